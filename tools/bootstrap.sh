@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian 12 machine (as root, or with sudo):
+#   tools/bootstrap.sh demo   install what is missing, build, run the main job
+#   tools/bootstrap.sh test   install what is missing, build, run every test
+# Idempotent: when everything is there it only builds and runs.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+job=${1:-}
+case "$job" in
+  demo|test|setup) ;;
+  *) echo "usage: $0 demo|test|setup" >&2; exit 2 ;;
+esac
+
+log() { printf '\033[1m[bootstrap]\033[0m %s\n' "$*"; }
+
+# ---- Debian packages --------------------------------------------------------
+APT_PACKAGES=(
+  cmake ninja-build g++ gcc make git
+  libeigen3-dev libgtest-dev
+  gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
+  qemu-system-arm
+  can-utils
+  cppcheck clang-tidy
+  python3 python3-venv
+)
+missing=()
+for p in "${APT_PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+if ((${#missing[@]})); then
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO=sudo
+  log "installing Debian packages: ${missing[*]}"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# ---- Python tools (project-local venv, from PyPI) ---------------------------
+VENV=$ROOT/.venv
+REQ=$ROOT/tools/requirements.txt
+stamp=$VENV/.requirements.sha256
+want=$(sha256sum "$REQ" | cut -d' ' -f1)
+if [ ! -x "$VENV/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+  log "creating Python venv in .venv (tools/requirements.txt)"
+  /usr/bin/python3 -m venv "$VENV"
+  "$VENV/bin/pip" install -q --disable-pip-version-check -r "$REQ"
+  echo "$want" > "$stamp"
+fi
+export PATH=$VENV/bin:$PATH
+export MC_PYTHON=$VENV/bin/python
+
+JOBS=$(nproc)
+
+build() { # preset
+  cmake --preset "$1" >/dev/null
+  cmake --build --preset "$1" -j "$JOBS"
+}
+
+case "$job" in
+  setup)
+    log "set-up complete"
+    ;;
+  demo)
+    exec "$ROOT/tools/demo.sh"
+    ;;
+  test)
+    exec "$ROOT/tools/test.sh"
+    ;;
+esac
