@@ -79,6 +79,15 @@ float mc_wrap_pi_f32(float x_rad);
 /** Wrap an angle to [0, 2*pi). NaN/inf in: NaN out. */
 float mc_wrap_2pi_f32(float x_rad);
 
+/** |x| up to which sin/cos and wrap use Cody-Waite reduction (rad). */
+#define MC_MATH_CW_LIMIT_RAD 8192.0f
+
+/**
+ * x_rad / (2*pi) modulo one turn, as an unsigned Q0.64 fraction of a turn.
+ * Returns false (and 0) for NaN/inf.
+ */
+bool mc_turn_from_rad_f32(float x_rad, uint64_t *p_turn_q64);
+
 #ifdef __cplusplus
 }
 #endif

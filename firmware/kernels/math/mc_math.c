@@ -1,0 +1,449 @@
+/**
+ * @file mc_math.c
+ * @brief Float32 fast math: sin/cos, atan2, sqrt, angle wrapping.
+ *
+ * No libm, no double, no float-to-int conversion of a NaN or out-of-range
+ * value. Every operation is a plain IEEE-754 single-precision add, multiply
+ * or divide (built with -ffp-contract=off, so no fused multiply-add), or an
+ * integer operation: results are bit-identical on x86-64 and Cortex-M4F.
+ *
+ * Range reduction (sin/cos, wrap):
+ * - |x| <= MC_MATH_CW_LIMIT_RAD (8192 rad): Cody-Waite, x - k*(pi/2) with
+ *   pi/2 = C1 + C2 + C3, where C1 and C2 have 11 significant bits (13
+ *   trailing zero bits), so k*C1 and k*C2 are exact for |k| < 2^13, and
+ *   x - k*C1 is exact (Sterbenz). The reduced argument carries one or two
+ *   roundings, i.e. its error is below 1 ulp of |r| <= pi/4 (~6e-8).
+ * - larger |x|: Payne-Hanek in integer arithmetic (mc_turn_from_rad_f32):
+ *   the float's 24-bit significand times a 96-bit window of the bits of 2/pi
+ *   gives x/(2*pi) modulo one turn as a Q0.64 fraction, exactly up to
+ *   2^-64 turn. Defined and accurate for every finite float.
+ */
+#include "math/mc_math.h"
+
+/* ---------------------------------------------------------------- helpers */
+
+/* Type punning through a union is defined in C11 (6.5.2.3 note 95) and,
+ * unlike memcpy under -fno-builtin, compiles to a register move. */
+typedef union {
+    float f;
+    uint32_t u;
+} f32_bits_t;
+
+static uint32_t bits_from_f32(float x)
+{
+    f32_bits_t b;
+    b.f = x;
+    return b.u;
+}
+
+static float f32_from_bits(uint32_t u)
+{
+    f32_bits_t b;
+    b.u = u;
+    return b.f;
+}
+
+/** Quiet NaN (built from its bits: no 0/0 at run time). */
+static float nan_f32(void)
+{
+    return f32_from_bits(0x7FC00000u);
+}
+
+/** true if the sign bit is set (distinguishes -0 from +0). */
+static bool signbit_f32(float x)
+{
+    return (bits_from_f32(x) & 0x80000000u) != 0u;
+}
+
+/**
+ * Round to the nearest integer (ties to even) for |v| < 2^22, using the
+ * float adder itself: adding 1.5*2^23 pushes the fraction bits out. Exact
+ * IEEE semantics are guaranteed because the kernels are not built with
+ * -ffast-math and float arithmetic is evaluated in float (FLT_EVAL_METHOD 0
+ * on SSE and on the M4F).
+ */
+static float round_small_f32(float v)
+{
+    const float magic = 12582912.0f; /* 1.5 * 2^23 */
+    return (v + magic) - magic;
+}
+
+/* Cody-Waite split of pi/2: C1, C2 with 11 significant bits. */
+#define CW_C1 1.5703125f               /* 0x1.92p+0 */
+#define CW_C2 4.837512969970703125e-4f /* 0x1.fb4p-12 */
+#define CW_C3 7.549790126404332e-8f    /* 0x1.4442d2p-24 */
+#define CW_TWO_OVER_PI 0.636619772367581343f
+
+/*
+ * Bits of 2/pi, most significant first: 2/pi = 0.A2F9836E 4E441529 ... (hex).
+ * 8 words = 256 bits cover the window needed by the largest float exponent
+ * (x < 2^128: window ends at bit 102 + 96 = 198, read one word beyond).
+ */
+static const uint32_t k_two_over_pi_bits[8] = {
+    0xA2F9836EU, 0x4E441529U, 0xFC2757D1U, 0xF534DDC0U,
+    0xDB629599U, 0x3C439041U, 0xFE5163ABU, 0xDEBBC561U,
+};
+
+/** Bit-field read of 32 bits of 2/pi starting after bit position `pos`. */
+static uint32_t two_over_pi_word(uint32_t pos)
+{
+    uint32_t wi = pos / 32u;
+    uint32_t bo = pos % 32u;
+    uint32_t hi = k_two_over_pi_bits[wi];
+    if (bo == 0u) {
+        return hi;
+    }
+    return (hi << bo) | (k_two_over_pi_bits[wi + 1u] >> (32u - bo));
+}
+
+bool mc_turn_from_rad_f32(float x_rad, uint64_t *p_turn_q64)
+{
+    if (!mc_isfinite_f32(x_rad)) {
+        *p_turn_q64 = 0u;
+        return false;
+    }
+    uint32_t u = bits_from_f32(x_rad);
+    bool neg = (u & 0x80000000u) != 0u;
+    uint32_t ebits = (u >> 23) & 0xFFu;
+    uint32_t m = u & 0x7FFFFFu;
+    int32_t e; /* |x| = m * 2^e */
+    if (ebits == 0u) {
+        e = -149;
+    } else {
+        m |= 0x800000u;
+        e = (int32_t)ebits - 150;
+    }
+    if (m == 0u) {
+        *p_turn_q64 = 0u;
+        return true;
+    }
+
+    /*
+     * |x| * 2/pi modulo 4, as an unsigned Q2.62 number V. Bits of 2/pi at
+     * positions 1..s weigh at least 2^-s, so m * 2^e times them is a
+     * multiple of 4 once s <= e - 2: skip them (s = max(e - 2, 0)) and use
+     * the 96-bit window W of bits s+1 .. s+96:
+     *   V = m * W * 2^(e - s - 96 + 62) = (m * W) >> (34 - e + s).
+     * The bits of 2/pi beyond the window contribute less than 2^-70.
+     */
+    uint32_t s = (e > 2) ? (uint32_t)(e - 2) : 0u;
+    uint64_t w0 = two_over_pi_word(s);
+    uint64_t w1 = two_over_pi_word(s + 32u);
+    uint64_t w2 = two_over_pi_word(s + 64u);
+    uint64_t mm = m;
+    /* 120-bit product m*W as 32-bit limbs r3:r2:r1:r0. */
+    uint64_t t = mm * w2;
+    uint64_t r0 = t & 0xFFFFFFFFu;
+    t = mm * w1 + (t >> 32);
+    uint64_t r1 = t & 0xFFFFFFFFu;
+    t = mm * w0 + (t >> 32);
+    uint64_t r2 = t & 0xFFFFFFFFu;
+    uint64_t r3 = t >> 32;
+    int32_t shift = 34 - e + (int32_t)s; /* >= 32 */
+    uint64_t v;
+    if (shift >= 128) {
+        v = 0u;
+    } else if (shift >= 96) {
+        v = r3 >> (uint32_t)(shift - 96);
+    } else if (shift >= 64) {
+        uint32_t k = (uint32_t)(shift - 64);
+        uint64_t hi = (r3 << 32) | r2;
+        v = (k == 0u) ? hi : (hi >> k);
+    } else {
+        /* 32 <= shift < 64: bits above 2^64 of the shifted value drop
+         * (multiples of 4 quarter turns). */
+        uint32_t k = (uint32_t)(shift - 32);
+        uint64_t hi = (r3 << 32) | r2;
+        v = (hi << (32u - k)) | (r1 >> k);
+    }
+    (void)r0; /* below the 2^-62 quarter-turn resolution */
+
+    /* V / 2^62 quarter turns = V / 2^64 turns. */
+    *p_turn_q64 = neg ? (0u - v) : v;
+    return true;
+}
+
+/**
+ * Split a turn fraction (Q0.64) into the nearest quarter q (0..3) and the
+ * remainder r in radians, |r| <= pi/4.
+ */
+static float quarter_from_turn(uint64_t turn, uint32_t *p_q)
+{
+    uint64_t rounded = turn + ((uint64_t)1 << 61);
+    uint32_t q = (uint32_t)(rounded >> 62);
+    uint64_t rem = turn - ((uint64_t)q << 62); /* mod 2^64 */
+    bool neg = rem >= ((uint64_t)1 << 63);
+    uint64_t mag = neg ? (0u - rem) : rem; /* <= 2^61 */
+    /* r = mag / 2^62 * pi/2: (mag >> 30) is Q0.32, pi/2 is Q1.31 (rounded),
+     * product Q1.63 < 2^63; converted to float with one rounding. */
+    uint64_t prod = (mag >> 30) * 0xC90FDAA2u;
+    float r = (float)prod * 1.08420217248550443e-19f; /* 2^-63 */
+    *p_q = q & 3u;
+    return neg ? -r : r;
+}
+
+/** Reduce x to r in [-pi/4, pi/4] and quadrant q: x = r + q*pi/2 (mod 2pi). */
+static float reduce_quadrant(float x, uint32_t *p_q)
+{
+    if (mc_abs_f32(x) <= MC_MATH_CW_LIMIT_RAD) {
+        float kf = round_small_f32(x * CW_TWO_OVER_PI); /* |k| <= 5216 */
+        int32_t k = (int32_t)kf;                        /* in range: exact */
+        float r = x - kf * CW_C1;                       /* exact */
+        r = r - kf * CW_C2;
+        r = r - kf * CW_C3;
+        *p_q = (uint32_t)k & 3u;
+        return r;
+    }
+    uint64_t turn = 0u;
+    (void)mc_turn_from_rad_f32(x, &turn);
+    return quarter_from_turn(turn, p_q);
+}
+
+/* Minimax-type fits on |r| <= pi/4 (Chebyshev interpolation, own fit):
+ * sin r = r + r^3 (S1 + S2 r^2 + S3 r^4 + S4 r^6), fit error < 1e-10;
+ * cos r = 1 - r^2/2 + r^4 (C1 + C2 r^2 + C3 r^4 + C4 r^6), fit error < 1e-11. */
+#define SIN_S1 -1.666666716e-01f
+#define SIN_S2 8.333331905e-03f
+#define SIN_S3 -1.984008704e-04f
+#define SIN_S4 2.724989599e-06f
+#define COS_C1 4.166666791e-02f
+#define COS_C2 -1.388888806e-03f
+#define COS_C3 2.480059993e-05f
+#define COS_C4 -2.730093343e-07f
+
+void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos)
+{
+    if (!mc_isfinite_f32(x_rad)) {
+        float nan = x_rad - x_rad; /* NaN for NaN and +-inf */
+        *p_sin = nan;
+        *p_cos = nan;
+        return;
+    }
+    uint32_t q = 0u;
+    float r = reduce_quadrant(x_rad, &q);
+    float z = r * r;
+    float s = r + (r * z) * (SIN_S1 + z * (SIN_S2 + z * (SIN_S3 + z * SIN_S4)));
+    float c = (1.0f - 0.5f * z) + (z * z) * (COS_C1 + z * (COS_C2 + z * (COS_C3 + z * COS_C4)));
+    switch (q) {
+    case 0u:
+        *p_sin = s;
+        *p_cos = c;
+        break;
+    case 1u:
+        *p_sin = c;
+        *p_cos = -s;
+        break;
+    case 2u:
+        *p_sin = -s;
+        *p_cos = -c;
+        break;
+    default:
+        *p_sin = -c;
+        *p_cos = s;
+        break;
+    }
+}
+
+/* ------------------------------------------------------------------ atan2 */
+
+/* atan t = t + t^3 (A1 + A2 t^2 + ... + A6 t^10) on |t| <= tan(pi/8),
+ * fit error < 3e-9 rad. */
+#define ATAN_A1 -3.333333433e-01f
+#define ATAN_A2 1.999997795e-01f
+#define ATAN_A3 -1.428415030e-01f
+#define ATAN_A4 1.107134447e-01f
+#define ATAN_A5 -8.624520153e-02f
+#define ATAN_A6 5.047736317e-02f
+#define TAN_PI_8 0.414213562373095049f
+#define QUARTER_PI_F32 0.785398163397448310f
+
+/** atan(z) for 0 <= z <= 1. */
+static float atan_unit(float z)
+{
+    float base = 0.0f;
+    float t = z;
+    if (z > TAN_PI_8) {
+        /* atan z = pi/4 + atan((z - 1)/(z + 1)), |(z-1)/(z+1)| <= tan(pi/8) */
+        base = QUARTER_PI_F32;
+        t = (z - 1.0f) / (z + 1.0f);
+    }
+    float t2 = t * t;
+    float p = ATAN_A1 + t2 * (ATAN_A2 + t2 * (ATAN_A3 + t2 * (ATAN_A4 + t2 * (ATAN_A5 + t2 * ATAN_A6))));
+    return base + (t + (t * t2) * p);
+}
+
+float mc_atan2_f32(float y, float x)
+{
+    if ((x != x) || (y != y)) {
+        return x + y; /* NaN */
+    }
+    bool y_neg = signbit_f32(y);
+    bool x_neg = signbit_f32(x);
+    bool x_inf = !mc_isfinite_f32(x);
+    bool y_inf = !mc_isfinite_f32(y);
+    float ax = mc_abs_f32(x);
+    float ay = mc_abs_f32(y);
+    if (x_inf && y_inf) {
+        ax = 1.0f;
+        ay = 1.0f;
+    } else if (x_inf) {
+        ax = 1.0f;
+        ay = 0.0f;
+    } else if (y_inf) {
+        ax = 0.0f;
+        ay = 1.0f;
+    } else if ((ax == 0.0f) && (ay == 0.0f)) {
+        return 0.0f; /* defined: no direction yet */
+    } else {
+        /* finite, not both zero */
+    }
+
+    float a;
+    if (ay <= ax) {
+        a = atan_unit(ay / ax); /* ax > 0 here */
+    } else {
+        a = MC_HALF_PI_F32 - atan_unit(ax / ay);
+    }
+    if (x_neg) {
+        a = MC_PI_F32 - a;
+    }
+    return y_neg ? -a : a;
+}
+
+/* ------------------------------------------------------------------- sqrt */
+
+float mc_sqrt_f32(float x)
+{
+    if (x != x) {
+        return x; /* NaN propagates */
+    }
+    if (x == 0.0f) {
+        return x; /* +0 -> +0, -0 -> -0 (as IEEE sqrt) */
+    }
+    if (x < 0.0f) {
+        return nan_f32();
+    }
+    if (!mc_isfinite_f32(x)) {
+        return x; /* +inf */
+    }
+
+    /* x = m * 2^e with m a 24-bit integer in [2^23, 2^24) (denormals
+     * normalised), then e made even. */
+    uint32_t u = bits_from_f32(x);
+    uint32_t ebits = u >> 23; /* sign is 0 */
+    uint32_t m = u & 0x7FFFFFu;
+    int32_t e;
+    if (ebits == 0u) {
+        e = -149;
+        while (m < 0x800000u) {
+            m <<= 1;
+            e -= 1;
+        }
+    } else {
+        m |= 0x800000u;
+        e = (int32_t)ebits - 150;
+    }
+    if ((e & 1) != 0) {
+        m <<= 1;
+        e -= 1;
+    }
+
+    /* sqrt(m * 2^26) = sqrt(m) * 2^13 has 25 or 26 bits: the digit-by-digit
+     * integer square root gives its floor and the remainder (sticky). */
+    uint64_t n = (uint64_t)m << 26; /* < 2^51 */
+    uint64_t root = 0u;
+    uint64_t bit = (uint64_t)1 << 50;
+    while (bit > n) {
+        bit >>= 2;
+    }
+    while (bit != 0u) {
+        if (n >= root + bit) {
+            n -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    bool sticky = n != 0u;
+
+    /* Keep 24 bits, round to nearest even (a sqrt is never an exact tie,
+     * but the rule is written out in full). */
+    uint32_t drop = (root >= ((uint64_t)1 << 25)) ? 2u : 1u;
+    uint64_t keep = root >> drop;
+    uint64_t rest = root & (((uint64_t)1 << drop) - 1u);
+    uint64_t half = (uint64_t)1 << (drop - 1u);
+    if ((rest > half) || ((rest == half) && (sticky || ((keep & 1u) != 0u)))) {
+        keep += 1u;
+    }
+    int32_t f = (e / 2) - 13 + (int32_t)drop; /* result = keep * 2^f */
+    if (keep >= ((uint64_t)1 << 24)) {
+        keep >>= 1;
+        f += 1;
+    }
+    /* sqrt of a positive finite float is a normal float: 2^-75 .. 2^64. */
+    uint32_t out = ((uint32_t)(f + 150) << 23) | ((uint32_t)keep & 0x7FFFFFu);
+    return f32_from_bits(out);
+}
+
+/* ------------------------------------------------------------------- wrap */
+
+/**
+ * x - 2*pi*k for the k that puts a real-valued result in [lo, lo + 2*pi),
+ * lo = -pi (centered) or 0. Cody-Waite for moderate |x|, integer reduction
+ * beyond. Inputs already in range come back unchanged.
+ */
+static float wrap_impl(float x, bool centered)
+{
+    if (!mc_isfinite_f32(x)) {
+        return x - x; /* NaN */
+    }
+    float lo = centered ? -MC_PI_F32 : 0.0f;
+    float hi = centered ? MC_PI_F32 : MC_TWO_PI_F32;
+    if ((x >= lo) && (x < hi)) {
+        return x;
+    }
+    float r;
+    if (mc_abs_f32(x) <= MC_MATH_CW_LIMIT_RAD) {
+        /* k turns = 4k quarter turns: the parts times 4k stay exact
+         * (|4k| <= 5216 < 2^13). */
+        float shift = centered ? 0.0f : -0.5f;
+        float kf = round_small_f32(x * (0.25f * CW_TWO_OVER_PI) + shift);
+        float k4 = 4.0f * kf;
+        r = x - k4 * CW_C1;
+        r = r - k4 * CW_C2;
+        r = r - k4 * CW_C3;
+    } else {
+        uint64_t turn = 0u;
+        (void)mc_turn_from_rad_f32(x, &turn);
+        uint64_t half_turn = (uint64_t)1 << 63;
+        bool neg = centered && (turn >= half_turn);
+        uint64_t mag = neg ? (0u - turn) : turn;
+        /* mag / 2^64 turns * 2*pi: (mag >> 32) Q0.32 times 2*pi in Q3.29,
+         * product Q3.61 < 2^64. */
+        uint64_t prod = (mag >> 32) * 0xC90FDAA2u;
+        r = (float)prod * 4.33680868994201774e-19f; /* 2^-61 */
+        r = neg ? -r : r;
+    }
+    /* One rounding may land exactly on a bound: fold it back. */
+    if (r >= hi) {
+        r = r - MC_TWO_PI_F32;
+    }
+    if (r < lo) {
+        r = r + MC_TWO_PI_F32;
+    }
+    if (r >= hi) {
+        r = lo; /* r was a tiny negative number rounding up to 2*pi */
+    }
+    return r;
+}
+
+float mc_wrap_pi_f32(float x_rad)
+{
+    return wrap_impl(x_rad, true);
+}
+
+float mc_wrap_2pi_f32(float x_rad)
+{
+    return wrap_impl(x_rad, false);
+}
