@@ -1,0 +1,17 @@
+// mcsim/mcsim.hpp: umbrella header of the plant simulator library (mc_sim).
+#ifndef MCSIM_MCSIM_HPP
+#define MCSIM_MCSIM_HPP
+
+#include "mcsim/frames.hpp"
+#include "mcsim/integrator.hpp"
+#include "mcsim/inverter.hpp"
+#include "mcsim/load_torque.hpp"
+#include "mcsim/pmsm_ab.hpp"
+#include "mcsim/pmsm_dq.hpp"
+#include "mcsim/pmsm_normalised.hpp"
+#include "mcsim/pmsm_params.hpp"
+#include "mcsim/sensors.hpp"
+#include "mcsim/status.hpp"
+#include "mcsim/stepper_2ph.hpp"
+
+#endif  // MCSIM_MCSIM_HPP

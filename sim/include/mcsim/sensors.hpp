@@ -1,0 +1,125 @@
+// mcsim/sensors.hpp: measurement models. Every sensor is deterministic for a
+// given seed: noise comes from std::mt19937_64 (whose output sequence the C++
+// standard fixes) and this library's own Box-Muller transform (no
+// std::normal_distribution, whose algorithm is implementation-defined).
+//
+// ADC channel (CurrentSensor, VbusSensor):
+//   y    = (1 + gain_error) x + offset + noise          (noise ~ N(0, rms^2))
+//   code = round(y / lsb), clamped to the converter range
+//   out  = code * lsb
+// CurrentSensor is bipolar: lsb = 2 full_scale_a / 2^bits, codes in
+//   [-2^(bits-1), 2^(bits-1) - 1].
+// VbusSensor is unipolar: lsb = full_scale_v / 2^bits, codes in [0, 2^bits - 1].
+//
+// Encoder: incremental, counts_per_rev edges per mechanical turn (after
+// quadrature decoding). The counter value is floor(theta_m * cpr / 2 pi)
+// relative to the angle at reset(); with an index, once the shaft has crossed
+// index_angle_rad (mod 2 pi) the reported count becomes absolute, i.e.
+// floor((theta_m - index_angle_rad) cpr / 2 pi) mod cpr.
+#ifndef MCSIM_SENSORS_HPP
+#define MCSIM_SENSORS_HPP
+
+#include <cstdint>
+#include <random>
+
+#include "mcsim/status.hpp"
+
+namespace mcsim {
+
+// Standard normal samples: mt19937_64 + Box-Muller, deterministic per seed.
+class GaussianRng {
+ public:
+  explicit GaussianRng(std::uint64_t seed = 1U) : eng_(seed) {}
+  void reseed(std::uint64_t seed);
+  double uniform_open01();   // in (0, 1], 53-bit resolution
+  double normal();           // N(0, 1)
+
+ private:
+  std::mt19937_64 eng_;
+  double spare_ = 0.0;
+  bool has_spare_ = false;
+};
+
+struct CurrentSensorParams {
+  double gain_error = 0.0;     // relative, gain = 1 + gain_error (> 0)
+  double offset_a = 0.0;
+  double full_scale_a = 50.0;  // bipolar range +-full_scale_a
+  int bits = 12;               // 1..30
+  double noise_rms_a = 0.0;
+  std::uint64_t seed = 1U;
+  // kOk, kNotFinite, kBadGain, kBadFullScale, kBadBits, kNegativeNoise.
+  Status validate() const;
+};
+
+class CurrentSensor {
+ public:
+  CurrentSensor() = default;
+  // Validates p and reseeds the noise; on error keeps everything unchanged.
+  Status configure(const CurrentSensorParams& p);
+  double lsb_a() const;
+  std::int32_t sample_code(double i_true_a);   // advances the noise generator
+  double sample_a(double i_true_a) { return sample_code(i_true_a) * lsb_a(); }
+
+ private:
+  CurrentSensorParams p_{};
+  GaussianRng rng_{1U};
+};
+
+struct VbusSensorParams {
+  double gain_error = 0.0;
+  double offset_v = 0.0;
+  double full_scale_v = 60.0;  // unipolar range [0, full_scale_v)
+  int bits = 12;
+  double noise_rms_v = 0.0;
+  std::uint64_t seed = 2U;
+  Status validate() const;
+};
+
+class VbusSensor {
+ public:
+  VbusSensor() = default;
+  Status configure(const VbusSensorParams& p);
+  double lsb_v() const;
+  std::int32_t sample_code(double vbus_true_v);
+  double sample_v(double vbus_true_v) { return sample_code(vbus_true_v) * lsb_v(); }
+
+ private:
+  VbusSensorParams p_{};
+  GaussianRng rng_{2U};
+};
+
+struct EncoderParams {
+  std::int32_t counts_per_rev = 4096;  // >= 1
+  bool has_index = false;
+  double index_angle_rad = 0.0;        // mechanical angle of the index mark
+  // kOk, kNotFinite, kBadCounts.
+  Status validate() const;
+};
+
+struct EncoderReading {
+  std::int64_t count = 0;          // unwrapped counter since reset (edges)
+  std::int32_t count_in_rev = 0;   // [0, cpr): relative, or absolute once index seen
+  bool index_seen = false;
+  double angle_rad = 0.0;          // count_in_rev * 2 pi / cpr
+};
+
+class Encoder {
+ public:
+  Encoder() = default;
+  // Validates p and resets at angle 0; on error keeps everything unchanged.
+  Status configure(const EncoderParams& p);
+  // Power-up / counter reset at the true mechanical angle theta_m_rad.
+  void reset(double theta_m_rad);
+  double step_rad() const;
+  EncoderReading sample(double theta_m_rad);
+
+ private:
+  EncoderParams p_{};
+  std::int64_t edge0_ = 0;      // floor(theta_reset * cpr / 2pi)
+  std::int64_t rev_idx_ = 0;    // floor((theta - index) / 2pi) at the last sample
+  bool index_seen_ = false;
+};
+
+}  // namespace mcsim
+
+#endif  // MCSIM_SENSORS_HPP

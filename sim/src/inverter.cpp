@@ -1,0 +1,89 @@
+#include "mcsim/inverter.hpp"
+
+#include "mcsim/frames.hpp"
+#include "util.hpp"
+
+namespace mcsim {
+
+Status InverterParams::validate() const {
+  if (!detail::all_finite({t_pwm_s, t_dead_s, i_dead_band_a})) {
+    return Status::kNotFinite;
+  }
+  if (!(t_pwm_s > 0.0)) {
+    return Status::kBadPwmPeriod;
+  }
+  if (t_dead_s < 0.0 || !(t_dead_s < 0.5 * t_pwm_s)) {
+    return Status::kBadDeadTime;
+  }
+  if (!(i_dead_band_a > 0.0)) {
+    return Status::kBadDeadBand;
+  }
+  return Status::kOk;
+}
+
+Status Inverter3Ph::configure(const InverterParams& p) {
+  const Status s = p.validate();
+  if (s == Status::kOk) {
+    p_ = p;
+  }
+  return s;
+}
+
+Eigen::Vector3d Inverter3Ph::pole_voltages_v(const Eigen::Vector3d& duty_abc,
+                                             double vbus_v,
+                                             const Eigen::Vector3d& i_abc_a) const {
+  const double dead_frac = p_.t_dead_s / p_.t_pwm_s;
+  const double vdc_v = (vbus_v > 0.0) ? vbus_v : 0.0;  // a bridge cannot invert the bus
+  Eigen::Vector3d v;
+  for (int k = 0; k < 3; ++k) {
+    const double d = detail::clamp(duty_abc(k), 0.0, 1.0);
+    const double err = detail::sat1(i_abc_a(k) / p_.i_dead_band_a) * dead_frac;
+    v(k) = detail::clamp((d - err) * vdc_v, 0.0, vdc_v);
+  }
+  return v;
+}
+
+Eigen::Vector3d Inverter3Ph::phase_voltages_v(const Eigen::Vector3d& duty_abc,
+                                              double vbus_v,
+                                              const Eigen::Vector3d& i_abc_a) const {
+  const Eigen::Vector3d pole = pole_voltages_v(duty_abc, vbus_v, i_abc_a);
+  const double v_cm = (pole(0) + pole(1) + pole(2)) / 3.0;
+  return pole - Eigen::Vector3d::Constant(v_cm);
+}
+
+Eigen::Vector2d Inverter3Ph::alpha_beta_v(const Eigen::Vector3d& duty_abc, double vbus_v,
+                                          const Eigen::Vector3d& i_abc_a) const {
+  return clarke(phase_voltages_v(duty_abc, vbus_v, i_abc_a));
+}
+
+double Inverter3Ph::dc_current_a(const Eigen::Vector3d& duty_abc,
+                                 const Eigen::Vector3d& i_abc_a) {
+  double i_dc = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    i_dc += detail::clamp(duty_abc(k), 0.0, 1.0) * i_abc_a(k);
+  }
+  return i_dc;
+}
+
+Status InverterHBridge2::configure(const InverterParams& p) {
+  const Status s = p.validate();
+  if (s == Status::kOk) {
+    p_ = p;
+  }
+  return s;
+}
+
+Eigen::Vector2d InverterHBridge2::voltages_v(const Eigen::Vector2d& duty_ab, double vbus_v,
+                                             const Eigen::Vector2d& i_ab_a) const {
+  const double dead_frac = p_.t_dead_s / p_.t_pwm_s;
+  const double vdc_v = (vbus_v > 0.0) ? vbus_v : 0.0;  // a bridge cannot invert the bus
+  Eigen::Vector2d v;
+  for (int k = 0; k < 2; ++k) {
+    const double d = detail::clamp(duty_ab(k), -1.0, 1.0);
+    const double err = 2.0 * detail::sat1(i_ab_a(k) / p_.i_dead_band_a) * dead_frac;
+    v(k) = detail::clamp((d - err) * vdc_v, -vdc_v, vdc_v);
+  }
+  return v;
+}
+
+}  // namespace mcsim

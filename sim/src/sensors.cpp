@@ -1,0 +1,186 @@
+#include "mcsim/sensors.hpp"
+
+#include <cmath>
+
+#include "util.hpp"
+
+namespace mcsim {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586476925286766559;
+
+// Rounds y / lsb to the nearest code (ties up) and clamps it to [lo, hi];
+// a NaN reading gives code 0.
+std::int32_t quantise(double y, double lsb, std::int32_t lo, std::int32_t hi) {
+  const double q = std::floor(y / lsb + 0.5);
+  if (std::isnan(q)) {
+    return 0;
+  }
+  const double c = detail::clamp(q, static_cast<double>(lo), static_cast<double>(hi));
+  return static_cast<std::int32_t>(c);
+}
+
+Status validate_adc(double gain_error, double offset, double full_scale, int bits,
+                    double noise_rms) {
+  if (!detail::all_finite({gain_error, offset, full_scale, noise_rms})) {
+    return Status::kNotFinite;
+  }
+  if (!(1.0 + gain_error > 0.0)) {
+    return Status::kBadGain;
+  }
+  if (!(full_scale > 0.0)) {
+    return Status::kBadFullScale;
+  }
+  if (bits < 1 || bits > 30) {
+    return Status::kBadBits;
+  }
+  if (noise_rms < 0.0) {
+    return Status::kNegativeNoise;
+  }
+  return Status::kOk;
+}
+
+std::int64_t floor_to_i64(double v) {
+  return std::isfinite(v) ? static_cast<std::int64_t>(std::floor(v)) : 0;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- GaussianRng
+
+void GaussianRng::reseed(std::uint64_t seed) {
+  eng_.seed(seed);
+  has_spare_ = false;
+  spare_ = 0.0;
+}
+
+double GaussianRng::uniform_open01() {
+  // Top 53 bits of the 64-bit draw, shifted by one so that 0 is excluded.
+  const std::uint64_t r = eng_() >> 11U;
+  return (static_cast<double>(r) + 1.0) * (1.0 / 9007199254740992.0);  // 2^-53
+}
+
+double GaussianRng::normal() {
+  if (has_spare_) {
+    has_spare_ = false;
+    return spare_;
+  }
+  // Box-Muller: two independent uniforms -> two independent N(0,1).
+  const double u1 = uniform_open01();              // (0, 1]: log is finite
+  const double u2 = uniform_open01();
+  const double r = std::sqrt(-2.0 * std::log(u1));
+  const double a = kTwoPi * u2;
+  spare_ = r * std::sin(a);
+  has_spare_ = true;
+  return r * std::cos(a);
+}
+
+// -------------------------------------------------------------- CurrentSensor
+
+Status CurrentSensorParams::validate() const {
+  return validate_adc(gain_error, offset_a, full_scale_a, bits, noise_rms_a);
+}
+
+Status CurrentSensor::configure(const CurrentSensorParams& p) {
+  const Status s = p.validate();
+  if (s == Status::kOk) {
+    p_ = p;
+    rng_.reseed(p.seed);
+  }
+  return s;
+}
+
+double CurrentSensor::lsb_a() const {
+  return 2.0 * p_.full_scale_a / std::ldexp(1.0, p_.bits);
+}
+
+std::int32_t CurrentSensor::sample_code(double i_true_a) {
+  const double noise = p_.noise_rms_a * rng_.normal();  // drawn every sample
+  const double y = (1.0 + p_.gain_error) * i_true_a + p_.offset_a + noise;
+  const std::int32_t half = static_cast<std::int32_t>(1) << (p_.bits - 1);
+  return quantise(y, lsb_a(), -half, half - 1);
+}
+
+// ----------------------------------------------------------------- VbusSensor
+
+Status VbusSensorParams::validate() const {
+  return validate_adc(gain_error, offset_v, full_scale_v, bits, noise_rms_v);
+}
+
+Status VbusSensor::configure(const VbusSensorParams& p) {
+  const Status s = p.validate();
+  if (s == Status::kOk) {
+    p_ = p;
+    rng_.reseed(p.seed);
+  }
+  return s;
+}
+
+double VbusSensor::lsb_v() const { return p_.full_scale_v / std::ldexp(1.0, p_.bits); }
+
+std::int32_t VbusSensor::sample_code(double vbus_true_v) {
+  const double noise = p_.noise_rms_v * rng_.normal();
+  const double y = (1.0 + p_.gain_error) * vbus_true_v + p_.offset_v + noise;
+  const std::int32_t full = static_cast<std::int32_t>(
+      (static_cast<std::int64_t>(1) << p_.bits) - 1);
+  return quantise(y, lsb_v(), 0, full);
+}
+
+// -------------------------------------------------------------------- Encoder
+
+Status EncoderParams::validate() const {
+  if (!std::isfinite(index_angle_rad)) {
+    return Status::kNotFinite;
+  }
+  if (counts_per_rev < 1) {
+    return Status::kBadCounts;
+  }
+  return Status::kOk;
+}
+
+Status Encoder::configure(const EncoderParams& p) {
+  const Status s = p.validate();
+  if (s == Status::kOk) {
+    p_ = p;
+    reset(0.0);
+  }
+  return s;
+}
+
+void Encoder::reset(double theta_m_rad) {
+  const double cpr = static_cast<double>(p_.counts_per_rev);
+  edge0_ = floor_to_i64(theta_m_rad * cpr / kTwoPi);
+  rev_idx_ = floor_to_i64((theta_m_rad - p_.index_angle_rad) / kTwoPi);
+  index_seen_ = false;
+}
+
+double Encoder::step_rad() const { return kTwoPi / static_cast<double>(p_.counts_per_rev); }
+
+EncoderReading Encoder::sample(double theta_m_rad) {
+  const double cpr = static_cast<double>(p_.counts_per_rev);
+  const std::int64_t cpr_i = p_.counts_per_rev;
+  EncoderReading r;
+  r.count = floor_to_i64(theta_m_rad * cpr / kTwoPi) - edge0_;
+  std::int64_t in_rev = r.count;
+  if (p_.has_index) {
+    const std::int64_t rev = floor_to_i64((theta_m_rad - p_.index_angle_rad) / kTwoPi);
+    if (rev != rev_idx_) {
+      index_seen_ = true;  // the index mark was crossed since the last sample
+    }
+    rev_idx_ = rev;
+    if (index_seen_) {
+      in_rev = floor_to_i64((theta_m_rad - p_.index_angle_rad) * cpr / kTwoPi);
+    }
+  }
+  in_rev %= cpr_i;
+  if (in_rev < 0) {
+    in_rev += cpr_i;
+  }
+  r.count_in_rev = static_cast<std::int32_t>(in_rev);
+  r.index_seen = index_seen_;
+  r.angle_rad = static_cast<double>(r.count_in_rev) * step_rad();
+  return r;
+}
+
+}  // namespace mcsim

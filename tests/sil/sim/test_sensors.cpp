@@ -1,0 +1,231 @@
+// Sensor models: quantisation, offset, gain, saturation, noise statistics,
+// determinism per seed; encoder quantisation and index.
+#include <cmath>
+#include <cstdint>
+#include <set>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "mcsim/sensors.hpp"
+#include "sim_test_util.hpp"
+
+namespace {
+
+using mcsim::CurrentSensor;
+using mcsim::CurrentSensorParams;
+using mcsim::Encoder;
+using mcsim::EncoderParams;
+using mcsim::Status;
+using mcsim::VbusSensor;
+using mcsim::VbusSensorParams;
+using mcsim_test::kPi;
+
+TEST(SimSensors, EngineSequenceIsTheStandardOne) {
+  // The C++ standard fixes the 10000th output of a default-seeded
+  // mt19937_64 (seed 5489): guards the determinism claim across toolchains.
+  mcsim::GaussianRng rng(5489U);
+  double u = 0.0;
+  for (int k = 0; k < 10000; ++k) {
+    u = rng.uniform_open01();
+  }
+  const double expected =
+      (static_cast<double>(9981545732273789042ULL >> 11U) + 1.0) / 9007199254740992.0;
+  EXPECT_EQ(u, expected);  // exact: same integer, same conversion
+}
+
+TEST(SimSensors, CurrentQuantisationStepIsOneLsb) {
+  CurrentSensorParams p;
+  p.full_scale_a = 25.0;
+  p.bits = 10;
+  CurrentSensor s;
+  ASSERT_EQ(s.configure(p), Status::kOk);
+  const double lsb = 50.0 / 1024.0;
+  EXPECT_DOUBLE_EQ(s.lsb_a(), lsb);
+  std::set<std::int32_t> codes;
+  double prev = s.sample_a(-3.0);
+  for (int k = 1; k <= 3000; ++k) {
+    const double i = -3.0 + 0.002 * k;  // sweep -3..+3 A in 2 mA steps
+    const double y = s.sample_a(i);
+    const double jump = y - prev;
+    // Output moves in whole LSBs: 0 or exactly one step (1e-12 round-off).
+    EXPECT_TRUE(std::fabs(jump) < 1e-12 || std::fabs(jump - lsb) < 1e-12) << "i=" << i;
+    // Quantisation error at most half an LSB (+ round-off).
+    EXPECT_LE(std::fabs(y - i), 0.5 * lsb + 1e-12);
+    codes.insert(s.sample_code(i));
+    prev = y;
+  }
+  // 6 A span / 48.8 mA = 123 levels (+-1 for the ends).
+  EXPECT_GE(codes.size(), 122U);
+  EXPECT_LE(codes.size(), 124U);
+}
+
+TEST(SimSensors, CurrentOffsetGainAndSaturation) {
+  CurrentSensorParams p;
+  p.full_scale_a = 20.0;
+  p.bits = 12;
+  p.offset_a = 0.37;
+  p.gain_error = 0.02;
+  CurrentSensor s;
+  ASSERT_EQ(s.configure(p), Status::kOk);
+  const double lsb = s.lsb_a();
+  // Zero input reads the offset, within half an LSB.
+  EXPECT_NEAR(s.sample_a(0.0), 0.37, 0.5 * lsb);
+  // 10 A reads 1.02 * 10 + 0.37, within half an LSB.
+  EXPECT_NEAR(s.sample_a(10.0), 10.57, 0.5 * lsb);
+  // Saturation at the converter range: codes -2048 .. 2047 (exact).
+  EXPECT_EQ(s.sample_code(1.0e3), 2047);
+  EXPECT_EQ(s.sample_code(-1.0e3), -2048);
+  EXPECT_EQ(s.sample_code(NAN), 0);
+}
+
+TEST(SimSensors, NoiseHasTheRequestedStatistics) {
+  CurrentSensorParams p;
+  p.full_scale_a = 100.0;
+  p.bits = 24;  // LSB 12 uA: quantisation negligible against 0.2 A noise
+  p.noise_rms_a = 0.2;
+  p.seed = 42U;
+  CurrentSensor s;
+  ASSERT_EQ(s.configure(p), Status::kOk);
+  const int n = 20000;
+  double sum = 0.0;
+  double sum2 = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double y = s.sample_a(1.0) - 1.0;
+    sum += y;
+    sum2 += y * y;
+  }
+  const double mean = sum / n;
+  const double rms = std::sqrt(sum2 / n - mean * mean);
+  // Standard error of the mean: 0.2/sqrt(20000) = 1.4 mA -> 5 sigma = 7 mA.
+  EXPECT_NEAR(mean, 0.0, 7.0e-3);
+  // Standard error of the rms estimate: 0.2/sqrt(2 n) = 1 mA -> 5 sigma = 5 mA.
+  EXPECT_NEAR(rms, 0.2, 5.0e-3);
+}
+
+TEST(SimSensors, DeterministicForASeed) {
+  CurrentSensorParams p;
+  p.noise_rms_a = 0.5;
+  p.seed = 7U;
+  CurrentSensor a;
+  CurrentSensor b;
+  ASSERT_EQ(a.configure(p), Status::kOk);
+  ASSERT_EQ(b.configure(p), Status::kOk);
+  std::vector<std::int32_t> first;
+  int differ = 0;
+  for (int k = 0; k < 500; ++k) {
+    const std::int32_t ca = a.sample_code(0.1 * k);
+    EXPECT_EQ(ca, b.sample_code(0.1 * k));  // same seed: identical sequence
+    first.push_back(ca);
+  }
+  // Re-configuring restarts the sequence.
+  ASSERT_EQ(a.configure(p), Status::kOk);
+  for (int k = 0; k < 500; ++k) {
+    EXPECT_EQ(a.sample_code(0.1 * k), first[static_cast<std::size_t>(k)]);
+  }
+  // Another seed gives another sequence (0.5 A noise vs 24 mA LSB: nearly
+  // every sample differs; require more than half).
+  p.seed = 8U;
+  ASSERT_EQ(b.configure(p), Status::kOk);
+  for (int k = 0; k < 500; ++k) {
+    if (b.sample_code(0.1 * k) != first[static_cast<std::size_t>(k)]) {
+      ++differ;
+    }
+  }
+  EXPECT_GT(differ, 250);
+}
+
+TEST(SimSensors, InvalidAdcConfigKeepsOldOne) {
+  CurrentSensor s;
+  CurrentSensorParams p;
+  p.bits = 0;
+  EXPECT_EQ(s.configure(p), Status::kBadBits);
+  p = CurrentSensorParams{};
+  p.bits = 31;
+  EXPECT_EQ(s.configure(p), Status::kBadBits);
+  p = CurrentSensorParams{};
+  p.full_scale_a = 0.0;
+  EXPECT_EQ(s.configure(p), Status::kBadFullScale);
+  p = CurrentSensorParams{};
+  p.gain_error = -1.0;
+  EXPECT_EQ(s.configure(p), Status::kBadGain);
+  p = CurrentSensorParams{};
+  p.noise_rms_a = -0.1;
+  EXPECT_EQ(s.configure(p), Status::kNegativeNoise);
+  p = CurrentSensorParams{};
+  p.offset_a = INFINITY;
+  EXPECT_EQ(s.configure(p), Status::kNotFinite);
+  EXPECT_DOUBLE_EQ(s.lsb_a(), 100.0 / 4096.0);  // defaults kept
+}
+
+TEST(SimSensors, VbusIsUnipolar) {
+  VbusSensorParams p;
+  p.full_scale_v = 64.0;
+  p.bits = 12;
+  p.offset_v = -0.1;
+  VbusSensor s;
+  ASSERT_EQ(s.configure(p), Status::kOk);
+  EXPECT_DOUBLE_EQ(s.lsb_v(), 64.0 / 4096.0);
+  EXPECT_NEAR(s.sample_v(48.0), 47.9, 0.5 * s.lsb_v());  // offset, half-LSB bound
+  EXPECT_EQ(s.sample_code(-5.0), 0);                     // exact: bottom rail
+  EXPECT_EQ(s.sample_code(100.0), 4095);                 // exact: top rail
+}
+
+TEST(SimEncoder, QuantisesTheMechanicalAngle) {
+  EncoderParams p;
+  p.counts_per_rev = 2000;
+  Encoder e;
+  ASSERT_EQ(e.configure(p), Status::kOk);
+  const double step = 2.0 * kPi / 2000.0;
+  EXPECT_DOUBLE_EQ(e.step_rad(), step);
+  std::int64_t prev = e.sample(0.0).count;
+  EXPECT_EQ(prev, 0);
+  for (int k = 1; k <= 5000; ++k) {
+    const double th = 1.3e-3 * k;  // 6.5 rad: more than one turn
+    const mcsim::EncoderReading r = e.sample(th);
+    // The count never skips (steps 1.3 mrad < 3.1 mrad) and never goes back.
+    EXPECT_GE(r.count - prev, 0);
+    EXPECT_LE(r.count - prev, 1);
+    prev = r.count;
+    // Reported angle is the true angle truncated to the step, modulo a turn.
+    const double wrapped = th - 2.0 * kPi * std::floor(th / (2.0 * kPi));
+    const double err = wrapped - r.angle_rad;
+    // err in [0, step) except right at the wrap; 1e-9 rad round-off margin.
+    const bool at_wrap = std::fabs(std::fabs(err) - 2.0 * kPi) < step;
+    EXPECT_TRUE((err > -1e-9 && err < step + 1e-9) || at_wrap) << "th=" << th;
+  }
+  EXPECT_EQ(prev, static_cast<std::int64_t>(std::floor(6.5 / step)));
+  // Negative direction counts down.
+  EXPECT_EQ(e.sample(-0.5 * step).count, -1);
+}
+
+TEST(SimEncoder, IndexMakesTheCountAbsolute) {
+  EncoderParams p;
+  p.counts_per_rev = 1000;
+  p.has_index = true;
+  p.index_angle_rad = 1.0;
+  Encoder e;
+  ASSERT_EQ(e.configure(p), Status::kOk);
+  e.reset(0.3);  // powered up at 0.3 rad: counts relative to that
+  const mcsim::EncoderReading r0 = e.sample(0.5);
+  EXPECT_FALSE(r0.index_seen);
+  EXPECT_EQ(r0.count_in_rev, static_cast<std::int32_t>(std::floor(0.5 * 1000 / (2 * kPi))) -
+                                 static_cast<std::int32_t>(std::floor(0.3 * 1000 / (2 * kPi))));
+  const mcsim::EncoderReading r1 = e.sample(1.2);  // crossed 1.0 rad
+  EXPECT_TRUE(r1.index_seen);
+  const std::int32_t expected = static_cast<std::int32_t>(std::floor(0.2 * 1000 / (2 * kPi)));
+  EXPECT_EQ(r1.count_in_rev, expected);  // absolute: 0 at the index mark
+  // 1e-12 rad: one multiplication of an exact count by the step.
+  EXPECT_NEAR(r1.angle_rad, expected * 2.0 * kPi / 1000.0, 1e-12);
+  // Going back below the mark keeps the absolute reference.
+  const mcsim::EncoderReading r2 = e.sample(0.9);
+  EXPECT_TRUE(r2.index_seen);
+  EXPECT_EQ(r2.count_in_rev,
+            static_cast<std::int32_t>(std::floor((0.9 - 1.0 + 2 * kPi) * 1000 / (2 * kPi))));
+  EncoderParams bad;
+  bad.counts_per_rev = 0;
+  EXPECT_EQ(e.configure(bad), Status::kBadCounts);
+  EXPECT_TRUE(e.sample(1.3).index_seen);  // unchanged by the failed configure
+}
+
+}  // namespace
