@@ -1,0 +1,168 @@
+/**
+ * @file mc_foc.h
+ * @brief Field-oriented dq current controller (float32): two PI loops with
+ *        decoupling feed-forward, a d-axis-priority voltage limit and the
+ *        whole fast step from phase currents to PWM duties.
+ *
+ * Motor model (PMSM, dq frame aligned with the rotor flux, electrical
+ * speed omega_e):
+ *     v_d = R i_d + L_d di_d/dt - omega_e L_q i_q
+ *     v_q = R i_q + L_q di_q/dt + omega_e L_d i_d + omega_e psi
+ * The controller adds the speed-dependent terms as feed-forward (with the
+ * measured currents) so that each PI sees a plain R-L load:
+ *     v_d = PI_d(id_ref - i_d) - omega_e L_q i_q
+ *     v_q = PI_q(iq_ref - i_q) + omega_e L_d i_d + omega_e psi
+ * With the pole-zero cancelling gains of mc_foc_f32_gains_from_bandwidth
+ * (kp = L bw, ki = R bw) each closed current loop is first order with time
+ * constant 1/bw (to the discretisation error of the sample period).
+ *
+ * Voltage limit, d-axis priority: with v_max = v_limit_ratio times the
+ * largest voltage the modulator delivers at this vbus
+ * (mc_svpwm_max_voltage_f32: vbus/sqrt(3) for the circle limit, 2 vbus/3
+ * for the hexagon), v_d is limited to [-v_max, v_max] and then v_q to
+ * +-sqrt(v_max^2 - v_d^2). Each limit is passed to its PI
+ * (mc_pi_f32_step_lim), so the anti-windup works against the limit actually
+ * applied, feed-forward included. In the whole step with the hexagon limit,
+ * the modulator may cut the vector further (near the hexagon's flat sides);
+ * the applied vector (mc_svpwm_limit_f32) is then transformed back to dq and
+ * fed to both PIs (mc_pi_f32_track).
+ *
+ * Non-finite input (any current, reference, angle, speed or vbus): the step
+ * outputs zero voltage (duties 0.5), sets the sticky MC_FOC_ERR_NAN_INPUT,
+ * and leaves both integrators untouched. vbus <= 0: the same with
+ * MC_FOC_ERR_VBUS. A PI that refuses its step (a feed-forward that overflows
+ * to infinity) gives MC_FOC_ERR_PI, zero voltage. The sticky flags are
+ * cleared by mc_foc_f32_reset() only.
+ *
+ * No heap, no globals, no I/O.
+ */
+#ifndef MC_FOC_H
+#define MC_FOC_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "pi/mc_pi.h"
+#include "transforms/mc_svpwm.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MC_FOC_ERR_NONE       0u
+#define MC_FOC_ERR_NULL       (1u << 0)  /**< a required pointer is NULL */
+#define MC_FOC_ERR_MOTOR      (1u << 1)  /**< R < 0, L <= 0, psi < 0, or not finite */
+#define MC_FOC_ERR_GAIN_D     (1u << 2)  /**< d-axis PI gain negative or not finite */
+#define MC_FOC_ERR_GAIN_Q     (1u << 3)  /**< q-axis PI gain negative or not finite */
+#define MC_FOC_ERR_DT         (1u << 4)  /**< dt_s <= 0 or not finite */
+#define MC_FOC_ERR_LIMIT_MODE (1u << 5)  /**< limit_mode not an mc_svpwm_limit_t */
+#define MC_FOC_ERR_V_LIMIT    (1u << 6)  /**< v_limit_ratio not in (0, 1], or v_abs_max_v <= 0 / not finite */
+#define MC_FOC_ERR_AW         (1u << 7)  /**< anti-windup scheme or kaw invalid (see MC_PI_ERR_AW_MODE/KAW) */
+#define MC_FOC_ERR_NAN_INPUT  (1u << 8)  /**< sticky: a step input was NaN or infinite */
+#define MC_FOC_ERR_VBUS       (1u << 9)  /**< sticky: vbus <= 0 */
+#define MC_FOC_ERR_PI         (1u << 10) /**< sticky: a PI refused its step */
+#define MC_FOC_ERR_BW         (1u << 11) /**< bandwidth helper: bw <= 0 or not finite */
+
+/** Configuration of the dq current controller. */
+typedef struct {
+    float r_ohm;            /**< phase resistance [ohm], >= 0 */
+    float ld_h;             /**< d-axis inductance [H], > 0 */
+    float lq_h;             /**< q-axis inductance [H], > 0 */
+    float flux_wb;          /**< permanent-magnet flux linkage psi [Wb], >= 0 */
+    float kp_d_v_per_a;     /**< d-axis PI proportional gain [V/A] */
+    float ki_d_v_per_as;    /**< d-axis PI integral gain [V/(A s)] */
+    float kp_q_v_per_a;     /**< q-axis PI proportional gain [V/A] */
+    float ki_q_v_per_as;    /**< q-axis PI integral gain [V/(A s)] */
+    float dt_s;             /**< control period [s], > 0 */
+    mc_pi_aw_t aw;          /**< anti-windup of both PIs */
+    float kaw_per_s;        /**< back-calculation gain [1/s] (MC_PI_AW_BACK_CALC only) */
+    mc_svpwm_limit_t limit_mode; /**< modulator limit: circle (linear) or hexagon */
+    float v_limit_ratio;    /**< fraction of the modulator's largest voltage used, (0, 1] */
+    float v_abs_max_v;      /**< static PI output and integrator limit [V], > 0 (e.g. the
+                                 largest vbus times 2/3) */
+    bool decouple;          /**< add the omega_e feed-forward terms */
+} mc_foc_f32_cfg_t;
+
+/** State of the dq current controller. */
+typedef struct {
+    mc_pi_f32_t pi_d;       /**< d-axis current PI (output V) */
+    mc_pi_f32_t pi_q;       /**< q-axis current PI (output V) */
+    float ld_h;
+    float lq_h;
+    float flux_wb;
+    mc_svpwm_limit_t limit_mode;
+    float v_limit_ratio;
+    bool decouple;
+    float vd_v;             /**< last applied d voltage [V] */
+    float vq_v;             /**< last applied q voltage [V] */
+    uint32_t flags;         /**< sticky MC_FOC_ERR_* */
+} mc_foc_f32_t;
+
+/** Inputs of the whole fast step. */
+typedef struct {
+    float ia_a;             /**< phase a current [A] */
+    float ib_a;             /**< phase b current [A] */
+    float ic_a;             /**< phase c current [A]; read only if three_phase */
+    bool three_phase;       /**< true: Clarke from ia, ib, ic; false: from ia, ib (ia+ib+ic = 0) */
+    float theta_e_rad;      /**< electrical angle of the d axis [rad] */
+    float omega_e_rad_s;    /**< electrical speed [rad/s] */
+    float vbus_v;           /**< DC-bus voltage [V] */
+    float id_ref_a;         /**< d current reference [A] */
+    float iq_ref_a;         /**< q current reference [A] */
+} mc_foc_f32_in_t;
+
+/** Outputs of the whole fast step (duties plus telemetry). */
+typedef struct {
+    float duty_a;           /**< high-side duty of phase a, [0, 1] */
+    float duty_b;
+    float duty_c;
+    float id_a;             /**< measured d current [A] */
+    float iq_a;             /**< measured q current [A] */
+    float vd_v;             /**< applied d voltage [V] */
+    float vq_v;             /**< applied q voltage [V] */
+    float v_alpha_v;        /**< applied alpha voltage [V] */
+    float v_beta_v;         /**< applied beta voltage [V] */
+    uint32_t svpwm_flags;   /**< MC_SVPWM_FLAG_* of this step */
+    uint32_t flags;         /**< sticky MC_FOC_ERR_* after this step */
+} mc_foc_f32_out_t;
+
+/**
+ * Pole-zero cancelling PI gains for a current loop on an R-L load: kp = L bw
+ * [V/A], ki = R bw [V/(A s)]; the closed loop is then bw / (s + bw).
+ * Returns MC_FOC_ERR_MOTOR (R < 0, L <= 0, not finite), MC_FOC_ERR_BW
+ * (bw <= 0, not finite), MC_FOC_ERR_NULL; on error nothing is written.
+ */
+uint32_t mc_foc_f32_gains_from_bandwidth(float r_ohm, float l_h, float bw_rad_s, float *p_kp,
+                                         float *p_ki);
+
+/**
+ * Validate cfg and initialise st (integrators 0, flags clear). Returns the OR
+ * of the MC_FOC_ERR_* rules broken; on error st is not written.
+ */
+uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg);
+
+/** Integrators and last voltages to 0, sticky flags cleared. */
+void mc_foc_f32_reset(mc_foc_f32_t *st);
+
+/**
+ * One dq current-controller step: PIs, decoupling, d-priority limit.
+ * Writes vd, vq (zero on error). Returns the MC_FOC_ERR_* bits raised by this
+ * step (MC_FOC_ERR_NONE = 0 when it ran); st->flags keeps them.
+ */
+uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, float id_a,
+                            float iq_a, float omega_e_rad_s, float vbus_v, float *p_vd_v,
+                            float *p_vq_v);
+
+/**
+ * The whole fast step: Clarke, Park at theta_e (mc_sincos_f32), dq step,
+ * inverse Park, modulator limit (fed back to the PIs), SVPWM. Fills *out
+ * (duties 0.5 and zero voltages on error). Returns the MC_FOC_ERR_* bits
+ * raised by this step.
+ */
+uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_FOC_H */
