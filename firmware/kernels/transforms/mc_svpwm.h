@@ -1,0 +1,118 @@
+/**
+ * @file mc_svpwm.h
+ * @brief Space-vector PWM: alpha/beta voltage request to three high-side
+ *        duties, float32 and q31 twins.
+ *
+ * Method: min-max (centred) zero-sequence injection, which gives the same
+ * switching pattern as symmetric seven-segment SVPWM. With the phase voltages
+ * va, vb, vc of the request (inverse Clarke, amplitude invariant) and
+ * mid = (max(va,vb,vc) + min(va,vb,vc)) / 2, the duties are
+ *     d_x = 1/2 + (v_x - mid) / D,      D = max(vbus, L)
+ * where L measures the request against the chosen limit:
+ * - MC_SVPWM_LIMIT_CIRCLE:  L = sqrt(3) * |v|. Requests up to the inscribed
+ *   circle |v| <= vbus / sqrt(3) pass unchanged; longer ones are scaled to
+ *   exactly vbus / sqrt(3), direction kept.
+ * - MC_SVPWM_LIMIT_HEXAGON: L = max - min (the largest line-to-line voltage).
+ *   Requests inside the hexagon (max - min <= vbus, vertices at 2/3 vbus)
+ *   pass unchanged; longer ones are scaled along their direction to the
+ *   hexagon boundary, where one duty is 0 and another 1.
+ * Dividing by D > vbus is the same as scaling the request by vbus / D, so the
+ * average line-to-line voltages (d_a - d_b) * vbus, (d_b - d_c) * vbus,
+ * (d_c - d_a) * vbus are those of the (limited) request.
+ *
+ * Duties are for the high-side switch of each phase: 0 = always low side,
+ * 1 = always high side; 0.5 on all three phases is zero line-to-line voltage.
+ */
+#ifndef MC_SVPWM_H
+#define MC_SVPWM_H
+
+#include <stdint.h>
+
+#include "math/mc_q31.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum { MC_SVPWM_LIMIT_CIRCLE = 0, MC_SVPWM_LIMIT_HEXAGON = 1 } mc_svpwm_limit_t;
+
+/** Nothing to report: the request was inside the linear region. */
+#define MC_SVPWM_FLAG_NONE 0u
+/** The request was outside the chosen limit and was scaled down to it. */
+#define MC_SVPWM_FLAG_LIMITED (1u << 0)
+/** vbus NaN, infinite or <= 0: all duties 0.5 (zero line-to-line voltage). */
+#define MC_SVPWM_FLAG_BAD_VBUS (1u << 1)
+/** A voltage NaN or infinite or a limit value outside mc_svpwm_limit_t:
+ *  duties 0.5. Also a NULL output pointer: then nothing is written. */
+#define MC_SVPWM_FLAG_BAD_INPUT (1u << 2)
+
+/**
+ * Float32 SVPWM. Voltages in volts (amplitude-invariant alpha/beta, the same
+ * convention as mc_inv_clarke_f32), vbus in volts. Writes duties in [0, 1].
+ * Returns a set of MC_SVPWM_FLAG_* bits (MC_SVPWM_FLAG_NONE = 0 in the
+ * linear region). BAD_VBUS and BAD_INPUT may be set together; with either,
+ * LIMITED is never set. Any finite request, however large, is handled
+ * without overflow (the computation is normalised by
+ * max(vbus, |v_alpha|, |v_beta|)).
+ * Cost: four float divisions, one mc_sqrt_f32 (circle limit only), about
+ * 30 other flops.
+ */
+uint32_t mc_svpwm_f32(float v_alpha_v, float v_beta_v, float vbus_v, mc_svpwm_limit_t limit,
+                      float *p_duty_a, float *p_duty_b, float *p_duty_c);
+
+/**
+ * The voltage vector mc_svpwm_f32 actually applies for this request, in
+ * place: unchanged in the linear region, scaled to the limit otherwise, and
+ * (0, 0) when the function reports BAD_VBUS or BAD_INPUT (the modulator then
+ * applies zero voltage). Same flags as mc_svpwm_f32. Meant for the current
+ * controller's anti-windup (back-calculation from the applied voltage).
+ * With a NULL pointer: BAD_INPUT, nothing written.
+ */
+uint32_t mc_svpwm_limit_f32(float *p_v_alpha_v, float *p_v_beta_v, float vbus_v,
+                            mc_svpwm_limit_t limit);
+
+/**
+ * The largest voltage magnitude |v| the modulator delivers, over every
+ * direction:
+ * - circle: vbus / sqrt(3), the same in every direction;
+ * - hexagon: 2 * vbus / 3, reached along the phase axes (the hexagon's
+ *   vertices); midway between them (the flat sides) only vbus / sqrt(3) is
+ *   available, and mc_svpwm_limit_f32 tells the caller what was applied.
+ * A request longer than this is scaled in every direction.
+ * Returns 0 for a bad vbus (NaN, infinite, <= 0) or an unknown limit.
+ */
+float mc_svpwm_max_voltage_f32(float vbus_v, mc_svpwm_limit_t limit);
+
+/**
+ * q31 twin of mc_svpwm_f32. v_alpha_pu, v_beta_pu and vbus_pu are per unit
+ * of one base voltage (the caller's config states it), q31 in [-1, 1); vbus
+ * must be > 0. Duties are q31 in [0, 1): a duty of exactly 1 (hexagon
+ * boundary) saturates to MC_Q31_MAX = 1 - 2^-31.
+ *
+ * Scaling and overflow: phase voltages in a 64-bit Q2.62 accumulator
+ * (|v_x| <= 1.37 for any q31 inputs), mid and v_x - mid in Q2.62
+ * (|v_x - mid| <= 1.23), the limit measure L and D in Q31 held in int64
+ * (L <= 2.45); |v| by an exact integer square root of the Q2.62 sum of
+ * squares (rounded to nearest). Each duty offset is one rounded int64
+ * division (v_x - mid)_Q62 / D_Q31; nothing wraps, duties saturate to
+ * [0, MC_Q31_MAX]. Error of each duty vs exact arithmetic on the same
+ * inputs, with D in per unit: at most 0.77 + c / D LSB, where 0.5 is the
+ * rounded division, 0.26 the Q31 constant sqrt(3)/2 (0.38 LSB times
+ * |beta| / D <= 2/3), and c / D the rounding of D to Q31 seen through an
+ * offset of at most 1/2 (only when limited; unlimited, D = vbus is exact):
+ * c = 0.69 for the circle (|v| and sqrt(3) |v| each rounded), 0.25 for the
+ * hexagon. Choose the base voltage so that vbus_pu is not tiny: at
+ * vbus_pu >= 0.25 every duty is within 3.6 LSB (2^-29).
+ * Cost: three 64-bit divisions (software on the Cortex-M4) plus, for the
+ * circle limit, a 32-step integer square root.
+ * BAD_VBUS for vbus_pu <= 0, BAD_INPUT for an unknown limit or a NULL
+ * pointer (q31 has no NaN); then duties are 2^30 (0.5).
+ */
+uint32_t mc_svpwm_q31(q31_t v_alpha_pu, q31_t v_beta_pu, q31_t vbus_pu, mc_svpwm_limit_t limit,
+                      q31_t *p_duty_a, q31_t *p_duty_b, q31_t *p_duty_c);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_SVPWM_H */
