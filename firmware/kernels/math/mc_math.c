@@ -10,9 +10,11 @@
  * Range reduction (sin/cos, wrap):
  * - |x| <= MC_MATH_CW_LIMIT_RAD (8192 rad): Cody-Waite, x - k*(pi/2) with
  *   pi/2 = C1 + C2 + C3, where C1 and C2 have 11 significant bits (13
- *   trailing zero bits), so k*C1 and k*C2 are exact for |k| < 2^13, and
- *   x - k*C1 is exact (Sterbenz). The reduced argument carries one or two
- *   roundings, i.e. its error is below 1 ulp of |r| <= pi/4 (~6e-8).
+ *   trailing zero bits), so k*C1 and k*C2 are exact for |k| < 2^13;
+ *   x - k*C1 is exact (Sterbenz) and so is the next step (its result is a
+ *   multiple of 2^-24 below 1, or of 2^-22 below 4, i.e. fits 24 bits). Only
+ *   the product k*C3 (< 2e-11) and the last subtraction (half an ulp of the
+ *   result) round; the residual pi/2 - C1 - C2 - C3 = -1.7e-15 adds < 1e-11.
  * - larger |x|: Payne-Hanek in integer arithmetic (mc_turn_from_rad_f32):
  *   the float's 24-bit significand times a 96-bit window of the bits of 2/pi
  *   gives x/(2*pi) modulo one turn as a Q0.64 fraction, exactly up to
@@ -69,10 +71,10 @@ static float round_small_f32(float v)
 }
 
 /* Cody-Waite split of pi/2: C1, C2 with 11 significant bits. */
-#define CW_C1 1.5703125f               /* 0x1.92p+0 */
-#define CW_C2 4.837512969970703125e-4f /* 0x1.fb4p-12 */
-#define CW_C3 7.549790126404332e-8f    /* 0x1.4442d2p-24 */
-#define CW_TWO_OVER_PI 0.636619772367581343f
+static const float cw_c1 = 0x1.92p+0f;      /* 1.5703125, 11 bits */
+static const float cw_c2 = 0x1.fb4p-12f;    /* 4.8375129699707e-4, 11 bits */
+static const float cw_c3 = 0x1.4442d2p-24f; /* 7.5497901264043e-8, 24 bits */
+static const float cw_two_over_pi = 0.636619772367581343f;
 
 /*
  * Bits of 2/pi, most significant first: 2/pi = 0.A2F9836E 4E441529 ... (hex).
@@ -186,11 +188,11 @@ static float quarter_from_turn(uint64_t turn, uint32_t *p_q)
 static float reduce_quadrant(float x, uint32_t *p_q)
 {
     if (mc_abs_f32(x) <= MC_MATH_CW_LIMIT_RAD) {
-        float kf = round_small_f32(x * CW_TWO_OVER_PI); /* |k| <= 5216 */
+        float kf = round_small_f32(x * cw_two_over_pi); /* |k| <= 5216 */
         int32_t k = (int32_t)kf;                        /* in range: exact */
-        float r = x - kf * CW_C1;                       /* exact */
-        r = r - kf * CW_C2;
-        r = r - kf * CW_C3;
+        float r = x - kf * cw_c1;                       /* exact */
+        r = r - kf * cw_c2;
+        r = r - kf * cw_c3;
         *p_q = (uint32_t)k & 3u;
         return r;
     }
@@ -202,14 +204,14 @@ static float reduce_quadrant(float x, uint32_t *p_q)
 /* Minimax-type fits on |r| <= pi/4 (Chebyshev interpolation, own fit):
  * sin r = r + r^3 (S1 + S2 r^2 + S3 r^4 + S4 r^6), fit error < 1e-10;
  * cos r = 1 - r^2/2 + r^4 (C1 + C2 r^2 + C3 r^4 + C4 r^6), fit error < 1e-11. */
-#define SIN_S1 -1.666666716e-01f
-#define SIN_S2 8.333331905e-03f
-#define SIN_S3 -1.984008704e-04f
-#define SIN_S4 2.724989599e-06f
-#define COS_C1 4.166666791e-02f
-#define COS_C2 -1.388888806e-03f
-#define COS_C3 2.480059993e-05f
-#define COS_C4 -2.730093343e-07f
+static const float sin_s1 = -1.666666716e-01f;
+static const float sin_s2 = 8.333331905e-03f;
+static const float sin_s3 = -1.984008704e-04f;
+static const float sin_s4 = 2.724989599e-06f;
+static const float cos_c1 = 4.166666791e-02f;
+static const float cos_c2 = -1.388888806e-03f;
+static const float cos_c3 = 2.480059993e-05f;
+static const float cos_c4 = -2.730093343e-07f;
 
 void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos)
 {
@@ -219,11 +221,16 @@ void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos)
         *p_cos = nan;
         return;
     }
+    if (x_rad == 0.0f) {
+        *p_sin = x_rad; /* keeps the sign of -0 (sin is odd) */
+        *p_cos = 1.0f;
+        return;
+    }
     uint32_t q = 0u;
     float r = reduce_quadrant(x_rad, &q);
     float z = r * r;
-    float s = r + (r * z) * (SIN_S1 + z * (SIN_S2 + z * (SIN_S3 + z * SIN_S4)));
-    float c = (1.0f - 0.5f * z) + (z * z) * (COS_C1 + z * (COS_C2 + z * (COS_C3 + z * COS_C4)));
+    float s = r + (r * z) * (sin_s1 + z * (sin_s2 + z * (sin_s3 + z * sin_s4)));
+    float c = (1.0f - 0.5f * z) + (z * z) * (cos_c1 + z * (cos_c2 + z * (cos_c3 + z * cos_c4)));
     switch (q) {
     case 0u:
         *p_sin = s;
@@ -248,27 +255,27 @@ void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos)
 
 /* atan t = t + t^3 (A1 + A2 t^2 + ... + A6 t^10) on |t| <= tan(pi/8),
  * fit error < 3e-9 rad. */
-#define ATAN_A1 -3.333333433e-01f
-#define ATAN_A2 1.999997795e-01f
-#define ATAN_A3 -1.428415030e-01f
-#define ATAN_A4 1.107134447e-01f
-#define ATAN_A5 -8.624520153e-02f
-#define ATAN_A6 5.047736317e-02f
-#define TAN_PI_8 0.414213562373095049f
-#define QUARTER_PI_F32 0.785398163397448310f
+static const float atan_a1 = -3.333333433e-01f;
+static const float atan_a2 = 1.999997795e-01f;
+static const float atan_a3 = -1.428415030e-01f;
+static const float atan_a4 = 1.107134447e-01f;
+static const float atan_a5 = -8.624520153e-02f;
+static const float atan_a6 = 5.047736317e-02f;
+static const float tan_pi_8 = 0.414213562373095049f;
+static const float quarter_pi_f32 = 0.785398163397448310f;
 
 /** atan(z) for 0 <= z <= 1. */
 static float atan_unit(float z)
 {
     float base = 0.0f;
     float t = z;
-    if (z > TAN_PI_8) {
+    if (z > tan_pi_8) {
         /* atan z = pi/4 + atan((z - 1)/(z + 1)), |(z-1)/(z+1)| <= tan(pi/8) */
-        base = QUARTER_PI_F32;
+        base = quarter_pi_f32;
         t = (z - 1.0f) / (z + 1.0f);
     }
     float t2 = t * t;
-    float p = ATAN_A1 + t2 * (ATAN_A2 + t2 * (ATAN_A3 + t2 * (ATAN_A4 + t2 * (ATAN_A5 + t2 * ATAN_A6))));
+    float p = atan_a1 + t2 * (atan_a2 + t2 * (atan_a3 + t2 * (atan_a4 + t2 * (atan_a5 + t2 * atan_a6))));
     return base + (t + (t * t2) * p);
 }
 
@@ -388,10 +395,27 @@ float mc_sqrt_f32(float x)
 
 /* ------------------------------------------------------------------- wrap */
 
+/* 2*pi = MC_TWO_PI_F32 + TWO_PI_LO (the float constant is 1.7e-7 high). */
+static const float two_pi_lo = -0x1.777a5cp-23f; /* -1.7484556e-7 */
+
 /**
- * x - 2*pi*k for the k that puts a real-valued result in [lo, lo + 2*pi),
- * lo = -pi (centered) or 0. Cody-Waite for moderate |x|, integer reduction
- * beyond. Inputs already in range come back unchanged.
+ * Cody-Waite x - k*2*pi for |k| <= 1306 (4k quarter turns < 2^13), split as
+ * r2 - p3: r2 = x - 4k*C1 - 4k*C2 is exact (Sterbenz, then 24-bit fit) when
+ * k = round(x / 2pi) or its neighbour, and p3 = 4k*C3 carries < 2e-11.
+ */
+static float cw_wrap(float x, float kf, float *p_p3)
+{
+    float k4 = 4.0f * kf;
+    float r = x - k4 * cw_c1;
+    r = r - k4 * cw_c2;
+    *p_p3 = k4 * cw_c3;
+    return r;
+}
+
+/**
+ * x - 2*pi*k for the k that puts the result in [lo, hi), lo = -pi (centered)
+ * or 0, hi = lo + 2*pi (the float constants). Cody-Waite for moderate |x|,
+ * integer reduction beyond. Inputs already in range come back unchanged.
  */
 static float wrap_impl(float x, bool centered)
 {
@@ -405,14 +429,31 @@ static float wrap_impl(float x, bool centered)
     }
     float r;
     if (mc_abs_f32(x) <= MC_MATH_CW_LIMIT_RAD) {
-        /* k turns = 4k quarter turns: the parts times 4k stay exact
-         * (|4k| <= 5216 < 2^13). */
-        float shift = centered ? 0.0f : -0.5f;
-        float kf = round_small_f32(x * (0.25f * CW_TWO_OVER_PI) + shift);
-        float k4 = 4.0f * kf;
-        r = x - k4 * CW_C1;
-        r = r - k4 * CW_C2;
-        r = r - k4 * CW_C3;
+        /* Centered reduction first: with k = round(x / 2pi), x and k*2pi
+         * are within a factor 2, so the leading steps are exact. */
+        float kf = round_small_f32(x * (0.25f * cw_two_over_pi));
+        float p3 = 0.0f;
+        float r2 = cw_wrap(x, kf, &p3);
+        r = r2 - p3;
+        /* The rounded x/(2pi) can pick a k one off near +-pi: redo the
+         * exact reduction with the neighbour instead of adding a rounded
+         * 2*pi. */
+        if (r >= MC_PI_F32) {
+            r2 = cw_wrap(x, kf + 1.0f, &p3);
+            r = r2 - p3;
+        } else if (r < -MC_PI_F32) {
+            r2 = cw_wrap(x, kf - 1.0f, &p3);
+            r = r2 - p3;
+        } else {
+            /* in range */
+        }
+        if (!centered && (r < 0.0f)) {
+            /* r2 - p3 + 2*pi with one final rounding: Fast2Sum of the float
+             * 2*pi and r2 (|r2| <= 2*pi) is exact as s + e. */
+            float s = MC_TWO_PI_F32 + r2;
+            float e = (MC_TWO_PI_F32 - s) + r2;
+            r = s + ((e + two_pi_lo) - p3);
+        }
     } else {
         uint64_t turn = 0u;
         (void)mc_turn_from_rad_f32(x, &turn);
@@ -425,15 +466,10 @@ static float wrap_impl(float x, bool centered)
         r = (float)prod * 4.33680868994201774e-19f; /* 2^-61 */
         r = neg ? -r : r;
     }
-    /* One rounding may land exactly on a bound: fold it back. */
-    if (r >= hi) {
-        r = r - MC_TWO_PI_F32;
-    }
-    if (r < lo) {
-        r = r + MC_TWO_PI_F32;
-    }
-    if (r >= hi) {
-        r = lo; /* r was a tiny negative number rounding up to 2*pi */
+    /* A result within rounding of the upper bound (e.g. 2*pi - 1e-8 rounds
+     * to the float 2*pi) is the same angle as the lower bound. */
+    if ((r >= hi) || (r < lo)) {
+        r = lo;
     }
     return r;
 }
