@@ -243,7 +243,6 @@ uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32
     out->iq_a = 0.0f;
 
     /* Raw inputs first: a NaN angle or current never reaches the transforms. */
-    err = MC_FOC_ERR_NONE;
     if (!mc_isfinite_f32(in->ia_a) || !mc_isfinite_f32(in->ib_a) ||
         (in->three_phase && !mc_isfinite_f32(in->ic_a)) || !mc_isfinite_f32(in->theta_e_rad)) {
         err = MC_FOC_ERR_NAN_INPUT;

@@ -31,12 +31,10 @@ static uint32_t pi_validate_f32(const mc_pi_f32_cfg_t *cfg)
     if (!dt_ok) {
         err |= MC_PI_ERR_DT;
     }
-    if (!pi_gain_ok_f32(cfg->ki_per_s)) {
+    /* ki*dt must not overflow either (only checked with a valid dt). */
+    if (!pi_gain_ok_f32(cfg->ki_per_s) ||
+        (dt_ok && !mc_isfinite_f32(cfg->ki_per_s * cfg->dt_s))) {
         err |= MC_PI_ERR_KI;
-    } else if (dt_ok && !mc_isfinite_f32(cfg->ki_per_s * cfg->dt_s)) {
-        err |= MC_PI_ERR_KI;
-    } else {
-        /* gain fine */
     }
     if (!mc_isfinite_f32(cfg->out_min) || !mc_isfinite_f32(cfg->out_max) ||
         (cfg->out_min > cfg->out_max)) {
@@ -47,12 +45,10 @@ static uint32_t pi_validate_f32(const mc_pi_f32_cfg_t *cfg)
     case MC_PI_AW_NONE:
         break;
     case MC_PI_AW_BACK_CALC:
-        if (!(cfg->kaw_per_s > 0.0f) || !mc_isfinite_f32(cfg->kaw_per_s)) {
+        /* 0 < kaw*dt <= 1 (the dt part only checked with a valid dt). */
+        if (!(cfg->kaw_per_s > 0.0f) || !mc_isfinite_f32(cfg->kaw_per_s) ||
+            (dt_ok && !(cfg->kaw_per_s * cfg->dt_s <= 1.0f))) {
             err |= MC_PI_ERR_KAW;
-        } else if (dt_ok && !(cfg->kaw_per_s * cfg->dt_s <= 1.0f)) {
-            err |= MC_PI_ERR_KAW;
-        } else {
-            /* gain fine */
         }
         break;
     default:
