@@ -117,7 +117,8 @@ float mc_q31_angle_to_rad_f32(q31_t angle)
 
 /*
  * Polynomials in t = fraction of a quarter turn, |t| <= 1/2, coefficients
- * Q2.30 (own Chebyshev-node fit, fit error < 2e-12):
+ * Q2.30 (own Chebyshev-node fit; error with the Q2.30 coefficients, exact
+ * evaluation, < 0.03 LSB of q31):
  *   sin(pi/2 t) = t * (A0 + A1 t^2 + ... + A5 t^10)
  *   cos(pi/2 t) = B0 + B1 t^2 + ... + B6 t^12
  */

@@ -21,17 +21,19 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-// Stated bound of mc_sincos_f32 (mc_math.h): reduction error < 1 ulp of
-// |r| <= pi/4 (6e-8) + polynomial and rounding < 1 ulp of the result (6e-8)
-// + the rounding of the float reference itself (3e-8), over every finite x.
+// Stated bound of mc_sincos_f32 (mc_math.h): reduction error <= half an ulp
+// of |r| <= pi/4 (3e-8), polynomial fit 2.4e-9, float evaluation ~1.5 ulp of
+// the result (9e-8), and the rounding of the float reference itself (3e-8),
+// over every finite x: 1.5e-7, stated with margin as 2e-7.
 constexpr double kSincosBound = 2e-7;
-// Stated bound of mc_atan2_f32: polynomial fit 3e-9, rounding of the ratio
+// Stated bound of mc_atan2_f32: polynomial fit 7e-10, rounding of the ratio
 // and of the reduction (pi/4 + ...) about 2 ulp of pi/2 (2.4e-7), float pi.
 constexpr double kAtan2Bound = 5e-7;
-// Stated bound of mc_wrap_pi_f32: one or two roundings of a result of
-// magnitude <= pi, i.e. 1 ulp of pi (2.4e-7).
+// Stated bound of mc_wrap_pi_f32: the leading Cody-Waite steps are exact,
+// so only the last rounding of a result of magnitude <= pi remains: half an
+// ulp of pi (1.19e-7) + < 3e-11 (k*C3 product, pi/2 residual).
 constexpr double kWrapPiBound = 1.25e-7;
-// mc_wrap_2pi_f32: the same for results up to 2*pi (ulp 4.8e-7).
+// mc_wrap_2pi_f32: the same for results up to 2*pi (half ulp 2.4e-7).
 constexpr double kWrap2PiBound = 2.5e-7;
 
 float from_bits(uint32_t u)

@@ -22,8 +22,8 @@ constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // Stated bounds (mc_q31.h), in LSB of q31 (2^-31 ~ 4.66e-10):
-// sincos: polynomial fit < 0.01 LSB, coefficient rounding and six Q30
-// Horner roundings give < 1.5 LSB of Q30 = 3 LSB of q31.
+// sincos: polynomial fit with Q30 coefficients < 0.03 LSB, six Q30
+// Horner roundings and the t^2 rounding give < 1.5 LSB of Q30 = 3 LSB.
 constexpr double kSincosQ31BoundLsb = 3.0;
 // atan2: CORDIC residual atan(2^-33) = 0.08 LSB, 34 table entries rounded to
 // 2^-40 turn (0.07 LSB), final rounding 0.5 LSB, shift truncation of the
