@@ -95,7 +95,7 @@ class InputDelay {
     if (delay_ == 0U) {
       return u_new;
     }
-    const Input out = buf_[head_];
+    Input out = buf_[head_];
     buf_[head_] = u_new;
     head_ = (head_ + 1U) % delay_;
     return out;

@@ -19,7 +19,7 @@ using mcsim::InverterParams;
 using mcsim::Status;
 using mcsim_test::kPi;
 
-const Vector3d kNoCurrent = Vector3d::Zero();
+Vector3d no_current() { return Vector3d::Zero(); }
 
 TEST(SimInverter3Ph, LineToLineVoltagesFollowDuties) {
   Inverter3Ph inv;
@@ -27,7 +27,7 @@ TEST(SimInverter3Ph, LineToLineVoltagesFollowDuties) {
   for (int k = 0; k < 20; ++k) {
     const Vector3d d(0.5 + 0.45 * std::sin(0.3 * k), 0.5 + 0.4 * std::cos(0.7 * k),
                      0.05 * (k % 19));
-    const Vector3d v = inv.phase_voltages_v(d, vbus, kNoCurrent);
+    const Vector3d v = inv.phase_voltages_v(d, vbus, no_current());
     // 1e-12 V: a few roundings of ~50 V quantities.
     EXPECT_NEAR(v(0) - v(1), (d(0) - d(1)) * vbus, 1e-12);
     EXPECT_NEAR(v(1) - v(2), (d(1) - d(2)) * vbus, 1e-12);
@@ -39,8 +39,8 @@ TEST(SimInverter3Ph, LineToLineVoltagesFollowDuties) {
 TEST(SimInverter3Ph, CommonModeOfDutiesIsRemoved) {
   Inverter3Ph inv;
   const Vector3d d(0.6, 0.3, 0.45);
-  const Vector3d v1 = inv.phase_voltages_v(d, 24.0, kNoCurrent);
-  const Vector3d v2 = inv.phase_voltages_v(d + Vector3d::Constant(0.2), 24.0, kNoCurrent);
+  const Vector3d v1 = inv.phase_voltages_v(d, 24.0, no_current());
+  const Vector3d v2 = inv.phase_voltages_v(d + Vector3d::Constant(0.2), 24.0, no_current());
   // Shifting every duty by the same amount (zero-sequence injection, as SVPWM
   // does) changes no phase voltage: 1e-12 V round-off bound.
   EXPECT_LT((v1 - v2).cwiseAbs().maxCoeff(), 1e-12);
@@ -55,7 +55,7 @@ TEST(SimInverter3Ph, AlphaBetaIsAmplitudeInvariant) {
     const double th = 0.5 * k;
     const Vector3d d(0.5 + 0.5 * m * std::cos(th), 0.5 + 0.5 * m * std::cos(th - 2.0 * kPi / 3.0),
                      0.5 + 0.5 * m * std::cos(th + 2.0 * kPi / 3.0));
-    const Vector2d vab = inv.alpha_beta_v(d, vbus, kNoCurrent);
+    const Vector2d vab = inv.alpha_beta_v(d, vbus, no_current());
     // Sinusoidal duties of depth m give a vector of length m vbus / 2.
     EXPECT_NEAR(vab(0), 0.5 * m * vbus * std::cos(th), 1e-12);
     EXPECT_NEAR(vab(1), 0.5 * m * vbus * std::sin(th), 1e-12);
@@ -81,7 +81,7 @@ TEST(SimInverter3Ph, DeadTimeErrorOpposesCurrent) {
   // Current into leg a (negative): the pole voltage rises by dv.
   EXPECT_NEAR(inv.pole_voltages_v(d, vbus, Vector3d(-5.0, 0.0, 0.0))(0), 25.0 + dv, 1e-12);
   // Zero current: no error; half the linear band: half the error.
-  EXPECT_NEAR(inv.pole_voltages_v(d, vbus, kNoCurrent)(0), 25.0, 1e-12);
+  EXPECT_NEAR(inv.pole_voltages_v(d, vbus, no_current())(0), 25.0, 1e-12);
   EXPECT_NEAR(inv.pole_voltages_v(d, vbus, Vector3d(0.05, 0.0, 0.0))(0), 25.0 - 0.5 * dv, 1e-12);
   // Currents (+5, -2.5, -2.5): poles (25 - dv, 25 + dv, 25 + dv); removing
   // the common mode 25 + dv/3 leaves (-4/3 dv, 2/3 dv, 2/3 dv).
@@ -93,10 +93,10 @@ TEST(SimInverter3Ph, DeadTimeErrorOpposesCurrent) {
 TEST(SimInverter3Ph, BusLimitClampsDutiesAndPoles) {
   Inverter3Ph inv;
   const double vbus = 40.0;
-  const Vector3d v = inv.pole_voltages_v(Vector3d(1.7, -0.3, 0.5), vbus, kNoCurrent);
+  const Vector3d v = inv.pole_voltages_v(Vector3d(1.7, -0.3, 0.5), vbus, no_current());
   EXPECT_EQ(v(0), vbus);  // exact: clamped
   EXPECT_EQ(v(1), 0.0);
-  const Vector3d ph = inv.phase_voltages_v(Vector3d(1.7, -0.3, 0.5), vbus, kNoCurrent);
+  const Vector3d ph = inv.phase_voltages_v(Vector3d(1.7, -0.3, 0.5), vbus, no_current());
   EXPECT_NEAR(ph(0) - ph(1), vbus, 1e-12);  // line voltage never exceeds vbus
   InverterParams p;
   p.t_dead_s = 2.0e-6;

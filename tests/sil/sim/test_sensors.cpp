@@ -90,10 +90,14 @@ TEST(SimSensors, NoiseHasTheRequestedStatistics) {
   const int n = 20000;
   double sum = 0.0;
   double sum2 = 0.0;
+  double lag1 = 0.0;
+  double prev = 0.0;
   for (int k = 0; k < n; ++k) {
     const double y = s.sample_a(1.0) - 1.0;
     sum += y;
     sum2 += y * y;
+    lag1 += y * prev;
+    prev = y;
   }
   const double mean = sum / n;
   const double rms = std::sqrt(sum2 / n - mean * mean);
@@ -101,6 +105,9 @@ TEST(SimSensors, NoiseHasTheRequestedStatistics) {
   EXPECT_NEAR(mean, 0.0, 7.0e-3);
   // Standard error of the rms estimate: 0.2/sqrt(2 n) = 1 mA -> 5 sigma = 5 mA.
   EXPECT_NEAR(rms, 0.2, 5.0e-3);
+  // Successive samples are independent (both Box-Muller outputs are used):
+  // lag-1 correlation has standard error 1/sqrt(n) = 0.007 -> 5 sigma bound.
+  EXPECT_NEAR(lag1 / sum2, 0.0, 0.035);
 }
 
 TEST(SimSensors, DeterministicForASeed) {
