@@ -335,6 +335,32 @@ float mc_sqrt_f32(float x)
     if (!mc_isfinite_f32(x)) {
         return x; /* +inf */
     }
+#if defined(__ARM_FP) || defined(__SSE_MATH__)
+    /* Single-precision FPUs with a square-root instruction (Cortex-M4F
+     * VSQRT.F32, x86-64 SQRTSS): IEEE 754 requires it correctly rounded, so
+     * it returns exactly what the integer algorithm below returns (the test
+     * compares both over every exponent), in 14 cycles on the M4F instead of
+     * ~700 instructions. This is an instruction, not a libm call. */
+    return __builtin_sqrtf(x);
+#else
+    return mc_sqrt_f32_soft(x);
+#endif
+}
+
+float mc_sqrt_f32_soft(float x)
+{
+    if (x != x) {
+        return x;
+    }
+    if (x == 0.0f) {
+        return x;
+    }
+    if (x < 0.0f) {
+        return nan_f32();
+    }
+    if (!mc_isfinite_f32(x)) {
+        return x;
+    }
 
     /* x = m * 2^e with m a 24-bit integer in [2^23, 2^24) (denormals
      * normalised), then e made even. */

@@ -96,14 +96,22 @@ float mc_atan2_f32(float y, float x);
 
 /**
  * Square root, correctly rounded (0 ulp: bit-identical to an IEEE sqrtf)
- * for every non-negative float, denormals included. Method: exponent
- * halving and a digit-by-digit integer square root of the 24-bit
- * significand (64-bit accumulator), rounded to nearest even with the
- * remainder as sticky bit. No FPU sqrt instruction and no libm.
+ * for every non-negative float, denormals included. Method: the FPU's
+ * square-root instruction where the core has one (Cortex-M4F VSQRT.F32,
+ * x86-64 SQRTSS), else mc_sqrt_f32_soft (below). No libm.
  * x = +-0: x (sign kept, as IEEE). x < 0 (incl. -inf, -denormal) or NaN:
  * NaN. +inf: +inf.
  */
 float mc_sqrt_f32(float x);
+
+/**
+ * The same square root by integer arithmetic only (digit-by-digit root of the
+ * significand, round to nearest even), for cores without an FPU square root.
+ * mc_sqrt_f32 uses the FPU instruction where there is one (ARM VFP, x86 SSE);
+ * IEEE 754 makes both correctly rounded, so the results are bit-identical,
+ * and tests/unit/math checks that they are.
+ */
+float mc_sqrt_f32_soft(float x);
 
 /**
  * Wrap an angle to [-MC_PI_F32, MC_PI_F32) ("[-pi, pi)" with the float pi,

@@ -306,10 +306,13 @@ TEST(MathSqrtF32, CorrectlyRoundedOverAllExponents)
     // included) plus 1e6 random ones.
     uint64_t mismatches = 0;
     float first_bad = 0.0f;
+    // Both paths: mc_sqrt_f32 (FPU instruction on this host) and the
+    // integer-only mc_sqrt_f32_soft used on cores without one.
     auto check = [&](float x) {
         const float got = mc_sqrt_f32(x);
+        const float soft = mc_sqrt_f32_soft(x);
         const float ref = std::sqrt(x);
-        if (to_bits(got) != to_bits(ref)) {
+        if (to_bits(got) != to_bits(ref) || to_bits(soft) != to_bits(ref)) {
             if (mismatches == 0) {
                 first_bad = x;
             }
@@ -346,6 +349,21 @@ TEST(MathSqrtF32, SpecialValues)
     EXPECT_EQ(mc_sqrt_f32(0.25f), 0.5f);
     EXPECT_EQ(mc_sqrt_f32(FLT_MAX), std::sqrt(FLT_MAX));
     EXPECT_EQ(mc_sqrt_f32(from_bits(1u)), std::sqrt(from_bits(1u)));  // 2^-74.5
+}
+
+TEST(MathSqrtF32, SoftSpecialValues)
+{
+    EXPECT_EQ(to_bits(mc_sqrt_f32_soft(0.0f)), 0u);
+    EXPECT_EQ(to_bits(mc_sqrt_f32_soft(-0.0f)), 0x80000000u);  // as IEEE sqrt
+    EXPECT_EQ(mc_sqrt_f32_soft(kInf), kInf);
+    EXPECT_TRUE(std::isnan(mc_sqrt_f32_soft(-kInf)));
+    EXPECT_TRUE(std::isnan(mc_sqrt_f32_soft(-1.0f)));
+    EXPECT_TRUE(std::isnan(mc_sqrt_f32_soft(-from_bits(1u))));  // negative denormal
+    EXPECT_TRUE(std::isnan(mc_sqrt_f32_soft(kNan)));
+    EXPECT_EQ(mc_sqrt_f32_soft(4.0f), 2.0f);
+    EXPECT_EQ(mc_sqrt_f32_soft(0.25f), 0.5f);
+    EXPECT_EQ(mc_sqrt_f32_soft(FLT_MAX), std::sqrt(FLT_MAX));
+    EXPECT_EQ(mc_sqrt_f32_soft(from_bits(1u)), std::sqrt(from_bits(1u)));  // 2^-74.5
 }
 
 // -------------------------------------------------------------------- wrap
