@@ -96,7 +96,9 @@ double CurrentSensor::lsb_a() const {
 }
 
 std::int32_t CurrentSensor::sample_code(double i_true_a) {
-  const double noise = p_.noise_rms_a * rng_.normal();  // drawn every sample
+  // No draw for a noiseless sensor (the Gaussian draw is a third of a
+  // noiseless SIL step); a noisy one draws every sample.
+  const double noise = (p_.noise_rms_a > 0.0) ? p_.noise_rms_a * rng_.normal() : 0.0;
   const double y = (1.0 + p_.gain_error) * i_true_a + p_.offset_a + noise;
   const std::int32_t half = static_cast<std::int32_t>(1) << (p_.bits - 1);
   return quantise(y, lsb_a(), -half, half - 1);
@@ -120,7 +122,7 @@ Status VbusSensor::configure(const VbusSensorParams& p) {
 double VbusSensor::lsb_v() const { return p_.full_scale_v / std::ldexp(1.0, p_.bits); }
 
 std::int32_t VbusSensor::sample_code(double vbus_true_v) {
-  const double noise = p_.noise_rms_v * rng_.normal();
+  const double noise = (p_.noise_rms_v > 0.0) ? p_.noise_rms_v * rng_.normal() : 0.0;
   const double y = (1.0 + p_.gain_error) * vbus_true_v + p_.offset_v + noise;
   const std::int32_t full = static_cast<std::int32_t>(
       (static_cast<std::int64_t>(1) << p_.bits) - 1);
