@@ -1,0 +1,299 @@
+/**
+ * @file mc_drive.c
+ * @brief Drive application: see mc_drive.h.
+ */
+#include "mc_drive.h"
+
+#include <errno.h>
+#include <stddef.h>
+
+#include "math/mc_math.h"
+
+static bool finite4(float a, float b, float c, float d)
+{
+    return mc_isfinite_f32(a) && mc_isfinite_f32(b) && mc_isfinite_f32(c) &&
+           mc_isfinite_f32(d);
+}
+
+static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
+                             uint32_t *p_foc_err)
+{
+    uint32_t err = MC_DRIVE_CFG_OK;
+    *p_foc_err = mc_foc_f32_init(foc_probe, &cfg->foc);
+    if (*p_foc_err != MC_FOC_ERR_NONE) {
+        err |= MC_DRIVE_CFG_ERR_FOC;
+    }
+    if (cfg->pole_pairs == 0u) {
+        err |= MC_DRIVE_CFG_ERR_POLES;
+    }
+    if (cfg->slow_loop_div == 0u) {
+        err |= MC_DRIVE_CFG_ERR_DIV;
+    }
+    if (!mc_isfinite_f32(cfg->i_max_a) || !mc_isfinite_f32(cfg->i_trip_a) ||
+        !(cfg->i_max_a > 0.0f) || !(cfg->i_trip_a >= cfg->i_max_a)) {
+        err |= MC_DRIVE_CFG_ERR_CURRENT;
+    }
+    if (!mc_isfinite_f32(cfg->vbus_min_v) || !mc_isfinite_f32(cfg->vbus_max_v) ||
+        !(cfg->vbus_min_v > 0.0f) || !(cfg->vbus_max_v > cfg->vbus_min_v)) {
+        err |= MC_DRIVE_CFG_ERR_VBUS;
+    }
+    /* The forward-Euler tracking loop keeps its three poles near
+     * z = 1 - bw dt, well inside the unit circle, for 3 bw dt <= 1. */
+    const float bw = cfg->speed_pll_bw_rad_s;
+    if (!mc_isfinite_f32(bw) || !(bw > 0.0f) || !(3.0f * bw * cfg->foc.dt_s <= 1.0f)) {
+        err |= MC_DRIVE_CFG_ERR_SPEED_PLL;
+    }
+    if (!mc_isfinite_f32(cfg->encoder_offset_rad)) {
+        err |= MC_DRIVE_CFG_ERR_OFFSET;
+    }
+    return err;
+}
+
+uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t *hal)
+{
+    if (d == NULL || cfg == NULL || hal == NULL) {
+        return MC_DRIVE_CFG_ERR_NULL;
+    }
+    mc_foc_f32_t foc;
+    uint32_t foc_err = MC_FOC_ERR_NONE;
+    uint32_t err = validate_cfg(cfg, &foc, &foc_err);
+    if (hal->adc == NULL || hal->pwm3 == NULL || hal->encoder == NULL) {
+        err |= MC_DRIVE_CFG_ERR_HAL;
+    }
+    if (err != MC_DRIVE_CFG_OK) {
+        return err;
+    }
+    /* Outputs off before anything else: a drive starts safe. */
+    (void)mc_hal_pwm3_disable(hal->pwm3);
+
+    mc_drive_t z = {0};
+    *d = z;
+    d->cfg = *cfg;
+    d->hal = hal;
+    d->foc = foc;
+    d->mode = MC_DRIVE_MODE_IDLE;
+    {
+        const float bw = cfg->speed_pll_bw_rad_s;
+        const float dt = cfg->foc.dt_s;
+        d->pll_k1_dt = 3.0f * bw * dt;
+        d->pll_k2_dt = 3.0f * bw * bw * dt;
+        d->pll_k3_dt = bw * bw * bw * dt;
+    }
+    d->foc_err = foc_err;
+    return MC_DRIVE_CFG_OK;
+}
+
+static uint32_t now_ticks(const mc_drive_t *d)
+{
+    uint32_t t = 0u;
+    if (d->hal->tick != NULL) {
+        (void)mc_hal_tick_read(d->hal->tick, &t);
+    }
+    return t;
+}
+
+/* Safe state: outputs off first, then bookkeeping. */
+static void raise_fault(mc_drive_t *d, uint32_t bits)
+{
+    if (bits == 0u) {
+        return;
+    }
+    (void)mc_hal_pwm3_disable(d->hal->pwm3);
+    if (d->faults == 0u) {
+        /* lowest set bit: the first detected cause of this step */
+        d->first_fault = bits & (~bits + 1u);
+        d->fault_tick = now_ticks(d);
+    }
+    d->faults |= bits;
+    d->mode = MC_DRIVE_MODE_FAULT;
+}
+
+static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
+{
+    const uint32_t cpr = enc->counts_per_rev;
+    const uint32_t count = enc->count % cpr;
+    const float rad_per_count = MC_TWO_PI_F32 / (float)cpr;
+    /* Electrical position in integer counts first: exact for any count. */
+    const uint32_t e_count =
+        (uint32_t)(((uint64_t)count * (uint64_t)d->cfg.pole_pairs) % (uint64_t)cpr);
+    d->tm.theta_m_rad = (float)count * rad_per_count;
+    d->tm.theta_e_rad =
+        mc_wrap_2pi_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);
+
+    /* Speed from a type-3 tracking loop on the encoder angle: states angle,
+     * speed, acceleration; characteristic polynomial (s + bw)^3, i.e.
+     * k1 = 3 bw, k2 = 3 bw^2, k3 = bw^3. A one-period count difference would
+     * be quantised to 2 pi / (cpr dt) (15 rad/s at 8192 counts and 20 kHz),
+     * and a type-2 loop lags by 2 a / bw under constant acceleration a; this
+     * one follows constant acceleration with no steady-state speed error, so
+     * the FOC's back-EMF feed-forward stays right while the rotor speeds up. */
+    if (!d->have_count) {
+        d->pll_theta_m_rad = d->tm.theta_m_rad;
+        d->omega_m_rad_s = 0.0f;
+        d->alpha_m_rad_s2 = 0.0f;
+    } else {
+        const float dt = d->cfg.foc.dt_s;
+        const float predicted = mc_wrap_2pi_f32(d->pll_theta_m_rad + d->omega_m_rad_s * dt);
+        const float err = mc_wrap_pi_f32(d->tm.theta_m_rad - predicted);
+        d->pll_theta_m_rad = mc_wrap_2pi_f32(predicted + d->pll_k1_dt * err);
+        d->omega_m_rad_s += d->alpha_m_rad_s2 * dt + d->pll_k2_dt * err;
+        d->alpha_m_rad_s2 += d->pll_k3_dt * err;
+    }
+    d->have_count = true;
+    d->tm.omega_m_rad_s = d->omega_m_rad_s;
+}
+
+static uint32_t check_sample(const mc_drive_t *d, const mc_hal_adc_sample_t *s, float *p_ic)
+{
+    const uint32_t need = MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS;
+    if ((s->valid_mask & need) != need) {
+        return MC_DRIVE_FAULT_ADC;
+    }
+    const bool have_ic = (s->valid_mask & MC_HAL_ADC_VALID_IC) != 0u;
+    const float ic = have_ic ? s->ic_a : -(s->ia_a + s->ib_a);
+    if (!finite4(s->ia_a, s->ib_a, ic, s->vbus_v)) {
+        return MC_DRIVE_FAULT_MEAS_NAN;
+    }
+    *p_ic = ic;
+    uint32_t f = 0u;
+    const float trip = d->cfg.i_trip_a;
+    if (mc_abs_f32(s->ia_a) > trip || mc_abs_f32(s->ib_a) > trip || mc_abs_f32(ic) > trip) {
+        f |= MC_DRIVE_FAULT_OVERCURRENT;
+    }
+    if (s->vbus_v < d->cfg.vbus_min_v) {
+        f |= MC_DRIVE_FAULT_VBUS_LOW;
+    }
+    if (s->vbus_v > d->cfg.vbus_max_v) {
+        f |= MC_DRIVE_FAULT_VBUS_HIGH;
+    }
+    return f;
+}
+
+bool mc_drive_fast_step(mc_drive_t *d)
+{
+    uint32_t f = 0u;
+    mc_hal_adc_sample_t s;
+    float ic = 0.0f;
+    const int arc = mc_hal_adc_read(d->hal->adc, &s);
+    if (arc != 0) {
+        f |= MC_DRIVE_FAULT_ADC; /* -EAGAIN here means a stale sample */
+    } else {
+        f |= check_sample(d, &s, &ic);
+        d->tm.ia_a = s.ia_a;
+        d->tm.ib_a = s.ib_a;
+        d->tm.ic_a = ic;
+        d->tm.vbus_v = s.vbus_v;
+    }
+
+    mc_hal_encoder_sample_t enc;
+    const int erc = mc_hal_encoder_read(d->hal->encoder, &enc);
+    if (erc != 0 || (enc.flags & MC_HAL_ENCODER_FLAG_VALID) == 0u || enc.counts_per_rev == 0u) {
+        f |= MC_DRIVE_FAULT_ENCODER;
+    } else {
+        update_position(d, &enc);
+    }
+
+    if (f == 0u && d->mode == MC_DRIVE_MODE_CURRENT) {
+        mc_foc_f32_in_t in = {
+            .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .three_phase = false,
+            .theta_e_rad = d->tm.theta_e_rad,
+            .omega_e_rad_s = d->omega_m_rad_s * (float)d->cfg.pole_pairs,
+            .vbus_v = s.vbus_v, .id_ref_a = d->id_ref_a, .iq_ref_a = d->iq_ref_a,
+        };
+        const uint32_t ferr = mc_foc_f32_step(&d->foc, &in, &d->tm.foc);
+        if (ferr != MC_FOC_ERR_NONE) {
+            d->foc_err = ferr;
+            f |= MC_DRIVE_FAULT_CONTROL;
+        } else if (mc_hal_pwm3_set_duty(d->hal->pwm3, d->tm.foc.duty_a, d->tm.foc.duty_b,
+                                        d->tm.foc.duty_c) != 0) {
+            f |= MC_DRIVE_FAULT_PWM;
+        }
+    }
+    d->tm.id_ref_a = d->id_ref_a;
+    d->tm.iq_ref_a = d->iq_ref_a;
+    raise_fault(d, f);
+
+    d->fast_count++;
+    d->slow_phase++;
+    if (d->slow_phase >= d->cfg.slow_loop_div) {
+        d->slow_phase = 0u;
+        return true;
+    }
+    return false;
+}
+
+void mc_drive_slow_step(mc_drive_t *d)
+{
+    if (d->hal->fault != NULL) {
+        mc_hal_fault_status_t fs;
+        if (mc_hal_fault_read(d->hal->fault, &fs) == 0 &&
+            (fs.active_mask != 0u || fs.gate_killed)) {
+            raise_fault(d, MC_DRIVE_FAULT_HW_INPUT);
+        }
+    }
+}
+
+int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
+{
+    switch (mode) {
+    case MC_DRIVE_MODE_IDLE:
+        (void)mc_hal_pwm3_disable(d->hal->pwm3);
+        if (d->mode != MC_DRIVE_MODE_FAULT) {
+            d->mode = MC_DRIVE_MODE_IDLE;
+        }
+        return 0;
+    case MC_DRIVE_MODE_CURRENT:
+        if (d->mode == MC_DRIVE_MODE_FAULT || d->faults != 0u) {
+            return -EBUSY;
+        }
+        if (d->mode == MC_DRIVE_MODE_CURRENT) {
+            return 0;
+        }
+        mc_foc_f32_reset(&d->foc);
+        /* Zero voltage first, then close the switches. */
+        if (mc_hal_pwm3_set_duty(d->hal->pwm3, 0.5f, 0.5f, 0.5f) != 0 ||
+            mc_hal_pwm3_enable(d->hal->pwm3) != 0) {
+            (void)mc_hal_pwm3_disable(d->hal->pwm3);
+            return -EBUSY;
+        }
+        d->mode = MC_DRIVE_MODE_CURRENT;
+        return 0;
+    case MC_DRIVE_MODE_FAULT:
+    default:
+        return -EINVAL;
+    }
+}
+
+int mc_drive_set_current_ref(mc_drive_t *d, float id_ref_a, float iq_ref_a)
+{
+    if (!mc_isfinite_f32(id_ref_a) || !mc_isfinite_f32(iq_ref_a) ||
+        mc_abs_f32(id_ref_a) > d->cfg.i_max_a || mc_abs_f32(iq_ref_a) > d->cfg.i_max_a) {
+        return -EINVAL;
+    }
+    d->id_ref_a = id_ref_a;
+    d->iq_ref_a = iq_ref_a;
+    return 0;
+}
+
+int mc_drive_clear_faults(mc_drive_t *d)
+{
+    if (d->hal->fault != NULL) {
+        mc_hal_fault_status_t fs;
+        if (mc_hal_fault_read(d->hal->fault, &fs) != 0 || fs.active_mask != 0u) {
+            return -EBUSY;
+        }
+        if (fs.gate_killed && mc_hal_fault_gate_release(d->hal->fault) != 0) {
+            return -EBUSY;
+        }
+    }
+    const float v = d->tm.vbus_v;
+    if (!(v >= d->cfg.vbus_min_v && v <= d->cfg.vbus_max_v)) {
+        return -EBUSY;
+    }
+    d->faults = 0u;
+    d->first_fault = 0u;
+    d->foc_err = MC_FOC_ERR_NONE;
+    mc_foc_f32_reset(&d->foc);
+    d->mode = MC_DRIVE_MODE_IDLE;
+    return 0;
+}
