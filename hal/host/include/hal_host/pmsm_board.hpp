@@ -1,0 +1,142 @@
+// hal_host::PmsmBoard: a simulated 3-phase drive board. It implements the
+// HAL (adc, pwm3, encoder, tick, fault) on top of the plant simulator, so the
+// unmodified firmware runs against it as against an STM32F405 board.
+//
+// Timing, as on a real drive (one PWM period T per control step):
+//   t_k       sample(): ADC trigger at the period start: phase currents, DC
+//             bus and encoder are measured from the plant state at t_k.
+//   [t_k, ..] the firmware's fast step runs and writes new duties.
+//   advance() integrates the plant (mcsim::PmsmRotorFrame: the dq model
+//             driven by the inverter's alpha-beta voltage, trig-free so a
+//             period costs no sin/cos but one re-sync) from t_k to t_k + T with RK4 sub-steps,
+//             the inputs held constant (ZOH). The duties in force are those
+//             written delay_periods steps earlier (1 = the usual one-period
+//             computation delay; 0 = ideal, instantaneous update).
+//
+// PWM disabled (or gate kill): every switch open. A phase still carrying
+// current freewheels through a diode: its pole is at 0 V for current into the
+// motor and at vbus for current out of it. The pole voltages are re-evaluated
+// at every sub-step; when the current vector would reverse within one
+// sub-step, it is set to zero and the machine is open-circuit from then on
+// (as long as its line-to-line back-EMF stays below vbus, which is checked:
+// above it the diode rectifier conducts again).
+#ifndef HAL_HOST_PMSM_BOARD_HPP
+#define HAL_HOST_PMSM_BOARD_HPP
+
+#include <cstdint>
+
+#include "hal/hal.h"
+#include "mcsim/integrator.hpp"
+#include "mcsim/inverter.hpp"
+#include "mcsim/pmsm_ab.hpp"
+#include "mcsim/pmsm_rotor_frame.hpp"
+#include "mcsim/sensors.hpp"
+
+namespace hal_host {
+
+struct PmsmBoardConfig {
+  mcsim::PmsmParams motor{};
+  mcsim::InverterParams inverter{};       // t_pwm_s is the control period
+  double vbus_v = 24.0;                   // DC-bus voltage (stiff source)
+  mcsim::CurrentSensorParams current_sensor{};
+  mcsim::VbusSensorParams vbus_sensor{};
+  mcsim::EncoderParams encoder{};
+  bool three_shunts = false;              // false: ic is not measured
+  int substeps = 4;                       // RK4 sub-steps per PWM period, >= 1
+  int delay_periods = 1;                  // computation delay, 0..4 periods
+  double tick_hz = 10.0e6;                // HAL tick counter frequency
+  double theta_m0_rad = 0.0;              // initial rotor angle
+  double omega_m0_rad_s = 0.0;            // initial speed
+};
+
+class PmsmBoard {
+ public:
+  // (i_alpha, i_beta, omega_m, theta_m), as mcsim::PmsmAb.
+  using State = mcsim::PmsmAb::State;
+
+  // Throws std::invalid_argument naming the bad parameter.
+  explicit PmsmBoard(const PmsmBoardConfig& cfg);
+  PmsmBoard(const PmsmBoard&) = delete;
+  PmsmBoard& operator=(const PmsmBoard&) = delete;
+
+  const mc_hal_t* hal() const { return &hal_; }
+
+  void sample();   // ADC/encoder trigger at the start of the period
+  void advance();  // integrate the plant over one period
+
+  // Inspection for scenarios and tests (true values, not measurements).
+  double t_s() const { return t_s_; }
+  State state() const;
+  const mcsim::PmsmRotorFrame::State& rotor_frame_state() const { return x_; }
+  const mcsim::PmsmRotorFrame& plant() const { return plant_; }
+  double period_s() const { return cfg_.inverter.t_pwm_s; }
+  double torque_nm() const { return plant_.torque_nm(x_); }
+  // dq currents at the true electrical angle.
+  void true_dq_a(double* id_a, double* iq_a) const;
+  bool pwm_enabled() const { return pwm_enabled_ && !gate_killed_; }
+  const Eigen::Vector3d& duties_applied() const { return duty_applied_; }
+  const Eigen::Vector2d& v_alpha_beta_applied() const { return v_ab_applied_; }
+
+  // Test hooks.
+  void set_vbus_v(double v) { cfg_.vbus_v = v; }
+  void set_fault_inputs(uint32_t active_mask);
+
+  // HAL op implementations (public so the C ops tables can reach them).
+  // noexcept: they are called from C through the ops tables and must never
+  // throw across that boundary.
+  int adc_read(mc_hal_adc_sample_t* s) noexcept;
+  int adc_read_temp(mc_hal_adc_temp_t* t) noexcept;
+  int pwm_set_duty(float a, float b, float c) noexcept;
+  int pwm_enable() noexcept;
+  int pwm_disable() noexcept;
+  int pwm_get_state(mc_hal_pwm3_state_t* st) noexcept;
+  int encoder_read(mc_hal_encoder_sample_t* s) noexcept;
+  int tick_read(uint32_t* ticks) const noexcept;
+  int tick_freq(uint32_t* hz) const noexcept;
+  int fault_read(mc_hal_fault_status_t* st) noexcept;
+  void fault_gate_kill() noexcept;
+  int fault_gate_release() noexcept;
+
+ private:
+  uint32_t ticks_now() const;
+  Eigen::Vector3d phase_currents_a() const;
+  void integrate_open_switches(double h_s, int n);
+
+  PmsmBoardConfig cfg_;
+  mcsim::PmsmRotorFrame plant_;
+  mcsim::Inverter3Ph inverter_;
+  mcsim::CurrentSensor isense_[3];
+  mcsim::VbusSensor vsense_;
+  mcsim::Encoder encoder_;
+  mcsim::InputDelay<Eigen::Vector3d, 4> delay_;
+  mcsim::PmsmRotorFrame::State x_ = mcsim::PmsmRotorFrame::State::Zero();
+  double t_s_ = 0.0;
+  uint64_t period_count_ = 0;
+
+  // HAL-visible state
+  mc_hal_adc_sample_t adc_{};
+  bool adc_fresh_ = false;
+  uint32_t adc_seq_ = 0;
+  Eigen::Vector3d duty_cmd_{0.5, 0.5, 0.5};
+  Eigen::Vector3d duty_applied_{0.5, 0.5, 0.5};
+  Eigen::Vector2d v_ab_applied_ = Eigen::Vector2d::Zero();
+  bool pwm_enabled_ = false;
+  bool pwm_enabled_applied_ = false;
+  bool gate_killed_ = false;
+  bool open_circuit_ = true;
+  uint32_t fault_active_ = 0;
+  uint32_t fault_latched_ = 0;
+  mc_hal_encoder_sample_t enc_{};
+
+  // ops tables bound to this board
+  mc_hal_adc_t adc_dev_{};
+  mc_hal_pwm3_t pwm_dev_{};
+  mc_hal_encoder_t enc_dev_{};
+  mc_hal_tick_t tick_dev_{};
+  mc_hal_fault_t fault_dev_{};
+  mc_hal_t hal_{};
+};
+
+}  // namespace hal_host
+
+#endif  // HAL_HOST_PMSM_BOARD_HPP

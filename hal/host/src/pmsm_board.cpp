@@ -1,0 +1,273 @@
+// See pmsm_board.hpp.
+#include "hal_host/pmsm_board.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "mcsim/status.hpp"
+
+namespace hal_host {
+
+namespace {
+
+PmsmBoard* B(void* ctx) noexcept { return static_cast<PmsmBoard*>(ctx); }
+
+const mc_hal_adc_ops_t kAdcOps = {
+    [](void* c, mc_hal_adc_sample_t* s) noexcept { return B(c)->adc_read(s); },
+    [](void* c, mc_hal_adc_temp_t* t) noexcept { return B(c)->adc_read_temp(t); },
+};
+const mc_hal_pwm3_ops_t kPwmOps = {
+    [](void* c, float a, float b, float d) noexcept { return B(c)->pwm_set_duty(a, b, d); },
+    [](void* c) noexcept { return B(c)->pwm_enable(); },
+    [](void* c) noexcept { return B(c)->pwm_disable(); },
+    [](void* c, mc_hal_pwm3_state_t* s) noexcept { return B(c)->pwm_get_state(s); },
+};
+const mc_hal_encoder_ops_t kEncOps = {
+    [](void* c, mc_hal_encoder_sample_t* s) noexcept { return B(c)->encoder_read(s); },
+};
+const mc_hal_tick_ops_t kTickOps = {
+    [](void* c, uint32_t* t) noexcept { return B(c)->tick_read(t); },
+    [](void* c, uint32_t* hz) noexcept { return B(c)->tick_freq(hz); },
+};
+const mc_hal_fault_ops_t kFaultOps = {
+    [](void* c, mc_hal_fault_status_t* s) noexcept { return B(c)->fault_read(s); },
+    [](void* c) noexcept { B(c)->fault_gate_kill(); },
+    [](void* c) noexcept { return B(c)->fault_gate_release(); },
+};
+
+void check(mcsim::Status s, const char* what) {
+  if (s != mcsim::Status::kOk) {
+    throw std::invalid_argument(std::string(what) + ": " + mcsim::status_name(s));
+  }
+}
+
+// Amplitude-invariant inverse Clarke.
+Eigen::Vector3d abc_from_ab(double a, double b) {
+  const double s3 = std::sqrt(3.0) / 2.0;
+  return {a, -0.5 * a + s3 * b, -0.5 * a - s3 * b};
+}
+
+}  // namespace
+
+PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
+  check(plant_.configure(cfg.motor), "motor");
+  check(inverter_.configure(cfg.inverter), "inverter");
+  for (int k = 0; k < 3; ++k) {
+    mcsim::CurrentSensorParams p = cfg.current_sensor;
+    p.seed = cfg.current_sensor.seed + static_cast<uint64_t>(k) * 7919U;
+    check(isense_[k].configure(p), "current_sensor");
+  }
+  check(vsense_.configure(cfg.vbus_sensor), "vbus_sensor");
+  check(encoder_.configure(cfg.encoder), "encoder");
+  if (cfg.substeps < 1) throw std::invalid_argument("substeps must be >= 1");
+  if (cfg.delay_periods < 0) throw std::invalid_argument("delay_periods must be >= 0");
+  check(delay_.configure(static_cast<std::size_t>(cfg.delay_periods), duty_cmd_), "delay_periods");
+  if (!(cfg.vbus_v > 0.0) || !std::isfinite(cfg.vbus_v)) throw std::invalid_argument("vbus_v must be > 0");
+  if (!(cfg.tick_hz >= 1.0) || cfg.tick_hz > 4.0e9) throw std::invalid_argument("tick_hz out of range");
+
+  x_ = plant_.make_state(0.0, 0.0, cfg.omega_m0_rad_s, cfg.theta_m0_rad);
+  encoder_.reset(cfg.theta_m0_rad);
+
+  adc_dev_ = {&kAdcOps, this};
+  pwm_dev_ = {&kPwmOps, this};
+  enc_dev_ = {&kEncOps, this};
+  tick_dev_ = {&kTickOps, this};
+  fault_dev_ = {&kFaultOps, this};
+  hal_.adc = &adc_dev_;
+  hal_.pwm3 = &pwm_dev_;
+  hal_.pwm2 = nullptr;
+  hal_.encoder = &enc_dev_;
+  hal_.can = nullptr;
+  hal_.tick = &tick_dev_;
+  hal_.fault = &fault_dev_;
+}
+
+uint32_t PmsmBoard::ticks_now() const {
+  // Modulo 2^32, like a free-running hardware counter.
+  const double ticks = std::floor(t_s_ * cfg_.tick_hz + 0.5);
+  return static_cast<uint32_t>(static_cast<uint64_t>(std::fmod(ticks, 4294967296.0)));
+}
+
+Eigen::Vector3d PmsmBoard::phase_currents_a() const {
+  const Eigen::Vector2d iab = mcsim::PmsmRotorFrame::i_alpha_beta_a(x_);
+  return abc_from_ab(iab(0), iab(1));
+}
+
+PmsmBoard::State PmsmBoard::state() const {
+  const Eigen::Vector2d iab = mcsim::PmsmRotorFrame::i_alpha_beta_a(x_);
+  State s;
+  s << iab(0), iab(1), x_(2), x_(3);
+  return s;
+}
+
+void PmsmBoard::true_dq_a(double* id_a, double* iq_a) const {
+  *id_a = x_(0);
+  *iq_a = x_(1);
+}
+
+void PmsmBoard::sample() {
+  const Eigen::Vector3d i = phase_currents_a();
+  adc_.ia_a = static_cast<float>(isense_[0].sample_a(i(0)));
+  adc_.ib_a = static_cast<float>(isense_[1].sample_a(i(1)));
+  adc_.ic_a = cfg_.three_shunts ? static_cast<float>(isense_[2].sample_a(i(2))) : 0.0f;
+  adc_.vbus_v = static_cast<float>(vsense_.sample_v(cfg_.vbus_v));
+  adc_.valid_mask = MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS |
+                    (cfg_.three_shunts ? MC_HAL_ADC_VALID_IC : 0U);
+  adc_.timestamp_ticks = ticks_now();
+  adc_.seq = ++adc_seq_;
+  adc_fresh_ = true;
+
+  const mcsim::EncoderReading r = encoder_.sample(x_(3));
+  enc_.count = static_cast<uint32_t>(r.count_in_rev);
+  enc_.counts_per_rev = static_cast<uint32_t>(cfg_.encoder.counts_per_rev);
+  enc_.flags = MC_HAL_ENCODER_FLAG_VALID | (r.index_seen ? MC_HAL_ENCODER_FLAG_INDEX : 0U);
+  enc_.timestamp_ticks = adc_.timestamp_ticks;
+}
+
+void PmsmBoard::integrate_open_switches(double h_s, int n) {
+  const double vbus = cfg_.vbus_v;
+  const double p = cfg_.motor.pole_pairs;
+  for (int k = 0; k < n; ++k) {
+    const double t = t_s_ + k * h_s;
+    if (open_circuit_) {
+      // Open circuit: currents stay zero unless the back-EMF exceeds vbus,
+      // in which case the diode bridge conducts again.
+      const double emf_ll_peak = std::sqrt(3.0) * std::abs(p * x_(2)) * cfg_.motor.flux_wb;
+      if (emf_ll_peak <= vbus) {
+        x_(0) = x_(1) = 0.0;
+        const mcsim::PmsmRotorFrame::Input u = mcsim::PmsmRotorFrame::Input::Zero();
+        // Mechanics only: with zero current there is no torque, and the
+        // electrical equations are not integrated (open terminals).
+        const mcsim::PmsmRotorFrame::State x1 = mcsim::rk4_step(plant_, t, x_, u, h_s);
+        x_.tail<4>() = x1.tail<4>();
+        continue;
+      }
+      open_circuit_ = false;
+    }
+    // Diode freewheeling: pole at 0 V for current into the motor, at vbus
+    // for current out of it; a phase with no current sits at mid-bus.
+    const Eigen::Vector3d i = phase_currents_a();
+    Eigen::Vector3d duty;
+    for (int j = 0; j < 3; ++j) duty(j) = (i(j) > 0.0) ? 0.0 : ((i(j) < 0.0) ? 1.0 : 0.5);
+    const Eigen::Vector2d v = inverter_.alpha_beta_v(duty, vbus, Eigen::Vector3d::Zero());
+    const mcsim::PmsmRotorFrame::State before = x_;
+    mcsim::PmsmRotorFrame::State x1 = mcsim::rk4_step(plant_, t, x_, v, h_s);
+    // The diodes block reverse current: if the current vector reversed
+    // within the sub-step, it reached zero inside it.
+    if (x1(0) * before(0) + x1(1) * before(1) <= 0.0) {
+      x1(0) = x1(1) = 0.0;
+      open_circuit_ = true;
+    }
+    x_ = x1;
+    v_ab_applied_ = v;
+  }
+}
+
+void PmsmBoard::advance() {
+  const double T = cfg_.inverter.t_pwm_s;
+  const int n = cfg_.substeps;
+  // The duty register and the enable take effect after the computation
+  // delay; a disable (safe torque off) acts at once, as on hardware where it
+  // forces the outputs through the timer's break/MOE path.
+  const Eigen::Vector3d duty = delay_.push(duty_cmd_);
+  const bool enabled = pwm_enabled_ && !gate_killed_;
+  if (!enabled) {
+    integrate_open_switches(T / n, n);
+    duty_applied_ = Eigen::Vector3d::Constant(0.5);
+  } else {
+    open_circuit_ = false;
+    duty_applied_ = duty;
+    const Eigen::Vector3d i = phase_currents_a();
+    const Eigen::Vector2d v = inverter_.alpha_beta_v(duty, cfg_.vbus_v, i);
+    v_ab_applied_ = v;
+    check(mcsim::advance_zoh(plant_, v, t_s_, T, n, &x_), "integrator");
+  }
+  // (cos, sin) of the electrical angle are integrated as states; re-derive
+  // them from theta_m every 32 periods (drift per period is O(h^5)).
+  if ((++period_count_ & 31U) == 0U) plant_.resync(&x_);
+  t_s_ += T;
+}
+
+int PmsmBoard::adc_read(mc_hal_adc_sample_t* s) noexcept {
+  if (!adc_fresh_) return -EAGAIN;
+  *s = adc_;
+  adc_fresh_ = false;
+  return 0;
+}
+
+int PmsmBoard::adc_read_temp(mc_hal_adc_temp_t* t) noexcept {
+  t->power_stage_temp_c = 25.0f;
+  t->motor_temp_c = 25.0f;
+  t->valid_mask = MC_HAL_ADC_TEMP_VALID_ALL;
+  return 0;
+}
+
+int PmsmBoard::pwm_set_duty(float a, float b, float c) noexcept {
+  if (!mc_hal_pwm3_duty_valid(a) || !mc_hal_pwm3_duty_valid(b) || !mc_hal_pwm3_duty_valid(c)) {
+    return -EINVAL;
+  }
+  duty_cmd_ << a, b, c;
+  return 0;
+}
+
+int PmsmBoard::pwm_enable() noexcept {
+  if (gate_killed_) return -EBUSY;
+  pwm_enabled_ = true;
+  return 0;
+}
+
+int PmsmBoard::pwm_disable() noexcept {
+  pwm_enabled_ = false;
+  return 0;
+}
+
+int PmsmBoard::pwm_get_state(mc_hal_pwm3_state_t* st) noexcept {
+  st->duty_a = static_cast<float>(duty_cmd_(0));
+  st->duty_b = static_cast<float>(duty_cmd_(1));
+  st->duty_c = static_cast<float>(duty_cmd_(2));
+  st->period_s = static_cast<float>(cfg_.inverter.t_pwm_s);
+  st->enabled = pwm_enabled_ && !gate_killed_;
+  return 0;
+}
+
+int PmsmBoard::encoder_read(mc_hal_encoder_sample_t* s) noexcept {
+  *s = enc_;
+  return 0;
+}
+
+int PmsmBoard::tick_read(uint32_t* ticks) const noexcept {
+  *ticks = ticks_now();
+  return 0;
+}
+
+int PmsmBoard::tick_freq(uint32_t* hz) const noexcept {
+  *hz = static_cast<uint32_t>(cfg_.tick_hz);
+  return 0;
+}
+
+void PmsmBoard::set_fault_inputs(uint32_t active_mask) {
+  fault_active_ = active_mask & MC_HAL_FAULT_ALL;
+  fault_latched_ |= fault_active_;
+  if (fault_active_ != 0U) gate_killed_ = true;  // comparator wired to the break input
+}
+
+int PmsmBoard::fault_read(mc_hal_fault_status_t* st) noexcept {
+  st->active_mask = fault_active_;
+  st->latched_mask = fault_latched_;
+  st->gate_killed = gate_killed_;
+  return 0;
+}
+
+void PmsmBoard::fault_gate_kill() noexcept { gate_killed_ = true; }
+
+int PmsmBoard::fault_gate_release() noexcept {
+  if (fault_active_ != 0U) return -EBUSY;
+  gate_killed_ = false;
+  fault_latched_ = 0U;
+  pwm_enabled_ = false;
+  return 0;
+}
+
+}  // namespace hal_host
