@@ -1,0 +1,162 @@
+// mcsim: run named simulation scenarios (plants alone, or the firmware in
+// closed loop through the host HAL) and write CSV + JSON summaries.
+//
+//   mcsim list
+//   mcsim describe <scenario>
+//   mcsim run <scenario> --out DIR [--duration S] [--set key=value ...]
+//   mcsim bench [--duration S]
+//
+// Exit codes: 0 ok, 2 usage error (nothing written), 1 run failure.
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "bench.hpp"
+#include "scenario.hpp"
+
+namespace {
+
+void usage(std::FILE* f) {
+  std::fprintf(f,
+               "usage: mcsim list\n"
+               "       mcsim describe <scenario>\n"
+               "       mcsim run <scenario> --out DIR [--duration S] [--set key=value ...]\n"
+               "       mcsim bench [--duration S]\n");
+}
+
+double parse_positive(const std::string& what, const std::string& s) {
+  char* end = nullptr;
+  errno = 0;
+  double v = std::strtod(s.c_str(), &end);
+  if (s.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v) || v <= 0.0) {
+    throw mcsim::UsageError("malformed " + what + " '" + s + "' (a positive number is expected)");
+  }
+  return v;
+}
+
+int cmd_list() {
+  for (const auto& s : mcsim::registry()) {
+    std::printf("%-28s %s (default %.3g s)\n", s.name.c_str(), s.description.c_str(),
+                s.default_duration_s);
+  }
+  return 0;
+}
+
+const mcsim::Scenario& need_scenario(const std::string& name) {
+  const mcsim::Scenario* s = mcsim::find_scenario(name);
+  if (s == nullptr) {
+    throw mcsim::UsageError("unknown scenario '" + name + "' (see 'mcsim list')");
+  }
+  return *s;
+}
+
+int cmd_describe(const std::string& name) {
+  const auto& s = need_scenario(name);
+  std::printf("%s: %s\ndefault duration: %g s\nparameters (--set key=value):\n", s.name.c_str(),
+              s.description.c_str(), s.default_duration_s);
+  for (const auto& p : s.params) {
+    std::printf("  %-22s default %-10g [%g, %g] %-8s %s\n", p.key.c_str(), p.default_value,
+                p.min_value, p.max_value, p.unit.c_str(), p.help.c_str());
+  }
+  return 0;
+}
+
+int cmd_run(const std::vector<std::string>& args) {
+  if (args.empty()) throw mcsim::UsageError("run: missing scenario name");
+  const auto& scen = need_scenario(args[0]);
+  std::string out_dir;
+  double duration = scen.default_duration_s;
+  std::vector<std::pair<std::string, std::string>> sets;
+  for (size_t i = 1; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    auto value = [&](const char* opt) -> const std::string& {
+      if (i + 1 >= args.size()) throw mcsim::UsageError(std::string(opt) + " needs a value");
+      return args[++i];
+    };
+    if (a == "--out") {
+      out_dir = value("--out");
+    } else if (a == "--duration") {
+      duration = parse_positive("duration", value("--duration"));
+    } else if (a == "--set") {
+      const std::string& kv = value("--set");
+      auto eq = kv.find('=');
+      if (eq == std::string::npos || eq == 0) {
+        throw mcsim::UsageError("--set expects key=value, got '" + kv + "'");
+      }
+      sets.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+    } else {
+      throw mcsim::UsageError("unknown option '" + a + "'");
+    }
+  }
+  if (out_dir.empty()) throw mcsim::UsageError("run: --out DIR is required");
+  mcsim::Params params(scen.params, sets);  // validates keys and values
+
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec || !std::filesystem::is_directory(out_dir) || access(out_dir.c_str(), W_OK) != 0) {
+    throw mcsim::UsageError("output directory '" + out_dir + "' cannot be created or written");
+  }
+  const std::string base = out_dir + "/" + scen.name;
+  mcsim::CsvWriter csv(base + ".csv");
+  mcsim::Summary summary;
+  mcsim::Progress progress(isatty(STDERR_FILENO) != 0);
+  mcsim::RunContext ctx{duration, params, csv, summary, progress};
+  summary.set_text("scenario", scen.name);
+  summary.set("duration_s", duration);
+  for (const auto& kv : params.values()) summary.set("param." + kv.first, kv.second);
+
+  scen.run(ctx);
+  progress.done();
+  summary.set("rows", static_cast<double>(csv.rows()));
+
+  const std::string json_tmp = base + ".json.part";
+  std::FILE* jf = std::fopen(json_tmp.c_str(), "w");
+  if (jf == nullptr) throw mcsim::UsageError("cannot write '" + json_tmp + "'");
+  const std::string js = summary.to_json();
+  const bool ok = std::fputs(js.c_str(), jf) >= 0;
+  if (std::fclose(jf) != 0 || !ok) {
+    std::remove(json_tmp.c_str());
+    throw mcsim::UsageError("write error on '" + json_tmp + "'");
+  }
+  csv.commit();
+  if (std::rename(json_tmp.c_str(), (base + ".json").c_str()) != 0) {
+    std::remove(json_tmp.c_str());
+    throw mcsim::UsageError("cannot write '" + base + ".json'");
+  }
+  std::printf("%s.csv (%zu rows)\n%s.json\n", base.c_str(), csv.rows(), base.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  try {
+    if (args.empty() || args[0] == "-h" || args[0] == "--help" || args[0] == "help") {
+      usage(args.empty() ? stderr : stdout);
+      return args.empty() ? 2 : 0;
+    }
+    const std::string cmd = args[0];
+    args.erase(args.begin());
+    if (cmd == "list") return cmd_list();
+    if (cmd == "describe") {
+      if (args.size() != 1) throw mcsim::UsageError("describe takes one scenario name");
+      return cmd_describe(args[0]);
+    }
+    if (cmd == "run") return cmd_run(args);
+    if (cmd == "bench") return mcsim::cmd_bench(args);
+    throw mcsim::UsageError("unknown command '" + cmd + "'");
+  } catch (const mcsim::UsageError& e) {
+    std::fprintf(stderr, "mcsim: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "mcsim: run failed: %s\n", e.what());
+    return 1;
+  }
+}

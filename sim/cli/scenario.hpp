@@ -1,0 +1,114 @@
+// mcsim scenario framework: a registry of named scenarios, each declaring its
+// parameters (name, default, unit, description), a run function that writes
+// rows to a CSV and metrics to a summary.
+#pragma once
+
+#include <cstdio>
+#include <functional>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace mcsim {
+
+/// A user-visible error: printed as "mcsim: <what>", exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// One declared parameter of a scenario, settable with --set key=value.
+struct ParamSpec {
+  std::string key;
+  double default_value;
+  std::string unit;
+  std::string help;
+  double min_value;  ///< inclusive bounds; a value outside is a usage error
+  double max_value;
+};
+
+/// Parameter values of one run: declared defaults overridden by --set.
+class Params {
+ public:
+  Params() = default;
+  Params(const std::vector<ParamSpec>& specs,
+         const std::vector<std::pair<std::string, std::string>>& sets);
+  double get(const std::string& key) const;
+  const std::map<std::string, double>& values() const { return values_; }
+
+ private:
+  std::map<std::string, double> values_;
+};
+
+/// Column-oriented CSV: the header is fixed by the first call to columns(),
+/// each row must have exactly that many values. Written to a temporary file
+/// and renamed into place by commit(), so a failed run leaves nothing behind.
+class CsvWriter {
+ public:
+  CsvWriter(const std::string& final_path);
+  ~CsvWriter();
+  CsvWriter(const CsvWriter&) = delete;
+  CsvWriter& operator=(const CsvWriter&) = delete;
+  void columns(const std::vector<std::string>& names);
+  void row(const double* values, size_t n);
+  void row(const std::vector<double>& values) { row(values.data(), values.size()); }
+  void commit();
+  size_t rows() const { return rows_; }
+
+ private:
+  std::string final_path_, tmp_path_;
+  std::FILE* f_ = nullptr;
+  size_t ncols_ = 0, rows_ = 0;
+  bool committed_ = false;
+};
+
+/// Summary metrics written as a flat JSON object next to the CSV.
+class Summary {
+ public:
+  void set(const std::string& key, double value) { num_[key] = value; }
+  void set_text(const std::string& key, const std::string& value) { txt_[key] = value; }
+  std::string to_json() const;
+  const std::map<std::string, double>& numbers() const { return num_; }
+
+ private:
+  std::map<std::string, double> num_;
+  std::map<std::string, std::string> txt_;
+};
+
+/// Progress bar on a terminal (stderr), silent otherwise.
+class Progress {
+ public:
+  explicit Progress(bool enabled) : enabled_(enabled) {}
+  void update(double t_s, double duration_s);
+  void done();
+
+ private:
+  bool enabled_;
+  int last_pct_ = -1;
+};
+
+struct RunContext {
+  double duration_s;
+  const Params& params;
+  CsvWriter& csv;
+  Summary& summary;
+  Progress& progress;
+};
+
+struct Scenario {
+  std::string name;
+  std::string description;
+  double default_duration_s;
+  std::vector<ParamSpec> params;
+  std::function<void(RunContext&)> run;
+};
+
+/// Global registry; scenario files register themselves with a static
+/// Registrar at start-up.
+std::vector<Scenario>& registry();
+struct Registrar {
+  explicit Registrar(Scenario s) { registry().push_back(std::move(s)); }
+};
+const Scenario* find_scenario(const std::string& name);
+
+}  // namespace mcsim
