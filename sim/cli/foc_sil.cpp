@@ -59,7 +59,7 @@ FocSil::FocSil(const FocSilOptions& o) : opt_(o) {
   dc.foc.decouple = true;
   dc.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
   dc.encoder_offset_rad = 0.0f;
-  dc.speed_pll_bw_rad_s = 2000.0f;
+  dc.speed_pll_bw_rad_s = static_cast<float>(o.speed_pll_bw_rad_s);
   dc.slow_loop_div = o.slow_loop_div;
   dc.i_max_a = 10.0f;
   dc.i_trip_a = 15.0f;

@@ -21,6 +21,7 @@ struct FocSilOptions {
   double J_kgm2 = 1.0e-3;           // rotor + load inertia
   double load_nm = 0.0;
   double noise_rms_a = 0.0;         // current-sensor noise
+  double speed_pll_bw_rad_s = 1000.0;  // encoder tracking loop (speed for the feed-forward)
   unsigned slow_loop_div = 20;      // slow loop at pwm_hz / 20 (1 kHz at 20 kHz)
 };
 

@@ -100,6 +100,7 @@ void run_foc_current_step(RunContext& ctx) {
   o.noise_rms_a = ctx.params.get("noise_rms_a");
   o.load_nm = ctx.params.get("load_nm");
   o.J_kgm2 = ctx.params.get("J_kgm2");
+  o.speed_pll_bw_rad_s = ctx.params.get("speed_pll_bw_rad_s");
   FocSil sil(o);
   const double iq_step = ctx.params.get("iq_step_a");
   const double id_step = ctx.params.get("id_step_a");
@@ -178,6 +179,9 @@ const Registrar reg_foc_step({
      {"substeps", 4.0, "1", "RK4 sub-steps per PWM period", 1.0, 64.0},
      {"delay_periods", 1.0, "1", "computation delay in PWM periods", 0.0, 4.0},
      {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 5.0},
+     {"speed_pll_bw_rad_s", 1000.0, "rad/s",
+      "bandwidth of the encoder tracking loop whose speed feeds the back-EMF feed-forward",
+      1.0, 6000.0},
      {"load_nm", 0.0, "N m", "constant load torque", -10.0, 10.0},
      {"J_kgm2", 0.1, "kg m^2",
       "rotor + load inertia; the default couples the motor to a dyno flywheel so the "
@@ -226,7 +230,7 @@ const Registrar reg_stepper({
     "stepper-constant-voltage",
     "two-phase PM stepper (paper 001 parameters) with constant winding voltages from an "
     "offset start: it settles at the detent where the torque vanishes",
-    1.0,
+    5.0,
     {{"va_v", 19.0, "V", "phase-A voltage", -100.0, 100.0},
      {"vb_v", 0.0, "V", "phase-B voltage", -100.0, 100.0},
      {"theta0_rad", 0.02, "rad", "initial shaft angle", -10.0, 10.0},
