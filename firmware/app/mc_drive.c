@@ -111,11 +111,16 @@ static void raise_fault(mc_drive_t *d, uint32_t bits)
 static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
 {
     const uint32_t cpr = enc->counts_per_rev;
-    const uint32_t count = enc->count % cpr;
+    /* The HAL promises count < cpr; reduce only if a driver breaks that. */
+    const uint32_t count = (enc->count < cpr) ? enc->count : enc->count % cpr;
     const float rad_per_count = MC_TWO_PI_F32 / (float)cpr;
-    /* Electrical position in integer counts first: exact for any count. */
-    const uint32_t e_count =
-        (uint32_t)(((uint64_t)count * (uint64_t)d->cfg.pole_pairs) % (uint64_t)cpr);
+    /* Electrical position in integer counts first: exact for any count.
+     * 32-bit when the product fits (always for cpr * poles < 2^32), which
+     * spares the M4F a 64-bit library division. */
+    const uint64_t prod = (uint64_t)count * (uint64_t)d->cfg.pole_pairs;
+    const uint32_t e_count = (prod <= 0xFFFFFFFFull)
+                                 ? (uint32_t)prod % cpr
+                                 : (uint32_t)(prod % (uint64_t)cpr);
     d->tm.theta_m_rad = (float)count * rad_per_count;
     d->tm.theta_e_rad =
         mc_wrap_2pi_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);

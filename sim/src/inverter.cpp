@@ -37,7 +37,9 @@ Eigen::Vector3d Inverter3Ph::pole_voltages_v(const Eigen::Vector3d& duty_abc,
   Eigen::Vector3d v;
   for (int k = 0; k < 3; ++k) {
     const double d = detail::clamp(duty_abc(k), 0.0, 1.0);
-    const double err = detail::sat1(i_abc_a(k) / p_.i_dead_band_a) * dead_frac;
+    // No dead time: skip the division (this runs once per SIL period).
+    const double err =
+        (dead_frac > 0.0) ? detail::sat1(i_abc_a(k) / p_.i_dead_band_a) * dead_frac : 0.0;
     v(k) = detail::clamp((d - err) * vdc_v, 0.0, vdc_v);
   }
   return v;
@@ -47,7 +49,7 @@ Eigen::Vector3d Inverter3Ph::phase_voltages_v(const Eigen::Vector3d& duty_abc,
                                               double vbus_v,
                                               const Eigen::Vector3d& i_abc_a) const {
   const Eigen::Vector3d pole = pole_voltages_v(duty_abc, vbus_v, i_abc_a);
-  const double v_cm = (pole(0) + pole(1) + pole(2)) / 3.0;
+  const double v_cm = (pole(0) + pole(1) + pole(2)) * (1.0 / 3.0);
   return pole - Eigen::Vector3d::Constant(v_cm);
 }
 

@@ -86,14 +86,13 @@ Status CurrentSensor::configure(const CurrentSensorParams& p) {
   const Status s = p.validate();
   if (s == Status::kOk) {
     p_ = p;
+    lsb_ = 2.0 * p.full_scale_a / std::ldexp(1.0, p.bits);
     rng_.reseed(p.seed);
   }
   return s;
 }
 
-double CurrentSensor::lsb_a() const {
-  return 2.0 * p_.full_scale_a / std::ldexp(1.0, p_.bits);
-}
+double CurrentSensor::lsb_a() const { return lsb_; }
 
 std::int32_t CurrentSensor::sample_code(double i_true_a) {
   // No draw for a noiseless sensor (the Gaussian draw is a third of a
@@ -114,12 +113,13 @@ Status VbusSensor::configure(const VbusSensorParams& p) {
   const Status s = p.validate();
   if (s == Status::kOk) {
     p_ = p;
+    lsb_ = p.full_scale_v / std::ldexp(1.0, p.bits);
     rng_.reseed(p.seed);
   }
   return s;
 }
 
-double VbusSensor::lsb_v() const { return p_.full_scale_v / std::ldexp(1.0, p_.bits); }
+double VbusSensor::lsb_v() const { return lsb_; }
 
 std::int32_t VbusSensor::sample_code(double vbus_true_v) {
   const double noise = (p_.noise_rms_v > 0.0) ? p_.noise_rms_v * rng_.normal() : 0.0;

@@ -62,6 +62,7 @@ class CurrentSensor {
 
  private:
   CurrentSensorParams p_{};
+  double lsb_ = 2.0 * 50.0 / 4096.0;  // of the default params; set by configure()
   GaussianRng rng_{1U};
 };
 
@@ -85,6 +86,7 @@ class VbusSensor {
 
  private:
   VbusSensorParams p_{};
+  double lsb_ = 60.0 / 4096.0;  // of the default params; set by configure()
   GaussianRng rng_{2U};
 };
 
