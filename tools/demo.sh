@@ -1,18 +1,52 @@
 #!/usr/bin/env bash
-# The main job (called by tools/bootstrap.sh demo, after set-up): build for
-# host and target and report what was built and where.
+# The main job (tools/bootstrap.sh demo runs it after set-up):
+#  1. build the host tools (optimised) and the STM32F405 firmware;
+#  2. run the SIL scenarios: the firmware's FOC current loop on the simulated
+#     motor, and the two plant-only runs; write CSV + JSON summaries;
+#  3. turn each CSV into a PNG figure;
+#  4. print what was built and made, and where.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+ROOT=$PWD
 JOBS=$(nproc)
+PY=${MC_PYTHON:-$ROOT/.venv/bin/python}
+OUT=${MC_DEMO_OUT:-$ROOT/out/demo}
 log() { printf '\033[1m[demo]\033[0m %s\n' "$*"; }
 
+log "building host-release and stm32f405"
 cmake --preset host-release >/dev/null
-cmake --build --preset host-release -j "$JOBS"
+cmake --build --preset host-release -j "$JOBS" --target mcsim
 cmake --preset stm32f405 >/dev/null
 cmake --build --preset stm32f405 -j "$JOBS"
 
+MCSIM=build/host-release/sim/cli/mcsim
+mkdir -p "$OUT"
+for s in foc-current-step pmsm-open-loop-step stepper-constant-voltage; do
+  log "mcsim run $s"
+  "$MCSIM" run "$s" --out "$OUT" >/dev/null
+  "$PY" tools/plot/mcplot.py "$OUT/$s.csv" >/dev/null
+done
+
+log "SIL benchmark (closed-loop FOC, 20 kHz PWM, 4 RK4 sub-steps, one core)"
+"$MCSIM" bench | tee "$OUT/bench.json"
+
+log "FOC current step (firmware in the loop), from $OUT/foc-current-step.json:"
+"$PY" - "$OUT/foc-current-step.json" <<'PYEOF'
+import json, sys
+s = json.load(open(sys.argv[1]))
+print(f"  designed 10-90% rise time  {s['rise_time_designed_s']*1e3:.3f} ms")
+print(f"  measured  i_q rise time     {s['iq_rise_time_s']*1e3:.3f} ms  (x{s['iq_rise_time_ratio']:.2f})")
+print(f"  measured  i_d rise time     {s['id_rise_time_s']*1e3:.3f} ms  (x{s['id_rise_time_ratio']:.2f})")
+print(f"  final i_q / i_d             {s['iq_final_a']:.3f} A / {s['id_final_a']:.3f} A")
+PYEOF
+
 log "built:"
-find build/host-release build/stm32f405 -maxdepth 4 \
-  \( -name '*.a' -o -name '*.elf' -o -name 'mcsim' \) -type f | sort | sed 's/^/  /'
-log "Cortex-M4F kernel library size (arm-none-eabi-size, bytes):"
-arm-none-eabi-size -t build/stm32f405/firmware/kernels/libmc_kernels.a | tail -1 | sed 's/^/  /'
+printf '  %s\n' "$ROOT/$MCSIM"
+find build/stm32f405 -maxdepth 4 \( -name '*.a' -o -name '*.elf' \) -type f | sort | sed "s|^|  $ROOT/|"
+log "Cortex-M4F libraries (arm-none-eabi-size, bytes):"
+for a in build/stm32f405/firmware/kernels/libmc_kernels.a build/stm32f405/firmware/app/libmc_app.a; do
+  printf '  %-40s %s bytes of code+data\n' "$(basename "$a")" \
+    "$(arm-none-eabi-size -t "$a" | tail -1 | awk '{print $1 + $2}')"
+done
+log "results in $OUT:"
+ls -1 "$OUT" | sed 's/^/  /'
