@@ -92,13 +92,24 @@ static uint32_t now_ticks(const mc_drive_t *d)
     return t;
 }
 
+/* Outputs off; if the PWM driver cannot confirm it, the gate kill (which
+ * cannot fail) does it, as hal/pwm3.h requires. */
+static void outputs_off(const mc_drive_t *d)
+{
+    if (mc_hal_pwm3_disable(d->hal->pwm3) != 0) {
+        (void)mc_hal_fault_gate_kill(d->hal->fault);
+    }
+}
+
 /* Safe state: outputs off first, then bookkeeping. */
 static void raise_fault(mc_drive_t *d, uint32_t bits)
 {
     if (bits == 0u) {
         return;
     }
-    (void)mc_hal_pwm3_disable(d->hal->pwm3);
+    outputs_off(d);
+    d->id_ref_a = 0.0f;
+    d->iq_ref_a = 0.0f;
     if (d->faults == 0u) {
         /* lowest set bit: the first detected cause of this step */
         d->first_fault = bits & (~bits + 1u);
@@ -231,8 +242,10 @@ void mc_drive_slow_step(mc_drive_t *d)
 {
     if (d->hal->fault != NULL) {
         mc_hal_fault_status_t fs;
-        if (mc_hal_fault_read(d->hal->fault, &fs) == 0 &&
-            (fs.active_mask != 0u || fs.gate_killed)) {
+        /* A fault status that cannot be read is treated as a fault: the
+         * drive must not run without its hardware protection supervised. */
+        if (mc_hal_fault_read(d->hal->fault, &fs) != 0 || fs.active_mask != 0u ||
+            fs.gate_killed) {
             raise_fault(d, MC_DRIVE_FAULT_HW_INPUT);
         }
     }
@@ -242,7 +255,9 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
 {
     switch (mode) {
     case MC_DRIVE_MODE_IDLE:
-        (void)mc_hal_pwm3_disable(d->hal->pwm3);
+        outputs_off(d);
+        d->id_ref_a = 0.0f;
+        d->iq_ref_a = 0.0f;
         if (d->mode != MC_DRIVE_MODE_FAULT) {
             d->mode = MC_DRIVE_MODE_IDLE;
         }
@@ -258,7 +273,7 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
         /* Zero voltage first, then close the switches. */
         if (mc_hal_pwm3_set_duty(d->hal->pwm3, 0.5f, 0.5f, 0.5f) != 0 ||
             mc_hal_pwm3_enable(d->hal->pwm3) != 0) {
-            (void)mc_hal_pwm3_disable(d->hal->pwm3);
+            outputs_off(d);
             return -EBUSY;
         }
         d->mode = MC_DRIVE_MODE_CURRENT;
@@ -297,6 +312,8 @@ int mc_drive_clear_faults(mc_drive_t *d)
     }
     d->faults = 0u;
     d->first_fault = 0u;
+    d->id_ref_a = 0.0f;
+    d->iq_ref_a = 0.0f;
     d->foc_err = MC_FOC_ERR_NONE;
     mc_foc_f32_reset(&d->foc);
     d->mode = MC_DRIVE_MODE_IDLE;

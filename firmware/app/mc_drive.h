@@ -17,14 +17,18 @@
  *                         window, temperatures, hardware fault input.
  *
  * Modes
- *   IDLE     PWM off (all switches open), references held at zero.
+ *   IDLE     PWM off (all switches open). Entering IDLE or FAULT, and
+ *            clearing faults, zero the references, so a later CURRENT
+ *            starts at no torque; references set while IDLE are kept.
  *   CURRENT  dq current control to the id/iq references (torque mode).
  *   FAULT    PWM off; entered on any fault; left only by
  *            mc_drive_clear_faults() once the cause is gone.
  *
  * Fault reaction: the first fault disables the PWM outputs through the HAL
- * (safe torque off) in the same fast step, sets mode FAULT and records the
- * sticky fault bit, the first fault's bit and the tick of detection.
+ * (safe torque off) in the same fast step (and, if the PWM driver cannot
+ * confirm that, fires the gate kill), sets mode FAULT and records the sticky
+ * fault bit, the first fault's bit and the tick of detection. A hardware
+ * fault status that cannot be read counts as MC_DRIVE_FAULT_HW_INPUT.
  */
 #ifndef MC_DRIVE_H
 #define MC_DRIVE_H
@@ -55,7 +59,8 @@ typedef enum {
 #define MC_DRIVE_FAULT_ENCODER     (1u << 5)  /**< encoder read failed or not valid */
 #define MC_DRIVE_FAULT_CONTROL     (1u << 6)  /**< the FOC kernel reported an error */
 #define MC_DRIVE_FAULT_PWM         (1u << 7)  /**< the PWM driver refused the duties */
-#define MC_DRIVE_FAULT_HW_INPUT    (1u << 8)  /**< gate-driver fault / over-current comparator */
+#define MC_DRIVE_FAULT_HW_INPUT    (1u << 8)  /**< gate-driver fault / over-current comparator,
+                                                   or its status unreadable */
 
 /* Configuration errors returned by mc_drive_init (bit set). */
 #define MC_DRIVE_CFG_OK            0u
@@ -65,7 +70,7 @@ typedef enum {
 #define MC_DRIVE_CFG_ERR_POLES     (1u << 3)  /**< pole_pairs == 0 */
 #define MC_DRIVE_CFG_ERR_DIV       (1u << 4)  /**< slow_loop_div == 0 */
 #define MC_DRIVE_CFG_ERR_CURRENT   (1u << 5)  /**< i_max_a <= 0, i_trip_a < i_max_a, not finite */
-#define MC_DRIVE_CFG_ERR_VBUS      (1u << 6)  /**< vbus window empty or not finite */
+#define MC_DRIVE_CFG_ERR_VBUS      (1u << 6)  /**< vbus_min_v <= 0, window empty, or not finite */
 #define MC_DRIVE_CFG_ERR_SPEED_PLL (1u << 7)  /**< speed_pll_bw_rad_s <= 0, not finite, or 3 bw dt > 1 */
 #define MC_DRIVE_CFG_ERR_OFFSET    (1u << 8)  /**< encoder_offset_rad not finite */
 

@@ -410,5 +410,52 @@ TEST_F(AppDriveFault, ClearAcceptedAfterAFastStepFault)
     EXPECT_FALSE(fake.pwm3.enabled);
 }
 
+
+// hal/pwm3.h: when disable cannot confirm the outputs are off (-EIO), the
+// caller must fire the gate kill. Found by this suite; fixed in mc_drive.c.
+TEST_F(AppDrive, FaultFallsBackToGateKillWhenDisableFails)
+{
+    InitRunning();
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 2.0f * kITrip, 0.0f, 0.0f, kVbus, kMask3));
+    mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM3_DISABLE, -EIO, 1u);
+    (void)mc_drive_fast_step(&d);
+    EXPECT_EQ(MC_DRIVE_MODE_FAULT, d.mode);
+    EXPECT_EQ(1u, fake.gate_kill_count);
+    EXPECT_FALSE(fake.pwm3.enabled);
+}
+
+// Going to IDLE (or FAULT) zeroes the references, so the next CURRENT starts
+// at no torque instead of re-applying the old one.
+TEST_F(AppDrive, ReferencesZeroedOnIdleAndFault)
+{
+    InitRunning();
+    ASSERT_NE(0.0f, d.iq_ref_a);
+    EXPECT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_IDLE));
+    EXPECT_EQ(0.0f, d.id_ref_a);
+    EXPECT_EQ(0.0f, d.iq_ref_a);
+    EXPECT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT));
+    GoodSample();
+    (void)mc_drive_fast_step(&d);
+    EXPECT_EQ(0.0f, d.tm.iq_ref_a);
+
+    EXPECT_EQ(0, mc_drive_set_current_ref(&d, 1.0f, 2.0f));
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 2.0f * kITrip, 0.0f, 0.0f, kVbus, kMask3));
+    (void)mc_drive_fast_step(&d);
+    ASSERT_EQ(MC_DRIVE_MODE_FAULT, d.mode);
+    EXPECT_EQ(0.0f, d.id_ref_a);
+    EXPECT_EQ(0.0f, d.iq_ref_a);
+}
+
+// Supervision that cannot read the fault status fails safe.
+TEST_F(AppDrive, UnreadableFaultStatusIsAFault)
+{
+    InitRunning();
+    mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_FAULT_READ, -EIO, 1u);
+    mc_drive_slow_step(&d);
+    EXPECT_EQ(MC_DRIVE_MODE_FAULT, d.mode);
+    EXPECT_EQ(MC_DRIVE_FAULT_HW_INPUT, d.faults);
+    EXPECT_FALSE(fake.pwm3.enabled);
+}
+
 }  // namespace
 }  // namespace apptest
