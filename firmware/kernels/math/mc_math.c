@@ -21,6 +21,7 @@
  *   2^-64 turn. Defined and accurate for every finite float.
  */
 #include "math/mc_math.h"
+#include "math/mc_q31.h"
 
 /* ---------------------------------------------------------------- helpers */
 
@@ -385,22 +386,9 @@ float mc_sqrt_f32_soft(float x)
 
     /* sqrt(m * 2^26) = sqrt(m) * 2^13 has 25 or 26 bits: the digit-by-digit
      * integer square root gives its floor and the remainder (sticky). */
-    uint64_t n = (uint64_t)m << 26; /* < 2^51 */
-    uint64_t root = 0u;
-    uint64_t bit = (uint64_t)1 << 50;
-    while (bit > n) {
-        bit >>= 2;
-    }
-    while (bit != 0u) {
-        if (n >= root + bit) {
-            n -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
-        }
-        bit >>= 2;
-    }
-    bool sticky = n != 0u;
+    uint64_t rem;
+    uint64_t root = mc_isqrt_u64((uint64_t)m << 26, &rem); /* argument < 2^51 */
+    bool sticky = rem != 0u;
 
     /* Keep 24 bits, round to nearest even (a sqrt is never an exact tie,
      * but the rule is written out in full). */

@@ -9,6 +9,8 @@
  */
 #include "math/mc_q31.h"
 
+#include <stddef.h>
+
 #include "math/mc_math.h"
 
 /* ---------------------------------------------------------------- helpers */
@@ -243,31 +245,40 @@ q31_t mc_atan2_q31(q31_t y, q31_t x)
 
 /* ------------------------------------------------------------------- sqrt */
 
-q31_t mc_sqrt_q31(q31_t x)
+uint64_t mc_isqrt_u64(uint64_t x, uint64_t *p_rem)
 {
-    if (x <= 0) {
-        return 0;
-    }
-    /* sqrt(x / 2^31) * 2^31 = sqrt(x * 2^31): integer square root of a
-     * 62-bit number, digit by digit, then rounded to nearest. */
-    uint64_t n = (uint64_t)x << 31;
+    uint64_t rem = x;
     uint64_t root = 0u;
     uint64_t bit = (uint64_t)1 << 62;
-    while (bit > n) {
+    while (bit > rem) {
         bit >>= 2;
     }
     while (bit != 0u) {
-        if (n >= root + bit) {
-            n -= root + bit;
+        if (rem >= root + bit) {
+            rem -= root + bit;
             root = (root >> 1) + bit;
         } else {
             root >>= 1;
         }
         bit >>= 2;
     }
-    /* n is now the remainder x*2^31 - root^2; round up when it exceeds
-     * root (then x*2^31 > (root + 1/2)^2). */
-    if (n > root) {
+    if (p_rem != NULL) {
+        *p_rem = rem;
+    }
+    return root;
+}
+
+q31_t mc_sqrt_q31(q31_t x)
+{
+    if (x <= 0) {
+        return 0;
+    }
+    /* sqrt(x / 2^31) * 2^31 = sqrt(x * 2^31): integer square root of a
+     * 62-bit number, then rounded to nearest: the remainder x*2^31 - root^2
+     * exceeds root exactly when x*2^31 > (root + 1/2)^2. */
+    uint64_t rem;
+    uint64_t root = mc_isqrt_u64((uint64_t)x << 31, &rem);
+    if (rem > root) {
         root += 1u;
     }
     return mc_q31_sat64((int64_t)root);

@@ -168,6 +168,14 @@ q31_t mc_atan2_q31(q31_t y, q31_t x);
  */
 q31_t mc_sqrt_q31(q31_t x);
 
+/**
+ * Integer square root: floor(sqrt(x)) of any 64-bit x, digit by digit (at
+ * most 32 iterations of shifts and adds), with the remainder x - root^2
+ * through p_rem (may be NULL). The one integer square root of the kernels:
+ * mc_sqrt_q31, mc_sqrt_f32_soft and the q31 SVPWM use it.
+ */
+uint64_t mc_isqrt_u64(uint64_t x, uint64_t *p_rem);
+
 #ifdef __cplusplus
 }
 #endif

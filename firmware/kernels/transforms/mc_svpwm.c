@@ -176,21 +176,8 @@ float mc_svpwm_max_voltage_f32(float vbus_v, mc_svpwm_limit_t limit)
  */
 static uint64_t mc_svpwm_isqrt_round_u64(uint64_t x)
 {
-    uint64_t rem = x;
-    uint64_t root = 0u;
-    uint64_t bit = (uint64_t)1 << 62;
-    while (bit > rem) {
-        bit >>= 2;
-    }
-    while (bit != 0u) {
-        if (rem >= root + bit) {
-            rem -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
-        }
-        bit >>= 2;
-    }
+    uint64_t rem;
+    uint64_t root = mc_isqrt_u64(x, &rem);
     /* Here x = root^2 + rem; (root + 1/2)^2 = root^2 + root + 1/4. */
     if (rem > root) {
         root += 1u;

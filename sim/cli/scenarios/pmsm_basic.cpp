@@ -27,6 +27,26 @@ double crossing_time(const std::vector<double>& t, const std::vector<double>& y,
   return std::nan("");
 }
 
+// Integrate a plant from x at a constant input u with RK4 steps of h for the
+// run's duration, writing about 4000 evenly spaced rows (and the last one):
+// row(t, x) gives the CSV values. Returns the final state.
+template <class Plant, class RowFn>
+typename Plant::State run_fixed_input(RunContext& ctx, const Plant& plant,
+                                      typename Plant::State x, const typename Plant::Input& u,
+                                      double h, RowFn row) {
+  const long n = std::lround(ctx.duration_s / h);
+  const long every = std::max(1L, n / 4000);
+  for (long k = 0; k <= n; ++k) {
+    const double t = k * h;
+    if (k % every == 0 || k == n) {
+      ctx.csv.row(row(t, x));
+      ctx.progress.update(t, ctx.duration_s);
+    }
+    if (k < n) x = rk4_step(plant, t, x, u, h);
+  }
+  return x;
+}
+
 // ---------------------------------------------------------------- open loop
 void run_open_loop(RunContext& ctx) {
   PmsmParams p = paper002_test_motor();
@@ -35,21 +55,14 @@ void run_open_loop(RunContext& ctx) {
   PmsmDq plant;
   if (plant.configure(p) != Status::kOk) throw UsageError("motor parameters rejected");
   const double vq = ctx.params.get("vq_v");
-  const double h = ctx.params.get("dt_s");
-  const long n = std::lround(ctx.duration_s / h);
-  PmsmDq::State x = PmsmDq::State::Zero();
-  PmsmDq::Input u(0.0, vq);
+  const PmsmDq::Input u(0.0, vq);
   ctx.csv.columns({"t", "i_d_a", "i_q_a", "omega_m_rad_s", "theta_m_rad", "v_d_v", "v_q_v",
                    "torque_nm"});
-  const long every = std::max(1L, n / 4000);
-  for (long k = 0; k <= n; ++k) {
-    const double t = k * h;
-    if (k % every == 0 || k == n) {
-      ctx.csv.row({t, x(0), x(1), x(2), x(3), u(0), u(1), plant.torque_nm(x)});
-      ctx.progress.update(t, ctx.duration_s);
-    }
-    if (k < n) x = rk4_step(plant, t, x, u, h);
-  }
+  const PmsmDq::State x = run_fixed_input(
+      ctx, plant, PmsmDq::State::Zero(), u, ctx.params.get("dt_s"),
+      [&](double t, const PmsmDq::State& s) {
+        return std::vector<double>{t, s(0), s(1), s(2), s(3), u(0), u(1), plant.torque_nm(s)};
+      });
   // Closed-form steady state (Ld = Lq = L): with w_e = p w,
   //   0 = -R id + w_e L iq,  0 = vq - R iq - w_e L id - w_e psi,
   //   0 = 1.5 p psi iq - B w - tau_L.
@@ -195,22 +208,15 @@ void run_stepper_constant_voltage(RunContext& ctx) {
   Stepper2Ph plant;
   if (plant.configure(p) != Status::kOk) throw UsageError("stepper parameters rejected");
   const double va = ctx.params.get("va_v"), vb = ctx.params.get("vb_v");
-  const double h = ctx.params.get("dt_s");
-  const long n = std::lround(ctx.duration_s / h);
-  Stepper2Ph::State x;
-  x << 0.0, 0.0, 0.0, ctx.params.get("theta0_rad");
+  Stepper2Ph::State x0;
+  x0 << 0.0, 0.0, 0.0, ctx.params.get("theta0_rad");
   const Stepper2Ph::Input u(va, vb);
   ctx.csv.columns({"t", "i_a_a", "i_b_a", "omega_m_rad_s", "theta_m_rad", "v_a_v", "v_b_v",
                    "torque_nm"});
-  const long every = std::max(1L, n / 4000);
-  for (long k = 0; k <= n; ++k) {
-    const double t = k * h;
-    if (k % every == 0 || k == n) {
-      ctx.csv.row({t, x(0), x(1), x(2), x(3), va, vb, plant.torque_nm(x)});
-      ctx.progress.update(t, ctx.duration_s);
-    }
-    if (k < n) x = rk4_step(plant, t, x, u, h);
-  }
+  const Stepper2Ph::State x = run_fixed_input(
+      ctx, plant, x0, u, ctx.params.get("dt_s"), [&](double t, const Stepper2Ph::State& s) {
+        return std::vector<double>{t, s(0), s(1), s(2), s(3), va, vb, plant.torque_nm(s)};
+      });
   // Steady state: i = v/R; the rotor rests where the torque vanishes with a
   // negative slope: -Km ia sin(Nr th) + Km ib cos(Nr th) = 0, i.e.
   // Nr th = atan2(ib, ia) (mod 2 pi), the detent nearest the start.
