@@ -57,14 +57,19 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
     mc_foc_f32_t foc;
     uint32_t foc_err = MC_FOC_ERR_NONE;
     uint32_t err = validate_cfg(cfg, &foc, &foc_err);
-    if (hal->adc == NULL || hal->pwm3 == NULL || hal->encoder == NULL) {
+    if (hal->adc == NULL || (hal->pwm3 == NULL && hal->pwm2 == NULL)) {
         err |= MC_DRIVE_CFG_ERR_HAL;
     }
     if (err != MC_DRIVE_CFG_OK) {
         return err;
     }
     /* Outputs off before anything else: a drive starts safe. */
-    (void)mc_hal_pwm3_disable(hal->pwm3);
+    if (hal->pwm3 != NULL) {
+        (void)mc_hal_pwm3_disable(hal->pwm3);
+    }
+    if (hal->pwm2 != NULL) {
+        (void)mc_hal_pwm2_disable(hal->pwm2);
+    }
 
     mc_drive_t z = {0};
     *d = z;
@@ -96,9 +101,25 @@ static uint32_t now_ticks(const mc_drive_t *d)
  * cannot fail) does it, as hal/pwm3.h requires. */
 static void outputs_off(const mc_drive_t *d)
 {
-    if (mc_hal_pwm3_disable(d->hal->pwm3) != 0) {
+    bool confirmed = true;
+    if (d->hal->pwm3 != NULL && mc_hal_pwm3_disable(d->hal->pwm3) != 0) {
+        confirmed = false;
+    }
+    if (d->hal->pwm2 != NULL && mc_hal_pwm2_disable(d->hal->pwm2) != 0) {
+        confirmed = false;
+    }
+    if (!confirmed) {
         (void)mc_hal_fault_gate_kill(d->hal->fault);
     }
+}
+
+/* The drive feeds a 3-phase machine unless the attached law drives the dual
+ * H-bridge: then ia, ib are two independent winding currents and there is
+ * no third phase to derive or check. */
+static bool drives_three_phase(const mc_drive_t *d)
+{
+    return d->hal->pwm3 != NULL &&
+           !(d->ctrl != NULL && d->ctrl->outputs == MC_DRIVE_OUT_PWM2);
 }
 
 /* Safe state: outputs off first, then bookkeeping. */
@@ -166,7 +187,7 @@ static uint32_t check_sample(const mc_drive_t *d, const mc_hal_adc_sample_t *s, 
         return MC_DRIVE_FAULT_ADC;
     }
     const bool have_ic = (s->valid_mask & MC_HAL_ADC_VALID_IC) != 0u;
-    const float ic = have_ic ? s->ic_a : -(s->ia_a + s->ib_a);
+    const float ic = have_ic ? s->ic_a : (drives_three_phase(d) ? -(s->ia_a + s->ib_a) : 0.0f);
     if (!finite4(s->ia_a, s->ib_a, ic, s->vbus_v)) {
         return MC_DRIVE_FAULT_MEAS_NAN;
     }
@@ -185,6 +206,22 @@ static uint32_t check_sample(const mc_drive_t *d, const mc_hal_adc_sample_t *s, 
     return f;
 }
 
+/* One step of the plugged law: its duties go to the bridge it drives. */
+static uint32_t run_ctrl(mc_drive_t *d, const mc_drive_meas_t *m)
+{
+    mc_drive_out_t out = {0.5f, 0.5f, 0.5f, 0.0f, 0.0f};
+    const uint32_t cerr = d->ctrl->fast(d->ctrl->ctx, m, &out);
+    d->tm.ctrl_out = out;
+    if (cerr != 0u) {
+        d->tm.ctrl_err = cerr;
+        return MC_DRIVE_FAULT_CONTROL;
+    }
+    const int rc = (d->ctrl->outputs == MC_DRIVE_OUT_PWM2)
+                       ? mc_hal_pwm2_set_duty(d->hal->pwm2, out.duty2_a, out.duty2_b)
+                       : mc_hal_pwm3_set_duty(d->hal->pwm3, out.duty_a, out.duty_b, out.duty_c);
+    return (rc != 0) ? MC_DRIVE_FAULT_PWM : 0u;
+}
+
 bool mc_drive_fast_step(mc_drive_t *d)
 {
     uint32_t f = 0u;
@@ -201,12 +238,17 @@ bool mc_drive_fast_step(mc_drive_t *d)
         d->tm.vbus_v = s.vbus_v;
     }
 
-    mc_hal_encoder_sample_t enc;
-    const int erc = mc_hal_encoder_read(d->hal->encoder, &enc);
-    if (erc != 0 || (enc.flags & MC_HAL_ENCODER_FLAG_VALID) == 0u || enc.counts_per_rev == 0u) {
-        f |= MC_DRIVE_FAULT_ENCODER;
-    } else {
-        update_position(d, &enc);
+    mc_hal_encoder_sample_t enc = {0u, 0u, 0u, 0u};
+    bool have_enc = false;
+    if (d->hal->encoder != NULL) {
+        const int erc = mc_hal_encoder_read(d->hal->encoder, &enc);
+        if (erc != 0 || (enc.flags & MC_HAL_ENCODER_FLAG_VALID) == 0u ||
+            enc.counts_per_rev == 0u) {
+            f |= MC_DRIVE_FAULT_ENCODER;
+        } else {
+            update_position(d, &enc);
+            have_enc = true;
+        }
     }
 
     if (f == 0u && d->mode == MC_DRIVE_MODE_CURRENT) {
@@ -224,6 +266,15 @@ bool mc_drive_fast_step(mc_drive_t *d)
                                         d->tm.foc.duty_c) != 0) {
             f |= MC_DRIVE_FAULT_PWM;
         }
+    } else if (f == 0u && d->mode == MC_DRIVE_MODE_CTRL) {
+        const mc_drive_meas_t m = {
+            .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .vbus_v = s.vbus_v,
+            .have_encoder = have_enc, .theta_m_rad = d->tm.theta_m_rad,
+            .theta_e_rad = d->tm.theta_e_rad, .omega_m_rad_s = d->omega_m_rad_s,
+            .enc_count = enc.count, .enc_cpr = enc.counts_per_rev,
+            .dt_s = d->cfg.foc.dt_s, .fast_count = d->fast_count,
+        };
+        f |= run_ctrl(d, &m);
     }
     d->tm.id_ref_a = d->id_ref_a;
     d->tm.iq_ref_a = d->iq_ref_a;
@@ -240,6 +291,13 @@ bool mc_drive_fast_step(mc_drive_t *d)
 
 void mc_drive_slow_step(mc_drive_t *d)
 {
+    if (d->mode == MC_DRIVE_MODE_CTRL && d->ctrl->slow != NULL) {
+        const uint32_t cerr = d->ctrl->slow(d->ctrl->ctx);
+        if (cerr != 0u) {
+            d->tm.ctrl_err = cerr;
+            raise_fault(d, MC_DRIVE_FAULT_CONTROL);
+        }
+    }
     if (d->hal->fault != NULL) {
         mc_hal_fault_status_t fs;
         /* A fault status that cannot be read is treated as a fault: the
@@ -249,6 +307,49 @@ void mc_drive_slow_step(mc_drive_t *d)
             raise_fault(d, MC_DRIVE_FAULT_HW_INPUT);
         }
     }
+}
+
+/* Zero output on the law's bridge, then close the switches. */
+static int enable_ctrl_bridge(mc_drive_t *d)
+{
+    int rc;
+    if (d->ctrl->outputs == MC_DRIVE_OUT_PWM2) {
+        rc = mc_hal_pwm2_set_duty(d->hal->pwm2, 0.0f, 0.0f);
+        if (rc == 0) {
+            rc = mc_hal_pwm2_enable(d->hal->pwm2);
+        }
+    } else {
+        rc = mc_hal_pwm3_set_duty(d->hal->pwm3, 0.5f, 0.5f, 0.5f);
+        if (rc == 0) {
+            rc = mc_hal_pwm3_enable(d->hal->pwm3);
+        }
+    }
+    if (rc != 0) {
+        outputs_off(d);
+        return -EBUSY;
+    }
+    d->mode = MC_DRIVE_MODE_CTRL;
+    return 0;
+}
+
+int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl)
+{
+    if (d->mode != MC_DRIVE_MODE_IDLE && d->mode != MC_DRIVE_MODE_FAULT) {
+        return -EBUSY;
+    }
+    if (ctrl != NULL) {
+        if (ctrl->fast == NULL ||
+            (ctrl->outputs != MC_DRIVE_OUT_PWM3 && ctrl->outputs != MC_DRIVE_OUT_PWM2)) {
+            return -EINVAL;
+        }
+        const bool bridge = (ctrl->outputs == MC_DRIVE_OUT_PWM2) ? (d->hal->pwm2 != NULL)
+                                                                 : (d->hal->pwm3 != NULL);
+        if (!bridge || (ctrl->needs_encoder && d->hal->encoder == NULL)) {
+            return -ENODEV;
+        }
+    }
+    d->ctrl = ctrl;
+    return 0;
 }
 
 int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
@@ -269,6 +370,12 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
         if (d->mode == MC_DRIVE_MODE_CURRENT) {
             return 0;
         }
+        if (d->mode != MC_DRIVE_MODE_IDLE) {
+            return -EBUSY;
+        }
+        if (d->hal->pwm3 == NULL || d->hal->encoder == NULL) {
+            return -ENODEV;
+        }
         mc_foc_f32_reset(&d->foc);
         /* Zero voltage first, then close the switches. */
         if (mc_hal_pwm3_set_duty(d->hal->pwm3, 0.5f, 0.5f, 0.5f) != 0 ||
@@ -278,6 +385,23 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
         }
         d->mode = MC_DRIVE_MODE_CURRENT;
         return 0;
+    case MC_DRIVE_MODE_CTRL:
+        if (d->mode == MC_DRIVE_MODE_FAULT || d->faults != 0u) {
+            return -EBUSY;
+        }
+        if (d->mode == MC_DRIVE_MODE_CTRL) {
+            return 0;
+        }
+        if (d->mode != MC_DRIVE_MODE_IDLE) {
+            return -EBUSY;
+        }
+        if (d->ctrl == NULL) {
+            return -ENODEV;
+        }
+        if (d->ctrl->reset != NULL && d->ctrl->reset(d->ctrl->ctx) != 0u) {
+            return -EINVAL;
+        }
+        return enable_ctrl_bridge(d);
     case MC_DRIVE_MODE_FAULT:
     default:
         return -EINVAL;

@@ -20,7 +20,15 @@
  *   IDLE     PWM off (all switches open). Entering IDLE or FAULT, and
  *            clearing faults, zero the references, so a later CURRENT
  *            starts at no torque; references set while IDLE are kept.
- *   CURRENT  dq current control to the id/iq references (torque mode).
+ *   CURRENT  dq current control to the id/iq references (torque mode);
+ *            needs pwm3 and an encoder.
+ *   CTRL     a control law plugged in with mc_drive_attach_ctrl() (speed
+ *            loops, PI2D, sensorless FOC, the stepper's CSMC): each fast step
+ *            the drive hands it the measurements (mc_drive_meas_t) and
+ *            writes the duties it returns (mc_drive_out_t) to the bridge it
+ *            names; the drive keeps sampling, supervision and the fault
+ *            reaction. A law error (non-zero return) is
+ *            MC_DRIVE_FAULT_CONTROL.
  *   FAULT    PWM off; entered on any fault; left only by
  *            mc_drive_clear_faults() once the cause is gone.
  *
@@ -47,6 +55,7 @@ typedef enum {
     MC_DRIVE_MODE_IDLE = 0,
     MC_DRIVE_MODE_CURRENT = 1,
     MC_DRIVE_MODE_FAULT = 2,
+    MC_DRIVE_MODE_CTRL = 3,
 } mc_drive_mode_t;
 
 /* Sticky fault bits (mc_drive_t.faults). */
@@ -65,7 +74,7 @@ typedef enum {
 /* Configuration errors returned by mc_drive_init (bit set). */
 #define MC_DRIVE_CFG_OK            0u
 #define MC_DRIVE_CFG_ERR_NULL      (1u << 0)  /**< NULL drive, config or HAL */
-#define MC_DRIVE_CFG_ERR_HAL       (1u << 1)  /**< HAL lacks adc, pwm3 or encoder */
+#define MC_DRIVE_CFG_ERR_HAL       (1u << 1)  /**< HAL lacks adc, or has neither pwm3 nor pwm2 */
 #define MC_DRIVE_CFG_ERR_FOC       (1u << 2)  /**< FOC config rejected (see foc_err) */
 #define MC_DRIVE_CFG_ERR_POLES     (1u << 3)  /**< pole_pairs == 0 */
 #define MC_DRIVE_CFG_ERR_DIV       (1u << 4)  /**< slow_loop_div == 0 */
@@ -89,6 +98,47 @@ typedef struct {
     float vbus_max_v;           /**< over-voltage trip [V] */
 } mc_drive_cfg_t;
 
+/** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
+#define MC_DRIVE_OUT_PWM3 1u   /**< 3-phase inverter: duty_a..c in [0, 1] */
+#define MC_DRIVE_OUT_PWM2 2u   /**< dual H-bridge (stepper): duty2_a, duty2_b in [-1, 1] */
+
+/** Measurements handed to a plugged control law, once per fast step. */
+typedef struct {
+    float ia_a, ib_a;           /**< phase (or winding) currents [A] */
+    float ic_a;                 /**< third phase [A]: measured, or -(ia + ib) */
+    float vbus_v;               /**< DC bus [V] */
+    bool have_encoder;          /**< the fields below are valid */
+    float theta_m_rad;          /**< encoder mechanical angle, [0, 2 pi) */
+    float theta_e_rad;          /**< pole_pairs * theta_m + offset, [0, 2 pi) */
+    float omega_m_rad_s;        /**< encoder tracking-loop speed [rad/s] */
+    uint32_t enc_count;         /**< raw count, 0 .. enc_cpr - 1 */
+    uint32_t enc_cpr;           /**< counts per mechanical revolution */
+    float dt_s;                 /**< fast-loop period [s] */
+    uint32_t fast_count;        /**< fast steps since init (wraps) */
+} mc_drive_meas_t;
+
+/** What a control law asks the bridge to do this period. */
+typedef struct {
+    float duty_a, duty_b, duty_c;   /**< MC_DRIVE_OUT_PWM3 */
+    float duty2_a, duty2_b;         /**< MC_DRIVE_OUT_PWM2 */
+} mc_drive_out_t;
+
+/**
+ * A control law plugged into the drive. The drive calls reset() when CTRL
+ * mode is entered, fast() every fast step (from the ADC interrupt: bounded
+ * time, no blocking) and slow() every slow step; a non-zero return from any
+ * of them is a control fault (the drive goes to FAULT, outputs off). The
+ * table and ctx must outlive the drive's use of them.
+ */
+typedef struct {
+    uint32_t outputs;           /**< MC_DRIVE_OUT_PWM3 or MC_DRIVE_OUT_PWM2 */
+    bool needs_encoder;         /**< refuse to attach without an encoder */
+    uint32_t (*reset)(void *ctx);                                    /**< may be NULL */
+    uint32_t (*fast)(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out);
+    uint32_t (*slow)(void *ctx);                                     /**< may be NULL */
+    void *ctx;
+} mc_drive_ctrl_t;
+
 /** What the last fast step saw and did (telemetry snapshot). */
 typedef struct {
     float ia_a, ib_a, ic_a, vbus_v;
@@ -97,6 +147,8 @@ typedef struct {
     float omega_m_rad_s;        /**< estimated mechanical speed (encoder PLL) [rad/s] */
     float id_ref_a, iq_ref_a;
     mc_foc_f32_out_t foc;       /**< currents, voltages and duties of the FOC step */
+    mc_drive_out_t ctrl_out;    /**< last output of the plugged control law */
+    uint32_t ctrl_err;          /**< last non-zero error code of the control law */
 } mc_drive_telemetry_t;
 
 /** The drive instance (statically allocated by the caller). */
@@ -119,6 +171,7 @@ typedef struct {
     uint32_t first_fault;       /**< the bit that tripped first */
     uint32_t fault_tick;        /**< HAL tick when the first fault was detected */
     uint32_t foc_err;           /**< last FOC error bits (init or step) */
+    const mc_drive_ctrl_t *ctrl; /**< attached control law, or NULL */
     mc_drive_telemetry_t tm;
 } mc_drive_t;
 
@@ -132,10 +185,18 @@ bool mc_drive_fast_step(mc_drive_t *d);
 /** Slow loop body (supervision). */
 void mc_drive_slow_step(mc_drive_t *d);
 
-/** Change mode. IDLE always accepted; CURRENT only from IDLE or CURRENT with
- *  no fault. Returns 0, -EINVAL (unknown mode) or -EBUSY (in fault, or the
- *  PWM could not be enabled); on error nothing changes. */
+/** Change mode. IDLE always accepted; CURRENT and CTRL only from IDLE (or
+ *  the same mode) with no fault. Returns 0, -EINVAL (unknown mode, or the
+ *  law's reset refused), -ENODEV (CURRENT without pwm3 or encoder, CTRL with
+ *  no law attached) or -EBUSY (in fault, or the bridge could not be
+ *  enabled); on error nothing changes and the outputs stay off. */
 int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode);
+
+/** Attach (or, with NULL, detach) a control law for CTRL mode. Only while
+ *  not running (IDLE or FAULT). Returns 0; -EBUSY while running; -EINVAL
+ *  (no fast function, unknown outputs); -ENODEV (the board lacks the bridge
+ *  the law drives, or the encoder it needs). On error nothing changes. */
+int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl);
 
 /** Set the dq current references. Returns 0 or -EINVAL (NaN, inf, or
  *  |ref| > i_max_a); on error the previous references stay. */

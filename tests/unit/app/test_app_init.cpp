@@ -44,17 +44,22 @@ TEST_F(AppDriveInit, NullPointers)
 
 TEST_F(AppDriveInit, HalMissingCapability)
 {
+    // Required: the ADC, and at least one bridge (pwm3 for a 3-phase drive,
+    // pwm2 for a stepper).
     mc_hal_t h = fake.board;
     h.adc = nullptr;
     ExpectRejected(cfg, MC_DRIVE_CFG_ERR_HAL, &h);
     h = fake.board;
     h.pwm3 = nullptr;
+    h.pwm2 = nullptr;
     ExpectRejected(cfg, MC_DRIVE_CFG_ERR_HAL, &h);
+    // Optional: either bridge alone, the encoder (sensorless laws), tick,
+    // fault, can.
+    h = fake.board;
+    h.pwm3 = nullptr;
+    EXPECT_EQ(MC_DRIVE_CFG_OK, mc_drive_init(&d, &cfg, &h));
     h = fake.board;
     h.encoder = nullptr;
-    ExpectRejected(cfg, MC_DRIVE_CFG_ERR_HAL, &h);
-    // Optional capabilities: tick, fault, can, pwm2 may be absent.
-    h = fake.board;
     h.tick = nullptr;
     h.fault = nullptr;
     h.can = nullptr;
@@ -182,7 +187,7 @@ TEST_F(AppDriveInit, SeveralRulesBrokenReportsAllBits)
     c.encoder_offset_rad = kNaN;
     c.vbus_min_v = kNaN;
     mc_hal_t h = fake.board;
-    h.encoder = nullptr;
+    h.adc = nullptr;
     ExpectRejected(c,
                    MC_DRIVE_CFG_ERR_POLES | MC_DRIVE_CFG_ERR_DIV | MC_DRIVE_CFG_ERR_OFFSET |
                        MC_DRIVE_CFG_ERR_VBUS | MC_DRIVE_CFG_ERR_HAL,

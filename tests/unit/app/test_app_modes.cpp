@@ -5,6 +5,8 @@
 
 #include "app_test_fixture.h"
 
+extern "C" int mc_test_set_mode_raw(mc_drive_t *d, int mode);
+
 namespace apptest {
 namespace {
 
@@ -94,9 +96,8 @@ TEST_F(AppDriveMode, InvalidModeIsEinvalAndChangesNothing)
 {
     InitRunning();
     const uint32_t disables = Calls(MC_HAL_FAKE_PWM3_DISABLE);
-    // 3: not an enumerator, but inside the C++ value range of the enum (0..3),
-    // so the cast is defined.
-    EXPECT_EQ(-EINVAL, mc_drive_set_mode(&d, static_cast<mc_drive_mode_t>(3)));
+    // 7: not an enumerator; made in C (invalid_mode.c), where that is defined.
+    EXPECT_EQ(-EINVAL, mc_test_set_mode_raw(&d, 7));
     // FAULT is entered by the drive, never requested.
     EXPECT_EQ(-EINVAL, mc_drive_set_mode(&d, MC_DRIVE_MODE_FAULT));
     EXPECT_EQ(MC_DRIVE_MODE_CURRENT, d.mode);
