@@ -46,6 +46,16 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
     if (!mc_isfinite_f32(cfg->encoder_offset_rad)) {
         err |= MC_DRIVE_CFG_ERR_OFFSET;
     }
+    const float sup[5] = {cfg->omega_max_rad_s, cfg->temp_max_c, cfg->stall_current_frac,
+                          cfg->stall_speed_rad_s, cfg->stall_time_s};
+    for (unsigned k = 0u; k < 5u; ++k) {
+        if (!mc_isfinite_f32(sup[k]) || sup[k] < 0.0f) {
+            err |= MC_DRIVE_CFG_ERR_SUPERVISION;
+        }
+    }
+    if (cfg->stall_current_frac > 1.0f) {
+        err |= MC_DRIVE_CFG_ERR_SUPERVISION;
+    }
     return err;
 }
 
@@ -85,6 +95,12 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
         d->pll_k3_dt = bw * bw * bw * dt;
     }
     d->foc_err = foc_err;
+    /* The control deadline in ticks: one PWM period after the ADC trigger. */
+    uint32_t hz = 0u;
+    if (hal->tick != NULL && mc_hal_tick_get_freq_hz(hal->tick, &hz) == 0 && hz > 0u) {
+        const float ticks = (float)hz * cfg->foc.dt_s;
+        d->deadline_ticks = (ticks >= 1.0f && ticks < 4.0e9f) ? (uint32_t)ticks : 0u;
+    }
     return MC_DRIVE_CFG_OK;
 }
 
@@ -206,6 +222,30 @@ static uint32_t check_sample(const mc_drive_t *d, const mc_hal_adc_sample_t *s, 
     return f;
 }
 
+/* An encoder step larger than twice what omega_max allows in one period
+ * (plus two counts of quantisation) is not a motion: lost lines, a noisy
+ * cable, a slipped coupling. */
+static uint32_t encoder_jump_fault(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
+{
+    const uint32_t cpr = enc->counts_per_rev;
+    const uint32_t count = (enc->count < cpr) ? enc->count : enc->count % cpr;
+    uint32_t f = 0u;
+    if (d->have_count && d->cfg.omega_max_rad_s > 0.0f) {
+        uint32_t step = (count >= d->last_count_raw) ? count - d->last_count_raw
+                                                     : d->last_count_raw - count;
+        if (step > cpr / 2u) {
+            step = cpr - step; /* the shorter way round the circle */
+        }
+        const float max_step = 2.0f * d->cfg.omega_max_rad_s * d->cfg.foc.dt_s * (float)cpr /
+                                   MC_TWO_PI_F32 + 2.0f;
+        if ((float)step > max_step) {
+            f = MC_DRIVE_FAULT_ENCODER;
+        }
+    }
+    d->last_count_raw = count;
+    return f;
+}
+
 /* One step of the plugged law: its duties go to the bridge it drives. */
 static uint32_t run_ctrl(mc_drive_t *d, const mc_drive_meas_t *m)
 {
@@ -246,8 +286,13 @@ bool mc_drive_fast_step(mc_drive_t *d)
             enc.counts_per_rev == 0u) {
             f |= MC_DRIVE_FAULT_ENCODER;
         } else {
+            f |= encoder_jump_fault(d, &enc);
             update_position(d, &enc);
             have_enc = true;
+            if (d->cfg.omega_max_rad_s > 0.0f &&
+                mc_abs_f32(d->omega_m_rad_s) > d->cfg.omega_max_rad_s) {
+                f |= MC_DRIVE_FAULT_OVERSPEED;
+            }
         }
     }
 
@@ -278,6 +323,14 @@ bool mc_drive_fast_step(mc_drive_t *d)
     }
     d->tm.id_ref_a = d->id_ref_a;
     d->tm.iq_ref_a = d->iq_ref_a;
+    /* Control deadline: the new duties must be written within one period of
+     * the ADC trigger, or the bridge runs on stale ones. */
+    if (arc == 0 && d->deadline_ticks != 0u && d->mode != MC_DRIVE_MODE_IDLE) {
+        const uint32_t now = now_ticks(d);
+        if (mc_hal_tick_elapsed(now, s.timestamp_ticks) > d->deadline_ticks) {
+            f |= MC_DRIVE_FAULT_OVERRUN;
+        }
+    }
     raise_fault(d, f);
 
     d->fast_count++;
@@ -291,6 +344,29 @@ bool mc_drive_fast_step(mc_drive_t *d)
 
 void mc_drive_slow_step(mc_drive_t *d)
 {
+    const float slow_dt = d->cfg.foc.dt_s * (float)d->cfg.slow_loop_div;
+    if (d->cfg.temp_max_c > 0.0f) {
+        mc_hal_adc_temp_t t;
+        const int rc = mc_hal_adc_read_temp(d->hal->adc, &t);
+        /* Unreadable or invalid sensors count as too hot: the limit cannot
+         * be enforced without them. */
+        if (rc != 0 || (t.valid_mask & MC_HAL_ADC_TEMP_VALID_ALL) != MC_HAL_ADC_TEMP_VALID_ALL ||
+            !(t.power_stage_temp_c <= d->cfg.temp_max_c) ||
+            !(t.motor_temp_c <= d->cfg.temp_max_c)) {
+            raise_fault(d, MC_DRIVE_FAULT_OVERTEMP);
+        }
+    }
+    if (d->mode == MC_DRIVE_MODE_CURRENT && d->cfg.stall_time_s > 0.0f) {
+        const bool stalled =
+            mc_abs_f32(d->tm.foc.iq_a) >= d->cfg.stall_current_frac * d->cfg.i_max_a &&
+            mc_abs_f32(d->omega_m_rad_s) < d->cfg.stall_speed_rad_s;
+        d->stall_time_acc_s = stalled ? d->stall_time_acc_s + slow_dt : 0.0f;
+        if (d->stall_time_acc_s > d->cfg.stall_time_s) {
+            raise_fault(d, MC_DRIVE_FAULT_STALL);
+        }
+    } else {
+        d->stall_time_acc_s = 0.0f;
+    }
     if (d->mode == MC_DRIVE_MODE_CTRL && d->ctrl->slow != NULL) {
         const uint32_t cerr = d->ctrl->slow(d->ctrl->ctx);
         if (cerr != 0u) {
@@ -417,6 +493,11 @@ int mc_drive_set_current_ref(mc_drive_t *d, float id_ref_a, float iq_ref_a)
     d->id_ref_a = id_ref_a;
     d->iq_ref_a = iq_ref_a;
     return 0;
+}
+
+void mc_drive_raise_fault(mc_drive_t *d, uint32_t bits)
+{
+    raise_fault(d, bits & MC_DRIVE_FAULT_EXTERNAL);
 }
 
 int mc_drive_clear_faults(mc_drive_t *d)

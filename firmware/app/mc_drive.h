@@ -70,6 +70,16 @@ typedef enum {
 #define MC_DRIVE_FAULT_PWM         (1u << 7)  /**< the PWM driver refused the duties */
 #define MC_DRIVE_FAULT_HW_INPUT    (1u << 8)  /**< gate-driver fault / over-current comparator,
                                                    or its status unreadable */
+#define MC_DRIVE_FAULT_OVERSPEED   (1u << 9)  /**< |omega_m| above omega_max_rad_s */
+#define MC_DRIVE_FAULT_OVERTEMP    (1u << 10) /**< power stage or motor above its limit,
+                                                   or the reading invalid/unreadable */
+#define MC_DRIVE_FAULT_OVERRUN     (1u << 11) /**< fast step finished later than one period
+                                                   after its ADC trigger (control deadline) */
+#define MC_DRIVE_FAULT_STALL       (1u << 12) /**< CURRENT mode: |iq| >= stall fraction of
+                                                   i_max while |omega_m| < stall speed, for
+                                                   longer than stall_time_s */
+#define MC_DRIVE_FAULT_EXTERNAL    (1u << 13) /**< raised by the application through
+                                                   mc_drive_raise_fault (e.g. CAN timeout) */
 
 /* Configuration errors returned by mc_drive_init (bit set). */
 #define MC_DRIVE_CFG_OK            0u
@@ -82,6 +92,9 @@ typedef enum {
 #define MC_DRIVE_CFG_ERR_VBUS      (1u << 6)  /**< vbus_min_v <= 0, window empty, or not finite */
 #define MC_DRIVE_CFG_ERR_SPEED_PLL (1u << 7)  /**< speed_pll_bw_rad_s <= 0, not finite, or 3 bw dt > 1 */
 #define MC_DRIVE_CFG_ERR_OFFSET    (1u << 8)  /**< encoder_offset_rad not finite */
+#define MC_DRIVE_CFG_ERR_SUPERVISION (1u << 9) /**< omega_max, temp_max or a stall
+                                                    parameter negative or not finite,
+                                                    or stall_current_frac > 1 */
 
 /** Drive configuration (copied at init). */
 typedef struct {
@@ -96,6 +109,15 @@ typedef struct {
     float i_trip_a;             /**< instantaneous over-current trip on any phase [A], >= i_max_a */
     float vbus_min_v;           /**< under-voltage trip [V] */
     float vbus_max_v;           /**< over-voltage trip [V] */
+    /* Optional supervision: a value of 0 disables that check (documented as
+     * a choice of the integrator, never a default to forget: the SIL and
+     * target configurations set all of them). */
+    float omega_max_rad_s;      /**< over-speed trip, mechanical [rad/s]; also bounds
+                                     the plausible encoder step (2x margin) */
+    float temp_max_c;           /**< over-temperature trip for power stage and motor [deg C] */
+    float stall_current_frac;   /**< stall: |iq| >= this * i_max_a ... (0, 1] */
+    float stall_speed_rad_s;    /**< ... while |omega_m| < this ... */
+    float stall_time_s;         /**< ... for longer than this [s] */
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
@@ -171,6 +193,9 @@ typedef struct {
     uint32_t first_fault;       /**< the bit that tripped first */
     uint32_t fault_tick;        /**< HAL tick when the first fault was detected */
     uint32_t foc_err;           /**< last FOC error bits (init or step) */
+    uint32_t deadline_ticks;    /**< one PWM period in HAL ticks (0: no tick source) */
+    uint32_t last_count_raw;    /**< encoder count of the previous step */
+    float stall_time_acc_s;     /**< time spent in the stall condition [s] */
     const mc_drive_ctrl_t *ctrl; /**< attached control law, or NULL */
     mc_drive_telemetry_t tm;
 } mc_drive_t;
@@ -201,6 +226,10 @@ int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl);
 /** Set the dq current references. Returns 0 or -EINVAL (NaN, inf, or
  *  |ref| > i_max_a); on error the previous references stay. */
 int mc_drive_set_current_ref(mc_drive_t *d, float id_ref_a, float iq_ref_a);
+
+/** Raise a fault from the application (e.g. the CAN command timeout):
+ *  same reaction as a detected fault. bits must be MC_DRIVE_FAULT_EXTERNAL. */
+void mc_drive_raise_fault(mc_drive_t *d, uint32_t bits);
 
 /** Clear the faults and go to IDLE, if the causes are gone (DC bus inside
  *  its window, hardware fault input released). Returns 0 or -EBUSY. */

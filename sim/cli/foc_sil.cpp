@@ -65,6 +65,13 @@ FocSil::FocSil(const FocSilOptions& o) : opt_(o) {
   dc.i_trip_a = 15.0f;
   dc.vbus_min_v = static_cast<float>(0.5 * o.vbus_v);
   dc.vbus_max_v = static_cast<float>(1.5 * o.vbus_v);
+  // Supervision: 1.5x rated speed (1000 r/min), the power stage's 100 degC,
+  // stall = 90 % of i_max below 1 rad/s for half a second.
+  dc.omega_max_rad_s = 1.5f * 1000.0f * 2.0f * 3.14159265f / 60.0f;
+  dc.temp_max_c = 100.0f;
+  dc.stall_current_frac = 0.9f;
+  dc.stall_speed_rad_s = 1.0f;
+  dc.stall_time_s = 0.5f;
   const uint32_t err = mc_drive_init(&drive_, &dc, board_->hal());
   if (err != MC_DRIVE_CFG_OK) {
     throw std::invalid_argument("drive configuration rejected, MC_DRIVE_CFG bits 0x" +

@@ -17,6 +17,9 @@ protected:
     void StepExpectTrip(uint32_t bit)
     {
         ASSERT_EQ(0, mc_hal_fake_tick_set(&fake, kTripTick));
+        // The conversion happened at the trip tick too: the step runs within
+        // its deadline, so only the injected cause trips.
+        fake.adc_sample.timestamp_ticks = kTripTick;
         const uint32_t disables = Calls(MC_HAL_FAKE_PWM3_DISABLE);
         (void)mc_drive_fast_step(&d);
         EXPECT_EQ(disables + 1u, Calls(MC_HAL_FAKE_PWM3_DISABLE)) << "no disable in this step";
