@@ -46,9 +46,9 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
     if (!mc_isfinite_f32(cfg->encoder_offset_rad)) {
         err |= MC_DRIVE_CFG_ERR_OFFSET;
     }
-    const float sup[5] = {cfg->omega_max_rad_s, cfg->temp_max_c, cfg->stall_current_frac,
-                          cfg->stall_speed_rad_s, cfg->stall_time_s};
-    for (unsigned k = 0u; k < 5u; ++k) {
+    const float sup[6] = {cfg->omega_max_rad_s,    cfg->temp_max_c,   cfg->stall_current_frac,
+                          cfg->stall_speed_rad_s, cfg->stall_time_s, cfg->i_unbalance_max_a};
+    for (unsigned k = 0u; k < 6u; ++k) {
         if (!mc_isfinite_f32(sup[k]) || sup[k] < 0.0f) {
             err |= MC_DRIVE_CFG_ERR_SUPERVISION;
         }
@@ -212,6 +212,10 @@ static uint32_t check_sample(const mc_drive_t *d, const mc_hal_adc_sample_t *s, 
     const float trip = d->cfg.i_trip_a;
     if (mc_abs_f32(s->ia_a) > trip || mc_abs_f32(s->ib_a) > trip || mc_abs_f32(ic) > trip) {
         f |= MC_DRIVE_FAULT_OVERCURRENT;
+    }
+    if (have_ic && d->cfg.i_unbalance_max_a > 0.0f &&
+        mc_abs_f32(s->ia_a + s->ib_a + s->ic_a) > d->cfg.i_unbalance_max_a) {
+        f |= MC_DRIVE_FAULT_UNBALANCED;
     }
     if (s->vbus_v < d->cfg.vbus_min_v) {
         f |= MC_DRIVE_FAULT_VBUS_LOW;

@@ -80,6 +80,9 @@ typedef enum {
                                                    longer than stall_time_s */
 #define MC_DRIVE_FAULT_EXTERNAL    (1u << 13) /**< raised by the application through
                                                    mc_drive_raise_fault (e.g. CAN timeout) */
+#define MC_DRIVE_FAULT_UNBALANCED  (1u << 14) /**< three measured phase currents do not sum
+                                                   to zero: a stuck, offset or failed
+                                                   current sensor (needs three shunts) */
 
 /* Configuration errors returned by mc_drive_init (bit set). */
 #define MC_DRIVE_CFG_OK            0u
@@ -92,9 +95,10 @@ typedef enum {
 #define MC_DRIVE_CFG_ERR_VBUS      (1u << 6)  /**< vbus_min_v <= 0, window empty, or not finite */
 #define MC_DRIVE_CFG_ERR_SPEED_PLL (1u << 7)  /**< speed_pll_bw_rad_s <= 0, not finite, or 3 bw dt > 1 */
 #define MC_DRIVE_CFG_ERR_OFFSET    (1u << 8)  /**< encoder_offset_rad not finite */
-#define MC_DRIVE_CFG_ERR_SUPERVISION (1u << 9) /**< omega_max, temp_max or a stall
-                                                    parameter negative or not finite,
-                                                    or stall_current_frac > 1 */
+#define MC_DRIVE_CFG_ERR_SUPERVISION (1u << 9) /**< omega_max, temp_max, a stall
+                                                    parameter or i_unbalance_max
+                                                    negative or not finite, or
+                                                    stall_current_frac > 1 */
 
 /** Drive configuration (copied at init). */
 typedef struct {
@@ -118,6 +122,7 @@ typedef struct {
     float stall_current_frac;   /**< stall: |iq| >= this * i_max_a ... (0, 1] */
     float stall_speed_rad_s;    /**< ... while |omega_m| < this ... */
     float stall_time_s;         /**< ... for longer than this [s] */
+    float i_unbalance_max_a;    /**< largest |ia + ib + ic| with three shunts [A] */
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */

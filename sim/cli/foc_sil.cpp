@@ -30,6 +30,7 @@ FocSil::FocSil(const FocSilOptions& o) : opt_(o) {
   bc.vbus_sensor.full_scale_v = 400.0;
   bc.encoder.counts_per_rev = 8192;
   bc.substeps = o.substeps;
+  bc.three_shunts = o.three_shunts;
   bc.delay_periods = o.delay_periods;
   board_ = std::make_unique<hal_host::PmsmBoard>(bc);
 
@@ -72,6 +73,9 @@ FocSil::FocSil(const FocSilOptions& o) : opt_(o) {
   dc.stall_current_frac = 0.9f;
   dc.stall_speed_rad_s = 1.0f;
   dc.stall_time_s = 0.5f;
+  // Three shunts: the phase currents must sum to zero within 1 A (12-bit
+  // ADC at 20 A full scale: 3 LSB of rounding is 15 mA; 1 A is a fault).
+  dc.i_unbalance_max_a = o.three_shunts ? 1.0f : 0.0f;
   const uint32_t err = mc_drive_init(&drive_, &dc, board_->hal());
   if (err != MC_DRIVE_CFG_OK) {
     throw std::invalid_argument("drive configuration rejected, MC_DRIVE_CFG bits 0x" +

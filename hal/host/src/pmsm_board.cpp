@@ -86,7 +86,7 @@ PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
 
 uint32_t PmsmBoard::ticks_now() const {
   // Modulo 2^32, like a free-running hardware counter.
-  const double ticks = std::floor(t_s_ * cfg_.tick_hz + 0.5);
+  const double ticks = std::floor((t_s_ + tick_offset_s_) * cfg_.tick_hz + 0.5);
   return static_cast<uint32_t>(static_cast<uint64_t>(std::fmod(ticks, 4294967296.0)));
 }
 
@@ -115,15 +115,27 @@ void PmsmBoard::sample() {
   adc_.vbus_v = static_cast<float>(vsense_.sample_v(cfg_.vbus_v));
   adc_.valid_mask = MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS |
                     (cfg_.three_shunts ? MC_HAL_ADC_VALID_IC : 0U);
+  // Injected sensor faults.
+  float* ch[3] = {&adc_.ia_a, &adc_.ib_a, &adc_.ic_a};
+  for (int k = 0; k < 3; ++k) *ch[k] += static_cast<float>(inj_.offset_a[k]);
+  if (inj_.stuck_phase >= 0 && inj_.stuck_phase < 3) {
+    *ch[inj_.stuck_phase] = static_cast<float>(inj_.stuck_value_a);
+  }
+  if (inj_.nan_ia) adc_.ia_a = std::nanf("");
+  tick_offset_s_ = 0.0;
   adc_.timestamp_ticks = ticks_now();
   adc_.seq = ++adc_seq_;
   adc_fresh_ = true;
 
   const mcsim::EncoderReading r = encoder_.sample(x_(3));
-  enc_.count = static_cast<uint32_t>(r.count_in_rev);
+  if (!inj_.encoder_frozen) enc_.count = static_cast<uint32_t>(r.count_in_rev);
   enc_.counts_per_rev = static_cast<uint32_t>(cfg_.encoder.counts_per_rev);
-  enc_.flags = MC_HAL_ENCODER_FLAG_VALID | (r.index_seen ? MC_HAL_ENCODER_FLAG_INDEX : 0U);
+  enc_.flags = inj_.encoder_dead
+                   ? 0U
+                   : (MC_HAL_ENCODER_FLAG_VALID | (r.index_seen ? MC_HAL_ENCODER_FLAG_INDEX : 0U));
   enc_.timestamp_ticks = adc_.timestamp_ticks;
+  // The fast step that follows this sample reads the tick this much later.
+  tick_offset_s_ = inj_.compute_delay_s;
 }
 
 void PmsmBoard::integrate_open_switches(double h_s, int n) {
@@ -166,6 +178,7 @@ void PmsmBoard::integrate_open_switches(double h_s, int n) {
 }
 
 void PmsmBoard::advance() {
+  tick_offset_s_ = 0.0;
   const double T = cfg_.inverter.t_pwm_s;
   const int n = cfg_.substeps;
   // The duty register and the enable take effect after the computation
@@ -245,6 +258,12 @@ int PmsmBoard::tick_read(uint32_t* ticks) const noexcept {
 int PmsmBoard::tick_freq(uint32_t* hz) const noexcept {
   *hz = static_cast<uint32_t>(cfg_.tick_hz);
   return 0;
+}
+
+void PmsmBoard::set_load(const mcsim::LoadTorque& load) {
+  mcsim::PmsmParams p = plant_.params();
+  p.load = load;
+  check(plant_.configure(p), "load");
 }
 
 void PmsmBoard::set_fault_inputs(uint32_t active_mask) {

@@ -45,10 +45,10 @@ TEST_F(AppDriveSupervision, ConfigRulesEachRejected)
     };
     const float bad[] = {-1.0f, kNaN, kInf};
     for (float v : bad) {
-        for (int field = 0; field < 5; ++field) {
+        for (int field = 0; field < 6; ++field) {
             mc_drive_cfg_t c = cfg;
-            float *p[5] = {&c.omega_max_rad_s, &c.temp_max_c, &c.stall_current_frac,
-                           &c.stall_speed_rad_s, &c.stall_time_s};
+            float *p[6] = {&c.omega_max_rad_s,   &c.temp_max_c,   &c.stall_current_frac,
+                           &c.stall_speed_rad_s, &c.stall_time_s, &c.i_unbalance_max_a};
             *p[field] = v;
             ExpectRejected(c, MC_DRIVE_CFG_ERR_SUPERVISION);
         }
@@ -174,6 +174,18 @@ TEST_F(AppDriveSupervision, StallAfterItsTime)
     // does, by one ulp), else after 21. Earlier means the timer is wrong.
     EXPECT_GE(slow_steps, 20);
     EXPECT_LE(slow_steps, 21);
+}
+
+TEST_F(AppDriveSupervision, UnbalancedThreePhaseCurrents)
+{
+    cfg.i_unbalance_max_a = 1.0f;
+    InitDrive();
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 5.0f, -2.0f, -2.1f, kVbus, MC_HAL_ADC_VALID_ALL));
+    (void)mc_drive_fast_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults) << "0.9 A of imbalance is inside the limit";
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 5.0f, -2.0f, -1.9f, kVbus, MC_HAL_ADC_VALID_ALL));
+    (void)mc_drive_fast_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_UNBALANCED, d.faults);
 }
 
 TEST_F(AppDriveSupervision, ExternalFaultFromTheApplication)

@@ -77,8 +77,22 @@ class PmsmBoard {
   const Eigen::Vector3d& duties_applied() const { return duty_applied_; }
   const Eigen::Vector2d& v_alpha_beta_applied() const { return v_ab_applied_; }
 
+  // Faults a test can inject into the board (all off by default).
+  struct Injection {
+    int stuck_phase = -1;          // 0..2: that current channel reads stuck_value_a
+    double stuck_value_a = 0.0;
+    double offset_a[3] = {0, 0, 0};  // added to each current reading [A]
+    bool nan_ia = false;           // the ia conversion returns NaN
+    bool encoder_dead = false;     // encoder reads not valid (cable off)
+    bool encoder_frozen = false;   // encoder keeps its last count (lost lines)
+    double compute_delay_s = 0.0;  // the tick jumps this much after the sample:
+                                   // the fast step looks late (deadline overrun)
+  };
+  void inject(const Injection& inj) { inj_ = inj; }
+
   // Test hooks.
   void set_vbus_v(double v) { cfg_.vbus_v = v; }
+  void set_load(const mcsim::LoadTorque& load);  // throws std::invalid_argument
   void set_fault_inputs(uint32_t active_mask);
 
   // HAL op implementations (public so the C ops tables can reach them).
@@ -127,6 +141,8 @@ class PmsmBoard {
   uint32_t fault_active_ = 0;
   uint32_t fault_latched_ = 0;
   mc_hal_encoder_sample_t enc_{};
+  Injection inj_{};
+  double tick_offset_s_ = 0.0;
 
   // ops tables bound to this board
   mc_hal_adc_t adc_dev_{};
