@@ -22,6 +22,7 @@ APT_PACKAGES=(
   qemu-system-arm
   can-utils
   cppcheck clang-tidy
+  clang-14 libfuzzer-14-dev
   python3 python3-venv
 )
 missing=()

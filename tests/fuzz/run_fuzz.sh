@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# run_fuzz.sh <target> <source-dir> <work-dir> <seconds>
+# Builds a libFuzzer target with clang-14 (ASan + UBSan, -ffp-contract=off
+# like every build here) and runs it for a bounded time on a working copy of
+# the committed seed corpus (tests/fuzz/corpus/<target>). Exit 0 only if no
+# crash, leak or sanitizer report. A crashing input is saved as crash-* in
+# the work dir: add it to the seed corpus as a regression test.
+set -euo pipefail
+target=$1; src=$2; work=$3; secs=$4
+CC=${MC_FUZZ_CC:-clang-14}; CXX=${MC_FUZZ_CXX:-clang++-14}
+FLAGS=(-g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off)
+mkdir -p "$work/obj-$target" "$work/corpus-$target"
+cd "$src"
+case "$target" in
+  mcsim_params)
+    "$CXX" "${FLAGS[@]}" -std=c++17 -I sim/cli tests/fuzz/fuzz_mcsim_params.cpp sim/cli/scenario.cpp \
+      -o "$work/fuzz_$target"
+    ;;
+  drive_api)
+    objs=()
+    while IFS= read -r f; do
+      o="$work/obj-$target/$(echo "$f" | tr '/' '_').o"
+      "$CC" "${FLAGS[@]/-fsanitize=fuzzer,/-fsanitize=fuzzer-no-link,}" -std=c11 \
+        -I firmware/kernels -I firmware/app -I hal/include -I hal/fake -c "$f" -o "$o"
+      objs+=("$o")
+    done < <(find firmware/kernels -name '*.c' | sort; echo firmware/app/mc_drive.c; find hal/fake -name '*.c' | sort)
+    "$CXX" "${FLAGS[@]}" -std=c++17 -I firmware/kernels -I firmware/app -I hal/include -I hal/fake \
+      tests/fuzz/fuzz_drive_api.cpp "${objs[@]}" -o "$work/fuzz_$target"
+    ;;
+  *) echo "unknown fuzz target $target" >&2; exit 2 ;;
+esac
+cp -n tests/fuzz/corpus/"$target"/* "$work/corpus-$target/" 2>/dev/null || true
+cd "$work"
+"./fuzz_$target" -max_total_time="$secs" -print_final_stats=1 -timeout=5 \
+  "corpus-$target" 2>&1 | tail -25
