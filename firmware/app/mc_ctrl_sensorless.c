@@ -1,0 +1,513 @@
+/**
+ * @file mc_ctrl_sensorless.c
+ * @brief Sensorless FOC speed control with I-f start-up (paper 002,
+ *        Section V); see mc_ctrl_sensorless.h.
+ *
+ * Departures from the paper's Section V, on purpose:
+ * - the current loop uses the kernels' dq PI with decoupling (mc_foc): the
+ *   paper's iv) with the measured currents in the feed-forward and the
+ *   PLL speed as omega_hat; identical in the continuous limit;
+ * - the paper's speed loop i_dq* = PI(omega* - omega_hat) is read as
+ *   iq* = PI(...), id* = 0 (a non-salient machine below base speed; the
+ *   paper's "field weakening provisions" are not reproduced);
+ * - start-up (ALIGN, I-f) and the low-speed fallback are additions: the
+ *   paper reports that below about 50 r/min the loop degrades or goes
+ *   unstable, which Prop. 4 explains (no information at zero speed).
+ */
+#include "mc_ctrl_sensorless.h"
+
+#include <stddef.h>
+
+#include "math/mc_math.h"
+#include "transforms/mc_transforms.h"
+
+static bool pos_finite(float x)
+{
+    return (x > 0.0f) && mc_isfinite_f32(x);
+}
+
+static float sign_f32(float x)
+{
+    return (x < 0.0f) ? -1.0f : 1.0f;
+}
+
+/* Move x towards target by at most step (>= 0). */
+static float slew_f32(float x, float target, float step)
+{
+    if (target > (x + step)) {
+        return x + step;
+    }
+    if (target < (x - step)) {
+        return x - step;
+    }
+    return target;
+}
+
+static uint32_t sls_validate(const mc_ctrl_sls_cfg_t *cfg)
+{
+    uint32_t err = MC_CTRL_SLS_ERR_NONE;
+
+    if (!(cfg->r_ohm >= 0.0f) || !mc_isfinite_f32(cfg->r_ohm) || !pos_finite(cfg->l_h) ||
+        !pos_finite(cfg->flux_wb) || (cfg->pole_pairs == 0u)) {
+        err |= MC_CTRL_SLS_ERR_MOTOR;
+    }
+    if (!pos_finite(cfg->dt_s) || (cfg->speed_div == 0u) || (cfg->pwm_delay_periods > 3u) ||
+        !(cfg->dead_time_s >= 0.0f) || !(cfg->dead_time_s < (0.5f * cfg->dt_s)) ||
+        !(cfg->dead_band_a >= 0.0f) || !mc_isfinite_f32(cfg->dead_band_a)) {
+        err |= MC_CTRL_SLS_ERR_TIMING;
+    }
+    if (!pos_finite(cfg->speed_kp_a_s_rad) || !(cfg->speed_ki_a_rad >= 0.0f) ||
+        !mc_isfinite_f32(cfg->speed_ki_a_rad) || !pos_finite(cfg->iq_max_a) ||
+        !pos_finite(cfg->speed_slew_rad_s2) || !pos_finite(cfg->speed_max_rad_s)) {
+        err |= MC_CTRL_SLS_ERR_SPEED;
+    }
+    {
+        const bool startup_ok =
+            pos_finite(cfg->if_current_a) && (cfg->align_time_s >= 0.0f) &&
+            mc_isfinite_f32(cfg->align_time_s) && pos_finite(cfg->if_accel_rad_s2) &&
+            pos_finite(cfg->handover_speed_rad_s) && (cfg->handover_hyst >= 0.0f) &&
+            (cfg->handover_hyst <= 0.9f) && pos_finite(cfg->lock_tol) &&
+            (cfg->lock_tol <= 1.0f) && pos_finite(cfg->if_lock_timeout_s) &&
+            pos_finite(cfg->blend_time_s) &&
+            (cfg->handover_speed_rad_s < cfg->speed_max_rad_s);
+        /* the closed loop must stay a factor 2 above the critical speed
+         * (an invalid critical speed is reported by the observer check) */
+        const bool margin_ok =
+            !pos_finite(cfg->omega_crit_m_rad_s) ||
+            ((cfg->handover_speed_rad_s * (1.0f - cfg->handover_hyst)) >
+             (2.0f * cfg->omega_crit_m_rad_s));
+        if (!startup_ok || !margin_ok) {
+            err |= MC_CTRL_SLS_ERR_STARTUP;
+        }
+    }
+    return err;
+}
+
+uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
+{
+    uint32_t err;
+    mc_fluxobs_f32_cfg_t oc;
+    mc_spdpll_f32_cfg_t pc;
+    mc_foc_f32_cfg_t fc;
+    mc_pi_f32_cfg_t sc;
+    float kp = 0.0f;
+    float ki = 0.0f;
+
+    if ((c == NULL) || (cfg == NULL)) {
+        return MC_CTRL_SLS_ERR_NULL;
+    }
+    err = sls_validate(cfg);
+    if ((err & (MC_CTRL_SLS_ERR_MOTOR | MC_CTRL_SLS_ERR_TIMING)) != 0u) {
+        return err; /* the kernels' configs below need these */
+    }
+    c->cfg = *cfg;
+    c->obs_err = mc_fluxobs_f32_gamma_for_critical_speed(cfg->omega_crit_m_rad_s, cfg->pole_pairs,
+                                                         cfg->flux_wb, &c->gamma);
+    if (c->obs_err == MC_FLUXOBS_ERR_NONE) {
+        oc.r_ohm = cfg->r_ohm;
+        oc.l_h = cfg->l_h;
+        oc.flux_wb = cfg->flux_wb;
+        oc.gamma = c->gamma;
+        oc.dt_s = cfg->dt_s;
+        oc.resid_tol = cfg->resid_tol;
+        oc.resid_time_s = cfg->resid_time_s;
+        c->obs_err = mc_fluxobs_f32_init(&c->obs, &oc);
+    }
+    if (c->obs_err != MC_FLUXOBS_ERR_NONE) {
+        err |= MC_CTRL_SLS_ERR_OBSERVER;
+    }
+    pc.bw_rad_s = cfg->pll_bw_rad_s;
+    pc.dt_s = cfg->dt_s;
+    pc.omega_max_rad_s = 2.0f * cfg->speed_max_rad_s * (float)cfg->pole_pairs;
+    if (mc_spdpll_f32_init(&c->pll, &pc) != MC_SPDPLL_ERR_NONE) {
+        err |= MC_CTRL_SLS_ERR_PLL;
+    }
+    if (mc_foc_f32_gains_from_bandwidth(cfg->r_ohm, cfg->l_h, cfg->cur_bw_rad_s, &kp, &ki) !=
+        MC_FOC_ERR_NONE) {
+        err |= MC_CTRL_SLS_ERR_CURRENT;
+    } else {
+        fc.r_ohm = cfg->r_ohm;
+        fc.ld_h = cfg->l_h;
+        fc.lq_h = cfg->l_h;
+        fc.flux_wb = cfg->flux_wb;
+        fc.kp_d_v_per_a = kp;
+        fc.ki_d_v_per_as = ki;
+        fc.kp_q_v_per_a = kp;
+        fc.ki_q_v_per_as = ki;
+        fc.dt_s = cfg->dt_s;
+        fc.aw = MC_PI_AW_CLAMP;
+        fc.kaw_per_s = 0.0f;
+        fc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
+        fc.v_limit_ratio = cfg->v_limit_ratio;
+        fc.v_abs_max_v = cfg->vbus_max_v;
+        fc.decouple = true;
+        if (mc_foc_f32_init(&c->foc, &fc) != MC_FOC_ERR_NONE) {
+            err |= MC_CTRL_SLS_ERR_CURRENT;
+        }
+    }
+    if ((err & MC_CTRL_SLS_ERR_SPEED) == 0u) {
+        sc.kp = cfg->speed_kp_a_s_rad;
+        sc.ki_per_s = cfg->speed_ki_a_rad;
+        sc.dt_s = cfg->dt_s * (float)cfg->speed_div;
+        sc.out_min = -cfg->iq_max_a;
+        sc.out_max = cfg->iq_max_a;
+        sc.aw = MC_PI_AW_CLAMP;
+        sc.kaw_per_s = 0.0f;
+        if (mc_pi_f32_init(&c->speed_pi, &sc) != MC_PI_ERR_NONE) {
+            err |= MC_CTRL_SLS_ERR_SPEED;
+        }
+    }
+    if (err != MC_CTRL_SLS_ERR_NONE) {
+        return err;
+    }
+    c->omega_cmd_m_rad_s = 0.0f;
+    c->table.outputs = MC_DRIVE_OUT_PWM3;
+    c->table.needs_encoder = false;
+    c->table.reset = mc_ctrl_sls_reset;
+    c->table.fast = mc_ctrl_sls_fast;
+    c->table.slow = NULL;
+    c->table.ctx = c;
+    c->tm.handovers = 0u;
+    c->tm.fallbacks = 0u;
+    return mc_ctrl_sls_reset(c);
+}
+
+const mc_drive_ctrl_t *mc_ctrl_sls_table(mc_ctrl_sls_t *c)
+{
+    return (c == NULL) ? NULL : &c->table;
+}
+
+uint32_t mc_ctrl_sls_set_speed_ref(mc_ctrl_sls_t *c, float omega_m_rad_s)
+{
+    if (c == NULL) {
+        return MC_CTRL_SLS_ERR_NULL;
+    }
+    if (!mc_isfinite_f32(omega_m_rad_s) ||
+        (mc_abs_f32(omega_m_rad_s) > c->cfg.speed_max_rad_s)) {
+        return MC_CTRL_SLS_ERR_REF;
+    }
+    c->omega_cmd_m_rad_s = omega_m_rad_s;
+    return MC_CTRL_SLS_ERR_NONE;
+}
+
+uint32_t mc_ctrl_sls_reset(void *ctx)
+{
+    mc_ctrl_sls_t *c = (mc_ctrl_sls_t *)ctx;
+    uint32_t k;
+
+    if (c == NULL) {
+        return MC_CTRL_SLS_ERR_NULL;
+    }
+    (void)mc_fluxobs_f32_reset(&c->obs, 0.0f, 0.0f, 0.0f);
+    (void)mc_spdpll_f32_reset(&c->pll, 0.0f, 0.0f);
+    mc_foc_f32_reset(&c->foc);
+    (void)mc_pi_f32_reset(&c->speed_pi, 0.0f);
+    c->phase = MC_CTRL_SLS_ALIGN;
+    c->omega_ref_m_rad_s = 0.0f;
+    c->theta_if_e_rad = 0.0f;
+    c->omega_if_e_rad_s = 0.0f;
+    c->i_if_a = 0.0f;
+    c->t_phase_s = 0.0f;
+    c->t_lockwait_s = 0.0f;
+    c->id_ref_a = 0.0f;
+    c->iq_ref_a = 0.0f;
+    c->dir = 1.0f;
+    for (k = 0u; k < 4u; ++k) {
+        c->v_hist_a[k] = 0.0f;
+        c->v_hist_b[k] = 0.0f;
+    }
+    c->speed_count = 0u;
+    c->ia_prev_a = 0.0f;
+    c->ib_prev_a = 0.0f;
+    c->tm.phase = MC_CTRL_SLS_ALIGN;
+    return MC_CTRL_SLS_ERR_NONE;
+}
+
+/* Dead-time voltage error of one leg in units of (dead_time / dt) vbus:
+ * sat(i / band), +-1 outside the band (a hard sign for band = 0). */
+static float dead_sign(float i_a, float band_a)
+{
+    if (band_a > 0.0f) {
+        return mc_sat_f32(i_a / band_a, -1.0f, 1.0f);
+    }
+    if (i_a > 0.0f) {
+        return 1.0f;
+    }
+    return (i_a < 0.0f) ? -1.0f : 0.0f;
+}
+
+/* Alpha-beta voltage lost to the dead time over the last period. */
+static void dead_time_error(const mc_ctrl_sls_t *c, float ia_a, float ib_a, float vbus_v,
+                            float *p_va, float *p_vb)
+{
+    const float k = (c->cfg.dead_time_s / c->cfg.dt_s) * vbus_v;
+    const float ia = 0.5f * (ia_a + c->ia_prev_a);
+    const float ib = 0.5f * (ib_a + c->ib_prev_a);
+    const float sa = dead_sign(ia, c->cfg.dead_band_a);
+    const float sb = dead_sign(ib, c->cfg.dead_band_a);
+    const float sc = dead_sign(-(ia + ib), c->cfg.dead_band_a);
+
+    /* amplitude-invariant Clarke of the three leg errors (common mode drops) */
+    *p_va = k * (2.0f / 3.0f) * (sa - (0.5f * (sb + sc)));
+    *p_vb = k * MC_INV_SQRT3_F32 * (sb - sc);
+}
+
+/* Preset the current PIs so that, in the frame theta with decoupling speed
+ * omega_e, the next output reproduces the last commanded voltage. */
+static void preset_current_pis(mc_ctrl_sls_t *c, float theta_e, float omega_e, float id_m,
+                               float iq_m)
+{
+    float s;
+    float co;
+    float vd;
+    float vq;
+    const float kp = c->foc.pi_d.kp;
+
+    mc_sincos_f32(theta_e, &s, &co);
+    mc_park_f32(c->v_hist_a[0], c->v_hist_b[0], s, co, &vd, &vq);
+    vd = vd + (omega_e * c->cfg.l_h * iq_m) - (kp * (c->id_ref_a - id_m));
+    vq = vq - (omega_e * c->cfg.l_h * id_m) - (omega_e * c->cfg.flux_wb) -
+         (kp * (c->iq_ref_a - iq_m));
+    (void)mc_pi_f32_reset(&c->foc.pi_d, vd);
+    (void)mc_pi_f32_reset(&c->foc.pi_q, vq);
+}
+
+/* IF -> CLOSED, keeping the current vector and the torque. */
+static void handover_to_closed(mc_ctrl_sls_t *c, float i_al, float i_be, float theta_hat,
+                               float omega_hat_e)
+{
+    float s;
+    float co;
+    float id_m;
+    float iq_m;
+    const float d = mc_wrap_pi_f32(c->theta_if_e_rad - theta_hat);
+    const float id_if = c->id_ref_a; /* last references, I-f frame */
+    const float iq_if = c->iq_ref_a;
+
+    /* the same current vector in the frame of theta_hat: rotate by d */
+    mc_sincos_f32(d, &s, &co);
+    c->id_ref_a = (co * id_if) - (s * iq_if);
+    c->iq_ref_a = (s * id_if) + (co * iq_if);
+    (void)mc_pi_f32_reset(&c->speed_pi, c->iq_ref_a);
+    mc_sincos_f32(theta_hat, &s, &co);
+    mc_park_f32(i_al, i_be, s, co, &id_m, &iq_m);
+    preset_current_pis(c, theta_hat, omega_hat_e, id_m, iq_m);
+    c->omega_ref_m_rad_s = omega_hat_e / (float)c->cfg.pole_pairs;
+    c->phase = MC_CTRL_SLS_CLOSED;
+    c->t_phase_s = 0.0f;
+    c->speed_count = 0u;
+    c->tm.handovers++;
+}
+
+/* CLOSED -> IF. In the I-f frame (current I along its q axis) the rotor
+ * sits at the load angle delta = theta_if + pi/2 - theta, with
+ * iq = I sin(delta) (the torque) and id = I cos(delta) in the rotor frame;
+ * it is a stable equilibrium only for cos(delta) > 0. Keeping the current
+ * VECTOR (id = 0) would put the rotor on the stability limit (delta =
+ * +-pi/2) and, while braking, on the wrong side (observed: pole slip and a
+ * reversal). So the torque-producing iq is kept exactly and the magnitude
+ * is raised to I = max(I_if, 1.25 |iq|) (|sin delta| <= 0.8): only id
+ * steps, from 0 to I cos(delta) > 0, which produces no torque on a
+ * non-salient machine; the current loop takes it over its bandwidth. */
+static void fallback_to_if(mc_ctrl_sls_t *c, float i_al, float i_be, float theta_hat,
+                           float omega_hat_e)
+{
+    float s;
+    float co;
+    float id_m;
+    float iq_m;
+    float mag = 1.25f * mc_abs_f32(c->iq_ref_a);
+    float delta;
+
+    if (mag < c->cfg.if_current_a) {
+        mag = c->cfg.if_current_a;
+    }
+    /* delta = asin(iq / I) on the stable branch: atan2(iq, sqrt(I^2 - iq^2)) */
+    delta = mc_atan2_f32(c->iq_ref_a, mc_sqrt_f32((mag * mag) - (c->iq_ref_a * c->iq_ref_a)));
+    c->theta_if_e_rad = mc_wrap_pi_f32(theta_hat + delta - MC_HALF_PI_F32);
+    c->i_if_a = mag;
+    c->omega_if_e_rad_s = omega_hat_e;
+    c->dir = sign_f32(omega_hat_e);
+    c->id_ref_a = 0.0f;
+    c->iq_ref_a = mag;
+    mc_sincos_f32(c->theta_if_e_rad, &s, &co);
+    mc_park_f32(i_al, i_be, s, co, &id_m, &iq_m);
+    preset_current_pis(c, c->theta_if_e_rad, 0.0f, id_m, iq_m);
+    c->phase = MC_CTRL_SLS_IF;
+    c->t_phase_s = 0.0f;
+    c->t_lockwait_s = 0.0f;
+    c->tm.fallbacks++;
+}
+
+uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out)
+{
+    mc_ctrl_sls_t *c = (mc_ctrl_sls_t *)ctx;
+    const mc_ctrl_sls_cfg_t *cfg;
+    uint32_t err = MC_CTRL_SLS_ERR_NONE;
+    float i_al;
+    float i_be;
+    float theta_hat;
+    float omega_hat_e;
+    float omega_hat_m;
+    float pp;
+    float ho_e;
+    float theta_ctrl;
+    float omega_ctrl;
+    uint32_t k;
+    mc_foc_f32_in_t in;
+    mc_foc_f32_out_t fo;
+    const uint32_t delay_idx = (c == NULL) ? 0u : c->cfg.pwm_delay_periods;
+
+    if ((c == NULL) || (m == NULL) || (out == NULL)) {
+        return MC_CTRL_SLS_ERR_NULL;
+    }
+    cfg = &c->cfg;
+    if (!mc_isfinite_f32(m->ia_a) || !mc_isfinite_f32(m->ib_a) || !mc_isfinite_f32(m->vbus_v)) {
+        return MC_CTRL_SLS_ERR_MEAS;
+    }
+    pp = (float)cfg->pole_pairs;
+    ho_e = cfg->handover_speed_rad_s * pp;
+
+    /* 1. observer on the voltage that acted over the last period */
+    mc_clarke_f32(m->ia_a, m->ib_a, &i_al, &i_be);
+    {
+        float dva = 0.0f;
+        float dvb = 0.0f;
+        if (cfg->dead_time_s > 0.0f) {
+            dead_time_error(c, m->ia_a, m->ib_a, m->vbus_v, &dva, &dvb);
+        }
+        c->tm.v_alpha_obs_v = c->v_hist_a[delay_idx] - dva;
+        c->tm.v_beta_obs_v = c->v_hist_b[delay_idx] - dvb;
+    }
+    c->ia_prev_a = m->ia_a;
+    c->ib_prev_a = m->ib_a;
+    if (mc_fluxobs_f32_step(&c->obs, c->tm.v_alpha_obs_v, c->tm.v_beta_obs_v, i_al, i_be) !=
+        MC_FLUXOBS_ERR_NONE) {
+        err |= MC_CTRL_SLS_ERR_DIVERGED;
+    }
+    theta_hat = c->obs.theta_e_rad;
+    omega_hat_e = mc_spdpll_f32_step(&c->pll, theta_hat);
+    omega_hat_m = omega_hat_e / pp;
+
+    /* 2. reference slew */
+    c->omega_ref_m_rad_s =
+        slew_f32(c->omega_ref_m_rad_s, c->omega_cmd_m_rad_s, cfg->speed_slew_rad_s2 * cfg->dt_s);
+    c->t_phase_s += cfg->dt_s;
+
+    /* 3. phase logic */
+    if (c->phase == MC_CTRL_SLS_ALIGN) {
+        c->i_if_a = (cfg->align_time_s > 0.0f)
+                        ? (cfg->if_current_a * mc_sat_f32(c->t_phase_s / cfg->align_time_s, 0.0f, 1.0f))
+                        : cfg->if_current_a;
+        if ((c->t_phase_s >= cfg->align_time_s) && (c->omega_cmd_m_rad_s != 0.0f)) {
+            c->phase = MC_CTRL_SLS_IF;
+            c->dir = sign_f32(c->omega_cmd_m_rad_s);
+            c->t_phase_s = 0.0f;
+            c->t_lockwait_s = 0.0f;
+        }
+    } else if (c->phase == MC_CTRL_SLS_IF) {
+        const float target = pp * mc_sat_f32(c->omega_ref_m_rad_s, -cfg->handover_speed_rad_s,
+                                             cfg->handover_speed_rad_s);
+        c->omega_if_e_rad_s =
+            slew_f32(c->omega_if_e_rad_s, target, cfg->if_accel_rad_s2 * pp * cfg->dt_s);
+        c->i_if_a = slew_f32(c->i_if_a, cfg->if_current_a,
+                             cfg->if_current_a * cfg->dt_s / cfg->blend_time_s);
+        if ((mc_abs_f32(c->omega_cmd_m_rad_s) > cfg->handover_speed_rad_s) &&
+            (mc_abs_f32(c->omega_if_e_rad_s) >= (0.999f * ho_e))) {
+            const bool locked =
+                (mc_abs_f32(omega_hat_e - c->omega_if_e_rad_s) <=
+                 (cfg->lock_tol * mc_abs_f32(c->omega_if_e_rad_s))) &&
+                ((c->obs.flags & MC_FLUXOBS_ERR_DIVERGED) == 0u);
+            if (locked) {
+                handover_to_closed(c, i_al, i_be, theta_hat, omega_hat_e);
+            } else {
+                c->t_lockwait_s += cfg->dt_s;
+                if (c->t_lockwait_s > cfg->if_lock_timeout_s) {
+                    err |= MC_CTRL_SLS_ERR_NO_LOCK;
+                }
+            }
+        }
+    } else {
+        const float lo = cfg->handover_speed_rad_s * (1.0f - cfg->handover_hyst);
+        if (cfg->lowspeed_fallback && (mc_abs_f32(c->omega_cmd_m_rad_s) < lo) &&
+            (mc_abs_f32(omega_hat_m) < lo)) {
+            fallback_to_if(c, i_al, i_be, theta_hat, omega_hat_e);
+        }
+    }
+
+    if (c->phase == MC_CTRL_SLS_CLOSED) {
+        /* speed loop at dt * speed_div */
+        c->speed_count++;
+        if (c->speed_count >= cfg->speed_div) {
+            c->speed_count = 0u;
+            c->iq_ref_a = mc_pi_f32_step(&c->speed_pi, c->omega_ref_m_rad_s - omega_hat_m);
+        }
+        /* id from the hand-over decays to 0 over blend_time */
+        c->id_ref_a = slew_f32(c->id_ref_a, 0.0f, cfg->if_current_a * cfg->dt_s / cfg->blend_time_s);
+        theta_ctrl = theta_hat;
+        omega_ctrl = omega_hat_e;
+    } else {
+        float damp_a = 0.0f;
+        float sd;
+        float cd;
+        if (c->phase == MC_CTRL_SLS_IF) {
+            c->theta_if_e_rad = mc_wrap_pi_f32(c->theta_if_e_rad + (c->omega_if_e_rad_s * cfg->dt_s));
+            if (cfg->if_damping) {
+                /* Active damping of the I-f "spring": a current along the
+                 * estimated rotor q axis, -kp_speed (omega_hat - omega_if),
+                 * limited to half the I-f current. Not in ALIGN: from
+                 * standstill the observer's angle is still the reset guess
+                 * (no information at zero speed, Prop. 4 i). */
+                damp_a = mc_sat_f32(-cfg->speed_kp_a_s_rad *
+                                        ((omega_hat_e - c->omega_if_e_rad_s) / pp),
+                                    -0.5f * cfg->if_current_a, 0.5f * cfg->if_current_a);
+            }
+        }
+        /* rotor q axis seen from the I-f frame: angle theta_hat - theta_if */
+        mc_sincos_f32(theta_hat - c->theta_if_e_rad, &sd, &cd);
+        c->id_ref_a = -damp_a * sd;
+        c->iq_ref_a = c->i_if_a + (damp_a * cd);
+        theta_ctrl = c->theta_if_e_rad;
+        omega_ctrl = 0.0f;
+    }
+
+    /* 4. current loop */
+    in.ia_a = m->ia_a;
+    in.ib_a = m->ib_a;
+    in.ic_a = m->ic_a;
+    in.three_phase = false;
+    in.theta_e_rad = theta_ctrl;
+    in.omega_e_rad_s = omega_ctrl;
+    in.vbus_v = m->vbus_v;
+    in.id_ref_a = c->id_ref_a;
+    in.iq_ref_a = c->iq_ref_a;
+    if (mc_foc_f32_step(&c->foc, &in, &fo) != MC_FOC_ERR_NONE) {
+        err |= MC_CTRL_SLS_ERR_FOC;
+    }
+    out->duty_a = fo.duty_a;
+    out->duty_b = fo.duty_b;
+    out->duty_c = fo.duty_c;
+    out->duty2_a = 0.0f;
+    out->duty2_b = 0.0f;
+    for (k = 3u; k > 0u; --k) {
+        c->v_hist_a[k] = c->v_hist_a[k - 1u];
+        c->v_hist_b[k] = c->v_hist_b[k - 1u];
+    }
+    c->v_hist_a[0] = fo.v_alpha_v;
+    c->v_hist_b[0] = fo.v_beta_v;
+
+    c->tm.phase = c->phase;
+    c->tm.theta_hat_e_rad = theta_hat;
+    c->tm.omega_hat_m_rad_s = omega_hat_m;
+    c->tm.theta_ctrl_e_rad = theta_ctrl;
+    c->tm.omega_ref_m_rad_s = c->omega_ref_m_rad_s;
+    c->tm.omega_if_m_rad_s = c->omega_if_e_rad_s / pp;
+    c->tm.i_alpha_a = i_al;
+    c->tm.i_beta_a = i_be;
+    c->tm.id_ref_a = c->id_ref_a;
+    c->tm.iq_ref_a = c->iq_ref_a;
+    c->tm.id_a = fo.id_a;
+    c->tm.iq_a = fo.iq_a;
+    c->tm.obs_resid = c->obs.resid;
+    return err;
+}

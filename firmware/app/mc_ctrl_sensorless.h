@@ -1,0 +1,211 @@
+/**
+ * @file mc_ctrl_sensorless.h
+ * @brief Sensorless field-oriented speed control of a surface-mounted PMSM
+ *        (paper 002, Section V), as a control law plugged into the drive
+ *        (mc_drive_attach_ctrl, MC_DRIVE_MODE_CTRL).
+ *
+ * Each fast step (PWM rate), from the phase currents only:
+ *   1. Clarke -> i_ab; the alpha-beta voltage applied over the period that
+ *      just ended (the law's own command pwm_delay_periods + 1 steps ago,
+ *      after the modulator's limit, minus the dead-time voltage error
+ *      sat(i_x / dead_band) (dead_time / dt) vbus of each leg, with the
+ *      mean of the currents at both ends of the period) -> flux gradient
+ *      observer (mc_fluxobs) -> theta_hat; PLL (mc_spdpll) -> omega_hat.
+ *      At low speed the back-EMF is a few volts and an uncompensated
+ *      2 us dead time at 8 kHz and 200 V is 3.2 V per leg: the observer
+ *      integrates it as flux.
+ *   2. Every speed_div steps: speed PI on the PLL speed -> iq_ref, limited
+ *      to +-iq_max_a (torque limit), clamping anti-windup.
+ *   3. dq current PIs with decoupling (mc_foc) in the frame of theta_hat,
+ *      inverse Park, SVPWM -> duties.
+ *
+ * Start-up and low speed (the observer cannot see the angle at standstill,
+ * Prop. 4 i, and below the critical speed it has extra equilibria):
+ *   ALIGN  current vector ramped from 0 to if_current_a at a fixed angle;
+ *   IF     open-loop current-frequency drive: iq_ref = current magnitude in
+ *          a frame theta_if turning at omega_if, ramped at if_accel towards
+ *          the handover speed (or the reference, if lower); the rotor follows
+ *          with a load angle. The observer and PLL run all the time. The
+ *          rotor on the I-f "spring" is undamped (it rings at
+ *          sqrt(kt I / J)); with if_damping a current -speed_kp (omega_hat -
+ *          omega_if) along the estimated q axis damps it (the observer is
+ *          used for damping only, never for the frame).
+ *   CLOSED sensorless speed loop. Hand-over IF -> CLOSED when |omega_if| has
+ *          reached handover_speed and the PLL speed agrees with omega_if to
+ *          lock_tol; it keeps the current VECTOR (in the stator frame)
+ *          unchanged: id_ref = -I sin(d), iq_ref = I cos(d) with
+ *          d = theta_if - theta_hat, the speed PI's integrator preset to that
+ *          iq_ref (the torque, 3/2 p flux iq, does not jump), id_ref then
+ *          ramped to 0 over blend_time_s (no torque effect on a non-salient
+ *          machine), the current PIs' integrators preset so the voltage
+ *          vector is continuous.
+ *   Back to IF when the reference and the speed estimate fall below
+ *          handover_speed (1 - handover_hyst) (if lowspeed_fallback): the
+ *          I-f frame is placed so that iq (the torque) is unchanged and the
+ *          rotor sits on the stable side of the I-f equilibrium: magnitude
+ *          I = max(if_current_a, 1.25 |iq|), load angle asin(iq / I); only
+ *          id steps (0 -> I cos(delta) > 0, no torque on a non-salient
+ *          machine). omega_if starts at omega_hat and follows the reference
+ *          down to zero (holding torque at standstill). Keeping the whole
+ *          current vector instead would put the rotor on the I-f stability
+ *          limit (and, while braking, past it: pole slip).
+ *
+ * Tuning the observer: gamma from the critical speed (mc_fluxobs.h):
+ *   gamma = 4 n_P omega_crit / flux^2, time scale 1 / (2 n_P omega_crit).
+ * init requires handover_speed (1 - handover_hyst) > 2 omega_crit (the
+ * closed loop never runs within a factor two of the critical speed unless
+ * lowspeed_fallback is off, which the low-speed sweep uses on purpose).
+ *
+ * Errors (return of the fast step, bits MC_CTRL_SLS_ERR_*): observer
+ * divergence, start-up not locked within if_lock_timeout_s, FOC error,
+ * bad measurement. Any of them makes the drive fault (outputs off).
+ *
+ * Lives in firmware/app: includes kernels and the drive's interface only.
+ * No heap, no globals; the caller allocates mc_ctrl_sls_t.
+ */
+#ifndef MC_CTRL_SENSORLESS_H
+#define MC_CTRL_SENSORLESS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "foc/mc_foc.h"
+#include "mc_drive.h"
+#include "observer/mc_fluxobs.h"
+#include "observer/mc_spdpll.h"
+#include "pi/mc_pi.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MC_CTRL_SLS_ERR_NONE        0u
+#define MC_CTRL_SLS_ERR_NULL        (1u << 0)  /**< a required pointer is NULL */
+#define MC_CTRL_SLS_ERR_MOTOR       (1u << 1)  /**< R, L, flux or pole pairs invalid */
+#define MC_CTRL_SLS_ERR_TIMING      (1u << 2)  /**< dt, speed_div, pwm delay (0..3) invalid */
+#define MC_CTRL_SLS_ERR_OBSERVER    (1u << 3)  /**< observer config rejected (see obs_err) */
+#define MC_CTRL_SLS_ERR_PLL         (1u << 4)  /**< PLL config rejected */
+#define MC_CTRL_SLS_ERR_CURRENT     (1u << 5)  /**< current loop config rejected */
+#define MC_CTRL_SLS_ERR_SPEED       (1u << 6)  /**< speed PI gains / limits / slew invalid */
+#define MC_CTRL_SLS_ERR_STARTUP     (1u << 7)  /**< I-f parameters invalid, or handover too close
+                                                    to the critical speed */
+#define MC_CTRL_SLS_ERR_DIVERGED    (1u << 8)  /**< run: observer residual out of tolerance */
+#define MC_CTRL_SLS_ERR_NO_LOCK     (1u << 9)  /**< run: start-up did not lock in time */
+#define MC_CTRL_SLS_ERR_FOC         (1u << 10) /**< run: the current loop refused a step */
+#define MC_CTRL_SLS_ERR_MEAS        (1u << 11) /**< run: non-finite measurement */
+#define MC_CTRL_SLS_ERR_REF         (1u << 12) /**< set_speed_ref: NaN/inf or beyond the limit */
+
+typedef enum {
+    MC_CTRL_SLS_ALIGN = 0,
+    MC_CTRL_SLS_IF = 1,
+    MC_CTRL_SLS_CLOSED = 2,
+} mc_ctrl_sls_phase_t;
+
+typedef struct {
+    /* motor (non-salient) */
+    float r_ohm;                 /**< stator resistance [ohm] */
+    float l_h;                   /**< stator inductance [H] */
+    float flux_wb;               /**< PM flux linkage (peak) [Wb] */
+    uint32_t pole_pairs;         /**< >= 1 */
+    /* timing */
+    float dt_s;                  /**< fast step = PWM period [s] */
+    uint32_t pwm_delay_periods;  /**< periods between writing duties and their taking
+                                      effect (1 on a drive that updates at the next
+                                      period), 0..3 */
+    uint32_t speed_div;          /**< speed loop every speed_div fast steps, >= 1 */
+    /* inverter voltage error seen by the observer (0: no compensation) */
+    float dead_time_s;           /**< dead time of a bridge leg [s], [0, dt/2) */
+    float dead_band_a;           /**< current over which the dead-time error reverses
+                                      (linear inside), >= 0 [A] */
+    /* observer */
+    float omega_crit_m_rad_s;    /**< critical speed of the flux observer [rad/s] (sets gamma) */
+    float resid_tol;             /**< divergence monitor tolerance (see mc_fluxobs.h) */
+    float resid_time_s;          /**< divergence monitor time [s] */
+    float pll_bw_rad_s;          /**< PLL bandwidth [rad/s] */
+    /* current loop */
+    float cur_bw_rad_s;          /**< current-loop bandwidth: kp = L bw, ki = R bw */
+    float v_limit_ratio;         /**< fraction of the SVPWM circle used, (0, 1] */
+    float vbus_max_v;            /**< largest DC bus [V] (static PI limit) */
+    /* speed loop */
+    float speed_kp_a_s_rad;      /**< speed PI kp [A / (rad/s)] */
+    float speed_ki_a_rad;        /**< speed PI ki [A / rad] */
+    float iq_max_a;              /**< torque limit as |iq| [A] */
+    float speed_slew_rad_s2;     /**< reference slew rate (mechanical) [rad/s^2] */
+    float speed_max_rad_s;       /**< largest |reference| accepted [rad/s] */
+    /* start-up */
+    float if_current_a;          /**< I-f current magnitude [A] */
+    float align_time_s;          /**< current ramp before the frequency ramp [s] */
+    float if_accel_rad_s2;       /**< I-f frequency ramp (mechanical) [rad/s^2] */
+    float handover_speed_rad_s;  /**< IF -> CLOSED hand-over speed (mechanical) [rad/s] */
+    float handover_hyst;         /**< back to IF below (1 - hyst) handover, [0, 0.9] */
+    float lock_tol;              /**< |omega_pll - omega_if| <= lock_tol omega_if to hand over */
+    float if_lock_timeout_s;     /**< give up (NO_LOCK) after this long at the hand-over speed */
+    float blend_time_s;          /**< id (or I-f magnitude) ramp after a hand-over [s] */
+    bool lowspeed_fallback;      /**< return to I-f at low speed (normal use: true) */
+    bool if_damping;             /**< I-f active damping from the observer's speed (true:
+                                      -speed_kp (omega_hat - omega_if) along the estimated
+                                      q axis, at most if_current_a / 2) */
+} mc_ctrl_sls_cfg_t;
+
+/** Telemetry of the last fast step. */
+typedef struct {
+    mc_ctrl_sls_phase_t phase;
+    float theta_hat_e_rad;       /**< observer angle [rad] */
+    float omega_hat_m_rad_s;     /**< PLL speed, mechanical [rad/s] */
+    float theta_ctrl_e_rad;      /**< angle of the frame the current loop used [rad] */
+    float omega_ref_m_rad_s;     /**< slewed speed reference [rad/s] */
+    float omega_if_m_rad_s;      /**< I-f frame speed [rad/s] */
+    float i_alpha_a, i_beta_a;   /**< currents fed to the observer [A] */
+    float v_alpha_obs_v, v_beta_obs_v; /**< voltage fed to the observer [V] */
+    float id_ref_a, iq_ref_a;    /**< current references in the control frame [A] */
+    float id_a, iq_a;            /**< measured currents in the control frame [A] */
+    float obs_resid;             /**< observer residual |e|/flux - 1 */
+    uint32_t handovers;          /**< number of IF -> CLOSED hand-overs */
+    uint32_t fallbacks;          /**< number of CLOSED -> IF returns */
+} mc_ctrl_sls_tm_t;
+
+typedef struct {
+    mc_ctrl_sls_cfg_t cfg;
+    float gamma;                 /**< observer gain from omega_crit [1/(Wb^2 s)] */
+    mc_fluxobs_f32_t obs;
+    mc_spdpll_f32_t pll;
+    mc_foc_f32_t foc;
+    mc_pi_f32_t speed_pi;
+    mc_ctrl_sls_phase_t phase;
+    float omega_cmd_m_rad_s;     /**< requested speed [rad/s] */
+    float omega_ref_m_rad_s;     /**< slewed reference [rad/s] */
+    float theta_if_e_rad;
+    float omega_if_e_rad_s;
+    float i_if_a;                /**< present I-f current magnitude [A] */
+    float t_phase_s;             /**< time in the present phase [s] */
+    float t_lockwait_s;          /**< time spent at the hand-over speed waiting for lock */
+    float id_ref_a, iq_ref_a;
+    float dir;                   /**< +1 / -1: direction of the I-f ramp */
+    float v_hist_a[4], v_hist_b[4]; /**< applied alpha-beta voltage, newest first */
+    float ia_prev_a, ib_prev_a;  /**< phase currents of the previous sample */
+    uint32_t speed_count;
+    uint32_t obs_err;            /**< observer init error, if any */
+    mc_ctrl_sls_tm_t tm;
+    mc_drive_ctrl_t table;       /**< the drive's plug-in table, bound to this instance */
+} mc_ctrl_sls_t;
+
+/** Validate cfg and initialise. Returns MC_CTRL_SLS_ERR_* bits; on error c
+ *  is not usable (and not partially trusted: init again). */
+uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg);
+
+/** The plug-in table for mc_drive_attach_ctrl() (PWM3, no encoder needed). */
+const mc_drive_ctrl_t *mc_ctrl_sls_table(mc_ctrl_sls_t *c);
+
+/** Set the speed reference [rad/s, mechanical]; slewed inside. Returns 0 or
+ *  MC_CTRL_SLS_ERR_REF (NaN/inf, |ref| > speed_max_rad_s; previous kept). */
+uint32_t mc_ctrl_sls_set_speed_ref(mc_ctrl_sls_t *c, float omega_m_rad_s);
+
+/** Plug-in functions (also callable directly, e.g. from a test loop). */
+uint32_t mc_ctrl_sls_reset(void *ctx);
+uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_CTRL_SENSORLESS_H */

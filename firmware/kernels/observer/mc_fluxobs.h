@@ -1,0 +1,154 @@
+/**
+ * @file mc_fluxobs.h
+ * @brief Flux gradient observer of the rotor position of a surface-mounted
+ *        PMSM (Ortega, Praly, Astolfi, Lee, Nam, IEEE TCST 2010, eqs. (4)-(9)),
+ *        float32.
+ *
+ * Model (amplitude-invariant alpha-beta frame, theta_e electrical angle):
+ *     x      = L i_ab + flux c(theta_e),  c = [cos, sin]^T          (4)
+ *     dx/dt  = y12 := v_ab - R i_ab                                 (6), (7)
+ *     |x - L i_ab|^2 = flux^2                 (the algebraic constraint)
+ * Observer (a gradient search on the constraint):
+ *     dxh/dt = y12 + (gamma/2) e (flux^2 - |e|^2),  e := xh - L i_ab   (9)
+ *     theta_e_hat = atan2(e_beta, e_alpha)
+ *
+ * Units of gamma: x is a flux [Wb = V s], so (gamma/2) e (flux^2 - |e|^2)
+ * must be [V] = [Wb/s]: gamma is in 1 / (Wb^2 s).
+ *
+ * Choosing gamma (the only tuning gain). With chi the rotated, scaled error
+ * of (10), the error obeys (11)/(17) in the time s = t gamma flux^2 / 2 with
+ * the scaled speed Omega = -2 omega_e / (gamma flux^2):
+ *   - time scale: one unit of s is T_obs = 2 / (gamma flux^2) seconds; near
+ *     the origin the error decays like exp(-t/T_obs) (eigenvalues
+ *     -1 +- sqrt(1 - Omega^2) of the linearisation, Prop. 3);
+ *   - critical speed (Prop. 4): for |Omega| <= 1/2, i.e.
+ *         |omega_m| <= omega_crit_m = gamma flux^2 / (4 n_P)   [rad/s]
+ *     extra equilibria (a saddle and an unstable focus) appear and at
+ *     omega = 0 a whole circle of wrong angles is stable; above it the
+ *     correct angle is the only equilibrium and is globally attractive.
+ * So gamma trades the two: T_obs = 1 / (2 n_P omega_crit_m). A lower
+ * critical speed means a slower observer (and, for gamma -> 0, the
+ * open-loop flux integrator, which drifts with any voltage or R error).
+ * mc_fluxobs_f32_gamma_for_critical_speed() gives gamma for a requested
+ * critical speed; mc_fluxobs_f32_critical_speed() and
+ * mc_fluxobs_f32_time_scale() go back.
+ *
+ * Discretisation (departure from the continuous (9), chosen so that the
+ * open-loop part is exact for the inverter's piecewise-constant voltage):
+ *     xh <- xh + dt (v_avg - R (i_prev + i)/2)           (flux integration)
+ *     e  =  xh - L i
+ *     k  =  dt (gamma/2) (flux^2 - |e|^2),  clamped to k >= -1/2
+ *     xh <- xh + k e                                     (gradient step)
+ * v_avg is the voltage applied over the last period (the caller accounts
+ * for its PWM delay), i_prev and i the currents sampled at its start and
+ * end. The clamp only acts for |e| > flux sqrt(1 + 1/(gamma flux^2 dt)),
+ * where an Euler step of the cubic term would shrink e by more than half
+ * (or flip it): 10 flux for gamma flux^2 dt = 0.01, i.e. far outside the
+ * attracting disk |chi| <= 2 (|e| <= 3 flux) at practical gains. Init
+ * requires gamma flux^2 dt <= 0.2 so the step samples (9) faithfully near
+ * the constraint circle.
+ *
+ * Divergence monitor: the residual rho = |e| / flux - 1 is 0 on the
+ * constraint circle. |rho| > resid_tol for longer than resid_time_s raises
+ * the sticky MC_FLUXOBS_ERR_DIVERGED (wrong flux, R, L or voltage, or an
+ * estimate that left the constraint). A consistent residual does NOT prove
+ * the angle right: at zero speed every point of the circle sigma(chi) = 0
+ * (Prop. 4 i) has rho = 0. The caller must also keep the speed above the
+ * critical one (the sensorless drive checks the PLL speed).
+ *
+ * Non-finite input: the step is refused (state unchanged) and the sticky
+ * MC_FLUXOBS_ERR_NAN_INPUT is set. No heap, no globals, no I/O.
+ */
+#ifndef MC_FLUXOBS_H
+#define MC_FLUXOBS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MC_FLUXOBS_ERR_NONE      0u
+#define MC_FLUXOBS_ERR_NULL      (1u << 0) /**< a required pointer is NULL */
+#define MC_FLUXOBS_ERR_MOTOR     (1u << 1) /**< R < 0, L <= 0, flux <= 0, or not finite */
+#define MC_FLUXOBS_ERR_GAMMA     (1u << 2) /**< gamma <= 0, not finite, or gamma flux^2 dt > 0.2 */
+#define MC_FLUXOBS_ERR_DT        (1u << 3) /**< dt_s <= 0 or not finite */
+#define MC_FLUXOBS_ERR_MONITOR   (1u << 4) /**< resid_tol <= 0 or resid_time_s < 0 / not finite */
+#define MC_FLUXOBS_ERR_NAN_INPUT (1u << 5) /**< sticky: a step input was NaN/inf (step refused) */
+#define MC_FLUXOBS_ERR_DIVERGED  (1u << 6) /**< sticky: residual out of tolerance too long */
+#define MC_FLUXOBS_ERR_ARG       (1u << 7) /**< helper: speed/gain/pole pairs invalid */
+
+/** Largest gamma flux^2 dt accepted (Euler step of the gradient term). */
+#define MC_FLUXOBS_MAX_GAIN_DT 0.2f
+
+/** Configuration. */
+typedef struct {
+    float r_ohm;         /**< stator resistance [ohm], >= 0 */
+    float l_h;           /**< stator inductance [H], > 0 (non-salient machine) */
+    float flux_wb;       /**< PM flux linkage (peak, per phase) [Wb], > 0 */
+    float gamma;         /**< observer gain [1/(Wb^2 s)], > 0 */
+    float dt_s;          /**< step period [s], > 0 */
+    float resid_tol;     /**< divergence monitor: tolerated | |e|/flux - 1 |, > 0 (e.g. 0.3) */
+    float resid_time_s;  /**< ... for this long before the flag, >= 0 (e.g. 0.05) */
+} mc_fluxobs_f32_cfg_t;
+
+/** State. Read-only for callers. */
+typedef struct {
+    mc_fluxobs_f32_cfg_t cfg;
+    float half_gamma_dt;  /**< gamma dt / 2 (derived) */
+    float flux2;          /**< flux^2 [Wb^2] (derived) */
+    float x_alpha_wb;     /**< flux estimate xh [Wb] */
+    float x_beta_wb;
+    float i_alpha_prev_a; /**< current at the start of the step [A] */
+    float i_beta_prev_a;
+    float theta_e_rad;    /**< angle estimate, [-pi, pi) */
+    float resid;          /**< |e|/flux - 1 of the last step */
+    float resid_bad_s;    /**< time the residual has been out of tolerance [s] */
+    uint32_t flags;       /**< sticky MC_FLUXOBS_ERR_* */
+} mc_fluxobs_f32_t;
+
+/**
+ * Validate cfg, initialise st with the estimate for angle 0 at zero current
+ * (xh = [flux, 0]). Returns the OR of the rules broken; on error st is not
+ * written.
+ */
+uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *cfg);
+
+/**
+ * Restart from an angle guess: xh = L i + flux c(theta_guess), previous
+ * current = i, sticky flags and monitor cleared. Non-finite argument:
+ * MC_FLUXOBS_ERR_NAN_INPUT returned, nothing changed.
+ */
+uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float i_alpha_a,
+                              float i_beta_a);
+
+/**
+ * One step over the period that ended with the current sample i_ab (see the
+ * discretisation above). v_ab: average alpha-beta voltage applied over that
+ * period [V]. Returns the MC_FLUXOBS_ERR_* bits raised by this step
+ * (NAN_INPUT, DIVERGED); st->flags keeps them.
+ */
+uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta_v,
+                             float i_alpha_a, float i_beta_a);
+
+/**
+ * gamma [1/(Wb^2 s)] whose critical speed (Prop. 4) is omega_crit_m_rad_s:
+ * gamma = 4 n_P omega_crit / flux^2. MC_FLUXOBS_ERR_ARG for a speed <= 0,
+ * pole_pairs = 0, flux <= 0 or a non-finite result; nothing written then.
+ */
+uint32_t mc_fluxobs_f32_gamma_for_critical_speed(float omega_crit_m_rad_s, uint32_t pole_pairs,
+                                                 float flux_wb, float *p_gamma);
+
+/** Critical mechanical speed gamma flux^2 / (4 n_P) [rad/s]; MC_FLUXOBS_ERR_ARG as above. */
+uint32_t mc_fluxobs_f32_critical_speed(float gamma, uint32_t pole_pairs, float flux_wb,
+                                       float *p_omega_crit_m_rad_s);
+
+/** Time scale T_obs = 2 / (gamma flux^2) [s] of the error dynamics; MC_FLUXOBS_ERR_ARG. */
+uint32_t mc_fluxobs_f32_time_scale(float gamma, float flux_wb, float *p_t_s);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_FLUXOBS_H */
