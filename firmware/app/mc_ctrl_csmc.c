@@ -1,0 +1,192 @@
+/**
+ * @file mc_ctrl_csmc.c
+ * @brief CSMC stepper position loop as a drive plug-in (see mc_ctrl_csmc.h).
+ */
+#include "mc_ctrl_csmc.h"
+
+#include <stddef.h>
+
+#include "csmc/mc_stepper_dq.h"
+#include "math/mc_math.h"
+
+static uint32_t ctrl_reset(void *ctx)
+{
+    mc_ctrl_csmc_t *c = (mc_ctrl_csmc_t *)ctx;
+    mc_csmc_f32_reset(&c->law);
+    if (c->cfg.feedback == MC_CTRL_CSMC_FB_HGO) {
+        (void)mc_hgo_f32_reset(&c->hgo, 0.0f, 0.0f, 0.0f);
+    }
+    c->have_pos = false;
+    c->pos_counts = 0;
+    c->last_count = 0u;
+    c->phi0_rad = 0.0f;
+    return MC_CTRL_CSMC_ERR_NONE;
+}
+
+/* Unwrapped shaft angle from the encoder counts (integer, exact). */
+static float ctrl_position(mc_ctrl_csmc_t *c, const mc_drive_meas_t *m)
+{
+    const uint32_t cpr = m->enc_cpr;
+    const uint32_t count = (m->enc_count < cpr) ? m->enc_count : (m->enc_count % cpr);
+    if (!c->have_pos) {
+        c->have_pos = true;
+        c->pos_counts = 0;
+        c->phi0_rad = mc_wrap_pi_f32(m->theta_m_rad);
+    } else {
+        /* shortest signed step on the circle of cpr counts */
+        uint32_t fwd = (count >= c->last_count) ? (count - c->last_count)
+                                                : (cpr - (c->last_count - count));
+        if (fwd > (cpr / 2u)) {
+            c->pos_counts -= (int32_t)(cpr - fwd);
+        } else {
+            c->pos_counts += (int32_t)fwd;
+        }
+    }
+    c->last_count = count;
+    return c->phi0_rad + (((float)c->pos_counts * MC_TWO_PI_F32) / (float)cpr);
+}
+
+static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out)
+{
+    mc_ctrl_csmc_t *c = (mc_ctrl_csmc_t *)ctx;
+    mc_ctrl_csmc_tm_t *tm = &c->tm;
+    float s;
+    float co;
+    float phi;
+    float e2;
+    float inv_vbus;
+    float lim;
+
+    out->duty2_a = 0.0f;
+    out->duty2_b = 0.0f;
+    if (!m->have_encoder || (m->enc_cpr == 0u)) {
+        return MC_CTRL_CSMC_ERR_ENCODER;
+    }
+    if (!(m->vbus_v > 0.0f) || !mc_isfinite_f32(m->vbus_v)) {
+        return MC_CTRL_CSMC_ERR_VBUS;
+    }
+    phi = ctrl_position(c, m);
+    mc_sincos_f32(m->theta_e_rad, &s, &co);
+    mc_stepper_ab_to_dq_sc_f32(m->ia_a, m->ib_a, s, co, &tm->i_d_a, &tm->i_q_a);
+    tm->phi_rad = phi;
+    e2 = phi - c->phi_d_rad;
+    if (c->cfg.feedback == MC_CTRL_CSMC_FB_STATE) {
+        if (mc_csmc_f32_err_from_state(&c->cfg.law.model, tm->i_d_a, tm->i_q_a, m->omega_m_rad_s,
+                                       phi, c->i_dd_a, c->phi_d_rad, c->dphi_d_rad_s,
+                                       c->ddphi_d_rad_s2, &tm->in) != MC_CSMC_ERR_NONE) {
+            return MC_CTRL_CSMC_ERR_STEP;
+        }
+    } else {
+        mc_hgo_f32_est_t est;
+        mc_hgo_f32_step(&c->hgo, e2, &est);
+        tm->in.e1_a = tm->i_d_a - c->i_dd_a;
+        tm->in.de2_rad_s = est.z2;
+        tm->in.dde2_rad_s2 = est.z3;
+        tm->in.i_d_a = tm->i_d_a;
+        tm->in.i_q_a = tm->i_q_a;
+        tm->in.omega_m_rad_s = m->omega_m_rad_s;
+    }
+    tm->in.e2_rad = e2;
+    tm->in.di_dd_a_s = c->di_dd_a_s;
+    tm->in.dddphi_d_rad_s3 = c->dddphi_d_rad_s3;
+    mc_csmc_f32_step(&c->law, &tm->in, &tm->out);
+    if ((c->law.flags != MC_CSMC_ERR_NONE) || (c->hgo.flags != MC_HGO_ERR_NONE)) {
+        return MC_CTRL_CSMC_ERR_STEP;
+    }
+    mc_stepper_dq_to_ab_sc_f32(tm->out.v_d_v, tm->out.v_q_v, s, co, &tm->v_a_v, &tm->v_b_v);
+    inv_vbus = 1.0f / m->vbus_v;
+    lim = c->cfg.duty_max;
+    out->duty2_a = mc_sat_f32(tm->v_a_v * inv_vbus, -lim, lim);
+    out->duty2_b = mc_sat_f32(tm->v_b_v * inv_vbus, -lim, lim);
+    return MC_CTRL_CSMC_ERR_NONE;
+}
+
+uint32_t mc_ctrl_csmc_init(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_cfg_t *cfg)
+{
+    uint32_t err = MC_CTRL_CSMC_ERR_NONE;
+    mc_csmc_f32_t law;
+    mc_hgo_f32_t hgo;
+    uint32_t law_err;
+    mc_csmc_f32_in_t probe;
+
+    if ((c == NULL) || (cfg == NULL)) {
+        return MC_CTRL_CSMC_ERR_NULL;
+    }
+    law_err = mc_csmc_f32_init(&law, &cfg->law);
+    if (law_err != MC_CSMC_ERR_NONE) {
+        err |= MC_CTRL_CSMC_ERR_LAW;
+    }
+    if (cfg->feedback == MC_CTRL_CSMC_FB_HGO) {
+        if (mc_hgo_f32_init(&hgo, &cfg->hgo) != MC_HGO_ERR_NONE) {
+            err |= MC_CTRL_CSMC_ERR_HGO;
+        }
+    } else if (cfg->feedback == MC_CTRL_CSMC_FB_STATE) {
+        /* the model must give e2'' (K_m, J > 0 ...) */
+        if (mc_csmc_f32_err_from_state(&cfg->law.model, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
+                                       0.0f, &probe) != MC_CSMC_ERR_NONE) {
+            err |= MC_CTRL_CSMC_ERR_FEEDBACK;
+        }
+    } else {
+        err |= MC_CTRL_CSMC_ERR_FEEDBACK;
+    }
+    if (!(cfg->duty_max > 0.0f) || !(cfg->duty_max <= 1.0f)) {
+        err |= MC_CTRL_CSMC_ERR_DUTY;
+    }
+    if (err != MC_CTRL_CSMC_ERR_NONE) {
+        return err;
+    }
+    c->cfg = *cfg;
+    c->law = law;
+    if (cfg->feedback == MC_CTRL_CSMC_FB_HGO) {
+        c->hgo = hgo;
+    } else {
+        c->hgo.flags = MC_HGO_ERR_NONE;
+    }
+    c->phi_d_rad = 0.0f;
+    c->dphi_d_rad_s = 0.0f;
+    c->ddphi_d_rad_s2 = 0.0f;
+    c->dddphi_d_rad_s3 = 0.0f;
+    c->i_dd_a = 0.0f;
+    c->di_dd_a_s = 0.0f;
+    (void)ctrl_reset(c);
+    c->tm.phi_rad = 0.0f;
+    c->tm.i_d_a = 0.0f;
+    c->tm.i_q_a = 0.0f;
+    c->tm.in = (mc_csmc_f32_in_t){0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    c->tm.out = (mc_csmc_f32_out_t){0.0f, 0.0f, 0.0f, 0.0f};
+    c->tm.v_a_v = 0.0f;
+    c->tm.v_b_v = 0.0f;
+    c->ops.outputs = MC_DRIVE_OUT_PWM2;
+    c->ops.needs_encoder = true;
+    c->ops.reset = ctrl_reset;
+    c->ops.fast = ctrl_fast;
+    c->ops.slow = NULL;
+    c->ops.ctx = c;
+    return MC_CTRL_CSMC_ERR_NONE;
+}
+
+const mc_drive_ctrl_t *mc_ctrl_csmc_ops(mc_ctrl_csmc_t *c)
+{
+    return (c == NULL) ? NULL : &c->ops;
+}
+
+uint32_t mc_ctrl_csmc_set_ref(mc_ctrl_csmc_t *c, float phi_d_rad, float dphi_d_rad_s,
+                              float ddphi_d_rad_s2, float dddphi_d_rad_s3, float i_dd_a,
+                              float di_dd_a_s)
+{
+    if (c == NULL) {
+        return MC_CTRL_CSMC_ERR_NULL;
+    }
+    if (!mc_isfinite_f32(phi_d_rad) || !mc_isfinite_f32(dphi_d_rad_s) ||
+        !mc_isfinite_f32(ddphi_d_rad_s2) || !mc_isfinite_f32(dddphi_d_rad_s3) ||
+        !mc_isfinite_f32(i_dd_a) || !mc_isfinite_f32(di_dd_a_s)) {
+        return MC_CTRL_CSMC_ERR_REF;
+    }
+    c->phi_d_rad = phi_d_rad;
+    c->dphi_d_rad_s = dphi_d_rad_s;
+    c->ddphi_d_rad_s2 = ddphi_d_rad_s2;
+    c->dddphi_d_rad_s3 = dddphi_d_rad_s3;
+    c->i_dd_a = i_dd_a;
+    c->di_dd_a_s = di_dd_a_s;
+    return MC_CTRL_CSMC_ERR_NONE;
+}

@@ -1,0 +1,285 @@
+/**
+ * @file mc_csmc.c
+ * @brief CSMC with conditional integrators/servocompensators and ideal SMC
+ *        for the two-phase PM stepper (see mc_csmc.h for the law and the
+ *        departures from the printed paper).
+ */
+#include "csmc/mc_csmc.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "math/mc_math.h"
+
+static bool csmc_pos(float v)
+{
+    return (v > 0.0f) && mc_isfinite_f32(v);
+}
+
+static float csmc_max(float a, float b)
+{
+    return (a > b) ? a : b;
+}
+
+/* Mechanical part of the model: K_m, J > 0, B >= 0, N_r >= 1, tau_L finite. */
+static bool csmc_mech_ok(const mc_csmc_f32_model_t *m)
+{
+    return csmc_pos(m->km_nm_a) && csmc_pos(m->j_kgm2) && (m->b_nms_rad >= 0.0f) &&
+           mc_isfinite_f32(m->b_nms_rad) && (m->rotor_teeth >= 1u) &&
+           mc_isfinite_f32(m->tau_load_nm);
+}
+
+static bool csmc_bounds_ok(const mc_csmc_f32_model_t *m)
+{
+    const bool r_ok = csmc_pos(m->r_min_ohm) && mc_isfinite_f32(m->r_max_ohm) &&
+                      (m->r_min_ohm <= m->r_nom_ohm) && (m->r_nom_ohm <= m->r_max_ohm);
+    const bool l_ok = csmc_pos(m->l_min_h) && mc_isfinite_f32(m->l_max_h) &&
+                      (m->l_min_h <= m->l_nom_h) && (m->l_nom_h <= m->l_max_h);
+    return r_ok && l_ok && csmc_pos(m->q1_v) && csmc_pos(m->q2_radh_s3);
+}
+
+/* Validate and initialise one sigma (order 0: none). */
+static uint32_t csmc_sigma_init(const mc_csvc_f32_model_t *m, float mu, float dt_s,
+                                mc_csvc_f32_t *p_sv, uint32_t *p_have)
+{
+    mc_csvc_f32_cfg_t c;
+
+    if (m->order == 0u) {
+        *p_have = 0u;
+        return MC_CSVC_ERR_NONE;
+    }
+    c.model = *m;
+    c.mu = mu;
+    c.dt_s = dt_s;
+    *p_have = 1u;
+    return mc_csvc_f32_init(p_sv, &c);
+}
+
+uint32_t mc_csmc_f32_init(mc_csmc_f32_t *st, const mc_csmc_f32_cfg_t *cfg)
+{
+    uint32_t err = MC_CSMC_ERR_NONE;
+    mc_csvc_f32_t sv1;
+    mc_csvc_f32_t sv2;
+    uint32_t have1 = 0u;
+    uint32_t have2 = 0u;
+    const bool dt_ok = csmc_pos((cfg != NULL) ? cfg->dt_s : 0.0f);
+    const bool mu_ok = (cfg != NULL) && csmc_pos(cfg->mu1_a) && csmc_pos(cfg->mu2_rad_s2);
+
+    if ((st == NULL) || (cfg == NULL)) {
+        return MC_CSMC_ERR_NULL;
+    }
+    if (((cfg->law != MC_CSMC_LAW_MODEL) && (cfg->law != MC_CSMC_LAW_CONST)) ||
+        ((cfg->sw != MC_CSMC_SW_SAT) && (cfg->sw != MC_CSMC_SW_SGN))) {
+        err |= MC_CSMC_ERR_LAW;
+    }
+    if (!csmc_pos(cfg->k1_per_s2) || !csmc_pos(cfg->k2_per_s)) {
+        err |= MC_CSMC_ERR_SURFACE;
+    }
+    if (!mu_ok) {
+        err |= MC_CSMC_ERR_MU;
+    }
+    if (!dt_ok) {
+        err |= MC_CSMC_ERR_DT;
+    }
+    if (!csmc_pos(cfg->v_limit_v)) {
+        err |= MC_CSMC_ERR_VLIMIT;
+    }
+    if (cfg->law == MC_CSMC_LAW_CONST) {
+        if (!csmc_pos(cfg->m1_v) || !csmc_pos(cfg->m2_v)) {
+            err |= MC_CSMC_ERR_GAIN_M;
+        }
+    } else if (cfg->law == MC_CSMC_LAW_MODEL) {
+        if (!csmc_mech_ok(&cfg->model)) {
+            err |= MC_CSMC_ERR_MODEL;
+        }
+        if (!csmc_bounds_ok(&cfg->model)) {
+            err |= MC_CSMC_ERR_BOUNDS;
+        }
+    } else {
+        /* unknown law: already flagged */
+    }
+    /* The sigma kernels need a valid mu and dt to be checked. */
+    if (mu_ok && dt_ok) {
+        if (csmc_sigma_init(&cfg->sigma1, cfg->mu1_a, cfg->dt_s, &sv1, &have1) != MC_CSVC_ERR_NONE) {
+            err |= MC_CSMC_ERR_SIGMA_1;
+        }
+        if (csmc_sigma_init(&cfg->sigma2, cfg->mu2_rad_s2, cfg->dt_s, &sv2, &have2) !=
+            MC_CSVC_ERR_NONE) {
+            err |= MC_CSMC_ERR_SIGMA_2;
+        }
+    }
+    if (err != MC_CSMC_ERR_NONE) {
+        return err;
+    }
+    st->law = cfg->law;
+    st->sw = cfg->sw;
+    st->k1_per_s2 = cfg->k1_per_s2;
+    st->k2_per_s = cfg->k2_per_s;
+    st->mu1_a = cfg->mu1_a;
+    st->mu2_rad_s2 = cfg->mu2_rad_s2;
+    st->m1_v = cfg->m1_v;
+    st->m2_v = cfg->m2_v;
+    st->v_limit_v = cfg->v_limit_v;
+    st->model = cfg->model;
+    st->k3 = 0.0f;
+    st->k4 = 0.0f;
+    st->d0 = 0.0f;
+    st->dr_ohm = 0.0f;
+    st->dl_h = 0.0f;
+    st->inv_k3 = 0.0f;
+    if (cfg->law == MC_CSMC_LAW_MODEL) {
+        const mc_csmc_f32_model_t *m = &cfg->model;
+        st->k3 = m->km_nm_a / m->j_kgm2;
+        st->k4 = m->b_nms_rad / m->j_kgm2;
+        st->d0 = m->tau_load_nm / m->j_kgm2;
+        st->inv_k3 = m->j_kgm2 / m->km_nm_a;
+        st->dr_ohm = csmc_max(m->r_max_ohm - m->r_nom_ohm, m->r_nom_ohm - m->r_min_ohm);
+        st->dl_h = csmc_max(m->l_max_h - m->l_nom_h, m->l_nom_h - m->l_min_h);
+    }
+    st->have_sigma1 = have1;
+    st->have_sigma2 = have2;
+    if (have1 != 0u) {
+        st->sigma1 = sv1;
+    }
+    if (have2 != 0u) {
+        st->sigma2 = sv2;
+    }
+    st->out.v_d_v = 0.0f;
+    st->out.v_q_v = 0.0f;
+    st->out.s1_a = 0.0f;
+    st->out.s2_rad_s2 = 0.0f;
+    st->flags = MC_CSMC_ERR_NONE;
+    return MC_CSMC_ERR_NONE;
+}
+
+void mc_csmc_f32_reset(mc_csmc_f32_t *st)
+{
+    if (st == NULL) {
+        return;
+    }
+    if (st->have_sigma1 != 0u) {
+        mc_csvc_f32_reset(&st->sigma1);
+    }
+    if (st->have_sigma2 != 0u) {
+        mc_csvc_f32_reset(&st->sigma2);
+    }
+    st->out.v_d_v = 0.0f;
+    st->out.v_q_v = 0.0f;
+    st->out.s1_a = 0.0f;
+    st->out.s2_rad_s2 = 0.0f;
+    st->flags = MC_CSMC_ERR_NONE;
+}
+
+/* psi = sat(s/mu) or sgn(s). */
+static float csmc_psi(mc_csmc_sw_t sw, float s, float mu)
+{
+    if (sw == MC_CSMC_SW_SGN) {
+        if (s > 0.0f) {
+            return 1.0f;
+        }
+        return (s < 0.0f) ? -1.0f : 0.0f;
+    }
+    return mc_sat_f32(s / mu, -1.0f, 1.0f);
+}
+
+static bool csmc_in_finite(const mc_csmc_f32_in_t *in)
+{
+    return mc_isfinite_f32(in->e1_a) && mc_isfinite_f32(in->e2_rad) &&
+           mc_isfinite_f32(in->de2_rad_s) && mc_isfinite_f32(in->dde2_rad_s2) &&
+           mc_isfinite_f32(in->i_d_a) && mc_isfinite_f32(in->i_q_a) &&
+           mc_isfinite_f32(in->omega_m_rad_s) && mc_isfinite_f32(in->di_dd_a_s) &&
+           mc_isfinite_f32(in->dddphi_d_rad_s3);
+}
+
+void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out)
+{
+    float s1;
+    float s2;
+    float psi1;
+    float psi2;
+    float u1;
+    float u2;
+
+    if ((st == NULL) || (in == NULL) || (p_out == NULL)) {
+        return;
+    }
+    if (!csmc_in_finite(in)) {
+        st->flags |= MC_CSMC_ERR_NAN_INPUT;
+        *p_out = st->out;
+        return;
+    }
+    s1 = in->e1_a;
+    s2 = (st->k1_per_s2 * in->e2_rad) + (st->k2_per_s * in->de2_rad_s) + in->dde2_rad_s2;
+    if (st->have_sigma1 != 0u) {
+        s1 += mc_csvc_f32_term(&st->sigma1);
+    }
+    if (st->have_sigma2 != 0u) {
+        s2 += mc_csvc_f32_term(&st->sigma2);
+    }
+    psi1 = csmc_psi(st->sw, s1, st->mu1_a);
+    psi2 = csmc_psi(st->sw, s2, st->mu2_rad_s2);
+    if (st->law == MC_CSMC_LAW_CONST) {
+        u1 = -st->m1_v * psi1;
+        u2 = -st->m2_v * psi2;
+    } else {
+        const mc_csmc_f32_model_t *m = &st->model;
+        const float x1 = in->i_d_a;
+        const float x2 = in->i_q_a;
+        const float x3 = in->omega_m_rad_s;
+        const float k5 = (float)m->rotor_teeth;
+        /* d axis: the part of F1 known up to the factor L: k5 x2 x3 - I_dd'. */
+        const float f1k = (k5 * x2 * x3) - in->di_dd_a_s;
+        /* q axis: G (see mc_csmc.h); k3 x2 - k4 x3 - d0 is w' from the model. */
+        const float wdot = (st->k3 * x2) - (st->k4 * x3) - st->d0;
+        const float g = (st->k1_per_s2 * in->de2_rad_s) + (st->k2_per_s * in->dde2_rad_s2) -
+                        in->dddphi_d_rad_s3 - (st->k4 * wdot) - (st->k3 * k5 * x1 * x3);
+        /* L^ beta_1 and L^ beta_2 / k3 (volts) */
+        const float lb1 = (st->dr_ohm * mc_abs_f32(x1)) + (st->dl_h * mc_abs_f32(f1k)) + m->q1_v;
+        const float lb2 = (st->dr_ohm * mc_abs_f32(x2)) +
+                          (st->inv_k3 * ((st->dl_h * mc_abs_f32(g)) + m->q2_radh_s3));
+        u1 = (m->r_nom_ohm * x1) - (m->l_nom_h * f1k) - (lb1 * psi1);
+        u2 = (m->r_nom_ohm * x2) + (m->km_nm_a * x3) - (m->l_nom_h * st->inv_k3 * g) -
+             (lb2 * psi2);
+    }
+    st->out.v_d_v = mc_sat_f32(u1, -st->v_limit_v, st->v_limit_v);
+    st->out.v_q_v = mc_sat_f32(u2, -st->v_limit_v, st->v_limit_v);
+    st->out.s1_a = s1;
+    st->out.s2_rad_s2 = s2;
+    if (st->have_sigma1 != 0u) {
+        mc_csvc_f32_update(&st->sigma1, s1);
+    }
+    if (st->have_sigma2 != 0u) {
+        mc_csvc_f32_update(&st->sigma2, s2);
+    }
+    *p_out = st->out;
+}
+
+uint32_t mc_csmc_f32_err_from_state(const mc_csmc_f32_model_t *model, float i_d_a, float i_q_a,
+                                    float omega_m_rad_s, float theta_m_rad, float i_dd_a,
+                                    float phi_d_rad, float dphi_d_rad_s, float ddphi_d_rad_s2,
+                                    mc_csmc_f32_in_t *p_in)
+{
+    float k3;
+    float k4;
+    float d0;
+    float dde2;
+
+    if ((model == NULL) || (p_in == NULL)) {
+        return MC_CSMC_ERR_NULL;
+    }
+    if (!csmc_mech_ok(model)) {
+        return MC_CSMC_ERR_MODEL;
+    }
+    k3 = model->km_nm_a / model->j_kgm2;
+    k4 = model->b_nms_rad / model->j_kgm2;
+    d0 = model->tau_load_nm / model->j_kgm2;
+    dde2 = (k3 * i_q_a) - (k4 * omega_m_rad_s) - d0 - ddphi_d_rad_s2;
+    p_in->e1_a = i_d_a - i_dd_a;
+    p_in->e2_rad = theta_m_rad - phi_d_rad;
+    p_in->de2_rad_s = omega_m_rad_s - dphi_d_rad_s;
+    p_in->dde2_rad_s2 = dde2;
+    p_in->i_d_a = i_d_a;
+    p_in->i_q_a = i_q_a;
+    p_in->omega_m_rad_s = omega_m_rad_s;
+    return MC_CSMC_ERR_NONE;
+}

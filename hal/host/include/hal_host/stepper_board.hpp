@@ -1,0 +1,109 @@
+// hal_host::StepperBoard: a simulated two-phase stepper drive (dual H-bridge)
+// behind the HAL (adc, pwm2, encoder, tick, fault), mirroring PmsmBoard, so
+// the drive with a plugged stepper law (e.g. firmware/app/mc_ctrl_csmc) runs
+// unmodified against the simulator.
+//
+// Plant: mcsim::Stepper2Ph (phase a/b model, paper 001 eq. (1)).
+// Bridges: average-value, winding voltage = duty * vbus (bipolar, no dead
+// time). Outputs disabled (or gate kill): a winding with current
+// freewheels through the diodes against the bus (-vbus sign(i)) until its
+// current reaches zero, then stays open (zero current).
+// ADC: ia = winding A, ib = winding B (ic not measured), DC bus.
+// Timing as PmsmBoard: sample() at t_k, the firmware's fast step, advance()
+// with the duties written delay_periods periods earlier (ZOH, RK4 sub-steps).
+#ifndef HAL_HOST_STEPPER_BOARD_HPP
+#define HAL_HOST_STEPPER_BOARD_HPP
+
+#include <cstdint>
+
+#include "hal/hal.h"
+#include "mcsim/integrator.hpp"
+#include "mcsim/sensors.hpp"
+#include "mcsim/stepper_2ph.hpp"
+
+namespace hal_host {
+
+struct StepperBoardConfig {
+  mcsim::Stepper2PhParams motor{};
+  double t_pwm_s = 1.0e-4;                // PWM = control period
+  double vbus_v = 60.0;                   // DC-bus voltage (stiff source)
+  mcsim::CurrentSensorParams current_sensor{};
+  mcsim::VbusSensorParams vbus_sensor{};
+  mcsim::EncoderParams encoder{};
+  int substeps = 4;                       // RK4 sub-steps per period, >= 1
+  int delay_periods = 1;                  // computation delay, 0..4 periods
+  double tick_hz = 10.0e6;                // HAL tick counter frequency
+  double theta_m0_rad = 0.0;              // initial shaft angle
+};
+
+class StepperBoard {
+ public:
+  using State = mcsim::Stepper2Ph::State;  // (i_a, i_b, w, phi)
+
+  // Throws std::invalid_argument naming the bad parameter.
+  explicit StepperBoard(const StepperBoardConfig& cfg);
+  StepperBoard(const StepperBoard&) = delete;
+  StepperBoard& operator=(const StepperBoard&) = delete;
+
+  const mc_hal_t* hal() const { return &hal_; }
+
+  void sample();   // ADC/encoder trigger at the start of the period
+  void advance();  // integrate the plant over one period
+
+  double t_s() const { return t_s_; }
+  const State& state() const { return x_; }
+  double period_s() const { return cfg_.t_pwm_s; }
+  bool pwm_enabled() const { return pwm_enabled_ && !gate_killed_; }
+  const Eigen::Vector2d& v_applied() const { return v_applied_; }
+
+  // HAL op implementations (public so the C ops tables can reach them).
+  int adc_read(mc_hal_adc_sample_t* s) noexcept;
+  int adc_read_temp(mc_hal_adc_temp_t* t) noexcept;
+  int pwm_set_duty(float a, float b) noexcept;
+  int pwm_enable() noexcept;
+  int pwm_disable() noexcept;
+  int pwm_get_state(mc_hal_pwm2_state_t* st) noexcept;
+  int encoder_read(mc_hal_encoder_sample_t* s) noexcept;
+  int tick_read(uint32_t* ticks) const noexcept;
+  int tick_freq(uint32_t* hz) const noexcept;
+  int fault_read(mc_hal_fault_status_t* st) noexcept;
+  void fault_gate_kill() noexcept;
+  int fault_gate_release() noexcept;
+
+ private:
+  uint32_t ticks_now() const;
+  void integrate_open(double h_s, int n);
+
+  StepperBoardConfig cfg_;
+  mcsim::Stepper2Ph plant_;
+  mcsim::CurrentSensor isense_[2];
+  mcsim::VbusSensor vsense_;
+  mcsim::Encoder encoder_;
+  mcsim::InputDelay<Eigen::Vector2d, 4> delay_;
+  State x_ = State::Zero();
+  double t_s_ = 0.0;
+  uint64_t period_count_ = 0;
+
+  mc_hal_adc_sample_t adc_{};
+  bool adc_fresh_ = false;
+  uint32_t adc_seq_ = 0;
+  Eigen::Vector2d duty_cmd_ = Eigen::Vector2d::Zero();
+  Eigen::Vector2d v_applied_ = Eigen::Vector2d::Zero();
+  bool pwm_enabled_ = false;
+  bool gate_killed_ = false;
+  bool open_[2] = {true, true};
+  uint32_t fault_active_ = 0;
+  uint32_t fault_latched_ = 0;
+  mc_hal_encoder_sample_t enc_{};
+
+  mc_hal_adc_t adc_dev_{};
+  mc_hal_pwm2_t pwm_dev_{};
+  mc_hal_encoder_t enc_dev_{};
+  mc_hal_tick_t tick_dev_{};
+  mc_hal_fault_t fault_dev_{};
+  mc_hal_t hal_{};
+};
+
+}  // namespace hal_host
+
+#endif  // HAL_HOST_STEPPER_BOARD_HPP

@@ -1,0 +1,216 @@
+// See stepper_board.hpp.
+#include "hal_host/stepper_board.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "mcsim/status.hpp"
+
+namespace hal_host {
+namespace {
+
+StepperBoard* S(void* ctx) noexcept { return static_cast<StepperBoard*>(ctx); }
+
+const mc_hal_adc_ops_t kAdcOps = {
+    [](void* c, mc_hal_adc_sample_t* s) noexcept { return S(c)->adc_read(s); },
+    [](void* c, mc_hal_adc_temp_t* t) noexcept { return S(c)->adc_read_temp(t); },
+};
+const mc_hal_pwm2_ops_t kPwmOps = {
+    [](void* c, float a, float b) noexcept { return S(c)->pwm_set_duty(a, b); },
+    [](void* c) noexcept { return S(c)->pwm_enable(); },
+    [](void* c) noexcept { return S(c)->pwm_disable(); },
+    [](void* c, mc_hal_pwm2_state_t* s) noexcept { return S(c)->pwm_get_state(s); },
+};
+const mc_hal_encoder_ops_t kEncOps = {
+    [](void* c, mc_hal_encoder_sample_t* s) noexcept { return S(c)->encoder_read(s); },
+};
+const mc_hal_tick_ops_t kTickOps = {
+    [](void* c, uint32_t* t) noexcept { return S(c)->tick_read(t); },
+    [](void* c, uint32_t* hz) noexcept { return S(c)->tick_freq(hz); },
+};
+const mc_hal_fault_ops_t kFaultOps = {
+    [](void* c, mc_hal_fault_status_t* s) noexcept { return S(c)->fault_read(s); },
+    [](void* c) noexcept { S(c)->fault_gate_kill(); },
+    [](void* c) noexcept { return S(c)->fault_gate_release(); },
+};
+
+void check(mcsim::Status s, const char* what) {
+  if (s != mcsim::Status::kOk) {
+    throw std::invalid_argument(std::string(what) + ": " + mcsim::status_name(s));
+  }
+}
+
+}  // namespace
+
+StepperBoard::StepperBoard(const StepperBoardConfig& cfg) : cfg_(cfg) {
+  check(plant_.configure(cfg.motor), "motor");
+  for (int k = 0; k < 2; ++k) {
+    mcsim::CurrentSensorParams p = cfg.current_sensor;
+    p.seed = cfg.current_sensor.seed + static_cast<uint64_t>(k) * 7919U;
+    check(isense_[k].configure(p), "current_sensor");
+  }
+  check(vsense_.configure(cfg.vbus_sensor), "vbus_sensor");
+  check(encoder_.configure(cfg.encoder), "encoder");
+  if (cfg.substeps < 1) throw std::invalid_argument("substeps must be >= 1");
+  if (cfg.delay_periods < 0) throw std::invalid_argument("delay_periods must be >= 0");
+  check(delay_.configure(static_cast<std::size_t>(cfg.delay_periods), duty_cmd_),
+        "delay_periods");
+  if (!(cfg.vbus_v > 0.0) || !std::isfinite(cfg.vbus_v)) {
+    throw std::invalid_argument("vbus_v must be > 0");
+  }
+  if (!(cfg.t_pwm_s > 0.0) || !std::isfinite(cfg.t_pwm_s)) {
+    throw std::invalid_argument("t_pwm_s must be > 0");
+  }
+  if (!(cfg.tick_hz >= 1.0) || cfg.tick_hz > 4.0e9) {
+    throw std::invalid_argument("tick_hz out of range");
+  }
+  x_(mcsim::Stepper2Ph::kThetaM) = cfg.theta_m0_rad;
+  encoder_.reset(cfg.theta_m0_rad);
+  adc_dev_ = {&kAdcOps, this};
+  pwm_dev_ = {&kPwmOps, this};
+  enc_dev_ = {&kEncOps, this};
+  tick_dev_ = {&kTickOps, this};
+  fault_dev_ = {&kFaultOps, this};
+  hal_.adc = &adc_dev_;
+  hal_.pwm3 = nullptr;
+  hal_.pwm2 = &pwm_dev_;
+  hal_.encoder = &enc_dev_;
+  hal_.can = nullptr;
+  hal_.tick = &tick_dev_;
+  hal_.fault = &fault_dev_;
+}
+
+uint32_t StepperBoard::ticks_now() const {
+  const double ticks = std::floor(t_s_ * cfg_.tick_hz + 0.5);
+  return static_cast<uint32_t>(static_cast<uint64_t>(std::fmod(ticks, 4294967296.0)));
+}
+
+void StepperBoard::sample() {
+  adc_.ia_a = static_cast<float>(isense_[0].sample_a(x_(mcsim::Stepper2Ph::kIa)));
+  adc_.ib_a = static_cast<float>(isense_[1].sample_a(x_(mcsim::Stepper2Ph::kIb)));
+  adc_.ic_a = 0.0f;
+  adc_.vbus_v = static_cast<float>(vsense_.sample_v(cfg_.vbus_v));
+  adc_.valid_mask = MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS;
+  adc_.timestamp_ticks = ticks_now();
+  adc_.seq = ++adc_seq_;
+  adc_fresh_ = true;
+  const mcsim::EncoderReading r = encoder_.sample(x_(mcsim::Stepper2Ph::kThetaM));
+  enc_.count = static_cast<uint32_t>(r.count_in_rev);
+  enc_.counts_per_rev = static_cast<uint32_t>(cfg_.encoder.counts_per_rev);
+  enc_.flags = MC_HAL_ENCODER_FLAG_VALID | (r.index_seen ? MC_HAL_ENCODER_FLAG_INDEX : 0U);
+  enc_.timestamp_ticks = adc_.timestamp_ticks;
+}
+
+void StepperBoard::integrate_open(double h_s, int n) {
+  // Each winding on its own: while it carries current the diodes clamp it to
+  // -vbus sign(i); once the current would reverse it is zero and open.
+  for (int k = 0; k < n; ++k) {
+    const double t = t_s_ + k * h_s;
+    mcsim::Stepper2Ph::Input u = mcsim::Stepper2Ph::Input::Zero();
+    for (int j = 0; j < 2; ++j) {
+      const double i = x_(j);
+      if (i != 0.0) open_[j] = false;
+      u(j) = open_[j] ? 0.0 : (i > 0.0 ? -cfg_.vbus_v : cfg_.vbus_v);
+    }
+    const State before = x_;
+    State x1 = mcsim::rk4_step(plant_, t, x_, u, h_s);
+    for (int j = 0; j < 2; ++j) {
+      if (open_[j] || x1(j) * before(j) <= 0.0) {
+        x1(j) = 0.0;  // open winding (or the current reached zero): no current
+        open_[j] = true;
+      }
+    }
+    x_ = x1;
+    v_applied_ = u;
+  }
+}
+
+void StepperBoard::advance() {
+  const double T = cfg_.t_pwm_s;
+  const int n = cfg_.substeps;
+  const Eigen::Vector2d duty = delay_.push(duty_cmd_);
+  if (!(pwm_enabled_ && !gate_killed_)) {
+    integrate_open(T / n, n);
+  } else {
+    open_[0] = open_[1] = false;
+    v_applied_ = duty * cfg_.vbus_v;
+    check(mcsim::advance_zoh(plant_, v_applied_, t_s_, T, n, &x_), "integrator");
+  }
+  ++period_count_;
+  t_s_ = static_cast<double>(period_count_) * T;
+}
+
+int StepperBoard::adc_read(mc_hal_adc_sample_t* s) noexcept {
+  if (!adc_fresh_) return -EAGAIN;
+  *s = adc_;
+  adc_fresh_ = false;
+  return 0;
+}
+
+int StepperBoard::adc_read_temp(mc_hal_adc_temp_t* t) noexcept {
+  t->power_stage_temp_c = 25.0f;
+  t->motor_temp_c = 25.0f;
+  t->valid_mask = MC_HAL_ADC_TEMP_VALID_ALL;
+  return 0;
+}
+
+int StepperBoard::pwm_set_duty(float a, float b) noexcept {
+  if (!mc_hal_pwm2_duty_valid(a) || !mc_hal_pwm2_duty_valid(b)) return -EINVAL;
+  duty_cmd_ << a, b;
+  return 0;
+}
+
+int StepperBoard::pwm_enable() noexcept {
+  if (gate_killed_) return -EBUSY;
+  pwm_enabled_ = true;
+  return 0;
+}
+
+int StepperBoard::pwm_disable() noexcept {
+  pwm_enabled_ = false;
+  return 0;
+}
+
+int StepperBoard::pwm_get_state(mc_hal_pwm2_state_t* st) noexcept {
+  st->duty_a = static_cast<float>(duty_cmd_(0));
+  st->duty_b = static_cast<float>(duty_cmd_(1));
+  st->period_s = static_cast<float>(cfg_.t_pwm_s);
+  st->enabled = pwm_enabled_ && !gate_killed_;
+  return 0;
+}
+
+int StepperBoard::encoder_read(mc_hal_encoder_sample_t* s) noexcept {
+  *s = enc_;
+  return 0;
+}
+
+int StepperBoard::tick_read(uint32_t* ticks) const noexcept {
+  *ticks = ticks_now();
+  return 0;
+}
+
+int StepperBoard::tick_freq(uint32_t* hz) const noexcept {
+  *hz = static_cast<uint32_t>(cfg_.tick_hz);
+  return 0;
+}
+
+int StepperBoard::fault_read(mc_hal_fault_status_t* st) noexcept {
+  st->active_mask = fault_active_;
+  st->latched_mask = fault_latched_;
+  st->gate_killed = gate_killed_;
+  return 0;
+}
+
+void StepperBoard::fault_gate_kill() noexcept { gate_killed_ = true; }
+
+int StepperBoard::fault_gate_release() noexcept {
+  if (fault_active_ != 0U) return -EBUSY;
+  gate_killed_ = false;
+  fault_latched_ = 0U;
+  pwm_enabled_ = false;
+  return 0;
+}
+
+}  // namespace hal_host

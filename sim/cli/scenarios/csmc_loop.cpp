@@ -1,0 +1,249 @@
+// The CSMC loop around the simulated stepper (see csmc_loop.hpp).
+#include "csmc_loop.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "csmc/mc_csvc.h"
+#include "csmc/mc_stepper_dq.h"
+#include "mcsim/integrator.hpp"
+#include "mcsim/stepper_2ph.hpp"
+
+namespace mcsim {
+namespace csmc {
+
+mc_csmc_f32_cfg_t paper_ctrl(bool model_law, bool integrators, bool ideal) {
+  mc_csmc_f32_cfg_t c{};
+  c.law = model_law ? MC_CSMC_LAW_MODEL : MC_CSMC_LAW_CONST;
+  c.sw = ideal ? MC_CSMC_SW_SGN : MC_CSMC_SW_SAT;
+  c.k1_per_s2 = 7.5e4f;
+  c.k2_per_s = 550.0f;
+  c.mu1_a = 0.1f;
+  c.mu2_rad_s2 = 50.0f;
+  const float k01 = 20.0f, k02 = 100.0f;
+  if (integrators) {
+    if (mc_csvc_f32_integrator(k01, &c.sigma1) != MC_CSVC_ERR_NONE ||
+        mc_csvc_f32_integrator(k02, &c.sigma2) != MC_CSVC_ERR_NONE) {
+      throw std::runtime_error("conditional integrator rejected");
+    }
+  }
+  c.m1_v = 50.0f;
+  c.m2_v = 50.0f;
+  mc_csmc_f32_model_t& m = c.model;
+  m.km_nm_a = 0.1349f;
+  m.j_kgm2 = 4.1295e-4f;
+  m.b_nms_rad = 0.0013f;
+  m.rotor_teeth = 50u;
+  m.tau_load_nm = 0.2f;
+  m.r_nom_ohm = 20.0f;
+  m.r_min_ohm = 19.0f;
+  m.r_max_ohm = 21.0f;
+  m.l_nom_h = 0.035f;
+  m.l_min_h = 0.030f;
+  m.l_max_h = 0.040f;
+  // q_i = 2.1 k0^i mu_i L^M (paper Sec. III)
+  m.q1_v = 2.1f * k01 * c.mu1_a * m.l_max_h;
+  m.q2_radh_s3 = 2.1f * k02 * c.mu2_rad_s2 * m.l_max_h;
+  c.v_limit_v = 1.0e4f;  // the paper's laws have no voltage limit
+  c.dt_s = 1.0e-5f;
+  return c;
+}
+
+mc_hgo_f32_cfg_t paper_hgo(double eps_s) {
+  mc_hgo_f32_cfg_t h{};
+  h.alpha1 = 17.0f;
+  h.alpha2 = 80.0f;
+  h.alpha3 = 100.0f;
+  h.eps_s = static_cast<float>(eps_s);
+  h.dt_s = 1.0e-5f;
+  h.input_order = 2u;  // parabolic input model between samples (mc_hgo.h)
+  return h;
+}
+
+void paper_servo(double w0_rad_s, mc_csmc_f32_cfg_t* cfg) {
+  const float w0 = static_cast<float>(w0_rad_s);
+  const float w02 = w0 * w0;
+  // S1 last row (0, -4 w0^4, 0, -5 w0^2, 0), S2 last row (0, -w0^2, 0).
+  const float c1[5] = {0.0f, -4.0f * w02 * w02, 0.0f, -5.0f * w02, 0.0f};
+  const float re1[5] = {-1.0f, -2.0f, -2.0f, -3.0f, -3.0f};
+  const float im1[5] = {0.0f, 1.0f, -1.0f, 1.0f, -1.0f};
+  const float c2[3] = {0.0f, -w02, 0.0f};
+  const float re2[3] = {-1.0f, -2.0f, -2.0f};
+  const float im2[3] = {0.0f, 1.0f, -1.0f};
+  if (mc_csvc_f32_place(5u, c1, re1, im1, &cfg->sigma1) != MC_CSVC_ERR_NONE ||
+      mc_csvc_f32_place(3u, c2, re2, im2, &cfg->sigma2) != MC_CSVC_ERR_NONE) {
+    throw std::runtime_error("servocompensator pole placement rejected");
+  }
+}
+
+namespace {
+
+struct Ref {
+  double phi, dphi, ddphi, dddphi;
+};
+
+Ref reference(const LoopOptions& o, double t) {
+  Ref r{0.0, 0.0, 0.0, 0.0};
+  if (o.ref == RefKind::kSteps) {
+    // Steps: derivatives are impulses at the jumps, taken as zero (the
+    // paper's phi_d is piecewise constant).
+    r.phi = (t >= 0.0 ? o.step_rad : 0.0) +
+            ((o.step2_t_s >= 0.0 && t >= o.step2_t_s) ? o.step_rad : 0.0);
+  } else {
+    const double w = o.w0_rad_s, a = o.r0_rad;
+    const double c = std::cos(w * t), s = std::sin(w * t);
+    r.phi = a * c;
+    r.dphi = -a * w * s;
+    r.ddphi = -a * w * w * c;
+    r.dddphi = a * w * w * w * s;
+  }
+  return r;
+}
+
+}  // namespace
+
+LoopResult run_loop(const LoopOptions& o) {
+  Stepper2PhParams p;
+  p.R_ohm = o.plant.R_ohm;
+  p.L_h = o.plant.L_h;
+  p.Km_nm_a = o.plant.Km_nm_a;
+  p.J_kgm2 = o.plant.J_kgm2;
+  p.B_nms_rad = o.plant.B_nms_rad;
+  p.rotor_teeth = o.plant.rotor_teeth;
+  p.load = load_constant(o.plant.tau_load_nm);
+  Stepper2Ph plant;
+  if (plant.configure(p) != Status::kOk) throw std::runtime_error("stepper parameters rejected");
+  if (!(o.dt_s > 0.0) || o.substeps < 1 || !(o.duration_s > 0.0)) {
+    throw std::runtime_error("bad loop timing");
+  }
+
+  mc_csmc_f32_cfg_t cc = o.ctrl;
+  cc.dt_s = static_cast<float>(o.dt_s);
+  mc_csmc_f32_t ctrl;
+  const uint32_t ce = mc_csmc_f32_init(&ctrl, &cc);
+  if (ce != MC_CSMC_ERR_NONE) {
+    throw std::runtime_error("csmc config rejected, error bits " + std::to_string(ce));
+  }
+  mc_hgo_f32_t hgo{};
+  if (o.fb == Feedback::kHgo) {
+    mc_hgo_f32_cfg_t hc = o.hgo;
+    hc.dt_s = static_cast<float>(o.dt_s);
+    const uint32_t he = mc_hgo_f32_init(&hgo, &hc);
+    if (he != MC_HGO_ERR_NONE) {
+      throw std::runtime_error("hgo config rejected, error bits " + std::to_string(he));
+    }
+  }
+  const uint32_t nr = static_cast<uint32_t>(o.plant.rotor_teeth);
+
+  LoopResult res;
+  const long n = std::lround(o.duration_s / o.dt_s);
+  const size_t every = std::max<size_t>(1, o.record_every);
+  res.trace.reserve(static_cast<size_t>(n) / every + 2);
+  Stepper2Ph::State x = Stepper2Ph::State::Zero();
+  for (long k = 0; k <= n; ++k) {
+    const double t = static_cast<double>(k) * o.dt_s;
+    const Ref r = reference(o, t);
+    // Measurements at t_k (float, as the firmware sees them).
+    const float ia = static_cast<float>(x(Stepper2Ph::kIa));
+    const float ib = static_cast<float>(x(Stepper2Ph::kIb));
+    const float w = static_cast<float>(x(Stepper2Ph::kOmegaM));
+    const float th = static_cast<float>(x(Stepper2Ph::kThetaM));
+    float sin_e = 0.0f, cos_e = 0.0f;
+    mc_sincos_f32(mc_stepper_theta_e_f32(th, nr), &sin_e, &cos_e);
+    float id = 0.0f, iq = 0.0f;
+    mc_stepper_ab_to_dq_sc_f32(ia, ib, sin_e, cos_e, &id, &iq);
+
+    mc_csmc_f32_in_t in{};
+    mc_hgo_f32_est_t est{0.0f, 0.0f, 0.0f};
+    // e2 formed in double and rounded once (a small number, full precision).
+    const float e2 = static_cast<float>(x(Stepper2Ph::kThetaM) - r.phi);
+    if (mc_csmc_f32_err_from_state(&cc.model, id, iq, w, th, 0.0f, static_cast<float>(r.phi),
+                                   static_cast<float>(r.dphi), static_cast<float>(r.ddphi),
+                                   &in) != MC_CSMC_ERR_NONE) {
+      throw std::runtime_error("model for the state errors rejected");
+    }
+    in.e2_rad = e2;
+    in.dddphi_d_rad_s3 = static_cast<float>(r.dddphi);
+    if (o.fb == Feedback::kHgo) {
+      mc_hgo_f32_step(&hgo, e2, &est);
+      in.de2_rad_s = est.z2;
+      in.dde2_rad_s2 = est.z3;
+    }
+    mc_csmc_f32_out_t out{};
+    mc_csmc_f32_step(&ctrl, &in, &out);
+    if (ctrl.flags != MC_CSMC_ERR_NONE) throw std::runtime_error("csmc step refused an input");
+
+    if (k % static_cast<long>(every) == 0 || k == n) {
+      res.trace.push_back(Sample{t, in.e1_a, in.e2_rad, id, iq, w, x(Stepper2Ph::kThetaM),
+                                 out.v_d_v, out.v_q_v, est.z1, est.z2, est.z3, out.s1_a,
+                                 out.s2_rad_s2, r.phi});
+    }
+    if (k == n) {
+      res.t_end = t;
+      res.e2_end = x(Stepper2Ph::kThetaM) - r.phi;
+      break;
+    }
+    float va = 0.0f, vb = 0.0f;
+    mc_stepper_dq_to_ab_sc_f32(out.v_d_v, out.v_q_v, sin_e, cos_e, &va, &vb);
+    const Stepper2Ph::Input u(static_cast<double>(va), static_cast<double>(vb));
+    if (advance_zoh(plant, u, t, o.dt_s, o.substeps, &x) != Status::kOk) {
+      throw std::runtime_error("integration failed");
+    }
+    if (!x.allFinite()) throw std::runtime_error("plant state diverged");
+  }
+  return res;
+}
+
+StepMetrics step_metrics(const std::vector<Sample>& tr, double t_from, double t_to,
+                         double phi_final_rad, double step_rad) {
+  StepMetrics m;
+  const double sgn = step_rad >= 0.0 ? 1.0 : -1.0;
+  const double band = 0.02 * std::abs(step_rad);
+  double over = 0.0, last_out = t_from;
+  for (const Sample& s : tr) {
+    if (s.t < t_from || s.t > t_to) continue;
+    const double d = s.x4 - phi_final_rad;
+    over = std::max(over, sgn * d);
+    if (std::abs(d) > band) last_out = s.t;
+  }
+  m.overshoot_frac = over / std::abs(step_rad);
+  m.settling_s = last_out - t_from;
+  return m;
+}
+
+WindowStats window_stats(const std::vector<Sample>& tr, double Sample::*field, double t_from,
+                         double t_to) {
+  WindowStats w;
+  double sum = 0.0, sum2 = 0.0, lo = 0.0, hi = 0.0, t0 = 0.0, t1 = 0.0;
+  long n = 0, changes = 0;
+  double prev = 0.0;
+  for (const Sample& s : tr) {
+    if (s.t < t_from || s.t > t_to) continue;
+    const double v = s.*field;
+    if (n == 0) {
+      lo = hi = v;
+      t0 = s.t;
+    } else if ((v > 0.0 && prev < 0.0) || (v < 0.0 && prev > 0.0)) {
+      ++changes;
+    }
+    if (v != 0.0) prev = v;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+    w.max_abs = std::max(w.max_abs, std::abs(v));
+    sum += v;
+    sum2 += v * v;
+    t1 = s.t;
+    ++n;
+  }
+  if (n > 0) {
+    w.mean = sum / static_cast<double>(n);
+    w.rms = std::sqrt(sum2 / static_cast<double>(n));
+    w.peak_to_peak = hi - lo;
+    if (t1 > t0) w.sign_changes_per_s = static_cast<double>(changes) / (t1 - t0);
+  }
+  return w;
+}
+
+}  // namespace csmc
+}  // namespace mcsim
