@@ -1,0 +1,153 @@
+/**
+ * @file mc_pil_frame.h
+ * @brief Processor-in-the-loop link: the frames the host simulator and the
+ *        emulated STM32F405 exchange over USART1 once per PWM period.
+ *
+ * Wire format of one frame (all multi-byte values little-endian):
+ *   0xA5 | type (1 byte) | payload length n (1 byte) | payload (n bytes) |
+ *   CRC-16/CCITT-FALSE over type, length and payload (2 bytes)
+ * Payloads are sequences of 32-bit words; floats travel as their IEEE bit
+ * patterns, so both sides see exactly the same values (the link adds no
+ * rounding: this is what makes the PIL trajectory bit-identical to SIL).
+ *
+ * One period, host first:
+ *   host -> target  MEAS: what the board's HAL returned at the PWM-synchronous
+ *                   sample (ADC sample and return code, encoder, fault
+ *                   status, tick) and the commands of this period
+ *                   (references, mode).
+ *   target          fast-loop interrupt: commands, mc_drive_fast_step(); the
+ *                   slow step in PendSV when due.
+ *   target -> host  OUT: what the drive did to the bridge this period (last
+ *                   accepted duties, enable state, gate kill) and telemetry.
+ *   host            applies OUT to the simulated board, integrates one period.
+ * Start-up: target -> HELLO once its USART receives (bytes sent earlier
+ * would be dropped), host -> CFG (the drive configuration), target -> READY
+ * (the drive's init result). End: host -> END, the target exits
+ * (semihosting).
+ *
+ * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
+ * and parse a complete frame. Built for the target (board_pil.c) and for the
+ * host (hal/host PilLink).
+ */
+#ifndef MC_PIL_FRAME_H
+#define MC_PIL_FRAME_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "hal/hal.h"
+#include "mc_drive.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MC_PIL_SYNC 0xA5u
+#define MC_PIL_HEADER_LEN 3u  /**< sync, type, length */
+#define MC_PIL_CRC_LEN 2u
+#define MC_PIL_MAX_PAYLOAD 252u
+#define MC_PIL_MAX_FRAME (MC_PIL_HEADER_LEN + MC_PIL_MAX_PAYLOAD + MC_PIL_CRC_LEN)
+
+typedef enum {
+    MC_PIL_TYPE_CFG = 1,   /**< host -> target: mc_drive_cfg_t */
+    MC_PIL_TYPE_READY = 2, /**< target -> host: drive init result */
+    MC_PIL_TYPE_MEAS = 3,  /**< host -> target: one period's measurements and commands */
+    MC_PIL_TYPE_OUT = 4,   /**< target -> host: one period's bridge actions and telemetry */
+    MC_PIL_TYPE_END = 5,   /**< host -> target: stop, exit code in the payload */
+    MC_PIL_TYPE_HELLO = 6, /**< target -> host: receiver ready, empty payload */
+} mc_pil_type_t;
+
+/* Decode errors. */
+#define MC_PIL_OK 0
+#define MC_PIL_ERR_SYNC (-1)    /**< first byte is not MC_PIL_SYNC */
+#define MC_PIL_ERR_LEN (-2)     /**< length field does not fit the buffer or the type */
+#define MC_PIL_ERR_CRC (-3)
+#define MC_PIL_ERR_TYPE (-4)    /**< not the expected frame type */
+#define MC_PIL_ERR_ARG (-5)     /**< NULL pointer or buffer too small */
+
+/* Command bits of mc_pil_meas_t.cmd_flags. */
+#define MC_PIL_CMD_SET_MODE (1u << 0)
+#define MC_PIL_CMD_SET_REFS (1u << 1)
+
+/** Host -> target, once per period. */
+typedef struct {
+    uint32_t seq;                 /**< period number */
+    int32_t adc_rc;               /**< board adc read() result (0, -EAGAIN, ...) */
+    mc_hal_adc_sample_t adc;      /**< valid when adc_rc == 0 */
+    int32_t enc_rc;
+    mc_hal_encoder_sample_t enc;
+    int32_t fault_rc;
+    mc_hal_fault_status_t fault;  /**< board fault inputs at the sample */
+    uint32_t tick_ticks;          /**< board tick counter at the sample */
+    uint32_t tick_hz;             /**< board tick counter frequency */
+    uint32_t cmd_flags;           /**< MC_PIL_CMD_* */
+    uint32_t mode;                /**< mc_drive_mode_t, with MC_PIL_CMD_SET_MODE */
+    float id_ref_a;               /**< with MC_PIL_CMD_SET_REFS */
+    float iq_ref_a;
+} mc_pil_meas_t;
+
+/** Target -> host, once per period. */
+typedef struct {
+    uint32_t seq;                 /**< echo of the MEAS seq */
+    uint32_t duty_set_count;      /**< accepted pwm3 set_duty calls this period */
+    float duty_a, duty_b, duty_c; /**< last accepted duties */
+    uint32_t pwm_enabled;         /**< 1: modulating at the end of the period */
+    uint32_t gate_kill_count;     /**< gate kills this period */
+    int32_t cmd_rc;               /**< result of this period's commands (first error) */
+    uint32_t mode;                /**< drive mode after the period */
+    uint32_t faults;              /**< sticky MC_DRIVE_FAULT_* */
+    uint32_t first_fault;
+    uint32_t foc_err;
+    float id_a, iq_a;             /**< FOC measured dq currents */
+    float vd_v, vq_v;             /**< FOC applied dq voltages */
+    float theta_e_rad;
+    float omega_m_rad_s;
+    uint32_t ipsr_fast;           /**< exception number of the fast step (34 = ADC IRQ) */
+    uint32_t ipsr_slow;           /**< of the slow step (14 = PendSV), 0 if none ran */
+    uint32_t slow_ran;
+} mc_pil_out_t;
+
+/** Target -> host after CFG. */
+typedef struct {
+    uint32_t drive_cfg_err;       /**< mc_drive_init() result */
+    uint32_t sysclk_hz;           /**< clock set-up result (0: no RCC, emulator) */
+} mc_pil_ready_t;
+
+/** CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection). */
+uint16_t mc_pil_crc16(const uint8_t *p, size_t n);
+
+/* Encoders: write a whole frame into buf (capacity cap), return its length,
+ * or 0 if buf is NULL or too small. */
+size_t mc_pil_encode_cfg(const mc_drive_cfg_t *cfg, uint8_t *buf, size_t cap);
+size_t mc_pil_encode_ready(const mc_pil_ready_t *r, uint8_t *buf, size_t cap);
+size_t mc_pil_encode_meas(const mc_pil_meas_t *m, uint8_t *buf, size_t cap);
+size_t mc_pil_encode_out(const mc_pil_out_t *o, uint8_t *buf, size_t cap);
+size_t mc_pil_encode_end(int32_t exit_code, uint8_t *buf, size_t cap);
+size_t mc_pil_encode_hello(uint8_t *buf, size_t cap);
+
+/**
+ * Length of the frame that starts at buf given its first n bytes: 0 while
+ * fewer than the header are known, else header + payload + CRC.
+ */
+size_t mc_pil_frame_len(const uint8_t *buf, size_t n);
+
+/** Type of a complete, CRC-checked frame (MC_PIL_TYPE_*), or a negative
+ *  MC_PIL_ERR_*. */
+int mc_pil_frame_type(const uint8_t *buf, size_t n);
+
+/* Decoders: parse a complete frame of the given type. MC_PIL_OK, or an
+ * MC_PIL_ERR_* with *out unchanged. */
+int mc_pil_decode_cfg(const uint8_t *buf, size_t n, mc_drive_cfg_t *out);
+int mc_pil_decode_ready(const uint8_t *buf, size_t n, mc_pil_ready_t *out);
+int mc_pil_decode_meas(const uint8_t *buf, size_t n, mc_pil_meas_t *out);
+int mc_pil_decode_out(const uint8_t *buf, size_t n, mc_pil_out_t *out);
+int mc_pil_decode_end(const uint8_t *buf, size_t n, int32_t *out);
+/** MC_PIL_OK if buf is a complete HELLO frame. */
+int mc_pil_check_hello(const uint8_t *buf, size_t n);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_PIL_FRAME_H */

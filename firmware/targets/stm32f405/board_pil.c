@@ -1,0 +1,456 @@
+/**
+ * @file board_pil.c
+ * @brief Processor-in-the-loop board: the HAL of the drive served over
+ *        USART1 by the host simulator (protocol: ../pil/mc_pil_frame.h).
+ *
+ * Runs on QEMU netduinoplus2 (USART1 is the first -serial). Each period the
+ * host sends MEAS with what its simulated board's HAL returned at the sample;
+ * the USART1 receive interrupt assembles the frame and pends the ADC
+ * interrupt, so the fast loop runs exactly where it runs on the drive board
+ * (ADC_IRQHandler in main.c); the slow loop runs in PendSV. When the period's
+ * work is done, OUT goes back with the duties, the enable state and gate
+ * kills the drive asked for, which the host applies to its board before it
+ * integrates the period.
+ *
+ * The HAL ops here mirror hal_host::PmsmBoard call for call (duty check,
+ * -EBUSY enable while killed, one read per ADC sample), so the drive takes
+ * the same decisions as in the software-in-the-loop run.
+ *
+ * Emulation only: link errors, the END frame and hard faults leave through
+ * ARM semihosting (exit codes below).
+ */
+#include <errno.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "mc_board.h"
+#include "mc_cortexm.h"
+#include "mc_pil_frame.h"
+#include "mc_stm32f405.h"
+
+/* Exit codes reported to the host through semihosting. */
+#define PIL_EXIT_FRAME_ERROR 3
+#define PIL_EXIT_CFG_REJECTED 2
+#define PIL_EXIT_HARD_FAULT 99
+
+/* USART1 (RM0090 section 30.6). */
+#define USART_SR  MC_REG32(MC_USART1_BASE + 0x00u)
+#define USART_DR  MC_REG32(MC_USART1_BASE + 0x04u)
+#define USART_BRR MC_REG32(MC_USART1_BASE + 0x08u)
+#define USART_CR1 MC_REG32(MC_USART1_BASE + 0x0Cu)
+#define USART_SR_ORE  (1u << 3)
+#define USART_SR_RXNE (1u << 5)
+#define USART_SR_TXE  (1u << 7)
+#define USART_CR1_RE     (1u << 2)
+#define USART_CR1_TE     (1u << 3)
+#define USART_CR1_RXNEIE (1u << 5)
+#define USART_CR1_UE     (1u << 13)
+#define RCC_APB2ENR MC_REG32(MC_RCC_BASE + MC_RCC_APB2ENR_OFS)
+#define RCC_APB2ENR_USART1EN (1u << 4)
+#define PIL_BAUD 115200u
+
+#define PRIO_LINK_RX 1u
+
+void USART1_IRQHandler(void);
+void HardFault_Handler(void);
+
+typedef struct {
+    /* link */
+    uint8_t rx[MC_PIL_MAX_FRAME];
+    size_t rx_len;
+    mc_pil_meas_t meas;          /**< the period's measurements */
+    bool meas_pending;           /**< commands of meas not applied yet */
+    bool adc_fresh;              /**< meas.adc not read yet */
+    uint32_t sysclk_hz;
+    mc_drive_cfg_t cfg;
+    bool have_cfg;
+    /* bridge mirror */
+    float duty[3];
+    bool pwm_enabled;
+    bool killed_here;            /**< gate kill by the drive (host kill is in meas) */
+    uint32_t duty_set_count;
+    uint32_t gate_kill_count;
+    int32_t cmd_rc;
+    uint32_t ipsr_fast;
+    /* HAL handles */
+    mc_hal_adc_t adc;
+    mc_hal_pwm3_t pwm3;
+    mc_hal_encoder_t enc;
+    mc_hal_tick_t tick;
+    mc_hal_fault_t fault;
+    mc_hal_t hal;
+} pil_board_t;
+
+static pil_board_t g_pil;
+
+/* ---- semihosting (emulation only) -------------------------------------- */
+
+#if defined(__arm__)
+static void sh_call(uint32_t op, const void *arg)
+{
+    register uint32_t r0 __asm__("r0") = op;
+    register const void *r1 __asm__("r1") = arg;
+    __asm__ volatile("bkpt 0xAB" : "+r"(r0) : "r"(r1) : "memory");
+}
+#else
+static void sh_call(uint32_t op, const void *arg)
+{
+    (void)op;
+    (void)arg;
+}
+#endif
+
+static void sh_write0(const char *s)
+{
+    sh_call(0x04u, s);
+}
+
+static void sh_exit(int code) __attribute__((noreturn));
+static void sh_exit(int code)
+{
+    /* SYS_EXIT_EXTENDED, ADP_Stopped_ApplicationExit with the code. */
+    static uint32_t block[2];
+    block[0] = 0x20026u;
+    block[1] = (uint32_t)code;
+    sh_call(0x20u, block);
+    for (;;) {
+        mc_wfi();
+    }
+}
+
+void HardFault_Handler(void)
+{
+    sh_write0("pil: hard fault\n");
+    sh_exit(PIL_EXIT_HARD_FAULT);
+}
+
+/* ---- USART1 ------------------------------------------------------------ */
+
+static void usart_send(const uint8_t *p, size_t n)
+{
+    for (size_t i = 0u; i < n; ++i) {
+        while ((USART_SR & USART_SR_TXE) == 0u) {
+        }
+        USART_DR = p[i];
+    }
+}
+
+/* Add one received byte; returns the frame type once a whole frame is in
+ * g_pil.rx (0 while incomplete). Exits on a corrupt frame: the link is a
+ * lossless emulated wire, so an error means a protocol bug. */
+static int rx_byte(uint8_t b)
+{
+    if (g_pil.rx_len == 0u && b != MC_PIL_SYNC) {
+        sh_write0("pil: lost frame sync\n");
+        sh_exit(PIL_EXIT_FRAME_ERROR);
+    }
+    g_pil.rx[g_pil.rx_len] = b;
+    g_pil.rx_len++;
+    const size_t want = mc_pil_frame_len(g_pil.rx, g_pil.rx_len);
+    if (want == 0u || g_pil.rx_len < want) {
+        return 0;
+    }
+    const int type = mc_pil_frame_type(g_pil.rx, g_pil.rx_len);
+    if (type < 0) {
+        sh_write0("pil: bad frame (CRC or length)\n");
+        sh_exit(PIL_EXIT_FRAME_ERROR);
+    }
+    return type;
+}
+
+static void handle_frame(int type)
+{
+    const size_t n = g_pil.rx_len;
+    g_pil.rx_len = 0u;
+    if (type == (int)MC_PIL_TYPE_MEAS) {
+        if (mc_pil_decode_meas(g_pil.rx, n, &g_pil.meas) != MC_PIL_OK) {
+            sh_exit(PIL_EXIT_FRAME_ERROR);
+        }
+        g_pil.meas_pending = true;
+        g_pil.adc_fresh = true;
+        /* The conversion is "complete": run the fast loop as the ADC would. */
+        mc_nvic_set_pending(MC_IRQ_ADC);
+    } else if (type == (int)MC_PIL_TYPE_END) {
+        int32_t code = 0;
+        (void)mc_pil_decode_end(g_pil.rx, n, &code);
+        sh_exit((int)code);
+    } else {
+        sh_write0("pil: unexpected frame type\n");
+        sh_exit(PIL_EXIT_FRAME_ERROR);
+    }
+}
+
+void USART1_IRQHandler(void)
+{
+    while ((USART_SR & (USART_SR_RXNE | USART_SR_ORE)) != 0u) {
+        const int type = rx_byte((uint8_t)(USART_DR & 0xFFu));
+        if (type > 0) {
+            handle_frame(type);
+        }
+    }
+}
+
+/* ---- HAL ops ----------------------------------------------------------- */
+
+static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
+{
+    pil_board_t *b = ctx;
+    if (!b->adc_fresh) {
+        return -EAGAIN;
+    }
+    b->adc_fresh = false;
+    if (b->meas.adc_rc != 0) {
+        return (int)b->meas.adc_rc;
+    }
+    *p_sample = b->meas.adc;
+    return 0;
+}
+
+static int pwm_set_duty(void *ctx, float da, float db, float dc)
+{
+    pil_board_t *b = ctx;
+    if (!mc_hal_pwm3_duty_valid(da) || !mc_hal_pwm3_duty_valid(db) ||
+        !mc_hal_pwm3_duty_valid(dc)) {
+        return -EINVAL;
+    }
+    b->duty[0] = da;
+    b->duty[1] = db;
+    b->duty[2] = dc;
+    b->duty_set_count++;
+    return 0;
+}
+
+static bool gate_killed(const pil_board_t *b)
+{
+    return b->killed_here || b->meas.fault.gate_killed;
+}
+
+static int pwm_enable(void *ctx)
+{
+    pil_board_t *b = ctx;
+    if (gate_killed(b)) {
+        return -EBUSY;
+    }
+    b->pwm_enabled = true;
+    return 0;
+}
+
+static int pwm_disable(void *ctx)
+{
+    pil_board_t *b = ctx;
+    b->pwm_enabled = false;
+    return 0;
+}
+
+static int pwm_get_state(void *ctx, mc_hal_pwm3_state_t *p_state)
+{
+    const pil_board_t *b = ctx;
+    p_state->duty_a = b->duty[0];
+    p_state->duty_b = b->duty[1];
+    p_state->duty_c = b->duty[2];
+    p_state->period_s = b->cfg.foc.dt_s;
+    p_state->enabled = b->pwm_enabled && !gate_killed(b);
+    return 0;
+}
+
+static int enc_read(void *ctx, mc_hal_encoder_sample_t *p_sample)
+{
+    const pil_board_t *b = ctx;
+    if (b->meas.enc_rc != 0) {
+        return (int)b->meas.enc_rc;
+    }
+    *p_sample = b->meas.enc;
+    return 0;
+}
+
+static int tick_read(void *ctx, uint32_t *p_ticks)
+{
+    const pil_board_t *b = ctx;
+    *p_ticks = b->meas.tick_ticks;
+    return 0;
+}
+
+static int tick_freq(void *ctx, uint32_t *p_hz)
+{
+    const pil_board_t *b = ctx;
+    *p_hz = b->meas.tick_hz;
+    return 0;
+}
+
+static int fault_read(void *ctx, mc_hal_fault_status_t *p_status)
+{
+    const pil_board_t *b = ctx;
+    if (b->meas.fault_rc != 0) {
+        return (int)b->meas.fault_rc;
+    }
+    *p_status = b->meas.fault;
+    p_status->gate_killed = gate_killed(b);
+    return 0;
+}
+
+static void fault_gate_kill(void *ctx)
+{
+    pil_board_t *b = ctx;
+    b->killed_here = true;
+    b->gate_kill_count++;
+}
+
+/* Releasing the kill is not part of the PIL protocol (no scenario clears
+ * faults over the link), so it is refused as a latched kill would be. */
+static int fault_gate_release(void *ctx)
+{
+    (void)ctx;
+    return -EBUSY;
+}
+
+static const mc_hal_adc_ops_t k_adc_ops = {adc_read, NULL};
+static const mc_hal_pwm3_ops_t k_pwm3_ops = {pwm_set_duty, pwm_enable, pwm_disable,
+                                             pwm_get_state};
+static const mc_hal_encoder_ops_t k_enc_ops = {enc_read};
+static const mc_hal_tick_ops_t k_tick_ops = {tick_read, tick_freq};
+static const mc_hal_fault_ops_t k_fault_ops = {fault_read, fault_gate_kill, fault_gate_release};
+
+/* ---- mc_board.h -------------------------------------------------------- */
+
+const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
+{
+    memset(&g_pil, 0, sizeof g_pil);
+    g_pil.sysclk_hz = sysclk_hz;
+    g_pil.duty[0] = MC_HAL_PWM3_DUTY_INIT;
+    g_pil.duty[1] = MC_HAL_PWM3_DUTY_INIT;
+    g_pil.duty[2] = MC_HAL_PWM3_DUTY_INIT;
+    g_pil.adc = (mc_hal_adc_t){&k_adc_ops, &g_pil};
+    g_pil.pwm3 = (mc_hal_pwm3_t){&k_pwm3_ops, &g_pil};
+    g_pil.enc = (mc_hal_encoder_t){&k_enc_ops, &g_pil};
+    g_pil.tick = (mc_hal_tick_t){&k_tick_ops, &g_pil};
+    g_pil.fault = (mc_hal_fault_t){&k_fault_ops, &g_pil};
+    g_pil.hal.adc = &g_pil.adc;
+    g_pil.hal.pwm3 = &g_pil.pwm3;
+    g_pil.hal.pwm2 = NULL;
+    g_pil.hal.encoder = &g_pil.enc;
+    g_pil.hal.can = NULL;
+    g_pil.hal.tick = &g_pil.tick;
+    g_pil.hal.fault = &g_pil.fault;
+
+    /* USART1 on APB2 (84 MHz on silicon; QEMU ignores the rate). */
+    RCC_APB2ENR |= RCC_APB2ENR_USART1EN;
+    const uint32_t pclk2_hz = (sysclk_hz != 0u) ? sysclk_hz / 2u : 84000000u;
+    USART_BRR = (pclk2_hz + PIL_BAUD / 2u) / PIL_BAUD;
+    USART_CR1 = USART_CR1_UE | USART_CR1_TE | USART_CR1_RE;
+    return &g_pil.hal;
+}
+
+const mc_drive_cfg_t *mc_board_drive_cfg(void)
+{
+    /* The receiver is on (mc_board_init): tell the host, which waits for
+     * this before it sends CFG. Then, before interrupts, poll for CFG. */
+    uint8_t hello[MC_PIL_HEADER_LEN + MC_PIL_CRC_LEN] = {0u};
+    usart_send(hello, mc_pil_encode_hello(hello, sizeof hello));
+    while (!g_pil.have_cfg) {
+        if ((USART_SR & USART_SR_RXNE) == 0u) {
+            continue;
+        }
+        const int type = rx_byte((uint8_t)(USART_DR & 0xFFu));
+        if (type == 0) {
+            continue;
+        }
+        const size_t n = g_pil.rx_len;
+        g_pil.rx_len = 0u;
+        if (type != (int)MC_PIL_TYPE_CFG || mc_pil_decode_cfg(g_pil.rx, n, &g_pil.cfg) != MC_PIL_OK) {
+            sh_write0("pil: expected a CFG frame\n");
+            sh_exit(PIL_EXIT_FRAME_ERROR);
+        }
+        g_pil.have_cfg = true;
+    }
+    return &g_pil.cfg;
+}
+
+static void send_ready(uint32_t err)
+{
+    uint8_t buf[MC_PIL_MAX_FRAME];
+    const mc_pil_ready_t r = {err, g_pil.sysclk_hz};
+    const size_t n = mc_pil_encode_ready(&r, buf, sizeof buf);
+    usart_send(buf, n);
+}
+
+void mc_board_start(void)
+{
+    /* Receive interrupt on before READY goes out: the host answers READY
+     * with the first MEAS at once. QEMU 7.2's USART does not raise its
+     * interrupt when RXNEIE is set while RXNE already is (silicon does), so
+     * a byte that came early is handed to the interrupt by hand. */
+    mc_nvic_set_priority(MC_IRQ_USART1, PRIO_LINK_RX);
+    USART_CR1 |= USART_CR1_RXNEIE;
+    mc_nvic_enable(MC_IRQ_USART1);
+    if ((USART_SR & USART_SR_RXNE) != 0u) {
+        mc_nvic_set_pending(MC_IRQ_USART1);
+    }
+    send_ready(MC_DRIVE_CFG_OK);
+}
+
+void mc_board_fast_irq_ack(void)
+{
+    /* Software-pended: the NVIC cleared the pending bit on entry. */
+}
+
+void mc_board_apply_commands(mc_drive_t *d)
+{
+    g_pil.ipsr_fast = mc_ipsr();
+    g_pil.cmd_rc = 0;
+    if (!g_pil.meas_pending) {
+        return;
+    }
+    g_pil.meas_pending = false;
+    int rc = 0;
+    if ((g_pil.meas.cmd_flags & MC_PIL_CMD_SET_MODE) != 0u) {
+        rc = mc_drive_set_mode(d, (mc_drive_mode_t)g_pil.meas.mode);
+    }
+    if ((g_pil.meas.cmd_flags & MC_PIL_CMD_SET_REFS) != 0u) {
+        const int rc2 = mc_drive_set_current_ref(d, g_pil.meas.id_ref_a, g_pil.meas.iq_ref_a);
+        if (rc == 0) {
+            rc = rc2;
+        }
+    }
+    g_pil.cmd_rc = (int32_t)rc;
+}
+
+void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
+{
+    mc_pil_out_t o;
+    o.seq = g_pil.meas.seq;
+    o.duty_set_count = g_pil.duty_set_count;
+    o.duty_a = g_pil.duty[0];
+    o.duty_b = g_pil.duty[1];
+    o.duty_c = g_pil.duty[2];
+    o.pwm_enabled = g_pil.pwm_enabled ? 1u : 0u;
+    o.gate_kill_count = g_pil.gate_kill_count;
+    o.cmd_rc = g_pil.cmd_rc;
+    o.mode = (uint32_t)d->mode;
+    o.faults = d->faults;
+    o.first_fault = d->first_fault;
+    o.foc_err = d->foc_err;
+    o.id_a = d->tm.foc.id_a;
+    o.iq_a = d->tm.foc.iq_a;
+    o.vd_v = d->tm.foc.vd_v;
+    o.vq_v = d->tm.foc.vq_v;
+    o.theta_e_rad = d->tm.theta_e_rad;
+    o.omega_m_rad_s = d->tm.omega_m_rad_s;
+    o.ipsr_fast = g_pil.ipsr_fast;
+    o.ipsr_slow = slow_ran ? mc_ipsr() : 0u;
+    o.slow_ran = slow_ran ? 1u : 0u;
+    g_pil.duty_set_count = 0u;
+    g_pil.gate_kill_count = 0u;
+
+    uint8_t buf[MC_PIL_MAX_FRAME];
+    const size_t n = mc_pil_encode_out(&o, buf, sizeof buf);
+    usart_send(buf, n);
+}
+
+void mc_board_halt(uint32_t drive_cfg_err)
+{
+    send_ready(drive_cfg_err);
+    sh_write0("pil: drive configuration rejected\n");
+    sh_exit(PIL_EXIT_CFG_REJECTED);
+}

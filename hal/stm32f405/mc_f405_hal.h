@@ -1,0 +1,409 @@
+/**
+ * @file mc_f405_hal.h
+ * @brief Register-level HAL for the STM32F405: the capabilities of
+ *        hal/hal.h on TIM1, TIM8, ADC1, a timer in encoder mode, bxCAN and
+ *        a 32-bit timer as tick counter.
+ *
+ * Peripheral use (one 3-phase drive or one stepper drive per board):
+ *   pwm3     TIM1 centre-aligned, CH1..CH3 + CH1N..CH3N complementary with
+ *            hardware dead time, preloaded CCRx, MOE = enable, BKIN = kill.
+ *            CH4 (no output) in PWM mode 2 marks the ADC trigger near the
+ *            counter peak, where all low-side switches are on.
+ *   pwm2     TIM8 centre-aligned, CH1..CH4 one per half-bridge of the dual
+ *            H-bridge (CH1/CH2 = bridge a +/-, CH3/CH4 = bridge b +/-). TIM8
+ *            has only three complementary pairs, so the low sides are not
+ *            driven by CHxN: the gate driver generates them with its own
+ *            dead time (PWM-input H-bridge drivers such as DRV8412 class).
+ *   adc      ADC1 injected group (ia, ib, [ic], vbus), hardware-triggered by
+ *            TIM1 TRGO (= OC4REF) or TIM1 CC4, end-of-injected-conversion
+ *            interrupt runs the fast loop; temperatures as software-started
+ *            regular conversions.
+ *   encoder  TIM2..TIM5 in encoder mode 3 (x4), ARR = counts_per_rev - 1,
+ *            index pulse via mc_f405_encoder_index_isr() from its EXTI ISR.
+ *   can      bxCAN (CAN1), classic frames, 3 tx mailboxes sent in request
+ *            order, rx FIFO 0 (+ an optional software ring filled from the
+ *            FIFO 0 interrupt), 32-bit mask filters, automatic bus-off
+ *            recovery.
+ *   tick     TIM2 or TIM5 (32-bit) free running. (The DWT cycle counter is
+ *            not used: it reads 0 under QEMU.)
+ *   fault    BKIN of TIM1/TIM8 (hardware kill), gate-driver nFAULT and
+ *            over-current comparator levels on GPIO, gate-driver enable pin;
+ *            gate kill = EGR.BG on both timers + MOE cleared + enable low.
+ *
+ * Host testing: every driver reaches its registers only through the
+ * pointers in its config, so on the host the same code runs against
+ * register structs in RAM. Hardware behaviour the RAM cannot show (a flag
+ * the hardware sets, a rc_w0 flag the hardware clears) is written by the
+ * test into the register file.
+ *
+ * Not done here (board bring-up, the target port's job): RCC clock enables,
+ * GPIO alternate-function muxing of the timer/CAN/ADC pins, NVIC set-up.
+ *
+ * Conventions: init validates the whole config first and returns -EINVAL
+ * (nothing written, *p_drv unchanged) on a bad one; after a successful init
+ * `p_drv->dev` is the HAL handle (ctx = p_drv). No heap, no globals. The
+ * driver structs contain pointers to themselves: do not copy after init.
+ */
+#ifndef MC_F405_HAL_H
+#define MC_F405_HAL_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hal/hal.h"
+#include "mc_f405_regs.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ======================================================================== */
+/* Dead time                                                                */
+/* ======================================================================== */
+
+/**
+ * Encode a dead time for TIMx_BDTR.DTG (RM0090 §17.4.18) with tDTS = one
+ * timer clock (CKD = 00). The dead time is rounded UP to the next
+ * representable value (never shorter than asked):
+ *   DTG[7]   = 0   : DT = DTG[6:0] x tDTS            (0..127 tDTS)
+ *   DTG[7:6] = 10  : DT = (64 + DTG[5:0]) x 2 tDTS   (128..254 tDTS)
+ *   DTG[7:5] = 110 : DT = (32 + DTG[4:0]) x 8 tDTS   (256..504 tDTS)
+ *   DTG[7:5] = 111 : DT = (32 + DTG[4:0]) x 16 tDTS  (512..1008 tDTS)
+ * @param deadtime_ns  requested dead time [ns], > 0
+ * @param tim_clk_hz   timer kernel clock [Hz], > 0 (168e6 for TIM1)
+ * @param p_dtg        out: DTG[7:0]
+ * @param p_actual_ns  out (may be NULL): dead time DTG gives [ns], rounded
+ *                     to the nearest ns
+ * @return 0; -EINVAL zero/NULL input or more than 1008 tDTS (6 us at
+ *         168 MHz): outputs untouched.
+ */
+int mc_f405_deadtime_encode(uint32_t deadtime_ns, uint32_t tim_clk_hz,
+                            uint32_t *p_dtg, uint32_t *p_actual_ns);
+
+/* ======================================================================== */
+/* Fault inputs and gate kill                                               */
+/* ======================================================================== */
+
+/** One GPIO pin; p_port == NULL means "not wired on this board". */
+typedef struct mc_f405_pin {
+    mc_f405_gpio_regs_t *p_port;
+    uint8_t pin;      /**< 0..15 */
+    bool active_low;  /**< asserted (or enabled, for an output) at 0 V */
+} mc_f405_pin_t;
+
+typedef struct mc_f405_fault_config {
+    mc_f405_tim_regs_t *p_tim1;      /**< TIM1 (pwm3) or NULL */
+    mc_f405_tim_regs_t *p_tim8;      /**< TIM8 (pwm2) or NULL; one of the
+                                          two is required */
+    mc_f405_pin_t gate_driver_fault; /**< nFAULT input (optional) */
+    mc_f405_pin_t overcurrent;       /**< comparator input (optional) */
+    mc_f405_pin_t gate_enable;       /**< gate-driver enable output
+                                          (optional) */
+    uint32_t bkin_mask;              /**< MC_HAL_FAULT_* inputs wired to the
+                                          timers' BKIN (hardware kill) */
+} mc_f405_fault_config_t;
+
+typedef struct mc_f405_fault {
+    mc_f405_fault_config_t cfg;
+    volatile bool killed;            /**< gate kill latched (software view) */
+    volatile uint32_t latched_mask;
+    mc_hal_fault_t dev;
+} mc_f405_fault_t;
+
+/**
+ * Configure the fault pins (inputs as inputs, gate enable as output, driven
+ * to its enabled level) and clear the latches. Timer break configuration
+ * (BKE/BKP) belongs to the PWM drivers.
+ * @return 0; -EINVAL NULL, no timer, pin > 15, unknown bkin_mask bits.
+ */
+int mc_f405_fault_init(mc_f405_fault_t *p_drv, const mc_f405_fault_config_t *p_cfg);
+
+/* ======================================================================== */
+/* pwm3: TIM1 complementary 3-phase                                          */
+/* ======================================================================== */
+
+/**
+ * ADC trigger source. TRGO (the default) is the internal OC4REF signal and
+ * fires whether or not the outputs are enabled, so the fast loop (and
+ * current-offset calibration) keeps running with the bridge off. The CC4
+ * event path needs CC4E, and ST application notes and forum reports say a
+ * channel-output trigger is also gated by the output enable logic (MOE):
+ * with CC4 the ADC may stop while the PWM is disabled.
+ */
+typedef enum mc_f405_adc_trigger {
+    MC_F405_ADC_TRIG_TIM1_TRGO = 0, /**< TRGO = OC4REF (MMS = 111), JEXTSEL 0001 */
+    MC_F405_ADC_TRIG_TIM1_CC4 = 1   /**< CC4 event, JEXTSEL 0000 (sets CC4E) */
+} mc_f405_adc_trigger_t;
+
+typedef struct mc_f405_pwm3_config {
+    mc_f405_tim_regs_t *p_tim;      /**< TIM1 */
+    uint32_t tim_clk_hz;            /**< 168e6 (APB2 timer clock) */
+    uint32_t pwm_freq_hz;           /**< PWM (carrier) frequency, e.g. 20000 */
+    uint32_t deadtime_ns;           /**< see mc_f405_deadtime_encode() */
+    uint32_t adc_trigger_lead_ticks; /**< CCR4 = ARR - lead: ADC trigger this
+                                          many counter ticks before the peak,
+                                          1 .. ARR - 1 */
+    mc_f405_adc_trigger_t adc_trigger; /**< CC4 needs CC4E set */
+    bool break_enable;              /**< BKE: BKIN kills the outputs */
+    bool break_active_high;         /**< BKP */
+    bool high_side_active_low;      /**< CCxP: inverted high-side gate input */
+    bool low_side_active_low;       /**< CCxNP: inverted low-side gate input */
+    mc_f405_fault_t *p_fault;       /**< software kill latch to honour, or
+                                         NULL (BIF is always honoured) */
+} mc_f405_pwm3_config_t;
+
+typedef struct mc_f405_pwm3 {
+    mc_f405_pwm3_config_t cfg;
+    uint32_t arr;        /**< auto-reload: half period in counter ticks */
+    uint32_t psc;        /**< prescaler register value */
+    uint32_t bdtr_off;   /**< BDTR with MOE clear */
+    float period_s;
+    float duty_a;
+    float duty_b;
+    float duty_c;
+    mc_hal_pwm3_t dev;
+} mc_f405_pwm3_t;
+
+/**
+ * Configure TIM1 and start its counter with the outputs off (MOE = 0),
+ * duties MC_HAL_PWM3_DUTY_INIT. Period = 2 (PSC + 1) ARR / tim_clk_hz
+ * (centre-aligned mode 1), the smallest PSC that fits ARR in 16 bits.
+ * @return 0; -EINVAL NULL, zero clock/frequency, ARR < 100 (too coarse) or
+ *         dead time not encodable, lead outside 1..ARR-1, enum out of range.
+ */
+int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg);
+
+/* ======================================================================== */
+/* pwm2: TIM8 dual H-bridge                                                 */
+/* ======================================================================== */
+
+typedef struct mc_f405_pwm2_config {
+    mc_f405_tim_regs_t *p_tim;      /**< TIM8 */
+    uint32_t tim_clk_hz;            /**< 168e6 */
+    uint32_t pwm_freq_hz;
+    bool break_enable;
+    bool break_active_high;
+    bool outputs_active_low;        /**< CCxP on all four channels */
+    mc_f405_fault_t *p_fault;       /**< or NULL */
+} mc_f405_pwm2_config_t;
+
+typedef struct mc_f405_pwm2 {
+    mc_f405_pwm2_config_t cfg;
+    uint32_t arr;
+    uint32_t psc;
+    uint32_t bdtr_off;
+    float period_s;
+    float duty_a;
+    float duty_b;
+    mc_hal_pwm2_t dev;
+} mc_f405_pwm2_t;
+
+/**
+ * Configure TIM8: CH1..CH4 PWM mode 1, centre-aligned, outputs off.
+ * Bipolar modulation: leg + duty = (1 + d) / 2, leg - duty = (1 - d) / 2.
+ * @return 0; -EINVAL as mc_f405_pwm3_init().
+ */
+int mc_f405_pwm2_init(mc_f405_pwm2_t *p_drv, const mc_f405_pwm2_config_t *p_cfg);
+
+/* ======================================================================== */
+/* adc: ADC1 injected conversions triggered by TIM1                          */
+/* ======================================================================== */
+
+/** Channel number meaning "not measured on this board". */
+#define MC_F405_ADC_CH_NONE 0xFFu
+/** Highest ADC1 channel (16 temperature sensor, 17 VREFINT, 18 VBAT). */
+#define MC_F405_ADC_CH_MAX 18u
+
+/** Sample time SMPx[2:0] (RM0090 §13.13.4/5) [ADC clock cycles]. */
+typedef enum mc_f405_adc_smp {
+    MC_F405_ADC_SMP_3 = 0,
+    MC_F405_ADC_SMP_15 = 1,
+    MC_F405_ADC_SMP_28 = 2,
+    MC_F405_ADC_SMP_56 = 3,
+    MC_F405_ADC_SMP_84 = 4,
+    MC_F405_ADC_SMP_112 = 5,
+    MC_F405_ADC_SMP_144 = 6,
+    MC_F405_ADC_SMP_480 = 7
+} mc_f405_adc_smp_t;
+
+/** A linear temperature sensor T = offset_c + slope_c_per_v * v, valid
+ *  for v_min_v <= v <= v_max_v (outside: open or short circuit). */
+typedef struct mc_f405_adc_temp_sensor {
+    uint8_t channel;        /**< ADC channel or MC_F405_ADC_CH_NONE */
+    float offset_c;
+    float slope_c_per_v;
+    float v_min_v;
+    float v_max_v;
+} mc_f405_adc_temp_sensor_t;
+
+typedef struct mc_f405_adc_config {
+    mc_f405_adc_regs_t *p_adc;             /**< ADC1 */
+    mc_f405_adc_common_regs_t *p_common;   /**< ADC common registers */
+    const mc_hal_tick_t *p_tick;           /**< timestamps; NULL: 0 */
+    uint8_t ch_ia;                         /**< channel of phase a amplifier */
+    uint8_t ch_ib;
+    uint8_t ch_ic;                         /**< or MC_F405_ADC_CH_NONE (2 shunts) */
+    uint8_t ch_vbus;
+    mc_f405_adc_smp_t smp_current;
+    mc_f405_adc_smp_t smp_vbus;
+    mc_f405_adc_smp_t smp_temp;
+    mc_f405_adc_trigger_t trigger;         /**< must match pwm3's config */
+    uint8_t clk_div;                       /**< ADCPRE: 2, 4, 6 or 8 */
+    bool jeoc_irq;                         /**< JEOCIE: fast loop in the ADC ISR */
+    float vref_v;                          /**< ADC reference (0, 3.6] V */
+    float shunt_ohm;                       /**< > 0 */
+    float amp_gain_v_per_v;                /**< current amplifier gain, != 0;
+                                                negative when a positive
+                                                (inverter -> motor) current
+                                                lowers the amplifier output */
+    float ia_offset_v;                     /**< amplifier output at 0 A [V] */
+    float ib_offset_v;
+    float ic_offset_v;
+    float vbus_divider;                    /**< Vbus / ADC pin voltage, >= 1 */
+    uint16_t rail_margin_counts;           /**< raw <= margin or >= 4095 -
+                                                margin: channel invalid */
+    mc_f405_adc_temp_sensor_t temp_power_stage;
+    mc_f405_adc_temp_sensor_t temp_motor;
+} mc_f405_adc_config_t;
+
+typedef struct mc_f405_adc {
+    mc_f405_adc_config_t cfg;
+    uint32_t n_inj;            /**< injected conversions (3 or 4) */
+    uint32_t rank_ic;          /**< JDR index of ic (if measured) */
+    uint32_t rank_vbus;        /**< JDR index of vbus */
+    float a_per_count[3];      /**< current scale per phase [A/count] */
+    float offset_counts[3];    /**< zero-current raw value per phase */
+    float v_per_count;         /**< ADC pin volts per count */
+    uint32_t seq;
+    uint32_t temp_slot;        /**< 0 power stage, 1 motor: conversion running */
+    bool temp_running;
+    mc_hal_adc_temp_t temp;
+    mc_hal_adc_t dev;
+} mc_f405_adc_t;
+
+/**
+ * Configure ADC1: 12-bit, scan, injected sequence ia, ib, [ic], vbus on the
+ * TIM1 trigger (rising edge), sample times, ADC clock divider; power on.
+ * @return 0; -EINVAL NULL pointer, channel > 18 (or NONE where required),
+ *         enum out of range, clk_div not 2/4/6/8, non-finite or out-of-range
+ *         analog parameter.
+ */
+int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg);
+
+/* ======================================================================== */
+/* encoder: TIMx encoder mode                                                */
+/* ======================================================================== */
+
+typedef struct mc_f405_encoder_config {
+    mc_f405_tim_regs_t *p_tim;     /**< TIM3/TIM4 (16 bit) or TIM2/TIM5 */
+    uint32_t counts_per_rev;       /**< x4 counts, 1 .. 65536 (16-bit timer)
+                                        or 1 .. 2^32-1 with counter_32bit */
+    bool counter_32bit;            /**< p_tim is TIM2 or TIM5 */
+    uint8_t input_filter;          /**< ICxF 0..15 on TI1 and TI2 */
+    bool invert;                   /**< count the other way (CC1P) */
+    const mc_hal_tick_t *p_tick;   /**< timestamps; NULL: 0 */
+} mc_f405_encoder_config_t;
+
+typedef struct mc_f405_encoder {
+    mc_f405_encoder_config_t cfg;
+    volatile bool index_seen;
+    mc_hal_encoder_t dev;
+} mc_f405_encoder_t;
+
+/** @return 0; -EINVAL NULL, counts_per_rev out of range, filter > 15. */
+int mc_f405_encoder_init(mc_f405_encoder_t *p_drv,
+                         const mc_f405_encoder_config_t *p_cfg);
+
+/** Index pulse seen (call from its EXTI ISR): counter to 0, index flag. */
+void mc_f405_encoder_index_isr(mc_f405_encoder_t *p_drv);
+
+/* ======================================================================== */
+/* tick: 32-bit timer                                                        */
+/* ======================================================================== */
+
+typedef struct mc_f405_tick_config {
+    mc_f405_tim_regs_t *p_tim;   /**< TIM2 or TIM5 (32-bit counter) */
+    uint32_t tim_clk_hz;         /**< 84e6 (APB1 timer clock) */
+    uint32_t prescaler;          /**< PSC: tick = tim_clk_hz / (PSC + 1) */
+} mc_f405_tick_config_t;
+
+typedef struct mc_f405_tick {
+    mc_f405_tick_config_t cfg;
+    uint32_t freq_hz;
+    mc_hal_tick_t dev;
+} mc_f405_tick_t;
+
+/** @return 0; -EINVAL NULL, zero clock, prescaler > 0xFFFF. */
+int mc_f405_tick_init(mc_f405_tick_t *p_drv, const mc_f405_tick_config_t *p_cfg);
+
+/* ======================================================================== */
+/* can: bxCAN                                                               */
+/* ======================================================================== */
+
+/** Software rx ring length [frames] (used with rx_irq). */
+#define MC_F405_CAN_RX_RING_LEN 16u
+/** Polls of MSR.INAK before init gives up (-EIO). */
+#define MC_F405_CAN_INIT_POLLS 100000u
+
+/** Accept a frame when (frame id & mask) == (id & mask), same id type. */
+typedef struct mc_f405_can_filter {
+    uint32_t id;
+    uint32_t mask;
+    bool ext;          /**< 29-bit identifiers (else 11-bit) */
+} mc_f405_can_filter_t;
+
+typedef struct mc_f405_can_config {
+    mc_f405_can_regs_t *p_can;        /**< CAN1 (owns the filter banks) */
+    uint32_t pclk_hz;                 /**< APB1 clock, 42e6 */
+    uint32_t bitrate_bps;             /**< e.g. 500000, 1000000 */
+    uint16_t sample_point_permille;   /**< wanted sample point, 500..950 */
+    uint8_t sjw_tq;                   /**< resync jump width 1..4 tq */
+    bool auto_bus_off_recovery;       /**< ABOM */
+    bool no_auto_retransmit;          /**< NART */
+    const mc_f405_can_filter_t *p_filters; /**< NULL/0: accept every frame */
+    uint8_t n_filters;                /**< 0 .. 28 - filter_bank_start */
+    uint8_t filter_bank_start;        /**< first bank (0 for CAN1) */
+    bool rx_irq;                      /**< FIFO 0 drained by
+                                           mc_f405_can_rx_isr(); receive
+                                           then only pops the ring */
+    const mc_hal_tick_t *p_tick;      /**< rx timestamps; NULL: 0 */
+} mc_f405_can_config_t;
+
+typedef struct mc_f405_can {
+    mc_f405_can_config_t cfg;
+    uint32_t btr;
+    mc_hal_can_frame_t ring[MC_F405_CAN_RX_RING_LEN];
+    volatile uint32_t ring_head;     /**< written by the consumer only */
+    volatile uint32_t ring_tail;     /**< written by the producer only */
+    volatile uint32_t rx_overrun_count;
+    mc_hal_can_t dev;
+} mc_f405_can_t;
+
+/**
+ * Bit timing register value for a bit rate (RM0090 §32.7.7):
+ * bit = (1 + BS1 + BS2) tq, tq = (BRP + 1) / pclk. Searches the prescalers
+ * that give an exact bit rate with 8..25 tq per bit, BS1 1..16, BS2 1..8,
+ * SJW <= BS2, and keeps the one whose sample point (1 + BS1) / N is nearest
+ * to sample_point_permille (on a tie the one with more tq).
+ * @return 0 and *p_btr; -EINVAL no exact setting or bad argument.
+ */
+int mc_f405_can_bit_timing(uint32_t pclk_hz, uint32_t bitrate_bps,
+                           uint16_t sample_point_permille, uint8_t sjw_tq,
+                           uint32_t *p_btr);
+
+/**
+ * Enter initialisation mode (wait for MSR.INAK), program BTR, filters (32-bit
+ * mask mode, FIFO 0), MCR options (TXFP: frames leave in request order),
+ * then request normal mode (not waited for: it needs 11 recessive bits).
+ * @return 0; -EINVAL bad config (nothing written); -EIO INAK never set.
+ */
+int mc_f405_can_init(mc_f405_can_t *p_drv, const mc_f405_can_config_t *p_cfg);
+
+/** CAN1 RX0 ISR body (rx_irq mode): move FIFO 0 into the ring. */
+void mc_f405_can_rx_isr(mc_f405_can_t *p_drv);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_F405_HAL_H */

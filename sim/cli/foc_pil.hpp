@@ -1,0 +1,62 @@
+// Processor-in-the-loop twin of FocSil: the same plant and board
+// (hal_host::PmsmBoard with the paper-002 test motor) on the host, the drive
+// application on the emulated STM32F405 (QEMU netduinoplus2, image
+// mc_stm32f405_pil: firmware/targets/stm32f405 with board_pil.c), the two
+// exchanging one frame each way per PWM period over USART1.
+//
+// Per period, as FocSil::step() does it in one process:
+//   board.sample()  -> MEAS (the board's adc/encoder/fault/tick HAL answers,
+//                      plus this period's commands) -> target: fast step in
+//                      the ADC interrupt, slow step in PendSV when due
+//   OUT             -> the duties, enable and gate kills the drive asked for,
+//                      applied to the board -> board.advance()
+// The drive configuration is FocSil's (sent as CFG at start-up), so the SIL
+// and PIL runs of one FocSilOptions are the same experiment.
+#pragma once
+
+#include <functional>
+#include <memory>
+
+#include "foc_sil.hpp"
+#include "hal_host/pil_link.hpp"
+extern "C" {
+#include "mc_pil_frame.h"
+}
+
+namespace mcsim {
+
+// What the scenario asks of the drive in one period.
+struct PilCommand {
+  bool set_mode = false;
+  mc_drive_mode_t mode = MC_DRIVE_MODE_IDLE;
+  bool set_refs = false;
+  float id_ref_a = 0.0f;
+  float iq_ref_a = 0.0f;
+};
+
+class FocPil {
+ public:
+  // tweak_cfg (optional) edits the drive configuration before it is sent
+  // (tests use it to show that a one-ulp change is detected). Throws
+  // std::runtime_error if QEMU fails or the target refuses the config.
+  FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
+         const std::function<void(mc_drive_cfg_t&)>& tweak_cfg = nullptr);
+
+  // One PWM period (see the file comment). Throws std::runtime_error on a
+  // link error or a frame out of sequence.
+  const mc_pil_out_t& step(const PilCommand& cmd);
+
+  hal_host::PmsmBoard& board() { return sil_.board(); }
+  const mc_pil_ready_t& ready() const { return ready_; }
+  // Stop the target; returns its exit status (0 = clean END).
+  int finish() { return link_.finish(0); }
+
+ private:
+  FocSil sil_;  // owns the board; its own drive instance stays idle
+  hal_host::PilLink link_;
+  mc_pil_ready_t ready_{};
+  mc_pil_out_t out_{};
+  uint32_t seq_ = 0;
+};
+
+}  // namespace mcsim

@@ -1,0 +1,135 @@
+// PIL link frames (firmware/targets/pil/mc_pil_frame.c): round trips keep
+// every bit (NaN payloads, -0, extremes), and corrupt or foreign frames are
+// refused with their specific error, output untouched.
+#include <gtest/gtest.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+extern "C" {
+#include "mc_pil_frame.h"
+}
+
+namespace {
+
+template <class T>
+bool same_bits(const T& a, const T& b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+float nan_with_payload() {
+  const uint32_t b = 0xFFA12345u;  // negative NaN with a payload
+  float f;
+  std::memcpy(&f, &b, sizeof f);
+  return f;
+}
+
+TEST(PilFrame, Crc16IsCcittFalse) {
+  const char* s = "123456789";
+  EXPECT_EQ(mc_pil_crc16(reinterpret_cast<const uint8_t*>(s), 9), 0x29B1u);  // catalogue check value
+}
+
+TEST(PilFrame, MeasRoundTripKeepsEveryBit) {
+  mc_pil_meas_t m{};
+  m.seq = 0xDEADBEEFu;
+  m.adc_rc = -EAGAIN;
+  m.adc = {nan_with_payload(), -0.0f, std::numeric_limits<float>::denorm_min(), 200.0f,
+           MC_HAL_ADC_VALID_ALL, 123u, 456u};
+  m.enc_rc = 0;
+  m.enc = {8191u, 8192u, MC_HAL_ENCODER_FLAG_ALL, 99u};
+  m.fault_rc = -EIO;
+  m.fault = {1u, 3u, true};
+  m.tick_ticks = 0xFFFFFFFFu;
+  m.tick_hz = 10000000u;
+  m.cmd_flags = MC_PIL_CMD_SET_MODE | MC_PIL_CMD_SET_REFS;
+  m.mode = MC_DRIVE_MODE_CURRENT;
+  m.id_ref_a = -1.0f;
+  m.iq_ref_a = std::numeric_limits<float>::infinity();
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  const size_t n = mc_pil_encode_meas(&m, buf, sizeof buf);
+  ASSERT_EQ(n, 3u + 4u * 24u + 2u);
+  EXPECT_EQ(mc_pil_frame_len(buf, 3), n);
+  EXPECT_EQ(mc_pil_frame_type(buf, n), MC_PIL_TYPE_MEAS);
+  mc_pil_meas_t d{};
+  ASSERT_EQ(mc_pil_decode_meas(buf, n, &d), MC_PIL_OK);
+  EXPECT_EQ(d.seq, m.seq);
+  EXPECT_EQ(d.adc_rc, m.adc_rc);
+  EXPECT_TRUE(same_bits(d.adc.ia_a, m.adc.ia_a));
+  EXPECT_TRUE(same_bits(d.adc.ib_a, m.adc.ib_a));
+  EXPECT_TRUE(same_bits(d.adc.ic_a, m.adc.ic_a));
+  EXPECT_EQ(d.adc.seq, 456u);
+  EXPECT_EQ(d.enc.count, 8191u);
+  EXPECT_EQ(d.fault_rc, -EIO);
+  EXPECT_TRUE(d.fault.gate_killed);
+  EXPECT_EQ(d.tick_ticks, 0xFFFFFFFFu);
+  EXPECT_EQ(d.tick_hz, 10000000u);
+  EXPECT_EQ(d.cmd_flags, m.cmd_flags);
+  EXPECT_TRUE(same_bits(d.iq_ref_a, m.iq_ref_a));
+}
+
+TEST(PilFrame, OutAndCfgRoundTrip) {
+  mc_pil_out_t o{};
+  o.seq = 7u;
+  o.duty_a = 0.25f;
+  o.duty_b = nan_with_payload();
+  o.cmd_rc = -EBUSY;
+  o.ipsr_fast = 34u;
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  size_t n = mc_pil_encode_out(&o, buf, sizeof buf);
+  mc_pil_out_t od{};
+  ASSERT_EQ(mc_pil_decode_out(buf, n, &od), MC_PIL_OK);
+  EXPECT_TRUE(same_bits(od, o));
+
+  mc_drive_cfg_t c{};
+  c.foc.r_ohm = 0.675f;
+  c.foc.kp_q_v_per_a = std::nextafter(1.4326f, 2.0f);
+  c.foc.aw = MC_PI_AW_BACK_CALC;
+  c.foc.limit_mode = MC_SVPWM_LIMIT_HEXAGON;
+  c.foc.decouple = true;
+  c.pole_pairs = 4u;
+  c.slow_loop_div = 20u;
+  c.vbus_max_v = 300.0f;
+  n = mc_pil_encode_cfg(&c, buf, sizeof buf);
+  mc_drive_cfg_t cd{};
+  ASSERT_EQ(mc_pil_decode_cfg(buf, n, &cd), MC_PIL_OK);
+  EXPECT_TRUE(same_bits(cd.foc.kp_q_v_per_a, c.foc.kp_q_v_per_a));
+  EXPECT_EQ(cd.foc.aw, MC_PI_AW_BACK_CALC);
+  EXPECT_EQ(cd.foc.limit_mode, MC_SVPWM_LIMIT_HEXAGON);
+  EXPECT_TRUE(cd.foc.decouple);
+  EXPECT_EQ(cd.pole_pairs, 4u);
+  EXPECT_EQ(cd.slow_loop_div, 20u);
+  EXPECT_EQ(cd.vbus_max_v, 300.0f);
+}
+
+TEST(PilFrame, CorruptOrForeignFramesAreRefusedAndOutputUntouched) {
+  mc_pil_out_t o{};
+  o.seq = 1u;
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  const size_t n = mc_pil_encode_out(&o, buf, sizeof buf);
+  mc_pil_out_t d{};
+  d.seq = 42u;
+
+  std::vector<uint8_t> bad(buf, buf + n);
+  bad[10] ^= 0x01u;  // one bit of the payload
+  EXPECT_EQ(mc_pil_decode_out(bad.data(), bad.size(), &d), MC_PIL_ERR_CRC);
+  bad.assign(buf, buf + n);
+  bad[0] = 0x5A;
+  EXPECT_EQ(mc_pil_decode_out(bad.data(), bad.size(), &d), MC_PIL_ERR_SYNC);
+  EXPECT_EQ(mc_pil_decode_out(buf, n - 1, &d), MC_PIL_ERR_LEN);
+  mc_pil_meas_t m{};
+  EXPECT_EQ(mc_pil_decode_meas(buf, n, &m), MC_PIL_ERR_TYPE);
+  EXPECT_EQ(mc_pil_decode_out(buf, n, nullptr), MC_PIL_ERR_ARG);
+  EXPECT_EQ(d.seq, 42u) << "output written on error";
+
+  EXPECT_EQ(mc_pil_encode_out(&o, buf, n - 1), 0u) << "buffer one byte short";
+  EXPECT_EQ(mc_pil_encode_out(&o, nullptr, 0), 0u);
+  uint8_t hello[5];
+  ASSERT_EQ(mc_pil_encode_hello(hello, sizeof hello), 5u);
+  EXPECT_EQ(mc_pil_check_hello(hello, 5), MC_PIL_OK);
+  EXPECT_EQ(mc_pil_check_hello(buf, n), MC_PIL_ERR_TYPE);
+}
+
+}  // namespace
