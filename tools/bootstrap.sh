@@ -23,6 +23,7 @@ APT_PACKAGES=(
   can-utils
   cppcheck clang-tidy
   clang-14 libfuzzer-14-dev
+  qemu-system-x86 busybox-static linux-image-amd64 cpio kmod iproute2
   python3 python3-venv
 )
 missing=()
@@ -52,6 +53,11 @@ if [ ! -x "$VENV/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; 
 fi
 export PATH=$VENV/bin:$PATH
 export MC_PYTHON=$VENV/bin/python
+
+# ---- SocketCAN VM (this kernel may lack CAN; see tools/vm/mc_vm.sh) ---------
+# Builds and caches a busybox initramfs with Debian's can/vcan modules in
+# .cache/vm; a no-op when the cached image is current.
+"$ROOT/tools/vm/mc_vm.sh" prepare
 
 JOBS=$(nproc)
 

@@ -27,6 +27,17 @@ for s in foc-current-step pmsm-open-loop-step stepper-constant-voltage; do
   "$PY" tools/plot/mcplot.py "$OUT/$s.csv" >/dev/null
 done
 
+log "CAN telemetry: the SIL drive streams its DBC-described frames; commands from a script"
+mkdir -p "$OUT/can"
+if tools/vm/mc_vm.sh native >/dev/null 2>&1; then
+  log "  (this kernel has vcan; 'ctest -L can' also runs the live vcan0 test)"
+fi
+MCSIM_CAN_LOG="$OUT/can/can.log" MCSIM_CAN_CMDS=tools/can/demo_commands.log \
+  "$MCSIM" run can-telemetry --out "$OUT/can" >/dev/null
+"$PY" tools/can/mc_can.py stats "$OUT/can/can.log"
+"$PY" tools/can/mc_can.py decode "$OUT/can/can.log" --out "$OUT/can/decoded" >/dev/null
+"$PY" tools/can/mc_can.py plot "$OUT/can/decoded/CURRENTS.csv" >/dev/null
+
 log "SIL benchmark (closed-loop FOC, 20 kHz PWM, 4 RK4 sub-steps, one core)"
 "$MCSIM" bench | tee "$OUT/bench.json"
 

@@ -29,11 +29,13 @@ int cmd_bench(const std::vector<std::string>& args) {
   mc_drive_t& d = sil.drive();
   if (mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT) != 0) throw std::runtime_error("mode refused");
   const long n = std::lround(sim_s * o.pwm_hz);
-  // A load that keeps the loop busy: a square-wave q current around a
-  // slowly spinning rotor, so every kernel path (limits, decoupling) runs.
+  // A load that keeps the loop busy: a symmetric square-wave q current
+  // (+-2 A, 50 ms half-periods) swings the rotor between about +-66 rad/s,
+  // so decoupling and the speed-dependent paths run, inside the drive's
+  // over-speed limit.
   const auto t0 = std::chrono::steady_clock::now();
   for (long k = 0; k < n; ++k) {
-    const float iq = ((k / 2000) % 2 == 0) ? 2.0f : -1.0f;
+    const float iq = ((k / 1000) % 2 == 0) ? 2.0f : -2.0f;
     (void)mc_drive_set_current_ref(&d, -0.5f, iq);
     sil.step();
   }

@@ -1,0 +1,339 @@
+/**
+ * @file mc_can_cmd.c
+ * @brief CAN command handler: see mc_can_cmd.h.
+ */
+#include "mc_can_cmd.h"
+
+#include <stddef.h>
+
+#include "math/mc_math.h"
+
+#define TIMEOUT_MAX_S 60.0f
+
+static bool positive_finite(float x)
+{
+    return mc_isfinite_f32(x) && (x > 0.0f);
+}
+
+static bool mode_usable(mc_drive_mode_t m)
+{
+    return (m == MC_DRIVE_MODE_CURRENT) || (m == MC_DRIVE_MODE_CTRL);
+}
+
+uint32_t mc_can_cmd_init(mc_can_cmd_t *c, const mc_can_cmd_cfg_t *cfg, mc_drive_t *drive,
+                         mc_telemetry_t *tm)
+{
+    uint32_t err = MC_CAN_CMD_CFG_OK;
+    float ticks = 0.0f;
+    if ((c == NULL) || (cfg == NULL) || (drive == NULL)) {
+        return MC_CAN_CMD_CFG_ERR_NULL;
+    }
+    if ((uint32_t)cfg->node_id > MC_CAN_NODE_ID_MAX) {
+        err |= MC_CAN_CMD_CFG_ERR_NODE;
+    }
+    if ((cfg->tick_hz == 0u) || (cfg->tick_hz > MC_TM_TICK_MAX_HZ)) {
+        err |= MC_CAN_CMD_CFG_ERR_TICK;
+    } else {
+        ticks = cfg->timeout_s * (float)cfg->tick_hz;
+        if (!mc_isfinite_f32(cfg->timeout_s) || !(ticks >= 1.0f) ||
+            !(cfg->timeout_s <= TIMEOUT_MAX_S)) {
+            err |= MC_CAN_CMD_CFG_ERR_TIMEOUT;
+        }
+    }
+    if (!positive_finite(cfg->stop_ramp_a_per_s) || !positive_finite(cfg->stop_decel_rad_s2)) {
+        err |= MC_CAN_CMD_CFG_ERR_RAMP;
+    }
+    if (!positive_finite(cfg->speed_max_rad_s)) {
+        err |= MC_CAN_CMD_CFG_ERR_SPEED;
+    }
+    if (((cfg->set_speed_ref != NULL) && !mode_usable(cfg->speed_drive_mode)) ||
+        ((cfg->set_position_ref != NULL) && !mode_usable(cfg->position_drive_mode))) {
+        err |= MC_CAN_CMD_CFG_ERR_MODE;
+    }
+    if (err != MC_CAN_CMD_CFG_OK) {
+        return err;
+    }
+    {
+        const mc_can_cmd_t z = {0};
+        *c = z;
+    }
+    c->cfg = *cfg;
+    c->drive = drive;
+    c->tm = tm;
+    c->timeout_ticks = (uint32_t)(ticks + 0.5f);
+    c->control_mode = (uint8_t)MC_CAN_CTRL_NONE;
+    c->stop_reason = (uint8_t)MC_CAN_STOP_NONE;
+    return MC_CAN_CMD_CFG_OK;
+}
+
+static void end_run(mc_can_cmd_t *c, uint8_t reason)
+{
+    (void)mc_drive_set_mode(c->drive, MC_DRIVE_MODE_IDLE);
+    c->enabled = false;
+    c->stopping = false;
+    c->stop_reason = reason;
+}
+
+static mc_can_err_t do_enable(mc_can_cmd_t *c, bool on)
+{
+    mc_drive_mode_t mode;
+    if (!on) {
+        if (c->enabled) {
+            end_run(c, (uint8_t)MC_CAN_STOP_DISABLE_CMD);
+        } else {
+            (void)mc_drive_set_mode(c->drive, MC_DRIVE_MODE_IDLE);
+        }
+        return MC_CAN_ERR_NONE;
+    }
+    if (c->stopping) {
+        return MC_CAN_ERR_MODE;
+    }
+    if (c->enabled) {
+        return MC_CAN_ERR_NONE;
+    }
+    switch (c->control_mode) {
+    case MC_CAN_CTRL_CURRENT:
+        mode = MC_DRIVE_MODE_CURRENT;
+        break;
+    case MC_CAN_CTRL_SPEED:
+        mode = c->cfg.speed_drive_mode;
+        break;
+    case MC_CAN_CTRL_POSITION:
+        mode = c->cfg.position_drive_mode;
+        break;
+    default:
+        return MC_CAN_ERR_MODE; /* no control mode selected */
+    }
+    if (mc_drive_set_mode(c->drive, mode) != 0) {
+        return MC_CAN_ERR_REFUSED;
+    }
+    c->enabled = true;
+    c->stop_reason = (uint8_t)MC_CAN_STOP_NONE;
+    return MC_CAN_ERR_NONE;
+}
+
+static mc_can_err_t do_control_mode(mc_can_cmd_t *c, uint32_t mode)
+{
+    if (c->enabled || c->stopping) {
+        return MC_CAN_ERR_MODE;
+    }
+    if (((mode == MC_CAN_CTRL_SPEED) && (c->cfg.set_speed_ref == NULL)) ||
+        ((mode == MC_CAN_CTRL_POSITION) && (c->cfg.set_position_ref == NULL))) {
+        return MC_CAN_ERR_UNSUPPORTED;
+    }
+    c->control_mode = (uint8_t)mode;
+    return MC_CAN_ERR_NONE;
+}
+
+static mc_can_err_t do_speed_ref(mc_can_cmd_t *c, float w)
+{
+    if ((c->control_mode != MC_CAN_CTRL_SPEED) || c->stopping) {
+        return MC_CAN_ERR_MODE;
+    }
+    {
+        /* half a raw step of slack: the limit itself, sent as the nearest
+         * raw value, must not be refused for float rounding of the scale */
+        const mc_can_message_t *m = &mc_can_messages[MC_CAN_MSG_SET_SPEED_REF];
+        const float half_step = 0.5f * m->signals[MC_CAN_SET_SPEED_REF_OMEGA_REF_RAD_S].scale;
+        if (mc_abs_f32(w) > c->cfg.speed_max_rad_s + half_step) {
+            return MC_CAN_ERR_RANGE;
+        }
+    }
+    if (c->cfg.set_speed_ref(c->cfg.hook_ctx, w) != 0) {
+        return MC_CAN_ERR_REFUSED;
+    }
+    c->omega_ref_rad_s = w;
+    return MC_CAN_ERR_NONE;
+}
+
+static mc_can_err_t do_position_ref(mc_can_cmd_t *c, float th)
+{
+    if ((c->control_mode != MC_CAN_CTRL_POSITION) || c->stopping) {
+        return MC_CAN_ERR_MODE;
+    }
+    if (c->cfg.set_position_ref(c->cfg.hook_ctx, th) != 0) {
+        return MC_CAN_ERR_REFUSED;
+    }
+    c->theta_ref_rad = th;
+    return MC_CAN_ERR_NONE;
+}
+
+static mc_can_err_t do_tm_rate(mc_can_cmd_t *c, float slot_cmd, float rate)
+{
+    uint32_t err;
+    if (c->tm == NULL) {
+        return MC_CAN_ERR_UNSUPPORTED;
+    }
+    /* the DBC range limits tm_cmd to 1..8 and rate to 0..1000 */
+    err = mc_telemetry_set_rate(c->tm, (uint32_t)slot_cmd - 1u, (uint16_t)rate);
+    if (err == MC_TM_CFG_OK) {
+        return MC_CAN_ERR_NONE;
+    }
+    return ((err & MC_TM_CFG_ERR_LOAD) != 0u) ? MC_CAN_ERR_BUDGET : MC_CAN_ERR_RANGE;
+}
+
+static mc_can_err_t dispatch(mc_can_cmd_t *c, uint32_t msg, const float *v)
+{
+    switch (msg) {
+    case MC_CAN_MSG_SET_ENABLE:
+        return do_enable(c, v[MC_CAN_SET_ENABLE_ENABLE] > 0.5f);
+    case MC_CAN_MSG_SET_CONTROL_MODE:
+        return do_control_mode(c, (uint32_t)v[MC_CAN_SET_CONTROL_MODE_CONTROL_MODE]);
+    case MC_CAN_MSG_SET_CURRENT_REF:
+        if ((c->control_mode != MC_CAN_CTRL_CURRENT) || c->stopping) {
+            return MC_CAN_ERR_MODE;
+        }
+        if (mc_drive_set_current_ref(c->drive, v[MC_CAN_SET_CURRENT_REF_I_D_REF_A],
+                                     v[MC_CAN_SET_CURRENT_REF_I_Q_REF_A]) != 0) {
+            return MC_CAN_ERR_RANGE; /* above the drive's i_max_a */
+        }
+        return MC_CAN_ERR_NONE;
+    case MC_CAN_MSG_SET_SPEED_REF:
+        return do_speed_ref(c, v[MC_CAN_SET_SPEED_REF_OMEGA_REF_RAD_S]);
+    case MC_CAN_MSG_SET_POSITION_REF:
+        return do_position_ref(c, v[MC_CAN_SET_POSITION_REF_THETA_REF_RAD]);
+    case MC_CAN_MSG_CLEAR_FAULTS:
+        if (c->enabled || c->stopping) {
+            return MC_CAN_ERR_MODE;
+        }
+        return (mc_drive_clear_faults(c->drive) == 0) ? MC_CAN_ERR_NONE : MC_CAN_ERR_REFUSED;
+    case MC_CAN_MSG_SET_TM_RATE:
+        return do_tm_rate(c, v[MC_CAN_SET_TM_RATE_TM_CMD], v[MC_CAN_SET_TM_RATE_RATE_HZ]);
+    case MC_CAN_MSG_HOST_HEARTBEAT:
+        return MC_CAN_ERR_NONE;
+    default:
+        return MC_CAN_ERR_UNKNOWN_CMD;
+    }
+}
+
+static void reply_error(mc_can_cmd_t *c, const mc_hal_can_t *can, uint32_t cmd, uint32_t len,
+                        mc_can_err_t e)
+{
+    float v[MC_CAN_CMD_ERROR_NSIG];
+    mc_hal_can_frame_t f;
+    c->last_error = (uint8_t)e;
+    c->last_error_cmd = (uint8_t)cmd;
+    c->rx_rejected++;
+    if (can == NULL) {
+        return;
+    }
+    v[MC_CAN_CMD_ERROR_REJECTED_CMD] = (float)cmd;
+    v[MC_CAN_CMD_ERROR_ERROR] = (float)(uint32_t)e;
+    v[MC_CAN_CMD_ERROR_RX_LEN] = (float)len;
+    v[MC_CAN_CMD_ERROR_SEQ] = (float)c->err_seq;
+    c->err_seq = (uint8_t)(c->err_seq + 1u);
+    if ((mc_can_proto_pack(MC_CAN_MSG_CMD_ERROR, c->cfg.node_id, v, MC_CAN_CMD_ERROR_NSIG, &f) !=
+         MC_CAN_ERR_NONE) ||
+        (mc_hal_can_send(can, &f) != 0)) {
+        c->reply_dropped++;
+    }
+}
+
+mc_can_err_t mc_can_cmd_handle(mc_can_cmd_t *c, const mc_hal_can_frame_t *p_frame,
+                               const mc_hal_can_t *can)
+{
+    float v[MC_CAN_NSIG_MAX] = {0.0f};
+    uint32_t msg = MC_CAN_MSG_COUNT;
+    uint32_t cmd;
+    mc_can_err_t e;
+    if ((c == NULL) || (p_frame == NULL)) {
+        return MC_CAN_ERR_ARG;
+    }
+    /* our identifiers are 11-bit: an extended frame belongs to someone else */
+    if (((p_frame->flags & MC_HAL_CAN_FLAG_EXT) != 0u) ||
+        (mc_can_id_node(p_frame->id) != (uint32_t)c->cfg.node_id) ||
+        (p_frame->id > MC_HAL_CAN_STD_ID_MAX)) {
+        return MC_CAN_ERR_IGNORED;
+    }
+    cmd = mc_can_id_cmd(p_frame->id);
+    e = mc_can_proto_unpack(p_frame, &msg, v, MC_CAN_NSIG_MAX);
+    if ((e == MC_CAN_ERR_NONE) && (mc_can_messages[msg].dir != (uint8_t)MC_CAN_DIR_RX)) {
+        e = MC_CAN_ERR_UNKNOWN_CMD; /* a telemetry id sent to us */
+    }
+    if (e == MC_CAN_ERR_NONE) {
+        e = dispatch(c, msg, v);
+    }
+    if (e != MC_CAN_ERR_NONE) {
+        reply_error(c, can, cmd, p_frame->len, e);
+        return e;
+    }
+    c->rx_accepted++;
+    c->ticks_since_cmd = 0u;
+    return MC_CAN_ERR_NONE;
+}
+
+uint32_t mc_can_cmd_poll(mc_can_cmd_t *c, const mc_hal_can_t *can, uint32_t max_frames)
+{
+    uint32_t n = 0u;
+    mc_hal_can_frame_t f;
+    if ((c == NULL) || (can == NULL)) {
+        return 0u;
+    }
+    while ((n < max_frames) && (mc_hal_can_receive(can, &f) == 0)) {
+        (void)mc_can_cmd_handle(c, &f, can);
+        n++;
+    }
+    return n;
+}
+
+static float toward_zero(float x, float step)
+{
+    if (x > step) {
+        return x - step;
+    }
+    if (x < -step) {
+        return x + step;
+    }
+    return 0.0f;
+}
+
+static void stop_step(mc_can_cmd_t *c)
+{
+    mc_drive_t *d = c->drive;
+    const float dt = 1.0f / (float)c->cfg.tick_hz;
+    if (c->control_mode == MC_CAN_CTRL_CURRENT && d->mode == MC_DRIVE_MODE_CURRENT) {
+        const float step = c->cfg.stop_ramp_a_per_s * dt;
+        const float id = toward_zero(d->id_ref_a, step);
+        const float iq = toward_zero(d->iq_ref_a, step);
+        /* smaller in magnitude than accepted references: cannot be refused */
+        (void)mc_drive_set_current_ref(d, id, iq);
+        if ((id == 0.0f) && (iq == 0.0f)) {
+            end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
+        }
+        return;
+    }
+    if (c->control_mode == MC_CAN_CTRL_SPEED) {
+        const float w = toward_zero(c->omega_ref_rad_s, c->cfg.stop_decel_rad_s2 * dt);
+        if ((c->cfg.set_speed_ref(c->cfg.hook_ctx, w) != 0) || (w == 0.0f)) {
+            c->omega_ref_rad_s = w;
+            end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
+            return;
+        }
+        c->omega_ref_rad_s = w;
+        return;
+    }
+    end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT); /* POSITION, or the mode changed */
+}
+
+void mc_can_cmd_step(mc_can_cmd_t *c)
+{
+    if (c == NULL) {
+        return;
+    }
+    if (c->ticks_since_cmd < 0xFFFFFFFFu) {
+        c->ticks_since_cmd++;
+    }
+    if (!c->enabled) {
+        return;
+    }
+    if (c->drive->mode == MC_DRIVE_MODE_FAULT) {
+        end_run(c, (uint8_t)MC_CAN_STOP_FAULT);
+        return;
+    }
+    if (!c->stopping && (c->ticks_since_cmd >= c->timeout_ticks)) {
+        c->stopping = true;
+    }
+    if (c->stopping) {
+        stop_step(c);
+    }
+}

@@ -1,0 +1,142 @@
+/**
+ * @file mc_can_cmd.h
+ * @brief CAN command handler: validates and applies the commands of
+ *        tools/can/motordrive.dbc, replies to a rejected one, and stops the
+ *        drive safely when the host falls silent.
+ *
+ * Commands (host -> drive, id = node_id << 5 | cmd):
+ *   SET_ENABLE        1: enter the drive mode of the selected control mode;
+ *                     0: outputs off at once (IDLE), stop_reason DISABLE_CMD
+ *   SET_CONTROL_MODE  CURRENT, SPEED or POSITION; only while disabled; SPEED
+ *                     and POSITION need the application's setpoint hooks
+ *   SET_CURRENT_REF   id, iq references (control mode CURRENT)
+ *   SET_SPEED_REF     speed reference (SPEED), |w| <= speed_max_rad_s
+ *   SET_POSITION_REF  angle reference (POSITION), [0, 2 pi)
+ *   CLEAR_FAULTS      mc_drive_clear_faults(); not while enabled
+ *   SET_TM_RATE       one telemetry message's rate (bus budget checked)
+ *   HOST_HEARTBEAT    keep-alive
+ *
+ * Validation, in this order, before anything changes: format (classic data
+ * frame), known command, exact length, every signal in its DBC range, then
+ * the state (control mode, enabled, stopping) and the drive's own checks.
+ * A rejected command changes nothing; the drive answers with CMD_ERROR
+ * (rejected command id, error code, received length) and records it for
+ * the heartbeat. Frames for another node, extended frames and frames with
+ * telemetry ids of other nodes are ignored silently.
+ *
+ * Command timeout: while enabled, if no command is accepted for timeout_s
+ * (any accepted command counts, HOST_HEARTBEAT is the cheapest), the drive
+ * stops safely and reports stop_reason CMD_TIMEOUT:
+ *   CURRENT   both current references ramp to zero at stop_ramp_a_per_s,
+ *             then IDLE;
+ *   SPEED     the speed reference ramps to zero at stop_decel_rad_s2
+ *             through the application's hook, then IDLE;
+ *   POSITION  IDLE at once (a held position cannot be ramped from here).
+ * During the stop, setpoint and enable commands are refused (MODE);
+ * SET_ENABLE 0 ends it at once. A drive fault while enabled ends the run
+ * with stop_reason FAULT.
+ */
+#ifndef MC_CAN_CMD_H
+#define MC_CAN_CMD_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hal/can.h"
+#include "mc_can_proto.h"
+#include "mc_drive.h"
+#include "mc_telemetry.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* CAN control modes (DBC values of control_mode). */
+#define MC_CAN_CTRL_NONE     0u
+#define MC_CAN_CTRL_CURRENT  1u
+#define MC_CAN_CTRL_SPEED    2u
+#define MC_CAN_CTRL_POSITION 3u
+
+/* Stop reasons (DBC values of HEARTBEAT.stop_reason). */
+#define MC_CAN_STOP_NONE        0u
+#define MC_CAN_STOP_CMD_TIMEOUT 1u
+#define MC_CAN_STOP_DISABLE_CMD 2u
+#define MC_CAN_STOP_FAULT       3u
+
+/* Configuration errors (bits) of mc_can_cmd_init. */
+#define MC_CAN_CMD_CFG_OK          0u
+#define MC_CAN_CMD_CFG_ERR_NULL    (1u << 0) /**< NULL command state, cfg or drive */
+#define MC_CAN_CMD_CFG_ERR_NODE    (1u << 1) /**< node_id > 62 */
+#define MC_CAN_CMD_CFG_ERR_TICK    (1u << 2) /**< tick_hz 0 or > 100 kHz */
+#define MC_CAN_CMD_CFG_ERR_TIMEOUT (1u << 3) /**< timeout_s not in [1 tick, 60 s] */
+#define MC_CAN_CMD_CFG_ERR_RAMP    (1u << 4) /**< a stop ramp <= 0 or not finite */
+#define MC_CAN_CMD_CFG_ERR_SPEED   (1u << 5) /**< speed_max_rad_s <= 0 or not finite */
+#define MC_CAN_CMD_CFG_ERR_MODE    (1u << 6) /**< a hook without a usable drive mode */
+
+/** Setpoint hook of the application (speed loop, position loop): 0 to
+ *  accept, non-zero to refuse (the command is then REFUSED). */
+typedef int (*mc_can_cmd_ref_fn)(void *ctx, float ref);
+
+typedef struct {
+    uint8_t node_id;              /**< 0..62 */
+    uint32_t tick_hz;             /**< call rate of mc_can_cmd_step [Hz] */
+    float timeout_s;              /**< command timeout while enabled [s] */
+    float stop_ramp_a_per_s;      /**< current ramp of a safe stop [A/s] */
+    float stop_decel_rad_s2;      /**< speed ramp of a safe stop [rad/s^2] */
+    float speed_max_rad_s;        /**< largest |speed reference| [rad/s] */
+    mc_can_cmd_ref_fn set_speed_ref;    /**< NULL: SPEED unsupported */
+    mc_can_cmd_ref_fn set_position_ref; /**< NULL: POSITION unsupported */
+    void *hook_ctx;
+    mc_drive_mode_t speed_drive_mode;    /**< drive mode that runs the speed
+                                              loop (CTRL, or CURRENT if the
+                                              hook sets current references) */
+    mc_drive_mode_t position_drive_mode; /**< same for POSITION */
+} mc_can_cmd_cfg_t;
+
+typedef struct mc_can_cmd {
+    mc_can_cmd_cfg_t cfg;
+    mc_drive_t *drive;
+    mc_telemetry_t *tm;           /**< for SET_TM_RATE, or NULL */
+    uint32_t timeout_ticks;       /**< derived at init */
+    uint8_t control_mode;         /**< MC_CAN_CTRL_* */
+    bool enabled;
+    bool stopping;                /**< safe stop in progress */
+    uint8_t stop_reason;          /**< MC_CAN_STOP_* */
+    uint32_t ticks_since_cmd;     /**< steps since the last accepted command */
+    float omega_ref_rad_s;        /**< last accepted speed reference */
+    float theta_ref_rad;          /**< last accepted angle reference */
+    uint8_t last_error;           /**< mc_can_err_t of the last rejection */
+    uint8_t last_error_cmd;
+    uint8_t err_seq;              /**< sequence counter of CMD_ERROR */
+    uint32_t rx_accepted;
+    uint32_t rx_rejected;
+    uint32_t reply_dropped;       /**< CMD_ERROR frames the HAL refused */
+} mc_can_cmd_t;
+
+/** Validate cfg and initialise c (disabled, control mode NONE). tm may be
+ *  NULL (SET_TM_RATE is then UNSUPPORTED). Returns MC_CAN_CMD_CFG_* bits;
+ *  on error c is not changed. */
+uint32_t mc_can_cmd_init(mc_can_cmd_t *c, const mc_can_cmd_cfg_t *cfg, mc_drive_t *drive,
+                         mc_telemetry_t *tm);
+
+/**
+ * Handle one received frame; on rejection queue a CMD_ERROR reply on can
+ * (if can is not NULL).
+ * @return MC_CAN_ERR_NONE (applied), MC_CAN_ERR_IGNORED (not for this
+ *         node) or the rejection's code.
+ */
+mc_can_err_t mc_can_cmd_handle(mc_can_cmd_t *c, const mc_hal_can_frame_t *p_frame,
+                               const mc_hal_can_t *can);
+
+/** Receive and handle up to max_frames queued frames. Returns how many. */
+uint32_t mc_can_cmd_poll(mc_can_cmd_t *c, const mc_hal_can_t *can, uint32_t max_frames);
+
+/** Supervision at tick_hz (slow loop): command timeout, safe-stop ramp,
+ *  end of the run on a drive fault. */
+void mc_can_cmd_step(mc_can_cmd_t *c);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_CAN_CMD_H */

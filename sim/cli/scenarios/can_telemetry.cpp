@@ -1,0 +1,311 @@
+// Scenario can-telemetry: the FOC drive on the simulated board with the CAN
+// telemetry scheduler (firmware/app/mc_telemetry) and command handler
+// (firmware/app/mc_can_cmd) attached, as on the MCU's slow loop.
+//
+// Where the frames go (environment, since scenario parameters are numbers):
+//   MCSIM_CAN_IF=vcan0     a SocketCAN interface (hal_host::SocketCan):
+//                          telemetry out, commands in (cansend, mc_can.py);
+//   otherwise              the candump log MCSIM_CAN_LOG (default
+//                          ./can-telemetry.candump.log), time-stamped with
+//                          the simulated time, and commands from the
+//                          candump-format script MCSIM_CAN_CMDS if set.
+// With --set realtime=1 the loop is paced to the wall clock (needed when
+// people or scripts send commands on a live interface).
+//
+// The CSV has one row per slow-loop step: the values every telemetry
+// message carried (or would carry) at that step, as "<MESSAGE>.<signal>",
+// with the mask of the frames generated (tm_sent_mask, bit = slot) and of
+// those the HAL refused (tm_fail_mask), so a logger's decoded frames can be
+// matched one for one.
+//
+// SPEED control mode is served by a speed PI in this scenario (the
+// application's set_speed_ref hook) that writes the current references in
+// the drive's CURRENT mode; POSITION is not offered (UNSUPPORTED).
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "foc_sil.hpp"
+#include "hal_host/candump_log.hpp"
+#include "hal_host/socketcan.hpp"
+#include "scenario.hpp"
+extern "C" {
+#include "mc_can_cmd.h"
+#include "mc_can_proto.h"
+#include "mc_telemetry.h"
+}
+
+namespace mcsim {
+namespace {
+
+const char* const kSlotParam[MC_TM_COUNT] = {
+    "rate_heartbeat_hz", "rate_currents_hz", "rate_voltages_hz", "rate_speed_hz",
+    "rate_position_hz",  "rate_observer_hz", "rate_controller_hz", "rate_stepper_hz"};
+const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT", "CURRENTS", "VOLTAGES", "SPEED",
+                                            "POSITION",  "OBSERVER", "CONTROLLER", "STEPPER"};
+// Signal names per slot, in DBC order (checked against the generated
+// signal counts below; tests/can compares the CSV header with the DBC).
+const std::vector<std::vector<std::string>> kSlotSignals = {
+    {"mode", "control_mode", "enabled", "stopping", "stop_reason", "faults", "last_error",
+     "last_error_cmd", "seq"},
+    {"i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a", "seq"},
+    {"v_d_v", "v_q_v", "v_bus_v", "seq"},
+    {"omega_m_rad_s", "omega_ref_rad_s", "seq"},
+    {"theta_m_rad", "theta_ref_rad", "theta_e_rad", "seq"},
+    {"tau_l_hat_nm", "omega_hat_rad_s", "theta_hat_rad", "seq"},
+    {"nu_pu", "vartheta_pu", "seq"},
+    {"e1_rad", "e2_rad_s", "s1", "s2", "seq"}};
+
+std::string env_or(const char* name, const std::string& fallback) {
+  const char* v = std::getenv(name);
+  return (v != nullptr && *v != '\0') ? std::string(v) : fallback;
+}
+
+// Speed PI of the scenario's application: iq_ref from the speed error.
+struct SpeedLoop {
+  mc_drive_t* drive = nullptr;
+  float ref_rad_s = 0.0f;
+  float kp = 0.0f, ki_dt = 0.0f, integ_a = 0.0f, i_max_a = 0.0f;
+  void step() {
+    const float e = ref_rad_s - drive->tm.omega_m_rad_s;
+    integ_a = std::fmin(std::fmax(integ_a + ki_dt * e, -i_max_a), i_max_a);
+    const float iq = std::fmin(std::fmax(kp * e + integ_a, -i_max_a), i_max_a);
+    (void)mc_drive_set_current_ref(drive, 0.0f, iq);
+  }
+};
+
+int speed_hook(void* ctx, float ref) {
+  static_cast<SpeedLoop*>(ctx)->ref_rad_s = ref;
+  return 0;
+}
+
+void run_can_telemetry(RunContext& ctx) {
+  const auto& P = ctx.params;
+  FocSilOptions o;
+  o.pwm_hz = P.get("pwm_hz");
+  o.substeps = static_cast<int>(P.get("substeps"));
+  o.slow_loop_div = static_cast<unsigned>(P.get("slow_loop_div"));
+  o.J_kgm2 = P.get("J_kgm2");
+  o.load_nm = P.get("load_nm");
+  o.bw_rad_s = 2.0 * 3.14159265358979 * P.get("bw_hz");
+  o.speed_pll_bw_rad_s = P.get("speed_pll_bw_rad_s");
+  FocSil sil(o);
+  mc_drive_t& d = sil.drive();
+  const double tick_hz_d = o.pwm_hz / o.slow_loop_div;
+  if (std::fabs(tick_hz_d - std::round(tick_hz_d)) > 1e-9) {
+    throw UsageError("pwm_hz / slow_loop_div must be a whole number of hertz");
+  }
+  const uint32_t tick_hz = static_cast<uint32_t>(std::lround(tick_hz_d));
+  const uint8_t node = static_cast<uint8_t>(P.get("node_id"));
+
+  // CAN: a SocketCAN interface, or a candump log (and a command script).
+  hal_host::PmsmBoard& board = sil.board();
+  auto ticks = [&board]() {
+    uint32_t t = 0;
+    (void)board.tick_read(&t);
+    return t;
+  };
+  const std::string iface = env_or("MCSIM_CAN_IF", "");
+  std::unique_ptr<hal_host::SocketCan> sock;
+  std::unique_ptr<hal_host::CandumpLogCan> logcan;
+  const mc_hal_can_t* can = nullptr;
+  if (!iface.empty()) {
+    try {
+      sock = std::make_unique<hal_host::SocketCan>(iface, false, ticks);
+    } catch (const std::system_error& e) {
+      throw UsageError(std::string(e.what()) + " (is the interface up? see tools/vm for a VM with vcan)");
+    }
+    can = sock->hal();
+  } else {
+    const std::string log = env_or("MCSIM_CAN_LOG", "can-telemetry.candump.log");
+    try {
+      logcan = std::make_unique<hal_host::CandumpLogCan>(
+          log, env_or("MCSIM_CAN_LOG_IFACE", "can0"), [&board]() { return board.t_s(); },
+          env_or("MCSIM_CAN_CMDS", ""), ticks);
+    } catch (const std::runtime_error& e) {
+      throw UsageError(e.what());
+    }
+    can = logcan->hal();
+  }
+
+  mc_telemetry_cfg_t tc{};
+  tc.node_id = node;
+  tc.bitrate_bps = static_cast<uint32_t>(P.get("bitrate_kbps") * 1000.0);
+  tc.bus_budget_frac = static_cast<float>(P.get("budget_pct") / 100.0);
+  tc.tick_hz = tick_hz;
+  for (int i = 0; i < MC_TM_COUNT; ++i) tc.rate_hz[i] = static_cast<uint16_t>(P.get(kSlotParam[i]));
+  mc_telemetry_t tm{};
+  const uint32_t terr = mc_telemetry_init(&tm, &tc);
+  if (terr != MC_TM_CFG_OK) {
+    throw UsageError("telemetry configuration refused (MC_TM_CFG bits 0x" + std::to_string(terr) +
+                     "), bus load " + std::to_string(100.0 * mc_telemetry_bus_load(&tc)) +
+                     " % of " + std::to_string(tc.bitrate_bps) + " bit/s, budget " +
+                     std::to_string(P.get("budget_pct")) + " %");
+  }
+
+  SpeedLoop speed;
+  speed.drive = &d;
+  speed.i_max_a = static_cast<float>(P.get("speed_i_max_a"));
+  {
+    // PI on J dw/dt = Kt iq: kp = J bw / Kt, ki = kp bw / 4 (critically damped).
+    const double kt = 1.5 * 4.0 * 0.11;  // paper-002 test motor: 1.5 p Phi [N m/A]
+    const double bw = P.get("speed_bw_rad_s");
+    speed.kp = static_cast<float>(o.J_kgm2 * bw / kt);
+    speed.ki_dt = static_cast<float>(speed.kp * bw / 4.0 / tick_hz_d);
+  }
+  mc_can_cmd_cfg_t cc{};
+  cc.node_id = node;
+  cc.tick_hz = tick_hz;
+  cc.timeout_s = static_cast<float>(P.get("timeout_s"));
+  cc.stop_ramp_a_per_s = static_cast<float>(P.get("stop_ramp_a_per_s"));
+  cc.stop_decel_rad_s2 = static_cast<float>(P.get("stop_decel_rad_s2"));
+  cc.speed_max_rad_s = static_cast<float>(P.get("speed_max_rad_s"));
+  cc.set_speed_ref = speed_hook;
+  cc.hook_ctx = &speed;
+  cc.speed_drive_mode = MC_DRIVE_MODE_CURRENT;
+  cc.position_drive_mode = MC_DRIVE_MODE_IDLE;
+  mc_can_cmd_t cmd{};
+  const uint32_t cerr = mc_can_cmd_init(&cmd, &cc, &d, &tm);
+  if (cerr != MC_CAN_CMD_CFG_OK) {
+    throw UsageError("command handler configuration refused (MC_CAN_CMD_CFG bits 0x" +
+                     std::to_string(cerr) + ")");
+  }
+  const mc_telemetry_src_t src{&d, &cmd, nullptr};
+
+  std::vector<std::string> cols{"t", "tm_sent_mask", "tm_fail_mask", "omega_m_true_rad_s",
+                                "i_q_true_a"};
+  for (int i = 0; i < MC_TM_COUNT; ++i) {
+    const uint32_t msg = mc_telemetry_msg(static_cast<uint32_t>(i));
+    if (kSlotSignals[i].size() != mc_can_messages[msg].n_signals) {
+      throw std::logic_error(std::string("signal list of ") + kSlotName[i] + " out of date");
+    }
+    for (const auto& s : kSlotSignals[i]) cols.push_back(std::string(kSlotName[i]) + "." + s);
+  }
+  ctx.csv.columns(cols);
+
+  const bool realtime = P.get("realtime") != 0.0;
+  // end_after_stop_s > 0: end the run that long after a CAN-commanded run
+  // stopped (timeout, disable or fault), for scripted tests whose command
+  // timing depends on a slow machine.
+  const double end_after_stop_s = P.get("end_after_stop_s");
+  bool was_enabled = false;
+  double t_end_early = -1.0;
+  const double T = board.period_s();
+  const long n = std::lround(ctx.duration_s / T);
+  const auto wall0 = std::chrono::steady_clock::now();
+  uint64_t frames = 0, slow_steps = 0;
+  std::vector<double> row(cols.size());
+  for (long k = 1; k <= n; ++k) {
+    sil.step();
+    if (k % static_cast<long>(o.slow_loop_div) != 0) continue;
+    // The slow loop's CAN work, as on the MCU: commands, supervision, the
+    // application's speed loop, then telemetry.
+    (void)mc_can_cmd_poll(&cmd, can, 16u);
+    mc_can_cmd_step(&cmd);
+    if (cmd.enabled && cmd.control_mode == MC_CAN_CTRL_SPEED) speed.step();
+    const uint32_t sent = mc_telemetry_step(&tm, can, &src);
+    ++slow_steps;
+    frames += static_cast<uint64_t>(__builtin_popcount(sent));
+
+    size_t c = 0;
+    double id_true, iq_true;
+    board.true_dq_a(&id_true, &iq_true);
+    row[c++] = board.t_s();
+    row[c++] = sent;
+    row[c++] = tm.last_fail_mask;
+    row[c++] = board.state()(2);
+    row[c++] = iq_true;
+    for (uint32_t i = 0; i < MC_TM_COUNT; ++i) {
+      float v[MC_CAN_NSIG_MAX] = {0};
+      const bool have = mc_telemetry_values(i, &src, v);
+      const uint32_t ns = mc_can_messages[mc_telemetry_msg(i)].n_signals;
+      const bool was_sent = (sent >> i) & 1u;
+      v[ns - 1] = static_cast<float>(was_sent ? static_cast<uint8_t>(tm.seq[i] - 1u) : tm.seq[i]);
+      for (uint32_t j = 0; j < ns; ++j) row[c++] = have ? static_cast<double>(v[j]) : std::nan("");
+    }
+    ctx.csv.row(row);
+    if (realtime) {
+      std::this_thread::sleep_until(wall0 + std::chrono::duration<double>(board.t_s()));
+    }
+    if ((slow_steps & 255u) == 0) ctx.progress.update(board.t_s(), ctx.duration_s);
+    if (end_after_stop_s > 0.0) {
+      if (was_enabled && !cmd.enabled && t_end_early < 0.0) t_end_early = board.t_s() + end_after_stop_s;
+      was_enabled = cmd.enabled;
+      if (t_end_early >= 0.0 && board.t_s() >= t_end_early) break;
+    }
+  }
+  ctx.summary.set("t_end_s", board.t_s());
+  if (logcan && !logcan->flush()) throw std::runtime_error("write error on the CAN log");
+
+  ctx.summary.set("tick_hz", tick_hz);
+  ctx.summary.set("bus_load_frac", tm.load_frac);
+  ctx.summary.set("tm_frames_generated", static_cast<double>(frames));
+  ctx.summary.set("tm_frames_queued", tm.tx_frames);
+  ctx.summary.set("tm_frames_dropped", tm.tx_dropped);
+  ctx.summary.set("tm_tx_nobufs", tm.tx_nobufs);
+  ctx.summary.set("tm_tx_busoff", tm.tx_busoff);
+  ctx.summary.set("cmd_accepted", cmd.rx_accepted);
+  ctx.summary.set("cmd_rejected", cmd.rx_rejected);
+  ctx.summary.set("cmd_reply_dropped", cmd.reply_dropped);
+  ctx.summary.set("final_mode", static_cast<double>(d.mode));
+  ctx.summary.set("final_enabled", cmd.enabled ? 1.0 : 0.0);
+  ctx.summary.set("final_stop_reason", cmd.stop_reason);
+  ctx.summary.set("final_faults", d.faults);
+  if (sock) {
+    const auto& s = sock->stats();
+    ctx.summary.set_text("can_interface", iface);
+    ctx.summary.set("socketcan_tx_nobufs", static_cast<double>(s.tx_nobufs));
+    ctx.summary.set("socketcan_tx_netdown", static_cast<double>(s.tx_netdown));
+    ctx.summary.set("socketcan_rx_frames", static_cast<double>(s.rx_frames));
+    ctx.summary.set("socketcan_rx_error_frames", static_cast<double>(s.rx_error_frames));
+    ctx.summary.set("socketcan_rx_dropped", s.rx_dropped);
+  } else {
+    ctx.summary.set_text("can_log", env_or("MCSIM_CAN_LOG", "can-telemetry.candump.log"));
+    ctx.summary.set("can_log_frames", static_cast<double>(logcan->stats().tx_frames));
+    ctx.summary.set("can_script_frames", static_cast<double>(logcan->stats().rx_frames));
+  }
+}
+
+const Registrar reg_can({
+    "can-telemetry",
+    "FOC drive (paper-002 test motor) with CAN telemetry and commands: frames to SocketCAN "
+    "(MCSIM_CAN_IF=vcan0) or to a candump log (MCSIM_CAN_LOG, commands from MCSIM_CAN_CMDS)",
+    2.0,
+    {{"node_id", 1.0, "1", "CAN node id (id = node << 5 | cmd)", 0.0, 62.0},
+     {"bitrate_kbps", 1000.0, "kbit/s", "bus bit rate for the budget check", 10.0, 1000.0},
+     {"budget_pct", 50.0, "%", "share of the bus the telemetry may use", 1.0, 70.0},
+     {"rate_heartbeat_hz", 10.0, "Hz", "HEARTBEAT rate (0 = off)", 0.0, 1000.0},
+     {"rate_currents_hz", 200.0, "Hz", "CURRENTS rate", 0.0, 1000.0},
+     {"rate_voltages_hz", 100.0, "Hz", "VOLTAGES rate", 0.0, 1000.0},
+     {"rate_speed_hz", 100.0, "Hz", "SPEED rate", 0.0, 1000.0},
+     {"rate_position_hz", 50.0, "Hz", "POSITION rate", 0.0, 1000.0},
+     {"rate_observer_hz", 0.0, "Hz", "OBSERVER rate (no observer in this scenario: nothing sent)", 0.0, 1000.0},
+     {"rate_controller_hz", 0.0, "Hz", "CONTROLLER rate (nothing sent here)", 0.0, 1000.0},
+     {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
+     {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
+     {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
+     {"stop_decel_rad_s2", 200.0, "rad/s^2", "speed ramp of a safe stop", 0.01, 1e6},
+     {"speed_max_rad_s", 150.0, "rad/s", "largest speed reference accepted", 0.1, 1000.0},
+     {"speed_bw_rad_s", 20.0, "rad/s", "bandwidth of the scenario's speed PI", 0.1, 500.0},
+     {"speed_i_max_a", 3.0, "A", "current limit of the speed PI", 0.0, 10.0},
+     {"realtime", 0.0, "1", "1: pace the simulation to the wall clock", 0.0, 1.0},
+     {"end_after_stop_s", 0.0, "s",
+      "if > 0, end the run this long after a CAN-enabled run stopped (timeout, disable, fault)",
+      0.0, 100.0},
+     {"pwm_hz", 10000.0, "Hz", "PWM and current-loop rate", 1000.0, 100000.0},
+     {"slow_loop_div", 10.0, "1", "slow loop (CAN) every this many PWM periods", 1.0, 1000.0},
+     {"substeps", 2.0, "1", "RK4 sub-steps per PWM period", 1.0, 64.0},
+     {"bw_hz", 200.0, "Hz", "designed current-loop bandwidth", 1.0, 2000.0},
+     {"speed_pll_bw_rad_s", 1000.0, "rad/s", "encoder tracking loop bandwidth (3 bw / pwm_hz <= 1)",
+      1.0, 6000.0},
+     {"J_kgm2", 0.05, "kg m^2", "rotor + load inertia (a flywheel: 1 A accelerates it at 13 rad/s^2)", 1.0e-7, 100.0},
+     {"load_nm", 0.0, "N m", "constant load torque", -10.0, 10.0}},
+    run_can_telemetry});
+
+}  // namespace
+}  // namespace mcsim

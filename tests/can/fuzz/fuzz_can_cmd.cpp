@@ -1,0 +1,178 @@
+// libFuzzer target: the CAN command handler and the frame unpackers under
+// arbitrary frames (ids, flags, lengths up to 64, payloads) interleaved with
+// supervision ticks and telemetry. Each 12-byte record of the input:
+//   [0]     op: bits 0-1: 0/1 frame to the handler, 2 tick(s), 3 telemetry
+//               bits 2-7: ticks to run for op 2
+//   [1..2]  id (little-endian, 11 bits; bit 15 = extended, bit 14 = RTR,
+//               bit 13 = FD)
+//   [3]     length (taken mod 65)
+//   [4..11] first data bytes (the rest of an FD payload repeats them)
+// Invariants checked after every record:
+//   - unpack accepts a frame only with the DBC's exact length, and every
+//     decoded value lies within its signal's range (half a step of slack);
+//     repacking the values gives back the same frame data;
+//   - the handler's result is NONE, IGNORED or a code the DBC defines, and
+//     a rejected frame (not IGNORED) produced exactly one CMD_ERROR;
+//   - enabled only while the drive runs (CURRENT/CTRL), stopping implies
+//     enabled; |references| within the drive's i_max.
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+
+extern "C" {
+#include "mc_can_cmd.h"
+#include "mc_can_proto.h"
+#include "mc_drive.h"
+#include "mc_hal_fake.h"
+#include "mc_telemetry.h"
+}
+
+namespace {
+
+void require(bool ok) {
+  if (!ok) std::abort();
+}
+
+mc_drive_cfg_t drive_cfg() {
+  mc_drive_cfg_t c{};
+  c.foc.r_ohm = 0.1f;
+  c.foc.ld_h = 100e-6f;
+  c.foc.lq_h = 100e-6f;
+  c.foc.flux_wb = 0.01f;
+  c.foc.kp_d_v_per_a = c.foc.kp_q_v_per_a = 0.1f;
+  c.foc.ki_d_v_per_as = c.foc.ki_q_v_per_as = 100.0f;
+  c.foc.dt_s = 50e-6f;
+  c.foc.aw = MC_PI_AW_CLAMP;
+  c.foc.kaw_per_s = 1000.0f;
+  c.foc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
+  c.foc.v_limit_ratio = 1.0f;
+  c.foc.v_abs_max_v = 40.0f;
+  c.foc.decouple = true;
+  c.pole_pairs = 4;
+  c.speed_pll_bw_rad_s = 500.0f;
+  c.slow_loop_div = 10;
+  c.i_max_a = 20.0f;
+  c.i_trip_a = 30.0f;
+  c.vbus_min_v = 10.0f;
+  c.vbus_max_v = 60.0f;
+  return c;
+}
+
+int speed_hook(void*, float w) { return std::fabs(w) > 150.0f ? -1 : 0; }
+
+void check_unpack(const mc_hal_can_frame_t& f) {
+  float v[MC_CAN_NSIG_MAX];
+  uint32_t m = MC_CAN_MSG_COUNT;
+  const mc_can_err_t e = mc_can_proto_unpack(&f, &m, v, MC_CAN_NSIG_MAX);
+  if (e != MC_CAN_ERR_NONE) {
+    require(e == MC_CAN_ERR_FORMAT || e == MC_CAN_ERR_UNKNOWN_CMD || e == MC_CAN_ERR_LENGTH ||
+            e == MC_CAN_ERR_RANGE);
+    return;
+  }
+  const mc_can_message_t& g = mc_can_messages[m];
+  require(f.len == g.dlc && f.flags == 0u);
+  for (uint32_t i = 0; i < g.n_signals; ++i) {
+    const mc_can_signal_t& s = g.signals[i];
+    require(std::isfinite(v[i]) && v[i] >= s.min - 0.5f * s.scale && v[i] <= s.max + 0.5f * s.scale);
+  }
+  // node 63 (broadcast) decodes but is never packed: repack as node 1
+  const uint32_t node = mc_can_id_node(f.id) <= MC_CAN_NODE_ID_MAX ? mc_can_id_node(f.id) : 1u;
+  mc_hal_can_frame_t r{};
+  require(mc_can_proto_pack(m, node, v, MC_CAN_NSIG_MAX, &r) == MC_CAN_ERR_NONE);
+  require(r.id == mc_can_id(node, mc_can_id_cmd(f.id)) && r.len == f.len);
+  // bits outside every signal are not carried: compare signal by signal
+  float w[MC_CAN_NSIG_MAX];
+  uint32_t m2;
+  require(mc_can_proto_unpack(&r, &m2, w, MC_CAN_NSIG_MAX) == MC_CAN_ERR_NONE && m2 == m);
+  for (uint32_t i = 0; i < g.n_signals; ++i) require(w[i] == v[i]);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  static mc_hal_fake_t fake;
+  mc_hal_fake_config_t fcfg;
+  require(mc_hal_fake_config_default(&fcfg) == 0);
+  require(mc_hal_fake_init(&fake, &fcfg) == 0);
+  mc_drive_t d;
+  const mc_drive_cfg_t dc = drive_cfg();
+  require(mc_drive_init(&d, &dc, &fake.board) == MC_DRIVE_CFG_OK);
+  require(mc_hal_fake_encoder_set(&fake, 0u, MC_HAL_ENCODER_FLAG_VALID) == 0);
+  mc_telemetry_cfg_t tc{};
+  tc.node_id = 1;
+  tc.bitrate_bps = 250000;
+  tc.bus_budget_frac = 0.5f;
+  tc.tick_hz = 1000;
+  tc.rate_hz[MC_TM_HEARTBEAT] = 10;
+  tc.rate_hz[MC_TM_CURRENTS] = 100;
+  mc_telemetry_t tm;
+  require(mc_telemetry_init(&tm, &tc) == MC_TM_CFG_OK);
+  mc_can_cmd_cfg_t cc{};
+  cc.node_id = 1;
+  cc.tick_hz = 1000;
+  cc.timeout_s = 0.02f;
+  cc.stop_ramp_a_per_s = 500.0f;
+  cc.stop_decel_rad_s2 = 2000.0f;
+  cc.speed_max_rad_s = 200.0f;
+  cc.set_speed_ref = speed_hook;
+  cc.speed_drive_mode = MC_DRIVE_MODE_CURRENT;
+  cc.position_drive_mode = MC_DRIVE_MODE_IDLE;
+  mc_can_cmd_t c;
+  require(mc_can_cmd_init(&c, &cc, &d, &tm) == MC_CAN_CMD_CFG_OK);
+  const mc_telemetry_src_t src{&d, &c, nullptr};
+
+  for (size_t k = 0; k + 12 <= size; k += 12) {
+    const uint8_t* r = data + k;
+    const unsigned op = r[0] & 3u;
+    if (op <= 1u) {
+      mc_hal_can_frame_t f{};
+      const uint16_t raw = static_cast<uint16_t>(r[1] | (r[2] << 8));
+      f.id = raw & 0x7FFu;
+      if (raw & 0x8000u) f.flags |= MC_HAL_CAN_FLAG_EXT;
+      if (raw & 0x4000u) f.flags |= MC_HAL_CAN_FLAG_RTR;
+      if (raw & 0x2000u) f.flags |= MC_HAL_CAN_FLAG_FD;
+      f.len = static_cast<uint8_t>(r[3] % 65u);
+      for (unsigned i = 0; i < MC_HAL_CAN_FD_MAX_LEN; ++i) f.data[i] = r[4 + (i % 8u)];
+      check_unpack(f);
+      const uint32_t rejected = c.rx_rejected;
+      const mc_can_err_t e = mc_can_cmd_handle(&c, &f, &fake.can_dev);
+      require(e == MC_CAN_ERR_NONE || e == MC_CAN_ERR_IGNORED ||
+              (e >= MC_CAN_ERR_UNKNOWN_CMD && e <= MC_CAN_ERR_FORMAT));
+      const bool rej = (e != MC_CAN_ERR_NONE && e != MC_CAN_ERR_IGNORED);
+      require(c.rx_rejected == rejected + (rej ? 1u : 0u));
+      mc_hal_can_frame_t out;
+      uint32_t replies = 0;
+      while (mc_hal_fake_can_tx_pop(&fake, &out) == 0) {
+        float v[MC_CAN_NSIG_MAX];
+        uint32_t m;
+        require(mc_can_proto_unpack(&out, &m, v, MC_CAN_NSIG_MAX) == MC_CAN_ERR_NONE);
+        require(m == MC_CAN_MSG_CMD_ERROR && v[MC_CAN_CMD_ERROR_ERROR] == static_cast<float>(e));
+        ++replies;
+      }
+      require(replies == (rej ? 1u : 0u));
+    } else if (op == 2u) {
+      const unsigned n = 1u + (r[0] >> 2);
+      for (unsigned i = 0; i < n; ++i) {
+        (void)mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 24.0f,
+                                         MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS);
+        for (unsigned j = 0; j < dc.slow_loop_div; ++j) {
+          if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
+        }
+        mc_can_cmd_step(&c);
+      }
+    } else {
+      (void)mc_telemetry_step(&tm, &fake.can_dev, &src);
+      mc_hal_can_frame_t out;
+      while (mc_hal_fake_can_tx_pop(&fake, &out) == 0) {
+        float v[MC_CAN_NSIG_MAX];
+        uint32_t m;
+        require(mc_can_proto_unpack(&out, &m, v, MC_CAN_NSIG_MAX) == MC_CAN_ERR_NONE);
+      }
+    }
+    require(!c.stopping || c.enabled);
+    require(!c.enabled || d.mode == MC_DRIVE_MODE_CURRENT || d.mode == MC_DRIVE_MODE_CTRL);
+    require(std::fabs(d.id_ref_a) <= dc.i_max_a && std::fabs(d.iq_ref_a) <= dc.i_max_a);
+  }
+  return 0;
+}
