@@ -1,5 +1,6 @@
 // See pmsm_board.hpp.
 #include "hal_host/pmsm_board.hpp"
+#include "hal_host/hal_binding.hpp"
 
 #include <cerrno>
 #include <cmath>
@@ -12,36 +13,7 @@ namespace hal_host {
 
 namespace {
 
-PmsmBoard* B(void* ctx) noexcept { return static_cast<PmsmBoard*>(ctx); }
-
-const mc_hal_adc_ops_t kAdcOps = {
-    [](void* c, mc_hal_adc_sample_t* s) noexcept { return B(c)->adc_read(s); },
-    [](void* c, mc_hal_adc_temp_t* t) noexcept { return B(c)->adc_read_temp(t); },
-};
-const mc_hal_pwm3_ops_t kPwmOps = {
-    [](void* c, float a, float b, float d) noexcept { return B(c)->pwm_set_duty(a, b, d); },
-    [](void* c) noexcept { return B(c)->pwm_enable(); },
-    [](void* c) noexcept { return B(c)->pwm_disable(); },
-    [](void* c, mc_hal_pwm3_state_t* s) noexcept { return B(c)->pwm_get_state(s); },
-};
-const mc_hal_encoder_ops_t kEncOps = {
-    [](void* c, mc_hal_encoder_sample_t* s) noexcept { return B(c)->encoder_read(s); },
-};
-const mc_hal_tick_ops_t kTickOps = {
-    [](void* c, uint32_t* t) noexcept { return B(c)->tick_read(t); },
-    [](void* c, uint32_t* hz) noexcept { return B(c)->tick_freq(hz); },
-};
-const mc_hal_fault_ops_t kFaultOps = {
-    [](void* c, mc_hal_fault_status_t* s) noexcept { return B(c)->fault_read(s); },
-    [](void* c) noexcept { B(c)->fault_gate_kill(); },
-    [](void* c) noexcept { return B(c)->fault_gate_release(); },
-};
-
-void check(mcsim::Status s, const char* what) {
-  if (s != mcsim::Status::kOk) {
-    throw std::invalid_argument(std::string(what) + ": " + mcsim::status_name(s));
-  }
-}
+using Binding = HalBinding<PmsmBoard>;
 
 // Amplitude-invariant inverse Clarke.
 Eigen::Vector3d abc_from_ab(double a, double b) {
@@ -52,29 +24,29 @@ Eigen::Vector3d abc_from_ab(double a, double b) {
 }  // namespace
 
 PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
-  check(plant_.configure(cfg.motor), "motor");
-  check(inverter_.configure(cfg.inverter), "inverter");
+  check_config(plant_.configure(cfg.motor), "motor");
+  check_config(inverter_.configure(cfg.inverter), "inverter");
   for (int k = 0; k < 3; ++k) {
     mcsim::CurrentSensorParams p = cfg.current_sensor;
     p.seed = cfg.current_sensor.seed + static_cast<uint64_t>(k) * 7919U;
-    check(isense_[k].configure(p), "current_sensor");
+    check_config(isense_[k].configure(p), "current_sensor");
   }
-  check(vsense_.configure(cfg.vbus_sensor), "vbus_sensor");
-  check(encoder_.configure(cfg.encoder), "encoder");
+  check_config(vsense_.configure(cfg.vbus_sensor), "vbus_sensor");
+  check_config(encoder_.configure(cfg.encoder), "encoder");
   if (cfg.substeps < 1) throw std::invalid_argument("substeps must be >= 1");
   if (cfg.delay_periods < 0) throw std::invalid_argument("delay_periods must be >= 0");
-  check(delay_.configure(static_cast<std::size_t>(cfg.delay_periods), duty_cmd_), "delay_periods");
+  check_config(delay_.configure(static_cast<std::size_t>(cfg.delay_periods), duty_cmd_), "delay_periods");
   if (!(cfg.vbus_v > 0.0) || !std::isfinite(cfg.vbus_v)) throw std::invalid_argument("vbus_v must be > 0");
   if (!(cfg.tick_hz >= 1.0) || cfg.tick_hz > 4.0e9) throw std::invalid_argument("tick_hz out of range");
 
   x_ = plant_.make_state(0.0, 0.0, cfg.omega_m0_rad_s, cfg.theta_m0_rad);
   encoder_.reset(cfg.theta_m0_rad);
 
-  adc_dev_ = {&kAdcOps, this};
-  pwm_dev_ = {&kPwmOps, this};
-  enc_dev_ = {&kEncOps, this};
-  tick_dev_ = {&kTickOps, this};
-  fault_dev_ = {&kFaultOps, this};
+  adc_dev_ = {&Binding::kAdc, this};
+  pwm_dev_ = {&Binding::kPwm3, this};
+  enc_dev_ = {&Binding::kEncoder, this};
+  tick_dev_ = {&Binding::kTick, this};
+  fault_dev_ = {&Binding::kFault, this};
   hal_.adc = &adc_dev_;
   hal_.pwm3 = &pwm_dev_;
   hal_.pwm2 = nullptr;
@@ -195,7 +167,7 @@ void PmsmBoard::advance() {
     const Eigen::Vector3d i = phase_currents_a();
     const Eigen::Vector2d v = inverter_.alpha_beta_v(duty, cfg_.vbus_v, i);
     v_ab_applied_ = v;
-    check(mcsim::advance_zoh(plant_, v, t_s_, T, n, &x_), "integrator");
+    check_config(mcsim::advance_zoh(plant_, v, t_s_, T, n, &x_), "integrator");
   }
   // (cos, sin) of the electrical angle are integrated as states; re-derive
   // them from theta_m every 32 periods (drift per period is O(h^5)).
@@ -263,7 +235,7 @@ int PmsmBoard::tick_freq(uint32_t* hz) const noexcept {
 void PmsmBoard::set_load(const mcsim::LoadTorque& load) {
   mcsim::PmsmParams p = plant_.params();
   p.load = load;
-  check(plant_.configure(p), "load");
+  check_config(plant_.configure(p), "load");
 }
 
 void PmsmBoard::set_fault_inputs(uint32_t active_mask) {

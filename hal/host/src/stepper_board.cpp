@@ -1,5 +1,6 @@
 // See stepper_board.hpp.
 #include "hal_host/stepper_board.hpp"
+#include "hal_host/hal_binding.hpp"
 
 #include <cerrno>
 #include <cmath>
@@ -11,51 +12,22 @@
 namespace hal_host {
 namespace {
 
-StepperBoard* S(void* ctx) noexcept { return static_cast<StepperBoard*>(ctx); }
-
-const mc_hal_adc_ops_t kAdcOps = {
-    [](void* c, mc_hal_adc_sample_t* s) noexcept { return S(c)->adc_read(s); },
-    [](void* c, mc_hal_adc_temp_t* t) noexcept { return S(c)->adc_read_temp(t); },
-};
-const mc_hal_pwm2_ops_t kPwmOps = {
-    [](void* c, float a, float b) noexcept { return S(c)->pwm_set_duty(a, b); },
-    [](void* c) noexcept { return S(c)->pwm_enable(); },
-    [](void* c) noexcept { return S(c)->pwm_disable(); },
-    [](void* c, mc_hal_pwm2_state_t* s) noexcept { return S(c)->pwm_get_state(s); },
-};
-const mc_hal_encoder_ops_t kEncOps = {
-    [](void* c, mc_hal_encoder_sample_t* s) noexcept { return S(c)->encoder_read(s); },
-};
-const mc_hal_tick_ops_t kTickOps = {
-    [](void* c, uint32_t* t) noexcept { return S(c)->tick_read(t); },
-    [](void* c, uint32_t* hz) noexcept { return S(c)->tick_freq(hz); },
-};
-const mc_hal_fault_ops_t kFaultOps = {
-    [](void* c, mc_hal_fault_status_t* s) noexcept { return S(c)->fault_read(s); },
-    [](void* c) noexcept { S(c)->fault_gate_kill(); },
-    [](void* c) noexcept { return S(c)->fault_gate_release(); },
-};
-
-void check(mcsim::Status s, const char* what) {
-  if (s != mcsim::Status::kOk) {
-    throw std::invalid_argument(std::string(what) + ": " + mcsim::status_name(s));
-  }
-}
+using Binding = HalBinding<StepperBoard>;
 
 }  // namespace
 
 StepperBoard::StepperBoard(const StepperBoardConfig& cfg) : cfg_(cfg) {
-  check(plant_.configure(cfg.motor), "motor");
+  check_config(plant_.configure(cfg.motor), "motor");
   for (int k = 0; k < 2; ++k) {
     mcsim::CurrentSensorParams p = cfg.current_sensor;
     p.seed = cfg.current_sensor.seed + static_cast<uint64_t>(k) * 7919U;
-    check(isense_[k].configure(p), "current_sensor");
+    check_config(isense_[k].configure(p), "current_sensor");
   }
-  check(vsense_.configure(cfg.vbus_sensor), "vbus_sensor");
-  check(encoder_.configure(cfg.encoder), "encoder");
+  check_config(vsense_.configure(cfg.vbus_sensor), "vbus_sensor");
+  check_config(encoder_.configure(cfg.encoder), "encoder");
   if (cfg.substeps < 1) throw std::invalid_argument("substeps must be >= 1");
   if (cfg.delay_periods < 0) throw std::invalid_argument("delay_periods must be >= 0");
-  check(delay_.configure(static_cast<std::size_t>(cfg.delay_periods), duty_cmd_),
+  check_config(delay_.configure(static_cast<std::size_t>(cfg.delay_periods), duty_cmd_),
         "delay_periods");
   if (!(cfg.vbus_v > 0.0) || !std::isfinite(cfg.vbus_v)) {
     throw std::invalid_argument("vbus_v must be > 0");
@@ -68,11 +40,11 @@ StepperBoard::StepperBoard(const StepperBoardConfig& cfg) : cfg_(cfg) {
   }
   x_(mcsim::Stepper2Ph::kThetaM) = cfg.theta_m0_rad;
   encoder_.reset(cfg.theta_m0_rad);
-  adc_dev_ = {&kAdcOps, this};
-  pwm_dev_ = {&kPwmOps, this};
-  enc_dev_ = {&kEncOps, this};
-  tick_dev_ = {&kTickOps, this};
-  fault_dev_ = {&kFaultOps, this};
+  adc_dev_ = {&Binding::kAdc, this};
+  pwm_dev_ = {&Binding::kPwm2, this};
+  enc_dev_ = {&Binding::kEncoder, this};
+  tick_dev_ = {&Binding::kTick, this};
+  fault_dev_ = {&Binding::kFault, this};
   hal_.adc = &adc_dev_;
   hal_.pwm3 = nullptr;
   hal_.pwm2 = &pwm_dev_;
@@ -136,7 +108,7 @@ void StepperBoard::advance() {
   } else {
     open_[0] = open_[1] = false;
     v_applied_ = duty * cfg_.vbus_v;
-    check(mcsim::advance_zoh(plant_, v_applied_, t_s_, T, n, &x_), "integrator");
+    check_config(mcsim::advance_zoh(plant_, v_applied_, t_s_, T, n, &x_), "integrator");
   }
   ++period_count_;
   t_s_ = static_cast<double>(period_count_) * T;
