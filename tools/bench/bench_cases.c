@@ -10,11 +10,20 @@
  * its atan2 for the angle), speed PLL, and the FOC step at the estimated
  * angle and speed (which repeats the Clarke transform internally).
  *
- * Slots still empty (their kernels were being written in
- * firmware/kernels/{pi2d,csmc} when this was done): PI2D step, CSMC with HGO
- * and servocompensator. Add a wrapper and a table entry each, named
- * pi2d_step and csmc_hgo_step; run_bench.py already lists them with their
- * targets and reports them as missing until then.
+ * This is the kernel path of the sensorless plug-in's closed-loop phase
+ * (firmware/app/mc_ctrl_sensorless.c: mc_fluxobs_f32_step, mc_spdpll_f32_step,
+ * mc_foc_f32_step), without its start-up logic and telemetry.
+ *
+ * PI2D step (pi2d_step): mc_pi2d_f32_step of the pi2d-motor law (paper 000
+ * in physical units, 20 kHz) on inputs of its operating range where neither
+ * limit acts: the dirty derivative, load adaptation, x2*, rho, v2, both
+ * voltages and the voltage-limit test.
+ *
+ * CSMC with HGO and servocompensator (csmc_hgo_step): the output-feedback
+ * loop of paper 001 Sec. V as the CSMC plug-in runs it: mc_hgo_f32_step on
+ * the position error (e2', e2'' from the observer), then mc_csmc_f32_step
+ * with the constant law (11) and the servocompensators S1 (order 5, d axis)
+ * and S2 (order 3, q axis), 100 kHz.
  */
 #include "bench_cases.h"
 
@@ -23,6 +32,9 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "csmc/mc_csmc.h"
+#include "csmc/mc_csvc.h"
+#include "csmc/mc_hgo.h"
 #include "foc/mc_foc.h"
 #include "hal/hal.h"
 #include "math/mc_math.h"
@@ -31,6 +43,7 @@
 #include "observer/mc_fluxobs.h"
 #include "observer/mc_spdpll.h"
 #include "pi/mc_pi.h"
+#include "pi2d/mc_pi2d.h"
 #include "transforms/mc_svpwm.h"
 #include "transforms/mc_transforms.h"
 
@@ -60,6 +73,9 @@ typedef struct {
     q31_t qb[BENCH_N];
     q31_t qc[BENCH_N];
     mc_foc_f32_in_t foc_in[BENCH_N];
+    mc_pi2d_f32_in_t pi2d_in[BENCH_N];
+    float e2[BENCH_N];     /* CSMC position error [rad] */
+    float e1[BENCH_N];     /* CSMC d-current error [A] */
 } bench_inputs_t;
 
 static bench_inputs_t g_in;
@@ -88,6 +104,9 @@ static mc_fluxobs_f32_t g_obs;
 static mc_spdpll_f32_t g_pll;
 static float g_v_alpha_v;
 static float g_v_beta_v;
+static mc_pi2d_f32_t g_pi2d;
+static mc_hgo_f32_t g_hgo;
+static mc_csmc_f32_t g_csmc;
 
 /* ---- drive fast loop on a RAM HAL -------------------------------------- */
 
@@ -266,6 +285,36 @@ static NOINLINE void c_spdpll_f32(uint32_t i)
 {
     sink_f32(mc_spdpll_f32_step(&g_pll, g_in.x[i]));
 }
+static NOINLINE void c_pi2d_f32(uint32_t i)
+{
+    mc_pi2d_f32_out_t out;
+    bench_sink_u32(mc_pi2d_f32_step(&g_pi2d, &g_in.pi2d_in[i], &out));
+    sink_f32(out.vd_v + out.vq_v);
+}
+static NOINLINE void c_csmc_hgo_f32(uint32_t i)
+{
+    mc_hgo_f32_est_t est;
+    mc_hgo_f32_step(&g_hgo, g_in.e2[i], &est);
+    mc_csmc_f32_in_t in;
+    in.e1_a = g_in.e1[i];
+    in.e2_rad = g_in.e2[i];
+    in.de2_rad_s = est.z2;
+    in.dde2_rad_s2 = est.z3;
+    in.i_d_a = 0.0f;
+    in.i_q_a = 0.0f;
+    in.omega_m_rad_s = 0.0f;
+    in.di_dd_a_s = 0.0f;
+    in.dddphi_d_rad_s3 = 0.0f;
+    mc_csmc_f32_out_t out;
+    mc_csmc_f32_step(&g_csmc, &in, &out);
+    sink_f32(out.v_d_v + out.v_q_v);
+}
+static NOINLINE void c_hgo_f32(uint32_t i)
+{
+    mc_hgo_f32_est_t est;
+    mc_hgo_f32_step(&g_hgo, g_in.e2[i], &est);
+    sink_f32(est.z2 + est.z3);
+}
 static NOINLINE void c_sincos_q31(uint32_t i)
 {
     q31_t s;
@@ -333,6 +382,9 @@ static const bench_case_t k_cases[] = {
     {"fluxobs_step", "f32", "kernel", c_fluxobs_f32, BENCH_N},
     {"spdpll_step", "f32", "kernel", c_spdpll_f32, BENCH_N},
     {"foc_step_sensorless", "f32", "fast_loop", c_foc_sensorless_f32, BENCH_N},
+    {"pi2d_step", "f32", "fast_loop", c_pi2d_f32, BENCH_N},
+    {"hgo_step", "f32", "kernel", c_hgo_f32, BENCH_N},
+    {"csmc_hgo_step", "f32", "fast_loop", c_csmc_hgo_f32, BENCH_N},
     {"sincos", "q31", "kernel", c_sincos_q31, BENCH_N},
     {"atan2", "q31", "kernel", c_atan2_q31, BENCH_N},
     {"sqrt", "q31", "kernel", c_sqrt_q31, BENCH_N},
@@ -351,8 +403,15 @@ const bench_case_t *bench_cases(void)
 
 int bench_check(void)
 {
-    /* The fast loop must have run the FOC every call, not a fault path. */
-    return (g_drive.mode == MC_DRIVE_MODE_CURRENT && g_drive.faults == 0u) ? 0 : 1;
+    /* The fast loop must have run the FOC every call, not a fault path; the
+     * PI2D and CSMC cases must not have met a refused input or a limit. */
+    if (g_drive.mode != MC_DRIVE_MODE_CURRENT || g_drive.faults != 0u) {
+        return 1;
+    }
+    if (g_pi2d.flags != 0u || g_pi2d.last.iq_limited || g_pi2d.last.v_limited) {
+        return 1;
+    }
+    return (g_csmc.flags != 0u || g_hgo.flags != 0u) ? 1 : 0;
 }
 
 /* ---- set-up ------------------------------------------------------------ */
@@ -380,11 +439,81 @@ static void draw_inputs(void)
         f->id_ref_a = 0.0f;
         f->iq_ref_a = uni(-3.0f, 3.0f);
     }
+    /* Drawn after the others, so that their inputs stay those of the first
+     * version of the benchmark (comparable counts). */
+    for (uint32_t i = 0u; i < BENCH_N; ++i) {
+        /* PI2D around a 100 rad/s operating point, small errors (no limit acts) */
+        mc_pi2d_f32_in_t *p = &g_in.pi2d_in[i];
+        p->id_a = uni(-0.1f, 0.1f);
+        p->iq_a = uni(0.2f, 0.8f);
+        p->theta_ref_rad = uni(-3.0f, 3.0f);
+        p->theta_m_rad = p->theta_ref_rad + uni(-0.01f, 0.01f);
+        p->omega_ref_rad_s = uni(90.0f, 110.0f);
+        p->alpha_ref_rad_s2 = uni(-50.0f, 50.0f);
+        p->jerk_ref_rad_s3 = uni(-100.0f, 100.0f);
+        p->id_ref_a = 0.0f;
+        p->did_ref_a_s = 0.0f;
+        /* CSMC errors inside the boundary layers (the regulated regime) */
+        g_in.e2[i] = uni(-1.0e-4f, 1.0e-4f);
+        g_in.e1[i] = uni(-0.05f, 0.05f);
+    }
+}
+
+/* The pi2d-motor law (see tests/target/kv/kv_families.c for the derivation
+ * of the gains): triple pole at -30 rad/s, a = 2000/s, b = 1, 20 kHz. */
+static int setup_pi2d(void)
+{
+    const float wn = 30.0f;
+    const float ki = wn * wn * wn;
+    const float kp = (3.0f * wn * wn) + (ki / 2000.0f);
+    const mc_pi2d_f32_cfg_t c = {
+        .r_ohm = 0.675f, .l_h = 1.14e-3f, .pole_pairs = 4u, .ke_v_s_rad = 0.44f,
+        .kt_nm_a = 0.66f, .j_kgm2 = 1.0e-3f, .k1_per_s = 1256.6f, .k2_per_s = 1256.6f,
+        .kp_per_s2 = kp, .kd_per_s2 = 3.0f * wn * 2000.0f, .ki_per_s3 = ki, .a_per_s = 2000.0f,
+        .b = 1.0f, .eps_per_s = 2.0f * ki / kp, .dt_s = 5.0e-5f, .iq_max_a = 5.0f,
+        .v_max_v = 200.0f, .nu_max_nm = 1.0f};
+    return (mc_pi2d_f32_init(&g_pi2d, &c) == 0u) ? 0 : 1;
+}
+
+/* Paper 001, Sec. V: constant law (M = 50 V), servocompensators for
+ * w0 = 2 pi rad/s, HGO alpha = (17, 80, 100), eps = 1e-4 s, 100 kHz. */
+static int setup_csmc(void)
+{
+    mc_csmc_f32_cfg_t c;
+    memset(&c, 0, sizeof c);
+    c.law = MC_CSMC_LAW_CONST;
+    c.sw = MC_CSMC_SW_SAT;
+    c.k1_per_s2 = 7.5e4f;
+    c.k2_per_s = 550.0f;
+    c.mu1_a = 0.1f;
+    c.mu2_rad_s2 = 50.0f;
+    c.m1_v = 50.0f;
+    c.m2_v = 50.0f;
+    c.v_limit_v = 1.0e4f;
+    c.dt_s = 1.0e-5f;
+    const float w02 = (2.0f * MC_PI_F32) * (2.0f * MC_PI_F32);
+    const float c1[5] = {0.0f, -4.0f * w02 * w02, 0.0f, -5.0f * w02, 0.0f};
+    const float re1[5] = {-1.0f, -2.0f, -2.0f, -3.0f, -3.0f};
+    const float im1[5] = {0.0f, 1.0f, -1.0f, 1.0f, -1.0f};
+    const float c2[3] = {0.0f, -w02, 0.0f};
+    const float re2[3] = {-1.0f, -2.0f, -2.0f};
+    const float im2[3] = {0.0f, 1.0f, -1.0f};
+    const mc_hgo_f32_cfg_t h = {.alpha1 = 17.0f, .alpha2 = 80.0f, .alpha3 = 100.0f,
+                                .eps_s = 1.0e-4f, .dt_s = 1.0e-5f, .input_order = 2u};
+    if (mc_csvc_f32_place(5u, c1, re1, im1, &c.sigma1) != 0u ||
+        mc_csvc_f32_place(3u, c2, re2, im2, &c.sigma2) != 0u ||
+        mc_csmc_f32_init(&g_csmc, &c) != 0u || mc_hgo_f32_init(&g_hgo, &h) != 0u) {
+        return 1;
+    }
+    return 0;
 }
 
 int bench_setup(void)
 {
     draw_inputs();
+    if (setup_pi2d() != 0 || setup_csmc() != 0) {
+        return 1;
+    }
     const mc_pi_f32_cfg_t pc = {.kp = 1.43f, .ki_per_s = 848.0f, .dt_s = 5.0e-5f,
                                 .out_min = -100.0f, .out_max = 100.0f,
                                 .aw = MC_PI_AW_CLAMP, .kaw_per_s = 0.0f};

@@ -7,6 +7,7 @@
 #include <stddef.h>
 
 #include "math/mc_math.h"
+#include "pi/mc_pi_core.h"
 #include "transforms/mc_transforms.h"
 
 /* Map PI init errors of one axis to the FOC flags. */
@@ -185,6 +186,108 @@ static uint32_t foc_dq_core(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     return MC_FOC_ERR_NONE;
 }
 
+/* ------------------------------------------------------------------------
+ * Fast path. The checked code above tests every value where it is used (the
+ * step, each PI, the modulator twice). The fast path computes the same
+ * operations on the same values, in the same order, so it gives the same
+ * bits, but screens for non-finite values a few at a time (foc_screen),
+ * commits nothing until the whole step is known to be good, and
+ * skips what the config validated at init already guarantees (the PI's
+ * dynamic limits are ordered: -v_max <= 0 <= v_max). When anything is off
+ * (a non-finite input or intermediate, vbus <= 0) it returns false with the
+ * state untouched, and the checked code runs the step instead: errors,
+ * flags and refusals are exactly the checked code's. tests/unit/foc
+ * (test_foc_fast.cpp) compares the two paths bit for bit.
+ * ------------------------------------------------------------------------ */
+
+/* 0 * (sum of the values): +-0 when every value is finite (and their sum
+ * does not overflow), NaN when one is NaN or +-inf (or the sum overflows:
+ * a false alarm, which only sends the step to the checked path). One add
+ * per value and one compare instead of a test per value. */
+static float foc_screen(float sum)
+{
+    return 0.0f * sum;
+}
+
+/* The square root of a positive finite float: mc_sqrt_f32 puts its checks
+ * (0, negative, NaN, inf) in front of this same instruction. */
+static float foc_sqrt_pos(float x)
+{
+#if defined(__ARM_FP) || defined(__SSE_MATH__)
+    return __builtin_sqrtf(x);
+#else
+    return mc_sqrt_f32(x);
+#endif
+}
+
+/* The dq step of foc_dq_core, or false (nothing written) where the checked
+ * path would refuse or might differ. */
+static bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, float id_a, float iq_a,
+                        float omega_e_rad_s, float vbus_v, float *p_vd_v, float *p_vq_v)
+{
+    float ff_d = 0.0f;
+    float ff_q = 0.0f;
+    float v_max;
+    float e_d;
+    float e_q;
+    float hi;
+    float vd;
+    float vq;
+    float integ_d;
+    float integ_q;
+    float vq_room_sq;
+    float vq_max;
+    float screen =
+        foc_screen(id_ref_a + iq_ref_a + id_a + iq_a + omega_e_rad_s + vbus_v);
+
+    if ((screen != 0.0f) || !(vbus_v > 0.0f)) {
+        return false;
+    }
+    /* = st->v_limit_ratio * mc_svpwm_max_voltage_f32(vbus_v, st->limit_mode)
+     * for the two modes init accepts; finite, as vbus is. */
+    v_max = st->v_limit_ratio * ((st->limit_mode == MC_SVPWM_LIMIT_CIRCLE)
+                                     ? (vbus_v * MC_INV_SQRT3_F32)
+                                     : (vbus_v * (2.0f / 3.0f)));
+    if (st->decouple) {
+        ff_d = -(omega_e_rad_s * st->lq_h * iq_a);
+        ff_q = (omega_e_rad_s * st->ld_h * id_a) + (omega_e_rad_s * st->flux_wb);
+    }
+    e_d = id_ref_a - id_a;
+    e_q = iq_ref_a - iq_a;
+
+    /* d axis: mc_pi_f32_step_lim(&st->pi_d, e_d, ff_d, -v_max, v_max). Its
+     * limits are max(-v_max, out_min) and min(v_max, out_max); init made
+     * out_min = -out_max (> 0), so the lower one is exactly minus the upper
+     * one, and they are ordered since v_max >= 0. */
+    hi = (v_max < st->pi_d.out_max) ? v_max : st->pi_d.out_max;
+    vd = mc_pi_f32_core(&st->pi_d, e_d, ff_d, -hi, hi, &integ_d);
+
+    vq_room_sq = (v_max * v_max) - (vd * vd);
+    vq_max = (vq_room_sq > 0.0f) ? foc_sqrt_pos(vq_room_sq) : 0.0f;
+
+    /* q axis: mc_pi_f32_step_lim(&st->pi_q, e_q, ff_q, -vq_max, vq_max), the
+     * same way (vq_max >= 0, or NaN: caught below) */
+    hi = (vq_max < st->pi_q.out_max) ? vq_max : st->pi_q.out_max;
+    vq = mc_pi_f32_core(&st->pi_q, e_q, ff_q, -hi, hi, &integ_q);
+
+    /* Everything the PIs check: their inputs (e, ff, the limits: v_max is
+     * finite, a NaN vd makes vq_max NaN) and their results. The results
+     * are clamped to finite limits, so they are finite or NaN: their plain
+     * sum is NaN iff one of them is. */
+    screen = foc_screen(e_d + ff_d + e_q + ff_q + vq_max) + (integ_d + vd + integ_q + vq);
+    if (screen != screen) {
+        return false;
+    }
+    /* The FOC keeps its own sticky flags and clears the PIs' every step. */
+    st->pi_d.flags = MC_PI_ERR_NONE;
+    st->pi_q.flags = MC_PI_ERR_NONE;
+    mc_pi_f32_commit(&st->pi_d, e_d, ff_d, integ_d, vd);
+    mc_pi_f32_commit(&st->pi_q, e_q, ff_q, integ_q, vq);
+    *p_vd_v = vd;
+    *p_vq_v = vq;
+    return true;
+}
+
 uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, float id_a,
                             float iq_a, float omega_e_rad_s, float vbus_v, float *p_vd_v,
                             float *p_vq_v)
@@ -195,6 +298,13 @@ uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
 
     if ((st == NULL) || (p_vd_v == NULL) || (p_vq_v == NULL)) {
         return MC_FOC_ERR_NULL;
+    }
+    if (foc_dq_fast(st, id_ref_a, iq_ref_a, id_a, iq_a, omega_e_rad_s, vbus_v, &vd, &vq)) {
+        st->vd_v = vd;
+        st->vq_v = vq;
+        *p_vd_v = vd;
+        *p_vq_v = vq;
+        return MC_FOC_ERR_NONE;
     }
     err = foc_check_inputs(id_ref_a, iq_ref_a, id_a, iq_a, omega_e_rad_s, vbus_v);
     if (err == MC_FOC_ERR_NONE) {
@@ -219,6 +329,71 @@ static void foc_out_zero(mc_foc_f32_out_t *out)
     out->v_beta_v = 0.0f;
 }
 
+/* The whole step on the fast path (see above), or false with st untouched
+ * (out may be partly written; the checked step rewrites all of it). */
+static bool foc_step_fast(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out)
+{
+    float i_alpha;
+    float i_beta;
+    float sin_th;
+    float cos_th;
+    float id;
+    float iq;
+    float vd;
+    float vq;
+    float v_alpha;
+    float v_beta;
+    float va_lim;
+    float vb_lim;
+    uint32_t svf;
+    float sum = in->ia_a + in->ib_a + in->theta_e_rad;
+
+    if (in->three_phase) {
+        sum += in->ic_a;
+    }
+    if (foc_screen(sum) != 0.0f) {
+        return false;
+    }
+    if (in->three_phase) {
+        mc_clarke3_f32(in->ia_a, in->ib_a, in->ic_a, &i_alpha, &i_beta);
+    } else {
+        mc_clarke_f32(in->ia_a, in->ib_a, &i_alpha, &i_beta);
+    }
+    mc_sincos_f32(in->theta_e_rad, &sin_th, &cos_th);
+    mc_park_f32(i_alpha, i_beta, sin_th, cos_th, &id, &iq);
+    if (!foc_dq_fast(st, in->id_ref_a, in->iq_ref_a, id, iq, in->omega_e_rad_s, in->vbus_v, &vd,
+                     &vq)) {
+        return false;
+    }
+
+    /* From here on nothing can fail: vd, vq, sin, cos and vbus > 0 are
+     * finite. Modulator limit and duties as mc_svpwm_limit_f32 followed by
+     * mc_svpwm_f32 on the limited vector (one solution when not limited). */
+    mc_inv_park_f32(vd, vq, sin_th, cos_th, &v_alpha, &v_beta);
+    va_lim = v_alpha;
+    vb_lim = v_beta;
+    svf = mc_svpwm_limit_duty_f32(&va_lim, &vb_lim, in->vbus_v, st->limit_mode, &out->duty_a,
+                                  &out->duty_b, &out->duty_c);
+    if ((svf & MC_SVPWM_FLAG_LIMITED) != 0u) {
+        v_alpha = va_lim;
+        v_beta = vb_lim;
+        mc_park_f32(v_alpha, v_beta, sin_th, cos_th, &vd, &vq);
+        (void)mc_pi_f32_track(&st->pi_d, vd);
+        (void)mc_pi_f32_track(&st->pi_q, vq);
+    }
+    st->vd_v = vd;
+    st->vq_v = vq;
+    out->svpwm_flags = svf;
+    out->id_a = id;
+    out->iq_a = iq;
+    out->vd_v = vd;
+    out->vq_v = vq;
+    out->v_alpha_v = v_alpha;
+    out->v_beta_v = v_beta;
+    out->flags = st->flags;
+    return true;
+}
+
 uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out)
 {
     uint32_t err;
@@ -238,6 +413,10 @@ uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32
     if ((st == NULL) || (in == NULL) || (out == NULL)) {
         return MC_FOC_ERR_NULL;
     }
+    if (foc_step_fast(st, in, out)) {
+        return MC_FOC_ERR_NONE;
+    }
+    /* The checked step: errors, refusals, and what the fast path left. */
     out->svpwm_flags = MC_SVPWM_FLAG_NONE;
     out->id_a = 0.0f;
     out->iq_a = 0.0f;

@@ -34,6 +34,16 @@
  * to infinity) gives MC_FOC_ERR_PI, zero voltage. The sticky flags are
  * cleared by mc_foc_f32_reset() only.
  *
+ * Cost: both steps first try a fast path that screens the inputs and
+ * intermediates for non-finite values in a few sums instead of one test
+ * per value and per stage, relies on what init validated, commits nothing
+ * until the step is known good and, in the modulator's linear region,
+ * solves the SVPWM once. It performs the same float operations in the same
+ * order, so its results are bit-identical; any step it cannot finish
+ * (non-finite value, vbus <= 0, a PI that would refuse) runs through the
+ * checked code, so errors and flags are as described above
+ * (tests/unit/foc/test_foc_fast.cpp compares the two bit for bit).
+ *
  * No heap, no globals, no I/O.
  */
 #ifndef MC_FOC_H

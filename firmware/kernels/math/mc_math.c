@@ -185,17 +185,23 @@ static float quarter_from_turn(uint64_t turn, uint32_t *p_q)
     return neg ? -r : r;
 }
 
+/** reduce_quadrant for |x| <= MC_MATH_CW_LIMIT_RAD: Cody-Waite. */
+static float reduce_cw(float x, uint32_t *p_q)
+{
+    float kf = round_small_f32(x * cw_two_over_pi); /* |k| <= 5216 */
+    int32_t k = (int32_t)kf;                        /* in range: exact */
+    float r = x - kf * cw_c1;                       /* exact */
+    r = r - kf * cw_c2;
+    r = r - kf * cw_c3;
+    *p_q = (uint32_t)k & 3u;
+    return r;
+}
+
 /** Reduce x to r in [-pi/4, pi/4] and quadrant q: x = r + q*pi/2 (mod 2pi). */
 static float reduce_quadrant(float x, uint32_t *p_q)
 {
     if (mc_abs_f32(x) <= MC_MATH_CW_LIMIT_RAD) {
-        float kf = round_small_f32(x * cw_two_over_pi); /* |k| <= 5216 */
-        int32_t k = (int32_t)kf;                        /* in range: exact */
-        float r = x - kf * cw_c1;                       /* exact */
-        r = r - kf * cw_c2;
-        r = r - kf * cw_c3;
-        *p_q = (uint32_t)k & 3u;
-        return r;
+        return reduce_cw(x, p_q);
     }
     uint64_t turn = 0u;
     (void)mc_turn_from_rad_f32(x, &turn);
@@ -218,19 +224,24 @@ static const float cos_c4 = -2.730093343e-07f;
 
 void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos)
 {
-    if (!mc_isfinite_f32(x_rad)) {
-        float nan = x_rad - x_rad; /* NaN for NaN and +-inf */
-        *p_sin = nan;
-        *p_cos = nan;
-        return;
-    }
+    uint32_t q = 0u;
+    float r;
     if (x_rad == 0.0f) {
         *p_sin = x_rad; /* keeps the sign of -0 (sin is odd) */
         *p_cos = 1.0f;
         return;
     }
-    uint32_t q = 0u;
-    float r = reduce_quadrant(x_rad, &q);
+    if (mc_abs_f32(x_rad) <= MC_MATH_CW_LIMIT_RAD) {
+        /* the common range first (it excludes NaN and inf): Cody-Waite */
+        r = reduce_cw(x_rad, &q);
+    } else if (!mc_isfinite_f32(x_rad)) {
+        float nan = x_rad - x_rad; /* NaN for NaN and +-inf */
+        *p_sin = nan;
+        *p_cos = nan;
+        return;
+    } else {
+        r = reduce_quadrant(x_rad, &q);
+    }
     float z = r * r;
     float s = r + (r * z) * (sin_s1 + z * (sin_s2 + z * (sin_s3 + z * sin_s4)));
     float c = (1.0f - 0.5f * z) + (z * z) * (cos_c1 + z * (cos_c2 + z * (cos_c3 + z * cos_c4)));

@@ -9,6 +9,7 @@
 #include <stddef.h>
 
 #include "math/mc_math.h"
+#include "pi/mc_pi_core.h"
 
 /* ------------------------------------------------------------------------ */
 /* float32                                                                   */
@@ -111,16 +112,17 @@ float mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, f
 {
     float lo;
     float hi;
-    float p;
-    float inc;
     float integ;
     float u;
 
     if (st == NULL) {
         return 0.0f;
     }
-    if (!mc_isfinite_f32(error) || !mc_isfinite_f32(ff) || !mc_isfinite_f32(lim_lo) ||
-        !mc_isfinite_f32(lim_hi)) {
+    /* 0 * (sum) is +-0 when the four are finite (and their sum does not
+     * overflow); only then is the test per value skipped. */
+    if (((0.0f * (error + ff + lim_lo + lim_hi)) != 0.0f) &&
+        (!mc_isfinite_f32(error) || !mc_isfinite_f32(ff) || !mc_isfinite_f32(lim_lo) ||
+         !mc_isfinite_f32(lim_hi))) {
         st->flags |= MC_PI_ERR_NAN_INPUT;
         return st->out;
     }
@@ -131,43 +133,19 @@ float mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, f
         return st->out;
     }
 
-    p = st->kp * error;
-    inc = st->ki_dt * error;
-    integ = st->integ + inc;
-
-    if (st->aw == MC_PI_AW_CLAMP) {
-        float u_try = p + integ + ff;
-        if ((u_try > hi) && (inc > 0.0f)) {
-            /* Integrate only up to the point where the output meets hi, never backwards. */
-            float room = hi - p - ff;
-            integ = (room > st->integ) ? room : st->integ;
-        } else if ((u_try < lo) && (inc < 0.0f)) {
-            float room = lo - p - ff;
-            integ = (room < st->integ) ? room : st->integ;
-        } else {
-            /* inside the limits, or the error pulls back into range: integrate */
-        }
-    } else if (st->aw == MC_PI_AW_BACK_CALC) {
-        float u_unsat = p + integ + ff;
-        float u_sat = mc_sat_f32(u_unsat, lo, hi);
-        integ = integ + (st->kaw_dt * (u_sat - u_unsat));
-    } else {
-        /* MC_PI_AW_NONE: plain integration, clamp below only */
-    }
-    integ = mc_sat_f32(integ, st->out_min, st->out_max);
-    u = mc_sat_f32(p + integ + ff, lo, hi);
+    /* The arithmetic (anti-windup, clamps) is shared with the FOC's fast
+     * path: pi/mc_pi_core.h. */
+    u = mc_pi_f32_core(st, error, ff, lo, hi, &integ);
 
     /* A finite input can still overflow (huge kp*e against an opposite ff):
      * refuse rather than store a NaN. */
-    if (!mc_isfinite_f32(integ) || !mc_isfinite_f32(u)) {
+    /* Both are clamped to finite limits, so each is finite or NaN: their
+     * sum is NaN iff one of them is. */
+    if ((integ + u) != (integ + u)) {
         st->flags |= MC_PI_ERR_NAN_INPUT;
         return st->out;
     }
-    st->integ_prev = st->integ;
-    st->integ = integ;
-    st->out = u;
-    st->last_error = error;
-    st->last_ff = ff;
+    mc_pi_f32_commit(st, error, ff, integ, u);
     return u;
 }
 

@@ -20,6 +20,14 @@
 
 /** sqrt(3) in Q30: round(2^30 * sqrt(3)). */
 #define MC_SVPWM_SQRT3_Q30 ((int64_t)1859775393)
+/** Keeps a rarely taken path out of line (its stack frame and saved
+ *  registers then cost nothing on the common path). */
+#if defined(__GNUC__)
+#define MC_SVPWM_NOINLINE __attribute__((noinline))
+#else
+#define MC_SVPWM_NOINLINE
+#endif
+
 /** Duty 0.5 in q31. */
 #define MC_SVPWM_HALF_Q31 ((q31_t)0x40000000)
 
@@ -52,7 +60,7 @@ static float mc_svpwm_min3_f32(float a, float b, float c)
 
 /** Validate and solve one request; the solution is valid only if the
  *  returned flags hold neither BAD_VBUS nor BAD_INPUT. */
-static uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float vbus_v,
+static inline uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float vbus_v,
                                    mc_svpwm_limit_t limit, mc_svpwm_solution_f32_t *p_sol)
 {
     uint32_t flags = MC_SVPWM_FLAG_NONE;
@@ -93,7 +101,18 @@ static uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float vbus_v
 
     float measure_n;
     if (limit == MC_SVPWM_LIMIT_CIRCLE) {
-        measure_n = MC_SQRT3_F32 * mc_sqrt_f32(alpha_n * alpha_n + beta_n * beta_n);
+        float mag2_n = alpha_n * alpha_n + beta_n * beta_n;
+        if ((p_sol->vbus_n == 1.0f) && (mag2_n < 0.33f)) {
+            /* Shortcut, same result: here |v| < 0.5745 vbus (rounding
+             * included), so sqrt(3) |v| <= 0.9951 vbus is inside the circle
+             * and the rounded measure below would not exceed vbus_n = 1
+             * either; the measure is not used when not limited. vbus_n is
+             * exactly 1 whenever |v_alpha|, |v_beta| <= vbus (k = vbus), the
+             * current controller's case. */
+            p_sol->den_n = 1.0f;
+            return flags;
+        }
+        measure_n = MC_SQRT3_F32 * mc_sqrt_f32(mag2_n);
     } else {
         measure_n = vmax - vmin;
     }
@@ -107,26 +126,152 @@ static uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float vbus_v
     return flags;
 }
 
+/** |x| for comparisons only (-0 gives +0, unlike mc_abs_f32): one
+ *  instruction (VABS.F32, ANDPS) where the compiler has the builtin. */
+static float mc_svpwm_fabs_f32(float x)
+{
+#if defined(__GNUC__)
+    return __builtin_fabsf(x);
+#else
+    return mc_abs_f32(x);
+#endif
+}
+
+/**
+ * The current controller's case on its own: circle limit, vbus finite and
+ * > 0, |v_alpha|, |v_beta| <= vbus (so k = vbus and vbus_n = vbus / vbus = 1
+ * exactly), and the request well inside the circle (the solver's shortcut
+ * test). Then D = 1, 1/D = 1 and the duties are 0.5 + (v_x - mid) with the
+ * solver's very operations (a product by 1 is exact), so the result is
+ * bit-identical to the general path, which this function leaves to
+ * (returns false, nothing written) in every other case.
+ */
+static bool mc_svpwm_linear_f32(float v_alpha_v, float v_beta_v, float vbus_v,
+                                mc_svpwm_limit_t limit, float *p_duty_a, float *p_duty_b,
+                                float *p_duty_c)
+{
+    /* A NaN fails every comparison: the voltage tests also rule out NaN and
+     * infinite voltages once vbus is known finite. */
+    if ((limit != MC_SVPWM_LIMIT_CIRCLE) || !(vbus_v > 0.0f) || !(vbus_v <= 3.40282347e38f) ||
+        !(mc_svpwm_fabs_f32(v_alpha_v) <= vbus_v) || !(mc_svpwm_fabs_f32(v_beta_v) <= vbus_v)) {
+        return false;
+    }
+    float alpha_n = v_alpha_v / vbus_v;
+    float beta_n = v_beta_v / vbus_v;
+    /* the solver's shortcut test (see there), first, so that a limited
+     * request goes to the general path at little cost */
+    if (!((alpha_n * alpha_n + beta_n * beta_n) < 0.33f)) {
+        return false;
+    }
+    float va;
+    float vb;
+    float vc;
+    mc_inv_clarke_f32(alpha_n, beta_n, &va, &vb, &vc);
+    float mid = 0.5f * (mc_svpwm_max3_f32(va, vb, vc) + mc_svpwm_min3_f32(va, vb, vc));
+    /* Here max - min <= sqrt(3) |v| < 0.9951, so every duty is within
+     * 0.5 +- 0.4976 (rounding included): the clamp to [0, 1] that the
+     * general path applies cannot act, and is left out. */
+    *p_duty_a = 0.5f + (va - mid);
+    *p_duty_b = 0.5f + (vb - mid);
+    *p_duty_c = 0.5f + (vc - mid);
+    return true;
+}
+
+/** The duties of a valid solution. */
+static inline void mc_svpwm_duties_f32(const mc_svpwm_solution_f32_t *p_sol, float *p_duty_a,
+                                float *p_duty_b, float *p_duty_c)
+{
+    float inv_den = 1.0f / p_sol->den_n;
+    /* Rounding can leave a duty a few ulp outside [0, 1] on the boundary. */
+    *p_duty_a = mc_sat_f32(0.5f + (p_sol->phase_n[0] - p_sol->mid_n) * inv_den, 0.0f, 1.0f);
+    *p_duty_b = mc_sat_f32(0.5f + (p_sol->phase_n[1] - p_sol->mid_n) * inv_den, 0.0f, 1.0f);
+    *p_duty_c = mc_sat_f32(0.5f + (p_sol->phase_n[2] - p_sol->mid_n) * inv_den, 0.0f, 1.0f);
+}
+
+static bool mc_svpwm_bad_f32(uint32_t flags)
+{
+    return (flags & (MC_SVPWM_FLAG_BAD_VBUS | MC_SVPWM_FLAG_BAD_INPUT)) != 0u;
+}
+
+/* The general modulator (every request), out of line so that the linear
+ * case's call stays light. */
+static MC_SVPWM_NOINLINE uint32_t mc_svpwm_general_f32(float v_alpha_v, float v_beta_v,
+                                                       float vbus_v, mc_svpwm_limit_t limit,
+                                                       float *p_duty_a, float *p_duty_b,
+                                                       float *p_duty_c)
+{
+    mc_svpwm_solution_f32_t sol;
+    uint32_t flags = mc_svpwm_solve_f32(v_alpha_v, v_beta_v, vbus_v, limit, &sol);
+    if (mc_svpwm_bad_f32(flags)) {
+        *p_duty_a = 0.5f;
+        *p_duty_b = 0.5f;
+        *p_duty_c = 0.5f;
+        return flags;
+    }
+    mc_svpwm_duties_f32(&sol, p_duty_a, p_duty_b, p_duty_c);
+    return flags;
+}
+
 uint32_t mc_svpwm_f32(float v_alpha_v, float v_beta_v, float vbus_v, mc_svpwm_limit_t limit,
                       float *p_duty_a, float *p_duty_b, float *p_duty_c)
 {
     if ((p_duty_a == NULL) || (p_duty_b == NULL) || (p_duty_c == NULL)) {
         return MC_SVPWM_FLAG_BAD_INPUT;
     }
+    if (mc_svpwm_linear_f32(v_alpha_v, v_beta_v, vbus_v, limit, p_duty_a, p_duty_b, p_duty_c)) {
+        return MC_SVPWM_FLAG_NONE;
+    }
+    return mc_svpwm_general_f32(v_alpha_v, v_beta_v, vbus_v, limit, p_duty_a, p_duty_b, p_duty_c);
+}
+
+/* mc_svpwm_limit_duty_f32 for every request, out of line (see above). */
+static MC_SVPWM_NOINLINE uint32_t mc_svpwm_limit_duty_general_f32(float *p_v_alpha_v,
+                                                                  float *p_v_beta_v, float vbus_v,
+                                                                  mc_svpwm_limit_t limit,
+                                                                  float *p_duty_a, float *p_duty_b,
+                                                                  float *p_duty_c)
+{
     mc_svpwm_solution_f32_t sol;
-    uint32_t flags = mc_svpwm_solve_f32(v_alpha_v, v_beta_v, vbus_v, limit, &sol);
-    if ((flags & (MC_SVPWM_FLAG_BAD_VBUS | MC_SVPWM_FLAG_BAD_INPUT)) != 0u) {
+    uint32_t flags = mc_svpwm_solve_f32(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit, &sol);
+    if (mc_svpwm_bad_f32(flags)) {
+        /* mc_svpwm_limit_f32 zeroes the vector; the modulator then gives
+         * 0.5 for a zero vector as for a bad one. */
+        *p_v_alpha_v = 0.0f;
+        *p_v_beta_v = 0.0f;
         *p_duty_a = 0.5f;
         *p_duty_b = 0.5f;
         *p_duty_c = 0.5f;
         return flags;
     }
-    float inv_den = 1.0f / sol.den_n;
-    /* Rounding can leave a duty a few ulp outside [0, 1] on the boundary. */
-    *p_duty_a = mc_sat_f32(0.5f + (sol.phase_n[0] - sol.mid_n) * inv_den, 0.0f, 1.0f);
-    *p_duty_b = mc_sat_f32(0.5f + (sol.phase_n[1] - sol.mid_n) * inv_den, 0.0f, 1.0f);
-    *p_duty_c = mc_sat_f32(0.5f + (sol.phase_n[2] - sol.mid_n) * inv_den, 0.0f, 1.0f);
+    if ((flags & MC_SVPWM_FLAG_LIMITED) != 0u) {
+        /* As mc_svpwm_limit_f32, then the modulator on the limited vector
+         * (a new solution: the scaled vector is normalised anew). */
+        float scale = sol.vbus_n / sol.den_n;
+        *p_v_alpha_v *= scale;
+        *p_v_beta_v *= scale;
+        return flags | mc_svpwm_general_f32(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit, p_duty_a,
+                                            p_duty_b, p_duty_c);
+    }
+    /* Not limited: the modulator's solution for the unchanged vector is
+     * this one. */
+    mc_svpwm_duties_f32(&sol, p_duty_a, p_duty_b, p_duty_c);
     return flags;
+}
+
+uint32_t mc_svpwm_limit_duty_f32(float *p_v_alpha_v, float *p_v_beta_v, float vbus_v,
+                                 mc_svpwm_limit_t limit, float *p_duty_a, float *p_duty_b,
+                                 float *p_duty_c)
+{
+    if ((p_v_alpha_v == NULL) || (p_v_beta_v == NULL) || (p_duty_a == NULL) ||
+        (p_duty_b == NULL) || (p_duty_c == NULL)) {
+        return MC_SVPWM_FLAG_BAD_INPUT;
+    }
+    if (mc_svpwm_linear_f32(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit, p_duty_a, p_duty_b,
+                            p_duty_c)) {
+        return MC_SVPWM_FLAG_NONE; /* inside the limit: the vector stays */
+    }
+    return mc_svpwm_limit_duty_general_f32(p_v_alpha_v, p_v_beta_v, vbus_v, limit, p_duty_a,
+                                           p_duty_b, p_duty_c);
 }
 
 uint32_t mc_svpwm_limit_f32(float *p_v_alpha_v, float *p_v_beta_v, float vbus_v,
@@ -137,7 +282,7 @@ uint32_t mc_svpwm_limit_f32(float *p_v_alpha_v, float *p_v_beta_v, float vbus_v,
     }
     mc_svpwm_solution_f32_t sol;
     uint32_t flags = mc_svpwm_solve_f32(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit, &sol);
-    if ((flags & (MC_SVPWM_FLAG_BAD_VBUS | MC_SVPWM_FLAG_BAD_INPUT)) != 0u) {
+    if (mc_svpwm_bad_f32(flags)) {
         *p_v_alpha_v = 0.0f;
         *p_v_beta_v = 0.0f;
         return flags;
