@@ -31,6 +31,10 @@ const bench_case_t *bench_cases(void);
 /** 0 if the stateful cases stayed on their nominal path (drive running). */
 int bench_check(void);
 
+/** q31 twins of the control kernels (bench_cases_q31.c): set-up and cases. */
+int bench_setup_q31(void);
+const bench_case_t *bench_cases_q31(void);
+
 /** Keep a result alive (the compiler must not drop the kernel call). */
 void bench_sink_u32(uint32_t v);
 

@@ -135,7 +135,7 @@ static void run_case(const bench_case_t *c)
 
 int main(void)
 {
-    if (bench_setup() != 0) {
+    if (bench_setup() != 0 || bench_setup_q31() != 0) {
         mc_sh_write0("bench: a kernel refused its configuration\n");
         return 1;
     }
@@ -157,6 +157,10 @@ int main(void)
     const bench_case_t *cases = bench_cases();
     for (uint32_t k = 0u; cases[k].fn != 0; ++k) {
         run_case(&cases[k]);
+    }
+    const bench_case_t *q31_cases = bench_cases_q31();
+    for (uint32_t k = 0u; q31_cases[k].fn != 0; ++k) {
+        run_case(&q31_cases[k]);
     }
     if (bench_check() != 0) {
         mc_sh_write0("bench: the drive left current mode during the run\n");

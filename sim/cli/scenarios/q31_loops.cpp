@@ -1,0 +1,551 @@
+// Closed loops with the q31 kernels; see q31_loops.hpp.
+#include "scenarios/q31_loops.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "hal_host/pmsm_board.hpp"
+#include "mcsim/integrator.hpp"
+#include "mcsim/pmsm_normalised.hpp"
+#include "mcsim/stepper_2ph.hpp"
+#include "scenario.hpp"
+
+extern "C" {
+#include "csmc/mc_stepper_dq.h"
+#include "math/mc_math.h"
+#include "mc_drive.h"
+#include "transforms/mc_svpwm.h"
+#include "transforms/mc_transforms.h"
+}
+
+namespace mcsim {
+namespace q31loop {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kQ31 = 2147483648.0;
+
+q31_t to_q(double v, double base) {
+  const double x = std::nearbyint(v / base * kQ31);
+  if (x >= kQ31 - 1.0) return MC_Q31_MAX;
+  if (x <= -kQ31) return MC_Q31_MIN;
+  return static_cast<q31_t>(x);
+}
+double from_q(q31_t q, double base) { return static_cast<double>(q) / kQ31 * base; }
+}  // namespace
+
+// ------------------------------------------------------------ pi2d paper
+mc_pi2d_q31_bases_t paper_pi2d_bases() {
+  mc_pi2d_q31_bases_t b{};
+  b.i_base_a = 32.0f;
+  b.v_base_v = 2048.0f;
+  b.theta_base_rad = 8.0f;  // theta_m, theta_ref in [0, 2 pi) + e4
+  b.thetaf_base_rad = 1.0f;
+  b.omega_base_rad_s = 16.0f;
+  b.alpha_base_rad_s2 = 8.0f;
+  b.jerk_base_rad_s3 = 1.0f;
+  b.did_base_a_s = 1.0f;
+  b.nu_base_nm = 1.0f;
+  return b;
+}
+
+long run_paper_q31(const pi2d::PaperOptions& o,
+                   const std::function<void(const pi2d::PaperSample&)>& row) {
+  const double T = 1.0 / o.rate_hz;
+  PmsmNormalised plant;
+  PmsmNormalisedParams pp;
+  pp.sigma = 0.51;
+  pp.gamma = 0.17;
+  pp.tau_l = o.tau_l;
+  if (plant.configure(pp) != Status::kOk) throw std::invalid_argument("normalised plant");
+  mc_pi2d_q31_cfg_t cfg{};
+  cfg.f = pi2d::paper_cfg(T);
+  cfg.base = paper_pi2d_bases();
+  const mc_pi2d_q31_bases_t& b = cfg.base;
+  mc_pi2d_q31_t law{};
+  const uint32_t err = mc_pi2d_q31_init(&law, &cfg);
+  if (err != 0u) throw std::invalid_argument("q31 paper gains rejected: " + std::to_string(err));
+  InputDelay<PmsmNormalised::Input, 4> delay;
+  delay.configure(static_cast<size_t>(o.delay_periods), PmsmNormalised::Input::Zero());
+  PmsmNormalised::State x = PmsmNormalised::State::Zero();
+  const long n = std::lround(o.duration / T);
+  for (long k = 0; k <= n; ++k) {
+    const double t = static_cast<double>(k) / o.rate_hz;
+    const pi2d::SpeedRef r = pi2d::paper_profile(t);
+    const double off = 2.0 * kPi * std::floor(r.th / (2.0 * kPi));
+    mc_pi2d_q31_in_t in{};
+    in.id = to_q(x(0), b.i_base_a);
+    in.iq = to_q(x(1), b.i_base_a);
+    in.theta_m = to_q(x(3) - off, b.theta_base_rad);
+    in.theta_ref = to_q(r.th - off, b.theta_base_rad);
+    in.omega_ref = to_q(r.w, b.omega_base_rad_s);
+    in.alpha_ref = to_q(r.a, b.alpha_base_rad_s2);
+    in.jerk_ref = to_q(r.j, b.jerk_base_rad_s3);
+    mc_pi2d_q31_out_t out{};
+    mc_pi2d_q31_step(&law, &in, &out);
+    const double u1 = from_q(out.vd, b.v_base_v), u2 = from_q(out.vq, b.v_base_v);
+    row(pi2d::PaperSample{t, x(0), x(1), x(2), x(3), r.w, r.th, from_q(out.iq_ref, b.i_base_a), u1,
+                          u2, from_q(out.nu, b.nu_base_nm), from_q(out.theta_f, b.thetaf_base_rad)});
+    if (k == n) break;
+    const PmsmNormalised::Input u = delay.push(PmsmNormalised::Input(u1, u2));
+    advance_zoh(plant, u, t, T, o.substeps, &x);
+  }
+  return n;
+}
+
+// ------------------------------------------------------------ pi2d motor
+mc_pi2d_q31_bases_t motor_pi2d_bases(const pi2d::MotorOptions& o) {
+  mc_pi2d_q31_bases_t b{};
+  b.i_base_a = 20.0f;     // the board's current-sensor range
+  b.v_base_v = static_cast<float>(2.0 * o.vbus_v);
+  b.theta_base_rad = 8.0f;  // positions kept in [0, 2 pi) (+ e4) by the plug-in
+  b.thetaf_base_rad = 1.0f;
+  b.omega_base_rad_s = 256.0f;   // 1000 r/min = 105 rad/s
+  b.alpha_base_rad_s2 = 1024.0f; // ramp 262 rad/s^2
+  b.jerk_base_rad_s3 = 1.0f;
+  b.did_base_a_s = 1.0f;
+  b.nu_base_nm = 8.0f;           // nu_max = 2 load + 1 = 7 N m
+  return b;
+}
+
+namespace {
+
+// The q31 PI^2D law as a drive plug-in (the f32 one is
+// firmware/app/mc_ctrl_pi2d): currents and angle in q31 from the drive's
+// measurements, Clarke/Park/inverse Park/SVPWM in q31, the law in q31.
+// Position bookkeeping (unwrapping, reference integration) as the f32
+// plug-in, in double: it is the caller's, not the kernel's.
+struct CtrlPi2dQ31 {
+  mc_pi2d_q31_t law{};
+  mc_pi2d_q31_bases_t b{};
+  double dt = 0.0, vbus_base = 0.0;
+  double omega_ref = 0.0, alpha_ref = 0.0;
+  double theta_ref = 0.0, theta_rel = 0.0, theta_prev = 0.0;
+  bool have_prev = false;
+  double iq_ref = 0.0, vd = 0.0, vq = 0.0, nu = 0.0, theta_f = 0.0;
+  mc_drive_ctrl_t ops{};
+};
+
+uint32_t q31_ctrl_reset(void* ctx) {
+  auto* c = static_cast<CtrlPi2dQ31*>(ctx);
+  mc_pi2d_q31_reset(&c->law, 0, 0);
+  c->theta_ref = 0.0;
+  c->theta_rel = 0.0;
+  c->have_prev = false;
+  return 0u;
+}
+
+uint32_t q31_ctrl_fast(void* ctx, const mc_drive_meas_t* m, mc_drive_out_t* out) {
+  auto* c = static_cast<CtrlPi2dQ31*>(ctx);
+  if (!m->have_encoder || !(m->vbus_v > 0.0f)) return 1u;
+  if (c->have_prev) {
+    c->theta_rel += std::remainder(static_cast<double>(m->theta_m_rad) - c->theta_prev, 2.0 * kPi);
+  } else {
+    c->theta_rel = 0.0;
+    c->have_prev = true;
+  }
+  c->theta_prev = m->theta_m_rad;
+  const mc_pi2d_q31_bases_t& b = c->b;
+  q31_t ia = to_q(m->ia_a, b.i_base_a), ib = to_q(m->ib_a, b.i_base_a);
+  q31_t al, be, s, co, id, iq;
+  mc_clarke_q31(ia, ib, &al, &be);
+  mc_sincos_q31(mc_q31_angle_from_rad_f32(m->theta_e_rad), &s, &co);
+  mc_park_q31(al, be, s, co, &id, &iq);
+  mc_pi2d_q31_in_t in{};
+  in.id = id;
+  in.iq = iq;
+  in.theta_m = to_q(c->theta_rel, b.theta_base_rad);
+  in.theta_ref = to_q(c->theta_ref, b.theta_base_rad);
+  in.omega_ref = to_q(c->omega_ref, b.omega_base_rad_s);
+  in.alpha_ref = to_q(c->alpha_ref, b.alpha_base_rad_s2);
+  mc_pi2d_q31_out_t o{};
+  mc_pi2d_q31_step(&c->law, &in, &o);
+  q31_t va, vb, da, db, dc;
+  mc_inv_park_q31(o.vd, o.vq, s, co, &va, &vb);
+  (void)mc_svpwm_q31(va, vb, to_q(m->vbus_v, b.v_base_v), MC_SVPWM_LIMIT_CIRCLE, &da, &db, &dc);
+  out->duty_a = static_cast<float>(from_q(da, 1.0));
+  out->duty_b = static_cast<float>(from_q(db, 1.0));
+  out->duty_c = static_cast<float>(from_q(dc, 1.0));
+  out->duty2_a = 0.0f;
+  out->duty2_b = 0.0f;
+  c->iq_ref = from_q(o.iq_ref, b.i_base_a);
+  c->vd = from_q(o.vd, b.v_base_v);
+  c->vq = from_q(o.vq, b.v_base_v);
+  c->nu = from_q(o.nu, b.nu_base_nm);
+  c->theta_f = from_q(o.theta_f, b.thetaf_base_rad);
+  // reference one period ahead (exact for constant alpha), whole turns off
+  c->theta_ref += c->omega_ref * c->dt + 0.5 * c->alpha_ref * c->dt * c->dt;
+  c->omega_ref += c->alpha_ref * c->dt;
+  if (c->theta_ref >= 2.0 * kPi) {
+    c->theta_ref -= 2.0 * kPi;
+    c->theta_rel -= 2.0 * kPi;
+  } else if (c->theta_ref < 0.0) {
+    c->theta_ref += 2.0 * kPi;
+    c->theta_rel += 2.0 * kPi;
+  }
+  return 0u;
+}
+
+constexpr double kRpm = 2.0 * kPi / 60.0;
+
+pi2d::SpeedRef motor_profile(const pi2d::MotorOptions& o, double t) {
+  const double w_r = o.speed_rpm * kRpm, acc = w_r / o.ramp_s;
+  pi2d::SpeedRef r;
+  if (t < o.t_up_s) return r;
+  if (t < o.t_up_s + o.ramp_s) {
+    r.a = acc;
+    r.w = acc * (t - o.t_up_s);
+  } else if (t < o.t_down_s) {
+    r.w = w_r;
+  } else if (t < o.t_down_s + o.ramp_s) {
+    r.a = -acc;
+    r.w = w_r - acc * (t - o.t_down_s);
+  }
+  return r;
+}
+
+}  // namespace
+
+pi2d::MotorMetrics run_motor_q31(const pi2d::MotorOptions& o, double duration_s,
+                                 const std::function<void(const pi2d::MotorSample&)>& row) {
+  // The rig of pi2d::run_motor (same board, drive and limits).
+  hal_host::PmsmBoardConfig bc;
+  bc.motor.R_ohm = 0.675;
+  bc.motor.Ld_h = 1.14e-3;
+  bc.motor.Lq_h = 1.14e-3;
+  bc.motor.flux_wb = 0.11;
+  bc.motor.pole_pairs = 4;
+  bc.motor.J_kgm2 = o.J_kgm2;
+  bc.motor.B_nms_rad = o.B_nms_rad;
+  bc.motor.load = load_step(0.0, o.t_load_s, o.load_nm);
+  bc.inverter.t_pwm_s = 1.0 / o.pwm_hz;
+  bc.vbus_v = o.vbus_v;
+  bc.current_sensor.full_scale_a = 20.0;
+  bc.current_sensor.bits = 12;
+  bc.current_sensor.noise_rms_a = o.noise_rms_a;
+  bc.vbus_sensor.full_scale_v = 400.0;
+  bc.encoder.counts_per_rev = 8192;
+  bc.substeps = o.substeps;
+  bc.delay_periods = o.delay_periods;
+  hal_host::PmsmBoard bd(bc);
+  float kp = 0.0f, ki = 0.0f;
+  if (mc_foc_f32_gains_from_bandwidth(0.675f, 1.14e-3f, static_cast<float>(o.bw_current_rad_s),
+                                      &kp, &ki) != 0u) {
+    throw std::invalid_argument("current-loop bandwidth rejected");
+  }
+  mc_drive_cfg_t dc{};
+  dc.foc.r_ohm = 0.675f;
+  dc.foc.ld_h = 1.14e-3f;
+  dc.foc.lq_h = 1.14e-3f;
+  dc.foc.flux_wb = 0.11f;
+  dc.foc.kp_d_v_per_a = kp;
+  dc.foc.ki_d_v_per_as = ki;
+  dc.foc.kp_q_v_per_a = kp;
+  dc.foc.ki_q_v_per_as = ki;
+  dc.foc.dt_s = static_cast<float>(1.0 / o.pwm_hz);
+  dc.foc.aw = MC_PI_AW_CLAMP;
+  dc.foc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
+  dc.foc.v_limit_ratio = 0.95f;
+  dc.foc.v_abs_max_v = static_cast<float>(o.vbus_v);
+  dc.foc.decouple = true;
+  dc.pole_pairs = 4;
+  dc.speed_pll_bw_rad_s = 1000.0f;
+  dc.slow_loop_div = 20;
+  dc.i_max_a = static_cast<float>(o.i_limit_a);
+  dc.i_trip_a = static_cast<float>(1.5 * o.i_limit_a);
+  dc.vbus_min_v = static_cast<float>(0.5 * o.vbus_v);
+  dc.vbus_max_v = static_cast<float>(1.5 * o.vbus_v);
+  dc.omega_max_rad_s = static_cast<float>(1.5 * o.speed_rpm * kRpm);
+  dc.temp_max_c = 100.0f;
+  dc.stall_current_frac = 0.95f;
+  dc.stall_speed_rad_s = 1.0f;
+  dc.stall_time_s = 0.5f;
+  mc_drive_t d{};
+  if (mc_drive_init(&d, &dc, bd.hal()) != MC_DRIVE_CFG_OK) {
+    throw std::invalid_argument("drive configuration rejected");
+  }
+  CtrlPi2dQ31 ctrl;
+  mc_pi2d_q31_cfg_t cc{};
+  cc.f = pi2d::motor_pi2d_cfg(o);
+  cc.base = motor_pi2d_bases(o);
+  const uint32_t lerr = mc_pi2d_q31_init(&ctrl.law, &cc);
+  if (lerr != 0u) throw std::invalid_argument("q31 PI2D rejected: " + std::to_string(lerr));
+  ctrl.b = cc.base;
+  ctrl.dt = 1.0 / o.pwm_hz;
+  ctrl.ops.outputs = MC_DRIVE_OUT_PWM3;
+  ctrl.ops.needs_encoder = true;
+  ctrl.ops.reset = q31_ctrl_reset;
+  ctrl.ops.fast = q31_ctrl_fast;
+  ctrl.ops.slow = nullptr;
+  ctrl.ops.ctx = &ctrl;
+  if (mc_drive_attach_ctrl(&d, &ctrl.ops) != 0) throw std::runtime_error("plug-in refused");
+  if (mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL) != 0) throw std::runtime_error("CTRL mode");
+
+  const double T = 1.0 / o.pwm_hz;
+  const long n = std::lround(duration_s / T);
+  const double w_r = o.speed_rpm * kRpm;
+  pi2d::MotorMetrics mm;
+  double sum_e2 = 0.0, last_out_of_band = o.t_load_s;
+  for (long k = 0; k <= n; ++k) {
+    const double t = bd.t_s();
+    const pi2d::SpeedRef r = motor_profile(o, t);
+    bd.sample();
+    ctrl.omega_ref = static_cast<float>(r.w);  // as the f32 plug-in's float reference
+    ctrl.alpha_ref = static_cast<float>(r.a);
+    if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
+    double id, iq;
+    bd.true_dq_a(&id, &iq);
+    const auto x = bd.state();
+    const double e = x(2) - r.w;
+    sum_e2 += e * e;
+    mm.peak_err_rad_s = std::max(mm.peak_err_rad_s, std::abs(e));
+    mm.peak_current_a = std::max(mm.peak_current_a, std::hypot(id, iq));
+    if (t >= o.t_load_s && t < o.t_down_s) {
+      mm.load_dip_rad_s = std::max(mm.load_dip_rad_s, std::abs(e));
+      if (std::abs(e) > 0.01 * w_r) last_out_of_band = t;
+    }
+    pi2d::MotorSample s{};
+    s.t = t;
+    s.omega_m = x(2);
+    s.omega_ref = r.w;
+    s.id = id;
+    s.iq = iq;
+    s.iq_ref = ctrl.iq_ref;
+    s.vd = ctrl.vd;
+    s.vq = ctrl.vq;
+    s.nu = ctrl.nu;
+    s.theta_f = ctrl.theta_f;
+    s.load = (t >= o.t_load_s) ? o.load_nm : 0.0;
+    row(s);
+    if (k < n) bd.advance();
+  }
+  mm.rms_err_rad_s = std::sqrt(sum_e2 / static_cast<double>(n + 1));
+  mm.settle_after_load_s = last_out_of_band - o.t_load_s;
+  mm.faults = d.faults;
+  return mm;
+}
+
+// ----------------------------------------------------------------- csmc
+mc_csmc_q31_bases_t paper_csmc_bases() {
+  mc_csmc_q31_bases_t b{};
+  b.i_base_a = 20.0f;
+  b.theta_base_rad = 0.5f;
+  b.omega_base_rad_s = 200.0f;
+  b.alpha_base_rad_s2 = 1.0e5f;
+  b.did_base_a_s = 1.0e5f;
+  b.jerk_base_rad_s3 = 1.0e7f;
+  b.g_base_rad_s3 = 1.0e9f;
+  b.v_base_v = 2.0e4f;
+  return b;
+}
+
+csmc::LoopResult run_csmc_q31(const csmc::LoopOptions& o) {
+  Stepper2PhParams p;
+  p.R_ohm = o.plant.R_ohm;
+  p.L_h = o.plant.L_h;
+  p.Km_nm_a = o.plant.Km_nm_a;
+  p.J_kgm2 = o.plant.J_kgm2;
+  p.B_nms_rad = o.plant.B_nms_rad;
+  p.rotor_teeth = o.plant.rotor_teeth;
+  p.load = load_constant(o.plant.tau_load_nm);
+  Stepper2Ph plant;
+  if (plant.configure(p) != Status::kOk) throw std::runtime_error("stepper parameters rejected");
+  if (o.fb != csmc::Feedback::kState || o.ref != csmc::RefKind::kSteps) {
+    throw std::runtime_error("run_csmc_q31: state feedback with step references only");
+  }
+  mc_csmc_q31_cfg_t cc{};
+  cc.f = o.ctrl;
+  cc.f.dt_s = static_cast<float>(o.dt_s);
+  cc.base = paper_csmc_bases();
+  const mc_csmc_q31_bases_t& b = cc.base;
+  mc_csmc_q31_t ctrl{};
+  const uint32_t ce = mc_csmc_q31_init(&ctrl, &cc);
+  if (ce != MC_CSMC_ERR_NONE) throw std::runtime_error("q31 csmc rejected: " + std::to_string(ce));
+  const uint32_t nr = static_cast<uint32_t>(o.plant.rotor_teeth);
+  csmc::LoopResult res;
+  const long n = std::lround(o.duration_s / o.dt_s);
+  const size_t every = std::max<size_t>(1, o.record_every);
+  Stepper2Ph::State x = Stepper2Ph::State::Zero();
+  for (long k = 0; k <= n; ++k) {
+    const double t = static_cast<double>(k) * o.dt_s;
+    const double phi = (t >= 0.0 ? o.step_rad : 0.0) +
+                       ((o.step2_t_s >= 0.0 && t >= o.step2_t_s) ? o.step_rad : 0.0);
+    const float ia = static_cast<float>(x(Stepper2Ph::kIa));
+    const float ib = static_cast<float>(x(Stepper2Ph::kIb));
+    const float w = static_cast<float>(x(Stepper2Ph::kOmegaM));
+    const float th = static_cast<float>(x(Stepper2Ph::kThetaM));
+    float sin_e = 0.0f, cos_e = 0.0f;
+    mc_sincos_f32(mc_stepper_theta_e_f32(th, nr), &sin_e, &cos_e);
+    float id = 0.0f, iq = 0.0f;
+    mc_stepper_ab_to_dq_sc_f32(ia, ib, sin_e, cos_e, &id, &iq);
+    // The error vector as the f32 loop forms it (measurement side), then
+    // per unit at the kernel boundary.
+    mc_csmc_f32_in_t fin{};
+    if (mc_csmc_f32_err_from_state(&cc.f.model, id, iq, w, th, 0.0f, static_cast<float>(phi), 0.0f,
+                                   0.0f, &fin) != MC_CSMC_ERR_NONE) {
+      throw std::runtime_error("model for the state errors rejected");
+    }
+    const double e2 = x(Stepper2Ph::kThetaM) - phi;
+    mc_csmc_q31_in_t in{};
+    in.e1 = to_q(fin.e1_a, b.i_base_a);
+    in.e2 = to_q(e2, b.theta_base_rad);
+    in.de2 = to_q(fin.de2_rad_s, b.omega_base_rad_s);
+    in.dde2 = to_q(fin.dde2_rad_s2, b.alpha_base_rad_s2);
+    in.i_d = to_q(id, b.i_base_a);
+    in.i_q = to_q(iq, b.i_base_a);
+    in.omega_m = to_q(w, b.omega_base_rad_s);
+    mc_csmc_q31_out_t out{};
+    mc_csmc_q31_step(&ctrl, &in, &out);
+    const float vd = static_cast<float>(from_q(out.v_d, b.v_base_v));
+    const float vq = static_cast<float>(from_q(out.v_q, b.v_base_v));
+    if (k % static_cast<long>(every) == 0 || k == n) {
+      res.trace.push_back(csmc::Sample{t, fin.e1_a, e2, id, iq, w, x(Stepper2Ph::kThetaM), vd, vq,
+                                       0.0, 0.0, 0.0, from_q(out.s1, b.i_base_a),
+                                       from_q(out.s2, b.alpha_base_rad_s2), phi});
+    }
+    if (k == n) {
+      res.t_end = t;
+      res.e2_end = e2;
+      break;
+    }
+    float va = 0.0f, vb = 0.0f;
+    mc_stepper_dq_to_ab_sc_f32(vd, vq, sin_e, cos_e, &va, &vb);
+    const Stepper2Ph::Input u(static_cast<double>(va), static_cast<double>(vb));
+    if (advance_zoh(plant, u, t, o.dt_s, o.substeps, &x) != Status::kOk) {
+      throw std::runtime_error("integration failed");
+    }
+    if (!x.allFinite()) throw std::runtime_error("plant state diverged");
+  }
+  return res;
+}
+
+// -------------------------------------------------------------- scenarios
+namespace {
+
+void run_paper_cmp(RunContext& ctx) {
+  pi2d::PaperOptions o;
+  o.rate_hz = ctx.params.get("rate_hz");
+  o.tau_l = ctx.params.get("tau_l");
+  o.duration = ctx.duration_s;
+  std::vector<pi2d::PaperSample> a, q;
+  pi2d::run_paper(o, [&](const pi2d::PaperSample& s) { a.push_back(s); });
+  ctx.progress.update(0.5 * ctx.duration_s, ctx.duration_s);
+  run_paper_q31(o, [&](const pi2d::PaperSample& s) { q.push_back(s); });
+  ctx.csv.columns({"t", "x3_ref", "f32_x3", "q31_x3", "f32_x4", "q31_x4", "f32_x2", "q31_x2",
+                   "f32_u2", "q31_u2", "f32_nu", "q31_nu", "dx3", "dx4"});
+  const long every = std::max(1L, std::lround(o.rate_hz / 1000.0));
+  double dx3 = 0, dx4 = 0, dx2 = 0, du2 = 0, dnu = 0;
+  for (size_t k = 0; k < std::min(a.size(), q.size()); ++k) {
+    const auto& s = a[k];
+    const auto& r = q[k];
+    dx3 = std::max(dx3, std::abs(s.x3 - r.x3));
+    dx4 = std::max(dx4, std::abs(s.x4 - r.x4));
+    dx2 = std::max(dx2, std::abs(s.x2 - r.x2));
+    du2 = std::max(du2, std::abs(s.u2 - r.u2));
+    dnu = std::max(dnu, std::abs(s.nu - r.nu));
+    if (static_cast<long>(k) % every == 0) {
+      ctx.csv.row({s.t, s.x3_ref, s.x3, r.x3, s.x4, r.x4, s.x2, r.x2, s.u2, r.u2, s.nu, r.nu,
+                   r.x3 - s.x3, r.x4 - s.x4});
+    }
+  }
+  ctx.summary.set("max_abs_dx3", dx3);
+  ctx.summary.set("max_abs_dx4", dx4);
+  ctx.summary.set("max_abs_dx2", dx2);
+  ctx.summary.set("max_abs_du2", du2);
+  ctx.summary.set("max_abs_dnu", dnu);
+  ctx.summary.set("q31_x3_final", q.back().x3);
+  ctx.summary.set("f32_x3_final", a.back().x3);
+}
+
+const Registrar reg_paper_q31({
+    "pi2d-paper-q31",
+    "pi2d-paper with the q31 PI^2D kernel (mc_pi2d_q31) next to the f32 run: both trajectories "
+    "and their difference (tests/sil/q31 bounds it)",
+    14.0,
+    {{"rate_hz", 10000.0, "1/t_n", "controller rate (normalised time)", 100.0, 1.0e6},
+     {"tau_l", 1.0, "1", "normalised load torque", -10.0, 10.0}},
+    run_paper_cmp});
+
+void run_motor_cmp(RunContext& ctx) {
+  pi2d::MotorOptions o;
+  o.load_nm = ctx.params.get("load_nm");
+  o.noise_rms_a = ctx.params.get("noise_rms_a");
+  std::vector<pi2d::MotorSample> a, q;
+  const auto ma = pi2d::run_motor(o, true, ctx.duration_s,
+                                  [&](const pi2d::MotorSample& s) { a.push_back(s); });
+  ctx.progress.update(0.5 * ctx.duration_s, ctx.duration_s);
+  const auto mq = run_motor_q31(o, ctx.duration_s, [&](const pi2d::MotorSample& s) { q.push_back(s); });
+  ctx.csv.columns({"t", "omega_ref_rad_s", "f32_omega_m_rad_s", "q31_omega_m_rad_s", "f32_i_q_a",
+                   "q31_i_q_a", "f32_nu_nm", "q31_nu_nm", "d_omega_rad_s"});
+  double dw = 0, diq = 0, dnu = 0;
+  for (size_t k = 0; k < std::min(a.size(), q.size()); ++k) {
+    dw = std::max(dw, std::abs(a[k].omega_m - q[k].omega_m));
+    diq = std::max(diq, std::abs(a[k].iq - q[k].iq));
+    dnu = std::max(dnu, std::abs(a[k].nu - q[k].nu));
+    if (k % 4 == 0) {
+      ctx.csv.row({a[k].t, a[k].omega_ref, a[k].omega_m, q[k].omega_m, a[k].iq, q[k].iq, a[k].nu,
+                   q[k].nu, q[k].omega_m - a[k].omega_m});
+    }
+  }
+  ctx.summary.set("max_abs_domega_rad_s", dw);
+  ctx.summary.set("max_abs_diq_a", diq);
+  ctx.summary.set("max_abs_dnu_nm", dnu);
+  ctx.summary.set("f32.rms_speed_error_rad_s", ma.rms_err_rad_s);
+  ctx.summary.set("q31.rms_speed_error_rad_s", mq.rms_err_rad_s);
+  ctx.summary.set("f32.load_step_dip_rad_s", ma.load_dip_rad_s);
+  ctx.summary.set("q31.load_step_dip_rad_s", mq.load_dip_rad_s);
+  ctx.summary.set("q31.faults", mq.faults);
+  if (ma.faults != 0u || mq.faults != 0u) throw std::runtime_error("drive faulted");
+}
+
+const Registrar reg_motor_q31({
+    "pi2d-motor-q31",
+    "pi2d-motor (PI^2D part) with a q31 plug-in: mc_pi2d_q31 and Clarke/Park/SVPWM q31 through "
+    "the drive's CTRL mode, next to the f32 plug-in run",
+    2.2,
+    {{"load_nm", 3.0, "N m", "load step at t = 1 s", -10.0, 10.0},
+     {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 1.0}},
+    run_motor_cmp});
+
+void run_csmc_cmp(RunContext& ctx) {
+  csmc::LoopOptions o;
+  o.duration_s = ctx.duration_s;
+  o.dt_s = ctx.params.get("dt_s");
+  o.step2_t_s = 0.5;
+  o.ctrl = csmc::paper_ctrl(true, ctx.params.get("integrators") != 0.0, false);
+  o.record_every = std::max<size_t>(1, static_cast<size_t>(std::floor(o.duration_s / o.dt_s / 5000.0)));
+  const csmc::LoopResult a = csmc::run_loop(o);
+  ctx.progress.update(0.5 * ctx.duration_s, ctx.duration_s);
+  const csmc::LoopResult q = run_csmc_q31(o);
+  ctx.csv.columns({"t", "phi_d_rad", "f32_x4_rad", "q31_x4_rad", "f32_u2_v", "q31_u2_v",
+                   "f32_x1_a", "q31_x1_a", "dx4_rad"});
+  double dx4 = 0, dx1 = 0;
+  for (size_t k = 0; k < std::min(a.trace.size(), q.trace.size()); ++k) {
+    const auto& s = a.trace[k];
+    const auto& r = q.trace[k];
+    dx4 = std::max(dx4, std::abs(s.x4 - r.x4));
+    dx1 = std::max(dx1, std::abs(s.x1 - r.x1));
+    ctx.csv.row({s.t, s.phi_d, s.x4, r.x4, s.u2, r.u2, s.x1, r.x1, r.x4 - s.x4});
+  }
+  ctx.summary.set("max_abs_dx4_rad", dx4);
+  ctx.summary.set("max_abs_dx1_a", dx1);
+  ctx.summary.set("f32_e2_final_rad", a.e2_end);
+  ctx.summary.set("q31_e2_final_rad", q.e2_end);
+}
+
+const Registrar reg_csmc_q31({
+    "csmc-state-feedback-q31",
+    "csmc-state-feedback (paper 001 Fig. 2) with the q31 CSMC kernel (mc_csmc_q31 with q31 "
+    "conditional integrators) next to the f32 run",
+    1.0,
+    {{"dt_s", 1.0e-5, "s", "control period", 1.0e-6, 1.0e-3},
+     {"integrators", 1.0, "-", "1: conditional integrators k0 = (20, 100); 0: none", 0.0, 1.0}},
+    run_csmc_cmp});
+
+}  // namespace
+}  // namespace q31loop
+}  // namespace mcsim
