@@ -61,8 +61,12 @@ int cmd_describe(const std::string& name) {
   std::printf("%s: %s\ndefault duration: %g s\nparameters (--set key=value):\n", s.name.c_str(),
               s.description.c_str(), s.default_duration_s);
   for (const auto& p : s.params) {
-    std::printf("  %-22s default %-10g [%g, %g] %-8s %s\n", p.key.c_str(), p.default_value,
+    std::printf("  %-22s default %-10g [%g, %g] %-8s %s", p.key.c_str(), p.default_value,
                 p.min_value, p.max_value, p.unit.c_str(), p.help.c_str());
+    for (size_t i = 0; i < p.choices.size(); ++i) {
+      std::printf("%s%s = %g", i ? ", " : " (", p.choices[i].first.c_str(), p.choices[i].second);
+    }
+    std::printf("%s\n", p.choices.empty() ? "" : ")");
   }
   return 0;
 }

@@ -35,13 +35,26 @@ Params::Params(const std::vector<ParamSpec>& specs,
       throw UsageError("unknown key '" + kv.first + "' (this scenario takes: " +
                        (known.empty() ? "none" : known) + ")");
     }
-    const char* s = kv.second.c_str();
-    char* end = nullptr;
-    errno = 0;
-    double v = std::strtod(s, &end);
-    if (kv.second.empty() || end == s || *end != '\0' || errno == ERANGE || !std::isfinite(v)) {
-      throw UsageError("malformed value '" + kv.second + "' for " + kv.first +
-                       " (a finite number is expected)");
+    bool named = false;
+    double v = 0.0;
+    for (const auto& c : spec->choices) {
+      if (c.first == kv.second) {
+        v = c.second;
+        named = true;
+      }
+    }
+    if (!named) {
+      const char* s = kv.second.c_str();
+      char* end = nullptr;
+      errno = 0;
+      v = std::strtod(s, &end);
+      if (kv.second.empty() || end == s || *end != '\0' || errno == ERANGE || !std::isfinite(v)) {
+        std::string names;
+        for (const auto& c : spec->choices) names += (names.empty() ? "" : ", ") + c.first;
+        throw UsageError("malformed value '" + kv.second + "' for " + kv.first +
+                         (names.empty() ? " (a finite number is expected)"
+                                        : " (a finite number or one of: " + names + ")"));
+      }
     }
     if (v < spec->min_value || v > spec->max_value) {
       std::ostringstream os;

@@ -25,6 +25,8 @@ struct ParamSpec {
   std::string help;
   double min_value;  ///< inclusive bounds; a value outside is a usage error
   double max_value;
+  /// Named values accepted besides numbers (e.g. {"f32", 0}, {"q31", 1}).
+  std::vector<std::pair<std::string, double>> choices = {};
 };
 
 /// Parameter values of one run: declared defaults overridden by --set.

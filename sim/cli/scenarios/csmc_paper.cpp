@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "csmc_loop.hpp"
+#include "q31_loops.hpp"
 #include "scenario.hpp"
 
 namespace mcsim {
@@ -84,7 +85,9 @@ void run_state_feedback(RunContext& ctx) {
   const bool ideal = ctx.params.get("ideal") != 0.0;
   o.ctrl = csmc::paper_ctrl(true, integ, ideal);
   o.record_every = record_every(o.duration_s, o.dt_s);
-  const LoopResult r = csmc::run_loop(o);
+  const bool q31 = ctx.params.get("kernels") != 0.0;
+  ctx.summary.set_text("kernels", q31 ? "q31" : "f32");
+  const LoopResult r = q31 ? q31loop::run_csmc_q31(o) : csmc::run_loop(o);
   write_runs(ctx, {&r}, {""}, {false});
   const double a = csmc::kPaperStepRad;
   const auto m1 = csmc::step_metrics(r.trace, 0.0, std::min(0.5, o.duration_s), a, a);
@@ -110,6 +113,7 @@ const Registrar reg_sf({
      {"R_ohm", 19.0, "ohm", "actual winding resistance", 1.0, 100.0},
      {"L_h", 0.040, "H", "actual winding inductance", 1.0e-3, 1.0},
      {"integrators", 1.0, "-", "1: conditional integrators k0 = (20, 100); 0: none", 0.0, 1.0},
+     q31loop::kernels_param(),
      {"ideal", 0.0, "-", "1: ideal SMC (sgn instead of sat)", 0.0, 1.0}},
     run_state_feedback});
 

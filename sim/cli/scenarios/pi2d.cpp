@@ -14,6 +14,7 @@
 #include "mcsim/pmsm_normalised.hpp"
 #include "scenario.hpp"
 #include "scenarios/pi2d_sil.hpp"
+#include "scenarios/q31_loops.hpp"
 
 extern "C" {
 #include "mc_ctrl_pi2d.h"
@@ -371,7 +372,10 @@ void run_pi2d_paper(RunContext& ctx) {
   long k = 0;
   double max_e3_late = 0.0, max_u2 = 0.0;
   pi2d::PaperSample last{};
-  pi2d::run_paper(o, [&](const pi2d::PaperSample& s) {
+  const bool q31 = ctx.params.get("kernels") != 0.0;
+  ctx.summary.set_text("kernels", q31 ? "q31" : "f32");
+  const auto run = q31 ? q31loop::run_paper_q31 : pi2d::run_paper;
+  run(o, [&](const pi2d::PaperSample& s) {
     if (k % every == 0) {
       ctx.csv.row({s.t, s.x1, s.x2, s.x3, s.x4, s.x3_ref, s.x4_ref, s.x2_ref, s.u1, s.u2, s.nu,
                    s.theta_f, s.x3 - s.x3_ref});
@@ -398,7 +402,8 @@ const Registrar reg_paper({
     {{"rate_hz", 10000.0, "1/t_n", "controller rate (normalised time)", 100.0, 1.0e6},
      {"substeps", 2.0, "1", "RK4 sub-steps per control period", 1.0, 64.0},
      {"delay_periods", 0.0, "1", "computation delay in control periods", 0.0, 4.0},
-     {"tau_l", 1.0, "1", "normalised load torque", -10.0, 10.0}},
+     {"tau_l", 1.0, "1", "normalised load torque", -10.0, 10.0},
+     q31loop::kernels_param()},
     run_pi2d_paper});
 
 pi2d::MotorOptions motor_options(const Params& p) {
@@ -416,8 +421,11 @@ pi2d::MotorOptions motor_options(const Params& p) {
 void run_pi2d_motor(RunContext& ctx) {
   const pi2d::MotorOptions o = motor_options(ctx.params);
   std::vector<pi2d::MotorSample> a, b;
-  const pi2d::MotorMetrics ma =
-      pi2d::run_motor(o, true, ctx.duration_s, [&](const pi2d::MotorSample& s) { a.push_back(s); });
+  const bool q31 = ctx.params.get("kernels") != 0.0;
+  ctx.summary.set_text("kernels", q31 ? "q31" : "f32");  // the PI2D run; the cascade is f32
+  auto keep_a = [&](const pi2d::MotorSample& s) { a.push_back(s); };
+  const pi2d::MotorMetrics ma = q31 ? q31loop::run_motor_q31(o, ctx.duration_s, keep_a)
+                                    : pi2d::run_motor(o, true, ctx.duration_s, keep_a);
   ctx.progress.update(0.5 * ctx.duration_s, ctx.duration_s);
   const pi2d::MotorMetrics mb = pi2d::run_motor(o, false, ctx.duration_s,
                                                 [&](const pi2d::MotorSample& s) { b.push_back(s); });
@@ -472,7 +480,8 @@ const Registrar reg_motor({
      {"wn_rad_s", 60.0, "rad/s", "mechanical loop pole (both controllers)", 1.0, 500.0},
      {"filter_rad_s", 1000.0, "rad/s", "speed filter pole = dirty-derivative a", 10.0, 10000.0},
      {"i_limit_a", 9.0, "A", "current limit (both controllers)", 1.0, 10.0},
-     {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 1.0}},
+     {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 1.0},
+     q31loop::kernels_param()},
     run_pi2d_motor});
 
 void run_pi2d_certificate(RunContext& ctx) {

@@ -60,6 +60,16 @@ class Cli(unittest.TestCase):
                     check=False)
             self.assert_usage_error(p, ["iq_step_a"])
 
+    def test_named_values(self):
+        # kernels takes a name (f32/q31) or its number; anything else is refused
+        # with the accepted names listed.
+        p = run("run", "csmc-state-feedback", "--out", self.out, "--set", "kernels=f64", check=False)
+        self.assert_usage_error(p, ["kernels", "f32", "q31"])
+        run("run", "csmc-state-feedback", "--out", self.out, "--duration", "0.05",
+            "--set", "kernels=q31")
+        with open(os.path.join(self.out, "csmc-state-feedback.json")) as f:
+            self.assertEqual(json.load(f)["kernels"], "q31")
+
     def test_out_of_range_value(self):
         p = run("run", "foc-current-step", "--out", self.out, "--set", "iq_step_a=50", check=False)
         self.assert_usage_error(p, ["out of range", "iq_step_a"])
