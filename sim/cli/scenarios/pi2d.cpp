@@ -145,6 +145,18 @@ struct MotorRig {
 };
 
 void build_rig(const MotorOptions& o, MotorRig* rig) {
+  const hal_host::PmsmBoardConfig bc = motor_board_cfg(o);
+  rig->board = std::make_unique<hal_host::PmsmBoard>(bc);
+  const mc_drive_cfg_t dc = motor_drive_cfg(o);
+  const uint32_t err = mc_drive_init(&rig->drive, &dc, rig->board->hal());
+  if (err != MC_DRIVE_CFG_OK) {
+    throw std::invalid_argument("drive configuration rejected: bits " + std::to_string(err));
+  }
+}
+
+}  // namespace
+
+hal_host::PmsmBoardConfig motor_board_cfg(const MotorOptions& o) {
   hal_host::PmsmBoardConfig bc;
   bc.motor.R_ohm = 0.675;  // paper 002, Table I, 0.3 kW test motor
   bc.motor.Ld_h = 1.14e-3;
@@ -163,8 +175,11 @@ void build_rig(const MotorOptions& o, MotorRig* rig) {
   bc.encoder.counts_per_rev = 8192;
   bc.substeps = o.substeps;
   bc.delay_periods = o.delay_periods;
-  rig->board = std::make_unique<hal_host::PmsmBoard>(bc);
+  return bc;
+}
 
+mc_drive_cfg_t motor_drive_cfg(const MotorOptions& o) {
+  const hal_host::PmsmBoardConfig bc = motor_board_cfg(o);
   const auto& m = bc.motor;
   float kp = 0.0f, ki = 0.0f;
   if (mc_foc_f32_gains_from_bandwidth(static_cast<float>(m.R_ohm), static_cast<float>(m.Ld_h),
@@ -198,13 +213,8 @@ void build_rig(const MotorOptions& o, MotorRig* rig) {
   dc.stall_current_frac = 0.95f;
   dc.stall_speed_rad_s = 1.0f;
   dc.stall_time_s = 0.5f;
-  const uint32_t err = mc_drive_init(&rig->drive, &dc, rig->board->hal());
-  if (err != MC_DRIVE_CFG_OK) {
-    throw std::invalid_argument("drive configuration rejected: bits " + std::to_string(err));
-  }
+  return dc;
 }
-
-}  // namespace
 
 mc_pi2d_f32_cfg_t motor_pi2d_cfg(const MotorOptions& o) {
   // Linearised mechanical loop with fast current loops and theta_f ~

@@ -11,7 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "hal_host/pmsm_board.hpp"
+
 extern "C" {
+#include "mc_drive.h"
 #include "pi2d/mc_pi2d.h"
 }
 
@@ -85,6 +88,11 @@ struct MotorMetrics {
 // Builds the gains of the PI^2D law for the motor options (documented in
 // the scenario help) and runs it (pi2d = true) or the cascade.
 mc_pi2d_f32_cfg_t motor_pi2d_cfg(const MotorOptions& o);
+// The pi2d-motor rig: the paper-002 test motor on the simulated board, and
+// the drive configuration (FOC current loops, limits, supervision) used by
+// both the f32 and the q31 PI2D runs and the PI cascade.
+hal_host::PmsmBoardConfig motor_board_cfg(const MotorOptions& o);
+mc_drive_cfg_t motor_drive_cfg(const MotorOptions& o);
 MotorMetrics run_motor(const MotorOptions& o, bool pi2d, double duration_s,
                        const std::function<void(const MotorSample&)>& row);
 

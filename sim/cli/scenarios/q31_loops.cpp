@@ -213,57 +213,8 @@ pi2d::SpeedRef motor_profile(const pi2d::MotorOptions& o, double t) {
 pi2d::MotorMetrics run_motor_q31(const pi2d::MotorOptions& o, double duration_s,
                                  const std::function<void(const pi2d::MotorSample&)>& row) {
   // The rig of pi2d::run_motor (same board, drive and limits).
-  hal_host::PmsmBoardConfig bc;
-  bc.motor.R_ohm = 0.675;
-  bc.motor.Ld_h = 1.14e-3;
-  bc.motor.Lq_h = 1.14e-3;
-  bc.motor.flux_wb = 0.11;
-  bc.motor.pole_pairs = 4;
-  bc.motor.J_kgm2 = o.J_kgm2;
-  bc.motor.B_nms_rad = o.B_nms_rad;
-  bc.motor.load = load_step(0.0, o.t_load_s, o.load_nm);
-  bc.inverter.t_pwm_s = 1.0 / o.pwm_hz;
-  bc.vbus_v = o.vbus_v;
-  bc.current_sensor.full_scale_a = 20.0;
-  bc.current_sensor.bits = 12;
-  bc.current_sensor.noise_rms_a = o.noise_rms_a;
-  bc.vbus_sensor.full_scale_v = 400.0;
-  bc.encoder.counts_per_rev = 8192;
-  bc.substeps = o.substeps;
-  bc.delay_periods = o.delay_periods;
-  hal_host::PmsmBoard bd(bc);
-  float kp = 0.0f, ki = 0.0f;
-  if (mc_foc_f32_gains_from_bandwidth(0.675f, 1.14e-3f, static_cast<float>(o.bw_current_rad_s),
-                                      &kp, &ki) != 0u) {
-    throw std::invalid_argument("current-loop bandwidth rejected");
-  }
-  mc_drive_cfg_t dc{};
-  dc.foc.r_ohm = 0.675f;
-  dc.foc.ld_h = 1.14e-3f;
-  dc.foc.lq_h = 1.14e-3f;
-  dc.foc.flux_wb = 0.11f;
-  dc.foc.kp_d_v_per_a = kp;
-  dc.foc.ki_d_v_per_as = ki;
-  dc.foc.kp_q_v_per_a = kp;
-  dc.foc.ki_q_v_per_as = ki;
-  dc.foc.dt_s = static_cast<float>(1.0 / o.pwm_hz);
-  dc.foc.aw = MC_PI_AW_CLAMP;
-  dc.foc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
-  dc.foc.v_limit_ratio = 0.95f;
-  dc.foc.v_abs_max_v = static_cast<float>(o.vbus_v);
-  dc.foc.decouple = true;
-  dc.pole_pairs = 4;
-  dc.speed_pll_bw_rad_s = 1000.0f;
-  dc.slow_loop_div = 20;
-  dc.i_max_a = static_cast<float>(o.i_limit_a);
-  dc.i_trip_a = static_cast<float>(1.5 * o.i_limit_a);
-  dc.vbus_min_v = static_cast<float>(0.5 * o.vbus_v);
-  dc.vbus_max_v = static_cast<float>(1.5 * o.vbus_v);
-  dc.omega_max_rad_s = static_cast<float>(1.5 * o.speed_rpm * kRpm);
-  dc.temp_max_c = 100.0f;
-  dc.stall_current_frac = 0.95f;
-  dc.stall_speed_rad_s = 1.0f;
-  dc.stall_time_s = 0.5f;
+  hal_host::PmsmBoard bd(pi2d::motor_board_cfg(o));
+  const mc_drive_cfg_t dc = pi2d::motor_drive_cfg(o);
   mc_drive_t d{};
   if (mc_drive_init(&d, &dc, bd.hal()) != MC_DRIVE_CFG_OK) {
     throw std::invalid_argument("drive configuration rejected");
