@@ -157,7 +157,7 @@ void PmsmBoard::advance() {
   // delay; a disable (safe torque off) acts at once, as on hardware where it
   // forces the outputs through the timer's break/MOE path.
   const Eigen::Vector3d duty = delay_.push(duty_cmd_);
-  const bool enabled = pwm_enabled_ && !gate_killed_;
+  const bool enabled = pwm_enabled_ && !fault_line_.killed;
   if (!enabled) {
     integrate_open_switches(T / n, n);
     duty_applied_ = Eigen::Vector3d::Constant(0.5);
@@ -198,7 +198,7 @@ int PmsmBoard::pwm_set_duty(float a, float b, float c) noexcept {
 }
 
 int PmsmBoard::pwm_enable() noexcept {
-  if (gate_killed_) return -EBUSY;
+  if (fault_line_.killed) return -EBUSY;
   pwm_enabled_ = true;
   return 0;
 }
@@ -213,7 +213,7 @@ int PmsmBoard::pwm_get_state(mc_hal_pwm3_state_t* st) noexcept {
   st->duty_b = static_cast<float>(duty_cmd_(1));
   st->duty_c = static_cast<float>(duty_cmd_(2));
   st->period_s = static_cast<float>(cfg_.inverter.t_pwm_s);
-  st->enabled = pwm_enabled_ && !gate_killed_;
+  st->enabled = pwm_enabled_ && !fault_line_.killed;
   return 0;
 }
 
@@ -238,25 +238,17 @@ void PmsmBoard::set_load(const mcsim::LoadTorque& load) {
   check_config(plant_.configure(p), "load");
 }
 
-void PmsmBoard::set_fault_inputs(uint32_t active_mask) {
-  fault_active_ = active_mask & MC_HAL_FAULT_ALL;
-  fault_latched_ |= fault_active_;
-  if (fault_active_ != 0U) gate_killed_ = true;  // comparator wired to the break input
-}
+void PmsmBoard::set_fault_inputs(uint32_t active_mask) { fault_line_.set_inputs(active_mask); }
 
 int PmsmBoard::fault_read(mc_hal_fault_status_t* st) noexcept {
-  st->active_mask = fault_active_;
-  st->latched_mask = fault_latched_;
-  st->gate_killed = gate_killed_;
+  fault_line_.read(st);
   return 0;
 }
 
-void PmsmBoard::fault_gate_kill() noexcept { gate_killed_ = true; }
+void PmsmBoard::fault_gate_kill() noexcept { fault_line_.killed = true; }
 
 int PmsmBoard::fault_gate_release() noexcept {
-  if (fault_active_ != 0U) return -EBUSY;
-  gate_killed_ = false;
-  fault_latched_ = 0U;
+  if (!fault_line_.release()) return -EBUSY;
   pwm_enabled_ = false;
   return 0;
 }

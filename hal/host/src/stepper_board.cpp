@@ -103,7 +103,7 @@ void StepperBoard::advance() {
   const double T = cfg_.t_pwm_s;
   const int n = cfg_.substeps;
   const Eigen::Vector2d duty = delay_.push(duty_cmd_);
-  if (!(pwm_enabled_ && !gate_killed_)) {
+  if (!(pwm_enabled_ && !fault_line_.killed)) {
     integrate_open(T / n, n);
   } else {
     open_[0] = open_[1] = false;
@@ -135,7 +135,7 @@ int StepperBoard::pwm_set_duty(float a, float b) noexcept {
 }
 
 int StepperBoard::pwm_enable() noexcept {
-  if (gate_killed_) return -EBUSY;
+  if (fault_line_.killed) return -EBUSY;
   pwm_enabled_ = true;
   return 0;
 }
@@ -149,7 +149,7 @@ int StepperBoard::pwm_get_state(mc_hal_pwm2_state_t* st) noexcept {
   st->duty_a = static_cast<float>(duty_cmd_(0));
   st->duty_b = static_cast<float>(duty_cmd_(1));
   st->period_s = static_cast<float>(cfg_.t_pwm_s);
-  st->enabled = pwm_enabled_ && !gate_killed_;
+  st->enabled = pwm_enabled_ && !fault_line_.killed;
   return 0;
 }
 
@@ -169,18 +169,14 @@ int StepperBoard::tick_freq(uint32_t* hz) const noexcept {
 }
 
 int StepperBoard::fault_read(mc_hal_fault_status_t* st) noexcept {
-  st->active_mask = fault_active_;
-  st->latched_mask = fault_latched_;
-  st->gate_killed = gate_killed_;
+  fault_line_.read(st);
   return 0;
 }
 
-void StepperBoard::fault_gate_kill() noexcept { gate_killed_ = true; }
+void StepperBoard::fault_gate_kill() noexcept { fault_line_.killed = true; }
 
 int StepperBoard::fault_gate_release() noexcept {
-  if (fault_active_ != 0U) return -EBUSY;
-  gate_killed_ = false;
-  fault_latched_ = 0U;
+  if (!fault_line_.release()) return -EBUSY;
   pwm_enabled_ = false;
   return 0;
 }

@@ -22,6 +22,33 @@ inline void check_config(mcsim::Status s, const char* what) {
   }
 }
 
+// The fault capability of a simulated board: inputs (gate-driver fault,
+// over-current comparator) wired to the break input, the latched gate kill,
+// and the release rule of hal/fault.h (refused while an input is asserted).
+struct FaultLine {
+  uint32_t active = 0;   // MC_HAL_FAULT_* asserted now
+  uint32_t latched = 0;  // asserted since the last release
+  bool killed = false;   // gate kill latched: all switches open
+
+  void set_inputs(uint32_t mask) {
+    active = mask & MC_HAL_FAULT_ALL;
+    latched |= active;
+    if (active != 0U) killed = true;  // comparator wired to the break input
+  }
+  void read(mc_hal_fault_status_t* st) const {
+    st->active_mask = active;
+    st->latched_mask = latched;
+    st->gate_killed = killed;
+  }
+  // Returns false (nothing changed) while an input is still asserted.
+  bool release() {
+    if (active != 0U) return false;
+    killed = false;
+    latched = 0U;
+    return true;
+  }
+};
+
 template <class Board>
 struct HalBinding {
   static Board* b(void* ctx) noexcept { return static_cast<Board*>(ctx); }

@@ -26,6 +26,7 @@
 #include <cstdint>
 
 #include "hal/hal.h"
+#include "hal_host/hal_binding.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/inverter.hpp"
 #include "mcsim/pmsm_ab.hpp"
@@ -73,7 +74,7 @@ class PmsmBoard {
   double torque_nm() const { return plant_.torque_nm(x_); }
   // dq currents at the true electrical angle.
   void true_dq_a(double* id_a, double* iq_a) const;
-  bool pwm_enabled() const { return pwm_enabled_ && !gate_killed_; }
+  bool pwm_enabled() const { return pwm_enabled_ && !fault_line_.killed; }
   const Eigen::Vector3d& duties_applied() const { return duty_applied_; }
   const Eigen::Vector2d& v_alpha_beta_applied() const { return v_ab_applied_; }
 
@@ -136,10 +137,8 @@ class PmsmBoard {
   Eigen::Vector2d v_ab_applied_ = Eigen::Vector2d::Zero();
   bool pwm_enabled_ = false;
   bool pwm_enabled_applied_ = false;
-  bool gate_killed_ = false;
+  FaultLine fault_line_;
   bool open_circuit_ = true;
-  uint32_t fault_active_ = 0;
-  uint32_t fault_latched_ = 0;
   mc_hal_encoder_sample_t enc_{};
   Injection inj_{};
   double tick_offset_s_ = 0.0;

@@ -17,6 +17,7 @@
 #include <cstdint>
 
 #include "hal/hal.h"
+#include "hal_host/hal_binding.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/sensors.hpp"
 #include "mcsim/stepper_2ph.hpp"
@@ -53,7 +54,7 @@ class StepperBoard {
   double t_s() const { return t_s_; }
   const State& state() const { return x_; }
   double period_s() const { return cfg_.t_pwm_s; }
-  bool pwm_enabled() const { return pwm_enabled_ && !gate_killed_; }
+  bool pwm_enabled() const { return pwm_enabled_ && !fault_line_.killed; }
   const Eigen::Vector2d& v_applied() const { return v_applied_; }
 
   // HAL op implementations (public so the C ops tables can reach them).
@@ -90,10 +91,8 @@ class StepperBoard {
   Eigen::Vector2d duty_cmd_ = Eigen::Vector2d::Zero();
   Eigen::Vector2d v_applied_ = Eigen::Vector2d::Zero();
   bool pwm_enabled_ = false;
-  bool gate_killed_ = false;
+  FaultLine fault_line_;
   bool open_[2] = {true, true};
-  uint32_t fault_active_ = 0;
-  uint32_t fault_latched_ = 0;
   mc_hal_encoder_sample_t enc_{};
 
   mc_hal_adc_t adc_dev_{};
