@@ -10,6 +10,7 @@
 
 #include "observer_sil.hpp"
 #include "scenario.hpp"
+#include "scenarios/q31_loops.hpp"
 extern "C" {
 #include "math/mc_math.h"
 #include "observer/mc_iiobs.h"
@@ -64,11 +65,10 @@ RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(doub
   const long n = std::lround(ctx.duration_s / T);
   const long every = std::max(1L, n / 6000);
   RunResult r;
-  mc_ctrl_sls_t& c = sil.ctrl();
   uint32_t handovers = 0;
   for (long k = 0; k <= n; ++k) {
     const double t = sil.t_s();
-    if (mc_ctrl_sls_set_speed_ref(&c, static_cast<float>(ref(t))) != 0u) {
+    if (sil.set_speed_ref(static_cast<float>(ref(t))) != 0u) {
       throw UsageError("speed reference beyond the controller's limit");
     }
     if (k < n) sil.step();
@@ -76,7 +76,7 @@ RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(doub
     const auto x = sil.board().state();
     double id, iq;
     sil.board().true_dq_a(&id, &iq);
-    const auto& tm = c.tm;
+    const auto& tm = sil.tm();
     r.t.push_back(tt);
     r.w.push_back(x(2));
     r.wref.push_back(ref(t));
@@ -87,10 +87,12 @@ RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(doub
     if (tm.handovers != handovers && std::isnan(r.first_handover_s)) r.first_handover_s = tt;
     handovers = tm.handovers;
     if (k % every == 0 || k == n) {
+      double xa = 0, xb = 0;
+      sil.flux_hat_wb(&xa, &xb);
       ctx.csv.row({tt, x(2), ref(t), tm.omega_hat_m_rad_s, sil.theta_e_true(), tm.theta_hat_e_rad,
                    sil.angle_error(), sil.load_nm(tt), sil.board().torque_nm(), id, iq,
                    tm.id_ref_a, tm.iq_ref_a, tm.i_alpha_a, tm.i_beta_a, tm.v_alpha_obs_v,
-                   tm.v_beta_obs_v, c.obs.x_alpha_wb, c.obs.x_beta_wb,
+                   tm.v_beta_obs_v, xa, xb,
                    static_cast<double>(tm.phase), static_cast<double>(sil.drive().faults)});
       ctx.progress.update(tt, ctx.duration_s);
     }
@@ -206,6 +208,7 @@ const Registrar reg_table1({"observer-table1",
 void run_test_motor(RunContext& ctx) {
   const Machine m = test_motor_300w();
   SilOptions o = options_from(ctx.params);
+  o.q31 = ctx.params.get("kernels") != 0.0;
   const int profile = static_cast<int>(ctx.params.get("profile"));
   const double tl = ctx.params.get("load_frac") * m.rated_torque_nm;
   const double t_step = ctx.params.get("t_load_s");
@@ -249,7 +252,7 @@ void run_test_motor(RunContext& ctx) {
   }
   if (profile == 3) {
     double t_fb = std::nan("");
-    ctx.summary.set("fallbacks", sil.ctrl().tm.fallbacks);
+    ctx.summary.set("fallbacks", sil.tm().fallbacks);
     (void)t_fb;
     ctx.summary.set("speed_final_rad_s", r.w.back());
   }
@@ -266,6 +269,7 @@ auto test_motor_params() {
   p.push_back({"t_load_s", 1.0, "s", "time of the load step / ramp start / stop command", 0.2,
                100.0});
   p.push_back({"ramp_rad_s2", 100.0, "rad/s^2", "profile 2: reference ramp", 1.0, 1000.0});
+  p.push_back(q31loop::kernels_param());
   return p;
 }
 

@@ -116,6 +116,18 @@ mc_ctrl_sls_cfg_t default_ctrl_cfg(const Machine& m, const SilOptions& o) {
   return c;
 }
 
+mc_ctrl_sls_q31_cfg_t q31_ctrl_cfg(const Machine& m, const mc_ctrl_sls_cfg_t& f) {
+  mc_ctrl_sls_q31_cfg_t q{};
+  q.f = f;
+  q.i_base_a = static_cast<float>(m.i_full_scale_a);
+  q.v_base_v = static_cast<float>(2.0 * m.vbus_v);
+  const double w_pll = 2.0 * f.speed_max_rad_s * f.pole_pairs;
+  q.omega_base_e_rad_s = static_cast<float>(std::exp2(std::ceil(std::log2(1.2 * w_pll))));
+  q.flux_base_wb = static_cast<float>(
+      std::exp2(std::ceil(std::log2(1.5 * (f.flux_wb + f.l_h * m.i_full_scale_a)))));
+  return q;
+}
+
 Sil::Sil(const Machine& m, const SilOptions& o, const mc_ctrl_sls_cfg_t& cfg, LoadSteps load)
     : m_(m), o_(o), load_(std::move(load)) {
   hal_host::PmsmBoardConfig bc;
@@ -172,7 +184,17 @@ Sil::Sil(const Machine& m, const SilOptions& o, const mc_ctrl_sls_cfg_t& cfg, Lo
     throw std::invalid_argument("drive configuration rejected, MC_DRIVE_CFG bits " +
                                 std::to_string(derr) + " (decimal)");
   }
-  if (mc_drive_attach_ctrl(&drive_, mc_ctrl_sls_table(&ctrl_)) != 0) {
+  if (o.q31) {
+    const mc_ctrl_sls_q31_cfg_t qc = q31_ctrl_cfg(m, cfg);
+    const uint32_t qerr = mc_ctrl_sls_q31_init(&ctrl_q31_, &qc);
+    if (qerr != 0u) {
+      throw std::invalid_argument("q31 sensorless controller rejected its configuration: bits " +
+                                  std::to_string(qerr) + " (decimal)");
+    }
+    mc_ctrl_sls_q31_tm_to_f32(&ctrl_q31_, &tm_q31_);
+  }
+  const mc_drive_ctrl_t* table = o.q31 ? mc_ctrl_sls_q31_table(&ctrl_q31_) : mc_ctrl_sls_table(&ctrl_);
+  if (mc_drive_attach_ctrl(&drive_, table) != 0) {
     throw std::runtime_error("drive refused the sensorless control law");
   }
   if (mc_drive_set_mode(&drive_, MC_DRIVE_MODE_CTRL) != 0) {
@@ -184,17 +206,43 @@ void Sil::step() {
   board_->sample();
   theta_e_sampled_ = std::remainder(m_.motor.pole_pairs * board_->state()(3), 2 * kPi);
   if (mc_drive_fast_step(&drive_)) mc_drive_slow_step(&drive_);
+  if (o_.q31) mc_ctrl_sls_q31_tm_to_f32(&ctrl_q31_, &tm_q31_);
   board_->advance();
 }
 
+uint32_t Sil::set_speed_ref(float omega_m_rad_s) {
+  return o_.q31 ? mc_ctrl_sls_q31_set_speed_ref(&ctrl_q31_, omega_m_rad_s)
+                : mc_ctrl_sls_set_speed_ref(&ctrl_, omega_m_rad_s);
+}
+
+void Sil::flux_hat_wb(double* p_alpha, double* p_beta) const {
+  if (o_.q31) {
+    float a = 0.0f, b = 0.0f;
+    mc_ctrl_sls_q31_flux_wb(&ctrl_q31_, &a, &b);
+    *p_alpha = a;
+    *p_beta = b;
+  } else {
+    *p_alpha = ctrl_.obs.x_alpha_wb;
+    *p_beta = ctrl_.obs.x_beta_wb;
+  }
+}
+
 double Sil::angle_error() const {
-  return std::remainder(static_cast<double>(ctrl_.tm.theta_hat_e_rad) - theta_e_true(), 2 * kPi);
+  return std::remainder(static_cast<double>(tm().theta_hat_e_rad) - theta_e_true(), 2 * kPi);
 }
 
 void Sil::record(Summary& s) const {
   const auto& p = m_.motor;
   const auto& c = ctrl_.cfg;
   s.set_text("machine", m_.name);
+  s.set_text("kernels", o_.q31 ? "q31" : "f32");
+  if (o_.q31) {
+    const auto& q = ctrl_q31_.cfg;
+    s.set("q31_i_base_a", q.i_base_a);
+    s.set("q31_v_base_v", q.v_base_v);
+    s.set("q31_omega_base_e_rad_s", q.omega_base_e_rad_s);
+    s.set("q31_flux_base_wb", q.flux_base_wb);
+  }
   s.set("motor_R_ohm", p.R_ohm);
   s.set("motor_L_h", p.Ld_h);
   s.set("motor_flux_wb", p.flux_wb);

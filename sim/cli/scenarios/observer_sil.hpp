@@ -13,6 +13,7 @@
 #include "scenario.hpp"
 extern "C" {
 #include "mc_ctrl_sensorless.h"
+#include "mc_ctrl_sensorless_q31.h"
 #include "mc_drive.h"
 }
 
@@ -55,11 +56,18 @@ struct SilOptions {
   int encoder_cpr = 8192;         // board encoder (unused by the sensorless law)
   double crit_frac = 0.02;        // observer critical speed / rated speed
   double speed_wc_rad_s = 100.0;  // speed-loop crossover (J / kt plant)
+  bool q31 = false;               // run the q31 plug-in (mc_ctrl_sensorless_q31)
 };
 
 // Controller configuration for a machine (the paper's structure, our gains;
 // every value is written to the scenario JSON by record()).
 mc_ctrl_sls_cfg_t default_ctrl_cfg(const Machine& m, const SilOptions& o);
+
+// The q31 plug-in's config: the f32 config plus bases from the machine
+// (current: the sensor range; voltage: twice the bus; electrical speed:
+// the next power of two above 1.2x the PLL limit 2 speed_max pole_pairs;
+// flux: the power of two at or above 1.5 (flux + L i_base), mc_fluxobs_q31.h).
+mc_ctrl_sls_q31_cfg_t q31_ctrl_cfg(const Machine& m, const mc_ctrl_sls_cfg_t& f);
 
 class Sil {
  public:
@@ -68,7 +76,18 @@ class Sil {
   void step();
   hal_host::PmsmBoard& board() { return *board_; }
   mc_drive_t& drive() { return drive_; }
+  // The f32 plug-in (initialised in both cases; attached unless q31).
   mc_ctrl_sls_t& ctrl() { return ctrl_; }
+  // The q31 plug-in (attached with SilOptions::q31).
+  mc_ctrl_sls_q31_t& ctrl_q31() { return ctrl_q31_; }
+  bool q31() const { return o_.q31; }
+  // Telemetry of the attached plug-in's last fast step (the q31 one's
+  // converted to engineering units after each step).
+  const mc_ctrl_sls_tm_t& tm() const { return o_.q31 ? tm_q31_ : ctrl_.tm; }
+  // Speed reference to the attached plug-in (MC_CTRL_SLS_ERR_* bits).
+  uint32_t set_speed_ref(float omega_m_rad_s);
+  // Observer flux estimate [Wb] of the attached plug-in.
+  void flux_hat_wb(double* p_alpha, double* p_beta) const;
   const Machine& machine() const { return m_; }
   double load_nm(double t_s) const { return load_.eval(t_s); }
   double t_s() const { return board_->t_s(); }
@@ -87,6 +106,8 @@ class Sil {
   std::unique_ptr<hal_host::PmsmBoard> board_;
   mc_drive_t drive_{};
   mc_ctrl_sls_t ctrl_{};
+  mc_ctrl_sls_q31_t ctrl_q31_{};
+  mc_ctrl_sls_tm_t tm_q31_{};
   double theta_e_sampled_ = 0.0;
 };
 

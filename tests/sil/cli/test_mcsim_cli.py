@@ -70,6 +70,25 @@ class Cli(unittest.TestCase):
         with open(os.path.join(self.out, "csmc-state-feedback.json")) as f:
             self.assertEqual(json.load(f)["kernels"], "q31")
 
+    def test_kernels_on_every_scenario_that_has_them(self):
+        # Each scenario that lists the kernels key takes both names, and the
+        # q31 run records its kernels and (sensorless) its per-unit bases.
+        for scen in ("pi2d-paper", "pi2d-motor", "csmc-state-feedback", "observer-test-motor"):
+            self.assertIn("kernels", run("describe", scen).stdout, scen)
+        p = run("run", "observer-test-motor", "--out", self.out, "--set", "kernels=q64",
+                check=False)
+        self.assert_usage_error(p, ["kernels", "f32", "q31"])
+        run("run", "observer-test-motor", "--out", self.out, "--duration", "0.3",
+            "--set", "kernels=q31")
+        with open(os.path.join(self.out, "observer-test-motor.json")) as f:
+            summary = json.load(f)
+        self.assertEqual(summary["kernels"], "q31")
+        self.assertEqual(summary["q31_i_base_a"], 20.0)
+        self.assertEqual(summary["q31_v_base_v"], 400.0)
+        # 0.3 s: the I-f start hands over to the closed loop (at ~0.14 s)
+        self.assertGreater(summary["handover_time_s"], 0.05)
+        self.assertLess(summary["handover_time_s"], 0.3)
+
     def test_out_of_range_value(self):
         p = run("run", "foc-current-step", "--out", self.out, "--set", "iq_step_a=50", check=False)
         self.assert_usage_error(p, ["out of range", "iq_step_a"])
