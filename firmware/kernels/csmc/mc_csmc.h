@@ -147,6 +147,10 @@ typedef struct {
     mc_csmc_f32_model_t model;
     /* derived (LAW_MODEL): */
     float k3, k4, d0, dr_ohm, dl_h, inv_k3;
+    /* derived (all laws): */
+    float inv_mu1, inv_mu2;                 /**< 1/mu_i */
+    float neg_m1_per_mu1, neg_m2_per_mu2;   /**< -M_i/mu_i (LAW_CONST) */
+    uint32_t may_clamp;                     /**< 0: |u_i| <= M_i <= v_limit, no clamp needed */
     uint32_t have_sigma1, have_sigma2;
     mc_csvc_f32_t sigma1, sigma2;
     mc_csmc_f32_out_t out;  /**< last output */
