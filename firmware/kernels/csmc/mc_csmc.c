@@ -11,6 +11,9 @@
 
 #include "math/mc_math.h"
 
+/* Per axis: no sigma, or its realisation (kind = 1 + st->real). */
+#define CSMC_SV_NONE 0u
+
 static bool csmc_pos(float v)
 {
     return (v > 0.0f) && mc_isfinite_f32(v);
@@ -144,13 +147,18 @@ uint32_t mc_csmc_f32_init(mc_csmc_f32_t *st, const mc_csmc_f32_cfg_t *cfg)
                      (cfg->m2_v > cfg->v_limit_v))
                         ? 1u
                         : 0u;
+    st->const_sat = ((cfg->law == MC_CSMC_LAW_CONST) && (cfg->sw == MC_CSMC_SW_SAT)) ? 1u : 0u;
     st->have_sigma1 = have1;
     st->have_sigma2 = have2;
+    st->kind1 = CSMC_SV_NONE;
+    st->kind2 = CSMC_SV_NONE;
     if (have1 != 0u) {
         st->sigma1 = sv1;
+        st->kind1 = 1u + sv1.real;
     }
     if (have2 != 0u) {
         st->sigma2 = sv2;
+        st->kind2 = 1u + sv2.real;
     }
     st->out.v_d_v = 0.0f;
     st->out.v_q_v = 0.0f;
@@ -185,27 +193,40 @@ static inline float csmc_fabs(float x)
 }
 
 /* K0 sigma of one axis (0 without a sigma). */
-static inline float csmc_term(const mc_csvc_f32_t *sv, uint32_t have)
+static inline float csmc_term(const mc_csvc_f32_t *sv, uint32_t kind)
 {
-    if (have == 0u) {
+    switch (kind) {
+    case 1u + MC_CSVC_REAL_MODAL2:
+        return mc_csvc_f32_term_m2(sv);
+    case 1u + MC_CSVC_REAL_MODAL1:
+        return mc_csvc_f32_term_m1(sv);
+    case 1u + MC_CSVC_REAL_MODAL0:
+        return mc_csvc_f32_term_m0(sv);
+    case 1u + MC_CSVC_REAL_DENSE:
+        return mc_csvc_f32_term(sv);
+    default:
         return 0.0f;
     }
-    if (__builtin_expect(sv->real != MC_CSVC_REAL_DENSE, 1)) {
-        return mc_csvc_f32_term_modal(sv);
-    }
-    return mc_csvc_f32_term(sv);
 }
 
 /* Advance one axis' sigma with v = mu sat(s/mu) - K0 sigma. */
-static inline void csmc_advance(mc_csvc_f32_t *sv, uint32_t have, float v)
+static inline void csmc_advance(mc_csvc_f32_t *sv, uint32_t kind, float v)
 {
-    if (have == 0u) {
-        return;
-    }
-    if (__builtin_expect(sv->real != MC_CSVC_REAL_DENSE, 1)) {
-        mc_csvc_f32_advance_modal(sv, v);
-    } else {
+    switch (kind) {
+    case 1u + MC_CSVC_REAL_MODAL2:
+        mc_csvc_f32_advance_m2(sv, v);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL1:
+        mc_csvc_f32_advance_m1(sv, v);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL0:
+        mc_csvc_f32_advance_m0(sv, v);
+        break;
+    case 1u + MC_CSVC_REAL_DENSE:
         mc_csvc_f32_advance(sv, v);
+        break;
+    default:
+        break;
     }
 }
 
@@ -227,8 +248,8 @@ void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32
         return;
     }
     /* Into locals first; the state is written once the step is accepted. */
-    const float t1 = csmc_term(&st->sigma1, st->have_sigma1);
-    const float t2 = csmc_term(&st->sigma2, st->have_sigma2);
+    const float t1 = csmc_term(&st->sigma1, st->kind1);
+    const float t2 = csmc_term(&st->sigma2, st->kind2);
     const float s1 = in->e1_a + t1;
     const float s2 = ((st->k1_per_s2 * in->e2_rad) + (st->k2_per_s * in->de2_rad_s)) +
                      in->dde2_rad_s2 + t2;
@@ -251,7 +272,7 @@ void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32
     if (__builtin_expect(csmc_fabs(s2) > st->mu2_rad_s2, 0)) {
         sm2 = (s2 < 0.0f) ? -st->mu2_rad_s2 : st->mu2_rad_s2;
     }
-    if ((st->law == MC_CSMC_LAW_CONST) && (st->sw == MC_CSMC_SW_SAT)) {
+    if (__builtin_expect(st->const_sat != 0u, 1)) {
         /* u = -M sat(s/mu) = (-M/mu) (mu sat(s/mu)) */
         u1 = st->neg_m1_per_mu1 * sm1;
         u2 = st->neg_m2_per_mu2 * sm2;
@@ -301,8 +322,8 @@ void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32
     st->out.s2_rad_s2 = s2;
     *p_out = st->out;
     /* Servocompensators: v = mu sat(s/mu) - K0 sigma (= s* inside the layer). */
-    csmc_advance(&st->sigma1, st->have_sigma1, sm1 - t1);
-    csmc_advance(&st->sigma2, st->have_sigma2, sm2 - t2);
+    csmc_advance(&st->sigma1, st->kind1, sm1 - t1);
+    csmc_advance(&st->sigma2, st->kind2, sm2 - t2);
 }
 
 uint32_t mc_csmc_f32_err_from_state(const mc_csmc_f32_model_t *model, float i_d_a, float i_q_a,

@@ -204,7 +204,7 @@ static bool csvc_modal(mc_csvc_f32_t *st, const mc_csvc_f32_model_t *m, float dt
                 /* (T A)_ij: A = 1 on mode 0, the pair blocks [1 -e; e 1-e^2] */
                 float rhs;
                 if (j == 0u) {
-                    rhs = tm[i * n];
+                    rhs = tm[(i * n) + 0u];
                 } else {
                     const uint32_t k = (j - 1u) / 2u;
                     const float e = st->e[k];
@@ -362,8 +362,14 @@ float mc_csvc_f32_term(const mc_csvc_f32_t *st)
     if (st == NULL) {
         return 0.0f;
     }
-    if (st->real != MC_CSVC_REAL_DENSE) {
-        return mc_csvc_f32_term_modal(st);
+    if (st->real == MC_CSVC_REAL_MODAL0) {
+        return mc_csvc_f32_term_m0(st);
+    }
+    if (st->real == MC_CSVC_REAL_MODAL1) {
+        return mc_csvc_f32_term_m1(st);
+    }
+    if (st->real == MC_CSVC_REAL_MODAL2) {
+        return mc_csvc_f32_term_m2(st);
     }
     for (uint32_t i = 0u; i < st->n; ++i) {
         acc += st->k0[i] * st->sigma[i];
@@ -379,8 +385,16 @@ void mc_csvc_f32_advance(mc_csvc_f32_t *st, float v)
     if ((st == NULL) || (n == 0u) || (n > CSVC_N)) {
         return;
     }
-    if (st->real != MC_CSVC_REAL_DENSE) {
-        mc_csvc_f32_advance_modal(st, v);
+    if (st->real == MC_CSVC_REAL_MODAL0) {
+        mc_csvc_f32_advance_m0(st, v);
+        return;
+    }
+    if (st->real == MC_CSVC_REAL_MODAL1) {
+        mc_csvc_f32_advance_m1(st, v);
+        return;
+    }
+    if (st->real == MC_CSVC_REAL_MODAL2) {
+        mc_csvc_f32_advance_m2(st, v);
         return;
     }
     for (uint32_t i = 0u; i < n; ++i) {

@@ -32,6 +32,19 @@
  * the stable continuous decay (for the paper's values the product is at
  * most 0.01).
  *
+ * Realisation (chosen at init, st->real): when S has the eigenvalues 0 and
+ * +-j w_k only, all simple (odd n, c_i = 0 for even i, and
+ * lambda^n - sum c_i lambda^i = lambda q(lambda^2) with distinct negative
+ * roots of q: the paper's S1, S2 and the conditional integrator), the state
+ * is kept in modal coordinates xi (sigma = T xi, T formed at init from the
+ * eigenvectors (1, lambda, .., lambda^(n-1)) of S): x0 += v for the
+ * eigenvalue 0, and per pair x <- x - e y + v, y <- y + e x with
+ * e = 2 sin(w dt/2), a rotation by exactly w dt with determinant exactly 1
+ * (2 multiplications; no growth or decay from rounded coefficients); the
+ * term is h . xi with h = K0 T. Init checks Phi T = T A and Gam = T g to
+ * 1e-4 and otherwise keeps the dense update (as for every other S).
+ * mc_csvc_f32_sigma() returns sigma in either case.
+ *
  * Pole placement: with S companion and J = e_n, S - J K0 is the companion
  * matrix with last row c - K0, whose characteristic polynomial is
  * lambda^n + sum_i (K0_i - c_i) lambda^i. To place the roots of
@@ -133,35 +146,41 @@ void mc_csvc_f32_force_dense(mc_csvc_f32_t *st);
 
 /* ---- the step's arithmetic, inline for the CSMC step ------------------- */
 
-/** K0 sigma for st->real != MC_CSVC_REAL_DENSE. */
-static inline float mc_csvc_f32_term_modal(const mc_csvc_f32_t *st)
+/** K0 sigma in the modal realisations, one function per shape. */
+static inline float mc_csvc_f32_term_m0(const mc_csvc_f32_t *st)
 {
-    float t = st->h[0] * st->xi[0];
-    if (st->real >= MC_CSVC_REAL_MODAL1) {
-        t += (st->h[1] * st->xi[1]) + (st->h[2] * st->xi[2]);
-        if (st->real == MC_CSVC_REAL_MODAL2) {
-            t += (st->h[3] * st->xi[3]) + (st->h[4] * st->xi[4]);
-        }
-    }
-    return t;
+    return st->h[0] * st->xi[0];
+}
+static inline float mc_csvc_f32_term_m1(const mc_csvc_f32_t *st)
+{
+    return (st->h[0] * st->xi[0]) + ((st->h[1] * st->xi[1]) + (st->h[2] * st->xi[2]));
+}
+static inline float mc_csvc_f32_term_m2(const mc_csvc_f32_t *st)
+{
+    return ((st->h[0] * st->xi[0]) + ((st->h[1] * st->xi[1]) + (st->h[2] * st->xi[2]))) +
+           ((st->h[3] * st->xi[3]) + (st->h[4] * st->xi[4]));
 }
 
-/** mc_csvc_f32_advance for st->real != MC_CSVC_REAL_DENSE: x0 += v (the
- *  eigenvalue 0 of S, exp(0 dt) = 1), and per pair the rotation by w dt as
+/** Advance in the modal realisations: x0 += v (the eigenvalue 0 of S,
+ *  exp(0 dt) = 1), and per pair the rotation by w dt as
  *  x <- x - e y + v, y <- y + e x (determinant exactly 1). */
-static inline void mc_csvc_f32_advance_modal(mc_csvc_f32_t *st, float v)
+static inline void mc_csvc_f32_advance_m0(mc_csvc_f32_t *st, float v)
 {
     st->xi[0] += v;
-    if (st->real >= MC_CSVC_REAL_MODAL1) {
-        const float x1 = (st->xi[1] - (st->e[0] * st->xi[2])) + v;
-        st->xi[1] = x1;
-        st->xi[2] += st->e[0] * x1;
-        if (st->real == MC_CSVC_REAL_MODAL2) {
-            const float x2 = (st->xi[3] - (st->e[1] * st->xi[4])) + v;
-            st->xi[3] = x2;
-            st->xi[4] += st->e[1] * x2;
-        }
-    }
+}
+static inline void mc_csvc_f32_advance_m1(mc_csvc_f32_t *st, float v)
+{
+    st->xi[0] += v;
+    const float x1 = (st->xi[1] - (st->e[0] * st->xi[2])) + v;
+    st->xi[1] = x1;
+    st->xi[2] += st->e[0] * x1;
+}
+static inline void mc_csvc_f32_advance_m2(mc_csvc_f32_t *st, float v)
+{
+    mc_csvc_f32_advance_m1(st, v);
+    const float x2 = (st->xi[3] - (st->e[1] * st->xi[4])) + v;
+    st->xi[3] = x2;
+    st->xi[4] += st->e[1] * x2;
 }
 
 #ifdef __cplusplus

@@ -527,10 +527,10 @@ TEST(CsmcHgo, RejectsBadConfigAndNanInput) {
   ASSERT_EQ(mc_hgo_f32_init(&st, &c), MC_HGO_ERR_NONE);
   mc_hgo_f32_est_t e{};
   mc_hgo_f32_step(&st, 0.1f, &e);
-  const float eta0 = st.eta[0];
+  const float eta0 = st.z[0];
   mc_hgo_f32_step(&st, std::nanf(""), &e);
   EXPECT_EQ(st.flags, MC_HGO_ERR_NAN_INPUT);
-  EXPECT_EQ(st.eta[0], eta0);
+  EXPECT_EQ(st.z[0], eta0);
   EXPECT_EQ(mc_hgo_f32_reset(&st, 0.0f, std::nanf(""), 0.0f), MC_HGO_ERR_NAN_INPUT);
   EXPECT_EQ(mc_hgo_f32_reset(&st, 0.0f, 0.0f, 0.0f), MC_HGO_ERR_NONE);
   EXPECT_EQ(st.flags, MC_HGO_ERR_NONE);
