@@ -11,6 +11,9 @@
 
 #include "math/mc_math.h"
 
+/* Per axis: no sigma, or its realisation (kind = 1 + st->real). */
+#define CSMC_SV_NONE 0u
+
 static bool csmc_pos(float v)
 {
     return (v > 0.0f) && mc_isfinite_f32(v);
@@ -136,13 +139,26 @@ uint32_t mc_csmc_f32_init(mc_csmc_f32_t *st, const mc_csmc_f32_cfg_t *cfg)
         st->dr_ohm = csmc_max(m->r_max_ohm - m->r_nom_ohm, m->r_nom_ohm - m->r_min_ohm);
         st->dl_h = csmc_max(m->l_max_h - m->l_nom_h, m->l_nom_h - m->l_min_h);
     }
+    st->inv_mu1 = 1.0f / cfg->mu1_a;
+    st->inv_mu2 = 1.0f / cfg->mu2_rad_s2;
+    st->neg_m1_per_mu1 = -(cfg->m1_v / cfg->mu1_a);
+    st->neg_m2_per_mu2 = -(cfg->m2_v / cfg->mu2_rad_s2);
+    st->may_clamp = ((cfg->law != MC_CSMC_LAW_CONST) || (cfg->m1_v > cfg->v_limit_v) ||
+                     (cfg->m2_v > cfg->v_limit_v))
+                        ? 1u
+                        : 0u;
+    st->const_sat = ((cfg->law == MC_CSMC_LAW_CONST) && (cfg->sw == MC_CSMC_SW_SAT)) ? 1u : 0u;
     st->have_sigma1 = have1;
     st->have_sigma2 = have2;
+    st->kind1 = CSMC_SV_NONE;
+    st->kind2 = CSMC_SV_NONE;
     if (have1 != 0u) {
         st->sigma1 = sv1;
+        st->kind1 = 1u + sv1.real;
     }
     if (have2 != 0u) {
         st->sigma2 = sv2;
+        st->kind2 = 1u + sv2.real;
     }
     st->out.v_d_v = 0.0f;
     st->out.v_q_v = 0.0f;
@@ -170,88 +186,144 @@ void mc_csmc_f32_reset(mc_csmc_f32_t *st)
     st->flags = MC_CSMC_ERR_NONE;
 }
 
-/* psi = sat(s/mu) or sgn(s). */
-static float csmc_psi(mc_csmc_sw_t sw, float s, float mu)
+/* |x| as the FPU's absolute value (one instruction; only compared here). */
+static inline float csmc_fabs(float x)
 {
-    if (sw == MC_CSMC_SW_SGN) {
-        if (s > 0.0f) {
-            return 1.0f;
-        }
-        return (s < 0.0f) ? -1.0f : 0.0f;
-    }
-    return mc_sat_f32(s / mu, -1.0f, 1.0f);
+    return __builtin_fabsf(x);
 }
 
-static bool csmc_in_finite(const mc_csmc_f32_in_t *in)
+/* K0 sigma of one axis (0 without a sigma). */
+static inline float csmc_term(const mc_csvc_f32_t *sv, uint32_t kind)
 {
-    return mc_isfinite_f32(in->e1_a) && mc_isfinite_f32(in->e2_rad) &&
-           mc_isfinite_f32(in->de2_rad_s) && mc_isfinite_f32(in->dde2_rad_s2) &&
-           mc_isfinite_f32(in->i_d_a) && mc_isfinite_f32(in->i_q_a) &&
-           mc_isfinite_f32(in->omega_m_rad_s) && mc_isfinite_f32(in->di_dd_a_s) &&
-           mc_isfinite_f32(in->dddphi_d_rad_s3);
+    switch (kind) {
+    case 1u + MC_CSVC_REAL_MODAL2:
+        return mc_csvc_f32_term_m2(sv);
+    case 1u + MC_CSVC_REAL_MODAL1:
+        return mc_csvc_f32_term_m1(sv);
+    case 1u + MC_CSVC_REAL_MODAL0:
+        return mc_csvc_f32_term_m0(sv);
+    case 1u + MC_CSVC_REAL_DENSE:
+        return mc_csvc_f32_term(sv);
+    default:
+        return 0.0f;
+    }
+}
+
+/* Advance one axis' sigma with v = mu sat(s/mu) - K0 sigma. */
+static inline void csmc_advance(mc_csvc_f32_t *sv, uint32_t kind, float v)
+{
+    switch (kind) {
+    case 1u + MC_CSVC_REAL_MODAL2:
+        mc_csvc_f32_advance_m2(sv, v);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL1:
+        mc_csvc_f32_advance_m1(sv, v);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL0:
+        mc_csvc_f32_advance_m0(sv, v);
+        break;
+    case 1u + MC_CSVC_REAL_DENSE:
+        mc_csvc_f32_advance(sv, v);
+        break;
+    default:
+        break;
+    }
+}
+
+/* psi for SW_SGN: sgn(s), sgn(0) = 0. */
+static float csmc_sgn(float s)
+{
+    if (s > 0.0f) {
+        return 1.0f;
+    }
+    return (s < 0.0f) ? -1.0f : 0.0f;
 }
 
 void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out)
 {
-    float s1;
-    float s2;
-    float psi1;
-    float psi2;
     float u1;
     float u2;
 
     if ((st == NULL) || (in == NULL) || (p_out == NULL)) {
         return;
     }
-    if (!csmc_in_finite(in)) {
+    /* Into locals first; the state is written once the step is accepted. */
+    const float t1 = csmc_term(&st->sigma1, st->kind1);
+    const float t2 = csmc_term(&st->sigma2, st->kind2);
+    const float s1 = in->e1_a + t1;
+    const float s2 = ((st->k1_per_s2 * in->e2_rad) + (st->k2_per_s * in->de2_rad_s)) +
+                     in->dde2_rad_s2 + t2;
+    /* One finiteness test for all inputs: e1, e2, e2', e2'' reach s1, s2
+     * (t1, t2 are finite), the others are added in; the sum is not finite
+     * when one of them is not (or when it overflows, |values| > 1e38). */
+    const float chk = (s1 + s2) + ((in->i_d_a + in->i_q_a) + in->omega_m_rad_s) +
+                      (in->di_dd_a_s + in->dddphi_d_rad_s3);
+    if (__builtin_expect(!mc_isfinite_f32(chk), 0)) {
         st->flags |= MC_CSMC_ERR_NAN_INPUT;
         *p_out = st->out;
         return;
     }
-    s1 = in->e1_a;
-    s2 = (st->k1_per_s2 * in->e2_rad) + (st->k2_per_s * in->de2_rad_s) + in->dde2_rad_s2;
-    if (st->have_sigma1 != 0u) {
-        s1 += mc_csvc_f32_term(&st->sigma1);
+    /* mu sat(s/mu): s itself inside the boundary layer. */
+    float sm1 = s1;
+    float sm2 = s2;
+    if (__builtin_expect(csmc_fabs(s1) > st->mu1_a, 0)) {
+        sm1 = (s1 < 0.0f) ? -st->mu1_a : st->mu1_a;
     }
-    if (st->have_sigma2 != 0u) {
-        s2 += mc_csvc_f32_term(&st->sigma2);
+    if (__builtin_expect(csmc_fabs(s2) > st->mu2_rad_s2, 0)) {
+        sm2 = (s2 < 0.0f) ? -st->mu2_rad_s2 : st->mu2_rad_s2;
     }
-    psi1 = csmc_psi(st->sw, s1, st->mu1_a);
-    psi2 = csmc_psi(st->sw, s2, st->mu2_rad_s2);
-    if (st->law == MC_CSMC_LAW_CONST) {
-        u1 = -st->m1_v * psi1;
-        u2 = -st->m2_v * psi2;
+    if (__builtin_expect(st->const_sat != 0u, 1)) {
+        /* u = -M sat(s/mu) = (-M/mu) (mu sat(s/mu)) */
+        u1 = st->neg_m1_per_mu1 * sm1;
+        u2 = st->neg_m2_per_mu2 * sm2;
     } else {
-        const mc_csmc_f32_model_t *m = &st->model;
-        const float x1 = in->i_d_a;
-        const float x2 = in->i_q_a;
-        const float x3 = in->omega_m_rad_s;
-        const float k5 = (float)m->rotor_teeth;
-        /* d axis: the part of F1 known up to the factor L: k5 x2 x3 - I_dd'. */
-        const float f1k = (k5 * x2 * x3) - in->di_dd_a_s;
-        /* q axis: G (see mc_csmc.h); k3 x2 - k4 x3 - d0 is w' from the model. */
-        const float wdot = (st->k3 * x2) - (st->k4 * x3) - st->d0;
-        const float g = (st->k1_per_s2 * in->de2_rad_s) + (st->k2_per_s * in->dde2_rad_s2) -
-                        in->dddphi_d_rad_s3 - (st->k4 * wdot) - (st->k3 * k5 * x1 * x3);
-        /* L^ beta_1 and L^ beta_2 / k3 (volts) */
-        const float lb1 = (st->dr_ohm * mc_abs_f32(x1)) + (st->dl_h * mc_abs_f32(f1k)) + m->q1_v;
-        const float lb2 = (st->dr_ohm * mc_abs_f32(x2)) +
-                          (st->inv_k3 * ((st->dl_h * mc_abs_f32(g)) + m->q2_radh_s3));
-        u1 = (m->r_nom_ohm * x1) - (m->l_nom_h * f1k) - (lb1 * psi1);
-        u2 = (m->r_nom_ohm * x2) + (m->km_nm_a * x3) - (m->l_nom_h * st->inv_k3 * g) -
-             (lb2 * psi2);
+        float psi1;
+        float psi2;
+        if (st->sw == MC_CSMC_SW_SGN) {
+            psi1 = csmc_sgn(s1);
+            psi2 = csmc_sgn(s2);
+        } else {
+            psi1 = sm1 * st->inv_mu1;
+            psi2 = sm2 * st->inv_mu2;
+        }
+        if (st->law == MC_CSMC_LAW_CONST) {
+            u1 = -st->m1_v * psi1;
+            u2 = -st->m2_v * psi2;
+        } else {
+            const mc_csmc_f32_model_t *m = &st->model;
+            const float x1 = in->i_d_a;
+            const float x2 = in->i_q_a;
+            const float x3 = in->omega_m_rad_s;
+            const float k5 = (float)m->rotor_teeth;
+            /* d axis: the part of F1 known up to the factor L: k5 x2 x3 - I_dd'. */
+            const float f1k = (k5 * x2 * x3) - in->di_dd_a_s;
+            /* q axis: G (see mc_csmc.h); k3 x2 - k4 x3 - d0 is w' from the model. */
+            const float wdot = (st->k3 * x2) - (st->k4 * x3) - st->d0;
+            const float g = (st->k1_per_s2 * in->de2_rad_s) + (st->k2_per_s * in->dde2_rad_s2) -
+                            in->dddphi_d_rad_s3 - (st->k4 * wdot) - (st->k3 * k5 * x1 * x3);
+            /* L^ beta_1 and L^ beta_2 / k3 (volts) */
+            const float lb1 =
+                (st->dr_ohm * mc_abs_f32(x1)) + (st->dl_h * mc_abs_f32(f1k)) + m->q1_v;
+            const float lb2 = (st->dr_ohm * mc_abs_f32(x2)) +
+                              (st->inv_k3 * ((st->dl_h * mc_abs_f32(g)) + m->q2_radh_s3));
+            u1 = (m->r_nom_ohm * x1) - (m->l_nom_h * f1k) - (lb1 * psi1);
+            u2 = (m->r_nom_ohm * x2) + (m->km_nm_a * x3) - (m->l_nom_h * st->inv_k3 * g) -
+                 (lb2 * psi2);
+        }
     }
-    st->out.v_d_v = mc_sat_f32(u1, -st->v_limit_v, st->v_limit_v);
-    st->out.v_q_v = mc_sat_f32(u2, -st->v_limit_v, st->v_limit_v);
+    /* Output clamp (with LAW_CONST it can act only if M_i > v_limit). */
+    if (st->may_clamp != 0u) {
+        u1 = mc_sat_f32(u1, -st->v_limit_v, st->v_limit_v);
+        u2 = mc_sat_f32(u2, -st->v_limit_v, st->v_limit_v);
+    }
+    st->out.v_d_v = u1;
+    st->out.v_q_v = u2;
     st->out.s1_a = s1;
     st->out.s2_rad_s2 = s2;
-    if (st->have_sigma1 != 0u) {
-        mc_csvc_f32_update(&st->sigma1, s1);
-    }
-    if (st->have_sigma2 != 0u) {
-        mc_csvc_f32_update(&st->sigma2, s2);
-    }
     *p_out = st->out;
+    /* Servocompensators: v = mu sat(s/mu) - K0 sigma (= s* inside the layer). */
+    csmc_advance(&st->sigma1, st->kind1, sm1 - t1);
+    csmc_advance(&st->sigma2, st->kind2, sm2 - t2);
 }
 
 uint32_t mc_csmc_f32_err_from_state(const mc_csmc_f32_model_t *model, float i_d_a, float i_q_a,

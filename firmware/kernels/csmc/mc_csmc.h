@@ -147,6 +147,12 @@ typedef struct {
     mc_csmc_f32_model_t model;
     /* derived (LAW_MODEL): */
     float k3, k4, d0, dr_ohm, dl_h, inv_k3;
+    /* derived (all laws): */
+    float inv_mu1, inv_mu2;                 /**< 1/mu_i */
+    float neg_m1_per_mu1, neg_m2_per_mu2;   /**< -M_i/mu_i (LAW_CONST) */
+    uint32_t const_sat;                     /**< LAW_CONST with SW_SAT (the step's straight path) */
+    uint32_t kind1, kind2;                  /**< 0: no sigma, else 1 + sigma_i.real */
+    uint32_t may_clamp;                     /**< 0: |u_i| <= M_i <= v_limit, no clamp needed */
     uint32_t have_sigma1, have_sigma2;
     mc_csvc_f32_t sigma1, sigma2;
     mc_csmc_f32_out_t out;  /**< last output */
@@ -163,7 +169,11 @@ void mc_csmc_f32_reset(mc_csmc_f32_t *st);
 /**
  * One control step: sliding variables, law, clamp; then sigma advanced over
  * one period. A non-finite input is refused: state unchanged, the last
- * output returned, MC_CSMC_ERR_NAN_INPUT made sticky.
+ * output returned, MC_CSMC_ERR_NAN_INPUT made sticky. The test is one sum,
+ * s1 + s2 + the five other inputs, which a non-finite input makes
+ * non-finite (so do finite values whose sum overflows, |x| ~ 1e38: also
+ * refused). psi = sat(s/mu) is formed as (1/mu) sat(s), and -M sat(s/mu) as
+ * (-M/mu) (mu sat(s/mu)), the constants precomputed.
  */
 void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out);
 

@@ -32,6 +32,19 @@
  * the stable continuous decay (for the paper's values the product is at
  * most 0.01).
  *
+ * Realisation (chosen at init, st->real): when S has the eigenvalues 0 and
+ * +-j w_k only, all simple (odd n, c_i = 0 for even i, and
+ * lambda^n - sum c_i lambda^i = lambda q(lambda^2) with distinct negative
+ * roots of q: the paper's S1, S2 and the conditional integrator), the state
+ * is kept in modal coordinates xi (sigma = T xi, T formed at init from the
+ * eigenvectors (1, lambda, .., lambda^(n-1)) of S): x0 += v for the
+ * eigenvalue 0, and per pair x <- x - e y + v, y <- y + e x with
+ * e = 2 sin(w dt/2), a rotation by exactly w dt with determinant exactly 1
+ * (2 multiplications; no growth or decay from rounded coefficients); the
+ * term is h . xi with h = K0 T. Init checks Phi T = T A and Gam = T g to
+ * 1e-4 and otherwise keeps the dense update (as for every other S).
+ * mc_csvc_f32_sigma() returns sigma in either case.
+ *
  * Pole placement: with S companion and J = e_n, S - J K0 is the companion
  * matrix with last row c - K0, whose characteristic polynomial is
  * lambda^n + sum_i (K0_i - c_i) lambda^i. To place the roots of
@@ -72,13 +85,25 @@ typedef struct {
     float dt_s;                     /**< control period [s], > 0 */
 } mc_csvc_f32_cfg_t;
 
+/** How the state is advanced (chosen at init, see mc_csvc_f32_init). */
+#define MC_CSVC_REAL_DENSE  0u  /**< sigma itself, dense Phi (any model) */
+#define MC_CSVC_REAL_MODAL0 1u  /**< modal: eigenvalue 0 only (integrator) */
+#define MC_CSVC_REAL_MODAL1 2u  /**< modal: 0 and one pair +-j w */
+#define MC_CSVC_REAL_MODAL2 3u  /**< modal: 0 and two pairs +-j w1, +-j w2 */
+
 typedef struct {
     uint32_t n;
     float mu;
     float k0[MC_CSVC_MAX_ORDER];
     float phi[MC_CSVC_MAX_ORDER * MC_CSVC_MAX_ORDER];  /**< exp(S dt), row-major n x n */
     float gam[MC_CSVC_MAX_ORDER];                      /**< int exp(S tau) J dtau */
-    float sigma[MC_CSVC_MAX_ORDER];                    /**< the compensator state */
+    float sigma[MC_CSVC_MAX_ORDER];                    /**< the state (MC_CSVC_REAL_DENSE only;
+                                                            read it with mc_csvc_f32_sigma) */
+    uint32_t real;                                     /**< MC_CSVC_REAL_* */
+    float xi[MC_CSVC_MAX_ORDER];                       /**< modal state: x0, (x, y) per pair */
+    float h[MC_CSVC_MAX_ORDER];                        /**< K0 T: term = h . xi */
+    float e[2];                                        /**< 2 sin(w dt / 2) per pair */
+    float t[MC_CSVC_MAX_ORDER * MC_CSVC_MAX_ORDER];    /**< sigma = T xi, row-major n x n */
     uint32_t flags;                                    /**< sticky MC_CSVC_ERR_NAN_INPUT */
 } mc_csvc_f32_t;
 
@@ -107,6 +132,56 @@ float mc_csvc_f32_term(const mc_csvc_f32_t *st);
 /** Advance one period with s held: sigma <- Phi sigma + Gam (mu sat(s/mu) - K0 sigma).
  *  Non-finite s: refused, sticky MC_CSVC_ERR_NAN_INPUT. */
 void mc_csvc_f32_update(mc_csvc_f32_t *st, float s);
+
+/** Advance one period with the input v = mu sat(s/mu) - K0 sigma already
+ *  formed (finite; no check): sigma <- Phi sigma + Gam v. */
+void mc_csvc_f32_advance(mc_csvc_f32_t *st, float v);
+
+/** The state sigma (n values, in the coordinates of S) into p_sigma. */
+void mc_csvc_f32_sigma(const mc_csvc_f32_t *st, float *p_sigma);
+
+/** Force the dense realisation (for tests comparing both); st must come
+ *  from a successful mc_csvc_f32_init and be in reset (state zero). */
+void mc_csvc_f32_force_dense(mc_csvc_f32_t *st);
+
+/* ---- the step's arithmetic, inline for the CSMC step ------------------- */
+
+/** K0 sigma in the modal realisations, one function per shape. */
+static inline float mc_csvc_f32_term_m0(const mc_csvc_f32_t *st)
+{
+    return st->h[0] * st->xi[0];
+}
+static inline float mc_csvc_f32_term_m1(const mc_csvc_f32_t *st)
+{
+    return (st->h[0] * st->xi[0]) + ((st->h[1] * st->xi[1]) + (st->h[2] * st->xi[2]));
+}
+static inline float mc_csvc_f32_term_m2(const mc_csvc_f32_t *st)
+{
+    return ((st->h[0] * st->xi[0]) + ((st->h[1] * st->xi[1]) + (st->h[2] * st->xi[2]))) +
+           ((st->h[3] * st->xi[3]) + (st->h[4] * st->xi[4]));
+}
+
+/** Advance in the modal realisations: x0 += v (the eigenvalue 0 of S,
+ *  exp(0 dt) = 1), and per pair the rotation by w dt as
+ *  x <- x - e y + v, y <- y + e x (determinant exactly 1). */
+static inline void mc_csvc_f32_advance_m0(mc_csvc_f32_t *st, float v)
+{
+    st->xi[0] += v;
+}
+static inline void mc_csvc_f32_advance_m1(mc_csvc_f32_t *st, float v)
+{
+    st->xi[0] += v;
+    const float x1 = (st->xi[1] - (st->e[0] * st->xi[2])) + v;
+    st->xi[1] = x1;
+    st->xi[2] += st->e[0] * x1;
+}
+static inline void mc_csvc_f32_advance_m2(mc_csvc_f32_t *st, float v)
+{
+    mc_csvc_f32_advance_m1(st, v);
+    const float x2 = (st->xi[3] - (st->e[1] * st->xi[4])) + v;
+    st->xi[3] = x2;
+    st->xi[4] += st->e[1] * x2;
+}
 
 #ifdef __cplusplus
 }

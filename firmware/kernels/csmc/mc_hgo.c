@@ -79,31 +79,36 @@ uint32_t mc_hgo_f32_init(mc_hgo_f32_t *st, const mc_hgo_f32_cfg_t *cfg)
     st->eps_s = cfg->eps_s;
     st->inv_eps = inv_eps;
     st->inv_eps2 = inv_eps * inv_eps;
-    st->eta[0] = 0.0f;
-    st->eta[1] = 0.0f;
-    st->eta[2] = 0.0f;
+    {
+        /* z = D^-1 eta, D = diag(1, eps, eps^2) */
+        const float d[3] = {1.0f, cfg->eps_s, cfg->eps_s * cfg->eps_s};
+        const float inv_d[3] = {1.0f, st->inv_eps, st->inv_eps2};
+        for (uint32_t i = 0u; i < 3u; ++i) {
+            for (uint32_t j = 0u; j < 3u; ++j) {
+                st->pz[(i * 3u) + j] = (st->phi[(i * 3u) + j] * d[j]) * inv_d[i];
+            }
+            st->g1z[i] = st->g1[i] * inv_d[i];
+            st->g2z[i] = st->g2[i] * inv_d[i];
+            st->gdy[i] = (cfg->input_order >= 1u) ? st->g1z[i] : 0.0f;
+            st->gd2y[i] = (cfg->input_order >= 2u) ? (st->g2z[i] + (0.5f * st->g1z[i])) : 0.0f;
+            st->z[i] = 0.0f;
+        }
+    }
     st->flags = MC_HGO_ERR_NONE;
     return MC_HGO_ERR_NONE;
 }
 
 uint32_t mc_hgo_f32_reset(mc_hgo_f32_t *st, float z1, float z2, float z3)
 {
-    float e1;
-    float e2;
-    float e3;
-
     if (st == NULL) {
         return MC_HGO_ERR_NULL;
     }
-    e1 = z1;
-    e2 = z2 * st->eps_s;
-    e3 = (z3 * st->eps_s) * st->eps_s;
-    if (!mc_isfinite_f32(e1) || !mc_isfinite_f32(e2) || !mc_isfinite_f32(e3)) {
+    if (!mc_isfinite_f32(z1) || !mc_isfinite_f32(z2) || !mc_isfinite_f32(z3)) {
         return MC_HGO_ERR_NAN_INPUT;
     }
-    st->eta[0] = e1;
-    st->eta[1] = e2;
-    st->eta[2] = e3;
+    st->z[0] = z1;
+    st->z[1] = z2;
+    st->z[2] = z3;
     st->n_hist = 0u;
     st->y1 = 0.0f;
     st->y2 = 0.0f;
@@ -111,48 +116,57 @@ uint32_t mc_hgo_f32_reset(mc_hgo_f32_t *st, float z1, float z2, float z3)
     return MC_HGO_ERR_NONE;
 }
 
+/* The first steps after init/reset (fewer than two past samples): the
+ * input polynomial of the order the history allows. */
+static void hgo_step_start(mc_hgo_f32_t *st, float y)
+{
+    float v1 = 0.0f;
+    float v2 = 0.0f;
+    if ((st->input_order >= 1u) && (st->n_hist >= 1u)) {
+        v1 = y - st->y1;
+    }
+    const float d0 = st->z[0] - y;
+    const float z1 = st->z[1];
+    const float z2 = st->z[2];
+    const float *p = st->pz;
+    st->z[0] = (y + (((p[0] * d0) + (p[1] * z1)) + (p[2] * z2))) +
+               ((st->g1z[0] * v1) + (st->g2z[0] * v2));
+    st->z[1] = (((p[3] * d0) + (p[4] * z1)) + (p[5] * z2)) + ((st->g1z[1] * v1) + (st->g2z[1] * v2));
+    st->z[2] = (((p[6] * d0) + (p[7] * z1)) + (p[8] * z2)) + ((st->g1z[2] * v1) + (st->g2z[2] * v2));
+    st->y2 = st->y1;
+    st->y1 = y;
+    st->n_hist += 1u;
+}
+
 void mc_hgo_f32_step(mc_hgo_f32_t *st, float y, mc_hgo_f32_est_t *p_est)
 {
-    float d0;
-    float n0;
-    float n1;
-    float n2;
-    float v1;
-    float v2;
-
     if ((st == NULL) || (p_est == NULL)) {
         return;
     }
-    p_est->z1 = st->eta[0];
-    p_est->z2 = st->eta[1] * st->inv_eps;
-    p_est->z3 = st->eta[2] * st->inv_eps2;
-    if (!mc_isfinite_f32(y)) {
+    const float z0 = st->z[0];
+    const float z1 = st->z[1];
+    const float z2 = st->z[2];
+    p_est->z1 = z0;
+    p_est->z2 = z1;
+    p_est->z3 = z2;
+    if (__builtin_expect(!mc_isfinite_f32(y), 0)) {
         st->flags |= MC_HGO_ERR_NAN_INPUT;
         return;
     }
-    /* Newton backward coefficients of the input polynomial (as many as
-     * the configured order and the history allow). */
-    v1 = 0.0f;
-    v2 = 0.0f;
-    if ((st->input_order >= 1u) && (st->n_hist >= 1u)) {
-        const float dy = y - st->y1;
-        v1 = dy;
-        if ((st->input_order >= 2u) && (st->n_hist >= 2u)) {
-            v2 = (dy - st->y1) + st->y2;
-            v1 = dy + (0.5f * v2);
-        }
+    if (__builtin_expect(st->n_hist < 2u, 0)) {
+        hgo_step_start(st, y);
+        return;
     }
-    /* eta <- y e1 + Phi (eta - y e1) + G1 v1 + G2 v2 */
-    d0 = st->eta[0] - y;
-    n0 = (st->phi[0] * d0) + (st->phi[1] * st->eta[1]) + (st->phi[2] * st->eta[2]);
-    n1 = (st->phi[3] * d0) + (st->phi[4] * st->eta[1]) + (st->phi[5] * st->eta[2]);
-    n2 = (st->phi[6] * d0) + (st->phi[7] * st->eta[1]) + (st->phi[8] * st->eta[2]);
-    st->eta[0] = (y + n0) + ((st->g1[0] * v1) + (st->g2[0] * v2));
-    st->eta[1] = n1 + ((st->g1[1] * v1) + (st->g2[1] * v2));
-    st->eta[2] = n2 + ((st->g1[2] * v1) + (st->g2[2] * v2));
-    st->y2 = st->y1;
+    /* z <- y e1 + Pz (z - y e1) + gdy dy + gd2y d2y */
+    const float y1 = st->y1;
+    const float dy = y - y1;
+    const float d2y = (dy - y1) + st->y2;
+    const float d0 = z0 - y;
+    const float *p = st->pz;
+    st->z[0] = (y + (((p[0] * d0) + (p[1] * z1)) + (p[2] * z2))) +
+               ((st->gdy[0] * dy) + (st->gd2y[0] * d2y));
+    st->z[1] = (((p[3] * d0) + (p[4] * z1)) + (p[5] * z2)) + ((st->gdy[1] * dy) + (st->gd2y[1] * d2y));
+    st->z[2] = (((p[6] * d0) + (p[7] * z1)) + (p[8] * z2)) + ((st->gdy[2] * dy) + (st->gd2y[2] * d2y));
+    st->y2 = y1;
     st->y1 = y;
-    if (st->n_hist < 2u) {
-        st->n_hist += 1u;
-    }
 }

@@ -49,6 +49,12 @@
  * the observer augmented with the input polynomial's chain of integrators,
  * computed at init.
  *
+ * The step runs in z = D^-1 eta (D = diag(1, eps, eps^2)), the estimates
+ * themselves, with D^-1 Phi D, D^-1 G1, D^-1 G2 formed at init (no output
+ * scaling per step); once two past samples exist the input terms are
+ * G1 v1 + G2 v2 = G1 dy + (G2 + G1/2) d2y for input_order 2 (G1 dy for 1,
+ * none for 0), with the combined coefficients formed at init.
+ *
  * Timing: mc_hgo_f32_step(y[k]) returns the estimate at t_k (from the
  * samples before y[k], as the continuous observer state at t_k), then
  * advances the state to t_{k+1}.
@@ -96,7 +102,12 @@ typedef struct {
     uint32_t n_hist;       /**< past samples available (0..2) */
     float y1;              /**< y[k-1] */
     float y2;              /**< y[k-2] */
-    float eta[3];          /**< (z1, eps z2, eps^2 z3) */
+    float pz[9];           /**< Phi in the coordinates z: D^-1 Phi D, D = diag(1, eps, eps^2) */
+    float g1z[3];          /**< D^-1 G1 */
+    float g2z[3];          /**< D^-1 G2 */
+    float gdy[3];          /**< with two past samples: coefficient of dy = y[k] - y[k-1] */
+    float gd2y[3];         /**< ... and of d2y = y[k] - 2 y[k-1] + y[k-2] (per input_order) */
+    float z[3];            /**< the state, (z1, z2, z3) = D^-1 eta */
     uint32_t flags;        /**< sticky MC_HGO_ERR_NAN_INPUT */
 } mc_hgo_f32_t;
 

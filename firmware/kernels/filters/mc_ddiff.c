@@ -69,16 +69,9 @@ float mc_ddiff_f32_step(mc_ddiff_f32_t *st, float y)
         st->flags |= MC_DDIFF_ERR_NAN_INPUT;
         return st->out;
     }
-    if (st->primed) {
-        /* Tustin on theta_f = b s/(s+a) y (see the header for why theta_f,
-         * not q_c, is the state). */
-        st->out = (st->c_q * st->out) + (st->g * (y - st->y_prev));
-    } else {
-        /* First sample: theta_f = q_c(0) + b y(0), as (12). */
-        st->out = st->q + (st->b * y);
-    }
-    st->primed = true;
-    st->y_prev = y;
-    st->q = st->out - (st->b * y);
-    return st->out;
+    /* Tustin on theta_f = b s/(s+a) y (see the header for why theta_f, not
+     * q_c, is the state); the first sample gives q_c(0) + b y(0), as (12). */
+    const float th = mc_ddiff_f32_next(st, y);
+    mc_ddiff_f32_commit(st, y, th);
+    return th;
 }

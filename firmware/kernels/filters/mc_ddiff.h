@@ -94,6 +94,26 @@ uint32_t mc_ddiff_f32_reset(mc_ddiff_f32_t *st, float q0);
 /** One sample: returns theta_f[k] for the input y[k]. */
 float mc_ddiff_f32_step(mc_ddiff_f32_t *st, float y);
 
+/** theta_f[k] for a finite y[k] without writing st: the arithmetic of
+ *  mc_ddiff_f32_step (bit for bit). For a caller that decides only later
+ *  whether the sample is accepted (then mc_ddiff_f32_commit). */
+static inline float mc_ddiff_f32_next(const mc_ddiff_f32_t *st, float y)
+{
+    if (__builtin_expect(!st->primed, 0)) {
+        return st->q + (st->b * y); /* first sample: q_c(0) + b y(0), (12) */
+    }
+    return (st->c_q * st->out) + (st->g * (y - st->y_prev));
+}
+
+/** Accept the sample y whose output was th = mc_ddiff_f32_next(st, y). */
+static inline void mc_ddiff_f32_commit(mc_ddiff_f32_t *st, float y, float th)
+{
+    st->out = th;
+    st->y_prev = y;
+    st->q = th - (st->b * y);
+    st->primed = true;
+}
+
 #ifdef __cplusplus
 }
 #endif

@@ -8,8 +8,54 @@
 
 #include <float.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "math/mc_math.h"
+
+/* |x| as the FPU's absolute value (one instruction; mc_abs_f32 keeps the
+ * sign of -0, so the compiler cannot use it there). Only compared here. */
+static inline float pi2d_fabs(float x)
+{
+    return __builtin_fabsf(x);
+}
+
+/* The next float above x, for x >= 0 finite. */
+static float pi2d_next_up(float x)
+{
+    uint32_t b;
+    memcpy(&b, &x, sizeof b);
+    b += 1u;
+    float r;
+    memcpy(&r, &b, sizeof r);
+    return r;
+}
+
+/* The next float below x, for x > 0 (inf gives FLT_MAX). */
+static float pi2d_next_down(float x)
+{
+    uint32_t b;
+    memcpy(&b, &x, sizeof b);
+    b -= 1u;
+    float r;
+    memcpy(&r, &b, sizeof r);
+    return r;
+}
+
+/* The largest float m with mc_sqrt_f32(m) <= v (v > 0 finite). The square
+ * root is correctly rounded, hence monotone, so sqrt(x) > v exactly when
+ * x > m: the step compares squares and takes a root only when the limit
+ * acts. v^2 rounded is within an ulp or two of m; the loops correct that. */
+static float pi2d_sq_threshold(float v)
+{
+    float m = v * v;
+    for (uint32_t i = 0u; (i < 16u) && (mc_sqrt_f32(m) > v); ++i) {
+        m = pi2d_next_down(m);
+    }
+    for (uint32_t i = 0u; (i < 16u) && (m < FLT_MAX) && (mc_sqrt_f32(pi2d_next_up(m)) <= v); ++i) {
+        m = pi2d_next_up(m);
+    }
+    return m;
+}
 
 static bool pos_finite(float x)
 {
@@ -77,6 +123,13 @@ uint32_t mc_pi2d_f32_init(mc_pi2d_f32_t *st, const mc_pi2d_f32_cfg_t *cfg)
     st->r_minus_lk1 = (cfg->l_h * cfg->k1_per_s) - cfg->r_ohm;
     st->r_minus_lk2 = (cfg->l_h * cfg->k2_per_s) - cfg->r_ohm;
     st->pl = (float)cfg->pole_pairs * cfg->l_h;
+    st->l_k1 = cfg->l_h * cfg->k1_per_s;
+    st->l_k2 = cfg->l_h * cfg->k2_per_s;
+    st->inv_kt = 1.0f / cfg->kt_nm_a;
+    st->neg_j_ki = -(cfg->j_kgm2 * cfg->ki_per_s3);
+    st->a_kd = cfg->a_per_s * cfg->kd_per_s2;
+    st->neg_eps_sigma = -(cfg->eps_per_s * st->sigma);
+    st->v_lim_sq = pi2d_sq_threshold(cfg->v_max_v);
     st->dd = dd;
     st->nu_nm = 0.0f;
     st->nu_comp_nm = 0.0f;
@@ -103,13 +156,15 @@ uint32_t mc_pi2d_f32_reset(mc_pi2d_f32_t *st, float qc0_rad, float nu0_nm)
     return MC_PI2D_ERR_NONE;
 }
 
-static bool inputs_finite(const mc_pi2d_f32_in_t *in)
+static uint32_t pi2d_refuse(mc_pi2d_f32_t *st, mc_pi2d_f32_out_t *out)
 {
-    return mc_isfinite_f32(in->id_a) && mc_isfinite_f32(in->iq_a) &&
-           mc_isfinite_f32(in->theta_m_rad) && mc_isfinite_f32(in->theta_ref_rad) &&
-           mc_isfinite_f32(in->omega_ref_rad_s) && mc_isfinite_f32(in->alpha_ref_rad_s2) &&
-           mc_isfinite_f32(in->jerk_ref_rad_s3) && mc_isfinite_f32(in->id_ref_a) &&
-           mc_isfinite_f32(in->did_ref_a_s);
+    st->flags |= MC_PI2D_ERR_NAN_INPUT;
+    st->last.vd_v = 0.0f;
+    st->last.vq_v = 0.0f;
+    if (out != NULL) {
+        *out = st->last;
+    }
+    return MC_PI2D_ERR_NAN_INPUT;
 }
 
 uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
@@ -118,89 +173,95 @@ uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
     if ((st == NULL) || (in == NULL)) {
         return MC_PI2D_ERR_NULL;
     }
-    if (!inputs_finite(in)) {
-        st->flags |= MC_PI2D_ERR_NAN_INPUT;
-        st->last.vd_v = 0.0f;
-        st->last.vq_v = 0.0f;
-        if (out != NULL) {
-            *out = st->last;
-        }
-        return MC_PI2D_ERR_NAN_INPUT;
-    }
     const mc_pi2d_f32_cfg_t *c = &st->cfg;
-    mc_pi2d_f32_out_t o;
+
+    /* Everything into locals first: the state is written only once the
+     * step is accepted (finite inputs, see the header). */
 
     /* Position error and its dirty derivative, (11)-(12). */
     const float e4 = in->theta_m_rad - in->theta_ref_rad;
-    const float th = mc_ddiff_f32_step(&st->dd, e4);
+    const float th = mc_ddiff_f32_next(&st->dd, e4);
+    const float ed = e4 - th;
 
     /* PD on the position error (9) and the adaptation rate (10), scaled by J
      * so that nu is a torque [N m]: nu/J is the paper's nu. */
     const float v3 = -(c->kp_per_s2 * e4) - (c->kd_per_s2 * th);
-    const float dnu = -(c->j_kgm2 * c->ki_per_s3) * (e4 - th);
+    const float dnu = st->neg_j_ki * ed;
 
     /* Reference current (8) and rho, the implementable part of d(x2*)/dt:
      * d(x2*)/dt = rho - (J/kt)(kp + b kd) e3 (the e3 part is not measured). */
-    const float iq_ref_raw = (st->nu_nm + (c->j_kgm2 * (in->alpha_ref_rad_s2 + v3))) / c->kt_nm_a;
-    const float iq_ref = mc_sat_f32(iq_ref_raw, -c->iq_max_a, c->iq_max_a);
-    const bool iq_lim = (iq_ref != iq_ref_raw);
-    float rho = (dnu + (c->j_kgm2 * (in->jerk_ref_rad_s3 + (c->a_per_s * c->kd_per_s2 * th)))) /
-                c->kt_nm_a;
-    if (iq_lim) {
+    const float iq_ref_raw = (st->nu_nm + (c->j_kgm2 * (in->alpha_ref_rad_s2 + v3))) * st->inv_kt;
+    const float rho_raw = (dnu + (c->j_kgm2 * (in->jerk_ref_rad_s3 + (st->a_kd * th)))) * st->inv_kt;
+    float iq_ref = iq_ref_raw;
+    float rho = rho_raw;
+    bool iq_lim = false;
+    if (__builtin_expect(pi2d_fabs(iq_ref_raw) > c->iq_max_a, 0)) {
+        iq_ref = (iq_ref_raw < 0.0f) ? -c->iq_max_a : c->iq_max_a;
+        iq_lim = true;
         rho = 0.0f; /* the clamped reference is constant */
     }
 
     /* Stabilising term (35): cancels eps sigma (e4 - theta_f) e2 in dV3/dt. */
-    const float v2 = -(c->eps_per_s * st->sigma) * (e4 - th);
+    const float v2 = st->neg_eps_sigma * ed;
 
-    /* Current-loop voltages (6) and (14) in physical units. */
-    const float e1 = in->id_a - in->id_ref_a;
-    const float e2 = in->iq_a - iq_ref;
-    float u1 = (c->r_ohm * in->id_ref_a) + (c->l_h * in->did_ref_a_s) -
-               (st->pl * in->iq_a * in->omega_ref_rad_s) - (st->r_minus_lk1 * e1);
-    float u2 = (c->ke_v_s_rad * in->omega_ref_rad_s) + (st->pl * in->id_a * in->omega_ref_rad_s) +
-               (c->r_ohm * iq_ref) + (c->l_h * (rho + v2)) - (st->r_minus_lk2 * e2);
+    /* Current-loop voltages (6) and (14) in physical units, with
+     * R x1* - (L k1 - R) e1 = L k1 x1* - (L k1 - R) x1 (and the same on q):
+     * the errors e1, e2 are not formed. */
+    const float om = in->omega_ref_rad_s;
+    float u1 = (st->l_k1 * in->id_ref_a) + (c->l_h * in->did_ref_a_s) -
+               ((st->pl * in->iq_a) * om) - (st->r_minus_lk1 * in->id_a);
+    float u2 = ((c->ke_v_s_rad + (st->pl * in->id_a)) * om) + (st->l_k2 * iq_ref) +
+               (c->l_h * (rho + v2)) - (st->r_minus_lk2 * in->iq_a);
+    const float mag_sq = (u1 * u1) + (u2 * u2);
 
-    /* Voltage circle. */
-    const float mag = mc_sqrt_f32((u1 * u1) + (u2 * u2));
-    const bool v_lim = mag > c->v_max_v;
-    if (v_lim) {
-        const float s = c->v_max_v / mag;
+    /* One finiteness test for all inputs (see the header): the sum is not
+     * finite when a term is not (or when it overflows, |values| > 1e38). */
+    const float chk = (iq_ref_raw + rho_raw) + mag_sq;
+    if (__builtin_expect(!mc_isfinite_f32(chk), 0)) {
+        return pi2d_refuse(st, out);
+    }
+
+    /* Voltage circle: |u| > v_max exactly when |u|^2 > v_lim_sq. */
+    const bool v_lim = mag_sq > st->v_lim_sq;
+    if (__builtin_expect(v_lim, 0)) {
+        const float s = c->v_max_v / mc_sqrt_f32(mag_sq);
         u1 *= s;
         u2 *= s;
     }
 
-    o.vd_v = u1;
-    o.vq_v = u2;
-    o.id_ref_a = in->id_ref_a;
-    o.iq_ref_a = iq_ref;
-    o.e4_rad = e4;
-    o.theta_f_rad = th;
-    o.nu_nm = st->nu_nm;
-    o.rho_a_s = rho;
-    o.v2_a_s = v2;
-    o.iq_limited = iq_lim;
-    o.v_limited = v_lim;
+    mc_pi2d_f32_out_t *o = &st->last;
+    o->vd_v = u1;
+    o->vq_v = u2;
+    o->id_ref_a = in->id_ref_a;
+    o->iq_ref_a = iq_ref;
+    o->e4_rad = e4;
+    o->theta_f_rad = th;
+    o->nu_nm = st->nu_nm;
+    o->rho_a_s = rho;
+    o->v2_a_s = v2;
+    o->iq_limited = iq_lim;
+    o->v_limited = v_lim;
+    mc_ddiff_f32_commit(&st->dd, e4, th);
 
     /* Adaptation (10), forward Euler, conditional integration. */
-    if (!iq_lim && !v_lim) {
-        o.dnu_nm_s = dnu;
+    if (__builtin_expect(iq_lim || v_lim, 0)) {
+        o->dnu_nm_s = 0.0f;
+    } else {
+        o->dnu_nm_s = dnu;
         /* Compensated (Kahan) sum: y is the increment plus what the last
          * addition lost; (s - nu) - y is what this one loses. */
         const float y = (c->dt_s * dnu) - st->nu_comp_nm;
         const float s = st->nu_nm + y;
-        st->nu_comp_nm = (s - st->nu_nm) - y;
-        const float s_sat = mc_sat_f32(s, -c->nu_max_nm, c->nu_max_nm);
-        if (s_sat != s) {
+        if (__builtin_expect(pi2d_fabs(s) > c->nu_max_nm, 0)) {
+            st->nu_nm = (s < 0.0f) ? -c->nu_max_nm : c->nu_max_nm;
             st->nu_comp_nm = 0.0f; /* at the clamp: nothing owed */
+        } else {
+            st->nu_comp_nm = (s - st->nu_nm) - y;
+            st->nu_nm = s;
         }
-        st->nu_nm = s_sat;
-    } else {
-        o.dnu_nm_s = 0.0f;
     }
-    st->last = o;
     if (out != NULL) {
-        *out = o;
+        *out = *o;
     }
     return MC_PI2D_ERR_NONE;
 }

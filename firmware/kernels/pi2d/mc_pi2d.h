@@ -168,6 +168,14 @@ typedef struct {
     float r_minus_lk1;       /**< L k1 - R [V/A], derived */
     float r_minus_lk2;       /**< L k2 - R [V/A], derived */
     float pl;                /**< p L [H], derived */
+    float l_k1;              /**< L k1 [V/A], derived */
+    float l_k2;              /**< L k2 [V/A], derived */
+    float inv_kt;            /**< 1/kt [A/(N m)], derived */
+    float neg_j_ki;          /**< -(J ki) [N m/(rad s)], derived */
+    float a_kd;              /**< a kd [1/s^3], derived */
+    float neg_eps_sigma;     /**< -(eps sigma), derived: v2 = neg_eps_sigma (e4 - theta_f) */
+    float v_lim_sq;          /**< the largest float m with sqrt(m) <= v_max_v:
+                                  |u| > v_max_v exactly when u1^2 + u2^2 > v_lim_sq */
     mc_ddiff_f32_t dd;       /**< dirty-derivative filter of e4 */
     float nu_nm;             /**< load estimate nu [N m] */
     float nu_comp_nm;        /**< compensation of the nu sum (Kahan): the low
@@ -185,8 +193,17 @@ uint32_t mc_pi2d_f32_init(mc_pi2d_f32_t *st, const mc_pi2d_f32_cfg_t *cfg);
 uint32_t mc_pi2d_f32_reset(mc_pi2d_f32_t *st, float qc0_rad, float nu0_nm);
 
 /** One control step. Returns 0, or MC_PI2D_ERR_NAN_INPUT when an input is not
- *  finite: then the output voltage is 0, the state is unchanged and the
- *  flag is sticky. out may be NULL (st->last always holds the result). */
+ *  finite (or so large that x2*, rho or u1^2 + u2^2 overflows): then the
+ *  output voltage is 0, the state is unchanged and the flag is sticky. out
+ *  may be NULL (st->last always holds the result).
+ *
+ *  Cost: the step computes into locals and checks once, at the end, that
+ *  x2* (before its clamp), rho (before it is zeroed) and u1^2 + u2^2 are
+ *  finite; every input reaches one of them through a product with a
+ *  non-zero constant or a sum (inf - inf and 0 inf are NaN), so a
+ *  non-finite input is caught there. The voltage limit compares
+ *  u1^2 + u2^2 with v_lim_sq (a square root only when it acts), the same
+ *  decision as sqrt(u1^2 + u2^2) > v_max_v for every float. */
 uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
                           mc_pi2d_f32_out_t *out);
 

@@ -459,10 +459,14 @@ static void fam_csmc(kv_state_t *st, const rec_t *in, rec_t *out)
     out_csmc(out, &st->csmc_model, &o);
     mc_csmc_f32_step(&st->csmc_ideal, &cin, &o);
     out_csmc(out, &st->csmc_ideal, &o);
-    out_f32(out, st->csmc_servo.sigma1.sigma[0]);
-    out_f32(out, st->csmc_servo.sigma1.sigma[4]);
-    out_f32(out, st->csmc_servo.sigma2.sigma[2]);
-    out_f32(out, st->csmc_model.sigma2.sigma[0]);
+    float sg[MC_CSVC_MAX_ORDER];
+    mc_csvc_f32_sigma(&st->csmc_servo.sigma1, sg);
+    out_f32(out, sg[0]);
+    out_f32(out, sg[4]);
+    mc_csvc_f32_sigma(&st->csmc_servo.sigma2, sg);
+    out_f32(out, sg[2]);
+    mc_csvc_f32_sigma(&st->csmc_model.sigma2, sg);
+    out_f32(out, sg[0]);
 
     mc_csmc_f32_in_t e;
     memset(&e, 0, sizeof e);
