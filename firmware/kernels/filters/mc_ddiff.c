@@ -39,10 +39,10 @@ uint32_t mc_ddiff_f32_init(mc_ddiff_f32_t *st, const mc_ddiff_f32_cfg_t *cfg)
     st->dt_s = cfg->dt_s;
     st->c_q = c_q;
     st->g = g;
-    st->q = 0.0f;
-    st->y_prev = 0.0f;
     st->out = 0.0f;
-    st->primed = false;
+    st->c_k = 1.0f;
+    st->g_k = cfg->b;
+    st->y_prev = 0.0f;
     st->flags = MC_DDIFF_ERR_NONE;
     return MC_DDIFF_ERR_NONE;
 }
@@ -55,10 +55,10 @@ uint32_t mc_ddiff_f32_reset(mc_ddiff_f32_t *st, float q0)
     if (!mc_isfinite_f32(q0)) {
         return MC_DDIFF_ERR_NAN_INPUT;
     }
-    st->q = q0;
-    st->y_prev = 0.0f;
     st->out = q0;
-    st->primed = false;
+    st->c_k = 1.0f;
+    st->g_k = st->b;
+    st->y_prev = 0.0f;
     st->flags = MC_DDIFF_ERR_NONE;
     return MC_DDIFF_ERR_NONE;
 }

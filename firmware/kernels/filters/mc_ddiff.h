@@ -28,7 +28,7 @@
  * small difference of two large numbers, so the rounding of q_c (ulp of
  * b y, accumulated over ~1/(a dt) steps by the slow pole) swamps theta_f;
  * with theta_f as the state, y enters only through its increment. q_c is
- * still available (st->q = theta_f - b y) for telemetry.
+ * still available (mc_ddiff_f32_q(st) = theta_f - b y) for telemetry.
  *
  * The filter needs no exponential (no libm), is stable for every a dt > 0,
  * and its frequency response is exactly that of H(s) at the pre-warped
@@ -38,7 +38,10 @@
  *
  * First step after init or reset: q takes the preset value and no
  * integration happens (there is no previous sample yet), so the output is
- * q0 + b y[0], the continuous filter's output at the start.
+ * q0 + b y[0], the continuous filter's output at the start. That step uses
+ * the same formula as every other one, with the coefficients a reset
+ * leaves (theta_f = q0, c_q -> 1, g -> b, y[-1] = 0: q0 1 + b (y - 0) is
+ * q0 + b y exactly), so the step has no first-sample branch.
  *
  * Non-finite input: the step is refused (state unchanged, last output
  * returned) and the sticky MC_DDIFF_ERR_NAN_INPUT is set; reset clears it.
@@ -47,7 +50,6 @@
 #ifndef MC_DDIFF_H
 #define MC_DDIFF_H
 
-#include <stdbool.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
@@ -75,10 +77,10 @@ typedef struct {
     float dt_s;
     float c_q;      /**< (1 - a dt/2) / (1 + a dt/2), derived at init */
     float g;        /**< b / (1 + a dt/2), derived at init */
-    float q;        /**< q_c = theta_f - b y of the last step [unit of y] (telemetry) */
-    float y_prev;   /**< input of the last accepted step */
-    float out;      /**< last output theta_f [unit of y] */
-    bool primed;    /**< false until the first step after init/reset */
+    float out;      /**< last output theta_f [unit of y] (q0 after init/reset) */
+    float c_k;      /**< coefficient of out in the next step: c_q, 1 after init/reset */
+    float g_k;      /**< coefficient of y - y_prev in the next step: g, b after init/reset */
+    float y_prev;   /**< input of the last accepted step (0 after init/reset) */
     uint32_t flags; /**< sticky MC_DDIFF_ERR_NAN_INPUT */
 } mc_ddiff_f32_t;
 
@@ -99,10 +101,9 @@ float mc_ddiff_f32_step(mc_ddiff_f32_t *st, float y);
  *  whether the sample is accepted (then mc_ddiff_f32_commit). */
 static inline float mc_ddiff_f32_next(const mc_ddiff_f32_t *st, float y)
 {
-    if (__builtin_expect(!st->primed, 0)) {
-        return st->q + (st->b * y); /* first sample: q_c(0) + b y(0), (12) */
-    }
-    return (st->c_q * st->out) + (st->g * (y - st->y_prev));
+    /* c_q theta_f[k-1] + g (y - y[k-1]); right after init/reset
+     * q0 1 + b (y - 0) = q_c(0) + b y(0), (12) */
+    return (st->out * st->c_k) + (st->g_k * (y - st->y_prev));
 }
 
 /** Accept the sample y whose output was th = mc_ddiff_f32_next(st, y). */
@@ -110,8 +111,14 @@ static inline void mc_ddiff_f32_commit(mc_ddiff_f32_t *st, float y, float th)
 {
     st->out = th;
     st->y_prev = y;
-    st->q = th - (st->b * y);
-    st->primed = true;
+    st->c_k = st->c_q;
+    st->g_k = st->g;
+}
+
+/** q_c = theta_f - b y of the last step (q0 after init/reset). */
+static inline float mc_ddiff_f32_q(const mc_ddiff_f32_t *st)
+{
+    return st->out - (st->b * st->y_prev);
 }
 
 #ifdef __cplusplus

@@ -134,8 +134,6 @@ uint32_t mc_pi2d_f32_init(mc_pi2d_f32_t *st, const mc_pi2d_f32_cfg_t *cfg)
     st->nu_nm = 0.0f;
     st->nu_comp_nm = 0.0f;
     st->flags = MC_PI2D_ERR_NONE;
-    const mc_pi2d_f32_out_t zero = {0};
-    st->last = zero;
     return MC_PI2D_ERR_NONE;
 }
 
@@ -151,26 +149,22 @@ uint32_t mc_pi2d_f32_reset(mc_pi2d_f32_t *st, float qc0_rad, float nu0_nm)
     st->nu_nm = mc_sat_f32(nu0_nm, -st->cfg.nu_max_nm, st->cfg.nu_max_nm);
     st->nu_comp_nm = 0.0f;
     st->flags = MC_PI2D_ERR_NONE;
-    const mc_pi2d_f32_out_t zero = {0};
-    st->last = zero;
     return MC_PI2D_ERR_NONE;
 }
 
-static uint32_t pi2d_refuse(mc_pi2d_f32_t *st, mc_pi2d_f32_out_t *out)
+static __attribute__((noinline, cold)) uint32_t pi2d_refuse(mc_pi2d_f32_t *st,
+                                                            mc_pi2d_f32_out_t *out)
 {
+    const mc_pi2d_f32_out_t zero = {0};
     st->flags |= MC_PI2D_ERR_NAN_INPUT;
-    st->last.vd_v = 0.0f;
-    st->last.vq_v = 0.0f;
-    if (out != NULL) {
-        *out = st->last;
-    }
+    *out = zero;
     return MC_PI2D_ERR_NAN_INPUT;
 }
 
 uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
                           mc_pi2d_f32_out_t *out)
 {
-    if ((st == NULL) || (in == NULL)) {
+    if ((st == NULL) || (in == NULL) || (out == NULL)) {
         return MC_PI2D_ERR_NULL;
     }
     const mc_pi2d_f32_cfg_t *c = &st->cfg;
@@ -208,7 +202,8 @@ uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
      * R x1* - (L k1 - R) e1 = L k1 x1* - (L k1 - R) x1 (and the same on q):
      * the errors e1, e2 are not formed. */
     const float om = in->omega_ref_rad_s;
-    float u1 = (st->l_k1 * in->id_ref_a) + (c->l_h * in->did_ref_a_s) -
+    const float id_ref = in->id_ref_a;
+    float u1 = (st->l_k1 * id_ref) + (c->l_h * in->did_ref_a_s) -
                ((st->pl * in->iq_a) * om) - (st->r_minus_lk1 * in->id_a);
     float u2 = ((c->ke_v_s_rad + (st->pl * in->id_a)) * om) + (st->l_k2 * iq_ref) +
                (c->l_h * (rho + v2)) - (st->r_minus_lk2 * in->iq_a);
@@ -229,40 +224,39 @@ uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
         u2 *= s;
     }
 
-    mc_pi2d_f32_out_t *o = &st->last;
-    o->vd_v = u1;
-    o->vq_v = u2;
-    o->id_ref_a = in->id_ref_a;
-    o->iq_ref_a = iq_ref;
-    o->e4_rad = e4;
-    o->theta_f_rad = th;
-    o->nu_nm = st->nu_nm;
-    o->rho_a_s = rho;
-    o->v2_a_s = v2;
-    o->iq_limited = iq_lim;
-    o->v_limited = v_lim;
-    mc_ddiff_f32_commit(&st->dd, e4, th);
-
-    /* Adaptation (10), forward Euler, conditional integration. */
-    if (__builtin_expect(iq_lim || v_lim, 0)) {
-        o->dnu_nm_s = 0.0f;
-    } else {
-        o->dnu_nm_s = dnu;
+    /* Adaptation (10), forward Euler, conditional integration; the state
+     * first (its reads come before any store through out, which the
+     * compiler must assume may alias it), then the outputs. */
+    const float nu = st->nu_nm;
+    float dnu_used = 0.0f;
+    if (__builtin_expect(!(iq_lim | v_lim), 1)) {
+        dnu_used = dnu;
         /* Compensated (Kahan) sum: y is the increment plus what the last
          * addition lost; (s - nu) - y is what this one loses. */
         const float y = (c->dt_s * dnu) - st->nu_comp_nm;
-        const float s = st->nu_nm + y;
+        const float s = nu + y;
         if (__builtin_expect(pi2d_fabs(s) > c->nu_max_nm, 0)) {
             st->nu_nm = (s < 0.0f) ? -c->nu_max_nm : c->nu_max_nm;
             st->nu_comp_nm = 0.0f; /* at the clamp: nothing owed */
         } else {
-            st->nu_comp_nm = (s - st->nu_nm) - y;
+            st->nu_comp_nm = (s - nu) - y;
             st->nu_nm = s;
         }
     }
-    if (out != NULL) {
-        *out = *o;
-    }
+    mc_ddiff_f32_commit(&st->dd, e4, th);
+
+    out->vd_v = u1;
+    out->vq_v = u2;
+    out->id_ref_a = id_ref;
+    out->iq_ref_a = iq_ref;
+    out->e4_rad = e4;
+    out->theta_f_rad = th;
+    out->nu_nm = nu;
+    out->dnu_nm_s = dnu_used;
+    out->rho_a_s = rho;
+    out->v2_a_s = v2;
+    out->iq_limited = iq_lim;
+    out->v_limited = v_lim;
     return MC_PI2D_ERR_NONE;
 }
 

@@ -181,7 +181,6 @@ typedef struct {
     float nu_comp_nm;        /**< compensation of the nu sum (Kahan): the low
                                   part the float sum lost [N m] */
     uint32_t flags;          /**< sticky MC_PI2D_ERR_NAN_INPUT */
-    mc_pi2d_f32_out_t last;  /**< outputs of the last step */
 } mc_pi2d_f32_t;
 
 /** Validate cfg and initialise st (q_c = 0, nu = 0). Returns the OR of the
@@ -193,9 +192,10 @@ uint32_t mc_pi2d_f32_init(mc_pi2d_f32_t *st, const mc_pi2d_f32_cfg_t *cfg);
 uint32_t mc_pi2d_f32_reset(mc_pi2d_f32_t *st, float qc0_rad, float nu0_nm);
 
 /** One control step. Returns 0, or MC_PI2D_ERR_NAN_INPUT when an input is not
- *  finite (or so large that x2*, rho or u1^2 + u2^2 overflows): then the
- *  output voltage is 0, the state is unchanged and the flag is sticky. out
- *  may be NULL (st->last always holds the result).
+ *  finite (or so large that x2*, rho or u1^2 + u2^2 overflows): then *out is
+ *  all zero (zero voltage), the state is unchanged and the flag is sticky.
+ *  out is the only place the outputs are written (the kernel keeps no copy);
+ *  a NULL st, in or out gives MC_PI2D_ERR_NULL and nothing is written.
  *
  *  Cost: the step computes into locals and checks once, at the end, that
  *  x2* (before its clamp), rho (before it is zeroed) and u1^2 + u2^2 are

@@ -335,10 +335,10 @@ static void fam_filters(kv_state_t *st, const rec_t *in, rec_t *out)
     }
     out_u32(out, rst);
     out_f32(out, mc_ddiff_f32_step(&st->dd_paper, y));
-    out_f32(out, st->dd_paper.q);
+    out_f32(out, mc_ddiff_f32_q(&st->dd_paper));
     out_u32(out, st->dd_paper.flags);
     out_f32(out, mc_ddiff_f32_step(&st->dd_motor, y));
-    out_f32(out, st->dd_motor.q);
+    out_f32(out, mc_ddiff_f32_q(&st->dd_motor));
     out_u32(out, st->dd_motor.flags);
 }
 

@@ -114,7 +114,7 @@ TEST(Ddiff, StepResponseMatchesContinuousFilter) {
 
 TEST(Ddiff, InitRejectsBadConfigAndLeavesStateAlone) {
   mc_ddiff_f32_t st = make(1.0f, 1.0f, 1.0f);
-  st.q = 42.0f;
+  st.out = 42.0f;
   const mc_ddiff_f32_cfg_t bad_a{0.0f, 1.0f, 1e-3f}, bad_b{1.0f, -1.0f, 1e-3f},
       bad_dt{1.0f, 1.0f, NAN}, bad_all{NAN, 0.0f, 0.0f};
   EXPECT_EQ(mc_ddiff_f32_init(&st, &bad_a), MC_DDIFF_ERR_A);
@@ -123,7 +123,7 @@ TEST(Ddiff, InitRejectsBadConfigAndLeavesStateAlone) {
   EXPECT_EQ(mc_ddiff_f32_init(&st, &bad_all),
             MC_DDIFF_ERR_A | MC_DDIFF_ERR_B | MC_DDIFF_ERR_DT);
   EXPECT_EQ(mc_ddiff_f32_init(nullptr, &bad_a), MC_DDIFF_ERR_NULL);
-  EXPECT_EQ(st.q, 42.0f);
+  EXPECT_EQ(st.out, 42.0f);
 }
 
 TEST(Ddiff, NonFiniteInputIsRefusedAndSticky) {
