@@ -12,9 +12,10 @@
 static uint32_t ctrl_reset(void *ctx)
 {
     mc_ctrl_csmc_t *c = (mc_ctrl_csmc_t *)ctx;
-    mc_csmc_f32_reset(&c->law);
     if (c->cfg.feedback == MC_CTRL_CSMC_FB_HGO) {
-        (void)mc_hgo_f32_reset(&c->hgo, 0.0f, 0.0f, 0.0f);
+        mc_csmc_hgo_f32_reset(&c->ctl);
+    } else {
+        mc_csmc_f32_reset(&c->ctl.law);
     }
     c->have_pos = false;
     c->pos_counts = 0;
@@ -76,22 +77,29 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
                                        c->ddphi_d_rad_s2, &tm->in) != MC_CSMC_ERR_NONE) {
             return MC_CTRL_CSMC_ERR_STEP;
         }
+        tm->in.e2_rad = e2;
+        tm->in.di_dd_a_s = c->di_dd_a_s;
+        tm->in.dddphi_d_rad_s3 = c->dddphi_d_rad_s3;
+        mc_csmc_f32_step(&c->ctl.law, &tm->in, &tm->out);
+        if (c->ctl.law.flags != MC_CSMC_ERR_NONE) {
+            return MC_CTRL_CSMC_ERR_STEP;
+        }
     } else {
-        mc_hgo_f32_est_t est;
-        mc_hgo_f32_step(&c->hgo, e2, &est);
+        /* observer and law in one step; the estimates it uses are the
+         * observer's state before the step (telemetry) */
         tm->in.e1_a = tm->i_d_a - c->i_dd_a;
-        tm->in.de2_rad_s = est.z2;
-        tm->in.dde2_rad_s2 = est.z3;
+        tm->in.e2_rad = e2;
+        tm->in.de2_rad_s = c->ctl.hgo.z[1];
+        tm->in.dde2_rad_s2 = c->ctl.hgo.z[2];
         tm->in.i_d_a = tm->i_d_a;
         tm->in.i_q_a = tm->i_q_a;
         tm->in.omega_m_rad_s = m->omega_m_rad_s;
-    }
-    tm->in.e2_rad = e2;
-    tm->in.di_dd_a_s = c->di_dd_a_s;
-    tm->in.dddphi_d_rad_s3 = c->dddphi_d_rad_s3;
-    mc_csmc_f32_step(&c->law, &tm->in, &tm->out);
-    if ((c->law.flags != MC_CSMC_ERR_NONE) || (c->hgo.flags != MC_HGO_ERR_NONE)) {
-        return MC_CTRL_CSMC_ERR_STEP;
+        tm->in.di_dd_a_s = c->di_dd_a_s;
+        tm->in.dddphi_d_rad_s3 = c->dddphi_d_rad_s3;
+        if (mc_csmc_hgo_f32_step(&c->ctl, tm->in.e1_a, e2, &tm->in, &tm->out) !=
+            MC_CSMC_ERR_NONE) {
+            return MC_CTRL_CSMC_ERR_STEP;
+        }
     }
     mc_stepper_dq_to_ab_sc_f32(tm->out.v_d_v, tm->out.v_q_v, s, co, &tm->v_a_v, &tm->v_b_v);
     inv_vbus = 1.0f / m->vbus_v;
@@ -104,30 +112,33 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
 uint32_t mc_ctrl_csmc_init(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_cfg_t *cfg)
 {
     uint32_t err = MC_CTRL_CSMC_ERR_NONE;
-    mc_csmc_f32_t law;
-    mc_hgo_f32_t hgo;
-    uint32_t law_err;
+    mc_csmc_hgo_f32_t ctl;
     mc_csmc_f32_in_t probe;
 
     if ((c == NULL) || (cfg == NULL)) {
         return MC_CTRL_CSMC_ERR_NULL;
     }
-    law_err = mc_csmc_f32_init(&law, &cfg->law);
-    if (law_err != MC_CSMC_ERR_NONE) {
-        err |= MC_CTRL_CSMC_ERR_LAW;
-    }
     if (cfg->feedback == MC_CTRL_CSMC_FB_HGO) {
-        if (mc_hgo_f32_init(&hgo, &cfg->hgo) != MC_HGO_ERR_NONE) {
+        const uint32_t e = mc_csmc_hgo_f32_init(&ctl, &cfg->law, &cfg->hgo);
+        if ((e & ~MC_CSMC_ERR_HGO) != MC_CSMC_ERR_NONE) {
+            err |= MC_CTRL_CSMC_ERR_LAW;
+        }
+        if ((e & MC_CSMC_ERR_HGO) != 0u) {
             err |= MC_CTRL_CSMC_ERR_HGO;
         }
-    } else if (cfg->feedback == MC_CTRL_CSMC_FB_STATE) {
-        /* the model must give e2'' (K_m, J > 0 ...) */
-        if (mc_csmc_f32_err_from_state(&cfg->law.model, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
-                                       0.0f, &probe) != MC_CSMC_ERR_NONE) {
+    } else {
+        if (mc_csmc_f32_init(&ctl.law, &cfg->law) != MC_CSMC_ERR_NONE) {
+            err |= MC_CTRL_CSMC_ERR_LAW;
+        }
+        if (cfg->feedback == MC_CTRL_CSMC_FB_STATE) {
+            /* the model must give e2'' (K_m, J > 0 ...) */
+            if (mc_csmc_f32_err_from_state(&cfg->law.model, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f,
+                                           0.0f, 0.0f, &probe) != MC_CSMC_ERR_NONE) {
+                err |= MC_CTRL_CSMC_ERR_FEEDBACK;
+            }
+        } else {
             err |= MC_CTRL_CSMC_ERR_FEEDBACK;
         }
-    } else {
-        err |= MC_CTRL_CSMC_ERR_FEEDBACK;
     }
     if (!(cfg->duty_max > 0.0f) || !(cfg->duty_max <= 1.0f)) {
         err |= MC_CTRL_CSMC_ERR_DUTY;
@@ -136,12 +147,7 @@ uint32_t mc_ctrl_csmc_init(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_cfg_t *cfg)
         return err;
     }
     c->cfg = *cfg;
-    c->law = law;
-    if (cfg->feedback == MC_CTRL_CSMC_FB_HGO) {
-        c->hgo = hgo;
-    } else {
-        c->hgo.flags = MC_HGO_ERR_NONE;
-    }
+    c->ctl = ctl;
     c->phi_d_rad = 0.0f;
     c->dphi_d_rad_s = 0.0f;
     c->ddphi_d_rad_s2 = 0.0f;

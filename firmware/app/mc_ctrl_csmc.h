@@ -18,7 +18,9 @@
  *              STATE feedback: e2' = w - phi_d' (w: the drive's encoder
  *              tracking loop), e2'' = k3 i_q - k4 w - d0 - phi_d'' (model);
  *              HGO feedback: e2', e2'' from the high-gain observer on e2;
- *   law        mc_csmc_f32_step (eq. (5) or (7)/(11), sat or sgn);
+ *   law        STATE: mc_csmc_f32_step (eq. (5) or (7)/(11), sat or sgn);
+ *              HGO: mc_csmc_hgo_f32_step, observer and law in one step on
+ *              the measured e1, e2 (the estimates it used in tm.in);
  *   bridge     (v_a, v_b) = inverse dq at theta_e; duty = v / vbus, clamped
  *              to [-duty_max, duty_max] (the conditional integrator needs no
  *              other anti-windup: sigma stays O(mu) outside the layer).
@@ -74,8 +76,7 @@ typedef struct {
 
 typedef struct {
     mc_ctrl_csmc_cfg_t cfg;
-    mc_csmc_f32_t law;
-    mc_hgo_f32_t hgo;
+    mc_csmc_hgo_f32_t ctl;      /**< the law (ctl.law) and, for FB_HGO, the observer */
     float phi_d_rad, dphi_d_rad_s, ddphi_d_rad_s2, dddphi_d_rad_s3, i_dd_a, di_dd_a_s;
     bool have_pos;
     uint32_t last_count;

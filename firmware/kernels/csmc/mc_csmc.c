@@ -9,10 +9,13 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "csmc/mc_hgo.h"
 #include "math/mc_math.h"
 
 /* Per axis: no sigma, or its realisation (kind = 1 + st->real). */
 #define CSMC_SV_NONE 0u
+/* mc_csmc_hgo_f32_step: the general path (kinds are 0..4) */
+#define CSMC_HGO_GENERAL 5u
 
 static bool csmc_pos(float v)
 {
@@ -148,6 +151,7 @@ uint32_t mc_csmc_f32_init(mc_csmc_f32_t *st, const mc_csmc_f32_cfg_t *cfg)
                         ? 1u
                         : 0u;
     st->const_sat = ((cfg->law == MC_CSMC_LAW_CONST) && (cfg->sw == MC_CSMC_SW_SAT)) ? 1u : 0u;
+    st->fast_kind2 = CSMC_HGO_GENERAL; /* set below once kind2 is known */
     st->have_sigma1 = have1;
     st->have_sigma2 = have2;
     st->kind1 = CSMC_SV_NONE;
@@ -159,6 +163,9 @@ uint32_t mc_csmc_f32_init(mc_csmc_f32_t *st, const mc_csmc_f32_cfg_t *cfg)
     if (have2 != 0u) {
         st->sigma2 = sv2;
         st->kind2 = 1u + sv2.real;
+    }
+    if ((st->const_sat != 0u) && (st->may_clamp == 0u)) {
+        st->fast_kind2 = st->kind2;
     }
     st->out.v_d_v = 0.0f;
     st->out.v_q_v = 0.0f;
@@ -239,14 +246,13 @@ static float csmc_sgn(float s)
     return (s < 0.0f) ? -1.0f : 0.0f;
 }
 
-void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out)
+/* The step of mc_csmc_f32_step without its pointer checks; false when the
+ * input was refused (st->out returned, flag set). */
+static bool csmc_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out)
 {
     float u1;
     float u2;
 
-    if ((st == NULL) || (in == NULL) || (p_out == NULL)) {
-        return;
-    }
     /* Into locals first; the state is written once the step is accepted. */
     const float t1 = csmc_term(&st->sigma1, st->kind1);
     const float t2 = csmc_term(&st->sigma2, st->kind2);
@@ -261,7 +267,7 @@ void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32
     if (__builtin_expect(!mc_isfinite_f32(chk), 0)) {
         st->flags |= MC_CSMC_ERR_NAN_INPUT;
         *p_out = st->out;
-        return;
+        return false;
     }
     /* mu sat(s/mu): s itself inside the boundary layer. */
     float sm1 = s1;
@@ -324,6 +330,208 @@ void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32
     /* Servocompensators: v = mu sat(s/mu) - K0 sigma (= s* inside the layer). */
     csmc_advance(&st->sigma1, st->kind1, sm1 - t1);
     csmc_advance(&st->sigma2, st->kind2, sm2 - t2);
+    return true;
+}
+
+void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out)
+{
+    if ((st == NULL) || (in == NULL) || (p_out == NULL)) {
+        return;
+    }
+    (void)csmc_step(st, in, p_out);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Law and high-gain observer in one step                                    */
+/* ------------------------------------------------------------------------ */
+
+uint32_t mc_csmc_hgo_f32_init(mc_csmc_hgo_f32_t *st, const mc_csmc_f32_cfg_t *law,
+                              const mc_hgo_f32_cfg_t *hgo)
+{
+    mc_csmc_f32_t l;
+    mc_hgo_f32_t h;
+
+    if ((st == NULL) || (law == NULL) || (hgo == NULL)) {
+        return MC_CSMC_ERR_NULL;
+    }
+    uint32_t err = mc_csmc_f32_init(&l, law);
+    if ((mc_hgo_f32_init(&h, hgo) != MC_HGO_ERR_NONE) || !(hgo->dt_s == law->dt_s)) {
+        err |= MC_CSMC_ERR_HGO;
+    }
+    if (err != MC_CSMC_ERR_NONE) {
+        return err;
+    }
+    st->law = l;
+    st->hgo = h;
+    st->fast = CSMC_HGO_GENERAL;
+    return MC_CSMC_ERR_NONE;
+}
+
+void mc_csmc_hgo_f32_reset(mc_csmc_hgo_f32_t *st)
+{
+    if (st == NULL) {
+        return;
+    }
+    mc_csmc_f32_reset(&st->law);
+    (void)mc_hgo_f32_reset(&st->hgo, 0.0f, 0.0f, 0.0f);
+    st->fast = CSMC_HGO_GENERAL;
+}
+
+static __attribute__((noinline, cold)) uint32_t csmc_hgo_refuse(mc_csmc_hgo_f32_t *st,
+                                                                mc_csmc_f32_out_t *out)
+{
+    st->law.flags |= MC_CSMC_ERR_NAN_INPUT;
+    out->v_d_v = 0.0f;
+    out->v_q_v = 0.0f;
+    out->s1_a = 0.0f;
+    out->s2_rad_s2 = 0.0f;
+    return MC_CSMC_ERR_NAN_INPUT;
+}
+
+/* Any law other than LAW_CONST with SW_SAT (and the first two steps of
+ * any law): the general law on an input built from the measurements and
+ * the estimates. */
+static __attribute__((noinline)) uint32_t csmc_hgo_general(mc_csmc_hgo_f32_t *st, float e1_a,
+                                                           float e2_rad,
+                                                           const mc_csmc_f32_in_t *model,
+                                                           mc_csmc_f32_out_t *out)
+{
+    mc_csmc_f32_in_t in = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    mc_csmc_f32_out_t o;
+
+    if (st->law.law == MC_CSMC_LAW_MODEL) {
+        if (model == NULL) {
+            return MC_CSMC_ERR_NULL;
+        }
+        in = *model;
+    }
+    in.e1_a = e1_a;
+    in.e2_rad = e2_rad;
+    in.de2_rad_s = st->hgo.z[1];
+    in.dde2_rad_s2 = st->hgo.z[2];
+    if (!csmc_step(&st->law, &in, &o)) {
+        return csmc_hgo_refuse(st, out);
+    }
+    mc_hgo_f32_advance(&st->hgo, e2_rad);
+    if (st->hgo.n_hist >= 2u) {
+        st->fast = st->law.fast_kind2;
+    }
+    *out = o;
+    return MC_CSMC_ERR_NONE;
+}
+
+/* The combined step's fast path (LAW_CONST, SW_SAT, no output clamp) per
+ * axis, always inlined with a constant kind so that the realisation's term
+ * and advance are one straight block (sigma stays in registers between
+ * them). The arithmetic is that of csmc_step, value for value. */
+#define CSMC_INLINE static inline __attribute__((always_inline))
+
+/* q axis: t2, s2 = s2_part + t2, the one finiteness test, sat, advance.
+ * false: refused, nothing written. */
+CSMC_INLINE bool csmc_fast_q(mc_csmc_f32_t *law, uint32_t kind, float s2_part, float e1_a,
+                             float *p_s2, float *p_u2)
+{
+    const float t2 = csmc_term(&law->sigma2, kind);
+    const float s2 = s2_part + t2;
+    /* e2 reaches s2_part, e1 is added: the sum is not finite when either
+     * is not (see mc_csmc_hgo_f32_step). */
+    if (__builtin_expect(!mc_isfinite_f32(s2 + e1_a), 0)) {
+        return false;
+    }
+    float sm2 = s2;
+    if (__builtin_expect(csmc_fabs(s2) > law->mu2_rad_s2, 0)) {
+        sm2 = (s2 < 0.0f) ? -law->mu2_rad_s2 : law->mu2_rad_s2;
+    }
+    csmc_advance(&law->sigma2, kind, sm2 - t2);
+    *p_s2 = s2;
+    *p_u2 = law->neg_m2_per_mu2 * sm2;
+    return true;
+}
+
+/* d axis: t1, s1 = e1 + t1, sat, advance (e1 finite, t1 finite: s1 is not
+ * NaN, and sat keeps sigma finite even if s1 overflowed). */
+CSMC_INLINE void csmc_fast_d(mc_csmc_f32_t *law, uint32_t kind, float e1_a, float *p_s1,
+                             float *p_u1)
+{
+    const float t1 = csmc_term(&law->sigma1, kind);
+    const float s1 = e1_a + t1;
+    float sm1 = s1;
+    if (__builtin_expect(csmc_fabs(s1) > law->mu1_a, 0)) {
+        sm1 = (s1 < 0.0f) ? -law->mu1_a : law->mu1_a;
+    }
+    csmc_advance(&law->sigma1, kind, sm1 - t1);
+    *p_s1 = s1;
+    *p_u1 = law->neg_m1_per_mu1 * sm1;
+}
+
+uint32_t mc_csmc_hgo_f32_step(mc_csmc_hgo_f32_t *st, float e1_a, float e2_rad,
+                              const mc_csmc_f32_in_t *model, mc_csmc_f32_out_t *out)
+{
+    float s1;
+    float s2;
+    float u1;
+    float u2;
+    bool ok;
+
+    if ((st == NULL) || (out == NULL)) {
+        return MC_CSMC_ERR_NULL;
+    }
+    mc_csmc_f32_t *law = &st->law;
+    /* The estimates at this sample: the observer's state, finite because
+     * only accepted steps write it (see the header). */
+    const float s2_part =
+        ((law->k1_per_s2 * e2_rad) + (law->k2_per_s * st->hgo.z[1])) + st->hgo.z[2];
+    switch (st->fast) {
+    case CSMC_SV_NONE:
+        ok = csmc_fast_q(law, CSMC_SV_NONE, s2_part, e1_a, &s2, &u2);
+        break;
+    case 1u + MC_CSVC_REAL_DENSE:
+        ok = csmc_fast_q(law, 1u + MC_CSVC_REAL_DENSE, s2_part, e1_a, &s2, &u2);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL0:
+        ok = csmc_fast_q(law, 1u + MC_CSVC_REAL_MODAL0, s2_part, e1_a, &s2, &u2);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL1:
+        ok = csmc_fast_q(law, 1u + MC_CSVC_REAL_MODAL1, s2_part, e1_a, &s2, &u2);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL2:
+        ok = csmc_fast_q(law, 1u + MC_CSVC_REAL_MODAL2, s2_part, e1_a, &s2, &u2);
+        break;
+    default:
+        /* another law, SW_SGN, an output clamp that can act, or the
+         * observer's first two steps */
+        return csmc_hgo_general(st, e1_a, e2_rad, model, out);
+    }
+    if (__builtin_expect(!ok, 0)) {
+        return csmc_hgo_refuse(st, out);
+    }
+    switch (law->kind1) {
+    case CSMC_SV_NONE:
+        csmc_fast_d(law, CSMC_SV_NONE, e1_a, &s1, &u1);
+        break;
+    case 1u + MC_CSVC_REAL_DENSE:
+        csmc_fast_d(law, 1u + MC_CSVC_REAL_DENSE, e1_a, &s1, &u1);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL0:
+        csmc_fast_d(law, 1u + MC_CSVC_REAL_MODAL0, e1_a, &s1, &u1);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL1:
+        csmc_fast_d(law, 1u + MC_CSVC_REAL_MODAL1, e1_a, &s1, &u1);
+        break;
+    case 1u + MC_CSVC_REAL_MODAL2:
+        csmc_fast_d(law, 1u + MC_CSVC_REAL_MODAL2, e1_a, &s1, &u1);
+        break;
+    default:
+        csmc_fast_d(law, CSMC_SV_NONE, e1_a, &s1, &u1);
+        break;
+    }
+    mc_hgo_f32_advance_run(&st->hgo, e2_rad); /* fast != 0: n_hist >= 2 */
+    /* out last: the compiler must assume that it may alias the state */
+    out->v_d_v = u1;
+    out->v_q_v = u2;
+    out->s1_a = s1;
+    out->s2_rad_s2 = s2;
+    return MC_CSMC_ERR_NONE;
 }
 
 uint32_t mc_csmc_f32_err_from_state(const mc_csmc_f32_model_t *model, float i_d_a, float i_q_a,

@@ -58,6 +58,7 @@
 #include <stdint.h>
 
 #include "csmc/mc_csvc.h"
+#include "csmc/mc_hgo.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -76,6 +77,7 @@ extern "C" {
 #define MC_CSMC_ERR_VLIMIT    (1u << 9)  /**< v_limit_v <= 0 or not finite */
 #define MC_CSMC_ERR_DT        (1u << 10) /**< dt_s <= 0 or not finite */
 #define MC_CSMC_ERR_NAN_INPUT (1u << 11) /**< sticky: a step got a non-finite input and was refused */
+#define MC_CSMC_ERR_HGO       (1u << 12) /**< combined step: observer config rejected, or its dt_s != the law's */
 
 typedef enum {
     MC_CSMC_LAW_MODEL = 0,  /**< eq. (5): nominal F^ and beta functions */
@@ -151,6 +153,8 @@ typedef struct {
     float inv_mu1, inv_mu2;                 /**< 1/mu_i */
     float neg_m1_per_mu1, neg_m2_per_mu2;   /**< -M_i/mu_i (LAW_CONST) */
     uint32_t const_sat;                     /**< LAW_CONST with SW_SAT (the step's straight path) */
+    uint32_t fast_kind2;                    /**< mc_csmc_hgo_f32_step: kind2 on its fast path
+                                                 (const_sat, no clamp), 5: the general law */
     uint32_t kind1, kind2;                  /**< 0: no sigma, else 1 + sigma_i.real */
     uint32_t may_clamp;                     /**< 0: |u_i| <= M_i <= v_limit, no clamp needed */
     uint32_t have_sigma1, have_sigma2;
@@ -189,8 +193,68 @@ uint32_t mc_csmc_f32_err_from_state(const mc_csmc_f32_model_t *model, float i_d_
                                     float phi_d_rad, float dphi_d_rad_s, float ddphi_d_rad_s2,
                                     mc_csmc_f32_in_t *p_in);
 
+/* ------------------------------------------------------------------------ */
+/* Output feedback: the law and the high-gain observer in one step           */
+/* ------------------------------------------------------------------------ */
+
+/** The law with e2', e2'' from the high-gain observer on e2 (paper Sec. V),
+ *  in one struct. */
+typedef struct {
+    mc_csmc_f32_t law;     /**< law.out is not written by the combined step */
+    mc_hgo_f32_t hgo;
+    uint32_t fast;         /**< law.fast_kind2 once the observer has two past
+                                samples (its straight update), else 5: the
+                                general path */
+} mc_csmc_hgo_f32_t;
+
+/** Validate both configs (law: mc_csmc_f32_init's bits; observer rejected
+ *  or hgo->dt_s != law->dt_s: MC_CSMC_ERR_HGO) and initialise st (sigma 0,
+ *  estimates 0). On error st is not written. */
+uint32_t mc_csmc_hgo_f32_init(mc_csmc_hgo_f32_t *st, const mc_csmc_f32_cfg_t *law,
+                              const mc_hgo_f32_cfg_t *hgo);
+
+/** sigma = 0, estimates 0 with no past samples, sticky flags cleared. */
+void mc_csmc_hgo_f32_reset(mc_csmc_hgo_f32_t *st);
+
+/**
+ * One output-feedback step: the estimates e2' = z2, e2'' = z3 at this
+ * sample from the observer's state, the law on (e1, e2, e2', e2''), sigma
+ * advanced, then the observer advanced with y = e2. Bit for bit the same as
+ * mc_hgo_f32_step(&st->hgo, e2) followed by mc_csmc_f32_step(&st->law, ...)
+ * with those estimates (tests/unit/csmc checks it).
+ *
+ * model: the LAW_MODEL inputs i_d, i_q, omega_m, I_dd', phi_d''' (its
+ * e-fields are ignored); may be NULL for LAW_CONST (MC_CSMC_ERR_NULL for
+ * LAW_MODEL).
+ *
+ * The estimates used are st->hgo.z[1], z[2] before the call (telemetry:
+ * read them first). The outputs are written to *out only.
+ *
+ * Finiteness: one test, on s2 + e1, before any state is written. e2 enters
+ * s2; the estimates are the observer's state, which only an accepted step
+ * writes, from a finite e2 and a finite state (a state overflowed by a
+ * finite but huge e2 makes the next s2 non-finite: that step and every
+ * later one is refused until reset). With e1 and sigma finite, s1 = e1 +
+ * K0 sigma cannot be NaN; the separate kernel refuses an e1 so close to
+ * +-FLT_MAX that s1 overflows, here u1 saturates (the only inputs for which
+ * the two differ). A refused step returns MC_CSMC_ERR_NAN_INPUT, changes
+ * no state (neither the law nor the observer), sets the sticky law.flags
+ * bit and writes zero v_d, v_q, s1, s2 to *out.
+ *
+ * Cost: LAW_CONST with SW_SAT and no clamp that can act (M_i <= v_limit)
+ * runs a straight path, one dispatch per axis on the realisation of
+ * sigma, from the third step after init/reset on (the observer's first
+ * two steps use the samples they have); every other law goes through the
+ * general step (mc_csmc_f32_step's
+ * code, whose test also covers the model inputs). Returns
+ * MC_CSMC_ERR_NONE, _NULL or _NAN_INPUT.
+ */
+uint32_t mc_csmc_hgo_f32_step(mc_csmc_hgo_f32_t *st, float e1_a, float e2_rad,
+                              const mc_csmc_f32_in_t *model, mc_csmc_f32_out_t *out);
+
 #ifdef __cplusplus
 }
 #endif
 
 #endif /* MC_CSMC_H */
+

@@ -116,9 +116,7 @@ uint32_t mc_hgo_f32_reset(mc_hgo_f32_t *st, float z1, float z2, float z3)
     return MC_HGO_ERR_NONE;
 }
 
-/* The first steps after init/reset (fewer than two past samples): the
- * input polynomial of the order the history allows. */
-static void hgo_step_start(mc_hgo_f32_t *st, float y)
+void mc_hgo_f32_advance_start(mc_hgo_f32_t *st, float y)
 {
     float v1 = 0.0f;
     float v2 = 0.0f;
@@ -143,30 +141,12 @@ void mc_hgo_f32_step(mc_hgo_f32_t *st, float y, mc_hgo_f32_est_t *p_est)
     if ((st == NULL) || (p_est == NULL)) {
         return;
     }
-    const float z0 = st->z[0];
-    const float z1 = st->z[1];
-    const float z2 = st->z[2];
-    p_est->z1 = z0;
-    p_est->z2 = z1;
-    p_est->z3 = z2;
+    p_est->z1 = st->z[0];
+    p_est->z2 = st->z[1];
+    p_est->z3 = st->z[2];
     if (__builtin_expect(!mc_isfinite_f32(y), 0)) {
         st->flags |= MC_HGO_ERR_NAN_INPUT;
         return;
     }
-    if (__builtin_expect(st->n_hist < 2u, 0)) {
-        hgo_step_start(st, y);
-        return;
-    }
-    /* z <- y e1 + Pz (z - y e1) + gdy dy + gd2y d2y */
-    const float y1 = st->y1;
-    const float dy = y - y1;
-    const float d2y = (dy - y1) + st->y2;
-    const float d0 = z0 - y;
-    const float *p = st->pz;
-    st->z[0] = (y + (((p[0] * d0) + (p[1] * z1)) + (p[2] * z2))) +
-               ((st->gdy[0] * dy) + (st->gd2y[0] * d2y));
-    st->z[1] = (((p[3] * d0) + (p[4] * z1)) + (p[5] * z2)) + ((st->gdy[1] * dy) + (st->gd2y[1] * d2y));
-    st->z[2] = (((p[6] * d0) + (p[7] * z1)) + (p[8] * z2)) + ((st->gdy[2] * dy) + (st->gd2y[2] * d2y));
-    st->y2 = y1;
-    st->y1 = y;
+    mc_hgo_f32_advance(st, y);
 }

@@ -133,6 +133,48 @@ uint32_t mc_hgo_f32_reset(mc_hgo_f32_t *st, float z1, float z2, float z3);
  */
 void mc_hgo_f32_step(mc_hgo_f32_t *st, float y, mc_hgo_f32_est_t *p_est);
 
+/** The first steps after init/reset (fewer than two past samples) of
+ *  mc_hgo_f32_advance: the input polynomial of the order the history allows. */
+void mc_hgo_f32_advance_start(mc_hgo_f32_t *st, float y);
+
+/**
+ * Advance the state one period with the sample y, which the caller has
+ * checked to be finite (no check here; the estimate at this sample is
+ * st->z before the call). mc_hgo_f32_step is this plus its check, so both
+ * give the same bits; for a caller that runs the observer inside its own
+ * step (mc_csmc_hgo_f32_step).
+ */
+static inline void mc_hgo_f32_advance_run(mc_hgo_f32_t *st, float y);
+
+static inline void mc_hgo_f32_advance(mc_hgo_f32_t *st, float y)
+{
+    if (__builtin_expect(st->n_hist < 2u, 0)) {
+        mc_hgo_f32_advance_start(st, y);
+        return;
+    }
+    mc_hgo_f32_advance_run(st, y);
+}
+
+/** mc_hgo_f32_advance once st->n_hist >= 2 (two past samples), which the
+ *  caller knows. */
+static inline void mc_hgo_f32_advance_run(mc_hgo_f32_t *st, float y)
+{
+    /* z <- y e1 + Pz (z - y e1) + gdy dy + gd2y d2y */
+    const float y1 = st->y1;
+    const float dy = y - y1;
+    const float d2y = (dy - y1) + st->y2;
+    const float d0 = st->z[0] - y;
+    const float z1 = st->z[1];
+    const float z2 = st->z[2];
+    const float *p = st->pz;
+    st->z[0] = (y + (((p[0] * d0) + (p[1] * z1)) + (p[2] * z2))) +
+               ((st->gdy[0] * dy) + (st->gd2y[0] * d2y));
+    st->z[1] = (((p[3] * d0) + (p[4] * z1)) + (p[5] * z2)) + ((st->gdy[1] * dy) + (st->gd2y[1] * d2y));
+    st->z[2] = (((p[6] * d0) + (p[7] * z1)) + (p[8] * z2)) + ((st->gdy[2] * dy) + (st->gd2y[2] * d2y));
+    st->y2 = y1;
+    st->y1 = y;
+}
+
 #ifdef __cplusplus
 }
 #endif

@@ -731,4 +731,166 @@ TEST(CsmcLaw, ErrorsFromState) {
   EXPECT_EQ(mc_csmc_f32_err_from_state(&bad, 0, 0, 0, 0, 0, 0, 0, 0, &in), MC_CSMC_ERR_MODEL);
 }
 
+// ------------------------------------------- law and observer in one step
+// The combined step must give the bits of the separate kernels: HGO step
+// (estimate, then advance) followed by the law on those estimates.
+struct Combo {
+  const char* name;
+  mc_csmc_f32_cfg_t law;
+};
+
+std::vector<Combo> combined_configs() {
+  std::vector<Combo> v;
+  const float w02 = static_cast<float>(4.0 * kPi * kPi);
+  const float c1[5] = {0.0f, -4.0f * w02 * w02, 0.0f, -5.0f * w02, 0.0f};
+  const float re1[5] = {-1, -2, -2, -3, -3}, im1[5] = {0, 1, -1, 1, -1};
+  const float c2[3] = {0.0f, -w02, 0.0f};
+  const float re2[3] = {-1, -2, -2}, im2[3] = {0, 1, -1};
+  mc_csmc_f32_cfg_t servo = paper_cfg(MC_CSMC_LAW_CONST, MC_CSMC_SW_SAT, false);
+  EXPECT_EQ(mc_csvc_f32_place(5u, c1, re1, im1, &servo.sigma1), MC_CSVC_ERR_NONE);
+  EXPECT_EQ(mc_csvc_f32_place(3u, c2, re2, im2, &servo.sigma2), MC_CSVC_ERR_NONE);
+  v.push_back({"S1 order 5 / S2 order 3 (modal)", servo});
+  mc_csmc_f32_cfg_t swapped = servo;
+  std::swap(swapped.sigma1, swapped.sigma2);
+  swapped.mu1_a = 50.0f;  // the layers follow the axes' scales
+  swapped.mu2_rad_s2 = 0.1f;
+  v.push_back({"S2 / S1 swapped", swapped});
+  v.push_back({"conditional integrators", paper_cfg(MC_CSMC_LAW_CONST, MC_CSMC_SW_SAT, true)});
+  v.push_back({"no sigma", paper_cfg(MC_CSMC_LAW_CONST, MC_CSMC_SW_SAT, false)});
+  mc_csmc_f32_cfg_t dense = paper_cfg(MC_CSMC_LAW_CONST, MC_CSMC_SW_SAT, false);
+  const float cd[2] = {0.0f, 0.0f}, red[2] = {-1, -2}, imd[2] = {0, 0};
+  EXPECT_EQ(mc_csvc_f32_place(2u, cd, red, imd, &dense.sigma1), MC_CSVC_ERR_NONE);
+  EXPECT_EQ(mc_csvc_f32_integrator(100.0f, &dense.sigma2), MC_CSVC_ERR_NONE);
+  v.push_back({"dense d axis", dense});
+  mc_csmc_f32_cfg_t clamp = servo;
+  clamp.v_limit_v = 20.0f;  // M = 50 V > v_limit: the clamp can act (general path)
+  v.push_back({"clamp", clamp});
+  v.push_back({"ideal SMC", paper_cfg(MC_CSMC_LAW_CONST, MC_CSMC_SW_SGN, true)});
+  v.push_back({"model law", paper_cfg(MC_CSMC_LAW_MODEL, MC_CSMC_SW_SAT, true)});
+  return v;
+}
+
+bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+TEST(CsmcHgoStep, EqualsTheSeparateKernelsBitForBit) {
+  for (const Combo& cb : combined_configs()) {
+    const mc_hgo_f32_cfg_t hc = hgo_cfg(1e-3, 1e-4, 2u);
+    mc_csmc_hgo_f32_t comb{};
+    ASSERT_EQ(mc_csmc_hgo_f32_init(&comb, &cb.law, &hc), MC_CSMC_ERR_NONE) << cb.name;
+    mc_csmc_f32_t law{};
+    mc_hgo_f32_t hgo{};
+    ASSERT_EQ(mc_csmc_f32_init(&law, &cb.law), MC_CSMC_ERR_NONE);
+    ASSERT_EQ(mc_hgo_f32_init(&hgo, &hc), MC_HGO_ERR_NONE);
+    std::mt19937 g(7);
+    // errors inside and outside both boundary layers (mu1 0.1 A, mu2 50
+    // rad/s^2 is k1 e2 ~ 7e-4 rad): the saturated branches run too
+    std::uniform_real_distribution<float> ue1(-0.3f, 0.3f), ue2(-2e-3f, 2e-3f), ux(-2.0f, 2.0f);
+    float e2 = 0.0f;
+    for (int k = 0; k < 3000; ++k) {
+      if (k == 1500) {  // a reset in the middle restarts both from scratch
+        mc_csmc_hgo_f32_reset(&comb);
+        mc_csmc_f32_reset(&law);
+        ASSERT_EQ(mc_hgo_f32_reset(&hgo, 0.0f, 0.0f, 0.0f), MC_HGO_ERR_NONE);
+      }
+      e2 = 0.9f * e2 + 0.1f * ue2(g);  // a smooth-ish position error
+      mc_csmc_f32_in_t in{};
+      in.e1_a = ue1(g);
+      in.e2_rad = e2;
+      in.i_d_a = ux(g);
+      in.i_q_a = ux(g);
+      in.omega_m_rad_s = 10.0f * ux(g);
+      in.di_dd_a_s = ux(g);
+      in.dddphi_d_rad_s3 = ux(g);
+      mc_hgo_f32_est_t est;
+      mc_hgo_f32_step(&hgo, e2, &est);
+      in.de2_rad_s = est.z2;
+      in.dde2_rad_s2 = est.z3;
+      mc_csmc_f32_out_t ref;
+      mc_csmc_f32_step(&law, &in, &ref);
+      mc_csmc_f32_out_t o;
+      ASSERT_EQ(mc_csmc_hgo_f32_step(&comb, in.e1_a, e2, &in, &o), MC_CSMC_ERR_NONE) << cb.name;
+      ASSERT_TRUE(same_bits(o.v_d_v, ref.v_d_v) && same_bits(o.v_q_v, ref.v_q_v) &&
+                  same_bits(o.s1_a, ref.s1_a) && same_bits(o.s2_rad_s2, ref.s2_rad_s2))
+          << cb.name << " step " << k << ": " << o.v_d_v << " " << ref.v_d_v << " " << o.s2_rad_s2
+          << " " << ref.s2_rad_s2;
+      ASSERT_EQ(std::memcmp(comb.hgo.z, hgo.z, sizeof hgo.z), 0) << cb.name << " step " << k;
+    }
+    // the sigma states (an axis without sigma has none to compare)
+    for (int ax = 0; ax < 2; ++ax) {
+      const mc_csvc_f32_t& a = (ax == 0) ? comb.law.sigma1 : comb.law.sigma2;
+      const mc_csvc_f32_t& b = (ax == 0) ? law.sigma1 : law.sigma2;
+      if (((ax == 0) ? law.have_sigma1 : law.have_sigma2) == 0u) continue;
+      EXPECT_EQ(std::memcmp(a.sigma, b.sigma, sizeof a.sigma), 0) << cb.name << " axis " << ax;
+      EXPECT_EQ(std::memcmp(a.xi, b.xi, sizeof a.xi), 0) << cb.name << " axis " << ax;
+    }
+    EXPECT_EQ(comb.law.flags, 0u);
+  }
+}
+
+TEST(CsmcHgoStep, NonFiniteInputChangesNothing) {
+  for (const Combo& cb : combined_configs()) {
+    mc_csmc_hgo_f32_t st{};
+    const mc_hgo_f32_cfg_t hc = hgo_cfg(1e-3, 1e-4, 2u);
+    ASSERT_EQ(mc_csmc_hgo_f32_init(&st, &cb.law, &hc), MC_CSMC_ERR_NONE);
+    mc_csmc_f32_in_t model{};
+    mc_csmc_f32_out_t o{};
+    for (int k = 0; k < 5; ++k) {  // past the observer's start-up steps
+      ASSERT_EQ(mc_csmc_hgo_f32_step(&st, 0.01f * k, 1e-4f * k, &model, &o), MC_CSMC_ERR_NONE);
+    }
+    const mc_csmc_hgo_f32_t before = st;
+    const float bad[] = {NAN, INFINITY, -INFINITY};
+    for (float b : bad) {
+      for (int which = 0; which < 2; ++which) {
+        o = mc_csmc_f32_out_t{1.0f, 1.0f, 1.0f, 1.0f};
+        const float e1 = (which == 0) ? b : 0.01f, e2 = (which == 1) ? b : 1e-4f;
+        EXPECT_EQ(mc_csmc_hgo_f32_step(&st, e1, e2, &model, &o), MC_CSMC_ERR_NAN_INPUT)
+            << cb.name << " " << b << " " << which;
+        EXPECT_EQ(o.v_d_v, 0.0f);
+        EXPECT_EQ(o.v_q_v, 0.0f);
+        EXPECT_EQ(std::memcmp(st.law.sigma1.xi, before.law.sigma1.xi, sizeof st.law.sigma1.xi), 0);
+        EXPECT_EQ(std::memcmp(st.law.sigma2.xi, before.law.sigma2.xi, sizeof st.law.sigma2.xi), 0);
+        EXPECT_EQ(std::memcmp(st.law.sigma1.sigma, before.law.sigma1.sigma,
+                              sizeof st.law.sigma1.sigma), 0);
+        EXPECT_EQ(std::memcmp(st.law.sigma2.sigma, before.law.sigma2.sigma,
+                              sizeof st.law.sigma2.sigma), 0);
+        EXPECT_EQ(std::memcmp(&st.hgo, &before.hgo, sizeof st.hgo), 0) << cb.name;
+        EXPECT_NE(st.law.flags & MC_CSMC_ERR_NAN_INPUT, 0u);
+      }
+    }
+    // a model-law input that is not finite is refused the same way
+    if (cb.law.law == MC_CSMC_LAW_MODEL) {
+      model.omega_m_rad_s = NAN;
+      EXPECT_EQ(mc_csmc_hgo_f32_step(&st, 0.01f, 1e-4f, &model, &o), MC_CSMC_ERR_NAN_INPUT);
+      EXPECT_EQ(std::memcmp(&st.hgo, &before.hgo, sizeof st.hgo), 0);
+      EXPECT_EQ(mc_csmc_hgo_f32_step(&st, 0.01f, 1e-4f, nullptr, &o), MC_CSMC_ERR_NULL);
+      model.omega_m_rad_s = 0.0f;
+    }
+    mc_csmc_hgo_f32_reset(&st);
+    EXPECT_EQ(st.law.flags, 0u);
+    EXPECT_EQ(mc_csmc_hgo_f32_step(&st, 0.01f, 1e-4f, &model, &o), MC_CSMC_ERR_NONE);
+  }
+}
+
+TEST(CsmcHgoStep, InitRejectsBadConfigsAndNulls) {
+  const mc_csmc_f32_cfg_t law = paper_cfg(MC_CSMC_LAW_CONST, MC_CSMC_SW_SAT, true);
+  mc_csmc_hgo_f32_t st{};
+  st.fast = 42u;
+  mc_hgo_f32_cfg_t hc = hgo_cfg(1e-3, 2e-4, 2u);  // dt differs from the law's 1e-4
+  EXPECT_EQ(mc_csmc_hgo_f32_init(&st, &law, &hc), MC_CSMC_ERR_HGO);
+  hc = hgo_cfg(-1e-3, 1e-4, 2u);
+  EXPECT_EQ(mc_csmc_hgo_f32_init(&st, &law, &hc), MC_CSMC_ERR_HGO);
+  mc_csmc_f32_cfg_t bad = law;
+  bad.mu1_a = 0.0f;
+  EXPECT_EQ(mc_csmc_hgo_f32_init(&st, &bad, &hc), MC_CSMC_ERR_MU | MC_CSMC_ERR_HGO);
+  EXPECT_EQ(mc_csmc_hgo_f32_init(nullptr, &law, &hc), MC_CSMC_ERR_NULL);
+  EXPECT_EQ(mc_csmc_hgo_f32_init(&st, nullptr, &hc), MC_CSMC_ERR_NULL);
+  EXPECT_EQ(mc_csmc_hgo_f32_init(&st, &law, nullptr), MC_CSMC_ERR_NULL);
+  EXPECT_EQ(st.fast, 42u);  // not written on error
+  mc_csmc_f32_out_t o{};
+  EXPECT_EQ(mc_csmc_hgo_f32_step(nullptr, 0.0f, 0.0f, nullptr, &o), MC_CSMC_ERR_NULL);
+  hc = hgo_cfg(1e-3, 1e-4, 2u);
+  ASSERT_EQ(mc_csmc_hgo_f32_init(&st, &law, &hc), MC_CSMC_ERR_NONE);
+  EXPECT_EQ(mc_csmc_hgo_f32_step(&st, 0.0f, 0.0f, nullptr, nullptr), MC_CSMC_ERR_NULL);
+}
+
 }  // namespace
