@@ -159,15 +159,15 @@ class PmsmBoard {
   bool pwm_enabled_applied_ = false;
   FaultLine fault_line_;
   bool open_circuit_ = true;
+  bool open_fresh_ = true;  // open phase: the next period starts from x_ (see below)
   mc_hal_encoder_sample_t enc_{};
   Injection inj_{};
   double tick_offset_s_ = 0.0;
-  // Open-phase fault: its plant, the series current it carries (exact: x_
-  // holds the same state in dq, rounded), and whether the next period must
-  // start from x_ (the break has just happened).
+  // Open-phase fault: its plant and the series current it carries (exact;
+  // x_ holds the same state in dq, rounded). open_fresh_ (above): the break
+  // has just happened, the series current is projected from x_.
   mcsim::PmsmOpenPhase open_plant_;
   double open_i_a_ = 0.0;
-  bool open_fresh_ = true;
 
   // ops tables bound to this board
   mc_hal_adc_t adc_dev_{};
