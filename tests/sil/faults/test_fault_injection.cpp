@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -388,6 +389,78 @@ TEST(OpenPhaseCheck, QuietWhileTheCurrentLagsAtSpeed) {
   EXPECT_EQ(r.sat_fraction, 0.0);
   EXPECT_GT(r.max_count, 0u) << "the reversals must exercise the count";
   RecordProperty("max_open_phase_count", std::to_string(r.max_count));
+}
+
+TEST(OpenPhaseBoard, SeriesCircuitDrivenThenFreewheeling) {
+  // The board alone (no firmware), phase a broken, the rotor at theta_e =
+  // 90 degrees (along the b-c pair: no torque, it stays locked) on a 1e3
+  // kg m^2 flywheel, 24 V bus. Duties b = 0.6, c = 0.4 put v_bc = 4.8 V
+  // across 2R = 1.35 ohm, 2L = 2.28 mH: after 20 ms (12 time constants
+  // L/R = 1.69 ms) the current is 4.8 / 1.35 = 3.556 A (to 7e-6 of it).
+  // Then the bridge opens: the current freewheels through the low diode of
+  // b and the high diode of c, v_bc = -24 V:
+  //   i(t) = (i0 + vbus/2R) exp(-t R/L) - vbus/2R,
+  // zero at t0 = (L/R) ln(1 + 2R i0 / vbus) = 0.308 ms (6.2 periods), and it
+  // stays zero (no back-EMF at standstill). Tolerances: 1e-9 A against the
+  // closed form while it flows (RK4 on a linear ODE with h = 12.5 us, tau =
+  // 1.69 ms: ~1e-13 per step); 5e-5 relative for the driven steady state
+  // (the exponential tail exp(-11.8)).
+  hal_host::PmsmBoardConfig bc;
+  bc.motor = mcsim::paper002_test_motor();
+  bc.motor.J_kgm2 = 1.0e3;
+  bc.vbus_v = 24.0;
+  bc.theta_m0_rad = 3.14159265358979 / 8.0;
+  hal_host::PmsmBoard b(bc);
+  hal_host::PmsmBoard::Injection inj;
+  inj.open_phase = 0;
+  b.inject(inj);
+  const double R = bc.motor.R_ohm, L = bc.motor.Ld_h;
+  ASSERT_EQ(b.pwm_set_duty(0.5f, 0.6f, 0.4f), 0);
+  ASSERT_EQ(b.pwm_enable(), 0);
+  for (int k = 0; k < 400; ++k) {
+    b.sample();
+    b.advance();
+    const Eigen::Vector3d i = b.phase_currents_true_a();
+    ASSERT_EQ(i(0), 0.0) << "the broken phase carries nothing";
+    ASSERT_EQ(i(1), -i(2)) << "the other two carry one series current";
+  }
+  const double i0 = b.phase_currents_true_a()(1);
+  EXPECT_NEAR(i0, 0.2 * 24.0 / (2.0 * R), 5e-5 * 3.556);
+  ASSERT_EQ(b.pwm_disable(), 0);
+  const double tau = L / R, i_inf = 24.0 / (2.0 * R);
+  const double t0 = tau * std::log(1.0 + i0 / i_inf);
+  for (int k = 1; k <= 40; ++k) {
+    b.sample();
+    b.advance();
+    const Eigen::Vector3d i = b.phase_currents_true_a();
+    const double t = k * kT;
+    const double want = (t < t0) ? (i0 + i_inf) * std::exp(-t / tau) - i_inf : 0.0;
+    if (std::abs(t - t0) < kT) continue;  // the period in which it reaches zero
+    EXPECT_NEAR(i(1), want, 1e-9) << "period " << k;
+    EXPECT_EQ(i(0), 0.0);
+    EXPECT_EQ(i(1), -i(2));
+  }
+  EXPECT_EQ(b.phase_currents_true_a()(1), 0.0) << "blocked by the diodes";
+  EXPECT_EQ(std::hypot(b.state()(0), b.state()(1)), 0.0) << "the rotor-frame state agrees";
+}
+
+TEST(OpenPhaseBoard, InjectionOutOfRangeIsRejected) {
+  hal_host::PmsmBoardConfig bc;
+  bc.motor = mcsim::paper002_test_motor();
+  hal_host::PmsmBoard b(bc);
+  hal_host::PmsmBoard::Injection inj;
+  inj.open_phase = 3;
+  EXPECT_THROW(b.inject(inj), std::invalid_argument);
+  inj.open_phase = -2;
+  EXPECT_THROW(b.inject(inj), std::invalid_argument);
+  // Nothing changed: still three phases (a current flows in a).
+  ASSERT_EQ(b.pwm_set_duty(0.6f, 0.4f, 0.5f), 0);
+  ASSERT_EQ(b.pwm_enable(), 0);
+  for (int k = 0; k < 20; ++k) {
+    b.sample();
+    b.advance();
+  }
+  EXPECT_GT(std::abs(b.phase_currents_true_a()(0)), 0.1);
 }
 
 }  // namespace
