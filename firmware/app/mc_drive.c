@@ -15,6 +15,26 @@ static bool finite4(float a, float b, float c, float d)
            mc_isfinite_f32(d);
 }
 
+/* Open-phase check: both values 0 (off), or i_min in (0, i_max] and a time
+ * of 1 .. 2^24 periods (a count that a float holds exactly). */
+static uint32_t validate_open_phase(const mc_drive_cfg_t *cfg)
+{
+    const float i_min = cfg->open_phase_i_min_a;
+    const float t = cfg->open_phase_time_s;
+    if (!mc_isfinite_f32(i_min) || !mc_isfinite_f32(t) || i_min < 0.0f || t < 0.0f) {
+        return MC_DRIVE_CFG_ERR_OPEN_PHASE;
+    }
+    if (i_min == 0.0f && t == 0.0f) {
+        return MC_DRIVE_CFG_OK;
+    }
+    const float steps = t / cfg->foc.dt_s;
+    if (i_min == 0.0f || !(i_min <= cfg->i_max_a) || !(steps >= 1.0f) ||
+        !(steps <= 16777216.0f)) {
+        return MC_DRIVE_CFG_ERR_OPEN_PHASE;
+    }
+    return MC_DRIVE_CFG_OK;
+}
+
 static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
                              uint32_t *p_foc_err)
 {
@@ -56,6 +76,7 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
     if (cfg->stall_current_frac > 1.0f) {
         err |= MC_DRIVE_CFG_ERR_SUPERVISION;
     }
+    err |= validate_open_phase(cfg);
     return err;
 }
 
@@ -95,6 +116,9 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
         d->pll_k3_dt = bw * bw * bw * dt;
     }
     d->foc_err = foc_err;
+    d->open_phase_trip = (cfg->open_phase_time_s > 0.0f)
+                             ? (uint32_t)(cfg->open_phase_time_s / cfg->foc.dt_s + 0.5f)
+                             : 0u;
     /* The control deadline in ticks: one PWM period after the ADC trigger. */
     uint32_t hz = 0u;
     if (hal->tick != NULL && mc_hal_tick_get_freq_hz(hal->tick, &hz) == 0 && hz > 0u) {
@@ -250,6 +274,44 @@ static uint32_t encoder_jump_fault(mc_drive_t *d, const mc_hal_encoder_sample_t 
     return f;
 }
 
+/* Open-phase check of one CURRENT-mode step (mc_drive.h): per phase, a
+ * net count of steps in which a large reference met no current. */
+static uint32_t open_phase_check(mc_drive_t *d, const float meas_a[3], float vbus_v)
+{
+    const mc_foc_f32_out_t *o = &d->tm.foc;
+    const float v_lim = MC_DRIVE_OPEN_PHASE_VSAT_FRAC * d->cfg.foc.v_limit_ratio *
+                        mc_svpwm_max_voltage_f32(vbus_v, d->cfg.foc.limit_mode);
+    if ((o->svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u ||
+        o->vd_v * o->vd_v + o->vq_v * o->vq_v >= v_lim * v_lim) {
+        return 0u; /* at the voltage limit: no evidence either way */
+    }
+    float s;
+    float c;
+    mc_sincos_f32(d->tm.theta_e_rad, &s, &c);
+    /* Reference in alpha-beta, then per phase (amplitude-invariant). */
+    const float r_alpha = d->id_ref_a * c - d->iq_ref_a * s;
+    const float r_beta = d->id_ref_a * s + d->iq_ref_a * c;
+    const float h = 0.5f * MC_SQRT3_F32 * r_beta;
+    const float ref[3] = {r_alpha, -0.5f * r_alpha + h, -0.5f * r_alpha - h};
+    uint32_t f = 0u;
+    for (unsigned k = 0u; k < 3u; ++k) {
+        const float r = mc_abs_f32(ref[k]);
+        if (!(r >= d->cfg.open_phase_i_min_a)) {
+            continue;
+        }
+        if (mc_abs_f32(meas_a[k]) < MC_DRIVE_OPEN_PHASE_CONDUCTION_RATIO * r) {
+            d->open_phase_count[k]++;
+            if (d->open_phase_count[k] >= d->open_phase_trip) {
+                d->open_phase_mask |= 1u << k;
+                f = MC_DRIVE_FAULT_OPEN_PHASE;
+            }
+        } else if (d->open_phase_count[k] > 0u) {
+            d->open_phase_count[k]--;
+        }
+    }
+    return f;
+}
+
 /* One step of the plugged law: its duties go to the bridge it drives. */
 static uint32_t run_ctrl(mc_drive_t *d, const mc_drive_meas_t *m)
 {
@@ -314,6 +376,9 @@ bool mc_drive_fast_step(mc_drive_t *d)
         } else if (mc_hal_pwm3_set_duty(d->hal->pwm3, d->tm.foc.duty_a, d->tm.foc.duty_b,
                                         d->tm.foc.duty_c) != 0) {
             f |= MC_DRIVE_FAULT_PWM;
+        } else if (d->open_phase_trip != 0u) {
+            const float meas[3] = {s.ia_a, s.ib_a, ic};
+            f |= open_phase_check(d, meas, s.vbus_v);
         }
     } else if (f == 0u && d->mode == MC_DRIVE_MODE_CTRL) {
         const mc_drive_meas_t m = {
@@ -457,6 +522,7 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
             return -ENODEV;
         }
         mc_foc_f32_reset(&d->foc);
+        d->open_phase_count[0] = d->open_phase_count[1] = d->open_phase_count[2] = 0u;
         /* Zero voltage first, then close the switches. */
         if (mc_hal_pwm3_set_duty(d->hal->pwm3, 0.5f, 0.5f, 0.5f) != 0 ||
             mc_hal_pwm3_enable(d->hal->pwm3) != 0) {
@@ -521,6 +587,7 @@ int mc_drive_clear_faults(mc_drive_t *d)
     }
     d->faults = 0u;
     d->first_fault = 0u;
+    d->open_phase_mask = 0u;
     d->id_ref_a = 0.0f;
     d->iq_ref_a = 0.0f;
     d->foc_err = MC_FOC_ERR_NONE;

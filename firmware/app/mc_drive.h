@@ -83,6 +83,10 @@ typedef enum {
 #define MC_DRIVE_FAULT_UNBALANCED  (1u << 14) /**< three measured phase currents do not sum
                                                    to zero: a stuck, offset or failed
                                                    current sensor (needs three shunts) */
+#define MC_DRIVE_FAULT_OPEN_PHASE  (1u << 15) /**< CURRENT mode: a phase carries no current
+                                                   while its commanded current is large
+                                                   (broken conductor or connector, a leg
+                                                   that never switches); see open_phase_* */
 
 /* Configuration errors returned by mc_drive_init (bit set). */
 #define MC_DRIVE_CFG_OK            0u
@@ -99,6 +103,46 @@ typedef enum {
                                                     parameter or i_unbalance_max
                                                     negative or not finite, or
                                                     stall_current_frac > 1 */
+#define MC_DRIVE_CFG_ERR_OPEN_PHASE (1u << 10) /**< open_phase_i_min_a or open_phase_time_s
+                                                    negative or not finite, only one of
+                                                    them 0, i_min above i_max_a, or the
+                                                    time shorter than one period or
+                                                    longer than 2^24 periods */
+
+/*
+ * Open-phase check (CURRENT mode, fast step; MC_DRIVE_FAULT_OPEN_PHASE).
+ * With one phase conductor broken, that phase's current is zero whatever
+ * the drive commands; the other two carry one series current. The drive
+ * turns its dq references into phase references at the angle of the step
+ * and, for each phase x whose reference |i_x_ref| is at least
+ * open_phase_i_min_a, counts up a step without conduction
+ * (|i_x| < MC_DRIVE_OPEN_PHASE_CONDUCTION_RATIO |i_x_ref|) and counts down
+ * (to 0) a step with conduction. Steps with |i_x_ref| below i_min carry no
+ * evidence (a healthy phase is near zero there too: the fault cannot be seen
+ * while the commanded current in the broken phase is small; on a turning
+ * machine each phase gets its turn every half electrical period). Neither do
+ * steps at the voltage limit (|v_dq| at MC_DRIVE_OPEN_PHASE_VSAT_FRAC of the
+ * controller's limit or beyond, or the modulator cutting the vector): at
+ * high speed and in field weakening a healthy current may legitimately fall
+ * far short of its reference. A phase whose count reaches
+ * open_phase_time_s / dt (rounded) trips; its bit is set in
+ * mc_drive_t.open_phase_mask (bit 0 = a).
+ *
+ * Choosing the values: i_min well above the current noise divided by the
+ * ratio (a broken phase reads noise), and at most i_max_a. The time must
+ * exceed what the loop needs to bring a phase current across +-ratio of a
+ * reversing reference (about 0.5/bw plus the computation delay for the
+ * first-order loop of mc_foc_f32_gains_from_bandwidth, 0.3/bw for a step
+ * from zero) and stay below the time the PIs need to wind up to the voltage
+ * limit on the error a broken phase leaves (v_max / (ki i_min)): after that
+ * the steps are at the limit and count nothing. Latency with the broken
+ * phase's reference above i_min throughout: the time, plus one period; on a
+ * turning machine, at most the time plus the part of a half electrical
+ * period where that reference is below i_min.
+ * The check runs in CURRENT mode only (a plugged law owns its references).
+ */
+#define MC_DRIVE_OPEN_PHASE_CONDUCTION_RATIO 0.25f
+#define MC_DRIVE_OPEN_PHASE_VSAT_FRAC        0.99f
 
 /** Drive configuration (copied at init). */
 typedef struct {
@@ -123,6 +167,10 @@ typedef struct {
     float stall_speed_rad_s;    /**< ... while |omega_m| < this ... */
     float stall_time_s;         /**< ... for longer than this [s] */
     float i_unbalance_max_a;    /**< largest |ia + ib + ic| with three shunts [A] */
+    float open_phase_i_min_a;   /**< open-phase check: phase reference magnitude above
+                                     which the phase must conduct [A], <= i_max_a ... */
+    float open_phase_time_s;    /**< ... net time without conduction that trips [s],
+                                     >= one period; both 0: check off */
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
@@ -201,6 +249,9 @@ typedef struct {
     uint32_t deadline_ticks;    /**< one PWM period in HAL ticks (0: no tick source) */
     uint32_t last_count_raw;    /**< encoder count of the previous step */
     float stall_time_acc_s;     /**< time spent in the stall condition [s] */
+    uint32_t open_phase_trip;   /**< steps without conduction that trip (0: check off) */
+    uint32_t open_phase_count[3]; /**< per phase: net steps without conduction */
+    uint32_t open_phase_mask;   /**< phases found open (bit 0 = a), with the fault */
     const mc_drive_ctrl_t *ctrl; /**< attached control law, or NULL */
     mc_drive_telemetry_t tm;
 } mc_drive_t;

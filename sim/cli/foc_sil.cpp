@@ -1,5 +1,6 @@
 #include "foc_sil.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -32,6 +33,8 @@ FocSil::FocSil(const FocSilOptions& o) : opt_(o) {
   bc.substeps = o.substeps;
   bc.three_shunts = o.three_shunts;
   bc.delay_periods = o.delay_periods;
+  bc.omega_m0_rad_s = o.omega_m0_rad_s;
+  bc.theta_m0_rad = o.theta_m0_rad;
   board_ = std::make_unique<hal_host::PmsmBoard>(bc);
 
   float kp = 0.0f, ki = 0.0f;
@@ -76,6 +79,15 @@ FocSil::FocSil(const FocSilOptions& o) : opt_(o) {
   // Three shunts: the phase currents must sum to zero within 1 A (12-bit
   // ADC at 20 A full scale: 3 LSB of rounding is 15 mA; 1 A is a fault).
   dc.i_unbalance_max_a = o.three_shunts ? 1.0f : 0.0f;
+  // Open phase: a phase commanded 1 A or more must carry at least a quarter
+  // of it (0.25 A: 25 LSB of the 12-bit, 20 A converter), net over 2 ms, or
+  // 2/bw when the loop is slower: a reversing reference takes the current
+  // across +-25 % in about 0.5/bw plus the one-period delay (0.45 ms at
+  // 200 Hz), and the PIs need longer to wind up to the 110 V limit on the
+  // error a broken phase leaves (at most the 14 A reference: 20 V + 12 kV/s,
+  // 7.5 ms at 200 Hz; both times scale with 1/bw).
+  dc.open_phase_i_min_a = 1.0f;
+  dc.open_phase_time_s = static_cast<float>(std::max(2.0e-3, 2.0 / o.bw_rad_s));
   const uint32_t err = mc_drive_init(&drive_, &dc, board_->hal());
   if (err != MC_DRIVE_CFG_OK) {
     throw std::invalid_argument("drive configuration rejected, MC_DRIVE_CFG bits 0x" +

@@ -22,8 +22,10 @@ struct FocSilOptions {
   double load_nm = 0.0;
   double noise_rms_a = 0.0;         // current-sensor noise
   double speed_pll_bw_rad_s = 1000.0;  // encoder tracking loop (speed for the feed-forward)
-  unsigned slow_loop_div = 20;
-  bool three_shunts = false;        // measure ic too (enables the unbalance check)      // slow loop at pwm_hz / 20 (1 kHz at 20 kHz)
+  unsigned slow_loop_div = 20;      // slow loop at pwm_hz / 20 (1 kHz at 20 kHz)
+  bool three_shunts = false;        // measure ic too (enables the unbalance check)
+  double omega_m0_rad_s = 0.0;      // initial rotor speed (mechanical)
+  double theta_m0_rad = 0.0;        // initial rotor angle (mechanical)
 };
 
 // Paper 002, Table I, test motor: 0.3 kW, n_p = 4, Phi = 0.11 Wb,

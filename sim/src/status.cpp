@@ -28,6 +28,7 @@ const char* status_name(Status s) {
     case Status::kDelayTooLong: return "delay_too_long";
     case Status::kNonSalientRequired: return "non_salient_required";
     case Status::kBadBase: return "bad_base";
+    case Status::kBadPhase: return "bad_phase";
   }
   return "unknown";
 }

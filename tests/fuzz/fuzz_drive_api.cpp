@@ -51,6 +51,8 @@ mc_drive_cfg_t good_cfg() {
   c.stall_speed_rad_s = 1.0f;
   c.stall_time_s = 0.1f;
   c.i_unbalance_max_a = 2.0f;
+  c.open_phase_i_min_a = 1.0f;
+  c.open_phase_time_s = 1.0e-3f;
   return c;
 }
 

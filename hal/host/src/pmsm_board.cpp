@@ -67,6 +67,15 @@ Eigen::Vector3d PmsmBoard::phase_currents_a() const {
   return abc_from_ab(iab(0), iab(1));
 }
 
+Eigen::Vector3d PmsmBoard::phase_currents_true_a() const {
+  if (inj_.open_phase >= 0 && !open_fresh_) {
+    mcsim::PmsmOpenPhase::State xo = mcsim::PmsmOpenPhase::State::Zero();
+    xo(mcsim::PmsmOpenPhase::kI) = open_i_a_;
+    return open_plant_.phase_currents_a(xo);
+  }
+  return phase_currents_a();
+}
+
 PmsmBoard::State PmsmBoard::state() const {
   const Eigen::Vector2d iab = mcsim::PmsmRotorFrame::i_alpha_beta_a(x_);
   State s;
@@ -149,6 +158,88 @@ void PmsmBoard::integrate_open_switches(double h_s, int n) {
   }
 }
 
+namespace {
+
+// The open-phase plant with the series current held at zero: open terminals
+// (no current, no torque), only the mechanics move.
+struct OpenPhaseNoCurrent {
+  using State = mcsim::PmsmOpenPhase::State;
+  using Input = mcsim::PmsmOpenPhase::Input;
+  const mcsim::PmsmOpenPhase* plant;
+  State deriv(double t_s, const State& x, const Input& u) const {
+    State x0 = x;
+    x0(mcsim::PmsmOpenPhase::kI) = 0.0;
+    State dx = plant->deriv(t_s, x0, u);
+    dx(mcsim::PmsmOpenPhase::kI) = 0.0;
+    return dx;
+  }
+};
+
+}  // namespace
+
+void PmsmBoard::inject(const Injection& inj) {
+  if (inj.open_phase < -1 || inj.open_phase > 2) {
+    throw std::invalid_argument("open_phase must be -1 (none) or 0..2");
+  }
+  if (inj.open_phase >= 0) {
+    check_config(open_plant_.configure(plant_.params(), inj.open_phase), "open_phase");
+  }
+  if (inj.open_phase != inj_.open_phase) open_fresh_ = true;
+  inj_ = inj;
+}
+
+void PmsmBoard::advance_open_phase(const Eigen::Vector3d& duty, bool enabled) {
+  using OP = mcsim::PmsmOpenPhase;
+  const double T = cfg_.inverter.t_pwm_s;
+  const int n = cfg_.substeps;
+  const double h = T / n;
+  const double vbus = cfg_.vbus_v;
+  // Mechanics and (cos, sin) from x_ (re-synced there); the series current
+  // carried over, or projected at the break.
+  OP::State xo = open_plant_.from_rotor_frame(x_);
+  if (!open_fresh_) xo(OP::kI) = open_i_a_;
+  open_fresh_ = false;
+  const int y = open_plant_.phase_y();
+  const int z = open_plant_.phase_z();
+  if (enabled) {
+    // The pair sees the difference of its two pole voltages (held over the
+    // period, dead time evaluated at the period's start as on the healthy path).
+    const Eigen::Vector3d i = open_plant_.phase_currents_a(xo);
+    const Eigen::Vector3d vp = inverter_.pole_voltages_v(duty, vbus, i);
+    const OP::Input u(vp(y) - vp(z));
+    duty_applied_ = duty;
+    v_ab_applied_ = inverter_.alpha_beta_v(duty, vbus, i);  // commanded; the
+                                                            // motor sees its part along the pair
+    check_config(mcsim::advance_zoh(open_plant_, u, t_s_, T, n, &xo), "integrator");
+  } else {
+    duty_applied_ = Eigen::Vector3d::Constant(0.5);
+    v_ab_applied_ = Eigen::Vector2d::Zero();
+    for (int k = 0; k < n; ++k) {
+      const double t = t_s_ + k * h;
+      const double i0 = xo(OP::kI);
+      const double e = open_plant_.line_emf_v(xo);
+      if (i0 == 0.0 && std::abs(e) <= vbus) {
+        // Diodes blocking: no current, mechanics only.
+        const OpenPhaseNoCurrent nc{&open_plant_};
+        xo = mcsim::rk4_step(nc, t, xo, OP::Input::Zero(), h);
+        xo(OP::kI) = 0.0;
+        continue;
+      }
+      // Current i > 0 flows into y (its lower diode: pole at 0 V) and out of
+      // z (upper diode: vbus): v_yz = -vbus; reversed for i < 0. From zero,
+      // a line back-EMF beyond vbus drives the current the way it points.
+      const double dir = (i0 != 0.0) ? i0 : -e;
+      const OP::Input u((dir > 0.0) ? -vbus : vbus);
+      OP::State x1 = mcsim::rk4_step(open_plant_, t, xo, u, h);
+      if (i0 != 0.0 && x1(OP::kI) * i0 <= 0.0) x1(OP::kI) = 0.0;  // diodes block reversal
+      xo = x1;
+    }
+  }
+  open_i_a_ = xo(OP::kI);
+  open_circuit_ = (open_i_a_ == 0.0);
+  x_ = open_plant_.to_rotor_frame(xo);
+}
+
 void PmsmBoard::advance() {
   tick_offset_s_ = 0.0;
   const double T = cfg_.inverter.t_pwm_s;
@@ -158,7 +249,9 @@ void PmsmBoard::advance() {
   // forces the outputs through the timer's break/MOE path.
   const Eigen::Vector3d duty = delay_.push(duty_cmd_);
   const bool enabled = pwm_enabled_ && !fault_line_.killed;
-  if (!enabled) {
+  if (inj_.open_phase >= 0) {
+    advance_open_phase(duty, enabled);
+  } else if (!enabled) {
     integrate_open_switches(T / n, n);
     duty_applied_ = Eigen::Vector3d::Constant(0.5);
   } else {
@@ -236,6 +329,7 @@ void PmsmBoard::set_load(const mcsim::LoadTorque& load) {
   mcsim::PmsmParams p = plant_.params();
   p.load = load;
   check_config(plant_.configure(p), "load");
+  if (inj_.open_phase >= 0) check_config(open_plant_.configure(p, inj_.open_phase), "load");
 }
 
 void PmsmBoard::set_fault_inputs(uint32_t active_mask) { fault_line_.set_inputs(active_mask); }

@@ -30,6 +30,7 @@ enum class Status : int {
   kDelayTooLong,             // delay longer than the ring-buffer capacity
   kNonSalientRequired,       // normalisation needs Ld == Lq and B == 0
   kBadBase,                  // a normalisation base value <= 0
+  kBadPhase,                 // phase index outside 0..2
 };
 
 // Short stable name of a status code (for test and log messages).

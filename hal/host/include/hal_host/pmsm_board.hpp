@@ -20,6 +20,14 @@
 // sub-step, it is set to zero and the machine is open-circuit from then on
 // (as long as its line-to-line back-EMF stays below vbus, which is checked:
 // above it the diode rectifier conducts again).
+//
+// Open phase (Injection::open_phase): one phase conductor broken between the
+// board and the star point. The plant is then mcsim::PmsmOpenPhase (one
+// series current through the other two phases, driven by the difference of
+// their pole voltages); x_ keeps the same state in the rotor frame, so the
+// inspection functions and the ADC see it. With the switches open the series
+// current freewheels through the diodes of its two legs (-vbus or +vbus
+// across the pair) until it reaches zero.
 #ifndef HAL_HOST_PMSM_BOARD_HPP
 #define HAL_HOST_PMSM_BOARD_HPP
 
@@ -30,6 +38,7 @@
 #include "mcsim/integrator.hpp"
 #include "mcsim/inverter.hpp"
 #include "mcsim/pmsm_ab.hpp"
+#include "mcsim/pmsm_open_phase.hpp"
 #include "mcsim/pmsm_rotor_frame.hpp"
 #include "mcsim/sensors.hpp"
 
@@ -72,6 +81,9 @@ class PmsmBoard {
   const mcsim::PmsmRotorFrame& plant() const { return plant_; }
   double period_s() const { return cfg_.inverter.t_pwm_s; }
   double torque_nm() const { return plant_.torque_nm(x_); }
+  // True phase currents (a, b, c) [A]; with an open phase, exactly 0 in it
+  // and exactly opposite in the other two.
+  Eigen::Vector3d phase_currents_true_a() const;
   // dq currents at the true electrical angle.
   void true_dq_a(double* id_a, double* iq_a) const;
   bool pwm_enabled() const { return pwm_enabled_ && !fault_line_.killed; }
@@ -88,8 +100,13 @@ class PmsmBoard {
     bool encoder_frozen = false;   // encoder keeps its last count (lost lines)
     double compute_delay_s = 0.0;  // the tick jumps this much after the sample:
                                    // the fast step looks late (deadline overrun)
+    int open_phase = -1;           // 0..2: that phase conductor is broken from
+                                   // the next advance() on (mcsim::PmsmOpenPhase);
+                                   // -1: all three connected
   };
-  void inject(const Injection& inj) { inj_ = inj; }
+  // Throws std::invalid_argument (and changes nothing) for open_phase outside
+  // -1..2.
+  void inject(const Injection& inj);
 
   // Test hooks.
   void set_vbus_v(double v) { cfg_.vbus_v = v; }
@@ -116,6 +133,9 @@ class PmsmBoard {
   uint32_t ticks_now() const;
   Eigen::Vector3d phase_currents_a() const;
   void integrate_open_switches(double h_s, int n);
+  // One period with a phase conductor broken (Injection::open_phase), bridge
+  // switching (enabled) or open (diodes); keeps x_ in step.
+  void advance_open_phase(const Eigen::Vector3d& duty, bool enabled);
 
   PmsmBoardConfig cfg_;
   mcsim::PmsmRotorFrame plant_;
@@ -139,9 +159,15 @@ class PmsmBoard {
   bool pwm_enabled_applied_ = false;
   FaultLine fault_line_;
   bool open_circuit_ = true;
+  bool open_fresh_ = true;  // open phase: the next period starts from x_ (see below)
   mc_hal_encoder_sample_t enc_{};
   Injection inj_{};
   double tick_offset_s_ = 0.0;
+  // Open-phase fault: its plant and the series current it carries (exact;
+  // x_ holds the same state in dq, rounded). open_fresh_ (above): the break
+  // has just happened, the series current is projected from x_.
+  mcsim::PmsmOpenPhase open_plant_;
+  double open_i_a_ = 0.0;
 
   // ops tables bound to this board
   mc_hal_adc_t adc_dev_{};
