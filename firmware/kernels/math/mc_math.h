@@ -60,23 +60,116 @@ static inline float mc_abs_f32(float x)
     return (x < 0.0f) ? -x : x;
 }
 
+/** |x| without libm, for comparisons and magnitudes: -0 gives +0 (unlike
+ * mc_abs_f32, which keeps it), NaN stays NaN. One instruction where the
+ * compiler has the builtin (VABS.F32 on the M4F, ANDPS on x86-64): the
+ * sign bit is cleared, nothing else, so the result is the same everywhere. */
+static inline float mc_fabs_f32(float x)
+{
+#if defined(__GNUC__)
+    return __builtin_fabsf(x);
+#else
+    return (x < 0.0f) ? -x : (x + 0.0f);
+#endif
+}
+
 /** |x| up to which sin/cos and wrap use Cody-Waite reduction (rad); beyond
  * it an integer Payne-Hanek reduction keeps the same accuracy. */
 #define MC_MATH_CW_LIMIT_RAD 8192.0f
 
+/** |x| up to which the two-constant Cody-Waite reduction of
+ * mc_sincos_near_f32 applies (rad): 163 quarter turns at most. */
+#define MC_MATH_NEAR_LIMIT_RAD 256.0f
+
+/* Constants of mc_sincos_near_f32 (internal, named for the header only). */
+/** 1.5 * 2^23: (v + M) - M rounds v to an integer (ties to even), |v| < 2^22. */
+#define MC_MATH_ROUND_MAGIC_F32 12582912.0f
+#define MC_MATH_TWO_OVER_PI_F32 0.636619772367581343f
+/** pi/2 = MC_MATH_NEAR_C1 + MC_MATH_NEAR_C2 + 7.4e-13: C1 is pi/2 cut to 16
+ * significant bits, so k*C1 is exact for |k| < 2^8 and x - k*C1 is exact
+ * (a multiple of ulp(x) smaller than 1); k*C2 and the last subtraction
+ * round. C2 > 0, so that x = -0 (k = +0) keeps its sign through
+ * x - (+0) - (+0). */
+#define MC_MATH_NEAR_C1 0x1.921ep+0f
+#define MC_MATH_NEAR_C2 0x1.b54442p-16f
+/* sin r = r (1 + z (S1 + z (S2 + z S3))), cos r = 1 + z (-1/2 + z (C1 + z (C2
+ * + z C3))), z = r^2, |r| <= pi/4: own minimax fits (Lawson iteration on
+ * 20000 Chebyshev nodes, weighted to the absolute error), fit error 1.8e-9
+ * (sin) and 1e-10 (cos) with the float coefficients. */
+#define MC_MATH_SIN_S1 (-1.666665077e-01f)
+#define MC_MATH_SIN_S2 8.331978694e-03f
+#define MC_MATH_SIN_S3 (-1.949563593e-04f)
+#define MC_MATH_COS_C1 4.166664556e-02f
+#define MC_MATH_COS_C2 (-1.388736768e-03f)
+#define MC_MATH_COS_C3 2.443845187e-05f
+
+/** sin and cos of r + q pi/2 for |r| <= pi/4 (about): the two polynomials
+ * and the quadrant q mod 4 by selection and sign. Internal to
+ * mc_sincos_near_f32 and mc_sincos_f32 (one code for every range). */
+static inline void mc_sincos_reduced_f32(float r, uint32_t q, float *p_sin, float *p_cos)
+{
+    const float z = r * r;
+    /* r (1 + ...), not r + r^3 (...): keeps sin(-0) = -0 */
+    const float s =
+        r * (1.0f + (z * (MC_MATH_SIN_S1 + (z * (MC_MATH_SIN_S2 + (z * MC_MATH_SIN_S3))))));
+    const float c = 1.0f + (z * (-0.5f + (z * (MC_MATH_COS_C1 +
+                                               (z * (MC_MATH_COS_C2 + (z * MC_MATH_COS_C3)))))));
+    float a = s;
+    float b = c;
+    if ((q & 1u) != 0u) {
+        /* a quarter turn: (sin, cos) -> (cos, -sin) */
+        a = c;
+        b = -s;
+    }
+    if ((q & 2u) != 0u) {
+        /* a half turn: both change sign */
+        a = -a;
+        b = -b;
+    }
+    *p_sin = a;
+    *p_cos = b;
+}
+
+/**
+ * mc_sincos_f32 for |x_rad| <= MC_MATH_NEAR_LIMIT_RAD, inline, bit for bit
+ * the same results (mc_sincos_f32 runs this very code in that range).
+ * The caller guarantees the range (|x| <= 256 rad, so not NaN or inf);
+ * outside it the results are not defined (still no undefined behaviour in
+ * C: the float-to-int conversion is only reached with |k| <= 163 inside the
+ * range; callers must test first). Cost: about 35 instructions on the
+ * Cortex-M4F, no branch.
+ * Method: k = round(x 2/pi), r = x - k pi/2 (two-constant Cody-Waite,
+ * error < 4e-10 before the final rounding), the two polynomials above on
+ * r, and the quadrant k mod 4 by selection and sign. Signed zero: sin(-0)
+ * = -0 (the sine is formed as r (1 + ...)).
+ */
+static inline void mc_sincos_near_f32(float x_rad, float *p_sin, float *p_cos)
+{
+    const float kf = ((x_rad * MC_MATH_TWO_OVER_PI_F32) + MC_MATH_ROUND_MAGIC_F32) -
+                     MC_MATH_ROUND_MAGIC_F32;
+    /* kf is an integer with |kf| <= 163 here: the conversion is exact */
+    const uint32_t q = (uint32_t)(int32_t)kf;
+    const float r = (x_rad - (kf * MC_MATH_NEAR_C1)) - (kf * MC_MATH_NEAR_C2);
+    mc_sincos_reduced_f32(r, q, p_sin, p_cos);
+}
+
 /**
  * sin and cos of x (radians) in one call.
  *
- * Range: every finite float (Cody-Waite reduction for |x| <= 8192 rad,
- * integer Payne-Hanek reduction with a table of the bits of 2/pi beyond).
+ * Range: every finite float. Reduction: two-constant Cody-Waite for
+ * |x| <= 256 rad (mc_sincos_near_f32, the control loops' range), three
+ * constants up to 8192 rad, integer Payne-Hanek with a table of the bits of
+ * 2/pi beyond.
  * Accuracy: |error| <= 2e-7 absolute against libm (double sin/cos rounded
- * to float), over the whole range; measured max 1.2e-7 (2 ulp of a result
- * in [0.5, 1)). Polynomials: own fits of degree 9 (sin) and 10 (cos) on
- * |r| <= pi/4, fit error < 2.4e-9 with the float coefficients.
+ * to float), over the whole range (tests/unit/math: dense sweeps, huge
+ * arguments). Polynomials: own fits of degree 7 (sin) and 8 (cos) on
+ * |r| <= pi/4, fit error < 1.8e-9 with the float coefficients, far below
+ * the half ulp (3e-8..6e-8) the float evaluation adds.
  * Exact values: sin(+-0) = +-0, cos(0) = 1; for |x| < 2^-12,
  * sin x = x and cos x = 1 exactly (denormals included).
  * NaN or +-inf in: *p_sin = *p_cos = NaN.
- * Cost: about 20 float operations (+ ~10 integer multiplies beyond 8192).
+ * Cost: about 40 instructions on the Cortex-M4F for |x| <= 256 rad (one
+ * compare, then mc_sincos_near_f32).
  */
 void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos);
 
@@ -84,9 +177,11 @@ void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos);
  * atan2(y, x) in radians, range [-MC_PI_F32, MC_PI_F32].
  *
  * Accuracy: |error| <= 5e-7 rad against libm atan2 (double) for every
- * finite or infinite input pair, all quadrants, denormals; measured max
- * 2.7e-7. Method: octant reduction, one division, pi/8 argument reduction,
- * own odd polynomial of degree 13 (fit error < 7e-10).
+ * finite or infinite input pair, all quadrants, denormals (tests/unit/math).
+ * Method: octant reduction and pi/8 argument reduction sharing one
+ * division (atan z = pi/4 + atan((n - d) / (n + d)) for z = n/d above
+ * tan(pi/8)), own odd polynomial of degree 9 (fit error < 5e-9).
+ * Cost: about 40 instructions on the Cortex-M4F for finite arguments.
  * Signed zeros and infinities follow C99 Annex F (atan2(-0, -1) = -pi,
  * atan2(+inf, -inf) = 3pi/4, ...), except atan2(+-0, +-0) = 0 for every
  * sign combination (defined, as the kernels need a value when a vector has
@@ -124,8 +219,21 @@ float mc_sqrt_f32_soft(float x);
  * reduction (exact to 2^-64 turn) beyond. A result within rounding of the
  * upper bound is returned as the lower bound (same angle).
  * NaN/inf in: NaN out.
+ * Cost: about 30 instructions on the Cortex-M4F for |x| <= 8192 rad.
  */
 float mc_wrap_pi_f32(float x_rad);
+
+/**
+ * mc_wrap_pi_f32 with the in-range test inline: an input with |x| < pi
+ * (the common case of a wrapped sum or difference of two wrapped angles)
+ * is returned as is, which is what mc_wrap_pi_f32 returns for it; any
+ * other input goes to mc_wrap_pi_f32. Same results, about 5 instructions
+ * when in range.
+ */
+static inline float mc_wrap_pi_fast_f32(float x_rad)
+{
+    return (mc_fabs_f32(x_rad) < MC_PI_F32) ? x_rad : mc_wrap_pi_f32(x_rad);
+}
 
 /**
  * Wrap an angle to [0, MC_TWO_PI_F32). As mc_wrap_pi_f32; error
