@@ -16,6 +16,7 @@
 
 #include "math/mc_math.h"
 #include "math/mc_q31.h"
+#include "transforms/mc_svpwm_core.h"
 #include "transforms/mc_transforms.h"
 
 /** sqrt(3) in Q30: round(2^30 * sqrt(3)). */
@@ -102,7 +103,7 @@ static inline uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float
     float measure_n;
     if (limit == MC_SVPWM_LIMIT_CIRCLE) {
         float mag2_n = alpha_n * alpha_n + beta_n * beta_n;
-        if ((p_sol->vbus_n == 1.0f) && (mag2_n < 0.33f)) {
+        if ((p_sol->vbus_n == 1.0f) && (mag2_n < MC_SVPWM_LINEAR_MAG2)) {
             /* Shortcut, same result: here |v| < 0.5745 vbus (rounding
              * included), so sqrt(3) |v| <= 0.9951 vbus is inside the circle
              * and the rounded measure below would not exceed vbus_n = 1
@@ -156,25 +157,10 @@ static bool mc_svpwm_linear_f32(float v_alpha_v, float v_beta_v, float vbus_v,
         !(mc_svpwm_fabs_f32(v_alpha_v) <= vbus_v) || !(mc_svpwm_fabs_f32(v_beta_v) <= vbus_v)) {
         return false;
     }
-    float alpha_n = v_alpha_v / vbus_v;
-    float beta_n = v_beta_v / vbus_v;
-    /* the solver's shortcut test (see there), first, so that a limited
-     * request goes to the general path at little cost */
-    if (!((alpha_n * alpha_n + beta_n * beta_n) < 0.33f)) {
-        return false;
-    }
-    float va;
-    float vb;
-    float vc;
-    mc_inv_clarke_f32(alpha_n, beta_n, &va, &vb, &vc);
-    float mid = 0.5f * (mc_svpwm_max3_f32(va, vb, vc) + mc_svpwm_min3_f32(va, vb, vc));
-    /* Here max - min <= sqrt(3) |v| < 0.9951, so every duty is within
-     * 0.5 +- 0.4976 (rounding included): the clamp to [0, 1] that the
-     * general path applies cannot act, and is left out. */
-    *p_duty_a = 0.5f + (va - mid);
-    *p_duty_b = 0.5f + (vb - mid);
-    *p_duty_c = 0.5f + (vc - mid);
-    return true;
+    /* the solver's shortcut test (see there) and the duties it leads to:
+     * transforms/mc_svpwm_core.h */
+    return mc_svpwm_circle_linear_f32(v_alpha_v / vbus_v, v_beta_v / vbus_v, p_duty_a, p_duty_b,
+                                      p_duty_c);
 }
 
 /** The duties of a valid solution. */
