@@ -7,12 +7,14 @@
  *        accesses of a real board.
  *
  * Sensorless FOC fast step: Clarke, flux gradient observer (paper 002, with
- * its atan2 for the angle), speed PLL, and the FOC step at the estimated
- * angle and speed (which repeats the Clarke transform internally).
+ * its atan2 for the angle), speed PLL, and the FOC step from the same
+ * alpha-beta currents at the estimated angle and speed (mc_foc_f32_step_ab:
+ * sin/cos, Park, two PIs with decoupling and the voltage limit, inverse
+ * Park, SVPWM).
  *
  * This is the kernel path of the sensorless plug-in's closed-loop phase
  * (firmware/app/mc_ctrl_sensorless.c: mc_fluxobs_f32_step, mc_spdpll_f32_step,
- * mc_foc_f32_step), without its start-up logic and telemetry.
+ * mc_foc_f32_step_ab), without its start-up logic and telemetry.
  *
  * PI2D step (pi2d_step): mc_pi2d_f32_step of the pi2d-motor law (paper 000
  * in physical units, 20 kHz) on inputs of its operating range where neither
@@ -257,15 +259,17 @@ static NOINLINE void c_foc_step_f32(uint32_t i)
 }
 static NOINLINE void c_foc_sensorless_f32(uint32_t i)
 {
-    mc_foc_f32_in_t in = g_in.foc_in[i];
-    float i_alpha;
-    float i_beta;
-    mc_clarke_f32(in.ia_a, in.ib_a, &i_alpha, &i_beta);
-    bench_sink_u32(mc_fluxobs_f32_step(&g_obs, g_v_alpha_v, g_v_beta_v, i_alpha, i_beta));
+    const mc_foc_f32_in_t *f = &g_in.foc_in[i];
+    mc_foc_f32_ab_in_t in;
+    mc_clarke_f32(f->ia_a, f->ib_a, &in.i_alpha_a, &in.i_beta_a);
+    bench_sink_u32(mc_fluxobs_f32_step(&g_obs, g_v_alpha_v, g_v_beta_v, in.i_alpha_a, in.i_beta_a));
     in.omega_e_rad_s = mc_spdpll_f32_step(&g_pll, g_obs.theta_e_rad);
     in.theta_e_rad = g_obs.theta_e_rad;
+    in.vbus_v = f->vbus_v;
+    in.id_ref_a = f->id_ref_a;
+    in.iq_ref_a = f->iq_ref_a;
     mc_foc_f32_out_t out;
-    bench_sink_u32(mc_foc_f32_step(&g_foc_sls, &in, &out));
+    bench_sink_u32(mc_foc_f32_step_ab(&g_foc_sls, &in, &out));
     g_v_alpha_v = out.v_alpha_v;
     g_v_beta_v = out.v_beta_v;
     sink_f32(out.duty_a + out.duty_b + out.duty_c);

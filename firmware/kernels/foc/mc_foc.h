@@ -16,10 +16,10 @@
  * (kp = L bw, ki = R bw) each closed current loop is first order with time
  * constant 1/bw (to the discretisation error of the sample period).
  *
- * Voltage limit, d-axis priority: with v_max = v_limit_ratio times the
- * largest voltage the modulator delivers at this vbus
- * (mc_svpwm_max_voltage_f32: vbus/sqrt(3) for the circle limit, 2 vbus/3
- * for the hexagon), v_d is limited to [-v_max, v_max] and then v_q to
+ * Voltage limit, d-axis priority: with v_max = v_max_per_vbus * vbus, where
+ * v_max_per_vbus = v_limit_ratio times the largest voltage per volt of bus
+ * the modulator delivers (mc_svpwm_max_voltage_f32: 1/sqrt(3) for the
+ * circle limit, 2/3 for the hexagon), computed once by init, v_d is limited to [-v_max, v_max] and then v_q to
  * +-sqrt(v_max^2 - v_d^2). Each limit is passed to its PI
  * (mc_pi_f32_step_lim), so the anti-windup works against the limit actually
  * applied, feed-forward included. In the whole step with the hexagon limit,
@@ -34,15 +34,23 @@
  * to infinity) gives MC_FOC_ERR_PI, zero voltage. The sticky flags are
  * cleared by mc_foc_f32_reset() only.
  *
- * Cost: both steps first try a fast path that screens the inputs and
- * intermediates for non-finite values in a few sums instead of one test
- * per value and per stage, relies on what init validated, commits nothing
- * until the step is known good and, in the modulator's linear region,
- * solves the SVPWM once. It performs the same float operations in the same
- * order, so its results are bit-identical; any step it cannot finish
- * (non-finite value, vbus <= 0, a PI that would refuse) runs through the
+ * Cost: every step first tries a fast path. It relies on what init
+ * validated (symmetric PI limits, v_max per volt of bus precomputed) and on
+ * NaN propagation: a non-finite current, reference or speed makes a PI's
+ * output non-finite, which fails that PI's range test, so the only explicit
+ * tests are the angle's range (|theta| <= 256 rad, inline sin/cos), the bus
+ * (0 < vbus < 1e18, so v_max^2 cannot overflow) and, without decoupling,
+ * the speed. Each PI's common case (output and integrator inside their
+ * limits) is two compares; a saturated PI takes the full anti-windup code
+ * (mc_pi_f32_core_sat) without leaving the fast path. It commits nothing
+ * until both PIs are good and, in the modulator's linear region (circle
+ * limit), computes the duties inline. It performs the same float
+ * operations in the same order as the checked code, so its results are
+ * bit-identical; any step it cannot finish (non-finite value, vbus <= 0,
+ * angle or bus out of its range, a PI that would refuse) runs through the
  * checked code, so errors and flags are as described above
  * (tests/unit/foc/test_foc_fast.cpp compares the two bit for bit).
+ * Measured on the emulated Cortex-M4F: README, "Instruction counts".
  *
  * No heap, no globals, no I/O.
  */
@@ -73,6 +81,11 @@ extern "C" {
 #define MC_FOC_ERR_PI         (1u << 10) /**< sticky: a PI refused its step */
 #define MC_FOC_ERR_BW         (1u << 11) /**< bandwidth helper: bw <= 0 or not finite */
 
+/** Largest v_limit_ratio (circle limit) at which the modulator is known to
+ *  stay in its linear case: |v| <= 0.99 vbus / sqrt(3) (1 + 1e-6) = 0.5716
+ *  vbus is below its test |v| < 0.5745 vbus (MC_SVPWM_LINEAR_MAG2). */
+#define MC_FOC_LINEAR_RATIO 0.99f
+
 /** Configuration of the dq current controller. */
 typedef struct {
     float r_ohm;            /**< phase resistance [ohm], >= 0 */
@@ -102,7 +115,11 @@ typedef struct {
     float flux_wb;
     mc_svpwm_limit_t limit_mode;
     float v_limit_ratio;
+    float v_max_per_vbus;   /**< v_limit_ratio times the modulator's largest voltage per volt
+                                 of bus: 1/sqrt(3) (circle) or 2/3 (hexagon) (derived) */
     bool decouple;
+    bool svpwm_linear;      /**< circle limit and v_limit_ratio <= MC_FOC_LINEAR_RATIO: the
+                                 modulator never limits what the dq step allows (derived) */
     float vd_v;             /**< last applied d voltage [V] */
     float vq_v;             /**< last applied q voltage [V] */
     uint32_t flags;         /**< sticky MC_FOC_ERR_* */
@@ -120,6 +137,18 @@ typedef struct {
     float id_ref_a;         /**< d current reference [A] */
     float iq_ref_a;         /**< q current reference [A] */
 } mc_foc_f32_in_t;
+
+/** Inputs of the fast step from alpha-beta currents (the caller did the
+ *  Clarke transform, e.g. for an observer that needs them too). */
+typedef struct {
+    float i_alpha_a;        /**< alpha current [A] (amplitude invariant, mc_clarke_f32) */
+    float i_beta_a;         /**< beta current [A] */
+    float theta_e_rad;      /**< electrical angle of the d axis [rad] */
+    float omega_e_rad_s;    /**< electrical speed [rad/s] */
+    float vbus_v;           /**< DC-bus voltage [V] */
+    float id_ref_a;         /**< d current reference [A] */
+    float iq_ref_a;         /**< q current reference [A] */
+} mc_foc_f32_ab_in_t;
 
 /** Outputs of the whole fast step (duties plus telemetry). */
 typedef struct {
@@ -164,12 +193,25 @@ uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
                             float *p_vq_v);
 
 /**
- * The whole fast step: Clarke, Park at theta_e (mc_sincos_f32), dq step,
- * inverse Park, modulator limit (fed back to the PIs), SVPWM. Fills *out
+ * The whole fast step: Clarke, then mc_foc_f32_step_ab. Fills *out
  * (duties 0.5 and zero voltages on error). Returns the MC_FOC_ERR_* bits
- * raised by this step.
+ * raised by this step. A non-finite current (one that is read) makes a
+ * non-finite alpha or beta current, hence MC_FOC_ERR_NAN_INPUT.
  */
 uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out);
+
+/**
+ * The whole fast step from alpha-beta currents: Park at theta_e
+ * (mc_sincos_f32), dq step, inverse Park, modulator limit (fed back to the
+ * PIs), SVPWM. mc_foc_f32_step is exactly this after its Clarke transform.
+ * Non-finite alpha/beta current or angle: MC_FOC_ERR_NAN_INPUT (id, iq
+ * reported 0); the dq step's inputs and errors as in mc_foc_f32_step_dq
+ * (out->id_a, iq_a are the measured values then). Fills *out (duties 0.5
+ * and zero voltages on error). Returns the MC_FOC_ERR_* bits raised by
+ * this step.
+ */
+uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, const mc_foc_f32_ab_in_t *in,
+                            mc_foc_f32_out_t *out);
 
 #ifdef __cplusplus
 }
