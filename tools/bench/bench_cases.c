@@ -104,8 +104,6 @@ static mc_foc_f32_cfg_t g_foc_cfg;
 static mc_foc_f32_t g_foc_sls;
 static mc_fluxobs_f32_t g_obs;
 static mc_spdpll_f32_t g_pll;
-static float g_v_alpha_v;
-static float g_v_beta_v;
 static mc_pi2d_f32_t g_pi2d;
 static mc_hgo_f32_t g_hgo;
 static mc_csmc_f32_t g_csmc;
@@ -251,28 +249,28 @@ static NOINLINE void c_foc_dq_f32(uint32_t i)
                                       400.0f, 200.0f, &vd, &vq));
     sink_f32(vd + vq);
 }
+/* The FOC steps write their outputs to a static struct, as the drive keeps
+ * them in its state (mc_drive.c: d->tm.foc); the step's return code is
+ * sunk, the PWM write that reads the duties is not part of the step. */
+static mc_foc_f32_out_t g_foc_out;
+static mc_foc_f32_out_t g_sls_out;
+
 static NOINLINE void c_foc_step_f32(uint32_t i)
 {
-    mc_foc_f32_out_t out;
-    bench_sink_u32(mc_foc_f32_step(&g_foc, &g_in.foc_in[i], &out));
-    sink_f32(out.duty_a + out.duty_b + out.duty_c);
+    bench_sink_u32(mc_foc_f32_step(&g_foc, &g_in.foc_in[i], &g_foc_out));
 }
 static NOINLINE void c_foc_sensorless_f32(uint32_t i)
 {
     const mc_foc_f32_in_t *f = &g_in.foc_in[i];
-    mc_foc_f32_ab_in_t in;
-    mc_clarke_f32(f->ia_a, f->ib_a, &in.i_alpha_a, &in.i_beta_a);
-    bench_sink_u32(mc_fluxobs_f32_step(&g_obs, g_v_alpha_v, g_v_beta_v, in.i_alpha_a, in.i_beta_a));
-    in.omega_e_rad_s = mc_spdpll_f32_step(&g_pll, g_obs.theta_e_rad);
-    in.theta_e_rad = g_obs.theta_e_rad;
-    in.vbus_v = f->vbus_v;
-    in.id_ref_a = f->id_ref_a;
-    in.iq_ref_a = f->iq_ref_a;
-    mc_foc_f32_out_t out;
-    bench_sink_u32(mc_foc_f32_step_ab(&g_foc_sls, &in, &out));
-    g_v_alpha_v = out.v_alpha_v;
-    g_v_beta_v = out.v_beta_v;
-    sink_f32(out.duty_a + out.duty_b + out.duty_c);
+    float i_alpha;
+    float i_beta;
+    mc_clarke_f32(f->ia_a, f->ib_a, &i_alpha, &i_beta);
+    /* the observer sees the voltage of the previous step, as in the plug-in */
+    bench_sink_u32(mc_fluxobs_f32_step(&g_obs, g_sls_out.v_alpha_v, g_sls_out.v_beta_v, i_alpha,
+                                       i_beta));
+    const float omega_hat = mc_spdpll_f32_step(&g_pll, g_obs.theta_e_rad);
+    bench_sink_u32(mc_foc_f32_step_ab(&g_foc_sls, i_alpha, i_beta, g_obs.theta_e_rad, omega_hat,
+                                      f->vbus_v, f->id_ref_a, f->iq_ref_a, &g_sls_out));
 }
 static NOINLINE void c_drive_fast_f32(uint32_t i)
 {

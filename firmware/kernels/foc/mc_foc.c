@@ -113,6 +113,9 @@ uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
     st->v_limit_ratio = cfg->v_limit_ratio;
     st->v_max_per_vbus = cfg->v_limit_ratio * mc_svpwm_max_voltage_f32(1.0f, cfg->limit_mode);
     st->decouple = cfg->decouple;
+    st->ff_ld_h = cfg->decouple ? cfg->ld_h : 0.0f;
+    st->ff_lq_h = cfg->decouple ? cfg->lq_h : 0.0f;
+    st->ff_flux_wb = cfg->decouple ? cfg->flux_wb : 0.0f;
     st->svpwm_linear = (cfg->limit_mode == MC_SVPWM_LIMIT_CIRCLE) &&
                        (cfg->v_limit_ratio <= MC_FOC_LINEAR_RATIO);
     st->vd_v = 0.0f;
@@ -147,12 +150,13 @@ static uint32_t foc_check_inputs(float id_ref_a, float iq_ref_a, float id_a, flo
     return MC_FOC_ERR_NONE;
 }
 
-/* The decoupling feed-forward (zero without decoupling). */
+/* The decoupling feed-forward; its gains are 0 without decoupling (then
+ * the terms are +-0, or NaN for a non-finite speed). */
 static inline void foc_feed_forward(const mc_foc_f32_t *st, float id_a, float iq_a,
                                     float omega_e_rad_s, float *p_ff_d, float *p_ff_q)
 {
-    *p_ff_d = -(omega_e_rad_s * st->lq_h * iq_a);
-    *p_ff_q = (omega_e_rad_s * st->ld_h * id_a) + (omega_e_rad_s * st->flux_wb);
+    *p_ff_d = -(omega_e_rad_s * st->ff_lq_h * iq_a);
+    *p_ff_q = (omega_e_rad_s * st->ff_ld_h * id_a) + (omega_e_rad_s * st->ff_flux_wb);
 }
 
 /* The dq step proper, inputs already checked (the checked path). */
@@ -161,8 +165,8 @@ static uint32_t foc_dq_core(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
                             float *p_vq_v)
 {
     float v_max = st->v_max_per_vbus * vbus_v;
-    float ff_d = 0.0f;
-    float ff_q = 0.0f;
+    float ff_d;
+    float ff_q;
     float vd;
     float vq;
     float vq_room_sq;
@@ -170,9 +174,7 @@ static uint32_t foc_dq_core(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     mc_pi_f32_t pi_d_saved = st->pi_d;
     mc_pi_f32_t pi_q_saved = st->pi_q;
 
-    if (st->decouple) {
-        foc_feed_forward(st, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
-    }
+    foc_feed_forward(st, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
 
     /* The FOC owns both PIs and keeps its own sticky flags: clear theirs so
      * that a refusal in this step shows. */
@@ -255,8 +257,8 @@ FOC_INLINE bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
                             float iq_a, float omega_e_rad_s, float vbus_v, float *p_vd_v,
                             float *p_vq_v)
 {
-    float ff_d = 0.0f;
-    float ff_q = 0.0f;
+    float ff_d;
+    float ff_q;
     float vd;
     float vq;
     float integ_d;
@@ -266,14 +268,9 @@ FOC_INLINE bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     /* finite and below 2/3 * 1e18, as vbus is */
     const float v_max = st->v_max_per_vbus * vbus_v;
 
-    if (st->decouple) {
-        /* a non-finite speed makes both terms non-finite: caught below */
-        foc_feed_forward(st, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
-    } else if (!mc_isfinite_f32(omega_e_rad_s)) {
-        return false; /* unused, but the checked path reports it */
-    } else {
-        /* no feed-forward */
-    }
+    /* a non-finite speed makes both terms non-finite (0 * inf is NaN):
+     * caught by the PIs' tests */
+    foc_feed_forward(st, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
     const float e_d = id_ref_a - id_a;
     const float e_q = iq_ref_a - iq_a;
 
@@ -474,18 +471,19 @@ static uint32_t foc_step_checked(mc_foc_f32_t *st, float i_alpha, float i_beta, 
     return MC_FOC_ERR_NONE;
 }
 
-uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, const mc_foc_f32_ab_in_t *in,
-                            mc_foc_f32_out_t *out)
+uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, float i_alpha_a, float i_beta_a,
+                            float theta_e_rad, float omega_e_rad_s, float vbus_v,
+                            float id_ref_a, float iq_ref_a, mc_foc_f32_out_t *out)
 {
-    if ((st == NULL) || (in == NULL) || (out == NULL)) {
+    if ((st == NULL) || (out == NULL)) {
         return MC_FOC_ERR_NULL;
     }
-    if (foc_step_fast(st, in->i_alpha_a, in->i_beta_a, in->theta_e_rad, in->omega_e_rad_s,
-                      in->vbus_v, in->id_ref_a, in->iq_ref_a, out)) {
+    if (foc_step_fast(st, i_alpha_a, i_beta_a, theta_e_rad, omega_e_rad_s, vbus_v, id_ref_a,
+                      iq_ref_a, out)) {
         return MC_FOC_ERR_NONE;
     }
-    return foc_step_checked(st, in->i_alpha_a, in->i_beta_a, in->theta_e_rad, in->omega_e_rad_s,
-                            in->vbus_v, in->id_ref_a, in->iq_ref_a, out);
+    return foc_step_checked(st, i_alpha_a, i_beta_a, theta_e_rad, omega_e_rad_s, vbus_v,
+                            id_ref_a, iq_ref_a, out);
 }
 
 uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out)

@@ -12,6 +12,8 @@
  * measured currents) so that each PI sees a plain R-L load:
  *     v_d = PI_d(id_ref - i_d) - omega_e L_q i_q
  *     v_q = PI_q(iq_ref - i_q) + omega_e L_d i_d + omega_e psi
+ * Without decoupling the same terms are formed with L_d, L_q and psi
+ * replaced by 0 (init stores the gains so): they are +-0 then.
  * With the pole-zero cancelling gains of mc_foc_f32_gains_from_bandwidth
  * (kp = L bw, ki = R bw) each closed current loop is first order with time
  * constant 1/bw (to the discretisation error of the sample period).
@@ -113,6 +115,9 @@ typedef struct {
     float ld_h;
     float lq_h;
     float flux_wb;
+    float ff_ld_h;          /**< ld_h with decoupling, else 0 (derived) */
+    float ff_lq_h;          /**< lq_h with decoupling, else 0 (derived) */
+    float ff_flux_wb;       /**< flux_wb with decoupling, else 0 (derived) */
     mc_svpwm_limit_t limit_mode;
     float v_limit_ratio;
     float v_max_per_vbus;   /**< v_limit_ratio times the modulator's largest voltage per volt
@@ -137,18 +142,6 @@ typedef struct {
     float id_ref_a;         /**< d current reference [A] */
     float iq_ref_a;         /**< q current reference [A] */
 } mc_foc_f32_in_t;
-
-/** Inputs of the fast step from alpha-beta currents (the caller did the
- *  Clarke transform, e.g. for an observer that needs them too). */
-typedef struct {
-    float i_alpha_a;        /**< alpha current [A] (amplitude invariant, mc_clarke_f32) */
-    float i_beta_a;         /**< beta current [A] */
-    float theta_e_rad;      /**< electrical angle of the d axis [rad] */
-    float omega_e_rad_s;    /**< electrical speed [rad/s] */
-    float vbus_v;           /**< DC-bus voltage [V] */
-    float id_ref_a;         /**< d current reference [A] */
-    float iq_ref_a;         /**< q current reference [A] */
-} mc_foc_f32_ab_in_t;
 
 /** Outputs of the whole fast step (duties plus telemetry). */
 typedef struct {
@@ -201,17 +194,21 @@ uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
 uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out);
 
 /**
- * The whole fast step from alpha-beta currents: Park at theta_e
+ * The whole fast step from alpha-beta currents (the caller did the Clarke
+ * transform, e.g. for an observer that needs them too): Park at theta_e
  * (mc_sincos_f32), dq step, inverse Park, modulator limit (fed back to the
  * PIs), SVPWM. mc_foc_f32_step is exactly this after its Clarke transform.
- * Non-finite alpha/beta current or angle: MC_FOC_ERR_NAN_INPUT (id, iq
- * reported 0); the dq step's inputs and errors as in mc_foc_f32_step_dq
- * (out->id_a, iq_a are the measured values then). Fills *out (duties 0.5
- * and zero voltages on error). Returns the MC_FOC_ERR_* bits raised by
- * this step.
+ * Arguments as in mc_foc_f32_in_t (alpha/beta currents amplitude
+ * invariant, mc_clarke_f32), passed by value so that they stay in
+ * registers. Non-finite alpha/beta current or angle:
+ * MC_FOC_ERR_NAN_INPUT (id, iq reported 0); the dq step's inputs and errors
+ * as in mc_foc_f32_step_dq (out->id_a, iq_a are the measured values then).
+ * Fills *out (duties 0.5 and zero voltages on error). Returns the
+ * MC_FOC_ERR_* bits raised by this step.
  */
-uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, const mc_foc_f32_ab_in_t *in,
-                            mc_foc_f32_out_t *out);
+uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, float i_alpha_a, float i_beta_a,
+                            float theta_e_rad, float omega_e_rad_s, float vbus_v,
+                            float id_ref_a, float iq_ref_a, mc_foc_f32_out_t *out);
 
 #ifdef __cplusplus
 }

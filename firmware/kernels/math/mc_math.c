@@ -229,54 +229,6 @@ void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos)
 
 /* ------------------------------------------------------------------ atan2 */
 
-/* atan t = t + t^3 (A1 + A2 t^2 + A3 t^4 + A4 t^6) on |t| <= tan(pi/8),
- * own minimax fit (Lawson iteration, weighted to the absolute error), error
- * < 5e-9 rad with the float coefficients. */
-static const float atan_a1 = -3.333275616e-01f;
-static const float atan_a2 = 1.997187883e-01f;
-static const float atan_a3 = -1.382445395e-01f;
-static const float atan_a4 = 7.902597636e-02f;
-static const float tan_pi_8 = 0.414213562373095049f;
-static const float quarter_pi_f32 = 0.785398163397448310f;
-
-/**
- * atan(num / den) for 0 <= num <= den, den > 0, num + den finite: with
- * z = num / den, z > tan(pi/8) is reduced by atan z = pi/4 + atan((z - 1) /
- * (z + 1)) = pi/4 + atan((num - den) / (num + den)), so one division serves
- * both cases and |t| <= tan(pi/8) (to rounding).
- */
-static float atan_ratio(float num, float den)
-{
-    float base = 0.0f;
-    float n = num;
-    float d = den;
-    if (num > (tan_pi_8 * den)) {
-        base = quarter_pi_f32;
-        n = num - den;
-        d = num + den;
-    }
-    const float t = n / d;
-    const float t2 = t * t;
-    const float p = atan_a1 + (t2 * (atan_a2 + (t2 * (atan_a3 + (t2 * atan_a4)))));
-    return base + (t + ((t * t2) * p));
-}
-
-/** The whole octant-to-circle mapping for finite ax, ay (not both 0, ax +
- * ay finite) and the signs of x and y. */
-static float atan2_finite(float ay, float ax, bool x_neg, bool y_neg)
-{
-    float a;
-    if (ay <= ax) {
-        a = atan_ratio(ay, ax);
-    } else {
-        a = MC_HALF_PI_F32 - atan_ratio(ax, ay);
-    }
-    if (x_neg) {
-        a = MC_PI_F32 - a;
-    }
-    return y_neg ? -a : a;
-}
-
 /* Everything the common case leaves: NaN, infinities, both zero, and finite
  * pairs whose |x| + |y| overflows. */
 static float atan2_special(float y, float x)
@@ -305,7 +257,7 @@ static float atan2_special(float y, float x)
         ax = 0.5f * ax;
         ay = 0.5f * ay;
     }
-    return atan2_finite(ay, ax, signbit_f32(x), signbit_f32(y));
+    return mc_atan2_octant_f32(ay, ax, signbit_f32(x), signbit_f32(y));
 }
 
 float mc_atan2_f32(float y, float x)
@@ -317,7 +269,7 @@ float mc_atan2_f32(float y, float x)
     if ((sum > 0.0f) && (sum <= 3.40282347e38f)) {
         /* x < 0 as a float compare: x = -0 (with y != 0) gives the same
          * +-pi/2 as +0, as C99 wants; y's sign bit decides -0 vs +0. */
-        return atan2_finite(ay, ax, x < 0.0f, signbit_f32(y));
+        return mc_atan2_octant_f32(ay, ax, x < 0.0f, signbit_f32(y));
     }
     return atan2_special(y, x);
 }

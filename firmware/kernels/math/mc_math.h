@@ -189,6 +189,85 @@ void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos);
  */
 float mc_atan2_f32(float y, float x);
 
+/* atan2's common case, inline (internal, named for the header only): own
+ * minimax fit of atan t = t + t^3 (A1 + A2 t^2 + A3 t^4 + A4 t^6) on
+ * |t| <= tan(pi/8) (Lawson iteration, weighted to the absolute error),
+ * error < 5e-9 rad with the float coefficients. */
+#define MC_MATH_ATAN_A1 (-3.333275616e-01f)
+#define MC_MATH_ATAN_A2 1.997187883e-01f
+#define MC_MATH_ATAN_A3 (-1.382445395e-01f)
+#define MC_MATH_ATAN_A4 7.902597636e-02f
+#define MC_MATH_TAN_PI_8_F32 0.414213562373095049f
+#define MC_MATH_QUARTER_PI_F32 0.785398163397448310f
+
+/**
+ * atan(num / den) for 0 <= num <= den, den > 0, num + den finite
+ * (internal to mc_atan2_f32): with z = num / den, z > tan(pi/8) is reduced
+ * by atan z = pi/4 + atan((z - 1) / (z + 1)) = pi/4 + atan((num - den) /
+ * (num + den)), so one division serves both cases and |t| <= tan(pi/8)
+ * (to rounding).
+ */
+static inline float mc_atan_ratio_f32(float num, float den)
+{
+    float base = 0.0f;
+    float n = num;
+    float d = den;
+    if (num > (MC_MATH_TAN_PI_8_F32 * den)) {
+        base = MC_MATH_QUARTER_PI_F32;
+        n = num - den;
+        d = num + den;
+    }
+    const float t = n / d;
+    const float t2 = t * t;
+    const float p =
+        MC_MATH_ATAN_A1 +
+        (t2 * (MC_MATH_ATAN_A2 + (t2 * (MC_MATH_ATAN_A3 + (t2 * MC_MATH_ATAN_A4)))));
+    return base + (t + ((t * t2) * p));
+}
+
+/** The octant-to-circle mapping of mc_atan2_f32 for finite |y| = ay,
+ * |x| = ax (not both 0, ax + ay finite) and the signs (internal). */
+static inline float mc_atan2_octant_f32(float ay, float ax, bool x_neg, bool y_neg)
+{
+    float a;
+    if (ay <= ax) {
+        a = mc_atan_ratio_f32(ay, ax);
+    } else {
+        a = MC_HALF_PI_F32 - mc_atan_ratio_f32(ax, ay);
+    }
+    if (x_neg) {
+        a = MC_PI_F32 - a;
+    }
+    return y_neg ? -a : a;
+}
+
+/** true if the sign bit of x is set (-0 included). */
+static inline bool mc_signbit_f32(float x)
+{
+    union {
+        float f;
+        uint32_t u;
+    } b;
+    b.f = x;
+    return (b.u & 0x80000000u) != 0u;
+}
+
+/**
+ * mc_atan2_f32 with its common case inline (finite arguments, not both 0,
+ * |x| + |y| finite): the same operations, so the same results; every other
+ * case calls mc_atan2_f32. For a kernel that needs the angle every step.
+ */
+static inline float mc_atan2_inline_f32(float y, float x)
+{
+    const float ax = mc_fabs_f32(x);
+    const float ay = mc_fabs_f32(y);
+    const float sum = ax + ay;
+    if ((sum > 0.0f) && (sum <= 3.40282347e38f)) {
+        return mc_atan2_octant_f32(ay, ax, x < 0.0f, mc_signbit_f32(y));
+    }
+    return mc_atan2_f32(y, x);
+}
+
 /**
  * Square root, correctly rounded (0 ulp: bit-identical to an IEEE sqrtf)
  * for every non-negative float, denormals included. Method: the FPU's
@@ -207,6 +286,22 @@ float mc_sqrt_f32(float x);
  * and tests/unit/math checks that they are.
  */
 float mc_sqrt_f32_soft(float x);
+
+/**
+ * mc_sqrt_f32 for x >= 0 (+0, denormals and +inf included), inline: the
+ * FPU's square-root instruction where the core has one (the instruction
+ * mc_sqrt_f32 runs after its checks), so the results are the same. NaN in:
+ * NaN out. Not for negative x (the caller knows x >= 0, e.g. a sum of
+ * squares).
+ */
+static inline float mc_sqrt_nonneg_f32(float x)
+{
+#if defined(__ARM_FP) || defined(__SSE_MATH__)
+    return __builtin_sqrtf(x);
+#else
+    return mc_sqrt_f32(x);
+#endif
+}
 
 /**
  * Wrap an angle to [-MC_PI_F32, MC_PI_F32) ("[-pi, pi)" with the float pi,

@@ -66,6 +66,8 @@ uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *c
     }
     st->cfg = *cfg;
     st->half_gamma_dt = 0.5f * cfg->gamma * cfg->dt_s;
+    st->half_r_ohm = cfg->r_ohm * 0.5f;
+    st->inv_flux_per_wb = 1.0f / cfg->flux_wb;
     st->flux2 = cfg->flux_wb * cfg->flux_wb;
     st->x_alpha_wb = cfg->flux_wb;
     st->x_beta_wb = 0.0f;
@@ -107,31 +109,25 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
                              float i_alpha_a, float i_beta_a)
 {
     const mc_fluxobs_f32_cfg_t *cfg;
-    uint32_t raised = MC_FLUXOBS_ERR_NONE;
     float xa;
     float xb;
     float ea;
     float eb;
     float e2;
     float k;
-    float mag;
+    float resid;
 
     if (st == NULL) {
         return MC_FLUXOBS_ERR_NULL;
     }
     cfg = &st->cfg;
-    if (!mc_isfinite_f32(v_alpha_v) || !mc_isfinite_f32(v_beta_v) ||
-        !mc_isfinite_f32(i_alpha_a) || !mc_isfinite_f32(i_beta_a)) {
-        st->flags |= MC_FLUXOBS_ERR_NAN_INPUT;
-        return MC_FLUXOBS_ERR_NAN_INPUT;
-    }
 
     /* Open-loop flux integration, exact for a constant voltage over the
      * period and a current linear in time (trapezoid on R i). */
     xa = st->x_alpha_wb +
-         (cfg->dt_s * (v_alpha_v - (cfg->r_ohm * 0.5f * (st->i_alpha_prev_a + i_alpha_a))));
+         (cfg->dt_s * (v_alpha_v - (st->half_r_ohm * (st->i_alpha_prev_a + i_alpha_a))));
     xb = st->x_beta_wb +
-         (cfg->dt_s * (v_beta_v - (cfg->r_ohm * 0.5f * (st->i_beta_prev_a + i_beta_a))));
+         (cfg->dt_s * (v_beta_v - (st->half_r_ohm * (st->i_beta_prev_a + i_beta_a))));
 
     /* Gradient correction (9) with the new current. */
     ea = xa - (cfg->l_h * i_alpha_a);
@@ -146,9 +142,11 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     xa = ea + (cfg->l_h * i_alpha_a);
     xb = eb + (cfg->l_h * i_beta_a);
 
-    if (!mc_isfinite_f32(xa) || !mc_isfinite_f32(xb)) {
-        /* cannot happen with finite inputs and a validated config, but never
-         * store a non-finite estimate */
+    /* A non-finite input makes xa or xb non-finite (every input enters
+     * both sums with a nonzero or NaN factor: 0 * inf is NaN), and so does
+     * an overflow of finite ones: one test for both, then the step is
+     * refused and nothing is stored. x - x is 0 for finite x, NaN else. */
+    if (((xa - xa) + (xb - xb)) != 0.0f) {
         st->flags |= MC_FLUXOBS_ERR_NAN_INPUT;
         return MC_FLUXOBS_ERR_NAN_INPUT;
     }
@@ -156,22 +154,22 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     st->x_beta_wb = xb;
     st->i_alpha_prev_a = i_alpha_a;
     st->i_beta_prev_a = i_beta_a;
-    st->theta_e_rad = mc_atan2_f32(eb, ea);
+    st->theta_e_rad = mc_atan2_inline_f32(eb, ea);
 
     /* Divergence monitor on the constraint residual. */
-    mag = mc_sqrt_f32((ea * ea) + (eb * eb));
-    st->resid = (mag / cfg->flux_wb) - 1.0f;
-    if (mc_abs_f32(st->resid) > cfg->resid_tol) {
+    resid = (mc_sqrt_nonneg_f32((ea * ea) + (eb * eb)) * st->inv_flux_per_wb) - 1.0f;
+    st->resid = resid;
+    if (mc_fabs_f32(resid) > cfg->resid_tol) {
         st->resid_bad_s += cfg->dt_s;
         if (st->resid_bad_s > cfg->resid_time_s) {
             st->resid_bad_s = cfg->resid_time_s; /* clamp the timer */
-            raised |= MC_FLUXOBS_ERR_DIVERGED;
+            st->flags |= MC_FLUXOBS_ERR_DIVERGED;
+            return MC_FLUXOBS_ERR_DIVERGED;
         }
     } else {
         st->resid_bad_s = 0.0f;
     }
-    st->flags |= raised;
-    return raised;
+    return MC_FLUXOBS_ERR_NONE;
 }
 
 uint32_t mc_fluxobs_f32_gamma_for_critical_speed(float omega_crit_m_rad_s, uint32_t pole_pairs,

@@ -66,28 +66,32 @@ uint32_t mc_spdpll_f32_reset(mc_spdpll_f32_t *st, float theta_rad, float omega_r
 
 float mc_spdpll_f32_step(mc_spdpll_f32_t *st, float theta_in_rad)
 {
-    float e;
+    float e = theta_in_rad - st->theta_rad;
     float wi;
     float w;
     const float lim = st->omega_max_rad_s;
 
-    if (!mc_isfinite_f32(theta_in_rad)) {
-        st->flags |= MC_SPDPLL_ERR_NAN_INPUT;
-        return st->omega_rad_s;
+    /* The common case inline: |e| < pi is its own wrap (and excludes a
+     * non-finite input); anything else is checked, then wrapped. */
+    if (!(mc_fabs_f32(e) < MC_PI_F32)) {
+        if (!mc_isfinite_f32(theta_in_rad)) {
+            st->flags |= MC_SPDPLL_ERR_NAN_INPUT;
+            return st->omega_rad_s;
+        }
+        e = mc_wrap_pi_f32(e);
     }
-    e = mc_wrap_pi_f32(theta_in_rad - st->theta_rad);
     wi = st->omega_i_rad_s + (st->ki_dt_per_s * e);
-    if ((wi > lim) || (wi < -lim)) {
+    if (mc_fabs_f32(wi) > lim) {
         st->flags |= MC_SPDPLL_ERR_SAT;
         wi = mc_sat_f32(wi, -lim, lim);
     }
     w = (st->kp_per_s * e) + wi;
-    if ((w > lim) || (w < -lim)) {
+    if (mc_fabs_f32(w) > lim) {
         st->flags |= MC_SPDPLL_ERR_SAT;
         w = mc_sat_f32(w, -lim, lim);
     }
     st->omega_i_rad_s = wi;
     st->omega_rad_s = w;
-    st->theta_rad = mc_wrap_pi_f32(st->theta_rad + (st->dt_s * w));
+    st->theta_rad = mc_wrap_pi_fast_f32(st->theta_rad + (st->dt_s * w));
     return w;
 }

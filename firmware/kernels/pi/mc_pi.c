@@ -108,9 +108,10 @@ uint32_t mc_pi_f32_reset(mc_pi_f32_t *st, float integrator_preset)
     return MC_PI_ERR_NONE;
 }
 
-float mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff, float lo,
-                         float hi, float *p_integ)
+mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff,
+                                   float lo, float hi)
 {
+    mc_pi_f32_res_t r;
     float integ = st->integ + inc;
 
     if (st->aw == MC_PI_AW_CLAMP) {
@@ -133,8 +134,9 @@ float mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff, fl
         /* MC_PI_AW_NONE: plain integration, clamp below only */
     }
     integ = mc_sat_f32(integ, st->out_min, st->out_max);
-    *p_integ = integ;
-    return mc_sat_f32(p + integ + ff, lo, hi);
+    r.integ = integ;
+    r.u = mc_sat_f32(p + integ + ff, lo, hi);
+    return r;
 }
 
 float mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, float lim_hi)

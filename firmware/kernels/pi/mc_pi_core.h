@@ -16,14 +16,27 @@
 extern "C" {
 #endif
 
+/** Branch hint: the common case laid out as the fall-through. */
+#if defined(__GNUC__)
+#define MC_PI_LIKELY(c) __builtin_expect(!!(c), 1)
+#else
+#define MC_PI_LIKELY(c) (c)
+#endif
+
+/** A step's new integrator and output (returned in two FPU registers). */
+typedef struct {
+    float integ;
+    float u;
+} mc_pi_f32_res_t;
+
 /**
  * The saturated (or non-finite) case of mc_pi_f32_core: the anti-windup
  * scheme, the static integrator clamp and the output clamp, from the
  * step's proportional term p and increment inc (mc_pi.c, out of line:
- * rarely run). Same contract as mc_pi_f32_core.
+ * run only when a limit acts). Same contract as mc_pi_f32_core.
  */
-float mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff, float lo,
-                         float hi, float *p_integ);
+mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff,
+                                   float lo, float hi);
 
 /**
  * One step's new integrator (*p_integ) and output (returned) for finite
@@ -50,7 +63,11 @@ static inline float mc_pi_f32_core(const mc_pi_f32_t *st, float error, float ff,
         *p_integ = integ;
         return u;
     }
-    return mc_pi_f32_core_sat(st, p, inc, ff, lo, hi, p_integ);
+    {
+        const mc_pi_f32_res_t r = mc_pi_f32_core_sat(st, p, inc, ff, lo, hi);
+        *p_integ = r.integ;
+        return r.u;
+    }
 }
 
 /**
@@ -75,7 +92,8 @@ static inline bool mc_pi_f32_core_sym(const mc_pi_f32_t *st, float error, float 
 
     /* NaN fails every test; so does an infinite error or ff (it makes u
      * infinite or NaN whatever kp is). */
-    if ((abs_u <= lim) && (abs_u <= st->out_max) && (mc_fabs_f32(integ) <= st->out_max)) {
+    if (MC_PI_LIKELY((abs_u <= lim) && (abs_u <= st->out_max) &&
+                     (mc_fabs_f32(integ) <= st->out_max))) {
         *p_integ = integ;
         *p_u = u;
         return true;
@@ -85,13 +103,12 @@ static inline bool mc_pi_f32_core_sym(const mc_pi_f32_t *st, float error, float 
     }
     {
         const float hi = (lim < st->out_max) ? lim : st->out_max;
-        float i2;
-        const float u2 = mc_pi_f32_core_sat(st, p, inc, ff, -hi, hi, &i2);
-        if ((i2 + u2) != (i2 + u2)) {
+        const mc_pi_f32_res_t r = mc_pi_f32_core_sat(st, p, inc, ff, -hi, hi);
+        if ((r.integ + r.u) != (r.integ + r.u)) {
             return false;
         }
-        *p_integ = i2;
-        *p_u = u2;
+        *p_integ = r.integ;
+        *p_u = r.u;
     }
     return true;
 }

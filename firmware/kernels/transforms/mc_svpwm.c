@@ -98,6 +98,7 @@ static inline uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float
                       &p_sol->phase_n[2]);
     float vmax = mc_svpwm_max3_f32(p_sol->phase_n[0], p_sol->phase_n[1], p_sol->phase_n[2]);
     float vmin = mc_svpwm_min3_f32(p_sol->phase_n[0], p_sol->phase_n[1], p_sol->phase_n[2]);
+    /* mid as the linear case forms it (mc_svpwm_core.h) */
     p_sol->mid_n = 0.5f * (vmax + vmin);
 
     float measure_n;
@@ -168,10 +169,13 @@ static inline void mc_svpwm_duties_f32(const mc_svpwm_solution_f32_t *p_sol, flo
                                 float *p_duty_b, float *p_duty_c)
 {
     float inv_den = 1.0f / p_sol->den_n;
-    /* Rounding can leave a duty a few ulp outside [0, 1] on the boundary. */
-    *p_duty_a = mc_sat_f32(0.5f + (p_sol->phase_n[0] - p_sol->mid_n) * inv_den, 0.0f, 1.0f);
-    *p_duty_b = mc_sat_f32(0.5f + (p_sol->phase_n[1] - p_sol->mid_n) * inv_den, 0.0f, 1.0f);
-    *p_duty_c = mc_sat_f32(0.5f + (p_sol->phase_n[2] - p_sol->mid_n) * inv_den, 0.0f, 1.0f);
+    /* d_x = 1/2 + (v_x - mid) / D = v_x / D + off, off = 1/2 - mid / D
+     * (one offset for the three phases). Rounding can leave a duty a few
+     * ulp outside [0, 1] on the boundary. */
+    float off = 0.5f - (p_sol->mid_n * inv_den);
+    *p_duty_a = mc_sat_f32((p_sol->phase_n[0] * inv_den) + off, 0.0f, 1.0f);
+    *p_duty_b = mc_sat_f32((p_sol->phase_n[1] * inv_den) + off, 0.0f, 1.0f);
+    *p_duty_c = mc_sat_f32((p_sol->phase_n[2] * inv_den) + off, 0.0f, 1.0f);
 }
 
 static bool mc_svpwm_bad_f32(uint32_t flags)

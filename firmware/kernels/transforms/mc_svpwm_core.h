@@ -20,7 +20,7 @@ extern "C" {
 #define MC_SVPWM_LINEAR_MAG2 0.33f
 
 /**
- * Duties 0.5 + (v_x - mid) of the normalised request alpha_n = v_alpha /
+ * Duties v_x + (0.5 - mid) of the normalised request alpha_n = v_alpha /
  * vbus, beta_n = v_beta / vbus, with the phase voltages v_x of the
  * normalised request and mid = (max + min) / 2: the modulator's result for
  * a request that meets the test of mc_svpwm_circle_linear_f32 (the caller
@@ -39,10 +39,11 @@ static inline void mc_svpwm_circle_duties_f32(float alpha_n, float beta_n, float
     const float lo_ab = a_gt_b ? vb : va;
     const float vmax = (hi_ab > vc) ? hi_ab : vc;
     const float vmin = (lo_ab < vc) ? lo_ab : vc;
-    const float mid = 0.5f * (vmax + vmin);
-    *p_duty_a = 0.5f + (va - mid);
-    *p_duty_b = 0.5f + (vb - mid);
-    *p_duty_c = 0.5f + (vc - mid);
+    /* d_x = 1/2 + v_x - mid = v_x + off, off = 1/2 - (max + min) / 2 */
+    const float off = 0.5f - (0.5f * (vmax + vmin));
+    *p_duty_a = va + off;
+    *p_duty_b = vb + off;
+    *p_duty_c = vc + off;
 }
 
 /**
@@ -55,7 +56,7 @@ static inline void mc_svpwm_circle_duties_f32(float alpha_n, float beta_n, float
  * Why this is the general modulator's result there (mc_svpwm.c): k = vbus,
  * so its normalised values are these; |v| < 0.5745 vbus (rounding
  * included) puts sqrt(3) |v| <= 0.9951 vbus inside the circle, so D = vbus
- * and its offsets are divided by vbus_n = 1 (exact); and max - min <=
+ * and its phase values are scaled by 1 / vbus_n = 1 (exact); and max - min <=
  * sqrt(3) |v| < 0.9951 keeps every duty within 0.5 +- 0.4976, where its
  * clamp to [0, 1] cannot act.
  */

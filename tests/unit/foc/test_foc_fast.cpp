@@ -43,12 +43,12 @@ uint32_t RefDq(mc_foc_f32_t* st, float id_ref, float iq_ref, float id, float iq,
   // the modulator's largest voltage per volt (computed by init).
   EXPECT_EQ(st->v_max_per_vbus, st->v_limit_ratio * mc_svpwm_max_voltage_f32(1.0f, st->limit_mode));
   const float v_max = st->v_max_per_vbus * vbus;
-  float ff_d = 0.0f;
-  float ff_q = 0.0f;
-  if (st->decouple) {
-    ff_d = -(omega * st->lq_h * iq);
-    ff_q = (omega * st->ld_h * id) + (omega * st->flux_wb);
-  }
+  // mc_foc.h: the feed-forward gains are L and psi with decoupling, 0 without.
+  EXPECT_EQ(st->ff_lq_h, st->decouple ? st->lq_h : 0.0f);
+  EXPECT_EQ(st->ff_ld_h, st->decouple ? st->ld_h : 0.0f);
+  EXPECT_EQ(st->ff_flux_wb, st->decouple ? st->flux_wb : 0.0f);
+  const float ff_d = -(omega * st->ff_lq_h * iq);
+  const float ff_q = (omega * st->ff_ld_h * id) + (omega * st->ff_flux_wb);
   const mc_pi_f32_t d_saved = st->pi_d;
   const mc_pi_f32_t q_saved = st->pi_q;
   st->pi_d.flags = MC_PI_ERR_NONE;
@@ -264,9 +264,8 @@ TEST_P(FocFastVsChecked, WholeStepAndDqStepBitIdentical) {
       mc_foc_f32_out_t orf{};
       if ((k % 5) == 3) {
         // the alpha-beta entry point, on raw draws for alpha and beta
-        const mc_foc_f32_ab_in_t ab = {in.ia_a,  in.ib_a,   in.theta_e_rad, in.omega_e_rad_s,
-                                       in.vbus_v, in.id_ref_a, in.iq_ref_a};
-        rf = mc_foc_f32_step_ab(&fast, &ab, &of);
+        rf = mc_foc_f32_step_ab(&fast, in.ia_a, in.ib_a, in.theta_e_rad, in.omega_e_rad_s,
+                                in.vbus_v, in.id_ref_a, in.iq_ref_a, &of);
         rr = RefStepAb(&ref, in.ia_a, in.ib_a, in, &orf);
       } else {
         rf = mc_foc_f32_step(&fast, &in, &of);
