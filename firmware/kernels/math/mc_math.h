@@ -77,22 +77,68 @@ static inline float mc_fabs_f32(float x)
  * it an integer Payne-Hanek reduction keeps the same accuracy. */
 #define MC_MATH_CW_LIMIT_RAD 8192.0f
 
-/** |x| up to which the two-constant Cody-Waite reduction of
- * mc_sincos_near_f32 applies (rad): 163 quarter turns at most. */
+/** |x| up to which mc_sincos_near_f32 applies (rad): 5215 table steps at
+ * most. */
 #define MC_MATH_NEAR_LIMIT_RAD 256.0f
 
-/* Constants of mc_sincos_near_f32 (internal, named for the header only). */
+/* Constants of the inline sin/cos (internal, named for the header only). */
 /** 1.5 * 2^23: (v + M) - M rounds v to an integer (ties to even), |v| < 2^22. */
 #define MC_MATH_ROUND_MAGIC_F32 12582912.0f
 #define MC_MATH_TWO_OVER_PI_F32 0.636619772367581343f
-/** pi/2 = MC_MATH_NEAR_C1 + MC_MATH_NEAR_C2 + 7.4e-13: C1 is pi/2 cut to 16
- * significant bits, so k*C1 is exact for |k| < 2^8 and x - k*C1 is exact
- * (a multiple of ulp(x) smaller than 1); k*C2 and the last subtraction
+/** Entries of the sin/cos table: one turn in steps of 2 pi / 128. */
+#define MC_MATH_SINCOS_STEPS 128u
+/** 128 / (2 pi), rounded to float. */
+#define MC_MATH_STEPS_PER_RAD_F32 20.3718327157626f
+/** 2 pi / 128 = MC_MATH_STEP_C1 + MC_MATH_STEP_C2 + 8e-14: C1 has 11
+ * significant bits, so k*C1 is exact for |k| < 2^13 and x - k*C1 is exact
+ * (a multiple of ulp(x) that fits 24 bits); k*C2 and the last subtraction
  * round. C2 > 0, so that x = -0 (k = +0) keeps its sign through
  * x - (+0) - (+0). */
-#define MC_MATH_NEAR_C1 0x1.921ep+0f
-#define MC_MATH_NEAR_C2 0x1.b54442p-16f
-/* sin r = r (1 + z (S1 + z (S2 + z S3))), cos r = 1 + z (-1/2 + z (C1 + z (C2
+#define MC_MATH_STEP_C1 0x1.92p-5f
+#define MC_MATH_STEP_C2 0x1.fb5444p-17f
+/** -1/6 (float), the cubic term of sin r on |r| <= pi/128. */
+#define MC_MATH_SIN_R3 (-0x1.555556p-3f)
+
+/**
+ * {sin, cos} of k 2 pi / 128 for k = 0..127, each rounded to float (exact
+ * for the multiples of pi/2; entry 0 holds sin = -0, so that sin(-0) = -0
+ * comes out of the same sum). mc_math.c.
+ */
+extern const float mc_math_sincos_table[MC_MATH_SINCOS_STEPS][2];
+
+/**
+ * mc_sincos_f32 for |x_rad| <= MC_MATH_NEAR_LIMIT_RAD, inline, bit for bit
+ * the same results (mc_sincos_f32 runs this very code in that range).
+ * The caller guarantees the range (|x| <= 256 rad, so not NaN or inf);
+ * outside it the results are not defined (still no undefined behaviour in
+ * C: the float-to-int conversion is only reached with |k| <= 5215 inside
+ * the range; callers must test first). Cost: about 33 instructions on the
+ * Cortex-M4F, no branch.
+ * Method: k = round(x 128 / (2 pi)), r = x - k 2 pi / 128 (two-constant
+ * Cody-Waite, error < 5e-10 before the final rounding), |r| <= pi/128;
+ * sin r = r (1 - r^2/6) (error < 8e-11), cos r = 1 - r^2/2 (< 1.6e-8);
+ * then the angle sum with the table entry (S, C) of k mod 128:
+ * sin x = C sin r + S cos r, cos x = C cos r - S sin r.
+ */
+static inline void mc_sincos_near_f32(float x_rad, float *p_sin, float *p_cos)
+{
+    const float kf = ((x_rad * MC_MATH_STEPS_PER_RAD_F32) + MC_MATH_ROUND_MAGIC_F32) -
+                     MC_MATH_ROUND_MAGIC_F32;
+    /* kf is an integer with |kf| <= 5215 here: the conversion is exact, and
+     * the two's complement index of a negative k is k mod 128 */
+    const uint32_t idx = (uint32_t)(int32_t)kf & (MC_MATH_SINCOS_STEPS - 1u);
+    const float r = (x_rad - (kf * MC_MATH_STEP_C1)) - (kf * MC_MATH_STEP_C2);
+    const float z = r * r;
+    const float sr = r * (1.0f + (z * MC_MATH_SIN_R3));
+    const float cr = 1.0f - (0.5f * z);
+    const float ts = mc_math_sincos_table[idx][0];
+    const float tc = mc_math_sincos_table[idx][1];
+    *p_sin = (tc * sr) + (ts * cr);
+    *p_cos = (tc * cr) - (ts * sr);
+}
+
+/* Quadrant polynomials of mc_sincos_f32 beyond 256 rad (internal):
+ * sin r = r (1 + z (S1 + z (S2 + z S3))), cos r = 1 + z (-1/2 + z (C1 + z (C2
  * + z C3))), z = r^2, |r| <= pi/4: own minimax fits (Lawson iteration on
  * 20000 Chebyshev nodes, weighted to the absolute error), fit error 1.8e-9
  * (sin) and 1e-10 (cos) with the float coefficients. */
@@ -103,73 +149,23 @@ static inline float mc_fabs_f32(float x)
 #define MC_MATH_COS_C2 (-1.388736768e-03f)
 #define MC_MATH_COS_C3 2.443845187e-05f
 
-/** sin and cos of r + q pi/2 for |r| <= pi/4 (about): the two polynomials
- * and the quadrant q mod 4 by selection and sign. Internal to
- * mc_sincos_near_f32 and mc_sincos_f32 (one code for every range). */
-static inline void mc_sincos_reduced_f32(float r, uint32_t q, float *p_sin, float *p_cos)
-{
-    const float z = r * r;
-    /* r (1 + ...), not r + r^3 (...): keeps sin(-0) = -0 */
-    const float s =
-        r * (1.0f + (z * (MC_MATH_SIN_S1 + (z * (MC_MATH_SIN_S2 + (z * MC_MATH_SIN_S3))))));
-    const float c = 1.0f + (z * (-0.5f + (z * (MC_MATH_COS_C1 +
-                                               (z * (MC_MATH_COS_C2 + (z * MC_MATH_COS_C3)))))));
-    float a = s;
-    float b = c;
-    if ((q & 1u) != 0u) {
-        /* a quarter turn: (sin, cos) -> (cos, -sin) */
-        a = c;
-        b = -s;
-    }
-    if ((q & 2u) != 0u) {
-        /* a half turn: both change sign */
-        a = -a;
-        b = -b;
-    }
-    *p_sin = a;
-    *p_cos = b;
-}
-
-/**
- * mc_sincos_f32 for |x_rad| <= MC_MATH_NEAR_LIMIT_RAD, inline, bit for bit
- * the same results (mc_sincos_f32 runs this very code in that range).
- * The caller guarantees the range (|x| <= 256 rad, so not NaN or inf);
- * outside it the results are not defined (still no undefined behaviour in
- * C: the float-to-int conversion is only reached with |k| <= 163 inside the
- * range; callers must test first). Cost: about 35 instructions on the
- * Cortex-M4F, no branch.
- * Method: k = round(x 2/pi), r = x - k pi/2 (two-constant Cody-Waite,
- * error < 4e-10 before the final rounding), the two polynomials above on
- * r, and the quadrant k mod 4 by selection and sign. Signed zero: sin(-0)
- * = -0 (the sine is formed as r (1 + ...)).
- */
-static inline void mc_sincos_near_f32(float x_rad, float *p_sin, float *p_cos)
-{
-    const float kf = ((x_rad * MC_MATH_TWO_OVER_PI_F32) + MC_MATH_ROUND_MAGIC_F32) -
-                     MC_MATH_ROUND_MAGIC_F32;
-    /* kf is an integer with |kf| <= 163 here: the conversion is exact */
-    const uint32_t q = (uint32_t)(int32_t)kf;
-    const float r = (x_rad - (kf * MC_MATH_NEAR_C1)) - (kf * MC_MATH_NEAR_C2);
-    mc_sincos_reduced_f32(r, q, p_sin, p_cos);
-}
-
 /**
  * sin and cos of x (radians) in one call.
  *
- * Range: every finite float. Reduction: two-constant Cody-Waite for
- * |x| <= 256 rad (mc_sincos_near_f32, the control loops' range), three
- * constants up to 8192 rad, integer Payne-Hanek with a table of the bits of
- * 2/pi beyond.
+ * Range: every finite float. |x| <= 256 rad (the control loops' range):
+ * mc_sincos_near_f32 (table of 128 steps, short polynomials, angle sum).
+ * Beyond: quadrant reduction, three-constant Cody-Waite up to 8192 rad,
+ * integer Payne-Hanek with a table of the bits of 2/pi further out, and
+ * own polynomial fits of degree 7 (sin) and 8 (cos) on |r| <= pi/4 (fit
+ * error < 1.8e-9 with the float coefficients).
  * Accuracy: |error| <= 2e-7 absolute against libm (double sin/cos rounded
  * to float), over the whole range (tests/unit/math: dense sweeps, huge
- * arguments). Polynomials: own fits of degree 7 (sin) and 8 (cos) on
- * |r| <= pi/4, fit error < 1.8e-9 with the float coefficients, far below
- * the half ulp (3e-8..6e-8) the float evaluation adds.
+ * arguments).
  * Exact values: sin(+-0) = +-0, cos(0) = 1; for |x| < 2^-12,
  * sin x = x and cos x = 1 exactly (denormals included).
  * NaN or +-inf in: *p_sin = *p_cos = NaN.
- * Cost: about 40 instructions on the Cortex-M4F for |x| <= 256 rad (one
- * compare, then mc_sincos_near_f32).
+ * Cost: about 40 instructions on the Cortex-M4F for |x| <= 256 rad (a
+ * call, one compare, then mc_sincos_near_f32).
  */
 void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos);
 
