@@ -213,9 +213,6 @@ static uint32_t foc_dq_core(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
  * tests/unit/foc (test_foc_fast.cpp) compares the two paths bit for bit.
  * ------------------------------------------------------------------------ */
 
-/* Largest vbus of the fast path: v_max^2 <= (2/3 * 1e18)^2 stays finite. */
-#define FOC_FAST_VBUS_MAX_V 1.0e18f
-
 /* The fast path is inlined into each entry point: one frame, no arguments
  * through memory. */
 #if defined(__GNUC__)
@@ -235,21 +232,34 @@ FOC_INLINE float foc_sqrt_pos(float x)
 #endif
 }
 
-/* 0 < vbus < FOC_FAST_VBUS_MAX_V (false for NaN): one unsigned compare of
- * the bits, as positive floats order like their bit patterns and every
- * negative float, -0 and +0 fall outside (bits - 1 wraps or is large). */
-FOC_INLINE bool foc_vbus_fast_ok(float vbus_v)
+/* The bits of a float (positive floats order like their bit patterns). */
+FOC_INLINE uint32_t foc_bits(float x)
 {
     union {
         float f;
         uint32_t u;
     } b;
-    b.f = vbus_v;
-    return (b.u - 1u) < (0x5D5E0B6Bu - 1u); /* 0x5D5E0B6B: the float 1e18 */
+    b.f = x;
+    return b.u;
 }
 
-/* The dq step of foc_dq_core for 0 < vbus < FOC_FAST_VBUS_MAX_V (the caller
- * tests it), committed to both PIs; or false with nothing written where the
+/* 0 < vbus <= 2^59 (5.8e17, the float with bits 0x5D000000; false for
+ * NaN): one unsigned compare, as +0 (bits 0) wraps to the top and every
+ * negative float, inf and NaN lie above. 2^59 keeps v_max^2 finite. */
+FOC_INLINE bool foc_vbus_fast_ok(float vbus_v)
+{
+    return (foc_bits(vbus_v) - 1u) < 0x5D000000u;
+}
+
+/* |theta| <= MC_MATH_NEAR_LIMIT_RAD (256 = bits 0x43800000; false for NaN
+ * and inf): the bits without the sign, compared in one. */
+FOC_INLINE bool foc_theta_fast_ok(float theta_rad)
+{
+    return (foc_bits(theta_rad) << 1) <= (0x43800000u << 1);
+}
+
+/* The dq step of foc_dq_core for 0 < vbus <= 2^59 (foc_vbus_fast_ok: the
+ * caller tests it), committed to both PIs; or false with nothing written where the
  * checked path would refuse or might differ. The PIs' own sticky flags are
  * not touched: they are 0 between steps (the checked step clears them and a
  * refused step restores the PIs as they were). */
@@ -265,7 +275,7 @@ FOC_INLINE bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     float integ_q;
     float vq_room_sq;
     float vq_max;
-    /* finite and below 2/3 * 1e18, as vbus is */
+    /* finite and at most 2/3 * 2^59, as vbus is */
     const float v_max = st->v_max_per_vbus * vbus_v;
 
     /* a non-finite speed makes both terms non-finite (0 * inf is NaN):
@@ -352,7 +362,7 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
     uint32_t svf = MC_SVPWM_FLAG_NONE;
 
     /* NaN fails both; a non-finite current shows in the PIs */
-    if (!(mc_fabs_f32(theta) <= MC_MATH_NEAR_LIMIT_RAD) || !foc_vbus_fast_ok(vbus)) {
+    if (!foc_theta_fast_ok(theta) || !foc_vbus_fast_ok(vbus)) {
         return false;
     }
     mc_sincos_near_f32(theta, &sin_th, &cos_th); /* = mc_sincos_f32 here */
@@ -362,7 +372,7 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
     }
 
     /* From here on nothing can fail: vd, vq, sin, cos are finite and
-     * 0 < vbus < 1e18. Modulator limit and duties as mc_svpwm_limit_f32
+     * 0 < vbus <= 2^59. Modulator limit and duties as mc_svpwm_limit_f32
      * followed by mc_svpwm_f32 on the limited vector. */
     mc_inv_park_f32(vd, vq, sin_th, cos_th, &v_alpha, &v_beta);
     if (st->svpwm_linear) {

@@ -41,7 +41,7 @@
  * NaN propagation: a non-finite current, reference or speed makes a PI's
  * output non-finite, which fails that PI's range test, so the only explicit
  * tests are the angle's range (|theta| <= 256 rad, inline sin/cos), the bus
- * (0 < vbus < 1e18, so v_max^2 cannot overflow) and, without decoupling,
+ * (0 < vbus <= 2^59, so v_max^2 cannot overflow) and, without decoupling,
  * the speed. Each PI's common case (output and integrator inside their
  * limits) is two compares; a saturated PI takes the full anti-windup code
  * (mc_pi_f32_core_sat) without leaving the fast path. It commits nothing

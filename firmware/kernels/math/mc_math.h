@@ -110,10 +110,9 @@ extern const float mc_math_sincos_table[MC_MATH_SINCOS_STEPS][2];
  * mc_sincos_f32 for |x_rad| <= MC_MATH_NEAR_LIMIT_RAD, inline, bit for bit
  * the same results (mc_sincos_f32 runs this very code in that range).
  * The caller guarantees the range (|x| <= 256 rad, so not NaN or inf);
- * outside it the results are not defined (still no undefined behaviour in
- * C: the float-to-int conversion is only reached with |k| <= 5215 inside
- * the range; callers must test first). Cost: about 33 instructions on the
- * Cortex-M4F, no branch.
+ * outside it the results are wrong or NaN (no undefined behaviour: no
+ * float-to-int conversion, the table index is 7 bits). Cost: about 32
+ * instructions on the Cortex-M4F, no branch.
  * Method: k = round(x 128 / (2 pi)), r = x - k 2 pi / 128 (two-constant
  * Cody-Waite, error < 5e-10 before the final rounding), |r| <= pi/128;
  * sin r = r (1 - r^2/6) (error < 8e-11), cos r = 1 - r^2/2 (< 1.6e-8);
@@ -122,11 +121,17 @@ extern const float mc_math_sincos_table[MC_MATH_SINCOS_STEPS][2];
  */
 static inline void mc_sincos_near_f32(float x_rad, float *p_sin, float *p_cos)
 {
-    const float kf = ((x_rad * MC_MATH_STEPS_PER_RAD_F32) + MC_MATH_ROUND_MAGIC_F32) -
-                     MC_MATH_ROUND_MAGIC_F32;
-    /* kf is an integer with |kf| <= 5215 here: the conversion is exact, and
-     * the two's complement index of a negative k is k mod 128 */
-    const uint32_t idx = (uint32_t)(int32_t)kf & (MC_MATH_SINCOS_STEPS - 1u);
+    union {
+        float f;
+        uint32_t u;
+    } t;
+    /* t = 1.5 2^23 + k with k = round(x 128 / 2pi), |k| <= 5215: k is in
+     * the low significand bits of t (offset by 2^22, a multiple of 128), so
+     * they give k mod 128 directly, negative k included; no float-to-int
+     * conversion */
+    t.f = (x_rad * MC_MATH_STEPS_PER_RAD_F32) + MC_MATH_ROUND_MAGIC_F32;
+    const float kf = t.f - MC_MATH_ROUND_MAGIC_F32;
+    const uint32_t idx = t.u & (MC_MATH_SINCOS_STEPS - 1u);
     const float r = (x_rad - (kf * MC_MATH_STEP_C1)) - (kf * MC_MATH_STEP_C2);
     const float z = r * r;
     const float sr = r * (1.0f + (z * MC_MATH_SIN_R3));

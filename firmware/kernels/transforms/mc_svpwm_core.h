@@ -33,12 +33,16 @@ static inline void mc_svpwm_circle_duties_f32(float alpha_n, float beta_n, float
     float vb;
     float vc;
     mc_inv_clarke_f32(alpha_n, beta_n, &va, &vb, &vc);
-    /* max and min of the three with one compare for the first pair */
-    const bool a_gt_b = va > vb;
-    const float hi_ab = a_gt_b ? va : vb;
-    const float lo_ab = a_gt_b ? vb : va;
-    const float vmax = (hi_ab > vc) ? hi_ab : vc;
-    const float vmin = (lo_ab < vc) ? lo_ab : vc;
+    /* vb, vc = -alpha/2 +- sqrt(3)/2 beta (mc_inv_clarke_f32): the larger of
+     * the two is -alpha/2 + |sqrt(3)/2 beta|, the smaller -alpha/2 - |...|,
+     * the same floats as vb and vc (x - y and -y + x round alike). So the
+     * max and min of the three take one compare each. */
+    const float half_alpha = 0.5f * alpha_n;
+    const float beta_term = mc_fabs_f32((0.5f * MC_SQRT3_F32) * beta_n);
+    const float hi_bc = beta_term - half_alpha;
+    const float lo_bc = -half_alpha - beta_term;
+    const float vmax = (va > hi_bc) ? va : hi_bc;
+    const float vmin = (va < lo_bc) ? va : lo_bc;
     /* d_x = 1/2 + v_x - mid = v_x + off, off = 1/2 - (max + min) / 2 */
     const float off = 0.5f - (0.5f * (vmax + vmin));
     *p_duty_a = va + off;
