@@ -344,6 +344,34 @@ static void foc_track_applied(mc_foc_f32_t *st, float v_alpha, float v_beta, flo
     (void)mc_pi_f32_track(&st->pi_q, *p_vq);
 }
 
+/* The applied voltage after the modulator: alpha-beta and dq. */
+typedef struct {
+    float v_alpha;
+    float v_beta;
+    float vd;
+    float vq;
+} foc_applied_t;
+
+/* The fast path's modulator when it is not known to stay linear: limit and
+ * duties (mc_svpwm_limit_duty_f32), the cut fed back to the PIs. Out of
+ * line, so that the linear case needs no stack frame; writes the duties
+ * and out->svpwm_flags, returns the applied voltage. */
+static foc_applied_t foc_modulate_general(mc_foc_f32_t *st, foc_applied_t v, float vbus,
+                                          float sin_th, float cos_th, mc_foc_f32_out_t *out)
+{
+    float va_lim = v.v_alpha;
+    float vb_lim = v.v_beta;
+    const uint32_t svf = mc_svpwm_limit_duty_f32(&va_lim, &vb_lim, vbus, st->limit_mode,
+                                                 &out->duty_a, &out->duty_b, &out->duty_c);
+    if ((svf & MC_SVPWM_FLAG_LIMITED) != 0u) {
+        v.v_alpha = va_lim;
+        v.v_beta = vb_lim;
+        foc_track_applied(st, v.v_alpha, v.v_beta, sin_th, cos_th, &v.vd, &v.vq);
+    }
+    out->svpwm_flags = svf;
+    return v;
+}
+
 /* The whole step from alpha-beta currents on the fast path (see above), or
  * false with st untouched (out may be partly written; the checked step
  * rewrites all of it). */
@@ -355,11 +383,7 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
     float cos_th;
     float id;
     float iq;
-    float vd;
-    float vq;
-    float v_alpha;
-    float v_beta;
-    uint32_t svf = MC_SVPWM_FLAG_NONE;
+    foc_applied_t v;
 
     /* NaN fails both; a non-finite current shows in the PIs */
     if (!foc_theta_fast_ok(theta) || !foc_vbus_fast_ok(vbus)) {
@@ -367,41 +391,33 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
     }
     mc_sincos_near_f32(theta, &sin_th, &cos_th); /* = mc_sincos_f32 here */
     mc_park_f32(i_alpha, i_beta, sin_th, cos_th, &id, &iq);
-    if (!foc_dq_fast(st, id_ref, iq_ref, id, iq, omega, vbus, &vd, &vq)) {
+    if (!foc_dq_fast(st, id_ref, iq_ref, id, iq, omega, vbus, &v.vd, &v.vq)) {
         return false;
     }
 
     /* From here on nothing can fail: vd, vq, sin, cos are finite and
      * 0 < vbus <= 2^59. Modulator limit and duties as mc_svpwm_limit_f32
      * followed by mc_svpwm_f32 on the limited vector. */
-    mc_inv_park_f32(vd, vq, sin_th, cos_th, &v_alpha, &v_beta);
-    if (st->svpwm_linear) {
+    mc_inv_park_f32(v.vd, v.vq, sin_th, cos_th, &v.v_alpha, &v.v_beta);
+    if (MC_PI_LIKELY(st->svpwm_linear)) {
         /* mc_svpwm_f32's linear case: its first test |v_alpha|, |v_beta|
          * <= vbus holds (|v| <= v_max (1 + 1e-6) < 0.58 vbus), and so does
          * its second (MC_FOC_LINEAR_RATIO), so the duties are these and the
          * modulator limits nothing. */
-        mc_svpwm_circle_duties_f32(v_alpha / vbus, v_beta / vbus, &out->duty_a, &out->duty_b,
-                                   &out->duty_c);
+        mc_svpwm_circle_duties_f32(v.v_alpha / vbus, v.v_beta / vbus, &out->duty_a,
+                                   &out->duty_b, &out->duty_c);
+        out->svpwm_flags = MC_SVPWM_FLAG_NONE;
     } else {
-        float va_lim = v_alpha;
-        float vb_lim = v_beta;
-        svf = mc_svpwm_limit_duty_f32(&va_lim, &vb_lim, vbus, st->limit_mode, &out->duty_a,
-                                      &out->duty_b, &out->duty_c);
-        if ((svf & MC_SVPWM_FLAG_LIMITED) != 0u) {
-            v_alpha = va_lim;
-            v_beta = vb_lim;
-            foc_track_applied(st, v_alpha, v_beta, sin_th, cos_th, &vd, &vq);
-        }
+        v = foc_modulate_general(st, v, vbus, sin_th, cos_th, out);
     }
-    st->vd_v = vd;
-    st->vq_v = vq;
-    out->svpwm_flags = svf;
+    st->vd_v = v.vd;
+    st->vq_v = v.vq;
     out->id_a = id;
     out->iq_a = iq;
-    out->vd_v = vd;
-    out->vq_v = vq;
-    out->v_alpha_v = v_alpha;
-    out->v_beta_v = v_beta;
+    out->vd_v = v.vd;
+    out->vq_v = v.vq;
+    out->v_alpha_v = v.v_alpha;
+    out->v_beta_v = v.v_beta;
     out->flags = st->flags;
     return true;
 }

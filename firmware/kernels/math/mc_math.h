@@ -254,22 +254,6 @@ static inline bool mc_signbit_f32(float x)
 }
 
 /**
- * mc_atan2_f32 with its common case inline (finite arguments, not both 0,
- * |x| + |y| finite): the same operations, so the same results; every other
- * case calls mc_atan2_f32. For a kernel that needs the angle every step.
- */
-static inline float mc_atan2_inline_f32(float y, float x)
-{
-    const float ax = mc_fabs_f32(x);
-    const float ay = mc_fabs_f32(y);
-    const float sum = ax + ay;
-    if ((sum > 0.0f) && (sum <= 3.40282347e38f)) {
-        return mc_atan2_octant_f32(ay, ax, x < 0.0f, mc_signbit_f32(y));
-    }
-    return mc_atan2_f32(y, x);
-}
-
-/**
  * Square root, correctly rounded (0 ulp: bit-identical to an IEEE sqrtf)
  * for every non-negative float, denormals included. Method: the FPU's
  * square-root instruction where the core has one (Cortex-M4F VSQRT.F32,

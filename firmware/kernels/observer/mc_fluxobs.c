@@ -105,6 +105,23 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
     return MC_FLUXOBS_ERR_NONE;
 }
 
+/* Keeps a rare path out of line (see fluxobs_finish_special). */
+#if defined(__GNUC__)
+#define FLUXOBS_NOINLINE __attribute__((noinline))
+#else
+#define FLUXOBS_NOINLINE
+#endif
+
+/* The angle when the inline atan2 cannot take it (e = 0, or |e| beyond
+ * float range), stored last and out of line, so that the common step calls
+ * nothing and needs no stack frame. Returns the step's flags. */
+static FLUXOBS_NOINLINE uint32_t fluxobs_finish_special(mc_fluxobs_f32_t *st, float eb,
+                                                        float ea, uint32_t raised)
+{
+    st->theta_e_rad = mc_atan2_f32(eb, ea);
+    return raised;
+}
+
 uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta_v,
                              float i_alpha_a, float i_beta_a)
 {
@@ -116,6 +133,7 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     float e2;
     float k;
     float resid;
+    uint32_t raised = MC_FLUXOBS_ERR_NONE;
 
     if (st == NULL) {
         return MC_FLUXOBS_ERR_NULL;
@@ -137,6 +155,8 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     if (k < -0.5f) {
         k = -0.5f; /* see the clamp in the header */
     }
+    /* e <- e + k e (not (1 + k) e: 1 + k would round away the low bits of
+     * a small k, and with them the observer's slow dynamics) */
     ea = ea + (k * ea);
     eb = eb + (k * eb);
     xa = ea + (cfg->l_h * i_alpha_a);
@@ -154,22 +174,39 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     st->x_beta_wb = xb;
     st->i_alpha_prev_a = i_alpha_a;
     st->i_beta_prev_a = i_beta_a;
-    st->theta_e_rad = mc_atan2_inline_f32(eb, ea);
 
-    /* Divergence monitor on the constraint residual. */
-    resid = (mc_sqrt_nonneg_f32((ea * ea) + (eb * eb)) * st->inv_flux_per_wb) - 1.0f;
+    /* Divergence monitor on the constraint residual of the new estimate:
+     * |e| = (1 + k) |e_before| (1 + k >= 1/2 > 0), to float rounding, far
+     * inside any useful resid_tol. */
+    resid = (((1.0f + k) * mc_sqrt_nonneg_f32(e2)) * st->inv_flux_per_wb) - 1.0f;
     st->resid = resid;
     if (mc_fabs_f32(resid) > cfg->resid_tol) {
         st->resid_bad_s += cfg->dt_s;
         if (st->resid_bad_s > cfg->resid_time_s) {
             st->resid_bad_s = cfg->resid_time_s; /* clamp the timer */
             st->flags |= MC_FLUXOBS_ERR_DIVERGED;
-            return MC_FLUXOBS_ERR_DIVERGED;
+            raised = MC_FLUXOBS_ERR_DIVERGED;
         }
     } else {
         st->resid_bad_s = 0.0f;
     }
-    return MC_FLUXOBS_ERR_NONE;
+
+    /* The angle: mc_atan2_f32's common case inline (finite, not both 0,
+     * |ea| + |eb| finite), the rest out of line. */
+    {
+        const float ax = mc_fabs_f32(ea);
+        const float ay = mc_fabs_f32(eb);
+        union {
+            float f;
+            uint32_t u;
+        } sum;
+        sum.f = ax + ay;
+        if ((sum.u - 1u) >= 0x7F7FFFFFu) {
+            return fluxobs_finish_special(st, eb, ea, raised);
+        }
+        st->theta_e_rad = mc_atan2_octant_f32(ay, ax, ea < 0.0f, mc_signbit_f32(eb));
+    }
+    return raised;
 }
 
 uint32_t mc_fluxobs_f32_gamma_for_critical_speed(float omega_crit_m_rad_s, uint32_t pole_pairs,
