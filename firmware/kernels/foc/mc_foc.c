@@ -150,13 +150,14 @@ static uint32_t foc_check_inputs(float id_ref_a, float iq_ref_a, float id_a, flo
     return MC_FOC_ERR_NONE;
 }
 
-/* The decoupling feed-forward; its gains are 0 without decoupling (then
- * the terms are +-0, or NaN for a non-finite speed). */
+/* The decoupling feed-forward, -omega L_q i_q and omega (L_d i_d + psi);
+ * its gains are 0 without decoupling (then the terms are +-0, or NaN for a
+ * non-finite speed). */
 static inline void foc_feed_forward(const mc_foc_f32_t *st, float id_a, float iq_a,
                                     float omega_e_rad_s, float *p_ff_d, float *p_ff_q)
 {
-    *p_ff_d = -(omega_e_rad_s * st->ff_lq_h * iq_a);
-    *p_ff_q = (omega_e_rad_s * st->ff_ld_h * id_a) + (omega_e_rad_s * st->ff_flux_wb);
+    *p_ff_d = -(omega_e_rad_s * (st->ff_lq_h * iq_a));
+    *p_ff_q = omega_e_rad_s * ((st->ff_ld_h * id_a) + st->ff_flux_wb);
 }
 
 /* The dq step proper, inputs already checked (the checked path). */
@@ -252,10 +253,12 @@ FOC_INLINE bool foc_vbus_fast_ok(float vbus_v)
 }
 
 /* |theta| <= MC_MATH_NEAR_LIMIT_RAD (256 = bits 0x43800000; false for NaN
- * and inf): the bits without the sign, compared in one. */
-FOC_INLINE bool foc_theta_fast_ok(float theta_rad)
+ * and inf) and foc_vbus_fast_ok(vbus), the two tests in one branch: the
+ * angle's bits without the sign, compared in one. */
+FOC_INLINE bool foc_theta_vbus_fast_ok(float theta_rad, float vbus_v)
 {
-    return (foc_bits(theta_rad) << 1) <= (0x43800000u << 1);
+    const bool theta_ok = (foc_bits(theta_rad) << 1) <= (0x43800000u << 1);
+    return theta_ok & foc_vbus_fast_ok(vbus_v);
 }
 
 /* The dq step of foc_dq_core for 0 < vbus <= 2^59 (foc_vbus_fast_ok: the
@@ -288,9 +291,12 @@ FOC_INLINE bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     if (!mc_pi_f32_core_sym(&st->pi_d, e_d, ff_d, v_max, &integ_d, &vd)) {
         return false;
     }
-    /* |vd| <= v_max: the room is finite */
+    /* |vd| <= v_max (the PI's limit), so vd^2 <= v_max^2 after rounding
+     * too (rounding is monotonic) and the room is finite and >= +0 (an
+     * exact difference of equal floats is +0): its square root is what the
+     * checked path's (room > 0) ? sqrt(room) : 0 gives. */
     vq_room_sq = (v_max * v_max) - (vd * vd);
-    vq_max = (vq_room_sq > 0.0f) ? foc_sqrt_pos(vq_room_sq) : 0.0f;
+    vq_max = foc_sqrt_pos(vq_room_sq);
 
     /* q axis: mc_pi_f32_step_lim(&st->pi_q, e_q, ff_q, -vq_max, vq_max) */
     if (!mc_pi_f32_core_sym(&st->pi_q, e_q, ff_q, vq_max, &integ_q, &vq)) {
@@ -386,7 +392,7 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
     foc_applied_t v;
 
     /* NaN fails both; a non-finite current shows in the PIs */
-    if (!foc_theta_fast_ok(theta) || !foc_vbus_fast_ok(vbus)) {
+    if (!foc_theta_vbus_fast_ok(theta, vbus)) {
         return false;
     }
     mc_sincos_near_f32(theta, &sin_th, &cos_th); /* = mc_sincos_f32 here */

@@ -103,7 +103,25 @@ static inline bool mc_pi_f32_core_sym(const mc_pi_f32_t *st, float error, float 
     }
     {
         const float hi = (lim < st->out_max) ? lim : st->out_max;
-        const mc_pi_f32_res_t r = mc_pi_f32_core_sat(st, p, inc, ff, -hi, hi);
+        mc_pi_f32_res_t r;
+        if (st->aw == MC_PI_AW_CLAMP) {
+            /* mc_pi_f32_core_sat's clamping branch with lo = -hi, inline
+             * (the FOC's default scheme): the very same operations */
+            float i2 = integ;
+            if ((u > hi) && (inc > 0.0f)) {
+                const float room = hi - p - ff;
+                i2 = (room > st->integ) ? room : st->integ;
+            } else if ((u < -hi) && (inc < 0.0f)) {
+                const float room = -hi - p - ff;
+                i2 = (room < st->integ) ? room : st->integ;
+            } else {
+                /* the error pulls back into range, or only the static clamp acts */
+            }
+            r.integ = mc_sat_f32(i2, -st->out_max, st->out_max);
+            r.u = mc_sat_f32(p + r.integ + ff, -hi, hi);
+        } else {
+            r = mc_pi_f32_core_sat(st, p, inc, ff, -hi, hi);
+        }
         if ((r.integ + r.u) != (r.integ + r.u)) {
             return false;
         }

@@ -47,8 +47,8 @@ uint32_t RefDq(mc_foc_f32_t* st, float id_ref, float iq_ref, float id, float iq,
   EXPECT_EQ(st->ff_lq_h, st->decouple ? st->lq_h : 0.0f);
   EXPECT_EQ(st->ff_ld_h, st->decouple ? st->ld_h : 0.0f);
   EXPECT_EQ(st->ff_flux_wb, st->decouple ? st->flux_wb : 0.0f);
-  const float ff_d = -(omega * st->ff_lq_h * iq);
-  const float ff_q = (omega * st->ff_ld_h * id) + (omega * st->ff_flux_wb);
+  const float ff_d = -(omega * (st->ff_lq_h * iq));
+  const float ff_q = omega * ((st->ff_ld_h * id) + st->ff_flux_wb);
   const mc_pi_f32_t d_saved = st->pi_d;
   const mc_pi_f32_t q_saved = st->pi_q;
   st->pi_d.flags = MC_PI_ERR_NONE;
