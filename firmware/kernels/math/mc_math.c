@@ -7,7 +7,11 @@
  * or divide (built with -ffp-contract=off, so no fused multiply-add), or an
  * integer operation: results are bit-identical on x86-64 and Cortex-M4F.
  *
- * Range reduction (sin/cos, wrap):
+ * sin/cos for |x| <= MC_MATH_NEAR_LIMIT_RAD (256 rad): mc_sincos_near_f32 in
+ * mc_math.h (a table of 128 steps per turn, two-constant Cody-Waite to the
+ * nearest step, short polynomials, angle sum), inline for the kernels.
+ *
+ * Range reduction (sin/cos beyond 256 rad, wrap):
  * - |x| <= MC_MATH_CW_LIMIT_RAD (8192 rad): Cody-Waite, x - k*(pi/2) with
  *   pi/2 = C1 + C2 + C3, where C1 and C2 have 11 significant bits (13
  *   trailing zero bits), so k*C1 and k*C2 are exact for |k| < 2^13;
