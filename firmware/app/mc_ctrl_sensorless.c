@@ -354,7 +354,6 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     float theta_ctrl;
     float omega_ctrl;
     uint32_t k;
-    mc_foc_f32_in_t in;
     mc_foc_f32_out_t fo;
     const uint32_t delay_idx = (c == NULL) ? 0u : c->cfg.pwm_delay_periods;
 
@@ -471,17 +470,9 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         omega_ctrl = 0.0f;
     }
 
-    /* 4. current loop */
-    in.ia_a = m->ia_a;
-    in.ib_a = m->ib_a;
-    in.ic_a = m->ic_a;
-    in.three_phase = false;
-    in.theta_e_rad = theta_ctrl;
-    in.omega_e_rad_s = omega_ctrl;
-    in.vbus_v = m->vbus_v;
-    in.id_ref_a = c->id_ref_a;
-    in.iq_ref_a = c->iq_ref_a;
-    if (mc_foc_f32_step(&c->foc, &in, &fo) != MC_FOC_ERR_NONE) {
+    /* 4. current loop, from the alpha-beta currents of step 1 */
+    if (mc_foc_f32_step_ab(&c->foc, i_al, i_be, theta_ctrl, omega_ctrl, m->vbus_v, c->id_ref_a,
+                           c->iq_ref_a, &fo) != MC_FOC_ERR_NONE) {
         err |= MC_CTRL_SLS_ERR_FOC;
     }
     out->duty_a = fo.duty_a;

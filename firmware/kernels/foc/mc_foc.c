@@ -8,6 +8,7 @@
 
 #include "math/mc_math.h"
 #include "pi/mc_pi_core.h"
+#include "transforms/mc_svpwm_core.h"
 #include "transforms/mc_transforms.h"
 
 /* Map PI init errors of one axis to the FOC flags. */
@@ -110,7 +111,13 @@ uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
     st->flux_wb = cfg->flux_wb;
     st->limit_mode = cfg->limit_mode;
     st->v_limit_ratio = cfg->v_limit_ratio;
+    st->v_max_per_vbus = cfg->v_limit_ratio * mc_svpwm_max_voltage_f32(1.0f, cfg->limit_mode);
     st->decouple = cfg->decouple;
+    st->ff_ld_h = cfg->decouple ? cfg->ld_h : 0.0f;
+    st->ff_lq_h = cfg->decouple ? cfg->lq_h : 0.0f;
+    st->ff_flux_wb = cfg->decouple ? cfg->flux_wb : 0.0f;
+    st->svpwm_linear = (cfg->limit_mode == MC_SVPWM_LIMIT_CIRCLE) &&
+                       (cfg->v_limit_ratio <= MC_FOC_LINEAR_RATIO);
     st->vd_v = 0.0f;
     st->vq_v = 0.0f;
     st->flags = MC_FOC_ERR_NONE;
@@ -143,14 +150,24 @@ static uint32_t foc_check_inputs(float id_ref_a, float iq_ref_a, float id_a, flo
     return MC_FOC_ERR_NONE;
 }
 
-/* The dq step proper, inputs already checked. */
+/* The decoupling feed-forward, -omega L_q i_q and omega (L_d i_d + psi);
+ * its gains are 0 without decoupling (then the terms are +-0, or NaN for a
+ * non-finite speed). */
+static inline void foc_feed_forward(const mc_foc_f32_t *st, float id_a, float iq_a,
+                                    float omega_e_rad_s, float *p_ff_d, float *p_ff_q)
+{
+    *p_ff_d = -(omega_e_rad_s * (st->ff_lq_h * iq_a));
+    *p_ff_q = omega_e_rad_s * ((st->ff_ld_h * id_a) + st->ff_flux_wb);
+}
+
+/* The dq step proper, inputs already checked (the checked path). */
 static uint32_t foc_dq_core(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, float id_a,
                             float iq_a, float omega_e_rad_s, float vbus_v, float *p_vd_v,
                             float *p_vq_v)
 {
-    float v_max = st->v_limit_ratio * mc_svpwm_max_voltage_f32(vbus_v, st->limit_mode);
-    float ff_d = 0.0f;
-    float ff_q = 0.0f;
+    float v_max = st->v_max_per_vbus * vbus_v;
+    float ff_d;
+    float ff_q;
     float vd;
     float vq;
     float vq_room_sq;
@@ -158,10 +175,7 @@ static uint32_t foc_dq_core(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     mc_pi_f32_t pi_d_saved = st->pi_d;
     mc_pi_f32_t pi_q_saved = st->pi_q;
 
-    if (st->decouple) {
-        ff_d = -(omega_e_rad_s * st->lq_h * iq_a);
-        ff_q = (omega_e_rad_s * st->ld_h * id_a) + (omega_e_rad_s * st->flux_wb);
-    }
+    foc_feed_forward(st, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
 
     /* The FOC owns both PIs and keeps its own sticky flags: clear theirs so
      * that a refusal in this step shows. */
@@ -190,28 +204,27 @@ static uint32_t foc_dq_core(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
  * Fast path. The checked code above tests every value where it is used (the
  * step, each PI, the modulator twice). The fast path computes the same
  * operations on the same values, in the same order, so it gives the same
- * bits, but screens for non-finite values a few at a time (foc_screen),
- * commits nothing until the whole step is known to be good, and
- * skips what the config validated at init already guarantees (the PI's
- * dynamic limits are ordered: -v_max <= 0 <= v_max). When anything is off
- * (a non-finite input or intermediate, vbus <= 0) it returns false with the
- * state untouched, and the checked code runs the step instead: errors,
- * flags and refusals are exactly the checked code's. tests/unit/foc
- * (test_foc_fast.cpp) compares the two paths bit for bit.
+ * bits, but tests only what NaN propagation does not catch (see mc_foc.h),
+ * commits nothing until the PIs are known good, and skips what init
+ * validated already (the PIs' limits are symmetric: out_min = -out_max, so
+ * the checked PI's dynamic limits max(-x, out_min), min(x, out_max) are
+ * -hi, hi with hi = min(x, out_max)). When anything is off it returns false
+ * with the state untouched, and the checked code runs the step instead:
+ * errors, flags and refusals are exactly the checked code's.
+ * tests/unit/foc (test_foc_fast.cpp) compares the two paths bit for bit.
  * ------------------------------------------------------------------------ */
 
-/* 0 * (sum of the values): +-0 when every value is finite (and their sum
- * does not overflow), NaN when one is NaN or +-inf (or the sum overflows:
- * a false alarm, which only sends the step to the checked path). One add
- * per value and one compare instead of a test per value. */
-static float foc_screen(float sum)
-{
-    return 0.0f * sum;
-}
+/* The fast path is inlined into each entry point: one frame, no arguments
+ * through memory. */
+#if defined(__GNUC__)
+#define FOC_INLINE static inline __attribute__((always_inline))
+#else
+#define FOC_INLINE static inline
+#endif
 
 /* The square root of a positive finite float: mc_sqrt_f32 puts its checks
  * (0, negative, NaN, inf) in front of this same instruction. */
-static float foc_sqrt_pos(float x)
+FOC_INLINE float foc_sqrt_pos(float x)
 {
 #if defined(__ARM_FP) || defined(__SSE_MATH__)
     return __builtin_sqrtf(x);
@@ -220,67 +233,75 @@ static float foc_sqrt_pos(float x)
 #endif
 }
 
-/* The dq step of foc_dq_core, or false (nothing written) where the checked
- * path would refuse or might differ. */
-static bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, float id_a, float iq_a,
-                        float omega_e_rad_s, float vbus_v, float *p_vd_v, float *p_vq_v)
+/* The bits of a float (positive floats order like their bit patterns). */
+FOC_INLINE uint32_t foc_bits(float x)
 {
-    float ff_d = 0.0f;
-    float ff_q = 0.0f;
-    float v_max;
-    float e_d;
-    float e_q;
-    float hi;
+    union {
+        float f;
+        uint32_t u;
+    } b;
+    b.f = x;
+    return b.u;
+}
+
+/* 0 < vbus <= 2^59 (5.8e17, the float with bits 0x5D000000; false for
+ * NaN): one unsigned compare, as +0 (bits 0) wraps to the top and every
+ * negative float, inf and NaN lie above. 2^59 keeps v_max^2 finite. */
+FOC_INLINE bool foc_vbus_fast_ok(float vbus_v)
+{
+    return (foc_bits(vbus_v) - 1u) < 0x5D000000u;
+}
+
+/* |theta| <= MC_MATH_NEAR_LIMIT_RAD (256 = bits 0x43800000; false for NaN
+ * and inf) and foc_vbus_fast_ok(vbus), the two tests in one branch: the
+ * angle's bits without the sign, compared in one. */
+FOC_INLINE bool foc_theta_vbus_fast_ok(float theta_rad, float vbus_v)
+{
+    const bool theta_ok = (foc_bits(theta_rad) << 1) <= (0x43800000u << 1);
+    return theta_ok & foc_vbus_fast_ok(vbus_v);
+}
+
+/* The dq step of foc_dq_core for 0 < vbus <= 2^59 (foc_vbus_fast_ok: the
+ * caller tests it), committed to both PIs; or false with nothing written where the
+ * checked path would refuse or might differ. The PIs' own sticky flags are
+ * not touched: they are 0 between steps (the checked step clears them and a
+ * refused step restores the PIs as they were). */
+FOC_INLINE bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, float id_a,
+                            float iq_a, float omega_e_rad_s, float vbus_v, float *p_vd_v,
+                            float *p_vq_v)
+{
+    float ff_d;
+    float ff_q;
     float vd;
     float vq;
     float integ_d;
     float integ_q;
     float vq_room_sq;
     float vq_max;
-    float screen =
-        foc_screen(id_ref_a + iq_ref_a + id_a + iq_a + omega_e_rad_s + vbus_v);
+    /* finite and at most 2/3 * 2^59, as vbus is */
+    const float v_max = st->v_max_per_vbus * vbus_v;
 
-    if ((screen != 0.0f) || !(vbus_v > 0.0f)) {
+    /* a non-finite speed makes both terms non-finite (0 * inf is NaN):
+     * caught by the PIs' tests */
+    foc_feed_forward(st, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
+    const float e_d = id_ref_a - id_a;
+    const float e_q = iq_ref_a - iq_a;
+
+    /* d axis: mc_pi_f32_step_lim(&st->pi_d, e_d, ff_d, -v_max, v_max) */
+    if (!mc_pi_f32_core_sym(&st->pi_d, e_d, ff_d, v_max, &integ_d, &vd)) {
         return false;
     }
-    /* = st->v_limit_ratio * mc_svpwm_max_voltage_f32(vbus_v, st->limit_mode)
-     * for the two modes init accepts; finite, as vbus is. */
-    v_max = st->v_limit_ratio * ((st->limit_mode == MC_SVPWM_LIMIT_CIRCLE)
-                                     ? (vbus_v * MC_INV_SQRT3_F32)
-                                     : (vbus_v * (2.0f / 3.0f)));
-    if (st->decouple) {
-        ff_d = -(omega_e_rad_s * st->lq_h * iq_a);
-        ff_q = (omega_e_rad_s * st->ld_h * id_a) + (omega_e_rad_s * st->flux_wb);
-    }
-    e_d = id_ref_a - id_a;
-    e_q = iq_ref_a - iq_a;
-
-    /* d axis: mc_pi_f32_step_lim(&st->pi_d, e_d, ff_d, -v_max, v_max). Its
-     * limits are max(-v_max, out_min) and min(v_max, out_max); init made
-     * out_min = -out_max (> 0), so the lower one is exactly minus the upper
-     * one, and they are ordered since v_max >= 0. */
-    hi = (v_max < st->pi_d.out_max) ? v_max : st->pi_d.out_max;
-    vd = mc_pi_f32_core(&st->pi_d, e_d, ff_d, -hi, hi, &integ_d);
-
+    /* |vd| <= v_max (the PI's limit), so vd^2 <= v_max^2 after rounding
+     * too (rounding is monotonic) and the room is finite and >= +0 (an
+     * exact difference of equal floats is +0): its square root is what the
+     * checked path's (room > 0) ? sqrt(room) : 0 gives. */
     vq_room_sq = (v_max * v_max) - (vd * vd);
-    vq_max = (vq_room_sq > 0.0f) ? foc_sqrt_pos(vq_room_sq) : 0.0f;
+    vq_max = foc_sqrt_pos(vq_room_sq);
 
-    /* q axis: mc_pi_f32_step_lim(&st->pi_q, e_q, ff_q, -vq_max, vq_max), the
-     * same way (vq_max >= 0, or NaN: caught below) */
-    hi = (vq_max < st->pi_q.out_max) ? vq_max : st->pi_q.out_max;
-    vq = mc_pi_f32_core(&st->pi_q, e_q, ff_q, -hi, hi, &integ_q);
-
-    /* Everything the PIs check: their inputs (e, ff, the limits: v_max is
-     * finite, a NaN vd makes vq_max NaN) and their results. The results
-     * are clamped to finite limits, so they are finite or NaN: their plain
-     * sum is NaN iff one of them is. */
-    screen = foc_screen(e_d + ff_d + e_q + ff_q + vq_max) + (integ_d + vd + integ_q + vq);
-    if (screen != screen) {
+    /* q axis: mc_pi_f32_step_lim(&st->pi_q, e_q, ff_q, -vq_max, vq_max) */
+    if (!mc_pi_f32_core_sym(&st->pi_q, e_q, ff_q, vq_max, &integ_q, &vq)) {
         return false;
     }
-    /* The FOC keeps its own sticky flags and clears the PIs' every step. */
-    st->pi_d.flags = MC_PI_ERR_NONE;
-    st->pi_q.flags = MC_PI_ERR_NONE;
     mc_pi_f32_commit(&st->pi_d, e_d, ff_d, integ_d, vd);
     mc_pi_f32_commit(&st->pi_q, e_q, ff_q, integ_q, vq);
     *p_vd_v = vd;
@@ -299,7 +320,8 @@ uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     if ((st == NULL) || (p_vd_v == NULL) || (p_vq_v == NULL)) {
         return MC_FOC_ERR_NULL;
     }
-    if (foc_dq_fast(st, id_ref_a, iq_ref_a, id_a, iq_a, omega_e_rad_s, vbus_v, &vd, &vq)) {
+    if (foc_vbus_fast_ok(vbus_v) &&
+        foc_dq_fast(st, id_ref_a, iq_ref_a, id_a, iq_a, omega_e_rad_s, vbus_v, &vd, &vq)) {
         st->vd_v = vd;
         st->vq_v = vq;
         *p_vd_v = vd;
@@ -318,8 +340,100 @@ uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     return err;
 }
 
-static void foc_out_zero(mc_foc_f32_out_t *out)
+/* The modulator cut the vector (hexagon flat sides, or rounding at the
+ * circle): tell both PIs what was really applied. */
+static void foc_track_applied(mc_foc_f32_t *st, float v_alpha, float v_beta, float sin_th,
+                              float cos_th, float *p_vd, float *p_vq)
 {
+    mc_park_f32(v_alpha, v_beta, sin_th, cos_th, p_vd, p_vq);
+    (void)mc_pi_f32_track(&st->pi_d, *p_vd);
+    (void)mc_pi_f32_track(&st->pi_q, *p_vq);
+}
+
+/* The applied voltage after the modulator: alpha-beta and dq. */
+typedef struct {
+    float v_alpha;
+    float v_beta;
+    float vd;
+    float vq;
+} foc_applied_t;
+
+/* The fast path's modulator when it is not known to stay linear: limit and
+ * duties (mc_svpwm_limit_duty_f32), the cut fed back to the PIs. Out of
+ * line, so that the linear case needs no stack frame; writes the duties
+ * and out->svpwm_flags, returns the applied voltage. */
+static foc_applied_t foc_modulate_general(mc_foc_f32_t *st, foc_applied_t v, float vbus,
+                                          float sin_th, float cos_th, mc_foc_f32_out_t *out)
+{
+    float va_lim = v.v_alpha;
+    float vb_lim = v.v_beta;
+    const uint32_t svf = mc_svpwm_limit_duty_f32(&va_lim, &vb_lim, vbus, st->limit_mode,
+                                                 &out->duty_a, &out->duty_b, &out->duty_c);
+    if ((svf & MC_SVPWM_FLAG_LIMITED) != 0u) {
+        v.v_alpha = va_lim;
+        v.v_beta = vb_lim;
+        foc_track_applied(st, v.v_alpha, v.v_beta, sin_th, cos_th, &v.vd, &v.vq);
+    }
+    out->svpwm_flags = svf;
+    return v;
+}
+
+/* The whole step from alpha-beta currents on the fast path (see above), or
+ * false with st untouched (out may be partly written; the checked step
+ * rewrites all of it). */
+FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, float theta,
+                              float omega, float vbus, float id_ref, float iq_ref,
+                              mc_foc_f32_out_t *out)
+{
+    float sin_th;
+    float cos_th;
+    float id;
+    float iq;
+    foc_applied_t v;
+
+    /* NaN fails both; a non-finite current shows in the PIs */
+    if (!foc_theta_vbus_fast_ok(theta, vbus)) {
+        return false;
+    }
+    mc_sincos_near_f32(theta, &sin_th, &cos_th); /* = mc_sincos_f32 here */
+    mc_park_f32(i_alpha, i_beta, sin_th, cos_th, &id, &iq);
+    if (!foc_dq_fast(st, id_ref, iq_ref, id, iq, omega, vbus, &v.vd, &v.vq)) {
+        return false;
+    }
+
+    /* From here on nothing can fail: vd, vq, sin, cos are finite and
+     * 0 < vbus <= 2^59. Modulator limit and duties as mc_svpwm_limit_f32
+     * followed by mc_svpwm_f32 on the limited vector. */
+    mc_inv_park_f32(v.vd, v.vq, sin_th, cos_th, &v.v_alpha, &v.v_beta);
+    if (MC_PI_LIKELY(st->svpwm_linear)) {
+        /* mc_svpwm_f32's linear case: its first test |v_alpha|, |v_beta|
+         * <= vbus holds (|v| <= v_max (1 + 1e-6) < 0.58 vbus), and so does
+         * its second (MC_FOC_LINEAR_RATIO), so the duties are these and the
+         * modulator limits nothing. */
+        mc_svpwm_circle_duties_f32(v.v_alpha / vbus, v.v_beta / vbus, &out->duty_a,
+                                   &out->duty_b, &out->duty_c);
+        out->svpwm_flags = MC_SVPWM_FLAG_NONE;
+    } else {
+        v = foc_modulate_general(st, v, vbus, sin_th, cos_th, out);
+    }
+    st->vd_v = v.vd;
+    st->vq_v = v.vq;
+    out->id_a = id;
+    out->iq_a = iq;
+    out->vd_v = v.vd;
+    out->vq_v = v.vq;
+    out->v_alpha_v = v.v_alpha;
+    out->v_beta_v = v.v_beta;
+    out->flags = st->flags;
+    return true;
+}
+
+/* An error of the whole step: zero voltage, duties 0.5, sticky flag. */
+static uint32_t foc_step_fail(mc_foc_f32_t *st, mc_foc_f32_out_t *out, uint32_t err)
+{
+    st->flags |= err;
+    st->vd_v = 0.0f;
+    st->vq_v = 0.0f;
     out->duty_a = 0.5f;
     out->duty_b = 0.5f;
     out->duty_c = 0.5f;
@@ -327,78 +441,17 @@ static void foc_out_zero(mc_foc_f32_out_t *out)
     out->vq_v = 0.0f;
     out->v_alpha_v = 0.0f;
     out->v_beta_v = 0.0f;
-}
-
-/* The whole step on the fast path (see above), or false with st untouched
- * (out may be partly written; the checked step rewrites all of it). */
-static bool foc_step_fast(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out)
-{
-    float i_alpha;
-    float i_beta;
-    float sin_th;
-    float cos_th;
-    float id;
-    float iq;
-    float vd;
-    float vq;
-    float v_alpha;
-    float v_beta;
-    float va_lim;
-    float vb_lim;
-    uint32_t svf;
-    float sum = in->ia_a + in->ib_a + in->theta_e_rad;
-
-    if (in->three_phase) {
-        sum += in->ic_a;
-    }
-    if (foc_screen(sum) != 0.0f) {
-        return false;
-    }
-    if (in->three_phase) {
-        mc_clarke3_f32(in->ia_a, in->ib_a, in->ic_a, &i_alpha, &i_beta);
-    } else {
-        mc_clarke_f32(in->ia_a, in->ib_a, &i_alpha, &i_beta);
-    }
-    mc_sincos_f32(in->theta_e_rad, &sin_th, &cos_th);
-    mc_park_f32(i_alpha, i_beta, sin_th, cos_th, &id, &iq);
-    if (!foc_dq_fast(st, in->id_ref_a, in->iq_ref_a, id, iq, in->omega_e_rad_s, in->vbus_v, &vd,
-                     &vq)) {
-        return false;
-    }
-
-    /* From here on nothing can fail: vd, vq, sin, cos and vbus > 0 are
-     * finite. Modulator limit and duties as mc_svpwm_limit_f32 followed by
-     * mc_svpwm_f32 on the limited vector (one solution when not limited). */
-    mc_inv_park_f32(vd, vq, sin_th, cos_th, &v_alpha, &v_beta);
-    va_lim = v_alpha;
-    vb_lim = v_beta;
-    svf = mc_svpwm_limit_duty_f32(&va_lim, &vb_lim, in->vbus_v, st->limit_mode, &out->duty_a,
-                                  &out->duty_b, &out->duty_c);
-    if ((svf & MC_SVPWM_FLAG_LIMITED) != 0u) {
-        v_alpha = va_lim;
-        v_beta = vb_lim;
-        mc_park_f32(v_alpha, v_beta, sin_th, cos_th, &vd, &vq);
-        (void)mc_pi_f32_track(&st->pi_d, vd);
-        (void)mc_pi_f32_track(&st->pi_q, vq);
-    }
-    st->vd_v = vd;
-    st->vq_v = vq;
-    out->svpwm_flags = svf;
-    out->id_a = id;
-    out->iq_a = iq;
-    out->vd_v = vd;
-    out->vq_v = vq;
-    out->v_alpha_v = v_alpha;
-    out->v_beta_v = v_beta;
     out->flags = st->flags;
-    return true;
+    return err;
 }
 
-uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out)
+/* The checked whole step from alpha-beta currents: errors, refusals, and
+ * what the fast path left. */
+static uint32_t foc_step_checked(mc_foc_f32_t *st, float i_alpha, float i_beta, float theta,
+                                 float omega, float vbus, float id_ref, float iq_ref,
+                                 mc_foc_f32_out_t *out)
 {
     uint32_t err;
-    float i_alpha = 0.0f;
-    float i_beta = 0.0f;
     float sin_th = 0.0f;
     float cos_th = 1.0f;
     float id = 0.0f;
@@ -410,60 +463,35 @@ uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32
     float va_lim;
     float vb_lim;
 
-    if ((st == NULL) || (in == NULL) || (out == NULL)) {
-        return MC_FOC_ERR_NULL;
-    }
-    if (foc_step_fast(st, in, out)) {
-        return MC_FOC_ERR_NONE;
-    }
-    /* The checked step: errors, refusals, and what the fast path left. */
     out->svpwm_flags = MC_SVPWM_FLAG_NONE;
     out->id_a = 0.0f;
     out->iq_a = 0.0f;
-
     /* Raw inputs first: a NaN angle or current never reaches the transforms. */
-    if (!mc_isfinite_f32(in->ia_a) || !mc_isfinite_f32(in->ib_a) ||
-        (in->three_phase && !mc_isfinite_f32(in->ic_a)) || !mc_isfinite_f32(in->theta_e_rad)) {
-        err = MC_FOC_ERR_NAN_INPUT;
-    } else {
-        if (in->three_phase) {
-            mc_clarke3_f32(in->ia_a, in->ib_a, in->ic_a, &i_alpha, &i_beta);
-        } else {
-            mc_clarke_f32(in->ia_a, in->ib_a, &i_alpha, &i_beta);
-        }
-        mc_sincos_f32(in->theta_e_rad, &sin_th, &cos_th);
-        mc_park_f32(i_alpha, i_beta, sin_th, cos_th, &id, &iq);
-        out->id_a = id;
-        out->iq_a = iq;
-        err = foc_check_inputs(in->id_ref_a, in->iq_ref_a, id, iq, in->omega_e_rad_s, in->vbus_v);
-        if (err == MC_FOC_ERR_NONE) {
-            err = foc_dq_core(st, in->id_ref_a, in->iq_ref_a, id, iq, in->omega_e_rad_s,
-                              in->vbus_v, &vd, &vq);
-        }
+    if (!mc_isfinite_f32(i_alpha) || !mc_isfinite_f32(i_beta) || !mc_isfinite_f32(theta)) {
+        return foc_step_fail(st, out, MC_FOC_ERR_NAN_INPUT);
+    }
+    mc_sincos_f32(theta, &sin_th, &cos_th);
+    mc_park_f32(i_alpha, i_beta, sin_th, cos_th, &id, &iq);
+    out->id_a = id;
+    out->iq_a = iq;
+    err = foc_check_inputs(id_ref, iq_ref, id, iq, omega, vbus);
+    if (err == MC_FOC_ERR_NONE) {
+        err = foc_dq_core(st, id_ref, iq_ref, id, iq, omega, vbus, &vd, &vq);
     }
     if (err != MC_FOC_ERR_NONE) {
-        st->flags |= err;
-        st->vd_v = 0.0f;
-        st->vq_v = 0.0f;
-        foc_out_zero(out);
-        out->flags = st->flags;
-        return err;
+        return foc_step_fail(st, out, err);
     }
 
     mc_inv_park_f32(vd, vq, sin_th, cos_th, &v_alpha, &v_beta);
     va_lim = v_alpha;
     vb_lim = v_beta;
-    out->svpwm_flags = mc_svpwm_limit_f32(&va_lim, &vb_lim, in->vbus_v, st->limit_mode);
+    out->svpwm_flags = mc_svpwm_limit_f32(&va_lim, &vb_lim, vbus, st->limit_mode);
     if ((out->svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u) {
-        /* The modulator cut the vector (hexagon flat sides, or rounding at
-         * the circle): tell both PIs what was really applied. */
         v_alpha = va_lim;
         v_beta = vb_lim;
-        mc_park_f32(v_alpha, v_beta, sin_th, cos_th, &vd, &vq);
-        (void)mc_pi_f32_track(&st->pi_d, vd);
-        (void)mc_pi_f32_track(&st->pi_q, vq);
+        foc_track_applied(st, v_alpha, v_beta, sin_th, cos_th, &vd, &vq);
     }
-    out->svpwm_flags |= mc_svpwm_f32(v_alpha, v_beta, in->vbus_v, st->limit_mode, &out->duty_a,
+    out->svpwm_flags |= mc_svpwm_f32(v_alpha, v_beta, vbus, st->limit_mode, &out->duty_a,
                                      &out->duty_b, &out->duty_c);
     st->vd_v = vd;
     st->vq_v = vq;
@@ -473,4 +501,43 @@ uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32
     out->v_beta_v = v_beta;
     out->flags = st->flags;
     return MC_FOC_ERR_NONE;
+}
+
+uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, float i_alpha_a, float i_beta_a,
+                            float theta_e_rad, float omega_e_rad_s, float vbus_v,
+                            float id_ref_a, float iq_ref_a, mc_foc_f32_out_t *out)
+{
+    if ((st == NULL) || (out == NULL)) {
+        return MC_FOC_ERR_NULL;
+    }
+    if (foc_step_fast(st, i_alpha_a, i_beta_a, theta_e_rad, omega_e_rad_s, vbus_v, id_ref_a,
+                      iq_ref_a, out)) {
+        return MC_FOC_ERR_NONE;
+    }
+    return foc_step_checked(st, i_alpha_a, i_beta_a, theta_e_rad, omega_e_rad_s, vbus_v,
+                            id_ref_a, iq_ref_a, out);
+}
+
+uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out)
+{
+    float i_alpha;
+    float i_beta;
+
+    if ((st == NULL) || (in == NULL) || (out == NULL)) {
+        return MC_FOC_ERR_NULL;
+    }
+    /* A non-finite current that is read gives a non-finite alpha or beta
+     * (x + finite, x * nonzero constant): the step from alpha-beta reports
+     * it as MC_FOC_ERR_NAN_INPUT. */
+    if (in->three_phase) {
+        mc_clarke3_f32(in->ia_a, in->ib_a, in->ic_a, &i_alpha, &i_beta);
+    } else {
+        mc_clarke_f32(in->ia_a, in->ib_a, &i_alpha, &i_beta);
+    }
+    if (foc_step_fast(st, i_alpha, i_beta, in->theta_e_rad, in->omega_e_rad_s, in->vbus_v,
+                      in->id_ref_a, in->iq_ref_a, out)) {
+        return MC_FOC_ERR_NONE;
+    }
+    return foc_step_checked(st, i_alpha, i_beta, in->theta_e_rad, in->omega_e_rad_s, in->vbus_v,
+                            in->id_ref_a, in->iq_ref_a, out);
 }

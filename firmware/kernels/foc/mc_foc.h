@@ -12,14 +12,16 @@
  * measured currents) so that each PI sees a plain R-L load:
  *     v_d = PI_d(id_ref - i_d) - omega_e L_q i_q
  *     v_q = PI_q(iq_ref - i_q) + omega_e L_d i_d + omega_e psi
+ * Without decoupling the same terms are formed with L_d, L_q and psi
+ * replaced by 0 (init stores the gains so): they are +-0 then.
  * With the pole-zero cancelling gains of mc_foc_f32_gains_from_bandwidth
  * (kp = L bw, ki = R bw) each closed current loop is first order with time
  * constant 1/bw (to the discretisation error of the sample period).
  *
- * Voltage limit, d-axis priority: with v_max = v_limit_ratio times the
- * largest voltage the modulator delivers at this vbus
- * (mc_svpwm_max_voltage_f32: vbus/sqrt(3) for the circle limit, 2 vbus/3
- * for the hexagon), v_d is limited to [-v_max, v_max] and then v_q to
+ * Voltage limit, d-axis priority: with v_max = v_max_per_vbus * vbus, where
+ * v_max_per_vbus = v_limit_ratio times the largest voltage per volt of bus
+ * the modulator delivers (mc_svpwm_max_voltage_f32: 1/sqrt(3) for the
+ * circle limit, 2/3 for the hexagon), computed once by init, v_d is limited to [-v_max, v_max] and then v_q to
  * +-sqrt(v_max^2 - v_d^2). Each limit is passed to its PI
  * (mc_pi_f32_step_lim), so the anti-windup works against the limit actually
  * applied, feed-forward included. In the whole step with the hexagon limit,
@@ -34,15 +36,24 @@
  * to infinity) gives MC_FOC_ERR_PI, zero voltage. The sticky flags are
  * cleared by mc_foc_f32_reset() only.
  *
- * Cost: both steps first try a fast path that screens the inputs and
- * intermediates for non-finite values in a few sums instead of one test
- * per value and per stage, relies on what init validated, commits nothing
- * until the step is known good and, in the modulator's linear region,
- * solves the SVPWM once. It performs the same float operations in the same
- * order, so its results are bit-identical; any step it cannot finish
- * (non-finite value, vbus <= 0, a PI that would refuse) runs through the
+ * Cost: every step first tries a fast path. It relies on what init
+ * validated (symmetric PI limits, v_max per volt of bus precomputed) and on
+ * NaN propagation: a non-finite current, reference or speed makes a PI's
+ * output non-finite (the feed-forward gains are 0 without decoupling, and
+ * 0 * inf is NaN), which fails that PI's range test, so the only explicit
+ * tests are the angle's range (|theta| <= 256 rad, inline sin/cos) and the
+ * bus (0 < vbus <= 2^59, so v_max^2 cannot overflow). Each PI's common case
+ * (output and integrator inside their limits) is three compares; a
+ * saturated PI takes the anti-windup code (clamping inline, the other
+ * schemes in mc_pi_f32_core_sat) without leaving the fast path. It commits nothing
+ * until both PIs are good and, in the modulator's linear region (circle
+ * limit), computes the duties inline. It performs the same float
+ * operations in the same order as the checked code, so its results are
+ * bit-identical; any step it cannot finish (non-finite value, vbus <= 0,
+ * angle or bus out of its range, a PI that would refuse) runs through the
  * checked code, so errors and flags are as described above
  * (tests/unit/foc/test_foc_fast.cpp compares the two bit for bit).
+ * Measured on the emulated Cortex-M4F: README, "Instruction counts".
  *
  * No heap, no globals, no I/O.
  */
@@ -73,6 +84,11 @@ extern "C" {
 #define MC_FOC_ERR_PI         (1u << 10) /**< sticky: a PI refused its step */
 #define MC_FOC_ERR_BW         (1u << 11) /**< bandwidth helper: bw <= 0 or not finite */
 
+/** Largest v_limit_ratio (circle limit) at which the modulator is known to
+ *  stay in its linear case: |v| <= 0.99 vbus / sqrt(3) (1 + 1e-6) = 0.5716
+ *  vbus is below its test |v| < 0.5745 vbus (MC_SVPWM_LINEAR_MAG2). */
+#define MC_FOC_LINEAR_RATIO 0.99f
+
 /** Configuration of the dq current controller. */
 typedef struct {
     float r_ohm;            /**< phase resistance [ohm], >= 0 */
@@ -100,9 +116,16 @@ typedef struct {
     float ld_h;
     float lq_h;
     float flux_wb;
+    float ff_ld_h;          /**< ld_h with decoupling, else 0 (derived) */
+    float ff_lq_h;          /**< lq_h with decoupling, else 0 (derived) */
+    float ff_flux_wb;       /**< flux_wb with decoupling, else 0 (derived) */
     mc_svpwm_limit_t limit_mode;
     float v_limit_ratio;
+    float v_max_per_vbus;   /**< v_limit_ratio times the modulator's largest voltage per volt
+                                 of bus: 1/sqrt(3) (circle) or 2/3 (hexagon) (derived) */
     bool decouple;
+    bool svpwm_linear;      /**< circle limit and v_limit_ratio <= MC_FOC_LINEAR_RATIO: the
+                                 modulator never limits what the dq step allows (derived) */
     float vd_v;             /**< last applied d voltage [V] */
     float vq_v;             /**< last applied q voltage [V] */
     uint32_t flags;         /**< sticky MC_FOC_ERR_* */
@@ -164,12 +187,29 @@ uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
                             float *p_vq_v);
 
 /**
- * The whole fast step: Clarke, Park at theta_e (mc_sincos_f32), dq step,
- * inverse Park, modulator limit (fed back to the PIs), SVPWM. Fills *out
+ * The whole fast step: Clarke, then mc_foc_f32_step_ab. Fills *out
  * (duties 0.5 and zero voltages on error). Returns the MC_FOC_ERR_* bits
- * raised by this step.
+ * raised by this step. A non-finite current (one that is read) makes a
+ * non-finite alpha or beta current, hence MC_FOC_ERR_NAN_INPUT.
  */
 uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out);
+
+/**
+ * The whole fast step from alpha-beta currents (the caller did the Clarke
+ * transform, e.g. for an observer that needs them too): Park at theta_e
+ * (mc_sincos_f32), dq step, inverse Park, modulator limit (fed back to the
+ * PIs), SVPWM. mc_foc_f32_step is exactly this after its Clarke transform.
+ * Arguments as in mc_foc_f32_in_t (alpha/beta currents amplitude
+ * invariant, mc_clarke_f32), passed by value so that they stay in
+ * registers. Non-finite alpha/beta current or angle:
+ * MC_FOC_ERR_NAN_INPUT (id, iq reported 0); the dq step's inputs and errors
+ * as in mc_foc_f32_step_dq (out->id_a, iq_a are the measured values then).
+ * Fills *out (duties 0.5 and zero voltages on error). Returns the
+ * MC_FOC_ERR_* bits raised by this step.
+ */
+uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, float i_alpha_a, float i_beta_a,
+                            float theta_e_rad, float omega_e_rad_s, float vbus_v,
+                            float id_ref_a, float iq_ref_a, mc_foc_f32_out_t *out);
 
 #ifdef __cplusplus
 }

@@ -7,7 +7,11 @@
  * or divide (built with -ffp-contract=off, so no fused multiply-add), or an
  * integer operation: results are bit-identical on x86-64 and Cortex-M4F.
  *
- * Range reduction (sin/cos, wrap):
+ * sin/cos for |x| <= MC_MATH_NEAR_LIMIT_RAD (256 rad): mc_sincos_near_f32 in
+ * mc_math.h (a table of 128 steps per turn, two-constant Cody-Waite to the
+ * nearest step, short polynomials, angle sum), inline for the kernels.
+ *
+ * Range reduction (sin/cos beyond 256 rad, wrap):
  * - |x| <= MC_MATH_CW_LIMIT_RAD (8192 rad): Cody-Waite, x - k*(pi/2) with
  *   pi/2 = C1 + C2 + C3, where C1 and C2 have 11 significant bits (13
  *   trailing zero bits), so k*C1 and k*C2 are exact for |k| < 2^13;
@@ -208,102 +212,198 @@ static float reduce_quadrant(float x, uint32_t *p_q)
     return quarter_from_turn(turn, p_q);
 }
 
-/* Near-minimax fits on |r| <= pi/4 (own Chebyshev-node interpolation),
- * errors with the coefficients rounded to float (evaluated exactly):
- * sin r = r + r^3 (S1 + S2 r^2 + S3 r^4 + S4 r^6), < 2.4e-9;
- * cos r = 1 - r^2/2 + r^4 (C1 + C2 r^2 + C3 r^4 + C4 r^6), < 5e-10.
- * Both far below the half ulp (3e-8..6e-8) the float evaluation adds. */
-static const float sin_s1 = -1.666666716e-01f;
-static const float sin_s2 = 8.333331905e-03f;
-static const float sin_s3 = -1.984008704e-04f;
-static const float sin_s4 = 2.724989599e-06f;
-static const float cos_c1 = 4.166666791e-02f;
-static const float cos_c2 = -1.388888806e-03f;
-static const float cos_c3 = 2.480059993e-05f;
-static const float cos_c4 = -2.730093343e-07f;
+/** sin and cos of r + q pi/2 for |r| <= pi/4 (about): the quadrant
+ * polynomials (mc_math.h) and the quadrant q mod 4 by swap and sign. */
+static void sincos_quadrant(float r, uint32_t q, float *p_sin, float *p_cos)
+{
+    const float z = r * r;
+    const float s =
+        r * (1.0f + (z * (MC_MATH_SIN_S1 + (z * (MC_MATH_SIN_S2 + (z * MC_MATH_SIN_S3))))));
+    const float c = 1.0f + (z * (-0.5f + (z * (MC_MATH_COS_C1 +
+                                               (z * (MC_MATH_COS_C2 + (z * MC_MATH_COS_C3)))))));
+    float a = s;
+    float b = c;
+    if ((q & 1u) != 0u) {
+        /* a quarter turn: (sin, cos) -> (cos, -sin) */
+        a = c;
+        b = -s;
+    }
+    if ((q & 2u) != 0u) {
+        /* a half turn: both change sign */
+        a = -a;
+        b = -b;
+    }
+    *p_sin = a;
+    *p_cos = b;
+}
+
+/* {sin, cos} of k 2 pi / 128, rounded to float from double sin/cos (whose
+ * error, < 2^-52, is far below the float rounding; the multiples of pi/2
+ * are written exactly). Generated once with numpy: float32(sin(2 pi k /
+ * 128)), float32(cos(2 pi k / 128)). */
+const float mc_math_sincos_table[MC_MATH_SINCOS_STEPS][2] = {
+    {-0.0f, 1.000000000e+00f}, /* 0 */
+    {4.906767607e-02f, 9.987954497e-01f},
+    {9.801714122e-02f, 9.951847196e-01f},
+    {1.467304677e-01f, 9.891765118e-01f},
+    {1.950903237e-01f, 9.807852507e-01f},
+    {2.429801822e-01f, 9.700312614e-01f},
+    {2.902846634e-01f, 9.569403529e-01f},
+    {3.368898630e-01f, 9.415440559e-01f},
+    {3.826834261e-01f, 9.238795042e-01f}, /* 8 */
+    {4.275550842e-01f, 9.039893150e-01f},
+    {4.713967443e-01f, 8.819212914e-01f},
+    {5.141027570e-01f, 8.577286005e-01f},
+    {5.555702448e-01f, 8.314695954e-01f},
+    {5.956993103e-01f, 8.032075167e-01f},
+    {6.343932748e-01f, 7.730104327e-01f},
+    {6.715589762e-01f, 7.409511209e-01f},
+    {7.071067691e-01f, 7.071067691e-01f}, /* 16 */
+    {7.409511209e-01f, 6.715589762e-01f},
+    {7.730104327e-01f, 6.343932748e-01f},
+    {8.032075167e-01f, 5.956993103e-01f},
+    {8.314695954e-01f, 5.555702448e-01f},
+    {8.577286005e-01f, 5.141027570e-01f},
+    {8.819212914e-01f, 4.713967443e-01f},
+    {9.039893150e-01f, 4.275550842e-01f},
+    {9.238795042e-01f, 3.826834261e-01f}, /* 24 */
+    {9.415440559e-01f, 3.368898630e-01f},
+    {9.569403529e-01f, 2.902846634e-01f},
+    {9.700312614e-01f, 2.429801822e-01f},
+    {9.807852507e-01f, 1.950903237e-01f},
+    {9.891765118e-01f, 1.467304677e-01f},
+    {9.951847196e-01f, 9.801714122e-02f},
+    {9.987954497e-01f, 4.906767607e-02f},
+    {1.000000000e+00f, 0.0f}, /* 32 */
+    {9.987954497e-01f, -4.906767607e-02f},
+    {9.951847196e-01f, -9.801714122e-02f},
+    {9.891765118e-01f, -1.467304677e-01f},
+    {9.807852507e-01f, -1.950903237e-01f},
+    {9.700312614e-01f, -2.429801822e-01f},
+    {9.569403529e-01f, -2.902846634e-01f},
+    {9.415440559e-01f, -3.368898630e-01f},
+    {9.238795042e-01f, -3.826834261e-01f}, /* 40 */
+    {9.039893150e-01f, -4.275550842e-01f},
+    {8.819212914e-01f, -4.713967443e-01f},
+    {8.577286005e-01f, -5.141027570e-01f},
+    {8.314695954e-01f, -5.555702448e-01f},
+    {8.032075167e-01f, -5.956993103e-01f},
+    {7.730104327e-01f, -6.343932748e-01f},
+    {7.409511209e-01f, -6.715589762e-01f},
+    {7.071067691e-01f, -7.071067691e-01f}, /* 48 */
+    {6.715589762e-01f, -7.409511209e-01f},
+    {6.343932748e-01f, -7.730104327e-01f},
+    {5.956993103e-01f, -8.032075167e-01f},
+    {5.555702448e-01f, -8.314695954e-01f},
+    {5.141027570e-01f, -8.577286005e-01f},
+    {4.713967443e-01f, -8.819212914e-01f},
+    {4.275550842e-01f, -9.039893150e-01f},
+    {3.826834261e-01f, -9.238795042e-01f}, /* 56 */
+    {3.368898630e-01f, -9.415440559e-01f},
+    {2.902846634e-01f, -9.569403529e-01f},
+    {2.429801822e-01f, -9.700312614e-01f},
+    {1.950903237e-01f, -9.807852507e-01f},
+    {1.467304677e-01f, -9.891765118e-01f},
+    {9.801714122e-02f, -9.951847196e-01f},
+    {4.906767607e-02f, -9.987954497e-01f},
+    {0.0f, -1.000000000e+00f}, /* 64 */
+    {-4.906767607e-02f, -9.987954497e-01f},
+    {-9.801714122e-02f, -9.951847196e-01f},
+    {-1.467304677e-01f, -9.891765118e-01f},
+    {-1.950903237e-01f, -9.807852507e-01f},
+    {-2.429801822e-01f, -9.700312614e-01f},
+    {-2.902846634e-01f, -9.569403529e-01f},
+    {-3.368898630e-01f, -9.415440559e-01f},
+    {-3.826834261e-01f, -9.238795042e-01f}, /* 72 */
+    {-4.275550842e-01f, -9.039893150e-01f},
+    {-4.713967443e-01f, -8.819212914e-01f},
+    {-5.141027570e-01f, -8.577286005e-01f},
+    {-5.555702448e-01f, -8.314695954e-01f},
+    {-5.956993103e-01f, -8.032075167e-01f},
+    {-6.343932748e-01f, -7.730104327e-01f},
+    {-6.715589762e-01f, -7.409511209e-01f},
+    {-7.071067691e-01f, -7.071067691e-01f}, /* 80 */
+    {-7.409511209e-01f, -6.715589762e-01f},
+    {-7.730104327e-01f, -6.343932748e-01f},
+    {-8.032075167e-01f, -5.956993103e-01f},
+    {-8.314695954e-01f, -5.555702448e-01f},
+    {-8.577286005e-01f, -5.141027570e-01f},
+    {-8.819212914e-01f, -4.713967443e-01f},
+    {-9.039893150e-01f, -4.275550842e-01f},
+    {-9.238795042e-01f, -3.826834261e-01f}, /* 88 */
+    {-9.415440559e-01f, -3.368898630e-01f},
+    {-9.569403529e-01f, -2.902846634e-01f},
+    {-9.700312614e-01f, -2.429801822e-01f},
+    {-9.807852507e-01f, -1.950903237e-01f},
+    {-9.891765118e-01f, -1.467304677e-01f},
+    {-9.951847196e-01f, -9.801714122e-02f},
+    {-9.987954497e-01f, -4.906767607e-02f},
+    {-1.000000000e+00f, 0.0f}, /* 96 */
+    {-9.987954497e-01f, 4.906767607e-02f},
+    {-9.951847196e-01f, 9.801714122e-02f},
+    {-9.891765118e-01f, 1.467304677e-01f},
+    {-9.807852507e-01f, 1.950903237e-01f},
+    {-9.700312614e-01f, 2.429801822e-01f},
+    {-9.569403529e-01f, 2.902846634e-01f},
+    {-9.415440559e-01f, 3.368898630e-01f},
+    {-9.238795042e-01f, 3.826834261e-01f}, /* 104 */
+    {-9.039893150e-01f, 4.275550842e-01f},
+    {-8.819212914e-01f, 4.713967443e-01f},
+    {-8.577286005e-01f, 5.141027570e-01f},
+    {-8.314695954e-01f, 5.555702448e-01f},
+    {-8.032075167e-01f, 5.956993103e-01f},
+    {-7.730104327e-01f, 6.343932748e-01f},
+    {-7.409511209e-01f, 6.715589762e-01f},
+    {-7.071067691e-01f, 7.071067691e-01f}, /* 112 */
+    {-6.715589762e-01f, 7.409511209e-01f},
+    {-6.343932748e-01f, 7.730104327e-01f},
+    {-5.956993103e-01f, 8.032075167e-01f},
+    {-5.555702448e-01f, 8.314695954e-01f},
+    {-5.141027570e-01f, 8.577286005e-01f},
+    {-4.713967443e-01f, 8.819212914e-01f},
+    {-4.275550842e-01f, 9.039893150e-01f},
+    {-3.826834261e-01f, 9.238795042e-01f}, /* 120 */
+    {-3.368898630e-01f, 9.415440559e-01f},
+    {-2.902846634e-01f, 9.569403529e-01f},
+    {-2.429801822e-01f, 9.700312614e-01f},
+    {-1.950903237e-01f, 9.807852507e-01f},
+    {-1.467304677e-01f, 9.891765118e-01f},
+    {-9.801714122e-02f, 9.951847196e-01f},
+    {-4.906767607e-02f, 9.987954497e-01f},
+};
 
 void mc_sincos_f32(float x_rad, float *p_sin, float *p_cos)
 {
     uint32_t q = 0u;
     float r;
-    if (x_rad == 0.0f) {
-        *p_sin = x_rad; /* keeps the sign of -0 (sin is odd) */
-        *p_cos = 1.0f;
+    if (mc_fabs_f32(x_rad) <= MC_MATH_NEAR_LIMIT_RAD) {
+        /* the common range first (it excludes NaN and inf) */
+        mc_sincos_near_f32(x_rad, p_sin, p_cos);
         return;
     }
-    if (mc_abs_f32(x_rad) <= MC_MATH_CW_LIMIT_RAD) {
-        /* the common range first (it excludes NaN and inf): Cody-Waite */
-        r = reduce_cw(x_rad, &q);
-    } else if (!mc_isfinite_f32(x_rad)) {
+    if (!mc_isfinite_f32(x_rad)) {
         float nan = x_rad - x_rad; /* NaN for NaN and +-inf */
         *p_sin = nan;
         *p_cos = nan;
         return;
-    } else {
-        r = reduce_quadrant(x_rad, &q);
     }
-    float z = r * r;
-    float s = r + (r * z) * (sin_s1 + z * (sin_s2 + z * (sin_s3 + z * sin_s4)));
-    float c = (1.0f - 0.5f * z) + (z * z) * (cos_c1 + z * (cos_c2 + z * (cos_c3 + z * cos_c4)));
-    switch (q) {
-    case 0u:
-        *p_sin = s;
-        *p_cos = c;
-        break;
-    case 1u:
-        *p_sin = c;
-        *p_cos = -s;
-        break;
-    case 2u:
-        *p_sin = -s;
-        *p_cos = -c;
-        break;
-    default:
-        *p_sin = -c;
-        *p_cos = s;
-        break;
-    }
+    r = reduce_quadrant(x_rad, &q);
+    sincos_quadrant(r, q, p_sin, p_cos);
 }
 
 /* ------------------------------------------------------------------ atan2 */
 
-/* atan t = t + t^3 (A1 + A2 t^2 + ... + A6 t^10) on |t| <= tan(pi/8),
- * own fit, error < 7e-10 rad with the float coefficients. */
-static const float atan_a1 = -3.333333433e-01f;
-static const float atan_a2 = 1.999997795e-01f;
-static const float atan_a3 = -1.428415030e-01f;
-static const float atan_a4 = 1.107134447e-01f;
-static const float atan_a5 = -8.624520153e-02f;
-static const float atan_a6 = 5.047736317e-02f;
-static const float tan_pi_8 = 0.414213562373095049f;
-static const float quarter_pi_f32 = 0.785398163397448310f;
-
-/** atan(z) for 0 <= z <= 1. */
-static float atan_unit(float z)
-{
-    float base = 0.0f;
-    float t = z;
-    if (z > tan_pi_8) {
-        /* atan z = pi/4 + atan((z - 1)/(z + 1)), |(z-1)/(z+1)| <= tan(pi/8) */
-        base = quarter_pi_f32;
-        t = (z - 1.0f) / (z + 1.0f);
-    }
-    float t2 = t * t;
-    float p = atan_a1 + t2 * (atan_a2 + t2 * (atan_a3 + t2 * (atan_a4 + t2 * (atan_a5 + t2 * atan_a6))));
-    return base + (t + (t * t2) * p);
-}
-
-float mc_atan2_f32(float y, float x)
+/* Everything the common case leaves: NaN, infinities, both zero, and finite
+ * pairs whose |x| + |y| overflows. */
+static float atan2_special(float y, float x)
 {
     if ((x != x) || (y != y)) {
         return x + y; /* NaN */
     }
-    bool y_neg = signbit_f32(y);
-    bool x_neg = signbit_f32(x);
     bool x_inf = !mc_isfinite_f32(x);
     bool y_inf = !mc_isfinite_f32(y);
-    float ax = mc_abs_f32(x);
-    float ay = mc_abs_f32(y);
+    float ax = mc_fabs_f32(x);
+    float ay = mc_fabs_f32(y);
     if (x_inf && y_inf) {
         ax = 1.0f;
         ay = 1.0f;
@@ -316,19 +416,26 @@ float mc_atan2_f32(float y, float x)
     } else if ((ax == 0.0f) && (ay == 0.0f)) {
         return 0.0f; /* defined: no direction yet */
     } else {
-        /* finite, not both zero */
+        /* finite, |x| + |y| overflows: halve both (exact, as both are
+         * large), the angle is the same */
+        ax = 0.5f * ax;
+        ay = 0.5f * ay;
     }
+    return mc_atan2_octant_f32(ay, ax, signbit_f32(x), signbit_f32(y));
+}
 
-    float a;
-    if (ay <= ax) {
-        a = atan_unit(ay / ax); /* ax > 0 here */
-    } else {
-        a = MC_HALF_PI_F32 - atan_unit(ax / ay);
+float mc_atan2_f32(float y, float x)
+{
+    const float ax = mc_fabs_f32(x);
+    const float ay = mc_fabs_f32(y);
+    const float sum = ax + ay;
+    /* false for NaN, both zero, an infinity or an overflowing sum */
+    if ((sum > 0.0f) && (sum <= 3.40282347e38f)) {
+        /* x < 0 as a float compare: x = -0 (with y != 0) gives the same
+         * +-pi/2 as +0, as C99 wants; y's sign bit decides -0 vs +0. */
+        return mc_atan2_octant_f32(ay, ax, x < 0.0f, signbit_f32(y));
     }
-    if (x_neg) {
-        a = MC_PI_F32 - a;
-    }
-    return y_neg ? -a : a;
+    return atan2_special(y, x);
 }
 
 /* ------------------------------------------------------------------- sqrt */
@@ -503,6 +610,19 @@ static float wrap_impl(float x, bool centered)
 
 float mc_wrap_pi_f32(float x_rad)
 {
+    /* The common case on its own: |x| <= 8192 rad and the first k right.
+     * wrap_impl performs the very same operations then (an input already
+     * in range has k = 0 and comes back unchanged), so the result is the
+     * same; everything else (NaN, inf, a neighbour k, -pi itself, huge |x|)
+     * goes there. */
+    if (mc_fabs_f32(x_rad) <= MC_MATH_CW_LIMIT_RAD) {
+        float kf = round_small_f32(x_rad * (0.25f * cw_two_over_pi));
+        float p3 = 0.0f;
+        float r = cw_wrap(x_rad, kf, &p3) - p3;
+        if (mc_fabs_f32(r) < MC_PI_F32) {
+            return r;
+        }
+    }
     return wrap_impl(x_rad, true);
 }
 

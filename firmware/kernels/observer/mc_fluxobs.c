@@ -66,6 +66,8 @@ uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *c
     }
     st->cfg = *cfg;
     st->half_gamma_dt = 0.5f * cfg->gamma * cfg->dt_s;
+    st->half_r_ohm = cfg->r_ohm * 0.5f;
+    st->inv_flux_per_wb = 1.0f / cfg->flux_wb;
     st->flux2 = cfg->flux_wb * cfg->flux_wb;
     st->x_alpha_wb = cfg->flux_wb;
     st->x_beta_wb = 0.0f;
@@ -103,35 +105,47 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
     return MC_FLUXOBS_ERR_NONE;
 }
 
+/* Keeps a rare path out of line (see fluxobs_finish_special). */
+#if defined(__GNUC__)
+#define FLUXOBS_NOINLINE __attribute__((noinline))
+#else
+#define FLUXOBS_NOINLINE
+#endif
+
+/* The angle when the inline atan2 cannot take it (e = 0, or |e| beyond
+ * float range), stored last and out of line, so that the common step calls
+ * nothing and needs no stack frame. Returns the step's flags. */
+static FLUXOBS_NOINLINE uint32_t fluxobs_finish_special(mc_fluxobs_f32_t *st, float eb,
+                                                        float ea, uint32_t raised)
+{
+    st->theta_e_rad = mc_atan2_f32(eb, ea);
+    return raised;
+}
+
 uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta_v,
                              float i_alpha_a, float i_beta_a)
 {
     const mc_fluxobs_f32_cfg_t *cfg;
-    uint32_t raised = MC_FLUXOBS_ERR_NONE;
     float xa;
     float xb;
     float ea;
     float eb;
     float e2;
     float k;
-    float mag;
+    float resid;
+    uint32_t raised = MC_FLUXOBS_ERR_NONE;
 
     if (st == NULL) {
         return MC_FLUXOBS_ERR_NULL;
     }
     cfg = &st->cfg;
-    if (!mc_isfinite_f32(v_alpha_v) || !mc_isfinite_f32(v_beta_v) ||
-        !mc_isfinite_f32(i_alpha_a) || !mc_isfinite_f32(i_beta_a)) {
-        st->flags |= MC_FLUXOBS_ERR_NAN_INPUT;
-        return MC_FLUXOBS_ERR_NAN_INPUT;
-    }
 
     /* Open-loop flux integration, exact for a constant voltage over the
      * period and a current linear in time (trapezoid on R i). */
     xa = st->x_alpha_wb +
-         (cfg->dt_s * (v_alpha_v - (cfg->r_ohm * 0.5f * (st->i_alpha_prev_a + i_alpha_a))));
+         (cfg->dt_s * (v_alpha_v - (st->half_r_ohm * (st->i_alpha_prev_a + i_alpha_a))));
     xb = st->x_beta_wb +
-         (cfg->dt_s * (v_beta_v - (cfg->r_ohm * 0.5f * (st->i_beta_prev_a + i_beta_a))));
+         (cfg->dt_s * (v_beta_v - (st->half_r_ohm * (st->i_beta_prev_a + i_beta_a))));
 
     /* Gradient correction (9) with the new current. */
     ea = xa - (cfg->l_h * i_alpha_a);
@@ -141,14 +155,18 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     if (k < -0.5f) {
         k = -0.5f; /* see the clamp in the header */
     }
+    /* e <- e + k e (not (1 + k) e: 1 + k would round away the low bits of
+     * a small k, and with them the observer's slow dynamics) */
     ea = ea + (k * ea);
     eb = eb + (k * eb);
     xa = ea + (cfg->l_h * i_alpha_a);
     xb = eb + (cfg->l_h * i_beta_a);
 
-    if (!mc_isfinite_f32(xa) || !mc_isfinite_f32(xb)) {
-        /* cannot happen with finite inputs and a validated config, but never
-         * store a non-finite estimate */
+    /* A non-finite input makes xa or xb non-finite (every input enters
+     * both sums with a nonzero or NaN factor: 0 * inf is NaN), and so does
+     * an overflow of finite ones: one test for both, then the step is
+     * refused and nothing is stored. x - x is 0 for finite x, NaN else. */
+    if (((xa - xa) + (xb - xb)) != 0.0f) {
         st->flags |= MC_FLUXOBS_ERR_NAN_INPUT;
         return MC_FLUXOBS_ERR_NAN_INPUT;
     }
@@ -156,21 +174,38 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     st->x_beta_wb = xb;
     st->i_alpha_prev_a = i_alpha_a;
     st->i_beta_prev_a = i_beta_a;
-    st->theta_e_rad = mc_atan2_f32(eb, ea);
 
-    /* Divergence monitor on the constraint residual. */
-    mag = mc_sqrt_f32((ea * ea) + (eb * eb));
-    st->resid = (mag / cfg->flux_wb) - 1.0f;
-    if (mc_abs_f32(st->resid) > cfg->resid_tol) {
+    /* Divergence monitor on the constraint residual of the new estimate:
+     * |e| = (1 + k) |e_before| (1 + k >= 1/2 > 0), to float rounding, far
+     * inside any useful resid_tol. */
+    resid = (((1.0f + k) * mc_sqrt_nonneg_f32(e2)) * st->inv_flux_per_wb) - 1.0f;
+    st->resid = resid;
+    if (mc_fabs_f32(resid) > cfg->resid_tol) {
         st->resid_bad_s += cfg->dt_s;
         if (st->resid_bad_s > cfg->resid_time_s) {
             st->resid_bad_s = cfg->resid_time_s; /* clamp the timer */
-            raised |= MC_FLUXOBS_ERR_DIVERGED;
+            st->flags |= MC_FLUXOBS_ERR_DIVERGED;
+            raised = MC_FLUXOBS_ERR_DIVERGED;
         }
     } else {
         st->resid_bad_s = 0.0f;
     }
-    st->flags |= raised;
+
+    /* The angle: mc_atan2_f32's common case inline (finite, not both 0,
+     * |ea| + |eb| finite), the rest out of line. */
+    {
+        const float ax = mc_fabs_f32(ea);
+        const float ay = mc_fabs_f32(eb);
+        union {
+            float f;
+            uint32_t u;
+        } sum;
+        sum.f = ax + ay;
+        if ((sum.u - 1u) >= 0x7F7FFFFFu) {
+            return fluxobs_finish_special(st, eb, ea, raised);
+        }
+        st->theta_e_rad = mc_atan2_octant_f32(ay, ax, ea < 0.0f, mc_signbit_f32(eb));
+    }
     return raised;
 }
 

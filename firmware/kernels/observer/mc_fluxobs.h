@@ -97,6 +97,8 @@ typedef struct {
 typedef struct {
     mc_fluxobs_f32_cfg_t cfg;
     float half_gamma_dt;  /**< gamma dt / 2 (derived) */
+    float half_r_ohm;     /**< R / 2 (derived) */
+    float inv_flux_per_wb; /**< 1 / flux (derived) */
     float flux2;          /**< flux^2 [Wb^2] (derived) */
     float x_alpha_wb;     /**< flux estimate xh [Wb] */
     float x_beta_wb;

@@ -64,7 +64,62 @@ uint32_t mc_spdpll_f32_reset(mc_spdpll_f32_t *st, float theta_rad, float omega_r
     return MC_SPDPLL_ERR_NONE;
 }
 
+/* Keeps a rare path out of line: the common step then calls nothing and
+ * needs no stack frame. */
+#if defined(__GNUC__)
+#define SPDPLL_NOINLINE __attribute__((noinline))
+#else
+#define SPDPLL_NOINLINE
+#endif
+
+/* The step's last part when the new angle leaves [-pi, pi): the full wrap,
+ * out of line so that the common step calls nothing. */
+static SPDPLL_NOINLINE float spdpll_store_wrapped(mc_spdpll_f32_t *st, float theta_next, float w)
+{
+    st->theta_rad = mc_wrap_pi_f32(theta_next);
+    return w;
+}
+
+/* The step for an angle error outside (-pi, pi): input check and full
+ * wrap, then the same loop as the common case. */
+static SPDPLL_NOINLINE float spdpll_step_far(mc_spdpll_f32_t *st, float theta_in_rad,
+                                             float e_raw);
+
 float mc_spdpll_f32_step(mc_spdpll_f32_t *st, float theta_in_rad)
+{
+    const float e = theta_in_rad - st->theta_rad;
+    float wi;
+    float w;
+    float theta_next;
+    const float lim = st->omega_max_rad_s;
+
+    /* The common case: |e| < pi is its own wrap (and excludes a non-finite
+     * input); anything else is checked and wrapped out of line. */
+    if (!(mc_fabs_f32(e) < MC_PI_F32)) {
+        return spdpll_step_far(st, theta_in_rad, e);
+    }
+    wi = st->omega_i_rad_s + (st->ki_dt_per_s * e);
+    if (mc_fabs_f32(wi) > lim) {
+        st->flags |= MC_SPDPLL_ERR_SAT;
+        wi = mc_sat_f32(wi, -lim, lim);
+    }
+    w = (st->kp_per_s * e) + wi;
+    if (mc_fabs_f32(w) > lim) {
+        st->flags |= MC_SPDPLL_ERR_SAT;
+        w = mc_sat_f32(w, -lim, lim);
+    }
+    st->omega_i_rad_s = wi;
+    st->omega_rad_s = w;
+    theta_next = st->theta_rad + (st->dt_s * w);
+    if (!(mc_fabs_f32(theta_next) < MC_PI_F32)) {
+        return spdpll_store_wrapped(st, theta_next, w);
+    }
+    st->theta_rad = theta_next; /* = mc_wrap_pi_f32(theta_next) */
+    return w;
+}
+
+static SPDPLL_NOINLINE float spdpll_step_far(mc_spdpll_f32_t *st, float theta_in_rad,
+                                             float e_raw)
 {
     float e;
     float wi;
@@ -75,19 +130,19 @@ float mc_spdpll_f32_step(mc_spdpll_f32_t *st, float theta_in_rad)
         st->flags |= MC_SPDPLL_ERR_NAN_INPUT;
         return st->omega_rad_s;
     }
-    e = mc_wrap_pi_f32(theta_in_rad - st->theta_rad);
+    e = mc_wrap_pi_f32(e_raw);
     wi = st->omega_i_rad_s + (st->ki_dt_per_s * e);
-    if ((wi > lim) || (wi < -lim)) {
+    if (mc_fabs_f32(wi) > lim) {
         st->flags |= MC_SPDPLL_ERR_SAT;
         wi = mc_sat_f32(wi, -lim, lim);
     }
     w = (st->kp_per_s * e) + wi;
-    if ((w > lim) || (w < -lim)) {
+    if (mc_fabs_f32(w) > lim) {
         st->flags |= MC_SPDPLL_ERR_SAT;
         w = mc_sat_f32(w, -lim, lim);
     }
     st->omega_i_rad_s = wi;
     st->omega_rad_s = w;
-    st->theta_rad = mc_wrap_pi_f32(st->theta_rad + (st->dt_s * w));
+    st->theta_rad = mc_wrap_pi_fast_f32(st->theta_rad + (st->dt_s * w));
     return w;
 }

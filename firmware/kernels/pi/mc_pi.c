@@ -108,6 +108,37 @@ uint32_t mc_pi_f32_reset(mc_pi_f32_t *st, float integrator_preset)
     return MC_PI_ERR_NONE;
 }
 
+mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff,
+                                   float lo, float hi)
+{
+    mc_pi_f32_res_t r;
+    float integ = st->integ + inc;
+
+    if (st->aw == MC_PI_AW_CLAMP) {
+        const float u_try = p + integ + ff;
+        if ((u_try > hi) && (inc > 0.0f)) {
+            /* Integrate only up to the point where the output meets hi, never backwards. */
+            const float room = hi - p - ff;
+            integ = (room > st->integ) ? room : st->integ;
+        } else if ((u_try < lo) && (inc < 0.0f)) {
+            const float room = lo - p - ff;
+            integ = (room < st->integ) ? room : st->integ;
+        } else {
+            /* inside the limits, or the error pulls back into range: integrate */
+        }
+    } else if (st->aw == MC_PI_AW_BACK_CALC) {
+        const float u_unsat = p + integ + ff;
+        const float u_sat = mc_sat_f32(u_unsat, lo, hi);
+        integ = integ + (st->kaw_dt * (u_sat - u_unsat));
+    } else {
+        /* MC_PI_AW_NONE: plain integration, clamp below only */
+    }
+    integ = mc_sat_f32(integ, st->out_min, st->out_max);
+    r.integ = integ;
+    r.u = mc_sat_f32(p + integ + ff, lo, hi);
+    return r;
+}
+
 float mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, float lim_hi)
 {
     float lo;

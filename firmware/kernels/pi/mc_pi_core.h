@@ -16,41 +16,119 @@
 extern "C" {
 #endif
 
+/** Branch hint: the common case laid out as the fall-through. */
+#if defined(__GNUC__)
+#define MC_PI_LIKELY(c) __builtin_expect(!!(c), 1)
+#else
+#define MC_PI_LIKELY(c) (c)
+#endif
+
+/** A step's new integrator and output (returned in two FPU registers). */
+typedef struct {
+    float integ;
+    float u;
+} mc_pi_f32_res_t;
+
+/**
+ * The saturated (or non-finite) case of mc_pi_f32_core: the anti-windup
+ * scheme, the static integrator clamp and the output clamp, from the
+ * step's proportional term p and increment inc (mc_pi.c, out of line:
+ * run only when a limit acts). Same contract as mc_pi_f32_core.
+ */
+mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff,
+                                   float lo, float hi);
+
 /**
  * One step's new integrator (*p_integ) and output (returned) for finite
  * error, ff and limits lo <= hi already intersected with the static limits.
  * Reads st, writes nothing else. The results may still be non-finite (an
  * overflow of kp*e against ff): the caller must check before committing.
+ *
+ * The common case first: when u = p + (I + inc) + ff is inside [lo, hi]
+ * and I + inc inside the static limits, every anti-windup scheme takes the
+ * whole increment and no clamp acts, so (I + inc, u) is the result. (The
+ * back-calculation term kaw*dt*(u_sat - u) is then exactly +0 and is not
+ * added: an integrator of -0 stays -0.) Every other case goes to
+ * mc_pi_f32_core_sat, which starts again from p and inc.
  */
 static inline float mc_pi_f32_core(const mc_pi_f32_t *st, float error, float ff, float lo,
                                    float hi, float *p_integ)
 {
     const float p = st->kp * error;
     const float inc = st->ki_dt * error;
-    float integ = st->integ + inc;
+    const float integ = st->integ + inc;
+    const float u = (p + integ) + ff;
 
-    if (st->aw == MC_PI_AW_CLAMP) {
-        const float u_try = p + integ + ff;
-        if ((u_try > hi) && (inc > 0.0f)) {
-            /* Integrate only up to the point where the output meets hi, never backwards. */
-            const float room = hi - p - ff;
-            integ = (room > st->integ) ? room : st->integ;
-        } else if ((u_try < lo) && (inc < 0.0f)) {
-            const float room = lo - p - ff;
-            integ = (room < st->integ) ? room : st->integ;
-        } else {
-            /* inside the limits, or the error pulls back into range: integrate */
-        }
-    } else if (st->aw == MC_PI_AW_BACK_CALC) {
-        const float u_unsat = p + integ + ff;
-        const float u_sat = mc_sat_f32(u_unsat, lo, hi);
-        integ = integ + (st->kaw_dt * (u_sat - u_unsat));
-    } else {
-        /* MC_PI_AW_NONE: plain integration, clamp below only */
+    if ((u <= hi) && (u >= lo) && (integ <= st->out_max) && (integ >= st->out_min)) {
+        *p_integ = integ;
+        return u;
     }
-    integ = mc_sat_f32(integ, st->out_min, st->out_max);
-    *p_integ = integ;
-    return mc_sat_f32(p + integ + ff, lo, hi);
+    {
+        const mc_pi_f32_res_t r = mc_pi_f32_core_sat(st, p, inc, ff, lo, hi);
+        *p_integ = r.integ;
+        return r.u;
+    }
+}
+
+/**
+ * mc_pi_f32_core for symmetric limits: dynamic limits -lim, lim (lim >= 0)
+ * on a state whose static limits are symmetric (out_min = -out_max, as the
+ * FOC's init makes them), so that the step's limits are -hi, hi with hi =
+ * min(lim, out_max). The common-case test on magnitudes (|u| <= lim,
+ * |u| <= out_max, |I + inc| <= out_max: three compares instead of four and
+ * a min) has the same outcome as mc_pi_f32_core's. Returns false, with
+ * nothing written, when the error or feed-forward is not finite or a
+ * result is NaN: the caller then runs the checked mc_pi_f32_step_lim,
+ * which refuses such a step.
+ */
+static inline bool mc_pi_f32_core_sym(const mc_pi_f32_t *st, float error, float ff, float lim,
+                                      float *p_integ, float *p_u)
+{
+    const float p = st->kp * error;
+    const float inc = st->ki_dt * error;
+    const float integ = st->integ + inc;
+    const float u = (p + integ) + ff;
+    const float abs_u = mc_fabs_f32(u);
+
+    /* NaN fails every test; so does an infinite error or ff (it makes u
+     * infinite or NaN whatever kp is). */
+    if (MC_PI_LIKELY((abs_u <= lim) && (abs_u <= st->out_max) &&
+                     (mc_fabs_f32(integ) <= st->out_max))) {
+        *p_integ = integ;
+        *p_u = u;
+        return true;
+    }
+    if (!mc_isfinite_f32(error + ff)) {
+        return false; /* non-finite (or overflowing) input: the checked path decides */
+    }
+    {
+        const float hi = (lim < st->out_max) ? lim : st->out_max;
+        mc_pi_f32_res_t r;
+        if (st->aw == MC_PI_AW_CLAMP) {
+            /* mc_pi_f32_core_sat's clamping branch with lo = -hi, inline
+             * (the FOC's default scheme): the very same operations */
+            float i2 = integ;
+            if ((u > hi) && (inc > 0.0f)) {
+                const float room = hi - p - ff;
+                i2 = (room > st->integ) ? room : st->integ;
+            } else if ((u < -hi) && (inc < 0.0f)) {
+                const float room = -hi - p - ff;
+                i2 = (room < st->integ) ? room : st->integ;
+            } else {
+                /* the error pulls back into range, or only the static clamp acts */
+            }
+            r.integ = mc_sat_f32(i2, -st->out_max, st->out_max);
+            r.u = mc_sat_f32(p + r.integ + ff, -hi, hi);
+        } else {
+            r = mc_pi_f32_core_sat(st, p, inc, ff, -hi, hi);
+        }
+        if ((r.integ + r.u) != (r.integ + r.u)) {
+            return false;
+        }
+        *p_integ = r.integ;
+        *p_u = r.u;
+    }
+    return true;
 }
 
 /** Store an accepted step (finite integ and u). */

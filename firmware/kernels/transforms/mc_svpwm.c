@@ -16,6 +16,7 @@
 
 #include "math/mc_math.h"
 #include "math/mc_q31.h"
+#include "transforms/mc_svpwm_core.h"
 #include "transforms/mc_transforms.h"
 
 /** sqrt(3) in Q30: round(2^30 * sqrt(3)). */
@@ -97,12 +98,13 @@ static inline uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float
                       &p_sol->phase_n[2]);
     float vmax = mc_svpwm_max3_f32(p_sol->phase_n[0], p_sol->phase_n[1], p_sol->phase_n[2]);
     float vmin = mc_svpwm_min3_f32(p_sol->phase_n[0], p_sol->phase_n[1], p_sol->phase_n[2]);
+    /* mid as the linear case forms it (mc_svpwm_core.h) */
     p_sol->mid_n = 0.5f * (vmax + vmin);
 
     float measure_n;
     if (limit == MC_SVPWM_LIMIT_CIRCLE) {
         float mag2_n = alpha_n * alpha_n + beta_n * beta_n;
-        if ((p_sol->vbus_n == 1.0f) && (mag2_n < 0.33f)) {
+        if ((p_sol->vbus_n == 1.0f) && (mag2_n < MC_SVPWM_LINEAR_MAG2)) {
             /* Shortcut, same result: here |v| < 0.5745 vbus (rounding
              * included), so sqrt(3) |v| <= 0.9951 vbus is inside the circle
              * and the rounded measure below would not exceed vbus_n = 1
@@ -126,55 +128,63 @@ static inline uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float
     return flags;
 }
 
-/** |x| for comparisons only (-0 gives +0, unlike mc_abs_f32): one
- *  instruction (VABS.F32, ANDPS) where the compiler has the builtin. */
-static float mc_svpwm_fabs_f32(float x)
+/**
+ * The circle limit with vbus finite and > 0 and |v_alpha|, |v_beta| <= vbus
+ * (every request of a current controller, limited or not): the case of
+ * mc_svpwm_circle_kv_f32. A NaN fails every comparison: the voltage tests
+ * also rule out NaN and infinite voltages once vbus is known finite.
+ */
+static inline bool mc_svpwm_circle_kv_case(float v_alpha_v, float v_beta_v, float vbus_v,
+                                           mc_svpwm_limit_t limit)
 {
-#if defined(__GNUC__)
-    return __builtin_fabsf(x);
-#else
-    return mc_abs_f32(x);
-#endif
+    return (limit == MC_SVPWM_LIMIT_CIRCLE) && (vbus_v > 0.0f) && (vbus_v <= 3.40282347e38f) &&
+           (mc_fabs_f32(v_alpha_v) <= vbus_v) && (mc_fabs_f32(v_beta_v) <= vbus_v);
 }
 
 /**
- * The current controller's case on its own: circle limit, vbus finite and
- * > 0, |v_alpha|, |v_beta| <= vbus (so k = vbus and vbus_n = vbus / vbus = 1
- * exactly), and the request well inside the circle (the solver's shortcut
- * test). Then D = 1, 1/D = 1 and the duties are 0.5 + (v_x - mid) with the
- * solver's very operations (a product by 1 is exact), so the result is
- * bit-identical to the general path, which this function leaves to
- * (returns false, nothing written) in every other case.
+ * mc_svpwm_circle_kv_case on its own: then k = vbus and vbus_n = vbus /
+ * vbus = 1 exactly, and the general solution (mc_svpwm_solve_f32,
+ * mc_svpwm_duties_f32) reduces to the operations below, the very same ones
+ * on the same values, so the results are bit-identical; the checks, the
+ * normalisation of vbus and the solution struct are left out. Inside
+ * MC_SVPWM_LINEAR_MAG2 the linear case (mc_svpwm_core.h); beyond it the
+ * measure sqrt(3) |v_n| and, only when it exceeds 1, the division by it.
+ * Writes the duties and *p_den (D / vbus), returns MC_SVPWM_FLAG_NONE or
+ * _LIMITED. Calls nothing (the square root of a sum of squares is the FPU
+ * instruction mc_sqrt_f32 would run).
  */
-static bool mc_svpwm_linear_f32(float v_alpha_v, float v_beta_v, float vbus_v,
-                                mc_svpwm_limit_t limit, float *p_duty_a, float *p_duty_b,
-                                float *p_duty_c)
+static inline uint32_t mc_svpwm_circle_kv_f32(float v_alpha_v, float v_beta_v, float vbus_v,
+                                              float *p_duty_a, float *p_duty_b,
+                                              float *p_duty_c, float *p_den)
 {
-    /* A NaN fails every comparison: the voltage tests also rule out NaN and
-     * infinite voltages once vbus is known finite. */
-    if ((limit != MC_SVPWM_LIMIT_CIRCLE) || !(vbus_v > 0.0f) || !(vbus_v <= 3.40282347e38f) ||
-        !(mc_svpwm_fabs_f32(v_alpha_v) <= vbus_v) || !(mc_svpwm_fabs_f32(v_beta_v) <= vbus_v)) {
-        return false;
+    const float alpha_n = v_alpha_v / vbus_v;
+    const float beta_n = v_beta_v / vbus_v;
+    *p_den = 1.0f;
+    /* the solver's shortcut test and the duties it leads to:
+     * transforms/mc_svpwm_core.h */
+    if (mc_svpwm_circle_linear_f32(alpha_n, beta_n, p_duty_a, p_duty_b, p_duty_c)) {
+        return MC_SVPWM_FLAG_NONE;
     }
-    float alpha_n = v_alpha_v / vbus_v;
-    float beta_n = v_beta_v / vbus_v;
-    /* the solver's shortcut test (see there), first, so that a limited
-     * request goes to the general path at little cost */
-    if (!((alpha_n * alpha_n + beta_n * beta_n) < 0.33f)) {
-        return false;
+    float phase[3];
+    mc_inv_clarke_f32(alpha_n, beta_n, &phase[0], &phase[1], &phase[2]);
+    const float vmax = mc_svpwm_max3_f32(phase[0], phase[1], phase[2]);
+    const float vmin = mc_svpwm_min3_f32(phase[0], phase[1], phase[2]);
+    const float mid = 0.5f * (vmax + vmin);
+    const float measure =
+        MC_SQRT3_F32 * mc_sqrt_nonneg_f32((alpha_n * alpha_n) + (beta_n * beta_n));
+    uint32_t flags = MC_SVPWM_FLAG_NONE;
+    float den = 1.0f;
+    if (measure > 1.0f) {
+        den = measure;
+        flags = MC_SVPWM_FLAG_LIMITED;
     }
-    float va;
-    float vb;
-    float vc;
-    mc_inv_clarke_f32(alpha_n, beta_n, &va, &vb, &vc);
-    float mid = 0.5f * (mc_svpwm_max3_f32(va, vb, vc) + mc_svpwm_min3_f32(va, vb, vc));
-    /* Here max - min <= sqrt(3) |v| < 0.9951, so every duty is within
-     * 0.5 +- 0.4976 (rounding included): the clamp to [0, 1] that the
-     * general path applies cannot act, and is left out. */
-    *p_duty_a = 0.5f + (va - mid);
-    *p_duty_b = 0.5f + (vb - mid);
-    *p_duty_c = 0.5f + (vc - mid);
-    return true;
+    const float inv_den = 1.0f / den;
+    const float off = 0.5f - (mid * inv_den);
+    *p_duty_a = mc_sat_f32((phase[0] * inv_den) + off, 0.0f, 1.0f);
+    *p_duty_b = mc_sat_f32((phase[1] * inv_den) + off, 0.0f, 1.0f);
+    *p_duty_c = mc_sat_f32((phase[2] * inv_den) + off, 0.0f, 1.0f);
+    *p_den = den;
+    return flags;
 }
 
 /** The duties of a valid solution. */
@@ -182,10 +192,13 @@ static inline void mc_svpwm_duties_f32(const mc_svpwm_solution_f32_t *p_sol, flo
                                 float *p_duty_b, float *p_duty_c)
 {
     float inv_den = 1.0f / p_sol->den_n;
-    /* Rounding can leave a duty a few ulp outside [0, 1] on the boundary. */
-    *p_duty_a = mc_sat_f32(0.5f + (p_sol->phase_n[0] - p_sol->mid_n) * inv_den, 0.0f, 1.0f);
-    *p_duty_b = mc_sat_f32(0.5f + (p_sol->phase_n[1] - p_sol->mid_n) * inv_den, 0.0f, 1.0f);
-    *p_duty_c = mc_sat_f32(0.5f + (p_sol->phase_n[2] - p_sol->mid_n) * inv_den, 0.0f, 1.0f);
+    /* d_x = 1/2 + (v_x - mid) / D = v_x / D + off, off = 1/2 - mid / D
+     * (one offset for the three phases). Rounding can leave a duty a few
+     * ulp outside [0, 1] on the boundary. */
+    float off = 0.5f - (p_sol->mid_n * inv_den);
+    *p_duty_a = mc_sat_f32((p_sol->phase_n[0] * inv_den) + off, 0.0f, 1.0f);
+    *p_duty_b = mc_sat_f32((p_sol->phase_n[1] * inv_den) + off, 0.0f, 1.0f);
+    *p_duty_c = mc_sat_f32((p_sol->phase_n[2] * inv_den) + off, 0.0f, 1.0f);
 }
 
 static bool mc_svpwm_bad_f32(uint32_t flags)
@@ -218,10 +231,13 @@ uint32_t mc_svpwm_f32(float v_alpha_v, float v_beta_v, float vbus_v, mc_svpwm_li
     if ((p_duty_a == NULL) || (p_duty_b == NULL) || (p_duty_c == NULL)) {
         return MC_SVPWM_FLAG_BAD_INPUT;
     }
-    if (mc_svpwm_linear_f32(v_alpha_v, v_beta_v, vbus_v, limit, p_duty_a, p_duty_b, p_duty_c)) {
-        return MC_SVPWM_FLAG_NONE;
+    if (!mc_svpwm_circle_kv_case(v_alpha_v, v_beta_v, vbus_v, limit)) {
+        return mc_svpwm_general_f32(v_alpha_v, v_beta_v, vbus_v, limit, p_duty_a, p_duty_b,
+                                    p_duty_c);
     }
-    return mc_svpwm_general_f32(v_alpha_v, v_beta_v, vbus_v, limit, p_duty_a, p_duty_b, p_duty_c);
+    float den;
+    return mc_svpwm_circle_kv_f32(v_alpha_v, v_beta_v, vbus_v, p_duty_a, p_duty_b, p_duty_c,
+                                  &den);
 }
 
 /* mc_svpwm_limit_duty_f32 for every request, out of line (see above). */
@@ -266,12 +282,26 @@ uint32_t mc_svpwm_limit_duty_f32(float *p_v_alpha_v, float *p_v_beta_v, float vb
         (p_duty_b == NULL) || (p_duty_c == NULL)) {
         return MC_SVPWM_FLAG_BAD_INPUT;
     }
-    if (mc_svpwm_linear_f32(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit, p_duty_a, p_duty_b,
-                            p_duty_c)) {
+    if (!mc_svpwm_circle_kv_case(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit)) {
+        return mc_svpwm_limit_duty_general_f32(p_v_alpha_v, p_v_beta_v, vbus_v, limit, p_duty_a,
+                                               p_duty_b, p_duty_c);
+    }
+    float den;
+    const uint32_t flags = mc_svpwm_circle_kv_f32(*p_v_alpha_v, *p_v_beta_v, vbus_v, p_duty_a,
+                                                  p_duty_b, p_duty_c, &den);
+    if (flags == MC_SVPWM_FLAG_NONE) {
         return MC_SVPWM_FLAG_NONE; /* inside the limit: the vector stays */
     }
-    return mc_svpwm_limit_duty_general_f32(p_v_alpha_v, p_v_beta_v, vbus_v, limit, p_duty_a,
-                                           p_duty_b, p_duty_c);
+    {
+        /* As mc_svpwm_limit_f32 (scale vbus_n / den_n = 1 / den), then the
+         * modulator on the limited vector (a new solution, which is again
+         * this function's case: the scaled vector is shorter). */
+        const float scale = 1.0f / den;
+        *p_v_alpha_v *= scale;
+        *p_v_beta_v *= scale;
+        return flags | mc_svpwm_f32(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit, p_duty_a, p_duty_b,
+                                    p_duty_c);
+    }
 }
 
 uint32_t mc_svpwm_limit_f32(float *p_v_alpha_v, float *p_v_beta_v, float vbus_v,

@@ -39,13 +39,16 @@ uint32_t RefDq(mc_foc_f32_t* st, float id_ref, float iq_ref, float id, float iq,
     return MC_FOC_ERR_NAN_INPUT;
   }
   if (!(vbus > 0.0f)) return MC_FOC_ERR_VBUS;
-  const float v_max = st->v_limit_ratio * mc_svpwm_max_voltage_f32(vbus, st->limit_mode);
-  float ff_d = 0.0f;
-  float ff_q = 0.0f;
-  if (st->decouple) {
-    ff_d = -(omega * st->lq_h * iq);
-    ff_q = (omega * st->ld_h * id) + (omega * st->flux_wb);
-  }
+  // mc_foc.h: v_max = v_max_per_vbus * vbus, v_max_per_vbus = ratio times
+  // the modulator's largest voltage per volt (computed by init).
+  EXPECT_EQ(st->v_max_per_vbus, st->v_limit_ratio * mc_svpwm_max_voltage_f32(1.0f, st->limit_mode));
+  const float v_max = st->v_max_per_vbus * vbus;
+  // mc_foc.h: the feed-forward gains are L and psi with decoupling, 0 without.
+  EXPECT_EQ(st->ff_lq_h, st->decouple ? st->lq_h : 0.0f);
+  EXPECT_EQ(st->ff_ld_h, st->decouple ? st->ld_h : 0.0f);
+  EXPECT_EQ(st->ff_flux_wb, st->decouple ? st->flux_wb : 0.0f);
+  const float ff_d = -(omega * (st->ff_lq_h * iq));
+  const float ff_q = omega * ((st->ff_ld_h * id) + st->ff_flux_wb);
   const mc_pi_f32_t d_saved = st->pi_d;
   const mc_pi_f32_t q_saved = st->pi_q;
   st->pi_d.flags = MC_PI_ERR_NONE;
@@ -73,8 +76,9 @@ uint32_t RefStepDq(mc_foc_f32_t* st, float id_ref, float iq_ref, float id, float
   return err;
 }
 
-// The checked whole step (mc_foc.h).
-uint32_t RefStep(mc_foc_f32_t* st, const mc_foc_f32_in_t& in, mc_foc_f32_out_t* out) {
+// The checked whole step from alpha-beta currents (mc_foc.h).
+uint32_t RefStepAb(mc_foc_f32_t* st, float al, float be, const mc_foc_f32_in_t& in,
+                   mc_foc_f32_out_t* out) {
   out->svpwm_flags = MC_SVPWM_FLAG_NONE;
   out->id_a = 0.0f;
   out->iq_a = 0.0f;
@@ -83,17 +87,9 @@ uint32_t RefStep(mc_foc_f32_t* st, const mc_foc_f32_in_t& in, mc_foc_f32_out_t* 
   float c = 1.0f;
   float vd = 0.0f;
   float vq = 0.0f;
-  if (!Finite(in.ia_a) || !Finite(in.ib_a) || (in.three_phase && !Finite(in.ic_a)) ||
-      !Finite(in.theta_e_rad)) {
+  if (!Finite(al) || !Finite(be) || !Finite(in.theta_e_rad)) {
     err = MC_FOC_ERR_NAN_INPUT;
   } else {
-    float al = 0.0f;
-    float be = 0.0f;
-    if (in.three_phase) {
-      mc_clarke3_f32(in.ia_a, in.ib_a, in.ic_a, &al, &be);
-    } else {
-      mc_clarke_f32(in.ia_a, in.ib_a, &al, &be);
-    }
     mc_sincos_f32(in.theta_e_rad, &s, &c);
     float id = 0.0f;
     float iq = 0.0f;
@@ -134,6 +130,19 @@ uint32_t RefStep(mc_foc_f32_t* st, const mc_foc_f32_in_t& in, mc_foc_f32_out_t* 
   out->v_beta_v = vb;
   out->flags = st->flags;
   return MC_FOC_ERR_NONE;
+}
+
+// The checked whole step (mc_foc.h): Clarke, then the step from alpha-beta
+// (a non-finite current read makes alpha or beta non-finite).
+uint32_t RefStep(mc_foc_f32_t* st, const mc_foc_f32_in_t& in, mc_foc_f32_out_t* out) {
+  float al = 0.0f;
+  float be = 0.0f;
+  if (in.three_phase) {
+    mc_clarke3_f32(in.ia_a, in.ib_a, in.ic_a, &al, &be);
+  } else {
+    mc_clarke_f32(in.ia_a, in.ib_a, &al, &be);
+  }
+  return RefStepAb(st, al, be, in, out);
 }
 
 uint32_t Bits(float x) {
@@ -253,8 +262,15 @@ TEST_P(FocFastVsChecked, WholeStepAndDqStepBitIdentical) {
     } else {
       mc_foc_f32_out_t of{};
       mc_foc_f32_out_t orf{};
-      rf = mc_foc_f32_step(&fast, &in, &of);
-      rr = RefStep(&ref, in, &orf);
+      if ((k % 5) == 3) {
+        // the alpha-beta entry point, on raw draws for alpha and beta
+        rf = mc_foc_f32_step_ab(&fast, in.ia_a, in.ib_a, in.theta_e_rad, in.omega_e_rad_s,
+                                in.vbus_v, in.id_ref_a, in.iq_ref_a, &of);
+        rr = RefStepAb(&ref, in.ia_a, in.ib_a, in, &orf);
+      } else {
+        rf = mc_foc_f32_step(&fast, &in, &of);
+        rr = RefStep(&ref, in, &orf);
+      }
       EXPECT_SAME(of.duty_a, orf.duty_a, "duty_a", k);
       EXPECT_SAME(of.duty_b, orf.duty_b, "duty_b", k);
       EXPECT_SAME(of.duty_c, orf.duty_c, "duty_c", k);

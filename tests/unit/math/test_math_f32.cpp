@@ -126,6 +126,29 @@ TEST(MathSincosF32, HugeArgumentsPayneHanekWithinBound)
     EXPECT_LE(e.max_err, kSincosBound) << "worst x = " << e.worst_x;
 }
 
+TEST(MathSincosF32, InlineNearFormSameBitsAsFunction)
+{
+    // mc_sincos_near_f32 is what mc_sincos_f32 runs for |x| <= 256 rad:
+    // the same bits over that whole range (a sweep with a step that is not
+    // a multiple of the table's 2pi/128, and the range ends).
+    const float ends[] = {MC_MATH_NEAR_LIMIT_RAD, -MC_MATH_NEAR_LIMIT_RAD, 0.0f, -0.0f};
+    for (int i = -2000000; i <= 2000000; ++i) {
+        const float x = static_cast<float>(i) * 1.28e-4f;
+        float s1 = 0.0f, c1 = 0.0f, s2 = 0.0f, c2 = 0.0f;
+        mc_sincos_near_f32(x, &s1, &c1);
+        mc_sincos_f32(x, &s2, &c2);
+        ASSERT_EQ(to_bits(s1), to_bits(s2)) << x;
+        ASSERT_EQ(to_bits(c1), to_bits(c2)) << x;
+    }
+    for (const float x : ends) {
+        float s1 = 0.0f, c1 = 0.0f, s2 = 0.0f, c2 = 0.0f;
+        mc_sincos_near_f32(x, &s1, &c1);
+        mc_sincos_f32(x, &s2, &c2);
+        EXPECT_EQ(to_bits(s1), to_bits(s2)) << x;
+        EXPECT_EQ(to_bits(c1), to_bits(c2)) << x;
+    }
+}
+
 TEST(MathSincosF32, SmallAndDenormalArguments)
 {
     // Below 2^-12, sin x rounds to x and cos x to 1 (x^3/6 and x^2/2 are
@@ -423,6 +446,41 @@ TEST(MathWrapF32, InRangeInputsUnchanged)
     }
     EXPECT_EQ(mc_wrap_pi_f32(-MC_PI_F32), -MC_PI_F32);
     EXPECT_EQ(mc_wrap_2pi_f32(0.0f), 0.0f);
+}
+
+TEST(MathWrapF32, InlineFormSameBitsAsFunction)
+{
+    // mc_wrap_pi_fast_f32 promises mc_wrap_pi_f32's result: no tolerance.
+    // A sweep over +-30 rad (several turns) with the float neighbours of
+    // +-pi, plus the non-finite values (NaN compared as NaN).
+    for (int i = -300000; i <= 300000; ++i) {
+        const float x = static_cast<float>(i) * 1e-4f;
+        ASSERT_EQ(to_bits(mc_wrap_pi_fast_f32(x)), to_bits(mc_wrap_pi_f32(x))) << x;
+    }
+    const float edges[] = {MC_PI_F32, -MC_PI_F32, std::nextafter(MC_PI_F32, 0.0f),
+                           std::nextafter(-MC_PI_F32, 0.0f), std::nextafter(MC_PI_F32, 4.0f),
+                           std::nextafter(-MC_PI_F32, -4.0f), 0.0f, -0.0f, 1e30f, -1e30f};
+    for (const float x : edges) {
+        EXPECT_EQ(to_bits(mc_wrap_pi_fast_f32(x)), to_bits(mc_wrap_pi_f32(x))) << x;
+    }
+    EXPECT_TRUE(std::isnan(mc_wrap_pi_fast_f32(kNan)));
+    EXPECT_TRUE(std::isnan(mc_wrap_pi_fast_f32(kInf)));
+}
+
+TEST(MathSqrtF32, NonNegativeInlineFormSameBits)
+{
+    // mc_sqrt_nonneg_f32 promises mc_sqrt_f32's result for x >= 0 (+0,
+    // denormals, +inf included): every exponent, a few significands each.
+    for (uint32_t e = 0u; e <= 255u; ++e) {
+        for (uint32_t m : {0u, 1u, 0x400000u, 0x7FFFFFu, 0x123457u}) {
+            if (e == 255u && m != 0u) {
+                continue;  // NaN: only "NaN out" is promised
+            }
+            const float x = from_bits((e << 23) | m);
+            ASSERT_EQ(to_bits(mc_sqrt_nonneg_f32(x)), to_bits(mc_sqrt_f32(x))) << x;
+        }
+    }
+    EXPECT_TRUE(std::isnan(mc_sqrt_nonneg_f32(kNan)));
 }
 
 TEST(MathWrapF32, DenseSweepWithinBoundAndRange)

@@ -43,6 +43,40 @@ TEST(SpdPll, InitRejectsBadConfig) {
   EXPECT_NE(st.flags & MC_SPDPLL_ERR_NAN_INPUT, 0u);
 }
 
+// The step's two forms (an angle error inside (-pi, pi) inline, anything
+// else checked and wrapped out of line) must be one law: an input a whole
+// number of turns away gives the same speed up to the rounding of that
+// input (the float th + 2 pi k is not an exact turn away); a non-finite
+// input is refused with the state unchanged.
+TEST(SpdPll, FarInputIsTheSameLawAndNonFiniteIsRefused) {
+  const auto c = cfg(300.0f, 1e-4f);
+  mc_spdpll_f32_t near_st{};
+  mc_spdpll_f32_t far_st{};
+  ASSERT_EQ(mc_spdpll_f32_init(&near_st, &c), 0u);
+  ASSERT_EQ(mc_spdpll_f32_init(&far_st, &c), 0u);
+  for (int k = 0; k < 2000; ++k) {
+    const float th = static_cast<float>(std::remainder(0.37 * k, 2.0 * M_PI));
+    const double turns = (k % 3 == 0) ? 0.0 : ((k % 3 == 1) ? 1.0 : -2.0);
+    const float th_far = static_cast<float>(th + turns * 2.0 * M_PI);
+    const float w1 = mc_spdpll_f32_step(&near_st, th);
+    const float w2 = mc_spdpll_f32_step(&far_st, th_far);
+    // The input differs by the rounding of th_far (half an ulp, < 9.6e-7
+    // rad below 16 rad) plus the wrap's 1.25e-7: kp = 2 bw = 600 /s makes
+    // that < 7e-4 rad/s in one step, and the stable loop keeps the
+    // difference from growing; stated with margin as 2e-3 rad/s (a missed
+    // wrap would give kp 2 pi = 3770 rad/s).
+    ASSERT_NEAR(w1, w2, 2e-3f) << k;
+  }
+  const mc_spdpll_f32_t before = far_st;
+  for (const float bad : {std::nanf(""), INFINITY, -INFINITY}) {
+    const float w = mc_spdpll_f32_step(&far_st, bad);
+    EXPECT_EQ(w, before.omega_rad_s);
+    EXPECT_EQ(far_st.theta_rad, before.theta_rad);
+    EXPECT_EQ(far_st.omega_i_rad_s, before.omega_i_rad_s);
+    EXPECT_NE(far_st.flags & MC_SPDPLL_ERR_NAN_INPUT, 0u);
+  }
+}
+
 // Angle ramp (speed step from 0 to w0 at t = 0): the continuous loop gives
 // omega_hat(t) = w0 (1 - e^{-bw t} + bw t e^{-bw t}) (both poles at -bw).
 TEST(SpdPll, SpeedStepMatchesContinuousLoop) {
