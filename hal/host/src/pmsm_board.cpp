@@ -167,7 +167,7 @@ void PmsmBoard::advance() {
     const Eigen::Vector3d i = phase_currents_a();
     const Eigen::Vector2d v = inverter_.alpha_beta_v(duty, cfg_.vbus_v, i);
     v_ab_applied_ = v;
-    check_config(mcsim::advance_zoh(plant_, v, t_s_, T, n, &x_), "integrator");
+    check_config(plant_.advance_zoh(v, t_s_, T, n, &x_), "integrator");
   }
   // (cos, sin) of the electrical angle are integrated as states; re-derive
   // them from theta_m every 32 periods (drift per period is O(h^5)).
