@@ -1,5 +1,6 @@
 #include "mcsim/sensors.hpp"
 
+#include <cfloat>
 #include <cmath>
 
 #include "util.hpp"
@@ -11,32 +12,55 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586476925286766559;
 constexpr double kInvTwoPi = 1.0 / kTwoPi;
 
-// std::floor(num / den + add), bit for bit, without the division (a long
-// latency at the head of every SIL period) unless it could matter: the
-// product num * inv_den (inv_den = 1 / den rounded) differs from the
-// quotient by a few units in the last place, at most 2^-50 (|q| + 1) after
-// the addition; when q is farther than tol = 2^-44 (|q| + 1) from every
-// integer, both lie strictly between the same two integers. Otherwise (one
-// call in ~10^12 for noisy inputs, and NaN or infinity) the division is done.
-double floor_of_quotient(double num, double den, double inv_den, double add) {
-  const double q = num * inv_den + add;
-  const double f = std::floor(q);
-  const double tol = 0x1p-44 * (std::fabs(q) + 1.0);
-  if (q - f > tol && (f + 1.0) - q > tol) {
-    return f;
-  }
-  return std::floor(num / den + add);
+// x rounded to the nearest integer (ties to even), for |x| < 2^51: adding
+// and removing 1.5 * 2^52 leaves no fraction bits (double arithmetic in the
+// default rounding mode, which FLT_EVAL_METHOD == 0 guarantees is not done
+// in a wider format). Two additions instead of a floor() call or its
+// inlined integer round trip.
+static_assert(FLT_EVAL_METHOD == 0, "the codes need double arithmetic evaluated in double");
+double nearest_int(double x) {
+  constexpr double kShift = 0x1.8p52;
+  return (x + kShift) - kShift;
 }
 
-// Rounds y / lsb to the nearest code (ties up) and clamps it to [lo, hi];
-// a NaN reading gives code 0.
-std::int32_t quantise(double y, double lsb, double inv_lsb, std::int32_t lo, std::int32_t hi) {
-  const double q = floor_of_quotient(y, lsb, inv_lsb, 0.5);
-  if (std::isnan(q)) {
-    return 0;
+// The codes below are computed with a reciprocal instead of a division (a
+// long latency at the head of every SIL period), bit for bit equal to the
+// definitions: num * inv_den (inv_den = 1 / den rounded) differs from the
+// rounded quotient by at most 2^-50 (|q| + 1); when it is farther than
+// tol = 2^-44 (|q| + 1) from every integer (floor) or from every half
+// integer (rounding), the quotient rounds the same way. Otherwise (about one
+// call in 10^12 for noisy inputs; NaN, infinity, |q| >= 2^50) the division
+// is done.
+double tolerance(double q) { return 0x1p-44 * (std::fabs(q) + 1.0); }
+
+// std::floor(num / den).
+double floor_of_quotient(double num, double den, double inv_den) {
+  const double q = num * inv_den;
+  const double r = nearest_int(q);
+  if (std::fabs(q) < 0x1p50 && std::fabs(q - r) > tolerance(q)) {
+    return (r > q) ? r - 1.0 : r;
   }
-  const double c = detail::clamp(q, static_cast<double>(lo), static_cast<double>(hi));
-  return static_cast<std::int32_t>(c);
+  return std::floor(num / den);
+}
+
+// std::floor(num / den + 0.5): the nearest integer, ties up.
+double round_of_quotient(double num, double den, double inv_den) {
+  const double q = num * inv_den;
+  const double r = nearest_int(q);
+  if (std::fabs(q) < 0x1p50 && std::fabs(q - r) < 0.5 - tolerance(q)) {
+    return r;
+  }
+  return std::floor(num / den + 0.5);
+}
+
+// Rounds y / lsb to the nearest code (ties up) and clamps it to [lo, hi]
+// (integers); a NaN reading gives code 0. The code as a double (exact).
+double quantise(double y, double lsb, double inv_lsb, double lo, double hi) {
+  const double q = round_of_quotient(y, lsb, inv_lsb);
+  if (std::isnan(q)) {
+    return 0.0;
+  }
+  return detail::clamp(q, lo, hi);
 }
 
 Status validate_adc(double gain_error, double offset, double full_scale, int bits,
@@ -66,7 +90,7 @@ std::int64_t to_i64(double v) {
 
 // floor(num / 2 pi) as an integer (0 if not finite).
 std::int64_t floor_turns(double num) {
-  return to_i64(floor_of_quotient(num, kTwoPi, kInvTwoPi, 0.0));
+  return to_i64(floor_of_quotient(num, kTwoPi, kInvTwoPi));
 }
 
 }  // namespace
@@ -112,19 +136,26 @@ Status CurrentSensor::configure(const CurrentSensorParams& p) {
     p_ = p;
     lsb_ = 2.0 * p.full_scale_a / std::ldexp(1.0, p.bits);
     inv_lsb_ = 1.0 / lsb_;
+    code_hi_ = std::ldexp(1.0, p.bits - 1) - 1.0;
+    code_lo_ = -code_hi_ - 1.0;
     rng_.reseed(p.seed);
   }
   return s;
 }
 
-std::int32_t CurrentSensor::sample_code(double i_true_a) {
+double CurrentSensor::code(double i_true_a) {
   // No draw for a noiseless sensor (the Gaussian draw is a third of a
   // noiseless SIL step); a noisy one draws every sample.
   const double noise = (p_.noise_rms_a > 0.0) ? p_.noise_rms_a * rng_.normal() : 0.0;
   const double y = (1.0 + p_.gain_error) * i_true_a + p_.offset_a + noise;
-  const std::int32_t half = static_cast<std::int32_t>(1) << (p_.bits - 1);
-  return quantise(y, lsb_, inv_lsb_, -half, half - 1);
+  return quantise(y, lsb_, inv_lsb_, code_lo_, code_hi_);
 }
+
+std::int32_t CurrentSensor::sample_code(double i_true_a) {
+  return static_cast<std::int32_t>(code(i_true_a));
+}
+
+double CurrentSensor::sample_a(double i_true_a) { return code(i_true_a) * lsb_; }
 
 // ----------------------------------------------------------------- VbusSensor
 
@@ -138,18 +169,23 @@ Status VbusSensor::configure(const VbusSensorParams& p) {
     p_ = p;
     lsb_ = p.full_scale_v / std::ldexp(1.0, p.bits);
     inv_lsb_ = 1.0 / lsb_;
+    code_hi_ = std::ldexp(1.0, p.bits) - 1.0;
     rng_.reseed(p.seed);
   }
   return s;
 }
 
-std::int32_t VbusSensor::sample_code(double vbus_true_v) {
+double VbusSensor::code(double vbus_true_v) {
   const double noise = (p_.noise_rms_v > 0.0) ? p_.noise_rms_v * rng_.normal() : 0.0;
   const double y = (1.0 + p_.gain_error) * vbus_true_v + p_.offset_v + noise;
-  const std::int32_t full = static_cast<std::int32_t>(
-      (static_cast<std::int64_t>(1) << p_.bits) - 1);
-  return quantise(y, lsb_, inv_lsb_, 0, full);
+  return quantise(y, lsb_, inv_lsb_, 0.0, code_hi_);
 }
+
+std::int32_t VbusSensor::sample_code(double vbus_true_v) {
+  return static_cast<std::int32_t>(code(vbus_true_v));
+}
+
+double VbusSensor::sample_v(double vbus_true_v) { return code(vbus_true_v) * lsb_; }
 
 // -------------------------------------------------------------------- Encoder
 

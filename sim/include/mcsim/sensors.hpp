@@ -58,12 +58,14 @@ class CurrentSensor {
   Status configure(const CurrentSensorParams& p);
   double lsb_a() const { return lsb_; }
   std::int32_t sample_code(double i_true_a);   // advances the noise generator
-  double sample_a(double i_true_a) { return sample_code(i_true_a) * lsb_a(); }
+  double sample_a(double i_true_a);            // sample_code() * lsb_a()
 
  private:
+  double code(double i_true_a);  // the code, as an (integral) double
   CurrentSensorParams p_{};
   double lsb_ = 2.0 * 50.0 / 4096.0;  // of the default params; set by configure()
   double inv_lsb_ = 4096.0 / (2.0 * 50.0);
+  double code_lo_ = -2048.0, code_hi_ = 2047.0;
   GaussianRng rng_{1U};
 };
 
@@ -83,12 +85,14 @@ class VbusSensor {
   Status configure(const VbusSensorParams& p);
   double lsb_v() const { return lsb_; }
   std::int32_t sample_code(double vbus_true_v);
-  double sample_v(double vbus_true_v) { return sample_code(vbus_true_v) * lsb_v(); }
+  double sample_v(double vbus_true_v);         // sample_code() * lsb_v()
 
  private:
+  double code(double vbus_true_v);
   VbusSensorParams p_{};
   double lsb_ = 60.0 / 4096.0;  // of the default params; set by configure()
   double inv_lsb_ = 4096.0 / 60.0;
+  double code_hi_ = 4095.0;
   GaussianRng rng_{2U};
 };
 
