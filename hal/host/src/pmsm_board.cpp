@@ -167,7 +167,9 @@ void PmsmBoard::advance() {
   } else {
     open_circuit_ = false;
     duty_applied_ = duty;
-    const Eigen::Vector3d i = phase_currents_a();
+    // The inverter uses the phase currents only for the dead-time error.
+    const Eigen::Vector3d i =
+        (cfg_.inverter.t_dead_s > 0.0) ? phase_currents_a() : Eigen::Vector3d::Zero();
     const Eigen::Vector2d v = inverter_.alpha_beta_v(duty, cfg_.vbus_v, i);
     v_ab_applied_ = v;
     check_config(plant_.advance_zoh(v, t_s_, T, n, &x_), "integrator");
