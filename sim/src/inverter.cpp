@@ -25,7 +25,6 @@ Status Inverter3Ph::configure(const InverterParams& p) {
   const Status s = p.validate();
   if (s == Status::kOk) {
     p_ = p;
-    dead_frac_ = p.t_dead_s / p.t_pwm_s;
   }
   return s;
 }
@@ -33,7 +32,7 @@ Status Inverter3Ph::configure(const InverterParams& p) {
 Eigen::Vector3d Inverter3Ph::pole_voltages_v(const Eigen::Vector3d& duty_abc,
                                              double vbus_v,
                                              const Eigen::Vector3d& i_abc_a) const {
-  const double dead_frac = dead_frac_;
+  const double dead_frac = p_.t_dead_s / p_.t_pwm_s;
   const double vdc_v = (vbus_v > 0.0) ? vbus_v : 0.0;  // a bridge cannot invert the bus
   Eigen::Vector3d v;
   for (int k = 0; k < 3; ++k) {

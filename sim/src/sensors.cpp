@@ -137,7 +137,6 @@ Status CurrentSensor::configure(const CurrentSensorParams& p) {
     lsb_ = 2.0 * p.full_scale_a / std::ldexp(1.0, p.bits);
     inv_lsb_ = 1.0 / lsb_;
     code_hi_ = std::ldexp(1.0, p.bits - 1) - 1.0;
-    code_lo_ = -code_hi_ - 1.0;
     rng_.reseed(p.seed);
   }
   return s;
@@ -148,7 +147,7 @@ double CurrentSensor::code(double i_true_a) {
   // noiseless SIL step); a noisy one draws every sample.
   const double noise = (p_.noise_rms_a > 0.0) ? p_.noise_rms_a * rng_.normal() : 0.0;
   const double y = (1.0 + p_.gain_error) * i_true_a + p_.offset_a + noise;
-  return quantise(y, lsb_, inv_lsb_, code_lo_, code_hi_);
+  return quantise(y, lsb_, inv_lsb_, -code_hi_ - 1.0, code_hi_);
 }
 
 std::int32_t CurrentSensor::sample_code(double i_true_a) {
@@ -203,7 +202,7 @@ Status Encoder::configure(const EncoderParams& p) {
   const Status s = p.validate();
   if (s == Status::kOk) {
     p_ = p;
-    const std::int64_t cpr = p.counts_per_rev;
+    const std::int32_t cpr = p.counts_per_rev;
     in_rev_mask_ = ((cpr & (cpr - 1)) == 0) ? cpr - 1 : -1;
     reset(0.0);
   }

@@ -59,7 +59,6 @@ class Inverter3Ph {
 
  private:
   InverterParams p_{};
-  double dead_frac_ = 0.0;  // t_dead_s / t_pwm_s
 };
 
 class InverterHBridge2 {

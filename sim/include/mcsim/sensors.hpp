@@ -65,7 +65,7 @@ class CurrentSensor {
   CurrentSensorParams p_{};
   double lsb_ = 2.0 * 50.0 / 4096.0;  // of the default params; set by configure()
   double inv_lsb_ = 4096.0 / (2.0 * 50.0);
-  double code_lo_ = -2048.0, code_hi_ = 2047.0;
+  double code_hi_ = 2047.0;  // codes in [-code_hi_ - 1, code_hi_]
   GaussianRng rng_{1U};
 };
 
@@ -125,7 +125,7 @@ class Encoder {
   EncoderParams p_{};
   std::int64_t edge0_ = 0;      // floor(theta_reset * cpr / 2pi)
   std::int64_t rev_idx_ = 0;    // floor((theta - index) / 2pi) at the last sample
-  std::int64_t in_rev_mask_ = 4095;  // cpr - 1 for a power-of-two cpr, else -1
+  std::int32_t in_rev_mask_ = 4095;  // cpr - 1 for a power-of-two cpr, else -1
   bool index_seen_ = false;
 };
 
