@@ -55,7 +55,15 @@ Eigen::Vector3d Inverter3Ph::phase_voltages_v(const Eigen::Vector3d& duty_abc,
 
 Eigen::Vector2d Inverter3Ph::alpha_beta_v(const Eigen::Vector3d& duty_abc, double vbus_v,
                                           const Eigen::Vector3d& i_abc_a) const {
-  return clarke(phase_voltages_v(duty_abc, vbus_v, i_abc_a));
+  // Clarke of the pole voltages: the common mode that separates them from
+  // the phase voltages cancels in both components, so it is not formed, and
+  // 1/3, 1/sqrt(3) are products. Same value as clarke(phase_voltages_v())
+  // to a few roundings (tests/sil/sim), with a third of its latency: a SIL
+  // period computes this right before integrating the plant with it.
+  const Eigen::Vector3d p = pole_voltages_v(duty_abc, vbus_v, i_abc_a);
+  constexpr double kThird = 1.0 / 3.0;
+  constexpr double kInvSqrt3 = 0.57735026918962576451;
+  return Eigen::Vector2d(((p(0) + p(0)) - p(1) - p(2)) * kThird, (p(1) - p(2)) * kInvSqrt3);
 }
 
 double Inverter3Ph::dc_current_a(const Eigen::Vector3d& duty_abc,

@@ -1,5 +1,6 @@
 #include "mcsim/sensors.hpp"
 
+#include <cfloat>
 #include <cmath>
 
 #include "util.hpp"
@@ -9,16 +10,57 @@ namespace mcsim {
 namespace {
 
 constexpr double kTwoPi = 6.283185307179586476925286766559;
+constexpr double kInvTwoPi = 1.0 / kTwoPi;
 
-// Rounds y / lsb to the nearest code (ties up) and clamps it to [lo, hi];
-// a NaN reading gives code 0.
-std::int32_t quantise(double y, double lsb, std::int32_t lo, std::int32_t hi) {
-  const double q = std::floor(y / lsb + 0.5);
-  if (std::isnan(q)) {
-    return 0;
+// x rounded to the nearest integer (ties to even), for |x| < 2^51: adding
+// and removing 1.5 * 2^52 leaves no fraction bits (double arithmetic in the
+// default rounding mode, which FLT_EVAL_METHOD == 0 guarantees is not done
+// in a wider format). Two additions instead of a floor() call or its
+// inlined integer round trip.
+static_assert(FLT_EVAL_METHOD == 0, "the codes need double arithmetic evaluated in double");
+double nearest_int(double x) {
+  constexpr double kShift = 0x1.8p52;
+  return (x + kShift) - kShift;
+}
+
+// The codes below are computed with a reciprocal instead of a division (a
+// long latency at the head of every SIL period), bit for bit equal to the
+// definitions: num * inv_den (inv_den = 1 / den rounded) differs from the
+// rounded quotient by at most 2^-50 (|q| + 1); when it is farther than
+// tol = 2^-44 (|q| + 1) from every integer (floor) or from every half
+// integer (rounding), the quotient rounds the same way. Otherwise (about one
+// call in 10^12 for noisy inputs; NaN, infinity, |q| >= 2^50) the division
+// is done.
+double tolerance(double q) { return 0x1p-44 * (std::fabs(q) + 1.0); }
+
+// std::floor(num / den).
+double floor_of_quotient(double num, double den, double inv_den) {
+  const double q = num * inv_den;
+  const double r = nearest_int(q);
+  if (std::fabs(q) < 0x1p50 && std::fabs(q - r) > tolerance(q)) {
+    return (r > q) ? r - 1.0 : r;
   }
-  const double c = detail::clamp(q, static_cast<double>(lo), static_cast<double>(hi));
-  return static_cast<std::int32_t>(c);
+  return std::floor(num / den);
+}
+
+// std::floor(num / den + 0.5): the nearest integer, ties up.
+double round_of_quotient(double num, double den, double inv_den) {
+  const double q = num * inv_den;
+  const double r = nearest_int(q);
+  if (std::fabs(q) < 0x1p50 && std::fabs(q - r) < 0.5 - tolerance(q)) {
+    return r;
+  }
+  return std::floor(num / den + 0.5);
+}
+
+// Rounds y / lsb to the nearest code (ties up) and clamps it to [lo, hi]
+// (integers); a NaN reading gives code 0. The code as a double (exact).
+double quantise(double y, double lsb, double inv_lsb, double lo, double hi) {
+  const double q = round_of_quotient(y, lsb, inv_lsb);
+  if (std::isnan(q)) {
+    return 0.0;
+  }
+  return detail::clamp(q, lo, hi);
 }
 
 Status validate_adc(double gain_error, double offset, double full_scale, int bits,
@@ -41,8 +83,14 @@ Status validate_adc(double gain_error, double offset, double full_scale, int bit
   return Status::kOk;
 }
 
-std::int64_t floor_to_i64(double v) {
-  return std::isfinite(v) ? static_cast<std::int64_t>(std::floor(v)) : 0;
+// floor(v) as an integer, v already integral (0 if not finite).
+std::int64_t to_i64(double v) {
+  return std::isfinite(v) ? static_cast<std::int64_t>(v) : 0;
+}
+
+// floor(num / 2 pi) as an integer (0 if not finite).
+std::int64_t floor_turns(double num) {
+  return to_i64(floor_of_quotient(num, kTwoPi, kInvTwoPi));
 }
 
 }  // namespace
@@ -87,21 +135,26 @@ Status CurrentSensor::configure(const CurrentSensorParams& p) {
   if (s == Status::kOk) {
     p_ = p;
     lsb_ = 2.0 * p.full_scale_a / std::ldexp(1.0, p.bits);
+    inv_lsb_ = 1.0 / lsb_;
+    code_hi_ = std::ldexp(1.0, p.bits - 1) - 1.0;
     rng_.reseed(p.seed);
   }
   return s;
 }
 
-double CurrentSensor::lsb_a() const { return lsb_; }
-
-std::int32_t CurrentSensor::sample_code(double i_true_a) {
+double CurrentSensor::code(double i_true_a) {
   // No draw for a noiseless sensor (the Gaussian draw is a third of a
   // noiseless SIL step); a noisy one draws every sample.
   const double noise = (p_.noise_rms_a > 0.0) ? p_.noise_rms_a * rng_.normal() : 0.0;
   const double y = (1.0 + p_.gain_error) * i_true_a + p_.offset_a + noise;
-  const std::int32_t half = static_cast<std::int32_t>(1) << (p_.bits - 1);
-  return quantise(y, lsb_a(), -half, half - 1);
+  return quantise(y, lsb_, inv_lsb_, -code_hi_ - 1.0, code_hi_);
 }
+
+std::int32_t CurrentSensor::sample_code(double i_true_a) {
+  return static_cast<std::int32_t>(code(i_true_a));
+}
+
+double CurrentSensor::sample_a(double i_true_a) { return code(i_true_a) * lsb_; }
 
 // ----------------------------------------------------------------- VbusSensor
 
@@ -114,20 +167,24 @@ Status VbusSensor::configure(const VbusSensorParams& p) {
   if (s == Status::kOk) {
     p_ = p;
     lsb_ = p.full_scale_v / std::ldexp(1.0, p.bits);
+    inv_lsb_ = 1.0 / lsb_;
+    code_hi_ = std::ldexp(1.0, p.bits) - 1.0;
     rng_.reseed(p.seed);
   }
   return s;
 }
 
-double VbusSensor::lsb_v() const { return lsb_; }
-
-std::int32_t VbusSensor::sample_code(double vbus_true_v) {
+double VbusSensor::code(double vbus_true_v) {
   const double noise = (p_.noise_rms_v > 0.0) ? p_.noise_rms_v * rng_.normal() : 0.0;
   const double y = (1.0 + p_.gain_error) * vbus_true_v + p_.offset_v + noise;
-  const std::int32_t full = static_cast<std::int32_t>(
-      (static_cast<std::int64_t>(1) << p_.bits) - 1);
-  return quantise(y, lsb_v(), 0, full);
+  return quantise(y, lsb_, inv_lsb_, 0.0, code_hi_);
 }
+
+std::int32_t VbusSensor::sample_code(double vbus_true_v) {
+  return static_cast<std::int32_t>(code(vbus_true_v));
+}
+
+double VbusSensor::sample_v(double vbus_true_v) { return code(vbus_true_v) * lsb_; }
 
 // -------------------------------------------------------------------- Encoder
 
@@ -145,6 +202,8 @@ Status Encoder::configure(const EncoderParams& p) {
   const Status s = p.validate();
   if (s == Status::kOk) {
     p_ = p;
+    const std::int32_t cpr = p.counts_per_rev;
+    in_rev_mask_ = ((cpr & (cpr - 1)) == 0) ? cpr - 1 : -1;
     reset(0.0);
   }
   return s;
@@ -152,8 +211,8 @@ Status Encoder::configure(const EncoderParams& p) {
 
 void Encoder::reset(double theta_m_rad) {
   const double cpr = static_cast<double>(p_.counts_per_rev);
-  edge0_ = floor_to_i64(theta_m_rad * cpr / kTwoPi);
-  rev_idx_ = floor_to_i64((theta_m_rad - p_.index_angle_rad) / kTwoPi);
+  edge0_ = floor_turns(theta_m_rad * cpr);
+  rev_idx_ = floor_turns(theta_m_rad - p_.index_angle_rad);
   index_seen_ = false;
 }
 
@@ -163,21 +222,25 @@ EncoderReading Encoder::sample(double theta_m_rad) {
   const double cpr = static_cast<double>(p_.counts_per_rev);
   const std::int64_t cpr_i = p_.counts_per_rev;
   EncoderReading r;
-  r.count = floor_to_i64(theta_m_rad * cpr / kTwoPi) - edge0_;
+  r.count = floor_turns(theta_m_rad * cpr) - edge0_;
   std::int64_t in_rev = r.count;
   if (p_.has_index) {
-    const std::int64_t rev = floor_to_i64((theta_m_rad - p_.index_angle_rad) / kTwoPi);
+    const std::int64_t rev = floor_turns(theta_m_rad - p_.index_angle_rad);
     if (rev != rev_idx_) {
       index_seen_ = true;  // the index mark was crossed since the last sample
     }
     rev_idx_ = rev;
     if (index_seen_) {
-      in_rev = floor_to_i64((theta_m_rad - p_.index_angle_rad) * cpr / kTwoPi);
+      in_rev = floor_turns((theta_m_rad - p_.index_angle_rad) * cpr);
     }
   }
-  in_rev %= cpr_i;
-  if (in_rev < 0) {
-    in_rev += cpr_i;
+  if (in_rev_mask_ >= 0) {
+    in_rev &= in_rev_mask_;  // power-of-two cpr: the non-negative remainder
+  } else {
+    in_rev %= cpr_i;
+    if (in_rev < 0) {
+      in_rev += cpr_i;
+    }
   }
   r.count_in_rev = static_cast<std::int32_t>(in_rev);
   r.index_seen = index_seen_;

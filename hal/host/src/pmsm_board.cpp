@@ -57,9 +57,12 @@ PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
 }
 
 uint32_t PmsmBoard::ticks_now() const {
-  // Modulo 2^32, like a free-running hardware counter.
+  // Modulo 2^32, like a free-running hardware counter: the conversion of
+  // the (integral) tick count to int64_t is exact below 2^63 ticks (29 000
+  // years at 10 MHz), and to uint32_t keeps the count modulo 2^32.
   const double ticks = std::floor((t_s_ + tick_offset_s_) * cfg_.tick_hz + 0.5);
-  return static_cast<uint32_t>(static_cast<uint64_t>(std::fmod(ticks, 4294967296.0)));
+  if (!(std::fabs(ticks) < 9.2e18)) return 0U;  // not reachable with a valid config
+  return static_cast<uint32_t>(static_cast<int64_t>(ticks));
 }
 
 Eigen::Vector3d PmsmBoard::phase_currents_a() const {
@@ -257,10 +260,12 @@ void PmsmBoard::advance() {
   } else {
     open_circuit_ = false;
     duty_applied_ = duty;
-    const Eigen::Vector3d i = phase_currents_a();
+    // The inverter uses the phase currents only for the dead-time error.
+    const Eigen::Vector3d i =
+        (cfg_.inverter.t_dead_s > 0.0) ? phase_currents_a() : Eigen::Vector3d::Zero();
     const Eigen::Vector2d v = inverter_.alpha_beta_v(duty, cfg_.vbus_v, i);
     v_ab_applied_ = v;
-    check_config(mcsim::advance_zoh(plant_, v, t_s_, T, n, &x_), "integrator");
+    check_config(plant_.advance_zoh(v, t_s_, T, n, &x_), "integrator");
   }
   // (cos, sin) of the electrical angle are integrated as states; re-derive
   // them from theta_m every 32 periods (drift per period is O(h^5)).

@@ -97,7 +97,9 @@ class InputDelay {
     }
     Input out = buf_[head_];
     buf_[head_] = u_new;
-    head_ = (head_ + 1U) % delay_;
+    if (++head_ == delay_) {
+      head_ = 0U;  // (no integer division once per period)
+    }
     return out;
   }
 

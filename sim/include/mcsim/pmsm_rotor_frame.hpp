@@ -16,6 +16,20 @@
 // representations of the angle never drift apart (RK4 integrates both to
 // O(h^4) per step; the caller re-syncs every few periods).
 //
+// advance_zoh() is mcsim::advance_zoh() (classical RK4, n equal sub-steps,
+// input held) written out for this model, because it is most of the cost of
+// a SIL period. Same stages, same weights; what differs is only where the
+// roundings fall:
+//   - every stage computes g = sigma f(x_stage) with the step factor sigma
+//     (h/2 for stages 1 and 2, h for stage 3, h/6 for stage 4) folded into
+//     the model's constants, and the ZOH input folded in once per period
+//     (sigma/L * v_alpha, ...), so a stage is a few products and sums;
+//   - x + (h/6)(k1 + 2 k2 + 2 k3 + k4) is formed as
+//     (x + (g1 + 2 g2 + g3) / 3) + g4, the first part while stage 4 runs.
+// The step constants are recomputed when (period, sub-steps) change and at
+// configure(). tests/sil/sim checks it against rk4_step() on deriv() to
+// 1e-13 relative per period, so RK4's order and stability carry over.
+//
 // State x (index, name, unit):
 //   0 i_d_a, 1 i_q_a, 2 omega_m_rad_s, 3 theta_m_rad (as PmsmDq),
 //   4 cos_theta_e_1, 5 sin_theta_e_1
@@ -35,6 +49,7 @@ class PmsmRotorFrame {
   using Input = Eigen::Matrix<double, 2, 1>;
   enum : int { kId = 0, kIq = 1, kOmegaM = 2, kThetaM = 3, kCos = 4, kSin = 5 };
 
+  // Validates p; on error returns the code and keeps the previous parameters.
   Status configure(const PmsmParams& p);
   const PmsmParams& params() const { return dq_.params(); }
   const PmsmDq& dq() const { return dq_; }
@@ -58,6 +73,12 @@ class PmsmRotorFrame {
     return dx;
   }
 
+  // Advances *x from t0_s over period_s with n_sub RK4 sub-steps, u held
+  // (what advance_zoh(*this, u, t0_s, period_s, n_sub, x) computes, to a few
+  // roundings). Errors as advance_zoh() (state unchanged): kBadStepCount,
+  // kBadPeriod, kNotFinite.
+  Status advance_zoh(const Input& u, double t0_s, double period_s, int n_sub, State* x);
+
   // Full state from dq currents, speed and angle.
   State make_state(double id_a, double iq_a, double omega_m, double theta_m) const;
   // Recompute (c, s) from theta_m (one sin/cos).
@@ -70,10 +91,40 @@ class PmsmRotorFrame {
   double torque_nm(const State& x) const { return dq_.torque_nm(x.head<4>()); }
 
  private:
+  // Model constants times one stage's step factor sigma; see advance_zoh().
+  struct StageConsts {
+    double sigma = 0.0;     // h/2, h or h/6
+    double v_d = 0.0;       // sigma / Ld   (times v: the input term of i_d)
+    double v_q = 0.0;       // sigma / Lq
+    double r_d = 0.0;       // sigma R / Ld
+    double x_d = 0.0;       // sigma p Lq / Ld   (times omega_m i_q)
+    double r_q = 0.0;       // sigma R / Lq
+    double x_q = 0.0;       // sigma p Ld / Lq   (times omega_m i_d)
+    double f_q = 0.0;       // sigma p flux / Lq (times omega_m)
+    double t_1 = 0.0;       // sigma 3/2 p flux / J          (times i_q)
+    double t_2 = 0.0;       // sigma 3/2 p (Ld - Lq) / J     (times i_d i_q)
+    double b = 0.0;         // sigma B / J
+    double l = 0.0;         // sigma tau_load / J (constant load)
+    double inv_j = 0.0;     // sigma / J (any other load)
+    double w_e = 0.0;       // sigma p   (times omega_m: rotation of (c, s))
+  };
+  void plan_steps(double period_s, int n_sub);
+  // The six states as plain scalars, as the stages are written out.
+  struct Y6 {
+    double id, iq, wm, th, c, s;
+  };
+  template <bool kConstLoad>
+  Y6 rk4_substeps(const Y6& y0, const Input& u, double t0_s, int n_sub) const;
+
   PmsmDq dq_;
   double pp_ = 1.0, kt_ = 1.5, inv_ld_ = 0.0, inv_lq_ = 0.0, inv_j_ = 0.0;
   bool load_is_const_ = true;   // constant load, no Coulomb term: skip the call
   double const_load_nm_ = 0.0;
+  // advance_zoh() step constants for (plan_period_s_, plan_n_sub_); a period
+  // of 0 means not planned.
+  double plan_period_s_ = 0.0;
+  int plan_n_sub_ = 0;
+  StageConsts stage_[3];   // sigma = h/2, h, h/6
 };
 
 }  // namespace mcsim

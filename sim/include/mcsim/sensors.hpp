@@ -56,13 +56,16 @@ class CurrentSensor {
   CurrentSensor() = default;
   // Validates p and reseeds the noise; on error keeps everything unchanged.
   Status configure(const CurrentSensorParams& p);
-  double lsb_a() const;
+  double lsb_a() const { return lsb_; }
   std::int32_t sample_code(double i_true_a);   // advances the noise generator
-  double sample_a(double i_true_a) { return sample_code(i_true_a) * lsb_a(); }
+  double sample_a(double i_true_a);            // sample_code() * lsb_a()
 
  private:
+  double code(double i_true_a);  // the code, as an (integral) double
   CurrentSensorParams p_{};
   double lsb_ = 2.0 * 50.0 / 4096.0;  // of the default params; set by configure()
+  double inv_lsb_ = 4096.0 / (2.0 * 50.0);
+  double code_hi_ = 2047.0;  // codes in [-code_hi_ - 1, code_hi_]
   GaussianRng rng_{1U};
 };
 
@@ -80,13 +83,16 @@ class VbusSensor {
  public:
   VbusSensor() = default;
   Status configure(const VbusSensorParams& p);
-  double lsb_v() const;
+  double lsb_v() const { return lsb_; }
   std::int32_t sample_code(double vbus_true_v);
-  double sample_v(double vbus_true_v) { return sample_code(vbus_true_v) * lsb_v(); }
+  double sample_v(double vbus_true_v);         // sample_code() * lsb_v()
 
  private:
+  double code(double vbus_true_v);
   VbusSensorParams p_{};
   double lsb_ = 60.0 / 4096.0;  // of the default params; set by configure()
+  double inv_lsb_ = 4096.0 / 60.0;
+  double code_hi_ = 4095.0;
   GaussianRng rng_{2U};
 };
 
@@ -119,6 +125,7 @@ class Encoder {
   EncoderParams p_{};
   std::int64_t edge0_ = 0;      // floor(theta_reset * cpr / 2pi)
   std::int64_t rev_idx_ = 0;    // floor((theta - index) / 2pi) at the last sample
+  std::int32_t in_rev_mask_ = 4095;  // cpr - 1 for a power-of-two cpr, else -1
   bool index_seen_ = false;
 };
 

@@ -122,6 +122,31 @@ class Cli(unittest.TestCase):
         self.assertEqual(summary["scenario"], "foc-current-step")
         self.assertEqual(summary["rows"], 101)
 
+    def test_bench_reports_json(self):
+        # The contract of `mcsim bench` (no wall-clock threshold: the figures
+        # depend on the machine): one JSON object, the stated set-up, figures
+        # consistent with each other; bad options refused with exit code 2.
+        r = json.loads(run("bench", "--duration", "0.1").stdout)
+        self.assertEqual(r["benchmark"], "sil_foc_rtf")
+        self.assertEqual((r["pwm_hz"], r["substeps"], r["delay_periods"]), (20000, 4, 1))
+        self.assertEqual(r["steps"], 2000)
+        self.assertAlmostEqual(r["sim_s"], 0.1)
+        # rtf and ns figures are printed with one decimal, times with 6
+        # significant digits: consistent to those roundings.
+        def tol(*one_decimal):
+            return sum(0.05 / v for v in one_decimal) + 2e-5
+        self.assertAlmostEqual(r["rtf"] * r["wall_s"] / r["sim_s"], 1.0, delta=tol(r["rtf"]))
+        self.assertAlmostEqual(r["ns_per_step"] * r["steps"] * 1e-9 / r["wall_s"], 1.0,
+                               delta=tol(r["ns_per_step"]))
+        self.assertAlmostEqual(r["best_block_rtf"] * r["best_block_ns_per_step"] * 1e-9 * 20000,
+                               1.0, delta=tol(r["best_block_rtf"], r["best_block_ns_per_step"]))
+        # The fastest of the two 1000-period blocks is no slower than the mean.
+        self.assertLessEqual(r["best_block_ns_per_step"], r["ns_per_step"] * 1.001)
+        for bad in (["--duration", "abc"], ["--duration", "-1"], ["--fast"]):
+            p = run("bench", *bad, check=False)
+            self.assertEqual(p.returncode, 2, p.stderr)
+            self.assertIn("bench", p.stderr)
+
     def test_plot_makes_png(self):
         run("run", "stepper-constant-voltage", "--out", self.out, "--duration", "0.05")
         csv_path = os.path.join(self.out, "stepper-constant-voltage.csv")

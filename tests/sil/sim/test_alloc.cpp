@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "mcsim/mcsim.hpp"
+#include "mcsim/pmsm_rotor_frame.hpp"
 
 namespace {
 std::atomic<long> g_new_calls{0};
@@ -52,6 +53,10 @@ TEST(SimAlloc, ControlLoopDoesNotAllocate) {
   ASSERT_EQ(delay.configure(1U, Eigen::Vector3d::Constant(0.5)), mcsim::Status::kOk);
 
   mcsim::PmsmAb::State x = mcsim::PmsmAb::State::Zero();
+  // The SIL board's plant and integrator, driven alongside.
+  mcsim::PmsmRotorFrame rf;
+  ASSERT_EQ(rf.configure(mp), mcsim::Status::kOk);
+  mcsim::PmsmRotorFrame::State xr = rf.make_state(0.0, 0.0, 0.0, 0.0);
   const double period_s = ip.t_pwm_s;
   double checksum = 0.0;
   const long before = g_new_calls.load();
@@ -67,12 +72,14 @@ TEST(SimAlloc, ControlLoopDoesNotAllocate) {
     const Eigen::Vector3d duty = delay.push(duty_new);
     const mcsim::PmsmAb::Input u = inv.alpha_beta_v(duty, 24.0, i_abc);
     ASSERT_EQ(mcsim::advance_zoh(motor, u, t_s, period_s, 4, &x), mcsim::Status::kOk);
+    ASSERT_EQ(rf.advance_zoh(u, t_s, period_s, 4, &xr), mcsim::Status::kOk);
     checksum += ia_meas + r.angle_rad;
   }
   const long after = g_new_calls.load();
   EXPECT_EQ(after - before, 0);  // exact: not a single heap allocation
   EXPECT_TRUE(std::isfinite(checksum));
   EXPECT_GT(std::fabs(x(2)), 1.0);  // the loop really drove the motor
+  EXPECT_GT(std::fabs(xr(2)), 1.0);
 }
 
 TEST(SimAlloc, CounterSeesAllocations) {

@@ -1,6 +1,7 @@
 // Average-value inverters: line voltages, common mode, Clarke, dead time,
 // DC-bus limit.
 #include <cmath>
+#include <cstdint>
 
 #include <Eigen/Core>
 #include <gtest/gtest.h>
@@ -63,6 +64,37 @@ TEST(SimInverter3Ph, AlphaBetaIsAmplitudeInvariant) {
   // inverse_clarke(clarke(v)) == v for zero-sum v (frames consistency).
   const Vector3d v(3.0, -1.0, -2.0);
   EXPECT_LT((mcsim::inverse_clarke(mcsim::clarke(v)) - v).cwiseAbs().maxCoeff(), 1e-15);
+}
+
+TEST(SimInverter3Ph, AlphaBetaIsTheClarkeOfThePhaseVoltages) {
+  // alpha_beta_v() forms the Clarke transform from the pole voltages (the
+  // common mode cancels) with products for 1/3 and 1/sqrt(3): equal to
+  // clarke(phase_voltages_v()) to a few roundings of vbus (1e-14 relative:
+  // a handful of 1.1e-16 roundings; a wrong sign or factor is off by >1e-2),
+  // with and without dead time, inside and at the rails.
+  Inverter3Ph inv;
+  InverterParams p;
+  p.t_dead_s = 1.0e-6;
+  p.i_dead_band_a = 0.2;
+  for (const bool dead : {false, true}) {
+    if (dead) {
+      ASSERT_EQ(inv.configure(p), Status::kOk);
+    }
+    std::uint64_t r = 99U;
+    auto uni = [&r](double lo, double hi) {
+      r = r * 6364136223846793005ULL + 1442695040888963407ULL;
+      return lo + (hi - lo) * (static_cast<double>(r >> 11) * 0x1p-53);
+    };
+    for (int k = 0; k < 2000; ++k) {
+      const double vbus = uni(10.0, 400.0);
+      const Vector3d d(uni(-0.1, 1.1), uni(-0.1, 1.1), uni(-0.1, 1.1));
+      const Vector3d i(uni(-5.0, 5.0), uni(-5.0, 5.0), uni(-5.0, 5.0));
+      const Vector2d got = inv.alpha_beta_v(d, vbus, i);
+      const Vector2d ref = mcsim::clarke(inv.phase_voltages_v(d, vbus, i));
+      ASSERT_NEAR(got(0), ref(0), 1e-14 * vbus) << "k " << k;
+      ASSERT_NEAR(got(1), ref(1), 1e-14 * vbus) << "k " << k;
+    }
+  }
 }
 
 TEST(SimInverter3Ph, DeadTimeErrorOpposesCurrent) {

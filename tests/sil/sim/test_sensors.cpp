@@ -178,6 +178,53 @@ TEST(SimSensors, VbusIsUnipolar) {
   EXPECT_EQ(s.sample_code(100.0), 4095);                 // exact: top rail
 }
 
+// The codes are defined as round(y / lsb) and floor(theta cpr / 2 pi); the
+// models compute them with a reciprocal and fall back to the division near
+// an integer. Checked bit for bit against the definitions on random values
+// and on exact ties and their neighbours (where a product and a quotient
+// can round to different sides).
+TEST(SimSensors, CodesEqualTheDefinitionsExactly) {
+  CurrentSensorParams p;
+  p.full_scale_a = 20.0;  // lsb 40/4096: not a power of two
+  p.bits = 12;
+  CurrentSensor s;
+  ASSERT_EQ(s.configure(p), Status::kOk);
+  const double lsb = s.lsb_a();
+  auto expect_code = [&](double y) {
+    double q = std::floor(y / lsb + 0.5);
+    q = std::fmin(std::fmax(q, -2048.0), 2047.0);
+    ASSERT_EQ(s.sample_code(y), static_cast<std::int32_t>(q)) << "y=" << y;
+  };
+  std::uint64_t r = 12345U;
+  for (int k = 0; k < 200000; ++k) {
+    r = r * 6364136223846793005ULL + 1442695040888963407ULL;
+    expect_code((static_cast<double>(r >> 11) * 0x1p-53 - 0.5) * 50.0);
+  }
+  for (int c = -2100; c < 2100; ++c) {
+    const double tie = (c + 0.5) * lsb;
+    expect_code(tie);
+    expect_code(std::nextafter(tie, 1e9));
+    expect_code(std::nextafter(tie, -1e9));
+  }
+  for (const std::int32_t cpr : {4096, 8192, 2000, 1000}) {
+    EncoderParams ep;
+    ep.counts_per_rev = cpr;
+    Encoder e;
+    ASSERT_EQ(e.configure(ep), Status::kOk);
+    const double step = 2.0 * kPi / cpr;
+    for (int c = -3 * cpr; c < 3 * cpr; c += 7) {
+      for (const double th : {c * step, std::nextafter(c * step, 1e9),
+                              std::nextafter(c * step, -1e9), (c + 0.5) * step}) {
+        const std::int64_t want = static_cast<std::int64_t>(std::floor(th * cpr / (2.0 * kPi)));
+        const mcsim::EncoderReading rd = e.sample(th);
+        ASSERT_EQ(rd.count, want) << "cpr " << cpr << " th " << th;
+        const std::int64_t in_rev = ((want % cpr) + cpr) % cpr;
+        ASSERT_EQ(rd.count_in_rev, in_rev) << "cpr " << cpr << " th " << th;
+      }
+    }
+  }
+}
+
 TEST(SimEncoder, QuantisesTheMechanicalAngle) {
   EncoderParams p;
   p.counts_per_rev = 2000;
