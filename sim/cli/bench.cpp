@@ -12,7 +12,7 @@
 namespace mcsim {
 
 int cmd_bench(const std::vector<std::string>& args) {
-  double sim_s = 2.0;
+  double sim_s = 20.0;  // ~80 ms of wall time: long enough for a stable whole-run figure
   for (size_t i = 0; i < args.size(); ++i) {
     if (args[i] == "--duration" && i + 1 < args.size()) {
       char* end = nullptr;
