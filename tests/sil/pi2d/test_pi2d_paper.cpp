@@ -50,7 +50,7 @@ struct LawOut {
 };
 
 LawOut law(const X& x, double t, double t_sel) {
-  double w, a, th_ref;
+  double w = 0.0, a = 0.0, th_ref = 0.0;  // set by profile() for t < 1e9 s; initialised for -O3 -Wmaybe-uninitialized
   profile(t, &w, &a, &th_ref, t_sel);
   const double e4 = x[3] - th_ref;
   const double th = x[4] + kB * e4;                        // (12)
@@ -66,7 +66,7 @@ LawOut law(const X& x, double t, double t_sel) {
 }
 
 X deriv(const X& x, double t, double t_sel) {
-  double w, a, th_ref;
+  double w = 0.0, a = 0.0, th_ref = 0.0;  // set by profile() for t < 1e9 s; initialised for -O3 -Wmaybe-uninitialized
   profile(t, &w, &a, &th_ref, t_sel);
   const LawOut u = law(x, t, t_sel);
   const double e4 = x[3] - th_ref;
