@@ -63,6 +63,53 @@ uint32_t mc_foc_f32_gains_from_bandwidth(float r_ohm, float l_h, float bw_rad_s,
     return MC_FOC_ERR_NONE;
 }
 
+/* The bits of a positive float and back (positive floats order like their
+ * bit patterns). */
+static uint32_t foc_bits_of(float x)
+{
+    union {
+        float f;
+        uint32_t u;
+    } b;
+    b.f = x;
+    return b.u;
+}
+
+static float foc_float_of(uint32_t u)
+{
+    union {
+        float f;
+        uint32_t u;
+    } b;
+    b.u = u;
+    return b.f;
+}
+
+/* Largest bus voltage of the fast path, as its bits (0x5D000000 = 2^59 at
+ * most, which keeps v_max^2 finite): the largest vbus with
+ * fl(v_max_per_vbus * vbus) <= out_max, so that the PIs' dynamic limit is
+ * inside their static one there. The product is monotonic in vbus, so the
+ * bound is found from the quotient by a few ulp steps. */
+static uint32_t foc_vbus_fast_bound(float v_max_per_vbus, float out_max)
+{
+    const uint32_t cap = 0x5D000000u;
+    const float x = out_max / v_max_per_vbus;
+    uint32_t b;
+
+    if (!(x < foc_float_of(cap))) {
+        b = cap;
+    } else {
+        b = foc_bits_of(x);
+    }
+    while ((b > 0u) && !((v_max_per_vbus * foc_float_of(b)) <= out_max)) {
+        --b;
+    }
+    while ((b < cap) && ((v_max_per_vbus * foc_float_of(b + 1u)) <= out_max)) {
+        ++b;
+    }
+    return b;
+}
+
 uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
 {
     uint32_t err = MC_FOC_ERR_NONE;
@@ -115,7 +162,9 @@ uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
     st->decouple = cfg->decouple;
     st->ff_ld_h = cfg->decouple ? cfg->ld_h : 0.0f;
     st->ff_lq_h = cfg->decouple ? cfg->lq_h : 0.0f;
+    st->ff_nlq_h = -st->ff_lq_h;
     st->ff_flux_wb = cfg->decouple ? cfg->flux_wb : 0.0f;
+    st->vbus_fast_bits = foc_vbus_fast_bound(st->v_max_per_vbus, pcfg.out_max);
     st->svpwm_linear = (cfg->limit_mode == MC_SVPWM_LIMIT_CIRCLE) &&
                        (cfg->v_limit_ratio <= MC_FOC_LINEAR_RATIO);
     st->vd_v = 0.0f;
@@ -156,7 +205,9 @@ static uint32_t foc_check_inputs(float id_ref_a, float iq_ref_a, float id_a, flo
 static inline void foc_feed_forward(const mc_foc_f32_t *st, float id_a, float iq_a,
                                     float omega_e_rad_s, float *p_ff_d, float *p_ff_q)
 {
-    *p_ff_d = -(omega_e_rad_s * (st->ff_lq_h * iq_a));
+    /* -(w (L_q i_q)) as w ((-L_q) i_q): the same bits (rounding is
+     * symmetric, and the signs of zeros agree), no negation left to store */
+    *p_ff_d = omega_e_rad_s * (st->ff_nlq_h * iq_a);
     *p_ff_q = omega_e_rad_s * ((st->ff_ld_h * id_a) + st->ff_flux_wb);
 }
 
@@ -233,36 +284,26 @@ FOC_INLINE float foc_sqrt_pos(float x)
 #endif
 }
 
-/* The bits of a float (positive floats order like their bit patterns). */
-FOC_INLINE uint32_t foc_bits(float x)
-{
-    union {
-        float f;
-        uint32_t u;
-    } b;
-    b.f = x;
-    return b.u;
-}
 
-/* 0 < vbus <= 2^59 (5.8e17, the float with bits 0x5D000000; false for
- * NaN): one unsigned compare, as +0 (bits 0) wraps to the top and every
- * negative float, inf and NaN lie above. 2^59 keeps v_max^2 finite. */
-FOC_INLINE bool foc_vbus_fast_ok(float vbus_v)
+/* 0 < vbus <= the bus bound of init (foc_vbus_fast_bound; at most 2^59,
+ * false for NaN): one unsigned compare, as +0 (bits 0) wraps to the top and
+ * every negative float, inf and NaN lie above. */
+FOC_INLINE bool foc_vbus_fast_ok(const mc_foc_f32_t *st, float vbus_v)
 {
-    return (foc_bits(vbus_v) - 1u) < 0x5D000000u;
+    return (foc_bits_of(vbus_v) - 1u) < st->vbus_fast_bits;
 }
 
 /* |theta| <= MC_MATH_NEAR_LIMIT_RAD (256 = bits 0x43800000; false for NaN
- * and inf) and foc_vbus_fast_ok(vbus), the two tests in one branch: the
- * angle's bits without the sign, compared in one. */
-FOC_INLINE bool foc_theta_vbus_fast_ok(float theta_rad, float vbus_v)
+ * and inf) and foc_vbus_fast_ok(vbus): the angle's bits without the sign,
+ * compared in one. */
+FOC_INLINE bool foc_theta_vbus_fast_ok(const mc_foc_f32_t *st, float theta_rad, float vbus_v)
 {
-    const bool theta_ok = (foc_bits(theta_rad) << 1) <= (0x43800000u << 1);
-    return theta_ok & foc_vbus_fast_ok(vbus_v);
+    const bool theta_ok = (foc_bits_of(theta_rad) << 1) <= (0x43800000u << 1);
+    return theta_ok & foc_vbus_fast_ok(st, vbus_v);
 }
 
-/* The dq step of foc_dq_core for 0 < vbus <= 2^59 (foc_vbus_fast_ok: the
- * caller tests it), committed to both PIs; or false with nothing written where the
+/* The dq step of foc_dq_core for 0 < vbus <= the bus bound (foc_vbus_fast_ok:
+ * the caller tests it; then v_max <= out_max of both PIs), committed to both PIs; or false with nothing written where the
  * checked path would refuse or might differ. The PIs' own sticky flags are
  * not touched: they are 0 between steps (the checked step clears them and a
  * refused step restores the PIs as they were). */
@@ -278,7 +319,7 @@ FOC_INLINE bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     float integ_q;
     float vq_room_sq;
     float vq_max;
-    /* finite and at most 2/3 * 2^59, as vbus is */
+    /* finite and at most the PIs' out_max (the bus bound) */
     const float v_max = st->v_max_per_vbus * vbus_v;
 
     /* a non-finite speed makes both terms non-finite (0 * inf is NaN):
@@ -288,7 +329,7 @@ FOC_INLINE bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     const float e_q = iq_ref_a - iq_a;
 
     /* d axis: mc_pi_f32_step_lim(&st->pi_d, e_d, ff_d, -v_max, v_max) */
-    if (!mc_pi_f32_core_sym(&st->pi_d, e_d, ff_d, v_max, &integ_d, &vd)) {
+    if (!mc_pi_f32_core_in(&st->pi_d, e_d, ff_d, v_max, &integ_d, &vd)) {
         return false;
     }
     /* |vd| <= v_max (the PI's limit), so vd^2 <= v_max^2 after rounding
@@ -298,8 +339,10 @@ FOC_INLINE bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     vq_room_sq = (v_max * v_max) - (vd * vd);
     vq_max = foc_sqrt_pos(vq_room_sq);
 
-    /* q axis: mc_pi_f32_step_lim(&st->pi_q, e_q, ff_q, -vq_max, vq_max) */
-    if (!mc_pi_f32_core_sym(&st->pi_q, e_q, ff_q, vq_max, &integ_q, &vq)) {
+    /* q axis: mc_pi_f32_step_lim(&st->pi_q, e_q, ff_q, -vq_max, vq_max);
+     * vq_max <= v_max <= out_max (rounding is monotonic: the room is at
+     * most fl(v_max^2), whose square root is at most v_max) */
+    if (!mc_pi_f32_core_in(&st->pi_q, e_q, ff_q, vq_max, &integ_q, &vq)) {
         return false;
     }
     mc_pi_f32_commit(&st->pi_d, e_d, ff_d, integ_d, vd);
@@ -320,7 +363,7 @@ uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     if ((st == NULL) || (p_vd_v == NULL) || (p_vq_v == NULL)) {
         return MC_FOC_ERR_NULL;
     }
-    if (foc_vbus_fast_ok(vbus_v) &&
+    if (foc_vbus_fast_ok(st, vbus_v) &&
         foc_dq_fast(st, id_ref_a, iq_ref_a, id_a, iq_a, omega_e_rad_s, vbus_v, &vd, &vq)) {
         st->vd_v = vd;
         st->vq_v = vq;
@@ -392,7 +435,7 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
     foc_applied_t v;
 
     /* NaN fails both; a non-finite current shows in the PIs */
-    if (!foc_theta_vbus_fast_ok(theta, vbus)) {
+    if (!foc_theta_vbus_fast_ok(st, theta, vbus)) {
         return false;
     }
     mc_sincos_near_f32(theta, &sin_th, &cos_th); /* = mc_sincos_f32 here */
@@ -523,7 +566,8 @@ uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32
     float i_alpha;
     float i_beta;
 
-    if ((st == NULL) || (in == NULL) || (out == NULL)) {
+    /* one branch for the three pointers (| evaluates all, no short circuit) */
+    if ((int)(st == NULL) | (int)(in == NULL) | (int)(out == NULL)) {
         return MC_FOC_ERR_NULL;
     }
     /* A non-finite current that is read gives a non-finite alpha or beta

@@ -119,6 +119,9 @@ typedef struct {
     float ff_ld_h;          /**< ld_h with decoupling, else 0 (derived) */
     float ff_lq_h;          /**< lq_h with decoupling, else 0 (derived) */
     float ff_flux_wb;       /**< flux_wb with decoupling, else 0 (derived) */
+    float ff_nlq_h;         /**< -ff_lq_h (derived) */
+    uint32_t vbus_fast_bits; /**< bits of the largest vbus of the fast path: v_max <= the PIs'
+                                  out_max there, and vbus <= 2^59 (derived) */
     mc_svpwm_limit_t limit_mode;
     float v_limit_ratio;
     float v_max_per_vbus;   /**< v_limit_ratio times the modulator's largest voltage per volt

@@ -23,6 +23,13 @@ extern "C" {
 #define MC_PI_LIKELY(c) (c)
 #endif
 
+/** Always inlined (the FOC's fast path: one frame, values in registers). */
+#if defined(__GNUC__)
+#define MC_PI_ALWAYS_INLINE static inline __attribute__((always_inline))
+#else
+#define MC_PI_ALWAYS_INLINE static inline
+#endif
+
 /** A step's new integrator and output (returned in two FPU registers). */
 typedef struct {
     float integ;
@@ -71,57 +78,84 @@ static inline float mc_pi_f32_core(const mc_pi_f32_t *st, float error, float ff,
 }
 
 /**
- * mc_pi_f32_core for symmetric limits: dynamic limits -lim, lim (lim >= 0)
- * on a state whose static limits are symmetric (out_min = -out_max, as the
- * FOC's init makes them), so that the step's limits are -hi, hi with hi =
- * min(lim, out_max). The common-case test on magnitudes (|u| <= lim,
- * |u| <= out_max, |I + inc| <= out_max: three compares instead of four and
- * a min) has the same outcome as mc_pi_f32_core's. Returns false, with
- * nothing written, when the error or feed-forward is not finite or a
- * result is NaN: the caller then runs the checked mc_pi_f32_step_lim,
- * which refuses such a step.
+ * mc_pi_f32_core for symmetric limits inside the static ones: dynamic limits
+ * -lim, lim with 0 <= lim <= out_max on a state whose static limits are
+ * symmetric (out_min = -out_max, as the FOC's init makes them), so that the
+ * step's limits are -lim, lim (the checked step's max(-lim, out_min),
+ * min(lim, out_max)). The caller guarantees lim <= out_max (the FOC bounds
+ * the bus voltage for that). The common-case test on magnitudes (|u| <= lim,
+ * |I + inc| <= out_max: two compares; |u| <= out_max follows) has the same
+ * outcome as mc_pi_f32_core's. Returns false, with nothing written, when
+ * the error or feed-forward is not finite or the step overflows: the
+ * caller then runs the checked mc_pi_f32_step_lim, which decides (it
+ * refuses a non-finite input and gives the same bits otherwise).
  */
-static inline bool mc_pi_f32_core_sym(const mc_pi_f32_t *st, float error, float ff, float lim,
-                                      float *p_integ, float *p_u)
+MC_PI_ALWAYS_INLINE bool mc_pi_f32_core_in(const mc_pi_f32_t *st, float error, float ff, float lim,
+                                           float *p_integ, float *p_u)
 {
     const float p = st->kp * error;
     const float inc = st->ki_dt * error;
     const float integ = st->integ + inc;
     const float u = (p + integ) + ff;
-    const float abs_u = mc_fabs_f32(u);
 
-    /* NaN fails every test; so does an infinite error or ff (it makes u
+    /* NaN fails both tests; so does an infinite error or ff (it makes u
      * infinite or NaN whatever kp is). */
-    if (MC_PI_LIKELY((abs_u <= lim) && (abs_u <= st->out_max) &&
-                     (mc_fabs_f32(integ) <= st->out_max))) {
+    if (MC_PI_LIKELY((mc_fabs_f32(u) <= lim) && (mc_fabs_f32(integ) <= st->out_max))) {
         *p_integ = integ;
         *p_u = u;
+        return true;
+    }
+    if (st->aw == MC_PI_AW_CLAMP) {
+        /* |u| as bits: at least those of inf for a non-finite u, which a
+         * non-finite error or ff makes (and an overflow, which the checked
+         * step then takes). A finite u means finite p, I + inc and ff, so
+         * nothing below is NaN. */
+        union {
+            float f;
+            uint32_t b;
+        } abs_u;
+        abs_u.f = mc_fabs_f32(u);
+        if (abs_u.b >= 0x7F800000u) {
+            return false;
+        }
+        /* mc_pi_f32_core_sat's clamping branch and clamps with lo = -lim,
+         * hi = lim, the very same operations, with the compares whose
+         * outcome is known left out: the stored integrator I lies in
+         * [-out_max, out_max]; inc > 0 gives I + inc >= I (rounding is
+         * monotonic), so max(room, I) and I + inc need only their upper
+         * clamp, and inc <= 0 their lower one. */
+        const float i0 = st->integ;
+        const float out_max = st->out_max;
+        float i2;
+        float w;
+        if (u > lim) {
+            if (inc > 0.0f) {
+                const float room = (lim - p) - ff;
+                i2 = (room > i0) ? ((room > out_max) ? out_max : room) : i0;
+            } else {
+                i2 = (integ < -out_max) ? -out_max : integ;
+            }
+        } else if (u < -lim) {
+            if (inc < 0.0f) {
+                const float room = (-lim - p) - ff;
+                i2 = (room < i0) ? ((room < -out_max) ? -out_max : room) : i0;
+            } else {
+                i2 = (integ > out_max) ? out_max : integ;
+            }
+        } else {
+            /* |u| <= lim with |I + inc| > out_max */
+            i2 = mc_sat_f32(integ, -out_max, out_max);
+        }
+        w = (p + i2) + ff; /* may overflow to +-inf: clamped as in the checked step */
+        *p_integ = i2;
+        *p_u = (w > lim) ? lim : ((w < -lim) ? -lim : w);
         return true;
     }
     if (!mc_isfinite_f32(error + ff)) {
         return false; /* non-finite (or overflowing) input: the checked path decides */
     }
     {
-        const float hi = (lim < st->out_max) ? lim : st->out_max;
-        mc_pi_f32_res_t r;
-        if (st->aw == MC_PI_AW_CLAMP) {
-            /* mc_pi_f32_core_sat's clamping branch with lo = -hi, inline
-             * (the FOC's default scheme): the very same operations */
-            float i2 = integ;
-            if ((u > hi) && (inc > 0.0f)) {
-                const float room = hi - p - ff;
-                i2 = (room > st->integ) ? room : st->integ;
-            } else if ((u < -hi) && (inc < 0.0f)) {
-                const float room = -hi - p - ff;
-                i2 = (room < st->integ) ? room : st->integ;
-            } else {
-                /* the error pulls back into range, or only the static clamp acts */
-            }
-            r.integ = mc_sat_f32(i2, -st->out_max, st->out_max);
-            r.u = mc_sat_f32(p + r.integ + ff, -hi, hi);
-        } else {
-            r = mc_pi_f32_core_sat(st, p, inc, ff, -hi, hi);
-        }
+        const mc_pi_f32_res_t r = mc_pi_f32_core_sat(st, p, inc, ff, -lim, lim);
         if ((r.integ + r.u) != (r.integ + r.u)) {
             return false;
         }

@@ -331,4 +331,36 @@ TEST(SvpwmLimitDuty, SameAsLimitThenModulator) {
   EXPECT_EQ(a, 1.0f);  // nothing written with a NULL pointer
 }
 
+
+// The fast path's bus bound (mc_foc.h, vbus_fast_bits): the largest vbus,
+// as bits, whose v_max = v_max_per_vbus * vbus stays within the PIs' static
+// limit (so that the dynamic limit alone bounds the output there), capped
+// at 2^59. Checked at the bound and one ulp above it, per variant: exact,
+// no tolerance (it is a property of two float products).
+TEST(FocFastBound, LargestBusWhoseVoltageLimitIsInsideTheStaticOne) {
+  for (int variant = 0; variant <= 4; ++variant) {
+    const mc_foc_f32_cfg_t cfg = Cfg(variant);
+    mc_foc_f32_t st{};
+    ASSERT_EQ(mc_foc_f32_init(&st, &cfg), MC_FOC_ERR_NONE);
+    const uint32_t b = st.vbus_fast_bits;
+    ASSERT_GT(b, 0u);
+    ASSERT_LE(b, 0x5D000000u);
+    float at;
+    float above;
+    const uint32_t b1 = b + 1u;
+    std::memcpy(&at, &b, sizeof at);
+    std::memcpy(&above, &b1, sizeof above);
+    EXPECT_LE(st.v_max_per_vbus * at, st.pi_d.out_max) << variant;
+    EXPECT_EQ(st.pi_d.out_max, st.pi_q.out_max) << variant;
+    if (b < 0x5D000000u) {
+      EXPECT_GT(st.v_max_per_vbus * above, st.pi_d.out_max) << variant;
+    }
+    // 200 V static limit, 0.95 of the circle: v_max reaches 200 V at about
+    // 364.6 V of bus
+    if (variant == 0) {
+      EXPECT_NEAR(at, 200.0f / (0.95f / std::sqrt(3.0f)), 1e-3f);
+    }
+  }
+}
+
 }  // namespace
