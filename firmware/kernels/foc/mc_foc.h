@@ -42,10 +42,12 @@
  * output non-finite (the feed-forward gains are 0 without decoupling, and
  * 0 * inf is NaN), which fails that PI's range test, so the only explicit
  * tests are the angle's range (|theta| <= 256 rad, inline sin/cos) and the
- * bus (0 < vbus <= 2^59, so v_max^2 cannot overflow). Each PI's common case
- * (output and integrator inside their limits) is three compares; a
- * saturated PI takes the anti-windup code (clamping inline, the other
- * schemes in mc_pi_f32_core_sat) without leaving the fast path. It commits nothing
+ * bus (0 < vbus <= vbus_fast_bits, computed by init: at most 2^59, so
+ * v_max^2 cannot overflow, and v_max within the PIs' static limit, so the
+ * dynamic limit alone bounds the output). Each PI's common case (output
+ * and integrator inside their limits) is two compares; a saturated PI
+ * takes the anti-windup code (clamping inline, the other schemes in
+ * mc_pi_f32_core_sat) without leaving the fast path. It commits nothing
  * until both PIs are good and, in the modulator's linear region (circle
  * limit), computes the duties inline. It performs the same float
  * operations in the same order as the checked code, so its results are
