@@ -164,11 +164,14 @@ uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
     st->ff_lq_h = cfg->decouple ? cfg->lq_h : 0.0f;
     st->ff_nlq_h = -st->ff_lq_h;
     st->ff_flux_wb = cfg->decouple ? cfg->flux_wb : 0.0f;
-    st->vbus_fast_bits = foc_vbus_fast_bound(st->v_max_per_vbus, pcfg.out_max);
+    /* the fast path runs the clamping anti-windup only (mc_pi_f32_core_in):
+     * with the other schemes every step takes the checked code */
+    st->vbus_fast_bound = (cfg->aw == MC_PI_AW_CLAMP)
+                              ? foc_vbus_fast_bound(st->v_max_per_vbus, pcfg.out_max)
+                              : 0u;
+    st->vbus_fast_bits = st->vbus_fast_bound;
     st->svpwm_linear = (cfg->limit_mode == MC_SVPWM_LIMIT_CIRCLE) &&
                        (cfg->v_limit_ratio <= MC_FOC_LINEAR_RATIO);
-    st->vd_v = 0.0f;
-    st->vq_v = 0.0f;
     st->flags = MC_FOC_ERR_NONE;
     return MC_FOC_ERR_NONE;
 }
@@ -180,9 +183,18 @@ void mc_foc_f32_reset(mc_foc_f32_t *st)
     }
     (void)mc_pi_f32_reset(&st->pi_d, 0.0f);
     (void)mc_pi_f32_reset(&st->pi_q, 0.0f);
-    st->vd_v = 0.0f;
-    st->vq_v = 0.0f;
     st->flags = MC_FOC_ERR_NONE;
+    st->vbus_fast_bits = st->vbus_fast_bound;
+}
+
+/* Raise sticky flags (err may be 0). The fast path runs only while none is
+ * set: its bus bound is 0 from then on, until reset. */
+static void foc_raise(mc_foc_f32_t *st, uint32_t err)
+{
+    st->flags |= err;
+    if (st->flags != MC_FOC_ERR_NONE) {
+        st->vbus_fast_bits = 0u;
+    }
 }
 
 /* Input checks shared by both steps: returns the flags to raise. */
@@ -285,7 +297,8 @@ FOC_INLINE float foc_sqrt_pos(float x)
 }
 
 
-/* 0 < vbus <= the bus bound of init (foc_vbus_fast_bound; at most 2^59,
+/* 0 < vbus <= the bus bound of init (foc_vbus_fast_bound; at most 2^59;
+ * 0 once a sticky flag is set: then false for every vbus;
  * false for NaN): one unsigned compare, as +0 (bits 0) wraps to the top and
  * every negative float, inf and NaN lie above. */
 FOC_INLINE bool foc_vbus_fast_ok(const mc_foc_f32_t *st, float vbus_v)
@@ -365,8 +378,6 @@ uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     }
     if (foc_vbus_fast_ok(st, vbus_v) &&
         foc_dq_fast(st, id_ref_a, iq_ref_a, id_a, iq_a, omega_e_rad_s, vbus_v, &vd, &vq)) {
-        st->vd_v = vd;
-        st->vq_v = vq;
         *p_vd_v = vd;
         *p_vq_v = vq;
         return MC_FOC_ERR_NONE;
@@ -375,9 +386,7 @@ uint32_t mc_foc_f32_step_dq(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     if (err == MC_FOC_ERR_NONE) {
         err = foc_dq_core(st, id_ref_a, iq_ref_a, id_a, iq_a, omega_e_rad_s, vbus_v, &vd, &vq);
     }
-    st->flags |= err;
-    st->vd_v = vd;
-    st->vq_v = vq;
+    foc_raise(st, err);
     *p_vd_v = vd;
     *p_vq_v = vq;
     return err;
@@ -459,24 +468,20 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
     } else {
         v = foc_modulate_general(st, v, vbus, sin_th, cos_th, out);
     }
-    st->vd_v = v.vd;
-    st->vq_v = v.vq;
     out->id_a = id;
     out->iq_a = iq;
     out->vd_v = v.vd;
     out->vq_v = v.vq;
     out->v_alpha_v = v.v_alpha;
     out->v_beta_v = v.v_beta;
-    out->flags = st->flags;
+    out->flags = MC_FOC_ERR_NONE; /* the fast path runs with no sticky flag set */
     return true;
 }
 
 /* An error of the whole step: zero voltage, duties 0.5, sticky flag. */
 static uint32_t foc_step_fail(mc_foc_f32_t *st, mc_foc_f32_out_t *out, uint32_t err)
 {
-    st->flags |= err;
-    st->vd_v = 0.0f;
-    st->vq_v = 0.0f;
+    foc_raise(st, err);
     out->duty_a = 0.5f;
     out->duty_b = 0.5f;
     out->duty_c = 0.5f;
@@ -536,8 +541,6 @@ static uint32_t foc_step_checked(mc_foc_f32_t *st, float i_alpha, float i_beta, 
     }
     out->svpwm_flags |= mc_svpwm_f32(v_alpha, v_beta, vbus, st->limit_mode, &out->duty_a,
                                      &out->duty_b, &out->duty_c);
-    st->vd_v = vd;
-    st->vq_v = vq;
     out->vd_v = vd;
     out->vq_v = vq;
     out->v_alpha_v = v_alpha;

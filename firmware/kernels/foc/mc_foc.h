@@ -42,12 +42,16 @@
  * output non-finite (the feed-forward gains are 0 without decoupling, and
  * 0 * inf is NaN), which fails that PI's range test, so the only explicit
  * tests are the angle's range (|theta| <= 256 rad, inline sin/cos) and the
- * bus (0 < vbus <= vbus_fast_bits, computed by init: at most 2^59, so
+ * bus (0 < vbus <= vbus_fast_bound, computed by init: at most 2^59, so
  * v_max^2 cannot overflow, and v_max within the PIs' static limit, so the
- * dynamic limit alone bounds the output). Each PI's common case (output
- * and integrator inside their limits) is two compares; a saturated PI
- * takes the anti-windup code (clamping inline, the other schemes in
- * mc_pi_f32_core_sat) without leaving the fast path. It commits nothing
+ * dynamic limit alone bounds the output). A sticky flag sets that bound to
+ * 0 until reset, so the fast path only runs with none raised (and writes
+ * out->flags = 0 without reading st->flags). The fast path covers the
+ * clamping anti-windup (MC_PI_AW_CLAMP, what the drive uses); with
+ * back-calculation or none, init sets the bound to 0 and every step runs
+ * the checked code. Each PI's common case (output and integrator inside
+ * their limits) is two compares; a saturated PI takes the clamping code
+ * inline without leaving the fast path. It commits nothing
  * until both PIs are good and, in the modulator's linear region (circle
  * limit), computes the duties inline. It performs the same float
  * operations in the same order as the checked code, so its results are
@@ -122,8 +126,11 @@ typedef struct {
     float ff_lq_h;          /**< lq_h with decoupling, else 0 (derived) */
     float ff_flux_wb;       /**< flux_wb with decoupling, else 0 (derived) */
     float ff_nlq_h;         /**< -ff_lq_h (derived) */
-    uint32_t vbus_fast_bits; /**< bits of the largest vbus of the fast path: v_max <= the PIs'
-                                  out_max there, and vbus <= 2^59 (derived) */
+    uint32_t vbus_fast_bound; /**< bits of the largest vbus of the fast path: v_max <= the PIs'
+                                   out_max there, and vbus <= 2^59; 0 (no fast path) unless
+                                   the anti-windup is MC_PI_AW_CLAMP (derived) */
+    uint32_t vbus_fast_bits; /**< vbus_fast_bound while no sticky flag is set, 0 once one is
+                                  (the fast path then never runs until reset) (derived) */
     mc_svpwm_limit_t limit_mode;
     float v_limit_ratio;
     float v_max_per_vbus;   /**< v_limit_ratio times the modulator's largest voltage per volt
@@ -131,8 +138,6 @@ typedef struct {
     bool decouple;
     bool svpwm_linear;      /**< circle limit and v_limit_ratio <= MC_FOC_LINEAR_RATIO: the
                                  modulator never limits what the dq step allows (derived) */
-    float vd_v;             /**< last applied d voltage [V] */
-    float vq_v;             /**< last applied q voltage [V] */
     uint32_t flags;         /**< sticky MC_FOC_ERR_* */
 } mc_foc_f32_t;
 
@@ -179,7 +184,7 @@ uint32_t mc_foc_f32_gains_from_bandwidth(float r_ohm, float l_h, float bw_rad_s,
  */
 uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg);
 
-/** Integrators and last voltages to 0, sticky flags cleared. */
+/** Integrators to 0, sticky flags cleared. */
 void mc_foc_f32_reset(mc_foc_f32_t *st);
 
 /**

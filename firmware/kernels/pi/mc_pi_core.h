@@ -78,10 +78,12 @@ static inline float mc_pi_f32_core(const mc_pi_f32_t *st, float error, float ff,
 }
 
 /**
- * mc_pi_f32_core for symmetric limits inside the static ones: dynamic limits
- * -lim, lim with 0 <= lim <= out_max on a state whose static limits are
- * symmetric (out_min = -out_max, as the FOC's init makes them), so that the
- * step's limits are -lim, lim (the checked step's max(-lim, out_min),
+ * mc_pi_f32_core for the clamping scheme (st->aw == MC_PI_AW_CLAMP: the
+ * caller guarantees it; the FOC's fast path runs only then) and symmetric
+ * limits inside the static ones: dynamic limits -lim, lim with
+ * 0 <= lim <= out_max on a state whose static limits are symmetric
+ * (out_min = -out_max, as the FOC's init makes them), so that the step's
+ * limits are -lim, lim (the checked step's max(-lim, out_min),
  * min(lim, out_max)). The caller guarantees lim <= out_max (the FOC bounds
  * the bus voltage for that). The common-case test on magnitudes (|u| <= lim,
  * |I + inc| <= out_max: two compares; |u| <= out_max follows) has the same
@@ -105,63 +107,60 @@ MC_PI_ALWAYS_INLINE bool mc_pi_f32_core_in(const mc_pi_f32_t *st, float error, f
         *p_u = u;
         return true;
     }
-    if (st->aw == MC_PI_AW_CLAMP) {
-        /* |u| as bits: at least those of inf for a non-finite u, which a
-         * non-finite error or ff makes (and an overflow, which the checked
-         * step then takes). A finite u means finite p, I + inc and ff, so
-         * nothing below is NaN. */
-        union {
-            float f;
-            uint32_t b;
-        } abs_u;
-        abs_u.f = mc_fabs_f32(u);
-        if (abs_u.b >= 0x7F800000u) {
-            return false;
-        }
-        /* mc_pi_f32_core_sat's clamping branch and clamps with lo = -lim,
-         * hi = lim, the very same operations, with the compares whose
-         * outcome is known left out: the stored integrator I lies in
-         * [-out_max, out_max]; inc > 0 gives I + inc >= I (rounding is
-         * monotonic), so max(room, I) and I + inc need only their upper
-         * clamp, and inc <= 0 their lower one. */
-        const float i0 = st->integ;
-        const float out_max = st->out_max;
-        float i2;
-        float w;
-        if (u > lim) {
-            if (inc > 0.0f) {
-                const float room = (lim - p) - ff;
-                i2 = (room > i0) ? ((room > out_max) ? out_max : room) : i0;
-            } else {
-                i2 = (integ < -out_max) ? -out_max : integ;
-            }
-        } else if (u < -lim) {
-            if (inc < 0.0f) {
-                const float room = (-lim - p) - ff;
-                i2 = (room < i0) ? ((room < -out_max) ? -out_max : room) : i0;
-            } else {
-                i2 = (integ > out_max) ? out_max : integ;
-            }
+    /* |u| as bits: at least those of inf for a non-finite u, which a
+     * non-finite error or ff makes (and an overflow, which the checked
+     * step then takes). A finite u means finite p, I + inc and ff, so
+     * nothing below is NaN. */
+    union {
+        float f;
+        uint32_t b;
+    } abs_u;
+    abs_u.f = mc_fabs_f32(u);
+    if (abs_u.b >= 0x7F800000u) {
+        return false;
+    }
+    /* mc_pi_f32_core_sat's clamping branch and clamps with lo = -lim,
+     * hi = lim, the very same operations, with the compares whose
+     * outcome is known left out: the stored integrator I lies in
+     * [-out_max, out_max]; inc > 0 gives I + inc >= I (rounding is
+     * monotonic), so max(room, I) and I + inc need only their upper
+     * clamp, and inc <= 0 their lower one. */
+    const float i0 = st->integ;
+    const float out_max = st->out_max;
+    float i2;
+    float w;
+    if (u > lim) {
+        if (inc > 0.0f) {
+            const float room = (lim - p) - ff;
+            i2 = (room > i0) ? ((room > out_max) ? out_max : room) : i0;
+        } else if (integ >= -out_max) {
+            /* The error pulls back and I + inc needs no clamp: the
+             * output (p + (I + inc)) + ff is u again, above lim. */
+            *p_integ = integ;
+            *p_u = lim;
+            return true;
         } else {
-            /* |u| <= lim with |I + inc| > out_max */
-            i2 = mc_sat_f32(integ, -out_max, out_max);
+            i2 = -out_max;
         }
-        w = (p + i2) + ff; /* may overflow to +-inf: clamped as in the checked step */
-        *p_integ = i2;
-        *p_u = (w > lim) ? lim : ((w < -lim) ? -lim : w);
-        return true;
-    }
-    if (!mc_isfinite_f32(error + ff)) {
-        return false; /* non-finite (or overflowing) input: the checked path decides */
-    }
-    {
-        const mc_pi_f32_res_t r = mc_pi_f32_core_sat(st, p, inc, ff, -lim, lim);
-        if ((r.integ + r.u) != (r.integ + r.u)) {
-            return false;
+    } else if (u < -lim) {
+        if (inc < 0.0f) {
+            const float room = (-lim - p) - ff;
+            i2 = (room < i0) ? ((room < -out_max) ? -out_max : room) : i0;
+        } else if (integ <= out_max) {
+            /* as above, on the other side */
+            *p_integ = integ;
+            *p_u = -lim;
+            return true;
+        } else {
+            i2 = out_max;
         }
-        *p_integ = r.integ;
-        *p_u = r.u;
+    } else {
+        /* |u| <= lim with |I + inc| > out_max */
+        i2 = mc_sat_f32(integ, -out_max, out_max);
     }
+    w = (p + i2) + ff; /* may overflow to +-inf: clamped as in the checked step */
+    *p_integ = i2;
+    *p_u = (w > lim) ? lim : ((w < -lim) ? -lim : w);
     return true;
 }
 
