@@ -252,6 +252,20 @@ static void dead_time_error(const mc_ctrl_sls_t *c, float ia_a, float ib_a, floa
     *p_vb = k * MC_INV_SQRT3_F32 * (sb - sc);
 }
 
+/* Duty-side dead-time correction (cfg.dead_comp_duty): each leg's duty
+ * plus dead_sign(i_x) dead_time / dt, from the latest current sample,
+ * clamped to [0, 1]. */
+static void dead_comp_duties(const mc_ctrl_sls_t *c, float ia_a, float ib_a,
+                             mc_drive_out_t *out)
+{
+    const float kd = c->cfg.dead_time_s / c->cfg.dt_s;
+    const float band = c->cfg.dead_band_a;
+
+    out->duty_a = mc_sat_f32(out->duty_a + (kd * dead_sign(ia_a, band)), 0.0f, 1.0f);
+    out->duty_b = mc_sat_f32(out->duty_b + (kd * dead_sign(ib_a, band)), 0.0f, 1.0f);
+    out->duty_c = mc_sat_f32(out->duty_c + (kd * dead_sign(-(ia_a + ib_a), band)), 0.0f, 1.0f);
+}
+
 /* Preset the current PIs so that, in the frame theta with decoupling speed
  * omega_e, the next output reproduces the last commanded voltage. */
 static void preset_current_pis(mc_ctrl_sls_t *c, float theta_e, float omega_e, float id_m,
@@ -372,7 +386,9 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     {
         float dva = 0.0f;
         float dvb = 0.0f;
-        if (cfg->dead_time_s > 0.0f) {
+        /* With the duty-side correction the commanded voltage is taken as
+         * applied (the correction cancels the error it estimates). */
+        if ((cfg->dead_time_s > 0.0f) && !cfg->dead_comp_duty) {
             dead_time_error(c, m->ia_a, m->ib_a, m->vbus_v, &dva, &dvb);
         }
         c->tm.v_alpha_obs_v = c->v_hist_a[delay_idx] - dva;
@@ -486,6 +502,9 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     }
     c->v_hist_a[0] = fo.v_alpha_v;
     c->v_hist_b[0] = fo.v_beta_v;
+    if (cfg->dead_comp_duty && (cfg->dead_time_s > 0.0f)) {
+        dead_comp_duties(c, m->ia_a, m->ib_a, out);
+    }
 
     c->tm.phase = c->phase;
     c->tm.theta_hat_e_rad = theta_hat;

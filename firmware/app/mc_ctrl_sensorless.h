@@ -9,15 +9,22 @@
  *      just ended (the law's own command pwm_delay_periods + 1 steps ago,
  *      after the modulator's limit, minus the dead-time voltage error
  *      sat(i_x / dead_band) (dead_time / dt) vbus of each leg, with the
- *      mean of the currents at both ends of the period) -> flux gradient
- *      observer (mc_fluxobs) -> theta_hat; PLL (mc_spdpll) -> omega_hat.
+ *      mean of the currents at both ends of the period; with
+ *      dead_comp_duty the duties carry the correction instead, see 3, and
+ *      the commanded voltage is used) -> flux gradient observer
+ *      (mc_fluxobs) -> theta_hat; PLL (mc_spdpll) -> omega_hat.
  *      At low speed the back-EMF is a few volts and an uncompensated
  *      2 us dead time at 8 kHz and 200 V is 3.2 V per leg: the observer
  *      integrates it as flux.
  *   2. Every speed_div steps: speed PI on the PLL speed -> iq_ref, limited
  *      to +-iq_max_a (torque limit), clamping anti-windup.
  *   3. dq current PIs with decoupling (mc_foc) in the frame of theta_hat,
- *      inverse Park, SVPWM -> duties.
+ *      inverse Park, SVPWM -> duties. With dead_comp_duty, each leg's duty
+ *      is raised by sat(i_x / dead_band) dead_time / dt (the latest
+ *      sample's sign): the current loop then no longer sees the dead-time
+ *      error as a disturbance. Without it, at light load (phase currents
+ *      near zero) that error makes the speed loop oscillate (README,
+ *      "Light load with dead time").
  *
  * Start-up and low speed (the observer cannot see the angle at standstill,
  * Prop. 4 i, and below the critical speed it has extra equilibria):
@@ -117,6 +124,10 @@ typedef struct {
     float dead_time_s;           /**< dead time of a bridge leg [s], [0, dt/2) */
     float dead_band_a;           /**< current over which the dead-time error reverses
                                       (linear inside), >= 0 [A] */
+    bool dead_comp_duty;         /**< correct the duties instead: each leg's duty plus
+                                      sat(i_x / dead_band) dead_time / dt, from the latest
+                                      current sample, clamped to [0, 1]; the observer then
+                                      takes the commanded voltage as applied. f32 only */
     /* observer */
     float omega_crit_m_rad_s;    /**< critical speed of the flux observer [rad/s] (sets gamma) */
     float resid_tol;             /**< divergence monitor tolerance (see mc_fluxobs.h) */

@@ -97,6 +97,10 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
     }
     f = &cfg->f;
     err = mc_ctrl_sls_init(&ref, f);
+    if (f->dead_comp_duty) {
+        /* the duty-side dead-time correction has no q31 version yet */
+        err |= MC_CTRL_SLS_ERR_TIMING;
+    }
     if (!slsq_pos(cfg->i_base_a) || !slsq_pos(cfg->v_base_v) ||
         !slsq_pos(cfg->omega_base_e_rad_s) || !slsq_pos(cfg->flux_base_wb)) {
         return err | MC_CTRL_SLS_ERR_SCALE;

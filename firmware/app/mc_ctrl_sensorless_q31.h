@@ -31,7 +31,9 @@
  * q31 values directly. Times are counted in fast steps (the f32 plug-in
  * accumulates dt in float: a phase may end one step apart). Slews, the
  * I-f angle, the dead-time compensation, the hand-over rotation and the PI
- * presets are q31 / Q46 (mc_q46.h) with gains formed once at init.
+ * presets are q31 / Q46 (mc_q46.h) with gains formed once at init. The
+ * duty-side dead-time correction (cfg dead_comp_duty) is f32 only: init
+ * refuses it with MC_CTRL_SLS_ERR_TIMING.
  *
  * Telemetry is kept in per unit (mc_ctrl_sls_q31_tm_t);
  * mc_ctrl_sls_q31_tm_to_f32 converts it to the f32 plug-in's telemetry

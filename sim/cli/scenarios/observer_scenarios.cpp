@@ -28,6 +28,7 @@ SilOptions options_from(const Params& p) {
   SilOptions o;
   o.dead_time_s = p.get("dead_time_s");
   o.dead_comp_frac = p.get("dead_comp_frac");
+  o.dead_comp_duty = p.get("dead_comp_duty") != 0.0;
   o.noise_rms_a = p.get("noise_rms_a");
   o.r_error = p.get("r_error");
   o.flux_error = p.get("flux_error");
@@ -40,6 +41,9 @@ std::vector<ParamSpec> common_params() {
       {"dead_time_s", 0.0, "s", "inverter dead time (paper's bench: 2e-6)", 0.0, 1e-5},
       {"dead_comp_frac", 1.0, "1", "fraction of the dead time the observer's voltage compensates",
        0.0, 1.5},
+      {"dead_comp_duty", 0.0, "-",
+       "also compensate that dead time in the duties (f32 kernels only; off = 0, on = 1)", 0.0,
+       1.0, {{"off", 0.0}, {"on", 1.0}}},
       {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 5.0},
       {"r_error", 0.0, "1", "relative error of R in the controller", -0.9, 2.0},
       {"flux_error", 0.0, "1", "relative error of the flux in the controller", -0.5, 0.5},

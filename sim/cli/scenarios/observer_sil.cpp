@@ -79,6 +79,7 @@ mc_ctrl_sls_cfg_t default_ctrl_cfg(const Machine& m, const SilOptions& o) {
   c.speed_div = o.speed_div;
   c.dead_time_s = static_cast<float>(o.dead_time_s * o.dead_comp_frac);
   c.dead_band_a = static_cast<float>(0.01 * m.rated_current_a);
+  c.dead_comp_duty = o.dead_comp_duty;
   // Observer: critical speed 2 % of rated by default (44 r/min for the
   // 40 kW machine, 20 r/min for the test motor, below the paper's 50 r/min
   // trouble zone).
@@ -256,6 +257,7 @@ void Sil::record(Summary& s) const {
   s.set("inverter_dead_time_s", o_.dead_time_s);
   s.set("inverter_dead_band_a", 0.01 * m_.rated_current_a);
   s.set("ctrl_dead_time_s", c.dead_time_s);
+  s.set("ctrl_dead_comp_duty", c.dead_comp_duty ? 1.0 : 0.0);
   s.set("board_delay_periods", o_.delay_periods);
   s.set("encoder_cpr", o_.encoder_cpr);
   s.set("ctrl_r_error", o_.r_error);

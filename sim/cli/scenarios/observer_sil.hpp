@@ -48,6 +48,7 @@ struct SilOptions {
   int delay_periods = 1;          // computation delay of the board
   double dead_time_s = 0.0;       // inverter dead time
   double dead_comp_frac = 1.0;    // fraction of it the controller compensates
+  bool dead_comp_duty = false;    // compensate in the duties too (else the observer only)
   double noise_rms_a = 0.0;       // current-sensor noise
   double r_error = 0.0;           // relative error of R in the controller
   double flux_error = 0.0;        // relative error of flux in the controller

@@ -317,6 +317,13 @@ TEST(Q31Sensorless, InvalidConfigRejectedWithSpecificError) {
     EXPECT_EQ(init_expect_untouched(q), MC_CTRL_SLS_ERR_SPEED);
   }
   {
+    auto q = good_cfg();  // the duty-side dead-time correction is f32 only
+    q.f.dead_comp_duty = true;
+    mc_ctrl_sls_t f{};
+    EXPECT_EQ(mc_ctrl_sls_init(&f, &q.f), 0u);
+    EXPECT_EQ(init_expect_untouched(q), MC_CTRL_SLS_ERR_TIMING);
+  }
+  {
     auto q = good_cfg();  // hand-over within 2x the critical speed
     q.f.handover_speed_rad_s = 2.0f * q.f.omega_crit_m_rad_s;
     EXPECT_EQ(init_expect_untouched(q), MC_CTRL_SLS_ERR_STARTUP);
