@@ -17,12 +17,12 @@ log() { printf '\033[1m[bootstrap]\033[0m %s\n' "$*"; }
 # ---- Debian packages --------------------------------------------------------
 APT_PACKAGES=(
   cmake ninja-build g++ gcc make git
-  libeigen3-dev libgtest-dev
+  libeigen3-dev libgtest-dev libtomlplusplus-dev
   gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
   qemu-system-arm
   can-utils
   cppcheck clang-tidy
-  clang-14 libfuzzer-14-dev
+  clang-14 libfuzzer-14-dev libclang-rt-14-dev
   qemu-system-x86 busybox-static linux-image-amd64 cpio kmod iproute2
   python3 python3-venv
 )
