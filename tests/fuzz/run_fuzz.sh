@@ -3,10 +3,10 @@
 # Builds a libFuzzer target with clang-14 (ASan + UBSan, -ffp-contract=off
 # like every build here) and runs it for a bounded time on a working copy of
 # the committed seed corpus (tests/fuzz/corpus/<target>). Exit 0 only if no
-# crash, leak or sanitizer report. A crashing input is saved as crash-* in
+# crash, leak or sanitizer report and the target ran (tests/fuzz/run_libfuzzer.sh). A crashing input is saved as crash-* in
 # the work dir: add it to the seed corpus as a regression test.
 set -euo pipefail
-target=$1; src=$2; work=$3; secs=$4
+target=$1; src=$(cd "$2" && pwd); mkdir -p "$3"; work=$(cd "$3" && pwd); secs=$4
 CC=${MC_FUZZ_CC:-clang-14}; CXX=${MC_FUZZ_CXX:-clang++-14}
 FLAGS=(-g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off)
 mkdir -p "$work/obj-$target" "$work/corpus-$target"
@@ -30,6 +30,4 @@ case "$target" in
   *) echo "unknown fuzz target $target" >&2; exit 2 ;;
 esac
 cp -n tests/fuzz/corpus/"$target"/* "$work/corpus-$target/" 2>/dev/null || true
-cd "$work"
-"./fuzz_$target" -max_total_time="$secs" -print_final_stats=1 -timeout=5 \
-  "corpus-$target" 2>&1 | tail -25
+exec "$src/tests/fuzz/run_libfuzzer.sh" "$target" "$work/fuzz_$target" "$work/corpus-$target" "$secs"

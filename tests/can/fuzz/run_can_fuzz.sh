@@ -8,9 +8,9 @@
 # to the seed corpus as a regression test. Exit 0 only without a crash,
 # leak or sanitizer report.
 set -euo pipefail
-src=$(cd "$1" && pwd); work=$2; secs=$3
+src=$(cd "$1" && pwd); mkdir -p "$2"; work=$(cd "$2" && pwd); secs=$3
 CC=${MC_FUZZ_CC:-clang-14}; CXX=${MC_FUZZ_CXX:-clang++-14}
-command -v "$CC" >/dev/null || { echo "$CC missing (Debian packages clang-14 libfuzzer-14-dev)" >&2; exit 2; }
+command -v "$CC" >/dev/null || { echo "$CC missing (Debian packages clang-14 libfuzzer-14-dev libclang-rt-14-dev)" >&2; exit 2; }
 FLAGS=(-g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off)
 INC=(-I "$src/firmware/kernels" -I "$src/firmware/app" -I "$src/hal/include" -I "$src/hal/fake")
 mkdir -p "$work/obj" "$work/corpus"
@@ -25,5 +25,4 @@ done < <(find "$src/firmware/kernels" -name '*.c' | sort
 "$CXX" "${FLAGS[@]}" -std=c++17 "${INC[@]}" "$src/tests/can/fuzz/fuzz_can_cmd.cpp" "${objs[@]}" \
   -o "$work/fuzz_can_cmd"
 cp -n "$src"/tests/can/fuzz/corpus/* "$work/corpus/" 2>/dev/null || true
-cd "$work"
-"./fuzz_can_cmd" -max_total_time="$secs" -print_final_stats=1 -timeout=5 -max_len=600 corpus 2>&1 | tail -25
+exec "$src/tests/fuzz/run_libfuzzer.sh" can_cmd "$work/fuzz_can_cmd" "$work/corpus" "$secs" -max_len=600
