@@ -24,7 +24,8 @@ Asserts, each with the reason of its tolerance:
  6. python-can's candump reader + cantools decode every frame as the logger
     does (values equal to 1e-9: both compute raw * scale + offset in double);
  7. with --logger-log: the logger's own recording has the same frames as
-    candump's.
+    candump's; with --logger-report: the kernel dropped none of them on the
+    logger's socket (SO_RXQ_OVFL counter), so a loss can never be silent.
 Exit 0 when all hold; prints each failure and exits 1 otherwise.
 """
 import argparse
@@ -65,6 +66,7 @@ def main():
     ap.add_argument("--json", required=True)
     ap.add_argument("--log", required=True)
     ap.add_argument("--logger-log")
+    ap.add_argument("--logger-report", help="the logger's --report JSON (kernel drop counter)")
     ap.add_argument("--cmds", help="command script the SIL replayed (else commands are in the log)")
     ap.add_argument("--timed", action="store_true", help="log time stamps are simulated time")
     ap.add_argument("--iq-cmd-a", type=float, default=1.0, help="an i_q reference a command set")
@@ -196,6 +198,14 @@ def main():
         check(key == key_rec, f"logger recorded {len(key_rec)} frames, candump {len(key)}"
                               " (or their contents differ)")
         print(f"logger recording: {len(key_rec)} frames, same as candump")
+    if a.logger_report:
+        rep = json.load(open(a.logger_report))
+        check(rep["kernel_dropped"] == 0,
+              f"the kernel dropped {rep['kernel_dropped']} frames on the logger's socket")
+        check(rep["frames"] == len(mc_can.read_candump(a.logger_log or a.log)),
+              "the logger's report and its log disagree on the frame count")
+        print(f"logger: kernel drop counter {rep['kernel_dropped']}, receive buffer "
+              f"{rep['rcvbuf_bytes']} B")
 
     for f in failures:
         print("FAIL:", f)

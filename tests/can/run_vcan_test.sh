@@ -23,4 +23,4 @@ fi
 cd "$W/run"
 "$PY" "$ROOT/tools/can/mc_can.py" stats candump.log
 exec "$PY" "$ROOT/tests/can/check_can_run.py" --csv can-telemetry.csv --json can-telemetry.json \
-  --log candump.log --logger-log logger.log
+  --log candump.log --logger-log logger.log --logger-report logger.json

@@ -37,9 +37,11 @@ fi
 ip link set up "$IF" || exit 3
 say "kernel $(uname -r), interface $IF up"
 
-candump -L "$IF" > candump.log &
+# both receivers queue up to 16 MiB in the kernel (about 20,000 frames) so a
+# receiver that is not scheduled for a while loses nothing (root: forced size)
+candump -L -r 16777216 "$IF" > candump.log &
 CD=$!; pids+=("$CD")
-"$PY" "$ROOT/tools/can/mc_can.py" record --iface "$IF" --out logger.log --ready rec.ready > record.out 2>&1 &
+"$PY" "$ROOT/tools/can/mc_can.py" record --iface "$IF" --out logger.log --report logger.json --ready rec.ready > record.out 2>&1 &
 REC=$!; pids+=("$REC")
 wait_for 120 test -e rec.ready || { say "logger did not start"; cat record.out; exit 1; }
 
@@ -73,3 +75,5 @@ kill -INT "$CD"; kill -TERM "$REC"
 wait "$CD" "$REC" 2>/dev/null
 cat record.out
 say "recorded: $(wc -l < candump.log) frames (candump), $(wc -l < logger.log) (logger)"
+# the drop counter the logger reports counts real drops
+"$PY" "$ROOT/tests/can/vm/drop_counter_check.py" "$IF" "$ROOT" || exit 1
