@@ -324,6 +324,8 @@ mc_ctrl_pi2d_cfg_t build_pi2d_cfg(const MotorFiles& f, const Gains& g) {
   c.v_max_v = static_cast<float>(g.v_max_v);
   c.nu_max_nm = static_cast<float>(2.0 * g.torque_rated_nm);
   cc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
+  // Delay compensation (mc_ctrl_pi2d.h): the board's delay plus half a period.
+  cc.angle_advance_periods = static_cast<float>(b.delay_periods + 0.5);
   return cc;
 }
 
@@ -370,9 +372,14 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
       const mc_ctrl_pi2d_cfg_t cc = build_pi2d_cfg(f, g);
       const uint32_t e = mc_ctrl_pi2d_init(&pi2d_, &cc);
       if (e != 0u) {
-        throw UsageError("PI2D refuses this motor: its gains break the law's conditions "
-                         "(MC_CTRL_PI2D bits " + std::to_string(e) + ", law bits " +
-                         std::to_string(pi2d_.law_err) + ")");
+        mc_pi2d_f32_t probe{};
+        const uint32_t le = mc_pi2d_f32_init(&probe, &cc.law);
+        throw UsageError(std::string("PI2D refuses this motor: ") +
+                         ((le & MC_PI2D_ERR_KI_EPS) ? "the proof's ki (L/R)^2 < eps fails"
+                          : (le & MC_PI2D_ERR_KP_PRIME) ? "kp' = kp - ki/eps <= 0"
+                                                        : "its configuration is invalid") +
+                         " (MC_CTRL_PI2D bits " + std::to_string(e) + ", MC_PI2D bits " +
+                         std::to_string(le) + ")");
       }
       if (mc_drive_attach_ctrl(&drive_, mc_ctrl_pi2d_ops(&pi2d_)) != 0) {
         throw std::runtime_error("drive refused the PI2D plug-in");
