@@ -123,7 +123,17 @@ Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
   g.pi2d_wn_rad_s =
       get("pi2d_wn_rad_s", std::min(g.speed_wc_rad_s / 3.0, 0.5 * m.r_ohm / m.lq_h),
           &Gains::pi2d_wn_rad_s);
-  g.pi2d_a_per_s = get("pi2d_a_per_s", std::min(g.enc_pll_bw_rad_s, 0.1 / T), &Gains::pi2d_a_per_s);
+  // The dirty-derivative pole sets the law's speed-error coupling into the
+  // q-current error, Delta ~ b kd / sigma = 3 wn a J / kt (mc_pi2d.h, (21));
+  // keeping it below 2 k2 keeps the q loop ahead of it (the 40 kW machine
+  // with a = 1000/s limit-cycled at +-i_limit).
+  const double sigma = g.kt_nm_a / m.j_kgm2;
+  g.pi2d_a_per_s = get("pi2d_a_per_s",
+                       std::min({g.enc_pll_bw_rad_s, 0.1 / T,
+                                 2.0 * g.cur_bw_rad_s * sigma / (3.0 * g.pi2d_wn_rad_s)}),
+                       &Gains::pi2d_a_per_s);
+  g.pi2d_ok = g.pi2d_a_per_s >= 3.0 * g.pi2d_wn_rad_s;
+  g.pi2d_coupling = sigma * m.pole_pairs * m.flux_wb / (m.lq_h * g.cur_bw_rad_s);
   return g;
 }
 
@@ -369,6 +379,19 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
       break;
     }
     case Law::kPi2d: {
+      if (!g.pi2d_ok) {
+        throw UsageError("PI2D refuses this motor: its current loop (cur_bw " +
+                         num(g.cur_bw_rad_s) + " rad/s) is too slow for kt/J = " +
+                         num(g.kt_nm_a / f.motor.j_kgm2) + ": the position filter would have "
+                         "to be slower than the speed loop (use law=pi)");
+      }
+      if (g.pi2d_coupling > 300.0) {
+        throw UsageError("PI2D refuses this motor: the back-EMF couples the speed error into "
+                         "the q current faster than the law's proportional current loop "
+                         "separates them: kt ke / (J L k2) = " + num(g.pi2d_coupling) +
+                         " rad/s > 300 (an empirical bound: the gimbal-class motor "
+                         "limit-cycles to over-current above it; use law=pi)");
+      }
       const mc_ctrl_pi2d_cfg_t cc = build_pi2d_cfg(f, g);
       const uint32_t e = mc_ctrl_pi2d_init(&pi2d_, &cc);
       if (e != 0u) {

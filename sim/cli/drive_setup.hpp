@@ -42,7 +42,16 @@
 //   pi2d_wn_rad_s      = min(speed_wc / 3, 0.5 R / L): the PI^2D triple pole;
 //                        the R/L bound keeps the proof's ki (L/R)^2 < eps
 //                        with eps = 2 ki / kp (kp' = kp / 2).
-//   pi2d_a_per_s       = min(enc_pll_bw, 0.1 / T): dirty-derivative pole (b = 1).
+//   pi2d_a_per_s       = min(enc_pll_bw, 0.1 / T, 2 cur_bw sigma / (3 wn)),
+//                        sigma = kt / J: dirty-derivative pole (b = 1); the
+//                        last bound keeps the law's coupling of the speed
+//                        error into the q-current error (Delta ~ 3 wn a / sigma)
+//                        below 2 k2. PI^2D is refused when this leaves
+//                        a < 3 wn (the filter would be slower than the loop),
+//                        and when kt ke / (J L k2) > 300 rad/s: an empirical
+//                        bound (the library's gimbal motor, 453, limit-cycles
+//                        to over-current with any wn, a tried; the others are
+//                        at 7 to 186 and settle).
 //
 // Refused (UsageError naming the reason): L/R shorter than two PWM periods;
 // a PWM ripple vbus T / (4 L) (peak to peak, half-bridge at 50 % duty: an
@@ -76,6 +85,8 @@ struct Gains {
   double pi2d_wn_rad_s = 0, pi2d_a_per_s = 0;
   // derived, not settable
   double kt_nm_a = 0, v_max_v = 0;
+  bool pi2d_ok = true;  // the PI^2D filter pole could be placed (see above)
+  double pi2d_coupling = 0;  // kt ke / (J L k2) [rad/s]; PI^2D refused above 300
 };
 
 /// The --set keys of the gains, their defaults derived from the files.
