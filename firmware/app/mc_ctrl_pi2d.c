@@ -64,6 +64,11 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     }
 
     float v_alpha, v_beta;
+    if (c->cfg.angle_advance_periods > 0.0f) {
+        const float adv = c->cfg.angle_advance_periods * (float)c->cfg.law.pole_pairs *
+                          c->omega_ref_rad_s * c->cfg.law.dt_s;
+        mc_sincos_f32(mc_wrap_pi_f32(m->theta_e_rad + adv), &s, &co);
+    }
     mc_inv_park_f32(o.vd_v, o.vq_v, s, co, &v_alpha, &v_beta);
     c->tm.svpwm_flags = mc_svpwm_f32(v_alpha, v_beta, m->vbus_v, c->cfg.limit_mode, &out->duty_a,
                                      &out->duty_b, &out->duty_c);
@@ -106,6 +111,10 @@ uint32_t mc_ctrl_pi2d_init(mc_ctrl_pi2d_t *c, const mc_ctrl_pi2d_cfg_t *cfg)
     uint32_t err = MC_CTRL_PI2D_ERR_NONE;
     if ((cfg->limit_mode != MC_SVPWM_LIMIT_CIRCLE) && (cfg->limit_mode != MC_SVPWM_LIMIT_HEXAGON)) {
         err |= MC_CTRL_PI2D_ERR_LIMIT;
+    }
+    if (!mc_isfinite_f32(cfg->angle_advance_periods) || (cfg->angle_advance_periods < 0.0f) ||
+        (cfg->angle_advance_periods > 4.0f)) {
+        err |= MC_CTRL_PI2D_ERR_ADVANCE;
     }
     mc_pi2d_f32_t law;
     const uint32_t lerr = mc_pi2d_f32_init(&law, &cfg->law);

@@ -44,10 +44,23 @@ extern "C" {
 #define MC_CTRL_PI2D_ERR_REF    (1u << 3)  /**< non-finite reference */
 #define MC_CTRL_PI2D_ERR_MEAS   (1u << 4)  /**< fast step without encoder or with bad vbus */
 #define MC_CTRL_PI2D_ERR_STEP   (1u << 5)  /**< the law refused its step (non-finite input) */
+#define MC_CTRL_PI2D_ERR_ADVANCE (1u << 6) /**< angle_advance_periods not finite or outside [0, 4] */
 
 typedef struct {
     mc_pi2d_f32_cfg_t law;          /**< plant, gains, limits; law.dt_s = PWM period */
     mc_svpwm_limit_t limit_mode;    /**< modulator limit */
+    /** Delay compensation of the output frame, in PWM periods: the inverse
+     *  Park uses theta_e + angle_advance_periods * p * omega_ref * dt. The
+     *  voltage computed from the sample at t_k acts over
+     *  [t_k + d dt, t_k + (d + 1) dt] (d: the board's computation delay), when
+     *  the rotor has turned (d + 0.5) omega_e dt on average: d + 0.5 cancels
+     *  that rotation. Without it, the lag turns part of the back-EMF
+     *  feed-forward into the d axis; the law's d loop is proportional only
+     *  (L k1 - R), so on a low-inductance motor at speed this leaves a
+     *  large steady i_d (measured on the D5065 in tests/sil/motors). The
+     *  speed is the reference's (the law is position-only). 0: off (the
+     *  paper's law as printed). [0, 4]. */
+    float angle_advance_periods;
 } mc_ctrl_pi2d_cfg_t;
 
 /** Telemetry of the last fast step. */

@@ -4,6 +4,7 @@
 //   mcsim list
 //   mcsim describe <scenario>
 //   mcsim run <scenario> --out DIR [--duration S] [--set key=value ...]
+//             [--motor FILE [--board FILE]]   (scenarios for any motor)
 //   mcsim bench [--duration S]
 //
 // Exit codes: 0 ok, 2 usage error (nothing written), 1 run failure.
@@ -13,11 +14,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <unistd.h>
 #include <vector>
 
 #include "bench.hpp"
+#include "motor_file.hpp"
 #include "scenario.hpp"
 
 namespace {
@@ -25,8 +28,9 @@ namespace {
 void usage(std::FILE* f) {
   std::fprintf(f,
                "usage: mcsim list\n"
-               "       mcsim describe <scenario>\n"
+               "       mcsim describe <scenario> [--motor FILE [--board FILE]]\n"
                "       mcsim run <scenario> --out DIR [--duration S] [--set key=value ...]\n"
+               "                 [--motor FILE [--board FILE]]\n"
                "       mcsim bench [--duration S]\n");
 }
 
@@ -56,11 +60,47 @@ const mcsim::Scenario& need_scenario(const std::string& name) {
   return *s;
 }
 
-int cmd_describe(const std::string& name) {
-  const auto& s = need_scenario(name);
+// --motor/--board for scenario s: parsed files, or none. A scenario with
+// its own motor refuses them; a scenario for any motor requires --motor.
+std::unique_ptr<mcsim::MotorFiles> motor_files(const mcsim::Scenario& s, const std::string& motor,
+                                               const std::string& board) {
+  if (!s.motor_params) {
+    if (!motor.empty() || !board.empty()) {
+      throw mcsim::UsageError("scenario '" + s.name + "' runs its own motor and takes no --motor "
+                              "or --board (the scenarios for any motor: current-step, "
+                              "speed-step, sensorless-speed-step, load-step)");
+    }
+    return nullptr;
+  }
+  if (motor.empty()) {
+    throw mcsim::UsageError("scenario '" + s.name + "' needs --motor FILE (and --board FILE "
+                            "unless the motor file has a [board] table); see sim/motors/");
+  }
+  return std::make_unique<mcsim::MotorFiles>(mcsim::load_motor_files(motor, board));
+}
+
+int cmd_describe(const std::vector<std::string>& args) {
+  if (args.empty()) throw mcsim::UsageError("describe takes one scenario name");
+  const auto& s = need_scenario(args[0]);
+  std::string motor, board;
+  for (size_t i = 1; i < args.size(); ++i) {
+    if ((args[i] == "--motor" || args[i] == "--board") && i + 1 < args.size()) {
+      (args[i] == "--motor" ? motor : board) = args[i + 1];
+      ++i;
+    } else {
+      throw mcsim::UsageError("describe: unexpected '" + args[i] + "'");
+    }
+  }
   std::printf("%s: %s\ndefault duration: %g s\nparameters (--set key=value):\n", s.name.c_str(),
               s.description.c_str(), s.default_duration_s);
-  for (const auto& p : s.params) {
+  if (s.motor_params && motor.empty()) {
+    std::printf("  (ranges and defaults depend on the motor: describe %s --motor FILE "
+                "[--board FILE])\n", s.name.c_str());
+    return 0;
+  }
+  const auto files = motor_files(s, motor, board);
+  const std::vector<mcsim::ParamSpec> specs = files ? s.motor_params(*files) : s.params;
+  for (const auto& p : specs) {
     std::printf("  %-22s default %-10g [%g, %g] %-8s %s", p.key.c_str(), p.default_value,
                 p.min_value, p.max_value, p.unit.c_str(), p.help.c_str());
     for (size_t i = 0; i < p.choices.size(); ++i) {
@@ -77,6 +117,7 @@ int cmd_run(const std::vector<std::string>& args) {
   std::string out_dir;
   double duration = scen.default_duration_s;
   std::vector<std::pair<std::string, std::string>> sets;
+  std::string motor_path, board_path;
   for (size_t i = 1; i < args.size(); ++i) {
     const std::string& a = args[i];
     auto value = [&](const char* opt) -> const std::string& {
@@ -87,6 +128,10 @@ int cmd_run(const std::vector<std::string>& args) {
       out_dir = value("--out");
     } else if (a == "--duration") {
       duration = parse_positive("duration", value("--duration"));
+    } else if (a == "--motor") {
+      motor_path = value("--motor");
+    } else if (a == "--board") {
+      board_path = value("--board");
     } else if (a == "--set") {
       const std::string& kv = value("--set");
       auto eq = kv.find('=');
@@ -99,7 +144,10 @@ int cmd_run(const std::vector<std::string>& args) {
     }
   }
   if (out_dir.empty()) throw mcsim::UsageError("run: --out DIR is required");
-  mcsim::Params params(scen.params, sets);  // validates keys and values
+  // Motor and board files before anything is written: a bad file changes nothing.
+  const auto files = motor_files(scen, motor_path, board_path);
+  const mcsim::Params params(files ? scen.motor_params(*files) : scen.params,
+                             sets);  // validates keys and values
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
@@ -110,7 +158,7 @@ int cmd_run(const std::vector<std::string>& args) {
   mcsim::CsvWriter csv(base + ".csv");
   mcsim::Summary summary;
   mcsim::Progress progress(isatty(STDERR_FILENO) != 0);
-  mcsim::RunContext ctx{duration, params, csv, summary, progress};
+  mcsim::RunContext ctx{duration, params, csv, summary, progress, files.get()};
   summary.set_text("scenario", scen.name);
   summary.set("duration_s", duration);
   for (const auto& kv : params.values()) summary.set("param." + kv.first, kv.second);
@@ -149,10 +197,7 @@ int main(int argc, char** argv) {
     const std::string cmd = args[0];
     args.erase(args.begin());
     if (cmd == "list") return cmd_list();
-    if (cmd == "describe") {
-      if (args.size() != 1) throw mcsim::UsageError("describe takes one scenario name");
-      return cmd_describe(args[0]);
-    }
+    if (cmd == "describe") return cmd_describe(args);
     if (cmd == "run") return cmd_run(args);
     if (cmd == "bench") return mcsim::cmd_bench(args);
     throw mcsim::UsageError("unknown command '" + cmd + "'");

@@ -12,6 +12,8 @@
 
 namespace mcsim {
 
+struct MotorFiles;  // motor_file.hpp
+
 /// A user-visible error: printed as "mcsim: <what>", exit code 2.
 struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
@@ -95,6 +97,8 @@ struct RunContext {
   CsvWriter& csv;
   Summary& summary;
   Progress& progress;
+  /// --motor/--board files (scenarios with motor_params only; else null).
+  const MotorFiles* files = nullptr;
 };
 
 struct Scenario {
@@ -103,6 +107,10 @@ struct Scenario {
   double default_duration_s;
   std::vector<ParamSpec> params;
   std::function<void(RunContext&)> run;
+  /// Set for scenarios that run any motor (--motor FILE [--board FILE],
+  /// required): their parameters, with ranges and defaults from the files.
+  /// Null: the scenario has its own motor and refuses --motor.
+  std::function<std::vector<ParamSpec>(const MotorFiles&)> motor_params = {};
 };
 
 /// Global registry; scenario files register themselves with a static

@@ -14,18 +14,28 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// Time of the first crossing of level by y(t) (linear interpolation), or NaN.
-double crossing_time(const std::vector<double>& t, const std::vector<double>& y, double level,
-                     double t_from) {
-  for (size_t k = 1; k < t.size(); ++k) {
-    if (t[k - 1] < t_from) continue;
-    const double a = y[k - 1] - level, b = y[k] - level;
-    if ((a < 0.0 && b >= 0.0) || (a > 0.0 && b <= 0.0)) {
-      return t[k - 1] + (t[k] - t[k - 1]) * a / (a - b);
+// Time of the first crossing of level by y(t) at or after t_from (linear
+// interpolation between consecutive samples, the earlier one at or after
+// t_from), or NaN. Fed sample by sample: constant memory for a run of any
+// length.
+class Crossing {
+ public:
+  Crossing(double level, double t_from) : level_(level), t_from_(t_from) {}
+  void add(double t, double y) {
+    if (have_ && std::isnan(tc_) && tp_ >= t_from_) {
+      const double a = yp_ - level_, b = y - level_;
+      if ((a < 0.0 && b >= 0.0) || (a > 0.0 && b <= 0.0)) tc_ = tp_ + (t - tp_) * a / (a - b);
     }
+    tp_ = t;
+    yp_ = y;
+    have_ = true;
   }
-  return std::nan("");
-}
+  double time() const { return tc_; }
+
+ private:
+  double level_, t_from_, tp_ = 0.0, yp_ = 0.0, tc_ = std::nan("");
+  bool have_ = false;
+};
 
 // Integrate a plant from x at a constant input u with RK4 steps of h for the
 // run's duration, writing about 4000 evenly spaced rows (and the last one):
@@ -129,10 +139,9 @@ void run_foc_current_step(RunContext& ctx) {
                    "duty_b_1", "duty_c_1", "fault_1"});
   const double T = sil.board().period_s();
   const long n = std::lround(ctx.duration_s / T);
-  std::vector<double> ts, idv, iqv;
-  ts.reserve(static_cast<size_t>(n) + 1);
-  idv.reserve(static_cast<size_t>(n) + 1);
-  iqv.reserve(static_cast<size_t>(n) + 1);
+  Crossing q10(0.1 * iq_step, t_iq), q90(0.9 * iq_step, t_iq);
+  Crossing d10(0.1 * id_step, t_id), d90(0.9 * id_step, t_id);
+  double id_last = 0.0, iq_last = 0.0;
   for (long k = 0; k <= n; ++k) {
     const double t = sil.board().t_s();
     const double idr = (t >= t_id) ? id_step : 0.0;
@@ -148,9 +157,12 @@ void run_foc_current_step(RunContext& ctx) {
     ctx.csv.row({t, id, iq, idr, iqr, tm.foc.id_a, tm.foc.iq_a, tm.foc.vd_v, tm.foc.vq_v, x(2),
                  tm.omega_m_rad_s, tm.theta_e_rad, sil.board().torque_nm(), du(0), du(1), du(2),
                  static_cast<double>(d.faults)});
-    ts.push_back(t);
-    idv.push_back(id);
-    iqv.push_back(iq);
+    q10.add(t, iq);
+    q90.add(t, iq);
+    d10.add(t, id);
+    d90.add(t, id);
+    id_last = id;
+    iq_last = iq;
     if (k < n) sil.step();
     if ((k & 1023) == 0) ctx.progress.update(t, ctx.duration_s);
   }
@@ -160,10 +172,8 @@ void run_foc_current_step(RunContext& ctx) {
   }
   // 10-90 % rise times of the true plant currents after each step.
   const double designed = std::log(9.0) / o.bw_rad_s;
-  const double rq = crossing_time(ts, iqv, 0.9 * iq_step, t_iq) -
-                    crossing_time(ts, iqv, 0.1 * iq_step, t_iq);
-  const double rd = crossing_time(ts, idv, 0.9 * id_step, t_id) -
-                    crossing_time(ts, idv, 0.1 * id_step, t_id);
+  const double rq = q90.time() - q10.time();
+  const double rd = d90.time() - d10.time();
   ctx.summary.set("rise_time_designed_s", designed);
   ctx.summary.set("iq_rise_time_s", rq);
   ctx.summary.set("id_rise_time_s", rd);
@@ -171,8 +181,8 @@ void run_foc_current_step(RunContext& ctx) {
   ctx.summary.set("id_rise_time_ratio", rd / designed);
   ctx.summary.set("kp_v_per_a", sil.designed_kp());
   ctx.summary.set("ki_v_per_as", sil.designed_ki());
-  ctx.summary.set("iq_final_a", iqv.back());
-  ctx.summary.set("id_final_a", idv.back());
+  ctx.summary.set("iq_final_a", iq_last);
+  ctx.summary.set("id_final_a", id_last);
 }
 
 const Registrar reg_foc_step({

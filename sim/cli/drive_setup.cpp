@@ -1,0 +1,506 @@
+#include "drive_setup.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace mcsim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(4);
+  os << v;
+  return os.str();
+}
+
+// Speed at which current i needs v_max (steady state, id = 0, iq = i):
+// (R i)^2 + 2 R i ke w + (ke^2 + (p L i)^2) w^2 = v_max^2, positive root.
+double voltage_limited_speed(const MotorSpec& m, double i_a, double v_max) {
+  const double ke = m.pole_pairs * m.flux_wb, pl = m.pole_pairs * m.lq_h * i_a;
+  const double a = ke * ke + pl * pl, b = 2.0 * m.r_ohm * i_a * ke,
+               c = m.r_ohm * i_a * m.r_ohm * i_a - v_max * v_max;
+  if (c >= 0.0) return 0.0;
+  return (-b + std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a);
+}
+
+// One gain: the derived value, unless the user set another one.
+double pick(const Params* p, const char* key, double derived, double dflt) {
+  if (p == nullptr) return derived;
+  const double v = p->get(key);
+  return (v != dflt) ? v : derived;
+}
+
+struct Key {
+  const char* key;
+  double Gains::*field;
+  const char* unit;
+  const char* help;
+};
+
+const Key kKeys[] = {
+    {"cur_bw_rad_s", &Gains::cur_bw_rad_s, "rad/s", "current-loop bandwidth (kp = L bw, ki = R bw)"},
+    {"i_limit_a", &Gains::i_limit_a, "A", "current limit of the drive"},
+    {"enc_pll_bw_rad_s", &Gains::enc_pll_bw_rad_s, "rad/s", "encoder tracking-loop bandwidth"},
+    {"speed_wc_rad_s", &Gains::speed_wc_rad_s, "rad/s", "sensored speed PI crossover"},
+    {"speed_accel_rad_s2", &Gains::speed_accel_rad_s2, "rad/s^2", "speed reference slew rate"},
+    {"obs_crit_rad_s", &Gains::obs_crit_rad_s, "rad/s", "flux observer critical speed (sets gamma)"},
+    {"pll_bw_rad_s", &Gains::pll_bw_rad_s, "rad/s", "observer PLL bandwidth"},
+    {"sls_wc_rad_s", &Gains::sls_wc_rad_s, "rad/s", "sensorless speed PI crossover"},
+    {"handover_rad_s", &Gains::handover_rad_s, "rad/s", "I-f -> closed-loop hand-over speed"},
+    {"if_current_a", &Gains::if_current_a, "A", "I-f start current"},
+    {"if_accel_rad_s2", &Gains::if_accel_rad_s2, "rad/s^2", "I-f frequency ramp (mechanical)"},
+    {"align_time_s", &Gains::align_time_s, "s", "alignment current ramp"},
+    {"pi2d_wn_rad_s", &Gains::pi2d_wn_rad_s, "rad/s", "PI2D triple pole"},
+    {"pi2d_a_per_s", &Gains::pi2d_a_per_s, "1/s", "PI2D dirty-derivative pole"},
+};
+
+Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  const double T = 1.0 / b.pwm_hz;
+  const double l_min = std::min(m.ld_h, m.lq_h);
+  auto get = [&](const char* key, double derived, double Gains::*field) {
+    return pick(p, key, derived, dflt ? dflt->*field : derived);
+  };
+  // Refusals first: no gains make these safe.
+  if (l_min / m.r_ohm < 2.0 * T) {
+    throw UsageError(m.file + ": no safe gains: the electrical time constant L/R = " +
+                     num(l_min / m.r_ohm) + " s is shorter than two PWM periods (" + num(2 * T) +
+                     " s at " + num(b.pwm_hz) + " Hz): raise pwm_hz");
+  }
+  const double ripple = b.vbus_v * T / (4.0 * l_min);
+  if (ripple > m.i_max_a) {
+    throw UsageError(m.file + ": no safe gains: the PWM current ripple vbus T / (4 L) = " +
+                     num(ripple) + " A (peak to peak) exceeds i_max_a (" + num(m.i_max_a) +
+                     " A): raise pwm_hz or lower vbus_v");
+  }
+  Gains g;
+  g.kt_nm_a = 1.5 * m.pole_pairs * m.flux_wb;
+  g.v_max_v = 0.95 * b.vbus_v / std::sqrt(3.0);
+  g.cur_bw_rad_s = get("cur_bw_rad_s", 0.08 / T, &Gains::cur_bw_rad_s);
+  g.i_limit_a = get("i_limit_a",
+                    std::min({m.i_max_a, b.i_sense_max_a / 1.25, 0.8 * g.v_max_v / m.r_ohm}),
+                    &Gains::i_limit_a);
+  if (g.i_limit_a < 0.1 * m.i_max_a) {
+    throw UsageError(m.file + ": no safe gains: the usable current " + num(g.i_limit_a) +
+                     " A (sensor range / 1.25, bus through R) is below 10 % of i_max_a");
+  }
+  if (g.i_limit_a > b.i_sense_max_a / 1.1) {
+    throw UsageError("i_limit_a " + num(g.i_limit_a) + " A leaves no margin to the current "
+                     "sensor's full scale " + num(b.i_sense_max_a) + " A");
+  }
+  g.i_rated_eff_a = std::min(m.i_rated_a, g.i_limit_a);
+  g.torque_rated_nm = g.kt_nm_a * g.i_rated_eff_a;
+  g.speed_limit_rad_s =
+      std::min(m.speed_max_rad_s, 0.9 * voltage_limited_speed(m, g.i_rated_eff_a, g.v_max_v));
+  if (!(g.speed_limit_rad_s > 0.0)) {
+    throw UsageError(m.file + ": no safe gains: the bus cannot drive rated current at any speed");
+  }
+  g.speed_rated_eff_rad_s = std::min(m.speed_rated_rad_s, g.speed_limit_rad_s);
+  g.enc_pll_bw_rad_s = get("enc_pll_bw_rad_s", std::min(1000.0, 0.1 / T), &Gains::enc_pll_bw_rad_s);
+  g.speed_wc_rad_s = get("speed_wc_rad_s", std::min(g.cur_bw_rad_s / 10.0, g.enc_pll_bw_rad_s / 4.0),
+                         &Gains::speed_wc_rad_s);
+  g.speed_accel_rad_s2 =
+      get("speed_accel_rad_s2", 0.5 * g.kt_nm_a * g.i_limit_a / m.j_kgm2, &Gains::speed_accel_rad_s2);
+  const double w_r = g.speed_rated_eff_rad_s;
+  g.obs_crit_rad_s = get("obs_crit_rad_s", 0.02 * w_r, &Gains::obs_crit_rad_s);
+  g.pll_bw_rad_s = get("pll_bw_rad_s", std::min(300.0, 0.04 / T), &Gains::pll_bw_rad_s);
+  g.sls_wc_rad_s = get("sls_wc_rad_s", std::min(g.pll_bw_rad_s / 3.0, g.cur_bw_rad_s / 10.0),
+                       &Gains::sls_wc_rad_s);
+  g.handover_rad_s = get("handover_rad_s", 0.1 * w_r, &Gains::handover_rad_s);
+  g.if_current_a = get("if_current_a", std::min(g.i_limit_a, 0.8 * g.i_rated_eff_a),
+                       &Gains::if_current_a);
+  g.if_accel_rad_s2 =
+      get("if_accel_rad_s2", 0.15 * g.torque_rated_nm / m.j_kgm2, &Gains::if_accel_rad_s2);
+  const double t_hold =
+      2.0 * std::sqrt(0.2 * m.j_kgm2 / (m.pole_pairs * 0.3 * g.torque_rated_nm));
+  g.align_time_s = get("align_time_s", std::clamp(t_hold, 10.0 / g.cur_bw_rad_s, 0.05),
+                       &Gains::align_time_s);
+  g.pi2d_wn_rad_s =
+      get("pi2d_wn_rad_s", std::min(g.speed_wc_rad_s / 3.0, 0.5 * m.r_ohm / m.lq_h),
+          &Gains::pi2d_wn_rad_s);
+  // The dirty-derivative pole sets the law's speed-error coupling into the
+  // q-current error, Delta ~ b kd / sigma = 3 wn a J / kt (mc_pi2d.h, (21));
+  // keeping it below 2 k2 keeps the q loop ahead of it (the 40 kW machine
+  // with a = 1000/s limit-cycled at +-i_limit).
+  const double sigma = g.kt_nm_a / m.j_kgm2;
+  g.pi2d_a_per_s = get("pi2d_a_per_s",
+                       std::min({g.enc_pll_bw_rad_s, 0.1 / T,
+                                 2.0 * g.cur_bw_rad_s * sigma / (3.0 * g.pi2d_wn_rad_s)}),
+                       &Gains::pi2d_a_per_s);
+  g.pi2d_ok = g.pi2d_a_per_s >= 3.0 * g.pi2d_wn_rad_s;
+  g.pi2d_coupling = sigma * m.pole_pairs * m.flux_wb / (m.lq_h * g.cur_bw_rad_s);
+  return g;
+}
+
+}  // namespace
+
+std::vector<ParamSpec> gain_params(const MotorFiles& f) {
+  const Gains g = derive(f, nullptr, nullptr);
+  std::vector<ParamSpec> v;
+  for (const auto& k : kKeys) {
+    const double d = g.*(k.field);
+    v.push_back({k.key, d, k.unit, std::string(k.help) + " (derived from the motor and board)",
+                 d > 0 ? d * 1e-3 : 0.0, d > 0 ? d * 1e3 : 1.0});
+  }
+  return v;
+}
+
+Gains derive_gains(const MotorFiles& f, const Params* p) {
+  const Gains d = derive(f, nullptr, nullptr);
+  return p ? derive(f, p, &d) : d;
+}
+
+void record_setup(const MotorFiles& f, const Gains& g, Summary& s) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  s.set_text("motor", m.name);
+  s.set_text("motor_file", m.file);
+  s.set_text("board", b.name);
+  s.set_text("board_file", b.file);
+  s.set("motor.r_ohm", m.r_ohm);
+  s.set("motor.ld_h", m.ld_h);
+  s.set("motor.lq_h", m.lq_h);
+  s.set("motor.flux_wb", m.flux_wb);
+  s.set("motor.pole_pairs", m.pole_pairs);
+  s.set("motor.j_kgm2", m.j_kgm2);
+  s.set("motor.b_nm_s_rad", m.b_nm_s_rad);
+  s.set("motor.i_max_a", m.i_max_a);
+  s.set("motor.i_rated_a", m.i_rated_a);
+  s.set("motor.speed_max_rad_s", m.speed_max_rad_s);
+  s.set("motor.speed_rated_rad_s", m.speed_rated_rad_s);
+  s.set("board.vbus_v", b.vbus_v);
+  s.set("board.pwm_hz", b.pwm_hz);
+  s.set("board.dead_time_s", b.dead_time_s);
+  s.set("board.current_sensors", b.current_sensors);
+  s.set("board.i_sense_max_a", b.i_sense_max_a);
+  s.set("board.adc_bits", b.adc_bits);
+  s.set("board.encoder_cpr", static_cast<double>(b.encoder_cpr));
+  s.set("board.delay_periods", b.delay_periods);
+  for (const auto& k : kKeys) s.set(std::string("gain.") + k.key, g.*(k.field));
+  s.set("gain.i_rated_eff_a", g.i_rated_eff_a);
+  s.set("gain.torque_rated_nm", g.torque_rated_nm);
+  s.set("gain.speed_limit_rad_s", g.speed_limit_rad_s);
+  s.set("gain.speed_rated_eff_rad_s", g.speed_rated_eff_rad_s);
+  s.set("gain.kt_nm_a", g.kt_nm_a);
+  s.set("gain.v_max_v", g.v_max_v);
+}
+
+hal_host::PmsmBoardConfig build_board_cfg(const MotorFiles& f) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  hal_host::PmsmBoardConfig bc;
+  bc.motor.R_ohm = m.r_ohm;
+  bc.motor.Ld_h = m.ld_h;
+  bc.motor.Lq_h = m.lq_h;
+  bc.motor.flux_wb = m.flux_wb;
+  bc.motor.pole_pairs = m.pole_pairs;
+  bc.motor.J_kgm2 = m.j_kgm2;
+  bc.motor.B_nms_rad = m.b_nm_s_rad;
+  bc.inverter.t_pwm_s = 1.0 / b.pwm_hz;
+  bc.inverter.t_dead_s = b.dead_time_s;
+  bc.inverter.i_dead_band_a = std::max(1e-3, 0.01 * m.i_rated_a);
+  bc.vbus_v = b.vbus_v;
+  bc.current_sensor.full_scale_a = b.i_sense_max_a;
+  bc.current_sensor.bits = b.adc_bits;
+  bc.vbus_sensor.full_scale_v = 2.0 * b.vbus_v;
+  bc.vbus_sensor.bits = b.adc_bits;
+  // No encoder (encoder_cpr = 0): the board model still has one, which no
+  // scenario reads (the sensored scenarios refuse such a board).
+  bc.encoder.counts_per_rev = b.encoder_cpr > 0 ? static_cast<int>(b.encoder_cpr) : 4096;
+  bc.substeps = 4;
+  bc.three_shunts = (b.current_sensors == 3);
+  bc.delay_periods = b.delay_periods;
+  return bc;
+}
+
+mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  mc_drive_cfg_t dc{};
+  float kp = 0, ki = 0;
+  if (mc_foc_f32_gains_from_bandwidth(static_cast<float>(m.r_ohm), static_cast<float>(m.ld_h),
+                                      static_cast<float>(g.cur_bw_rad_s), &kp, &ki) != 0u) {
+    throw UsageError("current-loop bandwidth rejected by the firmware");
+  }
+  dc.foc.kp_d_v_per_a = kp;
+  dc.foc.ki_d_v_per_as = ki;
+  if (mc_foc_f32_gains_from_bandwidth(static_cast<float>(m.r_ohm), static_cast<float>(m.lq_h),
+                                      static_cast<float>(g.cur_bw_rad_s), &kp, &ki) != 0u) {
+    throw UsageError("current-loop bandwidth rejected by the firmware");
+  }
+  dc.foc.kp_q_v_per_a = kp;
+  dc.foc.ki_q_v_per_as = ki;
+  dc.foc.r_ohm = static_cast<float>(m.r_ohm);
+  dc.foc.ld_h = static_cast<float>(m.ld_h);
+  dc.foc.lq_h = static_cast<float>(m.lq_h);
+  dc.foc.flux_wb = static_cast<float>(m.flux_wb);
+  dc.foc.dt_s = static_cast<float>(1.0 / b.pwm_hz);
+  dc.foc.aw = MC_PI_AW_CLAMP;
+  dc.foc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
+  dc.foc.v_limit_ratio = 0.95f;
+  dc.foc.v_abs_max_v = static_cast<float>(1.5 * b.vbus_v);
+  dc.foc.decouple = true;
+  dc.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
+  dc.speed_pll_bw_rad_s = static_cast<float>(g.enc_pll_bw_rad_s);
+  // Slow loop (supervision) at about 1 kHz.
+  dc.slow_loop_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
+  // References up to the limit (the sensorless law's I-f vector may reach
+  // 1.25 iq: 1.5x), the trip at 1.6x the limit inside the sensor's range.
+  dc.i_max_a = static_cast<float>(g.i_limit_a);
+  dc.i_trip_a = static_cast<float>(std::min(1.6 * g.i_limit_a, 0.98 * b.i_sense_max_a));
+  dc.vbus_min_v = static_cast<float>(0.5 * b.vbus_v);
+  dc.vbus_max_v = static_cast<float>(1.5 * b.vbus_v);
+  dc.omega_max_rad_s = static_cast<float>(1.5 * m.speed_max_rad_s);
+  dc.temp_max_c = 100.0f;
+  dc.stall_current_frac = 0.0f;  // stall check off: a locked rotor is a test case here
+  dc.stall_speed_rad_s = 0.0f;
+  dc.stall_time_s = 0.0f;
+  // Three shunts: sum within 3 % of the sensor range (a few LSB of rounding).
+  dc.i_unbalance_max_a = b.current_sensors == 3 ? static_cast<float>(0.03 * b.i_sense_max_a) : 0.0f;
+  return dc;
+}
+
+mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  mc_ctrl_sls_cfg_t c{};
+  c.r_ohm = static_cast<float>(m.r_ohm);
+  c.l_h = static_cast<float>(m.lq_h);
+  c.flux_wb = static_cast<float>(m.flux_wb);
+  c.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
+  c.dt_s = static_cast<float>(1.0 / b.pwm_hz);
+  c.pwm_delay_periods = static_cast<uint32_t>(b.delay_periods);
+  // Speed loop at about 1 kHz.
+  c.speed_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
+  c.dead_time_s = static_cast<float>(b.dead_time_s);
+  c.dead_band_a = static_cast<float>(std::max(1e-3, 0.01 * m.i_rated_a));
+  c.dead_comp_duty = true;
+  c.omega_crit_m_rad_s = static_cast<float>(g.obs_crit_rad_s);
+  c.resid_tol = 0.3f;
+  c.resid_time_s = 0.05f;
+  c.pll_bw_rad_s = static_cast<float>(g.pll_bw_rad_s);
+  c.cur_bw_rad_s = static_cast<float>(g.cur_bw_rad_s);
+  c.v_limit_ratio = 0.95f;
+  c.vbus_max_v = static_cast<float>(1.5 * b.vbus_v);
+  const double wc = g.sls_wc_rad_s;
+  c.speed_kp_a_s_rad = static_cast<float>(m.j_kgm2 * wc / g.kt_nm_a);
+  c.speed_ki_a_rad = static_cast<float>(c.speed_kp_a_s_rad * wc / 4.0);
+  c.iq_max_a = static_cast<float>(g.i_limit_a / 1.25);
+  c.speed_slew_rad_s2 = static_cast<float>(0.5 * g.torque_rated_nm / m.j_kgm2);
+  c.speed_max_rad_s = static_cast<float>(g.speed_limit_rad_s);
+  c.if_current_a = static_cast<float>(g.if_current_a);
+  c.align_time_s = static_cast<float>(g.align_time_s);
+  c.if_accel_rad_s2 = static_cast<float>(g.if_accel_rad_s2);
+  c.handover_speed_rad_s = static_cast<float>(g.handover_rad_s);
+  c.handover_hyst = 0.3f;
+  c.lock_tol = 0.2f;
+  c.if_lock_timeout_s = 0.5f;
+  c.blend_time_s = 0.05f;
+  c.lowspeed_fallback = true;
+  c.if_damping = true;
+  return c;
+}
+
+mc_ctrl_pi2d_cfg_t build_pi2d_cfg(const MotorFiles& f, const Gains& g) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  // As pi2d-motor (sim/cli/scenarios/pi2d.cpp): linearised mechanical loop
+  // s^3 + kd (b/a) s^2 + (kp - ki b/a) s + ki with a triple pole at -wn.
+  const double wn = g.pi2d_wn_rad_s, a = g.pi2d_a_per_s, bb = 1.0;
+  const double ki = wn * wn * wn, kd = 3.0 * wn * a / bb, kp = 3.0 * wn * wn + ki * bb / a;
+  mc_ctrl_pi2d_cfg_t cc{};
+  mc_pi2d_f32_cfg_t& c = cc.law;
+  c.r_ohm = static_cast<float>(m.r_ohm);
+  c.l_h = static_cast<float>(m.lq_h);
+  c.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
+  c.ke_v_s_rad = static_cast<float>(m.pole_pairs * m.flux_wb);
+  c.kt_nm_a = static_cast<float>(g.kt_nm_a);
+  c.j_kgm2 = static_cast<float>(m.j_kgm2);
+  c.k1_per_s = static_cast<float>(g.cur_bw_rad_s);
+  c.k2_per_s = static_cast<float>(g.cur_bw_rad_s);
+  c.kp_per_s2 = static_cast<float>(kp);
+  c.kd_per_s2 = static_cast<float>(kd);
+  c.ki_per_s3 = static_cast<float>(ki);
+  c.a_per_s = static_cast<float>(a);
+  c.b = static_cast<float>(bb);
+  c.eps_per_s = static_cast<float>(2.0 * ki / kp);
+  c.dt_s = static_cast<float>(1.0 / b.pwm_hz);
+  c.iq_max_a = static_cast<float>(g.i_limit_a);
+  c.v_max_v = static_cast<float>(g.v_max_v);
+  c.nu_max_nm = static_cast<float>(2.0 * g.torque_rated_nm);
+  cc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
+  // Delay compensation (mc_ctrl_pi2d.h): the board's delay plus half a period.
+  cc.angle_advance_periods = static_cast<float>(b.delay_periods + 0.5);
+  return cc;
+}
+
+// ------------------------------------------------------------------ rig
+MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
+    : f_(f), g_(g), o_(std::move(o)) {
+  T_ = 1.0 / f.board.pwm_hz;
+  if (o_.law != Law::kSensorless && f.board.encoder_cpr == 0) {
+    throw UsageError(f.board.file + ": this scenario needs an encoder (encoder_cpr = 0 here); "
+                     "use sensorless-speed-step");
+  }
+  hal_host::PmsmBoardConfig bc = build_board_cfg(f);
+  if (o_.load_nm) {
+    bc.motor.load.kind = LoadKind::kFunction;
+    bc.motor.load.fn = [](double t, double, double, const void* ctx) {
+      return (*static_cast<const std::function<double(double)>*>(ctx))(t);
+    };
+    bc.motor.load.fn_ctx = &o_.load_nm;
+  }
+  board_ = std::make_unique<hal_host::PmsmBoard>(bc);
+  dcfg_ = build_drive_cfg(f, g);
+  if (o_.law == Law::kSensorless) dcfg_.stall_current_frac = 0.0f;
+  const uint32_t derr = mc_drive_init(&drive_, &dcfg_, board_->hal());
+  if (derr != MC_DRIVE_CFG_OK) {
+    throw UsageError("the drive refused the configuration built from the files: MC_DRIVE_CFG "
+                     "bits " + std::to_string(derr));
+  }
+  switch (o_.law) {
+    case Law::kCurrent:
+      break;
+    case Law::kSpeedPi: {
+      mc_pi_f32_cfg_t pc{};
+      const double wc = g.speed_wc_rad_s;
+      pc.kp = static_cast<float>(f.motor.j_kgm2 * wc / g.kt_nm_a);
+      pc.ki_per_s = static_cast<float>(pc.kp * wc / 4.0);
+      pc.dt_s = static_cast<float>(T_);
+      pc.out_min = static_cast<float>(-g.i_limit_a);
+      pc.out_max = static_cast<float>(g.i_limit_a);
+      pc.aw = MC_PI_AW_CLAMP;
+      if (mc_pi_f32_init(&spi_, &pc) != 0u) throw UsageError("speed PI gains rejected");
+      break;
+    }
+    case Law::kPi2d: {
+      if (!g.pi2d_ok) {
+        throw UsageError("PI2D refuses this motor: its current loop (cur_bw " +
+                         num(g.cur_bw_rad_s) + " rad/s) is too slow for kt/J = " +
+                         num(g.kt_nm_a / f.motor.j_kgm2) + ": the position filter would have "
+                         "to be slower than the speed loop (use law=pi)");
+      }
+      if (g.pi2d_coupling > 300.0) {
+        throw UsageError("PI2D refuses this motor: the back-EMF couples the speed error into "
+                         "the q current faster than the law's proportional current loop "
+                         "separates them: kt ke / (J L k2) = " + num(g.pi2d_coupling) +
+                         " rad/s > 300 (an empirical bound: the gimbal-class motor "
+                         "limit-cycles to over-current above it; use law=pi)");
+      }
+      const mc_ctrl_pi2d_cfg_t cc = build_pi2d_cfg(f, g);
+      const uint32_t e = mc_ctrl_pi2d_init(&pi2d_, &cc);
+      if (e != 0u) {
+        mc_pi2d_f32_t probe{};
+        const uint32_t le = mc_pi2d_f32_init(&probe, &cc.law);
+        throw UsageError(std::string("PI2D refuses this motor: ") +
+                         ((le & MC_PI2D_ERR_KI_EPS) ? "the proof's ki (L/R)^2 < eps fails"
+                          : (le & MC_PI2D_ERR_KP_PRIME) ? "kp' = kp - ki/eps <= 0"
+                                                        : "its configuration is invalid") +
+                         " (MC_CTRL_PI2D bits " + std::to_string(e) + ", MC_PI2D bits " +
+                         std::to_string(le) + ")");
+      }
+      if (mc_drive_attach_ctrl(&drive_, mc_ctrl_pi2d_ops(&pi2d_)) != 0) {
+        throw std::runtime_error("drive refused the PI2D plug-in");
+      }
+      break;
+    }
+    case Law::kSensorless: {
+      const mc_ctrl_sls_cfg_t sc = build_sensorless_cfg(f, g);
+      const uint32_t e = mc_ctrl_sls_init(&sls_, &sc);
+      if (e != 0u) {
+        throw UsageError("the sensorless law refuses this motor's configuration: MC_CTRL_SLS "
+                         "bits " + std::to_string(e));
+      }
+      if (mc_drive_attach_ctrl(&drive_, mc_ctrl_sls_table(&sls_)) != 0) {
+        throw std::runtime_error("drive refused the sensorless plug-in");
+      }
+      break;
+    }
+  }
+  const mc_drive_mode_t mode =
+      (o_.law == Law::kCurrent || o_.law == Law::kSpeedPi) ? MC_DRIVE_MODE_CURRENT
+                                                           : MC_DRIVE_MODE_CTRL;
+  if (mc_drive_set_mode(&drive_, mode) != 0) throw std::runtime_error("drive refused its mode");
+}
+
+void MotorRig::set_speed_ref(double w) {
+  w_cmd_ = w;
+  if (o_.law == Law::kSensorless) {
+    if (mc_ctrl_sls_set_speed_ref(&sls_, static_cast<float>(w)) != 0u) {
+      throw UsageError("speed reference rejected by the sensorless law");
+    }
+  }
+}
+
+double MotorRig::omega_ref_rad_s() const {
+  return o_.law == Law::kSensorless ? static_cast<double>(sls_.tm.omega_ref_m_rad_s) : w_ref_;
+}
+
+void MotorRig::step() {
+  board_->sample();
+  if (o_.law == Law::kSpeedPi || o_.law == Law::kPi2d) {
+    // Reference slewed at speed_accel_rad_s2 (exact: constant acceleration
+    // over the period, then clamp at the target).
+    const double amax = g_.speed_accel_rad_s2;
+    const double err = w_cmd_ - w_ref_;
+    a_ref_ = std::abs(err) <= amax * T_ ? err / T_ : std::copysign(amax, err);
+    if (o_.law == Law::kPi2d) {
+      if (mc_ctrl_pi2d_set_ref(&pi2d_, static_cast<float>(w_ref_), static_cast<float>(a_ref_),
+                               0.0f, 0.0f) != 0u) {
+        throw std::runtime_error("PI2D reference rejected");
+      }
+    } else {
+      // The drive's encoder PLL speed of the previous step (a speed loop in
+      // a lower-priority task sees it one period late).
+      const float iq = mc_pi_f32_step_ff(
+          &spi_, static_cast<float>(w_ref_ - drive_.tm.omega_m_rad_s),
+          static_cast<float>((f_.motor.j_kgm2 * a_ref_ + f_.motor.b_nm_s_rad * w_ref_) /
+                             g_.kt_nm_a));
+      if (mc_drive_set_current_ref(&drive_, 0.0f, iq) != 0) {
+        throw std::runtime_error("iq reference rejected by the drive");
+      }
+    }
+    w_ref_ += a_ref_ * T_;
+  }
+  if (mc_drive_fast_step(&drive_)) mc_drive_slow_step(&drive_);
+  board_->advance();
+}
+
+double MotorRig::theta_e_true() const {
+  return std::remainder(f_.motor.pole_pairs * board_->rotor_frame_state()(3), 2 * kPi);
+}
+
+double MotorRig::theta_e_hat() const {
+  return o_.law == Law::kSensorless ? std::remainder(sls_.tm.theta_hat_e_rad, 2 * kPi)
+                                    : std::nan("");
+}
+
+void MotorRig::dq_refs(double* id, double* iq) const {
+  switch (o_.law) {
+    case Law::kPi2d:
+      *id = pi2d_.tm.id_ref_a;
+      *iq = pi2d_.tm.iq_ref_a;
+      return;
+    case Law::kSensorless:
+      *id = sls_.tm.id_ref_a;
+      *iq = sls_.tm.iq_ref_a;
+      return;
+    default:
+      *id = drive_.id_ref_a;
+      *iq = drive_.iq_ref_a;
+  }
+}
+
+void MotorRig::dq_volts(double* vd, double* vq) const {
+  const Eigen::Vector2d& v = board_->v_alpha_beta_applied();
+  const double th = theta_e_true(), c = std::cos(th), s = std::sin(th);
+  *vd = c * v(0) + s * v(1);
+  *vq = -s * v(0) + c * v(1);
+}
+
+}  // namespace mcsim

@@ -1,0 +1,197 @@
+#include "motor_file.hpp"
+
+#include <cmath>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "scenario.hpp"
+
+namespace mcsim {
+namespace {
+
+[[noreturn]] void fail(const std::string& file, long line, const std::string& reason) {
+  throw UsageError(file + ":" + std::to_string(line < 1 ? 1 : line) + ": " + reason);
+}
+
+long line_of(const toml::node& n) { return static_cast<long>(n.source().begin.line); }
+
+// One table of a file: reads keys, remembers which were read, and rejects
+// the rest as unknown.
+class TableReader {
+ public:
+  TableReader(const std::string& file, const std::string& table_name, const toml::table& t)
+      : file_(file), name_(table_name), t_(t) {}
+
+  const toml::node* need(const std::string& key) {
+    seen_.insert(key);
+    const toml::node* n = t_.get(key);
+    if (n == nullptr) {
+      fail(file_, line_of(t_), "[" + name_ + "] is missing the required key '" + key + "'");
+    }
+    return n;
+  }
+  const toml::node* maybe(const std::string& key) {
+    seen_.insert(key);
+    return t_.get(key);
+  }
+
+  std::string text(const std::string& key, bool required) {
+    const toml::node* n = required ? need(key) : maybe(key);
+    if (n == nullptr) return std::string();
+    if (!n->is_string()) fail(file_, line_of(*n), "'" + key + "' must be a string");
+    return n->value<std::string>().value_or("");
+  }
+
+  // A finite number in [lo, hi] (integers accepted). lo_open: lo excluded.
+  double number(const toml::node* n, const std::string& key, double lo, double hi, bool lo_open,
+                const std::string& unit) {
+    if (!n->is_number()) fail(file_, line_of(*n), "'" + key + "' must be a number (" + unit + ")");
+    const double v = n->value<double>().value_or(std::nan(""));
+    if (!std::isfinite(v) || v > hi || (lo_open ? v <= lo : v < lo)) {
+      std::ostringstream os;
+      os << "'" << key << "' = " << v << " " << unit << " is out of range " << (lo_open ? "(" : "[")
+         << lo << ", " << hi << "]";
+      fail(file_, line_of(*n), os.str());
+    }
+    return v;
+  }
+  double num(const std::string& key, double lo, double hi, bool lo_open, const std::string& unit) {
+    return number(need(key), key, lo, hi, lo_open, unit);
+  }
+  double num_or(const std::string& key, double dflt, double lo, double hi, bool lo_open,
+                const std::string& unit) {
+    const toml::node* n = maybe(key);
+    return n == nullptr ? dflt : number(n, key, lo, hi, lo_open, unit);
+  }
+  long integer(const toml::node* n, const std::string& key, long lo, long hi) {
+    if (!n->is_integer()) fail(file_, line_of(*n), "'" + key + "' must be an integer");
+    const long v = static_cast<long>(n->value<int64_t>().value_or(0));
+    if (v < lo || v > hi) {
+      fail(file_, line_of(*n), "'" + key + "' = " + std::to_string(v) + " is out of range [" +
+                                   std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    }
+    return v;
+  }
+  long int_req(const std::string& key, long lo, long hi) { return integer(need(key), key, lo, hi); }
+  long int_or(const std::string& key, long dflt, long lo, long hi) {
+    const toml::node* n = maybe(key);
+    return n == nullptr ? dflt : integer(n, key, lo, hi);
+  }
+  long line(const std::string& key) {
+    const toml::node* n = t_.get(key);
+    return n ? line_of(*n) : line_of(t_);
+  }
+  void reject_unknown() {
+    for (const auto& kv : t_) {
+      const std::string k(kv.first.str());
+      if (seen_.count(k) == 0u) {
+        std::string known;
+        for (const auto& s : seen_) known += (known.empty() ? "" : ", ") + s;
+        fail(file_, line_of(kv.second), "unknown key '" + k + "' in [" + name_ + "] (known: " +
+                                            known + ")");
+      }
+    }
+  }
+
+ private:
+  std::string file_, name_;
+  const toml::table& t_;
+  std::set<std::string> seen_;
+};
+
+toml::table parse(const std::string& path) {
+  try {
+    return toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    const std::string d(e.description());
+    if (e.source().begin.line == 0 || d.find("File could not be opened") != std::string::npos) {
+      fail(path, 1, "cannot read the file: " + d);
+    }
+    fail(path, static_cast<long>(e.source().begin.line), "malformed TOML: " + d);
+  }
+}
+
+// Top-level keys other than the known tables are refused too.
+void check_top(const std::string& path, const toml::table& root) {
+  for (const auto& kv : root) {
+    const std::string k(kv.first.str());
+    if (k != "motor" && k != "board") {
+      fail(path, line_of(kv.second),
+           "unknown top-level key or table '" + k + "' (expected [motor] and/or [board])");
+    }
+    if (!kv.second.is_table()) fail(path, line_of(kv.second), "'" + k + "' must be a table");
+  }
+}
+
+MotorSpec read_motor(const std::string& path, const toml::table& t) {
+  TableReader r(path, "motor", t);
+  MotorSpec m;
+  m.file = path;
+  m.name = r.text("name", true);
+  m.source = r.text("source", false);
+  m.r_ohm = r.num("r_ohm", 1.0e-4, 1.0e3, false, "ohm");
+  m.ld_h = r.num("ld_h", 1.0e-7, 10.0, false, "H");
+  m.lq_h = r.num("lq_h", 1.0e-7, 10.0, false, "H");
+  m.flux_wb = r.num("flux_wb", 1.0e-5, 10.0, false, "Wb");
+  m.pole_pairs = static_cast<int>(r.int_req("pole_pairs", 1, 100));
+  m.j_kgm2 = r.num("j_kgm2", 1.0e-9, 1.0e3, false, "kg m^2");
+  m.b_nm_s_rad = r.num("b_nm_s_rad", 0.0, 1.0e3, false, "N m s/rad");
+  m.i_max_a = r.num("i_max_a", 0.0, 1.0e4, true, "A");
+  m.speed_max_rad_s = r.num("speed_max_rad_s", 0.0, 1.0e5, true, "rad/s");
+  m.i_rated_a = r.num_or("i_rated_a", 0.5 * m.i_max_a, 0.0, m.i_max_a, true, "A (at most i_max_a)");
+  m.speed_rated_rad_s = r.num_or("speed_rated_rad_s", 0.8 * m.speed_max_rad_s, 0.0,
+                                 m.speed_max_rad_s, true, "rad/s (at most speed_max_rad_s)");
+  if (std::abs(m.ld_h - m.lq_h) > 0.05 * std::max(m.ld_h, m.lq_h)) {
+    fail(path, r.line("lq_h"),
+         "ld_h and lq_h differ by more than 5 %: the controllers here assume a non-salient "
+         "machine (surface magnets)");
+  }
+  r.reject_unknown();
+  return m;
+}
+
+BoardSpec read_board(const std::string& path, const toml::table& t) {
+  TableReader r(path, "board", t);
+  BoardSpec b;
+  b.file = path;
+  b.name = r.text("name", true);
+  b.source = r.text("source", false);
+  b.vbus_v = r.num("vbus_v", 0.0, 2000.0, true, "V");
+  b.pwm_hz = r.num("pwm_hz", 1000.0, 200000.0, false, "Hz");
+  b.dead_time_s = r.num("dead_time_s", 0.0, 0.1 / b.pwm_hz, false, "s (at most 10 % of a period)");
+  b.current_sensors = static_cast<int>(r.int_req("current_sensors", 2, 3));
+  b.i_sense_max_a = r.num("i_sense_max_a", 0.0, 1.0e5, true, "A");
+  b.adc_bits = static_cast<int>(r.int_req("adc_bits", 8, 24));
+  b.encoder_cpr = r.int_req("encoder_cpr", 0, 1L << 24);
+  b.delay_periods = static_cast<int>(r.int_or("delay_periods", 1, 0, 4));
+  r.reject_unknown();
+  return b;
+}
+
+}  // namespace
+
+MotorFiles load_motor_files(const std::string& motor_path, const std::string& board_path) {
+  MotorFiles f;
+  const toml::table mroot = parse(motor_path);
+  check_top(motor_path, mroot);
+  const toml::table* mt = mroot["motor"].as_table();
+  if (mt == nullptr) fail(motor_path, 1, "no [motor] table");
+  f.motor = read_motor(motor_path, *mt);
+  if (board_path.empty()) {
+    const toml::table* bt = mroot["board"].as_table();
+    if (bt == nullptr) {
+      fail(motor_path, 1, "no [board] table here and no --board FILE given");
+    }
+    f.board = read_board(motor_path, *bt);
+  } else {
+    const toml::table broot = parse(board_path);
+    check_top(board_path, broot);
+    const toml::table* bt = broot["board"].as_table();
+    if (bt == nullptr) fail(board_path, 1, "no [board] table");
+    f.board = read_board(board_path, *bt);
+  }
+  return f;
+}
+
+}  // namespace mcsim

@@ -1,0 +1,60 @@
+// Motor and board files for `mcsim run SCENARIO --motor FILE --board FILE`.
+//
+// TOML (parsed with toml++, Debian's libtomlplusplus-dev), SI units with the
+// unit in the key name. A motor file has a [motor] table, a board file a
+// [board] table; one file may hold both. The library is in sim/motors/.
+//
+// [motor]  required: name, r_ohm, ld_h, lq_h, flux_wb (PM flux linkage, peak
+//          phase value, amplitude-invariant dq: back-EMF constant p flux
+//          V s/rad mech., torque 3/2 p flux iq), pole_pairs, j_kgm2 (rotor
+//          plus what is coupled to it), b_nm_s_rad, i_max_a (peak phase
+//          current limit), speed_max_rad_s (mechanical).
+//          optional: i_rated_a (continuous peak phase current; default
+//          i_max_a / 2), speed_rated_rad_s (default 0.8 speed_max_rad_s),
+//          source (text: where the numbers come from).
+// [board]  required: name, vbus_v, pwm_hz (one current-loop step per PWM
+//          period), dead_time_s, current_sensors (2 or 3), i_sense_max_a
+//          (current ADC full scale, +-A), adc_bits, encoder_cpr (counts per
+//          mechanical revolution; 0 = no encoder).
+//          optional: delay_periods (computation delay, default 1),
+//          source (text).
+//
+// Any problem (unreadable or malformed file, a missing, unknown, mistyped
+// or out-of-range key, a missing table) is a UsageError whose text is
+// "<file>:<line>: <reason>" (line of the offending key, or of the table /
+// line 1 when the key is missing).
+#pragma once
+
+#include <string>
+
+namespace mcsim {
+
+struct MotorSpec {
+  std::string name, source, file;
+  double r_ohm = 0, ld_h = 0, lq_h = 0, flux_wb = 0;
+  int pole_pairs = 0;
+  double j_kgm2 = 0, b_nm_s_rad = 0, i_max_a = 0, speed_max_rad_s = 0;
+  double i_rated_a = 0, speed_rated_rad_s = 0;
+};
+
+struct BoardSpec {
+  std::string name, source, file;
+  double vbus_v = 0, pwm_hz = 0, dead_time_s = 0;
+  int current_sensors = 2;
+  double i_sense_max_a = 0;
+  int adc_bits = 12;
+  long encoder_cpr = 0;
+  int delay_periods = 1;
+};
+
+/// The files given on the command line, parsed and validated.
+struct MotorFiles {
+  MotorSpec motor;
+  BoardSpec board;
+};
+
+/// Parse --motor FILE and --board FILE (board_path may be empty when the
+/// motor file also holds [board]). Throws UsageError("<file>:<line>: ...").
+MotorFiles load_motor_files(const std::string& motor_path, const std::string& board_path);
+
+}  // namespace mcsim

@@ -1,0 +1,409 @@
+// Scenarios for any motor (`--motor FILE [--board FILE]`): the unmodified
+// drive on the simulated board, the gains derived from the files
+// (drive_setup.hpp). Every metric is computed on the fly: a run keeps
+// constant memory whatever its length. The CSV keeps every PWM period up to
+// 20000 rows and is decimated beyond (csv_every).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "drive_setup.hpp"
+#include "scenario.hpp"
+
+namespace mcsim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// 10-90 % rise time of y after a step at t0 to `target`, from consecutive
+// samples (linear interpolation), in constant memory.
+class RiseTimer {
+ public:
+  RiseTimer(double t0, double y0, double target) : t0_(t0), y0_(y0), target_(target) {}
+  void add(double t, double y) {
+    if (t >= t0_ && have_) {
+      cross(0.1, &t10_, t, y);
+      cross(0.9, &t90_, t, y);
+    }
+    tp_ = t;
+    yp_ = y;
+    have_ = true;
+  }
+  double rise_s() const { return t90_ - t10_; }
+
+ private:
+  void cross(double frac, double* tc, double t, double y) {
+    if (!std::isnan(*tc)) return;
+    const double lvl = y0_ + frac * (target_ - y0_);
+    const double a = yp_ - lvl, b = y - lvl;
+    if ((target_ > y0_ && a < 0 && b >= 0) || (target_ < y0_ && a > 0 && b <= 0)) {
+      *tc = tp_ + (t - tp_) * a / (a - b);
+    }
+  }
+  double t0_, y0_, target_;
+  double tp_ = 0, yp_ = 0;
+  bool have_ = false;
+  double t10_ = std::nan(""), t90_ = std::nan("");
+};
+
+std::string fault_names(uint32_t f, uint32_t ctrl_err) {
+  static const char* const names[] = {"ADC", "MEAS_NAN", "OVERCURRENT", "VBUS_LOW", "VBUS_HIGH",
+                                      "ENCODER", "CONTROL", "PWM", "HW_INPUT", "OVERSPEED",
+                                      "OVERTEMP", "OVERRUN", "STALL", "EXTERNAL", "UNBALANCED",
+                                      "OPEN_PHASE"};
+  std::string s;
+  for (int i = 0; i < 16; ++i) {
+    if (f & (1u << i)) s += (s.empty() ? "" : "|") + std::string(names[i]);
+  }
+  if ((f & MC_DRIVE_FAULT_CONTROL) != 0u) {
+    s += " (law error bits " + std::to_string(ctrl_err) + ")";
+  }
+  return s;
+}
+
+// The sensorless law's error bits, named (the reasons a start can fail).
+std::string sls_reason(uint32_t e) {
+  if (e & MC_CTRL_SLS_ERR_NO_LOCK) {
+    return "sensorless start-up did not lock: the observer's speed never agreed with the I-f "
+           "frame at the hand-over speed (the observer's low-speed limit, or the I-f current "
+           "too small for the load)";
+  }
+  if (e & MC_CTRL_SLS_ERR_FOC) return "the sensorless law's current loop refused a step";
+  if (e & MC_CTRL_SLS_ERR_MEAS) return "non-finite measurement";
+  return "sensorless law error bits " + std::to_string(e) + " (observer divergence)";
+}
+
+// Common CSV row and bookkeeping.
+struct Recorder {
+  RunContext& ctx;
+  MotorRig& rig;
+  bool hat;
+  long every = 1;
+  long k = 0;
+  void header() {
+    std::vector<std::string> c = {"t", "i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a",
+                                  "omega_m_rad_s", "omega_ref_rad_s", "theta_e_rad"};
+    if (hat) c.push_back("theta_e_hat_rad");
+    c.insert(c.end(), {"v_d_v", "v_q_v", "fault_1"});
+    ctx.csv.columns(c);
+  }
+  void row(double t, double id, double iq, double w) {
+    if (k++ % every != 0) return;
+    double idr, iqr, vd, vq;
+    rig.dq_refs(&idr, &iqr);
+    rig.dq_volts(&vd, &vq);
+    double v[12];
+    size_t n = 0;
+    for (double x : {t, id, iq, idr, iqr, w, rig.omega_ref_rad_s(), rig.theta_e_true()}) v[n++] = x;
+    if (hat) v[n++] = rig.theta_e_hat();
+    v[n++] = vd;
+    v[n++] = vq;
+    v[n++] = static_cast<double>(rig.drive().faults);
+    ctx.csv.row(v, n);
+  }
+};
+
+long csv_every(const RunContext& ctx, long n) {
+  const long e = std::lround(ctx.params.get("csv_every"));
+  return e > 0 ? e : std::max(1L, n / 20000);
+}
+
+// The run's duration: --duration, or the scenario's own from the motor.
+double duration(const RunContext& ctx, double auto_s) {
+  const double d = ctx.duration_s > 0 ? ctx.duration_s : auto_s;
+  ctx.summary.set("duration_s", d);
+  return d;
+}
+
+ParamSpec csv_every_spec() {
+  return {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0,
+          1.0e9};
+}
+
+// ------------------------------------------------------------ current step
+std::vector<ParamSpec> current_step_params(const MotorFiles& f) {
+  const Gains g = derive_gains(f, nullptr);
+  const double L = std::max(f.motor.ld_h, f.motor.lq_h);
+  // Default step: half the rated current, at most what needs half the
+  // voltage limit at the first instant (kp + R) di <= v_max / 2.
+  const double di =
+      std::min(0.5 * g.i_rated_eff_a, 0.5 * g.v_max_v / (L * g.cur_bw_rad_s + f.motor.r_ohm));
+  std::vector<ParamSpec> p = {
+      {"iq_step_a", di, "A", "q-axis current step", -g.i_limit_a, g.i_limit_a},
+      {"id_step_a", -0.5 * di, "A", "d-axis current step (after the q step)", -g.i_limit_a,
+       g.i_limit_a},
+      {"j_load_factor", 100.0, "1",
+       "inertia coupled to the rotor, in motor inertias (a dyno flywheel: the rotor stays near "
+       "standstill, as on a test bench)", 0.0, 1.0e6},
+      csv_every_spec()};
+  for (auto& s : gain_params(f)) p.push_back(s);
+  return p;
+}
+
+void run_current_step(RunContext& ctx) {
+  MotorFiles f = *ctx.files;
+  const Gains g = derive_gains(f, &ctx.params);
+  f.motor.j_kgm2 *= 1.0 + ctx.params.get("j_load_factor");
+  MotorRig rig(f, g, RigOptions{Law::kCurrent, {}});
+  const double T = rig.period_s();
+  const double design = std::log(9.0) / g.cur_bw_rad_s;
+  // Each step gets 12 design rise times (settled to 0.5 %) plus 2 ms.
+  const double t_iq = 10 * T, t_id = t_iq + 12 * design + 2e-3;
+  const double dur = duration(ctx, t_id + 12 * design + 2e-3);
+  const double iq_s = ctx.params.get("iq_step_a"), id_s = ctx.params.get("id_step_a");
+  const long n = std::lround(dur / T);
+  Recorder rec{ctx, rig, false, csv_every(ctx, n)};
+  rec.header();
+  RiseTimer rq(t_iq, 0.0, iq_s), rd(t_id, 0.0, id_s);
+  mc_drive_t& d = rig.drive();
+  double id = 0, iq = 0;
+  for (long k = 0; k <= n; ++k) {
+    const double t = rig.board().t_s();
+    const double idr = t >= t_id ? id_s : 0.0, iqr = t >= t_iq ? iq_s : 0.0;
+    if (mc_drive_set_current_ref(&d, static_cast<float>(idr), static_cast<float>(iqr)) != 0) {
+      throw UsageError("current reference rejected by the drive");
+    }
+    rig.board().true_dq_a(&id, &iq);
+    rq.add(t, iq);
+    rd.add(t, id);
+    rec.row(t, id, iq, rig.board().state()(2));
+    if (k < n) rig.step();
+    if ((k & 1023) == 0) ctx.progress.update(t, dur);
+  }
+  record_setup(*ctx.files, g, ctx.summary);
+  ctx.summary.set("faults", d.faults);
+  if (d.faults != 0u) {
+    ctx.summary.set_text("fault_names", fault_names(d.faults, d.tm.ctrl_err));
+    throw std::runtime_error("drive faulted: " + fault_names(d.faults, d.tm.ctrl_err));
+  }
+  ctx.summary.set("rise_time_designed_s", design);
+  ctx.summary.set("iq_rise_time_s", rq.rise_s());
+  ctx.summary.set("id_rise_time_s", rd.rise_s());
+  ctx.summary.set("iq_rise_time_ratio", rq.rise_s() / design);
+  ctx.summary.set("id_rise_time_ratio", rd.rise_s() / design);
+  ctx.summary.set("kp_q_v_per_a", rig.drive_cfg().foc.kp_q_v_per_a);
+  ctx.summary.set("ki_q_v_per_as", rig.drive_cfg().foc.ki_q_v_per_as);
+  ctx.summary.set("iq_final_a", iq);
+  ctx.summary.set("id_final_a", id);
+}
+
+const Registrar reg_current({
+    "current-step",
+    "any motor (--motor FILE [--board FILE]): FOC current loop through the firmware, a q then "
+    "a d current step; summary: 10-90% rise times against the design ln 9 / cur_bw",
+    0.0,
+    {},
+    run_current_step,
+    current_step_params});
+
+// --------------------------------------------------- speed step / load step
+std::vector<ParamSpec> speed_params(const MotorFiles& f, bool load_step) {
+  const Gains g = derive_gains(f, nullptr);
+  std::vector<ParamSpec> p = {
+      {"law", 0.0, "1", "speed law", 0.0, 1.0, {{"pi", 0.0}, {"pi2d", 1.0}}},
+      {"speed_rad_s", 0.5 * g.speed_rated_eff_rad_s, "rad/s",
+       load_step ? "running speed (mechanical)" : "speed step target (mechanical)",
+       -g.speed_limit_rad_s, g.speed_limit_rad_s},
+      {"load_frac", load_step ? 0.5 : 0.0, "1",
+       load_step ? "load step, fraction of rated torque" : "constant load, fraction of rated torque",
+       -1.0, 1.0},
+      csv_every_spec()};
+  for (auto& s : gain_params(f)) p.push_back(s);
+  return p;
+}
+
+void run_speed(RunContext& ctx, bool load_step) {
+  const MotorFiles& f = *ctx.files;
+  const Gains g = derive_gains(f, &ctx.params);
+  const bool pi2d = ctx.params.get("law") > 0.5;
+  const double w_t = ctx.params.get("speed_rad_s");
+  const double tau_l = ctx.params.get("load_frac") * g.torque_rated_nm;
+  const double wc = pi2d ? 3.0 * g.pi2d_wn_rad_s : g.speed_wc_rad_s;
+  const double t_acc = std::abs(w_t) / g.speed_accel_rad_s2;
+  const double t0 = 0.01;
+  // Settling: the PI's zero at wc/4 leaves a tail of a few 4/wc.
+  const double t_set = 40.0 / wc;
+  // load-step: the speed step first, the load once it has settled.
+  const double t_load = load_step ? t0 + t_acc + 0.5 * t_set : 0.0;
+  const double dur = duration(ctx, load_step ? t_load + t_set : t0 + t_acc + t_set);
+  RigOptions o;
+  o.law = pi2d ? Law::kPi2d : Law::kSpeedPi;
+  o.load_nm = [tau_l, t_load](double t) { return t >= t_load ? tau_l : 0.0; };
+  MotorFiles fr = f;
+  MotorRig rig(fr, g, o);
+  const double T = rig.period_s();
+  const long n = std::lround(dur / T);
+  Recorder rec{ctx, rig, false, csv_every(ctx, n)};
+  rec.header();
+  const double band = 0.02 * std::abs(w_t);
+  double last_out = t0, id_max_ss = 0, iq_max = 0, w = 0, id = 0, iq = 0, werr_max_ss = 0;
+  double last_out_load = t_load, dip = 0;
+  const double t_ss = dur - 0.2 * (dur - (load_step ? t_load : t0 + t_acc));
+  for (long k = 0; k <= n; ++k) {
+    const double t = rig.board().t_s();
+    rig.set_speed_ref(t >= t0 ? w_t : 0.0);
+    rig.board().true_dq_a(&id, &iq);
+    w = rig.board().state()(2);
+    if (t >= t0 && std::abs(w - w_t) > band) last_out = t;
+    if (load_step && t >= t_load) {
+      dip = std::max(dip, std::abs(w - w_t));
+      if (std::abs(w - w_t) > band) last_out_load = t;
+    }
+    if (t >= t_ss) {
+      id_max_ss = std::max(id_max_ss, std::abs(id));
+      werr_max_ss = std::max(werr_max_ss, std::abs(w - w_t));
+    }
+    iq_max = std::max(iq_max, std::abs(iq));
+    rec.row(t, id, iq, w);
+    if (rig.drive().faults != 0u) break;
+    if (k < n) rig.step();
+    if ((k & 1023) == 0) ctx.progress.update(t, dur);
+  }
+  record_setup(f, g, ctx.summary);
+  mc_drive_t& d = rig.drive();
+  ctx.summary.set_text("law", pi2d ? "pi2d" : "pi");
+  ctx.summary.set("faults", d.faults);
+  if (d.faults != 0u) {
+    ctx.summary.set_text("fault_names", fault_names(d.faults, d.tm.ctrl_err));
+    throw std::runtime_error("drive faulted: " + fault_names(d.faults, d.tm.ctrl_err));
+  }
+  if (load_step) {
+    ctx.summary.set("t_load_step_s", t_load);
+    ctx.summary.set("load_dip_rad_s", dip);
+    ctx.summary.set("recover_2pct_s", last_out_load - t_load);
+  } else {
+    ctx.summary.set("settle_2pct_s", last_out - t0);
+  }
+  ctx.summary.set("settled", std::abs(w - w_t) <= band ? 1.0 : 0.0);
+  ctx.summary.set("omega_final_rad_s", w);
+  ctx.summary.set("accel_time_s", t_acc);
+  ctx.summary.set("id_abs_max_steady_a", id_max_ss);
+  ctx.summary.set("id_abs_max_steady_frac_rated", id_max_ss / g.i_rated_eff_a);
+  ctx.summary.set("omega_err_max_steady_rad_s", werr_max_ss);
+  ctx.summary.set("iq_abs_max_a", iq_max);
+  ctx.summary.set("load_nm", tau_l);
+}
+
+const Registrar reg_speed({
+    "speed-step",
+    "any motor: sensored speed step from standstill through the firmware (law=pi: speed PI "
+    "on the drive's encoder speed; law=pi2d: the PI^2D plug-in); summary: 2% settling time, "
+    "steady |i_d|",
+    0.0,
+    {},
+    [](RunContext& ctx) { run_speed(ctx, false); },
+    [](const MotorFiles& f) { return speed_params(f, false); }});
+
+const Registrar reg_load({
+    "load-step",
+    "any motor: sensored speed step to speed_rad_s, then a load step of load_frac rated torque "
+    "(law=pi or pi2d); summary: speed dip and 2% recovery time",
+    0.0,
+    {},
+    [](RunContext& ctx) { run_speed(ctx, true); },
+    [](const MotorFiles& f) { return speed_params(f, true); }});
+
+// -------------------------------------------------- sensorless speed step
+std::vector<ParamSpec> sls_params(const MotorFiles& f) {
+  const Gains g = derive_gains(f, nullptr);
+  std::vector<ParamSpec> p = {
+      {"speed_rad_s", 0.5 * g.speed_rated_eff_rad_s, "rad/s", "speed target (mechanical)",
+       -g.speed_limit_rad_s, g.speed_limit_rad_s},
+      {"load_frac", 0.3, "1", "load from standstill on, fraction of rated torque", -1.0, 1.0},
+      {"load_step_frac", 0.3, "1", "load step added later, fraction of rated torque", -1.0, 1.0},
+      csv_every_spec()};
+  for (auto& s : gain_params(f)) p.push_back(s);
+  return p;
+}
+
+void run_sensorless(RunContext& ctx) {
+  const MotorFiles& f = *ctx.files;
+  const Gains g = derive_gains(f, &ctx.params);
+  const double w_t = ctx.params.get("speed_rad_s");
+  if (std::abs(w_t) < g.handover_rad_s / (1.0 - 0.3) * 1.2) {
+    throw UsageError("speed_rad_s must be well above the hand-over speed " +
+                     std::to_string(g.handover_rad_s) +
+                     " rad/s: below it the observer cannot see the angle (its low-speed limit)");
+  }
+  const double tau0 = ctx.params.get("load_frac") * g.torque_rated_nm;
+  const double tau1 = tau0 + ctx.params.get("load_step_frac") * g.torque_rated_nm;
+  const double wc = g.sls_wc_rad_s;
+  const double t_start = g.align_time_s + g.handover_rad_s / g.if_accel_rad_s2 + 0.1;
+  const double slew = 0.5 * g.torque_rated_nm / f.motor.j_kgm2;
+  const double t_run = std::abs(w_t) / slew + 40.0 / wc;
+  const double t_load = t_start + t_run;
+  const double dur = duration(ctx, t_load + 40.0 / wc);
+  RigOptions o;
+  o.law = Law::kSensorless;
+  // The load opposes the direction of the run (an active load: it turns a
+  // rotor at standstill backwards).
+  const double sgn = w_t >= 0 ? 1.0 : -1.0;
+  const double tau0s = sgn * tau0, tau1s = sgn * tau1;
+  o.load_nm = [tau0s, tau1s, t_load](double t) { return t >= t_load ? tau1s : tau0s; };
+  MotorRig rig(f, g, o);
+  rig.set_speed_ref(w_t);
+  const double T = rig.period_s();
+  const long n = std::lround(dur / T);
+  Recorder rec{ctx, rig, true, csv_every(ctx, n)};
+  rec.header();
+  const double band = 0.05 * std::abs(w_t);
+  double t_lock = std::nan(""), ang_max = 0, ang_sq = 0, werr_end = 0, w = 0, id = 0, iq = 0;
+  long ang_n = 0, k = 0;
+  double min_w_align = 0;
+  for (k = 0; k <= n; ++k) {
+    const double t = rig.board().t_s();
+    rig.board().true_dq_a(&id, &iq);
+    w = rig.board().state()(2);
+    const auto& tm = rig.sls().tm;
+    if (tm.phase == MC_CTRL_SLS_ALIGN) min_w_align = std::min(min_w_align, sgn * w);
+    if (tm.phase == MC_CTRL_SLS_CLOSED && std::isnan(t_lock)) t_lock = t;
+    if (!std::isnan(t_lock) && t > t_lock + 0.05) {
+      const double e = std::abs(std::remainder(rig.theta_e_hat() - rig.theta_e_true(), 2 * kPi));
+      ang_max = std::max(ang_max, e);
+      ang_sq += e * e;
+      ++ang_n;
+    }
+    if (t >= dur - 0.1 * (dur - t_load)) werr_end = std::max(werr_end, std::abs(w - w_t));
+    rec.row(t, id, iq, w);
+    if (rig.drive().faults != 0u) break;
+    if (k < n) rig.step();
+    if ((k & 1023) == 0) ctx.progress.update(t, dur);
+  }
+  record_setup(f, g, ctx.summary);
+  const mc_drive_t& d = rig.drive();
+  const auto& tm = rig.sls().tm;
+  ctx.summary.set("faults", d.faults);
+  ctx.summary.set("handovers", tm.handovers);
+  ctx.summary.set("fallbacks", tm.fallbacks);
+  ctx.summary.set("t_lock_s", t_lock);
+  ctx.summary.set("t_load_step_s", t_load);
+  ctx.summary.set("align_backwards_rad_s", -min_w_align);
+  ctx.summary.set("obs_gamma_per_wb2_s", rig.sls().gamma);
+  if (d.faults != 0u) {
+    const std::string why = (d.faults & MC_DRIVE_FAULT_CONTROL)
+                                ? sls_reason(d.tm.ctrl_err)
+                                : "drive fault " + fault_names(d.faults, d.tm.ctrl_err);
+    ctx.summary.set_text("fault_names", why);
+    throw std::runtime_error(why);
+  }
+  ctx.summary.set("locked", (tm.phase == MC_CTRL_SLS_CLOSED) ? 1.0 : 0.0);
+  ctx.summary.set("angle_err_max_rad", ang_max);
+  ctx.summary.set("angle_err_rms_rad", ang_n ? std::sqrt(ang_sq / ang_n) : std::nan(""));
+  ctx.summary.set("omega_final_rad_s", w);
+  ctx.summary.set("omega_err_max_end_rad_s", werr_end);
+  ctx.summary.set("tracks", werr_end <= band ? 1.0 : 0.0);
+  ctx.summary.set("load0_nm", tau0);
+  ctx.summary.set("load1_nm", tau1);
+}
+
+const Registrar reg_sls({
+    "sensorless-speed-step",
+    "any motor: sensorless start from standstill under load (I-f, hand-over to the flux "
+    "observer), speed step, then a load step; summary: lock, angle error, tracking",
+    0.0,
+    {},
+    run_sensorless,
+    sls_params});
+
+}  // namespace
+}  // namespace mcsim
