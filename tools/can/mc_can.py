@@ -415,15 +415,15 @@ class SocketcanRecorder:
                 cf, anc, _flags, _addr = self.sock.recvmsg(72, self._cmsg_space)
             except BlockingIOError:
                 break
-            t = None
-            for level, typ, data in anc:
+            stamp = None
+            for _level, typ, data in anc:
                 if typ == SO_TIMESTAMPNS and len(data) >= 16:
                     sec, ns = unpack_ts(data)
-                    t = sec + ns * 1e-9
+                    stamp = f"{sec:010d}.{ns // 1000:06d}"  # as candump: microseconds, truncated
                 elif typ == SO_RXQ_OVFL and len(data) >= 4:
                     self.dropped = unpack_u32(data)[0]
-            if t is None:
-                t = time.time()
+            if stamp is None:
+                stamp = f"{time.time():017.6f}"
             can_id, length = head(cf)
             payload = cf[8:8 + length]
             if can_id & CAN_ERR_FLAG:
@@ -433,11 +433,11 @@ class SocketcanRecorder:
             else:
                 ident = f"{can_id & 0x7FF:03X}"
             if len(cf) == 72:  # CAN FD frame
-                line = f"({t:017.6f}) {iface} {ident}##{cf[5] & 1:X}{payload.hex().upper()}"
+                line = f"({stamp}) {iface} {ident}##{cf[5] & 1:X}{payload.hex().upper()}"
             elif can_id & CAN_RTR_FLAG:
-                line = f"({t:017.6f}) {iface} {ident}#R"
+                line = f"({stamp}) {iface} {ident}#R"
             else:
-                line = f"({t:017.6f}) {iface} {ident}#{payload.hex().upper()}"
+                line = f"({stamp}) {iface} {ident}#{payload.hex().upper()}"
             out.append(line)
         return out
 
