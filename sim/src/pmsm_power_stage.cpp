@@ -31,6 +31,23 @@ struct OpenPhaseNoCurrent {
   }
 };
 
+// The healthy plant with its currents held at zero: open terminals (no
+// current, no torque), only the mechanics move. Integrating the full model
+// from zero current instead lets the back-EMF build a current inside the RK4
+// stages, whose torque would brake the rotor although no current flows.
+struct RotorFrameNoCurrent {
+  using State = PmsmRotorFrame::State;
+  using Input = PmsmRotorFrame::Input;
+  const PmsmRotorFrame* plant;
+  State deriv(double t_s, const State& x, const Input& u) const {
+    State x0 = x;
+    x0(0) = x0(1) = 0.0;
+    State dx = plant->deriv(t_s, x0, u);
+    dx(0) = dx(1) = 0.0;
+    return dx;
+  }
+};
+
 }  // namespace
 
 Status PmsmPowerStageParams::validate() const {
@@ -113,8 +130,8 @@ void PmsmPowerStage::freewheel(double h_s, int n) {
         const PmsmRotorFrame::Input u = PmsmRotorFrame::Input::Zero();
         // Mechanics only: with zero current there is no torque, and the
         // electrical equations are not integrated (open terminals).
-        const State x1 = rk4_step(plant_, t, x_, u, h_s);
-        x_.tail<4>() = x1.tail<4>();
+        const RotorFrameNoCurrent nc{&plant_};
+        x_ = rk4_step(nc, t, x_, u, h_s);
         continue;
       }
       open_circuit_ = false;
@@ -128,8 +145,10 @@ void PmsmPowerStage::freewheel(double h_s, int n) {
     const State before = x_;
     State x1 = rk4_step(plant_, t, x_, v, h_s);
     // The diodes block reverse current: if the current vector reversed
-    // within the sub-step, it reached zero inside it.
-    if (x1(0) * before(0) + x1(1) * before(1) <= 0.0) {
+    // within the sub-step, it reached zero inside it. A current that starts
+    // from zero (the back-EMF has just overcome the bus) cannot reverse.
+    const bool was_flowing = (before(0) != 0.0) || (before(1) != 0.0);
+    if (was_flowing && x1(0) * before(0) + x1(1) * before(1) <= 0.0) {
       x1(0) = x1(1) = 0.0;
       open_circuit_ = true;
     }
