@@ -10,12 +10,6 @@ namespace mcsim {
 
 namespace {
 
-// Amplitude-invariant inverse Clarke.
-Eigen::Vector3d abc_from_ab(double a, double b) {
-  const double s3 = std::sqrt(3.0) / 2.0;
-  return {a, -0.5 * a + s3 * b, -0.5 * a - s3 * b};
-}
-
 // The open-phase plant with the series current held at zero: open terminals
 // (no current, no torque), only the mechanics move.
 struct OpenPhaseNoCurrent {
@@ -100,11 +94,6 @@ Status PmsmPowerStage::set_load(const LoadTorque& load) {
   if (open_phase_ >= 0) (void)open_plant_.configure(p, open_phase_);
   p_.motor.load = load;
   return Status::kOk;
-}
-
-Eigen::Vector3d PmsmPowerStage::phase_currents_a() const {
-  const Eigen::Vector2d iab = PmsmRotorFrame::i_alpha_beta_a(x_);
-  return abc_from_ab(iab(0), iab(1));
 }
 
 Eigen::Vector3d PmsmPowerStage::phase_currents_true_a() const {
@@ -210,30 +199,16 @@ void PmsmPowerStage::advance_open_phase(const Eigen::Vector3d& duty, bool switch
   x_ = open_plant_.to_rotor_frame(xo);
 }
 
-Status PmsmPowerStage::advance(const Eigen::Vector3d& duty_abc, bool switching) {
+Status PmsmPowerStage::advance_special(const Eigen::Vector3d& duty, bool switching) {
   if (!std::isfinite(t_s_)) return Status::kNotFinite;
-  const double T = p_.inverter.t_pwm_s;
   const int n = p_.substeps;
   if (open_phase_ >= 0) {
-    advance_open_phase(duty_abc, switching);
-  } else if (!switching) {
-    freewheel(T / n, n);
-    duty_applied_ = Eigen::Vector3d::Constant(0.5);
+    advance_open_phase(duty, switching);
   } else {
-    open_circuit_ = false;
-    duty_applied_ = duty_abc;
-    // The inverter uses the phase currents only for the dead-time error.
-    const Eigen::Vector3d i =
-        (p_.inverter.t_dead_s > 0.0) ? phase_currents_a() : Eigen::Vector3d::Zero();
-    const Eigen::Vector2d v = inverter_.alpha_beta_v(duty_abc, p_.vbus_v, i);
-    v_ab_applied_ = v;
-    const Status s = plant_.advance_zoh(v, t_s_, T, n, &x_);
-    if (s != Status::kOk) return s;
+    freewheel(p_.inverter.t_pwm_s / n, n);
+    duty_applied_ = Eigen::Vector3d::Constant(0.5);
   }
-  // (cos, sin) of the electrical angle are integrated as states; re-derive
-  // them from theta_m every 32 periods (drift per period is O(h^5)).
-  if ((++period_count_ & 31U) == 0U) plant_.resync(&x_);
-  t_s_ += T;
+  end_period();
   return Status::kOk;
 }
 

@@ -34,6 +34,7 @@
 #ifndef MCSIM_PMSM_POWER_STAGE_HPP
 #define MCSIM_PMSM_POWER_STAGE_HPP
 
+#include <cmath>
 #include <cstdint>
 
 #include <Eigen/Core>
@@ -74,8 +75,23 @@ class PmsmPowerStage {
 
   // One period with the bridge switching at duty_abc (each in [0, 1]) when
   // switching is true, all switches open otherwise. Errors of the
-  // integrator (kNotFinite when the time is not finite).
-  Status advance(const Eigen::Vector3d& duty_abc, bool switching);
+  // integrator (kNotFinite when the time is not finite). The healthy
+  // switching path, once per SIL period, is inline: it costs no more than
+  // the two calls (inverter, integrator) it makes.
+  Status advance(const Eigen::Vector3d& duty_abc, bool switching) {
+    if (open_phase_ >= 0 || !switching) return advance_special(duty_abc, switching);
+    open_circuit_ = false;
+    duty_applied_ = duty_abc;
+    // The inverter uses the phase currents only for the dead-time error.
+    const Eigen::Vector3d i =
+        (p_.inverter.t_dead_s > 0.0) ? phase_currents_a() : Eigen::Vector3d::Zero();
+    const Eigen::Vector2d v = inverter_.alpha_beta_v(duty_abc, p_.vbus_v, i);
+    v_ab_applied_ = v;
+    const Status s = plant_.advance_zoh(v, t_s_, p_.inverter.t_pwm_s, p_.substeps, &x_);
+    if (s != Status::kOk) return s;
+    end_period();
+    return Status::kOk;
+  }
 
   // -1: all three phases connected; 0..2: that phase conductor is broken
   // from the next advance() on. kBadPhase (nothing changed) outside -1..2.
@@ -97,7 +113,13 @@ class PmsmPowerStage {
   // Phase currents (a, b, c) [A] of the rotor-frame state (what a current
   // sensor measures; with an open phase the rounded dq image of the exact
   // series current).
-  Eigen::Vector3d phase_currents_a() const;
+  Eigen::Vector3d phase_currents_a() const {
+    // Amplitude-invariant inverse Clarke.
+    const Eigen::Vector2d iab = PmsmRotorFrame::i_alpha_beta_a(x_);
+    const double a = iab(0), b = iab(1);
+    const double s3 = std::sqrt(3.0) / 2.0;
+    return {a, -0.5 * a + s3 * b, -0.5 * a - s3 * b};
+  }
   // Exact phase currents [A]: with an open phase exactly 0 in it and exactly
   // opposite in the other two.
   Eigen::Vector3d phase_currents_true_a() const;
@@ -110,6 +132,14 @@ class PmsmPowerStage {
   bool open_circuit() const { return open_circuit_; }
 
  private:
+  // The bridge off, or a phase open.
+  Status advance_special(const Eigen::Vector3d& duty, bool switching);
+  // (cos, sin) of the electrical angle are integrated as states; re-derive
+  // them from theta_m every 32 periods (drift per period is O(h^5)).
+  void end_period() {
+    if ((++period_count_ & 31U) == 0U) plant_.resync(&x_);
+    t_s_ += p_.inverter.t_pwm_s;
+  }
   void freewheel(double h_s, int n);
   void advance_open_phase(const Eigen::Vector3d& duty, bool switching);
 
