@@ -148,17 +148,17 @@ class PmsmPowerStage {
   Inverter3Ph inverter_;
   PmsmOpenPhase open_plant_;
   State x_ = State::Zero();
-  double t_s_ = 0.0;
-  uint64_t period_count_ = 0;
   Eigen::Vector3d duty_applied_{0.5, 0.5, 0.5};
   Eigen::Vector2d v_ab_applied_ = Eigen::Vector2d::Zero();
-  bool open_circuit_ = true;
-  int open_phase_ = -1;
+  double t_s_ = 0.0;
+  uint64_t period_count_ = 0;
   // Open phase: the series current it carries (exact; x_ holds the same
   // state in dq, rounded). open_fresh_: the break has just happened (or
   // healed), the next period projects the series current from x_.
-  bool open_fresh_ = true;
   double open_i_a_ = 0.0;
+  int open_phase_ = -1;
+  bool open_fresh_ = true;
+  bool open_circuit_ = true;
 };
 
 }  // namespace mcsim
