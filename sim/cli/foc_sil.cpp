@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "hal_host/sil_rig.hpp"
+
 namespace mcsim {
 
 mcsim::PmsmParams paper002_test_motor() {
@@ -95,10 +97,6 @@ FocSil::FocSil(const FocSilOptions& o) : opt_(o) {
   }
 }
 
-void FocSil::step() {
-  board_->sample();
-  if (mc_drive_fast_step(&drive_)) mc_drive_slow_step(&drive_);
-  board_->advance();
-}
+void FocSil::step() { (void)hal_host::sil_period(*board_, drive_); }
 
 }  // namespace mcsim

@@ -36,7 +36,7 @@ class FocSil {
  public:
   explicit FocSil(const FocSilOptions& o);
   // One PWM period: ADC trigger, firmware fast step (and slow step when
-  // due), plant integration.
+  // due), plant integration (hal_host::sil_period).
   void step();
   hal_host::PmsmBoard& board() { return *board_; }
   mc_drive_t& drive() { return drive_; }

@@ -17,7 +17,7 @@ using Binding = HalBinding<StepperBoard>;
 }  // namespace
 
 StepperBoard::StepperBoard(const StepperBoardConfig& cfg) : cfg_(cfg) {
-  check_config(plant_.configure(cfg.motor), "motor");
+  check_config(cfg.motor.validate(), "motor");
   for (int k = 0; k < 2; ++k) {
     mcsim::CurrentSensorParams p = cfg.current_sensor;
     p.seed = cfg.current_sensor.seed + static_cast<uint64_t>(k) * 7919U;
@@ -38,7 +38,13 @@ StepperBoard::StepperBoard(const StepperBoardConfig& cfg) : cfg_(cfg) {
   if (!(cfg.tick_hz >= 1.0) || cfg.tick_hz > 4.0e9) {
     throw std::invalid_argument("tick_hz out of range");
   }
-  x_(mcsim::Stepper2Ph::kThetaM) = cfg.theta_m0_rad;
+  mcsim::StepperPowerStageParams sp;
+  sp.motor = cfg.motor;
+  sp.t_pwm_s = cfg.t_pwm_s;
+  sp.vbus_v = cfg.vbus_v;
+  sp.substeps = cfg.substeps;
+  sp.theta_m0_rad = cfg.theta_m0_rad;
+  check_config(stage_.configure(sp), "power stage");
   encoder_.reset(cfg.theta_m0_rad);
   adc_dev_ = {&Binding::kAdc, this};
   pwm_dev_ = {&Binding::kPwm2, this};
@@ -55,63 +61,31 @@ StepperBoard::StepperBoard(const StepperBoardConfig& cfg) : cfg_(cfg) {
 }
 
 uint32_t StepperBoard::ticks_now() const {
-  const double ticks = std::floor(t_s_ * cfg_.tick_hz + 0.5);
+  const double ticks = std::floor(stage_.t_s() * cfg_.tick_hz + 0.5);
   return static_cast<uint32_t>(static_cast<uint64_t>(std::fmod(ticks, 4294967296.0)));
 }
 
 void StepperBoard::sample() {
-  adc_.ia_a = static_cast<float>(isense_[0].sample_a(x_(mcsim::Stepper2Ph::kIa)));
-  adc_.ib_a = static_cast<float>(isense_[1].sample_a(x_(mcsim::Stepper2Ph::kIb)));
+  const State& x = stage_.state();
+  adc_.ia_a = static_cast<float>(isense_[0].sample_a(x(mcsim::Stepper2Ph::kIa)));
+  adc_.ib_a = static_cast<float>(isense_[1].sample_a(x(mcsim::Stepper2Ph::kIb)));
   adc_.ic_a = 0.0f;
   adc_.vbus_v = static_cast<float>(vsense_.sample_v(cfg_.vbus_v));
   adc_.valid_mask = MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS;
   adc_.timestamp_ticks = ticks_now();
   adc_.seq = ++adc_seq_;
   adc_fresh_ = true;
-  const mcsim::EncoderReading r = encoder_.sample(x_(mcsim::Stepper2Ph::kThetaM));
+  const mcsim::EncoderReading r = encoder_.sample(x(mcsim::Stepper2Ph::kThetaM));
   enc_.count = static_cast<uint32_t>(r.count_in_rev);
   enc_.counts_per_rev = static_cast<uint32_t>(cfg_.encoder.counts_per_rev);
   enc_.flags = MC_HAL_ENCODER_FLAG_VALID | (r.index_seen ? MC_HAL_ENCODER_FLAG_INDEX : 0U);
   enc_.timestamp_ticks = adc_.timestamp_ticks;
 }
 
-void StepperBoard::integrate_open(double h_s, int n) {
-  // Each winding on its own: while it carries current the diodes clamp it to
-  // -vbus sign(i); once the current would reverse it is zero and open.
-  for (int k = 0; k < n; ++k) {
-    const double t = t_s_ + k * h_s;
-    mcsim::Stepper2Ph::Input u = mcsim::Stepper2Ph::Input::Zero();
-    for (int j = 0; j < 2; ++j) {
-      const double i = x_(j);
-      if (i != 0.0) open_[j] = false;
-      u(j) = open_[j] ? 0.0 : (i > 0.0 ? -cfg_.vbus_v : cfg_.vbus_v);
-    }
-    const State before = x_;
-    State x1 = mcsim::rk4_step(plant_, t, x_, u, h_s);
-    for (int j = 0; j < 2; ++j) {
-      if (open_[j] || x1(j) * before(j) <= 0.0) {
-        x1(j) = 0.0;  // open winding (or the current reached zero): no current
-        open_[j] = true;
-      }
-    }
-    x_ = x1;
-    v_applied_ = u;
-  }
-}
-
 void StepperBoard::advance() {
-  const double T = cfg_.t_pwm_s;
-  const int n = cfg_.substeps;
+  // Duties after the computation delay; a disable acts at once.
   const Eigen::Vector2d duty = delay_.push(duty_cmd_);
-  if (!(pwm_enabled_ && !fault_line_.killed)) {
-    integrate_open(T / n, n);
-  } else {
-    open_[0] = open_[1] = false;
-    v_applied_ = duty * cfg_.vbus_v;
-    check_config(mcsim::advance_zoh(plant_, v_applied_, t_s_, T, n, &x_), "integrator");
-  }
-  ++period_count_;
-  t_s_ = static_cast<double>(period_count_) * T;
+  check_config(stage_.advance(duty, pwm_enabled_ && !fault_line_.killed), "integrator");
 }
 
 int StepperBoard::adc_read(mc_hal_adc_sample_t* s) noexcept {

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "hal_host/sil_rig.hpp"
 #include "hal_host/stepper_board.hpp"
 #include "mc_ctrl_csmc.h"
 #include "mc_drive.h"
@@ -85,9 +86,7 @@ DriveResult run_drive(const DriveOptions& o) {
     throw std::runtime_error("drive refused the csmc plug-in");
   }
   // First fast step in IDLE to read the encoder, then CTRL.
-  board.sample();
-  if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
-  board.advance();
+  (void)hal_host::sil_period(board, d);
   if (mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL) != 0) {
     throw std::runtime_error("drive refused CTRL mode");
   }
@@ -99,9 +98,7 @@ DriveResult run_drive(const DriveOptions& o) {
   DriveResult r;
   const long n = std::lround(o.duration_s * o.pwm_hz);
   r.trace.reserve(static_cast<size_t>(n) + 1);
-  for (long k = 0; k <= n; ++k) {
-    board.sample();
-    if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
+  const auto record = [&] {
     const auto& x = board.state();
     const auto& tm = ctrl.tm;
     r.trace.push_back(DriveSample{board.t_s() - bc.t_pwm_s, phi0 + o.step_rad,
@@ -110,8 +107,8 @@ DriveResult run_drive(const DriveOptions& o) {
                                   tm.out.v_q_v, d.tm.ctrl_out.duty2_a, d.tm.ctrl_out.duty2_b,
                                   static_cast<double>(d.faults), tm.in.e2_rad, tm.in.de2_rad_s,
                                   tm.in.dde2_rad_s2, tm.out.s1_a, tm.out.s2_rad_s2});
-    board.advance();
-  }
+  };
+  for (long k = 0; k <= n; ++k) (void)hal_host::sil_period(board, d, hal_host::NoHook{}, record);
   r.faults = d.faults;
   return r;
 }

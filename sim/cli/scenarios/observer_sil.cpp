@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "hal_host/sil_rig.hpp"
+
 namespace mcsim {
 namespace observer {
 
@@ -204,11 +206,14 @@ Sil::Sil(const Machine& m, const SilOptions& o, const mc_ctrl_sls_cfg_t& cfg, Lo
 }
 
 void Sil::step() {
-  board_->sample();
-  theta_e_sampled_ = std::remainder(m_.motor.pole_pairs * board_->state()(3), 2 * kPi);
-  if (mc_drive_fast_step(&drive_)) mc_drive_slow_step(&drive_);
-  if (o_.q31) mc_ctrl_sls_q31_tm_to_f32(&ctrl_q31_, &tm_q31_);
-  board_->advance();
+  (void)hal_host::sil_period(
+      *board_, drive_,
+      [this] {
+        theta_e_sampled_ = std::remainder(m_.motor.pole_pairs * board_->state()(3), 2 * kPi);
+      },
+      [this] {
+        if (o_.q31) mc_ctrl_sls_q31_tm_to_f32(&ctrl_q31_, &tm_q31_);
+      });
 }
 
 uint32_t Sil::set_speed_ref(float omega_m_rad_s) {

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hal_host/pmsm_board.hpp"
+#include "hal_host/sil_rig.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/pmsm_normalised.hpp"
 #include "scenario.hpp"
@@ -299,64 +300,69 @@ MotorMetrics run_motor(const MotorOptions& o, bool use_pi2d, double duration_s,
   for (long k = 0; k <= n; ++k) {
     const double t = bd.t_s();
     const SpeedRef r = motor_profile(o, t);
-    bd.sample();
-    if (use_pi2d) {
-      if (mc_ctrl_pi2d_set_ref(&ctrl, static_cast<float>(r.w), static_cast<float>(r.a), 0.0f,
-                               0.0f) != 0u) {
-        throw std::runtime_error("reference rejected");
-      }
-    } else if (d.have_count) {
-      // The drive's telemetry of the previous step holds the last encoder
-      // angle; the cascade's speed filter runs on it (one period late, as a
-      // speed loop in a lower-priority task would).
-      const double th = d.tm.theta_m_rad;
-      if (have_prev) {
-        double dth = th - th_prev;
-        if (dth > kPi) dth -= 2.0 * kPi;
-        if (dth < -kPi) dth += 2.0 * kPi;
-        w_f += lpf * (dth / T - w_f);
-      }
-      th_prev = th;
-      have_prev = true;
-      const float iq_ref = mc_pi_f32_step_ff(
-          &spi, static_cast<float>(r.w - w_f), static_cast<float>(o.J_kgm2 * r.a / kt));
-      if (mc_drive_set_current_ref(&d, 0.0f, iq_ref) != 0) throw std::runtime_error("iq ref");
-    }
-    if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
-    double id, iq;
-    bd.true_dq_a(&id, &iq);
-    const auto x = bd.state();
-    const double e = x(2) - r.w;
-    sum_e2 += e * e;
-    mm.peak_err_rad_s = std::max(mm.peak_err_rad_s, std::abs(e));
-    const Eigen::Vector3d iph(std::abs(id), std::abs(iq), std::hypot(id, iq));
-    mm.peak_current_a = std::max(mm.peak_current_a, iph(2));
-    if (t >= o.t_load_s && t < o.t_down_s) {
-      mm.load_dip_rad_s = std::max(mm.load_dip_rad_s, std::abs(e));
-      if (std::abs(e) > 0.01 * w_r) last_out_of_band = t;
-    }
-    MotorSample s{};
-    s.t = t;
-    s.omega_m = x(2);
-    s.omega_ref = r.w;
-    s.id = id;
-    s.iq = iq;
-    if (use_pi2d) {
-      s.iq_ref = ctrl.tm.iq_ref_a;
-      s.vd = ctrl.tm.vd_v;
-      s.vq = ctrl.tm.vq_v;
-      s.nu = ctrl.tm.nu_nm;
-      s.theta_f = ctrl.tm.theta_f_rad;
-    } else {
-      s.iq_ref = d.iq_ref_a;
-      s.vd = d.tm.foc.vd_v;
-      s.vq = d.tm.foc.vq_v;
-      s.nu = 0.0;
-      s.theta_f = w_f;
-    }
-    s.load = (t >= o.t_load_s) ? o.load_nm : 0.0;
-    row(s);
-    if (k < n) bd.advance();
+    // The last row is recorded before the plant moves; the period the
+    // rig then integrates is not recorded.
+    (void)hal_host::sil_period(
+        bd, d,
+        [&] {
+          if (use_pi2d) {
+            if (mc_ctrl_pi2d_set_ref(&ctrl, static_cast<float>(r.w), static_cast<float>(r.a), 0.0f,
+                                     0.0f) != 0u) {
+              throw std::runtime_error("reference rejected");
+            }
+          } else if (d.have_count) {
+            // The drive's telemetry of the previous step holds the last encoder
+            // angle; the cascade's speed filter runs on it (one period late, as a
+            // speed loop in a lower-priority task would).
+            const double th = d.tm.theta_m_rad;
+            if (have_prev) {
+              double dth = th - th_prev;
+              if (dth > kPi) dth -= 2.0 * kPi;
+              if (dth < -kPi) dth += 2.0 * kPi;
+              w_f += lpf * (dth / T - w_f);
+            }
+            th_prev = th;
+            have_prev = true;
+            const float iq_ref = mc_pi_f32_step_ff(
+                &spi, static_cast<float>(r.w - w_f), static_cast<float>(o.J_kgm2 * r.a / kt));
+            if (mc_drive_set_current_ref(&d, 0.0f, iq_ref) != 0) throw std::runtime_error("iq ref");
+          }
+        },
+        [&] {
+          double id, iq;
+          bd.true_dq_a(&id, &iq);
+          const auto x = bd.state();
+          const double e = x(2) - r.w;
+          sum_e2 += e * e;
+          mm.peak_err_rad_s = std::max(mm.peak_err_rad_s, std::abs(e));
+          const Eigen::Vector3d iph(std::abs(id), std::abs(iq), std::hypot(id, iq));
+          mm.peak_current_a = std::max(mm.peak_current_a, iph(2));
+          if (t >= o.t_load_s && t < o.t_down_s) {
+            mm.load_dip_rad_s = std::max(mm.load_dip_rad_s, std::abs(e));
+            if (std::abs(e) > 0.01 * w_r) last_out_of_band = t;
+          }
+          MotorSample s{};
+          s.t = t;
+          s.omega_m = x(2);
+          s.omega_ref = r.w;
+          s.id = id;
+          s.iq = iq;
+          if (use_pi2d) {
+            s.iq_ref = ctrl.tm.iq_ref_a;
+            s.vd = ctrl.tm.vd_v;
+            s.vq = ctrl.tm.vq_v;
+            s.nu = ctrl.tm.nu_nm;
+            s.theta_f = ctrl.tm.theta_f_rad;
+          } else {
+            s.iq_ref = d.iq_ref_a;
+            s.vd = d.tm.foc.vd_v;
+            s.vq = d.tm.foc.vq_v;
+            s.nu = 0.0;
+            s.theta_f = w_f;
+          }
+          s.load = (t >= o.t_load_s) ? o.load_nm : 0.0;
+          row(s);
+        });
   }
   mm.rms_err_rad_s = std::sqrt(sum_e2 / static_cast<double>(n + 1));
   mm.settle_after_load_s = last_out_of_band - o.t_load_s;

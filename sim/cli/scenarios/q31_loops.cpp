@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hal_host/pmsm_board.hpp"
+#include "hal_host/sil_rig.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/pmsm_normalised.hpp"
 #include "mcsim/stepper_2ph.hpp"
@@ -244,35 +245,40 @@ pi2d::MotorMetrics run_motor_q31(const pi2d::MotorOptions& o, double duration_s,
   for (long k = 0; k <= n; ++k) {
     const double t = bd.t_s();
     const pi2d::SpeedRef r = motor_profile(o, t);
-    bd.sample();
-    ctrl.omega_ref = static_cast<float>(r.w);  // as the f32 plug-in's float reference
-    ctrl.alpha_ref = static_cast<float>(r.a);
-    if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
-    double id, iq;
-    bd.true_dq_a(&id, &iq);
-    const auto x = bd.state();
-    const double e = x(2) - r.w;
-    sum_e2 += e * e;
-    mm.peak_err_rad_s = std::max(mm.peak_err_rad_s, std::abs(e));
-    mm.peak_current_a = std::max(mm.peak_current_a, std::hypot(id, iq));
-    if (t >= o.t_load_s && t < o.t_down_s) {
-      mm.load_dip_rad_s = std::max(mm.load_dip_rad_s, std::abs(e));
-      if (std::abs(e) > 0.01 * w_r) last_out_of_band = t;
-    }
-    pi2d::MotorSample s{};
-    s.t = t;
-    s.omega_m = x(2);
-    s.omega_ref = r.w;
-    s.id = id;
-    s.iq = iq;
-    s.iq_ref = ctrl.iq_ref;
-    s.vd = ctrl.vd;
-    s.vq = ctrl.vq;
-    s.nu = ctrl.nu;
-    s.theta_f = ctrl.theta_f;
-    s.load = (t >= o.t_load_s) ? o.load_nm : 0.0;
-    row(s);
-    if (k < n) bd.advance();
+    // The last row is recorded before the plant moves; the period the
+    // rig then integrates is not recorded.
+    (void)hal_host::sil_period(
+        bd, d,
+        [&] {
+          ctrl.omega_ref = static_cast<float>(r.w);  // as the f32 plug-in's float reference
+          ctrl.alpha_ref = static_cast<float>(r.a);
+        },
+        [&] {
+          double id, iq;
+          bd.true_dq_a(&id, &iq);
+          const auto x = bd.state();
+          const double e = x(2) - r.w;
+          sum_e2 += e * e;
+          mm.peak_err_rad_s = std::max(mm.peak_err_rad_s, std::abs(e));
+          mm.peak_current_a = std::max(mm.peak_current_a, std::hypot(id, iq));
+          if (t >= o.t_load_s && t < o.t_down_s) {
+            mm.load_dip_rad_s = std::max(mm.load_dip_rad_s, std::abs(e));
+            if (std::abs(e) > 0.01 * w_r) last_out_of_band = t;
+          }
+          pi2d::MotorSample s{};
+          s.t = t;
+          s.omega_m = x(2);
+          s.omega_ref = r.w;
+          s.id = id;
+          s.iq = iq;
+          s.iq_ref = ctrl.iq_ref;
+          s.vd = ctrl.vd;
+          s.vq = ctrl.vq;
+          s.nu = ctrl.nu;
+          s.theta_f = ctrl.theta_f;
+          s.load = (t >= o.t_load_s) ? o.load_nm : 0.0;
+          row(s);
+        });
   }
   mm.rms_err_rad_s = std::sqrt(sum_e2 / static_cast<double>(n + 1));
   mm.settle_after_load_s = last_out_of_band - o.t_load_s;

@@ -10,9 +10,11 @@
 #include "mcsim/pmsm_dq.hpp"
 #include "mcsim/pmsm_normalised.hpp"
 #include "mcsim/pmsm_params.hpp"
+#include "mcsim/pmsm_power_stage.hpp"
 #include "mcsim/pmsm_rotor_frame.hpp"
 #include "mcsim/sensors.hpp"
 #include "mcsim/status.hpp"
 #include "mcsim/stepper_2ph.hpp"
+#include "mcsim/stepper_power_stage.hpp"
 
 #endif  // MCSIM_MCSIM_HPP

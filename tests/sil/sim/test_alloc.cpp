@@ -82,6 +82,30 @@ TEST(SimAlloc, ControlLoopDoesNotAllocate) {
   EXPECT_GT(std::fabs(xr(2)), 1.0);
 }
 
+TEST(SimAlloc, PowerStagesDoNotAllocate) {
+  // Every path of the power stages: switching, diode freewheel, open phase
+  // switching and freewheeling; the stepper's bridges on and off.
+  mcsim::PmsmPowerStageParams pp;
+  pp.motor.J_kgm2 = 1.0e-4;
+  pp.inverter.t_dead_s = 0.5e-6;
+  mcsim::PmsmPowerStage pmsm;
+  ASSERT_EQ(pmsm.configure(pp), mcsim::Status::kOk);
+  mcsim::StepperPowerStage stepper;
+  ASSERT_EQ(stepper.configure(mcsim::StepperPowerStageParams{}), mcsim::Status::kOk);
+  const long before = g_new_calls.load();
+  for (int k = 0; k < 2000; ++k) {
+    if (k == 1000) {
+      ASSERT_EQ(pmsm.set_open_phase(1), mcsim::Status::kOk);
+    }
+    const bool on = (k % 500) < 250;
+    ASSERT_EQ(pmsm.advance(Eigen::Vector3d(0.6, 0.4, 0.5), on), mcsim::Status::kOk);
+    ASSERT_EQ(stepper.advance(Eigen::Vector2d(0.3, -0.2), on), mcsim::Status::kOk);
+  }
+  EXPECT_EQ(g_new_calls.load() - before, 0);  // exact: not a single heap allocation
+  EXPECT_TRUE(std::isfinite(pmsm.rotor_frame_state().sum()));
+  EXPECT_TRUE(std::isfinite(stepper.state().sum()));
+}
+
 TEST(SimAlloc, CounterSeesAllocations) {
   // Proves the counter works, so the test above can fail.
   const long before = g_new_calls.load();

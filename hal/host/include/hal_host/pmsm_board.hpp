@@ -1,33 +1,23 @@
-// hal_host::PmsmBoard: a simulated 3-phase drive board. It implements the
-// HAL (adc, pwm3, encoder, tick, fault) on top of the plant simulator, so the
-// unmodified firmware runs against it as against an STM32F405 board.
+// hal_host::PmsmBoard: a simulated 3-phase drive board. It binds the HAL
+// (adc, pwm3, encoder, tick, fault) to the plant simulator, so the
+// unmodified firmware runs against it as against an STM32F405 board. The
+// physics (bridge, diodes, open phase, motor) is the plant's
+// (mcsim::PmsmPowerStage); the board adds what sits between it and the MCU:
+// current/bus/encoder sensors, the duty register with its computation
+// delay, the enable and gate-kill path, the tick counter and injected faults.
 //
 // Timing, as on a real drive (one PWM period T per control step):
 //   t_k       sample(): ADC trigger at the period start: phase currents, DC
 //             bus and encoder are measured from the plant state at t_k.
 //   [t_k, ..] the firmware's fast step runs and writes new duties.
-//   advance() integrates the plant (mcsim::PmsmRotorFrame: the dq model
-//             driven by the inverter's alpha-beta voltage, trig-free so a
-//             period costs no sin/cos but one re-sync) from t_k to t_k + T with RK4 sub-steps,
-//             the inputs held constant (ZOH). The duties in force are those
-//             written delay_periods steps earlier (1 = the usual one-period
-//             computation delay; 0 = ideal, instantaneous update).
+//   advance() the power stage integrates the plant from t_k to t_k + T
+//             (RK4 sub-steps, inputs held constant). The duties in force are
+//             those written delay_periods steps earlier (1 = the usual
+//             one-period computation delay; 0 = ideal, instantaneous update).
+// hal_host::sil_period() (sil_rig.hpp) runs this sequence with the drive.
 //
-// PWM disabled (or gate kill): every switch open. A phase still carrying
-// current freewheels through a diode: its pole is at 0 V for current into the
-// motor and at vbus for current out of it. The pole voltages are re-evaluated
-// at every sub-step; when the current vector would reverse within one
-// sub-step, it is set to zero and the machine is open-circuit from then on
-// (as long as its line-to-line back-EMF stays below vbus, which is checked:
-// above it the diode rectifier conducts again).
-//
-// Open phase (Injection::open_phase): one phase conductor broken between the
-// board and the star point. The plant is then mcsim::PmsmOpenPhase (one
-// series current through the other two phases, driven by the difference of
-// their pole voltages); x_ keeps the same state in the rotor frame, so the
-// inspection functions and the ADC see it. With the switches open the series
-// current freewheels through the diodes of its two legs (-vbus or +vbus
-// across the pair) until it reaches zero.
+// PWM disabled (or gate kill): every switch open; the currents freewheel
+// through the diodes (see mcsim::PmsmPowerStage).
 #ifndef HAL_HOST_PMSM_BOARD_HPP
 #define HAL_HOST_PMSM_BOARD_HPP
 
@@ -35,10 +25,11 @@
 
 #include "hal/hal.h"
 #include "hal_host/hal_binding.hpp"
+#include "hal_host/sim_board.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/inverter.hpp"
 #include "mcsim/pmsm_ab.hpp"
-#include "mcsim/pmsm_open_phase.hpp"
+#include "mcsim/pmsm_power_stage.hpp"
 #include "mcsim/pmsm_rotor_frame.hpp"
 #include "mcsim/sensors.hpp"
 
@@ -59,7 +50,7 @@ struct PmsmBoardConfig {
   double omega_m0_rad_s = 0.0;            // initial speed
 };
 
-class PmsmBoard {
+class PmsmBoard final : public SimBoard {
  public:
   // (i_alpha, i_beta, omega_m, theta_m), as mcsim::PmsmAb.
   using State = mcsim::PmsmAb::State;
@@ -69,26 +60,29 @@ class PmsmBoard {
   PmsmBoard(const PmsmBoard&) = delete;
   PmsmBoard& operator=(const PmsmBoard&) = delete;
 
-  const mc_hal_t* hal() const { return &hal_; }
+  const mc_hal_t* hal() const override { return &hal_; }
 
-  void sample();   // ADC/encoder trigger at the start of the period
-  void advance();  // integrate the plant over one period
+  void sample() override;   // ADC/encoder trigger at the start of the period
+  void advance() override;  // integrate the plant over one period
 
   // Inspection for scenarios and tests (true values, not measurements).
-  double t_s() const { return t_s_; }
+  double t_s() const override { return stage_.t_s(); }
   State state() const;
-  const mcsim::PmsmRotorFrame::State& rotor_frame_state() const { return x_; }
-  const mcsim::PmsmRotorFrame& plant() const { return plant_; }
-  double period_s() const { return cfg_.inverter.t_pwm_s; }
-  double torque_nm() const { return plant_.torque_nm(x_); }
+  const mcsim::PmsmRotorFrame::State& rotor_frame_state() const {
+    return stage_.rotor_frame_state();
+  }
+  const mcsim::PmsmRotorFrame& plant() const { return stage_.plant(); }
+  const mcsim::PmsmPowerStage& power_stage() const { return stage_; }
+  double period_s() const override { return cfg_.inverter.t_pwm_s; }
+  double torque_nm() const { return stage_.torque_nm(); }
   // True phase currents (a, b, c) [A]; with an open phase, exactly 0 in it
   // and exactly opposite in the other two.
-  Eigen::Vector3d phase_currents_true_a() const;
+  Eigen::Vector3d phase_currents_true_a() const { return stage_.phase_currents_true_a(); }
   // dq currents at the true electrical angle.
   void true_dq_a(double* id_a, double* iq_a) const;
   bool pwm_enabled() const { return pwm_enabled_ && !fault_line_.killed; }
-  const Eigen::Vector3d& duties_applied() const { return duty_applied_; }
-  const Eigen::Vector2d& v_alpha_beta_applied() const { return v_ab_applied_; }
+  const Eigen::Vector3d& duties_applied() const { return stage_.duties_applied(); }
+  const Eigen::Vector2d& v_alpha_beta_applied() const { return stage_.v_alpha_beta_applied(); }
 
   // Faults a test can inject into the board (all off by default).
   struct Injection {
@@ -101,7 +95,7 @@ class PmsmBoard {
     double compute_delay_s = 0.0;  // the tick jumps this much after the sample:
                                    // the fast step looks late (deadline overrun)
     int open_phase = -1;           // 0..2: that phase conductor is broken from
-                                   // the next advance() on (mcsim::PmsmOpenPhase);
+                                   // the next advance() on (mcsim::PmsmPowerStage);
                                    // -1: all three connected
   };
   // Throws std::invalid_argument (and changes nothing) for open_phase outside
@@ -109,7 +103,10 @@ class PmsmBoard {
   void inject(const Injection& inj);
 
   // Test hooks.
-  void set_vbus_v(double v) { cfg_.vbus_v = v; }
+  void set_vbus_v(double v) {
+    cfg_.vbus_v = v;
+    stage_.set_vbus_v(v);
+  }
   void set_load(const mcsim::LoadTorque& load);  // throws std::invalid_argument
   void set_fault_inputs(uint32_t active_mask);
 
@@ -131,43 +128,24 @@ class PmsmBoard {
 
  private:
   uint32_t ticks_now() const;
-  Eigen::Vector3d phase_currents_a() const;
-  void integrate_open_switches(double h_s, int n);
-  // One period with a phase conductor broken (Injection::open_phase), bridge
-  // switching (enabled) or open (diodes); keeps x_ in step.
-  void advance_open_phase(const Eigen::Vector3d& duty, bool enabled);
 
   PmsmBoardConfig cfg_;
-  mcsim::PmsmRotorFrame plant_;
-  mcsim::Inverter3Ph inverter_;
+  mcsim::PmsmPowerStage stage_;
   mcsim::CurrentSensor isense_[3];
   mcsim::VbusSensor vsense_;
   mcsim::Encoder encoder_;
   mcsim::InputDelay<Eigen::Vector3d, 4> delay_;
-  mcsim::PmsmRotorFrame::State x_ = mcsim::PmsmRotorFrame::State::Zero();
-  double t_s_ = 0.0;
-  uint64_t period_count_ = 0;
 
   // HAL-visible state
   mc_hal_adc_sample_t adc_{};
   bool adc_fresh_ = false;
   uint32_t adc_seq_ = 0;
   Eigen::Vector3d duty_cmd_{0.5, 0.5, 0.5};
-  Eigen::Vector3d duty_applied_{0.5, 0.5, 0.5};
-  Eigen::Vector2d v_ab_applied_ = Eigen::Vector2d::Zero();
   bool pwm_enabled_ = false;
-  bool pwm_enabled_applied_ = false;
   FaultLine fault_line_;
-  bool open_circuit_ = true;
-  bool open_fresh_ = true;  // open phase: the next period starts from x_ (see below)
   mc_hal_encoder_sample_t enc_{};
   Injection inj_{};
   double tick_offset_s_ = 0.0;
-  // Open-phase fault: its plant and the series current it carries (exact;
-  // x_ holds the same state in dq, rounded). open_fresh_ (above): the break
-  // has just happened, the series current is projected from x_.
-  mcsim::PmsmOpenPhase open_plant_;
-  double open_i_a_ = 0.0;
 
   // ops tables bound to this board
   mc_hal_adc_t adc_dev_{};

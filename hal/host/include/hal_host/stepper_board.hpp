@@ -3,14 +3,14 @@
 // the drive with a plugged stepper law (e.g. firmware/app/mc_ctrl_csmc) runs
 // unmodified against the simulator.
 //
-// Plant: mcsim::Stepper2Ph (phase a/b model, paper 001 eq. (1)).
-// Bridges: average-value, winding voltage = duty * vbus (bipolar, no dead
-// time). Outputs disabled (or gate kill): a winding with current
-// freewheels through the diodes against the bus (-vbus sign(i)) until its
-// current reaches zero, then stays open (zero current).
+// Plant: mcsim::StepperPowerStage (the two H-bridges and their diodes
+// feeding mcsim::Stepper2Ph, paper 001 eq. (1)); outputs disabled (or gate
+// kill) open every switch. The board adds the sensors, the duty register with
+// its computation delay, the enable and gate-kill path and the tick counter.
 // ADC: ia = winding A, ib = winding B (ic not measured), DC bus.
 // Timing as PmsmBoard: sample() at t_k, the firmware's fast step, advance()
-// with the duties written delay_periods periods earlier (ZOH, RK4 sub-steps).
+// with the duties written delay_periods periods earlier (ZOH, RK4 sub-steps);
+// hal_host::sil_period() (sil_rig.hpp) runs this sequence with the drive.
 #ifndef HAL_HOST_STEPPER_BOARD_HPP
 #define HAL_HOST_STEPPER_BOARD_HPP
 
@@ -18,9 +18,11 @@
 
 #include "hal/hal.h"
 #include "hal_host/hal_binding.hpp"
+#include "hal_host/sim_board.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/sensors.hpp"
 #include "mcsim/stepper_2ph.hpp"
+#include "mcsim/stepper_power_stage.hpp"
 
 namespace hal_host {
 
@@ -37,7 +39,7 @@ struct StepperBoardConfig {
   double theta_m0_rad = 0.0;              // initial shaft angle
 };
 
-class StepperBoard {
+class StepperBoard final : public SimBoard {
  public:
   using State = mcsim::Stepper2Ph::State;  // (i_a, i_b, w, phi)
 
@@ -46,16 +48,17 @@ class StepperBoard {
   StepperBoard(const StepperBoard&) = delete;
   StepperBoard& operator=(const StepperBoard&) = delete;
 
-  const mc_hal_t* hal() const { return &hal_; }
+  const mc_hal_t* hal() const override { return &hal_; }
 
-  void sample();   // ADC/encoder trigger at the start of the period
-  void advance();  // integrate the plant over one period
+  void sample() override;   // ADC/encoder trigger at the start of the period
+  void advance() override;  // integrate the plant over one period
 
-  double t_s() const { return t_s_; }
-  const State& state() const { return x_; }
-  double period_s() const { return cfg_.t_pwm_s; }
+  double t_s() const override { return stage_.t_s(); }
+  const State& state() const { return stage_.state(); }
+  const mcsim::StepperPowerStage& power_stage() const { return stage_; }
+  double period_s() const override { return cfg_.t_pwm_s; }
   bool pwm_enabled() const { return pwm_enabled_ && !fault_line_.killed; }
-  const Eigen::Vector2d& v_applied() const { return v_applied_; }
+  const Eigen::Vector2d& v_applied() const { return stage_.v_applied(); }
 
   // HAL op implementations (public so the C ops tables can reach them).
   int adc_read(mc_hal_adc_sample_t* s) noexcept;
@@ -73,26 +76,20 @@ class StepperBoard {
 
  private:
   uint32_t ticks_now() const;
-  void integrate_open(double h_s, int n);
 
   StepperBoardConfig cfg_;
-  mcsim::Stepper2Ph plant_;
+  mcsim::StepperPowerStage stage_;
   mcsim::CurrentSensor isense_[2];
   mcsim::VbusSensor vsense_;
   mcsim::Encoder encoder_;
   mcsim::InputDelay<Eigen::Vector2d, 4> delay_;
-  State x_ = State::Zero();
-  double t_s_ = 0.0;
-  uint64_t period_count_ = 0;
 
   mc_hal_adc_sample_t adc_{};
   bool adc_fresh_ = false;
   uint32_t adc_seq_ = 0;
   Eigen::Vector2d duty_cmd_ = Eigen::Vector2d::Zero();
-  Eigen::Vector2d v_applied_ = Eigen::Vector2d::Zero();
   bool pwm_enabled_ = false;
   FaultLine fault_line_;
-  bool open_[2] = {true, true};
   mc_hal_encoder_sample_t enc_{};
 
   mc_hal_adc_t adc_dev_{};
