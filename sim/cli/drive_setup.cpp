@@ -1,5 +1,7 @@
 #include "drive_setup.hpp"
 
+#include "hal_host/sil_rig.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -442,7 +444,12 @@ double MotorRig::omega_ref_rad_s() const {
 }
 
 void MotorRig::step() {
-  board_->sample();
+  hal_host::sil_period(*board_, drive_, [this] { set_references(); });
+}
+
+// Runs after the period's sample, before the interrupt (sil_period's
+// on_sampled hook): the slewed speed reference and the speed loop.
+void MotorRig::set_references() {
   if (o_.law == Law::kSpeedPi || o_.law == Law::kPi2d) {
     // Reference slewed at speed_accel_rad_s2 (exact: constant acceleration
     // over the period, then clamp at the target).
@@ -467,8 +474,6 @@ void MotorRig::step() {
     }
     w_ref_ += a_ref_ * T_;
   }
-  if (mc_drive_fast_step(&drive_)) mc_drive_slow_step(&drive_);
-  board_->advance();
 }
 
 double MotorRig::theta_e_true() const {

@@ -133,6 +133,7 @@ class MotorRig {
   const mc_drive_cfg_t& drive_cfg() const { return dcfg_; }
 
  private:
+  void set_references();
   MotorFiles f_;
   Gains g_;
   RigOptions o_;
