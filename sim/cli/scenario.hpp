@@ -103,6 +103,7 @@ class Summary {
   void set_text(const std::string& key, const std::string& value) { txt_[key] = value; }
   std::string to_json() const;
   const std::map<std::string, double>& numbers() const { return num_; }
+  const std::map<std::string, std::string>& texts() const { return txt_; }
 
  private:
   std::map<std::string, double> num_;
