@@ -9,6 +9,7 @@
 #include <nanobind/stl/vector.h>
 
 #include <exception>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,15 +27,25 @@ namespace {
 
 using Sets = std::vector<std::pair<std::string, std::string>>;
 
+// Counts rows and keeps none (campaigns need only the summary).
+class CountingSink : public mcsim::ColumnSink {
+ public:
+  using mcsim::RowSink::row;
+  void row(const double* values, size_t n) override {
+    if (n != names().size()) throw std::logic_error("CSV row width does not match header");
+    ++rows_;
+  }
+};
+
 // One run. Invalid inputs (unknown scenario, bad motor file, bad key=value)
 // raise UsageError before anything runs; a run that fails on its way
 // (refused settings, a drive fault) returns its partial summary and
 // trajectory with error_kind "usage" or "failed" and mcsim's message.
 nb::dict run(const std::string& scenario, const std::string& motor, const std::string& board,
-             const Sets& sets, double duration_s) {
+             const Sets& sets, double duration_s, bool trajectory) {
   mcsim::PreparedRun prepared = mcsim::prepare_run(scenario, motor, board, sets);
   if (duration_s <= 0) duration_s = prepared.scenario->default_duration_s;
-  auto* sink = new mcsim::ColumnSink();
+  mcsim::ColumnSink* sink = trajectory ? new mcsim::ColumnSink() : new CountingSink();
   nb::capsule owner(sink, [](void* p) noexcept { delete static_cast<mcsim::ColumnSink*>(p); });
   mcsim::Summary summary;
   mcsim::Progress progress(false);
@@ -52,13 +63,14 @@ nb::dict run(const std::string& scenario, const std::string& motor, const std::s
     }
   }
   const size_t ncols = sink->names().size();
-  const size_t nrows = sink->rows();
+  const size_t nrows = trajectory ? sink->rows() : 0;
   nb::ndarray<nb::numpy, double, nb::ndim<2>> data(
       const_cast<double*>(sink->data().data()), {nrows, ncols}, owner);
   nb::dict numbers, texts, out;
   for (const auto& kv : summary.numbers()) numbers[kv.first.c_str()] = kv.second;
   for (const auto& kv : summary.texts()) texts[kv.first.c_str()] = kv.second;
   out["columns"] = sink->names();
+  out["rows"] = sink->rows();
   out["data"] = data;
   out["numbers"] = numbers;
   out["texts"] = texts;
@@ -102,7 +114,7 @@ NB_MODULE(_sil, m) {
   m.doc() = "mcsim scenario runner in-process (see mdtool.sil)";
   nb::exception<mcsim::UsageError>(m, "UsageError", PyExc_ValueError);
   m.def("run", &run, nb::arg("scenario"), nb::arg("motor"), nb::arg("board"), nb::arg("sets"),
-        nb::arg("duration_s"));
+        nb::arg("duration_s"), nb::arg("trajectory") = true);
   m.def("scenarios", &scenarios);
   m.def("params", &params, nb::arg("scenario"), nb::arg("motor"), nb::arg("board"));
   m.attr("git_hash") = MDTOOL_GIT_HASH;

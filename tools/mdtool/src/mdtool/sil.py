@@ -90,8 +90,10 @@ def _summary(raw: dict) -> dict[str, Any]:
 
 def run_raw(scenario: str, motor: str | os.PathLike | None = None,
             board: str | os.PathLike | None = None, params: Mapping[str, Any] | None = None,
-            duration: float | None = None, seed: int | None = None) -> Result:
+            duration: float | None = None, seed: int | None = None,
+            trajectory: bool = True) -> Result:
     """One run; a failed run is returned (error, error_kind), not raised.
+    trajectory=False keeps no rows (data is empty; summary["rows"] counts them).
 
     Invalid inputs (unknown scenario or key, malformed value, bad motor or
     board file) still raise UsageError: nothing ran.
@@ -106,7 +108,7 @@ def run_raw(scenario: str, motor: str | os.PathLike | None = None,
     try:
         raw = _sil.run(scenario, os.fspath(motor) if motor else "",
                        os.fspath(board) if board else "", sets,
-                       float(duration) if duration is not None else 0.0)
+                       float(duration) if duration is not None else 0.0, trajectory)
     except _sil.UsageError as e:
         raise UsageError(str(e)) from None
     return Result(columns=list(raw["columns"]), data=raw["data"], summary=_summary(raw),
