@@ -666,7 +666,8 @@ def _run_ids(camp: Campaign, ids: list[int]) -> list[dict[str, Any]]:
 # ----------------------------------------------------------- one row again
 def spec_from_row(row) -> RunSpec:
     """The run of a results row, from the row alone."""
-    params = tuple((k[3:], _py(v)) for k, v in row.items() if k.startswith("in.") and not _nan(v))
+    params = tuple((k[3:], _py(v)) for k, v in row.items()
+                   if k.startswith("in.") and not _missing(_py(v)))
     crit = ()
     dur = row.get("duration_s")
     return RunSpec(int(row["run_id"]), int(row["seed"]), row["scenario"], row.get("motor"),
@@ -683,17 +684,28 @@ def _py(v):
 
 
 def rerun_row(row) -> tuple[dict[str, Any], list[str]]:
-    """Run a results row again; the keys whose values differ (none expected)."""
+    """Run a results row again; the keys whose values differ (none expected).
+    A row from another firmware (firmware_git) may differ: the caller says so."""
     spec = spec_from_row(row)
     new = run_one(spec)
     diffs = []
     for k, v in new.items():
-        if k in ("wall_s",) or k.startswith("pass"):
+        if k in ("wall_s", "firmware_git") or k.startswith("pass"):
             continue
         if k == "status" and v in ("pass", "fail"):
             continue  # criteria are not in the row's inputs
-        old = row.get(k)
-        old, v = _py(old), _py(v)
-        if not (old == v or (_nan(old) and _nan(v)) or (old is None and v is None)):
+        old, v = _py(row.get(k)), _py(v)
+        if not (old == v or (_missing(old) and _missing(v))):
             diffs.append(f"{k}: {old!r} -> {v!r}")
+    for k, old in row.items():  # columns of other runs are empty in this row
+        if (k not in new and not _missing(_py(old)) and not k.startswith("pass")
+                and k not in ("motor_sha256", "board_sha256")):
+            diffs.append(f"{k}: {old!r} -> (absent)")
+    for k in ("motor", "board"):
+        if row.get(k) and _sha256(row[k]) != row.get(k + "_sha256"):
+            diffs.append(f"{k}_sha256: the file {row[k]} changed since the campaign")
     return new, diffs
+
+
+def _missing(v) -> bool:
+    return v is None or _nan(v)

@@ -43,8 +43,6 @@ def cmd_sweep(a) -> int:
 
 
 def cmd_rerun(a) -> int:
-    import pandas as pd
-
     from . import campaign
 
     df = campaign.read_results(a.out)
@@ -52,11 +50,11 @@ def cmd_rerun(a) -> int:
     if sel.empty:
         print(f"mdtool: no run {a.run_id} in {a.out}", file=sys.stderr)
         return 2
-    row = {k: v for k, v in sel.iloc[0].to_dict().items() if not (k.startswith("out.") and
-                                                                  pd.isna(v))}
+    row = sel.iloc[0].to_dict()
     new, diffs = campaign.rerun_row(row)
     print(json.dumps({"run_id": a.run_id, "status": new["status"], "same": not diffs,
-                      "differences": diffs}))
+                      "differences": diffs, "firmware_git": new["firmware_git"],
+                      "same_firmware": new["firmware_git"] == row.get("firmware_git")}))
     return 0 if not diffs else 1
 
 
