@@ -51,6 +51,20 @@ if [ ! -x "$VENV/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; 
   "$VENV/bin/pip" install -q --disable-pip-version-check -r "$REQ"
   echo "$want" > "$stamp"
 fi
+# mdtool (tools/mdtool): the host package with the SIL extension, built from
+# this tree's sources. Re-installed when its inputs change: the commit and
+# the content of the folders it compiles or ships (a stamp of their hashes;
+# a few milliseconds when nothing changed).
+mdtool_stamp=$VENV/.mdtool.sha256
+mdtool_want=$( { git -C "$ROOT" rev-parse HEAD 2>/dev/null || true
+  find "$ROOT/firmware" "$ROOT/hal" "$ROOT/sim" "$ROOT/tools/cmake" "$ROOT/tools/mdtool" \
+       -path "$ROOT/tools/mdtool/build" -prune -o -name __pycache__ -prune -o -type f -print0 |
+    sort -z | xargs -0 sha256sum; } | sha256sum | cut -d' ' -f1)
+if [ "$(cat "$mdtool_stamp" 2>/dev/null)" != "$mdtool_want" ] || ! "$VENV/bin/python" -c 'import mdtool._sil' 2>/dev/null; then
+  log "installing mdtool (tools/mdtool) into .venv"
+  "$VENV/bin/pip" install -q --disable-pip-version-check --no-build-isolation "$ROOT/tools/mdtool"
+  echo "$mdtool_want" > "$mdtool_stamp"
+fi
 export PATH=$VENV/bin:$PATH
 export MC_PYTHON=$VENV/bin/python
 

@@ -21,6 +21,7 @@
 
 #include "bench.hpp"
 #include "motor_file.hpp"
+#include "run.hpp"
 #include "scenario.hpp"
 
 namespace {
@@ -52,36 +53,9 @@ int cmd_list() {
   return 0;
 }
 
-const mcsim::Scenario& need_scenario(const std::string& name) {
-  const mcsim::Scenario* s = mcsim::find_scenario(name);
-  if (s == nullptr) {
-    throw mcsim::UsageError("unknown scenario '" + name + "' (see 'mcsim list')");
-  }
-  return *s;
-}
-
-// --motor/--board for scenario s: parsed files, or none. A scenario with
-// its own motor refuses them; a scenario for any motor requires --motor.
-std::unique_ptr<mcsim::MotorFiles> motor_files(const mcsim::Scenario& s, const std::string& motor,
-                                               const std::string& board) {
-  if (!s.motor_params) {
-    if (!motor.empty() || !board.empty()) {
-      throw mcsim::UsageError("scenario '" + s.name + "' runs its own motor and takes no --motor "
-                              "or --board (the scenarios for any motor: current-step, "
-                              "speed-step, sensorless-speed-step, load-step)");
-    }
-    return nullptr;
-  }
-  if (motor.empty()) {
-    throw mcsim::UsageError("scenario '" + s.name + "' needs --motor FILE (and --board FILE "
-                            "unless the motor file has a [board] table); see sim/motors/");
-  }
-  return std::make_unique<mcsim::MotorFiles>(mcsim::load_motor_files(motor, board));
-}
-
 int cmd_describe(const std::vector<std::string>& args) {
   if (args.empty()) throw mcsim::UsageError("describe takes one scenario name");
-  const auto& s = need_scenario(args[0]);
+  const auto& s = mcsim::need_scenario(args[0]);
   std::string motor, board;
   for (size_t i = 1; i < args.size(); ++i) {
     if ((args[i] == "--motor" || args[i] == "--board") && i + 1 < args.size()) {
@@ -98,7 +72,7 @@ int cmd_describe(const std::vector<std::string>& args) {
                 "[--board FILE])\n", s.name.c_str());
     return 0;
   }
-  const auto files = motor_files(s, motor, board);
+  const auto files = mcsim::motor_files(s, motor, board);
   const std::vector<mcsim::ParamSpec> specs = files ? s.motor_params(*files) : s.params;
   for (const auto& p : specs) {
     std::printf("  %-22s default %-10g [%g, %g] %-8s %s", p.key.c_str(), p.default_value,
@@ -113,7 +87,7 @@ int cmd_describe(const std::vector<std::string>& args) {
 
 int cmd_run(const std::vector<std::string>& args) {
   if (args.empty()) throw mcsim::UsageError("run: missing scenario name");
-  const auto& scen = need_scenario(args[0]);
+  const auto& scen = mcsim::need_scenario(args[0]);
   std::string out_dir;
   double duration = scen.default_duration_s;
   std::vector<std::pair<std::string, std::string>> sets;
@@ -144,10 +118,9 @@ int cmd_run(const std::vector<std::string>& args) {
     }
   }
   if (out_dir.empty()) throw mcsim::UsageError("run: --out DIR is required");
-  // Motor and board files before anything is written: a bad file changes nothing.
-  const auto files = motor_files(scen, motor_path, board_path);
-  const mcsim::Params params(files ? scen.motor_params(*files) : scen.params,
-                             sets);  // validates keys and values
+  // Scenario, motor and board files and every --set before anything is
+  // written: a bad input changes nothing.
+  const mcsim::PreparedRun run = mcsim::prepare_run(scen.name, motor_path, board_path, sets);
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
@@ -158,14 +131,7 @@ int cmd_run(const std::vector<std::string>& args) {
   mcsim::CsvWriter csv(base + ".csv");
   mcsim::Summary summary;
   mcsim::Progress progress(isatty(STDERR_FILENO) != 0);
-  mcsim::RunContext ctx{duration, params, csv, summary, progress, files.get()};
-  summary.set_text("scenario", scen.name);
-  summary.set("duration_s", duration);
-  for (const auto& kv : params.values()) summary.set("param." + kv.first, kv.second);
-
-  scen.run(ctx);
-  progress.done();
-  summary.set("rows", static_cast<double>(csv.rows()));
+  mcsim::execute_run(run, duration, csv, summary, progress);
 
   const std::string json_tmp = base + ".json.part";
   std::FILE* jf = std::fopen(json_tmp.c_str(), "w");

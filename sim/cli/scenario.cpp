@@ -103,6 +103,18 @@ void CsvWriter::row(const double* values, size_t n) {
   ++rows_;
 }
 
+void ColumnSink::columns(const std::vector<std::string>& names) {
+  if (have_header_) throw std::logic_error("CSV header written twice");
+  have_header_ = true;
+  names_ = names;
+}
+
+void ColumnSink::row(const double* values, size_t n) {
+  if (n != names_.size()) throw std::logic_error("CSV row width does not match header");
+  data_.insert(data_.end(), values, values + n);
+  ++rows_;
+}
+
 void CsvWriter::commit() {
   if (std::fflush(f_) != 0 || std::ferror(f_)) {
     throw UsageError("write error on '" + tmp_path_ + "'");

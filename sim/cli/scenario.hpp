@@ -44,26 +44,56 @@ class Params {
   std::map<std::string, double> values_;
 };
 
+/// Where a scenario's trajectory goes: a header fixed by the first call to
+/// columns(), then rows of exactly that many values. The CLI writes a CSV
+/// (CsvWriter); the Python binding keeps the numbers in memory (ColumnSink).
+class RowSink {
+ public:
+  virtual ~RowSink() = default;
+  virtual void columns(const std::vector<std::string>& names) = 0;
+  virtual void row(const double* values, size_t n) = 0;
+  void row(const std::vector<double>& values) { row(values.data(), values.size()); }
+  size_t rows() const { return rows_; }
+
+ protected:
+  size_t rows_ = 0;
+};
+
 /// Column-oriented CSV: the header is fixed by the first call to columns(),
 /// each row must have exactly that many values. Written to a temporary file
 /// and renamed into place by commit(), so a failed run leaves nothing behind.
-class CsvWriter {
+class CsvWriter : public RowSink {
  public:
   CsvWriter(const std::string& final_path);
-  ~CsvWriter();
+  ~CsvWriter() override;
   CsvWriter(const CsvWriter&) = delete;
   CsvWriter& operator=(const CsvWriter&) = delete;
-  void columns(const std::vector<std::string>& names);
-  void row(const double* values, size_t n);
-  void row(const std::vector<double>& values) { row(values.data(), values.size()); }
+  using RowSink::row;
+  void columns(const std::vector<std::string>& names) override;
+  void row(const double* values, size_t n) override;
   void commit();
-  size_t rows() const { return rows_; }
 
  private:
   std::string final_path_, tmp_path_;
   std::FILE* f_ = nullptr;
-  size_t ncols_ = 0, rows_ = 0;
+  size_t ncols_ = 0;
   bool committed_ = false;
+};
+
+/// The trajectory in memory, row-major, full double precision (the CSV
+/// prints the same values with %.9g).
+class ColumnSink : public RowSink {
+ public:
+  using RowSink::row;
+  void columns(const std::vector<std::string>& names) override;
+  void row(const double* values, size_t n) override;
+  const std::vector<std::string>& names() const { return names_; }
+  const std::vector<double>& data() const { return data_; }
+
+ private:
+  std::vector<std::string> names_;
+  std::vector<double> data_;
+  bool have_header_ = false;
 };
 
 /// Summary metrics written as a flat JSON object next to the CSV.
@@ -73,6 +103,7 @@ class Summary {
   void set_text(const std::string& key, const std::string& value) { txt_[key] = value; }
   std::string to_json() const;
   const std::map<std::string, double>& numbers() const { return num_; }
+  const std::map<std::string, std::string>& texts() const { return txt_; }
 
  private:
   std::map<std::string, double> num_;
@@ -94,7 +125,7 @@ class Progress {
 struct RunContext {
   double duration_s;
   const Params& params;
-  CsvWriter& csv;
+  RowSink& csv;  ///< the trajectory (a CSV file for the CLI)
   Summary& summary;
   Progress& progress;
   /// --motor/--board files (scenarios with motor_params only; else null).

@@ -1,0 +1,53 @@
+#include "run.hpp"
+
+namespace mcsim {
+
+const Scenario& need_scenario(const std::string& name) {
+  const Scenario* s = find_scenario(name);
+  if (s == nullptr) {
+    throw UsageError("unknown scenario '" + name + "' (see 'mcsim list')");
+  }
+  return *s;
+}
+
+std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& motor,
+                                        const std::string& board) {
+  if (!s.motor_params) {
+    if (!motor.empty() || !board.empty()) {
+      throw UsageError("scenario '" + s.name + "' runs its own motor and takes no --motor "
+                       "or --board (the scenarios for any motor: current-step, "
+                       "speed-step, sensorless-speed-step, load-step)");
+    }
+    return nullptr;
+  }
+  if (motor.empty()) {
+    throw UsageError("scenario '" + s.name + "' needs --motor FILE (and --board FILE "
+                     "unless the motor file has a [board] table); see sim/motors/");
+  }
+  return std::make_unique<MotorFiles>(load_motor_files(motor, board));
+}
+
+PreparedRun prepare_run(const std::string& scenario, const std::string& motor_path,
+                        const std::string& board_path,
+                        const std::vector<std::pair<std::string, std::string>>& sets) {
+  PreparedRun r;
+  r.scenario = &need_scenario(scenario);
+  r.files = motor_files(*r.scenario, motor_path, board_path);
+  r.params = Params(r.files ? r.scenario->motor_params(*r.files) : r.scenario->params,
+                    sets);  // validates keys and values
+  return r;
+}
+
+void execute_run(const PreparedRun& run, double duration_s, RowSink& sink, Summary& summary,
+                 Progress& progress) {
+  const Scenario& scen = *run.scenario;
+  RunContext ctx{duration_s, run.params, sink, summary, progress, run.files.get()};
+  summary.set_text("scenario", scen.name);
+  summary.set("duration_s", duration_s);
+  for (const auto& kv : run.params.values()) summary.set("param." + kv.first, kv.second);
+  scen.run(ctx);
+  progress.done();
+  summary.set("rows", static_cast<double>(sink.rows()));
+}
+
+}  // namespace mcsim

@@ -1,0 +1,711 @@
+"""Campaigns: many SIL runs of one scenario over swept parameters, on Dask.
+
+A campaign file (TOML; format in tools/mdtool/README.md):
+
+    [campaign]
+    name = "current-loop-rise"
+    scenario = "current-step"
+    motor = "../../sim/motors/odrive-d5065.toml"   # relative to this file
+    board = "../../sim/motors/odrive-v36-24v.toml"
+    duration_s = 0.02        # optional: the scenario's own otherwise
+    seed = 1                 # seeds the draws and each run's own seed
+    samples = 1              # draws per grid point of the [sweep] distributions
+
+    [fixed]                  # --set in every run
+    csv_every = 100
+
+    [sweep]                  # grids (product) and distributions (sampled)
+    iq_step_a = [2.0, 5.0]
+    cur_bw_rad_s = { start = 500.0, stop = 2000.0, num = 4 }
+    r_scale = { dist = "uniform", low = 0.8, high = 1.2 }
+
+    [pass]                   # every criterion must hold; expressions over the summary
+    fast = "iq_rise_time_ratio < 1.25"
+
+Runs are numbered (run_id) in a fixed order: the grid in file order, the
+last key fastest, `samples` draws per grid point. Each run's draws and its
+seed come from numpy's default_rng([seed, run_id]), so a run depends on its
+row alone, not on which worker ran it or in which order.
+
+Results: OUT/parts/part-NNNNNNNN.parquet, one per finished chunk of runs
+(written atomically: an interrupted campaign resumes from them and redoes
+no finished run), merged into OUT/results.parquet at the end. One row per
+run: run_id, seed, status (pass, fail, fault, refused), error, pass.<name>,
+in.<key> (every parameter set), out.<key> (the summary), the scenario, the
+motor and board files (paths and SHA-256) and the firmware's git hash.
+"""
+from __future__ import annotations
+
+import ast
+import hashlib
+import itertools
+import json
+import math
+import os
+import re
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python < 3.11
+    import tomli as tomllib  # type: ignore
+
+
+class CampaignError(ValueError):
+    """A malformed campaign file: "FILE:LINE: reason"."""
+
+
+# ------------------------------------------------------------ file locations
+class _Lines:
+    """Line numbers of tables and keys in a TOML text (for error messages)."""
+
+    def __init__(self, text: str):
+        self.tables: dict[str, int] = {}
+        self.keys: dict[tuple[str, str], int] = {}
+        table = ""
+        for n, line in enumerate(text.splitlines(), 1):
+            s = line.strip()
+            m = re.match(r"^\[\s*([A-Za-z0-9_.\-\"' ]+?)\s*\]", s)
+            if m and not s.startswith("[["):
+                table = m.group(1).replace('"', "").replace("'", "")
+                self.tables.setdefault(table, n)
+                continue
+            m = re.match(r"^([A-Za-z0-9_\-\"'.]+)\s*=", s)
+            if m:
+                self.keys.setdefault((table, m.group(1).strip("\"'")), n)
+
+    def of(self, table: str, key: str | None = None) -> int:
+        if key is not None and (table, key) in self.keys:
+            return self.keys[(table, key)]
+        return self.tables.get(table, 1)
+
+
+# ---------------------------------------------------------- pass expressions
+_FUNCS = {"abs": abs, "min": min, "max": max, "isnan": math.isnan, "isfinite": math.isfinite,
+          "sqrt": math.sqrt, "log10": math.log10}
+_NODES = (ast.Expression, ast.BoolOp, ast.And, ast.Or, ast.UnaryOp, ast.Not, ast.USub, ast.UAdd,
+          ast.BinOp, ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.Mod, ast.Compare, ast.Eq,
+          ast.NotEq, ast.Lt, ast.LtE, ast.Gt, ast.GtE, ast.Name, ast.Load, ast.Attribute,
+          ast.Constant, ast.Call, ast.IfExp)
+
+
+def _dotted(node: ast.AST) -> str | None:
+    if isinstance(node, ast.Name):
+        return node.id
+    if isinstance(node, ast.Attribute):
+        base = _dotted(node.value)
+        return None if base is None else base + "." + node.attr
+    return None
+
+
+class Criterion:
+    """A pass criterion: a Python-syntax expression over the summary's keys
+    (dotted names such as param.speed_rad_s included), numbers, arithmetic,
+    comparisons, and/or/not and abs min max isnan isfinite sqrt log10."""
+
+    def __init__(self, name: str, text: str):
+        self.name, self.text = name, text
+        try:
+            tree = ast.parse(text, mode="eval")
+        except SyntaxError as e:
+            raise ValueError(f"pass criterion '{name}': {e.msg}: {text!r}") from None
+        for node in ast.walk(tree):
+            if not isinstance(node, _NODES):
+                raise ValueError(f"pass criterion '{name}': {type(node).__name__} is not allowed "
+                                 f"in {text!r}")
+            if isinstance(node, ast.Call) and (not isinstance(node.func, ast.Name)
+                                               or node.func.id not in _FUNCS or node.keywords):
+                raise ValueError(f"pass criterion '{name}': only calls to "
+                                 f"{', '.join(sorted(_FUNCS))} are allowed in {text!r}")
+            if isinstance(node, ast.Attribute) and _dotted(node) is None:
+                raise ValueError(f"pass criterion '{name}': malformed name in {text!r}")
+        self.tree = tree
+
+    def __call__(self, summary: dict[str, Any]) -> bool:
+        def ev(n: ast.AST) -> Any:
+            if isinstance(n, ast.Expression):
+                return ev(n.body)
+            if isinstance(n, ast.Constant):
+                return n.value
+            if isinstance(n, (ast.Name, ast.Attribute)):
+                key = _dotted(n)
+                if key in summary:
+                    return summary[key]
+                if isinstance(n, ast.Name) and key in _FUNCS:
+                    return _FUNCS[key]
+                raise KeyError(key)
+            if isinstance(n, ast.BoolOp):
+                vals = (ev(v) for v in n.values)
+                return all(vals) if isinstance(n.op, ast.And) else any(vals)
+            if isinstance(n, ast.UnaryOp):
+                v = ev(n.operand)
+                return (not v) if isinstance(n.op, ast.Not) else (-v if isinstance(n.op, ast.USub) else v)
+            if isinstance(n, ast.BinOp):
+                a, b = ev(n.left), ev(n.right)
+                op = type(n.op)
+                return {ast.Add: lambda: a + b, ast.Sub: lambda: a - b, ast.Mult: lambda: a * b,
+                        ast.Div: lambda: a / b, ast.Pow: lambda: a ** b, ast.Mod: lambda: a % b}[op]()
+            if isinstance(n, ast.Compare):
+                left = ev(n.left)
+                for op, c in zip(n.ops, n.comparators):
+                    right = ev(c)
+                    ok = {ast.Eq: left == right, ast.NotEq: left != right, ast.Lt: left < right,
+                          ast.LtE: left <= right, ast.Gt: left > right,
+                          ast.GtE: left >= right}[type(op)]
+                    if not ok:
+                        return False
+                    left = right
+                return True
+            if isinstance(n, ast.IfExp):
+                return ev(n.body) if ev(n.test) else ev(n.orelse)
+            if isinstance(n, ast.Call):
+                return _FUNCS[n.func.id](*[ev(a) for a in n.args])
+            raise TypeError(type(n).__name__)
+
+        try:
+            return bool(ev(self.tree))
+        except (KeyError, TypeError, ValueError, ZeroDivisionError, OverflowError):
+            return False  # a missing key (e.g. a faulted run) or NaN math fails the criterion
+
+
+# ------------------------------------------------------------------ the file
+@dataclass
+class Axis:
+    key: str
+    values: list | None = None      # a grid
+    dist: dict | None = None        # a distribution
+
+
+@dataclass
+class Campaign:
+    path: str
+    name: str
+    scenario: str
+    motor: str | None
+    board: str | None
+    duration_s: float | None
+    seed: int
+    samples: int
+    fixed: dict[str, Any]
+    axes: list[Axis]
+    criteria: list[Criterion]
+    sha256: str
+    has_seed_param: bool = False
+    param_specs: dict[str, dict] = field(default_factory=dict)
+
+    @property
+    def grid(self) -> list[Axis]:
+        return [a for a in self.axes if a.values is not None]
+
+    @property
+    def dists(self) -> list[Axis]:
+        return [a for a in self.axes if a.dist is not None]
+
+    def n_runs(self) -> int:
+        n = 1
+        for a in self.grid:
+            n *= len(a.values)
+        return n * self.samples
+
+    def run_inputs(self, run_id: int) -> dict[str, Any]:
+        """The run's parameters and seed, from run_id alone."""
+        if not 0 <= run_id < self.n_runs():
+            raise IndexError(run_id)
+        rng = np.random.default_rng([self.seed, run_id])
+        seed = int(rng.integers(1, 2**31 - 1))
+        g, _ = divmod(run_id, self.samples)
+        params = dict(self.fixed)
+        idx = []
+        for a in reversed(self.grid):
+            g, i = divmod(g, len(a.values))
+            idx.append(i)
+        for a, i in zip(self.grid, reversed(idx)):
+            params[a.key] = a.values[i]
+        for a in self.dists:
+            params[a.key] = _draw(rng, a.dist)
+        return {"run_id": run_id, "seed": seed, "params": params}
+
+
+_DISTS = {"uniform": ("low", "high"), "loguniform": ("low", "high"), "normal": ("mean", "sd"),
+          "choice": ("values",)}
+
+
+def _draw(rng: np.random.Generator, d: dict) -> Any:
+    kind = d["dist"]
+    if kind == "uniform":
+        return float(rng.uniform(d["low"], d["high"]))
+    if kind == "loguniform":
+        return float(math.exp(rng.uniform(math.log(d["low"]), math.log(d["high"]))))
+    if kind == "normal":
+        return float(rng.normal(d["mean"], d["sd"]))
+    vals = d["values"]
+    return vals[int(rng.integers(0, len(vals)))]
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def load(path: str) -> Campaign:
+    """Parse and check a campaign file; CampaignError("FILE:LINE: reason")."""
+    from . import sil
+
+    try:
+        raw = open(path, "rb").read()
+    except OSError as e:
+        raise CampaignError(f"{path}:1: cannot read the file: {e.strerror}") from None
+    text = raw.decode("utf-8", errors="replace")
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        m = re.search(r"\(at line (\d+), column \d+\)", str(e))
+        line = m.group(1) if m else "1"
+        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(e))
+        raise CampaignError(f"{path}:{line}: malformed TOML: {msg}") from None
+    lines = _Lines(text)
+
+    def err(table: str, key: str | None, reason: str):
+        return CampaignError(f"{path}:{lines.of(table, key)}: {reason}")
+
+    known = {"campaign", "fixed", "sweep", "pass"}
+    for t in doc:
+        if t not in known:
+            raise err(t, None, f"unknown table [{t}] (a campaign file has: "
+                      f"{', '.join(sorted(known))})")
+    c = doc.get("campaign")
+    if not isinstance(c, dict):
+        raise err("campaign", None, "missing [campaign] table")
+    ckeys = {"name", "scenario", "motor", "board", "duration_s", "seed", "samples", "description"}
+    for k in c:
+        if k not in ckeys:
+            raise err("campaign", k, f"unknown key '{k}' in [campaign] (known: "
+                      f"{', '.join(sorted(ckeys))})")
+    for k in ("name", "scenario"):
+        if not isinstance(c.get(k), str) or not c[k]:
+            raise err("campaign", k, f"[campaign] needs {k} = \"...\" (a non-empty string)")
+    if not re.fullmatch(r"[A-Za-z0-9_.\-]+", c["name"]):
+        raise err("campaign", "name", "name may hold letters, digits, '_', '-' and '.' only")
+    base = os.path.dirname(os.path.abspath(path))
+
+    def file_key(k):
+        v = c.get(k)
+        if v is None:
+            return None
+        if not isinstance(v, str) or not v:
+            raise err("campaign", k, f"{k} must be a path (a string)")
+        return os.path.normpath(os.path.join(base, v))
+
+    motor, board = file_key("motor"), file_key("board")
+    dur = c.get("duration_s")
+    if dur is not None and not (_number(dur) and dur > 0):
+        raise err("campaign", "duration_s", "duration_s must be a positive number")
+    seed = c.get("seed", 1)
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        raise err("campaign", "seed", "seed must be a non-negative integer")
+    fixed = doc.get("fixed", {})
+    sweep = doc.get("sweep", {})
+    passes = doc.get("pass", {})
+    for t, v in (("fixed", fixed), ("sweep", sweep), ("pass", passes)):
+        if not isinstance(v, dict):
+            raise err(t, None, f"[{t}] must be a table")
+
+    # The scenario, its files and its parameters, as mcsim checks them.
+    scen = {s["name"]: s for s in sil.scenarios()}
+    if c["scenario"] not in scen:
+        raise err("campaign", "scenario", f"unknown scenario '{c['scenario']}' (see 'mcsim list')")
+    try:
+        specs = {p["key"]: p for p in sil.params(c["scenario"], motor, board)}
+    except sil.UsageError as e:
+        raise err("campaign", "motor" if motor else "scenario", str(e)) from None
+
+    def check_value(table, key, v):
+        spec = specs[key]
+        if isinstance(v, str):
+            if v not in spec["choices"]:
+                names = ", ".join(spec["choices"]) or "none"
+                raise err(table, key, f"value '{v}' for {key}: a number or one of: {names}")
+            return
+        if not _number(v):
+            raise err(table, key, f"value {v!r} for {key}: a finite number is expected")
+        if not spec["min"] <= v <= spec["max"]:
+            raise err(table, key, f"value {v} for {key} is out of range "
+                      f"[{spec['min']:g}, {spec['max']:g}] {spec['unit']}")
+
+    def check_key(table, key):
+        if key not in specs:
+            raise err(table, key, f"unknown key '{key}' (scenario {c['scenario']} takes: "
+                      f"{', '.join(specs) or 'none'})")
+
+    for k, v in fixed.items():
+        check_key("fixed", k)
+        check_value("fixed", k, v)
+    axes: list[Axis] = []
+    for k, v in sweep.items():
+        check_key("sweep", k)
+        if k in fixed:
+            raise err("sweep", k, f"'{k}' is both fixed and swept")
+        if isinstance(v, list):
+            if not v:
+                raise err("sweep", k, f"empty grid for {k}")
+            if len({type(x) is str for x in v}) > 1:
+                raise err("sweep", k, f"grid for {k} mixes names and numbers")
+            for x in v:
+                check_value("sweep", k, x)
+            axes.append(Axis(k, values=list(v)))
+        elif isinstance(v, dict) and "dist" not in v:
+            want = {"start", "stop", "num"}
+            if set(v) - (want | {"log"}) or not want <= set(v):
+                raise err("sweep", k, f"a range for {k} is {{ start = A, stop = B, num = N "
+                          f"[, log = true] }}")
+            if not (_number(v["start"]) and _number(v["stop"]) and isinstance(v["num"], int)
+                    and v["num"] >= 1):
+                raise err("sweep", k, f"range for {k}: start and stop numbers, num an integer >= 1")
+            if v.get("log", False):
+                if v["start"] <= 0 or v["stop"] <= 0:
+                    raise err("sweep", k, f"log range for {k} needs positive start and stop")
+                vals = np.geomspace(v["start"], v["stop"], v["num"]).tolist()
+            else:
+                vals = np.linspace(v["start"], v["stop"], v["num"]).tolist()
+            for x in vals:
+                check_value("sweep", k, x)
+            axes.append(Axis(k, values=vals))
+        elif isinstance(v, dict):
+            kind = v.get("dist")
+            if kind not in _DISTS:
+                raise err("sweep", k, f"unknown dist '{kind}' for {k} (known: "
+                          f"{', '.join(_DISTS)})")
+            need = set(_DISTS[kind]) | {"dist"}
+            if set(v) != need:
+                raise err("sweep", k, f"dist '{kind}' for {k} takes exactly: "
+                          f"{', '.join(_DISTS[kind])}")
+            if kind == "choice":
+                if not isinstance(v["values"], list) or not v["values"]:
+                    raise err("sweep", k, f"choice for {k} needs a non-empty list of values")
+                for x in v["values"]:
+                    check_value("sweep", k, x)
+            else:
+                a, b = (v[n] for n in _DISTS[kind])
+                if not (_number(a) and _number(b)):
+                    raise err("sweep", k, f"dist '{kind}' for {k}: numbers expected")
+                if kind in ("uniform", "loguniform"):
+                    if not a < b or (kind == "loguniform" and a <= 0):
+                        raise err("sweep", k, f"dist '{kind}' for {k} needs "
+                                  f"{'0 < ' if kind == 'loguniform' else ''}low < high")
+                    check_value("sweep", k, a)
+                    check_value("sweep", k, b)
+                elif b < 0:
+                    raise err("sweep", k, f"normal for {k} needs sd >= 0")
+            axes.append(Axis(k, dist=dict(v)))
+        else:
+            raise err("sweep", k, f"sweep {k}: a list (grid), a range {{start, stop, num}} or a "
+                      f"distribution {{dist = ...}}")
+    has_dist = any(a.dist is not None for a in axes)
+    samples = c.get("samples", 1)
+    if not isinstance(samples, int) or isinstance(samples, bool) or samples < 1:
+        raise err("campaign", "samples", "samples must be an integer >= 1")
+    if samples > 1 and not has_dist:
+        raise err("campaign", "samples", "samples > 1 needs a distribution in [sweep] "
+                  "(the runs of a grid point would be identical)")
+    criteria = []
+    for k, v in passes.items():
+        if not isinstance(v, str):
+            raise err("pass", k, f"pass criterion '{k}' must be an expression in a string")
+        try:
+            criteria.append(Criterion(k, v))
+        except ValueError as e:
+            raise err("pass", k, str(e)) from None
+    camp = Campaign(path=os.path.abspath(path), name=c["name"], scenario=c["scenario"],
+                    motor=motor, board=board, duration_s=float(dur) if dur is not None else None,
+                    seed=seed, samples=samples, fixed=dict(fixed), axes=axes, criteria=criteria,
+                    sha256=hashlib.sha256(raw).hexdigest(), has_seed_param="seed" in specs,
+                    param_specs=specs)
+    if camp.n_runs() > 100_000_000:
+        raise err("sweep", None, f"{camp.n_runs()} runs: more than 1e8")
+    return camp
+
+
+# -------------------------------------------------------------------- a run
+def _sha256(path: str | None) -> str | None:
+    if not path:
+        return None
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """Everything a run depends on (what its row holds)."""
+    run_id: int
+    seed: int
+    scenario: str
+    motor: str | None
+    board: str | None
+    duration_s: float | None
+    params: tuple  # ((key, value), ...)
+    criteria: tuple  # ((name, expression), ...)
+    pass_seed: bool
+
+
+def specs(camp: Campaign, run_ids) -> list[RunSpec]:
+    out = []
+    for i in run_ids:
+        r = camp.run_inputs(i)
+        out.append(RunSpec(i, r["seed"], camp.scenario, camp.motor, camp.board, camp.duration_s,
+                           tuple(r["params"].items()),
+                           tuple((c.name, c.text) for c in camp.criteria), camp.has_seed_param))
+    return out
+
+
+def run_one(spec: RunSpec) -> dict[str, Any]:
+    """One run into one row (the same function serially and on a worker)."""
+    from . import sil
+
+    t0 = time.perf_counter()
+    params = dict(spec.params)
+    row: dict[str, Any] = {"run_id": spec.run_id, "seed": spec.seed}
+    try:
+        r = sil.run_raw(spec.scenario, spec.motor, spec.board, params, spec.duration_s,
+                        seed=spec.seed if spec.pass_seed else None, trajectory=False)
+        summary, kind, error = r.summary, r.error_kind, r.error
+    except sil.UsageError as e:
+        summary, kind, error = {}, "usage", str(e)
+    crit = {name: Criterion(name, text)(summary) if kind is None else False
+            for name, text in spec.criteria}
+    row["status"] = ("refused" if kind == "usage" else "fault" if kind == "failed"
+                     else "pass" if all(crit.values()) else "fail")
+    row["error"] = error
+    row["pass"] = row["status"] == "pass"
+    for name, ok in crit.items():
+        row["pass." + name] = ok
+    for k, v in params.items():
+        row["in." + k] = v
+    for k, v in summary.items():
+        row["out." + k] = v
+    row["scenario"] = spec.scenario
+    row["motor"] = spec.motor
+    row["board"] = spec.board
+    row["duration_s"] = spec.duration_s
+    row["firmware_git"] = sil.GIT_HASH
+    row["wall_s"] = time.perf_counter() - t0
+    return row
+
+
+def run_chunk(chunk: list[RunSpec]) -> list[dict[str, Any]]:
+    return [run_one(s) for s in chunk]
+
+
+# ------------------------------------------------------------- the campaign
+def _parts_dir(out: str) -> str:
+    return os.path.join(out, "parts")
+
+
+def finished_ids(out: str) -> set[int]:
+    import pyarrow.parquet as pq
+
+    ids: set[int] = set()
+    d = _parts_dir(out)
+    if not os.path.isdir(d):
+        return ids
+    for f in sorted(os.listdir(d)):
+        if f.endswith(".parquet"):
+            ids.update(pq.read_table(os.path.join(d, f), columns=["run_id"])
+                       .column("run_id").to_pylist())
+    return ids
+
+
+def _write_part(out: str, rows: list[dict[str, Any]], files: dict) -> None:
+    import pandas as pd
+
+    df = pd.DataFrame(rows)
+    for k, v in files.items():
+        df[k] = v
+    name = f"part-{rows[0]['run_id']:09d}.parquet"
+    tmp = os.path.join(_parts_dir(out), "." + name + ".tmp")
+    df.to_parquet(tmp, index=False)
+    os.replace(tmp, os.path.join(_parts_dir(out), name))
+
+
+def read_results(out: str):
+    """Every finished run of OUT (the parts; results.parquet is their merge)."""
+    import pandas as pd
+
+    d = _parts_dir(out)
+    parts = [pd.read_parquet(os.path.join(d, f)) for f in sorted(os.listdir(d))
+             if f.endswith(".parquet")] if os.path.isdir(d) else []
+    if not parts:
+        return pd.DataFrame()
+    df = pd.concat(parts, ignore_index=True, sort=False)
+    return df.sort_values("run_id", kind="stable").reset_index(drop=True)
+
+
+def _prepare_out(camp: Campaign, out: str) -> None:
+    os.makedirs(_parts_dir(out), exist_ok=True)
+    man = os.path.join(out, "campaign.json")
+    want = {"name": camp.name, "campaign_sha256": camp.sha256, "runs": camp.n_runs(),
+            "motor_sha256": _sha256(camp.motor), "board_sha256": _sha256(camp.board)}
+    if os.path.exists(man):
+        with open(man) as f:
+            have = json.load(f)
+        for k in want:
+            if have.get(k) != want[k]:
+                raise CampaignError(
+                    f"{camp.path}:1: {out} holds runs of a different campaign ({k} changed: "
+                    f"{have.get(k)} -> {want[k]}); finished runs would not match: use another "
+                    f"--out or delete {out}")
+    else:
+        with open(man + ".tmp", "w") as f:
+            json.dump(want, f, indent=1)
+        os.replace(man + ".tmp", man)
+        with open(camp.path, "rb") as src, open(os.path.join(out, "campaign.toml"), "wb") as dst:
+            dst.write(src.read())
+    for f in os.listdir(_parts_dir(out)):
+        if f.endswith(".tmp"):  # a part being written when the campaign was stopped
+            os.remove(os.path.join(_parts_dir(out), f))
+
+
+class _Progress:
+    def __init__(self, total: int, done: int, stream=sys.stderr):
+        self.total, self.done0, self.done, self.t0 = total, done, done, time.monotonic()
+        self.stream, self.last = stream, 0.0
+        self.tty = stream.isatty()
+
+    def add(self, n: int, force: bool = False):
+        self.done += n
+        now = time.monotonic()
+        if not force and now - self.last < (0.5 if self.tty else 10.0):
+            return
+        self.last = now
+        el = now - self.t0
+        rate = (self.done - self.done0) / el if el > 0 else 0.0
+        left = self.total - self.done
+        eta = f"{left / rate:.0f} s" if rate > 0 else "?"
+        msg = (f"{self.done}/{self.total} runs ({100.0 * self.done / max(1, self.total):.1f} %), "
+               f"{rate:.1f} runs/s, ETA {eta}")
+        self.stream.write(("\r" + msg + "\033[K") if self.tty else msg + "\n")
+        self.stream.flush()
+
+    def close(self):
+        self.add(0, force=True)
+        if self.tty:
+            self.stream.write("\n")
+
+
+def sweep(path: str, out: str, scheduler: str | None = None, workers: int | None = None,
+          serial: bool = False, max_runs: int | None = None, chunk: int | None = None,
+          progress: bool = True) -> dict[str, Any]:
+    """Run (or resume) a campaign into OUT. Returns counts: total, already
+    (finished before), ran, remaining; writes OUT/results.parquet when done."""
+    camp = load(path)
+    _prepare_out(camp, out)
+    files = {"motor_sha256": _sha256(camp.motor), "board_sha256": _sha256(camp.board)}
+    total = camp.n_runs()
+    done = finished_ids(out)
+    todo = [i for i in range(total) if i not in done]
+    if max_runs is not None:
+        todo = todo[:max_runs]
+    prog = _Progress(total, len(done)) if progress else None
+    nworkers = 1 if serial else (workers or os.cpu_count() or 1)
+    if chunk is None:
+        # About 8 chunks per worker (balance), at most 256 runs a part.
+        chunk = max(1, min(256, math.ceil(len(todo) / (8 * nworkers)) if todo else 1))
+    chunks = [todo[i:i + chunk] for i in range(0, len(todo), chunk)]
+    ran = 0
+    if serial or not chunks:
+        for ids in chunks:
+            rows = run_chunk(specs(camp, ids))
+            _write_part(out, rows, files)
+            ran += len(rows)
+            if prog:
+                prog.add(len(rows))
+    else:
+        from dask.distributed import Client, LocalCluster, as_completed
+        import logging
+
+        cluster = None
+        if scheduler:
+            client = Client(scheduler)
+        else:
+            cluster = LocalCluster(n_workers=nworkers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
+            client = Client(cluster)
+        try:
+            # The specs are built on the workers from (campaign, ids): small messages.
+            futs = [client.submit(_run_ids, camp, ids, pure=False) for ids in chunks]
+            for fut in as_completed(futs):
+                rows = fut.result()
+                _write_part(out, rows, files)
+                ran += len(rows)
+                if prog:
+                    prog.add(len(rows))
+                fut.release()
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    if prog:
+        prog.close()
+    remaining = total - len(done) - ran
+    if remaining == 0:
+        df = read_results(out)
+        tmp = os.path.join(out, ".results.parquet.tmp")
+        df.to_parquet(tmp, index=False)
+        os.replace(tmp, os.path.join(out, "results.parquet"))
+    return {"campaign": camp.name, "out": out, "total": total, "already": len(done), "ran": ran,
+            "remaining": remaining}
+
+
+def _run_ids(camp: Campaign, ids: list[int]) -> list[dict[str, Any]]:
+    return run_chunk(specs(camp, ids))
+
+
+# ----------------------------------------------------------- one row again
+def spec_from_row(row) -> RunSpec:
+    """The run of a results row, from the row alone."""
+    params = tuple((k[3:], _py(v)) for k, v in row.items()
+                   if k.startswith("in.") and not _missing(_py(v)))
+    crit = ()
+    dur = row.get("duration_s")
+    return RunSpec(int(row["run_id"]), int(row["seed"]), row["scenario"], row.get("motor"),
+                   row.get("board"), None if dur is None or _nan(dur) else float(dur), params,
+                   crit, any(k == "out.param.seed" for k in row.keys()))
+
+
+def _nan(v) -> bool:
+    return isinstance(v, float) and math.isnan(v)
+
+
+def _py(v):
+    return v.item() if hasattr(v, "item") else v
+
+
+def rerun_row(row) -> tuple[dict[str, Any], list[str]]:
+    """Run a results row again; the keys whose values differ (none expected).
+    A row from another firmware (firmware_git) may differ: the caller says so."""
+    spec = spec_from_row(row)
+    new = run_one(spec)
+    diffs = []
+    for k, v in new.items():
+        if k in ("wall_s", "firmware_git") or k.startswith("pass"):
+            continue
+        if k == "status" and v in ("pass", "fail"):
+            continue  # criteria are not in the row's inputs
+        old, v = _py(row.get(k)), _py(v)
+        if not (old == v or (_missing(old) and _missing(v))):
+            diffs.append(f"{k}: {old!r} -> {v!r}")
+    for k, old in row.items():  # columns of other runs are empty in this row
+        if (k not in new and not _missing(_py(old)) and not k.startswith("pass")
+                and k not in ("motor_sha256", "board_sha256")):
+            diffs.append(f"{k}: {old!r} -> (absent)")
+    for k in ("motor", "board"):
+        if row.get(k) and _sha256(row[k]) != row.get(k + "_sha256"):
+            diffs.append(f"{k}_sha256: the file {row[k]} changed since the campaign")
+    return new, diffs
+
+
+def _missing(v) -> bool:
+    return v is None or _nan(v)

@@ -1,0 +1,146 @@
+"""The SIL in-process: mcsim's scenario runner as a Python library.
+
+    from mdtool import sil
+    r = sil.run("current-step", motor="sim/motors/odrive-d5065.toml",
+                board="sim/motors/odrive-v36-24v.toml", params={"iq_step_a": 5})
+    r.trajectory   # pandas DataFrame, the columns of `mcsim run`'s CSV
+    r.summary      # dict, the keys of `mcsim run`'s JSON
+
+The numbers are those of `mcsim run` with the same arguments, bit for bit:
+the same C++ function runs (mcsim::execute_run); the CSV prints the
+trajectory with %.9g and the JSON the summary with 10 significant digits,
+the values here are the full doubles those were printed from.
+
+Errors are exceptions with mcsim's messages (what it prints after "mcsim: "):
+UsageError (a ValueError; mcsim's exit code 2) for invalid inputs and
+settings a scenario refuses, RunFailed (a RuntimeError; exit code 1) for a
+run that failed on its way, such as a drive fault. Both carry the partial
+`summary` and `trajectory` of a run that started.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+
+from . import _sil
+
+#: The commit the extension was built from (git describe --dirty).
+GIT_HASH: str = _sil.git_hash
+
+
+class UsageError(ValueError):
+    """Invalid input, or settings the scenario refuses (mcsim exit code 2)."""
+
+    def __init__(self, message: str, summary: dict | None = None, trajectory=None):
+        super().__init__(message)
+        self.summary = summary
+        self.trajectory = trajectory
+
+
+class RunFailed(RuntimeError):
+    """The run failed on its way, e.g. a drive fault (mcsim exit code 1)."""
+
+    def __init__(self, message: str, summary: dict | None = None, trajectory=None):
+        super().__init__(message)
+        self.summary = summary
+        self.trajectory = trajectory
+
+
+@dataclass
+class Result:
+    columns: list[str]
+    data: np.ndarray  # (rows, columns), float64
+    summary: dict[str, Any]
+    error: str | None = None
+    error_kind: str | None = None  # None, "usage" or "failed"
+
+    @property
+    def trajectory(self):
+        import pandas as pd
+
+        return pd.DataFrame(self.data, columns=self.columns, copy=False)
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def _value(v: Any) -> str:
+    """A --set value as mcsim reads it: names stay names, floats exact."""
+    if isinstance(v, str):
+        return v
+    if isinstance(v, bool):
+        return "1" if v else "0"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        return repr(float(v))  # shortest text that strtod reads back exactly
+    raise TypeError(f"parameter value {v!r}: a number or a name is expected")
+
+
+def _summary(raw: dict) -> dict[str, Any]:
+    s: dict[str, Any] = dict(raw["texts"])
+    s.update(raw["numbers"])
+    return s
+
+
+def run_raw(scenario: str, motor: str | os.PathLike | None = None,
+            board: str | os.PathLike | None = None, params: Mapping[str, Any] | None = None,
+            duration: float | None = None, seed: int | None = None,
+            trajectory: bool = True) -> Result:
+    """One run; a failed run is returned (error, error_kind), not raised.
+    trajectory=False keeps no rows (data is empty; summary["rows"] counts them).
+
+    Invalid inputs (unknown scenario or key, malformed value, bad motor or
+    board file) still raise UsageError: nothing ran.
+    """
+    sets = [(str(k), _value(v)) for k, v in (params or {}).items()]
+    if seed is not None:
+        if any(k == "seed" for k, _ in sets):
+            raise UsageError("seed given twice (params['seed'] and seed=)")
+        sets.append(("seed", _value(int(seed))))
+    if duration is not None and not (math.isfinite(duration) and duration > 0):
+        raise UsageError(f"malformed duration '{duration}' (a positive number is expected)")
+    try:
+        raw = _sil.run(scenario, os.fspath(motor) if motor else "",
+                       os.fspath(board) if board else "", sets,
+                       float(duration) if duration is not None else 0.0, trajectory)
+    except _sil.UsageError as e:
+        raise UsageError(str(e)) from None
+    return Result(columns=list(raw["columns"]), data=raw["data"], summary=_summary(raw),
+                  error=raw["error"], error_kind=raw["error_kind"])
+
+
+def run(scenario: str, motor: str | os.PathLike | None = None,
+        board: str | os.PathLike | None = None, params: Mapping[str, Any] | None = None,
+        duration: float | None = None, seed: int | None = None) -> Result:
+    """One run of a named scenario, as `mcsim run SCENARIO --motor M --board B
+    --set k=v ... [--duration D]`; `seed` sets the scenario's `seed` parameter
+    (the sensor-noise generator; scenarios without noise have none).
+    Raises UsageError or RunFailed with mcsim's message."""
+    r = run_raw(scenario, motor, board, params, duration, seed)
+    if r.error_kind == "usage":
+        raise UsageError(r.error, r.summary, r.trajectory)
+    if r.error_kind == "failed":
+        raise RunFailed(r.error, r.summary, r.trajectory)
+    return r
+
+
+def scenarios() -> list[dict[str, Any]]:
+    """The registered scenarios (as `mcsim list`)."""
+    return [dict(name=n, description=d, default_duration_s=t, any_motor=m)
+            for n, d, t, m in _sil.scenarios()]
+
+
+def params(scenario: str, motor: str | os.PathLike | None = None,
+           board: str | os.PathLike | None = None) -> list[dict[str, Any]]:
+    """The declared parameters (as `mcsim describe`), with defaults and ranges."""
+    try:
+        return list(_sil.params(scenario, os.fspath(motor) if motor else "",
+                                os.fspath(board) if board else ""))
+    except _sil.UsageError as e:
+        raise UsageError(str(e)) from None
