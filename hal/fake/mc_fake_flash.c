@@ -79,7 +79,7 @@ static int op_program(void *ctx, uint32_t sector, uint32_t offset, const uint32_
         return e;
     }
     for (uint32_t i = 0u; i < n_words; ++i) {
-        uint8_t *p = f->mem + f->sector_start[sector] + offset + 4u * i;
+        uint8_t *p = f->mem + f->sector_start[sector] + offset + (size_t)4u * i;
         uint32_t w;
         bool torn = false;
         (void)memcpy(&w, p, sizeof w);

@@ -65,7 +65,7 @@ static int check_record(const mc_cfg_store_t *s, uint32_t i, uint32_t off, uint3
     if (words * W > s->sector_bytes[i] - off) {
         return -EAGAIN;
     }
-    crc = mc_crc32_update(crc, hdr, MC_CFG_HDR_WORDS * W);
+    crc = mc_crc32_update(crc, hdr, (size_t)MC_CFG_HDR_WORDS * W);
     for (uint32_t k = MC_CFG_HDR_WORDS; k + 1u < words; ++k) {
         uint32_t w;
         if (read_word(s, i, off + k * W, &w) != 0) {
@@ -248,7 +248,7 @@ int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p)
             s->rec[k++] = mc_param_get_raw(p, info);
         }
     }
-    s->rec[k] = mc_crc32(s->rec, k * W);
+    s->rec[k] = mc_crc32(s->rec, (size_t)k * W);
 
     target = (s->active >= 0) ? (uint32_t)s->active : 0u;
     off = s->append_off[target];

@@ -52,7 +52,7 @@ static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
     }
 }
 
-static mc_param_status_t do_write(mc_param_srv_t *s, uint32_t id, uint32_t *p_value)
+static mc_param_status_t do_write(mc_param_srv_t *s, uint32_t id, uint32_t value)
 {
     const mc_param_info_t *info = mc_param_find(id, NULL);
     mc_param_status_t st;
@@ -62,14 +62,14 @@ static mc_param_status_t do_write(mc_param_srv_t *s, uint32_t id, uint32_t *p_va
     if (info->access == MC_PARAM_ACCESS_READONLY) {
         return MC_PARAM_ERR_READONLY;
     }
-    st = mc_param_check_value(info, *p_value);
+    st = mc_param_check_value(info, value);
     if (st != MC_PARAM_OK) {
         return st;
     }
     if ((info->access != MC_PARAM_ACCESS_RUNTIME) && bridge_on(s)) {
         return MC_PARAM_ERR_RUNNING;
     }
-    mc_param_set_raw(&s->staged, info, *p_value);
+    mc_param_set_raw(&s->staged, info, value);
     s->pending = true;
     return MC_PARAM_OK;
 }
@@ -161,7 +161,7 @@ mc_param_status_t mc_param_srv_request(mc_param_srv_t *s, uint32_t op, uint32_t 
     }
     switch (op) {
     case MC_PARAM_OP_WRITE:
-        return do_write(s, id, p_value);
+        return do_write(s, id, *p_value);
     case MC_PARAM_OP_APPLY:
         *p_value = 0u;
         return do_apply(s, p_value);
