@@ -63,7 +63,120 @@ uint32_t mc_can_cmd_init(mc_can_cmd_t *c, const mc_can_cmd_cfg_t *cfg, mc_drive_
     c->timeout_ticks = (uint32_t)(ticks + 0.5f);
     c->control_mode = (uint8_t)MC_CAN_CTRL_NONE;
     c->stop_reason = (uint8_t)MC_CAN_STOP_NONE;
+    c->cfg_status = (uint8_t)MC_CAN_VAL_CFG_STATUS_EMPTY;
     return MC_CAN_CMD_CFG_OK;
+}
+
+/* ---------------------------------------------------- parameter exchange */
+
+/* Telemetry slots the parameter table sets, in slot order. */
+static void tm_rates(const mc_params_t *p, uint32_t rate[MC_TM_POSITION + 1u])
+{
+    rate[MC_TM_HEARTBEAT] = p->tm_heartbeat_hz;
+    rate[MC_TM_CURRENTS] = p->tm_currents_hz;
+    rate[MC_TM_VOLTAGES] = p->tm_voltages_hz;
+    rate[MC_TM_SPEED] = p->tm_speed_hz;
+    rate[MC_TM_POSITION] = p->tm_position_hz;
+}
+
+static uint32_t params_check(void *ctx, const mc_params_t *p)
+{
+    const mc_can_cmd_t *c = (const mc_can_cmd_t *)ctx;
+    const float ticks = p->can_timeout_s * (float)c->cfg.tick_hz;
+    if (!(ticks >= 1.0f)) {
+        return 1u; /* timeout shorter than one supervision step */
+    }
+    if (c->tm != NULL) {
+        mc_telemetry_cfg_t t = c->tm->cfg;
+        uint32_t rate[MC_TM_POSITION + 1u];
+        tm_rates(p, rate);
+        for (uint32_t i = 0u; i <= (uint32_t)MC_TM_POSITION; ++i) {
+            if (rate[i] > t.tick_hz) {
+                return 1u;
+            }
+            t.rate_hz[i] = (uint16_t)rate[i];
+        }
+        if (mc_telemetry_bus_load(&t) > t.bus_budget_frac) {
+            return 1u;
+        }
+    }
+    return 0u;
+}
+
+static void params_apply(void *ctx, const mc_params_t *p)
+{
+    mc_can_cmd_t *c = (mc_can_cmd_t *)ctx;
+    c->cfg.timeout_s = p->can_timeout_s;
+    c->timeout_ticks = (uint32_t)(p->can_timeout_s * (float)c->cfg.tick_hz + 0.5f);
+    c->cfg.stop_ramp_a_per_s = p->stop_ramp_a_per_s;
+    c->cfg.stop_decel_rad_s2 = p->stop_decel_rad_s2;
+    c->cfg.speed_max_rad_s = p->speed_max_rad_s;
+    if (c->tm != NULL) {
+        uint32_t rate[MC_TM_POSITION + 1u];
+        tm_rates(p, rate);
+        /* lowered rates first, so no intermediate set exceeds the budget
+         * that the whole set (checked in params_check) respects */
+        for (uint32_t pass = 0u; pass < 2u; ++pass) {
+            for (uint32_t i = 0u; i <= (uint32_t)MC_TM_POSITION; ++i) {
+                const bool lower = rate[i] <= c->tm->cfg.rate_hz[i];
+                if ((pass == 0u) == lower) {
+                    (void)mc_telemetry_set_rate(c->tm, i, (uint16_t)rate[i]);
+                }
+            }
+        }
+    }
+}
+
+void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv)
+{
+    if (c == NULL) {
+        return;
+    }
+    c->params = srv;
+    if (srv != NULL) {
+        srv->hook.check = params_check;
+        srv->hook.apply = params_apply;
+        srv->hook.ctx = c;
+        c->cfg_status = srv->boot_status;
+    }
+}
+
+static mc_can_err_t do_param(mc_can_cmd_t *c, const mc_hal_can_t *can, const float *v,
+                             const mc_hal_can_frame_t *p_frame)
+{
+    const uint32_t op = (uint32_t)v[MC_CAN_PARAM_REQ_OPCODE];
+    const uint32_t id = (uint32_t)v[MC_CAN_PARAM_REQ_PARAM_ID];
+    uint32_t value = 0u;
+    mc_param_status_t st;
+    float r[MC_CAN_PARAM_REPLY_NSIG];
+    mc_hal_can_frame_t f;
+    if (c->params == NULL) {
+        return MC_CAN_ERR_UNSUPPORTED;
+    }
+    /* the value is the raw 32 bits (a float32 signal would lose them) */
+    for (uint32_t i = 0u; i < 4u; ++i) {
+        value |= (uint32_t)p_frame->data[4u + i] << (8u * i);
+    }
+    st = mc_param_srv_request(c->params, op, id, &value);
+    if (can == NULL) {
+        return MC_CAN_ERR_NONE;
+    }
+    r[MC_CAN_PARAM_REPLY_OPCODE] = (float)op;
+    r[MC_CAN_PARAM_REPLY_PARAM_ID] = (float)id;
+    r[MC_CAN_PARAM_REPLY_STATUS] = (float)(uint32_t)st;
+    r[MC_CAN_PARAM_REPLY_VALUE] = 0.0f;
+    if (mc_can_proto_pack(MC_CAN_MSG_PARAM_REPLY, c->cfg.node_id, r, MC_CAN_PARAM_REPLY_NSIG,
+                          &f) != MC_CAN_ERR_NONE) {
+        c->reply_dropped++;
+        return MC_CAN_ERR_NONE;
+    }
+    for (uint32_t i = 0u; i < 4u; ++i) {
+        f.data[4u + i] = (uint8_t)(value >> (8u * i));
+    }
+    if (mc_hal_can_send(can, &f) != 0) {
+        c->reply_dropped++;
+    }
+    return MC_CAN_ERR_NONE; /* answered, with its status, by PARAM_REPLY */
 }
 
 static void end_run(mc_can_cmd_t *c, uint8_t reason)
@@ -250,7 +363,9 @@ mc_can_err_t mc_can_cmd_handle(mc_can_cmd_t *c, const mc_hal_can_frame_t *p_fram
     if ((e == MC_CAN_ERR_NONE) && (mc_can_messages[msg].dir != (uint8_t)MC_CAN_DIR_RX)) {
         e = MC_CAN_ERR_UNKNOWN_CMD; /* a telemetry id sent to us */
     }
-    if (e == MC_CAN_ERR_NONE) {
+    if ((e == MC_CAN_ERR_NONE) && (msg == MC_CAN_MSG_PARAM_REQ)) {
+        e = do_param(c, can, v, p_frame);
+    } else if (e == MC_CAN_ERR_NONE) {
         e = dispatch(c, msg, v);
     }
     if (e != MC_CAN_ERR_NONE) {

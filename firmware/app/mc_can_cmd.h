@@ -15,6 +15,10 @@
  *   CLEAR_FAULTS      mc_drive_clear_faults(); not while enabled
  *   SET_TM_RATE       one telemetry message's rate (bus budget checked)
  *   HOST_HEARTBEAT    keep-alive
+ *   PARAM_REQ         parameter read / write / apply / save / load defaults
+ *                     (mc_param_srv.h), answered by one PARAM_REPLY with a
+ *                     status; needs mc_can_cmd_attach_params (else
+ *                     UNSUPPORTED)
  *
  * Validation, in this order, before anything changes: format (classic data
  * frame), known command, exact length, every signal in its DBC range, then
@@ -45,6 +49,7 @@
 #include "hal/can.h"
 #include "mc_can_proto.h"
 #include "mc_drive.h"
+#include "mc_param_srv.h"
 #include "mc_telemetry.h"
 
 #ifdef __cplusplus
@@ -110,7 +115,11 @@ typedef struct mc_can_cmd {
     uint8_t err_seq;              /**< sequence counter of CMD_ERROR */
     uint32_t rx_accepted;
     uint32_t rx_rejected;
-    uint32_t reply_dropped;       /**< CMD_ERROR frames the HAL refused */
+    uint32_t reply_dropped;       /**< CMD_ERROR / PARAM_REPLY frames the HAL refused */
+    mc_param_srv_t *params;       /**< parameter service, or NULL */
+    uint8_t cfg_status;           /**< HEARTBEAT.cfg_status: the boot status of the
+                                       parameter store (EMPTY without one: the
+                                       configuration is not from flash) */
 } mc_can_cmd_t;
 
 /** Validate cfg and initialise c (disabled, control mode NONE). tm may be
@@ -118,6 +127,14 @@ typedef struct mc_can_cmd {
  *  on error c is not changed. */
 uint32_t mc_can_cmd_init(mc_can_cmd_t *c, const mc_can_cmd_cfg_t *cfg, mc_drive_t *drive,
                          mc_telemetry_t *tm);
+
+/**
+ * Serve PARAM_REQ with srv (NULL: detach). Installs srv's hook so that an
+ * APPLY also checks and applies the CAN-side parameters: telemetry rates
+ * (bus budget, refused as a whole), command timeout, stop ramps, speed
+ * limit. The node id and bit rate are used only at the next boot.
+ */
+void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv);
 
 /**
  * Handle one received frame; on rejection queue a CMD_ERROR reply on can

@@ -7,12 +7,13 @@
 
 #include <stddef.h>
 
-static const mc_can_signal_t sig_heartbeat[9] = {
+static const mc_can_signal_t sig_heartbeat[10] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* mode [-] */
     {8u, 4u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* control_mode [-] */
     {12u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* enabled [-] */
     {13u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* stopping [-] */
-    {16u, 8u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* stop_reason [-] */
+    {16u, 4u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* stop_reason [-] */
+    {20u, 4u, false, 1.0f, 0.0f, 0.0f, 6.0f}, /* cfg_status [-] */
     {24u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* faults [-] */
     {40u, 8u, false, 1.0f, 0.0f, 0.0f, 8.0f}, /* last_error [-] */
     {48u, 8u, false, 1.0f, 0.0f, 0.0f, 31.0f}, /* last_error_cmd [-] */
@@ -83,6 +84,17 @@ static const mc_can_signal_t sig_set_tm_rate[2] = {
 static const mc_can_signal_t sig_host_heartbeat[1] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* counter [-] */
 };
+static const mc_can_signal_t sig_param_req[3] = {
+    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 4.0f}, /* opcode [-] */
+    {8u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* param_id [-] */
+    {32u, 32u, false, 1.0f, 0.0f, 0.0f, 4294967295.0f}, /* value [-] */
+};
+static const mc_can_signal_t sig_param_reply[4] = {
+    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 4.0f}, /* opcode [-] */
+    {8u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* param_id [-] */
+    {24u, 8u, false, 1.0f, 0.0f, 0.0f, 8.0f}, /* status [-] */
+    {32u, 32u, false, 1.0f, 0.0f, 0.0f, 4294967295.0f}, /* value [-] */
+};
 static const mc_can_signal_t sig_cmd_error[4] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 31.0f}, /* rejected_cmd [-] */
     {8u, 8u, false, 1.0f, 0.0f, 1.0f, 8.0f}, /* error [-] */
@@ -91,7 +103,7 @@ static const mc_can_signal_t sig_cmd_error[4] = {
 };
 
 const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
-    {MC_CAN_CMD_HEARTBEAT, 8u, MC_CAN_DIR_TX, 9u, sig_heartbeat}, /* HEARTBEAT */
+    {MC_CAN_CMD_HEARTBEAT, 8u, MC_CAN_DIR_TX, 10u, sig_heartbeat}, /* HEARTBEAT */
     {MC_CAN_CMD_CURRENTS, 8u, MC_CAN_DIR_TX, 5u, sig_currents}, /* CURRENTS */
     {MC_CAN_CMD_VOLTAGES, 8u, MC_CAN_DIR_TX, 4u, sig_voltages}, /* VOLTAGES */
     {MC_CAN_CMD_SPEED, 8u, MC_CAN_DIR_TX, 3u, sig_speed}, /* SPEED */
@@ -107,5 +119,7 @@ const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
     {MC_CAN_CMD_CLEAR_FAULTS, 0u, MC_CAN_DIR_RX, 0u, NULL}, /* CLEAR_FAULTS */
     {MC_CAN_CMD_SET_TM_RATE, 3u, MC_CAN_DIR_RX, 2u, sig_set_tm_rate}, /* SET_TM_RATE */
     {MC_CAN_CMD_HOST_HEARTBEAT, 1u, MC_CAN_DIR_RX, 1u, sig_host_heartbeat}, /* HOST_HEARTBEAT */
+    {MC_CAN_CMD_PARAM_REQ, 8u, MC_CAN_DIR_RX, 3u, sig_param_req}, /* PARAM_REQ */
+    {MC_CAN_CMD_PARAM_REPLY, 8u, MC_CAN_DIR_TX, 4u, sig_param_reply}, /* PARAM_REPLY */
     {MC_CAN_CMD_CMD_ERROR, 8u, MC_CAN_DIR_TX, 4u, sig_cmd_error}, /* CMD_ERROR */
 };

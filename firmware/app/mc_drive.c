@@ -80,6 +80,16 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
     return err;
 }
 
+uint32_t mc_drive_check_cfg(const mc_drive_cfg_t *cfg)
+{
+    mc_foc_f32_t foc;
+    uint32_t foc_err = MC_FOC_ERR_NONE;
+    if (cfg == NULL) {
+        return MC_DRIVE_CFG_ERR_NULL;
+    }
+    return validate_cfg(cfg, &foc, &foc_err);
+}
+
 uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t *hal)
 {
     if (d == NULL || cfg == NULL || hal == NULL) {

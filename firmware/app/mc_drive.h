@@ -260,6 +260,11 @@ typedef struct {
  *  MC_DRIVE_CFG_* bits; on error d is not changed. */
 uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t *hal);
 
+/** The configuration checks of mc_drive_init alone (no HAL, no side
+ *  effect): MC_DRIVE_CFG_* bits, MC_DRIVE_CFG_ERR_HAL never. The parameter
+ *  store validates a whole new configuration with it before applying it. */
+uint32_t mc_drive_check_cfg(const mc_drive_cfg_t *cfg);
+
 /** Fast loop body (ADC interrupt). Returns true when the slow loop is due. */
 bool mc_drive_fast_step(mc_drive_t *d);
 

@@ -15,6 +15,9 @@
  *   CAN             "hal/can.h"       mc_hal_can_t
  *   tick counter    "hal/tick.h"      mc_hal_tick_t
  *   fault/gate kill "hal/fault.h"     mc_hal_fault_t
+ *   flash store     "hal/flash.h"     mc_hal_flash_t     (not in mc_hal_t: the
+ *                                                        configuration store
+ *                                                        takes it directly)
  *
  * Conventions shared by every capability
  * - A handle is `{ const ops *ops; void *ctx; }`. The ops table is const
@@ -56,6 +59,7 @@
 #include "hal/can.h"
 #include "hal/encoder.h"
 #include "hal/fault.h"
+#include "hal/flash.h"
 #include "hal/pwm2.h"
 #include "hal/pwm3.h"
 #include "hal/tick.h"

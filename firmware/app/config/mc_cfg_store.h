@@ -1,0 +1,117 @@
+/**
+ * @file mc_cfg_store.h
+ * @brief The configuration store: the parameters in two flash sectors (A/B)
+ *        as versioned, CRC-32-protected records; the newest valid record
+ *        wins at boot; a save survives a power cut at any step.
+ *
+ * Record (32-bit little-endian words, programmed in this order, the CRC
+ * last):
+ *   0  magic 0x4746434D ("MCFG")
+ *   1  format (bits 0..15, MC_CFG_FORMAT) | table layout version (16..31,
+ *      MC_PARAMS_LAYOUT_VERSION of the firmware that wrote it)
+ *   2  sequence number (1, 2, ...: one more than the newest record seen)
+ *   3  n = number of entries (bits 0..15; bits 16..31 are 0xFFFF)
+ *   4 ..          n entries of two words: parameter id, raw value
+ *   4 + 2n        CRC-32 of words 0 .. 3 + 2n
+ * Records follow each other from the start of a sector; the first erased
+ * word (0xFFFFFFFF where a magic would be) is where the next one goes.
+ *
+ * Save: the new record is appended behind the newest in its sector if it
+ * fits (in erased words); otherwise the other sector is erased and the
+ * record written at its start. The sector holding the newest record is
+ * never erased or overwritten, so a cut at any step leaves either the old
+ * newest record (the new one has no valid CRC) or the new one. The record
+ * is read back and its CRC checked before the save reports success.
+ *
+ * Boot (mc_cfg_store_load): both sectors are scanned; a sector's scan ends
+ * at an erased word or at the first word sequence that is not a valid
+ * record (a cut record: the rest of that sector is not used again until it
+ * is erased). Of all valid records the one with the largest sequence number
+ * is decoded:
+ *   format differs, or a layout version other than this firmware's that no
+ *   migration knows        -> MC_CFG_BOOT_LAYOUT, defaults (named fault)
+ *   a value out of range, or the whole set refused by mc_params_validate
+ *                           -> MC_CFG_BOOT_INVALID, defaults
+ *   ids missing (a parameter added since) or unknown (one removed): those
+ *   take their default / are dropped, then validated as a whole
+ *                           -> MC_CFG_BOOT_MIGRATED
+ *   otherwise              -> MC_CFG_BOOT_STORED
+ * No valid record: MC_CFG_BOOT_EMPTY if both sectors start erased, else
+ * MC_CFG_BOOT_CORRUPT; defaults either way. The status goes into the
+ * heartbeat (HEARTBEAT.cfg_status) and the readonly parameter
+ * cfg_store_status.
+ */
+#ifndef MC_CFG_STORE_H
+#define MC_CFG_STORE_H
+
+#include <stdint.h>
+
+#include "hal/flash.h"
+#include "mc_params.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MC_CFG_MAGIC 0x4746434Du  /**< "MCFG" in memory order */
+#define MC_CFG_FORMAT 1u
+#define MC_CFG_HDR_WORDS 4u
+#define MC_CFG_ENTRIES_MAX 1024u   /**< a header announcing more is not a record */
+/** Words of a record this firmware writes. */
+#define MC_CFG_REC_WORDS (MC_CFG_HDR_WORDS + 2u * MC_PARAM_STORED_COUNT + 1u)
+#define MC_CFG_OFF_NONE 0xFFFFFFFFu
+
+/** How the configuration was obtained at boot. */
+typedef enum {
+    MC_CFG_BOOT_STORED = 0,   /**< newest record, every parameter */
+    MC_CFG_BOOT_MIGRATED = 1, /**< newest record, ids added/removed since */
+    MC_CFG_BOOT_EMPTY = 2,    /**< nothing stored: defaults */
+    MC_CFG_BOOT_CORRUPT = 3,  /**< no valid record, but not erased: defaults */
+    MC_CFG_BOOT_LAYOUT = 4,   /**< newest record of another format/layout: defaults */
+    MC_CFG_BOOT_INVALID = 5,  /**< newest record fails validation: defaults */
+    MC_CFG_BOOT_FLASH = 6,    /**< the flash could not be read: defaults */
+} mc_cfg_boot_t;
+
+typedef struct {
+    const mc_hal_flash_t *flash;
+    uint32_t sector[2];       /**< A and B: two distinct sectors of the flash */
+} mc_cfg_store_cfg_t;
+
+typedef struct {
+    mc_cfg_store_cfg_t cfg;
+    uint32_t sector_bytes[2];
+    uint32_t seq;             /**< largest sequence number of a valid record (0: none) */
+    int32_t active;           /**< 0/1: the sector of the newest valid record; -1: none */
+    uint32_t newest_off;      /**< its offset */
+    uint32_t append_off[2];   /**< next free offset per sector, MC_CFG_OFF_NONE if unusable */
+    bool scanned;
+    mc_cfg_boot_t boot;       /**< result of the last load */
+    uint32_t boot_dropped;    /**< entries of the loaded record with unknown ids */
+    uint32_t boot_missing;    /**< parameters the loaded record lacked (defaulted) */
+    uint32_t saves;           /**< successful saves since init */
+    uint32_t rec[MC_CFG_REC_WORDS]; /**< record being written */
+} mc_cfg_store_t;
+
+/** Bind the store to its two sectors (each must hold a record). Returns 0,
+ *  -EINVAL (NULL, same sector twice, a sector too small or unknown). */
+int mc_cfg_store_init(mc_cfg_store_t *s, const mc_cfg_store_cfg_t *cfg);
+
+/** Scan both sectors and decode the newest valid record into *p_out;
+ *  *p_out always receives a validated configuration (the defaults when
+ *  the status is not STORED or MIGRATED). */
+mc_cfg_boot_t mc_cfg_store_load(mc_cfg_store_t *s, mc_params_t *p_out);
+
+/**
+ * Write p as a new record (p must pass mc_params_validate: the store never
+ * holds a configuration the drive would refuse). BLOCKING (may erase a
+ * sector): only while the bridge is off.
+ * @return 0; -EINVAL (NULL, p invalid; nothing written); -EIO (flash error
+ *         or read-back mismatch: the previous record stays the newest).
+ */
+int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_CFG_STORE_H */

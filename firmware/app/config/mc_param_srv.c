@@ -1,0 +1,187 @@
+/**
+ * @file mc_param_srv.c
+ * @brief The parameter service: see mc_param_srv.h.
+ */
+#include "mc_param_srv.h"
+
+#include <stddef.h>
+
+int mc_param_srv_init(mc_param_srv_t *s, const mc_params_t *p, mc_drive_t *drive,
+                      const mc_hal_t *hal, mc_cfg_store_t *store, uint8_t boot_status)
+{
+    if ((s == NULL) || (p == NULL) || (drive == NULL) || (hal == NULL) ||
+        (mc_params_validate(p) != MC_PARAMS_OK)) {
+        return -EINVAL;
+    }
+    {
+        const mc_param_srv_t z = {0};
+        *s = z;
+    }
+    s->active = *p;
+    s->staged = *p;
+    s->drive = drive;
+    s->hal = hal;
+    s->store = store;
+    s->boot_status = boot_status;
+    return 0;
+}
+
+static bool bridge_on(const mc_param_srv_t *s)
+{
+    return (s->drive->mode == MC_DRIVE_MODE_CURRENT) || (s->drive->mode == MC_DRIVE_MODE_CTRL);
+}
+
+static bool fault_latched(const mc_param_srv_t *s)
+{
+    return (s->drive->mode == MC_DRIVE_MODE_FAULT) || (s->drive->faults != 0u);
+}
+
+static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
+{
+    switch (info->id) {
+    case MC_PARAM_ID_CFG_LAYOUT_VERSION:
+        return MC_PARAMS_LAYOUT_VERSION;
+    case MC_PARAM_ID_CFG_STORE_STATUS:
+        return s->boot_status;
+    case MC_PARAM_ID_CFG_STORE_SEQ:
+        return (s->store != NULL) ? s->store->seq : 0u;
+    case MC_PARAM_ID_CFG_PENDING:
+        return s->pending ? 1u : 0u;
+    default:
+        return mc_param_get_raw(&s->staged, info);
+    }
+}
+
+static mc_param_status_t do_write(mc_param_srv_t *s, uint32_t id, uint32_t value)
+{
+    const mc_param_info_t *info = mc_param_find(id, NULL);
+    mc_param_status_t st;
+    if (info == NULL) {
+        return MC_PARAM_ERR_UNKNOWN_ID;
+    }
+    if (info->access == MC_PARAM_ACCESS_READONLY) {
+        return MC_PARAM_ERR_READONLY;
+    }
+    st = mc_param_check_value(info, value);
+    if (st != MC_PARAM_OK) {
+        return st;
+    }
+    if ((info->access != MC_PARAM_ACCESS_RUNTIME) && bridge_on(s)) {
+        return MC_PARAM_ERR_RUNNING;
+    }
+    mc_param_set_raw(&s->staged, info, value);
+    s->pending = true;
+    return MC_PARAM_OK;
+}
+
+/* A stopped or reboot parameter differs between staged and active. */
+static bool needs_stop(const mc_param_srv_t *s)
+{
+    for (uint32_t i = 0u; i < MC_PARAM_COUNT; ++i) {
+        const mc_param_info_t *info = &mc_param_table[i];
+        if (((info->access == MC_PARAM_ACCESS_STOPPED) ||
+             (info->access == MC_PARAM_ACCESS_REBOOT)) &&
+            (mc_param_get_raw(&s->staged, info) != mc_param_get_raw(&s->active, info))) {
+            return true;
+        }
+    }
+    return false;
+}
+
+static mc_param_status_t do_apply(mc_param_srv_t *s, uint32_t *p_value)
+{
+    mc_drive_cfg_t cfg;
+    uint32_t err = mc_params_validate(&s->staged);
+    if ((err == MC_PARAMS_OK) && (s->hook.check != NULL) &&
+        (s->hook.check(s->hook.ctx, &s->staged) != 0u)) {
+        err = MC_PARAMS_ERR_DRIVE;
+    }
+    if (err == MC_PARAMS_OK) {
+        err = mc_params_to_drive_cfg(&s->staged, &cfg);
+    }
+    if (err != MC_PARAMS_OK) {
+        *p_value = err;
+        return MC_PARAM_ERR_INVALID;
+    }
+    if (bridge_on(s)) {
+        if (needs_stop(s)) {
+            return MC_PARAM_ERR_RUNNING;
+        }
+        /* Only runtime parameters differ: the limits the running drive
+         * reads every step (validated together above). */
+        mc_drive_cfg_t *d = &s->drive->cfg;
+        d->i_max_a = cfg.i_max_a;
+        d->i_trip_a = cfg.i_trip_a;
+        d->vbus_min_v = cfg.vbus_min_v;
+        d->vbus_max_v = cfg.vbus_max_v;
+        d->omega_max_rad_s = cfg.omega_max_rad_s;
+        d->temp_max_c = cfg.temp_max_c;
+        d->stall_current_frac = cfg.stall_current_frac;
+        d->stall_speed_rad_s = cfg.stall_speed_rad_s;
+        d->stall_time_s = cfg.stall_time_s;
+        d->i_unbalance_max_a = cfg.i_unbalance_max_a;
+    } else {
+        const mc_drive_ctrl_t *ctrl = s->drive->ctrl;
+        if (mc_drive_init(s->drive, &cfg, s->hal) != MC_DRIVE_CFG_OK) {
+            *p_value = MC_PARAMS_ERR_DRIVE; /* the HAL: validated otherwise */
+            return MC_PARAM_ERR_INVALID;
+        }
+        if (ctrl != NULL) {
+            (void)mc_drive_attach_ctrl(s->drive, ctrl); /* accepted before, bridge off */
+        }
+    }
+    s->active = s->staged;
+    s->pending = false;
+    s->applied++;
+    if (s->hook.apply != NULL) {
+        s->hook.apply(s->hook.ctx, &s->active);
+    }
+    return MC_PARAM_OK;
+}
+
+mc_param_status_t mc_param_srv_request(mc_param_srv_t *s, uint32_t op, uint32_t id,
+                                       uint32_t *p_value)
+{
+    if ((s == NULL) || (p_value == NULL)) {
+        return MC_PARAM_ERR_OPCODE;
+    }
+    if (op == MC_PARAM_OP_READ) {
+        const mc_param_info_t *info = mc_param_find(id, NULL);
+        if (info == NULL) {
+            return MC_PARAM_ERR_UNKNOWN_ID;
+        }
+        *p_value = read_value(s, info);
+        return MC_PARAM_OK;
+    }
+    if (op > MC_PARAM_OP_LOAD_DEFAULTS) {
+        return MC_PARAM_ERR_OPCODE;
+    }
+    if (fault_latched(s)) {
+        return MC_PARAM_ERR_FAULT;
+    }
+    switch (op) {
+    case MC_PARAM_OP_WRITE:
+        return do_write(s, id, *p_value);
+    case MC_PARAM_OP_APPLY:
+        *p_value = 0u;
+        return do_apply(s, p_value);
+    case MC_PARAM_OP_SAVE:
+        *p_value = 0u;
+        if (bridge_on(s)) {
+            return MC_PARAM_ERR_RUNNING; /* an erase stalls the CPU for up to seconds */
+        }
+        if ((s->store == NULL) || (mc_cfg_store_save(s->store, &s->active) != 0)) {
+            return MC_PARAM_ERR_STORE;
+        }
+        *p_value = s->store->seq;
+        return MC_PARAM_OK;
+    default: /* MC_PARAM_OP_LOAD_DEFAULTS */
+        *p_value = 0u;
+        if (bridge_on(s)) {
+            return MC_PARAM_ERR_RUNNING;
+        }
+        s->staged = mc_params_default;
+        s->pending = true;
+        return MC_PARAM_OK;
+    }
+}

@@ -1,0 +1,85 @@
+/**
+ * @file mc_params.h
+ * @brief The drive's parameters: lookup by id, checked single writes, the
+ *        whole-configuration validation and the mapping onto the drive's
+ *        mc_drive_cfg_t.
+ *
+ * The table (ids, types, ranges, defaults, access) is generated from
+ * tools/config/params.toml into mc_params_gen.{h,c}; this module only
+ * interprets it. A single value is checked against its type and range
+ * (f32: finite and in [min, max]; u32: in [min, max]); values that are only
+ * valid together are checked by mc_params_validate() on the whole set,
+ * which ends with the drive's own init validation (mc_drive_check_cfg), so
+ * a configuration is accepted only if mc_drive_init would accept it.
+ */
+#ifndef MC_PARAMS_H
+#define MC_PARAMS_H
+
+#include <stdint.h>
+
+#include "mc_drive.h"
+#include "mc_params_gen.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Status of one parameter operation (the CAN PARAM_REPLY.status values). */
+typedef enum {
+    MC_PARAM_OK = 0,
+    MC_PARAM_ERR_UNKNOWN_ID = 1, /**< no parameter with this id */
+    MC_PARAM_ERR_READONLY = 2,   /**< written, but computed by the drive */
+    MC_PARAM_ERR_RANGE = 3,      /**< outside [min, max], or NaN/inf */
+    MC_PARAM_ERR_RUNNING = 4,    /**< stopped/reboot parameter (or save, load
+                                      defaults, an apply that needs it) while
+                                      the bridge is on */
+    MC_PARAM_ERR_FAULT = 5,      /**< a fault is latched: only the clear path */
+    MC_PARAM_ERR_INVALID = 6,    /**< the whole configuration fails validation
+                                      (see PARAM_REPLY.value: MC_PARAMS_ERR_* bits) */
+    MC_PARAM_ERR_STORE = 7,      /**< the flash store failed */
+    MC_PARAM_ERR_OPCODE = 8,     /**< unknown opcode */
+} mc_param_status_t;
+
+/* Whole-configuration errors (bits) of mc_params_validate. */
+#define MC_PARAMS_OK              0u
+#define MC_PARAMS_ERR_NULL        (1u << 0)  /**< NULL argument */
+#define MC_PARAMS_ERR_RANGE       (1u << 1)  /**< a value outside its table range, or not finite */
+#define MC_PARAMS_ERR_SENSE       (1u << 2)  /**< i_max_a or i_trip_a above i_sense_max_a */
+#define MC_PARAMS_ERR_BANDWIDTH   (1u << 3)  /**< current_bw_rad_s / pwm_hz > 0.5 */
+#define MC_PARAMS_ERR_DEAD_TIME   (1u << 4)  /**< dead time above 10 % of the PWM period */
+#define MC_PARAMS_ERR_BITRATE     (1u << 5)  /**< CAN bit rate not 125k, 250k, 500k or 1M */
+#define MC_PARAMS_ERR_DRIVE       (1u << 6)  /**< mc_drive_check_cfg refused the derived
+                                                  mc_drive_cfg_t */
+
+/** Largest current_bw_rad_s * dt (dt = 1 / pwm_hz): above it the one-period
+ *  computation delay costs too much phase (gains vs PWM rate). */
+#define MC_PARAMS_BW_DT_MAX 0.5f
+/** Largest dead time as a fraction of the PWM period. */
+#define MC_PARAMS_DEAD_TIME_FRAC_MAX 0.1f
+
+/** Row of parameter id, or NULL; *p_idx (may be NULL) its table index. */
+const mc_param_info_t *mc_param_find(uint32_t id, uint32_t *p_idx);
+
+/** Raw 32 bits of a stored parameter's value in p (info not readonly). */
+uint32_t mc_param_get_raw(const mc_params_t *p, const mc_param_info_t *info);
+
+/** Type and range check of one raw value (no access check). */
+mc_param_status_t mc_param_check_value(const mc_param_info_t *info, uint32_t raw);
+
+/** Store a raw value into p (info not readonly; the caller checked it). */
+void mc_param_set_raw(mc_params_t *p, const mc_param_info_t *info, uint32_t raw);
+
+/** Every value in its range, plus the cross checks, plus the drive's init
+ *  validation of the derived mc_drive_cfg_t. Returns MC_PARAMS_ERR_* bits. */
+uint32_t mc_params_validate(const mc_params_t *p);
+
+/** The drive configuration the parameters describe (FOC gains from the
+ *  current-loop bandwidth: kp = L bw, ki = R bw; dt = 1 / pwm_hz). Returns
+ *  MC_PARAMS_OK or MC_PARAMS_ERR_NULL / _RANGE (no gains); not validated. */
+uint32_t mc_params_to_drive_cfg(const mc_params_t *p, mc_drive_cfg_t *cfg);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_PARAMS_H */

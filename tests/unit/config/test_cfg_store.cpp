@@ -1,0 +1,297 @@
+// The A/B configuration store (firmware/app/config/mc_cfg_store.h) on the
+// fake flash (hal/fake/mc_fake_flash.h). Configurations are compared bit
+// for bit (memcmp): a store either returns exactly what was saved or
+// exactly the defaults / the previous record, never a mixture.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+#include "mc_cfg_store.h"
+#include "mc_crc32.h"
+#include "mc_fake_flash.h"
+
+namespace {
+
+constexpr uint32_t kRecBytes = MC_CFG_REC_WORDS * 4u;
+constexpr uint32_t kCodeBytes = 256u;  // sector 0: stands for the code, never touched
+
+struct Rig {
+    std::vector<uint8_t> mem;
+    uint32_t sizes[3];
+    mc_fake_flash_t flash{};
+    mc_cfg_store_t store{};
+
+    explicit Rig(uint32_t sector_bytes) : mem(kCodeBytes + 2u * sector_bytes, 0xFF)
+    {
+        sizes[0] = kCodeBytes;
+        sizes[1] = sector_bytes;
+        sizes[2] = sector_bytes;
+        for (uint32_t i = 0; i < kCodeBytes; ++i) {
+            mem[i] = static_cast<uint8_t>(i * 7u + 1u);
+        }
+    }
+    // Power on: a fresh fake and store over the same memory.
+    mc_cfg_boot_t Boot(mc_params_t *p)
+    {
+        EXPECT_EQ(mc_fake_flash_init(&flash, mem.data(), sizes, 3), 0);
+        const mc_cfg_store_cfg_t c = {&flash.dev, {1u, 2u}};
+        EXPECT_EQ(mc_cfg_store_init(&store, &c), 0);
+        return mc_cfg_store_load(&store, p);
+    }
+    uint8_t *Sector(uint32_t i) { return mem.data() + kCodeBytes + (i - 1u) * sizes[1]; }
+};
+
+bool Same(const mc_params_t &a, const mc_params_t &b)
+{
+    return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+// A valid configuration that differs from the defaults and from the others.
+mc_params_t Variant(uint32_t i)
+{
+    mc_params_t p = mc_params_default;
+    p.i_max_a = 1.0f + static_cast<float>(i % 12u);
+    p.r_ohm = 0.1f * static_cast<float>(i + 1u);
+    p.pole_pairs = 1u + i % 60u;
+    p.can_node_id = i % 62u;
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
+    return p;
+}
+
+// Hand-made record (for layouts and migrations this firmware never writes).
+std::vector<uint32_t> Record(uint32_t layout, uint32_t seq,
+                             const std::vector<std::pair<uint32_t, uint32_t>> &entries,
+                             uint32_t format = MC_CFG_FORMAT)
+{
+    std::vector<uint32_t> w = {MC_CFG_MAGIC, format | (layout << 16), seq,
+                               static_cast<uint32_t>(entries.size()) | 0xFFFF0000u};
+    for (const auto &e : entries) {
+        w.push_back(e.first);
+        w.push_back(e.second);
+    }
+    w.push_back(mc_crc32(w.data(), w.size() * 4u));
+    return w;
+}
+
+std::vector<std::pair<uint32_t, uint32_t>> Entries(const mc_params_t &p)
+{
+    std::vector<std::pair<uint32_t, uint32_t>> e;
+    for (uint32_t i = 0; i < MC_PARAM_COUNT; ++i) {
+        if (mc_param_table[i].offset != MC_PARAM_NO_FIELD) {
+            e.emplace_back(mc_param_table[i].id, mc_param_get_raw(&p, &mc_param_table[i]));
+        }
+    }
+    return e;
+}
+
+TEST(Crc32, CheckValue)
+{
+    // The catalogued check value of CRC-32/ISO-HDLC (zlib's crc32).
+    EXPECT_EQ(mc_crc32("123456789", 9), 0xCBF43926u);
+    EXPECT_EQ(mc_crc32("", 0), 0x00000000u);
+}
+
+TEST(CfgStore, EmptyBootsWithDefaultsThenRoundTrip)
+{
+    Rig r(4096);
+    mc_params_t p{};
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_EMPTY);
+    EXPECT_TRUE(Same(p, mc_params_default));
+    const mc_params_t v = Variant(3);
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &v), 0);
+    EXPECT_EQ(r.flash.erases, 0u) << "an erased sector is used without erasing it again";
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, v));
+    EXPECT_EQ(r.store.seq, 1u);
+}
+
+TEST(CfgStore, NewestWinsAndCodeSectorUntouched)
+{
+    Rig r(kRecBytes * 3u + 64u);  // three records per sector: appends and switches
+    const std::vector<uint8_t> code(r.mem.begin(), r.mem.begin() + kCodeBytes);
+    mc_params_t p{};
+    r.Boot(&p);
+    for (uint32_t i = 0; i < 20; ++i) {
+        const mc_params_t v = Variant(i);
+        ASSERT_EQ(mc_cfg_store_save(&r.store, &v), 0) << i;
+        ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED) << i;
+        ASSERT_TRUE(Same(p, v)) << i;
+        EXPECT_EQ(r.store.seq, i + 1u);
+    }
+    EXPECT_TRUE(std::equal(code.begin(), code.end(), r.mem.begin()));
+}
+
+TEST(CfgStore, CorruptNewestFallsBackToPrevious)
+{
+    Rig r(kRecBytes * 3u + 64u);
+    mc_params_t p{};
+    r.Boot(&p);
+    const mc_params_t a = Variant(1), b = Variant(2);
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &a), 0);
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &b), 0);
+    r.Sector(1)[kRecBytes + 40] ^= 0x04;  // one bit of the second record's payload
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, a));
+    // the next save does not append behind the damaged record: it starts B
+    const mc_params_t c = Variant(3);
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &c), 0);
+    EXPECT_EQ(r.store.active, 1);
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, c));
+}
+
+TEST(CfgStore, GarbageIsCorruptAndRecoverable)
+{
+    Rig r(4096);
+    std::memset(r.Sector(1), 0x5A, 64);
+    mc_params_t p{};
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_CORRUPT);
+    EXPECT_TRUE(Same(p, mc_params_default));
+    const mc_params_t v = Variant(5);
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &v), 0);
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, v));
+}
+
+TEST(CfgStore, OtherLayoutOrFormatRefusedWithDefaults)
+{
+    for (const auto &rec : {Record(MC_PARAMS_LAYOUT_VERSION + 1u, 7, Entries(Variant(1))),
+                            Record(MC_PARAMS_LAYOUT_VERSION - 1u, 7, Entries(Variant(1))),
+                            Record(MC_PARAMS_LAYOUT_VERSION, 7, Entries(Variant(1)), 2u)}) {
+        Rig r(4096);
+        std::memcpy(r.Sector(1), rec.data(), rec.size() * 4u);
+        mc_params_t p{};
+        EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_LAYOUT);
+        EXPECT_TRUE(Same(p, mc_params_default));
+        // a save supersedes the refused record (larger sequence number)
+        const mc_params_t v = Variant(2);
+        ASSERT_EQ(mc_cfg_store_save(&r.store, &v), 0);
+        EXPECT_EQ(r.store.seq, 8u);
+        EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+        EXPECT_TRUE(Same(p, v));
+    }
+}
+
+TEST(CfgStore, MissingAndUnknownIdsMigrate)
+{
+    Rig r(4096);
+    const float r_ohm = 0.25f, i_max = 7.0f;
+    uint32_t rb, ib;
+    std::memcpy(&rb, &r_ohm, 4);
+    std::memcpy(&ib, &i_max, 4);
+    // a record of a table that lacked every other parameter and had id 9999
+    const auto rec = Record(MC_PARAMS_LAYOUT_VERSION, 3,
+                            {{MC_PARAM_ID_R_OHM, rb}, {9999u, 42u}, {MC_PARAM_ID_I_MAX_A, ib}});
+    std::memcpy(r.Sector(2), rec.data(), rec.size() * 4u);
+    mc_params_t p{};
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_MIGRATED);
+    mc_params_t want = mc_params_default;
+    want.r_ohm = r_ohm;
+    want.i_max_a = i_max;
+    EXPECT_TRUE(Same(p, want));
+    EXPECT_EQ(r.store.boot_dropped, 1u);
+    EXPECT_EQ(r.store.boot_missing, MC_PARAM_STORED_COUNT - 2u);
+}
+
+TEST(CfgStore, InvalidRecordRefusedWithDefaults)
+{
+    Rig r(4096);
+    mc_params_t bad = mc_params_default;
+    bad.i_sense_max_a = 5.0f;  // each value in range, the whole refused (sensor scale)
+    ASSERT_NE(mc_params_validate(&bad), MC_PARAMS_OK);
+    const auto rec = Record(MC_PARAMS_LAYOUT_VERSION, 1, Entries(bad));
+    std::memcpy(r.Sector(1), rec.data(), rec.size() * 4u);
+    mc_params_t p{};
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_INVALID);
+    EXPECT_TRUE(Same(p, mc_params_default));
+    // and the store itself refuses to write it
+    const uint32_t steps = r.flash.steps;
+    EXPECT_EQ(mc_cfg_store_save(&r.store, &bad), -EINVAL);
+    EXPECT_EQ(r.flash.steps, steps);
+}
+
+TEST(CfgStore, FlashErrorKeepsPrevious)
+{
+    Rig r(kRecBytes + 16u);  // one record per sector: every save erases
+    mc_params_t p{};
+    r.Boot(&p);
+    const mc_params_t a = Variant(1), b = Variant(2);
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &a), 0);
+    r.flash.fail_next = -EIO;  // the erase of B fails
+    EXPECT_EQ(mc_cfg_store_save(&r.store, &b), -EIO);
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, a));
+}
+
+// The power-cut guarantee: for every save of a sequence, cut the power at
+// every erase and every word-program step (the step not done, and the step
+// half done), reboot, and require exactly the previous configuration; the
+// store must then save and load normally. A cut after the last step (no
+// cut) must give the new one.
+void PowerCutSweep(uint32_t sector_bytes, uint32_t saves, uint32_t *p_cases, uint32_t *p_erase_cuts)
+{
+    Rig r(sector_bytes);
+    mc_params_t p{};
+    r.Boot(&p);
+    mc_params_t old = mc_params_default;
+    for (uint32_t i = 0; i < saves; ++i) {
+        const mc_params_t next = Variant(i);
+        const std::vector<uint8_t> before = r.mem;
+        // steps of an uncut save from this state
+        r.Boot(&p);
+        const uint32_t s0 = r.flash.steps, e0 = r.flash.erases;
+        ASSERT_EQ(mc_cfg_store_save(&r.store, &next), 0);
+        const uint32_t n = r.flash.steps - s0;
+        const bool erased = r.flash.erases > e0;
+        ASSERT_GE(n, MC_CFG_REC_WORDS);
+        const std::vector<uint8_t> after = r.mem;
+        for (uint32_t k = 1; k <= n; ++k) {
+            for (const mc_fake_flash_tear_t tear : {MC_FAKE_FLASH_TEAR_NONE, MC_FAKE_FLASH_TEAR_HALF}) {
+                r.mem = before;
+                r.Boot(&p);
+                mc_fake_flash_cut_at(&r.flash, k, tear);
+                ASSERT_EQ(mc_cfg_store_save(&r.store, &next), -EIO) << "save " << i << " step " << k;
+                const mc_cfg_boot_t st = r.Boot(&p);
+                ASSERT_TRUE(Same(p, old)) << "save " << i << " cut at step " << k << " of " << n
+                                          << " tear " << tear << " boot " << st;
+                if (i > 0) {
+                    ASSERT_EQ(st, MC_CFG_BOOT_STORED);
+                }
+                ++*p_cases;
+                if (erased && k == 1) {
+                    ++*p_erase_cuts;
+                }
+                // the store recovers: the same save now completes
+                ASSERT_EQ(mc_cfg_store_save(&r.store, &next), 0) << "save " << i << " step " << k;
+                ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+                ASSERT_TRUE(Same(p, next));
+            }
+        }
+        r.mem = after;
+        ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+        ASSERT_TRUE(Same(p, next));
+        old = next;
+    }
+}
+
+TEST(CfgStore, PowerCutAtEveryStepOneRecordPerSector)
+{
+    uint32_t cases = 0, erase_cuts = 0;
+    PowerCutSweep(kRecBytes + 16u, 5, &cases, &erase_cuts);
+    // 5 saves x (1 erase + MC_CFG_REC_WORDS words), except the first save
+    // (sector A starts erased: no erase) x 2 tear modes
+    EXPECT_EQ(cases, 2u * (5u * MC_CFG_REC_WORDS + 4u));
+    EXPECT_EQ(erase_cuts, 2u * 4u);
+}
+
+TEST(CfgStore, PowerCutAtEveryStepAppendAndSwitch)
+{
+    uint32_t cases = 0, erase_cuts = 0;
+    PowerCutSweep(kRecBytes * 2u + 32u, 7, &cases, &erase_cuts);
+    // 2 records per sector: saves 3, 5, 7 start a sector (erase)
+    EXPECT_EQ(cases, 2u * (7u * MC_CFG_REC_WORDS + 3u));
+    EXPECT_EQ(erase_cuts, 2u * 3u);
+}
+
+}  // namespace
