@@ -13,6 +13,8 @@ const mc_params_t mc_params_default = {
     .b_nm_s_rad = 0.0f,
     .i_max_a = 10.0f,
     .speed_max_rad_s = 300.0f,
+    .i_rated_a = 3.0f,
+    .speed_rated_rad_s = 104.7f,
     .vbus_v = 48.0f,
     .pwm_hz = 20000u,
     .dead_time_s = 2.5e-07f,
@@ -64,8 +66,10 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {7u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, b_nm_s_rad), {.f = 0.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* b_nm_s_rad */
     {8u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, i_max_a), {.f = 0.01f}, {.f = 1000.0f}, {.f = 10.0f}}, /* i_max_a */
     {9u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_max_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 300.0f}}, /* speed_max_rad_s */
+    {10u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, i_rated_a), {.f = 0.01f}, {.f = 1000.0f}, {.f = 3.0f}}, /* i_rated_a */
+    {11u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_rated_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 104.7f}}, /* speed_rated_rad_s */
     {20u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_v), {.f = 1.0f}, {.f = 1000.0f}, {.f = 48.0f}}, /* vbus_v */
-    {21u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, pwm_hz), {.u = 5000u}, {.u = 40000u}, {.u = 20000u}}, /* pwm_hz */
+    {21u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, pwm_hz), {.u = 5000u}, {.u = 60000u}, {.u = 20000u}}, /* pwm_hz */
     {22u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, dead_time_s), {.f = 0.0f}, {.f = 5e-06f}, {.f = 2.5e-07f}}, /* dead_time_s */
     {23u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, current_sensors), {.u = 2u}, {.u = 3u}, {.u = 2u}}, /* current_sensors */
     {24u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_sense_max_a), {.f = 0.1f}, {.f = 2000.0f}, {.f = 60.0f}}, /* i_sense_max_a */

@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 50u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 46u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 52u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 48u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -26,6 +26,8 @@
 #define MC_PARAM_ID_B_NM_S_RAD 7u
 #define MC_PARAM_ID_I_MAX_A 8u
 #define MC_PARAM_ID_SPEED_MAX_RAD_S 9u
+#define MC_PARAM_ID_I_RATED_A 10u
+#define MC_PARAM_ID_SPEED_RATED_RAD_S 11u
 #define MC_PARAM_ID_VBUS_V 20u
 #define MC_PARAM_ID_PWM_HZ 21u
 #define MC_PARAM_ID_DEAD_TIME_S 22u
@@ -78,47 +80,49 @@
 #define MC_PARAM_IDX_B_NM_S_RAD 6u
 #define MC_PARAM_IDX_I_MAX_A 7u
 #define MC_PARAM_IDX_SPEED_MAX_RAD_S 8u
-#define MC_PARAM_IDX_VBUS_V 9u
-#define MC_PARAM_IDX_PWM_HZ 10u
-#define MC_PARAM_IDX_DEAD_TIME_S 11u
-#define MC_PARAM_IDX_CURRENT_SENSORS 12u
-#define MC_PARAM_IDX_I_SENSE_MAX_A 13u
-#define MC_PARAM_IDX_ADC_BITS 14u
-#define MC_PARAM_IDX_ENCODER_CPR 15u
-#define MC_PARAM_IDX_CURRENT_BW_RAD_S 16u
-#define MC_PARAM_IDX_V_LIMIT_RATIO 17u
-#define MC_PARAM_IDX_SLOW_LOOP_DIV 18u
-#define MC_PARAM_IDX_SPEED_PLL_BW_RAD_S 19u
-#define MC_PARAM_IDX_ENCODER_OFFSET_RAD 20u
-#define MC_PARAM_IDX_SPEED_KP_A_S_RAD 21u
-#define MC_PARAM_IDX_SPEED_KI_A_RAD 22u
-#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 23u
-#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 24u
-#define MC_PARAM_IDX_I_TRIP_A 25u
-#define MC_PARAM_IDX_VBUS_MIN_V 26u
-#define MC_PARAM_IDX_VBUS_MAX_V 27u
-#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 28u
-#define MC_PARAM_IDX_TEMP_MAX_C 29u
-#define MC_PARAM_IDX_STALL_CURRENT_FRAC 30u
-#define MC_PARAM_IDX_STALL_SPEED_RAD_S 31u
-#define MC_PARAM_IDX_STALL_TIME_S 32u
-#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 33u
-#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 34u
-#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 35u
-#define MC_PARAM_IDX_CAN_NODE_ID 36u
-#define MC_PARAM_IDX_CAN_BITRATE_BPS 37u
-#define MC_PARAM_IDX_CAN_TIMEOUT_S 38u
-#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 39u
-#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 40u
-#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 41u
-#define MC_PARAM_IDX_TM_CURRENTS_HZ 42u
-#define MC_PARAM_IDX_TM_VOLTAGES_HZ 43u
-#define MC_PARAM_IDX_TM_SPEED_HZ 44u
-#define MC_PARAM_IDX_TM_POSITION_HZ 45u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 46u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 47u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 48u
-#define MC_PARAM_IDX_CFG_PENDING 49u
+#define MC_PARAM_IDX_I_RATED_A 9u
+#define MC_PARAM_IDX_SPEED_RATED_RAD_S 10u
+#define MC_PARAM_IDX_VBUS_V 11u
+#define MC_PARAM_IDX_PWM_HZ 12u
+#define MC_PARAM_IDX_DEAD_TIME_S 13u
+#define MC_PARAM_IDX_CURRENT_SENSORS 14u
+#define MC_PARAM_IDX_I_SENSE_MAX_A 15u
+#define MC_PARAM_IDX_ADC_BITS 16u
+#define MC_PARAM_IDX_ENCODER_CPR 17u
+#define MC_PARAM_IDX_CURRENT_BW_RAD_S 18u
+#define MC_PARAM_IDX_V_LIMIT_RATIO 19u
+#define MC_PARAM_IDX_SLOW_LOOP_DIV 20u
+#define MC_PARAM_IDX_SPEED_PLL_BW_RAD_S 21u
+#define MC_PARAM_IDX_ENCODER_OFFSET_RAD 22u
+#define MC_PARAM_IDX_SPEED_KP_A_S_RAD 23u
+#define MC_PARAM_IDX_SPEED_KI_A_RAD 24u
+#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 25u
+#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 26u
+#define MC_PARAM_IDX_I_TRIP_A 27u
+#define MC_PARAM_IDX_VBUS_MIN_V 28u
+#define MC_PARAM_IDX_VBUS_MAX_V 29u
+#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 30u
+#define MC_PARAM_IDX_TEMP_MAX_C 31u
+#define MC_PARAM_IDX_STALL_CURRENT_FRAC 32u
+#define MC_PARAM_IDX_STALL_SPEED_RAD_S 33u
+#define MC_PARAM_IDX_STALL_TIME_S 34u
+#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 35u
+#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 36u
+#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 37u
+#define MC_PARAM_IDX_CAN_NODE_ID 38u
+#define MC_PARAM_IDX_CAN_BITRATE_BPS 39u
+#define MC_PARAM_IDX_CAN_TIMEOUT_S 40u
+#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 41u
+#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 42u
+#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 43u
+#define MC_PARAM_IDX_TM_CURRENTS_HZ 44u
+#define MC_PARAM_IDX_TM_VOLTAGES_HZ 45u
+#define MC_PARAM_IDX_TM_SPEED_HZ 46u
+#define MC_PARAM_IDX_TM_POSITION_HZ 47u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 48u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 49u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 50u
+#define MC_PARAM_IDX_CFG_PENDING 51u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -131,8 +135,10 @@ typedef struct {
     float b_nm_s_rad; /**< Viscous friction. [N.m.s/rad] */
     float i_max_a; /**< Largest |id_ref|, |iq_ref| accepted; at most i_sense_max_a. [A] */
     float speed_max_rad_s; /**< Largest |speed reference| (mechanical). [rad/s] */
+    float i_rated_a; /**< Rated (continuous) current; gains and start-up currents are derived from it. [A] */
+    float speed_rated_rad_s; /**< Rated speed (mechanical); the observer's critical speed and hand-over derive from it. [rad/s] */
     float vbus_v; /**< Nominal DC-bus voltage. [V] */
-    uint32_t pwm_hz; /**< PWM frequency = fast-loop rate. [Hz] */
+    uint32_t pwm_hz; /**< PWM frequency = fast-loop rate (up to 60 kHz: low-inductance motors need 40-50 kHz). [Hz] */
     float dead_time_s; /**< Bridge dead time. [s] */
     uint32_t current_sensors; /**< Phase-current sensors (2 or 3 shunts). */
     float i_sense_max_a; /**< Current-sense full scale; i_max_a and i_trip_a must stay below it. [A] */
