@@ -37,7 +37,7 @@ TEST(Params, TableSortedUniqueAndDefaultsInRange)
     }
     EXPECT_EQ(mc_param_find(0, nullptr), nullptr);
     EXPECT_EQ(mc_param_find(65535, nullptr), nullptr);
-    EXPECT_EQ(mc_param_find(MC_PARAM_ID_R_OHM + 10u, nullptr), nullptr);  // 11: a gap
+    EXPECT_EQ(mc_param_find(MC_PARAM_ID_R_OHM + 18u, nullptr), nullptr);  // 19: a gap
 }
 
 TEST(Params, SingleValueChecks)
