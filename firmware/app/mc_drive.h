@@ -212,6 +212,10 @@ typedef struct {
     uint32_t (*fast)(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out);
     uint32_t (*slow)(void *ctx);                                     /**< may be NULL */
     void *ctx;
+    /** Controlled stop (MC_DRIVE_MODE_STOPPING): decelerate to standstill at
+     *  decel_rad_s2 [rad/s^2] and hold; fast() keeps running. NULL: the law
+     *  cannot stop itself and the drive opens the bridge at once. */
+    uint32_t (*stop)(void *ctx, float decel_rad_s2);
 } mc_drive_ctrl_t;
 
 /** What the last fast step saw and did (telemetry snapshot). */
