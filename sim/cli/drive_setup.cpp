@@ -276,6 +276,13 @@ mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
   dc.stall_time_s = 0.0f;
   // Three shunts: sum within 3 % of the sensor range (a few LSB of rounding).
   dc.i_unbalance_max_a = b.current_sensors == 3 ? static_cast<float>(0.03 * b.i_sense_max_a) : 0.0f;
+  // Controlled stop: the speed PI's kp, the feed-forward J decel / kt;
+  // rest below 0.2 % of the rated speed. Warnings off (no thermal model).
+  dc.stop_decel_rad_s2 = static_cast<float>(g.stop_decel_rad_s2);
+  dc.stop_rest_rad_s = static_cast<float>(0.002 * g.speed_rated_eff_rad_s);
+  dc.stop_kp_a_s_rad = static_cast<float>(m.j_kgm2 * g.speed_wc_rad_s / g.kt_nm_a);
+  dc.stop_iq_ff_a = static_cast<float>(std::min(g.i_limit_a, m.j_kgm2 * g.stop_decel_rad_s2 /
+                                                                 g.kt_nm_a));
   return dc;
 }
 
