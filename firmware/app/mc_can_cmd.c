@@ -447,6 +447,17 @@ void mc_can_cmd_step(mc_can_cmd_t *c)
     }
     if (!c->stopping && (c->ticks_since_cmd >= c->timeout_ticks)) {
         c->stopping = true;
+        /* With a controlled stop configured the drive decelerates to
+         * standstill itself before it opens the bridge (mc_drive.h). */
+        if (c->drive->cfg.stop_decel_rad_s2 > 0.0f) {
+            (void)mc_drive_stop(c->drive);
+        }
+    }
+    if (c->stopping && (c->drive->cfg.stop_decel_rad_s2 > 0.0f)) {
+        if (c->drive->mode != MC_DRIVE_MODE_STOPPING) {
+            end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
+        }
+        return;
     }
     if (c->stopping) {
         stop_step(c);

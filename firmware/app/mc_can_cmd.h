@@ -30,7 +30,11 @@
  *
  * Command timeout: while enabled, if no command is accepted for timeout_s
  * (any accepted command counts, HOST_HEARTBEAT is the cheapest), the drive
- * stops safely and reports stop_reason CMD_TIMEOUT:
+ * stops safely and reports stop_reason CMD_TIMEOUT. With the drive's
+ * controlled stop configured (mc_drive_cfg_t.stop_decel_rad_s2 > 0) in any
+ * control mode: mc_drive_stop(), the drive decelerates to standstill at
+ * that rate and opens the bridge (MODE_STOPPING); the run ends when it has.
+ * Without it:
  *   CURRENT   both current references ramp to zero at stop_ramp_a_per_s,
  *             then IDLE;
  *   SPEED     the speed reference ramps to zero at stop_decel_rad_s2

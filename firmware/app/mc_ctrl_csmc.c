@@ -167,6 +167,7 @@ uint32_t mc_ctrl_csmc_init(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_cfg_t *cfg)
     c->ops.reset = ctrl_reset;
     c->ops.fast = ctrl_fast;
     c->ops.slow = NULL;
+    c->ops.stop = NULL;
     c->ops.ctx = c;
     return MC_CTRL_CSMC_ERR_NONE;
 }

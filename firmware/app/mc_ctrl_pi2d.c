@@ -142,6 +142,7 @@ uint32_t mc_ctrl_pi2d_init(mc_ctrl_pi2d_t *c, const mc_ctrl_pi2d_cfg_t *cfg)
     c->ops.reset = ctrl_reset;
     c->ops.fast = ctrl_fast;
     c->ops.slow = NULL;
+    c->ops.stop = NULL;
     c->ops.ctx = c;
     return MC_CTRL_PI2D_ERR_NONE;
 }

@@ -166,6 +166,7 @@ uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
     c->table.reset = mc_ctrl_sls_reset;
     c->table.fast = mc_ctrl_sls_fast;
     c->table.slow = NULL;
+    c->table.stop = NULL;
     c->table.ctx = c;
     c->tm.handovers = 0u;
     c->tm.fallbacks = 0u;

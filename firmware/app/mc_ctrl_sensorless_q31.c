@@ -221,6 +221,7 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
     c->table.reset = mc_ctrl_sls_q31_reset;
     c->table.fast = mc_ctrl_sls_q31_fast;
     c->table.slow = NULL;
+    c->table.stop = NULL;
     c->table.ctx = c;
     c->tm.handovers = 0u;
     c->tm.fallbacks = 0u;

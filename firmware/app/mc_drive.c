@@ -76,6 +76,13 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
     if (cfg->stall_current_frac > 1.0f) {
         err |= MC_DRIVE_CFG_ERR_SUPERVISION;
     }
+    const float stop[6] = {cfg->stop_decel_rad_s2, cfg->stop_rest_rad_s, cfg->stop_kp_a_s_rad,
+                           cfg->stop_iq_ff_a, cfg->temp_warn_c, cfg->vbus_sag_v};
+    for (unsigned k = 0u; k < 6u; ++k) {
+        if (!mc_isfinite_f32(stop[k]) || stop[k] < 0.0f) {
+            err |= MC_DRIVE_CFG_ERR_SUPERVISION;
+        }
+    }
     err |= validate_open_phase(cfg);
     return err;
 }
@@ -338,6 +345,103 @@ static uint32_t run_ctrl(mc_drive_t *d, const mc_drive_meas_t *m)
     return (rc != 0) ? MC_DRIVE_FAULT_PWM : 0u;
 }
 
+/* STOPPING from CURRENT mode (mc_drive.h, Modes): the speed ramp to 0 and
+ * its P loop write the q current reference of the current loop. */
+static uint32_t stop_current_step(mc_drive_t *d, const mc_hal_adc_sample_t *s, float ic)
+{
+    const float step = d->cfg.stop_decel_rad_s2 * d->cfg.foc.dt_s;
+    const float w = d->stop_omega_ref_rad_s;
+    d->stop_omega_ref_rad_s = (w > step) ? (w - step) : ((w < -step) ? (w + step) : 0.0f);
+    const float wr = d->stop_omega_ref_rad_s;
+    const float ff = (wr > 0.0f) ? -d->cfg.stop_iq_ff_a
+                                 : ((wr < 0.0f) ? d->cfg.stop_iq_ff_a : 0.0f);
+    float iq = (d->cfg.stop_kp_a_s_rad * (wr - d->omega_m_rad_s)) + ff;
+    const float lim = d->cfg.i_max_a;
+    iq = (iq > lim) ? lim : ((iq < -lim) ? -lim : iq);
+    d->id_ref_a = 0.0f;
+    d->iq_ref_a = iq;
+    mc_foc_f32_in_t in = {
+        .ia_a = s->ia_a, .ib_a = s->ib_a, .ic_a = ic, .three_phase = false,
+        .theta_e_rad = d->tm.theta_e_rad,
+        .omega_e_rad_s = d->omega_m_rad_s * (float)d->cfg.pole_pairs,
+        .vbus_v = s->vbus_v, .id_ref_a = 0.0f, .iq_ref_a = iq,
+    };
+    const uint32_t ferr = mc_foc_f32_step(&d->foc, &in, &d->tm.foc);
+    if (ferr != MC_FOC_ERR_NONE) {
+        d->foc_err = ferr;
+        return MC_DRIVE_FAULT_CONTROL;
+    }
+    return (mc_hal_pwm3_set_duty(d->hal->pwm3, d->tm.foc.duty_a, d->tm.foc.duty_b,
+                                 d->tm.foc.duty_c) != 0) ? MC_DRIVE_FAULT_PWM : 0u;
+}
+
+/* Begin a controlled stop (or open the bridge at once when none is possible). */
+static void begin_stop(mc_drive_t *d, uint32_t cause)
+{
+    if (d->mode != MC_DRIVE_MODE_CURRENT && d->mode != MC_DRIVE_MODE_CTRL) {
+        return; /* IDLE, FAULT, or already stopping */
+    }
+    d->stop_cause = cause;
+    const bool ctrl = (d->mode == MC_DRIVE_MODE_CTRL);
+    const float w0 = mc_abs_f32(d->omega_m_rad_s);
+    bool ok = d->cfg.stop_decel_rad_s2 > 0.0f;
+    if (ok && ctrl) {
+        ok = (d->ctrl->stop != NULL) && (d->ctrl->stop(d->ctrl->ctx, d->cfg.stop_decel_rad_s2) == 0u);
+    }
+    if (ok && !ctrl) {
+        ok = d->hal->encoder != NULL && d->have_count;
+    }
+    if (!ok) {
+        outputs_off(d);
+        d->id_ref_a = 0.0f;
+        d->iq_ref_a = 0.0f;
+        d->mode = MC_DRIVE_MODE_IDLE;
+        return;
+    }
+    d->stop_from_ctrl = ctrl;
+    d->stop_omega_ref_rad_s = d->omega_m_rad_s;
+    d->stop_time_s = 0.0f;
+    d->stop_time_max_s = (2.0f * w0 / d->cfg.stop_decel_rad_s2) + 0.1f;
+    d->mode = MC_DRIVE_MODE_STOPPING;
+}
+
+int mc_drive_stop(mc_drive_t *d)
+{
+    begin_stop(d, MC_DRIVE_STOP_CMD);
+    return 0;
+}
+
+/* Slow-loop part of the controlled stop: warnings start one, standstill
+ * (or its time limit) ends it. */
+static void stop_supervise(mc_drive_t *d, float slow_dt, const mc_hal_adc_temp_t *t, bool t_ok)
+{
+    uint32_t w = 0u;
+    if (d->cfg.temp_warn_c > 0.0f && t_ok &&
+        (t->power_stage_temp_c > d->cfg.temp_warn_c || t->motor_temp_c > d->cfg.temp_warn_c)) {
+        w |= MC_DRIVE_WARN_TEMP;
+    }
+    if (d->cfg.vbus_sag_v > 0.0f && d->tm.vbus_v < d->cfg.vbus_sag_v &&
+        d->mode != MC_DRIVE_MODE_IDLE && d->mode != MC_DRIVE_MODE_FAULT) {
+        w |= MC_DRIVE_WARN_VBUS_SAG;
+    }
+    if (w != 0u) {
+        d->warnings |= w;
+        begin_stop(d, MC_DRIVE_STOP_WARNING);
+    }
+    if (d->mode != MC_DRIVE_MODE_STOPPING) {
+        return;
+    }
+    d->stop_time_s += slow_dt;
+    const bool ramp_done = d->stop_from_ctrl || d->stop_omega_ref_rad_s == 0.0f;
+    if ((ramp_done && mc_abs_f32(d->omega_m_rad_s) <= d->cfg.stop_rest_rad_s) ||
+        d->stop_time_s > d->stop_time_max_s) {
+        outputs_off(d);
+        d->id_ref_a = 0.0f;
+        d->iq_ref_a = 0.0f;
+        d->mode = MC_DRIVE_MODE_IDLE;
+    }
+}
+
 bool mc_drive_fast_step(mc_drive_t *d)
 {
     uint32_t f = 0u;
@@ -390,7 +494,10 @@ bool mc_drive_fast_step(mc_drive_t *d)
             const float meas[3] = {s.ia_a, s.ib_a, ic};
             f |= open_phase_check(d, meas, s.vbus_v);
         }
-    } else if (f == 0u && d->mode == MC_DRIVE_MODE_CTRL) {
+    } else if (f == 0u && d->mode == MC_DRIVE_MODE_STOPPING && !d->stop_from_ctrl) {
+        f |= stop_current_step(d, &s, ic);
+    } else if (f == 0u && (d->mode == MC_DRIVE_MODE_CTRL ||
+                           d->mode == MC_DRIVE_MODE_STOPPING)) {
         const mc_drive_meas_t m = {
             .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .vbus_v = s.vbus_v,
             .have_encoder = have_enc, .theta_m_rad = d->tm.theta_m_rad,
@@ -424,9 +531,15 @@ bool mc_drive_fast_step(mc_drive_t *d)
 void mc_drive_slow_step(mc_drive_t *d)
 {
     const float slow_dt = d->cfg.foc.dt_s * (float)d->cfg.slow_loop_div;
+    mc_hal_adc_temp_t t = {0};
+    bool t_ok = false;
+    if (d->cfg.temp_warn_c > 0.0f && d->cfg.temp_max_c <= 0.0f) {
+        t_ok = mc_hal_adc_read_temp(d->hal->adc, &t) == 0 &&
+               (t.valid_mask & MC_HAL_ADC_TEMP_VALID_ALL) == MC_HAL_ADC_TEMP_VALID_ALL;
+    }
     if (d->cfg.temp_max_c > 0.0f) {
-        mc_hal_adc_temp_t t;
         const int rc = mc_hal_adc_read_temp(d->hal->adc, &t);
+        t_ok = rc == 0 && (t.valid_mask & MC_HAL_ADC_TEMP_VALID_ALL) == MC_HAL_ADC_TEMP_VALID_ALL;
         /* Unreadable or invalid sensors count as too hot: the limit cannot
          * be enforced without them. */
         if (rc != 0 || (t.valid_mask & MC_HAL_ADC_TEMP_VALID_ALL) != MC_HAL_ADC_TEMP_VALID_ALL ||
@@ -446,7 +559,9 @@ void mc_drive_slow_step(mc_drive_t *d)
     } else {
         d->stall_time_acc_s = 0.0f;
     }
-    if (d->mode == MC_DRIVE_MODE_CTRL && d->ctrl->slow != NULL) {
+    stop_supervise(d, slow_dt, &t, t_ok);
+    if ((d->mode == MC_DRIVE_MODE_CTRL ||
+         (d->mode == MC_DRIVE_MODE_STOPPING && d->stop_from_ctrl)) && d->ctrl->slow != NULL) {
         const uint32_t cerr = d->ctrl->slow(d->ctrl->ctx);
         if (cerr != 0u) {
             d->tm.ctrl_err = cerr;
@@ -519,7 +634,7 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
         }
         return 0;
     case MC_DRIVE_MODE_CURRENT:
-        if (d->mode == MC_DRIVE_MODE_FAULT || d->faults != 0u) {
+        if (d->mode == MC_DRIVE_MODE_FAULT || d->faults != 0u || d->warnings != 0u) {
             return -EBUSY;
         }
         if (d->mode == MC_DRIVE_MODE_CURRENT) {
@@ -542,7 +657,7 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
         d->mode = MC_DRIVE_MODE_CURRENT;
         return 0;
     case MC_DRIVE_MODE_CTRL:
-        if (d->mode == MC_DRIVE_MODE_FAULT || d->faults != 0u) {
+        if (d->mode == MC_DRIVE_MODE_FAULT || d->faults != 0u || d->warnings != 0u) {
             return -EBUSY;
         }
         if (d->mode == MC_DRIVE_MODE_CTRL) {
@@ -558,6 +673,8 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
             return -EINVAL;
         }
         return enable_ctrl_bridge(d);
+    case MC_DRIVE_MODE_STOPPING:
+        return mc_drive_stop(d);
     case MC_DRIVE_MODE_FAULT:
     default:
         return -EINVAL;
@@ -596,6 +713,7 @@ int mc_drive_clear_faults(mc_drive_t *d)
         return -EBUSY;
     }
     d->faults = 0u;
+    d->warnings = 0u;
     d->first_fault = 0u;
     d->open_phase_mask = 0u;
     d->id_ref_a = 0.0f;

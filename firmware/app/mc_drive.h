@@ -32,6 +32,23 @@
  *   FAULT    PWM off; entered on any fault; left only by
  *            mc_drive_clear_faults() once the cause is gone.
  *
+ *   STOPPING controlled stop (mc_drive_stop(), a command timeout, a warning):
+ *            decelerate to standstill at stop_decel_rad_s2, then open the
+ *            bridge and go to IDLE. From CURRENT mode the drive ramps a
+ *            speed reference from the measured speed to 0 at the
+ *            deceleration and follows it with a P speed loop of its own
+ *            (iq = stop_kp (omega_ramp - omega) - sign(omega_ramp) stop_iq_ff,
+ *            |iq| <= i_max_a, id = 0; with stop_iq_ff = J decel / kt the
+ *            rotor follows the ramp closely, without it it lags by about
+ *            J decel / (kt stop_kp));
+ *            from CTRL mode the law's stop op decelerates (a law without
+ *            one: the bridge opens at once). Standstill: the ramp at 0 and
+ *            |omega| <= stop_rest_rad_s; the bridge opens anyway after
+ *            2 |omega_0| / decel + 0.1 s. stop_decel_rad_s2 = 0: no
+ *            controlled stop (the bridge opens at once, as IDLE).
+ *            Critical faults (every MC_DRIVE_FAULT_*: over-current, gate
+ *            fault, ...) still open the bridge at once, in STOPPING too.
+ *
  * Fault reaction: the first fault disables the PWM outputs through the HAL
  * (safe torque off) in the same fast step (and, if the PWM driver cannot
  * confirm that, fires the gate kill), sets mode FAULT and records the sticky
@@ -56,7 +73,21 @@ typedef enum {
     MC_DRIVE_MODE_CURRENT = 1,
     MC_DRIVE_MODE_FAULT = 2,
     MC_DRIVE_MODE_CTRL = 3,
+    MC_DRIVE_MODE_STOPPING = 4,
 } mc_drive_mode_t;
+
+/* Warnings (mc_drive_t.warnings): non-critical conditions that bring the
+ * drive to a controlled stop (MC_DRIVE_MODE_STOPPING), then IDLE; CURRENT
+ * and CTRL are refused while one is set (cleared by mc_drive_clear_faults
+ * once the condition is gone). */
+#define MC_DRIVE_WARN_NONE      0u
+#define MC_DRIVE_WARN_TEMP      (1u << 0) /**< power stage or motor above temp_warn_c */
+#define MC_DRIVE_WARN_VBUS_SAG  (1u << 1) /**< DC bus below vbus_sag_v */
+
+/* Why the last controlled stop began (mc_drive_t.stop_cause). */
+#define MC_DRIVE_STOP_NONE      0u
+#define MC_DRIVE_STOP_CMD       1u /**< mc_drive_stop(): a stop command or a command timeout */
+#define MC_DRIVE_STOP_WARNING   2u /**< a warning (MC_DRIVE_WARN_*) */
 
 /* Sticky fault bits (mc_drive_t.faults). */
 #define MC_DRIVE_FAULT_NONE        0u
@@ -171,6 +202,18 @@ typedef struct {
                                      which the phase must conduct [A], <= i_max_a ... */
     float open_phase_time_s;    /**< ... net time without conduction that trips [s],
                                      >= one period; both 0: check off */
+    /* Controlled stop (MODE_STOPPING); 0 disables each. */
+    float stop_decel_rad_s2;    /**< deceleration of a controlled stop [rad/s^2]
+                                     (0: the bridge opens at once) */
+    float stop_rest_rad_s;      /**< |omega_m| at or below which the rotor is at rest [rad/s] */
+    float stop_kp_a_s_rad;      /**< P gain of the CURRENT-mode stop's speed loop [A/(rad/s)] */
+    float stop_iq_ff_a;         /**< q current that decelerates the load at stop_decel
+                                     (J decel / kt) [A]: feed-forward of that loop while
+                                     the ramp runs, against the direction of motion */
+    float temp_warn_c;          /**< over-temperature warning: controlled stop [deg C]
+                                     (below temp_max_c, the trip) */
+    float vbus_sag_v;           /**< bus-sag warning: controlled stop below this [V]
+                                     (above vbus_min_v, the trip) */
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
@@ -212,6 +255,10 @@ typedef struct {
     uint32_t (*fast)(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out);
     uint32_t (*slow)(void *ctx);                                     /**< may be NULL */
     void *ctx;
+    /** Controlled stop (MC_DRIVE_MODE_STOPPING): decelerate to standstill at
+     *  decel_rad_s2 [rad/s^2] and hold; fast() keeps running. NULL: the law
+     *  cannot stop itself and the drive opens the bridge at once. */
+    uint32_t (*stop)(void *ctx, float decel_rad_s2);
 } mc_drive_ctrl_t;
 
 /** What the last fast step saw and did (telemetry snapshot). */
@@ -254,6 +301,12 @@ typedef struct {
     uint32_t open_phase_mask;   /**< phases found open (bit 0 = a), with the fault */
     const mc_drive_ctrl_t *ctrl; /**< attached control law, or NULL */
     mc_drive_telemetry_t tm;
+    uint32_t warnings;          /**< MC_DRIVE_WARN_* (sticky until clear_faults) */
+    uint32_t stop_cause;        /**< MC_DRIVE_STOP_* of the last controlled stop */
+    bool stop_from_ctrl;        /**< STOPPING: the law decelerates (else the drive) */
+    float stop_omega_ref_rad_s; /**< STOPPING from CURRENT: the speed ramp [rad/s] */
+    float stop_time_s;          /**< time in STOPPING [s] */
+    float stop_time_max_s;      /**< STOPPING: open the bridge after this [s] */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns
@@ -283,6 +336,11 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode);
  *  (no fast function, unknown outputs); -ENODEV (the board lacks the bridge
  *  the law drives, or the encoder it needs). On error nothing changes. */
 int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl);
+
+/** Controlled stop (STOPPING, see Modes) from CURRENT or CTRL; IDLE at
+ *  once when stop_decel_rad_s2 is 0 or the law has no stop op. Returns 0
+ *  (also when already stopping or stopped). */
+int mc_drive_stop(mc_drive_t *d);
 
 /** Set the dq current references. Returns 0 or -EINVAL (NaN, inf, or
  *  |ref| > i_max_a); on error the previous references stay. */

@@ -58,6 +58,12 @@ const Key kKeys[] = {
     {"align_time_s", &Gains::align_time_s, "s", "alignment current ramp"},
     {"pi2d_wn_rad_s", &Gains::pi2d_wn_rad_s, "rad/s", "PI2D triple pole"},
     {"pi2d_a_per_s", &Gains::pi2d_a_per_s, "1/s", "PI2D dirty-derivative pole"},
+    {"pos_kp_per_s", &Gains::pos_kp_per_s, "1/s", "position P gain"},
+    {"pos_v_max_rad_s", &Gains::pos_v_max_rad_s, "rad/s", "trajectory cruise speed"},
+    {"pos_a_max_rad_s2", &Gains::pos_a_max_rad_s2, "rad/s^2", "trajectory acceleration"},
+    {"pos_d_max_rad_s2", &Gains::pos_d_max_rad_s2, "rad/s^2", "trajectory deceleration"},
+    {"pos_filter_bw_rad_s", &Gains::pos_filter_bw_rad_s, "rad/s", "input filter bandwidth"},
+    {"stop_decel_rad_s2", &Gains::stop_decel_rad_s2, "rad/s^2", "controlled-stop deceleration"},
 };
 
 Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
@@ -135,6 +141,12 @@ Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
                                  2.0 * g.cur_bw_rad_s * sigma / (3.0 * g.pi2d_wn_rad_s)}),
                        &Gains::pi2d_a_per_s);
   g.pi2d_ok = g.pi2d_a_per_s >= 3.0 * g.pi2d_wn_rad_s;
+  g.pos_kp_per_s = get("pos_kp_per_s", g.speed_wc_rad_s / 6.0, &Gains::pos_kp_per_s);
+  g.pos_v_max_rad_s = get("pos_v_max_rad_s", 0.5 * w_r, &Gains::pos_v_max_rad_s);
+  g.pos_a_max_rad_s2 = get("pos_a_max_rad_s2", g.speed_accel_rad_s2, &Gains::pos_a_max_rad_s2);
+  g.pos_d_max_rad_s2 = get("pos_d_max_rad_s2", g.speed_accel_rad_s2, &Gains::pos_d_max_rad_s2);
+  g.pos_filter_bw_rad_s = get("pos_filter_bw_rad_s", g.pos_kp_per_s, &Gains::pos_filter_bw_rad_s);
+  g.stop_decel_rad_s2 = get("stop_decel_rad_s2", g.speed_accel_rad_s2, &Gains::stop_decel_rad_s2);
   g.pi2d_coupling = sigma * m.pole_pairs * m.flux_wb / (m.lq_h * g.cur_bw_rad_s);
   return g;
 }
@@ -264,6 +276,13 @@ mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
   dc.stall_time_s = 0.0f;
   // Three shunts: sum within 3 % of the sensor range (a few LSB of rounding).
   dc.i_unbalance_max_a = b.current_sensors == 3 ? static_cast<float>(0.03 * b.i_sense_max_a) : 0.0f;
+  // Controlled stop: the speed PI's kp, the feed-forward J decel / kt;
+  // rest below 0.2 % of the rated speed. Warnings off (no thermal model).
+  dc.stop_decel_rad_s2 = static_cast<float>(g.stop_decel_rad_s2);
+  dc.stop_rest_rad_s = static_cast<float>(0.002 * g.speed_rated_eff_rad_s);
+  dc.stop_kp_a_s_rad = static_cast<float>(m.j_kgm2 * g.speed_wc_rad_s / g.kt_nm_a);
+  dc.stop_iq_ff_a = static_cast<float>(std::min(g.i_limit_a, m.j_kgm2 * g.stop_decel_rad_s2 /
+                                                                 g.kt_nm_a));
   return dc;
 }
 
@@ -341,6 +360,34 @@ mc_ctrl_pi2d_cfg_t build_pi2d_cfg(const MotorFiles& f, const Gains& g) {
   return cc;
 }
 
+mc_ctrl_pos_cfg_t build_position_cfg(const MotorFiles& f, const Gains& g) {
+  const MotorSpec& m = f.motor;
+  const mc_drive_cfg_t dc = build_drive_cfg(f, g);
+  mc_ctrl_pos_cfg_t c{};
+  c.foc = dc.foc;
+  c.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
+  c.traj.v_max_rad_s = static_cast<float>(g.pos_v_max_rad_s);
+  c.traj.a_max_rad_s2 = static_cast<float>(g.pos_a_max_rad_s2);
+  c.traj.d_max_rad_s2 = static_cast<float>(g.pos_d_max_rad_s2);
+  c.traj.filter_bw_rad_s = static_cast<float>(g.pos_filter_bw_rad_s);
+  c.traj.dt_s = dc.foc.dt_s;
+  c.pos_kp_per_s = static_cast<float>(g.pos_kp_per_s);
+  // The sensored speed PI's formula (kp = J wc / kt, zero at wc / 4).
+  const double wc = g.speed_wc_rad_s;
+  c.vel_kp_a_s_rad = static_cast<float>(m.j_kgm2 * wc / g.kt_nm_a);
+  c.vel_ki_a_rad = static_cast<float>(c.vel_kp_a_s_rad * wc / 4.0);
+  c.vel_limit_rad_s = static_cast<float>(g.speed_limit_rad_s);
+  c.iq_max_a = static_cast<float>(g.i_limit_a);
+  c.kt_nm_a = static_cast<float>(g.kt_nm_a);
+  c.j_kgm2 = static_cast<float>(m.j_kgm2);
+  c.b_nm_s_rad = static_cast<float>(m.b_nm_s_rad);
+  // Torque lags its reference by the current loop's 1/bw plus the board's
+  // computation delay and half a period (the PWM's zero-order hold).
+  c.ff_lead_s = static_cast<float>(1.0 / g.cur_bw_rad_s + (f.board.delay_periods + 0.5) /
+                                   f.board.pwm_hz);
+  return c;
+}
+
 // ------------------------------------------------------------------ rig
 MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
     : f_(f), g_(g), o_(std::move(o)) {
@@ -411,6 +458,18 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
       }
       break;
     }
+    case Law::kPosition: {
+      const mc_ctrl_pos_cfg_t pc = build_position_cfg(f, g);
+      const uint32_t e = mc_ctrl_pos_init(&pos_, &pc);
+      if (e != 0u) {
+        throw UsageError("the position law refuses this motor's configuration: MC_CTRL_POS "
+                         "bits " + std::to_string(e));
+      }
+      if (mc_drive_attach_ctrl(&drive_, mc_ctrl_pos_ops(&pos_)) != 0) {
+        throw std::runtime_error("drive refused the position plug-in");
+      }
+      break;
+    }
     case Law::kSensorless: {
       const mc_ctrl_sls_cfg_t sc = build_sensorless_cfg(f, g);
       const uint32_t e = mc_ctrl_sls_init(&sls_, &sc);
@@ -440,6 +499,7 @@ void MotorRig::set_speed_ref(double w) {
 }
 
 double MotorRig::omega_ref_rad_s() const {
+  if (o_.law == Law::kPosition) return pos_.tm.omega_ref_rad_s;
   return o_.law == Law::kSensorless ? static_cast<double>(sls_.tm.omega_ref_m_rad_s) : w_ref_;
 }
 
@@ -490,6 +550,10 @@ void MotorRig::dq_refs(double* id, double* iq) const {
     case Law::kPi2d:
       *id = pi2d_.tm.id_ref_a;
       *iq = pi2d_.tm.iq_ref_a;
+      return;
+    case Law::kPosition:
+      *id = 0.0;
+      *iq = pos_.tm.iq_ref_a;
       return;
     case Law::kSensorless:
       *id = sls_.tm.id_ref_a;

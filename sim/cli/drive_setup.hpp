@@ -39,6 +39,16 @@
 //                        rated load cannot turn the rotor 0.2 rad (electrical)
 //                        while the current ramps up, long enough for the
 //                        current loop.
+//   pos_kp_per_s       = speed_wc / 6: position P gain (the position pole
+//                        below the velocity PI's zero at speed_wc / 4, so the
+//                        cascade does not overshoot); the velocity PI of the
+//                        position cascade is the sensored speed PI above.
+//   pos_v_max_rad_s    = 0.5 speed_rated_eff: trapezoid cruise speed.
+//   pos_a_max_rad_s2   = speed_accel_rad_s2 (half the current limit
+//                        accelerates the rotor; the other half is the loop's).
+//   pos_d_max_rad_s2   = speed_accel_rad_s2.
+//   pos_filter_bw_rad_s = pos_kp: input filter of streamed setpoints.
+//   stop_decel_rad_s2  = speed_accel_rad_s2: the drive's controlled stop.
 //   pi2d_wn_rad_s      = min(speed_wc / 3, 0.5 R / L): the PI^2D triple pole;
 //                        the R/L bound keeps the proof's ki (L/R)^2 < eps
 //                        with eps = 2 ki / kp (kp' = kp / 2).
@@ -69,6 +79,7 @@
 #include "scenario.hpp"
 extern "C" {
 #include "mc_ctrl_pi2d.h"
+#include "mc_ctrl_position.h"
 #include "mc_ctrl_sensorless.h"
 #include "mc_drive.h"
 #include "pi/mc_pi.h"
@@ -83,6 +94,8 @@ struct Gains {
   double obs_crit_rad_s = 0, pll_bw_rad_s = 0, sls_wc_rad_s = 0, handover_rad_s = 0;
   double if_current_a = 0, if_accel_rad_s2 = 0, align_time_s = 0;
   double pi2d_wn_rad_s = 0, pi2d_a_per_s = 0;
+  double pos_kp_per_s = 0, pos_v_max_rad_s = 0, pos_a_max_rad_s2 = 0, pos_d_max_rad_s2 = 0;
+  double pos_filter_bw_rad_s = 0, stop_decel_rad_s2 = 0;
   // derived, not settable
   double kt_nm_a = 0, v_max_v = 0;
   bool pi2d_ok = true;  // the PI^2D filter pole could be placed (see above)
@@ -100,7 +113,7 @@ Gains derive_gains(const MotorFiles& f, const Params* p);
 /// Every motor, board and gain value into the summary.
 void record_setup(const MotorFiles& f, const Gains& g, Summary& s);
 
-enum class Law { kCurrent, kSpeedPi, kPi2d, kSensorless };
+enum class Law { kCurrent, kSpeedPi, kPi2d, kSensorless, kPosition };
 
 struct RigOptions {
   Law law = Law::kCurrent;
@@ -124,6 +137,7 @@ class MotorRig {
   mc_drive_t& drive() { return drive_; }
   const mc_ctrl_sls_t& sls() const { return sls_; }
   const mc_ctrl_pi2d_t& pi2d() const { return pi2d_; }
+  mc_ctrl_pos_t& pos() { return pos_; }
   double omega_ref_rad_s() const;
   double period_s() const { return T_; }
   double theta_e_true() const;
@@ -143,6 +157,7 @@ class MotorRig {
   mc_drive_cfg_t dcfg_{};
   mc_ctrl_sls_t sls_{};
   mc_ctrl_pi2d_t pi2d_{};
+  mc_ctrl_pos_t pos_{};
   mc_pi_f32_t spi_{};
   double w_cmd_ = 0, w_ref_ = 0, a_ref_ = 0;
 };
@@ -151,6 +166,7 @@ class MotorRig {
 mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g);
 mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g);
 mc_ctrl_pi2d_cfg_t build_pi2d_cfg(const MotorFiles& f, const Gains& g);
+mc_ctrl_pos_cfg_t build_position_cfg(const MotorFiles& f, const Gains& g);
 hal_host::PmsmBoardConfig build_board_cfg(const MotorFiles& f);
 
 }  // namespace mcsim

@@ -1,0 +1,120 @@
+// position-move through the firmware (mc_ctrl_position on mc_drive) on the
+// D5065 and the paper-002 test motor: a 10-turn trapezoid, a re-plan
+// mid-move and a streamed move through the input filter.
+//
+// Bounds (measured values in sim/cli/README or the commit; 8192 counts/turn):
+//   final error        <= 1 encoder count (the law's own measurement)
+//   reach time         first entry within 1 count: within 2 % of the
+//                      trapezoid's predicted duration
+//   overshoot          <= 32 counts (1/256 turn). Measured 24 (D5065) and
+//                      7 (paper motor): the drive's encoder tracking loop
+//                      (bw 1000 rad/s) answers the step of acceleration at
+//                      the end of the deceleration with a speed transient of
+//                      about d/bw, which the velocity PI turns into torque.
+//   settle time        last entry within 1 count: within 1.4x the predicted
+//                      duration (the same transient decays at the position
+//                      loop's pace)
+//   re-plan            the velocity reference changes by at most max(a, d) T
+//                      per period (continuous; only the acceleration steps)
+#include <gtest/gtest.h>
+
+#include <cctype>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "drive_setup.hpp"
+#include "motor_file.hpp"
+#include "scenario.hpp"
+
+namespace mcsim {
+namespace {
+
+const std::string kDir = MCSIM_MOTORS_DIR;
+
+struct Case {
+  const char* motor;
+  const char* board;
+};
+
+const Case kCases[] = {{"odrive-d5065", "odrive-v36-24v"},
+                       {"paper002-test-motor", "paper002-200v"}};
+
+std::map<std::string, double> run(const Case& c,
+                                  const std::vector<std::pair<std::string, std::string>>& sets) {
+  const MotorFiles f = load_motor_files(kDir + "/" + c.motor + ".toml", kDir + "/" + c.board + ".toml");
+  const Scenario* s = find_scenario("position-move");
+  if (s == nullptr) throw std::logic_error("position-move not registered");
+  const Params p(s->motor_params(f), sets);
+  std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  for (auto& ch : name) {
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  }
+  const std::string dir = ::testing::TempDir() + "/position_sil_" + name;
+  std::filesystem::create_directories(dir);
+  CsvWriter csv(dir + "/position-move.csv");
+  Summary sum;
+  Progress prog(false);
+  RunContext ctx{0.0, p, csv, sum, prog, &f};
+  s->run(ctx);
+  csv.commit();
+  return sum.numbers();
+}
+
+class PositionSil : public ::testing::TestWithParam<Case> {};
+
+TEST_P(PositionSil, TenTurnMoveReachesWithinOneCountOnTime) {
+  const auto r = run(GetParam(), {{"turns", "10"}});
+  EXPECT_EQ(r.at("faults"), 0.0);
+  EXPECT_LE(r.at("final_err_counts"), 1.0);
+  EXPECT_LE(r.at("final_err_true_counts"), 1.0);
+  EXPECT_NEAR(r.at("reach_time_ratio"), 1.0, 0.02);
+  EXPECT_LT(r.at("move_time_ratio"), 1.4);
+  EXPECT_LE(r.at("overshoot_counts"), 32.0);
+  EXPECT_LE(r.at("dv_ref_max_rad_s"), r.at("dv_ref_bound_rad_s") * 1.001);
+}
+
+TEST_P(PositionSil, NegativeShortTriangleMove) {
+  const auto r = run(GetParam(), {{"turns", "-0.25"}});
+  EXPECT_EQ(r.at("faults"), 0.0);
+  EXPECT_LE(r.at("final_err_counts"), 1.0);
+  // A 31 ms triangle on the D5065: the end transient (above) is a
+  // larger part of it; within 10 ms of the prediction (measured 9 ms).
+  EXPECT_LE(r.at("reach_time_s"), r.at("move_time_pred_s") + 0.010);
+  EXPECT_GE(r.at("reach_time_s"), r.at("move_time_pred_s") * 0.98);
+  EXPECT_LE(r.at("overshoot_counts"), 32.0);
+}
+
+// A new target (back to 3 turns) half-way through a 10-turn move: the
+// velocity reference stays continuous, the new target is reached.
+TEST_P(PositionSil, ReplanMidMoveIsSmooth) {
+  const auto r = run(GetParam(), {{"turns", "10"}, {"replan_frac", "0.5"}, {"replan_turns", "3"}});
+  EXPECT_EQ(r.at("faults"), 0.0);
+  EXPECT_LE(r.at("dv_ref_max_rad_s"), r.at("dv_ref_bound_rad_s") * 1.001);
+  EXPECT_LE(r.at("final_err_counts"), 1.0);
+  EXPECT_NEAR(r.at("reach_time_ratio"), 1.0, 0.02);
+  EXPECT_LE(r.at("overshoot_counts"), 32.0);
+}
+
+// Setpoints streamed at 200 Hz through the input filter: the rotor follows
+// the filter's output closely and ends within one count.
+TEST_P(PositionSil, StreamedSetpointsThroughInputFilter) {
+  const auto r = run(GetParam(), {{"turns", "10"}, {"stream", "1"}});
+  EXPECT_EQ(r.at("faults"), 0.0);
+  EXPECT_LE(r.at("final_err_counts"), 1.0);
+  EXPECT_LT(r.at("track_err_max_rad"), 0.01);
+  EXPECT_LE(r.at("overshoot_counts"), 2.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Motors, PositionSil, ::testing::ValuesIn(kCases),
+                         [](const ::testing::TestParamInfo<Case>& i) {
+                           std::string n = i.param.motor;
+                           for (auto& ch : n) {
+                             if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+                           }
+                           return n;
+                         });
+
+}  // namespace
+}  // namespace mcsim

@@ -1,0 +1,83 @@
+// Controlled stop (mc_drive MODE_STOPPING) in the SIL rig: a command-timeout
+// stop (mc_drive_stop, what mc_can_cmd does on a timeout) in speed mode at
+// speed decelerates to standstill at stop_decel_rad_s2 before the bridge
+// opens; in position mode the law's stop op does the same.
+//
+// Bounds: the bridge opens with |omega| <= stop_rest_rad_s + 1 % of the
+// starting speed; the stop takes between 0.95 and 1.2 omega_0 / decel.
+// Measured: position mode 0.9996 (D5065), 0.9955 (paper motor): the
+// trajectory's stop; speed mode 1.157, 1.154: the drive's P loop reaches
+// the rest speed about 1/wc after its ramp ends.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "drive_setup.hpp"
+#include "motor_file.hpp"
+
+namespace mcsim {
+namespace {
+
+const std::string kDir = MCSIM_MOTORS_DIR;
+
+struct StopResult {
+  double t_stop_s, w0, w_at_open, decel, rest;
+  uint32_t faults;
+};
+
+StopResult RunStop(const char* motor, const char* board, Law law) {
+  const MotorFiles f = load_motor_files(kDir + "/" + motor + ".toml", kDir + "/" + board + ".toml");
+  const Gains g = derive_gains(f, nullptr);
+  MotorRig rig(f, g, RigOptions{law, {}});
+  const double w_t = 0.5 * g.speed_rated_eff_rad_s;
+  const double T = rig.period_s();
+  // Run up: speed loop to w_t, or a long position move cruising at pos_v_max.
+  if (law == Law::kPosition) {
+    EXPECT_EQ(0u, mc_ctrl_pos_set_target(&rig.pos(), 1000, 0.0f));
+  } else {
+    rig.set_speed_ref(w_t);
+  }
+  const double t_run = 2.0 * std::max(w_t, g.pos_v_max_rad_s) / g.speed_accel_rad_s2 +
+                       40.0 / g.speed_wc_rad_s;
+  for (long k = 0; k < std::lround(t_run / T); ++k) rig.step();
+  StopResult r{};
+  r.w0 = rig.board().state()(2);
+  r.decel = rig.drive_cfg().stop_decel_rad_s2;
+  r.rest = rig.drive_cfg().stop_rest_rad_s;
+  EXPECT_EQ(0, mc_drive_stop(&rig.drive()));
+  EXPECT_EQ(MC_DRIVE_MODE_STOPPING, rig.drive().mode);
+  const double t0 = rig.board().t_s();
+  while (rig.drive().mode == MC_DRIVE_MODE_STOPPING && rig.board().t_s() < t0 + 5.0) {
+    rig.step();
+  }
+  r.t_stop_s = rig.board().t_s() - t0;
+  r.w_at_open = rig.board().state()(2);
+  r.faults = rig.drive().faults;
+  EXPECT_EQ(MC_DRIVE_MODE_IDLE, rig.drive().mode);
+  return r;
+}
+
+void Check(const StopResult& r) {
+  EXPECT_EQ(0u, r.faults);
+  EXPECT_GT(std::abs(r.w0), 10.0);
+  EXPECT_LE(std::abs(r.w_at_open), r.rest + 0.01 * std::abs(r.w0));
+  const double t_pred = std::abs(r.w0) / r.decel;
+  EXPECT_GE(r.t_stop_s / t_pred, 0.95);
+  EXPECT_LE(r.t_stop_s / t_pred, 1.20) << "t_stop " << r.t_stop_s << " pred " << t_pred;
+  std::printf("stop: w0 %.2f rad/s, decel %.1f rad/s^2, t %.5f s (pred %.5f, ratio %.4f), "
+              "w at bridge off %.4f rad/s\n",
+              r.w0, r.decel, r.t_stop_s, t_pred, r.t_stop_s / t_pred, r.w_at_open);
+}
+
+TEST(StopSil, SpeedModeTimeoutStopD5065) { Check(RunStop("odrive-d5065", "odrive-v36-24v", Law::kSpeedPi)); }
+TEST(StopSil, SpeedModeTimeoutStopPaperMotor) {
+  Check(RunStop("paper002-test-motor", "paper002-200v", Law::kSpeedPi));
+}
+TEST(StopSil, PositionModeStopD5065) { Check(RunStop("odrive-d5065", "odrive-v36-24v", Law::kPosition)); }
+TEST(StopSil, PositionModeStopPaperMotor) {
+  Check(RunStop("paper002-test-motor", "paper002-200v", Law::kPosition));
+}
+
+}  // namespace
+}  // namespace mcsim
