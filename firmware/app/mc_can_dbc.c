@@ -8,7 +8,7 @@
 #include <stddef.h>
 
 static const mc_can_signal_t sig_heartbeat[10] = {
-    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* mode [-] */
+    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 4.0f}, /* mode [-] */
     {8u, 4u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* control_mode [-] */
     {12u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* enabled [-] */
     {13u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* stopping [-] */
