@@ -35,6 +35,22 @@ static uint32_t validate_open_phase(const mc_drive_cfg_t *cfg)
     return MC_DRIVE_CFG_OK;
 }
 
+/* A threshold pair of the bus-power handling: both 0 (off), or
+ * vbus_min < lo < hi <= vbus_max. */
+static uint32_t validate_bus_pair(const mc_drive_cfg_t *cfg, float lo, float hi)
+{
+    if (!mc_isfinite_f32(lo) || !mc_isfinite_f32(hi)) {
+        return MC_DRIVE_CFG_ERR_BUS_POWER;
+    }
+    if (lo == 0.0f && hi == 0.0f) {
+        return MC_DRIVE_CFG_OK;
+    }
+    if (!(lo > cfg->vbus_min_v) || !(hi > lo) || !(hi <= cfg->vbus_max_v)) {
+        return MC_DRIVE_CFG_ERR_BUS_POWER;
+    }
+    return MC_DRIVE_CFG_OK;
+}
+
 static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
                              uint32_t *p_foc_err)
 {
@@ -77,6 +93,8 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
         err |= MC_DRIVE_CFG_ERR_SUPERVISION;
     }
     err |= validate_open_phase(cfg);
+    err |= validate_bus_pair(cfg, cfg->vbus_regen_start_v, cfg->vbus_regen_end_v);
+    err |= validate_bus_pair(cfg, cfg->brake_on_v, cfg->brake_full_v);
     return err;
 }
 
@@ -108,6 +126,7 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
     d->hal = hal;
     d->foc = foc;
     d->mode = MC_DRIVE_MODE_IDLE;
+    d->tm.regen_scale = 1.0f;
     {
         const float bw = cfg->speed_pll_bw_rad_s;
         const float dt = cfg->foc.dt_s;
@@ -289,8 +308,8 @@ static uint32_t open_phase_check(mc_drive_t *d, const float meas_a[3], float vbu
     float c;
     mc_sincos_f32(d->tm.theta_e_rad, &s, &c);
     /* Reference in alpha-beta, then per phase (amplitude-invariant). */
-    const float r_alpha = d->id_ref_a * c - d->iq_ref_a * s;
-    const float r_beta = d->id_ref_a * s + d->iq_ref_a * c;
+    const float r_alpha = d->tm.id_ref_a * c - d->tm.iq_ref_a * s;
+    const float r_beta = d->tm.id_ref_a * s + d->tm.iq_ref_a * c;
     const float h = 0.5f * MC_SQRT3_F32 * r_beta;
     const float ref[3] = {r_alpha, -0.5f * r_alpha + h, -0.5f * r_alpha - h};
     uint32_t f = 0u;
@@ -310,6 +329,34 @@ static uint32_t open_phase_check(mc_drive_t *d, const float meas_a[3], float vbu
         }
     }
     return f;
+}
+
+/* The regenerative-current limit (mc_drive.h): a braking q reference
+ * scaled down as the bus rises from vbus_regen_start_v to _end_v. */
+static float regen_limit(mc_drive_t *d, float iq_ref_a, float vbus_v)
+{
+    float k = 1.0f;
+    const float lo = d->cfg.vbus_regen_start_v;
+    const float hi = d->cfg.vbus_regen_end_v;
+    if (hi > 0.0f && vbus_v > lo && iq_ref_a * d->omega_m_rad_s < 0.0f) {
+        k = (vbus_v >= hi) ? 0.0f : (hi - vbus_v) / (hi - lo);
+    }
+    d->tm.regen_scale = k;
+    return (k < 1.0f) ? k * iq_ref_a : iq_ref_a;
+}
+
+/* Brake chopper duty from the bus voltage (mc_drive.h). */
+static uint32_t brake_step(mc_drive_t *d, float vbus_v)
+{
+    const float lo = d->cfg.brake_on_v;
+    const float hi = d->cfg.brake_full_v;
+    if (d->hal->brake == NULL || !(hi > 0.0f)) {
+        return 0u;
+    }
+    float duty = (vbus_v - lo) / (hi - lo);
+    duty = (duty < 0.0f) ? 0.0f : ((duty > 1.0f) ? 1.0f : duty);
+    d->tm.brake_duty = duty;
+    return (mc_hal_brake_set_duty(d->hal->brake, duty) != 0) ? MC_DRIVE_FAULT_PWM : 0u;
 }
 
 /* One step of the plugged law: its duties go to the bridge it drives. */
@@ -342,6 +389,9 @@ bool mc_drive_fast_step(mc_drive_t *d)
         d->tm.ib_a = s.ib_a;
         d->tm.ic_a = ic;
         d->tm.vbus_v = s.vbus_v;
+        if (mc_isfinite_f32(s.vbus_v)) {
+            f |= brake_step(d, s.vbus_v);
+        }
     }
 
     mc_hal_encoder_sample_t enc = {0u, 0u, 0u, 0u};
@@ -362,12 +412,15 @@ bool mc_drive_fast_step(mc_drive_t *d)
         }
     }
 
+    d->tm.id_ref_a = d->id_ref_a;
+    d->tm.iq_ref_a = d->iq_ref_a;
     if (f == 0u && d->mode == MC_DRIVE_MODE_CURRENT) {
+        d->tm.iq_ref_a = regen_limit(d, d->iq_ref_a, s.vbus_v);
         mc_foc_f32_in_t in = {
             .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .three_phase = false,
             .theta_e_rad = d->tm.theta_e_rad,
             .omega_e_rad_s = d->omega_m_rad_s * (float)d->cfg.pole_pairs,
-            .vbus_v = s.vbus_v, .id_ref_a = d->id_ref_a, .iq_ref_a = d->iq_ref_a,
+            .vbus_v = s.vbus_v, .id_ref_a = d->tm.id_ref_a, .iq_ref_a = d->tm.iq_ref_a,
         };
         const uint32_t ferr = mc_foc_f32_step(&d->foc, &in, &d->tm.foc);
         if (ferr != MC_FOC_ERR_NONE) {
@@ -390,8 +443,6 @@ bool mc_drive_fast_step(mc_drive_t *d)
         };
         f |= run_ctrl(d, &m);
     }
-    d->tm.id_ref_a = d->id_ref_a;
-    d->tm.iq_ref_a = d->iq_ref_a;
     /* Control deadline: the new duties must be written within one period of
      * the ADC trigger, or the bridge runs on stale ones. */
     if (arc == 0 && d->deadline_ticks != 0u && d->mode != MC_DRIVE_MODE_IDLE) {

@@ -108,6 +108,9 @@ typedef enum {
                                                     them 0, i_min above i_max_a, or the
                                                     time shorter than one period or
                                                     longer than 2^24 periods */
+#define MC_DRIVE_CFG_ERR_BUS_POWER (1u << 12) /**< regen limit or brake chopper thresholds:
+                                                   not finite, only one of a pair 0, or not
+                                                   vbus_min_v < start < end <= vbus_max_v */
 
 /*
  * Open-phase check (CURRENT mode, fast step; MC_DRIVE_FAULT_OPEN_PHASE).
@@ -144,6 +147,29 @@ typedef enum {
 #define MC_DRIVE_OPEN_PHASE_CONDUCTION_RATIO 0.25f
 #define MC_DRIVE_OPEN_PHASE_VSAT_FRAC        0.99f
 
+/*
+ * Regenerative braking (CURRENT mode, fast step). While the q-current
+ * reference brakes the rotor (iq_ref and the measured speed of opposite
+ * signs: the machine generates and the bridge pushes current into the bus),
+ * the drive scales it by
+ *   k = clamp((vbus_regen_end_v - vbus) / (vbus_regen_end_v - vbus_regen_start_v), 0, 1)
+ * so the bus settles where the braking power equals what the bus can take
+ * (source sinking, brake resistor, losses) instead of rising to the
+ * over-voltage trip. A supply that cannot sink current and no brake
+ * resistor leave only the motor's and the bridge's losses: the rotor then
+ * stops more slowly than the reference asks (the outer loop sees the
+ * scaled reference in tm.iq_ref_a and tm.regen_scale and should track it).
+ * Motoring currents are never scaled. Plugged laws (CTRL) own their
+ * references and are not limited here.
+ *
+ * Brake chopper (every fast step, any mode, when the board has
+ * mc_hal_t.brake and the thresholds are set): duty
+ *   clamp((vbus - brake_on_v) / (brake_full_v - brake_on_v), 0, 1),
+ * a proportional bus-voltage regulator; put brake_full_v below
+ * vbus_regen_start_v so the resistor takes the braking energy before the
+ * current is cut.
+ */
+
 /** Drive configuration (copied at init). */
 typedef struct {
     mc_foc_f32_cfg_t foc;       /**< current loop; foc.dt_s is the PWM period [s] */
@@ -171,6 +197,13 @@ typedef struct {
                                      which the phase must conduct [A], <= i_max_a ... */
     float open_phase_time_s;    /**< ... net time without conduction that trips [s],
                                      >= one period; both 0: check off */
+    /* Bus-voltage handling while braking (see "Regenerative braking" above
+     * mc_drive_cfg_t); each pair both 0: off. */
+    float vbus_regen_start_v;   /**< regen current limit: full regenerative q current
+                                     below this bus voltage [V] ... */
+    float vbus_regen_end_v;     /**< ... none at and above this one [V], <= vbus_max_v */
+    float brake_on_v;           /**< brake chopper: duty 0 at and below this [V] ... */
+    float brake_full_v;         /**< ... duty 1 at and above this one [V], <= vbus_max_v */
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
@@ -224,6 +257,8 @@ typedef struct {
     mc_foc_f32_out_t foc;       /**< currents, voltages and duties of the FOC step */
     mc_drive_out_t ctrl_out;    /**< last output of the plugged control law */
     uint32_t ctrl_err;          /**< last non-zero error code of the control law */
+    float regen_scale;          /**< factor applied to a braking iq reference, [0, 1] */
+    float brake_duty;           /**< brake chopper duty written, [0, 1] */
 } mc_drive_telemetry_t;
 
 /** The drive instance (statically allocated by the caller). */

@@ -78,6 +78,12 @@ class TableReader {
     const toml::node* n = maybe(key);
     return n == nullptr ? dflt : integer(n, key, lo, hi);
   }
+  bool boolean_or(const std::string& key, bool dflt) {
+    const toml::node* n = maybe(key);
+    if (n == nullptr) return dflt;
+    if (!n->is_boolean()) fail(file_, line_of(*n), "'" + key + "' must be true or false");
+    return n->value<bool>().value_or(dflt);
+  }
   long line(const std::string& key) {
     const toml::node* n = t_.get(key);
     return n ? line_of(*n) : line_of(t_);
@@ -165,6 +171,10 @@ BoardSpec read_board(const std::string& path, const toml::table& t) {
   b.adc_bits = static_cast<int>(r.int_req("adc_bits", 8, 24));
   b.encoder_cpr = r.int_req("encoder_cpr", 0, 1L << 24);
   b.delay_periods = static_cast<int>(r.int_or("delay_periods", 1, 0, 4));
+  b.dc_link_c_f = r.num_or("dc_link_c_f", 0.0, 0.0, 10.0, false, "F");
+  b.source_r_ohm = r.num_or("source_r_ohm", 0.05, 1.0e-4, 1.0e3, false, "ohm");
+  b.source_sink = r.boolean_or("source_sink", false);
+  b.brake_r_ohm = r.num_or("brake_r_ohm", 0.0, 0.0, 1.0e4, false, "ohm");
   r.reject_unknown();
   return b;
 }

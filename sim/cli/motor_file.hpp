@@ -18,6 +18,12 @@
 //          mechanical revolution; 0 = no encoder).
 //          optional: delay_periods (computation delay, default 1),
 //          source (text).
+//          DC link (optional; without dc_link_c_f the bus is stiff at vbus_v):
+//          dc_link_c_f (bus capacitance, F), source_r_ohm (supply internal
+//          resistance, default 0.05), source_sink (bool: the supply can
+//          sink current; default false, a bench supply behind its output
+//          diode), brake_r_ohm (brake resistor on a chopper; 0 = none,
+//          the default). See mcsim::DcLink.
 //
 // Any problem (unreadable or malformed file, a missing, unknown, mistyped
 // or out-of-range key, a missing table) is a UsageError whose text is
@@ -45,6 +51,10 @@ struct BoardSpec {
   int adc_bits = 12;
   long encoder_cpr = 0;
   int delay_periods = 1;
+  double dc_link_c_f = 0;      // 0: stiff bus
+  double source_r_ohm = 0.05;
+  bool source_sink = false;
+  double brake_r_ohm = 0;
 };
 
 /// The files given on the command line, parsed and validated.

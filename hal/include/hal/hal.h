@@ -15,6 +15,7 @@
  *   CAN             "hal/can.h"       mc_hal_can_t
  *   tick counter    "hal/tick.h"      mc_hal_tick_t
  *   fault/gate kill "hal/fault.h"     mc_hal_fault_t
+ *   brake chopper   "hal/brake.h"     mc_hal_brake_t     (optional)
  *
  * Conventions shared by every capability
  * - A handle is `{ const ops *ops; void *ctx; }`. The ops table is const
@@ -53,6 +54,7 @@
 #define MC_HAL_HAL_H
 
 #include "hal/adc.h"
+#include "hal/brake.h"
 #include "hal/can.h"
 #include "hal/encoder.h"
 #include "hal/fault.h"
@@ -78,6 +80,7 @@ typedef struct mc_hal {
     const mc_hal_can_t *can;
     const mc_hal_tick_t *tick;
     const mc_hal_fault_t *fault;
+    const mc_hal_brake_t *brake; /**< brake-resistor chopper; NULL: none */
 } mc_hal_t;
 
 #ifdef __cplusplus
