@@ -95,6 +95,10 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
     err |= validate_open_phase(cfg);
     err |= validate_bus_pair(cfg, cfg->vbus_regen_start_v, cfg->vbus_regen_end_v);
     err |= validate_bus_pair(cfg, cfg->brake_on_v, cfg->brake_full_v);
+    if (!mc_isfinite_f32(cfg->regen_id_a) || cfg->regen_id_a < 0.0f ||
+        cfg->regen_id_a > cfg->i_max_a) {
+        err |= MC_DRIVE_CFG_ERR_BUS_POWER;
+    }
     return err;
 }
 
@@ -333,16 +337,31 @@ static uint32_t open_phase_check(mc_drive_t *d, const float meas_a[3], float vbu
 
 /* The regenerative-current limit (mc_drive.h): a braking q reference
  * scaled down as the bus rises from vbus_regen_start_v to _end_v. */
-static float regen_limit(mc_drive_t *d, float iq_ref_a, float vbus_v)
+static void regen_limit(mc_drive_t *d, float vbus_v, float *p_id_a, float *p_iq_a)
 {
     float k = 1.0f;
     const float lo = d->cfg.vbus_regen_start_v;
     const float hi = d->cfg.vbus_regen_end_v;
-    if (hi > 0.0f && vbus_v > lo && iq_ref_a * d->omega_m_rad_s < 0.0f) {
+    if (hi > 0.0f && vbus_v > lo && *p_iq_a * d->omega_m_rad_s < 0.0f) {
         k = (vbus_v >= hi) ? 0.0f : (hi - vbus_v) / (hi - lo);
     }
     d->tm.regen_scale = k;
-    return (k < 1.0f) ? k * iq_ref_a : iq_ref_a;
+    if (k < 1.0f) {
+        const float iq = k * *p_iq_a;
+        *p_iq_a = iq;
+        if (d->cfg.regen_id_a > 0.0f) {
+            const float room2 = d->cfg.i_max_a * d->cfg.i_max_a - iq * iq;
+            float id = -(1.0f - k) * d->cfg.regen_id_a;
+            if (room2 <= 0.0f) {
+                id = 0.0f;
+            } else if (id * id > room2) {
+                id = -mc_sqrt_f32(room2);
+            }
+            if (id < *p_id_a) {
+                *p_id_a = id;
+            }
+        }
+    }
 }
 
 /* Brake chopper duty from the bus voltage (mc_drive.h). */
@@ -415,7 +434,7 @@ bool mc_drive_fast_step(mc_drive_t *d)
     d->tm.id_ref_a = d->id_ref_a;
     d->tm.iq_ref_a = d->iq_ref_a;
     if (f == 0u && d->mode == MC_DRIVE_MODE_CURRENT) {
-        d->tm.iq_ref_a = regen_limit(d, d->iq_ref_a, s.vbus_v);
+        regen_limit(d, s.vbus_v, &d->tm.id_ref_a, &d->tm.iq_ref_a);
         mc_foc_f32_in_t in = {
             .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .three_phase = false,
             .theta_e_rad = d->tm.theta_e_rad,

@@ -159,6 +159,13 @@ typedef enum {
  * resistor leave only the motor's and the bridge's losses: the rotor then
  * stops more slowly than the reference asks (the outer loop sees the
  * scaled reference in tm.iq_ref_a and tm.regen_scale and should track it).
+ * With regen_id_a > 0 the drive then burns the energy in the windings: it
+ * adds a d current -(1 - k) regen_id_a (bounded so |i_dq| <= i_max_a, and
+ * only when the d reference itself is not more negative), so braking goes
+ * on at the rate the copper losses 3/2 R id^2 allow (a low-R motor on a
+ * supply that cannot sink and no resistor would otherwise coast). A
+ * negative id only weakens the field (no demagnetisation risk while
+ * regen_id_a < flux/Ld).
  * Motoring currents are never scaled. Plugged laws (CTRL) own their
  * references and are not limited here.
  *
@@ -202,6 +209,9 @@ typedef struct {
     float vbus_regen_start_v;   /**< regen current limit: full regenerative q current
                                      below this bus voltage [V] ... */
     float vbus_regen_end_v;     /**< ... none at and above this one [V], <= vbus_max_v */
+    float regen_id_a;           /**< d current injected while the regen limit cuts
+                                     the q current: (1 - k) * this, >= 0, <= i_max_a;
+                                     0: none */
     float brake_on_v;           /**< brake chopper: duty 0 at and below this [V] ... */
     float brake_full_v;         /**< ... duty 1 at and above this one [V], <= vbus_max_v */
 } mc_drive_cfg_t;

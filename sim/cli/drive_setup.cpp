@@ -278,6 +278,9 @@ mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
   dc.brake_full_v = static_cast<float>(1.2 * b.vbus_v);
   dc.vbus_regen_start_v = static_cast<float>(1.25 * b.vbus_v);
   dc.vbus_regen_end_v = static_cast<float>(1.4 * b.vbus_v);
+  // Braking in the windings when the bus is full: up to the current limit,
+  // at most half the current that would cancel the magnet flux.
+  dc.regen_id_a = static_cast<float>(std::min(g.i_limit_a, 0.5 * m.flux_wb / m.ld_h));
   dc.omega_max_rad_s = static_cast<float>(1.5 * m.speed_max_rad_s);
   dc.temp_max_c = 100.0f;
   dc.stall_current_frac = 0.0f;  // stall check off: a locked rotor is a test case here
