@@ -95,6 +95,12 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
     err |= validate_open_phase(cfg);
     err |= validate_bus_pair(cfg, cfg->vbus_regen_start_v, cfg->vbus_regen_end_v);
     err |= validate_bus_pair(cfg, cfg->brake_on_v, cfg->brake_full_v);
+    if (cfg->fw_enable) {
+        mc_fw_f32_t probe;
+        if (mc_fw_f32_init(&probe, &cfg->fw) != MC_FW_ERR_NONE || cfg->fw.dt_s != cfg->foc.dt_s) {
+            err |= MC_DRIVE_CFG_ERR_FW;
+        }
+    }
     if (!mc_isfinite_f32(cfg->regen_id_a) || cfg->regen_id_a < 0.0f ||
         cfg->regen_id_a > cfg->i_max_a) {
         err |= MC_DRIVE_CFG_ERR_BUS_POWER;
@@ -131,6 +137,9 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
     d->foc = foc;
     d->mode = MC_DRIVE_MODE_IDLE;
     d->tm.regen_scale = 1.0f;
+    if (cfg->fw_enable) {
+        (void)mc_fw_f32_init(&d->fw, &cfg->fw);
+    }
     {
         const float bw = cfg->speed_pll_bw_rad_s;
         const float dt = cfg->foc.dt_s;
@@ -364,6 +373,21 @@ static void regen_limit(mc_drive_t *d, float vbus_v, float *p_id_a, float *p_iq_
     }
 }
 
+/* MTPA / field weakening (mc_drive.h): the command iq_ref_a becomes the
+ * kernel's (id, iq); the voltage it weakens against is the last step's. */
+static uint32_t fw_refs(mc_drive_t *d, float vbus_v)
+{
+    const mc_fw_f32_in_t in = {
+        .i_cmd_a = d->iq_ref_a, .vd_v = d->tm.foc.vd_v, .vq_v = d->tm.foc.vq_v, .vbus_v = vbus_v,
+    };
+    if (mc_fw_f32_step(&d->fw, &in, &d->tm.fw) != MC_FW_ERR_NONE) {
+        return MC_DRIVE_FAULT_CONTROL;
+    }
+    d->tm.id_ref_a = (d->id_ref_a < d->tm.fw.id_ref_a) ? d->id_ref_a : d->tm.fw.id_ref_a;
+    d->tm.iq_ref_a = d->tm.fw.iq_ref_a;
+    return 0u;
+}
+
 /* Brake chopper duty from the bus voltage (mc_drive.h). */
 static uint32_t brake_step(mc_drive_t *d, float vbus_v)
 {
@@ -434,6 +458,9 @@ bool mc_drive_fast_step(mc_drive_t *d)
     d->tm.id_ref_a = d->id_ref_a;
     d->tm.iq_ref_a = d->iq_ref_a;
     if (f == 0u && d->mode == MC_DRIVE_MODE_CURRENT) {
+        if (d->cfg.fw_enable) {
+            f |= fw_refs(d, s.vbus_v);
+        }
         regen_limit(d, s.vbus_v, &d->tm.id_ref_a, &d->tm.iq_ref_a);
         mc_foc_f32_in_t in = {
             .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .three_phase = false,
@@ -592,6 +619,11 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
             return -ENODEV;
         }
         mc_foc_f32_reset(&d->foc);
+        if (d->cfg.fw_enable) {
+            (void)mc_fw_f32_reset(&d->fw);
+            d->tm.foc.vd_v = 0.0f; /* the FW loop's first voltage */
+            d->tm.foc.vq_v = 0.0f;
+        }
         d->open_phase_count[0] = d->open_phase_count[1] = d->open_phase_count[2] = 0u;
         /* Zero voltage first, then close the switches. */
         if (mc_hal_pwm3_set_duty(d->hal->pwm3, 0.5f, 0.5f, 0.5f) != 0 ||

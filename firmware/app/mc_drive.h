@@ -45,6 +45,7 @@
 #include <stdint.h>
 
 #include "foc/mc_foc.h"
+#include "fw/mc_fw.h"
 #include "hal/hal.h"
 
 #ifdef __cplusplus
@@ -108,6 +109,8 @@ typedef enum {
                                                     them 0, i_min above i_max_a, or the
                                                     time shorter than one period or
                                                     longer than 2^24 periods */
+#define MC_DRIVE_CFG_ERR_FW        (1u << 13) /**< fw_enable with a cfg.fw mc_fw_f32_init
+                                                   refuses, or fw.dt_s != foc.dt_s */
 #define MC_DRIVE_CFG_ERR_BUS_POWER (1u << 12) /**< regen limit or brake chopper thresholds:
                                                    not finite, only one of a pair 0, or not
                                                    vbus_min_v < start < end <= vbus_max_v */
@@ -214,6 +217,13 @@ typedef struct {
                                      0: none */
     float brake_on_v;           /**< brake chopper: duty 0 at and below this [V] ... */
     float brake_full_v;         /**< ... duty 1 at and above this one [V], <= vbus_max_v */
+    /* MTPA and field weakening (CURRENT mode; kernels/fw/mc_fw.h). With
+     * fw_enable, iq_ref_a is the signed current command: the kernel turns it
+     * into (id, iq) on the MTPA curve, weakened by the voltage loop, inside
+     * the circle fw.i_max_a; the d reference is then min(id_ref_a, kernel's).
+     * fw.dt_s must be foc.dt_s. Off: references as set. */
+    bool fw_enable;
+    mc_fw_f32_cfg_t fw;
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
@@ -269,6 +279,7 @@ typedef struct {
     uint32_t ctrl_err;          /**< last non-zero error code of the control law */
     float regen_scale;          /**< factor applied to a braking iq reference, [0, 1] */
     float brake_duty;           /**< brake chopper duty written, [0, 1] */
+    mc_fw_f32_out_t fw;         /**< last MTPA/FW step (fw_enable) */
 } mc_drive_telemetry_t;
 
 /** The drive instance (statically allocated by the caller). */
@@ -276,6 +287,7 @@ typedef struct {
     mc_drive_cfg_t cfg;
     const mc_hal_t *hal;
     mc_foc_f32_t foc;
+    mc_fw_f32_t fw;             /**< MTPA / field weakening (cfg.fw_enable) */
     mc_drive_mode_t mode;
     float id_ref_a, iq_ref_a;   /**< accepted references [A] */
     float pll_theta_m_rad;      /**< encoder PLL position estimate, [0, 2 pi) */

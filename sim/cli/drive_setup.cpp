@@ -291,6 +291,21 @@ mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
   return dc;
 }
 
+mc_fw_f32_cfg_t build_fw_cfg(const MotorFiles& f, const Gains& g) {
+  const MotorSpec& m = f.motor;
+  mc_fw_f32_cfg_t c{};
+  c.ld_h = static_cast<float>(m.ld_h);
+  c.lq_h = static_cast<float>(m.lq_h);
+  c.flux_wb = static_cast<float>(m.flux_wb);
+  c.i_max_a = static_cast<float>(g.i_limit_a);
+  c.v_margin = 0.9f;
+  c.k_demag = 0.9f;
+  c.ki_fw_a_per_vs =
+      static_cast<float>(g.cur_bw_rad_s / (10.0 * m.pole_pairs * m.speed_max_rad_s * m.ld_h));
+  c.dt_s = static_cast<float>(1.0 / f.board.pwm_hz);
+  return c;
+}
+
 mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g) {
   const MotorSpec& m = f.motor;
   const BoardSpec& b = f.board;
@@ -382,7 +397,16 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
     bc.motor.load.fn_ctx = &o_.load_nm;
   }
   board_ = std::make_unique<hal_host::PmsmBoard>(bc);
+  if ((o_.law == Law::kSensorless || o_.law == Law::kPi2d) &&
+      std::abs(f.motor.ld_h - f.motor.lq_h) > 0.05 * std::max(f.motor.ld_h, f.motor.lq_h)) {
+    throw UsageError(f.motor.file + ": ld_h and lq_h differ by more than 5 %: the sensorless "
+                     "and PI^2D laws assume a non-salient machine (surface magnets)");
+  }
   dcfg_ = build_drive_cfg(f, g);
+  if (o_.fw) {
+    dcfg_.fw_enable = true;
+    dcfg_.fw = build_fw_cfg(f, g);
+  }
   if (o_.law == Law::kSensorless) dcfg_.stall_current_frac = 0.0f;
   const uint32_t derr = mc_drive_init(&drive_, &dcfg_, board_->hal());
   if (derr != MC_DRIVE_CFG_OK) {

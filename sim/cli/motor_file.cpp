@@ -148,10 +148,10 @@ MotorSpec read_motor(const std::string& path, const toml::table& t) {
   m.i_rated_a = r.num_or("i_rated_a", 0.5 * m.i_max_a, 0.0, m.i_max_a, true, "A (at most i_max_a)");
   m.speed_rated_rad_s = r.num_or("speed_rated_rad_s", 0.8 * m.speed_max_rad_s, 0.0,
                                  m.speed_max_rad_s, true, "rad/s (at most speed_max_rad_s)");
-  if (std::abs(m.ld_h - m.lq_h) > 0.05 * std::max(m.ld_h, m.lq_h)) {
-    fail(path, r.line("lq_h"),
-         "ld_h and lq_h differ by more than 5 %: the controllers here assume a non-salient "
-         "machine (surface magnets)");
+  if (m.ld_h > 1.05 * m.lq_h) {
+    fail(path, r.line("ld_h"),
+         "ld_h exceeds lq_h by more than 5 %: only surface (Ld = Lq) and interior "
+         "(Ld < Lq) magnet machines are modelled");
   }
   r.reject_unknown();
   return m;

@@ -12,6 +12,9 @@
 //          optional: i_rated_a (continuous peak phase current; default
 //          i_max_a / 2), speed_rated_rad_s (default 0.8 speed_max_rad_s),
 //          source (text: where the numbers come from).
+//          Ld may be below Lq (interior magnets, salient): the field-weakening
+//          scenario uses MTPA for it; the sensorless and PI^2D laws refuse a
+//          motor whose Ld and Lq differ by more than 5 % (they assume Ld = Lq).
 // [board]  required: name, vbus_v, pwm_hz (one current-loop step per PWM
 //          period), dead_time_s, current_sensors (2 or 3), i_sense_max_a
 //          (current ADC full scale, +-A), adc_bits, encoder_cpr (counts per

@@ -84,6 +84,37 @@ TEST(RegenStopBrake, ResistorTakesTheEnergyAndTheRampHolds) {
   EXPECT_GT(r.at("brake_energy_j"), 0.5 * r.at("kinetic_j"));
 }
 
+// Field weakening on the salient (IPM, Lq/Ld = 2) motor: MTPA torque per
+// ampere within 1 % of the analytic optimum at 25..100 % rated current (and
+// above the id = 0 torque constant), then a speed ramp to 2.5x base speed
+// that holds without fault, the current inside its limit, the d current
+// above the demagnetisation bound.
+TEST(FieldWeakening, SalientMtpaAndRampTo2p5xBase) {
+  const auto r = run("field-weakening", files({"ipm-representative-48v", ""}), {}, "");
+  EXPECT_EQ(r.at("faults"), 0.0);
+  EXPECT_LT(r.at("mtpa_rel_err_max"), 0.01);
+  EXPECT_GT(r.at("mtpa_t_per_a_over_kt_max"), 1.05);
+  EXPECT_NEAR(r.at("target_over_base"), 2.5, 1e-9);
+  EXPECT_NEAR(r.at("omega_final_rad_s"), r.at("target_speed_rad_s"),
+              0.02 * r.at("target_speed_rad_s"));
+  EXPECT_LE(r.at("i_peak_a"), 1.05 * r.at("i_limit_a"));
+  EXPECT_GE(r.at("id_min_a"), r.at("id_demag_bound_a") - 0.05 * r.at("i_limit_a"));
+  // Past the point where the rectifier would conduct on a loss of control.
+  EXPECT_GT(r.at("target_speed_rad_s"), r.at("omega_uncontrolled_gen_rad_s"));
+}
+
+// Non-salient motors: the MTPA d current is zero (what the loop leaves is
+// current-loop noise, below 1 % of rated), the torque per ampere is kt.
+TEST(FieldWeakening, NonSalientUnaffected) {
+  const MotorFiles f = files({"odrive-d5065", "odrive-v36-24v"});
+  const auto r = run("field-weakening", f, {}, "");
+  EXPECT_EQ(r.at("faults"), 0.0);
+  EXPECT_LT(r.at("mtpa_id_abs_max_a"), 0.01 * f.motor.i_rated_a);
+  EXPECT_LT(r.at("mtpa_rel_err_max"), 0.01);
+  EXPECT_NEAR(r.at("omega_final_rad_s"), r.at("target_speed_rad_s"),
+              0.02 * r.at("target_speed_rad_s"));
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Library, RegenStop,
     ::testing::Values(Case{"paper002-test-motor", "paper002-200v"}, Case{"paper002-40kw", ""},
