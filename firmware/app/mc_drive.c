@@ -102,7 +102,7 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
         }
     }
     if (!mc_isfinite_f32(cfg->regen_id_a) || cfg->regen_id_a < 0.0f ||
-        cfg->regen_id_a > cfg->i_max_a) {
+        (cfg->regen_id_a > 0.0f && !(cfg->regen_id_a <= cfg->i_max_a))) {
         err |= MC_DRIVE_CFG_ERR_BUS_POWER;
     }
     return err;
