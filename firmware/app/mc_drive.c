@@ -35,6 +35,22 @@ static uint32_t validate_open_phase(const mc_drive_cfg_t *cfg)
     return MC_DRIVE_CFG_OK;
 }
 
+/* A threshold pair of the bus-power handling: both 0 (off), or
+ * vbus_min < lo < hi <= vbus_max. */
+static uint32_t validate_bus_pair(const mc_drive_cfg_t *cfg, float lo, float hi)
+{
+    if (!mc_isfinite_f32(lo) || !mc_isfinite_f32(hi)) {
+        return MC_DRIVE_CFG_ERR_BUS_POWER;
+    }
+    if (lo == 0.0f && hi == 0.0f) {
+        return MC_DRIVE_CFG_OK;
+    }
+    if (!(lo > cfg->vbus_min_v) || !(hi > lo) || !(hi <= cfg->vbus_max_v)) {
+        return MC_DRIVE_CFG_ERR_BUS_POWER;
+    }
+    return MC_DRIVE_CFG_OK;
+}
+
 static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
                              uint32_t *p_foc_err)
 {
@@ -84,6 +100,18 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
         }
     }
     err |= validate_open_phase(cfg);
+    err |= validate_bus_pair(cfg, cfg->vbus_regen_start_v, cfg->vbus_regen_end_v);
+    err |= validate_bus_pair(cfg, cfg->brake_on_v, cfg->brake_full_v);
+    if (cfg->fw_enable) {
+        mc_fw_f32_t probe;
+        if (mc_fw_f32_init(&probe, &cfg->fw) != MC_FW_ERR_NONE || cfg->fw.dt_s != cfg->foc.dt_s) {
+            err |= MC_DRIVE_CFG_ERR_FW;
+        }
+    }
+    if (!mc_isfinite_f32(cfg->regen_id_a) || cfg->regen_id_a < 0.0f ||
+        (cfg->regen_id_a > 0.0f && !(cfg->regen_id_a <= cfg->i_max_a))) {
+        err |= MC_DRIVE_CFG_ERR_BUS_POWER;
+    }
     return err;
 }
 
@@ -125,6 +153,10 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
     d->hal = hal;
     d->foc = foc;
     d->mode = MC_DRIVE_MODE_IDLE;
+    d->tm.regen_scale = 1.0f;
+    if (cfg->fw_enable) {
+        (void)mc_fw_f32_init(&d->fw, &cfg->fw);
+    }
     {
         const float bw = cfg->speed_pll_bw_rad_s;
         const float dt = cfg->foc.dt_s;
@@ -306,8 +338,8 @@ static uint32_t open_phase_check(mc_drive_t *d, const float meas_a[3], float vbu
     float c;
     mc_sincos_f32(d->tm.theta_e_rad, &s, &c);
     /* Reference in alpha-beta, then per phase (amplitude-invariant). */
-    const float r_alpha = d->id_ref_a * c - d->iq_ref_a * s;
-    const float r_beta = d->id_ref_a * s + d->iq_ref_a * c;
+    const float r_alpha = d->tm.id_ref_a * c - d->tm.iq_ref_a * s;
+    const float r_beta = d->tm.id_ref_a * s + d->tm.iq_ref_a * c;
     const float h = 0.5f * MC_SQRT3_F32 * r_beta;
     const float ref[3] = {r_alpha, -0.5f * r_alpha + h, -0.5f * r_alpha - h};
     uint32_t f = 0u;
@@ -327,6 +359,64 @@ static uint32_t open_phase_check(mc_drive_t *d, const float meas_a[3], float vbu
         }
     }
     return f;
+}
+
+/* The regenerative-current limit (mc_drive.h): a braking q reference
+ * scaled down as the bus rises from vbus_regen_start_v to _end_v. */
+static void regen_limit(mc_drive_t *d, float vbus_v, float *p_id_a, float *p_iq_a)
+{
+    float k = 1.0f;
+    const float lo = d->cfg.vbus_regen_start_v;
+    const float hi = d->cfg.vbus_regen_end_v;
+    if (hi > 0.0f && vbus_v > lo && *p_iq_a * d->omega_m_rad_s < 0.0f) {
+        k = (vbus_v >= hi) ? 0.0f : (hi - vbus_v) / (hi - lo);
+    }
+    d->tm.regen_scale = k;
+    if (k < 1.0f) {
+        const float iq = k * *p_iq_a;
+        *p_iq_a = iq;
+        if (d->cfg.regen_id_a > 0.0f) {
+            const float room2 = d->cfg.i_max_a * d->cfg.i_max_a - iq * iq;
+            float id = -(1.0f - k) * d->cfg.regen_id_a;
+            if (room2 <= 0.0f) {
+                id = 0.0f;
+            } else if (id * id > room2) {
+                id = -mc_sqrt_f32(room2);
+            }
+            if (id < *p_id_a) {
+                *p_id_a = id;
+            }
+        }
+    }
+}
+
+/* MTPA / field weakening (mc_drive.h): the command iq_ref_a becomes the
+ * kernel's (id, iq); the voltage it weakens against is the last step's. */
+static uint32_t fw_refs(mc_drive_t *d, float vbus_v)
+{
+    const mc_fw_f32_in_t in = {
+        .i_cmd_a = d->iq_ref_a, .vd_v = d->tm.foc.vd_v, .vq_v = d->tm.foc.vq_v, .vbus_v = vbus_v,
+    };
+    if (mc_fw_f32_step(&d->fw, &in, &d->tm.fw) != MC_FW_ERR_NONE) {
+        return MC_DRIVE_FAULT_CONTROL;
+    }
+    d->tm.id_ref_a = (d->id_ref_a < d->tm.fw.id_ref_a) ? d->id_ref_a : d->tm.fw.id_ref_a;
+    d->tm.iq_ref_a = d->tm.fw.iq_ref_a;
+    return 0u;
+}
+
+/* Brake chopper duty from the bus voltage (mc_drive.h). */
+static uint32_t brake_step(mc_drive_t *d, float vbus_v)
+{
+    const float lo = d->cfg.brake_on_v;
+    const float hi = d->cfg.brake_full_v;
+    if (d->hal->brake == NULL || !(hi > 0.0f)) {
+        return 0u;
+    }
+    float duty = (vbus_v - lo) / (hi - lo);
+    duty = (duty < 0.0f) ? 0.0f : ((duty > 1.0f) ? 1.0f : duty);
+    d->tm.brake_duty = duty;
+    return (mc_hal_brake_set_duty(d->hal->brake, duty) != 0) ? MC_DRIVE_FAULT_PWM : 0u;
 }
 
 /* One step of the plugged law: its duties go to the bridge it drives. */
@@ -456,6 +546,9 @@ bool mc_drive_fast_step(mc_drive_t *d)
         d->tm.ib_a = s.ib_a;
         d->tm.ic_a = ic;
         d->tm.vbus_v = s.vbus_v;
+        if (mc_isfinite_f32(s.vbus_v)) {
+            f |= brake_step(d, s.vbus_v);
+        }
     }
 
     mc_hal_encoder_sample_t enc = {0u, 0u, 0u, 0u};
@@ -476,12 +569,18 @@ bool mc_drive_fast_step(mc_drive_t *d)
         }
     }
 
+    d->tm.id_ref_a = d->id_ref_a;
+    d->tm.iq_ref_a = d->iq_ref_a;
     if (f == 0u && d->mode == MC_DRIVE_MODE_CURRENT) {
+        if (d->cfg.fw_enable) {
+            f |= fw_refs(d, s.vbus_v);
+        }
+        regen_limit(d, s.vbus_v, &d->tm.id_ref_a, &d->tm.iq_ref_a);
         mc_foc_f32_in_t in = {
             .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .three_phase = false,
             .theta_e_rad = d->tm.theta_e_rad,
             .omega_e_rad_s = d->omega_m_rad_s * (float)d->cfg.pole_pairs,
-            .vbus_v = s.vbus_v, .id_ref_a = d->id_ref_a, .iq_ref_a = d->iq_ref_a,
+            .vbus_v = s.vbus_v, .id_ref_a = d->tm.id_ref_a, .iq_ref_a = d->tm.iq_ref_a,
         };
         const uint32_t ferr = mc_foc_f32_step(&d->foc, &in, &d->tm.foc);
         if (ferr != MC_FOC_ERR_NONE) {
@@ -507,8 +606,6 @@ bool mc_drive_fast_step(mc_drive_t *d)
         };
         f |= run_ctrl(d, &m);
     }
-    d->tm.id_ref_a = d->id_ref_a;
-    d->tm.iq_ref_a = d->iq_ref_a;
     /* Control deadline: the new duties must be written within one period of
      * the ADC trigger, or the bridge runs on stale ones. */
     if (arc == 0 && d->deadline_ticks != 0u && d->mode != MC_DRIVE_MODE_IDLE) {
@@ -647,6 +744,11 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
             return -ENODEV;
         }
         mc_foc_f32_reset(&d->foc);
+        if (d->cfg.fw_enable) {
+            (void)mc_fw_f32_reset(&d->fw);
+            d->tm.foc.vd_v = 0.0f; /* the FW loop's first voltage */
+            d->tm.foc.vq_v = 0.0f;
+        }
         d->open_phase_count[0] = d->open_phase_count[1] = d->open_phase_count[2] = 0u;
         /* Zero voltage first, then close the switches. */
         if (mc_hal_pwm3_set_duty(d->hal->pwm3, 0.5f, 0.5f, 0.5f) != 0 ||

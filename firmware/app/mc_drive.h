@@ -62,6 +62,7 @@
 #include <stdint.h>
 
 #include "foc/mc_foc.h"
+#include "fw/mc_fw.h"
 #include "hal/hal.h"
 
 #ifdef __cplusplus
@@ -139,6 +140,11 @@ typedef enum {
                                                     them 0, i_min above i_max_a, or the
                                                     time shorter than one period or
                                                     longer than 2^24 periods */
+#define MC_DRIVE_CFG_ERR_FW        (1u << 13) /**< fw_enable with a cfg.fw mc_fw_f32_init
+                                                   refuses, or fw.dt_s != foc.dt_s */
+#define MC_DRIVE_CFG_ERR_BUS_POWER (1u << 12) /**< regen limit or brake chopper thresholds:
+                                                   not finite, only one of a pair 0, or not
+                                                   vbus_min_v < start < end <= vbus_max_v */
 
 /*
  * Open-phase check (CURRENT mode, fast step; MC_DRIVE_FAULT_OPEN_PHASE).
@@ -174,6 +180,36 @@ typedef enum {
  */
 #define MC_DRIVE_OPEN_PHASE_CONDUCTION_RATIO 0.25f
 #define MC_DRIVE_OPEN_PHASE_VSAT_FRAC        0.99f
+
+/*
+ * Regenerative braking (CURRENT mode, fast step). While the q-current
+ * reference brakes the rotor (iq_ref and the measured speed of opposite
+ * signs: the machine generates and the bridge pushes current into the bus),
+ * the drive scales it by
+ *   k = clamp((vbus_regen_end_v - vbus) / (vbus_regen_end_v - vbus_regen_start_v), 0, 1)
+ * so the bus settles where the braking power equals what the bus can take
+ * (source sinking, brake resistor, losses) instead of rising to the
+ * over-voltage trip. A supply that cannot sink current and no brake
+ * resistor leave only the motor's and the bridge's losses: the rotor then
+ * stops more slowly than the reference asks (the outer loop sees the
+ * scaled reference in tm.iq_ref_a and tm.regen_scale and should track it).
+ * With regen_id_a > 0 the drive then burns the energy in the windings: it
+ * adds a d current -(1 - k) regen_id_a (bounded so |i_dq| <= i_max_a, and
+ * only when the d reference itself is not more negative), so braking goes
+ * on at the rate the copper losses 3/2 R id^2 allow (a low-R motor on a
+ * supply that cannot sink and no resistor would otherwise coast). A
+ * negative id only weakens the field (no demagnetisation risk while
+ * regen_id_a < flux/Ld).
+ * Motoring currents are never scaled. Plugged laws (CTRL) own their
+ * references and are not limited here.
+ *
+ * Brake chopper (every fast step, any mode, when the board has
+ * mc_hal_t.brake and the thresholds are set): duty
+ *   clamp((vbus - brake_on_v) / (brake_full_v - brake_on_v), 0, 1),
+ * a proportional bus-voltage regulator; put brake_full_v below
+ * vbus_regen_start_v so the resistor takes the braking energy before the
+ * current is cut.
+ */
 
 /** Drive configuration (copied at init). */
 typedef struct {
@@ -214,6 +250,23 @@ typedef struct {
                                      (below temp_max_c, the trip) */
     float vbus_sag_v;           /**< bus-sag warning: controlled stop below this [V]
                                      (above vbus_min_v, the trip) */
+    /* Bus-voltage handling while braking (see "Regenerative braking" above
+     * mc_drive_cfg_t); each pair both 0: off. */
+    float vbus_regen_start_v;   /**< regen current limit: full regenerative q current
+                                     below this bus voltage [V] ... */
+    float vbus_regen_end_v;     /**< ... none at and above this one [V], <= vbus_max_v */
+    float regen_id_a;           /**< d current injected while the regen limit cuts
+                                     the q current: (1 - k) * this, >= 0, <= i_max_a;
+                                     0: none */
+    float brake_on_v;           /**< brake chopper: duty 0 at and below this [V] ... */
+    float brake_full_v;         /**< ... duty 1 at and above this one [V], <= vbus_max_v */
+    /* MTPA and field weakening (CURRENT mode; kernels/fw/mc_fw.h). With
+     * fw_enable, iq_ref_a is the signed current command: the kernel turns it
+     * into (id, iq) on the MTPA curve, weakened by the voltage loop, inside
+     * the circle fw.i_max_a; the d reference is then min(id_ref_a, kernel's).
+     * fw.dt_s must be foc.dt_s. Off: references as set. */
+    bool fw_enable;
+    mc_fw_f32_cfg_t fw;
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
@@ -271,6 +324,9 @@ typedef struct {
     mc_foc_f32_out_t foc;       /**< currents, voltages and duties of the FOC step */
     mc_drive_out_t ctrl_out;    /**< last output of the plugged control law */
     uint32_t ctrl_err;          /**< last non-zero error code of the control law */
+    float regen_scale;          /**< factor applied to a braking iq reference, [0, 1] */
+    float brake_duty;           /**< brake chopper duty written, [0, 1] */
+    mc_fw_f32_out_t fw;         /**< last MTPA/FW step (fw_enable) */
 } mc_drive_telemetry_t;
 
 /** The drive instance (statically allocated by the caller). */
@@ -278,6 +334,7 @@ typedef struct {
     mc_drive_cfg_t cfg;
     const mc_hal_t *hal;
     mc_foc_f32_t foc;
+    mc_fw_f32_t fw;             /**< MTPA / field weakening (cfg.fw_enable) */
     mc_drive_mode_t mode;
     float id_ref_a, iq_ref_a;   /**< accepted references [A] */
     float pll_theta_m_rad;      /**< encoder PLL position estimate, [0, 2 pi) */

@@ -441,6 +441,29 @@ static const mc_hal_fault_ops_t fake_fault_ops = {
     .gate_release = fake_gate_release,
 };
 
+static int fake_brake_set_duty(void *ctx, float duty)
+{
+    mc_hal_fake_t *f = ctx;
+    int rc;
+
+    if (f == NULL) {
+        return -EINVAL;
+    }
+    rc = fake_enter(f, MC_HAL_FAKE_BRAKE_SET_DUTY);
+    if (rc != 0) {
+        return rc;
+    }
+    if (!(duty >= 0.0f && duty <= 1.0f)) {
+        return -EINVAL;
+    }
+    f->brake_duty = duty;
+    return 0;
+}
+
+static const mc_hal_brake_ops_t fake_brake_ops = {
+    .set_duty = fake_brake_set_duty,
+};
+
 /* ---- set-up and test-side controls ------------------------------------- */
 
 int mc_hal_fake_config_default(mc_hal_fake_config_t *p_cfg)
@@ -509,6 +532,9 @@ int mc_hal_fake_init(mc_hal_fake_t *p_fake, const mc_hal_fake_config_t *p_cfg)
     p_fake->board.can = &p_fake->can_dev;
     p_fake->board.tick = &p_fake->tick_dev;
     p_fake->board.fault = &p_fake->fault_dev;
+    p_fake->brake_dev.ops = &fake_brake_ops;
+    p_fake->brake_dev.ctx = p_fake;
+    p_fake->board.brake = &p_fake->brake_dev;
     return 0;
 }
 

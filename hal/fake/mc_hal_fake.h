@@ -63,6 +63,7 @@ typedef enum mc_hal_fake_call {
     MC_HAL_FAKE_TICK_GET_FREQ,
     MC_HAL_FAKE_FAULT_READ,
     MC_HAL_FAKE_FAULT_GATE_RELEASE,
+    MC_HAL_FAKE_BRAKE_SET_DUTY,
     MC_HAL_FAKE_CALL_COUNT /**< number of entries, not a call */
 } mc_hal_fake_call_t;
 
@@ -110,6 +111,9 @@ typedef struct mc_hal_fake {
     mc_hal_fault_status_t fault;
     uint32_t gate_kill_count; /**< gate kills requested (cannot fail) */
 
+    /* brake chopper */
+    float brake_duty; /**< last accepted chopper duty, [0, 1] */
+
     /* instrumentation */
     uint32_t call_count[MC_HAL_FAKE_CALL_COUNT]; /**< calls per op, also
                                                       the failed ones */
@@ -124,6 +128,7 @@ typedef struct mc_hal_fake {
     mc_hal_can_t can_dev;
     mc_hal_tick_t tick_dev;
     mc_hal_fault_t fault_dev;
+    mc_hal_brake_t brake_dev;
     mc_hal_t board; /**< every capability present */
 } mc_hal_fake_t;
 

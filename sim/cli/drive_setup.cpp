@@ -195,6 +195,12 @@ void record_setup(const MotorFiles& f, const Gains& g, Summary& s) {
   s.set("board.adc_bits", b.adc_bits);
   s.set("board.encoder_cpr", static_cast<double>(b.encoder_cpr));
   s.set("board.delay_periods", b.delay_periods);
+  if (b.dc_link_c_f > 0.0) {
+    s.set("board.dc_link_c_f", b.dc_link_c_f);
+    s.set("board.source_r_ohm", b.source_r_ohm);
+    s.set("board.source_sink", b.source_sink ? 1.0 : 0.0);
+    s.set("board.brake_r_ohm", b.brake_r_ohm);
+  }
   for (const auto& k : kKeys) s.set(std::string("gain.") + k.key, g.*(k.field));
   s.set("gain.i_rated_eff_a", g.i_rated_eff_a);
   s.set("gain.torque_rated_nm", g.torque_rated_nm);
@@ -229,6 +235,14 @@ hal_host::PmsmBoardConfig build_board_cfg(const MotorFiles& f) {
   bc.substeps = 4;
   bc.three_shunts = (b.current_sensors == 3);
   bc.delay_periods = b.delay_periods;
+  if (b.dc_link_c_f > 0.0) {
+    bc.dc_link_enabled = true;
+    bc.dc_link.source_v = b.vbus_v;
+    bc.dc_link.source_r_ohm = b.source_r_ohm;
+    bc.dc_link.source_sink = b.source_sink;
+    bc.dc_link.c_f = b.dc_link_c_f;
+    bc.dc_link.brake_r_ohm = b.brake_r_ohm;
+  }
   return bc;
 }
 
@@ -269,6 +283,16 @@ mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
   dc.i_trip_a = static_cast<float>(std::min(1.6 * g.i_limit_a, 0.98 * b.i_sense_max_a));
   dc.vbus_min_v = static_cast<float>(0.5 * b.vbus_v);
   dc.vbus_max_v = static_cast<float>(1.5 * b.vbus_v);
+  // Braking (mc_drive.h): the chopper from 1.1 to 1.2 vbus, then the regen
+  // current limit from 1.25 to 1.4 vbus, below the 1.5 vbus trip. On a
+  // stiff bus neither is ever reached.
+  dc.brake_on_v = static_cast<float>(1.1 * b.vbus_v);
+  dc.brake_full_v = static_cast<float>(1.2 * b.vbus_v);
+  dc.vbus_regen_start_v = static_cast<float>(1.25 * b.vbus_v);
+  dc.vbus_regen_end_v = static_cast<float>(1.4 * b.vbus_v);
+  // Braking in the windings when the bus is full: up to the current limit,
+  // at most half the current that would cancel the magnet flux.
+  dc.regen_id_a = static_cast<float>(std::min(g.i_limit_a, 0.5 * m.flux_wb / m.ld_h));
   dc.omega_max_rad_s = static_cast<float>(1.5 * m.speed_max_rad_s);
   dc.temp_max_c = 100.0f;
   dc.stall_current_frac = 0.0f;  // stall check off: a locked rotor is a test case here
@@ -284,6 +308,21 @@ mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
   dc.stop_iq_ff_a = static_cast<float>(std::min(g.i_limit_a, m.j_kgm2 * g.stop_decel_rad_s2 /
                                                                  g.kt_nm_a));
   return dc;
+}
+
+mc_fw_f32_cfg_t build_fw_cfg(const MotorFiles& f, const Gains& g) {
+  const MotorSpec& m = f.motor;
+  mc_fw_f32_cfg_t c{};
+  c.ld_h = static_cast<float>(m.ld_h);
+  c.lq_h = static_cast<float>(m.lq_h);
+  c.flux_wb = static_cast<float>(m.flux_wb);
+  c.i_max_a = static_cast<float>(g.i_limit_a);
+  c.v_margin = 0.9f;
+  c.k_demag = 0.9f;
+  c.ki_fw_a_per_vs =
+      static_cast<float>(g.cur_bw_rad_s / (10.0 * m.pole_pairs * m.speed_max_rad_s * m.ld_h));
+  c.dt_s = static_cast<float>(1.0 / f.board.pwm_hz);
+  return c;
 }
 
 mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g) {
@@ -405,7 +444,16 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
     bc.motor.load.fn_ctx = &o_.load_nm;
   }
   board_ = std::make_unique<hal_host::PmsmBoard>(bc);
+  if ((o_.law == Law::kSensorless || o_.law == Law::kPi2d) &&
+      std::abs(f.motor.ld_h - f.motor.lq_h) > 0.05 * std::max(f.motor.ld_h, f.motor.lq_h)) {
+    throw UsageError(f.motor.file + ": ld_h and lq_h differ by more than 5 %: the sensorless "
+                     "and PI^2D laws assume a non-salient machine (surface magnets)");
+  }
   dcfg_ = build_drive_cfg(f, g);
+  if (o_.fw) {
+    dcfg_.fw_enable = true;
+    dcfg_.fw = build_fw_cfg(f, g);
+  }
   if (o_.law == Law::kSensorless) dcfg_.stall_current_frac = 0.0f;
   const uint32_t derr = mc_drive_init(&drive_, &dcfg_, board_->hal());
   if (derr != MC_DRIVE_CFG_OK) {
@@ -510,6 +558,11 @@ void MotorRig::step() {
 // Runs after the period's sample, before the interrupt (sil_period's
 // on_sampled hook): the slewed speed reference and the speed loop.
 void MotorRig::set_references() {
+  // The drive cut the last braking reference (regen limit): the speed PI's
+  // anti-windup works against what was applied.
+  if (o_.law == Law::kSpeedPi && drive_.tm.regen_scale < 1.0f) {
+    (void)mc_pi_f32_track(&spi_, drive_.tm.iq_ref_a);
+  }
   if (o_.law == Law::kSpeedPi || o_.law == Law::kPi2d) {
     // Reference slewed at speed_accel_rad_s2 (exact: constant acceleration
     // over the period, then clamp at the target).

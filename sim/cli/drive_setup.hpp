@@ -119,6 +119,9 @@ struct RigOptions {
   Law law = Law::kCurrent;
   // Load torque [N m] opposing positive rotation, a pure function of t.
   std::function<double(double)> load_nm;
+  // MTPA + field weakening in the drive (build_fw_cfg); the speed PI's
+  // output is then the signed current command.
+  bool fw = false;
 };
 
 /// The simulated board + the unmodified drive + the law's plug-in, built
@@ -168,5 +171,11 @@ mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g);
 mc_ctrl_pi2d_cfg_t build_pi2d_cfg(const MotorFiles& f, const Gains& g);
 mc_ctrl_pos_cfg_t build_position_cfg(const MotorFiles& f, const Gains& g);
 hal_host::PmsmBoardConfig build_board_cfg(const MotorFiles& f);
+/// MTPA / field weakening (kernels/fw/mc_fw.h): v_margin 0.9 (the current
+/// loop limits at 0.95 of the circle), k_demag 0.9, i_max = i_limit, and
+/// ki_fw = cur_bw / (10 p speed_max Ld): the loop d|v|/d id ~ omega_e Ld
+/// closes at a tenth of the current loop's bandwidth at the top speed
+/// (slower below it).
+mc_fw_f32_cfg_t build_fw_cfg(const MotorFiles& f, const Gains& g);
 
 }  // namespace mcsim

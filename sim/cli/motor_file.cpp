@@ -78,6 +78,12 @@ class TableReader {
     const toml::node* n = maybe(key);
     return n == nullptr ? dflt : integer(n, key, lo, hi);
   }
+  bool boolean_or(const std::string& key, bool dflt) {
+    const toml::node* n = maybe(key);
+    if (n == nullptr) return dflt;
+    if (!n->is_boolean()) fail(file_, line_of(*n), "'" + key + "' must be true or false");
+    return n->value<bool>().value_or(dflt);
+  }
   long line(const std::string& key) {
     const toml::node* n = t_.get(key);
     return n ? line_of(*n) : line_of(t_);
@@ -142,10 +148,10 @@ MotorSpec read_motor(const std::string& path, const toml::table& t) {
   m.i_rated_a = r.num_or("i_rated_a", 0.5 * m.i_max_a, 0.0, m.i_max_a, true, "A (at most i_max_a)");
   m.speed_rated_rad_s = r.num_or("speed_rated_rad_s", 0.8 * m.speed_max_rad_s, 0.0,
                                  m.speed_max_rad_s, true, "rad/s (at most speed_max_rad_s)");
-  if (std::abs(m.ld_h - m.lq_h) > 0.05 * std::max(m.ld_h, m.lq_h)) {
-    fail(path, r.line("lq_h"),
-         "ld_h and lq_h differ by more than 5 %: the controllers here assume a non-salient "
-         "machine (surface magnets)");
+  if (m.ld_h > 1.05 * m.lq_h) {
+    fail(path, r.line("ld_h"),
+         "ld_h exceeds lq_h by more than 5 %: only surface (Ld = Lq) and interior "
+         "(Ld < Lq) magnet machines are modelled");
   }
   r.reject_unknown();
   return m;
@@ -165,6 +171,10 @@ BoardSpec read_board(const std::string& path, const toml::table& t) {
   b.adc_bits = static_cast<int>(r.int_req("adc_bits", 8, 24));
   b.encoder_cpr = r.int_req("encoder_cpr", 0, 1L << 24);
   b.delay_periods = static_cast<int>(r.int_or("delay_periods", 1, 0, 4));
+  b.dc_link_c_f = r.num_or("dc_link_c_f", 0.0, 0.0, 10.0, false, "F");
+  b.source_r_ohm = r.num_or("source_r_ohm", 0.05, 1.0e-4, 1.0e3, false, "ohm");
+  b.source_sink = r.boolean_or("source_sink", false);
+  b.brake_r_ohm = r.num_or("brake_r_ohm", 0.0, 0.0, 1.0e4, false, "ohm");
   r.reject_unknown();
   return b;
 }

@@ -12,12 +12,21 @@
 //          optional: i_rated_a (continuous peak phase current; default
 //          i_max_a / 2), speed_rated_rad_s (default 0.8 speed_max_rad_s),
 //          source (text: where the numbers come from).
+//          Ld may be below Lq (interior magnets, salient): the field-weakening
+//          scenario uses MTPA for it; the sensorless and PI^2D laws refuse a
+//          motor whose Ld and Lq differ by more than 5 % (they assume Ld = Lq).
 // [board]  required: name, vbus_v, pwm_hz (one current-loop step per PWM
 //          period), dead_time_s, current_sensors (2 or 3), i_sense_max_a
 //          (current ADC full scale, +-A), adc_bits, encoder_cpr (counts per
 //          mechanical revolution; 0 = no encoder).
 //          optional: delay_periods (computation delay, default 1),
 //          source (text).
+//          DC link (optional; without dc_link_c_f the bus is stiff at vbus_v):
+//          dc_link_c_f (bus capacitance, F), source_r_ohm (supply internal
+//          resistance, default 0.05), source_sink (bool: the supply can
+//          sink current; default false, a bench supply behind its output
+//          diode), brake_r_ohm (brake resistor on a chopper; 0 = none,
+//          the default). See mcsim::DcLink.
 //
 // Any problem (unreadable or malformed file, a missing, unknown, mistyped
 // or out-of-range key, a missing table) is a UsageError whose text is
@@ -45,6 +54,10 @@ struct BoardSpec {
   int adc_bits = 12;
   long encoder_cpr = 0;
   int delay_periods = 1;
+  double dc_link_c_f = 0;      // 0: stiff bus
+  double source_r_ohm = 0.05;
+  bool source_sink = false;
+  double brake_r_ohm = 0;
 };
 
 /// The files given on the command line, parsed and validated.

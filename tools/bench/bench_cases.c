@@ -178,7 +178,7 @@ static const mc_hal_adc_t g_rb_adc = {&k_rb_adc, &g_rb};
 static const mc_hal_pwm3_t g_rb_pwm = {&k_rb_pwm, &g_rb};
 static const mc_hal_encoder_t g_rb_enc = {&k_rb_enc, &g_rb};
 static const mc_hal_tick_t g_rb_tick = {&k_rb_tick, &g_rb};
-static const mc_hal_t g_rb_hal = {&g_rb_adc, &g_rb_pwm, NULL, &g_rb_enc, NULL, &g_rb_tick, NULL};
+static const mc_hal_t g_rb_hal = {&g_rb_adc, &g_rb_pwm, NULL, &g_rb_enc, NULL, &g_rb_tick, NULL, NULL};
 static mc_drive_t g_drive;
 
 /* ---- wrappers ---------------------------------------------------------- */

@@ -40,6 +40,12 @@ PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
   sp.theta_m0_rad = cfg.theta_m0_rad;
   sp.omega_m0_rad_s = cfg.omega_m0_rad_s;
   check_config(stage_.configure(sp), "power stage");
+  if (cfg.dc_link_enabled) {
+    check_config(link_.configure(cfg.dc_link), "dc_link");
+    if (cfg.vbus_v != cfg.dc_link.source_v) {
+      throw std::invalid_argument("vbus_v must equal dc_link.source_v with the DC link on");
+    }
+  }
   encoder_.reset(cfg.theta_m0_rad);
 
   adc_dev_ = {&Binding::kAdc, this};
@@ -54,6 +60,8 @@ PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
   hal_.can = nullptr;
   hal_.tick = &tick_dev_;
   hal_.fault = &fault_dev_;
+  brake_dev_ = {&Binding::kBrake, this};
+  hal_.brake = (cfg.dc_link_enabled && cfg.dc_link.brake_r_ohm > 0.0) ? &brake_dev_ : nullptr;
 }
 
 uint32_t PmsmBoard::ticks_now() const {
@@ -124,7 +132,29 @@ void PmsmBoard::advance() {
   // forces the outputs through the timer's break/MOE path.
   const Eigen::Vector3d duty = delay_.push(duty_cmd_);
   const bool enabled = pwm_enabled_ && !fault_line_.killed;
+  if (!cfg_.dc_link_enabled) {
+    check_config(stage_.advance(duty, enabled), "integrator");
+    return;
+  }
+  // DC link: the power into the motor over the period (trapezoid of the
+  // currents at its ends, the alpha-beta voltage held), drawn from the bus
+  // as i_inv = P / vbus; the bus voltage after the period is in force for
+  // the next one (and is what the ADC samples).
+  const Eigen::Vector2d i0 = mcsim::PmsmRotorFrame::i_alpha_beta_a(stage_.rotor_frame_state());
   check_config(stage_.advance(duty, enabled), "integrator");
+  const Eigen::Vector2d i1 = mcsim::PmsmRotorFrame::i_alpha_beta_a(stage_.rotor_frame_state());
+  const double T = cfg_.inverter.t_pwm_s;
+  const double p_w = 0.75 * stage_.v_alpha_beta_applied().dot(i0 + i1);
+  motor_in_j_ += p_w * T;
+  link_.advance(T, cfg_.substeps, p_w / stage_.vbus_v(), brake_duty_);
+  cfg_.vbus_v = link_.v();
+  stage_.set_vbus_v(link_.v());
+}
+
+int PmsmBoard::brake_set_duty(float duty) noexcept {
+  if (!(duty >= 0.0f && duty <= 1.0f)) return -EINVAL;
+  brake_duty_ = duty;
+  return 0;
 }
 
 int PmsmBoard::adc_read(mc_hal_adc_sample_t* s) noexcept {

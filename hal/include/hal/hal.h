@@ -18,6 +18,7 @@
  *   flash store     "hal/flash.h"     mc_hal_flash_t     (not in mc_hal_t: the
  *                                                        configuration store
  *                                                        takes it directly)
+ *   brake chopper   "hal/brake.h"     mc_hal_brake_t     (optional)
  *
  * Conventions shared by every capability
  * - A handle is `{ const ops *ops; void *ctx; }`. The ops table is const
@@ -56,6 +57,7 @@
 #define MC_HAL_HAL_H
 
 #include "hal/adc.h"
+#include "hal/brake.h"
 #include "hal/can.h"
 #include "hal/encoder.h"
 #include "hal/fault.h"
@@ -82,6 +84,7 @@ typedef struct mc_hal {
     const mc_hal_can_t *can;
     const mc_hal_tick_t *tick;
     const mc_hal_fault_t *fault;
+    const mc_hal_brake_t *brake; /**< brake-resistor chopper; NULL: none */
 } mc_hal_t;
 
 #ifdef __cplusplus

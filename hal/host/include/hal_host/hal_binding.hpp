@@ -74,12 +74,15 @@ struct HalBinding {
   static void fault_kill(void* c) noexcept { b(c)->fault_gate_kill(); }
   static int fault_release(void* c) noexcept { return b(c)->fault_gate_release(); }
 
+  static int brake_set(void* c, float d) noexcept { return b(c)->brake_set_duty(d); }
+
   static inline const mc_hal_adc_ops_t kAdc{&adc_read, &adc_read_temp};
   static inline const mc_hal_pwm3_ops_t kPwm3{&pwm3_set, &pwm_enable, &pwm_disable, &pwm3_state};
   static inline const mc_hal_pwm2_ops_t kPwm2{&pwm2_set, &pwm_enable, &pwm_disable, &pwm2_state};
   static inline const mc_hal_encoder_ops_t kEncoder{&encoder_read};
   static inline const mc_hal_tick_ops_t kTick{&tick_read, &tick_freq};
   static inline const mc_hal_fault_ops_t kFault{&fault_read, &fault_kill, &fault_release};
+  static inline const mc_hal_brake_ops_t kBrake{&brake_set};
 };
 
 }  // namespace hal_host

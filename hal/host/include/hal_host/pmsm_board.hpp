@@ -26,6 +26,7 @@
 #include "hal/hal.h"
 #include "hal_host/hal_binding.hpp"
 #include "hal_host/sim_board.hpp"
+#include "mcsim/dc_link.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/inverter.hpp"
 #include "mcsim/pmsm_ab.hpp"
@@ -39,6 +40,15 @@ struct PmsmBoardConfig {
   mcsim::PmsmParams motor{};
   mcsim::InverterParams inverter{};       // t_pwm_s is the control period
   double vbus_v = 24.0;                   // DC-bus voltage (stiff source)
+  // DC link (mcsim::DcLink): off (the default) = a stiff bus at vbus_v, bit
+  // for bit the behaviour before the link existed. On: the bus voltage is
+  // the capacitor's, charged by the source and by the bridge (the inverter
+  // current from the power into the motor, 3/2 v_ab . i_ab / vbus, averaged
+  // over the period); the board has a brake chopper (mc_hal_t.brake) when
+  // dc_link.brake_r_ohm > 0. dc_link.source_v is the source's open-circuit
+  // voltage (vbus_v is then only the initial value and must equal it).
+  bool dc_link_enabled = false;
+  mcsim::DcLinkParams dc_link{};
   mcsim::CurrentSensorParams current_sensor{};
   mcsim::VbusSensorParams vbus_sensor{};
   mcsim::EncoderParams encoder{};
@@ -83,6 +93,15 @@ class PmsmBoard final : public SimBoard {
   bool pwm_enabled() const { return pwm_enabled_ && !fault_line_.killed; }
   const Eigen::Vector3d& duties_applied() const { return stage_.duties_applied(); }
   const Eigen::Vector2d& v_alpha_beta_applied() const { return stage_.v_alpha_beta_applied(); }
+  // The DC link, nullptr when the bus is stiff (dc_link_enabled false).
+  const mcsim::DcLink* dc_link() const { return cfg_.dc_link_enabled ? &link_ : nullptr; }
+  // Bus voltage in force [V] (the link's, or the stiff vbus_v).
+  double vbus_v() const { return stage_.vbus_v(); }
+  // Energy delivered to the motor terminals since construction [J]
+  // (integral of 3/2 v_ab . i_ab, trapezoidal per period; only counted with
+  // the DC link on) and the brake duty in force.
+  double motor_in_j() const { return motor_in_j_; }
+  double brake_duty() const { return brake_duty_; }
 
   // Faults a test can inject into the board (all off by default).
   struct Injection {
@@ -125,6 +144,7 @@ class PmsmBoard final : public SimBoard {
   int fault_read(mc_hal_fault_status_t* st) noexcept;
   void fault_gate_kill() noexcept;
   int fault_gate_release() noexcept;
+  int brake_set_duty(float duty) noexcept;
 
  private:
   uint32_t ticks_now() const;
@@ -146,6 +166,9 @@ class PmsmBoard final : public SimBoard {
   mc_hal_encoder_sample_t enc_{};
   Injection inj_{};
   double tick_offset_s_ = 0.0;
+  mcsim::DcLink link_;
+  double motor_in_j_ = 0.0;
+  double brake_duty_ = 0.0;
 
   // ops tables bound to this board
   mc_hal_adc_t adc_dev_{};
@@ -153,6 +176,7 @@ class PmsmBoard final : public SimBoard {
   mc_hal_encoder_t enc_dev_{};
   mc_hal_tick_t tick_dev_{};
   mc_hal_fault_t fault_dev_{};
+  mc_hal_brake_t brake_dev_{};
   mc_hal_t hal_{};
 };
 
