@@ -97,7 +97,7 @@ run() { # script
     rm -f "$script.rc"
     # -smp 2 with multi-threaded TCG; nested KVM hangs on these machines.
     timeout "${MC_VM_TIMEOUT:-600}" qemu-system-x86_64 \
-        -accel tcg,thread=multi -smp "${MC_VM_SMP:-2}" -m "${MC_VM_MEM:-1024}" \
+        -accel tcg,thread=multi -cpu max -smp "${MC_VM_SMP:-2}" -m "${MC_VM_MEM:-1024}" \
         -nodefaults -no-user-config -display none -serial stdio -no-reboot \
         -kernel "$dir/vmlinuz" -initrd "$dir/initramfs.cpio.gz" \
         -append "console=ttyS0 quiet loglevel=3 panic=-1 mc_script=$script" \
