@@ -98,8 +98,17 @@ void mc_comm_abort(mc_comm_t *c)
     c->err |= MC_COMM_ERR_ABORTED;
 }
 
-/* Current loop of the tests: kp = L bw, ki = ki_v_per_as. */
-static uint32_t foc_setup(mc_comm_t *c, float r_ohm, float ld_h, float lq_h, bool from_r)
+/* Current loop of the tests: kp = L bw; ki = R bw (from_r) or kp bw / zdiv.
+ * Without R, a PI zero at bw / zdiv keeps the loop stable for any R >= 0
+ * (a pure inductance: phase margin 76 deg at zdiv = 4). zdiv = 40 while
+ * the rotor is positioned: below its swing frequency the loop then acts as
+ * the resistance kp, and the back-EMF of a swinging rotor drives a current
+ * that damps it (1.5 p^2 psi^2 / (R + kp)); a stiff current loop leaves an
+ * undamped rotor (a 0.1 kg m^2 machine rings for seconds). */
+#define ZDIV_STIFF 4.0f
+#define ZDIV_DAMP  40.0f
+static uint32_t foc_setup(mc_comm_t *c, float r_ohm, float ld_h, float lq_h, bool from_r,
+                          float zdiv)
 {
     const float bw = c->cfg.cur_bw_rad_s;
     mc_foc_f32_cfg_t fc = {0};
@@ -109,10 +118,8 @@ static uint32_t foc_setup(mc_comm_t *c, float r_ohm, float ld_h, float lq_h, boo
     fc.flux_wb = 0.0f;
     fc.kp_d_v_per_a = ld_h * bw;
     fc.kp_q_v_per_a = lq_h * bw;
-    /* Without R: the PI zero at bw / 4 keeps the loop stable for any R >= 0
-     * (a pure inductance gives a phase margin of 76 deg at bw). */
-    fc.ki_d_v_per_as = from_r ? r_ohm * bw : 0.25f * fc.kp_d_v_per_a * bw;
-    fc.ki_q_v_per_as = from_r ? r_ohm * bw : 0.25f * fc.kp_q_v_per_a * bw;
+    fc.ki_d_v_per_as = from_r ? r_ohm * bw : fc.kp_d_v_per_a * bw / zdiv;
+    fc.ki_q_v_per_as = from_r ? r_ohm * bw : fc.kp_q_v_per_a * bw / zdiv;
     fc.dt_s = c->cfg.dt_s;
     fc.aw = MC_PI_AW_CLAMP;
     fc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
@@ -387,7 +394,8 @@ static uint32_t step_l_rough(mc_comm_t *c, const float i[3], mc_drive_out_t *out
         enter(c, MC_COMM_STEP_ENCODER, ENC_ALIGN_RAMP);
         c->have_count = false;
         c->count_acc = 0;
-        return foc_setup(c, 0.0f, c->l0_h, c->l0_h, false) | (zero_out(out), 0u);
+        zero_out(out);
+        return foc_setup(c, 0.0f, c->l0_h, c->l0_h, false, ZDIV_DAMP);
     }
     /* First period at half amplitude: the ripple starts centred on 0. */
     const float v = c->sq_sign * c->vh_v * ((c->n == 0u) ? 0.5f : 1.0f);
@@ -473,6 +481,9 @@ static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas
                 c->res.valid |= MC_COMM_HAVE_ENCODER;
                 c->theta0_rad = c->theta_cmd_rad;
                 enter(c, MC_COMM_STEP_RESISTANCE, 0u);
+                if (foc_setup(c, 0.0f, c->l0_h, c->l0_h, false, ZDIV_STIFF) != 0u) {
+                    return MC_COMM_ERR_RANGE;
+                }
                 mc_ident_avg_f32_reset(&c->v_acc);
                 mc_ident_avg_f32_reset(&c->i_acc);
                 break;
@@ -621,7 +632,7 @@ static uint32_t step_inductance(mc_comm_t *c, const float i[3], mc_drive_out_t *
                 mc_ident_line_f32_reset(&c->acc_fit);
                 c->iq_spin_a = 0.5f * c->cfg.i_test_a;
                 c->t_s = 0.0f;
-                return foc_setup(c, c->res.r_ohm, c->res.ld_h, c->res.lq_h, true);
+                return foc_setup(c, c->res.r_ohm, c->res.ld_h, c->res.lq_h, true, ZDIV_STIFF);
             }
         }
         next_sub(c);
