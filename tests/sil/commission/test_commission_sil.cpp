@@ -98,9 +98,12 @@ TEST(CommissionRandom, RandomisedMotorsFixedSeed) {
     m.ld_h = m.r_ohm * tau;
     m.lq_h = m.ld_h * std::uniform_real_distribution<double>(1.0, 1.6)(rng);  // saliency
     m.flux_wb = logu(2e-3, 0.15);
-    m.j_kgm2 = logu(5e-5, 0.1);
-    m.b_nm_s_rad = m.j_kgm2 * logu(0.05, 0.5);
     m.i_rated_a = std::min(300.0, 2.0 / m.r_ohm);
+    // Inertia from the rated acceleration kt i_rated / J, 500 .. 10^4
+    // rad/s^2 as in the library (560 for the 0.3 kW machine on its
+    // dynamometer, 10^4 for the low-inductance outrunner); B / J as there.
+    m.j_kgm2 = 1.5 * m.pole_pairs * m.flux_wb * m.i_rated_a / logu(500.0, 1.0e4);
+    m.b_nm_s_rad = m.j_kgm2 * logu(0.05, 0.5);
     m.i_max_a = 2 * m.i_rated_a;
     m.speed_max_rad_s = 500;
     m.speed_rated_rad_s = 400;
@@ -117,6 +120,7 @@ TEST(CommissionRandom, RandomisedMotorsFixedSeed) {
     s.encoder_direction = (n % 2) ? -1 : 1;
     s.encoder_offset_rad = std::uniform_real_distribution<double>(0, 2 * kPi)(rng);
     s.seed = 100u + static_cast<unsigned>(n);
+    SCOPED_TRACE(m.name + ": R " + std::to_string(m.r_ohm) + " L " + std::to_string(m.ld_h) + "/" + std::to_string(m.lq_h) + " flux " + std::to_string(m.flux_wb) + " p " + std::to_string(m.pole_pairs) + " J " + std::to_string(m.j_kgm2) + " vbus " + std::to_string(b.vbus_v) + " pwm " + std::to_string(b.pwm_hz));
     expect_accurate(f, run_commission(f, s), m.name);
   }
 }
