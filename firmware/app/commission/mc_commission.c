@@ -30,6 +30,11 @@
 #define T_SPIN_BLOCK  0.30f
 #define T_COAST_SKIP  0.02f
 #define T_COAST       0.25f
+#define T_COAST_QUIET 0.01f  /* the coast's current below I_COAST_GATE this long: fit */
+#define T_COAST_SKIP_MAX 0.20f
+#define I_COAST_GATE  0.03f  /* of i_test (about 7 sigma of the library's sensor noise) */
+#define V_SPIN_FRAC   0.8f   /* spin-up ends at this fraction of the voltage limit */
+#define W_E_BW_MAX    1.5f   /* ... or at this electrical speed per current-loop bandwidth */
 
 /* Sub-phases of the encoder step. */
 enum {
@@ -394,6 +399,7 @@ static uint32_t step_l_rough(mc_comm_t *c, const float i[3], mc_drive_out_t *out
         enter(c, MC_COMM_STEP_ENCODER, ENC_ALIGN_RAMP);
         c->have_count = false;
         c->count_acc = 0;
+        mc_ident_avg_f32_reset(&c->v_acc);
         zero_out(out);
         return foc_setup(c, 0.0f, c->l0_h, c->l0_h, false, ZDIV_DAMP);
     }
@@ -405,6 +411,34 @@ static uint32_t step_l_rough(mc_comm_t *c, const float i[3], mc_drive_out_t *out
 }
 
 /* ------------------------------------------------- encoder and poles */
+/* Damping of the positioned rotor. With the soft PI zero the loop acts, at
+ * the rotor's swing frequency, as the resistance kp in series with the
+ * winding: the back-EMF of the swing drives a damping torque
+ * 1.5 p^2 psi^2 / (R + kp) per rad/s. kp = L0 bw can be many times R (a
+ * high-L/R winding at a low PWM rate: L bw / R = 0.08 tau / T), and a
+ * low-flux, many-pole rotor then swings for seconds, which corrupts the
+ * pole-pair count. The voltage that holds i_test (mean vd over the align
+ * hold) bounds R from above (dead time and switch drops add to it):
+ * kp = min(L0 bw, vd / i_test) keeps the series resistance within about
+ * twice the winding's, the PI zero (bw / ZDIV_DAMP) where it was. Bumpless
+ * (mc_pi_f32_set_gains keeps the output). */
+static void damp_loop(mc_comm_t *c)
+{
+    float vd = 0.0f;
+    if (mc_ident_avg_f32_get(&c->v_acc, &vd) != 0u) {
+        return;
+    }
+    mc_ident_avg_f32_reset(&c->v_acc);
+    const float kp_full = c->l0_h * c->cfg.cur_bw_rad_s;
+    const float r_up = vd / c->cfg.i_test_a;
+    if (!(r_up > 0.0f) || !(r_up < kp_full)) {
+        return;
+    }
+    const float ki = r_up * c->cfg.cur_bw_rad_s / ZDIV_DAMP;
+    (void)mc_pi_f32_set_gains(&c->foc.pi_d, r_up, ki);
+    (void)mc_pi_f32_set_gains(&c->foc.pi_q, r_up, ki);
+}
+
 static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas_t *m,
                              mc_drive_out_t *out)
 {
@@ -427,6 +461,11 @@ static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas
         }
         break;
     case ENC_ALIGN_HOLD:
+        if (c->n >= steps_of(c, T_HOLD)) {
+            damp_loop(c);
+            next_sub(c);
+        }
+        break;
     case ENC_PRE_HOLD:
     case ENC_FWD1_HOLD:
     case ENC_BACK_HOLD:
@@ -511,6 +550,9 @@ static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas
     c->theta_cmd_rad = mc_wrap_2pi_f32(c->theta_cmd_rad + w * dt);
     mc_foc_f32_out_t fo;
     const uint32_t e = foc_out(c, i, c->theta_cmd_rad, 0.0f, c->i_cmd_a, 0.0f, out, &fo);
+    if (c->sub == ENC_ALIGN_HOLD) {
+        (void)mc_ident_avg_f32_step(&c->v_acc, fo.vd_v);
+    }
     if (in_const) {
         if (c->sub == ENC_FWD1) {
             (void)mc_ident_avg_f32_step(&c->vq_acc, fo.vq_v);
@@ -673,7 +715,17 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
         }
         /* The back-EMF part of the voltage (the resistive drop removed). */
         const float emf = fo.vq_v - c->res.r_ohm * fo.iq_a;
-        if (mc_abs_f32(emf) >= c->cfg.bemf_frac * c->cfg.v_test_max_v || w_m >= c->cfg.speed_max_m_rad_s ||
+        /* The whole voltage as well: at a high electrical speed the
+         * winding's own omega_e Lq iq (along d) can take the voltage before
+         * the back-EMF reaches its fraction; a loop at its limit no longer
+         * controls the current, and the coast would start from nonsense. */
+        float v_lim = 0.95f * c->vbus_v * MC_INV_SQRT3_F32;
+        if (v_lim > c->cfg.v_test_max_v) {
+            v_lim = c->cfg.v_test_max_v;
+        }
+        if (mc_abs_f32(emf) >= c->cfg.bemf_frac * c->cfg.v_test_max_v ||
+            vmag >= V_SPIN_FRAC * v_lim || (fo.svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u ||
+            w_e >= W_E_BW_MAX * c->cfg.cur_bw_rad_s || w_m >= c->cfg.speed_max_m_rad_s ||
             c->t_s >= T_SPIN_MAX) {
             if (w_m <= 0.0f) {
                 return MC_COMM_ERR_ROTOR_BLOCKED;
@@ -688,11 +740,27 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
             mc_ident_line_f32_reset(&c->acc_fit);
             next_sub(c);
             c->t_s = 0.0f;
+            c->quiet_n = 0u;
+            c->t_fit0_s = -1.0f;
         }
         return 0u;
     }
     if (c->sub == 1u) {
-        if (c->t_s >= T_COAST_SKIP) {
+        /* The fit starts once the current has settled at zero (a loop
+         * whose bandwidth is below the electrical speed rings after the
+         * step of iq; during that the voltage is not the back-EMF), at the
+         * latest T_COAST_SKIP_MAX into the coast. */
+        const float gate = I_COAST_GATE * c->cfg.i_test_a;
+        if (fo.id_a * fo.id_a + fo.iq_a * fo.iq_a < gate * gate) {
+            c->quiet_n++;
+        } else {
+            c->quiet_n = 0u;
+        }
+        if (c->t_fit0_s < 0.0f && c->t_s >= T_COAST_SKIP &&
+            (c->quiet_n >= steps_of(c, T_COAST_QUIET) || c->t_s >= T_COAST_SKIP_MAX)) {
+            c->t_fit0_s = c->t_s;
+        }
+        if (c->t_fit0_s >= 0.0f) {
             /* Zero current: the voltage is the back-EMF alone, omega_e psi
              * along q; its magnitude does not depend on the angle error of
              * the one-period delay. */
@@ -700,7 +768,7 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
             (void)mc_ident_line_f32_step(&c->fit, w_e, y);
             (void)mc_ident_line_f32_step(&c->acc_fit, c->t_s, w_m);
         }
-        if (c->t_s >= T_COAST_SKIP + T_COAST) {
+        if (c->t_fit0_s >= 0.0f && c->t_s >= c->t_fit0_s + T_COAST) {
             float psi = 0.0f;
             if (mc_ident_line_f32_get(&c->fit, false, &psi, NULL) != 0u || !(psi > 0.0f)) {
                 return MC_COMM_ERR_RANGE;

@@ -24,8 +24,11 @@
  *               turn, then one electrical turn forward (direction and pole
  *               pairs from the encoder counts), back and forward again
  *               (the electrical offset averaged over both directions, which
- *               cancels friction and lag). No encoder motion: the voltage
- *               that the rotating field needs tells a turning rotor (dead
+ *               cancels friction and lag). After the align hold kp drops
+ *               to the holding resistance (vd / i_test, an upper bound of
+ *               R): the rotor's swing is then damped by its back-EMF. No
+ *               encoder motion: the voltage that the rotating field needs
+ *               tells a turning rotor (dead
  *               encoder, ENCODER_NO_MOTION) from a blocked one
  *               (ROTOR_BLOCKED).
  *   RESISTANCE  i_test / 2 and i_test along the (aligned) d axis:
@@ -35,9 +38,12 @@
  *               current on one side of the dead band, so the dead time
  *               adds a constant that the ripple does not see.
  *   FLUX        FOC on the identified values: iq = i_test / 2 until the
- *               voltage reaches bemf_frac of the limit (or the speed cap),
+ *               back-EMF reaches bemf_frac of the limit (or the whole
+ *               voltage 0.8 of it, the electrical speed 1.5 current-loop
+ *               bandwidths, the speed cap),
  *               then zero current: the voltage the loop then applies is the
- *               back-EMF alone, psi = |v| / omega_e (least squares). The
+ *               back-EMF alone (fitted once the current has settled at
+ *               zero), psi = |v| / omega_e (least squares). The
  *               spin-up and the coast-down give J and B. A rotor that does
  *               not move: ROTOR_BLOCKED; one that turns backwards:
  *               WRONG_DIRECTION.
@@ -175,6 +181,8 @@ typedef struct {
     float w_acc_mean, a_acc;
     float iq_spin_a;
     float t_s;
+    float t_fit0_s;             /**< coast: when the flux fit began (< 0: not yet) */
+    uint32_t quiet_n;           /**< coast: periods the current has stayed near zero */
     float vbus_v;
     float w_m_rad_s;            /**< own speed estimate from the counts (forward > 0) */
     uint8_t progress_pct;       /**< rough progress of the sequence, 0..100 */
