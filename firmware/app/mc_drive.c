@@ -79,7 +79,8 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
     if (!mc_isfinite_f32(bw) || !(bw > 0.0f) || !(3.0f * bw * cfg->foc.dt_s <= 1.0f)) {
         err |= MC_DRIVE_CFG_ERR_SPEED_PLL;
     }
-    if (!mc_isfinite_f32(cfg->encoder_offset_rad)) {
+    if (!mc_isfinite_f32(cfg->encoder_offset_rad) || !mc_isfinite_f32(cfg->i_offset_a[0]) ||
+        !mc_isfinite_f32(cfg->i_offset_a[1]) || !mc_isfinite_f32(cfg->i_offset_a[2])) {
         err |= MC_DRIVE_CFG_ERR_OFFSET;
     }
     const float sup[6] = {cfg->omega_max_rad_s,    cfg->temp_max_c,   cfg->stall_current_frac,
@@ -233,7 +234,9 @@ static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
 {
     const uint32_t cpr = enc->counts_per_rev;
     /* The HAL promises count < cpr; reduce only if a driver breaks that. */
-    const uint32_t count = (enc->count < cpr) ? enc->count : enc->count % cpr;
+    const uint32_t raw = (enc->count < cpr) ? enc->count : enc->count % cpr;
+    /* A reversed encoder counts down as the rotor turns positive. */
+    const uint32_t count = (d->cfg.encoder_reversed && raw != 0u) ? cpr - raw : raw;
     const float rad_per_count = MC_TWO_PI_F32 / (float)cpr;
     /* Electrical position in integer counts first: exact for any count.
      * 32-bit when the product fits (always for cpr * poles < 2^32), which
@@ -538,6 +541,14 @@ bool mc_drive_fast_step(mc_drive_t *d)
     mc_hal_adc_sample_t s;
     float ic = 0.0f;
     const int arc = mc_hal_adc_read(d->hal->adc, &s);
+    if (arc == 0) {
+        /* Sensor offsets (commissioning measures them) before any check. */
+        s.ia_a -= d->cfg.i_offset_a[0];
+        s.ib_a -= d->cfg.i_offset_a[1];
+        if ((s.valid_mask & MC_HAL_ADC_VALID_IC) != 0u) {
+            s.ic_a -= d->cfg.i_offset_a[2];
+        }
+    }
     if (arc != 0) {
         f |= MC_DRIVE_FAULT_ADC; /* -EAGAIN here means a stale sample */
     } else {

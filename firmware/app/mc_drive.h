@@ -130,7 +130,7 @@ typedef enum {
 #define MC_DRIVE_CFG_ERR_CURRENT   (1u << 5)  /**< i_max_a <= 0, i_trip_a < i_max_a, not finite */
 #define MC_DRIVE_CFG_ERR_VBUS      (1u << 6)  /**< vbus_min_v <= 0, window empty, or not finite */
 #define MC_DRIVE_CFG_ERR_SPEED_PLL (1u << 7)  /**< speed_pll_bw_rad_s <= 0, not finite, or 3 bw dt > 1 */
-#define MC_DRIVE_CFG_ERR_OFFSET    (1u << 8)  /**< encoder_offset_rad not finite */
+#define MC_DRIVE_CFG_ERR_OFFSET    (1u << 8)  /**< encoder_offset_rad or an i_offset_a not finite */
 #define MC_DRIVE_CFG_ERR_SUPERVISION (1u << 9) /**< omega_max, temp_max, a stall
                                                     parameter or i_unbalance_max
                                                     negative or not finite, or
@@ -216,6 +216,12 @@ typedef struct {
     mc_foc_f32_cfg_t foc;       /**< current loop; foc.dt_s is the PWM period [s] */
     uint32_t pole_pairs;        /**< electrical turns per mechanical turn, >= 1 */
     float encoder_offset_rad;   /**< electrical angle of the d axis at encoder count 0 [rad] */
+    bool encoder_reversed;      /**< the encoder counts down when the rotor turns positive
+                                     (commissioning's encoder_direction = -1): the drive
+                                     uses cpr - count */
+    float i_offset_a[3];        /**< current-sensor offsets subtracted from each phase
+                                     reading (a, b, c) before any use [A] (commissioning
+                                     measures them; 0 on a board whose HAL removes them) */
     float speed_pll_bw_rad_s;   /**< bandwidth of the encoder tracking loop that
                                      estimates speed [rad/s] (three poles at
                                      -bw), > 0, with 3 * bw * dt <= 1 */

@@ -429,7 +429,8 @@ mc_ctrl_pos_cfg_t build_position_cfg(const MotorFiles& f, const Gains& g) {
 
 // ------------------------------------------------------------------ rig
 MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
-    : f_(f), g_(g), o_(std::move(o)) {
+    : f_(f), fd_(f), g_(g), o_(std::move(o)) {
+  if (o_.drive_motor != nullptr) fd_.motor = *o_.drive_motor;
   T_ = 1.0 / f.board.pwm_hz;
   if (o_.law != Law::kSensorless && f.board.encoder_cpr == 0) {
     throw UsageError(f.board.file + ": this scenario needs an encoder (encoder_cpr = 0 here); "
@@ -443,17 +444,20 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
     };
     bc.motor.load.fn_ctx = &o_.load_nm;
   }
+  if (o_.board_hook) o_.board_hook(bc);
   board_ = std::make_unique<hal_host::PmsmBoard>(bc);
   if ((o_.law == Law::kSensorless || o_.law == Law::kPi2d) &&
       std::abs(f.motor.ld_h - f.motor.lq_h) > 0.05 * std::max(f.motor.ld_h, f.motor.lq_h)) {
     throw UsageError(f.motor.file + ": ld_h and lq_h differ by more than 5 %: the sensorless "
                      "and PI^2D laws assume a non-salient machine (surface magnets)");
   }
-  dcfg_ = build_drive_cfg(f, g);
+  if (o_.board_built_hook) o_.board_built_hook(*board_);
+  dcfg_ = build_drive_cfg(fd_, g);
   if (o_.fw) {
     dcfg_.fw_enable = true;
-    dcfg_.fw = build_fw_cfg(f, g);
+    dcfg_.fw = build_fw_cfg(fd_, g);
   }
+  if (o_.drive_hook) o_.drive_hook(dcfg_);
   if (o_.law == Law::kSensorless) dcfg_.stall_current_frac = 0.0f;
   const uint32_t derr = mc_drive_init(&drive_, &dcfg_, board_->hal());
   if (derr != MC_DRIVE_CFG_OK) {
@@ -466,7 +470,7 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
     case Law::kSpeedPi: {
       mc_pi_f32_cfg_t pc{};
       const double wc = g.speed_wc_rad_s;
-      pc.kp = static_cast<float>(f.motor.j_kgm2 * wc / g.kt_nm_a);
+      pc.kp = static_cast<float>(fd_.motor.j_kgm2 * wc / g.kt_nm_a);
       pc.ki_per_s = static_cast<float>(pc.kp * wc / 4.0);
       pc.dt_s = static_cast<float>(T_);
       pc.out_min = static_cast<float>(-g.i_limit_a);
@@ -479,7 +483,7 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
       if (!g.pi2d_ok) {
         throw UsageError("PI2D refuses this motor: its current loop (cur_bw " +
                          num(g.cur_bw_rad_s) + " rad/s) is too slow for kt/J = " +
-                         num(g.kt_nm_a / f.motor.j_kgm2) + ": the position filter would have "
+                         num(g.kt_nm_a / fd_.motor.j_kgm2) + ": the position filter would have "
                          "to be slower than the speed loop (use law=pi)");
       }
       if (g.pi2d_coupling > 300.0) {
@@ -489,7 +493,7 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
                          " rad/s > 300 (an empirical bound: the gimbal-class motor "
                          "limit-cycles to over-current above it; use law=pi)");
       }
-      const mc_ctrl_pi2d_cfg_t cc = build_pi2d_cfg(f, g);
+      const mc_ctrl_pi2d_cfg_t cc = build_pi2d_cfg(fd_, g);
       const uint32_t e = mc_ctrl_pi2d_init(&pi2d_, &cc);
       if (e != 0u) {
         mc_pi2d_f32_t probe{};
@@ -519,7 +523,7 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
       break;
     }
     case Law::kSensorless: {
-      const mc_ctrl_sls_cfg_t sc = build_sensorless_cfg(f, g);
+      const mc_ctrl_sls_cfg_t sc = build_sensorless_cfg(fd_, g);
       const uint32_t e = mc_ctrl_sls_init(&sls_, &sc);
       if (e != 0u) {
         throw UsageError("the sensorless law refuses this motor's configuration: MC_CTRL_SLS "
@@ -579,7 +583,7 @@ void MotorRig::set_references() {
       // a lower-priority task sees it one period late).
       const float iq = mc_pi_f32_step_ff(
           &spi_, static_cast<float>(w_ref_ - drive_.tm.omega_m_rad_s),
-          static_cast<float>((f_.motor.j_kgm2 * a_ref_ + f_.motor.b_nm_s_rad * w_ref_) /
+          static_cast<float>((fd_.motor.j_kgm2 * a_ref_ + fd_.motor.b_nm_s_rad * w_ref_) /
                              g_.kt_nm_a));
       if (mc_drive_set_current_ref(&drive_, 0.0f, iq) != 0) {
         throw std::runtime_error("iq reference rejected by the drive");

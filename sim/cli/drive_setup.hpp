@@ -122,6 +122,15 @@ struct RigOptions {
   // MTPA + field weakening in the drive (build_fw_cfg); the speed PI's
   // output is then the signed current command.
   bool fw = false;
+  // Optional: the motor values the drive believes (e.g. identified by
+  // commissioning); the plant stays the files' motor. Unset: the same.
+  const MotorSpec* drive_motor = nullptr;
+  // Optional hooks: the plant's board configuration before it is built
+  // (sensor offsets, encoder), the board once built (injections), and the
+  // drive configuration before init (identified offsets and encoder).
+  std::function<void(hal_host::PmsmBoardConfig&)> board_hook;
+  std::function<void(hal_host::PmsmBoard&)> board_built_hook;
+  std::function<void(mc_drive_cfg_t&)> drive_hook;
 };
 
 /// The simulated board + the unmodified drive + the law's plug-in, built
@@ -152,6 +161,7 @@ class MotorRig {
  private:
   void set_references();
   MotorFiles f_;
+  MotorFiles fd_;  // the drive's view of the motor (RigOptions::drive_motor)
   Gains g_;
   RigOptions o_;
   double T_ = 0;

@@ -156,6 +156,16 @@ std::string Summary::to_json() const {
     os << (first ? "\n  " : ",\n  ") << json_string(kv.first) << ": " << json_number(kv.second);
     first = false;
   }
+  for (const auto& o : obj_) {
+    os << (first ? "\n  " : ",\n  ") << json_string(o.first) << ": {";
+    bool f2 = true;
+    for (const auto& kv : o.second) {
+      os << (f2 ? "" : ", ") << json_string(kv.first) << ": " << json_number(kv.second);
+      f2 = false;
+    }
+    os << "}";
+    first = false;
+  }
   os << "\n}\n";
   return os.str();
 }

@@ -192,7 +192,7 @@ Status EncoderParams::validate() const {
   if (!std::isfinite(index_angle_rad)) {
     return Status::kNotFinite;
   }
-  if (counts_per_rev < 1) {
+  if (counts_per_rev < 1 || (direction != 1 && direction != -1)) {
     return Status::kBadCounts;
   }
   return Status::kOk;
@@ -210,6 +210,7 @@ Status Encoder::configure(const EncoderParams& p) {
 }
 
 void Encoder::reset(double theta_m_rad) {
+  theta_m_rad *= static_cast<double>(p_.direction);
   const double cpr = static_cast<double>(p_.counts_per_rev);
   edge0_ = floor_turns(theta_m_rad * cpr);
   rev_idx_ = floor_turns(theta_m_rad - p_.index_angle_rad);
@@ -219,6 +220,7 @@ void Encoder::reset(double theta_m_rad) {
 double Encoder::step_rad() const { return kTwoPi / static_cast<double>(p_.counts_per_rev); }
 
 EncoderReading Encoder::sample(double theta_m_rad) {
+  theta_m_rad *= static_cast<double>(p_.direction);
   const double cpr = static_cast<double>(p_.counts_per_rev);
   const std::int64_t cpr_i = p_.counts_per_rev;
   EncoderReading r;

@@ -122,6 +122,7 @@ void PmsmBoard::inject(const Injection& inj) {
     throw std::invalid_argument("open_phase must be -1 (none) or 0..2");
   }
   check_config(stage_.set_open_phase(inj.open_phase), "open_phase");
+  stage_.set_disconnected(inj.motor_disconnected);
   inj_ = inj;
 }
 

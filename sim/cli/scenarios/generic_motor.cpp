@@ -144,7 +144,9 @@ void run_current_step(RunContext& ctx) {
   MotorFiles f = *ctx.files;
   const Gains g = derive_gains(f, &ctx.params);
   f.motor.j_kgm2 *= 1.0 + ctx.params.get("j_load_factor");
-  MotorRig rig(f, g, RigOptions{Law::kCurrent, {}});
+  RigOptions ro;
+  ro.law = Law::kCurrent;
+  MotorRig rig(f, g, ro);
   const double T = rig.period_s();
   const double design = std::log(9.0) / g.cur_bw_rad_s;
   // Each step gets 12 design rise times (settled to 0.5 %) plus 2 ms.

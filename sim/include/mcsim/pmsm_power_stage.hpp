@@ -79,7 +79,9 @@ class PmsmPowerStage {
   // switching path, once per SIL period, is inline: it costs no more than
   // the two calls (inverter, integrator) it makes.
   Status advance(const Eigen::Vector3d& duty_abc, bool switching) {
-    if (open_phase_ >= 0 || !switching) return advance_special(duty_abc, switching);
+    if (disconnected_ || open_phase_ >= 0 || !switching) {
+      return advance_special(duty_abc, switching && !disconnected_);
+    }
     open_circuit_ = false;
     duty_applied_ = duty_abc;
     // The inverter uses the phase currents only for the dead-time error.
@@ -97,6 +99,11 @@ class PmsmPowerStage {
   // from the next advance() on. kBadPhase (nothing changed) outside -1..2.
   Status set_open_phase(int phase);
   int open_phase() const { return open_phase_; }
+  // true: no motor on the terminals (all three conductors off): the bridge's
+  // switching reaches no winding; the machine behaves as with the switches
+  // open (no current unless its back-EMF exceeds the bus).
+  void set_disconnected(bool d) { disconnected_ = d; }
+  bool disconnected() const { return disconnected_; }
   // Load torque model (kBadLoad and friends of PmsmParams::validate(),
   // nothing changed, on error).
   Status set_load(const LoadTorque& load);
@@ -157,6 +164,7 @@ class PmsmPowerStage {
   // healed), the next period projects the series current from x_.
   double open_i_a_ = 0.0;
   int open_phase_ = -1;
+  bool disconnected_ = false;
   bool open_fresh_ = true;
   bool open_circuit_ = true;
 };

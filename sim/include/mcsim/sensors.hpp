@@ -12,7 +12,7 @@
 // VbusSensor is unipolar: lsb = full_scale_v / 2^bits, codes in [0, 2^bits - 1].
 //
 // Encoder: incremental, counts_per_rev edges per mechanical turn (after
-// quadrature decoding). The counter value is floor(theta_m * cpr / 2 pi)
+// quadrature decoding). The counter value is floor(dir theta_m * cpr / 2 pi)
 // relative to the angle at reset(); with an index, once the shaft has crossed
 // index_angle_rad (mod 2 pi) the reported count becomes absolute, i.e.
 // floor((theta_m - index_angle_rad) cpr / 2 pi) mod cpr.
@@ -100,7 +100,11 @@ struct EncoderParams {
   std::int32_t counts_per_rev = 4096;  // >= 1
   bool has_index = false;
   double index_angle_rad = 0.0;        // mechanical angle of the index mark
-  // kOk, kNotFinite, kBadCounts.
+  // +1: counts up when the shaft turns positive; -1: mounted (or wired) the
+  // other way, counts down. The offset of an incremental encoder is the
+  // shaft angle at reset() (the board's power-up angle).
+  int direction = 1;
+  // kOk, kNotFinite, kBadCounts (also for a direction other than +-1).
   Status validate() const;
 };
 

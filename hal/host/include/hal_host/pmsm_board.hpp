@@ -116,6 +116,7 @@ class PmsmBoard final : public SimBoard {
     int open_phase = -1;           // 0..2: that phase conductor is broken from
                                    // the next advance() on (mcsim::PmsmPowerStage);
                                    // -1: all three connected
+    bool motor_disconnected = false;  // no motor on the terminals (all three open)
   };
   // Throws std::invalid_argument (and changes nothing) for open_phase outside
   // -1..2.

@@ -1,0 +1,217 @@
+/**
+ * @file mc_commission.h
+ * @brief Commissioning: the drive measures its own motor and sensors.
+ *
+ * A control-law plug-in (mc_drive_ctrl_t, CTRL mode, three-phase bridge,
+ * encoder) that runs the whole sequence from the drive's fast step and
+ * writes only duties; the drive keeps sampling, supervision and the fault
+ * reaction. Nothing about the motor is needed: only the board (period,
+ * dead time, shunts) and the test limits (current, voltage, speed). The
+ * method, its limits and the measured accuracy: commission/README.md.
+ *
+ * Sequence (mc_comm_step_t):
+ *   OFFSETS     bridge on at zero voltage (equal duties: at the sampling
+ *               instant every low side conducts, as low-leg shunts need;
+ *               no current flows in a motor at rest); each current channel
+ *               averaged. An offset above offset_max_a: MC_COMM_ERR_OFFSET.
+ *   L_ROUGH     square-wave voltage (+-v each period) along alpha, then
+ *               beta, its amplitude doubled until the ripple reaches 10 % of
+ *               i_test: a first inductance for the current loop, and the
+ *               connection check (per-phase ripple): nothing conducts ->
+ *               NO_MOTOR; one phase silent -> OPEN_PHASE.
+ *   ALIGN/SWEEP i_test along a commanded electrical angle (current loop
+ *               kp = L bw, ki = kp bw / 4: stable whatever R), a quarter
+ *               turn, then one electrical turn forward (direction and pole
+ *               pairs from the encoder counts), back and forward again
+ *               (the electrical offset averaged over both directions, which
+ *               cancels friction and lag). After the align hold kp drops
+ *               to the holding resistance (vd / i_test, an upper bound of
+ *               R): the rotor's swing is then damped by its back-EMF. No
+ *               encoder motion: the voltage that the rotating field needs
+ *               tells a turning rotor (dead
+ *               encoder, ENCODER_NO_MOTION) from a blocked one
+ *               (ROTOR_BLOCKED).
+ *   RESISTANCE  i_test / 2 and i_test along the (aligned) d axis:
+ *               R = dV / dI (dead-time and switch drops cancel).
+ *   INDUCTANCE  the d-axis DC voltage of i_test held, plus a square wave
+ *               along d (Ld) and along q (Lq): the bias keeps every phase
+ *               current on one side of the dead band, so the dead time
+ *               adds a constant that the ripple does not see.
+ *   FLUX        FOC on the identified values: iq = i_test / 2 until the
+ *               back-EMF reaches bemf_frac of the limit (or the whole
+ *               voltage 0.8 of it, the electrical speed 1.5 current-loop
+ *               bandwidths, the speed cap),
+ *               then zero current: the voltage the loop then applies is the
+ *               back-EMF alone (fitted once the current has settled at
+ *               zero), psi = |v| / omega_e (least squares). The
+ *               spin-up and the coast-down give J and B. A rotor that does
+ *               not move: ROTOR_BLOCKED; one that turns backwards:
+ *               WRONG_DIRECTION.
+ *   DONE        zero current until the application leaves CTRL mode.
+ * A failure returns the error bits from the fast step: the drive faults
+ * (MC_DRIVE_FAULT_CONTROL, tm.ctrl_err = the bits), the bridge is off and
+ * the result stays invalid (nothing to store).
+ */
+#ifndef MC_COMMISSION_H
+#define MC_COMMISSION_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "foc/mc_foc.h"
+#include "ident/mc_ident.h"
+#include "mc_drive.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Error bits (the named reasons a sequence stops). */
+#define MC_COMM_ERR_NONE              0u
+#define MC_COMM_ERR_OFFSET            (1u << 0)  /**< a current-sensor offset implausible */
+#define MC_COMM_ERR_NO_MOTOR          (1u << 1)  /**< no current on any axis */
+#define MC_COMM_ERR_OPEN_PHASE        (1u << 2)  /**< one phase carries no current */
+#define MC_COMM_ERR_ENCODER_NO_MOTION (1u << 3)  /**< the rotor turned, the encoder did not */
+#define MC_COMM_ERR_ROTOR_BLOCKED     (1u << 4)  /**< the rotor did not turn */
+#define MC_COMM_ERR_WRONG_DIRECTION   (1u << 5)  /**< the rotor turned against the torque */
+#define MC_COMM_ERR_ENCODER_BAD       (1u << 6)  /**< counts inconsistent: no integer pole
+                                                      pairs, back and forth disagree */
+#define MC_COMM_ERR_OVERCURRENT       (1u << 7)  /**< a phase above 1.5 i_test */
+#define MC_COMM_ERR_VOLTAGE           (1u << 8)  /**< the test needs more than v_test_max */
+#define MC_COMM_ERR_RANGE             (1u << 9)  /**< an identified value not plausible */
+#define MC_COMM_ERR_MEAS              (1u << 10) /**< no encoder sample or a non-finite one */
+#define MC_COMM_ERR_ABORTED           (1u << 11) /**< mc_comm_abort() */
+
+/* Configuration errors of mc_comm_init. */
+#define MC_COMM_CFG_OK        0u
+#define MC_COMM_CFG_ERR_NULL  (1u << 0)
+#define MC_COMM_CFG_ERR_VALUE (1u << 1) /**< a field <= 0, not finite, or out of range */
+
+typedef enum {
+    MC_COMM_STEP_IDLE = 0,
+    MC_COMM_STEP_OFFSETS = 1,
+    MC_COMM_STEP_L_ROUGH = 2,
+    MC_COMM_STEP_ENCODER = 3,
+    MC_COMM_STEP_RESISTANCE = 4,
+    MC_COMM_STEP_INDUCTANCE = 5,
+    MC_COMM_STEP_FLUX = 6,
+    MC_COMM_STEP_DONE = 7,
+    MC_COMM_STEP_FAILED = 8,
+} mc_comm_step_t;
+
+typedef struct {
+    float dt_s;               /**< PWM period [s], > 0 */
+    float i_test_a;           /**< test current (every step stays below 1.5x) [A], > 0 */
+    float v_test_max_v;       /**< largest voltage vector of any step [V], > 0 */
+    float offset_max_a;       /**< largest plausible current-sensor offset [A], > 0 */
+    float dead_time_s;        /**< bridge dead time [s], >= 0, < dt_s / 4 */
+    float cur_bw_rad_s;       /**< current-loop bandwidth during the tests [rad/s],
+                                   0 < bw dt <= 0.2 */
+    float speed_max_m_rad_s;  /**< cap of the flux spin-up, mechanical [rad/s], > 0 */
+    float bemf_frac;          /**< spin-up ends at this fraction of v_test_max, (0, 1) */
+    uint32_t pole_pairs_max;  /**< largest pole-pair count accepted, 1..64 */
+    bool three_shunts;        /**< ic is measured (else -(ia + ib)) */
+} mc_comm_cfg_t;
+
+/* Result bits (mc_comm_result_t.valid). */
+#define MC_COMM_HAVE_OFFSETS  (1u << 0)
+#define MC_COMM_HAVE_R        (1u << 1)
+#define MC_COMM_HAVE_L        (1u << 2)
+#define MC_COMM_HAVE_ENCODER  (1u << 3)
+#define MC_COMM_HAVE_FLUX     (1u << 4)
+#define MC_COMM_HAVE_MECH     (1u << 5)
+#define MC_COMM_HAVE_ALL      0x3Fu
+
+/**
+ * What commissioning found: one field per parameter of the table (issue 17
+ * names: adc offsets, r_ohm, ld_h, lq_h, flux_wb, pole_pairs,
+ * encoder_offset_rad, encoder_direction; j_kgm2 and b_nm_s_rad besides).
+ * adc_offset_a are relative to the offsets the drive already subtracted
+ * (mc_comm_apply adds them).
+ */
+typedef struct {
+    float adc_offset_a[3];
+    float r_ohm;
+    float ld_h;
+    float lq_h;
+    float flux_wb;
+    uint32_t pole_pairs;
+    float encoder_offset_rad;   /**< electrical angle of the d axis at count 0, [0, 2 pi) */
+    int32_t encoder_direction;  /**< +1: counts up for positive rotation; -1: down */
+    float dead_time_v;          /**< inverter voltage error per phase (dead time, drops) [V] */
+    float j_kgm2;
+    float b_nm_s_rad;
+    uint32_t valid;             /**< MC_COMM_HAVE_* */
+} mc_comm_result_t;
+
+typedef struct {
+    mc_comm_cfg_t cfg;
+    mc_comm_step_t step;
+    uint32_t sub;               /**< phase within the step */
+    uint32_t n;                 /**< periods in the current phase */
+    uint32_t err;               /**< sticky MC_COMM_ERR_* */
+    mc_comm_result_t res;
+    mc_foc_f32_t foc;
+    float l0_h;                 /**< rough inductance (current loop of the tests) */
+    /* square wave */
+    float vh_v;
+    float sq_sign;
+    float prev_i[3];
+    mc_ident_avg_f32_t corr[3];
+    float d_axis[2];            /**< ripple of the alpha and beta tries [A] */
+    float d_phase[2][3];
+    /* encoder */
+    float theta_cmd_rad;
+    float theta0_rad;
+    float i_cmd_a;
+    uint32_t last_count;
+    int32_t count_acc;          /**< unwrapped counts since the sweep began */
+    int32_t count_fwd;
+    int32_t count_back;
+    bool have_count;
+    mc_ident_circ_f32_t off_acc;
+    mc_ident_avg_f32_t vq_acc;
+    /* resistance / inductance */
+    mc_ident_avg_f32_t v_acc, i_acc;
+    float v1_v, i1_a, v2_v, i2_a;
+    float vdc_alpha_v, vdc_beta_v;
+    /* flux and mechanics */
+    mc_ident_line_f32_t fit;
+    mc_ident_line_f32_t acc_fit;
+    float w_acc_mean, a_acc;
+    float iq_spin_a;
+    float t_s;
+    float t_fit0_s;             /**< coast: when the flux fit began (< 0: not yet) */
+    uint32_t quiet_n;           /**< coast: periods the current has stayed near zero */
+    float vbus_v;
+    float w_m_rad_s;            /**< own speed estimate from the counts (forward > 0) */
+    uint8_t progress_pct;       /**< rough progress of the sequence, 0..100 */
+    mc_drive_ctrl_t ops;        /**< the plug-in table (mc_comm_ops) */
+} mc_comm_t;
+
+/** Validate cfg and initialise c (step IDLE, no result). */
+uint32_t mc_comm_init(mc_comm_t *c, const mc_comm_cfg_t *cfg);
+/** Arm the sequence: it starts with the next reset (entering CTRL mode). */
+void mc_comm_restart(mc_comm_t *c);
+/** Stop: the next fast step returns MC_COMM_ERR_ABORTED (bridge off). */
+void mc_comm_abort(mc_comm_t *c);
+/** The plug-in to attach (outputs PWM3, needs the encoder). */
+const mc_drive_ctrl_t *mc_comm_ops(mc_comm_t *c);
+
+static inline bool mc_comm_done(const mc_comm_t *c) { return c->step == MC_COMM_STEP_DONE; }
+
+/**
+ * Check the result and write it into the drive configuration: motor
+ * values into foc (r, ld, lq, flux), current PI gains re-derived with
+ * mc_foc_f32_gains_from_bandwidth at cur_bw_rad_s (the formula of
+ * sim/cli/drive_setup.cpp), pole pairs, encoder offset and direction,
+ * current offsets added. Returns MC_COMM_ERR_RANGE (and changes nothing)
+ * for an incomplete or implausible result.
+ */
+uint32_t mc_comm_apply(const mc_comm_result_t *r, float cur_bw_rad_s, mc_drive_cfg_t *dc);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_COMMISSION_H */
