@@ -78,7 +78,9 @@ void run_regen(RunContext& ctx) {
                                         : t_stop + std::max(20.0 * t_acc, 10.0 * ke_j / p_cu) +
                                               t_set;
   ctx.summary.set("duration_s", dur);
-  MotorRig rig(f, g, RigOptions{Law::kSpeedPi, {}});
+  RigOptions ro;
+  ro.law = Law::kSpeedPi;
+  MotorRig rig(f, g, ro);
   auto& board = rig.board();
   const mcsim::DcLink* link = board.dc_link();
   if (link == nullptr) throw std::logic_error("regen-stop: the board has no DC link");

@@ -29,7 +29,9 @@ struct StopResult {
 StopResult RunStop(const char* motor, const char* board, Law law) {
   const MotorFiles f = load_motor_files(kDir + "/" + motor + ".toml", kDir + "/" + board + ".toml");
   const Gains g = derive_gains(f, nullptr);
-  MotorRig rig(f, g, RigOptions{law, {}});
+  RigOptions ro;
+  ro.law = law;
+  MotorRig rig(f, g, ro);
   const double w_t = 0.5 * g.speed_rated_eff_rad_s;
   const double T = rig.period_s();
   // Run up: speed loop to w_t, or a long position move cruising at pos_v_max.
