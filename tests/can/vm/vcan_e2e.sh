@@ -70,7 +70,19 @@ done
 say "heartbeats stopped; waiting for the SIL to finish"
 wait "$SIM"; rc=$?
 [ $rc -eq 0 ] || { say "mcsim failed ($rc)"; cat mcsim.out; exit 1; }
-sleep 1  # let candump and the logger read what is still queued
+# Let both receivers drain what is still queued before they are told to stop:
+# candump stops reading at once on SIGINT, so on a busy machine (it may be
+# seconds behind in the emulated VM) its log would lose the tail. Wait until
+# neither log has grown for 2 s (at most 60 s). The logger drains its socket
+# after SIGTERM anyway.
+size() { stat -c %s candump.log logger.log 2>/dev/null | tr '\n' ' '; }
+prev=$(size); still=0
+for _ in $(seq 1 120); do
+  sleep 0.5
+  now=$(size)
+  if [ "$now" = "$prev" ]; then still=$((still + 1)); else still=0; prev=$now; fi
+  [ $still -ge 4 ] && break
+done
 kill -INT "$CD"; kill -TERM "$REC"
 wait "$CD" "$REC" 2>/dev/null
 cat record.out
