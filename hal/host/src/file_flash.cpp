@@ -43,11 +43,14 @@ FileFlash::FileFlash(const std::string& path) : path_(path), mem_(kFileBytes, 0x
            std::to_string(kFileBytes) + " (two 16 KiB sectors)");
     }
     std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (f == nullptr) fail(std::strerror(errno));
-    const size_t got = std::fread(mem_.data(), 1, mem_.size(), f);
-    const bool err = std::ferror(f) != 0;
-    std::fclose(f);
-    if (err || got != mem_.size()) fail("read error");
+    if (f == nullptr) {
+      fail(std::strerror(errno));
+    } else {
+      const size_t got = std::fread(mem_.data(), 1, mem_.size(), f);
+      const bool err = std::ferror(f) != 0;
+      (void)std::fclose(f);
+      if (err || got != mem_.size()) fail("read error");
+    }
     if (::access(path.c_str(), W_OK) != 0) fail(std::string("not writable: ") + std::strerror(errno));
     existed_ = true;
   } else if (errno != ENOENT) {
@@ -84,9 +87,10 @@ int FileFlash::program(uint32_t sector, uint32_t offset, const uint32_t* p_words
   uint8_t* base = mem_.data() + static_cast<size_t>(sector) * kSectorBytes + offset;
   for (uint32_t i = 0; i < n; ++i) {
     uint32_t w;
-    std::memcpy(&w, base + 4u * i, 4u);
+    const size_t at = static_cast<size_t>(i) * MC_HAL_FLASH_WORD_BYTES;
+    std::memcpy(&w, base + at, 4u);
     w &= p_words[i];  // NOR: bits only clear (host and MCU are little-endian)
-    std::memcpy(base + 4u * i, &w, 4u);
+    std::memcpy(base + at, &w, 4u);
   }
   ++programs_;
   return persist() ? 0 : -EIO;
@@ -109,7 +113,7 @@ bool FileFlash::persist() noexcept {
     ok = std::fwrite(mem_.data(), 1, mem_.size(), f) == mem_.size();
     ok = (std::fclose(f) == 0) && ok;
     ok = ok && std::rename(tmp.c_str(), path_.c_str()) == 0;
-    if (!ok) std::remove(tmp.c_str());
+    if (!ok) (void)std::remove(tmp.c_str());
   }
   if (!ok) ++persist_errors_;
   return ok;
