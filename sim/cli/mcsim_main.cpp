@@ -5,6 +5,8 @@
 //   mcsim describe <scenario>
 //   mcsim run <scenario> --out DIR [--duration S] [--set key=value ...]
 //             [--motor FILE [--board FILE]]   (scenarios for any motor)
+//             [--flash FILE]   (the board's flash: the drive boots from the
+//                              configuration stored there and saves to it)
 //   mcsim bench [--duration S]
 //
 // Exit codes: 0 ok, 2 usage error (nothing written), 1 run failure.
@@ -31,7 +33,7 @@ void usage(std::FILE* f) {
                "usage: mcsim list\n"
                "       mcsim describe <scenario> [--motor FILE [--board FILE]]\n"
                "       mcsim run <scenario> --out DIR [--duration S] [--set key=value ...]\n"
-               "                 [--motor FILE [--board FILE]]\n"
+               "                 [--motor FILE [--board FILE]] [--flash FILE]\n"
                "       mcsim bench [--duration S]\n");
 }
 
@@ -91,7 +93,7 @@ int cmd_run(const std::vector<std::string>& args) {
   std::string out_dir;
   double duration = scen.default_duration_s;
   std::vector<std::pair<std::string, std::string>> sets;
-  std::string motor_path, board_path;
+  std::string motor_path, board_path, flash_path;
   for (size_t i = 1; i < args.size(); ++i) {
     const std::string& a = args[i];
     auto value = [&](const char* opt) -> const std::string& {
@@ -106,6 +108,9 @@ int cmd_run(const std::vector<std::string>& args) {
       motor_path = value("--motor");
     } else if (a == "--board") {
       board_path = value("--board");
+    } else if (a == "--flash") {
+      flash_path = value("--flash");
+      if (flash_path.empty()) throw mcsim::UsageError("--flash needs a file name");
     } else if (a == "--set") {
       const std::string& kv = value("--set");
       auto eq = kv.find('=');
@@ -120,7 +125,8 @@ int cmd_run(const std::vector<std::string>& args) {
   if (out_dir.empty()) throw mcsim::UsageError("run: --out DIR is required");
   // Scenario, motor and board files and every --set before anything is
   // written: a bad input changes nothing.
-  const mcsim::PreparedRun run = mcsim::prepare_run(scen.name, motor_path, board_path, sets);
+  const mcsim::PreparedRun run = mcsim::prepare_run(scen.name, motor_path, board_path, sets,
+                                                        flash_path);
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);

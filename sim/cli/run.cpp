@@ -29,19 +29,35 @@ std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& mo
 
 PreparedRun prepare_run(const std::string& scenario, const std::string& motor_path,
                         const std::string& board_path,
-                        const std::vector<std::pair<std::string, std::string>>& sets) {
+                        const std::vector<std::pair<std::string, std::string>>& sets,
+                        const std::string& flash_path) {
   PreparedRun r;
   r.scenario = &need_scenario(scenario);
   r.files = motor_files(*r.scenario, motor_path, board_path);
   r.params = Params(r.files ? r.scenario->motor_params(*r.files) : r.scenario->params,
                     sets);  // validates keys and values
+  if (!flash_path.empty()) {
+    if (!r.scenario->takes_flash) {
+      std::string with;
+      for (const auto& s : registry()) {
+        if (s.takes_flash) with += (with.empty() ? "" : ", ") + s.name;
+      }
+      throw UsageError("scenario '" + r.scenario->name + "' has no flash: --flash FILE is for " +
+                       with);
+    }
+    try {
+      r.flash = std::make_unique<hal_host::FileFlash>(flash_path);
+    } catch (const hal_host::FileFlashError& e) {
+      throw UsageError(e.what());
+    }
+  }
   return r;
 }
 
 void execute_run(const PreparedRun& run, double duration_s, RowSink& sink, Summary& summary,
                  Progress& progress) {
   const Scenario& scen = *run.scenario;
-  RunContext ctx{duration_s, run.params, sink, summary, progress, run.files.get()};
+  RunContext ctx{duration_s, run.params, sink, summary, progress, run.files.get(), run.flash.get()};
   summary.set_text("scenario", scen.name);
   summary.set("duration_s", duration_s);
   for (const auto& kv : run.params.values()) summary.set("param." + kv.first, kv.second);

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "hal_host/file_flash.hpp"
 #include "motor_file.hpp"
 #include "scenario.hpp"
 
@@ -26,13 +27,18 @@ struct PreparedRun {
   const Scenario* scenario = nullptr;
   std::unique_ptr<MotorFiles> files;  ///< null for scenarios with their own motor
   Params params;
+  std::unique_ptr<hal_host::FileFlash> flash;  ///< --flash FILE, opened; else null
 };
 
 /// Scenario name, motor and board files and every key=value checked (the
-/// messages of `mcsim run`, as UsageError).
+/// messages of `mcsim run`, as UsageError). flash_path ("" = none): the
+/// board's flash file (hal_host::FileFlash), opened and checked here
+/// ("<file>: <reason>" as UsageError; nothing is written until the run
+/// erases or programs it); only for scenarios with takes_flash.
 PreparedRun prepare_run(const std::string& scenario, const std::string& motor_path,
                         const std::string& board_path,
-                        const std::vector<std::pair<std::string, std::string>>& sets);
+                        const std::vector<std::pair<std::string, std::string>>& sets,
+                        const std::string& flash_path = "");
 
 /// Run it: summary keys scenario, duration_s and param.*, the scenario's own,
 /// then rows. duration_s <= 0: the scenario's own (from the motor for the

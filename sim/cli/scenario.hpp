@@ -10,6 +10,10 @@
 #include <string>
 #include <vector>
 
+namespace hal_host {
+class FileFlash;  // hal_host/file_flash.hpp
+}
+
 namespace mcsim {
 
 struct MotorFiles;  // motor_file.hpp
@@ -135,6 +139,9 @@ struct RunContext {
   Progress& progress;
   /// --motor/--board files (scenarios with motor_params only; else null).
   const MotorFiles* files = nullptr;
+  /// --flash FILE: the simulated board's flash (scenarios with takes_flash
+  /// only; else null).
+  hal_host::FileFlash* flash = nullptr;
 };
 
 struct Scenario {
@@ -147,6 +154,9 @@ struct Scenario {
   /// required): their parameters, with ranges and defaults from the files.
   /// Null: the scenario has its own motor and refuses --motor.
   std::function<std::vector<ParamSpec>(const MotorFiles&)> motor_params = {};
+  /// The scenario's drive boots from the board's flash (mcsim --flash FILE):
+  /// the configuration store of firmware/app/config on hal_host::FileFlash.
+  bool takes_flash = false;
 };
 
 /// Global registry; scenario files register themselves with a static

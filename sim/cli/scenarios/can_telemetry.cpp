@@ -21,8 +21,31 @@
 // SPEED control mode is served by a speed PI in this scenario (the
 // application's set_speed_ref hook) that writes the current references in
 // the drive's CURRENT mode; POSITION is not offered (UNSUPPORTED).
+//
+// Parameters (PARAM_REQ/PARAM_REPLY) are served as on the MCU: the
+// parameter service (firmware/app/config/mc_param_srv) on the drive, with
+// the configuration store on the board's flash when mcsim runs with
+// --flash FILE (hal_host::FileFlash). The scenario's settings, as a
+// parameter set (scenario_params below), are this board's defaults (what
+// mc_params_default is on the MCU: the table's defaults describe a 48 V
+// board, not this 200 V one). Boot, with --flash: mc_cfg_store_load; with a
+// STORED or MIGRATED record the stored set replaces the scenario's settings
+// for everything the firmware configures (gains from current_bw_rad_s,
+// pwm_hz, slow_loop_div, limits, trips, CAN node id, bit rate, timeout,
+// ramps, speed limit, telemetry rates: the stored value wins over --set,
+// as a flashed drive ignores how it was shipped); any other status boots
+// the scenario's settings and says so. The plant and the board's hardware
+// (motor, inertia, load, bus voltage, sensors) stay the scenario's: the
+// flash configures the drive, not the motor it is wired to. A SAVE writes
+// the file. On this board pwm_hz and slow_loop_div cannot change by APPLY
+// during a run (the simulated PWM period and CAN tick are fixed at start):
+// such an APPLY is refused INVALID (MC_PARAMS_ERR_DRIVE). Without --flash
+// the service runs without a store (SAVE answers STORE), and with settings
+// outside the parameter table (e.g. rate_heartbeat_hz=0, a 10 kbit/s bus)
+// without the service (PARAM_REQ: UNSUPPORTED).
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <stdexcept>
@@ -32,11 +55,15 @@
 
 #include "foc_sil.hpp"
 #include "hal_host/candump_log.hpp"
+#include "hal_host/file_flash.hpp"
 #include "hal_host/socketcan.hpp"
 #include "scenario.hpp"
 extern "C" {
 #include "mc_can_cmd.h"
 #include "mc_can_proto.h"
+#include "mc_cfg_store.h"
+#include "mc_param_srv.h"
+#include "mc_params.h"
 #include "mc_telemetry.h"
 }
 
@@ -84,6 +111,75 @@ int speed_hook(void* ctx, float ref) {
   return 0;
 }
 
+const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
+                                 "LAYOUT", "INVALID",  "FLASH"};
+
+// The scenario's settings and the drive configuration FocSil built from
+// them, as a parameter set (the board's defaults; see the header).
+mc_params_t scenario_params(const Params& P, const FocSilOptions& o, const mc_drive_cfg_t& c) {
+  mc_params_t p = mc_params_default;
+  const PmsmParams m = paper002_test_motor();
+  p.r_ohm = c.foc.r_ohm;
+  p.ld_h = c.foc.ld_h;
+  p.lq_h = c.foc.lq_h;
+  p.flux_wb = c.foc.flux_wb;
+  p.pole_pairs = c.pole_pairs;
+  p.j_kgm2 = static_cast<float>(o.J_kgm2);
+  p.b_nm_s_rad = static_cast<float>(m.B_nms_rad);
+  p.i_max_a = c.i_max_a;
+  p.speed_max_rad_s = static_cast<float>(P.get("speed_max_rad_s"));
+  p.vbus_v = static_cast<float>(o.vbus_v);
+  p.pwm_hz = static_cast<uint32_t>(std::lround(o.pwm_hz));
+  p.dead_time_s = 0.0f;         // the average-value inverter has none here
+  p.current_sensors = o.three_shunts ? 3u : 2u;
+  p.i_sense_max_a = 20.0f;      // FocSil's board: 12-bit, 20 A, 8192 counts
+  p.adc_bits = 12u;
+  p.encoder_cpr = 8192u;
+  p.current_bw_rad_s = static_cast<float>(o.bw_rad_s);
+  p.v_limit_ratio = c.foc.v_limit_ratio;
+  p.slow_loop_div = c.slow_loop_div;
+  p.speed_pll_bw_rad_s = c.speed_pll_bw_rad_s;
+  p.encoder_offset_rad = c.encoder_offset_rad;
+  p.i_trip_a = c.i_trip_a;
+  p.vbus_min_v = c.vbus_min_v;
+  p.vbus_max_v = c.vbus_max_v;
+  p.omega_max_rad_s = c.omega_max_rad_s;
+  p.temp_max_c = c.temp_max_c;
+  p.stall_current_frac = c.stall_current_frac;
+  p.stall_speed_rad_s = c.stall_speed_rad_s;
+  p.stall_time_s = c.stall_time_s;
+  p.i_unbalance_max_a = c.i_unbalance_max_a;
+  p.open_phase_i_min_a = c.open_phase_i_min_a;
+  p.open_phase_time_s = c.open_phase_time_s;
+  p.can_node_id = static_cast<uint32_t>(P.get("node_id"));
+  p.can_bitrate_bps = static_cast<uint32_t>(P.get("bitrate_kbps") * 1000.0);
+  p.can_timeout_s = static_cast<float>(P.get("timeout_s"));
+  p.stop_ramp_a_per_s = static_cast<float>(P.get("stop_ramp_a_per_s"));
+  p.stop_decel_rad_s2 = static_cast<float>(P.get("stop_decel_rad_s2"));
+  p.tm_heartbeat_hz = static_cast<uint32_t>(P.get("rate_heartbeat_hz"));
+  p.tm_currents_hz = static_cast<uint32_t>(P.get("rate_currents_hz"));
+  p.tm_voltages_hz = static_cast<uint32_t>(P.get("rate_voltages_hz"));
+  p.tm_speed_hz = static_cast<uint32_t>(P.get("rate_speed_hz"));
+  p.tm_position_hz = static_cast<uint32_t>(P.get("rate_position_hz"));
+  return p;
+}
+
+// The SIL board's extra APPLY check in front of the CAN layer's: the PWM
+// rate and the slow-loop divider are fixed for the run.
+struct SilParamHook {
+  mc_param_hook_t inner{};
+  uint32_t pwm_hz = 0, slow_loop_div = 0;
+};
+uint32_t sil_param_check(void* ctx, const mc_params_t* p) {
+  const auto* h = static_cast<const SilParamHook*>(ctx);
+  if (p->pwm_hz != h->pwm_hz || p->slow_loop_div != h->slow_loop_div) return 1u;
+  return h->inner.check != nullptr ? h->inner.check(h->inner.ctx, p) : 0u;
+}
+void sil_param_apply(void* ctx, const mc_params_t* p) {
+  const auto* h = static_cast<const SilParamHook*>(ctx);
+  if (h->inner.apply != nullptr) h->inner.apply(h->inner.ctx, p);
+}
+
 void run_can_telemetry(RunContext& ctx) {
   const auto& P = ctx.params;
   FocSilOptions o;
@@ -94,14 +190,58 @@ void run_can_telemetry(RunContext& ctx) {
   o.load_nm = P.get("load_nm");
   o.bw_rad_s = 2.0 * 3.14159265358979 * P.get("bw_hz");
   o.speed_pll_bw_rad_s = P.get("speed_pll_bw_rad_s");
-  FocSil sil(o);
+  auto sil_ptr = std::make_unique<FocSil>(o);
+  // Boot: the configuration (see the header).
+  const mc_params_t p_scn = scenario_params(P, o, sil_ptr->drive().cfg);
+  const uint32_t scn_err = mc_params_validate(&p_scn);
+  mc_params_t p = p_scn;
+  std::unique_ptr<mc_cfg_store_t> store;
+  mc_cfg_boot_t boot = MC_CFG_BOOT_EMPTY;
+  if (ctx.flash != nullptr) {
+    if (scn_err != MC_PARAMS_OK) {
+      throw UsageError("with --flash the scenario's settings are the board's defaults and must "
+                       "form a valid parameter set (firmware/app/config/PARAMS.md); "
+                       "mc_params_validate refuses them: MC_PARAMS_ERR bits 0x" +
+                       std::to_string(scn_err));
+    }
+    store = std::make_unique<mc_cfg_store_t>();
+    const mc_cfg_store_cfg_t scfg{ctx.flash->hal(), {0u, 1u}};
+    if (mc_cfg_store_init(store.get(), &scfg) != 0) {
+      throw std::logic_error("configuration store refused the flash file's sectors");
+    }
+    mc_params_t loaded;
+    boot = mc_cfg_store_load(store.get(), &loaded);
+    if (boot == MC_CFG_BOOT_STORED || boot == MC_CFG_BOOT_MIGRATED) {
+      p = loaded;
+    } else if (boot != MC_CFG_BOOT_EMPTY) {
+      std::fprintf(stderr, "mcsim: %s: no usable configuration (boot status %s): the "
+                   "scenario's settings\n", ctx.flash->path().c_str(), kBootName[boot]);
+    }
+    if (p.pwm_hz != p_scn.pwm_hz || p.slow_loop_div != p_scn.slow_loop_div) {
+      o.pwm_hz = static_cast<double>(p.pwm_hz);
+      o.slow_loop_div = p.slow_loop_div;
+      o.bw_rad_s = static_cast<double>(p.current_bw_rad_s);
+      o.speed_pll_bw_rad_s = static_cast<double>(p.speed_pll_bw_rad_s);
+      sil_ptr = std::make_unique<FocSil>(o);
+    }
+  }
+  FocSil& sil = *sil_ptr;
   mc_drive_t& d = sil.drive();
+  // The parameter service needs the drive to run exactly its parameters.
+  const bool serve_params = scn_err == MC_PARAMS_OK;
+  if (serve_params) {
+    mc_drive_cfg_t dc;
+    if (mc_params_to_drive_cfg(&p, &dc) != MC_PARAMS_OK ||
+        mc_drive_init(&d, &dc, sil.board().hal()) != MC_DRIVE_CFG_OK) {
+      throw std::logic_error("a validated parameter set refused by the drive");
+    }
+  }
   const double tick_hz_d = o.pwm_hz / o.slow_loop_div;
   if (std::fabs(tick_hz_d - std::round(tick_hz_d)) > 1e-9) {
     throw UsageError("pwm_hz / slow_loop_div must be a whole number of hertz");
   }
   const uint32_t tick_hz = static_cast<uint32_t>(std::lround(tick_hz_d));
-  const uint8_t node = static_cast<uint8_t>(P.get("node_id"));
+  const uint8_t node = static_cast<uint8_t>(p.can_node_id);
 
   // CAN: a SocketCAN interface, or a candump log (and a command script).
   hal_host::PmsmBoard& board = sil.board();
@@ -135,10 +275,14 @@ void run_can_telemetry(RunContext& ctx) {
 
   mc_telemetry_cfg_t tc{};
   tc.node_id = node;
-  tc.bitrate_bps = static_cast<uint32_t>(P.get("bitrate_kbps") * 1000.0);
+  tc.bitrate_bps = p.can_bitrate_bps;
   tc.bus_budget_frac = static_cast<float>(P.get("budget_pct") / 100.0);
   tc.tick_hz = tick_hz;
   for (int i = 0; i < MC_TM_COUNT; ++i) tc.rate_hz[i] = static_cast<uint16_t>(P.get(kSlotParam[i]));
+  // the parameter table's rates (the rest, OBSERVER ..., are the scenario's)
+  const uint32_t tm_param[] = {p.tm_heartbeat_hz, p.tm_currents_hz, p.tm_voltages_hz,
+                               p.tm_speed_hz, p.tm_position_hz};
+  for (int i = 0; i <= MC_TM_POSITION; ++i) tc.rate_hz[i] = static_cast<uint16_t>(tm_param[i]);
   mc_telemetry_t tm{};
   const uint32_t terr = mc_telemetry_init(&tm, &tc);
   if (terr != MC_TM_CFG_OK) {
@@ -161,10 +305,10 @@ void run_can_telemetry(RunContext& ctx) {
   mc_can_cmd_cfg_t cc{};
   cc.node_id = node;
   cc.tick_hz = tick_hz;
-  cc.timeout_s = static_cast<float>(P.get("timeout_s"));
-  cc.stop_ramp_a_per_s = static_cast<float>(P.get("stop_ramp_a_per_s"));
-  cc.stop_decel_rad_s2 = static_cast<float>(P.get("stop_decel_rad_s2"));
-  cc.speed_max_rad_s = static_cast<float>(P.get("speed_max_rad_s"));
+  cc.timeout_s = p.can_timeout_s;
+  cc.stop_ramp_a_per_s = p.stop_ramp_a_per_s;
+  cc.stop_decel_rad_s2 = p.stop_decel_rad_s2;
+  cc.speed_max_rad_s = p.speed_max_rad_s;
   cc.set_speed_ref = speed_hook;
   cc.hook_ctx = &speed;
   cc.speed_drive_mode = MC_DRIVE_MODE_CURRENT;
@@ -174,6 +318,19 @@ void run_can_telemetry(RunContext& ctx) {
   if (cerr != MC_CAN_CMD_CFG_OK) {
     throw UsageError("command handler configuration refused (MC_CAN_CMD_CFG bits 0x" +
                      std::to_string(cerr) + ")");
+  }
+  mc_param_srv_t srv{};
+  SilParamHook sil_hook;
+  if (serve_params) {
+    if (mc_param_srv_init(&srv, &p, &d, sil.board().hal(), store.get(),
+                          static_cast<uint8_t>(boot)) != 0) {
+      throw std::logic_error("parameter service refused a validated parameter set");
+    }
+    mc_can_cmd_attach_params(&cmd, &srv);
+    sil_hook.inner = srv.hook;
+    sil_hook.pwm_hz = p.pwm_hz;
+    sil_hook.slow_loop_div = p.slow_loop_div;
+    srv.hook = mc_param_hook_t{sil_param_check, sil_param_apply, &sil_hook};
   }
   const mc_telemetry_src_t src{&d, &cmd, nullptr};
 
@@ -256,6 +413,26 @@ void run_can_telemetry(RunContext& ctx) {
   ctx.summary.set("final_enabled", cmd.enabled ? 1.0 : 0.0);
   ctx.summary.set("final_stop_reason", cmd.stop_reason);
   ctx.summary.set("final_faults", d.faults);
+  if (ctx.flash != nullptr) {
+    // What the drive booted from (cfg_from_store: ids of the parameters whose
+    // stored value replaced the scenario's), and what the run did to the store.
+    std::string from_store;
+    for (uint32_t i = 0; i < MC_PARAM_COUNT; ++i) {
+      const mc_param_info_t* info = &mc_param_table[i];
+      if (info->offset == MC_PARAM_NO_FIELD) continue;
+      if (mc_param_get_raw(&p, info) != mc_param_get_raw(&p_scn, info)) {
+        from_store += (from_store.empty() ? "" : ",") + std::to_string(info->id);
+      }
+    }
+    ctx.summary.set_text("flash_file", ctx.flash->path());
+    ctx.summary.set_text("cfg_boot_status", kBootName[boot]);
+    ctx.summary.set("cfg_boot_code", static_cast<double>(boot));
+    ctx.summary.set_text("cfg_from_store", from_store);
+    ctx.summary.set("cfg_store_seq", store->seq);
+    ctx.summary.set("cfg_saves", store->saves);
+    ctx.summary.set("cfg_applied", srv.applied);
+    ctx.summary.set("flash_persist_errors", ctx.flash->persist_errors());
+  }
   if (sock) {
     const auto& s = sock->stats();
     ctx.summary.set_text("can_interface", iface);
@@ -305,7 +482,9 @@ const Registrar reg_can({
       1.0, 6000.0},
      {"J_kgm2", 0.05, "kg m^2", "rotor + load inertia (a flywheel: 1 A accelerates it at 13 rad/s^2)", 1.0e-7, 100.0},
      {"load_nm", 0.0, "N m", "constant load torque", -10.0, 10.0}},
-    run_can_telemetry});
+    run_can_telemetry,
+    {},
+    true});
 
 }  // namespace
 }  // namespace mcsim

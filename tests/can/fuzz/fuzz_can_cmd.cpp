@@ -13,8 +13,15 @@
 //     repacking the values gives back the same frame data;
 //   - the handler's result is NONE, IGNORED or a code the DBC defines, and
 //     a rejected frame (not IGNORED) produced exactly one CMD_ERROR;
+//   - a PARAM_REQ for this node that the handler accepted got exactly one
+//     PARAM_REPLY with its opcode and id and a status the DBC defines;
 //   - enabled only while the drive runs (CURRENT/CTRL), stopping implies
-//     enabled; |references| within the drive's i_max.
+//     enabled; |references| within the drive's i_max (the one in force:
+//     an APPLY may change it).
+// The parameter service is attached as on the MCU, with the configuration
+// store on a fake flash of two 1 KiB sectors (two records each, so a few
+// SAVEs go through append, erase and switch); the drive runs the stored
+// configuration (the table's defaults: the flash starts erased each input).
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -23,8 +30,12 @@
 extern "C" {
 #include "mc_can_cmd.h"
 #include "mc_can_proto.h"
+#include "mc_cfg_store.h"
 #include "mc_drive.h"
+#include "mc_fake_flash.h"
 #include "mc_hal_fake.h"
+#include "mc_param_srv.h"
+#include "mc_params.h"
 #include "mc_telemetry.h"
 }
 
@@ -32,31 +43,6 @@ namespace {
 
 void require(bool ok) {
   if (!ok) std::abort();
-}
-
-mc_drive_cfg_t drive_cfg() {
-  mc_drive_cfg_t c{};
-  c.foc.r_ohm = 0.1f;
-  c.foc.ld_h = 100e-6f;
-  c.foc.lq_h = 100e-6f;
-  c.foc.flux_wb = 0.01f;
-  c.foc.kp_d_v_per_a = c.foc.kp_q_v_per_a = 0.1f;
-  c.foc.ki_d_v_per_as = c.foc.ki_q_v_per_as = 100.0f;
-  c.foc.dt_s = 50e-6f;
-  c.foc.aw = MC_PI_AW_CLAMP;
-  c.foc.kaw_per_s = 1000.0f;
-  c.foc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
-  c.foc.v_limit_ratio = 1.0f;
-  c.foc.v_abs_max_v = 40.0f;
-  c.foc.decouple = true;
-  c.pole_pairs = 4;
-  c.speed_pll_bw_rad_s = 500.0f;
-  c.slow_loop_div = 10;
-  c.i_max_a = 20.0f;
-  c.i_trip_a = 30.0f;
-  c.vbus_min_v = 10.0f;
-  c.vbus_max_v = 60.0f;
-  return c;
 }
 
 int speed_hook(void*, float w) { return std::fabs(w) > 150.0f ? -1 : 0; }
@@ -75,6 +61,12 @@ void check_unpack(const mc_hal_can_frame_t& f) {
   for (uint32_t i = 0; i < g.n_signals; ++i) {
     const mc_can_signal_t& s = g.signals[i];
     require(std::isfinite(v[i]) && v[i] >= s.min - 0.5f * s.scale && v[i] <= s.max + 0.5f * s.scale);
+  }
+  // A raw integer signal wider than a float's 24-bit mantissa (PARAM_REQ.value:
+  // 32 raw bits, which the handler reads from the frame, not from the
+  // float) does not survive the float round trip: no repack check then.
+  for (uint32_t i = 0; i < g.n_signals; ++i) {
+    if (g.signals[i].length > 24u && g.signals[i].scale == 1.0f) return;
   }
   // node 63 (broadcast) decodes but is never packed: repack as node 1
   const uint32_t node = mc_can_id_node(f.id) <= MC_CAN_NODE_ID_MAX ? mc_can_id_node(f.id) : 1u;
@@ -95,8 +87,21 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   mc_hal_fake_config_t fcfg;
   require(mc_hal_fake_config_default(&fcfg) == 0);
   require(mc_hal_fake_init(&fake, &fcfg) == 0);
+  // Boot as on the MCU: the store on the (erased) flash, the drive from it.
+  static uint8_t flash_mem[2u * 1024u];
+  std::memset(flash_mem, 0xFF, sizeof flash_mem);
+  static mc_fake_flash_t flash;
+  const uint32_t sectors[2] = {1024u, 1024u};
+  require(mc_fake_flash_init(&flash, flash_mem, sectors, 2u) == 0);
+  static mc_cfg_store_t store;
+  const mc_cfg_store_cfg_t scfg{&flash.dev, {0u, 1u}};
+  require(mc_cfg_store_init(&store, &scfg) == 0);
+  mc_params_t p;
+  const mc_cfg_boot_t boot = mc_cfg_store_load(&store, &p);
+  require(boot == MC_CFG_BOOT_EMPTY);
   mc_drive_t d;
-  const mc_drive_cfg_t dc = drive_cfg();
+  mc_drive_cfg_t dc;
+  require(mc_params_to_drive_cfg(&p, &dc) == MC_PARAMS_OK);
   require(mc_drive_init(&d, &dc, &fake.board) == MC_DRIVE_CFG_OK);
   require(mc_hal_fake_encoder_set(&fake, 0u, MC_HAL_ENCODER_FLAG_VALID) == 0);
   mc_telemetry_cfg_t tc{};
@@ -120,6 +125,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   cc.position_drive_mode = MC_DRIVE_MODE_IDLE;
   mc_can_cmd_t c;
   require(mc_can_cmd_init(&c, &cc, &d, &tm) == MC_CAN_CMD_CFG_OK);
+  static mc_param_srv_t srv;
+  require(mc_param_srv_init(&srv, &p, &d, &fake.board, &store, static_cast<uint8_t>(boot)) == 0);
+  mc_can_cmd_attach_params(&c, &srv);
   const mc_telemetry_src_t src{&d, &c, nullptr};
 
   for (size_t k = 0; k + 12 <= size; k += 12) {
@@ -141,22 +149,30 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
               (e >= MC_CAN_ERR_UNKNOWN_CMD && e <= MC_CAN_ERR_FORMAT));
       const bool rej = (e != MC_CAN_ERR_NONE && e != MC_CAN_ERR_IGNORED);
       require(c.rx_rejected == rejected + (rej ? 1u : 0u));
+      const bool param_req = e == MC_CAN_ERR_NONE && mc_can_id_cmd(f.id) == MC_CAN_CMD_PARAM_REQ;
       mc_hal_can_frame_t out;
-      uint32_t replies = 0;
+      uint32_t replies = 0, param_replies = 0;
       while (mc_hal_fake_can_tx_pop(&fake, &out) == 0) {
         float v[MC_CAN_NSIG_MAX];
         uint32_t m;
         require(mc_can_proto_unpack(&out, &m, v, MC_CAN_NSIG_MAX) == MC_CAN_ERR_NONE);
+        if (m == MC_CAN_MSG_PARAM_REPLY) {
+          require(param_req && out.data[0] == f.data[0] && out.data[1] == f.data[1] &&
+                  out.data[2] == f.data[2] && out.data[3] <= MC_PARAM_ERR_OPCODE);
+          ++param_replies;
+          continue;
+        }
         require(m == MC_CAN_MSG_CMD_ERROR && v[MC_CAN_CMD_ERROR_ERROR] == static_cast<float>(e));
         ++replies;
       }
       require(replies == (rej ? 1u : 0u));
+      require(param_replies == (param_req ? 1u : 0u));
     } else if (op == 2u) {
       const unsigned n = 1u + (r[0] >> 2);
       for (unsigned i = 0; i < n; ++i) {
         (void)mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 24.0f,
                                          MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS);
-        for (unsigned j = 0; j < dc.slow_loop_div; ++j) {
+        for (unsigned j = 0; j < d.cfg.slow_loop_div; ++j) {
           if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
         }
         mc_can_cmd_step(&c);
@@ -172,7 +188,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     require(!c.stopping || c.enabled);
     require(!c.enabled || d.mode == MC_DRIVE_MODE_CURRENT || d.mode == MC_DRIVE_MODE_CTRL);
-    require(std::fabs(d.id_ref_a) <= dc.i_max_a && std::fabs(d.iq_ref_a) <= dc.i_max_a);
+    require(std::fabs(d.id_ref_a) <= d.cfg.i_max_a && std::fabs(d.iq_ref_a) <= d.cfg.i_max_a);
   }
   return 0;
 }
