@@ -13,28 +13,16 @@
 
 #include "scenarios/generic_commission.hpp"
 #include "motor_file.hpp"
+#include "motor_library.hpp"
 
 namespace mcsim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-const std::string kDir = MCSIM_MOTORS_DIR;
+using testlib::Case;
+const std::vector<Case>& kCases = testlib::library();
 
-struct Case {
-  const char* motor;
-  const char* board;  // "" = the motor file holds [board]
-};
-
-const Case kCases[] = {
-    {"paper002-test-motor", "paper002-200v"}, {"paper002-40kw", ""},
-    {"odrive-d5065", "odrive-v36-24v"},       {"gimbal-gm4108", "gimbal-24v"},
-    {"low-l-8uh", "low-l-48khz-24v"},          {"turnigy-sk3-6374-149kv", "vesc6-48v"},
-};
-
-MotorFiles load(const Case& c) {
-  return load_motor_files(kDir + "/" + c.motor + ".toml",
-                          c.board[0] ? kDir + "/" + c.board + ".toml" : "");
-}
+MotorFiles load(const Case& c) { return testlib::files(c); }
 
 double off_err_deg(const CommissionRun& r) {
   return std::remainder(r.res.encoder_offset_rad - r.true_encoder_offset_rad, 2 * kPi) * 180 / kPi;

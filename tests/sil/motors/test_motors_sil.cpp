@@ -12,51 +12,17 @@
 #include <string>
 #include <vector>
 
-#include "drive_setup.hpp"
-#include "motor_file.hpp"
-#include "scenario.hpp"
+#include "motor_library.hpp"
 
 namespace mcsim {
 namespace {
 
-const std::string kDir = MCSIM_MOTORS_DIR;
+using testlib::Case;
+using testlib::files;
 
-struct Case {
-  const char* motor;
-  const char* board;  // "" = the motor file holds [board]
-};
-
-const Case kCases[] = {
-    {"paper002-test-motor", "paper002-200v"}, {"paper002-40kw", ""},
-    {"odrive-d5065", "odrive-v36-24v"},       {"gimbal-gm4108", "gimbal-24v"},
-    {"low-l-8uh", "low-l-48khz-24v"},          {"turnigy-sk3-6374-149kv", "vesc6-48v"},
-};
-
-MotorFiles files(const Case& c) {
-  return load_motor_files(kDir + "/" + c.motor + ".toml",
-                          c.board[0] ? kDir + "/" + c.board + ".toml" : "");
-}
-
-// Run a scenario for the files as `mcsim run` does; returns the summary.
 std::map<std::string, double> run(const std::string& scen, const MotorFiles& f,
-                                  const std::vector<std::pair<std::string, std::string>>& sets) {
-  const Scenario* s = find_scenario(scen);
-  if (s == nullptr) throw std::logic_error("scenario " + scen + " not registered");
-  const Params p(s->motor_params(f), sets);
-  // One directory per test: ctest runs them in parallel.
-  std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  for (auto& ch : name) {
-    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-  }
-  const std::string dir = ::testing::TempDir() + "/motors_sil_" + name;
-  std::filesystem::create_directories(dir);
-  CsvWriter csv(dir + "/" + scen + ".csv");
-  Summary sum;
-  Progress prog(false);
-  RunContext ctx{0.0, p, csv, sum, prog, &f};
-  s->run(ctx);
-  csv.commit();
-  return sum.numbers();
+                                  const testlib::Sets& sets) {
+  return testlib::run_scenario(scen, f, sets);
 }
 
 class MotorSil : public ::testing::TestWithParam<Case> {};
@@ -116,14 +82,8 @@ TEST_P(MotorSil, SensorlessStartUnderLoadLocksAndTracks) {
   EXPECT_LT(r.at("angle_err_max_rad"), 0.2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Library, MotorSil, ::testing::ValuesIn(kCases),
-                         [](const ::testing::TestParamInfo<Case>& i) {
-                           std::string n = i.param.motor;
-                           for (auto& ch : n) {
-                             if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-                           }
-                           return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(Library, MotorSil, ::testing::ValuesIn(testlib::library()),
+                         testlib::case_name);
 
 // ------------------------------------------------------------ bad files
 std::string write(const std::string& name, const std::string& text) {

@@ -10,44 +10,17 @@
 #include <string>
 #include <vector>
 
-#include "drive_setup.hpp"
-#include "motor_file.hpp"
-#include "scenario.hpp"
+#include "motor_library.hpp"
 
 namespace mcsim {
 namespace {
 
-const std::string kDir = MCSIM_MOTORS_DIR;
-
-struct Case {
-  const char* motor;
-  const char* board;  // "" = the motor file holds [board]
-};
-
-MotorFiles files(const Case& c) {
-  return load_motor_files(kDir + "/" + c.motor + ".toml",
-                          c.board[0] ? kDir + "/" + c.board + ".toml" : "");
-}
+using testlib::Case;
+using testlib::files;
 
 std::map<std::string, double> run(const std::string& scen, const MotorFiles& f,
-                                  const std::vector<std::pair<std::string, std::string>>& sets,
-                                  const std::string& tag) {
-  const Scenario* s = find_scenario(scen);
-  if (s == nullptr) throw std::logic_error("scenario " + scen + " not registered");
-  const Params p(s->motor_params(f), sets);
-  std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name() + tag;
-  for (auto& ch : name) {
-    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-  }
-  const std::string dir = ::testing::TempDir() + "/regen_fw_sil_" + name;
-  std::filesystem::create_directories(dir);
-  CsvWriter csv(dir + "/" + scen + ".csv");
-  Summary sum;
-  Progress prog(false);
-  RunContext ctx{0.0, p, csv, sum, prog, &f};
-  s->run(ctx);
-  csv.commit();
-  return sum.numbers();
+                                  const testlib::Sets& sets, const std::string& tag) {
+  return testlib::run_scenario(scen, f, sets, tag);
 }
 
 class RegenStop : public ::testing::TestWithParam<Case> {};
@@ -117,17 +90,8 @@ TEST(FieldWeakening, NonSalientUnaffected) {
 
 INSTANTIATE_TEST_SUITE_P(
     Library, RegenStop,
-    ::testing::Values(Case{"paper002-test-motor", "paper002-200v"}, Case{"paper002-40kw", ""},
-                      Case{"odrive-d5065", "odrive-v36-24v"},
-                      Case{"gimbal-gm4108", "gimbal-24v"}, Case{"low-l-8uh", "low-l-48khz-24v"},
-                      Case{"turnigy-sk3-6374-149kv", "vesc6-48v"}),
-    [](const ::testing::TestParamInfo<Case>& i) {
-      std::string n = i.param.motor;
-      for (auto& ch : n) {
-        if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-      }
-      return n;
-    });
+    ::testing::ValuesIn(testlib::library()),
+    testlib::case_name);
 
 }  // namespace
 }  // namespace mcsim

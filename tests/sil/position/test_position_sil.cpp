@@ -24,42 +24,18 @@
 #include <string>
 #include <vector>
 
-#include "drive_setup.hpp"
-#include "motor_file.hpp"
-#include "scenario.hpp"
+#include "motor_library.hpp"
 
 namespace mcsim {
 namespace {
 
-const std::string kDir = MCSIM_MOTORS_DIR;
-
-struct Case {
-  const char* motor;
-  const char* board;
-};
+using testlib::Case;
 
 const Case kCases[] = {{"odrive-d5065", "odrive-v36-24v"},
                        {"paper002-test-motor", "paper002-200v"}};
 
-std::map<std::string, double> run(const Case& c,
-                                  const std::vector<std::pair<std::string, std::string>>& sets) {
-  const MotorFiles f = load_motor_files(kDir + "/" + c.motor + ".toml", kDir + "/" + c.board + ".toml");
-  const Scenario* s = find_scenario("position-move");
-  if (s == nullptr) throw std::logic_error("position-move not registered");
-  const Params p(s->motor_params(f), sets);
-  std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  for (auto& ch : name) {
-    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-  }
-  const std::string dir = ::testing::TempDir() + "/position_sil_" + name;
-  std::filesystem::create_directories(dir);
-  CsvWriter csv(dir + "/position-move.csv");
-  Summary sum;
-  Progress prog(false);
-  RunContext ctx{0.0, p, csv, sum, prog, &f};
-  s->run(ctx);
-  csv.commit();
-  return sum.numbers();
+std::map<std::string, double> run(const Case& c, const testlib::Sets& sets) {
+  return testlib::run_scenario("position-move", testlib::files(c), sets);
 }
 
 class PositionSil : public ::testing::TestWithParam<Case> {};
@@ -108,13 +84,7 @@ TEST_P(PositionSil, StreamedSetpointsThroughInputFilter) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Motors, PositionSil, ::testing::ValuesIn(kCases),
-                         [](const ::testing::TestParamInfo<Case>& i) {
-                           std::string n = i.param.motor;
-                           for (auto& ch : n) {
-                             if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-                           }
-                           return n;
-                         });
+                         testlib::case_name);
 
 }  // namespace
 }  // namespace mcsim
