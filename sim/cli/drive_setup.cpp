@@ -64,6 +64,10 @@ const Key kKeys[] = {
     {"pos_d_max_rad_s2", &Gains::pos_d_max_rad_s2, "rad/s^2", "trajectory deceleration"},
     {"pos_filter_bw_rad_s", &Gains::pos_filter_bw_rad_s, "rad/s", "input filter bandwidth"},
     {"stop_decel_rad_s2", &Gains::stop_decel_rad_s2, "rad/s^2", "controlled-stop deceleration"},
+    {"model_r_scale", &Gains::model_r_scale, "1", "the drive's R / the motor's (model error)"},
+    {"model_l_scale", &Gains::model_l_scale, "1", "the drive's Ld, Lq / the motor's (model error)"},
+    {"model_flux_scale", &Gains::model_flux_scale, "1",
+     "the drive's flux / the motor's (model error)"},
 };
 
 Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
@@ -147,6 +151,12 @@ Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
   g.pos_d_max_rad_s2 = get("pos_d_max_rad_s2", g.speed_accel_rad_s2, &Gains::pos_d_max_rad_s2);
   g.pos_filter_bw_rad_s = get("pos_filter_bw_rad_s", g.pos_kp_per_s, &Gains::pos_filter_bw_rad_s);
   g.stop_decel_rad_s2 = get("stop_decel_rad_s2", g.speed_accel_rad_s2, &Gains::stop_decel_rad_s2);
+  // Model errors: what the drive believes is the files' motor scaled by
+  // these (the plant stays the files'); the gains above are not re-derived,
+  // so a run shows the designed loops on a wrong model (MotorRig applies them).
+  g.model_r_scale = get("model_r_scale", 1.0, &Gains::model_r_scale);
+  g.model_l_scale = get("model_l_scale", 1.0, &Gains::model_l_scale);
+  g.model_flux_scale = get("model_flux_scale", 1.0, &Gains::model_flux_scale);
   g.pi2d_coupling = sigma * m.pole_pairs * m.flux_wb / (m.lq_h * g.cur_bw_rad_s);
   return g;
 }
@@ -431,6 +441,10 @@ mc_ctrl_pos_cfg_t build_position_cfg(const MotorFiles& f, const Gains& g) {
 MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
     : f_(f), fd_(f), g_(g), o_(std::move(o)) {
   if (o_.drive_motor != nullptr) fd_.motor = *o_.drive_motor;
+  fd_.motor.r_ohm *= g.model_r_scale;
+  fd_.motor.ld_h *= g.model_l_scale;
+  fd_.motor.lq_h *= g.model_l_scale;
+  fd_.motor.flux_wb *= g.model_flux_scale;
   T_ = 1.0 / f.board.pwm_hz;
   if (o_.law != Law::kSensorless && f.board.encoder_cpr == 0) {
     throw UsageError(f.board.file + ": this scenario needs an encoder (encoder_cpr = 0 here); "

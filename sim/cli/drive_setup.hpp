@@ -96,6 +96,7 @@ struct Gains {
   double pi2d_wn_rad_s = 0, pi2d_a_per_s = 0;
   double pos_kp_per_s = 0, pos_v_max_rad_s = 0, pos_a_max_rad_s2 = 0, pos_d_max_rad_s2 = 0;
   double pos_filter_bw_rad_s = 0, stop_decel_rad_s2 = 0;
+  double model_r_scale = 1, model_l_scale = 1, model_flux_scale = 1;  // drive's / motor's
   // derived, not settable
   double kt_nm_a = 0, v_max_v = 0;
   bool pi2d_ok = true;  // the PI^2D filter pole could be placed (see above)

@@ -1,6 +1,7 @@
 #include "motor_file.hpp"
 
 #include <cmath>
+#include <map>
 #include <set>
 #include <sstream>
 #include <toml++/toml.h>
@@ -10,18 +11,31 @@
 namespace mcsim {
 namespace {
 
+// "FILE:LINE: reason"; for a value given on the command line (its source is
+// the --set, see apply_overrides) "--set KEY=VALUE: reason".
 [[noreturn]] void fail(const std::string& file, long line, const std::string& reason) {
+  if (file.rfind("--set ", 0) == 0) throw UsageError(file + ": " + reason);
   throw UsageError(file + ":" + std::to_string(line < 1 ? 1 : line) + ": " + reason);
 }
 
 long line_of(const toml::node& n) { return static_cast<long>(n.source().begin.line); }
 
+// Keys of one table replaced on the command line -> that --set.
+using SetSources = std::map<std::string, std::string>;
+
 // One table of a file: reads keys, remembers which were read, and rejects
 // the rest as unknown.
 class TableReader {
  public:
-  TableReader(const std::string& file, const std::string& table_name, const toml::table& t)
-      : file_(file), name_(table_name), t_(t) {}
+  TableReader(const std::string& file, const std::string& table_name, const toml::table& t,
+              const SetSources& sets)
+      : file_(file), name_(table_name), t_(t), sets_(sets) {}
+
+  // Where key's value came from: the file, or the --set that replaced it.
+  std::string src(const std::string& key) const {
+    const auto it = sets_.find(key);
+    return it == sets_.end() ? file_ : it->second;
+  }
 
   const toml::node* need(const std::string& key) {
     seen_.insert(key);
@@ -39,20 +53,20 @@ class TableReader {
   std::string text(const std::string& key, bool required) {
     const toml::node* n = required ? need(key) : maybe(key);
     if (n == nullptr) return std::string();
-    if (!n->is_string()) fail(file_, line_of(*n), "'" + key + "' must be a string");
+    if (!n->is_string()) fail(src(key), line_of(*n), "'" + key + "' must be a string");
     return n->value<std::string>().value_or("");
   }
 
   // A finite number in [lo, hi] (integers accepted). lo_open: lo excluded.
   double number(const toml::node* n, const std::string& key, double lo, double hi, bool lo_open,
                 const std::string& unit) {
-    if (!n->is_number()) fail(file_, line_of(*n), "'" + key + "' must be a number (" + unit + ")");
+    if (!n->is_number()) fail(src(key), line_of(*n), "'" + key + "' must be a number (" + unit + ")");
     const double v = n->value<double>().value_or(std::nan(""));
     if (!std::isfinite(v) || v > hi || (lo_open ? v <= lo : v < lo)) {
       std::ostringstream os;
       os << "'" << key << "' = " << v << " " << unit << " is out of range " << (lo_open ? "(" : "[")
          << lo << ", " << hi << "]";
-      fail(file_, line_of(*n), os.str());
+      fail(src(key), line_of(*n), os.str());
     }
     return v;
   }
@@ -65,10 +79,10 @@ class TableReader {
     return n == nullptr ? dflt : number(n, key, lo, hi, lo_open, unit);
   }
   long integer(const toml::node* n, const std::string& key, long lo, long hi) {
-    if (!n->is_integer()) fail(file_, line_of(*n), "'" + key + "' must be an integer");
+    if (!n->is_integer()) fail(src(key), line_of(*n), "'" + key + "' must be an integer");
     const long v = static_cast<long>(n->value<int64_t>().value_or(0));
     if (v < lo || v > hi) {
-      fail(file_, line_of(*n), "'" + key + "' = " + std::to_string(v) + " is out of range [" +
+      fail(src(key), line_of(*n), "'" + key + "' = " + std::to_string(v) + " is out of range [" +
                                    std::to_string(lo) + ", " + std::to_string(hi) + "]");
     }
     return v;
@@ -81,7 +95,7 @@ class TableReader {
   bool boolean_or(const std::string& key, bool dflt) {
     const toml::node* n = maybe(key);
     if (n == nullptr) return dflt;
-    if (!n->is_boolean()) fail(file_, line_of(*n), "'" + key + "' must be true or false");
+    if (!n->is_boolean()) fail(src(key), line_of(*n), "'" + key + "' must be true or false");
     return n->value<bool>().value_or(dflt);
   }
   long line(const std::string& key) {
@@ -94,7 +108,7 @@ class TableReader {
       if (seen_.count(k) == 0u) {
         std::string known;
         for (const auto& s : seen_) known += (known.empty() ? "" : ", ") + s;
-        fail(file_, line_of(kv.second), "unknown key '" + k + "' in [" + name_ + "] (known: " +
+        fail(src(k), line_of(kv.second), "unknown key '" + k + "' in [" + name_ + "] (known: " +
                                             known + ")");
       }
     }
@@ -103,6 +117,7 @@ class TableReader {
  private:
   std::string file_, name_;
   const toml::table& t_;
+  const SetSources& sets_;
   std::set<std::string> seen_;
 };
 
@@ -130,8 +145,8 @@ void check_top(const std::string& path, const toml::table& root) {
   }
 }
 
-MotorSpec read_motor(const std::string& path, const toml::table& t) {
-  TableReader r(path, "motor", t);
+MotorSpec read_motor(const std::string& path, const toml::table& t, const SetSources& sets) {
+  TableReader r(path, "motor", t, sets);
   MotorSpec m;
   m.file = path;
   m.name = r.text("name", true);
@@ -149,7 +164,7 @@ MotorSpec read_motor(const std::string& path, const toml::table& t) {
   m.speed_rated_rad_s = r.num_or("speed_rated_rad_s", 0.8 * m.speed_max_rad_s, 0.0,
                                  m.speed_max_rad_s, true, "rad/s (at most speed_max_rad_s)");
   if (m.ld_h > 1.05 * m.lq_h) {
-    fail(path, r.line("ld_h"),
+    fail(r.src("ld_h"), r.line("ld_h"),
          "ld_h exceeds lq_h by more than 5 %: only surface (Ld = Lq) and interior "
          "(Ld < Lq) magnet machines are modelled");
   }
@@ -157,8 +172,8 @@ MotorSpec read_motor(const std::string& path, const toml::table& t) {
   return m;
 }
 
-BoardSpec read_board(const std::string& path, const toml::table& t) {
-  TableReader r(path, "board", t);
+BoardSpec read_board(const std::string& path, const toml::table& t, const SetSources& sets) {
+  TableReader r(path, "board", t, sets);
   BoardSpec b;
   b.file = path;
   b.name = r.text("name", true);
@@ -179,27 +194,61 @@ BoardSpec read_board(const std::string& path, const toml::table& t) {
   return b;
 }
 
+
+// --set motor.KEY=VALUE / board.KEY=VALUE: the value is parsed as TOML and
+// replaces (or adds) KEY in that table before the table is read, so it is
+// checked by exactly the rules of the file; a refusal names the --set.
+SetSources apply_overrides(toml::table& t, const std::string& table, const Overrides& ov) {
+  SetSources srcs;
+  for (const auto& kv : ov) {
+    const std::string prefix = table + ".";
+    if (kv.first.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string key = kv.first.substr(prefix.size());
+    const std::string where = "--set " + kv.first + "=" + kv.second;
+    toml::table one;
+    try {
+      one = toml::parse(key + " = " + kv.second, where);
+    } catch (const toml::parse_error& e) {
+      throw UsageError(where + ": not a TOML value: " + std::string(e.description()));
+    }
+    const toml::node* v = one.get(key);
+    if (v == nullptr || one.size() != 1u) throw UsageError(where + ": malformed key");
+    t.insert_or_assign(key, *v);
+    srcs[key] = where;
+  }
+  return srcs;
+}
+
 }  // namespace
 
-MotorFiles load_motor_files(const std::string& motor_path, const std::string& board_path) {
+MotorFiles load_motor_files(const std::string& motor_path, const std::string& board_path,
+                            const Overrides& overrides) {
+  for (const auto& kv : overrides) {
+    if (kv.first.rfind("motor.", 0) != 0 && kv.first.rfind("board.", 0) != 0) {
+      throw UsageError("--set " + kv.first + ": file overrides are motor.KEY or board.KEY");
+    }
+  }
   MotorFiles f;
-  const toml::table mroot = parse(motor_path);
+  toml::table mroot = parse(motor_path);
   check_top(motor_path, mroot);
-  const toml::table* mt = mroot["motor"].as_table();
+  toml::table* mt = mroot["motor"].as_table();
   if (mt == nullptr) fail(motor_path, 1, "no [motor] table");
-  f.motor = read_motor(motor_path, *mt);
+  const SetSources msets = apply_overrides(*mt, "motor", overrides);
+  f.motor = read_motor(motor_path, *mt, msets);
   if (board_path.empty()) {
-    const toml::table* bt = mroot["board"].as_table();
+    toml::table* bt = mroot["board"].as_table();
     if (bt == nullptr) {
       fail(motor_path, 1, "no [board] table here and no --board FILE given");
     }
-    f.board = read_board(motor_path, *bt);
+    const SetSources bsets = apply_overrides(*bt, "board", overrides);
+    f.board = read_board(motor_path, *bt, bsets);
   } else {
-    const toml::table broot = parse(board_path);
+    toml::table broot = parse(board_path);
     check_top(board_path, broot);
-    const toml::table* bt = broot["board"].as_table();
+    toml::table* bt = broot["board"].as_table();
     if (bt == nullptr) fail(board_path, 1, "no [board] table");
-    f.board = read_board(board_path, *bt);
+    const SetSources bsets = apply_overrides(*bt, "board", overrides);
+    f.board = read_board(board_path, *bt, bsets);
   }
   return f;
 }

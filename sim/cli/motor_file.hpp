@@ -35,6 +35,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace mcsim {
 
@@ -68,6 +70,11 @@ struct MotorFiles {
 
 /// Parse --motor FILE and --board FILE (board_path may be empty when the
 /// motor file also holds [board]). Throws UsageError("<file>:<line>: ...").
-MotorFiles load_motor_files(const std::string& motor_path, const std::string& board_path);
+/// --set motor.KEY=VALUE / board.KEY=VALUE pairs: they replace the files'
+/// values before the tables are read (the same checks; a refusal names the
+/// --set).
+using Overrides = std::vector<std::pair<std::string, std::string>>;
+MotorFiles load_motor_files(const std::string& motor_path, const std::string& board_path,
+                            const Overrides& overrides = {});
 
 }  // namespace mcsim

@@ -11,7 +11,7 @@ const Scenario& need_scenario(const std::string& name) {
 }
 
 std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& motor,
-                                        const std::string& board) {
+                                        const std::string& board, const Overrides& overrides) {
   if (!s.motor_params) {
     if (!motor.empty() || !board.empty()) {
       throw UsageError("scenario '" + s.name + "' runs its own motor and takes no --motor "
@@ -24,7 +24,7 @@ std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& mo
     throw UsageError("scenario '" + s.name + "' needs --motor FILE (and --board FILE "
                      "unless the motor file has a [board] table); see sim/motors/");
   }
-  return std::make_unique<MotorFiles>(load_motor_files(motor, board));
+  return std::make_unique<MotorFiles>(load_motor_files(motor, board, overrides));
 }
 
 PreparedRun prepare_run(const std::string& scenario, const std::string& motor_path,
@@ -33,9 +33,17 @@ PreparedRun prepare_run(const std::string& scenario, const std::string& motor_pa
                         const std::string& flash_path) {
   PreparedRun r;
   r.scenario = &need_scenario(scenario);
-  r.files = motor_files(*r.scenario, motor_path, board_path);
+  // motor.KEY= and board.KEY= edit the files (scenarios for any motor);
+  // every other key is a scenario parameter.
+  Overrides file_sets;
+  std::vector<std::pair<std::string, std::string>> params;
+  for (const auto& kv : sets) {
+    const bool file_key = kv.first.rfind("motor.", 0) == 0 || kv.first.rfind("board.", 0) == 0;
+    (file_key && r.scenario->motor_params ? file_sets : params).push_back(kv);
+  }
+  r.files = motor_files(*r.scenario, motor_path, board_path, file_sets);
   r.params = Params(r.files ? r.scenario->motor_params(*r.files) : r.scenario->params,
-                    sets);  // validates keys and values
+                    params);  // validates keys and values
   if (!flash_path.empty()) {
     if (!r.scenario->takes_flash) {
       std::string with;

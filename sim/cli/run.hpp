@@ -20,7 +20,8 @@ const Scenario& need_scenario(const std::string& name);
 /// --motor/--board for scenario s: the parsed files, or null for a scenario
 /// with its own motor (which refuses them). UsageError on any problem.
 std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& motor_path,
-                                        const std::string& board_path);
+                                        const std::string& board_path,
+                                        const Overrides& overrides = {});
 
 /// A run whose inputs were all checked: nothing has been written yet.
 struct PreparedRun {

@@ -133,6 +133,52 @@ class MotorCli(unittest.TestCase):
         self.assertLess(rss[1] - rss[0], 1024, rss)
 
 
+class FileOverrides(unittest.TestCase):
+    """--set motor.KEY= / board.KEY= replace a file's value under the file's
+    own rules (campaigns sweep them); model_*_scale give the drive a wrong
+    model while the plant stays the file's motor."""
+
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.out = self.tmp.name
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def summary(self, scen):
+        with open(os.path.join(self.out, scen + ".json")) as f:
+            return json.load(f)
+
+    def test_board_override_reaches_the_run(self):
+        run("run", "current-step", "--out", self.out, *d5065(), "--duration", "0.01",
+            "--set", "board.pwm_hz=40000", "--set", "board.delay_periods=2")
+        s = self.summary("current-step")
+        self.assertEqual(s["board.pwm_hz"], 40000)
+        self.assertEqual(s["board.delay_periods"], 2)
+
+    def test_bad_overrides_named_nothing_written(self):
+        for kv, words in [("board.pwm_hz=1e9", ["--set board.pwm_hz=1e9", "out of range"]),
+                          ("board.foo=1", ["--set board.foo=1", "unknown key 'foo'"]),
+                          ("motor.r_ohm=abc", ["--set motor.r_ohm=abc", "not a TOML value"]),
+                          ("motor.ld_h=1.0", ["--set motor.ld_h=1.0", "ld_h exceeds lq_h"])]:
+            p = run("run", "current-step", "--out", self.out, *d5065(), "--set", kv, check=False)
+            self.assertEqual(p.returncode, 2, kv + ": " + p.stderr)
+            for w in words:
+                self.assertIn(w, p.stderr)
+            self.assertEqual(os.listdir(self.out), [], kv + ": a refused run must write nothing")
+
+    def test_model_error_changes_the_run_default_is_bit_identical(self):
+        base = ["run", "current-step", *d5065(), "--duration", "0.01"]
+        run(*base, "--out", os.path.join(self.out, "a"))
+        run(*base, "--out", os.path.join(self.out, "b"), "--set", "model_r_scale=1")
+        run(*base, "--out", os.path.join(self.out, "c"), "--set", "model_l_scale=0.5")
+        def rd(d):
+            with open(os.path.join(self.out, d, "current-step.csv")) as f:
+                return f.read()
+        self.assertEqual(rd("a"), rd("b"), "scale 1 must change nothing")
+        self.assertNotEqual(rd("a"), rd("c"), "a halved L model must change the current loop")
+
+
 def main():
     global ARGS
     ap = argparse.ArgumentParser()

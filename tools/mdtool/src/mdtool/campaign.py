@@ -323,7 +323,14 @@ def load(path: str) -> Campaign:
     except sil.UsageError as e:
         raise err("campaign", "motor" if motor else "scenario", str(e)) from None
 
+    def edits_file(key):  # motor.KEY / board.KEY: the run edits its files (mcsim --set)
+        return bool(motor) and key.split(".", 1)[0] in ("motor", "board") and "." in key
+
     def check_value(table, key, v):
+        if edits_file(key):  # checked by mcsim's file rules when the run starts
+            if isinstance(v, bool) or not (_number(v) or isinstance(v, str)):
+                raise err(table, key, f"value {v!r} for {key}: a number or a string is expected")
+            return
         spec = specs[key]
         if isinstance(v, str):
             if v not in spec["choices"]:
@@ -337,7 +344,7 @@ def load(path: str) -> Campaign:
                       f"[{spec['min']:g}, {spec['max']:g}] {spec['unit']}")
 
     def check_key(table, key):
-        if key not in specs:
+        if key not in specs and not edits_file(key):
             raise err(table, key, f"unknown key '{key}' (scenario {c['scenario']} takes: "
                       f"{', '.join(specs) or 'none'})")
 
