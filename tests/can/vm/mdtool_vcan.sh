@@ -3,7 +3,8 @@
 # where the kernel has vcan, otherwise in tools/vm/mc_vm.sh's VM):
 #   mdtool_vcan.sh MCSIM WORKDIR PYTHON REPO
 # The SIL drive (mcsim can-telemetry, paced to the wall clock) on vcan0;
-# candump -L and `mdtool record rec.mf4` record; then mdtool scan, status,
+# candump -L and `mdtool record rec.blf` record (not .mf4 in the VM: asammdf's compiled
+# dependencies use instructions the emulated CPU lacks; the host converts); then mdtool scan, status,
 # config get (the SIL has no parameter service attached: the drive's
 # refusal, CMD_ERROR UNSUPPORTED, must come back decoded, exit 4), monitor
 # (headless, to a PNG) and run speed (the keep-alive sent by mdtool; the
@@ -29,7 +30,7 @@ BUS=(--interface socketcan --channel "$IF" --timeout 5)
 
 candump -L -r 16777216 "$IF" > candump.log &
 pids+=($!); CD=$!
-MD record rec.mf4 --channel "$IF" --report rec.json --ready rec.ready > record.out 2>&1 &
+MD record rec.blf --channel "$IF" --report rec.json --ready rec.ready > record.out 2>&1 &
 REC=$!; pids+=("$REC")
 wait_for 120 test -e rec.ready || { say "recorder did not start"; cat record.out; exit 1; }
 MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN" --duration 60 --set end_after_stop_s=0.3 \
