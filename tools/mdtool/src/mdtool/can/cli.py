@@ -167,7 +167,8 @@ def cmd_run(a):
             if name == "SPEED" and a.verbose:
                 print(f"omega {vals['omega_m_rad_s']:.3f} rad/s (ref {vals['omega_ref_rad_s']:.3f})")
         hb = s.drive.run(a.mode, a.setpoint, a.duration, i_d=a.id, period=a.keepalive, on_frame=on_frame)
-        hb_after = s.drive.heartbeat()
+        hb_after = s.drive.wait_for(lambda n, v: n == "HEARTBEAT" and v["enabled"] == 0, a.timeout,
+                                    "HEARTBEAT showing the drive disabled")[1]
     print(f"ran {a.mode} {a.setpoint:g} for {a.duration:g} s ({n['frames']} frames from node {a.node}); "
           f"last heartbeat while running: {hb}; now: mode {hb_after['mode']}, enabled {hb_after['enabled']}")
     return 0
