@@ -43,7 +43,7 @@ def check(ok, what):
 
 
 def mdtool(*args, **kw):
-    env = dict(os.environ, PYTHONPATH=SRC)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [SRC, os.environ.get("PYTHONPATH")])))
     return subprocess.run([sys.executable, "-m", "mdtool.cli", *args], capture_output=True, text=True,
                           env=env, timeout=120, **kw)
 
@@ -84,7 +84,7 @@ def main():
             with open(os.path.join(data, name), "rb") as f1, open(os.path.join(ROOT, repo), "rb") as f2:
                 check(f1.read() == f2.read(), f"installed copy {data}/{name} equals {repo}")
     else:
-        print(f"note: the venv's mdtool has no CAN data folder ({r.stderr.strip()[-120:] or data}); "
+        print(f"note: the venv's mdtool has no CAN data folder ({(r.stderr.strip().splitlines() or [data])[-1]}); "
               "run tools/bootstrap.sh setup to install this tree's package")
 
     # ---- the SIL's frames
