@@ -6,9 +6,15 @@
     mdtool bench-sil [--duration S]
     mdtool sil SCENARIO [--motor F] [--board F] [--set k=v ...]   one run, summary as JSON
 
+CAN (mdtool/can; every command: --interface/--channel/--bitrate, --node):
+    mdtool scan | status | config ... | run MODE SETPOINT | monitor SIG... |
+           record OUT | decode LOG --out DIR | stats LOG | convert SRC DST
+
 Exit codes: 0 ok, 2 usage error (a malformed campaign file: "FILE:LINE:
-reason"), 1 failure, 3 campaign stopped before every run finished
-(--max-runs): run the same command again to resume.
+reason"; CAN: also a value refused here before sending), 1 failure, 3
+campaign stopped before every run finished (--max-runs): run the same
+command again to resume; CAN commands: 3 no reply from the drive within the
+timeout, 4 refused by the drive (its reason printed).
 """
 from __future__ import annotations
 
@@ -135,7 +141,19 @@ def main(argv=None) -> int:
     s.add_argument("--set", action="append", default=[])
     s.set_defaults(fn=cmd_sil)
 
+    from .can.cli import add_parsers
+
+    add_parsers(sub)
+
     a = ap.parse_args(argv)
+    from .can.errors import CanToolError
+
+    try:
+        if a.fn.__module__ == "mdtool.can.cli":
+            return a.fn(a)
+    except CanToolError as e:
+        print(f"mdtool: {e}", file=sys.stderr)
+        return e.exit_code
     from .campaign import CampaignError
 
     try:

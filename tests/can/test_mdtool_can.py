@@ -1,0 +1,216 @@
+#!/usr/bin/env python3
+"""mdtool's CAN commands (tools/mdtool/src/mdtool/can) on the SIL firmware's
+frames and on python-can's virtual bus:
+
+- the SIL drive (mcsim can-telemetry, the demo command script) writes a
+  candump log; its frames are replayed on a python-can virtual bus while
+  `mdtool record` (the library function) records that bus to .log, .blf,
+  .asc and .mf4; every file reads back to the frames sent (ids, data,
+  order; the bus stamps frames on arrival), the .mf4 also through asammdf directly;
+- the SIL log converted to each format (`mdtool convert`, its simulated
+  time stamps kept): `mdtool decode` and `mdtool stats` of every format
+  equal mc_can.py's on the SIL log;
+- the CLI's errors: no reply within the timeout (exit 3), a value out of
+  range refused here with its range from params_meta.json and nothing sent
+  (exit 2), unknown parameter / log format / interface, a malformed TOML;
+- the DBC and the parameter table the package uses are the repository's
+  (and the installed copies equal them).
+
+    test_mdtool_can.py --mcsim MCSIM --work DIR
+"""
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import threading
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+SRC = os.path.join(ROOT, "tools", "mdtool", "src")
+sys.path.insert(0, SRC)
+
+from mdtool.can import dbc, log, paths, record  # noqa: E402
+
+fails = []
+
+
+def check(ok, what):
+    print(("ok   " if ok else "FAIL ") + what)
+    if not ok:
+        fails.append(what)
+
+
+def mdtool(*args, **kw):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [SRC, os.environ.get("PYTHONPATH")])))
+    return subprocess.run([sys.executable, "-m", "mdtool.cli", *args], capture_output=True, text=True,
+                          env=env, timeout=120, **kw)
+
+
+def same_frames(a, b, tol):
+    if len(a) != len(b):
+        return f"{len(a)} vs {len(b)} frames"
+    ta0, tb0 = a[0][0], b[0][0]
+    for i, (x, y) in enumerate(zip(a, b)):
+        if (x[2], x[3], x[4]) != (y[2], y[3], y[4]):
+            return f"frame {i}: {x} vs {y}"
+        if abs((x[0] - ta0) - (y[0] - tb0)) > tol:
+            return f"frame {i}: time {x[0] - ta0} vs {y[0] - tb0}"
+    return None
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--mcsim", required=True)
+    ap.add_argument("--work", required=True)
+    a = ap.parse_args()
+    shutil.rmtree(a.work, ignore_errors=True)
+    os.makedirs(a.work)
+    W = a.work
+
+    # ---- data files: one DBC, one parameter table
+    check(os.path.samefile(paths.dbc_path(), os.path.join(ROOT, "tools", "can", "motordrive.dbc")),
+          "from the source tree the package reads tools/can/motordrive.dbc")
+    check(os.path.samefile(paths.params_meta_path(), os.path.join(ROOT, "tools", "config", "params_meta.json")),
+          "from the source tree the package reads tools/config/params_meta.json")
+    r = subprocess.run([sys.executable, "-c", "import mdtool.can.paths as p, os; print(p._DATA)"],
+                       capture_output=True, text=True, cwd="/", env={k: v for k, v in os.environ.items()
+                                                                    if k != "PYTHONPATH"})
+    data = r.stdout.strip()
+    if r.returncode == 0 and os.path.isdir(data):
+        for name, repo in (("motordrive.dbc", "tools/can/motordrive.dbc"),
+                           ("params_meta.json", "tools/config/params_meta.json")):
+            with open(os.path.join(data, name), "rb") as f1, open(os.path.join(ROOT, repo), "rb") as f2:
+                check(f1.read() == f2.read(), f"installed copy {data}/{name} equals {repo}")
+    else:
+        print(f"note: the venv's mdtool has no CAN data folder ({(r.stderr.strip().splitlines() or [data])[-1]}); "
+              "run tools/bootstrap.sh setup to install this tree's package")
+
+    # ---- the SIL's frames
+    sil_log = os.path.join(W, "sil.log")
+    env = dict(os.environ, MCSIM_CAN_LOG=sil_log,
+               MCSIM_CAN_CMDS=os.path.join(ROOT, "tools", "can", "demo_commands.log"))
+    subprocess.run([a.mcsim, "run", "can-telemetry", "--out", W], env=env, check=True,
+                   stdout=subprocess.DEVNULL)
+    db = dbc.load_db()
+    ref = log.read_candump(sil_log)
+    check(len(ref) > 500, f"the SIL wrote {len(ref)} frames")
+
+    # ---- record from a python-can virtual bus into every format
+    import can
+    for ext in (".log", ".blf", ".asc", ".mf4"):
+        out = os.path.join(W, "rec" + ext)
+        ready = os.path.join(W, "ready" + ext)
+        stop = {"now": False}
+        rep = {}
+        chan = "mdtool_test" + ext
+        th = threading.Thread(target=lambda: rep.update(record.record(
+            out, db, 1, interface="virtual", channel=chan, ready=ready, stop=stop, log=lambda *_: None)))
+        th.start()
+        while not os.path.exists(ready):
+            time.sleep(0.01)
+        with can.Bus(interface="virtual", channel=chan) as tx:
+            for fr in ref:
+                tx.send(log.message_of_frame(fr))
+        t_end = time.monotonic() + 20
+        while time.monotonic() < t_end:  # the recorder has them all once it idles
+            time.sleep(0.2)
+            if os.path.getsize(out) > 0 and ext != ".log" or ext == ".log":
+                break
+        time.sleep(0.5)
+        stop["now"] = True
+        th.join(30)
+        back = log.read_frames(out)
+        err = same_frames(ref, back, 1e9)  # times: stamped on arrival (checked by convert below)
+        if err is None and any(y[0] < x[0] for x, y in zip(back, back[1:])):
+            err = "time stamps go backwards"
+        check(err is None and rep.get("frames") == len(ref),
+              f"record {ext}: {rep.get('frames')} frames written, read back identical" + (f" ({err})" if err else ""))
+        check(rep.get("seq_gaps") == 0 and rep.get("kernel_dropped") is None,
+              f"record {ext}: sequence gaps {rep.get('seq_gaps')}, kernel drops n/a on virtual")
+        conv = os.path.join(W, "conv" + ext)
+        r = mdtool("convert", sil_log, conv)
+        check(r.returncode == 0 and same_frames(ref, log.read_frames(conv), 2e-6) is None,
+              f"convert the SIL log to {ext}: same frames and times")
+        out = conv
+        # decode/stats of this file equal mc_can.py's on the SIL log
+        st_ref = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "can", "mc_can.py"), "stats",
+                                 sil_log, "--json", os.path.join(W, "ref.json")], capture_output=True)
+        r = mdtool("stats", out, "--json", os.path.join(W, f"st{ext}.json"))
+        A = json.load(open(os.path.join(W, "ref.json")))
+        B = json.load(open(os.path.join(W, f"st{ext}.json")))
+        same = st_ref.returncode == 0 and r.returncode == 0 and A["frames"] == B["frames"] and \
+            A["lost_total"] == B["lost_total"] and abs(A["bus_load"] - B["bus_load"]) < 1e-6 and \
+            {k: (v["frames"], v["gaps"], v["lost"]) for k, v in A["messages"].items()} == \
+            {k: (v["frames"], v["gaps"], v["lost"]) for k, v in B["messages"].items()}
+        check(same, f"mdtool stats {ext} equals mc_can.py stats of the SIL log")
+        r = mdtool("decode", out, "--out", os.path.join(W, "dec" + ext))
+        subprocess.run([sys.executable, os.path.join(ROOT, "tools", "can", "mc_can.py"), "decode",
+                        sil_log, "--out", os.path.join(W, "dec_ref")], capture_output=True, check=True)
+        ok = r.returncode == 0
+        for name in sorted(os.listdir(os.path.join(W, "dec_ref"))):
+            with open(os.path.join(W, "dec_ref", name)) as f1, open(os.path.join(W, "dec" + ext, name)) as f2:
+                r1 = [ln.split(",") for ln in f1.read().splitlines()]
+                r2 = [ln.split(",") for ln in f2.read().splitlines()]
+            # signal values identical; the time columns to 1 us (BLF/ASC/MF4 store their own clock)
+            ok = ok and len(r1) == len(r2) and all(x[2:] == y[2:] and
+                                                   (i == 0 or abs(float(x[0]) - float(y[0])) < 2e-6)
+                                                   for i, (x, y) in enumerate(zip(r1, r2)))
+        check(ok, f"mdtool decode {ext} equals mc_can.py decode of the SIL log")
+    # the MF4 through asammdf itself
+    from asammdf import MDF
+    mdf = MDF(os.path.join(W, "rec.mf4"))
+    ids = None
+    for g, grp in enumerate(mdf.groups):
+        for ch in grp.channels:
+            if ch.name.endswith("CAN_DataFrame.ID"):
+                ids = mdf.get(ch.name, group=g).samples
+                break
+        if ids is not None:
+            break
+    check(ids is not None and [int(i) for i in ids] == [fr[2] for fr in ref if not fr[4]],
+          f"asammdf reads the MF4's identifiers ({0 if ids is None else len(ids)} CAN_DataFrame.ID samples)")
+
+    # ---- the CLI's errors (python-can virtual bus: nobody answers)
+    bus = ["--interface", "virtual", "--channel", "mdtool_errors", "--timeout", "0.3"]
+    listener = can.Bus(interface="virtual", channel="mdtool_errors")
+    r = mdtool("config", "get", "r_ohm", *bus)
+    check(r.returncode == 3 and "no PARAM_REPLY" in r.stderr and "within 0.3 s" in r.stderr,
+          f"no reply: exit 3, '{r.stderr.strip()}'")
+    while listener.recv(0.05) is not None:
+        pass
+    r = mdtool("config", "set", "r_ohm=1e9", *bus)
+    sent = listener.recv(0.3)
+    check(r.returncode == 2 and "outside its range [0.0, 100.0] ohm" in r.stderr and sent is None,
+          f"out of range: exit 2, nothing sent, '{r.stderr.strip()}'")
+    r = mdtool("config", "set", "pole_pairs=7.5", *bus)
+    check(r.returncode == 2 and "whole number" in r.stderr, f"u32 not whole: '{r.stderr.strip()}'")
+    r = mdtool("config", "set", "cfg_store_seq=3", *bus)
+    check(r.returncode == 2 and "readonly" in r.stderr, f"readonly: '{r.stderr.strip()}'")
+    r = mdtool("config", "get", "no_such_param", *bus)
+    check(r.returncode == 2 and "unknown parameter 'no_such_param'" in r.stderr, f"unknown: '{r.stderr.strip()}'")
+    bad = os.path.join(W, "bad.toml")
+    with open(bad, "w") as f:
+        f.write("[motor]\nr_ohm = 0.1\nvbus_v = 24.0\n")
+    r = mdtool("config", "load", bad, *bus)
+    check(r.returncode == 2 and "vbus_v belongs in [board]" in r.stderr, f"misplaced key: '{r.stderr.strip()}'")
+    r = mdtool("config", "load", os.path.join(ROOT, "sim", "motors", "odrive-d5065.toml"), *bus)
+    check(r.returncode == 3 and "PARAM_REPLY" in r.stderr,
+          "a motor file of the simulator passes the local checks (then: no reply, exit 3)")
+    r = mdtool("record", os.path.join(W, "x.xyz"), *bus, "--duration", "0.1")
+    check(r.returncode == 2 and "unknown log format" in r.stderr, f"log format: '{r.stderr.strip()}'")
+    r = mdtool("status", "--interface", "no_such_interface", "--channel", "x")
+    check(r.returncode == 2 and "cannot open CAN interface" in r.stderr, f"interface: '{r.stderr.strip()}'")
+    r = mdtool("scan", *bus[:4], "--timeout", "0.2")
+    check(r.returncode == 3 and "no drive heartbeat" in r.stderr, f"scan, nobody there: '{r.stderr.strip()}'")
+    r = mdtool("decode", os.path.join(W, "missing.log"), "--out", W)
+    check(r.returncode == 2 and "cannot read" in r.stderr, f"missing log: '{r.stderr.strip()}'")
+    listener.shutdown()
+
+    print(f"mdtool CAN checks: {'FAILED: ' + str(len(fails)) if fails else 'passed'}")
+    return 1 if fails else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

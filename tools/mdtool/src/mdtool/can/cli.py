@@ -1,0 +1,308 @@
+"""The `mdtool` CAN subcommands (added to mdtool.cli's parser).
+
+Every command that talks to a drive takes --interface/--channel/--bitrate
+(any python-can interface), --node and --timeout. Exit codes: 0 ok,
+2 usage (bad argument, file, or a value refused here before sending),
+3 no reply within the timeout, 4 refused by the drive (its reason printed),
+1 other failures (frames lost while recording).
+"""
+import json
+import os
+import sys
+import time
+
+from .errors import UsageError
+
+
+def _bus_args(p, with_node=True):
+    g = p.add_argument_group("CAN bus (python-can)")
+    g.add_argument("--interface", "-i", default=os.environ.get("MDTOOL_INTERFACE", "socketcan"),
+                   help="python-can interface: socketcan, slcan, pcan, virtual, ... "
+                        "(default socketcan, or $MDTOOL_INTERFACE)")
+    g.add_argument("--channel", "-c", default=os.environ.get("MDTOOL_CHANNEL", "can0"),
+                   help="channel: can0, vcan0, /dev/ttyACM0, PCAN_USBBUS1, ... (default can0)")
+    g.add_argument("--bitrate", "-b", type=int, help="bit rate [bit/s] where the interface sets it")
+    if with_node:
+        g.add_argument("--node", "-n", type=int, default=1, help="drive node id 0..62 (default 1)")
+        g.add_argument("--timeout", type=float, default=1.0, help="reply timeout [s] (default 1)")
+    g.add_argument("--dbc", help="DBC file (default: the package's, see mdtool.can.paths)")
+
+
+def _db(a):
+    from .dbc import load_db
+    return load_db(a.dbc)
+
+
+class _Session:
+    def __init__(self, a):
+        from .client import Drive
+        from .record import open_bus
+        self.db = _db(a)
+        self.bus = open_bus(a.interface, a.channel, a.bitrate)
+        self.drive = Drive(self.bus, self.db, a.node, a.timeout)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.bus.shutdown()
+
+
+# ------------------------------------------------------------------ scan
+def cmd_scan(a):
+    from .client import scan
+    from .record import open_bus
+    db = _db(a)
+    bus = open_bus(a.interface, a.channel, a.bitrate)
+    try:
+        found = scan(bus, db, a.timeout)
+    finally:
+        bus.shutdown()
+    if not found:
+        print(f"no drive heartbeat on {a.interface}:{a.channel} within {a.timeout:g} s", file=sys.stderr)
+        return 3
+    for node, hb in sorted(found.items()):
+        print(f"node {node}: mode {hb['mode']}, control {hb['control_mode']}, "
+              f"enabled {hb['enabled']}, faults 0x{hb['faults']:04X}, config {hb['cfg_status']}")
+    return 0
+
+
+# ---------------------------------------------------------------- status
+def cmd_status(a):
+    with _Session(a) as s:
+        hb = s.drive.heartbeat()
+        latest = {}
+        t_end = time.monotonic() + a.listen
+        while time.monotonic() < t_end:
+            d = s.drive.decode(s.bus.recv(0.05))
+            if d and d[0] != "HEARTBEAT":
+                latest[d[0]] = d[1]
+    if a.json:
+        print(json.dumps({"node": a.node, "heartbeat": hb, "telemetry": latest}, indent=1))
+        return 0
+    print(f"node {a.node}: " + ", ".join(f"{k} {v}" for k, v in hb.items() if k != "seq"))
+    for name, vals in sorted(latest.items()):
+        print(f"  {name}: " + ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
+                                        for k, v in vals.items() if k != "seq"))
+    return 0
+
+
+# ---------------------------------------------------------------- config
+def _params(a):
+    from .params import ParamTable
+    return ParamTable(a.params_meta)
+
+
+def _read(drive, p):
+    from .params import from_raw
+    return from_raw(p, drive.param("READ", p["id"]))
+
+
+def cmd_config(a):
+    from .params import fmt_value, from_raw, read_toml, to_raw, write_toml
+    table = _params(a)
+    if a.action == "list":  # offline: the table itself
+        for p in table.params:
+            print(f"{p['id']:>4} {p['name']:<24} {p['type']} {table.range_text(p):<32} {p['access']:<9} {p['desc']}")
+        return 0
+    # checks that need no drive come first
+    writes = []
+    if a.action == "set":
+        if not a.items:
+            raise UsageError("config set NAME=VALUE ...")
+        for it in a.items:
+            k, eq, v = it.partition("=")
+            if not eq:
+                raise UsageError(f"expected NAME=VALUE, got {it!r}")
+            writes.append((k, table.check(k, v)))
+    elif a.action == "load":
+        if not a.items or len(a.items) != 1:
+            raise UsageError("config load FILE (a motor, board or drive TOML file)")
+        writes = [(k, table.check(k, v)) for k, v in read_toml(a.items[0], table)]
+    elif a.action == "export" and (not a.items or len(a.items) != 1):
+        raise UsageError("config export FILE")
+    names = a.items if a.action == "get" else []
+    sel = [table.get(n) for n in names] if names else table.params
+
+    with _Session(a) as s:
+        d = s.drive
+        if a.action == "get":
+            for p in sel:
+                v = _read(d, p)
+                print(f"{p['name']:<24} {fmt_value(p, v):>14} {p['unit']:<8} "
+                      f"{table.range_text(p):<32} {p['access']}")
+            return 0
+        if a.action == "export":
+            vals = {p["name"]: _read(d, p) for p in table.params}
+            write_toml(a.items[0], table, vals,
+                       [f"Drive configuration of node {a.node} ({a.interface}:{a.channel}), "
+                        "exported by `mdtool config export`.",
+                        "[motor] and [board] use the keys of sim/motors/*.toml; [drive] the rest.",
+                        "Staged values (what APPLY applies); load with `mdtool config load FILE`."])
+            print(f"{a.items[0]}: {len(vals)} parameters")
+            return 0
+        if a.action == "defaults":
+            d.param("LOAD_DEFAULTS")
+            print("defaults staged")
+        for k, v in writes:
+            p = table.get(k)
+            got = d.param("WRITE", p["id"], to_raw(p, v))
+            print(f"{k} = {fmt_value(p, from_raw(p, got))} {p['unit']} (staged)")
+        if a.action in ("set", "load", "defaults") and not a.no_apply:
+            d.param("APPLY")
+            print("applied")
+        if a.action == "save" or (a.action in ("set", "load", "defaults") and a.save):
+            seq = d.param("SAVE")
+            print(f"saved (record {seq})")
+    return 0
+
+
+# ------------------------------------------------------------------- run
+def cmd_run(a):
+    with _Session(a) as s:
+        n = {"frames": 0}
+
+        def on_frame(name, vals):
+            n["frames"] += 1
+            if name == "SPEED" and a.verbose:
+                print(f"omega {vals['omega_m_rad_s']:.3f} rad/s (ref {vals['omega_ref_rad_s']:.3f})")
+        hb = s.drive.run(a.mode, a.setpoint, a.duration, i_d=a.id, period=a.keepalive, on_frame=on_frame)
+        hb_after = s.drive.wait_for(lambda n, v: n == "HEARTBEAT" and v["enabled"] == 0, a.timeout,
+                                    "HEARTBEAT showing the drive disabled")[1]
+    print(f"ran {a.mode} {a.setpoint:g} for {a.duration:g} s ({n['frames']} frames from node {a.node}); "
+          f"last heartbeat while running: {hb}; now: mode {hb_after['mode']}, enabled {hb_after['enabled']}")
+    return 0
+
+
+# ------------------------------------------------------- record / decode
+def cmd_record(a):
+    from .record import record
+    db = _db(a)
+    rep = record(a.out, db, a.node, interface=a.interface, channel=a.channel, bitrate=a.bitrate,
+                 duration=a.duration, ready=a.ready, report=a.report)
+    if rep["kernel_dropped"] or rep["seq_lost"]:
+        print(f"mdtool: record: frames lost (kernel {rep['kernel_dropped']}, sequence gaps "
+              f"{rep['seq_lost']})", file=sys.stderr)
+        return 1
+    return 0
+
+
+def cmd_decode(a):
+    from .log import decode_log, read_frames, write_csvs
+    db = _db(a)
+    decoded, skipped = decode_log(db, read_frames(a.log), a.node)
+    for p in write_csvs(db, decoded, a.out, a.merged):
+        print(p)
+    if skipped:
+        print(f"skipped {skipped} frames (other nodes, unknown ids or lengths)", file=sys.stderr)
+    return 0
+
+
+def cmd_stats(a):
+    from .log import read_frames, stats_of
+    db = _db(a)
+    s = stats_of(db, read_frames(a.log), a.node, a.bitrate)
+    print(f"{a.log}: {s['frames']} frames in {s['duration_s']:.3f} s, "
+          f"bus load {100 * s['bus_load']:.2f} % of {a.bitrate / 1000:g} kbit/s")
+    print(f"{'message':<18}{'frames':>8}{'rate_hz':>10}{'gaps':>6}{'lost':>6}")
+    for name, e in s["messages"].items():
+        print(f"{name:<18}{e['frames']:>8}{e['rate_hz']:>10.1f}{e['gaps']:>6}{e['lost']:>6}")
+    print(f"frames lost (sequence gaps): {s['lost_total']}")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(s, f, indent=1)
+    return 0
+
+
+def cmd_convert(a):
+    from .log import convert
+    print(f"{a.dst}: {convert(a.src, a.dst)} frames")
+    return 0
+
+
+def cmd_calibrate(a):
+    raise UsageError("calibrate: commissioning over CAN is not in the protocol yet "
+                     "(tools/can/motordrive.dbc has no commissioning command); run it in the SIL "
+                     "with `mcsim run commission` meanwhile")
+
+
+# --------------------------------------------------------------- monitor
+def cmd_monitor(a):
+    from .monitor import monitor
+    with _Session(a) as s:
+        return monitor(s.drive, a.signals, window_s=a.window, frames=a.frames, png=a.png,
+                       no_gui=a.no_gui, duration=a.duration)
+
+
+def add_parsers(sub):
+    p = sub.add_parser("scan", help="nodes on the bus (from their heartbeats)")
+    _bus_args(p, with_node=False)
+    p.add_argument("--timeout", type=float, default=1.0, help="listen this long [s]")
+    p.set_defaults(fn=cmd_scan)
+
+    p = sub.add_parser("status", help="a drive's heartbeat and latest telemetry")
+    _bus_args(p)
+    p.add_argument("--listen", type=float, default=0.3, help="collect telemetry this long [s]")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(fn=cmd_status)
+
+    p = sub.add_parser("config", help="parameters: list | get [NAME...] | set NAME=V... | save | "
+                       "load FILE | export FILE | defaults")
+    p.add_argument("action", choices=["list", "get", "set", "save", "load", "export", "defaults"])
+    p.add_argument("items", nargs="*")
+    p.add_argument("--no-apply", action="store_true", help="set/load/defaults: stage only, no APPLY")
+    p.add_argument("--save", action="store_true", help="set/load/defaults: SAVE after APPLY")
+    p.add_argument("--params-meta", help="parameter table (default: the package's params_meta.json)")
+    _bus_args(p)
+    p.set_defaults(fn=cmd_config)
+
+    p = sub.add_parser("run", help="run a mode with a setpoint; the keep-alive is sent for you")
+    p.add_argument("mode", choices=["current", "speed"])
+    p.add_argument("setpoint", type=float, help="current: i_q [A]; speed: [rad/s]")
+    p.add_argument("--id", type=float, default=0.0, help="current mode: i_d [A]")
+    p.add_argument("--duration", type=float, default=1.0, help="[s] (then disable)")
+    p.add_argument("--keepalive", type=float, default=0.05, help="keep-alive period [s]")
+    p.add_argument("--verbose", "-v", action="store_true")
+    _bus_args(p)
+    p.set_defaults(fn=cmd_run)
+
+    p = sub.add_parser("monitor", help="live plot of chosen signals (matplotlib)")
+    p.add_argument("signals", nargs="+", help="MESSAGE.signal, e.g. SPEED.omega_m_rad_s CURRENTS.i_q_a")
+    p.add_argument("--window", type=float, default=5.0, help="seconds shown")
+    p.add_argument("--frames", type=int, help="stop after this many animation frames")
+    p.add_argument("--duration", type=float, help="stop after this long [s]")
+    p.add_argument("--png", help="write the final figure here")
+    p.add_argument("--no-gui", action="store_true", help="headless (Agg): collect, then write --png")
+    _bus_args(p)
+    p.set_defaults(fn=cmd_monitor)
+
+    p = sub.add_parser("record", help="record the bus (.log candump, .blf, .asc, .mf4, .csv, .trc)")
+    p.add_argument("out")
+    p.add_argument("--duration", type=float, default=0.0, help="seconds (0: until Ctrl-C / SIGTERM)")
+    p.add_argument("--ready", help="touch this file once the bus is open")
+    p.add_argument("--report", help="frames, kernel drops, sequence gaps as JSON")
+    _bus_args(p)
+    p.set_defaults(fn=cmd_record)
+
+    for name, fn, hlp in (("decode", cmd_decode, "decode a log (any format) to CSV"),
+                          ("stats", cmd_stats, "frames per message, sequence gaps, bus load")):
+        p = sub.add_parser(name, help=hlp)
+        p.add_argument("log")
+        p.add_argument("--node", "-n", type=int, default=1)
+        p.add_argument("--dbc")
+        if name == "decode":
+            p.add_argument("--out", required=True, help="output directory")
+            p.add_argument("--merged", action="store_true", help="one merged.csv")
+        else:
+            p.add_argument("--bitrate", type=float, default=1e6, help="[bit/s] (default 1e6)")
+            p.add_argument("--json")
+        p.set_defaults(fn=fn)
+
+    p = sub.add_parser("convert", help="copy a log into another format (by extension)")
+    p.add_argument("src")
+    p.add_argument("dst")
+    p.set_defaults(fn=cmd_convert)
+
+    p = sub.add_parser("calibrate", help="commissioning over CAN (not in the protocol yet)")
+    _bus_args(p)
+    p.set_defaults(fn=cmd_calibrate)

@@ -1,0 +1,176 @@
+"""The drive over any python-can bus (socketcan, slcan, pcan, virtual, ...):
+heartbeats, commands, the parameter service (PARAM_REQ / PARAM_REPLY) and a
+run with the keep-alive sent for you.
+
+Every wait has a timeout (NoReply); a refusal carries the drive's reason
+decoded from the DBC (PARAM_REPLY.status, CMD_ERROR.error).
+"""
+import time
+
+from .dbc import CMD_MASK, by_cmd, cmd_of, decode_signals, encode_signals, frame_id, node_of
+from .errors import NoReply, Refused, UsageError
+
+OPS = {"READ": 0, "WRITE": 1, "APPLY": 2, "SAVE": 3, "LOAD_DEFAULTS": 4}
+#: What a PARAM_REPLY status means (firmware/app/config/README.md).
+STATUS_HELP = {
+    "UNKNOWN_ID": "no parameter with this id on the drive",
+    "READONLY": "the parameter is computed by the drive",
+    "RANGE": "value out of range or not finite",
+    "RUNNING": "not while the bridge is on: disable the drive first",
+    "FAULT": "a fault is latched: clear it first",
+    "INVALID": "the staged set fails validation as a whole",
+    "STORE": "the drive has no parameter store (or writing it failed)",
+    "OPCODE": "unknown operation",
+}
+ERROR_HELP = {"UNSUPPORTED": "this drive does not offer it (e.g. no parameter service attached)"}
+
+
+def named(msg, vals):
+    """Signal values with the DBC's names for enumerated ones."""
+    out = {}
+    for s in msg.signals:
+        v = vals[s.name]
+        if s.choices and int(v) in s.choices:
+            out[s.name] = str(s.choices[int(v)])
+        elif s.scale == 1 and s.offset == 0 and not s.is_float:
+            out[s.name] = int(v)
+        else:
+            out[s.name] = v
+    return out
+
+
+class Drive:
+    def __init__(self, bus, db, node=1, timeout=1.0):
+        self.bus, self.db, self.node, self.timeout = bus, db, node, timeout
+        self.table = by_cmd(db)
+        self.hb_counter = 0
+        frame_id(node, 0)
+
+    # -------------------------------------------------------------- frames
+    def send(self, name, **values):
+        import can
+        msg = self.db.get_message_by_name(name)
+        data = encode_signals(msg, values)
+        self.bus.send(can.Message(arbitration_id=frame_id(self.node, cmd_of(msg)), data=data,
+                                  is_extended_id=False))
+
+    def decode(self, m, node=None):
+        """(message name, values) of a frame of `node` (default: ours), else None."""
+        if m is None or m.is_extended_id or m.is_error_frame or m.is_remote_frame:
+            return None
+        if node_of(m.arbitration_id) != (self.node if node is None else node):
+            return None
+        msg = self.table.get(m.arbitration_id & CMD_MASK)
+        if msg is None or len(m.data) != msg.length:
+            return None
+        return msg.name, named(msg, decode_signals(msg, m.data))
+
+    def wait_for(self, pred, timeout, what):
+        """The first decoded frame of our node for which pred(name, values)
+        holds; CMD_ERROR frames for `what`'s command raise Refused."""
+        t_end = time.monotonic() + timeout
+        while True:
+            left = t_end - time.monotonic()
+            if left <= 0:
+                raise NoReply(f"no {what} from node {self.node} within {timeout:g} s "
+                              f"(is the drive on this bus, with this node id and bit rate?)")
+            d = self.decode(self.bus.recv(min(left, 0.1)))
+            if d is None:
+                continue
+            if pred(*d):
+                return d
+
+    def check_cmd_error(self, name, vals, cmd_name):
+        if name == "CMD_ERROR":
+            rejected = self.table.get(int(vals["rejected_cmd"]))
+            if rejected is not None and rejected.name == cmd_name:
+                err = vals["error"]
+                raise Refused(f"the drive refused {cmd_name}: {err}"
+                              + (f" ({ERROR_HELP[err]})" if err in ERROR_HELP else ""), status=err)
+
+    # ---------------------------------------------------------- heartbeats
+    def heartbeat(self, timeout=None):
+        return self.wait_for(lambda n, v: n == "HEARTBEAT", timeout or self.timeout, "HEARTBEAT")[1]
+
+    def host_heartbeat(self):
+        self.send("HOST_HEARTBEAT", counter=self.hb_counter)
+        self.hb_counter = (self.hb_counter + 1) & 0xFF
+
+    # ------------------------------------------------------------ params
+    def param(self, op, pid=0, raw=0, timeout=None):
+        """One PARAM_REQ; returns the reply's raw value, or raises Refused
+        with the drive's reason, NoReply after the timeout."""
+        self.send("PARAM_REQ", opcode=OPS[op], param_id=pid, value=raw)
+
+        def match(name, vals):
+            self.check_cmd_error(name, vals, "PARAM_REQ")
+            return name == "PARAM_REPLY" and vals["opcode"] == op and int(vals["param_id"]) == pid
+        _n, vals = self.wait_for(match, timeout or self.timeout, f"PARAM_REPLY to {op}")
+        if vals["status"] != "OK":
+            st = vals["status"]
+            raise Refused(f"the drive refused {op}: {st}" + (f" ({STATUS_HELP[st]})" if st in STATUS_HELP else ""),
+                          status=st, value=int(vals["value"]))
+        return int(vals["value"])
+
+    # --------------------------------------------------------------- run
+    def run(self, mode, setpoint, duration, i_d=0.0, period=0.05, on_frame=None):
+        """Select `mode` (current: setpoint = i_q [A]; speed: rad/s), enable,
+        hold the setpoint for `duration` s with the keep-alive every
+        `period` s, then disable. Returns the last heartbeat seen."""
+        mode = mode.upper()
+        if mode not in ("CURRENT", "SPEED"):
+            raise UsageError(f"mode {mode.lower()!r}: current or speed")
+        code = {"CURRENT": 1, "SPEED": 2}[mode]
+
+        def ref():
+            if mode == "CURRENT":
+                self.send("SET_CURRENT_REF", i_d_ref_a=i_d, i_q_ref_a=setpoint)
+            else:
+                self.send("SET_SPEED_REF", omega_ref_rad_s=setpoint)
+        self.send("SET_CONTROL_MODE", control_mode=code)
+        self.wait_for(lambda n, v: self.check_cmd_error(n, v, "SET_CONTROL_MODE") or
+                      (n == "HEARTBEAT" and v["control_mode"] == mode), self.timeout,
+                      f"HEARTBEAT in control mode {mode}")
+        ref()
+        self.send("SET_ENABLE", enable=1)
+        last_hb = None
+        t0 = time.monotonic()
+        t_next = t0
+        try:
+            while time.monotonic() - t0 < duration:
+                now = time.monotonic()
+                if now >= t_next:
+                    self.host_heartbeat()
+                    ref()
+                    t_next = now + period
+                d = self.decode(self.bus.recv(max(0.0, min(t_next - time.monotonic(), 0.02))))
+                if d is None:
+                    continue
+                name, vals = d
+                for c in ("SET_ENABLE", "SET_CURRENT_REF", "SET_SPEED_REF"):
+                    self.check_cmd_error(name, vals, c)
+                if name == "HEARTBEAT":
+                    last_hb = vals
+                    if vals["mode"] == "FAULT":
+                        raise Refused(f"the drive faulted (faults 0x{vals['faults']:04X})", status="FAULT")
+                if on_frame:
+                    on_frame(name, vals)
+        finally:
+            self.send("SET_ENABLE", enable=0)
+        return last_hb
+
+
+def scan(bus, db, timeout=1.0):
+    """{node: heartbeat values} of every node whose HEARTBEAT arrives within timeout."""
+    hb = db.get_message_by_name("HEARTBEAT")
+    found = {}
+    t_end = time.monotonic() + timeout
+    while True:
+        left = t_end - time.monotonic()
+        if left <= 0:
+            return found
+        m = bus.recv(min(left, 0.1))
+        if m is None or m.is_extended_id or m.is_error_frame or len(m.data) != hb.length:
+            continue
+        if m.arbitration_id & CMD_MASK == cmd_of(hb):
+            found[node_of(m.arbitration_id)] = named(hb, decode_signals(hb, m.data))
