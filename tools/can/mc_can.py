@@ -172,10 +172,7 @@ def main(argv=None):
     a = p.parse_args(argv)
     try:
         frame_id(a.node, 0)
-        # record needs no DBC unless it decodes: cantools imports python-can, which
-        # imports asammdf, pandas and pyarrow when they are installed (seconds,
-        # tens of seconds in the CAN test's emulated VM) before the socket opens
-        db = None if a.cmd == "record" and not a.decode_dir else load_db(a.dbc)
+        db = load_db(a.dbc)  # record too: it counts sequence gaps as it goes
         return {"record": cmd_record, "decode": cmd_decode, "stats": cmd_stats, "plot": cmd_plot,
                 "encode": cmd_encode, "send": cmd_send, "table": cmd_table, "dbc": cmd_dbc,
                 "gen-c": cmd_gen_c}[a.cmd](a, db)
