@@ -112,6 +112,7 @@ class Summary {
   std::string to_json() const;
   const std::map<std::string, double>& numbers() const { return num_; }
   const std::map<std::string, std::string>& texts() const { return txt_; }
+  const std::map<std::string, std::map<std::string, double>>& objects() const { return obj_; }
 
  private:
   std::map<std::string, double> num_;

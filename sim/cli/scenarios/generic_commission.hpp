@@ -23,7 +23,10 @@ struct CommissionSetup {
   double noise_rms_a = 0.0;         // plant: current noise per channel [A]
   double i_test_a = 0.0;            // 0: 0.25 i_sense_max_a (the board's range)
   double t_max_s = 12.0;            // give up after this much simulated time
-  std::uint64_t seed = 1;
+  std::uint64_t seed = 1;           // plant: current-noise generator
+  // verify_speed_step, sensorless: the rotor's electrical angle at the
+  // start (the I-f start resets its observer at angle 0; see the .cpp).
+  double sensorless_start_theta_e_rad = 0.0;
   // Test hooks: injections once the board is built, and a call every period
   // (e.g. a load that appears in the flux step).
   std::function<void(hal_host::PmsmBoard&)> inject;
