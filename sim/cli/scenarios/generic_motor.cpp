@@ -169,6 +169,7 @@ void run_current_step(RunContext& ctx) {
     rq.add(t, iq);
     rd.add(t, id);
     rec.row(t, id, iq, rig.board().state()(2));
+    if (d.faults != 0u) break;  // as the speed scenarios: a faulted run ends at its fault
     if (k < n) rig.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
