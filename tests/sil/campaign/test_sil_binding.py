@@ -38,14 +38,23 @@ def csv_text(r):
     return "\n".join(lines) + "\n"
 
 
-def json_text(summary):
-    """mcsim::Summary::to_json: texts, then numbers, each sorted by key."""
+def json_text(summary, objects=None):
+    """mcsim::Summary::to_json: texts, then numbers, each sorted by key, then
+    the nested objects by name (their numbers are also in `summary` as
+    "OBJECT.KEY": those are left out of the numbers)."""
     def s(x):
         return '"' + x.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+    def num(v):
+        return c_g(v, 10) if math.isfinite(v) else "null"
+    objects = objects or {}
+    flat = {f"{o}.{k}" for o, kv in objects.items() for k in kv}
     texts = sorted((k, v) for k, v in summary.items() if isinstance(v, str))
-    nums = sorted((k, v) for k, v in summary.items() if not isinstance(v, str))
+    nums = sorted((k, v) for k, v in summary.items() if not isinstance(v, str) and k not in flat)
     items = [f"{s(k)}: {s(v)}" for k, v in texts]
-    items += [f"{s(k)}: {c_g(v, 10) if math.isfinite(v) else 'null'}" for k, v in nums]
+    items += [f"{s(k)}: {num(v)}" for k, v in nums]
+    items += [f"{s(o)}: {{" + ", ".join(f"{s(k)}: {num(v)}" for k, v in sorted(kv.items())) + "}"
+              for o, kv in sorted(objects.items())]
     return "{" + ",".join("\n  " + i for i in items) + "\n}\n"
 
 
@@ -74,7 +83,7 @@ class BitForBit(unittest.TestCase):
         with open(os.path.join(out, scenario + ".csv")) as f:
             self.assertEqual(csv_text(r), f.read())
         with open(os.path.join(out, scenario + ".json")) as f:
-            self.assertEqual(json_text(r.summary), f.read())
+            self.assertEqual(json_text(r.summary, r.objects), f.read())
         df = r.trajectory
         self.assertEqual(list(df.columns), r.columns)
         self.assertEqual(df.shape, r.data.shape)
@@ -94,6 +103,34 @@ class BitForBit(unittest.TestCase):
 
     def test_own_motor_scenario(self):
         self.same("foc-current-step", duration=0.01)
+
+    def test_commission_objects(self):
+        # The nested objects ("identified", "true", "error") byte for byte,
+        # and as dotted keys in the summary (what campaigns read).
+        m = "sim/motors/paper002-40kw.toml"
+        r = self.same("commission", m, m, {"encoder_direction": -1, "seed": 7, "verify": 1})
+        self.assertEqual(set(r.objects), {"identified", "true", "error"})
+        for name, kv in r.objects.items():
+            for k, v in kv.items():
+                self.assertEqual(r.summary[f"{name}.{k}"], v)
+        # The error object is the identified against the true value.
+        self.assertEqual(r.summary["error.r_frac"],
+                         r.summary["identified.r_ohm"] / r.summary["true.r_ohm"] - 1)
+        self.assertEqual(r.summary["error.pole_pairs_diff"],
+                         r.summary["identified.pole_pairs"] - r.summary["true.pole_pairs"])
+        self.assertEqual(r.summary["error.direction_wrong"], 0.0)
+        self.assertEqual(r.summary["true.encoder_direction"], -1.0)
+        # verify=1 ran both laws on the identified values (this non-salient
+        # motor is one the sensorless law takes).
+        self.assertTrue(math.isfinite(r.summary["verify.sensorless_speed_err_frac"]))
+
+    def test_commission_seed_changes_noise(self):
+        m = "sim/motors/paper002-40kw.toml"
+        a = sil.run("commission", m, m, {"seed": 1})
+        b = sil.run("commission", m, m, seed=2)
+        self.assertEqual(b.summary["param.seed"], 2.0)
+        self.assertNotEqual(a.summary["identified.r_ohm"], b.summary["identified.r_ohm"])
+        self.assertEqual(a.summary["true.r_ohm"], b.summary["true.r_ohm"])
 
     def test_deterministic_in_process(self):
         a = sil.run("current-step", M, B, {"iq_step_a": 4.0})

@@ -19,9 +19,7 @@
 
 namespace nb = nanobind;
 
-#ifndef MDTOOL_GIT_HASH
-#define MDTOOL_GIT_HASH "unknown"
-#endif
+#include "mdtool_git_hash.h"  // MDTOOL_GIT_HASH, written at every build (git_hash.cmake)
 
 namespace {
 
@@ -66,14 +64,20 @@ nb::dict run(const std::string& scenario, const std::string& motor, const std::s
   const size_t nrows = trajectory ? sink->rows() : 0;
   nb::ndarray<nb::numpy, double, nb::ndim<2>> data(
       const_cast<double*>(sink->data().data()), {nrows, ncols}, owner);
-  nb::dict numbers, texts, out;
+  nb::dict numbers, texts, objects, out;
   for (const auto& kv : summary.numbers()) numbers[kv.first.c_str()] = kv.second;
   for (const auto& kv : summary.texts()) texts[kv.first.c_str()] = kv.second;
+  for (const auto& o : summary.objects()) {  // e.g. commission's "identified": {...}
+    nb::dict d;
+    for (const auto& kv : o.second) d[kv.first.c_str()] = kv.second;
+    objects[o.first.c_str()] = d;
+  }
   out["columns"] = sink->names();
   out["rows"] = sink->rows();
   out["data"] = data;
   out["numbers"] = numbers;
   out["texts"] = texts;
+  out["objects"] = objects;
   out["error"] = error.empty() ? nb::none() : nb::cast(error);
   out["error_kind"] = kind.empty() ? nb::none() : nb::cast(kind);
   return out;

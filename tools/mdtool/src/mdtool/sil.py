@@ -4,7 +4,9 @@
     r = sil.run("current-step", motor="sim/motors/odrive-d5065.toml",
                 board="sim/motors/odrive-v36-24v.toml", params={"iq_step_a": 5})
     r.trajectory   # pandas DataFrame, the columns of `mcsim run`'s CSV
-    r.summary      # dict, the keys of `mcsim run`'s JSON
+    r.summary      # dict, the keys of `mcsim run`'s JSON; a nested object
+                   # ("identified": {"r_ohm": ...}) as dotted keys "identified.r_ohm"
+    r.objects      # the nested objects as they are: {"identified": {"r_ohm": ...}}
 
 The numbers are those of `mcsim run` with the same arguments, bit for bit:
 the same C++ function runs (mcsim::execute_run); the CSV prints the
@@ -21,7 +23,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
@@ -57,6 +59,7 @@ class Result:
     summary: dict[str, Any]
     error: str | None = None
     error_kind: str | None = None  # None, "usage" or "failed"
+    objects: dict[str, dict[str, float]] = field(default_factory=dict)
 
     @property
     def trajectory(self):
@@ -78,13 +81,26 @@ def _value(v: Any) -> str:
     if isinstance(v, (int, np.integer)):
         return str(int(v))
     if isinstance(v, (float, np.floating)):
-        return repr(float(v))  # shortest text that strtod reads back exactly
+        v = float(v)
+        if v.is_integer() and 0 < abs(v) < 2**53:
+            # An integral value as an integer: a motor file's integer keys
+            # (pole_pairs, encoder_cpr) refuse "7.0", every number key takes
+            # "7"; a Parquet column holding ints and NaN comes back as floats.
+            return str(int(v))
+        return repr(v)  # shortest text that strtod reads back exactly
     raise TypeError(f"parameter value {v!r}: a number or a name is expected")
 
 
 def _summary(raw: dict) -> dict[str, Any]:
+    """Texts and numbers by key; each nested object's numbers as "OBJECT.KEY"."""
     s: dict[str, Any] = dict(raw["texts"])
     s.update(raw["numbers"])
+    for name, obj in raw["objects"].items():
+        for k, v in obj.items():
+            key = f"{name}.{k}"
+            if key in s:  # a scenario's naming bug; never silently overwrite
+                raise RuntimeError(f"summary key '{key}' is both a number and in object '{name}'")
+            s[key] = v
     return s
 
 
@@ -112,7 +128,8 @@ def run_raw(scenario: str, motor: str | os.PathLike | None = None,
     except _sil.UsageError as e:
         raise UsageError(str(e)) from None
     return Result(columns=list(raw["columns"]), data=raw["data"], summary=_summary(raw),
-                  error=raw["error"], error_kind=raw["error_kind"])
+                  error=raw["error"], error_kind=raw["error_kind"],
+                  objects={k: dict(v) for k, v in raw["objects"].items()})
 
 
 def run(scenario: str, motor: str | os.PathLike | None = None,
