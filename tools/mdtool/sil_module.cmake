@@ -11,16 +11,18 @@ function(mdtool_add_sil_module out_dir)
   find_package(nanobind CONFIG REQUIRED)
   # The firmware commit the module is built from: a campaign writes it into
   # every row (tools/mdtool/README.md). "-dirty" when the tree had changes.
+  # Generated at every build (git_hash.cmake), not at configure time.
   get_filename_component(root ${MDTOOL_DIR}/../.. ABSOLUTE)
-  execute_process(COMMAND git -C ${root} describe --always --dirty --abbrev=40
-                  OUTPUT_VARIABLE hash OUTPUT_STRIP_TRAILING_WHITESPACE
-                  RESULT_VARIABLE rc ERROR_QUIET)
-  if(NOT rc EQUAL 0 OR hash STREQUAL "")
-    set(hash "unknown")
-  endif()
+  set(gen ${CMAKE_CURRENT_BINARY_DIR}/mdtool_gen)
+  add_custom_target(mdtool_git_hash
+    COMMAND ${CMAKE_COMMAND} -DROOT=${root} -DOUT=${gen}/mdtool_git_hash.h
+            -P ${MDTOOL_DIR}/git_hash.cmake
+    BYPRODUCTS ${gen}/mdtool_git_hash.h
+    COMMENT "mdtool: git hash of the tree")
   nanobind_add_module(_sil NB_STATIC ${MDTOOL_DIR}/csrc/sil_module.cpp)
   # Scenarios register themselves from static initialisers: keep every object.
   target_link_libraries(_sil PRIVATE $<LINK_LIBRARY:WHOLE_ARCHIVE,mcsim_scenarios>)
-  target_compile_definitions(_sil PRIVATE MDTOOL_GIT_HASH="${hash}")
+  add_dependencies(_sil mdtool_git_hash)
+  target_include_directories(_sil PRIVATE ${gen})
   set_target_properties(_sil PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${out_dir})
 endfunction()
