@@ -7,6 +7,7 @@ malformed campaign file is refused with its line and the reason.
     test_campaign.py --mcsim PATH --root REPO --work DIR
 """
 import argparse
+import json
 import os
 import shutil
 import signal
@@ -51,7 +52,7 @@ def mdtool(*argv, check=True, timeout=240):
     return p
 
 
-def results(out, drop=("wall_s",)):
+def results(out, drop=("wall_s", "worker")):
     return pd.read_parquet(os.path.join(out, "results.parquet")).drop(columns=list(drop))
 
 
@@ -87,6 +88,10 @@ class Campaigns(unittest.TestCase):
         p = mdtool("sweep", self.file, "--out", out, "--workers", "2", "--chunk", "2")
         self.assertIn('"ran": 12', p.stdout)
         pd.testing.assert_frame_equal(results(out), results(self.serial), check_exact=True)
+        # Two worker processes ran them, neither of them the serial one.
+        workers = set(results(out, drop=())["worker"])
+        self.assertEqual(len(workers), 2, workers)
+        self.assertFalse(workers & set(results(self.serial, drop=())["worker"]))
 
     def test_resume_after_max_runs(self):
         out = os.path.join(ARGS.work, "resume")
@@ -144,6 +149,171 @@ class Campaigns(unittest.TestCase):
             self.assertIn('"same": true', p.stdout)
 
 
+DERIVED = """\
+[campaign]
+name = "derived"
+scenario = "current-step"
+motor = "{root}/sim/motors/odrive-d5065.toml"
+board = "{root}/sim/motors/odrive-v36-24v.toml"
+duration_s = 0.004
+seed = 5
+samples = 3
+
+[sweep]
+"motor.r_ohm" = {{ dist = "loguniform", low = 0.02, high = 0.2 }}
+"motor.pole_pairs" = [4, 7]
+
+[vars]
+tau_s = {{ dist = "uniform", low = 3.0e-4, high = 1.0e-3 }}
+shift = [0.0, -1.0]
+
+[derived]
+"motor.ld_h" = "motor.r_ohm * tau_s"
+"motor.lq_h" = "motor.ld_h"
+iq_step_a = "log10(1.0 + shift) + 2.0"   # log10(0): the runs of shift = -1 are refused
+"""
+
+
+class VarsAndDerived(unittest.TestCase):
+    """[vars] are drawn but not given to the scenario; [derived] parameters
+    are computed from the others; a derivation that fails refuses its run."""
+
+    def test_rows(self):
+        path = os.path.join(ARGS.work, "derived.toml")
+        with open(path, "w") as f:
+            f.write(DERIVED.format(root=ARGS.root))
+        out = os.path.join(ARGS.work, "derived")
+        shutil.rmtree(out, ignore_errors=True)
+        mdtool("sweep", path, "--out", out, "--serial", "--quiet")
+        df = results(out)
+        self.assertEqual(len(df), 2 * 2 * 3)  # pole pairs x shift x samples
+        ok = df[df["var.shift"] == 0.0]
+        bad = df[df["var.shift"] == -1.0]
+        self.assertEqual(len(ok), 6)
+        # The derived values are the expressions of the drawn ones, exactly,
+        # and the run used them (the summary echoes the motor's values).
+        self.assertTrue(((ok["in.motor.ld_h"] == ok["in.motor.r_ohm"] * ok["var.tau_s"])).all())
+        self.assertTrue((ok["in.motor.lq_h"] == ok["in.motor.ld_h"]).all())
+        self.assertTrue((ok["in.iq_step_a"] == 2.0).all())
+        self.assertTrue((ok["out.param.iq_step_a"] == 2.0).all())
+        self.assertEqual(set(ok["status"]), {"pass"})
+        self.assertNotIn("out.param.tau_s", df.columns)  # a var is not a parameter
+        self.assertNotIn("in.tau_s", df.columns)
+        # Integer grid values reach the motor file as integers.
+        self.assertEqual(sorted(set(df["in.motor.pole_pairs"])), [4, 7])
+        self.assertEqual(set(bad["status"]), {"refused"})
+        for e in bad["error"]:
+            self.assertIn("derived iq_step_a = 'log10(1.0 + shift) + 2.0': math domain error", e)
+        # A row reruns to itself from the row alone (derived values included).
+        for rid in (int(ok["run_id"].iloc[0]), int(bad["run_id"].iloc[0])):
+            p = mdtool("rerun", out, str(rid))
+            self.assertIn('"same": true', p.stdout)
+
+
+class ShippedCampaigns(unittest.TestCase):
+    def test_they_load(self):
+        from mdtool import campaign
+        d = os.path.join(ARGS.root, "tools/mdtool/campaigns")
+        names = sorted(f for f in os.listdir(d) if f.endswith(".toml"))
+        self.assertIn("commissioning-accuracy.toml", names)
+        for f in names:
+            with self.subTest(f=f):
+                c = campaign.load(os.path.join(d, f))
+                self.assertGreater(c.n_runs(), 0)
+                self.assertTrue(c.criteria)
+        c = campaign.load(os.path.join(d, "commissioning-accuracy.toml"))
+        # Issue 18's bounds are the criteria.
+        crit = {k.name: k.text for k in c.criteria}
+        self.assertEqual(crit["r_2pct"], "abs(error.r_frac) < 0.02")
+        self.assertEqual(crit["ld_5pct"], "abs(error.ld_frac) < 0.05")
+        self.assertEqual(crit["lq_5pct"], "abs(error.lq_frac) < 0.05")
+        self.assertEqual(crit["flux_3pct"], "abs(error.flux_frac) < 0.03")
+        self.assertEqual(crit["offset_1deg"], "abs(error.encoder_offset_deg) < 1.0")
+        self.assertEqual(crit["pole_pairs_exact"], "error.pole_pairs_diff == 0")
+        self.assertEqual(crit["direction_right"], "error.direction_wrong == 0")
+        # Every drawn motor is a valid motor file: the first runs' inputs.
+        for i in range(3):
+            r = c.run_inputs(i)
+            self.assertIsNone(r["refuse"])
+            p = r["params"]
+            self.assertLessEqual(p["motor.ld_h"], p["motor.lq_h"])
+            self.assertIsInstance(p["motor.pole_pairs"], int)
+
+
+class Report(unittest.TestCase):
+    def test_histograms_and_tables(self):
+        path = os.path.join(ARGS.work, "tiny-report.toml")
+        with open(path, "w") as f:
+            f.write(CAMPAIGN.format(root=ARGS.root))
+        serial = os.path.join(ARGS.work, "serial-report")
+        shutil.rmtree(serial, ignore_errors=True)
+        mdtool("sweep", path, "--out", serial, "--serial", "--quiet")
+        rep = os.path.join(ARGS.work, "report")
+        shutil.rmtree(rep, ignore_errors=True)
+        mdtool("report", serial, "--x", "iq_step_a", "--y", "id_step_a", "--metric",
+               "pass_rate", "--hist", "iq_rise_time_ratio=1.25", "--report-dir", rep,
+               "--with-results")
+        for f in ("envelope.png", "histograms.png", "summary.md", "envelope.csv",
+                  "results.parquet"):
+            self.assertTrue(os.path.exists(os.path.join(rep, f)), f)
+        df = results(serial)
+        v = df["out.iq_rise_time_ratio"].dropna().abs()
+        with open(os.path.join(rep, "summary.md")) as f:
+            md = f.read()
+        self.assertIn(f"| iq_rise_time_ratio | 1.25 | {len(v)} | {int((v < 1.25).sum())} |", md)
+        st = df["status"].value_counts()
+        self.assertIn(f"| **all** | {len(df)} | {st.get('pass', 0)} | {st.get('fail', 0)} | "
+                      f"{st.get('refused', 0)} | {st.get('fault', 0)} |", md)
+        # The copy holds the same rows, with paths relative to the directory it was made in.
+        copy = pd.read_parquet(os.path.join(rep, "results.parquet")).drop(columns=["wall_s"])
+        self.assertNotIn("worker", copy.columns)
+        self.assertEqual(list(copy["run_id"]), list(df["run_id"]))
+        self.assertFalse(copy["motor"].iloc[0].startswith("/"))
+        p = mdtool("report", serial, "--hist", "iq_rise_time_ratio=-1", "--report-dir", rep,
+                   check=False)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("positive BOUND", p.stderr)
+
+
+class BenchPage(unittest.TestCase):
+    """The benchmark's page is arithmetic on its JSON (not a timing test)."""
+
+    def test_sizing_arithmetic(self):
+        res = {"scenario": "current-step", "duration_s": 1.0, "runs": 20, "firmware_git": "x",
+               "cpu": "cpu", "nproc": 2, "cores_usable": 2, "python": "3",
+               "load_avg_before": [0.1, 0.1, 0.1], "load_avg_after": [0.2, 0.1, 0.1],
+               "bench_wall_s": 60.0, "inprocess_runs_per_s": 4.0,
+               "inprocess_cpu_s_per_run": 0.25, "inprocess_realtime_factor": 4.0,
+               "mcsim_subprocess_runs_per_s": 2.0, "mcsim_subprocess_cpu_s_per_run": 0.5,
+               "inprocess_over_subprocess": 2.0, "fault_run_error": "run failed: OVERCURRENT",
+               "fault_run_sim_s": 0.001, "fault_run_s": 0.0025, "fault_run_cpu_s": 0.0025,
+               "pass_run_s": 0.25, "fault_cost_ratio": 0.01, "dask_1_worker_runs_per_s": 3.6,
+               "dask_1_worker_cpu_s_per_run": 0.25, "dask_2_workers_runs_per_s": 6.0,
+               "dask_2_workers_cpu_s_per_run": 0.3, "dask_scaling_efficiency": 6.0 / 7.2,
+               "dask_cpu_efficiency": 0.25 / 0.3, "dask_task_latency_s": 0.002,
+               "dask_task_overhead_s": 0.01, "parquet_bytes_per_row": 200.0}
+        js = os.path.join(ARGS.work, "bench.json")
+        md = os.path.join(ARGS.work, "bench.md")
+        with open(js, "w") as f:
+            json.dump(res, f)
+        mdtool("bench-sil", "--from-json", js, "--md", md)
+        with open(md) as f:
+            text = f.read()
+        # 100,000 runs x 0.3 CPU s = 30,000 core-seconds = 8.33 core-hours;
+        # on 32 cores: 937.5 s = 16 min at E = 1, 1125 s = 19 min at E = 0.83.
+        self.assertIn("100,000 x c = 8.33 core-hours", text)
+        self.assertIn("| 32 | 16 min | 19 min |", text)
+        self.assertIn("tasks of at least 4 runs", text)  # 100 x 10 ms / 0.3 s = 3.3, up to 4
+        self.assertIn("(this scenario's 100,000 rows: 20 MB)", text)
+        self.assertNotIn("machine was busy", text)
+        res["load_avg_before"] = [5.0, 4.0, 3.0]
+        with open(js, "w") as f:
+            json.dump(res, f)
+        mdtool("bench-sil", "--from-json", js, "--md", md)
+        with open(md) as f:
+            self.assertIn("**The machine was busy** (load average up to 5 on 2 cores", f.read())
+
+
 BAD = [
     # (text, line, reason fragment)
     ("[campaign\nname = 'x'\n", 1, "malformed TOML"),
@@ -167,6 +337,15 @@ BAD = [
     ("{head}\nsamples = 3\n", 6, "samples > 1 needs a distribution"),
     ("{head}\n[fixed]\niq_step_a = 'big'\n", 7, "value 'big' for iq_step_a"),
     ("{head}\n[sweeps]\n", 6, "unknown table [sweeps]"),
+    ("{head}\n[vars]\nx = [1.0]\n[derived]\niq_step_a = 'x + y'\n", 9,
+     "derived iq_step_a reads y: not fixed, swept, a var or derived above it"),
+    ("{head}\n[vars]\niq_step_a = [1.0]\n", 7, "var 'iq_step_a' is also a parameter"),
+    ("{head}\n[vars]\nabs = [1.0]\n", 7, "var name 'abs'"),
+    ("{head}\n[sweep]\niq_step_a = [1.0]\n[derived]\niq_step_a = '2.0'\n", 9,
+     "'iq_step_a' is derived and also fixed, swept or a var"),
+    ("{head}\n[derived]\niq_step_a = 2.0\n", 7, "must be an expression in a string"),
+    ("{head}\n[derived]\nnot_a_key = '2.0'\n", 7, "unknown key 'not_a_key'"),
+    ("{head}\n[derived]\niq_step_a = 'open(1)'\n", 7, "only calls to"),
 ]
 
 

@@ -43,6 +43,7 @@ import json
 import math
 import os
 import re
+import socket
 import sys
 import time
 from dataclasses import dataclass, field
@@ -87,7 +88,9 @@ class _Lines:
 
 # ---------------------------------------------------------- pass expressions
 _FUNCS = {"abs": abs, "min": min, "max": max, "isnan": math.isnan, "isfinite": math.isfinite,
-          "sqrt": math.sqrt, "log10": math.log10}
+          "sqrt": math.sqrt, "log10": math.log10, "log": math.log, "exp": math.exp,
+          "round": round, "floor": math.floor, "ceil": math.ceil}
+_CONSTS = {"pi": math.pi}
 _NODES = (ast.Expression, ast.BoolOp, ast.And, ast.Or, ast.UnaryOp, ast.Not, ast.USub, ast.UAdd,
           ast.BinOp, ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.Mod, ast.Compare, ast.Eq,
           ast.NotEq, ast.Lt, ast.LtE, ast.Gt, ast.GtE, ast.Name, ast.Load, ast.Attribute,
@@ -103,30 +106,52 @@ def _dotted(node: ast.AST) -> str | None:
     return None
 
 
-class Criterion:
-    """A pass criterion: a Python-syntax expression over the summary's keys
-    (dotted names such as param.speed_rad_s included), numbers, arithmetic,
-    comparisons, and/or/not and abs min max isnan isfinite sqrt log10."""
+class Expr:
+    """A Python-syntax expression over named values (dotted names such as
+    param.speed_rad_s or motor.r_ohm included): numbers, arithmetic,
+    comparisons, and/or/not, x if c else y, the constant pi and the
+    functions abs min max isnan isfinite sqrt log log10 exp round floor ceil.
+    `what` names it in messages ("pass criterion 'ok'")."""
 
-    def __init__(self, name: str, text: str):
-        self.name, self.text = name, text
+    def __init__(self, what: str, text: str):
+        self.what, self.text = what, text
         try:
             tree = ast.parse(text, mode="eval")
         except SyntaxError as e:
-            raise ValueError(f"pass criterion '{name}': {e.msg}: {text!r}") from None
+            raise ValueError(f"{what}: {e.msg}: {text!r}") from None
         for node in ast.walk(tree):
             if not isinstance(node, _NODES):
-                raise ValueError(f"pass criterion '{name}': {type(node).__name__} is not allowed "
-                                 f"in {text!r}")
+                raise ValueError(f"{what}: {type(node).__name__} is not allowed in {text!r}")
             if isinstance(node, ast.Call) and (not isinstance(node.func, ast.Name)
                                                or node.func.id not in _FUNCS or node.keywords):
-                raise ValueError(f"pass criterion '{name}': only calls to "
+                raise ValueError(f"{what}: only calls to "
                                  f"{', '.join(sorted(_FUNCS))} are allowed in {text!r}")
             if isinstance(node, ast.Attribute) and _dotted(node) is None:
-                raise ValueError(f"pass criterion '{name}': malformed name in {text!r}")
+                raise ValueError(f"{what}: malformed name in {text!r}")
         self.tree = tree
 
-    def __call__(self, summary: dict[str, Any]) -> bool:
+    def names(self) -> set[str]:
+        """The values it reads (function names and constants excepted)."""
+        out: set[str] = set()
+
+        def walk(n: ast.AST):
+            if isinstance(n, ast.Call):
+                for a in n.args:
+                    walk(a)
+                return
+            if isinstance(n, (ast.Name, ast.Attribute)):
+                key = _dotted(n)
+                if key not in _CONSTS:
+                    out.add(key)
+                return
+            for c in ast.iter_child_nodes(n):
+                walk(c)
+
+        walk(self.tree)
+        return out
+
+    def value(self, env: dict[str, Any]) -> Any:
+        """The value; KeyError for a name env lacks, ArithmeticError/ValueError/TypeError."""
         def ev(n: ast.AST) -> Any:
             if isinstance(n, ast.Expression):
                 return ev(n.body)
@@ -134,10 +159,10 @@ class Criterion:
                 return n.value
             if isinstance(n, (ast.Name, ast.Attribute)):
                 key = _dotted(n)
-                if key in summary:
-                    return summary[key]
-                if isinstance(n, ast.Name) and key in _FUNCS:
-                    return _FUNCS[key]
+                if key in env:
+                    return env[key]
+                if key in _CONSTS:
+                    return _CONSTS[key]
                 raise KeyError(key)
             if isinstance(n, ast.BoolOp):
                 vals = (ev(v) for v in n.values)
@@ -167,9 +192,20 @@ class Criterion:
                 return _FUNCS[n.func.id](*[ev(a) for a in n.args])
             raise TypeError(type(n).__name__)
 
+        return ev(self.tree)
+
+
+class Criterion(Expr):
+    """A pass criterion: an Expr over the summary's keys; true or false."""
+
+    def __init__(self, name: str, text: str):
+        super().__init__(f"pass criterion '{name}'", text)
+        self.name = name
+
+    def __call__(self, summary: dict[str, Any]) -> bool:
         try:
-            return bool(ev(self.tree))
-        except (KeyError, TypeError, ValueError, ZeroDivisionError, OverflowError):
+            return bool(self.value(summary))
+        except (KeyError, TypeError, ValueError, ArithmeticError):
             return False  # a missing key (e.g. a faulted run) or NaN math fails the criterion
 
 
@@ -179,6 +215,7 @@ class Axis:
     key: str
     values: list | None = None      # a grid
     dist: dict | None = None        # a distribution
+    var: bool = False               # [vars]: a helper value, not given to the scenario
 
 
 @dataclass
@@ -197,6 +234,7 @@ class Campaign:
     sha256: str
     has_seed_param: bool = False
     param_specs: dict[str, dict] = field(default_factory=dict)
+    derived: list[tuple[str, Expr]] = field(default_factory=list)  # [derived], in file order
 
     @property
     def grid(self) -> list[Axis]:
@@ -213,22 +251,40 @@ class Campaign:
         return n * self.samples
 
     def run_inputs(self, run_id: int) -> dict[str, Any]:
-        """The run's parameters and seed, from run_id alone."""
+        """The run's parameters, helper values ([vars]) and seed, from run_id
+        alone. "refuse" names a derived value that could not be computed."""
         if not 0 <= run_id < self.n_runs():
             raise IndexError(run_id)
         rng = np.random.default_rng([self.seed, run_id])
         seed = int(rng.integers(1, 2**31 - 1))
         g, _ = divmod(run_id, self.samples)
-        params = dict(self.fixed)
+        drawn: dict[str, Any] = {}
         idx = []
         for a in reversed(self.grid):
             g, i = divmod(g, len(a.values))
             idx.append(i)
         for a, i in zip(self.grid, reversed(idx)):
-            params[a.key] = a.values[i]
+            drawn[a.key] = a.values[i]
         for a in self.dists:
-            params[a.key] = _draw(rng, a.dist)
-        return {"run_id": run_id, "seed": seed, "params": params}
+            drawn[a.key] = _draw(rng, a.dist)
+        var_keys = {a.key for a in self.axes if a.var}
+        params = dict(self.fixed)
+        params.update({k: v for k, v in drawn.items() if k not in var_keys})
+        variables = {k: v for k, v in drawn.items() if k in var_keys}
+        refuse = None
+        env = {**params, **variables}
+        for key, expr in self.derived:
+            try:
+                v = expr.value(env)
+                if isinstance(v, bool) or not isinstance(v, (int, float)) or (
+                        isinstance(v, float) and not math.isfinite(v)):
+                    raise ValueError(f"{v!r} is not a finite number")
+            except (KeyError, TypeError, ValueError, ArithmeticError) as e:
+                refuse = refuse or f"derived {key} = {expr.text!r}: {e}"
+                continue
+            params[key] = env[key] = v
+        return {"run_id": run_id, "seed": seed, "params": params, "vars": variables,
+                "refuse": refuse}
 
 
 _DISTS = {"uniform": ("low", "high"), "loguniform": ("low", "high"), "normal": ("mean", "sd"),
@@ -256,7 +312,8 @@ def load(path: str) -> Campaign:
     from . import sil
 
     try:
-        raw = open(path, "rb").read()
+        with open(path, "rb") as f:
+            raw = f.read()
     except OSError as e:
         raise CampaignError(f"{path}:1: cannot read the file: {e.strerror}") from None
     text = raw.decode("utf-8", errors="replace")
@@ -272,7 +329,7 @@ def load(path: str) -> Campaign:
     def err(table: str, key: str | None, reason: str):
         return CampaignError(f"{path}:{lines.of(table, key)}: {reason}")
 
-    known = {"campaign", "fixed", "sweep", "pass"}
+    known = {"campaign", "fixed", "sweep", "vars", "derived", "pass"}
     for t in doc:
         if t not in known:
             raise err(t, None, f"unknown table [{t}] (a campaign file has: "
@@ -309,8 +366,11 @@ def load(path: str) -> Campaign:
         raise err("campaign", "seed", "seed must be a non-negative integer")
     fixed = doc.get("fixed", {})
     sweep = doc.get("sweep", {})
+    variables = doc.get("vars", {})
+    derived = doc.get("derived", {})
     passes = doc.get("pass", {})
-    for t, v in (("fixed", fixed), ("sweep", sweep), ("pass", passes)):
+    for t, v in (("fixed", fixed), ("sweep", sweep), ("vars", variables), ("derived", derived),
+                 ("pass", passes)):
         if not isinstance(v, dict):
             raise err(t, None, f"[{t}] must be a table")
 
@@ -351,66 +411,102 @@ def load(path: str) -> Campaign:
     for k, v in fixed.items():
         check_key("fixed", k)
         check_value("fixed", k, v)
+    def parse_axis(table, k, v, is_var):
+        """A grid, a range or a distribution of [sweep] or [vars]."""
+        def check_var(t, key, x):
+            if not _number(x):
+                raise err(t, key, f"value {x!r} for {key}: a finite number is expected")
+
+        check = check_var if is_var else check_value
+        if isinstance(v, list):
+            if not v:
+                raise err(table, k, f"empty grid for {k}")
+            if len({type(x) is str for x in v}) > 1:
+                raise err(table, k, f"grid for {k} mixes names and numbers")
+            for x in v:
+                check(table, k, x)
+            return Axis(k, values=list(v), var=is_var)
+        if isinstance(v, dict) and "dist" not in v:
+            want = {"start", "stop", "num"}
+            if set(v) - (want | {"log"}) or not want <= set(v):
+                raise err(table, k, f"a range for {k} is {{ start = A, stop = B, num = N "
+                          f"[, log = true] }}")
+            if not (_number(v["start"]) and _number(v["stop"]) and isinstance(v["num"], int)
+                    and v["num"] >= 1):
+                raise err(table, k, f"range for {k}: start and stop numbers, num an integer >= 1")
+            if v.get("log", False):
+                if v["start"] <= 0 or v["stop"] <= 0:
+                    raise err(table, k, f"log range for {k} needs positive start and stop")
+                vals = np.geomspace(v["start"], v["stop"], v["num"]).tolist()
+            else:
+                vals = np.linspace(v["start"], v["stop"], v["num"]).tolist()
+            for x in vals:
+                check(table, k, x)
+            return Axis(k, values=vals, var=is_var)
+        if isinstance(v, dict):
+            kind = v.get("dist")
+            if kind not in _DISTS:
+                raise err(table, k, f"unknown dist '{kind}' for {k} (known: "
+                          f"{', '.join(_DISTS)})")
+            need = set(_DISTS[kind]) | {"dist"}
+            if set(v) != need:
+                raise err(table, k, f"dist '{kind}' for {k} takes exactly: "
+                          f"{', '.join(_DISTS[kind])}")
+            if kind == "choice":
+                if not isinstance(v["values"], list) or not v["values"]:
+                    raise err(table, k, f"choice for {k} needs a non-empty list of values")
+                for x in v["values"]:
+                    check(table, k, x)
+            else:
+                a, b = (v[n] for n in _DISTS[kind])
+                if not (_number(a) and _number(b)):
+                    raise err(table, k, f"dist '{kind}' for {k}: numbers expected")
+                if kind in ("uniform", "loguniform"):
+                    if not a < b or (kind == "loguniform" and a <= 0):
+                        raise err(table, k, f"dist '{kind}' for {k} needs "
+                                  f"{'0 < ' if kind == 'loguniform' else ''}low < high")
+                    check(table, k, a)
+                    check(table, k, b)
+                elif b < 0:
+                    raise err(table, k, f"normal for {k} needs sd >= 0")
+            return Axis(k, dist=dict(v), var=is_var)
+        raise err(table, k, f"{table} {k}: a list (grid), a range {{start, stop, num}} or a "
+                  f"distribution {{dist = ...}}")
+
     axes: list[Axis] = []
     for k, v in sweep.items():
         check_key("sweep", k)
         if k in fixed:
             raise err("sweep", k, f"'{k}' is both fixed and swept")
-        if isinstance(v, list):
-            if not v:
-                raise err("sweep", k, f"empty grid for {k}")
-            if len({type(x) is str for x in v}) > 1:
-                raise err("sweep", k, f"grid for {k} mixes names and numbers")
-            for x in v:
-                check_value("sweep", k, x)
-            axes.append(Axis(k, values=list(v)))
-        elif isinstance(v, dict) and "dist" not in v:
-            want = {"start", "stop", "num"}
-            if set(v) - (want | {"log"}) or not want <= set(v):
-                raise err("sweep", k, f"a range for {k} is {{ start = A, stop = B, num = N "
-                          f"[, log = true] }}")
-            if not (_number(v["start"]) and _number(v["stop"]) and isinstance(v["num"], int)
-                    and v["num"] >= 1):
-                raise err("sweep", k, f"range for {k}: start and stop numbers, num an integer >= 1")
-            if v.get("log", False):
-                if v["start"] <= 0 or v["stop"] <= 0:
-                    raise err("sweep", k, f"log range for {k} needs positive start and stop")
-                vals = np.geomspace(v["start"], v["stop"], v["num"]).tolist()
-            else:
-                vals = np.linspace(v["start"], v["stop"], v["num"]).tolist()
-            for x in vals:
-                check_value("sweep", k, x)
-            axes.append(Axis(k, values=vals))
-        elif isinstance(v, dict):
-            kind = v.get("dist")
-            if kind not in _DISTS:
-                raise err("sweep", k, f"unknown dist '{kind}' for {k} (known: "
-                          f"{', '.join(_DISTS)})")
-            need = set(_DISTS[kind]) | {"dist"}
-            if set(v) != need:
-                raise err("sweep", k, f"dist '{kind}' for {k} takes exactly: "
-                          f"{', '.join(_DISTS[kind])}")
-            if kind == "choice":
-                if not isinstance(v["values"], list) or not v["values"]:
-                    raise err("sweep", k, f"choice for {k} needs a non-empty list of values")
-                for x in v["values"]:
-                    check_value("sweep", k, x)
-            else:
-                a, b = (v[n] for n in _DISTS[kind])
-                if not (_number(a) and _number(b)):
-                    raise err("sweep", k, f"dist '{kind}' for {k}: numbers expected")
-                if kind in ("uniform", "loguniform"):
-                    if not a < b or (kind == "loguniform" and a <= 0):
-                        raise err("sweep", k, f"dist '{kind}' for {k} needs "
-                                  f"{'0 < ' if kind == 'loguniform' else ''}low < high")
-                    check_value("sweep", k, a)
-                    check_value("sweep", k, b)
-                elif b < 0:
-                    raise err("sweep", k, f"normal for {k} needs sd >= 0")
-            axes.append(Axis(k, dist=dict(v)))
-        else:
-            raise err("sweep", k, f"sweep {k}: a list (grid), a range {{start, stop, num}} or a "
-                      f"distribution {{dist = ...}}")
+        axes.append(parse_axis("sweep", k, v, False))
+    # [vars]: helper values (grids or draws) that [derived] computes parameters
+    # from; recorded in the row as var.NAME, not given to the scenario.
+    for k, v in variables.items():
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", k) or k in _FUNCS or k in _CONSTS:
+            raise err("vars", k, f"var name '{k}': letters, digits and '_', not a function "
+                      f"or constant name")
+        if k in specs or k in fixed or k in sweep:
+            raise err("vars", k, f"var '{k}' is also a parameter of the campaign")
+        axes.append(parse_axis("vars", k, v, True))
+    # [derived]: parameters computed from the others, in file order.
+    known_names = set(fixed) | set(sweep) | set(variables)
+    derived_exprs: list[tuple[str, Expr]] = []
+    for k, v in derived.items():
+        check_key("derived", k)
+        if k in known_names:
+            raise err("derived", k, f"'{k}' is derived and also fixed, swept or a var")
+        if not isinstance(v, str):
+            raise err("derived", k, f"derived {k} must be an expression in a string")
+        try:
+            e = Expr(f"derived {k}", v)
+        except ValueError as ex:
+            raise err("derived", k, str(ex)) from None
+        unknown = sorted(e.names() - known_names)
+        if unknown:
+            raise err("derived", k, f"derived {k} reads {', '.join(unknown)}: not fixed, swept, "
+                      f"a var or derived above it")
+        derived_exprs.append((k, e))
+        known_names.add(k)
     has_dist = any(a.dist is not None for a in axes)
     samples = c.get("samples", 1)
     if not isinstance(samples, int) or isinstance(samples, bool) or samples < 1:
@@ -430,7 +526,7 @@ def load(path: str) -> Campaign:
                     motor=motor, board=board, duration_s=float(dur) if dur is not None else None,
                     seed=seed, samples=samples, fixed=dict(fixed), axes=axes, criteria=criteria,
                     sha256=hashlib.sha256(raw).hexdigest(), has_seed_param="seed" in specs,
-                    param_specs=specs)
+                    param_specs=specs, derived=derived_exprs)
     if camp.n_runs() > 100_000_000:
         raise err("sweep", None, f"{camp.n_runs()} runs: more than 1e8")
     return camp
@@ -456,6 +552,8 @@ class RunSpec:
     params: tuple  # ((key, value), ...)
     criteria: tuple  # ((name, expression), ...)
     pass_seed: bool
+    variables: tuple = ()  # ((name, value), ...) of [vars]: recorded, not run
+    refuse: str | None = None  # a derived value that could not be computed: not run
 
 
 def specs(camp: Campaign, run_ids) -> list[RunSpec]:
@@ -464,7 +562,8 @@ def specs(camp: Campaign, run_ids) -> list[RunSpec]:
         r = camp.run_inputs(i)
         out.append(RunSpec(i, r["seed"], camp.scenario, camp.motor, camp.board, camp.duration_s,
                            tuple(r["params"].items()),
-                           tuple((c.name, c.text) for c in camp.criteria), camp.has_seed_param))
+                           tuple((c.name, c.text) for c in camp.criteria), camp.has_seed_param,
+                           tuple(r["vars"].items()), r["refuse"]))
     return out
 
 
@@ -475,12 +574,15 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     t0 = time.perf_counter()
     params = dict(spec.params)
     row: dict[str, Any] = {"run_id": spec.run_id, "seed": spec.seed}
-    try:
-        r = sil.run_raw(spec.scenario, spec.motor, spec.board, params, spec.duration_s,
-                        seed=spec.seed if spec.pass_seed else None, trajectory=False)
-        summary, kind, error = r.summary, r.error_kind, r.error
-    except sil.UsageError as e:
-        summary, kind, error = {}, "usage", str(e)
+    if spec.refuse:
+        summary, kind, error = {}, "usage", spec.refuse
+    else:
+        try:
+            r = sil.run_raw(spec.scenario, spec.motor, spec.board, params, spec.duration_s,
+                            seed=spec.seed if spec.pass_seed else None, trajectory=False)
+            summary, kind, error = r.summary, r.error_kind, r.error
+        except sil.UsageError as e:
+            summary, kind, error = {}, "usage", str(e)
     crit = {name: Criterion(name, text)(summary) if kind is None else False
             for name, text in spec.criteria}
     row["status"] = ("refused" if kind == "usage" else "fault" if kind == "failed"
@@ -491,6 +593,8 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
         row["pass." + name] = ok
     for k, v in params.items():
         row["in." + k] = v
+    for k, v in spec.variables:
+        row["var." + k] = v
     for k, v in summary.items():
         row["out." + k] = v
     row["scenario"] = spec.scenario
@@ -499,7 +603,11 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
     row["duration_s"] = spec.duration_s
     row["firmware_git"] = sil.GIT_HASH
     row["wall_s"] = time.perf_counter() - t0
+    row["worker"] = _WORKER  # which process ran it (host:pid): differs between runs
     return row
+
+
+_WORKER = f"{socket.gethostname()}:{os.getpid()}"
 
 
 def run_chunk(chunk: list[RunSpec]) -> list[dict[str, Any]]:
@@ -675,11 +783,19 @@ def spec_from_row(row) -> RunSpec:
     """The run of a results row, from the row alone."""
     params = tuple((k[3:], _py(v)) for k, v in row.items()
                    if k.startswith("in.") and not _missing(_py(v)))
+    variables = tuple((k[4:], _py(v)) for k, v in row.items()
+                      if k.startswith("var.") and not _missing(_py(v)))
     crit = ()
+    err = row.get("error")
+    # A run refused because a [derived] value could not be computed: the row
+    # lacks that value, and its reason is the record of it.
+    refuse = (err if row.get("status") == "refused" and isinstance(err, str)
+              and err.startswith("derived ") else None)
     dur = row.get("duration_s")
     return RunSpec(int(row["run_id"]), int(row["seed"]), row["scenario"], row.get("motor"),
                    row.get("board"), None if dur is None or _nan(dur) else float(dur), params,
-                   crit, any(k == "out.param.seed" for k in row.keys()))
+                   crit, any(k == "out.param.seed" for k in row.keys()), variables,
+                   refuse)
 
 
 def _nan(v) -> bool:
@@ -697,7 +813,7 @@ def rerun_row(row) -> tuple[dict[str, Any], list[str]]:
     new = run_one(spec)
     diffs = []
     for k, v in new.items():
-        if k in ("wall_s", "firmware_git") or k.startswith("pass"):
+        if k in ("wall_s", "firmware_git", "worker") or k.startswith("pass"):
             continue
         if k == "status" and v in ("pass", "fail"):
             continue  # criteria are not in the row's inputs

@@ -2,8 +2,8 @@
 
     mdtool sweep FILE [--out DIR] [--scheduler ADDRESS] [--workers N] [--serial]
     mdtool rerun OUT RUN_ID        run one row of a campaign again and compare
-    mdtool report OUT [--x KEY --y KEY] [--metric EXPR]
-    mdtool bench-sil [--duration S]
+    mdtool report OUT [--x KEY --y KEY] [--metric KEY] [--hist KEY=BOUND ...]
+    mdtool bench-sil [--duration S] [--runs N] [--json FILE] [--md FILE] [--from-json FILE]
     mdtool sil SCENARIO [--motor F] [--board F] [--set k=v ...]   one run, summary as JSON
 
 CAN (mdtool/can; every command: --interface/--channel/--bitrate, --node):
@@ -67,7 +67,12 @@ def cmd_rerun(a) -> int:
 def cmd_report(a) -> int:
     from . import report
 
-    res = report.make(a.out, x=a.x, y=a.y, metric=a.metric, out_dir=a.report_dir)
+    try:
+        res = report.make(a.out, x=a.x, y=a.y, metric=a.metric, out_dir=a.report_dir,
+                          hists=a.hist, with_results=a.with_results)
+    except ValueError as e:  # no runs, an unknown column, a malformed --hist
+        print(f"mdtool: {e}", file=sys.stderr)
+        return 2
     print(json.dumps(res))
     return 0
 
@@ -75,8 +80,15 @@ def cmd_report(a) -> int:
 def cmd_bench(a) -> int:
     from . import bench
 
-    print(json.dumps(bench.run(duration=a.duration, runs=a.runs, mcsim=a.mcsim,
-                               motor=a.motor, board=a.board, scaling=not a.no_scaling), indent=1))
+    if a.from_json:  # the page again from a saved measurement
+        with open(a.from_json) as f:
+            res = json.load(f)
+    else:
+        res = bench.run(duration=a.duration, runs=a.runs, mcsim=a.mcsim, motor=a.motor,
+                        board=a.board, scaling=not a.no_scaling)
+    bench.main_json(res, a.json, a.md, "mdtool bench-sil" + (
+        f" --duration {a.duration:g}" if a.duration != 1.0 else "") + (
+        f" --runs {a.runs}" if a.runs != 20 else ""))
     return 0
 
 
@@ -120,8 +132,14 @@ def main(argv=None) -> int:
     s.add_argument("out")
     s.add_argument("--x", help="swept key on the x axis (default: the first)")
     s.add_argument("--y", help="swept key on the y axis (default: the second)")
-    s.add_argument("--metric", help="a summary key (out.KEY) to map instead of pass/fail")
+    s.add_argument("--metric", help="a summary key (out.KEY) to map instead of the worst "
+                   "outcome, or pass_rate (the share of runs that pass)")
     s.add_argument("--report-dir", help="where to write (default OUT/report)")
+    s.add_argument("--hist", action="append", default=[], metavar="KEY=BOUND",
+                   help="histogram of |out.KEY| / BOUND and a row of the error table "
+                   "(repeat for more)")
+    s.add_argument("--with-results", action="store_true",
+                   help="also copy the results (results.parquet, paths relative to here)")
     s.set_defaults(fn=cmd_report)
 
     s = sub.add_parser("bench-sil", help="runs per second: binding vs mcsim, 1 vs 2 workers")
@@ -131,6 +149,9 @@ def main(argv=None) -> int:
     s.add_argument("--motor", default="sim/motors/odrive-d5065.toml")
     s.add_argument("--board", default="sim/motors/odrive-v36-24v.toml")
     s.add_argument("--no-scaling", action="store_true")
+    s.add_argument("--json", help="also write the JSON to this file")
+    s.add_argument("--md", help="write the numbers and the 100,000-run sizing as Markdown")
+    s.add_argument("--from-json", help="no measurement: the Markdown from a saved JSON")
     s.set_defaults(fn=cmd_bench)
 
     s = sub.add_parser("sil", help="one run in-process; the summary as JSON")
