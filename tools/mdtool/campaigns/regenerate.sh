@@ -1,20 +1,71 @@
 #!/usr/bin/env bash
-# Runs every shipped campaign and writes its report into results/NAME/
-# (summary.md, envelope.png, envelope.csv), the files the README links:
-#   tools/mdtool/campaigns/regenerate.sh [OUT]     (OUT: scratch, default out/campaigns)
-# Needs the project's venv with mdtool (tools/bootstrap.sh setup).
+# Runs the shipped campaigns and the SIL benchmark and writes their reports
+# into results/ (the files the README links; never typed by hand):
+#   tools/mdtool/campaigns/regenerate.sh [all | campaigns | bench | NAME ...]
+#   results/NAME/: summary.md, envelope.png, envelope.csv, results.parquet
+#                  (+ histograms.png where the report asks for them)
+#   results/bench-sil/: bench.json and bench.md (mdtool bench-sil)
+# Scratch: $OUT (default out/campaigns). mdtool: this checkout's build
+# (build/host/tests/sil/campaign/py, made by `cmake --build --preset host`)
+# when it exists, else the venv's installed one; MDTOOL="command" overrides.
 set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(cd "$HERE/../../.." && pwd)
-MD=${MDTOOL:-$ROOT/.venv/bin/mdtool}
-OUT=${1:-$ROOT/out/campaigns}
-report() { # name x y [metric]
-  local name=$1 x=$2 y=$3 metric=${4:-}
-  rm -rf "$OUT/$name"
-  "$MD" sweep "$HERE/$name.toml" --out "$OUT/$name" | tail -1
-  "$MD" report "$OUT/$name" --x "$x" --y "$y" ${metric:+--metric "$metric"} \
-    --report-dir "$HERE/results/$name" > /dev/null
+cd "$ROOT"  # the copies of the results name the motor files relative to here
+OUT=${OUT:-$ROOT/out/campaigns}
+if [[ -n "${MDTOOL:-}" ]]; then
+  read -r -a MD <<< "$MDTOOL"
+elif compgen -G "$ROOT/build/host/tests/sil/campaign/py/mdtool/_sil*.so" > /dev/null; then
+  MD=(env "PYTHONPATH=$ROOT/build/host/tests/sil/campaign/py" "$ROOT/.venv/bin/python"
+      -m mdtool.cli)
+else
+  MD=("$ROOT/.venv/bin/mdtool")
+fi
+echo "mdtool: ${MD[*]}" >&2
+
+report() { # name x y metric [report options...]
+  local name=$1 x=$2 y=$3 metric=$4
+  shift 4
+  rm -rf "${OUT:?}/$name" "$HERE/results/$name"
+  "${MD[@]}" sweep "$HERE/$name.toml" --out "$OUT/$name" | tail -1
+  "${MD[@]}" report "$OUT/$name" --x "$x" --y "$y" ${metric:+--metric "$metric"} \
+    --report-dir "$HERE/results/$name" --with-results "$@" > /dev/null
   echo "$HERE/results/$name"
 }
-report sensorless-envelope in.model_r_scale in.model_flux_scale
-report current-loop-rise in.motor.r_ohm in.board.pwm_hz out.iq_rise_time_ratio
+
+sensorless_envelope() {
+  report sensorless-envelope in.model_r_scale in.model_flux_scale ""
+}
+current_loop_rise() {
+  report current-loop-rise in.motor.r_ohm in.board.pwm_hz out.iq_rise_time_ratio
+}
+commissioning_accuracy() {
+  # Each identified quantity against its bound (issue 18), and the speed
+  # error of the runs on the identified values (the bounds of
+  # tests/sil/commission: 2 % sensored, 5 % sensorless).
+  report commissioning-accuracy in.motor.pole_pairs in.motor.flux_wb pass_rate \
+    --hist error.r_frac=0.02 --hist error.ld_frac=0.05 --hist error.lq_frac=0.05 \
+    --hist error.flux_frac=0.03 --hist error.encoder_offset_deg=1 \
+    --hist error.pole_pairs_diff=0.5 --hist error.adc_offset_max_frac=0.002 \
+    --hist verify.sensored_speed_err_frac=0.02 --hist verify.sensorless_speed_err_frac=0.05
+}
+bench() {
+  mkdir -p "$HERE/results/bench-sil"
+  "${MD[@]}" bench-sil --json "$HERE/results/bench-sil/bench.json" \
+    --md "$HERE/results/bench-sil/bench.md" > /dev/null
+  echo "$HERE/results/bench-sil"
+}
+
+[[ $# -eq 0 ]] && set -- all
+for what in "$@"; do
+  case $what in
+    all) sensorless_envelope; current_loop_rise; commissioning_accuracy; bench ;;
+    campaigns) sensorless_envelope; current_loop_rise; commissioning_accuracy ;;
+    bench) bench ;;
+    sensorless-envelope) sensorless_envelope ;;
+    current-loop-rise) current_loop_rise ;;
+    commissioning-accuracy) commissioning_accuracy ;;
+    *) echo "regenerate.sh: unknown '$what' (all, campaigns, bench or a campaign name)" >&2
+       exit 2 ;;
+  esac
+done
