@@ -24,5 +24,7 @@ function(mdtool_add_sil_module out_dir)
   target_link_libraries(_sil PRIVATE $<LINK_LIBRARY:WHOLE_ARCHIVE,mcsim_scenarios>)
   add_dependencies(_sil mdtool_git_hash)
   target_include_directories(_sil PRIVATE ${gen})
+  # Debug or Release: the benchmark says which it measured.
+  target_compile_definitions(_sil PRIVATE MDTOOL_BUILD_TYPE="$<IF:$<CONFIG:>,none,$<CONFIG>>")
   set_target_properties(_sil PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${out_dir})
 endfunction()

@@ -280,6 +280,7 @@ class BenchPage(unittest.TestCase):
 
     def test_sizing_arithmetic(self):
         res = {"scenario": "current-step", "duration_s": 1.0, "runs": 20, "firmware_git": "x",
+               "build_type": "Release",
                "cpu": "cpu", "nproc": 2, "cores_usable": 2, "python": "3",
                "load_avg_before": [0.1, 0.1, 0.1], "load_avg_after": [0.2, 0.1, 0.1],
                "bench_wall_s": 60.0, "inprocess_runs_per_s": 4.0,
@@ -306,6 +307,7 @@ class BenchPage(unittest.TestCase):
         self.assertIn("tasks of at least 4 runs", text)  # 100 x 10 ms / 0.3 s = 3.3, up to 4
         self.assertIn("(this scenario's 100,000 rows: 20 MB)", text)
         self.assertNotIn("machine was busy", text)
+        self.assertNotIn("build**", text)
         res["load_avg_before"] = [5.0, 4.0, 3.0]
         with open(js, "w") as f:
             json.dump(res, f)

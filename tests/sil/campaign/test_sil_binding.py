@@ -132,6 +132,10 @@ class BitForBit(unittest.TestCase):
         self.assertNotEqual(a.summary["identified.r_ohm"], b.summary["identified.r_ohm"])
         self.assertEqual(a.summary["true.r_ohm"], b.summary["true.r_ohm"])
 
+    def test_build_type_named(self):
+        # bench-sil records it: a Debug build runs several times slower.
+        self.assertIn(sil.BUILD_TYPE, ("Debug", "Release", "RelWithDebInfo", "MinSizeRel"))
+
     def test_deterministic_in_process(self):
         a = sil.run("current-step", M, B, {"iq_step_a": 4.0})
         b = sil.run("current-step", M, B, {"iq_step_a": 4.0})

@@ -5,23 +5,32 @@
 #   results/NAME/: summary.md, envelope.png, envelope.csv, results.parquet
 #                  (+ histograms.png where the report asks for them)
 #   results/bench-sil/: bench.json and bench.md (mdtool bench-sil)
-# Scratch: $OUT (default out/campaigns). mdtool: this checkout's build
-# (build/host/tests/sil/campaign/py, made by `cmake --build --preset host`)
-# when it exists, else the venv's installed one; MDTOOL="command" overrides.
+# Scratch: $OUT (default out/campaigns). mdtool: this checkout's Release
+# build (build/host-release/tests/sil/campaign/py, made by
+# `cmake --preset host-release && cmake --build build/host-release --target
+# mdtool_py mcsim`), else its Debug build (build/host, several times slower),
+# else the venv's installed one; MDTOOL="command" (and MCSIM=path for the
+# benchmark's subprocess runs) override.
 set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(cd "$HERE/../../.." && pwd)
 cd "$ROOT"  # the copies of the results name the motor files relative to here
 OUT=${OUT:-$ROOT/out/campaigns}
+MCSIM=${MCSIM:-}
 if [[ -n "${MDTOOL:-}" ]]; then
   read -r -a MD <<< "$MDTOOL"
-elif compgen -G "$ROOT/build/host/tests/sil/campaign/py/mdtool/_sil*.so" > /dev/null; then
-  MD=(env "PYTHONPATH=$ROOT/build/host/tests/sil/campaign/py" "$ROOT/.venv/bin/python"
-      -m mdtool.cli)
 else
   MD=("$ROOT/.venv/bin/mdtool")
+  for b in build/host-release build/host; do
+    if compgen -G "$ROOT/$b/tests/sil/campaign/py/mdtool/_sil*.so" > /dev/null; then
+      MD=(env "PYTHONPATH=$ROOT/$b/tests/sil/campaign/py" "$ROOT/.venv/bin/python"
+          -m mdtool.cli)
+      [[ -z "$MCSIM" && -x "$ROOT/$b/sim/cli/mcsim" ]] && MCSIM=$ROOT/$b/sim/cli/mcsim
+      break
+    fi
+  done
 fi
-echo "mdtool: ${MD[*]}" >&2
+echo "mdtool: ${MD[*]}${MCSIM:+; mcsim: $MCSIM}" >&2
 
 report() { # name x y metric [report options...]
   local name=$1 x=$2 y=$3 metric=$4
@@ -51,7 +60,7 @@ commissioning_accuracy() {
 }
 bench() {
   mkdir -p "$HERE/results/bench-sil"
-  "${MD[@]}" bench-sil --json "$HERE/results/bench-sil/bench.json" \
+  "${MD[@]}" bench-sil ${MCSIM:+--mcsim "$MCSIM"} --json "$HERE/results/bench-sil/bench.json" \
     --md "$HERE/results/bench-sil/bench.md" > /dev/null
   echo "$HERE/results/bench-sil"
 }

@@ -122,4 +122,5 @@ NB_MODULE(_sil, m) {
   m.def("scenarios", &scenarios);
   m.def("params", &params, nb::arg("scenario"), nb::arg("motor"), nb::arg("board"));
   m.attr("git_hash") = MDTOOL_GIT_HASH;
+  m.attr("build_type") = MDTOOL_BUILD_TYPE;  // CMake's build type: Debug, Release, ...
 }

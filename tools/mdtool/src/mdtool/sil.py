@@ -32,6 +32,8 @@ from . import _sil
 
 #: The commit the extension was built from (git describe --dirty).
 GIT_HASH: str = _sil.git_hash
+#: CMake's build type of the extension (Debug runs several times slower).
+BUILD_TYPE: str = _sil.build_type
 
 
 class UsageError(ValueError):
