@@ -300,14 +300,16 @@ void run_commission_scenario(RunContext& ctx) {
                 {"adc_offset_max_a", e_adc},
                 {"adc_offset_max_frac", e_adc / f.board.i_sense_max_a}});
   if (ctx.params.get("verify") > 0.5) {
-    // A law that refuses this motor (the sensorless law takes no salient
-    // machine) leaves its error NaN and says why; commissioning itself
-    // succeeded, so the run does not fail for it.
+    // verify.LAW_faulted: 1 if the drive faulted on the way (the error is
+    // then NaN), 0 if not. A law that refuses this motor (the sensorless
+    // law takes no salient machine) leaves its error NaN, no _faulted, and
+    // says why; commissioning itself succeeded, so the run does not fail.
     double w = 0;
     const auto verify = [&](Law law, const char* name) {
       try {
-        ctx.summary.set(std::string("verify.") + name + "_speed_err_frac",
-                        verify_speed_step(f, s, run, law, &w));
+        const double e = verify_speed_step(f, s, run, law, &w);
+        ctx.summary.set(std::string("verify.") + name + "_speed_err_frac", e);
+        ctx.summary.set(std::string("verify.") + name + "_faulted", std::isnan(e) ? 1.0 : 0.0);
       } catch (const UsageError& e) {
         ctx.summary.set(std::string("verify.") + name + "_speed_err_frac", std::nan(""));
         ctx.summary.set_text(std::string("verify.") + name + "_refused", e.what());

@@ -280,7 +280,7 @@ class BenchPage(unittest.TestCase):
 
     def test_sizing_arithmetic(self):
         res = {"scenario": "current-step", "duration_s": 1.0, "runs": 20, "firmware_git": "x",
-               "build_type": "Release",
+               "build_type": "Release", "dask_runs_per_task": 37,
                "cpu": "cpu", "nproc": 2, "cores_usable": 2, "python": "3",
                "load_avg_before": [0.1, 0.1, 0.1], "load_avg_after": [0.2, 0.1, 0.1],
                "bench_wall_s": 60.0, "inprocess_runs_per_s": 4.0,
@@ -303,6 +303,7 @@ class BenchPage(unittest.TestCase):
         # 100,000 runs x 0.3 CPU s = 30,000 core-seconds = 8.33 core-hours;
         # on 32 cores: 937.5 s = 16 min at E = 1, 1125 s = 19 min at E = 0.83.
         self.assertIn("100,000 x c = 8.33 core-hours", text)
+        self.assertIn("Dask: 4 tasks of 37 runs per worker.", text)
         self.assertIn("| 32 | 16 min | 19 min |", text)
         self.assertIn("tasks of at least 4 runs", text)  # 100 x 10 ms / 0.3 s = 3.3, up to 4
         self.assertIn("(this scenario's 100,000 rows: 20 MB)", text)

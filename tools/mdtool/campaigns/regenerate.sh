@@ -56,7 +56,15 @@ commissioning_accuracy() {
     --hist error.r_frac=0.02 --hist error.ld_frac=0.05 --hist error.lq_frac=0.05 \
     --hist error.flux_frac=0.03 --hist error.encoder_offset_deg=1 \
     --hist error.pole_pairs_diff=0.5 --hist error.adc_offset_max_frac=0.002 \
-    --hist verify.sensored_speed_err_frac=0.02 --hist verify.sensorless_speed_err_frac=0.05
+    --hist verify.sensored_speed_err_frac=0.02 --hist verify.sensorless_speed_err_frac=0.05 \
+    --hist verify.sensored_faulted=0.5 --hist verify.sensorless_faulted=0.5
+  # The sensorless start's known limit: did the sensorless run on the
+  # identified values fault, over the rotor's start angle x pole pairs
+  # (1 = some run of the cell faulted; blank: the law refused every motor
+  # of the cell, e.g. salient ones).
+  "${MD[@]}" report "$OUT/commissioning-accuracy" --x in.verify_sensorless_theta_e_rad \
+    --y in.motor.pole_pairs --metric verify.sensorless_faulted \
+    --report-dir "$HERE/results/commissioning-accuracy/sensorless-start" > /dev/null
 }
 bench() {
   mkdir -p "$HERE/results/bench-sil"

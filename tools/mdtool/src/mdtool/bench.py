@@ -6,7 +6,8 @@ Measured, for a `current-step` of --duration seconds (default 1 s):
 - one core: runs per second in-process (mdtool.sil, no trajectory kept)
   and as an `mcsim run` subprocess writing its CSV and JSON;
 - Dask: the same runs on a local cluster of 1 and of 2 single-threaded
-  worker processes; efficiency = rate(2) / (2 rate(1));
+  worker processes, 4 tasks of about 0.25 CPU seconds each per worker;
+  efficiency = rate(2) / (2 rate(1));
 - the cost of a run that faults early (OVERCURRENT a millisecond in: the
   scenario stops at the fault) against one that runs to the end;
 - the scheduler's overhead per task (empty tasks) and the Parquet bytes
@@ -74,8 +75,9 @@ def _noop(i: int) -> int:
     return i
 
 
-def _cluster(n_workers: int, runs: int, motor: str, board: str, duration: float,
+def _cluster(n_workers: int, per: int, motor: str, board: str, duration: float,
              parquet_dir: str | None = None) -> dict[str, float]:
+    """4 tasks of `per` runs per worker, all submitted at once."""
     import logging
 
     import pandas as pd
@@ -87,9 +89,8 @@ def _cluster(n_workers: int, runs: int, motor: str, board: str, duration: float,
                       dashboard_address=None, silence_logs=logging.ERROR) as cl, Client(cl) as c:
         spec = campaign.RunSpec(0, 1, SCEN, motor, board, duration, (), (), False)
         wait(c.map(campaign.run_one, [spec] * n_workers, pure=False))  # warm-up
-        per = 4
         t0 = time.perf_counter()
-        futs = c.map(_timed_chunk, [[spec] * per] * (runs // per), pure=False)
+        futs = c.map(_timed_chunk, [[spec] * per] * (4 * n_workers), pure=False)
         wait(futs)
         wall = time.perf_counter() - t0
         res = [f.result() for f in futs]
@@ -165,10 +166,15 @@ def run(duration: float = 1.0, runs: int = 20, mcsim: str | None = None,
     res["pass_run_s"] = 1.0 / rate
     res["fault_cost_ratio"] = res["fault_run_s"] / res["pass_run_s"]
     if scaling:
+        # Tasks of about 0.25 s of CPU (at least 4 runs): the scaling of the
+        # runs, not of the scheduler's overhead per task (measured apart).
+        per = max(4, math.ceil(0.25 / max(cpu, 1e-6)))
         with tempfile.TemporaryDirectory() as tmp:
-            c1 = _cluster(1, runs, motor, board, duration)
-            c2 = _cluster(2, 2 * runs, motor, board, duration, parquet_dir=tmp)
+            c1 = _cluster(1, per, motor, board, duration)
+            c2 = _cluster(2, per, motor, board, duration, parquet_dir=tmp)
         res.update({
+            "dask_runs_per_task": per, "dask_1_worker_runs": c1["runs"],
+            "dask_2_workers_runs": c2["runs"],
             "dask_1_worker_runs_per_s": c1["runs_per_s"],
             "dask_1_worker_cpu_s_per_run": c1["cpu_s_per_run"],
             "dask_2_workers_runs_per_s": c2["runs_per_s"],
@@ -208,7 +214,9 @@ def markdown(r: dict[str, Any], command: str = "mdtool bench-sil") -> str:
         f"after {r['load_avg_after']}; the benchmark took {r['bench_wall_s']:.0f} s.",
         "",
         f"Run: `{r['scenario']}` on the ODrive D5065 / v3.6 files, {d:g} s simulated, "
-        f"{r['runs']} runs per measurement.",
+        f"{r['runs']} runs per one-core measurement"
+        + (f"; Dask: 4 tasks of {r['dask_runs_per_task']} runs per worker."
+           if "dask_runs_per_task" in r else "."),
         "",
         "| measurement | runs/s | CPU s per run | note |",
         "|---|---|---|---|",
