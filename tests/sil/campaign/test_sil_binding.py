@@ -123,6 +123,8 @@ class BitForBit(unittest.TestCase):
         # verify=1 ran both laws on the identified values (this non-salient
         # motor is one the sensorless law takes).
         self.assertTrue(math.isfinite(r.summary["verify.sensorless_speed_err_frac"]))
+        self.assertEqual(r.summary["verify.sensorless_faulted"], 0.0)
+        self.assertEqual(r.summary["verify.sensored_faulted"], 0.0)
 
     def test_commission_seed_changes_noise(self):
         m = "sim/motors/paper002-40kw.toml"
