@@ -85,8 +85,11 @@ def _cluster(n_workers: int, per: int, motor: str, board: str, duration: float,
 
     from . import campaign
 
+    # CRITICAL: a worker's heartbeat racing the cluster's shutdown logs an
+    # ERROR that means nothing here.
     with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                      dashboard_address=None, silence_logs=logging.ERROR) as cl, Client(cl) as c:
+                      dashboard_address=None, silence_logs=logging.CRITICAL) as cl, \
+            Client(cl) as c:
         spec = campaign.RunSpec(0, 1, SCEN, motor, board, duration, (), (), False)
         wait(c.map(campaign.run_one, [spec] * n_workers, pure=False))  # warm-up
         t0 = time.perf_counter()

@@ -11,8 +11,9 @@ with --hist also histograms.png; with --with-results a copy of the results
 
 Axes (--x, --y) are swept inputs (in.KEY, the default prefix) or helper
 draws (var.KEY); a numeric axis with more than 12 distinct values (a
-distribution) is cut into 10 bins, logarithmic when its values are positive
-and span more than a decade. Without --metric a cell is the worst outcome of
+distribution) is cut into 10 bins, logarithmic when its values are positive,
+span more than a decade and are spread logarithmically (their median nearer
+their geometric than their arithmetic mean). Without --metric a cell is the worst outcome of
 its runs (fault > refused > fail > pass); with --metric out.KEY (or KEY) it
 is the largest value of that summary key among its runs (a fault counts as
 missing); with --metric pass_rate the share of its runs that pass. --hist out.KEY=BOUND (or KEY=BOUND) adds the histogram of
@@ -45,7 +46,11 @@ def _axis(df, key: str, bins: int = 10):
             or (pd.api.types.is_integer_dtype(vals) and vals.nunique() <= 24)):
         return vals, sorted(vals.unique())
     lo, hi = float(vals.min()), float(vals.max())
-    if lo > 0 and hi / lo > 10:
+    v = vals.to_numpy(float)
+    # Logarithmic bins for values spread logarithmically (a loguniform draw,
+    # a log range): the median nearer the geometric than the arithmetic mean.
+    if lo > 0 and hi / lo > 10 and abs(math.log(np.median(v) / np.exp(np.mean(np.log(v))))) < \
+            abs(math.log(np.median(v) / np.mean(v))):
         edges = np.geomspace(lo, hi, bins + 1)
         mids = np.sqrt(edges[:-1] * edges[1:])
     else:
