@@ -26,6 +26,8 @@
  *            recovery.
  *   tick     TIM2 or TIM5 (32-bit) free running. (The DWT cycle counter is
  *            not used: it reads 0 under QEMU.)
+ *   spi      SPI1..3 master with a GPIO chip select, 16-bit frames (the
+ *            gate driver's register interface; hal/spi.h).
  *   fault    BKIN of TIM1/TIM8 (hardware kill), gate-driver nFAULT and
  *            over-current comparator levels on GPIO, gate-driver enable pin;
  *            gate kill = EGR.BG on both timers + MOE cleared + enable low.
@@ -51,6 +53,7 @@
 #include <stdint.h>
 
 #include "hal/hal.h"
+#include "hal/spi.h"
 #include "mc_f405_regs.h"
 
 #ifdef __cplusplus
@@ -316,6 +319,48 @@ int mc_f405_encoder_init(mc_f405_encoder_t *p_drv,
 
 /** Index pulse seen (call from its EXTI ISR): counter to 0, index flag. */
 void mc_f405_encoder_index_isr(mc_f405_encoder_t *p_drv);
+
+/* ======================================================================== */
+/* spi: SPI1..3 master, one device on a GPIO chip select                     */
+/* ======================================================================== */
+
+/** Status-flag polls before a transfer gives up (-EIO). A 16-bit frame at
+ *  the slowest setting (PCLK / 256, 42 MHz APB1) lasts about 100 us; one
+ *  poll is at least one APB clock (24 ns), so 20000 polls cover it. */
+#define MC_F405_SPI_POLLS 20000u
+/** SR reads after the chip select is released: at least one APB clock each
+ *  (24 ns at 42 MHz), so 64 reads keep the chip select high for at least
+ *  1.5 us between frames (the ODrive firmware waits 1 us after each DRV8301
+ *  frame). */
+#define MC_F405_SPI_CS_GAP_READS 64u
+
+typedef struct mc_f405_spi_config {
+    mc_f405_spi_regs_t *p_spi;   /**< SPI1, SPI2 or SPI3 */
+    uint32_t pclk_hz;            /**< its APB clock: 84e6 (SPI1), 42e6 (SPI2/3) */
+    uint32_t max_sck_hz;         /**< fastest SCK the device allows: the
+                                      driver takes the smallest divider
+                                      2, 4, .. 256 that stays at or below it */
+    uint8_t mode;                /**< SPI mode 0..3: CPOL = bit 1, CPHA = bit 0 */
+    mc_f405_pin_t cs;            /**< chip select (output; active_low as the
+                                      device wants); required */
+} mc_f405_spi_config_t;
+
+typedef struct mc_f405_spi {
+    mc_f405_spi_config_t cfg;
+    uint32_t cr1;                /**< CR1 with SPE */
+    uint32_t sck_hz;             /**< SCK frequency the divider gives */
+    mc_hal_spi_t dev;
+} mc_f405_spi_t;
+
+/**
+ * Master, 16-bit frames, MSB first, software chip select (SSM = SSI = 1),
+ * full duplex, no CRC; chip select driven to its released level and made an
+ * output; then SPE. Pin alternate functions (SCK, MISO, MOSI) and the
+ * peripheral clock are the board's.
+ * @return 0; -EINVAL NULL, zero clock, mode > 3, no chip-select pin or pin
+ *         > 15, max_sck_hz below PCLK / 256 (nothing written).
+ */
+int mc_f405_spi_init(mc_f405_spi_t *p_drv, const mc_f405_spi_config_t *p_cfg);
 
 /* ======================================================================== */
 /* tick: 32-bit timer                                                        */
