@@ -49,7 +49,8 @@ static bool temp_sensor_valid(const mc_f405_adc_temp_sensor_t *s)
         return true;
     }
     return channel_valid(s->channel) && finite_f(s->offset_c) &&
-           finite_f(s->slope_c_per_v) && finite_f(s->v_min_v) &&
+           finite_f(s->slope_c_per_v) && finite_f(s->c2_c_per_v2) &&
+           finite_f(s->c3_c_per_v3) && finite_f(s->v_min_v) &&
            finite_f(s->v_max_v) && (s->v_min_v < s->v_max_v);
 }
 
@@ -58,8 +59,12 @@ static bool config_valid(const mc_f405_adc_config_t *c)
     if ((c->p_adc == NULL) || (c->p_common == NULL)) {
         return false;
     }
-    if (!channel_valid(c->ch_ia) || !channel_valid(c->ch_ib) ||
+    /* Phases a and b, a b and c, or b and c. */
+    if (!channel_or_none(c->ch_ia) || !channel_valid(c->ch_ib) ||
         !channel_or_none(c->ch_ic) || !channel_valid(c->ch_vbus)) {
+        return false;
+    }
+    if ((c->ch_ia == MC_F405_ADC_CH_NONE) && (c->ch_ic == MC_F405_ADC_CH_NONE)) {
         return false;
     }
     if (!smp_valid(c->smp_current) || !smp_valid(c->smp_vbus) ||
@@ -142,7 +147,6 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
     float cur[3] = {0.0f, 0.0f, 0.0f};
     uint32_t valid = 0u;
     uint32_t k;
-    uint32_t n_phase;
     float vbus_v = 0.0f;
     const uint32_t margin = (p != NULL) ? p->cfg.rail_margin_counts : 0u;
 
@@ -161,12 +165,18 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
     }
     r->SR = ~MC_F405_ADC_SR_JEOC; /* rc_w0: clear JEOC, leave the others */
 
-    n_phase = (p->cfg.ch_ic != MC_F405_ADC_CH_NONE) ? 3u : 2u;
-    for (k = 0u; k < n_phase; k++) {
+    for (k = 0u; k < p->n_phase; k++) {
+        const uint32_t ph = p->phase_of_rank[k];
         if (raw_in_range(raw[k], margin)) {
-            cur[k] = ((float)raw[k] - p->offset_counts[k]) * p->a_per_count[k];
-            valid |= (1u << k); /* MC_HAL_ADC_VALID_IA/IB/IC are bits 0..2 */
+            cur[ph] = ((float)raw[k] - p->offset_counts[ph]) * p->a_per_count[ph];
+            valid |= (1u << ph); /* MC_HAL_ADC_VALID_IA/IB/IC are bits 0..2 */
         }
+    }
+    if (p->derive_ia &&
+        ((valid & (MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC)) ==
+         (MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC))) {
+        cur[0] = -(cur[1] + cur[2]);
+        valid |= MC_HAL_ADC_VALID_IA;
     }
     if (raw_in_range(raw[p->rank_vbus], margin)) {
         vbus_v = (float)raw[p->rank_vbus] * p->v_per_count * p->cfg.vbus_divider;
@@ -220,7 +230,9 @@ static int adc_read_temp(void *ctx, mc_hal_adc_temp_t *p_temp)
         float t_c = 0.0f;
 
         if ((v >= s->v_min_v) && (v <= s->v_max_v)) {
-            t_c = s->offset_c + (s->slope_c_per_v * v);
+            /* Horner: offset + v (slope + v (c2 + v c3)). */
+            t_c = s->offset_c +
+                  (v * (s->slope_c_per_v + (v * (s->c2_c_per_v2 + (v * s->c3_c_per_v3)))));
             p->temp.valid_mask |= bit;
         } else {
             p->temp.valid_mask &= ~bit; /* open or short circuit */
@@ -258,7 +270,9 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
 {
     const mc_f405_adc_config_t *c = p_cfg;
     uint8_t seq[4];
+    uint32_t phase_of_rank[3] = {0u, 0u, 0u};
     uint32_t n;
+    uint32_t n_phase;
     uint32_t k;
     uint32_t jsqr;
     uint32_t smpr1 = 0u;
@@ -273,13 +287,19 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
         return -EINVAL;
     }
 
-    /* Injected sequence: ia, ib, [ic], vbus. */
+    /* Injected sequence: the measured phases in phase order, then vbus. */
     n = 0u;
-    seq[n++] = c->ch_ia;
+    if (c->ch_ia != MC_F405_ADC_CH_NONE) {
+        phase_of_rank[n] = 0u;
+        seq[n++] = c->ch_ia;
+    }
+    phase_of_rank[n] = 1u;
     seq[n++] = c->ch_ib;
     if (c->ch_ic != MC_F405_ADC_CH_NONE) {
+        phase_of_rank[n] = 2u;
         seq[n++] = c->ch_ic;
     }
+    n_phase = n;
     seq[n++] = c->ch_vbus;
     /* Rank k of an n-long sequence sits in field JSQ(4 - n + k), i.e. the
      * sequence fills the last fields (RM0090 §13.13.12). */
@@ -297,7 +317,11 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
 
     p_drv->cfg = *c;
     p_drv->n_inj = n;
-    p_drv->rank_ic = 2u;
+    p_drv->n_phase = n_phase;
+    for (k = 0u; k < 3u; k++) {
+        p_drv->phase_of_rank[k] = (k < n_phase) ? phase_of_rank[k] : 0u;
+    }
+    p_drv->derive_ia = (c->ch_ia == MC_F405_ADC_CH_NONE);
     p_drv->rank_vbus = n - 1u;
     offsets_v[0] = c->ia_offset_v;
     offsets_v[1] = c->ib_offset_v;

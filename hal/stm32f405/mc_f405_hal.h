@@ -229,23 +229,31 @@ typedef enum mc_f405_adc_smp {
     MC_F405_ADC_SMP_480 = 7
 } mc_f405_adc_smp_t;
 
-/** A linear temperature sensor T = offset_c + slope_c_per_v * v, valid
- *  for v_min_v <= v <= v_max_v (outside: open or short circuit). */
+/** A temperature sensor as a cubic in the ADC pin voltage v:
+ *  T = offset_c + slope_c_per_v v + c2_c_per_v2 v^2 + c3_c_per_v3 v^3
+ *  (a linear sensor has c2 = c3 = 0; a thermistor network is a polynomial
+ *  fitted over its working range), valid for v_min_v <= v <= v_max_v
+ *  (outside: open or short circuit). */
 typedef struct mc_f405_adc_temp_sensor {
     uint8_t channel;        /**< ADC channel or MC_F405_ADC_CH_NONE */
     float offset_c;
     float slope_c_per_v;
     float v_min_v;
     float v_max_v;
+    float c2_c_per_v2;
+    float c3_c_per_v3;
 } mc_f405_adc_temp_sensor_t;
 
 typedef struct mc_f405_adc_config {
     mc_f405_adc_regs_t *p_adc;             /**< ADC1 */
     mc_f405_adc_common_regs_t *p_common;   /**< ADC common registers */
     const mc_hal_tick_t *p_tick;           /**< timestamps; NULL: 0 */
-    uint8_t ch_ia;                         /**< channel of phase a amplifier */
+    uint8_t ch_ia;                         /**< channel of phase a amplifier,
+                                                or MC_F405_ADC_CH_NONE when
+                                                phases b and c are measured */
     uint8_t ch_ib;
-    uint8_t ch_ic;                         /**< or MC_F405_ADC_CH_NONE (2 shunts) */
+    uint8_t ch_ic;                         /**< or MC_F405_ADC_CH_NONE (2 shunts
+                                                on a and b) */
     uint8_t ch_vbus;
     mc_f405_adc_smp_t smp_current;
     mc_f405_adc_smp_t smp_vbus;
@@ -272,7 +280,9 @@ typedef struct mc_f405_adc_config {
 typedef struct mc_f405_adc {
     mc_f405_adc_config_t cfg;
     uint32_t n_inj;            /**< injected conversions (3 or 4) */
-    uint32_t rank_ic;          /**< JDR index of ic (if measured) */
+    uint32_t n_phase;          /**< measured phases (2 or 3) */
+    uint32_t phase_of_rank[3]; /**< phase index (0 a, 1 b, 2 c) of JDR k */
+    bool derive_ia;            /**< b and c measured: ia = -(ib + ic) */
     uint32_t rank_vbus;        /**< JDR index of vbus */
     float a_per_count[3];      /**< current scale per phase [A/count] */
     float offset_counts[3];    /**< zero-current raw value per phase */
@@ -285,11 +295,17 @@ typedef struct mc_f405_adc {
 } mc_f405_adc_t;
 
 /**
- * Configure ADC1: 12-bit, scan, injected sequence ia, ib, [ic], vbus on the
- * TIM1 trigger (rising edge), sample times, ADC clock divider; power on.
- * @return 0; -EINVAL NULL pointer, channel > 18 (or NONE where required),
- *         enum out of range, clk_div not 2/4/6/8, non-finite or out-of-range
- *         analog parameter.
+ * Configure ADC1: 12-bit, scan, injected sequence of the measured phase
+ * currents in phase order (a, b, [c], or b, c) then vbus, on the TIM1
+ * trigger (rising edge), sample times, ADC clock divider; power on.
+ *
+ * Phases measured: a and b (ic from the drive, ia + ib + ic = 0), a, b and
+ * c, or b and c (ODrive v3.6). With b and c the driver reports ia as
+ * -(ib + ic), valid when both are, so the sample always carries ia and ib
+ * (what the drive requires) and the measured ic.
+ * @return 0; -EINVAL NULL pointer, channel > 18 (or NONE where required:
+ *         ib and vbus always, ic when ia is NONE), enum out of range,
+ *         clk_div not 2/4/6/8, non-finite or out-of-range analog parameter.
  */
 int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg);
 
