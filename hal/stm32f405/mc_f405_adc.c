@@ -43,10 +43,32 @@ static bool smp_valid(mc_f405_adc_smp_t smp)
     return ((uint32_t)smp) <= (uint32_t)MC_F405_ADC_SMP_480;
 }
 
+static bool temp_table_valid(const mc_f405_adc_temp_sensor_t *s)
+{
+    uint32_t k;
+
+    if ((s->p_table == NULL) || (s->n_table < 2u) ||
+        (s->n_table > MC_F405_ADC_TEMP_TABLE_MAX)) {
+        return false;
+    }
+    for (k = 0u; k < s->n_table; k++) {
+        if (!finite_f(s->p_table[k].v) || !finite_f(s->p_table[k].t_c)) {
+            return false;
+        }
+        if ((k > 0u) && !(s->p_table[k].v > s->p_table[k - 1u].v)) {
+            return false;
+        }
+    }
+    return true;
+}
+
 static bool temp_sensor_valid(const mc_f405_adc_temp_sensor_t *s)
 {
     if (s->channel == MC_F405_ADC_CH_NONE) {
         return true;
+    }
+    if (s->n_table != 0u) {
+        return channel_valid(s->channel) && temp_table_valid(s);
     }
     return channel_valid(s->channel) && finite_f(s->offset_c) &&
            finite_f(s->slope_c_per_v) && finite_f(s->c2_c_per_v2) &&
@@ -196,6 +218,34 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
     return 0;
 }
 
+/* Temperature of a sensor at pin voltage v; false outside its window. */
+static bool temp_convert(const mc_f405_adc_temp_sensor_t *s, float v, float *p_t_c)
+{
+    if (s->n_table != 0u) {
+        const mc_f405_adc_temp_point_t *t = s->p_table;
+        uint32_t k;
+        if ((v < t[0].v) || (v > t[s->n_table - 1u].v)) {
+            return false;
+        }
+        for (k = 1u; k < (s->n_table - 1u); k++) {
+            if (v <= t[k].v) {
+                break;
+            }
+        }
+        /* v in [t[k-1].v, t[k].v] */
+        *p_t_c = t[k - 1u].t_c +
+                 ((v - t[k - 1u].v) * (t[k].t_c - t[k - 1u].t_c) / (t[k].v - t[k - 1u].v));
+        return true;
+    }
+    if ((v < s->v_min_v) || (v > s->v_max_v)) {
+        return false;
+    }
+    /* Horner: offset + v (slope + v (c2 + v c3)). */
+    *p_t_c = s->offset_c +
+             (v * (s->slope_c_per_v + (v * (s->c2_c_per_v2 + (v * s->c3_c_per_v3)))));
+    return true;
+}
+
 static const mc_f405_adc_temp_sensor_t *temp_sensor(const mc_f405_adc_t *p,
                                                     uint32_t slot)
 {
@@ -229,12 +279,10 @@ static int adc_read_temp(void *ctx, mc_hal_adc_temp_t *p_temp)
         const float v = (float)(r->DR & MC_F405_ADC_DATA_MASK) * p->v_per_count;
         float t_c = 0.0f;
 
-        if ((v >= s->v_min_v) && (v <= s->v_max_v)) {
-            /* Horner: offset + v (slope + v (c2 + v c3)). */
-            t_c = s->offset_c +
-                  (v * (s->slope_c_per_v + (v * (s->c2_c_per_v2 + (v * s->c3_c_per_v3)))));
+        if (temp_convert(s, v, &t_c)) {
             p->temp.valid_mask |= bit;
         } else {
+            t_c = 0.0f;
             p->temp.valid_mask &= ~bit; /* open or short circuit */
         }
         if (p->temp_slot == 0u) {

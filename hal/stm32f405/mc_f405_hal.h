@@ -229,11 +229,24 @@ typedef enum mc_f405_adc_smp {
     MC_F405_ADC_SMP_480 = 7
 } mc_f405_adc_smp_t;
 
-/** A temperature sensor as a cubic in the ADC pin voltage v:
- *  T = offset_c + slope_c_per_v v + c2_c_per_v2 v^2 + c3_c_per_v3 v^3
- *  (a linear sensor has c2 = c3 = 0; a thermistor network is a polynomial
- *  fitted over its working range), valid for v_min_v <= v <= v_max_v
- *  (outside: open or short circuit). */
+/** One point of a temperature table: ADC pin voltage and temperature. */
+typedef struct mc_f405_adc_temp_point {
+    float v;
+    float t_c;
+} mc_f405_adc_temp_point_t;
+
+/** Most points of a temperature table. */
+#define MC_F405_ADC_TEMP_TABLE_MAX 64u
+
+/** A temperature sensor on one ADC channel, either
+ *  - a cubic in the ADC pin voltage v (n_table = 0):
+ *    T = offset_c + slope_c_per_v v + c2_c_per_v2 v^2 + c3_c_per_v3 v^3
+ *    (a linear sensor has c2 = c3 = 0), valid for v_min_v <= v <= v_max_v;
+ *  - or a table (n_table >= 2 points, v strictly increasing), linearly
+ *    interpolated, valid from the first to the last point's voltage (a
+ *    thermistor network: points spaced in temperature follow its curve
+ *    where it is steep); the cubic and window fields are then unused.
+ *  Outside the valid window: open or short circuit. */
 typedef struct mc_f405_adc_temp_sensor {
     uint8_t channel;        /**< ADC channel or MC_F405_ADC_CH_NONE */
     float offset_c;
@@ -242,6 +255,8 @@ typedef struct mc_f405_adc_temp_sensor {
     float v_max_v;
     float c2_c_per_v2;
     float c3_c_per_v3;
+    const mc_f405_adc_temp_point_t *p_table; /**< or NULL */
+    uint32_t n_table;       /**< 0 (cubic) or 2 .. MC_F405_ADC_TEMP_TABLE_MAX */
 } mc_f405_adc_temp_sensor_t;
 
 typedef struct mc_f405_adc_config {

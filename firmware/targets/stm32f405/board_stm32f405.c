@@ -164,7 +164,7 @@ static bool board_drivers(uint32_t sysclk_hz)
     if (mc_f405_pwm3_init(&g_board.pwm3, &pc) != 0) {
         return false;
     }
-    const mc_f405_adc_temp_sensor_t no_temp = {MC_F405_ADC_CH_NONE, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    const mc_f405_adc_temp_sensor_t no_temp = {MC_F405_ADC_CH_NONE, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, NULL, 0u};
     const mc_f405_adc_config_t ac = {
         .p_adc = (mc_f405_adc_regs_t *)(uintptr_t)MC_F405_ADC1_BASE, /* NOLINT(performance-no-int-to-ptr) */
         .p_common = (mc_f405_adc_common_regs_t *)(uintptr_t)MC_F405_ADC_COMMON_BASE, /* NOLINT(performance-no-int-to-ptr) */

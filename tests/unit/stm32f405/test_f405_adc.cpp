@@ -43,8 +43,8 @@ struct AdcBoard : public ::testing::Test {
         c.vbus_divider = 20.0f;
         c.rail_margin_counts = 16u;
         // Linear sensor, 10 mV/degC with 0.5 V at 0 degC: T = -50 + 100 v.
-        c.temp_power_stage = {14u, -50.0f, 100.0f, 0.1f, 2.0f, 0.0f, 0.0f};
-        c.temp_motor = {15u, -50.0f, 100.0f, 0.1f, 2.0f, 0.0f, 0.0f};
+        c.temp_power_stage = {14u, -50.0f, 100.0f, 0.1f, 2.0f, 0.0f, 0.0f, nullptr, 0u};
+        c.temp_motor = {15u, -50.0f, 100.0f, 0.1f, 2.0f, 0.0f, 0.0f, nullptr, 0u};
         return c;
     }
 
@@ -336,7 +336,7 @@ TEST_F(AdcBoard, PhasesBAndCDeriveA)
 TEST_F(AdcBoard, CubicTemperatureSensor)
 {
     mc_f405_adc_config_t c = cfg();
-    c.temp_power_stage = {14u, 10.0f, 20.0f, 0.1f, 3.2f, -3.0f, 0.5f};
+    c.temp_power_stage = {14u, 10.0f, 20.0f, 0.1f, 3.2f, -3.0f, 0.5f, nullptr, 0u};
     c.temp_motor.channel = MC_F405_ADC_CH_NONE;
     ASSERT_EQ(mc_f405_adc_init(&drv, &c), 0);
     mc_hal_adc_temp_t t{};
@@ -348,4 +348,49 @@ TEST_F(AdcBoard, CubicTemperatureSensor)
     const double expect_c = 10.0 + 20.0 * v - 3.0 * v * v + 0.5 * v * v * v;
     EXPECT_EQ(t.valid_mask, MC_HAL_ADC_TEMP_VALID_POWER_STAGE);
     EXPECT_NEAR(t.power_stage_temp_c, expect_c, rel_tol(expect_c));
+}
+
+// Table sensor: three points (0.5 V, 100 degC), (1.0 V, 60 degC), (2.0 V,
+// 20 degC) interpolated linearly; outside 0.5..2.0 V invalid. 1241 counts =
+// 0.99983 V lies in the first segment: 100 - 40 (0.99983 - 0.5) / 0.5.
+TEST_F(AdcBoard, TableTemperatureSensor)
+{
+    static const mc_f405_adc_temp_point_t table[] = {{0.5f, 100.0f}, {1.0f, 60.0f}, {2.0f, 20.0f}};
+    mc_f405_adc_config_t c = cfg();
+    c.temp_power_stage = {14u, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, table, 3u};
+    c.temp_motor.channel = MC_F405_ADC_CH_NONE;
+    ASSERT_EQ(mc_f405_adc_init(&drv, &c), 0);
+    mc_hal_adc_temp_t t{};
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    const double v1 = 1241.0 * 3.3 / 4096.0;
+    adc.DR = 1241u;
+    adc.SR = MC_F405_ADC_SR_EOC;
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    const double e1 = 100.0 - 40.0 * (v1 - 0.5) / 0.5;
+    EXPECT_EQ(t.valid_mask, MC_HAL_ADC_TEMP_VALID_POWER_STAGE);
+    EXPECT_NEAR(t.power_stage_temp_c, e1, rel_tol(e1));
+    // 1862 counts = 1.5002 V: second segment, 60 - 40 (1.5002 - 1.0).
+    adc.DR = 1862u;
+    adc.SR = MC_F405_ADC_SR_EOC;
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    const double e2 = 60.0 - 40.0 * (1862.0 * 3.3 / 4096.0 - 1.0);
+    EXPECT_NEAR(t.power_stage_temp_c, e2, rel_tol(e2));
+    // 2600 counts = 2.095 V: beyond the last point, open circuit.
+    adc.DR = 2600u;
+    adc.SR = MC_F405_ADC_SR_EOC;
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    EXPECT_EQ(t.valid_mask, 0u);
+}
+
+// A table must have increasing voltages and finite values.
+TEST_F(AdcBoard, BadTemperatureTableRefused)
+{
+    static const mc_f405_adc_temp_point_t falling[] = {{1.0f, 20.0f}, {0.5f, 60.0f}};
+    mc_f405_adc_config_t c = cfg();
+    c.temp_power_stage = {14u, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, falling, 2u};
+    EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
+    c.temp_power_stage = {14u, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, nullptr, 2u};
+    EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
+    c.temp_power_stage = {14u, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, falling, 1u};
+    EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
 }
