@@ -255,6 +255,26 @@ int mc_drv8301_read_faults(mc_drv8301_t *p_drv, uint32_t *p_faults)
     return 0;
 }
 
+int mc_drv8301_reset_faults(const mc_drv8301_t *p_drv)
+{
+    uint16_t r1 = 0u;
+
+    if ((p_drv == NULL) || (p_drv->p_spi == NULL)) {
+        return -EINVAL;
+    }
+    if (mc_hal_spi_transfer16(p_drv->p_spi,
+                              mc_drv8301_frame_write(MC_DRV8301_REG_CTRL1,
+                                                     (uint32_t)p_drv->ctrl1 |
+                                                         MC_DRV8301_CTRL1_GATE_RESET),
+                              NULL) != 0) {
+        return -EIO;
+    }
+    if ((read_raw(p_drv->p_spi, MC_DRV8301_REG_CTRL1, &r1) != 0) || (r1 != p_drv->ctrl1)) {
+        return -EIO;
+    }
+    return 0;
+}
+
 static mc_drv8301_status_t status_of(int rc)
 {
     return (rc == -EPROTO) ? MC_DRV8301_STATUS_NO_RESPONSE : MC_DRV8301_STATUS_SPI;

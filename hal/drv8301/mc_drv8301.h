@@ -52,6 +52,9 @@
 extern "C" {
 #endif
 
+/** Control 1 D2: reset latched faults (reads back 0). */
+#define MC_DRV8301_CTRL1_GATE_RESET (1u << 2)
+
 /* Register addresses (bits 14:11 of a frame). */
 #define MC_DRV8301_REG_STATUS1 0x0u
 #define MC_DRV8301_REG_STATUS2 0x1u
@@ -221,6 +224,16 @@ int mc_drv8301_read_reg(const mc_drv8301_t *p_drv, uint32_t addr, uint16_t *p_da
 
 /** Write one register (one frame). @return 0; -EINVAL; -EIO. */
 int mc_drv8301_write_reg(const mc_drv8301_t *p_drv, uint32_t addr, uint32_t data);
+
+/**
+ * Reset the chip's latched faults (a latched over-current shut-down in
+ * particular): write Control 1 with GATE_RESET (D2) set, which the chip
+ * clears again, then read Control 1 back to check it holds the
+ * configuration (GATE_RESET 0).
+ * @return 0; -EINVAL (NULL or never set up); -EIO (SPI failure, no valid
+ *         response, or Control 1 not as configured).
+ */
+int mc_drv8301_reset_faults(const mc_drv8301_t *p_drv);
 
 /**
  * Read Status 1 and 2 (clearing the latched bits in the chip) and store the

@@ -8,7 +8,9 @@
 //  - Status 1 (0x00) and the GVDD_OV bit of Status 2 (0x01) are latched and
 //    cleared when read; Status 2 D3:D0 hold the device ID; writes to the
 //    status registers have no effect;
-//  - Control 1 (0x02) and 2 (0x03) keep what is written (11 bits).
+//  - Control 1 (0x02) and 2 (0x03) keep what is written (11 bits); Control 1
+//    D2 (GATE_RESET) clears the latched faults and reads back 0;
+//  - EN_GATE low resets every register (power_reset()).
 // Fault injection for the tests: writes to Control 1 ignored a number of
 // times, MISO stuck high or low, a failing transfer.
 #ifndef DRV8301_MODEL_H
@@ -28,6 +30,16 @@ public:
     bool miso_stuck_high = false;            // no chip: pulled-up MISO
     bool miso_stuck_low = false;
     int fail_at_frame = -1;                  // transfer returns -EIO
+    int gate_resets = 0;                     // Control 1 writes with GATE_RESET
+
+    // EN_GATE low resets the chip: registers back to their defaults.
+    void power_reset()
+    {
+        reg[0] = 0u;
+        reg[1] = 0x0001u;
+        reg[2] = 0u;
+        reg[3] = 0u;
+    }
 
     mc_hal_spi_t spi() { return mc_hal_spi_t{&ops_, this}; }
 
@@ -51,6 +63,13 @@ public:
                 --ignore_ctrl1_writes;
             } else if (addr >= 2u) {
                 reg[addr] = static_cast<uint16_t>(cmd & 0x7FFu);
+                if (addr == 2u && (cmd & 0x0004u) != 0u) {
+                    // GATE_RESET: latched faults cleared, the bit reverts to 0.
+                    reg[0] = 0u;
+                    reg[1] = static_cast<uint16_t>(reg[1] & 0x000Fu);
+                    reg[2] = static_cast<uint16_t>(reg[2] & ~0x0004u);
+                    ++gate_resets;
+                }
             }
             // The answer to a write is not used by a correct master: make
             // it one that no read check could accept (address 0xF).

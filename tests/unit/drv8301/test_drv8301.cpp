@@ -339,3 +339,31 @@ TEST(Drv8301Access, RefusesBadArguments)
     ASSERT_EQ(mc_drv8301_read_reg(&drv, MC_DRV8301_REG_CTRL2, &v), 0);
     EXPECT_EQ(v, 0x004u);
 }
+
+// GATE_RESET: one write of Control 1 with D2 set (0x1554 for the ODrive
+// set-up), the latched over-current cleared in the chip, Control 1 read back
+// as configured (D2 back to 0).
+TEST(Drv8301Reset, GateResetClearsLatchedFaults)
+{
+    Drv8301Model chip;
+    const mc_hal_spi_t spi = chip.spi();
+    const mc_drv8301_config_t c = odrive_cfg();
+    mc_drv8301_t drv{};
+    ASSERT_EQ(mc_drv8301_init(&drv, &spi, &c), 0);
+    chip.reg[0] = (1u << 4) | (1u << 10); // FETLA_OC latched
+    chip.frames.clear();
+    ASSERT_EQ(mc_drv8301_reset_faults(&drv), 0);
+    const std::vector<uint16_t> want = {0x1554u, kReadCtrl1, kReadCtrl1};
+    EXPECT_EQ(chip.frames, want);
+    EXPECT_EQ(chip.gate_resets, 1);
+    EXPECT_EQ(chip.reg[0], 0u);
+    EXPECT_EQ(chip.reg[2], 0x550u);
+
+    // A chip that lost its configuration (EN_GATE reset) and drops the
+    // write fails the read-back check.
+    chip.power_reset();
+    chip.ignore_ctrl1_writes = 1;
+    EXPECT_EQ(mc_drv8301_reset_faults(&drv), -EIO);
+    mc_drv8301_t none{};
+    EXPECT_EQ(mc_drv8301_reset_faults(&none), -EINVAL);
+}
