@@ -14,9 +14,12 @@
  *   gate driver   EN_GATE and nFAULT pins; a DRV8301 set up over SPI3
  *                 (gain, over-current threshold and mode) and verified
  *                 before the drive starts; a failed set-up halts the image
- *                 with the gates killed. While nFAULT is asserted the slow
- *                 loop's end reads the DRV8301 status registers once
- *                 (g_board.f405.drv.faults, names: mc_drv8301_fault_name).
+ *                 with the gates killed. The slow loop's end supervises it
+ *                 (mc_board_f405_gate_driver_supervise): set up again after
+ *                 a gate kill and release, status registers read when nFAULT
+ *                 asserts (g_board.f405.drv.faults, names:
+ *                 mc_drv8301_fault_name), the chip's latch reset once the
+ *                 drive has recorded the fault.
  *
  * The motor defaults are the paper-002 test motor of the simulator (R 0.675
  * ohm, L 1.14 mH, psi 0.11 Wb, 4 pole pairs), current loop bandwidth 200 Hz.
@@ -44,13 +47,14 @@ extern const mc_board_desc_t MC_BOARD_DESC;
 #define I_MAX_A 10.0f
 #define I_TRIP_A 15.0f
 #define DELAY_POLL_SLACK 1000u
+#define SLOW_LOOP_DIV 20u                                 /* 1 kHz slow loop */
+#define SLOW_PERIOD_US (1000000u / PWM_HZ * SLOW_LOOP_DIV) /* 1000 us */
 
 void CAN1_RX0_IRQHandler(void);
 
 typedef struct drive_board {
     mc_board_f405_t f405;
     mc_drive_cfg_t cfg;
-    bool gate_fault_seen;    /**< nFAULT asserted at the last slow loop */
 } drive_board_t;
 
 static drive_board_t g_board;
@@ -153,7 +157,7 @@ const mc_drive_cfg_t *mc_board_drive_cfg(void)
     c->pole_pairs = 4u;
     c->encoder_offset_rad = 0.0f;
     c->speed_pll_bw_rad_s = 1000.0f;
-    c->slow_loop_div = 20u; /* 1 kHz */
+    c->slow_loop_div = SLOW_LOOP_DIV;
     c->i_max_a = I_MAX_A;
     c->i_trip_a = I_TRIP_A;
     c->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
@@ -180,35 +184,23 @@ void mc_board_fast_irq_ack(void)
 void mc_board_apply_commands(mc_drive_t *d)
 {
     /* Commands arrive over CAN (firmware/app CAN protocol), outside this
-     * binding. */
-    (void)d;
-}
-
-/* nFAULT level straight from IDR: no side effect on the fault driver's
- * latches (the fast loop may be using them). */
-static bool gate_fault_asserted(void)
-{
-    const mc_board_pin_t f = MC_BOARD_DESC.gate_fault;
-    if (f.port >= MC_F405_GPIO_PORTS) {
-        return false;
+     * binding. While the DRV8301 does not hold its set-up (after a gate
+     * kill until the slow loop has written it again) the drive is held in
+     * an external fault: its current scaling assumes the set-up's gain. */
+    if (!g_board.f405.drv_ready) {
+        mc_drive_raise_fault(d, MC_DRIVE_FAULT_EXTERNAL);
     }
-    const mc_f405_gpio_regs_t *g = g_board.f405.fault.cfg.gate_driver_fault.p_port;
-    const bool level = ((g->IDR >> f.pin) & 1u) != 0u;
-    return f.active_low ? !level : level;
 }
 
 void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
 {
-    (void)d;
-    if (!slow_ran || !MC_BOARD_DESC.has_drv8301) {
+    if (!slow_ran) {
         return;
     }
-    /* PendSV (slow loop) context: a few SPI frames, about 30 us. */
-    const bool asserted = gate_fault_asserted();
-    if (asserted && !g_board.gate_fault_seen) {
-        (void)mc_drv8301_read_faults(&g_board.f405.drv, NULL);
-    }
-    g_board.gate_fault_seen = asserted;
+    /* PendSV (slow loop) context: a few SPI frames when something happens. */
+    (void)mc_board_f405_gate_driver_supervise(&g_board.f405, &MC_BOARD_DESC,
+                                              &g_board.f405.spi.dev, SLOW_PERIOD_US,
+                                              (d->faults & MC_DRIVE_FAULT_HW_INPUT) != 0u);
 }
 
 void mc_board_halt(uint32_t drive_cfg_err)

@@ -392,6 +392,93 @@ TEST_P(GateDriverBoard, SilentGateDriverKillsTheGates)
     EXPECT_EQ(rig.gpio[en->port].BSRR, 1u << (en->pin + 16));
 }
 
+// After a gate kill (EN_GATE low resets the chip: its settings are lost) the
+// board is not ready; after the release it waits the 20 ms start-up time in
+// slow-loop periods, then writes and verifies the set-up again.
+TEST_P(GateDriverBoard, SetupWrittenAgainAfterKillAndRelease)
+{
+    const Case &c = GetParam();
+    const auto pins = boards::read_pins(c.name);
+    Rig rig;
+    ASSERT_EQ(rig.setup(c.desc), MC_BOARD_F405_OK);
+    Drv8301Model chip;
+    const mc_hal_spi_t spi = chip.spi();
+    ASSERT_EQ(mc_board_f405_gate_driver_setup(&rig.board, c.desc, &spi), MC_BOARD_F405_OK);
+    const uint16_t ctrl1 = chip.reg[2];
+    const uint16_t ctrl2 = chip.reg[3];
+    const auto *nf = boards::find(pins, "gate_fault");
+    rig.gpio[nf->port].IDR = 1u << nf->pin; // nFAULT high: no fault
+    EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
+
+    ASSERT_EQ(mc_hal_fault_gate_kill(rig.board.hal.fault), 0);
+    chip.power_reset();
+    EXPECT_FALSE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
+    ASSERT_EQ(mc_hal_fault_gate_release(rig.board.hal.fault), 0);
+    chip.frames.clear();
+    for (int k = 0; k < 19; ++k) { // 19 ms: still inside the start-up time
+        EXPECT_FALSE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
+    }
+    EXPECT_TRUE(chip.frames.empty());
+    EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
+    EXPECT_EQ(chip.reg[2], ctrl1);
+    EXPECT_EQ(chip.reg[3], ctrl2);
+    EXPECT_TRUE(rig.board.drv_ready);
+}
+
+// If the set-up fails after a release, the gates are killed again.
+TEST_P(GateDriverBoard, FailedRearmKillsAgain)
+{
+    const Case &c = GetParam();
+    Rig rig;
+    ASSERT_EQ(rig.setup(c.desc), MC_BOARD_F405_OK);
+    Drv8301Model chip;
+    const mc_hal_spi_t spi = chip.spi();
+    ASSERT_EQ(mc_board_f405_gate_driver_setup(&rig.board, c.desc, &spi), MC_BOARD_F405_OK);
+    ASSERT_EQ(mc_hal_fault_gate_kill(rig.board.hal.fault), 0);
+    EXPECT_FALSE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
+    const auto *nf = boards::find(boards::read_pins(c.name), "gate_fault");
+    rig.gpio[nf->port].IDR = 1u << nf->pin;
+    ASSERT_EQ(mc_hal_fault_gate_release(rig.board.hal.fault), 0);
+    ASSERT_FALSE(rig.board.fault.killed);
+    chip.miso_stuck_high = true; // the chip does not come back
+    for (int k = 0; k < 20; ++k) {
+        EXPECT_FALSE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
+    }
+    EXPECT_TRUE(rig.board.fault.killed);
+    EXPECT_EQ(rig.board.drv.status, MC_DRV8301_STATUS_NO_RESPONSE);
+}
+
+// nFAULT asserts with a latched over-current in the chip: the status
+// registers are read at once (named faults); the chip's latch is reset
+// (GATE_RESET) only after the drive has recorded its hardware fault, and
+// only once per assertion.
+TEST_P(GateDriverBoard, NfaultReadsFaultsThenResetsLatchOnce)
+{
+    const Case &c = GetParam();
+    const auto pins = boards::read_pins(c.name);
+    Rig rig;
+    ASSERT_EQ(rig.setup(c.desc), MC_BOARD_F405_OK);
+    Drv8301Model chip;
+    const mc_hal_spi_t spi = chip.spi();
+    ASSERT_EQ(mc_board_f405_gate_driver_setup(&rig.board, c.desc, &spi), MC_BOARD_F405_OK);
+    const auto *nf = boards::find(pins, "gate_fault");
+    rig.gpio[nf->port].IDR = 0u;           // nFAULT low (active)
+    chip.reg[0] = (1u << 3) | (1u << 10);  // FETHB_OC, FAULT
+    EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
+    EXPECT_EQ(rig.board.drv.faults, MC_DRV8301_FAULT_FETHB_OC | MC_DRV8301_FAULT_FAULT);
+    EXPECT_STREQ(mc_drv8301_fault_name(MC_DRV8301_FAULT_FETHB_OC), "FETHB_OC");
+    EXPECT_EQ(chip.gate_resets, 0);
+    chip.reg[0] = (1u << 3) | (1u << 10);  // still latched
+    EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, true));
+    EXPECT_EQ(chip.gate_resets, 1);
+    EXPECT_EQ(chip.reg[0], 0u);
+    EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, true));
+    EXPECT_EQ(chip.gate_resets, 1);        // once per assertion
+    rig.gpio[nf->port].IDR = 1u << nf->pin; // released
+    EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
+    EXPECT_EQ(chip.gate_resets, 1);
+}
+
 // A missing peripheral or description is refused before any register is
 // written.
 TEST(BoardSetupArgs, Refused)

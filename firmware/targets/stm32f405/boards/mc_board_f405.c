@@ -86,6 +86,10 @@ mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board,
     b->hal = (mc_hal_t){0};
     b->can_ok = false;
     b->drv.status = MC_DRV8301_STATUS_NOT_INIT;
+    b->drv_ready = false;
+    b->rearm_wait_us = 0u;
+    b->nfault_seen = false;
+    b->drv_latch_reset = false;
     if ((d == NULL) || (p == NULL) || (sysclk_hz == 0u) || !periph_complete(d, p)) {
         return fail(b, MC_BOARD_F405_ERR_ARG);
     }
@@ -218,6 +222,7 @@ mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board,
     b->hal.tick = &b->tick.dev;
     b->hal.fault = &b->fault.dev;
     b->hal.brake = NULL;
+    b->drv_ready = !d->has_drv8301; /* a DRV8301 becomes ready when set up */
     b->err = MC_BOARD_F405_OK;
     return MC_BOARD_F405_OK;
 }
@@ -233,12 +238,73 @@ mc_board_f405_err_t mc_board_f405_gate_driver_setup(mc_board_f405_t *p_board,
         return MC_BOARD_F405_OK;
     }
     if (mc_drv8301_init(&p_board->drv, p_spi, &p_desc->drv8301) != 0) {
+        p_board->drv_ready = false;
         if (p_board->hal.fault != NULL) {
             (void)mc_hal_fault_gate_kill(p_board->hal.fault);
         }
         return fail(p_board, MC_BOARD_F405_ERR_GATE_DRIVER);
     }
+    p_board->drv_ready = true;
     return MC_BOARD_F405_OK;
+}
+
+/* nFAULT level from IDR: no side effect on the fault driver's latches. */
+static bool nfault_asserted(const mc_board_f405_t *b)
+{
+    const mc_f405_pin_t *f = &b->fault.cfg.gate_driver_fault;
+    bool level;
+
+    if (f->p_port == NULL) {
+        return false;
+    }
+    level = ((f->p_port->IDR >> f->pin) & 1u) != 0u;
+    return f->active_low ? !level : level;
+}
+
+bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board,
+                                         const mc_board_desc_t *p_desc,
+                                         const mc_hal_spi_t *p_spi, uint32_t period_us,
+                                         bool drive_hw_fault)
+{
+    mc_board_f405_t *b = p_board;
+    bool asserted;
+
+    if ((b == NULL) || (p_desc == NULL)) {
+        return false;
+    }
+    if (!p_desc->has_drv8301) {
+        return b->drv_ready;
+    }
+    if (b->fault.killed) {
+        b->drv_ready = false;
+        b->rearm_wait_us = 0u;
+        b->nfault_seen = false;
+        b->drv_latch_reset = false;
+        return false;
+    }
+    if (!b->drv_ready) {
+        b->rearm_wait_us += period_us;
+        if (b->rearm_wait_us >= MC_BOARD_F405_GATE_STARTUP_US) {
+            b->rearm_wait_us = 0u;
+            if (mc_drv8301_init(&b->drv, p_spi, &p_desc->drv8301) == 0) {
+                b->drv_ready = true;
+            } else if (b->hal.fault != NULL) {
+                (void)mc_hal_fault_gate_kill(b->hal.fault);
+            }
+        }
+        return b->drv_ready;
+    }
+    asserted = nfault_asserted(b);
+    if (asserted && !b->nfault_seen) {
+        (void)mc_drv8301_read_faults(&b->drv, NULL);
+        b->drv_latch_reset = false;
+    }
+    if (asserted && drive_hw_fault && !b->drv_latch_reset) {
+        (void)mc_drv8301_reset_faults(&b->drv);
+        b->drv_latch_reset = true;
+    }
+    b->nfault_seen = asserted;
+    return b->drv_ready;
 }
 
 const char *mc_board_f405_err_name(mc_board_f405_err_t err)

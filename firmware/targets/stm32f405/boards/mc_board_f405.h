@@ -86,6 +86,12 @@ typedef struct mc_board_f405 {
     mc_hal_t hal;
     bool can_ok;                  /**< CAN left init mode (else hal.can NULL) */
     mc_board_f405_err_t err;
+    /* Gate-driver supervision (mc_board_f405_gate_driver_supervise). */
+    volatile bool drv_ready;      /**< the DRV8301 holds its set-up (always true
+                                       on a board without one) */
+    uint32_t rearm_wait_us;       /**< time since the gates were released */
+    bool nfault_seen;             /**< nFAULT asserted at the last call */
+    bool drv_latch_reset;         /**< GATE_RESET sent for this assertion */
 } mc_board_f405_t;
 
 /**
@@ -109,6 +115,28 @@ mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board,
 mc_board_f405_err_t mc_board_f405_gate_driver_setup(mc_board_f405_t *p_board,
                                                     const mc_board_desc_t *p_desc,
                                                     const mc_hal_spi_t *p_spi);
+
+/**
+ * Gate-driver supervision, from the slow loop every period_us (a few SPI
+ * frames when something happens, nothing otherwise):
+ *  - gates killed: EN_GATE low resets the DRV8301, its settings are lost:
+ *    not ready;
+ *  - released again (EN_GATE high): after MC_BOARD_F405_GATE_STARTUP_US the
+ *    DRV8301 is set up and verified again; if that fails the gates are
+ *    killed again (drv.status names why);
+ *  - nFAULT newly asserted: the status registers are read (drv.faults,
+ *    mc_drv8301_fault_name); once the drive has recorded its hardware-input
+ *    fault (drive_hw_fault) the chip's latch is reset (GATE_RESET, once per
+ *    assertion), so that clearing the drive's fault can then succeed. The
+ *    drive stays stopped until it is cleared.
+ * The caller keeps the drive from running while this returns false (the
+ * image raises an external fault).
+ * @return p_board->drv_ready.
+ */
+bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board,
+                                         const mc_board_desc_t *p_desc,
+                                         const mc_hal_spi_t *p_spi, uint32_t period_us,
+                                         bool drive_hw_fault);
 
 /** Name of a set-up result ("ok", "gate driver", ...). */
 const char *mc_board_f405_err_name(mc_board_f405_err_t err);
