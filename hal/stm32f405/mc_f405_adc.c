@@ -43,13 +43,36 @@ static bool smp_valid(mc_f405_adc_smp_t smp)
     return ((uint32_t)smp) <= (uint32_t)MC_F405_ADC_SMP_480;
 }
 
+static bool temp_table_valid(const mc_f405_adc_temp_sensor_t *s)
+{
+    uint32_t k;
+
+    if ((s->p_table == NULL) || (s->n_table < 2u) ||
+        (s->n_table > MC_F405_ADC_TEMP_TABLE_MAX)) {
+        return false;
+    }
+    for (k = 0u; k < s->n_table; k++) {
+        if (!finite_f(s->p_table[k].v) || !finite_f(s->p_table[k].t_c)) {
+            return false;
+        }
+        if ((k > 0u) && !(s->p_table[k].v > s->p_table[k - 1u].v)) {
+            return false;
+        }
+    }
+    return true;
+}
+
 static bool temp_sensor_valid(const mc_f405_adc_temp_sensor_t *s)
 {
     if (s->channel == MC_F405_ADC_CH_NONE) {
         return true;
     }
+    if (s->n_table != 0u) {
+        return channel_valid(s->channel) && temp_table_valid(s);
+    }
     return channel_valid(s->channel) && finite_f(s->offset_c) &&
-           finite_f(s->slope_c_per_v) && finite_f(s->v_min_v) &&
+           finite_f(s->slope_c_per_v) && finite_f(s->c2_c_per_v2) &&
+           finite_f(s->c3_c_per_v3) && finite_f(s->v_min_v) &&
            finite_f(s->v_max_v) && (s->v_min_v < s->v_max_v);
 }
 
@@ -58,8 +81,12 @@ static bool config_valid(const mc_f405_adc_config_t *c)
     if ((c->p_adc == NULL) || (c->p_common == NULL)) {
         return false;
     }
-    if (!channel_valid(c->ch_ia) || !channel_valid(c->ch_ib) ||
+    /* Phases a and b, a b and c, or b and c. */
+    if (!channel_or_none(c->ch_ia) || !channel_valid(c->ch_ib) ||
         !channel_or_none(c->ch_ic) || !channel_valid(c->ch_vbus)) {
+        return false;
+    }
+    if ((c->ch_ia == MC_F405_ADC_CH_NONE) && (c->ch_ic == MC_F405_ADC_CH_NONE)) {
         return false;
     }
     if (!smp_valid(c->smp_current) || !smp_valid(c->smp_vbus) ||
@@ -142,7 +169,6 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
     float cur[3] = {0.0f, 0.0f, 0.0f};
     uint32_t valid = 0u;
     uint32_t k;
-    uint32_t n_phase;
     float vbus_v = 0.0f;
     const uint32_t margin = (p != NULL) ? p->cfg.rail_margin_counts : 0u;
 
@@ -161,12 +187,18 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
     }
     r->SR = ~MC_F405_ADC_SR_JEOC; /* rc_w0: clear JEOC, leave the others */
 
-    n_phase = (p->cfg.ch_ic != MC_F405_ADC_CH_NONE) ? 3u : 2u;
-    for (k = 0u; k < n_phase; k++) {
+    for (k = 0u; k < p->n_phase; k++) {
+        const uint32_t ph = p->phase_of_rank[k];
         if (raw_in_range(raw[k], margin)) {
-            cur[k] = ((float)raw[k] - p->offset_counts[k]) * p->a_per_count[k];
-            valid |= (1u << k); /* MC_HAL_ADC_VALID_IA/IB/IC are bits 0..2 */
+            cur[ph] = ((float)raw[k] - p->offset_counts[ph]) * p->a_per_count[ph];
+            valid |= (1u << ph); /* MC_HAL_ADC_VALID_IA/IB/IC are bits 0..2 */
         }
+    }
+    if (p->derive_ia &&
+        ((valid & (MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC)) ==
+         (MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC))) {
+        cur[0] = -(cur[1] + cur[2]);
+        valid |= MC_HAL_ADC_VALID_IA;
     }
     if (raw_in_range(raw[p->rank_vbus], margin)) {
         vbus_v = (float)raw[p->rank_vbus] * p->v_per_count * p->cfg.vbus_divider;
@@ -184,6 +216,34 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
     p_sample->timestamp_ticks = now_ticks(p->cfg.p_tick);
     p_sample->seq = p->seq;
     return 0;
+}
+
+/* Temperature of a sensor at pin voltage v; false outside its window. */
+static bool temp_convert(const mc_f405_adc_temp_sensor_t *s, float v, float *p_t_c)
+{
+    if (s->n_table != 0u) {
+        const mc_f405_adc_temp_point_t *t = s->p_table;
+        uint32_t k;
+        if ((v < t[0].v) || (v > t[s->n_table - 1u].v)) {
+            return false;
+        }
+        for (k = 1u; k < (s->n_table - 1u); k++) {
+            if (v <= t[k].v) {
+                break;
+            }
+        }
+        /* v in [t[k-1].v, t[k].v] */
+        *p_t_c = t[k - 1u].t_c +
+                 ((v - t[k - 1u].v) * (t[k].t_c - t[k - 1u].t_c) / (t[k].v - t[k - 1u].v));
+        return true;
+    }
+    if ((v < s->v_min_v) || (v > s->v_max_v)) {
+        return false;
+    }
+    /* Horner: offset + v (slope + v (c2 + v c3)). */
+    *p_t_c = s->offset_c +
+             (v * (s->slope_c_per_v + (v * (s->c2_c_per_v2 + (v * s->c3_c_per_v3)))));
+    return true;
 }
 
 static const mc_f405_adc_temp_sensor_t *temp_sensor(const mc_f405_adc_t *p,
@@ -219,10 +279,10 @@ static int adc_read_temp(void *ctx, mc_hal_adc_temp_t *p_temp)
         const float v = (float)(r->DR & MC_F405_ADC_DATA_MASK) * p->v_per_count;
         float t_c = 0.0f;
 
-        if ((v >= s->v_min_v) && (v <= s->v_max_v)) {
-            t_c = s->offset_c + (s->slope_c_per_v * v);
+        if (temp_convert(s, v, &t_c)) {
             p->temp.valid_mask |= bit;
         } else {
+            t_c = 0.0f;
             p->temp.valid_mask &= ~bit; /* open or short circuit */
         }
         if (p->temp_slot == 0u) {
@@ -258,7 +318,9 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
 {
     const mc_f405_adc_config_t *c = p_cfg;
     uint8_t seq[4];
+    uint32_t phase_of_rank[3] = {0u, 0u, 0u};
     uint32_t n;
+    uint32_t n_phase;
     uint32_t k;
     uint32_t jsqr;
     uint32_t smpr1 = 0u;
@@ -273,13 +335,19 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
         return -EINVAL;
     }
 
-    /* Injected sequence: ia, ib, [ic], vbus. */
+    /* Injected sequence: the measured phases in phase order, then vbus. */
     n = 0u;
-    seq[n++] = c->ch_ia;
+    if (c->ch_ia != MC_F405_ADC_CH_NONE) {
+        phase_of_rank[n] = 0u;
+        seq[n++] = c->ch_ia;
+    }
+    phase_of_rank[n] = 1u;
     seq[n++] = c->ch_ib;
     if (c->ch_ic != MC_F405_ADC_CH_NONE) {
+        phase_of_rank[n] = 2u;
         seq[n++] = c->ch_ic;
     }
+    n_phase = n;
     seq[n++] = c->ch_vbus;
     /* Rank k of an n-long sequence sits in field JSQ(4 - n + k), i.e. the
      * sequence fills the last fields (RM0090 §13.13.12). */
@@ -297,7 +365,11 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
 
     p_drv->cfg = *c;
     p_drv->n_inj = n;
-    p_drv->rank_ic = 2u;
+    p_drv->n_phase = n_phase;
+    for (k = 0u; k < 3u; k++) {
+        p_drv->phase_of_rank[k] = (k < n_phase) ? phase_of_rank[k] : 0u;
+    }
+    p_drv->derive_ia = (c->ch_ia == MC_F405_ADC_CH_NONE);
     p_drv->rank_vbus = n - 1u;
     offsets_v[0] = c->ia_offset_v;
     offsets_v[1] = c->ib_offset_v;

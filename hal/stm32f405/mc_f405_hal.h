@@ -26,6 +26,8 @@
  *            recovery.
  *   tick     TIM2 or TIM5 (32-bit) free running. (The DWT cycle counter is
  *            not used: it reads 0 under QEMU.)
+ *   spi      SPI1..3 master with a GPIO chip select, 16-bit frames (the
+ *            gate driver's register interface; hal/spi.h).
  *   fault    BKIN of TIM1/TIM8 (hardware kill), gate-driver nFAULT and
  *            over-current comparator levels on GPIO, gate-driver enable pin;
  *            gate kill = EGR.BG on both timers + MOE cleared + enable low.
@@ -51,6 +53,7 @@
 #include <stdint.h>
 
 #include "hal/hal.h"
+#include "hal/spi.h"
 #include "mc_f405_regs.h"
 
 #ifdef __cplusplus
@@ -226,23 +229,46 @@ typedef enum mc_f405_adc_smp {
     MC_F405_ADC_SMP_480 = 7
 } mc_f405_adc_smp_t;
 
-/** A linear temperature sensor T = offset_c + slope_c_per_v * v, valid
- *  for v_min_v <= v <= v_max_v (outside: open or short circuit). */
+/** One point of a temperature table: ADC pin voltage and temperature. */
+typedef struct mc_f405_adc_temp_point {
+    float v;
+    float t_c;
+} mc_f405_adc_temp_point_t;
+
+/** Most points of a temperature table. */
+#define MC_F405_ADC_TEMP_TABLE_MAX 64u
+
+/** A temperature sensor on one ADC channel, either
+ *  - a cubic in the ADC pin voltage v (n_table = 0):
+ *    T = offset_c + slope_c_per_v v + c2_c_per_v2 v^2 + c3_c_per_v3 v^3
+ *    (a linear sensor has c2 = c3 = 0), valid for v_min_v <= v <= v_max_v;
+ *  - or a table (n_table >= 2 points, v strictly increasing), linearly
+ *    interpolated, valid from the first to the last point's voltage (a
+ *    thermistor network: points spaced in temperature follow its curve
+ *    where it is steep); the cubic and window fields are then unused.
+ *  Outside the valid window: open or short circuit. */
 typedef struct mc_f405_adc_temp_sensor {
     uint8_t channel;        /**< ADC channel or MC_F405_ADC_CH_NONE */
     float offset_c;
     float slope_c_per_v;
     float v_min_v;
     float v_max_v;
+    float c2_c_per_v2;
+    float c3_c_per_v3;
+    const mc_f405_adc_temp_point_t *p_table; /**< or NULL */
+    uint32_t n_table;       /**< 0 (cubic) or 2 .. MC_F405_ADC_TEMP_TABLE_MAX */
 } mc_f405_adc_temp_sensor_t;
 
 typedef struct mc_f405_adc_config {
     mc_f405_adc_regs_t *p_adc;             /**< ADC1 */
     mc_f405_adc_common_regs_t *p_common;   /**< ADC common registers */
     const mc_hal_tick_t *p_tick;           /**< timestamps; NULL: 0 */
-    uint8_t ch_ia;                         /**< channel of phase a amplifier */
+    uint8_t ch_ia;                         /**< channel of phase a amplifier,
+                                                or MC_F405_ADC_CH_NONE when
+                                                phases b and c are measured */
     uint8_t ch_ib;
-    uint8_t ch_ic;                         /**< or MC_F405_ADC_CH_NONE (2 shunts) */
+    uint8_t ch_ic;                         /**< or MC_F405_ADC_CH_NONE (2 shunts
+                                                on a and b) */
     uint8_t ch_vbus;
     mc_f405_adc_smp_t smp_current;
     mc_f405_adc_smp_t smp_vbus;
@@ -269,7 +295,9 @@ typedef struct mc_f405_adc_config {
 typedef struct mc_f405_adc {
     mc_f405_adc_config_t cfg;
     uint32_t n_inj;            /**< injected conversions (3 or 4) */
-    uint32_t rank_ic;          /**< JDR index of ic (if measured) */
+    uint32_t n_phase;          /**< measured phases (2 or 3) */
+    uint32_t phase_of_rank[3]; /**< phase index (0 a, 1 b, 2 c) of JDR k */
+    bool derive_ia;            /**< b and c measured: ia = -(ib + ic) */
     uint32_t rank_vbus;        /**< JDR index of vbus */
     float a_per_count[3];      /**< current scale per phase [A/count] */
     float offset_counts[3];    /**< zero-current raw value per phase */
@@ -282,11 +310,17 @@ typedef struct mc_f405_adc {
 } mc_f405_adc_t;
 
 /**
- * Configure ADC1: 12-bit, scan, injected sequence ia, ib, [ic], vbus on the
- * TIM1 trigger (rising edge), sample times, ADC clock divider; power on.
- * @return 0; -EINVAL NULL pointer, channel > 18 (or NONE where required),
- *         enum out of range, clk_div not 2/4/6/8, non-finite or out-of-range
- *         analog parameter.
+ * Configure ADC1: 12-bit, scan, injected sequence of the measured phase
+ * currents in phase order (a, b, [c], or b, c) then vbus, on the TIM1
+ * trigger (rising edge), sample times, ADC clock divider; power on.
+ *
+ * Phases measured: a and b (ic from the drive, ia + ib + ic = 0), a, b and
+ * c, or b and c (ODrive v3.6). With b and c the driver reports ia as
+ * -(ib + ic), valid when both are, so the sample always carries ia and ib
+ * (what the drive requires) and the measured ic.
+ * @return 0; -EINVAL NULL pointer, channel > 18 (or NONE where required:
+ *         ib and vbus always, ic when ia is NONE), enum out of range,
+ *         clk_div not 2/4/6/8, non-finite or out-of-range analog parameter.
  */
 int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg);
 
@@ -316,6 +350,48 @@ int mc_f405_encoder_init(mc_f405_encoder_t *p_drv,
 
 /** Index pulse seen (call from its EXTI ISR): counter to 0, index flag. */
 void mc_f405_encoder_index_isr(mc_f405_encoder_t *p_drv);
+
+/* ======================================================================== */
+/* spi: SPI1..3 master, one device on a GPIO chip select                     */
+/* ======================================================================== */
+
+/** Status-flag polls before a transfer gives up (-EIO). A 16-bit frame at
+ *  the slowest setting (PCLK / 256, 42 MHz APB1) lasts about 100 us; one
+ *  poll is at least one APB clock (24 ns), so 20000 polls cover it. */
+#define MC_F405_SPI_POLLS 20000u
+/** SR reads after the chip select is released: at least one APB clock each
+ *  (24 ns at 42 MHz), so 64 reads keep the chip select high for at least
+ *  1.5 us between frames (the ODrive firmware waits 1 us after each DRV8301
+ *  frame). */
+#define MC_F405_SPI_CS_GAP_READS 64u
+
+typedef struct mc_f405_spi_config {
+    mc_f405_spi_regs_t *p_spi;   /**< SPI1, SPI2 or SPI3 */
+    uint32_t pclk_hz;            /**< its APB clock: 84e6 (SPI1), 42e6 (SPI2/3) */
+    uint32_t max_sck_hz;         /**< fastest SCK the device allows: the
+                                      driver takes the smallest divider
+                                      2, 4, .. 256 that stays at or below it */
+    uint8_t mode;                /**< SPI mode 0..3: CPOL = bit 1, CPHA = bit 0 */
+    mc_f405_pin_t cs;            /**< chip select (output; active_low as the
+                                      device wants); required */
+} mc_f405_spi_config_t;
+
+typedef struct mc_f405_spi {
+    mc_f405_spi_config_t cfg;
+    uint32_t cr1;                /**< CR1 with SPE */
+    uint32_t sck_hz;             /**< SCK frequency the divider gives */
+    mc_hal_spi_t dev;
+} mc_f405_spi_t;
+
+/**
+ * Master, 16-bit frames, MSB first, software chip select (SSM = SSI = 1),
+ * full duplex, no CRC; chip select driven to its released level and made an
+ * output; then SPE. Pin alternate functions (SCK, MISO, MOSI) and the
+ * peripheral clock are the board's.
+ * @return 0; -EINVAL NULL, zero clock, mode > 3, no chip-select pin or pin
+ *         > 15, max_sck_hz below PCLK / 256 (nothing written).
+ */
+int mc_f405_spi_init(mc_f405_spi_t *p_drv, const mc_f405_spi_config_t *p_cfg);
 
 /* ======================================================================== */
 /* tick: 32-bit timer                                                        */

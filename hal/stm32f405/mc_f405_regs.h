@@ -1,7 +1,7 @@
 /**
  * @file mc_f405_regs.h
  * @brief STM32F405 register maps used by the register-level HAL: timers,
- *        ADC, bxCAN, GPIO. Written from the reference manual RM0090
+ *        ADC, bxCAN, SPI, GPIO. Written from the reference manual RM0090
  *        (STM32F405/415/407/417/427/437/429/439); no vendor header.
  *
  * Each peripheral is a struct of 32-bit volatile registers whose layout is
@@ -37,6 +37,9 @@ extern "C" {
 #define MC_F405_ADC2_BASE       0x40012100u
 #define MC_F405_ADC3_BASE       0x40012200u
 #define MC_F405_ADC_COMMON_BASE 0x40012300u
+#define MC_F405_SPI2_BASE       0x40003800u /* APB1 */
+#define MC_F405_SPI3_BASE       0x40003C00u /* APB1 */
+#define MC_F405_SPI1_BASE       0x40013000u /* APB2 */
 #define MC_F405_GPIOA_BASE      0x40020000u /* AHB1, one port per 0x400 */
 #define MC_F405_GPIO_STRIDE     0x400u
 
@@ -248,6 +251,38 @@ typedef struct mc_f405_can_regs {
 /* FMR */
 #define MC_F405_CAN_FMR_FINIT  (1u << 0)
 
+/* ---- SPI (§28.5; the I2S registers are not used) ----------------------- */
+
+typedef struct mc_f405_spi_regs {
+    volatile uint32_t CR1;     /* 0x00 */
+    volatile uint32_t CR2;     /* 0x04 */
+    volatile uint32_t SR;      /* 0x08 flags (RXNE, TXE, BSY read-only) */
+    volatile uint32_t DR;      /* 0x0C data: write = transmit, read = receive */
+    volatile uint32_t CRCPR;   /* 0x10 */
+    volatile uint32_t RXCRCR;  /* 0x14 */
+    volatile uint32_t TXCRCR;  /* 0x18 */
+    volatile uint32_t I2SCFGR; /* 0x1C */
+    volatile uint32_t I2SPR;   /* 0x20 */
+} mc_f405_spi_regs_t;
+
+/* CR1 (§28.5.1) */
+#define MC_F405_SPI_CR1_CPHA      (1u << 0)  /* 1: data captured on the second edge */
+#define MC_F405_SPI_CR1_CPOL      (1u << 1)  /* 1: SCK idles high */
+#define MC_F405_SPI_CR1_MSTR      (1u << 2)
+#define MC_F405_SPI_CR1_BR_SHIFT  3u         /* BR[5:3]: fPCLK / 2^(BR + 1) */
+#define MC_F405_SPI_CR1_BR_MASK   (7u << 3)
+#define MC_F405_SPI_CR1_SPE       (1u << 6)  /* SPI enable */
+#define MC_F405_SPI_CR1_LSBFIRST  (1u << 7)
+#define MC_F405_SPI_CR1_SSI       (1u << 8)  /* internal NSS level (with SSM) */
+#define MC_F405_SPI_CR1_SSM       (1u << 9)  /* software slave management */
+#define MC_F405_SPI_CR1_DFF       (1u << 11) /* 1: 16-bit frames */
+/* SR (§28.5.3) */
+#define MC_F405_SPI_SR_RXNE       (1u << 0)
+#define MC_F405_SPI_SR_TXE        (1u << 1)
+#define MC_F405_SPI_SR_MODF       (1u << 5)
+#define MC_F405_SPI_SR_OVR        (1u << 6)
+#define MC_F405_SPI_SR_BSY        (1u << 7)
+
 /* ---- GPIO (§8.4) ------------------------------------------------------- */
 
 typedef struct mc_f405_gpio_regs {
@@ -263,6 +298,8 @@ typedef struct mc_f405_gpio_regs {
 } mc_f405_gpio_regs_t;
 
 #define MC_F405_GPIO_MODER_OUTPUT 1u
+/** Ports A..I of the STM32F405/407 (LQFP64 bonds A, B, C, D2 and H0/H1). */
+#define MC_F405_GPIO_PORTS 9u
 
 /* ---- Peripheral pointers on the MCU ------------------------------------ */
 
@@ -275,6 +312,7 @@ typedef struct mc_f405_gpio_regs {
 #define MC_F405_ADC1 ((mc_f405_adc_regs_t *)(uintptr_t)MC_F405_ADC1_BASE)
 #define MC_F405_ADC_COMMON ((mc_f405_adc_common_regs_t *)(uintptr_t)MC_F405_ADC_COMMON_BASE)
 #define MC_F405_CAN1 ((mc_f405_can_regs_t *)(uintptr_t)MC_F405_CAN1_BASE)
+#define MC_F405_SPI3 ((mc_f405_spi_regs_t *)(uintptr_t)MC_F405_SPI3_BASE)
 /** GPIO port n: 0 = A, 1 = B, ... */
 #define MC_F405_GPIO(n) \
     ((mc_f405_gpio_regs_t *)(MC_F405_GPIOA_BASE + MC_F405_GPIO_STRIDE * (n)))
@@ -298,6 +336,9 @@ _Static_assert(offsetof(mc_f405_can_regs_t, FA1R) == 0x21Cu, "CAN FA1R");
 _Static_assert(offsetof(mc_f405_can_regs_t, FB) == 0x240u, "CAN F0R1");
 _Static_assert(sizeof(mc_f405_can_regs_t) == 0x320u, "CAN size");
 _Static_assert(offsetof(mc_f405_gpio_regs_t, BSRR) == 0x18u, "GPIO BSRR");
+_Static_assert(offsetof(mc_f405_gpio_regs_t, AFR) == 0x20u, "GPIO AFRL");
+_Static_assert(offsetof(mc_f405_spi_regs_t, DR) == 0x0Cu, "SPI DR");
+_Static_assert(offsetof(mc_f405_spi_regs_t, I2SPR) == 0x20u, "SPI I2SPR");
 #endif
 
 #ifdef __cplusplus

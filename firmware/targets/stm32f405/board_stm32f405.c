@@ -1,23 +1,25 @@
 /**
  * @file board_stm32f405.c
- * @brief The drive board: the hal/stm32f405 drivers wired to an example
- *        3-phase inverter with an incremental encoder (ODrive v3-like pins).
+ * @brief The drive image's board binding (mc_board.h) for real hardware:
+ *        one board description (boards/<name>/, chosen at build time by
+ *        MC_BOARD: example, odrive36, vesc6) bound to the hal/stm32f405
+ *        drivers by boards/mc_board_f405.c.
  *
- * Board bring-up done here (the drivers leave it to the port): peripheral
- * clocks, GPIO alternate functions and analog pins, and the drivers' configs.
- *
- *   TIM1 PWM      CH1..3 PA8, PA9, PA10; CH1N..3N PB13, PB14, PB15 (AF1);
- *                 BKIN PA6 (AF1) from the over-current comparator (active low);
- *                 20 kHz centre-aligned, 250 ns dead time; ADC trigger TIM1
- *                 TRGO = OC4REF, 1 us before the counter peak.
- *   ADC1          injected ia PC0 (IN10), ib PC1 (IN11), vbus PA0 (IN0);
- *                 2 shunts of 0.5 mOhm, amplifier gain 40, offset 1.65 V;
- *                 bus divider 18.72; JEOC interrupt runs the fast loop.
- *   encoder       TIM3 PB4, PB5 (AF2), 2048 lines x4 = 8192 counts/rev.
- *   tick          TIM5, 32 bit, 84 MHz (no prescaler).
- *   CAN1          PB8 RX, PB9 TX (AF9), 500 kbit/s, every frame accepted.
- *   gate driver   EN_GATE PB12 (output, active high), nFAULT PD2 (input,
- *                 active low).
+ *   TIM1 PWM      20 kHz centre-aligned, the board's dead time; ADC trigger
+ *                 TIM1 TRGO = OC4REF, 1 us before the counter peak.
+ *   ADC1          injected: the board's measured phases and bus voltage;
+ *                 JEOC interrupt runs the fast loop. Temperatures regular.
+ *   encoder       TIM3. tick TIM5 (32 bit, 84 MHz). CAN1 500 kbit/s, every
+ *                 frame accepted.
+ *   gate driver   EN_GATE and nFAULT pins; a DRV8301 set up over SPI3
+ *                 (gain, over-current threshold and mode) and verified
+ *                 before the drive starts; a failed set-up halts the image
+ *                 with the gates killed. The slow loop's end supervises it
+ *                 (mc_board_f405_gate_driver_supervise): set up again after
+ *                 a gate kill and release, status registers read when nFAULT
+ *                 asserts (g_board.f405.drv.faults, names:
+ *                 mc_drv8301_fault_name), the chip's latch reset once the
+ *                 drive has recorded the fault.
  *
  * The motor defaults are the paper-002 test motor of the simulator (R 0.675
  * ohm, L 1.14 mH, psi 0.11 Wb, 4 pole pairs), current loop bandwidth 200 Hz.
@@ -27,223 +29,102 @@
 #include <stdint.h>
 
 #include "mc_board.h"
+#include "mc_board_f405.h"
 #include "mc_clock.h"
 #include "mc_cortexm.h"
-#include "mc_f405_hal.h"
 #include "mc_stm32f405.h"
 
-#define RCC_AHB1ENR MC_REG32(MC_RCC_BASE + MC_RCC_AHB1ENR_OFS)
-#define RCC_APB1ENR MC_REG32(MC_RCC_BASE + MC_RCC_APB1ENR_OFS)
-#define RCC_APB2ENR MC_REG32(MC_RCC_BASE + MC_RCC_APB2ENR_OFS)
-#define RCC_AHB1ENR_GPIOAEN (1u << 0)
-#define RCC_AHB1ENR_GPIOBEN (1u << 1)
-#define RCC_AHB1ENR_GPIOCEN (1u << 2)
-#define RCC_AHB1ENR_GPIODEN (1u << 3)
-#define RCC_APB1ENR_TIM3EN (1u << 1)
-#define RCC_APB1ENR_TIM5EN (1u << 3)
-#define RCC_APB1ENR_CAN1EN (1u << 25)
-#define RCC_APB2ENR_TIM1EN (1u << 0)
-#define RCC_APB2ENR_ADC1EN (1u << 8)
-
-#define GPIO_MODE_AF 2u
-#define GPIO_MODE_ANALOG 3u
-#define GPIO_PORT_A 0u
-#define GPIO_PORT_B 1u
-#define GPIO_PORT_C 2u
-#define GPIO_PORT_D 3u
+/* The board: its generated description, mc_board_<name>_desc, named by the
+ * build (firmware/targets/stm32f405/CMakeLists.txt, MC_BOARD). Static
+ * analysis without the build's definitions sees the example board. */
+#ifndef MC_BOARD_DESC
+#define MC_BOARD_DESC mc_board_example_desc
+#endif
+extern const mc_board_desc_t MC_BOARD_DESC;
 
 #define PWM_HZ 20000u
 #define CURRENT_BW_RAD_S 1256.6371f /* 2 pi 200 Hz */
+#define I_MAX_A 10.0f
+#define I_TRIP_A 15.0f
+#define DELAY_POLL_SLACK 1000u
+#define SLOW_LOOP_DIV 20u                                 /* 1 kHz slow loop */
+#define SLOW_PERIOD_US (1000000u / PWM_HZ * SLOW_LOOP_DIV) /* 1000 us */
 
 void CAN1_RX0_IRQHandler(void);
 
-typedef struct {
-    mc_f405_fault_t fault;
-    mc_f405_pwm3_t pwm3;
-    mc_f405_tick_t tick;
-    mc_f405_adc_t adc;
-    mc_f405_encoder_t enc;
-    mc_f405_can_t can;
+typedef struct drive_board {
+    mc_board_f405_t f405;
     mc_drive_cfg_t cfg;
-    mc_hal_t hal;
 } drive_board_t;
 
 static drive_board_t g_board;
 
 /* Peripheral register blocks at their RM0090 addresses (through uintptr_t,
  * so this file also compiles on a 64-bit host for the lint checks). */
-static mc_f405_gpio_regs_t *gpio_port(uint32_t port)
+static void *periph_at(uintptr_t a)
 {
-    const uintptr_t a = (uintptr_t)MC_F405_GPIOA_BASE + (uintptr_t)MC_F405_GPIO_STRIDE * port;
-    return (mc_f405_gpio_regs_t *)a; /* NOLINT(performance-no-int-to-ptr): peripheral address */
+    return (void *)a; /* NOLINT(performance-no-int-to-ptr): peripheral address */
 }
 
-static mc_f405_tim_regs_t *tim_at(uintptr_t a)
+/* Busy wait on the tick timer: at least `us` microseconds. A read of TIM5
+ * takes at least one APB1 clock (2 ticks), so the loop bound cannot end
+ * the wait early. */
+static void delay_us(void *ctx, uint32_t us)
 {
-    return (mc_f405_tim_regs_t *)a; /* NOLINT(performance-no-int-to-ptr): peripheral address */
-}
+    const mc_f405_tick_t *t = ctx;
+    const uint32_t ticks = us * (t->freq_hz / 1000000u);
+    uint32_t start = 0u;
+    uint32_t now = 0u;
+    uint32_t n;
 
-/* Pin mode (and alternate function number for GPIO_MODE_AF). */
-static void pin_config(uint32_t port, uint32_t pin, uint32_t mode, uint32_t af)
-{
-    mc_f405_gpio_regs_t *g = gpio_port(port);
-    if (mode == GPIO_MODE_AF) {
-        const uint32_t idx = pin >> 3;
-        const uint32_t sh = (pin & 7u) * 4u;
-        g->AFR[idx] = (g->AFR[idx] & ~(0xFu << sh)) | ((af & 0xFu) << sh);
-        g->OSPEEDR |= 3u << (pin * 2u); /* very high speed: sharp gate edges */
+    if (mc_hal_tick_read(&t->dev, &start) != 0) {
+        return;
     }
-    g->MODER = (g->MODER & ~(3u << (pin * 2u))) | ((mode & 3u) << (pin * 2u));
-}
-
-static void board_pins(void)
-{
-    RCC_AHB1ENR |= RCC_AHB1ENR_GPIOAEN | RCC_AHB1ENR_GPIOBEN | RCC_AHB1ENR_GPIOCEN |
-                   RCC_AHB1ENR_GPIODEN;
-    RCC_APB1ENR |= RCC_APB1ENR_TIM3EN | RCC_APB1ENR_TIM5EN | RCC_APB1ENR_CAN1EN;
-    RCC_APB2ENR |= RCC_APB2ENR_TIM1EN | RCC_APB2ENR_ADC1EN;
-    mc_dsb(); /* the clocks are on before the first register access */
-
-    static const uint8_t tim1_a[] = {6u, 8u, 9u, 10u}; /* BKIN, CH1..CH3 */
-    static const uint8_t tim1_b[] = {13u, 14u, 15u};   /* CH1N..CH3N */
-    for (size_t i = 0u; i < sizeof tim1_a; ++i) {
-        pin_config(GPIO_PORT_A, tim1_a[i], GPIO_MODE_AF, 1u);
+    for (n = 0u; n < (ticks + DELAY_POLL_SLACK); n++) {
+        if ((mc_hal_tick_read(&t->dev, &now) != 0) || ((now - start) >= ticks)) {
+            return;
+        }
     }
-    for (size_t i = 0u; i < sizeof tim1_b; ++i) {
-        pin_config(GPIO_PORT_B, tim1_b[i], GPIO_MODE_AF, 1u);
-    }
-    pin_config(GPIO_PORT_B, 4u, GPIO_MODE_AF, 2u); /* TIM3 CH1 */
-    pin_config(GPIO_PORT_B, 5u, GPIO_MODE_AF, 2u); /* TIM3 CH2 */
-    pin_config(GPIO_PORT_B, 8u, GPIO_MODE_AF, 9u); /* CAN1 RX */
-    pin_config(GPIO_PORT_B, 9u, GPIO_MODE_AF, 9u); /* CAN1 TX */
-    pin_config(GPIO_PORT_C, 0u, GPIO_MODE_ANALOG, 0u);
-    pin_config(GPIO_PORT_C, 1u, GPIO_MODE_ANALOG, 0u);
-    pin_config(GPIO_PORT_A, 0u, GPIO_MODE_ANALOG, 0u);
-}
-
-static bool board_drivers(uint32_t sysclk_hz)
-{
-    /* Timer clocks: APB2 timers at 2 x 84 MHz, APB1 timers at 2 x 42 MHz
-     * (RM0090 section 6.2); scaled if the clock set-up fell back to HSI. */
-    const uint32_t tim1_clk_hz = (sysclk_hz != 0u) ? sysclk_hz : MC_CLOCK_SYSCLK_HZ;
-    const uint32_t tim_apb1_clk_hz = tim1_clk_hz / 2u;
-    const uint32_t pclk1_hz = tim1_clk_hz / 4u;
-
-    const mc_f405_fault_config_t fc = {
-        .p_tim1 = tim_at(MC_F405_TIM1_BASE),
-        .p_tim8 = NULL,
-        .gate_driver_fault = {gpio_port(GPIO_PORT_D), 2u, true},
-        .overcurrent = {gpio_port(GPIO_PORT_A), 6u, true},
-        .gate_enable = {gpio_port(GPIO_PORT_B), 12u, false},
-        .bkin_mask = MC_HAL_FAULT_OVERCURRENT,
-    };
-    if (mc_f405_fault_init(&g_board.fault, &fc) != 0) {
-        return false;
-    }
-    const mc_f405_tick_config_t tc = {
-        .p_tim = tim_at(MC_F405_TIM5_BASE),
-        .tim_clk_hz = tim_apb1_clk_hz,
-        .prescaler = 0u,
-    };
-    if (mc_f405_tick_init(&g_board.tick, &tc) != 0) {
-        return false;
-    }
-    const mc_f405_pwm3_config_t pc = {
-        .p_tim = tim_at(MC_F405_TIM1_BASE),
-        .tim_clk_hz = tim1_clk_hz,
-        .pwm_freq_hz = PWM_HZ,
-        .deadtime_ns = 250u,
-        .adc_trigger_lead_ticks = tim1_clk_hz / 1000000u, /* 1 us */
-        .adc_trigger = MC_F405_ADC_TRIG_TIM1_TRGO,
-        .break_enable = true,
-        .break_active_high = false,
-        .high_side_active_low = false,
-        .low_side_active_low = false,
-        .p_fault = &g_board.fault,
-    };
-    if (mc_f405_pwm3_init(&g_board.pwm3, &pc) != 0) {
-        return false;
-    }
-    const mc_f405_adc_temp_sensor_t no_temp = {MC_F405_ADC_CH_NONE, 0.0f, 0.0f, 0.0f, 0.0f};
-    const mc_f405_adc_config_t ac = {
-        .p_adc = (mc_f405_adc_regs_t *)(uintptr_t)MC_F405_ADC1_BASE, /* NOLINT(performance-no-int-to-ptr) */
-        .p_common = (mc_f405_adc_common_regs_t *)(uintptr_t)MC_F405_ADC_COMMON_BASE, /* NOLINT(performance-no-int-to-ptr) */
-        .p_tick = &g_board.tick.dev,
-        .ch_ia = 10u,
-        .ch_ib = 11u,
-        .ch_ic = MC_F405_ADC_CH_NONE,
-        .ch_vbus = 0u,
-        .smp_current = MC_F405_ADC_SMP_15,
-        .smp_vbus = MC_F405_ADC_SMP_15,
-        .smp_temp = MC_F405_ADC_SMP_144,
-        .trigger = MC_F405_ADC_TRIG_TIM1_TRGO,
-        .clk_div = 4u, /* 84 MHz / 4 = 21 MHz (max 36 MHz) */
-        .jeoc_irq = true,
-        .vref_v = 3.3f,
-        .shunt_ohm = 0.0005f,
-        .amp_gain_v_per_v = 40.0f,
-        .ia_offset_v = 1.65f,
-        .ib_offset_v = 1.65f,
-        .ic_offset_v = 1.65f,
-        .vbus_divider = 18.72f,
-        .rail_margin_counts = 16u,
-        .temp_power_stage = no_temp,
-        .temp_motor = no_temp,
-    };
-    if (mc_f405_adc_init(&g_board.adc, &ac) != 0) {
-        return false;
-    }
-    const mc_f405_encoder_config_t ec = {
-        .p_tim = tim_at(MC_F405_TIM3_BASE),
-        .counts_per_rev = 8192u,
-        .counter_32bit = false,
-        .input_filter = 4u,
-        .invert = false,
-        .p_tick = &g_board.tick.dev,
-    };
-    if (mc_f405_encoder_init(&g_board.enc, &ec) != 0) {
-        return false;
-    }
-    const mc_f405_can_config_t cc = {
-        .p_can = (mc_f405_can_regs_t *)(uintptr_t)MC_F405_CAN1_BASE, /* NOLINT(performance-no-int-to-ptr) */
-        .pclk_hz = pclk1_hz,
-        .bitrate_bps = 500000u,
-        .sample_point_permille = 875u,
-        .sjw_tq = 1u,
-        .auto_bus_off_recovery = true,
-        .no_auto_retransmit = false,
-        .p_filters = NULL,
-        .n_filters = 0u,
-        .filter_bank_start = 0u,
-        .rx_irq = true,
-        .p_tick = &g_board.tick.dev,
-    };
-    /* A CAN controller that does not leave init mode (no transceiver, bus
-     * stuck) does not stop the drive: it runs without CAN. */
-    const bool have_can = (mc_f405_can_init(&g_board.can, &cc) == 0);
-
-    g_board.hal.adc = &g_board.adc.dev;
-    g_board.hal.pwm3 = &g_board.pwm3.dev;
-    g_board.hal.pwm2 = NULL;
-    g_board.hal.encoder = &g_board.enc.dev;
-    g_board.hal.can = have_can ? &g_board.can.dev : NULL;
-    g_board.hal.tick = &g_board.tick.dev;
-    g_board.hal.fault = &g_board.fault.dev;
-    return true;
 }
 
 void CAN1_RX0_IRQHandler(void)
 {
-    mc_f405_can_rx_isr(&g_board.can);
+    mc_f405_can_rx_isr(&g_board.f405.can);
 }
 
 const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
 {
-    board_pins();
-    if (!board_drivers(sysclk_hz)) {
+    mc_board_f405_periph_t p = {0};
+    uint32_t k;
+
+    for (k = 0u; k < MC_F405_GPIO_PORTS; k++) {
+        p.p_gpio[k] = periph_at((uintptr_t)MC_F405_GPIOA_BASE + (uintptr_t)MC_F405_GPIO_STRIDE * k);
+    }
+    p.p_rcc_ahb1enr = periph_at((uintptr_t)MC_RCC_BASE + MC_RCC_AHB1ENR_OFS);
+    p.p_rcc_apb1enr = periph_at((uintptr_t)MC_RCC_BASE + MC_RCC_APB1ENR_OFS);
+    p.p_rcc_apb2enr = periph_at((uintptr_t)MC_RCC_BASE + MC_RCC_APB2ENR_OFS);
+    p.p_tim1 = periph_at(MC_F405_TIM1_BASE);
+    p.p_tim3 = periph_at(MC_F405_TIM3_BASE);
+    p.p_tim5 = periph_at(MC_F405_TIM5_BASE);
+    p.p_adc1 = periph_at(MC_F405_ADC1_BASE);
+    p.p_adc_common = periph_at(MC_F405_ADC_COMMON_BASE);
+    p.p_can1 = periph_at(MC_F405_CAN1_BASE);
+    p.p_spi3 = periph_at(MC_F405_SPI3_BASE);
+    p.delay_us = delay_us;
+    p.delay_ctx = &g_board.f405.tick;
+
+    /* An HSE/PLL failure leaves the HSI at 16 MHz (sysclk_hz says so); 0
+     * means no RCC (emulation), where the nominal clock is assumed. */
+    const uint32_t clk_hz = (sysclk_hz != 0u) ? sysclk_hz : MC_CLOCK_SYSCLK_HZ;
+    if (mc_board_f405_setup(&g_board.f405, &MC_BOARD_DESC, &p, clk_hz, PWM_HZ) !=
+        MC_BOARD_F405_OK) {
         return NULL;
     }
-    return &g_board.hal;
+    if (mc_board_f405_gate_driver_setup(&g_board.f405, &MC_BOARD_DESC,
+                                        &g_board.f405.spi.dev) != MC_BOARD_F405_OK) {
+        return NULL;
+    }
+    return &g_board.f405.hal;
 }
 
 const mc_drive_cfg_t *mc_board_drive_cfg(void)
@@ -252,6 +133,10 @@ const mc_drive_cfg_t *mc_board_drive_cfg(void)
     float kp = 0.0f;
     float ki = 0.0f;
     if (mc_foc_f32_gains_from_bandwidth(0.675f, 1.14e-3f, CURRENT_BW_RAD_S, &kp, &ki) != 0u) {
+        return NULL;
+    }
+    /* The trip must lie inside what the board can measure. */
+    if (!(I_TRIP_A < MC_BOARD_DESC.i_sense_max_a)) {
         return NULL;
     }
     c->foc.r_ohm = 0.675f;
@@ -272,11 +157,11 @@ const mc_drive_cfg_t *mc_board_drive_cfg(void)
     c->pole_pairs = 4u;
     c->encoder_offset_rad = 0.0f;
     c->speed_pll_bw_rad_s = 1000.0f;
-    c->slow_loop_div = 20u; /* 1 kHz */
-    c->i_max_a = 10.0f;
-    c->i_trip_a = 15.0f;
-    c->vbus_min_v = 12.0f;
-    c->vbus_max_v = 56.0f;
+    c->slow_loop_div = SLOW_LOOP_DIV;
+    c->i_max_a = I_MAX_A;
+    c->i_trip_a = I_TRIP_A;
+    c->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
+    c->vbus_max_v = MC_BOARD_DESC.vbus_max_v;
     return c;
 }
 
@@ -285,7 +170,7 @@ void mc_board_start(void)
     /* TIM1 already counts (mc_f405_pwm3_init) and triggers the ADC; the
      * fast-loop interrupt is enabled by main. CAN receive runs at a
      * priority between the two loops. */
-    if (g_board.hal.can != NULL) {
+    if (g_board.f405.hal.can != NULL) {
         mc_nvic_set_priority(MC_IRQ_CAN1_RX0, 8u);
         mc_nvic_enable(MC_IRQ_CAN1_RX0);
     }
@@ -299,21 +184,38 @@ void mc_board_fast_irq_ack(void)
 void mc_board_apply_commands(mc_drive_t *d)
 {
     /* Commands arrive over CAN (firmware/app CAN protocol), outside this
-     * binding. */
-    (void)d;
+     * binding. While the DRV8301 does not hold its set-up (after a gate
+     * kill until the slow loop has written it again) the drive is held in
+     * an external fault: its current scaling assumes the set-up's gain. */
+    if (!g_board.f405.drv_ready) {
+        mc_drive_raise_fault(d, MC_DRIVE_FAULT_EXTERNAL);
+    }
 }
 
 void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
 {
-    (void)d;
-    (void)slow_ran;
+    if (!slow_ran) {
+        return;
+    }
+    /* PendSV (slow loop) context: a few SPI frames when something happens. */
+    (void)mc_board_f405_gate_driver_supervise(&g_board.f405, &MC_BOARD_DESC,
+                                              &g_board.f405.spi.dev, SLOW_PERIOD_US,
+                                              (d->faults & MC_DRIVE_FAULT_HW_INPUT) != 0u);
 }
 
 void mc_board_halt(uint32_t drive_cfg_err)
 {
     (void)drive_cfg_err;
-    if (g_board.hal.fault != NULL) {
-        (void)mc_hal_fault_gate_kill(g_board.hal.fault);
+    if (g_board.f405.hal.fault != NULL) {
+        (void)mc_hal_fault_gate_kill(g_board.f405.hal.fault);
+    } else if (MC_BOARD_DESC.gate_enable.port < MC_F405_GPIO_PORTS) {
+        /* Set-up failed before the fault driver ran: EN_GATE is still at
+         * its disabled level from the GPIO table; keep it there. */
+        mc_f405_gpio_regs_t *g =
+            periph_at((uintptr_t)MC_F405_GPIOA_BASE +
+                      (uintptr_t)MC_F405_GPIO_STRIDE * MC_BOARD_DESC.gate_enable.port);
+        const uint32_t pin = MC_BOARD_DESC.gate_enable.pin;
+        g->BSRR = MC_BOARD_DESC.gate_enable.active_low ? (1u << pin) : (1u << (pin + 16u));
     }
     for (;;) {
         mc_wfi();

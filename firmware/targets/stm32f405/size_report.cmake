@@ -1,9 +1,10 @@
-# cmake -DSIZE=<arm-none-eabi-size> -DELF=<image> -DBUDGET=ON|OFF -P size_report.cmake
+# cmake -DSIZE=<arm-none-eabi-size> -DELF=<image> -DBUDGET=ON|OFF [-DLABEL=<text>]
+#       [-DFLASH_MAX=<bytes> -DRAM_MAX=<bytes>] -P size_report.cmake
 # Prints `size` (Berkeley) and the use of each memory region, from the
 # section addresses: flash 0x08000000 (what is programmed: code, constants,
 # .data initialisers), SRAM 0x20000000 (.data, .bss, the reserved stack),
-# CCM 0x10000000. With BUDGET=ON, fails above 64 KiB flash or 16 KiB RAM
-# (SRAM + CCM), the drive image's budget.
+# CCM 0x10000000. With BUDGET=ON, fails above FLASH_MAX bytes of flash or
+# RAM_MAX bytes of RAM (SRAM + CCM), the drive image's budget.
 execute_process(COMMAND ${SIZE} ${ELF} OUTPUT_VARIABLE berkeley RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "size failed on ${ELF}")
@@ -35,13 +36,19 @@ foreach(line IN LISTS lines)
   endif()
 endforeach()
 get_filename_component(name ${ELF} NAME)
+if(DEFINED LABEL AND NOT LABEL STREQUAL "")
+  set(name "${name} (${LABEL})")
+endif()
 math(EXPR ram "${sram} + ${ccm}")
 string(STRIP "${berkeley}" berkeley)
 message("${berkeley}")
 message("${name}: flash ${flash} B of 1048576, SRAM ${sram} B of 131072 (stack included), CCM ${ccm} B of 65536")
 if(BUDGET)
-  if(flash GREATER 65536 OR ram GREATER 16384)
-    message(FATAL_ERROR "${name} over budget: flash ${flash} B (max 65536), RAM ${ram} B (max 16384)")
+  if(NOT DEFINED FLASH_MAX OR NOT DEFINED RAM_MAX)
+    message(FATAL_ERROR "size_report.cmake: BUDGET=ON needs FLASH_MAX and RAM_MAX")
   endif()
-  message("${name}: within budget (flash <= 64 KiB, RAM <= 16 KiB)")
+  if(flash GREATER FLASH_MAX OR ram GREATER RAM_MAX)
+    message(FATAL_ERROR "${name} over budget: flash ${flash} B (max ${FLASH_MAX}), RAM ${ram} B (max ${RAM_MAX})")
+  endif()
+  message("${name}: within budget (flash ${flash} <= ${FLASH_MAX} B, RAM ${ram} <= ${RAM_MAX} B)")
 endif()

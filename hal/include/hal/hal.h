@@ -19,6 +19,9 @@
  *                                                        configuration store
  *                                                        takes it directly)
  *   brake chopper   "hal/brake.h"     mc_hal_brake_t     (optional)
+ *   SPI device      "hal/spi.h"       mc_hal_spi_t       (not in mc_hal_t: a
+ *                                                        board's gate-driver
+ *                                                        set-up takes it)
  *
  * Conventions shared by every capability
  * - A handle is `{ const ops *ops; void *ctx; }`. The ops table is const

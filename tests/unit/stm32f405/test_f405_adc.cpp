@@ -43,8 +43,8 @@ struct AdcBoard : public ::testing::Test {
         c.vbus_divider = 20.0f;
         c.rail_margin_counts = 16u;
         // Linear sensor, 10 mV/degC with 0.5 V at 0 degC: T = -50 + 100 v.
-        c.temp_power_stage = {14u, -50.0f, 100.0f, 0.1f, 2.0f};
-        c.temp_motor = {15u, -50.0f, 100.0f, 0.1f, 2.0f};
+        c.temp_power_stage = {14u, -50.0f, 100.0f, 0.1f, 2.0f, 0.0f, 0.0f, nullptr, 0u};
+        c.temp_motor = {15u, -50.0f, 100.0f, 0.1f, 2.0f, 0.0f, 0.0f, nullptr, 0u};
         return c;
     }
 
@@ -147,7 +147,14 @@ TEST_F(AdcBoard, InvalidConfigWritesNothing)
     c.amp_gain_v_per_v = 0.0f;
     EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
     c = cfg();
-    c.ch_ia = MC_F405_ADC_CH_NONE;
+    c.ch_ia = MC_F405_ADC_CH_NONE; // only phase b: nothing to derive from
+    c.ch_ic = MC_F405_ADC_CH_NONE;
+    EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
+    c = cfg();
+    c.ch_ib = MC_F405_ADC_CH_NONE; // phase b is always measured
+    EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
+    c = cfg();
+    c.temp_power_stage.c3_c_per_v3 = std::nanf("");
     EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
     c = cfg();
     c.ch_vbus = 19u;
@@ -286,4 +293,104 @@ TEST_F(AdcBoard, NoTemperatureChannelsMeansNoOp)
     ASSERT_EQ(mc_f405_adc_init(&drv, &c), 0);
     mc_hal_adc_temp_t t{};
     EXPECT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), -ENODEV);
+}
+
+// Phases b and c measured (the ODrive v3.6 M0 layout: ib on channel 10 =
+// PC0, ic on channel 11 = PC1, bus on channel 6 = PA6): JL = 2 and the
+// sequence ib, ic, vbus fills JSQ2..JSQ4. JDR1 is phase b, JDR2 phase c;
+// ia is reported as -(ib + ic) and is valid only when both are.
+TEST_F(AdcBoard, PhasesBAndCDeriveA)
+{
+    mc_f405_adc_config_t c = cfg();
+    c.ch_ia = MC_F405_ADC_CH_NONE;
+    c.ch_ib = 10u;
+    c.ch_ic = 11u;
+    c.ch_vbus = 6u;
+    ASSERT_EQ(mc_f405_adc_init(&drv, &c), 0);
+    EXPECT_EQ(adc.JSQR, (2u << 20) | (10u << 5) | (11u << 10) | (6u << 15));
+
+    adc.JDR[0] = 2148u; // phase b: +100 counts
+    adc.JDR[1] = 1998u; // phase c: -50 counts
+    adc.JDR[2] = 1000u;
+    adc.SR = MC_F405_ADC_SR_JEOC;
+    mc_hal_adc_sample_t s{};
+    ASSERT_EQ(mc_hal_adc_read(&drv.dev, &s), 0);
+    EXPECT_EQ(s.valid_mask, MC_HAL_ADC_VALID_ALL);
+    EXPECT_NEAR(s.ib_a, amps(2148u), rel_tol(amps(2148u)));
+    EXPECT_NEAR(s.ic_a, amps(1998u), rel_tol(amps(1998u)));
+    const double ia = -(amps(2148u) + amps(1998u));
+    EXPECT_NEAR(s.ia_a, ia, rel_tol(ia));
+    EXPECT_NEAR(s.vbus_v, bus_volts(1000u), rel_tol(bus_volts(1000u)));
+
+    // Phase c saturated: ic and the derived ia are invalid, ib stays.
+    adc.JDR[0] = 2148u;
+    adc.JDR[1] = 4095u;
+    adc.JDR[2] = 1000u;
+    adc.SR = MC_F405_ADC_SR_JEOC;
+    ASSERT_EQ(mc_hal_adc_read(&drv.dev, &s), 0);
+    EXPECT_EQ(s.valid_mask, MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS);
+    EXPECT_EQ(s.ia_a, 0.0f);
+}
+
+// Cubic sensor: T = 10 + 20 v - 3 v^2 + 0.5 v^3 at 1241 counts.
+TEST_F(AdcBoard, CubicTemperatureSensor)
+{
+    mc_f405_adc_config_t c = cfg();
+    c.temp_power_stage = {14u, 10.0f, 20.0f, 0.1f, 3.2f, -3.0f, 0.5f, nullptr, 0u};
+    c.temp_motor.channel = MC_F405_ADC_CH_NONE;
+    ASSERT_EQ(mc_f405_adc_init(&drv, &c), 0);
+    mc_hal_adc_temp_t t{};
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    adc.DR = 1241u;
+    adc.SR = MC_F405_ADC_SR_EOC;
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    const double v = 1241.0 * 3.3 / 4096.0;
+    const double expect_c = 10.0 + 20.0 * v - 3.0 * v * v + 0.5 * v * v * v;
+    EXPECT_EQ(t.valid_mask, MC_HAL_ADC_TEMP_VALID_POWER_STAGE);
+    EXPECT_NEAR(t.power_stage_temp_c, expect_c, rel_tol(expect_c));
+}
+
+// Table sensor: three points (0.5 V, 100 degC), (1.0 V, 60 degC), (2.0 V,
+// 20 degC) interpolated linearly; outside 0.5..2.0 V invalid. 1241 counts =
+// 0.99983 V lies in the first segment: 100 - 40 (0.99983 - 0.5) / 0.5.
+TEST_F(AdcBoard, TableTemperatureSensor)
+{
+    static const mc_f405_adc_temp_point_t table[] = {{0.5f, 100.0f}, {1.0f, 60.0f}, {2.0f, 20.0f}};
+    mc_f405_adc_config_t c = cfg();
+    c.temp_power_stage = {14u, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, table, 3u};
+    c.temp_motor.channel = MC_F405_ADC_CH_NONE;
+    ASSERT_EQ(mc_f405_adc_init(&drv, &c), 0);
+    mc_hal_adc_temp_t t{};
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    const double v1 = 1241.0 * 3.3 / 4096.0;
+    adc.DR = 1241u;
+    adc.SR = MC_F405_ADC_SR_EOC;
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    const double e1 = 100.0 - 40.0 * (v1 - 0.5) / 0.5;
+    EXPECT_EQ(t.valid_mask, MC_HAL_ADC_TEMP_VALID_POWER_STAGE);
+    EXPECT_NEAR(t.power_stage_temp_c, e1, rel_tol(e1));
+    // 1862 counts = 1.5002 V: second segment, 60 - 40 (1.5002 - 1.0).
+    adc.DR = 1862u;
+    adc.SR = MC_F405_ADC_SR_EOC;
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    const double e2 = 60.0 - 40.0 * (1862.0 * 3.3 / 4096.0 - 1.0);
+    EXPECT_NEAR(t.power_stage_temp_c, e2, rel_tol(e2));
+    // 2600 counts = 2.095 V: beyond the last point, open circuit.
+    adc.DR = 2600u;
+    adc.SR = MC_F405_ADC_SR_EOC;
+    ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
+    EXPECT_EQ(t.valid_mask, 0u);
+}
+
+// A table must have increasing voltages and finite values.
+TEST_F(AdcBoard, BadTemperatureTableRefused)
+{
+    static const mc_f405_adc_temp_point_t falling[] = {{1.0f, 20.0f}, {0.5f, 60.0f}};
+    mc_f405_adc_config_t c = cfg();
+    c.temp_power_stage = {14u, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, falling, 2u};
+    EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
+    c.temp_power_stage = {14u, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, nullptr, 2u};
+    EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
+    c.temp_power_stage = {14u, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, falling, 1u};
+    EXPECT_EQ(mc_f405_adc_init(&drv, &c), -EINVAL);
 }

@@ -1,0 +1,334 @@
+/**
+ * @file mc_board_f405.c
+ * @brief A board description bound to the hal/stm32f405 drivers. See
+ *        mc_board_f405.h for the order of the steps and why.
+ */
+#include "mc_board_f405.h"
+
+#include <stddef.h>
+
+#include "mc_cortexm.h"
+
+#define ADC_CLK_DIV 4u          /* PCLK2 84 MHz / 4 = 21 MHz (max 36 MHz) */
+#define ADC_TRIGGER_LEAD_US 1u  /* ADC trigger 1 us before the PWM peak */
+#define CAN_BITRATE_BPS 500000u
+#define CAN_SAMPLE_POINT_PERMILLE 875u
+
+static mc_f405_pin_t pin_of(const mc_board_f405_periph_t *p, mc_board_pin_t b)
+{
+    mc_f405_pin_t pin = {NULL, 0u, false};
+
+    if (b.port < MC_F405_GPIO_PORTS) {
+        pin.p_port = p->p_gpio[b.port];
+        pin.pin = b.pin;
+        pin.active_low = b.active_low;
+    }
+    return pin;
+}
+
+static void delay(const mc_board_f405_periph_t *p, uint32_t us)
+{
+    if (p->delay_us != NULL) {
+        p->delay_us(p->delay_ctx, us);
+    }
+}
+
+static void clocks_on(const mc_board_desc_t *d, const mc_board_f405_periph_t *p)
+{
+    uint32_t apb1 = MC_BOARD_F405_APB1ENR_TIM3EN | MC_BOARD_F405_APB1ENR_TIM5EN |
+                    MC_BOARD_F405_APB1ENR_CAN1EN;
+
+    if (d->has_drv8301) {
+        apb1 |= MC_BOARD_F405_APB1ENR_SPI3EN;
+    }
+    *p->p_rcc_ahb1enr |= d->gpio_port_mask; /* GPIOxEN = bit x */
+    *p->p_rcc_apb1enr |= apb1;
+    *p->p_rcc_apb2enr |= MC_BOARD_F405_APB2ENR_TIM1EN | MC_BOARD_F405_APB2ENR_ADC1EN;
+    mc_dsb(); /* the clocks are on before the first register access */
+}
+
+static bool periph_complete(const mc_board_desc_t *d, const mc_board_f405_periph_t *p)
+{
+    uint32_t k;
+
+    if ((p->p_rcc_ahb1enr == NULL) || (p->p_rcc_apb1enr == NULL) ||
+        (p->p_rcc_apb2enr == NULL) || (p->p_tim1 == NULL) || (p->p_tim3 == NULL) ||
+        (p->p_tim5 == NULL) || (p->p_adc1 == NULL) || (p->p_adc_common == NULL) ||
+        (p->p_can1 == NULL) || (d->has_drv8301 && (p->p_spi3 == NULL))) {
+        return false;
+    }
+    for (k = 0u; k < MC_F405_GPIO_PORTS; k++) {
+        if (((d->gpio_port_mask >> k) & 1u) != 0u && (p->p_gpio[k] == NULL)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+static mc_board_f405_err_t fail(mc_board_f405_t *b, mc_board_f405_err_t err)
+{
+    b->err = err;
+    return err;
+}
+
+mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board,
+                                        const mc_board_desc_t *p_desc,
+                                        const mc_board_f405_periph_t *p_periph,
+                                        uint32_t sysclk_hz, uint32_t pwm_hz)
+{
+    const mc_board_desc_t *d = p_desc;
+    const mc_board_f405_periph_t *p = p_periph;
+    mc_board_f405_t *b = p_board;
+
+    if (b == NULL) {
+        return MC_BOARD_F405_ERR_ARG;
+    }
+    b->hal = (mc_hal_t){0};
+    b->can_ok = false;
+    b->drv.status = MC_DRV8301_STATUS_NOT_INIT;
+    b->drv_ready = false;
+    b->rearm_wait_us = 0u;
+    b->nfault_seen = false;
+    b->drv_latch_reset = false;
+    if ((d == NULL) || (p == NULL) || (sysclk_hz == 0u) || !periph_complete(d, p)) {
+        return fail(b, MC_BOARD_F405_ERR_ARG);
+    }
+    /* Timer and bus clocks (RM0090 §6.2; mc_clock.c sets APB1 = /4,
+     * APB2 = /2, so timers run at 2 x their bus clock). */
+    const uint32_t tim1_clk_hz = sysclk_hz;
+    const uint32_t tim_apb1_clk_hz = sysclk_hz / 2u;
+    const uint32_t pclk1_hz = sysclk_hz / 4u;
+
+    clocks_on(d, p);
+    mc_board_gpio_apply(d->p_gpio, d->n_gpio, p->p_gpio);
+
+    const mc_f405_tick_config_t tc = {
+        .p_tim = p->p_tim5,
+        .tim_clk_hz = tim_apb1_clk_hz,
+        .prescaler = 0u,
+    };
+    if (mc_f405_tick_init(&b->tick, &tc) != 0) {
+        return fail(b, MC_BOARD_F405_ERR_TICK);
+    }
+    const mc_f405_pwm3_config_t pc = {
+        .p_tim = p->p_tim1,
+        .tim_clk_hz = tim1_clk_hz,
+        .pwm_freq_hz = pwm_hz,
+        .deadtime_ns = d->deadtime_ns,
+        .adc_trigger_lead_ticks = (tim1_clk_hz / 1000000u) * ADC_TRIGGER_LEAD_US,
+        .adc_trigger = MC_F405_ADC_TRIG_TIM1_TRGO,
+        .break_enable = d->break_enable,
+        .break_active_high = d->break_active_high,
+        .high_side_active_low = false,
+        .low_side_active_low = false,
+        .p_fault = &b->fault,
+    };
+    if (mc_f405_pwm3_init(&b->pwm3, &pc) != 0) {
+        return fail(b, MC_BOARD_F405_ERR_PWM);
+    }
+    /* EN_GATE has been low since the GPIO table; hold it for the reset
+     * pulse, then the fault driver raises it. A BKIN input stays in its
+     * alternate function: the fault driver only sees it through BIF. */
+    delay(p, MC_BOARD_F405_GATE_RESET_US);
+    const mc_f405_fault_config_t fc = {
+        .p_tim1 = p->p_tim1,
+        .p_tim8 = NULL,
+        .gate_driver_fault = pin_of(p, d->gate_fault),
+        .overcurrent = {NULL, 0u, false},
+        .gate_enable = pin_of(p, d->gate_enable),
+        .bkin_mask = d->bkin_mask,
+    };
+    if (mc_f405_fault_init(&b->fault, &fc) != 0) {
+        return fail(b, MC_BOARD_F405_ERR_FAULT);
+    }
+    if (d->has_drv8301) {
+        delay(p, MC_BOARD_F405_GATE_STARTUP_US);
+    }
+
+    const mc_f405_adc_config_t ac = {
+        .p_adc = p->p_adc1,
+        .p_common = p->p_adc_common,
+        .p_tick = &b->tick.dev,
+        .ch_ia = d->adc_ch_ia,
+        .ch_ib = d->adc_ch_ib,
+        .ch_ic = d->adc_ch_ic,
+        .ch_vbus = d->adc_ch_vbus,
+        .smp_current = MC_F405_ADC_SMP_15,
+        .smp_vbus = MC_F405_ADC_SMP_15,
+        .smp_temp = MC_F405_ADC_SMP_144,
+        .trigger = MC_F405_ADC_TRIG_TIM1_TRGO,
+        .clk_div = ADC_CLK_DIV,
+        .jeoc_irq = true,
+        .vref_v = d->adc_vref_v,
+        .shunt_ohm = d->shunt_ohm,
+        .amp_gain_v_per_v = d->amp_gain_v_per_v,
+        .ia_offset_v = d->amp_offset_v,
+        .ib_offset_v = d->amp_offset_v,
+        .ic_offset_v = d->amp_offset_v,
+        .vbus_divider = d->vbus_divider,
+        .rail_margin_counts = d->adc_rail_margin_counts,
+        .temp_power_stage = d->temp_power_stage,
+        .temp_motor = d->temp_motor,
+    };
+    if (mc_f405_adc_init(&b->adc, &ac) != 0) {
+        return fail(b, MC_BOARD_F405_ERR_ADC);
+    }
+    const mc_f405_encoder_config_t ec = {
+        .p_tim = p->p_tim3,
+        .counts_per_rev = d->enc_counts_per_rev,
+        .counter_32bit = false,
+        .input_filter = d->enc_input_filter,
+        .invert = false,
+        .p_tick = &b->tick.dev,
+    };
+    if (mc_f405_encoder_init(&b->enc, &ec) != 0) {
+        return fail(b, MC_BOARD_F405_ERR_ENCODER);
+    }
+    const mc_f405_can_config_t cc = {
+        .p_can = p->p_can1,
+        .pclk_hz = pclk1_hz,
+        .bitrate_bps = CAN_BITRATE_BPS,
+        .sample_point_permille = CAN_SAMPLE_POINT_PERMILLE,
+        .sjw_tq = 1u,
+        .auto_bus_off_recovery = true,
+        .no_auto_retransmit = false,
+        .p_filters = NULL,
+        .n_filters = 0u,
+        .filter_bank_start = 0u,
+        .rx_irq = true,
+        .p_tick = &b->tick.dev,
+    };
+    /* A CAN controller that does not leave init mode (no transceiver, bus
+     * stuck) does not stop the drive: it runs without CAN. */
+    b->can_ok = (mc_f405_can_init(&b->can, &cc) == 0);
+    if (d->has_drv8301) {
+        const mc_f405_spi_config_t sc = {
+            .p_spi = p->p_spi3,
+            .pclk_hz = pclk1_hz,
+            .max_sck_hz = d->drv_spi_max_hz,
+            .mode = 1u, /* DRV8301: SCLK idle low, data captured on the falling edge */
+            .cs = pin_of(p, d->drv_spi_cs),
+        };
+        if (mc_f405_spi_init(&b->spi, &sc) != 0) {
+            return fail(b, MC_BOARD_F405_ERR_SPI);
+        }
+    }
+
+    b->hal.adc = &b->adc.dev;
+    b->hal.pwm3 = &b->pwm3.dev;
+    b->hal.pwm2 = NULL;
+    b->hal.encoder = &b->enc.dev;
+    b->hal.can = b->can_ok ? &b->can.dev : NULL;
+    b->hal.tick = &b->tick.dev;
+    b->hal.fault = &b->fault.dev;
+    b->hal.brake = NULL;
+    b->drv_ready = !d->has_drv8301; /* a DRV8301 becomes ready when set up */
+    b->err = MC_BOARD_F405_OK;
+    return MC_BOARD_F405_OK;
+}
+
+mc_board_f405_err_t mc_board_f405_gate_driver_setup(mc_board_f405_t *p_board,
+                                                    const mc_board_desc_t *p_desc,
+                                                    const mc_hal_spi_t *p_spi)
+{
+    if ((p_board == NULL) || (p_desc == NULL)) {
+        return MC_BOARD_F405_ERR_ARG;
+    }
+    if (!p_desc->has_drv8301) {
+        return MC_BOARD_F405_OK;
+    }
+    if (mc_drv8301_init(&p_board->drv, p_spi, &p_desc->drv8301) != 0) {
+        p_board->drv_ready = false;
+        if (p_board->hal.fault != NULL) {
+            (void)mc_hal_fault_gate_kill(p_board->hal.fault);
+        }
+        return fail(p_board, MC_BOARD_F405_ERR_GATE_DRIVER);
+    }
+    p_board->drv_ready = true;
+    return MC_BOARD_F405_OK;
+}
+
+/* nFAULT level from IDR: no side effect on the fault driver's latches. */
+static bool nfault_asserted(const mc_board_f405_t *b)
+{
+    const mc_f405_pin_t *f = &b->fault.cfg.gate_driver_fault;
+    bool level;
+
+    if (f->p_port == NULL) {
+        return false;
+    }
+    level = ((f->p_port->IDR >> f->pin) & 1u) != 0u;
+    return f->active_low ? !level : level;
+}
+
+bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board,
+                                         const mc_board_desc_t *p_desc,
+                                         const mc_hal_spi_t *p_spi, uint32_t period_us,
+                                         bool drive_hw_fault)
+{
+    mc_board_f405_t *b = p_board;
+    bool asserted;
+
+    if ((b == NULL) || (p_desc == NULL)) {
+        return false;
+    }
+    if (!p_desc->has_drv8301) {
+        return b->drv_ready;
+    }
+    if (b->fault.killed) {
+        b->drv_ready = false;
+        b->rearm_wait_us = 0u;
+        b->nfault_seen = false;
+        b->drv_latch_reset = false;
+        return false;
+    }
+    if (!b->drv_ready) {
+        b->rearm_wait_us += period_us;
+        if (b->rearm_wait_us >= MC_BOARD_F405_GATE_STARTUP_US) {
+            b->rearm_wait_us = 0u;
+            if (mc_drv8301_init(&b->drv, p_spi, &p_desc->drv8301) == 0) {
+                b->drv_ready = true;
+            } else if (b->hal.fault != NULL) {
+                (void)mc_hal_fault_gate_kill(b->hal.fault);
+            }
+        }
+        return b->drv_ready;
+    }
+    asserted = nfault_asserted(b);
+    if (asserted && !b->nfault_seen) {
+        (void)mc_drv8301_read_faults(&b->drv, NULL);
+        b->drv_latch_reset = false;
+    }
+    if (asserted && drive_hw_fault && !b->drv_latch_reset) {
+        (void)mc_drv8301_reset_faults(&b->drv);
+        b->drv_latch_reset = true;
+    }
+    b->nfault_seen = asserted;
+    return b->drv_ready;
+}
+
+const char *mc_board_f405_err_name(mc_board_f405_err_t err)
+{
+    switch (err) {
+    case MC_BOARD_F405_OK:
+        return "ok";
+    case MC_BOARD_F405_ERR_ARG:
+        return "bad description or peripheral map";
+    case MC_BOARD_F405_ERR_TICK:
+        return "tick timer";
+    case MC_BOARD_F405_ERR_PWM:
+        return "PWM timer";
+    case MC_BOARD_F405_ERR_FAULT:
+        return "fault pins";
+    case MC_BOARD_F405_ERR_ADC:
+        return "ADC";
+    case MC_BOARD_F405_ERR_ENCODER:
+        return "encoder timer";
+    case MC_BOARD_F405_ERR_SPI:
+        return "SPI";
+    case MC_BOARD_F405_ERR_GATE_DRIVER:
+        return "gate driver";
+    default:
+        return "unknown";
+    }
+}

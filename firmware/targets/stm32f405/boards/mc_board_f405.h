@@ -1,0 +1,148 @@
+/**
+ * @file mc_board_f405.h
+ * @brief A board description (mc_board_desc.h) bound to the hal/stm32f405
+ *        drivers: clocks, GPIO, TIM1 PWM, TIM5 tick, fault pins, ADC1,
+ *        TIM3 encoder, CAN1, SPI3 and the DRV8301.
+ *
+ * Every register is reached through mc_board_f405_periph_t, so the same
+ * set-up runs on the MCU (peripheral addresses) and on the host against
+ * register files in RAM (tests/target/boards).
+ *
+ * Order (gate driver boards): clocks; GPIO from the table (EN_GATE low,
+ * chip selects released, unused gate inputs low); tick; PWM (outputs off,
+ * MOE = 0); EN_GATE low for at least 40 us (the DRV8301's full reset needs
+ * 20 us, ODrive board.cpp); EN_GATE high (the fault driver's enabled
+ * level); 20 ms for the chip's SPI to come up (ODrive waits 20 ms, its
+ * drv8301.cpp names t_spi_ready <= 10 ms); ADC, encoder, CAN, SPI. The
+ * DRV8301 registers are then written and verified by
+ * mc_board_f405_gate_driver_setup() over an SPI handle (the SPI3 driver on
+ * the MCU, a model of the chip in the tests).
+ */
+#ifndef MC_BOARD_F405_H
+#define MC_BOARD_F405_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hal/hal.h"
+#include "mc_board_desc.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** DRV8301 reset pulse on EN_GATE [us] and its SPI start-up wait [us]. */
+#define MC_BOARD_F405_GATE_RESET_US 40u
+#define MC_BOARD_F405_GATE_STARTUP_US 20000u
+
+/** RCC enable bits the set-up writes (RM0090 §7.3.10, §7.3.13, §7.3.14). */
+#define MC_BOARD_F405_APB1ENR_TIM3EN (1u << 1)
+#define MC_BOARD_F405_APB1ENR_TIM5EN (1u << 3)
+#define MC_BOARD_F405_APB1ENR_SPI3EN (1u << 15)
+#define MC_BOARD_F405_APB1ENR_CAN1EN (1u << 25)
+#define MC_BOARD_F405_APB2ENR_TIM1EN (1u << 0)
+#define MC_BOARD_F405_APB2ENR_ADC1EN (1u << 8)
+
+typedef struct mc_board_f405_periph {
+    mc_f405_gpio_regs_t *p_gpio[MC_F405_GPIO_PORTS]; /**< A..I */
+    volatile uint32_t *p_rcc_ahb1enr;
+    volatile uint32_t *p_rcc_apb1enr;
+    volatile uint32_t *p_rcc_apb2enr;
+    mc_f405_tim_regs_t *p_tim1;
+    mc_f405_tim_regs_t *p_tim3;
+    mc_f405_tim_regs_t *p_tim5;
+    mc_f405_adc_regs_t *p_adc1;
+    mc_f405_adc_common_regs_t *p_adc_common;
+    mc_f405_can_regs_t *p_can1;
+    mc_f405_spi_regs_t *p_spi3;
+    /** Busy wait of at least `us` microseconds (the tick driver on the MCU). */
+    void (*delay_us)(void *ctx, uint32_t us);
+    void *delay_ctx;
+} mc_board_f405_periph_t;
+
+/** Why a set-up failed (kept in mc_board_f405_t.err for the debugger and
+ *  the bring-up guide). */
+typedef enum mc_board_f405_err {
+    MC_BOARD_F405_OK = 0,
+    MC_BOARD_F405_ERR_ARG,        /**< NULL description or peripheral */
+    MC_BOARD_F405_ERR_TICK,
+    MC_BOARD_F405_ERR_PWM,
+    MC_BOARD_F405_ERR_FAULT,
+    MC_BOARD_F405_ERR_ADC,
+    MC_BOARD_F405_ERR_ENCODER,
+    MC_BOARD_F405_ERR_SPI,
+    MC_BOARD_F405_ERR_GATE_DRIVER /**< DRV8301 set-up failed: drv.status says why */
+} mc_board_f405_err_t;
+
+typedef struct mc_board_f405 {
+    mc_f405_tick_t tick;
+    mc_f405_pwm3_t pwm3;
+    mc_f405_fault_t fault;
+    mc_f405_adc_t adc;
+    mc_f405_encoder_t enc;
+    mc_f405_can_t can;
+    mc_f405_spi_t spi;
+    mc_drv8301_t drv;
+    mc_hal_t hal;
+    bool can_ok;                  /**< CAN left init mode (else hal.can NULL) */
+    mc_board_f405_err_t err;
+    /* Gate-driver supervision (mc_board_f405_gate_driver_supervise). */
+    volatile bool drv_ready;      /**< the DRV8301 holds its set-up (always true
+                                       on a board without one) */
+    uint32_t rearm_wait_us;       /**< time since the gates were released */
+    bool nfault_seen;             /**< nFAULT asserted at the last call */
+    bool drv_latch_reset;         /**< GATE_RESET sent for this assertion */
+} mc_board_f405_t;
+
+/**
+ * Configure clocks, pins and drivers for a board. Timer clocks from
+ * sysclk_hz (APB2 timers = sysclk, APB1 timers = sysclk / 2, APB1 =
+ * sysclk / 4; RM0090 §6.2 with the clock set-up's prescalers).
+ * @return MC_BOARD_F405_OK and p_board->hal filled (gate driver not yet set
+ *         up), or the failing step (p_board->err); the gate enable is then
+ *         left at its disabled level where the fault driver did not run.
+ */
+mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board,
+                                        const mc_board_desc_t *p_desc,
+                                        const mc_board_f405_periph_t *p_periph,
+                                        uint32_t sysclk_hz, uint32_t pwm_hz);
+
+/**
+ * Write and verify the DRV8301 registers over `p_spi` (no-op on a board
+ * without one). On failure the gates are killed (mc_hal_fault_gate_kill:
+ * PWM outputs off, EN_GATE low) and p_board->drv.status names the reason.
+ */
+mc_board_f405_err_t mc_board_f405_gate_driver_setup(mc_board_f405_t *p_board,
+                                                    const mc_board_desc_t *p_desc,
+                                                    const mc_hal_spi_t *p_spi);
+
+/**
+ * Gate-driver supervision, from the slow loop every period_us (a few SPI
+ * frames when something happens, nothing otherwise):
+ *  - gates killed: EN_GATE low resets the DRV8301, its settings are lost:
+ *    not ready;
+ *  - released again (EN_GATE high): after MC_BOARD_F405_GATE_STARTUP_US the
+ *    DRV8301 is set up and verified again; if that fails the gates are
+ *    killed again (drv.status names why);
+ *  - nFAULT newly asserted: the status registers are read (drv.faults,
+ *    mc_drv8301_fault_name); once the drive has recorded its hardware-input
+ *    fault (drive_hw_fault) the chip's latch is reset (GATE_RESET, once per
+ *    assertion), so that clearing the drive's fault can then succeed. The
+ *    drive stays stopped until it is cleared.
+ * The caller keeps the drive from running while this returns false (the
+ * image raises an external fault).
+ * @return p_board->drv_ready.
+ */
+bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board,
+                                         const mc_board_desc_t *p_desc,
+                                         const mc_hal_spi_t *p_spi, uint32_t period_us,
+                                         bool drive_hw_fault);
+
+/** Name of a set-up result ("ok", "gate driver", ...). */
+const char *mc_board_f405_err_name(mc_board_f405_err_t err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_BOARD_F405_H */
