@@ -595,10 +595,12 @@ void MotorRig::set_references() {
     } else {
       // The drive's encoder PLL speed of the previous step (a speed loop in
       // a lower-priority task sees it one period late).
-      const float iq = mc_pi_f32_step_ff(
+      float iq = 0.0f;
+      (void)mc_pi_f32_step_ff(
           &spi_, static_cast<float>(w_ref_ - drive_.tm.omega_m_rad_s),
           static_cast<float>((fd_.motor.j_kgm2 * a_ref_ + fd_.motor.b_nm_s_rad * w_ref_) /
-                             g_.kt_nm_a));
+                             g_.kt_nm_a),
+          &iq);
       if (mc_drive_set_current_ref(&drive_, 0.0f, iq) != 0) {
         throw std::runtime_error("iq reference rejected by the drive");
       }

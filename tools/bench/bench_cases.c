@@ -245,7 +245,9 @@ static NOINLINE void c_svpwm_hexagon_f32(uint32_t i)
 }
 static NOINLINE void c_pi_f32(uint32_t i)
 {
-    sink_f32(mc_pi_f32_step_lim(&g_pi, g_in.y[i], 0.1f, -20.0f, 20.0f));
+    float u;
+    (void)mc_pi_f32_step_lim(&g_pi, g_in.y[i], 0.1f, -20.0f, 20.0f, &u);
+    sink_f32(u);
 }
 static NOINLINE void c_foc_dq_f32(uint32_t i)
 {
@@ -274,7 +276,8 @@ static NOINLINE void c_foc_sensorless_f32(uint32_t i)
     /* the observer sees the voltage of the previous step, as in the plug-in */
     bench_sink_u32(mc_fluxobs_f32_step(&g_obs, g_sls_out.v_alpha_v, g_sls_out.v_beta_v, i_alpha,
                                        i_beta));
-    const float omega_hat = mc_spdpll_f32_step(&g_pll, g_obs.theta_e_rad);
+    float omega_hat;
+    (void)mc_spdpll_f32_step(&g_pll, g_obs.theta_e_rad, &omega_hat);
     bench_sink_u32(mc_foc_f32_step_ab(&g_foc_sls, i_alpha, i_beta, g_obs.theta_e_rad, omega_hat,
                                       f->vbus_v, f->id_ref_a, f->iq_ref_a, &g_sls_out));
 }
@@ -291,7 +294,9 @@ static NOINLINE void c_fluxobs_f32(uint32_t i)
 }
 static NOINLINE void c_spdpll_f32(uint32_t i)
 {
-    sink_f32(mc_spdpll_f32_step(&g_pll, g_in.x[i]));
+    float omega_hat;
+    (void)mc_spdpll_f32_step(&g_pll, g_in.x[i], &omega_hat);
+    sink_f32(omega_hat);
 }
 static NOINLINE void c_pi2d_f32(uint32_t i)
 {
@@ -357,7 +362,9 @@ static NOINLINE void c_svpwm_q31(uint32_t i)
 }
 static NOINLINE void c_pi_q31(uint32_t i)
 {
-    bench_sink_u32((uint32_t)mc_pi_q31_step(&g_qpi, g_in.qa[i] >> 4));
+    q31_t u;
+    (void)mc_pi_q31_step(&g_qpi, g_in.qa[i] >> 4, &u);
+    bench_sink_u32((uint32_t)u);
 }
 
 static const bench_case_t k_cases[] = {

@@ -171,11 +171,15 @@ int bench_setup_q31(void)
 /* ---- q31 cases --------------------------------------------------------- */
 static void c_ddiff_q(uint32_t i)
 {
-    sink((uint32_t)mc_ddiff_q31_step(&s_dd_q, in_y_q[i]));
+    q31_t th;
+    (void)mc_ddiff_q31_step(&s_dd_q, in_y_q[i], &th);
+    sink((uint32_t)th);
 }
 static void c_pll_q(uint32_t i)
 {
-    sink((uint32_t)mc_spdpll_q31_step(&s_pll_q, in_th_q[i]));
+    q31_t w;
+    (void)mc_spdpll_q31_step(&s_pll_q, in_th_q[i], &w);
+    sink((uint32_t)w);
 }
 static void c_obs_q(uint32_t i)
 {
@@ -219,11 +223,15 @@ static void c_hgo_q(uint32_t i)
 /* ---- f32 twins on the same inputs -------------------------------------- */
 static void c_ddiff_f(uint32_t i)
 {
-    sink((uint32_t)(int32_t)(mc_ddiff_f32_step(&s_dd_f, in_y_f[i]) * 1e6f));
+    float th;
+    (void)mc_ddiff_f32_step(&s_dd_f, in_y_f[i], &th);
+    sink((uint32_t)(int32_t)(th * 1e6f));
 }
 static void c_pll_f(uint32_t i)
 {
-    sink((uint32_t)(int32_t)mc_spdpll_f32_step(&s_pll_f, in_th_f[i]));
+    float w;
+    (void)mc_spdpll_f32_step(&s_pll_f, in_th_f[i], &w);
+    sink((uint32_t)(int32_t)w);
 }
 static void c_obs_f(uint32_t i)
 {

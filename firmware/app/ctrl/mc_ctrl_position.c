@@ -140,7 +140,8 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     const float w_cmd = clampf(r.v_rad_s + (c->cfg.pos_kp_per_s * e_pos), c->cfg.vel_limit_rad_s);
     const float ff = ((c->cfg.j_kgm2 * a_ff) + (c->cfg.b_nm_s_rad * r.v_rad_s)) /
                      c->cfg.kt_nm_a;
-    const float iq_ref = mc_pi_f32_step_ff(&c->vel_pi, w_cmd - m->omega_m_rad_s, ff);
+    float iq_ref;
+    (void)mc_pi_f32_step_ff(&c->vel_pi, w_cmd - m->omega_m_rad_s, ff, &iq_ref);
 
     mc_foc_f32_in_t in;
     in.ia_a = m->ia_a;

@@ -402,7 +402,7 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         err |= MC_CTRL_SLS_ERR_DIVERGED;
     }
     theta_hat = c->obs.theta_e_rad;
-    omega_hat_e = mc_spdpll_f32_step(&c->pll, theta_hat);
+    (void)mc_spdpll_f32_step(&c->pll, theta_hat, &omega_hat_e);
     omega_hat_m = omega_hat_e / pp;
 
     /* 2. reference slew */
@@ -456,7 +456,7 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         c->speed_count++;
         if (c->speed_count >= cfg->speed_div) {
             c->speed_count = 0u;
-            c->iq_ref_a = mc_pi_f32_step(&c->speed_pi, c->omega_ref_m_rad_s - omega_hat_m);
+            (void)mc_pi_f32_step(&c->speed_pi, c->omega_ref_m_rad_s - omega_hat_m, &c->iq_ref_a);
         }
         /* id from the hand-over decays to 0 over blend_time */
         c->id_ref_a = slew_f32(c->id_ref_a, 0.0f, cfg->if_current_a * cfg->dt_s / cfg->blend_time_s);

@@ -450,7 +450,7 @@ uint32_t mc_ctrl_sls_q31_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_
         err |= MC_CTRL_SLS_ERR_DIVERGED;
     }
     theta_hat = c->obs.theta;
-    omega_hat = mc_spdpll_q31_step(&c->pll, theta_hat); /* electrical = mechanical pu */
+    (void)mc_spdpll_q31_step(&c->pll, theta_hat, &omega_hat); /* electrical = mechanical pu */
 
     /* 2. reference slew */
     c->omega_ref = slsq_slew(c->omega_ref, c->omega_cmd, c->slew_inc);
@@ -501,7 +501,7 @@ uint32_t mc_ctrl_sls_q31_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_
         c->speed_count++;
         if (c->speed_count >= cfg->speed_div) {
             c->speed_count = 0u;
-            c->iq_ref = mc_pi_q31_step(&c->speed_pi, mc_q31_sub_sat(c->omega_ref, omega_hat));
+            (void)mc_pi_q31_step(&c->speed_pi, mc_q31_sub_sat(c->omega_ref, omega_hat), &c->iq_ref);
         }
         c->id_ref = slsq_slew(c->id_ref, 0, c->blend_inc);
         theta_ctrl = theta_hat;

@@ -175,22 +175,23 @@ uint32_t mc_csmc_f32_init(mc_csmc_f32_t *st, const mc_csmc_f32_cfg_t *cfg)
     return MC_CSMC_ERR_NONE;
 }
 
-void mc_csmc_f32_reset(mc_csmc_f32_t *st)
+uint32_t mc_csmc_f32_reset(mc_csmc_f32_t *st)
 {
     if (st == NULL) {
-        return;
+        return MC_CSMC_ERR_NULL;
     }
     if (st->have_sigma1 != 0u) {
-        mc_csvc_f32_reset(&st->sigma1);
+        (void)mc_csvc_f32_reset(&st->sigma1);
     }
     if (st->have_sigma2 != 0u) {
-        mc_csvc_f32_reset(&st->sigma2);
+        (void)mc_csvc_f32_reset(&st->sigma2);
     }
     st->out.v_d_v = 0.0f;
     st->out.v_q_v = 0.0f;
     st->out.s1_a = 0.0f;
     st->out.s2_rad_s2 = 0.0f;
     st->flags = MC_CSMC_ERR_NONE;
+    return MC_CSMC_ERR_NONE;
 }
 
 /* |x| as the FPU's absolute value (one instruction; only compared here). */
@@ -333,12 +334,13 @@ static bool csmc_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32
     return true;
 }
 
-void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out)
+uint32_t mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in,
+                          mc_csmc_f32_out_t *p_out)
 {
     if ((st == NULL) || (in == NULL) || (p_out == NULL)) {
-        return;
+        return MC_CSMC_ERR_NULL;
     }
-    (void)csmc_step(st, in, p_out);
+    return csmc_step(st, in, p_out) ? MC_CSMC_ERR_NONE : MC_CSMC_ERR_NAN_INPUT;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -367,14 +369,15 @@ uint32_t mc_csmc_hgo_f32_init(mc_csmc_hgo_f32_t *st, const mc_csmc_f32_cfg_t *la
     return MC_CSMC_ERR_NONE;
 }
 
-void mc_csmc_hgo_f32_reset(mc_csmc_hgo_f32_t *st)
+uint32_t mc_csmc_hgo_f32_reset(mc_csmc_hgo_f32_t *st)
 {
     if (st == NULL) {
-        return;
+        return MC_CSMC_ERR_NULL;
     }
-    mc_csmc_f32_reset(&st->law);
+    (void)mc_csmc_f32_reset(&st->law);
     (void)mc_hgo_f32_reset(&st->hgo, 0.0f, 0.0f, 0.0f);
     st->fast = CSMC_HGO_GENERAL;
+    return MC_CSMC_ERR_NONE;
 }
 
 static __attribute__((noinline, cold)) uint32_t csmc_hgo_refuse(mc_csmc_hgo_f32_t *st,

@@ -167,19 +167,23 @@ typedef struct {
  *  last output 0). Returns the OR of the broken rules; on error st is not written. */
 uint32_t mc_csmc_f32_init(mc_csmc_f32_t *st, const mc_csmc_f32_cfg_t *cfg);
 
-/** sigma = 0, last output 0, sticky flags cleared. */
-void mc_csmc_f32_reset(mc_csmc_f32_t *st);
+/** sigma = 0, last output 0, sticky flags cleared. Returns MC_CSMC_ERR_NONE,
+ *  or MC_CSMC_ERR_NULL for a NULL st. */
+uint32_t mc_csmc_f32_reset(mc_csmc_f32_t *st);
 
 /**
  * One control step: sliding variables, law, clamp; then sigma advanced over
- * one period. A non-finite input is refused: state unchanged, the last
- * output returned, MC_CSMC_ERR_NAN_INPUT made sticky. The test is one sum,
+ * one period; the outputs in *p_out. Returns MC_CSMC_ERR_NONE,
+ * MC_CSMC_ERR_NULL (st, in or p_out NULL: nothing written) or
+ * MC_CSMC_ERR_NAN_INPUT: a non-finite input is refused, state unchanged,
+ * *p_out the last output, the bit also made sticky in st->flags. The test is one sum,
  * s1 + s2 + the five other inputs, which a non-finite input makes
  * non-finite (so do finite values whose sum overflows, |x| ~ 1e38: also
  * refused). psi = sat(s/mu) is formed as (1/mu) sat(s), and -M sat(s/mu) as
  * (-M/mu) (mu sat(s/mu)), the constants precomputed.
  */
-void mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out);
+uint32_t mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in,
+                          mc_csmc_f32_out_t *p_out);
 
 /**
  * Error vector from the full state (state feedback, paper Sec. III):
@@ -213,8 +217,9 @@ typedef struct {
 uint32_t mc_csmc_hgo_f32_init(mc_csmc_hgo_f32_t *st, const mc_csmc_f32_cfg_t *law,
                               const mc_hgo_f32_cfg_t *hgo);
 
-/** sigma = 0, estimates 0 with no past samples, sticky flags cleared. */
-void mc_csmc_hgo_f32_reset(mc_csmc_hgo_f32_t *st);
+/** sigma = 0, estimates 0 with no past samples, sticky flags cleared.
+ *  Returns MC_CSMC_ERR_NONE, or MC_CSMC_ERR_NULL for a NULL st. */
+uint32_t mc_csmc_hgo_f32_reset(mc_csmc_hgo_f32_t *st);
 
 /**
  * One output-feedback step: the estimates e2' = z2, e2'' = z3 at this

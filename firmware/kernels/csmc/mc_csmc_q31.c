@@ -139,17 +139,18 @@ uint32_t mc_csmc_q31_init(mc_csmc_q31_t *st, const mc_csmc_q31_cfg_t *cfg)
     return MC_CSMC_ERR_NONE;
 }
 
-void mc_csmc_q31_reset(mc_csmc_q31_t *st)
+uint32_t mc_csmc_q31_reset(mc_csmc_q31_t *st)
 {
     if (st == NULL) {
-        return;
+        return MC_CSMC_ERR_NULL;
     }
-    mc_csvc_q31_reset(&st->sigma1);
-    mc_csvc_q31_reset(&st->sigma2);
+    (void)mc_csvc_q31_reset(&st->sigma1);
+    (void)mc_csvc_q31_reset(&st->sigma2);
     st->out.v_d = 0;
     st->out.v_q = 0;
     st->out.s1 = 0;
     st->out.s2 = 0;
+    return MC_CSMC_ERR_NONE;
 }
 
 /* psi = sat(s/mu) or sgn(s), q31 */
@@ -164,7 +165,8 @@ static q31_t cq_psi(mc_csmc_sw_t sw, int64_t s_q46, mc_q46_gain_t inv_mu)
     return mc_q46_to_q31(mc_q46_clamp(mc_q46_mul(inv_mu, s_q46), -MC_Q46_ONE, MC_Q46_ONE));
 }
 
-void mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in, mc_csmc_q31_out_t *p_out)
+uint32_t mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in,
+                          mc_csmc_q31_out_t *p_out)
 {
     int64_t s1;
     int64_t s2;
@@ -174,7 +176,7 @@ void mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in, mc_csmc_q31
     int64_t u2;
 
     if ((st == NULL) || (in == NULL) || (p_out == NULL)) {
-        return;
+        return MC_CSMC_ERR_NULL;
     }
     s1 = mc_q46_from_q31(in->e1);
     s2 = mc_q46_mul_q31(st->g_s2_e2, in->e2);
@@ -240,4 +242,5 @@ void mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in, mc_csmc_q31
         mc_csvc_q31_update(&st->sigma2, s2);
     }
     *p_out = st->out;
+    return MC_CSMC_ERR_NONE;
 }

@@ -94,8 +94,16 @@ typedef struct {
 } mc_csmc_q31_t;
 
 uint32_t mc_csmc_q31_init(mc_csmc_q31_t *st, const mc_csmc_q31_cfg_t *cfg);
-void mc_csmc_q31_reset(mc_csmc_q31_t *st);
-void mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in, mc_csmc_q31_out_t *p_out);
+/** sigma = 0, last output 0. Returns MC_CSMC_ERR_NONE, or MC_CSMC_ERR_NULL
+ *  for a NULL st. */
+uint32_t mc_csmc_q31_reset(mc_csmc_q31_t *st);
+
+/** One control step (as mc_csmc_f32_step), the outputs in *p_out. Returns
+ *  MC_CSMC_ERR_NONE, or MC_CSMC_ERR_NULL (st, in or p_out NULL: nothing
+ *  written); q31 inputs are always finite and every sum saturates, so no
+ *  MC_CSMC_ERR_NAN_INPUT. */
+uint32_t mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in,
+                          mc_csmc_q31_out_t *p_out);
 
 #ifdef __cplusplus
 }

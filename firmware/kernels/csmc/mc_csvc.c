@@ -343,16 +343,17 @@ void mc_csvc_f32_force_dense(mc_csvc_f32_t *st)
     }
 }
 
-void mc_csvc_f32_reset(mc_csvc_f32_t *st)
+uint32_t mc_csvc_f32_reset(mc_csvc_f32_t *st)
 {
     if (st == NULL) {
-        return;
+        return MC_CSVC_ERR_NULL;
     }
     for (uint32_t i = 0u; i < CSVC_N; ++i) {
         st->sigma[i] = 0.0f;
         st->xi[i] = 0.0f;
     }
     st->flags = MC_CSVC_ERR_NONE;
+    return MC_CSVC_ERR_NONE;
 }
 
 float mc_csvc_f32_term(const mc_csvc_f32_t *st)

@@ -123,8 +123,9 @@ uint32_t mc_csvc_f32_place(uint32_t order, const float *p_c, const float *p_pole
 /** Validate cfg, compute Phi and Gam, zero sigma. On error st is not written. */
 uint32_t mc_csvc_f32_init(mc_csvc_f32_t *st, const mc_csvc_f32_cfg_t *cfg);
 
-/** sigma = 0, sticky flag cleared. */
-void mc_csvc_f32_reset(mc_csvc_f32_t *st);
+/** sigma = 0, sticky flag cleared. Returns MC_CSVC_ERR_NONE, or
+ *  MC_CSVC_ERR_NULL for a NULL st. */
+uint32_t mc_csvc_f32_reset(mc_csvc_f32_t *st);
 
 /** K0 sigma: the compensator's share of the sliding variable s. */
 float mc_csvc_f32_term(const mc_csvc_f32_t *st);

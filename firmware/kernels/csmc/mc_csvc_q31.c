@@ -59,14 +59,15 @@ uint32_t mc_csvc_q31_init(mc_csvc_q31_t *st, const mc_csvc_q31_cfg_t *cfg)
     return MC_CSVC_ERR_NONE;
 }
 
-void mc_csvc_q31_reset(mc_csvc_q31_t *st)
+uint32_t mc_csvc_q31_reset(mc_csvc_q31_t *st)
 {
     if (st == NULL) {
-        return;
+        return MC_CSVC_ERR_NULL;
     }
     for (uint32_t i = 0u; i < MC_CSVC_MAX_ORDER; ++i) {
         st->w_q46[i] = 0;
     }
+    return MC_CSVC_ERR_NONE;
 }
 
 int64_t mc_csvc_q31_term_q46(const mc_csvc_q31_t *st)

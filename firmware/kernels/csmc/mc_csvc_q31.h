@@ -47,7 +47,8 @@ typedef struct {
 } mc_csvc_q31_t;
 
 uint32_t mc_csvc_q31_init(mc_csvc_q31_t *st, const mc_csvc_q31_cfg_t *cfg);
-void mc_csvc_q31_reset(mc_csvc_q31_t *st);
+/** sigma = 0. Returns MC_CSVC_ERR_NONE, or MC_CSVC_ERR_NULL for a NULL st. */
+uint32_t mc_csvc_q31_reset(mc_csvc_q31_t *st);
 /** K0 sigma in Q46 of s_base. */
 int64_t mc_csvc_q31_term_q46(const mc_csvc_q31_t *st);
 /** Advance one period with s (Q46 of s_base) held. */

@@ -63,15 +63,20 @@ uint32_t mc_ddiff_f32_reset(mc_ddiff_f32_t *st, float q0)
     return MC_DDIFF_ERR_NONE;
 }
 
-float mc_ddiff_f32_step(mc_ddiff_f32_t *st, float y)
+uint32_t mc_ddiff_f32_step(mc_ddiff_f32_t *st, float y, float *p_theta_f)
 {
+    if ((st == NULL) || (p_theta_f == NULL)) {
+        return MC_DDIFF_ERR_NULL;
+    }
     if (!mc_isfinite_f32(y)) {
         st->flags |= MC_DDIFF_ERR_NAN_INPUT;
-        return st->out;
+        *p_theta_f = st->out;
+        return MC_DDIFF_ERR_NAN_INPUT;
     }
     /* Tustin on theta_f = b s/(s+a) y (see the header for why theta_f, not
      * q_c, is the state); the first sample gives q_c(0) + b y(0), as (12). */
     const float th = mc_ddiff_f32_next(st, y);
     mc_ddiff_f32_commit(st, y, th);
-    return th;
+    *p_theta_f = th;
+    return MC_DDIFF_ERR_NONE;
 }

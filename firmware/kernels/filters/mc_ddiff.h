@@ -43,8 +43,9 @@
  * leaves (theta_f = q0, c_q -> 1, g -> b, y[-1] = 0: q0 1 + b (y - 0) is
  * q0 + b y exactly), so the step has no first-sample branch.
  *
- * Non-finite input: the step is refused (state unchanged, last output
- * returned) and the sticky MC_DDIFF_ERR_NAN_INPUT is set; reset clears it.
+ * Non-finite input: the step is refused (state unchanged, the last output
+ * written) and returns MC_DDIFF_ERR_NAN_INPUT, also made sticky in
+ * st->flags; reset clears it.
  * No heap, no globals, no I/O.
  */
 #ifndef MC_DDIFF_H
@@ -93,8 +94,11 @@ uint32_t mc_ddiff_f32_init(mc_ddiff_f32_t *st, const mc_ddiff_f32_cfg_t *cfg);
  *  returned, st not written). */
 uint32_t mc_ddiff_f32_reset(mc_ddiff_f32_t *st, float q0);
 
-/** One sample: returns theta_f[k] for the input y[k]. */
-float mc_ddiff_f32_step(mc_ddiff_f32_t *st, float y);
+/** One sample: theta_f[k] [unit of y] for the input y[k] in *p_theta_f.
+ *  Returns MC_DDIFF_ERR_NONE, MC_DDIFF_ERR_NAN_INPUT (y not finite: refused,
+ *  *p_theta_f the last output) or MC_DDIFF_ERR_NULL (st or p_theta_f NULL:
+ *  nothing written). */
+uint32_t mc_ddiff_f32_step(mc_ddiff_f32_t *st, float y, float *p_theta_f);
 
 /** theta_f[k] for a finite y[k] without writing st: the arithmetic of
  *  mc_ddiff_f32_step (bit for bit). For a caller that decides only later

@@ -50,26 +50,27 @@ uint32_t mc_ddiff_q31_init(mc_ddiff_q31_t *st, const mc_ddiff_q31_cfg_t *cfg)
     return MC_DDIFF_ERR_NONE;
 }
 
-void mc_ddiff_q31_reset(mc_ddiff_q31_t *st, q31_t q0)
+uint32_t mc_ddiff_q31_reset(mc_ddiff_q31_t *st, q31_t q0)
 {
     if (st == NULL) {
-        return;
+        return MC_DDIFF_ERR_NULL;
     }
     st->out_q46 = mc_q46_from_q31(q0);
     st->y_prev = 0;
     st->out = q0;
     st->primed = false;
     st->flags = MC_DDIFF_ERR_NONE;
+    return MC_DDIFF_ERR_NONE;
 }
 
-q31_t mc_ddiff_q31_step(mc_ddiff_q31_t *st, q31_t y)
+uint32_t mc_ddiff_q31_step(mc_ddiff_q31_t *st, q31_t y, q31_t *p_theta_f)
 {
     const int64_t lo = mc_q46_from_q31(MC_Q31_MIN);
     const int64_t hi = mc_q46_from_q31(MC_Q31_MAX);
     int64_t acc;
 
-    if (st == NULL) {
-        return 0;
+    if ((st == NULL) || (p_theta_f == NULL)) {
+        return MC_DDIFF_ERR_NULL;
     }
     if (st->primed) {
         acc = mc_q46_mul(st->c_q, st->out_q46);
@@ -82,5 +83,6 @@ q31_t mc_ddiff_q31_step(mc_ddiff_q31_t *st, q31_t y)
     st->primed = true;
     st->y_prev = y;
     st->out = mc_q46_to_q31(st->out_q46);
-    return st->out;
+    *p_theta_f = st->out;
+    return MC_DDIFF_ERR_NONE;
 }

@@ -60,11 +60,14 @@ typedef struct {
  *  state with q_c = 0. On error st is not written. */
 uint32_t mc_ddiff_q31_init(mc_ddiff_q31_t *st, const mc_ddiff_q31_cfg_t *cfg);
 
-/** Preset q_c (q31 per unit of out_base): the next step outputs q0 + b y. */
-void mc_ddiff_q31_reset(mc_ddiff_q31_t *st, q31_t q0);
+/** Preset q_c (q31 per unit of out_base): the next step outputs q0 + b y.
+ *  Returns MC_DDIFF_ERR_NONE, or MC_DDIFF_ERR_NULL for a NULL st. */
+uint32_t mc_ddiff_q31_reset(mc_ddiff_q31_t *st, q31_t q0);
 
-/** One sample: theta_f[k] (q31, out_base) for y[k] (q31, y_base). */
-q31_t mc_ddiff_q31_step(mc_ddiff_q31_t *st, q31_t y);
+/** One sample: theta_f[k] (q31, out_base) for y[k] (q31, y_base) in
+ *  *p_theta_f. Returns MC_DDIFF_ERR_NONE, or MC_DDIFF_ERR_NULL (st or
+ *  p_theta_f NULL: nothing written). */
+uint32_t mc_ddiff_q31_step(mc_ddiff_q31_t *st, q31_t y, q31_t *p_theta_f);
 
 #ifdef __cplusplus
 }

@@ -176,15 +176,16 @@ uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
     return MC_FOC_ERR_NONE;
 }
 
-void mc_foc_f32_reset(mc_foc_f32_t *st)
+uint32_t mc_foc_f32_reset(mc_foc_f32_t *st)
 {
     if (st == NULL) {
-        return;
+        return MC_FOC_ERR_NULL;
     }
     (void)mc_pi_f32_reset(&st->pi_d, 0.0f);
     (void)mc_pi_f32_reset(&st->pi_q, 0.0f);
     st->flags = MC_FOC_ERR_NONE;
     st->vbus_fast_bits = st->vbus_fast_bound;
+    return MC_FOC_ERR_NONE;
 }
 
 /* Raise sticky flags (err may be 0). The fast path runs only while none is
@@ -244,10 +245,10 @@ static uint32_t foc_dq_core(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
      * that a refusal in this step shows. */
     st->pi_d.flags = MC_PI_ERR_NONE;
     st->pi_q.flags = MC_PI_ERR_NONE;
-    vd = mc_pi_f32_step_lim(&st->pi_d, id_ref_a - id_a, ff_d, -v_max, v_max);
+    (void)mc_pi_f32_step_lim(&st->pi_d, id_ref_a - id_a, ff_d, -v_max, v_max, &vd);
     vq_room_sq = (v_max * v_max) - (vd * vd);
     vq_max = (vq_room_sq > 0.0f) ? mc_sqrt_f32(vq_room_sq) : 0.0f;
-    vq = mc_pi_f32_step_lim(&st->pi_q, iq_ref_a - iq_a, ff_q, -vq_max, vq_max);
+    (void)mc_pi_f32_step_lim(&st->pi_q, iq_ref_a - iq_a, ff_q, -vq_max, vq_max, &vq);
 
     if ((st->pi_d.flags | st->pi_q.flags) != MC_PI_ERR_NONE) {
         /* A PI refused its step (an error, feed-forward or limit overflowed

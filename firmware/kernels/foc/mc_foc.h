@@ -184,8 +184,9 @@ uint32_t mc_foc_f32_gains_from_bandwidth(float r_ohm, float l_h, float bw_rad_s,
  */
 uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg);
 
-/** Integrators to 0, sticky flags cleared. */
-void mc_foc_f32_reset(mc_foc_f32_t *st);
+/** Integrators to 0, sticky flags cleared. Returns MC_FOC_ERR_NONE, or
+ *  MC_FOC_ERR_NULL for a NULL st. */
+uint32_t mc_foc_f32_reset(mc_foc_f32_t *st);
 
 /**
  * One dq current-controller step: PIs, decoupling, d-priority limit.

@@ -74,16 +74,17 @@ uint32_t mc_foc_q31_init(mc_foc_q31_t *st, const mc_foc_q31_cfg_t *cfg)
     return MC_FOC_ERR_NONE;
 }
 
-void mc_foc_q31_reset(mc_foc_q31_t *st)
+uint32_t mc_foc_q31_reset(mc_foc_q31_t *st)
 {
     if (st == NULL) {
-        return;
+        return MC_FOC_ERR_NULL;
     }
-    mc_pi_q31_reset(&st->pi_d, 0);
-    mc_pi_q31_reset(&st->pi_q, 0);
+    (void)mc_pi_q31_reset(&st->pi_d, 0);
+    (void)mc_pi_q31_reset(&st->pi_q, 0);
     st->vd = 0;
     st->vq = 0;
     st->flags = MC_FOC_ERR_NONE;
+    return MC_FOC_ERR_NONE;
 }
 
 /* The dq step proper, vbus > 0. */
@@ -102,13 +103,14 @@ static void foc_q31_core(mc_foc_q31_t *st, q31_t id_ref, q31_t iq_ref, q31_t id,
         ff_q = mc_q46_to_q31(mc_q46_add(mc_q46_mul_q31(st->g_ff_q, mc_q31_mul(omega_e, id)),
                                         mc_q46_mul_q31(st->g_ff_psi, omega_e)));
     }
-    vd = mc_pi_q31_step_lim(&st->pi_d, mc_q31_sub_sat(id_ref, id), ff_d, (q31_t)-v_max, v_max);
+    (void)mc_pi_q31_step_lim(&st->pi_d, mc_q31_sub_sat(id_ref, id), ff_d, (q31_t)-v_max, v_max,
+                             &vd);
     /* |vd| <= v_max: the Q62 difference is >= 0 and < 2^62 */
     room = (uint64_t)(((int64_t)v_max * (int64_t)v_max) - ((int64_t)vd * (int64_t)vd));
     vq_max = (q31_t)mc_isqrt_u64(room, NULL);
     *p_vd = vd;
-    *p_vq = mc_pi_q31_step_lim(&st->pi_q, mc_q31_sub_sat(iq_ref, iq), ff_q, (q31_t)-vq_max,
-                               vq_max);
+    (void)mc_pi_q31_step_lim(&st->pi_q, mc_q31_sub_sat(iq_ref, iq), ff_q, (q31_t)-vq_max,
+                             vq_max, p_vq);
 }
 
 uint32_t mc_foc_q31_step_dq(mc_foc_q31_t *st, q31_t id_ref, q31_t iq_ref, q31_t id, q31_t iq,

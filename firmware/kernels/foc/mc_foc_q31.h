@@ -93,8 +93,9 @@ typedef struct {
  *  for the hexagon) and initialise st. On error st is not written. */
 uint32_t mc_foc_q31_init(mc_foc_q31_t *st, const mc_foc_q31_cfg_t *cfg);
 
-/** Integrators and voltages to 0, flags cleared. */
-void mc_foc_q31_reset(mc_foc_q31_t *st);
+/** Integrators and voltages to 0, flags cleared. Returns MC_FOC_ERR_NONE,
+ *  or MC_FOC_ERR_NULL for a NULL st. */
+uint32_t mc_foc_q31_reset(mc_foc_q31_t *st);
 
 /** dq step (see the file comment); vbus <= 0: zero voltage, MC_FOC_ERR_VBUS. */
 uint32_t mc_foc_q31_step_dq(mc_foc_q31_t *st, q31_t id_ref, q31_t iq_ref, q31_t id, q31_t iq,

@@ -8,15 +8,22 @@
 
 #include "math/mc_math.h"
 
-void mc_ident_avg_f32_reset(mc_ident_avg_f32_t *st)
+uint32_t mc_ident_avg_f32_reset(mc_ident_avg_f32_t *st)
 {
+    if (st == NULL) {
+        return MC_IDENT_ERR_NULL;
+    }
     st->sum = 0.0f;
     st->comp = 0.0f;
     st->n = 0u;
+    return MC_IDENT_ERR_NONE;
 }
 
 uint32_t mc_ident_avg_f32_step(mc_ident_avg_f32_t *st, float x)
 {
+    if (st == NULL) {
+        return MC_IDENT_ERR_NULL;
+    }
     if (!mc_isfinite_f32(x)) {
         return MC_IDENT_ERR_NAN;
     }
@@ -39,16 +46,23 @@ uint32_t mc_ident_avg_f32_get(const mc_ident_avg_f32_t *st, float *p_mean)
     return MC_IDENT_ERR_NONE;
 }
 
-void mc_ident_line_f32_reset(mc_ident_line_f32_t *st)
+uint32_t mc_ident_line_f32_reset(mc_ident_line_f32_t *st)
 {
-    mc_ident_avg_f32_reset(&st->sx);
-    mc_ident_avg_f32_reset(&st->sy);
-    mc_ident_avg_f32_reset(&st->sxx);
-    mc_ident_avg_f32_reset(&st->sxy);
+    if (st == NULL) {
+        return MC_IDENT_ERR_NULL;
+    }
+    (void)mc_ident_avg_f32_reset(&st->sx);
+    (void)mc_ident_avg_f32_reset(&st->sy);
+    (void)mc_ident_avg_f32_reset(&st->sxx);
+    (void)mc_ident_avg_f32_reset(&st->sxy);
+    return MC_IDENT_ERR_NONE;
 }
 
 uint32_t mc_ident_line_f32_step(mc_ident_line_f32_t *st, float x, float y)
 {
+    if (st == NULL) {
+        return MC_IDENT_ERR_NULL;
+    }
     if (!mc_isfinite_f32(x) || !mc_isfinite_f32(y) || !mc_isfinite_f32(x * x) ||
         !mc_isfinite_f32(x * y)) {
         return MC_IDENT_ERR_NAN;
@@ -96,14 +110,21 @@ uint32_t mc_ident_line_f32_get(const mc_ident_line_f32_t *st, bool with_intercep
     return err;
 }
 
-void mc_ident_circ_f32_reset(mc_ident_circ_f32_t *st)
+uint32_t mc_ident_circ_f32_reset(mc_ident_circ_f32_t *st)
 {
-    mc_ident_avg_f32_reset(&st->s);
-    mc_ident_avg_f32_reset(&st->c);
+    if (st == NULL) {
+        return MC_IDENT_ERR_NULL;
+    }
+    (void)mc_ident_avg_f32_reset(&st->s);
+    (void)mc_ident_avg_f32_reset(&st->c);
+    return MC_IDENT_ERR_NONE;
 }
 
 uint32_t mc_ident_circ_f32_step(mc_ident_circ_f32_t *st, float angle_rad)
 {
+    if (st == NULL) {
+        return MC_IDENT_ERR_NULL;
+    }
     if (!mc_isfinite_f32(angle_rad)) {
         return MC_IDENT_ERR_NAN;
     }

@@ -6,8 +6,9 @@
  *        inductance from a square-wave voltage).
  *
  * All f32, no heap, no libm (mc_math only). Accumulators are plain structs
- * the caller owns: `reset` zeroes them, `step` adds one sample and returns
- * MC_IDENT_ERR_* bits (a non-finite sample is refused and not added),
+ * the caller owns: `reset` zeroes them, `step` adds one sample; both return
+ * the MC_IDENT_ERR_* bits raised by the call (MC_IDENT_ERR_NULL for a NULL
+ * accumulator; a non-finite sample is refused and not added: _NAN),
  * `get` reads the result and returns error bits (too few samples, a
  * degenerate fit). Sums are compensated (Kahan), so averages over 10^5
  * samples keep float's relative precision.
@@ -36,7 +37,7 @@ typedef struct {
     uint32_t n;     /**< samples added */
 } mc_ident_avg_f32_t;
 
-void mc_ident_avg_f32_reset(mc_ident_avg_f32_t *st);
+uint32_t mc_ident_avg_f32_reset(mc_ident_avg_f32_t *st);
 uint32_t mc_ident_avg_f32_step(mc_ident_avg_f32_t *st, float x);
 /** Mean of the samples; MC_IDENT_ERR_EMPTY (and 0) with none. */
 uint32_t mc_ident_avg_f32_get(const mc_ident_avg_f32_t *st, float *p_mean);
@@ -50,7 +51,7 @@ typedef struct {
     mc_ident_avg_f32_t sx, sy, sxx, sxy;
 } mc_ident_line_f32_t;
 
-void mc_ident_line_f32_reset(mc_ident_line_f32_t *st);
+uint32_t mc_ident_line_f32_reset(mc_ident_line_f32_t *st);
 uint32_t mc_ident_line_f32_step(mc_ident_line_f32_t *st, float x, float y);
 /** Slope b (and intercept a, which may be NULL). With with_intercept false
  *  the line passes through the origin (a = 0). MC_IDENT_ERR_EMPTY with
@@ -64,7 +65,7 @@ typedef struct {
     mc_ident_avg_f32_t s, c;
 } mc_ident_circ_f32_t;
 
-void mc_ident_circ_f32_reset(mc_ident_circ_f32_t *st);
+uint32_t mc_ident_circ_f32_reset(mc_ident_circ_f32_t *st);
 uint32_t mc_ident_circ_f32_step(mc_ident_circ_f32_t *st, float angle_rad);
 /** Mean angle in (-pi, pi] and the resultant length in [0, 1] (1: all
  *  samples equal; may be NULL). MC_IDENT_ERR_DEGENERATE when the resultant

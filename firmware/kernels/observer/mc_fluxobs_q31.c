@@ -63,13 +63,14 @@ uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *c
     return MC_FLUXOBS_ERR_NONE;
 }
 
-void mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha, q31_t i_beta)
+uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha,
+                              q31_t i_beta)
 {
     q31_t s;
     q31_t c;
 
     if (st == NULL) {
-        return;
+        return MC_FLUXOBS_ERR_NULL;
     }
     mc_sincos_q31(theta_guess, &s, &c);
     st->x_alpha_q46 = mc_q46_add(mc_q46_mul_q31(st->g_l, i_alpha),
@@ -82,6 +83,7 @@ void mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha
     st->resid = 0;
     st->resid_bad_steps = 0u;
     st->flags = MC_FLUXOBS_ERR_NONE;
+    return MC_FLUXOBS_ERR_NONE;
 }
 
 /* xh + dt (v - R (i_prev + i)/2), one axis, Q46 */

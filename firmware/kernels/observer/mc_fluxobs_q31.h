@@ -74,8 +74,11 @@ typedef struct {
 /** Validate cfg, estimate for angle 0 at zero current. On error st is not written. */
 uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *cfg);
 
-/** Restart from an angle guess (q31 turn) and the present current (pu). */
-void mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha, q31_t i_beta);
+/** Restart from an angle guess (q31 turn) and the present current (pu),
+ *  flags cleared. Returns MC_FLUXOBS_ERR_NONE, or MC_FLUXOBS_ERR_NULL for a
+ *  NULL st. */
+uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha,
+                              q31_t i_beta);
 
 /** One step (see mc_fluxobs_f32_step); returns the bits raised (DIVERGED). */
 uint32_t mc_fluxobs_q31_step(mc_fluxobs_q31_t *st, q31_t v_alpha, q31_t v_beta, q31_t i_alpha,

@@ -136,17 +136,18 @@ void mc_hgo_f32_advance_start(mc_hgo_f32_t *st, float y)
     st->n_hist += 1u;
 }
 
-void mc_hgo_f32_step(mc_hgo_f32_t *st, float y, mc_hgo_f32_est_t *p_est)
+uint32_t mc_hgo_f32_step(mc_hgo_f32_t *st, float y, mc_hgo_f32_est_t *p_est)
 {
     if ((st == NULL) || (p_est == NULL)) {
-        return;
+        return MC_HGO_ERR_NULL;
     }
     p_est->z1 = st->z[0];
     p_est->z2 = st->z[1];
     p_est->z3 = st->z[2];
     if (__builtin_expect(!mc_isfinite_f32(y), 0)) {
         st->flags |= MC_HGO_ERR_NAN_INPUT;
-        return;
+        return MC_HGO_ERR_NAN_INPUT;
     }
     mc_hgo_f32_advance(st, y);
+    return MC_HGO_ERR_NONE;
 }

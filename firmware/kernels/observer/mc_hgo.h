@@ -127,11 +127,12 @@ uint32_t mc_hgo_f32_init(mc_hgo_f32_t *st, const mc_hgo_f32_cfg_t *cfg);
 uint32_t mc_hgo_f32_reset(mc_hgo_f32_t *st, float z1, float z2, float z3);
 
 /**
- * Return the estimate at this sample in *p_est, then advance one period.
- * Non-finite y: the state is not advanced, the current estimate is
- * returned and MC_HGO_ERR_NAN_INPUT is made sticky.
+ * Write the estimate at this sample to *p_est, then advance one period.
+ * Returns MC_HGO_ERR_NONE; MC_HGO_ERR_NAN_INPUT for a non-finite y (the
+ * state is not advanced, *p_est is the current estimate, the bit is also
+ * made sticky); MC_HGO_ERR_NULL when st or p_est is NULL (nothing written).
  */
-void mc_hgo_f32_step(mc_hgo_f32_t *st, float y, mc_hgo_f32_est_t *p_est);
+uint32_t mc_hgo_f32_step(mc_hgo_f32_t *st, float y, mc_hgo_f32_est_t *p_est);
 
 /** The first steps after init/reset (fewer than two past samples) of
  *  mc_hgo_f32_advance: the input polynomial of the order the history allows. */

@@ -41,6 +41,9 @@ uint32_t mc_hgo_q31_init(mc_hgo_q31_t *st, const mc_hgo_q31_cfg_t *cfg)
     ok = ok && mc_q46_gain_from_f32((cfg->y_base * ref.inv_eps) / cfg->z2_base, &t.out2);
     ok = ok && mc_q46_gain_from_f32(((cfg->y_base * ref.inv_eps) * ref.inv_eps) / cfg->z3_base,
                                     &t.out3);
+    ok = ok && mc_q46_gain_from_f32((cfg->z2_base * ref.eps_s) / cfg->y_base, &t.in2);
+    ok = ok && mc_q46_gain_from_f32(((cfg->z3_base * ref.eps_s) * ref.eps_s) / cfg->y_base,
+                                    &t.in3);
     if (!ok) {
         return MC_HGO_ERR_SCALE;
     }
@@ -55,20 +58,21 @@ uint32_t mc_hgo_q31_init(mc_hgo_q31_t *st, const mc_hgo_q31_cfg_t *cfg)
     return MC_HGO_ERR_NONE;
 }
 
-void mc_hgo_q31_reset(mc_hgo_q31_t *st)
+uint32_t mc_hgo_q31_reset(mc_hgo_q31_t *st, q31_t z1, q31_t z2, q31_t z3)
 {
     if (st == NULL) {
-        return;
+        return MC_HGO_ERR_NULL;
     }
     st->n_hist = 0u;
     st->y1 = 0;
     st->y2 = 0;
-    st->eta_q46[0] = 0;
-    st->eta_q46[1] = 0;
-    st->eta_q46[2] = 0;
+    st->eta_q46[0] = mc_q46_from_q31(z1);
+    st->eta_q46[1] = mc_q46_mul_q31(st->in2, z2);
+    st->eta_q46[2] = mc_q46_mul_q31(st->in3, z3);
+    return MC_HGO_ERR_NONE;
 }
 
-void mc_hgo_q31_step(mc_hgo_q31_t *st, q31_t y, mc_hgo_q31_est_t *p_est)
+uint32_t mc_hgo_q31_step(mc_hgo_q31_t *st, q31_t y, mc_hgo_q31_est_t *p_est)
 {
     int64_t v1 = 0;
     int64_t v2 = 0;
@@ -77,7 +81,7 @@ void mc_hgo_q31_step(mc_hgo_q31_t *st, q31_t y, mc_hgo_q31_est_t *p_est)
     int64_t n[3];
 
     if ((st == NULL) || (p_est == NULL)) {
-        return;
+        return MC_HGO_ERR_NULL;
     }
     p_est->z1 = mc_q46_to_q31(st->eta_q46[0]);
     p_est->z2 = mc_q46_to_q31(mc_q46_mul(st->out2, st->eta_q46[1]));
@@ -111,4 +115,5 @@ void mc_hgo_q31_step(mc_hgo_q31_t *st, q31_t y, mc_hgo_q31_est_t *p_est)
     if (st->n_hist < 2u) {
         st->n_hist += 1u;
     }
+    return MC_HGO_ERR_NONE;
 }

@@ -51,6 +51,8 @@ typedef struct {
     mc_q46_gain_t g2[3];
     mc_q46_gain_t out2;     /**< y_base/(eps z2_base) */
     mc_q46_gain_t out3;     /**< y_base/(eps^2 z3_base) */
+    mc_q46_gain_t in2;      /**< eps z2_base/y_base (reset: z2 to eta2) */
+    mc_q46_gain_t in3;      /**< eps^2 z3_base/y_base (reset: z3 to eta3) */
     uint32_t input_order;
     uint32_t n_hist;
     q31_t y1, y2;           /**< y[k-1], y[k-2] */
@@ -61,10 +63,24 @@ typedef struct {
     q31_t z1, z2, z3;
 } mc_hgo_q31_est_t;
 
+/** Validate cfg (MC_HGO_ERR_* of the f32 kernel on cfg->f, plus
+ *  MC_HGO_ERR_SCALE for a base <= 0 / not finite or an output or reset gain
+ *  out of range), form the coefficients, zero the state. On error st is
+ *  not written. */
 uint32_t mc_hgo_q31_init(mc_hgo_q31_t *st, const mc_hgo_q31_cfg_t *cfg);
-void mc_hgo_q31_reset(mc_hgo_q31_t *st);
-/** The estimate at this sample, then one period ahead (as mc_hgo_f32_step). */
-void mc_hgo_q31_step(mc_hgo_q31_t *st, q31_t y, mc_hgo_q31_est_t *p_est);
+
+/** Set the estimates (z1 in y_base, z2 in z2_base, z3 in z3_base, as
+ *  mc_hgo_f32_reset in engineering units) and forget the past samples.
+ *  eta = (z1, eps z2, eps^2 z3) is formed in Q46 by one gain each (in2,
+ *  in3: one rounding, <= 2^-47 y_base); zeros give the zero state exactly.
+ *  Returns MC_HGO_ERR_NONE, or MC_HGO_ERR_NULL for a NULL st (q31 values
+ *  are finite: no MC_HGO_ERR_NAN_INPUT). */
+uint32_t mc_hgo_q31_reset(mc_hgo_q31_t *st, q31_t z1, q31_t z2, q31_t z3);
+
+/** The estimate at this sample in *p_est, then one period ahead (as
+ *  mc_hgo_f32_step). Returns MC_HGO_ERR_NONE, or MC_HGO_ERR_NULL (st or
+ *  p_est NULL: nothing written); q31 has no non-finite input. */
+uint32_t mc_hgo_q31_step(mc_hgo_q31_t *st, q31_t y, mc_hgo_q31_est_t *p_est);
 
 #ifdef __cplusplus
 }

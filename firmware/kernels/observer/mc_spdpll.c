@@ -73,76 +73,90 @@ uint32_t mc_spdpll_f32_reset(mc_spdpll_f32_t *st, float theta_rad, float omega_r
 #endif
 
 /* The step's last part when the new angle leaves [-pi, pi): the full wrap,
- * out of line so that the common step calls nothing. */
-static SPDPLL_NOINLINE float spdpll_store_wrapped(mc_spdpll_f32_t *st, float theta_next, float w)
+ * out of line so that the common step calls nothing. Returns err. */
+static SPDPLL_NOINLINE uint32_t spdpll_store_wrapped(mc_spdpll_f32_t *st, float theta_next,
+                                                     uint32_t err)
 {
     st->theta_rad = mc_wrap_pi_f32(theta_next);
-    return w;
+    return err;
 }
 
 /* The step for an angle error outside (-pi, pi): input check and full
  * wrap, then the same loop as the common case. */
-static SPDPLL_NOINLINE float spdpll_step_far(mc_spdpll_f32_t *st, float theta_in_rad,
-                                             float e_raw);
+static SPDPLL_NOINLINE uint32_t spdpll_step_far(mc_spdpll_f32_t *st, float theta_in_rad,
+                                                float e_raw, float *p_omega_rad_s);
 
-float mc_spdpll_f32_step(mc_spdpll_f32_t *st, float theta_in_rad)
-{
-    const float e = theta_in_rad - st->theta_rad;
-    float wi;
-    float w;
-    float theta_next;
-    const float lim = st->omega_max_rad_s;
-
-    /* The common case: |e| < pi is its own wrap (and excludes a non-finite
-     * input); anything else is checked and wrapped out of line. */
-    if (!(mc_fabs_f32(e) < MC_PI_F32)) {
-        return spdpll_step_far(st, theta_in_rad, e);
-    }
-    wi = st->omega_i_rad_s + (st->ki_dt_per_s * e);
-    if (mc_fabs_f32(wi) > lim) {
-        st->flags |= MC_SPDPLL_ERR_SAT;
-        wi = mc_sat_f32(wi, -lim, lim);
-    }
-    w = (st->kp_per_s * e) + wi;
-    if (mc_fabs_f32(w) > lim) {
-        st->flags |= MC_SPDPLL_ERR_SAT;
-        w = mc_sat_f32(w, -lim, lim);
-    }
-    st->omega_i_rad_s = wi;
-    st->omega_rad_s = w;
-    theta_next = st->theta_rad + (st->dt_s * w);
-    if (!(mc_fabs_f32(theta_next) < MC_PI_F32)) {
-        return spdpll_store_wrapped(st, theta_next, w);
-    }
-    st->theta_rad = theta_next; /* = mc_wrap_pi_f32(theta_next) */
-    return w;
-}
-
-static SPDPLL_NOINLINE float spdpll_step_far(mc_spdpll_f32_t *st, float theta_in_rad,
-                                             float e_raw)
+uint32_t mc_spdpll_f32_step(mc_spdpll_f32_t *st, float theta_in_rad, float *p_omega_rad_s)
 {
     float e;
     float wi;
     float w;
-    const float lim = st->omega_max_rad_s;
+    float theta_next;
+    float lim;
+    uint32_t err = MC_SPDPLL_ERR_NONE;
 
-    if (!mc_isfinite_f32(theta_in_rad)) {
-        st->flags |= MC_SPDPLL_ERR_NAN_INPUT;
-        return st->omega_rad_s;
+    if ((st == NULL) || (p_omega_rad_s == NULL)) {
+        return MC_SPDPLL_ERR_NULL;
     }
-    e = mc_wrap_pi_f32(e_raw);
+    e = theta_in_rad - st->theta_rad;
+    lim = st->omega_max_rad_s;
+    /* The common case: |e| < pi is its own wrap (and excludes a non-finite
+     * input); anything else is checked and wrapped out of line. */
+    if (!(mc_fabs_f32(e) < MC_PI_F32)) {
+        return spdpll_step_far(st, theta_in_rad, e, p_omega_rad_s);
+    }
     wi = st->omega_i_rad_s + (st->ki_dt_per_s * e);
     if (mc_fabs_f32(wi) > lim) {
         st->flags |= MC_SPDPLL_ERR_SAT;
+        err = MC_SPDPLL_ERR_SAT;
         wi = mc_sat_f32(wi, -lim, lim);
     }
     w = (st->kp_per_s * e) + wi;
     if (mc_fabs_f32(w) > lim) {
         st->flags |= MC_SPDPLL_ERR_SAT;
+        err = MC_SPDPLL_ERR_SAT;
         w = mc_sat_f32(w, -lim, lim);
     }
     st->omega_i_rad_s = wi;
     st->omega_rad_s = w;
+    *p_omega_rad_s = w;
+    theta_next = st->theta_rad + (st->dt_s * w);
+    if (!(mc_fabs_f32(theta_next) < MC_PI_F32)) {
+        return spdpll_store_wrapped(st, theta_next, err);
+    }
+    st->theta_rad = theta_next; /* = mc_wrap_pi_f32(theta_next) */
+    return err;
+}
+
+static SPDPLL_NOINLINE uint32_t spdpll_step_far(mc_spdpll_f32_t *st, float theta_in_rad,
+                                                float e_raw, float *p_omega_rad_s)
+{
+    float e;
+    float wi;
+    float w;
+    uint32_t err = MC_SPDPLL_ERR_NONE;
+    const float lim = st->omega_max_rad_s;
+
+    if (!mc_isfinite_f32(theta_in_rad)) {
+        st->flags |= MC_SPDPLL_ERR_NAN_INPUT;
+        *p_omega_rad_s = st->omega_rad_s;
+        return MC_SPDPLL_ERR_NAN_INPUT;
+    }
+    e = mc_wrap_pi_f32(e_raw);
+    wi = st->omega_i_rad_s + (st->ki_dt_per_s * e);
+    if (mc_fabs_f32(wi) > lim) {
+        err = MC_SPDPLL_ERR_SAT;
+        wi = mc_sat_f32(wi, -lim, lim);
+    }
+    w = (st->kp_per_s * e) + wi;
+    if (mc_fabs_f32(w) > lim) {
+        err = MC_SPDPLL_ERR_SAT;
+        w = mc_sat_f32(w, -lim, lim);
+    }
+    st->flags |= err;
+    st->omega_i_rad_s = wi;
+    st->omega_rad_s = w;
     st->theta_rad = mc_wrap_pi_fast_f32(st->theta_rad + (st->dt_s * w));
-    return w;
+    *p_omega_rad_s = w;
+    return err;
 }

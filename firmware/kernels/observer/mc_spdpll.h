@@ -78,9 +78,14 @@ uint32_t mc_spdpll_f32_init(mc_spdpll_f32_t *st, const mc_spdpll_f32_cfg_t *cfg)
  *  Non-finite: MC_SPDPLL_ERR_NAN_INPUT, nothing changed. */
 uint32_t mc_spdpll_f32_reset(mc_spdpll_f32_t *st, float theta_rad, float omega_rad_s);
 
-/** One step with the new angle; returns the speed estimate [rad/s] (the
- *  last one if the input was refused). */
-float mc_spdpll_f32_step(mc_spdpll_f32_t *st, float theta_in_rad);
+/** One step with the new angle: the speed estimate [rad/s] in
+ *  *p_omega_rad_s (the last one if the input was refused). Returns the bits
+ *  raised by this step: MC_SPDPLL_ERR_NONE, MC_SPDPLL_ERR_SAT (the integral
+ *  or the speed reached +-omega_max and was clamped), MC_SPDPLL_ERR_NAN_INPUT
+ *  (theta_in not finite: refused, state unchanged), both also made sticky in
+ *  st->flags; or MC_SPDPLL_ERR_NULL (st or p_omega_rad_s NULL: nothing
+ *  written). */
+uint32_t mc_spdpll_f32_step(mc_spdpll_f32_t *st, float theta_in_rad, float *p_omega_rad_s);
 
 #ifdef __cplusplus
 }

@@ -61,12 +61,12 @@ uint32_t mc_spdpll_q31_init(mc_spdpll_q31_t *st, const mc_spdpll_q31_cfg_t *cfg)
     return MC_SPDPLL_ERR_NONE;
 }
 
-void mc_spdpll_q31_reset(mc_spdpll_q31_t *st, q31_t theta, q31_t omega)
+uint32_t mc_spdpll_q31_reset(mc_spdpll_q31_t *st, q31_t theta, q31_t omega)
 {
     int64_t w;
 
     if (st == NULL) {
-        return;
+        return MC_SPDPLL_ERR_NULL;
     }
     w = mc_q46_clamp(mc_q46_from_q31(omega), -st->omega_max_q46, st->omega_max_q46);
     st->theta_turn64 = ((uint64_t)(uint32_t)theta) << 32;
@@ -74,36 +74,40 @@ void mc_spdpll_q31_reset(mc_spdpll_q31_t *st, q31_t theta, q31_t omega)
     st->omega_i_q46 = w;
     st->omega = mc_q46_to_q31(w);
     st->flags = MC_SPDPLL_ERR_NONE;
+    return MC_SPDPLL_ERR_NONE;
 }
 
-q31_t mc_spdpll_q31_step(mc_spdpll_q31_t *st, q31_t theta_in)
+uint32_t mc_spdpll_q31_step(mc_spdpll_q31_t *st, q31_t theta_in, q31_t *p_omega)
 {
     q31_t e;
     int64_t wi;
     int64_t w;
     int64_t dz;
+    uint32_t err = MC_SPDPLL_ERR_NONE;
     const int64_t lim = (st != NULL) ? st->omega_max_q46 : 0;
 
-    if (st == NULL) {
-        return 0;
+    if ((st == NULL) || (p_omega == NULL)) {
+        return MC_SPDPLL_ERR_NULL;
     }
     /* wrapped error: modular difference of two turns */
     e = pll_i32((uint32_t)theta_in - (uint32_t)st->theta);
     wi = mc_q46_add(st->omega_i_q46, mc_q46_mul_q31(st->ki_dt, e));
     if ((wi > lim) || (wi < -lim)) {
-        st->flags |= MC_SPDPLL_ERR_SAT;
+        err = MC_SPDPLL_ERR_SAT;
         wi = mc_q46_clamp(wi, -lim, lim);
     }
     w = mc_q46_add(mc_q46_mul_q31(st->kp, e), wi);
     if ((w > lim) || (w < -lim)) {
-        st->flags |= MC_SPDPLL_ERR_SAT;
+        err = MC_SPDPLL_ERR_SAT;
         w = mc_q46_clamp(w, -lim, lim);
     }
+    st->flags |= err;
     st->omega_i_q46 = wi;
     st->omega = mc_q46_to_q31(w);
     /* z1 += dt w, modulo one turn (uint64 arithmetic is modular) */
     dz = mc_q46_mul(st->dz, w);
     st->theta_turn64 += (uint64_t)dz;
     st->theta = pll_angle_of(st->theta_turn64);
-    return st->omega;
+    *p_omega = st->omega;
+    return err;
 }

@@ -56,13 +56,20 @@ typedef struct {
     uint32_t flags;             /**< sticky MC_SPDPLL_ERR_SAT */
 } mc_spdpll_q31_t;
 
+/** Validate cfg (MC_SPDPLL_ERR_* of the f32 kernel on cfg->f, plus
+ *  MC_SPDPLL_ERR_SCALE) and initialise (angle 0, speed 0). On error st is
+ *  not written. */
 uint32_t mc_spdpll_q31_init(mc_spdpll_q31_t *st, const mc_spdpll_q31_cfg_t *cfg);
 
-/** Restart at (theta, omega) (omega clamped), flags cleared. */
-void mc_spdpll_q31_reset(mc_spdpll_q31_t *st, q31_t theta, q31_t omega);
+/** Restart at (theta, omega) (omega clamped), flags cleared. Returns
+ *  MC_SPDPLL_ERR_NONE, or MC_SPDPLL_ERR_NULL for a NULL st. */
+uint32_t mc_spdpll_q31_reset(mc_spdpll_q31_t *st, q31_t theta, q31_t omega);
 
-/** One step with the new angle (q31 turn); returns the speed (q31 pu). */
-q31_t mc_spdpll_q31_step(mc_spdpll_q31_t *st, q31_t theta_in);
+/** One step with the new angle (q31 turn): the speed (q31 pu) in *p_omega.
+ *  Returns the bits raised by this step: MC_SPDPLL_ERR_NONE or
+ *  MC_SPDPLL_ERR_SAT (clamped at +-omega_max, also sticky), or
+ *  MC_SPDPLL_ERR_NULL (st or p_omega NULL: nothing written). */
+uint32_t mc_spdpll_q31_step(mc_spdpll_q31_t *st, q31_t theta_in, q31_t *p_omega);
 
 #ifdef __cplusplus
 }

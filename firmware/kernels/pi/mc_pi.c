@@ -138,15 +138,16 @@ mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, fl
     return r;
 }
 
-float mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, float lim_hi)
+uint32_t mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, float lim_hi,
+                            float *p_out)
 {
     float lo;
     float hi;
     float integ;
     float u;
 
-    if (st == NULL) {
-        return 0.0f;
+    if ((st == NULL) || (p_out == NULL)) {
+        return MC_PI_ERR_NULL;
     }
     /* 0 * (sum) is +-0 when the four are finite (and their sum does not
      * overflow); only then is the test per value skipped. */
@@ -154,13 +155,15 @@ float mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, f
         (!mc_isfinite_f32(error) || !mc_isfinite_f32(ff) || !mc_isfinite_f32(lim_lo) ||
          !mc_isfinite_f32(lim_hi))) {
         st->flags |= MC_PI_ERR_NAN_INPUT;
-        return st->out;
+        *p_out = st->out;
+        return MC_PI_ERR_NAN_INPUT;
     }
     lo = (lim_lo > st->out_min) ? lim_lo : st->out_min;
     hi = (lim_hi < st->out_max) ? lim_hi : st->out_max;
     if (lo > hi) {
         st->flags |= MC_PI_ERR_DYN_LIMIT;
-        return st->out;
+        *p_out = st->out;
+        return MC_PI_ERR_DYN_LIMIT;
     }
 
     /* The arithmetic (anti-windup, clamps) is shared with the FOC's fast
@@ -173,23 +176,25 @@ float mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, f
      * sum is NaN iff one of them is. */
     if ((integ + u) != (integ + u)) {
         st->flags |= MC_PI_ERR_NAN_INPUT;
-        return st->out;
+        *p_out = st->out;
+        return MC_PI_ERR_NAN_INPUT;
     }
     mc_pi_f32_commit(st, error, ff, integ, u);
-    return u;
+    *p_out = u;
+    return MC_PI_ERR_NONE;
 }
 
-float mc_pi_f32_step_ff(mc_pi_f32_t *st, float error, float ff)
+uint32_t mc_pi_f32_step_ff(mc_pi_f32_t *st, float error, float ff, float *p_out)
 {
     if (st == NULL) {
-        return 0.0f;
+        return MC_PI_ERR_NULL;
     }
-    return mc_pi_f32_step_lim(st, error, ff, st->out_min, st->out_max);
+    return mc_pi_f32_step_lim(st, error, ff, st->out_min, st->out_max, p_out);
 }
 
-float mc_pi_f32_step(mc_pi_f32_t *st, float error)
+uint32_t mc_pi_f32_step(mc_pi_f32_t *st, float error, float *p_out)
 {
-    return mc_pi_f32_step_ff(st, error, 0.0f);
+    return mc_pi_f32_step_ff(st, error, 0.0f, p_out);
 }
 
 uint32_t mc_pi_f32_track(mc_pi_f32_t *st, float applied_out)

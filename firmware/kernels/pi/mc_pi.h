@@ -36,9 +36,13 @@
  * then works against the limit actually applied. The integrator clamp stays
  * the static [out_min, out_max].
  *
+ * Return convention (as every kernel's init/reset/step, kernels/README.md):
+ * a step returns the MC_PI_ERR_* bits raised by that call (MC_PI_ERR_NONE =
+ * 0 when it ran) and writes its output to *p_out.
+ *
  * Non-finite input (float kernel): a step whose error, feed-forward or limits
- * are NaN or infinite is refused: the state is not changed, the last output
- * is returned, and the sticky flag MC_PI_ERR_NAN_INPUT is set in st->flags.
+ * are NaN or infinite is refused: the state is not changed, *p_out is the
+ * last output, MC_PI_ERR_NAN_INPUT is returned and made sticky in st->flags.
  * Only mc_pi_f32_reset() clears the sticky flags.
  *
  * Bumpless gain change: mc_pi_f32_set_gains() moves the integrator by
@@ -133,19 +137,26 @@ uint32_t mc_pi_f32_init(mc_pi_f32_t *st, const mc_pi_f32_cfg_t *cfg);
  */
 uint32_t mc_pi_f32_reset(mc_pi_f32_t *st, float integrator_preset);
 
-/** One step without feed-forward, static limits. */
-float mc_pi_f32_step(mc_pi_f32_t *st, float error);
+/**
+ * One step without feed-forward, static limits: the output [out] in *p_out.
+ * Returns MC_PI_ERR_NONE, MC_PI_ERR_NAN_INPUT (refused, see the file
+ * comment) or MC_PI_ERR_NULL (st or p_out NULL: nothing written).
+ */
+uint32_t mc_pi_f32_step(mc_pi_f32_t *st, float error, float *p_out);
 
-/** One step with a feed-forward term added before the limits. */
-float mc_pi_f32_step_ff(mc_pi_f32_t *st, float error, float ff);
+/** One step with a feed-forward term added before the limits; returns as
+ *  mc_pi_f32_step. */
+uint32_t mc_pi_f32_step_ff(mc_pi_f32_t *st, float error, float ff, float *p_out);
 
 /**
  * One step with feed-forward and dynamic limits [lim_lo, lim_hi] (intersected
  * with the static limits). The anti-windup works against the limit actually
  * applied. lim_lo > lim_hi (after intersection) is refused: state unchanged,
- * last output returned, sticky MC_PI_ERR_DYN_LIMIT set.
+ * *p_out the last output, MC_PI_ERR_DYN_LIMIT returned and made sticky.
+ * Otherwise returns as mc_pi_f32_step.
  */
-float mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, float lim_hi);
+uint32_t mc_pi_f32_step_lim(mc_pi_f32_t *st, float error, float ff, float lim_lo, float lim_hi,
+                            float *p_out);
 
 /**
  * Tell the PI the output actually applied after its last step, when a later

@@ -96,16 +96,16 @@ uint32_t mc_pi_q31_init(mc_pi_q31_t *st, const mc_pi_q31_cfg_t *cfg)
     st->out_min = cfg->out_min;
     st->out_max = cfg->out_max;
     st->aw = cfg->aw;
-    mc_pi_q31_reset(st, 0);
+    (void)mc_pi_q31_reset(st, 0);
     return MC_PI_ERR_NONE;
 }
 
-void mc_pi_q31_reset(mc_pi_q31_t *st, q31_t integrator_preset)
+uint32_t mc_pi_q31_reset(mc_pi_q31_t *st, q31_t integrator_preset)
 {
     q31_t v;
 
     if (st == NULL) {
-        return;
+        return MC_PI_ERR_NULL;
     }
     v = mc_q31_sat(integrator_preset, st->out_min, st->out_max);
     st->integ_q46 = pi_q46_from_q31(v);
@@ -113,9 +113,11 @@ void mc_pi_q31_reset(mc_pi_q31_t *st, q31_t integrator_preset)
     st->last_error = 0;
     st->last_ff = 0;
     st->flags = MC_PI_ERR_NONE;
+    return MC_PI_ERR_NONE;
 }
 
-q31_t mc_pi_q31_step_lim(mc_pi_q31_t *st, q31_t error, q31_t ff, q31_t lim_lo, q31_t lim_hi)
+uint32_t mc_pi_q31_step_lim(mc_pi_q31_t *st, q31_t error, q31_t ff, q31_t lim_lo, q31_t lim_hi,
+                            q31_t *p_out)
 {
     q31_t lo;
     q31_t hi;
@@ -127,14 +129,15 @@ q31_t mc_pi_q31_step_lim(mc_pi_q31_t *st, q31_t error, q31_t ff, q31_t lim_lo, q
     int64_t integ;
     int64_t u46;
 
-    if (st == NULL) {
-        return 0;
+    if ((st == NULL) || (p_out == NULL)) {
+        return MC_PI_ERR_NULL;
     }
     lo = (lim_lo > st->out_min) ? lim_lo : st->out_min;
     hi = (lim_hi < st->out_max) ? lim_hi : st->out_max;
     if (lo > hi) {
         st->flags |= MC_PI_ERR_DYN_LIMIT;
-        return st->out;
+        *p_out = st->out;
+        return MC_PI_ERR_DYN_LIMIT;
     }
     lo46 = pi_q46_from_q31(lo);
     hi46 = pi_q46_from_q31(hi);
@@ -170,20 +173,21 @@ q31_t mc_pi_q31_step_lim(mc_pi_q31_t *st, q31_t error, q31_t ff, q31_t lim_lo, q
     st->out = mc_q31_sat(pi_q31_from_q46(u46), lo, hi);
     st->last_error = error;
     st->last_ff = ff;
-    return st->out;
+    *p_out = st->out;
+    return MC_PI_ERR_NONE;
 }
 
-q31_t mc_pi_q31_step_ff(mc_pi_q31_t *st, q31_t error, q31_t ff)
+uint32_t mc_pi_q31_step_ff(mc_pi_q31_t *st, q31_t error, q31_t ff, q31_t *p_out)
 {
     if (st == NULL) {
-        return 0;
+        return MC_PI_ERR_NULL;
     }
-    return mc_pi_q31_step_lim(st, error, ff, st->out_min, st->out_max);
+    return mc_pi_q31_step_lim(st, error, ff, st->out_min, st->out_max, p_out);
 }
 
-q31_t mc_pi_q31_step(mc_pi_q31_t *st, q31_t error)
+uint32_t mc_pi_q31_step(mc_pi_q31_t *st, q31_t error, q31_t *p_out)
 {
-    return mc_pi_q31_step_ff(st, error, 0);
+    return mc_pi_q31_step_ff(st, error, 0, p_out);
 }
 
 uint32_t mc_pi_q31_set_gains(mc_pi_q31_t *st, q31_t kp_mant, int32_t kp_shift,

@@ -77,21 +77,26 @@ uint32_t mc_pi_q31_cfg_from_f32(const mc_pi_f32_cfg_t *cfg, float err_base, floa
 /** Validate cfg and initialise st (integrator 0). On error st is not written. */
 uint32_t mc_pi_q31_init(mc_pi_q31_t *st, const mc_pi_q31_cfg_t *cfg);
 
-/** Integrator and last output to preset (clamped), last error/ff 0, flags cleared. */
-void mc_pi_q31_reset(mc_pi_q31_t *st, q31_t integrator_preset);
+/** Integrator and last output to preset (clamped), last error/ff 0, flags
+ *  cleared. Returns MC_PI_ERR_NONE, or MC_PI_ERR_NULL for a NULL st. */
+uint32_t mc_pi_q31_reset(mc_pi_q31_t *st, q31_t integrator_preset);
 
-/** One step, no feed-forward, static limits. */
-q31_t mc_pi_q31_step(mc_pi_q31_t *st, q31_t error);
+/** One step, no feed-forward, static limits: the output (per unit) in
+ *  *p_out. Returns MC_PI_ERR_NONE or MC_PI_ERR_NULL (st or p_out NULL:
+ *  nothing written); q31 has no non-finite input. */
+uint32_t mc_pi_q31_step(mc_pi_q31_t *st, q31_t error, q31_t *p_out);
 
-/** One step with feed-forward. */
-q31_t mc_pi_q31_step_ff(mc_pi_q31_t *st, q31_t error, q31_t ff);
+/** One step with feed-forward; returns as mc_pi_q31_step. */
+uint32_t mc_pi_q31_step_ff(mc_pi_q31_t *st, q31_t error, q31_t ff, q31_t *p_out);
 
 /**
  * One step with feed-forward and dynamic limits (intersected with the static
- * ones); lim_lo > lim_hi is refused (state unchanged, last output returned,
- * sticky MC_PI_ERR_DYN_LIMIT).
+ * ones); lim_lo > lim_hi is refused (state unchanged, *p_out the last output,
+ * MC_PI_ERR_DYN_LIMIT returned and made sticky). Otherwise returns as
+ * mc_pi_q31_step.
  */
-q31_t mc_pi_q31_step_lim(mc_pi_q31_t *st, q31_t error, q31_t ff, q31_t lim_lo, q31_t lim_hi);
+uint32_t mc_pi_q31_step_lim(mc_pi_q31_t *st, q31_t error, q31_t ff, q31_t lim_lo, q31_t lim_hi,
+                            q31_t *p_out);
 
 /** Bumpless gain change (mantissa/shift as in the config); on error nothing changes. */
 uint32_t mc_pi_q31_set_gains(mc_pi_q31_t *st, q31_t kp_mant, int32_t kp_shift,

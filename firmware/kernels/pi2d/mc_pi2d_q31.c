@@ -101,27 +101,21 @@ uint32_t mc_pi2d_q31_init(mc_pi2d_q31_t *st, const mc_pi2d_q31_cfg_t *cfg)
         return MC_PI2D_ERR_SCALE; /* a limit below one LSB of its base */
     }
     t.nu_q46 = 0;
-    {
-        const mc_pi2d_q31_out_t zero = {0};
-        t.last = zero;
-    }
     *st = t;
     return MC_PI2D_ERR_NONE;
 }
 
-void mc_pi2d_q31_reset(mc_pi2d_q31_t *st, q31_t qc0, q31_t nu0)
+uint32_t mc_pi2d_q31_reset(mc_pi2d_q31_t *st, q31_t qc0, q31_t nu0)
 {
-    const mc_pi2d_q31_out_t zero = {0};
-
     if (st == NULL) {
-        return;
+        return MC_PI2D_ERR_NULL;
     }
-    mc_ddiff_q31_reset(&st->dd, qc0);
+    (void)mc_ddiff_q31_reset(&st->dd, qc0);
     st->nu_q46 = mc_q46_clamp(mc_q46_from_q31(nu0), -st->nu_max_q46, st->nu_max_q46);
-    st->last = zero;
+    return MC_PI2D_ERR_NONE;
 }
 
-void mc_pi2d_q31_step(mc_pi2d_q31_t *st, const mc_pi2d_q31_in_t *in, mc_pi2d_q31_out_t *out)
+uint32_t mc_pi2d_q31_step(mc_pi2d_q31_t *st, const mc_pi2d_q31_in_t *in, mc_pi2d_q31_out_t *out)
 {
     mc_pi2d_q31_out_t o;
     q31_t e4;
@@ -134,12 +128,12 @@ void mc_pi2d_q31_step(mc_pi2d_q31_t *st, const mc_pi2d_q31_in_t *in, mc_pi2d_q31
     bool iq_lim;
     bool v_lim;
 
-    if ((st == NULL) || (in == NULL)) {
-        return;
+    if ((st == NULL) || (in == NULL) || (out == NULL)) {
+        return MC_PI2D_ERR_NULL;
     }
     /* Position error and its dirty derivative, (11)-(12). */
     e4 = mc_q31_sub_sat(in->theta_m, in->theta_ref);
-    th = mc_ddiff_q31_step(&st->dd, e4);
+    (void)mc_ddiff_q31_step(&st->dd, e4, &th);
 
     /* x2* (8) and its clamp. */
     iq_raw = mc_q46_mul(st->g_iq_nu, st->nu_q46);
@@ -189,8 +183,6 @@ void mc_pi2d_q31_step(mc_pi2d_q31_t *st, const mc_pi2d_q31_in_t *in, mc_pi2d_q31
         nu = mc_q46_add(nu, mc_q46_mul_q31(st->g_nu_th, th));
         st->nu_q46 = mc_q46_clamp(nu, -st->nu_max_q46, st->nu_max_q46);
     }
-    st->last = o;
-    if (out != NULL) {
-        *out = o;
-    }
+    *out = o;
+    return MC_PI2D_ERR_NONE;
 }

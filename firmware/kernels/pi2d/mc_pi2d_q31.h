@@ -98,16 +98,24 @@ typedef struct {
     mc_q46_gain_t g_nu_e4, g_nu_th;
     int64_t iq_max_q46, v_max_q46, nu_max_q46;
     int64_t nu_q46;             /**< load estimate (Q46 of nu_base) */
-    mc_pi2d_q31_out_t last;
 } mc_pi2d_q31_t;
 
+/** Validate cfg (MC_PI2D_ERR_* of mc_pi2d_f32_init on cfg->f, plus
+ *  MC_PI2D_ERR_SCALE) and initialise st (q_c = 0, nu = 0). Returns the OR of
+ *  the rules broken; on error st is not written. */
 uint32_t mc_pi2d_q31_init(mc_pi2d_q31_t *st, const mc_pi2d_q31_cfg_t *cfg);
 
-/** q_c (thetaf_base) and nu (nu_base, clamped) preset. */
-void mc_pi2d_q31_reset(mc_pi2d_q31_t *st, q31_t qc0, q31_t nu0);
+/** Preset q_c (thetaf_base) and nu (nu_base, clamped to +-nu_max). Returns
+ *  MC_PI2D_ERR_NONE, or MC_PI2D_ERR_NULL for a NULL st (q31 values are
+ *  always finite: no MC_PI2D_ERR_NAN_INPUT). */
+uint32_t mc_pi2d_q31_reset(mc_pi2d_q31_t *st, q31_t qc0, q31_t nu0);
 
-/** One control step; out may be NULL (st->last holds the result). */
-void mc_pi2d_q31_step(mc_pi2d_q31_t *st, const mc_pi2d_q31_in_t *in, mc_pi2d_q31_out_t *out);
+/** One control step, as mc_pi2d_f32_step: out is the only place the outputs
+ *  are written (the kernel keeps no copy). Returns MC_PI2D_ERR_NONE, or
+ *  MC_PI2D_ERR_NULL when st, in or out is NULL (nothing written). q31 inputs
+ *  are always finite and every sum saturates: no MC_PI2D_ERR_NAN_INPUT. */
+uint32_t mc_pi2d_q31_step(mc_pi2d_q31_t *st, const mc_pi2d_q31_in_t *in,
+                          mc_pi2d_q31_out_t *out);
 
 #ifdef __cplusplus
 }

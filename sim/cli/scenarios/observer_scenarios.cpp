@@ -442,7 +442,9 @@ void run_ii(RunContext& ctx) {
     const double tau_avg = first ? tau_now : 0.5 * (tau_now + tau_prev);
     tau_prev = tau_now;
     mc_iiobs_f32_step(&ii, static_cast<float>(th), static_cast<float>(tau_avg));
-    const double wp = mc_spdpll_f32_step(&pll, static_cast<float>(th));
+    float wp_f = 0.0f;
+    (void)mc_spdpll_f32_step(&pll, static_cast<float>(th), &wp_f);
+    const double wp = wp_f;
     if (first) {
       th_prev = th;
       first = false;

@@ -323,8 +323,9 @@ MotorMetrics run_motor(const MotorOptions& o, bool use_pi2d, double duration_s,
             }
             th_prev = th;
             have_prev = true;
-            const float iq_ref = mc_pi_f32_step_ff(
-                &spi, static_cast<float>(r.w - w_f), static_cast<float>(o.J_kgm2 * r.a / kt));
+            float iq_ref = 0.0f;
+            (void)mc_pi_f32_step_ff(&spi, static_cast<float>(r.w - w_f),
+                                    static_cast<float>(o.J_kgm2 * r.a / kt), &iq_ref);
             if (mc_drive_set_current_ref(&d, 0.0f, iq_ref) != 0) throw std::runtime_error("iq ref");
           }
         },

@@ -241,9 +241,15 @@ static void fam_pi(kv_state_t *st, const rec_t *in, rec_t *out)
     const float ff = in_f32(in, 1);
     const float lo = in_f32(in, 2);
     const float hi = in_f32(in, 3);
-    out_f32(out, mc_pi_f32_step_lim(&st->clamp, e, ff, lo, hi));
-    out_f32(out, mc_pi_f32_step_lim(&st->back_calc, e, ff, lo, hi));
-    out_q31(out, mc_pi_q31_step_ff(&st->q, in_q31(in, 4), in_q31(in, 5)));
+    float u_clamp = 0.0f;
+    float u_back_calc = 0.0f;
+    q31_t u_q = 0;
+    (void)mc_pi_f32_step_lim(&st->clamp, e, ff, lo, hi, &u_clamp);
+    out_f32(out, u_clamp);
+    (void)mc_pi_f32_step_lim(&st->back_calc, e, ff, lo, hi, &u_back_calc);
+    out_f32(out, u_back_calc);
+    (void)mc_pi_q31_step_ff(&st->q, in_q31(in, 4), in_q31(in, 5), &u_q);
+    out_q31(out, u_q);
     out_f32(out, st->clamp.integ);
     out_f32(out, st->back_calc.integ);
     out_u32(out, st->clamp.flags | (st->back_calc.flags << 16));
@@ -309,7 +315,9 @@ static void fam_observer(kv_state_t *st, const rec_t *in, rec_t *out)
     out_f32(out, st->fluxobs.x_beta_wb);
     out_f32(out, st->fluxobs.resid);
     out_u32(out, st->fluxobs.flags);
-    out_f32(out, mc_spdpll_f32_step(&st->pll, st->fluxobs.theta_e_rad));
+    float omega_hat = 0.0f;
+    (void)mc_spdpll_f32_step(&st->pll, st->fluxobs.theta_e_rad, &omega_hat);
+    out_f32(out, omega_hat);
     out_f32(out, st->pll.theta_rad);
     out_f32(out, st->pll.omega_i_rad_s);
     out_u32(out, st->pll.flags);
@@ -336,10 +344,13 @@ static void fam_filters(kv_state_t *st, const rec_t *in, rec_t *out)
         rst |= mc_ddiff_f32_reset(&st->dd_motor, in_f32(in, 2)) << 8;
     }
     out_u32(out, rst);
-    out_f32(out, mc_ddiff_f32_step(&st->dd_paper, y));
+    float th = 0.0f;
+    (void)mc_ddiff_f32_step(&st->dd_paper, y, &th);
+    out_f32(out, th);
     out_f32(out, mc_ddiff_f32_q(&st->dd_paper));
     out_u32(out, st->dd_paper.flags);
-    out_f32(out, mc_ddiff_f32_step(&st->dd_motor, y));
+    (void)mc_ddiff_f32_step(&st->dd_motor, y, &th);
+    out_f32(out, th);
     out_f32(out, mc_ddiff_f32_q(&st->dd_motor));
     out_u32(out, st->dd_motor.flags);
 }

@@ -120,4 +120,29 @@ TEST(IdentL, OutsideTheDomain) {
   EXPECT_EQ(0.0f, est);
 }
 
+// Return convention (kernels/README.md): reset and step return the bits the
+// call raised; a NULL accumulator is MC_IDENT_ERR_NULL.
+TEST(IdentAccumulators, ResetAndStepReturnTheirBits) {
+  mc_ident_avg_f32_t a;
+  mc_ident_line_f32_t l;
+  mc_ident_circ_f32_t c;
+  EXPECT_EQ(MC_IDENT_ERR_NONE, mc_ident_avg_f32_reset(&a));
+  EXPECT_EQ(MC_IDENT_ERR_NONE, mc_ident_line_f32_reset(&l));
+  EXPECT_EQ(MC_IDENT_ERR_NONE, mc_ident_circ_f32_reset(&c));
+  EXPECT_EQ(MC_IDENT_ERR_NULL, mc_ident_avg_f32_reset(nullptr));
+  EXPECT_EQ(MC_IDENT_ERR_NULL, mc_ident_line_f32_reset(nullptr));
+  EXPECT_EQ(MC_IDENT_ERR_NULL, mc_ident_circ_f32_reset(nullptr));
+  EXPECT_EQ(MC_IDENT_ERR_NULL, mc_ident_avg_f32_step(nullptr, 1.0f));
+  EXPECT_EQ(MC_IDENT_ERR_NULL, mc_ident_line_f32_step(nullptr, 1.0f, 2.0f));
+  EXPECT_EQ(MC_IDENT_ERR_NULL, mc_ident_circ_f32_step(nullptr, 1.0f));
+  EXPECT_EQ(MC_IDENT_ERR_NAN, mc_ident_line_f32_step(&l, kNaN, 2.0f));
+  EXPECT_EQ(MC_IDENT_ERR_NAN, mc_ident_circ_f32_step(&c, kNaN));
+  EXPECT_EQ(0u, l.sx.n);  // refused samples are not added
+  EXPECT_EQ(0u, c.s.n);
+  EXPECT_EQ(MC_IDENT_ERR_NONE, mc_ident_line_f32_step(&l, 1.0f, 2.0f));
+  EXPECT_EQ(MC_IDENT_ERR_NONE, mc_ident_circ_f32_step(&c, 1.0f));
+  EXPECT_EQ(1u, l.sx.n);
+  EXPECT_EQ(1u, c.s.n);
+}
+
 }  // namespace

@@ -526,11 +526,20 @@ TEST(CsmcHgo, RejectsBadConfigAndNanInput) {
   c = hgo_cfg(1e-4, 1e-4, 2u);
   ASSERT_EQ(mc_hgo_f32_init(&st, &c), MC_HGO_ERR_NONE);
   mc_hgo_f32_est_t e{};
-  mc_hgo_f32_step(&st, 0.1f, &e);
+  EXPECT_EQ(mc_hgo_f32_step(&st, 0.1f, &e), MC_HGO_ERR_NONE);
   const float eta0 = st.z[0];
-  mc_hgo_f32_step(&st, std::nanf(""), &e);
+  // Refused: the bit returned and made sticky, the current estimate written.
+  EXPECT_EQ(mc_hgo_f32_step(&st, std::nanf(""), &e), MC_HGO_ERR_NAN_INPUT);
   EXPECT_EQ(st.flags, MC_HGO_ERR_NAN_INPUT);
   EXPECT_EQ(st.z[0], eta0);
+  EXPECT_EQ(e.z1, eta0);
+  // NULL state or estimate: MC_HGO_ERR_NULL, nothing written.
+  const mc_hgo_f32_t kept = st;
+  mc_hgo_f32_est_t e_null{42.0f, 42.0f, 42.0f};
+  EXPECT_EQ(mc_hgo_f32_step(nullptr, 0.1f, &e_null), MC_HGO_ERR_NULL);
+  EXPECT_EQ(e_null.z1, 42.0f);
+  EXPECT_EQ(mc_hgo_f32_step(&st, 0.1f, nullptr), MC_HGO_ERR_NULL);
+  EXPECT_EQ(std::memcmp(&st, &kept, sizeof st), 0);
   EXPECT_EQ(mc_hgo_f32_reset(&st, 0.0f, std::nanf(""), 0.0f), MC_HGO_ERR_NAN_INPUT);
   EXPECT_EQ(mc_hgo_f32_reset(&st, 0.0f, 0.0f, 0.0f), MC_HGO_ERR_NONE);
   EXPECT_EQ(st.flags, MC_HGO_ERR_NONE);
@@ -700,19 +709,31 @@ TEST(CsmcLaw, RejectsBadConfigAndNanInput) {
   mc_csmc_f32_in_t in{};
   in.e1_a = 0.02f;
   mc_csmc_f32_out_t o{};
-  mc_csmc_f32_step(&st, &in, &o);
+  EXPECT_EQ(mc_csmc_f32_step(&st, &in, &o), MC_CSMC_ERR_NONE);
   float sg[MC_CSVC_MAX_ORDER];
   mc_csvc_f32_sigma(&st.sigma1, sg);
   const float sig = sg[0];
   const mc_csmc_f32_out_t last = o;
   in.e2_rad = std::nanf("");
-  mc_csmc_f32_step(&st, &in, &o);
+  EXPECT_EQ(mc_csmc_f32_step(&st, &in, &o), MC_CSMC_ERR_NAN_INPUT);
   EXPECT_EQ(st.flags, MC_CSMC_ERR_NAN_INPUT);
   EXPECT_EQ(o.v_d_v, last.v_d_v);
   mc_csvc_f32_sigma(&st.sigma1, sg);
   EXPECT_EQ(sg[0], sig);
-  mc_csmc_f32_reset(&st);
+  // NULL pointers: MC_CSMC_ERR_NULL, nothing written.
+  in.e2_rad = 0.0f;
+  mc_csmc_f32_out_t o_null{42.0f, 42.0f, 42.0f, 42.0f};
+  EXPECT_EQ(mc_csmc_f32_step(nullptr, &in, &o_null), MC_CSMC_ERR_NULL);
+  EXPECT_EQ(mc_csmc_f32_step(&st, nullptr, &o_null), MC_CSMC_ERR_NULL);
+  EXPECT_EQ(o_null.v_d_v, 42.0f);
+  EXPECT_EQ(mc_csmc_f32_step(&st, &in, nullptr), MC_CSMC_ERR_NULL);
+  mc_csvc_f32_sigma(&st.sigma1, sg);
+  EXPECT_EQ(sg[0], sig);
+  EXPECT_EQ(mc_csmc_f32_reset(&st), MC_CSMC_ERR_NONE);
   EXPECT_EQ(st.flags, MC_CSMC_ERR_NONE);
+  EXPECT_EQ(mc_csmc_f32_reset(nullptr), MC_CSMC_ERR_NULL);
+  EXPECT_EQ(mc_csvc_f32_reset(&st.sigma1), MC_CSVC_ERR_NONE);
+  EXPECT_EQ(mc_csvc_f32_reset(nullptr), MC_CSVC_ERR_NULL);
 }
 
 TEST(CsmcLaw, ErrorsFromState) {
@@ -865,8 +886,9 @@ TEST(CsmcHgoStep, NonFiniteInputChangesNothing) {
       EXPECT_EQ(mc_csmc_hgo_f32_step(&st, 0.01f, 1e-4f, nullptr, &o), MC_CSMC_ERR_NULL);
       model.omega_m_rad_s = 0.0f;
     }
-    mc_csmc_hgo_f32_reset(&st);
+    EXPECT_EQ(mc_csmc_hgo_f32_reset(&st), MC_CSMC_ERR_NONE);
     EXPECT_EQ(st.law.flags, 0u);
+    EXPECT_EQ(mc_csmc_hgo_f32_reset(nullptr), MC_CSMC_ERR_NULL);
     EXPECT_EQ(mc_csmc_hgo_f32_step(&st, 0.01f, 1e-4f, &model, &o), MC_CSMC_ERR_NONE);
   }
 }

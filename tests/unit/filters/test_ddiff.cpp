@@ -21,6 +21,13 @@ mc_ddiff_f32_t make(float a, float b, float dt) {
   return st;
 }
 
+// The step's output theta_f; the step must have run (MC_DDIFF_ERR_NONE).
+float step(mc_ddiff_f32_t* st, float y) {
+  float th = NAN;
+  EXPECT_EQ(mc_ddiff_f32_step(st, y, &th), MC_DDIFF_ERR_NONE);
+  return th;
+}
+
 std::complex<double> h_cont(double a, double b, double w) {
   const std::complex<double> s(0.0, w);
   return b * s / (s + a);
@@ -37,7 +44,7 @@ std::complex<double> measured_gain(float a, float b, float dt, double w) {
   double ss = 0, sc = 0, cc = 0, ys = 0, yc = 0;
   for (long k = 0; k < skip + cycles * per; ++k) {
     const double t = k * dt;
-    const float y = mc_ddiff_f32_step(&st, static_cast<float>(std::sin(w * t)));
+    const float y = step(&st, static_cast<float>(std::sin(w * t)));
     if (k >= skip) {
       const double s = std::sin(w * t), c = std::cos(w * t);
       ss += s * s; sc += s * c; cc += c * c; ys += y * s; yc += y * c;
@@ -73,7 +80,7 @@ TEST(Ddiff, LowFrequencyGainIsBOverATimesDerivative) {
   const float a = 200.0f, b = 3.0f, dt = 1.0e-4f, v = 2.5f;
   mc_ddiff_f32_t st = make(a, b, dt);
   float out = 0.0f;
-  for (int k = 0; k < 20000; ++k) out = mc_ddiff_f32_step(&st, v * static_cast<float>(k) * dt);
+  for (int k = 0; k < 20000; ++k) out = step(&st, v * static_cast<float>(k) * dt);
   // Float rounding only: theta is the state (size 0.0375, ulp 3.7e-9) and
   // y enters by its increment (rounded to ulp(5) = 4.8e-7 relative to
   // g = 3/1.01): one rounding per step decays with c_q = 1 - a dt, so at
@@ -86,12 +93,12 @@ TEST(Ddiff, FirstStepIsPresetPlusBY) {
   mc_ddiff_f32_t st = make(10.0f, 4.0f, 1e-3f);
   ASSERT_EQ(mc_ddiff_f32_reset(&st, 0.25f), MC_DDIFF_ERR_NONE);
   // No integration on the first sample: q0 + b y exactly.
-  EXPECT_EQ(mc_ddiff_f32_step(&st, 0.5f), 0.25f + 4.0f * 0.5f);
+  EXPECT_EQ(step(&st, 0.5f), 0.25f + 4.0f * 0.5f);
   // Second step is one trapezoidal step of (11): q1 = c_q q0 - c_y (y1 + y0),
   // c_y = (a b dt/2)/(1 + a dt/2).
   const float h = 0.5f * 10.0f * 1e-3f;
   const float q1 = (1.0f - h) / (1.0f + h) * 0.25f - (h * 4.0f) / (1.0f + h) * (0.5f + 0.5f);
-  EXPECT_NEAR(mc_ddiff_f32_step(&st, 0.5f), q1 + 2.0f, 1e-6f);
+  EXPECT_NEAR(step(&st, 0.5f), q1 + 2.0f, 1e-6f);
 }
 
 TEST(Ddiff, StepResponseMatchesContinuousFilter) {
@@ -101,9 +108,9 @@ TEST(Ddiff, StepResponseMatchesContinuousFilter) {
   // (exp(-a (t - dt/2)) correction) and an O((a dt)^2) tolerance.
   const float a = 20.0f, b = 2.0f, dt = 1.0e-3f;
   mc_ddiff_f32_t st = make(a, b, dt);
-  mc_ddiff_f32_step(&st, 0.0f);
+  (void)step(&st, 0.0f);
   for (int k = 1; k < 300; ++k) {
-    const float out = mc_ddiff_f32_step(&st, 1.0f);
+    const float out = step(&st, 1.0f);
     const double t = (k - 0.5) * dt;
     if (k >= 5) {
       // (a dt)^2 = 4e-4 relative error of the discrete pole, times b.
@@ -128,15 +135,34 @@ TEST(Ddiff, InitRejectsBadConfigAndLeavesStateAlone) {
 
 TEST(Ddiff, NonFiniteInputIsRefusedAndSticky) {
   mc_ddiff_f32_t st = make(10.0f, 1.0f, 1e-3f);
-  const float y1 = mc_ddiff_f32_step(&st, 0.1f);
-  EXPECT_EQ(mc_ddiff_f32_step(&st, NAN), y1);
-  EXPECT_EQ(mc_ddiff_f32_step(&st, INFINITY), y1);
+  const float y1 = step(&st, 0.1f);
+  // Refused: the bit returned (and made sticky), the last output written.
+  float th = 0.0f;
+  EXPECT_EQ(mc_ddiff_f32_step(&st, NAN, &th), MC_DDIFF_ERR_NAN_INPUT);
+  EXPECT_EQ(th, y1);
+  th = 0.0f;
+  EXPECT_EQ(mc_ddiff_f32_step(&st, INFINITY, &th), MC_DDIFF_ERR_NAN_INPUT);
+  EXPECT_EQ(th, y1);
   EXPECT_NE(st.flags & MC_DDIFF_ERR_NAN_INPUT, 0u);
-  mc_ddiff_f32_step(&st, 0.1f);
+  (void)step(&st, 0.1f);
   EXPECT_NE(st.flags & MC_DDIFF_ERR_NAN_INPUT, 0u);
   EXPECT_EQ(mc_ddiff_f32_reset(&st, NAN), MC_DDIFF_ERR_NAN_INPUT);
   EXPECT_EQ(mc_ddiff_f32_reset(&st, 0.0f), MC_DDIFF_ERR_NONE);
   EXPECT_EQ(st.flags, 0u);
+}
+
+TEST(Ddiff, NullPointersAreRefusedAndNothingIsWritten) {
+  mc_ddiff_f32_t st = make(10.0f, 1.0f, 1e-3f);
+  (void)step(&st, 0.1f);
+  const float out_before = st.out;
+  const float y_before = st.y_prev;
+  float th = 42.0f;
+  EXPECT_EQ(mc_ddiff_f32_step(nullptr, 0.2f, &th), MC_DDIFF_ERR_NULL);
+  EXPECT_EQ(th, 42.0f);
+  EXPECT_EQ(mc_ddiff_f32_step(&st, 0.2f, nullptr), MC_DDIFF_ERR_NULL);
+  EXPECT_EQ(st.out, out_before);
+  EXPECT_EQ(st.y_prev, y_before);
+  EXPECT_EQ(mc_ddiff_f32_reset(nullptr, 0.0f), MC_DDIFF_ERR_NULL);
 }
 
 }  // namespace

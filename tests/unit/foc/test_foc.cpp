@@ -335,9 +335,10 @@ TEST(FocF32, NonFiniteInputGivesZeroVoltageAndKeepsIntegrators)
     EXPECT_EQ(mc_foc_f32_step_dq(&st, 1.0f, 5.0f, 0.0f, 0.0f, 100.0f, 24.0f, &vd, &vq),
               MC_FOC_ERR_NONE);
     EXPECT_EQ(st.flags, MC_FOC_ERR_NAN_INPUT | MC_FOC_ERR_VBUS | MC_FOC_ERR_PI);
-    mc_foc_f32_reset(&st);
+    EXPECT_EQ(mc_foc_f32_reset(&st), MC_FOC_ERR_NONE);
     EXPECT_EQ(st.flags, MC_FOC_ERR_NONE);
     EXPECT_EQ(st.pi_d.integ, 0.0f);
+    EXPECT_EQ(mc_foc_f32_reset(nullptr), MC_FOC_ERR_NULL);
 
     // The whole step: duties exactly 0.5, integrators untouched.
     ASSERT_EQ(mc_foc_f32_init(&st, &c), MC_FOC_ERR_NONE);

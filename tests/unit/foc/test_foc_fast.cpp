@@ -53,10 +53,15 @@ uint32_t RefDq(mc_foc_f32_t* st, float id_ref, float iq_ref, float id, float iq,
   const mc_pi_f32_t q_saved = st->pi_q;
   st->pi_d.flags = MC_PI_ERR_NONE;
   st->pi_q.flags = MC_PI_ERR_NONE;
-  const float vd = mc_pi_f32_step_lim(&st->pi_d, id_ref - id, ff_d, -v_max, v_max);
+  float vd = 0.0f;
+  float vq = 0.0f;
+  const uint32_t err_d = mc_pi_f32_step_lim(&st->pi_d, id_ref - id, ff_d, -v_max, v_max, &vd);
   const float room = (v_max * v_max) - (vd * vd);
   const float vq_max = (room > 0.0f) ? mc_sqrt_f32(room) : 0.0f;
-  const float vq = mc_pi_f32_step_lim(&st->pi_q, iq_ref - iq, ff_q, -vq_max, vq_max);
+  const uint32_t err_q = mc_pi_f32_step_lim(&st->pi_q, iq_ref - iq, ff_q, -vq_max, vq_max, &vq);
+  // A step's return value is the flags it raised (kernels/README.md).
+  EXPECT_EQ(err_d, st->pi_d.flags);
+  EXPECT_EQ(err_q, st->pi_q.flags);
   if ((st->pi_d.flags | st->pi_q.flags) != MC_PI_ERR_NONE) {
     st->pi_d = d_saved;
     st->pi_q = q_saved;

@@ -66,6 +66,43 @@ struct RefPi {
     }
 };
 
+// A step's output through its out-pointer; the step must have run
+// (MC_PI_ERR_NONE). Refusals are tested with the kernel calls themselves.
+float Step(mc_pi_f32_t *st, float e)
+{
+    float u = kNaN;
+    EXPECT_EQ(mc_pi_f32_step(st, e, &u), MC_PI_ERR_NONE);
+    return u;
+}
+
+float StepFf(mc_pi_f32_t *st, float e, float ff)
+{
+    float u = kNaN;
+    EXPECT_EQ(mc_pi_f32_step_ff(st, e, ff, &u), MC_PI_ERR_NONE);
+    return u;
+}
+
+float StepLim(mc_pi_f32_t *st, float e, float ff, float lo, float hi)
+{
+    float u = kNaN;
+    EXPECT_EQ(mc_pi_f32_step_lim(st, e, ff, lo, hi, &u), MC_PI_ERR_NONE);
+    return u;
+}
+
+q31_t StepQ(mc_pi_q31_t *st, q31_t e)
+{
+    q31_t u = 0x5A5A5A5A;
+    EXPECT_EQ(mc_pi_q31_step(st, e, &u), MC_PI_ERR_NONE);
+    return u;
+}
+
+q31_t StepQFf(mc_pi_q31_t *st, q31_t e, q31_t ff)
+{
+    q31_t u = 0x5A5A5A5A;
+    EXPECT_EQ(mc_pi_q31_step_ff(st, e, ff, &u), MC_PI_ERR_NONE);
+    return u;
+}
+
 RefPi MakeRef(const mc_pi_f32_cfg_t &c)
 {
     RefPi r{};
@@ -94,7 +131,7 @@ TEST(PiF32, StepResponseMatchesClosedForm)
         ASSERT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
         const double e = 0.5;
         for (int k = 0; k < 200; ++k) {
-            const float u = mc_pi_f32_step(&st, static_cast<float>(e));
+            const float u = Step(&st, static_cast<float>(e));
             const double expect = 2.0 * e + 0.1 * e * (k + 1);
             ASSERT_NEAR(u, expect, 1e-4) << "aw=" << aw << " k=" << k;
         }
@@ -116,7 +153,7 @@ TEST(PiF32, VaryingErrorMatchesSum)
         const float e = static_cast<float>(0.7 * std::sin(0.05 * k) + 0.2 * std::cos(0.31 * k));
         const float ff = static_cast<float>(0.3 * std::sin(0.02 * k));
         sum += static_cast<double>(e);
-        const float u = mc_pi_f32_step_ff(&st, e, ff);
+        const float u = StepFf(&st, e, ff);
         const double expect = 2.0 * e + static_cast<double>(c.ki_per_s * c.dt_s) * sum + ff;
         max_err = std::max(max_err, std::fabs(u - expect));
     }
@@ -136,18 +173,18 @@ TEST(PiF32, OutputAndIntegratorStayWithinLimits)
         mc_pi_f32_t st;
         ASSERT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
         for (int k = 0; k < 100; ++k) {
-            EXPECT_EQ(mc_pi_f32_step(&st, 5.0f), 3.0f);
+            EXPECT_EQ(Step(&st, 5.0f), 3.0f);
             EXPECT_LE(st.integ, 3.0f);
             EXPECT_GE(st.integ, -2.0f);
         }
         for (int k = 0; k < 100; ++k) {
-            EXPECT_EQ(mc_pi_f32_step(&st, -5.0f), -2.0f);
+            EXPECT_EQ(Step(&st, -5.0f), -2.0f);
             EXPECT_LE(st.integ, 3.0f);
             EXPECT_GE(st.integ, -2.0f);
         }
         // A large feed-forward alone saturates too.
-        EXPECT_EQ(mc_pi_f32_step_ff(&st, 0.0f, 100.0f), 3.0f);
-        EXPECT_EQ(mc_pi_f32_step_ff(&st, 0.0f, -100.0f), -2.0f);
+        EXPECT_EQ(StepFf(&st, 0.0f, 100.0f), 3.0f);
+        EXPECT_EQ(StepFf(&st, 0.0f, -100.0f), -2.0f);
     }
 }
 
@@ -172,11 +209,11 @@ int RecoverySteps(mc_pi_aw_t aw, bool dynamic_limit)
     EXPECT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
     float u = 0.0f;
     for (int k = 0; k < 1000; ++k) {
-        u = mc_pi_f32_step_lim(&st, 1.0f, ff, -hi, hi);
+        u = StepLim(&st, 1.0f, ff, -hi, hi);
     }
     EXPECT_EQ(u, hi);  // deep in saturation for the last ~980 steps
     for (int k = 1; k <= 2000; ++k) {
-        if (mc_pi_f32_step_lim(&st, -0.5f, ff, -hi, hi) < hi) {
+        if (StepLim(&st, -0.5f, ff, -hi, hi) < hi) {
             return k;
         }
     }
@@ -214,7 +251,7 @@ TEST(PiF32, BumplessGainChange)
     ASSERT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
     float u_last = 0.0f;
     for (int k = 0; k < 20; ++k) {
-        u_last = mc_pi_f32_step(&st, 0.3f);
+        u_last = Step(&st, 0.3f);
     }
     mc_pi_f32_t plain = st;
     plain.kp = 5.0f;
@@ -222,9 +259,9 @@ TEST(PiF32, BumplessGainChange)
     plain.ki_dt = 0.3f;
 
     ASSERT_EQ(mc_pi_f32_set_gains(&st, 5.0f, 300.0f), MC_PI_ERR_NONE);
-    const float u_next = mc_pi_f32_step(&st, 0.3f);
+    const float u_next = Step(&st, 0.3f);
     EXPECT_NEAR(u_next - u_last, 300.0 * 1e-3 * 0.3, 1e-6);
-    const float u_plain = mc_pi_f32_step(&plain, 0.3f);
+    const float u_plain = Step(&plain, 0.3f);
     EXPECT_GT(std::fabs(u_plain - u_last - 0.09f), 0.5f);
 
     // Invalid gains: specific flags, state unchanged.
@@ -244,16 +281,17 @@ TEST(PiF32, Reset)
     mc_pi_f32_t st;
     ASSERT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
     for (int k = 0; k < 500; ++k) {
-        (void)mc_pi_f32_step(&st, 50.0f);
+        (void)Step(&st, 50.0f);
     }
-    (void)mc_pi_f32_step(&st, kNaN);
+    float u = 0.0f;
+    EXPECT_EQ(mc_pi_f32_step(&st, kNaN, &u), MC_PI_ERR_NAN_INPUT);
     ASSERT_NE(st.flags, 0u);
     // Exact values: reset copies the preset, a zero error adds nothing.
     EXPECT_EQ(mc_pi_f32_reset(&st, 0.25f), MC_PI_ERR_NONE);
     EXPECT_EQ(st.integ, 0.25f);
     EXPECT_EQ(st.out, 0.25f);
     EXPECT_EQ(st.flags, 0u);
-    EXPECT_EQ(mc_pi_f32_step(&st, 0.0f), 0.25f);
+    EXPECT_EQ(Step(&st, 0.0f), 0.25f);
     EXPECT_EQ(mc_pi_f32_reset(&st, 100.0f), MC_PI_ERR_NONE);  // clamped
     EXPECT_EQ(st.integ, 10.0f);
     mc_pi_f32_t before = st;
@@ -351,34 +389,59 @@ TEST(PiF32, NonFiniteInputIsRefusedAndSticky)
     mc_pi_f32_cfg_t c = BaseCfg();
     mc_pi_f32_t st;
     ASSERT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
-    const float u0 = mc_pi_f32_step(&st, 0.4f);
+    const float u0 = Step(&st, 0.4f);
     const mc_pi_f32_t good = st;
-    // Each refused step returns the last output and changes nothing but the
-    // sticky flag.
+    // Each refused step returns MC_PI_ERR_NAN_INPUT, writes the last output
+    // and changes nothing but the sticky flag.
     const float bad[][4] = {{kNaN, 0.0f, -1.0f, 1.0f}, {kInf, 0.0f, -1.0f, 1.0f},
                             {0.1f, kNaN, -1.0f, 1.0f}, {0.1f, 0.0f, kNaN, 1.0f},
                             {0.1f, 0.0f, -1.0f, -kInf}};
     for (const auto &b : bad) {
-        EXPECT_EQ(mc_pi_f32_step_lim(&st, b[0], b[1], b[2], b[3]), u0);
+        float u = 0.0f;
+        EXPECT_EQ(mc_pi_f32_step_lim(&st, b[0], b[1], b[2], b[3], &u), MC_PI_ERR_NAN_INPUT);
+        EXPECT_EQ(u, u0);
         EXPECT_EQ(st.integ, good.integ);
         EXPECT_EQ(st.out, good.out);
         EXPECT_EQ(st.last_error, good.last_error);
         EXPECT_EQ(st.flags, MC_PI_ERR_NAN_INPUT);
     }
     // Dynamic limits out of order: refused with their own flag.
-    EXPECT_EQ(mc_pi_f32_step_lim(&st, 0.1f, 0.0f, 1.0f, -1.0f), u0);
+    float u = 0.0f;
+    EXPECT_EQ(mc_pi_f32_step_lim(&st, 0.1f, 0.0f, 1.0f, -1.0f, &u), MC_PI_ERR_DYN_LIMIT);
+    EXPECT_EQ(u, u0);
     EXPECT_EQ(st.integ, good.integ);
     EXPECT_EQ(st.flags, MC_PI_ERR_NAN_INPUT | MC_PI_ERR_DYN_LIMIT);
     // Finite steps run again; the flags stay until reset.
-    EXPECT_NE(mc_pi_f32_step(&st, 0.4f), u0);
+    EXPECT_NE(Step(&st, 0.4f), u0);
     EXPECT_EQ(st.flags, MC_PI_ERR_NAN_INPUT | MC_PI_ERR_DYN_LIMIT);
     // Overflow inside a step (finite inputs): refused too, never stores NaN.
     mc_pi_f32_cfg_t big = BaseCfg();
     big.kp = 1e30f;
     ASSERT_EQ(mc_pi_f32_init(&st, &big), MC_PI_ERR_NONE);
-    (void)mc_pi_f32_step_ff(&st, 1e30f, -3e38f);
+    (void)mc_pi_f32_step_ff(&st, 1e30f, -3e38f, &u);
     EXPECT_TRUE(std::isfinite(st.integ));
     EXPECT_TRUE(std::isfinite(st.out));
+}
+
+TEST(PiF32, StepsRefuseNullPointersAndWriteNothing)
+{
+    // The return convention (kernels/README.md): a NULL state or output
+    // pointer gives MC_PI_ERR_NULL, and neither the state nor the output
+    // changes (compared bit for bit).
+    mc_pi_f32_cfg_t c = BaseCfg();
+    mc_pi_f32_t st;
+    ASSERT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
+    (void)Step(&st, 0.4f);
+    const mc_pi_f32_t before = st;
+    float u = 42.0f;
+    EXPECT_EQ(mc_pi_f32_step(nullptr, 0.1f, &u), MC_PI_ERR_NULL);
+    EXPECT_EQ(mc_pi_f32_step_ff(nullptr, 0.1f, 0.0f, &u), MC_PI_ERR_NULL);
+    EXPECT_EQ(mc_pi_f32_step_lim(nullptr, 0.1f, 0.0f, -1.0f, 1.0f, &u), MC_PI_ERR_NULL);
+    EXPECT_EQ(u, 42.0f);
+    EXPECT_EQ(mc_pi_f32_step(&st, 0.1f, nullptr), MC_PI_ERR_NULL);
+    EXPECT_EQ(mc_pi_f32_step_ff(&st, 0.1f, 0.0f, nullptr), MC_PI_ERR_NULL);
+    EXPECT_EQ(mc_pi_f32_step_lim(&st, 0.1f, 0.0f, -1.0f, 1.0f, nullptr), MC_PI_ERR_NULL);
+    EXPECT_EQ(std::memcmp(&before, &st, sizeof st), 0);
 }
 
 TEST(PiF32, TrackEqualsRunningWithTheAppliedLimit)
@@ -401,8 +464,8 @@ TEST(PiF32, TrackEqualsRunningWithTheAppliedLimit)
         ASSERT_EQ(mc_pi_f32_init(&b, &c), MC_PI_ERR_NONE);
         for (int k = 0; k < 1500; ++k) {
             const float e = (k < 1000) ? 1.0f : -0.5f;
-            const float ua = mc_pi_f32_step_lim(&a, e, 0.0f, -10.0f, 1.0f);
-            const float ub_raw = mc_pi_f32_step(&b, e);
+            const float ua = StepLim(&a, e, 0.0f, -10.0f, 1.0f);
+            const float ub_raw = Step(&b, e);
             if (ub_raw > 1.0f) {
                 ASSERT_EQ(mc_pi_f32_track(&b, 1.0f), MC_PI_ERR_NONE);
             }
@@ -449,7 +512,7 @@ TEST(PiQ31, StepResponseIsExactOnDyadicValues)
             const int64_t e = int64_t{1} << 27;
             const int64_t p = (int64_t{1} << 26) << shift;
             for (int k = 0; k < 100; ++k) {
-                const q31_t u = mc_pi_q31_step(&st, static_cast<q31_t>(e));
+                const q31_t u = StepQ(&st, static_cast<q31_t>(e));
                 ASSERT_EQ(u, p + (int64_t{1} << 17) * (k + 1)) << "k=" << k;
             }
         }
@@ -521,8 +584,8 @@ TEST(PiQ31, TwinOfF32OnRandomInputs)
             const q31_t ffq = static_cast<q31_t>(std::llround(ff * 2147483648.0));
             const double ur = ref.Step(e, ff, -1.0, 1.0);
             const double urq = ref_q.Step(e, ff, -1.0, 1.0);
-            const double uf = mc_pi_f32_step_ff(&sf, static_cast<float>(e), static_cast<float>(ff));
-            const double uq = mc_pi_q31_step_ff(&sq, eq, ffq) * kLsb;
+            const double uf = StepFf(&sf, static_cast<float>(e), static_cast<float>(ff));
+            const double uq = StepQFf(&sq, eq, ffq) * kLsb;
             const double bound_f = ((k + 1) * 4.0 + 3.0) * 512.0;
             const double bound_gain = (k + 1) * 0.5 * 1.0;
             ASSERT_LE(std::fabs(uq - urq) / kLsb, 1.0) << "trial " << trial << " k " << k;
@@ -559,7 +622,7 @@ TEST(PiQ31, SaturatesAtRangeEdgesNeverWraps)
         for (q31_t e : edges) {
             for (q31_t ff : edges) {
                 for (int rep = 0; rep < 3; ++rep) {
-                    const q31_t u = mc_pi_q31_step_ff(&st, e, ff);
+                    const q31_t u = StepQFf(&st, e, ff);
                     // |kp*e| = 32768 per unit for the extreme errors, far
                     // beyond |I + ff| <= 2; for the small errors only the
                     // range is checked.
@@ -588,8 +651,8 @@ TEST(PiQ31, SaturatesAtRangeEdgesNeverWraps)
     ASSERT_EQ(mc_pi_f32_init(&sf, &c), MC_PI_ERR_NONE);
     ASSERT_EQ(mc_pi_q31_init(&sq, &q), MC_PI_ERR_NONE);
     for (q31_t e : {MC_Q31_MIN, MC_Q31_MAX, MC_Q31_MIN}) {
-        const double uf = mc_pi_f32_step(&sf, mc_q31_to_f32(e));
-        const double uq = mc_pi_q31_step(&sq, e);
+        const double uf = Step(&sf, mc_q31_to_f32(e));
+        const double uq = StepQ(&sq, e);
         EXPECT_LE(std::fabs(uf - uq * kLsb) / kLsb, 1.0);
     }
 }
@@ -605,11 +668,11 @@ TEST(PiQ31, BumplessGainChangeAndReset)
     const q31_t e = 123456789;  // about 0.0575 per unit
     q31_t u_last = 0;
     for (int k = 0; k < 20; ++k) {
-        u_last = mc_pi_q31_step(&st, e);
+        u_last = StepQ(&st, e);
     }
     const q31_t ki_new = 1 << 24;  // 2^-7 per step
     ASSERT_EQ(mc_pi_q31_set_gains(&st, 3 << 28, 2, ki_new, 0), MC_PI_ERR_NONE);  // kp 1.5
-    const q31_t u_next = mc_pi_q31_step(&st, e);
+    const q31_t u_next = StepQ(&st, e);
     const double inc = static_cast<double>(e) / 128.0;
     EXPECT_NEAR(static_cast<double>(u_next) - u_last, inc, 1.0);
 
@@ -619,12 +682,34 @@ TEST(PiQ31, BumplessGainChangeAndReset)
     EXPECT_EQ(mc_pi_q31_set_gains(&st, 1, 0, 1, -1), MC_PI_ERR_KI);
     EXPECT_EQ(std::memcmp(&before, &st, sizeof st), 0);
 
-    mc_pi_q31_reset(&st, 1 << 29);
+    EXPECT_EQ(mc_pi_q31_reset(&st, 1 << 29), MC_PI_ERR_NONE);
     EXPECT_EQ(st.out, 1 << 29);
-    EXPECT_EQ(mc_pi_q31_step(&st, 0), 1 << 29);  // zero error: exact
-    // Dynamic limits out of order: refused, sticky flag.
-    EXPECT_EQ(mc_pi_q31_step_lim(&st, 5, 0, 10, -10), 1 << 29);
+    EXPECT_EQ(StepQ(&st, 0), 1 << 29);  // zero error: exact
+    // Dynamic limits out of order: refused (the last output written), sticky flag.
+    q31_t u = 0;
+    EXPECT_EQ(mc_pi_q31_step_lim(&st, 5, 0, 10, -10, &u), MC_PI_ERR_DYN_LIMIT);
+    EXPECT_EQ(u, 1 << 29);
     EXPECT_EQ(st.flags, MC_PI_ERR_DYN_LIMIT);
+    EXPECT_EQ(mc_pi_q31_reset(nullptr, 0), MC_PI_ERR_NULL);
+}
+
+TEST(PiQ31, StepsRefuseNullPointersAndWriteNothing)
+{
+    // As the f32 kernel: MC_PI_ERR_NULL, state and output untouched.
+    mc_pi_q31_cfg_t q = BaseQ();
+    mc_pi_q31_t st;
+    ASSERT_EQ(mc_pi_q31_init(&st, &q), MC_PI_ERR_NONE);
+    (void)StepQ(&st, 1 << 20);
+    const mc_pi_q31_t before = st;
+    q31_t u = 42;
+    EXPECT_EQ(mc_pi_q31_step(nullptr, 1, &u), MC_PI_ERR_NULL);
+    EXPECT_EQ(mc_pi_q31_step_ff(nullptr, 1, 0, &u), MC_PI_ERR_NULL);
+    EXPECT_EQ(mc_pi_q31_step_lim(nullptr, 1, 0, -10, 10, &u), MC_PI_ERR_NULL);
+    EXPECT_EQ(u, 42);
+    EXPECT_EQ(mc_pi_q31_step(&st, 1, nullptr), MC_PI_ERR_NULL);
+    EXPECT_EQ(mc_pi_q31_step_ff(&st, 1, 0, nullptr), MC_PI_ERR_NULL);
+    EXPECT_EQ(mc_pi_q31_step_lim(&st, 1, 0, -10, 10, nullptr), MC_PI_ERR_NULL);
+    EXPECT_EQ(std::memcmp(&before, &st, sizeof st), 0);
 }
 
 TEST(PiQ31, InitRejectsEveryBadRuleWithItsFlag)

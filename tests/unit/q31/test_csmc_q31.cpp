@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "q31_test_util.hpp"
@@ -123,7 +124,7 @@ TEST(HgoQ31, MatchesF32AtEps1e4)
         mc_hgo_f32_est_t ef{};
         mc_hgo_q31_est_t eq{};
         mc_hgo_f32_step(&f, static_cast<float>(from_q(yq, c.y_base)), &ef);
-        mc_hgo_q31_step(&q, yq, &eq);
+        ASSERT_EQ(mc_hgo_q31_step(&q, yq, &eq), MC_HGO_ERR_NONE);
         w1 = std::max(w1, std::abs(ef.z1 - from_q(eq.z1, c.y_base)));
         w2 = std::max(w2, std::abs(ef.z2 - from_q(eq.z2, c.z2_base)));
         w3 = std::max(w3, std::abs(ef.z3 - from_q(eq.z3, c.z3_base)));
@@ -168,6 +169,53 @@ TEST(HgoQ31, FullScaleInputSaturatesNeverWraps)
     for (int k = 0; k < 20000; ++k) mc_hgo_q31_step(&q, MC_Q31_MAX, &e);
     EXPECT_NEAR(e.z1, MC_Q31_MAX, 4);  // settles on y, no wrap on the way
     EXPECT_NEAR(from_q(e.z2, 200.0), 0.0, 1e-6);
+    // NULL state or estimate: MC_HGO_ERR_NULL, nothing written; reset returns NONE.
+    const mc_hgo_q31_t before = q;
+    mc_hgo_q31_est_t e_null{42, 42, 42};
+    EXPECT_EQ(mc_hgo_q31_step(nullptr, 0, &e_null), MC_HGO_ERR_NULL);
+    EXPECT_EQ(e_null.z1, 42);
+    EXPECT_EQ(mc_hgo_q31_step(&q, 0, nullptr), MC_HGO_ERR_NULL);
+    EXPECT_EQ(std::memcmp(&q, &before, sizeof q), 0);
+    EXPECT_EQ(mc_hgo_q31_reset(nullptr, 0, 0, 0), MC_HGO_ERR_NULL);
+    EXPECT_EQ(mc_hgo_q31_reset(&q, 0, 0, 0), MC_HGO_ERR_NONE);
+    EXPECT_EQ(q.eta_q46[0], 0);
+    EXPECT_EQ(q.eta_q46[1], 0);
+    EXPECT_EQ(q.eta_q46[2], 0);
+    EXPECT_EQ(q.n_hist, 0u);
+}
+
+TEST(HgoQ31, ResetPresetsTheEstimatesAsTheF32Twin)
+{
+    // Same shape as mc_hgo_f32_reset: preset (z1, z2, z3), then the next
+    // step returns them as the estimate at that sample. z1 is exact; z2, z3
+    // go through eta = (eps z2, eps^2 z3) and back (in2 then out2): one
+    // rounding each way and the float rounding of the two gains (their
+    // product is 1 to about 2^-23): bounded by 2 LSB + 2^-22 relative.
+    mc_hgo_q31_cfg_t c{};
+    c.f = {17.0f, 80.0f, 100.0f, 1e-4f, 1e-5f, 2u};
+    c.y_base = 0.1f;
+    c.z2_base = 200.0f;
+    c.z3_base = 1.0e5f;
+    mc_hgo_q31_t q{};
+    ASSERT_EQ(mc_hgo_q31_init(&q, &c), 0u);
+    mc_hgo_f32_t f{};
+    ASSERT_EQ(mc_hgo_f32_init(&f, &c.f), 0u);
+    const q31_t z1 = to_q(0.03, c.y_base), z2 = to_q(-55.0, c.z2_base), z3 = to_q(3.0e4, c.z3_base);
+    ASSERT_EQ(mc_hgo_q31_reset(&q, z1, z2, z3), MC_HGO_ERR_NONE);
+    ASSERT_EQ(mc_hgo_f32_reset(&f, 0.03f, -55.0f, 3.0e4f), MC_HGO_ERR_NONE);
+    mc_hgo_q31_est_t e{};
+    mc_hgo_f32_est_t ef{};
+    ASSERT_EQ(mc_hgo_q31_step(&q, z1, &e), MC_HGO_ERR_NONE);
+    ASSERT_EQ(mc_hgo_f32_step(&f, 0.03f, &ef), MC_HGO_ERR_NONE);
+    EXPECT_EQ(e.z1, z1);
+    EXPECT_LE(std::abs(static_cast<double>(e.z2) - z2), 2.0 + std::abs(z2) * 0x1p-22);
+    EXPECT_LE(std::abs(static_cast<double>(e.z3) - z3), 2.0 + std::abs(z3) * 0x1p-22);
+    // and the same estimate as the f32 twin preset with the same values
+    // (which returns them exactly): the bounds above in engineering units,
+    // 55 * 2^-22 = 1.3e-5 rad/s and 3e4 * 2^-22 = 7.2e-3 rad/s^2, plus the
+    // input's q31 rounding (1e-7 of a base), with margin: 1e-4 and 1e-1.
+    EXPECT_NEAR(from_q(e.z2, c.z2_base), ef.z2, 1e-4);
+    EXPECT_NEAR(from_q(e.z3, c.z3_base), ef.z3, 1e-1);
 }
 
 TEST(CsmcQ31, ModelAndConstLawsMatchF32OnRandomStates)
@@ -211,7 +259,7 @@ TEST(CsmcQ31, ModelAndConstLawsMatchF32OnRandomStates)
             mc_csmc_f32_out_t fo{};
             mc_csmc_q31_out_t qo{};
             mc_csmc_f32_step(&f, &fi, &fo);
-            mc_csmc_q31_step(&q, &qi, &qo);
+            ASSERT_EQ(mc_csmc_q31_step(&q, &qi, &qo), MC_CSMC_ERR_NONE);
             // sgn at s = 0 exactly is the one place the two may differ: skip
             // steps where s2 is within float rounding of 0
             if (law == 2 && std::abs(fo.s2_rad_s2) < 1e-2) continue;
@@ -267,7 +315,7 @@ TEST(CsmcQ31, FullScaleInputsSaturateNeverWrap)
     mc_csmc_q31_out_t o{};
     mc_csmc_f32_out_t fo{};
     for (int k = 0; k < 1000; ++k) {
-        mc_csmc_q31_step(&q, &in, &o);
+        ASSERT_EQ(mc_csmc_q31_step(&q, &in, &o), MC_CSMC_ERR_NONE);
         mc_csmc_f32_step(&f, &fi, &fo);
         // relative 1e-5 of the value (f32 rounding of terms of ~1e4 V) + 1e-3 V
         ASSERT_NEAR(from_q(o.v_d, b.v_base_v), clampq(fo.v_d_v, b.v_base_v),
@@ -280,4 +328,16 @@ TEST(CsmcQ31, FullScaleInputsSaturateNeverWrap)
     EXPECT_EQ(o.s1, MC_Q31_MAX);   // f32: 20 A + sigma > one base
     EXPECT_GT(fo.s1_a, 20.0f);
     EXPECT_LT(o.v_q, 0);  // the sign of the f32 law (checked to 1e-5 above)
+    // NULL pointers: MC_CSMC_ERR_NULL, nothing written; reset returns NONE.
+    const mc_csmc_q31_t before = q;
+    mc_csmc_q31_out_t o_null{42, 42, 42, 42};
+    EXPECT_EQ(mc_csmc_q31_step(nullptr, &in, &o_null), MC_CSMC_ERR_NULL);
+    EXPECT_EQ(mc_csmc_q31_step(&q, nullptr, &o_null), MC_CSMC_ERR_NULL);
+    EXPECT_EQ(o_null.v_d, 42);
+    EXPECT_EQ(mc_csmc_q31_step(&q, &in, nullptr), MC_CSMC_ERR_NULL);
+    EXPECT_EQ(std::memcmp(&q, &before, sizeof q), 0);
+    EXPECT_EQ(mc_csmc_q31_reset(nullptr), MC_CSMC_ERR_NULL);
+    EXPECT_EQ(mc_csvc_q31_reset(nullptr), MC_CSVC_ERR_NULL);
+    EXPECT_EQ(mc_csmc_q31_reset(&q), MC_CSMC_ERR_NONE);
+    EXPECT_EQ(q.out.v_d, 0);
 }

@@ -27,6 +27,19 @@ Pair make(float a, float b, float dt, double yb, double ob) {
     p.ob = ob;
     return p;
 }
+// One step of each twin: theta_f; the step must have run (ERR_NONE).
+double step_f(mc_ddiff_f32_t *f, float y)
+{
+    float th = NAN;
+    EXPECT_EQ(mc_ddiff_f32_step(f, y, &th), MC_DDIFF_ERR_NONE);
+    return th;
+}
+q31_t step_q(mc_ddiff_q31_t *q, q31_t y)
+{
+    q31_t th = 0x5A5A5A5A;
+    EXPECT_EQ(mc_ddiff_q31_step(q, y, &th), MC_DDIFF_ERR_NONE);
+    return th;
+}
 }  // namespace
 
 TEST(DdiffQ31, InitRejectsBadBasesAndKeepsF32Rules)
@@ -49,6 +62,15 @@ TEST(DdiffQ31, InitRejectsBadBasesAndKeepsF32Rules)
     q2.out = 77;
     EXPECT_EQ(mc_ddiff_q31_init(&q2, &c), MC_DDIFF_ERR_SCALE);
     EXPECT_EQ(q2.out, 77);  // state not written
+    // NULL state or output: MC_DDIFF_ERR_NULL, nothing written.
+    q31_t th = 42;
+    EXPECT_EQ(mc_ddiff_q31_step(nullptr, 1, &th), MC_DDIFF_ERR_NULL);
+    EXPECT_EQ(th, 42);
+    const int64_t out_q46 = q.out_q46;
+    EXPECT_EQ(mc_ddiff_q31_step(&q, 1 << 20, nullptr), MC_DDIFF_ERR_NULL);
+    EXPECT_EQ(q.out_q46, out_q46);
+    EXPECT_FALSE(q.primed);
+    EXPECT_EQ(mc_ddiff_q31_reset(nullptr, 0), MC_DDIFF_ERR_NULL);
 }
 
 TEST(DdiffQ31, MatchesF32OnRandomInputs)
@@ -66,8 +88,8 @@ TEST(DdiffQ31, MatchesF32OnRandomInputs)
         const double yy = y + 0.02 * std::sin(2.0 * kPi * 3.0 * k * 1e-4);
         const q31_t yq = to_q(yy, p.yb);
         const float yf = static_cast<float>(from_q(yq, p.yb));  // same input
-        const double of = mc_ddiff_f32_step(&p.f, yf);
-        const double oq = from_q(mc_ddiff_q31_step(&p.q, yq), p.ob);
+        const double of = step_f(&p.f, yf);
+        const double oq = from_q(step_q(&p.q, yq), p.ob);
         worst = std::max(worst, std::abs(of - oq));
         peak = std::max(peak, std::abs(of));
     }
@@ -85,24 +107,24 @@ TEST(DdiffQ31, EdgeStepsSaturateNeverWrap)
     // Full-scale steps of y with a large b: the output saturates at the
     // range edge with the right sign (a wrap would flip it) and recovers.
     Pair p = make(50.0f, 50.0f, 1e-4f, 1.0, 1.0);
-    EXPECT_EQ(mc_ddiff_q31_step(&p.q, 0), 0);
-    EXPECT_EQ(mc_ddiff_q31_step(&p.q, MC_Q31_MAX), MC_Q31_MAX);
-    EXPECT_EQ(mc_ddiff_q31_step(&p.q, MC_Q31_MIN), MC_Q31_MIN);
-    EXPECT_EQ(mc_ddiff_q31_step(&p.q, MC_Q31_MAX), MC_Q31_MAX);
+    EXPECT_EQ(step_q(&p.q, 0), 0);
+    EXPECT_EQ(step_q(&p.q, MC_Q31_MAX), MC_Q31_MAX);
+    EXPECT_EQ(step_q(&p.q, MC_Q31_MIN), MC_Q31_MIN);
+    EXPECT_EQ(step_q(&p.q, MC_Q31_MAX), MC_Q31_MAX);
     // hold: the filter decays from the clamped value towards 0 with c_q
     q31_t last = MC_Q31_MAX;
     for (int k = 0; k < 5000; ++k) {
-        const q31_t o = mc_ddiff_q31_step(&p.q, MC_Q31_MAX);
+        const q31_t o = step_q(&p.q, MC_Q31_MAX);
         EXPECT_LE(o, last);
         EXPECT_GE(o, 0);
         last = o;
     }
     EXPECT_LT(last, 1 << 10);  // (1 - a dt)^5000 ~ 1.4e-11 of full scale
     // first step after reset: q0 + b y saturates too
-    mc_ddiff_q31_reset(&p.q, MC_Q31_MAX);
-    EXPECT_EQ(mc_ddiff_q31_step(&p.q, MC_Q31_MAX), MC_Q31_MAX);
-    mc_ddiff_q31_reset(&p.q, MC_Q31_MIN);
-    EXPECT_EQ(mc_ddiff_q31_step(&p.q, MC_Q31_MIN), MC_Q31_MIN);
+    ASSERT_EQ(mc_ddiff_q31_reset(&p.q, MC_Q31_MAX), MC_DDIFF_ERR_NONE);
+    EXPECT_EQ(step_q(&p.q, MC_Q31_MAX), MC_Q31_MAX);
+    ASSERT_EQ(mc_ddiff_q31_reset(&p.q, MC_Q31_MIN), MC_DDIFF_ERR_NONE);
+    EXPECT_EQ(step_q(&p.q, MC_Q31_MIN), MC_Q31_MIN);
 }
 
 TEST(DdiffQ31, DifferentiatesARampExactly)
@@ -114,7 +136,7 @@ TEST(DdiffQ31, DifferentiatesARampExactly)
     const q31_t step = 21475;  // 1e-5 per step: v = 0.1 per second
     q31_t y = 0, o = 0;
     for (int k = 0; k < 20000; ++k) {
-        o = mc_ddiff_q31_step(&p.q, y);
+        o = step_q(&p.q, y);
         y += step;
     }
     // settled value of the discrete filter with its (float) coefficients:

@@ -55,6 +55,7 @@ TEST(FluxobsQ31, InitRules)
     EXPECT_EQ(q.theta, 5);
     c = cfg();
     EXPECT_EQ(mc_fluxobs_q31_init(&q, &c), 0u);
+    EXPECT_EQ(mc_fluxobs_q31_reset(nullptr, 0, 0, 0), MC_FLUXOBS_ERR_NULL);
 }
 
 TEST(FluxobsQ31, MatchesF32FromAWrongStartOnANoisyRun)
@@ -69,7 +70,8 @@ TEST(FluxobsQ31, MatchesF32FromAWrongStartOnANoisyRun)
     ASSERT_EQ(mc_fluxobs_q31_init(&q, &c), 0u);
     Drive d;
     ASSERT_EQ(mc_fluxobs_f32_reset(&f, static_cast<float>(d.th + 0.5), 0.0f, 3.0f), 0u);
-    mc_fluxobs_q31_reset(&q, ang_q(d.th + 0.5), to_q(0.0, kIb), to_q(3.0, kIb));
+    ASSERT_EQ(mc_fluxobs_q31_reset(&q, ang_q(d.th + 0.5), to_q(0.0, kIb), to_q(3.0, kIb)),
+              MC_FLUXOBS_ERR_NONE);
     std::mt19937 rng(30);
     std::normal_distribution<double> n(0.0, 0.02);
     double worst = 0.0, worst_x = 0.0, worst_true_late = 0.0;

@@ -64,6 +64,12 @@ TEST(FocQ31, InitRules)
     q.vd = 3;
     EXPECT_EQ(mc_foc_q31_init(&q, &c), MC_FOC_ERR_SCALE);
     EXPECT_EQ(q.vd, 3);
+    // reset: NONE, voltages and flags to 0; NULL: MC_FOC_ERR_NULL.
+    q.flags = MC_FOC_ERR_VBUS;
+    EXPECT_EQ(mc_foc_q31_reset(&q), MC_FOC_ERR_NONE);
+    EXPECT_EQ(q.vd, 0);
+    EXPECT_EQ(q.flags, MC_FOC_ERR_NONE);
+    EXPECT_EQ(mc_foc_q31_reset(nullptr), MC_FOC_ERR_NULL);
 }
 
 TEST(FocQ31, DqStepMatchesF32OnRandomWalks)

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "q31_test_util.hpp"
@@ -58,6 +59,31 @@ TEST(Pi2dQ31, InitRules)
     EXPECT_EQ(mc_pi2d_q31_init(&q, &c), 0u);
 }
 
+TEST(Pi2dQ31, SameShapeAsF32NullPointersWriteNothing)
+{
+    // Twin of mc_pi2d_f32_step: out is required and is the only place the
+    // outputs go; a NULL st, in or out gives MC_PI2D_ERR_NULL and writes
+    // nothing (state compared bit for bit, out keeps its sentinel).
+    mc_pi2d_q31_t q{};
+    const mc_pi2d_q31_cfg_t c = cfg();
+    ASSERT_EQ(mc_pi2d_q31_init(&q, &c), 0u);
+    mc_pi2d_q31_in_t in{};
+    in.theta_m = 1 << 24;
+    mc_pi2d_q31_out_t o{};
+    ASSERT_EQ(mc_pi2d_q31_step(&q, &in, &o), MC_PI2D_ERR_NONE);
+    const mc_pi2d_q31_t before = q;
+    mc_pi2d_q31_out_t sentinel{};
+    sentinel.vd = 42;
+    mc_pi2d_q31_out_t o2 = sentinel;
+    EXPECT_EQ(mc_pi2d_q31_step(nullptr, &in, &o2), MC_PI2D_ERR_NULL);
+    EXPECT_EQ(mc_pi2d_q31_step(&q, nullptr, &o2), MC_PI2D_ERR_NULL);
+    EXPECT_EQ(o2.vd, 42);
+    EXPECT_EQ(mc_pi2d_q31_step(&q, &in, nullptr), MC_PI2D_ERR_NULL);
+    EXPECT_EQ(std::memcmp(&q, &before, sizeof q), 0);
+    EXPECT_EQ(mc_pi2d_q31_reset(nullptr, 0, 0), MC_PI2D_ERR_NULL);
+    EXPECT_EQ(mc_pi2d_q31_reset(&q, 0, 0), MC_PI2D_ERR_NONE);
+}
+
 TEST(Pi2dQ31, MatchesF32OnRandomTrajectories)
 {
     // 100000 steps (10 s normalised) of smooth random measurements and
@@ -101,7 +127,7 @@ TEST(Pi2dQ31, MatchesF32OnRandomTrajectories)
         mc_pi2d_f32_out_t fo{};
         mc_pi2d_q31_out_t qo{};
         ASSERT_EQ(mc_pi2d_f32_step(&f, &fi, &fo), 0u);
-        mc_pi2d_q31_step(&q, &qi, &qo);
+        ASSERT_EQ(mc_pi2d_q31_step(&q, &qi, &qo), 0u);
         ASSERT_EQ(fo.iq_limited, qo.iq_limited) << "step " << k;
         ASSERT_EQ(fo.v_limited, qo.v_limited) << "step " << k;
         iq_lim += qo.iq_limited ? 1 : 0;
@@ -149,7 +175,7 @@ TEST(Pi2dQ31, FullScaleInputsSaturateNeverWrap)
     in.jerk_ref = MC_Q31_MIN;
     mc_pi2d_q31_out_t o{};
     for (int k = 0; k < 2000; ++k) {
-        mc_pi2d_q31_step(&q, &in, &o);
+        ASSERT_EQ(mc_pi2d_q31_step(&q, &in, &o), 0u);
         ASSERT_EQ(o.e4, MC_Q31_MAX);
         ASSERT_LT(o.iq_ref, 0);  // -kp e4 - kd theta_f: negative
         ASSERT_TRUE(o.iq_limited);
@@ -160,6 +186,6 @@ TEST(Pi2dQ31, FullScaleInputsSaturateNeverWrap)
     EXPECT_NEAR(from_q(o.iq_ref, 8.0), -6.0, 1e-8);
     EXPECT_EQ(o.nu, 0);  // frozen by the conditional integration
     // reset with nu beyond its clamp
-    mc_pi2d_q31_reset(&q, 0, MC_Q31_MAX);
+    ASSERT_EQ(mc_pi2d_q31_reset(&q, 0, MC_Q31_MAX), MC_PI2D_ERR_NONE);
     EXPECT_NEAR(q.nu_q46 / 70368744177664.0 * 4.0, 3.0, 1e-8);
 }

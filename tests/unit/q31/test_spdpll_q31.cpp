@@ -17,6 +17,27 @@ constexpr double kWb = 2000.0;  // speed base [rad/s]
 mc_spdpll_q31_cfg_t cfg(float bw, float dt, float wmax) {
     return mc_spdpll_q31_cfg_t{{bw, dt, wmax}, static_cast<float>(kWb)};
 }
+// One step of each twin: the speed; the bits returned are the ones raised
+// (each also in the sticky flags), never NULL here.
+double step_f(mc_spdpll_f32_t *f, float th)
+{
+    float w = NAN;
+    const uint32_t rc = mc_spdpll_f32_step(f, th, &w);
+    EXPECT_EQ(rc & ~f->flags, 0u);
+    EXPECT_EQ(rc & MC_SPDPLL_ERR_NULL, 0u);
+    return w;
+}
+q31_t step_q(mc_spdpll_q31_t *q, q31_t th, uint32_t *p_rc = nullptr)
+{
+    q31_t w = 0x5A5A5A5A;
+    const uint32_t rc = mc_spdpll_q31_step(q, th, &w);
+    EXPECT_EQ(rc & ~q->flags, 0u);
+    EXPECT_EQ(rc & MC_SPDPLL_ERR_NULL, 0u);
+    if (p_rc != nullptr) {
+        *p_rc = rc;
+    }
+    return w;
+}
 }  // namespace
 
 TEST(SpdpllQ31, InitRules)
@@ -32,6 +53,15 @@ TEST(SpdpllQ31, InitRules)
     EXPECT_EQ(q.omega, 99);
     c.f.bw_rad_s = 300.0f;
     EXPECT_EQ(mc_spdpll_q31_init(&q, &c), 0u);
+    // NULL state or output: MC_SPDPLL_ERR_NULL, nothing written.
+    const mc_spdpll_q31_t before = q;
+    q31_t w = 42;
+    EXPECT_EQ(mc_spdpll_q31_step(nullptr, 1, &w), MC_SPDPLL_ERR_NULL);
+    EXPECT_EQ(w, 42);
+    EXPECT_EQ(mc_spdpll_q31_step(&q, 1, nullptr), MC_SPDPLL_ERR_NULL);
+    EXPECT_EQ(q.theta_turn64, before.theta_turn64);
+    EXPECT_EQ(q.omega_i_q46, before.omega_i_q46);
+    EXPECT_EQ(mc_spdpll_q31_reset(nullptr, 0, 0), MC_SPDPLL_ERR_NULL);
 }
 
 TEST(SpdpllQ31, MatchesF32OnNoisyRamps)
@@ -55,8 +85,8 @@ TEST(SpdpllQ31, MatchesF32OnNoisyRamps)
         th += w * dt;
         const q31_t aq = ang_q(th + n(rng));
         const float af = static_cast<float>(ang_rad(aq));
-        const double wf = mc_spdpll_f32_step(&f, af);
-        const double wq = from_q(mc_spdpll_q31_step(&q, aq), kWb);
+        const double wf = step_f(&f, af);
+        const double wq = from_q(step_q(&q, aq), kWb);
         worst_w = std::max(worst_w, std::abs(wf - wq));
         worst_th = std::max(worst_th, ang_diff(f.theta_rad, ang_rad(q.theta)));
     }
@@ -84,23 +114,27 @@ TEST(SpdpllQ31, SaturatesAtOmegaMaxNeverWraps)
     ASSERT_EQ(mc_spdpll_q31_init(&q, &c), 0u);
     double th = 0.0;
     q31_t w = 0, wmax = 0;
+    uint32_t rc_any = 0u;
     for (int k = 0; k < 20000; ++k) {
         th += 1500.0 * 1.25e-4;
-        w = mc_spdpll_q31_step(&q, ang_q(th));
+        uint32_t rc = 0u;
+        w = step_q(&q, ang_q(th), &rc);
+        rc_any |= rc;
         wmax = std::max(wmax, w);
         ASSERT_LE(std::abs(from_q(w, kWb)), 1000.0 + kWb / kQ31);
     }
     EXPECT_NE(q.flags & MC_SPDPLL_ERR_SAT, 0u);
+    EXPECT_EQ(rc_any, MC_SPDPLL_ERR_SAT);  // the clamping steps returned it
     EXPECT_NEAR(from_q(wmax, kWb), 1000.0, 2.0 * kWb / kQ31);
     const mc_spdpll_q31_cfg_t c2 = cfg(300.0f, 1.25e-4f, 5000.0f);  // clamped to one base
     ASSERT_EQ(mc_spdpll_q31_init(&q, &c2), 0u);
-    mc_spdpll_q31_reset(&q, 0, MC_Q31_MIN);
+    ASSERT_EQ(mc_spdpll_q31_reset(&q, 0, MC_Q31_MIN), MC_SPDPLL_ERR_NONE);
     EXPECT_EQ(q.omega, -MC_Q31_MAX);  // the preset is clamped too
     th = 0.0;
     q31_t wmin = 0;
     for (int k = 0; k < 400; ++k) {
         th -= 0.1;  // 800 rad/s backwards, then the PLL is pushed at its limit
-        w = mc_spdpll_q31_step(&q, ang_q(th));
+        w = step_q(&q, ang_q(th));
         wmin = std::min(wmin, w);
         ASSERT_GE(w, -MC_Q31_MAX);
     }
