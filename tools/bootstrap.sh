@@ -24,7 +24,7 @@ APT_PACKAGES=(
   cppcheck clang-tidy
   clang-14 libfuzzer-14-dev libclang-rt-14-dev
   qemu-system-x86 busybox-static linux-image-amd64 cpio kmod iproute2
-  python3 python3-venv ca-certificates
+  python3 python3-venv python3-dev ca-certificates
 )
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

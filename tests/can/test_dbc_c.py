@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The DBC is the single source of truth for the firmware's CAN codec.
 
- 1. `mc_can.py gen-c` regenerates firmware/app/mc_can_dbc.{h,c} byte for byte
+ 1. `mc_can.py gen-c` regenerates firmware/app/can/mc_can_dbc.{h,c} byte for byte
     (edit the DBC, regenerate, commit both: this test fails otherwise);
  2. the C tables (dumped by can_codec_tool) equal the DBC as cantools reads
     it: ids, lengths, directions, bit positions; scale, offset, min, max to
@@ -51,9 +51,9 @@ def main():
     subprocess.run([sys.executable, os.path.join(ROOT, "tools", "can", "mc_can.py"), "gen-c",
                     "--out-dir", a.work], check=True, capture_output=True)
     for f in ("mc_can_dbc.h", "mc_can_dbc.c"):
-        check(filecmp.cmp(os.path.join(a.work, f), os.path.join(ROOT, "firmware", "app", f),
+        check(filecmp.cmp(os.path.join(a.work, f), os.path.join(ROOT, "firmware", "app", "can", f),
                           shallow=False),
-              f"firmware/app/{f} differs from what tools/can/mc_can.py gen-c makes of the DBC")
+              f"firmware/app/can/{f} differs from what tools/can/mc_can.py gen-c makes of the DBC")
 
     # 2. tables
     db = mc_can.load_db()

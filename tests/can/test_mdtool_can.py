@@ -172,6 +172,22 @@ def main():
     check(ids is not None and [int(i) for i in ids] == [fr[2] for fr in ref if not fr[4]],
           f"asammdf reads the MF4's identifiers ({0 if ids is None else len(ids)} CAN_DataFrame.ID samples)")
 
+    # mdtool reads MF4 data frames as whole arrays (python-can's MF4Reader is
+    # O(n^2)): the same frames as python-can's own reader, on a file with
+    # standard and extended ids and every data length
+    small = os.path.join(W, "mix.mf4")
+    mix = [(fr[0], fr[1], (fr[2] | 0x1000) if k % 3 == 0 else fr[2], fr[3][:k % 9],
+            {"ext"} if k % 3 == 0 else set()) for k, fr in enumerate(ref[:600])]
+    w = can.Logger(small)
+    for fr in mix:
+        w.on_message_received(log.message_of_frame(fr))
+    w.stop()
+    fast = log._read_mf4_data_frames(small)
+    with can.LogReader(small) as rd:
+        slow = [log.frame_of_message(m) for m in rd]
+    check(fast is not None and fast == slow and len(fast) == len(mix),
+          f"MF4 array reader equals python-can's MF4Reader ({0 if fast is None else len(fast)} frames)")
+
     # ---- the CLI's errors (python-can virtual bus: nobody answers)
     bus = ["--interface", "virtual", "--channel", "mdtool_errors", "--timeout", "0.3"]
     listener = can.Bus(interface="virtual", channel="mdtool_errors")

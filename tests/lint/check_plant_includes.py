@@ -24,7 +24,8 @@ import tempfile
 PLANT_DIRS = ("sim/src", "sim/include")
 PLANT_INCLUDE_ROOTS = ("sim/include",)
 # Include directories of the firmware side (what its CMake targets export).
-FIRMWARE_INCLUDE_ROOTS = ("firmware/kernels", "firmware/app", "firmware", "hal/include",
+FIRMWARE_INCLUDE_ROOTS = ("firmware/kernels", "firmware/app", "firmware/app/drive", "firmware/app/ctrl",
+                          "firmware/app/can", "firmware", "hal/include",
                           "hal/host/include", "hal/fake/include", "hal/stm32f405/include", "hal")
 FORBIDDEN_PREFIX = re.compile(r"^(firmware|hal|hal_host|kernels|app|targets)/")
 FIRMWARE_STYLE = re.compile(r"(^|/)mc_[A-Za-z0-9_]*\.h$")
@@ -93,7 +94,7 @@ def self_test():
         "sim/src/a.cpp": '#include "mcsim/a.hpp"\n#include "util.hpp"\n',
         "sim/src/util.hpp": "#pragma once\n",
         "firmware/kernels/math/mc_math.h": "",
-        "firmware/app/mc_drive.h": "",
+        "firmware/app/drive/mc_drive.h": "",
         "hal/include/hal/hal.h": "",
         "firmware/kernels/pi/pi_detail.h": "",
     }
@@ -105,7 +106,7 @@ def self_test():
         "#  include <hal/hal.h>",                # spaced directive
         '#include "firmware/kernels/math/mc_math.h"',
         '#include "pi/pi_detail.h"',             # not mc_*, found under firmware/kernels
-        '#include "../../firmware/app/mc_drive.h"',
+        '#include "../../firmware/app/drive/mc_drive.h"',
         '#include "scenario.hpp"',               # a project header from outside the plant
     ]
     failures = 0

@@ -11,7 +11,9 @@
 #include "math/mc_math.h"
 #include "math/mc_q31.h"
 #include "pi/mc_pi.h"
+#include "pi/mc_pi_q31.h"
 #include "transforms/mc_svpwm.h"
+#include "transforms/mc_svpwm_q31.h"
 #include "transforms/mc_transforms.h"
 
 typedef struct {

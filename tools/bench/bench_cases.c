@@ -36,7 +36,7 @@
 
 #include "csmc/mc_csmc.h"
 #include "csmc/mc_csvc.h"
-#include "csmc/mc_hgo.h"
+#include "observer/mc_hgo.h"
 #include "foc/mc_foc.h"
 #include "hal/hal.h"
 #include "math/mc_math.h"
@@ -45,8 +45,10 @@
 #include "observer/mc_fluxobs.h"
 #include "observer/mc_spdpll.h"
 #include "pi/mc_pi.h"
+#include "pi/mc_pi_q31.h"
 #include "pi2d/mc_pi2d.h"
 #include "transforms/mc_svpwm.h"
+#include "transforms/mc_svpwm_q31.h"
 #include "transforms/mc_transforms.h"
 
 static volatile uint32_t g_sink_u32;

@@ -167,7 +167,7 @@ def main(argv=None):
     sub.add_parser("table", help="protocol table (Markdown)")
     db_ = sub.add_parser("dbc", help="write the DBC for another node id")
     db_.add_argument("-o", required=True)
-    g = sub.add_parser("gen-c", help="generate firmware/app/mc_can_dbc.{h,c}")
+    g = sub.add_parser("gen-c", help="generate firmware/app/can/mc_can_dbc.{h,c}")
     g.add_argument("--out-dir", required=True)
     a = p.parse_args(argv)
     try:

@@ -9,7 +9,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "csmc/mc_hgo.h"
+#include "observer/mc_hgo.h"
 #include "math/mc_math.h"
 
 /* Per axis: no sigma, or its realisation (kind = 1 + st->real). */

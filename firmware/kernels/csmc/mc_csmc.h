@@ -29,7 +29,7 @@
  *       u1 = R^ x1 - L^ (k5 x2 x3 - I_dd') - (dR |x1| + dL |..| + q1) psi1
  *       u2 = R^ x2 + K_m x3 - (L^/k3) G - (dR |x2| + (dL/k3) |G| + q2/k3) psi2
  *   MC_CSMC_LAW_CONST, eqs. (7)/(11): u_i = -M_i psi_i (no model; e2', e2''
- *     may come from the high-gain observer, csmc/mc_hgo.h).
+ *     may come from the high-gain observer, observer/mc_hgo.h).
  * Output clamp: each u_i is limited to [-v_limit_v, v_limit_v].
  *
  * Departures from the printed paper (re-derived; each checked in tests):
@@ -58,7 +58,7 @@
 #include <stdint.h>
 
 #include "csmc/mc_csvc.h"
-#include "csmc/mc_hgo.h"
+#include "observer/mc_hgo.h"
 
 #ifdef __cplusplus
 extern "C" {

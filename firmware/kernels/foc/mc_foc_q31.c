@@ -8,6 +8,7 @@
 
 #include "math/mc_math.h"
 #include "transforms/mc_svpwm.h"
+#include "transforms/mc_svpwm_q31.h"
 #include "transforms/mc_transforms.h"
 
 static bool fq31_pos(float x)

@@ -43,6 +43,7 @@
 #include "foc/mc_foc.h"
 #include "math/mc_q46.h"
 #include "pi/mc_pi.h"
+#include "pi/mc_pi_q31.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -10,11 +10,18 @@
 
 #include <stdbool.h>
 
+#include "transforms/mc_svpwm.h"
 #include "transforms/mc_transforms.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/** The limit is one the modulators know (both twins refuse others). */
+static inline bool mc_svpwm_limit_ok(mc_svpwm_limit_t limit)
+{
+    return (limit == MC_SVPWM_LIMIT_CIRCLE) || (limit == MC_SVPWM_LIMIT_HEXAGON);
+}
 
 /** Largest |v|^2 / vbus^2 of the linear case: |v| < 0.5745 vbus. */
 #define MC_SVPWM_LINEAR_MAG2 0.33f

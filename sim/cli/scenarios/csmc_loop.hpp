@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "csmc/mc_csmc.h"
-#include "csmc/mc_hgo.h"
+#include "observer/mc_hgo.h"
 
 namespace mcsim {
 namespace csmc {

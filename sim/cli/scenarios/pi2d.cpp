@@ -310,7 +310,7 @@ MotorMetrics run_motor(const MotorOptions& o, bool use_pi2d, double duration_s,
                                      0.0f) != 0u) {
               throw std::runtime_error("reference rejected");
             }
-          } else if (d.have_count) {
+          } else if (d.enc_trk.primed) {
             // The drive's telemetry of the previous step holds the last encoder
             // angle; the cascade's speed filter runs on it (one period late, as a
             // speed loop in a lower-priority task would).

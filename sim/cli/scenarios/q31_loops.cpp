@@ -20,6 +20,7 @@ extern "C" {
 #include "math/mc_math.h"
 #include "mc_drive.h"
 #include "transforms/mc_svpwm.h"
+#include "transforms/mc_svpwm_q31.h"
 #include "transforms/mc_transforms.h"
 }
 

@@ -12,7 +12,7 @@ src=$(cd "$1" && pwd); mkdir -p "$2"; work=$(cd "$2" && pwd); secs=$3
 CC=${MC_FUZZ_CC:-clang-14}; CXX=${MC_FUZZ_CXX:-clang++-14}
 command -v "$CC" >/dev/null || { echo "$CC missing (Debian packages clang-14 libfuzzer-14-dev libclang-rt-14-dev)" >&2; exit 2; }
 FLAGS=(-g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off)
-INC=(-I "$src/firmware/kernels" -I "$src/firmware/app" -I "$src/firmware/app/config" -I "$src/hal/include" -I "$src/hal/fake")
+INC=(-I "$src/firmware/kernels" -I "$src/firmware/app" -I "$src/firmware/app/config" -I "$src/firmware/app/drive" -I "$src/firmware/app/ctrl" -I "$src/firmware/app/can" -I "$src/hal/include" -I "$src/hal/fake")
 mkdir -p "$work/obj" "$work/corpus"
 objs=()
 while IFS= read -r f; do
@@ -20,7 +20,7 @@ while IFS= read -r f; do
   "$CC" "${FLAGS[@]/-fsanitize=fuzzer,/-fsanitize=fuzzer-no-link,}" -std=c11 "${INC[@]}" -c "$f" -o "$o"
   objs+=("$o")
 done < <(find "$src/firmware/kernels" -name '*.c' | sort
-         for f in mc_drive mc_can_proto mc_can_dbc mc_telemetry mc_can_cmd; do echo "$src/firmware/app/$f.c"; done
+         for f in drive/mc_drive can/mc_can_proto can/mc_can_dbc can/mc_telemetry can/mc_can_cmd; do echo "$src/firmware/app/$f.c"; done
          find "$src/firmware/app/config" -name '*.c' | sort
          find "$src/hal/fake" -name '*.c' | sort)
 "$CXX" "${FLAGS[@]}" -std=c++17 "${INC[@]}" "$src/tests/can/fuzz/fuzz_can_cmd.cpp" "${objs[@]}" \

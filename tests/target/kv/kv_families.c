@@ -10,7 +10,7 @@
 
 #include "csmc/mc_csmc.h"
 #include "csmc/mc_csvc.h"
-#include "csmc/mc_hgo.h"
+#include "observer/mc_hgo.h"
 #include "filters/mc_ddiff.h"
 #include "foc/mc_foc.h"
 #include "math/mc_math.h"
@@ -19,8 +19,10 @@
 #include "observer/mc_iiobs.h"
 #include "observer/mc_spdpll.h"
 #include "pi/mc_pi.h"
+#include "pi/mc_pi_q31.h"
 #include "pi2d/mc_pi2d.h"
 #include "transforms/mc_svpwm.h"
+#include "transforms/mc_svpwm_q31.h"
 #include "transforms/mc_transforms.h"
 
 #define KV_MAX_WORDS 48u

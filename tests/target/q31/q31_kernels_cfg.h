@@ -6,7 +6,7 @@
 #define MC_Q31_KERNELS_CFG_H
 
 #include "csmc/mc_csmc_q31.h"
-#include "csmc/mc_hgo_q31.h"
+#include "observer/mc_hgo_q31.h"
 #include "filters/mc_ddiff_q31.h"
 #include "foc/mc_foc_q31.h"
 #include "observer/mc_fluxobs_q31.h"

@@ -213,14 +213,14 @@ TEST_F(AppDriveInit, GoodInitIsIdleWithPwmOff)
     EXPECT_EQ(0u, d.first_fault);
     EXPECT_EQ(0.0f, d.id_ref_a);
     EXPECT_EQ(0.0f, d.iq_ref_a);
-    EXPECT_FALSE(d.have_count);
+    EXPECT_FALSE(d.enc_trk.primed);
     // Tracking-loop gains (s + bw)^3: one or two float products each,
     // relative error below 2 * 2^-24 (tolerance 3e-7 relative).
     const double bw = kPllBw;
     const double dt = kDt;
-    EXPECT_NEAR(d.pll_k1_dt, 3.0 * bw * dt, 3e-7 * 3.0 * bw * dt);
-    EXPECT_NEAR(d.pll_k2_dt, 3.0 * bw * bw * dt, 3e-7 * 3.0 * bw * bw * dt);
-    EXPECT_NEAR(d.pll_k3_dt, bw * bw * bw * dt, 3e-7 * bw * bw * bw * dt);
+    EXPECT_NEAR(d.enc_trk.k1_dt, 3.0 * bw * dt, 3e-7 * 3.0 * bw * dt);
+    EXPECT_NEAR(d.enc_trk.k2_dt, 3.0 * bw * bw * dt, 3e-7 * 3.0 * bw * bw * dt);
+    EXPECT_NEAR(d.enc_trk.k3_dt, bw * bw * bw * dt, 3e-7 * bw * bw * bw * dt);
 }
 
 TEST_F(AppDriveInit, ReinitOfARunningDriveResetsIt)

@@ -12,7 +12,7 @@ extern "C" {
 #include "csmc/mc_csmc.h"
 #include "csmc/mc_csmc_linalg.h"
 #include "csmc/mc_csvc.h"
-#include "csmc/mc_hgo.h"
+#include "observer/mc_hgo.h"
 #include "csmc/mc_stepper_dq.h"
 }
 

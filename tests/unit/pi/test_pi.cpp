@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "pi/mc_pi.h"
+#include "pi/mc_pi_q31.h"
 
 namespace {
 

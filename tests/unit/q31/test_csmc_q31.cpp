@@ -11,7 +11,7 @@
 
 extern "C" {
 #include "csmc/mc_csmc_q31.h"
-#include "csmc/mc_hgo_q31.h"
+#include "observer/mc_hgo_q31.h"
 }
 
 using namespace q31t;

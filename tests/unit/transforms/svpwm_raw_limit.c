@@ -1,6 +1,7 @@
 #include "svpwm_raw_limit.h"
 
 #include "transforms/mc_svpwm.h"
+#include "transforms/mc_svpwm_q31.h"
 
 uint32_t svpwm_f32_raw_limit(float v_alpha_v, float v_beta_v, float vbus_v, int raw_limit,
                              float *p_duty_a, float *p_duty_b, float *p_duty_c)

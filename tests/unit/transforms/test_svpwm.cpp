@@ -17,6 +17,7 @@
 
 #include "svpwm_raw_limit.h"
 #include "transforms/mc_svpwm.h"
+#include "transforms/mc_svpwm_q31.h"
 
 namespace {
 

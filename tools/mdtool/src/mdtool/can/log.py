@@ -235,12 +235,52 @@ def read_frames(path):
         return read_candump(path)
     if not os.path.isfile(path):
         raise UsageError(f"cannot read {path}: no such file")
+    if path.lower().endswith(".mf4"):
+        frames = _read_mf4_data_frames(path)
+        if frames is not None:
+            return frames
     import can
     try:
         with can.LogReader(path) as reader:
             return [frame_of_message(m) for m in reader]
     except ImportError as e:
         raise UsageError(f"{path}: reading this format needs {e.name} (tools/requirements.txt)")
+
+
+def _read_mf4_data_frames(path):
+    """The data frames of an MF4 bus log written by python-can, read as whole
+    arrays with asammdf. python-can 4.4's MF4Reader fetches one record per
+    call from the start of the compressed data, which costs O(n^2) or worse:
+    measured 1.4 s for 1000 frames, 109 s for 6000, and a 18,600-frame record
+    of 3 s of telemetry did not finish in 5 minutes. Returns None (the caller
+    then uses python-can's reader) when the file also holds error or remote
+    frames, or is not laid out as python-can writes it."""
+    try:
+        from asammdf import MDF
+    except ImportError as e:
+        raise UsageError(f"{path}: reading this format needs {e.name} (tools/requirements.txt)")
+    mdf = MDF(path)
+    try:
+        if len(mdf.groups) != 3 or any(len(mdf.get_master(i)) for i in (1, 2)):
+            return None
+        sig = mdf.get("CAN_DataFrame", group=0, raw=True)
+        rec = sig.samples
+        names = rec.dtype.names or ()
+        if "CAN_DataFrame.ID" not in names or "CAN_DataFrame.EDL" not in names:
+            return None
+        if (rec["CAN_DataFrame.EDL"] != 0).any():
+            return None  # CAN FD frames: python-can's reader knows their DLC coding
+        start = mdf.header.start_time.timestamp()
+        out = []
+        for t, ch, ide, fid, size, data in zip(
+                sig.timestamps.tolist(), rec["CAN_DataFrame.BusChannel"].tolist(),
+                rec["CAN_DataFrame.IDE"].tolist(), rec["CAN_DataFrame.ID"].tolist(),
+                rec["CAN_DataFrame.DataLength"].tolist(), rec["CAN_DataFrame.DataBytes"]):
+            out.append((float(t + start), str(int(ch)), int(fid), data[:size].tobytes(),
+                        {"ext"} if ide else set()))
+        return out
+    finally:
+        mdf.close()
 
 
 class FrameWriter:

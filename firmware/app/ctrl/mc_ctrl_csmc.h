@@ -35,7 +35,7 @@
 #include <stdint.h>
 
 #include "csmc/mc_csmc.h"
-#include "csmc/mc_hgo.h"
+#include "observer/mc_hgo.h"
 #include "mc_drive.h"
 
 #ifdef __cplusplus

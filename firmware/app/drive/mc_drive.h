@@ -63,6 +63,7 @@
 
 #include "foc/mc_foc.h"
 #include "fw/mc_fw.h"
+#include "observer/mc_enctrack.h"
 #include "hal/hal.h"
 
 #ifdef __cplusplus
@@ -347,13 +348,7 @@ typedef struct {
     mc_fw_f32_t fw;             /**< MTPA / field weakening (cfg.fw_enable) */
     mc_drive_mode_t mode;
     float id_ref_a, iq_ref_a;   /**< accepted references [A] */
-    float pll_theta_m_rad;      /**< encoder PLL position estimate, [0, 2 pi) */
-    float omega_m_rad_s;        /**< encoder PLL speed estimate [rad/s] */
-    float alpha_m_rad_s2;       /**< encoder PLL acceleration estimate [rad/s^2] */
-    float pll_k1_dt;            /**< 3 bw dt, derived at init */
-    float pll_k2_dt;            /**< 3 bw^2 dt, derived at init */
-    float pll_k3_dt;            /**< bw^3 dt, derived at init */
-    bool have_count;
+    mc_enctrack_f32_t enc_trk;  /**< encoder tracking loop: mechanical angle, speed, accel. */
     uint32_t fast_count;        /**< fast steps since init (wraps) */
     uint32_t slow_phase;        /**< fast steps since the last slow step */
     uint32_t faults;            /**< sticky MC_DRIVE_FAULT_* */

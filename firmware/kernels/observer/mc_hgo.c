@@ -2,7 +2,7 @@
  * @file mc_hgo.c
  * @brief High-gain observer, exact ZOH discretisation (see mc_hgo.h).
  */
-#include "csmc/mc_hgo.h"
+#include "observer/mc_hgo.h"
 
 #include <stdbool.h>
 #include <stddef.h>

@@ -57,6 +57,7 @@
 #include "observer/mc_fluxobs_q31.h"
 #include "observer/mc_spdpll_q31.h"
 #include "pi/mc_pi.h"
+#include "pi/mc_pi_q31.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -1,6 +1,6 @@
 /**
  * @file mc_hgo_q31.h
- * @brief q31 twin of the high-gain observer (csmc/mc_hgo.h, paper 001
+ * @brief q31 twin of the high-gain observer (observer/mc_hgo.h, paper 001
  *        eq. (6)), exact discretisation with the same input polynomial.
  *
  * Where q31 cannot hold the dynamic range, and what this kernel does:
@@ -29,7 +29,7 @@
 
 #include <stdint.h>
 
-#include "csmc/mc_hgo.h"
+#include "observer/mc_hgo.h"
 #include "math/mc_q46.h"
 
 #ifdef __cplusplus

@@ -2,7 +2,7 @@
  * @file mc_hgo_q31.c
  * @brief High-gain observer, q31 twin (see mc_hgo_q31.h).
  */
-#include "csmc/mc_hgo_q31.h"
+#include "observer/mc_hgo_q31.h"
 
 #include <stdbool.h>
 #include <stddef.h>

@@ -159,11 +159,10 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
         (void)mc_fw_f32_init(&d->fw, &cfg->fw);
     }
     {
-        const float bw = cfg->speed_pll_bw_rad_s;
-        const float dt = cfg->foc.dt_s;
-        d->pll_k1_dt = 3.0f * bw * dt;
-        d->pll_k2_dt = 3.0f * bw * bw * dt;
-        d->pll_k3_dt = bw * bw * bw * dt;
+        /* validated above (MC_DRIVE_CFG_ERR_SPEED_PLL): cannot fail here */
+        const mc_enctrack_f32_cfg_t tc = {.bw_rad_s = cfg->speed_pll_bw_rad_s,
+                                          .dt_s = cfg->foc.dt_s};
+        (void)mc_enctrack_f32_init(&d->enc_trk, &tc);
     }
     d->foc_err = foc_err;
     d->open_phase_trip = (cfg->open_phase_time_s > 0.0f)
@@ -249,27 +248,10 @@ static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
     d->tm.theta_e_rad =
         mc_wrap_2pi_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);
 
-    /* Speed from a type-3 tracking loop on the encoder angle: states angle,
-     * speed, acceleration; characteristic polynomial (s + bw)^3, i.e.
-     * k1 = 3 bw, k2 = 3 bw^2, k3 = bw^3. A one-period count difference would
-     * be quantised to 2 pi / (cpr dt) (15 rad/s at 8192 counts and 20 kHz),
-     * and a type-2 loop lags by 2 a / bw under constant acceleration a; this
-     * one follows constant acceleration with no steady-state speed error, so
-     * the FOC's back-EMF feed-forward stays right while the rotor speeds up. */
-    if (!d->have_count) {
-        d->pll_theta_m_rad = d->tm.theta_m_rad;
-        d->omega_m_rad_s = 0.0f;
-        d->alpha_m_rad_s2 = 0.0f;
-    } else {
-        const float dt = d->cfg.foc.dt_s;
-        const float predicted = mc_wrap_2pi_f32(d->pll_theta_m_rad + d->omega_m_rad_s * dt);
-        const float err = mc_wrap_pi_f32(d->tm.theta_m_rad - predicted);
-        d->pll_theta_m_rad = mc_wrap_2pi_f32(predicted + d->pll_k1_dt * err);
-        d->omega_m_rad_s += d->alpha_m_rad_s2 * dt + d->pll_k2_dt * err;
-        d->alpha_m_rad_s2 += d->pll_k3_dt * err;
-    }
-    d->have_count = true;
-    d->tm.omega_m_rad_s = d->omega_m_rad_s;
+    /* Speed from the encoder tracking loop (observer/mc_enctrack.h): the
+     * angle is finite by construction, so the step cannot fail. */
+    (void)mc_enctrack_f32_step(&d->enc_trk, d->tm.theta_m_rad);
+    d->tm.omega_m_rad_s = d->enc_trk.omega_rad_s;
 }
 
 static uint32_t check_sample(const mc_drive_t *d, const mc_hal_adc_sample_t *s, float *p_ic)
@@ -310,7 +292,7 @@ static uint32_t encoder_jump_fault(mc_drive_t *d, const mc_hal_encoder_sample_t 
     const uint32_t cpr = enc->counts_per_rev;
     const uint32_t count = (enc->count < cpr) ? enc->count : enc->count % cpr;
     uint32_t f = 0u;
-    if (d->have_count && d->cfg.omega_max_rad_s > 0.0f) {
+    if (d->enc_trk.primed && d->cfg.omega_max_rad_s > 0.0f) {
         uint32_t step = (count >= d->last_count_raw) ? count - d->last_count_raw
                                                      : d->last_count_raw - count;
         if (step > cpr / 2u) {
@@ -371,7 +353,7 @@ static void regen_limit(mc_drive_t *d, float vbus_v, float *p_id_a, float *p_iq_
     float k = 1.0f;
     const float lo = d->cfg.vbus_regen_start_v;
     const float hi = d->cfg.vbus_regen_end_v;
-    if (hi > 0.0f && vbus_v > lo && *p_iq_a * d->omega_m_rad_s < 0.0f) {
+    if (hi > 0.0f && vbus_v > lo && *p_iq_a * d->enc_trk.omega_rad_s < 0.0f) {
         k = (vbus_v >= hi) ? 0.0f : (hi - vbus_v) / (hi - lo);
     }
     d->tm.regen_scale = k;
@@ -448,7 +430,7 @@ static uint32_t stop_current_step(mc_drive_t *d, const mc_hal_adc_sample_t *s, f
     const float wr = d->stop_omega_ref_rad_s;
     const float ff = (wr > 0.0f) ? -d->cfg.stop_iq_ff_a
                                  : ((wr < 0.0f) ? d->cfg.stop_iq_ff_a : 0.0f);
-    float iq = (d->cfg.stop_kp_a_s_rad * (wr - d->omega_m_rad_s)) + ff;
+    float iq = (d->cfg.stop_kp_a_s_rad * (wr - d->enc_trk.omega_rad_s)) + ff;
     const float lim = d->cfg.i_max_a;
     iq = (iq > lim) ? lim : ((iq < -lim) ? -lim : iq);
     d->id_ref_a = 0.0f;
@@ -456,7 +438,7 @@ static uint32_t stop_current_step(mc_drive_t *d, const mc_hal_adc_sample_t *s, f
     mc_foc_f32_in_t in = {
         .ia_a = s->ia_a, .ib_a = s->ib_a, .ic_a = ic, .three_phase = false,
         .theta_e_rad = d->tm.theta_e_rad,
-        .omega_e_rad_s = d->omega_m_rad_s * (float)d->cfg.pole_pairs,
+        .omega_e_rad_s = d->enc_trk.omega_rad_s * (float)d->cfg.pole_pairs,
         .vbus_v = s->vbus_v, .id_ref_a = 0.0f, .iq_ref_a = iq,
     };
     const uint32_t ferr = mc_foc_f32_step(&d->foc, &in, &d->tm.foc);
@@ -476,13 +458,13 @@ static void begin_stop(mc_drive_t *d, uint32_t cause)
     }
     d->stop_cause = cause;
     const bool ctrl = (d->mode == MC_DRIVE_MODE_CTRL);
-    const float w0 = mc_abs_f32(d->omega_m_rad_s);
+    const float w0 = mc_abs_f32(d->enc_trk.omega_rad_s);
     bool ok = d->cfg.stop_decel_rad_s2 > 0.0f;
     if (ok && ctrl) {
         ok = (d->ctrl->stop != NULL) && (d->ctrl->stop(d->ctrl->ctx, d->cfg.stop_decel_rad_s2) == 0u);
     }
     if (ok && !ctrl) {
-        ok = d->hal->encoder != NULL && d->have_count;
+        ok = d->hal->encoder != NULL && d->enc_trk.primed;
     }
     if (!ok) {
         outputs_off(d);
@@ -492,7 +474,7 @@ static void begin_stop(mc_drive_t *d, uint32_t cause)
         return;
     }
     d->stop_from_ctrl = ctrl;
-    d->stop_omega_ref_rad_s = d->omega_m_rad_s;
+    d->stop_omega_ref_rad_s = d->enc_trk.omega_rad_s;
     d->stop_time_s = 0.0f;
     d->stop_time_max_s = (2.0f * w0 / d->cfg.stop_decel_rad_s2) + 0.1f;
     d->mode = MC_DRIVE_MODE_STOPPING;
@@ -526,7 +508,7 @@ static void stop_supervise(mc_drive_t *d, float slow_dt, const mc_hal_adc_temp_t
     }
     d->stop_time_s += slow_dt;
     const bool ramp_done = d->stop_from_ctrl || d->stop_omega_ref_rad_s == 0.0f;
-    if ((ramp_done && mc_abs_f32(d->omega_m_rad_s) <= d->cfg.stop_rest_rad_s) ||
+    if ((ramp_done && mc_abs_f32(d->enc_trk.omega_rad_s) <= d->cfg.stop_rest_rad_s) ||
         d->stop_time_s > d->stop_time_max_s) {
         outputs_off(d);
         d->id_ref_a = 0.0f;
@@ -574,7 +556,7 @@ bool mc_drive_fast_step(mc_drive_t *d)
             update_position(d, &enc);
             have_enc = true;
             if (d->cfg.omega_max_rad_s > 0.0f &&
-                mc_abs_f32(d->omega_m_rad_s) > d->cfg.omega_max_rad_s) {
+                mc_abs_f32(d->enc_trk.omega_rad_s) > d->cfg.omega_max_rad_s) {
                 f |= MC_DRIVE_FAULT_OVERSPEED;
             }
         }
@@ -590,7 +572,7 @@ bool mc_drive_fast_step(mc_drive_t *d)
         mc_foc_f32_in_t in = {
             .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .three_phase = false,
             .theta_e_rad = d->tm.theta_e_rad,
-            .omega_e_rad_s = d->omega_m_rad_s * (float)d->cfg.pole_pairs,
+            .omega_e_rad_s = d->enc_trk.omega_rad_s * (float)d->cfg.pole_pairs,
             .vbus_v = s.vbus_v, .id_ref_a = d->tm.id_ref_a, .iq_ref_a = d->tm.iq_ref_a,
         };
         const uint32_t ferr = mc_foc_f32_step(&d->foc, &in, &d->tm.foc);
@@ -611,7 +593,7 @@ bool mc_drive_fast_step(mc_drive_t *d)
         const mc_drive_meas_t m = {
             .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .vbus_v = s.vbus_v,
             .have_encoder = have_enc, .theta_m_rad = d->tm.theta_m_rad,
-            .theta_e_rad = d->tm.theta_e_rad, .omega_m_rad_s = d->omega_m_rad_s,
+            .theta_e_rad = d->tm.theta_e_rad, .omega_m_rad_s = d->enc_trk.omega_rad_s,
             .enc_count = enc.count, .enc_cpr = enc.counts_per_rev,
             .dt_s = d->cfg.foc.dt_s, .fast_count = d->fast_count,
         };
@@ -659,7 +641,7 @@ void mc_drive_slow_step(mc_drive_t *d)
     if (d->mode == MC_DRIVE_MODE_CURRENT && d->cfg.stall_time_s > 0.0f) {
         const bool stalled =
             mc_abs_f32(d->tm.foc.iq_a) >= d->cfg.stall_current_frac * d->cfg.i_max_a &&
-            mc_abs_f32(d->omega_m_rad_s) < d->cfg.stall_speed_rad_s;
+            mc_abs_f32(d->enc_trk.omega_rad_s) < d->cfg.stall_speed_rad_s;
         d->stall_time_acc_s = stalled ? d->stall_time_acc_s + slow_dt : 0.0f;
         if (d->stall_time_acc_s > d->cfg.stall_time_s) {
             raise_fault(d, MC_DRIVE_FAULT_STALL);
