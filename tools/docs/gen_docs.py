@@ -44,7 +44,7 @@ import tomllib
 
 ROOT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 SKIP_DIRS = {".git", "build", ".venv", "out", ".cache", "node_modules", "__pycache__"}
-GEN_RE = re.compile(r"<!-- gen:([a-z0-9-]+) -->\n(.*?)<!-- /gen:\1 -->", re.S)
+GEN_RE = re.compile(r"<!-- gen:([a-z0-9-]+) -->\n(.*?)<!-- /gen:\1 -->", re.DOTALL)
 GEN_OPEN_RE = re.compile(r"<!-- gen:([a-z0-9-]+) -->")
 NUM_RE = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
 TOP_DIRS = ("firmware/", "hal/", "sim/", "tests/", "tools/", ".ci/")
@@ -56,6 +56,11 @@ EXACT_QEMU = "exactly (QEMU -icount counts instructions deterministically)"
 
 class DocError(Exception):
     pass
+
+
+def read_text(path):
+    with open(path, encoding="utf-8") as fh:
+        return fh.read()
 
 
 # ---------------------------------------------------------------------------
@@ -111,7 +116,7 @@ class Ctx:
 
 
 def run(cmd, cwd=ROOT, timeout=900):
-    p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout)
+    p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout, check=False)
     if p.returncode != 0:
         raise DocError(f"{' '.join(cmd)} exited {p.returncode}:\n{p.stdout[-2000:]}{p.stderr[-2000:]}")
     return p.stdout
@@ -156,7 +161,8 @@ def gtest(binary, filt="*"):
         out = os.path.join(ctx.workdir(("gtest", binary, filt)), "out.json")
         exe = ctx.input(binary)
         p = subprocess.run([exe, f"--gtest_filter={filt}", f"--gtest_output=json:{out}"],
-                           cwd=os.path.dirname(exe), capture_output=True, text=True, timeout=900)
+                           cwd=os.path.dirname(exe), capture_output=True, text=True, timeout=900,
+                           check=False)
         if p.returncode != 0 or not os.path.exists(out):
             raise DocError(f"{binary} --gtest_filter={filt} failed (exit {p.returncode}): "
                            "a table is never made from a failing test\n" + p.stdout[-3000:])
@@ -473,19 +479,19 @@ def _csmc_results(ctx, sf, eps, sin, drv):
     ev = sorted(((float(k[len(pre):]), v) for k, v in e.items() if k.startswith(pre)), reverse=True)
     return table(["scenario", "result"], [
         ["`csmc-state-feedback` (Fig. 2)",
-         f"overshoot {g(s['step1_overshoot_pct'])} % / {g(s['step2_overshoot_pct'])} %, "
+         (f"overshoot {g(s['step1_overshoot_pct'])} % / {g(s['step2_overshoot_pct'])} %, "
          f"2 % settling {g(s['step1_settling_2pct_s'] * 1e3)} ms / "
-         f"{g(s['step2_settling_2pct_s'] * 1e3)} ms (first / second step)"],
+         f"{g(s['step2_settling_2pct_s'] * 1e3)} ms (first / second step)")],
         ["`csmc-output-feedback-eps` (Fig. 3b)",
          "max \\|e2 − e2 of state feedback\\|: " + ", ".join(
              f"{g(v * 1e3, 2)} mrad (ε = {g(k)})" for k, v in ev)],
         ["`csmc-sinusoid` (Fig. 5)",
-         f"steady \\|e2\\| max {g(n['svc_e2_ss_max_abs_rad'])} rad with the servocompensators, "
-         f"{g(n['nosvc_e2_ss_max_abs_rad'])} rad without: {g(n['ratio_nosvc_over_svc'])}x"],
+         (f"steady \\|e2\\| max {g(n['svc_e2_ss_max_abs_rad'])} rad with the servocompensators, "
+         f"{g(n['nosvc_e2_ss_max_abs_rad'])} rad without: {g(n['ratio_nosvc_over_svc'])}x")],
         ["`csmc-drive` (drive + plug-in, 10 kHz, one-period delay)",
-         f"steady \\|e2\\| max {g(d['e2_ss_max_abs_rad'])} rad, overshoot "
+         (f"steady \\|e2\\| max {g(d['e2_ss_max_abs_rad'])} rad, overshoot "
          f"{g(d['overshoot_pct'])} %, settling {g(d['settling_2pct_s'] * 1e3)} ms, "
-         f"{g(d['vq_sign_changes_per_s'])} v_q sign changes per s, faults {g(d['faults'])}"]])
+         f"{g(d['vq_sign_changes_per_s'])} v_q sign changes per s, faults {g(d['faults'])}")]])
 
 
 # --- q31 twins -------------------------------------------------------------------
@@ -525,17 +531,17 @@ def _q31_kernels(ctx, t, m4, m3):
     rows = []
     for lab, test, key, case in Q31_KERNELS:
         u = unit(test, key)
-        rows.append([lab, f"{_with_unit(prop(t, test, key), u, 2)} "
-                          f"({_with_unit(prop(t, test, key + '.bound'), u, 2)})",
-                     f"{_instr(_bench_mean(m4, case, 'f32') if case else None)} / "
-                     f"{_instr(_bench_mean(m4, case, 'q31') if case else None)}",
-                     f"{_instr(_bench_mean(m3, case, 'f32') if case else None)} / "
-                     f"{_instr(_bench_mean(m3, case, 'q31') if case else None)}"])
+        rows.append([lab, (f"{_with_unit(prop(t, test, key), u, 2)} "
+                          f"({_with_unit(prop(t, test, key + '.bound'), u, 2)})"),
+                     (f"{_instr(_bench_mean(m4, case, 'f32') if case else None)} / "
+                     f"{_instr(_bench_mean(m4, case, 'q31') if case else None)}"),
+                     (f"{_instr(_bench_mean(m3, case, 'f32') if case else None)} / "
+                     f"{_instr(_bench_mean(m3, case, 'q31') if case else None)}")])
     hgo = "HgoQ31.MatchesF32AtEps1e4"
     kq, kf = "hgo |z3 q31 - true y''| after 10 ms", "hgo |z3 f32 - true y''| after 10 ms"
     rows.append(["high-gain observer: \\|z3 − true y''\\| after 10 ms",
-                 f"q31 {_with_unit(prop(t, hgo, kq), unit(hgo, kq), 2)}, "
-                 f"f32 {_with_unit(prop(t, hgo, kf), unit(hgo, kf), 2)}", "", ""])
+                 (f"q31 {_with_unit(prop(t, hgo, kq), unit(hgo, kq), 2)}, "
+                 f"f32 {_with_unit(prop(t, hgo, kf), unit(hgo, kf), 2)}"), "", ""])
     return table(["kernel", "\\|f32 − q31\\| max (test bound)", "instructions M4F f32 / q31",
                   "instructions M3 f32 (soft float) / q31"], rows)
 
@@ -599,9 +605,9 @@ def _fault_defs():
             hdr = os.path.join(dp, "mc_drive.h")
     if hdr is None:
         raise DocError("firmware/app/**/mc_drive.h not found")
-    text = open(hdr).read()
+    text = read_text(hdr)
     out = []
-    for m in re.finditer(r"#define MC_DRIVE_FAULT_(\w+)\s+\(1u << (\d+)\)\s*/\*\*<(.*?)\*/", text, re.S):
+    for m in re.finditer(r"#define MC_DRIVE_FAULT_(\w+)\s+\(1u << (\d+)\)\s*/\*\*<(.*?)\*/", text, re.DOTALL):
         desc = " ".join(m.group(3).split())
         out.append((m.group(1), int(m.group(2)), desc))
     if not out:
@@ -613,13 +619,13 @@ def _tests_asserting(dirs, const):
     """TEST blocks under dirs with an assertion (EXPECT_/ASSERT_, or a helper
     whose name contains Expect) that names `const`: Suite.Name list."""
     found = []
-    pat = re.compile(r"^TEST(?:_F|_P)?\((\w+),\s*(\w+)\)", re.M)
+    pat = re.compile(r"^TEST(?:_F|_P)?\((\w+),\s*(\w+)\)", re.MULTILINE)
     for d in dirs:
         for dp, dn, fn in os.walk(os.path.join(ROOT, d)):
             for n in sorted(fn):
                 if not n.endswith(".cpp"):
                     continue
-                text = open(os.path.join(dp, n)).read()
+                text = read_text(os.path.join(dp, n))
                 heads = list(pat.finditer(text))
                 for i, h in enumerate(heads):
                     body = text[h.end():heads[i + 1].start() if i + 1 < len(heads) else len(text)]
@@ -649,7 +655,7 @@ def _drive_faults(ctx, sil, unit):
         for where, name, p in measured.get(1 << bit, []):
             per = p["period_s"]
 
-            def t(x):  # periods, or seconds where that is clearer
+            def t(x, per=per):  # periods, or seconds where that is clearer
                 n = x / per
                 if n >= 1000:
                     return f"{g(x, 4)} s"
@@ -768,7 +774,7 @@ def _can_cansend(ctx, *outs):
 
 def _motor_library_pairs():
     p = os.path.join(ROOT, "tests", "sil", "motors", "motor_library.hpp")
-    text = open(p).read()
+    text = read_text(p)
     return dict(re.findall(r'\{"([\w.-]+)",\s*"([\w.-]*)"\}', text))
 
 
@@ -817,7 +823,7 @@ def regions(root=ROOT):
     """NAME -> (path, body); errors for unknown or duplicated regions."""
     found, errors = {}, []
     for p in docs(root):
-        text = open(p, encoding="utf-8").read()
+        text = read_text(p)
         opened = GEN_OPEN_RE.findall(text)
         closed = GEN_RE.findall(text)
         if len(opened) != len(closed):
@@ -833,9 +839,9 @@ def regions(root=ROOT):
 
 
 def rewrite(path, name, body):
-    text = open(path, encoding="utf-8").read()
+    text = read_text(path)
     new = re.sub(r"(<!-- gen:" + re.escape(name) + r" -->\n).*?(<!-- /gen:" + re.escape(name) + r" -->)",
-                 lambda m: m.group(1) + body + m.group(2), text, count=1, flags=re.S)
+                 lambda m: m.group(1) + body + m.group(2), text, count=1, flags=re.DOTALL)
     if new != text:
         with open(path, "w", encoding="utf-8") as fh:
             fh.write(new)
@@ -872,7 +878,7 @@ def compare(doc, fresh, tol):
 
 LINK_RE = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
 CODE_RE = re.compile(r"`([^`\s]+)`")
-FENCE_RE = re.compile(r"^```.*?^```", re.S | re.M)
+FENCE_RE = re.compile(r"^```.*?^```", re.DOTALL | re.MULTILINE)
 
 
 def _expand(p):
@@ -888,7 +894,7 @@ def _expand(p):
 def check_links(root=ROOT):
     errors = []
     for p in docs(root):
-        text = open(p, encoding="utf-8").read()
+        text = read_text(p)
         rel = os.path.relpath(p, root)
         prose = FENCE_RE.sub("", text)
         for m in LINK_RE.finditer(prose):
