@@ -99,7 +99,9 @@ typedef enum {
 #define MC_DRIVE_FAULT_VBUS_LOW    (1u << 3)  /**< DC bus below vbus_min_v */
 #define MC_DRIVE_FAULT_VBUS_HIGH   (1u << 4)  /**< DC bus above vbus_max_v */
 #define MC_DRIVE_FAULT_ENCODER     (1u << 5)  /**< encoder read failed or not valid */
-#define MC_DRIVE_FAULT_CONTROL     (1u << 6)  /**< the FOC kernel reported an error */
+#define MC_DRIVE_FAULT_CONTROL     (1u << 6)  /**< the FOC or field-weakening kernel, or
+                                                   the plugged control law, reported an
+                                                   error */
 #define MC_DRIVE_FAULT_PWM         (1u << 7)  /**< the PWM driver refused the duties */
 #define MC_DRIVE_FAULT_HW_INPUT    (1u << 8)  /**< gate-driver fault / over-current comparator,
                                                    or its status unreadable */
@@ -112,7 +114,9 @@ typedef enum {
                                                    i_max while |omega_m| < stall speed, for
                                                    longer than stall_time_s */
 #define MC_DRIVE_FAULT_EXTERNAL    (1u << 13) /**< raised by the application through
-                                                   mc_drive_raise_fault (e.g. CAN timeout) */
+                                                   mc_drive_raise_fault (no firmware module
+                                                   raises it; a CAN command timeout is a
+                                                   controlled stop) */
 #define MC_DRIVE_FAULT_UNBALANCED  (1u << 14) /**< three measured phase currents do not sum
                                                    to zero: a stuck, offset or failed
                                                    current sensor (needs three shunts) */

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "scenarios/pi2d_sil.hpp"
+#include "mc_record.hpp"
 
 namespace {
 
@@ -167,6 +168,9 @@ TEST(Pi2dPaper, SampledFirmwareLawMatchesContinuousClosedLoop) {
   // float floor).
   EXPECT_GT(e10.x3 / e20.x3, 1.6);
   EXPECT_LT(e10.x3 / e20.x3, 2.4);
+  mc_record("x3_err_10khz", e10.x3, 6.0e-4);
+  mc_record("x2_err_10khz", e10.x2, 3.5e-2);
+  mc_record("x3_err_ratio_10_over_20khz", e10.x3 / e20.x3);
   EXPECT_GT(e10.x4 / e20.x4, 1.6);
   EXPECT_LT(e10.x4 / e20.x4, 2.4);
 }

@@ -15,6 +15,7 @@
 
 #include "drive_setup.hpp"
 #include "motor_file.hpp"
+#include "mc_record.hpp"
 
 namespace mcsim {
 namespace {
@@ -67,6 +68,7 @@ void Check(const StopResult& r) {
   const double t_pred = std::abs(r.w0) / r.decel;
   EXPECT_GE(r.t_stop_s / t_pred, 0.95);
   EXPECT_LE(r.t_stop_s / t_pred, 1.20) << "t_stop " << r.t_stop_s << " pred " << t_pred;
+  mc_record("stop_time_ratio", r.t_stop_s / t_pred, 1.20);
   std::printf("stop: w0 %.2f rad/s, decel %.1f rad/s^2, t %.5f s (pred %.5f, ratio %.4f), "
               "w at bridge off %.4f rad/s\n",
               r.w0, r.decel, r.t_stop_s, t_pred, r.t_stop_s / t_pred, r.w_at_open);

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "app_test_fixture.h"
+#include "mc_record.hpp"
 
 namespace apptest {
 namespace {
@@ -85,6 +86,9 @@ TEST_F(AppDriveSupervision, OverSpeedTripsOnTheSpeedEstimate)
     // reaches omega_max = w/1.5 in about 3/bw (6 ms, 120 steps); 400 steps
     // (20 ms) is a loose bound that still fails a loop that never trips.
     EXPECT_LT(steps, 400);
+    mc_record("fault_bits", d.faults);
+    mc_record("period_s", kDt);
+    mc_record("latency_s", steps * kDt, 400 * kDt);
 }
 
 TEST_F(AppDriveSupervision, ImplausibleEncoderStepIsAnEncoderFault)

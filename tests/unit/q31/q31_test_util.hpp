@@ -9,6 +9,8 @@ extern "C" {
 #include "math/mc_q31.h"
 }
 
+#include "mc_record.hpp"
+
 namespace q31t {
 
 constexpr double kQ31 = 2147483648.0;  // 2^31
@@ -35,9 +37,11 @@ inline q31_t ang_q(double rad) {
 // |a - b| folded to [0, pi]
 inline double ang_diff(double a, double b) { return std::abs(std::remainder(a - b, 2.0 * kPi)); }
 
-// Report a measured value next to its bound (ctest -V shows it).
+// Report a measured value next to its bound (ctest -V shows it; the
+// documents read it as a test property, mc_record.hpp).
 inline void report(const char* what, double measured, double bound, const char* unit) {
   std::printf("[ measured ] %-48s %.4g %s (bound %.4g)\n", what, measured, unit, bound);
+  mc_record(what, measured, bound, unit);
 }
 
 }  // namespace q31t
