@@ -22,7 +22,8 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -132,7 +133,7 @@ def run(scenario: str, motor: str | os.PathLike | None = None,
 
 def scenarios() -> list[dict[str, Any]]:
     """The registered scenarios (as `mcsim list`)."""
-    return [dict(name=n, description=d, default_duration_s=t, any_motor=m)
+    return [{"name": n, "description": d, "default_duration_s": t, "any_motor": m}
             for n, d, t, m in _sil.scenarios()]
 
 
