@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The whole test suite (called by tools/bootstrap.sh test, after set-up):
 #  1. host debug build: every test (unit, sil, can, lint, target);
-#  2. host-asan build: the same minus lint, under ASan + UBSan;
+#  2. host-asan build: the same minus lint, fuzz and campaign, under ASan + UBSan;
 #  3. stm32f405 cross build with warnings as errors.
 set -euo pipefail
 cd "$(dirname "$0")/.."
