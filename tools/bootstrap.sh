@@ -21,7 +21,7 @@ APT_PACKAGES=(
   gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
   qemu-system-arm
   can-utils
-  cppcheck clang-tidy
+  cppcheck clang-tidy clang-format
   clang-14 libfuzzer-14-dev libclang-rt-14-dev
   qemu-system-x86 busybox-static linux-image-amd64 cpio kmod iproute2
   python3 python3-venv python3-dev ca-certificates

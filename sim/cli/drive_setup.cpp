@@ -555,10 +555,10 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
   if (mc_drive_set_mode(&drive_, mode) != 0) throw std::runtime_error("drive refused its mode");
 }
 
-void MotorRig::set_speed_ref(double w) {
-  w_cmd_ = w;
+void MotorRig::set_speed_ref(double omega_m_rad_s) {
+  w_cmd_ = omega_m_rad_s;
   if (o_.law == Law::kSensorless) {
-    if (mc_ctrl_sls_set_speed_ref(&sls_, static_cast<float>(w)) != 0u) {
+    if (mc_ctrl_sls_set_speed_ref(&sls_, static_cast<float>(omega_m_rad_s)) != 0u) {
       throw UsageError("speed reference rejected by the sensorless law");
     }
   }

@@ -141,6 +141,7 @@ class MotorRig {
   MotorRig(const MotorFiles& f, const Gains& g, RigOptions o);
   MotorRig(const MotorRig&) = delete;
   MotorRig& operator=(const MotorRig&) = delete;
+  ~MotorRig() = default;
 
   void step();
   /// Speed reference (mechanical) for the speed laws; the sensored PI and

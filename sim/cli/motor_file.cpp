@@ -4,6 +4,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <utility>
 #include <toml++/toml.h>
 
 #include "scenario.hpp"
@@ -27,9 +28,9 @@ using SetSources = std::map<std::string, std::string>;
 // the rest as unknown.
 class TableReader {
  public:
-  TableReader(const std::string& file, const std::string& table_name, const toml::table& t,
+  TableReader(std::string file, std::string table_name, const toml::table& t,
               const SetSources& sets)
-      : file_(file), name_(table_name), t_(t), sets_(sets) {}
+      : file_(std::move(file)), name_(std::move(table_name)), t_(t), sets_(sets) {}
 
   // Where key's value came from: the file, or the --set that replaced it.
   std::string src(const std::string& key) const {
@@ -59,7 +60,7 @@ class TableReader {
 
   // A finite number in [lo, hi] (integers accepted). lo_open: lo excluded.
   double number(const toml::node* n, const std::string& key, double lo, double hi, bool lo_open,
-                const std::string& unit) {
+                const std::string& unit) const {
     if (!n->is_number()) fail(src(key), line_of(*n), "'" + key + "' must be a number (" + unit + ")");
     const double v = n->value<double>().value_or(std::nan(""));
     if (!std::isfinite(v) || v > hi || (lo_open ? v <= lo : v < lo)) {
@@ -78,7 +79,7 @@ class TableReader {
     const toml::node* n = maybe(key);
     return n == nullptr ? dflt : number(n, key, lo, hi, lo_open, unit);
   }
-  long integer(const toml::node* n, const std::string& key, long lo, long hi) {
+  long integer(const toml::node* n, const std::string& key, long lo, long hi) const {
     if (!n->is_integer()) fail(src(key), line_of(*n), "'" + key + "' must be an integer");
     const long v = static_cast<long>(n->value<int64_t>().value_or(0));
     if (v < lo || v > hi) {
@@ -106,10 +107,15 @@ class TableReader {
     for (const auto& kv : t_) {
       const std::string k(kv.first.str());
       if (seen_.count(k) == 0u) {
-        std::string known;
-        for (const auto& s : seen_) known += (known.empty() ? "" : ", ") + s;
-        fail(src(k), line_of(kv.second), "unknown key '" + k + "' in [" + name_ + "] (known: " +
-                                            known + ")");
+        std::ostringstream msg;
+        msg << "unknown key '" << k << "' in [" << name_ << "] (known: ";
+        const char* sep = "";
+        for (const auto& s : seen_) {
+          msg << sep << s;
+          sep = ", ";
+        }
+        msg << ")";
+        fail(src(k), line_of(kv.second), msg.str());
       }
     }
   }

@@ -179,7 +179,7 @@ void Progress::update(double t_s, double duration_s) {
   std::fflush(stderr);
 }
 
-void Progress::done() {
+void Progress::done() const {
   if (enabled_ && last_pct_ >= 0) std::fprintf(stderr, "\r\033[K");
 }
 

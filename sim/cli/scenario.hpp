@@ -125,7 +125,7 @@ class Progress {
  public:
   explicit Progress(bool enabled) : enabled_(enabled) {}
   void update(double t_s, double duration_s);
-  void done();
+  void done() const;
 
  private:
   bool enabled_;
@@ -133,7 +133,7 @@ class Progress {
 };
 
 struct RunContext {
-  double duration_s;
+  double duration_s = 0.0;
   const Params& params;
   RowSink& csv;  ///< the trajectory (a CSV file for the CLI)
   Summary& summary;

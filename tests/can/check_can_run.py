@@ -74,7 +74,8 @@ def main():
     a = ap.parse_args()
 
     db = mc_can.load_db()
-    summ = json.load(open(a.json))
+    with open(a.json) as f:
+        summ = json.load(f)
     head, rows = load_csv(a.csv)
     col = {h: i for i, h in enumerate(head)}
     frames = mc_can.read_candump(a.log)
@@ -99,7 +100,7 @@ def main():
             continue
         msg = db.get_message_by_name(name)
         worst = 0.0
-        for k, (row, (_t, vals)) in enumerate(zip(sent_rows, got)):
+        for k, (row, (_t, vals)) in enumerate(zip(sent_rows, got, strict=True)):
             for s in msg.signals:
                 want = row[col[f"{name}.{s.name}"]]
                 want_q = min(max(want, s.minimum), s.maximum)  # the packer saturates
@@ -209,13 +210,14 @@ def main():
         for i in sorted(set(mine) | set(theirs)):
             x, y = theirs.get(i, []), mine.get(i, [])
             if x != y:
-                first = next((k for k, (u, v) in enumerate(zip(x, y)) if u != v), min(len(x), len(y)))
+                first = next((k for k, (u, v) in enumerate(zip(x, y, strict=False)) if u != v), min(len(x), len(y)))
                 check(False, f"id 0x{i:03X}: candump {len(x)} frames, logger {len(y)};"
                              f" first difference at its frame {first}")
         print(f"logger recording: {len(rec)} frames, each id's frames the same and in the same"
               " order as candump's")
     if a.logger_report:
-        rep = json.load(open(a.logger_report))
+        with open(a.logger_report) as f:
+            rep = json.load(f)
         check(rep["kernel_dropped"] == 0,
               f"the kernel dropped {rep['kernel_dropped']} frames on the logger's socket")
         check(rep["frames"] == len(mc_can.read_candump(a.logger_log or a.log)),

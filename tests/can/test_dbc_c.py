@@ -70,7 +70,7 @@ def main():
             check((int(f[0]), int(f[1]), int(f[2])) == (s.start, s.length, int(s.is_signed)),
                   f"{m.name}.{s.name}: bits {f[:3]}")
             for got, want, what in zip(map(float, f[3:]), (s.scale, s.offset, s.minimum, s.maximum),
-                                       ("scale", "offset", "min", "max")):
+                                       ("scale", "offset", "min", "max"), strict=True):
                 check(abs(got - want) <= 1e-7 * max(1.0, abs(want)), f"{m.name}.{s.name}.{what}: {got} vs {want}")
 
     # 3. C pack -> cantools decode
@@ -84,11 +84,11 @@ def main():
             reqs.append(f"{idx} 1 " + " ".join(repr(x) for x in v))
             vals.append((m, v))
     worst = 0.0
-    for (m, v), out in zip(vals, run(a.codec, "pack", reqs)):
+    for (m, v), out in zip(vals, run(a.codec, "pack", reqs), strict=True):
         fid, hexdata = out.split()[0], (out.split() + [""])[1]
         check(int(fid, 16) == m.frame_id, f"{m.name}: id {fid}")
         dec = db.decode_message(m.frame_id, bytes.fromhex(hexdata), decode_choices=False, scaling=True)
-        for s, x in zip(m.signals, v):
+        for s, x in zip(m.signals, v, strict=True):
             tol = 0.5 * s.scale + 2.4e-7 * max(1.0, abs(x))
             err = abs(dec[s.name] - x)
             worst = max(worst, err / tol)
@@ -104,10 +104,10 @@ def main():
             data = m.encode(v, scaling=True, strict=False) if m.signals else b""
             reqs.append(f"{m.frame_id:03X} {data.hex()}")
             exp.append((m, db.decode_message(m.frame_id, data, decode_choices=False) if m.signals else {}))
-    for (m, dec), out in zip(exp, run(a.codec, "unpack", reqs)):
+    for (m, dec), out in zip(exp, run(a.codec, "unpack", reqs), strict=True):
         f = out.split()
         check(int(f[0]) == 0, f"{m.name}: C unpack error {f[0]} on a cantools frame")
-        for s, x in zip(m.signals, map(float, f[2:])):
+        for s, x in zip(m.signals, map(float, f[2:]), strict=True):
             check(abs(x - dec[s.name]) <= 1e-6 * abs(dec[s.name]) + 1e-9 + 1.2e-7 * abs(s.offset),
                   f"{m.name}.{s.name}: C {x}, cantools {dec[s.name]}")
     print(f"cantools encode -> C unpack: {len(reqs)} frames agree")
@@ -125,7 +125,7 @@ def main():
             reqs.append(f"{m.frame_id:03X} {data.hex()}")
             exp.append((m, out_of, data))
     n_range = 0
-    for (m, out_of, data), out in zip(exp, run(a.codec, "unpack", reqs)):
+    for (m, out_of, data), out in zip(exp, run(a.codec, "unpack", reqs), strict=True):
         e = int(out.split()[0])
         n_range += e == ERR_RANGE
         check((e == ERR_RANGE) == out_of and e in (0, ERR_RANGE),

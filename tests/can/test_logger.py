@@ -39,7 +39,7 @@ def main():
     # (wrap, no loss); HEARTBEAT at 10 Hz; a frame of node 2 and a broken
     # length that the decoder must skip.
     lines, t = [], 0.0
-    seqs = [s for s in range(20) if s not in (4, 5)] + list(range(250, 256)) + list(range(0, 4))
+    seqs = [s for s in range(20) if s not in (4, 5)] + list(range(250, 256)) + list(range(4))
     for k, s in enumerate(seqs):
         t = 0.01 * k
         data = mc_can.encode_signals(cur, {"i_d_a": 0.1 * k, "i_q_a": -0.5, "i_d_ref_a": 0.0,
@@ -79,12 +79,14 @@ def main():
     out = os.path.join(a.work, "csv")
     r = cli("decode", log, "--out", out)
     check(r.returncode == 0, f"decode failed: {r.stderr}")
-    rows = list(csv.DictReader(open(os.path.join(out, "CURRENTS.csv"))))
+    with open(os.path.join(out, "CURRENTS.csv")) as f:
+        rows = list(csv.DictReader(f))
     check(len(rows) == len(seqs), f"CURRENTS.csv rows {len(rows)}")
     check(abs(float(rows[3]["i_d_a"]) - 0.3) <= 0.001 + 1e-12, "i_d_a decoded")  # half of 0.002 A
     check(float(rows[0]["t"]) == 0.0, "time origin")
     r = cli("decode", log, "--out", out, "--merged")
-    rows = list(csv.DictReader(open(os.path.join(out, "merged.csv"))))
+    with open(os.path.join(out, "merged.csv")) as f:
+        rows = list(csv.DictReader(f))
     check(len(rows) == len(seqs) + 3 and "CURRENTS.i_q_a" in rows[0], "merged.csv")
 
     # the DBC re-based for node 2 decodes node 2's frames with cantools

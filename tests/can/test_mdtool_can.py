@@ -19,6 +19,7 @@ frames and on python-can's virtual bus:
     test_mdtool_can.py --mcsim MCSIM --work DIR
 """
 import argparse
+import itertools
 import json
 import os
 import shutil
@@ -52,7 +53,7 @@ def same_frames(a, b, tol):
     if len(a) != len(b):
         return f"{len(a)} vs {len(b)} frames"
     ta0, tb0 = a[0][0], b[0][0]
-    for i, (x, y) in enumerate(zip(a, b)):
+    for i, (x, y) in enumerate(zip(a, b, strict=True)):
         if (x[2], x[3], x[4]) != (y[2], y[3], y[4]):
             return f"frame {i}: {x} vs {y}"
         if abs((x[0] - ta0) - (y[0] - tb0)) > tol:
@@ -99,14 +100,17 @@ def main():
 
     # ---- record from a python-can virtual bus into every format
     import can
+
+    def record_into(rep, out, chan, ready, stop):
+        rep.update(record.record(out, db, 1, interface="virtual", channel=chan, ready=ready, stop=stop,
+                                 log=lambda *_: None))
     for ext in (".log", ".blf", ".asc", ".mf4"):
         out = os.path.join(W, "rec" + ext)
         ready = os.path.join(W, "ready" + ext)
         stop = {"now": False}
         rep = {}
         chan = "mdtool_test" + ext
-        th = threading.Thread(target=lambda: rep.update(record.record(
-            out, db, 1, interface="virtual", channel=chan, ready=ready, stop=stop, log=lambda *_: None)))
+        th = threading.Thread(target=record_into, args=(rep, out, chan, ready, stop))
         th.start()
         while not os.path.exists(ready):
             time.sleep(0.01)
@@ -116,14 +120,14 @@ def main():
         t_end = time.monotonic() + 20
         while time.monotonic() < t_end:  # the recorder has them all once it idles
             time.sleep(0.2)
-            if os.path.getsize(out) > 0 and ext != ".log" or ext == ".log":
+            if (os.path.getsize(out) > 0 and ext != ".log") or ext == ".log":
                 break
         time.sleep(0.5)
         stop["now"] = True
         th.join(30)
         back = log.read_frames(out)
         err = same_frames(ref, back, 1e9)  # times: stamped on arrival (checked by convert below)
-        if err is None and any(y[0] < x[0] for x, y in zip(back, back[1:])):
+        if err is None and any(y[0] < x[0] for x, y in itertools.pairwise(back)):
             err = "time stamps go backwards"
         check(err is None and rep.get("frames") == len(ref),
               f"record {ext}: {rep.get('frames')} frames written, read back identical" + (f" ({err})" if err else ""))
@@ -138,8 +142,8 @@ def main():
         st_ref = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "can", "mc_can.py"), "stats",
                                  sil_log, "--json", os.path.join(W, "ref.json")], capture_output=True)
         r = mdtool("stats", out, "--json", os.path.join(W, f"st{ext}.json"))
-        A = json.load(open(os.path.join(W, "ref.json")))
-        B = json.load(open(os.path.join(W, f"st{ext}.json")))
+        with open(os.path.join(W, "ref.json")) as f1, open(os.path.join(W, f"st{ext}.json")) as f2:
+            A, B = json.load(f1), json.load(f2)
         same = st_ref.returncode == 0 and r.returncode == 0 and A["frames"] == B["frames"] and \
             A["lost_total"] == B["lost_total"] and abs(A["bus_load"] - B["bus_load"]) < 1e-6 and \
             {k: (v["frames"], v["gaps"], v["lost"]) for k, v in A["messages"].items()} == \
@@ -156,7 +160,7 @@ def main():
             # signal values identical; the time columns to 1 us (BLF/ASC/MF4 store their own clock)
             ok = ok and len(r1) == len(r2) and all(x[2:] == y[2:] and
                                                    (i == 0 or abs(float(x[0]) - float(y[0])) < 2e-6)
-                                                   for i, (x, y) in enumerate(zip(r1, r2)))
+                                                   for i, (x, y) in enumerate(zip(r1, r2, strict=True)))
         check(ok, f"mdtool decode {ext} equals mc_can.py decode of the SIL log")
     # the MF4 through asammdf itself
     from asammdf import MDF

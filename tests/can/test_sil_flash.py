@@ -25,6 +25,7 @@ import shutil
 import struct
 import subprocess
 import sys
+from pathlib import Path
 
 import cantools
 
@@ -43,7 +44,7 @@ class Sil:
         self.work = args.work
         self.db = cantools.database.load_file(
             os.path.join(args.repo, "tools", "can", "motordrive.dbc"))
-        meta = json.load(open(os.path.join(args.repo, "tools", "config", "params_meta.json")))
+        meta = json.loads(Path(args.repo, "tools", "config", "params_meta.json").read_text())
         self.pid = {p["name"]: p["id"] for p in meta["params"]}
         self.node = 1
 
@@ -69,12 +70,12 @@ class Sil:
         assert r.returncode == expect_rc, (argv, r.returncode, r.stderr)
         if expect_rc != 0:
             return r, None, None
-        summary = json.load(open(os.path.join(out, "can-telemetry.json")))
+        summary = json.loads(Path(out, "can-telemetry.json").read_text())
         return r, summary, self.decode(log)
 
     def decode(self, log):
         frames = []
-        for line in open(log):
+        for line in Path(log).read_text().splitlines():
             ts, _, rest = line.split()
             can_id, data = rest.split("#")
             can_id = int(can_id, 16)
@@ -155,25 +156,25 @@ def main():
     print("run 2: STORED, read back %.1f rad/s and %d Hz, limit in force" % (SPEED_MAX, CURRENTS_HZ))
 
     # 3. a flipped byte inside the record
-    img = bytearray(open(flash, "rb").read())
+    img = bytearray(Path(flash).read_bytes())
     img[4 * 5] ^= 0x01  # first entry's value word, inside the CRC
-    open(flash, "wb").write(img)
+    Path(flash).write_bytes(img)
     r, s, fr = sil.run("run3", read_both, flash=flash)
     assert s["cfg_boot_status"] == "CORRUPT" and s["cfg_from_store"] == "", s
     assert "CORRUPT" in r.stderr and flash in r.stderr, r.stderr
     assert cfg_status(fr) == boot["CORRUPT"]
     rep = replies(fr)
     assert bits_f32(rep[0]["value"]) == 150.0 and rep[1]["value"] == 200, rep  # scenario's
-    assert open(flash, "rb").read() == bytes(img)  # booting writes nothing
+    assert Path(flash).read_bytes() == bytes(img)  # booting writes nothing
     print("run 3: CORRUPT, scenario's settings, file untouched")
 
     # 4. refusals: exit 2, the file named, nothing written
     bad = os.path.join(args.work, "short.flash")
-    open(bad, "wb").write(b"\xff" * 1000)
+    Path(bad).write_bytes(b"\xff" * 1000)
     r, _, _ = sil.run("run4", [], flash=bad, expect_rc=2)
     assert r.stderr.startswith("mcsim: " + bad + ": ") and "1000" in r.stderr, r.stderr
     assert not os.path.exists(os.path.join(args.work, "run4"))
-    assert open(bad, "rb").read() == b"\xff" * 1000
+    assert Path(bad).read_bytes() == b"\xff" * 1000
     r = subprocess.run([args.mcsim, "run", "foc-current-step", "--out",
                         os.path.join(args.work, "run5"), "--flash", flash],
                        capture_output=True, text=True)

@@ -94,8 +94,8 @@ def main():
     text = run_image(a.qemu, a.elf)
     overhead = None
     cases = []
-    for line in text.splitlines():
-        line = line.strip()
+    for raw in text.splitlines():
+        line = raw.strip()
         if not line.startswith("{"):
             continue
         obj = json.loads(line)

@@ -37,7 +37,7 @@ from mdtool.can.dbc import (  # noqa: E402,F401  (re-exported for the tests)
     CMD_BITS, CMD_MASK, DBC_NODE, NODE_MAX, by_cmd, cmd_of, decode_signals, encode_signals,
     find_message, frame_bits, frame_id, gen_c, load_db, parse_assignments, rebase_dbc_text,
     table_markdown, worst_case_bits)
-from mdtool.can.errors import UsageError  # noqa: E402,F401
+from mdtool.can.errors import UsageError  # noqa: E402
 from mdtool.can.log import (  # noqa: E402,F401
     decode_log, format_candump_line, parse_candump_line, read_candump, stats_of, write_csvs)
 from mdtool.can.record import (  # noqa: E402,F401

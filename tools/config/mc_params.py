@@ -211,7 +211,8 @@ def gen_md(table):
                   "|---:|---|---|---|---:|---:|---:|---|---|"]
         for p in ps:
             lines.append(f"| {p['id']} | `{p['name']}` | {p['type']} | {p['unit']} | {_num(p, 'min')} | "
-                         f"{_num(p, 'max')} | {_num(p, 'default')} | {p['access']} | {p['desc'].replace('|', chr(92) + '|')} |")
+                         f"{_num(p, 'max')} | {_num(p, 'default')} | {p['access']} | "
+                         f"{p['desc'].replace('|', chr(92) + '|')} |")
         lines.append("")
     return "\n".join(lines)
 

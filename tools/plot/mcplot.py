@@ -32,7 +32,7 @@ def load(path):
         with open(path, newline="") as f:
             rows = list(csv.reader(f))
     except OSError as e:
-        raise SystemExit(f"mcplot: cannot read {path}: {e.strerror}")
+        raise SystemExit(f"mcplot: cannot read {path}: {e.strerror}") from e
     if len(rows) < 2 or not rows[0] or rows[0][0] != "t":
         raise SystemExit(f"mcplot: {path} is not an mcsim CSV (header must start with 't')")
     header = rows[0]
@@ -41,10 +41,10 @@ def load(path):
         if len(r) != len(header):
             raise SystemExit(f"mcplot: {path}:{i}: {len(r)} fields, header has {len(header)}")
         try:
-            for h, v in zip(header, r):
+            for h, v in zip(header, r, strict=True):
                 cols[h].append(float(v))
         except ValueError:
-            raise SystemExit(f"mcplot: {path}:{i}: not a number")
+            raise SystemExit(f"mcplot: {path}:{i}: not a number") from None
     return header, cols
 
 
@@ -62,7 +62,7 @@ def main(argv=None):
     import matplotlib.pyplot as plt
 
     header, cols = load(a.csv)
-    names = [h for h in header[1:]]
+    names = list(header[1:])
     if a.columns:
         wanted = [c.strip() for c in a.columns.split(",") if c.strip()]
         unknown = [c for c in wanted if c not in cols]
@@ -80,7 +80,7 @@ def main(argv=None):
 
     fig, axes = plt.subplots(len(groups), 1, sharex=True,
                              figsize=(9, 1.9 * len(groups) + 1.0), squeeze=False)
-    for ax, (unit, members) in zip(axes[:, 0], groups.items()):
+    for ax, (unit, members) in zip(axes[:, 0], groups.items(), strict=True):
         for name in members:
             style = "--" if "_ref" in name else "-"
             ax.plot(t[:n], cols[name][:n], style, lw=1.2, label=name)

@@ -17,8 +17,8 @@ import sys
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
 RPM = 60.0 / (2.0 * np.pi)
 
@@ -42,7 +42,7 @@ def fig_phase(path):
     cols = min(n, 3)
     rows = (n + cols - 1) // cols
     fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
-    for ax, w in zip(axes.flat, omegas):
+    for ax, w in zip(axes.flat, omegas, strict=False):
         sel = d[d["omega0_1"] == w]
         for tr in sorted(set(sel["traj_1"])):
             s = sel[sel["traj_1"] == tr]

@@ -13,7 +13,7 @@ import sys
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
 
 def read(path):
@@ -37,7 +37,7 @@ def paper(c, png):
         ("Fig. 7  dirty-derivative state theta_f", [("theta_f", "-")]),
         ("Fig. 8  voltages u1, u2", [("u1", "-"), ("u2", "-")]),
     ]
-    for a, (title, series) in zip(ax.flat, panels):
+    for a, (title, series) in zip(ax.flat, panels, strict=True):
         for name, style in series:
             a.plot(t, c[name], style, label=name, linewidth=1.0)
         a.set_title(title, fontsize=10)
@@ -58,9 +58,9 @@ def motor(c, png):
     ax[0].plot(t, c["pi2d_omega_m_rad_s"], label="PI$^2$D", linewidth=1.0)
     ax[0].plot(t, c["pi_omega_m_rad_s"], label="PI cascade", linewidth=1.0)
     ax[0].set_ylabel("speed [rad/s]")
-    ax[1].plot(t, [a - b for a, b in zip(c["pi2d_omega_m_rad_s"], c["omega_ref_rad_s"])],
+    ax[1].plot(t, [a - b for a, b in zip(c["pi2d_omega_m_rad_s"], c["omega_ref_rad_s"], strict=True)],
                label="PI$^2$D", linewidth=1.0)
-    ax[1].plot(t, [a - b for a, b in zip(c["pi_omega_m_rad_s"], c["omega_ref_rad_s"])],
+    ax[1].plot(t, [a - b for a, b in zip(c["pi_omega_m_rad_s"], c["omega_ref_rad_s"], strict=True)],
                label="PI cascade", linewidth=1.0)
     ax[1].set_ylabel("speed error [rad/s]")
     ax[2].plot(t, c["pi2d_i_q_a"], label="i_q PI$^2$D", linewidth=1.0)

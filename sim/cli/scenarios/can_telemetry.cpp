@@ -417,8 +417,8 @@ void run_can_telemetry(RunContext& ctx) {
     // What the drive booted from (cfg_from_store: ids of the parameters whose
     // stored value replaced the scenario's), and what the run did to the store.
     std::string from_store;
-    for (uint32_t i = 0; i < MC_PARAM_COUNT; ++i) {
-      const mc_param_info_t* info = &mc_param_table[i];
+    for (const mc_param_info_t& entry : mc_param_table) {
+      const mc_param_info_t* info = &entry;
       if (info->offset == MC_PARAM_NO_FIELD) continue;
       if (mc_param_get_raw(&p, info) != mc_param_get_raw(&p_scn, info)) {
         from_store += (from_store.empty() ? "" : ",") + std::to_string(info->id);

@@ -147,7 +147,7 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s) {
     if (s.each_period) s.each_period(board, comm);
     if (drive.mode == MC_DRIVE_MODE_FAULT || mc_comm_done(&comm)) break;
   }
-  run.duration_s = (k + 1) * T;
+  run.duration_s = static_cast<double>(k + 1) * T;
   run.done = mc_comm_done(&comm);
   run.err = comm.err;
   if (!run.done && run.err == 0u) run.err = MC_COMM_ERR_ABORTED;  // timed out

@@ -32,7 +32,7 @@ class RiseTimer {
   double rise_s() const { return t90_ - t10_; }
 
  private:
-  void cross(double frac, double* tc, double t, double y) {
+  void cross(double frac, double* tc, double t, double y) const {
     if (!std::isnan(*tc)) return;
     const double lvl = y0_ + frac * (target_ - y0_);
     const double a = yp_ - lvl, b = y - lvl;
@@ -77,13 +77,13 @@ std::string sls_reason(uint32_t e) {
 struct Recorder {
   RunContext& ctx;
   MotorRig& rig;
-  bool hat;
+  bool hat = false;
   long every = 1;
   long k = 0;
   void header() {
     std::vector<std::string> c = {"t", "i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a",
                                   "omega_m_rad_s", "omega_ref_rad_s", "theta_e_rad"};
-    if (hat) c.push_back("theta_e_hat_rad");
+    if (hat) c.emplace_back("theta_e_hat_rad");
     c.insert(c.end(), {"v_d_v", "v_q_v", "fault_1"});
     ctx.csv.columns(c);
   }
@@ -391,7 +391,7 @@ void run_sensorless(RunContext& ctx) {
   }
   ctx.summary.set("locked", (tm.phase == MC_CTRL_SLS_CLOSED) ? 1.0 : 0.0);
   ctx.summary.set("angle_err_max_rad", ang_max);
-  ctx.summary.set("angle_err_rms_rad", ang_n ? std::sqrt(ang_sq / ang_n) : std::nan(""));
+  ctx.summary.set("angle_err_rms_rad", ang_n ? std::sqrt(ang_sq / static_cast<double>(ang_n)) : std::nan(""));
   ctx.summary.set("omega_final_rad_s", w);
   ctx.summary.set("omega_err_max_end_rad_s", werr_end);
   ctx.summary.set("tracks", werr_end <= band ? 1.0 : 0.0);

@@ -47,7 +47,7 @@ void run_phase(RunContext& ctx) {
         V2 c{-1.5 + 4.0 * i / (n_grid - 1), -2.0 + 4.0 * j / (n_grid - 1)};
         for (long k = 0; k <= steps; ++k) {
           if (k % every == 0 || k == steps) {
-            ctx.csv.row({W, static_cast<double>(traj), k * h, c.a, c.b,
+            ctx.csv.row({W, static_cast<double>(traj), static_cast<double>(k) * h, c.a, c.b,
                          std::atan2(-c.b, 1.0 - c.a)});
           }
           c = rk4(c, W, h);

@@ -11,7 +11,7 @@ namespace observer {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-double load_fn(double t_s, double, double, const void* ctx) {
+double load_fn(double t_s, double /*theta_m_rad*/, double /*omega_m_rad_s*/, const void* ctx) {
   return static_cast<const LoadSteps*>(ctx)->eval(t_s);
 }
 }  // namespace
@@ -285,7 +285,7 @@ void Sil::record(Summary& s) const {
   s.set("current_loop_bw_rad_s", c.cur_bw_rad_s);
   s.set("current_kp_v_per_a", ctrl_.foc.pi_d.kp);
   s.set("current_ki_v_per_as", ctrl_.foc.pi_d.ki_per_s);
-  s.set("speed_loop_rate_hz", 1.0 / (c.dt_s * c.speed_div));
+  s.set("speed_loop_rate_hz", 1.0 / (c.dt_s * static_cast<float>(c.speed_div)));
   s.set("speed_wc_rad_s", o_.speed_wc_rad_s);
   s.set("speed_kp_a_s_rad", c.speed_kp_a_s_rad);
   s.set("speed_ki_a_rad", c.speed_ki_a_rad);

@@ -31,9 +31,9 @@ struct LoadSteps {
 struct Machine {
   std::string name;
   PmsmParams motor;        // R, L, flux, pole pairs, J, B
-  double vbus_v;
-  double rated_torque_nm, rated_speed_rpm, rated_current_a;
-  double i_full_scale_a;   // current-sensor range
+  double vbus_v = 0.0;
+  double rated_torque_nm = 0.0, rated_speed_rpm = 0.0, rated_current_a = 0.0;
+  double i_full_scale_a = 0.0;  // current-sensor range
 };
 
 // Paper 002, Table I. J and friction are not in the paper: our choice,

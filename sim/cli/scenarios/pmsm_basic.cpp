@@ -47,7 +47,7 @@ typename Plant::State run_fixed_input(RunContext& ctx, const Plant& plant,
   const long n = std::lround(ctx.duration_s / h);
   const long every = std::max(1L, n / 4000);
   for (long k = 0; k <= n; ++k) {
-    const double t = k * h;
+    const double t = static_cast<double>(k) * h;
     if (k % every == 0 || k == n) {
       ctx.csv.row(row(t, x));
       ctx.progress.update(t, ctx.duration_s);

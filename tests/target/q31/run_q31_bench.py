@@ -26,12 +26,13 @@ def main():
                "-icount", "shift=0", "-chardev", f"file,id=sh0,path={path}",
                "-semihosting-config", "enable=on,target=native,chardev=sh0", "-kernel", elf]
         rc = subprocess.run(cmd, timeout=300).returncode
-        text = open(path).read()
+        with open(path) as f:
+            text = f.read()
     if rc != 0:
         print(text)
         print(f"FAIL: image exited {rc}")
         return 1
-    rows = [json.loads(l) for l in text.splitlines() if l.startswith("{")]
+    rows = [json.loads(ln) for ln in text.splitlines() if ln.startswith("{")]
     cases = [r for r in rows if "name" in r]
     byk = {}
     for r in cases:

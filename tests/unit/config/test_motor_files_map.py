@@ -44,7 +44,8 @@ def main():
     ap.add_argument("--repo", required=True)
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
-    meta = json.load(open(os.path.join(a.repo, "tools", "config", "params_meta.json")))
+    with open(os.path.join(a.repo, "tools", "config", "params_meta.json")) as f:
+        meta = json.load(f)
     params = {p["name"]: p for p in meta["params"]}
     files = sorted(glob.glob(os.path.join(a.repo, "sim", "motors", "*.toml")))
     fails = []

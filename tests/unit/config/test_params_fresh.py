@@ -40,7 +40,8 @@ def main():
     r = subprocess.run([sys.executable, GEN, "check"], capture_output=True, text=True)
     check(r.returncode == 0, f"mc_params.py check: {r.stderr}")
 
-    text = open(mc_params.TABLE).read()
+    with open(mc_params.TABLE) as f:
+        text = f.read()
     bad = {
         "duplicate id": text.replace("id = 2\n", "id = 1\n", 1),
         "default out of range": text.replace("default = 0.675", "default = 1000.0", 1),
@@ -53,10 +54,11 @@ def main():
         r = subprocess.run([sys.executable, GEN, "table", "--table", p], capture_output=True, text=True)
         check(r.returncode == 2, f"{what}: generator exit {r.returncode}, want 2")
 
-    meta = json.load(open(os.path.join(ROOT, mc_params.OUT_JSON)))
+    with open(os.path.join(ROOT, mc_params.OUT_JSON)) as f:
+        meta = json.load(f)
     table = mc_params.load()
     check(len(meta["params"]) == len(table["params"]), "metadata count")
-    for m, p in zip(meta["params"], table["params"]):
+    for m, p in zip(meta["params"], table["params"], strict=True):
         for k in ("min", "max", "default"):
             want = mc_params.f32(p[k]) if p["type"] == "f32" else p[k]
             check(m[k] == want, f"{p['name']}.{k}: metadata {m[k]}, table {want}")

@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import ast
 import hashlib
-import itertools
 import json
 import math
 import os
@@ -794,7 +793,7 @@ def spec_from_row(row) -> RunSpec:
     dur = row.get("duration_s")
     return RunSpec(int(row["run_id"]), int(row["seed"]), row["scenario"], row.get("motor"),
                    row.get("board"), None if dur is None or _nan(dur) else float(dur), params,
-                   crit, any(k == "out.param.seed" for k in row.keys()), variables,
+                   crit, "out.param.seed" in row, variables,
                    refuse)
 
 
@@ -817,9 +816,9 @@ def rerun_row(row) -> tuple[dict[str, Any], list[str]]:
             continue
         if k == "status" and v in ("pass", "fail"):
             continue  # criteria are not in the row's inputs
-        old, v = _py(row.get(k)), _py(v)
-        if not (old == v or (_missing(old) and _missing(v))):
-            diffs.append(f"{k}: {old!r} -> {v!r}")
+        old, val = _py(row.get(k)), _py(v)
+        if not (old == val or (_missing(old) and _missing(val))):
+            diffs.append(f"{k}: {old!r} -> {val!r}")
     for k, old in row.items():  # columns of other runs are empty in this row
         if (k not in new and not _missing(_py(old)) and not k.startswith("pass")
                 and k not in ("motor_sha256", "board_sha256")):

@@ -182,7 +182,7 @@ def main(argv=None) -> int:
     except CampaignError as e:
         print(f"mdtool: {e}", file=sys.stderr)
         return 2
-    except Exception as e:  # noqa: BLE001
+    except Exception as e:
         from . import sil
 
         if isinstance(e, sil.UsageError):

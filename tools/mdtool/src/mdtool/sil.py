@@ -23,8 +23,9 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -151,7 +152,7 @@ def run(scenario: str, motor: str | os.PathLike | None = None,
 
 def scenarios() -> list[dict[str, Any]]:
     """The registered scenarios (as `mcsim list`)."""
-    return [dict(name=n, description=d, default_duration_s=t, any_motor=m)
+    return [{"name": n, "description": d, "default_duration_s": t, "any_motor": m}
             for n, d, t, m in _sil.scenarios()]
 
 

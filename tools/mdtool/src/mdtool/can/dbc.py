@@ -20,7 +20,7 @@ def load_db(path=None):
     try:
         return cantools.database.load_file(path, strict=True)
     except (OSError, cantools.database.UnsupportedDatabaseFormatError) as e:
-        raise UsageError(f"cannot load DBC {path}: {e}")
+        raise UsageError(f"cannot load DBC {path}: {e}") from e
 
 
 def cmd_of(msg):
@@ -67,7 +67,7 @@ def encode_signals(msg, values):
         v = values.get(s.name, 0.0)
         if s.minimum is not None and not (s.minimum - s.scale / 2 <= v <= s.maximum + s.scale / 2):
             raise UsageError(f"{msg.name}.{s.name}={v} outside [{s.minimum}, {s.maximum}]")
-        raw = int(round((v - s.offset) / s.scale))
+        raw = round((v - s.offset) / s.scale)
         word |= (raw & ((1 << s.length) - 1)) << s.start
     return word.to_bytes(8, "little")[: msg.length]
 
@@ -132,7 +132,7 @@ def parse_assignments(msg, items):
         try:
             vals[k] = float(v)
         except ValueError:
-            raise UsageError(f"{k}: not a number: {v!r}")
+            raise UsageError(f"{k}: not a number: {v!r}") from None
     return vals
 
 
@@ -140,7 +140,7 @@ def find_message(db, name):
     try:
         return db.get_message_by_name(name.upper())
     except KeyError:
-        raise UsageError(f"unknown message {name!r} (known: {', '.join(m.name for m in db.messages)})")
+        raise UsageError(f"unknown message {name!r} (known: {', '.join(m.name for m in db.messages)})") from None
 
 
 def table_markdown(db):
@@ -184,7 +184,7 @@ def _cfloat(v):
 
 
 def gen_c(db, dbc_name):
-    msgs = sorted(db.messages, key=lambda m: cmd_of(m))
+    msgs = sorted(db.messages, key=cmd_of)
     for m in msgs:
         if (m.frame_id >> CMD_BITS) != DBC_NODE:
             raise UsageError(f"{m.name}: frame id 0x{m.frame_id:X} is not on node {DBC_NODE}")

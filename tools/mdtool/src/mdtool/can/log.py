@@ -63,11 +63,11 @@ def read_candump(path):
                 try:
                     fr = parse_candump_line(line)
                 except ValueError as e:
-                    raise UsageError(f"{path}:{n}: {e}")
+                    raise UsageError(f"{path}:{n}: {e}") from e
                 if fr is not None:
                     frames.append(fr)
     except OSError as e:
-        raise UsageError(f"cannot read {path}: {e.strerror}")
+        raise UsageError(f"cannot read {path}: {e.strerror}") from e
     return frames
 
 
@@ -103,7 +103,7 @@ def write_csvs(db, decoded, out_dir, merged):
         with open(path, "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(["t", "message"] + cols)
-            last = {c: "" for c in cols}
+            last = dict.fromkeys(cols, "")
             for msg, t_s, vals in decoded:
                 for k, v in vals.items():
                     last[f"{msg.name}.{k}"] = repr(v)
@@ -244,7 +244,7 @@ def read_frames(path):
         with can.LogReader(path) as reader:
             return [frame_of_message(m) for m in reader]
     except ImportError as e:
-        raise UsageError(f"{path}: reading this format needs {e.name} (tools/requirements.txt)")
+        raise UsageError(f"{path}: reading this format needs {e.name} (tools/requirements.txt)") from e
 
 
 def _read_mf4_data_frames(path):
@@ -294,7 +294,7 @@ class FrameWriter:
         self.channel = channel
         self.count = 0
         if self.ext == CANDUMP_EXT:
-            self._f = open(path, "w", buffering=1 << 20)
+            self._f = open(path, "w", buffering=1 << 20)  # noqa: SIM115 (the writer's close() closes it)
             self._w = None
         else:
             import can
@@ -302,7 +302,7 @@ class FrameWriter:
             try:
                 self._w = can.Logger(path)
             except ImportError as e:
-                raise UsageError(f"{path}: writing this format needs {e.name} (tools/requirements.txt)")
+                raise UsageError(f"{path}: writing this format needs {e.name} (tools/requirements.txt)") from e
 
     def write_lines(self, lines, frames):
         """candump lines already formatted (the raw SocketCAN recorder) and their frames."""

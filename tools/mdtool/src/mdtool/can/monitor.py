@@ -29,7 +29,7 @@ def monitor(drive, signals, window_s=5.0, frames=None, png=None, no_gui=False, d
         try:
             msg = drive.db.get_message_by_name(msg_name.upper())
         except KeyError:
-            raise UsageError(f"{s}: unknown message {msg_name!r}")
+            raise UsageError(f"{s}: unknown message {msg_name!r}") from None
         if not dot or sig not in [x.name for x in msg.signals]:
             raise UsageError(f"{s}: {msg.name} has the signals {', '.join(x.name for x in msg.signals)}")
         want.append((msg.name, sig, next(x.unit for x in msg.signals if x.name == sig)))
@@ -62,7 +62,7 @@ def monitor(drive, signals, window_s=5.0, frames=None, png=None, no_gui=False, d
                     q.append((now, float(vals[sig])))
                     stats["frames"] += 1
         now = time.monotonic() - t0
-        for ((mn, sig), q), ln, ax in zip(data.items(), lines, axes[:, 0]):
+        for (_key, q), ln, ax in zip(data.items(), lines, axes[:, 0]):
             while q and q[0][0] < now - window_s:
                 q.popleft()
             if q:

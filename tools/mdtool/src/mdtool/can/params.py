@@ -25,7 +25,7 @@ class ParamTable:
             with open(path) as f:
                 meta = json.load(f)
         except (OSError, ValueError) as e:
-            raise UsageError(f"cannot read the parameter table {path}: {e}")
+            raise UsageError(f"cannot read the parameter table {path}: {e}") from e
         self.path = path
         self.params = meta["params"]
         self.by_name = {p["name"]: p for p in self.params}
@@ -56,7 +56,7 @@ class ParamTable:
             try:
                 value = float(value)
             except ValueError:
-                raise UsageError(f"{name}: not a number: {value!r}")
+                raise UsageError(f"{name}: not a number: {value!r}") from None
         value = float(value)
         if not math.isfinite(value):
             raise UsageError(f"{name}: {value} is not finite")
@@ -105,9 +105,9 @@ def read_toml(path, table):
         with open(path, "rb") as f:
             doc = tomllib.load(f)
     except OSError as e:
-        raise UsageError(f"cannot read {path}: {e.strerror}")
+        raise UsageError(f"cannot read {path}: {e.strerror}") from e
     except tomllib.TOMLDecodeError as e:
-        raise UsageError(f"{path}: not valid TOML: {e}")
+        raise UsageError(f"{path}: not valid TOML: {e}") from e
     out = []
     for sec, body in doc.items():
         if sec not in SECTIONS or not isinstance(body, dict):

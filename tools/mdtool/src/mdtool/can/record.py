@@ -3,6 +3,7 @@ and python-can's generic Bus for every other interface; the output format
 follows the file's extension (log.FrameWriter). Sequence gaps of the
 telemetry are counted as frames arrive (log.SeqCounter).
 """
+import contextlib
 import json
 import signal
 import time
@@ -56,15 +57,14 @@ class SocketcanRecorder:
         self.rcvbuf = self.sock.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)
         self.sock.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
         self.sock.setsockopt(socket.SOL_SOCKET, SO_RXQ_OVFL, 1)
-        try:  # error frames too, as candump -L shows them when asked
+        # error frames too, as candump -L shows them when asked
+        with contextlib.suppress(AttributeError, OSError):
             self.sock.setsockopt(socket.SOL_CAN_RAW, socket.CAN_RAW_ERR_FILTER, 0x1FFFFFFF)
-        except (AttributeError, OSError):
-            pass
         try:
             self.sock.bind((iface,))
         except OSError as e:
             self.sock.close()
-            raise UsageError(f"record: cannot open SocketCAN interface {iface!r}: {e.strerror}")
+            raise UsageError(f"record: cannot open SocketCAN interface {iface!r}: {e.strerror}") from e
         self.sock.setblocking(False)
         self.dropped = 0  # the kernel's cumulative count for this socket
         self._cmsg_space = socket.CMSG_SPACE(16) + socket.CMSG_SPACE(4)
@@ -236,4 +236,4 @@ def open_bus(interface, channel, bitrate=None, **kw):
     try:
         return can.Bus(**args)
     except (can.CanError, OSError, ValueError, ImportError) as e:
-        raise UsageError(f"cannot open CAN interface {interface!r} channel {channel!r}: {e}")
+        raise UsageError(f"cannot open CAN interface {interface!r} channel {channel!r}: {e}") from e
