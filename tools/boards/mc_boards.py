@@ -34,6 +34,7 @@ import re
 import struct
 import sys
 import tomllib
+import itertools
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
@@ -140,7 +141,7 @@ def load_pins(path):
         where = f"{os.path.basename(path)} row {n}"
         if len(r) != len(COLUMNS):
             raise BoardError(f"{where}: {len(r)} fields, want {len(COLUMNS)}")
-        p = dict(zip(COLUMNS, (c.strip() for c in r)))
+        p = dict(zip(COLUMNS, (c.strip() for c in r), strict=False))
         sig = p["signal"]
         if not re.fullmatch(r"[a-z][a-z0-9_]*", sig):
             raise BoardError(f"{where}: signal '{sig}' must be a lower-case identifier")
@@ -182,8 +183,8 @@ def load_pins(path):
             raise BoardError(f"{where}: init given for a {mode} pin")
         seen_signal[sig] = name
         seen_pin[name] = sig
-        pins.append(dict(signal=sig, name=name, port=port, pin=pin, mode=mode, af=af,
-                         pull=p["pull"], otype=otype, speed=speed, init=init))
+        pins.append({"signal": sig, "name": name, "port": port, "pin": pin, "mode": mode, "af": af,
+                         "pull": p["pull"], "otype": otype, "speed": speed, "init": init})
     return comments, pins
 
 
@@ -253,7 +254,7 @@ def load_thermistor(th, slot, where, vref, pins):
             return 0.5 * (lo + hi)
         # The polynomial must be increasing over the window.
         xs = [x_at(rng[0]) + k * (x_at(rng[1]) - x_at(rng[0])) / 200 for k in range(201)]
-        if any(poly_norm_t(coeffs, b) <= poly_norm_t(coeffs, a) for a, b in zip(xs, xs[1:])):
+        if any(poly_norm_t(coeffs, b) <= poly_norm_t(coeffs, a) for a, b in itertools.pairwise(xs)):
             raise BoardError(f"{where}: polynomial not monotonic over range_c")
         v_lo, v_hi = x_at(rng[0]) * vref, x_at(rng[1]) * vref
         fit_err_c = 0.0
@@ -274,7 +275,7 @@ def load_thermistor(th, slot, where, vref, pins):
         # Largest interpolation error against the Beta model, sampled finely
         # between the points (what the driver computes, in double).
         fit_err_c = 0.0
-        for (v0, t0), (v1, t1) in zip(table, table[1:]):
+        for (v0, t0), (v1, t1) in itertools.pairwise(table):
             for j in range(1, 50):
                 t_true = t0 + (t1 - t0) * j / 50
                 v = thermistor_v(th, t_true, vref)
@@ -287,9 +288,9 @@ def load_thermistor(th, slot, where, vref, pins):
     else:
         raise BoardError(f"{where}: model is 'poly_norm' or 'ntc'")
     v_lo, v_hi = min(v_lo, v_hi), max(v_lo, v_hi)
-    return dict(signal=sig, channel=channel, poly=poly, v_min=v_lo, v_max=v_hi,
-                range_c=rng, fit_err_c=fit_err_c, text=text, model=model,
-                table=table if model == "ntc" else None, slot=slot)
+    return {"signal": sig, "channel": channel, "poly": poly, "v_min": v_lo, "v_max": v_hi,
+                "range_c": rng, "fit_err_c": fit_err_c, "text": text, "model": model,
+                "table": table if model == "ntc" else None, "slot": slot}
 
 
 def load_board(folder):
@@ -433,12 +434,12 @@ def load_board(folder):
     if amplifier not in ("drv8301", "external"):
         raise BoardError(f"{ws}: amplifier is 'drv8301' or 'external'")
 
-    return dict(name=name, title=need(t, "name", where, str), comments=comments,
-                pins=pin_list, by_signal=pins, source=src, active_low=active_low,
-                deadtime_ns=deadtime_ns, break_input=brk, vref=vref, shunt=shunt,
-                gain=float(gain), offset=offset, divider=divider, margin=margin,
-                i_max=i_max, vbus_min=vbus_min, vbus_max=vbus_max, amplifier=amplifier,
-                therm=therm, cpr=cpr, filt=filt, drv=drv, notes=t.get("notes", []))
+    return {"name": name, "title": need(t, "name", where, str), "comments": comments,
+                "pins": pin_list, "by_signal": pins, "source": src, "active_low": active_low,
+                "deadtime_ns": deadtime_ns, "break_input": brk, "vref": vref, "shunt": shunt,
+                "gain": float(gain), "offset": offset, "divider": divider, "margin": margin,
+                "i_max": i_max, "vbus_min": vbus_min, "vbus_max": vbus_max, "amplifier": amplifier,
+                "therm": therm, "cpr": cpr, "filt": filt, "drv": drv, "notes": t.get("notes", [])}
 
 
 def board_folders(boards_dir):
@@ -456,9 +457,9 @@ def board_folders(boards_dir):
 def gpio_table(pins):
     ports = {}
     for p in pins:
-        e = ports.setdefault(p["port"], dict(moder_mask=0, moder=0, otyper_mask=0, otyper=0,
-                                             ospeedr_mask=0, ospeedr=0, pupdr_mask=0, pupdr=0,
-                                             afrl_mask=0, afrl=0, afrh_mask=0, afrh=0, bsrr=0))
+        e = ports.setdefault(p["port"], {"moder_mask": 0, "moder": 0, "otyper_mask": 0, "otyper": 0,
+                                             "ospeedr_mask": 0, "ospeedr": 0, "pupdr_mask": 0, "pupdr": 0,
+                                             "afrl_mask": 0, "afrl": 0, "afrh_mask": 0, "afrh": 0, "bsrr": 0})
         n = p["pin"]
         e["moder_mask"] |= 3 << (2 * n)
         e["moder"] |= MODES[p["mode"]] << (2 * n)
@@ -544,7 +545,7 @@ def gen_source(b):
     lines += [f" *   {f}" for f in src["files"]]
     lines += [" */", f'#include "mc_board_{n}_gen.h"', "",
               "/* GPIO set-up per port (pins.csv): masks of the pins the board owns. */",
-              f"static const mc_board_gpio_port_init_t k_gpio[] = {{"]
+              "static const mc_board_gpio_port_init_t k_gpio[] = {"]
     table = gpio_table(b["pins"])
     for e in table:
         sigs = ", ".join(f"{p['name']} {p['signal']}" for p in b["pins"] if p["port"] == e["port"])

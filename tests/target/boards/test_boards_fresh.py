@@ -58,8 +58,10 @@ def main():
     check(r.returncode == 0, f"mc_boards.py check: {r.stderr}")
 
     src = os.path.join(ROOT, mc_boards.BOARDS_REL, "odrive36")
-    pins = open(os.path.join(src, "pins.csv")).read()
-    toml = open(os.path.join(src, "board.toml")).read()
+    with open(os.path.join(src, "pins.csv")) as f:
+        pins = f.read()
+    with open(os.path.join(src, "board.toml")) as f:
+        toml = f.read()
 
     def sub(text, old, new):
         out = re.sub(old, new, text, count=1, flags=re.M)

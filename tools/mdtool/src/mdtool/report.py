@@ -16,7 +16,8 @@ span more than a decade and are spread logarithmically (their median nearer
 their geometric than their arithmetic mean). Without --metric a cell is the worst outcome of
 its runs (fault > refused > fail > pass); with --metric out.KEY (or KEY) it
 is the largest value of that summary key among its runs (a fault counts as
-missing); with --metric pass_rate the share of its runs that pass. --hist out.KEY=BOUND (or KEY=BOUND) adds the histogram of
+missing); with --metric pass_rate the share of its runs that pass.
+--hist out.KEY=BOUND (or KEY=BOUND) adds the histogram of
 |value| / BOUND and a row of the error table (how many runs have a value,
 how many within the bound, median, 95th percentile and largest |value|).
 """

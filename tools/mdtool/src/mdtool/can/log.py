@@ -258,7 +258,7 @@ def _read_mf4_data_frames(path):
     try:
         from asammdf import MDF
     except ImportError as e:
-        raise UsageError(f"{path}: reading this format needs {e.name} (tools/requirements.txt)")
+        raise UsageError(f"{path}: reading this format needs {e.name} (tools/requirements.txt)") from e
     mdf = MDF(path)
     try:
         if len(mdf.groups) != 3 or any(len(mdf.get_master(i)) for i in (1, 2)):
