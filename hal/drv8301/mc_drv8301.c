@@ -11,24 +11,23 @@
 
 /* Control 1 fields */
 #define CTRL1_GATE_CURRENT_SHIFT 0u
-#define CTRL1_PWM_MODE_SHIFT 3u
-#define CTRL1_OCP_MODE_SHIFT 4u
-#define CTRL1_OC_ADJ_SHIFT 6u
+#define CTRL1_PWM_MODE_SHIFT     3u
+#define CTRL1_OCP_MODE_SHIFT     4u
+#define CTRL1_OC_ADJ_SHIFT       6u
 /* Control 2 fields */
-#define CTRL2_OCTW_SHIFT 0u
-#define CTRL2_GAIN_SHIFT 2u
+#define CTRL2_OCTW_SHIFT    0u
+#define CTRL2_GAIN_SHIFT    2u
 #define CTRL2_OC_TOFF_SHIFT 6u
 /* Status 2 */
-#define STATUS2_GVDD_OV (1u << 7)
+#define STATUS2_GVDD_OV        (1u << 7)
 #define STATUS2_DEVICE_ID_MASK 0xFu
-#define STATUS1_MASK 0x7FFu
+#define STATUS1_MASK           0x7FFu
 
 /* SLOS719F, OC_ADJ_SET table: V_DS threshold per code [mV]. */
 static const uint16_t k_oc_adj_vds_mv[MC_DRV8301_OC_ADJ_CODES] = {
-    60u,   68u,   76u,   86u,   97u,   109u,  123u,  138u,
-    155u,  175u,  197u,  222u,  250u,  282u,  317u,  358u,
-    403u,  454u,  511u,  576u,  648u,  730u,  822u,  926u,
-    1043u, 1175u, 1324u, 1491u, 1679u, 1892u, 2131u, 2400u,
+    60u,  68u,  76u,   86u,   97u,   109u,  123u,  138u,  155u,  175u,  197u,
+    222u, 250u, 282u,  317u,  358u,  403u,  454u,  511u,  576u,  648u,  730u,
+    822u, 926u, 1043u, 1175u, 1324u, 1491u, 1679u, 1892u, 2131u, 2400u,
 };
 
 static const char *const k_fault_names[12] = {
@@ -53,8 +52,7 @@ uint16_t mc_drv8301_frame_read(uint32_t addr)
                       ((addr << MC_DRV8301_FRAME_ADDR_SHIFT) & MC_DRV8301_FRAME_ADDR_MASK));
 }
 
-int mc_drv8301_ctrl_encode(const mc_drv8301_config_t *p_cfg, uint16_t *p_ctrl1,
-                           uint16_t *p_ctrl2)
+int mc_drv8301_ctrl_encode(const mc_drv8301_config_t *p_cfg, uint16_t *p_ctrl1, uint16_t *p_ctrl2)
 {
     uint32_t c1;
     uint32_t c2;
@@ -208,8 +206,7 @@ int mc_drv8301_read_reg(const mc_drv8301_t *p_drv, uint32_t addr, uint16_t *p_da
 
 int mc_drv8301_write_reg(const mc_drv8301_t *p_drv, uint32_t addr, uint32_t data)
 {
-    if ((p_drv == NULL) || (addr > MC_DRV8301_REG_CTRL2) ||
-        (data > MC_DRV8301_FRAME_DATA_MASK)) {
+    if ((p_drv == NULL) || (addr > MC_DRV8301_REG_CTRL2) || (data > MC_DRV8301_FRAME_DATA_MASK)) {
         return -EINVAL;
     }
     return (mc_hal_spi_transfer16(p_drv->p_spi, mc_drv8301_frame_write(addr, data), NULL) == 0)
@@ -262,11 +259,11 @@ int mc_drv8301_reset_faults(const mc_drv8301_t *p_drv)
     if ((p_drv == NULL) || (p_drv->p_spi == NULL)) {
         return -EINVAL;
     }
-    if (mc_hal_spi_transfer16(p_drv->p_spi,
-                              mc_drv8301_frame_write(MC_DRV8301_REG_CTRL1,
-                                                     (uint32_t)p_drv->ctrl1 |
-                                                         MC_DRV8301_CTRL1_GATE_RESET),
-                              NULL) != 0) {
+    if (mc_hal_spi_transfer16(
+            p_drv->p_spi,
+            mc_drv8301_frame_write(MC_DRV8301_REG_CTRL1,
+                                   (uint32_t)p_drv->ctrl1 | MC_DRV8301_CTRL1_GATE_RESET),
+            NULL) != 0) {
         return -EIO;
     }
     if ((read_raw(p_drv->p_spi, MC_DRV8301_REG_CTRL1, &r1) != 0) || (r1 != p_drv->ctrl1)) {
@@ -305,10 +302,10 @@ int mc_drv8301_init(mc_drv8301_t *p_drv, const mc_hal_spi_t *p_spi,
     p_drv->device_id = 0u;
 
     for (attempt = 0u; (attempt < MC_DRV8301_INIT_ATTEMPTS) && !match; attempt++) {
-        if ((mc_hal_spi_transfer16(p_spi, mc_drv8301_frame_write(MC_DRV8301_REG_CTRL1, c1),
-                                   NULL) != 0) ||
-            (mc_hal_spi_transfer16(p_spi, mc_drv8301_frame_write(MC_DRV8301_REG_CTRL2, c2),
-                                   NULL) != 0)) {
+        if ((mc_hal_spi_transfer16(p_spi, mc_drv8301_frame_write(MC_DRV8301_REG_CTRL1, c1), NULL) !=
+             0) ||
+            (mc_hal_spi_transfer16(p_spi, mc_drv8301_frame_write(MC_DRV8301_REG_CTRL2, c2), NULL) !=
+             0)) {
             p_drv->status = MC_DRV8301_STATUS_SPI;
             return -EIO;
         }

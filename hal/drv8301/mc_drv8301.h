@@ -69,8 +69,8 @@ extern "C" {
 
 /* Faults as reported by mc_drv8301_read_faults(): bits 0..10 are Status 1
  * D0..D10, bit 11 is Status 2 D7 (GVDD_OV). */
-#define MC_DRV8301_FAULT_FETLC_OC (1u << 0)  /**< phase C low-side FET over-current */
-#define MC_DRV8301_FAULT_FETHC_OC (1u << 1)  /**< phase C high-side FET over-current */
+#define MC_DRV8301_FAULT_FETLC_OC (1u << 0) /**< phase C low-side FET over-current */
+#define MC_DRV8301_FAULT_FETHC_OC (1u << 1) /**< phase C high-side FET over-current */
 #define MC_DRV8301_FAULT_FETLB_OC (1u << 2)
 #define MC_DRV8301_FAULT_FETHB_OC (1u << 3)
 #define MC_DRV8301_FAULT_FETLA_OC (1u << 4)
@@ -129,8 +129,8 @@ typedef enum mc_drv8301_oc_toff {
 } mc_drv8301_oc_toff_t;
 
 typedef struct mc_drv8301_config {
-    mc_drv8301_gain_t gain;              /**< shunt amplifier gain */
-    uint8_t oc_adj_set;                  /**< OC_ADJ_SET code 0..31 */
+    mc_drv8301_gain_t gain; /**< shunt amplifier gain */
+    uint8_t oc_adj_set;     /**< OC_ADJ_SET code 0..31 */
     mc_drv8301_ocp_mode_t ocp_mode;
     mc_drv8301_pwm_mode_t pwm_mode;
     mc_drv8301_gate_current_t gate_current;
@@ -141,23 +141,23 @@ typedef struct mc_drv8301_config {
 /** Outcome of the last mc_drv8301_init() (why a set-up failed). */
 typedef enum mc_drv8301_status {
     MC_DRV8301_STATUS_OK = 0,
-    MC_DRV8301_STATUS_NOT_INIT,      /**< never set up */
-    MC_DRV8301_STATUS_CONFIG,        /**< configuration refused */
-    MC_DRV8301_STATUS_SPI,           /**< the SPI transfer failed */
-    MC_DRV8301_STATUS_NO_RESPONSE,   /**< response with the frame-fault bit or
+    MC_DRV8301_STATUS_NOT_INIT,    /**< never set up */
+    MC_DRV8301_STATUS_CONFIG,      /**< configuration refused */
+    MC_DRV8301_STATUS_SPI,         /**< the SPI transfer failed */
+    MC_DRV8301_STATUS_NO_RESPONSE, /**< response with the frame-fault bit or
                                           the wrong address (no chip, EN_GATE
                                           low, MISO stuck) */
-    MC_DRV8301_STATUS_READBACK,      /**< the control registers do not hold
+    MC_DRV8301_STATUS_READBACK,    /**< the control registers do not hold
                                           what was written */
-    MC_DRV8301_STATUS_FAULT          /**< the chip reports a fault (faults) */
+    MC_DRV8301_STATUS_FAULT        /**< the chip reports a fault (faults) */
 } mc_drv8301_status_t;
 
 typedef struct mc_drv8301 {
     const mc_hal_spi_t *p_spi;
-    uint16_t ctrl1;               /**< Control 1 as configured */
-    uint16_t ctrl2;               /**< Control 2 as configured */
-    uint32_t faults;              /**< MC_DRV8301_FAULT_* of the last read */
-    uint8_t device_id;            /**< Status 2 D3:D0 of the last read */
+    uint16_t ctrl1;    /**< Control 1 as configured */
+    uint16_t ctrl2;    /**< Control 2 as configured */
+    uint32_t faults;   /**< MC_DRV8301_FAULT_* of the last read */
+    uint8_t device_id; /**< Status 2 D3:D0 of the last read */
     mc_drv8301_status_t status;
 } mc_drv8301_t;
 
@@ -173,8 +173,7 @@ uint16_t mc_drv8301_frame_read(uint32_t addr);
  * @return 0; -EINVAL NULL, code > 31 or an enum out of range (reserved
  *         encodings included): outputs untouched.
  */
-int mc_drv8301_ctrl_encode(const mc_drv8301_config_t *p_cfg, uint16_t *p_ctrl1,
-                           uint16_t *p_ctrl2);
+int mc_drv8301_ctrl_encode(const mc_drv8301_config_t *p_cfg, uint16_t *p_ctrl1, uint16_t *p_ctrl2);
 
 /** MC_DRV8301_FAULT_* bits from the two status registers. */
 uint32_t mc_drv8301_faults_from_status(uint16_t status1, uint16_t status2);

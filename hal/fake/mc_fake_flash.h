@@ -37,18 +37,18 @@ typedef enum {
 } mc_fake_flash_tear_t;
 
 typedef struct {
-    mc_hal_flash_t dev;         /**< hand this to the code under test */
-    uint8_t *mem;               /**< all sectors back to back */
+    mc_hal_flash_t dev; /**< hand this to the code under test */
+    uint8_t *mem;       /**< all sectors back to back */
     uint32_t n_sectors;
     uint32_t sector_bytes[MC_FAKE_FLASH_MAX_SECTORS];
     uint32_t sector_start[MC_FAKE_FLASH_MAX_SECTORS];
-    uint32_t steps;             /**< erases + programmed words since init */
+    uint32_t steps; /**< erases + programmed words since init */
     uint32_t erases;
     uint32_t words;
-    uint32_t cut_step;          /**< step number that loses power; 0: none */
+    uint32_t cut_step; /**< step number that loses power; 0: none */
     mc_fake_flash_tear_t tear;
-    bool dead;                  /**< power is off */
-    int fail_next;              /**< next erase/program returns this (<0), once */
+    bool dead;     /**< power is off */
+    int fail_next; /**< next erase/program returns this (<0), once */
 } mc_fake_flash_t;
 
 /** Bind f to mem (sum of sector sizes bytes; left as is: "power on" with

@@ -77,8 +77,7 @@ static const mc_hal_adc_ops_t fake_adc_ops = {
 
 /* ---- pwm3 -------------------------------------------------------------- */
 
-static int fake_pwm3_set_duty(void *ctx, float duty_a, float duty_b,
-                              float duty_c)
+static int fake_pwm3_set_duty(void *ctx, float duty_a, float duty_b, float duty_c)
 {
     mc_hal_fake_t *f = ctx;
     int rc;
@@ -485,9 +484,8 @@ int mc_hal_fake_init(mc_hal_fake_t *p_fake, const mc_hal_fake_config_t *p_cfg)
     if ((p_fake == NULL) || (p_cfg == NULL)) {
         return -EINVAL;
     }
-    if (!period_valid(p_cfg->pwm3_period_s) ||
-        !period_valid(p_cfg->pwm2_period_s) || (p_cfg->tick_freq_hz == 0u) ||
-        (p_cfg->encoder_counts_per_rev == 0u)) {
+    if (!period_valid(p_cfg->pwm3_period_s) || !period_valid(p_cfg->pwm2_period_s) ||
+        (p_cfg->tick_freq_hz == 0u) || (p_cfg->encoder_counts_per_rev == 0u)) {
         return -EINVAL;
     }
 
@@ -538,11 +536,10 @@ int mc_hal_fake_init(mc_hal_fake_t *p_fake, const mc_hal_fake_config_t *p_cfg)
     return 0;
 }
 
-int mc_hal_fake_inject_error(mc_hal_fake_t *p_fake, mc_hal_fake_call_t call,
-                             int err, uint32_t times)
+int mc_hal_fake_inject_error(mc_hal_fake_t *p_fake, mc_hal_fake_call_t call, int err,
+                             uint32_t times)
 {
-    if ((p_fake == NULL) || ((unsigned)call >= (unsigned)MC_HAL_FAKE_CALL_COUNT) ||
-        (err >= 0)) {
+    if ((p_fake == NULL) || ((unsigned)call >= (unsigned)MC_HAL_FAKE_CALL_COUNT) || (err >= 0)) {
         return -EINVAL;
     }
     p_fake->inject_err[call] = err;
@@ -550,8 +547,8 @@ int mc_hal_fake_inject_error(mc_hal_fake_t *p_fake, mc_hal_fake_call_t call,
     return 0;
 }
 
-int mc_hal_fake_adc_set_sample(mc_hal_fake_t *p_fake, float ia_a, float ib_a,
-                               float ic_a, float vbus_v, uint32_t valid_mask)
+int mc_hal_fake_adc_set_sample(mc_hal_fake_t *p_fake, float ia_a, float ib_a, float ic_a,
+                               float vbus_v, uint32_t valid_mask)
 {
     if ((p_fake == NULL) || ((valid_mask & ~MC_HAL_ADC_VALID_ALL) != 0u)) {
         return -EINVAL;
@@ -567,11 +564,10 @@ int mc_hal_fake_adc_set_sample(mc_hal_fake_t *p_fake, float ia_a, float ib_a,
     return 0;
 }
 
-int mc_hal_fake_adc_set_temp(mc_hal_fake_t *p_fake, float power_stage_temp_c,
-                             float motor_temp_c, uint32_t valid_mask)
+int mc_hal_fake_adc_set_temp(mc_hal_fake_t *p_fake, float power_stage_temp_c, float motor_temp_c,
+                             uint32_t valid_mask)
 {
-    if ((p_fake == NULL) ||
-        ((valid_mask & ~MC_HAL_ADC_TEMP_VALID_ALL) != 0u)) {
+    if ((p_fake == NULL) || ((valid_mask & ~MC_HAL_ADC_TEMP_VALID_ALL) != 0u)) {
         return -EINVAL;
     }
     p_fake->adc_temp.power_stage_temp_c = power_stage_temp_c;
@@ -580,8 +576,7 @@ int mc_hal_fake_adc_set_temp(mc_hal_fake_t *p_fake, float power_stage_temp_c,
     return 0;
 }
 
-int mc_hal_fake_encoder_set(mc_hal_fake_t *p_fake, uint32_t count,
-                            uint32_t flags)
+int mc_hal_fake_encoder_set(mc_hal_fake_t *p_fake, uint32_t count, uint32_t flags)
 {
     if ((p_fake == NULL) || (count >= p_fake->encoder.counts_per_rev) ||
         ((flags & ~MC_HAL_ENCODER_FLAG_ALL) != 0u)) {
@@ -593,8 +588,7 @@ int mc_hal_fake_encoder_set(mc_hal_fake_t *p_fake, uint32_t count,
     return 0;
 }
 
-int mc_hal_fake_can_rx_push(mc_hal_fake_t *p_fake,
-                            const mc_hal_can_frame_t *p_frame)
+int mc_hal_fake_can_rx_push(mc_hal_fake_t *p_fake, const mc_hal_can_frame_t *p_frame)
 {
     mc_hal_can_frame_t frame;
     int rc;
@@ -628,8 +622,7 @@ int mc_hal_fake_can_tx_pop(mc_hal_fake_t *p_fake, mc_hal_can_frame_t *p_frame)
     return 0;
 }
 
-int mc_hal_fake_can_set_errors(mc_hal_fake_t *p_fake, uint16_t tx_err_count,
-                               uint16_t rx_err_count)
+int mc_hal_fake_can_set_errors(mc_hal_fake_t *p_fake, uint16_t tx_err_count, uint16_t rx_err_count)
 {
     mc_hal_can_bus_state_t state;
 

@@ -115,9 +115,9 @@ typedef struct mc_hal_fake {
     float brake_duty; /**< last accepted chopper duty, [0, 1] */
 
     /* instrumentation */
-    uint32_t call_count[MC_HAL_FAKE_CALL_COUNT]; /**< calls per op, also
+    uint32_t call_count[MC_HAL_FAKE_CALL_COUNT];       /**< calls per op, also
                                                       the failed ones */
-    int inject_err[MC_HAL_FAKE_CALL_COUNT];        /**< error to return */
+    int inject_err[MC_HAL_FAKE_CALL_COUNT];            /**< error to return */
     uint32_t inject_remaining[MC_HAL_FAKE_CALL_COUNT]; /**< calls to fail */
 
     /* handles, ctx = this struct; board points at them */
@@ -155,30 +155,29 @@ int mc_hal_fake_init(mc_hal_fake_t *p_fake, const mc_hal_fake_config_t *p_cfg);
  * is still counted). times = 0 cancels an injection.
  * @return 0; -EINVAL if call is out of range or err is not negative.
  */
-int mc_hal_fake_inject_error(mc_hal_fake_t *p_fake, mc_hal_fake_call_t call,
-                             int err, uint32_t times);
+int mc_hal_fake_inject_error(mc_hal_fake_t *p_fake, mc_hal_fake_call_t call, int err,
+                             uint32_t times);
 
 /**
  * Complete a conversion: the next mc_hal_adc_read() returns these values
  * with timestamp = current tick and seq incremented (wrapping).
  * @return 0; -EINVAL unknown valid_mask bits (nothing changes).
  */
-int mc_hal_fake_adc_set_sample(mc_hal_fake_t *p_fake, float ia_a, float ib_a,
-                               float ic_a, float vbus_v, uint32_t valid_mask);
+int mc_hal_fake_adc_set_sample(mc_hal_fake_t *p_fake, float ia_a, float ib_a, float ic_a,
+                               float vbus_v, uint32_t valid_mask);
 
 /**
  * Set the temperatures mc_hal_adc_read_temp() returns.
  * @return 0; -EINVAL unknown valid_mask bits (nothing changes).
  */
-int mc_hal_fake_adc_set_temp(mc_hal_fake_t *p_fake, float power_stage_temp_c,
-                             float motor_temp_c, uint32_t valid_mask);
+int mc_hal_fake_adc_set_temp(mc_hal_fake_t *p_fake, float power_stage_temp_c, float motor_temp_c,
+                             uint32_t valid_mask);
 
 /**
  * Set the position mc_hal_encoder_read() returns (timestamp = current tick).
  * @return 0; -EINVAL count >= counts_per_rev or unknown flag bits.
  */
-int mc_hal_fake_encoder_set(mc_hal_fake_t *p_fake, uint32_t count,
-                            uint32_t flags);
+int mc_hal_fake_encoder_set(mc_hal_fake_t *p_fake, uint32_t count, uint32_t flags);
 
 /**
  * A frame arrives from the bus: queue it for mc_hal_can_receive(), stamped
@@ -187,8 +186,7 @@ int mc_hal_fake_encoder_set(mc_hal_fake_t *p_fake, uint32_t count,
  *         queue full: the frame is lost and rx_overrun_count incremented,
  *         as a controller would.
  */
-int mc_hal_fake_can_rx_push(mc_hal_fake_t *p_fake,
-                            const mc_hal_can_frame_t *p_frame);
+int mc_hal_fake_can_rx_push(mc_hal_fake_t *p_fake, const mc_hal_can_frame_t *p_frame);
 
 /**
  * Take the oldest frame the code under test sent.
@@ -202,8 +200,7 @@ int mc_hal_fake_can_tx_pop(mc_hal_fake_t *p_fake, mc_hal_can_frame_t *p_frame);
  * >= 96 error-warning, else error-active.
  * @return 0; -EINVAL NULL.
  */
-int mc_hal_fake_can_set_errors(mc_hal_fake_t *p_fake, uint16_t tx_err_count,
-                               uint16_t rx_err_count);
+int mc_hal_fake_can_set_errors(mc_hal_fake_t *p_fake, uint16_t tx_err_count, uint16_t rx_err_count);
 
 /** Advance the tick counter by `ticks` (wraps modulo 2^32). 0; -EINVAL. */
 int mc_hal_fake_tick_advance(mc_hal_fake_t *p_fake, uint32_t ticks);

@@ -12,15 +12,16 @@
 #include <stddef.h>
 
 #define ADC_FULL_SCALE_COUNTS 4096.0f /* 12 bit: 1 LSB = Vref / 4096 */
-#define ADC_MAX_RAW 4095u
-#define VREF_MAX_V 3.6f                /* datasheet limit of VREF+ */
-#define TSVREFE (1u << 23)             /* ADC_CCR: temp sensor and VREFINT */
-#define CH_TEMP_SENSOR 16u
-#define CH_VREFINT 17u
+#define ADC_MAX_RAW           4095u
+#define VREF_MAX_V            3.6f       /* datasheet limit of VREF+ */
+#define TSVREFE               (1u << 23) /* ADC_CCR: temp sensor and VREFINT */
+#define CH_TEMP_SENSOR        16u
+#define CH_VREFINT            17u
 
 /* adc_read sets the current valid bits as 1 << phase index. */
 _Static_assert((MC_HAL_ADC_VALID_IA == 1u) && (MC_HAL_ADC_VALID_IB == 2u) &&
-               (MC_HAL_ADC_VALID_IC == 4u), "valid bits are phase-indexed");
+                   (MC_HAL_ADC_VALID_IC == 4u),
+               "valid bits are phase-indexed");
 
 static bool finite_f(float x)
 {
@@ -47,8 +48,7 @@ static bool temp_table_valid(const mc_f405_adc_temp_sensor_t *s)
 {
     uint32_t k;
 
-    if ((s->p_table == NULL) || (s->n_table < 2u) ||
-        (s->n_table > MC_F405_ADC_TEMP_TABLE_MAX)) {
+    if ((s->p_table == NULL) || (s->n_table < 2u) || (s->n_table > MC_F405_ADC_TEMP_TABLE_MAX)) {
         return false;
     }
     for (k = 0u; k < s->n_table; k++) {
@@ -70,9 +70,8 @@ static bool temp_sensor_valid(const mc_f405_adc_temp_sensor_t *s)
     if (s->n_table != 0u) {
         return channel_valid(s->channel) && temp_table_valid(s);
     }
-    return channel_valid(s->channel) && finite_f(s->offset_c) &&
-           finite_f(s->slope_c_per_v) && finite_f(s->c2_c_per_v2) &&
-           finite_f(s->c3_c_per_v3) && finite_f(s->v_min_v) &&
+    return channel_valid(s->channel) && finite_f(s->offset_c) && finite_f(s->slope_c_per_v) &&
+           finite_f(s->c2_c_per_v2) && finite_f(s->c3_c_per_v3) && finite_f(s->v_min_v) &&
            finite_f(s->v_max_v) && (s->v_min_v < s->v_max_v);
 }
 
@@ -82,35 +81,32 @@ static bool config_valid(const mc_f405_adc_config_t *c)
         return false;
     }
     /* Phases a and b, a b and c, or b and c. */
-    if (!channel_or_none(c->ch_ia) || !channel_valid(c->ch_ib) ||
-        !channel_or_none(c->ch_ic) || !channel_valid(c->ch_vbus)) {
+    if (!channel_or_none(c->ch_ia) || !channel_valid(c->ch_ib) || !channel_or_none(c->ch_ic) ||
+        !channel_valid(c->ch_vbus)) {
         return false;
     }
     if ((c->ch_ia == MC_F405_ADC_CH_NONE) && (c->ch_ic == MC_F405_ADC_CH_NONE)) {
         return false;
     }
-    if (!smp_valid(c->smp_current) || !smp_valid(c->smp_vbus) ||
-        !smp_valid(c->smp_temp)) {
+    if (!smp_valid(c->smp_current) || !smp_valid(c->smp_vbus) || !smp_valid(c->smp_temp)) {
         return false;
     }
-    if ((c->trigger != MC_F405_ADC_TRIG_TIM1_TRGO) &&
-        (c->trigger != MC_F405_ADC_TRIG_TIM1_CC4)) {
+    if ((c->trigger != MC_F405_ADC_TRIG_TIM1_TRGO) && (c->trigger != MC_F405_ADC_TRIG_TIM1_CC4)) {
         return false;
     }
-    if ((c->clk_div != 2u) && (c->clk_div != 4u) && (c->clk_div != 6u) &&
-        (c->clk_div != 8u)) {
+    if ((c->clk_div != 2u) && (c->clk_div != 4u) && (c->clk_div != 6u) && (c->clk_div != 8u)) {
         return false;
     }
     if (!(c->vref_v > 0.0f) || !(c->vref_v <= VREF_MAX_V)) {
         return false;
     }
-    if (!(c->shunt_ohm > 0.0f) || !finite_f(c->shunt_ohm) ||
-        !finite_f(c->amp_gain_v_per_v) || (c->amp_gain_v_per_v == 0.0f)) {
+    if (!(c->shunt_ohm > 0.0f) || !finite_f(c->shunt_ohm) || !finite_f(c->amp_gain_v_per_v) ||
+        (c->amp_gain_v_per_v == 0.0f)) {
         return false;
     }
-    if (!(c->ia_offset_v >= 0.0f) || !(c->ia_offset_v <= c->vref_v) ||
-        !(c->ib_offset_v >= 0.0f) || !(c->ib_offset_v <= c->vref_v) ||
-        !(c->ic_offset_v >= 0.0f) || !(c->ic_offset_v <= c->vref_v)) {
+    if (!(c->ia_offset_v >= 0.0f) || !(c->ia_offset_v <= c->vref_v) || !(c->ib_offset_v >= 0.0f) ||
+        !(c->ib_offset_v <= c->vref_v) || !(c->ic_offset_v >= 0.0f) ||
+        !(c->ic_offset_v <= c->vref_v)) {
         return false;
     }
     if (!(c->vbus_divider >= 1.0f) || !finite_f(c->vbus_divider)) {
@@ -119,14 +115,12 @@ static bool config_valid(const mc_f405_adc_config_t *c)
     if (c->rail_margin_counts >= 2048u) {
         return false;
     }
-    return temp_sensor_valid(&c->temp_power_stage) &&
-           temp_sensor_valid(&c->temp_motor);
+    return temp_sensor_valid(&c->temp_power_stage) && temp_sensor_valid(&c->temp_motor);
 }
 
 /* SMPx[2:0] of one channel into the SMPR1 (ch 10..18) / SMPR2 (ch 0..9)
  * images. */
-static void smp_set(uint32_t *p_smpr1, uint32_t *p_smpr2, uint8_t ch,
-                    mc_f405_adc_smp_t smp)
+static void smp_set(uint32_t *p_smpr1, uint32_t *p_smpr2, uint8_t ch, mc_f405_adc_smp_t smp)
 {
     uint32_t shift;
 
@@ -194,9 +188,8 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
             valid |= (1u << ph); /* MC_HAL_ADC_VALID_IA/IB/IC are bits 0..2 */
         }
     }
-    if (p->derive_ia &&
-        ((valid & (MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC)) ==
-         (MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC))) {
+    if (p->derive_ia && ((valid & (MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC)) ==
+                         (MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC))) {
         cur[0] = -(cur[1] + cur[2]);
         valid |= MC_HAL_ADC_VALID_IA;
     }
@@ -241,13 +234,11 @@ static bool temp_convert(const mc_f405_adc_temp_sensor_t *s, float v, float *p_t
         return false;
     }
     /* Horner: offset + v (slope + v (c2 + v c3)). */
-    *p_t_c = s->offset_c +
-             (v * (s->slope_c_per_v + (v * (s->c2_c_per_v2 + (v * s->c3_c_per_v3)))));
+    *p_t_c = s->offset_c + (v * (s->slope_c_per_v + (v * (s->c2_c_per_v2 + (v * s->c3_c_per_v3)))));
     return true;
 }
 
-static const mc_f405_adc_temp_sensor_t *temp_sensor(const mc_f405_adc_t *p,
-                                                    uint32_t slot)
+static const mc_f405_adc_temp_sensor_t *temp_sensor(const mc_f405_adc_t *p, uint32_t slot)
 {
     return (slot == 0u) ? &p->cfg.temp_power_stage : &p->cfg.temp_motor;
 }
@@ -273,8 +264,8 @@ static int adc_read_temp(void *ctx, mc_hal_adc_temp_t *p_temp)
     }
     if (p->temp_running && ((r->SR & MC_F405_ADC_SR_EOC) != 0u)) {
         const mc_f405_adc_temp_sensor_t *s = temp_sensor(p, p->temp_slot);
-        const uint32_t bit = (p->temp_slot == 0u) ?
-            MC_HAL_ADC_TEMP_VALID_POWER_STAGE : MC_HAL_ADC_TEMP_VALID_MOTOR;
+        const uint32_t bit =
+            (p->temp_slot == 0u) ? MC_HAL_ADC_TEMP_VALID_POWER_STAGE : MC_HAL_ADC_TEMP_VALID_MOTOR;
         /* Reading DR clears EOC in hardware. */
         const float v = (float)(r->DR & MC_F405_ADC_DATA_MASK) * p->v_per_count;
         float t_c = 0.0f;
@@ -308,8 +299,7 @@ static const mc_hal_adc_ops_t adc_ops_temp = {
 };
 
 static const mc_hal_adc_ops_t adc_ops_no_temp = {
-    .read = adc_read,
-    .read_temp = NULL, /* no temperature channel on this board */
+    .read = adc_read, .read_temp = NULL, /* no temperature channel on this board */
 };
 
 /* ---- init -------------------------------------------------------------- */
@@ -394,15 +384,14 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
     ccr = c->p_common->CCR & ~MC_F405_ADC_CCR_ADCPRE_MASK;
     ccr |= (((uint32_t)c->clk_div / 2u) - 1u) << MC_F405_ADC_CCR_ADCPRE_SHIFT;
     if ((c->temp_power_stage.channel == CH_TEMP_SENSOR) ||
-        (c->temp_motor.channel == CH_TEMP_SENSOR) ||
-        (c->temp_power_stage.channel == CH_VREFINT) ||
+        (c->temp_motor.channel == CH_TEMP_SENSOR) || (c->temp_power_stage.channel == CH_VREFINT) ||
         (c->temp_motor.channel == CH_VREFINT)) {
         ccr |= TSVREFE;
     }
     c->p_common->CCR = ccr;
 
-    jextsel = (c->trigger == MC_F405_ADC_TRIG_TIM1_CC4) ?
-              MC_F405_ADC_JEXTSEL_TIM1_CC4 : MC_F405_ADC_JEXTSEL_TIM1_TRGO;
+    jextsel = (c->trigger == MC_F405_ADC_TRIG_TIM1_CC4) ? MC_F405_ADC_JEXTSEL_TIM1_CC4
+                                                        : MC_F405_ADC_JEXTSEL_TIM1_TRGO;
     r = c->p_adc;
     r->CR2 = 0u; /* off while configuring */
     r->CR1 = MC_F405_ADC_CR1_SCAN | (c->jeoc_irq ? MC_F405_ADC_CR1_JEOCIE : 0u);
@@ -412,11 +401,10 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
         r->JOFR[k] = 0u; /* offsets are applied in float, not by the ADC */
     }
     r->JSQR = jsqr;
-    r->SQR1 = 0u;     /* L = 0: one regular conversion per start */
+    r->SQR1 = 0u; /* L = 0: one regular conversion per start */
     r->SQR3 = have_temp ? temp_sensor(p_drv, p_drv->temp_slot)->channel : 0u;
-    r->SR = 0u;       /* rc_w0: clear stale flags */
-    r->CR2 = MC_F405_ADC_CR2_ADON |
-             (jextsel << MC_F405_ADC_CR2_JEXTSEL_SHIFT) |
+    r->SR = 0u; /* rc_w0: clear stale flags */
+    r->CR2 = MC_F405_ADC_CR2_ADON | (jextsel << MC_F405_ADC_CR2_JEXTSEL_SHIFT) |
              (MC_F405_ADC_JEXTEN_RISING << MC_F405_ADC_CR2_JEXTEN_SHIFT);
     return 0;
 }

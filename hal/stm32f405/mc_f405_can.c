@@ -9,30 +9,29 @@
 #include <errno.h>
 #include <stddef.h>
 
-#define TQ_MIN 8u    /* fewer tq per bit leave no room to place the sample */
-#define TQ_MAX 25u   /* 1 + 16 + 8 */
-#define BS1_MAX 16u
-#define BS2_MAX 8u
-#define BRP_MAX 1024u
-#define SJW_MAX 4u
+#define TQ_MIN         8u  /* fewer tq per bit leave no room to place the sample */
+#define TQ_MAX         25u /* 1 + 16 + 8 */
+#define BS1_MAX        16u
+#define BS2_MAX        8u
+#define BRP_MAX        1024u
+#define SJW_MAX        4u
 #define N_TX_MAILBOXES 3u
-#define RX_FIFO_DEPTH 3u
+#define RX_FIFO_DEPTH  3u
 
 /* ---- bit timing -------------------------------------------------------- */
 
-int mc_f405_can_bit_timing(uint32_t pclk_hz, uint32_t bitrate_bps,
-                           uint16_t sample_point_permille, uint8_t sjw_tq,
-                           uint32_t *p_btr)
+int mc_f405_can_bit_timing(uint32_t pclk_hz, uint32_t bitrate_bps, uint16_t sample_point_permille,
+                           uint8_t sjw_tq, uint32_t *p_btr)
 {
     uint32_t brp;
     bool found = false;
-    uint32_t best_err = 0u;   /* |1000 (1 + BS1) - sp N|, over best_n */
+    uint32_t best_err = 0u; /* |1000 (1 + BS1) - sp N|, over best_n */
     uint32_t best_n = 1u;
     uint32_t best_btr = 0u;
 
     if ((p_btr == NULL) || (pclk_hz == 0u) || (bitrate_bps == 0u) ||
-        (sample_point_permille < 500u) || (sample_point_permille > 950u) ||
-        (sjw_tq == 0u) || (sjw_tq > SJW_MAX)) {
+        (sample_point_permille < 500u) || (sample_point_permille > 950u) || (sjw_tq == 0u) ||
+        (sjw_tq > SJW_MAX)) {
         return -EINVAL;
     }
     for (brp = 1u; brp <= BRP_MAX; brp++) {
@@ -63,16 +62,14 @@ int mc_f405_can_bit_timing(uint32_t pclk_hz, uint32_t bitrate_bps,
             continue;
         }
         sp_x1000 = 1000u * (1u + bs1);
-        err = (sp_x1000 > (sample_point_permille * n)) ?
-              (sp_x1000 - (sample_point_permille * n)) :
-              ((sample_point_permille * n) - sp_x1000);
+        err = (sp_x1000 > (sample_point_permille * n)) ? (sp_x1000 - (sample_point_permille * n))
+                                                       : ((sample_point_permille * n) - sp_x1000);
         /* err / n < best_err / best_n; ties keep the earlier (more tq). */
         if (!found || ((uint64_t)err * best_n < (uint64_t)best_err * n)) {
             found = true;
             best_err = err;
             best_n = n;
-            best_btr = (brp - 1u) |
-                       ((bs1 - 1u) << MC_F405_CAN_BTR_TS1_SHIFT) |
+            best_btr = (brp - 1u) | ((bs1 - 1u) << MC_F405_CAN_BTR_TS1_SHIFT) |
                        ((bs2 - 1u) << MC_F405_CAN_BTR_TS2_SHIFT) |
                        (((uint32_t)sjw_tq - 1u) << MC_F405_CAN_BTR_SJW_SHIFT);
         }
@@ -95,8 +92,7 @@ static uint32_t id_word(uint32_t id, bool ext)
 
 static uint32_t bytes_to_word(const uint8_t *p)
 {
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
-           ((uint32_t)p[3] << 24);
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
 static void word_to_bytes(uint32_t w, uint8_t *p)
@@ -323,16 +319,16 @@ static void filters_program(mc_f405_can_regs_t *r, const mc_f405_can_config_t *c
     for (k = 0u; k < n; k++) {
         bits |= 1u << (c->filter_bank_start + k);
     }
-    r->FMR |= MC_F405_CAN_FMR_FINIT;   /* filters writable, rx paused */
-    r->FA1R &= ~bits;                  /* deactivate while writing */
-    r->FM1R &= ~bits;                  /* identifier-mask mode */
-    r->FS1R |= bits;                   /* single 32-bit scale */
-    r->FFA1R &= ~bits;                 /* all to FIFO 0: one reception order */
+    r->FMR |= MC_F405_CAN_FMR_FINIT; /* filters writable, rx paused */
+    r->FA1R &= ~bits;                /* deactivate while writing */
+    r->FM1R &= ~bits;                /* identifier-mask mode */
+    r->FS1R |= bits;                 /* single 32-bit scale */
+    r->FFA1R &= ~bits;               /* all to FIFO 0: one reception order */
     for (k = 0u; k < n; k++) {
         mc_f405_can_filter_bank_t *fb = &r->FB[c->filter_bank_start + k];
 
         if (c->n_filters == 0u) {
-            fb->FR1 = 0u;              /* mask 0: accept everything */
+            fb->FR1 = 0u; /* mask 0: accept everything */
             fb->FR2 = 0u;
         } else {
             const mc_f405_can_filter_t *f = &c->p_filters[k];
@@ -359,13 +355,12 @@ int mc_f405_can_init(mc_f405_can_t *p_drv, const mc_f405_can_config_t *p_cfg)
     if ((p_drv == NULL) || (c == NULL) || (c->p_can == NULL)) {
         return -EINVAL;
     }
-    if (mc_f405_can_bit_timing(c->pclk_hz, c->bitrate_bps,
-                               c->sample_point_permille, c->sjw_tq, &btr) != 0) {
+    if (mc_f405_can_bit_timing(c->pclk_hz, c->bitrate_bps, c->sample_point_permille, c->sjw_tq,
+                               &btr) != 0) {
         return -EINVAL;
     }
     if (((c->n_filters != 0u) && (c->p_filters == NULL)) ||
-        (((uint32_t)c->filter_bank_start +
-          ((c->n_filters == 0u) ? 1u : (uint32_t)c->n_filters)) >
+        (((uint32_t)c->filter_bank_start + ((c->n_filters == 0u) ? 1u : (uint32_t)c->n_filters)) >
          MC_F405_CAN_FILTER_BANKS)) {
         return -EINVAL;
     }
@@ -386,8 +381,7 @@ int mc_f405_can_init(mc_f405_can_t *p_drv, const mc_f405_can_config_t *p_cfg)
     /* Leave sleep (SLEEP = 0) and request initialisation mode. */
     r->MCR = mcr | MC_F405_CAN_MCR_INRQ;
     for (polls = 0u; polls < MC_F405_CAN_INIT_POLLS; polls++) {
-        if ((r->MSR & (MC_F405_CAN_MSR_INAK | MC_F405_CAN_MSR_SLAK)) ==
-            MC_F405_CAN_MSR_INAK) {
+        if ((r->MSR & (MC_F405_CAN_MSR_INAK | MC_F405_CAN_MSR_SLAK)) == MC_F405_CAN_MSR_INAK) {
             break;
         }
     }
@@ -403,9 +397,9 @@ int mc_f405_can_init(mc_f405_can_t *p_drv, const mc_f405_can_config_t *p_cfg)
     p_drv->dev.ops = &can_ops;
     p_drv->dev.ctx = p_drv;
 
-    r->BTR = btr;        /* writable in initialisation mode only */
+    r->BTR = btr; /* writable in initialisation mode only */
     filters_program(r, c);
     r->IER = c->rx_irq ? MC_F405_CAN_IER_FMPIE0 : 0u;
-    r->MCR = mcr;        /* request normal mode: joins after 11 recessive bits */
+    r->MCR = mcr; /* request normal mode: joins after 11 recessive bits */
     return 0;
 }

@@ -102,8 +102,8 @@ static int op_erase(void *ctx, uint32_t sector)
         return finish(f, -EIO);
     }
     /* RM0090 3.6.3: SER with the sector number, then STRT */
-    r->CR = MC_F405_FLASH_CR_PSIZE_X32 | MC_F405_FLASH_CR_SER |
-            (sector << MC_F405_FLASH_CR_SNB_SHIFT);
+    r->CR =
+        MC_F405_FLASH_CR_PSIZE_X32 | MC_F405_FLASH_CR_SER | (sector << MC_F405_FLASH_CR_SNB_SHIFT);
     r->CR |= MC_F405_FLASH_CR_STRT;
     rc = wait_idle(f);
     if (rc == 0) {
@@ -131,7 +131,8 @@ static int op_program(void *ctx, uint32_t sector, uint32_t offset, const uint32_
     /* RM0090 3.6.4: PG with PSIZE x32, one word per write, wait BSY */
     r->CR = MC_F405_FLASH_CR_PSIZE_X32 | MC_F405_FLASH_CR_PG;
     for (uint32_t i = 0u; (i < n_words) && (rc == 0); ++i) {
-        volatile uint32_t *dst = (volatile uint32_t *)(void *)(f->cfg.p_mem + base + offset + (size_t)4u * i);
+        volatile uint32_t *dst =
+            (volatile uint32_t *)(void *)(f->cfg.p_mem + base + offset + (size_t)4u * i);
         *dst = p_words[i];
         rc = wait_idle(f);
         if (rc == 0) {

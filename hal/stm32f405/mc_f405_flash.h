@@ -41,8 +41,8 @@ extern "C" {
 #define MC_F405_FLASH_SR_PGPERR (1u << 6)
 #define MC_F405_FLASH_SR_PGSERR (1u << 7)
 #define MC_F405_FLASH_SR_BSY    (1u << 16)
-#define MC_F405_FLASH_SR_ERRORS                                                       \
-    (MC_F405_FLASH_SR_OPERR | MC_F405_FLASH_SR_WRPERR | MC_F405_FLASH_SR_PGAERR |     \
+#define MC_F405_FLASH_SR_ERRORS                                                   \
+    (MC_F405_FLASH_SR_OPERR | MC_F405_FLASH_SR_WRPERR | MC_F405_FLASH_SR_PGAERR | \
      MC_F405_FLASH_SR_PGPERR | MC_F405_FLASH_SR_PGSERR)
 
 #define MC_F405_FLASH_CR_PG        (1u << 0)
@@ -64,11 +64,11 @@ typedef struct mc_f405_flash_regs {
 
 typedef struct {
     mc_f405_flash_regs_t *p_regs;
-    volatile uint8_t *p_mem;      /**< the array's base (0x08000000 on the MCU) */
-    uint32_t protect_mask;        /**< bit n: sector n refused (holds the code) */
-    uint32_t busy_spin_max;       /**< polls of SR.BSY before -EIO (erase of
+    volatile uint8_t *p_mem;    /**< the array's base (0x08000000 on the MCU) */
+    uint32_t protect_mask;      /**< bit n: sector n refused (holds the code) */
+    uint32_t busy_spin_max;     /**< polls of SR.BSY before -EIO (erase of
                                        128 KiB: up to 2 s) */
-    void (*hw_poll)(void *ctx);   /**< host test model; NULL on the MCU */
+    void (*hw_poll)(void *ctx); /**< host test model; NULL on the MCU */
     void *hw_ctx;
 } mc_f405_flash_config_t;
 

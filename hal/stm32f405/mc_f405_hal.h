@@ -80,8 +80,8 @@ extern "C" {
  * @return 0; -EINVAL zero/NULL input or more than 1008 tDTS (6 us at
  *         168 MHz): outputs untouched.
  */
-int mc_f405_deadtime_encode(uint32_t deadtime_ns, uint32_t tim_clk_hz,
-                            uint32_t *p_dtg, uint32_t *p_actual_ns);
+int mc_f405_deadtime_encode(uint32_t deadtime_ns, uint32_t tim_clk_hz, uint32_t *p_dtg,
+                            uint32_t *p_actual_ns);
 
 /* ======================================================================== */
 /* Fault inputs and gate kill                                               */
@@ -90,8 +90,8 @@ int mc_f405_deadtime_encode(uint32_t deadtime_ns, uint32_t tim_clk_hz,
 /** One GPIO pin; p_port == NULL means "not wired on this board". */
 typedef struct mc_f405_pin {
     mc_f405_gpio_regs_t *p_port;
-    uint8_t pin;      /**< 0..15 */
-    bool active_low;  /**< asserted (or enabled, for an output) at 0 V */
+    uint8_t pin;     /**< 0..15 */
+    bool active_low; /**< asserted (or enabled, for an output) at 0 V */
 } mc_f405_pin_t;
 
 typedef struct mc_f405_fault_config {
@@ -108,7 +108,7 @@ typedef struct mc_f405_fault_config {
 
 typedef struct mc_f405_fault {
     mc_f405_fault_config_t cfg;
-    volatile bool killed;            /**< gate kill latched (software view) */
+    volatile bool killed; /**< gate kill latched (software view) */
     volatile uint32_t latched_mask;
     mc_hal_fault_t dev;
 } mc_f405_fault_t;
@@ -139,27 +139,27 @@ typedef enum mc_f405_adc_trigger {
 } mc_f405_adc_trigger_t;
 
 typedef struct mc_f405_pwm3_config {
-    mc_f405_tim_regs_t *p_tim;      /**< TIM1 */
-    uint32_t tim_clk_hz;            /**< 168e6 (APB2 timer clock) */
-    uint32_t pwm_freq_hz;           /**< PWM (carrier) frequency, e.g. 20000 */
-    uint32_t deadtime_ns;           /**< see mc_f405_deadtime_encode() */
-    uint32_t adc_trigger_lead_ticks; /**< CCR4 = ARR - lead: ADC trigger this
+    mc_f405_tim_regs_t *p_tim;         /**< TIM1 */
+    uint32_t tim_clk_hz;               /**< 168e6 (APB2 timer clock) */
+    uint32_t pwm_freq_hz;              /**< PWM (carrier) frequency, e.g. 20000 */
+    uint32_t deadtime_ns;              /**< see mc_f405_deadtime_encode() */
+    uint32_t adc_trigger_lead_ticks;   /**< CCR4 = ARR - lead: ADC trigger this
                                           many counter ticks before the peak,
                                           1 .. ARR - 1 */
     mc_f405_adc_trigger_t adc_trigger; /**< CC4 needs CC4E set */
-    bool break_enable;              /**< BKE: BKIN kills the outputs */
-    bool break_active_high;         /**< BKP */
-    bool high_side_active_low;      /**< CCxP: inverted high-side gate input */
-    bool low_side_active_low;       /**< CCxNP: inverted low-side gate input */
-    mc_f405_fault_t *p_fault;       /**< software kill latch to honour, or
+    bool break_enable;                 /**< BKE: BKIN kills the outputs */
+    bool break_active_high;            /**< BKP */
+    bool high_side_active_low;         /**< CCxP: inverted high-side gate input */
+    bool low_side_active_low;          /**< CCxNP: inverted low-side gate input */
+    mc_f405_fault_t *p_fault;          /**< software kill latch to honour, or
                                          NULL (BIF is always honoured) */
 } mc_f405_pwm3_config_t;
 
 typedef struct mc_f405_pwm3 {
     mc_f405_pwm3_config_t cfg;
-    uint32_t arr;        /**< auto-reload: half period in counter ticks */
-    uint32_t psc;        /**< prescaler register value */
-    uint32_t bdtr_off;   /**< BDTR with MOE clear */
+    uint32_t arr;      /**< auto-reload: half period in counter ticks */
+    uint32_t psc;      /**< prescaler register value */
+    uint32_t bdtr_off; /**< BDTR with MOE clear */
     float period_s;
     float duty_a;
     float duty_b;
@@ -181,13 +181,13 @@ int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg)
 /* ======================================================================== */
 
 typedef struct mc_f405_pwm2_config {
-    mc_f405_tim_regs_t *p_tim;      /**< TIM8 */
-    uint32_t tim_clk_hz;            /**< 168e6 */
+    mc_f405_tim_regs_t *p_tim; /**< TIM8 */
+    uint32_t tim_clk_hz;       /**< 168e6 */
     uint32_t pwm_freq_hz;
     bool break_enable;
     bool break_active_high;
-    bool outputs_active_low;        /**< CCxP on all four channels */
-    mc_f405_fault_t *p_fault;       /**< or NULL */
+    bool outputs_active_low;  /**< CCxP on all four channels */
+    mc_f405_fault_t *p_fault; /**< or NULL */
 } mc_f405_pwm2_config_t;
 
 typedef struct mc_f405_pwm2 {
@@ -248,7 +248,7 @@ typedef struct mc_f405_adc_temp_point {
  *    where it is steep); the cubic and window fields are then unused.
  *  Outside the valid window: open or short circuit. */
 typedef struct mc_f405_adc_temp_sensor {
-    uint8_t channel;        /**< ADC channel or MC_F405_ADC_CH_NONE */
+    uint8_t channel; /**< ADC channel or MC_F405_ADC_CH_NONE */
     float offset_c;
     float slope_c_per_v;
     float v_min_v;
@@ -256,37 +256,37 @@ typedef struct mc_f405_adc_temp_sensor {
     float c2_c_per_v2;
     float c3_c_per_v3;
     const mc_f405_adc_temp_point_t *p_table; /**< or NULL */
-    uint32_t n_table;       /**< 0 (cubic) or 2 .. MC_F405_ADC_TEMP_TABLE_MAX */
+    uint32_t n_table;                        /**< 0 (cubic) or 2 .. MC_F405_ADC_TEMP_TABLE_MAX */
 } mc_f405_adc_temp_sensor_t;
 
 typedef struct mc_f405_adc_config {
-    mc_f405_adc_regs_t *p_adc;             /**< ADC1 */
-    mc_f405_adc_common_regs_t *p_common;   /**< ADC common registers */
-    const mc_hal_tick_t *p_tick;           /**< timestamps; NULL: 0 */
-    uint8_t ch_ia;                         /**< channel of phase a amplifier,
+    mc_f405_adc_regs_t *p_adc;           /**< ADC1 */
+    mc_f405_adc_common_regs_t *p_common; /**< ADC common registers */
+    const mc_hal_tick_t *p_tick;         /**< timestamps; NULL: 0 */
+    uint8_t ch_ia;                       /**< channel of phase a amplifier,
                                                 or MC_F405_ADC_CH_NONE when
                                                 phases b and c are measured */
     uint8_t ch_ib;
-    uint8_t ch_ic;                         /**< or MC_F405_ADC_CH_NONE (2 shunts
+    uint8_t ch_ic; /**< or MC_F405_ADC_CH_NONE (2 shunts
                                                 on a and b) */
     uint8_t ch_vbus;
     mc_f405_adc_smp_t smp_current;
     mc_f405_adc_smp_t smp_vbus;
     mc_f405_adc_smp_t smp_temp;
-    mc_f405_adc_trigger_t trigger;         /**< must match pwm3's config */
-    uint8_t clk_div;                       /**< ADCPRE: 2, 4, 6 or 8 */
-    bool jeoc_irq;                         /**< JEOCIE: fast loop in the ADC ISR */
-    float vref_v;                          /**< ADC reference (0, 3.6] V */
-    float shunt_ohm;                       /**< > 0 */
-    float amp_gain_v_per_v;                /**< current amplifier gain, != 0;
+    mc_f405_adc_trigger_t trigger; /**< must match pwm3's config */
+    uint8_t clk_div;               /**< ADCPRE: 2, 4, 6 or 8 */
+    bool jeoc_irq;                 /**< JEOCIE: fast loop in the ADC ISR */
+    float vref_v;                  /**< ADC reference (0, 3.6] V */
+    float shunt_ohm;               /**< > 0 */
+    float amp_gain_v_per_v;        /**< current amplifier gain, != 0;
                                                 negative when a positive
                                                 (inverter -> motor) current
                                                 lowers the amplifier output */
-    float ia_offset_v;                     /**< amplifier output at 0 A [V] */
+    float ia_offset_v;             /**< amplifier output at 0 A [V] */
     float ib_offset_v;
     float ic_offset_v;
-    float vbus_divider;                    /**< Vbus / ADC pin voltage, >= 1 */
-    uint16_t rail_margin_counts;           /**< raw <= margin or >= 4095 -
+    float vbus_divider;          /**< Vbus / ADC pin voltage, >= 1 */
+    uint16_t rail_margin_counts; /**< raw <= margin or >= 4095 -
                                                 margin: channel invalid */
     mc_f405_adc_temp_sensor_t temp_power_stage;
     mc_f405_adc_temp_sensor_t temp_motor;
@@ -303,7 +303,7 @@ typedef struct mc_f405_adc {
     float offset_counts[3];    /**< zero-current raw value per phase */
     float v_per_count;         /**< ADC pin volts per count */
     uint32_t seq;
-    uint32_t temp_slot;        /**< 0 power stage, 1 motor: conversion running */
+    uint32_t temp_slot; /**< 0 power stage, 1 motor: conversion running */
     bool temp_running;
     mc_hal_adc_temp_t temp;
     mc_hal_adc_t dev;
@@ -329,13 +329,13 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg);
 /* ======================================================================== */
 
 typedef struct mc_f405_encoder_config {
-    mc_f405_tim_regs_t *p_tim;     /**< TIM3/TIM4 (16 bit) or TIM2/TIM5 */
-    uint32_t counts_per_rev;       /**< x4 counts, 1 .. 65536 (16-bit timer)
+    mc_f405_tim_regs_t *p_tim;   /**< TIM3/TIM4 (16 bit) or TIM2/TIM5 */
+    uint32_t counts_per_rev;     /**< x4 counts, 1 .. 65536 (16-bit timer)
                                         or 1 .. 2^32-1 with counter_32bit */
-    bool counter_32bit;            /**< p_tim is TIM2 or TIM5 */
-    uint8_t input_filter;          /**< ICxF 0..15 on TI1 and TI2 */
-    bool invert;                   /**< count the other way (CC1P) */
-    const mc_hal_tick_t *p_tick;   /**< timestamps; NULL: 0 */
+    bool counter_32bit;          /**< p_tim is TIM2 or TIM5 */
+    uint8_t input_filter;        /**< ICxF 0..15 on TI1 and TI2 */
+    bool invert;                 /**< count the other way (CC1P) */
+    const mc_hal_tick_t *p_tick; /**< timestamps; NULL: 0 */
 } mc_f405_encoder_config_t;
 
 typedef struct mc_f405_encoder {
@@ -345,8 +345,7 @@ typedef struct mc_f405_encoder {
 } mc_f405_encoder_t;
 
 /** @return 0; -EINVAL NULL, counts_per_rev out of range, filter > 15. */
-int mc_f405_encoder_init(mc_f405_encoder_t *p_drv,
-                         const mc_f405_encoder_config_t *p_cfg);
+int mc_f405_encoder_init(mc_f405_encoder_t *p_drv, const mc_f405_encoder_config_t *p_cfg);
 
 /** Index pulse seen (call from its EXTI ISR): counter to 0, index flag. */
 void mc_f405_encoder_index_isr(mc_f405_encoder_t *p_drv);
@@ -366,20 +365,20 @@ void mc_f405_encoder_index_isr(mc_f405_encoder_t *p_drv);
 #define MC_F405_SPI_CS_GAP_READS 64u
 
 typedef struct mc_f405_spi_config {
-    mc_f405_spi_regs_t *p_spi;   /**< SPI1, SPI2 or SPI3 */
-    uint32_t pclk_hz;            /**< its APB clock: 84e6 (SPI1), 42e6 (SPI2/3) */
-    uint32_t max_sck_hz;         /**< fastest SCK the device allows: the
+    mc_f405_spi_regs_t *p_spi; /**< SPI1, SPI2 or SPI3 */
+    uint32_t pclk_hz;          /**< its APB clock: 84e6 (SPI1), 42e6 (SPI2/3) */
+    uint32_t max_sck_hz;       /**< fastest SCK the device allows: the
                                       driver takes the smallest divider
                                       2, 4, .. 256 that stays at or below it */
-    uint8_t mode;                /**< SPI mode 0..3: CPOL = bit 1, CPHA = bit 0 */
-    mc_f405_pin_t cs;            /**< chip select (output; active_low as the
+    uint8_t mode;              /**< SPI mode 0..3: CPOL = bit 1, CPHA = bit 0 */
+    mc_f405_pin_t cs;          /**< chip select (output; active_low as the
                                       device wants); required */
 } mc_f405_spi_config_t;
 
 typedef struct mc_f405_spi {
     mc_f405_spi_config_t cfg;
-    uint32_t cr1;                /**< CR1 with SPE */
-    uint32_t sck_hz;             /**< SCK frequency the divider gives */
+    uint32_t cr1;    /**< CR1 with SPE */
+    uint32_t sck_hz; /**< SCK frequency the divider gives */
     mc_hal_spi_t dev;
 } mc_f405_spi_t;
 
@@ -398,9 +397,9 @@ int mc_f405_spi_init(mc_f405_spi_t *p_drv, const mc_f405_spi_config_t *p_cfg);
 /* ======================================================================== */
 
 typedef struct mc_f405_tick_config {
-    mc_f405_tim_regs_t *p_tim;   /**< TIM2 or TIM5 (32-bit counter) */
-    uint32_t tim_clk_hz;         /**< 84e6 (APB1 timer clock) */
-    uint32_t prescaler;          /**< PSC: tick = tim_clk_hz / (PSC + 1) */
+    mc_f405_tim_regs_t *p_tim; /**< TIM2 or TIM5 (32-bit counter) */
+    uint32_t tim_clk_hz;       /**< 84e6 (APB1 timer clock) */
+    uint32_t prescaler;        /**< PSC: tick = tim_clk_hz / (PSC + 1) */
 } mc_f405_tick_config_t;
 
 typedef struct mc_f405_tick {
@@ -425,32 +424,32 @@ int mc_f405_tick_init(mc_f405_tick_t *p_drv, const mc_f405_tick_config_t *p_cfg)
 typedef struct mc_f405_can_filter {
     uint32_t id;
     uint32_t mask;
-    bool ext;          /**< 29-bit identifiers (else 11-bit) */
+    bool ext; /**< 29-bit identifiers (else 11-bit) */
 } mc_f405_can_filter_t;
 
 typedef struct mc_f405_can_config {
-    mc_f405_can_regs_t *p_can;        /**< CAN1 (owns the filter banks) */
-    uint32_t pclk_hz;                 /**< APB1 clock, 42e6 */
-    uint32_t bitrate_bps;             /**< e.g. 500000, 1000000 */
-    uint16_t sample_point_permille;   /**< wanted sample point, 500..950 */
-    uint8_t sjw_tq;                   /**< resync jump width 1..4 tq */
-    bool auto_bus_off_recovery;       /**< ABOM */
-    bool no_auto_retransmit;          /**< NART */
+    mc_f405_can_regs_t *p_can;             /**< CAN1 (owns the filter banks) */
+    uint32_t pclk_hz;                      /**< APB1 clock, 42e6 */
+    uint32_t bitrate_bps;                  /**< e.g. 500000, 1000000 */
+    uint16_t sample_point_permille;        /**< wanted sample point, 500..950 */
+    uint8_t sjw_tq;                        /**< resync jump width 1..4 tq */
+    bool auto_bus_off_recovery;            /**< ABOM */
+    bool no_auto_retransmit;               /**< NART */
     const mc_f405_can_filter_t *p_filters; /**< NULL/0: accept every frame */
-    uint8_t n_filters;                /**< 0 .. 28 - filter_bank_start */
-    uint8_t filter_bank_start;        /**< first bank (0 for CAN1) */
-    bool rx_irq;                      /**< FIFO 0 drained by
+    uint8_t n_filters;                     /**< 0 .. 28 - filter_bank_start */
+    uint8_t filter_bank_start;             /**< first bank (0 for CAN1) */
+    bool rx_irq;                           /**< FIFO 0 drained by
                                            mc_f405_can_rx_isr(); receive
                                            then only pops the ring */
-    const mc_hal_tick_t *p_tick;      /**< rx timestamps; NULL: 0 */
+    const mc_hal_tick_t *p_tick;           /**< rx timestamps; NULL: 0 */
 } mc_f405_can_config_t;
 
 typedef struct mc_f405_can {
     mc_f405_can_config_t cfg;
     uint32_t btr;
     mc_hal_can_frame_t ring[MC_F405_CAN_RX_RING_LEN];
-    volatile uint32_t ring_head;     /**< written by the consumer only */
-    volatile uint32_t ring_tail;     /**< written by the producer only */
+    volatile uint32_t ring_head; /**< written by the consumer only */
+    volatile uint32_t ring_tail; /**< written by the producer only */
     volatile uint32_t rx_overrun_count;
     mc_hal_can_t dev;
 } mc_f405_can_t;
@@ -463,9 +462,8 @@ typedef struct mc_f405_can {
  * to sample_point_permille (on a tie the one with more tq).
  * @return 0 and *p_btr; -EINVAL no exact setting or bad argument.
  */
-int mc_f405_can_bit_timing(uint32_t pclk_hz, uint32_t bitrate_bps,
-                           uint16_t sample_point_permille, uint8_t sjw_tq,
-                           uint32_t *p_btr);
+int mc_f405_can_bit_timing(uint32_t pclk_hz, uint32_t bitrate_bps, uint16_t sample_point_permille,
+                           uint8_t sjw_tq, uint32_t *p_btr);
 
 /**
  * Enter initialisation mode (wait for MSR.INAK), program BTR, filters (32-bit

@@ -13,15 +13,15 @@
 
 /* Smallest ARR the drivers accept: below 100 counter ticks per half period
  * the duty resolution is worse than 1 %. */
-#define MIN_ARR 100u
-#define MAX_ARR 0xFFFFu   /* TIM1/TIM8 counters are 16 bit */
+#define MIN_ARR     100u
+#define MAX_ARR     0xFFFFu /* TIM1/TIM8 counters are 16 bit */
 #define MAX_PSC_DIV 0x10000u
 
 /* Worst case dead time: 1008 tDTS (DTG = 0xFF). */
 #define DTG_MAX_TICKS 1008u
 
-int mc_f405_deadtime_encode(uint32_t deadtime_ns, uint32_t tim_clk_hz,
-                            uint32_t *p_dtg, uint32_t *p_actual_ns)
+int mc_f405_deadtime_encode(uint32_t deadtime_ns, uint32_t tim_clk_hz, uint32_t *p_dtg,
+                            uint32_t *p_actual_ns)
 {
     uint64_t ticks;
     uint32_t dtg;
@@ -53,23 +53,22 @@ int mc_f405_deadtime_encode(uint32_t deadtime_ns, uint32_t tim_clk_hz,
     }
     *p_dtg = dtg;
     if (p_actual_ns != NULL) {
-        *p_actual_ns = (uint32_t)((((uint64_t)actual_ticks * 1000000000u) +
-                                   (tim_clk_hz / 2u)) / tim_clk_hz);
+        *p_actual_ns =
+            (uint32_t)((((uint64_t)actual_ticks * 1000000000u) + (tim_clk_hz / 2u)) / tim_clk_hz);
     }
     return 0;
 }
 
 /* Centre-aligned period = 2 (PSC + 1) ARR counter-clock ticks. Picks the
  * smallest prescaler that fits ARR in 16 bits; ARR rounded to nearest. */
-static int pwm_timebase(uint32_t tim_clk_hz, uint32_t pwm_freq_hz,
-                        uint32_t *p_psc, uint32_t *p_arr, float *p_period_s)
+static int pwm_timebase(uint32_t tim_clk_hz, uint32_t pwm_freq_hz, uint32_t *p_psc, uint32_t *p_arr,
+                        float *p_period_s)
 {
     uint64_t half;
     uint64_t div;
     uint64_t arr;
 
-    if ((tim_clk_hz == 0u) || (pwm_freq_hz == 0u) ||
-        (pwm_freq_hz > tim_clk_hz)) {
+    if ((tim_clk_hz == 0u) || (pwm_freq_hz == 0u) || (pwm_freq_hz > tim_clk_hz)) {
         return -EINVAL;
     }
     half = (uint64_t)tim_clk_hz / (2u * (uint64_t)pwm_freq_hz);
@@ -80,8 +79,8 @@ static int pwm_timebase(uint32_t tim_clk_hz, uint32_t pwm_freq_hz,
     if (div > MAX_PSC_DIV) {
         return -EINVAL;
     }
-    arr = ((uint64_t)tim_clk_hz + ((uint64_t)pwm_freq_hz * div)) /
-          (2u * (uint64_t)pwm_freq_hz * div);
+    arr =
+        ((uint64_t)tim_clk_hz + ((uint64_t)pwm_freq_hz * div)) / (2u * (uint64_t)pwm_freq_hz * div);
     if ((arr < MIN_ARR) || (arr > MAX_ARR)) {
         return -EINVAL;
     }
@@ -118,8 +117,7 @@ static uint32_t bdtr_break_bits(bool enable, bool active_high)
 
 /* The kill latch as the PWM drivers see it: software latch of the fault
  * driver, or the hardware break flag of their own timer. */
-static bool kill_latched(const mc_f405_fault_t *p_fault,
-                         const mc_f405_tim_regs_t *p_tim)
+static bool kill_latched(const mc_f405_fault_t *p_fault, const mc_f405_tim_regs_t *p_tim)
 {
     if ((p_fault != NULL) && p_fault->killed) {
         return true;
@@ -129,8 +127,8 @@ static bool kill_latched(const mc_f405_fault_t *p_fault,
 
 /* Common enable: MOE on, then re-check the latch, since a gate kill from a
  * higher-priority context may have fired between the check and the write. */
-static int tim_outputs_enable(const mc_f405_fault_t *p_fault,
-                              mc_f405_tim_regs_t *p_tim, uint32_t bdtr_off)
+static int tim_outputs_enable(const mc_f405_fault_t *p_fault, mc_f405_tim_regs_t *p_tim,
+                              uint32_t bdtr_off)
 {
     if (kill_latched(p_fault, p_tim)) {
         return -EBUSY;
@@ -236,17 +234,14 @@ int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg)
         (p_cfg->adc_trigger != MC_F405_ADC_TRIG_TIM1_CC4)) {
         return -EINVAL;
     }
-    if (pwm_timebase(p_cfg->tim_clk_hz, p_cfg->pwm_freq_hz, &psc, &arr,
-                     &period_s) != 0) {
+    if (pwm_timebase(p_cfg->tim_clk_hz, p_cfg->pwm_freq_hz, &psc, &arr, &period_s) != 0) {
         return -EINVAL;
     }
     /* tDTS = counter clock before the prescaler (CKD = 00). */
-    if (mc_f405_deadtime_encode(p_cfg->deadtime_ns, p_cfg->tim_clk_hz, &dtg,
-                                NULL) != 0) {
+    if (mc_f405_deadtime_encode(p_cfg->deadtime_ns, p_cfg->tim_clk_hz, &dtg, NULL) != 0) {
         return -EINVAL;
     }
-    if ((p_cfg->adc_trigger_lead_ticks == 0u) ||
-        (p_cfg->adc_trigger_lead_ticks >= arr)) {
+    if ((p_cfg->adc_trigger_lead_ticks == 0u) || (p_cfg->adc_trigger_lead_ticks >= arr)) {
         return -EINVAL;
     }
 
@@ -260,8 +255,7 @@ int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg)
     /* OSSI/OSSR: with MOE = 0 the outputs are driven to their idle level
      * (OISx = OISxN = 0: both switches off) instead of floating. */
     p_drv->bdtr_off = dtg | MC_F405_TIM_BDTR_OSSI | MC_F405_TIM_BDTR_OSSR |
-                      bdtr_break_bits(p_cfg->break_enable,
-                                      p_cfg->break_active_high);
+                      bdtr_break_bits(p_cfg->break_enable, p_cfg->break_active_high);
     p_drv->dev.ops = &pwm3_ops;
     p_drv->dev.ctx = p_drv;
 
@@ -283,8 +277,8 @@ int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg)
     ccr_init = duty_to_ccr(MC_HAL_PWM3_DUTY_INIT, arr);
 
     t = p_cfg->p_tim;
-    t->CR1 = 0u;                 /* counter stopped while configuring */
-    t->BDTR = p_drv->bdtr_off;   /* outputs off, dead time, break */
+    t->CR1 = 0u;               /* counter stopped while configuring */
+    t->BDTR = p_drv->bdtr_off; /* outputs off, dead time, break */
     t->PSC = psc;
     t->ARR = arr;
     /* Centre-aligned: an update event at every over- and underflow; RCR = 1
@@ -302,8 +296,7 @@ int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg)
     t->CCER = ccer;
     t->CR2 = cr2;
     t->EGR = MC_F405_TIM_EGR_UG; /* load PSC, ARR, RCR, CCRx preloads */
-    t->CR1 = (1u << MC_F405_TIM_CR1_CMS_SHIFT) | MC_F405_TIM_CR1_ARPE |
-             MC_F405_TIM_CR1_CEN;
+    t->CR1 = (1u << MC_F405_TIM_CR1_CMS_SHIFT) | MC_F405_TIM_CR1_ARPE | MC_F405_TIM_CR1_CEN;
     return 0;
 }
 
@@ -385,8 +378,7 @@ int mc_f405_pwm2_init(mc_f405_pwm2_t *p_drv, const mc_f405_pwm2_config_t *p_cfg)
     if ((p_drv == NULL) || (p_cfg == NULL) || (p_cfg->p_tim == NULL)) {
         return -EINVAL;
     }
-    if (pwm_timebase(p_cfg->tim_clk_hz, p_cfg->pwm_freq_hz, &psc, &arr,
-                     &period_s) != 0) {
+    if (pwm_timebase(p_cfg->tim_clk_hz, p_cfg->pwm_freq_hz, &psc, &arr, &period_s) != 0) {
         return -EINVAL;
     }
 
@@ -398,8 +390,7 @@ int mc_f405_pwm2_init(mc_f405_pwm2_t *p_drv, const mc_f405_pwm2_config_t *p_cfg)
     p_drv->duty_b = MC_HAL_PWM2_DUTY_INIT;
     /* No complementary outputs here, so no dead time (DTG = 0). */
     p_drv->bdtr_off = MC_F405_TIM_BDTR_OSSI | MC_F405_TIM_BDTR_OSSR |
-                      bdtr_break_bits(p_cfg->break_enable,
-                                      p_cfg->break_active_high);
+                      bdtr_break_bits(p_cfg->break_enable, p_cfg->break_active_high);
     p_drv->dev.ops = &pwm2_ops;
     p_drv->dev.ctx = p_drv;
 
@@ -426,8 +417,7 @@ int mc_f405_pwm2_init(mc_f405_pwm2_t *p_drv, const mc_f405_pwm2_config_t *p_cfg)
     t->CCER = ccer;
     t->CR2 = 0u;
     t->EGR = MC_F405_TIM_EGR_UG;
-    t->CR1 = (1u << MC_F405_TIM_CR1_CMS_SHIFT) | MC_F405_TIM_CR1_ARPE |
-             MC_F405_TIM_CR1_CEN;
+    t->CR1 = (1u << MC_F405_TIM_CR1_CMS_SHIFT) | MC_F405_TIM_CR1_ARPE | MC_F405_TIM_CR1_CEN;
     return 0;
 }
 
@@ -583,8 +573,7 @@ int mc_f405_fault_init(mc_f405_fault_t *p_drv, const mc_f405_fault_config_t *p_c
         return -EINVAL;
     }
     if (!pin_valid(&p_cfg->gate_driver_fault) || !pin_valid(&p_cfg->overcurrent) ||
-        !pin_valid(&p_cfg->gate_enable) ||
-        ((p_cfg->bkin_mask & ~MC_HAL_FAULT_ALL) != 0u)) {
+        !pin_valid(&p_cfg->gate_enable) || ((p_cfg->bkin_mask & ~MC_HAL_FAULT_ALL) != 0u)) {
         return -EINVAL;
     }
     p_drv->cfg = *p_cfg;
@@ -595,7 +584,7 @@ int mc_f405_fault_init(mc_f405_fault_t *p_drv, const mc_f405_fault_config_t *p_c
 
     pin_mode(&p_cfg->gate_driver_fault, 0u); /* input */
     pin_mode(&p_cfg->overcurrent, 0u);
-    pin_drive(&p_cfg->gate_enable, true);    /* level first, then output */
+    pin_drive(&p_cfg->gate_enable, true); /* level first, then output */
     pin_mode(&p_cfg->gate_enable, MC_F405_GPIO_MODER_OUTPUT);
     return 0;
 }

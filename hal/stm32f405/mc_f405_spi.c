@@ -17,7 +17,7 @@
 #include <stddef.h>
 
 #define SPI_MODE_MAX 3u
-#define SPI_BR_MAX 7u /* PCLK / 256 */
+#define SPI_BR_MAX   7u /* PCLK / 256 */
 
 static void cs_drive(const mc_f405_pin_t *p_cs, bool asserted)
 {
@@ -98,9 +98,8 @@ int mc_f405_spi_init(mc_f405_spi_t *p_drv, const mc_f405_spi_config_t *p_cfg)
     mc_f405_gpio_regs_t *port;
 
     if ((p_drv == NULL) || (p_cfg == NULL) || (p_cfg->p_spi == NULL) ||
-        (p_cfg->cs.p_port == NULL) || (p_cfg->cs.pin > 15u) ||
-        (p_cfg->pclk_hz == 0u) || (p_cfg->max_sck_hz == 0u) ||
-        (p_cfg->mode > SPI_MODE_MAX)) {
+        (p_cfg->cs.p_port == NULL) || (p_cfg->cs.pin > 15u) || (p_cfg->pclk_hz == 0u) ||
+        (p_cfg->max_sck_hz == 0u) || (p_cfg->mode > SPI_MODE_MAX)) {
         return -EINVAL;
     }
     /* Smallest divider 2^(BR + 1) with pclk / divider <= max_sck_hz. */
@@ -115,8 +114,8 @@ int mc_f405_spi_init(mc_f405_spi_t *p_drv, const mc_f405_spi_config_t *p_cfg)
 
     p_drv->cfg = *p_cfg;
     p_drv->sck_hz = p_cfg->pclk_hz >> (br + 1u);
-    cr1 = MC_F405_SPI_CR1_MSTR | MC_F405_SPI_CR1_SSM | MC_F405_SPI_CR1_SSI |
-          MC_F405_SPI_CR1_DFF | (br << MC_F405_SPI_CR1_BR_SHIFT);
+    cr1 = MC_F405_SPI_CR1_MSTR | MC_F405_SPI_CR1_SSM | MC_F405_SPI_CR1_SSI | MC_F405_SPI_CR1_DFF |
+          (br << MC_F405_SPI_CR1_BR_SHIFT);
     if ((p_cfg->mode & 2u) != 0u) {
         cr1 |= MC_F405_SPI_CR1_CPOL;
     }

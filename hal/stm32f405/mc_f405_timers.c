@@ -10,8 +10,8 @@
 #include <stddef.h>
 
 #define ENC_MAX_CPR_16BIT 0x10000u /* ARR = cpr - 1 must fit in 16 bits */
-#define IC_FILTER_MAX 15u
-#define PSC_MAX 0xFFFFu
+#define IC_FILTER_MAX     15u
+#define PSC_MAX           0xFFFFu
 
 static uint32_t now_ticks(const mc_hal_tick_t *p_tick)
 {
@@ -63,8 +63,7 @@ static const mc_hal_encoder_ops_t encoder_ops = {
     .read = encoder_read,
 };
 
-int mc_f405_encoder_init(mc_f405_encoder_t *p_drv,
-                         const mc_f405_encoder_config_t *p_cfg)
+int mc_f405_encoder_init(mc_f405_encoder_t *p_drv, const mc_f405_encoder_config_t *p_cfg)
 {
     mc_f405_tim_regs_t *t;
     uint32_t ccmr1;
@@ -143,8 +142,8 @@ int mc_f405_tick_init(mc_f405_tick_t *p_drv, const mc_f405_tick_config_t *p_cfg)
 {
     mc_f405_tim_regs_t *t;
 
-    if ((p_drv == NULL) || (p_cfg == NULL) || (p_cfg->p_tim == NULL) ||
-        (p_cfg->tim_clk_hz == 0u) || (p_cfg->prescaler > PSC_MAX)) {
+    if ((p_drv == NULL) || (p_cfg == NULL) || (p_cfg->p_tim == NULL) || (p_cfg->tim_clk_hz == 0u) ||
+        (p_cfg->prescaler > PSC_MAX)) {
         return -EINVAL;
     }
     p_drv->cfg = *p_cfg;
@@ -157,7 +156,7 @@ int mc_f405_tick_init(mc_f405_tick_t *p_drv, const mc_f405_tick_config_t *p_cfg)
     t->SMCR = 0u;
     t->DIER = 0u;
     t->PSC = p_cfg->prescaler;
-    t->ARR = 0xFFFFFFFFu; /* wrap at 2^32 */
+    t->ARR = 0xFFFFFFFFu;        /* wrap at 2^32 */
     t->EGR = MC_F405_TIM_EGR_UG; /* load PSC now, not at the first wrap */
     t->CNT = 0u;
     t->CR1 = MC_F405_TIM_CR1_CEN;

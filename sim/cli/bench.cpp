@@ -54,7 +54,8 @@ int cmd_bench(const std::vector<std::string>& args) {
   }
   const auto t1 = Clock::now();
   const double wall = std::chrono::duration<double>(t1 - t0).count();
-  const double best_ns = (best_block_s > 0.0) ? 1e9 * best_block_s / kBlock : 1e9 * wall / static_cast<double>(n);
+  const double best_ns =
+      (best_block_s > 0.0) ? 1e9 * best_block_s / kBlock : 1e9 * wall / static_cast<double>(n);
   if (d.faults != 0u) throw std::runtime_error("drive faulted during the benchmark");
   std::printf(
       "{\"benchmark\": \"sil_foc_rtf\", \"pwm_hz\": %.0f, \"substeps\": %d, "

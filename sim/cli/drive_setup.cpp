@@ -44,12 +44,14 @@ struct Key {
 };
 
 const Key kKeys[] = {
-    {"cur_bw_rad_s", &Gains::cur_bw_rad_s, "rad/s", "current-loop bandwidth (kp = L bw, ki = R bw)"},
+    {"cur_bw_rad_s", &Gains::cur_bw_rad_s, "rad/s",
+     "current-loop bandwidth (kp = L bw, ki = R bw)"},
     {"i_limit_a", &Gains::i_limit_a, "A", "current limit of the drive"},
     {"enc_pll_bw_rad_s", &Gains::enc_pll_bw_rad_s, "rad/s", "encoder tracking-loop bandwidth"},
     {"speed_wc_rad_s", &Gains::speed_wc_rad_s, "rad/s", "sensored speed PI crossover"},
     {"speed_accel_rad_s2", &Gains::speed_accel_rad_s2, "rad/s^2", "speed reference slew rate"},
-    {"obs_crit_rad_s", &Gains::obs_crit_rad_s, "rad/s", "flux observer critical speed (sets gamma)"},
+    {"obs_crit_rad_s", &Gains::obs_crit_rad_s, "rad/s",
+     "flux observer critical speed (sets gamma)"},
     {"pll_bw_rad_s", &Gains::pll_bw_rad_s, "rad/s", "observer PLL bandwidth"},
     {"sls_wc_rad_s", &Gains::sls_wc_rad_s, "rad/s", "sensorless speed PI crossover"},
     {"handover_rad_s", &Gains::handover_rad_s, "rad/s", "I-f -> closed-loop hand-over speed"},
@@ -94,16 +96,18 @@ Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
   g.kt_nm_a = 1.5 * m.pole_pairs * m.flux_wb;
   g.v_max_v = 0.95 * b.vbus_v / std::sqrt(3.0);
   g.cur_bw_rad_s = get("cur_bw_rad_s", 0.08 / T, &Gains::cur_bw_rad_s);
-  g.i_limit_a = get("i_limit_a",
-                    std::min({m.i_max_a, b.i_sense_max_a / 1.25, 0.8 * g.v_max_v / m.r_ohm}),
-                    &Gains::i_limit_a);
+  g.i_limit_a =
+      get("i_limit_a", std::min({m.i_max_a, b.i_sense_max_a / 1.25, 0.8 * g.v_max_v / m.r_ohm}),
+          &Gains::i_limit_a);
   if (g.i_limit_a < 0.1 * m.i_max_a) {
     throw UsageError(m.file + ": no safe gains: the usable current " + num(g.i_limit_a) +
                      " A (sensor range / 1.25, bus through R) is below 10 % of i_max_a");
   }
   if (g.i_limit_a > b.i_sense_max_a / 1.1) {
-    throw UsageError("i_limit_a " + num(g.i_limit_a) + " A leaves no margin to the current "
-                     "sensor's full scale " + num(b.i_sense_max_a) + " A");
+    throw UsageError("i_limit_a " + num(g.i_limit_a) +
+                     " A leaves no margin to the current "
+                     "sensor's full scale " +
+                     num(b.i_sense_max_a) + " A");
   }
   g.i_rated_eff_a = std::min(m.i_rated_a, g.i_limit_a);
   g.torque_rated_nm = g.kt_nm_a * g.i_rated_eff_a;
@@ -114,27 +118,26 @@ Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
   }
   g.speed_rated_eff_rad_s = std::min(m.speed_rated_rad_s, g.speed_limit_rad_s);
   g.enc_pll_bw_rad_s = get("enc_pll_bw_rad_s", std::min(1000.0, 0.1 / T), &Gains::enc_pll_bw_rad_s);
-  g.speed_wc_rad_s = get("speed_wc_rad_s", std::min(g.cur_bw_rad_s / 10.0, g.enc_pll_bw_rad_s / 4.0),
-                         &Gains::speed_wc_rad_s);
-  g.speed_accel_rad_s2 =
-      get("speed_accel_rad_s2", 0.5 * g.kt_nm_a * g.i_limit_a / m.j_kgm2, &Gains::speed_accel_rad_s2);
+  g.speed_wc_rad_s =
+      get("speed_wc_rad_s", std::min(g.cur_bw_rad_s / 10.0, g.enc_pll_bw_rad_s / 4.0),
+          &Gains::speed_wc_rad_s);
+  g.speed_accel_rad_s2 = get("speed_accel_rad_s2", 0.5 * g.kt_nm_a * g.i_limit_a / m.j_kgm2,
+                             &Gains::speed_accel_rad_s2);
   const double w_r = g.speed_rated_eff_rad_s;
   g.obs_crit_rad_s = get("obs_crit_rad_s", 0.02 * w_r, &Gains::obs_crit_rad_s);
   g.pll_bw_rad_s = get("pll_bw_rad_s", std::min(300.0, 0.04 / T), &Gains::pll_bw_rad_s);
   g.sls_wc_rad_s = get("sls_wc_rad_s", std::min(g.pll_bw_rad_s / 3.0, g.cur_bw_rad_s / 10.0),
                        &Gains::sls_wc_rad_s);
   g.handover_rad_s = get("handover_rad_s", 0.1 * w_r, &Gains::handover_rad_s);
-  g.if_current_a = get("if_current_a", std::min(g.i_limit_a, 0.8 * g.i_rated_eff_a),
-                       &Gains::if_current_a);
+  g.if_current_a =
+      get("if_current_a", std::min(g.i_limit_a, 0.8 * g.i_rated_eff_a), &Gains::if_current_a);
   g.if_accel_rad_s2 =
       get("if_accel_rad_s2", 0.15 * g.torque_rated_nm / m.j_kgm2, &Gains::if_accel_rad_s2);
-  const double t_hold =
-      2.0 * std::sqrt(0.2 * m.j_kgm2 / (m.pole_pairs * 0.3 * g.torque_rated_nm));
-  g.align_time_s = get("align_time_s", std::clamp(t_hold, 10.0 / g.cur_bw_rad_s, 0.05),
-                       &Gains::align_time_s);
-  g.pi2d_wn_rad_s =
-      get("pi2d_wn_rad_s", std::min(g.speed_wc_rad_s / 3.0, 0.5 * m.r_ohm / m.lq_h),
-          &Gains::pi2d_wn_rad_s);
+  const double t_hold = 2.0 * std::sqrt(0.2 * m.j_kgm2 / (m.pole_pairs * 0.3 * g.torque_rated_nm));
+  g.align_time_s =
+      get("align_time_s", std::clamp(t_hold, 10.0 / g.cur_bw_rad_s, 0.05), &Gains::align_time_s);
+  g.pi2d_wn_rad_s = get("pi2d_wn_rad_s", std::min(g.speed_wc_rad_s / 3.0, 0.5 * m.r_ohm / m.lq_h),
+                        &Gains::pi2d_wn_rad_s);
   // The dirty-derivative pole sets the law's speed-error coupling into the
   // q-current error, Delta ~ b kd / sigma = 3 wn a J / kt (mc_pi2d.h, (21));
   // keeping it below 2 k2 keeps the q loop ahead of it (the 40 kW machine
@@ -315,8 +318,8 @@ mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
   dc.stop_decel_rad_s2 = static_cast<float>(g.stop_decel_rad_s2);
   dc.stop_rest_rad_s = static_cast<float>(0.002 * g.speed_rated_eff_rad_s);
   dc.stop_kp_a_s_rad = static_cast<float>(m.j_kgm2 * g.speed_wc_rad_s / g.kt_nm_a);
-  dc.stop_iq_ff_a = static_cast<float>(std::min(g.i_limit_a, m.j_kgm2 * g.stop_decel_rad_s2 /
-                                                                 g.kt_nm_a));
+  dc.stop_iq_ff_a =
+      static_cast<float>(std::min(g.i_limit_a, m.j_kgm2 * g.stop_decel_rad_s2 / g.kt_nm_a));
   return dc;
 }
 
@@ -432,8 +435,8 @@ mc_ctrl_pos_cfg_t build_position_cfg(const MotorFiles& f, const Gains& g) {
   c.b_nm_s_rad = static_cast<float>(m.b_nm_s_rad);
   // Torque lags its reference by the current loop's 1/bw plus the board's
   // computation delay and half a period (the PWM's zero-order hold).
-  c.ff_lead_s = static_cast<float>(1.0 / g.cur_bw_rad_s + (f.board.delay_periods + 0.5) /
-                                   f.board.pwm_hz);
+  c.ff_lead_s =
+      static_cast<float>(1.0 / g.cur_bw_rad_s + (f.board.delay_periods + 0.5) / f.board.pwm_hz);
   return c;
 }
 
@@ -447,7 +450,8 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
   fd_.motor.flux_wb *= g.model_flux_scale;
   T_ = 1.0 / f.board.pwm_hz;
   if (o_.law != Law::kSensorless && f.board.encoder_cpr == 0) {
-    throw UsageError(f.board.file + ": this scenario needs an encoder (encoder_cpr = 0 here); "
+    throw UsageError(f.board.file +
+                     ": this scenario needs an encoder (encoder_cpr = 0 here); "
                      "use sensorless-speed-step");
   }
   hal_host::PmsmBoardConfig bc = build_board_cfg(f);
@@ -462,7 +466,8 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
   board_ = std::make_unique<hal_host::PmsmBoard>(bc);
   if ((o_.law == Law::kSensorless || o_.law == Law::kPi2d) &&
       std::abs(f.motor.ld_h - f.motor.lq_h) > 0.05 * std::max(f.motor.ld_h, f.motor.lq_h)) {
-    throw UsageError(f.motor.file + ": ld_h and lq_h differ by more than 5 %: the sensorless "
+    throw UsageError(f.motor.file +
+                     ": ld_h and lq_h differ by more than 5 %: the sensorless "
                      "and PI^2D laws assume a non-salient machine (surface magnets)");
   }
   if (o_.board_built_hook) o_.board_built_hook(*board_);
@@ -475,8 +480,10 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
   if (o_.law == Law::kSensorless) dcfg_.stall_current_frac = 0.0f;
   const uint32_t derr = mc_drive_init(&drive_, &dcfg_, board_->hal());
   if (derr != MC_DRIVE_CFG_OK) {
-    throw UsageError("the drive refused the configuration built from the files: MC_DRIVE_CFG "
-                     "bits " + std::to_string(derr));
+    throw UsageError(
+        "the drive refused the configuration built from the files: MC_DRIVE_CFG "
+        "bits " +
+        std::to_string(derr));
   }
   switch (o_.law) {
     case Law::kCurrent:
@@ -496,16 +503,19 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
     case Law::kPi2d: {
       if (!g.pi2d_ok) {
         throw UsageError("PI2D refuses this motor: its current loop (cur_bw " +
-                         num(g.cur_bw_rad_s) + " rad/s) is too slow for kt/J = " +
-                         num(g.kt_nm_a / fd_.motor.j_kgm2) + ": the position filter would have "
+                         num(g.cur_bw_rad_s) +
+                         " rad/s) is too slow for kt/J = " + num(g.kt_nm_a / fd_.motor.j_kgm2) +
+                         ": the position filter would have "
                          "to be slower than the speed loop (use law=pi)");
       }
       if (g.pi2d_coupling > 300.0) {
-        throw UsageError("PI2D refuses this motor: the back-EMF couples the speed error into "
-                         "the q current faster than the law's proportional current loop "
-                         "separates them: kt ke / (J L k2) = " + num(g.pi2d_coupling) +
-                         " rad/s > 300 (an empirical bound: the gimbal-class motor "
-                         "limit-cycles to over-current above it; use law=pi)");
+        throw UsageError(
+            "PI2D refuses this motor: the back-EMF couples the speed error into "
+            "the q current faster than the law's proportional current loop "
+            "separates them: kt ke / (J L k2) = " +
+            num(g.pi2d_coupling) +
+            " rad/s > 300 (an empirical bound: the gimbal-class motor "
+            "limit-cycles to over-current above it; use law=pi)");
       }
       const mc_ctrl_pi2d_cfg_t cc = build_pi2d_cfg(fd_, g);
       const uint32_t e = mc_ctrl_pi2d_init(&pi2d_, &cc);
@@ -513,7 +523,7 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
         mc_pi2d_f32_t probe{};
         const uint32_t le = mc_pi2d_f32_init(&probe, &cc.law);
         throw UsageError(std::string("PI2D refuses this motor: ") +
-                         ((le & MC_PI2D_ERR_KI_EPS) ? "the proof's ki (L/R)^2 < eps fails"
+                         ((le & MC_PI2D_ERR_KI_EPS)     ? "the proof's ki (L/R)^2 < eps fails"
                           : (le & MC_PI2D_ERR_KP_PRIME) ? "kp' = kp - ki/eps <= 0"
                                                         : "its configuration is invalid") +
                          " (MC_CTRL_PI2D bits " + std::to_string(e) + ", MC_PI2D bits " +
@@ -528,8 +538,10 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
       const mc_ctrl_pos_cfg_t pc = build_position_cfg(f, g);
       const uint32_t e = mc_ctrl_pos_init(&pos_, &pc);
       if (e != 0u) {
-        throw UsageError("the position law refuses this motor's configuration: MC_CTRL_POS "
-                         "bits " + std::to_string(e));
+        throw UsageError(
+            "the position law refuses this motor's configuration: MC_CTRL_POS "
+            "bits " +
+            std::to_string(e));
       }
       if (mc_drive_attach_ctrl(&drive_, mc_ctrl_pos_ops(&pos_)) != 0) {
         throw std::runtime_error("drive refused the position plug-in");
@@ -540,8 +552,10 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
       const mc_ctrl_sls_cfg_t sc = build_sensorless_cfg(fd_, g);
       const uint32_t e = mc_ctrl_sls_init(&sls_, &sc);
       if (e != 0u) {
-        throw UsageError("the sensorless law refuses this motor's configuration: MC_CTRL_SLS "
-                         "bits " + std::to_string(e));
+        throw UsageError(
+            "the sensorless law refuses this motor's configuration: MC_CTRL_SLS "
+            "bits " +
+            std::to_string(e));
       }
       if (mc_drive_attach_ctrl(&drive_, mc_ctrl_sls_table(&sls_)) != 0) {
         throw std::runtime_error("drive refused the sensorless plug-in");
@@ -549,9 +563,9 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
       break;
     }
   }
-  const mc_drive_mode_t mode =
-      (o_.law == Law::kCurrent || o_.law == Law::kSpeedPi) ? MC_DRIVE_MODE_CURRENT
-                                                           : MC_DRIVE_MODE_CTRL;
+  const mc_drive_mode_t mode = (o_.law == Law::kCurrent || o_.law == Law::kSpeedPi)
+                                   ? MC_DRIVE_MODE_CURRENT
+                                   : MC_DRIVE_MODE_CTRL;
   if (mc_drive_set_mode(&drive_, mode) != 0) throw std::runtime_error("drive refused its mode");
 }
 
@@ -588,8 +602,8 @@ void MotorRig::set_references() {
     const double err = w_cmd_ - w_ref_;
     a_ref_ = std::abs(err) <= amax * T_ ? err / T_ : std::copysign(amax, err);
     if (o_.law == Law::kPi2d) {
-      if (mc_ctrl_pi2d_set_ref(&pi2d_, static_cast<float>(w_ref_), static_cast<float>(a_ref_),
-                               0.0f, 0.0f) != 0u) {
+      if (mc_ctrl_pi2d_set_ref(&pi2d_, static_cast<float>(w_ref_), static_cast<float>(a_ref_), 0.0f,
+                               0.0f) != 0u) {
         throw std::runtime_error("PI2D reference rejected");
       }
     } else {

@@ -8,7 +8,9 @@ namespace mcsim {
 
 namespace {
 
-std::vector<uint8_t> frame_buf() { return std::vector<uint8_t>(MC_PIL_MAX_FRAME); }
+std::vector<uint8_t> frame_buf() {
+  return std::vector<uint8_t>(MC_PIL_MAX_FRAME);
+}
 
 }  // namespace
 
@@ -45,7 +47,8 @@ const mc_pil_out_t& FocPil::step(const PilCommand& cmd) {
   m.fault_rc = b.fault_read(&m.fault);
   (void)b.tick_read(&m.tick_ticks);
   (void)b.tick_freq(&m.tick_hz);
-  m.cmd_flags = (cmd.set_mode ? MC_PIL_CMD_SET_MODE : 0u) | (cmd.set_refs ? MC_PIL_CMD_SET_REFS : 0u);
+  m.cmd_flags =
+      (cmd.set_mode ? MC_PIL_CMD_SET_MODE : 0u) | (cmd.set_refs ? MC_PIL_CMD_SET_REFS : 0u);
   m.mode = static_cast<uint32_t>(cmd.mode);
   m.id_ref_a = cmd.id_ref_a;
   m.iq_ref_a = cmd.iq_ref_a;
@@ -60,8 +63,7 @@ const mc_pil_out_t& FocPil::step(const PilCommand& cmd) {
   }
 
   // What the drive did to the bridge this period, in the board's terms.
-  if (out_.duty_set_count > 0u &&
-      b.pwm_set_duty(out_.duty_a, out_.duty_b, out_.duty_c) != 0) {
+  if (out_.duty_set_count > 0u && b.pwm_set_duty(out_.duty_a, out_.duty_b, out_.duty_c) != 0) {
     throw std::runtime_error("FocPil: the board refused duties the target accepted");
   }
   if (out_.gate_kill_count > 0u) b.fault_gate_kill();

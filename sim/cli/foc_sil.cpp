@@ -97,6 +97,8 @@ FocSil::FocSil(const FocSilOptions& o) : opt_(o) {
   }
 }
 
-void FocSil::step() { (void)hal_host::sil_period(*board_, drive_); }
+void FocSil::step() {
+  (void)hal_host::sil_period(*board_, drive_);
+}
 
 }  // namespace mcsim

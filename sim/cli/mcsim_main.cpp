@@ -70,8 +70,10 @@ int cmd_describe(const std::vector<std::string>& args) {
   std::printf("%s: %s\ndefault duration: %g s\nparameters (--set key=value):\n", s.name.c_str(),
               s.description.c_str(), s.default_duration_s);
   if (s.motor_params && motor.empty()) {
-    std::printf("  (ranges and defaults depend on the motor: describe %s --motor FILE "
-                "[--board FILE])\n", s.name.c_str());
+    std::printf(
+        "  (ranges and defaults depend on the motor: describe %s --motor FILE "
+        "[--board FILE])\n",
+        s.name.c_str());
     return 0;
   }
   const auto files = mcsim::motor_files(s, motor, board);
@@ -125,8 +127,8 @@ int cmd_run(const std::vector<std::string>& args) {
   if (out_dir.empty()) throw mcsim::UsageError("run: --out DIR is required");
   // Scenario, motor and board files and every --set before anything is
   // written: a bad input changes nothing.
-  const mcsim::PreparedRun run = mcsim::prepare_run(scen.name, motor_path, board_path, sets,
-                                                        flash_path);
+  const mcsim::PreparedRun run =
+      mcsim::prepare_run(scen.name, motor_path, board_path, sets, flash_path);
 
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);

@@ -19,7 +19,9 @@ namespace {
   throw UsageError(file + ":" + std::to_string(line < 1 ? 1 : line) + ": " + reason);
 }
 
-long line_of(const toml::node& n) { return static_cast<long>(n.source().begin.line); }
+long line_of(const toml::node& n) {
+  return static_cast<long>(n.source().begin.line);
+}
 
 // Keys of one table replaced on the command line -> that --set.
 using SetSources = std::map<std::string, std::string>;
@@ -61,7 +63,8 @@ class TableReader {
   // A finite number in [lo, hi] (integers accepted). lo_open: lo excluded.
   double number(const toml::node* n, const std::string& key, double lo, double hi, bool lo_open,
                 const std::string& unit) const {
-    if (!n->is_number()) fail(src(key), line_of(*n), "'" + key + "' must be a number (" + unit + ")");
+    if (!n->is_number())
+      fail(src(key), line_of(*n), "'" + key + "' must be a number (" + unit + ")");
     const double v = n->value<double>().value_or(std::nan(""));
     if (!std::isfinite(v) || v > hi || (lo_open ? v <= lo : v < lo)) {
       std::ostringstream os;
@@ -83,8 +86,9 @@ class TableReader {
     if (!n->is_integer()) fail(src(key), line_of(*n), "'" + key + "' must be an integer");
     const long v = static_cast<long>(n->value<int64_t>().value_or(0));
     if (v < lo || v > hi) {
-      fail(src(key), line_of(*n), "'" + key + "' = " + std::to_string(v) + " is out of range [" +
-                                   std::to_string(lo) + ", " + std::to_string(hi) + "]");
+      fail(src(key), line_of(*n),
+           "'" + key + "' = " + std::to_string(v) + " is out of range [" + std::to_string(lo) +
+               ", " + std::to_string(hi) + "]");
     }
     return v;
   }
@@ -199,7 +203,6 @@ BoardSpec read_board(const std::string& path, const toml::table& t, const SetSou
   r.reject_unknown();
   return b;
 }
-
 
 // --set motor.KEY=VALUE / board.KEY=VALUE: the value is parsed as TOML and
 // replaces (or adds) KEY in that table before the table is read, so it is

@@ -56,7 +56,7 @@ struct BoardSpec {
   int adc_bits = 12;
   long encoder_cpr = 0;
   int delay_periods = 1;
-  double dc_link_c_f = 0;      // 0: stiff bus
+  double dc_link_c_f = 0;  // 0: stiff bus
   double source_r_ohm = 0.05;
   bool source_sink = false;
   double brake_r_ohm = 0;

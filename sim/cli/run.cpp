@@ -14,14 +14,16 @@ std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& mo
                                         const std::string& board, const Overrides& overrides) {
   if (!s.motor_params) {
     if (!motor.empty() || !board.empty()) {
-      throw UsageError("scenario '" + s.name + "' runs its own motor and takes no --motor "
+      throw UsageError("scenario '" + s.name +
+                       "' runs its own motor and takes no --motor "
                        "or --board (the scenarios for any motor: current-step, "
                        "speed-step, sensorless-speed-step, load-step)");
     }
     return nullptr;
   }
   if (motor.empty()) {
-    throw UsageError("scenario '" + s.name + "' needs --motor FILE (and --board FILE "
+    throw UsageError("scenario '" + s.name +
+                     "' needs --motor FILE (and --board FILE "
                      "unless the motor file has a [board] table); see sim/motors/");
   }
   return std::make_unique<MotorFiles>(load_motor_files(motor, board, overrides));

@@ -32,8 +32,8 @@ Params::Params(const std::vector<ParamSpec>& specs,
     if (spec == nullptr) {
       std::string known;
       for (const auto& p : specs) known += (known.empty() ? "" : ", ") + p.key;
-      throw UsageError("unknown key '" + kv.first + "' (this scenario takes: " +
-                       (known.empty() ? "none" : known) + ")");
+      throw UsageError("unknown key '" + kv.first +
+                       "' (this scenario takes: " + (known.empty() ? "none" : known) + ")");
     }
     bool named = false;
     double v = 0.0;
@@ -58,8 +58,8 @@ Params::Params(const std::vector<ParamSpec>& specs,
     }
     if (v < spec->min_value || v > spec->max_value) {
       std::ostringstream os;
-      os << "value " << v << " for " << kv.first << " is out of range [" << spec->min_value
-         << ", " << spec->max_value << "] " << spec->unit;
+      os << "value " << v << " for " << kv.first << " is out of range [" << spec->min_value << ", "
+         << spec->max_value << "] " << spec->unit;
       throw UsageError(os.str());
     }
     values_[kv.first] = v;

@@ -106,9 +106,7 @@ class Summary {
   void set(const std::string& key, double value) { num_[key] = value; }
   void set_text(const std::string& key, const std::string& value) { txt_[key] = value; }
   /// A nested object of numbers, written as "key": {"k": v, ...}.
-  void set_object(const std::string& key, const std::map<std::string, double>& v) {
-    obj_[key] = v;
-  }
+  void set_object(const std::string& key, const std::map<std::string, double>& v) { obj_[key] = v; }
   std::string to_json() const;
   const std::map<std::string, double>& numbers() const { return num_; }
   const std::map<std::string, std::string>& texts() const { return txt_; }

@@ -29,8 +29,7 @@ Status Inverter3Ph::configure(const InverterParams& p) {
   return s;
 }
 
-Eigen::Vector3d Inverter3Ph::pole_voltages_v(const Eigen::Vector3d& duty_abc,
-                                             double vbus_v,
+Eigen::Vector3d Inverter3Ph::pole_voltages_v(const Eigen::Vector3d& duty_abc, double vbus_v,
                                              const Eigen::Vector3d& i_abc_a) const {
   const double dead_frac = p_.t_dead_s / p_.t_pwm_s;
   const double vdc_v = (vbus_v > 0.0) ? vbus_v : 0.0;  // a bridge cannot invert the bus
@@ -45,8 +44,7 @@ Eigen::Vector3d Inverter3Ph::pole_voltages_v(const Eigen::Vector3d& duty_abc,
   return v;
 }
 
-Eigen::Vector3d Inverter3Ph::phase_voltages_v(const Eigen::Vector3d& duty_abc,
-                                              double vbus_v,
+Eigen::Vector3d Inverter3Ph::phase_voltages_v(const Eigen::Vector3d& duty_abc, double vbus_v,
                                               const Eigen::Vector3d& i_abc_a) const {
   const Eigen::Vector3d pole = pole_voltages_v(duty_abc, vbus_v, i_abc_a);
   const double v_cm = (pole(0) + pole(1) + pole(2)) * (1.0 / 3.0);
@@ -66,8 +64,7 @@ Eigen::Vector2d Inverter3Ph::alpha_beta_v(const Eigen::Vector3d& duty_abc, doubl
   return Eigen::Vector2d(((p(0) + p(0)) - p(1) - p(2)) * kThird, (p(1) - p(2)) * kInvSqrt3);
 }
 
-double Inverter3Ph::dc_current_a(const Eigen::Vector3d& duty_abc,
-                                 const Eigen::Vector3d& i_abc_a) {
+double Inverter3Ph::dc_current_a(const Eigen::Vector3d& duty_abc, const Eigen::Vector3d& i_abc_a) {
   double i_dc = 0.0;
   for (int k = 0; k < 3; ++k) {
     i_dc += detail::clamp(duty_abc(k), 0.0, 1.0) * i_abc_a(k);

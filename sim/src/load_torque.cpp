@@ -31,9 +31,9 @@ double LoadTorque::eval_nm(double t_s, double theta_m_rad, double omega_m_rad_s)
 }
 
 Status LoadTorque::validate() const {
-  if (!detail::all_finite({tau0_nm, step_time_s, tau_step_nm, k_omega_nms_rad,
-                           k_omega2_nms2_rad2, ripple_nm, ripple_per_rev,
-                           ripple_phase_rad, coulomb_nm, coulomb_band_rad_s})) {
+  if (!detail::all_finite({tau0_nm, step_time_s, tau_step_nm, k_omega_nms_rad, k_omega2_nms2_rad2,
+                           ripple_nm, ripple_per_rev, ripple_phase_rad, coulomb_nm,
+                           coulomb_band_rad_s})) {
     return Status::kNotFinite;
   }
   if (coulomb_nm < 0.0) {

@@ -20,8 +20,7 @@ Eigen::Matrix2d PmsmAb::inductance_h(double theta_e_rad) const {
   const double c2 = std::cos(2.0 * theta_e_rad);
   const double s2 = std::sin(2.0 * theta_e_rad);
   Eigen::Matrix2d l;
-  l << l0 + l2 * c2, l2 * s2,
-       l2 * s2, l0 - l2 * c2;
+  l << l0 + l2 * c2, l2 * s2, l2 * s2, l0 - l2 * c2;
   return l;
 }
 
@@ -45,8 +44,7 @@ PmsmAb::State PmsmAb::deriv(double t_s, const State& x, const Input& u) const {
 
   // dL/dtheta_e = 2 L2 [[-sin 2th, cos 2th], [cos 2th, sin 2th]]
   Eigen::Matrix2d dl;
-  dl << -2.0 * l2 * s2, 2.0 * l2 * c2,
-        2.0 * l2 * c2, 2.0 * l2 * s2;
+  dl << -2.0 * l2 * s2, 2.0 * l2 * c2, 2.0 * l2 * c2, 2.0 * l2 * s2;
   // Back-EMF of the magnet: d/dt (flux [cos, sin]) = w_e flux [-sin, cos]
   const Eigen::Vector2d emf_pm(-w_e * p_.flux_wb * std::sin(th_e),
                                w_e * p_.flux_wb * std::cos(th_e));
@@ -63,8 +61,7 @@ PmsmAb::State PmsmAb::deriv(double t_s, const State& x, const Input& u) const {
 
 double PmsmAb::torque_nm(const State& x) const {
   const Eigen::Vector2d lam = flux_linkage_wb(x);
-  return 1.5 * static_cast<double>(p_.pole_pairs) *
-         (lam(0) * x(kIbeta) - lam(1) * x(kIalpha));
+  return 1.5 * static_cast<double>(p_.pole_pairs) * (lam(0) * x(kIbeta) - lam(1) * x(kIalpha));
 }
 
 double PmsmAb::load_nm(double t_s, const State& x) const {

@@ -27,8 +27,7 @@ Status PmsmNormalised::configure(const PmsmNormalisedParams& p) {
   return s;
 }
 
-PmsmNormalised::State PmsmNormalised::deriv(double t_n, const State& x,
-                                            const Input& u) const {
+PmsmNormalised::State PmsmNormalised::deriv(double t_n, const State& x, const Input& u) const {
   (void)t_n;
   State dx;
   dx(0) = -x(0) + x(1) * x(2) + u(0);
@@ -38,8 +37,8 @@ PmsmNormalised::State PmsmNormalised::deriv(double t_n, const State& x,
   return dx;
 }
 
-Status make_normalised_scaling(const PmsmParams& phys, double i_base_a,
-                               double tau_load_nm, PmsmNormalisedScaling* out) {
+Status make_normalised_scaling(const PmsmParams& phys, double i_base_a, double tau_load_nm,
+                               PmsmNormalisedScaling* out) {
   const Status s = phys.validate();
   if (s != Status::kOk) {
     return s;
@@ -67,8 +66,7 @@ Status make_normalised_scaling(const PmsmParams& phys, double i_base_a,
   sc.v_base_v = phys.R_ohm * i_base_a;
   sc.omega_e_base_rad_s = 1.0 / t_base_s;
   sc.params.gamma = phys.flux_wb / (phys.Ld_h * i_base_a);
-  sc.params.sigma = 1.5 * pp * pp * phys.flux_wb * i_base_a * t_base_s * t_base_s /
-                    phys.J_kgm2;
+  sc.params.sigma = 1.5 * pp * pp * phys.flux_wb * i_base_a * t_base_s * t_base_s / phys.J_kgm2;
   sc.params.tau_l = pp * t_base_s * t_base_s * tau_load_nm / phys.J_kgm2;
   *out = sc;
   return Status::kOk;

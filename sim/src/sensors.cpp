@@ -31,7 +31,9 @@ double nearest_int(double x) {
 // integer (rounding), the quotient rounds the same way. Otherwise (about one
 // call in 10^12 for noisy inputs; NaN, infinity, |q| >= 2^50) the division
 // is done.
-double tolerance(double q) { return 0x1p-44 * (std::fabs(q) + 1.0); }
+double tolerance(double q) {
+  return 0x1p-44 * (std::fabs(q) + 1.0);
+}
 
 // std::floor(num / den).
 double floor_of_quotient(double num, double den, double inv_den) {
@@ -115,7 +117,7 @@ double GaussianRng::normal() {
     return spare_;
   }
   // Box-Muller: two independent uniforms -> two independent N(0,1).
-  const double u1 = uniform_open01();              // (0, 1]: log is finite
+  const double u1 = uniform_open01();  // (0, 1]: log is finite
   const double u2 = uniform_open01();
   const double r = std::sqrt(-2.0 * std::log(u1));
   const double a = kTwoPi * u2;
@@ -154,7 +156,9 @@ std::int32_t CurrentSensor::sample_code(double i_true_a) {
   return static_cast<std::int32_t>(code(i_true_a));
 }
 
-double CurrentSensor::sample_a(double i_true_a) { return code(i_true_a) * lsb_; }
+double CurrentSensor::sample_a(double i_true_a) {
+  return code(i_true_a) * lsb_;
+}
 
 // ----------------------------------------------------------------- VbusSensor
 
@@ -184,7 +188,9 @@ std::int32_t VbusSensor::sample_code(double vbus_true_v) {
   return static_cast<std::int32_t>(code(vbus_true_v));
 }
 
-double VbusSensor::sample_v(double vbus_true_v) { return code(vbus_true_v) * lsb_; }
+double VbusSensor::sample_v(double vbus_true_v) {
+  return code(vbus_true_v) * lsb_;
+}
 
 // -------------------------------------------------------------------- Encoder
 
@@ -217,7 +223,9 @@ void Encoder::reset(double theta_m_rad) {
   index_seen_ = false;
 }
 
-double Encoder::step_rad() const { return kTwoPi / static_cast<double>(p_.counts_per_rev); }
+double Encoder::step_rad() const {
+  return kTwoPi / static_cast<double>(p_.counts_per_rev);
+}
 
 EncoderReading Encoder::sample(double theta_m_rad) {
   theta_m_rad *= static_cast<double>(p_.direction);

@@ -28,7 +28,9 @@ inline double clamp(double v, double lo, double hi) {
 }
 
 // Unit saturation: v for |v| < 1, sign(v) outside.
-inline double sat1(double v) { return clamp(v, -1.0, 1.0); }
+inline double sat1(double v) {
+  return clamp(v, -1.0, 1.0);
+}
 
 }  // namespace detail
 }  // namespace mcsim

@@ -79,7 +79,8 @@ TEST(CanProto, RoundTripEveryMessageWithinHalfAStep) {
           << "message " << m;
       ASSERT_EQ(m, got);
       for (uint32_t i = 0; i < msg.n_signals; ++i) {
-        EXPECT_NEAR(v[i], back[i], QuantTol(msg.signals[i], v[i])) << "message " << m << " signal " << i;
+        EXPECT_NEAR(v[i], back[i], QuantTol(msg.signals[i], v[i]))
+            << "message " << m << " signal " << i;
       }
     }
   }
@@ -114,24 +115,26 @@ TEST(CanProto, PackRejectsMisuseAndLeavesFrame) {
 TEST(CanProto, UnpackRejectsFormatLengthIdAndRange) {
   float v[MC_CAN_NSIG_MAX];
   uint32_t m = 77;
-  auto un = [&](const mc_hal_can_frame_t& f) { return mc_can_proto_unpack(&f, &m, v, MC_CAN_NSIG_MAX); };
+  auto un = [&](const mc_hal_can_frame_t& f) {
+    return mc_can_proto_unpack(&f, &m, v, MC_CAN_NSIG_MAX);
+  };
   EXPECT_EQ(MC_CAN_ERR_FORMAT, un(Frame(0x031, {1}, MC_HAL_CAN_FLAG_RTR)));
   EXPECT_EQ(MC_CAN_ERR_FORMAT, un(Frame(0x031, {1}, MC_HAL_CAN_FLAG_FD)));
   EXPECT_EQ(MC_CAN_ERR_FORMAT, un(Frame(0x031, {1}, MC_HAL_CAN_FLAG_EXT)));
   EXPECT_EQ(MC_CAN_ERR_UNKNOWN_CMD, un(Frame(0x03D, {1})));
   EXPECT_EQ(MC_CAN_ERR_LENGTH, un(Frame(0x032, {0, 0, 0xE8})));
   EXPECT_EQ(MC_CAN_ERR_LENGTH, un(Frame(0x031, {})));
-  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {0})));   // control_mode 1..3
+  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {0})));  // control_mode 1..3
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {4})));
-  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x030, {2})));   // enable 0..1
-  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {9, 10, 0})));  // tm_cmd 1..8
+  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x030, {2})));              // enable 0..1
+  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {9, 10, 0})));       // tm_cmd 1..8
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {1, 0xE9, 0x03})));  // 1001 Hz
   // 1000.001 rad/s: one raw step above the DBC maximum
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x033, {0x41, 0x42, 0x0F, 0x00})));
   EXPECT_EQ(MC_CAN_ERR_NONE, un(Frame(0x033, {0x40, 0x42, 0x0F, 0x00})));
   EXPECT_NEAR(1000.0f, v[0], 1e-3f);  // raw 1000000 * 0.001f: float rounding of the scale
   EXPECT_EQ(MC_CAN_MSG_SET_SPEED_REF, m);
-  EXPECT_EQ(MC_CAN_ERR_NONE, un(Frame(0x035, {})));   // CLEAR_FAULTS: no data
+  EXPECT_EQ(MC_CAN_ERR_NONE, un(Frame(0x035, {})));  // CLEAR_FAULTS: no data
 }
 
 TEST(CanProto, WorstCaseFrameBits) {
@@ -180,7 +183,11 @@ TEST(Telemetry, InitValidatesEachFieldAndLeavesStateOnError) {
   bad([](mc_telemetry_cfg_t* c) { c->bus_budget_frac = NAN; }, MC_TM_CFG_ERR_BUDGET);
   bad([](mc_telemetry_cfg_t* c) { c->rate_hz[1] = 1001; }, MC_TM_CFG_ERR_RATE);
   // 125 kbit/s: 460 frames/s x 135 bits = 49.7 % > 40 %
-  bad([](mc_telemetry_cfg_t* c) { c->bitrate_bps = 125000; c->bus_budget_frac = 0.4f; },
+  bad(
+      [](mc_telemetry_cfg_t* c) {
+        c->bitrate_bps = 125000;
+        c->bus_budget_frac = 0.4f;
+      },
       MC_TM_CFG_ERR_LOAD);
   EXPECT_EQ(MC_TM_CFG_ERR_NULL, mc_telemetry_init(nullptr, nullptr));
   mc_telemetry_cfg_t ok = TmCfg();
@@ -213,8 +220,8 @@ class TelemetryOnDrive : public AppDrive {
 
 TEST_F(TelemetryOnDrive, RatesAreExactPerSecond) {
   mc_telemetry_cfg_t c = TmCfg();
-  c.rate_hz[MC_TM_POSITION] = 3;    // does not divide the tick rate
-  c.rate_hz[MC_TM_SPEED] = 1000;    // every tick
+  c.rate_hz[MC_TM_POSITION] = 3;  // does not divide the tick rate
+  c.rate_hz[MC_TM_SPEED] = 1000;  // every tick
   mc_telemetry_t t;
   ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &c));
   const mc_telemetry_src_t src{&d, nullptr, nullptr};
@@ -277,12 +284,12 @@ TEST_F(TelemetryOnDrive, ControlLawMessagesOnlyWithData) {
   float v[MC_CAN_NSIG_MAX];
   uint32_t m;
   ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&fr.front(), &m, v, MC_CAN_NSIG_MAX));
-  EXPECT_NEAR(0.25f, v[0], 0.0005f);   // half of 0.001 N m
-  EXPECT_NEAR(-12.5f, v[1], 0.01f);    // half of 0.02 rad/s
-  EXPECT_NEAR(3.0f, v[2], 0.00005f);   // half of 0.0001 rad
-  EXPECT_EQ(0.0f, v[3]);               // its first frame: sequence 0
+  EXPECT_NEAR(0.25f, v[0], 0.0005f);  // half of 0.001 N m
+  EXPECT_NEAR(-12.5f, v[1], 0.01f);   // half of 0.02 rad/s
+  EXPECT_NEAR(3.0f, v[2], 0.00005f);  // half of 0.0001 rad
+  EXPECT_EQ(0.0f, v[3]);              // its first frame: sequence 0
   ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&fr.back(), &m, v, MC_CAN_NSIG_MAX));
-  EXPECT_EQ(9.0f, v[3]);               // the tenth
+  EXPECT_EQ(9.0f, v[3]);  // the tenth
 }
 
 TEST_F(TelemetryOnDrive, CurrentsAreTheParkTransformOfThePhaseCurrents) {
@@ -339,7 +346,9 @@ class CanCmd : public TelemetryOnDrive {
     g_speed_ref = 0.0f;
   }
   void Init() { ASSERT_EQ(MC_CAN_CMD_CFG_OK, mc_can_cmd_init(&c, &cc, &d, &tm)); }
-  mc_can_err_t Send(const mc_hal_can_frame_t& f) { return mc_can_cmd_handle(&c, &f, &fake.can_dev); }
+  mc_can_err_t Send(const mc_hal_can_frame_t& f) {
+    return mc_can_cmd_handle(&c, &f, &fake.can_dev);
+  }
   // Pop the one CMD_ERROR reply and check its fields.
   void ExpectReply(uint32_t cmd, mc_can_err_t e, uint32_t len) {
     mc_hal_can_frame_t f;
@@ -385,7 +394,11 @@ TEST_F(CanCmd, InitValidatesAndLeavesStateOnError) {
   bad([](mc_can_cmd_cfg_t* x) { x->stop_ramp_a_per_s = -1.0f; }, MC_CAN_CMD_CFG_ERR_RAMP);
   bad([](mc_can_cmd_cfg_t* x) { x->stop_decel_rad_s2 = INFINITY; }, MC_CAN_CMD_CFG_ERR_RAMP);
   bad([](mc_can_cmd_cfg_t* x) { x->speed_max_rad_s = 0.0f; }, MC_CAN_CMD_CFG_ERR_SPEED);
-  bad([](mc_can_cmd_cfg_t* x) { x->set_speed_ref = SpeedHook; x->speed_drive_mode = MC_DRIVE_MODE_IDLE; },
+  bad(
+      [](mc_can_cmd_cfg_t* x) {
+        x->set_speed_ref = SpeedHook;
+        x->speed_drive_mode = MC_DRIVE_MODE_IDLE;
+      },
       MC_CAN_CMD_CFG_ERR_MODE);
   EXPECT_EQ(MC_CAN_CMD_CFG_ERR_NULL, mc_can_cmd_init(&z, &cc, nullptr, &tm));
   Init();
@@ -419,14 +432,14 @@ TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
     mc_can_err_t e;
   } cases[] = {
       {Frame(0x032, {0, 0, 0xE8}), MC_CAN_ERR_LENGTH},
-      {Frame(0x032, {0, 0, 0xA8, 0x61}), MC_CAN_ERR_RANGE},   // 25 A > the drive's i_max 20 A
-      {Frame(0x031, {2}), MC_CAN_ERR_MODE},                   // mode change while enabled
-      {Frame(0x033, {0, 0, 0, 0}), MC_CAN_ERR_MODE},          // speed ref in CURRENT mode
-      {Frame(0x035, {}), MC_CAN_ERR_MODE},                    // clear faults while enabled
+      {Frame(0x032, {0, 0, 0xA8, 0x61}), MC_CAN_ERR_RANGE},  // 25 A > the drive's i_max 20 A
+      {Frame(0x031, {2}), MC_CAN_ERR_MODE},                  // mode change while enabled
+      {Frame(0x033, {0, 0, 0, 0}), MC_CAN_ERR_MODE},         // speed ref in CURRENT mode
+      {Frame(0x035, {}), MC_CAN_ERR_MODE},                   // clear faults while enabled
       {Frame(0x022, {0, 0, 0, 0, 0, 0, 0, 0}), MC_CAN_ERR_UNKNOWN_CMD},  // a telemetry id
       {Frame(0x03C, {}), MC_CAN_ERR_UNKNOWN_CMD},
       {Frame(0x032, {0, 0, 0xE8, 0x03}, MC_HAL_CAN_FLAG_RTR), MC_CAN_ERR_FORMAT},
-      {Frame(0x036, {2, 0xE8, 0x03}), MC_CAN_ERR_BUDGET},     // CURRENTS at 1000 Hz (see below)
+      {Frame(0x036, {2, 0xE8, 0x03}), MC_CAN_ERR_BUDGET},  // CURRENTS at 1000 Hz (see below)
       {Frame(0x036, {9, 1, 0}), MC_CAN_ERR_RANGE},
   };
   // a 125 kbit/s bus: the present rates load it 49.7 %; CURRENTS at
@@ -520,7 +533,7 @@ TEST_F(CanCmd, SpeedModeRampsTheSpeedReferenceOnTimeout) {
   // 50 rad/s = raw 50000
   ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x033, {0x50, 0xC3, 0x00, 0x00})));
   EXPECT_FLOAT_EQ(50.0f, g_speed_ref);
-  EXPECT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x033, {0x40, 0x0D, 0x03, 0x00})));   // 200 rad/s: the limit
+  EXPECT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x033, {0x40, 0x0D, 0x03, 0x00})));  // 200 rad/s: the limit
   EXPECT_EQ(MC_CAN_ERR_RANGE, Send(Frame(0x033, {0x41, 0x0D, 0x03, 0x00})));  // 200.001 rad/s
   ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x033, {0x50, 0xC3, 0x00, 0x00})));
   ExpectReply(0x13, MC_CAN_ERR_RANGE, 4);

@@ -34,20 +34,23 @@ std::string Slurp(const std::string& p) {
 }
 
 TEST(Candump, FormatMatchesCandumpL) {
-  EXPECT_EQ("(0000000001.250000) can0 021#0A00FF", hal_host::candump_format(1.25, "can0", Fr(0x21, {0x0A, 0, 0xFF})));
-  EXPECT_EQ("(0000000000.000001) vcan0 12345678#", hal_host::candump_format(1e-6, "vcan0",
-            Fr(0x12345678, {}, MC_HAL_CAN_FLAG_EXT)));
+  EXPECT_EQ("(0000000001.250000) can0 021#0A00FF",
+            hal_host::candump_format(1.25, "can0", Fr(0x21, {0x0A, 0, 0xFF})));
+  EXPECT_EQ("(0000000000.000001) vcan0 12345678#",
+            hal_host::candump_format(1e-6, "vcan0", Fr(0x12345678, {}, MC_HAL_CAN_FLAG_EXT)));
   mc_hal_can_frame_t r = Fr(0x7FF, {});
   r.flags = MC_HAL_CAN_FLAG_RTR;
   r.len = 4;
   EXPECT_EQ("(0000000002.000000) can0 7FF#R4", hal_host::candump_format(2.0, "can0", r));
   EXPECT_EQ("(0000000000.500000) can0 123##1AABB",
-            hal_host::candump_format(0.5, "can0", Fr(0x123, {0xAA, 0xBB}, MC_HAL_CAN_FLAG_FD | MC_HAL_CAN_FLAG_BRS)));
+            hal_host::candump_format(
+                0.5, "can0", Fr(0x123, {0xAA, 0xBB}, MC_HAL_CAN_FLAG_FD | MC_HAL_CAN_FLAG_BRS)));
 }
 
 TEST(Candump, ParseInvertsFormatAndRejectsGarbage) {
-  const mc_hal_can_frame_t in[] = {Fr(0x21, {1, 2, 3, 4, 5, 6, 7, 8}), Fr(0x1ABCDEF0, {9}, MC_HAL_CAN_FLAG_EXT),
-                                   Fr(0x35, {}), Fr(0x123, {1, 2, 3}, MC_HAL_CAN_FLAG_FD)};
+  const mc_hal_can_frame_t in[] = {Fr(0x21, {1, 2, 3, 4, 5, 6, 7, 8}),
+                                   Fr(0x1ABCDEF0, {9}, MC_HAL_CAN_FLAG_EXT), Fr(0x35, {}),
+                                   Fr(0x123, {1, 2, 3}, MC_HAL_CAN_FLAG_FD)};
   for (const auto& f : in) {
     double t = 0;
     mc_hal_can_frame_t g{};
@@ -61,10 +64,11 @@ TEST(Candump, ParseInvertsFormatAndRejectsGarbage) {
   double t;
   mc_hal_can_frame_t g;
   EXPECT_FALSE(hal_host::candump_parse("", &t, &g));
-  EXPECT_FALSE(hal_host::candump_parse("(1.0) can0 21#00", &t, &g));     // 2-digit id
-  EXPECT_FALSE(hal_host::candump_parse("(1.0) can0 021#0", &t, &g));     // odd digits
+  EXPECT_FALSE(hal_host::candump_parse("(1.0) can0 21#00", &t, &g));  // 2-digit id
+  EXPECT_FALSE(hal_host::candump_parse("(1.0) can0 021#0", &t, &g));  // odd digits
   EXPECT_FALSE(hal_host::candump_parse("(x) can0 021#00", &t, &g));
-  EXPECT_FALSE(hal_host::candump_parse("(1.0) can0 20000004#0000000000000000", &t, &g));  // error frame
+  EXPECT_FALSE(
+      hal_host::candump_parse("(1.0) can0 20000004#0000000000000000", &t, &g));  // error frame
 }
 
 TEST(CandumpLogCan, WritesFramesAtTheCallersClockAndReplaysAScript) {
@@ -76,7 +80,8 @@ TEST(CandumpLogCan, WritesFramesAtTheCallersClockAndReplaysAScript) {
   }
   double now = 0.0;
   {
-    hal_host::CandumpLogCan c(out, "can0", [&now] { return now; }, script, [] { return 42u; });
+    hal_host::CandumpLogCan c(
+        out, "can0", [&now] { return now; }, script, [] { return 42u; });
     mc_hal_can_frame_t f;
     EXPECT_EQ(-EAGAIN, mc_hal_can_receive(c.hal(), &f));
     now = 0.15;
@@ -107,7 +112,8 @@ TEST(CandumpLogCan, BadScriptNamesTheLine) {
     s << "(0.1) can0 031#01\nnot a frame\n";
   }
   try {
-    hal_host::CandumpLogCan c("", "can0", [] { return 0.0; }, script);
+    hal_host::CandumpLogCan c(
+        "", "can0", [] { return 0.0; }, script);
     FAIL() << "no exception";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string::npos, std::string(e.what()).find(":2:")) << e.what();

@@ -56,7 +56,9 @@ mc_drive_cfg_t good_cfg() {
   return c;
 }
 
-bool duty_ok(float x) { return x >= 0.0f && x <= 1.0f; }
+bool duty_ok(float x) {
+  return x >= 0.0f && x <= 1.0f;
+}
 
 }  // namespace
 
@@ -75,14 +77,31 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const float a = f32_from(r + 1);
     const float b = f32_from(r + 4);  // overlaps a on purpose: more bit patterns
     switch (r[0] % 8u) {
-      case 0: (void)mc_hal_fake_adc_set_sample(&fake, a, b, -(a + b), 24.0f, MC_HAL_ADC_VALID_ALL); break;
-      case 1: (void)mc_hal_fake_adc_set_sample(&fake, a, 0.0f, 0.0f, b, r[7] & 0x0Fu); break;
-      case 2: (void)mc_hal_fake_encoder_set(&fake, (uint32_t)(r[1] | (r[2] << 8)) % fc.encoder_counts_per_rev, r[3] & 3u); break;
-      case 3: (void)mc_drive_set_current_ref(&d, a, b); break;
-      case 4: (void)mc_drive_set_mode(&d, (mc_drive_mode_t)(r[1] % 3u == 2u ? 0 : r[1] % 3u)); break;
-      case 5: (void)mc_drive_clear_faults(&d); break;
-      case 6: (void)mc_hal_fake_fault_set_inputs(&fake, r[1] & MC_HAL_FAULT_ALL); break;
-      default: (void)mc_hal_fake_tick_advance(&fake, r[1]); break;
+      case 0:
+        (void)mc_hal_fake_adc_set_sample(&fake, a, b, -(a + b), 24.0f, MC_HAL_ADC_VALID_ALL);
+        break;
+      case 1:
+        (void)mc_hal_fake_adc_set_sample(&fake, a, 0.0f, 0.0f, b, r[7] & 0x0Fu);
+        break;
+      case 2:
+        (void)mc_hal_fake_encoder_set(
+            &fake, (uint32_t)(r[1] | (r[2] << 8)) % fc.encoder_counts_per_rev, r[3] & 3u);
+        break;
+      case 3:
+        (void)mc_drive_set_current_ref(&d, a, b);
+        break;
+      case 4:
+        (void)mc_drive_set_mode(&d, (mc_drive_mode_t)(r[1] % 3u == 2u ? 0 : r[1] % 3u));
+        break;
+      case 5:
+        (void)mc_drive_clear_faults(&d);
+        break;
+      case 6:
+        (void)mc_hal_fake_fault_set_inputs(&fake, r[1] & MC_HAL_FAULT_ALL);
+        break;
+      default:
+        (void)mc_hal_fake_tick_advance(&fake, r[1]);
+        break;
     }
     if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
     const bool running = d.mode == MC_DRIVE_MODE_CURRENT || d.mode == MC_DRIVE_MODE_CTRL;

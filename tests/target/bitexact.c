@@ -119,8 +119,8 @@ static void sweep_math_f32(void)
         acc_f32(&a, s);
         acc_f32(&a, c);
     }
-    static const float edges[] = {0.0f, -0.0f, MC_PI_F32, -MC_PI_F32, 1.0e6f,
-                                  -3.0e9f, 1.0e30f, 1.0e-40f};
+    static const float edges[] = {0.0f,   -0.0f,   MC_PI_F32, -MC_PI_F32,
+                                  1.0e6f, -3.0e9f, 1.0e30f,   1.0e-40f};
     for (unsigned i = 0; i < sizeof edges / sizeof edges[0]; ++i) {
         float s;
         float c;
@@ -255,9 +255,13 @@ static void sweep_svpwm(void)
 
 static int sweep_pi(void)
 {
-    const mc_pi_f32_cfg_t cfg = {.kp = 2.5f, .ki_per_s = 400.0f, .dt_s = 5.0e-5f,
-                                 .out_min = -12.0f, .out_max = 12.0f,
-                                 .aw = MC_PI_AW_BACK_CALC, .kaw_per_s = 2000.0f};
+    const mc_pi_f32_cfg_t cfg = {.kp = 2.5f,
+                                 .ki_per_s = 400.0f,
+                                 .dt_s = 5.0e-5f,
+                                 .out_min = -12.0f,
+                                 .out_max = 12.0f,
+                                 .aw = MC_PI_AW_BACK_CALC,
+                                 .kaw_per_s = 2000.0f};
     mc_pi_f32_t pi;
     bx_acc_t a = acc_new(9u);
     if (mc_pi_f32_init(&pi, &cfg) != 0u) {
@@ -293,12 +297,21 @@ static int sweep_pi(void)
 
 static int sweep_foc(void)
 {
-    mc_foc_f32_cfg_t cfg = {
-        .r_ohm = 0.675f, .ld_h = 1.14e-3f, .lq_h = 1.3e-3f, .flux_wb = 0.11f,
-        .kp_d_v_per_a = 1.43f, .ki_d_v_per_as = 848.0f,
-        .kp_q_v_per_a = 1.6f, .ki_q_v_per_as = 848.0f, .dt_s = 5.0e-5f,
-        .aw = MC_PI_AW_CLAMP, .kaw_per_s = 0.0f, .limit_mode = MC_SVPWM_LIMIT_HEXAGON,
-        .v_limit_ratio = 0.95f, .v_abs_max_v = 200.0f, .decouple = true};
+    mc_foc_f32_cfg_t cfg = {.r_ohm = 0.675f,
+                            .ld_h = 1.14e-3f,
+                            .lq_h = 1.3e-3f,
+                            .flux_wb = 0.11f,
+                            .kp_d_v_per_a = 1.43f,
+                            .ki_d_v_per_as = 848.0f,
+                            .kp_q_v_per_a = 1.6f,
+                            .ki_q_v_per_as = 848.0f,
+                            .dt_s = 5.0e-5f,
+                            .aw = MC_PI_AW_CLAMP,
+                            .kaw_per_s = 0.0f,
+                            .limit_mode = MC_SVPWM_LIMIT_HEXAGON,
+                            .v_limit_ratio = 0.95f,
+                            .v_abs_max_v = 200.0f,
+                            .decouple = true};
     mc_foc_f32_t foc;
     bx_acc_t a = acc_new(11u);
     if (mc_foc_f32_init(&foc, &cfg) != 0u) {

@@ -67,18 +67,18 @@ static void sink_f32(float v)
 /* ---- inputs ------------------------------------------------------------ */
 
 typedef struct {
-    float x[BENCH_N];      /* angle-like, [-pi, pi) */
-    float y[BENCH_N];      /* [-10, 10) */
-    float z[BENCH_N];      /* [-10, 10) */
-    float big[BENCH_N];    /* [0, 1000) */
-    float va[BENCH_N];     /* [-150, 150) V */
+    float x[BENCH_N];   /* angle-like, [-pi, pi) */
+    float y[BENCH_N];   /* [-10, 10) */
+    float z[BENCH_N];   /* [-10, 10) */
+    float big[BENCH_N]; /* [0, 1000) */
+    float va[BENCH_N];  /* [-150, 150) V */
     float vb[BENCH_N];
     q31_t qa[BENCH_N];
     q31_t qb[BENCH_N];
     q31_t qc[BENCH_N];
     mc_pi2d_f32_in_t pi2d_in[BENCH_N];
-    float e2[BENCH_N];     /* CSMC position error [rad] */
-    float e1[BENCH_N];     /* CSMC d-current error [A] */
+    float e2[BENCH_N]; /* CSMC position error [rad] */
+    float e1[BENCH_N]; /* CSMC d-current error [A] */
 } bench_inputs_t;
 
 static bench_inputs_t g_in;
@@ -180,7 +180,8 @@ static const mc_hal_adc_t g_rb_adc = {&k_rb_adc, &g_rb};
 static const mc_hal_pwm3_t g_rb_pwm = {&k_rb_pwm, &g_rb};
 static const mc_hal_encoder_t g_rb_enc = {&k_rb_enc, &g_rb};
 static const mc_hal_tick_t g_rb_tick = {&k_rb_tick, &g_rb};
-static const mc_hal_t g_rb_hal = {&g_rb_adc, &g_rb_pwm, NULL, &g_rb_enc, NULL, &g_rb_tick, NULL, NULL};
+static const mc_hal_t g_rb_hal = {&g_rb_adc, &g_rb_pwm,  NULL, &g_rb_enc,
+                                  NULL,      &g_rb_tick, NULL, NULL};
 static mc_drive_t g_drive;
 
 /* ---- wrappers ---------------------------------------------------------- */
@@ -240,7 +241,8 @@ static NOINLINE void c_svpwm_hexagon_f32(uint32_t i)
     float a;
     float b;
     float c;
-    bench_sink_u32(mc_svpwm_f32(g_in.va[i], g_in.vb[i], 200.0f, MC_SVPWM_LIMIT_HEXAGON, &a, &b, &c));
+    bench_sink_u32(
+        mc_svpwm_f32(g_in.va[i], g_in.vb[i], 200.0f, MC_SVPWM_LIMIT_HEXAGON, &a, &b, &c));
     sink_f32(a + b + c);
 }
 static NOINLINE void c_pi_f32(uint32_t i)
@@ -274,8 +276,8 @@ static NOINLINE void c_foc_sensorless_f32(uint32_t i)
     float i_beta;
     mc_clarke_f32(f->ia_a, f->ib_a, &i_alpha, &i_beta);
     /* the observer sees the voltage of the previous step, as in the plug-in */
-    bench_sink_u32(mc_fluxobs_f32_step(&g_obs, g_sls_out.v_alpha_v, g_sls_out.v_beta_v, i_alpha,
-                                       i_beta));
+    bench_sink_u32(
+        mc_fluxobs_f32_step(&g_obs, g_sls_out.v_alpha_v, g_sls_out.v_beta_v, i_alpha, i_beta));
     float omega_hat;
     (void)mc_spdpll_f32_step(&g_pll, g_obs.theta_e_rad, &omega_hat);
     bench_sink_u32(mc_foc_f32_step_ab(&g_foc_sls, i_alpha, i_beta, g_obs.theta_e_rad, omega_hat,
@@ -468,12 +470,24 @@ static int setup_pi2d(void)
     const float wn = 30.0f;
     const float ki = wn * wn * wn;
     const float kp = (3.0f * wn * wn) + (ki / 2000.0f);
-    const mc_pi2d_f32_cfg_t c = {
-        .r_ohm = 0.675f, .l_h = 1.14e-3f, .pole_pairs = 4u, .ke_v_s_rad = 0.44f,
-        .kt_nm_a = 0.66f, .j_kgm2 = 1.0e-3f, .k1_per_s = 1256.6f, .k2_per_s = 1256.6f,
-        .kp_per_s2 = kp, .kd_per_s2 = 3.0f * wn * 2000.0f, .ki_per_s3 = ki, .a_per_s = 2000.0f,
-        .b = 1.0f, .eps_per_s = 2.0f * ki / kp, .dt_s = 5.0e-5f, .iq_max_a = 5.0f,
-        .v_max_v = 200.0f, .nu_max_nm = 1.0f};
+    const mc_pi2d_f32_cfg_t c = {.r_ohm = 0.675f,
+                                 .l_h = 1.14e-3f,
+                                 .pole_pairs = 4u,
+                                 .ke_v_s_rad = 0.44f,
+                                 .kt_nm_a = 0.66f,
+                                 .j_kgm2 = 1.0e-3f,
+                                 .k1_per_s = 1256.6f,
+                                 .k2_per_s = 1256.6f,
+                                 .kp_per_s2 = kp,
+                                 .kd_per_s2 = 3.0f * wn * 2000.0f,
+                                 .ki_per_s3 = ki,
+                                 .a_per_s = 2000.0f,
+                                 .b = 1.0f,
+                                 .eps_per_s = 2.0f * ki / kp,
+                                 .dt_s = 5.0e-5f,
+                                 .iq_max_a = 5.0f,
+                                 .v_max_v = 200.0f,
+                                 .nu_max_nm = 1.0f};
     return (mc_pi2d_f32_init(&g_pi2d, &c) == 0u) ? 0 : 1;
 }
 
@@ -500,8 +514,12 @@ static int setup_csmc(void)
     const float c2[3] = {0.0f, -w02, 0.0f};
     const float re2[3] = {-1.0f, -2.0f, -2.0f};
     const float im2[3] = {0.0f, 1.0f, -1.0f};
-    const mc_hgo_f32_cfg_t h = {.alpha1 = 17.0f, .alpha2 = 80.0f, .alpha3 = 100.0f,
-                                .eps_s = 1.0e-4f, .dt_s = 1.0e-5f, .input_order = 2u};
+    const mc_hgo_f32_cfg_t h = {.alpha1 = 17.0f,
+                                .alpha2 = 80.0f,
+                                .alpha3 = 100.0f,
+                                .eps_s = 1.0e-4f,
+                                .dt_s = 1.0e-5f,
+                                .input_order = 2u};
     if (mc_csvc_f32_place(5u, c1, re1, im1, &c.sigma1) != 0u ||
         mc_csvc_f32_place(3u, c2, re2, im2, &c.sigma2) != 0u ||
         mc_csmc_hgo_f32_init(&g_csmc_hgo, &c, &h) != 0u || mc_hgo_f32_init(&g_hgo, &h) != 0u) {
@@ -525,23 +543,37 @@ int bench_setup(void)
     if (setup_pi2d() != 0 || setup_csmc() != 0) {
         return 1;
     }
-    const mc_pi_f32_cfg_t pc = {.kp = 1.43f, .ki_per_s = 848.0f, .dt_s = 5.0e-5f,
-                                .out_min = -100.0f, .out_max = 100.0f,
-                                .aw = MC_PI_AW_CLAMP, .kaw_per_s = 0.0f};
+    const mc_pi_f32_cfg_t pc = {.kp = 1.43f,
+                                .ki_per_s = 848.0f,
+                                .dt_s = 5.0e-5f,
+                                .out_min = -100.0f,
+                                .out_max = 100.0f,
+                                .aw = MC_PI_AW_CLAMP,
+                                .kaw_per_s = 0.0f};
     if (mc_pi_f32_init(&g_pi, &pc) != 0u) {
         return 1;
     }
     mc_pi_q31_cfg_t qc;
-    if (mc_pi_q31_cfg_from_f32(&pc, 10.0f, 200.0f, &qc) != 0u || mc_pi_q31_init(&g_qpi, &qc) != 0u) {
+    if (mc_pi_q31_cfg_from_f32(&pc, 10.0f, 200.0f, &qc) != 0u ||
+        mc_pi_q31_init(&g_qpi, &qc) != 0u) {
         return 1;
     }
     /* The paper-002 test motor at 20 kHz, 200 Hz current loop (FocSil). */
-    g_foc_cfg = (mc_foc_f32_cfg_t){
-        .r_ohm = 0.675f, .ld_h = 1.14e-3f, .lq_h = 1.14e-3f, .flux_wb = 0.11f,
-        .kp_d_v_per_a = 1.4326f, .ki_d_v_per_as = 848.23f,
-        .kp_q_v_per_a = 1.4326f, .ki_q_v_per_as = 848.23f, .dt_s = 5.0e-5f,
-        .aw = MC_PI_AW_CLAMP, .kaw_per_s = 0.0f, .limit_mode = MC_SVPWM_LIMIT_CIRCLE,
-        .v_limit_ratio = 0.95f, .v_abs_max_v = 200.0f, .decouple = true};
+    g_foc_cfg = (mc_foc_f32_cfg_t){.r_ohm = 0.675f,
+                                   .ld_h = 1.14e-3f,
+                                   .lq_h = 1.14e-3f,
+                                   .flux_wb = 0.11f,
+                                   .kp_d_v_per_a = 1.4326f,
+                                   .ki_d_v_per_as = 848.23f,
+                                   .kp_q_v_per_a = 1.4326f,
+                                   .ki_q_v_per_as = 848.23f,
+                                   .dt_s = 5.0e-5f,
+                                   .aw = MC_PI_AW_CLAMP,
+                                   .kaw_per_s = 0.0f,
+                                   .limit_mode = MC_SVPWM_LIMIT_CIRCLE,
+                                   .v_limit_ratio = 0.95f,
+                                   .v_abs_max_v = 200.0f,
+                                   .decouple = true};
     if (mc_foc_f32_init(&g_foc, &g_foc_cfg) != 0u) {
         return 1;
     }
@@ -552,11 +584,15 @@ int bench_setup(void)
     if (mc_fluxobs_f32_gamma_for_critical_speed(50.0f, 4u, 0.11f, &gamma) != 0u) {
         return 1;
     }
-    const mc_fluxobs_f32_cfg_t oc = {.r_ohm = 0.675f, .l_h = 1.14e-3f, .flux_wb = 0.11f,
-                                     .gamma = gamma, .dt_s = 5.0e-5f, .resid_tol = 0.3f,
+    const mc_fluxobs_f32_cfg_t oc = {.r_ohm = 0.675f,
+                                     .l_h = 1.14e-3f,
+                                     .flux_wb = 0.11f,
+                                     .gamma = gamma,
+                                     .dt_s = 5.0e-5f,
+                                     .resid_tol = 0.3f,
                                      .resid_time_s = 0.05f};
-    const mc_spdpll_f32_cfg_t plc = {.bw_rad_s = 500.0f, .dt_s = 5.0e-5f,
-                                     .omega_max_rad_s = 6000.0f};
+    const mc_spdpll_f32_cfg_t plc = {
+        .bw_rad_s = 500.0f, .dt_s = 5.0e-5f, .omega_max_rad_s = 6000.0f};
     if (mc_fluxobs_f32_init(&g_obs, &oc) != 0u || mc_spdpll_f32_init(&g_pll, &plc) != 0u) {
         return 1;
     }

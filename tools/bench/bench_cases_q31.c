@@ -45,13 +45,13 @@ static mc_hgo_q31_t s_hgo_q;
 static mc_hgo_f32_t s_hgo_f;
 
 /* ---- inputs (same values, both formats) -------------------------------- */
-static q31_t in_y_q[BENCH_N];          /* ddiff input, rad (base 1) */
+static q31_t in_y_q[BENCH_N]; /* ddiff input, rad (base 1) */
 static float in_y_f[BENCH_N];
-static q31_t in_th_q[BENCH_N];         /* PLL angle (turn) */
+static q31_t in_th_q[BENCH_N]; /* PLL angle (turn) */
 static float in_th_f[BENCH_N];
-static q31_t in_v_q[BENCH_N][2];       /* observer voltages (400 V base) */
+static q31_t in_v_q[BENCH_N][2]; /* observer voltages (400 V base) */
 static float in_v_f[BENCH_N][2];
-static q31_t in_i_q[BENCH_N][2];       /* currents (20 A base) */
+static q31_t in_i_q[BENCH_N][2]; /* currents (20 A base) */
 static float in_i_f[BENCH_N][2];
 static mc_foc_q31_in_t in_foc_q[BENCH_N];
 static mc_foc_f32_in_t in_foc_f[BENCH_N];

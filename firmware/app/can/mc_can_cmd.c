@@ -165,8 +165,8 @@ static mc_can_err_t do_param(mc_can_cmd_t *c, const mc_hal_can_t *can, const flo
     r[MC_CAN_PARAM_REPLY_PARAM_ID] = (float)id;
     r[MC_CAN_PARAM_REPLY_STATUS] = (float)(uint32_t)st;
     r[MC_CAN_PARAM_REPLY_VALUE] = 0.0f;
-    if (mc_can_proto_pack(MC_CAN_MSG_PARAM_REPLY, c->cfg.node_id, r, MC_CAN_PARAM_REPLY_NSIG,
-                          &f) != MC_CAN_ERR_NONE) {
+    if (mc_can_proto_pack(MC_CAN_MSG_PARAM_REPLY, c->cfg.node_id, r, MC_CAN_PARAM_REPLY_NSIG, &f) !=
+        MC_CAN_ERR_NONE) {
         c->reply_dropped++;
         return MC_CAN_ERR_NONE;
     }

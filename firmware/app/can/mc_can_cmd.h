@@ -87,12 +87,12 @@ extern "C" {
 typedef int (*mc_can_cmd_ref_fn)(void *ctx, float ref);
 
 typedef struct {
-    uint8_t node_id;              /**< 0..62 */
-    uint32_t tick_hz;             /**< call rate of mc_can_cmd_step [Hz] */
-    float timeout_s;              /**< command timeout while enabled [s] */
-    float stop_ramp_a_per_s;      /**< current ramp of a safe stop [A/s] */
-    float stop_decel_rad_s2;      /**< speed ramp of a safe stop [rad/s^2] */
-    float speed_max_rad_s;        /**< largest |speed reference| [rad/s] */
+    uint8_t node_id;                    /**< 0..62 */
+    uint32_t tick_hz;                   /**< call rate of mc_can_cmd_step [Hz] */
+    float timeout_s;                    /**< command timeout while enabled [s] */
+    float stop_ramp_a_per_s;            /**< current ramp of a safe stop [A/s] */
+    float stop_decel_rad_s2;            /**< speed ramp of a safe stop [rad/s^2] */
+    float speed_max_rad_s;              /**< largest |speed reference| [rad/s] */
     mc_can_cmd_ref_fn set_speed_ref;    /**< NULL: SPEED unsupported */
     mc_can_cmd_ref_fn set_position_ref; /**< NULL: POSITION unsupported */
     void *hook_ctx;
@@ -105,23 +105,23 @@ typedef struct {
 typedef struct mc_can_cmd {
     mc_can_cmd_cfg_t cfg;
     mc_drive_t *drive;
-    mc_telemetry_t *tm;           /**< for SET_TM_RATE, or NULL */
-    uint32_t timeout_ticks;       /**< derived at init */
-    uint8_t control_mode;         /**< MC_CAN_CTRL_* */
+    mc_telemetry_t *tm;     /**< for SET_TM_RATE, or NULL */
+    uint32_t timeout_ticks; /**< derived at init */
+    uint8_t control_mode;   /**< MC_CAN_CTRL_* */
     bool enabled;
-    bool stopping;                /**< safe stop in progress */
-    uint8_t stop_reason;          /**< MC_CAN_STOP_* */
-    uint32_t ticks_since_cmd;     /**< steps since the last accepted command */
-    float omega_ref_rad_s;        /**< last accepted speed reference */
-    float theta_ref_rad;          /**< last accepted angle reference */
-    uint8_t last_error;           /**< mc_can_err_t of the last rejection */
+    bool stopping;            /**< safe stop in progress */
+    uint8_t stop_reason;      /**< MC_CAN_STOP_* */
+    uint32_t ticks_since_cmd; /**< steps since the last accepted command */
+    float omega_ref_rad_s;    /**< last accepted speed reference */
+    float theta_ref_rad;      /**< last accepted angle reference */
+    uint8_t last_error;       /**< mc_can_err_t of the last rejection */
     uint8_t last_error_cmd;
-    uint8_t err_seq;              /**< sequence counter of CMD_ERROR */
+    uint8_t err_seq; /**< sequence counter of CMD_ERROR */
     uint32_t rx_accepted;
     uint32_t rx_rejected;
-    uint32_t reply_dropped;       /**< CMD_ERROR / PARAM_REPLY frames the HAL refused */
-    mc_param_srv_t *params;       /**< parameter service, or NULL */
-    uint8_t cfg_status;           /**< HEARTBEAT.cfg_status: the boot status of the
+    uint32_t reply_dropped; /**< CMD_ERROR / PARAM_REPLY frames the HAL refused */
+    mc_param_srv_t *params; /**< parameter service, or NULL */
+    uint8_t cfg_status;     /**< HEARTBEAT.cfg_status: the boot status of the
                                        parameter store (EMPTY without one: the
                                        configuration is not from flash) */
 } mc_can_cmd_t;

@@ -120,8 +120,8 @@ mc_can_err_t mc_can_proto_pack(uint32_t msg, uint32_t node_id, const float *valu
     return MC_CAN_ERR_NONE;
 }
 
-mc_can_err_t mc_can_proto_unpack(const mc_hal_can_frame_t *p_frame, uint32_t *p_msg,
-                                 float *values, uint32_t n_values)
+mc_can_err_t mc_can_proto_unpack(const mc_hal_can_frame_t *p_frame, uint32_t *p_msg, float *values,
+                                 uint32_t n_values)
 {
     const mc_can_message_t *m;
     uint32_t msg;

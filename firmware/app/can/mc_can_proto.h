@@ -71,9 +71,9 @@ typedef struct {
 
 /** One message. */
 typedef struct {
-    uint8_t cmd;       /**< low 5 bits of the id */
-    uint8_t dlc;       /**< data bytes, exact */
-    uint8_t dir;       /**< mc_can_dir_t */
+    uint8_t cmd; /**< low 5 bits of the id */
+    uint8_t dlc; /**< data bytes, exact */
+    uint8_t dir; /**< mc_can_dir_t */
     uint8_t n_signals;
     const mc_can_signal_t *signals;
 } mc_can_message_t;
@@ -85,8 +85,14 @@ static inline uint32_t mc_can_id(uint32_t node_id, uint32_t cmd)
 {
     return (node_id << MC_CAN_CMD_BITS) | (cmd & MC_CAN_CMD_MASK);
 }
-static inline uint32_t mc_can_id_node(uint32_t id) { return (id >> MC_CAN_CMD_BITS) & 0x3Fu; }
-static inline uint32_t mc_can_id_cmd(uint32_t id) { return id & MC_CAN_CMD_MASK; }
+static inline uint32_t mc_can_id_node(uint32_t id)
+{
+    return (id >> MC_CAN_CMD_BITS) & 0x3Fu;
+}
+static inline uint32_t mc_can_id_cmd(uint32_t id)
+{
+    return id & MC_CAN_CMD_MASK;
+}
 
 /** Index (MC_CAN_MSG_*) of the message with command id cmd, or
  *  MC_CAN_MSG_COUNT if there is none. */
@@ -114,12 +120,15 @@ mc_can_err_t mc_can_proto_pack(uint32_t msg, uint32_t node_id, const float *valu
  *         n_values too small for the message). Checked first: the format
  *         and identifier, so MC_CAN_ERR_ARG only for a caller's mistake.
  */
-mc_can_err_t mc_can_proto_unpack(const mc_hal_can_frame_t *p_frame, uint32_t *p_msg,
-                                 float *values, uint32_t n_values);
+mc_can_err_t mc_can_proto_unpack(const mc_hal_can_frame_t *p_frame, uint32_t *p_msg, float *values,
+                                 uint32_t n_values);
 
 /** Worst-case bus time of a classic 11-bit frame with dlc data bytes, in
  *  bits, stuff bits and the 3-bit intermission included: 55 + 10 dlc. */
-static inline uint32_t mc_can_frame_bits_worst(uint32_t dlc) { return 55u + 10u * dlc; }
+static inline uint32_t mc_can_frame_bits_worst(uint32_t dlc)
+{
+    return 55u + 10u * dlc;
+}
 
 #ifdef __cplusplus
 }

@@ -12,9 +12,8 @@
 #include "transforms/mc_transforms.h"
 
 static const uint8_t k_slot_msg[MC_TM_COUNT] = {
-    (uint8_t)MC_CAN_MSG_HEARTBEAT, (uint8_t)MC_CAN_MSG_CURRENTS,
-    (uint8_t)MC_CAN_MSG_VOLTAGES,  (uint8_t)MC_CAN_MSG_SPEED,
-    (uint8_t)MC_CAN_MSG_POSITION,  (uint8_t)MC_CAN_MSG_OBSERVER,
+    (uint8_t)MC_CAN_MSG_HEARTBEAT,  (uint8_t)MC_CAN_MSG_CURRENTS, (uint8_t)MC_CAN_MSG_VOLTAGES,
+    (uint8_t)MC_CAN_MSG_SPEED,      (uint8_t)MC_CAN_MSG_POSITION, (uint8_t)MC_CAN_MSG_OBSERVER,
     (uint8_t)MC_CAN_MSG_CONTROLLER, (uint8_t)MC_CAN_MSG_STEPPER,
 };
 
@@ -113,7 +112,10 @@ uint32_t mc_telemetry_set_rate(mc_telemetry_t *t, uint32_t slot, uint16_t rate_h
     return MC_TM_CFG_OK;
 }
 
-static float u8f(uint32_t v) { return (float)(v & 0xFFu); }
+static float u8f(uint32_t v)
+{
+    return (float)(v & 0xFFu);
+}
 
 static void values_heartbeat(const mc_telemetry_src_t *src, float *v)
 {
@@ -184,7 +186,8 @@ bool mc_telemetry_values(uint32_t slot, const mc_telemetry_src_t *src,
     }
     case MC_TM_SPEED:
         values[MC_CAN_SPEED_OMEGA_M_RAD_S] = d->tm.omega_m_rad_s;
-        values[MC_CAN_SPEED_OMEGA_REF_RAD_S] = (src->cmd != NULL) ? src->cmd->omega_ref_rad_s : 0.0f;
+        values[MC_CAN_SPEED_OMEGA_REF_RAD_S] =
+            (src->cmd != NULL) ? src->cmd->omega_ref_rad_s : 0.0f;
         return true;
     case MC_TM_POSITION:
         values[MC_CAN_POSITION_THETA_M_RAD] = d->tm.theta_m_rad;

@@ -56,13 +56,13 @@ typedef enum {
     MC_TM_COUNT = 8
 } mc_tm_slot_t;
 
-#define MC_TM_BUDGET_FRAC_MAX 0.7f      /**< largest accepted bus_budget_frac */
+#define MC_TM_BUDGET_FRAC_MAX 0.7f /**< largest accepted bus_budget_frac */
 #define MC_TM_BITRATE_MIN_BPS 10000u
 #define MC_TM_BITRATE_MAX_BPS 1000000u
 #define MC_TM_TICK_MAX_HZ     100000u
 
 /* Configuration errors (bits) of mc_telemetry_init / _set_rate. */
-#define MC_TM_CFG_OK         0u
+#define MC_TM_CFG_OK          0u
 #define MC_TM_CFG_ERR_NULL    (1u << 0) /**< NULL argument */
 #define MC_TM_CFG_ERR_NODE    (1u << 1) /**< node_id > 62 */
 #define MC_TM_CFG_ERR_BITRATE (1u << 2) /**< bitrate outside [10 k, 1 M] bit/s */
@@ -72,10 +72,10 @@ typedef enum {
 #define MC_TM_CFG_ERR_LOAD    (1u << 6) /**< load of the rates above the budget */
 
 typedef struct {
-    uint8_t node_id;              /**< 0..62 */
-    uint32_t bitrate_bps;         /**< nominal bus bit rate [bit/s] */
-    float bus_budget_frac;        /**< share of the bus telemetry may use */
-    uint32_t tick_hz;             /**< call rate of mc_telemetry_step [Hz] */
+    uint8_t node_id;               /**< 0..62 */
+    uint32_t bitrate_bps;          /**< nominal bus bit rate [bit/s] */
+    float bus_budget_frac;         /**< share of the bus telemetry may use */
+    uint32_t tick_hz;              /**< call rate of mc_telemetry_step [Hz] */
     uint16_t rate_hz[MC_TM_COUNT]; /**< frames per second, 0 = off */
 } mc_telemetry_cfg_t;
 
@@ -93,21 +93,21 @@ struct mc_can_cmd; /* mc_can_cmd.h */
 
 /** What the telemetry reads each step. */
 typedef struct {
-    const mc_drive_t *drive;           /**< required */
-    const struct mc_can_cmd *cmd;      /**< CAN command state, or NULL */
-    const mc_telemetry_ext_t *ext;     /**< control-law internals, or NULL */
+    const mc_drive_t *drive;       /**< required */
+    const struct mc_can_cmd *cmd;  /**< CAN command state, or NULL */
+    const mc_telemetry_ext_t *ext; /**< control-law internals, or NULL */
 } mc_telemetry_src_t;
 
 typedef struct {
     mc_telemetry_cfg_t cfg;
-    uint32_t acc[MC_TM_COUNT];    /**< phase accumulators, < tick_hz */
-    uint8_t seq[MC_TM_COUNT];     /**< next sequence number per message */
-    float load_frac;              /**< bus load of the present rates */
-    uint32_t tx_frames;           /**< frames queued by the HAL */
-    uint32_t tx_dropped;          /**< frames the HAL refused (any reason) */
-    uint32_t tx_nobufs;           /**< ... of which tx queue full */
-    uint32_t tx_busoff;           /**< ... of which bus-off */
-    uint32_t last_fail_mask;      /**< slots whose frame the HAL refused, last step */
+    uint32_t acc[MC_TM_COUNT]; /**< phase accumulators, < tick_hz */
+    uint8_t seq[MC_TM_COUNT];  /**< next sequence number per message */
+    float load_frac;           /**< bus load of the present rates */
+    uint32_t tx_frames;        /**< frames queued by the HAL */
+    uint32_t tx_dropped;       /**< frames the HAL refused (any reason) */
+    uint32_t tx_nobufs;        /**< ... of which tx queue full */
+    uint32_t tx_busoff;        /**< ... of which bus-off */
+    uint32_t last_fail_mask;   /**< slots whose frame the HAL refused, last step */
 } mc_telemetry_t;
 
 /** Bus load (fraction of bitrate_bps) of cfg's rates; 0 for a NULL cfg or

@@ -11,35 +11,43 @@
 #include "transforms/mc_transforms.h"
 
 /* Durations [s] of the phases (README.md: why these). */
-#define T_OFF_SETTLE  0.01f
-#define T_OFF_AVG     0.10f
-#define SQ_SKIP       32u    /* periods of each square-wave try before correlating */
-#define SQ_LEN        128u   /* periods of each try */
-#define T_ALIGN_RAMP  0.10f
-#define T_ALIGN_HOLD  0.15f
-#define T_PRE_RAMP    0.10f
-#define T_PRE_CONST   0.10f
-#define T_SWP_RAMP    0.25f
-#define T_SWP_CONST   0.75f
-#define T_HOLD        0.10f
-#define T_R_SETTLE    0.10f
-#define T_R_AVG       0.10f
-#define T_L_SETTLE    0.03f
-#define T_L_AVG       0.10f
-#define T_SPIN_MAX    2.00f
-#define T_SPIN_BLOCK  0.30f
-#define T_COAST_SKIP  0.02f
-#define T_COAST       0.25f
-#define T_COAST_QUIET 0.01f  /* the coast's current below I_COAST_GATE this long: fit */
+#define T_OFF_SETTLE     0.01f
+#define T_OFF_AVG        0.10f
+#define SQ_SKIP          32u  /* periods of each square-wave try before correlating */
+#define SQ_LEN           128u /* periods of each try */
+#define T_ALIGN_RAMP     0.10f
+#define T_ALIGN_HOLD     0.15f
+#define T_PRE_RAMP       0.10f
+#define T_PRE_CONST      0.10f
+#define T_SWP_RAMP       0.25f
+#define T_SWP_CONST      0.75f
+#define T_HOLD           0.10f
+#define T_R_SETTLE       0.10f
+#define T_R_AVG          0.10f
+#define T_L_SETTLE       0.03f
+#define T_L_AVG          0.10f
+#define T_SPIN_MAX       2.00f
+#define T_SPIN_BLOCK     0.30f
+#define T_COAST_SKIP     0.02f
+#define T_COAST          0.25f
+#define T_COAST_QUIET    0.01f /* the coast's current below I_COAST_GATE this long: fit */
 #define T_COAST_SKIP_MAX 0.20f
-#define I_COAST_GATE  0.03f  /* of i_test (about 7 sigma of the library's sensor noise) */
-#define V_SPIN_FRAC   0.8f   /* spin-up ends at this fraction of the voltage limit */
-#define W_E_BW_MAX    1.5f   /* ... or at this electrical speed per current-loop bandwidth */
+#define I_COAST_GATE     0.03f /* of i_test (about 7 sigma of the library's sensor noise) */
+#define V_SPIN_FRAC      0.8f  /* spin-up ends at this fraction of the voltage limit */
+#define W_E_BW_MAX       1.5f  /* ... or at this electrical speed per current-loop bandwidth */
 
 /* Sub-phases of the encoder step. */
 enum {
-    ENC_ALIGN_RAMP = 0, ENC_ALIGN_HOLD, ENC_PRE, ENC_PRE_HOLD, ENC_FWD1, ENC_FWD1_HOLD,
-    ENC_BACK, ENC_BACK_HOLD, ENC_FWD2, ENC_FWD2_HOLD
+    ENC_ALIGN_RAMP = 0,
+    ENC_ALIGN_HOLD,
+    ENC_PRE,
+    ENC_PRE_HOLD,
+    ENC_FWD1,
+    ENC_FWD1_HOLD,
+    ENC_BACK,
+    ENC_BACK_HOLD,
+    ENC_FWD2,
+    ENC_FWD2_HOLD
 };
 
 static uint32_t steps_of(const mc_comm_t *c, float t_s)
@@ -69,8 +77,8 @@ uint32_t mc_comm_init(mc_comm_t *c, const mc_comm_cfg_t *cfg)
     if (c == NULL || cfg == NULL) {
         return MC_COMM_CFG_ERR_NULL;
     }
-    const float pos[6] = {cfg->dt_s, cfg->i_test_a, cfg->v_test_max_v, cfg->offset_max_a,
-                          cfg->cur_bw_rad_s, cfg->speed_max_m_rad_s};
+    const float pos[6] = {cfg->dt_s,         cfg->i_test_a,     cfg->v_test_max_v,
+                          cfg->offset_max_a, cfg->cur_bw_rad_s, cfg->speed_max_m_rad_s};
     for (unsigned k = 0u; k < 6u; ++k) {
         if (!mc_isfinite_f32(pos[k]) || !(pos[k] > 0.0f)) {
             return MC_COMM_CFG_ERR_VALUE;
@@ -251,9 +259,15 @@ static uint32_t foc_out(mc_comm_t *c, const float i[3], float theta, float omega
                         float iq_ref, mc_drive_out_t *out, mc_foc_f32_out_t *fo)
 {
     const mc_foc_f32_in_t in = {
-        .ia_a = i[0], .ib_a = i[1], .ic_a = i[2], .three_phase = c->cfg.three_shunts,
-        .theta_e_rad = theta, .omega_e_rad_s = omega_e, .vbus_v = c->vbus_v,
-        .id_ref_a = id_ref, .iq_ref_a = iq_ref,
+        .ia_a = i[0],
+        .ib_a = i[1],
+        .ic_a = i[2],
+        .three_phase = c->cfg.three_shunts,
+        .theta_e_rad = theta,
+        .omega_e_rad_s = omega_e,
+        .vbus_v = c->vbus_v,
+        .id_ref_a = id_ref,
+        .iq_ref_a = iq_ref,
     };
     if (mc_foc_f32_step(&c->foc, &in, fo) != MC_FOC_ERR_NONE) {
         return MC_COMM_ERR_RANGE;
@@ -387,7 +401,8 @@ static uint32_t step_l_rough(mc_comm_t *c, const float i[3], mc_drive_out_t *out
         }
         /* Alpha try: phase a carries d, b and c half of it each. */
         const float *p = c->d_phase[0];
-        const float big = (p[0] > p[1]) ? ((p[0] > p[2]) ? p[0] : p[2]) : ((p[1] > p[2]) ? p[1] : p[2]);
+        const float big =
+            (p[0] > p[1]) ? ((p[0] > p[2]) ? p[0] : p[2]) : ((p[1] > p[2]) ? p[1] : p[2]);
         for (unsigned k = 0u; k < 3u; ++k) {
             if (p[k] < 0.2f * big) {
                 return MC_COMM_ERR_OPEN_PHASE;
@@ -557,8 +572,7 @@ static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas
         if (c->sub == ENC_FWD1) {
             (void)mc_ident_avg_f32_step(&c->vq_acc, fo.vq_v);
         } else if (c->sub == ENC_BACK || c->sub == ENC_FWD2) {
-            (void)mc_ident_circ_f32_step(&c->off_acc,
-                                         c->theta_cmd_rad - enc_theta_e(c, m, 0.0f));
+            (void)mc_ident_circ_f32_step(&c->off_acc, c->theta_cmd_rad - enc_theta_e(c, m, 0.0f));
         }
     }
     if (end) {
@@ -577,8 +591,8 @@ static uint32_t step_resistance(mc_comm_t *c, const float i[3], mc_drive_out_t *
         return e;
     }
     if ((fo.svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u ||
-        fo.vd_v * fo.vd_v + fo.vq_v * fo.vq_v >= 0.9f * c->cfg.v_test_max_v * 0.9f *
-                                                     c->cfg.v_test_max_v) {
+        fo.vd_v * fo.vd_v + fo.vq_v * fo.vq_v >=
+            0.9f * c->cfg.v_test_max_v * 0.9f * c->cfg.v_test_max_v) {
         if (c->n > steps_of(c, T_R_SETTLE)) {
             return MC_COMM_ERR_VOLTAGE;
         }
@@ -634,8 +648,8 @@ static uint32_t step_inductance(mc_comm_t *c, const float i[3], mc_drive_out_t *
         sq_reset(c);
         c->sq_sign = 1.0f;
         /* Ripple 30 % of i_test peak to peak, within the voltage left. */
-        const float vdc = mc_sqrt_f32(c->vdc_alpha_v * c->vdc_alpha_v +
-                                      c->vdc_beta_v * c->vdc_beta_v);
+        const float vdc =
+            mc_sqrt_f32(c->vdc_alpha_v * c->vdc_alpha_v + c->vdc_beta_v * c->vdc_beta_v);
         float vh = 0.3f * c->cfg.i_test_a * c->l0_h / c->cfg.dt_s;
         const float room = 0.95f * c->cfg.v_test_max_v - vdc;
         if (vh > room) {
@@ -690,7 +704,7 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
     const uint32_t cpr = m->enc_cpr;
     const float p = (float)c->res.pole_pairs;
     const float dir = (float)c->res.encoder_direction;
-    const float w_m = dir * c->w_m_rad_s;   /* positive: forward */
+    const float w_m = dir * c->w_m_rad_s; /* positive: forward */
     const float w_e = p * w_m;
     const float theta = enc_theta_e(c, m, c->res.encoder_offset_rad);
     const float turned_e = dir * (float)c->count_acc * p * MC_TWO_PI_F32 / (float)cpr;
@@ -731,7 +745,8 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
                 return MC_COMM_ERR_ROTOR_BLOCKED;
             }
             float a = 0.0f;
-            if (mc_ident_line_f32_get(&c->acc_fit, true, &a, NULL) == 0u && c->acc_fit.sx.n >= 20u) {
+            if (mc_ident_line_f32_get(&c->acc_fit, true, &a, NULL) == 0u &&
+                c->acc_fit.sx.n >= 20u) {
                 c->a_acc = a;
                 c->w_acc_mean = c->acc_fit.sy.sum / (float)c->acc_fit.sy.n;
             } else {
@@ -777,8 +792,8 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
             c->res.valid |= MC_COMM_HAVE_FLUX;
             float ac = 0.0f;
             const float wc = c->acc_fit.sy.sum / (float)(c->acc_fit.sy.n ? c->acc_fit.sy.n : 1u);
-            if (c->a_acc > 0.0f &&
-                mc_ident_line_f32_get(&c->acc_fit, true, &ac, NULL) == 0u && wc > 0.0f) {
+            if (c->a_acc > 0.0f && mc_ident_line_f32_get(&c->acc_fit, true, &ac, NULL) == 0u &&
+                wc > 0.0f) {
                 const float kt = 1.5f * p * psi;
                 const float den = c->a_acc - ac * c->w_acc_mean / wc;
                 if (den > 0.0f) {
@@ -870,8 +885,12 @@ static uint32_t fast_cb(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out
 const mc_drive_ctrl_t *mc_comm_ops(mc_comm_t *c)
 {
     c->ops = (mc_drive_ctrl_t){
-        .outputs = MC_DRIVE_OUT_PWM3, .needs_encoder = true,
-        .reset = reset_cb, .fast = fast_cb, .slow = NULL, .ctx = c,
+        .outputs = MC_DRIVE_OUT_PWM3,
+        .needs_encoder = true,
+        .reset = reset_cb,
+        .fast = fast_cb,
+        .slow = NULL,
+        .ctx = c,
     };
     return &c->ops;
 }
@@ -880,9 +899,8 @@ uint32_t mc_comm_apply(const mc_comm_result_t *r, float cur_bw_rad_s, mc_drive_c
 {
     const uint32_t need = MC_COMM_HAVE_OFFSETS | MC_COMM_HAVE_R | MC_COMM_HAVE_L |
                           MC_COMM_HAVE_ENCODER | MC_COMM_HAVE_FLUX;
-    if ((r->valid & need) != need || !(r->r_ohm > 0.0f) || !(r->ld_h > 0.0f) ||
-        !(r->lq_h > 0.0f) || !(r->flux_wb > 0.0f) || r->pole_pairs < 1u ||
-        !mc_isfinite_f32(r->encoder_offset_rad) ||
+    if ((r->valid & need) != need || !(r->r_ohm > 0.0f) || !(r->ld_h > 0.0f) || !(r->lq_h > 0.0f) ||
+        !(r->flux_wb > 0.0f) || r->pole_pairs < 1u || !mc_isfinite_f32(r->encoder_offset_rad) ||
         (r->encoder_direction != 1 && r->encoder_direction != -1)) {
         return MC_COMM_ERR_RANGE;
     }

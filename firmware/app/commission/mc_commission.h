@@ -68,19 +68,20 @@ extern "C" {
 
 /* Error bits (the named reasons a sequence stops). */
 #define MC_COMM_ERR_NONE              0u
-#define MC_COMM_ERR_OFFSET            (1u << 0)  /**< a current-sensor offset implausible */
-#define MC_COMM_ERR_NO_MOTOR          (1u << 1)  /**< no current on any axis */
-#define MC_COMM_ERR_OPEN_PHASE        (1u << 2)  /**< one phase carries no current */
-#define MC_COMM_ERR_ENCODER_NO_MOTION (1u << 3)  /**< the rotor turned, the encoder did not */
-#define MC_COMM_ERR_ROTOR_BLOCKED     (1u << 4)  /**< the rotor did not turn */
-#define MC_COMM_ERR_WRONG_DIRECTION   (1u << 5)  /**< the rotor turned against the torque */
-#define MC_COMM_ERR_ENCODER_BAD       (1u << 6)  /**< counts inconsistent: no integer pole
+#define MC_COMM_ERR_OFFSET            (1u << 0) /**< a current-sensor offset implausible */
+#define MC_COMM_ERR_NO_MOTOR          (1u << 1) /**< no current on any axis */
+#define MC_COMM_ERR_OPEN_PHASE        (1u << 2) /**< one phase carries no current */
+#define MC_COMM_ERR_ENCODER_NO_MOTION (1u << 3) /**< the rotor turned, the encoder did not */
+#define MC_COMM_ERR_ROTOR_BLOCKED     (1u << 4) /**< the rotor did not turn */
+#define MC_COMM_ERR_WRONG_DIRECTION   (1u << 5) /**< the rotor turned against the torque */
+#define MC_COMM_ERR_ENCODER_BAD \
+    (1u << 6)                              /**< counts inconsistent: no integer pole
                                                       pairs, back and forth disagree */
-#define MC_COMM_ERR_OVERCURRENT       (1u << 7)  /**< a phase above 1.5 i_test */
-#define MC_COMM_ERR_VOLTAGE           (1u << 8)  /**< the test needs more than v_test_max */
-#define MC_COMM_ERR_RANGE             (1u << 9)  /**< an identified value not plausible */
-#define MC_COMM_ERR_MEAS              (1u << 10) /**< no encoder sample or a non-finite one */
-#define MC_COMM_ERR_ABORTED           (1u << 11) /**< mc_comm_abort() */
+#define MC_COMM_ERR_OVERCURRENT (1u << 7)  /**< a phase above 1.5 i_test */
+#define MC_COMM_ERR_VOLTAGE     (1u << 8)  /**< the test needs more than v_test_max */
+#define MC_COMM_ERR_RANGE       (1u << 9)  /**< an identified value not plausible */
+#define MC_COMM_ERR_MEAS        (1u << 10) /**< no encoder sample or a non-finite one */
+#define MC_COMM_ERR_ABORTED     (1u << 11) /**< mc_comm_abort() */
 
 /* Configuration errors of mc_comm_init. */
 #define MC_COMM_CFG_OK        0u
@@ -100,27 +101,27 @@ typedef enum {
 } mc_comm_step_t;
 
 typedef struct {
-    float dt_s;               /**< PWM period [s], > 0 */
-    float i_test_a;           /**< test current (every step stays below 1.5x) [A], > 0 */
-    float v_test_max_v;       /**< largest voltage vector of any step [V], > 0 */
-    float offset_max_a;       /**< largest plausible current-sensor offset [A], > 0 */
-    float dead_time_s;        /**< bridge dead time [s], >= 0, < dt_s / 4 */
-    float cur_bw_rad_s;       /**< current-loop bandwidth during the tests [rad/s],
+    float dt_s;              /**< PWM period [s], > 0 */
+    float i_test_a;          /**< test current (every step stays below 1.5x) [A], > 0 */
+    float v_test_max_v;      /**< largest voltage vector of any step [V], > 0 */
+    float offset_max_a;      /**< largest plausible current-sensor offset [A], > 0 */
+    float dead_time_s;       /**< bridge dead time [s], >= 0, < dt_s / 4 */
+    float cur_bw_rad_s;      /**< current-loop bandwidth during the tests [rad/s],
                                    0 < bw dt <= 0.2 */
-    float speed_max_m_rad_s;  /**< cap of the flux spin-up, mechanical [rad/s], > 0 */
-    float bemf_frac;          /**< spin-up ends at this fraction of v_test_max, (0, 1) */
-    uint32_t pole_pairs_max;  /**< largest pole-pair count accepted, 1..64 */
-    bool three_shunts;        /**< ic is measured (else -(ia + ib)) */
+    float speed_max_m_rad_s; /**< cap of the flux spin-up, mechanical [rad/s], > 0 */
+    float bemf_frac;         /**< spin-up ends at this fraction of v_test_max, (0, 1) */
+    uint32_t pole_pairs_max; /**< largest pole-pair count accepted, 1..64 */
+    bool three_shunts;       /**< ic is measured (else -(ia + ib)) */
 } mc_comm_cfg_t;
 
 /* Result bits (mc_comm_result_t.valid). */
-#define MC_COMM_HAVE_OFFSETS  (1u << 0)
-#define MC_COMM_HAVE_R        (1u << 1)
-#define MC_COMM_HAVE_L        (1u << 2)
-#define MC_COMM_HAVE_ENCODER  (1u << 3)
-#define MC_COMM_HAVE_FLUX     (1u << 4)
-#define MC_COMM_HAVE_MECH     (1u << 5)
-#define MC_COMM_HAVE_ALL      0x3Fu
+#define MC_COMM_HAVE_OFFSETS (1u << 0)
+#define MC_COMM_HAVE_R       (1u << 1)
+#define MC_COMM_HAVE_L       (1u << 2)
+#define MC_COMM_HAVE_ENCODER (1u << 3)
+#define MC_COMM_HAVE_FLUX    (1u << 4)
+#define MC_COMM_HAVE_MECH    (1u << 5)
+#define MC_COMM_HAVE_ALL     0x3Fu
 
 /**
  * What commissioning found: one field per parameter of the table (issue 17
@@ -136,36 +137,36 @@ typedef struct {
     float lq_h;
     float flux_wb;
     uint32_t pole_pairs;
-    float encoder_offset_rad;   /**< electrical angle of the d axis at count 0, [0, 2 pi) */
-    int32_t encoder_direction;  /**< +1: counts up for positive rotation; -1: down */
-    float dead_time_v;          /**< inverter voltage error per phase (dead time, drops) [V] */
+    float encoder_offset_rad;  /**< electrical angle of the d axis at count 0, [0, 2 pi) */
+    int32_t encoder_direction; /**< +1: counts up for positive rotation; -1: down */
+    float dead_time_v;         /**< inverter voltage error per phase (dead time, drops) [V] */
     float j_kgm2;
     float b_nm_s_rad;
-    uint32_t valid;             /**< MC_COMM_HAVE_* */
+    uint32_t valid; /**< MC_COMM_HAVE_* */
 } mc_comm_result_t;
 
 typedef struct {
     mc_comm_cfg_t cfg;
     mc_comm_step_t step;
-    uint32_t sub;               /**< phase within the step */
-    uint32_t n;                 /**< periods in the current phase */
-    uint32_t err;               /**< sticky MC_COMM_ERR_* */
+    uint32_t sub; /**< phase within the step */
+    uint32_t n;   /**< periods in the current phase */
+    uint32_t err; /**< sticky MC_COMM_ERR_* */
     mc_comm_result_t res;
     mc_foc_f32_t foc;
-    float l0_h;                 /**< rough inductance (current loop of the tests) */
+    float l0_h; /**< rough inductance (current loop of the tests) */
     /* square wave */
     float vh_v;
     float sq_sign;
     float prev_i[3];
     mc_ident_avg_f32_t corr[3];
-    float d_axis[2];            /**< ripple of the alpha and beta tries [A] */
+    float d_axis[2]; /**< ripple of the alpha and beta tries [A] */
     float d_phase[2][3];
     /* encoder */
     float theta_cmd_rad;
     float theta0_rad;
     float i_cmd_a;
     uint32_t last_count;
-    int32_t count_acc;          /**< unwrapped counts since the sweep began */
+    int32_t count_acc; /**< unwrapped counts since the sweep began */
     int32_t count_fwd;
     int32_t count_back;
     bool have_count;
@@ -181,12 +182,12 @@ typedef struct {
     float w_acc_mean, a_acc;
     float iq_spin_a;
     float t_s;
-    float t_fit0_s;             /**< coast: when the flux fit began (< 0: not yet) */
-    uint32_t quiet_n;           /**< coast: periods the current has stayed near zero */
+    float t_fit0_s;   /**< coast: when the flux fit began (< 0: not yet) */
+    uint32_t quiet_n; /**< coast: periods the current has stayed near zero */
     float vbus_v;
-    float w_m_rad_s;            /**< own speed estimate from the counts (forward > 0) */
-    uint8_t progress_pct;       /**< rough progress of the sequence, 0..100 */
-    mc_drive_ctrl_t ops;        /**< the plug-in table (mc_comm_ops) */
+    float w_m_rad_s;      /**< own speed estimate from the counts (forward > 0) */
+    uint8_t progress_pct; /**< rough progress of the sequence, 0..100 */
+    mc_drive_ctrl_t ops;  /**< the plug-in table (mc_comm_ops) */
 } mc_comm_t;
 
 /** Validate cfg and initialise c (step IDLE, no result). */
@@ -198,7 +199,10 @@ void mc_comm_abort(mc_comm_t *c);
 /** The plug-in to attach (outputs PWM3, needs the encoder). */
 const mc_drive_ctrl_t *mc_comm_ops(mc_comm_t *c);
 
-static inline bool mc_comm_done(const mc_comm_t *c) { return c->step == MC_COMM_STEP_DONE; }
+static inline bool mc_comm_done(const mc_comm_t *c)
+{
+    return c->step == MC_COMM_STEP_DONE;
+}
 
 /**
  * Check the result and write it into the drive configuration: motor

@@ -262,8 +262,8 @@ int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p)
             return -EIO;
         }
     }
-    if ((mc_hal_flash_program(s->cfg.flash, s->cfg.sector[target], off, s->rec,
-                              MC_CFG_REC_WORDS) != 0) ||
+    if ((mc_hal_flash_program(s->cfg.flash, s->cfg.sector[target], off, s->rec, MC_CFG_REC_WORDS) !=
+         0) ||
         (check_record(s, target, off, &words, hdr) != 0) || (words != MC_CFG_REC_WORDS) ||
         (hdr[2] != s->rec[2])) {
         s->append_off[target] = MC_CFG_OFF_NONE; /* not again before an erase */

@@ -53,13 +53,13 @@
 extern "C" {
 #endif
 
-#define MC_CFG_MAGIC 0x4746434Du  /**< "MCFG" in memory order */
-#define MC_CFG_FORMAT 1u
-#define MC_CFG_HDR_WORDS 4u
-#define MC_CFG_ENTRIES_MAX 1024u   /**< a header announcing more is not a record */
+#define MC_CFG_MAGIC       0x4746434Du /**< "MCFG" in memory order */
+#define MC_CFG_FORMAT      1u
+#define MC_CFG_HDR_WORDS   4u
+#define MC_CFG_ENTRIES_MAX 1024u /**< a header announcing more is not a record */
 /** Words of a record this firmware writes. */
 #define MC_CFG_REC_WORDS (MC_CFG_HDR_WORDS + 2u * MC_PARAM_STORED_COUNT + 1u)
-#define MC_CFG_OFF_NONE 0xFFFFFFFFu
+#define MC_CFG_OFF_NONE  0xFFFFFFFFu
 
 /** How the configuration was obtained at boot. */
 typedef enum {
@@ -74,21 +74,21 @@ typedef enum {
 
 typedef struct {
     const mc_hal_flash_t *flash;
-    uint32_t sector[2];       /**< A and B: two distinct sectors of the flash */
+    uint32_t sector[2]; /**< A and B: two distinct sectors of the flash */
 } mc_cfg_store_cfg_t;
 
 typedef struct {
     mc_cfg_store_cfg_t cfg;
     uint32_t sector_bytes[2];
-    uint32_t seq;             /**< largest sequence number of a valid record (0: none) */
-    int32_t active;           /**< 0/1: the sector of the newest valid record; -1: none */
-    uint32_t newest_off;      /**< its offset */
-    uint32_t append_off[2];   /**< next free offset per sector, MC_CFG_OFF_NONE if unusable */
+    uint32_t seq;           /**< largest sequence number of a valid record (0: none) */
+    int32_t active;         /**< 0/1: the sector of the newest valid record; -1: none */
+    uint32_t newest_off;    /**< its offset */
+    uint32_t append_off[2]; /**< next free offset per sector, MC_CFG_OFF_NONE if unusable */
     bool scanned;
-    mc_cfg_boot_t boot;       /**< result of the last load */
-    uint32_t boot_dropped;    /**< entries of the loaded record with unknown ids */
-    uint32_t boot_missing;    /**< parameters the loaded record lacked (defaulted) */
-    uint32_t saves;           /**< successful saves since init */
+    mc_cfg_boot_t boot;             /**< result of the last load */
+    uint32_t boot_dropped;          /**< entries of the loaded record with unknown ids */
+    uint32_t boot_missing;          /**< parameters the loaded record lacked (defaulted) */
+    uint32_t saves;                 /**< successful saves since init */
     uint32_t rec[MC_CFG_REC_WORDS]; /**< record being written */
 } mc_cfg_store_t;
 

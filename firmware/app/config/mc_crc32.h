@@ -21,7 +21,10 @@ extern "C" {
  *  mc_crc32_final. */
 uint32_t mc_crc32_update(uint32_t state, const void *data, size_t len);
 
-static inline uint32_t mc_crc32_final(uint32_t state) { return state ^ 0xFFFFFFFFu; }
+static inline uint32_t mc_crc32_final(uint32_t state)
+{
+    return state ^ 0xFFFFFFFFu;
+}
 
 /** CRC-32 of one buffer. */
 static inline uint32_t mc_crc32(const void *data, size_t len)

@@ -55,15 +55,15 @@ typedef struct {
 } mc_param_hook_t;
 
 typedef struct {
-    mc_params_t active;       /**< the configuration in effect */
-    mc_params_t staged;       /**< writes land here */
-    bool pending;             /**< staged differs from active (written since APPLY) */
+    mc_params_t active; /**< the configuration in effect */
+    mc_params_t staged; /**< writes land here */
+    bool pending;       /**< staged differs from active (written since APPLY) */
     mc_drive_t *drive;
     const mc_hal_t *hal;
-    mc_cfg_store_t *store;    /**< NULL: SAVE answers STORE */
-    uint8_t boot_status;      /**< mc_cfg_boot_t of the boot */
-    mc_param_hook_t hook;     /**< optional (fields NULL) */
-    uint32_t applied;         /**< successful APPLYs */
+    mc_cfg_store_t *store; /**< NULL: SAVE answers STORE */
+    uint8_t boot_status;   /**< mc_cfg_boot_t of the boot */
+    mc_param_hook_t hook;  /**< optional (fields NULL) */
+    uint32_t applied;      /**< successful APPLYs */
 } mc_param_srv_t;
 
 /**

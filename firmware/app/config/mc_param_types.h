@@ -27,13 +27,13 @@ typedef union {
 
 /** One row of the parameter table. */
 typedef struct {
-    uint16_t id;           /**< CAN parameter id */
-    uint8_t type;          /**< MC_PARAM_TYPE_* */
-    uint8_t access;        /**< MC_PARAM_ACCESS_* */
-    uint16_t offset;       /**< byte offset in mc_params_t, or MC_PARAM_NO_FIELD */
-    mc_param_value_t min;  /**< inclusive */
-    mc_param_value_t max;  /**< inclusive */
-    mc_param_value_t def;  /**< default */
+    uint16_t id;          /**< CAN parameter id */
+    uint8_t type;         /**< MC_PARAM_TYPE_* */
+    uint8_t access;       /**< MC_PARAM_ACCESS_* */
+    uint16_t offset;      /**< byte offset in mc_params_t, or MC_PARAM_NO_FIELD */
+    mc_param_value_t min; /**< inclusive */
+    mc_param_value_t max; /**< inclusive */
+    mc_param_value_t def; /**< default */
 } mc_param_info_t;
 
 #endif /* MC_PARAM_TYPES_H */

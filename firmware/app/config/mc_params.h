@@ -41,14 +41,15 @@ typedef enum {
 } mc_param_status_t;
 
 /* Whole-configuration errors (bits) of mc_params_validate. */
-#define MC_PARAMS_OK              0u
-#define MC_PARAMS_ERR_NULL        (1u << 0)  /**< NULL argument */
-#define MC_PARAMS_ERR_RANGE       (1u << 1)  /**< a value outside its table range, or not finite */
-#define MC_PARAMS_ERR_SENSE       (1u << 2)  /**< i_max_a or i_trip_a above i_sense_max_a */
-#define MC_PARAMS_ERR_BANDWIDTH   (1u << 3)  /**< current_bw_rad_s / pwm_hz > 0.5 */
-#define MC_PARAMS_ERR_DEAD_TIME   (1u << 4)  /**< dead time above 10 % of the PWM period */
-#define MC_PARAMS_ERR_BITRATE     (1u << 5)  /**< CAN bit rate not 125k, 250k, 500k or 1M */
-#define MC_PARAMS_ERR_DRIVE       (1u << 6)  /**< mc_drive_check_cfg refused the derived
+#define MC_PARAMS_OK            0u
+#define MC_PARAMS_ERR_NULL      (1u << 0) /**< NULL argument */
+#define MC_PARAMS_ERR_RANGE     (1u << 1) /**< a value outside its table range, or not finite */
+#define MC_PARAMS_ERR_SENSE     (1u << 2) /**< i_max_a or i_trip_a above i_sense_max_a */
+#define MC_PARAMS_ERR_BANDWIDTH (1u << 3) /**< current_bw_rad_s / pwm_hz > 0.5 */
+#define MC_PARAMS_ERR_DEAD_TIME (1u << 4) /**< dead time above 10 % of the PWM period */
+#define MC_PARAMS_ERR_BITRATE   (1u << 5) /**< CAN bit rate not 125k, 250k, 500k or 1M */
+#define MC_PARAMS_ERR_DRIVE \
+    (1u << 6) /**< mc_drive_check_cfg refused the derived
                                                   mc_drive_cfg_t */
 
 /** Largest current_bw_rad_s * dt (dt = 1 / pwm_hz): above it the one-period

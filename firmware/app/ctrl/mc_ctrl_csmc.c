@@ -35,8 +35,8 @@ static float ctrl_position(mc_ctrl_csmc_t *c, const mc_drive_meas_t *m)
         c->phi0_rad = mc_wrap_pi_f32(m->theta_m_rad);
     } else {
         /* shortest signed step on the circle of cpr counts */
-        uint32_t fwd = (count >= c->last_count) ? (count - c->last_count)
-                                                : (cpr - (c->last_count - count));
+        uint32_t fwd =
+            (count >= c->last_count) ? (count - c->last_count) : (cpr - (c->last_count - count));
         if (fwd > (cpr / 2u)) {
             c->pos_counts -= (int32_t)(cpr - fwd);
         } else {
@@ -96,8 +96,7 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         tm->in.omega_m_rad_s = m->omega_m_rad_s;
         tm->in.di_dd_a_s = c->di_dd_a_s;
         tm->in.dddphi_d_rad_s3 = c->dddphi_d_rad_s3;
-        if (mc_csmc_hgo_f32_step(&c->ctl, tm->in.e1_a, e2, &tm->in, &tm->out) !=
-            MC_CSMC_ERR_NONE) {
+        if (mc_csmc_hgo_f32_step(&c->ctl, tm->in.e1_a, e2, &tm->in, &tm->out) != MC_CSMC_ERR_NONE) {
             return MC_CTRL_CSMC_ERR_STEP;
         }
     }

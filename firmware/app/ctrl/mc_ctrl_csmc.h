@@ -43,45 +43,45 @@ extern "C" {
 #endif
 
 #define MC_CTRL_CSMC_ERR_NONE     0u
-#define MC_CTRL_CSMC_ERR_NULL     (1u << 0)  /**< a required pointer is NULL */
-#define MC_CTRL_CSMC_ERR_LAW      (1u << 1)  /**< law config rejected (mc_csmc_f32_init tells why) */
-#define MC_CTRL_CSMC_ERR_HGO      (1u << 2)  /**< observer config rejected (mc_hgo_f32_init tells why) */
-#define MC_CTRL_CSMC_ERR_FEEDBACK (1u << 3)  /**< unknown feedback, or STATE without a valid model */
-#define MC_CTRL_CSMC_ERR_DUTY     (1u << 4)  /**< duty_max not in (0, 1] */
-#define MC_CTRL_CSMC_ERR_REF      (1u << 5)  /**< set_ref: a value not finite */
-#define MC_CTRL_CSMC_ERR_ENCODER  (1u << 6)  /**< fast: no encoder reading */
-#define MC_CTRL_CSMC_ERR_VBUS     (1u << 7)  /**< fast: vbus <= 0 or not finite */
-#define MC_CTRL_CSMC_ERR_STEP     (1u << 8)  /**< fast: the law or observer refused an input */
+#define MC_CTRL_CSMC_ERR_NULL     (1u << 0) /**< a required pointer is NULL */
+#define MC_CTRL_CSMC_ERR_LAW      (1u << 1) /**< law config rejected (mc_csmc_f32_init tells why) */
+#define MC_CTRL_CSMC_ERR_HGO      (1u << 2) /**< observer config rejected (mc_hgo_f32_init tells why) */
+#define MC_CTRL_CSMC_ERR_FEEDBACK (1u << 3) /**< unknown feedback, or STATE without a valid model */
+#define MC_CTRL_CSMC_ERR_DUTY     (1u << 4) /**< duty_max not in (0, 1] */
+#define MC_CTRL_CSMC_ERR_REF      (1u << 5) /**< set_ref: a value not finite */
+#define MC_CTRL_CSMC_ERR_ENCODER  (1u << 6) /**< fast: no encoder reading */
+#define MC_CTRL_CSMC_ERR_VBUS     (1u << 7) /**< fast: vbus <= 0 or not finite */
+#define MC_CTRL_CSMC_ERR_STEP     (1u << 8) /**< fast: the law or observer refused an input */
 
 typedef enum {
-    MC_CTRL_CSMC_FB_STATE = 0,  /**< e2' from the encoder speed, e2'' from the model and i_q */
-    MC_CTRL_CSMC_FB_HGO = 1     /**< e2', e2'' from the high-gain observer (output feedback) */
+    MC_CTRL_CSMC_FB_STATE = 0, /**< e2' from the encoder speed, e2'' from the model and i_q */
+    MC_CTRL_CSMC_FB_HGO = 1    /**< e2', e2'' from the high-gain observer (output feedback) */
 } mc_ctrl_csmc_fb_t;
 
 typedef struct {
-    mc_csmc_f32_cfg_t law;      /**< law.dt_s must be the drive's PWM period */
+    mc_csmc_f32_cfg_t law; /**< law.dt_s must be the drive's PWM period */
     mc_ctrl_csmc_fb_t feedback;
-    mc_hgo_f32_cfg_t hgo;       /**< FB_HGO only; hgo.dt_s = law.dt_s */
-    float duty_max;             /**< |duty| limit of each bridge, (0, 1] */
+    mc_hgo_f32_cfg_t hgo; /**< FB_HGO only; hgo.dt_s = law.dt_s */
+    float duty_max;       /**< |duty| limit of each bridge, (0, 1] */
 } mc_ctrl_csmc_cfg_t;
 
 /** Telemetry of the last fast step. */
 typedef struct {
-    float phi_rad;              /**< unwrapped shaft angle [rad] */
-    float i_d_a, i_q_a;         /**< winding currents in the rotor frame [A] */
-    mc_csmc_f32_in_t in;        /**< errors handed to the law */
-    mc_csmc_f32_out_t out;      /**< v_d, v_q, s1, s2 */
-    float v_a_v, v_b_v;         /**< winding voltages asked for [V] */
+    float phi_rad;         /**< unwrapped shaft angle [rad] */
+    float i_d_a, i_q_a;    /**< winding currents in the rotor frame [A] */
+    mc_csmc_f32_in_t in;   /**< errors handed to the law */
+    mc_csmc_f32_out_t out; /**< v_d, v_q, s1, s2 */
+    float v_a_v, v_b_v;    /**< winding voltages asked for [V] */
 } mc_ctrl_csmc_tm_t;
 
 typedef struct {
     mc_ctrl_csmc_cfg_t cfg;
-    mc_csmc_hgo_f32_t ctl;      /**< the law (ctl.law) and, for FB_HGO, the observer */
+    mc_csmc_hgo_f32_t ctl; /**< the law (ctl.law) and, for FB_HGO, the observer */
     float phi_d_rad, dphi_d_rad_s, ddphi_d_rad_s2, dddphi_d_rad_s3, i_dd_a, di_dd_a_s;
     bool have_pos;
     uint32_t last_count;
-    int32_t pos_counts;         /**< counts moved since the first step after reset */
-    float phi0_rad;             /**< encoder angle at the first step after reset, [-pi, pi) */
+    int32_t pos_counts; /**< counts moved since the first step after reset */
+    float phi0_rad;     /**< encoder angle at the first step after reset, [-pi, pi) */
     mc_ctrl_csmc_tm_t tm;
     mc_drive_ctrl_t ops;
 } mc_ctrl_csmc_t;

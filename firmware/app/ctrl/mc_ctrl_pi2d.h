@@ -37,18 +37,19 @@
 extern "C" {
 #endif
 
-#define MC_CTRL_PI2D_ERR_NONE   0u
-#define MC_CTRL_PI2D_ERR_NULL   (1u << 0)  /**< NULL pointer */
-#define MC_CTRL_PI2D_ERR_LAW    (1u << 1)  /**< the PI2D config was rejected (see law_err) */
-#define MC_CTRL_PI2D_ERR_LIMIT  (1u << 2)  /**< unknown modulator limit mode */
-#define MC_CTRL_PI2D_ERR_REF    (1u << 3)  /**< non-finite reference */
-#define MC_CTRL_PI2D_ERR_MEAS   (1u << 4)  /**< fast step without encoder or with bad vbus */
-#define MC_CTRL_PI2D_ERR_STEP   (1u << 5)  /**< the law refused its step (non-finite input) */
-#define MC_CTRL_PI2D_ERR_ADVANCE (1u << 6) /**< angle_advance_periods not finite or outside [0, 4] */
+#define MC_CTRL_PI2D_ERR_NONE  0u
+#define MC_CTRL_PI2D_ERR_NULL  (1u << 0) /**< NULL pointer */
+#define MC_CTRL_PI2D_ERR_LAW   (1u << 1) /**< the PI2D config was rejected (see law_err) */
+#define MC_CTRL_PI2D_ERR_LIMIT (1u << 2) /**< unknown modulator limit mode */
+#define MC_CTRL_PI2D_ERR_REF   (1u << 3) /**< non-finite reference */
+#define MC_CTRL_PI2D_ERR_MEAS  (1u << 4) /**< fast step without encoder or with bad vbus */
+#define MC_CTRL_PI2D_ERR_STEP  (1u << 5) /**< the law refused its step (non-finite input) */
+#define MC_CTRL_PI2D_ERR_ADVANCE \
+    (1u << 6) /**< angle_advance_periods not finite or outside [0, 4] */
 
 typedef struct {
-    mc_pi2d_f32_cfg_t law;          /**< plant, gains, limits; law.dt_s = PWM period */
-    mc_svpwm_limit_t limit_mode;    /**< modulator limit */
+    mc_pi2d_f32_cfg_t law;       /**< plant, gains, limits; law.dt_s = PWM period */
+    mc_svpwm_limit_t limit_mode; /**< modulator limit */
     /** Delay compensation of the output frame, in PWM periods: the inverse
      *  Park uses theta_e + angle_advance_periods * p * omega_ref * dt. The
      *  voltage computed from the sample at t_k acts over
@@ -65,27 +66,27 @@ typedef struct {
 
 /** Telemetry of the last fast step. */
 typedef struct {
-    float id_a, iq_a;               /**< measured dq currents [A] */
-    float id_ref_a, iq_ref_a;       /**< x1*, x2* [A] */
-    float vd_v, vq_v;               /**< law output [V] (before the modulator) */
-    float omega_ref_rad_s;          /**< x3* [rad/s] */
-    float e4_rad;                   /**< position error [rad] */
-    float theta_f_rad;              /**< dirty derivative of e4 [rad] */
-    float nu_nm;                    /**< load-torque estimate [N m] */
-    uint32_t svpwm_flags;           /**< MC_SVPWM_FLAG_* of the step */
+    float id_a, iq_a;         /**< measured dq currents [A] */
+    float id_ref_a, iq_ref_a; /**< x1*, x2* [A] */
+    float vd_v, vq_v;         /**< law output [V] (before the modulator) */
+    float omega_ref_rad_s;    /**< x3* [rad/s] */
+    float e4_rad;             /**< position error [rad] */
+    float theta_f_rad;        /**< dirty derivative of e4 [rad] */
+    float nu_nm;              /**< load-torque estimate [N m] */
+    uint32_t svpwm_flags;     /**< MC_SVPWM_FLAG_* of the step */
 } mc_ctrl_pi2d_tm_t;
 
 typedef struct {
     mc_ctrl_pi2d_cfg_t cfg;
     mc_pi2d_f32_t law;
-    uint32_t law_err;               /**< last error bits of the law (init or step) */
+    uint32_t law_err; /**< last error bits of the law (init or step) */
     float omega_ref_rad_s, alpha_ref_rad_s2, jerk_ref_rad_s3, id_ref_a;
-    float theta_ref_rad;            /**< integrated reference, [0, 2 pi) (common origin) */
-    float theta_rel_rad;            /**< unwrapped measured position (common origin) */
-    float theta_m_prev_rad;         /**< last encoder angle [0, 2 pi) */
+    float theta_ref_rad;    /**< integrated reference, [0, 2 pi) (common origin) */
+    float theta_rel_rad;    /**< unwrapped measured position (common origin) */
+    float theta_m_prev_rad; /**< last encoder angle [0, 2 pi) */
     bool have_prev;
     mc_ctrl_pi2d_tm_t tm;
-    mc_drive_ctrl_t ops;            /**< the table handed to mc_drive_attach_ctrl */
+    mc_drive_ctrl_t ops; /**< the table handed to mc_drive_attach_ctrl */
 } mc_ctrl_pi2d_t;
 
 /** Validate cfg, initialise c and its ops table (outputs PWM3, needs the

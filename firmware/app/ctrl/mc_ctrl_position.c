@@ -138,8 +138,7 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     const float x = meas_rel(c, count, cpr);
     const float e_pos = r.x_rad - x;
     const float w_cmd = clampf(r.v_rad_s + (c->cfg.pos_kp_per_s * e_pos), c->cfg.vel_limit_rad_s);
-    const float ff = ((c->cfg.j_kgm2 * a_ff) + (c->cfg.b_nm_s_rad * r.v_rad_s)) /
-                     c->cfg.kt_nm_a;
+    const float ff = ((c->cfg.j_kgm2 * a_ff) + (c->cfg.b_nm_s_rad * r.v_rad_s)) / c->cfg.kt_nm_a;
     float iq_ref;
     (void)mc_pi_f32_step_ff(&c->vel_pi, w_cmd - m->omega_m_rad_s, ff, &iq_ref);
 
@@ -167,8 +166,8 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
 
     c->tm.turns = c->turns;
     c->tm.count = count;
-    c->tm.theta_m_rad = ((float)c->turns * MC_TWO_PI_F32) +
-                        ((float)count * (MC_TWO_PI_F32 / (float)cpr));
+    c->tm.theta_m_rad =
+        ((float)c->turns * MC_TWO_PI_F32) + ((float)count * (MC_TWO_PI_F32 / (float)cpr));
     c->tm.theta_ref_rad = ((float)c->base_turns * MC_TWO_PI_F32) + r.x_rad;
     c->tm.pos_err_rad = e_pos;
     c->tm.omega_ref_rad_s = r.v_rad_s;
@@ -189,7 +188,7 @@ static uint32_t ctrl_stop(void *ctx, float decel_rad_s2)
     }
     c->ack_seq = c->req_seq; /* a pending target no longer applies */
     return (mc_traj_f32_stop(&c->traj, decel_rad_s2) == 0u) ? MC_CTRL_POS_ERR_NONE
-                                                             : MC_CTRL_POS_ERR_REF;
+                                                            : MC_CTRL_POS_ERR_REF;
 }
 
 static bool nonneg_finite(float x)
@@ -218,9 +217,8 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
     }
     if (!(mc_isfinite_f32(cfg->vel_limit_rad_s) && (cfg->vel_limit_rad_s > 0.0f)) ||
         !(mc_isfinite_f32(cfg->iq_max_a) && (cfg->iq_max_a > 0.0f)) ||
-        !(mc_isfinite_f32(cfg->kt_nm_a) && (cfg->kt_nm_a > 0.0f)) ||
-        !nonneg_finite(cfg->j_kgm2) || !nonneg_finite(cfg->b_nm_s_rad) ||
-        (cfg->pole_pairs == 0u)) {
+        !(mc_isfinite_f32(cfg->kt_nm_a) && (cfg->kt_nm_a > 0.0f)) || !nonneg_finite(cfg->j_kgm2) ||
+        !nonneg_finite(cfg->b_nm_s_rad) || (cfg->pole_pairs == 0u)) {
         err |= MC_CTRL_POS_ERR_LIMIT;
     }
     mc_pi_f32_t pi;

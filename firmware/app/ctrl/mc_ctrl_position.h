@@ -45,47 +45,49 @@
 extern "C" {
 #endif
 
-#define MC_CTRL_POS_ERR_NONE  0u
-#define MC_CTRL_POS_ERR_NULL  (1u << 0) /**< NULL pointer */
-#define MC_CTRL_POS_ERR_FOC   (1u << 1) /**< current-loop config rejected, or its step failed */
-#define MC_CTRL_POS_ERR_TRAJ  (1u << 2) /**< trajectory config rejected, or a setpoint refused */
-#define MC_CTRL_POS_ERR_GAIN  (1u << 3) /**< a loop gain negative / not finite, kp_pos dt > 1,
+#define MC_CTRL_POS_ERR_NONE 0u
+#define MC_CTRL_POS_ERR_NULL (1u << 0) /**< NULL pointer */
+#define MC_CTRL_POS_ERR_FOC  (1u << 1) /**< current-loop config rejected, or its step failed */
+#define MC_CTRL_POS_ERR_TRAJ (1u << 2) /**< trajectory config rejected, or a setpoint refused */
+#define MC_CTRL_POS_ERR_GAIN \
+    (1u << 3) /**< a loop gain negative / not finite, kp_pos dt > 1,
                                              ff_lead_s outside [0, 0.1] */
-#define MC_CTRL_POS_ERR_LIMIT (1u << 4) /**< vel_limit or iq_max <= 0, not finite; kt <= 0;
+#define MC_CTRL_POS_ERR_LIMIT \
+    (1u << 4)                          /**< vel_limit or iq_max <= 0, not finite; kt <= 0;
                                              J or B < 0 */
-#define MC_CTRL_POS_ERR_MEAS  (1u << 5) /**< fast step without encoder, cpr 0 or bad vbus */
-#define MC_CTRL_POS_ERR_REF   (1u << 6) /**< non-finite setpoint or limit: refused */
+#define MC_CTRL_POS_ERR_MEAS (1u << 5) /**< fast step without encoder, cpr 0 or bad vbus */
+#define MC_CTRL_POS_ERR_REF  (1u << 6) /**< non-finite setpoint or limit: refused */
 
 typedef struct {
-    mc_foc_f32_cfg_t foc;           /**< current loop (as the drive's); foc.dt_s = PWM period */
-    uint32_t pole_pairs;            /**< for the electrical speed of the decoupling, >= 1 */
-    mc_traj_f32_cfg_t traj;         /**< trajectory limits and input filter; traj.dt_s = foc.dt_s */
-    float pos_kp_per_s;             /**< position P gain [(rad/s)/rad], kp dt <= 1 */
-    float vel_kp_a_s_rad;           /**< velocity PI proportional gain [A/(rad/s)] */
-    float vel_ki_a_rad;             /**< velocity PI integral gain [A/rad] */
-    float vel_limit_rad_s;          /**< bound of the velocity command [rad/s] */
-    float iq_max_a;                 /**< q current limit [A] */
-    float kt_nm_a;                  /**< torque constant for the feed-forward [N m/A] */
-    float j_kgm2;                   /**< inertia for the torque feed-forward [kg m^2], >= 0 */
-    float ff_lead_s;                /**< the torque feed-forward takes the trajectory's
+    mc_foc_f32_cfg_t foc;   /**< current loop (as the drive's); foc.dt_s = PWM period */
+    uint32_t pole_pairs;    /**< for the electrical speed of the decoupling, >= 1 */
+    mc_traj_f32_cfg_t traj; /**< trajectory limits and input filter; traj.dt_s = foc.dt_s */
+    float pos_kp_per_s;     /**< position P gain [(rad/s)/rad], kp dt <= 1 */
+    float vel_kp_a_s_rad;   /**< velocity PI proportional gain [A/(rad/s)] */
+    float vel_ki_a_rad;     /**< velocity PI integral gain [A/rad] */
+    float vel_limit_rad_s;  /**< bound of the velocity command [rad/s] */
+    float iq_max_a;         /**< q current limit [A] */
+    float kt_nm_a;          /**< torque constant for the feed-forward [N m/A] */
+    float j_kgm2;           /**< inertia for the torque feed-forward [kg m^2], >= 0 */
+    float ff_lead_s;        /**< the torque feed-forward takes the trajectory's
                                          acceleration this far ahead [s], [0, 0.1]: about the
                                          current loop's lag 1/bw plus the PWM delay */
-    float b_nm_s_rad;               /**< viscous friction for the feed-forward [N m s/rad], >= 0 */
+    float b_nm_s_rad;       /**< viscous friction for the feed-forward [N m s/rad], >= 0 */
 } mc_ctrl_pos_cfg_t;
 
 /** Telemetry of the last fast step. */
 typedef struct {
-    int32_t turns;                  /**< whole turns of the measured position */
-    uint32_t count;                 /**< count within the turn, 0 .. cpr - 1 */
-    float theta_m_rad;              /**< measured multi-turn position [rad] (float: for display) */
-    float theta_ref_rad;            /**< multi-turn reference [rad] */
-    float pos_err_rad;              /**< theta_ref - theta_m, exact (relative frame) [rad] */
-    float omega_ref_rad_s;          /**< trajectory velocity [rad/s] */
-    float alpha_ref_rad_s2;         /**< trajectory acceleration [rad/s^2] */
-    float omega_cmd_rad_s;          /**< velocity command after the position loop [rad/s] */
-    float iq_ref_a;                 /**< velocity-loop output [A] */
-    float id_a, iq_a;               /**< measured dq currents [A] */
-    bool done;                      /**< trajectory finished (reference at rest on the target) */
+    int32_t turns;          /**< whole turns of the measured position */
+    uint32_t count;         /**< count within the turn, 0 .. cpr - 1 */
+    float theta_m_rad;      /**< measured multi-turn position [rad] (float: for display) */
+    float theta_ref_rad;    /**< multi-turn reference [rad] */
+    float pos_err_rad;      /**< theta_ref - theta_m, exact (relative frame) [rad] */
+    float omega_ref_rad_s;  /**< trajectory velocity [rad/s] */
+    float alpha_ref_rad_s2; /**< trajectory acceleration [rad/s^2] */
+    float omega_cmd_rad_s;  /**< velocity command after the position loop [rad/s] */
+    float iq_ref_a;         /**< velocity-loop output [A] */
+    float id_a, iq_a;       /**< measured dq currents [A] */
+    bool done;              /**< trajectory finished (reference at rest on the target) */
 } mc_ctrl_pos_tm_t;
 
 typedef struct {
@@ -98,7 +100,7 @@ typedef struct {
     bool have_prev;
     uint32_t count_prev;
     int32_t turns;
-    int32_t base_turns;             /**< the frame of the trajectory: base_turns * 2 pi */
+    int32_t base_turns; /**< the frame of the trajectory: base_turns * 2 pi */
     /* latched setpoints (written by the setters, taken by the fast step) */
     uint32_t req_seq, ack_seq;
     int32_t req_turns;

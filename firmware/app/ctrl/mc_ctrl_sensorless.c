@@ -66,16 +66,14 @@ static uint32_t sls_validate(const mc_ctrl_sls_cfg_t *cfg)
             pos_finite(cfg->if_current_a) && (cfg->align_time_s >= 0.0f) &&
             mc_isfinite_f32(cfg->align_time_s) && pos_finite(cfg->if_accel_rad_s2) &&
             pos_finite(cfg->handover_speed_rad_s) && (cfg->handover_hyst >= 0.0f) &&
-            (cfg->handover_hyst <= 0.9f) && pos_finite(cfg->lock_tol) &&
-            (cfg->lock_tol <= 1.0f) && pos_finite(cfg->if_lock_timeout_s) &&
-            pos_finite(cfg->blend_time_s) &&
+            (cfg->handover_hyst <= 0.9f) && pos_finite(cfg->lock_tol) && (cfg->lock_tol <= 1.0f) &&
+            pos_finite(cfg->if_lock_timeout_s) && pos_finite(cfg->blend_time_s) &&
             (cfg->handover_speed_rad_s < cfg->speed_max_rad_s);
         /* the closed loop must stay a factor 2 above the critical speed
          * (an invalid critical speed is reported by the observer check) */
-        const bool margin_ok =
-            !pos_finite(cfg->omega_crit_m_rad_s) ||
-            ((cfg->handover_speed_rad_s * (1.0f - cfg->handover_hyst)) >
-             (2.0f * cfg->omega_crit_m_rad_s));
+        const bool margin_ok = !pos_finite(cfg->omega_crit_m_rad_s) ||
+                               ((cfg->handover_speed_rad_s * (1.0f - cfg->handover_hyst)) >
+                                (2.0f * cfg->omega_crit_m_rad_s));
         if (!startup_ok || !margin_ok) {
             err |= MC_CTRL_SLS_ERR_STARTUP;
         }
@@ -183,8 +181,7 @@ uint32_t mc_ctrl_sls_set_speed_ref(mc_ctrl_sls_t *c, float omega_m_rad_s)
     if (c == NULL) {
         return MC_CTRL_SLS_ERR_NULL;
     }
-    if (!mc_isfinite_f32(omega_m_rad_s) ||
-        (mc_abs_f32(omega_m_rad_s) > c->cfg.speed_max_rad_s)) {
+    if (!mc_isfinite_f32(omega_m_rad_s) || (mc_abs_f32(omega_m_rad_s) > c->cfg.speed_max_rad_s)) {
         return MC_CTRL_SLS_ERR_REF;
     }
     c->omega_cmd_m_rad_s = omega_m_rad_s;
@@ -256,8 +253,7 @@ static void dead_time_error(const mc_ctrl_sls_t *c, float ia_a, float ib_a, floa
 /* Duty-side dead-time correction (cfg.dead_comp_duty): each leg's duty
  * plus dead_sign(i_x) dead_time / dt, from the latest current sample,
  * clamped to [0, 1]. */
-static void dead_comp_duties(const mc_ctrl_sls_t *c, float ia_a, float ib_a,
-                             mc_drive_out_t *out)
+static void dead_comp_duties(const mc_ctrl_sls_t *c, float ia_a, float ib_a, mc_drive_out_t *out)
 {
     const float kd = c->cfg.dead_time_s / c->cfg.dt_s;
     const float band = c->cfg.dead_band_a;
@@ -412,9 +408,10 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
 
     /* 3. phase logic */
     if (c->phase == MC_CTRL_SLS_ALIGN) {
-        c->i_if_a = (cfg->align_time_s > 0.0f)
-                        ? (cfg->if_current_a * mc_sat_f32(c->t_phase_s / cfg->align_time_s, 0.0f, 1.0f))
-                        : cfg->if_current_a;
+        c->i_if_a =
+            (cfg->align_time_s > 0.0f)
+                ? (cfg->if_current_a * mc_sat_f32(c->t_phase_s / cfg->align_time_s, 0.0f, 1.0f))
+                : cfg->if_current_a;
         if ((c->t_phase_s >= cfg->align_time_s) && (c->omega_cmd_m_rad_s != 0.0f)) {
             c->phase = MC_CTRL_SLS_IF;
             c->dir = sign_f32(c->omega_cmd_m_rad_s);
@@ -430,10 +427,9 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
                              cfg->if_current_a * cfg->dt_s / cfg->blend_time_s);
         if ((mc_abs_f32(c->omega_cmd_m_rad_s) > cfg->handover_speed_rad_s) &&
             (mc_abs_f32(c->omega_if_e_rad_s) >= (0.999f * ho_e))) {
-            const bool locked =
-                (mc_abs_f32(omega_hat_e - c->omega_if_e_rad_s) <=
-                 (cfg->lock_tol * mc_abs_f32(c->omega_if_e_rad_s))) &&
-                ((c->obs.flags & MC_FLUXOBS_ERR_DIVERGED) == 0u);
+            const bool locked = (mc_abs_f32(omega_hat_e - c->omega_if_e_rad_s) <=
+                                 (cfg->lock_tol * mc_abs_f32(c->omega_if_e_rad_s))) &&
+                                ((c->obs.flags & MC_FLUXOBS_ERR_DIVERGED) == 0u);
             if (locked) {
                 handover_to_closed(c, i_al, i_be, theta_hat, omega_hat_e);
             } else {
@@ -459,7 +455,8 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
             (void)mc_pi_f32_step(&c->speed_pi, c->omega_ref_m_rad_s - omega_hat_m, &c->iq_ref_a);
         }
         /* id from the hand-over decays to 0 over blend_time */
-        c->id_ref_a = slew_f32(c->id_ref_a, 0.0f, cfg->if_current_a * cfg->dt_s / cfg->blend_time_s);
+        c->id_ref_a =
+            slew_f32(c->id_ref_a, 0.0f, cfg->if_current_a * cfg->dt_s / cfg->blend_time_s);
         theta_ctrl = theta_hat;
         omega_ctrl = omega_hat_e;
     } else {
@@ -467,16 +464,17 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         float sd;
         float cd;
         if (c->phase == MC_CTRL_SLS_IF) {
-            c->theta_if_e_rad = mc_wrap_pi_f32(c->theta_if_e_rad + (c->omega_if_e_rad_s * cfg->dt_s));
+            c->theta_if_e_rad =
+                mc_wrap_pi_f32(c->theta_if_e_rad + (c->omega_if_e_rad_s * cfg->dt_s));
             if (cfg->if_damping) {
                 /* Active damping of the I-f "spring": a current along the
                  * estimated rotor q axis, -kp_speed (omega_hat - omega_if),
                  * limited to half the I-f current. Not in ALIGN: from
                  * standstill the observer's angle is still the reset guess
                  * (no information at zero speed, Prop. 4 i). */
-                damp_a = mc_sat_f32(-cfg->speed_kp_a_s_rad *
-                                        ((omega_hat_e - c->omega_if_e_rad_s) / pp),
-                                    -0.5f * cfg->if_current_a, 0.5f * cfg->if_current_a);
+                damp_a =
+                    mc_sat_f32(-cfg->speed_kp_a_s_rad * ((omega_hat_e - c->omega_if_e_rad_s) / pp),
+                               -0.5f * cfg->if_current_a, 0.5f * cfg->if_current_a);
             }
         }
         /* rotor q axis seen from the I-f frame: angle theta_hat - theta_if */

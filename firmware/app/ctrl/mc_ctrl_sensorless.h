@@ -86,21 +86,22 @@
 extern "C" {
 #endif
 
-#define MC_CTRL_SLS_ERR_NONE        0u
-#define MC_CTRL_SLS_ERR_NULL        (1u << 0)  /**< a required pointer is NULL */
-#define MC_CTRL_SLS_ERR_MOTOR       (1u << 1)  /**< R, L, flux or pole pairs invalid */
-#define MC_CTRL_SLS_ERR_TIMING      (1u << 2)  /**< dt, speed_div, pwm delay (0..3) invalid */
-#define MC_CTRL_SLS_ERR_OBSERVER    (1u << 3)  /**< observer config rejected (see obs_err) */
-#define MC_CTRL_SLS_ERR_PLL         (1u << 4)  /**< PLL config rejected */
-#define MC_CTRL_SLS_ERR_CURRENT     (1u << 5)  /**< current loop config rejected */
-#define MC_CTRL_SLS_ERR_SPEED       (1u << 6)  /**< speed PI gains / limits / slew invalid */
-#define MC_CTRL_SLS_ERR_STARTUP     (1u << 7)  /**< I-f parameters invalid, or handover too close
+#define MC_CTRL_SLS_ERR_NONE     0u
+#define MC_CTRL_SLS_ERR_NULL     (1u << 0) /**< a required pointer is NULL */
+#define MC_CTRL_SLS_ERR_MOTOR    (1u << 1) /**< R, L, flux or pole pairs invalid */
+#define MC_CTRL_SLS_ERR_TIMING   (1u << 2) /**< dt, speed_div, pwm delay (0..3) invalid */
+#define MC_CTRL_SLS_ERR_OBSERVER (1u << 3) /**< observer config rejected (see obs_err) */
+#define MC_CTRL_SLS_ERR_PLL      (1u << 4) /**< PLL config rejected */
+#define MC_CTRL_SLS_ERR_CURRENT  (1u << 5) /**< current loop config rejected */
+#define MC_CTRL_SLS_ERR_SPEED    (1u << 6) /**< speed PI gains / limits / slew invalid */
+#define MC_CTRL_SLS_ERR_STARTUP \
+    (1u << 7)                               /**< I-f parameters invalid, or handover too close
                                                     to the critical speed */
-#define MC_CTRL_SLS_ERR_DIVERGED    (1u << 8)  /**< run: observer residual out of tolerance */
-#define MC_CTRL_SLS_ERR_NO_LOCK     (1u << 9)  /**< run: start-up did not lock in time */
-#define MC_CTRL_SLS_ERR_FOC         (1u << 10) /**< run: the current loop refused a step */
-#define MC_CTRL_SLS_ERR_MEAS        (1u << 11) /**< run: non-finite measurement */
-#define MC_CTRL_SLS_ERR_REF         (1u << 12) /**< set_speed_ref: NaN/inf or beyond the limit */
+#define MC_CTRL_SLS_ERR_DIVERGED (1u << 8)  /**< run: observer residual out of tolerance */
+#define MC_CTRL_SLS_ERR_NO_LOCK  (1u << 9)  /**< run: start-up did not lock in time */
+#define MC_CTRL_SLS_ERR_FOC      (1u << 10) /**< run: the current loop refused a step */
+#define MC_CTRL_SLS_ERR_MEAS     (1u << 11) /**< run: non-finite measurement */
+#define MC_CTRL_SLS_ERR_REF      (1u << 12) /**< set_speed_ref: NaN/inf or beyond the limit */
 
 typedef enum {
     MC_CTRL_SLS_ALIGN = 0,
@@ -110,50 +111,50 @@ typedef enum {
 
 typedef struct {
     /* motor (non-salient) */
-    float r_ohm;                 /**< stator resistance [ohm] */
-    float l_h;                   /**< stator inductance [H] */
-    float flux_wb;               /**< PM flux linkage (peak) [Wb] */
-    uint32_t pole_pairs;         /**< >= 1 */
+    float r_ohm;         /**< stator resistance [ohm] */
+    float l_h;           /**< stator inductance [H] */
+    float flux_wb;       /**< PM flux linkage (peak) [Wb] */
+    uint32_t pole_pairs; /**< >= 1 */
     /* timing */
-    float dt_s;                  /**< fast step = PWM period [s] */
-    uint32_t pwm_delay_periods;  /**< periods between writing duties and their taking
+    float dt_s;                 /**< fast step = PWM period [s] */
+    uint32_t pwm_delay_periods; /**< periods between writing duties and their taking
                                       effect (1 on a drive that updates at the next
                                       period), 0..3 */
-    uint32_t speed_div;          /**< speed loop every speed_div fast steps, >= 1 */
+    uint32_t speed_div;         /**< speed loop every speed_div fast steps, >= 1 */
     /* inverter voltage error seen by the observer (0: no compensation) */
-    float dead_time_s;           /**< dead time of a bridge leg [s], [0, dt/2) */
-    float dead_band_a;           /**< current over which the dead-time error reverses
+    float dead_time_s;   /**< dead time of a bridge leg [s], [0, dt/2) */
+    float dead_band_a;   /**< current over which the dead-time error reverses
                                       (linear inside), >= 0 [A] */
-    bool dead_comp_duty;         /**< correct the duties instead: each leg's duty plus
+    bool dead_comp_duty; /**< correct the duties instead: each leg's duty plus
                                       sat(i_x / dead_band) dead_time / dt, from the latest
                                       current sample, clamped to [0, 1]; the observer then
                                       takes the commanded voltage as applied. f32 only */
     /* observer */
-    float omega_crit_m_rad_s;    /**< critical speed of the flux observer [rad/s] (sets gamma) */
-    float resid_tol;             /**< divergence monitor tolerance (see mc_fluxobs.h) */
-    float resid_time_s;          /**< divergence monitor time [s] */
-    float pll_bw_rad_s;          /**< PLL bandwidth [rad/s] */
+    float omega_crit_m_rad_s; /**< critical speed of the flux observer [rad/s] (sets gamma) */
+    float resid_tol;          /**< divergence monitor tolerance (see mc_fluxobs.h) */
+    float resid_time_s;       /**< divergence monitor time [s] */
+    float pll_bw_rad_s;       /**< PLL bandwidth [rad/s] */
     /* current loop */
-    float cur_bw_rad_s;          /**< current-loop bandwidth: kp = L bw, ki = R bw */
-    float v_limit_ratio;         /**< fraction of the SVPWM circle used, (0, 1] */
-    float vbus_max_v;            /**< largest DC bus [V] (static PI limit) */
+    float cur_bw_rad_s;  /**< current-loop bandwidth: kp = L bw, ki = R bw */
+    float v_limit_ratio; /**< fraction of the SVPWM circle used, (0, 1] */
+    float vbus_max_v;    /**< largest DC bus [V] (static PI limit) */
     /* speed loop */
-    float speed_kp_a_s_rad;      /**< speed PI kp [A / (rad/s)] */
-    float speed_ki_a_rad;        /**< speed PI ki [A / rad] */
-    float iq_max_a;              /**< torque limit as |iq| [A] */
-    float speed_slew_rad_s2;     /**< reference slew rate (mechanical) [rad/s^2] */
-    float speed_max_rad_s;       /**< largest |reference| accepted [rad/s] */
+    float speed_kp_a_s_rad;  /**< speed PI kp [A / (rad/s)] */
+    float speed_ki_a_rad;    /**< speed PI ki [A / rad] */
+    float iq_max_a;          /**< torque limit as |iq| [A] */
+    float speed_slew_rad_s2; /**< reference slew rate (mechanical) [rad/s^2] */
+    float speed_max_rad_s;   /**< largest |reference| accepted [rad/s] */
     /* start-up */
-    float if_current_a;          /**< I-f current magnitude [A] */
-    float align_time_s;          /**< current ramp before the frequency ramp [s] */
-    float if_accel_rad_s2;       /**< I-f frequency ramp (mechanical) [rad/s^2] */
-    float handover_speed_rad_s;  /**< IF -> CLOSED hand-over speed (mechanical) [rad/s] */
-    float handover_hyst;         /**< back to IF below (1 - hyst) handover, [0, 0.9] */
-    float lock_tol;              /**< |omega_pll - omega_if| <= lock_tol omega_if to hand over */
-    float if_lock_timeout_s;     /**< give up (NO_LOCK) after this long at the hand-over speed */
-    float blend_time_s;          /**< id (or I-f magnitude) ramp after a hand-over [s] */
-    bool lowspeed_fallback;      /**< return to I-f at low speed (normal use: true) */
-    bool if_damping;             /**< I-f active damping from the observer's speed (true:
+    float if_current_a;         /**< I-f current magnitude [A] */
+    float align_time_s;         /**< current ramp before the frequency ramp [s] */
+    float if_accel_rad_s2;      /**< I-f frequency ramp (mechanical) [rad/s^2] */
+    float handover_speed_rad_s; /**< IF -> CLOSED hand-over speed (mechanical) [rad/s] */
+    float handover_hyst;        /**< back to IF below (1 - hyst) handover, [0, 0.9] */
+    float lock_tol;             /**< |omega_pll - omega_if| <= lock_tol omega_if to hand over */
+    float if_lock_timeout_s;    /**< give up (NO_LOCK) after this long at the hand-over speed */
+    float blend_time_s;         /**< id (or I-f magnitude) ramp after a hand-over [s] */
+    bool lowspeed_fallback;     /**< return to I-f at low speed (normal use: true) */
+    bool if_damping;            /**< I-f active damping from the observer's speed (true:
                                       -speed_kp (omega_hat - omega_if) along the estimated
                                       q axis, at most if_current_a / 2) */
 } mc_ctrl_sls_cfg_t;
@@ -161,43 +162,43 @@ typedef struct {
 /** Telemetry of the last fast step. */
 typedef struct {
     mc_ctrl_sls_phase_t phase;
-    float theta_hat_e_rad;       /**< observer angle [rad] */
-    float omega_hat_m_rad_s;     /**< PLL speed, mechanical [rad/s] */
-    float theta_ctrl_e_rad;      /**< angle of the frame the current loop used [rad] */
-    float omega_ref_m_rad_s;     /**< slewed speed reference [rad/s] */
-    float omega_if_m_rad_s;      /**< I-f frame speed [rad/s] */
-    float i_alpha_a, i_beta_a;   /**< currents fed to the observer [A] */
+    float theta_hat_e_rad;             /**< observer angle [rad] */
+    float omega_hat_m_rad_s;           /**< PLL speed, mechanical [rad/s] */
+    float theta_ctrl_e_rad;            /**< angle of the frame the current loop used [rad] */
+    float omega_ref_m_rad_s;           /**< slewed speed reference [rad/s] */
+    float omega_if_m_rad_s;            /**< I-f frame speed [rad/s] */
+    float i_alpha_a, i_beta_a;         /**< currents fed to the observer [A] */
     float v_alpha_obs_v, v_beta_obs_v; /**< voltage fed to the observer [V] */
-    float id_ref_a, iq_ref_a;    /**< current references in the control frame [A] */
-    float id_a, iq_a;            /**< measured currents in the control frame [A] */
-    float obs_resid;             /**< observer residual |e|/flux - 1 */
-    uint32_t handovers;          /**< number of IF -> CLOSED hand-overs */
-    uint32_t fallbacks;          /**< number of CLOSED -> IF returns */
+    float id_ref_a, iq_ref_a;          /**< current references in the control frame [A] */
+    float id_a, iq_a;                  /**< measured currents in the control frame [A] */
+    float obs_resid;                   /**< observer residual |e|/flux - 1 */
+    uint32_t handovers;                /**< number of IF -> CLOSED hand-overs */
+    uint32_t fallbacks;                /**< number of CLOSED -> IF returns */
 } mc_ctrl_sls_tm_t;
 
 typedef struct {
     mc_ctrl_sls_cfg_t cfg;
-    float gamma;                 /**< observer gain from omega_crit [1/(Wb^2 s)] */
+    float gamma; /**< observer gain from omega_crit [1/(Wb^2 s)] */
     mc_fluxobs_f32_t obs;
     mc_spdpll_f32_t pll;
     mc_foc_f32_t foc;
     mc_pi_f32_t speed_pi;
     mc_ctrl_sls_phase_t phase;
-    float omega_cmd_m_rad_s;     /**< requested speed [rad/s] */
-    float omega_ref_m_rad_s;     /**< slewed reference [rad/s] */
+    float omega_cmd_m_rad_s; /**< requested speed [rad/s] */
+    float omega_ref_m_rad_s; /**< slewed reference [rad/s] */
     float theta_if_e_rad;
     float omega_if_e_rad_s;
-    float i_if_a;                /**< present I-f current magnitude [A] */
-    float t_phase_s;             /**< time in the present phase [s] */
-    float t_lockwait_s;          /**< time spent at the hand-over speed waiting for lock */
+    float i_if_a;       /**< present I-f current magnitude [A] */
+    float t_phase_s;    /**< time in the present phase [s] */
+    float t_lockwait_s; /**< time spent at the hand-over speed waiting for lock */
     float id_ref_a, iq_ref_a;
-    float dir;                   /**< +1 / -1: direction of the I-f ramp */
+    float dir;                      /**< +1 / -1: direction of the I-f ramp */
     float v_hist_a[4], v_hist_b[4]; /**< applied alpha-beta voltage, newest first */
-    float ia_prev_a, ib_prev_a;  /**< phase currents of the previous sample */
+    float ia_prev_a, ib_prev_a;     /**< phase currents of the previous sample */
     uint32_t speed_count;
-    uint32_t obs_err;            /**< observer init error, if any */
+    uint32_t obs_err; /**< observer init error, if any */
     mc_ctrl_sls_tm_t tm;
-    mc_drive_ctrl_t table;       /**< the drive's plug-in table, bound to this instance */
+    mc_drive_ctrl_t table; /**< the drive's plug-in table, bound to this instance */
 } mc_ctrl_sls_t;
 
 /** Validate cfg and initialise. Returns MC_CTRL_SLS_ERR_* bits; on error c

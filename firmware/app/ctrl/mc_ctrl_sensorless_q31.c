@@ -238,8 +238,7 @@ uint32_t mc_ctrl_sls_q31_set_speed_ref(mc_ctrl_sls_q31_t *c, float omega_m_rad_s
     if (c == NULL) {
         return MC_CTRL_SLS_ERR_NULL;
     }
-    if (!mc_isfinite_f32(omega_m_rad_s) ||
-        (mc_abs_f32(omega_m_rad_s) > c->cfg.f.speed_max_rad_s)) {
+    if (!mc_isfinite_f32(omega_m_rad_s) || (mc_abs_f32(omega_m_rad_s) > c->cfg.f.speed_max_rad_s)) {
         return MC_CTRL_SLS_ERR_REF;
     }
     c->omega_cmd = slsq_q(omega_m_rad_s * (float)c->cfg.f.pole_pairs, c->cfg.omega_base_e_rad_s);
@@ -460,10 +459,10 @@ uint32_t mc_ctrl_sls_q31_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_
 
     /* 3. phase logic */
     if (c->phase == MC_CTRL_SLS_ALIGN) {
-        c->i_if = (c->n_phase >= c->align_steps)
-                      ? c->if_cur
-                      : (q31_t)(((int64_t)c->if_cur * (int64_t)c->n_phase) /
-                                (int64_t)c->align_steps);
+        c->i_if =
+            (c->n_phase >= c->align_steps)
+                ? c->if_cur
+                : (q31_t)(((int64_t)c->if_cur * (int64_t)c->n_phase) / (int64_t)c->align_steps);
         if ((c->n_phase >= c->align_steps) && (c->omega_cmd != 0)) {
             c->phase = MC_CTRL_SLS_IF;
             c->dir = (c->omega_cmd < 0) ? -1 : 1;
@@ -475,10 +474,9 @@ uint32_t mc_ctrl_sls_q31_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_
         c->omega_if = slsq_slew(c->omega_if, target, c->if_acc_inc);
         c->i_if = slsq_slew(c->i_if, c->if_cur, c->blend_inc);
         if ((mc_q31_abs_sat(c->omega_cmd) > c->ho) && (mc_q31_abs_sat(c->omega_if) >= c->ho_999)) {
-            const bool locked =
-                (mc_q31_abs_sat(mc_q31_sub_sat(omega_hat, c->omega_if)) <=
-                 mc_q31_mul(c->lock_tol, mc_q31_abs_sat(c->omega_if))) &&
-                ((c->obs.flags & MC_FLUXOBS_ERR_DIVERGED) == 0u);
+            const bool locked = (mc_q31_abs_sat(mc_q31_sub_sat(omega_hat, c->omega_if)) <=
+                                 mc_q31_mul(c->lock_tol, mc_q31_abs_sat(c->omega_if))) &&
+                                ((c->obs.flags & MC_FLUXOBS_ERR_DIVERGED) == 0u);
             if (locked) {
                 slsq_handover_to_closed(c, i_al, i_be, theta_hat, omega_hat);
             } else {
@@ -511,8 +509,8 @@ uint32_t mc_ctrl_sls_q31_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_
         q31_t sd;
         q31_t cd;
         if (c->phase == MC_CTRL_SLS_IF) {
-            c->theta_if = mc_q31_angle_add(
-                c->theta_if, mc_q46_to_q31(mc_q46_mul_q31(c->g_dtheta, c->omega_if)));
+            c->theta_if = mc_q31_angle_add(c->theta_if,
+                                           mc_q46_to_q31(mc_q46_mul_q31(c->g_dtheta, c->omega_if)));
             if (cfg->if_damping) {
                 /* -kp (omega_hat - omega_if) along the estimated q axis,
                  * at most half the I-f current (not in ALIGN) */

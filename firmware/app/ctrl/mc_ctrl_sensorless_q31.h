@@ -67,76 +67,76 @@ extern "C" {
 #define MC_CTRL_SLS_ERR_SCALE (1u << 15)
 
 typedef struct {
-    mc_ctrl_sls_cfg_t f;         /**< as the f32 plug-in */
-    float i_base_a;              /**< current base [A] */
-    float v_base_v;              /**< voltage base [V], >= f.vbus_max_v */
-    float omega_base_e_rad_s;    /**< electrical speed base [rad/s] */
-    float flux_base_wb;          /**< flux base [Wb], > flux (1.5 (flux + L i_base) advised) */
+    mc_ctrl_sls_cfg_t f;      /**< as the f32 plug-in */
+    float i_base_a;           /**< current base [A] */
+    float v_base_v;           /**< voltage base [V], >= f.vbus_max_v */
+    float omega_base_e_rad_s; /**< electrical speed base [rad/s] */
+    float flux_base_wb;       /**< flux base [Wb], > flux (1.5 (flux + L i_base) advised) */
 } mc_ctrl_sls_q31_cfg_t;
 
 /** Telemetry of the last fast step, per unit of the config's bases. */
 typedef struct {
     mc_ctrl_sls_phase_t phase;
-    q31_t theta_hat_e;           /**< observer angle (turn) */
-    q31_t omega_hat;             /**< PLL speed (speed pu) */
-    q31_t theta_ctrl_e;          /**< frame of the current loop (turn) */
-    q31_t omega_ref;             /**< slewed reference (speed pu) */
-    q31_t omega_if;              /**< I-f frame speed (speed pu) */
-    q31_t i_alpha, i_beta;       /**< currents fed to the observer (current pu) */
+    q31_t theta_hat_e;             /**< observer angle (turn) */
+    q31_t omega_hat;               /**< PLL speed (speed pu) */
+    q31_t theta_ctrl_e;            /**< frame of the current loop (turn) */
+    q31_t omega_ref;               /**< slewed reference (speed pu) */
+    q31_t omega_if;                /**< I-f frame speed (speed pu) */
+    q31_t i_alpha, i_beta;         /**< currents fed to the observer (current pu) */
     q31_t v_alpha_obs, v_beta_obs; /**< voltage fed to the observer (voltage pu) */
-    q31_t id_ref, iq_ref;        /**< references in the control frame (current pu) */
-    q31_t id, iq;                /**< measured currents in the control frame (current pu) */
-    q31_t obs_resid;             /**< observer residual |e|/flux - 1 (q31) */
+    q31_t id_ref, iq_ref;          /**< references in the control frame (current pu) */
+    q31_t id, iq;                  /**< measured currents in the control frame (current pu) */
+    q31_t obs_resid;               /**< observer residual |e|/flux - 1 (q31) */
     uint32_t handovers;
     uint32_t fallbacks;
 } mc_ctrl_sls_q31_tm_t;
 
 typedef struct {
     mc_ctrl_sls_q31_cfg_t cfg;
-    float gamma;                 /**< observer gain (as the f32 plug-in) */
+    float gamma; /**< observer gain (as the f32 plug-in) */
     mc_fluxobs_q31_t obs;
     mc_spdpll_q31_t pll;
     mc_foc_q31_t foc;
     mc_pi_q31_t speed_pi;
     /* constants formed at init (per unit) */
-    float inv_i_base, inv_v_base;     /**< measurement conversion (boundary) */
-    q31_t if_cur;                /**< I-f current */
-    q31_t if_half;               /**< if_cur / 2 (damping limit) */
-    q31_t blend_inc;             /**< id / I-f magnitude ramp per step */
-    q31_t slew_inc;              /**< reference slew per step */
-    q31_t if_acc_inc;            /**< I-f speed ramp per step */
-    q31_t ho;                    /**< hand-over speed */
-    q31_t ho_999;                /**< 0.999 of it */
-    q31_t lo;                    /**< fallback speed ho (1 - hyst) */
-    q31_t lock_tol;              /**< q31 fraction */
-    q31_t speed_max;             /**< largest |reference| */
-    uint32_t align_steps;        /**< align_time / dt, rounded */
-    uint32_t lock_timeout_steps; /**< if_lock_timeout / dt, rounded */
-    mc_q46_gain_t g_dtheta;      /**< speed pu -> q31 turn per step: omega_base_e dt / pi */
-    mc_q46_gain_t g_damp;        /**< speed error pu -> current pu: kp omega_base_m / i_base */
-    mc_q46_gain_t g_kp_cur;      /**< current PI kp i_base / v_base (PI presets) */
-    mc_q46_gain_t g_dead_a;      /**< (dead_time / dt) 4/3 (alpha, see the .c) */
-    mc_q46_gain_t g_dead_b;      /**< (dead_time / dt) 2/sqrt(3) (beta) */
-    mc_q46_gain_t g_inv_band;    /**< i_base / dead_band (0: hard sign) */
-    bool dead_on;                /**< dead_time_s > 0 */
-    bool band_on;                /**< linear dead band (else a hard sign) */
+    float inv_i_base, inv_v_base; /**< measurement conversion (boundary) */
+    q31_t if_cur;                 /**< I-f current */
+    q31_t if_half;                /**< if_cur / 2 (damping limit) */
+    q31_t blend_inc;              /**< id / I-f magnitude ramp per step */
+    q31_t slew_inc;               /**< reference slew per step */
+    q31_t if_acc_inc;             /**< I-f speed ramp per step */
+    q31_t ho;                     /**< hand-over speed */
+    q31_t ho_999;                 /**< 0.999 of it */
+    q31_t lo;                     /**< fallback speed ho (1 - hyst) */
+    q31_t lock_tol;               /**< q31 fraction */
+    q31_t speed_max;              /**< largest |reference| */
+    uint32_t align_steps;         /**< align_time / dt, rounded */
+    uint32_t lock_timeout_steps;  /**< if_lock_timeout / dt, rounded */
+    mc_q46_gain_t g_dtheta;       /**< speed pu -> q31 turn per step: omega_base_e dt / pi */
+    mc_q46_gain_t g_damp;         /**< speed error pu -> current pu: kp omega_base_m / i_base */
+    mc_q46_gain_t g_kp_cur;       /**< current PI kp i_base / v_base (PI presets) */
+    mc_q46_gain_t g_dead_a;       /**< (dead_time / dt) 4/3 (alpha, see the .c) */
+    mc_q46_gain_t g_dead_b;       /**< (dead_time / dt) 2/sqrt(3) (beta) */
+    mc_q46_gain_t g_inv_band;     /**< i_base / dead_band (0: hard sign) */
+    bool dead_on;                 /**< dead_time_s > 0 */
+    bool band_on;                 /**< linear dead band (else a hard sign) */
     /* state */
     mc_ctrl_sls_phase_t phase;
-    q31_t omega_cmd;             /**< requested speed (pu) */
-    q31_t omega_ref;             /**< slewed reference (pu) */
-    q31_t theta_if;              /**< I-f frame angle (turn) */
-    q31_t omega_if;              /**< I-f frame speed (pu) */
-    q31_t i_if;                  /**< present I-f magnitude (pu) */
-    uint32_t n_phase;            /**< fast steps in the present phase */
-    uint32_t n_lockwait;         /**< steps at the hand-over speed waiting for lock */
+    q31_t omega_cmd;     /**< requested speed (pu) */
+    q31_t omega_ref;     /**< slewed reference (pu) */
+    q31_t theta_if;      /**< I-f frame angle (turn) */
+    q31_t omega_if;      /**< I-f frame speed (pu) */
+    q31_t i_if;          /**< present I-f magnitude (pu) */
+    uint32_t n_phase;    /**< fast steps in the present phase */
+    uint32_t n_lockwait; /**< steps at the hand-over speed waiting for lock */
     q31_t id_ref, iq_ref;
-    int32_t dir;                 /**< +1 / -1: direction of the I-f ramp */
+    int32_t dir;                    /**< +1 / -1: direction of the I-f ramp */
     q31_t v_hist_a[4], v_hist_b[4]; /**< applied alpha-beta voltage, newest first (pu) */
-    q31_t ia_prev, ib_prev;      /**< phase currents of the previous sample (pu) */
+    q31_t ia_prev, ib_prev;         /**< phase currents of the previous sample (pu) */
     uint32_t speed_count;
-    uint32_t obs_err;            /**< observer init error, if any */
+    uint32_t obs_err; /**< observer init error, if any */
     mc_ctrl_sls_q31_tm_t tm;
-    mc_drive_ctrl_t table;       /**< the drive's plug-in table, bound to this instance */
+    mc_drive_ctrl_t table; /**< the drive's plug-in table, bound to this instance */
 } mc_ctrl_sls_q31_t;
 
 /** Validate cfg (the f32 plug-in's rules and bits, plus _SCALE) and

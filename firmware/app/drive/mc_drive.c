@@ -11,8 +11,7 @@
 
 static bool finite4(float a, float b, float c, float d)
 {
-    return mc_isfinite_f32(a) && mc_isfinite_f32(b) && mc_isfinite_f32(c) &&
-           mc_isfinite_f32(d);
+    return mc_isfinite_f32(a) && mc_isfinite_f32(b) && mc_isfinite_f32(c) && mc_isfinite_f32(d);
 }
 
 /* Open-phase check: both values 0 (off), or i_min in (0, i_max] and a time
@@ -28,8 +27,7 @@ static uint32_t validate_open_phase(const mc_drive_cfg_t *cfg)
         return MC_DRIVE_CFG_OK;
     }
     const float steps = t / cfg->foc.dt_s;
-    if (i_min == 0.0f || !(i_min <= cfg->i_max_a) || !(steps >= 1.0f) ||
-        !(steps <= 16777216.0f)) {
+    if (i_min == 0.0f || !(i_min <= cfg->i_max_a) || !(steps >= 1.0f) || !(steps <= 16777216.0f)) {
         return MC_DRIVE_CFG_ERR_OPEN_PHASE;
     }
     return MC_DRIVE_CFG_OK;
@@ -83,7 +81,7 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
         !mc_isfinite_f32(cfg->i_offset_a[1]) || !mc_isfinite_f32(cfg->i_offset_a[2])) {
         err |= MC_DRIVE_CFG_ERR_OFFSET;
     }
-    const float sup[6] = {cfg->omega_max_rad_s,    cfg->temp_max_c,   cfg->stall_current_frac,
+    const float sup[6] = {cfg->omega_max_rad_s,   cfg->temp_max_c,   cfg->stall_current_frac,
                           cfg->stall_speed_rad_s, cfg->stall_time_s, cfg->i_unbalance_max_a};
     for (unsigned k = 0u; k < 6u; ++k) {
         if (!mc_isfinite_f32(sup[k]) || sup[k] < 0.0f) {
@@ -94,7 +92,7 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
         err |= MC_DRIVE_CFG_ERR_SUPERVISION;
     }
     const float stop[6] = {cfg->stop_decel_rad_s2, cfg->stop_rest_rad_s, cfg->stop_kp_a_s_rad,
-                           cfg->stop_iq_ff_a, cfg->temp_warn_c, cfg->vbus_sag_v};
+                           cfg->stop_iq_ff_a,      cfg->temp_warn_c,     cfg->vbus_sag_v};
     for (unsigned k = 0u; k < 6u; ++k) {
         if (!mc_isfinite_f32(stop[k]) || stop[k] < 0.0f) {
             err |= MC_DRIVE_CFG_ERR_SUPERVISION;
@@ -207,8 +205,7 @@ static void outputs_off(const mc_drive_t *d)
  * no third phase to derive or check. */
 static bool drives_three_phase(const mc_drive_t *d)
 {
-    return d->hal->pwm3 != NULL &&
-           !(d->ctrl != NULL && d->ctrl->outputs == MC_DRIVE_OUT_PWM2);
+    return d->hal->pwm3 != NULL && !(d->ctrl != NULL && d->ctrl->outputs == MC_DRIVE_OUT_PWM2);
 }
 
 /* Safe state: outputs off first, then bookkeeping. */
@@ -241,12 +238,10 @@ static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
      * 32-bit when the product fits (always for cpr * poles < 2^32), which
      * spares the M4F a 64-bit library division. */
     const uint64_t prod = (uint64_t)count * (uint64_t)d->cfg.pole_pairs;
-    const uint32_t e_count = (prod <= 0xFFFFFFFFull)
-                                 ? (uint32_t)prod % cpr
-                                 : (uint32_t)(prod % (uint64_t)cpr);
+    const uint32_t e_count =
+        (prod <= 0xFFFFFFFFull) ? (uint32_t)prod % cpr : (uint32_t)(prod % (uint64_t)cpr);
     d->tm.theta_m_rad = (float)count * rad_per_count;
-    d->tm.theta_e_rad =
-        mc_wrap_2pi_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);
+    d->tm.theta_e_rad = mc_wrap_2pi_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);
 
     /* Speed from the encoder tracking loop (observer/mc_enctrack.h): the
      * angle is finite by construction, so the step cannot fail. */
@@ -293,13 +288,13 @@ static uint32_t encoder_jump_fault(mc_drive_t *d, const mc_hal_encoder_sample_t 
     const uint32_t count = (enc->count < cpr) ? enc->count : enc->count % cpr;
     uint32_t f = 0u;
     if (d->enc_trk.primed && d->cfg.omega_max_rad_s > 0.0f) {
-        uint32_t step = (count >= d->last_count_raw) ? count - d->last_count_raw
-                                                     : d->last_count_raw - count;
+        uint32_t step =
+            (count >= d->last_count_raw) ? count - d->last_count_raw : d->last_count_raw - count;
         if (step > cpr / 2u) {
             step = cpr - step; /* the shorter way round the circle */
         }
-        const float max_step = 2.0f * d->cfg.omega_max_rad_s * d->cfg.foc.dt_s * (float)cpr /
-                                   MC_TWO_PI_F32 + 2.0f;
+        const float max_step =
+            2.0f * d->cfg.omega_max_rad_s * d->cfg.foc.dt_s * (float)cpr / MC_TWO_PI_F32 + 2.0f;
         if ((float)step > max_step) {
             f = MC_DRIVE_FAULT_ENCODER;
         }
@@ -380,7 +375,10 @@ static void regen_limit(mc_drive_t *d, float vbus_v, float *p_id_a, float *p_iq_
 static uint32_t fw_refs(mc_drive_t *d, float vbus_v)
 {
     const mc_fw_f32_in_t in = {
-        .i_cmd_a = d->iq_ref_a, .vd_v = d->tm.foc.vd_v, .vq_v = d->tm.foc.vq_v, .vbus_v = vbus_v,
+        .i_cmd_a = d->iq_ref_a,
+        .vd_v = d->tm.foc.vd_v,
+        .vq_v = d->tm.foc.vq_v,
+        .vbus_v = vbus_v,
     };
     if (mc_fw_f32_step(&d->fw, &in, &d->tm.fw) != MC_FW_ERR_NONE) {
         return MC_DRIVE_FAULT_CONTROL;
@@ -428,18 +426,23 @@ static uint32_t stop_current_step(mc_drive_t *d, const mc_hal_adc_sample_t *s, f
     const float w = d->stop_omega_ref_rad_s;
     d->stop_omega_ref_rad_s = (w > step) ? (w - step) : ((w < -step) ? (w + step) : 0.0f);
     const float wr = d->stop_omega_ref_rad_s;
-    const float ff = (wr > 0.0f) ? -d->cfg.stop_iq_ff_a
-                                 : ((wr < 0.0f) ? d->cfg.stop_iq_ff_a : 0.0f);
+    const float ff =
+        (wr > 0.0f) ? -d->cfg.stop_iq_ff_a : ((wr < 0.0f) ? d->cfg.stop_iq_ff_a : 0.0f);
     float iq = (d->cfg.stop_kp_a_s_rad * (wr - d->enc_trk.omega_rad_s)) + ff;
     const float lim = d->cfg.i_max_a;
     iq = (iq > lim) ? lim : ((iq < -lim) ? -lim : iq);
     d->id_ref_a = 0.0f;
     d->iq_ref_a = iq;
     mc_foc_f32_in_t in = {
-        .ia_a = s->ia_a, .ib_a = s->ib_a, .ic_a = ic, .three_phase = false,
+        .ia_a = s->ia_a,
+        .ib_a = s->ib_a,
+        .ic_a = ic,
+        .three_phase = false,
         .theta_e_rad = d->tm.theta_e_rad,
         .omega_e_rad_s = d->enc_trk.omega_rad_s * (float)d->cfg.pole_pairs,
-        .vbus_v = s->vbus_v, .id_ref_a = 0.0f, .iq_ref_a = iq,
+        .vbus_v = s->vbus_v,
+        .id_ref_a = 0.0f,
+        .iq_ref_a = iq,
     };
     const uint32_t ferr = mc_foc_f32_step(&d->foc, &in, &d->tm.foc);
     if (ferr != MC_FOC_ERR_NONE) {
@@ -447,7 +450,9 @@ static uint32_t stop_current_step(mc_drive_t *d, const mc_hal_adc_sample_t *s, f
         return MC_DRIVE_FAULT_CONTROL;
     }
     return (mc_hal_pwm3_set_duty(d->hal->pwm3, d->tm.foc.duty_a, d->tm.foc.duty_b,
-                                 d->tm.foc.duty_c) != 0) ? MC_DRIVE_FAULT_PWM : 0u;
+                                 d->tm.foc.duty_c) != 0)
+               ? MC_DRIVE_FAULT_PWM
+               : 0u;
 }
 
 /* Begin a controlled stop (or open the bridge at once when none is possible). */
@@ -461,7 +466,8 @@ static void begin_stop(mc_drive_t *d, uint32_t cause)
     const float w0 = mc_abs_f32(d->enc_trk.omega_rad_s);
     bool ok = d->cfg.stop_decel_rad_s2 > 0.0f;
     if (ok && ctrl) {
-        ok = (d->ctrl->stop != NULL) && (d->ctrl->stop(d->ctrl->ctx, d->cfg.stop_decel_rad_s2) == 0u);
+        ok = (d->ctrl->stop != NULL) &&
+             (d->ctrl->stop(d->ctrl->ctx, d->cfg.stop_decel_rad_s2) == 0u);
     }
     if (ok && !ctrl) {
         ok = d->hal->encoder != NULL && d->enc_trk.primed;
@@ -548,8 +554,7 @@ bool mc_drive_fast_step(mc_drive_t *d)
     bool have_enc = false;
     if (d->hal->encoder != NULL) {
         const int erc = mc_hal_encoder_read(d->hal->encoder, &enc);
-        if (erc != 0 || (enc.flags & MC_HAL_ENCODER_FLAG_VALID) == 0u ||
-            enc.counts_per_rev == 0u) {
+        if (erc != 0 || (enc.flags & MC_HAL_ENCODER_FLAG_VALID) == 0u || enc.counts_per_rev == 0u) {
             f |= MC_DRIVE_FAULT_ENCODER;
         } else {
             f |= encoder_jump_fault(d, &enc);
@@ -570,10 +575,15 @@ bool mc_drive_fast_step(mc_drive_t *d)
         }
         regen_limit(d, s.vbus_v, &d->tm.id_ref_a, &d->tm.iq_ref_a);
         mc_foc_f32_in_t in = {
-            .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .three_phase = false,
+            .ia_a = s.ia_a,
+            .ib_a = s.ib_a,
+            .ic_a = ic,
+            .three_phase = false,
             .theta_e_rad = d->tm.theta_e_rad,
             .omega_e_rad_s = d->enc_trk.omega_rad_s * (float)d->cfg.pole_pairs,
-            .vbus_v = s.vbus_v, .id_ref_a = d->tm.id_ref_a, .iq_ref_a = d->tm.iq_ref_a,
+            .vbus_v = s.vbus_v,
+            .id_ref_a = d->tm.id_ref_a,
+            .iq_ref_a = d->tm.iq_ref_a,
         };
         const uint32_t ferr = mc_foc_f32_step(&d->foc, &in, &d->tm.foc);
         if (ferr != MC_FOC_ERR_NONE) {
@@ -588,14 +598,20 @@ bool mc_drive_fast_step(mc_drive_t *d)
         }
     } else if (f == 0u && d->mode == MC_DRIVE_MODE_STOPPING && !d->stop_from_ctrl) {
         f |= stop_current_step(d, &s, ic);
-    } else if (f == 0u && (d->mode == MC_DRIVE_MODE_CTRL ||
-                           d->mode == MC_DRIVE_MODE_STOPPING)) {
+    } else if (f == 0u && (d->mode == MC_DRIVE_MODE_CTRL || d->mode == MC_DRIVE_MODE_STOPPING)) {
         const mc_drive_meas_t m = {
-            .ia_a = s.ia_a, .ib_a = s.ib_a, .ic_a = ic, .vbus_v = s.vbus_v,
-            .have_encoder = have_enc, .theta_m_rad = d->tm.theta_m_rad,
-            .theta_e_rad = d->tm.theta_e_rad, .omega_m_rad_s = d->enc_trk.omega_rad_s,
-            .enc_count = enc.count, .enc_cpr = enc.counts_per_rev,
-            .dt_s = d->cfg.foc.dt_s, .fast_count = d->fast_count,
+            .ia_a = s.ia_a,
+            .ib_a = s.ib_a,
+            .ic_a = ic,
+            .vbus_v = s.vbus_v,
+            .have_encoder = have_enc,
+            .theta_m_rad = d->tm.theta_m_rad,
+            .theta_e_rad = d->tm.theta_e_rad,
+            .omega_m_rad_s = d->enc_trk.omega_rad_s,
+            .enc_count = enc.count,
+            .enc_cpr = enc.counts_per_rev,
+            .dt_s = d->cfg.foc.dt_s,
+            .fast_count = d->fast_count,
         };
         f |= run_ctrl(d, &m);
     }
@@ -651,7 +667,8 @@ void mc_drive_slow_step(mc_drive_t *d)
     }
     stop_supervise(d, slow_dt, &t, t_ok);
     if ((d->mode == MC_DRIVE_MODE_CTRL ||
-         (d->mode == MC_DRIVE_MODE_STOPPING && d->stop_from_ctrl)) && d->ctrl->slow != NULL) {
+         (d->mode == MC_DRIVE_MODE_STOPPING && d->stop_from_ctrl)) &&
+        d->ctrl->slow != NULL) {
         const uint32_t cerr = d->ctrl->slow(d->ctrl->ctx);
         if (cerr != 0u) {
             d->tm.ctrl_err = cerr;
@@ -662,8 +679,7 @@ void mc_drive_slow_step(mc_drive_t *d)
         mc_hal_fault_status_t fs;
         /* A fault status that cannot be read is treated as a fault: the
          * drive must not run without its hardware protection supervised. */
-        if (mc_hal_fault_read(d->hal->fault, &fs) != 0 || fs.active_mask != 0u ||
-            fs.gate_killed) {
+        if (mc_hal_fault_read(d->hal->fault, &fs) != 0 || fs.active_mask != 0u || fs.gate_killed) {
             raise_fault(d, MC_DRIVE_FAULT_HW_INPUT);
         }
     }
@@ -702,8 +718,8 @@ int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl)
             (ctrl->outputs != MC_DRIVE_OUT_PWM3 && ctrl->outputs != MC_DRIVE_OUT_PWM2)) {
             return -EINVAL;
         }
-        const bool bridge = (ctrl->outputs == MC_DRIVE_OUT_PWM2) ? (d->hal->pwm2 != NULL)
-                                                                 : (d->hal->pwm3 != NULL);
+        const bool bridge =
+            (ctrl->outputs == MC_DRIVE_OUT_PWM2) ? (d->hal->pwm2 != NULL) : (d->hal->pwm3 != NULL);
         if (!bridge || (ctrl->needs_encoder && d->hal->encoder == NULL)) {
             return -ENODEV;
         }

@@ -82,72 +82,85 @@ typedef enum {
  * drive to a controlled stop (MC_DRIVE_MODE_STOPPING), then IDLE; CURRENT
  * and CTRL are refused while one is set (cleared by mc_drive_clear_faults
  * once the condition is gone). */
-#define MC_DRIVE_WARN_NONE      0u
-#define MC_DRIVE_WARN_TEMP      (1u << 0) /**< power stage or motor above temp_warn_c */
-#define MC_DRIVE_WARN_VBUS_SAG  (1u << 1) /**< DC bus below vbus_sag_v */
+#define MC_DRIVE_WARN_NONE     0u
+#define MC_DRIVE_WARN_TEMP     (1u << 0) /**< power stage or motor above temp_warn_c */
+#define MC_DRIVE_WARN_VBUS_SAG (1u << 1) /**< DC bus below vbus_sag_v */
 
 /* Why the last controlled stop began (mc_drive_t.stop_cause). */
-#define MC_DRIVE_STOP_NONE      0u
-#define MC_DRIVE_STOP_CMD       1u /**< mc_drive_stop(): a stop command or a command timeout */
-#define MC_DRIVE_STOP_WARNING   2u /**< a warning (MC_DRIVE_WARN_*) */
+#define MC_DRIVE_STOP_NONE    0u
+#define MC_DRIVE_STOP_CMD     1u /**< mc_drive_stop(): a stop command or a command timeout */
+#define MC_DRIVE_STOP_WARNING 2u /**< a warning (MC_DRIVE_WARN_*) */
 
 /* Sticky fault bits (mc_drive_t.faults). */
 #define MC_DRIVE_FAULT_NONE        0u
-#define MC_DRIVE_FAULT_ADC         (1u << 0)  /**< ADC read failed or sample invalid/stale */
-#define MC_DRIVE_FAULT_MEAS_NAN    (1u << 1)  /**< NaN/inf in a measurement */
-#define MC_DRIVE_FAULT_OVERCURRENT (1u << 2)  /**< |phase current| above i_trip_a */
-#define MC_DRIVE_FAULT_VBUS_LOW    (1u << 3)  /**< DC bus below vbus_min_v */
-#define MC_DRIVE_FAULT_VBUS_HIGH   (1u << 4)  /**< DC bus above vbus_max_v */
-#define MC_DRIVE_FAULT_ENCODER     (1u << 5)  /**< encoder read failed or not valid */
-#define MC_DRIVE_FAULT_CONTROL     (1u << 6)  /**< the FOC or field-weakening kernel, or
+#define MC_DRIVE_FAULT_ADC         (1u << 0) /**< ADC read failed or sample invalid/stale */
+#define MC_DRIVE_FAULT_MEAS_NAN    (1u << 1) /**< NaN/inf in a measurement */
+#define MC_DRIVE_FAULT_OVERCURRENT (1u << 2) /**< |phase current| above i_trip_a */
+#define MC_DRIVE_FAULT_VBUS_LOW    (1u << 3) /**< DC bus below vbus_min_v */
+#define MC_DRIVE_FAULT_VBUS_HIGH   (1u << 4) /**< DC bus above vbus_max_v */
+#define MC_DRIVE_FAULT_ENCODER     (1u << 5) /**< encoder read failed or not valid */
+#define MC_DRIVE_FAULT_CONTROL \
+    (1u << 6)                        /**< the FOC or field-weakening kernel, or
                                                    the plugged control law, reported an
                                                    error */
-#define MC_DRIVE_FAULT_PWM         (1u << 7)  /**< the PWM driver refused the duties */
-#define MC_DRIVE_FAULT_HW_INPUT    (1u << 8)  /**< gate-driver fault / over-current comparator,
+#define MC_DRIVE_FAULT_PWM (1u << 7) /**< the PWM driver refused the duties */
+#define MC_DRIVE_FAULT_HW_INPUT \
+    (1u << 8)                              /**< gate-driver fault / over-current comparator,
                                                    or its status unreadable */
-#define MC_DRIVE_FAULT_OVERSPEED   (1u << 9)  /**< |omega_m| above omega_max_rad_s */
-#define MC_DRIVE_FAULT_OVERTEMP    (1u << 10) /**< power stage or motor above its limit,
+#define MC_DRIVE_FAULT_OVERSPEED (1u << 9) /**< |omega_m| above omega_max_rad_s */
+#define MC_DRIVE_FAULT_OVERTEMP \
+    (1u << 10) /**< power stage or motor above its limit,
                                                    or the reading invalid/unreadable */
-#define MC_DRIVE_FAULT_OVERRUN     (1u << 11) /**< fast step finished later than one period
+#define MC_DRIVE_FAULT_OVERRUN \
+    (1u << 11) /**< fast step finished later than one period
                                                    after its ADC trigger (control deadline) */
-#define MC_DRIVE_FAULT_STALL       (1u << 12) /**< CURRENT mode: |iq| >= stall fraction of
+#define MC_DRIVE_FAULT_STALL \
+    (1u << 12) /**< CURRENT mode: |iq| >= stall fraction of
                                                    i_max while |omega_m| < stall speed, for
                                                    longer than stall_time_s */
-#define MC_DRIVE_FAULT_EXTERNAL    (1u << 13) /**< raised by the application through
+#define MC_DRIVE_FAULT_EXTERNAL \
+    (1u << 13) /**< raised by the application through
                                                    mc_drive_raise_fault (no firmware module
                                                    raises it; a CAN command timeout is a
                                                    controlled stop) */
-#define MC_DRIVE_FAULT_UNBALANCED  (1u << 14) /**< three measured phase currents do not sum
+#define MC_DRIVE_FAULT_UNBALANCED \
+    (1u << 14) /**< three measured phase currents do not sum
                                                    to zero: a stuck, offset or failed
                                                    current sensor (needs three shunts) */
-#define MC_DRIVE_FAULT_OPEN_PHASE  (1u << 15) /**< CURRENT mode: a phase carries no current
+#define MC_DRIVE_FAULT_OPEN_PHASE \
+    (1u << 15) /**< CURRENT mode: a phase carries no current
                                                    while its commanded current is large
                                                    (broken conductor or connector, a leg
                                                    that never switches); see open_phase_* */
 
 /* Configuration errors returned by mc_drive_init (bit set). */
-#define MC_DRIVE_CFG_OK            0u
-#define MC_DRIVE_CFG_ERR_NULL      (1u << 0)  /**< NULL drive, config or HAL */
-#define MC_DRIVE_CFG_ERR_HAL       (1u << 1)  /**< HAL lacks adc, or has neither pwm3 nor pwm2 */
-#define MC_DRIVE_CFG_ERR_FOC       (1u << 2)  /**< FOC config rejected (see foc_err) */
-#define MC_DRIVE_CFG_ERR_POLES     (1u << 3)  /**< pole_pairs == 0 */
-#define MC_DRIVE_CFG_ERR_DIV       (1u << 4)  /**< slow_loop_div == 0 */
-#define MC_DRIVE_CFG_ERR_CURRENT   (1u << 5)  /**< i_max_a <= 0, i_trip_a < i_max_a, not finite */
-#define MC_DRIVE_CFG_ERR_VBUS      (1u << 6)  /**< vbus_min_v <= 0, window empty, or not finite */
-#define MC_DRIVE_CFG_ERR_SPEED_PLL (1u << 7)  /**< speed_pll_bw_rad_s <= 0, not finite, or 3 bw dt > 1 */
-#define MC_DRIVE_CFG_ERR_OFFSET    (1u << 8)  /**< encoder_offset_rad or an i_offset_a not finite */
-#define MC_DRIVE_CFG_ERR_SUPERVISION (1u << 9) /**< omega_max, temp_max, a stall
+#define MC_DRIVE_CFG_OK          0u
+#define MC_DRIVE_CFG_ERR_NULL    (1u << 0) /**< NULL drive, config or HAL */
+#define MC_DRIVE_CFG_ERR_HAL     (1u << 1) /**< HAL lacks adc, or has neither pwm3 nor pwm2 */
+#define MC_DRIVE_CFG_ERR_FOC     (1u << 2) /**< FOC config rejected (see foc_err) */
+#define MC_DRIVE_CFG_ERR_POLES   (1u << 3) /**< pole_pairs == 0 */
+#define MC_DRIVE_CFG_ERR_DIV     (1u << 4) /**< slow_loop_div == 0 */
+#define MC_DRIVE_CFG_ERR_CURRENT (1u << 5) /**< i_max_a <= 0, i_trip_a < i_max_a, not finite */
+#define MC_DRIVE_CFG_ERR_VBUS    (1u << 6) /**< vbus_min_v <= 0, window empty, or not finite */
+#define MC_DRIVE_CFG_ERR_SPEED_PLL \
+    (1u << 7) /**< speed_pll_bw_rad_s <= 0, not finite, or 3 bw dt > 1 */
+#define MC_DRIVE_CFG_ERR_OFFSET (1u << 8) /**< encoder_offset_rad or an i_offset_a not finite */
+#define MC_DRIVE_CFG_ERR_SUPERVISION \
+    (1u << 9) /**< omega_max, temp_max, a stall
                                                     parameter or i_unbalance_max
                                                     negative or not finite, or
                                                     stall_current_frac > 1 */
-#define MC_DRIVE_CFG_ERR_OPEN_PHASE (1u << 10) /**< open_phase_i_min_a or open_phase_time_s
+#define MC_DRIVE_CFG_ERR_OPEN_PHASE \
+    (1u << 10) /**< open_phase_i_min_a or open_phase_time_s
                                                     negative or not finite, only one of
                                                     them 0, i_min above i_max_a, or the
                                                     time shorter than one period or
                                                     longer than 2^24 periods */
-#define MC_DRIVE_CFG_ERR_FW        (1u << 13) /**< fw_enable with a cfg.fw mc_fw_f32_init
+#define MC_DRIVE_CFG_ERR_FW \
+    (1u << 13) /**< fw_enable with a cfg.fw mc_fw_f32_init
                                                    refuses, or fw.dt_s != foc.dt_s */
-#define MC_DRIVE_CFG_ERR_BUS_POWER (1u << 12) /**< regen limit or brake chopper thresholds:
+#define MC_DRIVE_CFG_ERR_BUS_POWER \
+    (1u << 12) /**< regen limit or brake chopper thresholds:
                                                    not finite, only one of a pair 0, or not
                                                    vbus_min_v < start < end <= vbus_max_v */
 
@@ -218,59 +231,59 @@ typedef enum {
 
 /** Drive configuration (copied at init). */
 typedef struct {
-    mc_foc_f32_cfg_t foc;       /**< current loop; foc.dt_s is the PWM period [s] */
-    uint32_t pole_pairs;        /**< electrical turns per mechanical turn, >= 1 */
-    float encoder_offset_rad;   /**< electrical angle of the d axis at encoder count 0 [rad] */
-    bool encoder_reversed;      /**< the encoder counts down when the rotor turns positive
+    mc_foc_f32_cfg_t foc;     /**< current loop; foc.dt_s is the PWM period [s] */
+    uint32_t pole_pairs;      /**< electrical turns per mechanical turn, >= 1 */
+    float encoder_offset_rad; /**< electrical angle of the d axis at encoder count 0 [rad] */
+    bool encoder_reversed;    /**< the encoder counts down when the rotor turns positive
                                      (commissioning's encoder_direction = -1): the drive
                                      uses cpr - count */
-    float i_offset_a[3];        /**< current-sensor offsets subtracted from each phase
+    float i_offset_a[3];      /**< current-sensor offsets subtracted from each phase
                                      reading (a, b, c) before any use [A] (commissioning
                                      measures them; 0 on a board whose HAL removes them) */
-    float speed_pll_bw_rad_s;   /**< bandwidth of the encoder tracking loop that
+    float speed_pll_bw_rad_s; /**< bandwidth of the encoder tracking loop that
                                      estimates speed [rad/s] (three poles at
                                      -bw), > 0, with 3 * bw * dt <= 1 */
-    uint32_t slow_loop_div;     /**< slow loop every this many fast steps, >= 1 */
-    float i_max_a;              /**< largest |id_ref|, |iq_ref| accepted [A] */
-    float i_trip_a;             /**< instantaneous over-current trip on any phase [A], >= i_max_a */
-    float vbus_min_v;           /**< under-voltage trip [V] */
-    float vbus_max_v;           /**< over-voltage trip [V] */
+    uint32_t slow_loop_div;   /**< slow loop every this many fast steps, >= 1 */
+    float i_max_a;            /**< largest |id_ref|, |iq_ref| accepted [A] */
+    float i_trip_a;           /**< instantaneous over-current trip on any phase [A], >= i_max_a */
+    float vbus_min_v;         /**< under-voltage trip [V] */
+    float vbus_max_v;         /**< over-voltage trip [V] */
     /* Optional supervision: a value of 0 disables that check (documented as
      * a choice of the integrator, never a default to forget: the SIL and
      * target configurations set all of them). */
-    float omega_max_rad_s;      /**< over-speed trip, mechanical [rad/s]; also bounds
+    float omega_max_rad_s;    /**< over-speed trip, mechanical [rad/s]; also bounds
                                      the plausible encoder step (2x margin) */
-    float temp_max_c;           /**< over-temperature trip for power stage and motor [deg C] */
-    float stall_current_frac;   /**< stall: |iq| >= this * i_max_a ... (0, 1] */
-    float stall_speed_rad_s;    /**< ... while |omega_m| < this ... */
-    float stall_time_s;         /**< ... for longer than this [s] */
-    float i_unbalance_max_a;    /**< largest |ia + ib + ic| with three shunts [A] */
-    float open_phase_i_min_a;   /**< open-phase check: phase reference magnitude above
+    float temp_max_c;         /**< over-temperature trip for power stage and motor [deg C] */
+    float stall_current_frac; /**< stall: |iq| >= this * i_max_a ... (0, 1] */
+    float stall_speed_rad_s;  /**< ... while |omega_m| < this ... */
+    float stall_time_s;       /**< ... for longer than this [s] */
+    float i_unbalance_max_a;  /**< largest |ia + ib + ic| with three shunts [A] */
+    float open_phase_i_min_a; /**< open-phase check: phase reference magnitude above
                                      which the phase must conduct [A], <= i_max_a ... */
-    float open_phase_time_s;    /**< ... net time without conduction that trips [s],
+    float open_phase_time_s;  /**< ... net time without conduction that trips [s],
                                      >= one period; both 0: check off */
     /* Controlled stop (MODE_STOPPING); 0 disables each. */
-    float stop_decel_rad_s2;    /**< deceleration of a controlled stop [rad/s^2]
+    float stop_decel_rad_s2; /**< deceleration of a controlled stop [rad/s^2]
                                      (0: the bridge opens at once) */
-    float stop_rest_rad_s;      /**< |omega_m| at or below which the rotor is at rest [rad/s] */
-    float stop_kp_a_s_rad;      /**< P gain of the CURRENT-mode stop's speed loop [A/(rad/s)] */
-    float stop_iq_ff_a;         /**< q current that decelerates the load at stop_decel
+    float stop_rest_rad_s;   /**< |omega_m| at or below which the rotor is at rest [rad/s] */
+    float stop_kp_a_s_rad;   /**< P gain of the CURRENT-mode stop's speed loop [A/(rad/s)] */
+    float stop_iq_ff_a;      /**< q current that decelerates the load at stop_decel
                                      (J decel / kt) [A]: feed-forward of that loop while
                                      the ramp runs, against the direction of motion */
-    float temp_warn_c;          /**< over-temperature warning: controlled stop [deg C]
+    float temp_warn_c;       /**< over-temperature warning: controlled stop [deg C]
                                      (below temp_max_c, the trip) */
-    float vbus_sag_v;           /**< bus-sag warning: controlled stop below this [V]
+    float vbus_sag_v;        /**< bus-sag warning: controlled stop below this [V]
                                      (above vbus_min_v, the trip) */
     /* Bus-voltage handling while braking (see "Regenerative braking" above
      * mc_drive_cfg_t); each pair both 0: off. */
-    float vbus_regen_start_v;   /**< regen current limit: full regenerative q current
+    float vbus_regen_start_v; /**< regen current limit: full regenerative q current
                                      below this bus voltage [V] ... */
-    float vbus_regen_end_v;     /**< ... none at and above this one [V], <= vbus_max_v */
-    float regen_id_a;           /**< d current injected while the regen limit cuts
+    float vbus_regen_end_v;   /**< ... none at and above this one [V], <= vbus_max_v */
+    float regen_id_a;         /**< d current injected while the regen limit cuts
                                      the q current: (1 - k) * this, >= 0, <= i_max_a;
                                      0: none */
-    float brake_on_v;           /**< brake chopper: duty 0 at and below this [V] ... */
-    float brake_full_v;         /**< ... duty 1 at and above this one [V], <= vbus_max_v */
+    float brake_on_v;         /**< brake chopper: duty 0 at and below this [V] ... */
+    float brake_full_v;       /**< ... duty 1 at and above this one [V], <= vbus_max_v */
     /* MTPA and field weakening (CURRENT mode; kernels/fw/mc_fw.h). With
      * fw_enable, iq_ref_a is the signed current command: the kernel turns it
      * into (id, iq) on the MTPA curve, weakened by the voltage loop, inside
@@ -281,28 +294,28 @@ typedef struct {
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
-#define MC_DRIVE_OUT_PWM3 1u   /**< 3-phase inverter: duty_a..c in [0, 1] */
-#define MC_DRIVE_OUT_PWM2 2u   /**< dual H-bridge (stepper): duty2_a, duty2_b in [-1, 1] */
+#define MC_DRIVE_OUT_PWM3 1u /**< 3-phase inverter: duty_a..c in [0, 1] */
+#define MC_DRIVE_OUT_PWM2 2u /**< dual H-bridge (stepper): duty2_a, duty2_b in [-1, 1] */
 
 /** Measurements handed to a plugged control law, once per fast step. */
 typedef struct {
-    float ia_a, ib_a;           /**< phase (or winding) currents [A] */
-    float ic_a;                 /**< third phase [A]: measured, or -(ia + ib) */
-    float vbus_v;               /**< DC bus [V] */
-    bool have_encoder;          /**< the fields below are valid */
-    float theta_m_rad;          /**< encoder mechanical angle, [0, 2 pi) */
-    float theta_e_rad;          /**< pole_pairs * theta_m + offset, [0, 2 pi) */
-    float omega_m_rad_s;        /**< encoder tracking-loop speed [rad/s] */
-    uint32_t enc_count;         /**< raw count, 0 .. enc_cpr - 1 */
-    uint32_t enc_cpr;           /**< counts per mechanical revolution */
-    float dt_s;                 /**< fast-loop period [s] */
-    uint32_t fast_count;        /**< fast steps since init (wraps) */
+    float ia_a, ib_a;    /**< phase (or winding) currents [A] */
+    float ic_a;          /**< third phase [A]: measured, or -(ia + ib) */
+    float vbus_v;        /**< DC bus [V] */
+    bool have_encoder;   /**< the fields below are valid */
+    float theta_m_rad;   /**< encoder mechanical angle, [0, 2 pi) */
+    float theta_e_rad;   /**< pole_pairs * theta_m + offset, [0, 2 pi) */
+    float omega_m_rad_s; /**< encoder tracking-loop speed [rad/s] */
+    uint32_t enc_count;  /**< raw count, 0 .. enc_cpr - 1 */
+    uint32_t enc_cpr;    /**< counts per mechanical revolution */
+    float dt_s;          /**< fast-loop period [s] */
+    uint32_t fast_count; /**< fast steps since init (wraps) */
 } mc_drive_meas_t;
 
 /** What a control law asks the bridge to do this period. */
 typedef struct {
-    float duty_a, duty_b, duty_c;   /**< MC_DRIVE_OUT_PWM3 */
-    float duty2_a, duty2_b;         /**< MC_DRIVE_OUT_PWM2 */
+    float duty_a, duty_b, duty_c; /**< MC_DRIVE_OUT_PWM3 */
+    float duty2_a, duty2_b;       /**< MC_DRIVE_OUT_PWM2 */
 } mc_drive_out_t;
 
 /**
@@ -313,11 +326,11 @@ typedef struct {
  * table and ctx must outlive the drive's use of them.
  */
 typedef struct {
-    uint32_t outputs;           /**< MC_DRIVE_OUT_PWM3 or MC_DRIVE_OUT_PWM2 */
-    bool needs_encoder;         /**< refuse to attach without an encoder */
-    uint32_t (*reset)(void *ctx);                                    /**< may be NULL */
+    uint32_t outputs;             /**< MC_DRIVE_OUT_PWM3 or MC_DRIVE_OUT_PWM2 */
+    bool needs_encoder;           /**< refuse to attach without an encoder */
+    uint32_t (*reset)(void *ctx); /**< may be NULL */
     uint32_t (*fast)(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out);
-    uint32_t (*slow)(void *ctx);                                     /**< may be NULL */
+    uint32_t (*slow)(void *ctx); /**< may be NULL */
     void *ctx;
     /** Controlled stop (MC_DRIVE_MODE_STOPPING): decelerate to standstill at
      *  decel_rad_s2 [rad/s^2] and hold; fast() keeps running. NULL: the law
@@ -328,16 +341,16 @@ typedef struct {
 /** What the last fast step saw and did (telemetry snapshot). */
 typedef struct {
     float ia_a, ib_a, ic_a, vbus_v;
-    float theta_m_rad;          /**< mechanical angle from the encoder, [0, 2 pi) */
-    float theta_e_rad;          /**< electrical angle used by the FOC [rad] */
-    float omega_m_rad_s;        /**< estimated mechanical speed (encoder PLL) [rad/s] */
+    float theta_m_rad;   /**< mechanical angle from the encoder, [0, 2 pi) */
+    float theta_e_rad;   /**< electrical angle used by the FOC [rad] */
+    float omega_m_rad_s; /**< estimated mechanical speed (encoder PLL) [rad/s] */
     float id_ref_a, iq_ref_a;
-    mc_foc_f32_out_t foc;       /**< currents, voltages and duties of the FOC step */
-    mc_drive_out_t ctrl_out;    /**< last output of the plugged control law */
-    uint32_t ctrl_err;          /**< last non-zero error code of the control law */
-    float regen_scale;          /**< factor applied to a braking iq reference, [0, 1] */
-    float brake_duty;           /**< brake chopper duty written, [0, 1] */
-    mc_fw_f32_out_t fw;         /**< last MTPA/FW step (fw_enable) */
+    mc_foc_f32_out_t foc;    /**< currents, voltages and duties of the FOC step */
+    mc_drive_out_t ctrl_out; /**< last output of the plugged control law */
+    uint32_t ctrl_err;       /**< last non-zero error code of the control law */
+    float regen_scale;       /**< factor applied to a braking iq reference, [0, 1] */
+    float brake_duty;        /**< brake chopper duty written, [0, 1] */
+    mc_fw_f32_out_t fw;      /**< last MTPA/FW step (fw_enable) */
 } mc_drive_telemetry_t;
 
 /** The drive instance (statically allocated by the caller). */
@@ -345,23 +358,23 @@ typedef struct {
     mc_drive_cfg_t cfg;
     const mc_hal_t *hal;
     mc_foc_f32_t foc;
-    mc_fw_f32_t fw;             /**< MTPA / field weakening (cfg.fw_enable) */
+    mc_fw_f32_t fw; /**< MTPA / field weakening (cfg.fw_enable) */
     mc_drive_mode_t mode;
-    float id_ref_a, iq_ref_a;   /**< accepted references [A] */
-    mc_enctrack_f32_t enc_trk;  /**< encoder tracking loop: mechanical angle, speed, accel. */
-    uint32_t fast_count;        /**< fast steps since init (wraps) */
-    uint32_t slow_phase;        /**< fast steps since the last slow step */
-    uint32_t faults;            /**< sticky MC_DRIVE_FAULT_* */
-    uint32_t first_fault;       /**< the bit that tripped first */
-    uint32_t fault_tick;        /**< HAL tick when the first fault was detected */
-    uint32_t foc_err;           /**< last FOC error bits (init or step) */
-    uint32_t deadline_ticks;    /**< one PWM period in HAL ticks (0: no tick source) */
-    uint32_t last_count_raw;    /**< encoder count of the previous step */
-    float stall_time_acc_s;     /**< time spent in the stall condition [s] */
-    uint32_t open_phase_trip;   /**< steps without conduction that trip (0: check off) */
+    float id_ref_a, iq_ref_a;     /**< accepted references [A] */
+    mc_enctrack_f32_t enc_trk;    /**< encoder tracking loop: mechanical angle, speed, accel. */
+    uint32_t fast_count;          /**< fast steps since init (wraps) */
+    uint32_t slow_phase;          /**< fast steps since the last slow step */
+    uint32_t faults;              /**< sticky MC_DRIVE_FAULT_* */
+    uint32_t first_fault;         /**< the bit that tripped first */
+    uint32_t fault_tick;          /**< HAL tick when the first fault was detected */
+    uint32_t foc_err;             /**< last FOC error bits (init or step) */
+    uint32_t deadline_ticks;      /**< one PWM period in HAL ticks (0: no tick source) */
+    uint32_t last_count_raw;      /**< encoder count of the previous step */
+    float stall_time_acc_s;       /**< time spent in the stall condition [s] */
+    uint32_t open_phase_trip;     /**< steps without conduction that trip (0: check off) */
     uint32_t open_phase_count[3]; /**< per phase: net steps without conduction */
-    uint32_t open_phase_mask;   /**< phases found open (bit 0 = a), with the fault */
-    const mc_drive_ctrl_t *ctrl; /**< attached control law, or NULL */
+    uint32_t open_phase_mask;     /**< phases found open (bit 0 = a), with the fault */
+    const mc_drive_ctrl_t *ctrl;  /**< attached control law, or NULL */
     mc_drive_telemetry_t tm;
     uint32_t warnings;          /**< MC_DRIVE_WARN_* (sticky until clear_faults) */
     uint32_t stop_cause;        /**< MC_DRIVE_STOP_* of the last controlled stop */

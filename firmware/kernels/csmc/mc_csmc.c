@@ -106,7 +106,8 @@ uint32_t mc_csmc_f32_init(mc_csmc_f32_t *st, const mc_csmc_f32_cfg_t *cfg)
     }
     /* The sigma kernels need a valid mu and dt to be checked. */
     if (mu_ok && dt_ok) {
-        if (csmc_sigma_init(&cfg->sigma1, cfg->mu1_a, cfg->dt_s, &sv1, &have1) != MC_CSVC_ERR_NONE) {
+        if (csmc_sigma_init(&cfg->sigma1, cfg->mu1_a, cfg->dt_s, &sv1, &have1) !=
+            MC_CSVC_ERR_NONE) {
             err |= MC_CSMC_ERR_SIGMA_1;
         }
         if (csmc_sigma_init(&cfg->sigma2, cfg->mu2_rad_s2, cfg->dt_s, &sv2, &have2) !=
@@ -258,8 +259,8 @@ static bool csmc_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32
     const float t1 = csmc_term(&st->sigma1, st->kind1);
     const float t2 = csmc_term(&st->sigma2, st->kind2);
     const float s1 = in->e1_a + t1;
-    const float s2 = ((st->k1_per_s2 * in->e2_rad) + (st->k2_per_s * in->de2_rad_s)) +
-                     in->dde2_rad_s2 + t2;
+    const float s2 =
+        ((st->k1_per_s2 * in->e2_rad) + (st->k2_per_s * in->de2_rad_s)) + in->dde2_rad_s2 + t2;
     /* One finiteness test for all inputs: e1, e2, e2', e2'' reach s1, s2
      * (t1, t2 are finite), the others are added in; the sum is not finite
      * when one of them is not (or when it overflows, |values| > 1e38). */
@@ -334,8 +335,7 @@ static bool csmc_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32
     return true;
 }
 
-uint32_t mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in,
-                          mc_csmc_f32_out_t *p_out)
+uint32_t mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out)
 {
     if ((st == NULL) || (in == NULL) || (p_out == NULL)) {
         return MC_CSMC_ERR_NULL;

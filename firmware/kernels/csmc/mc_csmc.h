@@ -64,62 +64,66 @@
 extern "C" {
 #endif
 
-#define MC_CSMC_ERR_NONE      0u
-#define MC_CSMC_ERR_NULL      (1u << 0)  /**< a required pointer is NULL */
-#define MC_CSMC_ERR_LAW       (1u << 1)  /**< unknown law or switching function */
-#define MC_CSMC_ERR_SURFACE   (1u << 2)  /**< k1^2, k2^2 <= 0 or not finite (x^2 + k2 x + k1 not Hurwitz) */
-#define MC_CSMC_ERR_MU        (1u << 3)  /**< mu_1 or mu_2 <= 0 or not finite */
-#define MC_CSMC_ERR_SIGMA_1   (1u << 4)  /**< d-axis integrator/servocompensator rejected */
-#define MC_CSMC_ERR_SIGMA_2   (1u << 5)  /**< q-axis integrator/servocompensator rejected */
-#define MC_CSMC_ERR_GAIN_M    (1u << 6)  /**< LAW_CONST: M_i <= 0 or not finite */
-#define MC_CSMC_ERR_MODEL     (1u << 7)  /**< model: K_m, J <= 0, B < 0, N_r = 0, tau_L not finite */
-#define MC_CSMC_ERR_BOUNDS    (1u << 8)  /**< model: not 0 < R^m <= R^ <= R^M, same for L, or q_i <= 0 */
-#define MC_CSMC_ERR_VLIMIT    (1u << 9)  /**< v_limit_v <= 0 or not finite */
-#define MC_CSMC_ERR_DT        (1u << 10) /**< dt_s <= 0 or not finite */
-#define MC_CSMC_ERR_NAN_INPUT (1u << 11) /**< sticky: a step got a non-finite input and was refused */
-#define MC_CSMC_ERR_HGO       (1u << 12) /**< combined step: observer config rejected, or its dt_s != the law's */
+#define MC_CSMC_ERR_NONE 0u
+#define MC_CSMC_ERR_NULL (1u << 0) /**< a required pointer is NULL */
+#define MC_CSMC_ERR_LAW  (1u << 1) /**< unknown law or switching function */
+#define MC_CSMC_ERR_SURFACE \
+    (1u << 2) /**< k1^2, k2^2 <= 0 or not finite (x^2 + k2 x + k1 not Hurwitz) */
+#define MC_CSMC_ERR_MU      (1u << 3) /**< mu_1 or mu_2 <= 0 or not finite */
+#define MC_CSMC_ERR_SIGMA_1 (1u << 4) /**< d-axis integrator/servocompensator rejected */
+#define MC_CSMC_ERR_SIGMA_2 (1u << 5) /**< q-axis integrator/servocompensator rejected */
+#define MC_CSMC_ERR_GAIN_M  (1u << 6) /**< LAW_CONST: M_i <= 0 or not finite */
+#define MC_CSMC_ERR_MODEL   (1u << 7) /**< model: K_m, J <= 0, B < 0, N_r = 0, tau_L not finite */
+#define MC_CSMC_ERR_BOUNDS \
+    (1u << 8) /**< model: not 0 < R^m <= R^ <= R^M, same for L, or q_i <= 0 */
+#define MC_CSMC_ERR_VLIMIT (1u << 9)  /**< v_limit_v <= 0 or not finite */
+#define MC_CSMC_ERR_DT     (1u << 10) /**< dt_s <= 0 or not finite */
+#define MC_CSMC_ERR_NAN_INPUT \
+    (1u << 11) /**< sticky: a step got a non-finite input and was refused */
+#define MC_CSMC_ERR_HGO \
+    (1u << 12) /**< combined step: observer config rejected, or its dt_s != the law's */
 
 typedef enum {
-    MC_CSMC_LAW_MODEL = 0,  /**< eq. (5): nominal F^ and beta functions */
-    MC_CSMC_LAW_CONST = 1   /**< eq. (7)/(11): u = -M psi */
+    MC_CSMC_LAW_MODEL = 0, /**< eq. (5): nominal F^ and beta functions */
+    MC_CSMC_LAW_CONST = 1  /**< eq. (7)/(11): u = -M psi */
 } mc_csmc_law_t;
 
 typedef enum {
-    MC_CSMC_SW_SAT = 0,     /**< continuous SMC: sat(s/mu) */
-    MC_CSMC_SW_SGN = 1      /**< ideal SMC: sgn(s) (sgn(0) = 0) */
+    MC_CSMC_SW_SAT = 0, /**< continuous SMC: sat(s/mu) */
+    MC_CSMC_SW_SGN = 1  /**< ideal SMC: sgn(s) (sgn(0) = 0) */
 } mc_csmc_sw_t;
 
 /** Motor constants and parameter bounds (law MODEL, and e2'' from states). */
 typedef struct {
-    float km_nm_a;         /**< torque / back-EMF constant K_m [N m/A] = [V s/rad], > 0 */
-    float j_kgm2;          /**< inertia [kg m^2], > 0 */
-    float b_nms_rad;       /**< viscous friction [N m s/rad], >= 0 */
-    uint32_t rotor_teeth;  /**< N_r, >= 1 */
-    float tau_load_nm;     /**< load torque known to the law [N m] */
-    float r_nom_ohm;       /**< R^ */
-    float r_min_ohm;       /**< R^m, > 0 */
-    float r_max_ohm;       /**< R^M */
-    float l_nom_h;         /**< L^ */
-    float l_min_h;         /**< L^m, > 0 */
-    float l_max_h;         /**< L^M */
-    float q1_v;            /**< q1 [V], > 0 (paper: 2.1 k0^1 mu1 L^M) */
-    float q2_radh_s3;      /**< q2 [rad H/s^3], > 0 (paper: 2.1 k0^2 mu2 L^M) */
+    float km_nm_a;        /**< torque / back-EMF constant K_m [N m/A] = [V s/rad], > 0 */
+    float j_kgm2;         /**< inertia [kg m^2], > 0 */
+    float b_nms_rad;      /**< viscous friction [N m s/rad], >= 0 */
+    uint32_t rotor_teeth; /**< N_r, >= 1 */
+    float tau_load_nm;    /**< load torque known to the law [N m] */
+    float r_nom_ohm;      /**< R^ */
+    float r_min_ohm;      /**< R^m, > 0 */
+    float r_max_ohm;      /**< R^M */
+    float l_nom_h;        /**< L^ */
+    float l_min_h;        /**< L^m, > 0 */
+    float l_max_h;        /**< L^M */
+    float q1_v;           /**< q1 [V], > 0 (paper: 2.1 k0^1 mu1 L^M) */
+    float q2_radh_s3;     /**< q2 [rad H/s^3], > 0 (paper: 2.1 k0^2 mu2 L^M) */
 } mc_csmc_f32_model_t;
 
 typedef struct {
     mc_csmc_law_t law;
     mc_csmc_sw_t sw;
-    float k1_per_s2;       /**< k1^2 [1/s^2], > 0 */
-    float k2_per_s;        /**< k2^2 [1/s], > 0 */
-    float mu1_a;           /**< boundary layer of s1 [A], > 0 */
-    float mu2_rad_s2;      /**< boundary layer of s2 [rad/s^2], > 0 */
-    mc_csvc_f32_model_t sigma1;  /**< d axis: order 0 = none, else integrator/servocompensator */
-    mc_csvc_f32_model_t sigma2;  /**< q axis: as sigma1 */
-    float m1_v;            /**< LAW_CONST: M1 [V] */
-    float m2_v;            /**< LAW_CONST: M2 [V] */
-    mc_csmc_f32_model_t model;   /**< LAW_MODEL only */
-    float v_limit_v;       /**< output clamp |u_i| <= v_limit_v [V], > 0 */
-    float dt_s;            /**< control period [s], > 0 */
+    float k1_per_s2;            /**< k1^2 [1/s^2], > 0 */
+    float k2_per_s;             /**< k2^2 [1/s], > 0 */
+    float mu1_a;                /**< boundary layer of s1 [A], > 0 */
+    float mu2_rad_s2;           /**< boundary layer of s2 [rad/s^2], > 0 */
+    mc_csvc_f32_model_t sigma1; /**< d axis: order 0 = none, else integrator/servocompensator */
+    mc_csvc_f32_model_t sigma2; /**< q axis: as sigma1 */
+    float m1_v;                 /**< LAW_CONST: M1 [V] */
+    float m2_v;                 /**< LAW_CONST: M2 [V] */
+    mc_csmc_f32_model_t model;  /**< LAW_MODEL only */
+    float v_limit_v;            /**< output clamp |u_i| <= v_limit_v [V], > 0 */
+    float dt_s;                 /**< control period [s], > 0 */
 } mc_csmc_f32_cfg_t;
 
 /** Inputs at one sample. */
@@ -136,10 +140,10 @@ typedef struct {
 } mc_csmc_f32_in_t;
 
 typedef struct {
-    float v_d_v;           /**< u1 [V] */
-    float v_q_v;           /**< u2 [V] */
-    float s1_a;            /**< s1 [A] */
-    float s2_rad_s2;       /**< s2 [rad/s^2] */
+    float v_d_v;     /**< u1 [V] */
+    float v_q_v;     /**< u2 [V] */
+    float s1_a;      /**< s1 [A] */
+    float s2_rad_s2; /**< s2 [rad/s^2] */
 } mc_csmc_f32_out_t;
 
 typedef struct {
@@ -150,17 +154,17 @@ typedef struct {
     /* derived (LAW_MODEL): */
     float k3, k4, d0, dr_ohm, dl_h, inv_k3;
     /* derived (all laws): */
-    float inv_mu1, inv_mu2;                 /**< 1/mu_i */
-    float neg_m1_per_mu1, neg_m2_per_mu2;   /**< -M_i/mu_i (LAW_CONST) */
-    uint32_t const_sat;                     /**< LAW_CONST with SW_SAT (the step's straight path) */
-    uint32_t fast_kind2;                    /**< mc_csmc_hgo_f32_step: kind2 on its fast path
+    float inv_mu1, inv_mu2;               /**< 1/mu_i */
+    float neg_m1_per_mu1, neg_m2_per_mu2; /**< -M_i/mu_i (LAW_CONST) */
+    uint32_t const_sat;                   /**< LAW_CONST with SW_SAT (the step's straight path) */
+    uint32_t fast_kind2;                  /**< mc_csmc_hgo_f32_step: kind2 on its fast path
                                                  (const_sat, no clamp), 5: the general law */
-    uint32_t kind1, kind2;                  /**< 0: no sigma, else 1 + sigma_i.real */
-    uint32_t may_clamp;                     /**< 0: |u_i| <= M_i <= v_limit, no clamp needed */
+    uint32_t kind1, kind2;                /**< 0: no sigma, else 1 + sigma_i.real */
+    uint32_t may_clamp;                   /**< 0: |u_i| <= M_i <= v_limit, no clamp needed */
     uint32_t have_sigma1, have_sigma2;
     mc_csvc_f32_t sigma1, sigma2;
-    mc_csmc_f32_out_t out;  /**< last output */
-    uint32_t flags;         /**< sticky MC_CSMC_ERR_NAN_INPUT */
+    mc_csmc_f32_out_t out; /**< last output */
+    uint32_t flags;        /**< sticky MC_CSMC_ERR_NAN_INPUT */
 } mc_csmc_f32_t;
 
 /** Validate cfg (only the fields the law uses) and initialise st (sigma = 0,
@@ -182,8 +186,7 @@ uint32_t mc_csmc_f32_reset(mc_csmc_f32_t *st);
  * refused). psi = sat(s/mu) is formed as (1/mu) sat(s), and -M sat(s/mu) as
  * (-M/mu) (mu sat(s/mu)), the constants precomputed.
  */
-uint32_t mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in,
-                          mc_csmc_f32_out_t *p_out);
+uint32_t mc_csmc_f32_step(mc_csmc_f32_t *st, const mc_csmc_f32_in_t *in, mc_csmc_f32_out_t *p_out);
 
 /**
  * Error vector from the full state (state feedback, paper Sec. III):
@@ -204,9 +207,9 @@ uint32_t mc_csmc_f32_err_from_state(const mc_csmc_f32_model_t *model, float i_d_
 /** The law with e2', e2'' from the high-gain observer on e2 (paper Sec. V),
  *  in one struct. */
 typedef struct {
-    mc_csmc_f32_t law;     /**< law.out is not written by the combined step */
+    mc_csmc_f32_t law; /**< law.out is not written by the combined step */
     mc_hgo_f32_t hgo;
-    uint32_t fast;         /**< law.fast_kind2 once the observer has two past
+    uint32_t fast; /**< law.fast_kind2 once the observer has two past
                                 samples (its straight update), else 5: the
                                 general path */
 } mc_csmc_hgo_f32_t;
@@ -262,4 +265,3 @@ uint32_t mc_csmc_hgo_f32_step(mc_csmc_hgo_f32_t *st, float e1_a, float e2_rad,
 #endif
 
 #endif /* MC_CSMC_H */
-

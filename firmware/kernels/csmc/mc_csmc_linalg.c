@@ -8,8 +8,8 @@
 
 #include "math/mc_math.h"
 
-#define LA_N   MC_LINALG_MAX_N
-#define LA_NN  (MC_LINALG_MAX_N * MC_LINALG_MAX_N)
+#define LA_N  MC_LINALG_MAX_N
+#define LA_NN (MC_LINALG_MAX_N * MC_LINALG_MAX_N)
 
 /* c = a * b, all n x n (c must not alias a or b). */
 static void la_mul(const float *p_a, const float *p_b, uint32_t n, float *p_c)

@@ -17,8 +17,8 @@ static bool cq_pos(float x)
 static bool cq_bases_ok(const mc_csmc_q31_bases_t *b)
 {
     return cq_pos(b->i_base_a) && cq_pos(b->theta_base_rad) && cq_pos(b->omega_base_rad_s) &&
-           cq_pos(b->alpha_base_rad_s2) && cq_pos(b->did_base_a_s) &&
-           cq_pos(b->jerk_base_rad_s3) && cq_pos(b->g_base_rad_s3) && cq_pos(b->v_base_v);
+           cq_pos(b->alpha_base_rad_s2) && cq_pos(b->did_base_a_s) && cq_pos(b->jerk_base_rad_s3) &&
+           cq_pos(b->g_base_rad_s3) && cq_pos(b->v_base_v);
 }
 
 /* A constant (engineering value / base) as Q46, false if beyond 2^15 pu. */
@@ -76,8 +76,8 @@ uint32_t mc_csmc_q31_init(mc_csmc_q31_t *st, const mc_csmc_q31_cfg_t *cfg)
     t.have_sigma2 = 0u;
     if ((cq_sigma(f, &f->sigma1, f->mu1_a, b->i_base_a, &t.sigma1, &t.have_sigma1) !=
          MC_CSVC_ERR_NONE) ||
-        (cq_sigma(f, &f->sigma2, f->mu2_rad_s2, b->alpha_base_rad_s2, &t.sigma2,
-                  &t.have_sigma2) != MC_CSVC_ERR_NONE)) {
+        (cq_sigma(f, &f->sigma2, f->mu2_rad_s2, b->alpha_base_rad_s2, &t.sigma2, &t.have_sigma2) !=
+         MC_CSVC_ERR_NONE)) {
         return MC_CSMC_ERR_SCALE;
     }
     ok = ok && mc_q46_gain_from_f32((f->k1_per_s2 * b->theta_base_rad) / b->alpha_base_rad_s2,
@@ -102,8 +102,8 @@ uint32_t mc_csmc_q31_init(mc_csmc_q31_t *st, const mc_csmc_q31_cfg_t *cfg)
         const float gb = b->g_base_rad_s3;
         const float vb = b->v_base_v;
         const float inv_k3 = ref.inv_k3;
-        ok = ok && mc_q46_gain_from_f32(((k5 * b->i_base_a) * b->omega_base_rad_s) / b->did_base_a_s,
-                                        &t.g_f1_x23);
+        ok = ok && mc_q46_gain_from_f32(
+                       ((k5 * b->i_base_a) * b->omega_base_rad_s) / b->did_base_a_s, &t.g_f1_x23);
         ok = ok && mc_q46_gain_from_f32((f->k1_per_s2 * b->omega_base_rad_s) / gb, &t.g_g_de2);
         ok = ok && mc_q46_gain_from_f32((f->k2_per_s * b->alpha_base_rad_s2) / gb, &t.g_g_dde2);
         ok = ok && mc_q46_gain_from_f32(-b->jerk_base_rad_s3 / gb, &t.g_g_jerk);
@@ -112,9 +112,10 @@ uint32_t mc_csmc_q31_init(mc_csmc_q31_t *st, const mc_csmc_q31_cfg_t *cfg)
         ok = ok && mc_q46_gain_from_f32(-(((ref.k3 * k5) * b->i_base_a) * b->omega_base_rad_s) / gb,
                                         &t.g_g_x13);
         ok = ok && cq_const((ref.k4 * ref.d0) / gb, &t.g_const_q46);
-        ok = ok && mc_q46_gain_from_f32(model ? ((m->r_nom_ohm * b->i_base_a) / vb) : 0.0f, &t.g_rx);
-        ok = ok && mc_q46_gain_from_f32(model ? ((m->l_nom_h * b->did_base_a_s) / vb) : 0.0f,
-                                        &t.g_lf);
+        ok =
+            ok && mc_q46_gain_from_f32(model ? ((m->r_nom_ohm * b->i_base_a) / vb) : 0.0f, &t.g_rx);
+        ok = ok &&
+             mc_q46_gain_from_f32(model ? ((m->l_nom_h * b->did_base_a_s) / vb) : 0.0f, &t.g_lf);
         ok = ok && mc_q46_gain_from_f32(model ? ((m->km_nm_a * b->omega_base_rad_s) / vb) : 0.0f,
                                         &t.g_km);
         ok = ok && mc_q46_gain_from_f32(((m->l_nom_h * inv_k3) * gb) / vb, &t.g_lg);
@@ -165,8 +166,7 @@ static q31_t cq_psi(mc_csmc_sw_t sw, int64_t s_q46, mc_q46_gain_t inv_mu)
     return mc_q46_to_q31(mc_q46_clamp(mc_q46_mul(inv_mu, s_q46), -MC_Q46_ONE, MC_Q46_ONE));
 }
 
-uint32_t mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in,
-                          mc_csmc_q31_out_t *p_out)
+uint32_t mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in, mc_csmc_q31_out_t *p_out)
 {
     int64_t s1;
     int64_t s2;

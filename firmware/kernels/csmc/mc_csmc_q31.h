@@ -52,25 +52,25 @@ typedef struct {
 } mc_csmc_q31_bases_t;
 
 typedef struct {
-    mc_csmc_f32_cfg_t f;        /**< validated as by mc_csmc_f32_init */
+    mc_csmc_f32_cfg_t f; /**< validated as by mc_csmc_f32_init */
     mc_csmc_q31_bases_t base;
 } mc_csmc_q31_cfg_t;
 
 typedef struct {
-    q31_t e1;           /**< i_base */
-    q31_t e2;           /**< theta_base */
-    q31_t de2;          /**< omega_base */
-    q31_t dde2;         /**< alpha_base */
-    q31_t i_d, i_q;     /**< i_base (LAW_MODEL) */
-    q31_t omega_m;      /**< omega_base (LAW_MODEL) */
-    q31_t di_dd;        /**< did_base (LAW_MODEL) */
-    q31_t dddphi_d;     /**< jerk_base (LAW_MODEL) */
+    q31_t e1;       /**< i_base */
+    q31_t e2;       /**< theta_base */
+    q31_t de2;      /**< omega_base */
+    q31_t dde2;     /**< alpha_base */
+    q31_t i_d, i_q; /**< i_base (LAW_MODEL) */
+    q31_t omega_m;  /**< omega_base (LAW_MODEL) */
+    q31_t di_dd;    /**< did_base (LAW_MODEL) */
+    q31_t dddphi_d; /**< jerk_base (LAW_MODEL) */
 } mc_csmc_q31_in_t;
 
 typedef struct {
-    q31_t v_d, v_q;     /**< v_base */
-    q31_t s1;           /**< i_base */
-    q31_t s2;           /**< alpha_base */
+    q31_t v_d, v_q; /**< v_base */
+    q31_t s1;       /**< i_base */
+    q31_t s2;       /**< alpha_base */
 } mc_csmc_q31_out_t;
 
 typedef struct {
@@ -78,15 +78,16 @@ typedef struct {
     mc_csmc_sw_t sw;
     /* s2 = g_e2 e2 + g_de2 e2' + g_dde2 e2'' (alpha_base) */
     mc_q46_gain_t g_s2_e2, g_s2_de2, g_s2_dde2;
-    mc_q46_gain_t g_inv_mu1, g_inv_mu2;  /**< s_base/mu */
-    mc_q46_gain_t g_m1, g_m2;            /**< M/v_base (LAW_CONST) */
+    mc_q46_gain_t g_inv_mu1, g_inv_mu2; /**< s_base/mu */
+    mc_q46_gain_t g_m1, g_m2;           /**< M/v_base (LAW_CONST) */
     /* LAW_MODEL */
-    mc_q46_gain_t g_f1_x23;              /**< k5 i_b w_b / did_b on x2 x3 */
+    mc_q46_gain_t g_f1_x23; /**< k5 i_b w_b / did_b on x2 x3 */
     mc_q46_gain_t g_g_de2, g_g_dde2, g_g_jerk, g_g_x2, g_g_x3, g_g_x13;
-    int64_t g_const_q46;                 /**< k4 d0 / g_base */
-    mc_q46_gain_t g_rx, g_lf, g_km, g_lg; /**< R^ i_b/v_b, L^ did_b/v_b, Km w_b/v_b, L^ g_b/(k3 v_b) */
+    int64_t g_const_q46; /**< k4 d0 / g_base */
+    mc_q46_gain_t g_rx, g_lf, g_km,
+        g_lg; /**< R^ i_b/v_b, L^ did_b/v_b, Km w_b/v_b, L^ g_b/(k3 v_b) */
     mc_q46_gain_t g_b_dr, g_b1_dl, g_b2_dl; /**< dR i_b/v_b, dL did_b/v_b, dL g_b/(k3 v_b) */
-    int64_t q1_q46, q2_q46;              /**< q1/v_b, q2/(k3 v_b) */
+    int64_t q1_q46, q2_q46;                 /**< q1/v_b, q2/(k3 v_b) */
     int64_t v_lim_q46;
     uint32_t have_sigma1, have_sigma2;
     mc_csvc_q31_t sigma1, sigma2;
@@ -102,8 +103,7 @@ uint32_t mc_csmc_q31_reset(mc_csmc_q31_t *st);
  *  MC_CSMC_ERR_NONE, or MC_CSMC_ERR_NULL (st, in or p_out NULL: nothing
  *  written); q31 inputs are always finite and every sum saturates, so no
  *  MC_CSMC_ERR_NAN_INPUT. */
-uint32_t mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in,
-                          mc_csmc_q31_out_t *p_out);
+uint32_t mc_csmc_q31_step(mc_csmc_q31_t *st, const mc_csmc_q31_in_t *in, mc_csmc_q31_out_t *p_out);
 
 #ifdef __cplusplus
 }

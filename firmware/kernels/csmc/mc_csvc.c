@@ -148,7 +148,7 @@ static bool csvc_modal(mc_csvc_f32_t *st, const mc_csvc_f32_model_t *m, float dt
         float ch;
         mc_sincos_f32(0.5f * (wk * dt), &sh, &ch);
         const float e = 2.0f * sh;
-        const float sn = e * ch;                 /* sin(w dt) */
+        const float sn = e * ch;                  /* sin(w dt) */
         const float cs = 1.0f - (0.5f * (e * e)); /* cos(w dt) */
         /* p'(j w) = j w * 2 j w * prod_{l != k} (w_l^2 - w^2) = -dk */
         float dk = 2.0f * (wk * wk);

@@ -63,48 +63,49 @@ extern "C" {
 #define MC_CSVC_MAX_ORDER 5u
 
 #define MC_CSVC_ERR_NONE        0u
-#define MC_CSVC_ERR_NULL        (1u << 0)  /**< a required pointer is NULL */
-#define MC_CSVC_ERR_ORDER       (1u << 1)  /**< order not in 1..MC_CSVC_MAX_ORDER */
-#define MC_CSVC_ERR_MODEL       (1u << 2)  /**< a c_i or K0_i not finite */
-#define MC_CSVC_ERR_NOT_HURWITZ (1u << 3)  /**< S - J K0 not Hurwitz */
-#define MC_CSVC_ERR_MU          (1u << 4)  /**< mu <= 0 or not finite */
-#define MC_CSVC_ERR_DT          (1u << 5)  /**< dt_s <= 0, not finite, or dt ||S - J K0|| > 0.1 */
-#define MC_CSVC_ERR_POLES       (1u << 6)  /**< place: pole list invalid or not in the open left half-plane */
-#define MC_CSVC_ERR_NAN_INPUT   (1u << 7)  /**< sticky: an update got a non-finite s and was refused */
+#define MC_CSVC_ERR_NULL        (1u << 0) /**< a required pointer is NULL */
+#define MC_CSVC_ERR_ORDER       (1u << 1) /**< order not in 1..MC_CSVC_MAX_ORDER */
+#define MC_CSVC_ERR_MODEL       (1u << 2) /**< a c_i or K0_i not finite */
+#define MC_CSVC_ERR_NOT_HURWITZ (1u << 3) /**< S - J K0 not Hurwitz */
+#define MC_CSVC_ERR_MU          (1u << 4) /**< mu <= 0 or not finite */
+#define MC_CSVC_ERR_DT          (1u << 5) /**< dt_s <= 0, not finite, or dt ||S - J K0|| > 0.1 */
+#define MC_CSVC_ERR_POLES \
+    (1u << 6) /**< place: pole list invalid or not in the open left half-plane */
+#define MC_CSVC_ERR_NAN_INPUT (1u << 7) /**< sticky: an update got a non-finite s and was refused */
 
 /** Internal model and gain: S (companion, last row c), K0. */
 typedef struct {
-    uint32_t order;                 /**< n, 1..MC_CSVC_MAX_ORDER */
-    float c[MC_CSVC_MAX_ORDER];     /**< last row of S [1/s^(n-i)] */
-    float k0[MC_CSVC_MAX_ORDER];    /**< K0 [units of s per unit of sigma_i] */
+    uint32_t order;              /**< n, 1..MC_CSVC_MAX_ORDER */
+    float c[MC_CSVC_MAX_ORDER];  /**< last row of S [1/s^(n-i)] */
+    float k0[MC_CSVC_MAX_ORDER]; /**< K0 [units of s per unit of sigma_i] */
 } mc_csvc_f32_model_t;
 
 typedef struct {
     mc_csvc_f32_model_t model;
-    float mu;                       /**< boundary-layer width, units of s, > 0 */
-    float dt_s;                     /**< control period [s], > 0 */
+    float mu;   /**< boundary-layer width, units of s, > 0 */
+    float dt_s; /**< control period [s], > 0 */
 } mc_csvc_f32_cfg_t;
 
 /** How the state is advanced (chosen at init, see mc_csvc_f32_init). */
-#define MC_CSVC_REAL_DENSE  0u  /**< sigma itself, dense Phi (any model) */
-#define MC_CSVC_REAL_MODAL0 1u  /**< modal: eigenvalue 0 only (integrator) */
-#define MC_CSVC_REAL_MODAL1 2u  /**< modal: 0 and one pair +-j w */
-#define MC_CSVC_REAL_MODAL2 3u  /**< modal: 0 and two pairs +-j w1, +-j w2 */
+#define MC_CSVC_REAL_DENSE  0u /**< sigma itself, dense Phi (any model) */
+#define MC_CSVC_REAL_MODAL0 1u /**< modal: eigenvalue 0 only (integrator) */
+#define MC_CSVC_REAL_MODAL1 2u /**< modal: 0 and one pair +-j w */
+#define MC_CSVC_REAL_MODAL2 3u /**< modal: 0 and two pairs +-j w1, +-j w2 */
 
 typedef struct {
     uint32_t n;
     float mu;
     float k0[MC_CSVC_MAX_ORDER];
-    float phi[MC_CSVC_MAX_ORDER * MC_CSVC_MAX_ORDER];  /**< exp(S dt), row-major n x n */
-    float gam[MC_CSVC_MAX_ORDER];                      /**< int exp(S tau) J dtau */
-    float sigma[MC_CSVC_MAX_ORDER];                    /**< the state (MC_CSVC_REAL_DENSE only;
+    float phi[MC_CSVC_MAX_ORDER * MC_CSVC_MAX_ORDER]; /**< exp(S dt), row-major n x n */
+    float gam[MC_CSVC_MAX_ORDER];                     /**< int exp(S tau) J dtau */
+    float sigma[MC_CSVC_MAX_ORDER];                   /**< the state (MC_CSVC_REAL_DENSE only;
                                                             read it with mc_csvc_f32_sigma) */
-    uint32_t real;                                     /**< MC_CSVC_REAL_* */
-    float xi[MC_CSVC_MAX_ORDER];                       /**< modal state: x0, (x, y) per pair */
-    float h[MC_CSVC_MAX_ORDER];                        /**< K0 T: term = h . xi */
-    float e[2];                                        /**< 2 sin(w dt / 2) per pair */
-    float t[MC_CSVC_MAX_ORDER * MC_CSVC_MAX_ORDER];    /**< sigma = T xi, row-major n x n */
-    uint32_t flags;                                    /**< sticky MC_CSVC_ERR_NAN_INPUT */
+    uint32_t real;                                    /**< MC_CSVC_REAL_* */
+    float xi[MC_CSVC_MAX_ORDER];                      /**< modal state: x0, (x, y) per pair */
+    float h[MC_CSVC_MAX_ORDER];                       /**< K0 T: term = h . xi */
+    float e[2];                                       /**< 2 sin(w dt / 2) per pair */
+    float t[MC_CSVC_MAX_ORDER * MC_CSVC_MAX_ORDER];   /**< sigma = T xi, row-major n x n */
+    uint32_t flags;                                   /**< sticky MC_CSVC_ERR_NAN_INPUT */
 } mc_csvc_f32_t;
 
 /** The conditional integrator (4): order 1, c = 0, K0 = k0_per_s. Returns

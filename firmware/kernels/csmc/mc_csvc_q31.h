@@ -33,17 +33,17 @@ extern "C" {
 #define MC_CSVC_ERR_SCALE (1u << 8) /**< s_base <= 0 / not finite, or a coefficient out of range */
 
 typedef struct {
-    mc_csvc_f32_cfg_t f;        /**< model, mu, dt: validated as by mc_csvc_f32_init */
-    float s_base;               /**< base of s and mu, > 0 */
+    mc_csvc_f32_cfg_t f; /**< model, mu, dt: validated as by mc_csvc_f32_init */
+    float s_base;        /**< base of s and mu, > 0 */
 } mc_csvc_q31_cfg_t;
 
 typedef struct {
     uint32_t n;
     mc_q46_gain_t phi[MC_CSVC_MAX_ORDER * MC_CSVC_MAX_ORDER];
     mc_q46_gain_t gam[MC_CSVC_MAX_ORDER];
-    int32_t k0_sign[MC_CSVC_MAX_ORDER];  /**< sign of K0_i (0 if K0_i = 0) */
+    int32_t k0_sign[MC_CSVC_MAX_ORDER]; /**< sign of K0_i (0 if K0_i = 0) */
     int64_t mu_q46;
-    int64_t w_q46[MC_CSVC_MAX_ORDER];    /**< scaled state */
+    int64_t w_q46[MC_CSVC_MAX_ORDER]; /**< scaled state */
 } mc_csvc_q31_t;
 
 uint32_t mc_csvc_q31_init(mc_csvc_q31_t *st, const mc_csvc_q31_cfg_t *cfg);

@@ -26,7 +26,7 @@ uint32_t mc_ddiff_f32_init(mc_ddiff_f32_t *st, const mc_ddiff_f32_cfg_t *cfg)
     if (err != MC_DDIFF_ERR_NONE) {
         return err;
     }
-    const float h = 0.5f * cfg->a_per_s * cfg->dt_s;   /* a dt / 2 */
+    const float h = 0.5f * cfg->a_per_s * cfg->dt_s; /* a dt / 2 */
     const float den = 1.0f + h;
     const float c_q = (1.0f - h) / den;
     const float g = cfg->b / den;

@@ -58,22 +58,22 @@ extern "C" {
 #endif
 
 #define MC_DDIFF_ERR_NONE      0u
-#define MC_DDIFF_ERR_NULL      (1u << 0)  /**< a required pointer is NULL */
-#define MC_DDIFF_ERR_A         (1u << 1)  /**< a_per_s <= 0 or not finite */
-#define MC_DDIFF_ERR_B         (1u << 2)  /**< b <= 0 or not finite */
-#define MC_DDIFF_ERR_DT        (1u << 3)  /**< dt_s <= 0 or not finite */
-#define MC_DDIFF_ERR_NAN_INPUT (1u << 4)  /**< sticky: a step got a non-finite input */
+#define MC_DDIFF_ERR_NULL      (1u << 0) /**< a required pointer is NULL */
+#define MC_DDIFF_ERR_A         (1u << 1) /**< a_per_s <= 0 or not finite */
+#define MC_DDIFF_ERR_B         (1u << 2) /**< b <= 0 or not finite */
+#define MC_DDIFF_ERR_DT        (1u << 3) /**< dt_s <= 0 or not finite */
+#define MC_DDIFF_ERR_NAN_INPUT (1u << 4) /**< sticky: a step got a non-finite input */
 
 /** Configuration. */
 typedef struct {
-    float a_per_s;  /**< filter pole a [1/s], > 0 */
-    float b;        /**< high-frequency gain b [1], > 0 */
-    float dt_s;     /**< sample period [s], > 0 */
+    float a_per_s; /**< filter pole a [1/s], > 0 */
+    float b;       /**< high-frequency gain b [1], > 0 */
+    float dt_s;    /**< sample period [s], > 0 */
 } mc_ddiff_f32_cfg_t;
 
 /** State (read-only for callers except through the functions below). */
 typedef struct {
-    float a_per_s;  /**< copy of the config */
+    float a_per_s; /**< copy of the config */
     float b;
     float dt_s;
     float c_q;      /**< (1 - a dt/2) / (1 + a dt/2), derived at init */

@@ -40,20 +40,20 @@ extern "C" {
 #define MC_DDIFF_ERR_SCALE (1u << 5) /**< a base <= 0 / not finite, or a gain beyond mc_q46 */
 
 typedef struct {
-    mc_ddiff_f32_cfg_t f;  /**< a [1/s], b [1], dt [s]: validated as by mc_ddiff_f32_init */
-    float y_base;          /**< base of y [unit of y], > 0 */
-    float out_base;        /**< base of theta_f [unit of y], > 0 */
+    mc_ddiff_f32_cfg_t f; /**< a [1/s], b [1], dt [s]: validated as by mc_ddiff_f32_init */
+    float y_base;         /**< base of y [unit of y], > 0 */
+    float out_base;       /**< base of theta_f [unit of y], > 0 */
 } mc_ddiff_q31_cfg_t;
 
 typedef struct {
-    mc_q46_gain_t c_q;     /**< pole coefficient */
-    mc_q46_gain_t g;       /**< increment gain, y pu -> out pu */
-    mc_q46_gain_t b;       /**< first-step gain b y_base/out_base */
-    int64_t out_q46;       /**< theta_f, Q46 per unit of out_base */
-    q31_t y_prev;          /**< y of the last step */
-    q31_t out;             /**< last output */
+    mc_q46_gain_t c_q; /**< pole coefficient */
+    mc_q46_gain_t g;   /**< increment gain, y pu -> out pu */
+    mc_q46_gain_t b;   /**< first-step gain b y_base/out_base */
+    int64_t out_q46;   /**< theta_f, Q46 per unit of out_base */
+    q31_t y_prev;      /**< y of the last step */
+    q31_t out;         /**< last output */
     bool primed;
-    uint32_t flags;        /**< sticky flags (none raised by steps today) */
+    uint32_t flags; /**< sticky flags (none raised by steps today) */
 } mc_ddiff_q31_t;
 
 /** Validate cfg (MC_DDIFF_ERR_* as the f32 twin, plus MC_DDIFF_ERR_SCALE);

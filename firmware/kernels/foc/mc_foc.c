@@ -166,12 +166,11 @@ uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
     st->ff_flux_wb = cfg->decouple ? cfg->flux_wb : 0.0f;
     /* the fast path runs the clamping anti-windup only (mc_pi_f32_core_in):
      * with the other schemes every step takes the checked code */
-    st->vbus_fast_bound = (cfg->aw == MC_PI_AW_CLAMP)
-                              ? foc_vbus_fast_bound(st->v_max_per_vbus, pcfg.out_max)
-                              : 0u;
+    st->vbus_fast_bound =
+        (cfg->aw == MC_PI_AW_CLAMP) ? foc_vbus_fast_bound(st->v_max_per_vbus, pcfg.out_max) : 0u;
     st->vbus_fast_bits = st->vbus_fast_bound;
-    st->svpwm_linear = (cfg->limit_mode == MC_SVPWM_LIMIT_CIRCLE) &&
-                       (cfg->v_limit_ratio <= MC_FOC_LINEAR_RATIO);
+    st->svpwm_linear =
+        (cfg->limit_mode == MC_SVPWM_LIMIT_CIRCLE) && (cfg->v_limit_ratio <= MC_FOC_LINEAR_RATIO);
     st->flags = MC_FOC_ERR_NONE;
     return MC_FOC_ERR_NONE;
 }
@@ -296,7 +295,6 @@ FOC_INLINE float foc_sqrt_pos(float x)
     return mc_sqrt_f32(x);
 #endif
 }
-
 
 /* 0 < vbus <= the bus bound of init (foc_vbus_fast_bound; at most 2^59;
  * 0 once a sticky flag is set: then false for every vbus;
@@ -463,8 +461,8 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
          * <= vbus holds (|v| <= v_max (1 + 1e-6) < 0.58 vbus), and so does
          * its second (MC_FOC_LINEAR_RATIO), so the duties are these and the
          * modulator limits nothing. */
-        mc_svpwm_circle_duties_f32(v.v_alpha / vbus, v.v_beta / vbus, &out->duty_a,
-                                   &out->duty_b, &out->duty_c);
+        mc_svpwm_circle_duties_f32(v.v_alpha / vbus, v.v_beta / vbus, &out->duty_a, &out->duty_b,
+                                   &out->duty_c);
         out->svpwm_flags = MC_SVPWM_FLAG_NONE;
     } else {
         v = foc_modulate_general(st, v, vbus, sin_th, cos_th, out);
@@ -550,9 +548,9 @@ static uint32_t foc_step_checked(mc_foc_f32_t *st, float i_alpha, float i_beta, 
     return MC_FOC_ERR_NONE;
 }
 
-uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, float i_alpha_a, float i_beta_a,
-                            float theta_e_rad, float omega_e_rad_s, float vbus_v,
-                            float id_ref_a, float iq_ref_a, mc_foc_f32_out_t *out)
+uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, float i_alpha_a, float i_beta_a, float theta_e_rad,
+                            float omega_e_rad_s, float vbus_v, float id_ref_a, float iq_ref_a,
+                            mc_foc_f32_out_t *out)
 {
     if ((st == NULL) || (out == NULL)) {
         return MC_FOC_ERR_NULL;
@@ -561,8 +559,8 @@ uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, float i_alpha_a, float i_beta_a,
                       iq_ref_a, out)) {
         return MC_FOC_ERR_NONE;
     }
-    return foc_step_checked(st, i_alpha_a, i_beta_a, theta_e_rad, omega_e_rad_s, vbus_v,
-                            id_ref_a, iq_ref_a, out);
+    return foc_step_checked(st, i_alpha_a, i_beta_a, theta_e_rad, omega_e_rad_s, vbus_v, id_ref_a,
+                            iq_ref_a, out);
 }
 
 uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32_out_t *out)

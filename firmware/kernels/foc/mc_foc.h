@@ -77,18 +77,20 @@ extern "C" {
 #endif
 
 #define MC_FOC_ERR_NONE       0u
-#define MC_FOC_ERR_NULL       (1u << 0)  /**< a required pointer is NULL */
-#define MC_FOC_ERR_MOTOR      (1u << 1)  /**< R < 0, L <= 0, psi < 0, or not finite */
-#define MC_FOC_ERR_GAIN_D     (1u << 2)  /**< d-axis PI gain negative or not finite */
-#define MC_FOC_ERR_GAIN_Q     (1u << 3)  /**< q-axis PI gain negative or not finite */
-#define MC_FOC_ERR_DT         (1u << 4)  /**< dt_s <= 0 or not finite */
-#define MC_FOC_ERR_LIMIT_MODE (1u << 5)  /**< limit_mode not an mc_svpwm_limit_t */
-#define MC_FOC_ERR_V_LIMIT    (1u << 6)  /**< v_limit_ratio not in (0, 1], or v_abs_max_v <= 0 / not finite */
-#define MC_FOC_ERR_AW         (1u << 7)  /**< anti-windup scheme or kaw invalid (see MC_PI_ERR_AW_MODE/KAW) */
-#define MC_FOC_ERR_NAN_INPUT  (1u << 8)  /**< sticky: a step input was NaN or infinite */
-#define MC_FOC_ERR_VBUS       (1u << 9)  /**< sticky: vbus <= 0 */
-#define MC_FOC_ERR_PI         (1u << 10) /**< sticky: a PI refused its step */
-#define MC_FOC_ERR_BW         (1u << 11) /**< bandwidth helper: bw <= 0 or not finite */
+#define MC_FOC_ERR_NULL       (1u << 0) /**< a required pointer is NULL */
+#define MC_FOC_ERR_MOTOR      (1u << 1) /**< R < 0, L <= 0, psi < 0, or not finite */
+#define MC_FOC_ERR_GAIN_D     (1u << 2) /**< d-axis PI gain negative or not finite */
+#define MC_FOC_ERR_GAIN_Q     (1u << 3) /**< q-axis PI gain negative or not finite */
+#define MC_FOC_ERR_DT         (1u << 4) /**< dt_s <= 0 or not finite */
+#define MC_FOC_ERR_LIMIT_MODE (1u << 5) /**< limit_mode not an mc_svpwm_limit_t */
+#define MC_FOC_ERR_V_LIMIT \
+    (1u << 6) /**< v_limit_ratio not in (0, 1], or v_abs_max_v <= 0 / not finite */
+#define MC_FOC_ERR_AW \
+    (1u << 7) /**< anti-windup scheme or kaw invalid (see MC_PI_ERR_AW_MODE/KAW) */
+#define MC_FOC_ERR_NAN_INPUT (1u << 8)  /**< sticky: a step input was NaN or infinite */
+#define MC_FOC_ERR_VBUS      (1u << 9)  /**< sticky: vbus <= 0 */
+#define MC_FOC_ERR_PI        (1u << 10) /**< sticky: a PI refused its step */
+#define MC_FOC_ERR_BW        (1u << 11) /**< bandwidth helper: bw <= 0 or not finite */
 
 /** Largest v_limit_ratio (circle limit) at which the modulator is known to
  *  stay in its linear case: |v| <= 0.99 vbus / sqrt(3) (1 + 1e-6) = 0.5716
@@ -97,76 +99,76 @@ extern "C" {
 
 /** Configuration of the dq current controller. */
 typedef struct {
-    float r_ohm;            /**< phase resistance [ohm], >= 0 */
-    float ld_h;             /**< d-axis inductance [H], > 0 */
-    float lq_h;             /**< q-axis inductance [H], > 0 */
-    float flux_wb;          /**< permanent-magnet flux linkage psi [Wb], >= 0 */
-    float kp_d_v_per_a;     /**< d-axis PI proportional gain [V/A] */
-    float ki_d_v_per_as;    /**< d-axis PI integral gain [V/(A s)] */
-    float kp_q_v_per_a;     /**< q-axis PI proportional gain [V/A] */
-    float ki_q_v_per_as;    /**< q-axis PI integral gain [V/(A s)] */
-    float dt_s;             /**< control period [s], > 0 */
-    mc_pi_aw_t aw;          /**< anti-windup of both PIs */
-    float kaw_per_s;        /**< back-calculation gain [1/s] (MC_PI_AW_BACK_CALC only) */
+    float r_ohm;                 /**< phase resistance [ohm], >= 0 */
+    float ld_h;                  /**< d-axis inductance [H], > 0 */
+    float lq_h;                  /**< q-axis inductance [H], > 0 */
+    float flux_wb;               /**< permanent-magnet flux linkage psi [Wb], >= 0 */
+    float kp_d_v_per_a;          /**< d-axis PI proportional gain [V/A] */
+    float ki_d_v_per_as;         /**< d-axis PI integral gain [V/(A s)] */
+    float kp_q_v_per_a;          /**< q-axis PI proportional gain [V/A] */
+    float ki_q_v_per_as;         /**< q-axis PI integral gain [V/(A s)] */
+    float dt_s;                  /**< control period [s], > 0 */
+    mc_pi_aw_t aw;               /**< anti-windup of both PIs */
+    float kaw_per_s;             /**< back-calculation gain [1/s] (MC_PI_AW_BACK_CALC only) */
     mc_svpwm_limit_t limit_mode; /**< modulator limit: circle (linear) or hexagon */
-    float v_limit_ratio;    /**< fraction of the modulator's largest voltage used, (0, 1] */
-    float v_abs_max_v;      /**< static PI output and integrator limit [V], > 0 (e.g. the
+    float v_limit_ratio;         /**< fraction of the modulator's largest voltage used, (0, 1] */
+    float v_abs_max_v;           /**< static PI output and integrator limit [V], > 0 (e.g. the
                                  largest vbus times 2/3) */
-    bool decouple;          /**< add the omega_e feed-forward terms */
+    bool decouple;               /**< add the omega_e feed-forward terms */
 } mc_foc_f32_cfg_t;
 
 /** State of the dq current controller. */
 typedef struct {
-    mc_pi_f32_t pi_d;       /**< d-axis current PI (output V) */
-    mc_pi_f32_t pi_q;       /**< q-axis current PI (output V) */
+    mc_pi_f32_t pi_d; /**< d-axis current PI (output V) */
+    mc_pi_f32_t pi_q; /**< q-axis current PI (output V) */
     float ld_h;
     float lq_h;
     float flux_wb;
-    float ff_ld_h;          /**< ld_h with decoupling, else 0 (derived) */
-    float ff_lq_h;          /**< lq_h with decoupling, else 0 (derived) */
-    float ff_flux_wb;       /**< flux_wb with decoupling, else 0 (derived) */
-    float ff_nlq_h;         /**< -ff_lq_h (derived) */
+    float ff_ld_h;            /**< ld_h with decoupling, else 0 (derived) */
+    float ff_lq_h;            /**< lq_h with decoupling, else 0 (derived) */
+    float ff_flux_wb;         /**< flux_wb with decoupling, else 0 (derived) */
+    float ff_nlq_h;           /**< -ff_lq_h (derived) */
     uint32_t vbus_fast_bound; /**< bits of the largest vbus of the fast path: v_max <= the PIs'
                                    out_max there, and vbus <= 2^59; 0 (no fast path) unless
                                    the anti-windup is MC_PI_AW_CLAMP (derived) */
-    uint32_t vbus_fast_bits; /**< vbus_fast_bound while no sticky flag is set, 0 once one is
+    uint32_t vbus_fast_bits;  /**< vbus_fast_bound while no sticky flag is set, 0 once one is
                                   (the fast path then never runs until reset) (derived) */
     mc_svpwm_limit_t limit_mode;
     float v_limit_ratio;
-    float v_max_per_vbus;   /**< v_limit_ratio times the modulator's largest voltage per volt
+    float v_max_per_vbus; /**< v_limit_ratio times the modulator's largest voltage per volt
                                  of bus: 1/sqrt(3) (circle) or 2/3 (hexagon) (derived) */
     bool decouple;
-    bool svpwm_linear;      /**< circle limit and v_limit_ratio <= MC_FOC_LINEAR_RATIO: the
+    bool svpwm_linear; /**< circle limit and v_limit_ratio <= MC_FOC_LINEAR_RATIO: the
                                  modulator never limits what the dq step allows (derived) */
-    uint32_t flags;         /**< sticky MC_FOC_ERR_* */
+    uint32_t flags;    /**< sticky MC_FOC_ERR_* */
 } mc_foc_f32_t;
 
 /** Inputs of the whole fast step. */
 typedef struct {
-    float ia_a;             /**< phase a current [A] */
-    float ib_a;             /**< phase b current [A] */
-    float ic_a;             /**< phase c current [A]; read only if three_phase */
-    bool three_phase;       /**< true: Clarke from ia, ib, ic; false: from ia, ib (ia+ib+ic = 0) */
-    float theta_e_rad;      /**< electrical angle of the d axis [rad] */
-    float omega_e_rad_s;    /**< electrical speed [rad/s] */
-    float vbus_v;           /**< DC-bus voltage [V] */
-    float id_ref_a;         /**< d current reference [A] */
-    float iq_ref_a;         /**< q current reference [A] */
+    float ia_a;          /**< phase a current [A] */
+    float ib_a;          /**< phase b current [A] */
+    float ic_a;          /**< phase c current [A]; read only if three_phase */
+    bool three_phase;    /**< true: Clarke from ia, ib, ic; false: from ia, ib (ia+ib+ic = 0) */
+    float theta_e_rad;   /**< electrical angle of the d axis [rad] */
+    float omega_e_rad_s; /**< electrical speed [rad/s] */
+    float vbus_v;        /**< DC-bus voltage [V] */
+    float id_ref_a;      /**< d current reference [A] */
+    float iq_ref_a;      /**< q current reference [A] */
 } mc_foc_f32_in_t;
 
 /** Outputs of the whole fast step (duties plus telemetry). */
 typedef struct {
-    float duty_a;           /**< high-side duty of phase a, [0, 1] */
+    float duty_a; /**< high-side duty of phase a, [0, 1] */
     float duty_b;
     float duty_c;
-    float id_a;             /**< measured d current [A] */
-    float iq_a;             /**< measured q current [A] */
-    float vd_v;             /**< applied d voltage [V] */
-    float vq_v;             /**< applied q voltage [V] */
-    float v_alpha_v;        /**< applied alpha voltage [V] */
-    float v_beta_v;         /**< applied beta voltage [V] */
-    uint32_t svpwm_flags;   /**< MC_SVPWM_FLAG_* of this step */
-    uint32_t flags;         /**< sticky MC_FOC_ERR_* after this step */
+    float id_a;           /**< measured d current [A] */
+    float iq_a;           /**< measured q current [A] */
+    float vd_v;           /**< applied d voltage [V] */
+    float vq_v;           /**< applied q voltage [V] */
+    float v_alpha_v;      /**< applied alpha voltage [V] */
+    float v_beta_v;       /**< applied beta voltage [V] */
+    uint32_t svpwm_flags; /**< MC_SVPWM_FLAG_* of this step */
+    uint32_t flags;       /**< sticky MC_FOC_ERR_* after this step */
 } mc_foc_f32_out_t;
 
 /**
@@ -218,9 +220,9 @@ uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32
  * Fills *out (duties 0.5 and zero voltages on error). Returns the
  * MC_FOC_ERR_* bits raised by this step.
  */
-uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, float i_alpha_a, float i_beta_a,
-                            float theta_e_rad, float omega_e_rad_s, float vbus_v,
-                            float id_ref_a, float iq_ref_a, mc_foc_f32_out_t *out);
+uint32_t mc_foc_f32_step_ab(mc_foc_f32_t *st, float i_alpha_a, float i_beta_a, float theta_e_rad,
+                            float omega_e_rad_s, float vbus_v, float id_ref_a, float iq_ref_a,
+                            mc_foc_f32_out_t *out);
 
 #ifdef __cplusplus
 }

@@ -60,8 +60,7 @@ uint32_t mc_foc_q31_init(mc_foc_q31_t *st, const mc_foc_q31_cfg_t *cfg)
     k = (cfg->omega_base_rad_s * cfg->i_base_a) / cfg->v_base_v;
     if (!mc_q46_gain_from_f32(k * f->lq_h, &t.g_ff_d) ||
         !mc_q46_gain_from_f32(k * f->ld_h, &t.g_ff_q) ||
-        !mc_q46_gain_from_f32((cfg->omega_base_rad_s * f->flux_wb) / cfg->v_base_v,
-                              &t.g_ff_psi) ||
+        !mc_q46_gain_from_f32((cfg->omega_base_rad_s * f->flux_wb) / cfg->v_base_v, &t.g_ff_psi) ||
         !mc_q46_gain_from_f32(f->v_limit_ratio * mc_svpwm_max_voltage_f32(1.0f, f->limit_mode),
                               &t.g_vmax)) {
         return MC_FOC_ERR_SCALE;
@@ -109,8 +108,8 @@ static void foc_q31_core(mc_foc_q31_t *st, q31_t id_ref, q31_t iq_ref, q31_t id,
     room = (uint64_t)(((int64_t)v_max * (int64_t)v_max) - ((int64_t)vd * (int64_t)vd));
     vq_max = (q31_t)mc_isqrt_u64(room, NULL);
     *p_vd = vd;
-    (void)mc_pi_q31_step_lim(&st->pi_q, mc_q31_sub_sat(iq_ref, iq), ff_q, (q31_t)-vq_max,
-                             vq_max, p_vq);
+    (void)mc_pi_q31_step_lim(&st->pi_q, mc_q31_sub_sat(iq_ref, iq), ff_q, (q31_t)-vq_max, vq_max,
+                             p_vq);
 }
 
 uint32_t mc_foc_q31_step_dq(mc_foc_q31_t *st, q31_t id_ref, q31_t iq_ref, q31_t id, q31_t iq,

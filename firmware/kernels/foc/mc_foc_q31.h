@@ -49,42 +49,43 @@
 extern "C" {
 #endif
 
-#define MC_FOC_ERR_SCALE (1u << 12) /**< a base <= 0 / not finite, or a gain beyond the q31 formats */
+#define MC_FOC_ERR_SCALE \
+    (1u << 12) /**< a base <= 0 / not finite, or a gain beyond the q31 formats */
 
 typedef struct {
-    mc_foc_f32_cfg_t f;         /**< engineering config, validated as by mc_foc_f32_init */
-    float i_base_a;             /**< current base [A], > 0 */
-    float v_base_v;             /**< voltage base [V], > 0 */
-    float omega_base_rad_s;     /**< electrical speed base [rad/s], > 0 */
+    mc_foc_f32_cfg_t f;     /**< engineering config, validated as by mc_foc_f32_init */
+    float i_base_a;         /**< current base [A], > 0 */
+    float v_base_v;         /**< voltage base [V], > 0 */
+    float omega_base_rad_s; /**< electrical speed base [rad/s], > 0 */
 } mc_foc_q31_cfg_t;
 
 typedef struct {
     mc_pi_q31_t pi_d;
     mc_pi_q31_t pi_q;
-    mc_q46_gain_t g_ff_d;       /**< omega_base L_q i_base / v_base */
-    mc_q46_gain_t g_ff_q;       /**< omega_base L_d i_base / v_base */
-    mc_q46_gain_t g_ff_psi;     /**< omega_base psi / v_base */
-    mc_q46_gain_t g_vmax;       /**< v_limit_ratio / sqrt(3) */
+    mc_q46_gain_t g_ff_d;   /**< omega_base L_q i_base / v_base */
+    mc_q46_gain_t g_ff_q;   /**< omega_base L_d i_base / v_base */
+    mc_q46_gain_t g_ff_psi; /**< omega_base psi / v_base */
+    mc_q46_gain_t g_vmax;   /**< v_limit_ratio / sqrt(3) */
     bool decouple;
-    q31_t vd;                   /**< last applied voltages (pu) */
+    q31_t vd; /**< last applied voltages (pu) */
     q31_t vq;
-    uint32_t flags;             /**< sticky MC_FOC_ERR_VBUS */
+    uint32_t flags; /**< sticky MC_FOC_ERR_VBUS */
 } mc_foc_q31_t;
 
 typedef struct {
-    q31_t ia, ib, ic;           /**< phase currents (pu); ic read only if three_phase */
+    q31_t ia, ib, ic; /**< phase currents (pu); ic read only if three_phase */
     bool three_phase;
-    q31_t theta_e;              /**< electrical angle (q31 turn) */
-    q31_t omega_e;              /**< electrical speed (pu) */
-    q31_t vbus;                 /**< DC bus (pu of v_base) */
-    q31_t id_ref, iq_ref;       /**< current references (pu) */
+    q31_t theta_e;        /**< electrical angle (q31 turn) */
+    q31_t omega_e;        /**< electrical speed (pu) */
+    q31_t vbus;           /**< DC bus (pu of v_base) */
+    q31_t id_ref, iq_ref; /**< current references (pu) */
 } mc_foc_q31_in_t;
 
 typedef struct {
-    q31_t duty_a, duty_b, duty_c;   /**< [0, 1) */
-    q31_t id, iq;                   /**< measured dq currents (pu) */
-    q31_t vd, vq;                   /**< applied dq voltages (pu) */
-    q31_t v_alpha, v_beta;          /**< applied alpha-beta voltages (pu) */
+    q31_t duty_a, duty_b, duty_c; /**< [0, 1) */
+    q31_t id, iq;                 /**< measured dq currents (pu) */
+    q31_t vd, vq;                 /**< applied dq voltages (pu) */
+    q31_t v_alpha, v_beta;        /**< applied alpha-beta voltages (pu) */
     uint32_t svpwm_flags;
     uint32_t flags;
 } mc_foc_q31_out_t;

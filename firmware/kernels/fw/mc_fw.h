@@ -48,44 +48,45 @@
 extern "C" {
 #endif
 
-#define MC_FW_ERR_NONE     0u
-#define MC_FW_ERR_NULL     (1u << 0) /**< NULL pointer */
-#define MC_FW_ERR_MOTOR    (1u << 1) /**< ld, lq, flux not > 0 or not finite */
-#define MC_FW_ERR_LIMIT    (1u << 2) /**< i_max not > 0, v_margin not in (0, 1],
+#define MC_FW_ERR_NONE  0u
+#define MC_FW_ERR_NULL  (1u << 0) /**< NULL pointer */
+#define MC_FW_ERR_MOTOR (1u << 1) /**< ld, lq, flux not > 0 or not finite */
+#define MC_FW_ERR_LIMIT \
+    (1u << 2)                     /**< i_max not > 0, v_margin not in (0, 1],
                                           k_demag not in (0, 1] */
-#define MC_FW_ERR_GAIN     (1u << 3) /**< ki_fw < 0, dt not > 0, not finite */
-#define MC_FW_ERR_INPUT    (1u << 4) /**< a non-finite input (state unchanged) */
+#define MC_FW_ERR_GAIN  (1u << 3) /**< ki_fw < 0, dt not > 0, not finite */
+#define MC_FW_ERR_INPUT (1u << 4) /**< a non-finite input (state unchanged) */
 
 typedef struct {
-    float ld_h;          /**< d inductance [H], > 0 */
-    float lq_h;          /**< q inductance [H], > 0 */
-    float flux_wb;       /**< PM flux linkage [Wb], > 0 */
-    float i_max_a;       /**< current circle radius [A], > 0 */
-    float v_margin;      /**< v_max = v_margin vbus / sqrt 3, (0, 1] */
+    float ld_h;           /**< d inductance [H], > 0 */
+    float lq_h;           /**< q inductance [H], > 0 */
+    float flux_wb;        /**< PM flux linkage [Wb], > 0 */
+    float i_max_a;        /**< current circle radius [A], > 0 */
+    float v_margin;       /**< v_max = v_margin vbus / sqrt 3, (0, 1] */
     float ki_fw_a_per_vs; /**< FW integrator gain [A/(V s)], >= 0 (0: FW off) */
-    float k_demag;       /**< id >= -k_demag flux / Ld, (0, 1] */
-    float dt_s;          /**< step [s], > 0 */
+    float k_demag;        /**< id >= -k_demag flux / Ld, (0, 1] */
+    float dt_s;           /**< step [s], > 0 */
 } mc_fw_f32_cfg_t;
 
 typedef struct {
     mc_fw_f32_cfg_t cfg;
-    float dl_h;          /**< Lq - Ld (derived) */
-    bool salient;        /**< |dL| > 1e-3 max(Ld, Lq) (derived) */
-    float id_min_a;      /**< demagnetisation / circle bound [A] (derived) */
-    float id_fw_a;       /**< FW integrator [A], in [id_min, 0] */
+    float dl_h;     /**< Lq - Ld (derived) */
+    bool salient;   /**< |dL| > 1e-3 max(Ld, Lq) (derived) */
+    float id_min_a; /**< demagnetisation / circle bound [A] (derived) */
+    float id_fw_a;  /**< FW integrator [A], in [id_min, 0] */
 } mc_fw_f32_t;
 
 typedef struct {
-    float i_cmd_a;       /**< signed current command [A] */
-    float vd_v, vq_v;    /**< voltage applied by the current loop last step [V] */
-    float vbus_v;        /**< DC bus [V] */
+    float i_cmd_a;    /**< signed current command [A] */
+    float vd_v, vq_v; /**< voltage applied by the current loop last step [V] */
+    float vbus_v;     /**< DC bus [V] */
 } mc_fw_f32_in_t;
 
 typedef struct {
     float id_ref_a, iq_ref_a;
-    float id_mtpa_a;     /**< the MTPA d current for |i_cmd| */
-    float v_mag_v;       /**< |v_dq| seen */
-    float v_max_v;       /**< the FW target */
+    float id_mtpa_a; /**< the MTPA d current for |i_cmd| */
+    float v_mag_v;   /**< |v_dq| seen */
+    float v_max_v;   /**< the FW target */
 } mc_fw_f32_out_t;
 
 /** Validate cfg, derive, reset. Returns MC_FW_ERR_* (0: ok; on error st unchanged). */

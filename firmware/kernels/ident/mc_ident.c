@@ -136,8 +136,7 @@ uint32_t mc_ident_circ_f32_step(mc_ident_circ_f32_t *st, float angle_rad)
     return MC_IDENT_ERR_NONE;
 }
 
-uint32_t mc_ident_circ_f32_get(const mc_ident_circ_f32_t *st, float *p_mean_rad,
-                               float *p_resultant)
+uint32_t mc_ident_circ_f32_get(const mc_ident_circ_f32_t *st, float *p_mean_rad, float *p_resultant)
 {
     float ms = 0.0f;
     float mc = 0.0f;

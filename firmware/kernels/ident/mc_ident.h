@@ -32,9 +32,9 @@ extern "C" {
 
 /** Compensated running sum / mean. */
 typedef struct {
-    float sum;      /**< running sum */
-    float comp;     /**< Kahan compensation */
-    uint32_t n;     /**< samples added */
+    float sum;  /**< running sum */
+    float comp; /**< Kahan compensation */
+    uint32_t n; /**< samples added */
 } mc_ident_avg_f32_t;
 
 uint32_t mc_ident_avg_f32_reset(mc_ident_avg_f32_t *st);

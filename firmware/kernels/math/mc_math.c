@@ -219,8 +219,9 @@ static void sincos_quadrant(float r, uint32_t q, float *p_sin, float *p_cos)
     const float z = r * r;
     const float s =
         r * (1.0f + (z * (MC_MATH_SIN_S1 + (z * (MC_MATH_SIN_S2 + (z * MC_MATH_SIN_S3))))));
-    const float c = 1.0f + (z * (-0.5f + (z * (MC_MATH_COS_C1 +
-                                               (z * (MC_MATH_COS_C2 + (z * MC_MATH_COS_C3)))))));
+    const float c =
+        1.0f +
+        (z * (-0.5f + (z * (MC_MATH_COS_C1 + (z * (MC_MATH_COS_C2 + (z * MC_MATH_COS_C3)))))));
     float a = s;
     float b = c;
     if ((q & 1u) != 0u) {

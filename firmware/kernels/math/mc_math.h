@@ -28,10 +28,10 @@
 extern "C" {
 #endif
 
-#define MC_PI_F32      3.14159265358979323846f
-#define MC_TWO_PI_F32  6.28318530717958647692f
-#define MC_HALF_PI_F32 1.57079632679489661923f
-#define MC_SQRT3_F32   1.73205080756887729353f
+#define MC_PI_F32        3.14159265358979323846f
+#define MC_TWO_PI_F32    6.28318530717958647692f
+#define MC_HALF_PI_F32   1.57079632679489661923f
+#define MC_SQRT3_F32     1.73205080756887729353f
 #define MC_INV_SQRT3_F32 0.57735026918962576451f
 
 /** true if x is neither NaN nor +-infinity (no libm, no integer conversion). */
@@ -194,11 +194,11 @@ float mc_atan2_f32(float y, float x);
  * minimax fit of atan t = t + t^3 (A1 + A2 t^2 + A3 t^4 + A4 t^6) on
  * |t| <= tan(pi/8) (Lawson iteration, weighted to the absolute error),
  * error < 5e-9 rad with the float coefficients. */
-#define MC_MATH_ATAN_A1 (-3.333275616e-01f)
-#define MC_MATH_ATAN_A2 1.997187883e-01f
-#define MC_MATH_ATAN_A3 (-1.382445395e-01f)
-#define MC_MATH_ATAN_A4 7.902597636e-02f
-#define MC_MATH_TAN_PI_8_F32 0.414213562373095049f
+#define MC_MATH_ATAN_A1        (-3.333275616e-01f)
+#define MC_MATH_ATAN_A2        1.997187883e-01f
+#define MC_MATH_ATAN_A3        (-1.382445395e-01f)
+#define MC_MATH_ATAN_A4        7.902597636e-02f
+#define MC_MATH_TAN_PI_8_F32   0.414213562373095049f
 #define MC_MATH_QUARTER_PI_F32 0.785398163397448310f
 
 /**
@@ -220,9 +220,8 @@ static inline float mc_atan_ratio_f32(float num, float den)
     }
     const float t = n / d;
     const float t2 = t * t;
-    const float p =
-        MC_MATH_ATAN_A1 +
-        (t2 * (MC_MATH_ATAN_A2 + (t2 * (MC_MATH_ATAN_A3 + (t2 * MC_MATH_ATAN_A4)))));
+    const float p = MC_MATH_ATAN_A1 +
+                    (t2 * (MC_MATH_ATAN_A2 + (t2 * (MC_MATH_ATAN_A3 + (t2 * MC_MATH_ATAN_A4)))));
     return base + (t + ((t * t2) * p));
 }
 

@@ -50,15 +50,15 @@ static int32_t fixed_from_f32(float x, float scale, int32_t lo, int32_t hi)
     if (x != x) {
         return 0;
     }
-    float v = x * scale; /* power of two: exact unless it overflows to inf */
+    float v = x * scale;      /* power of two: exact unless it overflows to inf */
     if (v >= 2147483648.0f) { /* 2^31: out of range (2^31 - 128 is the largest float below) */
         return hi;
     }
     if (v <= -2147483648.0f) {
         return lo;
     }
-    int32_t t = (int32_t)v;      /* truncation, in range */
-    float d = v - (float)t;      /* exact: |v| < 2^24 or v is an integer */
+    int32_t t = (int32_t)v; /* truncation, in range */
+    float d = v - (float)t; /* exact: |v| < 2^24 or v is an integer */
     int64_t r = t;
     if (d >= 0.5f) {
         r += 1;
@@ -137,8 +137,8 @@ void mc_sincos_q31(q31_t angle, q31_t *p_sin, q31_t *p_cos)
     uint32_t u = (uint32_t)angle;
     uint32_t q = ((u + 0x20000000u) >> 30) & 3u;
     uint32_t rem_u = u - (q << 30);
-    int64_t rem = i32_from_u32(rem_u);  /* [-2^29, 2^29) */
-    int64_t t = rem * 2;                /* t in Q31, |t| <= 2^30 */
+    int64_t rem = i32_from_u32(rem_u);   /* [-2^29, 2^29) */
+    int64_t t = rem * 2;                 /* t in Q31, |t| <= 2^30 */
     int64_t v = rshift_round(t * t, 31); /* t^2 in Q31, <= 2^29 */
 
     int64_t ps = k_sin_q30[5];
@@ -182,11 +182,11 @@ void mc_sincos_q31(q31_t angle, q31_t *p_sin, q31_t *p_cos)
 /* atan(2^-i) / (2*pi) in units of 2^-40 turn (q31 angle LSB / 256). */
 #define CORDIC_STEPS 34
 static const int64_t k_cordic_atan[CORDIC_STEPS] = {
-    137438953472, 81134951838, 42869480287, 21761217566, 10922836750,
-    5466743129, 2734038620, 1367102738, 683561799, 341782203, 170891265,
-    85445653, 42722829, 21361415, 10680707, 5340354, 2670177, 1335088,
-    667544, 333772, 166886, 83443, 41722, 20861, 10430, 5215, 2608, 1304,
-    652, 326, 163, 81, 41, 20,
+    137438953472, 81134951838, 42869480287, 21761217566, 10922836750, 5466743129, 2734038620,
+    1367102738,   683561799,   341782203,   170891265,   85445653,    42722829,   21361415,
+    10680707,     5340354,     2670177,     1335088,     667544,      333772,     166886,
+    83443,        41722,       20861,       10430,       5215,        2608,       1304,
+    652,          326,         163,         81,          41,          20,
 };
 
 q31_t mc_atan2_q31(q31_t y, q31_t x)

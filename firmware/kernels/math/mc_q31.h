@@ -75,7 +75,7 @@ static inline q31_t mc_q31_abs_sat(q31_t a)
  */
 static inline q31_t mc_q31_mul(q31_t a, q31_t b)
 {
-    int64_t p = (int64_t)a * (int64_t)b;          /* Q2.62 */
+    int64_t p = (int64_t)a * (int64_t)b; /* Q2.62 */
     return mc_q31_sat64((p + ((int64_t)1 << 30)) >> 31);
 }
 
@@ -88,8 +88,8 @@ static inline q31_t mc_q31_sat(q31_t x, q31_t lo, q31_t hi)
 /** Add two q31 angles (normalised turn): wraps modulo one turn, exactly. */
 static inline q31_t mc_q31_angle_add(q31_t a, q31_t b)
 {
-    uint32_t s = (uint32_t)a + (uint32_t)b;   /* modular, no UB */
-    return (q31_t)(int32_t)s;                  /* two's complement (C11 impl.-defined, GCC: modular) */
+    uint32_t s = (uint32_t)a + (uint32_t)b; /* modular, no UB */
+    return (q31_t)(int32_t)s;               /* two's complement (C11 impl.-defined, GCC: modular) */
 }
 
 /**

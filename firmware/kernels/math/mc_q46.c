@@ -109,13 +109,13 @@ int64_t mc_q46_mul_q31(mc_q46_gain_t g, q31_t x)
 int64_t mc_q46_mul(mc_q46_gain_t g, int64_t a)
 {
     const int64_t as = mc_q46_sat(a);
-    const int64_t hi = mc_q46_asr(as, 31u);               /* |hi| <= 2^31 */
-    const int64_t lo = as - (hi * ((int64_t)1 << 31));    /* [0, 2^31) */
-    const int64_t t = hi * (int64_t)g.mant;               /* |t| <= 2^62 */
-    const int64_t u = lo * (int64_t)g.mant;               /* |u| < 2^62 */
+    const int64_t hi = mc_q46_asr(as, 31u);            /* |hi| <= 2^31 */
+    const int64_t lo = as - (hi * ((int64_t)1 << 31)); /* [0, 2^31) */
+    const int64_t t = hi * (int64_t)g.mant;            /* |t| <= 2^62 */
+    const int64_t u = lo * (int64_t)g.mant;            /* |u| < 2^62 */
     int64_t r_hi;
     int64_t r_lo;
-    const int32_t s = g.shift;                            /* a*g = t 2^s + u 2^(s-31) */
+    const int32_t s = g.shift; /* a*g = t 2^s + u 2^(s-31) */
 
     if (s >= 0) {
         r_hi = q46_lshift_sat(t, (uint32_t)s);

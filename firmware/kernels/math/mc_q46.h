@@ -39,15 +39,15 @@
 extern "C" {
 #endif
 
-#define MC_Q46_ONE ((int64_t)1 << 46)          /**< 1.0 per unit */
-#define MC_Q46_LIM (((int64_t)1 << 62) - 1)    /**< saturation bound (2^16 per unit, less 1 LSB) */
+#define MC_Q46_ONE       ((int64_t)1 << 46)       /**< 1.0 per unit */
+#define MC_Q46_LIM       (((int64_t)1 << 62) - 1) /**< saturation bound (2^16 per unit, less 1 LSB) */
 #define MC_Q46_SHIFT_MIN (-48)
 #define MC_Q46_SHIFT_MAX 30
 
 /** g = mant * 2^(shift - 31). */
 typedef struct {
-    int32_t mant;   /**< |mant| < 2^31; normalised to [2^30, 2^31) unless 0 */
-    int32_t shift;  /**< MC_Q46_SHIFT_MIN .. MC_Q46_SHIFT_MAX */
+    int32_t mant;  /**< |mant| < 2^31; normalised to [2^30, 2^31) unless 0 */
+    int32_t shift; /**< MC_Q46_SHIFT_MIN .. MC_Q46_SHIFT_MAX */
 } mc_q46_gain_t;
 
 /**

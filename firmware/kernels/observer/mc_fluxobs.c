@@ -115,15 +115,15 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
 /* The angle when the inline atan2 cannot take it (e = 0, or |e| beyond
  * float range), stored last and out of line, so that the common step calls
  * nothing and needs no stack frame. Returns the step's flags. */
-static FLUXOBS_NOINLINE uint32_t fluxobs_finish_special(mc_fluxobs_f32_t *st, float eb,
-                                                        float ea, uint32_t raised)
+static FLUXOBS_NOINLINE uint32_t fluxobs_finish_special(mc_fluxobs_f32_t *st, float eb, float ea,
+                                                        uint32_t raised)
 {
     st->theta_e_rad = mc_atan2_f32(eb, ea);
     return raised;
 }
 
-uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta_v,
-                             float i_alpha_a, float i_beta_a)
+uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta_v, float i_alpha_a,
+                             float i_beta_a)
 {
     const mc_fluxobs_f32_cfg_t *cfg;
     float xa;

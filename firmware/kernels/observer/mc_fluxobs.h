@@ -84,30 +84,30 @@ extern "C" {
 
 /** Configuration. */
 typedef struct {
-    float r_ohm;         /**< stator resistance [ohm], >= 0 */
-    float l_h;           /**< stator inductance [H], > 0 (non-salient machine) */
-    float flux_wb;       /**< PM flux linkage (peak, per phase) [Wb], > 0 */
-    float gamma;         /**< observer gain [1/(Wb^2 s)], > 0 */
-    float dt_s;          /**< step period [s], > 0 */
-    float resid_tol;     /**< divergence monitor: tolerated | |e|/flux - 1 |, > 0 (e.g. 0.3) */
-    float resid_time_s;  /**< ... for this long before the flag, >= 0 (e.g. 0.05) */
+    float r_ohm;        /**< stator resistance [ohm], >= 0 */
+    float l_h;          /**< stator inductance [H], > 0 (non-salient machine) */
+    float flux_wb;      /**< PM flux linkage (peak, per phase) [Wb], > 0 */
+    float gamma;        /**< observer gain [1/(Wb^2 s)], > 0 */
+    float dt_s;         /**< step period [s], > 0 */
+    float resid_tol;    /**< divergence monitor: tolerated | |e|/flux - 1 |, > 0 (e.g. 0.3) */
+    float resid_time_s; /**< ... for this long before the flag, >= 0 (e.g. 0.05) */
 } mc_fluxobs_f32_cfg_t;
 
 /** State. Read-only for callers. */
 typedef struct {
     mc_fluxobs_f32_cfg_t cfg;
-    float half_gamma_dt;  /**< gamma dt / 2 (derived) */
-    float half_r_ohm;     /**< R / 2 (derived) */
+    float half_gamma_dt;   /**< gamma dt / 2 (derived) */
+    float half_r_ohm;      /**< R / 2 (derived) */
     float inv_flux_per_wb; /**< 1 / flux (derived) */
-    float flux2;          /**< flux^2 [Wb^2] (derived) */
-    float x_alpha_wb;     /**< flux estimate xh [Wb] */
+    float flux2;           /**< flux^2 [Wb^2] (derived) */
+    float x_alpha_wb;      /**< flux estimate xh [Wb] */
     float x_beta_wb;
     float i_alpha_prev_a; /**< current at the start of the step [A] */
     float i_beta_prev_a;
-    float theta_e_rad;    /**< angle estimate, [-pi, pi) */
-    float resid;          /**< |e|/flux - 1 of the last step */
-    float resid_bad_s;    /**< time the residual has been out of tolerance [s] */
-    uint32_t flags;       /**< sticky MC_FLUXOBS_ERR_* */
+    float theta_e_rad; /**< angle estimate, [-pi, pi) */
+    float resid;       /**< |e|/flux - 1 of the last step */
+    float resid_bad_s; /**< time the residual has been out of tolerance [s] */
+    uint32_t flags;    /**< sticky MC_FLUXOBS_ERR_* */
 } mc_fluxobs_f32_t;
 
 /**
@@ -131,8 +131,8 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
  * period [V]. Returns the MC_FLUXOBS_ERR_* bits raised by this step
  * (NAN_INPUT, DIVERGED); st->flags keeps them.
  */
-uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta_v,
-                             float i_alpha_a, float i_beta_a);
+uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta_v, float i_alpha_a,
+                             float i_beta_a);
 
 /**
  * gamma [1/(Wb^2 s)] whose critical speed (Prop. 4) is omega_crit_m_rad_s:

@@ -63,8 +63,7 @@ uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *c
     return MC_FLUXOBS_ERR_NONE;
 }
 
-uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha,
-                              q31_t i_beta)
+uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha, q31_t i_beta)
 {
     q31_t s;
     q31_t c;
@@ -73,10 +72,10 @@ uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_a
         return MC_FLUXOBS_ERR_NULL;
     }
     mc_sincos_q31(theta_guess, &s, &c);
-    st->x_alpha_q46 = mc_q46_add(mc_q46_mul_q31(st->g_l, i_alpha),
-                                 mc_q46_from_q31(mc_q31_mul(st->flux_pu, c)));
-    st->x_beta_q46 = mc_q46_add(mc_q46_mul_q31(st->g_l, i_beta),
-                                mc_q46_from_q31(mc_q31_mul(st->flux_pu, s)));
+    st->x_alpha_q46 =
+        mc_q46_add(mc_q46_mul_q31(st->g_l, i_alpha), mc_q46_from_q31(mc_q31_mul(st->flux_pu, c)));
+    st->x_beta_q46 =
+        mc_q46_add(mc_q46_mul_q31(st->g_l, i_beta), mc_q46_from_q31(mc_q31_mul(st->flux_pu, s)));
     st->i_alpha_prev = i_alpha;
     st->i_beta_prev = i_beta;
     st->theta = theta_guess;

@@ -43,27 +43,28 @@
 extern "C" {
 #endif
 
-#define MC_FLUXOBS_ERR_SCALE (1u << 8) /**< a base <= 0 / not finite, flux >= flux_base, or a gain out of range */
+#define MC_FLUXOBS_ERR_SCALE \
+    (1u << 8) /**< a base <= 0 / not finite, flux >= flux_base, or a gain out of range */
 
 typedef struct {
-    mc_fluxobs_f32_cfg_t f;   /**< R, L, flux, gamma, dt, monitor: as the f32 kernel */
-    float i_base_a;           /**< current base [A], > 0 */
-    float v_base_v;           /**< voltage base [V], > 0 */
-    float flux_base_wb;       /**< flux base [Wb], > flux */
+    mc_fluxobs_f32_cfg_t f; /**< R, L, flux, gamma, dt, monitor: as the f32 kernel */
+    float i_base_a;         /**< current base [A], > 0 */
+    float v_base_v;         /**< voltage base [V], > 0 */
+    float flux_base_wb;     /**< flux base [Wb], > flux */
 } mc_fluxobs_q31_cfg_t;
 
 typedef struct {
-    mc_q46_gain_t g_v;        /**< dt v_base/flux_base */
-    mc_q46_gain_t g_r;        /**< dt R i_base/(2 flux_base) */
-    mc_q46_gain_t g_l;        /**< L i_base/flux_base */
-    mc_q46_gain_t g_k;        /**< gamma dt flux_base^2 / 2 */
-    uint64_t flux2_q62;       /**< (flux/flux_base)^2 in Q62 */
-    q31_t flux_pu;            /**< flux/flux_base */
-    q31_t resid_tol;          /**< tolerated | |e|/flux - 1 | in q31 */
-    uint32_t resid_steps;     /**< steps out of tolerance before the flag */
-    int64_t x_alpha_q46;      /**< flux estimate (Q46 of flux_base) */
+    mc_q46_gain_t g_v;    /**< dt v_base/flux_base */
+    mc_q46_gain_t g_r;    /**< dt R i_base/(2 flux_base) */
+    mc_q46_gain_t g_l;    /**< L i_base/flux_base */
+    mc_q46_gain_t g_k;    /**< gamma dt flux_base^2 / 2 */
+    uint64_t flux2_q62;   /**< (flux/flux_base)^2 in Q62 */
+    q31_t flux_pu;        /**< flux/flux_base */
+    q31_t resid_tol;      /**< tolerated | |e|/flux - 1 | in q31 */
+    uint32_t resid_steps; /**< steps out of tolerance before the flag */
+    int64_t x_alpha_q46;  /**< flux estimate (Q46 of flux_base) */
     int64_t x_beta_q46;
-    q31_t i_alpha_prev;       /**< current at the start of the step (pu) */
+    q31_t i_alpha_prev; /**< current at the start of the step (pu) */
     q31_t i_beta_prev;
     q31_t theta;              /**< angle estimate (q31 turn) */
     q31_t resid;              /**< |e|/flux - 1 of the last step (q31, saturated) */
@@ -77,8 +78,7 @@ uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *c
 /** Restart from an angle guess (q31 turn) and the present current (pu),
  *  flags cleared. Returns MC_FLUXOBS_ERR_NONE, or MC_FLUXOBS_ERR_NULL for a
  *  NULL st. */
-uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha,
-                              q31_t i_beta);
+uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha, q31_t i_beta);
 
 /** One step (see mc_fluxobs_f32_step); returns the bits raised (DIVERGED). */
 uint32_t mc_fluxobs_q31_step(mc_fluxobs_q31_t *st, q31_t v_alpha, q31_t v_beta, q31_t i_alpha,

@@ -127,10 +127,12 @@ void mc_hgo_f32_advance_start(mc_hgo_f32_t *st, float y)
     const float z1 = st->z[1];
     const float z2 = st->z[2];
     const float *p = st->pz;
-    st->z[0] = (y + (((p[0] * d0) + (p[1] * z1)) + (p[2] * z2))) +
-               ((st->g1z[0] * v1) + (st->g2z[0] * v2));
-    st->z[1] = (((p[3] * d0) + (p[4] * z1)) + (p[5] * z2)) + ((st->g1z[1] * v1) + (st->g2z[1] * v2));
-    st->z[2] = (((p[6] * d0) + (p[7] * z1)) + (p[8] * z2)) + ((st->g1z[2] * v1) + (st->g2z[2] * v2));
+    st->z[0] =
+        (y + (((p[0] * d0) + (p[1] * z1)) + (p[2] * z2))) + ((st->g1z[0] * v1) + (st->g2z[0] * v2));
+    st->z[1] =
+        (((p[3] * d0) + (p[4] * z1)) + (p[5] * z2)) + ((st->g1z[1] * v1) + (st->g2z[1] * v2));
+    st->z[2] =
+        (((p[6] * d0) + (p[7] * z1)) + (p[8] * z2)) + ((st->g1z[2] * v1) + (st->g2z[2] * v2));
     st->y2 = st->y1;
     st->y1 = y;
     st->n_hist += 1u;

@@ -73,49 +73,50 @@
 extern "C" {
 #endif
 
-#define MC_HGO_ERR_NONE      0u
-#define MC_HGO_ERR_NULL      (1u << 0)  /**< a required pointer is NULL */
-#define MC_HGO_ERR_ALPHA     (1u << 1)  /**< alpha_i <= 0, not finite, or alpha1 alpha2 <= alpha3 */
-#define MC_HGO_ERR_EPS       (1u << 2)  /**< eps_s <= 0, not finite, or 1/eps^2 not finite */
-#define MC_HGO_ERR_DT        (1u << 3)  /**< dt_s <= 0 or not finite */
-#define MC_HGO_ERR_DISCRETE  (1u << 4)  /**< the matrix exponential could not be formed (dt/eps too large) */
-#define MC_HGO_ERR_NAN_INPUT (1u << 5)  /**< sticky: a step got a non-finite y and was refused */
-#define MC_HGO_ERR_ORDER     (1u << 6)  /**< input_order > 2 */
+#define MC_HGO_ERR_NONE  0u
+#define MC_HGO_ERR_NULL  (1u << 0) /**< a required pointer is NULL */
+#define MC_HGO_ERR_ALPHA (1u << 1) /**< alpha_i <= 0, not finite, or alpha1 alpha2 <= alpha3 */
+#define MC_HGO_ERR_EPS   (1u << 2) /**< eps_s <= 0, not finite, or 1/eps^2 not finite */
+#define MC_HGO_ERR_DT    (1u << 3) /**< dt_s <= 0 or not finite */
+#define MC_HGO_ERR_DISCRETE \
+    (1u << 4) /**< the matrix exponential could not be formed (dt/eps too large) */
+#define MC_HGO_ERR_NAN_INPUT (1u << 5) /**< sticky: a step got a non-finite y and was refused */
+#define MC_HGO_ERR_ORDER     (1u << 6) /**< input_order > 2 */
 
 typedef struct {
-    float alpha1;          /**< [-], > 0 */
-    float alpha2;          /**< [-], > 0 */
-    float alpha3;          /**< [-], > 0, < alpha1 alpha2 */
-    float eps_s;           /**< observer time scale eps [s], > 0 */
-    float dt_s;            /**< control period [s], > 0 */
-    uint32_t input_order;  /**< y between samples: 0 held, 1 ramp, 2 parabola (see above) */
+    float alpha1;         /**< [-], > 0 */
+    float alpha2;         /**< [-], > 0 */
+    float alpha3;         /**< [-], > 0, < alpha1 alpha2 */
+    float eps_s;          /**< observer time scale eps [s], > 0 */
+    float dt_s;           /**< control period [s], > 0 */
+    uint32_t input_order; /**< y between samples: 0 held, 1 ramp, 2 parabola (see above) */
 } mc_hgo_f32_cfg_t;
 
 typedef struct {
-    float phi[9];          /**< exp(A0 dt/eps), row-major */
-    float g1[3];           /**< response to the ramp coefficient v1 */
-    float g2[3];           /**< response to the parabola coefficient v2 */
-    float inv_eps;         /**< 1/eps [1/s] */
-    float inv_eps2;        /**< 1/eps^2 [1/s^2] */
+    float phi[9];   /**< exp(A0 dt/eps), row-major */
+    float g1[3];    /**< response to the ramp coefficient v1 */
+    float g2[3];    /**< response to the parabola coefficient v2 */
+    float inv_eps;  /**< 1/eps [1/s] */
+    float inv_eps2; /**< 1/eps^2 [1/s^2] */
     float eps_s;
     uint32_t input_order;
-    uint32_t n_hist;       /**< past samples available (0..2) */
-    float y1;              /**< y[k-1] */
-    float y2;              /**< y[k-2] */
-    float pz[9];           /**< Phi in the coordinates z: D^-1 Phi D, D = diag(1, eps, eps^2) */
-    float g1z[3];          /**< D^-1 G1 */
-    float g2z[3];          /**< D^-1 G2 */
-    float gdy[3];          /**< with two past samples: coefficient of dy = y[k] - y[k-1] */
-    float gd2y[3];         /**< ... and of d2y = y[k] - 2 y[k-1] + y[k-2] (per input_order) */
-    float z[3];            /**< the state, (z1, z2, z3) = D^-1 eta */
-    uint32_t flags;        /**< sticky MC_HGO_ERR_NAN_INPUT */
+    uint32_t n_hist; /**< past samples available (0..2) */
+    float y1;        /**< y[k-1] */
+    float y2;        /**< y[k-2] */
+    float pz[9];     /**< Phi in the coordinates z: D^-1 Phi D, D = diag(1, eps, eps^2) */
+    float g1z[3];    /**< D^-1 G1 */
+    float g2z[3];    /**< D^-1 G2 */
+    float gdy[3];    /**< with two past samples: coefficient of dy = y[k] - y[k-1] */
+    float gd2y[3];   /**< ... and of d2y = y[k] - 2 y[k-1] + y[k-2] (per input_order) */
+    float z[3];      /**< the state, (z1, z2, z3) = D^-1 eta */
+    uint32_t flags;  /**< sticky MC_HGO_ERR_NAN_INPUT */
 } mc_hgo_f32_t;
 
 /** Estimates at one sample, in the units of y: y, y/s, y/s^2. */
 typedef struct {
-    float z1;  /**< estimate of y */
-    float z2;  /**< estimate of dy/dt */
-    float z3;  /**< estimate of d2y/dt2 */
+    float z1; /**< estimate of y */
+    float z2; /**< estimate of dy/dt */
+    float z3; /**< estimate of d2y/dt2 */
 } mc_hgo_f32_est_t;
 
 /** Validate cfg, form Phi, G1, G2, zero the state. On error st is not written. */
@@ -170,8 +171,10 @@ static inline void mc_hgo_f32_advance_run(mc_hgo_f32_t *st, float y)
     const float *p = st->pz;
     st->z[0] = (y + (((p[0] * d0) + (p[1] * z1)) + (p[2] * z2))) +
                ((st->gdy[0] * dy) + (st->gd2y[0] * d2y));
-    st->z[1] = (((p[3] * d0) + (p[4] * z1)) + (p[5] * z2)) + ((st->gdy[1] * dy) + (st->gd2y[1] * d2y));
-    st->z[2] = (((p[6] * d0) + (p[7] * z1)) + (p[8] * z2)) + ((st->gdy[2] * dy) + (st->gd2y[2] * d2y));
+    st->z[1] =
+        (((p[3] * d0) + (p[4] * z1)) + (p[5] * z2)) + ((st->gdy[1] * dy) + (st->gd2y[1] * d2y));
+    st->z[2] =
+        (((p[6] * d0) + (p[7] * z1)) + (p[8] * z2)) + ((st->gdy[2] * dy) + (st->gd2y[2] * d2y));
     st->y2 = y1;
     st->y1 = y;
 }

@@ -39,11 +39,10 @@ uint32_t mc_hgo_q31_init(mc_hgo_q31_t *st, const mc_hgo_q31_cfg_t *cfg)
         ok = ok && mc_q46_gain_from_f32(ref.g2[i], &t.g2[i]);
     }
     ok = ok && mc_q46_gain_from_f32((cfg->y_base * ref.inv_eps) / cfg->z2_base, &t.out2);
-    ok = ok && mc_q46_gain_from_f32(((cfg->y_base * ref.inv_eps) * ref.inv_eps) / cfg->z3_base,
-                                    &t.out3);
+    ok = ok &&
+         mc_q46_gain_from_f32(((cfg->y_base * ref.inv_eps) * ref.inv_eps) / cfg->z3_base, &t.out3);
     ok = ok && mc_q46_gain_from_f32((cfg->z2_base * ref.eps_s) / cfg->y_base, &t.in2);
-    ok = ok && mc_q46_gain_from_f32(((cfg->z3_base * ref.eps_s) * ref.eps_s) / cfg->y_base,
-                                    &t.in3);
+    ok = ok && mc_q46_gain_from_f32(((cfg->z3_base * ref.eps_s) * ref.eps_s) / cfg->y_base, &t.in3);
     if (!ok) {
         return MC_HGO_ERR_SCALE;
     }

@@ -39,23 +39,23 @@ extern "C" {
 #define MC_HGO_ERR_SCALE (1u << 7) /**< a base <= 0 / not finite, or an output gain out of range */
 
 typedef struct {
-    mc_hgo_f32_cfg_t f;     /**< alpha, eps, dt, input order: as the f32 kernel */
-    float y_base;           /**< base of y and z1, > 0 */
-    float z2_base;          /**< base of z2 [y/s], > 0 */
-    float z3_base;          /**< base of z3 [y/s^2], > 0 */
+    mc_hgo_f32_cfg_t f; /**< alpha, eps, dt, input order: as the f32 kernel */
+    float y_base;       /**< base of y and z1, > 0 */
+    float z2_base;      /**< base of z2 [y/s], > 0 */
+    float z3_base;      /**< base of z3 [y/s^2], > 0 */
 } mc_hgo_q31_cfg_t;
 
 typedef struct {
     mc_q46_gain_t phi[9];
     mc_q46_gain_t g1[3];
     mc_q46_gain_t g2[3];
-    mc_q46_gain_t out2;     /**< y_base/(eps z2_base) */
-    mc_q46_gain_t out3;     /**< y_base/(eps^2 z3_base) */
-    mc_q46_gain_t in2;      /**< eps z2_base/y_base (reset: z2 to eta2) */
-    mc_q46_gain_t in3;      /**< eps^2 z3_base/y_base (reset: z3 to eta3) */
+    mc_q46_gain_t out2; /**< y_base/(eps z2_base) */
+    mc_q46_gain_t out3; /**< y_base/(eps^2 z3_base) */
+    mc_q46_gain_t in2;  /**< eps z2_base/y_base (reset: z2 to eta2) */
+    mc_q46_gain_t in3;  /**< eps^2 z3_base/y_base (reset: z3 to eta3) */
     uint32_t input_order;
     uint32_t n_hist;
-    q31_t y1, y2;           /**< y[k-1], y[k-2] */
+    q31_t y1, y2; /**< y[k-1], y[k-2] */
     int64_t eta_q46[3];
 } mc_hgo_q31_t;
 

@@ -45,8 +45,8 @@ static uint32_t iiobs_validate(const mc_iiobs_f32_cfg_t *cfg)
     uint32_t err = MC_IIOBS_ERR_NONE;
     const bool gains_finite = pos_finite(cfg->a1) && pos_finite(cfg->a2);
     const bool time_ok = pos_finite(cfg->t_unit_s) && pos_finite(cfg->dt_s);
-    const bool mech_ok = pos_finite(cfg->j_kgm2) && (cfg->f_nms_rad >= 0.0f) &&
-                         mc_isfinite_f32(cfg->f_nms_rad);
+    const bool mech_ok =
+        pos_finite(cfg->j_kgm2) && (cfg->f_nms_rad >= 0.0f) && mc_isfinite_f32(cfg->f_nms_rad);
 
     if (!mech_ok) {
         err |= MC_IIOBS_ERR_MECH;
@@ -127,8 +127,8 @@ uint32_t mc_iiobs_f32_init(mc_iiobs_f32_t *st, const mc_iiobs_f32_cfg_t *cfg)
     v12 /= n2;
     v22 /= n2;
     smax = norm2_2x2(v11, v12, v21, v22, &absdet);
-    k.k3 = smax;                      /* ||T^-1|| = ||V|| */
-    k.k5 = (smax * smax) / absdet;    /* ||V|| ||V^-1|| = smax / smin, smax smin = |det| */
+    k.k3 = smax;                   /* ||T^-1|| = ||V|| */
+    k.k5 = (smax * smax) / absdet; /* ||V|| ||V^-1|| = smax / smin, smax smin = |det| */
     k.c_r = (k.k2 * k.k5 * k.k5) / (2.0f * k.k1);
     k.c_rho = 0.5f * (((k.k2 * k.k5 * k.k5) / k.k1) + (k.k3 * k.k3));
     if (!mc_isfinite_f32(k.c_rho) || !mc_isfinite_f32(k.c_r)) {
@@ -233,8 +233,8 @@ uint32_t mc_iiobs_f32_step(mc_iiobs_f32_t *st, float theta_m_rad, float tau_nm)
     drift = (st->tau_s_per_nm * tau_nm) - (st->f_s * st->eta1) - st->eta2;
     rho2_old = (hn1 * st->hh2) - (st->hh1 * hn2);
     rho2_new = (hn1 * g2) - (g1 * hn2);
-    st->xi1 += (st->dts * (drift - (st->eta1 * hth * k->delta1))) -
-               ((rho2_new - rho2_old) * k->delta1);
+    st->xi1 +=
+        (st->dts * (drift - (st->eta1 * hth * k->delta1))) - ((rho2_new - rho2_old) * k->delta1);
     st->xi2 += (st->dts * (-(st->eta1 * hth * k->delta2))) - ((rho2_new - rho2_old) * k->delta2);
 
     /* dynamic scaling */

@@ -78,38 +78,38 @@ extern "C" {
 #define MC_IIOBS_MAX_STEP 0.1f
 
 typedef struct {
-    float j_kgm2;        /**< inertia [kg m^2], > 0 */
-    float f_nms_rad;     /**< viscous friction [N m s/rad], >= 0 */
-    float a1;            /**< pole-shape gain, per t_unit (dimensionless), see (27) */
-    float a2;            /**< pole-shape gain, per t_unit^2 (dimensionless) */
-    float k4;            /**< injection gain per t_unit (dimensionless), > 0; small = less noise */
-    float t_unit_s;      /**< time unit of a1, a2, k4 [s], > 0 (poles at lambda_i / t_unit) */
-    float dt_s;          /**< step period [s], > 0 */
-    float r_max;         /**< clamp of the dynamic scaling, > 1 (e.g. 100) */
+    float j_kgm2;    /**< inertia [kg m^2], > 0 */
+    float f_nms_rad; /**< viscous friction [N m s/rad], >= 0 */
+    float a1;        /**< pole-shape gain, per t_unit (dimensionless), see (27) */
+    float a2;        /**< pole-shape gain, per t_unit^2 (dimensionless) */
+    float k4;        /**< injection gain per t_unit (dimensionless), > 0; small = less noise */
+    float t_unit_s;  /**< time unit of a1, a2, k4 [s], > 0 (poles at lambda_i / t_unit) */
+    float dt_s;      /**< step period [s], > 0 */
+    float r_max;     /**< clamp of the dynamic scaling, > 1 (e.g. 100) */
 } mc_iiobs_f32_cfg_t;
 
 /** Constants derived by init (scaled-time units). */
 typedef struct {
-    float k1, k2, k3, k5;     /**< (26), (29) */
-    float lambda1, lambda2;   /**< eigenvalues of A*, lambda2 < lambda1 = -k1 < 0 */
-    float delta1, delta2;     /**< delta of (26) */
-    float c_r;                /**< k2 k5^2 / (2 k1) */
-    float c_rho;              /**< (k2 k5^2 / k1 + k3^2) / 2 */
+    float k1, k2, k3, k5;   /**< (26), (29) */
+    float lambda1, lambda2; /**< eigenvalues of A*, lambda2 < lambda1 = -k1 < 0 */
+    float delta1, delta2;   /**< delta of (26) */
+    float c_r;              /**< k2 k5^2 / (2 k1) */
+    float c_rho;            /**< (k2 k5^2 / k1 + k3^2) / 2 */
 } mc_iiobs_f32_const_t;
 
 typedef struct {
     mc_iiobs_f32_cfg_t cfg;
     mc_iiobs_f32_const_t k;
-    float dts;                /**< dt / t_unit */
-    float f_s;                /**< f t_unit / J */
-    float tau_s_per_nm;       /**< t_unit^2 / J [1/(N m)] */
-    float hh1, hh2;           /**< h_hat */
-    float h1, h2;             /**< last measured h */
+    float dts;          /**< dt / t_unit */
+    float f_s;          /**< f t_unit / J */
+    float tau_s_per_nm; /**< t_unit^2 / J [1/(N m)] */
+    float hh1, hh2;     /**< h_hat */
+    float h1, h2;       /**< last measured h */
     float xi1, xi2;
-    float r;                  /**< dynamic scaling, [1, r_max] */
-    float eta1, eta2;         /**< eta_hat (scaled) */
-    bool primed;              /**< an angle has been seen */
-    uint32_t flags;           /**< sticky MC_IIOBS_ERR_* */
+    float r;          /**< dynamic scaling, [1, r_max] */
+    float eta1, eta2; /**< eta_hat (scaled) */
+    bool primed;      /**< an angle has been seen */
+    uint32_t flags;   /**< sticky MC_IIOBS_ERR_* */
 } mc_iiobs_f32_t;
 
 /** Validate cfg, compute the constants, initialise (estimates 0, r = 1,

@@ -59,15 +59,15 @@ typedef struct {
 } mc_spdpll_f32_cfg_t;
 
 typedef struct {
-    float kp_per_s;        /**< 2 bw (derived) */
-    float ki_dt_per_s;     /**< bw^2 dt (derived) [1/s] */
+    float kp_per_s;    /**< 2 bw (derived) */
+    float ki_dt_per_s; /**< bw^2 dt (derived) [1/s] */
     float dt_s;
     float omega_max_rad_s;
-    float theta_rad;       /**< z1: tracked angle, [-pi, pi); after a step it is the
+    float theta_rad;     /**< z1: tracked angle, [-pi, pi); after a step it is the
                                 prediction for the next sample (theta + omega dt) */
-    float omega_i_rad_s;   /**< integral part ki z2 [rad/s] */
-    float omega_rad_s;     /**< last speed estimate [rad/s] */
-    uint32_t flags;        /**< sticky MC_SPDPLL_ERR_* */
+    float omega_i_rad_s; /**< integral part ki z2 [rad/s] */
+    float omega_rad_s;   /**< last speed estimate [rad/s] */
+    uint32_t flags;      /**< sticky MC_SPDPLL_ERR_* */
 } mc_spdpll_f32_t;
 
 /** Validate cfg and initialise (angle 0, speed 0). On error st is not written. */

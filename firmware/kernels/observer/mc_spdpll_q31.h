@@ -40,20 +40,20 @@ extern "C" {
 #define MC_SPDPLL_ERR_SCALE (1u << 6) /**< omega_base <= 0 / not finite, or a gain out of range */
 
 typedef struct {
-    mc_spdpll_f32_cfg_t f;      /**< bw, dt, omega_max: validated as by the f32 kernel */
-    float omega_base_rad_s;     /**< speed base [rad/s], > 0 */
+    mc_spdpll_f32_cfg_t f;  /**< bw, dt, omega_max: validated as by the f32 kernel */
+    float omega_base_rad_s; /**< speed base [rad/s], > 0 */
 } mc_spdpll_q31_cfg_t;
 
 typedef struct {
-    mc_q46_gain_t kp;           /**< e (turn) -> speed pu */
-    mc_q46_gain_t ki_dt;        /**< e (turn) -> speed pu per step */
-    mc_q46_gain_t dz;           /**< speed Q46 -> 64-bit turn per step */
+    mc_q46_gain_t kp;    /**< e (turn) -> speed pu */
+    mc_q46_gain_t ki_dt; /**< e (turn) -> speed pu per step */
+    mc_q46_gain_t dz;    /**< speed Q46 -> 64-bit turn per step */
     int64_t omega_max_q46;
-    uint64_t theta_turn64;      /**< z1 as a 64-bit turn */
-    int64_t omega_i_q46;        /**< integral part */
-    q31_t theta;                /**< z1 rounded to a q31 angle */
-    q31_t omega;                /**< last speed estimate (pu) */
-    uint32_t flags;             /**< sticky MC_SPDPLL_ERR_SAT */
+    uint64_t theta_turn64; /**< z1 as a 64-bit turn */
+    int64_t omega_i_q46;   /**< integral part */
+    q31_t theta;           /**< z1 rounded to a q31 angle */
+    q31_t omega;           /**< last speed estimate (pu) */
+    uint32_t flags;        /**< sticky MC_SPDPLL_ERR_SAT */
 } mc_spdpll_q31_t;
 
 /** Validate cfg (MC_SPDPLL_ERR_* of the f32 kernel on cfg->f, plus

@@ -32,8 +32,7 @@ uint32_t mc_pi_f32_validate(const mc_pi_f32_cfg_t *cfg)
         err |= MC_PI_ERR_DT;
     }
     /* ki*dt must not overflow either (only checked with a valid dt). */
-    if (!pi_gain_ok_f32(cfg->ki_per_s) ||
-        (dt_ok && !mc_isfinite_f32(cfg->ki_per_s * cfg->dt_s))) {
+    if (!pi_gain_ok_f32(cfg->ki_per_s) || (dt_ok && !mc_isfinite_f32(cfg->ki_per_s * cfg->dt_s))) {
         err |= MC_PI_ERR_KI;
     }
     if (!mc_isfinite_f32(cfg->out_min) || !mc_isfinite_f32(cfg->out_max) ||
@@ -107,8 +106,8 @@ uint32_t mc_pi_f32_reset(mc_pi_f32_t *st, float integrator_preset)
     return MC_PI_ERR_NONE;
 }
 
-mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff,
-                                   float lo, float hi)
+mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff, float lo,
+                                   float hi)
 {
     mc_pi_f32_res_t r;
     float integ = st->integ + inc;

@@ -65,17 +65,21 @@ extern "C" {
 #endif
 
 /** Error bits (init / set_gains / reset return them; st->flags keeps the sticky ones). */
-#define MC_PI_ERR_NONE      0u
-#define MC_PI_ERR_NULL      (1u << 0)  /**< a required pointer is NULL */
-#define MC_PI_ERR_KP        (1u << 1)  /**< kp negative or not finite (q31: mantissa < 0 or shift out of range) */
-#define MC_PI_ERR_KI        (1u << 2)  /**< ki negative or not finite (q31: mantissa < 0 or shift out of range) */
-#define MC_PI_ERR_DT        (1u << 3)  /**< dt_s <= 0 or not finite */
-#define MC_PI_ERR_LIMITS    (1u << 4)  /**< out_min > out_max, or a limit not finite */
-#define MC_PI_ERR_AW_MODE   (1u << 5)  /**< unknown anti-windup scheme */
-#define MC_PI_ERR_KAW       (1u << 6)  /**< back-calculation: kaw <= 0, not finite, or kaw*dt > 1 */
-#define MC_PI_ERR_NAN_INPUT (1u << 7)  /**< sticky: a step got a non-finite input and was refused */
-#define MC_PI_ERR_SCALE     (1u << 8)  /**< q31 from f32: base value <= 0 / not finite, or gain beyond the q31 range */
-#define MC_PI_ERR_DYN_LIMIT (1u << 9)  /**< sticky: a step got dynamic limits lo > hi and was refused */
+#define MC_PI_ERR_NONE 0u
+#define MC_PI_ERR_NULL (1u << 0) /**< a required pointer is NULL */
+#define MC_PI_ERR_KP \
+    (1u << 1) /**< kp negative or not finite (q31: mantissa < 0 or shift out of range) */
+#define MC_PI_ERR_KI \
+    (1u << 2) /**< ki negative or not finite (q31: mantissa < 0 or shift out of range) */
+#define MC_PI_ERR_DT        (1u << 3) /**< dt_s <= 0 or not finite */
+#define MC_PI_ERR_LIMITS    (1u << 4) /**< out_min > out_max, or a limit not finite */
+#define MC_PI_ERR_AW_MODE   (1u << 5) /**< unknown anti-windup scheme */
+#define MC_PI_ERR_KAW       (1u << 6) /**< back-calculation: kaw <= 0, not finite, or kaw*dt > 1 */
+#define MC_PI_ERR_NAN_INPUT (1u << 7) /**< sticky: a step got a non-finite input and was refused */
+#define MC_PI_ERR_SCALE \
+    (1u << 8) /**< q31 from f32: base value <= 0 / not finite, or gain beyond the q31 range */
+#define MC_PI_ERR_DYN_LIMIT \
+    (1u << 9) /**< sticky: a step got dynamic limits lo > hi and was refused */
 
 /** Anti-windup scheme. */
 typedef enum {
@@ -89,31 +93,31 @@ typedef enum {
  * unit (e.g. V), "err" the error unit (e.g. A).
  */
 typedef struct {
-    float kp;          /**< proportional gain [out/err], >= 0 */
-    float ki_per_s;    /**< integral gain [out/(err*s)], >= 0 */
-    float dt_s;        /**< sample period [s], > 0 */
-    float out_min;     /**< lower output limit [out] */
-    float out_max;     /**< upper output limit [out], >= out_min */
-    mc_pi_aw_t aw;     /**< anti-windup scheme */
-    float kaw_per_s;   /**< back-calculation gain [1/s]; only read for MC_PI_AW_BACK_CALC */
+    float kp;        /**< proportional gain [out/err], >= 0 */
+    float ki_per_s;  /**< integral gain [out/(err*s)], >= 0 */
+    float dt_s;      /**< sample period [s], > 0 */
+    float out_min;   /**< lower output limit [out] */
+    float out_max;   /**< upper output limit [out], >= out_min */
+    mc_pi_aw_t aw;   /**< anti-windup scheme */
+    float kaw_per_s; /**< back-calculation gain [1/s]; only read for MC_PI_AW_BACK_CALC */
 } mc_pi_f32_cfg_t;
 
 /** Float PI state. Read-only for callers except through the functions below. */
 typedef struct {
-    float kp;          /**< current proportional gain [out/err] */
-    float ki_per_s;    /**< current integral gain [out/(err*s)] */
-    float ki_dt;       /**< ki_per_s * dt_s (derived) */
-    float kaw_dt;      /**< kaw_per_s * dt_s (derived; 0 unless back-calculation) */
-    float dt_s;        /**< sample period [s] */
-    float out_min;     /**< static output / integrator limits [out] */
+    float kp;       /**< current proportional gain [out/err] */
+    float ki_per_s; /**< current integral gain [out/(err*s)] */
+    float ki_dt;    /**< ki_per_s * dt_s (derived) */
+    float kaw_dt;   /**< kaw_per_s * dt_s (derived; 0 unless back-calculation) */
+    float dt_s;     /**< sample period [s] */
+    float out_min;  /**< static output / integrator limits [out] */
     float out_max;
-    mc_pi_aw_t aw;     /**< anti-windup scheme */
-    float integ;       /**< integrator, output units, in [out_min, out_max] */
-    float integ_prev;  /**< integrator before the last accepted step (for track) */
-    float out;         /**< last output (saturated) */
-    float last_error;  /**< error of the last accepted step */
-    float last_ff;     /**< feed-forward of the last accepted step */
-    uint32_t flags;    /**< sticky MC_PI_ERR_* raised by steps */
+    mc_pi_aw_t aw;    /**< anti-windup scheme */
+    float integ;      /**< integrator, output units, in [out_min, out_max] */
+    float integ_prev; /**< integrator before the last accepted step (for track) */
+    float out;        /**< last output (saturated) */
+    float last_error; /**< error of the last accepted step */
+    float last_ff;    /**< feed-forward of the last accepted step */
+    uint32_t flags;   /**< sticky MC_PI_ERR_* raised by steps */
 } mc_pi_f32_t;
 
 /**

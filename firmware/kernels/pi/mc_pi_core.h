@@ -42,8 +42,8 @@ typedef struct {
  * step's proportional term p and increment inc (mc_pi.c, out of line:
  * run only when a limit acts). Same contract as mc_pi_f32_core.
  */
-mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff,
-                                   float lo, float hi);
+mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, float ff, float lo,
+                                   float hi);
 
 /**
  * One step's new integrator (*p_integ) and output (returned) for finite
@@ -58,8 +58,8 @@ mc_pi_f32_res_t mc_pi_f32_core_sat(const mc_pi_f32_t *st, float p, float inc, fl
  * added: an integrator of -0 stays -0.) Every other case goes to
  * mc_pi_f32_core_sat, which starts again from p and inc.
  */
-static inline float mc_pi_f32_core(const mc_pi_f32_t *st, float error, float ff, float lo,
-                                   float hi, float *p_integ)
+static inline float mc_pi_f32_core(const mc_pi_f32_t *st, float error, float ff, float lo, float hi,
+                                   float *p_integ)
 {
     const float p = st->kp * error;
     const float inc = st->ki_dt * error;

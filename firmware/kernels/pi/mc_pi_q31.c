@@ -190,8 +190,8 @@ uint32_t mc_pi_q31_step(mc_pi_q31_t *st, q31_t error, q31_t *p_out)
     return mc_pi_q31_step_ff(st, error, 0, p_out);
 }
 
-uint32_t mc_pi_q31_set_gains(mc_pi_q31_t *st, q31_t kp_mant, int32_t kp_shift,
-                             q31_t ki_dt_mant, int32_t ki_shift)
+uint32_t mc_pi_q31_set_gains(mc_pi_q31_t *st, q31_t kp_mant, int32_t kp_shift, q31_t ki_dt_mant,
+                             int32_t ki_shift)
 {
     uint32_t err = MC_PI_ERR_NONE;
     int64_t p_old;

@@ -37,14 +37,14 @@ extern "C" {
  * never wraps.
  */
 typedef struct {
-    q31_t kp_mant;      /**< proportional gain mantissa, >= 0 */
-    int32_t kp_shift;   /**< proportional gain left shift, 0..15 */
-    q31_t ki_dt_mant;   /**< ki*dt mantissa, >= 0 */
-    int32_t ki_shift;   /**< ki*dt left shift, 0..15 */
-    q31_t out_min;      /**< lower output limit (per unit) */
-    q31_t out_max;      /**< upper output limit (per unit), >= out_min */
-    mc_pi_aw_t aw;      /**< anti-windup scheme */
-    q31_t kaw_dt;       /**< kaw*dt in q31, > 0; only read for MC_PI_AW_BACK_CALC */
+    q31_t kp_mant;    /**< proportional gain mantissa, >= 0 */
+    int32_t kp_shift; /**< proportional gain left shift, 0..15 */
+    q31_t ki_dt_mant; /**< ki*dt mantissa, >= 0 */
+    int32_t ki_shift; /**< ki*dt left shift, 0..15 */
+    q31_t out_min;    /**< lower output limit (per unit) */
+    q31_t out_max;    /**< upper output limit (per unit), >= out_min */
+    mc_pi_aw_t aw;    /**< anti-windup scheme */
+    q31_t kaw_dt;     /**< kaw*dt in q31, > 0; only read for MC_PI_AW_BACK_CALC */
 } mc_pi_q31_cfg_t;
 
 /** Fixed-point PI state. */
@@ -57,11 +57,11 @@ typedef struct {
     q31_t out_min;
     q31_t out_max;
     mc_pi_aw_t aw;
-    int64_t integ_q46;  /**< integrator in Q17.46, within [out_min, out_max] */
-    q31_t out;          /**< last output */
-    q31_t last_error;   /**< error of the last accepted step */
-    q31_t last_ff;      /**< feed-forward of the last accepted step */
-    uint32_t flags;     /**< sticky MC_PI_ERR_* raised by steps */
+    int64_t integ_q46; /**< integrator in Q17.46, within [out_min, out_max] */
+    q31_t out;         /**< last output */
+    q31_t last_error;  /**< error of the last accepted step */
+    q31_t last_ff;     /**< feed-forward of the last accepted step */
+    uint32_t flags;    /**< sticky MC_PI_ERR_* raised by steps */
 } mc_pi_q31_t;
 
 /**
@@ -99,8 +99,8 @@ uint32_t mc_pi_q31_step_lim(mc_pi_q31_t *st, q31_t error, q31_t ff, q31_t lim_lo
                             q31_t *p_out);
 
 /** Bumpless gain change (mantissa/shift as in the config); on error nothing changes. */
-uint32_t mc_pi_q31_set_gains(mc_pi_q31_t *st, q31_t kp_mant, int32_t kp_shift,
-                             q31_t ki_dt_mant, int32_t ki_shift);
+uint32_t mc_pi_q31_set_gains(mc_pi_q31_t *st, q31_t kp_mant, int32_t kp_shift, q31_t ki_dt_mant,
+                             int32_t ki_shift);
 
 #ifdef __cplusplus
 }

@@ -161,8 +161,7 @@ static __attribute__((noinline, cold)) uint32_t pi2d_refuse(mc_pi2d_f32_t *st,
     return MC_PI2D_ERR_NAN_INPUT;
 }
 
-uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
-                          mc_pi2d_f32_out_t *out)
+uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in, mc_pi2d_f32_out_t *out)
 {
     if ((st == NULL) || (in == NULL) || (out == NULL)) {
         return MC_PI2D_ERR_NULL;
@@ -185,7 +184,8 @@ uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
     /* Reference current (8) and rho, the implementable part of d(x2*)/dt:
      * d(x2*)/dt = rho - (J/kt)(kp + b kd) e3 (the e3 part is not measured). */
     const float iq_ref_raw = (st->nu_nm + (c->j_kgm2 * (in->alpha_ref_rad_s2 + v3))) * st->inv_kt;
-    const float rho_raw = (dnu + (c->j_kgm2 * (in->jerk_ref_rad_s3 + (st->a_kd * th)))) * st->inv_kt;
+    const float rho_raw =
+        (dnu + (c->j_kgm2 * (in->jerk_ref_rad_s3 + (st->a_kd * th)))) * st->inv_kt;
     float iq_ref = iq_ref_raw;
     float rho = rho_raw;
     bool iq_lim = false;
@@ -203,8 +203,8 @@ uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
      * the errors e1, e2 are not formed. */
     const float om = in->omega_ref_rad_s;
     const float id_ref = in->id_ref_a;
-    float u1 = (st->l_k1 * id_ref) + (c->l_h * in->did_ref_a_s) -
-               ((st->pl * in->iq_a) * om) - (st->r_minus_lk1 * in->id_a);
+    float u1 = (st->l_k1 * id_ref) + (c->l_h * in->did_ref_a_s) - ((st->pl * in->iq_a) * om) -
+               (st->r_minus_lk1 * in->id_a);
     float u2 = ((c->ke_v_s_rad + (st->pl * in->id_a)) * om) + (st->l_k2 * iq_ref) +
                (c->l_h * (rho + v2)) - (st->r_minus_lk2 * in->iq_a);
     const float mag_sq = (u1 * u1) + (u2 * u2);

@@ -96,91 +96,94 @@
 extern "C" {
 #endif
 
-#define MC_PI2D_ERR_NONE      0u
-#define MC_PI2D_ERR_NULL      (1u << 0)  /**< a required pointer is NULL */
-#define MC_PI2D_ERR_PLANT     (1u << 1)  /**< R, L, kt, J <= 0, ke < 0, pole_pairs 0, or not finite */
-#define MC_PI2D_ERR_K12       (1u << 2)  /**< k1 or k2 <= 0 or not finite */
-#define MC_PI2D_ERR_KPKD      (1u << 3)  /**< kp or kd <= 0 or not finite */
-#define MC_PI2D_ERR_FILTER    (1u << 4)  /**< a or b <= 0 or not finite */
-#define MC_PI2D_ERR_KI_EPS    (1u << 5)  /**< ki <= 0, eps <= 0, or ki (L/R)^2 >= eps (paper: 0 < ki < eps) */
-#define MC_PI2D_ERR_KP_PRIME  (1u << 6)  /**< kp' = kp - ki/eps <= 0 */
-#define MC_PI2D_ERR_DT        (1u << 7)  /**< dt_s <= 0 or not finite */
-#define MC_PI2D_ERR_LIMITS    (1u << 8)  /**< iq_max_a, v_max_v or nu_max_nm <= 0 or not finite */
-#define MC_PI2D_ERR_NAN_INPUT (1u << 9)  /**< sticky: a step got a non-finite input (zero voltage out) */
-#define MC_PI2D_ERR_ENVELOPE  (1u << 10) /**< certificate: envelope bounds out of order / not finite */
+#define MC_PI2D_ERR_NONE   0u
+#define MC_PI2D_ERR_NULL   (1u << 0) /**< a required pointer is NULL */
+#define MC_PI2D_ERR_PLANT  (1u << 1) /**< R, L, kt, J <= 0, ke < 0, pole_pairs 0, or not finite */
+#define MC_PI2D_ERR_K12    (1u << 2) /**< k1 or k2 <= 0 or not finite */
+#define MC_PI2D_ERR_KPKD   (1u << 3) /**< kp or kd <= 0 or not finite */
+#define MC_PI2D_ERR_FILTER (1u << 4) /**< a or b <= 0 or not finite */
+#define MC_PI2D_ERR_KI_EPS \
+    (1u << 5) /**< ki <= 0, eps <= 0, or ki (L/R)^2 >= eps (paper: 0 < ki < eps) */
+#define MC_PI2D_ERR_KP_PRIME (1u << 6) /**< kp' = kp - ki/eps <= 0 */
+#define MC_PI2D_ERR_DT       (1u << 7) /**< dt_s <= 0 or not finite */
+#define MC_PI2D_ERR_LIMITS   (1u << 8) /**< iq_max_a, v_max_v or nu_max_nm <= 0 or not finite */
+#define MC_PI2D_ERR_NAN_INPUT \
+    (1u << 9) /**< sticky: a step got a non-finite input (zero voltage out) */
+#define MC_PI2D_ERR_ENVELOPE \
+    (1u << 10) /**< certificate: envelope bounds out of order / not finite */
 
 /** Configuration: plant constants, gains, limits, sample period. */
 typedef struct {
-    float r_ohm;          /**< stator resistance R [ohm], > 0 */
-    float l_h;            /**< stator inductance L (Ld = Lq) [H], > 0 */
-    uint32_t pole_pairs;  /**< p, >= 1 */
-    float ke_v_s_rad;     /**< back-EMF constant [V/(rad/s) mech.], >= 0 */
-    float kt_nm_a;        /**< torque constant [N m/A], > 0 */
-    float j_kgm2;         /**< inertia [kg m^2], > 0 */
-    float k1_per_s;       /**< closed-loop d-current error rate k1 [1/s], > 0 */
-    float k2_per_s;       /**< closed-loop q-current error rate k2 [1/s], > 0 */
-    float kp_per_s2;      /**< position gain kp [1/s^2], > 0 */
-    float kd_per_s2;      /**< theta_f gain kd [1/s^2], > 0 */
-    float ki_per_s3;      /**< load-adaptation gain ki [1/s^3], 0 < ki (L/R)^2 < eps */
-    float a_per_s;        /**< dirty-derivative pole a [1/s], > 0 */
-    float b;              /**< dirty-derivative gain b [1], > 0 */
-    float eps_per_s;      /**< epsilon [1/s] of the proof and of v2, > 0 */
-    float dt_s;           /**< sample period [s], > 0 */
-    float iq_max_a;       /**< clamp of x2* [A], > 0 */
-    float v_max_v;        /**< clamp of |(u1, u2)| [V], > 0 */
-    float nu_max_nm;      /**< clamp of nu [N m], > 0 */
+    float r_ohm;         /**< stator resistance R [ohm], > 0 */
+    float l_h;           /**< stator inductance L (Ld = Lq) [H], > 0 */
+    uint32_t pole_pairs; /**< p, >= 1 */
+    float ke_v_s_rad;    /**< back-EMF constant [V/(rad/s) mech.], >= 0 */
+    float kt_nm_a;       /**< torque constant [N m/A], > 0 */
+    float j_kgm2;        /**< inertia [kg m^2], > 0 */
+    float k1_per_s;      /**< closed-loop d-current error rate k1 [1/s], > 0 */
+    float k2_per_s;      /**< closed-loop q-current error rate k2 [1/s], > 0 */
+    float kp_per_s2;     /**< position gain kp [1/s^2], > 0 */
+    float kd_per_s2;     /**< theta_f gain kd [1/s^2], > 0 */
+    float ki_per_s3;     /**< load-adaptation gain ki [1/s^3], 0 < ki (L/R)^2 < eps */
+    float a_per_s;       /**< dirty-derivative pole a [1/s], > 0 */
+    float b;             /**< dirty-derivative gain b [1], > 0 */
+    float eps_per_s;     /**< epsilon [1/s] of the proof and of v2, > 0 */
+    float dt_s;          /**< sample period [s], > 0 */
+    float iq_max_a;      /**< clamp of x2* [A], > 0 */
+    float v_max_v;       /**< clamp of |(u1, u2)| [V], > 0 */
+    float nu_max_nm;     /**< clamp of nu [N m], > 0 */
 } mc_pi2d_f32_cfg_t;
 
 /** Inputs of one step. The positions only enter as their difference, so the
  *  caller may subtract the same offset from both (e.g. whole turns) to keep
  *  them small. */
 typedef struct {
-    float id_a;              /**< measured x1 [A] */
-    float iq_a;              /**< measured x2 [A] */
-    float theta_m_rad;       /**< measured mechanical position x4 [rad] (unwrapped) */
-    float theta_ref_rad;     /**< integrated reference position x4* [rad] */
-    float omega_ref_rad_s;   /**< reference speed x3* [rad/s] */
-    float alpha_ref_rad_s2;  /**< d(x3*)/dt [rad/s^2] */
-    float jerk_ref_rad_s3;   /**< d2(x3*)/dt2 [rad/s^3] */
-    float id_ref_a;          /**< x1* [A] (0 for field orientation) */
-    float did_ref_a_s;       /**< d(x1*)/dt [A/s] */
+    float id_a;             /**< measured x1 [A] */
+    float iq_a;             /**< measured x2 [A] */
+    float theta_m_rad;      /**< measured mechanical position x4 [rad] (unwrapped) */
+    float theta_ref_rad;    /**< integrated reference position x4* [rad] */
+    float omega_ref_rad_s;  /**< reference speed x3* [rad/s] */
+    float alpha_ref_rad_s2; /**< d(x3*)/dt [rad/s^2] */
+    float jerk_ref_rad_s3;  /**< d2(x3*)/dt2 [rad/s^3] */
+    float id_ref_a;         /**< x1* [A] (0 for field orientation) */
+    float did_ref_a_s;      /**< d(x1*)/dt [A/s] */
 } mc_pi2d_f32_in_t;
 
 /** Outputs of one step (also the telemetry of the law). */
 typedef struct {
-    float vd_v, vq_v;        /**< u1, u2 after the voltage limit [V] */
-    float id_ref_a;          /**< x1* [A] */
-    float iq_ref_a;          /**< x2* after its clamp [A] */
-    float e4_rad;            /**< position error [rad] */
-    float theta_f_rad;       /**< dirty derivative of e4 [rad] */
-    float nu_nm;             /**< load estimate used in this step [N m] */
-    float dnu_nm_s;          /**< its rate in this step (0 when frozen) [N m/s] */
-    float rho_a_s;           /**< implementable part of d(x2*)/dt [A/s] */
-    float v2_a_s;            /**< stabilising term (35) [A/s] */
-    bool iq_limited;         /**< x2* was clamped */
-    bool v_limited;          /**< the voltage vector was scaled down */
+    float vd_v, vq_v;  /**< u1, u2 after the voltage limit [V] */
+    float id_ref_a;    /**< x1* [A] */
+    float iq_ref_a;    /**< x2* after its clamp [A] */
+    float e4_rad;      /**< position error [rad] */
+    float theta_f_rad; /**< dirty derivative of e4 [rad] */
+    float nu_nm;       /**< load estimate used in this step [N m] */
+    float dnu_nm_s;    /**< its rate in this step (0 when frozen) [N m/s] */
+    float rho_a_s;     /**< implementable part of d(x2*)/dt [A/s] */
+    float v2_a_s;      /**< stabilising term (35) [A/s] */
+    bool iq_limited;   /**< x2* was clamped */
+    bool v_limited;    /**< the voltage vector was scaled down */
 } mc_pi2d_f32_out_t;
 
 /** Controller instance. */
 typedef struct {
-    mc_pi2d_f32_cfg_t cfg;   /**< copy of the validated config */
-    float sigma;             /**< kt/J [N m/(A kg m^2)], derived */
-    float r_minus_lk1;       /**< L k1 - R [V/A], derived */
-    float r_minus_lk2;       /**< L k2 - R [V/A], derived */
-    float pl;                /**< p L [H], derived */
-    float l_k1;              /**< L k1 [V/A], derived */
-    float l_k2;              /**< L k2 [V/A], derived */
-    float inv_kt;            /**< 1/kt [A/(N m)], derived */
-    float neg_j_ki;          /**< -(J ki) [N m/(rad s)], derived */
-    float a_kd;              /**< a kd [1/s^3], derived */
-    float neg_eps_sigma;     /**< -(eps sigma), derived: v2 = neg_eps_sigma (e4 - theta_f) */
-    float v_lim_sq;          /**< the largest float m with sqrt(m) <= v_max_v:
+    mc_pi2d_f32_cfg_t cfg; /**< copy of the validated config */
+    float sigma;           /**< kt/J [N m/(A kg m^2)], derived */
+    float r_minus_lk1;     /**< L k1 - R [V/A], derived */
+    float r_minus_lk2;     /**< L k2 - R [V/A], derived */
+    float pl;              /**< p L [H], derived */
+    float l_k1;            /**< L k1 [V/A], derived */
+    float l_k2;            /**< L k2 [V/A], derived */
+    float inv_kt;          /**< 1/kt [A/(N m)], derived */
+    float neg_j_ki;        /**< -(J ki) [N m/(rad s)], derived */
+    float a_kd;            /**< a kd [1/s^3], derived */
+    float neg_eps_sigma;   /**< -(eps sigma), derived: v2 = neg_eps_sigma (e4 - theta_f) */
+    float v_lim_sq;        /**< the largest float m with sqrt(m) <= v_max_v:
                                   |u| > v_max_v exactly when u1^2 + u2^2 > v_lim_sq */
-    mc_ddiff_f32_t dd;       /**< dirty-derivative filter of e4 */
-    float nu_nm;             /**< load estimate nu [N m] */
-    float nu_comp_nm;        /**< compensation of the nu sum (Kahan): the low
+    mc_ddiff_f32_t dd;     /**< dirty-derivative filter of e4 */
+    float nu_nm;           /**< load estimate nu [N m] */
+    float nu_comp_nm;      /**< compensation of the nu sum (Kahan): the low
                                   part the float sum lost [N m] */
-    uint32_t flags;          /**< sticky MC_PI2D_ERR_NAN_INPUT */
+    uint32_t flags;        /**< sticky MC_PI2D_ERR_NAN_INPUT */
 } mc_pi2d_f32_t;
 
 /** Validate cfg and initialise st (q_c = 0, nu = 0). Returns the OR of the
@@ -204,8 +207,7 @@ uint32_t mc_pi2d_f32_reset(mc_pi2d_f32_t *st, float qc0_rad, float nu0_nm);
  *  non-finite input is caught there. The voltage limit compares
  *  u1^2 + u2^2 with v_lim_sq (a square root only when it acts), the same
  *  decision as sqrt(u1^2 + u2^2) > v_max_v for every float. */
-uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
-                          mc_pi2d_f32_out_t *out);
+uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in, mc_pi2d_f32_out_t *out);
 
 /* ------------------------------------------------------------------------ */
 /* Gain certificate                                                          */
@@ -213,9 +215,9 @@ uint32_t mc_pi2d_f32_step(mc_pi2d_f32_t *st, const mc_pi2d_f32_in_t *in,
 
 /** Operating envelope over which the sufficient conditions are evaluated. */
 typedef struct {
-    float id_min_a;      /**< lower bound of x1 [A] */
-    float id_max_a;      /**< upper bound of x1 [A], >= id_min_a */
-    float iq_abs_max_a;  /**< bound of |x2| [A], >= 0 */
+    float id_min_a;     /**< lower bound of x1 [A] */
+    float id_max_a;     /**< upper bound of x1 [A], >= id_min_a */
+    float iq_abs_max_a; /**< bound of |x2| [A], >= 0 */
 } mc_pi2d_envelope_t;
 
 /**
@@ -247,9 +249,9 @@ typedef struct {
     float c38_lhs, c38_rhs, c38_margin;
     float c38_k2_min_per_s;
     float c38_printed_rhs, c38_printed_margin;
-    float delta_sigma_max;      /**< max |Delta + sigma| over the envelope */
-    float kp_prime_per_s2;      /**< kp - ki/eps */
-    bool holds;                 /**< c34 and c38 (re-derived) both hold */
+    float delta_sigma_max; /**< max |Delta + sigma| over the envelope */
+    float kp_prime_per_s2; /**< kp - ki/eps */
+    bool holds;            /**< c34 and c38 (re-derived) both hold */
 } mc_pi2d_cert_t;
 
 /** Evaluate the certificate for cfg over env. Returns MC_PI2D_ERR_NONE, the

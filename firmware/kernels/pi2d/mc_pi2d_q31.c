@@ -17,8 +17,8 @@ static bool pq_bases_ok(const mc_pi2d_q31_bases_t *b)
 {
     return pq_pos(b->i_base_a) && pq_pos(b->v_base_v) && pq_pos(b->theta_base_rad) &&
            pq_pos(b->thetaf_base_rad) && pq_pos(b->omega_base_rad_s) &&
-           pq_pos(b->alpha_base_rad_s2) && pq_pos(b->jerk_base_rad_s3) &&
-           pq_pos(b->did_base_a_s) && pq_pos(b->nu_base_nm);
+           pq_pos(b->alpha_base_rad_s2) && pq_pos(b->jerk_base_rad_s3) && pq_pos(b->did_base_a_s) &&
+           pq_pos(b->nu_base_nm);
 }
 
 /* A limit in engineering units as Q46 of its base, clamped to one base. */
@@ -49,21 +49,21 @@ uint32_t mc_pi2d_q31_init(mc_pi2d_q31_t *st, const mc_pi2d_q31_cfg_t *cfg)
         return err;
     }
     {
-        const mc_ddiff_q31_cfg_t dc = {{c->a_per_s, c->b, c->dt_s}, b->theta_base_rad,
-                                       b->thetaf_base_rad};
+        const mc_ddiff_q31_cfg_t dc = {
+            {c->a_per_s, c->b, c->dt_s}, b->theta_base_rad, b->thetaf_base_rad};
         if (mc_ddiff_q31_init(&t.dd, &dc) != MC_DDIFF_ERR_NONE) {
             return MC_PI2D_ERR_SCALE;
         }
     }
     {
-        const float j_kt = c->j_kgm2 / c->kt_nm_a;            /* [kg m^2 A/(N m)] */
+        const float j_kt = c->j_kgm2 / c->kt_nm_a; /* [kg m^2 A/(N m)] */
         const float l = c->l_h;
         const float iv = b->i_base_a / b->v_base_v;
         const float ktib = c->kt_nm_a * b->i_base_a;
         const float th = b->theta_base_rad;
         const float thf = b->thetaf_base_rad;
-        const float lrho = (l * j_kt) * c->ki_per_s3;          /* L J ki / kt */
-        const float lv2 = (l * c->eps_per_s) * ref.sigma;      /* L eps sigma */
+        const float lrho = (l * j_kt) * c->ki_per_s3;               /* L J ki / kt */
+        const float lv2 = (l * c->eps_per_s) * ref.sigma;           /* L eps sigma */
         const float lad = ((l * j_kt) * c->a_per_s) * c->kd_per_s2; /* L J a kd / kt */
         const float jki_dt = (c->j_kgm2 * c->ki_per_s3) * c->dt_s;
 
@@ -77,14 +77,14 @@ uint32_t mc_pi2d_q31_init(mc_pi2d_q31_t *st, const mc_pi2d_q31_cfg_t *cfg)
         ok = ok && mc_q46_gain_from_f32((l * b->did_base_a_s) / b->v_base_v, &t.g_u1_did);
         ok = ok && mc_q46_gain_from_f32((ref.pl * b->omega_base_rad_s) * iv, &t.g_plw);
 
-        ok = ok && mc_q46_gain_from_f32((c->ke_v_s_rad * b->omega_base_rad_s) / b->v_base_v,
-                                        &t.g_u2_w);
+        ok = ok &&
+             mc_q46_gain_from_f32((c->ke_v_s_rad * b->omega_base_rad_s) / b->v_base_v, &t.g_u2_w);
         ok = ok && mc_q46_gain_from_f32((l * c->k2_per_s) * iv, &t.g_u2_iqref);
         ok = ok && mc_q46_gain_from_f32(-ref.r_minus_lk2 * iv, &t.g_u2_iq);
         ok = ok && mc_q46_gain_from_f32(-((lrho + lv2) * th) / b->v_base_v, &t.g_u2_e4_rho);
         ok = ok && mc_q46_gain_from_f32(((lrho + lv2 + lad) * thf) / b->v_base_v, &t.g_u2_th_rho);
-        ok = ok && mc_q46_gain_from_f32(((l * j_kt) * b->jerk_base_rad_s3) / b->v_base_v,
-                                        &t.g_u2_jerk);
+        ok = ok &&
+             mc_q46_gain_from_f32(((l * j_kt) * b->jerk_base_rad_s3) / b->v_base_v, &t.g_u2_jerk);
         ok = ok && mc_q46_gain_from_f32(-(lv2 * th) / b->v_base_v, &t.g_u2_e4_v2);
         ok = ok && mc_q46_gain_from_f32((lv2 * thf) / b->v_base_v, &t.g_u2_th_v2);
 

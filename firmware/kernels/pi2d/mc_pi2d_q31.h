@@ -60,26 +60,26 @@ typedef struct {
 } mc_pi2d_q31_bases_t;
 
 typedef struct {
-    mc_pi2d_f32_cfg_t f;        /**< engineering config, validated as by mc_pi2d_f32_init */
+    mc_pi2d_f32_cfg_t f; /**< engineering config, validated as by mc_pi2d_f32_init */
     mc_pi2d_q31_bases_t base;
 } mc_pi2d_q31_cfg_t;
 
 typedef struct {
-    q31_t id, iq;               /**< measured x1, x2 (i_base) */
-    q31_t theta_m, theta_ref;   /**< positions with a common offset removed (theta_base) */
-    q31_t omega_ref;            /**< omega_base */
-    q31_t alpha_ref;            /**< alpha_base */
-    q31_t jerk_ref;             /**< jerk_base */
-    q31_t id_ref;               /**< i_base */
-    q31_t did_ref;              /**< did_base */
+    q31_t id, iq;             /**< measured x1, x2 (i_base) */
+    q31_t theta_m, theta_ref; /**< positions with a common offset removed (theta_base) */
+    q31_t omega_ref;          /**< omega_base */
+    q31_t alpha_ref;          /**< alpha_base */
+    q31_t jerk_ref;           /**< jerk_base */
+    q31_t id_ref;             /**< i_base */
+    q31_t did_ref;            /**< did_base */
 } mc_pi2d_q31_in_t;
 
 typedef struct {
-    q31_t vd, vq;               /**< after the voltage limit (v_base) */
-    q31_t id_ref, iq_ref;       /**< x1*, x2* after its clamp (i_base) */
-    q31_t e4;                   /**< theta_base */
-    q31_t theta_f;              /**< thetaf_base */
-    q31_t nu;                   /**< load estimate used in this step (nu_base) */
+    q31_t vd, vq;         /**< after the voltage limit (v_base) */
+    q31_t id_ref, iq_ref; /**< x1*, x2* after its clamp (i_base) */
+    q31_t e4;             /**< theta_base */
+    q31_t theta_f;        /**< thetaf_base */
+    q31_t nu;             /**< load estimate used in this step (nu_base) */
     bool iq_limited;
     bool v_limited;
 } mc_pi2d_q31_out_t;
@@ -92,12 +92,12 @@ typedef struct {
     mc_q46_gain_t g_u1_idref, g_u1_id, g_u1_did, g_plw;
     /* u2 */
     mc_q46_gain_t g_u2_w, g_u2_iqref, g_u2_iq;
-    mc_q46_gain_t g_u2_e4_rho, g_u2_th_rho, g_u2_jerk;  /* rho + v2 */
-    mc_q46_gain_t g_u2_e4_v2, g_u2_th_v2;               /* v2 only (x2* clamped) */
+    mc_q46_gain_t g_u2_e4_rho, g_u2_th_rho, g_u2_jerk; /* rho + v2 */
+    mc_q46_gain_t g_u2_e4_v2, g_u2_th_v2;              /* v2 only (x2* clamped) */
     /* nu */
     mc_q46_gain_t g_nu_e4, g_nu_th;
     int64_t iq_max_q46, v_max_q46, nu_max_q46;
-    int64_t nu_q46;             /**< load estimate (Q46 of nu_base) */
+    int64_t nu_q46; /**< load estimate (Q46 of nu_base) */
 } mc_pi2d_q31_t;
 
 /** Validate cfg (MC_PI2D_ERR_* of mc_pi2d_f32_init on cfg->f, plus
@@ -114,8 +114,7 @@ uint32_t mc_pi2d_q31_reset(mc_pi2d_q31_t *st, q31_t qc0, q31_t nu0);
  *  are written (the kernel keeps no copy). Returns MC_PI2D_ERR_NONE, or
  *  MC_PI2D_ERR_NULL when st, in or out is NULL (nothing written). q31 inputs
  *  are always finite and every sum saturates: no MC_PI2D_ERR_NAN_INPUT. */
-uint32_t mc_pi2d_q31_step(mc_pi2d_q31_t *st, const mc_pi2d_q31_in_t *in,
-                          mc_pi2d_q31_out_t *out);
+uint32_t mc_pi2d_q31_step(mc_pi2d_q31_t *st, const mc_pi2d_q31_in_t *in, mc_pi2d_q31_out_t *out);
 
 #ifdef __cplusplus
 }

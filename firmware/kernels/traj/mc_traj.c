@@ -33,8 +33,7 @@ static float exp_neg(float h)
 
 static uint32_t check_limits(float v, float a, float d)
 {
-    return (pos_finite(v) && pos_finite(a) && pos_finite(d)) ? MC_TRAJ_ERR_NONE
-                                                             : MC_TRAJ_ERR_LIMIT;
+    return (pos_finite(v) && pos_finite(a) && pos_finite(d)) ? MC_TRAJ_ERR_NONE : MC_TRAJ_ERR_LIMIT;
 }
 
 uint32_t mc_traj_f32_init(mc_traj_f32_t *t, const mc_traj_f32_cfg_t *cfg)
@@ -113,8 +112,7 @@ uint32_t mc_traj_f32_set_limits(mc_traj_f32_t *t, float v_max_rad_s, float a_max
 
 /* The plan (mc_traj.h): direction s from the stopping point, an optional
  * brake segment, then ramp / cruise / stop from v_s = s v >= 0. */
-static void plan_core(mc_traj_f32_t *t, float x0, float v0, float xf, float a, float d,
-                      float vmax)
+static void plan_core(mc_traj_f32_t *t, float x0, float v0, float xf, float a, float d, float vmax)
 {
     const float stop = v0 * mc_abs_f32(v0) / (2.0f * d);
     const float diff = xf - (x0 + stop);
@@ -234,8 +232,7 @@ uint32_t mc_traj_f32_plan(mc_traj_f32_t *t, float x0_rad, float v0_rad_s, float 
     if (t == NULL) {
         return MC_TRAJ_ERR_NULL;
     }
-    if (!mc_isfinite_f32(x0_rad) || !mc_isfinite_f32(v0_rad_s) ||
-        !mc_isfinite_f32(x_target_rad)) {
+    if (!mc_isfinite_f32(x0_rad) || !mc_isfinite_f32(v0_rad_s) || !mc_isfinite_f32(x_target_rad)) {
         return MC_TRAJ_ERR_INPUT;
     }
     t->mode = MC_TRAJ_MODE_TRAP;

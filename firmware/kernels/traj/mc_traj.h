@@ -59,20 +59,20 @@ typedef enum {
 } mc_traj_mode_t;
 
 typedef struct {
-    float v_max_rad_s;      /**< cruise speed limit [rad/s], > 0 */
-    float a_max_rad_s2;     /**< acceleration limit (|v| rising) [rad/s^2], > 0 */
-    float d_max_rad_s2;     /**< deceleration limit (|v| falling) [rad/s^2], > 0 */
-    float filter_bw_rad_s;  /**< input filter's natural frequency w [rad/s], >= 0,
+    float v_max_rad_s;     /**< cruise speed limit [rad/s], > 0 */
+    float a_max_rad_s2;    /**< acceleration limit (|v| rising) [rad/s^2], > 0 */
+    float d_max_rad_s2;    /**< deceleration limit (|v| falling) [rad/s^2], > 0 */
+    float filter_bw_rad_s; /**< input filter's natural frequency w [rad/s], >= 0,
                                  w dt <= 1 (0: no filter mode) */
-    float dt_s;             /**< step period [s], > 0 */
+    float dt_s;            /**< step period [s], > 0 */
 } mc_traj_f32_cfg_t;
 
 /** Reference of one instant. */
 typedef struct {
-    float x_rad;            /**< position [rad] */
-    float v_rad_s;          /**< velocity [rad/s] */
-    float a_rad_s2;         /**< acceleration [rad/s^2] */
-    bool done;              /**< trapezoid: at the target, at rest */
+    float x_rad;    /**< position [rad] */
+    float v_rad_s;  /**< velocity [rad/s] */
+    float a_rad_s2; /**< acceleration [rad/s^2] */
+    bool done;      /**< trapezoid: at the target, at rest */
 } mc_traj_f32_out_t;
 
 #define MC_TRAJ_SEGMENTS 4u
@@ -87,11 +87,11 @@ typedef struct {
     float v_s[MC_TRAJ_SEGMENTS];
     float a_s[MC_TRAJ_SEGMENTS];
     float x_target_rad;
-    uint32_t k;             /**< steps since the plan began */
+    uint32_t k; /**< steps since the plan began */
     /* input filter: exact one-period transition (derived at init) */
     float f11, f12, f21, f22;
     float fx_rad, fv_rad_s, fr_rad;
-    mc_traj_f32_out_t out;  /**< the last output */
+    mc_traj_f32_out_t out; /**< the last output */
 } mc_traj_f32_t;
 
 /** Validate cfg; on success the generator rests at 0 in TRAP mode. */

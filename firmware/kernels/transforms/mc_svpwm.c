@@ -52,14 +52,13 @@ static float mc_svpwm_min3_f32(float a, float b, float c)
 /** Validate and solve one request; the solution is valid only if the
  *  returned flags hold neither BAD_VBUS nor BAD_INPUT. */
 static inline uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float vbus_v,
-                                   mc_svpwm_limit_t limit, mc_svpwm_solution_f32_t *p_sol)
+                                          mc_svpwm_limit_t limit, mc_svpwm_solution_f32_t *p_sol)
 {
     uint32_t flags = MC_SVPWM_FLAG_NONE;
     if (!mc_isfinite_f32(vbus_v) || (vbus_v <= 0.0f)) {
         flags |= MC_SVPWM_FLAG_BAD_VBUS;
     }
-    if (!mc_isfinite_f32(v_alpha_v) || !mc_isfinite_f32(v_beta_v) ||
-        !mc_svpwm_limit_ok(limit)) {
+    if (!mc_isfinite_f32(v_alpha_v) || !mc_isfinite_f32(v_beta_v) || !mc_svpwm_limit_ok(limit)) {
         flags |= MC_SVPWM_FLAG_BAD_INPUT;
     }
     if (flags != MC_SVPWM_FLAG_NONE) {
@@ -84,8 +83,7 @@ static inline uint32_t mc_svpwm_solve_f32(float v_alpha_v, float v_beta_v, float
     float beta_n = v_beta_v / k;
     p_sol->vbus_n = vbus_v / k;
 
-    mc_inv_clarke_f32(alpha_n, beta_n, &p_sol->phase_n[0], &p_sol->phase_n[1],
-                      &p_sol->phase_n[2]);
+    mc_inv_clarke_f32(alpha_n, beta_n, &p_sol->phase_n[0], &p_sol->phase_n[1], &p_sol->phase_n[2]);
     float vmax = mc_svpwm_max3_f32(p_sol->phase_n[0], p_sol->phase_n[1], p_sol->phase_n[2]);
     float vmin = mc_svpwm_min3_f32(p_sol->phase_n[0], p_sol->phase_n[1], p_sol->phase_n[2]);
     /* mid as the linear case forms it (mc_svpwm_core.h) */
@@ -144,8 +142,8 @@ static inline bool mc_svpwm_circle_kv_case(float v_alpha_v, float v_beta_v, floa
  * instruction mc_sqrt_f32 would run).
  */
 static inline uint32_t mc_svpwm_circle_kv_f32(float v_alpha_v, float v_beta_v, float vbus_v,
-                                              float *p_duty_a, float *p_duty_b,
-                                              float *p_duty_c, float *p_den)
+                                              float *p_duty_a, float *p_duty_b, float *p_duty_c,
+                                              float *p_den)
 {
     const float alpha_n = v_alpha_v / vbus_v;
     const float beta_n = v_beta_v / vbus_v;
@@ -179,7 +177,7 @@ static inline uint32_t mc_svpwm_circle_kv_f32(float v_alpha_v, float v_beta_v, f
 
 /** The duties of a valid solution. */
 static inline void mc_svpwm_duties_f32(const mc_svpwm_solution_f32_t *p_sol, float *p_duty_a,
-                                float *p_duty_b, float *p_duty_c)
+                                       float *p_duty_b, float *p_duty_c)
 {
     float inv_den = 1.0f / p_sol->den_n;
     /* d_x = 1/2 + (v_x - mid) / D = v_x / D + off, off = 1/2 - mid / D
@@ -226,8 +224,7 @@ uint32_t mc_svpwm_f32(float v_alpha_v, float v_beta_v, float vbus_v, mc_svpwm_li
                                     p_duty_c);
     }
     float den;
-    return mc_svpwm_circle_kv_f32(v_alpha_v, v_beta_v, vbus_v, p_duty_a, p_duty_b, p_duty_c,
-                                  &den);
+    return mc_svpwm_circle_kv_f32(v_alpha_v, v_beta_v, vbus_v, p_duty_a, p_duty_b, p_duty_c, &den);
 }
 
 /* mc_svpwm_limit_duty_f32 for every request, out of line (see above). */
@@ -268,8 +265,8 @@ uint32_t mc_svpwm_limit_duty_f32(float *p_v_alpha_v, float *p_v_beta_v, float vb
                                  mc_svpwm_limit_t limit, float *p_duty_a, float *p_duty_b,
                                  float *p_duty_c)
 {
-    if ((p_v_alpha_v == NULL) || (p_v_beta_v == NULL) || (p_duty_a == NULL) ||
-        (p_duty_b == NULL) || (p_duty_c == NULL)) {
+    if ((p_v_alpha_v == NULL) || (p_v_beta_v == NULL) || (p_duty_a == NULL) || (p_duty_b == NULL) ||
+        (p_duty_c == NULL)) {
         return MC_SVPWM_FLAG_BAD_INPUT;
     }
     if (!mc_svpwm_circle_kv_case(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit)) {
@@ -289,8 +286,8 @@ uint32_t mc_svpwm_limit_duty_f32(float *p_v_alpha_v, float *p_v_beta_v, float vb
         const float scale = 1.0f / den;
         *p_v_alpha_v *= scale;
         *p_v_beta_v *= scale;
-        return flags | mc_svpwm_f32(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit, p_duty_a, p_duty_b,
-                                    p_duty_c);
+        return flags |
+               mc_svpwm_f32(*p_v_alpha_v, *p_v_beta_v, vbus_v, limit, p_duty_a, p_duty_b, p_duty_c);
     }
 }
 

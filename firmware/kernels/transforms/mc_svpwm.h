@@ -32,7 +32,10 @@
 extern "C" {
 #endif
 
-typedef enum { MC_SVPWM_LIMIT_CIRCLE = 0, MC_SVPWM_LIMIT_HEXAGON = 1 } mc_svpwm_limit_t;
+typedef enum {
+    MC_SVPWM_LIMIT_CIRCLE = 0,
+    MC_SVPWM_LIMIT_HEXAGON = 1
+} mc_svpwm_limit_t;
 
 /** Nothing to report: the request was inside the linear region. */
 #define MC_SVPWM_FLAG_NONE 0u

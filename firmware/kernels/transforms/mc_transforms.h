@@ -80,8 +80,7 @@ static inline void mc_clarke_f32(float ia_a, float ib_a, float *p_alpha, float *
 }
 
 /** Three-phase Clarke: any common mode in ia+ib+ic is removed. */
-static inline void mc_clarke3_f32(float ia_a, float ib_a, float ic_a, float *p_alpha,
-                                  float *p_beta)
+static inline void mc_clarke3_f32(float ia_a, float ib_a, float ic_a, float *p_alpha, float *p_beta)
 {
     *p_alpha = (2.0f * ia_a - ib_a - ic_a) * (1.0f / 3.0f);
     *p_beta = (ib_a - ic_a) * MC_INV_SQRT3_F32;

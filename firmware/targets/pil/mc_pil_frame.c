@@ -7,11 +7,11 @@
 #include <string.h>
 
 /* Payload sizes [32-bit words]. */
-#define CFG_WORDS 23u
+#define CFG_WORDS   23u
 #define READY_WORDS 2u
-#define MEAS_WORDS 24u
-#define OUT_WORDS 21u
-#define END_WORDS 1u
+#define MEAS_WORDS  24u
+#define OUT_WORDS   21u
+#define END_WORDS   1u
 
 uint16_t mc_pil_crc16(const uint8_t *p, size_t n)
 {
@@ -90,8 +90,7 @@ static uint32_t get_u32(reader_t *r)
 {
     const uint8_t *p = &r->buf[r->pos];
     r->pos += 4u;
-    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) |
-           ((uint32_t)p[3] << 24);
+    return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
 static int32_t get_i32(reader_t *r)
@@ -130,7 +129,8 @@ int mc_pil_frame_type(const uint8_t *buf, size_t n)
         return MC_PIL_ERR_LEN;
     }
     const size_t body = n - MC_PIL_CRC_LEN;
-    const uint16_t crc = (uint16_t)((uint16_t)buf[body] | (uint16_t)((uint16_t)buf[body + 1u] << 8));
+    const uint16_t crc =
+        (uint16_t)((uint16_t)buf[body] | (uint16_t)((uint16_t)buf[body + 1u] << 8));
     if (mc_pil_crc16(&buf[1], body - 1u) != crc) {
         return MC_PIL_ERR_CRC;
     }
@@ -139,8 +139,7 @@ int mc_pil_frame_type(const uint8_t *buf, size_t n)
 
 /* Check a complete frame of the expected type and payload size; on success
  * the reader points at the payload. */
-static int open_frame(reader_t *r, const uint8_t *buf, size_t n, mc_pil_type_t type,
-                      uint32_t words)
+static int open_frame(reader_t *r, const uint8_t *buf, size_t n, mc_pil_type_t type, uint32_t words)
 {
     const int t = mc_pil_frame_type(buf, n);
     if (t < 0) {

@@ -43,11 +43,11 @@
 extern "C" {
 #endif
 
-#define MC_PIL_SYNC 0xA5u
-#define MC_PIL_HEADER_LEN 3u  /**< sync, type, length */
-#define MC_PIL_CRC_LEN 2u
+#define MC_PIL_SYNC        0xA5u
+#define MC_PIL_HEADER_LEN  3u /**< sync, type, length */
+#define MC_PIL_CRC_LEN     2u
 #define MC_PIL_MAX_PAYLOAD 252u
-#define MC_PIL_MAX_FRAME (MC_PIL_HEADER_LEN + MC_PIL_MAX_PAYLOAD + MC_PIL_CRC_LEN)
+#define MC_PIL_MAX_FRAME   (MC_PIL_HEADER_LEN + MC_PIL_MAX_PAYLOAD + MC_PIL_CRC_LEN)
 
 typedef enum {
     MC_PIL_TYPE_CFG = 1,   /**< host -> target: mc_drive_cfg_t */
@@ -59,12 +59,12 @@ typedef enum {
 } mc_pil_type_t;
 
 /* Decode errors. */
-#define MC_PIL_OK 0
-#define MC_PIL_ERR_SYNC (-1)    /**< first byte is not MC_PIL_SYNC */
-#define MC_PIL_ERR_LEN (-2)     /**< length field does not fit the buffer or the type */
-#define MC_PIL_ERR_CRC (-3)
-#define MC_PIL_ERR_TYPE (-4)    /**< not the expected frame type */
-#define MC_PIL_ERR_ARG (-5)     /**< NULL pointer or buffer too small */
+#define MC_PIL_OK       0
+#define MC_PIL_ERR_SYNC (-1) /**< first byte is not MC_PIL_SYNC */
+#define MC_PIL_ERR_LEN  (-2) /**< length field does not fit the buffer or the type */
+#define MC_PIL_ERR_CRC  (-3)
+#define MC_PIL_ERR_TYPE (-4) /**< not the expected frame type */
+#define MC_PIL_ERR_ARG  (-5) /**< NULL pointer or buffer too small */
 
 /* Command bits of mc_pil_meas_t.cmd_flags. */
 #define MC_PIL_CMD_SET_MODE (1u << 0)
@@ -72,18 +72,18 @@ typedef enum {
 
 /** Host -> target, once per period. */
 typedef struct {
-    uint32_t seq;                 /**< period number */
-    int32_t adc_rc;               /**< board adc read() result (0, -EAGAIN, ...) */
-    mc_hal_adc_sample_t adc;      /**< valid when adc_rc == 0 */
+    uint32_t seq;            /**< period number */
+    int32_t adc_rc;          /**< board adc read() result (0, -EAGAIN, ...) */
+    mc_hal_adc_sample_t adc; /**< valid when adc_rc == 0 */
     int32_t enc_rc;
     mc_hal_encoder_sample_t enc;
     int32_t fault_rc;
-    mc_hal_fault_status_t fault;  /**< board fault inputs at the sample */
-    uint32_t tick_ticks;          /**< board tick counter at the sample */
-    uint32_t tick_hz;             /**< board tick counter frequency */
-    uint32_t cmd_flags;           /**< MC_PIL_CMD_* */
-    uint32_t mode;                /**< mc_drive_mode_t, with MC_PIL_CMD_SET_MODE */
-    float id_ref_a;               /**< with MC_PIL_CMD_SET_REFS */
+    mc_hal_fault_status_t fault; /**< board fault inputs at the sample */
+    uint32_t tick_ticks;         /**< board tick counter at the sample */
+    uint32_t tick_hz;            /**< board tick counter frequency */
+    uint32_t cmd_flags;          /**< MC_PIL_CMD_* */
+    uint32_t mode;               /**< mc_drive_mode_t, with MC_PIL_CMD_SET_MODE */
+    float id_ref_a;              /**< with MC_PIL_CMD_SET_REFS */
     float iq_ref_a;
 } mc_pil_meas_t;
 
@@ -99,19 +99,19 @@ typedef struct {
     uint32_t faults;              /**< sticky MC_DRIVE_FAULT_* */
     uint32_t first_fault;
     uint32_t foc_err;
-    float id_a, iq_a;             /**< FOC measured dq currents */
-    float vd_v, vq_v;             /**< FOC applied dq voltages */
+    float id_a, iq_a; /**< FOC measured dq currents */
+    float vd_v, vq_v; /**< FOC applied dq voltages */
     float theta_e_rad;
     float omega_m_rad_s;
-    uint32_t ipsr_fast;           /**< exception number of the fast step (34 = ADC IRQ) */
-    uint32_t ipsr_slow;           /**< of the slow step (14 = PendSV), 0 if none ran */
+    uint32_t ipsr_fast; /**< exception number of the fast step (34 = ADC IRQ) */
+    uint32_t ipsr_slow; /**< of the slow step (14 = PendSV), 0 if none ran */
     uint32_t slow_ran;
 } mc_pil_out_t;
 
 /** Target -> host after CFG. */
 typedef struct {
-    uint32_t drive_cfg_err;       /**< mc_drive_init() result */
-    uint32_t sysclk_hz;           /**< clock set-up result (0: no RCC, emulator) */
+    uint32_t drive_cfg_err; /**< mc_drive_init() result */
+    uint32_t sysclk_hz;     /**< clock set-up result (0: no RCC, emulator) */
 } mc_pil_ready_t;
 
 /** CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection). */

@@ -31,25 +31,25 @@
 #include "mc_stm32f405.h"
 
 /* Exit codes reported to the host through semihosting. */
-#define PIL_EXIT_FRAME_ERROR 3
+#define PIL_EXIT_FRAME_ERROR  3
 #define PIL_EXIT_CFG_REJECTED 2
-#define PIL_EXIT_HARD_FAULT 99
+#define PIL_EXIT_HARD_FAULT   99
 
 /* USART1 (RM0090 section 30.6). */
-#define USART_SR  MC_REG32(MC_USART1_BASE + 0x00u)
-#define USART_DR  MC_REG32(MC_USART1_BASE + 0x04u)
-#define USART_BRR MC_REG32(MC_USART1_BASE + 0x08u)
-#define USART_CR1 MC_REG32(MC_USART1_BASE + 0x0Cu)
-#define USART_SR_ORE  (1u << 3)
-#define USART_SR_RXNE (1u << 5)
-#define USART_SR_TXE  (1u << 7)
-#define USART_CR1_RE     (1u << 2)
-#define USART_CR1_TE     (1u << 3)
-#define USART_CR1_RXNEIE (1u << 5)
-#define USART_CR1_UE     (1u << 13)
-#define RCC_APB2ENR MC_REG32(MC_RCC_BASE + MC_RCC_APB2ENR_OFS)
+#define USART_SR             MC_REG32(MC_USART1_BASE + 0x00u)
+#define USART_DR             MC_REG32(MC_USART1_BASE + 0x04u)
+#define USART_BRR            MC_REG32(MC_USART1_BASE + 0x08u)
+#define USART_CR1            MC_REG32(MC_USART1_BASE + 0x0Cu)
+#define USART_SR_ORE         (1u << 3)
+#define USART_SR_RXNE        (1u << 5)
+#define USART_SR_TXE         (1u << 7)
+#define USART_CR1_RE         (1u << 2)
+#define USART_CR1_TE         (1u << 3)
+#define USART_CR1_RXNEIE     (1u << 5)
+#define USART_CR1_UE         (1u << 13)
+#define RCC_APB2ENR          MC_REG32(MC_RCC_BASE + MC_RCC_APB2ENR_OFS)
 #define RCC_APB2ENR_USART1EN (1u << 4)
-#define PIL_BAUD 115200u
+#define PIL_BAUD             115200u
 
 #define PRIO_LINK_RX 1u
 
@@ -60,16 +60,16 @@ typedef struct {
     /* link */
     uint8_t rx[MC_PIL_MAX_FRAME];
     size_t rx_len;
-    mc_pil_meas_t meas;          /**< the period's measurements */
-    bool meas_pending;           /**< commands of meas not applied yet */
-    bool adc_fresh;              /**< meas.adc not read yet */
+    mc_pil_meas_t meas; /**< the period's measurements */
+    bool meas_pending;  /**< commands of meas not applied yet */
+    bool adc_fresh;     /**< meas.adc not read yet */
     uint32_t sysclk_hz;
     mc_drive_cfg_t cfg;
     bool have_cfg;
     /* bridge mirror */
     float duty[3];
     bool pwm_enabled;
-    bool killed_here;            /**< gate kill by the drive (host kill is in meas) */
+    bool killed_here; /**< gate kill by the drive (host kill is in meas) */
     uint32_t duty_set_count;
     uint32_t gate_kill_count;
     int32_t cmd_rc;
@@ -211,8 +211,7 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
 static int pwm_set_duty(void *ctx, float da, float db, float dc)
 {
     pil_board_t *b = ctx;
-    if (!mc_hal_pwm3_duty_valid(da) || !mc_hal_pwm3_duty_valid(db) ||
-        !mc_hal_pwm3_duty_valid(dc)) {
+    if (!mc_hal_pwm3_duty_valid(da) || !mc_hal_pwm3_duty_valid(db) || !mc_hal_pwm3_duty_valid(dc)) {
         return -EINVAL;
     }
     b->duty[0] = da;
@@ -306,8 +305,7 @@ static int fault_gate_release(void *ctx)
 }
 
 static const mc_hal_adc_ops_t k_adc_ops = {adc_read, NULL};
-static const mc_hal_pwm3_ops_t k_pwm3_ops = {pwm_set_duty, pwm_enable, pwm_disable,
-                                             pwm_get_state};
+static const mc_hal_pwm3_ops_t k_pwm3_ops = {pwm_set_duty, pwm_enable, pwm_disable, pwm_get_state};
 static const mc_hal_encoder_ops_t k_enc_ops = {enc_read};
 static const mc_hal_tick_ops_t k_tick_ops = {tick_read, tick_freq};
 static const mc_hal_fault_ops_t k_fault_ops = {fault_read, fault_gate_kill, fault_gate_release};
@@ -358,7 +356,8 @@ const mc_drive_cfg_t *mc_board_drive_cfg(void)
         }
         const size_t n = g_pil.rx_len;
         g_pil.rx_len = 0u;
-        if (type != (int)MC_PIL_TYPE_CFG || mc_pil_decode_cfg(g_pil.rx, n, &g_pil.cfg) != MC_PIL_OK) {
+        if (type != (int)MC_PIL_TYPE_CFG ||
+            mc_pil_decode_cfg(g_pil.rx, n, &g_pil.cfg) != MC_PIL_OK) {
             sh_write0("pil: expected a CFG frame\n");
             sh_exit(PIL_EXIT_FRAME_ERROR);
         }

@@ -42,13 +42,13 @@
 #endif
 extern const mc_board_desc_t MC_BOARD_DESC;
 
-#define PWM_HZ 20000u
+#define PWM_HZ           20000u
 #define CURRENT_BW_RAD_S 1256.6371f /* 2 pi 200 Hz */
-#define I_MAX_A 10.0f
-#define I_TRIP_A 15.0f
+#define I_MAX_A          10.0f
+#define I_TRIP_A         15.0f
 #define DELAY_POLL_SLACK 1000u
-#define SLOW_LOOP_DIV 20u                                 /* 1 kHz slow loop */
-#define SLOW_PERIOD_US (1000000u / PWM_HZ * SLOW_LOOP_DIV) /* 1000 us */
+#define SLOW_LOOP_DIV    20u                                 /* 1 kHz slow loop */
+#define SLOW_PERIOD_US   (1000000u / PWM_HZ * SLOW_LOOP_DIV) /* 1000 us */
 
 void CAN1_RX0_IRQHandler(void);
 
@@ -120,8 +120,8 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
         MC_BOARD_F405_OK) {
         return NULL;
     }
-    if (mc_board_f405_gate_driver_setup(&g_board.f405, &MC_BOARD_DESC,
-                                        &g_board.f405.spi.dev) != MC_BOARD_F405_OK) {
+    if (mc_board_f405_gate_driver_setup(&g_board.f405, &MC_BOARD_DESC, &g_board.f405.spi.dev) !=
+        MC_BOARD_F405_OK) {
         return NULL;
     }
     return &g_board.f405.hal;
@@ -198,8 +198,8 @@ void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
         return;
     }
     /* PendSV (slow loop) context: a few SPI frames when something happens. */
-    (void)mc_board_f405_gate_driver_supervise(&g_board.f405, &MC_BOARD_DESC,
-                                              &g_board.f405.spi.dev, SLOW_PERIOD_US,
+    (void)mc_board_f405_gate_driver_supervise(&g_board.f405, &MC_BOARD_DESC, &g_board.f405.spi.dev,
+                                              SLOW_PERIOD_US,
                                               (d->faults & MC_DRIVE_FAULT_HW_INPUT) != 0u);
 }
 

@@ -38,10 +38,10 @@ extern "C" {
 #define MC_CLOCK_APB1_HZ   42000000u
 #define MC_CLOCK_APB2_HZ   84000000u
 
-#define MC_CLOCK_PLL_M 8u
-#define MC_CLOCK_PLL_N 336u
+#define MC_CLOCK_PLL_M     8u
+#define MC_CLOCK_PLL_N     336u
 #define MC_CLOCK_PLL_P_DIV 2u
-#define MC_CLOCK_PLL_Q 7u
+#define MC_CLOCK_PLL_Q     7u
 
 /** Polls per ready flag by default: >= 20 ms at 16 MHz (HSE start-up is
  *  specified at 2 ms typical). */

@@ -17,7 +17,8 @@
 /** The register at a fixed peripheral address. */
 static inline volatile uint32_t *mc_reg32(uintptr_t addr)
 {
-    return (volatile uint32_t *)addr; /* NOLINT(performance-no-int-to-ptr): memory-mapped register */
+    return (
+        volatile uint32_t *)addr; /* NOLINT(performance-no-int-to-ptr): memory-mapped register */
 }
 
 static inline volatile uint8_t *mc_reg8(uintptr_t addr)
@@ -42,12 +43,12 @@ static inline volatile uint8_t *mc_reg8(uintptr_t addr)
 
 /* NVIC: 32 interrupts per enable/pending word, 8-bit priority fields of
  * which the STM32F405 implements the top 4 bits (16 levels, 0 = highest). */
-#define MC_NVIC_ISER(n) MC_REG32(0xE000E100u + 4u * (uint32_t)(n))
-#define MC_NVIC_ICER(n) MC_REG32(0xE000E180u + 4u * (uint32_t)(n))
-#define MC_NVIC_ISPR(n) MC_REG32(0xE000E200u + 4u * (uint32_t)(n))
-#define MC_NVIC_ICPR(n) MC_REG32(0xE000E280u + 4u * (uint32_t)(n))
+#define MC_NVIC_ISER(n)       MC_REG32(0xE000E100u + 4u * (uint32_t)(n))
+#define MC_NVIC_ICER(n)       MC_REG32(0xE000E180u + 4u * (uint32_t)(n))
+#define MC_NVIC_ISPR(n)       MC_REG32(0xE000E200u + 4u * (uint32_t)(n))
+#define MC_NVIC_ICPR(n)       MC_REG32(0xE000E280u + 4u * (uint32_t)(n))
 #define MC_NVIC_IPR_BYTE(irq) (*mc_reg8((uintptr_t)0xE000E400u + (uintptr_t)(irq)))
-#define MC_NVIC_PRIO_BITS 4u
+#define MC_NVIC_PRIO_BITS     4u
 
 static inline void mc_nvic_set_priority(uint32_t irq, uint32_t prio)
 {
@@ -83,11 +84,26 @@ static inline void mc_scb_pend_pendsv(void)
 }
 
 #if defined(__arm__)
-static inline void mc_dsb(void) { __asm__ volatile("dsb" ::: "memory"); }
-static inline void mc_isb(void) { __asm__ volatile("isb" ::: "memory"); }
-static inline void mc_wfi(void) { __asm__ volatile("wfi" ::: "memory"); }
-static inline void mc_irq_disable(void) { __asm__ volatile("cpsid i" ::: "memory"); }
-static inline void mc_irq_enable(void) { __asm__ volatile("cpsie i" ::: "memory"); }
+static inline void mc_dsb(void)
+{
+    __asm__ volatile("dsb" ::: "memory");
+}
+static inline void mc_isb(void)
+{
+    __asm__ volatile("isb" ::: "memory");
+}
+static inline void mc_wfi(void)
+{
+    __asm__ volatile("wfi" ::: "memory");
+}
+static inline void mc_irq_disable(void)
+{
+    __asm__ volatile("cpsid i" ::: "memory");
+}
+static inline void mc_irq_enable(void)
+{
+    __asm__ volatile("cpsie i" ::: "memory");
+}
 /** Exception number being handled (0 = thread mode, 14 = PendSV, 16 + n = IRQ n). */
 static inline uint32_t mc_ipsr(void)
 {
@@ -96,12 +112,25 @@ static inline uint32_t mc_ipsr(void)
     return v;
 }
 #else
-static inline void mc_dsb(void) {}
-static inline void mc_isb(void) {}
-static inline void mc_wfi(void) {}
-static inline void mc_irq_disable(void) {}
-static inline void mc_irq_enable(void) {}
-static inline uint32_t mc_ipsr(void) { return 0u; }
+static inline void mc_dsb(void)
+{
+}
+static inline void mc_isb(void)
+{
+}
+static inline void mc_wfi(void)
+{
+}
+static inline void mc_irq_disable(void)
+{
+}
+static inline void mc_irq_enable(void)
+{
+}
+static inline uint32_t mc_ipsr(void)
+{
+    return 0u;
+}
 #endif
 
 #endif /* MC_CORTEXM_H */

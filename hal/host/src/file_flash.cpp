@@ -9,12 +9,16 @@
 namespace hal_host {
 namespace {
 
-FileFlash* self(void* ctx) { return static_cast<FileFlash*>(ctx); }
+FileFlash* self(void* ctx) {
+  return static_cast<FileFlash*>(ctx);
+}
 
 int op_sector_size(void* ctx, uint32_t sector, uint32_t* p_bytes) {
   return self(ctx)->sector_size(sector, p_bytes);
 }
-int op_erase(void* ctx, uint32_t sector) { return self(ctx)->erase(sector); }
+int op_erase(void* ctx, uint32_t sector) {
+  return self(ctx)->erase(sector);
+}
 int op_program(void* ctx, uint32_t sector, uint32_t offset, const uint32_t* p_words, uint32_t n) {
   return self(ctx)->program(sector, offset, p_words, n);
 }
@@ -51,7 +55,8 @@ FileFlash::FileFlash(const std::string& path) : path_(path), mem_(kFileBytes, 0x
       (void)std::fclose(f);
       if (err || got != mem_.size()) fail("read error");
     }
-    if (::access(path.c_str(), W_OK) != 0) fail(std::string("not writable: ") + std::strerror(errno));
+    if (::access(path.c_str(), W_OK) != 0)
+      fail(std::string("not writable: ") + std::strerror(errno));
     existed_ = true;
   } else if (errno != ENOENT) {
     fail(std::strerror(errno));

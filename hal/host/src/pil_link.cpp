@@ -61,7 +61,8 @@ void PilLink::start() {
 
   sockaddr_un addr{};
   addr.sun_family = AF_UNIX;
-  if (sock_path_.size() >= sizeof(addr.sun_path)) throw std::runtime_error("PilLink: socket path too long");
+  if (sock_path_.size() >= sizeof(addr.sun_path))
+    throw std::runtime_error("PilLink: socket path too long");
   std::memcpy(addr.sun_path, sock_path_.c_str(), sock_path_.size() + 1);
   listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM, 0);
   if (listen_fd_ < 0) throw sys_error("socket");
@@ -72,8 +73,8 @@ void PilLink::start() {
 
   // QEMU: USART1 (the first -serial) connects to our socket as a client;
   // semihosting (exit code, diagnostics) is enabled for the END frame.
-  std::vector<std::string> args = {opt_.qemu, "-M", "netduinoplus2", "-display", "none",
-                                   "-monitor", "none", "-serial", "unix:" + sock_path_};
+  std::vector<std::string> args = {opt_.qemu,  "-M",   "netduinoplus2", "-display",          "none",
+                                   "-monitor", "none", "-serial",       "unix:" + sock_path_};
   if (!opt_.semihost_log.empty()) {
     args.insert(args.end(), {"-chardev", "file,id=sh0,path=" + opt_.semihost_log,
                              "-semihosting-config", "enable=on,target=native,chardev=sh0"});
@@ -99,7 +100,9 @@ void PilLink::start() {
   if (fd_ < 0) throw sys_error("accept");
 }
 
-PilLink::~PilLink() { cleanup(); }
+PilLink::~PilLink() {
+  cleanup();
+}
 
 void PilLink::cleanup() noexcept {
   if (pid_ > 0 && !finished_) {
@@ -162,7 +165,8 @@ void PilLink::read_exact(uint8_t* p, std::size_t n) {
 std::vector<uint8_t> PilLink::receive_frame() {
   std::vector<uint8_t> f(MC_PIL_HEADER_LEN);
   read_exact(f.data(), MC_PIL_HEADER_LEN);
-  if (f[0] != MC_PIL_SYNC) throw std::runtime_error("PilLink: frame does not start with the sync byte");
+  if (f[0] != MC_PIL_SYNC)
+    throw std::runtime_error("PilLink: frame does not start with the sync byte");
   const std::size_t n = mc_pil_frame_len(f.data(), f.size());
   f.resize(n);
   read_exact(f.data() + MC_PIL_HEADER_LEN, n - MC_PIL_HEADER_LEN);

@@ -29,9 +29,12 @@ PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
   check_config(encoder_.configure(cfg.encoder), "encoder");
   if (cfg.substeps < 1) throw std::invalid_argument("substeps must be >= 1");
   if (cfg.delay_periods < 0) throw std::invalid_argument("delay_periods must be >= 0");
-  check_config(delay_.configure(static_cast<std::size_t>(cfg.delay_periods), duty_cmd_), "delay_periods");
-  if (!(cfg.vbus_v > 0.0) || !std::isfinite(cfg.vbus_v)) throw std::invalid_argument("vbus_v must be > 0");
-  if (!(cfg.tick_hz >= 1.0) || cfg.tick_hz > 4.0e9) throw std::invalid_argument("tick_hz out of range");
+  check_config(delay_.configure(static_cast<std::size_t>(cfg.delay_periods), duty_cmd_),
+               "delay_periods");
+  if (!(cfg.vbus_v > 0.0) || !std::isfinite(cfg.vbus_v))
+    throw std::invalid_argument("vbus_v must be > 0");
+  if (!(cfg.tick_hz >= 1.0) || cfg.tick_hz > 4.0e9)
+    throw std::invalid_argument("tick_hz out of range");
   mcsim::PmsmPowerStageParams sp;
   sp.motor = cfg.motor;
   sp.inverter = cfg.inverter;
@@ -219,14 +222,18 @@ void PmsmBoard::set_load(const mcsim::LoadTorque& load) {
   check_config(stage_.set_load(load), "load");
 }
 
-void PmsmBoard::set_fault_inputs(uint32_t active_mask) { fault_line_.set_inputs(active_mask); }
+void PmsmBoard::set_fault_inputs(uint32_t active_mask) {
+  fault_line_.set_inputs(active_mask);
+}
 
 int PmsmBoard::fault_read(mc_hal_fault_status_t* st) noexcept {
   fault_line_.read(st);
   return 0;
 }
 
-void PmsmBoard::fault_gate_kill() noexcept { fault_line_.killed = true; }
+void PmsmBoard::fault_gate_kill() noexcept {
+  fault_line_.killed = true;
+}
 
 int PmsmBoard::fault_gate_release() noexcept {
   if (!fault_line_.release()) return -EBUSY;

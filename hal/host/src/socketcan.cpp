@@ -44,8 +44,8 @@ SocketCan::SocketCan(const std::string& ifname, bool fd, std::function<uint32_t(
   try {
     const unsigned idx = if_nametoindex(ifname.c_str());
     if (idx == 0) fail(errno, "no such interface", ifname);
-    can_err_mask_t err_mask = CAN_ERR_TX_TIMEOUT | CAN_ERR_CRTL | CAN_ERR_BUSOFF |
-                              CAN_ERR_RESTARTED;
+    can_err_mask_t err_mask =
+        CAN_ERR_TX_TIMEOUT | CAN_ERR_CRTL | CAN_ERR_BUSOFF | CAN_ERR_RESTARTED;
 #ifdef CAN_ERR_CNT
     err_mask |= CAN_ERR_CNT;
 #endif
@@ -157,7 +157,9 @@ void socketcan_apply_error(uint32_t can_id, const uint8_t data[8], mc_hal_can_st
 int SocketCan::receive(mc_hal_can_frame_t* f) noexcept {
   for (int i = 0; i < kMaxErrorFramesPerReceive; ++i) {
     struct canfd_frame cf {};
-    struct iovec iov {&cf, sizeof cf};
+    struct iovec iov {
+      &cf, sizeof cf
+    };
     alignas(struct cmsghdr) char ctrl[CMSG_SPACE(sizeof(uint32_t))];
     struct msghdr msg {};
     msg.msg_iov = &iov;

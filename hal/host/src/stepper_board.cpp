@@ -28,7 +28,7 @@ StepperBoard::StepperBoard(const StepperBoardConfig& cfg) : cfg_(cfg) {
   if (cfg.substeps < 1) throw std::invalid_argument("substeps must be >= 1");
   if (cfg.delay_periods < 0) throw std::invalid_argument("delay_periods must be >= 0");
   check_config(delay_.configure(static_cast<std::size_t>(cfg.delay_periods), duty_cmd_),
-        "delay_periods");
+               "delay_periods");
   if (!(cfg.vbus_v > 0.0) || !std::isfinite(cfg.vbus_v)) {
     throw std::invalid_argument("vbus_v must be > 0");
   }
@@ -147,7 +147,9 @@ int StepperBoard::fault_read(mc_hal_fault_status_t* st) noexcept {
   return 0;
 }
 
-void StepperBoard::fault_gate_kill() noexcept { fault_line_.killed = true; }
+void StepperBoard::fault_gate_kill() noexcept {
+  fault_line_.killed = true;
+}
 
 int StepperBoard::fault_gate_release() noexcept {
   if (!fault_line_.release()) return -EBUSY;

@@ -28,14 +28,13 @@ extern "C" {
 #define MC_HAL_ADC_VALID_IB   (1u << 1)
 #define MC_HAL_ADC_VALID_IC   (1u << 2)
 #define MC_HAL_ADC_VALID_VBUS (1u << 3)
-#define MC_HAL_ADC_VALID_ALL  (MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | \
-                               MC_HAL_ADC_VALID_IC | MC_HAL_ADC_VALID_VBUS)
+#define MC_HAL_ADC_VALID_ALL \
+    (MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC | MC_HAL_ADC_VALID_VBUS)
 
 /** Bits of mc_hal_adc_temp_t.valid_mask. */
 #define MC_HAL_ADC_TEMP_VALID_POWER_STAGE (1u << 0)
 #define MC_HAL_ADC_TEMP_VALID_MOTOR       (1u << 1)
-#define MC_HAL_ADC_TEMP_VALID_ALL (MC_HAL_ADC_TEMP_VALID_POWER_STAGE | \
-                                   MC_HAL_ADC_TEMP_VALID_MOTOR)
+#define MC_HAL_ADC_TEMP_VALID_ALL         (MC_HAL_ADC_TEMP_VALID_POWER_STAGE | MC_HAL_ADC_TEMP_VALID_MOTOR)
 
 /**
  * One fast-loop sample, taken at one PWM-synchronous trigger.
@@ -93,8 +92,7 @@ typedef struct mc_hal_adc {
  *         -EIO    ADC fault (overrun, conversion error): *p_sample unchanged;
  *         -ENODEV / -EINVAL as in hal/hal.h.
  */
-static inline int mc_hal_adc_read(const mc_hal_adc_t *dev,
-                                  mc_hal_adc_sample_t *p_sample)
+static inline int mc_hal_adc_read(const mc_hal_adc_t *dev, mc_hal_adc_sample_t *p_sample)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->read == NULL)) {
         return -ENODEV;
@@ -112,8 +110,7 @@ static inline int mc_hal_adc_read(const mc_hal_adc_t *dev,
  * @return 0 and *p_temp filled (check valid_mask per channel);
  *         -EIO ADC fault: *p_temp unchanged; -ENODEV / -EINVAL.
  */
-static inline int mc_hal_adc_read_temp(const mc_hal_adc_t *dev,
-                                       mc_hal_adc_temp_t *p_temp)
+static inline int mc_hal_adc_read_temp(const mc_hal_adc_t *dev, mc_hal_adc_temp_t *p_temp)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->read_temp == NULL)) {
         return -ENODEV;

@@ -28,13 +28,13 @@ extern "C" {
 #define MC_HAL_CAN_FLAG_RTR (1u << 1) /**< classic remote frame (no data) */
 #define MC_HAL_CAN_FLAG_FD  (1u << 2) /**< CAN FD frame (len up to 64) */
 #define MC_HAL_CAN_FLAG_BRS (1u << 3) /**< FD bit-rate switch (needs FD) */
-#define MC_HAL_CAN_FLAG_ALL (MC_HAL_CAN_FLAG_EXT | MC_HAL_CAN_FLAG_RTR | \
-                             MC_HAL_CAN_FLAG_FD | MC_HAL_CAN_FLAG_BRS)
+#define MC_HAL_CAN_FLAG_ALL \
+    (MC_HAL_CAN_FLAG_EXT | MC_HAL_CAN_FLAG_RTR | MC_HAL_CAN_FLAG_FD | MC_HAL_CAN_FLAG_BRS)
 
-#define MC_HAL_CAN_STD_ID_MAX  0x7FFu      /**< largest 11-bit identifier */
-#define MC_HAL_CAN_EXT_ID_MAX  0x1FFFFFFFu /**< largest 29-bit identifier */
-#define MC_HAL_CAN_MAX_LEN     8u          /**< classic data bytes */
-#define MC_HAL_CAN_FD_MAX_LEN  64u         /**< FD data bytes */
+#define MC_HAL_CAN_STD_ID_MAX 0x7FFu      /**< largest 11-bit identifier */
+#define MC_HAL_CAN_EXT_ID_MAX 0x1FFFFFFFu /**< largest 29-bit identifier */
+#define MC_HAL_CAN_MAX_LEN    8u          /**< classic data bytes */
+#define MC_HAL_CAN_FD_MAX_LEN 64u         /**< FD data bytes */
 
 /**
  * One frame. `len` is the number of data bytes: 0..8 for a classic frame
@@ -84,8 +84,8 @@ typedef struct mc_hal_can {
 /** true if len is a data length an FD frame can carry. */
 static inline bool mc_hal_can_fd_len_valid(uint8_t len)
 {
-    return (len <= 8u) || (len == 12u) || (len == 16u) || (len == 20u) ||
-           (len == 24u) || (len == 32u) || (len == 48u) || (len == 64u);
+    return (len <= 8u) || (len == 12u) || (len == 16u) || (len == 20u) || (len == 24u) ||
+           (len == 32u) || (len == 48u) || (len == 64u);
 }
 
 /**
@@ -97,8 +97,7 @@ static inline bool mc_hal_can_fd_len_valid(uint8_t len)
  *                 FD length, RTR on an FD frame, BRS without FD;
  *         -ENOTSUP a valid FD frame and fd_capable is false.
  */
-static inline int mc_hal_can_frame_check(const mc_hal_can_frame_t *p_frame,
-                                         bool fd_capable)
+static inline int mc_hal_can_frame_check(const mc_hal_can_frame_t *p_frame, bool fd_capable)
 {
     uint32_t id_max;
 
@@ -108,8 +107,8 @@ static inline int mc_hal_can_frame_check(const mc_hal_can_frame_t *p_frame,
     if ((p_frame->flags & ~MC_HAL_CAN_FLAG_ALL) != 0u) {
         return -EINVAL;
     }
-    id_max = ((p_frame->flags & MC_HAL_CAN_FLAG_EXT) != 0u) ?
-             MC_HAL_CAN_EXT_ID_MAX : MC_HAL_CAN_STD_ID_MAX;
+    id_max = ((p_frame->flags & MC_HAL_CAN_FLAG_EXT) != 0u) ? MC_HAL_CAN_EXT_ID_MAX
+                                                            : MC_HAL_CAN_STD_ID_MAX;
     if (p_frame->id > id_max) {
         return -EINVAL;
     }
@@ -123,8 +122,7 @@ static inline int mc_hal_can_frame_check(const mc_hal_can_frame_t *p_frame,
         }
         return 0;
     }
-    if (((p_frame->flags & MC_HAL_CAN_FLAG_BRS) != 0u) ||
-        (p_frame->len > MC_HAL_CAN_MAX_LEN)) {
+    if (((p_frame->flags & MC_HAL_CAN_FLAG_BRS) != 0u) || (p_frame->len > MC_HAL_CAN_MAX_LEN)) {
         return -EINVAL;
     }
     return 0;
@@ -140,8 +138,7 @@ static inline int mc_hal_can_frame_check(const mc_hal_can_frame_t *p_frame,
  *         drop); -ENETDOWN controller is bus-off (nothing queued); -EIO;
  *         -ENODEV.
  */
-static inline int mc_hal_can_send(const mc_hal_can_t *dev,
-                                  const mc_hal_can_frame_t *p_frame)
+static inline int mc_hal_can_send(const mc_hal_can_t *dev, const mc_hal_can_frame_t *p_frame)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->send == NULL)) {
         return -ENODEV;
@@ -159,8 +156,7 @@ static inline int mc_hal_can_send(const mc_hal_can_t *dev,
  * @return 0 and *p_frame filled; -EAGAIN nothing received (*p_frame
  *         unchanged); -EIO; -ENODEV; -EINVAL.
  */
-static inline int mc_hal_can_receive(const mc_hal_can_t *dev,
-                                     mc_hal_can_frame_t *p_frame)
+static inline int mc_hal_can_receive(const mc_hal_can_t *dev, mc_hal_can_frame_t *p_frame)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->receive == NULL)) {
         return -ENODEV;
@@ -175,11 +171,9 @@ static inline int mc_hal_can_receive(const mc_hal_can_t *dev,
  * Bus state, error counters, overruns, FD capability.   Timing: SLOW.
  * @return 0 and *p_status filled; -EIO; -ENODEV; -EINVAL.
  */
-static inline int mc_hal_can_get_status(const mc_hal_can_t *dev,
-                                        mc_hal_can_status_t *p_status)
+static inline int mc_hal_can_get_status(const mc_hal_can_t *dev, mc_hal_can_status_t *p_status)
 {
-    if ((dev == NULL) || (dev->ops == NULL) ||
-        (dev->ops->get_status == NULL)) {
+    if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->get_status == NULL)) {
         return -ENODEV;
     }
     if (p_status == NULL) {

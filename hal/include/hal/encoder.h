@@ -29,8 +29,7 @@ extern "C" {
 /** The index pulse has been seen (or the encoder is absolute): count is
  *  referenced to the index. Clear: count is relative to power-up. */
 #define MC_HAL_ENCODER_FLAG_INDEX (1u << 1)
-#define MC_HAL_ENCODER_FLAG_ALL (MC_HAL_ENCODER_FLAG_VALID | \
-                                 MC_HAL_ENCODER_FLAG_INDEX)
+#define MC_HAL_ENCODER_FLAG_ALL   (MC_HAL_ENCODER_FLAG_VALID | MC_HAL_ENCODER_FLAG_INDEX)
 
 typedef struct mc_hal_encoder_sample {
     uint32_t count;           /**< position [counts], 0 .. counts_per_rev-1 */

@@ -32,7 +32,7 @@ extern "C" {
 /** Fault input bits (mc_hal_fault_status_t active_mask / latched_mask). */
 #define MC_HAL_FAULT_GATE_DRIVER (1u << 0) /**< gate driver nFAULT */
 #define MC_HAL_FAULT_OVERCURRENT (1u << 1) /**< over-current comparator */
-#define MC_HAL_FAULT_ALL (MC_HAL_FAULT_GATE_DRIVER | MC_HAL_FAULT_OVERCURRENT)
+#define MC_HAL_FAULT_ALL         (MC_HAL_FAULT_GATE_DRIVER | MC_HAL_FAULT_OVERCURRENT)
 
 typedef struct mc_hal_fault_status {
     uint32_t active_mask;  /**< MC_HAL_FAULT_* inputs asserted now */
@@ -61,8 +61,7 @@ typedef struct mc_hal_fault {
  * @return 0 and *p_status filled; -EIO: *p_status unchanged (the drive
  *         treats this as a fault and kills the gates); -ENODEV; -EINVAL.
  */
-static inline int mc_hal_fault_read(const mc_hal_fault_t *dev,
-                                    mc_hal_fault_status_t *p_status)
+static inline int mc_hal_fault_read(const mc_hal_fault_t *dev, mc_hal_fault_status_t *p_status)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->read == NULL)) {
         return -ENODEV;
@@ -101,8 +100,7 @@ static inline int mc_hal_fault_gate_kill(const mc_hal_fault_t *dev)
  */
 static inline int mc_hal_fault_gate_release(const mc_hal_fault_t *dev)
 {
-    if ((dev == NULL) || (dev->ops == NULL) ||
-        (dev->ops->gate_release == NULL)) {
+    if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->gate_release == NULL)) {
         return -ENODEV;
     }
     return dev->ops->gate_release(dev->ctx);

@@ -33,7 +33,7 @@
 extern "C" {
 #endif
 
-#define MC_HAL_FLASH_WORD_BYTES 4u   /**< program granularity */
+#define MC_HAL_FLASH_WORD_BYTES  4u /**< program granularity */
 #define MC_HAL_FLASH_ERASED_WORD 0xFFFFFFFFu
 
 typedef struct mc_hal_flash_ops {
@@ -91,9 +91,8 @@ static inline int mc_hal_flash_erase(const mc_hal_flash_t *dev, uint32_t sector)
  *         sector, NULL data; nothing programmed); -EIO (controller error:
  *         the words before the failing one are programmed); -ENODEV.
  */
-static inline int mc_hal_flash_program(const mc_hal_flash_t *dev, uint32_t sector,
-                                       uint32_t offset, const uint32_t *p_words,
-                                       uint32_t n_words)
+static inline int mc_hal_flash_program(const mc_hal_flash_t *dev, uint32_t sector, uint32_t offset,
+                                       const uint32_t *p_words, uint32_t n_words)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->program == NULL)) {
         return -ENODEV;

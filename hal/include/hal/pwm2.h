@@ -61,8 +61,7 @@ static inline bool mc_hal_pwm2_duty_valid(float d)
  *         changes; -EIO hardware fault: the drive must kill the gates;
  *         -ENODEV.
  */
-static inline int mc_hal_pwm2_set_duty(const mc_hal_pwm2_t *dev,
-                                       float duty_a, float duty_b)
+static inline int mc_hal_pwm2_set_duty(const mc_hal_pwm2_t *dev, float duty_a, float duty_b)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->set_duty == NULL)) {
         return -ENODEV;
@@ -99,8 +98,7 @@ static inline int mc_hal_pwm2_disable(const mc_hal_pwm2_t *dev)
  * Read back duties, period and enable state.           Timing: FAST.
  * @return 0; -EIO: *p_state unchanged; -ENODEV; -EINVAL.
  */
-static inline int mc_hal_pwm2_get_state(const mc_hal_pwm2_t *dev,
-                                        mc_hal_pwm2_state_t *p_state)
+static inline int mc_hal_pwm2_get_state(const mc_hal_pwm2_t *dev, mc_hal_pwm2_state_t *p_state)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->get_state == NULL)) {
         return -ENODEV;

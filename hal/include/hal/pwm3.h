@@ -77,8 +77,8 @@ static inline bool mc_hal_pwm3_duty_valid(float d)
  *         previous duties stay in force; -EIO hardware fault: duties
  *         unspecified, the drive must kill the gates; -ENODEV.
  */
-static inline int mc_hal_pwm3_set_duty(const mc_hal_pwm3_t *dev,
-                                       float duty_a, float duty_b, float duty_c)
+static inline int mc_hal_pwm3_set_duty(const mc_hal_pwm3_t *dev, float duty_a, float duty_b,
+                                       float duty_c)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->set_duty == NULL)) {
         return -ENODEV;
@@ -124,8 +124,7 @@ static inline int mc_hal_pwm3_disable(const mc_hal_pwm3_t *dev)
  * Read back duties, period and enable state.           Timing: FAST.
  * @return 0 and *p_state filled; -EIO: *p_state unchanged; -ENODEV; -EINVAL.
  */
-static inline int mc_hal_pwm3_get_state(const mc_hal_pwm3_t *dev,
-                                        mc_hal_pwm3_state_t *p_state)
+static inline int mc_hal_pwm3_get_state(const mc_hal_pwm3_t *dev, mc_hal_pwm3_state_t *p_state)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->get_state == NULL)) {
         return -ENODEV;
@@ -140,8 +139,7 @@ static inline int mc_hal_pwm3_get_state(const mc_hal_pwm3_t *dev,
  * PWM period [s] (convenience over mc_hal_pwm3_get_state()). Timing: FAST.
  * @return as mc_hal_pwm3_get_state(); *p_period_s unchanged on error.
  */
-static inline int mc_hal_pwm3_get_period_s(const mc_hal_pwm3_t *dev,
-                                           float *p_period_s)
+static inline int mc_hal_pwm3_get_period_s(const mc_hal_pwm3_t *dev, float *p_period_s)
 {
     mc_hal_pwm3_state_t st;
     int rc;

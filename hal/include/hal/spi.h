@@ -44,8 +44,7 @@ typedef struct mc_hal_spi {
  * @return 0; -EIO (the peripheral did not complete the frame: chip select
  *         released, *p_rx untouched); -ENODEV.
  */
-static inline int mc_hal_spi_transfer16(const mc_hal_spi_t *dev, uint16_t tx,
-                                        uint16_t *p_rx)
+static inline int mc_hal_spi_transfer16(const mc_hal_spi_t *dev, uint16_t tx, uint16_t *p_rx)
 {
     if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->transfer16 == NULL)) {
         return -ENODEV;

@@ -54,11 +54,9 @@ static inline int mc_hal_tick_read(const mc_hal_tick_t *dev, uint32_t *p_ticks)
  * Counter frequency [Hz], > 0, constant after init.     Timing: ANY.
  * @return 0; -ENODEV; -EINVAL.
  */
-static inline int mc_hal_tick_get_freq_hz(const mc_hal_tick_t *dev,
-                                          uint32_t *p_freq_hz)
+static inline int mc_hal_tick_get_freq_hz(const mc_hal_tick_t *dev, uint32_t *p_freq_hz)
 {
-    if ((dev == NULL) || (dev->ops == NULL) ||
-        (dev->ops->get_freq_hz == NULL)) {
+    if ((dev == NULL) || (dev->ops == NULL) || (dev->ops->get_freq_hz == NULL)) {
         return -ENODEV;
     }
     if (p_freq_hz == NULL) {
@@ -72,8 +70,7 @@ static inline int mc_hal_tick_get_freq_hz(const mc_hal_tick_t *dev,
  * counter (unsigned arithmetic is modulo 2^32 in C): e.g. since 0xFFFFFFF0,
  * now 0x10 gives 0x20. Valid while the true interval is below 2^32 ticks.
  */
-static inline uint32_t mc_hal_tick_elapsed(uint32_t now_ticks,
-                                           uint32_t since_ticks)
+static inline uint32_t mc_hal_tick_elapsed(uint32_t now_ticks, uint32_t since_ticks)
 {
     return now_ticks - since_ticks;
 }

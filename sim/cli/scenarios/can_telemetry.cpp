@@ -71,15 +71,15 @@ namespace mcsim {
 namespace {
 
 const char* const kSlotParam[MC_TM_COUNT] = {
-    "rate_heartbeat_hz", "rate_currents_hz", "rate_voltages_hz", "rate_speed_hz",
+    "rate_heartbeat_hz", "rate_currents_hz", "rate_voltages_hz",   "rate_speed_hz",
     "rate_position_hz",  "rate_observer_hz", "rate_controller_hz", "rate_stepper_hz"};
-const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT", "CURRENTS", "VOLTAGES", "SPEED",
+const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT", "CURRENTS", "VOLTAGES",   "SPEED",
                                             "POSITION",  "OBSERVER", "CONTROLLER", "STEPPER"};
 // Signal names per slot, in DBC order (checked against the generated
 // signal counts below; tests/can compares the CSV header with the DBC).
 const std::vector<std::vector<std::string>> kSlotSignals = {
-    {"mode", "control_mode", "enabled", "stopping", "stop_reason", "cfg_status", "faults", "last_error",
-     "last_error_cmd", "seq"},
+    {"mode", "control_mode", "enabled", "stopping", "stop_reason", "cfg_status", "faults",
+     "last_error", "last_error_cmd", "seq"},
     {"i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a", "seq"},
     {"v_d_v", "v_q_v", "v_bus_v", "seq"},
     {"omega_m_rad_s", "omega_ref_rad_s", "seq"},
@@ -130,9 +130,9 @@ mc_params_t scenario_params(const Params& P, const FocSilOptions& o, const mc_dr
   p.speed_max_rad_s = static_cast<float>(P.get("speed_max_rad_s"));
   p.vbus_v = static_cast<float>(o.vbus_v);
   p.pwm_hz = static_cast<uint32_t>(std::lround(o.pwm_hz));
-  p.dead_time_s = 0.0f;         // the average-value inverter has none here
+  p.dead_time_s = 0.0f;  // the average-value inverter has none here
   p.current_sensors = o.three_shunts ? 3u : 2u;
-  p.i_sense_max_a = 20.0f;      // FocSil's board: 12-bit, 20 A, 8192 counts
+  p.i_sense_max_a = 20.0f;  // FocSil's board: 12-bit, 20 A, 8192 counts
   p.adc_bits = 12u;
   p.encoder_cpr = 8192u;
   p.current_bw_rad_s = static_cast<float>(o.bw_rad_s);
@@ -199,10 +199,11 @@ void run_can_telemetry(RunContext& ctx) {
   mc_cfg_boot_t boot = MC_CFG_BOOT_EMPTY;
   if (ctx.flash != nullptr) {
     if (scn_err != MC_PARAMS_OK) {
-      throw UsageError("with --flash the scenario's settings are the board's defaults and must "
-                       "form a valid parameter set (firmware/app/config/PARAMS.md); "
-                       "mc_params_validate refuses them: MC_PARAMS_ERR bits 0x" +
-                       std::to_string(scn_err));
+      throw UsageError(
+          "with --flash the scenario's settings are the board's defaults and must "
+          "form a valid parameter set (firmware/app/config/PARAMS.md); "
+          "mc_params_validate refuses them: MC_PARAMS_ERR bits 0x" +
+          std::to_string(scn_err));
     }
     store = std::make_unique<mc_cfg_store_t>();
     const mc_cfg_store_cfg_t scfg{ctx.flash->hal(), {0u, 1u}};
@@ -214,8 +215,10 @@ void run_can_telemetry(RunContext& ctx) {
     if (boot == MC_CFG_BOOT_STORED || boot == MC_CFG_BOOT_MIGRATED) {
       p = loaded;
     } else if (boot != MC_CFG_BOOT_EMPTY) {
-      std::fprintf(stderr, "mcsim: %s: no usable configuration (boot status %s): the "
-                   "scenario's settings\n", ctx.flash->path().c_str(), kBootName[boot]);
+      std::fprintf(stderr,
+                   "mcsim: %s: no usable configuration (boot status %s): the "
+                   "scenario's settings\n",
+                   ctx.flash->path().c_str(), kBootName[boot]);
     }
     if (p.pwm_hz != p_scn.pwm_hz || p.slow_loop_div != p_scn.slow_loop_div) {
       o.pwm_hz = static_cast<double>(p.pwm_hz);
@@ -258,7 +261,8 @@ void run_can_telemetry(RunContext& ctx) {
     try {
       sock = std::make_unique<hal_host::SocketCan>(iface, false, ticks);
     } catch (const std::system_error& e) {
-      throw UsageError(std::string(e.what()) + " (is the interface up? see tools/vm for a VM with vcan)");
+      throw UsageError(std::string(e.what()) +
+                       " (is the interface up? see tools/vm for a VM with vcan)");
     }
     can = sock->hal();
   } else {
@@ -280,8 +284,8 @@ void run_can_telemetry(RunContext& ctx) {
   tc.tick_hz = tick_hz;
   for (int i = 0; i < MC_TM_COUNT; ++i) tc.rate_hz[i] = static_cast<uint16_t>(P.get(kSlotParam[i]));
   // the parameter table's rates (the rest, OBSERVER ..., are the scenario's)
-  const uint32_t tm_param[] = {p.tm_heartbeat_hz, p.tm_currents_hz, p.tm_voltages_hz,
-                               p.tm_speed_hz, p.tm_position_hz};
+  const uint32_t tm_param[] = {p.tm_heartbeat_hz, p.tm_currents_hz, p.tm_voltages_hz, p.tm_speed_hz,
+                               p.tm_position_hz};
   for (int i = 0; i <= MC_TM_POSITION; ++i) tc.rate_hz[i] = static_cast<uint16_t>(tm_param[i]);
   mc_telemetry_t tm{};
   const uint32_t terr = mc_telemetry_init(&tm, &tc);
@@ -391,7 +395,8 @@ void run_can_telemetry(RunContext& ctx) {
     }
     if ((slow_steps & 255u) == 0) ctx.progress.update(board.t_s(), ctx.duration_s);
     if (end_after_stop_s > 0.0) {
-      if (was_enabled && !cmd.enabled && t_end_early < 0.0) t_end_early = board.t_s() + end_after_stop_s;
+      if (was_enabled && !cmd.enabled && t_end_early < 0.0)
+        t_end_early = board.t_s() + end_after_stop_s;
       was_enabled = cmd.enabled;
       if (t_end_early >= 0.0 && board.t_s() >= t_end_early) break;
     }
@@ -448,43 +453,45 @@ void run_can_telemetry(RunContext& ctx) {
   }
 }
 
-const Registrar reg_can({
-    "can-telemetry",
-    "FOC drive (paper-002 test motor) with CAN telemetry and commands: frames to SocketCAN "
-    "(MCSIM_CAN_IF=vcan0) or to a candump log (MCSIM_CAN_LOG, commands from MCSIM_CAN_CMDS)",
-    2.0,
-    {{"node_id", 1.0, "1", "CAN node id (id = node << 5 | cmd)", 0.0, 62.0},
-     {"bitrate_kbps", 1000.0, "kbit/s", "bus bit rate for the budget check", 10.0, 1000.0},
-     {"budget_pct", 50.0, "%", "share of the bus the telemetry may use", 1.0, 70.0},
-     {"rate_heartbeat_hz", 10.0, "Hz", "HEARTBEAT rate (0 = off)", 0.0, 1000.0},
-     {"rate_currents_hz", 200.0, "Hz", "CURRENTS rate", 0.0, 1000.0},
-     {"rate_voltages_hz", 100.0, "Hz", "VOLTAGES rate", 0.0, 1000.0},
-     {"rate_speed_hz", 100.0, "Hz", "SPEED rate", 0.0, 1000.0},
-     {"rate_position_hz", 50.0, "Hz", "POSITION rate", 0.0, 1000.0},
-     {"rate_observer_hz", 0.0, "Hz", "OBSERVER rate (no observer in this scenario: nothing sent)", 0.0, 1000.0},
-     {"rate_controller_hz", 0.0, "Hz", "CONTROLLER rate (nothing sent here)", 0.0, 1000.0},
-     {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
-     {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
-     {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
-     {"stop_decel_rad_s2", 200.0, "rad/s^2", "speed ramp of a safe stop", 0.01, 1e6},
-     {"speed_max_rad_s", 150.0, "rad/s", "largest speed reference accepted", 0.1, 1000.0},
-     {"speed_bw_rad_s", 20.0, "rad/s", "bandwidth of the scenario's speed PI", 0.1, 500.0},
-     {"speed_i_max_a", 3.0, "A", "current limit of the speed PI", 0.0, 10.0},
-     {"realtime", 0.0, "1", "1: pace the simulation to the wall clock", 0.0, 1.0},
-     {"end_after_stop_s", 0.0, "s",
-      "if > 0, end the run this long after a CAN-enabled run stopped (timeout, disable, fault)",
-      0.0, 100.0},
-     {"pwm_hz", 10000.0, "Hz", "PWM and current-loop rate", 1000.0, 100000.0},
-     {"slow_loop_div", 10.0, "1", "slow loop (CAN) every this many PWM periods", 1.0, 1000.0},
-     {"substeps", 2.0, "1", "RK4 sub-steps per PWM period", 1.0, 64.0},
-     {"bw_hz", 200.0, "Hz", "designed current-loop bandwidth", 1.0, 2000.0},
-     {"speed_pll_bw_rad_s", 1000.0, "rad/s", "encoder tracking loop bandwidth (3 bw / pwm_hz <= 1)",
-      1.0, 6000.0},
-     {"J_kgm2", 0.05, "kg m^2", "rotor + load inertia (a flywheel: 1 A accelerates it at 13 rad/s^2)", 1.0e-7, 100.0},
-     {"load_nm", 0.0, "N m", "constant load torque", -10.0, 10.0}},
-    run_can_telemetry,
-    {},
-    true});
+const Registrar reg_can(
+    {"can-telemetry",
+     "FOC drive (paper-002 test motor) with CAN telemetry and commands: frames to SocketCAN "
+     "(MCSIM_CAN_IF=vcan0) or to a candump log (MCSIM_CAN_LOG, commands from MCSIM_CAN_CMDS)",
+     2.0,
+     {{"node_id", 1.0, "1", "CAN node id (id = node << 5 | cmd)", 0.0, 62.0},
+      {"bitrate_kbps", 1000.0, "kbit/s", "bus bit rate for the budget check", 10.0, 1000.0},
+      {"budget_pct", 50.0, "%", "share of the bus the telemetry may use", 1.0, 70.0},
+      {"rate_heartbeat_hz", 10.0, "Hz", "HEARTBEAT rate (0 = off)", 0.0, 1000.0},
+      {"rate_currents_hz", 200.0, "Hz", "CURRENTS rate", 0.0, 1000.0},
+      {"rate_voltages_hz", 100.0, "Hz", "VOLTAGES rate", 0.0, 1000.0},
+      {"rate_speed_hz", 100.0, "Hz", "SPEED rate", 0.0, 1000.0},
+      {"rate_position_hz", 50.0, "Hz", "POSITION rate", 0.0, 1000.0},
+      {"rate_observer_hz", 0.0, "Hz", "OBSERVER rate (no observer in this scenario: nothing sent)",
+       0.0, 1000.0},
+      {"rate_controller_hz", 0.0, "Hz", "CONTROLLER rate (nothing sent here)", 0.0, 1000.0},
+      {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
+      {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
+      {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
+      {"stop_decel_rad_s2", 200.0, "rad/s^2", "speed ramp of a safe stop", 0.01, 1e6},
+      {"speed_max_rad_s", 150.0, "rad/s", "largest speed reference accepted", 0.1, 1000.0},
+      {"speed_bw_rad_s", 20.0, "rad/s", "bandwidth of the scenario's speed PI", 0.1, 500.0},
+      {"speed_i_max_a", 3.0, "A", "current limit of the speed PI", 0.0, 10.0},
+      {"realtime", 0.0, "1", "1: pace the simulation to the wall clock", 0.0, 1.0},
+      {"end_after_stop_s", 0.0, "s",
+       "if > 0, end the run this long after a CAN-enabled run stopped (timeout, disable, fault)",
+       0.0, 100.0},
+      {"pwm_hz", 10000.0, "Hz", "PWM and current-loop rate", 1000.0, 100000.0},
+      {"slow_loop_div", 10.0, "1", "slow loop (CAN) every this many PWM periods", 1.0, 1000.0},
+      {"substeps", 2.0, "1", "RK4 sub-steps per PWM period", 1.0, 64.0},
+      {"bw_hz", 200.0, "Hz", "designed current-loop bandwidth", 1.0, 2000.0},
+      {"speed_pll_bw_rad_s", 1000.0, "rad/s",
+       "encoder tracking loop bandwidth (3 bw / pwm_hz <= 1)", 1.0, 6000.0},
+      {"J_kgm2", 0.05, "kg m^2",
+       "rotor + load inertia (a flywheel: 1 A accelerates it at 13 rad/s^2)", 1.0e-7, 100.0},
+      {"load_nm", 0.0, "N m", "constant load torque", -10.0, 10.0}},
+     run_can_telemetry,
+     {},
+     true});
 
 }  // namespace
 }  // namespace mcsim

@@ -65,7 +65,8 @@ DriveResult run_drive(const DriveOptions& o) {
   dc.i_unbalance_max_a = 0.0f;
   mc_drive_t d;
   const uint32_t de = mc_drive_init(&d, &dc, board.hal());
-  if (de != MC_DRIVE_CFG_OK) throw std::runtime_error("drive config rejected: " + std::to_string(de));
+  if (de != MC_DRIVE_CFG_OK)
+    throw std::runtime_error("drive config rejected: " + std::to_string(de));
 
   mc_ctrl_csmc_cfg_t cc{};
   cc.law = paper_ctrl(o.model_law, true, false);
@@ -101,12 +102,12 @@ DriveResult run_drive(const DriveOptions& o) {
   const auto record = [&] {
     const auto& x = board.state();
     const auto& tm = ctrl.tm;
-    r.trace.push_back(DriveSample{board.t_s() - bc.t_pwm_s, phi0 + o.step_rad,
-                                  x(Stepper2Ph::kThetaM), x(Stepper2Ph::kThetaM) - phi0 - o.step_rad,
-                                  tm.i_d_a, tm.i_q_a, x(Stepper2Ph::kOmegaM), tm.out.v_d_v,
-                                  tm.out.v_q_v, d.tm.ctrl_out.duty2_a, d.tm.ctrl_out.duty2_b,
-                                  static_cast<double>(d.faults), tm.in.e2_rad, tm.in.de2_rad_s,
-                                  tm.in.dde2_rad_s2, tm.out.s1_a, tm.out.s2_rad_s2});
+    r.trace.push_back(
+        DriveSample{board.t_s() - bc.t_pwm_s, phi0 + o.step_rad, x(Stepper2Ph::kThetaM),
+                    x(Stepper2Ph::kThetaM) - phi0 - o.step_rad, tm.i_d_a, tm.i_q_a,
+                    x(Stepper2Ph::kOmegaM), tm.out.v_d_v, tm.out.v_q_v, d.tm.ctrl_out.duty2_a,
+                    d.tm.ctrl_out.duty2_b, static_cast<double>(d.faults), tm.in.e2_rad,
+                    tm.in.de2_rad_s, tm.in.dde2_rad_s2, tm.out.s1_a, tm.out.s2_rad_s2});
   };
   for (long k = 0; k <= n; ++k) (void)hal_host::sil_period(board, d, hal_host::NoHook{}, record);
   r.faults = d.faults;
@@ -128,8 +129,8 @@ void run_drive_scenario(RunContext& ctx) {
   o.mu1_a = ctx.params.get("mu1_a");
   o.mu2_rad_s2 = ctx.params.get("mu2_rad_s2");
   const DriveResult r = run_drive(o);
-  ctx.csv.columns({"t", "phi_d_rad", "x4_rad", "e2_rad", "x1_a", "x2_a", "x3_rad_s", "u1_v",
-                   "u2_v", "duty2_a_1", "duty2_b_1", "fault_1", "e2_meas_rad", "de2_meas_rad_s",
+  ctx.csv.columns({"t", "phi_d_rad", "x4_rad", "e2_rad", "x1_a", "x2_a", "x3_rad_s", "u1_v", "u2_v",
+                   "duty2_a_1", "duty2_b_1", "fault_1", "e2_meas_rad", "de2_meas_rad_s",
                    "dde2_meas_rad_s2", "s1_a", "s2_rad_s2"});
   const size_t every = std::max<size_t>(1, r.trace.size() / 5000);
   for (size_t k = 0; k < r.trace.size(); ++k) {
@@ -158,20 +159,20 @@ void run_drive_scenario(RunContext& ctx) {
   ctx.summary.set("vq_sign_changes_per_s", static_cast<double>(changes) / win);
 }
 
-const Registrar reg_drive({
-    "csmc-drive",
-    "The CSMC stepper position loop through the firmware path: drive application in CTRL mode "
-    "with the mc_ctrl_csmc plug-in on the simulated dual-H-bridge board (12-bit currents, "
-    "encoder, one-period delay); phi_d step of 0.03142 rad, 0.2 N m load",
-    0.4,
-    {{"pwm_hz", 10.0e3, "Hz", "fast-loop rate", 5.0e3, 100.0e3},
-     {"hgo", 0.0, "-", "1: output feedback (high-gain observer), 0: state feedback", 0.0, 1.0},
-     {"eps_s", 1.0e-3, "s", "observer eps (hgo = 1)", 1.0e-5, 1.0e-1},
-     {"encoder_cpr", 262144.0, "counts", "encoder counts per revolution", 1000.0, 16777216.0},
-     {"delay_periods", 1.0, "-", "computation delay", 0.0, 4.0},
-     {"mu1_a", 0.5, "A", "boundary layer of s1 (paper 0.1; see csmc_drive.hpp)", 1.0e-3, 10.0},
-     {"mu2_rad_s2", 200.0, "rad/s^2", "boundary layer of s2 (paper 50)", 1.0, 1.0e4}},
-    run_drive_scenario});
+const Registrar reg_drive(
+    {"csmc-drive",
+     "The CSMC stepper position loop through the firmware path: drive application in CTRL mode "
+     "with the mc_ctrl_csmc plug-in on the simulated dual-H-bridge board (12-bit currents, "
+     "encoder, one-period delay); phi_d step of 0.03142 rad, 0.2 N m load",
+     0.4,
+     {{"pwm_hz", 10.0e3, "Hz", "fast-loop rate", 5.0e3, 100.0e3},
+      {"hgo", 0.0, "-", "1: output feedback (high-gain observer), 0: state feedback", 0.0, 1.0},
+      {"eps_s", 1.0e-3, "s", "observer eps (hgo = 1)", 1.0e-5, 1.0e-1},
+      {"encoder_cpr", 262144.0, "counts", "encoder counts per revolution", 1000.0, 16777216.0},
+      {"delay_periods", 1.0, "-", "computation delay", 0.0, 4.0},
+      {"mu1_a", 0.5, "A", "boundary layer of s1 (paper 0.1; see csmc_drive.hpp)", 1.0e-3, 10.0},
+      {"mu2_rad_s2", 200.0, "rad/s^2", "boundary layer of s2 (paper 50)", 1.0, 1.0e4}},
+     run_drive_scenario});
 
 }  // namespace
 }  // namespace csmc

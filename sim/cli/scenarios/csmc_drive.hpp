@@ -14,18 +14,18 @@ namespace mcsim {
 namespace csmc {
 
 struct DriveOptions {
-  PlantOptions plant{};          // default: Fig. 3 plant (set in the .cpp)
-  double pwm_hz = 10.0e3;        // fast-loop rate (paper's sampled case: 10 kHz)
+  PlantOptions plant{};    // default: Fig. 3 plant (set in the .cpp)
+  double pwm_hz = 10.0e3;  // fast-loop rate (paper's sampled case: 10 kHz)
   double vbus_v = 60.0;
-  int encoder_cpr = 1 << 18;     // counts per mechanical revolution
-  double current_fs_a = 5.0;     // ADC full scale (12 bits)
+  int encoder_cpr = 1 << 18;  // counts per mechanical revolution
+  double current_fs_a = 5.0;  // ADC full scale (12 bits)
   int delay_periods = 1;
   double speed_pll_bw_rad_s = 1000.0;
   double duration_s = 0.4;
   double step_rad = kPaperStepRad;  // phi_d = phi0 + step from t = 0
   bool hgo = false;                 // output feedback (else state feedback)
   double eps_s = 1.0e-3;
-  bool model_law = false;           // law (5) instead of -M sat
+  bool model_law = false;  // law (5) instead of -M sat
   // Boundary layers. The paper's mu = (0.1 A, 50 rad/s^2) give a discrete
   // loop gain (T/L)(M/mu) of 1.7 (d) and 1.1 (q) per period at 10 kHz:
   // stable without computation delay (the paper's sampled case), a limit

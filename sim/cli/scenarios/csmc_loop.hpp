@@ -27,8 +27,8 @@ namespace csmc {
 constexpr double kPaperStepRad = 0.03142;  // phi_d step of the paper [rad]
 
 struct PlantOptions {
-  double R_ohm = 19.0;           // actual resistance (Fig. 2; Fig. 3-5: 19.5)
-  double L_h = 0.040;            // actual inductance (Fig. 2; Fig. 3-5: 0.030)
+  double R_ohm = 19.0;  // actual resistance (Fig. 2; Fig. 3-5: 19.5)
+  double L_h = 0.040;   // actual inductance (Fig. 2; Fig. 3-5: 0.030)
   double Km_nm_a = 0.1349;
   double J_kgm2 = 4.1295e-4;
   double B_nms_rad = 0.0013;
@@ -41,8 +41,8 @@ enum class Feedback { kState, kHgo };
 
 struct LoopOptions {
   PlantOptions plant{};
-  double dt_s = 1.0e-5;          // control period T
-  int substeps = 1;              // RK4 sub-steps per period
+  double dt_s = 1.0e-5;  // control period T
+  int substeps = 1;      // RK4 sub-steps per period
   double duration_s = 1.0;
   RefKind ref = RefKind::kSteps;
   double step_rad = kPaperStepRad;  // kSteps: phi_d = step (u(t) + u(t - t2))
@@ -50,9 +50,9 @@ struct LoopOptions {
   double r0_rad = 0.0;              // kCos: phi_d = r0 cos(w0 t)
   double w0_rad_s = 0.0;
   Feedback fb = Feedback::kState;
-  mc_csmc_f32_cfg_t ctrl{};      // dt_s is overwritten with dt_s above
-  mc_hgo_f32_cfg_t hgo{};        // used with kHgo; dt_s overwritten
-  size_t record_every = 1;       // keep every n-th sample in the trace
+  mc_csmc_f32_cfg_t ctrl{};  // dt_s is overwritten with dt_s above
+  mc_hgo_f32_cfg_t hgo{};    // used with kHgo; dt_s overwritten
+  size_t record_every = 1;   // keep every n-th sample in the trace
 };
 
 // One recorded sample.

@@ -25,9 +25,9 @@ constexpr double kPi = 3.14159265358979323846;
 
 // Standard columns of one loop run (prefix p: "" or e.g. "smc_").
 std::vector<std::string> loop_columns(const std::string& p, bool hgo) {
-  std::vector<std::string> c = {p + "phi_d_rad", p + "e1_a",  p + "e2_rad", p + "x1_a",
-                                p + "x2_a",      p + "x3_rad_s", p + "x4_rad", p + "u1_v",
-                                p + "u2_v",      p + "s1_a",  p + "s2_rad_s2"};
+  std::vector<std::string> c = {p + "phi_d_rad", p + "e1_a",     p + "e2_rad",   p + "x1_a",
+                                p + "x2_a",      p + "x3_rad_s", p + "x4_rad",   p + "u1_v",
+                                p + "u2_v",      p + "s1_a",     p + "s2_rad_s2"};
   if (hgo) {
     c.push_back(p + "z1_rad");
     c.push_back(p + "z2_rad_s");
@@ -102,20 +102,20 @@ void run_state_feedback(RunContext& ctx) {
   ctx.summary.set("e1_final_a", r.trace.back().e1);
 }
 
-const Registrar reg_sf({
-    "csmc-state-feedback",
-    "Paper 001 Fig. 2: stepper position steps phi_d = 0.03142 (u(t) + u(t-0.5)) under "
-    "state-feedback CSMC (5) with conditional integrators; R, L mismatched (nominal 20 ohm, "
-    "35 mH)",
-    1.0,
-    {{"dt_s", 1.0e-5, "s", "control period (small: close to the paper's continuous loop)", 1.0e-6,
-      1.0e-3},
-     {"R_ohm", 19.0, "ohm", "actual winding resistance", 1.0, 100.0},
-     {"L_h", 0.040, "H", "actual winding inductance", 1.0e-3, 1.0},
-     {"integrators", 1.0, "-", "1: conditional integrators k0 = (20, 100); 0: none", 0.0, 1.0},
-     q31loop::kernels_param(),
-     {"ideal", 0.0, "-", "1: ideal SMC (sgn instead of sat)", 0.0, 1.0}},
-    run_state_feedback});
+const Registrar reg_sf(
+    {"csmc-state-feedback",
+     "Paper 001 Fig. 2: stepper position steps phi_d = 0.03142 (u(t) + u(t-0.5)) under "
+     "state-feedback CSMC (5) with conditional integrators; R, L mismatched (nominal 20 ohm, "
+     "35 mH)",
+     1.0,
+     {{"dt_s", 1.0e-5, "s", "control period (small: close to the paper's continuous loop)", 1.0e-6,
+       1.0e-3},
+      {"R_ohm", 19.0, "ohm", "actual winding resistance", 1.0, 100.0},
+      {"L_h", 0.040, "H", "actual winding inductance", 1.0e-3, 1.0},
+      {"integrators", 1.0, "-", "1: conditional integrators k0 = (20, 100); 0: none", 0.0, 1.0},
+      q31loop::kernels_param(),
+      {"ideal", 0.0, "-", "1: ideal SMC (sgn instead of sat)", 0.0, 1.0}},
+     run_state_feedback});
 
 // ------------------------------------------ Fig. 3(a): output feedback
 LoopOptions of_options(RunContext& ctx) {
@@ -154,15 +154,15 @@ void run_output_feedback(RunContext& ctx) {
   ctx.summary.set("sf_e2_final_rad", sf.e2_end);
 }
 
-const Registrar reg_of({
-    "csmc-output-feedback",
-    "Paper 001 Fig. 3(a): phi_d = 0.03142 step, output feedback u = -M sat(s^/mu) with the "
-    "high-gain observer (6) (columns z1..z3) against partial state feedback (sf_ columns); "
-    "R = 19.5 ohm, L = 30 mH, M = 50 V",
-    0.5,
-    {{"dt_s", 1.0e-5, "s", "control period", 1.0e-6, 1.0e-3},
-     {"eps_s", 1.0e-4, "s", "high-gain observer eps", 1.0e-6, 1.0e-2}},
-    run_output_feedback});
+const Registrar reg_of(
+    {"csmc-output-feedback",
+     "Paper 001 Fig. 3(a): phi_d = 0.03142 step, output feedback u = -M sat(s^/mu) with the "
+     "high-gain observer (6) (columns z1..z3) against partial state feedback (sf_ columns); "
+     "R = 19.5 ohm, L = 30 mH, M = 50 V",
+     0.5,
+     {{"dt_s", 1.0e-5, "s", "control period", 1.0e-6, 1.0e-3},
+      {"eps_s", 1.0e-4, "s", "high-gain observer eps", 1.0e-6, 1.0e-2}},
+     run_output_feedback});
 
 // ----------------------------------------- Fig. 3(b): the eps sweep
 const double kEpsSweep[] = {4.0e-4, 2.0e-4, 1.0e-4, 5.0e-5, 2.5e-5};
@@ -201,13 +201,13 @@ void run_eps_sweep(RunContext& ctx) {
   }
 }
 
-const Registrar reg_eps({
-    "csmc-output-feedback-eps",
-    "Paper 001 Fig. 3(b): e2 under output feedback for eps = 4e-4 .. 2.5e-5 against partial "
-    "state feedback (sf_e2_rad); the difference shrinks as eps -> 0",
-    0.5,
-    {{"dt_s", 1.0e-5, "s", "control period", 1.0e-6, 1.0e-3}},
-    run_eps_sweep});
+const Registrar reg_eps(
+    {"csmc-output-feedback-eps",
+     "Paper 001 Fig. 3(b): e2 under output feedback for eps = 4e-4 .. 2.5e-5 against partial "
+     "state feedback (sf_e2_rad); the difference shrinks as eps -> 0",
+     0.5,
+     {{"dt_s", 1.0e-5, "s", "control period", 1.0e-6, 1.0e-3}},
+     run_eps_sweep});
 
 // ---------------------------------------- Fig. 4: sampled data, CSMC vs SMC
 void run_sampled(RunContext& ctx) {
@@ -240,17 +240,17 @@ void run_sampled(RunContext& ctx) {
   ctx.summary.set("smc_vq_peak_to_peak_v", v_sm.peak_to_peak);
 }
 
-const Registrar reg_sampled({
-    "csmc-sampled",
-    "Paper 001 Fig. 4: sampled-data loop (ZOH, T = 0.1 ms), CSMC with conditional "
-    "integrators (columns without prefix) vs ideal SMC u = -M sgn(s) (smc_ columns); "
-    "steady-state error and v_q chattering in the summary",
-    0.5,
-    {{"T_s", 1.0e-4, "s", "sampling period", 1.0e-6, 1.0e-3},
-     {"substeps", 4.0, "-", "RK4 sub-steps per period", 1.0, 100.0},
-     {"model_law", 0.0, "-", "1: law (5) with beta functions instead of -M sat/sgn", 0.0, 1.0},
-     {"window_s", 0.1, "s", "steady-state window at the end of the run", 1.0e-3, 10.0}},
-    run_sampled});
+const Registrar reg_sampled(
+    {"csmc-sampled",
+     "Paper 001 Fig. 4: sampled-data loop (ZOH, T = 0.1 ms), CSMC with conditional "
+     "integrators (columns without prefix) vs ideal SMC u = -M sgn(s) (smc_ columns); "
+     "steady-state error and v_q chattering in the summary",
+     0.5,
+     {{"T_s", 1.0e-4, "s", "sampling period", 1.0e-6, 1.0e-3},
+      {"substeps", 4.0, "-", "RK4 sub-steps per period", 1.0, 100.0},
+      {"model_law", 0.0, "-", "1: law (5) with beta functions instead of -M sat/sgn", 0.0, 1.0},
+      {"window_s", 0.1, "s", "steady-state window at the end of the run", 1.0e-3, 10.0}},
+     run_sampled});
 
 // -------------------------------------- Fig. 5: sinusoidal references
 void run_sinusoid(RunContext& ctx) {
@@ -282,18 +282,18 @@ void run_sinusoid(RunContext& ctx) {
   ctx.summary.set("ratio_nosvc_over_svc", b.max_abs / a.max_abs);
 }
 
-const Registrar reg_sin({
-    "csmc-sinusoid",
-    "Paper 001 Fig. 5: phi_d = r0 cos(w0 t), output feedback with conditional "
-    "servocompensators (K0 placing {-1,-2+-j,-3+-j} and {-1,-2+-j}) against the same CSMC "
-    "without them (nosvc_ columns)",
-    10.0,
-    {{"dt_s", 1.0e-5, "s", "control period", 1.0e-6, 1.0e-3},
-     {"r0_rad", kPi / 2.0, "rad", "reference amplitude (paper: pi/2 or pi/10)", 0.0, 10.0},
-     {"w0_rad_s", 2.0, "rad/s", "reference frequency (paper: 2 or 5)", 0.1, 50.0},
-     {"eps_s", 1.0e-4, "s", "high-gain observer eps", 1.0e-6, 1.0e-2},
-     {"state_feedback", 0.0, "-", "1: e2', e2'' from the states instead of the HGO", 0.0, 1.0}},
-    run_sinusoid});
+const Registrar reg_sin(
+    {"csmc-sinusoid",
+     "Paper 001 Fig. 5: phi_d = r0 cos(w0 t), output feedback with conditional "
+     "servocompensators (K0 placing {-1,-2+-j,-3+-j} and {-1,-2+-j}) against the same CSMC "
+     "without them (nosvc_ columns)",
+     10.0,
+     {{"dt_s", 1.0e-5, "s", "control period", 1.0e-6, 1.0e-3},
+      {"r0_rad", kPi / 2.0, "rad", "reference amplitude (paper: pi/2 or pi/10)", 0.0, 10.0},
+      {"w0_rad_s", 2.0, "rad/s", "reference frequency (paper: 2 or 5)", 0.1, 50.0},
+      {"eps_s", 1.0e-4, "s", "high-gain observer eps", 1.0e-6, 1.0e-2},
+      {"state_feedback", 0.0, "-", "1: e2', e2'' from the states instead of the HGO", 0.0, 1.0}},
+     run_sinusoid});
 
 }  // namespace
 }  // namespace mcsim

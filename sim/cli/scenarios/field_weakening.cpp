@@ -41,7 +41,10 @@ double mtpa_t_per_a(const MotorSpec& m, double I) {
   const double g = 0.5 * (std::sqrt(5.0) - 1.0);
   for (int k = 0; k < 200; ++k) {
     const double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
-    if (t(a) > t(b)) hi = b; else lo = a;
+    if (t(a) > t(b))
+      hi = b;
+    else
+      lo = a;
   }
   return t(0.5 * (lo + hi)) / I;
 }
@@ -49,10 +52,10 @@ double mtpa_t_per_a(const MotorSpec& m, double I) {
 // Mechanical speed at which MTPA at current I needs v (steady state).
 double base_speed(const MotorSpec& m, double I, double v) {
   const double dl = m.lq_h - m.ld_h;
-  const double id = (std::abs(dl) > 1e-3 * std::max(m.ld_h, m.lq_h))
-                        ? (m.flux_wb - std::sqrt(m.flux_wb * m.flux_wb + 8 * dl * dl * I * I)) /
-                              (4 * dl)
-                        : 0.0;
+  const double id =
+      (std::abs(dl) > 1e-3 * std::max(m.ld_h, m.lq_h))
+          ? (m.flux_wb - std::sqrt(m.flux_wb * m.flux_wb + 8 * dl * dl * I * I)) / (4 * dl)
+          : 0.0;
   const double iq = std::sqrt(std::max(0.0, I * I - id * id));
   auto vmag = [&](double wm) {
     const double we = m.pole_pairs * wm;
@@ -64,7 +67,10 @@ double base_speed(const MotorSpec& m, double I, double v) {
   if (vmag(lo) >= v) return 0.0;
   for (int k = 0; k < 200; ++k) {
     const double mid = 0.5 * (lo + hi);
-    if (vmag(mid) > v) hi = mid; else lo = mid;
+    if (vmag(mid) > v)
+      hi = mid;
+    else
+      lo = mid;
   }
   return lo;
 }
@@ -80,7 +86,9 @@ std::vector<ParamSpec> fw_params(const MotorFiles& f) {
   return p;
 }
 
-std::string faults_text(uint32_t f) { return "drive fault bits " + std::to_string(f); }
+std::string faults_text(uint32_t f) {
+  return "drive fault bits " + std::to_string(f);
+}
 
 void run_fw(RunContext& ctx) {
   const MotorFiles& f = *ctx.files;
@@ -130,8 +138,8 @@ void run_fw(RunContext& ctx) {
   const double w_base = base_speed(m, g.i_rated_eff_a, v_fw);
   const double w_t = std::min(P.get("speed_factor") * w_base, m.speed_max_rad_s);
   const double t0 = 0.01, t_acc = w_t / g.speed_accel_rad_s2;
-  const double dur = ctx.duration_s > 0 ? ctx.duration_s
-                                        : t0 + t_acc + 40.0 / g.speed_wc_rad_s + P.get("hold_s");
+  const double dur =
+      ctx.duration_s > 0 ? ctx.duration_s : t0 + t_acc + 40.0 / g.speed_wc_rad_s + P.get("hold_s");
   ctx.summary.set("duration_s", dur);
   const double t_hold = dur - P.get("hold_s");
   RigOptions o;
@@ -160,8 +168,18 @@ void run_fw(RunContext& ctx) {
     if (k % every == 0) {
       double vd, vq;
       rig.dq_volts(&vd, &vq);
-      const double row[] = {t, id, iq, tm.id_ref_a, tm.iq_ref_a, w, rig.omega_ref_rad_s(),
-                            rig.theta_e_true(), vd, vq, tm.fw.v_mag_v, tm.fw.v_max_v,
+      const double row[] = {t,
+                            id,
+                            iq,
+                            tm.id_ref_a,
+                            tm.iq_ref_a,
+                            w,
+                            rig.omega_ref_rad_s(),
+                            rig.theta_e_true(),
+                            vd,
+                            vq,
+                            tm.fw.v_mag_v,
+                            tm.fw.v_max_v,
                             static_cast<double>(rig.drive().faults)};
       ctx.csv.row(row, sizeof row / sizeof row[0]);
     }
@@ -190,15 +208,15 @@ void run_fw(RunContext& ctx) {
   ctx.summary.set("short_circuit_current_a", m.flux_wb / m.ld_h);
 }
 
-const Registrar reg_fw({
-    "field-weakening",
-    "any motor: MTPA torque per ampere on a dyno against the analytic optimum, then a sensored "
-    "speed ramp to 2.5x base speed (capped at speed_max) with voltage-feedback field weakening; "
-    "CSV adds v_mag_v and v_max_v",
-    0.0,
-    {},
-    run_fw,
-    fw_params});
+const Registrar reg_fw(
+    {"field-weakening",
+     "any motor: MTPA torque per ampere on a dyno against the analytic optimum, then a sensored "
+     "speed ramp to 2.5x base speed (capped at speed_max) with voltage-feedback field weakening; "
+     "CSV adds v_mag_v and v_max_v",
+     0.0,
+     {},
+     run_fw,
+     fw_params});
 
 }  // namespace
 }  // namespace mcsim

@@ -37,7 +37,8 @@ void configure_plant(const MotorFiles& f, const CommissionSetup& s, hal_host::Pm
 // The electrical offset the firmware's formula needs for this plant: the
 // counter is floor(x) - floor(x0), x = dir theta cpr / 2 pi, so on average
 // the count lags x - x0 by 1/2 - frac(x0) counts.
-double true_offset(const MotorFiles& f, const CommissionSetup& s, const hal_host::PmsmBoardConfig& bc) {
+double true_offset(const MotorFiles& f, const CommissionSetup& s,
+                   const hal_host::PmsmBoardConfig& bc) {
   const double cpr = bc.encoder.counts_per_rev, step = 2 * kPi / cpr, p = f.motor.pole_pairs;
   const double th0 = bc.theta_m0_rad, dir = s.encoder_direction;
   const double x0 = dir * th0 * cpr / (2 * kPi);
@@ -86,9 +87,10 @@ CommissionSetup default_commission_setup(const MotorFiles& f) {
 }
 
 std::string commission_error_names(uint32_t e) {
-  static const char* const names[] = {"OFFSET", "NO_MOTOR", "OPEN_PHASE", "ENCODER_NO_MOTION",
-                                      "ROTOR_BLOCKED", "WRONG_DIRECTION", "ENCODER_BAD",
-                                      "OVERCURRENT", "VOLTAGE", "RANGE", "MEAS", "ABORTED"};
+  static const char* const names[] = {
+      "OFFSET",        "NO_MOTOR",        "OPEN_PHASE",  "ENCODER_NO_MOTION",
+      "ROTOR_BLOCKED", "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT",
+      "VOLTAGE",       "RANGE",           "MEAS",        "ABORTED"};
   std::string s;
   for (int i = 0; i < 12; ++i) {
     if (e & (1u << i)) s += (s.empty() ? "" : "|") + std::string(names[i]);
@@ -233,8 +235,10 @@ std::vector<ParamSpec> commission_params(const MotorFiles& f) {
        "plant: current-sensor offsets (x, -0.7 x, 0.4 x) on phases a, b, c", -1e4, 1e4},
       {"noise_rms_a", d.noise_rms_a, "A", "plant: current-sensor noise per channel", 0.0, 1e4},
       {"i_test_a", 0.25 * f.board.i_sense_max_a, "A", "commissioning test current", 1e-6, 1e6},
-      {"verify", 0.0, "1", "1: then run sensored and sensorless speed steps on the identified "
-       "values", 0.0, 1.0},
+      {"verify", 0.0, "1",
+       "1: then run sensored and sensorless speed steps on the identified "
+       "values",
+       0.0, 1.0},
       {"verify_sensorless_theta_e_rad", 0.0, "rad",
        "verify=1: the rotor's electrical angle when the sensorless run starts", -100.0, 100.0},
       {"seed", 1.0, "1", "plant: current-noise generator seed", 0.0, 4294967295.0},
@@ -261,24 +265,33 @@ void run_commission_scenario(RunContext& ctx) {
   ctx.csv.columns({"t", "done"});
   const double row[2] = {run.duration_s, run.done ? 1.0 : 0.0};
   ctx.csv.row(row, 2);
-  ctx.summary.set_object("true", {{"r_ohm", f.motor.r_ohm}, {"ld_h", f.motor.ld_h},
-                                  {"lq_h", f.motor.lq_h}, {"flux_wb", f.motor.flux_wb},
+  ctx.summary.set_object("true", {{"r_ohm", f.motor.r_ohm},
+                                  {"ld_h", f.motor.ld_h},
+                                  {"lq_h", f.motor.lq_h},
+                                  {"flux_wb", f.motor.flux_wb},
                                   {"pole_pairs", f.motor.pole_pairs},
                                   {"encoder_offset_rad", run.true_encoder_offset_rad},
                                   {"encoder_direction", run.true_encoder_direction},
                                   {"adc_offset_a_a", run.true_adc_offset_a[0]},
                                   {"adc_offset_b_a", run.true_adc_offset_a[1]},
                                   {"adc_offset_c_a", run.true_adc_offset_a[2]},
-                                  {"j_kgm2", f.motor.j_kgm2}, {"b_nm_s_rad", f.motor.b_nm_s_rad}});
+                                  {"j_kgm2", f.motor.j_kgm2},
+                                  {"b_nm_s_rad", f.motor.b_nm_s_rad}});
   if (!run.done) {
     throw std::runtime_error("commissioning stopped: " + commission_error_names(run.err));
   }
-  std::map<std::string, double> id = {
-      {"r_ohm", r.r_ohm}, {"ld_h", r.ld_h}, {"lq_h", r.lq_h}, {"flux_wb", r.flux_wb},
-      {"pole_pairs", r.pole_pairs}, {"encoder_offset_rad", r.encoder_offset_rad},
-      {"encoder_direction", r.encoder_direction}, {"adc_offset_a_a", r.adc_offset_a[0]},
-      {"adc_offset_b_a", r.adc_offset_a[1]}, {"adc_offset_c_a", r.adc_offset_a[2]},
-      {"dead_time_v", r.dead_time_v}, {"saliency", r.lq_h / r.ld_h}};
+  std::map<std::string, double> id = {{"r_ohm", r.r_ohm},
+                                      {"ld_h", r.ld_h},
+                                      {"lq_h", r.lq_h},
+                                      {"flux_wb", r.flux_wb},
+                                      {"pole_pairs", r.pole_pairs},
+                                      {"encoder_offset_rad", r.encoder_offset_rad},
+                                      {"encoder_direction", r.encoder_direction},
+                                      {"adc_offset_a_a", r.adc_offset_a[0]},
+                                      {"adc_offset_b_a", r.adc_offset_a[1]},
+                                      {"adc_offset_c_a", r.adc_offset_a[2]},
+                                      {"dead_time_v", r.dead_time_v},
+                                      {"saliency", r.lq_h / r.ld_h}};
   if (r.valid & MC_COMM_HAVE_MECH) {
     id["j_kgm2"] = r.j_kgm2;
     id["b_nm_s_rad"] = r.b_nm_s_rad;
@@ -321,15 +334,15 @@ void run_commission_scenario(RunContext& ctx) {
   }
 }
 
-const Registrar reg_commission({
-    "commission",
-    "any motor: the drive, knowing only the board, measures current-sensor offsets, R, Ld, "
-    "Lq, pole pairs, encoder direction and offset, flux (and J, B); JSON with 'identified' and "
-    "'true'; verify=1 then runs speed steps on the identified values",
-    0.0,
-    {},
-    run_commission_scenario,
-    commission_params});
+const Registrar reg_commission(
+    {"commission",
+     "any motor: the drive, knowing only the board, measures current-sensor offsets, R, Ld, "
+     "Lq, pole pairs, encoder direction and offset, flux (and J, B); JSON with 'identified' and "
+     "'true'; verify=1 then runs speed steps on the identified values",
+     0.0,
+     {},
+     run_commission_scenario,
+     commission_params});
 
 }  // namespace
 }  // namespace mcsim

@@ -38,7 +38,7 @@ struct CommissionRun {
   uint32_t err = 0;           // MC_COMM_ERR_* (0: done)
   uint32_t drive_faults = 0;  // the drive's fault bits at the end
   bool done = false;
-  bool bridge_off = false;    // PWM disabled at the end (after a failure)
+  bool bridge_off = false;  // PWM disabled at the end (after a failure)
   double duration_s = 0;
   // the plant's true values in the result's terms
   double true_encoder_offset_rad = 0;

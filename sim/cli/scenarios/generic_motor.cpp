@@ -47,10 +47,10 @@ class RiseTimer {
 };
 
 std::string fault_names(uint32_t f, uint32_t ctrl_err) {
-  static const char* const names[] = {"ADC", "MEAS_NAN", "OVERCURRENT", "VBUS_LOW", "VBUS_HIGH",
-                                      "ENCODER", "CONTROL", "PWM", "HW_INPUT", "OVERSPEED",
-                                      "OVERTEMP", "OVERRUN", "STALL", "EXTERNAL", "UNBALANCED",
-                                      "OPEN_PHASE"};
+  static const char* const names[] = {"ADC",       "MEAS_NAN",  "OVERCURRENT", "VBUS_LOW",
+                                      "VBUS_HIGH", "ENCODER",   "CONTROL",     "PWM",
+                                      "HW_INPUT",  "OVERSPEED", "OVERTEMP",    "OVERRUN",
+                                      "STALL",     "EXTERNAL",  "UNBALANCED",  "OPEN_PHASE"};
   std::string s;
   for (int i = 0; i < 16; ++i) {
     if (f & (1u << i)) s += (s.empty() ? "" : "|") + std::string(names[i]);
@@ -81,8 +81,8 @@ struct Recorder {
   long every = 1;
   long k = 0;
   void header() {
-    std::vector<std::string> c = {"t", "i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a",
-                                  "omega_m_rad_s", "omega_ref_rad_s", "theta_e_rad"};
+    std::vector<std::string> c = {"t",         "i_d_a",         "i_q_a",           "i_d_ref_a",
+                                  "i_q_ref_a", "omega_m_rad_s", "omega_ref_rad_s", "theta_e_rad"};
     if (hat) c.emplace_back("theta_e_hat_rad");
     c.insert(c.end(), {"v_d_v", "v_q_v", "fault_1"});
     ctx.csv.columns(c);
@@ -116,8 +116,8 @@ double duration(const RunContext& ctx, double auto_s) {
 }
 
 ParamSpec csv_every_spec() {
-  return {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0,
-          1.0e9};
+  return {"csv_every", 0.0,  "1", "write every n-th PWM period (0: all up to 20000 rows)",
+          0.0,         1.0e9};
 }
 
 // ------------------------------------------------------------ current step
@@ -134,7 +134,8 @@ std::vector<ParamSpec> current_step_params(const MotorFiles& f) {
        g.i_limit_a},
       {"j_load_factor", 100.0, "1",
        "inertia coupled to the rotor, in motor inertias (a dyno flywheel: the rotor stays near "
-       "standstill, as on a test bench)", 0.0, 1.0e6},
+       "standstill, as on a test bench)",
+       0.0, 1.0e6},
       csv_every_spec()};
   for (auto& s : gain_params(f)) p.push_back(s);
   return p;
@@ -190,14 +191,14 @@ void run_current_step(RunContext& ctx) {
   ctx.summary.set("id_final_a", id);
 }
 
-const Registrar reg_current({
-    "current-step",
-    "any motor (--motor FILE [--board FILE]): FOC current loop through the firmware, a q then "
-    "a d current step; summary: 10-90% rise times against the design ln 9 / cur_bw",
-    0.0,
-    {},
-    run_current_step,
-    current_step_params});
+const Registrar reg_current(
+    {"current-step",
+     "any motor (--motor FILE [--board FILE]): FOC current loop through the firmware, a q then "
+     "a d current step; summary: 10-90% rise times against the design ln 9 / cur_bw",
+     0.0,
+     {},
+     run_current_step,
+     current_step_params});
 
 // --------------------------------------------------- speed step / load step
 std::vector<ParamSpec> speed_params(const MotorFiles& f, bool load_step) {
@@ -208,7 +209,8 @@ std::vector<ParamSpec> speed_params(const MotorFiles& f, bool load_step) {
        load_step ? "running speed (mechanical)" : "speed step target (mechanical)",
        -g.speed_limit_rad_s, g.speed_limit_rad_s},
       {"load_frac", load_step ? 0.5 : 0.0, "1",
-       load_step ? "load step, fraction of rated torque" : "constant load, fraction of rated torque",
+       load_step ? "load step, fraction of rated torque"
+                 : "constant load, fraction of rated torque",
        -1.0, 1.0},
       csv_every_spec()};
   for (auto& s : gain_params(f)) p.push_back(s);
@@ -287,24 +289,24 @@ void run_speed(RunContext& ctx, bool load_step) {
   ctx.summary.set("load_nm", tau_l);
 }
 
-const Registrar reg_speed({
-    "speed-step",
-    "any motor: sensored speed step from standstill through the firmware (law=pi: speed PI "
-    "on the drive's encoder speed; law=pi2d: the PI^2D plug-in); summary: 2% settling time, "
-    "steady |i_d|",
-    0.0,
-    {},
-    [](RunContext& ctx) { run_speed(ctx, false); },
-    [](const MotorFiles& f) { return speed_params(f, false); }});
+const Registrar reg_speed(
+    {"speed-step",
+     "any motor: sensored speed step from standstill through the firmware (law=pi: speed PI "
+     "on the drive's encoder speed; law=pi2d: the PI^2D plug-in); summary: 2% settling time, "
+     "steady |i_d|",
+     0.0,
+     {},
+     [](RunContext& ctx) { run_speed(ctx, false); },
+     [](const MotorFiles& f) { return speed_params(f, false); }});
 
-const Registrar reg_load({
-    "load-step",
-    "any motor: sensored speed step to speed_rad_s, then a load step of load_frac rated torque "
-    "(law=pi or pi2d); summary: speed dip and 2% recovery time",
-    0.0,
-    {},
-    [](RunContext& ctx) { run_speed(ctx, true); },
-    [](const MotorFiles& f) { return speed_params(f, true); }});
+const Registrar reg_load(
+    {"load-step",
+     "any motor: sensored speed step to speed_rad_s, then a load step of load_frac rated torque "
+     "(law=pi or pi2d); summary: speed dip and 2% recovery time",
+     0.0,
+     {},
+     [](RunContext& ctx) { run_speed(ctx, true); },
+     [](const MotorFiles& f) { return speed_params(f, true); }});
 
 // -------------------------------------------------- sensorless speed step
 std::vector<ParamSpec> sls_params(const MotorFiles& f) {
@@ -391,7 +393,8 @@ void run_sensorless(RunContext& ctx) {
   }
   ctx.summary.set("locked", (tm.phase == MC_CTRL_SLS_CLOSED) ? 1.0 : 0.0);
   ctx.summary.set("angle_err_max_rad", ang_max);
-  ctx.summary.set("angle_err_rms_rad", ang_n ? std::sqrt(ang_sq / static_cast<double>(ang_n)) : std::nan(""));
+  ctx.summary.set("angle_err_rms_rad",
+                  ang_n ? std::sqrt(ang_sq / static_cast<double>(ang_n)) : std::nan(""));
   ctx.summary.set("omega_final_rad_s", w);
   ctx.summary.set("omega_err_max_end_rad_s", werr_end);
   ctx.summary.set("tracks", werr_end <= band ? 1.0 : 0.0);
@@ -399,14 +402,14 @@ void run_sensorless(RunContext& ctx) {
   ctx.summary.set("load1_nm", tau1);
 }
 
-const Registrar reg_sls({
-    "sensorless-speed-step",
-    "any motor: sensorless start from standstill under load (I-f, hand-over to the flux "
-    "observer), speed step, then a load step; summary: lock, angle error, tracking",
-    0.0,
-    {},
-    run_sensorless,
-    sls_params});
+const Registrar reg_sls(
+    {"sensorless-speed-step",
+     "any motor: sensorless start from standstill under load (I-f, hand-over to the flux "
+     "observer), speed step, then a load step; summary: lock, angle error, tracking",
+     0.0,
+     {},
+     run_sensorless,
+     sls_params});
 
 }  // namespace
 }  // namespace mcsim

@@ -40,13 +40,11 @@ std::vector<ParamSpec> position_params(const MotorFiles& f) {
       {"d_max", 0.0, "rad/s^2", "trajectory deceleration (0: pos_d_max_rad_s2)", 0.0, 1.0e9},
       {"replan_frac", 0.0, "1",
        "re-plan to replan_turns at this fraction of the predicted move time (0: off)", 0.0, 1.0},
-      {"replan_turns", 5.0, "1", "target of the re-plan [turns from the start]", -1000.0,
-       1000.0},
+      {"replan_turns", 5.0, "1", "target of the re-plan [turns from the start]", -1000.0, 1000.0},
       {"stream", 0.0, "1", "1: stream the move as setpoints through the input filter", 0.0, 1.0},
       {"stream_hz", 200.0, "Hz", "setpoint rate of the streamed move", 1.0, 1.0e5},
       {"load_frac", 0.0, "1", "constant load, fraction of rated torque", -1.0, 1.0},
-      {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0,
-       1.0e9}};
+      {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9}};
   for (auto& s : gain_params(f)) p.push_back(s);
   return p;
 }
@@ -78,8 +76,9 @@ void run_position(RunContext& ctx) {
   const double vp = std::min(v, std::sqrt(2 * a * d * D / (a + d)));
   const double t_pred0 = (vp < v) ? vp / a + vp / d : D / v + v / (2 * a) + v / (2 * d);
   double t_move_total = t_pred0;
-  if (replan_frac > 0) t_move_total += std::abs(ctx.params.get("replan_turns") - turns) * kTwoPi / v +
-                                      2 * v / std::min(a, d);
+  if (replan_frac > 0)
+    t_move_total +=
+        std::abs(ctx.params.get("replan_turns") - turns) * kTwoPi / v + 2 * v / std::min(a, d);
   // Streamed: a smooth (1 - cos) profile of the trapezoid's length.
   const double t_stream = t_pred0;
   const double settle = 20.0 / g.pos_kp_per_s;
@@ -116,9 +115,9 @@ void run_position(RunContext& ctx) {
           throw UsageError("input filter refused");
         }
       } else {
-        if (mc_ctrl_pos_set_target(&pc, start_turns + static_cast<int32_t>(std::lround(turns)),
-                                   start_frac + static_cast<float>((turns - std::round(turns)) *
-                                                                   kTwoPi)) != 0u) {
+        if (mc_ctrl_pos_set_target(
+                &pc, start_turns + static_cast<int32_t>(std::lround(turns)),
+                start_frac + static_cast<float>((turns - std::round(turns)) * kTwoPi)) != 0u) {
           throw UsageError("target refused");
         }
       }
@@ -138,8 +137,8 @@ void run_position(RunContext& ctx) {
       target_rad = start_rad + rt * kTwoPi;
       sgn = (rt * kTwoPi + start_rad) >= pc.tm.theta_ref_rad ? 1.0 : -1.0;
       if (mc_ctrl_pos_set_target(&pc, start_turns + static_cast<int32_t>(std::lround(rt)),
-                                 start_frac + static_cast<float>((rt - std::round(rt)) *
-                                                                 kTwoPi)) != 0u) {
+                                 start_frac + static_cast<float>((rt - std::round(rt)) * kTwoPi)) !=
+          0u) {
         throw UsageError("re-plan target refused");
       }
       replanned = true;
@@ -178,8 +177,18 @@ void run_position(RunContext& ctx) {
     if (k % every == 0) {
       double idr, iqr;
       rig.dq_refs(&idr, &iqr);
-      const double row[] = {t, id, iq, idr, iqr, w_true, rig.omega_ref_rad_s(), th_e_true, vd, vq,
-                            static_cast<double>(rig.drive().faults), th_true,
+      const double row[] = {t,
+                            id,
+                            iq,
+                            idr,
+                            iqr,
+                            w_true,
+                            rig.omega_ref_rad_s(),
+                            th_e_true,
+                            vd,
+                            vq,
+                            static_cast<double>(rig.drive().faults),
+                            th_true,
                             started ? th_ref : th_true};
       ctx.csv.row(row, 13);
     }
@@ -215,16 +224,16 @@ void run_position(RunContext& ctx) {
   ctx.summary.set("d_max_rad_s2", d);
 }
 
-const Registrar reg_position({
-    "position-move",
-    "any motor with an encoder: a trapezoidal move of `turns` turns through the position "
-    "cascade (trajectory -> P -> velocity PI -> FOC); re-plan mid-move (replan_frac) or "
-    "streamed setpoints through the input filter (stream=1); summary: final error in counts, "
-    "overshoot, move time against the trapezoid's",
-    0.0,
-    {},
-    run_position,
-    position_params});
+const Registrar reg_position(
+    {"position-move",
+     "any motor with an encoder: a trapezoidal move of `turns` turns through the position "
+     "cascade (trajectory -> P -> velocity PI -> FOC); re-plan mid-move (replan_frac) or "
+     "streamed setpoints through the input filter (stream=1); summary: final error in counts, "
+     "overshoot, move time against the trapezoid's",
+     0.0,
+     {},
+     run_position,
+     position_params});
 
 }  // namespace
 }  // namespace mcsim

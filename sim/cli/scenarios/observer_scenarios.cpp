@@ -41,9 +41,13 @@ std::vector<ParamSpec> common_params() {
       {"dead_time_s", 0.0, "s", "inverter dead time (paper's bench: 2e-6)", 0.0, 1e-5},
       {"dead_comp_frac", 1.0, "1", "fraction of the dead time the observer's voltage compensates",
        0.0, 1.5},
-      {"dead_comp_duty", 0.0, "-",
-       "also compensate that dead time in the duties (f32 kernels only; off = 0, on = 1)", 0.0,
-       1.0, {{"off", 0.0}, {"on", 1.0}}},
+      {"dead_comp_duty",
+       0.0,
+       "-",
+       "also compensate that dead time in the duties (f32 kernels only; off = 0, on = 1)",
+       0.0,
+       1.0,
+       {{"off", 0.0}, {"on", 1.0}}},
       {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 5.0},
       {"r_error", 0.0, "1", "relative error of R in the controller", -0.9, 2.0},
       {"flux_error", 0.0, "1", "relative error of the flux in the controller", -0.5, 0.5},
@@ -61,10 +65,27 @@ struct RunResult {
 };
 
 RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(double)>& ref) {
-  ctx.csv.columns({"t", "omega_m_rad_s", "omega_ref_rad_s", "omega_hat_rad_s", "theta_e_rad",
-                   "theta_e_hat_rad", "angle_err_rad", "tau_load_nm", "tau_e_nm", "id_a", "iq_a",
-                   "id_ref_a", "iq_ref_a", "i_alpha_a", "i_beta_a", "v_alpha_v", "v_beta_v",
-                   "x_hat_alpha_wb", "x_hat_beta_wb", "phase_1", "fault_1"});
+  ctx.csv.columns({"t",
+                   "omega_m_rad_s",
+                   "omega_ref_rad_s",
+                   "omega_hat_rad_s",
+                   "theta_e_rad",
+                   "theta_e_hat_rad",
+                   "angle_err_rad",
+                   "tau_load_nm",
+                   "tau_e_nm",
+                   "id_a",
+                   "iq_a",
+                   "id_ref_a",
+                   "iq_ref_a",
+                   "i_alpha_a",
+                   "i_beta_a",
+                   "v_alpha_v",
+                   "v_beta_v",
+                   "x_hat_alpha_wb",
+                   "x_hat_beta_wb",
+                   "phase_1",
+                   "fault_1"});
   const double T = sil.board().period_s();
   const long n = std::lround(ctx.duration_s / T);
   const long every = std::max(1L, n / 6000);
@@ -93,11 +114,27 @@ RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(doub
     if (k % every == 0 || k == n) {
       double xa = 0, xb = 0;
       sil.flux_hat_wb(&xa, &xb);
-      ctx.csv.row({tt, x(2), ref(t), tm.omega_hat_m_rad_s, sil.theta_e_true(), tm.theta_hat_e_rad,
-                   sil.angle_error(), sil.load_nm(tt), sil.board().torque_nm(), id, iq,
-                   tm.id_ref_a, tm.iq_ref_a, tm.i_alpha_a, tm.i_beta_a, tm.v_alpha_obs_v,
-                   tm.v_beta_obs_v, xa, xb,
-                   static_cast<double>(tm.phase), static_cast<double>(sil.drive().faults)});
+      ctx.csv.row({tt,
+                   x(2),
+                   ref(t),
+                   tm.omega_hat_m_rad_s,
+                   sil.theta_e_true(),
+                   tm.theta_hat_e_rad,
+                   sil.angle_error(),
+                   sil.load_nm(tt),
+                   sil.board().torque_nm(),
+                   id,
+                   iq,
+                   tm.id_ref_a,
+                   tm.iq_ref_a,
+                   tm.i_alpha_a,
+                   tm.i_beta_a,
+                   tm.v_alpha_obs_v,
+                   tm.v_beta_obs_v,
+                   xa,
+                   xb,
+                   static_cast<double>(tm.phase),
+                   static_cast<double>(sil.drive().faults)});
       ctx.progress.update(tt, ctx.duration_s);
     }
     if (sil.drive().faults != 0u) {
@@ -187,12 +224,15 @@ void run_table1(RunContext& ctx) {
   ctx.summary.set("fault_bits", r.faults);
   handover_metrics(r, ctx.summary);
   ctx.summary.set("angle_err_max_after_1s_rad", max_abs(r, r.err, 1.0, 1e9));
-  ctx.summary.set("speed_dip_load_step_rad_s",
-                  max_abs(r, [&] {
-                    std::vector<double> e(r.w.size());
-                    for (size_t k = 0; k < e.size(); ++k) e[k] = r.wref[k] - r.w[k];
-                    return e;
-                  }(), 1.2, 1.6));
+  ctx.summary.set("speed_dip_load_step_rad_s", max_abs(
+                                                   r,
+                                                   [&] {
+                                                     std::vector<double> e(r.w.size());
+                                                     for (size_t k = 0; k < e.size(); ++k)
+                                                       e[k] = r.wref[k] - r.w[k];
+                                                     return e;
+                                                   }(),
+                                                   1.2, 1.6));
   if (r.faults) throw std::runtime_error("drive faulted: bits " + std::to_string(r.faults));
 }
 
@@ -270,8 +310,8 @@ auto test_motor_params() {
                "200 -> 1000 r/min (Fig. 9), 3: start-stop 0 -> 300 -> 0 r/min",
                0.0, 3.0});
   p.push_back({"load_frac", 1.0, "1", "load step as a fraction of rated torque (3 N m)", 0.0, 1.5});
-  p.push_back({"t_load_s", 1.0, "s", "time of the load step / ramp start / stop command", 0.2,
-               100.0});
+  p.push_back(
+      {"t_load_s", 1.0, "s", "time of the load step / ramp start / stop command", 0.2, 100.0});
   p.push_back({"ramp_rad_s2", 100.0, "rad/s^2", "profile 2: reference ramp", 1.0, 1000.0});
   p.push_back(q31loop::kernels_param());
   return p;

@@ -196,7 +196,8 @@ Sil::Sil(const Machine& m, const SilOptions& o, const mc_ctrl_sls_cfg_t& cfg, Lo
     }
     mc_ctrl_sls_q31_tm_to_f32(&ctrl_q31_, &tm_q31_);
   }
-  const mc_drive_ctrl_t* table = o.q31 ? mc_ctrl_sls_q31_table(&ctrl_q31_) : mc_ctrl_sls_table(&ctrl_);
+  const mc_drive_ctrl_t* table =
+      o.q31 ? mc_ctrl_sls_q31_table(&ctrl_q31_) : mc_ctrl_sls_table(&ctrl_);
   if (mc_drive_attach_ctrl(&drive_, table) != 0) {
     throw std::runtime_error("drive refused the sensorless control law");
   }

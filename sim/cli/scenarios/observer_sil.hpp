@@ -30,7 +30,7 @@ struct LoadSteps {
 
 struct Machine {
   std::string name;
-  PmsmParams motor;        // R, L, flux, pole pairs, J, B
+  PmsmParams motor;  // R, L, flux, pole pairs, J, B
   double vbus_v = 0.0;
   double rated_torque_nm = 0.0, rated_speed_rpm = 0.0, rated_current_a = 0.0;
   double i_full_scale_a = 0.0;  // current-sensor range
@@ -38,20 +38,20 @@ struct Machine {
 
 // Paper 002, Table I. J and friction are not in the paper: our choice,
 // documented in the scenario JSON and the README.
-Machine table1_40kw();     // 40 kW simulation machine
-Machine test_motor_300w(); // 0.3 kW test motor on its dynamometer
+Machine table1_40kw();      // 40 kW simulation machine
+Machine test_motor_300w();  // 0.3 kW test motor on its dynamometer
 
 struct SilOptions {
-  double pwm_hz = 8000.0;         // paper: 8 kHz PWM, 125 us current loop
-  unsigned speed_div = 10;        // paper: 1.25 ms speed loop
-  int substeps = 4;               // RK4 sub-steps per PWM period
-  int delay_periods = 1;          // computation delay of the board
-  double dead_time_s = 0.0;       // inverter dead time
-  double dead_comp_frac = 1.0;    // fraction of it the controller compensates
-  bool dead_comp_duty = false;    // compensate in the duties too (else the observer only)
-  double noise_rms_a = 0.0;       // current-sensor noise
-  double r_error = 0.0;           // relative error of R in the controller
-  double flux_error = 0.0;        // relative error of flux in the controller
+  double pwm_hz = 8000.0;       // paper: 8 kHz PWM, 125 us current loop
+  unsigned speed_div = 10;      // paper: 1.25 ms speed loop
+  int substeps = 4;             // RK4 sub-steps per PWM period
+  int delay_periods = 1;        // computation delay of the board
+  double dead_time_s = 0.0;     // inverter dead time
+  double dead_comp_frac = 1.0;  // fraction of it the controller compensates
+  bool dead_comp_duty = false;  // compensate in the duties too (else the observer only)
+  double noise_rms_a = 0.0;     // current-sensor noise
+  double r_error = 0.0;         // relative error of R in the controller
+  double flux_error = 0.0;      // relative error of flux in the controller
   bool lowspeed_fallback = true;
   bool if_damping = true;
   int encoder_cpr = 8192;         // board encoder (unused by the sensorless law)

@@ -35,8 +35,8 @@ SpeedRef paper_profile(double t) {
   struct Seg {
     double t0, w0, a;
   };
-  static const Seg segs[] = {{0.0, 0.0, 5.25},  {1.0, 5.25, 0.0}, {3.0, 5.25, 3.675},
-                             {5.0, 12.6, 0.0},  {7.0, 12.6, -6.3}, {9.0, 0.0, 0.0}};
+  static const Seg segs[] = {{0.0, 0.0, 5.25}, {1.0, 5.25, 0.0},  {3.0, 5.25, 3.675},
+                             {5.0, 12.6, 0.0}, {7.0, 12.6, -6.3}, {9.0, 0.0, 0.0}};
   SpeedRef r;
   double th = 0.0;
   for (size_t i = 0; i < 6; ++i) {
@@ -63,8 +63,8 @@ mc_pi2d_f32_cfg_t paper_cfg(double dt_s) {
   c.ke_v_s_rad = 0.17f;  // gamma
   c.kt_nm_a = 0.51f;     // sigma (J = 1)
   c.j_kgm2 = 1.0f;
-  c.k1_per_s = 4.0f;     // closed-loop k1 = k1' + 1
-  c.k2_per_s = 75.0f;    // closed-loop k2 = k2' + 1
+  c.k1_per_s = 4.0f;   // closed-loop k1 = k1' + 1
+  c.k2_per_s = 75.0f;  // closed-loop k2 = k2' + 1
   c.kp_per_s2 = 5.0f;
   c.kd_per_s2 = 10.0f;
   c.ki_per_s3 = 0.01f;
@@ -72,7 +72,7 @@ mc_pi2d_f32_cfg_t paper_cfg(double dt_s) {
   c.b = 50.0f;
   c.eps_per_s = 0.02f;
   c.dt_s = static_cast<float>(dt_s);
-  c.iq_max_a = 1.0e6f;   // the paper has no limits
+  c.iq_max_a = 1.0e6f;  // the paper has no limits
   c.v_max_v = 1.0e9f;
   c.nu_max_nm = 1.0e6f;
   return c;
@@ -230,8 +230,8 @@ mc_pi2d_f32_cfg_t motor_pi2d_cfg(const MotorOptions& o) {
   c.r_ohm = 0.675f;
   c.l_h = 1.14e-3f;
   c.pole_pairs = 4;
-  c.ke_v_s_rad = 4.0f * 0.11f;          // p flux
-  c.kt_nm_a = 1.5f * 4.0f * 0.11f;      // 3/2 p flux (amplitude-invariant)
+  c.ke_v_s_rad = 4.0f * 0.11f;      // p flux
+  c.kt_nm_a = 1.5f * 4.0f * 0.11f;  // 3/2 p flux (amplitude-invariant)
   c.j_kgm2 = static_cast<float>(o.J_kgm2);
   c.k1_per_s = static_cast<float>(o.bw_current_rad_s);
   c.k2_per_s = static_cast<float>(o.bw_current_rad_s);
@@ -410,18 +410,18 @@ void run_pi2d_paper(RunContext& ctx) {
   ctx.summary.set("max_abs_u2", max_u2);
 }
 
-const Registrar reg_paper({
-    "pi2d-paper",
-    "PI^2D output-feedback speed tracking, paper 000 Section V: normalised PMSM (sigma 0.51, "
-    "gamma 0.17, tau_L 1), gains k1 4, k2 75 (closed loop), kp 5, kd 10, ki 0.01, a = b = 50, "
-    "eps 0.02; the firmware kernel sampled at rate_hz with zero-order hold",
-    14.0,
-    {{"rate_hz", 10000.0, "1/t_n", "controller rate (normalised time)", 100.0, 1.0e6},
-     {"substeps", 2.0, "1", "RK4 sub-steps per control period", 1.0, 64.0},
-     {"delay_periods", 0.0, "1", "computation delay in control periods", 0.0, 4.0},
-     {"tau_l", 1.0, "1", "normalised load torque", -10.0, 10.0},
-     q31loop::kernels_param()},
-    run_pi2d_paper});
+const Registrar reg_paper(
+    {"pi2d-paper",
+     "PI^2D output-feedback speed tracking, paper 000 Section V: normalised PMSM (sigma 0.51, "
+     "gamma 0.17, tau_L 1), gains k1 4, k2 75 (closed loop), kp 5, kd 10, ki 0.01, a = b = 50, "
+     "eps 0.02; the firmware kernel sampled at rate_hz with zero-order hold",
+     14.0,
+     {{"rate_hz", 10000.0, "1/t_n", "controller rate (normalised time)", 100.0, 1.0e6},
+      {"substeps", 2.0, "1", "RK4 sub-steps per control period", 1.0, 64.0},
+      {"delay_periods", 0.0, "1", "computation delay in control periods", 0.0, 4.0},
+      {"tau_l", 1.0, "1", "normalised load torque", -10.0, 10.0},
+      q31loop::kernels_param()},
+     run_pi2d_paper});
 
 pi2d::MotorOptions motor_options(const Params& p) {
   pi2d::MotorOptions o;
@@ -444,8 +444,8 @@ void run_pi2d_motor(RunContext& ctx) {
   const pi2d::MotorMetrics ma = q31 ? q31loop::run_motor_q31(o, ctx.duration_s, keep_a)
                                     : pi2d::run_motor(o, true, ctx.duration_s, keep_a);
   ctx.progress.update(0.5 * ctx.duration_s, ctx.duration_s);
-  const pi2d::MotorMetrics mb = pi2d::run_motor(o, false, ctx.duration_s,
-                                                [&](const pi2d::MotorSample& s) { b.push_back(s); });
+  const pi2d::MotorMetrics mb = pi2d::run_motor(
+      o, false, ctx.duration_s, [&](const pi2d::MotorSample& s) { b.push_back(s); });
   ctx.csv.columns({"t", "omega_ref_rad_s", "load_nm", "pi2d_omega_m_rad_s", "pi2d_i_d_a",
                    "pi2d_i_q_a", "pi2d_i_q_ref_a", "pi2d_v_d_v", "pi2d_v_q_v", "pi2d_nu_nm",
                    "pi2d_theta_f_rad", "pi_omega_m_rad_s", "pi_i_d_a", "pi_i_q_a", "pi_i_q_ref_a",
@@ -475,8 +475,7 @@ void run_pi2d_motor(RunContext& ctx) {
   std::printf("%-22s %12.3f %12.3f\n", "peak current A", ma.peak_current_a, mb.peak_current_a);
   std::printf("%-22s %12.4f %12.4f\n", "settling (1%) s", ma.settle_after_load_s,
               mb.settle_after_load_s);
-  std::printf("%-22s %12.3f %12.3f\n", "load-step dip rad/s", ma.load_dip_rad_s,
-              mb.load_dip_rad_s);
+  std::printf("%-22s %12.3f %12.3f\n", "load-step dip rad/s", ma.load_dip_rad_s, mb.load_dip_rad_s);
   if (ma.faults != 0u || mb.faults != 0u) {
     throw std::runtime_error("drive faulted (MC_DRIVE_FAULT bits pi2d " +
                              std::to_string(ma.faults) + ", cascade " + std::to_string(mb.faults) +
@@ -484,22 +483,22 @@ void run_pi2d_motor(RunContext& ctx) {
   }
 }
 
-const Registrar reg_motor({
-    "pi2d-motor",
-    "PI^2D on the paper-002 0.3 kW test motor (200 V, 20 kHz, encoder position only) through "
-    "the drive's CTRL mode, against a speed-PI cascade on the differentiated encoder with the "
-    "drive's FOC current loops: 0 -> 1000 r/min -> 0, rated-load step at 1 s; prints the "
-    "comparison table",
-    2.2,
-    {{"J_kgm2", 1.0e-3, "kg m^2", "rotor + coupled load inertia", 1.0e-5, 1.0},
-     {"B_nms_rad", 1.0e-4, "N m s/rad", "viscous friction", 0.0, 1.0},
-     {"load_nm", 3.0, "N m", "load step at t = 1 s (rated torque 3 N m)", -10.0, 10.0},
-     {"wn_rad_s", 60.0, "rad/s", "mechanical loop pole (both controllers)", 1.0, 500.0},
-     {"filter_rad_s", 1000.0, "rad/s", "speed filter pole = dirty-derivative a", 10.0, 10000.0},
-     {"i_limit_a", 9.0, "A", "current limit (both controllers)", 1.0, 10.0},
-     {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 1.0},
-     q31loop::kernels_param()},
-    run_pi2d_motor});
+const Registrar reg_motor(
+    {"pi2d-motor",
+     "PI^2D on the paper-002 0.3 kW test motor (200 V, 20 kHz, encoder position only) through "
+     "the drive's CTRL mode, against a speed-PI cascade on the differentiated encoder with the "
+     "drive's FOC current loops: 0 -> 1000 r/min -> 0, rated-load step at 1 s; prints the "
+     "comparison table",
+     2.2,
+     {{"J_kgm2", 1.0e-3, "kg m^2", "rotor + coupled load inertia", 1.0e-5, 1.0},
+      {"B_nms_rad", 1.0e-4, "N m s/rad", "viscous friction", 0.0, 1.0},
+      {"load_nm", 3.0, "N m", "load step at t = 1 s (rated torque 3 N m)", -10.0, 10.0},
+      {"wn_rad_s", 60.0, "rad/s", "mechanical loop pole (both controllers)", 1.0, 500.0},
+      {"filter_rad_s", 1000.0, "rad/s", "speed filter pole = dirty-derivative a", 10.0, 10000.0},
+      {"i_limit_a", 9.0, "A", "current limit (both controllers)", 1.0, 10.0},
+      {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 1.0},
+      q31loop::kernels_param()},
+     run_pi2d_motor});
 
 void run_pi2d_certificate(RunContext& ctx) {
   const bool paper = ctx.params.get("motor") == 0.0;
@@ -510,30 +509,36 @@ void run_pi2d_certificate(RunContext& ctx) {
                                static_cast<float>(ctx.params.get("iq_abs_max_a"))};
   mc_pi2d_cert_t r{};
   const uint32_t err = mc_pi2d_f32_certify(&c, &env, &r);
-  if (err != 0u) throw UsageError("certificate: config or envelope rejected, bits " +
-                                  std::to_string(err));
+  if (err != 0u)
+    throw UsageError("certificate: config or envelope rejected, bits " + std::to_string(err));
   std::printf("gains: %s; envelope x1 in [%g, %g] A, |x2| <= %g A\n",
               paper ? "paper 000 Section V" : "pi2d-motor", env.id_min_a, env.id_max_a,
               env.iq_abs_max_a);
   std::printf("kp' = kp - ki/eps = %g, max |Delta + sigma| = %g\n", r.kp_prime_per_s2,
               r.delta_sigma_max);
-  std::printf("(34) re-derived kd a/b >= eps[2kd + a^2/(b-1) + (kp'-kd)^2/kp']: %g >= %g, "
-              "margin %g  %s\n", r.c34_lhs, r.c34_rhs, r.c34_margin,
-              r.c34_margin >= 0 ? "HOLDS" : "FAILS");
-  std::printf("(34) as printed (a^2/b):                                  %g >= %g, margin %g  "
-              "%s\n", r.c34_lhs, r.c34_printed_rhs, r.c34_printed_margin,
-              r.c34_printed_margin >= 0 ? "HOLDS" : "FAILS");
-  std::printf("(38) re-derived 2 eps b' >= (p x2)^2/k1 + (Delta+sigma)^2/k2: %g >= %g, margin "
-              "%g  %s\n", r.c38_lhs, r.c38_rhs, r.c38_margin,
-              r.c38_margin >= 0 ? "HOLDS" : "FAILS");
+  std::printf(
+      "(34) re-derived kd a/b >= eps[2kd + a^2/(b-1) + (kp'-kd)^2/kp']: %g >= %g, "
+      "margin %g  %s\n",
+      r.c34_lhs, r.c34_rhs, r.c34_margin, r.c34_margin >= 0 ? "HOLDS" : "FAILS");
+  std::printf(
+      "(34) as printed (a^2/b):                                  %g >= %g, margin %g  "
+      "%s\n",
+      r.c34_lhs, r.c34_printed_rhs, r.c34_printed_margin,
+      r.c34_printed_margin >= 0 ? "HOLDS" : "FAILS");
+  std::printf(
+      "(38) re-derived 2 eps b' >= (p x2)^2/k1 + (Delta+sigma)^2/k2: %g >= %g, margin "
+      "%g  %s\n",
+      r.c38_lhs, r.c38_rhs, r.c38_margin, r.c38_margin >= 0 ? "HOLDS" : "FAILS");
   if (r.c38_k2_min_per_s < 1e38f) {
     std::printf("     smallest k2 meeting it: %g\n", r.c38_k2_min_per_s);
   } else {
     std::printf("     no k2 meets it: 2 eps b' <= (p x2)^2/k1 (raise k1 or eps b')\n");
   }
-  std::printf("(38) as printed k2 >= (Delta_p+sigma)^2/(eps b') + x2^2/k1: %g >= %g, margin %g"
-              "  %s\n", c.k2_per_s, r.c38_printed_rhs, r.c38_printed_margin,
-              r.c38_printed_margin >= 0 ? "HOLDS" : "FAILS");
+  std::printf(
+      "(38) as printed k2 >= (Delta_p+sigma)^2/(eps b') + x2^2/k1: %g >= %g, margin %g"
+      "  %s\n",
+      c.k2_per_s, r.c38_printed_rhs, r.c38_printed_margin,
+      r.c38_printed_margin >= 0 ? "HOLDS" : "FAILS");
   ctx.csv.columns({"condition", "lhs", "rhs", "margin"});
   ctx.csv.row({34.0, r.c34_lhs, r.c34_rhs, r.c34_margin});
   ctx.csv.row({34.1, r.c34_lhs, r.c34_printed_rhs, r.c34_printed_margin});
@@ -547,18 +552,18 @@ void run_pi2d_certificate(RunContext& ctx) {
   ctx.summary.set("holds", r.holds ? 1.0 : 0.0);
 }
 
-const Registrar reg_cert({
-    "pi2d-certificate",
-    "evaluate the PI^2D proof's sufficient conditions (34) and (38), re-derived and as printed, "
-    "for the paper's gains (motor=0) or the pi2d-motor gains (motor=1) over an envelope of "
-    "x1, x2; prints each condition with its margin (CSV rows: condition, lhs, rhs, margin; "
-    "34.1/38.1 = as printed)",
-    1.0,
-    {{"motor", 0.0, "1", "0: paper gains (normalised), 1: pi2d-motor gains (SI)", 0.0, 1.0},
-     {"id_min_a", -0.5, "A", "lower bound of x1", -100.0, 100.0},
-     {"id_max_a", 0.5, "A", "upper bound of x1", -100.0, 100.0},
-     {"iq_abs_max_a", 5.0, "A", "bound of |x2|", 0.0, 100.0}},
-    run_pi2d_certificate});
+const Registrar reg_cert(
+    {"pi2d-certificate",
+     "evaluate the PI^2D proof's sufficient conditions (34) and (38), re-derived and as printed, "
+     "for the paper's gains (motor=0) or the pi2d-motor gains (motor=1) over an envelope of "
+     "x1, x2; prints each condition with its margin (CSV rows: condition, lhs, rhs, margin; "
+     "34.1/38.1 = as printed)",
+     1.0,
+     {{"motor", 0.0, "1", "0: paper gains (normalised), 1: pi2d-motor gains (SI)", 0.0, 1.0},
+      {"id_min_a", -0.5, "A", "lower bound of x1", -100.0, 100.0},
+      {"id_max_a", 0.5, "A", "upper bound of x1", -100.0, 100.0},
+      {"iq_abs_max_a", 5.0, "A", "bound of |x2|", 0.0, 100.0}},
+     run_pi2d_certificate});
 
 }  // namespace
 }  // namespace mcsim

@@ -38,10 +38,10 @@ SpeedRef paper_profile(double t_s);
 mc_pi2d_f32_cfg_t paper_cfg(double dt_s);
 
 struct PaperOptions {
-  double rate_hz = 10000.0;   // controller rate (normalised time)
-  int substeps = 2;           // RK4 sub-steps per control period
-  int delay_periods = 0;      // computation delay (0: as the continuous law)
-  double tau_l = 1.0;         // load
+  double rate_hz = 10000.0;  // controller rate (normalised time)
+  int substeps = 2;          // RK4 sub-steps per control period
+  int delay_periods = 0;     // computation delay (0: as the continuous law)
+  double tau_l = 1.0;        // load
   double duration = 14.0;
 };
 
@@ -59,18 +59,18 @@ struct MotorOptions {
   int substeps = 4;
   int delay_periods = 1;
   double vbus_v = 200.0;
-  double J_kgm2 = 1.0e-3;        // rotor + coupled load (documented choice)
-  double B_nms_rad = 1.0e-4;     // viscous friction
-  double speed_rpm = 1000.0;     // rated speed
-  double ramp_s = 0.4;           // 0 -> rated speed and back
-  double t_up_s = 0.05;          // start of the ramp up
-  double t_load_s = 1.0;         // rated-load step
-  double load_nm = 3.0;          // rated torque (Table I)
-  double t_down_s = 1.6;         // start of the ramp down
-  double i_limit_a = 9.0;        // current limit (both controllers)
+  double J_kgm2 = 1.0e-3;     // rotor + coupled load (documented choice)
+  double B_nms_rad = 1.0e-4;  // viscous friction
+  double speed_rpm = 1000.0;  // rated speed
+  double ramp_s = 0.4;        // 0 -> rated speed and back
+  double t_up_s = 0.05;       // start of the ramp up
+  double t_load_s = 1.0;      // rated-load step
+  double load_nm = 3.0;       // rated torque (Table I)
+  double t_down_s = 1.6;      // start of the ramp down
+  double i_limit_a = 9.0;     // current limit (both controllers)
   double bw_current_rad_s = 2.0 * 3.14159265358979 * 500.0;  // current loops
-  double wn_rad_s = 60.0;        // mechanical loop: triple pole at -wn
-  double filter_rad_s = 1000.0;  // speed filter / dirty-derivative pole
+  double wn_rad_s = 60.0;                                    // mechanical loop: triple pole at -wn
+  double filter_rad_s = 1000.0;                              // speed filter / dirty-derivative pole
   double noise_rms_a = 0.0;
 };
 
@@ -80,8 +80,8 @@ struct MotorSample {
 
 struct MotorMetrics {
   double rms_err_rad_s = 0, peak_err_rad_s = 0, peak_current_a = 0;
-  double settle_after_load_s = 0;   // |e| within 1 % of rated speed for good
-  double load_dip_rad_s = 0;        // largest |e| after the load step
+  double settle_after_load_s = 0;  // |e| within 1 % of rated speed for good
+  double load_dip_rad_s = 0;       // largest |e| after the load step
   unsigned faults = 0;
 };
 

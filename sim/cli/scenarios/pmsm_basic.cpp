@@ -41,9 +41,8 @@ class Crossing {
 // run's duration, writing about 4000 evenly spaced rows (and the last one):
 // row(t, x) gives the CSV values. Returns the final state.
 template <class Plant, class RowFn>
-typename Plant::State run_fixed_input(RunContext& ctx, const Plant& plant,
-                                      typename Plant::State x, const typename Plant::Input& u,
-                                      double h, RowFn row) {
+typename Plant::State run_fixed_input(RunContext& ctx, const Plant& plant, typename Plant::State x,
+                                      const typename Plant::Input& u, double h, RowFn row) {
   const long n = std::lround(ctx.duration_s / h);
   const long every = std::max(1L, n / 4000);
   for (long k = 0; k <= n; ++k) {
@@ -66,8 +65,8 @@ void run_open_loop(RunContext& ctx) {
   if (plant.configure(p) != Status::kOk) throw UsageError("motor parameters rejected");
   const double vq = ctx.params.get("vq_v");
   const PmsmDq::Input u(0.0, vq);
-  ctx.csv.columns({"t", "i_d_a", "i_q_a", "omega_m_rad_s", "theta_m_rad", "v_d_v", "v_q_v",
-                   "torque_nm"});
+  ctx.csv.columns(
+      {"t", "i_d_a", "i_q_a", "omega_m_rad_s", "theta_m_rad", "v_d_v", "v_q_v", "torque_nm"});
   const PmsmDq::State x = run_fixed_input(
       ctx, plant, PmsmDq::State::Zero(), u, ctx.params.get("dt_s"),
       [&](double t, const PmsmDq::State& s) {
@@ -101,17 +100,17 @@ void run_open_loop(RunContext& ctx) {
   ctx.summary.set("i_d_steady_closed_form_a", id_ss);
 }
 
-const Registrar reg_open_loop({
-    "pmsm-open-loop-step",
-    "PMSM (paper-002 test motor, dq model) with a q-axis voltage step at t = 0; "
-    "summary compares the final state with the closed-form steady state",
-    2.0,
-    {{"vq_v", 20.0, "V", "q-axis voltage step", -400.0, 400.0},
-     {"B_nms_rad", 2.0e-3, "N m s/rad", "viscous friction (B > 0 gives a unique steady state)",
-      0.0, 10.0},
-     {"load_nm", 0.1, "N m", "constant load torque", -10.0, 10.0},
-     {"dt_s", 20.0e-6, "s", "RK4 step", 1.0e-7, 1.0e-3}},
-    run_open_loop});
+const Registrar reg_open_loop(
+    {"pmsm-open-loop-step",
+     "PMSM (paper-002 test motor, dq model) with a q-axis voltage step at t = 0; "
+     "summary compares the final state with the closed-form steady state",
+     2.0,
+     {{"vq_v", 20.0, "V", "q-axis voltage step", -400.0, 400.0},
+      {"B_nms_rad", 2.0e-3, "N m s/rad", "viscous friction (B > 0 gives a unique steady state)",
+       0.0, 10.0},
+      {"load_nm", 0.1, "N m", "constant load torque", -10.0, 10.0},
+      {"dt_s", 20.0e-6, "s", "RK4 step", 1.0e-7, 1.0e-3}},
+     run_open_loop});
 
 // -------------------------------------------------------- FOC current step
 void run_foc_current_step(RunContext& ctx) {
@@ -135,8 +134,8 @@ void run_foc_current_step(RunContext& ctx) {
     throw std::runtime_error("drive refused current mode");
   }
   ctx.csv.columns({"t", "i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a", "i_d_meas_a", "i_q_meas_a",
-                   "v_d_v", "v_q_v", "omega_m_rad_s", "omega_m_est_rad_s", "theta_e_rad", "torque_nm", "duty_a_1",
-                   "duty_b_1", "duty_c_1", "fault_1"});
+                   "v_d_v", "v_q_v", "omega_m_rad_s", "omega_m_est_rad_s", "theta_e_rad",
+                   "torque_nm", "duty_a_1", "duty_b_1", "duty_c_1", "fault_1"});
   const double T = sil.board().period_s();
   const long n = std::lround(ctx.duration_s / T);
   Crossing q10(0.1 * iq_step, t_iq), q90(0.9 * iq_step, t_iq);
@@ -185,32 +184,32 @@ void run_foc_current_step(RunContext& ctx) {
   ctx.summary.set("id_final_a", id_last);
 }
 
-const Registrar reg_foc_step({
-    "foc-current-step",
-    "FOC current loop through the firmware (host HAL, paper-002 test motor, 200 V): "
-    "q then d current steps; summary: 10-90% rise times vs the designed bandwidth",
-    0.03,
-    {{"iq_step_a", 2.0, "A", "q-axis current step", -10.0, 10.0},
-     {"id_step_a", -1.0, "A", "d-axis current step", -10.0, 10.0},
-     {"t_iq_step_s", 0.002, "s", "time of the q step", 0.0, 100.0},
-     {"t_id_step_s", 0.015, "s", "time of the d step", 0.0, 100.0},
-     {"bw_hz", 200.0, "Hz",
-      "designed current-loop bandwidth (kp = L bw, ki = R bw); keep 2 pi bw / pwm_hz <= 0.08 "
-      "for a response within 20% of first order with the one-period delay",
-      1.0, 5000.0},
-     {"pwm_hz", 20000.0, "Hz", "PWM and current-loop rate", 1000.0, 100000.0},
-     {"substeps", 4.0, "1", "RK4 sub-steps per PWM period", 1.0, 64.0},
-     {"delay_periods", 1.0, "1", "computation delay in PWM periods", 0.0, 4.0},
-     {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 5.0},
-     {"speed_pll_bw_rad_s", 1000.0, "rad/s",
-      "bandwidth of the encoder tracking loop whose speed feeds the back-EMF feed-forward",
-      1.0, 6000.0},
-     {"load_nm", 0.0, "N m", "constant load torque", -10.0, 10.0},
-     {"J_kgm2", 0.1, "kg m^2",
-      "rotor + load inertia; the default couples the motor to a dyno flywheel so the "
-      "current loop is measured near locked rotor, as on a test bench",
-      1.0e-7, 100.0}},
-    run_foc_current_step});
+const Registrar reg_foc_step(
+    {"foc-current-step",
+     "FOC current loop through the firmware (host HAL, paper-002 test motor, 200 V): "
+     "q then d current steps; summary: 10-90% rise times vs the designed bandwidth",
+     0.03,
+     {{"iq_step_a", 2.0, "A", "q-axis current step", -10.0, 10.0},
+      {"id_step_a", -1.0, "A", "d-axis current step", -10.0, 10.0},
+      {"t_iq_step_s", 0.002, "s", "time of the q step", 0.0, 100.0},
+      {"t_id_step_s", 0.015, "s", "time of the d step", 0.0, 100.0},
+      {"bw_hz", 200.0, "Hz",
+       "designed current-loop bandwidth (kp = L bw, ki = R bw); keep 2 pi bw / pwm_hz <= 0.08 "
+       "for a response within 20% of first order with the one-period delay",
+       1.0, 5000.0},
+      {"pwm_hz", 20000.0, "Hz", "PWM and current-loop rate", 1000.0, 100000.0},
+      {"substeps", 4.0, "1", "RK4 sub-steps per PWM period", 1.0, 64.0},
+      {"delay_periods", 1.0, "1", "computation delay in PWM periods", 0.0, 4.0},
+      {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 5.0},
+      {"speed_pll_bw_rad_s", 1000.0, "rad/s",
+       "bandwidth of the encoder tracking loop whose speed feeds the back-EMF feed-forward", 1.0,
+       6000.0},
+      {"load_nm", 0.0, "N m", "constant load torque", -10.0, 10.0},
+      {"J_kgm2", 0.1, "kg m^2",
+       "rotor + load inertia; the default couples the motor to a dyno flywheel so the "
+       "current loop is measured near locked rotor, as on a test bench",
+       1.0e-7, 100.0}},
+     run_foc_current_step});
 
 // ---------------------------------------------------- stepper, constant V
 void run_stepper_constant_voltage(RunContext& ctx) {
@@ -221,8 +220,8 @@ void run_stepper_constant_voltage(RunContext& ctx) {
   Stepper2Ph::State x0;
   x0 << 0.0, 0.0, 0.0, ctx.params.get("theta0_rad");
   const Stepper2Ph::Input u(va, vb);
-  ctx.csv.columns({"t", "i_a_a", "i_b_a", "omega_m_rad_s", "theta_m_rad", "v_a_v", "v_b_v",
-                   "torque_nm"});
+  ctx.csv.columns(
+      {"t", "i_a_a", "i_b_a", "omega_m_rad_s", "theta_m_rad", "v_a_v", "v_b_v", "torque_nm"});
   const Stepper2Ph::State x = run_fixed_input(
       ctx, plant, x0, u, ctx.params.get("dt_s"), [&](double t, const Stepper2Ph::State& s) {
         return std::vector<double>{t, s(0), s(1), s(2), s(3), va, vb, plant.torque_nm(s)};
@@ -242,16 +241,16 @@ void run_stepper_constant_voltage(RunContext& ctx) {
   ctx.summary.set("theta_equilibrium_rad", th_eq);
 }
 
-const Registrar reg_stepper({
-    "stepper-constant-voltage",
-    "two-phase PM stepper (paper 001 parameters) with constant winding voltages from an "
-    "offset start: it settles at the detent where the torque vanishes",
-    5.0,
-    {{"va_v", 19.0, "V", "phase-A voltage", -100.0, 100.0},
-     {"vb_v", 0.0, "V", "phase-B voltage", -100.0, 100.0},
-     {"theta0_rad", 0.02, "rad", "initial shaft angle", -10.0, 10.0},
-     {"dt_s", 10.0e-6, "s", "RK4 step", 1.0e-7, 1.0e-3}},
-    run_stepper_constant_voltage});
+const Registrar reg_stepper(
+    {"stepper-constant-voltage",
+     "two-phase PM stepper (paper 001 parameters) with constant winding voltages from an "
+     "offset start: it settles at the detent where the torque vanishes",
+     5.0,
+     {{"va_v", 19.0, "V", "phase-A voltage", -100.0, 100.0},
+      {"vb_v", 0.0, "V", "phase-B voltage", -100.0, 100.0},
+      {"theta0_rad", 0.02, "rad", "initial shaft angle", -10.0, 10.0},
+      {"dt_s", 10.0e-6, "s", "RK4 step", 1.0e-7, 1.0e-3}},
+     run_stepper_constant_voltage});
 
 }  // namespace
 }  // namespace mcsim

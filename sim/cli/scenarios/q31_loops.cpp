@@ -37,7 +37,9 @@ q31_t to_q(double v, double base) {
   if (x <= -kQ31) return MC_Q31_MIN;
   return static_cast<q31_t>(x);
 }
-double from_q(q31_t q, double base) { return static_cast<double>(q) / kQ31 * base; }
+double from_q(q31_t q, double base) {
+  return static_cast<double>(q) / kQ31 * base;
+}
 }  // namespace
 
 // ------------------------------------------------------------ pi2d paper
@@ -91,7 +93,8 @@ long run_paper_q31(const pi2d::PaperOptions& o,
     mc_pi2d_q31_step(&law, &in, &out);
     const double u1 = from_q(out.vd, b.v_base_v), u2 = from_q(out.vq, b.v_base_v);
     row(pi2d::PaperSample{t, x(0), x(1), x(2), x(3), r.w, r.th, from_q(out.iq_ref, b.i_base_a), u1,
-                          u2, from_q(out.nu, b.nu_base_nm), from_q(out.theta_f, b.thetaf_base_rad)});
+                          u2, from_q(out.nu, b.nu_base_nm),
+                          from_q(out.theta_f, b.thetaf_base_rad)});
     if (k == n) break;
     const PmsmNormalised::Input u = delay.push(PmsmNormalised::Input(u1, u2));
     advance_zoh(plant, u, t, T, o.substeps, &x);
@@ -102,15 +105,15 @@ long run_paper_q31(const pi2d::PaperOptions& o,
 // ------------------------------------------------------------ pi2d motor
 mc_pi2d_q31_bases_t motor_pi2d_bases(const pi2d::MotorOptions& o) {
   mc_pi2d_q31_bases_t b{};
-  b.i_base_a = 20.0f;     // the board's current-sensor range
+  b.i_base_a = 20.0f;  // the board's current-sensor range
   b.v_base_v = static_cast<float>(2.0 * o.vbus_v);
   b.theta_base_rad = 8.0f;  // positions kept in [0, 2 pi) (+ e4) by the plug-in
   b.thetaf_base_rad = 1.0f;
-  b.omega_base_rad_s = 256.0f;   // 1000 r/min = 105 rad/s
-  b.alpha_base_rad_s2 = 1024.0f; // ramp 262 rad/s^2
+  b.omega_base_rad_s = 256.0f;    // 1000 r/min = 105 rad/s
+  b.alpha_base_rad_s2 = 1024.0f;  // ramp 262 rad/s^2
   b.jerk_base_rad_s3 = 1.0f;
   b.did_base_a_s = 1.0f;
-  b.nu_base_nm = 8.0f;           // nu_max = 2 load + 1 = 7 N m
+  b.nu_base_nm = 8.0f;  // nu_max = 2 load + 1 = 7 N m
   return b;
 }
 
@@ -419,24 +422,25 @@ void run_paper_cmp(RunContext& ctx) {
   ctx.summary.set("f32_x3_final", a.back().x3);
 }
 
-const Registrar reg_paper_q31({
-    "pi2d-paper-q31",
-    "pi2d-paper with the q31 PI^2D kernel (mc_pi2d_q31) next to the f32 run: both trajectories "
-    "and their difference (tests/sil/q31 bounds it)",
-    14.0,
-    {{"rate_hz", 10000.0, "1/t_n", "controller rate (normalised time)", 100.0, 1.0e6},
-     {"tau_l", 1.0, "1", "normalised load torque", -10.0, 10.0}},
-    run_paper_cmp});
+const Registrar reg_paper_q31(
+    {"pi2d-paper-q31",
+     "pi2d-paper with the q31 PI^2D kernel (mc_pi2d_q31) next to the f32 run: both trajectories "
+     "and their difference (tests/sil/q31 bounds it)",
+     14.0,
+     {{"rate_hz", 10000.0, "1/t_n", "controller rate (normalised time)", 100.0, 1.0e6},
+      {"tau_l", 1.0, "1", "normalised load torque", -10.0, 10.0}},
+     run_paper_cmp});
 
 void run_motor_cmp(RunContext& ctx) {
   pi2d::MotorOptions o;
   o.load_nm = ctx.params.get("load_nm");
   o.noise_rms_a = ctx.params.get("noise_rms_a");
   std::vector<pi2d::MotorSample> a, q;
-  const auto ma = pi2d::run_motor(o, true, ctx.duration_s,
-                                  [&](const pi2d::MotorSample& s) { a.push_back(s); });
+  const auto ma =
+      pi2d::run_motor(o, true, ctx.duration_s, [&](const pi2d::MotorSample& s) { a.push_back(s); });
   ctx.progress.update(0.5 * ctx.duration_s, ctx.duration_s);
-  const auto mq = run_motor_q31(o, ctx.duration_s, [&](const pi2d::MotorSample& s) { q.push_back(s); });
+  const auto mq =
+      run_motor_q31(o, ctx.duration_s, [&](const pi2d::MotorSample& s) { q.push_back(s); });
   ctx.csv.columns({"t", "omega_ref_rad_s", "f32_omega_m_rad_s", "q31_omega_m_rad_s", "f32_i_q_a",
                    "q31_i_q_a", "f32_nu_nm", "q31_nu_nm", "d_omega_rad_s"});
   double dw = 0, diq = 0, dnu = 0;
@@ -460,14 +464,14 @@ void run_motor_cmp(RunContext& ctx) {
   if (ma.faults != 0u || mq.faults != 0u) throw std::runtime_error("drive faulted");
 }
 
-const Registrar reg_motor_q31({
-    "pi2d-motor-q31",
-    "pi2d-motor (PI^2D part) with a q31 plug-in: mc_pi2d_q31 and Clarke/Park/SVPWM q31 through "
-    "the drive's CTRL mode, next to the f32 plug-in run",
-    2.2,
-    {{"load_nm", 3.0, "N m", "load step at t = 1 s", -10.0, 10.0},
-     {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 1.0}},
-    run_motor_cmp});
+const Registrar reg_motor_q31(
+    {"pi2d-motor-q31",
+     "pi2d-motor (PI^2D part) with a q31 plug-in: mc_pi2d_q31 and Clarke/Park/SVPWM q31 through "
+     "the drive's CTRL mode, next to the f32 plug-in run",
+     2.2,
+     {{"load_nm", 3.0, "N m", "load step at t = 1 s", -10.0, 10.0},
+      {"noise_rms_a", 0.0, "A", "current-sensor noise (rms)", 0.0, 1.0}},
+     run_motor_cmp});
 
 void run_csmc_cmp(RunContext& ctx) {
   csmc::LoopOptions o;
@@ -475,12 +479,13 @@ void run_csmc_cmp(RunContext& ctx) {
   o.dt_s = ctx.params.get("dt_s");
   o.step2_t_s = 0.5;
   o.ctrl = csmc::paper_ctrl(true, ctx.params.get("integrators") != 0.0, false);
-  o.record_every = std::max<size_t>(1, static_cast<size_t>(std::floor(o.duration_s / o.dt_s / 5000.0)));
+  o.record_every =
+      std::max<size_t>(1, static_cast<size_t>(std::floor(o.duration_s / o.dt_s / 5000.0)));
   const csmc::LoopResult a = csmc::run_loop(o);
   ctx.progress.update(0.5 * ctx.duration_s, ctx.duration_s);
   const csmc::LoopResult q = run_csmc_q31(o);
-  ctx.csv.columns({"t", "phi_d_rad", "f32_x4_rad", "q31_x4_rad", "f32_u2_v", "q31_u2_v",
-                   "f32_x1_a", "q31_x1_a", "dx4_rad"});
+  ctx.csv.columns({"t", "phi_d_rad", "f32_x4_rad", "q31_x4_rad", "f32_u2_v", "q31_u2_v", "f32_x1_a",
+                   "q31_x1_a", "dx4_rad"});
   double dx4 = 0, dx1 = 0;
   for (size_t k = 0; k < std::min(a.trace.size(), q.trace.size()); ++k) {
     const auto& s = a.trace[k];
@@ -495,14 +500,14 @@ void run_csmc_cmp(RunContext& ctx) {
   ctx.summary.set("q31_e2_final_rad", q.e2_end);
 }
 
-const Registrar reg_csmc_q31({
-    "csmc-state-feedback-q31",
-    "csmc-state-feedback (paper 001 Fig. 2) with the q31 CSMC kernel (mc_csmc_q31 with q31 "
-    "conditional integrators) next to the f32 run",
-    1.0,
-    {{"dt_s", 1.0e-5, "s", "control period", 1.0e-6, 1.0e-3},
-     {"integrators", 1.0, "-", "1: conditional integrators k0 = (20, 100); 0: none", 0.0, 1.0}},
-    run_csmc_cmp});
+const Registrar reg_csmc_q31(
+    {"csmc-state-feedback-q31",
+     "csmc-state-feedback (paper 001 Fig. 2) with the q31 CSMC kernel (mc_csmc_q31 with q31 "
+     "conditional integrators) next to the f32 run",
+     1.0,
+     {{"dt_s", 1.0e-5, "s", "control period", 1.0e-6, 1.0e-3},
+      {"integrators", 1.0, "-", "1: conditional integrators k0 = (20, 100); 0: none", 0.0, 1.0}},
+     run_csmc_cmp});
 
 }  // namespace
 }  // namespace q31loop

@@ -29,8 +29,13 @@ namespace q31loop {
 // `--set kernels=q31` on pi2d-paper, pi2d-motor and csmc-state-feedback runs
 // the control law with its q31 twin (tests/sil/q31 bounds the difference).
 inline ParamSpec kernels_param() {
-  return {"kernels", 0.0, "-", "control kernels: f32 or q31 (per-unit fixed-point twins)",
-          0.0, 1.0, {{"f32", 0.0}, {"q31", 1.0}}};
+  return {"kernels",
+          0.0,
+          "-",
+          "control kernels: f32 or q31 (per-unit fixed-point twins)",
+          0.0,
+          1.0,
+          {{"f32", 0.0}, {"q31", 1.0}}};
 }
 
 // Bases of the paper-000 loop (normalised units; from the f32 run's ranges:

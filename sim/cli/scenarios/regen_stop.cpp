@@ -43,7 +43,8 @@ std::vector<ParamSpec> regen_params(const MotorFiles& f) {
        0.0, g.speed_limit_rad_s},
       {"dc_link_c_f", b.dc_link_c_f > 0 ? b.dc_link_c_f : default_c_f(g), "F",
        "bus capacitance (the board file's, else a representative 0.25 mF per kW of the "
-       "drive's peak shaft power kt i_limit speed_limit, at least 1 mF)", 1.0e-7, 10.0},
+       "drive's peak shaft power kt i_limit speed_limit, at least 1 mF)",
+       1.0e-7, 10.0},
       {"source_r_ohm", b.source_r_ohm, "ohm", "supply internal resistance", 1.0e-4, 1.0e3},
       {"source_sink", b.source_sink ? 1.0 : 0.0, "1",
        "the supply can sink current (0: a bench supply behind a diode)", 0.0, 1.0},
@@ -74,9 +75,9 @@ void run_regen(RunContext& ctx) {
   const MotorSpec& m = f.motor;
   const double ke_j = 0.5 * m.j_kgm2 * w_t * w_t;
   const double p_cu = std::max(1e-9, 1.5 * m.r_ohm * g.i_limit_a * g.i_limit_a);
-  const double dur = ctx.duration_s > 0 ? ctx.duration_s
-                                        : t_stop + std::max(20.0 * t_acc, 10.0 * ke_j / p_cu) +
-                                              t_set;
+  const double dur = ctx.duration_s > 0
+                         ? ctx.duration_s
+                         : t_stop + std::max(20.0 * t_acc, 10.0 * ke_j / p_cu) + t_set;
   ctx.summary.set("duration_s", dur);
   RigOptions ro;
   ro.law = Law::kSpeedPi;
@@ -86,8 +87,8 @@ void run_regen(RunContext& ctx) {
   if (link == nullptr) throw std::logic_error("regen-stop: the board has no DC link");
   const double T = rig.period_s();
   const long n = std::lround(dur / T);
-  const long every = P.get("csv_every") > 0 ? std::lround(P.get("csv_every"))
-                                            : std::max(1L, n / 20000);
+  const long every =
+      P.get("csv_every") > 0 ? std::lround(P.get("csv_every")) : std::max(1L, n / 20000);
   ctx.csv.columns({"t", "omega_m_rad_s", "omega_ref_rad_s", "i_d_a", "i_q_a", "i_d_ref_a",
                    "i_q_ref_a", "vbus_v", "brake_duty", "regen_scale", "fault_1"});
   const double trip = rig.drive_cfg().vbus_max_v;
@@ -111,8 +112,10 @@ void run_regen(RunContext& ctx) {
     if (t >= t_stop) {
       vpk = std::max(vpk, v);
       w_min = std::min(w_min, w);
-      if (std::abs(w) > 0.02 * w_t) t_still = std::nan("");
-      else if (std::isnan(t_still)) t_still = t;
+      if (std::abs(w) > 0.02 * w_t)
+        t_still = std::nan("");
+      else if (std::isnan(t_still))
+        t_still = t;
       const double pl = loss_w(id, iq, w);
       if (!in_stop) {
         in_stop = true;
@@ -128,9 +131,17 @@ void run_regen(RunContext& ctx) {
       p_prev = pl;
     }
     if (k % every == 0) {
-      const double row[] = {t, w, rig.omega_ref_rad_s(), id, iq, rig.drive().tm.id_ref_a,
-                            rig.drive().tm.iq_ref_a, v, board.brake_duty(),
-                            rig.drive().tm.regen_scale, static_cast<double>(rig.drive().faults)};
+      const double row[] = {t,
+                            w,
+                            rig.omega_ref_rad_s(),
+                            id,
+                            iq,
+                            rig.drive().tm.id_ref_a,
+                            rig.drive().tm.iq_ref_a,
+                            v,
+                            board.brake_duty(),
+                            rig.drive().tm.regen_scale,
+                            static_cast<double>(rig.drive().faults)};
       ctx.csv.row(row, sizeof row / sizeof row[0]);
     }
     if (rig.drive().faults != 0u) break;
@@ -141,13 +152,13 @@ void run_regen(RunContext& ctx) {
   const mc_drive_t& d = rig.drive();
   ctx.summary.set("faults", d.faults);
   ctx.summary.set_text("brake", brake ? "on" : "off");
-  if (d.faults != 0u) throw std::runtime_error("drive faulted in regen-stop: bits " +
-                                               std::to_string(d.faults));
+  if (d.faults != 0u)
+    throw std::runtime_error("drive faulted in regen-stop: bits " + std::to_string(d.faults));
   const auto& e = link->energy();
   const double ke1 = 0.5 * m.j_kgm2 * w * w, em1 = emag(id, iq);
   const double lhs = (e.source_j - src0) + (ke0 - ke1) + (em0 - em1);
-  const double rhs = (e.brake_j - brk0) + (e.source_r_j - srcr0) + e_cu +
-                     (link->cap_delta_j() - cap0);
+  const double rhs =
+      (e.brake_j - brk0) + (e.source_r_j - srcr0) + e_cu + (link->cap_delta_j() - cap0);
   ctx.summary.set("vbus_peak_v", vpk);
   ctx.summary.set("vbus_trip_v", trip);
   ctx.summary.set("vbus_margin_v", trip - vpk);
@@ -168,15 +179,15 @@ void run_regen(RunContext& ctx) {
   ctx.summary.set("energy_balance_rel_err", (lhs - rhs) / std::max(1e-12, ke0));
 }
 
-const Registrar reg_regen({
-    "regen-stop",
-    "any motor: full-speed stop on a DC link (supply with internal resistance that cannot sink "
-    "by default, bus capacitor, brake resistor with brake=on): regen current limit by the bus "
-    "voltage, chopper; summary: vbus peak, energy to the resistor, stop time, energy balance",
-    0.0,
-    {},
-    run_regen,
-    regen_params});
+const Registrar reg_regen(
+    {"regen-stop",
+     "any motor: full-speed stop on a DC link (supply with internal resistance that cannot sink "
+     "by default, bus capacitor, brake resistor with brake=on): regen current limit by the bus "
+     "voltage, chopper; summary: vbus peak, energy to the resistor, stop time, energy balance",
+     0.0,
+     {},
+     run_regen,
+     regen_params});
 
 }  // namespace
 }  // namespace mcsim

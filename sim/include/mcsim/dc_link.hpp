@@ -50,10 +50,10 @@ struct DcLinkParams {
 
 // Energies since configure() [J].
 struct DcLinkEnergy {
-  double source_j = 0;     // delivered by the ideal source v_s (integral v_s i_s)
-  double source_r_j = 0;   // dissipated in r_s
-  double brake_j = 0;      // dissipated in the brake resistor
-  double inverter_j = 0;   // drawn by the inverter (integral v i_inv; < 0 when braking)
+  double source_j = 0;    // delivered by the ideal source v_s (integral v_s i_s)
+  double source_r_j = 0;  // dissipated in r_s
+  double brake_j = 0;     // dissipated in the brake resistor
+  double inverter_j = 0;  // drawn by the inverter (integral v i_inv; < 0 when braking)
 };
 
 class DcLink {
@@ -90,8 +90,8 @@ class DcLink {
       // The diode changes state at most once in a sub-step (twice with
       // rounding at the crossing); the third piece takes the rest.
       for (int pass = 0; pass < 3 && left > 0.0; ++pass) {
-        const bool on = p_.source_sink || v_ < p_.source_v ||
-                        (v_ == p_.source_v && i_inv_a + gb * v_ > 0.0);
+        const bool on =
+            p_.source_sink || v_ < p_.source_v || (v_ == p_.source_v && i_inv_a + gb * v_ > 0.0);
         const double gs = on ? 1.0 / p_.source_r_ohm : 0.0;
         const double b = (gs + gb) / p_.c_f;
         const double a = (gs * p_.source_v - i_inv_a) / p_.c_f;

@@ -17,8 +17,7 @@ namespace mcsim {
 // (a, b, c) -> (alpha, beta); the zero-sequence part is discarded.
 inline Eigen::Vector2d clarke(const Eigen::Vector3d& abc) {
   const double k_sqrt3 = std::sqrt(3.0);
-  return Eigen::Vector2d((2.0 * abc(0) - abc(1) - abc(2)) / 3.0,
-                         (abc(1) - abc(2)) / k_sqrt3);
+  return Eigen::Vector2d((2.0 * abc(0) - abc(1) - abc(2)) / 3.0, (abc(1) - abc(2)) / k_sqrt3);
 }
 
 // (alpha, beta) -> (a, b, c) with zero common mode.

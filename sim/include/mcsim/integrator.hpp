@@ -22,8 +22,7 @@ namespace mcsim {
 
 // One classical 4-stage Runge-Kutta step of length h_s, input held constant.
 template <class Plant>
-typename Plant::State rk4_step(const Plant& plant, double t_s,
-                               const typename Plant::State& x,
+typename Plant::State rk4_step(const Plant& plant, double t_s, const typename Plant::State& x,
                                const typename Plant::Input& u, double h_s) {
   using State = typename Plant::State;
   const double half = 0.5 * h_s;
@@ -43,9 +42,8 @@ typename Plant::State rk4_step(const Plant& plant, double t_s,
 // Errors (state unchanged): kBadStepCount (n_sub < 1), kBadPeriod
 // (period_s <= 0 or not finite), kNotFinite (t0_s not finite).
 template <class Plant>
-Status advance_zoh(const Plant& plant, const typename Plant::Input& u,
-                   double t0_s, double period_s, int n_sub,
-                   typename Plant::State* x) {
+Status advance_zoh(const Plant& plant, const typename Plant::Input& u, double t0_s, double period_s,
+                   int n_sub, typename Plant::State* x) {
   if (n_sub < 1) {
     return Status::kBadStepCount;
   }

@@ -29,9 +29,9 @@
 namespace mcsim {
 
 struct InverterParams {
-  double t_pwm_s = 50.0e-6;       // PWM period, > 0
-  double t_dead_s = 0.0;          // dead time, 0 <= t_dead < t_pwm/2
-  double i_dead_band_a = 0.05;    // linear region of the dead-time error, > 0
+  double t_pwm_s = 50.0e-6;     // PWM period, > 0
+  double t_dead_s = 0.0;        // dead time, 0 <= t_dead < t_pwm/2
+  double i_dead_band_a = 0.05;  // linear region of the dead-time error, > 0
 
   // kOk, kNotFinite, kBadPwmPeriod, kBadDeadTime, kBadDeadBand.
   Status validate() const;
@@ -54,8 +54,7 @@ class Inverter3Ph {
   Eigen::Vector2d alpha_beta_v(const Eigen::Vector3d& duty_abc, double vbus_v,
                                const Eigen::Vector3d& i_abc_a) const;
   // Average DC-bus current drawn by the bridge [A]: sum d_x i_x.
-  static double dc_current_a(const Eigen::Vector3d& duty_abc,
-                             const Eigen::Vector3d& i_abc_a);
+  static double dc_current_a(const Eigen::Vector3d& duty_abc, const Eigen::Vector3d& i_abc_a);
 
  private:
   InverterParams p_{};

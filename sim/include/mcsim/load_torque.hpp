@@ -16,29 +16,28 @@
 namespace mcsim {
 
 enum class LoadKind : int {
-  kConstant = 0,   // tau = tau0_nm
-  kStep,           // tau = tau0_nm, plus tau_step_nm from t >= step_time_s
-  kAngleSpeed,     // tau = tau0_nm + k_omega*w + k_omega2*w*|w|
-                   //       + ripple_nm*sin(ripple_per_rev*theta + ripple_phase_rad)
-  kFunction,       // tau = fn(t, theta, omega, fn_ctx)
+  kConstant = 0,  // tau = tau0_nm
+  kStep,          // tau = tau0_nm, plus tau_step_nm from t >= step_time_s
+  kAngleSpeed,    // tau = tau0_nm + k_omega*w + k_omega2*w*|w|
+                  //       + ripple_nm*sin(ripple_per_rev*theta + ripple_phase_rad)
+  kFunction,      // tau = fn(t, theta, omega, fn_ctx)
 };
 
 // User load: must be pure (same inputs, same result) so RK4 stages agree.
-using LoadFn = double (*)(double t_s, double theta_m_rad, double omega_m_rad_s,
-                          const void* ctx);
+using LoadFn = double (*)(double t_s, double theta_m_rad, double omega_m_rad_s, const void* ctx);
 
 struct LoadTorque {
   LoadKind kind = LoadKind::kConstant;
   double tau0_nm = 0.0;
-  double step_time_s = 0.0;            // kStep
-  double tau_step_nm = 0.0;            // kStep: added at t >= step_time_s
-  double k_omega_nms_rad = 0.0;        // kAngleSpeed: linear in speed
-  double k_omega2_nms2_rad2 = 0.0;     // kAngleSpeed: fan/pump law w*|w|
-  double ripple_nm = 0.0;              // kAngleSpeed: angle-periodic amplitude
-  double ripple_per_rev = 0.0;         // kAngleSpeed: periods per mech. turn
-  double ripple_phase_rad = 0.0;       // kAngleSpeed
-  LoadFn fn = nullptr;                 // kFunction
-  const void* fn_ctx = nullptr;        // kFunction: passed to fn
+  double step_time_s = 0.0;         // kStep
+  double tau_step_nm = 0.0;         // kStep: added at t >= step_time_s
+  double k_omega_nms_rad = 0.0;     // kAngleSpeed: linear in speed
+  double k_omega2_nms2_rad2 = 0.0;  // kAngleSpeed: fan/pump law w*|w|
+  double ripple_nm = 0.0;           // kAngleSpeed: angle-periodic amplitude
+  double ripple_per_rev = 0.0;      // kAngleSpeed: periods per mech. turn
+  double ripple_phase_rad = 0.0;    // kAngleSpeed
+  LoadFn fn = nullptr;              // kFunction
+  const void* fn_ctx = nullptr;     // kFunction: passed to fn
   // Coulomb friction (any kind): coulomb_nm * sat(omega / coulomb_band_rad_s),
   // linear inside the band so the ODE stays continuous at omega = 0.
   double coulomb_nm = 0.0;

@@ -38,12 +38,12 @@ class PmsmDq {
 
   State deriv(double t_s, const State& x, const Input& u) const;
 
-  double torque_nm(const State& x) const;               // electromagnetic
-  double load_nm(double t_s, const State& x) const;     // load model incl. Coulomb
+  double torque_nm(const State& x) const;                      // electromagnetic
+  double load_nm(double t_s, const State& x) const;            // load model incl. Coulomb
   double input_power_w(const State& x, const Input& u) const;  // 3/2 v.i
-  double copper_loss_w(const State& x) const;           // 3/2 R |i|^2
-  double magnetic_energy_j(const State& x) const;       // 3/4 (Ld id^2 + Lq iq^2)
-  double kinetic_energy_j(const State& x) const;        // 1/2 J w^2
+  double copper_loss_w(const State& x) const;                  // 3/2 R |i|^2
+  double magnetic_energy_j(const State& x) const;              // 3/4 (Ld id^2 + Lq iq^2)
+  double kinetic_energy_j(const State& x) const;               // 1/2 J w^2
 
  private:
   PmsmParams p_{};

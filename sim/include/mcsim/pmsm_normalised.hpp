@@ -40,9 +40,9 @@
 namespace mcsim {
 
 struct PmsmNormalisedParams {
-  double sigma = 1.0;   // > 0
-  double gamma = 1.0;   // >= 0
-  double tau_l = 0.0;   // any finite value
+  double sigma = 1.0;  // > 0
+  double gamma = 1.0;  // >= 0
+  double tau_l = 0.0;  // any finite value
 
   // kOk, kNotFinite, kNonPositiveTorqueConstant (sigma <= 0), kNegativeFlux
   // (gamma < 0).
@@ -68,10 +68,10 @@ class PmsmNormalised {
 
 // Base values of the mapping above and the resulting normalised parameters.
 struct PmsmNormalisedScaling {
-  double t_base_s = 1.0;          // T = L/R
-  double i_base_a = 1.0;          // I_b
-  double v_base_v = 1.0;          // R I_b
-  double omega_e_base_rad_s = 1.0;// 1/T
+  double t_base_s = 1.0;            // T = L/R
+  double i_base_a = 1.0;            // I_b
+  double v_base_v = 1.0;            // R I_b
+  double omega_e_base_rad_s = 1.0;  // 1/T
   PmsmNormalisedParams params{};
 };
 
@@ -80,8 +80,8 @@ struct PmsmNormalisedScaling {
 // kNonSalientRequired (Ld != Lq or B != 0), kBadBase (i_base_a <= 0 or not
 // finite, or out == nullptr), kNonPositiveTorqueConstant (flux == 0 gives sigma = 0).
 // *out is written only on kOk.
-Status make_normalised_scaling(const PmsmParams& phys, double i_base_a,
-                               double tau_load_nm, PmsmNormalisedScaling* out);
+Status make_normalised_scaling(const PmsmParams& phys, double i_base_a, double tau_load_nm,
+                               PmsmNormalisedScaling* out);
 
 }  // namespace mcsim
 

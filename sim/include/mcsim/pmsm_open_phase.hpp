@@ -73,18 +73,17 @@ class PmsmOpenPhase {
 
   State deriv(double t_s, const State& x, const Input& u) const {
     const double c = x(kCos), s = x(kSin);
-    const double cr = c * cphi_ + s * sphi_;   // cos(theta_e - phi)
-    const double sr = s * cphi_ - c * sphi_;   // sin(theta_e - phi)
+    const double cr = c * cphi_ + s * sphi_;  // cos(theta_e - phi)
+    const double sr = s * cphi_ - c * sphi_;  // sin(theta_e - phi)
     const double i = x(kI), wm = x(kOmegaM);
     const double we = pp_ * wm;
     const double l = lsum_ + ldiff_ * (cr * cr - sr * sr);
-    const double dl = -4.0 * ldiff_ * sr * cr;         // dL_yz/dtheta_e
-    const double dpsi = -kSqrt3 * p_.flux_wb * sr;     // dpsi_yz/dtheta_e
+    const double dl = -4.0 * ldiff_ * sr * cr;      // dL_yz/dtheta_e
+    const double dpsi = -kSqrt3 * p_.flux_wb * sr;  // dpsi_yz/dtheta_e
     const double tau_e = pp_ * (0.5 * i * i * dl + i * dpsi);
     State dx;
     dx(kI) = (u(0) - 2.0 * p_.R_ohm * i - we * dpsi - we * dl * i) / l;
-    dx(kOmegaM) =
-        (tau_e - p_.B_nms_rad * wm - p_.load.eval_nm(t_s, x(kThetaM), wm)) / p_.J_kgm2;
+    dx(kOmegaM) = (tau_e - p_.B_nms_rad * wm - p_.load.eval_nm(t_s, x(kThetaM), wm)) / p_.J_kgm2;
     dx(kThetaM) = wm;
     dx(kCos) = -we * s;
     dx(kSin) = we * c;
@@ -112,8 +111,8 @@ class PmsmOpenPhase {
   PmsmParams p_{};
   int x_ = 0;
   double pp_ = 4.0;
-  double lsum_ = 2.0e-4, ldiff_ = 0.0;   // Ld + Lq, Ld - Lq
-  double cphi_ = 0.0, sphi_ = 1.0;       // direction of u
+  double lsum_ = 2.0e-4, ldiff_ = 0.0;  // Ld + Lq, Ld - Lq
+  double cphi_ = 0.0, sphi_ = 1.0;      // direction of u
 };
 
 }  // namespace mcsim

@@ -17,14 +17,14 @@
 namespace mcsim {
 
 struct PmsmParams {
-  double R_ohm = 0.1;         // stator resistance per phase
-  double Ld_h = 1.0e-4;       // d-axis inductance
-  double Lq_h = 1.0e-4;       // q-axis inductance (Ld != Lq: reluctance torque)
-  double flux_wb = 0.01;      // PM flux linkage (peak, per phase); 0 allowed
+  double R_ohm = 0.1;     // stator resistance per phase
+  double Ld_h = 1.0e-4;   // d-axis inductance
+  double Lq_h = 1.0e-4;   // q-axis inductance (Ld != Lq: reluctance torque)
+  double flux_wb = 0.01;  // PM flux linkage (peak, per phase); 0 allowed
   int pole_pairs = 4;
-  double J_kgm2 = 1.0e-5;     // rotor + load inertia
-  double B_nms_rad = 0.0;     // viscous friction
-  LoadTorque load{};          // load torque model (plus optional Coulomb)
+  double J_kgm2 = 1.0e-5;  // rotor + load inertia
+  double B_nms_rad = 0.0;  // viscous friction
+  LoadTorque load{};       // load torque model (plus optional Coulomb)
 
   // kOk or the first failing check: kNotFinite, kNonPositiveResistance,
   // kNonPositiveInductance, kNegativeFlux, kBadPolePairs, kNonPositiveInertia,

@@ -50,11 +50,11 @@ namespace mcsim {
 
 struct PmsmPowerStageParams {
   PmsmParams motor{};
-  InverterParams inverter{};   // t_pwm_s is the period of advance()
-  double vbus_v = 24.0;        // DC-bus voltage (stiff source), > 0
-  int substeps = 4;            // RK4 sub-steps per period, >= 1
-  double theta_m0_rad = 0.0;   // initial rotor angle
-  double omega_m0_rad_s = 0.0; // initial speed
+  InverterParams inverter{};    // t_pwm_s is the period of advance()
+  double vbus_v = 24.0;         // DC-bus voltage (stiff source), > 0
+  int substeps = 4;             // RK4 sub-steps per period, >= 1
+  double theta_m0_rad = 0.0;    // initial rotor angle
+  double omega_m0_rad_s = 0.0;  // initial speed
 
   // kOk or the first failing check: motor.validate(), inverter.validate(),
   // kBadStepCount (substeps < 1), kNotFinite (vbus_v not > 0 or not finite,

@@ -93,20 +93,20 @@ class PmsmRotorFrame {
  private:
   // Model constants times one stage's step factor sigma; see advance_zoh().
   struct StageConsts {
-    double sigma = 0.0;     // h/2, h or h/6
-    double v_d = 0.0;       // sigma / Ld   (times v: the input term of i_d)
-    double v_q = 0.0;       // sigma / Lq
-    double r_d = 0.0;       // sigma R / Ld
-    double x_d = 0.0;       // sigma p Lq / Ld   (times omega_m i_q)
-    double r_q = 0.0;       // sigma R / Lq
-    double x_q = 0.0;       // sigma p Ld / Lq   (times omega_m i_d)
-    double f_q = 0.0;       // sigma p flux / Lq (times omega_m)
-    double t_1 = 0.0;       // sigma 3/2 p flux / J          (times i_q)
-    double t_2 = 0.0;       // sigma 3/2 p (Ld - Lq) / J     (times i_d i_q)
-    double b = 0.0;         // sigma B / J
-    double l = 0.0;         // sigma tau_load / J (constant load)
-    double inv_j = 0.0;     // sigma / J (any other load)
-    double w_e = 0.0;       // sigma p   (times omega_m: rotation of (c, s))
+    double sigma = 0.0;  // h/2, h or h/6
+    double v_d = 0.0;    // sigma / Ld   (times v: the input term of i_d)
+    double v_q = 0.0;    // sigma / Lq
+    double r_d = 0.0;    // sigma R / Ld
+    double x_d = 0.0;    // sigma p Lq / Ld   (times omega_m i_q)
+    double r_q = 0.0;    // sigma R / Lq
+    double x_q = 0.0;    // sigma p Ld / Lq   (times omega_m i_d)
+    double f_q = 0.0;    // sigma p flux / Lq (times omega_m)
+    double t_1 = 0.0;    // sigma 3/2 p flux / J          (times i_q)
+    double t_2 = 0.0;    // sigma 3/2 p (Ld - Lq) / J     (times i_d i_q)
+    double b = 0.0;      // sigma B / J
+    double l = 0.0;      // sigma tau_load / J (constant load)
+    double inv_j = 0.0;  // sigma / J (any other load)
+    double w_e = 0.0;    // sigma p   (times omega_m: rotation of (c, s))
   };
   void plan_steps(double period_s, int n_sub);
   // The six states as plain scalars, as the stages are written out.
@@ -118,13 +118,13 @@ class PmsmRotorFrame {
 
   PmsmDq dq_;
   double pp_ = 1.0, kt_ = 1.5, inv_ld_ = 0.0, inv_lq_ = 0.0, inv_j_ = 0.0;
-  bool load_is_const_ = true;   // constant load, no Coulomb term: skip the call
+  bool load_is_const_ = true;  // constant load, no Coulomb term: skip the call
   double const_load_nm_ = 0.0;
   // advance_zoh() step constants for (plan_period_s_, plan_n_sub_); a period
   // of 0 means not planned.
   double plan_period_s_ = 0.0;
   int plan_n_sub_ = 0;
-  StageConsts stage_[3];   // sigma = h/2, h, h/6
+  StageConsts stage_[3];  // sigma = h/2, h, h/6
 };
 
 }  // namespace mcsim

@@ -31,8 +31,8 @@ class GaussianRng {
  public:
   explicit GaussianRng(std::uint64_t seed = 1U) : eng_(seed) {}
   void reseed(std::uint64_t seed);
-  double uniform_open01();   // in (0, 1], 53-bit resolution
-  double normal();           // N(0, 1)
+  double uniform_open01();  // in (0, 1], 53-bit resolution
+  double normal();          // N(0, 1)
 
  private:
   std::mt19937_64 eng_;
@@ -41,7 +41,7 @@ class GaussianRng {
 };
 
 struct CurrentSensorParams {
-  double gain_error = 0.0;     // relative, gain = 1 + gain_error (> 0)
+  double gain_error = 0.0;  // relative, gain = 1 + gain_error (> 0)
   double offset_a = 0.0;
   double full_scale_a = 50.0;  // bipolar range +-full_scale_a
   int bits = 12;               // 1..30
@@ -57,8 +57,8 @@ class CurrentSensor {
   // Validates p and reseeds the noise; on error keeps everything unchanged.
   Status configure(const CurrentSensorParams& p);
   double lsb_a() const { return lsb_; }
-  std::int32_t sample_code(double i_true_a);   // advances the noise generator
-  double sample_a(double i_true_a);            // sample_code() * lsb_a()
+  std::int32_t sample_code(double i_true_a);  // advances the noise generator
+  double sample_a(double i_true_a);           // sample_code() * lsb_a()
 
  private:
   double code(double i_true_a);  // the code, as an (integral) double
@@ -85,7 +85,7 @@ class VbusSensor {
   Status configure(const VbusSensorParams& p);
   double lsb_v() const { return lsb_; }
   std::int32_t sample_code(double vbus_true_v);
-  double sample_v(double vbus_true_v);         // sample_code() * lsb_v()
+  double sample_v(double vbus_true_v);  // sample_code() * lsb_v()
 
  private:
   double code(double vbus_true_v);
@@ -99,7 +99,7 @@ class VbusSensor {
 struct EncoderParams {
   std::int32_t counts_per_rev = 4096;  // >= 1
   bool has_index = false;
-  double index_angle_rad = 0.0;        // mechanical angle of the index mark
+  double index_angle_rad = 0.0;  // mechanical angle of the index mark
   // +1: counts up when the shaft turns positive; -1: mounted (or wired) the
   // other way, counts down. The offset of an incremental encoder is the
   // shaft angle at reset() (the board's power-up angle).
@@ -109,10 +109,10 @@ struct EncoderParams {
 };
 
 struct EncoderReading {
-  std::int64_t count = 0;          // unwrapped counter since reset (edges)
-  std::int32_t count_in_rev = 0;   // [0, cpr): relative, or absolute once index seen
+  std::int64_t count = 0;         // unwrapped counter since reset (edges)
+  std::int32_t count_in_rev = 0;  // [0, cpr): relative, or absolute once index seen
   bool index_seen = false;
-  double angle_rad = 0.0;          // count_in_rev * 2 pi / cpr
+  double angle_rad = 0.0;  // count_in_rev * 2 pi / cpr
 };
 
 class Encoder {
@@ -127,8 +127,8 @@ class Encoder {
 
  private:
   EncoderParams p_{};
-  std::int64_t edge0_ = 0;      // floor(theta_reset * cpr / 2pi)
-  std::int64_t rev_idx_ = 0;    // floor((theta - index) / 2pi) at the last sample
+  std::int64_t edge0_ = 0;           // floor(theta_reset * cpr / 2pi)
+  std::int64_t rev_idx_ = 0;         // floor((theta - index) / 2pi) at the last sample
   std::int32_t in_rev_mask_ = 4095;  // cpr - 1 for a power-of-two cpr, else -1
   bool index_seen_ = false;
 };

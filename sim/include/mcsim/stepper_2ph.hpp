@@ -38,8 +38,8 @@ struct Stepper2PhParams {
   // Defaults: the paper's simulation values (R and L the "actual" ones).
   double R_ohm = 19.0;
   double L_h = 0.040;
-  double Km_nm_a = 0.1349;       // torque constant = back-EMF constant [V s/rad]
-  int rotor_teeth = 50;          // N_r
+  double Km_nm_a = 0.1349;  // torque constant = back-EMF constant [V s/rad]
+  int rotor_teeth = 50;     // N_r
   double J_kgm2 = 4.1295e-4;
   double B_nms_rad = 0.0013;
   LoadTorque load{};
@@ -64,7 +64,7 @@ class Stepper2Ph {
 
   State deriv(double t_s, const State& x, const Input& u) const;
 
-  double torque_nm(const State& x) const;               // electromagnetic
+  double torque_nm(const State& x) const;  // electromagnetic
   double load_nm(double t_s, const State& x) const;
   double input_power_w(const State& x, const Input& u) const;  // v_a i_a + v_b i_b
   double copper_loss_w(const State& x) const;                  // R (i_a^2 + i_b^2)

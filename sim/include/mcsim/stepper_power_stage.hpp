@@ -29,10 +29,10 @@ namespace mcsim {
 
 struct StepperPowerStageParams {
   Stepper2PhParams motor{};
-  double t_pwm_s = 1.0e-4;     // period of advance(), > 0
-  double vbus_v = 60.0;        // DC-bus voltage (stiff source), > 0
-  int substeps = 4;            // RK4 sub-steps per period, >= 1
-  double theta_m0_rad = 0.0;   // initial shaft angle
+  double t_pwm_s = 1.0e-4;    // period of advance(), > 0
+  double vbus_v = 60.0;       // DC-bus voltage (stiff source), > 0
+  int substeps = 4;           // RK4 sub-steps per period, >= 1
+  double theta_m0_rad = 0.0;  // initial shaft angle
 
   // kOk or the first failing check: motor.validate(), kBadPwmPeriod,
   // kBadStepCount, kNotFinite (vbus_v not > 0 or not finite, theta_m0_rad

@@ -45,7 +45,9 @@ void require(bool ok) {
   if (!ok) std::abort();
 }
 
-int speed_hook(void*, float w) { return std::fabs(w) > 150.0f ? -1 : 0; }
+int speed_hook(void*, float w) {
+  return std::fabs(w) > 150.0f ? -1 : 0;
+}
 
 void check_unpack(const mc_hal_can_frame_t& f) {
   float v[MC_CAN_NSIG_MAX];
@@ -60,7 +62,8 @@ void check_unpack(const mc_hal_can_frame_t& f) {
   require(f.len == g.dlc && f.flags == 0u);
   for (uint32_t i = 0; i < g.n_signals; ++i) {
     const mc_can_signal_t& s = g.signals[i];
-    require(std::isfinite(v[i]) && v[i] >= s.min - 0.5f * s.scale && v[i] <= s.max + 0.5f * s.scale);
+    require(std::isfinite(v[i]) && v[i] >= s.min - 0.5f * s.scale &&
+            v[i] <= s.max + 0.5f * s.scale);
   }
   // A raw integer signal wider than a float's 24-bit mantissa (PARAM_REQ.value:
   // 32 raw bits, which the handler reads from the frame, not from the
@@ -170,8 +173,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     } else if (op == 2u) {
       const unsigned n = 1u + (r[0] >> 2);
       for (unsigned i = 0; i < n; ++i) {
-        (void)mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 24.0f,
-                                         MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS);
+        (void)mc_hal_fake_adc_set_sample(
+            &fake, 0.0f, 0.0f, 0.0f, 24.0f,
+            MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS);
         for (unsigned j = 0; j < d.cfg.slow_loop_div; ++j) {
           if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
         }

@@ -22,7 +22,9 @@ constexpr double kPi = 3.14159265358979323846;
 using testlib::Case;
 const std::vector<Case>& kCases = testlib::library();
 
-MotorFiles load(const Case& c) { return testlib::files(c); }
+MotorFiles load(const Case& c) {
+  return testlib::files(c);
+}
 
 double off_err_deg(const CommissionRun& r) {
   return std::remainder(r.res.encoder_offset_rad - r.true_encoder_offset_rad, 2 * kPi) * 180 / kPi;
@@ -33,11 +35,12 @@ void expect_accurate(const MotorFiles& f, const CommissionRun& r, const std::str
   const MotorSpec& m = f.motor;
   const double er = r.res.r_ohm / m.r_ohm - 1, ed = r.res.ld_h / m.ld_h - 1,
                eq = r.res.lq_h / m.lq_h - 1, ef = r.res.flux_wb / m.flux_wb - 1;
-  std::printf("COMMISSION_ACCURACY {\"case\": \"%s\", \"r_frac\": %.5f, \"ld_frac\": %.5f, "
-              "\"lq_frac\": %.5f, \"flux_frac\": %.5f, \"pole_pairs\": %u, \"pole_pairs_true\": %d, "
-              "\"encoder_offset_deg\": %.4f, \"direction_ok\": %d, \"duration_s\": %.3f}\n",
-              tag.c_str(), er, ed, eq, ef, r.res.pole_pairs, m.pole_pairs, off_err_deg(r),
-              r.res.encoder_direction == r.true_encoder_direction ? 1 : 0, r.duration_s);
+  std::printf(
+      "COMMISSION_ACCURACY {\"case\": \"%s\", \"r_frac\": %.5f, \"ld_frac\": %.5f, "
+      "\"lq_frac\": %.5f, \"flux_frac\": %.5f, \"pole_pairs\": %u, \"pole_pairs_true\": %d, "
+      "\"encoder_offset_deg\": %.4f, \"direction_ok\": %d, \"duration_s\": %.3f}\n",
+      tag.c_str(), er, ed, eq, ef, r.res.pole_pairs, m.pole_pairs, off_err_deg(r),
+      r.res.encoder_direction == r.true_encoder_direction ? 1 : 0, r.duration_s);
   EXPECT_LT(std::abs(er), 0.02) << tag;
   EXPECT_LT(std::abs(ed), 0.05) << tag;
   EXPECT_LT(std::abs(eq), 0.05) << tag;
@@ -108,7 +111,10 @@ TEST(CommissionRandom, RandomisedMotorsFixedSeed) {
     s.encoder_direction = (n % 2) ? -1 : 1;
     s.encoder_offset_rad = std::uniform_real_distribution<double>(0, 2 * kPi)(rng);
     s.seed = 100u + static_cast<unsigned>(n);
-    SCOPED_TRACE(m.name + ": R " + std::to_string(m.r_ohm) + " L " + std::to_string(m.ld_h) + "/" + std::to_string(m.lq_h) + " flux " + std::to_string(m.flux_wb) + " p " + std::to_string(m.pole_pairs) + " J " + std::to_string(m.j_kgm2) + " vbus " + std::to_string(b.vbus_v) + " pwm " + std::to_string(b.pwm_hz));
+    SCOPED_TRACE(m.name + ": R " + std::to_string(m.r_ohm) + " L " + std::to_string(m.ld_h) + "/" +
+                 std::to_string(m.lq_h) + " flux " + std::to_string(m.flux_wb) + " p " +
+                 std::to_string(m.pole_pairs) + " J " + std::to_string(m.j_kgm2) + " vbus " +
+                 std::to_string(b.vbus_v) + " pwm " + std::to_string(b.pwm_hz));
     expect_accurate(f, run_commission(f, s), m.name);
   }
 }
@@ -121,7 +127,9 @@ void expect_refused(const CommissionRun& r, uint32_t bit, const char* what) {
   EXPECT_EQ(r.res.valid, 0u) << what << ": nothing to store";
 }
 
-MotorFiles d5065() { return load(kCases[2]); }
+MotorFiles d5065() {
+  return load(kCases[2]);
+}
 
 TEST(CommissionRefuses, NoMotorConnected) {
   const MotorFiles f = d5065();
@@ -205,9 +213,10 @@ TEST(CommissionThenRun, SensoredAndSensorlessOnIdentifiedValues) {
     double w = 0;
     const double e1 = verify_speed_step(f, s, r, Law::kSpeedPi, &w);
     const double e2 = verify_speed_step(f, s, r, Law::kSensorless, &w);
-    std::printf("COMMISSION_RUN {\"case\": \"%s\", \"speed_rad_s\": %.3f, "
-                "\"sensored_err_frac\": %.5f, \"sensorless_err_frac\": %.5f}\n",
-                kCases[i].motor, w, e1, e2);
+    std::printf(
+        "COMMISSION_RUN {\"case\": \"%s\", \"speed_rad_s\": %.3f, "
+        "\"sensored_err_frac\": %.5f, \"sensorless_err_frac\": %.5f}\n",
+        kCases[i].motor, w, e1, e2);
     EXPECT_LT(e1, 0.02) << kCases[i].motor;
     EXPECT_LT(e2, 0.05) << kCases[i].motor;
   }

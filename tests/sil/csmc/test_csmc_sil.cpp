@@ -56,7 +56,7 @@ struct RefLoop {
     const double u1 = (-F1h - b1 * sat(s1 / mu1)) / (1.0 / Lh);
     const double u2 = (-F2h - b2 * sat(s2 / mu2)) / (k3 / Lh);
     X d;
-    d[0] = (-R * x1 + u1) / L + Nr * x2 * x3;               // (2), k1 = R/L, k6 = 1/L
+    d[0] = (-R * x1 + u1) / L + Nr * x2 * x3;  // (2), k1 = R/L, k6 = 1/L
     d[1] = (-R * x2 - Km * x3 + u2) / L - Nr * x1 * x3;
     d[2] = k3 * x2 - k4 * x3 - d0;
     d[3] = x3;
@@ -95,8 +95,8 @@ struct Metrics {
   double over, settle;
 };
 
-Metrics metrics(const std::vector<double>& t, const std::vector<double>& phi, double t0,
-                double t1, double final_v) {
+Metrics metrics(const std::vector<double>& t, const std::vector<double>& phi, double t0, double t1,
+                double final_v) {
   double over = 0.0, last = t0;
   for (size_t k = 0; k < t.size(); ++k) {
     if (t[k] < t0 || t[k] > t1) continue;

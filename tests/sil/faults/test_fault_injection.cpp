@@ -20,10 +20,10 @@ constexpr double kT = 50e-6;  // PWM period of the set-up
 
 struct Outcome {
   uint32_t faults = 0;
-  double latency_s = -1.0;        // injection to the fault's first step
-  double decay_s = -1.0;          // fault to zero phase current
+  double latency_s = -1.0;  // injection to the fault's first step
+  double decay_s = -1.0;    // fault to zero phase current
   bool pwm_on_after = true;
-  uint32_t open_phase_mask = 0;   // the drive's open_phase_mask after the fault
+  uint32_t open_phase_mask = 0;  // the drive's open_phase_mask after the fault
 };
 
 // The set-up of every injection: 200 Hz current loop, the given inertia.
@@ -107,7 +107,8 @@ void record(const Outcome& r, double latency_bound_s) {
 }
 
 TEST(FaultInjection, DcBusSag) {
-  const Outcome r = run_injection(2.0, [](mcsim::FocSil& s) { s.board().set_vbus_v(80.0); }, 0.01);
+  const Outcome r = run_injection(
+      2.0, [](mcsim::FocSil& s) { s.board().set_vbus_v(80.0); }, 0.01);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_VBUS_LOW);
   EXPECT_LE(r.latency_s, kT + 1e-9) << "detected at the first sample below the window";
   expect_safe(r);
@@ -115,7 +116,8 @@ TEST(FaultInjection, DcBusSag) {
 }
 
 TEST(FaultInjection, DcBusSurge) {
-  const Outcome r = run_injection(2.0, [](mcsim::FocSil& s) { s.board().set_vbus_v(320.0); }, 0.01);
+  const Outcome r = run_injection(
+      2.0, [](mcsim::FocSil& s) { s.board().set_vbus_v(320.0); }, 0.01);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_VBUS_HIGH);
   EXPECT_LE(r.latency_s, kT + 1e-9);
   expect_safe(r);
@@ -123,11 +125,14 @@ TEST(FaultInjection, DcBusSurge) {
 }
 
 TEST(FaultInjection, NanInAMeasurement) {
-  const Outcome r = run_injection(2.0, [](mcsim::FocSil& s) {
-    hal_host::PmsmBoard::Injection inj;
-    inj.nan_ia = true;
-    s.board().inject(inj);
-  }, 0.01);
+  const Outcome r = run_injection(
+      2.0,
+      [](mcsim::FocSil& s) {
+        hal_host::PmsmBoard::Injection inj;
+        inj.nan_ia = true;
+        s.board().inject(inj);
+      },
+      0.01);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_MEAS_NAN);
   EXPECT_LE(r.latency_s, kT + 1e-9);
   expect_safe(r);
@@ -135,11 +140,14 @@ TEST(FaultInjection, NanInAMeasurement) {
 }
 
 TEST(FaultInjection, EncoderCableOff) {
-  const Outcome r = run_injection(2.0, [](mcsim::FocSil& s) {
-    hal_host::PmsmBoard::Injection inj;
-    inj.encoder_dead = true;
-    s.board().inject(inj);
-  }, 0.01);
+  const Outcome r = run_injection(
+      2.0,
+      [](mcsim::FocSil& s) {
+        hal_host::PmsmBoard::Injection inj;
+        inj.encoder_dead = true;
+        s.board().inject(inj);
+      },
+      0.01);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_ENCODER);
   EXPECT_LE(r.latency_s, kT + 1e-9);
   expect_safe(r);
@@ -149,11 +157,14 @@ TEST(FaultInjection, EncoderCableOff) {
 TEST(FaultInjection, PhaseCurrentOffsetBeyondTrip) {
   // A 20 A offset on phase b (a failed amplifier): the reading exceeds the
   // 15 A trip at once.
-  const Outcome r = run_injection(2.0, [](mcsim::FocSil& s) {
-    hal_host::PmsmBoard::Injection inj;
-    inj.offset_a[1] = 20.0;
-    s.board().inject(inj);
-  }, 0.01);
+  const Outcome r = run_injection(
+      2.0,
+      [](mcsim::FocSil& s) {
+        hal_host::PmsmBoard::Injection inj;
+        inj.offset_a[1] = 20.0;
+        s.board().inject(inj);
+      },
+      0.01);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_OVERCURRENT);
   EXPECT_LE(r.latency_s, kT + 1e-9);
   expect_safe(r);
@@ -165,12 +176,15 @@ TEST(FaultInjection, PhaseCurrentSensorStuckAtZeroThreeShunts) {
   // 0): with three shunts the sum is 1.7 A > 1 A, found in one period. (On a
   // two-shunt board a stuck sensor is invisible by construction: the third
   // phase is derived from the other two. The README says so.)
-  const Outcome r = run_injection(2.0, [](mcsim::FocSil& s) {
-    hal_host::PmsmBoard::Injection inj;
-    inj.stuck_phase = 1;
-    inj.stuck_value_a = 0.0;
-    s.board().inject(inj);
-  }, 0.01, 0.1, true);
+  const Outcome r = run_injection(
+      2.0,
+      [](mcsim::FocSil& s) {
+        hal_host::PmsmBoard::Injection inj;
+        inj.stuck_phase = 1;
+        inj.stuck_value_a = 0.0;
+        s.board().inject(inj);
+      },
+      0.01, 0.1, true);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_UNBALANCED);
   EXPECT_LE(r.latency_s, kT + 1e-9);
   expect_safe(r);
@@ -179,11 +193,14 @@ TEST(FaultInjection, PhaseCurrentSensorStuckAtZeroThreeShunts) {
 
 TEST(FaultInjection, PhaseCurrentOffsetThreeShunts) {
   // A 3 A offset on phase a (below the 15 A trip): the sum is 3 A.
-  const Outcome r = run_injection(2.0, [](mcsim::FocSil& s) {
-    hal_host::PmsmBoard::Injection inj;
-    inj.offset_a[0] = 3.0;
-    s.board().inject(inj);
-  }, 0.01, 0.1, true);
+  const Outcome r = run_injection(
+      2.0,
+      [](mcsim::FocSil& s) {
+        hal_host::PmsmBoard::Injection inj;
+        inj.offset_a[0] = 3.0;
+        s.board().inject(inj);
+      },
+      0.01, 0.1, true);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_UNBALANCED);
   EXPECT_LE(r.latency_s, kT + 1e-9);
   expect_safe(r);
@@ -193,11 +210,14 @@ TEST(FaultInjection, PhaseCurrentOffsetThreeShunts) {
 TEST(FaultInjection, ControlDeadlineOverrun) {
   // The fast step finishes 60 us after its sample, later than the 50 us
   // period: the drive sees it on the tick counter in that same step.
-  const Outcome r = run_injection(2.0, [](mcsim::FocSil& s) {
-    hal_host::PmsmBoard::Injection inj;
-    inj.compute_delay_s = 60e-6;
-    s.board().inject(inj);
-  }, 0.01);
+  const Outcome r = run_injection(
+      2.0,
+      [](mcsim::FocSil& s) {
+        hal_host::PmsmBoard::Injection inj;
+        inj.compute_delay_s = 60e-6;
+        s.board().inject(inj);
+      },
+      0.01);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_OVERRUN);
   EXPECT_LE(r.latency_s, kT + 1e-9);
   expect_safe(r);
@@ -209,12 +229,15 @@ TEST(FaultInjection, StallAgainstALoadBeyondTheTorqueLimit) {
   // (Coulomb) load holds the rotor: the stall check (>= 90 % of i_max below
   // 1 rad/s for 0.5 s) trips 0.5 s after the condition starts, at the next
   // 1 ms slow step. The current needs ~4 ms to rise into the condition.
-  const Outcome r = run_injection(0.0, [](mcsim::FocSil& s) {
-    mcsim::LoadTorque load = mcsim::load_constant(0.0);
-    load.coulomb_nm = 10.0;
-    s.board().set_load(load);
-    EXPECT_EQ(mc_drive_set_current_ref(&s.drive(), 0.0f, 9.5f), 0);
-  }, 1.0, 1.0e-3);
+  const Outcome r = run_injection(
+      0.0,
+      [](mcsim::FocSil& s) {
+        mcsim::LoadTorque load = mcsim::load_constant(0.0);
+        load.coulomb_nm = 10.0;
+        s.board().set_load(load);
+        EXPECT_EQ(mc_drive_set_current_ref(&s.drive(), 0.0f, 9.5f), 0);
+      },
+      1.0, 1.0e-3);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_STALL);
   EXPECT_GE(r.latency_s, 0.5);
   EXPECT_LE(r.latency_s, 0.5 + 0.006);
@@ -225,15 +248,13 @@ TEST(FaultInjection, StallAgainstALoadBeyondTheTorqueLimit) {
 TEST(FaultInjection, GateDriverFaultInput) {
   // The gate driver's fault line acts on the break input at once (the board
   // opens the bridge); the drive reports it at its next slow step (1 ms).
-  const Outcome r = run_injection(2.0, [](mcsim::FocSil& s) {
-    s.board().set_fault_inputs(MC_HAL_FAULT_GATE_DRIVER);
-  }, 0.01);
+  const Outcome r = run_injection(
+      2.0, [](mcsim::FocSil& s) { s.board().set_fault_inputs(MC_HAL_FAULT_GATE_DRIVER); }, 0.01);
   EXPECT_EQ(r.faults, MC_DRIVE_FAULT_HW_INPUT);
   EXPECT_LE(r.latency_s, 1e-3 + 1e-9);
   expect_safe(r);
   record(r, 1e-3 + 1e-9);
 }
-
 
 // ---- Open phase ---------------------------------------------------------
 // The SIL configuration (foc_sil.cpp): a phase commanded >= 1 A must carry a
@@ -312,13 +333,12 @@ TEST(FaultInjection, OpenPhaseWhileTurningEachPhase) {
     {
       SCOPED_TRACE(testing::Message() << "phase " << k << " entering its gap");
       double prev = 0.0;
-      const Outcome r = run_injection(o, 0.0, 3.0, open_phase(k), 0.05, 400,
-                                      [&](mcsim::FocSil& s) {
-                                        const double a = ref_abs(s);
-                                        const bool edge = prev >= 1.0 && a < 1.0;
-                                        prev = a;
-                                        return edge;
-                                      });
+      const Outcome r = run_injection(o, 0.0, 3.0, open_phase(k), 0.05, 400, [&](mcsim::FocSil& s) {
+        const double a = ref_abs(s);
+        const bool edge = prev >= 1.0 && a < 1.0;
+        prev = a;
+        return edge;
+      });
       EXPECT_EQ(r.faults, MC_DRIVE_FAULT_OPEN_PHASE);
       EXPECT_NE(r.open_phase_mask & (1u << k), 0u);
       EXPECT_GE(r.latency_s, kOpenPhaseSteps * kT + gap_s - 2 * kT);

@@ -19,8 +19,8 @@ struct StepResult {
 
 // Run the drive in current mode with an iq step at t_step (and optionally an
 // id step at t_id), recording the true plant dq currents each period.
-StepResult run_steps(mcsim::FocSil& sil, double iq_step, double t_step, double id_step,
-                     double t_id, double duration) {
+StepResult run_steps(mcsim::FocSil& sil, double iq_step, double t_step, double id_step, double t_id,
+                     double duration) {
   StepResult r;
   mc_drive_t& d = sil.drive();
   EXPECT_EQ(mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT), 0);

@@ -31,7 +31,7 @@ inline const std::vector<Case>& library() {
   static const std::vector<Case> cases = {
       {"paper002-test-motor", "paper002-200v"}, {"paper002-40kw", ""},
       {"odrive-d5065", "odrive-v36-24v"},       {"gimbal-gm4108", "gimbal-24v"},
-      {"low-l-8uh", "low-l-48khz-24v"},          {"turnigy-sk3-6374-149kv", "vesc6-48v"},
+      {"low-l-8uh", "low-l-48khz-24v"},         {"turnigy-sk3-6374-149kv", "vesc6-48v"},
   };
   return cases;
 }
@@ -65,9 +65,9 @@ inline std::map<std::string, double> run_scenario(const std::string& scen, const
   if (s == nullptr) throw std::logic_error("scenario " + scen + " not registered");
   const Params p(s->motor_params(f), sets);
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string dir = ::testing::TempDir() + "/" +
-                          identifier(std::string(info->test_suite_name()) + "_" + info->name() +
-                                     tag);
+  const std::string dir =
+      ::testing::TempDir() + "/" +
+      identifier(std::string(info->test_suite_name()) + "_" + info->name() + tag);
   std::filesystem::create_directories(dir);
   CsvWriter csv(dir + "/" + scen + ".csv");
   Summary sum;

@@ -51,8 +51,8 @@ TEST_P(RegenStop, FullSpeedStopBelowTripEnergyBalanced) {
 // and the resistor takes most of the kinetic energy on the motors whose
 // braking power lifts the bus above the chopper's threshold.
 TEST(RegenStopBrake, ResistorTakesTheEnergyAndTheRampHolds) {
-  const auto r = run("regen-stop", files({"odrive-d5065", "odrive-v36-24v"}), {{"brake", "on"}},
-                     "");
+  const auto r =
+      run("regen-stop", files({"odrive-d5065", "odrive-v36-24v"}), {{"brake", "on"}}, "");
   EXPECT_NEAR(r.at("stop_time_s"), r.at("stop_time_ramp_s"), 0.1 * r.at("stop_time_ramp_s"));
   EXPECT_GT(r.at("brake_energy_j"), 0.5 * r.at("kinetic_j"));
 }
@@ -88,10 +88,8 @@ TEST(FieldWeakening, NonSalientUnaffected) {
               0.02 * r.at("target_speed_rad_s"));
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Library, RegenStop,
-    ::testing::ValuesIn(testlib::library()),
-    testlib::case_name);
+INSTANTIATE_TEST_SUITE_P(Library, RegenStop, ::testing::ValuesIn(testlib::library()),
+                         testlib::case_name);
 
 }  // namespace
 }  // namespace mcsim

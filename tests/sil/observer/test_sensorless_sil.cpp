@@ -42,15 +42,18 @@ TEST(SensorlessSil, HoldsTestMotorAt200RpmThroughFullLoadStep) {
   Sil sil(m, o, mcsim::observer::default_ctrl_cfg(m, o), load);
   const double w0 = 200 * kRpm;
   double err_max_load = 0, err_final = 0, ang_max = 0;
-  run(sil, 1.8, [&](double) { return w0; }, [&](Sil& s) {
-    const double t = s.t_s(), w = s.board().state()(2);
-    if (t > 1.0) err_max_load = std::max(err_max_load, std::abs(w - w0));
-    if (t > 1.6) err_final = std::max(err_final, std::abs(w - w0));
-    if (t > 0.6) ang_max = std::max(ang_max, std::abs(s.angle_error()));
-  });
-  std::printf("200 r/min full-load step: max speed error %.2f r/min, after 0.6 s %.3f r/min, "
-              "max angle error %.2e rad\n",
-              err_max_load / kRpm, err_final / kRpm, ang_max);
+  run(
+      sil, 1.8, [&](double) { return w0; },
+      [&](Sil& s) {
+        const double t = s.t_s(), w = s.board().state()(2);
+        if (t > 1.0) err_max_load = std::max(err_max_load, std::abs(w - w0));
+        if (t > 1.6) err_final = std::max(err_final, std::abs(w - w0));
+        if (t > 0.6) ang_max = std::max(ang_max, std::abs(s.angle_error()));
+      });
+  std::printf(
+      "200 r/min full-load step: max speed error %.2f r/min, after 0.6 s %.3f r/min, "
+      "max angle error %.2e rad\n",
+      err_max_load / kRpm, err_final / kRpm, ang_max);
   EXPECT_EQ(sil.ctrl().tm.phase, MC_CTRL_SLS_CLOSED);
   // Dip: a 3 N m step on J = 5e-3 kg m^2 with a 100 rad/s speed loop;
   // measured 47 r/min (23 %), bound 60 r/min.
@@ -82,15 +85,17 @@ LightLoad light_load(bool duty) {
   double sum = 0, sum2 = 0;
   long n = 0;
   LightLoad r;
-  run(sil, 1.3, [&](double) { return 200 * kRpm; }, [&](Sil& s) {
-    if (s.t_s() > 0.8) {
-      const double w = s.board().state()(2) / kRpm;
-      sum += w;
-      sum2 += w * w;
-      ++n;
-      r.ang_max = std::max(r.ang_max, std::abs(s.angle_error()));
-    }
-  });
+  run(
+      sil, 1.3, [&](double) { return 200 * kRpm; },
+      [&](Sil& s) {
+        if (s.t_s() > 0.8) {
+          const double w = s.board().state()(2) / kRpm;
+          sum += w;
+          sum2 += w * w;
+          ++n;
+          r.ang_max = std::max(r.ang_max, std::abs(s.angle_error()));
+        }
+      });
   const double mean = sum / static_cast<double>(n);
   r.speed_std_rpm = std::sqrt(std::max(0.0, sum2 / static_cast<double>(n) - mean * mean));
   return r;
@@ -99,9 +104,10 @@ LightLoad light_load(bool duty) {
 TEST(SensorlessSil, LightLoadWithDeadTimeHoldsWithDutyCompensation) {
   const LightLoad obs_only = light_load(false);
   const LightLoad duty = light_load(true);
-  std::printf("unloaded 200 r/min, 2 us dead time: speed std %.2f r/min (observer only) vs "
-              "%.2f (duties), angle error max %.3f vs %.4f rad\n",
-              obs_only.speed_std_rpm, duty.speed_std_rpm, obs_only.ang_max, duty.ang_max);
+  std::printf(
+      "unloaded 200 r/min, 2 us dead time: speed std %.2f r/min (observer only) vs "
+      "%.2f (duties), angle error max %.3f vs %.4f rad\n",
+      obs_only.speed_std_rpm, duty.speed_std_rpm, obs_only.ang_max, duty.ang_max);
   // With the duty correction: measured 4.3 r/min and 8 mrad; bounds 8 r/min
   // and 0.03 rad (the loop without dead time holds 0.02 r/min, so the bound
   // is about the oscillation, not the quantisation).
@@ -161,11 +167,13 @@ TEST(SensorlessSil, HandoverHasNoTorqueJerk) {
   const double T = sil.board().period_s();
   std::vector<double> t, tau;
   long k_switch = -1;
-  run(sil, 0.4, [](double) { return 300 * kRpm; }, [&](Sil& s) {
-    t.push_back(s.t_s());
-    tau.push_back(s.board().torque_nm());
-    if (k_switch < 0 && s.ctrl().tm.handovers == 1) k_switch = static_cast<long>(t.size()) - 1;
-  });
+  run(
+      sil, 0.4, [](double) { return 300 * kRpm; },
+      [&](Sil& s) {
+        t.push_back(s.t_s());
+        tau.push_back(s.board().torque_nm());
+        if (k_switch < 0 && s.ctrl().tm.handovers == 1) k_switch = static_cast<long>(t.size()) - 1;
+      });
   ASSERT_GT(k_switch, 0);
   const auto ks = static_cast<size_t>(k_switch);
   double jump = 0, before = 0;
@@ -190,9 +198,11 @@ TEST(SensorlessSil, StopsAndHoldsLoadAtStandstill) {
   SilOptions o;
   Sil sil(m, o, mcsim::observer::default_ctrl_cfg(m, o), LoadSteps{{{0.0, 0.9}}});
   double wmax_end = 0;
-  run(sil, 2.0, [](double t) { return t < 0.8 ? 300 * kRpm : 0.0; }, [&](Sil& s) {
-    if (s.t_s() > 1.7) wmax_end = std::max(wmax_end, std::abs(s.board().state()(2)));
-  });
+  run(
+      sil, 2.0, [](double t) { return t < 0.8 ? 300 * kRpm : 0.0; },
+      [&](Sil& s) {
+        if (s.t_s() > 1.7) wmax_end = std::max(wmax_end, std::abs(s.board().state()(2)));
+      });
   std::printf("start-stop: hand-overs %u, fallbacks %u, |omega| after 1.7 s <= %.2e rad/s\n",
               sil.ctrl().tm.handovers, sil.ctrl().tm.fallbacks, wmax_end);
   EXPECT_EQ(sil.ctrl().tm.handovers, 1u);
@@ -239,8 +249,10 @@ TEST(SensorlessSil, LowSpeedLimitWithRealisticErrors) {
   double a100 = 0, a20 = 0;
   const double w100 = low_speed_mean_rpm(100.0, &a100);
   const double w20 = low_speed_mean_rpm(20.0, &a20);
-  std::printf("100 r/min: mean %.1f r/min, max angle error %.3f rad; 20 r/min: mean %.1f r/min, "
-              "max angle error %.3f rad\n", w100, a100, w20, a20);
+  std::printf(
+      "100 r/min: mean %.1f r/min, max angle error %.3f rad; 20 r/min: mean %.1f r/min, "
+      "max angle error %.3f rad\n",
+      w100, a100, w20, a20);
   // 100 r/min: holds within 3 r/min with < 0.2 rad error (measured 0.13)
   EXPECT_NEAR(w100, 100.0, 3.0);
   EXPECT_LT(a100, 0.2);
@@ -271,19 +283,21 @@ TEST(SensorlessSil, IiObserverEstimatesLoadFromEncoder) {
   const double kt = 1.5 * m.motor.pole_pairs * m.motor.flux_wb;
   double tau_prev = 0, sum_l = 0, sum_w = 0;
   long n = 0;
-  run(sil, 1.5, [](double) { return 400 * kRpm; }, [&](Sil& s) {
-    const auto& tm = s.drive().tm;
-    const double c = std::cos(tm.theta_e_rad), sn = std::sin(tm.theta_e_rad);
-    const double al = tm.ia_a, be = (tm.ia_a + 2.0 * tm.ib_a) / std::sqrt(3.0);
-    const double tau = kt * (-sn * al + c * be);
-    mc_iiobs_f32_step(&ii, tm.theta_m_rad, static_cast<float>(0.5 * (tau + tau_prev)));
-    tau_prev = tau;
-    if (s.t_s() > 1.2) {
-      sum_l += mc_iiobs_f32_tau_load_nm(&ii) - 3.0;
-      sum_w += mc_iiobs_f32_omega_m_rad_s(&ii) - s.board().state()(2);
-      ++n;
-    }
-  });
+  run(
+      sil, 1.5, [](double) { return 400 * kRpm; },
+      [&](Sil& s) {
+        const auto& tm = s.drive().tm;
+        const double c = std::cos(tm.theta_e_rad), sn = std::sin(tm.theta_e_rad);
+        const double al = tm.ia_a, be = (tm.ia_a + 2.0 * tm.ib_a) / std::sqrt(3.0);
+        const double tau = kt * (-sn * al + c * be);
+        mc_iiobs_f32_step(&ii, tm.theta_m_rad, static_cast<float>(0.5 * (tau + tau_prev)));
+        tau_prev = tau;
+        if (s.t_s() > 1.2) {
+          sum_l += mc_iiobs_f32_tau_load_nm(&ii) - 3.0;
+          sum_w += mc_iiobs_f32_omega_m_rad_s(&ii) - s.board().state()(2);
+          ++n;
+        }
+      });
   const double el = sum_l / static_cast<double>(n), ew = sum_w / static_cast<double>(n);
   std::printf("I&I after the load step: mean load error %.2e N m, mean speed error %.2e rad/s\n",
               el, ew);

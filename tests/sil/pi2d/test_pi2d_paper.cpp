@@ -16,8 +16,8 @@ namespace {
 
 // Section V values.
 constexpr double kSigma = 0.51, kGamma = 0.17, kTau = 1.0;
-constexpr double kK1 = 4.0, kK2 = 75.0, kKp = 5.0, kKd = 10.0, kKi = 0.01, kA = 50.0,
-                 kB = 50.0, kEps = 0.02;
+constexpr double kK1 = 4.0, kK2 = 75.0, kKp = 5.0, kKd = 10.0, kKi = 0.01, kA = 50.0, kB = 50.0,
+                 kEps = 0.02;
 
 // Speed profile, written again from the paper's text (not shared with the
 // scenario): piecewise-linear speed through (0,0), (1,5.25), (3,5.25),
@@ -51,10 +51,11 @@ struct LawOut {
 };
 
 LawOut law(const X& x, double t, double t_sel) {
-  double w = 0.0, a = 0.0, th_ref = 0.0;  // set by profile() for t < 1e9 s; initialised for -O3 -Wmaybe-uninitialized
+  double w = 0.0, a = 0.0,
+         th_ref = 0.0;  // set by profile() for t < 1e9 s; initialised for -O3 -Wmaybe-uninitialized
   profile(t, &w, &a, &th_ref, t_sel);
   const double e4 = x[3] - th_ref;
-  const double th = x[4] + kB * e4;                        // (12)
+  const double th = x[4] + kB * e4;                         // (12)
   const double v3 = -kKp * e4 - kKd * th;                   // (9)
   const double dnu = -kKi * (e4 - th);                      // (10)
   const double x2s = (x[5] + a + v3) / kSigma;              // (8)
@@ -67,7 +68,8 @@ LawOut law(const X& x, double t, double t_sel) {
 }
 
 X deriv(const X& x, double t, double t_sel) {
-  double w = 0.0, a = 0.0, th_ref = 0.0;  // set by profile() for t < 1e9 s; initialised for -O3 -Wmaybe-uninitialized
+  double w = 0.0, a = 0.0,
+         th_ref = 0.0;  // set by profile() for t < 1e9 s; initialised for -O3 -Wmaybe-uninitialized
   profile(t, &w, &a, &th_ref, t_sel);
   const LawOut u = law(x, t, t_sel);
   const double e4 = x[3] - th_ref;
@@ -146,10 +148,10 @@ TEST(Pi2dPaper, SampledFirmwareLawMatchesContinuousClosedLoop) {
 
   const Err e10 = compare(10000.0, ref);
   const Err e20 = compare(20000.0, ref);
-  std::printf("max |SIL - continuous| at 10 kHz: x2 %.3g x3 %.3g x4 %.3g nu %.3g\n", e10.x2,
-              e10.x3, e10.x4, e10.nu);
-  std::printf("                       at 20 kHz: x2 %.3g x3 %.3g x4 %.3g nu %.3g\n", e20.x2,
-              e20.x3, e20.x4, e20.nu);
+  std::printf("max |SIL - continuous| at 10 kHz: x2 %.3g x3 %.3g x4 %.3g nu %.3g\n", e10.x2, e10.x3,
+              e10.x4, e10.nu);
+  std::printf("                       at 20 kHz: x2 %.3g x3 %.3g x4 %.3g nu %.3g\n", e20.x2, e20.x3,
+              e20.x4, e20.nu);
   // Tolerance: the sampled law differs from the continuous one by the
   // zero-order hold (an average delay of T/2 = 5e-5 on every input) and the
   // one-step discretisations of theta_f (Tustin) and nu (Euler): errors of
@@ -188,12 +190,12 @@ TEST(Pi2dPaper, ReproducesSectionVBehaviour) {
     if (s.t > 10.0) e3_max_late = std::max(e3_max_late, std::abs(s.x3 - s.x3_ref));
     last = s;
   });
-  EXPECT_LT(e3_max, 0.25);        // measured 0.17 (start-up against tau_L = 1)
-  EXPECT_LT(e3_max_late, 0.05);   // measured 0.018
+  EXPECT_LT(e3_max, 0.25);                           // measured 0.17 (start-up against tau_L = 1)
+  EXPECT_LT(e3_max_late, 0.05);                      // measured 0.018
   EXPECT_LT(std::abs(last.x4 - last.x4_ref), 0.3);   // measured 0.195
   EXPECT_GT(std::abs(last.x4 - last.x4_ref), 0.05);  // but not zero (Fig. 5)
   EXPECT_GT(last.nu, 0.0);
-  EXPECT_LT(last.nu, 0.1);        // measured 0.024
+  EXPECT_LT(last.nu, 0.1);  // measured 0.024
 }
 
 }  // namespace

@@ -83,8 +83,7 @@ TEST_P(PositionSil, StreamedSetpointsThroughInputFilter) {
   EXPECT_LE(r.at("overshoot_counts"), 2.0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Motors, PositionSil, ::testing::ValuesIn(kCases),
-                         testlib::case_name);
+INSTANTIATE_TEST_SUITE_P(Motors, PositionSil, ::testing::ValuesIn(kCases), testlib::case_name);
 
 }  // namespace
 }  // namespace mcsim

@@ -41,8 +41,8 @@ StopResult RunStop(const char* motor, const char* board, Law law) {
   } else {
     rig.set_speed_ref(w_t);
   }
-  const double t_run = 2.0 * std::max(w_t, g.pos_v_max_rad_s) / g.speed_accel_rad_s2 +
-                       40.0 / g.speed_wc_rad_s;
+  const double t_run =
+      2.0 * std::max(w_t, g.pos_v_max_rad_s) / g.speed_accel_rad_s2 + 40.0 / g.speed_wc_rad_s;
   for (long k = 0; k < std::lround(t_run / T); ++k) rig.step();
   StopResult r{};
   r.w0 = rig.board().state()(2);
@@ -69,16 +69,21 @@ void Check(const StopResult& r) {
   EXPECT_GE(r.t_stop_s / t_pred, 0.95);
   EXPECT_LE(r.t_stop_s / t_pred, 1.20) << "t_stop " << r.t_stop_s << " pred " << t_pred;
   mc_record("stop_time_ratio", r.t_stop_s / t_pred, 1.20);
-  std::printf("stop: w0 %.2f rad/s, decel %.1f rad/s^2, t %.5f s (pred %.5f, ratio %.4f), "
-              "w at bridge off %.4f rad/s\n",
-              r.w0, r.decel, r.t_stop_s, t_pred, r.t_stop_s / t_pred, r.w_at_open);
+  std::printf(
+      "stop: w0 %.2f rad/s, decel %.1f rad/s^2, t %.5f s (pred %.5f, ratio %.4f), "
+      "w at bridge off %.4f rad/s\n",
+      r.w0, r.decel, r.t_stop_s, t_pred, r.t_stop_s / t_pred, r.w_at_open);
 }
 
-TEST(StopSil, SpeedModeTimeoutStopD5065) { Check(RunStop("odrive-d5065", "odrive-v36-24v", Law::kSpeedPi)); }
+TEST(StopSil, SpeedModeTimeoutStopD5065) {
+  Check(RunStop("odrive-d5065", "odrive-v36-24v", Law::kSpeedPi));
+}
 TEST(StopSil, SpeedModeTimeoutStopPaperMotor) {
   Check(RunStop("paper002-test-motor", "paper002-200v", Law::kSpeedPi));
 }
-TEST(StopSil, PositionModeStopD5065) { Check(RunStop("odrive-d5065", "odrive-v36-24v", Law::kPosition)); }
+TEST(StopSil, PositionModeStopD5065) {
+  Check(RunStop("odrive-d5065", "odrive-v36-24v", Law::kPosition));
+}
 TEST(StopSil, PositionModeStopPaperMotor) {
   Check(RunStop("paper002-test-motor", "paper002-200v", Law::kPosition));
 }

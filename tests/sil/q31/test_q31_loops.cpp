@@ -20,8 +20,7 @@ void report(const char* what, double v, double bound, const char* unit) {
 }
 }  // namespace
 
-TEST(Q31Loops, Pi2dPaperTracksTheF32Loop)
-{
+TEST(Q31Loops, Pi2dPaperTracksTheF32Loop) {
   // Paper 000 Section V, 14 s (1.4e5 steps at 10 kHz). Each step the two
   // laws differ by the f32 kernel's rounding (mc_pi2d_q31 vs mc_pi2d_f32:
   // < 1e-3 V on terms of ~900 V, tests/unit/q31); the closed loop is
@@ -59,8 +58,7 @@ TEST(Q31Loops, Pi2dPaperTracksTheF32Loop)
   EXPECT_NEAR(e3_late, e3_late_f, 1e-5);
 }
 
-TEST(Q31Loops, CsmcStateFeedbackTracksTheF32Loop)
-{
+TEST(Q31Loops, CsmcStateFeedbackTracksTheF32Loop) {
   // Paper 001 Fig. 2, 1 s at dt = 10 us (1e5 steps), two 0.0314 rad steps,
   // R, L mismatched. The q31 law differs per step by < 5e-3 V on ~1e3 V
   // (tests/unit/q31); through the stable loop the positions stay within
@@ -92,8 +90,7 @@ TEST(Q31Loops, CsmcStateFeedbackTracksTheF32Loop)
   EXPECT_LE(m.settling_s, 0.1);
 }
 
-TEST(Q31Loops, Pi2dMotorTracksTheF32Loop)
-{
+TEST(Q31Loops, Pi2dMotorTracksTheF32Loop) {
   // The test motor through the drive (20 kHz, 12-bit currents, 8192-count
   // encoder, one-period delay), 2.2 s: ramp to 1000 r/min, rated-load step,
   // ramp down. The ADC and encoder quantisation make the two loops' inputs
@@ -103,12 +100,10 @@ TEST(Q31Loops, Pi2dMotorTracksTheF32Loop)
   // 11 rad/s), the metrics within 2 %.
   mcsim::pi2d::MotorOptions o;
   std::vector<mcsim::pi2d::MotorSample> a, q;
-  const auto ma = mcsim::pi2d::run_motor(o, true, 2.2, [&](const mcsim::pi2d::MotorSample& s) {
-    a.push_back(s);
-  });
-  const auto mq = mcsim::q31loop::run_motor_q31(o, 2.2, [&](const mcsim::pi2d::MotorSample& s) {
-    q.push_back(s);
-  });
+  const auto ma = mcsim::pi2d::run_motor(
+      o, true, 2.2, [&](const mcsim::pi2d::MotorSample& s) { a.push_back(s); });
+  const auto mq = mcsim::q31loop::run_motor_q31(
+      o, 2.2, [&](const mcsim::pi2d::MotorSample& s) { q.push_back(s); });
   ASSERT_EQ(a.size(), q.size());
   double dw = 0;
   for (size_t k = 0; k < a.size(); ++k) dw = std::max(dw, std::abs(a[k].omega_m - q[k].omega_m));

@@ -137,7 +137,8 @@ TEST(Q31Sensorless, TestMotorLoadStepTracksTheF32Loop) {
   const double ang_q = max_abs(q.ang, q, 0.6, 9.0);
   // hand-over torque step per period within 3 periods of the switch
   double jump = 0;
-  for (size_t k = kh - 3; k <= kh + 3; ++k) jump = std::max(jump, std::abs(q.tau[k] - q.tau[k - 1]));
+  for (size_t k = kh - 3; k <= kh + 3; ++k)
+    jump = std::max(jump, std::abs(q.tau[k] - q.tau[k - 1]));
   report("|omega f32 - q31|, whole run", dw, 0.15, "rad/s");
   report("|omega f32 - q31|, closed loop", dw_closed, 0.1, "rad/s");
   report("|angle error f32 - q31|, closed loop", dang, 2e-3, "rad");

@@ -20,7 +20,9 @@ using mcsim::InverterParams;
 using mcsim::Status;
 using mcsim_test::kPi;
 
-Vector3d no_current() { return Vector3d::Zero(); }
+Vector3d no_current() {
+  return Vector3d::Zero();
+}
 
 TEST(SimInverter3Ph, LineToLineVoltagesFollowDuties) {
   Inverter3Ph inv;
@@ -169,7 +171,7 @@ TEST(SimInverterHBridge, SignedDutiesDeadTimeAndLimit) {
   EXPECT_NEAR(v(0), 6.0, 1e-12);
   EXPECT_NEAR(v(1), -12.0, 1e-12);
   const Vector2d vc = hb.voltages_v(Vector2d(1.5, -2.0), vbus, Vector2d::Zero());
-  EXPECT_EQ(vc(0), vbus);   // exact: clamped to the bus
+  EXPECT_EQ(vc(0), vbus);  // exact: clamped to the bus
   EXPECT_EQ(vc(1), -vbus);
   InverterParams p;
   p.t_pwm_s = 40.0e-6;

@@ -49,8 +49,7 @@ TEST(SimNormalised, DerivEqualsUnitPhysicalModel) {
   ASSERT_EQ(norm.configure(np), Status::kOk);
   for (int k = 0; k < 50; ++k) {
     const double s = 0.1 * k;
-    const Eigen::Matrix<double, 4, 1> x(std::sin(3.0 * s), 2.0 * std::cos(s), 5.0 * std::sin(s),
-                                        s);
+    const Eigen::Matrix<double, 4, 1> x(std::sin(3.0 * s), 2.0 * std::cos(s), 5.0 * std::sin(s), s);
     const Eigen::Vector2d u(std::cos(2.0 * s), -std::sin(s));
     const Eigen::Matrix<double, 4, 1> dn = norm.deriv(0.0, x, u);
     const Eigen::Matrix<double, 4, 1> dp = phys.deriv(0.0, x, u);
@@ -65,8 +64,8 @@ struct NormDriven {
   using State = Eigen::Matrix<double, 4, 1>;
   using Input = Eigen::Vector2d;
   const PmsmNormalised* m = nullptr;
-  double v_scale = 1.0;   // u = u_profile(t_phys) / v_base
-  double t_scale = 1.0;   // t_phys = t_n * t_base
+  double v_scale = 1.0;  // u = u_profile(t_phys) / v_base
+  double t_scale = 1.0;  // t_phys = t_n * t_base
   State deriv(double t_n, const State& x, const Input& /*u*/) const {
     return m->deriv(t_n, x, u_profile(t_n * t_scale) * v_scale);
   }
@@ -134,8 +133,8 @@ TEST(SimNormalised, GeneralScalingMapsAPhysicalMachine) {
   fn.t_scale = sc.t_base_s;
   const double pp = 5.0;
   Eigen::Matrix<double, 4, 1> xp(1.0, -2.0, 10.0, 0.05);
-  Eigen::Matrix<double, 4, 1> xn(1.0 / sc.i_base_a, -2.0 / sc.i_base_a,
-                                 pp * 10.0 * sc.t_base_s, pp * 0.05);
+  Eigen::Matrix<double, 4, 1> xn(1.0 / sc.i_base_a, -2.0 / sc.i_base_a, pp * 10.0 * sc.t_base_s,
+                                 pp * 0.05);
   const Eigen::Vector2d u0 = Eigen::Vector2d::Zero();
   const double period_s = 2.0e-5;
   const double period_n = period_s / sc.t_base_s;

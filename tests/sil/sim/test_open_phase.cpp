@@ -44,7 +44,9 @@ PmsmOpenPhase::State state_at(const PmsmParams& p, double i_a, double omega_m, d
 }
 
 // Direction of the series current in alpha-beta for open phase k (header).
-double phi(int k) { return kPi / 2.0 + k * 2.0 * kPi / 3.0; }
+double phi(int k) {
+  return kPi / 2.0 + k * 2.0 * kPi / 3.0;
+}
 
 // Locked rotor: a constant voltage v across the pair, rotor at an angle
 // where the torque is zero (so it stays locked exactly: omega stays 0), 20

@@ -75,8 +75,7 @@ TEST(SimPmsmConfig, InvalidParametersGiveSpecificCodesAndKeepOldOnes) {
 
 // --------------------------------------------------------------- load models
 
-double quadratic_load(double t_s, double theta_m_rad, double omega_m_rad_s,
-                      const void* ctx) {
+double quadratic_load(double t_s, double theta_m_rad, double omega_m_rad_s, const void* ctx) {
   const double k = *static_cast<const double*>(ctx);
   return k * (t_s + theta_m_rad + omega_m_rad_s);
 }
@@ -101,8 +100,8 @@ TEST(SimLoad, KindsEvaluateAsDocumented) {
   a.ripple_per_rev = 6.0;
   const double th = 0.2;
   const double w = -10.0;
-  EXPECT_NEAR(a.eval_nm(0.0, th, w),
-              0.1 + 0.01 * w - 0.001 * w * w + 0.05 * std::sin(6.0 * th), 1e-15);
+  EXPECT_NEAR(a.eval_nm(0.0, th, w), 0.1 + 0.01 * w - 0.001 * w * w + 0.05 * std::sin(6.0 * th),
+              1e-15);
 
   double k = 2.0;
   mcsim::LoadTorque f;
@@ -117,8 +116,8 @@ TEST(SimLoad, CoulombOpposesMotionAndIsLinearNearZero) {
   mcsim::LoadTorque l = mcsim::load_constant(0.0);
   l.coulomb_nm = 0.02;
   l.coulomb_band_rad_s = 0.1;
-  EXPECT_EQ(l.eval_nm(0.0, 0.0, 5.0), 0.02);     // brakes forward motion
-  EXPECT_EQ(l.eval_nm(0.0, 0.0, -5.0), -0.02);   // brakes reverse motion
+  EXPECT_EQ(l.eval_nm(0.0, 0.0, 5.0), 0.02);    // brakes forward motion
+  EXPECT_EQ(l.eval_nm(0.0, 0.0, -5.0), -0.02);  // brakes reverse motion
   EXPECT_EQ(l.eval_nm(0.0, 0.0, 0.0), 0.0);
   EXPECT_NEAR(l.eval_nm(0.0, 0.0, 0.05), 0.01, 1e-15);  // half the band
   l.coulomb_nm = -0.01;
@@ -166,8 +165,7 @@ template <class Plant, class VoltageFn>
 void check_energy_balance(const Plant& plant, VoltageFn volts) {
   mcsim_test::EnergyAudit<Plant> audit;
   audit.plant = &plant;
-  typename mcsim_test::EnergyAudit<Plant>::State xa =
-      mcsim_test::EnergyAudit<Plant>::State::Zero();
+  typename mcsim_test::EnergyAudit<Plant>::State xa = mcsim_test::EnergyAudit<Plant>::State::Zero();
   const auto xa0 = xa;
   const double period_s = 50.0e-6;
   double e_in_abs_j = 0.0;
@@ -261,8 +259,7 @@ TEST(SimPmsmFrames, DqAndAlphaBetaModelsAgree) {
     const double t_s = k * period_s;
     ASSERT_EQ(mcsim::advance_zoh(fdq, u0, t_s, period_s, 4, &xdq), Status::kOk);
     ASSERT_EQ(mcsim::advance_zoh(fab, u0, t_s, period_s, 4, &xab), Status::kOk);
-    const Eigen::Vector2d idq_from_ab =
-        mcsim::park(Eigen::Vector2d(xab(0), xab(1)), 4.0 * xab(3));
+    const Eigen::Vector2d idq_from_ab = mcsim::park(Eigen::Vector2d(xab(0), xab(1)), 4.0 * xab(3));
     max_di_a = std::fmax(max_di_a, (idq_from_ab - xdq.head<2>()).cwiseAbs().maxCoeff());
     max_dw_rad_s = std::fmax(max_dw_rad_s, std::fabs(xab(2) - xdq(2)));
     max_dth_rad = std::fmax(max_dth_rad, std::fabs(xab(3) - xdq(3)));
@@ -310,8 +307,8 @@ TEST(SimPmsmDq, SteadyStateMatchesClosedForm) {
   const double i_d = -2.0;
   const double pp = static_cast<double>(p.pole_pairs);
   const double w_e = pp * w_m;
-  const double i_q = (p.B_nms_rad * w_m + 0.05) /
-                     (1.5 * pp * (p.flux_wb + (p.Ld_h - p.Lq_h) * i_d));
+  const double i_q =
+      (p.B_nms_rad * w_m + 0.05) / (1.5 * pp * (p.flux_wb + (p.Ld_h - p.Lq_h) * i_d));
   const PmsmDq::Input u(p.R_ohm * i_d - w_e * p.Lq_h * i_q,
                         p.R_ohm * i_q + w_e * (p.Ld_h * i_d + p.flux_wb));
   // The solved point is an equilibrium of the model (residual at round-off).

@@ -97,8 +97,10 @@ TEST(SimRotorFrame, TrajectoryEqualsAlphaBetaModel) {
     max_dw = std::max(max_dw, std::abs(xr(2) - xa(2)));
     max_dth = std::max(max_dth, std::abs(xr(3) - xa(3)));
   }
-  std::printf("rotor frame vs alpha-beta: max |di| %.3g A, |dw| %.3g rad/s, |dth| %.3g rad, "
-              "final w %.1f rad/s\n", max_di, max_dw, max_dth, xa(2));
+  std::printf(
+      "rotor frame vs alpha-beta: max |di| %.3g A, |dw| %.3g rad/s, |dth| %.3g rad, "
+      "final w %.1f rad/s\n",
+      max_di, max_dw, max_dth, xa(2));
   EXPECT_GT(std::abs(xa(2)), 10.0) << "the run must actually spin the rotor";
   EXPECT_LT(max_di, 1e-5);
   EXPECT_LT(max_dw, 1e-5);
@@ -192,8 +194,10 @@ TEST(SimRotorFrame, WrittenOutRk4FollowsParameterAndPeriodChanges) {
     }
     worst = std::max(worst, rel_diff(got, ref));
   }
-  std::printf("written-out vs generic RK4, 2000 periods: worst relative difference %.3g, "
-              "final w %.1f rad/s\n", worst, ref(2));
+  std::printf(
+      "written-out vs generic RK4, 2000 periods: worst relative difference %.3g, "
+      "final w %.1f rad/s\n",
+      worst, ref(2));
   EXPECT_GT(std::abs(ref(2)), 10.0) << "the run must actually spin the rotor";
   EXPECT_LT(worst, 1e-10);
 }

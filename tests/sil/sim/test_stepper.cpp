@@ -28,8 +28,8 @@ TEST(SimStepper, TorqueVersusAngleFollowsEquationOne) {
     const double th = (2.0 * kPi / 50.0) * k / 64.0;  // one tooth pitch
     const Stepper2Ph::State x(ia, ib, 0.0, th);
     const Stepper2Ph::State dx = m.deriv(0.0, x, Stepper2Ph::Input::Zero());
-    const double expected = -p.Km_nm_a * ia * std::sin(50.0 * th) +
-                            p.Km_nm_a * ib * std::cos(50.0 * th);
+    const double expected =
+        -p.Km_nm_a * ia * std::sin(50.0 * th) + p.Km_nm_a * ib * std::cos(50.0 * th);
     // J dw/dt is the torque (no friction, no load, standstill); 1e-12 N m is
     // round-off on a torque of ~0.2 N m.
     EXPECT_NEAR(dx(Stepper2Ph::kOmegaM) * p.J_kgm2, expected, 1e-12) << "k=" << k;
@@ -76,14 +76,12 @@ template <class Plant>
 double relative_energy_residual(const Plant& plant) {
   mcsim_test::EnergyAudit<Plant> audit;
   audit.plant = &plant;
-  typename mcsim_test::EnergyAudit<Plant>::State xa =
-      mcsim_test::EnergyAudit<Plant>::State::Zero();
+  typename mcsim_test::EnergyAudit<Plant>::State xa = mcsim_test::EnergyAudit<Plant>::State::Zero();
   const auto xa0 = xa;
   const double period_s = 50.0e-6;
   for (int k = 0; k < 10000; ++k) {  // 0.5 s
     const double t_s = k * period_s;
-    EXPECT_EQ(mcsim::advance_zoh(audit, microstep_volts(t_s), t_s, period_s, 2, &xa),
-              Status::kOk);
+    EXPECT_EQ(mcsim::advance_zoh(audit, microstep_volts(t_s), t_s, period_s, 2, &xa), Status::kOk);
   }
   EXPECT_GT(std::fabs(xa(2)), 0.5);  // the rotor follows the field
   return std::fabs(audit.residual_j(xa0, xa)) / xa(4);

@@ -16,7 +16,8 @@
 
 #include <toml++/toml.h>
 
-namespace boards {
+namespace boards
+{
 
 struct Pin {
     std::string signal;
@@ -119,8 +120,8 @@ inline unsigned otyper_code(const std::string &otype)
 inline std::optional<unsigned> adc_channel(const std::string &name)
 {
     static const std::map<std::string, unsigned> m = {
-        {"PA0", 0u},  {"PA1", 1u},  {"PA2", 2u},  {"PA3", 3u},  {"PA4", 4u},  {"PA5", 5u},
-        {"PA6", 6u},  {"PA7", 7u},  {"PB0", 8u},  {"PB1", 9u},  {"PC0", 10u}, {"PC1", 11u},
+        {"PA0", 0u},  {"PA1", 1u},  {"PA2", 2u},  {"PA3", 3u}, {"PA4", 4u},  {"PA5", 5u},
+        {"PA6", 6u},  {"PA7", 7u},  {"PB0", 8u},  {"PB1", 9u}, {"PC0", 10u}, {"PC1", 11u},
         {"PC2", 12u}, {"PC3", 13u}, {"PC4", 14u}, {"PC5", 15u}};
     auto it = m.find(name);
     if (it == m.end()) {

@@ -19,7 +19,8 @@ extern "C" {
 #include "mc_board_vesc6_gen.h"
 }
 
-namespace {
+namespace
+{
 
 struct Case {
     const char *name;
@@ -40,7 +41,9 @@ const Case kBoards[] = {
 
 constexpr uint32_t kPattern = 0xA5A5A5A5u;
 
-class BoardPins : public ::testing::TestWithParam<Case> {};
+class BoardPins : public ::testing::TestWithParam<Case>
+{
+};
 
 uint32_t field(uint32_t reg, int pos, int width)
 {
@@ -193,7 +196,9 @@ TEST_P(BoardPins, AdcChannelsFollowPins)
 }
 
 INSTANTIATE_TEST_SUITE_P(Boards, BoardPins, ::testing::ValuesIn(kBoards),
-                         [](const ::testing::TestParamInfo<Case> &i) { return std::string(i.param.name); });
+                         [](const ::testing::TestParamInfo<Case> &i) {
+                             return std::string(i.param.name);
+                         });
 
 // The facts the issue names, from the sources (ODrive main.h/adc.c, VESC
 // hw_60_core.h): on the ODrive v3.6 M0 phase B is PC0 (IN10) and phase C is

@@ -20,7 +20,8 @@ extern "C" {
 #include "mc_board_vesc6_gen.h"
 }
 
-namespace {
+namespace
+{
 
 struct Case {
     const char *name;
@@ -62,7 +63,10 @@ struct Rig {
     std::vector<uint32_t> delays;
     mc_board_f405_t board{};
 
-    static void delay(void *ctx, uint32_t us) { static_cast<Rig *>(ctx)->delays.push_back(us); }
+    static void delay(void *ctx, uint32_t us)
+    {
+        static_cast<Rig *>(ctx)->delays.push_back(us);
+    }
 
     mc_board_f405_periph_t periph()
     {
@@ -98,8 +102,12 @@ const Case kDrvBoards[] = {
     {"vesc6", &mc_board_vesc6_desc},
 };
 
-class BoardSetup : public ::testing::TestWithParam<Case> {};
-class GateDriverBoard : public ::testing::TestWithParam<Case> {};
+class BoardSetup : public ::testing::TestWithParam<Case>
+{
+};
+class GateDriverBoard : public ::testing::TestWithParam<Case>
+{
+};
 
 double divider(const toml::table &t)
 {
@@ -260,8 +268,7 @@ TEST_P(BoardSetup, ThermistorsFollowTheirModels)
     Rig rig;
     ASSERT_EQ(rig.setup(c.desc), MC_BOARD_F405_OK);
     const char *slots[2] = {"power_stage", "motor"};
-    const mc_f405_adc_temp_sensor_t *sensors[2] = {&c.desc->temp_power_stage,
-                                                   &c.desc->temp_motor};
+    const mc_f405_adc_temp_sensor_t *sensors[2] = {&c.desc->temp_power_stage, &c.desc->temp_motor};
     int checked = 0;
     for (int k = 0; k < 2; ++k) {
         const std::string slot = slots[k];
@@ -313,7 +320,8 @@ TEST_P(BoardSetup, ThermistorsFollowTheirModels)
                 ASSERT_EQ(deliver(2048u), 0);
             }
             ASSERT_EQ(deliver(raw), 0);
-            const uint32_t bit = k == 0 ? MC_HAL_ADC_TEMP_VALID_POWER_STAGE : MC_HAL_ADC_TEMP_VALID_MOTOR;
+            const uint32_t bit =
+                k == 0 ? MC_HAL_ADC_TEMP_VALID_POWER_STAGE : MC_HAL_ADC_TEMP_VALID_MOTOR;
             ASSERT_NE(temp.valid_mask & bit, 0u);
             EXPECT_NEAR(k == 0 ? temp.power_stage_temp_c : temp.motor_temp_c, want, tol);
             ++checked;
@@ -345,14 +353,14 @@ TEST_P(BoardSetup, GateDriverRegistersFromBoardToml)
     }
     const std::map<std::string, uint32_t> ocp = {
         {"current_limit", 0u}, {"latch", 1u}, {"report_only", 2u}, {"disabled", 3u}};
-    const std::map<std::string, uint32_t> octw = {{"ot_and_oc", 0u}, {"ot_only", 1u}, {"oc_only", 2u}};
+    const std::map<std::string, uint32_t> octw = {
+        {"ot_and_oc", 0u}, {"ot_only", 1u}, {"oc_only", 2u}};
     const std::map<double, uint32_t> gate = {{1.7, 0u}, {0.7, 1u}, {0.25, 2u}};
     const std::map<int64_t, uint32_t> gain = {{10, 0u}, {20, 1u}, {40, 2u}, {80, 3u}};
-    const uint32_t ctrl1 =
-        (uint32_t(boards::num(t, "drv8301.oc_adj_set")) << 6) |
-        (ocp.at(*t.at_path("drv8301.ocp_mode").value<std::string>()) << 4) |
-        ((*t.at_path("drv8301.pwm_mode").value<int64_t>() == 3 ? 1u : 0u) << 3) |
-        gate.at(boards::num(t, "drv8301.gate_current_a"));
+    const uint32_t ctrl1 = (uint32_t(boards::num(t, "drv8301.oc_adj_set")) << 6) |
+                           (ocp.at(*t.at_path("drv8301.ocp_mode").value<std::string>()) << 4) |
+                           ((*t.at_path("drv8301.pwm_mode").value<int64_t>() == 3 ? 1u : 0u) << 3) |
+                           gate.at(boards::num(t, "drv8301.gate_current_a"));
     const uint32_t ctrl2 =
         ((*t.at_path("drv8301.oc_toff").value<std::string>() == "off_time" ? 1u : 0u) << 6) |
         (gain.at(*t.at_path("drv8301.gain_v_per_v").value<int64_t>()) << 2) |
@@ -462,18 +470,18 @@ TEST_P(GateDriverBoard, NfaultReadsFaultsThenResetsLatchOnce)
     const mc_hal_spi_t spi = chip.spi();
     ASSERT_EQ(mc_board_f405_gate_driver_setup(&rig.board, c.desc, &spi), MC_BOARD_F405_OK);
     const auto *nf = boards::find(pins, "gate_fault");
-    rig.gpio[nf->port].IDR = 0u;           // nFAULT low (active)
-    chip.reg[0] = (1u << 3) | (1u << 10);  // FETHB_OC, FAULT
+    rig.gpio[nf->port].IDR = 0u;          // nFAULT low (active)
+    chip.reg[0] = (1u << 3) | (1u << 10); // FETHB_OC, FAULT
     EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
     EXPECT_EQ(rig.board.drv.faults, MC_DRV8301_FAULT_FETHB_OC | MC_DRV8301_FAULT_FAULT);
     EXPECT_STREQ(mc_drv8301_fault_name(MC_DRV8301_FAULT_FETHB_OC), "FETHB_OC");
     EXPECT_EQ(chip.gate_resets, 0);
-    chip.reg[0] = (1u << 3) | (1u << 10);  // still latched
+    chip.reg[0] = (1u << 3) | (1u << 10); // still latched
     EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, true));
     EXPECT_EQ(chip.gate_resets, 1);
     EXPECT_EQ(chip.reg[0], 0u);
     EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, true));
-    EXPECT_EQ(chip.gate_resets, 1);        // once per assertion
+    EXPECT_EQ(chip.gate_resets, 1);         // once per assertion
     rig.gpio[nf->port].IDR = 1u << nf->pin; // released
     EXPECT_TRUE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
     EXPECT_EQ(chip.gate_resets, 1);
@@ -500,6 +508,10 @@ TEST(BoardSetupArgs, Refused)
 }
 
 INSTANTIATE_TEST_SUITE_P(Boards, BoardSetup, ::testing::ValuesIn(kBoards),
-                         [](const ::testing::TestParamInfo<Case> &i) { return std::string(i.param.name); });
+                         [](const ::testing::TestParamInfo<Case> &i) {
+                             return std::string(i.param.name);
+                         });
 INSTANTIATE_TEST_SUITE_P(Boards, GateDriverBoard, ::testing::ValuesIn(kDrvBoards),
-                         [](const ::testing::TestParamInfo<Case> &i) { return std::string(i.param.name); });
+                         [](const ::testing::TestParamInfo<Case> &i) {
+                             return std::string(i.param.name);
+                         });

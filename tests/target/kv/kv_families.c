@@ -226,9 +226,9 @@ typedef struct {
     mc_pi2d_f32_t pi2d_motor;
     mc_pi2d_f32_cfg_t pi2d_motor_cfg;
     mc_hgo_f32_t hgo;
-    mc_csmc_f32_t csmc_servo;  /* LAW_CONST, sat, servocompensators, HGO inputs */
-    mc_csmc_f32_t csmc_model;  /* LAW_MODEL, sat, conditional integrators */
-    mc_csmc_f32_t csmc_ideal;  /* LAW_MODEL, sgn, no sigma (ideal SMC) */
+    mc_csmc_f32_t csmc_servo; /* LAW_CONST, sat, servocompensators, HGO inputs */
+    mc_csmc_f32_t csmc_model; /* LAW_MODEL, sat, conditional integrators */
+    mc_csmc_f32_t csmc_ideal; /* LAW_MODEL, sgn, no sigma (ideal SMC) */
     mc_csmc_f32_model_t csmc_plant;
 } kv_state_t;
 
@@ -405,8 +405,8 @@ static void fam_pi2d(kv_state_t *st, const rec_t *in, rec_t *out)
     out_pi2d(out, ret, &st->pi2d_motor, &o);
 
     const float aid = mc_abs_f32(pin.id_a);
-    const mc_pi2d_envelope_t env = {.id_min_a = -aid, .id_max_a = aid,
-                                    .iq_abs_max_a = mc_abs_f32(pin.iq_a)};
+    const mc_pi2d_envelope_t env = {
+        .id_min_a = -aid, .id_max_a = aid, .iq_abs_max_a = mc_abs_f32(pin.iq_a)};
     mc_pi2d_cert_t cert;
     memset(&cert, 0, sizeof cert);
     out_u32(out, mc_pi2d_f32_certify(&st->pi2d_motor_cfg, &env, &cert));
@@ -483,9 +483,9 @@ static void fam_csmc(kv_state_t *st, const rec_t *in, rec_t *out)
 
     mc_csmc_f32_in_t e;
     memset(&e, 0, sizeof e);
-    out_u32(out, mc_csmc_f32_err_from_state(&st->csmc_plant, cin.i_d_a, cin.i_q_a,
-                                            cin.omega_m_rad_s, cin.e2_rad, 0.1f, 0.0f, 0.0f,
-                                            cin.dde2_rad_s2, &e));
+    out_u32(out,
+            mc_csmc_f32_err_from_state(&st->csmc_plant, cin.i_d_a, cin.i_q_a, cin.omega_m_rad_s,
+                                       cin.e2_rad, 0.1f, 0.0f, 0.0f, cin.dde2_rad_s2, &e));
     out_f32(out, e.e1_a);
     out_f32(out, e.e2_rad);
     out_f32(out, e.de2_rad_s);
@@ -504,14 +504,23 @@ static int setup_observer(kv_state_t *st)
     if (mc_fluxobs_f32_gamma_for_critical_speed(50.0f, 4u, 0.11f, &gamma) != 0u) {
         return 2;
     }
-    const mc_fluxobs_f32_cfg_t oc = {.r_ohm = 0.675f, .l_h = 1.14e-3f, .flux_wb = 0.11f,
-                                     .gamma = gamma, .dt_s = 5.0e-5f, .resid_tol = 0.3f,
+    const mc_fluxobs_f32_cfg_t oc = {.r_ohm = 0.675f,
+                                     .l_h = 1.14e-3f,
+                                     .flux_wb = 0.11f,
+                                     .gamma = gamma,
+                                     .dt_s = 5.0e-5f,
+                                     .resid_tol = 0.3f,
                                      .resid_time_s = 0.05f};
-    const mc_spdpll_f32_cfg_t pc = {.bw_rad_s = 500.0f, .dt_s = 5.0e-5f,
-                                    .omega_max_rad_s = 6000.0f};
-    const mc_iiobs_f32_cfg_t ic = {.j_kgm2 = 2.5e-4f, .f_nms_rad = 1.0e-4f, .a1 = 6.0f,
-                                   .a2 = 8.5f, .k4 = 1.0f, .t_unit_s = 2.2929f / 100.0f,
-                                   .dt_s = 5.0e-5f, .r_max = 1000.0f};
+    const mc_spdpll_f32_cfg_t pc = {
+        .bw_rad_s = 500.0f, .dt_s = 5.0e-5f, .omega_max_rad_s = 6000.0f};
+    const mc_iiobs_f32_cfg_t ic = {.j_kgm2 = 2.5e-4f,
+                                   .f_nms_rad = 1.0e-4f,
+                                   .a1 = 6.0f,
+                                   .a2 = 8.5f,
+                                   .k4 = 1.0f,
+                                   .t_unit_s = 2.2929f / 100.0f,
+                                   .dt_s = 5.0e-5f,
+                                   .r_max = 1000.0f};
     if (mc_fluxobs_f32_init(&st->fluxobs, &oc) != 0u || mc_spdpll_f32_init(&st->pll, &pc) != 0u ||
         mc_iiobs_f32_init(&st->iiobs, &ic) != 0u) {
         return 2;
@@ -538,23 +547,48 @@ static int setup_filters(kv_state_t *st)
  * iq <= 5 A, |u| <= 13.2 V (24 V bus), |nu| <= 1 N m. */
 static int setup_pi2d(kv_state_t *st)
 {
-    const mc_pi2d_f32_cfg_t p = {
-        .r_ohm = 1.0f, .l_h = 1.0f, .pole_pairs = 1u, .ke_v_s_rad = 0.17f, .kt_nm_a = 0.51f,
-        .j_kgm2 = 1.0f, .k1_per_s = 4.0f, .k2_per_s = 75.0f, .kp_per_s2 = 5.0f,
-        .kd_per_s2 = 10.0f, .ki_per_s3 = 0.01f, .a_per_s = 50.0f, .b = 50.0f,
-        .eps_per_s = 0.02f, .dt_s = 1.0e-4f, .iq_max_a = 1.0e6f, .v_max_v = 1.0e9f,
-        .nu_max_nm = 1.0e6f};
+    const mc_pi2d_f32_cfg_t p = {.r_ohm = 1.0f,
+                                 .l_h = 1.0f,
+                                 .pole_pairs = 1u,
+                                 .ke_v_s_rad = 0.17f,
+                                 .kt_nm_a = 0.51f,
+                                 .j_kgm2 = 1.0f,
+                                 .k1_per_s = 4.0f,
+                                 .k2_per_s = 75.0f,
+                                 .kp_per_s2 = 5.0f,
+                                 .kd_per_s2 = 10.0f,
+                                 .ki_per_s3 = 0.01f,
+                                 .a_per_s = 50.0f,
+                                 .b = 50.0f,
+                                 .eps_per_s = 0.02f,
+                                 .dt_s = 1.0e-4f,
+                                 .iq_max_a = 1.0e6f,
+                                 .v_max_v = 1.0e9f,
+                                 .nu_max_nm = 1.0e6f};
     const float wn = 30.0f;
     const float ki = wn * wn * wn;
     const float kp = (3.0f * wn * wn) + (ki / 2000.0f);
-    const mc_pi2d_f32_cfg_t m = {
-        .r_ohm = 0.675f, .l_h = 1.14e-3f, .pole_pairs = 4u, .ke_v_s_rad = 0.44f,
-        .kt_nm_a = 0.66f, .j_kgm2 = 1.0e-3f, .k1_per_s = 1256.6f, .k2_per_s = 1256.6f,
-        .kp_per_s2 = kp, .kd_per_s2 = 3.0f * wn * 2000.0f, .ki_per_s3 = ki, .a_per_s = 2000.0f,
-        .b = 1.0f, .eps_per_s = 2.0f * ki / kp, .dt_s = 5.0e-5f, .iq_max_a = 5.0f,
-        .v_max_v = 13.2f, .nu_max_nm = 1.0f};
+    const mc_pi2d_f32_cfg_t m = {.r_ohm = 0.675f,
+                                 .l_h = 1.14e-3f,
+                                 .pole_pairs = 4u,
+                                 .ke_v_s_rad = 0.44f,
+                                 .kt_nm_a = 0.66f,
+                                 .j_kgm2 = 1.0e-3f,
+                                 .k1_per_s = 1256.6f,
+                                 .k2_per_s = 1256.6f,
+                                 .kp_per_s2 = kp,
+                                 .kd_per_s2 = 3.0f * wn * 2000.0f,
+                                 .ki_per_s3 = ki,
+                                 .a_per_s = 2000.0f,
+                                 .b = 1.0f,
+                                 .eps_per_s = 2.0f * ki / kp,
+                                 .dt_s = 5.0e-5f,
+                                 .iq_max_a = 5.0f,
+                                 .v_max_v = 13.2f,
+                                 .nu_max_nm = 1.0f};
     st->pi2d_motor_cfg = m;
-    if (mc_pi2d_f32_init(&st->pi2d_paper, &p) != 0u || mc_pi2d_f32_init(&st->pi2d_motor, &m) != 0u) {
+    if (mc_pi2d_f32_init(&st->pi2d_paper, &p) != 0u ||
+        mc_pi2d_f32_init(&st->pi2d_motor, &m) != 0u) {
         return 2;
     }
     return 0;
@@ -578,11 +612,19 @@ static int setup_csmc(kv_state_t *st)
     c.mu2_rad_s2 = 50.0f;
     c.m1_v = 50.0f;
     c.m2_v = 50.0f;
-    c.model = (mc_csmc_f32_model_t){
-        .km_nm_a = 0.1349f, .j_kgm2 = 4.1295e-4f, .b_nms_rad = 0.0013f, .rotor_teeth = 50u,
-        .tau_load_nm = 0.2f, .r_nom_ohm = 20.0f, .r_min_ohm = 19.0f, .r_max_ohm = 21.0f,
-        .l_nom_h = 0.035f, .l_min_h = 0.030f, .l_max_h = 0.040f,
-        .q1_v = 2.1f * 20.0f * 0.1f * 0.040f, .q2_radh_s3 = 2.1f * 100.0f * 50.0f * 0.040f};
+    c.model = (mc_csmc_f32_model_t){.km_nm_a = 0.1349f,
+                                    .j_kgm2 = 4.1295e-4f,
+                                    .b_nms_rad = 0.0013f,
+                                    .rotor_teeth = 50u,
+                                    .tau_load_nm = 0.2f,
+                                    .r_nom_ohm = 20.0f,
+                                    .r_min_ohm = 19.0f,
+                                    .r_max_ohm = 21.0f,
+                                    .l_nom_h = 0.035f,
+                                    .l_min_h = 0.030f,
+                                    .l_max_h = 0.040f,
+                                    .q1_v = 2.1f * 20.0f * 0.1f * 0.040f,
+                                    .q2_radh_s3 = 2.1f * 100.0f * 50.0f * 0.040f};
     c.v_limit_v = 1.0e4f;
     c.dt_s = 1.0e-5f;
     st->csmc_plant = c.model;
@@ -611,8 +653,12 @@ static int setup_csmc(kv_state_t *st)
         mc_csmc_f32_init(&st->csmc_servo, &c) != 0u) {
         return 2;
     }
-    const mc_hgo_f32_cfg_t h = {.alpha1 = 17.0f, .alpha2 = 80.0f, .alpha3 = 100.0f,
-                                .eps_s = 1.0e-4f, .dt_s = 1.0e-5f, .input_order = 2u};
+    const mc_hgo_f32_cfg_t h = {.alpha1 = 17.0f,
+                                .alpha2 = 80.0f,
+                                .alpha3 = 100.0f,
+                                .eps_s = 1.0e-4f,
+                                .dt_s = 1.0e-5f,
+                                .input_order = 2u};
     if (mc_hgo_f32_init(&st->hgo, &h) != 0u) {
         return 2;
     }
@@ -621,16 +667,19 @@ static int setup_csmc(kv_state_t *st)
 
 static int setup(kv_state_t *st)
 {
-    const mc_pi_f32_cfg_t pc = {.kp = 2.5f, .ki_per_s = 400.0f, .dt_s = 5.0e-5f,
-                                .out_min = -12.0f, .out_max = 12.0f,
-                                .aw = MC_PI_AW_CLAMP, .kaw_per_s = 0.0f};
+    const mc_pi_f32_cfg_t pc = {.kp = 2.5f,
+                                .ki_per_s = 400.0f,
+                                .dt_s = 5.0e-5f,
+                                .out_min = -12.0f,
+                                .out_max = 12.0f,
+                                .aw = MC_PI_AW_CLAMP,
+                                .kaw_per_s = 0.0f};
     mc_pi_f32_cfg_t pb = pc;
     pb.aw = MC_PI_AW_BACK_CALC;
     pb.kaw_per_s = 2000.0f;
     mc_pi_q31_cfg_t qc;
     if (mc_pi_f32_init(&st->clamp, &pc) != 0u || mc_pi_f32_init(&st->back_calc, &pb) != 0u ||
-        mc_pi_q31_cfg_from_f32(&pc, 10.0f, 24.0f, &qc) != 0u ||
-        mc_pi_q31_init(&st->q, &qc) != 0u) {
+        mc_pi_q31_cfg_from_f32(&pc, 10.0f, 24.0f, &qc) != 0u || mc_pi_q31_init(&st->q, &qc) != 0u) {
         return 2;
     }
     /* FocSil's current loop (paper-002 test motor, 20 kHz, 200 Hz
@@ -641,12 +690,21 @@ static int setup(kv_state_t *st)
         0u) {
         return 2;
     }
-    const mc_foc_f32_cfg_t fc = {
-        .r_ohm = 0.675f, .ld_h = 1.14e-3f, .lq_h = 1.14e-3f, .flux_wb = 0.11f,
-        .kp_d_v_per_a = kp, .ki_d_v_per_as = ki, .kp_q_v_per_a = kp, .ki_q_v_per_as = ki,
-        .dt_s = 5.0e-5f, .aw = MC_PI_AW_CLAMP, .kaw_per_s = 0.0f,
-        .limit_mode = MC_SVPWM_LIMIT_CIRCLE, .v_limit_ratio = 0.95f, .v_abs_max_v = 200.0f,
-        .decouple = true};
+    const mc_foc_f32_cfg_t fc = {.r_ohm = 0.675f,
+                                 .ld_h = 1.14e-3f,
+                                 .lq_h = 1.14e-3f,
+                                 .flux_wb = 0.11f,
+                                 .kp_d_v_per_a = kp,
+                                 .ki_d_v_per_as = ki,
+                                 .kp_q_v_per_a = kp,
+                                 .ki_q_v_per_as = ki,
+                                 .dt_s = 5.0e-5f,
+                                 .aw = MC_PI_AW_CLAMP,
+                                 .kaw_per_s = 0.0f,
+                                 .limit_mode = MC_SVPWM_LIMIT_CIRCLE,
+                                 .v_limit_ratio = 0.95f,
+                                 .v_abs_max_v = 200.0f,
+                                 .decouple = true};
     if (mc_foc_f32_init(&st->foc, &fc) != 0u) {
         return 2;
     }
@@ -656,17 +714,9 @@ static int setup(kv_state_t *st)
 /* ---- driver ------------------------------------------------------------ */
 
 static const kv_family_t k_families[] = {
-    {"math_f32", 2u, 6u},
-    {"math_q31", 3u, 9u},
-    {"transforms", 8u, 22u},
-    {"svpwm", 6u, 21u},
-    {"pi", 6u, 6u},
-    {"foc", 9u, 12u},
-    {"observer", 9u, 20u},
-    {"filters", 3u, 7u},
-    {"pi2d", 12u, 33u},
-    {"csmc", 10u, 29u},
-    {NULL, 0u, 0u},
+    {"math_f32", 2u, 6u}, {"math_q31", 3u, 9u}, {"transforms", 8u, 22u}, {"svpwm", 6u, 21u},
+    {"pi", 6u, 6u},       {"foc", 9u, 12u},     {"observer", 9u, 20u},   {"filters", 3u, 7u},
+    {"pi2d", 12u, 33u},   {"csmc", 10u, 29u},   {NULL, 0u, 0u},
 };
 
 const kv_family_t *kv_families(void)

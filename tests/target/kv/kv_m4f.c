@@ -16,13 +16,13 @@ static uint32_t sh_call(uint32_t op, const void *arg)
     return r0;
 }
 
-#define SYS_OPEN 0x01u
-#define SYS_CLOSE 0x02u
-#define SYS_WRITE 0x05u
-#define SYS_READ 0x06u
+#define SYS_OPEN        0x01u
+#define SYS_CLOSE       0x02u
+#define SYS_WRITE       0x05u
+#define SYS_READ        0x06u
 #define SYS_GET_CMDLINE 0x15u
-#define MODE_RB 1u
-#define MODE_WB 5u
+#define MODE_RB         1u
+#define MODE_WB         5u
 
 static int32_t sh_open(const char *path, uint32_t mode)
 {

@@ -19,7 +19,10 @@ static uintptr_t sh_call(uintptr_t op, const void *arg)
     return r0;
 }
 
-void mc_sh_write0(const char *s) { (void)sh_call(0x04u, s); }
+void mc_sh_write0(const char *s)
+{
+    (void)sh_call(0x04u, s);
+}
 
 void mc_sh_exit(int code)
 {
@@ -52,10 +55,21 @@ void mc_reset_handler(void)
     mc_sh_exit(main());
 }
 
-__attribute__((section(".isr_vector"), used))
-static void (*const vectors[16])(void) = {
-    (void (*)(void))(&_estack), mc_reset_handler,
-    mc_fault_handler, mc_fault_handler, mc_fault_handler,
-    mc_fault_handler, mc_fault_handler, 0, 0, 0, 0,
-    mc_fault_handler, mc_fault_handler, 0, mc_fault_handler, mc_fault_handler,
+__attribute__((section(".isr_vector"), used)) static void (*const vectors[16])(void) = {
+    (void (*)(void))(&_estack),
+    mc_reset_handler,
+    mc_fault_handler,
+    mc_fault_handler,
+    mc_fault_handler,
+    mc_fault_handler,
+    mc_fault_handler,
+    0,
+    0,
+    0,
+    0,
+    mc_fault_handler,
+    mc_fault_handler,
+    0,
+    mc_fault_handler,
+    mc_fault_handler,
 };

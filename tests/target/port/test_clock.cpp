@@ -15,9 +15,7 @@ namespace {
 
 struct Regs {
   volatile uint32_t cr = 0, pllcfgr = 0, cfgr = 0, apb1enr = 0, acr = 0, pwr = 0;
-  mc_clock_regs_t map() {
-    return mc_clock_regs_t{&cr, &pllcfgr, &cfgr, &apb1enr, &acr, &pwr};
-  }
+  mc_clock_regs_t map() { return mc_clock_regs_t{&cr, &pllcfgr, &cfgr, &apb1enr, &acr, &pwr}; }
 };
 
 constexpr uint32_t kHsiOnRdy = (1u << 0) | (1u << 1);

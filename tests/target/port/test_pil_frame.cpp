@@ -29,15 +29,21 @@ float nan_with_payload() {
 
 TEST(PilFrame, Crc16IsCcittFalse) {
   const char* s = "123456789";
-  EXPECT_EQ(mc_pil_crc16(reinterpret_cast<const uint8_t*>(s), 9), 0x29B1u);  // catalogue check value
+  EXPECT_EQ(mc_pil_crc16(reinterpret_cast<const uint8_t*>(s), 9),
+            0x29B1u);  // catalogue check value
 }
 
 TEST(PilFrame, MeasRoundTripKeepsEveryBit) {
   mc_pil_meas_t m{};
   m.seq = 0xDEADBEEFu;
   m.adc_rc = -EAGAIN;
-  m.adc = {nan_with_payload(), -0.0f, std::numeric_limits<float>::denorm_min(), 200.0f,
-           MC_HAL_ADC_VALID_ALL, 123u, 456u};
+  m.adc = {nan_with_payload(),
+           -0.0f,
+           std::numeric_limits<float>::denorm_min(),
+           200.0f,
+           MC_HAL_ADC_VALID_ALL,
+           123u,
+           456u};
   m.enc_rc = 0;
   m.enc = {8191u, 8192u, MC_HAL_ENCODER_FLAG_ALL, 99u};
   m.fault_rc = -EIO;

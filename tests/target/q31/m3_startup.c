@@ -52,10 +52,21 @@ void mc_reset_handler(void)
     mc_sh_exit(main());
 }
 
-__attribute__((section(".isr_vector"), used))
-static void (*const vectors[16])(void) = {
-    (void (*)(void))(&_estack), mc_reset_handler,
-    mc_fault_handler, mc_fault_handler, mc_fault_handler,
-    mc_fault_handler, mc_fault_handler, 0, 0, 0, 0,
-    mc_fault_handler, mc_fault_handler, 0, mc_fault_handler, mc_fault_handler,
+__attribute__((section(".isr_vector"), used)) static void (*const vectors[16])(void) = {
+    (void (*)(void))(&_estack),
+    mc_reset_handler,
+    mc_fault_handler,
+    mc_fault_handler,
+    mc_fault_handler,
+    mc_fault_handler,
+    mc_fault_handler,
+    0,
+    0,
+    0,
+    0,
+    mc_fault_handler,
+    mc_fault_handler,
+    0,
+    mc_fault_handler,
+    mc_fault_handler,
 };

@@ -15,25 +15,25 @@
 #include "mc_drive.h"
 #include "mc_hal_fake.h"
 
-namespace apptest {
+namespace apptest
+{
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-constexpr float kDt = 50e-6f;        // PWM period of the fake board [s]
+constexpr float kDt = 50e-6f; // PWM period of the fake board [s]
 constexpr uint32_t kPolePairs = 4u;
-constexpr float kOffset = 0.3f;      // encoder offset [rad]
-constexpr float kPllBw = 500.0f;     // speed tracking loop bandwidth [rad/s]
+constexpr float kOffset = 0.3f;  // encoder offset [rad]
+constexpr float kPllBw = 500.0f; // speed tracking loop bandwidth [rad/s]
 constexpr uint32_t kSlowDiv = 10u;
 constexpr float kIMax = 20.0f;
 constexpr float kITrip = 30.0f;
 constexpr float kVbusMin = 10.0f;
 constexpr float kVbusMax = 60.0f;
-constexpr float kVbus = 24.0f;       // nominal bus voltage of the tests
+constexpr float kVbus = 24.0f; // nominal bus voltage of the tests
 
 // ADC channels the drive needs (ic is derived when IC is not valid).
-constexpr uint32_t kMask3 =
-    MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS;
+constexpr uint32_t kMask3 = MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS;
 
 inline mc_drive_cfg_t GoodCfg()
 {
@@ -65,8 +65,9 @@ inline mc_drive_cfg_t GoodCfg()
     return c;
 }
 
-class AppDrive : public ::testing::Test {
-protected:
+class AppDrive : public ::testing::Test
+{
+  protected:
     void SetUp() override
     {
         ASSERT_EQ(0, mc_hal_fake_config_default(&fcfg));
@@ -83,7 +84,10 @@ protected:
     }
 
     // One conversion with zero currents at the nominal bus voltage.
-    void GoodSample() { ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, kVbus, kMask3)); }
+    void GoodSample()
+    {
+        ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, kVbus, kMask3));
+    }
 
     // Init, enter CURRENT, run one clean fast step.
     void InitRunning()
@@ -98,7 +102,10 @@ protected:
         ASSERT_TRUE(fake.pwm3.enabled);
     }
 
-    uint32_t Calls(mc_hal_fake_call_t c) const { return fake.call_count[c]; }
+    uint32_t Calls(mc_hal_fake_call_t c) const
+    {
+        return fake.call_count[c];
+    }
 
     mc_hal_fake_config_t fcfg{};
     mc_hal_fake_t fake{};
@@ -107,6 +114,6 @@ protected:
     mc_drive_t d{};
 };
 
-}  // namespace apptest
+} // namespace apptest
 
-#endif  // APP_TEST_FIXTURE_H
+#endif // APP_TEST_FIXTURE_H

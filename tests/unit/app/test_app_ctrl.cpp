@@ -8,8 +8,10 @@
 
 #include "app_test_fixture.h"
 
-namespace apptest {
-namespace {
+namespace apptest
+{
+namespace
+{
 
 struct StubLaw {
     uint32_t resets = 0, fasts = 0, slows = 0;
@@ -39,11 +41,13 @@ uint32_t stub_slow(void *ctx)
     return s->slow_ret;
 }
 
-class AppDriveCtrl : public AppDrive {
-protected:
+class AppDriveCtrl : public AppDrive
+{
+  protected:
     mc_drive_ctrl_t Law(uint32_t outputs, bool needs_encoder = true)
     {
-        return mc_drive_ctrl_t{outputs, needs_encoder, stub_reset, stub_fast, stub_slow, &law, nullptr};
+        return mc_drive_ctrl_t{outputs,   needs_encoder, stub_reset, stub_fast,
+                               stub_slow, &law,          nullptr};
     }
     StubLaw law;
 };
@@ -68,7 +72,7 @@ TEST_F(AppDriveCtrl, AttachRules)
     EXPECT_EQ(-ENODEV, mc_drive_attach_ctrl(&d, &c));
     c = Law(MC_DRIVE_OUT_PWM3, true);
     EXPECT_EQ(-ENODEV, mc_drive_attach_ctrl(&d, &c));
-    c = Law(MC_DRIVE_OUT_PWM3, false);  // a sensorless law needs no encoder
+    c = Law(MC_DRIVE_OUT_PWM3, false); // a sensorless law needs no encoder
     EXPECT_EQ(0, mc_drive_attach_ctrl(&d, &c));
     // CURRENT mode needs the encoder.
     EXPECT_EQ(-ENODEV, mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT));
@@ -131,7 +135,8 @@ TEST_F(AppDriveCtrl, StepperLawDrivesTheDualHBridgeWithoutAThirdPhase)
     // Two winding currents of 0.6 trip each: a derived third phase would be
     // 1.2 trip and trip; a stepper has no third phase.
     const uint32_t mask2 = MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS;
-    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.6f * kITrip, 0.6f * kITrip, 0.0f, kVbus, mask2));
+    ASSERT_EQ(0,
+              mc_hal_fake_adc_set_sample(&fake, 0.6f * kITrip, 0.6f * kITrip, 0.0f, kVbus, mask2));
     (void)mc_drive_fast_step(&d);
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
     EXPECT_EQ(0.0f, law.last.ic_a);
@@ -184,5 +189,5 @@ TEST_F(AppDriveCtrl, InvalidLawDutiesArePwmFaults)
     EXPECT_FALSE(fake.pwm3.enabled);
 }
 
-}  // namespace
-}  // namespace apptest
+} // namespace
+} // namespace apptest

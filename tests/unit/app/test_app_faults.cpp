@@ -6,13 +6,16 @@
 
 #include "app_test_fixture.h"
 
-namespace apptest {
-namespace {
+namespace apptest
+{
+namespace
+{
 
-constexpr uint32_t kTripTick = 0xC0FFEE01u;  // the fake's tick at the trip
+constexpr uint32_t kTripTick = 0xC0FFEE01u; // the fake's tick at the trip
 
-class AppDriveFault : public AppDrive {
-protected:
+class AppDriveFault : public AppDrive
+{
+  protected:
     // One fast step at tick kTripTick; expect exactly `bit` raised by it.
     void StepExpectTrip(uint32_t bit)
     {
@@ -65,28 +68,31 @@ TEST_F(AppDriveFault, AdcStaleSample)
 TEST_F(AppDriveFault, AdcMissingIa)
 {
     InitRunning();
-    Sample(0.0f, 0.0f, 0.0f, kVbus, MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC | MC_HAL_ADC_VALID_VBUS);
+    Sample(0.0f, 0.0f, 0.0f, kVbus,
+           MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC | MC_HAL_ADC_VALID_VBUS);
     StepExpectTrip(MC_DRIVE_FAULT_ADC);
 }
 
 TEST_F(AppDriveFault, AdcMissingIb)
 {
     InitRunning();
-    Sample(0.0f, 0.0f, 0.0f, kVbus, MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IC | MC_HAL_ADC_VALID_VBUS);
+    Sample(0.0f, 0.0f, 0.0f, kVbus,
+           MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IC | MC_HAL_ADC_VALID_VBUS);
     StepExpectTrip(MC_DRIVE_FAULT_ADC);
 }
 
 TEST_F(AppDriveFault, AdcMissingVbus)
 {
     InitRunning();
-    Sample(0.0f, 0.0f, 0.0f, kVbus, MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC);
+    Sample(0.0f, 0.0f, 0.0f, kVbus,
+           MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_IC);
     StepExpectTrip(MC_DRIVE_FAULT_ADC);
 }
 
 TEST_F(AppDriveFault, AdcFaultDetectedInIdleToo)
 {
     InitDrive();
-    StepExpectTrip(MC_DRIVE_FAULT_ADC);  // never sampled: stale
+    StepExpectTrip(MC_DRIVE_FAULT_ADC); // never sampled: stale
 }
 
 // ---- fast step: measurement values -------------------------------------------
@@ -104,7 +110,7 @@ TEST_F(AppDriveFault, NanOrInfMeasurement)
         {kInf, 0.0f, 0.0f, kVbus, kMask3},
         {0.0f, -kInf, 0.0f, kVbus, kMask3},
         {0.0f, 0.0f, 0.0f, kInf, kMask3},
-        {0.0f, 0.0f, kNaN, kVbus, MC_HAL_ADC_VALID_ALL},  // measured ic
+        {0.0f, 0.0f, kNaN, kVbus, MC_HAL_ADC_VALID_ALL}, // measured ic
         // derived ic = -(ia + ib) overflows to -inf
         {3e38f, 3e38f, 0.0f, kVbus, kMask3},
     };
@@ -119,7 +125,7 @@ TEST_F(AppDriveFault, NanOrInfMeasurement)
 TEST_F(AppDriveFault, NanInIcIgnoredWhenIcNotValid)
 {
     InitRunning();
-    Sample(1.0f, 2.0f, kNaN, kVbus, kMask3);  // ic channel not valid: derived
+    Sample(1.0f, 2.0f, kNaN, kVbus, kMask3); // ic channel not valid: derived
     StepExpectClean();
     EXPECT_EQ(-3.0f, d.tm.ic_a);
 }
@@ -136,7 +142,7 @@ TEST_F(AppDriveFault, OverCurrentOnEachPhase)
         {-above, 0.0f, 0.0f, kMask3},
         {0.0f, above, 0.0f, kMask3},
         {0.0f, -above, 0.0f, kMask3},
-        {0.0f, 0.0f, above, MC_HAL_ADC_VALID_ALL},   // measured ic
+        {0.0f, 0.0f, above, MC_HAL_ADC_VALID_ALL}, // measured ic
         {0.0f, 0.0f, -above, MC_HAL_ADC_VALID_ALL},
         // derived ic = -(ia + ib) = -36 A while |ia|, |ib| = 18 A are fine
         {0.6f * kITrip, 0.6f * kITrip, 0.0f, kMask3},
@@ -154,7 +160,7 @@ TEST_F(AppDriveFault, CurrentsAtTripLevelDoNotTrip)
 {
     InitRunning();
     // |i| == i_trip is not above it.
-    Sample(kITrip, -kITrip, 0.0f, kVbus, kMask3);  // derived ic = 0
+    Sample(kITrip, -kITrip, 0.0f, kVbus, kMask3); // derived ic = 0
     StepExpectClean();
     Sample(0.0f, 0.0f, -kITrip, kVbus, MC_HAL_ADC_VALID_ALL);
     StepExpectClean();
@@ -258,7 +264,7 @@ TEST_F(AppDriveFault, NoTickCapabilityStampsZero)
     ASSERT_EQ(MC_DRIVE_CFG_OK, mc_drive_init(&d, &cfg, &h));
     ASSERT_EQ(0, mc_hal_fake_encoder_set(&fake, 0u, MC_HAL_ENCODER_FLAG_VALID));
     ASSERT_EQ(0, mc_hal_fake_tick_set(&fake, 5u));
-    (void)mc_drive_fast_step(&d);  // stale ADC
+    (void)mc_drive_fast_step(&d); // stale ADC
     EXPECT_EQ(MC_DRIVE_FAULT_ADC, d.faults);
     EXPECT_EQ(0u, d.fault_tick);
 }
@@ -293,7 +299,7 @@ TEST_F(AppDriveFault, SlowStepRaisesHwInputWhenGateKilledOnly)
 {
     InitRunning();
     ASSERT_EQ(0, mc_hal_fake_fault_set_inputs(&fake, MC_HAL_FAULT_GATE_DRIVER));
-    ASSERT_EQ(0, mc_hal_fake_fault_set_inputs(&fake, 0u));  // glitch gone, kill latched
+    ASSERT_EQ(0, mc_hal_fake_fault_set_inputs(&fake, 0u)); // glitch gone, kill latched
     ASSERT_TRUE(fake.fault.gate_killed);
     mc_drive_slow_step(&d);
     EXPECT_EQ(MC_DRIVE_MODE_FAULT, d.mode);
@@ -320,7 +326,7 @@ TEST_F(AppDriveFault, SlowStepWithoutFaultCapability)
     h.fault = nullptr;
     ASSERT_EQ(MC_DRIVE_CFG_OK, mc_drive_init(&d, &cfg, &h));
     ASSERT_EQ(0, mc_hal_fake_fault_set_inputs(&fake, MC_HAL_FAULT_GATE_DRIVER));
-    mc_drive_slow_step(&d);  // nothing to read: no fault from the slow step
+    mc_drive_slow_step(&d); // nothing to read: no fault from the slow step
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
     EXPECT_EQ(0u, Calls(MC_HAL_FAKE_FAULT_READ));
 }
@@ -361,7 +367,7 @@ TEST_F(AppDriveFault, ClearReleasesTheGateOnceTheInputIsGone)
     EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
     EXPECT_EQ(0u, d.first_fault);
-    EXPECT_FALSE(fake.pwm3.enabled);  // clearing does not restart the bridge
+    EXPECT_FALSE(fake.pwm3.enabled); // clearing does not restart the bridge
     // And the drive can run again.
     EXPECT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT));
     EXPECT_TRUE(fake.pwm3.enabled);
@@ -394,7 +400,7 @@ TEST_F(AppDriveFault, ClearRefusedWhileVbusOutsideWindow)
 TEST_F(AppDriveFault, ClearRefusedBeforeAnyBusMeasurement)
 {
     InitDrive();
-    (void)mc_drive_fast_step(&d);  // stale ADC: no vbus ever measured
+    (void)mc_drive_fast_step(&d); // stale ADC: no vbus ever measured
     ASSERT_EQ(MC_DRIVE_FAULT_ADC, d.faults);
     EXPECT_EQ(-EBUSY, mc_drive_clear_faults(&d));
     EXPECT_EQ(MC_DRIVE_MODE_FAULT, d.mode);
@@ -412,7 +418,6 @@ TEST_F(AppDriveFault, ClearAcceptedAfterAFastStepFault)
     EXPECT_EQ(MC_FOC_ERR_NONE, d.foc_err);
     EXPECT_FALSE(fake.pwm3.enabled);
 }
-
 
 // hal/pwm3.h: when disable cannot confirm the outputs are off (-EIO), the
 // caller must fire the gate kill. Found by this suite; fixed in mc_drive.c.
@@ -460,5 +465,5 @@ TEST_F(AppDrive, UnreadableFaultStatusIsAFault)
     EXPECT_FALSE(fake.pwm3.enabled);
 }
 
-}  // namespace
-}  // namespace apptest
+} // namespace
+} // namespace apptest

@@ -6,11 +6,14 @@
 
 #include "app_test_fixture.h"
 
-namespace apptest {
-namespace {
+namespace apptest
+{
+namespace
+{
 
-class AppDriveInit : public AppDrive {
-protected:
+class AppDriveInit : public AppDrive
+{
+  protected:
     // Init with `c` (and `h`) into a drive filled with a byte pattern; expect
     // exactly `want`, the drive bytes unchanged and the PWM not touched.
     void ExpectRejected(const mc_drive_cfg_t &c, uint32_t want, const mc_hal_t *h = nullptr)
@@ -23,7 +26,11 @@ protected:
         EXPECT_EQ(want, mc_drive_init(&probe, &c, h != nullptr ? h : hal));
         // Byte comparison on purpose: padding included, every byte of the
         // pattern must survive a rejected init.
-        EXPECT_EQ(0, std::memcmp(&probe, &copy, sizeof probe))  // NOLINT(bugprone-suspicious-memory-comparison,cert-exp42-c,cert-flp37-c)
+        EXPECT_EQ(
+            0,
+            std::memcmp(
+                &probe, &copy,
+                sizeof probe)) // NOLINT(bugprone-suspicious-memory-comparison,cert-exp42-c,cert-flp37-c)
             << "drive written on error";
         EXPECT_EQ(disables, Calls(MC_HAL_FAKE_PWM3_DISABLE));
     }
@@ -39,7 +46,11 @@ TEST_F(AppDriveInit, NullPointers)
     EXPECT_EQ(MC_DRIVE_CFG_ERR_NULL, mc_drive_init(&probe, nullptr, hal));
     EXPECT_EQ(MC_DRIVE_CFG_ERR_NULL, mc_drive_init(&probe, &cfg, nullptr));
     // Byte comparison on purpose: the pattern must survive, padding included.
-    EXPECT_EQ(0, std::memcmp(&probe, &copy, sizeof probe));  // NOLINT(bugprone-suspicious-memory-comparison,cert-exp42-c,cert-flp37-c)
+    EXPECT_EQ(
+        0,
+        std::memcmp(
+            &probe, &copy,
+            sizeof probe)); // NOLINT(bugprone-suspicious-memory-comparison,cert-exp42-c,cert-flp37-c)
 }
 
 TEST_F(AppDriveInit, HalMissingCapability)
@@ -70,13 +81,13 @@ TEST_F(AppDriveInit, HalMissingCapability)
 TEST_F(AppDriveInit, FocConfigRejected)
 {
     mc_drive_cfg_t c = cfg;
-    c.foc.r_ohm = -0.1f;  // MC_FOC_ERR_MOTOR
+    c.foc.r_ohm = -0.1f; // MC_FOC_ERR_MOTOR
     ExpectRejected(c, MC_DRIVE_CFG_ERR_FOC);
     c = cfg;
-    c.foc.v_limit_ratio = 1.5f;  // MC_FOC_ERR_V_LIMIT
+    c.foc.v_limit_ratio = 1.5f; // MC_FOC_ERR_V_LIMIT
     ExpectRejected(c, MC_DRIVE_CFG_ERR_FOC);
     c = cfg;
-    c.foc.dt_s = 0.0f;  // MC_FOC_ERR_DT (3 bw dt = 0 passes the PLL rule)
+    c.foc.dt_s = 0.0f; // MC_FOC_ERR_DT (3 bw dt = 0 passes the PLL rule)
     ExpectRejected(c, MC_DRIVE_CFG_ERR_FOC);
 }
 
@@ -105,19 +116,19 @@ TEST_F(AppDriveInit, CurrentLimits)
         mc_drive_cfg_t c = cfg;
         c.i_max_a = v;
         if (std::isinf(v)) {
-            c.i_trip_a = kInf;  // keep i_trip >= i_max: only finiteness is broken
+            c.i_trip_a = kInf; // keep i_trip >= i_max: only finiteness is broken
         }
         SCOPED_TRACE(v);
         ExpectRejected(c, MC_DRIVE_CFG_ERR_CURRENT);
     }
     mc_drive_cfg_t c = cfg;
-    c.i_trip_a = std::nextafter(cfg.i_max_a, 0.0f);  // trip just below i_max
+    c.i_trip_a = std::nextafter(cfg.i_max_a, 0.0f); // trip just below i_max
     ExpectRejected(c, MC_DRIVE_CFG_ERR_CURRENT);
     c.i_trip_a = kNaN;
     ExpectRejected(c, MC_DRIVE_CFG_ERR_CURRENT);
     c.i_trip_a = kInf;
     ExpectRejected(c, MC_DRIVE_CFG_ERR_CURRENT);
-    c.i_trip_a = cfg.i_max_a;  // equal is allowed
+    c.i_trip_a = cfg.i_max_a; // equal is allowed
     EXPECT_EQ(MC_DRIVE_CFG_OK, mc_drive_init(&d, &c, hal));
 }
 
@@ -127,13 +138,10 @@ TEST_F(AppDriveInit, VbusWindow)
         float lo, hi;
     };
     const Case bad[] = {
-        {30.0f, 30.0f},   // empty window
-        {40.0f, 30.0f},   // reversed
-        {kNaN, 60.0f},
-        {10.0f, kNaN},
-        {10.0f, kInf},
-        {-kInf, 60.0f},
-        {-1.0f, 60.0f},   // an under-voltage trip must be a positive voltage
+        {30.0f, 30.0f}, // empty window
+        {40.0f, 30.0f}, // reversed
+        {kNaN, 60.0f},  {10.0f, kNaN},  {10.0f, kInf},
+        {-kInf, 60.0f}, {-1.0f, 60.0f}, // an under-voltage trip must be a positive voltage
     };
     for (const Case &k : bad) {
         mc_drive_cfg_t c = cfg;
@@ -144,7 +152,7 @@ TEST_F(AppDriveInit, VbusWindow)
         ExpectRejected(c, MC_DRIVE_CFG_ERR_VBUS);
     }
     mc_drive_cfg_t c = cfg;
-    c.vbus_max_v = std::nextafter(c.vbus_min_v, kInf);  // narrowest non-empty window
+    c.vbus_max_v = std::nextafter(c.vbus_min_v, kInf); // narrowest non-empty window
     EXPECT_EQ(MC_DRIVE_CFG_OK, mc_drive_init(&d, &c, hal));
 }
 
@@ -159,9 +167,9 @@ TEST_F(AppDriveInit, SpeedPllBandwidth)
     }
     // 3 bw dt <= 1 at dt = 50 us: bw <= 6666.7 rad/s.
     mc_drive_cfg_t c = cfg;
-    c.speed_pll_bw_rad_s = 6700.0f;  // 3 bw dt = 1.005
+    c.speed_pll_bw_rad_s = 6700.0f; // 3 bw dt = 1.005
     ExpectRejected(c, MC_DRIVE_CFG_ERR_SPEED_PLL);
-    c.speed_pll_bw_rad_s = 6660.0f;  // 3 bw dt = 0.999
+    c.speed_pll_bw_rad_s = 6660.0f; // 3 bw dt = 0.999
     EXPECT_EQ(MC_DRIVE_CFG_OK, mc_drive_init(&d, &c, hal));
     // The rule scales with dt: the same bw at twice the period is refused.
     c.foc.dt_s = 2.0f * kDt;
@@ -175,7 +183,7 @@ TEST_F(AppDriveInit, EncoderOffsetNotFinite)
     ExpectRejected(c, MC_DRIVE_CFG_ERR_OFFSET);
     c.encoder_offset_rad = -kInf;
     ExpectRejected(c, MC_DRIVE_CFG_ERR_OFFSET);
-    c.encoder_offset_rad = -100.0f;  // any finite offset is fine (wrapped)
+    c.encoder_offset_rad = -100.0f; // any finite offset is fine (wrapped)
     EXPECT_EQ(MC_DRIVE_CFG_OK, mc_drive_init(&d, &c, hal));
 }
 
@@ -196,7 +204,7 @@ TEST_F(AppDriveInit, SeveralRulesBrokenReportsAllBits)
 
 TEST_F(AppDriveInit, GoodInitIsIdleWithPwmOff)
 {
-    fake.pwm3.enabled = true;  // outputs left on by whoever ran before
+    fake.pwm3.enabled = true; // outputs left on by whoever ran before
     ASSERT_EQ(MC_DRIVE_CFG_OK, mc_drive_init(&d, &cfg, hal));
     EXPECT_FALSE(fake.pwm3.enabled);
     EXPECT_EQ(1u, Calls(MC_HAL_FAKE_PWM3_DISABLE));
@@ -233,5 +241,5 @@ TEST_F(AppDriveInit, ReinitOfARunningDriveResetsIt)
     EXPECT_EQ(0u, d.fast_count);
 }
 
-}  // namespace
-}  // namespace apptest
+} // namespace
+} // namespace apptest

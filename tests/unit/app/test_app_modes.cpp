@@ -7,8 +7,10 @@
 
 extern "C" int mc_test_set_mode_raw(mc_drive_t *d, int mode);
 
-namespace apptest {
-namespace {
+namespace apptest
+{
+namespace
+{
 
 using AppDriveMode = AppDrive;
 
@@ -52,7 +54,7 @@ TEST_F(AppDriveMode, EnableFailureIsBusyAndPwmStaysOff)
     EXPECT_EQ(-EBUSY, mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT));
     EXPECT_FALSE(fake.pwm3.enabled);
     EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
-    EXPECT_EQ(disables + 1u, Calls(MC_HAL_FAKE_PWM3_DISABLE));  // put back to safe
+    EXPECT_EQ(disables + 1u, Calls(MC_HAL_FAKE_PWM3_DISABLE)); // put back to safe
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
     // The injection is consumed: the next request works.
     EXPECT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT));
@@ -128,8 +130,8 @@ TEST_F(AppDriveMode, CurrentRefValidation)
 {
     InitDrive();
     ASSERT_EQ(0, mc_drive_set_current_ref(&d, -2.0f, 3.0f));
-    const float bad[] = {kNaN, kInf, -kInf, std::nextafter(kIMax, kInf),
-                         -std::nextafter(kIMax, kInf), 1e30f};
+    const float bad[] = {
+        kNaN, kInf, -kInf, std::nextafter(kIMax, kInf), -std::nextafter(kIMax, kInf), 1e30f};
     for (float v : bad) {
         SCOPED_TRACE(v);
         EXPECT_EQ(-EINVAL, mc_drive_set_current_ref(&d, v, 1.0f));
@@ -194,7 +196,7 @@ TEST_F(AppDriveMode, CurrentModeStepWritesFocDuties)
         in.ic_a = 0.0f;
         in.three_phase = false;
         in.theta_e_rad = d.tm.theta_e_rad;
-        in.omega_e_rad_s = 0.0f;  // encoder still: the speed estimate stays 0
+        in.omega_e_rad_s = 0.0f; // encoder still: the speed estimate stays 0
         in.vbus_v = kVbus;
         in.id_ref_a = -1.0f;
         in.iq_ref_a = 8.0f;
@@ -244,7 +246,7 @@ TEST_F(AppDriveMode, ReenteringCurrentStartsTheFocFromRest)
     InitDrive();
     ASSERT_EQ(0, mc_drive_set_current_ref(&d, 2.0f, -6.0f));
     ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT));
-    for (int k = 0; k < 50; ++k) {  // wind the PI integrators up
+    for (int k = 0; k < 50; ++k) { // wind the PI integrators up
         GoodSample();
         (void)mc_drive_fast_step(&d);
     }
@@ -273,15 +275,14 @@ TEST_F(AppDriveMode, ReenteringCurrentStartsTheFocFromRest)
 TEST_F(AppDriveMode, ThreeValidCurrentsAreUsedForIc)
 {
     InitDrive();
-    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 1.0f, 2.0f, -2.5f, kVbus,
-                                            MC_HAL_ADC_VALID_ALL));
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 1.0f, 2.0f, -2.5f, kVbus, MC_HAL_ADC_VALID_ALL));
     (void)mc_drive_fast_step(&d);
-    EXPECT_EQ(-2.5f, d.tm.ic_a);  // measured ic, copied
+    EXPECT_EQ(-2.5f, d.tm.ic_a); // measured ic, copied
     ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 1.0f, 2.0f, -2.5f, kVbus, kMask3));
     (void)mc_drive_fast_step(&d);
-    EXPECT_EQ(-3.0f, d.tm.ic_a);  // derived -(ia + ib): exact in float
+    EXPECT_EQ(-3.0f, d.tm.ic_a); // derived -(ia + ib): exact in float
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
 }
 
-}  // namespace
-}  // namespace apptest
+} // namespace
+} // namespace apptest

@@ -8,13 +8,16 @@
 
 #include "app_test_fixture.h"
 
-namespace apptest {
-namespace {
+namespace apptest
+{
+namespace
+{
 
 constexpr uint32_t kTripSteps = 10u;
 
-class AppOpenPhase : public AppDrive {
-protected:
+class AppOpenPhase : public AppDrive
+{
+  protected:
     void SetUp() override
     {
         AppDrive::SetUp();
@@ -140,11 +143,14 @@ TEST_F(AppOpenPhase, ConductionCountsDownAndAQuarterIsConduction)
     Start(4.0f, 0.0f);
     // ic = -(ia + ib): choose ib so that ic is the wanted value.
     auto StepIc = [&](float ic) { StepWith(r[0], -r[0] - ic); };
-    for (int k = 0; k < 6; ++k) StepIc(0.0f);
+    for (int k = 0; k < 6; ++k)
+        StepIc(0.0f);
     EXPECT_EQ(6u, d.open_phase_count[2]);
-    for (int k = 0; k < 6; ++k) StepIc(-1.01f * quarter);
+    for (int k = 0; k < 6; ++k)
+        StepIc(-1.01f * quarter);
     EXPECT_EQ(0u, d.open_phase_count[2]);
-    for (int k = 0; k < 100; ++k) StepIc((k % 2 == 0) ? 0.0f : r[2]);
+    for (int k = 0; k < 100; ++k)
+        StepIc((k % 2 == 0) ? 0.0f : r[2]);
     EXPECT_LE(d.open_phase_count[2], 1u);
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
     // The 0.99 / 1.01 margins keep the float sums of the derived ic on the
@@ -163,7 +169,8 @@ TEST_F(AppOpenPhase, NoCountAtTheVoltageLimit)
     // count far above that, the counts must stop growing there.
     cfg.open_phase_time_s = 4000.0f * kDt;
     Start(4.0f, 0.0f);
-    for (int k = 0; k < 1000; ++k) StepWith(0.0f, 0.0f);
+    for (int k = 0; k < 1000; ++k)
+        StepWith(0.0f, 0.0f);
     const uint32_t at_1000 = d.open_phase_count[0];
     const float v = std::hypot(d.tm.foc.vd_v, d.tm.foc.vq_v);
     EXPECT_GE(v, MC_DRIVE_OPEN_PHASE_VSAT_FRAC * kVbus / std::sqrt(3.0f)) << "at the limit";
@@ -171,7 +178,8 @@ TEST_F(AppOpenPhase, NoCountAtTheVoltageLimit)
     // (13.72 V - 0.4 V) / (400 V/s) = 33.3 ms = 666 steps; +-5 steps for the
     // discrete integrator (its update order and the one-step kp term).
     EXPECT_NEAR(static_cast<double>(at_1000), 666.0, 5.0);
-    for (int k = 0; k < 1000; ++k) StepWith(0.0f, 0.0f);
+    for (int k = 0; k < 1000; ++k)
+        StepWith(0.0f, 0.0f);
     EXPECT_EQ(at_1000, d.open_phase_count[0]);
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
 }
@@ -182,7 +190,8 @@ TEST_F(AppOpenPhase, OffWhenNotConfiguredAndOutsideCurrentMode)
     cfg.open_phase_i_min_a = 0.0f;
     cfg.open_phase_time_s = 0.0f;
     Start(4.0f, 0.0f);
-    for (int k = 0; k < 100; ++k) StepWith(0.0f, 0.0f);
+    for (int k = 0; k < 100; ++k)
+        StepWith(0.0f, 0.0f);
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
     // Check on but IDLE (references kept from IDLE): nothing counts.
     cfg = GoodCfg();
@@ -190,10 +199,11 @@ TEST_F(AppOpenPhase, OffWhenNotConfiguredAndOutsideCurrentMode)
     cfg.open_phase_time_s = static_cast<float>(kTripSteps) * kDt;
     InitDrive();
     ASSERT_EQ(0, mc_drive_set_current_ref(&d, 4.0f, 0.0f));
-    for (int k = 0; k < 100; ++k) StepWith(0.0f, 0.0f);
+    for (int k = 0; k < 100; ++k)
+        StepWith(0.0f, 0.0f);
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
     EXPECT_EQ(0u, d.open_phase_count[0]);
 }
 
-}  // namespace
-}  // namespace apptest
+} // namespace
+} // namespace apptest

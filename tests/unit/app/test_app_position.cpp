@@ -9,8 +9,10 @@
 #include "app_test_fixture.h"
 #include "math/mc_math.h"
 
-namespace apptest {
-namespace {
+namespace apptest
+{
+namespace
+{
 
 constexpr double kTwoPi = 6.283185307179586476925;
 
@@ -24,8 +26,9 @@ double AngleDist(double a, double b)
     return std::min(x, kTwoPi - x);
 }
 
-class AppDrivePosition : public AppDrive {
-protected:
+class AppDrivePosition : public AppDrive
+{
+  protected:
     void UseCpr(uint32_t cpr)
     {
         fcfg.encoder_counts_per_rev = cpr;
@@ -51,7 +54,10 @@ protected:
         return w;
     }
 
-    double RadPerCount() const { return kTwoPi / fcfg.encoder_counts_per_rev; }
+    double RadPerCount() const
+    {
+        return kTwoPi / fcfg.encoder_counts_per_rev;
+    }
 };
 
 // ---- electrical angle -------------------------------------------------------------
@@ -78,8 +84,8 @@ TEST_F(AppDrivePosition, ElectricalAngleEveryCount)
 {
     const AngleCase cases[] = {
         {16384u, 4u, 0.3f},
-        {4000u, 7u, -2.5f},    // cpr not a power of two, negative offset
-        {16384u, 21u, 6.0f},   // many pole pairs, offset near 2 pi
+        {4000u, 7u, -2.5f},  // cpr not a power of two, negative offset
+        {16384u, 21u, 6.0f}, // many pole pairs, offset near 2 pi
         {2048u, 1u, 0.0f},
     };
     for (const AngleCase &k : cases) {
@@ -118,9 +124,9 @@ TEST_F(AppDrivePosition, ElectricalAngleEveryCount)
 // one-period count difference is quantised to 2 pi / (cpr dt) = 7.67 rad/s
 // here (16384 counts, 50 us).
 
-constexpr int kSteps = 4000;   // 0.2 s = 100 / bw
-constexpr int kSettle = 1000;  // 0.05 s = 25 / bw: triple-pole transient
-                               // (bw t)^2 e^(-bw t) < 1e-7 of the initial error
+constexpr int kSteps = 4000;  // 0.2 s = 100 / bw
+constexpr int kSettle = 1000; // 0.05 s = 25 / bw: triple-pole transient
+                              // (bw t)^2 e^(-bw t) < 1e-7 of the initial error
 
 double WorstAfterSettle(const std::vector<double> &w, const std::function<double(int)> &want)
 {
@@ -140,7 +146,7 @@ TEST_F(AppDrivePosition, SpeedConvergesOnIntegerCountsPerStep)
     // |r| <= one ulp gives 9.5e-3 rad/s -> tolerance 1e-2 rad/s (0.04 % of
     // the slowest speed tested; measured <= 4.5e-3).
     constexpr double kTol = 1e-2;
-    for (int n : {3, -3, 40, -117}) {  // -117: through the wrap every 140 periods
+    for (int n : {3, -3, 40, -117}) { // -117: through the wrap every 140 periods
         SCOPED_TRACE(n);
         InitDrive();
         const double w_true = n * RadPerCount() / static_cast<double>(kDt);
@@ -204,11 +210,11 @@ TEST_F(AppDrivePosition, SpeedTracksConstantAccelerationWithoutLag)
     //    (measured <= 0.06).
     constexpr double tol = 0.2;
     const double dt = static_cast<double>(kDt);
-    const int n = 2000;  // 0.1 s: 2000 rad/s^2 reaches 200 rad/s (26 counts/period)
+    const int n = 2000; // 0.1 s: 2000 rad/s^2 reaches 200 rad/s (26 counts/period)
     for (double a : {2000.0, -2000.0, 800.0}) {
         SCOPED_TRACE(a);
         InitDrive();
-        const double a_counts = a / RadPerCount();  // [counts/s^2]
+        const double a_counts = a / RadPerCount(); // [counts/s^2]
         const auto pos = [a_counts, dt](int k) {
             const double t = k * dt;
             return 3000.0 + 0.5 * a_counts * t * t;
@@ -239,7 +245,7 @@ TEST_F(AppDrivePosition, SpeedEstimateStartsFromRest)
     ASSERT_EQ(0, mc_hal_fake_encoder_set(&fake, 9000u, MC_HAL_ENCODER_FLAG_VALID));
     GoodSample();
     (void)mc_drive_fast_step(&d);
-    EXPECT_EQ(0.0f, d.tm.omega_m_rad_s);  // set, not computed
+    EXPECT_EQ(0.0f, d.tm.omega_m_rad_s); // set, not computed
     // Encoder still afterwards: the estimate stays exactly 0 (err = 0).
     for (int k = 0; k < 100; ++k) {
         GoodSample();
@@ -248,5 +254,5 @@ TEST_F(AppDrivePosition, SpeedEstimateStartsFromRest)
     EXPECT_EQ(0.0f, d.tm.omega_m_rad_s);
 }
 
-}  // namespace
-}  // namespace apptest
+} // namespace
+} // namespace apptest

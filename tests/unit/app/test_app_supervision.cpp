@@ -9,11 +9,14 @@
 #include "app_test_fixture.h"
 #include "mc_record.hpp"
 
-namespace apptest {
-namespace {
+namespace apptest
+{
+namespace
+{
 
-class AppDriveSupervision : public AppDrive {
-protected:
+class AppDriveSupervision : public AppDrive
+{
+  protected:
     void SetUp() override
     {
         AppDrive::SetUp();
@@ -146,8 +149,7 @@ TEST_F(AppDriveSupervision, OverTemperatureAndInvalidSensor)
     EXPECT_EQ(MC_DRIVE_FAULT_OVERTEMP, d.faults) << "motor winding too hot";
 
     InitDrive();
-    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 20.0f, 20.0f,
-                                          MC_HAL_ADC_TEMP_VALID_POWER_STAGE));
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 20.0f, 20.0f, MC_HAL_ADC_TEMP_VALID_POWER_STAGE));
     mc_drive_slow_step(&d);
     EXPECT_EQ(MC_DRIVE_FAULT_OVERTEMP, d.faults) << "a missing reading cannot be trusted";
 }
@@ -184,10 +186,12 @@ TEST_F(AppDriveSupervision, UnbalancedThreePhaseCurrents)
 {
     cfg.i_unbalance_max_a = 1.0f;
     InitDrive();
-    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 5.0f, -2.0f, -2.1f, kVbus, MC_HAL_ADC_VALID_ALL));
+    ASSERT_EQ(0,
+              mc_hal_fake_adc_set_sample(&fake, 5.0f, -2.0f, -2.1f, kVbus, MC_HAL_ADC_VALID_ALL));
     (void)mc_drive_fast_step(&d);
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults) << "0.9 A of imbalance is inside the limit";
-    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 5.0f, -2.0f, -1.9f, kVbus, MC_HAL_ADC_VALID_ALL));
+    ASSERT_EQ(0,
+              mc_hal_fake_adc_set_sample(&fake, 5.0f, -2.0f, -1.9f, kVbus, MC_HAL_ADC_VALID_ALL));
     (void)mc_drive_fast_step(&d);
     EXPECT_EQ(MC_DRIVE_FAULT_UNBALANCED, d.faults);
 }
@@ -200,5 +204,5 @@ TEST_F(AppDriveSupervision, ExternalFaultFromTheApplication)
     EXPECT_FALSE(fake.pwm3.enabled);
 }
 
-}  // namespace
-}  // namespace apptest
+} // namespace
+} // namespace apptest

@@ -155,8 +155,8 @@ TEST(CommissionApply, WritesTheMotorAndRederivesTheCurrentLoop) {
   EXPECT_EQ(1e-4f, dc.foc.ld_h);
   EXPECT_EQ(1.5e-4f, dc.foc.lq_h);
   EXPECT_EQ(0.02f, dc.foc.flux_wb);
-  EXPECT_FLOAT_EQ(1e-4f * bw, dc.foc.kp_d_v_per_a);   // kp = L bw
-  EXPECT_FLOAT_EQ(0.2f * bw, dc.foc.ki_d_v_per_as);   // ki = R bw
+  EXPECT_FLOAT_EQ(1e-4f * bw, dc.foc.kp_d_v_per_a);  // kp = L bw
+  EXPECT_FLOAT_EQ(0.2f * bw, dc.foc.ki_d_v_per_as);  // ki = R bw
   EXPECT_FLOAT_EQ(1.5e-4f * bw, dc.foc.kp_q_v_per_a);
   EXPECT_EQ(7u, dc.pole_pairs);
   EXPECT_EQ(1.25f, dc.encoder_offset_rad);
@@ -186,8 +186,7 @@ TEST(CommissionApply, RefusesAnIncompleteOrImplausibleResult) {
   EXPECT_EQ(MC_COMM_ERR_RANGE, refused([](mc_comm_result_t& r) { r.ld_h = kNaN; }));
   EXPECT_EQ(MC_COMM_ERR_RANGE, refused([](mc_comm_result_t& r) { r.pole_pairs = 0u; }));
   EXPECT_EQ(MC_COMM_ERR_RANGE, refused([](mc_comm_result_t& r) { r.encoder_direction = 0; }));
-  EXPECT_EQ(MC_COMM_ERR_RANGE,
-            refused([](mc_comm_result_t& r) { r.encoder_offset_rad = kInf; }));
+  EXPECT_EQ(MC_COMM_ERR_RANGE, refused([](mc_comm_result_t& r) { r.encoder_offset_rad = kInf; }));
 }
 
 }  // namespace

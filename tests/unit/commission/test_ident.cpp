@@ -41,7 +41,8 @@ TEST(IdentAvg, CompensatedOverAMillionSamples) {
 TEST(IdentLine, ExactLineWithAndWithoutIntercept) {
   mc_ident_line_f32_t l;
   mc_ident_line_f32_reset(&l);
-  for (int k = -10; k <= 10; ++k) (void)mc_ident_line_f32_step(&l, 0.1f * k, 2.0f + 3.0f * 0.1f * k);
+  for (int k = -10; k <= 10; ++k)
+    (void)mc_ident_line_f32_step(&l, 0.1f * k, 2.0f + 3.0f * 0.1f * k);
   float b = 0.0f, a = 0.0f;
   ASSERT_EQ(MC_IDENT_ERR_NONE, mc_ident_line_f32_get(&l, true, &b, &a));
   EXPECT_NEAR(3.0f, b, 1e-5f);

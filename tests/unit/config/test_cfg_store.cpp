@@ -11,10 +11,11 @@
 #include "mc_crc32.h"
 #include "mc_fake_flash.h"
 
-namespace {
+namespace
+{
 
 constexpr uint32_t kRecBytes = MC_CFG_REC_WORDS * 4u;
-constexpr uint32_t kCodeBytes = 256u;  // sector 0: stands for the code, never touched
+constexpr uint32_t kCodeBytes = 256u; // sector 0: stands for the code, never touched
 
 struct Rig {
     std::vector<uint8_t> mem;
@@ -39,7 +40,10 @@ struct Rig {
         EXPECT_EQ(mc_cfg_store_init(&store, &c), 0);
         return mc_cfg_store_load(&store, p);
     }
-    uint8_t *Sector(uint32_t i) { return mem.data() + kCodeBytes + (i - 1u) * sizes[1]; }
+    uint8_t *Sector(uint32_t i)
+    {
+        return mem.data() + kCodeBytes + (i - 1u) * sizes[1];
+    }
 };
 
 bool Same(const mc_params_t &a, const mc_params_t &b)
@@ -108,7 +112,7 @@ TEST(CfgStore, EmptyBootsWithDefaultsThenRoundTrip)
 
 TEST(CfgStore, NewestWinsAndCodeSectorUntouched)
 {
-    Rig r(kRecBytes * 3u + 64u);  // three records per sector: appends and switches
+    Rig r(kRecBytes * 3u + 64u); // three records per sector: appends and switches
     const std::vector<uint8_t> code(r.mem.begin(), r.mem.begin() + kCodeBytes);
     mc_params_t p{};
     r.Boot(&p);
@@ -130,7 +134,7 @@ TEST(CfgStore, CorruptNewestFallsBackToPrevious)
     const mc_params_t a = Variant(1), b = Variant(2);
     ASSERT_EQ(mc_cfg_store_save(&r.store, &a), 0);
     ASSERT_EQ(mc_cfg_store_save(&r.store, &b), 0);
-    r.Sector(1)[kRecBytes + 40] ^= 0x04;  // one bit of the second record's payload
+    r.Sector(1)[kRecBytes + 40] ^= 0x04; // one bit of the second record's payload
     EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
     EXPECT_TRUE(Same(p, a));
     // the next save does not append behind the damaged record: it starts B
@@ -198,7 +202,7 @@ TEST(CfgStore, InvalidRecordRefusedWithDefaults)
 {
     Rig r(4096);
     mc_params_t bad = mc_params_default;
-    bad.i_sense_max_a = 5.0f;  // each value in range, the whole refused (sensor scale)
+    bad.i_sense_max_a = 5.0f; // each value in range, the whole refused (sensor scale)
     ASSERT_NE(mc_params_validate(&bad), MC_PARAMS_OK);
     const auto rec = Record(MC_PARAMS_LAYOUT_VERSION, 1, Entries(bad));
     std::memcpy(r.Sector(1), rec.data(), rec.size() * 4u);
@@ -213,12 +217,12 @@ TEST(CfgStore, InvalidRecordRefusedWithDefaults)
 
 TEST(CfgStore, FlashErrorKeepsPrevious)
 {
-    Rig r(kRecBytes + 16u);  // one record per sector: every save erases
+    Rig r(kRecBytes + 16u); // one record per sector: every save erases
     mc_params_t p{};
     r.Boot(&p);
     const mc_params_t a = Variant(1), b = Variant(2);
     ASSERT_EQ(mc_cfg_store_save(&r.store, &a), 0);
-    r.flash.fail_next = -EIO;  // the erase of B fails
+    r.flash.fail_next = -EIO; // the erase of B fails
     EXPECT_EQ(mc_cfg_store_save(&r.store, &b), -EIO);
     EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
     EXPECT_TRUE(Same(p, a));
@@ -247,11 +251,13 @@ void PowerCutSweep(uint32_t sector_bytes, uint32_t saves, uint32_t *p_cases, uin
         ASSERT_GE(n, MC_CFG_REC_WORDS);
         const std::vector<uint8_t> after = r.mem;
         for (uint32_t k = 1; k <= n; ++k) {
-            for (const mc_fake_flash_tear_t tear : {MC_FAKE_FLASH_TEAR_NONE, MC_FAKE_FLASH_TEAR_HALF}) {
+            for (const mc_fake_flash_tear_t tear :
+                 {MC_FAKE_FLASH_TEAR_NONE, MC_FAKE_FLASH_TEAR_HALF}) {
                 r.mem = before;
                 r.Boot(&p);
                 mc_fake_flash_cut_at(&r.flash, k, tear);
-                ASSERT_EQ(mc_cfg_store_save(&r.store, &next), -EIO) << "save " << i << " step " << k;
+                ASSERT_EQ(mc_cfg_store_save(&r.store, &next), -EIO)
+                    << "save " << i << " step " << k;
                 const mc_cfg_boot_t st = r.Boot(&p);
                 ASSERT_TRUE(Same(p, old)) << "save " << i << " cut at step " << k << " of " << n
                                           << " tear " << tear << " boot " << st;
@@ -294,4 +300,4 @@ TEST(CfgStore, PowerCutAtEveryStepAppendAndSwitch)
     EXPECT_EQ(erase_cuts, 2u * 3u);
 }
 
-}  // namespace
+} // namespace

@@ -17,7 +17,8 @@
 #include "mc_param_srv.h"
 #include "mc_telemetry.h"
 
-namespace {
+namespace
+{
 
 constexpr uint32_t kSector = 4096;
 
@@ -32,9 +33,13 @@ struct Reply {
     uint32_t op, id, status, value;
 };
 
-class ParamCan : public ::testing::Test {
-protected:
-    void SetUp() override { Boot(); }
+class ParamCan : public ::testing::Test
+{
+  protected:
+    void SetUp() override
+    {
+        Boot();
+    }
 
     // Power on: flash, store, configuration, drive, telemetry, commands.
     void Boot()
@@ -65,7 +70,8 @@ protected:
         cc.stop_decel_rad_s2 = p.stop_decel_rad_s2;
         cc.speed_max_rad_s = p.speed_max_rad_s;
         ASSERT_EQ(MC_CAN_CMD_CFG_OK, mc_can_cmd_init(&c, &cc, &d, &tm));
-        ASSERT_EQ(0, mc_param_srv_init(&srv, &p, &d, &fake.board, &store, static_cast<uint8_t>(boot)));
+        ASSERT_EQ(0,
+                  mc_param_srv_init(&srv, &p, &d, &fake.board, &store, static_cast<uint8_t>(boot)));
         mc_can_cmd_attach_params(&c, &srv);
     }
 
@@ -77,14 +83,16 @@ protected:
         f.data[0] = static_cast<uint8_t>(op);
         f.data[1] = static_cast<uint8_t>(id);
         f.data[2] = static_cast<uint8_t>(id >> 8);
-        for (int i = 0; i < 4; ++i) f.data[4 + i] = static_cast<uint8_t>(value >> (8 * i));
+        for (int i = 0; i < 4; ++i)
+            f.data[4 + i] = static_cast<uint8_t>(value >> (8 * i));
         EXPECT_EQ(MC_CAN_ERR_NONE, mc_can_cmd_handle(&c, &f, fake.board.can));
         mc_hal_can_frame_t r{};
         EXPECT_EQ(0, mc_hal_fake_can_tx_pop(&fake, &r)) << "one PARAM_REPLY per request";
         EXPECT_EQ(mc_can_id(c.cfg.node_id, MC_CAN_CMD_PARAM_REPLY), r.id);
         EXPECT_EQ(8u, r.len);
         Reply out{r.data[0], static_cast<uint32_t>(r.data[1] | (r.data[2] << 8)), r.data[3], 0};
-        for (int i = 0; i < 4; ++i) out.value |= static_cast<uint32_t>(r.data[4 + i]) << (8 * i);
+        for (int i = 0; i < 4; ++i)
+            out.value |= static_cast<uint32_t>(r.data[4 + i]) << (8 * i);
         EXPECT_EQ(op, out.op);
         EXPECT_EQ(id, out.id);
         return out;
@@ -117,7 +125,8 @@ TEST_F(ParamCan, ReadValuesAndStatus)
     EXPECT_EQ(MC_PARAM_OK, r.status);
     EXPECT_EQ(Bits(0.675f), r.value);
     EXPECT_EQ(500000u, Req(MC_PARAM_OP_READ, MC_PARAM_ID_CAN_BITRATE_BPS).value);
-    EXPECT_EQ(MC_PARAMS_LAYOUT_VERSION, Req(MC_PARAM_OP_READ, MC_PARAM_ID_CFG_LAYOUT_VERSION).value);
+    EXPECT_EQ(MC_PARAMS_LAYOUT_VERSION,
+              Req(MC_PARAM_OP_READ, MC_PARAM_ID_CFG_LAYOUT_VERSION).value);
     EXPECT_EQ(static_cast<uint32_t>(MC_CFG_BOOT_EMPTY),
               Req(MC_PARAM_OP_READ, MC_PARAM_ID_CFG_STORE_STATUS).value);
     EXPECT_EQ(MC_PARAM_ERR_UNKNOWN_ID, Req(MC_PARAM_OP_READ, 19u).status);
@@ -129,8 +138,9 @@ TEST_F(ParamCan, BadWritesRefusedWithReasonNothingChanged)
     EXPECT_EQ(MC_PARAM_ERR_UNKNOWN_ID, Req(MC_PARAM_OP_WRITE, 19u, 1u).status);
     EXPECT_EQ(MC_PARAM_ERR_READONLY, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CFG_STORE_SEQ, 5u).status);
     EXPECT_EQ(MC_PARAM_ERR_RANGE, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_R_OHM, Bits(-0.5f)).status);
-    EXPECT_EQ(MC_PARAM_ERR_RANGE,
-              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_R_OHM, Bits(std::numeric_limits<float>::quiet_NaN())).status);
+    EXPECT_EQ(MC_PARAM_ERR_RANGE, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_R_OHM,
+                                      Bits(std::numeric_limits<float>::quiet_NaN()))
+                                      .status);
     EXPECT_EQ(MC_PARAM_ERR_RANGE, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_POLE_PAIRS, 0u).status);
     EXPECT_EQ(MC_PARAM_ERR_RANGE, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_NODE_ID, 63u).status);
     EXPECT_EQ(0, std::memcmp(&before, &srv, sizeof srv));
@@ -146,7 +156,7 @@ TEST_F(ParamCan, BadWritesRefusedWithReasonNothingChanged)
 TEST_F(ParamCan, WriteTakesEffectOnApply)
 {
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, Bits(5.0f)).status);
-    EXPECT_EQ(Bits(5.0f), Req(MC_PARAM_OP_READ, MC_PARAM_ID_I_MAX_A).value);  // staged
+    EXPECT_EQ(Bits(5.0f), Req(MC_PARAM_OP_READ, MC_PARAM_ID_I_MAX_A).value); // staged
     EXPECT_EQ(1u, Req(MC_PARAM_OP_READ, MC_PARAM_ID_CFG_PENDING).value);
     EXPECT_EQ(10.0f, d.cfg.i_max_a) << "not in effect before APPLY";
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
@@ -161,7 +171,7 @@ TEST_F(ParamCan, WriteTakesEffectOnApply)
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_TIMEOUT_S, Bits(0.25f)).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_TM_CURRENTS_HZ, 250u).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
-    EXPECT_EQ(250u, c.timeout_ticks);  // 0.25 s at 1 kHz
+    EXPECT_EQ(250u, c.timeout_ticks); // 0.25 s at 1 kHz
     EXPECT_EQ(250u, tm.cfg.rate_hz[MC_TM_CURRENTS]);
 }
 
@@ -179,15 +189,16 @@ TEST_F(ParamCan, InconsistentSetRefusedAsAWhole)
     // gains vs PWM rate: 1257 rad/s at 2 kHz is bw dt = 0.63 > 0.5
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_SENSE_MAX_A, Bits(60.0f)).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_PWM_HZ, 5000u).status);
-    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CURRENT_BW_RAD_S, Bits(3000.0f)).status);
+    EXPECT_EQ(MC_PARAM_OK,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CURRENT_BW_RAD_S, Bits(3000.0f)).status);
     r = Req(MC_PARAM_OP_APPLY, 0);
     EXPECT_EQ(MC_PARAM_ERR_INVALID, r.status);
     EXPECT_EQ(MC_PARAMS_ERR_BANDWIDTH, r.value);
     // telemetry above the bus budget (4 x 1000 frames/s of 135 bits on
     // 500 kbit/s is 108 %): refused, rates unchanged
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_LOAD_DEFAULTS, 0).status);
-    for (uint32_t id : {MC_PARAM_ID_TM_CURRENTS_HZ, MC_PARAM_ID_TM_VOLTAGES_HZ, MC_PARAM_ID_TM_SPEED_HZ,
-                        MC_PARAM_ID_TM_POSITION_HZ}) {
+    for (uint32_t id : {MC_PARAM_ID_TM_CURRENTS_HZ, MC_PARAM_ID_TM_VOLTAGES_HZ,
+                        MC_PARAM_ID_TM_SPEED_HZ, MC_PARAM_ID_TM_POSITION_HZ}) {
         EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, id, 1000u).status);
     }
     EXPECT_EQ(MC_PARAM_ERR_INVALID, Req(MC_PARAM_OP_APPLY, 0).status);
@@ -230,8 +241,9 @@ TEST_F(ParamCan, FaultLatchedOnlyReadsAndTheClearPath)
     EXPECT_EQ(10.0f, d.cfg.i_max_a);
     // the clear path (the fake's bus is inside the window: the cause is gone)
     ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 24.0f,
-                                            MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS));
-    (void)mc_drive_fast_step(&d);  // the drive sees the bus back in its window
+                                            MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB |
+                                                MC_HAL_ADC_VALID_VBUS));
+    (void)mc_drive_fast_step(&d); // the drive sees the bus back in its window
     mc_hal_can_frame_t f{};
     f.id = mc_can_id(1u, MC_CAN_CMD_CLEAR_FAULTS);
     ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_cmd_handle(&c, &f, fake.board.can));
@@ -246,12 +258,12 @@ TEST_F(ParamCan, SaveSurvivesRebootNodeIdOnlyAfterReset)
     EXPECT_EQ(1u, c.cfg.node_id) << "the node id changes only after save + reset";
     Reply r = Req(MC_PARAM_OP_SAVE, 0);
     EXPECT_EQ(MC_PARAM_OK, r.status);
-    EXPECT_EQ(1u, r.value);  // first record
+    EXPECT_EQ(1u, r.value); // first record
     Boot();
     EXPECT_EQ(MC_CFG_BOOT_STORED, boot);
     EXPECT_EQ(5u, c.cfg.node_id);
     EXPECT_EQ(7.0f, d.cfg.i_max_a);
-    EXPECT_EQ(Bits(7.0f), Req(MC_PARAM_OP_READ, MC_PARAM_ID_I_MAX_A).value);  // node 5 now
+    EXPECT_EQ(Bits(7.0f), Req(MC_PARAM_OP_READ, MC_PARAM_ID_I_MAX_A).value); // node 5 now
     // defaults: staged, applied, saved, and after a reset the node is 1 again
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_LOAD_DEFAULTS, 0).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
@@ -267,7 +279,7 @@ TEST_F(ParamCan, HeartbeatSaysWhenDefaultsWereLoaded)
     const mc_telemetry_src_t src = {&d, &c, nullptr};
     ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
     EXPECT_EQ(static_cast<float>(MC_CAN_VAL_CFG_STATUS_EMPTY), v[MC_CAN_HEARTBEAT_CFG_STATUS]);
-    std::memset(mem.data(), 0x00, 64);  // garbage where a record would start
+    std::memset(mem.data(), 0x00, 64); // garbage where a record would start
     Boot();
     EXPECT_EQ(MC_CFG_BOOT_CORRUPT, boot);
     ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
@@ -275,4 +287,4 @@ TEST_F(ParamCan, HeartbeatSaysWhenDefaultsWereLoaded)
     EXPECT_EQ(0, std::memcmp(&p, &mc_params_default, sizeof p));
 }
 
-}  // namespace
+} // namespace

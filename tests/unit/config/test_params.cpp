@@ -11,7 +11,8 @@
 #include "mc_hal_fake.h"
 #include "mc_params.h"
 
-namespace {
+namespace
+{
 
 uint32_t Bits(float f)
 {
@@ -37,15 +38,15 @@ TEST(Params, TableSortedUniqueAndDefaultsInRange)
     }
     EXPECT_EQ(mc_param_find(0, nullptr), nullptr);
     EXPECT_EQ(mc_param_find(65535, nullptr), nullptr);
-    EXPECT_EQ(mc_param_find(MC_PARAM_ID_R_OHM + 18u, nullptr), nullptr);  // 19: a gap
+    EXPECT_EQ(mc_param_find(MC_PARAM_ID_R_OHM + 18u, nullptr), nullptr); // 19: a gap
 }
 
 TEST(Params, SingleValueChecks)
 {
     const mc_param_info_t *r = mc_param_find(MC_PARAM_ID_R_OHM, nullptr);
     ASSERT_NE(r, nullptr);
-    EXPECT_EQ(mc_param_check_value(r, Bits(0.0f)), MC_PARAM_OK);     // min inclusive
-    EXPECT_EQ(mc_param_check_value(r, Bits(100.0f)), MC_PARAM_OK);   // max inclusive
+    EXPECT_EQ(mc_param_check_value(r, Bits(0.0f)), MC_PARAM_OK);   // min inclusive
+    EXPECT_EQ(mc_param_check_value(r, Bits(100.0f)), MC_PARAM_OK); // max inclusive
     EXPECT_EQ(mc_param_check_value(r, Bits(-1e-9f)), MC_PARAM_ERR_RANGE);
     EXPECT_EQ(mc_param_check_value(r, Bits(std::nextafter(100.0f, 200.0f))), MC_PARAM_ERR_RANGE);
     EXPECT_EQ(mc_param_check_value(r, Bits(std::numeric_limits<float>::quiet_NaN())),
@@ -82,31 +83,31 @@ TEST(Params, DefaultsValidAndAcceptedByTheDrive)
 TEST(Params, CurrentLimitAboveSensorFullScaleRefused)
 {
     mc_params_t p = mc_params_default;
-    p.i_sense_max_a = 12.0f;  // i_max 10 fits, i_trip 15 does not
+    p.i_sense_max_a = 12.0f; // i_max 10 fits, i_trip 15 does not
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_SENSE);
     p.i_trip_a = 12.0f;
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
-    p.i_max_a = 12.5f;  // now i_max > i_trip (drive) and > full scale
+    p.i_max_a = 12.5f; // now i_max > i_trip (drive) and > full scale
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_SENSE | MC_PARAMS_ERR_DRIVE);
 }
 
 TEST(Params, CrossChecks)
 {
     mc_params_t p = mc_params_default;
-    p.current_bw_rad_s = 0.5f * 20000.0f;  // bw dt = 0.5: the limit itself is allowed
+    p.current_bw_rad_s = 0.5f * 20000.0f; // bw dt = 0.5: the limit itself is allowed
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
-    p.pwm_hz = 19999u;  // same bandwidth, slower loop: bw dt > 0.5
+    p.pwm_hz = 19999u; // same bandwidth, slower loop: bw dt > 0.5
     EXPECT_EQ(mc_params_validate(&p) & MC_PARAMS_ERR_BANDWIDTH, MC_PARAMS_ERR_BANDWIDTH);
     p = mc_params_default;
-    p.dead_time_s = 5.0e-6f;  // 10 % of 50 us is 5 us: allowed
+    p.dead_time_s = 5.0e-6f; // 10 % of 50 us is 5 us: allowed
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
-    p.pwm_hz = 25000u;  // 12.5 %
+    p.pwm_hz = 25000u; // 12.5 %
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_DEAD_TIME);
     p = mc_params_default;
-    p.can_bitrate_bps = 300000u;  // in range, not a standard rate
+    p.can_bitrate_bps = 300000u; // in range, not a standard rate
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_BITRATE);
     p = mc_params_default;
-    p.vbus_min_v = 60.0f;  // above vbus_max_v: the drive's own check
+    p.vbus_min_v = 60.0f; // above vbus_max_v: the drive's own check
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_DRIVE);
     p = mc_params_default;
     p.r_ohm = std::numeric_limits<float>::quiet_NaN();
@@ -114,4 +115,4 @@ TEST(Params, CrossChecks)
     EXPECT_EQ(mc_params_validate(nullptr), MC_PARAMS_ERR_NULL);
 }
 
-}  // namespace
+} // namespace

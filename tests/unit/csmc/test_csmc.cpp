@@ -67,12 +67,14 @@ std::vector<double> expm_ref(const std::vector<double>& a, int n) {
   const double sc = std::ldexp(1.0, -s);
   std::vector<double> m(a.size()), term(a.size(), 0.0), sum(a.size(), 0.0), tmp(a.size());
   for (size_t i = 0; i < a.size(); ++i) m[i] = a[i] * sc;
-  for (int i = 0; i < n; ++i) term[static_cast<size_t>(i * n + i)] = sum[static_cast<size_t>(i * n + i)] = 1.0;
+  for (int i = 0; i < n; ++i)
+    term[static_cast<size_t>(i * n + i)] = sum[static_cast<size_t>(i * n + i)] = 1.0;
   for (int k = 1; k < 12; ++k) {
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
         double acc = 0.0;
-        for (int l = 0; l < n; ++l) acc += term[static_cast<size_t>(i * n + l)] * m[static_cast<size_t>(l * n + j)];
+        for (int l = 0; l < n; ++l)
+          acc += term[static_cast<size_t>(i * n + l)] * m[static_cast<size_t>(l * n + j)];
         tmp[static_cast<size_t>(i * n + j)] = acc / k;
       }
     term = tmp;
@@ -82,7 +84,8 @@ std::vector<double> expm_ref(const std::vector<double>& a, int n) {
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
         double acc = 0.0;
-        for (int l = 0; l < n; ++l) acc += sum[static_cast<size_t>(i * n + l)] * sum[static_cast<size_t>(l * n + j)];
+        for (int l = 0; l < n; ++l)
+          acc += sum[static_cast<size_t>(i * n + l)] * sum[static_cast<size_t>(l * n + j)];
         tmp[static_cast<size_t>(i * n + j)] = acc;
       }
     sum = tmp;
@@ -280,7 +283,8 @@ void run_modal_vs_dense(const CsvcModel& m, float mu, float dt, int steps, doubl
     // s* = a sinusoid at the model's lowest frequency plus a constant and
     // noise, with bursts far outside the boundary layer.
     const double t = k * static_cast<double>(dt);
-    float sstar = static_cast<float>(0.3 * mu * std::sin(2.0 * kPi * t) + 0.2 * mu) + 0.1f * mu * u(g);
+    float sstar =
+        static_cast<float>(0.3 * mu * std::sin(2.0 * kPi * t) + 0.2 * mu) + 0.1f * mu * u(g);
     if ((k / 2000) % 5 == 4) sstar *= 30.0f;
     double tr = 0.0;
     for (size_t i = 0; i < n; ++i) tr += static_cast<double>(c.model.k0[i]) * sref[i];
@@ -316,8 +320,11 @@ void run_modal_vs_dense(const CsvcModel& m, float mu, float dt, int steps, doubl
 
 TEST(CsmcCsvc, ModalRealisationAgreesWithDense) {
   const float w02 = static_cast<float>(4.0 * kPi * kPi);
-  const CsvcModel s1{5u, {0.0f, -4.0f * w02 * w02, 0.0f, -5.0f * w02, 0.0f},
-                     {-1, -2, -2, -3, -3}, {0, 1, -1, 1, -1}, MC_CSVC_REAL_MODAL2};
+  const CsvcModel s1{5u,
+                     {0.0f, -4.0f * w02 * w02, 0.0f, -5.0f * w02, 0.0f},
+                     {-1, -2, -2, -3, -3},
+                     {0, 1, -1, 1, -1},
+                     MC_CSVC_REAL_MODAL2};
   const CsvcModel s2{3u, {0.0f, -w02, 0.0f}, {-1, -2, -2}, {0, 1, -1}, MC_CSVC_REAL_MODAL1};
   const CsvcModel integ{1u, {0.0f}, {-20.0f}, {0.0f}, MC_CSVC_REAL_MODAL0};
   for (const CsvcModel* m : {&s1, &s2, &integ}) {
@@ -367,7 +374,7 @@ TEST(CsmcCsvc, RejectsBadConfigWithoutTouchingState) {
   mc_csvc_f32_cfg_t c{};
   c.model.order = 3u;
   c.model.c[1] = -4.0f;
-  c.model.k0[0] = 5.0f;  // K0 = (5, 0, 5): l^3 + 5 l^2 + 4 l + 5 -> 5*4 < 5? 20 > 5 ok
+  c.model.k0[0] = 5.0f;    // K0 = (5, 0, 5): l^3 + 5 l^2 + 4 l + 5 -> 5*4 < 5? 20 > 5 ok
   c.model.k0[1] = -10.0f;  // makes l coefficient -6: not Hurwitz
   c.model.k0[2] = 5.0f;
   c.mu = 1.0f;
@@ -560,9 +567,18 @@ mc_csmc_f32_cfg_t paper_cfg(mc_csmc_law_t law, mc_csmc_sw_t sw, bool integ) {
   }
   c.m1_v = 50.0f;
   c.m2_v = 50.0f;
-  c.model = mc_csmc_f32_model_t{0.1349f, 4.1295e-4f, 0.0013f, 50u,    0.2f,
-                                20.0f,   19.0f,      21.0f,   0.035f, 0.030f,
-                                0.040f,  2.1f * 20.0f * 0.1f * 0.040f,
+  c.model = mc_csmc_f32_model_t{0.1349f,
+                                4.1295e-4f,
+                                0.0013f,
+                                50u,
+                                0.2f,
+                                20.0f,
+                                19.0f,
+                                21.0f,
+                                0.035f,
+                                0.030f,
+                                0.040f,
+                                2.1f * 20.0f * 0.1f * 0.040f,
                                 2.1f * 100.0f * 50.0f * 0.040f};
   c.v_limit_v = 1e4f;
   c.dt_s = 1e-4f;
@@ -574,8 +590,8 @@ TEST(CsmcLaw, ConstLawIsMinusMSat) {
   const mc_csmc_f32_cfg_t c = paper_cfg(MC_CSMC_LAW_CONST, MC_CSMC_SW_SAT, false);
   ASSERT_EQ(mc_csmc_f32_init(&st, &c), MC_CSMC_ERR_NONE);
   mc_csmc_f32_in_t in{};
-  in.e1_a = 0.05f;           // s1 = 0.05 -> sat = 0.5 -> u1 = -25
-  in.e2_rad = 1e-4f;         // s2 = 7.5 + 550*0.01 + 2 = 15 -> u2 = -15
+  in.e1_a = 0.05f;    // s1 = 0.05 -> sat = 0.5 -> u1 = -25
+  in.e2_rad = 1e-4f;  // s2 = 7.5 + 550*0.01 + 2 = 15 -> u2 = -15
   in.de2_rad_s = 0.01f;
   in.dde2_rad_s2 = 2.0f;
   mc_csmc_f32_out_t o{};
@@ -584,7 +600,7 @@ TEST(CsmcLaw, ConstLawIsMinusMSat) {
   EXPECT_NEAR(o.v_d_v, -25.0f, 1e-4);
   EXPECT_NEAR(o.s2_rad_s2, 15.0f, 1e-4);
   EXPECT_NEAR(o.v_q_v, -15.0f, 1e-4);
-  in.e2_rad = -1.0f;         // far outside: u2 = +M
+  in.e2_rad = -1.0f;  // far outside: u2 = +M
   mc_csmc_f32_step(&st, &in, &o);
   EXPECT_EQ(o.v_q_v, 50.0f);
 }
@@ -791,7 +807,9 @@ std::vector<Combo> combined_configs() {
   return v;
 }
 
-bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool same_bits(float a, float b) {
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
 
 TEST(CsmcHgoStep, EqualsTheSeparateKernelsBitForBit) {
   for (const Combo& cb : combined_configs()) {
@@ -870,10 +888,12 @@ TEST(CsmcHgoStep, NonFiniteInputChangesNothing) {
         EXPECT_EQ(o.v_q_v, 0.0f);
         EXPECT_EQ(std::memcmp(st.law.sigma1.xi, before.law.sigma1.xi, sizeof st.law.sigma1.xi), 0);
         EXPECT_EQ(std::memcmp(st.law.sigma2.xi, before.law.sigma2.xi, sizeof st.law.sigma2.xi), 0);
-        EXPECT_EQ(std::memcmp(st.law.sigma1.sigma, before.law.sigma1.sigma,
-                              sizeof st.law.sigma1.sigma), 0);
-        EXPECT_EQ(std::memcmp(st.law.sigma2.sigma, before.law.sigma2.sigma,
-                              sizeof st.law.sigma2.sigma), 0);
+        EXPECT_EQ(
+            std::memcmp(st.law.sigma1.sigma, before.law.sigma1.sigma, sizeof st.law.sigma1.sigma),
+            0);
+        EXPECT_EQ(
+            std::memcmp(st.law.sigma2.sigma, before.law.sigma2.sigma, sizeof st.law.sigma2.sigma),
+            0);
         EXPECT_EQ(std::memcmp(&st.hgo, &before.hgo, sizeof st.hgo), 0) << cb.name;
         EXPECT_NE(st.law.flags & MC_CSMC_ERR_NAN_INPUT, 0u);
       }

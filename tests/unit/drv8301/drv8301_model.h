@@ -22,15 +22,16 @@
 
 #include "hal/spi.h"
 
-class Drv8301Model {
-public:
+class Drv8301Model
+{
+  public:
     uint16_t reg[4] = {0u, 0x0001u, 0u, 0u}; // device ID 1 in Status 2
     std::vector<uint16_t> frames;            // every command received
     int ignore_ctrl1_writes = 0;             // writes to Control 1 dropped
     bool miso_stuck_high = false;            // no chip: pulled-up MISO
     bool miso_stuck_low = false;
-    int fail_at_frame = -1;                  // transfer returns -EIO
-    int gate_resets = 0;                     // Control 1 writes with GATE_RESET
+    int fail_at_frame = -1; // transfer returns -EIO
+    int gate_resets = 0;    // Control 1 writes with GATE_RESET
 
     // EN_GATE low resets the chip: registers back to their defaults.
     void power_reset()
@@ -41,7 +42,10 @@ public:
         reg[3] = 0u;
     }
 
-    mc_hal_spi_t spi() { return mc_hal_spi_t{&ops_, this}; }
+    mc_hal_spi_t spi()
+    {
+        return mc_hal_spi_t{&ops_, this};
+    }
 
     uint16_t exchange(uint16_t cmd)
     {
@@ -54,7 +58,7 @@ public:
         } else if (read) {
             pending_ = static_cast<uint16_t>((addr << 11) | (reg[addr] & 0x7FFu));
             if (addr == 0u) {
-                reg[0] = 0u;                    // latched faults cleared
+                reg[0] = 0u; // latched faults cleared
             } else if (addr == 1u) {
                 reg[1] = static_cast<uint16_t>(reg[1] & 0x000Fu); // GVDD_OV cleared, ID kept
             }
@@ -78,7 +82,7 @@ public:
         return out;
     }
 
-private:
+  private:
     uint16_t pending_ = 0x0000u; // what the first frame shifts out
 
     static int transfer(void *ctx, uint16_t tx, uint16_t *p_rx)

@@ -19,7 +19,8 @@ extern "C" {
 #include "mc_drv8301.h"
 }
 
-namespace {
+namespace
+{
 
 // The ODrive v3.6 set-up (Firmware/Drivers/DRV8301/drv8301.cpp at
 // odriverobotics/ODrive f9b5419c): OC_ADJ_SET 21, OC latch shut down, six
@@ -92,13 +93,13 @@ TEST(Drv8301Encode, Vesc6Setup)
 TEST(Drv8301Encode, FieldPositions)
 {
     mc_drv8301_config_t c{};
-    c.gain = MC_DRV8301_GAIN_80;                  // 11 at 3:2
-    c.oc_adj_set = 31u;                           // 11111 at 10:6
-    c.ocp_mode = MC_DRV8301_OCP_DISABLED;         // 11 at 5:4
-    c.pwm_mode = MC_DRV8301_PWM_3;                // 1 at 3
-    c.gate_current = MC_DRV8301_GATE_0A25;        // 10 at 1:0
-    c.octw_mode = MC_DRV8301_OCTW_OC_ONLY;        // 10 at 1:0
-    c.oc_toff = MC_DRV8301_OC_TOFF_OFF_TIME;      // 1 at 6
+    c.gain = MC_DRV8301_GAIN_80;             // 11 at 3:2
+    c.oc_adj_set = 31u;                      // 11111 at 10:6
+    c.ocp_mode = MC_DRV8301_OCP_DISABLED;    // 11 at 5:4
+    c.pwm_mode = MC_DRV8301_PWM_3;           // 1 at 3
+    c.gate_current = MC_DRV8301_GATE_0A25;   // 10 at 1:0
+    c.octw_mode = MC_DRV8301_OCTW_OC_ONLY;   // 10 at 1:0
+    c.oc_toff = MC_DRV8301_OC_TOFF_OFF_TIME; // 1 at 6
     uint16_t c1 = 0u;
     uint16_t c2 = 0u;
     ASSERT_EQ(mc_drv8301_ctrl_encode(&c, &c1, &c2), 0);
@@ -119,7 +120,7 @@ TEST(Drv8301Encode, RefusesReservedAndOutOfRange)
     c.gate_current = static_cast<mc_drv8301_gate_current_t>(3); // reserved
     EXPECT_EQ(mc_drv8301_ctrl_encode(&c, &c1, &c2), -EINVAL);
     c = odrive_cfg();
-    c.octw_mode = static_cast<mc_drv8301_octw_mode_t>(3);       // reserved
+    c.octw_mode = static_cast<mc_drv8301_octw_mode_t>(3); // reserved
     EXPECT_EQ(mc_drv8301_ctrl_encode(&c, &c1, &c2), -EINVAL);
     c = odrive_cfg();
     c.gain = static_cast<mc_drv8301_gain_t>(4);
@@ -167,9 +168,8 @@ TEST(Drv8301OcAdj, CodeForTripCurrent)
 
 TEST(Drv8301Faults, NamesAndStatusMapping)
 {
-    const char *names[12] = {"FETLC_OC", "FETHC_OC", "FETLB_OC", "FETHB_OC",
-                             "FETLA_OC", "FETHA_OC", "OTW",      "OTSD",
-                             "PVDD_UV",  "GVDD_UV",  "FAULT",    "GVDD_OV"};
+    const char *names[12] = {"FETLC_OC", "FETHC_OC", "FETLB_OC", "FETHB_OC", "FETLA_OC", "FETHA_OC",
+                             "OTW",      "OTSD",     "PVDD_UV",  "GVDD_UV",  "FAULT",    "GVDD_OV"};
     for (uint32_t k = 0u; k < 12u; ++k) {
         const char *n = mc_drv8301_fault_name(1u << k);
         ASSERT_NE(n, nullptr) << k;
@@ -199,10 +199,10 @@ TEST(Drv8301Init, OdriveFramesAndRegisters)
     EXPECT_EQ(chip.reg[3], 0x008u);
     const std::vector<uint16_t> want = {
         kWriteCtrl1Odrive, kWriteCtrl2Odrive,
-        kReadCtrl1, kReadCtrl1,    // read Control 1, clock the answer out
-        kReadCtrl2, kReadCtrl1,    // read Control 2
-        kReadStatus1, kReadCtrl1,  // faults
-        kReadStatus2, kReadCtrl1,
+        kReadCtrl1,        kReadCtrl1, // read Control 1, clock the answer out
+        kReadCtrl2,        kReadCtrl1, // read Control 2
+        kReadStatus1,      kReadCtrl1, // faults
+        kReadStatus2,      kReadCtrl1,
     };
     EXPECT_EQ(chip.frames, want);
     EXPECT_EQ(drv.faults, 0u);
@@ -224,8 +224,8 @@ TEST(Drv8301Init, FaultReadBackIsNamed)
     chip.reg[1] = static_cast<uint16_t>((1u << 7) | 1u);
     uint32_t faults = 0u;
     ASSERT_EQ(mc_drv8301_read_faults(&drv, &faults), 0);
-    EXPECT_EQ(faults, MC_DRV8301_FAULT_FETHA_OC | MC_DRV8301_FAULT_FAULT |
-                          MC_DRV8301_FAULT_GVDD_OV);
+    EXPECT_EQ(faults,
+              MC_DRV8301_FAULT_FETHA_OC | MC_DRV8301_FAULT_FAULT | MC_DRV8301_FAULT_GVDD_OV);
     std::string named;
     for (uint32_t k = 0u; k < 12u; ++k) {
         if ((faults & (1u << k)) != 0u) {

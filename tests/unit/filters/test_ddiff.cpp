@@ -47,7 +47,11 @@ std::complex<double> measured_gain(float a, float b, float dt, double w) {
     const float y = step(&st, static_cast<float>(std::sin(w * t)));
     if (k >= skip) {
       const double s = std::sin(w * t), c = std::cos(w * t);
-      ss += s * s; sc += s * c; cc += c * c; ys += y * s; yc += y * c;
+      ss += s * s;
+      sc += s * c;
+      cc += c * c;
+      ys += y * s;
+      yc += y * c;
     }
   }
   // y = A s + B c -> gain = A + j B (sin(wt + phi) = cos(phi) s + sin(phi) c).
@@ -127,8 +131,7 @@ TEST(Ddiff, InitRejectsBadConfigAndLeavesStateAlone) {
   EXPECT_EQ(mc_ddiff_f32_init(&st, &bad_a), MC_DDIFF_ERR_A);
   EXPECT_EQ(mc_ddiff_f32_init(&st, &bad_b), MC_DDIFF_ERR_B);
   EXPECT_EQ(mc_ddiff_f32_init(&st, &bad_dt), MC_DDIFF_ERR_DT);
-  EXPECT_EQ(mc_ddiff_f32_init(&st, &bad_all),
-            MC_DDIFF_ERR_A | MC_DDIFF_ERR_B | MC_DDIFF_ERR_DT);
+  EXPECT_EQ(mc_ddiff_f32_init(&st, &bad_all), MC_DDIFF_ERR_A | MC_DDIFF_ERR_B | MC_DDIFF_ERR_DT);
   EXPECT_EQ(mc_ddiff_f32_init(nullptr, &bad_a), MC_DDIFF_ERR_NULL);
   EXPECT_EQ(st.out, 42.0f);
 }

@@ -9,7 +9,8 @@
 
 #include "foc/mc_foc.h"
 
-namespace {
+namespace
+{
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -51,8 +52,13 @@ mc_foc_f32_cfg_t BaseCfg()
 // b = (1 - a) / R. Computed in double, independent of the kernels' math.
 struct RlAxis {
     double a, b;
-    RlAxis(double r, double l, double dt) : a(std::exp(-r * dt / l)), b((1.0 - a) / r) {}
-    double Next(double i, double v) const { return a * i + b * v; }
+    RlAxis(double r, double l, double dt) : a(std::exp(-r * dt / l)), b((1.0 - a) / r)
+    {
+    }
+    double Next(double i, double v) const
+    {
+        return a * i + b * v;
+    }
 };
 
 TEST(FocF32, GainsFromBandwidth)
@@ -70,7 +76,7 @@ TEST(FocF32, GainsFromBandwidth)
     EXPECT_EQ(mc_foc_f32_gains_from_bandwidth(0.2f, 1e-3f, kNaN, &kp2, &ki2), MC_FOC_ERR_BW);
     EXPECT_EQ(mc_foc_f32_gains_from_bandwidth(0.2f, 1e-3f, -5.0f, &kp2, &ki2), MC_FOC_ERR_BW);
     EXPECT_EQ(mc_foc_f32_gains_from_bandwidth(0.2f, 1e-3f, 5.0f, nullptr, &ki2), MC_FOC_ERR_NULL);
-    EXPECT_EQ(kp2, 7.0f);  // nothing written on error
+    EXPECT_EQ(kp2, 7.0f); // nothing written on error
     EXPECT_EQ(ki2, 7.0f);
 }
 
@@ -183,8 +189,8 @@ double CoupledRunWorstDeviation(bool decouple, double omega)
                                      static_cast<float>(iq0), 0.0f, 48.0f, &vd0, &vq0),
                   MC_FOC_ERR_NONE);
         EXPECT_EQ(mc_foc_f32_step_dq(&st, -2.0f, 10.0f, static_cast<float>(id),
-                                     static_cast<float>(iq), static_cast<float>(omega), 48.0f,
-                                     &vd, &vq),
+                                     static_cast<float>(iq), static_cast<float>(omega), 48.0f, &vd,
+                                     &vq),
                   MC_FOC_ERR_NONE);
         id0 = axis.Next(id0, vd0);
         iq0 = axis.Next(iq0, vq0);
@@ -355,7 +361,7 @@ TEST(FocF32, NonFiniteInputGivesZeroVoltageAndKeepsIntegrators)
     mc_foc_f32_out_t out{};
     ASSERT_EQ(mc_foc_f32_step(&st, &in, &out), MC_FOC_ERR_NONE);
     const mc_foc_f32_t before = st;
-    float *fields[] = {&in.ia_a, &in.ib_a, &in.ic_a, &in.theta_e_rad,
+    float *fields[] = {&in.ia_a,          &in.ib_a,   &in.ic_a,     &in.theta_e_rad,
                        &in.omega_e_rad_s, &in.vbus_v, &in.id_ref_a, &in.iq_ref_a};
     for (float *f : fields) {
         const float keep = *f;
@@ -412,7 +418,7 @@ TEST(FocF32, WholeStepLineToLineMatchesInverseTransforms)
                 mc_foc_f32_t st;
                 ASSERT_EQ(mc_foc_f32_init(&st, &c), MC_FOC_ERR_NONE);
                 double ph[3];
-                PhaseVoltages(id_true, iq_true, th, ph);  // same maths for currents
+                PhaseVoltages(id_true, iq_true, th, ph); // same maths for currents
                 mc_foc_f32_in_t in{};
                 in.ia_a = static_cast<float>(ph[0]);
                 in.ib_a = static_cast<float>(ph[1]);
@@ -462,9 +468,9 @@ TEST(FocF32, HexagonCutIsFedBackToThePis)
     mc_foc_f32_t st;
     ASSERT_EQ(mc_foc_f32_init(&st, &c), MC_FOC_ERR_NONE);
     mc_foc_f32_in_t in{};
-    in.theta_e_rad = static_cast<float>(kPi / 6.0);  // d axis on a flat side
+    in.theta_e_rad = static_cast<float>(kPi / 6.0); // d axis on a flat side
     in.vbus_v = 24.0f;
-    in.id_ref_a = 100.0f;  // kp*e = 10 V, the integrator adds up to the 16 V circle
+    in.id_ref_a = 100.0f; // kp*e = 10 V, the integrator adds up to the 16 V circle
     in.iq_ref_a = 0.0f;
     mc_foc_f32_out_t out{};
     for (int k = 0; k < 20; ++k) {
@@ -531,9 +537,9 @@ TEST(FocF32, InitRejectsEveryBadRuleWithItsFlag)
     mc_foc_f32_t st;
     EXPECT_EQ(mc_foc_f32_init(nullptr, &c), MC_FOC_ERR_NULL);
     EXPECT_EQ(mc_foc_f32_init(&st, nullptr), MC_FOC_ERR_NULL);
-    c.r_ohm = 0.0f;  // R = 0 (superconducting limit) and psi = 0 are valid
+    c.r_ohm = 0.0f; // R = 0 (superconducting limit) and psi = 0 are valid
     c.flux_wb = 0.0f;
     EXPECT_EQ(mc_foc_f32_init(&st, &c), MC_FOC_ERR_NONE);
 }
 
-}  // namespace
+} // namespace

@@ -12,8 +12,9 @@
 // any difference at all is a bug.
 constexpr float kExact = 0.0f;
 
-class HalFake : public ::testing::Test {
-protected:
+class HalFake : public ::testing::Test
+{
+  protected:
     void SetUp() override
     {
         ASSERT_EQ(0, mc_hal_fake_config_default(&cfg));

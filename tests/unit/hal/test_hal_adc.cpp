@@ -3,7 +3,8 @@
 
 #include "hal_test_fixture.h"
 
-namespace {
+namespace
+{
 
 // A sentinel sample: a read that must not write its output leaves it as is.
 mc_hal_adc_sample_t Sentinel()
@@ -31,8 +32,8 @@ void ExpectSentinel(const mc_hal_adc_sample_t &s)
 TEST_F(HalFake, AdcReadReturnsTheSampleWithTimestampAndSequence)
 {
     ASSERT_EQ(0, mc_hal_fake_tick_set(&fake, 1000u));
-    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 1.5f, -0.75f, -0.75f, 48.0f,
-                                            MC_HAL_ADC_VALID_ALL));
+    ASSERT_EQ(0,
+              mc_hal_fake_adc_set_sample(&fake, 1.5f, -0.75f, -0.75f, 48.0f, MC_HAL_ADC_VALID_ALL));
     ASSERT_EQ(0, mc_hal_fake_tick_advance(&fake, 7u)); // read happens later
 
     mc_hal_adc_sample_t s = Sentinel();
@@ -45,8 +46,7 @@ TEST_F(HalFake, AdcReadReturnsTheSampleWithTimestampAndSequence)
     EXPECT_EQ(1000u, s.timestamp_ticks); // the trigger time, not the read time
     EXPECT_EQ(1u, s.seq);
 
-    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 47.0f,
-                                            MC_HAL_ADC_VALID_ALL));
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 47.0f, MC_HAL_ADC_VALID_ALL));
     ASSERT_EQ(0, mc_hal_adc_read(hal->adc, &s));
     EXPECT_EQ(2u, s.seq);
     EXPECT_EQ(1007u, s.timestamp_ticks);
@@ -59,8 +59,7 @@ TEST_F(HalFake, AdcSecondReadOfTheSameConversionIsEAGAIN)
     EXPECT_EQ(-EAGAIN, mc_hal_adc_read(hal->adc, &s)); // nothing converted yet
     ExpectSentinel(s);
 
-    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 1.0f, 2.0f, 3.0f, 24.0f,
-                                            MC_HAL_ADC_VALID_ALL));
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 1.0f, 2.0f, 3.0f, 24.0f, MC_HAL_ADC_VALID_ALL));
     ASSERT_EQ(0, mc_hal_adc_read(hal->adc, &s));
     s = Sentinel();
     EXPECT_EQ(-EAGAIN, mc_hal_adc_read(hal->adc, &s));
@@ -71,8 +70,8 @@ TEST_F(HalFake, AdcMissedConversionsShowAsSequenceGap)
 {
     mc_hal_adc_sample_t s{};
     for (int i = 0; i < 3; ++i) {
-        ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 24.0f,
-                                                MC_HAL_ADC_VALID_ALL));
+        ASSERT_EQ(0,
+                  mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 24.0f, MC_HAL_ADC_VALID_ALL));
     }
     ASSERT_EQ(0, mc_hal_adc_read(hal->adc, &s));
     EXPECT_EQ(3u, s.seq); // two samples overwritten before the read
@@ -81,8 +80,7 @@ TEST_F(HalFake, AdcMissedConversionsShowAsSequenceGap)
 TEST_F(HalFake, AdcSequenceWraps)
 {
     fake.adc_sample.seq = 0xFFFFFFFFu;
-    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 24.0f,
-                                            MC_HAL_ADC_VALID_ALL));
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 24.0f, MC_HAL_ADC_VALID_ALL));
     mc_hal_adc_sample_t s{};
     ASSERT_EQ(0, mc_hal_adc_read(hal->adc, &s));
     EXPECT_EQ(0u, s.seq);
@@ -91,8 +89,7 @@ TEST_F(HalFake, AdcSequenceWraps)
 TEST_F(HalFake, AdcPartialValidMaskIsPassedThrough)
 {
     // Two-shunt board: phase c is not measured.
-    const uint32_t mask =
-        MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS;
+    const uint32_t mask = MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS;
     ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 1.0f, -1.0f, 0.0f, 24.0f, mask));
     mc_hal_adc_sample_t s{};
     ASSERT_EQ(0, mc_hal_adc_read(hal->adc, &s));
@@ -102,8 +99,7 @@ TEST_F(HalFake, AdcPartialValidMaskIsPassedThrough)
 
 TEST_F(HalFake, AdcSetSampleRejectsUnknownValidBits)
 {
-    EXPECT_EQ(-EINVAL, mc_hal_fake_adc_set_sample(&fake, 1.0f, 1.0f, 1.0f,
-                                                  24.0f, 1u << 4));
+    EXPECT_EQ(-EINVAL, mc_hal_fake_adc_set_sample(&fake, 1.0f, 1.0f, 1.0f, 24.0f, 1u << 4));
     EXPECT_FALSE(fake.adc_pending);
     EXPECT_EQ(0u, fake.adc_sample.seq);
     EXPECT_NEAR(0.0f, fake.adc_sample.ia_a, kExact);
@@ -111,8 +107,8 @@ TEST_F(HalFake, AdcSetSampleRejectsUnknownValidBits)
 
 TEST_F(HalFake, AdcInjectedEIOLeavesOutputAndKeepsSamplePending)
 {
-    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 2.0f, -1.0f, -1.0f, 24.0f,
-                                            MC_HAL_ADC_VALID_ALL));
+    ASSERT_EQ(0,
+              mc_hal_fake_adc_set_sample(&fake, 2.0f, -1.0f, -1.0f, 24.0f, MC_HAL_ADC_VALID_ALL));
     ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_ADC_READ, -EIO, 1u));
     mc_hal_adc_sample_t s = Sentinel();
     EXPECT_EQ(-EIO, mc_hal_adc_read(hal->adc, &s));
@@ -129,8 +125,7 @@ TEST_F(HalFake, AdcTemperatures)
     ASSERT_EQ(0, mc_hal_adc_read_temp(hal->adc, &t));
     EXPECT_EQ(0u, t.valid_mask);
 
-    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 45.5f, 80.25f,
-                                          MC_HAL_ADC_TEMP_VALID_ALL));
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 45.5f, 80.25f, MC_HAL_ADC_TEMP_VALID_ALL));
     ASSERT_EQ(0, mc_hal_adc_read_temp(hal->adc, &t));
     EXPECT_NEAR(45.5f, t.power_stage_temp_c, kExact);
     EXPECT_NEAR(80.25f, t.motor_temp_c, kExact);
@@ -139,8 +134,7 @@ TEST_F(HalFake, AdcTemperatures)
     EXPECT_EQ(-EINVAL, mc_hal_fake_adc_set_temp(&fake, 1.0f, 1.0f, 1u << 2));
     EXPECT_NEAR(45.5f, fake.adc_temp.power_stage_temp_c, kExact);
 
-    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_ADC_READ_TEMP,
-                                          -EIO, 1u));
+    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_ADC_READ_TEMP, -EIO, 1u));
     mc_hal_adc_temp_t u{};
     u.motor_temp_c = -999.0f;
     EXPECT_EQ(-EIO, mc_hal_adc_read_temp(hal->adc, &u));

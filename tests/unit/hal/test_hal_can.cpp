@@ -5,7 +5,8 @@
 
 #include "hal_test_fixture.h"
 
-namespace {
+namespace
+{
 
 mc_hal_can_frame_t Frame(uint32_t id, uint8_t len, uint8_t flags = 0u)
 {
@@ -29,7 +30,7 @@ void ExpectSameFrame(const mc_hal_can_frame_t &want, const mc_hal_can_frame_t &g
 
 TEST_F(HalFake, CanSendClassicFramesInOrder)
 {
-    const mc_hal_can_frame_t a = Frame(0x7FFu, 8u);                        // max std id
+    const mc_hal_can_frame_t a = Frame(0x7FFu, 8u);                           // max std id
     const mc_hal_can_frame_t b = Frame(0x1FFFFFFFu, 0u, MC_HAL_CAN_FLAG_EXT); // max ext id
     const mc_hal_can_frame_t c = Frame(0x123u, 4u, MC_HAL_CAN_FLAG_RTR);
     ASSERT_EQ(0, mc_hal_can_send(hal->can, &a));
@@ -178,14 +179,10 @@ TEST_F(HalFake, CanBusStateFollowsErrorCounters)
     };
     // ISO 11898-1 thresholds: warning at 96, passive at 128, bus-off > 255.
     const Case cases[] = {
-        {0, 0, MC_HAL_CAN_STATE_ERROR_ACTIVE},
-        {95, 95, MC_HAL_CAN_STATE_ERROR_ACTIVE},
-        {96, 0, MC_HAL_CAN_STATE_ERROR_WARNING},
-        {0, 96, MC_HAL_CAN_STATE_ERROR_WARNING},
-        {127, 127, MC_HAL_CAN_STATE_ERROR_WARNING},
-        {128, 0, MC_HAL_CAN_STATE_ERROR_PASSIVE},
-        {0, 128, MC_HAL_CAN_STATE_ERROR_PASSIVE},
-        {255, 0, MC_HAL_CAN_STATE_ERROR_PASSIVE},
+        {0, 0, MC_HAL_CAN_STATE_ERROR_ACTIVE},      {95, 95, MC_HAL_CAN_STATE_ERROR_ACTIVE},
+        {96, 0, MC_HAL_CAN_STATE_ERROR_WARNING},    {0, 96, MC_HAL_CAN_STATE_ERROR_WARNING},
+        {127, 127, MC_HAL_CAN_STATE_ERROR_WARNING}, {128, 0, MC_HAL_CAN_STATE_ERROR_PASSIVE},
+        {0, 128, MC_HAL_CAN_STATE_ERROR_PASSIVE},   {255, 0, MC_HAL_CAN_STATE_ERROR_PASSIVE},
         {256, 0, MC_HAL_CAN_STATE_BUS_OFF},
     };
     for (const Case &c : cases) {

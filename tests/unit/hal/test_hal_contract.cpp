@@ -7,7 +7,8 @@
 
 #include "hal_test_fixture.h"
 
-namespace {
+namespace
+{
 
 TEST(HalContract, AbsentCapabilitiesReturnENODEV)
 {
@@ -119,11 +120,9 @@ TEST(HalFakeInit, RejectsBadConfigAndLeavesFakeUnchanged)
         mc_hal_fake_config_t cfg;
     };
     Case cases[] = {
-        {"pwm3 period NaN", good}, {"pwm3 period 0", good},
-        {"pwm3 period < 0", good}, {"pwm3 period > 1 s", good},
-        {"pwm3 period inf", good}, {"pwm2 period NaN", good},
-        {"pwm2 period 0", good},   {"tick 0 Hz", good},
-        {"encoder 0 counts", good},
+        {"pwm3 period NaN", good},   {"pwm3 period 0", good},   {"pwm3 period < 0", good},
+        {"pwm3 period > 1 s", good}, {"pwm3 period inf", good}, {"pwm2 period NaN", good},
+        {"pwm2 period 0", good},     {"tick 0 Hz", good},       {"encoder 0 counts", good},
     };
     cases[0].cfg.pwm3_period_s = nan;
     cases[1].cfg.pwm3_period_s = 0.0f;
@@ -155,14 +154,10 @@ TEST(HalFakeInit, RejectsBadConfigAndLeavesFakeUnchanged)
 
 TEST_F(HalFake, InjectErrorRejectsBadArguments)
 {
-    EXPECT_EQ(-EINVAL, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_CALL_COUNT,
-                                                -EIO, 1u));
-    EXPECT_EQ(-EINVAL,
-              mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_ADC_READ, 0, 1u));
-    EXPECT_EQ(-EINVAL,
-              mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_ADC_READ, EIO, 1u));
-    EXPECT_EQ(-EINVAL,
-              mc_hal_fake_inject_error(nullptr, MC_HAL_FAKE_ADC_READ, -EIO, 1u));
+    EXPECT_EQ(-EINVAL, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_CALL_COUNT, -EIO, 1u));
+    EXPECT_EQ(-EINVAL, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_ADC_READ, 0, 1u));
+    EXPECT_EQ(-EINVAL, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_ADC_READ, EIO, 1u));
+    EXPECT_EQ(-EINVAL, mc_hal_fake_inject_error(nullptr, MC_HAL_FAKE_ADC_READ, -EIO, 1u));
 }
 
 TEST_F(HalFake, InjectedErrorFiresTheRequestedNumberOfTimesThenCanBeCancelled)

@@ -3,7 +3,8 @@
 
 #include "hal_test_fixture.h"
 
-namespace {
+namespace
+{
 
 TEST_F(HalFake, EncoderReadReturnsCountCprFlagsTimestamp)
 {
@@ -15,8 +16,7 @@ TEST_F(HalFake, EncoderReadReturnsCountCprFlagsTimestamp)
 
     ASSERT_EQ(0, mc_hal_fake_tick_set(&fake, 555u));
     ASSERT_EQ(0, mc_hal_fake_encoder_set(&fake, 16383u,
-                                         MC_HAL_ENCODER_FLAG_VALID |
-                                             MC_HAL_ENCODER_FLAG_INDEX));
+                                         MC_HAL_ENCODER_FLAG_VALID | MC_HAL_ENCODER_FLAG_INDEX));
     ASSERT_EQ(0, mc_hal_encoder_read(hal->encoder, &e));
     EXPECT_EQ(16383u, e.count); // the last count of a turn is legal
     EXPECT_EQ(16384u, e.counts_per_rev);
@@ -27,8 +27,7 @@ TEST_F(HalFake, EncoderReadReturnsCountCprFlagsTimestamp)
 TEST_F(HalFake, EncoderSetRejectsOutOfRangeAndUnknownFlags)
 {
     ASSERT_EQ(0, mc_hal_fake_encoder_set(&fake, 100u, MC_HAL_ENCODER_FLAG_VALID));
-    EXPECT_EQ(-EINVAL, mc_hal_fake_encoder_set(&fake, 16384u,
-                                               MC_HAL_ENCODER_FLAG_VALID));
+    EXPECT_EQ(-EINVAL, mc_hal_fake_encoder_set(&fake, 16384u, MC_HAL_ENCODER_FLAG_VALID));
     EXPECT_EQ(-EINVAL, mc_hal_fake_encoder_set(&fake, 5u, 1u << 2));
     EXPECT_EQ(100u, fake.encoder.count);
     EXPECT_EQ(MC_HAL_ENCODER_FLAG_VALID, fake.encoder.flags);
@@ -36,8 +35,7 @@ TEST_F(HalFake, EncoderSetRejectsOutOfRangeAndUnknownFlags)
 
 TEST_F(HalFake, EncoderInjectedEIOLeavesOutput)
 {
-    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_ENCODER_READ,
-                                          -EIO, 1u));
+    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_ENCODER_READ, -EIO, 1u));
     mc_hal_encoder_sample_t e{};
     e.count = 0xBEEFu;
     EXPECT_EQ(-EIO, mc_hal_encoder_read(hal->encoder, &e));

@@ -4,10 +4,12 @@
 
 #include "hal_test_fixture.h"
 
-namespace {
+namespace
+{
 
-class HalFakeRunning : public HalFake {
-protected:
+class HalFakeRunning : public HalFake
+{
+  protected:
     void SetUp() override
     {
         HalFake::SetUp();
@@ -48,8 +50,8 @@ TEST_F(HalFakeRunning, GateKillDisablesAllPwmAndLatches)
 TEST_F(HalFakeRunning, GateKillWorksWhenEveryOtherCallFails)
 {
     for (int c = 0; c < MC_HAL_FAKE_CALL_COUNT; ++c) {
-        ASSERT_EQ(0, mc_hal_fake_inject_error(
-                         &fake, static_cast<mc_hal_fake_call_t>(c), -EIO, 100u));
+        ASSERT_EQ(0,
+                  mc_hal_fake_inject_error(&fake, static_cast<mc_hal_fake_call_t>(c), -EIO, 100u));
     }
     EXPECT_EQ(-EIO, mc_hal_pwm3_disable(hal->pwm3));
     EXPECT_EQ(-EIO, mc_hal_pwm2_disable(hal->pwm2));

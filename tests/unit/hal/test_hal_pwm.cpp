@@ -5,7 +5,8 @@
 
 #include "hal_test_fixture.h"
 
-namespace {
+namespace
+{
 
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -77,10 +78,9 @@ TEST_F(HalFake, Pwm3RejectsBadDutiesAndChangesNothing)
     // Each bad value in each position, with valid values in the others so
     // that a driver writing duties one by one would be caught.
     const Case bad[] = {
-        {kNan, 0.5f, 0.5f},   {0.5f, kNan, 0.5f},   {0.5f, 0.5f, kNan},
-        {-0.01f, 0.5f, 0.5f}, {0.5f, -0.01f, 0.5f}, {0.5f, 0.5f, -0.01f},
-        {1.01f, 0.5f, 0.5f},  {0.5f, 1.01f, 0.5f},  {0.5f, 0.5f, 1.01f},
-        {kInf, 0.5f, 0.5f},   {0.5f, -kInf, 0.5f},  {0.5f, 0.5f, kInf},
+        {kNan, 0.5f, 0.5f},       {0.5f, kNan, 0.5f},   {0.5f, 0.5f, kNan},  {-0.01f, 0.5f, 0.5f},
+        {0.5f, -0.01f, 0.5f},     {0.5f, 0.5f, -0.01f}, {1.01f, 0.5f, 0.5f}, {0.5f, 1.01f, 0.5f},
+        {0.5f, 0.5f, 1.01f},      {kInf, 0.5f, 0.5f},   {0.5f, -kInf, 0.5f}, {0.5f, 0.5f, kInf},
         {1.0000001f, 0.5f, 0.5f},
     };
     for (const Case &c : bad) {
@@ -93,25 +93,21 @@ TEST_F(HalFake, Pwm3RejectsBadDutiesAndChangesNothing)
 TEST_F(HalFake, Pwm3InjectedEIOChangesNothing)
 {
     ASSERT_EQ(0, mc_hal_pwm3_set_duty(hal->pwm3, 0.25f, 0.5f, 0.75f));
-    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM3_SET_DUTY,
-                                          -EIO, 1u));
+    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM3_SET_DUTY, -EIO, 1u));
     EXPECT_EQ(-EIO, mc_hal_pwm3_set_duty(hal->pwm3, 0.6f, 0.6f, 0.6f));
     ExpectPwm3(fake, 0.25f, 0.5f, 0.75f, false);
 
-    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM3_ENABLE,
-                                          -EIO, 1u));
+    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM3_ENABLE, -EIO, 1u));
     EXPECT_EQ(-EIO, mc_hal_pwm3_enable(hal->pwm3));
     EXPECT_FALSE(fake.pwm3.enabled);
 
-    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM3_GET_STATE,
-                                          -EIO, 1u));
+    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM3_GET_STATE, -EIO, 1u));
     mc_hal_pwm3_state_t st{};
     st.duty_a = -7.0f;
     EXPECT_EQ(-EIO, mc_hal_pwm3_get_state(hal->pwm3, &st));
     EXPECT_NEAR(-7.0f, st.duty_a, kExact);
     float period_s = -7.0f;
-    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM3_GET_STATE,
-                                          -EIO, 1u));
+    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM3_GET_STATE, -EIO, 1u));
     EXPECT_EQ(-EIO, mc_hal_pwm3_get_period_s(hal->pwm3, &period_s));
     EXPECT_NEAR(-7.0f, period_s, kExact);
 }
@@ -169,12 +165,10 @@ TEST_F(HalFake, Pwm2RejectsBadDutiesAndChangesNothing)
         EXPECT_EQ(-EINVAL, mc_hal_pwm2_set_duty(hal->pwm2, 0.0f, v));
         ExpectPwm2(fake, -0.3f, 0.4f, true);
     }
-    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM2_SET_DUTY,
-                                          -EIO, 1u));
+    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM2_SET_DUTY, -EIO, 1u));
     EXPECT_EQ(-EIO, mc_hal_pwm2_set_duty(hal->pwm2, 0.0f, 0.0f));
     ExpectPwm2(fake, -0.3f, 0.4f, true);
-    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM2_DISABLE,
-                                          -EIO, 1u));
+    ASSERT_EQ(0, mc_hal_fake_inject_error(&fake, MC_HAL_FAKE_PWM2_DISABLE, -EIO, 1u));
     EXPECT_EQ(-EIO, mc_hal_pwm2_disable(hal->pwm2));
     ExpectPwm2(fake, -0.3f, 0.4f, true);
 }

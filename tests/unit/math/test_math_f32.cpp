@@ -15,7 +15,8 @@
 
 #include "math/mc_math.h"
 
-namespace {
+namespace
+{
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
@@ -62,7 +63,8 @@ void check_sincos(float x, SincosErr *e)
     mc_sincos_f32(x, &s, &c);
     const double rs = static_cast<double>(static_cast<float>(std::sin(static_cast<double>(x))));
     const double rc = static_cast<double>(static_cast<float>(std::cos(static_cast<double>(x))));
-    const double err = std::max(std::fabs(static_cast<double>(s) - rs), std::fabs(static_cast<double>(c) - rc));
+    const double err =
+        std::max(std::fabs(static_cast<double>(s) - rs), std::fabs(static_cast<double>(c) - rc));
     if (err > e->max_err || std::isnan(err)) {
         e->max_err = std::isnan(err) ? 1e9 : err;
         e->worst_x = x;
@@ -75,7 +77,7 @@ double angle_diff(double a, double b)
     return std::remainder(a - b, 2.0 * kPi);
 }
 
-}  // namespace
+} // namespace
 
 // ------------------------------------------------------------------ sincos
 
@@ -115,7 +117,8 @@ TEST(MathSincosF32, HugeArgumentsPayneHanekWithinBound)
         check_sincos(from_bits(u), &e);
     }
     // Every float just around the switch point and a few landmarks.
-    for (uint32_t u = to_bits(MC_MATH_CW_LIMIT_RAD) - 2000u; u <= to_bits(MC_MATH_CW_LIMIT_RAD) + 2000u; ++u) {
+    for (uint32_t u = to_bits(MC_MATH_CW_LIMIT_RAD) - 2000u;
+         u <= to_bits(MC_MATH_CW_LIMIT_RAD) + 2000u; ++u) {
         check_sincos(from_bits(u), &e);
         check_sincos(-from_bits(u), &e);
     }
@@ -153,7 +156,8 @@ TEST(MathSincosF32, SmallAndDenormalArguments)
 {
     // Below 2^-12, sin x rounds to x and cos x to 1 (x^3/6 and x^2/2 are
     // below half an ulp): the kernel must return them exactly.
-    const float xs[] = {FLT_MIN, from_bits(1u), from_bits(0x007FFFFFu), 1e-20f, 1e-10f, 1e-5f, 2.4e-4f};
+    const float xs[] = {FLT_MIN, from_bits(1u), from_bits(0x007FFFFFu), 1e-20f, 1e-10f,
+                        1e-5f,   2.4e-4f};
     for (float x : xs) {
         for (float sx : {x, -x}) {
             float s = 1.0f;
@@ -170,10 +174,10 @@ TEST(MathSincosF32, ZerosAndSignedZero)
     float s = 1.0f;
     float c = 0.0f;
     mc_sincos_f32(0.0f, &s, &c);
-    EXPECT_EQ(to_bits(s), 0u);  // +0
+    EXPECT_EQ(to_bits(s), 0u); // +0
     EXPECT_EQ(c, 1.0f);
     mc_sincos_f32(-0.0f, &s, &c);
-    EXPECT_EQ(to_bits(s), 0x80000000u);  // -0: sin is odd
+    EXPECT_EQ(to_bits(s), 0x80000000u); // -0: sin is odd
     EXPECT_EQ(c, 1.0f);
 }
 
@@ -263,11 +267,11 @@ TEST(MathAtan2F32, RandomPairsAndExtremeRatios)
     double worst = 0.0;
     std::mt19937 rng(777u);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-    std::uniform_int_distribution<uint32_t> bits(0u, 0x7F7FFFFFu);  // finite
+    std::uniform_int_distribution<uint32_t> bits(0u, 0x7F7FFFFFu); // finite
     for (int i = 0; i < 500000; ++i) {
         float y = u(rng);
         float x = u(rng);
-        if (i % 2 == 1) {  // any finite magnitudes, incl. denormals
+        if (i % 2 == 1) { // any finite magnitudes, incl. denormals
             y = from_bits(bits(rng) | ((i & 2) ? 0x80000000u : 0u));
             x = from_bits(bits(rng) | ((i & 4) ? 0x80000000u : 0u));
         }
@@ -302,7 +306,7 @@ TEST(MathAtan2F32, InfinitiesMatchLibm)
     for (float y : vals) {
         for (float x : vals) {
             if (y == 0.0f && x == 0.0f) {
-                continue;  // our defined atan2(0,0) = 0 differs from libm's +-pi
+                continue; // our defined atan2(0,0) = 0 differs from libm's +-pi
             }
             const double ref = std::atan2(static_cast<double>(y), static_cast<double>(x));
             EXPECT_NEAR(mc_atan2_f32(y, x), ref, kAtan2Bound) << "y=" << y << " x=" << x;
@@ -350,10 +354,10 @@ TEST(MathSqrtF32, CorrectlyRoundedOverAllExponents)
     for (int i = 0; i < 1000000; ++i) {
         check(from_bits(bits(rng)));
     }
-    for (uint32_t u = 1u; u < 5000u; ++u) {  // smallest denormals, one by one
+    for (uint32_t u = 1u; u < 5000u; ++u) { // smallest denormals, one by one
         check(from_bits(u));
     }
-    for (uint32_t k = 1u; k < 4096u; ++k) {  // perfect squares: exact results
+    for (uint32_t k = 1u; k < 4096u; ++k) { // perfect squares: exact results
         check(static_cast<float>(k * k));
     }
     EXPECT_EQ(mismatches, 0u) << "first mismatch at x = " << first_bad;
@@ -362,36 +366,37 @@ TEST(MathSqrtF32, CorrectlyRoundedOverAllExponents)
 TEST(MathSqrtF32, SpecialValues)
 {
     EXPECT_EQ(to_bits(mc_sqrt_f32(0.0f)), 0u);
-    EXPECT_EQ(to_bits(mc_sqrt_f32(-0.0f)), 0x80000000u);  // as IEEE sqrt
+    EXPECT_EQ(to_bits(mc_sqrt_f32(-0.0f)), 0x80000000u); // as IEEE sqrt
     EXPECT_EQ(mc_sqrt_f32(kInf), kInf);
     EXPECT_TRUE(std::isnan(mc_sqrt_f32(-kInf)));
     EXPECT_TRUE(std::isnan(mc_sqrt_f32(-1.0f)));
-    EXPECT_TRUE(std::isnan(mc_sqrt_f32(-from_bits(1u))));  // negative denormal
+    EXPECT_TRUE(std::isnan(mc_sqrt_f32(-from_bits(1u)))); // negative denormal
     EXPECT_TRUE(std::isnan(mc_sqrt_f32(kNan)));
     EXPECT_EQ(mc_sqrt_f32(4.0f), 2.0f);
     EXPECT_EQ(mc_sqrt_f32(0.25f), 0.5f);
     EXPECT_EQ(mc_sqrt_f32(FLT_MAX), std::sqrt(FLT_MAX));
-    EXPECT_EQ(mc_sqrt_f32(from_bits(1u)), std::sqrt(from_bits(1u)));  // 2^-74.5
+    EXPECT_EQ(mc_sqrt_f32(from_bits(1u)), std::sqrt(from_bits(1u))); // 2^-74.5
 }
 
 TEST(MathSqrtF32, SoftSpecialValues)
 {
     EXPECT_EQ(to_bits(mc_sqrt_f32_soft(0.0f)), 0u);
-    EXPECT_EQ(to_bits(mc_sqrt_f32_soft(-0.0f)), 0x80000000u);  // as IEEE sqrt
+    EXPECT_EQ(to_bits(mc_sqrt_f32_soft(-0.0f)), 0x80000000u); // as IEEE sqrt
     EXPECT_EQ(mc_sqrt_f32_soft(kInf), kInf);
     EXPECT_TRUE(std::isnan(mc_sqrt_f32_soft(-kInf)));
     EXPECT_TRUE(std::isnan(mc_sqrt_f32_soft(-1.0f)));
-    EXPECT_TRUE(std::isnan(mc_sqrt_f32_soft(-from_bits(1u))));  // negative denormal
+    EXPECT_TRUE(std::isnan(mc_sqrt_f32_soft(-from_bits(1u)))); // negative denormal
     EXPECT_TRUE(std::isnan(mc_sqrt_f32_soft(kNan)));
     EXPECT_EQ(mc_sqrt_f32_soft(4.0f), 2.0f);
     EXPECT_EQ(mc_sqrt_f32_soft(0.25f), 0.5f);
     EXPECT_EQ(mc_sqrt_f32_soft(FLT_MAX), std::sqrt(FLT_MAX));
-    EXPECT_EQ(mc_sqrt_f32_soft(from_bits(1u)), std::sqrt(from_bits(1u)));  // 2^-74.5
+    EXPECT_EQ(mc_sqrt_f32_soft(from_bits(1u)), std::sqrt(from_bits(1u))); // 2^-74.5
 }
 
 // -------------------------------------------------------------------- wrap
 
-namespace {
+namespace
+{
 
 struct WrapErr {
     double max_err = 0.0;
@@ -428,7 +433,7 @@ void check_wrap(float x, bool centered, WrapErr *e)
     }
 }
 
-}  // namespace
+} // namespace
 
 TEST(MathWrapF32, InRangeInputsUnchanged)
 {
@@ -457,9 +462,16 @@ TEST(MathWrapF32, InlineFormSameBitsAsFunction)
         const float x = static_cast<float>(i) * 1e-4f;
         ASSERT_EQ(to_bits(mc_wrap_pi_fast_f32(x)), to_bits(mc_wrap_pi_f32(x))) << x;
     }
-    const float edges[] = {MC_PI_F32, -MC_PI_F32, std::nextafter(MC_PI_F32, 0.0f),
-                           std::nextafter(-MC_PI_F32, 0.0f), std::nextafter(MC_PI_F32, 4.0f),
-                           std::nextafter(-MC_PI_F32, -4.0f), 0.0f, -0.0f, 1e30f, -1e30f};
+    const float edges[] = {MC_PI_F32,
+                           -MC_PI_F32,
+                           std::nextafter(MC_PI_F32, 0.0f),
+                           std::nextafter(-MC_PI_F32, 0.0f),
+                           std::nextafter(MC_PI_F32, 4.0f),
+                           std::nextafter(-MC_PI_F32, -4.0f),
+                           0.0f,
+                           -0.0f,
+                           1e30f,
+                           -1e30f};
     for (const float x : edges) {
         EXPECT_EQ(to_bits(mc_wrap_pi_fast_f32(x)), to_bits(mc_wrap_pi_f32(x))) << x;
     }
@@ -474,7 +486,7 @@ TEST(MathSqrtF32, NonNegativeInlineFormSameBits)
     for (uint32_t e = 0u; e <= 255u; ++e) {
         for (uint32_t m : {0u, 1u, 0x400000u, 0x7FFFFFu, 0x123457u}) {
             if (e == 255u && m != 0u) {
-                continue;  // NaN: only "NaN out" is promised
+                continue; // NaN: only "NaN out" is promised
             }
             const float x = from_bits((e << 23) | m);
             ASSERT_EQ(to_bits(mc_sqrt_nonneg_f32(x)), to_bits(mc_sqrt_f32(x))) << x;
@@ -550,11 +562,11 @@ TEST(MathTurnFromRadF32, MatchesLongDoubleReference)
         uint64_t turn = 0u;
         ASSERT_TRUE(mc_turn_from_rad_f32(x, &turn));
         long double t = static_cast<long double>(x) / two_pi;
-        t -= std::floor(t);  // [0, 1)
-        const long double ref48 = t * 281474976710656.0L;  // 2^48
+        t -= std::floor(t);                               // [0, 1)
+        const long double ref48 = t * 281474976710656.0L; // 2^48
         const long double got48 = static_cast<long double>(turn >> 16);
         long double d = std::fabs(got48 - ref48);
-        d = std::min(d, 281474976710656.0L - d);  // modulo one turn
+        d = std::min(d, 281474976710656.0L - d); // modulo one turn
         if (d > 1.0L) {
             ++bad;
         }

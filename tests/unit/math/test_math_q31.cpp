@@ -14,10 +14,11 @@
 #include "math/mc_math.h"
 #include "math/mc_q31.h"
 
-namespace {
+namespace
+{
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kQ31 = 2147483648.0;  // 2^31
+constexpr double kQ31 = 2147483648.0; // 2^31
 constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
@@ -38,7 +39,7 @@ double angle_lsb_diff(double a, double b)
     return std::remainder(a - b, 4294967296.0);
 }
 
-}  // namespace
+} // namespace
 
 // ----------------------------------------------------- saturating helpers
 
@@ -68,15 +69,15 @@ TEST(MathQ31Helpers, MulMinusOneTimesMinusOneSaturates)
     EXPECT_EQ(mc_q31_mul(MC_Q31_MIN, MC_Q31_MIN), MC_Q31_MAX);
     EXPECT_EQ(mc_q31_mul(MC_Q31_MIN, MC_Q31_MAX), -MC_Q31_MAX);
     EXPECT_EQ(mc_q31_mul(MC_Q31_MAX, MC_Q31_MAX), MC_Q31_MAX - 1);
-    EXPECT_EQ(mc_q31_mul(1 << 30, 1 << 30), 1 << 29);  // 0.5 * 0.5
+    EXPECT_EQ(mc_q31_mul(1 << 30, 1 << 30), 1 << 29); // 0.5 * 0.5
 }
 
 TEST(MathQ31Helpers, MulRoundsToNearestTiesUp)
 {
-    EXPECT_EQ(mc_q31_mul(1, 1 << 30), 1);    // +0.5 LSB -> 1
-    EXPECT_EQ(mc_q31_mul(-1, 1 << 30), 0);   // -0.5 LSB -> 0 (ties up)
-    EXPECT_EQ(mc_q31_mul(3, 1 << 29), 1);    // 0.75 LSB -> 1
-    EXPECT_EQ(mc_q31_mul(1, 1 << 29), 0);    // 0.25 LSB -> 0
+    EXPECT_EQ(mc_q31_mul(1, 1 << 30), 1);  // +0.5 LSB -> 1
+    EXPECT_EQ(mc_q31_mul(-1, 1 << 30), 0); // -0.5 LSB -> 0 (ties up)
+    EXPECT_EQ(mc_q31_mul(3, 1 << 29), 1);  // 0.75 LSB -> 1
+    EXPECT_EQ(mc_q31_mul(1, 1 << 29), 0);  // 0.25 LSB -> 0
     // Random products: within 0.5 LSB of the exact product (exact rounding).
     std::mt19937 rng(1u);
     std::uniform_int_distribution<int32_t> d(MC_Q31_MIN, MC_Q31_MAX);
@@ -93,7 +94,7 @@ TEST(MathQ31Helpers, MulRoundsToNearestTiesUp)
 
 TEST(MathQ31Helpers, AngleAddWrapsExactly)
 {
-    EXPECT_EQ(mc_q31_angle_add(MC_Q31_MAX, 1), MC_Q31_MIN);  // pi wraps to -pi
+    EXPECT_EQ(mc_q31_angle_add(MC_Q31_MAX, 1), MC_Q31_MIN); // pi wraps to -pi
     EXPECT_EQ(mc_q31_angle_add(MC_Q31_MIN, -1), MC_Q31_MAX);
     EXPECT_EQ(mc_q31_angle_add(1 << 30, 1 << 30), MC_Q31_MIN);
     EXPECT_EQ(mc_q31_angle_add(-5, 3), -2);
@@ -106,8 +107,8 @@ TEST(MathQ31Conv, FromF32SaturatesAndHandlesNaN)
     EXPECT_EQ(mc_q31_from_f32(0.0f), 0);
     EXPECT_EQ(mc_q31_from_f32(-0.0f), 0);
     EXPECT_EQ(mc_q31_from_f32(0.5f), 1 << 30);
-    EXPECT_EQ(mc_q31_from_f32(-1.0f), MC_Q31_MIN);  // exactly representable
-    EXPECT_EQ(mc_q31_from_f32(1.0f), MC_Q31_MAX);   // saturates (never wraps)
+    EXPECT_EQ(mc_q31_from_f32(-1.0f), MC_Q31_MIN); // exactly representable
+    EXPECT_EQ(mc_q31_from_f32(1.0f), MC_Q31_MAX);  // saturates (never wraps)
     EXPECT_EQ(mc_q31_from_f32(2.0f), MC_Q31_MAX);
     EXPECT_EQ(mc_q31_from_f32(-2.0f), MC_Q31_MIN);
     EXPECT_EQ(mc_q31_from_f32(-1.0000001f), MC_Q31_MIN);
@@ -125,14 +126,14 @@ TEST(MathQ31Conv, FromF32SaturatesAndHandlesNaN)
 TEST(MathQ31Conv, FromF32RoundsToNearestTiesAway)
 {
     const float lsb = std::ldexp(1.0f, -31);
-    EXPECT_EQ(mc_q31_from_f32(0.5f * lsb), 1);     // tie -> away from zero
+    EXPECT_EQ(mc_q31_from_f32(0.5f * lsb), 1); // tie -> away from zero
     EXPECT_EQ(mc_q31_from_f32(-0.5f * lsb), -1);
     EXPECT_EQ(mc_q31_from_f32(0.25f * lsb), 0);
     EXPECT_EQ(mc_q31_from_f32(0.75f * lsb), 1);
     EXPECT_EQ(mc_q31_from_f32(-0.75f * lsb), -1);
     EXPECT_EQ(mc_q31_from_f32(1.5f * lsb), 2);
     EXPECT_EQ(mc_q31_from_f32(2.5f * lsb), 3);
-    EXPECT_EQ(mc_q31_from_f32(std::ldexp(1.0f, -140)), 0);  // denormal
+    EXPECT_EQ(mc_q31_from_f32(std::ldexp(1.0f, -140)), 0); // denormal
     // Dense: within 0.5 LSB of x * 2^31 (exact in double), 1e6 values of
     // all magnitudes in (-1, 1).
     std::mt19937 rng(2u);
@@ -150,7 +151,7 @@ TEST(MathQ31Conv, FromF32RoundsToNearestTiesAway)
 TEST(MathQ31Conv, ToF32AndRoundTrip)
 {
     EXPECT_EQ(mc_q31_to_f32(MC_Q31_MIN), -1.0f);
-    EXPECT_EQ(mc_q31_to_f32(MC_Q31_MAX), 1.0f);  // 1 - 2^-31 rounds to 1.0f
+    EXPECT_EQ(mc_q31_to_f32(MC_Q31_MAX), 1.0f); // 1 - 2^-31 rounds to 1.0f
     EXPECT_EQ(mc_q31_to_f32(0), 0.0f);
     EXPECT_EQ(mc_q31_to_f32(1), std::ldexp(1.0f, -31));
     EXPECT_EQ(mc_q31_to_f32(1 << 30), 0.5f);
@@ -178,14 +179,15 @@ TEST(MathQ15Conv, FromF32RoundsAndSaturates)
     EXPECT_EQ(mc_q15_from_f32(0.5f), 16384);
     EXPECT_EQ(mc_q15_from_f32(-1.0f), MC_Q15_MIN);
     EXPECT_EQ(mc_q15_from_f32(1.0f), MC_Q15_MAX);
-    EXPECT_EQ(mc_q15_from_f32(1.0f - std::ldexp(1.0f, -16)), MC_Q15_MAX);  // rounds to 2^15: saturates
+    EXPECT_EQ(mc_q15_from_f32(1.0f - std::ldexp(1.0f, -16)),
+              MC_Q15_MAX); // rounds to 2^15: saturates
     EXPECT_EQ(mc_q15_from_f32(-1.5f), MC_Q15_MIN);
     EXPECT_EQ(mc_q15_from_f32(1e30f), MC_Q15_MAX);
     EXPECT_EQ(mc_q15_from_f32(-kInf), MC_Q15_MIN);
     EXPECT_EQ(mc_q15_from_f32(kNan), 0);
-    EXPECT_EQ(mc_q15_from_f32(std::ldexp(1.0f, -16)), 1);    // 0.5 LSB, ties away
+    EXPECT_EQ(mc_q15_from_f32(std::ldexp(1.0f, -16)), 1); // 0.5 LSB, ties away
     EXPECT_EQ(mc_q15_from_f32(-std::ldexp(1.0f, -16)), -1);
-    EXPECT_EQ(mc_q15_from_f32(std::ldexp(1.0f, -17)), 0);    // 0.25 LSB
+    EXPECT_EQ(mc_q15_from_f32(std::ldexp(1.0f, -17)), 0); // 0.25 LSB
     for (int i = -40000; i <= 40000; ++i) {
         const float x = static_cast<float>(i) / 32768.0f + 1e-7f;
         const double exact = static_cast<double>(x) * 32768.0;
@@ -212,8 +214,9 @@ TEST(MathQ31Angle, FromRadWrapsAndRounds)
     for (int i = 0; i <= n; ++i) {
         const float x = static_cast<float>(-8192.0 + 16384.0 * i / n);
         const long double ref = static_cast<long double>(x) * scale;
-        const double err = std::fabs(angle_lsb_diff(static_cast<double>(mc_q31_angle_from_rad_f32(x)),
-                                                    static_cast<double>(std::remainder(ref, 4294967296.0L))));
+        const double err =
+            std::fabs(angle_lsb_diff(static_cast<double>(mc_q31_angle_from_rad_f32(x)),
+                                     static_cast<double>(std::remainder(ref, 4294967296.0L))));
         worst = std::max(worst, err);
     }
     EXPECT_LE(worst, 0.5 + 1e-3);
@@ -229,13 +232,15 @@ TEST(MathQ31Angle, ToRadWithinBoundAndRange)
     for (int64_t a = MC_Q31_MIN; a <= MC_Q31_MAX; a += 4099) {
         const float r = mc_q31_angle_to_rad_f32(static_cast<q31_t>(a));
         range_ok = range_ok && (r >= -MC_PI_F32) && (r < MC_PI_F32);
-        const double err = std::fabs(std::remainder(static_cast<double>(r) - a * kPi / kQ31, 2.0 * kPi));
+        const double err =
+            std::fabs(std::remainder(static_cast<double>(r) - a * kPi / kQ31, 2.0 * kPi));
         worst = std::max(worst, err);
     }
     for (q31_t a : {MC_Q31_MAX, MC_Q31_MIN, 0, 1, -1, MC_Q31_MAX - 64}) {
         const float r = mc_q31_angle_to_rad_f32(a);
         range_ok = range_ok && (r >= -MC_PI_F32) && (r < MC_PI_F32);
-        worst = std::max(worst, std::fabs(std::remainder(static_cast<double>(r) - a * kPi / kQ31, 2.0 * kPi)));
+        worst = std::max(
+            worst, std::fabs(std::remainder(static_cast<double>(r) - a * kPi / kQ31, 2.0 * kPi)));
     }
     EXPECT_TRUE(range_ok);
     EXPECT_LE(worst, bound);
@@ -267,8 +272,8 @@ TEST(MathSincosQ31, FullTurnSweepWithinBound)
     for (int64_t a = MC_Q31_MIN; a <= MC_Q31_MAX; a += 997) {
         check(a);
     }
-    for (int64_t b : {-2147483648LL, -1610612736LL, -1073741824LL, -536870912LL, 0LL, 536870912LL, 1073741824LL,
-                      1610612736LL, 2147483647LL}) {
+    for (int64_t b : {-2147483648LL, -1610612736LL, -1073741824LL, -536870912LL, 0LL, 536870912LL,
+                      1073741824LL, 1610612736LL, 2147483647LL}) {
         for (int64_t d = -32768; d <= 32768; ++d) {
             const int64_t a = b + d;
             if (a >= MC_Q31_MIN && a <= MC_Q31_MAX) {
@@ -287,19 +292,19 @@ TEST(MathSincosQ31, QuadrantValues)
     q31_t c = 1;
     mc_sincos_q31(0, &s, &c);
     EXPECT_EQ(s, 0);
-    EXPECT_EQ(c, MC_Q31_MAX);  // +1 saturates
-    mc_sincos_q31(1 << 30, &s, &c);  // +pi/2
+    EXPECT_EQ(c, MC_Q31_MAX);       // +1 saturates
+    mc_sincos_q31(1 << 30, &s, &c); // +pi/2
     EXPECT_EQ(s, MC_Q31_MAX);
     EXPECT_EQ(c, 0);
-    mc_sincos_q31(-(1 << 30), &s, &c);  // -pi/2
-    EXPECT_EQ(s, MC_Q31_MIN);  // -1 is exact
+    mc_sincos_q31(-(1 << 30), &s, &c); // -pi/2
+    EXPECT_EQ(s, MC_Q31_MIN);          // -1 is exact
     EXPECT_EQ(c, 0);
-    mc_sincos_q31(MC_Q31_MIN, &s, &c);  // -pi
+    mc_sincos_q31(MC_Q31_MIN, &s, &c); // -pi
     EXPECT_EQ(s, 0);
     EXPECT_EQ(c, MC_Q31_MIN);
     // pi/6: sin = 0.5 exactly = 2^30, within the stated bound.
-    mc_sincos_q31(357913941, &s, &c);  // round(2^31 / 6)
-    EXPECT_NEAR(s, 1 << 30, kSincosQ31BoundLsb + 2.0);  // + angle rounding (1/3 LSB * pi * cos)
+    mc_sincos_q31(357913941, &s, &c);                  // round(2^31 / 6)
+    EXPECT_NEAR(s, 1 << 30, kSincosQ31BoundLsb + 2.0); // + angle rounding (1/3 LSB * pi * cos)
 }
 
 TEST(MathSincosQ31, PythagoreanIdentity)
@@ -380,13 +385,13 @@ TEST(MathAtan2Q31, EdgeCases)
     EXPECT_EQ(mc_atan2_q31(0, 0), 0);
     EXPECT_EQ(mc_atan2_q31(0, 1), 0);
     EXPECT_EQ(mc_atan2_q31(0, MC_Q31_MAX), 0);
-    EXPECT_EQ(mc_atan2_q31(0, -1), MC_Q31_MIN);  // pi is -pi in [-pi, pi)
+    EXPECT_EQ(mc_atan2_q31(0, -1), MC_Q31_MIN); // pi is -pi in [-pi, pi)
     EXPECT_EQ(mc_atan2_q31(0, MC_Q31_MIN), MC_Q31_MIN);
     EXPECT_EQ(mc_atan2_q31(1, 0), 1 << 30);
     EXPECT_EQ(mc_atan2_q31(MC_Q31_MIN, 0), -(1 << 30));
-    EXPECT_EQ(mc_atan2_q31(MC_Q31_MAX, MC_Q31_MAX), 1 << 29);      // 45 deg
+    EXPECT_EQ(mc_atan2_q31(MC_Q31_MAX, MC_Q31_MAX), 1 << 29); // 45 deg
     EXPECT_EQ(mc_atan2_q31(1, 1), 1 << 29);
-    EXPECT_EQ(mc_atan2_q31(MC_Q31_MIN, MC_Q31_MIN), -1610612736);  // -135 deg
+    EXPECT_EQ(mc_atan2_q31(MC_Q31_MIN, MC_Q31_MIN), -1610612736); // -135 deg
     EXPECT_EQ(mc_atan2_q31(-7, 7), -(1 << 29));
     // Tiny angle: atan(1 / (2^31 - 1)) = 0.32 LSB -> 0.
     EXPECT_EQ(mc_atan2_q31(1, MC_Q31_MAX), 0);
@@ -421,7 +426,8 @@ TEST(MathSqrtQ31, RoundedToNearestOverFullRange)
     double worst = 0.0;
     auto check = [&](int64_t x) {
         const long double exact = std::sqrt(static_cast<long double>(x) * 2147483648.0L);
-        const double err = static_cast<double>(std::fabs(mc_sqrt_q31(static_cast<q31_t>(x)) - exact));
+        const double err =
+            static_cast<double>(std::fabs(mc_sqrt_q31(static_cast<q31_t>(x)) - exact));
         worst = std::max(worst, err);
     };
     for (int64_t x = 1; x <= MC_Q31_MAX; x += 2039) {
@@ -442,8 +448,8 @@ TEST(MathSqrtQ31, EdgeCases)
     EXPECT_EQ(mc_sqrt_q31(0), 0);
     EXPECT_EQ(mc_sqrt_q31(-1), 0);
     EXPECT_EQ(mc_sqrt_q31(MC_Q31_MIN), 0);
-    EXPECT_EQ(mc_sqrt_q31(1 << 29), 1 << 30);  // sqrt(0.25) = 0.5
-    EXPECT_EQ(mc_sqrt_q31(1), 46341);          // sqrt(2^31) = 46340.95
+    EXPECT_EQ(mc_sqrt_q31(1 << 29), 1 << 30); // sqrt(0.25) = 0.5
+    EXPECT_EQ(mc_sqrt_q31(1), 46341);         // sqrt(2^31) = 46340.95
     EXPECT_EQ(mc_sqrt_q31(MC_Q31_MAX), MC_Q31_MAX);
 }
 
@@ -456,7 +462,8 @@ TEST(MathSqrtQ31, MatchesF32Twin)
     double worst = 0.0;
     for (int64_t x = 0; x <= MC_Q31_MAX; x += 4093) {
         const double q = mc_sqrt_q31(static_cast<q31_t>(x));
-        const double f = static_cast<double>(mc_sqrt_f32(mc_q31_to_f32(static_cast<q31_t>(x)))) * kQ31;
+        const double f =
+            static_cast<double>(mc_sqrt_f32(mc_q31_to_f32(static_cast<q31_t>(x)))) * kQ31;
         worst = std::max(worst, std::fabs(q - f));
     }
     EXPECT_LE(worst, bound);

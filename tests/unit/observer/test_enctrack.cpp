@@ -35,9 +35,8 @@ TEST(EncTrack, RefusesBadConfigAndLeavesStateUntouched) {
   mc_enctrack_f32_t st{};
   st.omega_rad_s = 7.0f;
   const mc_enctrack_f32_cfg_t bad[] = {
-      {0.0f, 5e-5f}, {-1.0f, 5e-5f}, {NAN, 5e-5f}, {INFINITY, 5e-5f},
-      {100.0f, 0.0f}, {100.0f, NAN},
-      {6667.0f, 5e-5f},  // 3 bw dt = 1.00005 > 1: poles leave the safe region
+      {0.0f, 5e-5f},  {-1.0f, 5e-5f}, {NAN, 5e-5f},     {INFINITY, 5e-5f},
+      {100.0f, 0.0f}, {100.0f, NAN},  {6667.0f, 5e-5f},  // 3 bw dt = 1.00005 > 1: poles leave the safe region
   };
   for (const auto& c : bad) {
     EXPECT_NE(mc_enctrack_f32_init(&st, &c), MC_ENCTRACK_ERR_NONE) << c.bw_rad_s << " " << c.dt_s;
@@ -68,7 +67,7 @@ TEST(EncTrack, FollowsConstantAccelerationWithoutSpeedLag) {
   const float dt = 5e-5f;   // 20 kHz
   const float bw = 300.0f;  // rad/s
   const uint32_t cpr = 8192u;
-  const double a = 400.0;   // rad/s^2
+  const double a = 400.0;  // rad/s^2
   auto st = make(bw, dt);
   double worst_late = 0.0;
   const int n = static_cast<int>(1.0 / dt);  // 1 s: ends at 400 rad/s, 32 turns

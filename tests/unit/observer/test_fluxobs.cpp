@@ -152,7 +152,7 @@ TEST(FluxObs, GammaHelpersMatchProp4AndTimeScale) {
   ASSERT_EQ(mc_fluxobs_f32_gamma_for_critical_speed(5.0f, kPoles, 0.11f, &g), 0u);
   EXPECT_NEAR(g, 6611.57, 0.05);  // float rounding of the formula
   ASSERT_EQ(mc_fluxobs_f32_critical_speed(g, kPoles, 0.11f, &w), 0u);
-  EXPECT_NEAR(w, 5.0, 1e-5);      // round trip, float rounding
+  EXPECT_NEAR(w, 5.0, 1e-5);  // round trip, float rounding
   ASSERT_EQ(mc_fluxobs_f32_time_scale(g, 0.11f, &t), 0u);
   EXPECT_NEAR(t, 1.0 / (2.0 * 4 * 5.0), 1e-7);  // T_obs = 1/(2 n_P omega_crit)
   EXPECT_EQ(mc_fluxobs_f32_gamma_for_critical_speed(0.0f, kPoles, 0.11f, &g), MC_FLUXOBS_ERR_ARG);
@@ -164,8 +164,8 @@ TEST(FluxObs, GammaHelpersMatchProp4AndTimeScale) {
 // The kernel's error follows the continuous error system (17).
 TEST(FluxObs, ErrorFollowsContinuousErrorSystem) {
   const double gamma = 6611.57, dt = 1.0e-4;
-  const double gp = gamma * kFlux * kFlux;   // 80 1/s
-  const double hs = 0.5 * gp * dt;           // s-time per step: 0.004
+  const double gp = gamma * kFlux * kFlux;  // 80 1/s
+  const double hs = 0.5 * gp * dt;          // s-time per step: 0.004
   for (double W : {-0.3, 0.8, -2.0}) {
     auto c = base_cfg(gamma, dt);
     mc_fluxobs_f32_t st{};
@@ -204,8 +204,8 @@ struct KernelField {
     const auto c0 = chi_of(st, m);  // chi as stored in float
     double va, vb, ia, ib;
     m.advance(dt, &va, &vb, &ia, &ib);
-    mc_fluxobs_f32_step(&st, static_cast<float>(va), static_cast<float>(vb),
-                        static_cast<float>(ia), static_cast<float>(ib));
+    mc_fluxobs_f32_step(&st, static_cast<float>(va), static_cast<float>(vb), static_cast<float>(ia),
+                        static_cast<float>(ib));
     const auto c1 = chi_of(st, m);
     return {(c1[0] - c0[0]) / hs, (c1[1] - c0[1]) / hs};
   }
@@ -353,7 +353,7 @@ TEST(FluxObs, DoublePointAtHalfIsUnstable) {
 // Above the critical speed: from random initial estimates the angle
 // converges. Bound: |theta_hat - theta| < 0.01 rad after 30 T_obs.
 TEST(FluxObs, RandomInitialEstimatesConvergeAboveCriticalSpeed) {
-  const double gamma = 6611.57, dt = 1.25e-4;  // paper's 8 kHz current loop
+  const double gamma = 6611.57, dt = 1.25e-4;                // paper's 8 kHz current loop
   const double gp = gamma * kFlux * kFlux, Tobs = 2.0 / gp;  // 25 ms
   std::mt19937 rng(12345);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

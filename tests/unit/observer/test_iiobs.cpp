@@ -37,12 +37,12 @@ TEST(IiObs, InitRulesIncludingTheK1Condition) {
     uint32_t expect;
   };
   const Case cases[] = {
-      {3.9f, 1.0f, 1.0f, MC_IIOBS_ERR_GAINS},  // a1 <= 4 (27); also k1 > 2 fails
-      {6.0f, 10.0f, 1.0f, MC_IIOBS_ERR_GAINS}, // a1 <= 2 sqrt(a2) (27)
+      {3.9f, 1.0f, 1.0f, MC_IIOBS_ERR_GAINS},   // a1 <= 4 (27); also k1 > 2 fails
+      {6.0f, 10.0f, 1.0f, MC_IIOBS_ERR_GAINS},  // a1 <= 2 sqrt(a2) (27)
       // (27) holds but k1 = (10 - sqrt(96))/2 = 0.10 < 2: the proof of (42)
       // fails. The paper's (27) alone would accept this.
       {10.0f, 1.0f, 1.0f, MC_IIOBS_ERR_K1},
-      {6.0f, 8.0f, 1.0f, MC_IIOBS_ERR_K1},     // boundary a2 = 2 a1 - 4: k1 = 2
+      {6.0f, 8.0f, 1.0f, MC_IIOBS_ERR_K1},  // boundary a2 = 2 a1 - 4: k1 = 2
       {6.0f, 8.5f, 0.0f, MC_IIOBS_ERR_K4},
       {-6.0f, 8.5f, 1.0f, MC_IIOBS_ERR_GAINS},
   };
@@ -80,7 +80,8 @@ TEST(IiObs, ConstantsMatchIndependentComputation) {
   const auto c = cfg();
   ASSERT_EQ(mc_iiobs_f32_init(&st, &c), 0u);
   const double a1 = 6.0, a2 = 8.5, fJ = 1e-3 * 0.02 / 5e-3;
-  const double l1 = (-a1 + std::sqrt(a1 * a1 - 4 * a2)) / 2, l2 = (-a1 - std::sqrt(a1 * a1 - 4 * a2)) / 2;
+  const double l1 = (-a1 + std::sqrt(a1 * a1 - 4 * a2)) / 2,
+               l2 = (-a1 - std::sqrt(a1 * a1 - 4 * a2)) / 2;
   // eigenvector check: A* v = lambda v for v = (1, y): -a1 - y = lambda
   double V[2][2] = {{1, 1}, {-a1 - l1, -a1 - l2}};
   for (int j = 0; j < 2; ++j) {
@@ -98,7 +99,8 @@ TEST(IiObs, ConstantsMatchIndependentComputation) {
     }
     return best;
   };
-  const double k1 = -l1, k2 = (a1 - fJ) * (a1 - fJ) + a2 * a2, k3 = norm(V), k5 = norm(V) * norm(Vi);
+  const double k1 = -l1, k2 = (a1 - fJ) * (a1 - fJ) + a2 * a2, k3 = norm(V),
+               k5 = norm(V) * norm(Vi);
   // float kernel vs double; the sweep's resolution 1e-10 relative
   EXPECT_NEAR(st.k.k1, k1, 1e-5 * k1);
   EXPECT_NEAR(st.k.lambda2, l2, 1e-5 * std::abs(l2));
@@ -150,7 +152,8 @@ TEST(IiObs, ConvergesExponentiallyToSpeedAndLoad) {
   // (the z-dynamics A* has two real poles; the transient of the faster one
   // and the non-normal V give a hump, hence C). 0.8: the Euler step and the
   // residual Delta term slow the slowest pole by < 20 %.
-  const double Cw = 3 * 30.0, Cl = 3 * 0.4 * 0.02 / 0.02 * 50;  // load error scale: tau_L/J t_unit = 1.6 rad/s per unit
+  const double Cw = 3 * 30.0, Cl = 3 * 0.4 * 0.02 / 0.02 *
+                                   50;  // load error scale: tau_L/J t_unit = 1.6 rad/s per unit
   for (size_t k = 0; k < ew.size(); ++k) {
     const double t = static_cast<double>(k) * dt;
     ASSERT_LE(ew[k], Cw * std::exp(-0.8 * rate * t) + 2e-3) << "t = " << t;
@@ -184,7 +187,7 @@ TEST(IiObs, TracksThroughReversal) {
     if (k > 2000) worst = std::max(worst, std::abs(mc_iiobs_f32_omega_m_rad_s(&st) - m.w));
     m.advance(tau, c.dt_s);
   }
-  EXPECT_LT(m.w, -50.0);   // it did reverse
+  EXPECT_LT(m.w, -50.0);  // it did reverse
   // rad/s. Under a constant deceleration a the estimate lags by half a
   // step (a dt / 2 = 0.011 rad/s: forward Euler on xi with the torque of
   // the last period), plus a second-order term growing with (omega dt)^2;

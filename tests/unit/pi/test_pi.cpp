@@ -15,11 +15,12 @@
 #include "pi/mc_pi.h"
 #include "pi/mc_pi_q31.h"
 
-namespace {
+namespace
+{
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
-constexpr double kLsb = 1.0 / 2147483648.0;  // one q31 LSB in per unit
+constexpr double kLsb = 1.0 / 2147483648.0; // one q31 LSB in per unit
 
 mc_pi_f32_cfg_t BaseCfg(mc_pi_aw_t aw = MC_PI_AW_CLAMP)
 {
@@ -30,7 +31,7 @@ mc_pi_f32_cfg_t BaseCfg(mc_pi_aw_t aw = MC_PI_AW_CLAMP)
     c.out_min = -1000.0f;
     c.out_max = 1000.0f;
     c.aw = aw;
-    c.kaw_per_s = 100.0f;  // kaw*dt = 0.1
+    c.kaw_per_s = 100.0f; // kaw*dt = 0.1
     return c;
 }
 
@@ -107,7 +108,7 @@ RefPi MakeRef(const mc_pi_f32_cfg_t &c)
 {
     RefPi r{};
     r.kp = c.kp;
-    r.ki_dt = static_cast<double>(c.ki_per_s * c.dt_s);  // the float product the kernel uses
+    r.ki_dt = static_cast<double>(c.ki_per_s * c.dt_s); // the float product the kernel uses
     r.kaw_dt = (c.aw == MC_PI_AW_BACK_CALC) ? static_cast<double>(c.kaw_per_s * c.dt_s) : 0.0;
     r.out_min = c.out_min;
     r.out_max = c.out_max;
@@ -193,17 +194,17 @@ int RecoverySteps(mc_pi_aw_t aw, bool dynamic_limit)
 {
     mc_pi_f32_cfg_t c = BaseCfg(aw);
     c.kp = 0.1f;
-    c.ki_per_s = 50.0f;       // ki*dt*|e| = 0.025 per step for e = -0.5
-    c.kaw_per_s = 500.0f;     // kaw*dt = 0.5
+    c.ki_per_s = 50.0f;   // ki*dt*|e| = 0.025 per step for e = -0.5
+    c.kaw_per_s = 500.0f; // kaw*dt = 0.5
     float ff = 0.0f;
     float hi = 1.0f;
     if (dynamic_limit) {
-        c.out_min = -10.0f;   // static limits wide, the output cut to +-1 per step
+        c.out_min = -10.0f; // static limits wide, the output cut to +-1 per step
         c.out_max = 10.0f;
     } else {
         c.out_min = -1.0f;
         c.out_max = 1.0f;
-        ff = 0.8f;            // feed-forward uses most of the range
+        ff = 0.8f; // feed-forward uses most of the range
     }
     mc_pi_f32_t st;
     EXPECT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
@@ -211,7 +212,7 @@ int RecoverySteps(mc_pi_aw_t aw, bool dynamic_limit)
     for (int k = 0; k < 1000; ++k) {
         u = StepLim(&st, 1.0f, ff, -hi, hi);
     }
-    EXPECT_EQ(u, hi);  // deep in saturation for the last ~980 steps
+    EXPECT_EQ(u, hi); // deep in saturation for the last ~980 steps
     for (int k = 1; k <= 2000; ++k) {
         if (StepLim(&st, -0.5f, ff, -hi, hi) < hi) {
             return k;
@@ -292,7 +293,7 @@ TEST(PiF32, Reset)
     EXPECT_EQ(st.out, 0.25f);
     EXPECT_EQ(st.flags, 0u);
     EXPECT_EQ(Step(&st, 0.0f), 0.25f);
-    EXPECT_EQ(mc_pi_f32_reset(&st, 100.0f), MC_PI_ERR_NONE);  // clamped
+    EXPECT_EQ(mc_pi_f32_reset(&st, 100.0f), MC_PI_ERR_NONE); // clamped
     EXPECT_EQ(st.integ, 10.0f);
     mc_pi_f32_t before = st;
     EXPECT_EQ(mc_pi_f32_reset(&st, kNaN), MC_PI_ERR_NAN_INPUT);
@@ -376,7 +377,7 @@ TEST(PiF32, InitRejectsEveryBadRuleWithItsFlag)
     c.out_min = c.out_max = 2.0f;
     c.kaw_per_s = kNaN;
     EXPECT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
-    EXPECT_EQ(st.out, 2.0f);  // 0 is outside [2, 2]: starts at the nearest limit
+    EXPECT_EQ(st.out, 2.0f); // 0 is outside [2, 2]: starts at the nearest limit
     c = BaseCfg(MC_PI_AW_BACK_CALC);
     c.kaw_per_s = 1000.0f;
     EXPECT_EQ(mc_pi_f32_init(&st, &c), MC_PI_ERR_NONE);
@@ -393,8 +394,10 @@ TEST(PiF32, NonFiniteInputIsRefusedAndSticky)
     const mc_pi_f32_t good = st;
     // Each refused step returns MC_PI_ERR_NAN_INPUT, writes the last output
     // and changes nothing but the sticky flag.
-    const float bad[][4] = {{kNaN, 0.0f, -1.0f, 1.0f}, {kInf, 0.0f, -1.0f, 1.0f},
-                            {0.1f, kNaN, -1.0f, 1.0f}, {0.1f, 0.0f, kNaN, 1.0f},
+    const float bad[][4] = {{kNaN, 0.0f, -1.0f, 1.0f},
+                            {kInf, 0.0f, -1.0f, 1.0f},
+                            {0.1f, kNaN, -1.0f, 1.0f},
+                            {0.1f, 0.0f, kNaN, 1.0f},
                             {0.1f, 0.0f, -1.0f, -kInf}};
     for (const auto &b : bad) {
         float u = 0.0f;
@@ -487,14 +490,14 @@ TEST(PiF32, TrackEqualsRunningWithTheAppliedLimit)
 mc_pi_q31_cfg_t BaseQ(mc_pi_aw_t aw = MC_PI_AW_CLAMP)
 {
     mc_pi_q31_cfg_t q{};
-    q.kp_mant = 1 << 30;  // 0.5
+    q.kp_mant = 1 << 30; // 0.5
     q.kp_shift = 0;
-    q.ki_dt_mant = 1 << 21;  // 2^-10 per step
+    q.ki_dt_mant = 1 << 21; // 2^-10 per step
     q.ki_shift = 0;
     q.out_min = MC_Q31_MIN;
     q.out_max = MC_Q31_MAX;
     q.aw = aw;
-    q.kaw_dt = 1 << 30;  // 0.5
+    q.kaw_dt = 1 << 30; // 0.5
     return q;
 }
 
@@ -665,13 +668,13 @@ TEST(PiQ31, BumplessGainChangeAndReset)
     mc_pi_q31_t st;
     mc_pi_q31_cfg_t q = BaseQ();
     ASSERT_EQ(mc_pi_q31_init(&st, &q), MC_PI_ERR_NONE);
-    const q31_t e = 123456789;  // about 0.0575 per unit
+    const q31_t e = 123456789; // about 0.0575 per unit
     q31_t u_last = 0;
     for (int k = 0; k < 20; ++k) {
         u_last = StepQ(&st, e);
     }
-    const q31_t ki_new = 1 << 24;  // 2^-7 per step
-    ASSERT_EQ(mc_pi_q31_set_gains(&st, 3 << 28, 2, ki_new, 0), MC_PI_ERR_NONE);  // kp 1.5
+    const q31_t ki_new = 1 << 24;                                               // 2^-7 per step
+    ASSERT_EQ(mc_pi_q31_set_gains(&st, 3 << 28, 2, ki_new, 0), MC_PI_ERR_NONE); // kp 1.5
     const q31_t u_next = StepQ(&st, e);
     const double inc = static_cast<double>(e) / 128.0;
     EXPECT_NEAR(static_cast<double>(u_next) - u_last, inc, 1.0);
@@ -684,7 +687,7 @@ TEST(PiQ31, BumplessGainChangeAndReset)
 
     EXPECT_EQ(mc_pi_q31_reset(&st, 1 << 29), MC_PI_ERR_NONE);
     EXPECT_EQ(st.out, 1 << 29);
-    EXPECT_EQ(StepQ(&st, 0), 1 << 29);  // zero error: exact
+    EXPECT_EQ(StepQ(&st, 0), 1 << 29); // zero error: exact
     // Dynamic limits out of order: refused (the last output written), sticky flag.
     q31_t u = 0;
     EXPECT_EQ(mc_pi_q31_step_lim(&st, 5, 0, 10, -10, &u), MC_PI_ERR_DYN_LIMIT);
@@ -757,7 +760,7 @@ TEST(PiQ31, InitRejectsEveryBadRuleWithItsFlag)
     const mc_pi_q31_cfg_t q_before = q;
     EXPECT_EQ(mc_pi_q31_cfg_from_f32(&c, 0.0f, 1.0f, &q), MC_PI_ERR_SCALE);
     EXPECT_EQ(mc_pi_q31_cfg_from_f32(&c, 1.0f, kNaN, &q), MC_PI_ERR_SCALE);
-    c.kp = 40000.0f;  // >= 2^15 per unit
+    c.kp = 40000.0f; // >= 2^15 per unit
     EXPECT_EQ(mc_pi_q31_cfg_from_f32(&c, 1.0f, 1.0f, &q), MC_PI_ERR_SCALE);
     c = BaseCfg();
     c.dt_s = -1.0f;
@@ -774,4 +777,4 @@ TEST(PiQ31, InitRejectsEveryBadRuleWithItsFlag)
     EXPECT_EQ(q.out_min, -(1 << 30));
 }
 
-}  // namespace
+} // namespace

@@ -20,11 +20,24 @@ namespace {
 // eps = 0.02, at the scenario's 10 kHz.
 mc_pi2d_f32_cfg_t paper_cfg() {
   mc_pi2d_f32_cfg_t c{};
-  c.r_ohm = 1.0f; c.l_h = 1.0f; c.pole_pairs = 1; c.ke_v_s_rad = 0.17f; c.kt_nm_a = 0.51f;
+  c.r_ohm = 1.0f;
+  c.l_h = 1.0f;
+  c.pole_pairs = 1;
+  c.ke_v_s_rad = 0.17f;
+  c.kt_nm_a = 0.51f;
   c.j_kgm2 = 1.0f;
-  c.k1_per_s = 4.0f; c.k2_per_s = 75.0f; c.kp_per_s2 = 5.0f; c.kd_per_s2 = 10.0f;
-  c.ki_per_s3 = 0.01f; c.a_per_s = 50.0f; c.b = 50.0f; c.eps_per_s = 0.02f;
-  c.dt_s = 1.0e-4f; c.iq_max_a = 1e6f; c.v_max_v = 1e9f; c.nu_max_nm = 1e6f;
+  c.k1_per_s = 4.0f;
+  c.k2_per_s = 75.0f;
+  c.kp_per_s2 = 5.0f;
+  c.kd_per_s2 = 10.0f;
+  c.ki_per_s3 = 0.01f;
+  c.a_per_s = 50.0f;
+  c.b = 50.0f;
+  c.eps_per_s = 0.02f;
+  c.dt_s = 1.0e-4f;
+  c.iq_max_a = 1e6f;
+  c.v_max_v = 1e9f;
+  c.nu_max_nm = 1e6f;
   return c;
 }
 
@@ -32,11 +45,24 @@ mc_pi2d_f32_cfg_t paper_cfg() {
 // J = 1e-3 kg m^2, gains of the pi2d-motor scenario's order of magnitude.
 mc_pi2d_f32_cfg_t motor_cfg() {
   mc_pi2d_f32_cfg_t c{};
-  c.r_ohm = 0.675f; c.l_h = 1.14e-3f; c.pole_pairs = 4; c.ke_v_s_rad = 0.44f;
-  c.kt_nm_a = 0.66f; c.j_kgm2 = 1.0e-3f;
-  c.k1_per_s = 3000.0f; c.k2_per_s = 3000.0f; c.kp_per_s2 = 4000.0f; c.kd_per_s2 = 2.4e5f;
-  c.ki_per_s3 = 4.0e4f; c.a_per_s = 2000.0f; c.b = 1.0f; c.eps_per_s = 20.0f;
-  c.dt_s = 5.0e-5f; c.iq_max_a = 1e6f; c.v_max_v = 1e9f; c.nu_max_nm = 1e6f;
+  c.r_ohm = 0.675f;
+  c.l_h = 1.14e-3f;
+  c.pole_pairs = 4;
+  c.ke_v_s_rad = 0.44f;
+  c.kt_nm_a = 0.66f;
+  c.j_kgm2 = 1.0e-3f;
+  c.k1_per_s = 3000.0f;
+  c.k2_per_s = 3000.0f;
+  c.kp_per_s2 = 4000.0f;
+  c.kd_per_s2 = 2.4e5f;
+  c.ki_per_s3 = 4.0e4f;
+  c.a_per_s = 2000.0f;
+  c.b = 1.0f;
+  c.eps_per_s = 20.0f;
+  c.dt_s = 5.0e-5f;
+  c.iq_max_a = 1e6f;
+  c.v_max_v = 1e9f;
+  c.nu_max_nm = 1e6f;
   return c;
 }
 
@@ -59,10 +85,14 @@ Residuals check_case(const mc_pi2d_f32_cfg_t& c, const Case& s) {
   EXPECT_EQ(mc_pi2d_f32_init(&st, &c), MC_PI2D_ERR_NONE);
   EXPECT_EQ(mc_pi2d_f32_reset(&st, static_cast<float>(s.qc), static_cast<float>(s.nu)), 0u);
   mc_pi2d_f32_in_t in{};
-  in.id_a = static_cast<float>(s.x1); in.iq_a = static_cast<float>(s.x2);
-  in.theta_m_rad = static_cast<float>(s.x4); in.theta_ref_rad = static_cast<float>(s.th_ref);
-  in.omega_ref_rad_s = static_cast<float>(s.w_ref); in.alpha_ref_rad_s2 = static_cast<float>(s.a_ref);
-  in.jerk_ref_rad_s3 = static_cast<float>(s.j_ref); in.id_ref_a = static_cast<float>(s.id_ref);
+  in.id_a = static_cast<float>(s.x1);
+  in.iq_a = static_cast<float>(s.x2);
+  in.theta_m_rad = static_cast<float>(s.x4);
+  in.theta_ref_rad = static_cast<float>(s.th_ref);
+  in.omega_ref_rad_s = static_cast<float>(s.w_ref);
+  in.alpha_ref_rad_s2 = static_cast<float>(s.a_ref);
+  in.jerk_ref_rad_s3 = static_cast<float>(s.j_ref);
+  in.id_ref_a = static_cast<float>(s.id_ref);
   in.did_ref_a_s = static_cast<float>(s.did_ref);
   mc_pi2d_f32_out_t o{};
   EXPECT_EQ(mc_pi2d_f32_step(&st, &in, &o), 0u);
@@ -102,12 +132,14 @@ Residuals check_case(const mc_pi2d_f32_cfg_t& c, const Case& s) {
   r.r22 = de3 - (sigma * e2 - kpp * e4 - kd * th + z);
   // Size of the terms whose float rounding the residual sees: the voltage
   // terms over L (u1, u2 are sums of these), and the reference current.
-  r.scale20 = (std::abs(R * in.id_ref_a) + std::abs(L * in.did_ref_a_s) +
-               std::abs(p * L * x2 * in.omega_ref_rad_s) + std::abs((L * k1 - R) * e1) +
-               std::abs(u1)) / L;
+  r.scale20 =
+      (std::abs(R * in.id_ref_a) + std::abs(L * in.did_ref_a_s) +
+       std::abs(p * L * x2 * in.omega_ref_rad_s) + std::abs((L * k1 - R) * e1) + std::abs(u1)) /
+      L;
   r.scale21 = (std::abs(ke * in.omega_ref_rad_s) + std::abs(p * L * x1 * in.omega_ref_rad_s) +
                std::abs(R * x2s) + std::abs(L * o.rho_a_s) + std::abs(L * v2) +
-               std::abs((L * k2 - R) * e2) + std::abs(L * k2 * x2s) + std::abs(u2)) / L;
+               std::abs((L * k2 - R) * e2) + std::abs(L * k2 * x2s) + std::abs(u2)) /
+              L;
   r.scale22 = sigma * (std::abs(x2s) + std::abs(nu / kt) + std::abs(J * v3 / kt) +
                        std::abs(J * in.alpha_ref_rad_s2 / kt));
   return r;
@@ -120,11 +152,18 @@ void run_algebra(const mc_pi2d_f32_cfg_t& c, double i_scale, double w_scale, dou
   int printed_wrong = 0;
   for (int k = 0; k < 500; ++k) {
     Case s{};
-    s.x1 = i_scale * u(rng); s.x2 = i_scale * u(rng); s.x3 = w_scale * u(rng);
-    s.x4 = th_scale * u(rng); s.qc = th_scale * u(rng); s.nu = tau_scale * u(rng);
-    s.tau = tau_scale * u(rng); s.th_ref = s.x4 + 0.1 * th_scale * u(rng);
-    s.w_ref = w_scale * u(rng); s.a_ref = 10.0 * w_scale * u(rng);
-    s.j_ref = 100.0 * w_scale * u(rng); s.id_ref = 0.1 * i_scale * u(rng);
+    s.x1 = i_scale * u(rng);
+    s.x2 = i_scale * u(rng);
+    s.x3 = w_scale * u(rng);
+    s.x4 = th_scale * u(rng);
+    s.qc = th_scale * u(rng);
+    s.nu = tau_scale * u(rng);
+    s.tau = tau_scale * u(rng);
+    s.th_ref = s.x4 + 0.1 * th_scale * u(rng);
+    s.w_ref = w_scale * u(rng);
+    s.a_ref = 10.0 * w_scale * u(rng);
+    s.j_ref = 100.0 * w_scale * u(rng);
+    s.id_ref = 0.1 * i_scale * u(rng);
     s.did_ref = i_scale * u(rng);
     const Residuals r = check_case(c, s);
     // Float rounding: each voltage is a sum of ~6 products computed in
@@ -183,8 +222,13 @@ TEST(Pi2dConfig, RejectsWhatThePaperForbidsAndLeavesStateAlone) {
   expect([](mc_pi2d_f32_cfg_t* c) { c->v_max_v = 0.0f; }, MC_PI2D_ERR_LIMITS);
   expect([](mc_pi2d_f32_cfg_t* c) { c->nu_max_nm = INFINITY; }, MC_PI2D_ERR_LIMITS);
   // Several at once are all reported.
-  expect([](mc_pi2d_f32_cfg_t* c) { c->k1_per_s = 0.0f; c->a_per_s = 0.0f; c->dt_s = -1.0f; },
-         MC_PI2D_ERR_K12 | MC_PI2D_ERR_FILTER | MC_PI2D_ERR_DT);
+  expect(
+      [](mc_pi2d_f32_cfg_t* c) {
+        c->k1_per_s = 0.0f;
+        c->a_per_s = 0.0f;
+        c->dt_s = -1.0f;
+      },
+      MC_PI2D_ERR_K12 | MC_PI2D_ERR_FILTER | MC_PI2D_ERR_DT);
   EXPECT_EQ(mc_pi2d_f32_init(nullptr, &kPaper), MC_PI2D_ERR_NULL);
 }
 
@@ -300,8 +344,14 @@ TEST(Pi2dCertificate, GainsThatMeetBothAreCertified) {
   // 3.2/0.51 - 0.17 + 0.5 + 0.51 = 7.12, 2 eps b' = 0.1; |x2| <= 0.1 with
   // k1 = 1 uses 0.01, and k2 = 1000 uses 0.0507.
   mc_pi2d_f32_cfg_t c = paper_cfg();
-  c.kp_per_s2 = 1.2f; c.kd_per_s2 = 1.0f; c.a_per_s = 1.0f; c.b = 2.0f; c.eps_per_s = 0.05f;
-  c.ki_per_s3 = 0.01f; c.k1_per_s = 1.0f; c.k2_per_s = 1000.0f;
+  c.kp_per_s2 = 1.2f;
+  c.kd_per_s2 = 1.0f;
+  c.a_per_s = 1.0f;
+  c.b = 2.0f;
+  c.eps_per_s = 0.05f;
+  c.ki_per_s3 = 0.01f;
+  c.k1_per_s = 1.0f;
+  c.k2_per_s = 1000.0f;
   const mc_pi2d_envelope_t env{-0.5f, 0.5f, 0.1f};
   mc_pi2d_cert_t r{};
   ASSERT_EQ(mc_pi2d_f32_certify(&c, &env, &r), 0u);

@@ -17,14 +17,16 @@ extern "C" {
 
 using namespace q31t;
 
-namespace {
+namespace
+{
 constexpr double kQ46 = 70368744177664.0;
 
 // The paper's state-feedback CSMC (Fig. 2): law (5), conditional
 // integrators k0 = (20, 100), mu = (0.1 A, 50 rad/s^2).
-mc_csmc_q31_cfg_t paper_cfg(bool model, bool ideal) {
+mc_csmc_q31_cfg_t paper_cfg(bool model, bool ideal)
+{
     mc_csmc_q31_cfg_t c{};
-    mc_csmc_f32_cfg_t& f = c.f;
+    mc_csmc_f32_cfg_t &f = c.f;
     f.law = model ? MC_CSMC_LAW_MODEL : MC_CSMC_LAW_CONST;
     f.sw = ideal ? MC_CSMC_SW_SGN : MC_CSMC_SW_SAT;
     f.k1_per_s2 = 7.5e4f;
@@ -35,15 +37,25 @@ mc_csmc_q31_cfg_t paper_cfg(bool model, bool ideal) {
     EXPECT_EQ(mc_csvc_f32_integrator(100.0f, &f.sigma2), 0u);
     f.m1_v = 50.0f;
     f.m2_v = 50.0f;
-    f.model = {0.1349f, 4.1295e-4f, 0.0013f, 50u, 0.2f, 20.0f, 19.0f, 21.0f,
-               0.035f,  0.030f,     0.040f,  2.1f * 20.0f * 0.1f * 0.040f,
+    f.model = {0.1349f,
+               4.1295e-4f,
+               0.0013f,
+               50u,
+               0.2f,
+               20.0f,
+               19.0f,
+               21.0f,
+               0.035f,
+               0.030f,
+               0.040f,
+               2.1f * 20.0f * 0.1f * 0.040f,
                2.1f * 100.0f * 50.0f * 0.040f};
     f.v_limit_v = 1.0e4f;
     f.dt_s = 1e-5f;
     c.base = {20.0f, 0.5f, 200.0f, 1.0e5f, 1.0e5f, 1.0e7f, 1.0e9f, 2.0e4f};
     return c;
 }
-}  // namespace
+} // namespace
 
 TEST(CsvcQ31, ServocompensatorMatchesF32)
 {
@@ -87,7 +99,7 @@ TEST(CsvcQ31, SaturatesNeverWraps)
 {
     mc_csvc_q31_cfg_t c{};
     ASSERT_EQ(mc_csvc_f32_integrator(1.0e3f, &c.f.model), 0u);
-    c.f.mu = 1.0e6f;  // mu beyond the base: clamped to one base
+    c.f.mu = 1.0e6f; // mu beyond the base: clamped to one base
     c.f.dt_s = 1e-4f;
     c.s_base = 1.0f;
     mc_csvc_q31_t q{};
@@ -162,12 +174,13 @@ TEST(HgoQ31, FullScaleInputSaturatesNeverWraps)
     ASSERT_EQ(mc_hgo_q31_init(&q, &c), 0u);
     mc_hgo_q31_est_t e{};
     mc_hgo_q31_step(&q, 0, &e);
-    mc_hgo_q31_step(&q, MC_Q31_MAX, &e);  // a full-scale jump in one period
+    mc_hgo_q31_step(&q, MC_Q31_MAX, &e); // a full-scale jump in one period
     mc_hgo_q31_step(&q, MC_Q31_MAX, &e);
-    EXPECT_EQ(e.z2, MC_Q31_MAX);  // 0.1 rad in 10 us = 1e4 rad/s: beyond the base
+    EXPECT_EQ(e.z2, MC_Q31_MAX); // 0.1 rad in 10 us = 1e4 rad/s: beyond the base
     EXPECT_EQ(e.z3, MC_Q31_MAX);
-    for (int k = 0; k < 20000; ++k) mc_hgo_q31_step(&q, MC_Q31_MAX, &e);
-    EXPECT_NEAR(e.z1, MC_Q31_MAX, 4);  // settles on y, no wrap on the way
+    for (int k = 0; k < 20000; ++k)
+        mc_hgo_q31_step(&q, MC_Q31_MAX, &e);
+    EXPECT_NEAR(e.z1, MC_Q31_MAX, 4); // settles on y, no wrap on the way
     EXPECT_NEAR(from_q(e.z2, 200.0), 0.0, 1e-6);
     // NULL state or estimate: MC_HGO_ERR_NULL, nothing written; reset returns NONE.
     const mc_hgo_q31_t before = q;
@@ -229,7 +242,7 @@ TEST(CsmcQ31, ModelAndConstLawsMatchF32OnRandomStates)
         mc_csmc_q31_t q{};
         ASSERT_EQ(mc_csmc_f32_init(&f, &c.f), 0u);
         ASSERT_EQ(mc_csmc_q31_init(&q, &c), 0u);
-        const mc_csmc_q31_bases_t& b = c.base;
+        const mc_csmc_q31_bases_t &b = c.base;
         std::mt19937 rng(70 + law);
         std::normal_distribution<double> n(0.0, 1.0);
         double x1 = 0, x2 = 0, w = 0, e2 = 0, de2 = 0, dde2 = 0, worst = 0, worst_s = 0;
@@ -262,18 +275,20 @@ TEST(CsmcQ31, ModelAndConstLawsMatchF32OnRandomStates)
             ASSERT_EQ(mc_csmc_q31_step(&q, &qi, &qo), MC_CSMC_ERR_NONE);
             // sgn at s = 0 exactly is the one place the two may differ: skip
             // steps where s2 is within float rounding of 0
-            if (law == 2 && std::abs(fo.s2_rad_s2) < 1e-2) continue;
+            if (law == 2 && std::abs(fo.s2_rad_s2) < 1e-2)
+                continue;
             worst = std::max({worst, std::abs(fo.v_d_v - from_q(qo.v_d, b.v_base_v)),
                               std::abs(fo.v_q_v - from_q(qo.v_q, b.v_base_v))});
-            worst_s = std::max(worst_s, std::abs(fo.s2_rad_s2 - from_q(qo.s2, b.alpha_base_rad_s2)));
+            worst_s =
+                std::max(worst_s, std::abs(fo.s2_rad_s2 - from_q(qo.s2, b.alpha_base_rad_s2)));
         }
         // Bounds: in f32, s2 = k1 e2 + k2 e2' + e2'' sums terms of ~1e4
         // (ulp 1e-3) and u2 ~ (L^/k3) G with G ~ 1e7 (ulp 1: ~1e-4 V);
         // inside the boundary layer u2 depends on s2/mu2 with gain
         // lb2/mu2 ~ 2e-1 V per rad/s^2: 2e-3 rad/s^2 -> 4e-4 V.
         const double bv = 5.0e-3, bs = 1.0e-2;
-        report(law == 0 ? "csmc model |u f32 - q31|" : (law == 1 ? "csmc const |u f32 - q31|"
-                                                                 : "smc sgn |u f32 - q31|"),
+        report(law == 0 ? "csmc model |u f32 - q31|"
+                        : (law == 1 ? "csmc const |u f32 - q31|" : "smc sgn |u f32 - q31|"),
                worst, bv, "V");
         report("csmc |s2 f32 - q31|", worst_s, bs, "rad/s^2");
         EXPECT_LE(worst, bv);
@@ -288,7 +303,7 @@ TEST(CsmcQ31, FullScaleInputsSaturateNeverWrap)
     // engineering values clamped to the q31 range of their bases (a wrap
     // would flip a sign): s1 saturates at +1 base.
     const mc_csmc_q31_cfg_t c = paper_cfg(true, false);
-    const mc_csmc_q31_bases_t& b = c.base;
+    const mc_csmc_q31_bases_t &b = c.base;
     mc_csmc_q31_t q{};
     mc_csmc_f32_t f{};
     ASSERT_EQ(mc_csmc_q31_init(&q, &c), 0u);
@@ -319,15 +334,18 @@ TEST(CsmcQ31, FullScaleInputsSaturateNeverWrap)
         mc_csmc_f32_step(&f, &fi, &fo);
         // relative 1e-5 of the value (f32 rounding of terms of ~1e4 V) + 1e-3 V
         ASSERT_NEAR(from_q(o.v_d, b.v_base_v), clampq(fo.v_d_v, b.v_base_v),
-                    1e-3 + 1e-5 * std::abs(fo.v_d_v)) << k;
+                    1e-3 + 1e-5 * std::abs(fo.v_d_v))
+            << k;
         ASSERT_NEAR(from_q(o.v_q, b.v_base_v), clampq(fo.v_q_v, b.v_base_v),
-                    1e-3 + 1e-5 * std::abs(fo.v_q_v)) << k;
+                    1e-3 + 1e-5 * std::abs(fo.v_q_v))
+            << k;
         ASSERT_NEAR(from_q(o.s2, b.alpha_base_rad_s2), clampq(fo.s2_rad_s2, b.alpha_base_rad_s2),
-                    1e-2) << k;
+                    1e-2)
+            << k;
     }
-    EXPECT_EQ(o.s1, MC_Q31_MAX);   // f32: 20 A + sigma > one base
+    EXPECT_EQ(o.s1, MC_Q31_MAX); // f32: 20 A + sigma > one base
     EXPECT_GT(fo.s1_a, 20.0f);
-    EXPECT_LT(o.v_q, 0);  // the sign of the f32 law (checked to 1e-5 above)
+    EXPECT_LT(o.v_q, 0); // the sign of the f32 law (checked to 1e-5 above)
     // NULL pointers: MC_CSMC_ERR_NULL, nothing written; reset returns NONE.
     const mc_csmc_q31_t before = q;
     mc_csmc_q31_out_t o_null{42, 42, 42, 42};

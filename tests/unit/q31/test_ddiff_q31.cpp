@@ -12,13 +12,15 @@ extern "C" {
 
 using namespace q31t;
 
-namespace {
+namespace
+{
 struct Pair {
     mc_ddiff_f32_t f;
     mc_ddiff_q31_t q;
     double yb, ob;
 };
-Pair make(float a, float b, float dt, double yb, double ob) {
+Pair make(float a, float b, float dt, double yb, double ob)
+{
     Pair p{};
     mc_ddiff_q31_cfg_t c{{a, b, dt}, static_cast<float>(yb), static_cast<float>(ob)};
     EXPECT_EQ(mc_ddiff_f32_init(&p.f, &c.f), 0u);
@@ -40,7 +42,7 @@ q31_t step_q(mc_ddiff_q31_t *q, q31_t y)
     EXPECT_EQ(mc_ddiff_q31_step(q, y, &th), MC_DDIFF_ERR_NONE);
     return th;
 }
-}  // namespace
+} // namespace
 
 TEST(DdiffQ31, InitRejectsBadBasesAndKeepsF32Rules)
 {
@@ -55,13 +57,13 @@ TEST(DdiffQ31, InitRejectsBadBasesAndKeepsF32Rules)
     c.f.a_per_s = -1.0f;
     EXPECT_EQ(mc_ddiff_q31_init(&q, &c), MC_DDIFF_ERR_A);
     c.f.a_per_s = 50.0f;
-    c.y_base = 1.0e-12f;  // g y_base/out_base: far beyond nothing, but b*ratio tiny: accepted
+    c.y_base = 1.0e-12f; // g y_base/out_base: far beyond nothing, but b*ratio tiny: accepted
     EXPECT_EQ(mc_ddiff_q31_init(&q, &c), 0u);
-    c.y_base = 1.0e12f;   // b y_base/out_base = 5e13 >= 2^30: no gain format holds it
+    c.y_base = 1.0e12f; // b y_base/out_base = 5e13 >= 2^30: no gain format holds it
     mc_ddiff_q31_t q2{};
     q2.out = 77;
     EXPECT_EQ(mc_ddiff_q31_init(&q2, &c), MC_DDIFF_ERR_SCALE);
-    EXPECT_EQ(q2.out, 77);  // state not written
+    EXPECT_EQ(q2.out, 77); // state not written
     // NULL state or output: MC_DDIFF_ERR_NULL, nothing written.
     q31_t th = 42;
     EXPECT_EQ(mc_ddiff_q31_step(nullptr, 1, &th), MC_DDIFF_ERR_NULL);
@@ -87,7 +89,7 @@ TEST(DdiffQ31, MatchesF32OnRandomInputs)
         y += n(rng);
         const double yy = y + 0.02 * std::sin(2.0 * kPi * 3.0 * k * 1e-4);
         const q31_t yq = to_q(yy, p.yb);
-        const float yf = static_cast<float>(from_q(yq, p.yb));  // same input
+        const float yf = static_cast<float>(from_q(yq, p.yb)); // same input
         const double of = step_f(&p.f, yf);
         const double oq = from_q(step_q(&p.q, yq), p.ob);
         worst = std::max(worst, std::abs(of - oq));
@@ -119,7 +121,7 @@ TEST(DdiffQ31, EdgeStepsSaturateNeverWrap)
         EXPECT_GE(o, 0);
         last = o;
     }
-    EXPECT_LT(last, 1 << 10);  // (1 - a dt)^5000 ~ 1.4e-11 of full scale
+    EXPECT_LT(last, 1 << 10); // (1 - a dt)^5000 ~ 1.4e-11 of full scale
     // first step after reset: q0 + b y saturates too
     ASSERT_EQ(mc_ddiff_q31_reset(&p.q, MC_Q31_MAX), MC_DDIFF_ERR_NONE);
     EXPECT_EQ(step_q(&p.q, MC_Q31_MAX), MC_Q31_MAX);
@@ -133,7 +135,7 @@ TEST(DdiffQ31, DifferentiatesARampExactly)
     // integer arithmetic the settled value is within 1 LSB of the discrete
     // filter's exact fixed point (the rounding of the state is 2^-16 LSB).
     Pair p = make(100.0f, 2.0f, 1e-4f, 1.0, 1.0);
-    const q31_t step = 21475;  // 1e-5 per step: v = 0.1 per second
+    const q31_t step = 21475; // 1e-5 per step: v = 0.1 per second
     q31_t y = 0, o = 0;
     for (int k = 0; k < 20000; ++k) {
         o = step_q(&p.q, y);
@@ -141,8 +143,8 @@ TEST(DdiffQ31, DifferentiatesARampExactly)
     }
     // settled value of the discrete filter with its (float) coefficients:
     // g dy / (1 - c_q) = (b/a) v up to the coefficients' float rounding
-    const double expect = static_cast<double>(p.f.g) * (step / kQ31) /
-                          (1.0 - static_cast<double>(p.f.c_q));
+    const double expect =
+        static_cast<double>(p.f.g) * (step / kQ31) / (1.0 - static_cast<double>(p.f.c_q));
     report("ddiff ramp settle error", std::abs(from_q(o, 1.0) - expect) * kQ31, 1.0, "LSB");
     EXPECT_LE(std::abs(from_q(o, 1.0) - expect) * kQ31, 1.0);
 }

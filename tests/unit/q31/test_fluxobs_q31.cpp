@@ -12,11 +12,13 @@ extern "C" {
 
 using namespace q31t;
 
-namespace {
+namespace
+{
 constexpr double kIb = 20.0, kVb = 400.0, kFb = 0.25;
 constexpr double kR = 0.675, kL = 1.14e-3, kPsi = 0.11, kDt = 1.25e-4;
 
-mc_fluxobs_q31_cfg_t cfg() {
+mc_fluxobs_q31_cfg_t cfg()
+{
     mc_fluxobs_q31_cfg_t c{};
     float gamma = 0.0f;
     // paper-002 test motor, critical speed 2.1 rad/s (20 r/min), 4 pole pairs
@@ -32,19 +34,20 @@ mc_fluxobs_q31_cfg_t cfg() {
 // voltage that gives exactly that flux trajectory over each period.
 struct Drive {
     double th = 0.3, w = 0.0;
-    void currents(double t_th, double iq, double* ia, double* ib) const {
+    void currents(double t_th, double iq, double *ia, double *ib) const
+    {
         *ia = -iq * std::sin(t_th);
         *ib = iq * std::cos(t_th);
     }
 };
-}  // namespace
+} // namespace
 
 TEST(FluxobsQ31, InitRules)
 {
     mc_fluxobs_q31_t q{};
     q.theta = 5;
     mc_fluxobs_q31_cfg_t c = cfg();
-    c.flux_base_wb = 0.1f;  // below the flux: would saturate on the circle itself
+    c.flux_base_wb = 0.1f; // below the flux: would saturate on the circle itself
     EXPECT_EQ(mc_fluxobs_q31_init(&q, &c), MC_FLUXOBS_ERR_SCALE);
     c = cfg();
     c.i_base_a = 0.0f;
@@ -90,14 +93,15 @@ TEST(FluxobsQ31, MatchesF32FromAWrongStartOnANoisyRun)
                           (kL * (ib1 - ib0) + kPsi * (std::sin(th1) - std::sin(d.th))) / kDt;
         const q31_t vaq = to_q(va, kVb), vbq = to_q(vb, kVb);
         const q31_t iaq = to_q(ia1 + n(rng), kIb), ibq = to_q(ib1 + n(rng), kIb);
-        mc_fluxobs_f32_step(&f, static_cast<float>(from_q(vaq, kVb)),
-                            static_cast<float>(from_q(vbq, kVb)),
-                            static_cast<float>(from_q(iaq, kIb)),
-                            static_cast<float>(from_q(ibq, kIb)));
+        mc_fluxobs_f32_step(
+            &f, static_cast<float>(from_q(vaq, kVb)), static_cast<float>(from_q(vbq, kVb)),
+            static_cast<float>(from_q(iaq, kIb)), static_cast<float>(from_q(ibq, kIb)));
         mc_fluxobs_q31_step(&q, vaq, vbq, iaq, ibq);
         worst = std::max(worst, ang_diff(f.theta_e_rad, ang_rad(q.theta)));
-        worst_x = std::max(worst_x, std::abs(f.x_alpha_wb - q.x_alpha_q46 / 70368744177664.0 * kFb));
-        if (t > 1.0) worst_true_late = std::max(worst_true_late, ang_diff(ang_rad(q.theta), th1));
+        worst_x =
+            std::max(worst_x, std::abs(f.x_alpha_wb - q.x_alpha_q46 / 70368744177664.0 * kFb));
+        if (t > 1.0)
+            worst_true_late = std::max(worst_true_late, ang_diff(ang_rad(q.theta), th1));
         d.th = th1;
         ia0 = ia1;
         ib0 = ib1;
@@ -114,7 +118,7 @@ TEST(FluxobsQ31, MatchesF32FromAWrongStartOnANoisyRun)
     report("fluxobs q31 vs true angle after 1 s", worst_true_late, 0.05, "rad");
     EXPECT_LE(worst, bound);
     EXPECT_LE(worst_x, 2e-6);
-    EXPECT_LE(worst_true_late, 0.05);  // it works: 3 deg under 20 mA noise
+    EXPECT_LE(worst_true_late, 0.05); // it works: 3 deg under 20 mA noise
     EXPECT_EQ(q.flags, 0u);
 }
 
@@ -130,20 +134,21 @@ TEST(FluxobsQ31, FullScaleVoltageSaturatesNeverWraps)
     ASSERT_EQ(mc_fluxobs_f32_init(&f, &c.f), 0u);
     int first_q = -1, first_f = -1;
     for (int k = 0; k < 3000; ++k) {
-        if (mc_fluxobs_q31_step(&q, MC_Q31_MAX, 0, 0, 0) != 0u && first_q < 0) first_q = k;
+        if (mc_fluxobs_q31_step(&q, MC_Q31_MAX, 0, 0, 0) != 0u && first_q < 0)
+            first_q = k;
         if (mc_fluxobs_f32_step(&f, static_cast<float>(kVb), 0.0f, 0.0f, 0.0f) != 0u && first_f < 0)
             first_f = k;
         ASSERT_GE(q.x_alpha_q46, 0);
     }
     EXPECT_EQ(mc_q46_to_q31(q.x_alpha_q46), MC_Q31_MAX);
     EXPECT_NE(q.flags & MC_FLUXOBS_ERR_DIVERGED, 0u);
-    EXPECT_NEAR(first_q, first_f, 1);  // same step (timer in steps vs dt sum)
-    EXPECT_EQ(q.theta, 0);             // e along +alpha
+    EXPECT_NEAR(first_q, first_f, 1); // same step (timer in steps vs dt sum)
+    EXPECT_EQ(q.theta, 0);            // e along +alpha
     // the opposite corner
     ASSERT_EQ(mc_fluxobs_q31_init(&q, &c), 0u);
     for (int k = 0; k < 3000; ++k) {
         mc_fluxobs_q31_step(&q, MC_Q31_MIN, MC_Q31_MIN, MC_Q31_MAX, MC_Q31_MAX);
         ASSERT_LE(q.x_beta_q46, 0);
     }
-    EXPECT_EQ(mc_q46_to_q31(q.x_beta_q46), MC_Q31_MIN + 1);  // clamp at -MAX
+    EXPECT_EQ(mc_q46_to_q31(q.x_beta_q46), MC_Q31_MIN + 1); // clamp at -MAX
 }

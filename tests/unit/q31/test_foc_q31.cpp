@@ -12,12 +12,14 @@ extern "C" {
 
 using namespace q31t;
 
-namespace {
+namespace
+{
 // current base 50 A: above every current AND every current error of the
 // tests (errors beyond one base saturate: FocQ31.ErrorsSaturateAtTheRangeEdges)
 constexpr double kIb = 50.0, kVb = 400.0, kWb = 1000.0;
 
-mc_foc_q31_cfg_t cfg() {
+mc_foc_q31_cfg_t cfg()
+{
     mc_foc_q31_cfg_t c{};
     float kp = 0.0f, ki = 0.0f;
     // paper-002 test motor, current loops at 2 pi 500 rad/s, 20 kHz
@@ -42,14 +44,14 @@ mc_foc_q31_cfg_t cfg() {
     c.omega_base_rad_s = static_cast<float>(kWb);
     return c;
 }
-}  // namespace
+} // namespace
 
 TEST(FocQ31, InitRules)
 {
     mc_foc_q31_t q{};
     q.vd = 3;
     mc_foc_q31_cfg_t c = cfg();
-    c.f.limit_mode = MC_SVPWM_LIMIT_HEXAGON;  // departure: circle only
+    c.f.limit_mode = MC_SVPWM_LIMIT_HEXAGON; // departure: circle only
     EXPECT_EQ(mc_foc_q31_init(&q, &c), MC_FOC_ERR_LIMIT_MODE);
     c = cfg();
     c.v_base_v = 0.0f;
@@ -58,9 +60,9 @@ TEST(FocQ31, InitRules)
     c.f.ld_h = -1.0f;
     EXPECT_EQ(mc_foc_q31_init(&q, &c), MC_FOC_ERR_MOTOR);
     c = cfg();
-    c.i_base_a = 1.0e6f;  // kp i_base/v_base = 8950 per unit: fits (2^15)
+    c.i_base_a = 1.0e6f; // kp i_base/v_base = 8950 per unit: fits (2^15)
     EXPECT_EQ(mc_foc_q31_init(&q, &c), 0u);
-    c.i_base_a = 1.0e8f;  // ... 9e5: beyond the PI's gain format
+    c.i_base_a = 1.0e8f; // ... 9e5: beyond the PI's gain format
     q.vd = 3;
     EXPECT_EQ(mc_foc_q31_init(&q, &c), MC_FOC_ERR_SCALE);
     EXPECT_EQ(q.vd, 3);
@@ -94,21 +96,22 @@ TEST(FocQ31, DqStepMatchesF32OnRandomWalks)
         id += 0.05 * (idr - id) + 0.02 * n(rng);
         iq += 0.05 * (iqr - iq) + 0.02 * n(rng);
         w = std::clamp(w + 2.0 * n(rng), -900.0, 900.0);
-        if (k % 5000 == 2500) w = (w > 0 ? -1.0 : 1.0) * 1400.0 * 0.6;  // speed reversal
+        if (k % 5000 == 2500)
+            w = (w > 0 ? -1.0 : 1.0) * 1400.0 * 0.6; // speed reversal
         vb = std::clamp(vb + 0.5 * n(rng), 100.0, 390.0);
         const q31_t q_idr = to_q(idr, kIb), q_iqr = to_q(iqr, kIb), q_id = to_q(id, kIb),
                     q_iq = to_q(iq, kIb), q_w = to_q(w, kWb), q_vb = to_q(vb, kVb);
         float vdf = 0, vqf = 0;
-        ASSERT_EQ(mc_foc_f32_step_dq(&f, static_cast<float>(from_q(q_idr, kIb)),
-                                     static_cast<float>(from_q(q_iqr, kIb)),
-                                     static_cast<float>(from_q(q_id, kIb)),
-                                     static_cast<float>(from_q(q_iq, kIb)),
-                                     static_cast<float>(from_q(q_w, kWb)),
-                                     static_cast<float>(from_q(q_vb, kVb)), &vdf, &vqf),
+        ASSERT_EQ(mc_foc_f32_step_dq(
+                      &f, static_cast<float>(from_q(q_idr, kIb)),
+                      static_cast<float>(from_q(q_iqr, kIb)), static_cast<float>(from_q(q_id, kIb)),
+                      static_cast<float>(from_q(q_iq, kIb)), static_cast<float>(from_q(q_w, kWb)),
+                      static_cast<float>(from_q(q_vb, kVb)), &vdf, &vqf),
                   0u);
         q31_t vdq = 0, vqq = 0;
         ASSERT_EQ(mc_foc_q31_step_dq(&q, q_idr, q_iqr, q_id, q_iq, q_w, q_vb, &vdq, &vqq), 0u);
-        const double err = std::max(std::abs(vdf - from_q(vdq, kVb)), std::abs(vqf - from_q(vqq, kVb)));
+        const double err =
+            std::max(std::abs(vdf - from_q(vdq, kVb)), std::abs(vqf - from_q(vqq, kVb)));
         const double vmax = 0.95 * from_q(q_vb, kVb) / std::sqrt(3.0);
         const bool lim = std::hypot(vdf, vqf) > vmax * 0.9999;
         limited += lim ? 1 : 0;
@@ -125,10 +128,11 @@ TEST(FocQ31, DqStepMatchesF32OnRandomWalks)
     // bus).
     const double bound = 2.0e-4;
     report("foc |v_f32 - v_q31| (linear + circle)", worst_lin, bound, "V");
-    report("foc same in LSB of the voltage base", worst_lin / kVb * kQ31, bound / kVb * kQ31, "LSB");
+    report("foc same in LSB of the voltage base", worst_lin / kVb * kQ31, bound / kVb * kQ31,
+           "LSB");
     std::printf("[ measured ] foc steps at the voltage limit: %ld of 40000\n", limited);
     EXPECT_LE(worst_lin, bound);
-    EXPECT_GT(limited, 100);  // the limit path was exercised
+    EXPECT_GT(limited, 100); // the limit path was exercised
 }
 
 TEST(FocQ31, FullStepDutiesMatchF32)
@@ -168,7 +172,8 @@ TEST(FocQ31, FullStepDutiesMatchF32)
         ASSERT_EQ(mc_foc_q31_step(&q, &qi, &qo), 0u);
         const double d[3] = {fo.duty_a - from_q(qo.duty_a, 1.0), fo.duty_b - from_q(qo.duty_b, 1.0),
                              fo.duty_c - from_q(qo.duty_c, 1.0)};
-        for (double v : d) worst = std::max(worst, std::abs(v));
+        for (double v : d)
+            worst = std::max(worst, std::abs(v));
     }
     // Bound: the f32 chain (sincos 1e-7, transforms and SVPWM a few ulp of
     // 1) gives duties within ~1e-6; q31 within 4 LSB (mc_svpwm.h). 5e-6.

@@ -14,9 +14,11 @@ extern "C" {
 
 using namespace q31t;
 
-namespace {
+namespace
+{
 // Paper 000 Section V gains on the normalised machine, limits that act.
-mc_pi2d_q31_cfg_t cfg() {
+mc_pi2d_q31_cfg_t cfg()
+{
     mc_pi2d_q31_cfg_t c{};
     c.f.r_ohm = 1.0f;
     c.f.l_h = 1.0f;
@@ -39,7 +41,7 @@ mc_pi2d_q31_cfg_t cfg() {
     c.base = {8.0f, 100.0f, 1.0f, 4.0f, 20.0f, 20.0f, 20.0f, 10.0f, 4.0f};
     return c;
 }
-}  // namespace
+} // namespace
 
 TEST(Pi2dQ31, InitRules)
 {
@@ -49,10 +51,10 @@ TEST(Pi2dQ31, InitRules)
     c.base.v_base_v = -1.0f;
     EXPECT_EQ(mc_pi2d_q31_init(&q, &c), MC_PI2D_ERR_SCALE);
     c = cfg();
-    c.f.ki_per_s3 = 1.0f;  // ki >= eps: the f32 rule
+    c.f.ki_per_s3 = 1.0f; // ki >= eps: the f32 rule
     EXPECT_EQ(mc_pi2d_q31_init(&q, &c) & MC_PI2D_ERR_KI_EPS, MC_PI2D_ERR_KI_EPS);
     c = cfg();
-    c.base.v_base_v = 1.0e-9f;  // L k2 i_b / v_b = 6e11: no gain format holds it
+    c.base.v_base_v = 1.0e-9f; // L k2 i_b / v_b = 6e11: no gain format holds it
     EXPECT_EQ(mc_pi2d_q31_init(&q, &c), MC_PI2D_ERR_SCALE);
     EXPECT_EQ(q.nu_q46, 9);
     c = cfg();
@@ -95,7 +97,7 @@ TEST(Pi2dQ31, MatchesF32OnRandomTrajectories)
     mc_pi2d_q31_t q{};
     ASSERT_EQ(mc_pi2d_f32_init(&f, &c.f), 0u);
     ASSERT_EQ(mc_pi2d_q31_init(&q, &c), 0u);
-    const mc_pi2d_q31_bases_t& b = c.base;
+    const mc_pi2d_q31_bases_t &b = c.base;
     std::mt19937 rng(50);
     std::normal_distribution<double> n(0.0, 1.0);
     double id = 0, iq = 0, e = 0, w = 0;
@@ -136,7 +138,8 @@ TEST(Pi2dQ31, MatchesF32OnRandomTrajectories)
                             std::abs(fo.vq_v - from_q(qo.vq, b.v_base_v))});
         worst_nu = std::max(worst_nu, std::abs(fo.nu_nm - from_q(qo.nu, b.nu_base_nm)));
         worst_iq = std::max(worst_iq, std::abs(fo.iq_ref_a - from_q(qo.iq_ref, b.i_base_a)));
-        worst_th = std::max(worst_th, std::abs(fo.theta_f_rad - from_q(qo.theta_f, b.thetaf_base_rad)));
+        worst_th =
+            std::max(worst_th, std::abs(fo.theta_f_rad - from_q(qo.theta_f, b.thetaf_base_rad)));
     }
     // Bounds: the f32 kernel sums a dozen terms of up to ~500 V that
     // largely cancel (L k2 x2* against (L k2 - R) x2: ulp 3e-5 V each) and
@@ -146,7 +149,8 @@ TEST(Pi2dQ31, MatchesF32OnRandomTrajectories)
     // x2*: terms up to 6 A (ulp 4.8e-7 A), kp e4 with e4 rounded in f32.
     const double bv = 1.0e-3, bnu = 2.0e-6, biq = 4.0e-5, bth = 4.0e-6;
     report("pi2d |v_f32 - v_q31|", worst_v, bv, "V");
-    report("pi2d same in LSB of the voltage base", worst_v / b.v_base_v * kQ31, bv / b.v_base_v * kQ31, "LSB");
+    report("pi2d same in LSB of the voltage base", worst_v / b.v_base_v * kQ31,
+           bv / b.v_base_v * kQ31, "LSB");
     report("pi2d |nu_f32 - nu_q31|", worst_nu, bnu, "N m");
     report("pi2d |iq_ref_f32 - iq_ref_q31|", worst_iq, biq, "A");
     report("pi2d |theta_f_f32 - theta_f_q31|", worst_th, bth, "rad");
@@ -167,7 +171,7 @@ TEST(Pi2dQ31, FullScaleInputsSaturateNeverWrap)
     ASSERT_EQ(mc_pi2d_q31_init(&q, &c), 0u);
     mc_pi2d_q31_in_t in{};
     in.theta_m = MC_Q31_MAX;
-    in.theta_ref = MC_Q31_MIN;  // e4 = +2 bases: saturates at +1
+    in.theta_ref = MC_Q31_MIN; // e4 = +2 bases: saturates at +1
     in.id = MC_Q31_MIN;
     in.iq = MC_Q31_MIN;
     in.omega_ref = MC_Q31_MAX;
@@ -177,14 +181,14 @@ TEST(Pi2dQ31, FullScaleInputsSaturateNeverWrap)
     for (int k = 0; k < 2000; ++k) {
         ASSERT_EQ(mc_pi2d_q31_step(&q, &in, &o), 0u);
         ASSERT_EQ(o.e4, MC_Q31_MAX);
-        ASSERT_LT(o.iq_ref, 0);  // -kp e4 - kd theta_f: negative
+        ASSERT_LT(o.iq_ref, 0); // -kp e4 - kd theta_f: negative
         ASSERT_TRUE(o.iq_limited);
         ASSERT_TRUE(o.v_limited);
         const double vm = std::hypot(from_q(o.vd, 100.0), from_q(o.vq, 100.0));
-        ASSERT_LE(vm, 60.0 * (1.0 + 1e-7));  // limit_vec: < 2^-28 relative, + rounding
+        ASSERT_LE(vm, 60.0 * (1.0 + 1e-7)); // limit_vec: < 2^-28 relative, + rounding
     }
     EXPECT_NEAR(from_q(o.iq_ref, 8.0), -6.0, 1e-8);
-    EXPECT_EQ(o.nu, 0);  // frozen by the conditional integration
+    EXPECT_EQ(o.nu, 0); // frozen by the conditional integration
     // reset with nu beyond its clamp
     ASSERT_EQ(mc_pi2d_q31_reset(&q, 0, MC_Q31_MAX), MC_PI2D_ERR_NONE);
     EXPECT_NEAR(q.nu_q46 / 70368744177664.0 * 4.0, 3.0, 1e-8);

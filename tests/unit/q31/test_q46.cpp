@@ -12,10 +12,14 @@ extern "C" {
 
 using namespace q31t;
 
-namespace {
-constexpr double kQ46 = 70368744177664.0;  // 2^46
-double q46_val(int64_t a) { return static_cast<double>(a) / kQ46; }
-}  // namespace
+namespace
+{
+constexpr double kQ46 = 70368744177664.0; // 2^46
+double q46_val(int64_t a)
+{
+    return static_cast<double>(a) / kQ46;
+}
+} // namespace
 
 TEST(Q46, GainHoldsTheFloatExactly)
 {
@@ -26,13 +30,14 @@ TEST(Q46, GainHoldsTheFloatExactly)
     std::uniform_int_distribution<int> e(-40, 29);
     for (int i = 0; i < 20000; ++i) {
         const float g = std::ldexp(m(rng), e(rng));
-        if (std::abs(g) < 7.2e-15f) continue;  // below 2^-47: 0 by design
+        if (std::abs(g) < 7.2e-15f)
+            continue; // below 2^-47: 0 by design
         mc_q46_gain_t q;
         ASSERT_TRUE(mc_q46_gain_from_f32(g, &q));
         EXPECT_EQ(mc_q46_gain_to_f32(q), g);
     }
     mc_q46_gain_t q;
-    EXPECT_FALSE(mc_q46_gain_from_f32(1073741824.0f, &q));  // 2^30: out of range
+    EXPECT_FALSE(mc_q46_gain_from_f32(1073741824.0f, &q)); // 2^30: out of range
     EXPECT_FALSE(mc_q46_gain_from_f32(std::nanf(""), &q));
     EXPECT_FALSE(mc_q46_gain_from_f32(INFINITY, &q));
     EXPECT_TRUE(mc_q46_gain_from_f32(0.0f, &q));
@@ -56,13 +61,16 @@ TEST(Q46, ProductsWithinOneQ46LsbOfExact)
         const double exact1 = static_cast<double>(gf) * static_cast<double>(xi) / kQ31 * kQ46;
         if (std::abs(exact1) < 4.0e18) {
             // long double: 64-bit mantissa holds the exact product here
-            const long double ex = static_cast<long double>(gf) * xi / 2147483648.0L * 70368744177664.0L;
-            worst1 = std::max(worst1, static_cast<double>(std::fabs(static_cast<long double>(mc_q46_mul_q31(g, xi)) - ex)));
+            const long double ex =
+                static_cast<long double>(gf) * xi / 2147483648.0L * 70368744177664.0L;
+            worst1 = std::max(worst1, static_cast<double>(std::fabs(
+                                          static_cast<long double>(mc_q46_mul_q31(g, xi)) - ex)));
         }
         const int64_t ai = static_cast<int64_t>(a(rng) * kQ46);
         const long double ex2 = static_cast<long double>(gf) * static_cast<long double>(ai);
         if (std::fabs(ex2) < 4.0e18L) {
-            worst2 = std::max(worst2, static_cast<double>(std::fabs(static_cast<long double>(mc_q46_mul(g, ai)) - ex2)));
+            worst2 = std::max(worst2, static_cast<double>(std::fabs(
+                                          static_cast<long double>(mc_q46_mul(g, ai)) - ex2)));
         }
     }
     report("q46 mul_q31 max error", worst1, 0.5, "Q46 LSB");
@@ -79,7 +87,7 @@ TEST(Q46, SaturatesAtTheRangeEdgesNeverWraps)
     EXPECT_EQ(mc_q46_mul_q31(big, MC_Q31_MIN), -MC_Q46_LIM);
     EXPECT_EQ(mc_q46_mul(big, MC_Q46_LIM), MC_Q46_LIM);
     EXPECT_EQ(mc_q46_mul(big, -MC_Q46_LIM), -MC_Q46_LIM);
-    EXPECT_EQ(mc_q46_mul(big, INT64_MAX), MC_Q46_LIM);   // input saturated first
+    EXPECT_EQ(mc_q46_mul(big, INT64_MAX), MC_Q46_LIM); // input saturated first
     EXPECT_EQ(mc_q46_mul(big, INT64_MIN), -MC_Q46_LIM);
     mc_q46_gain_t neg;
     ASSERT_TRUE(mc_q46_gain_from_f32(-1.0e9f, &neg));
@@ -111,7 +119,8 @@ TEST(Q46, LimitVecKeepsDirectionAndLength)
         const bool s = mc_q46_limit_vec(&ai, &bi, li);
         if (len > q46_val(li) * (1.0 + 1e-8)) {
             ASSERT_TRUE(s);
-            worst_len = std::max(worst_len, std::abs(std::hypot(q46_val(ai), q46_val(bi)) / q46_val(li) - 1.0));
+            worst_len = std::max(
+                worst_len, std::abs(std::hypot(q46_val(ai), q46_val(bi)) / q46_val(li) - 1.0));
             worst_dir = std::max(worst_dir, std::abs(std::atan2(q46_val(bi), q46_val(ai)) -
                                                      std::atan2(q46_val(b0), q46_val(a0))));
         } else if (!s) {

@@ -12,9 +12,11 @@ extern "C" {
 
 using namespace q31t;
 
-namespace {
-constexpr double kWb = 2000.0;  // speed base [rad/s]
-mc_spdpll_q31_cfg_t cfg(float bw, float dt, float wmax) {
+namespace
+{
+constexpr double kWb = 2000.0; // speed base [rad/s]
+mc_spdpll_q31_cfg_t cfg(float bw, float dt, float wmax)
+{
     return mc_spdpll_q31_cfg_t{{bw, dt, wmax}, static_cast<float>(kWb)};
 }
 // One step of each twin: the speed; the bits returned are the ones raised
@@ -38,7 +40,7 @@ q31_t step_q(mc_spdpll_q31_t *q, q31_t th, uint32_t *p_rc = nullptr)
     }
     return w;
 }
-}  // namespace
+} // namespace
 
 TEST(SpdpllQ31, InitRules)
 {
@@ -48,7 +50,7 @@ TEST(SpdpllQ31, InitRules)
     c.omega_base_rad_s = -1.0f;
     EXPECT_EQ(mc_spdpll_q31_init(&q, &c), MC_SPDPLL_ERR_SCALE);
     c.omega_base_rad_s = 2000.0f;
-    c.f.bw_rad_s = 2000.0f;  // bw dt > 0.1: the f32 rule
+    c.f.bw_rad_s = 2000.0f; // bw dt > 0.1: the f32 rule
     EXPECT_EQ(mc_spdpll_q31_init(&q, &c), MC_SPDPLL_ERR_BW);
     EXPECT_EQ(q.omega, 99);
     c.f.bw_rad_s = 300.0f;
@@ -93,10 +95,11 @@ TEST(SpdpllQ31, MatchesF32OnNoisyRamps)
     // Bound: the f32 kernel rounds its angle to float every step (ulp of pi
     // 2.4e-7 rad; mc_wrap_pi_f32 and the product add a few ulp); through kp
     // = 600 that is ~1e-4..1e-3 rad/s of speed jitter. q31: 2^-63 turn.
-    const double bound_w = 2.0e-3;     // rad/s (2.1 LSB of a 2000 rad/s base)
-    const double bound_th = 2.0e-6;    // rad (1400 LSB of the q31 turn)
+    const double bound_w = 2.0e-3;  // rad/s (2.1 LSB of a 2000 rad/s base)
+    const double bound_th = 2.0e-6; // rad (1400 LSB of the q31 turn)
     report("spdpll |w_f32 - w_q31|", worst_w, bound_w, "rad/s");
-    report("spdpll same in LSB of the speed base", worst_w / kWb * kQ31, bound_w / kWb * kQ31, "LSB");
+    report("spdpll same in LSB of the speed base", worst_w / kWb * kQ31, bound_w / kWb * kQ31,
+           "LSB");
     report("spdpll |theta_f32 - theta_q31|", worst_th, bound_th, "rad");
     EXPECT_LE(worst_w, bound_w);
     EXPECT_LE(worst_th, bound_th);
@@ -124,16 +127,16 @@ TEST(SpdpllQ31, SaturatesAtOmegaMaxNeverWraps)
         ASSERT_LE(std::abs(from_q(w, kWb)), 1000.0 + kWb / kQ31);
     }
     EXPECT_NE(q.flags & MC_SPDPLL_ERR_SAT, 0u);
-    EXPECT_EQ(rc_any, MC_SPDPLL_ERR_SAT);  // the clamping steps returned it
+    EXPECT_EQ(rc_any, MC_SPDPLL_ERR_SAT); // the clamping steps returned it
     EXPECT_NEAR(from_q(wmax, kWb), 1000.0, 2.0 * kWb / kQ31);
-    const mc_spdpll_q31_cfg_t c2 = cfg(300.0f, 1.25e-4f, 5000.0f);  // clamped to one base
+    const mc_spdpll_q31_cfg_t c2 = cfg(300.0f, 1.25e-4f, 5000.0f); // clamped to one base
     ASSERT_EQ(mc_spdpll_q31_init(&q, &c2), 0u);
     ASSERT_EQ(mc_spdpll_q31_reset(&q, 0, MC_Q31_MIN), MC_SPDPLL_ERR_NONE);
-    EXPECT_EQ(q.omega, -MC_Q31_MAX);  // the preset is clamped too
+    EXPECT_EQ(q.omega, -MC_Q31_MAX); // the preset is clamped too
     th = 0.0;
     q31_t wmin = 0;
     for (int k = 0; k < 400; ++k) {
-        th -= 0.1;  // 800 rad/s backwards, then the PLL is pushed at its limit
+        th -= 0.1; // 800 rad/s backwards, then the PLL is pushed at its limit
         w = step_q(&q, ang_q(th));
         wmin = std::min(wmin, w);
         ASSERT_GE(w, -MC_Q31_MAX);

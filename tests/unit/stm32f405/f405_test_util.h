@@ -11,8 +11,7 @@
 
 // Byte copy of a register file or driver struct (volatile members: copy
 // through a const volatile byte view, not memcpy).
-template <typename T>
-std::vector<uint8_t> snapshot(const T &obj)
+template <typename T> std::vector<uint8_t> snapshot(const T &obj)
 {
     const volatile uint8_t *p = reinterpret_cast<const volatile uint8_t *>(&obj);
     std::vector<uint8_t> v(sizeof(T));
@@ -23,8 +22,7 @@ std::vector<uint8_t> snapshot(const T &obj)
 }
 
 // Fill a struct with a pattern so that "unchanged" is a strong statement.
-template <typename T>
-void poison(T &obj)
+template <typename T> void poison(T &obj)
 {
     volatile uint8_t *p = reinterpret_cast<volatile uint8_t *>(&obj);
     for (size_t i = 0; i < sizeof(T); ++i) {

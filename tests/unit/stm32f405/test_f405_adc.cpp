@@ -6,7 +6,8 @@
 
 #include "f405_test_util.h"
 
-namespace {
+namespace
+{
 
 // Board: 3 shunts on ADC channels 10, 11, 12, bus divider on 13, power-stage
 // sensor on 14, motor thermistor network on 15. 0.5 mOhm shunts, x20

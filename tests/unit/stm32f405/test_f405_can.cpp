@@ -4,7 +4,8 @@
 
 #include "f405_test_util.h"
 
-namespace {
+namespace
+{
 
 constexpr uint32_t kApb1Hz = 42000000u; // APB1 at 168 MHz SYSCLK / 4
 
@@ -20,8 +21,8 @@ Btr decode(uint32_t btr)
 }
 
 const mc_f405_can_filter_t kFilters[] = {
-    {0x120u, 0x7E0u, false},           // ODrive-style node 9: ids 0x120..0x13F
-    {0x18FF0000u, 0x1FFFFFFFu, true},  // one 29-bit id
+    {0x120u, 0x7E0u, false},          // ODrive-style node 9: ids 0x120..0x13F
+    {0x18FF0000u, 0x1FFFFFFFu, true}, // one 29-bit id
 };
 
 mc_hal_can_frame_t frame(uint32_t id, uint8_t len, uint8_t flags)
@@ -76,7 +77,10 @@ struct CanBoard : public ::testing::Test {
         can.TSR = MC_F405_CAN_TSR_TME(0) | MC_F405_CAN_TSR_TME(1) | MC_F405_CAN_TSR_TME(2);
     }
 
-    int send(const mc_hal_can_frame_t &f) { return mc_hal_can_send(&drv.dev, &f); }
+    int send(const mc_hal_can_frame_t &f)
+    {
+        return mc_hal_can_send(&drv.dev, &f);
+    }
 
     // A frame arrives in FIFO 0 (one pending).
     void arrive(uint32_t rir, uint32_t dlc, uint32_t lo, uint32_t hi)
@@ -228,8 +232,7 @@ TEST_F(CanBoard, SendFillsMailboxesThenNoBufs)
     can.TSR = can.TSR & ~MC_F405_CAN_TSR_TME(0); // hardware: mailbox 0 busy
 
     // 29-bit remote frame -> mailbox 1: EXID << 3 | IDE | RTR | TXRQ.
-    ASSERT_EQ(send(frame(0x1ABCDE0u, 2u,
-                                               MC_HAL_CAN_FLAG_EXT | MC_HAL_CAN_FLAG_RTR)), 0);
+    ASSERT_EQ(send(frame(0x1ABCDE0u, 2u, MC_HAL_CAN_FLAG_EXT | MC_HAL_CAN_FLAG_RTR)), 0);
     EXPECT_EQ(can.TX[1].TIR, (0x1ABCDE0u << 3) | 4u | 2u | 1u);
     EXPECT_EQ(can.TX[1].TDTR, 2u);
     EXPECT_EQ(can.TX[1].TDLR, 0u); // no data in a remote frame
@@ -279,12 +282,16 @@ TEST_F(CanBoard, SendRejectsBadFramesAndBusOff)
 TEST_F(CanBoard, ErrorStatesFromEsr)
 {
     start(cfg());
-    struct Case { uint32_t esr; mc_hal_can_bus_state_t state; uint16_t tec, rec; };
+    struct Case {
+        uint32_t esr;
+        mc_hal_can_bus_state_t state;
+        uint16_t tec, rec;
+    };
     const Case cases[] = {
         {(5u << 16) | (3u << 24), MC_HAL_CAN_STATE_ERROR_ACTIVE, 5u, 3u},
         {MC_F405_CAN_ESR_EWGF | (100u << 16), MC_HAL_CAN_STATE_ERROR_WARNING, 100u, 0u},
-        {MC_F405_CAN_ESR_EWGF | MC_F405_CAN_ESR_EPVF | (130u << 24),
-         MC_HAL_CAN_STATE_ERROR_PASSIVE, 0u, 130u},
+        {MC_F405_CAN_ESR_EWGF | MC_F405_CAN_ESR_EPVF | (130u << 24), MC_HAL_CAN_STATE_ERROR_PASSIVE,
+         0u, 130u},
         {MC_F405_CAN_ESR_EWGF | MC_F405_CAN_ESR_EPVF | MC_F405_CAN_ESR_BOFF | (248u << 16),
          MC_HAL_CAN_STATE_BUS_OFF, 248u, 0u},
         // LEC bits (6:4) do not disturb the decoding.

@@ -4,7 +4,8 @@
 
 #include "f405_test_util.h"
 
-namespace {
+namespace
+{
 
 // Board: nFAULT on PB12 (active low, also wired to TIM1_BKIN), gate-driver
 // enable on PB5 (active high), no over-current comparator pin.
@@ -125,20 +126,20 @@ TEST_F(FaultBoard, GateKillForcesEverythingOff)
 TEST_F(FaultBoard, HardwareBreakLatchesAndPropagates)
 {
     ASSERT_EQ(mc_hal_pwm3_enable(&pwm3.dev), 0);
-    gpiob.IDR = 0u;                                   // nFAULT asserted
-    tim1.BDTR = tim1.BDTR & ~MC_F405_TIM_BDTR_MOE;    // hardware
-    tim1.SR = MC_F405_TIM_SR_BIF;                     // hardware
+    gpiob.IDR = 0u;                                // nFAULT asserted
+    tim1.BDTR = tim1.BDTR & ~MC_F405_TIM_BDTR_MOE; // hardware
+    tim1.SR = MC_F405_TIM_SR_BIF;                  // hardware
 
     const mc_hal_fault_status_t st = read();
     EXPECT_EQ(st.active_mask, MC_HAL_FAULT_GATE_DRIVER);
     EXPECT_EQ(st.latched_mask, MC_HAL_FAULT_GATE_DRIVER);
     EXPECT_TRUE(st.gate_killed);
-    EXPECT_EQ(tim8.EGR, MC_F405_TIM_EGR_BG);          // propagated
-    EXPECT_EQ(gpiob.BSRR, 1u << (16u + 5u));          // gate driver disabled
+    EXPECT_EQ(tim8.EGR, MC_F405_TIM_EGR_BG); // propagated
+    EXPECT_EQ(gpiob.BSRR, 1u << (16u + 5u)); // gate driver disabled
 
     const auto tim1_0 = snapshot(tim1);
     EXPECT_EQ(mc_hal_fault_gate_release(&fault.dev), -EBUSY);
-    EXPECT_EQ(snapshot(tim1), tim1_0);                // nothing changed
+    EXPECT_EQ(snapshot(tim1), tim1_0); // nothing changed
     EXPECT_TRUE(read().gate_killed);
 }
 

@@ -12,16 +12,17 @@
 
 #include "mc_f405_flash.h"
 
-namespace {
+namespace
+{
 
 struct Model {
     mc_f405_flash_regs_t regs{};
     std::vector<uint8_t> mem = std::vector<uint8_t>(1u << 20, 0xFF);
-    std::vector<uint32_t> keys;      // KEYR writes seen
-    std::vector<uint32_t> cr_start;  // CR at each STRT
-    uint32_t inject_sr = 0;          // error flag raised by the next operation
+    std::vector<uint32_t> keys;     // KEYR writes seen
+    std::vector<uint32_t> cr_start; // CR at each STRT
+    uint32_t inject_sr = 0;         // error flag raised by the next operation
     uint32_t programmed = 0;
-    std::vector<uint8_t> shadow = mem;  // last known array (to see word writes)
+    std::vector<uint8_t> shadow = mem; // last known array (to see word writes)
 };
 
 void HwPoll(void *ctx)
@@ -31,7 +32,8 @@ void HwPoll(void *ctx)
     if (r.KEYR != 0u) {
         m->keys.push_back(static_cast<uint32_t>(r.KEYR));
         const size_t n = m->keys.size();
-        if (n >= 2 && m->keys[n - 2] == MC_F405_FLASH_KEY1 && m->keys[n - 1] == MC_F405_FLASH_KEY2) {
+        if (n >= 2 && m->keys[n - 2] == MC_F405_FLASH_KEY1 &&
+            m->keys[n - 1] == MC_F405_FLASH_KEY2) {
             r.CR &= ~MC_F405_FLASH_CR_LOCK;
         }
         r.KEYR = 0u;
@@ -53,7 +55,8 @@ void HwPoll(void *ctx)
         // one word was written: NOR programming only clears bits
         for (size_t i = 0; i < m->mem.size(); ++i) {
             if (m->mem[i] != m->shadow[i]) {
-                EXPECT_EQ(r.CR & 0x300u, MC_F405_FLASH_CR_PSIZE_X32) << "word program needs PSIZE x32";
+                EXPECT_EQ(r.CR & 0x300u, MC_F405_FLASH_CR_PSIZE_X32)
+                    << "word program needs PSIZE x32";
                 m->mem[i] = m->inject_sr != 0u ? m->shadow[i] : (m->mem[i] & m->shadow[i]);
             }
         }
@@ -64,13 +67,14 @@ void HwPoll(void *ctx)
     }
 }
 
-class F405Flash : public ::testing::Test {
-protected:
+class F405Flash : public ::testing::Test
+{
+  protected:
     void SetUp() override
     {
-        m.regs.CR = MC_F405_FLASH_CR_LOCK;  // reset value 0x80000000 (RM0090 3.9.7)
-        const mc_f405_flash_config_t c = {&m.regs, m.mem.data(), 0x1u /* sector 0: code */, 100u,
-                                          HwPoll, &m};
+        m.regs.CR = MC_F405_FLASH_CR_LOCK; // reset value 0x80000000 (RM0090 3.9.7)
+        const mc_f405_flash_config_t c = {&m.regs, m.mem.data(), 0x1u /* sector 0: code */,
+                                          100u,    HwPoll,       &m};
         ASSERT_EQ(0, mc_f405_flash_init(&f, &c));
     }
     Model m;
@@ -81,7 +85,7 @@ TEST(F405FlashMap, SectorGeometryRm0090Table5)
 {
     const uint32_t want_off[12] = {0x00000, 0x04000, 0x08000, 0x0C000, 0x10000, 0x20000,
                                    0x40000, 0x60000, 0x80000, 0xA0000, 0xC0000, 0xE0000};
-    const uint32_t want_size[12] = {16384, 16384, 16384, 16384, 65536, 131072,
+    const uint32_t want_size[12] = {16384,  16384,  16384,  16384,  65536,  131072,
                                     131072, 131072, 131072, 131072, 131072, 131072};
     for (uint32_t s = 0; s < 12; ++s) {
         uint32_t off = 0, bytes = 0;
@@ -96,7 +100,7 @@ TEST(F405FlashMap, SectorGeometryRm0090Table5)
 TEST_F(F405Flash, EraseSequenceRegisters)
 {
     std::memset(m.mem.data() + 0xE0000, 0x00, 0x20000);
-    m.mem[0xDFFFF] = 0x00;  // last byte of sector 10
+    m.mem[0xDFFFF] = 0x00; // last byte of sector 10
     m.shadow = m.mem;
     ASSERT_EQ(0, mc_hal_flash_erase(&f.dev, 11));
     ASSERT_EQ(2u, m.keys.size());
@@ -149,4 +153,4 @@ TEST_F(F405Flash, ErrorsAndRefusals)
     EXPECT_EQ(-EIO, mc_hal_flash_erase(&f.dev, 5));
 }
 
-}  // namespace
+} // namespace

@@ -7,7 +7,8 @@
 
 #include "f405_test_util.h"
 
-namespace {
+namespace
+{
 
 constexpr uint32_t kTimClkHz = 168000000u; // APB2 timer clock at 168 MHz SYSCLK
 
@@ -55,10 +56,12 @@ uint32_t dtg_ticks(uint32_t dtg)
 //  100 ns = 16.8 -> 17 tDTS (rounded up) -> 0x11, 101.19 ns -> 101
 TEST(F405Deadtime, HandWorkedValuesAt168MHz)
 {
-    struct Case { uint32_t ns, dtg, actual_ns; };
+    struct Case {
+        uint32_t ns, dtg, actual_ns;
+    };
     const Case cases[] = {
-        {500u, 0x54u, 500u}, {1000u, 0x94u, 1000u}, {2000u, 0xCAu, 2000u},
-        {4000u, 0xEAu, 4000u}, {100u, 0x11u, 101u}, {6000u, 0xFFu, 6000u},
+        {500u, 0x54u, 500u},   {1000u, 0x94u, 1000u}, {2000u, 0xCAu, 2000u},
+        {4000u, 0xEAu, 4000u}, {100u, 0x11u, 101u},   {6000u, 0xFFu, 6000u},
     };
     for (const Case &c : cases) {
         uint32_t dtg = 0u;

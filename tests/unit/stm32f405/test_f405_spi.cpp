@@ -7,7 +7,8 @@
 
 #include "f405_test_util.h"
 
-namespace {
+namespace
+{
 
 // RM0090 §28.5.1 SPI_CR1 bit positions, typed from the manual.
 constexpr uint32_t kCpha = 1u << 0;

@@ -4,7 +4,8 @@
 
 #include "f405_test_util.h"
 
-namespace {
+namespace
+{
 
 mc_f405_encoder_config_t enc_cfg(mc_f405_tim_regs_t *tim, const mc_hal_tick_t *tick)
 {

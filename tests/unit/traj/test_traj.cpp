@@ -12,7 +12,8 @@ extern "C" {
 #include "traj/mc_traj.h"
 }
 
-namespace {
+namespace
+{
 
 constexpr double kTwoPi = 6.283185307179586476925;
 
@@ -30,7 +31,10 @@ mc_traj_f32_cfg_t Cfg(float v = 50.0f, float a = 200.0f, float d = 100.0f, float
 
 // float position tolerance: a few ulp of the largest position plus the
 // accumulated rounding of the segment chaining.
-double PosTol(double x) { return 4e-6 * std::max(1.0, std::abs(x)); }
+double PosTol(double x)
+{
+    return 4e-6 * std::max(1.0, std::abs(x));
+}
 
 TEST(Traj, InitRejectsBadConfig)
 {
@@ -202,7 +206,8 @@ TEST(Traj, ReplanWhileMovingIsContinuous)
         ASSERT_LE(std::abs(dv), std::max(a, d) * dt * 1.001 + 1e-4) << k;
         const double dx = o.x_rad - prev.x_rad;
         ASSERT_NEAR(dx, 0.5 * (o.v_rad_s + prev.v_rad_s) * dt,
-                    0.5 * std::max(a, d) * dt * dt + 2e-5) << k;
+                    0.5 * std::max(a, d) * dt * dt + 2e-5)
+            << k;
         ASSERT_LE(std::abs(o.v_rad_s), v * 1.0001f) << k;
         ASSERT_TRUE(o.a_rad_s2 == 0.0f || std::abs(o.a_rad_s2) == a || std::abs(o.a_rad_s2) == d);
         if (o.a_rad_s2 != 0.0f && std::abs(o.a_rad_s2) == a) {
@@ -287,14 +292,16 @@ TEST(Traj, ModeSwitchKeepsState)
     ASSERT_EQ(0u, mc_traj_f32_set_mode(&t, MC_TRAJ_MODE_FILTER));
     ASSERT_EQ(0u, mc_traj_f32_set_input(&t, 5.0f));
     mc_traj_f32_out_t o, p;
-    for (int k = 0; k < 300; ++k) ASSERT_EQ(0u, mc_traj_f32_step(&t, &o));
+    for (int k = 0; k < 300; ++k)
+        ASSERT_EQ(0u, mc_traj_f32_step(&t, &o));
     const float x = t.fx_rad, v = t.fv_rad_s;
     ASSERT_EQ(0u, mc_traj_f32_set_mode(&t, MC_TRAJ_MODE_TRAP));
     ASSERT_EQ(0u, mc_traj_f32_step(&t, &p));
     EXPECT_EQ(x, p.x_rad);
     EXPECT_EQ(v, p.v_rad_s);
-    for (int k = 0; k < 100000 && !p.done; ++k) ASSERT_EQ(0u, mc_traj_f32_step(&t, &p));
+    for (int k = 0; k < 100000 && !p.done; ++k)
+        ASSERT_EQ(0u, mc_traj_f32_step(&t, &p));
     EXPECT_EQ(5.0f, p.x_rad);
 }
 
-}  // namespace
+} // namespace

@@ -19,10 +19,11 @@
 #include "transforms/mc_svpwm.h"
 #include "transforms/mc_svpwm_q31.h"
 
-namespace {
+namespace
+{
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kQ31 = 2147483648.0;  // 2^31
+constexpr double kQ31 = 2147483648.0; // 2^31
 const double kSqrt3 = std::sqrt(3.0);
 
 // Float duty tolerance, 16 * 2^-24 (about 1e-6): a duty is 0.5 + x with
@@ -45,8 +46,14 @@ void Phases(double alpha, double beta, double v[3])
     v[2] = -0.5 * alpha - 0.5 * kSqrt3 * beta;
 }
 
-double Max3(const double v[3]) { return std::fmax(v[0], std::fmax(v[1], v[2])); }
-double Min3(const double v[3]) { return std::fmin(v[0], std::fmin(v[1], v[2])); }
+double Max3(const double v[3])
+{
+    return std::fmax(v[0], std::fmax(v[1], v[2]));
+}
+double Min3(const double v[3])
+{
+    return std::fmin(v[0], std::fmin(v[1], v[2]));
+}
 
 Duties RefSvpwm(double alpha, double beta, double vbus, mc_svpwm_limit_t limit)
 {
@@ -104,11 +111,14 @@ q31_t ToQ31(double x)
     return static_cast<q31_t>(r);
 }
 
-double ToDouble(q31_t x) { return static_cast<double>(x) / kQ31; }
+double ToDouble(q31_t x)
+{
+    return static_cast<double>(x) / kQ31;
+}
 
 const mc_svpwm_limit_t kLimits[] = {MC_SVPWM_LIMIT_CIRCLE, MC_SVPWM_LIMIT_HEXAGON};
 
-}  // namespace
+} // namespace
 
 // --------------------------------------------------------------- f32
 
@@ -127,8 +137,8 @@ TEST(SvpwmF32, LinearRegionReproducesLineToLineVoltages)
             const float alpha = static_cast<float>(mag * std::cos(th));
             const float beta = static_cast<float>(mag * std::sin(th));
             float d[3] = {-1.0f, -1.0f, -1.0f};
-            const uint32_t flags = mc_svpwm_f32(alpha, beta, static_cast<float>(vbus), limit,
-                                                &d[0], &d[1], &d[2]);
+            const uint32_t flags =
+                mc_svpwm_f32(alpha, beta, static_cast<float>(vbus), limit, &d[0], &d[1], &d[2]);
             ASSERT_EQ(flags, MC_SVPWM_FLAG_NONE) << "limit " << limit << " |v| " << mag;
             double v[3];
             Phases(alpha, beta, v);
@@ -164,7 +174,7 @@ TEST(SvpwmF32, HexagonIsLinearBeyondTheCircleWhereTheCircleLimits)
         const double r_hex = HexRadius(vbus, th);
         const double r_circle = vbus / kSqrt3;
         if (r_hex < 1.01 * r_circle) {
-            continue;  // near a flat side: no room between circle and hexagon
+            continue; // near a flat side: no room between circle and hexagon
         }
         ++tested;
         const double mag = 1.002 * r_circle + frac(rng) * (0.998 * r_hex - 1.002 * r_circle);
@@ -185,7 +195,7 @@ TEST(SvpwmF32, HexagonIsLinearBeyondTheCircleWhereTheCircleLimits)
         flags = mc_svpwm_f32(alpha, beta, vbus, MC_SVPWM_LIMIT_CIRCLE, &d[0], &d[1], &d[2]);
         EXPECT_EQ(flags, MC_SVPWM_FLAG_LIMITED);
     }
-    EXPECT_GT(tested, 5000);  // about 70 % of the directions qualify
+    EXPECT_GT(tested, 5000); // about 70 % of the directions qualify
 }
 
 TEST(SvpwmF32, CircleLimitKeepsDirectionAndGivesVbusOverSqrt3)
@@ -222,8 +232,7 @@ TEST(SvpwmF32, CircleLimitKeepsDirectionAndGivesVbusOverSqrt3)
         // The applied vector reported for anti-windup matches the duties.
         float la = alpha;
         float lb = beta;
-        EXPECT_EQ(mc_svpwm_limit_f32(&la, &lb, vbus, MC_SVPWM_LIMIT_CIRCLE),
-                  MC_SVPWM_FLAG_LIMITED);
+        EXPECT_EQ(mc_svpwm_limit_f32(&la, &lb, vbus, MC_SVPWM_LIMIT_CIRCLE), MC_SVPWM_FLAG_LIMITED);
         EXPECT_NEAR(la, ra, 2.0 * kDutyTol * vbus);
         EXPECT_NEAR(lb, rb, 2.0 * kDutyTol * vbus);
     }
@@ -273,8 +282,7 @@ TEST(SvpwmF32, ZeroRequestGivesHalfDuty)
 {
     for (mc_svpwm_limit_t limit : kLimits) {
         float d[3] = {0.0f, 0.0f, 0.0f};
-        EXPECT_EQ(mc_svpwm_f32(0.0f, 0.0f, 48.0f, limit, &d[0], &d[1], &d[2]),
-                  MC_SVPWM_FLAG_NONE);
+        EXPECT_EQ(mc_svpwm_f32(0.0f, 0.0f, 48.0f, limit, &d[0], &d[1], &d[2]), MC_SVPWM_FLAG_NONE);
         // Exact: 0.5 + 0 * (1/D).
         EXPECT_EQ(d[0], 0.5f);
         EXPECT_EQ(d[1], 0.5f);
@@ -294,7 +302,7 @@ TEST(SvpwmF32, BadVbusAndNonFiniteInputGiveZeroVoltage)
                       MC_SVPWM_FLAG_BAD_VBUS)
                 << "vbus " << vbus;
             for (float x : d) {
-                EXPECT_EQ(x, 0.5f);  // exact by definition
+                EXPECT_EQ(x, 0.5f); // exact by definition
             }
             float la = 5.0f;
             float lb = -3.0f;
@@ -340,7 +348,7 @@ TEST(SvpwmF32, InvalidLimitAndNullPointersAreRejected)
     d[1] = 0.25f;
     EXPECT_EQ(mc_svpwm_f32(5.0f, 1.0f, 48.0f, MC_SVPWM_LIMIT_CIRCLE, &d[0], &d[1], nullptr),
               MC_SVPWM_FLAG_BAD_INPUT);
-    EXPECT_EQ(d[0], 0.25f);  // nothing written
+    EXPECT_EQ(d[0], 0.25f); // nothing written
     EXPECT_EQ(d[1], 0.25f);
     float lb = 1.0f;
     EXPECT_EQ(mc_svpwm_limit_f32(nullptr, &lb, 48.0f, MC_SVPWM_LIMIT_CIRCLE),
@@ -394,7 +402,8 @@ TEST(SvpwmF32, MaxVoltage)
 
 // --------------------------------------------------------------- q31
 
-namespace {
+namespace
+{
 
 // Error bound of the q31 twin in LSB, as derived in mc_svpwm.h: 0.5 for the
 // rounded division, 0.26 for the Q31 constant sqrt(3)/2 (0.38 LSB times
@@ -413,8 +422,8 @@ double RefDen(double alpha, double beta, double vbus, mc_svpwm_limit_t limit)
 {
     double v[3];
     Phases(alpha, beta, v);
-    const double measure = (limit == MC_SVPWM_LIMIT_CIRCLE) ? kSqrt3 * std::hypot(alpha, beta)
-                                                            : Max3(v) - Min3(v);
+    const double measure =
+        (limit == MC_SVPWM_LIMIT_CIRCLE) ? kSqrt3 * std::hypot(alpha, beta) : Max3(v) - Min3(v);
     return std::fmax(vbus, measure);
 }
 
@@ -455,7 +464,7 @@ double WorstQ31VsReference(mc_svpwm_limit_t limit, double vbus_lo, std::mt19937 
     return worst;
 }
 
-}  // namespace
+} // namespace
 
 TEST(SvpwmQ31, AgainstExactReference)
 {
@@ -497,9 +506,9 @@ TEST(SvpwmQ31, AgainstF32Twin)
             q31_t dq[3];
             float df[3];
             const uint32_t fq = mc_svpwm_q31(alpha, beta, vbus, limit, &dq[0], &dq[1], &dq[2]);
-            const uint32_t ff =
-                mc_svpwm_f32(static_cast<float>(ToDouble(alpha)), static_cast<float>(ToDouble(beta)),
-                             static_cast<float>(ToDouble(vbus)), limit, &df[0], &df[1], &df[2]);
+            const uint32_t ff = mc_svpwm_f32(
+                static_cast<float>(ToDouble(alpha)), static_cast<float>(ToDouble(beta)),
+                static_cast<float>(ToDouble(vbus)), limit, &df[0], &df[1], &df[2]);
             EXPECT_EQ(fq, ff);
             for (int k = 0; k < 3; ++k) {
                 worst = std::fmax(worst, std::fabs(static_cast<double>(dq[k]) -
@@ -582,7 +591,7 @@ TEST(SvpwmQ31, BadVbusInvalidLimitAndNullPointers)
         }
         q31_t d[3] = {0, 0, 0};
         EXPECT_EQ(mc_svpwm_q31(0, 0, ToQ31(0.5), limit, &d[0], &d[1], &d[2]), MC_SVPWM_FLAG_NONE);
-        EXPECT_EQ(d[0], half);  // zero request: exactly 1/2
+        EXPECT_EQ(d[0], half); // zero request: exactly 1/2
         EXPECT_EQ(d[1], half);
         EXPECT_EQ(d[2], half);
     }
@@ -596,6 +605,6 @@ TEST(SvpwmQ31, BadVbusInvalidLimitAndNullPointers)
     d[1] = 7;
     EXPECT_EQ(mc_svpwm_q31(ToQ31(0.1), 0, ToQ31(0.5), MC_SVPWM_LIMIT_CIRCLE, &d[0], &d[1], nullptr),
               MC_SVPWM_FLAG_BAD_INPUT);
-    EXPECT_EQ(d[0], 7);  // nothing written
+    EXPECT_EQ(d[0], 7); // nothing written
     EXPECT_EQ(d[1], 7);
 }

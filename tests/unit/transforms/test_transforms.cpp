@@ -15,12 +15,16 @@
 
 #include "transforms/mc_transforms.h"
 
-namespace {
+namespace
+{
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kQ31 = 2147483648.0;  // 2^31
+constexpr double kQ31 = 2147483648.0; // 2^31
 
-double ToDouble(q31_t x) { return static_cast<double>(x) / kQ31; }
+double ToDouble(q31_t x)
+{
+    return static_cast<double>(x) / kQ31;
+}
 
 // Exact q31 from a double in (-1, 1), rounded to nearest (test helper, not
 // the kernel's mc_q31_from_f32, so the tests do not depend on it).
@@ -46,9 +50,12 @@ q31_t FloatExactQ31(std::mt19937 &rng, double lo, double hi)
 }
 
 // Difference in q31 LSB between a q31 result and a real value.
-double LsbDiff(q31_t q, double ref) { return std::fabs(static_cast<double>(q) - ref * kQ31); }
+double LsbDiff(q31_t q, double ref)
+{
+    return std::fabs(static_cast<double>(q) - ref * kQ31);
+}
 
-}  // namespace
+} // namespace
 
 // --------------------------------------------------------------- f32
 
@@ -72,7 +79,7 @@ TEST(TransformsF32, KnownValuesFixTheConvention)
     // q leads d by 90 degrees: d = 0, q = 1 at theta = 0 is +beta; at theta
     // = 90 degrees (sin 1, cos 0) d = 1 points along +beta and q along -alpha.
     mc_inv_park_f32(0.0f, 1.0f, 0.0f, 1.0f, &alpha, &beta);
-    EXPECT_EQ(alpha, 0.0f);  // exact: products with 0 and 1 are exact
+    EXPECT_EQ(alpha, 0.0f); // exact: products with 0 and 1 are exact
     EXPECT_EQ(beta, 1.0f);
     mc_inv_park_f32(1.0f, 0.0f, 1.0f, 0.0f, &alpha, &beta);
     EXPECT_EQ(alpha, 0.0f);
@@ -132,7 +139,7 @@ TEST(TransformsF32, PhasesClarkeInverseClarkeRoundTrip)
     for (int i = 0; i < 10000; ++i) {
         const float ia = dist(rng);
         const float ib = dist(rng);
-        const float ic = -ia - ib;  // balanced (rounded once)
+        const float ic = -ia - ib; // balanced (rounded once)
         float alpha = 0.0f;
         float beta = 0.0f;
         mc_clarke3_f32(ia, ib, ic, &alpha, &beta);
@@ -456,7 +463,7 @@ TEST(TransformsQ31, SaturatesAtTheRangeEdgesInsteadOfWrapping)
     // d = -1, q = 1, sin = 1, cos = -1: alpha = d c - q s = 1 - 1 (+2^-30),
     // beta = d s + q c = -2 -> MIN.
     mc_inv_park_q31(MC_Q31_MIN, MC_Q31_MAX, MC_Q31_MAX, MC_Q31_MIN, &alpha, &beta);
-    EXPECT_LE(LsbDiff(alpha, 1.0 - one_minus * one_minus), 1.0);  // 1 LSB as above
+    EXPECT_LE(LsbDiff(alpha, 1.0 - one_minus * one_minus), 1.0); // 1 LSB as above
     EXPECT_EQ(beta, MC_Q31_MIN);
     mc_inv_park_q31(MC_Q31_MIN, MC_Q31_MIN, MC_Q31_MIN, MC_Q31_MIN, &alpha, &beta);
     // alpha = 1 - 1 = 0, beta = 1 + 1 -> MAX.

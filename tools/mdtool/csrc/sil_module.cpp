@@ -62,8 +62,8 @@ nb::dict run(const std::string& scenario, const std::string& motor, const std::s
   }
   const size_t ncols = sink->names().size();
   const size_t nrows = trajectory ? sink->rows() : 0;
-  nb::ndarray<nb::numpy, double, nb::ndim<2>> data(
-      const_cast<double*>(sink->data().data()), {nrows, ncols}, owner);
+  nb::ndarray<nb::numpy, double, nb::ndim<2>> data(const_cast<double*>(sink->data().data()),
+                                                   {nrows, ncols}, owner);
   nb::dict numbers, texts, objects, out;
   for (const auto& kv : summary.numbers()) numbers[kv.first.c_str()] = kv.second;
   for (const auto& kv : summary.texts()) texts[kv.first.c_str()] = kv.second;

@@ -38,7 +38,7 @@ typedef struct mc_board_pin {
  * (mask) and their value. Pins not in pins.csv keep their reset state.
  */
 typedef struct mc_board_gpio_port_init {
-    uint8_t port;           /**< 0 = A .. 8 = I */
+    uint8_t port; /**< 0 = A .. 8 = I */
     uint32_t moder_mask;
     uint32_t moder;
     uint32_t otyper_mask;
@@ -47,11 +47,11 @@ typedef struct mc_board_gpio_port_init {
     uint32_t ospeedr;
     uint32_t pupdr_mask;
     uint32_t pupdr;
-    uint32_t afrl_mask;     /**< AFR[0]: pins 0..7 */
+    uint32_t afrl_mask; /**< AFR[0]: pins 0..7 */
     uint32_t afrl;
-    uint32_t afrh_mask;     /**< AFR[1]: pins 8..15 */
+    uint32_t afrh_mask; /**< AFR[1]: pins 8..15 */
     uint32_t afrh;
-    uint32_t bsrr;          /**< output levels, written before MODER */
+    uint32_t bsrr; /**< output levels, written before MODER */
 } mc_board_gpio_port_init_t;
 
 typedef struct mc_board_desc {
@@ -59,12 +59,12 @@ typedef struct mc_board_desc {
     /* GPIO */
     const mc_board_gpio_port_init_t *p_gpio;
     uint32_t n_gpio;
-    uint32_t gpio_port_mask;          /**< bit n: port n used (RCC_AHB1ENR GPIOxEN) */
+    uint32_t gpio_port_mask; /**< bit n: port n used (RCC_AHB1ENR GPIOxEN) */
     /* TIM1 PWM */
     uint32_t deadtime_ns;
-    bool break_enable;                /**< BKIN wired (an over-current comparator) */
+    bool break_enable; /**< BKIN wired (an over-current comparator) */
     bool break_active_high;
-    uint32_t bkin_mask;               /**< MC_HAL_FAULT_* inputs on BKIN */
+    uint32_t bkin_mask; /**< MC_HAL_FAULT_* inputs on BKIN */
     /* control pins (MC_BOARD_PORT_NONE: not wired) */
     mc_board_pin_t gate_enable;
     mc_board_pin_t gate_fault;
@@ -79,7 +79,7 @@ typedef struct mc_board_desc {
     float amp_offset_v;
     float vbus_divider;
     uint16_t adc_rail_margin_counts;
-    float i_sense_max_a;              /**< largest current inside the rail margin */
+    float i_sense_max_a; /**< largest current inside the rail margin */
     mc_f405_adc_temp_sensor_t temp_power_stage;
     mc_f405_adc_temp_sensor_t temp_motor;
     /* supply limits of the board (the drive's configuration may be narrower) */

@@ -9,9 +9,9 @@
 
 #include "mc_cortexm.h"
 
-#define ADC_CLK_DIV 4u          /* PCLK2 84 MHz / 4 = 21 MHz (max 36 MHz) */
-#define ADC_TRIGGER_LEAD_US 1u  /* ADC trigger 1 us before the PWM peak */
-#define CAN_BITRATE_BPS 500000u
+#define ADC_CLK_DIV               4u /* PCLK2 84 MHz / 4 = 21 MHz (max 36 MHz) */
+#define ADC_TRIGGER_LEAD_US       1u /* ADC trigger 1 us before the PWM peak */
+#define CAN_BITRATE_BPS           500000u
 #define CAN_SAMPLE_POINT_PERMILLE 875u
 
 static mc_f405_pin_t pin_of(const mc_board_f405_periph_t *p, mc_board_pin_t b)
@@ -35,8 +35,8 @@ static void delay(const mc_board_f405_periph_t *p, uint32_t us)
 
 static void clocks_on(const mc_board_desc_t *d, const mc_board_f405_periph_t *p)
 {
-    uint32_t apb1 = MC_BOARD_F405_APB1ENR_TIM3EN | MC_BOARD_F405_APB1ENR_TIM5EN |
-                    MC_BOARD_F405_APB1ENR_CAN1EN;
+    uint32_t apb1 =
+        MC_BOARD_F405_APB1ENR_TIM3EN | MC_BOARD_F405_APB1ENR_TIM5EN | MC_BOARD_F405_APB1ENR_CAN1EN;
 
     if (d->has_drv8301) {
         apb1 |= MC_BOARD_F405_APB1ENR_SPI3EN;
@@ -51,10 +51,10 @@ static bool periph_complete(const mc_board_desc_t *d, const mc_board_f405_periph
 {
     uint32_t k;
 
-    if ((p->p_rcc_ahb1enr == NULL) || (p->p_rcc_apb1enr == NULL) ||
-        (p->p_rcc_apb2enr == NULL) || (p->p_tim1 == NULL) || (p->p_tim3 == NULL) ||
-        (p->p_tim5 == NULL) || (p->p_adc1 == NULL) || (p->p_adc_common == NULL) ||
-        (p->p_can1 == NULL) || (d->has_drv8301 && (p->p_spi3 == NULL))) {
+    if ((p->p_rcc_ahb1enr == NULL) || (p->p_rcc_apb1enr == NULL) || (p->p_rcc_apb2enr == NULL) ||
+        (p->p_tim1 == NULL) || (p->p_tim3 == NULL) || (p->p_tim5 == NULL) || (p->p_adc1 == NULL) ||
+        (p->p_adc_common == NULL) || (p->p_can1 == NULL) ||
+        (d->has_drv8301 && (p->p_spi3 == NULL))) {
         return false;
     }
     for (k = 0u; k < MC_F405_GPIO_PORTS; k++) {
@@ -71,10 +71,9 @@ static mc_board_f405_err_t fail(mc_board_f405_t *b, mc_board_f405_err_t err)
     return err;
 }
 
-mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board,
-                                        const mc_board_desc_t *p_desc,
-                                        const mc_board_f405_periph_t *p_periph,
-                                        uint32_t sysclk_hz, uint32_t pwm_hz)
+mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board_desc_t *p_desc,
+                                        const mc_board_f405_periph_t *p_periph, uint32_t sysclk_hz,
+                                        uint32_t pwm_hz)
 {
     const mc_board_desc_t *d = p_desc;
     const mc_board_f405_periph_t *p = p_periph;
@@ -261,8 +260,7 @@ static bool nfault_asserted(const mc_board_f405_t *b)
     return f->active_low ? !level : level;
 }
 
-bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board,
-                                         const mc_board_desc_t *p_desc,
+bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board, const mc_board_desc_t *p_desc,
                                          const mc_hal_spi_t *p_spi, uint32_t period_us,
                                          bool drive_hw_fault)
 {

@@ -32,7 +32,7 @@ extern "C" {
 #endif
 
 /** DRV8301 reset pulse on EN_GATE [us] and its SPI start-up wait [us]. */
-#define MC_BOARD_F405_GATE_RESET_US 40u
+#define MC_BOARD_F405_GATE_RESET_US   40u
 #define MC_BOARD_F405_GATE_STARTUP_US 20000u
 
 /** RCC enable bits the set-up writes (RM0090 §7.3.10, §7.3.13, §7.3.14). */
@@ -64,7 +64,7 @@ typedef struct mc_board_f405_periph {
  *  the bring-up guide). */
 typedef enum mc_board_f405_err {
     MC_BOARD_F405_OK = 0,
-    MC_BOARD_F405_ERR_ARG,        /**< NULL description or peripheral */
+    MC_BOARD_F405_ERR_ARG, /**< NULL description or peripheral */
     MC_BOARD_F405_ERR_TICK,
     MC_BOARD_F405_ERR_PWM,
     MC_BOARD_F405_ERR_FAULT,
@@ -84,14 +84,14 @@ typedef struct mc_board_f405 {
     mc_f405_spi_t spi;
     mc_drv8301_t drv;
     mc_hal_t hal;
-    bool can_ok;                  /**< CAN left init mode (else hal.can NULL) */
+    bool can_ok; /**< CAN left init mode (else hal.can NULL) */
     mc_board_f405_err_t err;
     /* Gate-driver supervision (mc_board_f405_gate_driver_supervise). */
-    volatile bool drv_ready;      /**< the DRV8301 holds its set-up (always true
+    volatile bool drv_ready; /**< the DRV8301 holds its set-up (always true
                                        on a board without one) */
-    uint32_t rearm_wait_us;       /**< time since the gates were released */
-    bool nfault_seen;             /**< nFAULT asserted at the last call */
-    bool drv_latch_reset;         /**< GATE_RESET sent for this assertion */
+    uint32_t rearm_wait_us;  /**< time since the gates were released */
+    bool nfault_seen;        /**< nFAULT asserted at the last call */
+    bool drv_latch_reset;    /**< GATE_RESET sent for this assertion */
 } mc_board_f405_t;
 
 /**
@@ -102,10 +102,9 @@ typedef struct mc_board_f405 {
  *         up), or the failing step (p_board->err); the gate enable is then
  *         left at its disabled level where the fault driver did not run.
  */
-mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board,
-                                        const mc_board_desc_t *p_desc,
-                                        const mc_board_f405_periph_t *p_periph,
-                                        uint32_t sysclk_hz, uint32_t pwm_hz);
+mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board_desc_t *p_desc,
+                                        const mc_board_f405_periph_t *p_periph, uint32_t sysclk_hz,
+                                        uint32_t pwm_hz);
 
 /**
  * Write and verify the DRV8301 registers over `p_spi` (no-op on a board
@@ -133,8 +132,7 @@ mc_board_f405_err_t mc_board_f405_gate_driver_setup(mc_board_f405_t *p_board,
  * image raises an external fault).
  * @return p_board->drv_ready.
  */
-bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board,
-                                         const mc_board_desc_t *p_desc,
+bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board, const mc_board_desc_t *p_desc,
                                          const mc_hal_spi_t *p_spi, uint32_t period_us,
                                          bool drive_hw_fault);
 

@@ -19,9 +19,9 @@
 namespace hal_host {
 
 struct PilLinkOptions {
-  std::string qemu;              // qemu-system-arm executable
-  std::string elf;               // the PIL firmware image
-  std::string semihost_log;      // file for the target's semihosting text ("" = none)
+  std::string qemu;          // qemu-system-arm executable
+  std::string elf;           // the PIL firmware image
+  std::string semihost_log;  // file for the target's semihosting text ("" = none)
   double receive_timeout_s = 10.0;
 };
 

@@ -38,8 +38,8 @@ namespace hal_host {
 
 struct PmsmBoardConfig {
   mcsim::PmsmParams motor{};
-  mcsim::InverterParams inverter{};       // t_pwm_s is the control period
-  double vbus_v = 24.0;                   // DC-bus voltage (stiff source)
+  mcsim::InverterParams inverter{};  // t_pwm_s is the control period
+  double vbus_v = 24.0;              // DC-bus voltage (stiff source)
   // DC link (mcsim::DcLink): off (the default) = a stiff bus at vbus_v, bit
   // for bit the behaviour before the link existed. On: the bus voltage is
   // the capacitor's, charged by the source and by the bridge (the inverter
@@ -52,12 +52,12 @@ struct PmsmBoardConfig {
   mcsim::CurrentSensorParams current_sensor{};
   mcsim::VbusSensorParams vbus_sensor{};
   mcsim::EncoderParams encoder{};
-  bool three_shunts = false;              // false: ic is not measured
-  int substeps = 4;                       // RK4 sub-steps per PWM period, >= 1
-  int delay_periods = 1;                  // computation delay, 0..4 periods
-  double tick_hz = 10.0e6;                // HAL tick counter frequency
-  double theta_m0_rad = 0.0;              // initial rotor angle
-  double omega_m0_rad_s = 0.0;            // initial speed
+  bool three_shunts = false;    // false: ic is not measured
+  int substeps = 4;             // RK4 sub-steps per PWM period, >= 1
+  int delay_periods = 1;        // computation delay, 0..4 periods
+  double tick_hz = 10.0e6;      // HAL tick counter frequency
+  double theta_m0_rad = 0.0;    // initial rotor angle
+  double omega_m0_rad_s = 0.0;  // initial speed
 };
 
 class PmsmBoard final : public SimBoard {
@@ -105,17 +105,17 @@ class PmsmBoard final : public SimBoard {
 
   // Faults a test can inject into the board (all off by default).
   struct Injection {
-    int stuck_phase = -1;          // 0..2: that current channel reads stuck_value_a
+    int stuck_phase = -1;  // 0..2: that current channel reads stuck_value_a
     double stuck_value_a = 0.0;
-    double offset_a[3] = {0, 0, 0};  // added to each current reading [A]
-    bool nan_ia = false;           // the ia conversion returns NaN
-    bool encoder_dead = false;     // encoder reads not valid (cable off)
-    bool encoder_frozen = false;   // encoder keeps its last count (lost lines)
-    double compute_delay_s = 0.0;  // the tick jumps this much after the sample:
-                                   // the fast step looks late (deadline overrun)
-    int open_phase = -1;           // 0..2: that phase conductor is broken from
-                                   // the next advance() on (mcsim::PmsmPowerStage);
-                                   // -1: all three connected
+    double offset_a[3] = {0, 0, 0};   // added to each current reading [A]
+    bool nan_ia = false;              // the ia conversion returns NaN
+    bool encoder_dead = false;        // encoder reads not valid (cable off)
+    bool encoder_frozen = false;      // encoder keeps its last count (lost lines)
+    double compute_delay_s = 0.0;     // the tick jumps this much after the sample:
+                                      // the fast step looks late (deadline overrun)
+    int open_phase = -1;              // 0..2: that phase conductor is broken from
+                                      // the next advance() on (mcsim::PmsmPowerStage);
+                                      // -1: all three connected
     bool motor_disconnected = false;  // no motor on the terminals (all three open)
   };
   // Throws std::invalid_argument (and changes nothing) for open_phase outside

@@ -25,13 +25,13 @@ namespace hal_host {
 
 struct SocketCanStats {
   uint64_t tx_frames = 0;
-  uint64_t tx_nobufs = 0;      // ENOBUFS / EAGAIN: queue full, frame dropped
-  uint64_t tx_netdown = 0;     // ENETDOWN: bus-off or interface down
-  uint64_t tx_errors = 0;      // any other send error
+  uint64_t tx_nobufs = 0;   // ENOBUFS / EAGAIN: queue full, frame dropped
+  uint64_t tx_netdown = 0;  // ENETDOWN: bus-off or interface down
+  uint64_t tx_errors = 0;   // any other send error
   uint64_t rx_frames = 0;
   uint64_t rx_error_frames = 0;
   uint64_t bus_off_events = 0;
-  uint32_t rx_dropped = 0;     // kernel's SO_RXQ_OVFL count for this socket
+  uint32_t rx_dropped = 0;  // kernel's SO_RXQ_OVFL count for this socket
 };
 
 // Fold one SocketCAN error frame (can_id with CAN_ERR_FLAG, the 8 data bytes
@@ -46,7 +46,7 @@ class SocketCan {
   // call and interface (EAFNOSUPPORT on a kernel without CAN, ENODEV for an
   // unknown interface). now_ticks stamps received frames (may be empty).
   explicit SocketCan(const std::string& ifname, bool fd = false,
-            std::function<uint32_t()> now_ticks = nullptr);
+                     std::function<uint32_t()> now_ticks = nullptr);
   ~SocketCan();
   SocketCan(const SocketCan&) = delete;
   SocketCan& operator=(const SocketCan&) = delete;
@@ -58,7 +58,6 @@ class SocketCan {
   int send(const mc_hal_can_frame_t* f) noexcept;
   int receive(mc_hal_can_frame_t* f) noexcept;
   int get_status(mc_hal_can_status_t* st) noexcept;
-
 
  private:
   int fd_ = -1;

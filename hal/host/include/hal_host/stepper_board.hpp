@@ -28,15 +28,15 @@ namespace hal_host {
 
 struct StepperBoardConfig {
   mcsim::Stepper2PhParams motor{};
-  double t_pwm_s = 1.0e-4;                // PWM = control period
-  double vbus_v = 60.0;                   // DC-bus voltage (stiff source)
+  double t_pwm_s = 1.0e-4;  // PWM = control period
+  double vbus_v = 60.0;     // DC-bus voltage (stiff source)
   mcsim::CurrentSensorParams current_sensor{};
   mcsim::VbusSensorParams vbus_sensor{};
   mcsim::EncoderParams encoder{};
-  int substeps = 4;                       // RK4 sub-steps per period, >= 1
-  int delay_periods = 1;                  // computation delay, 0..4 periods
-  double tick_hz = 10.0e6;                // HAL tick counter frequency
-  double theta_m0_rad = 0.0;              // initial shaft angle
+  int substeps = 4;           // RK4 sub-steps per period, >= 1
+  int delay_periods = 1;      // computation delay, 0..4 periods
+  double tick_hz = 10.0e6;    // HAL tick counter frequency
+  double theta_m0_rad = 0.0;  // initial shaft angle
 };
 
 class StepperBoard final : public SimBoard {
