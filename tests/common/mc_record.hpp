@@ -13,27 +13,24 @@
 #include <cstdio>
 #include <string>
 
-inline void mc_record(const std::string &key, double value)
-{
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", value);
-    ::testing::Test::RecordProperty(key, buf);
+inline void mc_record(const std::string& key, double value) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", value);
+  ::testing::Test::RecordProperty(key, buf);
 }
 
-inline void mc_record(const std::string &key, double value, double bound)
-{
-    mc_record(key, value);
-    mc_record(key + ".bound", bound);
+inline void mc_record(const std::string& key, double value, double bound) {
+  mc_record(key, value);
+  mc_record(key + ".bound", bound);
 }
 
 // The same with the value's unit (text, `key.unit`). bound <= 0: a value
 // the test shows but does not bound itself (no `key.bound`).
-inline void mc_record(const std::string &key, double value, double bound, const std::string &unit)
-{
-    if (bound > 0.0) {
-        mc_record(key, value, bound);
-    } else {
-        mc_record(key, value);
-    }
-    ::testing::Test::RecordProperty(key + ".unit", unit);
+inline void mc_record(const std::string& key, double value, double bound, const std::string& unit) {
+  if (bound > 0.0) {
+    mc_record(key, value, bound);
+  } else {
+    mc_record(key, value);
+  }
+  ::testing::Test::RecordProperty(key + ".unit", unit);
 }

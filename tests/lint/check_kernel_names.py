@@ -43,6 +43,7 @@ PRIMITIVE_FORMATS = ("f32", "q31", "q15", "q46", "u64")
 # their return convention; the others are the few a kernel needs besides).
 VERBS = {
     "init": "validate a config and derive its coefficients",
+    "validate": "check a config as init does, changing nothing (returns its error bits)",
     "reset": "return the state to its initial value",
     "step": "advance one sample (step_<detail>: the same step for another input form)",
     "set": "set_<field>: change one part of the config at run time, validated as init does",
@@ -86,6 +87,9 @@ ALLOWED = {
     "mc_pi2d_f32_certify",
     # traj/
     "mc_traj_f32_duration", "mc_traj_f32_shift", "mc_traj_f32_stop",
+    # transforms/: the limit-mode check the f32 and q31 SVPWM share names
+    # no format (it has none); a private helper of the two files
+    "mc_svpwm_limit_ok",
 }
 
 NOT_FUNCTIONS = {"sizeof", "defined", "_Static_assert", "static_assert", "_Alignas",
