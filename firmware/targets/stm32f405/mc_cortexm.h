@@ -17,8 +17,8 @@
 /** The register at a fixed peripheral address. */
 static inline volatile uint32_t *mc_reg32(uintptr_t addr)
 {
-    return (
-        volatile uint32_t *)addr; /* NOLINT(performance-no-int-to-ptr): memory-mapped register */
+    /* NOLINTNEXTLINE(performance-no-int-to-ptr): memory-mapped register */
+    return (volatile uint32_t *)addr;
 }
 
 static inline volatile uint8_t *mc_reg8(uintptr_t addr)
