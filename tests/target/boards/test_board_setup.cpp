@@ -444,7 +444,8 @@ TEST_P(GateDriverBoard, FailedRearmKillsAgain)
     ASSERT_EQ(mc_board_f405_gate_driver_setup(&rig.board, c.desc, &spi), MC_BOARD_F405_OK);
     ASSERT_EQ(mc_hal_fault_gate_kill(rig.board.hal.fault), 0);
     EXPECT_FALSE(mc_board_f405_gate_driver_supervise(&rig.board, c.desc, &spi, 1000u, false));
-    const auto *nf = boards::find(boards::read_pins(c.name), "gate_fault");
+    const auto pins = boards::read_pins(c.name); // kept: find() points into it
+    const auto *nf = boards::find(pins, "gate_fault");
     rig.gpio[nf->port].IDR = 1u << nf->pin;
     ASSERT_EQ(mc_hal_fault_gate_release(rig.board.hal.fault), 0);
     ASSERT_FALSE(rig.board.fault.killed);
