@@ -389,6 +389,7 @@ mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g) {
   c.blend_time_s = 0.05f;
   c.lowspeed_fallback = true;
   c.if_damping = true;
+  c.align_any_angle = true;  // the rotor may start anywhere (tests/sil/commission)
   return c;
 }
 
