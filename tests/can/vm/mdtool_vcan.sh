@@ -8,7 +8,8 @@
 # config get (the SIL has no parameter service attached: the drive's
 # refusal, CMD_ERROR UNSUPPORTED, must come back decoded, exit 4), monitor
 # (headless, to a PNG) and run speed (the keep-alive sent by mdtool; the
-# drive stops when it disables). Leaves every output and exit code in
+# drive stops when it disables), calibrate (commissioning over CAN: progress
+# and results; the plant without the scenario's flywheel). Leaves every output and exit code in
 # WORKDIR/run for tests/can/run_mdtool_vcan_test.sh to check on the host.
 set -u
 MCSIM=$1 W=$2 PY=$3 ROOT=$4
@@ -36,7 +37,7 @@ REC=$!; pids+=("$REC")  # python itself (a shell function here would fork a subs
 wait_for 120 test -e rec.ready || { say "recorder did not start"; cat record.out; exit 1; }
 MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN" --duration 60 --set end_after_stop_s=0.3 \
   --set realtime=1 --set timeout_s=2.0 --set pwm_hz=2000 --set slow_loop_div=2 --set substeps=1 \
-  --set bw_hz=20 --set speed_pll_bw_rad_s=500 > mcsim.out 2>&1 &
+  --set bw_hz=20 --set speed_pll_bw_rad_s=500 --set J_kgm2=0.002 > mcsim.out 2>&1 &
 SIM=$!; pids+=("$SIM")
 wait_for 60 grep -q " 021#" candump.log || { say "no heartbeat from the SIL"; cat mcsim.out; exit 1; }
 say "drive is streaming"
@@ -45,6 +46,9 @@ MD status "${BUS[@]}" > status.out 2>&1; echo $? > status.rc
 MD config get r_ohm "${BUS[@]}" > config.out 2>&1; echo $? > config.rc
 MD monitor HEARTBEAT.mode CURRENTS.i_q_a "${BUS[@]}" --no-gui --frames 10 --png monitor.png > monitor.out 2>&1
 echo $? > monitor.rc
+# commissioning (before run: the SIL ends after the run's disable); this
+# SIL runs outside the parameter table (no service): results shown, not staged
+MD calibrate "${BUS[@]}" --progress-timeout 30 --json cal.json > calibrate.out 2>&1; echo $? > calibrate.rc
 MD run speed 20 --duration 3 --keepalive 0.1 "${BUS[@]}" > run.out 2>&1; echo $? > run.rc
 say "run done ($(cat run.rc)); waiting for the SIL to end"
 wait "$SIM"; echo $? > mcsim.rc
@@ -52,5 +56,5 @@ sleep 1
 kill -INT "$CD"; kill -TERM "$REC"
 wait "$CD" "$REC" 2>/dev/null
 echo $? > record.rc
-for f in scan status config monitor run record; do say "$f (exit $(cat $f.rc)): $(tail -c 600 $f.out)"; done
+for f in scan status config monitor calibrate run record; do say "$f (exit $(cat $f.rc)): $(tail -c 600 $f.out)"; done
 exit 0
