@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "app_test_fixture.h"
+#include "comm_result_fixture.h"
 extern "C" {
 #include "can/mc_can_cmd.h"
 #include "commission/mc_comm_can.h"
@@ -102,18 +103,9 @@ class CommCan : public AppDrive {
     return out;
   }
   std::vector<Rx> bus;
-  static mc_comm_result_t FullResult() {
-    mc_comm_result_t r{};
-    r.adc_offset_a[0] = 0.1f;
-    r.adc_offset_a[1] = -0.05f;
-    r.adc_offset_a[2] = 0.0f;
-    r.r_ohm = 0.2f;
-    r.ld_h = 1e-4f;
-    r.lq_h = 1.5e-4f;
-    r.flux_wb = 0.02f;
-    r.pole_pairs = 7u;
-    r.encoder_offset_rad = 1.25f;
-    r.encoder_direction = -1;
+  // the complete result plus the mechanics
+  static mc_comm_result_t FullResultWithMech() {
+    mc_comm_result_t r = FullResult();
     r.j_kgm2 = 2e-4f;
     r.b_nm_s_rad = 1e-5f;
     r.valid = MC_COMM_HAVE_ALL;
@@ -228,7 +220,7 @@ TEST_F(CommCan, DoneStagesEveryResultThenApplyPutsThemInEffect) {
   Run(10u * kSlowDiv);
   (void)Drain();
   const mc_params_t active_before = srv.active;
-  comm.res = FullResult();
+  comm.res = FullResultWithMech();
   comm.step = MC_COMM_STEP_DONE;  // as the plug-in leaves it
   Run(20u * kSlowDiv);
   EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
@@ -295,7 +287,7 @@ TEST_F(CommCan, AResultTheTableRefusesStagesNothing) {
   const mc_params_t staged_before = srv.staged;
   ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START));
   Run(10u * kSlowDiv);
-  comm.res = FullResult();
+  comm.res = FullResultWithMech();
   comm.res.lq_h = 2.0f;  // above the table's 1 H: the 4th write is refused
   comm.step = MC_COMM_STEP_DONE;
   Run(20u * kSlowDiv);
