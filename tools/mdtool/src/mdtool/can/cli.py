@@ -241,9 +241,13 @@ def cmd_calibrate(a):
                 raise
             present = {}
 
-        def progress(v):
-            if not a.quiet:
-                print(f"  {v['step']:<11} {int(v['progress_pct']):>3} %", flush=True)
+        shown = {}
+
+        def progress(v):  # one line per change of step or percentage
+            line = f"  {v['step']:<11} {int(v['progress_pct']):>3} %"
+            if not a.quiet and shown.get("line") != line:
+                shown["line"] = line
+                print(line, flush=True)
         summ = calibrate(d, a.i_test, a.v_test_max, a.speed_max, a.progress_timeout, progress)
         if a.json:
             with open(a.json, "w") as f:
