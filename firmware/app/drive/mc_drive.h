@@ -74,7 +74,10 @@
  * current reading the drive cannot trust: the bridge or its supervision
  * cannot be relied on). mc_drive_set_mode(IDLE) in FAULT keeps the short;
  * mc_drive_clear_faults ends it. init refuses asc_enable unless the steady
- * short-circuit current flux / Ld is below i_trip_a (MC_DRIVE_CFG_ERR_ASC).
+ * short-circuit current flux / Ld is below i_trip_a (MC_DRIVE_CFG_ERR_ASC);
+ * the transient from the operating point overshoots flux / Ld by up to
+ * |v_dq| / (omega_e Ld), and if it crosses i_trip_a the over-current rule
+ * opens the bridge after all (app README: size the trip for ~2 flux / Ld).
  */
 #ifndef MC_DRIVE_H
 #define MC_DRIVE_H

@@ -29,7 +29,11 @@
 // omega_uncontrolled_gen the back-EMF drives current through the diodes
 // into the bus. With asc=on (mc_drive_cfg_t.asc_enable) it shorts the
 // phases through the low-side switches. Summary: fault_vbus_peak_v against
-// fault_vbus_trip_v, the peak phase current and the braking torque.
+// fault_vbus_trip_v, the peak phase current and the braking torque. The
+// short's current settles towards flux / Ld, but its transient from the
+// operating point overshoots that by up to |v_dq| / (omega_e Ld) (the flux
+// deviation rotating at omega_e); fault_i_sense_max_a gives the board the
+// sensing (and the drive the trip) that the transient needs.
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -101,7 +105,11 @@ std::vector<ParamSpec> fw_params(const MotorFiles& f) {
        0.0,
        1.0,
        {{"off", 0.0}, {"on", 1.0}}},
-      {"fault_s", 0.05, "s", "part 3: run time after the fault", 1.0e-4, 10.0}};
+      {"fault_s", 0.05, "s", "part 3: run time after the fault", 1.0e-4, 10.0},
+      {"fault_i_sense_max_a", 0.0, "A",
+       "part 3: current-sensing range of the board (0: the board file's); the drive's "
+       "over-current trip follows it",
+       0.0, 1.0e5}};
   for (auto& s : gain_params(f)) p.push_back(s);
   return p;
 }
@@ -171,6 +179,8 @@ void run_fw(RunContext& ctx) {
   if (fault) {  // part 3 on a supply that cannot sink current
     f.board.dc_link_c_f = f.board.dc_link_c_f > 0.0 ? f.board.dc_link_c_f : 1.0e-3;
     f.board.source_sink = false;
+    const double isense = ctx.params.get("fault_i_sense_max_a");
+    if (isense > 0.0) f.board.i_sense_max_a = isense;
   }
   const MotorSpec& m = f.motor;
   const Params& P = ctx.params;
