@@ -100,7 +100,8 @@ TEST(FieldWeakening, NonSalientUnaffected) {
 // (by up to |v| / (omega_e Ld) = 50 A here). The board's 125 A sensing puts
 // the trip at 122.5 A, which the transient crosses: the drive then opens
 // the bridge (the over-current rule) and the bus is pumped after all. With
-// 250 A sensing the trip is 128 A (1.6x the current limit) and holds.
+// 250 A sensing and the trip at 245 A (switches rated for ~2 flux / Ld, as
+// the app README asks) the short holds.
 TEST(ActiveShortCircuit, FaultAtTopSpeedKeepsTheBusBelowTheTrip) {
   const MotorFiles f = files({"ipm-representative-48v", ""});
   const auto off = run("field-weakening", f, {{"fault", "1"}, {"asc", "off"}}, "asc_off");
