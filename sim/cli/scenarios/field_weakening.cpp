@@ -312,7 +312,8 @@ const Registrar reg_fw(
     {"field-weakening",
      "any motor: MTPA torque per ampere on a dyno against the analytic optimum, then a sensored "
      "speed ramp to 2.5x base speed (capped at speed_max) with voltage-feedback field weakening; "
-     "CSV adds v_mag_v and v_max_v",
+     "CSV adds v_mag_v, v_max_v and vbus_v; fault=1: a fault at the top speed on a supply that "
+     "cannot sink current, asc=on|off (the drive's active short circuit)",
      0.0,
      {},
      run_fw,
