@@ -118,6 +118,30 @@ std::string faults_text(uint32_t f) {
   return "drive fault bits " + std::to_string(f);
 }
 
+// One CSV row (part 2 and part 3): the true dq currents, the drive's
+// references and voltages, the bus.
+void write_row(RunContext& ctx, MotorRig& rig) {
+  double id, iq, vd, vq;
+  rig.board().true_dq_a(&id, &iq);
+  rig.dq_volts(&vd, &vq);
+  const auto& tm = rig.drive().tm;
+  const double row[] = {rig.board().t_s(),
+                        id,
+                        iq,
+                        tm.id_ref_a,
+                        tm.iq_ref_a,
+                        rig.board().state()(2),
+                        rig.omega_ref_rad_s(),
+                        rig.theta_e_true(),
+                        vd,
+                        vq,
+                        tm.fw.v_mag_v,
+                        tm.fw.v_max_v,
+                        static_cast<double>(rig.drive().faults),
+                        rig.board().vbus_v()};
+  ctx.csv.row(row, sizeof row / sizeof row[0]);
+}
+
 // Part 3: the fault at speed and what follows (see the file's comment).
 void run_fault(RunContext& ctx, MotorRig& rig, long every) {
   const MotorSpec& m = ctx.files->motor;
@@ -126,7 +150,7 @@ void run_fault(RunContext& ctx, MotorRig& rig, long every) {
   const double vbus0 = board.vbus_v();
   mc_drive_raise_fault(&rig.drive(), MC_DRIVE_FAULT_EXTERNAL);
   const long nf = std::lround(ctx.params.get("fault_s") / rig.period_s());
-  double vpk = vbus0, ipk = 0, tq_min = 0, id = 0, iq = 0;
+  double vpk = vbus0, ipk = 0, tq_min = 0;
   long asc_steps = 0;
   for (long k = 0; k < nf; ++k) {
     rig.step();
@@ -135,27 +159,7 @@ void run_fault(RunContext& ctx, MotorRig& rig, long every) {
     vpk = std::max(vpk, board.vbus_v());
     tq_min = std::min(tq_min, board.torque_nm());
     asc_steps += rig.drive().asc_active ? 1 : 0;
-    if (k % every == 0) {
-      board.true_dq_a(&id, &iq);
-      double vd, vq;
-      rig.dq_volts(&vd, &vq);
-      const auto& tm = rig.drive().tm;
-      const double row[] = {board.t_s(),
-                            id,
-                            iq,
-                            tm.id_ref_a,
-                            tm.iq_ref_a,
-                            board.state()(2),
-                            rig.omega_ref_rad_s(),
-                            rig.theta_e_true(),
-                            vd,
-                            vq,
-                            tm.fw.v_mag_v,
-                            tm.fw.v_max_v,
-                            static_cast<double>(rig.drive().faults),
-                            board.vbus_v()};
-      ctx.csv.row(row, sizeof row / sizeof row[0]);
-    }
+    if (k % every == 0) write_row(ctx, rig);
   }
   ctx.summary.set_text("asc", rig.drive_cfg().asc_enable ? "on" : "off");
   ctx.summary.set("fault_omega_m_rad_s", w0);
@@ -263,25 +267,7 @@ void run_fw(RunContext& ctx) {
       v_over = std::max(v_over, static_cast<double>(tm.fw.v_mag_v - tm.fw.v_max_v));
       werr_hold = std::max(werr_hold, std::abs(w - w_t));
     }
-    if (k % every == 0) {
-      double vd, vq;
-      rig.dq_volts(&vd, &vq);
-      const double row[] = {t,
-                            id,
-                            iq,
-                            tm.id_ref_a,
-                            tm.iq_ref_a,
-                            w,
-                            rig.omega_ref_rad_s(),
-                            rig.theta_e_true(),
-                            vd,
-                            vq,
-                            tm.fw.v_mag_v,
-                            tm.fw.v_max_v,
-                            static_cast<double>(rig.drive().faults),
-                            rig.board().vbus_v()};
-      ctx.csv.row(row, sizeof row / sizeof row[0]);
-    }
+    if (k % every == 0) write_row(ctx, rig);
     if (rig.drive().faults != 0u) break;
     if (k < n) rig.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);

@@ -196,14 +196,15 @@ TEST(CsmcSil, SampledDataCsmcRegulatesWithoutChatteringIdealSmcChatters) {
   EXPECT_GT(esm.max_abs, 1e-4);
 }
 
-// Paper Fig. 5, output feedback (HGO, eps = 1e-4), T = 50 us (at T = eps
-// = 100 us the sampled observer limits both designs alike, see README).
-// Returns the max |e2| over the last reference period with and without the
-// servocompensators.
-std::array<double, 2> sinusoid_errors(double r0, double w0, double duration) {
+// Paper Fig. 5, output feedback (HGO, eps = 1e-4), T = 50 us by default
+// (at T = eps = 100 us the sampled observer limits both designs alike, see
+// README). Returns the max |e2| over the last reference period with and
+// without the servocompensators (the trace every record_every periods).
+std::array<double, 2> sinusoid_errors(double r0, double w0, double duration, double dt = 5e-5,
+                                      size_t record_every = 4) {
   LoopOptions o;
   o.duration_s = duration;
-  o.dt_s = 5e-5;
+  o.dt_s = dt;
   o.plant.R_ohm = 19.5;
   o.plant.L_h = 0.030;
   o.ref = RefKind::kCos;
@@ -211,7 +212,7 @@ std::array<double, 2> sinusoid_errors(double r0, double w0, double duration) {
   o.w0_rad_s = w0;
   o.fb = Feedback::kHgo;
   o.hgo = mcsim::csmc::paper_hgo(1e-4);
-  o.record_every = 4;
+  o.record_every = record_every;
   o.ctrl = mcsim::csmc::paper_ctrl(false, false, false);
   mcsim::csmc::paper_servo(w0, &o.ctrl);
   const LoopResult sv = mcsim::csmc::run_loop(o);
@@ -351,26 +352,10 @@ struct SinRefLoop {
 // internal model's phase that the loop saw as a disturbance (it grew as dt
 // shrank). MC_CSVC_ACC_F32 carries each sum's rounding error.
 void SinusoidAgainstDouble(double r0, double w0, const char* tag, double bound_over_ref) {
-  LoopOptions o;
-  o.duration_s = 10.0;
-  o.dt_s = 1e-5;
-  o.plant.R_ohm = 19.5;
-  o.plant.L_h = 0.030;
-  o.ref = RefKind::kCos;
-  o.r0_rad = r0;
-  o.w0_rad_s = w0;
-  o.fb = Feedback::kHgo;
-  o.hgo = mcsim::csmc::paper_hgo(1e-4);
-  o.record_every = 10;
-  o.ctrl = mcsim::csmc::paper_ctrl(false, false, false);
-  mcsim::csmc::paper_servo(w0, &o.ctrl);
-  const LoopResult sv = mcsim::csmc::run_loop(o);
-  o.ctrl = mcsim::csmc::paper_ctrl(false, false, false);
-  const LoopResult ns = mcsim::csmc::run_loop(o);
-  const double t1 = o.duration_s, t0 = t1 - 2.0 * kPi / w0;
-  const double e_sv = mcsim::csmc::window_stats(sv.trace, &Sample::e2, t0, t1).max_abs;
-  const double e_ns = mcsim::csmc::window_stats(ns.trace, &Sample::e2, t0, t1).max_abs;
-  const double e_ref = SinRefLoop(r0, w0).tail_max_abs_e2(o.duration_s, 5e-6);
+  const double duration_s = 10.0;
+  const auto e = sinusoid_errors(r0, w0, duration_s, 1e-5, 10);
+  const double e_sv = e[0], e_ns = e[1];
+  const double e_ref = SinRefLoop(r0, w0).tail_max_abs_e2(duration_s, 5e-6);
   const std::string k(tag);
   mc_record("svc_e2_max_abs_rad." + k, e_sv);
   mc_record("nosvc_e2_max_abs_rad." + k, e_ns);

@@ -89,12 +89,12 @@ class AppStop : public AppDrive
         return slow;
     }
 
-    // CURRENT mode at zero torque with the rotor coasting at kOmega0, long
+    // CURRENT mode at zero torque with the rotor coasting at omega, long
     // enough (0.1 s = 50 / bw) for the speed estimate to settle.
-    void SpinUp()
+    void SpinUp(double omega = kOmega0)
     {
         InitDrive();
-        omega_ = kOmega0;
+        omega_ = omega;
         ASSERT_EQ(0, mc_drive_set_current_ref(&d, 0.0f, 0.0f));
         ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT));
         for (int k = 0; k < 2000; ++k) {
@@ -102,7 +102,7 @@ class AppStop : public AppDrive
         }
         ASSERT_EQ(MC_DRIVE_MODE_CURRENT, d.mode);
         // the tracking loop has converged: 0.1 % (encoder quantisation)
-        ASSERT_NEAR(kOmega0, d.enc_trk.omega_rad_s, 0.1);
+        ASSERT_NEAR(omega, d.enc_trk.omega_rad_s, 1e-3 * omega);
     }
 
     // Run until the bridge opens (at most 0.5 s) and trace the stop; the
@@ -380,19 +380,6 @@ class AppAsc : public AppStop
         cfg.foc.lq_h = 1.0e-3f;
         cfg.asc_enable = true;
     }
-    // CURRENT mode at omega, the speed estimate settled.
-    void RunAt(double omega)
-    {
-        InitDrive();
-        omega_ = omega;
-        ASSERT_EQ(0, mc_drive_set_current_ref(&d, 0.0f, 0.0f));
-        ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT));
-        for (int k = 0; k < 2000; ++k) {
-            Step();
-        }
-        // settled within 0.1 % (encoder quantisation)
-        ASSERT_NEAR(omega, d.enc_trk.omega_rad_s, 1e-3 * omega);
-    }
     bool Shorted() const
     {
         return fake.pwm3.enabled && fake.pwm3.duty_a == 0.0f && fake.pwm3.duty_b == 0.0f &&
@@ -416,7 +403,7 @@ TEST_F(AppAsc, InitRefusesAShortCircuitCurrentAtOrAboveTheTrip)
 // opens in the first fast step whose speed estimate is below the exit.
 TEST_F(AppAsc, FaultAboveTheBusSpeedShortsThenOpensBelowTheExitSpeed)
 {
-    RunAt(400.0); // back-EMF 27.7 V > 24 V
+    SpinUp(400.0); // back-EMF 27.7 V > 24 V
     mc_drive_raise_fault(&d, MC_DRIVE_FAULT_EXTERNAL);
     EXPECT_EQ(MC_DRIVE_MODE_FAULT, d.mode);
     EXPECT_TRUE(d.asc_active);
@@ -449,7 +436,7 @@ TEST_F(AppAsc, FaultAboveTheBusSpeedShortsThenOpensBelowTheExitSpeed)
 
 TEST_F(AppAsc, FaultBelowTheBusSpeedOpensTheBridge)
 {
-    RunAt(300.0); // back-EMF 20.8 V < 24 V: opening pumps nothing
+    SpinUp(300.0); // back-EMF 20.8 V < 24 V: opening pumps nothing
     mc_drive_raise_fault(&d, MC_DRIVE_FAULT_EXTERNAL);
     EXPECT_FALSE(fake.pwm3.enabled);
     EXPECT_FALSE(d.asc_active);
@@ -457,7 +444,7 @@ TEST_F(AppAsc, FaultBelowTheBusSpeedOpensTheBridge)
 
 TEST_F(AppAsc, CriticalFaultsOpenTheBridgeEvenAboveTheBusSpeed)
 {
-    RunAt(400.0);
+    SpinUp(400.0);
     Step(kVbus, kITrip + 1.0f); // over-current: the bridge itself is suspect
     EXPECT_FALSE(fake.pwm3.enabled);
     EXPECT_FALSE(d.asc_active);
@@ -466,7 +453,7 @@ TEST_F(AppAsc, CriticalFaultsOpenTheBridgeEvenAboveTheBusSpeed)
 
 TEST_F(AppAsc, OverCurrentDuringTheShortOpensItInTheSameStep)
 {
-    RunAt(400.0);
+    SpinUp(400.0);
     mc_drive_raise_fault(&d, MC_DRIVE_FAULT_EXTERNAL);
     Step();
     ASSERT_TRUE(Shorted());
@@ -478,7 +465,7 @@ TEST_F(AppAsc, OverCurrentDuringTheShortOpensItInTheSameStep)
 
 TEST_F(AppAsc, ClearFaultsEndsTheShort)
 {
-    RunAt(400.0);
+    SpinUp(400.0);
     mc_drive_raise_fault(&d, MC_DRIVE_FAULT_EXTERNAL);
     ASSERT_TRUE(Shorted());
     EXPECT_EQ(0, mc_drive_clear_faults(&d));
@@ -490,7 +477,7 @@ TEST_F(AppAsc, ClearFaultsEndsTheShort)
 TEST_F(AppAsc, OffByDefault)
 {
     cfg.asc_enable = false;
-    RunAt(400.0);
+    SpinUp(400.0);
     mc_drive_raise_fault(&d, MC_DRIVE_FAULT_EXTERNAL);
     EXPECT_FALSE(fake.pwm3.enabled);
     EXPECT_FALSE(d.asc_active);
