@@ -36,9 +36,14 @@ Eigen::Vector3d Inverter3Ph::pole_voltages_v(const Eigen::Vector3d& duty_abc, do
   Eigen::Vector3d v;
   for (int k = 0; k < 3; ++k) {
     const double d = detail::clamp(duty_abc(k), 0.0, 1.0);
-    // No dead time: skip the division (this runs once per SIL period).
-    const double err =
-        (dead_frac > 0.0) ? detail::sat1(i_abc_a(k) / p_.i_dead_band_a) * dead_frac : 0.0;
+    // No dead time: skip the division (this runs once per SIL period). A leg
+    // held at 0 or 1 does not switch in the period (one switch on
+    // throughout: the active short circuit is all three at 0), so it has
+    // no dead-time interval either.
+    const bool switches = d > 0.0 && d < 1.0;
+    const double err = (dead_frac > 0.0 && switches)
+                           ? detail::sat1(i_abc_a(k) / p_.i_dead_band_a) * dead_frac
+                           : 0.0;
     v(k) = detail::clamp((d - err) * vdc_v, 0.0, vdc_v);
   }
   return v;

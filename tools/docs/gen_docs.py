@@ -471,6 +471,24 @@ def _csmc_sampled(ctx, r):
          g(s["smc_vq_sign_changes_per_s"], 4), g(s["smc_vq_peak_to_peak_v"])]])
 
 
+CSMC_FLOOR = [("pi_2_w2", "π/2, 2 rad/s"), ("pi_10_w5", "π/10, 5 rad/s")]
+
+
+@figure("csmc-floor", [gtest("test_csmc_sil", "*ServocompensatorFloor*")])
+def _csmc_floor(ctx, t):
+    rows = []
+    for (tag, label), test in zip(CSMC_FLOOR, ("CsmcSil.ServocompensatorFloorLargeSetting",
+                                               "CsmcSil.ServocompensatorFloorFastSetting"),
+                                  strict=True):
+        rows.append([label, g(prop(t, test, "nosvc_e2_max_abs_rad." + tag)),
+                     g(prop(t, test, "svc_e2_max_abs_rad." + tag)),
+                     f"{g(prop(t, test, 'ratio.' + tag), 4)}x",
+                     g(prop(t, test, "double_ref_e2_max_abs_rad." + tag)),
+                     g(prop(t, test, "svc_over_double_ref." + tag), 3)])
+    return table(["(r0, ω0)", "\\|e2\\| max without [rad]", "\\|e2\\| max with [rad]",
+                  "factor", "double-precision reference [rad]", "with / reference"], rows)
+
+
 @figure("csmc-results", [mcsim("csmc-state-feedback"), mcsim("csmc-output-feedback-eps"),
                          mcsim("csmc-sinusoid"), mcsim("csmc-drive")])
 def _csmc_results(ctx, sf, eps, sin, drv):
@@ -707,6 +725,24 @@ def _drive_stop(ctx, t):
         rows.append([mode, motor, g(prop(t, test, "stop_time_ratio"), 4),
                      f"0.95 … {g(prop(t, test, 'stop_time_ratio.bound'), 3)}"])
     return table(["mode", "motor", "stop time / (ω₀ / decel)", "test bounds"], rows)
+
+
+ASC_RUNS = [("off", ()), ("on", ("fault_i_sense_max_a=250",)), ("on", ())]
+
+
+@figure("drive-asc", [mcsim("field-weakening", "fault=1", f"asc={a}", *x,
+                            motor="ipm-representative-48v") for a, x in ASC_RUNS])
+def _drive_asc(ctx, *runs):
+    rows = []
+    for (a, x), r in zip(ASC_RUNS, runs, strict=True):
+        s = r["summary"]
+        board = "250 A sensing" if x else "board file (125 A sensing)"
+        rows.append([a, board, g(s["fault_emf_over_vbus"], 3),
+                     f"{g(s['fault_vbus_peak_v'], 3)} / {g(s['fault_vbus_trip_v'], 3)}",
+                     f"{g(s['fault_i_phase_peak_a'], 3)} / {g(s['fault_i_trip_a'], 4)}",
+                     g(s["fault_torque_min_nm"], 3), g(s["fault_asc_time_s"] * 1e3, 3)])
+    return table(["short", "board", "back-EMF / bus at the fault", "bus peak / trip [V]",
+                  "phase current peak / trip [A]", "torque min [N m]", "time shorted [ms]"], rows)
 
 
 # --- field weakening, regen ---------------------------------------------------------

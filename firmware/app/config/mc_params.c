@@ -125,6 +125,7 @@ uint32_t mc_params_to_drive_cfg(const mc_params_t *p, mc_drive_cfg_t *cfg)
     cfg->i_unbalance_max_a = p->i_unbalance_max_a;
     cfg->open_phase_i_min_a = p->open_phase_i_min_a;
     cfg->open_phase_time_s = p->open_phase_time_s;
+    cfg->asc_enable = p->asc_enable != 0u;
     return MC_PARAMS_OK;
 }
 

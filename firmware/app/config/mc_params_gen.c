@@ -46,6 +46,7 @@ const mc_params_t mc_params_default = {
     .i_unbalance_max_a = 0.0f,
     .open_phase_i_min_a = 0.0f,
     .open_phase_time_s = 0.0f,
+    .asc_enable = 0u,
     .can_node_id = 1u,
     .can_bitrate_bps = 500000u,
     .can_timeout_s = 0.5f,
@@ -103,6 +104,7 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {93u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, i_unbalance_max_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* i_unbalance_max_a */
     {94u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, open_phase_i_min_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* open_phase_i_min_a */
     {95u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, open_phase_time_s), {.f = 0.0f}, {.f = 10.0f}, {.f = 0.0f}}, /* open_phase_time_s */
+    {96u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, asc_enable), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* asc_enable */
     {110u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, can_node_id), {.u = 0u}, {.u = 62u}, {.u = 1u}}, /* can_node_id */
     {111u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, can_bitrate_bps), {.u = 125000u}, {.u = 1000000u}, {.u = 500000u}}, /* can_bitrate_bps */
     {112u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, can_timeout_s), {.f = 0.01f}, {.f = 60.0f}, {.f = 0.5f}}, /* can_timeout_s */

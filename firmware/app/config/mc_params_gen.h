@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 56u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 52u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 57u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 53u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -59,6 +59,7 @@
 #define MC_PARAM_ID_I_UNBALANCE_MAX_A 93u
 #define MC_PARAM_ID_OPEN_PHASE_I_MIN_A 94u
 #define MC_PARAM_ID_OPEN_PHASE_TIME_S 95u
+#define MC_PARAM_ID_ASC_ENABLE 96u
 #define MC_PARAM_ID_CAN_NODE_ID 110u
 #define MC_PARAM_ID_CAN_BITRATE_BPS 111u
 #define MC_PARAM_ID_CAN_TIMEOUT_S 112u
@@ -117,20 +118,21 @@
 #define MC_PARAM_IDX_I_UNBALANCE_MAX_A 39u
 #define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 40u
 #define MC_PARAM_IDX_OPEN_PHASE_TIME_S 41u
-#define MC_PARAM_IDX_CAN_NODE_ID 42u
-#define MC_PARAM_IDX_CAN_BITRATE_BPS 43u
-#define MC_PARAM_IDX_CAN_TIMEOUT_S 44u
-#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 45u
-#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 46u
-#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 47u
-#define MC_PARAM_IDX_TM_CURRENTS_HZ 48u
-#define MC_PARAM_IDX_TM_VOLTAGES_HZ 49u
-#define MC_PARAM_IDX_TM_SPEED_HZ 50u
-#define MC_PARAM_IDX_TM_POSITION_HZ 51u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 52u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 53u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 54u
-#define MC_PARAM_IDX_CFG_PENDING 55u
+#define MC_PARAM_IDX_ASC_ENABLE 42u
+#define MC_PARAM_IDX_CAN_NODE_ID 43u
+#define MC_PARAM_IDX_CAN_BITRATE_BPS 44u
+#define MC_PARAM_IDX_CAN_TIMEOUT_S 45u
+#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 46u
+#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 47u
+#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 48u
+#define MC_PARAM_IDX_TM_CURRENTS_HZ 49u
+#define MC_PARAM_IDX_TM_VOLTAGES_HZ 50u
+#define MC_PARAM_IDX_TM_SPEED_HZ 51u
+#define MC_PARAM_IDX_TM_POSITION_HZ 52u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 53u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 54u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 55u
+#define MC_PARAM_IDX_CFG_PENDING 56u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -176,6 +178,7 @@ typedef struct {
     float i_unbalance_max_a; /**< Largest |ia + ib + ic| with three shunts; 0 = off. [A] */
     float open_phase_i_min_a; /**< Open-phase check: reference above which a phase must conduct; 0 (with the time) = off. [A] */
     float open_phase_time_s; /**< Open-phase check: time without conduction that trips; 0 (with i_min) = off. [s] */
+    uint32_t asc_enable; /**< Active short circuit (low sides on) for a fault above the speed whose back-EMF exceeds the bus; needs flux/Ld < i_trip_a (app README). */
     uint32_t can_node_id; /**< CAN node id (id = node_id << 5 | cmd); takes effect after save + reset. */
     uint32_t can_bitrate_bps; /**< CAN bit rate (125k, 250k, 500k or 1M); takes effect after save + reset. [bit/s] */
     float can_timeout_s; /**< Command timeout while enabled: no accepted command for this long stops the drive. [s] */

@@ -107,6 +107,10 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
             err |= MC_DRIVE_CFG_ERR_FW;
         }
     }
+    if (cfg->asc_enable && !(cfg->foc.flux_wb > 0.0f && cfg->foc.ld_h > 0.0f &&
+                             cfg->foc.flux_wb < cfg->i_trip_a * cfg->foc.ld_h)) {
+        err |= MC_DRIVE_CFG_ERR_ASC;
+    }
     if (!mc_isfinite_f32(cfg->regen_id_a) || cfg->regen_id_a < 0.0f ||
         (cfg->regen_id_a > 0.0f && !(cfg->regen_id_a <= cfg->i_max_a))) {
         err |= MC_DRIVE_CFG_ERR_BUS_POWER;
@@ -208,13 +212,54 @@ static bool drives_three_phase(const mc_drive_t *d)
     return d->hal->pwm3 != NULL && !(d->ctrl != NULL && d->ctrl->outputs == MC_DRIVE_OUT_PWM2);
 }
 
-/* Safe state: outputs off first, then bookkeeping. */
+/* Line-to-line back-EMF peak of the encoder's speed above frac * the bus
+ * (mc_drive.h, active short circuit). */
+static bool asc_emf_above(const mc_drive_t *d, float frac)
+{
+    const float emf = MC_SQRT3_F32 * d->cfg.foc.flux_wb * (float)d->cfg.pole_pairs *
+                      mc_abs_f32(d->enc_trk.omega_rad_s);
+    return emf > frac * d->tm.vbus_v;
+}
+
+/* Whether a fault with these bits shorts the phases instead of opening
+ * them: every fault so far of MC_DRIVE_ASC_FAULTS, a 3-phase bridge, and
+ * the short already on or the back-EMF above the bus. */
+static bool asc_wanted(const mc_drive_t *d, uint32_t bits)
+{
+    const uint32_t all = bits | d->faults;
+    return d->cfg.asc_enable && drives_three_phase(d) && (all & ~MC_DRIVE_ASC_FAULTS) == 0u &&
+           (d->asc_active || (d->enc_trk.primed && asc_emf_above(d, 1.0f)));
+}
+
+/* All low-side switches on (duties 0, bridge enabled); the bridge opens
+ * when the PWM driver refuses either. */
+static void asc_on(mc_drive_t *d)
+{
+    if (mc_hal_pwm3_set_duty(d->hal->pwm3, 0.0f, 0.0f, 0.0f) != 0 ||
+        mc_hal_pwm3_enable(d->hal->pwm3) != 0) {
+        outputs_off(d);
+        d->asc_active = false;
+        return;
+    }
+    if (d->hal->pwm2 != NULL) {
+        (void)mc_hal_pwm2_disable(d->hal->pwm2);
+    }
+    d->asc_active = true;
+}
+
+/* Safe state: outputs off (or the active short circuit) first, then
+ * bookkeeping. */
 static void raise_fault(mc_drive_t *d, uint32_t bits)
 {
     if (bits == 0u) {
         return;
     }
-    outputs_off(d);
+    if (asc_wanted(d, bits)) {
+        asc_on(d);
+    } else {
+        outputs_off(d);
+        d->asc_active = false;
+    }
     d->id_ref_a = 0.0f;
     d->iq_ref_a = 0.0f;
     if (d->faults == 0u) {
@@ -624,6 +669,10 @@ bool mc_drive_fast_step(mc_drive_t *d)
         }
     }
     raise_fault(d, f);
+    if (d->asc_active && have_enc && !asc_emf_above(d, MC_DRIVE_ASC_EXIT_FRAC)) {
+        outputs_off(d); /* slow enough: opening no longer pumps the bus */
+        d->asc_active = false;
+    }
 
     d->fast_count++;
     d->slow_phase++;
@@ -732,6 +781,9 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
 {
     switch (mode) {
     case MC_DRIVE_MODE_IDLE:
+        if (d->asc_active) {
+            return 0; /* FAULT with the phases shorted: the fault reaction keeps them */
+        }
         outputs_off(d);
         d->id_ref_a = 0.0f;
         d->iq_ref_a = 0.0f;
@@ -838,6 +890,10 @@ int mc_drive_clear_faults(mc_drive_t *d)
     const float v = d->tm.vbus_v;
     if (!(v >= d->cfg.vbus_min_v && v <= d->cfg.vbus_max_v)) {
         return -EBUSY;
+    }
+    if (d->asc_active) {
+        outputs_off(d); /* ends the active short circuit */
+        d->asc_active = false;
     }
     d->faults = 0u;
     d->warnings = 0u;

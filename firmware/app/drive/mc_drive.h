@@ -54,6 +54,30 @@
  * confirm that, fires the gate kill), sets mode FAULT and records the sticky
  * fault bit, the first fault's bit and the tick of detection. A hardware
  * fault status that cannot be read counts as MC_DRIVE_FAULT_HW_INPUT.
+ *
+ * Active short circuit (cfg.asc_enable, off by default): above the speed at
+ * which the motor's line-to-line back-EMF peak sqrt(3) p flux |omega_m|
+ * exceeds the measured bus voltage, opening the bridge lets the rotor
+ * pump current through the free-wheeling diodes into the bus (a supply
+ * that cannot sink it, no brake resistor: the bus rises past its trip,
+ * braking torque uncontrolled). With asc_enable, a fault of
+ * MC_DRIVE_ASC_FAULTS at such a speed instead turns the three low-side
+ * switches on (duties 0 with the bridge enabled: hal/pwm3.h): the phases
+ * are shorted, no current reaches the bus, the windings carry the
+ * short-circuit current (towards flux / Ld at high speed) and the rotor
+ * feels a braking torque (largest near omega_e = R / L, small at high
+ * speed). The drive is in FAULT with asc_active set; it opens the bridge
+ * when the back-EMF falls below MC_DRIVE_ASC_EXIT_FRAC of the bus (the
+ * encoder's speed; without a valid encoder the short stays until
+ * mc_drive_clear_faults), or at once when a fault outside
+ * MC_DRIVE_ASC_FAULTS joins (over-current, gate driver, PWM refusal, a
+ * current reading the drive cannot trust: the bridge or its supervision
+ * cannot be relied on). mc_drive_set_mode(IDLE) in FAULT keeps the short;
+ * mc_drive_clear_faults ends it. init refuses asc_enable unless the steady
+ * short-circuit current flux / Ld is below i_trip_a (MC_DRIVE_CFG_ERR_ASC);
+ * the transient from the operating point overshoots flux / Ld by up to
+ * |v_dq| / (omega_e Ld), and if it crosses i_trip_a the over-current rule
+ * opens the bridge after all (app README: size the trip for ~2 flux / Ld).
  */
 #ifndef MC_DRIVE_H
 #define MC_DRIVE_H
@@ -159,10 +183,23 @@ typedef enum {
 #define MC_DRIVE_CFG_ERR_FW \
     (1u << 13) /**< fw_enable with a cfg.fw mc_fw_f32_init
                                                    refuses, or fw.dt_s != foc.dt_s */
+#define MC_DRIVE_CFG_ERR_ASC \
+    (1u << 14) /**< asc_enable without a 3-phase motor model: flux_wb or ld_h
+                                                   not > 0, or flux / Ld not below i_trip_a */
 #define MC_DRIVE_CFG_ERR_BUS_POWER \
     (1u << 12) /**< regen limit or brake chopper thresholds:
                                                    not finite, only one of a pair 0, or not
                                                    vbus_min_v < start < end <= vbus_max_v */
+
+/* Faults that may engage the active short circuit (cfg.asc_enable): those
+ * that leave the bridge and the current measurement trustworthy. */
+#define MC_DRIVE_ASC_FAULTS                                                        \
+    (MC_DRIVE_FAULT_VBUS_LOW | MC_DRIVE_FAULT_VBUS_HIGH | MC_DRIVE_FAULT_ENCODER | \
+     MC_DRIVE_FAULT_CONTROL | MC_DRIVE_FAULT_OVERSPEED | MC_DRIVE_FAULT_OVERTEMP | \
+     MC_DRIVE_FAULT_OVERRUN | MC_DRIVE_FAULT_STALL | MC_DRIVE_FAULT_EXTERNAL |     \
+     MC_DRIVE_FAULT_OPEN_PHASE)
+/* The short ends when the back-EMF peak falls below this fraction of the bus. */
+#define MC_DRIVE_ASC_EXIT_FRAC 0.9f
 
 /*
  * Open-phase check (CURRENT mode, fast step; MC_DRIVE_FAULT_OPEN_PHASE).
@@ -291,6 +328,10 @@ typedef struct {
      * fw.dt_s must be foc.dt_s. Off: references as set. */
     bool fw_enable;
     mc_fw_f32_cfg_t fw;
+    /** Active short circuit on a fault above the speed where the back-EMF
+     *  exceeds the bus (see "Active short circuit" above); needs foc.flux_wb,
+     *  foc.ld_h > 0 and foc.flux_wb / foc.ld_h < i_trip_a. */
+    bool asc_enable;
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
@@ -382,6 +423,7 @@ typedef struct {
     float stop_omega_ref_rad_s; /**< STOPPING from CURRENT: the speed ramp [rad/s] */
     float stop_time_s;          /**< time in STOPPING [s] */
     float stop_time_max_s;      /**< STOPPING: open the bridge after this [s] */
+    bool asc_active;            /**< FAULT with the low-side switches on (asc_enable) */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns

@@ -232,6 +232,7 @@ static bool csvc_modal(mc_csvc_f32_t *st, const mc_csvc_f32_model_t *m, float dt
         }
         st->h[j] = hj;
         st->xi[j] = 0.0f;
+        st->xi_lo[j] = 0.0f;
     }
     for (uint32_t i = 0u; i < (CSVC_N * CSVC_N); ++i) {
         st->t[i] = tm[i];
@@ -351,6 +352,7 @@ uint32_t mc_csvc_f32_reset(mc_csvc_f32_t *st)
     for (uint32_t i = 0u; i < CSVC_N; ++i) {
         st->sigma[i] = 0.0f;
         st->xi[i] = 0.0f;
+        st->xi_lo[i] = 0.0f;
     }
     st->flags = MC_CSVC_ERR_NONE;
     return MC_CSVC_ERR_NONE;

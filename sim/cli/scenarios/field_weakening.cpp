@@ -18,7 +18,22 @@
 // v_mag - v_max in the hold.
 //
 // CSV (part 2): the generic scenarios' columns plus v_mag_v (|v_dq| the
-// current loop applied) and v_max_v (the field-weakening target).
+// current loop applied) and v_max_v (the field-weakening target), and
+// vbus_v.
+//
+// Part 3 (--set fault=1): a loss of control at the top speed. The supply
+// is a bench supply behind a diode (it cannot sink current), the bus
+// capacitor the board file's or 1 mF. At the end of the hold the
+// application raises a fault (mc_drive_raise_fault, EXTERNAL) and the run
+// goes on for fault_s. With asc=off the drive opens the bridge: above
+// omega_uncontrolled_gen the back-EMF drives current through the diodes
+// into the bus. With asc=on (mc_drive_cfg_t.asc_enable) it shorts the
+// phases through the low-side switches. Summary: fault_vbus_peak_v against
+// fault_vbus_trip_v, the peak phase current and the braking torque. The
+// short's current settles towards flux / Ld, but its transient from the
+// operating point overshoots that by up to |v_dq| / (omega_e Ld) (the flux
+// deviation rotating at omega_e); fault_i_sense_max_a gives the board the
+// sensing (and the drive a trip at 98 % of it) that the transient needs.
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -81,7 +96,20 @@ std::vector<ParamSpec> fw_params(const MotorFiles& f) {
        10.0},
       {"hold_s", 0.3, "s", "hold at the target", 0.0, 100.0},
       {"j_load_factor", 1.0e4, "1", "MTPA part: dyno inertia in motor inertias", 0.0, 1.0e9},
-      {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9}};
+      {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9},
+      {"fault", 0.0, "1", "part 3: a fault at the end of the hold, one-way supply", 0.0, 1.0},
+      {"asc",
+       0.0,
+       "1",
+       "the drive's active short circuit (asc_enable)",
+       0.0,
+       1.0,
+       {{"off", 0.0}, {"on", 1.0}}},
+      {"fault_s", 0.05, "s", "part 3: run time after the fault", 1.0e-4, 10.0},
+      {"fault_i_sense_max_a", 0.0, "A",
+       "part 3: current-sensing range of the board (0: the board file's); the drive's "
+       "over-current trip at 98 % of it",
+       0.0, 1.0e5}};
   for (auto& s : gain_params(f)) p.push_back(s);
   return p;
 }
@@ -90,8 +118,74 @@ std::string faults_text(uint32_t f) {
   return "drive fault bits " + std::to_string(f);
 }
 
+// One CSV row (part 2 and part 3): the true dq currents, the drive's
+// references and voltages, the bus.
+void write_row(RunContext& ctx, MotorRig& rig) {
+  double id, iq, vd, vq;
+  rig.board().true_dq_a(&id, &iq);
+  rig.dq_volts(&vd, &vq);
+  const auto& tm = rig.drive().tm;
+  const double row[] = {rig.board().t_s(),
+                        id,
+                        iq,
+                        tm.id_ref_a,
+                        tm.iq_ref_a,
+                        rig.board().state()(2),
+                        rig.omega_ref_rad_s(),
+                        rig.theta_e_true(),
+                        vd,
+                        vq,
+                        tm.fw.v_mag_v,
+                        tm.fw.v_max_v,
+                        static_cast<double>(rig.drive().faults),
+                        rig.board().vbus_v()};
+  ctx.csv.row(row, sizeof row / sizeof row[0]);
+}
+
+// Part 3: the fault at speed and what follows (see the file's comment).
+void run_fault(RunContext& ctx, MotorRig& rig, long every) {
+  const MotorSpec& m = ctx.files->motor;
+  auto& board = rig.board();
+  const double w0 = board.state()(2);
+  const double vbus0 = board.vbus_v();
+  mc_drive_raise_fault(&rig.drive(), MC_DRIVE_FAULT_EXTERNAL);
+  const long nf = std::lround(ctx.params.get("fault_s") / rig.period_s());
+  double vpk = vbus0, ipk = 0, tq_min = 0;
+  long asc_steps = 0;
+  for (long k = 0; k < nf; ++k) {
+    rig.step();
+    const Eigen::Vector3d i = board.phase_currents_true_a();
+    ipk = std::max(ipk, i.cwiseAbs().maxCoeff());
+    vpk = std::max(vpk, board.vbus_v());
+    tq_min = std::min(tq_min, board.torque_nm());
+    asc_steps += rig.drive().asc_active ? 1 : 0;
+    if (k % every == 0) write_row(ctx, rig);
+  }
+  ctx.summary.set_text("asc", rig.drive_cfg().asc_enable ? "on" : "off");
+  ctx.summary.set("fault_omega_m_rad_s", w0);
+  ctx.summary.set("fault_emf_over_vbus",
+                  std::sqrt(3.0) * m.pole_pairs * m.flux_wb * std::abs(w0) / vbus0);
+  ctx.summary.set("fault_vbus_before_v", vbus0);
+  ctx.summary.set("fault_vbus_peak_v", vpk);
+  ctx.summary.set("fault_vbus_trip_v", rig.drive_cfg().vbus_max_v);
+  ctx.summary.set("fault_i_phase_peak_a", ipk);
+  ctx.summary.set("fault_i_trip_a", rig.drive_cfg().i_trip_a);
+  ctx.summary.set("fault_torque_min_nm", tq_min);
+  ctx.summary.set("fault_asc_time_s", static_cast<double>(asc_steps) * rig.period_s());
+  ctx.summary.set("fault_omega_end_rad_s", board.state()(2));
+  ctx.summary.set("fault_first", rig.drive().first_fault);
+  ctx.summary.set("fault_bits", rig.drive().faults);
+}
+
 void run_fw(RunContext& ctx) {
-  const MotorFiles& f = *ctx.files;
+  MotorFiles f = *ctx.files;
+  const bool fault = ctx.params.get("fault") > 0.5;
+  if (fault) {  // part 3 on a supply that cannot sink current
+    f.board.dc_link_c_f = f.board.dc_link_c_f > 0.0 ? f.board.dc_link_c_f : 1.0e-3;
+    f.board.source_sink = false;
+    const double isense = ctx.params.get("fault_i_sense_max_a");
+    if (isense > 0.0) f.board.i_sense_max_a = isense;
+  }
   const MotorSpec& m = f.motor;
   const Params& P = ctx.params;
   const Gains g = derive_gains(f, &P);
@@ -145,13 +239,21 @@ void run_fw(RunContext& ctx) {
   RigOptions o;
   o.law = Law::kSpeedPi;
   o.fw = true;
+  const bool asc = P.get("asc") > 0.5;
+  // A board with its own sensing for part 3 trips where that sensing ends
+  // (the switches rated for it), not at 1.6x the current limit.
+  const double isense = fault ? P.get("fault_i_sense_max_a") : 0.0;
+  o.drive_hook = [asc, isense](mc_drive_cfg_t& c) {
+    c.asc_enable = asc;
+    if (isense > 0.0) c.i_trip_a = static_cast<float>(0.98 * isense);
+  };
   MotorRig rig(f, g, o);
   const long n = std::lround(dur / T);
   const long every =
       P.get("csv_every") > 0 ? std::lround(P.get("csv_every")) : std::max(1L, n / 20000);
   ctx.csv.columns({"t", "i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a", "omega_m_rad_s",
                    "omega_ref_rad_s", "theta_e_rad", "v_d_v", "v_q_v", "v_mag_v", "v_max_v",
-                   "fault_1"});
+                   "fault_1", "vbus_v"});
   double i_pk = 0, w = 0, id = 0, iq = 0, v_over = -1e9, id_min = 0, werr_hold = 0;
   for (long k = 0; k <= n; ++k) {
     const double t = rig.board().t_s();
@@ -165,24 +267,7 @@ void run_fw(RunContext& ctx) {
       v_over = std::max(v_over, static_cast<double>(tm.fw.v_mag_v - tm.fw.v_max_v));
       werr_hold = std::max(werr_hold, std::abs(w - w_t));
     }
-    if (k % every == 0) {
-      double vd, vq;
-      rig.dq_volts(&vd, &vq);
-      const double row[] = {t,
-                            id,
-                            iq,
-                            tm.id_ref_a,
-                            tm.iq_ref_a,
-                            w,
-                            rig.omega_ref_rad_s(),
-                            rig.theta_e_true(),
-                            vd,
-                            vq,
-                            tm.fw.v_mag_v,
-                            tm.fw.v_max_v,
-                            static_cast<double>(rig.drive().faults)};
-      ctx.csv.row(row, sizeof row / sizeof row[0]);
-    }
+    if (k % every == 0) write_row(ctx, rig);
     if (rig.drive().faults != 0u) break;
     if (k < n) rig.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
@@ -206,13 +291,15 @@ void run_fw(RunContext& ctx) {
   ctx.summary.set("omega_uncontrolled_gen_rad_s",
                   vbus / (std::sqrt(3.0) * m.pole_pairs * m.flux_wb));
   ctx.summary.set("short_circuit_current_a", m.flux_wb / m.ld_h);
+  if (fault) run_fault(ctx, rig, every);
 }
 
 const Registrar reg_fw(
     {"field-weakening",
      "any motor: MTPA torque per ampere on a dyno against the analytic optimum, then a sensored "
      "speed ramp to 2.5x base speed (capped at speed_max) with voltage-feedback field weakening; "
-     "CSV adds v_mag_v and v_max_v",
+     "CSV adds v_mag_v, v_max_v and vbus_v; fault=1: a fault at the top speed on a supply that "
+     "cannot sink current, asc=on|off (the drive's active short circuit)",
      0.0,
      {},
      run_fw,

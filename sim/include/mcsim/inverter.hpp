@@ -9,6 +9,8 @@
 //   v_xN = clamp(d_x vbus - sat(i_x / i_dead_band_a) (t_dead/T_pwm) vbus, 0, vbus)
 // sat() is linear for |i_x| < i_dead_band_a (smooth near zero current) and
 // +-1 outside: a current flowing out of the leg loses the dead-time interval.
+// A leg at d_x = 0 or 1 does not switch and has no dead-time term (the
+// active short circuit: all three low sides on, d = 0).
 // The clamp to [0, vbus] is the DC-bus limit: no leg can produce more.
 // Phase-to-neutral voltage removes the common mode:
 //   v_x = v_xN - (v_aN + v_bN + v_cN)/3,  so v_a + v_b + v_c = 0,

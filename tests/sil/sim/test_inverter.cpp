@@ -143,6 +143,29 @@ TEST(SimInverter3Ph, BusLimitClampsDutiesAndPoles) {
               1.4 - 0.2 - 0.4, 1e-15);
 }
 
+// A leg held at duty 0 or 1 does not switch: one of its switches is on for
+// the whole period and there is no dead-time interval, whatever the current
+// (the active short circuit: all three legs at 0, every phase at the
+// negative rail, no power to or from the bus).
+TEST(SimInverter3Ph, LegsThatDoNotSwitchHaveNoDeadTime) {
+  Inverter3Ph inv;
+  InverterParams p;
+  p.t_pwm_s = 50.0e-6;
+  p.t_dead_s = 1.0e-6;
+  ASSERT_EQ(inv.configure(p), Status::kOk);
+  const double vbus = 50.0;
+  const Vector3d i(-40.0, 70.0, -30.0);  // currents into legs a and c
+  // exact: no arithmetic on a rail
+  const Vector3d v0 = inv.pole_voltages_v(Vector3d(0.0, 0.0, 0.0), vbus, i);
+  EXPECT_EQ(v0(0), 0.0);
+  EXPECT_EQ(v0(1), 0.0);
+  EXPECT_EQ(v0(2), 0.0);
+  EXPECT_EQ(inv.pole_voltages_v(Vector3d(1.0, 1.0, 1.0), vbus, -i)(0), vbus);
+  EXPECT_EQ(Inverter3Ph::dc_current_a(Vector3d(0.0, 0.0, 0.0), i), 0.0);
+  // A switching leg next to them keeps its dead-time error (2 % of vbus).
+  EXPECT_NEAR(inv.pole_voltages_v(Vector3d(0.5, 0.0, 0.0), vbus, i)(0), 25.0 + 0.02 * vbus, 1e-12);
+}
+
 TEST(SimInverter3Ph, InvalidConfigKeepsOldOne) {
   Inverter3Ph inv;
   InverterParams p;
