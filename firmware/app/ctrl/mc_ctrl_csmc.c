@@ -47,37 +47,25 @@ static float ctrl_position(mc_ctrl_csmc_t *c, const mc_drive_meas_t *m)
     return c->phi0_rad + (((float)c->pos_counts * MC_TWO_PI_F32) / (float)cpr);
 }
 
-static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out)
+uint32_t mc_ctrl_csmc_step(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_meas_t *m)
 {
-    mc_ctrl_csmc_t *c = (mc_ctrl_csmc_t *)ctx;
-    mc_ctrl_csmc_tm_t *tm = &c->tm;
     float s;
     float co;
-    float phi;
-    float e2;
-    float inv_vbus;
-    float lim;
 
-    out->duty2_a = 0.0f;
-    out->duty2_b = 0.0f;
-    if (!m->have_encoder || (m->enc_cpr == 0u)) {
-        return MC_CTRL_CSMC_ERR_ENCODER;
+    if ((c == NULL) || (m == NULL)) {
+        return MC_CTRL_CSMC_ERR_NULL;
     }
-    if (!(m->vbus_v > 0.0f) || !mc_isfinite_f32(m->vbus_v)) {
-        return MC_CTRL_CSMC_ERR_VBUS;
-    }
-    phi = ctrl_position(c, m);
+    mc_ctrl_csmc_tm_t *tm = &c->tm;
     mc_sincos_f32(m->theta_e_rad, &s, &co);
     mc_stepper_ab_to_dq_sc_f32(m->ia_a, m->ib_a, s, co, &tm->i_d_a, &tm->i_q_a);
-    tm->phi_rad = phi;
-    e2 = phi - c->phi_d_rad;
+    tm->phi_rad = m->phi_rad;
     if (c->cfg.feedback == MC_CTRL_CSMC_FB_STATE) {
         if (mc_csmc_f32_err_from_state(&c->cfg.law.model, tm->i_d_a, tm->i_q_a, m->omega_m_rad_s,
-                                       phi, c->i_dd_a, c->phi_d_rad, c->dphi_d_rad_s,
+                                       m->phi_rad, c->i_dd_a, c->phi_d_rad, c->dphi_d_rad_s,
                                        c->ddphi_d_rad_s2, &tm->in) != MC_CSMC_ERR_NONE) {
             return MC_CTRL_CSMC_ERR_STEP;
         }
-        tm->in.e2_rad = e2;
+        tm->in.e2_rad = m->e2_rad;
         tm->in.di_dd_a_s = c->di_dd_a_s;
         tm->in.dddphi_d_rad_s3 = c->dddphi_d_rad_s3;
         mc_csmc_f32_step(&c->ctl.law, &tm->in, &tm->out);
@@ -87,24 +75,54 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     } else {
         /* observer and law in one step; the estimates it uses are the
          * observer's state before the step (telemetry) */
+        tm->est.z1 = c->ctl.hgo.z[0];
+        tm->est.z2 = c->ctl.hgo.z[1];
+        tm->est.z3 = c->ctl.hgo.z[2];
         tm->in.e1_a = tm->i_d_a - c->i_dd_a;
-        tm->in.e2_rad = e2;
-        tm->in.de2_rad_s = c->ctl.hgo.z[1];
-        tm->in.dde2_rad_s2 = c->ctl.hgo.z[2];
+        tm->in.e2_rad = m->e2_rad;
+        tm->in.de2_rad_s = tm->est.z2;
+        tm->in.dde2_rad_s2 = tm->est.z3;
         tm->in.i_d_a = tm->i_d_a;
         tm->in.i_q_a = tm->i_q_a;
         tm->in.omega_m_rad_s = m->omega_m_rad_s;
         tm->in.di_dd_a_s = c->di_dd_a_s;
         tm->in.dddphi_d_rad_s3 = c->dddphi_d_rad_s3;
-        if (mc_csmc_hgo_f32_step(&c->ctl, tm->in.e1_a, e2, &tm->in, &tm->out) != MC_CSMC_ERR_NONE) {
+        if (mc_csmc_hgo_f32_step(&c->ctl, tm->in.e1_a, m->e2_rad, &tm->in, &tm->out) !=
+            MC_CSMC_ERR_NONE) {
             return MC_CTRL_CSMC_ERR_STEP;
         }
     }
     mc_stepper_dq_to_ab_sc_f32(tm->out.v_d_v, tm->out.v_q_v, s, co, &tm->v_a_v, &tm->v_b_v);
-    inv_vbus = 1.0f / m->vbus_v;
-    lim = c->cfg.duty_max;
-    out->duty2_a = mc_sat_f32(tm->v_a_v * inv_vbus, -lim, lim);
-    out->duty2_b = mc_sat_f32(tm->v_b_v * inv_vbus, -lim, lim);
+    return MC_CTRL_CSMC_ERR_NONE;
+}
+
+static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out)
+{
+    mc_ctrl_csmc_t *c = (mc_ctrl_csmc_t *)ctx;
+    mc_ctrl_csmc_meas_t cm;
+
+    out->duty2_a = 0.0f;
+    out->duty2_b = 0.0f;
+    if (!m->have_encoder || (m->enc_cpr == 0u)) {
+        return MC_CTRL_CSMC_ERR_ENCODER;
+    }
+    if (!(m->vbus_v > 0.0f) || !mc_isfinite_f32(m->vbus_v)) {
+        return MC_CTRL_CSMC_ERR_VBUS;
+    }
+    cm.ia_a = m->ia_a;
+    cm.ib_a = m->ib_a;
+    cm.theta_e_rad = m->theta_e_rad;
+    cm.omega_m_rad_s = m->omega_m_rad_s;
+    cm.phi_rad = ctrl_position(c, m);
+    cm.e2_rad = cm.phi_rad - c->phi_d_rad;
+    const uint32_t err = mc_ctrl_csmc_step(c, &cm);
+    if (err != MC_CTRL_CSMC_ERR_NONE) {
+        return err;
+    }
+    const float inv_vbus = 1.0f / m->vbus_v;
+    const float lim = c->cfg.duty_max;
+    out->duty2_a = mc_sat_f32(c->tm.v_a_v * inv_vbus, -lim, lim);
+    out->duty2_b = mc_sat_f32(c->tm.v_b_v * inv_vbus, -lim, lim);
     return MC_CTRL_CSMC_ERR_NONE;
 }
 
@@ -161,6 +179,7 @@ uint32_t mc_ctrl_csmc_init(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_cfg_t *cfg)
     c->tm.out = (mc_csmc_f32_out_t){0.0f, 0.0f, 0.0f, 0.0f};
     c->tm.v_a_v = 0.0f;
     c->tm.v_b_v = 0.0f;
+    c->tm.est = (mc_hgo_f32_est_t){0.0f, 0.0f, 0.0f};
     c->ops.outputs = MC_DRIVE_OUT_PWM2;
     c->ops.needs_encoder = true;
     c->ops.reset = ctrl_reset;

@@ -72,7 +72,21 @@ typedef struct {
     mc_csmc_f32_in_t in;   /**< errors handed to the law */
     mc_csmc_f32_out_t out; /**< v_d, v_q, s1, s2 */
     float v_a_v, v_b_v;    /**< winding voltages asked for [V] */
+    mc_hgo_f32_est_t est;  /**< FB_HGO: the observer's estimates this step used (else 0) */
 } mc_ctrl_csmc_tm_t;
+
+/** The measurements of one step in the law's frame (mc_ctrl_csmc_step). The
+ *  drive's fast op forms them from mc_drive_meas_t: phi from the encoder
+ *  counts, e2 = phi - phi_d in float; a loop without the drive (the paper
+ *  scenarios, sim/cli/scenarios/csmc_loop) forms them from its plant, e2
+ *  at the precision it has. */
+typedef struct {
+    float ia_a, ib_a;    /**< winding currents, phase A and B [A] */
+    float theta_e_rad;   /**< electrical angle of the dq transform, N_r phi + offset [rad] */
+    float omega_m_rad_s; /**< shaft speed (STATE feedback) [rad/s] */
+    float phi_rad;       /**< shaft angle (STATE: the model's e2) [rad] */
+    float e2_rad;        /**< position error phi - phi_d handed to the law [rad] */
+} mc_ctrl_csmc_meas_t;
 
 typedef struct {
     mc_ctrl_csmc_cfg_t cfg;
@@ -88,6 +102,16 @@ typedef struct {
 
 /** Validate cfg, initialise the kernels; reference 0. On error c is not written. */
 uint32_t mc_ctrl_csmc_init(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_cfg_t *cfg);
+
+/**
+ * One step of the loop on measurements in the law's frame: dq transform,
+ * errors (STATE: from the model; HGO: from the observer), law, inverse
+ * transform; the result in c->tm (v_a_v, v_b_v: the winding voltages to
+ * apply). The drive's fast op is this step between the encoder and the
+ * bridge. Returns MC_CTRL_CSMC_ERR_STEP when the law or observer refuses an
+ * input (their state unchanged), _NULL for a NULL pointer.
+ */
+uint32_t mc_ctrl_csmc_step(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_meas_t *m);
 
 /** The plug-in table for mc_drive_attach_ctrl() (NULL for c == NULL). */
 const mc_drive_ctrl_t *mc_ctrl_csmc_ops(mc_ctrl_csmc_t *c);
