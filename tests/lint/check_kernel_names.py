@@ -91,7 +91,7 @@ ALLOWED = {
     "mc_stepper_ab_to_dq_f32", "mc_stepper_ab_to_dq_sc_f32", "mc_stepper_dq_to_ab_f32",
     "mc_stepper_dq_to_ab_sc_f32", "mc_stepper_theta_e_f32",
     # filters/
-    "mc_ddiff_f32_next", "mc_ddiff_f32_q",
+    "mc_ddiff_f32_next",
     # foc/, fw/
     "mc_foc_f32_gains_from_bandwidth",
     "mc_fw_f32_mtpa_id",
@@ -100,14 +100,13 @@ ALLOWED = {
     # observer/
     "mc_fluxobs_f32_critical_speed", "mc_fluxobs_f32_gamma_for_critical_speed",
     "mc_fluxobs_f32_time_scale",
-    "mc_iiobs_f32_omega_m_rad_s", "mc_iiobs_f32_tau_load_nm",
     # pi/
     "mc_pi_q31_cfg_from_f32",
     "mc_pi_f32_core", "mc_pi_f32_core_in", "mc_pi_f32_core_sat",
     # pi2d/
     "mc_pi2d_f32_certify",
     # traj/
-    "mc_traj_f32_duration", "mc_traj_f32_shift", "mc_traj_f32_stop",
+    "mc_traj_f32_shift", "mc_traj_f32_stop",
     # transforms/: the limit-mode check the f32 and q31 SVPWM share names
     # no format (it has none); a private helper of the two files
     "mc_svpwm_limit_ok",
