@@ -70,7 +70,8 @@ PLUGIN_VERBS = {
     "ops": "the plug-in table for mc_drive_attach_ctrl (one name for every law)",
     "reset": "the table's reset, exported for direct use",
     "fast": "the table's fast step, exported for direct use",
-    "step": "the fast step on measurements in the law's frame, for a loop without the drive",
+    "step": "step[_<detail>]: the fast step on measurements in the law's frame (for a loop "
+            "without the drive), or one part of it",
     "set": "set_<field>: a reference or setting, validated",
     "get": "get_<field>: read telemetry or the state, changing nothing",
 }
@@ -250,7 +251,7 @@ def plugin_verdict(name):
         return f"'{words[k]}' is not a plug-in verb ({', '.join(PLUGIN_VERBS)})"
     if words[k] in ("set", "get") and k + 1 >= len(words):
         return f"{words[k]} needs the field (<verb>_<field>)"
-    if words[k] not in ("set", "get") and k + 1 < len(words):
+    if words[k] not in ("set", "get", "step") and k + 1 < len(words):
         return f"'{words[k]}' takes no detail"
     return None
 

@@ -65,6 +65,19 @@ typedef struct {
     float duty_max;       /**< |duty| limit of each bridge, (0, 1] */
 } mc_ctrl_csmc_cfg_t;
 
+/** The reference of a CSMC plug-in, f32 and q31 alike (see mc_ctrl_csmc_set_ref). */
+typedef struct {
+    float phi_d_rad, dphi_d_rad_s, ddphi_d_rad_s2, dddphi_d_rad_s3, i_dd_a, di_dd_a_s;
+} mc_ctrl_csmc_ref_t;
+
+/** The shaft angle unwrapped from the encoder counts (f32 and q31 plug-ins). */
+typedef struct {
+    bool have_pos;
+    uint32_t last_count;
+    int32_t pos_counts; /**< counts moved since the first step after reset */
+    float phi0_rad;     /**< encoder angle at the first step after reset, [-pi, pi) */
+} mc_ctrl_csmc_pos_t;
+
 /** Telemetry of the last fast step. */
 typedef struct {
     float phi_rad;         /**< unwrapped shaft angle [rad] */
@@ -91,11 +104,8 @@ typedef struct {
 typedef struct {
     mc_ctrl_csmc_cfg_t cfg;
     mc_csmc_hgo_f32_t ctl; /**< the law (ctl.law) and, for FB_HGO, the observer */
-    float phi_d_rad, dphi_d_rad_s, ddphi_d_rad_s2, dddphi_d_rad_s3, i_dd_a, di_dd_a_s;
-    bool have_pos;
-    uint32_t last_count;
-    int32_t pos_counts; /**< counts moved since the first step after reset */
-    float phi0_rad;     /**< encoder angle at the first step after reset, [-pi, pi) */
+    mc_ctrl_csmc_ref_t ref;
+    mc_ctrl_csmc_pos_t pos;
     mc_ctrl_csmc_tm_t tm;
     mc_drive_ctrl_t ops;
 } mc_ctrl_csmc_t;
@@ -127,6 +137,18 @@ const mc_drive_ctrl_t *mc_ctrl_csmc_ops(mc_ctrl_csmc_t *c);
 uint32_t mc_ctrl_csmc_set_ref(mc_ctrl_csmc_t *c, float phi_d_rad, float dphi_d_rad_s,
                               float ddphi_d_rad_s2, float dddphi_d_rad_s3, float i_dd_a,
                               float di_dd_a_s);
+
+/** The validation and store of mc_ctrl_csmc_set_ref on a reference struct
+ *  (shared with the q31 twin). */
+uint32_t mc_ctrl_csmc_set_ref_in(mc_ctrl_csmc_ref_t *r, float phi_d_rad, float dphi_d_rad_s,
+                                 float ddphi_d_rad_s2, float dddphi_d_rad_s3, float i_dd_a,
+                                 float di_dd_a_s);
+
+/** The shaft angle [rad] of this fast step from the encoder counts (exact
+ *  integer count, the shortest way between steps): the encoder's angle
+ *  wrapped to [-pi, pi) at the first step after reset (p->have_pos false),
+ *  then counted on. m->enc_cpr must be > 0. Shared with the q31 twin. */
+float mc_ctrl_csmc_step_pos(mc_ctrl_csmc_pos_t *p, const mc_drive_meas_t *m);
 
 #ifdef __cplusplus
 }

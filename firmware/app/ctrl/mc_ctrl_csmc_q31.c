@@ -15,29 +15,8 @@ static uint32_t ctrl_reset(void *ctx)
 {
     mc_ctrl_csmc_q31_t *c = (mc_ctrl_csmc_q31_t *)ctx;
     (void)mc_csmc_q31_reset(&c->law);
-    c->have_pos = false;
-    c->pos_counts = 0;
-    c->last_count = 0u;
-    c->phi0_rad = 0.0f;
+    c->pos = (mc_ctrl_csmc_pos_t){false, 0u, 0, 0.0f};
     return MC_CTRL_CSMC_ERR_NONE;
-}
-
-/* Unwrapped shaft angle from the encoder counts (as the f32 plug-in). */
-static float ctrl_position(mc_ctrl_csmc_q31_t *c, const mc_drive_meas_t *m)
-{
-    const uint32_t cpr = m->enc_cpr;
-    const uint32_t count = (m->enc_count < cpr) ? m->enc_count : (m->enc_count % cpr);
-    if (!c->have_pos) {
-        c->have_pos = true;
-        c->pos_counts = 0;
-        c->phi0_rad = mc_wrap_pi_f32(m->theta_m_rad);
-    } else {
-        const uint32_t fwd =
-            (count >= c->last_count) ? (count - c->last_count) : (cpr - (c->last_count - count));
-        c->pos_counts += (fwd > (cpr / 2u)) ? -(int32_t)(cpr - fwd) : (int32_t)fwd;
-    }
-    c->last_count = count;
-    return c->phi0_rad + (((float)c->pos_counts * MC_TWO_PI_F32) / (float)cpr);
 }
 
 uint32_t mc_ctrl_csmc_q31_step(mc_ctrl_csmc_q31_t *c, const mc_ctrl_csmc_q31_meas_t *m)
@@ -54,8 +33,8 @@ uint32_t mc_ctrl_csmc_q31_step(mc_ctrl_csmc_q31_t *c, const mc_ctrl_csmc_q31_mea
     mc_stepper_ab_to_dq_sc_f32(m->ia_a, m->ib_a, s, co, &tm->i_d_a, &tm->i_q_a);
     tm->phi_rad = m->phi_rad;
     if (mc_csmc_f32_err_from_state(&c->cfg.law.f.model, tm->i_d_a, tm->i_q_a, m->omega_m_rad_s,
-                                   m->phi_rad, c->i_dd_a, c->phi_d_rad, c->dphi_d_rad_s,
-                                   c->ddphi_d_rad_s2, &tm->fin) != MC_CSMC_ERR_NONE) {
+                                   m->phi_rad, c->ref.i_dd_a, c->ref.phi_d_rad, c->ref.dphi_d_rad_s,
+                                   c->ref.ddphi_d_rad_s2, &tm->fin) != MC_CSMC_ERR_NONE) {
         return MC_CTRL_CSMC_ERR_STEP;
     }
     tm->in.e1 = mc_pu_to_q31((double)tm->fin.e1_a, (double)b->i_base_a);
@@ -65,8 +44,8 @@ uint32_t mc_ctrl_csmc_q31_step(mc_ctrl_csmc_q31_t *c, const mc_ctrl_csmc_q31_mea
     tm->in.i_d = mc_pu_to_q31((double)tm->i_d_a, (double)b->i_base_a);
     tm->in.i_q = mc_pu_to_q31((double)tm->i_q_a, (double)b->i_base_a);
     tm->in.omega_m = mc_pu_to_q31((double)m->omega_m_rad_s, (double)b->omega_base_rad_s);
-    tm->in.di_dd = mc_pu_to_q31((double)c->di_dd_a_s, (double)b->did_base_a_s);
-    tm->in.dddphi_d = mc_pu_to_q31((double)c->dddphi_d_rad_s3, (double)b->jerk_base_rad_s3);
+    tm->in.di_dd = mc_pu_to_q31((double)c->ref.di_dd_a_s, (double)b->did_base_a_s);
+    tm->in.dddphi_d = mc_pu_to_q31((double)c->ref.dddphi_d_rad_s3, (double)b->jerk_base_rad_s3);
     if (mc_csmc_q31_step(&c->law, &tm->in, &tm->out) != MC_CSMC_ERR_NONE) {
         return MC_CTRL_CSMC_ERR_STEP;
     }
@@ -93,9 +72,9 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     cm.ib_a = m->ib_a;
     cm.theta_e_rad = m->theta_e_rad;
     cm.omega_m_rad_s = m->omega_m_rad_s;
-    cm.phi_rad = ctrl_position(c, m);
-    cm.e2 =
-        mc_pu_to_q31((double)(cm.phi_rad - c->phi_d_rad), (double)c->cfg.law.base.theta_base_rad);
+    cm.phi_rad = mc_ctrl_csmc_step_pos(&c->pos, m);
+    cm.e2 = mc_pu_to_q31((double)(cm.phi_rad - c->ref.phi_d_rad),
+                         (double)c->cfg.law.base.theta_base_rad);
     const uint32_t err = mc_ctrl_csmc_q31_step(c, &cm);
     if (err != MC_CTRL_CSMC_ERR_NONE) {
         return err;
@@ -134,12 +113,7 @@ uint32_t mc_ctrl_csmc_q31_init(mc_ctrl_csmc_q31_t *c, const mc_ctrl_csmc_q31_cfg
     const mc_ctrl_csmc_q31_tm_t tm0 = {0};
     c->cfg = *cfg;
     c->law = law;
-    c->phi_d_rad = 0.0f;
-    c->dphi_d_rad_s = 0.0f;
-    c->ddphi_d_rad_s2 = 0.0f;
-    c->dddphi_d_rad_s3 = 0.0f;
-    c->i_dd_a = 0.0f;
-    c->di_dd_a_s = 0.0f;
+    c->ref = (mc_ctrl_csmc_ref_t){0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
     (void)ctrl_reset(c);
     c->tm = tm0;
     c->ops.outputs = MC_DRIVE_OUT_PWM2;
@@ -161,19 +135,6 @@ uint32_t mc_ctrl_csmc_q31_set_ref(mc_ctrl_csmc_q31_t *c, float phi_d_rad, float 
                                   float ddphi_d_rad_s2, float dddphi_d_rad_s3, float i_dd_a,
                                   float di_dd_a_s)
 {
-    if (c == NULL) {
-        return MC_CTRL_CSMC_ERR_NULL;
-    }
-    if (!mc_isfinite_f32(phi_d_rad) || !mc_isfinite_f32(dphi_d_rad_s) ||
-        !mc_isfinite_f32(ddphi_d_rad_s2) || !mc_isfinite_f32(dddphi_d_rad_s3) ||
-        !mc_isfinite_f32(i_dd_a) || !mc_isfinite_f32(di_dd_a_s)) {
-        return MC_CTRL_CSMC_ERR_REF;
-    }
-    c->phi_d_rad = phi_d_rad;
-    c->dphi_d_rad_s = dphi_d_rad_s;
-    c->ddphi_d_rad_s2 = ddphi_d_rad_s2;
-    c->dddphi_d_rad_s3 = dddphi_d_rad_s3;
-    c->i_dd_a = i_dd_a;
-    c->di_dd_a_s = di_dd_a_s;
-    return MC_CTRL_CSMC_ERR_NONE;
+    return mc_ctrl_csmc_set_ref_in((c == NULL) ? NULL : &c->ref, phi_d_rad, dphi_d_rad_s,
+                                   ddphi_d_rad_s2, dddphi_d_rad_s3, i_dd_a, di_dd_a_s);
 }

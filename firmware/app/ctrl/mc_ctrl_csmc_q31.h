@@ -62,11 +62,8 @@ typedef struct {
 typedef struct {
     mc_ctrl_csmc_q31_cfg_t cfg;
     mc_csmc_q31_t law;
-    float phi_d_rad, dphi_d_rad_s, ddphi_d_rad_s2, dddphi_d_rad_s3, i_dd_a, di_dd_a_s;
-    bool have_pos;
-    uint32_t last_count;
-    int32_t pos_counts; /**< counts moved since the first step after reset */
-    float phi0_rad;     /**< encoder angle at the first step after reset, [-pi, pi) */
+    mc_ctrl_csmc_ref_t ref;
+    mc_ctrl_csmc_pos_t pos;
     mc_ctrl_csmc_q31_tm_t tm;
     mc_drive_ctrl_t ops;
 } mc_ctrl_csmc_q31_t;
