@@ -569,7 +569,7 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
             "bits " +
             std::to_string(e));
       }
-      if (mc_drive_attach_ctrl(&drive_, mc_ctrl_sls_table(&sls_)) != 0) {
+      if (mc_drive_attach_ctrl(&drive_, mc_ctrl_sls_ops(&sls_)) != 0) {
         throw std::runtime_error("drive refused the sensorless plug-in");
       }
       break;

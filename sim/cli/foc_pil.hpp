@@ -1,7 +1,7 @@
 // Processor-in-the-loop twin of FocSil: the same plant and board
 // (hal_host::PmsmBoard with the paper-002 test motor) on the host, the drive
 // application on the emulated STM32F405 (QEMU netduinoplus2, image
-// mc_stm32f405_pil: firmware/targets/stm32f405 with board_pil.c), the two
+// mc_stm32f405_pil: firmware/targets/stm32f405 with hal/pil/mc_hal_pil.c), the two
 // exchanging one frame each way per PWM period over USART1.
 //
 // Per period, as FocSil::step() does it in one process:

@@ -23,6 +23,16 @@ calls is not a declaration). Two rules:
   arm_clarke_q31): mc_<words>, where one word names the number format
   (f32, q31, q15, q46, u64), e.g. mc_sqrt_f32, mc_park_q31, mc_q46_mul.
 
+  Control-law plug-ins (firmware/app/ctrl/mc_ctrl_*.h, the drive's CTRL mode):
+      mc_ctrl_<law>[_q31]_<verb>[_<detail>]
+    law         one word (pi2d, sls, pos, csmc)
+    format      none for the float plug-in, q31 for its fixed-point twin
+                (the files: mc_ctrl_<x>.h and mc_ctrl_<x>_q31.h)
+    verb        one of PLUGIN_VERBS: init, ops (the table for
+                mc_drive_attach_ctrl), reset and fast (the table's
+                functions, when exported), step (the fast step without the
+                drive), set_<field>, get_<field>
+
 Names that broke a rule when the check was written are listed in ALLOWED
 (issue 22): each is still reported in --list, a new violation fails, and
 an entry that no longer names a public function fails too, so the list
@@ -54,6 +64,18 @@ VERBS = {
     "track": "make an integrator follow an output set from outside (bumpless transfer)",
 }
 
+PLUGIN_DIR = "firmware/app/ctrl"
+PLUGIN_VERBS = {
+    "init": "validate a config, set up the state and the ops table",
+    "ops": "the plug-in table for mc_drive_attach_ctrl (one name for every law)",
+    "reset": "the table's reset, exported for direct use",
+    "fast": "the table's fast step, exported for direct use",
+    "step": "step[_<detail>]: the fast step on measurements in the law's frame (for a loop "
+            "without the drive), or one part of it",
+    "set": "set_<field>: a reference or setting, validated",
+    "get": "get_<field>: read telemetry or the state, changing nothing",
+}
+
 # Today's violations (issue 22, "one shape per capability"): renaming them
 # touches firmware/app/ and the kernel files being moved, so they are
 # renamed with that move, not here. Remove an entry when its name is fixed.
@@ -70,7 +92,7 @@ ALLOWED = {
     "mc_stepper_ab_to_dq_f32", "mc_stepper_ab_to_dq_sc_f32", "mc_stepper_dq_to_ab_f32",
     "mc_stepper_dq_to_ab_sc_f32", "mc_stepper_theta_e_f32",
     # filters/
-    "mc_ddiff_f32_next", "mc_ddiff_f32_q",
+    "mc_ddiff_f32_next",
     # foc/, fw/
     "mc_foc_f32_gains_from_bandwidth",
     "mc_fw_f32_mtpa_id",
@@ -79,14 +101,13 @@ ALLOWED = {
     # observer/
     "mc_fluxobs_f32_critical_speed", "mc_fluxobs_f32_gamma_for_critical_speed",
     "mc_fluxobs_f32_time_scale",
-    "mc_iiobs_f32_omega_m_rad_s", "mc_iiobs_f32_tau_load_nm",
     # pi/
     "mc_pi_q31_cfg_from_f32",
     "mc_pi_f32_core", "mc_pi_f32_core_in", "mc_pi_f32_core_sat",
     # pi2d/
     "mc_pi2d_f32_certify",
     # traj/
-    "mc_traj_f32_duration", "mc_traj_f32_shift", "mc_traj_f32_stop",
+    "mc_traj_f32_shift", "mc_traj_f32_stop",
     # transforms/: the limit-mode check the f32 and q31 SVPWM share names
     # no format (it has none); a private helper of the two files
     "mc_svpwm_limit_ok",
@@ -214,6 +235,49 @@ def verdict(name, folder):
     return None
 
 
+def plugin_verdict(name):
+    """None when a plug-in function follows mc_ctrl_<law>[_q31]_<verb>, else why."""
+    words = name.split("_")
+    if len(words) < 4 or words[0] != "mc" or words[1] != "ctrl":
+        return "not mc_ctrl_<law>_<verb>"
+    if not all(re.fullmatch(r"[a-z0-9]+", w) for w in words):
+        return "not lower-case words joined by single underscores"
+    k = 4 if words[3] == "q31" else 3
+    if words[3] in KERNEL_FORMATS and words[3] != "q31":
+        return f"'{words[3]}': a float plug-in names no format (its twin: q31)"
+    if k >= len(words):
+        return "no verb after the law"
+    if words[k] not in PLUGIN_VERBS:
+        return f"'{words[k]}' is not a plug-in verb ({', '.join(PLUGIN_VERBS)})"
+    if words[k] in ("set", "get") and k + 1 >= len(words):
+        return f"{words[k]} needs the field (<verb>_<field>)"
+    if words[k] not in ("set", "get", "step") and k + 1 < len(words):
+        return f"'{words[k]}' takes no detail"
+    return None
+
+
+def scan_plugins(root):
+    """{name: (rel_path, line)} over the plug-in headers."""
+    names = {}
+    base = os.path.join(root, PLUGIN_DIR)
+    for f in sorted(os.listdir(base)) if os.path.isdir(base) else []:
+        if not (f.startswith("mc_ctrl_") and f.endswith(".h")):
+            continue
+        path = os.path.join(base, f)
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            text = fh.read()
+        for name, line in public_functions(text):
+            names.setdefault(name, (os.path.relpath(path, root), line))
+    return names
+
+
+def check_plugins(root):
+    """Findings over the plug-in headers (no allow-list: every name follows)."""
+    return [f"{rel}:{line}: {name}: {why}"
+            for name, (rel, line) in sorted(scan_plugins(root).items(), key=lambda kv: kv[1])
+            for why in [plugin_verdict(name)] if why is not None]
+
+
 def scan(root):
     """{name: (rel_path, line, folder)} over the kernel headers."""
     names = {}
@@ -257,9 +321,15 @@ def main_check(root, list_all=False):
         for name, (rel, line, folder) in sorted(names.items(), key=lambda kv: kv[1]):
             why = verdict(name, folder)
             print(f"{'ok ' if why is None else 'BAD'} {rel}:{line}: {name}" + (f": {why}" if why else ""))
+    plugins = scan_plugins(root)
+    if list_all:
+        for name, (rel, line) in sorted(plugins.items(), key=lambda kv: kv[1]):
+            why = plugin_verdict(name)
+            print(f"{'ok ' if why is None else 'BAD'} {rel}:{line}: {name}" + (f": {why}" if why else ""))
+    findings = findings + check_plugins(root)
     for f in findings:
         print(f)
-    if not names:
+    if not names or not plugins:
         print("kernel names: no public functions found (wrong source directory?)", file=sys.stderr)
         return 1
     if findings:
@@ -267,7 +337,8 @@ def main_check(root, list_all=False):
               file=sys.stderr)
         return 1
     print(f"kernel names: {len(names)} public functions, {len(names) - len(allowed_hits)} follow "
-          f"the rule, {len(allowed_hits)} known violations allowed (issue 22)")
+          f"the rule, {len(allowed_hits)} known violations allowed (issue 22); "
+          f"{len(plugins)} plug-in functions follow mc_ctrl_<law>[_q31]_<verb>")
     return 0
 
 
@@ -370,11 +441,22 @@ def self_test():
             if len(findings) != 1:
                 print(f"self-test: stale allow-list entry {stale} gave {findings}, want 1 finding")
                 failures += 1
+    # plug-ins: the names of firmware/app/ctrl pass, each bad form fails
+    for good in ("mc_ctrl_pi2d_init", "mc_ctrl_pi2d_q31_ops", "mc_ctrl_sls_set_speed_ref",
+                 "mc_ctrl_sls_q31_get_tm_f32", "mc_ctrl_sls_fast"):
+        if plugin_verdict(good) is not None:
+            print(f"self-test: plug-in name {good} refused: {plugin_verdict(good)}")
+            failures += 1
+    for bad in ("mc_ctrl_sls_table", "mc_ctrl_pi2d_f32_init", "mc_ctrl_pi2d_set",
+                "mc_ctrl_pi2d_ops_x", "mc_ctrl_pi2d", "mc_pi2d_ctrl_init", "mc_ctrl_sls_q31_flux_wb"):
+        if plugin_verdict(bad) is None:
+            print(f"self-test: bad plug-in name {bad} passed")
+            failures += 1
     if failures:
         print(f"self-test: {failures} case(s) wrong", file=sys.stderr)
         return 1
-    print(f"self-test: clean tree passes, all {len(SELF_TEST_BAD)} bad names and 2 stale "
-          "allow-list entries caught")
+    print(f"self-test: clean tree passes, all {len(SELF_TEST_BAD)} bad names, 2 stale "
+          "allow-list entries and 7 bad plug-in names caught")
     return 0
 
 

@@ -14,11 +14,15 @@ set(CMAKE_OBJCOPY      arm-none-eabi-objcopy)
 # No OS: test compilations must not try to link a hosted executable.
 set(CMAKE_TRY_COMPILE_TARGET_TYPE STATIC_LIBRARY)
 
-set(MC_CPU_FLAGS "-mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard")
-set(CMAKE_C_FLAGS_INIT   "${MC_CPU_FLAGS} -ffunction-sections -fdata-sections")
-set(CMAKE_CXX_FLAGS_INIT "${MC_CPU_FLAGS} -ffunction-sections -fdata-sections")
+# The flags themselves are in mc_m4f_flags.cmake (shared with tests/target).
+include(${CMAKE_CURRENT_LIST_DIR}/mc_m4f_flags.cmake)
+string(JOIN " " MC_CPU_FLAGS ${MC_M4F_CPU_FLAGS})
+string(JOIN " " MC_SECTION_FLAGS ${MC_M4F_SECTION_FLAGS})
+string(JOIN " " MC_LINK_FLAGS ${MC_M4F_LINK_FLAGS})
+set(CMAKE_C_FLAGS_INIT   "${MC_CPU_FLAGS} ${MC_SECTION_FLAGS}")
+set(CMAKE_CXX_FLAGS_INIT "${MC_CPU_FLAGS} ${MC_SECTION_FLAGS}")
 set(CMAKE_ASM_FLAGS_INIT "${MC_CPU_FLAGS}")
-set(CMAKE_EXE_LINKER_FLAGS_INIT "${MC_CPU_FLAGS} -Wl,--gc-sections")
+set(CMAKE_EXE_LINKER_FLAGS_INIT "${MC_CPU_FLAGS} ${MC_LINK_FLAGS}")
 
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)

@@ -4,7 +4,8 @@
 #   gives bit-identical float results on x86-64 and on the Cortex-M4F.
 # -fno-math-errno: lets sqrtf-like builtins map to instructions; kernels do not
 #   use libm anyway (own math in firmware/kernels/math).
-add_compile_options(-ffp-contract=off)
+include(${CMAKE_CURRENT_LIST_DIR}/mc_m4f_flags.cmake)
+add_compile_options(${MC_FP_FLAGS})
 
 # Warnings for firmware C code (kernels, app, MCU HAL): all of them are errors.
 # -Wdouble-promotion matters on the M4F: a stray double literal turns a

@@ -65,6 +65,19 @@ typedef struct {
     float duty_max;       /**< |duty| limit of each bridge, (0, 1] */
 } mc_ctrl_csmc_cfg_t;
 
+/** The reference of a CSMC plug-in, f32 and q31 alike (see mc_ctrl_csmc_set_ref). */
+typedef struct {
+    float phi_d_rad, dphi_d_rad_s, ddphi_d_rad_s2, dddphi_d_rad_s3, i_dd_a, di_dd_a_s;
+} mc_ctrl_csmc_ref_t;
+
+/** The shaft angle unwrapped from the encoder counts (f32 and q31 plug-ins). */
+typedef struct {
+    bool have_pos;
+    uint32_t last_count;
+    int32_t pos_counts; /**< counts moved since the first step after reset */
+    float phi0_rad;     /**< encoder angle at the first step after reset, [-pi, pi) */
+} mc_ctrl_csmc_pos_t;
+
 /** Telemetry of the last fast step. */
 typedef struct {
     float phi_rad;         /**< unwrapped shaft angle [rad] */
@@ -72,22 +85,43 @@ typedef struct {
     mc_csmc_f32_in_t in;   /**< errors handed to the law */
     mc_csmc_f32_out_t out; /**< v_d, v_q, s1, s2 */
     float v_a_v, v_b_v;    /**< winding voltages asked for [V] */
+    mc_hgo_f32_est_t est;  /**< FB_HGO: the observer's estimates this step used (else 0) */
 } mc_ctrl_csmc_tm_t;
+
+/** The measurements of one step in the law's frame (mc_ctrl_csmc_step). The
+ *  drive's fast op forms them from mc_drive_meas_t: phi from the encoder
+ *  counts, e2 = phi - phi_d in float; a loop without the drive (the paper
+ *  scenarios, sim/cli/scenarios/csmc_loop) forms them from its plant, e2
+ *  at the precision it has. */
+typedef struct {
+    float ia_a, ib_a;    /**< winding currents, phase A and B [A] */
+    float theta_e_rad;   /**< electrical angle of the dq transform, N_r phi + offset [rad] */
+    float omega_m_rad_s; /**< shaft speed (STATE feedback) [rad/s] */
+    float phi_rad;       /**< shaft angle (STATE: the model's e2) [rad] */
+    float e2_rad;        /**< position error phi - phi_d handed to the law [rad] */
+} mc_ctrl_csmc_meas_t;
 
 typedef struct {
     mc_ctrl_csmc_cfg_t cfg;
     mc_csmc_hgo_f32_t ctl; /**< the law (ctl.law) and, for FB_HGO, the observer */
-    float phi_d_rad, dphi_d_rad_s, ddphi_d_rad_s2, dddphi_d_rad_s3, i_dd_a, di_dd_a_s;
-    bool have_pos;
-    uint32_t last_count;
-    int32_t pos_counts; /**< counts moved since the first step after reset */
-    float phi0_rad;     /**< encoder angle at the first step after reset, [-pi, pi) */
+    mc_ctrl_csmc_ref_t ref;
+    mc_ctrl_csmc_pos_t pos;
     mc_ctrl_csmc_tm_t tm;
     mc_drive_ctrl_t ops;
 } mc_ctrl_csmc_t;
 
 /** Validate cfg, initialise the kernels; reference 0. On error c is not written. */
 uint32_t mc_ctrl_csmc_init(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_cfg_t *cfg);
+
+/**
+ * One step of the loop on measurements in the law's frame: dq transform,
+ * errors (STATE: from the model; HGO: from the observer), law, inverse
+ * transform; the result in c->tm (v_a_v, v_b_v: the winding voltages to
+ * apply). The drive's fast op is this step between the encoder and the
+ * bridge. Returns MC_CTRL_CSMC_ERR_STEP when the law or observer refuses an
+ * input (their state unchanged), _NULL for a NULL pointer.
+ */
+uint32_t mc_ctrl_csmc_step(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_meas_t *m);
 
 /** The plug-in table for mc_drive_attach_ctrl() (NULL for c == NULL). */
 const mc_drive_ctrl_t *mc_ctrl_csmc_ops(mc_ctrl_csmc_t *c);
@@ -103,6 +137,18 @@ const mc_drive_ctrl_t *mc_ctrl_csmc_ops(mc_ctrl_csmc_t *c);
 uint32_t mc_ctrl_csmc_set_ref(mc_ctrl_csmc_t *c, float phi_d_rad, float dphi_d_rad_s,
                               float ddphi_d_rad_s2, float dddphi_d_rad_s3, float i_dd_a,
                               float di_dd_a_s);
+
+/** The validation and store of mc_ctrl_csmc_set_ref on a reference struct
+ *  (shared with the q31 twin). */
+uint32_t mc_ctrl_csmc_set_ref_in(mc_ctrl_csmc_ref_t *r, float phi_d_rad, float dphi_d_rad_s,
+                                 float ddphi_d_rad_s2, float dddphi_d_rad_s3, float i_dd_a,
+                                 float di_dd_a_s);
+
+/** The shaft angle [rad] of this fast step from the encoder counts (exact
+ *  integer count, the shortest way between steps): the encoder's angle
+ *  wrapped to [-pi, pi) at the first step after reset (p->have_pos false),
+ *  then counted on. m->enc_cpr must be > 0. Shared with the q31 twin. */
+float mc_ctrl_csmc_step_pos(mc_ctrl_csmc_pos_t *p, const mc_drive_meas_t *m);
 
 #ifdef __cplusplus
 }

@@ -159,21 +159,21 @@ uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
         return err;
     }
     c->omega_cmd_m_rad_s = 0.0f;
-    c->table.outputs = MC_DRIVE_OUT_PWM3;
-    c->table.needs_encoder = false;
-    c->table.reset = mc_ctrl_sls_reset;
-    c->table.fast = mc_ctrl_sls_fast;
-    c->table.slow = NULL;
-    c->table.stop = NULL;
-    c->table.ctx = c;
+    c->ops.outputs = MC_DRIVE_OUT_PWM3;
+    c->ops.needs_encoder = false;
+    c->ops.reset = mc_ctrl_sls_reset;
+    c->ops.fast = mc_ctrl_sls_fast;
+    c->ops.slow = NULL;
+    c->ops.stop = NULL;
+    c->ops.ctx = c;
     c->tm.handovers = 0u;
     c->tm.fallbacks = 0u;
     return mc_ctrl_sls_reset(c);
 }
 
-const mc_drive_ctrl_t *mc_ctrl_sls_table(mc_ctrl_sls_t *c)
+const mc_drive_ctrl_t *mc_ctrl_sls_ops(mc_ctrl_sls_t *c)
 {
-    return (c == NULL) ? NULL : &c->table;
+    return (c == NULL) ? NULL : &c->ops;
 }
 
 uint32_t mc_ctrl_sls_set_speed_ref(mc_ctrl_sls_t *c, float omega_m_rad_s)

@@ -215,7 +215,7 @@ typedef struct {
     float al_u, al_v;       /**< last point, relative to the first */
     float al_n, al_su, al_sv, al_suu, al_svv, al_suv, al_sz, al_suz, al_svz;
     mc_ctrl_sls_tm_t tm;
-    mc_drive_ctrl_t table; /**< the drive's plug-in table, bound to this instance */
+    mc_drive_ctrl_t ops; /**< the drive's plug-in table, bound to this instance */
 } mc_ctrl_sls_t;
 
 /** Validate cfg and initialise. Returns MC_CTRL_SLS_ERR_* bits; on error c
@@ -223,7 +223,7 @@ typedef struct {
 uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg);
 
 /** The plug-in table for mc_drive_attach_ctrl() (PWM3, no encoder needed). */
-const mc_drive_ctrl_t *mc_ctrl_sls_table(mc_ctrl_sls_t *c);
+const mc_drive_ctrl_t *mc_ctrl_sls_ops(mc_ctrl_sls_t *c);
 
 /** Set the speed reference [rad/s, mechanical]; slewed inside. Returns 0 or
  *  MC_CTRL_SLS_ERR_REF (NaN/inf, |ref| > speed_max_rad_s; previous kept). */

@@ -220,21 +220,21 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
     c->lock_timeout_steps = slsq_steps(f->if_lock_timeout_s, f->dt_s);
     c->dead_on = f->dead_time_s > 0.0f;
     c->omega_cmd = 0;
-    c->table.outputs = MC_DRIVE_OUT_PWM3;
-    c->table.needs_encoder = false;
-    c->table.reset = mc_ctrl_sls_q31_reset;
-    c->table.fast = mc_ctrl_sls_q31_fast;
-    c->table.slow = NULL;
-    c->table.stop = NULL;
-    c->table.ctx = c;
+    c->ops.outputs = MC_DRIVE_OUT_PWM3;
+    c->ops.needs_encoder = false;
+    c->ops.reset = mc_ctrl_sls_q31_reset;
+    c->ops.fast = mc_ctrl_sls_q31_fast;
+    c->ops.slow = NULL;
+    c->ops.stop = NULL;
+    c->ops.ctx = c;
     c->tm.handovers = 0u;
     c->tm.fallbacks = 0u;
     return mc_ctrl_sls_q31_reset(c);
 }
 
-const mc_drive_ctrl_t *mc_ctrl_sls_q31_table(mc_ctrl_sls_q31_t *c)
+const mc_drive_ctrl_t *mc_ctrl_sls_q31_ops(mc_ctrl_sls_q31_t *c)
 {
-    return (c == NULL) ? NULL : &c->table;
+    return (c == NULL) ? NULL : &c->ops;
 }
 
 uint32_t mc_ctrl_sls_q31_set_speed_ref(mc_ctrl_sls_q31_t *c, float omega_m_rad_s)
@@ -571,7 +571,7 @@ uint32_t mc_ctrl_sls_q31_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_
     return err;
 }
 
-void mc_ctrl_sls_q31_tm_to_f32(const mc_ctrl_sls_q31_t *c, mc_ctrl_sls_tm_t *p_tm)
+void mc_ctrl_sls_q31_get_tm_f32(const mc_ctrl_sls_q31_t *c, mc_ctrl_sls_tm_t *p_tm)
 {
     float ib;
     float vb;
@@ -602,7 +602,7 @@ void mc_ctrl_sls_q31_tm_to_f32(const mc_ctrl_sls_q31_t *c, mc_ctrl_sls_tm_t *p_t
     p_tm->fallbacks = c->tm.fallbacks;
 }
 
-void mc_ctrl_sls_q31_flux_wb(const mc_ctrl_sls_q31_t *c, float *p_alpha_wb, float *p_beta_wb)
+void mc_ctrl_sls_q31_get_flux_wb(const mc_ctrl_sls_q31_t *c, float *p_alpha_wb, float *p_beta_wb)
 {
     if ((c == NULL) || (p_alpha_wb == NULL) || (p_beta_wb == NULL)) {
         return;

@@ -36,7 +36,7 @@
  * refuses it with MC_CTRL_SLS_ERR_TIMING.
  *
  * Telemetry is kept in per unit (mc_ctrl_sls_q31_tm_t);
- * mc_ctrl_sls_q31_tm_to_f32 converts it to the f32 plug-in's telemetry
+ * mc_ctrl_sls_q31_get_tm_f32 converts it to the f32 plug-in's telemetry
  * struct for logging (not in the fast step).
  *
  * Errors as the f32 plug-in: a non-finite measurement returns
@@ -136,7 +136,7 @@ typedef struct {
     uint32_t speed_count;
     uint32_t obs_err; /**< observer init error, if any */
     mc_ctrl_sls_q31_tm_t tm;
-    mc_drive_ctrl_t table; /**< the drive's plug-in table, bound to this instance */
+    mc_drive_ctrl_t ops; /**< the drive's plug-in table, bound to this instance */
 } mc_ctrl_sls_q31_t;
 
 /** Validate cfg (the f32 plug-in's rules and bits, plus _SCALE) and
@@ -144,7 +144,7 @@ typedef struct {
 uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t *cfg);
 
 /** The plug-in table for mc_drive_attach_ctrl() (PWM3, no encoder needed). */
-const mc_drive_ctrl_t *mc_ctrl_sls_q31_table(mc_ctrl_sls_q31_t *c);
+const mc_drive_ctrl_t *mc_ctrl_sls_q31_ops(mc_ctrl_sls_q31_t *c);
 
 /** Set the speed reference [rad/s, mechanical]; slewed inside. Returns 0 or
  *  MC_CTRL_SLS_ERR_REF (NaN/inf, |ref| > speed_max_rad_s; previous kept). */
@@ -155,10 +155,10 @@ uint32_t mc_ctrl_sls_q31_reset(void *ctx);
 uint32_t mc_ctrl_sls_q31_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out);
 
 /** The telemetry in engineering units (the f32 plug-in's struct). */
-void mc_ctrl_sls_q31_tm_to_f32(const mc_ctrl_sls_q31_t *c, mc_ctrl_sls_tm_t *p_tm);
+void mc_ctrl_sls_q31_get_tm_f32(const mc_ctrl_sls_q31_t *c, mc_ctrl_sls_tm_t *p_tm);
 
 /** The observer's flux estimate [Wb] (telemetry). */
-void mc_ctrl_sls_q31_flux_wb(const mc_ctrl_sls_q31_t *c, float *p_alpha_wb, float *p_beta_wb);
+void mc_ctrl_sls_q31_get_flux_wb(const mc_ctrl_sls_q31_t *c, float *p_alpha_wb, float *p_beta_wb);
 
 #ifdef __cplusplus
 }

@@ -28,7 +28,7 @@
  * small difference of two large numbers, so the rounding of q_c (ulp of
  * b y, accumulated over ~1/(a dt) steps by the slow pole) swamps theta_f;
  * with theta_f as the state, y enters only through its increment. q_c is
- * still available (mc_ddiff_f32_q(st) = theta_f - b y) for telemetry.
+ * still available (mc_ddiff_f32_get_q(st) = theta_f - b y) for telemetry.
  *
  * The filter needs no exponential (no libm), is stable for every a dt > 0,
  * and its frequency response is exactly that of H(s) at the pre-warped
@@ -120,7 +120,7 @@ static inline void mc_ddiff_f32_commit(mc_ddiff_f32_t *st, float y, float th)
 }
 
 /** q_c = theta_f - b y of the last step (q0 after init/reset). */
-static inline float mc_ddiff_f32_q(const mc_ddiff_f32_t *st)
+static inline float mc_ddiff_f32_get_q(const mc_ddiff_f32_t *st)
 {
     return st->out - (st->b * st->y_prev);
 }

@@ -259,12 +259,12 @@ uint32_t mc_iiobs_f32_step(mc_iiobs_f32_t *st, float theta_m_rad, float tau_nm)
     return raised;
 }
 
-float mc_iiobs_f32_omega_m_rad_s(const mc_iiobs_f32_t *st)
+float mc_iiobs_f32_get_omega_m_rad_s(const mc_iiobs_f32_t *st)
 {
     return st->eta1 / st->cfg.t_unit_s;
 }
 
-float mc_iiobs_f32_tau_load_nm(const mc_iiobs_f32_t *st)
+float mc_iiobs_f32_get_tau_load_nm(const mc_iiobs_f32_t *st)
 {
     return st->eta2 / st->tau_s_per_nm;
 }

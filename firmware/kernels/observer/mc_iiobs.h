@@ -126,10 +126,10 @@ uint32_t mc_iiobs_f32_reset(mc_iiobs_f32_t *st, float theta_m_rad, float omega_m
 uint32_t mc_iiobs_f32_step(mc_iiobs_f32_t *st, float theta_m_rad, float tau_nm);
 
 /** Speed estimate [rad/s]. */
-float mc_iiobs_f32_omega_m_rad_s(const mc_iiobs_f32_t *st);
+float mc_iiobs_f32_get_omega_m_rad_s(const mc_iiobs_f32_t *st);
 
 /** Load-torque estimate [N m] (opposing positive rotation). */
-float mc_iiobs_f32_tau_load_nm(const mc_iiobs_f32_t *st);
+float mc_iiobs_f32_get_tau_load_nm(const mc_iiobs_f32_t *st);
 
 #ifdef __cplusplus
 }

@@ -331,7 +331,7 @@ uint32_t mc_traj_f32_step(mc_traj_f32_t *t, mc_traj_f32_out_t *out)
     return MC_TRAJ_ERR_NONE;
 }
 
-float mc_traj_f32_duration(const mc_traj_f32_t *t)
+float mc_traj_f32_get_duration_s(const mc_traj_f32_t *t)
 {
     return (t == NULL) ? 0.0f : t->t_s[MC_TRAJ_SEGMENTS];
 }

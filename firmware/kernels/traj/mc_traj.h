@@ -127,7 +127,7 @@ uint32_t mc_traj_f32_step(mc_traj_f32_t *t, mc_traj_f32_out_t *out);
 void mc_traj_f32_eval(const mc_traj_f32_t *t, float t_s, mc_traj_f32_out_t *out);
 
 /** Duration of the present plan [s] (0 at rest). */
-float mc_traj_f32_duration(const mc_traj_f32_t *t);
+float mc_traj_f32_get_duration_s(const mc_traj_f32_t *t);
 
 /** Move the frame: every stored position minus dx_rad (e.g. whole turns). */
 void mc_traj_f32_shift(mc_traj_f32_t *t, float dx_rad);

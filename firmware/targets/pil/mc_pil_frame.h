@@ -26,7 +26,7 @@
  * (semihosting).
  *
  * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
- * and parse a complete frame. Built for the target (board_pil.c) and for the
+ * and parse a complete frame. Built for the target (hal/pil/mc_hal_pil.c) and for the
  * host (hal/host PilLink).
  */
 #ifndef MC_PIL_FRAME_H

@@ -6,7 +6,7 @@
  * one board file supplies these functions:
  *   board_stm32f405.c  the drive board: hal/stm32f405 drivers (TIM1 PWM, ADC
  *                      injected conversions, encoder timer, bxCAN, tick);
- *   board_pil.c        processor-in-the-loop: the same HAL contract served
+ *   hal/pil/mc_hal_pil.c  processor-in-the-loop: the same HAL contract served
  *                      over USART1 by the host simulator (QEMU netduinoplus2).
  *
  * Interrupt structure (both boards): the fast loop runs in ADC_IRQHandler

@@ -7,6 +7,7 @@
 
 #include "csmc/mc_csvc.h"
 #include "csmc/mc_stepper_dq.h"
+#include "mc_ctrl_csmc.h"
 #include "mcsim/integrator.hpp"
 #include "mcsim/stepper_2ph.hpp"
 
@@ -118,21 +119,20 @@ LoopResult run_loop(const LoopOptions& o) {
     throw std::runtime_error("bad loop timing");
   }
 
-  mc_csmc_f32_cfg_t cc = o.ctrl;
-  cc.dt_s = static_cast<float>(o.dt_s);
-  mc_csmc_f32_t ctrl;
-  const uint32_t ce = mc_csmc_f32_init(&ctrl, &cc);
-  if (ce != MC_CSMC_ERR_NONE) {
+  // The loop is the drive's plug-in (firmware/app/ctrl/mc_ctrl_csmc), its
+  // step called on the plant's measurements (the drive and its encoder
+  // are left out: the paper's loop measures exactly).
+  mc_ctrl_csmc_cfg_t cc{};
+  cc.law = o.ctrl;
+  cc.law.dt_s = static_cast<float>(o.dt_s);
+  cc.feedback = (o.fb == Feedback::kHgo) ? MC_CTRL_CSMC_FB_HGO : MC_CTRL_CSMC_FB_STATE;
+  cc.hgo = o.hgo;
+  cc.hgo.dt_s = cc.law.dt_s;
+  cc.duty_max = 1.0f;  // unused: no bridge here
+  mc_ctrl_csmc_t ctrl{};
+  const uint32_t ce = mc_ctrl_csmc_init(&ctrl, &cc);
+  if (ce != MC_CTRL_CSMC_ERR_NONE) {
     throw std::runtime_error("csmc config rejected, error bits " + std::to_string(ce));
-  }
-  mc_hgo_f32_t hgo{};
-  if (o.fb == Feedback::kHgo) {
-    mc_hgo_f32_cfg_t hc = o.hgo;
-    hc.dt_s = static_cast<float>(o.dt_s);
-    const uint32_t he = mc_hgo_f32_init(&hgo, &hc);
-    if (he != MC_HGO_ERR_NONE) {
-      throw std::runtime_error("hgo config rejected, error bits " + std::to_string(he));
-    }
   }
   const uint32_t nr = static_cast<uint32_t>(o.plant.rotor_teeth);
 
@@ -141,52 +141,39 @@ LoopResult run_loop(const LoopOptions& o) {
   const size_t every = std::max<size_t>(1, o.record_every);
   res.trace.reserve(static_cast<size_t>(n) / every + 2);
   Stepper2Ph::State x = Stepper2Ph::State::Zero();
+  const mc_ctrl_csmc_tm_t& tm = ctrl.tm;
   for (long k = 0; k <= n; ++k) {
     const double t = static_cast<double>(k) * o.dt_s;
     const Ref r = reference(o, t);
-    // Measurements at t_k (float, as the firmware sees them).
-    const float ia = static_cast<float>(x(Stepper2Ph::kIa));
-    const float ib = static_cast<float>(x(Stepper2Ph::kIb));
-    const float w = static_cast<float>(x(Stepper2Ph::kOmegaM));
-    const float th = static_cast<float>(x(Stepper2Ph::kThetaM));
-    float sin_e = 0.0f, cos_e = 0.0f;
-    mc_sincos_f32(mc_stepper_theta_e_f32(th, nr), &sin_e, &cos_e);
-    float id = 0.0f, iq = 0.0f;
-    mc_stepper_ab_to_dq_sc_f32(ia, ib, sin_e, cos_e, &id, &iq);
-
-    mc_csmc_f32_in_t in{};
-    mc_hgo_f32_est_t est{0.0f, 0.0f, 0.0f};
-    // e2 formed in double and rounded once (a small number, full precision).
-    const float e2 = static_cast<float>(x(Stepper2Ph::kThetaM) - r.phi);
-    if (mc_csmc_f32_err_from_state(&cc.model, id, iq, w, th, 0.0f, static_cast<float>(r.phi),
-                                   static_cast<float>(r.dphi), static_cast<float>(r.ddphi),
-                                   &in) != MC_CSMC_ERR_NONE) {
-      throw std::runtime_error("model for the state errors rejected");
+    if (mc_ctrl_csmc_set_ref(&ctrl, static_cast<float>(r.phi), static_cast<float>(r.dphi),
+                             static_cast<float>(r.ddphi), static_cast<float>(r.dddphi), 0.0f,
+                             0.0f) != MC_CTRL_CSMC_ERR_NONE) {
+      throw std::runtime_error("reference refused");
     }
-    in.e2_rad = e2;
-    in.dddphi_d_rad_s3 = static_cast<float>(r.dddphi);
-    if (o.fb == Feedback::kHgo) {
-      mc_hgo_f32_step(&hgo, e2, &est);
-      in.de2_rad_s = est.z2;
-      in.dde2_rad_s2 = est.z3;
+    // Measurements at t_k (float, as the firmware sees them); e2 formed in
+    // double and rounded once (a small number, full precision).
+    mc_ctrl_csmc_meas_t m{};
+    m.ia_a = static_cast<float>(x(Stepper2Ph::kIa));
+    m.ib_a = static_cast<float>(x(Stepper2Ph::kIb));
+    m.omega_m_rad_s = static_cast<float>(x(Stepper2Ph::kOmegaM));
+    m.phi_rad = static_cast<float>(x(Stepper2Ph::kThetaM));
+    m.theta_e_rad = mc_stepper_theta_e_f32(m.phi_rad, nr);
+    m.e2_rad = static_cast<float>(x(Stepper2Ph::kThetaM) - r.phi);
+    if (mc_ctrl_csmc_step(&ctrl, &m) != MC_CTRL_CSMC_ERR_NONE) {
+      throw std::runtime_error("csmc step refused an input");
     }
-    mc_csmc_f32_out_t out{};
-    mc_csmc_f32_step(&ctrl, &in, &out);
-    if (ctrl.flags != MC_CSMC_ERR_NONE) throw std::runtime_error("csmc step refused an input");
 
     if (k % static_cast<long>(every) == 0 || k == n) {
-      res.trace.push_back(Sample{t, in.e1_a, in.e2_rad, id, iq, w, x(Stepper2Ph::kThetaM),
-                                 out.v_d_v, out.v_q_v, est.z1, est.z2, est.z3, out.s1_a,
-                                 out.s2_rad_s2, r.phi});
+      res.trace.push_back(Sample{t, tm.in.e1_a, tm.in.e2_rad, tm.i_d_a, tm.i_q_a, m.omega_m_rad_s,
+                                 x(Stepper2Ph::kThetaM), tm.out.v_d_v, tm.out.v_q_v, tm.est.z1,
+                                 tm.est.z2, tm.est.z3, tm.out.s1_a, tm.out.s2_rad_s2, r.phi});
     }
     if (k == n) {
       res.t_end = t;
       res.e2_end = x(Stepper2Ph::kThetaM) - r.phi;
       break;
     }
-    float va = 0.0f, vb = 0.0f;
-    mc_stepper_dq_to_ab_sc_f32(out.v_d_v, out.v_q_v, sin_e, cos_e, &va, &vb);
-    const Stepper2Ph::Input u(static_cast<double>(va), static_cast<double>(vb));
+    const Stepper2Ph::Input u(static_cast<double>(tm.v_a_v), static_cast<double>(tm.v_b_v));
     if (advance_zoh(plant, u, t, o.dt_s, o.substeps, &x) != Status::kOk) {
       throw std::runtime_error("integration failed");
     }

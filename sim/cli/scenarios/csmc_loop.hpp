@@ -1,13 +1,15 @@
 // The CSMC position loop of paper 001 (Seshagiri and Khalil) closed around
 // the simulator's two-phase stepper (mcsim::Stepper2Ph, phase a/b model),
-// with the firmware kernels (firmware/kernels/csmc) as the controller:
+// with the drive's CSMC plug-in (firmware/app/ctrl/mc_ctrl_csmc, the one
+// composition of the loop) as the controller, its step called on the
+// plant's measurements (no drive, no encoder, no bridge):
 //
 //   every control period T (sampled data, zero-order hold):
-//     measure i_a, i_b, w, phi at t_k (exact, no quantisation)
-//     (i_d, i_q) = dq transform at N_r phi        (mc_stepper_ab_to_dq_f32)
-//     e from the state (state feedback) or from the HGO (output feedback)
-//     (v_d, v_q) = CSMC / ideal SMC law            (mc_csmc_f32_step)
-//     (v_a, v_b) = inverse transform at N_r phi_k, held over [t_k, t_k + T]
+//     measure i_a, i_b, w, phi at t_k (exact, no quantisation); e2 in double
+//     mc_ctrl_csmc_step: dq transform at N_r phi, e from the state (state
+//       feedback) or from the HGO (output feedback), CSMC / ideal SMC law,
+//       inverse transform
+//     (v_a, v_b) held over [t_k, t_k + T]
 //     RK4 with n_sub sub-steps over the period
 //
 // The paper's figures 2, 3, 5 are continuous-time; a small T (default

@@ -153,10 +153,10 @@ void run_position(RunContext& ctx) {
     rig.dq_volts(&vd, &vq);
     if (k == n) break;
     rig.step();
-    if (started && t_pred == 0 && !stream) t_pred = mc_traj_f32_duration(&pc.traj);
+    if (started && t_pred == 0 && !stream) t_pred = mc_traj_f32_get_duration_s(&pc.traj);
     if (replanned && t_pred > 0 && pc.traj.k == 1 && !replan_seen) {
       // the re-plan took effect this step: its end, from the move's start
-      t_pred = (t - t0) + mc_traj_f32_duration(&pc.traj);
+      t_pred = (t - t0) + mc_traj_f32_get_duration_s(&pc.traj);
       replan_seen = true;
     }
     // the plug-in's multi-turn measurement (exact: turns and count)

@@ -494,7 +494,7 @@ void run_ii(RunContext& ctx) {
     th_prev = th;
     dd += bw * dt * (dth / dt - dd);
     const double w = sil.board().state()(2);
-    const double wi = mc_iiobs_f32_omega_m_rad_s(&ii), li = mc_iiobs_f32_tau_load_nm(&ii);
+    const double wi = mc_iiobs_f32_get_omega_m_rad_s(&ii), li = mc_iiobs_f32_get_tau_load_nm(&ii);
     tv.push_back(t);
     ew_ii.push_back(wi - w);
     ew_pll.push_back(wp - w);

@@ -194,10 +194,9 @@ Sil::Sil(const Machine& m, const SilOptions& o, const mc_ctrl_sls_cfg_t& cfg, Lo
       throw std::invalid_argument("q31 sensorless controller rejected its configuration: bits " +
                                   std::to_string(qerr) + " (decimal)");
     }
-    mc_ctrl_sls_q31_tm_to_f32(&ctrl_q31_, &tm_q31_);
+    mc_ctrl_sls_q31_get_tm_f32(&ctrl_q31_, &tm_q31_);
   }
-  const mc_drive_ctrl_t* table =
-      o.q31 ? mc_ctrl_sls_q31_table(&ctrl_q31_) : mc_ctrl_sls_table(&ctrl_);
+  const mc_drive_ctrl_t* table = o.q31 ? mc_ctrl_sls_q31_ops(&ctrl_q31_) : mc_ctrl_sls_ops(&ctrl_);
   if (mc_drive_attach_ctrl(&drive_, table) != 0) {
     throw std::runtime_error("drive refused the sensorless control law");
   }
@@ -213,7 +212,7 @@ void Sil::step() {
         theta_e_sampled_ = std::remainder(m_.motor.pole_pairs * board_->state()(3), 2 * kPi);
       },
       [this] {
-        if (o_.q31) mc_ctrl_sls_q31_tm_to_f32(&ctrl_q31_, &tm_q31_);
+        if (o_.q31) mc_ctrl_sls_q31_get_tm_f32(&ctrl_q31_, &tm_q31_);
       });
 }
 
@@ -225,7 +224,7 @@ uint32_t Sil::set_speed_ref(float omega_m_rad_s) {
 void Sil::flux_hat_wb(double* p_alpha, double* p_beta) const {
   if (o_.q31) {
     float a = 0.0f, b = 0.0f;
-    mc_ctrl_sls_q31_flux_wb(&ctrl_q31_, &a, &b);
+    mc_ctrl_sls_q31_get_flux_wb(&ctrl_q31_, &a, &b);
     *p_alpha = a;
     *p_beta = b;
   } else {

@@ -18,10 +18,11 @@
 extern "C" {
 #include "csmc/mc_stepper_dq.h"
 #include "math/mc_math.h"
+#include "mc_ctrl_csmc_q31.h"
+#include "mc_ctrl_pi2d_q31.h"
 #include "mc_drive.h"
+#include "mc_pu.h"
 #include "transforms/mc_svpwm.h"
-#include "transforms/mc_svpwm_q31.h"
-#include "transforms/mc_transforms.h"
 }
 
 namespace mcsim {
@@ -29,17 +30,6 @@ namespace q31loop {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kQ31 = 2147483648.0;
-
-q31_t to_q(double v, double base) {
-  const double x = std::nearbyint(v / base * kQ31);
-  if (x >= kQ31 - 1.0) return MC_Q31_MAX;
-  if (x <= -kQ31) return MC_Q31_MIN;
-  return static_cast<q31_t>(x);
-}
-double from_q(q31_t q, double base) {
-  return static_cast<double>(q) / kQ31 * base;
-}
 }  // namespace
 
 // ------------------------------------------------------------ pi2d paper
@@ -82,19 +72,19 @@ long run_paper_q31(const pi2d::PaperOptions& o,
     const pi2d::SpeedRef r = pi2d::paper_profile(t);
     const double off = 2.0 * kPi * std::floor(r.th / (2.0 * kPi));
     mc_pi2d_q31_in_t in{};
-    in.id = to_q(x(0), b.i_base_a);
-    in.iq = to_q(x(1), b.i_base_a);
-    in.theta_m = to_q(x(3) - off, b.theta_base_rad);
-    in.theta_ref = to_q(r.th - off, b.theta_base_rad);
-    in.omega_ref = to_q(r.w, b.omega_base_rad_s);
-    in.alpha_ref = to_q(r.a, b.alpha_base_rad_s2);
-    in.jerk_ref = to_q(r.j, b.jerk_base_rad_s3);
+    in.id = mc_pu_to_q31(x(0), b.i_base_a);
+    in.iq = mc_pu_to_q31(x(1), b.i_base_a);
+    in.theta_m = mc_pu_to_q31(x(3) - off, b.theta_base_rad);
+    in.theta_ref = mc_pu_to_q31(r.th - off, b.theta_base_rad);
+    in.omega_ref = mc_pu_to_q31(r.w, b.omega_base_rad_s);
+    in.alpha_ref = mc_pu_to_q31(r.a, b.alpha_base_rad_s2);
+    in.jerk_ref = mc_pu_to_q31(r.j, b.jerk_base_rad_s3);
     mc_pi2d_q31_out_t out{};
     mc_pi2d_q31_step(&law, &in, &out);
-    const double u1 = from_q(out.vd, b.v_base_v), u2 = from_q(out.vq, b.v_base_v);
-    row(pi2d::PaperSample{t, x(0), x(1), x(2), x(3), r.w, r.th, from_q(out.iq_ref, b.i_base_a), u1,
-                          u2, from_q(out.nu, b.nu_base_nm),
-                          from_q(out.theta_f, b.thetaf_base_rad)});
+    const double u1 = mc_pu_from_q31(out.vd, b.v_base_v), u2 = mc_pu_from_q31(out.vq, b.v_base_v);
+    row(pi2d::PaperSample{
+        t, x(0), x(1), x(2), x(3), r.w, r.th, mc_pu_from_q31(out.iq_ref, b.i_base_a), u1, u2,
+        mc_pu_from_q31(out.nu, b.nu_base_nm), mc_pu_from_q31(out.theta_f, b.thetaf_base_rad)});
     if (k == n) break;
     const PmsmNormalised::Input u = delay.push(PmsmNormalised::Input(u1, u2));
     advance_zoh(plant, u, t, T, o.substeps, &x);
@@ -118,82 +108,6 @@ mc_pi2d_q31_bases_t motor_pi2d_bases(const pi2d::MotorOptions& o) {
 }
 
 namespace {
-
-// The q31 PI^2D law as a drive plug-in (the f32 one is
-// firmware/app/mc_ctrl_pi2d): currents and angle in q31 from the drive's
-// measurements, Clarke/Park/inverse Park/SVPWM in q31, the law in q31.
-// Position bookkeeping (unwrapping, reference integration) as the f32
-// plug-in, in double: it is the caller's, not the kernel's.
-struct CtrlPi2dQ31 {
-  mc_pi2d_q31_t law{};
-  mc_pi2d_q31_bases_t b{};
-  double dt = 0.0, vbus_base = 0.0;
-  double omega_ref = 0.0, alpha_ref = 0.0;
-  double theta_ref = 0.0, theta_rel = 0.0, theta_prev = 0.0;
-  bool have_prev = false;
-  double iq_ref = 0.0, vd = 0.0, vq = 0.0, nu = 0.0, theta_f = 0.0;
-  mc_drive_ctrl_t ops{};
-};
-
-uint32_t q31_ctrl_reset(void* ctx) {
-  auto* c = static_cast<CtrlPi2dQ31*>(ctx);
-  mc_pi2d_q31_reset(&c->law, 0, 0);
-  c->theta_ref = 0.0;
-  c->theta_rel = 0.0;
-  c->have_prev = false;
-  return 0u;
-}
-
-uint32_t q31_ctrl_fast(void* ctx, const mc_drive_meas_t* m, mc_drive_out_t* out) {
-  auto* c = static_cast<CtrlPi2dQ31*>(ctx);
-  if (!m->have_encoder || !(m->vbus_v > 0.0f)) return 1u;
-  if (c->have_prev) {
-    c->theta_rel += std::remainder(static_cast<double>(m->theta_m_rad) - c->theta_prev, 2.0 * kPi);
-  } else {
-    c->theta_rel = 0.0;
-    c->have_prev = true;
-  }
-  c->theta_prev = m->theta_m_rad;
-  const mc_pi2d_q31_bases_t& b = c->b;
-  q31_t ia = to_q(m->ia_a, b.i_base_a), ib = to_q(m->ib_a, b.i_base_a);
-  q31_t al, be, s, co, id, iq;
-  mc_clarke_q31(ia, ib, &al, &be);
-  mc_sincos_q31(mc_q31_angle_from_rad_f32(m->theta_e_rad), &s, &co);
-  mc_park_q31(al, be, s, co, &id, &iq);
-  mc_pi2d_q31_in_t in{};
-  in.id = id;
-  in.iq = iq;
-  in.theta_m = to_q(c->theta_rel, b.theta_base_rad);
-  in.theta_ref = to_q(c->theta_ref, b.theta_base_rad);
-  in.omega_ref = to_q(c->omega_ref, b.omega_base_rad_s);
-  in.alpha_ref = to_q(c->alpha_ref, b.alpha_base_rad_s2);
-  mc_pi2d_q31_out_t o{};
-  mc_pi2d_q31_step(&c->law, &in, &o);
-  q31_t va, vb, da, db, dc;
-  mc_inv_park_q31(o.vd, o.vq, s, co, &va, &vb);
-  (void)mc_svpwm_q31(va, vb, to_q(m->vbus_v, b.v_base_v), MC_SVPWM_LIMIT_CIRCLE, &da, &db, &dc);
-  out->duty_a = static_cast<float>(from_q(da, 1.0));
-  out->duty_b = static_cast<float>(from_q(db, 1.0));
-  out->duty_c = static_cast<float>(from_q(dc, 1.0));
-  out->duty2_a = 0.0f;
-  out->duty2_b = 0.0f;
-  c->iq_ref = from_q(o.iq_ref, b.i_base_a);
-  c->vd = from_q(o.vd, b.v_base_v);
-  c->vq = from_q(o.vq, b.v_base_v);
-  c->nu = from_q(o.nu, b.nu_base_nm);
-  c->theta_f = from_q(o.theta_f, b.thetaf_base_rad);
-  // reference one period ahead (exact for constant alpha), whole turns off
-  c->theta_ref += c->omega_ref * c->dt + 0.5 * c->alpha_ref * c->dt * c->dt;
-  c->omega_ref += c->alpha_ref * c->dt;
-  if (c->theta_ref >= 2.0 * kPi) {
-    c->theta_ref -= 2.0 * kPi;
-    c->theta_rel -= 2.0 * kPi;
-  } else if (c->theta_ref < 0.0) {
-    c->theta_ref += 2.0 * kPi;
-    c->theta_rel += 2.0 * kPi;
-  }
-  return 0u;
-}
 
 constexpr double kRpm = 2.0 * kPi / 60.0;
 
@@ -224,21 +138,20 @@ pi2d::MotorMetrics run_motor_q31(const pi2d::MotorOptions& o, double duration_s,
   if (mc_drive_init(&d, &dc, bd.hal()) != MC_DRIVE_CFG_OK) {
     throw std::invalid_argument("drive configuration rejected");
   }
-  CtrlPi2dQ31 ctrl;
-  mc_pi2d_q31_cfg_t cc{};
-  cc.f = pi2d::motor_pi2d_cfg(o);
-  cc.base = motor_pi2d_bases(o);
-  const uint32_t lerr = mc_pi2d_q31_init(&ctrl.law, &cc);
+  // The q31 PI^2D plug-in (firmware/app/ctrl/mc_ctrl_pi2d_q31), attached
+  // as the f32 one is in pi2d::run_motor.
+  mc_ctrl_pi2d_q31_t ctrl{};
+  mc_ctrl_pi2d_q31_cfg_t cc{};
+  cc.law.f = pi2d::motor_pi2d_cfg(o);
+  cc.law.base = motor_pi2d_bases(o);
+  cc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
+  cc.dt_s = 1.0 / o.pwm_hz;
+  const uint32_t lerr = mc_ctrl_pi2d_q31_init(&ctrl, &cc);
   if (lerr != 0u) throw std::invalid_argument("q31 PI2D rejected: " + std::to_string(lerr));
-  ctrl.b = cc.base;
-  ctrl.dt = 1.0 / o.pwm_hz;
-  ctrl.ops.outputs = MC_DRIVE_OUT_PWM3;
-  ctrl.ops.needs_encoder = true;
-  ctrl.ops.reset = q31_ctrl_reset;
-  ctrl.ops.fast = q31_ctrl_fast;
-  ctrl.ops.slow = nullptr;
-  ctrl.ops.ctx = &ctrl;
-  if (mc_drive_attach_ctrl(&d, &ctrl.ops) != 0) throw std::runtime_error("plug-in refused");
+  const mc_pi2d_q31_bases_t& b = cc.law.base;
+  if (mc_drive_attach_ctrl(&d, mc_ctrl_pi2d_q31_ops(&ctrl)) != 0) {
+    throw std::runtime_error("plug-in refused");
+  }
   if (mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL) != 0) throw std::runtime_error("CTRL mode");
 
   const double T = 1.0 / o.pwm_hz;
@@ -254,8 +167,9 @@ pi2d::MotorMetrics run_motor_q31(const pi2d::MotorOptions& o, double duration_s,
     (void)hal_host::sil_period(
         bd, d,
         [&] {
-          ctrl.omega_ref = static_cast<float>(r.w);  // as the f32 plug-in's float reference
-          ctrl.alpha_ref = static_cast<float>(r.a);
+          // float references, as the f32 plug-in's
+          (void)mc_ctrl_pi2d_q31_set_ref(&ctrl, static_cast<float>(r.w), static_cast<float>(r.a),
+                                         0.0f, 0.0f);
         },
         [&] {
           double id, iq;
@@ -275,11 +189,11 @@ pi2d::MotorMetrics run_motor_q31(const pi2d::MotorOptions& o, double duration_s,
           s.omega_ref = r.w;
           s.id = id;
           s.iq = iq;
-          s.iq_ref = ctrl.iq_ref;
-          s.vd = ctrl.vd;
-          s.vq = ctrl.vq;
-          s.nu = ctrl.nu;
-          s.theta_f = ctrl.theta_f;
+          s.iq_ref = mc_pu_from_q31(ctrl.tm.iq_ref, b.i_base_a);
+          s.vd = mc_pu_from_q31(ctrl.tm.vd, b.v_base_v);
+          s.vq = mc_pu_from_q31(ctrl.tm.vq, b.v_base_v);
+          s.nu = mc_pu_from_q31(ctrl.tm.nu, b.nu_base_nm);
+          s.theta_f = mc_pu_from_q31(ctrl.tm.theta_f, b.thetaf_base_rad);
           s.load = (t >= o.t_load_s) ? o.load_nm : 0.0;
           row(s);
         });
@@ -318,14 +232,21 @@ csmc::LoopResult run_csmc_q31(const csmc::LoopOptions& o) {
   if (o.fb != csmc::Feedback::kState || o.ref != csmc::RefKind::kSteps) {
     throw std::runtime_error("run_csmc_q31: state feedback with step references only");
   }
-  mc_csmc_q31_cfg_t cc{};
-  cc.f = o.ctrl;
-  cc.f.dt_s = static_cast<float>(o.dt_s);
-  cc.base = paper_csmc_bases();
-  const mc_csmc_q31_bases_t& b = cc.base;
-  mc_csmc_q31_t ctrl{};
-  const uint32_t ce = mc_csmc_q31_init(&ctrl, &cc);
-  if (ce != MC_CSMC_ERR_NONE) throw std::runtime_error("q31 csmc rejected: " + std::to_string(ce));
+  // The q31 plug-in (firmware/app/ctrl/mc_ctrl_csmc_q31), its step called
+  // on the plant's measurements as csmc::run_loop calls the f32 one.
+  mc_ctrl_csmc_q31_cfg_t cc{};
+  cc.law.f = o.ctrl;
+  cc.law.f.dt_s = static_cast<float>(o.dt_s);
+  cc.law.base = paper_csmc_bases();
+  cc.feedback = MC_CTRL_CSMC_FB_STATE;
+  cc.duty_max = 1.0f;  // unused: no bridge here
+  const mc_csmc_q31_bases_t& b = cc.law.base;
+  mc_ctrl_csmc_q31_t ctrl{};
+  const uint32_t ce = mc_ctrl_csmc_q31_init(&ctrl, &cc);
+  if (ce != MC_CTRL_CSMC_ERR_NONE) {
+    throw std::runtime_error("q31 csmc rejected: " + std::to_string(ce));
+  }
+  const mc_ctrl_csmc_q31_tm_t& tm = ctrl.tm;
   const uint32_t nr = static_cast<uint32_t>(o.plant.rotor_teeth);
   csmc::LoopResult res;
   const long n = std::lround(o.duration_s / o.dt_s);
@@ -335,47 +256,34 @@ csmc::LoopResult run_csmc_q31(const csmc::LoopOptions& o) {
     const double t = static_cast<double>(k) * o.dt_s;
     const double phi = (t >= 0.0 ? o.step_rad : 0.0) +
                        ((o.step2_t_s >= 0.0 && t >= o.step2_t_s) ? o.step_rad : 0.0);
-    const float ia = static_cast<float>(x(Stepper2Ph::kIa));
-    const float ib = static_cast<float>(x(Stepper2Ph::kIb));
-    const float w = static_cast<float>(x(Stepper2Ph::kOmegaM));
-    const float th = static_cast<float>(x(Stepper2Ph::kThetaM));
-    float sin_e = 0.0f, cos_e = 0.0f;
-    mc_sincos_f32(mc_stepper_theta_e_f32(th, nr), &sin_e, &cos_e);
-    float id = 0.0f, iq = 0.0f;
-    mc_stepper_ab_to_dq_sc_f32(ia, ib, sin_e, cos_e, &id, &iq);
-    // The error vector as the f32 loop forms it (measurement side), then
-    // per unit at the kernel boundary.
-    mc_csmc_f32_in_t fin{};
-    if (mc_csmc_f32_err_from_state(&cc.f.model, id, iq, w, th, 0.0f, static_cast<float>(phi), 0.0f,
-                                   0.0f, &fin) != MC_CSMC_ERR_NONE) {
-      throw std::runtime_error("model for the state errors rejected");
+    if (mc_ctrl_csmc_q31_set_ref(&ctrl, static_cast<float>(phi), 0.0f, 0.0f, 0.0f, 0.0f, 0.0f) !=
+        MC_CTRL_CSMC_ERR_NONE) {
+      throw std::runtime_error("reference refused");
     }
+    // e2 per unit from the exact angle, rounded once
     const double e2 = x(Stepper2Ph::kThetaM) - phi;
-    mc_csmc_q31_in_t in{};
-    in.e1 = to_q(fin.e1_a, b.i_base_a);
-    in.e2 = to_q(e2, b.theta_base_rad);
-    in.de2 = to_q(fin.de2_rad_s, b.omega_base_rad_s);
-    in.dde2 = to_q(fin.dde2_rad_s2, b.alpha_base_rad_s2);
-    in.i_d = to_q(id, b.i_base_a);
-    in.i_q = to_q(iq, b.i_base_a);
-    in.omega_m = to_q(w, b.omega_base_rad_s);
-    mc_csmc_q31_out_t out{};
-    mc_csmc_q31_step(&ctrl, &in, &out);
-    const float vd = static_cast<float>(from_q(out.v_d, b.v_base_v));
-    const float vq = static_cast<float>(from_q(out.v_q, b.v_base_v));
+    mc_ctrl_csmc_q31_meas_t m{};
+    m.ia_a = static_cast<float>(x(Stepper2Ph::kIa));
+    m.ib_a = static_cast<float>(x(Stepper2Ph::kIb));
+    m.omega_m_rad_s = static_cast<float>(x(Stepper2Ph::kOmegaM));
+    m.phi_rad = static_cast<float>(x(Stepper2Ph::kThetaM));
+    m.theta_e_rad = mc_stepper_theta_e_f32(m.phi_rad, nr);
+    m.e2 = mc_pu_to_q31(e2, b.theta_base_rad);
+    if (mc_ctrl_csmc_q31_step(&ctrl, &m) != MC_CTRL_CSMC_ERR_NONE) {
+      throw std::runtime_error("q31 csmc step refused an input");
+    }
     if (k % static_cast<long>(every) == 0 || k == n) {
-      res.trace.push_back(csmc::Sample{t, fin.e1_a, e2, id, iq, w, x(Stepper2Ph::kThetaM), vd, vq,
-                                       0.0, 0.0, 0.0, from_q(out.s1, b.i_base_a),
-                                       from_q(out.s2, b.alpha_base_rad_s2), phi});
+      res.trace.push_back(csmc::Sample{t, tm.fin.e1_a, e2, tm.i_d_a, tm.i_q_a, m.omega_m_rad_s,
+                                       x(Stepper2Ph::kThetaM), tm.v_d_v, tm.v_q_v, 0.0, 0.0, 0.0,
+                                       mc_pu_from_q31(tm.out.s1, b.i_base_a),
+                                       mc_pu_from_q31(tm.out.s2, b.alpha_base_rad_s2), phi});
     }
     if (k == n) {
       res.t_end = t;
       res.e2_end = e2;
       break;
     }
-    float va = 0.0f, vb = 0.0f;
-    mc_stepper_dq_to_ab_sc_f32(vd, vq, sin_e, cos_e, &va, &vb);
-    const Stepper2Ph::Input u(static_cast<double>(va), static_cast<double>(vb));
+    const Stepper2Ph::Input u(static_cast<double>(tm.v_a_v), static_cast<double>(tm.v_b_v));
     if (advance_zoh(plant, u, t, o.dt_s, o.substeps, &x) != Status::kOk) {
       throw std::runtime_error("integration failed");
     }

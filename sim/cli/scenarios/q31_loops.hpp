@@ -3,10 +3,11 @@
 // kernel in the loop (conversions to and from per unit at the kernel
 // boundary, as an ADC/PWM driver would do them):
 //   pi2d-paper-q31          paper 000 Section V, mc_pi2d_q31      (vs pi2d-paper)
-//   pi2d-motor-q31          test motor through the drive, a q31
-//                           PI2D plug-in (mc_pi2d_q31, Clarke/Park/
-//                           SVPWM q31)                            (vs pi2d-motor)
-//   csmc-state-feedback-q31 paper 001 Fig. 2, mc_csmc_q31         (vs csmc-state-feedback)
+//   pi2d-motor-q31          test motor through the drive, the q31
+//                           PI2D plug-in (firmware/app/ctrl/
+//                           mc_ctrl_pi2d_q31)                     (vs pi2d-motor)
+//   csmc-state-feedback-q31 paper 001 Fig. 2, the q31 CSMC plug-in
+//                           (firmware/app/ctrl/mc_ctrl_csmc_q31)  (vs csmc-state-feedback)
 // Each scenario runs the f32 and the q31 loop and writes both trajectories
 // and their difference; tests/sil/q31 bounds the difference.
 #pragma once
@@ -47,13 +48,13 @@ long run_paper_q31(const pi2d::PaperOptions& o,
 
 // Bases of the motor loop (SI: 20 A sensor range, 400 V, ...).
 mc_pi2d_q31_bases_t motor_pi2d_bases(const pi2d::MotorOptions& o);
-// pi2d::run_motor(o, true, ...) with the q31 PI2D plug-in.
+// pi2d::run_motor(o, true, ...) with the q31 PI2D plug-in (mc_ctrl_pi2d_q31).
 pi2d::MotorMetrics run_motor_q31(const pi2d::MotorOptions& o, double duration_s,
                                  const std::function<void(const pi2d::MotorSample&)>& row);
 
 // Bases of the paper-001 loop.
 mc_csmc_q31_bases_t paper_csmc_bases();
-// csmc::run_loop with mc_csmc_q31 (state feedback only).
+// csmc::run_loop with the q31 plug-in mc_ctrl_csmc_q31 (state feedback only).
 csmc::LoopResult run_csmc_q31(const csmc::LoopOptions& o);
 
 }  // namespace q31loop

@@ -476,7 +476,7 @@ TEST(CsmcSil, DrivePluginRejectsBadConfigAndReference) {
   ASSERT_NE(ops, nullptr);
   EXPECT_EQ(ops->outputs, MC_DRIVE_OUT_PWM2);
   EXPECT_EQ(mc_ctrl_csmc_set_ref(&p, std::nanf(""), 0, 0, 0, 0, 0), MC_CTRL_CSMC_ERR_REF);
-  EXPECT_EQ(p.phi_d_rad, 0.0f);
+  EXPECT_EQ(p.ref.phi_d_rad, 0.0f);
   // No encoder reading: the law refuses to run (the drive then faults).
   mc_drive_meas_t m{};
   m.vbus_v = 60.0f;

@@ -293,8 +293,8 @@ TEST(SensorlessSil, IiObserverEstimatesLoadFromEncoder) {
         mc_iiobs_f32_step(&ii, tm.theta_m_rad, static_cast<float>(0.5 * (tau + tau_prev)));
         tau_prev = tau;
         if (s.t_s() > 1.2) {
-          sum_l += mc_iiobs_f32_tau_load_nm(&ii) - 3.0;
-          sum_w += mc_iiobs_f32_omega_m_rad_s(&ii) - s.board().state()(2);
+          sum_l += mc_iiobs_f32_get_tau_load_nm(&ii) - 3.0;
+          sum_w += mc_iiobs_f32_get_omega_m_rad_s(&ii) - s.board().state()(2);
           ++n;
         }
       });

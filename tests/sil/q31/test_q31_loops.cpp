@@ -13,6 +13,10 @@
 #include "mc_record.hpp"
 #include "scenarios/q31_loops.hpp"
 
+extern "C" {
+#include "mc_ctrl_pi2d_q31.h"
+}
+
 namespace {
 void report(const char* what, double v, double bound, const char* unit) {
   std::printf("[ measured ] %-44s %.4g %s (bound %.4g)\n", what, v, unit, bound);
@@ -114,4 +118,62 @@ TEST(Q31Loops, Pi2dMotorTracksTheF32Loop) {
   EXPECT_LE(dw, 0.5);
   EXPECT_NEAR(mq.rms_err_rad_s, ma.rms_err_rad_s, 0.02 * ma.rms_err_rad_s);
   EXPECT_NEAR(mq.load_dip_rad_s, ma.load_dip_rad_s, 0.02 * ma.load_dip_rad_s);
+}
+
+TEST(Q31Pi2dPlugin, RefusesABadConfigAndBadInputChangingNothing) {
+  // The C plug-in (firmware/app/ctrl/mc_ctrl_pi2d_q31) that pi2d-motor-q31
+  // runs: init names each bad part of its config and leaves c unwritten;
+  // a non-finite reference or measurement is refused with its bit. Exact
+  // comparisons: these are decisions, not arithmetic.
+  const mcsim::pi2d::MotorOptions o;
+  mc_ctrl_pi2d_q31_cfg_t good{};
+  good.law.f = mcsim::pi2d::motor_pi2d_cfg(o);
+  good.law.base = mcsim::q31loop::motor_pi2d_bases(o);
+  good.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
+  good.dt_s = 1.0 / o.pwm_hz;
+  mc_ctrl_pi2d_q31_t c{};
+  EXPECT_EQ(mc_ctrl_pi2d_q31_init(nullptr, &good), MC_CTRL_PI2D_ERR_NULL);
+  EXPECT_EQ(mc_ctrl_pi2d_q31_ops(nullptr), nullptr);
+  mc_ctrl_pi2d_q31_cfg_t bad = good;
+  bad.dt_s = 2.0 / o.pwm_hz;  // the law's float period is no longer its rounding
+  EXPECT_EQ(mc_ctrl_pi2d_q31_init(&c, &bad), MC_CTRL_PI2D_ERR_PERIOD);
+  bad = good;
+  bad.dt_s = std::nan("");
+  EXPECT_EQ(mc_ctrl_pi2d_q31_init(&c, &bad), MC_CTRL_PI2D_ERR_PERIOD);
+  bad = good;
+  bad.limit_mode = static_cast<mc_svpwm_limit_t>(7);
+  EXPECT_EQ(mc_ctrl_pi2d_q31_init(&c, &bad), MC_CTRL_PI2D_ERR_LIMIT);
+  bad = good;
+  bad.law.base.i_base_a = -1.0f;  // the q31 law refuses its bases
+  EXPECT_EQ(mc_ctrl_pi2d_q31_init(&c, &bad), MC_CTRL_PI2D_ERR_LAW);
+  EXPECT_EQ(c.ops.fast, nullptr) << "a refused init wrote the plug-in";
+
+  ASSERT_EQ(mc_ctrl_pi2d_q31_init(&c, &good), MC_CTRL_PI2D_ERR_NONE);
+  const mc_drive_ctrl_t* ops = mc_ctrl_pi2d_q31_ops(&c);
+  ASSERT_NE(ops, nullptr);
+  EXPECT_EQ(ops->outputs, MC_DRIVE_OUT_PWM3);
+  EXPECT_TRUE(ops->needs_encoder);
+  ASSERT_EQ(mc_ctrl_pi2d_q31_set_ref(&c, 10.0f, 0.0f, 0.0f, 0.0f), MC_CTRL_PI2D_ERR_NONE);
+  EXPECT_EQ(mc_ctrl_pi2d_q31_set_ref(&c, std::nanf(""), 0.0f, 0.0f, 0.0f), MC_CTRL_PI2D_ERR_REF);
+  EXPECT_EQ(c.omega_ref_rad_s, 10.0) << "a refused reference changed the plug-in";
+  ASSERT_EQ(ops->reset(ops->ctx), MC_CTRL_PI2D_ERR_NONE);
+  mc_drive_meas_t m{};
+  m.have_encoder = true;
+  m.vbus_v = 200.0f;
+  mc_drive_out_t out{};
+  m.ia_a = std::nanf("");
+  EXPECT_EQ(ops->fast(ops->ctx, &m, &out), MC_CTRL_PI2D_ERR_MEAS);
+  EXPECT_FALSE(c.have_prev) << "a refused measurement moved the position bookkeeping";
+  m.ia_a = 1.0f;
+  m.have_encoder = false;
+  EXPECT_EQ(ops->fast(ops->ctx, &m, &out), MC_CTRL_PI2D_ERR_MEAS);
+  m.have_encoder = true;
+  ASSERT_EQ(ops->fast(ops->ctx, &m, &out), MC_CTRL_PI2D_ERR_NONE);
+  // one period of the 10 rad/s reference: 10 * 50 us = 5e-4 rad (exact in
+  // double up to its rounding, 1e-15)
+  EXPECT_NEAR(c.theta_ref_rad, 10.0 / o.pwm_hz, 1e-15);
+  for (float d : {out.duty_a, out.duty_b, out.duty_c}) {
+    EXPECT_GE(d, 0.0f);
+    EXPECT_LE(d, 1.0f);
+  }
 }

@@ -322,8 +322,8 @@ static void fam_observer(kv_state_t *st, const rec_t *in, rec_t *out)
     out_f32(out, st->pll.omega_i_rad_s);
     out_u32(out, st->pll.flags);
     out_u32(out, mc_iiobs_f32_step(&st->iiobs, th_m, tau));
-    out_f32(out, mc_iiobs_f32_omega_m_rad_s(&st->iiobs));
-    out_f32(out, mc_iiobs_f32_tau_load_nm(&st->iiobs));
+    out_f32(out, mc_iiobs_f32_get_omega_m_rad_s(&st->iiobs));
+    out_f32(out, mc_iiobs_f32_get_tau_load_nm(&st->iiobs));
     out_f32(out, st->iiobs.r);
     out_f32(out, st->iiobs.hh1);
     out_f32(out, st->iiobs.hh2);
@@ -347,11 +347,11 @@ static void fam_filters(kv_state_t *st, const rec_t *in, rec_t *out)
     float th = 0.0f;
     (void)mc_ddiff_f32_step(&st->dd_paper, y, &th);
     out_f32(out, th);
-    out_f32(out, mc_ddiff_f32_q(&st->dd_paper));
+    out_f32(out, mc_ddiff_f32_get_q(&st->dd_paper));
     out_u32(out, st->dd_paper.flags);
     (void)mc_ddiff_f32_step(&st->dd_motor, y, &th);
     out_f32(out, th);
-    out_f32(out, mc_ddiff_f32_q(&st->dd_motor));
+    out_f32(out, mc_ddiff_f32_get_q(&st->dd_motor));
     out_u32(out, st->dd_motor.flags);
 }
 

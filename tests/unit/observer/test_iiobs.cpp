@@ -143,8 +143,8 @@ TEST(IiObs, ConvergesExponentiallyToSpeedAndLoad) {
     const double tau = 0.5 + 0.3 * std::sin(2 * kPi * 3 * t);
     mc_iiobs_f32_step(&st, static_cast<float>(std::remainder(m.th, 2 * kPi)),
                       static_cast<float>(tau));
-    ew.push_back(std::abs(mc_iiobs_f32_omega_m_rad_s(&st) - m.w));
-    el.push_back(std::abs(mc_iiobs_f32_tau_load_nm(&st) - m.tauL));
+    ew.push_back(std::abs(mc_iiobs_f32_get_omega_m_rad_s(&st) - m.w));
+    el.push_back(std::abs(mc_iiobs_f32_get_tau_load_nm(&st) - m.tauL));
     rmax = std::max(rmax, static_cast<double>(st.r));
     m.advance(tau, dt);
   }
@@ -184,7 +184,7 @@ TEST(IiObs, TracksThroughReversal) {
     const double tau = -1.5;
     mc_iiobs_f32_step(&st, static_cast<float>(std::remainder(m.th, 2 * kPi)),
                       static_cast<float>(tau));
-    if (k > 2000) worst = std::max(worst, std::abs(mc_iiobs_f32_omega_m_rad_s(&st) - m.w));
+    if (k > 2000) worst = std::max(worst, std::abs(mc_iiobs_f32_get_omega_m_rad_s(&st) - m.w));
     m.advance(tau, c.dt_s);
   }
   EXPECT_LT(m.w, -50.0);  // it did reverse

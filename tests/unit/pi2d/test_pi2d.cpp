@@ -294,13 +294,13 @@ TEST(Pi2dStep, NonFiniteInputGivesZeroVoltageAndStickyFlag) {
   in.theta_m_rad = 0.1f;
   mc_pi2d_f32_out_t o{};
   ASSERT_EQ(mc_pi2d_f32_step(&st, &in, &o), 0u);
-  const float nu = st.nu_nm, q = mc_ddiff_f32_q(&st.dd);
+  const float nu = st.nu_nm, q = mc_ddiff_f32_get_q(&st.dd);
   in.iq_a = NAN;
   EXPECT_EQ(mc_pi2d_f32_step(&st, &in, &o), MC_PI2D_ERR_NAN_INPUT);
   EXPECT_EQ(o.vd_v, 0.0f);
   EXPECT_EQ(o.vq_v, 0.0f);
   EXPECT_EQ(st.nu_nm, nu);
-  EXPECT_EQ(mc_ddiff_f32_q(&st.dd), q);
+  EXPECT_EQ(mc_ddiff_f32_get_q(&st.dd), q);
   in.iq_a = 0.0f;
   EXPECT_EQ(mc_pi2d_f32_step(&st, &in, &o), 0u);
   EXPECT_NE(st.flags & MC_PI2D_ERR_NAN_INPUT, 0u);

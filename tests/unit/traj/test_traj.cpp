@@ -75,7 +75,7 @@ TEST(Traj, TrapezoidFromRestClosedForm)
     ASSERT_EQ(0u, mc_traj_f32_init(&t, &c));
     ASSERT_EQ(0u, mc_traj_f32_plan(&t, static_cast<float>(x0), 0.0f, static_cast<float>(x0 + D)));
     const double T = D / v + v / (2 * a) + v / (2 * d);
-    EXPECT_NEAR(T, mc_traj_f32_duration(&t), 1e-6 * T);
+    EXPECT_NEAR(T, mc_traj_f32_get_duration_s(&t), 1e-6 * T);
     const double t1 = v / a, t3 = T - v / d;
     for (double tt = 0.0; tt < T + 0.01; tt += 0.0123) {
         double x, vv, aa;
@@ -110,7 +110,7 @@ TEST(Traj, TriangleShortMoveNegative)
     ASSERT_EQ(0u, mc_traj_f32_init(&t, &c));
     ASSERT_EQ(0u, mc_traj_f32_plan(&t, 2.0f, 0.0f, static_cast<float>(2.0 - D)));
     const double vp = std::sqrt(2 * a * d * D / (a + d)), T = vp / a + vp / d;
-    EXPECT_NEAR(T, mc_traj_f32_duration(&t), 1e-6);
+    EXPECT_NEAR(T, mc_traj_f32_get_duration_s(&t), 1e-6);
     double vmin = 0;
     for (double tt = 0.0; tt < T; tt += 1e-4) {
         mc_traj_f32_out_t o;
@@ -139,7 +139,7 @@ TEST(Traj, OvershootBrakesAtDecelThenReturns)
     // then a from-rest move of 7 rad back: a triangle (a, d)
     const double D = v0 * v0 / (2 * d) - 1.0, a = 200;
     const double vp = std::sqrt(2 * a * d * D / (a + d));
-    EXPECT_NEAR(v0 / d + vp / a + vp / d, mc_traj_f32_duration(&t), 1e-5);
+    EXPECT_NEAR(v0 / d + vp / a + vp / d, mc_traj_f32_get_duration_s(&t), 1e-5);
     mc_traj_f32_eval(&t, 10.0f, &o);
     EXPECT_EQ(1.0f, o.x_rad);
 }
@@ -156,7 +156,7 @@ TEST(Traj, AboveVmaxDeceleratesAtD)
     EXPECT_FLOAT_EQ(-100.0f, o.a_rad_s2);
     EXPECT_NEAR(70.0, o.v_rad_s, 1e-4);
     // ramp 0.3 s (80 -> 50, 19.5 rad), stop 0.5 s (12.5 rad), cruise 68 rad
-    EXPECT_NEAR(0.3 + 68.0 / 50.0 + 0.5, mc_traj_f32_duration(&t), 1e-5);
+    EXPECT_NEAR(0.3 + 68.0 / 50.0 + 0.5, mc_traj_f32_get_duration_s(&t), 1e-5);
 }
 
 // Stop: from cruise, decelerate at the given rate to the stopping point.
@@ -174,7 +174,7 @@ TEST(Traj, StopAtGivenDecel)
     mc_traj_f32_eval(&t, static_cast<float>(t.k) * c.dt_s, &now);
     ASSERT_FLOAT_EQ(50.0f, now.v_rad_s);
     ASSERT_EQ(0u, mc_traj_f32_stop(&t, 25.0f));
-    EXPECT_NEAR(2.0, mc_traj_f32_duration(&t), 1e-6);
+    EXPECT_NEAR(2.0, mc_traj_f32_get_duration_s(&t), 1e-6);
     mc_traj_f32_eval(&t, 5.0f, &o);
     EXPECT_NEAR(now.x_rad + 50.0 * 50.0 / 50.0, o.x_rad, PosTol(o.x_rad));
 }

@@ -1,7 +1,11 @@
 /**
- * @file board_pil.c
+ * @file mc_hal_pil.c
  * @brief Processor-in-the-loop board: the HAL of the drive served over
- *        USART1 by the host simulator (protocol: ../pil/mc_pil_frame.h).
+ *        USART1 by the host simulator (protocol:
+ *        firmware/targets/pil/mc_pil_frame.h), and the board binding of the
+ *        STM32F405 image's main (firmware/targets/stm32f405/mc_board.h).
+ *        Built into mc_stm32f405_pil.elf by firmware/targets/stm32f405 and
+ *        tests/target (label pil).
  *
  * Runs on QEMU netduinoplus2 (USART1 is the first -serial). Each period the
  * host sends MEAS with what its simulated board's HAL returned at the sample;
