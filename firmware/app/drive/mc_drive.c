@@ -808,6 +808,16 @@ void mc_drive_raise_fault(mc_drive_t *d, uint32_t bits)
     raise_fault(d, bits & MC_DRIVE_FAULT_EXTERNAL);
 }
 
+void mc_drive_raise_warning(mc_drive_t *d, uint32_t bits)
+{
+    const uint32_t w = bits & MC_DRIVE_WARN_CAN_BUS;
+    if (w == 0u) {
+        return;
+    }
+    d->warnings |= w;
+    begin_stop(d, MC_DRIVE_STOP_WARNING);
+}
+
 int mc_drive_clear_faults(mc_drive_t *d)
 {
     if (d->hal->fault != NULL) {

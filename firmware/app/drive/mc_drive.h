@@ -85,6 +85,9 @@ typedef enum {
 #define MC_DRIVE_WARN_NONE     0u
 #define MC_DRIVE_WARN_TEMP     (1u << 0) /**< power stage or motor above temp_warn_c */
 #define MC_DRIVE_WARN_VBUS_SAG (1u << 1) /**< DC bus below vbus_sag_v */
+#define MC_DRIVE_WARN_CAN_BUS \
+    (1u << 2) /**< the CAN controller is error-passive or bus-off (raised by
+                   the application, mc_drive_raise_warning) */
 
 /* Why the last controlled stop began (mc_drive_t.stop_cause). */
 #define MC_DRIVE_STOP_NONE    0u
@@ -424,6 +427,12 @@ int mc_drive_set_current_ref(mc_drive_t *d, float id_ref_a, float iq_ref_a);
 /** Raise a fault from the application (e.g. the CAN command timeout):
  *  same reaction as a detected fault. bits must be MC_DRIVE_FAULT_EXTERNAL. */
 void mc_drive_raise_fault(mc_drive_t *d, uint32_t bits);
+
+/** Raise a warning from the application: a running drive makes a
+ *  controlled stop (as for its own warnings), and CURRENT/CTRL are refused
+ *  until mc_drive_clear_faults. bits must be MC_DRIVE_WARN_CAN_BUS (others
+ *  are ignored: the drive detects them itself). */
+void mc_drive_raise_warning(mc_drive_t *d, uint32_t bits);
 
 /** Clear the faults and go to IDLE, if the causes are gone (DC bus inside
  *  its window, hardware fault input released). Returns 0 or -EBUSY. */
