@@ -14,6 +14,9 @@ static int fake_start(void *ctx, uint32_t timeout_ms)
         return -EINVAL;
     }
     w->timeout_ms = timeout_ms;
+    if (timeout_ms > w->timeout_max_ms) {
+        w->timeout_max_ms = timeout_ms;
+    }
     w->since_feed_ms = 0u;
     w->starts++;
     return 0;

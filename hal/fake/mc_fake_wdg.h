@@ -17,12 +17,13 @@ extern "C" {
 #endif
 
 typedef struct mc_fake_wdg {
-    uint32_t reset_cause;   /**< what mc_hal_wdg_reset_cause() reports */
-    uint32_t timeout_ms;    /**< 0: not started */
-    uint32_t starts;        /**< successful starts */
-    uint32_t feeds;         /**< successful feeds */
-    uint32_t since_feed_ms; /**< fake time since the last feed (or start) */
-    bool expired;           /**< the timeout passed without a feed: on the
+    uint32_t reset_cause;    /**< what mc_hal_wdg_reset_cause() reports */
+    uint32_t timeout_ms;     /**< 0: not started */
+    uint32_t starts;         /**< successful starts */
+    uint32_t timeout_max_ms; /**< largest timeout started */
+    uint32_t feeds;          /**< successful feeds */
+    uint32_t since_feed_ms;  /**< fake time since the last feed (or start) */
+    bool expired;            /**< the timeout passed without a feed: on the
                                 MCU the watchdog would have reset it */
     mc_hal_wdg_t dev;
 } mc_fake_wdg_t;

@@ -275,6 +275,7 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     app->tm_src.drive = drive;
     app->tm_src.cmd = &app->cmd;
     app->tm_src.ext = NULL;
+    app->status_pending = (app->reset_cause != MC_HAL_WDG_RESET_NONE);
 
     if (app->cfg.set_rx_filter != NULL) {
         (void)app->cfg.set_rx_filter(app->cfg.filter_ctx, (uint32_t)p->can_node_id << 5u,
@@ -391,10 +392,10 @@ static void can_supervise(mc_app_t *a)
         f |= MC_APP_FAULT_CAN_PASSIVE;
     }
     a->faults |= f;
-    if ((f & (MC_APP_FAULT_CAN_BUS_OFF | MC_APP_FAULT_CAN_PASSIVE)) != 0u) {
-        /* the host may not hear us, nor we it: stop under control */
-        mc_drive_raise_warning(a->drive, MC_DRIVE_WARN_CAN_BUS);
-    }
+    /* error-passive or bus-off: the host may not hear us, nor we it: stop
+     * under control, and no clear while it lasts */
+    mc_drive_warning_cause(a->drive, MC_DRIVE_WARN_CAN_BUS,
+                           (f & (MC_APP_FAULT_CAN_BUS_OFF | MC_APP_FAULT_CAN_PASSIVE)) != 0u);
     /* The CAN run ends once the drive has stopped for the bus. */
     if (a->cmd.enabled && ((a->drive->warnings & MC_DRIVE_WARN_CAN_BUS) != 0u) &&
         (a->drive->mode != MC_DRIVE_MODE_STOPPING)) {
@@ -402,6 +403,41 @@ static void can_supervise(mc_app_t *a)
         a->cmd.enabled = false;
         a->cmd.stopping = false;
         a->cmd.stop_reason = (uint8_t)MC_CAN_STOP_FAULT;
+    }
+}
+
+static float sat_f(uint32_t v, uint32_t max)
+{
+    return (float)((v > max) ? max : v);
+}
+
+static void status_send(mc_app_t *a)
+{
+    float v[MC_CAN_APP_STATUS_NSIG];
+    mc_hal_can_frame_t f;
+    const uint32_t state = (uint32_t)a->can_status.state & 0x3u;
+    const uint32_t key = (a->faults << 2u) | state;
+    if (key != a->status_sent_key) {
+        a->status_pending = true;
+    }
+    if (!a->status_pending || (a->can == NULL)) {
+        return;
+    }
+    v[MC_CAN_APP_STATUS_RESET_CAUSE] = (float)(a->reset_cause & 0x7Fu);
+    v[MC_CAN_APP_STATUS_CFG_STATUS] = (float)a->boot_status;
+    v[MC_CAN_APP_STATUS_CAN_STATE] = (float)state;
+    v[MC_CAN_APP_STATUS_APP_FAULTS] = (float)(a->faults & 0xFu);
+    v[MC_CAN_APP_STATUS_TX_ERR_COUNT] = sat_f(a->can_status.tx_err_count, 255u);
+    v[MC_CAN_APP_STATUS_RX_ERR_COUNT] = sat_f(a->can_status.rx_err_count, 255u);
+    v[MC_CAN_APP_STATUS_RX_LOST] = sat_f(a->rx_overflows + a->hw_rx_overruns, 0xFFFFu);
+    v[MC_CAN_APP_STATUS_SEQ] = (float)a->status_seq;
+    if ((mc_can_proto_pack(MC_CAN_MSG_APP_STATUS, a->cmd.cfg.node_id, v, MC_CAN_APP_STATUS_NSIG,
+                           &f) == MC_CAN_ERR_NONE) &&
+        (mc_hal_can_send(a->can, &f) == 0)) {
+        a->status_seq = (uint8_t)(a->status_seq + 1u);
+        a->status_frames++;
+        a->status_pending = false;
+        a->status_sent_key = key;
     }
 }
 
@@ -445,7 +481,9 @@ uint32_t mc_app_slow_work(mc_app_t *app)
     if ((faults_before != 0u) && ((app->drive->faults | app->drive->warnings) == 0u)) {
         app->faults = MC_APP_FAULT_NONE; /* CLEAR_FAULTS went through */
     }
+    app->cmd.can_state = (uint8_t)mc_app_can_state(app);
     app->tm_sent = mc_telemetry_step(&app->tm, can, &app->tm_src);
+    status_send(app);
     wdg_service(app);
     return app->tm_sent;
 }

@@ -40,9 +40,15 @@
  * stalled for up to 2 s on a 128 KiB sector) the timeout is stretched to
  * wdg_erase_timeout_ms and restored afterwards.
  *
+ * APP_STATUS (tools/can/motordrive.dbc, cmd 0x0E): reset cause, boot
+ * status of the configuration, CAN state and error counters, application
+ * faults, frames lost; queued at the first slow step when the watchdog HAL
+ * reports a reset cause, and at every change of the CAN state or of the
+ * application faults (retried while the controller refuses to send).
+ *
  * CAN controller state (slow loop, mc_hal_can_get_status): error-passive or
  * bus-off latches MC_APP_FAULT_CAN_PASSIVE / MC_APP_FAULT_CAN_BUS_OFF and
- * raises the drive's warning MC_DRIVE_WARN_CAN_BUS: a running drive makes a
+ * sets the drive's warning MC_DRIVE_WARN_CAN_BUS: a running drive makes a
  * controlled stop (mc_drive.h, STOPPING) and cannot be enabled again until
  * CLEAR_FAULTS once the controller is error-active or warning again; the
  * CAN run ends with stop_reason FAULT when the drive has stopped.
@@ -178,6 +184,13 @@ typedef struct {
     mc_param_hook_t cmd_hook; /**< the command handler's APPLY hook, chained */
     mc_telemetry_src_t tm_src;
     uint32_t tm_sent; /**< frames mask of the last telemetry step */
+    /* APP_STATUS (cmd 0x0E): at boot when a reset cause is known, and at each
+     * change of the CAN state or of the application faults; retried at the
+     * next slow steps while the HAL refuses it (bus-off) */
+    bool status_pending;
+    uint32_t status_sent_key; /**< (faults, can_state) of the last one queued */
+    uint8_t status_seq;
+    uint32_t status_frames; /**< APP_STATUS frames queued */
     /* speed loop */
     float speed_ref_rad_s;
     float speed_integ_a;

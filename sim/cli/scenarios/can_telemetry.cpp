@@ -77,8 +77,8 @@ const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT", "CURRENTS", "VOLTAGES",
 // Signal names per slot, in DBC order (checked against the generated
 // signal counts below; tests/can compares the CSV header with the DBC).
 const std::vector<std::vector<std::string>> kSlotSignals = {
-    {"mode", "control_mode", "enabled", "stopping", "stop_reason", "cfg_status", "faults",
-     "last_error", "last_error_cmd", "seq"},
+    {"mode", "control_mode", "enabled", "stopping", "can_state", "stop_reason", "cfg_status",
+     "faults", "last_error", "last_error_cmd", "seq"},
     {"i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a", "seq"},
     {"v_d_v", "v_q_v", "v_bus_v", "seq"},
     {"omega_m_rad_s", "omega_ref_rad_s", "seq"},

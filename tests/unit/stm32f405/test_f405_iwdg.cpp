@@ -26,7 +26,7 @@ struct Model {
 void HwPoll(void *ctx)
 {
     auto *m = static_cast<Model *>(ctx);
-    m->kr_seen.push_back(m->regs.KR);
+    m->kr_seen.push_back(static_cast<uint32_t>(m->regs.KR));
     if (m->stuck) {
         m->regs.SR = MC_F405_IWDG_SR_PVU | MC_F405_IWDG_SR_RVU;
     } else if (m->busy_polls > 0u) {
@@ -54,7 +54,7 @@ TEST(F405Iwdg, DividerAgainstRm0090Table107)
         {512, 0, 4095},   // the /4 maximum of table 107
         {513, 1, 2051},   // one ms more needs /8: 2052 counts of 0.25 ms
         {1000, 1, 3999},  // 4000 counts of 0.25 ms
-        {2049, 3, 2049},  // /16 ends at 2048 ms: /32, 1 ms counts
+        {2049, 3, 2048},  // /16 ends at 2048 ms: /32, 2049 counts of 1 ms
         {30000, 6, 3749}, // 3750 counts of 8 ms
     };
     for (const Row &r : rows) {
