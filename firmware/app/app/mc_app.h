@@ -158,43 +158,33 @@ typedef struct {
     void *filter_ctx;
 } mc_app_cfg_t;
 
+/* Fields ordered by size (pointers, structs, words, bytes): no padding. */
 typedef struct {
-    mc_app_cfg_t cfg;
     mc_drive_t *drive;
-    const mc_hal_t *hal;     /**< the drive's board */
-    const mc_hal_can_t *can; /**< the CAN bus, or NULL */
-    /* boot */
-    mc_params_t params;   /**< the configuration booted */
-    uint8_t boot_status;  /**< mc_cfg_boot_t */
-    uint32_t reset_cause; /**< MC_HAL_WDG_RESET_* at boot */
-    bool params_valid;    /**< the parameter service runs */
-    mc_cfg_store_t store;
-    bool have_store;
+    const mc_hal_t *hal;       /**< the drive's board */
+    const mc_hal_can_t *can;   /**< the CAN bus, or NULL */
     mc_hal_flash_t flash_wrap; /**< the store's flash: stretches the watchdog */
-    /* CAN */
-    mc_app_rx_ring_t rx;
-    uint32_t rx_overflows;          /**< frames lost: ring full (in the interrupt) */
-    uint32_t rx_foreign;            /**< frames of other nodes dropped */
-    uint32_t hw_rx_overruns;        /**< controller FIFO overruns (HAL status) */
-    mc_hal_can_status_t can_status; /**< last status read */
-    mc_telemetry_cfg_t tm_cfg;      /**< the telemetry configuration asked for */
-    mc_telemetry_t tm;
-    mc_can_cmd_t cmd;
-    mc_param_srv_t srv;
-    mc_param_hook_t cmd_hook; /**< the command handler's APPLY hook, chained */
+    mc_param_hook_t cmd_hook;  /**< the command handler's APPLY hook, chained */
     mc_telemetry_src_t tm_src;
-    uint32_t tm_sent; /**< frames mask of the last telemetry step */
+    mc_can_cmd_t cmd;
+    mc_app_cfg_t cfg;
+    mc_param_srv_t srv;
+    mc_cfg_store_t store;
+    /* boot */
+    uint32_t reset_cause; /**< MC_HAL_WDG_RESET_* at boot */
+    /* CAN */
+    uint32_t rx_overflows;   /**< frames lost: ring full (in the interrupt) */
+    uint32_t rx_foreign;     /**< frames of other nodes dropped */
+    uint32_t hw_rx_overruns; /**< controller FIFO overruns (HAL status) */
+    uint32_t tm_sent;        /**< frames mask of the last telemetry step */
     /* APP_STATUS (cmd 0x0E): at boot when a reset cause is known, and at each
      * change of the CAN state or of the application faults; retried at the
      * next slow steps while the HAL refuses it (bus-off) */
-    bool status_pending;
     uint32_t status_sent_key; /**< (faults, can_state) of the last one queued */
-    uint8_t status_seq;
-    uint32_t status_frames; /**< APP_STATUS frames queued */
+    uint32_t status_frames;   /**< APP_STATUS frames queued */
     /* speed loop */
     float speed_ref_rad_s;
     float speed_integ_a;
-    bool was_enabled; /**< CAN run state of the previous slow step */
     /* supervision */
     uint32_t faults;  /**< MC_APP_FAULT_* (sticky) */
     uint32_t tick_hz; /**< slow-loop rate [Hz] */
@@ -202,9 +192,20 @@ typedef struct {
     uint32_t fast_runs;     /**< fast steps (interrupt; __atomic access) */
     uint32_t fast_runs_fed; /**< fast_runs at the last feed */
     uint32_t wdg_feeds;
-    bool wdg_running;
     /* errors of the start */
     uint32_t drive_err, tm_err, cmd_err;
+    mc_hal_can_status_t can_status; /**< last status read */
+    mc_telemetry_cfg_t tm_cfg;      /**< the telemetry configuration asked for */
+    mc_telemetry_t tm;
+    mc_params_t params; /**< the configuration booted */
+    mc_app_rx_ring_t rx;
+    uint8_t boot_status; /**< mc_cfg_boot_t */
+    bool params_valid;   /**< the parameter service runs */
+    bool have_store;
+    bool status_pending;
+    uint8_t status_seq;
+    bool was_enabled; /**< CAN run state of the previous slow step */
+    bool wdg_running;
 } mc_app_t;
 
 /** Boot: reset cause, configuration (see the file comment). app is

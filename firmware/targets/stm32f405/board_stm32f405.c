@@ -238,7 +238,7 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
         const float bw = 20.0f;
         const float kp = b->defaults.j_kgm2 * bw / kt;
         b->app.speed.kp_a_s_rad = kp;
-        b->app.speed.ki_dt_a_s_rad = kp * bw / 4.0f / (float)(PWM_HZ / SLOW_LOOP_DIV);
+        b->app.speed.ki_dt_a_s_rad = kp * bw / 4.0f / ((float)PWM_HZ / (float)SLOW_LOOP_DIV);
         b->app.speed.i_max_a = I_MAX_A;
     }
     b->app.set_rx_filter = set_node_filter;

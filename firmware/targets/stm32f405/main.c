@@ -111,6 +111,7 @@ int main(void)
         mc_board_halt(MC_DRIVE_CFG_ERR_NULL);
     }
     const mc_app_cfg_t *app_cfg = mc_board_app_cfg();
+    /* cppcheck-suppress knownConditionTrueFalse ; the board's strong symbol replaces the weak NULL */
     if (app_cfg != NULL) {
         /* A store that cannot be read boots the defaults (boot_status says
          * so); a configuration the drive refuses halts with the outputs off. */
