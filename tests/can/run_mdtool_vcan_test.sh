@@ -33,14 +33,19 @@ check(rc["status"] == 0 and "mode IDLE" in out["status"] and "CURRENTS" in out["
 check(rc["config"] == 4 and "refused PARAM_REQ: UNSUPPORTED" in out["config"],
       "config get: the SIL's refusal decoded (no parameter service): " + out["config"].strip())
 check(rc["monitor"] == 0 and os.path.getsize("monitor.png") > 1000, "monitor --no-gui wrote monitor.png")
-check(rc["run"] == 0 and "ran speed 20" in out["run"], "run speed 20: " + out["run"].strip()[-200:])
+check(rc["run"] == 0 and "ran speed 20" in out["run"] and "settled: speed" in out["run"],
+      "run speed 20 --settle 1.0: " + out["run"].strip()[-200:])
 check(rc["mcsim"] == 0, "the SIL ended after the drive was disabled")
 s = json.load(open("can-telemetry.json"))
 check(s.get("final_stop_reason") == 2, f"the drive stopped on the disable command (stop_reason {s.get('final_stop_reason')})")
 import csv
 rows = list(csv.DictReader(open("can-telemetry.csv")))
 w = [float(r["omega_m_true_rad_s"]) for r in rows]
-check(max(w) > 15.0, f"the speed step reached {max(w):.1f} rad/s (ref 20)")
+# mdtool saw 3 SPEED frames in a row within 1.0 rad/s of 20 before it
+# disabled; the true speed of the plant agrees within the encoder tracking
+# loop's error (0.5 rad/s of slack on top of the band).
+near = [x for x in w if abs(x - 20.0) <= 1.5]
+check(len(near) > 0, f"the speed step reached 20 +- 1.5 rad/s (max {max(w):.2f})")
 rec = json.load(open("rec.json"))
 cd = [f for f in log.read_candump("candump.log")]
 log.convert("rec.blf", "rec.mf4")  # asammdf on the host (see mdtool_vcan.sh)

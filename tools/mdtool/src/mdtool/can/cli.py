@@ -166,9 +166,12 @@ def cmd_run(a):
             n["frames"] += 1
             if name == "SPEED" and a.verbose:
                 print(f"omega {vals['omega_m_rad_s']:.3f} rad/s (ref {vals['omega_ref_rad_s']:.3f})")
-        hb = s.drive.run(a.mode, a.setpoint, a.duration, i_d=a.id, period=a.keepalive, on_frame=on_frame)
+        hb = s.drive.run(a.mode, a.setpoint, a.duration, i_d=a.id, period=a.keepalive, on_frame=on_frame,
+                         settle=a.settle, settle_timeout=a.settle_timeout)
         hb_after = s.drive.wait_for(lambda n, v: n == "HEARTBEAT" and v["enabled"] == 0, a.timeout,
                                     "HEARTBEAT showing the drive disabled")[1]
+    if a.settle is not None:
+        print(f"settled: {a.mode} {s.drive.last_measured:.3f} within {a.settle:g} of {a.setpoint:g}")
     print(f"ran {a.mode} {a.setpoint:g} for {a.duration:g} s ({n['frames']} frames from node {a.node}); "
           f"last heartbeat while running: {hb}; now: mode {hb_after['mode']}, enabled {hb_after['enabled']}")
     return 0
@@ -262,6 +265,10 @@ def add_parsers(sub):
     p.add_argument("--id", type=float, default=0.0, help="current mode: i_d [A]")
     p.add_argument("--duration", type=float, default=1.0, help="[s] (then disable)")
     p.add_argument("--keepalive", type=float, default=0.05, help="keep-alive period [s]")
+    p.add_argument("--settle", type=float, metavar="TOL",
+                   help="after --duration, hold until 3 frames in a row of the measured speed "
+                   "[rad/s] or i_q [A] lie within TOL of the setpoint (exit 3 if not)")
+    p.add_argument("--settle-timeout", type=float, default=30.0, help="longest hold for --settle [s]")
     p.add_argument("--verbose", "-v", action="store_true")
     _bus_args(p)
     p.set_defaults(fn=cmd_run)

@@ -5,6 +5,7 @@ run with the keep-alive sent for you.
 Every wait has a timeout (NoReply); a refusal carries the drive's reason
 decoded from the DBC (PARAM_REPLY.status, CMD_ERROR.error).
 """
+import math
 import time
 
 from .dbc import CMD_MASK, by_cmd, cmd_of, decode_signals, encode_signals, frame_id, node_of
@@ -113,14 +114,26 @@ class Drive:
         return int(vals["value"])
 
     # --------------------------------------------------------------- run
-    def run(self, mode, setpoint, duration, i_d=0.0, period=0.05, on_frame=None):
+    def run(self, mode, setpoint, duration, i_d=0.0, period=0.05, on_frame=None,
+            settle=None, settle_timeout=30.0, settle_frames=3):
         """Select `mode` (current: setpoint = i_q [A]; speed: rad/s), enable,
         hold the setpoint for `duration` s with the keep-alive every
-        `period` s, then disable. Returns the last heartbeat seen."""
+        `period` s, then disable. Returns the last heartbeat seen.
+
+        With `settle` (same unit as the setpoint), hold on after `duration`
+        until `settle_frames` telemetry frames in a row (SPEED.omega_m_rad_s
+        or CURRENTS.i_q_a) lie within `settle` of the setpoint, for at most
+        `settle_timeout` s more; then disable. Not settled by then: NoReply
+        (the drive is disabled all the same). The criterion counts frames, not
+        seconds, so it holds however slowly the drive's clock runs against
+        this host's (a simulated drive on a busy machine)."""
         mode = mode.upper()
         if mode not in ("CURRENT", "SPEED"):
             raise UsageError(f"mode {mode.lower()!r}: current or speed")
+        if settle is not None and not (settle > 0 and math.isfinite(settle)):
+            raise UsageError(f"settle {settle!r}: a tolerance > 0")
         code = {"CURRENT": 1, "SPEED": 2}[mode]
+        meas = ("SPEED", "omega_m_rad_s") if mode == "SPEED" else ("CURRENTS", "i_q_a")
 
         def ref():
             if mode == "CURRENT":
@@ -134,10 +147,23 @@ class Drive:
         ref()
         self.send("SET_ENABLE", enable=1)
         last_hb = None
+        self.last_measured = None
+        inside = 0
         t0 = time.monotonic()
         t_next = t0
+
+        def holding():
+            el = time.monotonic() - t0
+            if el < duration:
+                return True
+            if settle is None or inside >= settle_frames:
+                return False
+            if el < duration + settle_timeout:
+                return True
+            raise NoReply(f"{meas[0]}.{meas[1]} did not settle within {settle:g} of {setpoint:g} "
+                          f"in {duration + settle_timeout:g} s (last {self.last_measured})")
         try:
-            while time.monotonic() - t0 < duration:
+            while holding():
                 now = time.monotonic()
                 if now >= t_next:
                     self.host_heartbeat()
@@ -153,6 +179,9 @@ class Drive:
                     last_hb = vals
                     if vals["mode"] == "FAULT":
                         raise Refused(f"the drive faulted (faults 0x{vals['faults']:04X})", status="FAULT")
+                if name == meas[0]:
+                    self.last_measured = vals[meas[1]]
+                    inside = inside + 1 if abs(vals[meas[1]] - setpoint) <= (settle or 0.0) else 0
                 if on_frame:
                     on_frame(name, vals)
         finally:
