@@ -343,6 +343,37 @@ static void filters_program(mc_f405_can_regs_t *r, const mc_f405_can_config_t *c
     r->FMR &= ~MC_F405_CAN_FMR_FINIT;
 }
 
+int mc_f405_can_set_filters(mc_f405_can_t *p_drv, const mc_f405_can_filter_t *p_filters,
+                            uint8_t n_filters)
+{
+    mc_f405_can_config_t c;
+    uint32_t old_bits = 0u;
+    uint32_t k;
+
+    if ((p_drv == NULL) || (p_drv->cfg.p_can == NULL) ||
+        ((n_filters != 0u) && (p_filters == NULL)) ||
+        (((uint32_t)p_drv->cfg.filter_bank_start + ((n_filters == 0u) ? 1u : (uint32_t)n_filters)) >
+         MC_F405_CAN_FILTER_BANKS)) {
+        return -EINVAL;
+    }
+    for (k = 0u; k < n_filters; k++) {
+        if (!filter_valid(&p_filters[k])) {
+            return -EINVAL;
+        }
+    }
+    c = p_drv->cfg;
+    for (k = 0u; k < ((c.n_filters == 0u) ? 1u : (uint32_t)c.n_filters); k++) {
+        old_bits |= 1u << (c.filter_bank_start + k);
+    }
+    c.p_filters = p_filters;
+    c.n_filters = n_filters;
+    p_drv->cfg.p_can->FMR |= MC_F405_CAN_FMR_FINIT;
+    p_drv->cfg.p_can->FA1R &= ~old_bits; /* banks of the old set no longer used */
+    filters_program(p_drv->cfg.p_can, &c);
+    p_drv->cfg = c;
+    return 0;
+}
+
 int mc_f405_can_init(mc_f405_can_t *p_drv, const mc_f405_can_config_t *p_cfg)
 {
     const mc_f405_can_config_t *c = p_cfg;

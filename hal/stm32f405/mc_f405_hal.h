@@ -473,6 +473,16 @@ int mc_f405_can_bit_timing(uint32_t pclk_hz, uint32_t bitrate_bps, uint16_t samp
  */
 int mc_f405_can_init(mc_f405_can_t *p_drv, const mc_f405_can_config_t *p_cfg);
 
+/**
+ * Replace the acceptance filters at run time (the application's node filter,
+ * known only once the configuration is loaded): FMR.FINIT while the banks
+ * are written (reception pauses for those few writes), the banks of the old
+ * set deactivated, the new ones programmed as at init. p_filters must
+ * outlive the driver. @return 0; -EINVAL (nothing written) as at init.
+ */
+int mc_f405_can_set_filters(mc_f405_can_t *p_drv, const mc_f405_can_filter_t *p_filters,
+                            uint8_t n_filters);
+
 /** CAN1 RX0 ISR body (rx_irq mode): move FIFO 0 into the ring. */
 void mc_f405_can_rx_isr(mc_f405_can_t *p_drv);
 

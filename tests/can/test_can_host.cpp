@@ -13,6 +13,10 @@
 
 #include "hal_host/candump_log.hpp"
 #include "hal_host/socketcan.hpp"
+extern "C" {
+#include "mc_app.h"
+#include "mc_hal_fake.h"
+}
 
 namespace {
 
@@ -145,6 +149,98 @@ TEST(SocketCan, ErrorFramesDriveTheBusState) {
   EXPECT_EQ(130u, st.tx_err_count);
   EXPECT_EQ(7u, st.rx_err_count);
 #endif
+}
+
+// The application on the host HAL's bus-state path: the controller state
+// comes from SocketCAN error frames (socketcan_apply_error, what SocketCan
+// does with each error frame it reads); frames go through the fake board.
+struct ErrorFrameCan {
+  mc_hal_can_status_t st{};
+  hal_host::SocketCanStats stats;
+  const mc_hal_can_t* inner = nullptr;
+  mc_hal_can_t dev{};
+  static int send(void* c, const mc_hal_can_frame_t* f) {
+    return mc_hal_can_send(static_cast<ErrorFrameCan*>(c)->inner, f);
+  }
+  static int receive(void* c, mc_hal_can_frame_t* f) {
+    return mc_hal_can_receive(static_cast<ErrorFrameCan*>(c)->inner, f);
+  }
+  static int status(void* c, mc_hal_can_status_t* s) {
+    *s = static_cast<ErrorFrameCan*>(c)->st;
+    return 0;
+  }
+  void error_frame(uint32_t id, uint8_t ctrl) {
+    uint8_t d[8] = {0};
+    d[1] = ctrl;
+    hal_host::socketcan_apply_error(CAN_ERR_FLAG | id, d, &st, &stats);
+  }
+};
+
+TEST(SocketCan, AppStopsTheDriveOnBusOffFromErrorFrames) {
+  static const mc_hal_can_ops_t ops{ErrorFrameCan::send, ErrorFrameCan::receive,
+                                    ErrorFrameCan::status};
+  mc_hal_fake_config_t fc{};
+  ASSERT_EQ(0, mc_hal_fake_config_default(&fc));
+  static mc_hal_fake_t fake{};
+  ASSERT_EQ(0, mc_hal_fake_init(&fake, &fc));
+  fake.adc_temp = mc_hal_adc_temp_t{25.0f, 25.0f, MC_HAL_ADC_TEMP_VALID_ALL};
+  ErrorFrameCan can;
+  can.inner = fake.board.can;
+  can.dev = mc_hal_can_t{&ops, &can};
+  const mc_params_t defaults = mc_params_default;
+  mc_app_cfg_t cfg{};
+  cfg.defaults = &defaults;
+  cfg.tm_budget_frac = 0.5f;
+  static mc_app_t app{};
+  static mc_drive_t drive{};
+  ASSERT_EQ(MC_APP_CFG_OK, mc_app_boot(&app, &cfg));
+  ASSERT_EQ(MC_APP_CFG_OK, mc_app_start(&app, &drive, &fake.board, &can.dev, true));
+  ASSERT_EQ(0, mc_hal_fake_encoder_set(&fake, 0u, MC_HAL_ENCODER_FLAG_VALID));
+  auto period = [&]() {
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(
+                     &fake, 0.0f, 0.0f, 0.0f, defaults.vbus_v,
+                     MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB | MC_HAL_ADC_VALID_VBUS));
+    if (mc_app_fast_step(&app)) {
+      mc_app_can_rx_isr(&app);
+      mc_app_slow_step(&app);
+    }
+  };
+  auto slow_steps = [&](uint32_t n) {
+    for (uint32_t i = 0; i < n * defaults.slow_loop_div; ++i) period();
+  };
+  auto send = [&](uint32_t cmd, uint8_t b) {
+    mc_hal_can_frame_t f{};
+    f.id = defaults.can_node_id << 5 | cmd;
+    f.len = 1;
+    f.data[0] = b;
+    ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &f));
+  };
+  send(0x11u, 1);  // SET_CONTROL_MODE CURRENT
+  send(0x10u, 1);  // SET_ENABLE 1
+  slow_steps(2);
+  ASSERT_EQ(MC_DRIVE_MODE_CURRENT, drive.mode);
+  can.error_frame(CAN_ERR_CRTL, CAN_ERR_CRTL_TX_WARNING);
+  slow_steps(1);
+  EXPECT_EQ(1u, mc_app_can_state(&app));
+  EXPECT_EQ(MC_DRIVE_MODE_CURRENT, drive.mode) << "a warning level alone keeps running";
+  can.error_frame(CAN_ERR_BUSOFF, 0u);
+  slow_steps(1);
+  EXPECT_EQ(3u, mc_app_can_state(&app));
+  EXPECT_EQ(MC_APP_FAULT_CAN_BUS_OFF, app.faults);
+  EXPECT_NE(MC_DRIVE_MODE_CURRENT, drive.mode) << "controlled stop";
+  slow_steps(400);
+  EXPECT_EQ(MC_DRIVE_MODE_IDLE, drive.mode);
+  EXPECT_FALSE(app.cmd.enabled);
+  // the kernel restarts the controller: error-active, then CLEAR_FAULTS works
+  can.error_frame(CAN_ERR_RESTARTED, 0u);
+  slow_steps(1);
+  EXPECT_EQ(0u, mc_app_can_state(&app));
+  mc_hal_can_frame_t f{};
+  f.id = defaults.can_node_id << 5 | 0x15u;  // CLEAR_FAULTS, no data
+  ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &f));
+  slow_steps(1);
+  EXPECT_EQ(0u, drive.warnings);
+  EXPECT_EQ(MC_APP_FAULT_NONE, app.faults);
 }
 
 TEST(SocketCan, MissingInterfaceOrStackIsAnErrorNamingIt) {

@@ -132,6 +132,8 @@ typedef struct mc_can_cmd {
     uint32_t rx_rejected;
     uint32_t reply_dropped;       /**< CMD_ERROR / PARAM_REPLY frames the HAL refused */
     mc_param_srv_t *params;       /**< parameter service, or NULL */
+    uint8_t can_state;            /**< HEARTBEAT.can_state (mc_hal_can_bus_state_t): set by
+                                 the application from the controller's status */
     uint8_t cfg_status;           /**< HEARTBEAT.cfg_status: the boot status of the
                                        parameter store (EMPTY without one: the
                                        configuration is not from flash) */

@@ -7,11 +7,12 @@
 
 #include <stddef.h>
 
-static const mc_can_signal_t sig_heartbeat[10] = {
+static const mc_can_signal_t sig_heartbeat[11] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 4.0f}, /* mode [-] */
     {8u, 4u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* control_mode [-] */
     {12u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* enabled [-] */
     {13u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* stopping [-] */
+    {14u, 2u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* can_state [-] */
     {16u, 4u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* stop_reason [-] */
     {20u, 4u, false, 1.0f, 0.0f, 0.0f, 6.0f}, /* cfg_status [-] */
     {24u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* faults [-] */
@@ -59,6 +60,16 @@ static const mc_can_signal_t sig_stepper[5] = {
     {14u, 14u, true, 0.01f, 0.0f, -81.92f, 81.91f}, /* e2_rad_s [rad/s] */
     {28u, 14u, true, 0.01f, 0.0f, -81.92f, 81.91f}, /* s1 [-] */
     {42u, 14u, true, 0.01f, 0.0f, -81.92f, 81.91f}, /* s2 [-] */
+    {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
+};
+static const mc_can_signal_t sig_app_status[8] = {
+    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 127.0f}, /* reset_cause [-] */
+    {8u, 4u, false, 1.0f, 0.0f, 0.0f, 6.0f}, /* cfg_status [-] */
+    {12u, 2u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* can_state [-] */
+    {16u, 8u, false, 1.0f, 0.0f, 0.0f, 15.0f}, /* app_faults [-] */
+    {24u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* tx_err_count [-] */
+    {32u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* rx_err_count [-] */
+    {40u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* rx_lost [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
 static const mc_can_signal_t sig_set_enable[1] = {
@@ -122,7 +133,7 @@ static const mc_can_signal_t sig_cmd_error[4] = {
 };
 
 const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
-    {MC_CAN_CMD_HEARTBEAT, 8u, MC_CAN_DIR_TX, 10u, sig_heartbeat}, /* HEARTBEAT */
+    {MC_CAN_CMD_HEARTBEAT, 8u, MC_CAN_DIR_TX, 11u, sig_heartbeat}, /* HEARTBEAT */
     {MC_CAN_CMD_CURRENTS, 8u, MC_CAN_DIR_TX, 5u, sig_currents}, /* CURRENTS */
     {MC_CAN_CMD_VOLTAGES, 8u, MC_CAN_DIR_TX, 4u, sig_voltages}, /* VOLTAGES */
     {MC_CAN_CMD_SPEED, 8u, MC_CAN_DIR_TX, 3u, sig_speed}, /* SPEED */
@@ -130,6 +141,7 @@ const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
     {MC_CAN_CMD_OBSERVER, 8u, MC_CAN_DIR_TX, 4u, sig_observer}, /* OBSERVER */
     {MC_CAN_CMD_CONTROLLER, 8u, MC_CAN_DIR_TX, 3u, sig_controller}, /* CONTROLLER */
     {MC_CAN_CMD_STEPPER, 8u, MC_CAN_DIR_TX, 5u, sig_stepper}, /* STEPPER */
+    {MC_CAN_CMD_APP_STATUS, 8u, MC_CAN_DIR_TX, 8u, sig_app_status}, /* APP_STATUS */
     {MC_CAN_CMD_SET_ENABLE, 1u, MC_CAN_DIR_RX, 1u, sig_set_enable}, /* SET_ENABLE */
     {MC_CAN_CMD_SET_CONTROL_MODE, 1u, MC_CAN_DIR_RX, 1u, sig_set_control_mode}, /* SET_CONTROL_MODE */
     {MC_CAN_CMD_SET_CURRENT_REF, 4u, MC_CAN_DIR_RX, 2u, sig_set_current_ref}, /* SET_CURRENT_REF */

@@ -129,6 +129,7 @@ static void values_heartbeat(const mc_telemetry_src_t *src, float *v)
         v[MC_CAN_HEARTBEAT_STOPPING] = c->stopping ? 1.0f : 0.0f;
         v[MC_CAN_HEARTBEAT_STOP_REASON] = u8f(c->stop_reason);
         v[MC_CAN_HEARTBEAT_CFG_STATUS] = u8f(c->cfg_status);
+        v[MC_CAN_HEARTBEAT_CAN_STATE] = (float)(c->can_state & 0x3u);
         v[MC_CAN_HEARTBEAT_LAST_ERROR] = u8f(c->last_error);
         v[MC_CAN_HEARTBEAT_LAST_ERROR_CMD] = u8f(c->last_error_cmd);
     } else {
@@ -137,6 +138,7 @@ static void values_heartbeat(const mc_telemetry_src_t *src, float *v)
         v[MC_CAN_HEARTBEAT_STOPPING] = 0.0f;
         v[MC_CAN_HEARTBEAT_STOP_REASON] = 0.0f;
         v[MC_CAN_HEARTBEAT_CFG_STATUS] = (float)MC_CAN_VAL_CFG_STATUS_EMPTY;
+        v[MC_CAN_HEARTBEAT_CAN_STATE] = 0.0f;
         v[MC_CAN_HEARTBEAT_LAST_ERROR] = 0.0f;
         v[MC_CAN_HEARTBEAT_LAST_ERROR_CMD] = 0.0f;
     }

@@ -876,6 +876,21 @@ void mc_drive_raise_fault(mc_drive_t *d, uint32_t bits)
     raise_fault(d, bits & MC_DRIVE_FAULT_EXTERNAL);
 }
 
+void mc_drive_warning_cause(mc_drive_t *d, uint32_t bits, bool present)
+{
+    const uint32_t w = bits & MC_DRIVE_WARN_CAN_BUS;
+    if (!present) {
+        d->warn_causes &= ~w;
+        return;
+    }
+    if (w == 0u) {
+        return;
+    }
+    d->warn_causes |= w;
+    d->warnings |= w;
+    begin_stop(d, MC_DRIVE_STOP_WARNING);
+}
+
 int mc_drive_clear_faults(mc_drive_t *d)
 {
     if (d->hal->fault != NULL) {
@@ -888,7 +903,7 @@ int mc_drive_clear_faults(mc_drive_t *d)
         }
     }
     const float v = d->tm.vbus_v;
-    if (!(v >= d->cfg.vbus_min_v && v <= d->cfg.vbus_max_v)) {
+    if (!(v >= d->cfg.vbus_min_v && v <= d->cfg.vbus_max_v) || d->warn_causes != 0u) {
         return -EBUSY;
     }
     if (d->asc_active) {

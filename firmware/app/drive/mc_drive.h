@@ -109,6 +109,9 @@ typedef enum {
 #define MC_DRIVE_WARN_NONE     0u
 #define MC_DRIVE_WARN_TEMP     (1u << 0) /**< power stage or motor above temp_warn_c */
 #define MC_DRIVE_WARN_VBUS_SAG (1u << 1) /**< DC bus below vbus_sag_v */
+#define MC_DRIVE_WARN_CAN_BUS \
+    (1u << 2) /**< the CAN controller is error-passive or bus-off (raised by
+                   the application, mc_drive_warning_cause) */
 
 /* Why the last controlled stop began (mc_drive_t.stop_cause). */
 #define MC_DRIVE_STOP_NONE    0u
@@ -420,6 +423,7 @@ typedef struct {
     const mc_drive_ctrl_t *ctrl;  /**< attached control law, or NULL */
     mc_drive_telemetry_t tm;
     uint32_t warnings;          /**< MC_DRIVE_WARN_* (sticky until clear_faults) */
+    uint32_t warn_causes;       /**< application warnings whose cause is present */
     uint32_t stop_cause;        /**< MC_DRIVE_STOP_* of the last controlled stop */
     bool stop_from_ctrl;        /**< STOPPING: the law decelerates (else the drive) */
     float stop_omega_ref_rad_s; /**< STOPPING from CURRENT: the speed ramp [rad/s] */
@@ -477,8 +481,17 @@ void mc_drive_set_runtime_limits(mc_drive_t *d, const mc_drive_cfg_t *cfg);
  *  same reaction as a detected fault. bits must be MC_DRIVE_FAULT_EXTERNAL. */
 void mc_drive_raise_fault(mc_drive_t *d, uint32_t bits);
 
+/** A warning whose cause the application sees (bits: MC_DRIVE_WARN_CAN_BUS;
+ *  others are ignored, the drive detects them itself). present: the warning
+ *  is set (a running drive makes a controlled stop, as for its own
+ *  warnings; CURRENT/CTRL are refused) and mc_drive_clear_faults is refused
+ *  while the cause stays; !present: the cause is gone, the warning stays
+ *  until mc_drive_clear_faults. */
+void mc_drive_warning_cause(mc_drive_t *d, uint32_t bits, bool present);
+
 /** Clear the faults and go to IDLE, if the causes are gone (DC bus inside
- *  its window, hardware fault input released). Returns 0 or -EBUSY. */
+ *  its window, hardware fault input released, no application warning cause
+ *  present). Returns 0 or -EBUSY. */
 int mc_drive_clear_faults(mc_drive_t *d);
 
 #ifdef __cplusplus

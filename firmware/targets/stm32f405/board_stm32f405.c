@@ -9,8 +9,19 @@
  *                 TIM1 TRGO = OC4REF, 1 us before the counter peak.
  *   ADC1          injected: the board's measured phases and bus voltage;
  *                 JEOC interrupt runs the fast loop. Temperatures regular.
- *   encoder       TIM3. tick TIM5 (32 bit, 84 MHz). CAN1 500 kbit/s, every
- *                 frame accepted.
+ *   encoder       TIM3. tick TIM5 (32 bit, 84 MHz). CAN1 500 kbit/s: every
+ *                 frame accepted until the application has loaded its
+ *                 configuration, then only this node's identifiers
+ *                 (mc_f405_can_set_filters, id & 0x7E0 == node << 5). The
+ *                 receive interrupt drains FIFO 0 into the application's
+ *                 ring (mc_main_can_rx).
+ *   application   firmware/app/app/mc_app (mc_board_app_cfg): the A/B
+ *                 configuration store in flash sectors 10 and 11 (128 KiB
+ *                 each at 0x080C0000 / 0x080E0000, far above the image;
+ *                 sectors 0..9 refused by the flash driver), the IWDG
+ *                 (50 ms, 4 s around an erase) and the reset flags of
+ *                 RCC_CSR, the board's defaults below (what runs when no
+ *                 stored configuration is valid).
  *   gate driver   EN_GATE and nFAULT pins; a DRV8301 set up over SPI3
  *                 (gain, over-current threshold and mode) and verified
  *                 before the drive starts; a failed set-up halts the image
@@ -28,10 +39,14 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "mc_app.h"
 #include "mc_board.h"
 #include "mc_board_f405.h"
 #include "mc_clock.h"
 #include "mc_cortexm.h"
+#include "mc_f405_flash.h"
+#include "mc_f405_iwdg.h"
+#include "mc_params.h"
 #include "mc_stm32f405.h"
 
 /* The board: its generated description, mc_board_<name>_desc, named by the
@@ -49,12 +64,26 @@ extern const mc_board_desc_t MC_BOARD_DESC;
 #define DELAY_POLL_SLACK 1000u
 #define SLOW_LOOP_DIV    20u                                 /* 1 kHz slow loop */
 #define SLOW_PERIOD_US   (1000000u / PWM_HZ * SLOW_LOOP_DIV) /* 1000 us */
+#define CFG_SECTOR_A     10u
+#define CFG_SECTOR_B     11u
+#define CFG_PROTECT_MASK 0x3FFu /* sectors 0..9: the code's side of the flash */
+/* SR.BSY polls of one flash operation: a 128 KiB erase takes up to 2 s
+ * (DS8626, x32), a poll at least 4 cycles at 168 MHz (84e6 per 2 s). */
+#define FLASH_BUSY_POLLS 100000000u
+#define WDG_TIMEOUT_MS   50u   /* 50 slow periods; >= 34 ms at the fastest LSI */
+#define WDG_ERASE_MS     4000u /* >= 2.7 s at the fastest LSI: a 128 KiB erase */
+#define TM_BUDGET_FRAC   0.5f
 
 void CAN1_RX0_IRQHandler(void);
 
 typedef struct drive_board {
     mc_board_f405_t f405;
     mc_drive_cfg_t cfg;
+    mc_f405_flash_t flash;
+    mc_f405_iwdg_t iwdg;
+    mc_f405_can_filter_t node_filter[1];
+    mc_params_t defaults;
+    mc_app_cfg_t app;
 } drive_board_t;
 
 static drive_board_t g_board;
@@ -89,7 +118,21 @@ static void delay_us(void *ctx, uint32_t us)
 
 void CAN1_RX0_IRQHandler(void)
 {
+    /* FIFO 0 into the driver's ring, then into the application's ring */
     mc_f405_can_rx_isr(&g_board.f405.can);
+    mc_main_can_rx();
+}
+
+static int set_node_filter(void *ctx, uint32_t id, uint32_t mask)
+{
+    drive_board_t *b = ctx;
+    if (!b->f405.can_ok) {
+        return -ENODEV;
+    }
+    b->node_filter[0].id = id;
+    b->node_filter[0].mask = mask;
+    b->node_filter[0].ext = false;
+    return mc_f405_can_set_filters(&b->f405.can, b->node_filter, 1u);
 }
 
 const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
@@ -125,6 +168,82 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
         return NULL;
     }
     return &g_board.f405.hal;
+}
+
+/* The board's defaults as a parameter set: the table's defaults with this
+ * board's PWM rate, slow divider, sensing and bus window, and the motor and
+ * current loop of mc_board_drive_cfg (the paper-002 test motor). */
+static void board_defaults(mc_params_t *p)
+{
+    *p = mc_params_default;
+    p->pwm_hz = PWM_HZ;
+    p->slow_loop_div = SLOW_LOOP_DIV;
+    p->r_ohm = 0.675f;
+    p->ld_h = 1.14e-3f;
+    p->lq_h = 1.14e-3f;
+    p->flux_wb = 0.11f;
+    p->pole_pairs = 4u;
+    p->current_bw_rad_s = CURRENT_BW_RAD_S;
+    p->v_limit_ratio = 0.95f;
+    p->speed_pll_bw_rad_s = 1000.0f;
+    p->i_max_a = I_MAX_A;
+    p->i_trip_a = I_TRIP_A;
+    p->i_sense_max_a = MC_BOARD_DESC.i_sense_max_a;
+    p->dead_time_s = (float)MC_BOARD_DESC.deadtime_ns * 1e-9f;
+    p->encoder_cpr = MC_BOARD_DESC.enc_counts_per_rev;
+    p->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
+    p->vbus_max_v = MC_BOARD_DESC.vbus_max_v;
+    p->can_bitrate_bps = 500000u; /* the controller's rate (mc_board_f405.c) */
+}
+
+const mc_app_cfg_t *mc_board_app_cfg(void)
+{
+    drive_board_t *b = &g_board;
+    const mc_f405_flash_config_t fc = {
+        .p_regs = periph_at(MC_F405_FLASH_R_BASE),
+        .p_mem = periph_at(MC_F405_FLASH_MEM_BASE),
+        .protect_mask = CFG_PROTECT_MASK,
+        .busy_spin_max = FLASH_BUSY_POLLS,
+        .hw_poll = NULL,
+        .hw_ctx = NULL,
+    };
+    const mc_f405_iwdg_config_t wc = {
+        .p_iwdg = periph_at(MC_F405_IWDG_BASE),
+        .p_rcc_csr = periph_at(MC_F405_RCC_CSR_ADDR),
+        .hw_poll = NULL,
+        .hw_ctx = NULL,
+    };
+    const mc_app_cfg_t zero = {0};
+    b->app = zero;
+    board_defaults(&b->defaults);
+    b->app.defaults = &b->defaults;
+    b->app.pwm_hz_fixed = PWM_HZ;
+    b->app.slow_loop_div_fixed = SLOW_LOOP_DIV;
+    b->app.tm_budget_frac = TM_BUDGET_FRAC;
+    if (mc_f405_flash_init(&b->flash, &fc) == 0) {
+        b->app.flash = &b->flash.dev;
+        b->app.flash_sectors[0] = CFG_SECTOR_A;
+        b->app.flash_sectors[1] = CFG_SECTOR_B;
+    }
+    if (mc_f405_iwdg_init(&b->iwdg, &wc) == 0) {
+        b->app.wdg = &b->iwdg.dev;
+        b->app.wdg_timeout_ms = WDG_TIMEOUT_MS;
+        b->app.wdg_erase_timeout_ms = WDG_ERASE_MS;
+    }
+    {
+        /* Sensored speed loop at the slow rate on the default motor:
+         * kp = J bw / kt, ki = kp bw / 4 (critically damped), bw 20 rad/s,
+         * J of the defaults; kt = 1.5 p psi. */
+        const float kt = 1.5f * (float)b->defaults.pole_pairs * b->defaults.flux_wb;
+        const float bw = 20.0f;
+        const float kp = b->defaults.j_kgm2 * bw / kt;
+        b->app.speed.kp_a_s_rad = kp;
+        b->app.speed.ki_dt_a_s_rad = kp * bw / 4.0f / ((float)PWM_HZ / (float)SLOW_LOOP_DIV);
+        b->app.speed.i_max_a = I_MAX_A;
+    }
+    b->app.set_rx_filter = set_node_filter;
+    b->app.filter_ctx = b;
+    return &b->app;
 }
 
 const mc_drive_cfg_t *mc_board_drive_cfg(void)

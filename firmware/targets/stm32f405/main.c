@@ -4,10 +4,21 @@
  *        the two loops in their interrupts.
  *
  *   ADC_IRQHandler  (IRQ 18, priority 0, the highest): fast loop, once per
- *                   PWM period: mc_drive_fast_step(); every slow_loop_div
- *                   periods it pends PendSV.
- *   PendSV_Handler  (priority 15, the lowest): slow loop, mc_drive_slow_step().
+ *                   PWM period: mc_drive_fast_step() and the application's
+ *                   fast-loop mark (watchdog); every slow_loop_div periods
+ *                   it pends PendSV.
+ *   CAN1_RX0        (the board's, priority 8): received frames into the
+ *                   application's ring (mc_main_can_rx).
+ *   PendSV_Handler  (priority 15, the lowest): slow loop, mc_drive_slow_step()
+ *                   and the application's slow work (commands, timeout,
+ *                   speed loop, CAN state, telemetry, watchdog feed).
  *   main            sleeps (WFI) between interrupts.
+ *
+ * The application (firmware/app/app/mc_app) is bound when the board gives
+ * its configuration (mc_board_app_cfg): it boots the stored configuration
+ * (or the board's defaults), initialises the drive from it and starts the
+ * watchdog. A board without one (the PIL board) runs the drive alone on
+ * mc_board_drive_cfg().
  *
  * The FPU is enabled by the reset handler; FP context stacking is lazy, so
  * both handlers may use floats and an interrupted slow step keeps its FP
@@ -21,6 +32,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "mc_app.h"
 #include "mc_board.h"
 #include "mc_clock.h"
 #include "mc_cortexm.h"
@@ -42,7 +54,22 @@ void PendSV_Handler(void);
 /* The application owns its instances (design notes: no globals in kernels,
  * app/ and the image's main own the statically allocated state). */
 static mc_drive_t g_drive MC_FAST_DATA;
+static mc_app_t g_app;
+static bool g_app_on;
 static volatile bool g_running;
+
+/* Boards without an application binding (the PIL board) keep this one. */
+__attribute__((weak)) const mc_app_cfg_t *mc_board_app_cfg(void)
+{
+    return NULL;
+}
+
+void mc_main_can_rx(void)
+{
+    if (g_running && g_app_on) {
+        (void)mc_app_can_rx_isr(&g_app);
+    }
+}
 
 void ADC_IRQHandler(void)
 {
@@ -51,7 +78,11 @@ void ADC_IRQHandler(void)
         return;
     }
     mc_board_apply_commands(&g_drive);
-    if (mc_drive_fast_step(&g_drive)) {
+    const bool slow_due = mc_drive_fast_step(&g_drive);
+    if (g_app_on) {
+        mc_app_fast_mark(&g_app);
+    }
+    if (slow_due) {
         mc_scb_pend_pendsv(); /* period_done follows the slow step */
     } else {
         mc_board_period_done(&g_drive, false);
@@ -61,6 +92,9 @@ void ADC_IRQHandler(void)
 void PendSV_Handler(void)
 {
     mc_drive_slow_step(&g_drive);
+    if (g_app_on) {
+        (void)mc_app_slow_work(&g_app);
+    }
     mc_board_period_done(&g_drive, true);
 }
 
@@ -73,13 +107,29 @@ int main(void)
     (void)mc_clock_init_168mhz(&regs, MC_CLOCK_TIMEOUT_LOOPS, &sysclk_hz);
 
     const mc_hal_t *hal = mc_board_init(sysclk_hz);
-    const mc_drive_cfg_t *cfg = mc_board_drive_cfg();
-    if (hal == NULL || cfg == NULL) {
+    if (hal == NULL) {
         mc_board_halt(MC_DRIVE_CFG_ERR_NULL);
     }
-    const uint32_t err = mc_drive_init(&g_drive, cfg, hal);
-    if (err != MC_DRIVE_CFG_OK) {
-        mc_board_halt(err);
+    const mc_app_cfg_t *app_cfg = mc_board_app_cfg();
+    /* cppcheck-suppress knownConditionTrueFalse ; the board's strong symbol replaces the weak NULL */
+    if (app_cfg != NULL) {
+        /* A store that cannot be read boots the defaults (boot_status says
+         * so); a configuration the drive refuses halts with the outputs off. */
+        (void)mc_app_boot(&g_app, app_cfg);
+        const uint32_t aerr = mc_app_start(&g_app, &g_drive, hal, hal->can, true);
+        if (aerr != MC_APP_CFG_OK) {
+            mc_board_halt((g_app.drive_err != 0u) ? g_app.drive_err : MC_DRIVE_CFG_ERR_NULL);
+        }
+        g_app_on = true;
+    } else {
+        const mc_drive_cfg_t *cfg = mc_board_drive_cfg();
+        if (cfg == NULL) {
+            mc_board_halt(MC_DRIVE_CFG_ERR_NULL);
+        }
+        const uint32_t err = mc_drive_init(&g_drive, cfg, hal);
+        if (err != MC_DRIVE_CFG_OK) {
+            mc_board_halt(err);
+        }
     }
 
     mc_nvic_set_priority(MC_IRQ_ADC, MC_PRIO_FAST_LOOP);

@@ -22,6 +22,7 @@
 #include <stdint.h>
 
 #include "hal/hal.h"
+#include "mc_app.h"
 #include "mc_drive.h"
 
 /** Configure the board's peripherals (clocks already set: sysclk_hz, or 0
@@ -31,6 +32,17 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz);
 /** The drive configuration for this board (the PIL board receives it from
  *  the host). NULL: none available. */
 const mc_drive_cfg_t *mc_board_drive_cfg(void);
+
+/** The drive application's binding (flash store, watchdog, defaults, node
+ *  filter), called once after mc_board_init. NULL (the default of main.c,
+ *  a weak symbol; the PIL board): no application, the drive alone runs on
+ *  mc_board_drive_cfg and the board's own command path. */
+const mc_app_cfg_t *mc_board_app_cfg(void);
+
+/** Provided by main.c for the board's CAN receive interrupt: move the
+ *  received frames into the application's ring (nothing before the
+ *  application runs). */
+void mc_main_can_rx(void);
 
 /** Start the PWM-synchronous conversions (the fast-loop interrupt source). */
 void mc_board_start(void);

@@ -1,6 +1,8 @@
-// Scenario can-telemetry: the FOC drive on the simulated board with the CAN
-// telemetry scheduler (firmware/app/mc_telemetry) and command handler
-// (firmware/app/mc_can_cmd) attached, as on the MCU's slow loop.
+// Scenario can-telemetry: the FOC drive on the simulated board with the
+// drive application of the MCU image (firmware/app/app/mc_app: CAN receive
+// ring, command handler, telemetry, command timeout, parameter service and
+// flash configuration, sensored speed loop) bound to it; this file only binds
+// the application to the simulated board, its CAN and its flash file.
 //
 // Where the frames go (environment, since scenario parameters are numbers):
 //   MCSIM_CAN_IF=vcan0     a SocketCAN interface (hal_host::SocketCan):
@@ -18,9 +20,9 @@
 // those the HAL refused (tm_fail_mask), so a logger's decoded frames can be
 // matched one for one.
 //
-// SPEED control mode is served by a speed PI in this scenario (the
-// application's set_speed_ref hook) that writes the current references in
-// the drive's CURRENT mode; POSITION is not offered (UNSUPPORTED).
+// SPEED control mode is served by the application's sensored speed loop (a
+// PI at the slow rate writing the current references in the drive's CURRENT
+// mode, gains below); POSITION is not offered (UNSUPPORTED).
 //
 // Parameters (PARAM_REQ/PARAM_REPLY) are served as on the MCU: the
 // parameter service (firmware/app/config/mc_param_srv) on the drive, with
@@ -61,12 +63,9 @@
 #include "scenario.hpp"
 extern "C" {
 #include "commission/mc_comm_can.h"
-#include "mc_can_cmd.h"
+#include "mc_app.h"
 #include "mc_can_proto.h"
-#include "mc_cfg_store.h"
-#include "mc_param_srv.h"
 #include "mc_params.h"
-#include "mc_telemetry.h"
 }
 
 namespace mcsim {
@@ -80,8 +79,8 @@ const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT", "CURRENTS", "VOLTAGES",
 // Signal names per slot, in DBC order (checked against the generated
 // signal counts below; tests/can compares the CSV header with the DBC).
 const std::vector<std::vector<std::string>> kSlotSignals = {
-    {"mode", "control_mode", "enabled", "stopping", "stop_reason", "cfg_status", "faults",
-     "last_error", "last_error_cmd", "seq"},
+    {"mode", "control_mode", "enabled", "stopping", "can_state", "stop_reason", "cfg_status",
+     "faults", "last_error", "last_error_cmd", "seq"},
     {"i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a", "seq"},
     {"v_d_v", "v_q_v", "v_bus_v", "seq"},
     {"omega_m_rad_s", "omega_ref_rad_s", "seq"},
@@ -93,24 +92,6 @@ const std::vector<std::vector<std::string>> kSlotSignals = {
 std::string env_or(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);
   return (v != nullptr && *v != '\0') ? std::string(v) : fallback;
-}
-
-// Speed PI of the scenario's application: iq_ref from the speed error.
-struct SpeedLoop {
-  mc_drive_t* drive = nullptr;
-  float ref_rad_s = 0.0f;
-  float kp = 0.0f, ki_dt = 0.0f, integ_a = 0.0f, i_max_a = 0.0f;
-  void step() {
-    const float e = ref_rad_s - drive->tm.omega_m_rad_s;
-    integ_a = std::fmin(std::fmax(integ_a + ki_dt * e, -i_max_a), i_max_a);
-    const float iq = std::fmin(std::fmax(kp * e + integ_a, -i_max_a), i_max_a);
-    (void)mc_drive_set_current_ref(drive, 0.0f, iq);
-  }
-};
-
-int speed_hook(void* ctx, float ref) {
-  static_cast<SpeedLoop*>(ctx)->ref_rad_s = ref;
-  return 0;
 }
 
 const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
@@ -170,22 +151,6 @@ mc_params_t scenario_params(const Params& P, const FocSilOptions& o, const mc_dr
   return p;
 }
 
-// The SIL board's extra APPLY check in front of the CAN layer's: the PWM
-// rate and the slow-loop divider are fixed for the run.
-struct SilParamHook {
-  mc_param_hook_t inner{};
-  uint32_t pwm_hz = 0, slow_loop_div = 0;
-};
-uint32_t sil_param_check(void* ctx, const mc_params_t* p) {
-  const auto* h = static_cast<const SilParamHook*>(ctx);
-  if (p->pwm_hz != h->pwm_hz || p->slow_loop_div != h->slow_loop_div) return 1u;
-  return h->inner.check != nullptr ? h->inner.check(h->inner.ctx, p) : 0u;
-}
-void sil_param_apply(void* ctx, const mc_params_t* p) {
-  const auto* h = static_cast<const SilParamHook*>(ctx);
-  if (h->inner.apply != nullptr) h->inner.apply(h->inner.ctx, p);
-}
-
 void run_can_telemetry(RunContext& ctx) {
   const auto& P = ctx.params;
   FocSilOptions o;
@@ -200,27 +165,31 @@ void run_can_telemetry(RunContext& ctx) {
   // Boot: the configuration (see the header).
   const mc_params_t p_scn = scenario_params(P, o, sil_ptr->drive().cfg);
   const uint32_t scn_err = mc_params_validate(&p_scn);
-  mc_params_t p = p_scn;
-  std::unique_ptr<mc_cfg_store_t> store;
-  mc_cfg_boot_t boot = MC_CFG_BOOT_EMPTY;
+  if (ctx.flash != nullptr && scn_err != MC_PARAMS_OK) {
+    throw UsageError(
+        "with --flash the scenario's settings are the board's defaults and must "
+        "form a valid parameter set (firmware/app/config/PARAMS.md); "
+        "mc_params_validate refuses them: MC_PARAMS_ERR bits 0x" +
+        std::to_string(scn_err));
+  }
+  auto app_ptr = std::make_unique<mc_app_t>();
+  mc_app_t& app = *app_ptr;
+  mc_app_cfg_t acfg{};
+  acfg.flash = ctx.flash != nullptr ? ctx.flash->hal() : nullptr;
+  acfg.flash_sectors[0] = 0u;
+  acfg.flash_sectors[1] = 1u;
+  acfg.defaults = &p_scn;
+  acfg.tm_budget_frac = static_cast<float>(P.get("budget_pct") / 100.0);
+  for (int i = 0; i < 3; ++i) {
+    acfg.tm_ext_rate_hz[i] = static_cast<uint16_t>(P.get(kSlotParam[MC_TM_OBSERVER + i]));
+  }
+  if ((mc_app_boot(&app, &acfg) & MC_APP_CFG_ERR_STORE) != 0u) {
+    throw std::logic_error("configuration store refused the flash file's sectors");
+  }
+  const mc_params_t& p = app.params;
+  const auto boot = static_cast<mc_cfg_boot_t>(app.boot_status);
   if (ctx.flash != nullptr) {
-    if (scn_err != MC_PARAMS_OK) {
-      throw UsageError(
-          "with --flash the scenario's settings are the board's defaults and must "
-          "form a valid parameter set (firmware/app/config/PARAMS.md); "
-          "mc_params_validate refuses them: MC_PARAMS_ERR bits 0x" +
-          std::to_string(scn_err));
-    }
-    store = std::make_unique<mc_cfg_store_t>();
-    const mc_cfg_store_cfg_t scfg{ctx.flash->hal(), {0u, 1u}};
-    if (mc_cfg_store_init(store.get(), &scfg) != 0) {
-      throw std::logic_error("configuration store refused the flash file's sectors");
-    }
-    mc_params_t loaded;
-    boot = mc_cfg_store_load(store.get(), &loaded);
-    if (boot == MC_CFG_BOOT_STORED || boot == MC_CFG_BOOT_MIGRATED) {
-      p = loaded;
-    } else if (boot != MC_CFG_BOOT_EMPTY) {
+    if (boot != MC_CFG_BOOT_STORED && boot != MC_CFG_BOOT_MIGRATED && boot != MC_CFG_BOOT_EMPTY) {
       std::fprintf(stderr,
                    "mcsim: %s: no usable configuration (boot status %s): the "
                    "scenario's settings\n",
@@ -236,21 +205,14 @@ void run_can_telemetry(RunContext& ctx) {
   }
   FocSil& sil = *sil_ptr;
   mc_drive_t& d = sil.drive();
-  // The parameter service needs the drive to run exactly its parameters.
+  // The parameter service needs the drive to run exactly its parameters
+  // (the application initialises it from them).
   const bool serve_params = scn_err == MC_PARAMS_OK;
-  if (serve_params) {
-    mc_drive_cfg_t dc;
-    if (mc_params_to_drive_cfg(&p, &dc) != MC_PARAMS_OK ||
-        mc_drive_init(&d, &dc, sil.board().hal()) != MC_DRIVE_CFG_OK) {
-      throw std::logic_error("a validated parameter set refused by the drive");
-    }
-  }
   const double tick_hz_d = o.pwm_hz / o.slow_loop_div;
   if (std::fabs(tick_hz_d - std::round(tick_hz_d)) > 1e-9) {
     throw UsageError("pwm_hz / slow_loop_div must be a whole number of hertz");
   }
   const uint32_t tick_hz = static_cast<uint32_t>(std::lround(tick_hz_d));
-  const uint8_t node = static_cast<uint8_t>(p.can_node_id);
 
   // CAN: a SocketCAN interface, or a candump log (and a command script).
   hal_host::PmsmBoard& board = sil.board();
@@ -283,65 +245,35 @@ void run_can_telemetry(RunContext& ctx) {
     can = logcan->hal();
   }
 
-  mc_telemetry_cfg_t tc{};
-  tc.node_id = node;
-  tc.bitrate_bps = p.can_bitrate_bps;
-  tc.bus_budget_frac = static_cast<float>(P.get("budget_pct") / 100.0);
-  tc.tick_hz = tick_hz;
-  for (int i = 0; i < MC_TM_COUNT; ++i) tc.rate_hz[i] = static_cast<uint16_t>(P.get(kSlotParam[i]));
-  // the parameter table's rates (the rest, OBSERVER ..., are the scenario's)
-  const uint32_t tm_param[] = {p.tm_heartbeat_hz, p.tm_currents_hz, p.tm_voltages_hz, p.tm_speed_hz,
-                               p.tm_position_hz};
-  for (int i = 0; i <= MC_TM_POSITION; ++i) tc.rate_hz[i] = static_cast<uint16_t>(tm_param[i]);
-  mc_telemetry_t tm{};
-  const uint32_t terr = mc_telemetry_init(&tm, &tc);
-  if (terr != MC_TM_CFG_OK) {
-    throw UsageError("telemetry configuration refused (MC_TM_CFG bits 0x" + std::to_string(terr) +
-                     "), bus load " + std::to_string(100.0 * mc_telemetry_bus_load(&tc)) +
-                     " % of " + std::to_string(tc.bitrate_bps) + " bit/s, budget " +
-                     std::to_string(P.get("budget_pct")) + " %");
-  }
-
-  SpeedLoop speed;
-  speed.drive = &d;
-  speed.i_max_a = static_cast<float>(P.get("speed_i_max_a"));
   {
-    // PI on J dw/dt = Kt iq: kp = J bw / Kt, ki = kp bw / 4 (critically damped).
+    // The application's speed loop: a PI on J dw/dt = Kt iq, kp = J bw / Kt,
+    // ki = kp bw / 4 (critically damped), at the slow rate.
     const double kt = 1.5 * 4.0 * 0.11;  // paper-002 test motor: 1.5 p Phi [N m/A]
     const double bw = P.get("speed_bw_rad_s");
-    speed.kp = static_cast<float>(o.J_kgm2 * bw / kt);
-    speed.ki_dt = static_cast<float>(speed.kp * bw / 4.0 / tick_hz_d);
+    const float kp = static_cast<float>(o.J_kgm2 * bw / kt);
+    app.cfg.speed.kp_a_s_rad = kp;
+    app.cfg.speed.ki_dt_a_s_rad = static_cast<float>(kp * bw / 4.0 / tick_hz_d);
+    app.cfg.speed.i_max_a = static_cast<float>(P.get("speed_i_max_a"));
   }
-  mc_can_cmd_cfg_t cc{};
-  cc.node_id = node;
-  cc.tick_hz = tick_hz;
-  cc.timeout_s = p.can_timeout_s;
-  cc.stop_ramp_a_per_s = p.stop_ramp_a_per_s;
-  cc.stop_decel_rad_s2 = p.stop_decel_rad_s2;
-  cc.speed_max_rad_s = p.speed_max_rad_s;
-  cc.set_speed_ref = speed_hook;
-  cc.hook_ctx = &speed;
-  cc.speed_drive_mode = MC_DRIVE_MODE_CURRENT;
-  cc.position_drive_mode = MC_DRIVE_MODE_IDLE;
-  mc_can_cmd_t cmd{};
-  const uint32_t cerr = mc_can_cmd_init(&cmd, &cc, &d, &tm);
-  if (cerr != MC_CAN_CMD_CFG_OK) {
+  const uint32_t aerr = mc_app_start(&app, &d, sil.board().hal(), can, serve_params);
+  if ((aerr & MC_APP_CFG_ERR_TM) != 0u) {
+    throw UsageError("telemetry configuration refused (MC_TM_CFG bits 0x" +
+                     std::to_string(app.tm_err) + "), bus load " +
+                     std::to_string(100.0 * mc_telemetry_bus_load(&app.tm_cfg)) + " % of " +
+                     std::to_string(app.tm_cfg.bitrate_bps) + " bit/s, budget " +
+                     std::to_string(P.get("budget_pct")) + " %");
+  }
+  if ((aerr & MC_APP_CFG_ERR_CMD) != 0u) {
     throw UsageError("command handler configuration refused (MC_CAN_CMD_CFG bits 0x" +
-                     std::to_string(cerr) + ")");
+                     std::to_string(app.cmd_err) + ")");
   }
-  mc_param_srv_t srv{};
-  SilParamHook sil_hook;
-  if (serve_params) {
-    if (mc_param_srv_init(&srv, &p, &d, sil.board().hal(), store.get(),
-                          static_cast<uint8_t>(boot)) != 0) {
-      throw std::logic_error("parameter service refused a validated parameter set");
-    }
-    mc_can_cmd_attach_params(&cmd, &srv);
-    sil_hook.inner = srv.hook;
-    sil_hook.pwm_hz = p.pwm_hz;
-    sil_hook.slow_loop_div = p.slow_loop_div;
-    srv.hook = mc_param_hook_t{sil_param_check, sil_param_apply, &sil_hook};
+  if (aerr != MC_APP_CFG_OK) {
+    throw std::logic_error("the application refused a validated configuration (MC_APP_CFG 0x" +
+                           std::to_string(aerr) + ")");
   }
+  mc_telemetry_t& tm = app.tm;
+  const mc_can_cmd_t& cmd = app.cmd;
+  const mc_telemetry_src_t& src = app.tm_src;
   // Commissioning over CAN (COMMISSION_CMD, firmware/app/commission/
   // mc_comm_can.h): the board's test limits as in the commission scenario,
   // the results staged in the parameter service (when it is served).
@@ -360,16 +292,15 @@ void run_can_telemetry(RunContext& ctx) {
     k.base.bemf_frac = 0.5f;
     k.base.pole_pairs_max = 32;
     k.base.three_shunts = o.three_shunts;
-    k.node_id = node;
+    k.node_id = static_cast<uint8_t>(p.can_node_id);
     k.status_div = std::max<uint32_t>(1u, tick_hz / 10u);
     k.enc_pll_bw_rad_s = p.speed_pll_bw_rad_s;
-    if (mc_comm_can_init(&comm_can, &k, &comm, &d, serve_params ? &srv : nullptr) !=
+    if (mc_comm_can_init(&comm_can, &k, &comm, &d, serve_params ? &app.srv : nullptr) !=
         MC_COMM_CAN_CFG_OK) {
       throw UsageError("commissioning refused its configuration for this board");
     }
-    mc_can_cmd_attach_commission(&cmd, mc_comm_can_command, mc_comm_can_busy, &comm_can);
+    mc_app_attach_commission(&app, &comm_can);
   }
-  const mc_telemetry_src_t src{&d, &cmd, nullptr};
 
   std::vector<std::string> cols{"t", "tm_sent_mask", "tm_fail_mask", "omega_m_true_rad_s",
                                 "i_q_true_a"};
@@ -397,13 +328,11 @@ void run_can_telemetry(RunContext& ctx) {
   for (long k = 1; k <= n; ++k) {
     sil.step();
     if (k % static_cast<long>(o.slow_loop_div) != 0) continue;
-    // The slow loop's CAN work, as on the MCU: commands, supervision, the
-    // application's speed loop, then telemetry.
-    (void)mc_can_cmd_poll(&cmd, can, 16u);
-    mc_can_cmd_step(&cmd);
-    mc_comm_can_step(&comm_can, can);
-    if (cmd.enabled && cmd.control_mode == MC_CAN_CTRL_SPEED) speed.step();
-    const uint32_t sent = mc_telemetry_step(&tm, can, &src);
+    // The slow loop's application work, as on the MCU: the frames received
+    // since the previous step (the MCU's CAN interrupt), then commands,
+    // supervision, the speed loop and telemetry.
+    (void)mc_app_can_rx_isr(&app);
+    const uint32_t sent = mc_app_slow_work(&app);
     ++slow_steps;
     frames += static_cast<uint64_t>(__builtin_popcount(sent));
 
@@ -467,9 +396,9 @@ void run_can_telemetry(RunContext& ctx) {
     ctx.summary.set_text("cfg_boot_status", kBootName[boot]);
     ctx.summary.set("cfg_boot_code", static_cast<double>(boot));
     ctx.summary.set_text("cfg_from_store", from_store);
-    ctx.summary.set("cfg_store_seq", store->seq);
-    ctx.summary.set("cfg_saves", store->saves);
-    ctx.summary.set("cfg_applied", srv.applied);
+    ctx.summary.set("cfg_store_seq", app.store.seq);
+    ctx.summary.set("cfg_saves", app.store.saves);
+    ctx.summary.set("cfg_applied", app.srv.applied);
     ctx.summary.set("flash_persist_errors", ctx.flash->persist_errors());
   }
   if (sock) {

@@ -185,6 +185,33 @@ TEST_F(CanBoard, NoFiltersAcceptsAll)
     EXPECT_EQ(can.IER, MC_F405_CAN_IER_FMPIE0);
 }
 
+TEST_F(CanBoard, NodeFilterSetAtRunTime)
+{
+    // Booted accepting everything (bank 0), then the application's node
+    // filter for node 5: id 5 << 5 = 0xA0 under mask 0x7E0 (the node bits).
+    mc_f405_can_config_t c = cfg();
+    c.p_filters = nullptr;
+    c.n_filters = 0u;
+    start(c);
+    static const mc_f405_can_filter_t node5[1] = {{0xA0u, 0x7E0u, false}};
+    ASSERT_EQ(0, mc_f405_can_set_filters(&drv, node5, 1u));
+    EXPECT_EQ(can.FA1R, 1u);
+    EXPECT_EQ(can.FS1R & 1u, 1u);
+    EXPECT_EQ(can.FB[0].FR1, 0xA0u << 21);
+    EXPECT_EQ(can.FB[0].FR2, (0x7E0u << 21) | 4u);
+    EXPECT_EQ(can.FMR & MC_F405_CAN_FMR_FINIT, 0u);
+    // From two banks to one: bank 1 deactivated.
+    start(cfg());
+    ASSERT_EQ(can.FA1R, 3u);
+    ASSERT_EQ(0, mc_f405_can_set_filters(&drv, node5, 1u));
+    EXPECT_EQ(can.FA1R, 1u);
+    // An invalid filter writes nothing.
+    static const mc_f405_can_filter_t bad[1] = {{0x800u, 0x7E0u, false}};
+    const uint32_t fr1 = can.FB[0].FR1;
+    EXPECT_EQ(-EINVAL, mc_f405_can_set_filters(&drv, bad, 1u));
+    EXPECT_EQ(fr1, can.FB[0].FR1);
+}
+
 TEST_F(CanBoard, InitModeNeverAcknowledgedIsIoError)
 {
     const mc_f405_can_config_t c = cfg();

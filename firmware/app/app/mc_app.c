@@ -1,0 +1,509 @@
+/**
+ * @file mc_app.c
+ * @brief The drive application: see mc_app.h.
+ */
+#include "mc_app.h"
+
+#include <stddef.h>
+
+#include "math/mc_math.h"
+
+#define RING_MASK (MC_APP_RX_RING_LEN - 1u)
+#define NODE_MASK 0x7E0u /* the node bits of an 11-bit id (node << 5) */
+
+/* ------------------------------------------------------------ receive ring */
+
+bool mc_app_rx_ring_push(mc_app_rx_ring_t *r, const mc_hal_can_frame_t *p_frame)
+{
+    const uint32_t tail = __atomic_load_n(&r->tail, __ATOMIC_RELAXED);
+    const uint32_t head = __atomic_load_n(&r->head, __ATOMIC_ACQUIRE);
+    if ((uint32_t)(tail - head) >= MC_APP_RX_RING_LEN) {
+        return false;
+    }
+    r->frames[tail & RING_MASK] = *p_frame;
+    __atomic_store_n(&r->tail, tail + 1u, __ATOMIC_RELEASE);
+    return true;
+}
+
+bool mc_app_rx_ring_pop(mc_app_rx_ring_t *r, mc_hal_can_frame_t *p_frame)
+{
+    const uint32_t head = __atomic_load_n(&r->head, __ATOMIC_RELAXED);
+    const uint32_t tail = __atomic_load_n(&r->tail, __ATOMIC_ACQUIRE);
+    if (head == tail) {
+        return false;
+    }
+    *p_frame = r->frames[head & RING_MASK];
+    __atomic_store_n(&r->head, head + 1u, __ATOMIC_RELEASE);
+    return true;
+}
+
+/* ----------------------------------------------- flash with the watchdog */
+
+/* The store's flash: an erase stalls the CPU (the code runs from the same
+ * bank) for longer than the watchdog's normal timeout, so the timeout is
+ * stretched around it. */
+static int wrap_sector_size(void *ctx, uint32_t sector, uint32_t *p_bytes)
+{
+    const mc_app_t *a = ctx;
+    return mc_hal_flash_sector_size(a->cfg.flash, sector, p_bytes);
+}
+
+static int wrap_erase(void *ctx, uint32_t sector)
+{
+    mc_app_t *a = ctx;
+    int rc;
+    if (a->wdg_running) {
+        (void)mc_hal_wdg_start(a->cfg.wdg, a->cfg.wdg_erase_timeout_ms);
+    }
+    rc = mc_hal_flash_erase(a->cfg.flash, sector);
+    if (a->wdg_running) {
+        (void)mc_hal_wdg_start(a->cfg.wdg, a->cfg.wdg_timeout_ms);
+    }
+    return rc;
+}
+
+static int wrap_program(void *ctx, uint32_t sector, uint32_t offset, const uint32_t *p_words,
+                        uint32_t n_words)
+{
+    const mc_app_t *a = ctx;
+    return mc_hal_flash_program(a->cfg.flash, sector, offset, p_words, n_words);
+}
+
+static int wrap_read(void *ctx, uint32_t sector, uint32_t offset, void *p_buf, uint32_t len)
+{
+    const mc_app_t *a = ctx;
+    return mc_hal_flash_read(a->cfg.flash, sector, offset, p_buf, len);
+}
+
+static const mc_hal_flash_ops_t wrap_flash_ops = {
+    .sector_size = wrap_sector_size,
+    .erase = wrap_erase,
+    .program = wrap_program,
+    .read = wrap_read,
+};
+
+/* -------------------------------------------------------------------- boot */
+
+uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
+{
+    uint32_t err = MC_APP_CFG_OK;
+    if ((app == NULL) || (cfg == NULL) || (cfg->defaults == NULL)) {
+        return MC_APP_CFG_ERR_NULL;
+    }
+    if ((cfg->wdg != NULL) &&
+        ((cfg->wdg_timeout_ms == 0u) || (cfg->wdg_timeout_ms > MC_HAL_WDG_TIMEOUT_MAX_MS) ||
+         (cfg->wdg_erase_timeout_ms < cfg->wdg_timeout_ms) ||
+         (cfg->wdg_erase_timeout_ms > MC_HAL_WDG_TIMEOUT_MAX_MS))) {
+        return MC_APP_CFG_ERR_WDG;
+    }
+    {
+        static const mc_app_t z = {0};
+        *app = z;
+    }
+    app->cfg = *cfg;
+    app->reset_cause = MC_HAL_WDG_RESET_NONE;
+    if (cfg->wdg != NULL) {
+        (void)mc_hal_wdg_reset_cause(cfg->wdg, &app->reset_cause);
+    }
+    app->params = *cfg->defaults;
+    app->boot_status = (uint8_t)MC_CFG_BOOT_EMPTY;
+    if (cfg->flash != NULL) {
+        mc_params_t loaded;
+        mc_cfg_store_cfg_t scfg;
+        app->flash_wrap.ops = &wrap_flash_ops;
+        app->flash_wrap.ctx = app;
+        scfg.flash = &app->flash_wrap;
+        scfg.sector[0] = cfg->flash_sectors[0];
+        scfg.sector[1] = cfg->flash_sectors[1];
+        if (mc_cfg_store_init(&app->store, &scfg) != 0) {
+            err |= MC_APP_CFG_ERR_STORE;
+        } else {
+            mc_cfg_boot_t b;
+            app->have_store = true;
+            b = mc_cfg_store_load(&app->store, &loaded);
+            if ((b == MC_CFG_BOOT_STORED) || (b == MC_CFG_BOOT_MIGRATED)) {
+                const bool fits =
+                    ((cfg->pwm_hz_fixed == 0u) || (loaded.pwm_hz == cfg->pwm_hz_fixed)) &&
+                    ((cfg->slow_loop_div_fixed == 0u) ||
+                     (loaded.slow_loop_div == cfg->slow_loop_div_fixed));
+                if (fits) {
+                    app->params = loaded;
+                } else {
+                    b = MC_CFG_BOOT_INVALID; /* a set this board cannot run */
+                }
+            }
+            app->boot_status = (uint8_t)b;
+        }
+    }
+    return err;
+}
+
+/* ------------------------------------------------------------------- start */
+
+/* Setpoint hooks of the command handler (context: the app). */
+static int speed_ref_hook(void *ctx, float ref)
+{
+    mc_app_t *a = ctx;
+    if (a->cfg.speed_law.ctrl != NULL) {
+        return a->cfg.speed_law.set_ref(a->cfg.speed_law.ctx, ref);
+    }
+    a->speed_ref_rad_s = ref;
+    return 0;
+}
+
+static int position_ref_hook(void *ctx, float ref)
+{
+    const mc_app_t *a = ctx;
+    return a->cfg.position_law.set_ref(a->cfg.position_law.ctx, ref);
+}
+
+/* The parameter service's hook: the board's check (the PWM rate and the slow
+ * divider stay the booted ones: the timer and the CAN tick run on them),
+ * then the command handler's own check and apply (telemetry rates, timeout,
+ * ramps, speed limit). */
+static uint32_t params_check(void *ctx, const mc_params_t *p)
+{
+    const mc_app_t *a = ctx;
+    if ((p->pwm_hz != a->params.pwm_hz) || (p->slow_loop_div != a->params.slow_loop_div)) {
+        return 1u;
+    }
+    return (a->cmd_hook.check != NULL) ? a->cmd_hook.check(a->cmd_hook.ctx, p) : 0u;
+}
+
+static void params_apply(void *ctx, const mc_params_t *p)
+{
+    const mc_app_t *a = ctx;
+    if (a->cmd_hook.apply != NULL) {
+        a->cmd_hook.apply(a->cmd_hook.ctx, p);
+    }
+}
+
+static bool speed_cfg_ok(const mc_app_speed_cfg_t *s)
+{
+    return mc_isfinite_f32(s->kp_a_s_rad) && mc_isfinite_f32(s->ki_dt_a_s_rad) &&
+           mc_isfinite_f32(s->i_max_a) && (s->kp_a_s_rad >= 0.0f) && (s->ki_dt_a_s_rad >= 0.0f) &&
+           (s->i_max_a >= 0.0f);
+}
+
+uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
+                      const mc_hal_can_t *can, bool init_drive)
+{
+    const mc_params_t *p;
+    mc_telemetry_cfg_t *tc;
+    mc_can_cmd_cfg_t cc;
+    uint32_t i;
+    if ((app == NULL) || (drive == NULL) || (hal == NULL)) {
+        return MC_APP_CFG_ERR_NULL;
+    }
+    p = &app->params;
+    app->drive = drive;
+    app->hal = hal;
+    app->can = can;
+    if (!speed_cfg_ok(&app->cfg.speed)) {
+        return MC_APP_CFG_ERR_SPEED;
+    }
+    app->params_valid = init_drive && (mc_params_validate(p) == MC_PARAMS_OK);
+    if (init_drive) {
+        mc_drive_cfg_t dc;
+        if (!app->params_valid || (mc_params_to_drive_cfg(p, &dc) != MC_PARAMS_OK)) {
+            return MC_APP_CFG_ERR_PARAMS;
+        }
+        app->drive_err = mc_drive_init(drive, &dc, hal);
+        if (app->drive_err != MC_DRIVE_CFG_OK) {
+            return MC_APP_CFG_ERR_DRIVE;
+        }
+    }
+    if ((p->slow_loop_div == 0u) || ((p->pwm_hz % p->slow_loop_div) != 0u)) {
+        return MC_APP_CFG_ERR_PARAMS; /* the CAN tick must be a whole rate */
+    }
+    app->tick_hz = p->pwm_hz / p->slow_loop_div;
+
+    tc = &app->tm_cfg;
+    tc->node_id = (uint8_t)p->can_node_id;
+    tc->bitrate_bps = p->can_bitrate_bps;
+    tc->bus_budget_frac = app->cfg.tm_budget_frac;
+    tc->tick_hz = app->tick_hz;
+    tc->rate_hz[MC_TM_HEARTBEAT] = (uint16_t)p->tm_heartbeat_hz;
+    tc->rate_hz[MC_TM_CURRENTS] = (uint16_t)p->tm_currents_hz;
+    tc->rate_hz[MC_TM_VOLTAGES] = (uint16_t)p->tm_voltages_hz;
+    tc->rate_hz[MC_TM_SPEED] = (uint16_t)p->tm_speed_hz;
+    tc->rate_hz[MC_TM_POSITION] = (uint16_t)p->tm_position_hz;
+    for (i = 0u; i < 3u; i++) {
+        tc->rate_hz[(uint32_t)MC_TM_OBSERVER + i] = app->cfg.tm_ext_rate_hz[i];
+    }
+    app->tm_err = mc_telemetry_init(&app->tm, tc);
+    if (app->tm_err != MC_TM_CFG_OK) {
+        return MC_APP_CFG_ERR_TM;
+    }
+
+    cc.node_id = (uint8_t)p->can_node_id;
+    cc.tick_hz = app->tick_hz;
+    cc.timeout_s = p->can_timeout_s;
+    cc.stop_ramp_a_per_s = p->stop_ramp_a_per_s;
+    cc.stop_decel_rad_s2 = p->stop_decel_rad_s2;
+    cc.speed_max_rad_s = p->speed_max_rad_s;
+    cc.set_speed_ref = NULL;
+    cc.set_position_ref = NULL;
+    cc.hook_ctx = app;
+    cc.speed_drive_mode = MC_DRIVE_MODE_CURRENT;
+    cc.position_drive_mode = MC_DRIVE_MODE_IDLE;
+    if ((app->cfg.speed_law.ctrl != NULL) && (app->cfg.speed_law.set_ref != NULL)) {
+        cc.set_speed_ref = speed_ref_hook;
+        cc.speed_drive_mode = MC_DRIVE_MODE_CTRL;
+    } else if (app->cfg.speed.kp_a_s_rad > 0.0f) {
+        cc.set_speed_ref = speed_ref_hook;
+    }
+    if ((app->cfg.position_law.ctrl != NULL) && (app->cfg.position_law.set_ref != NULL)) {
+        cc.set_position_ref = position_ref_hook;
+        cc.position_drive_mode = MC_DRIVE_MODE_CTRL;
+    }
+    app->cmd_err = mc_can_cmd_init(&app->cmd, &cc, drive, &app->tm);
+    if (app->cmd_err != MC_CAN_CMD_CFG_OK) {
+        return MC_APP_CFG_ERR_CMD;
+    }
+    if (app->params_valid) {
+        if (mc_param_srv_init(&app->srv, p, drive, hal, app->have_store ? &app->store : NULL,
+                              app->boot_status) != 0) {
+            return MC_APP_CFG_ERR_PARAMS;
+        }
+        mc_can_cmd_attach_params(&app->cmd, &app->srv);
+        app->cmd_hook = app->srv.hook;
+        app->srv.hook.check = params_check;
+        app->srv.hook.apply = params_apply;
+        app->srv.hook.ctx = app;
+    }
+    app->tm_src.drive = drive;
+    app->tm_src.cmd = &app->cmd;
+    app->tm_src.ext = NULL;
+    app->status_pending = (app->reset_cause != MC_HAL_WDG_RESET_NONE);
+
+    if (app->cfg.set_rx_filter != NULL) {
+        (void)app->cfg.set_rx_filter(app->cfg.filter_ctx, (uint32_t)p->can_node_id << 5u,
+                                     NODE_MASK);
+    }
+    if (app->cfg.wdg != NULL) {
+        if (mc_hal_wdg_start(app->cfg.wdg, app->cfg.wdg_timeout_ms) == 0) {
+            app->wdg_running = true;
+        } else {
+            app->faults |= MC_APP_FAULT_WDG;
+        }
+    }
+    return MC_APP_CFG_OK;
+}
+
+/* -------------------------------------------------------------- fast loop */
+
+void mc_app_fast_mark(mc_app_t *app)
+{
+    /* the only writer (the fast interrupt): a plain increment, published */
+    __atomic_store_n(&app->fast_runs, app->fast_runs + 1u, __ATOMIC_RELAXED);
+}
+
+bool mc_app_fast_step(mc_app_t *app)
+{
+    const bool slow_due = mc_drive_fast_step(app->drive);
+    mc_app_fast_mark(app);
+    return slow_due;
+}
+
+/* ---------------------------------------------------------------- receive */
+
+uint32_t mc_app_can_rx_isr(mc_app_t *app)
+{
+    mc_hal_can_frame_t f;
+    uint32_t n = 0u;
+    const mc_hal_can_t *can = app->can;
+    const uint32_t node = (uint32_t)app->cmd.cfg.node_id;
+    if (can == NULL) {
+        return 0u;
+    }
+    /* bounded: a controller cannot deliver more than this per interrupt */
+    while ((n < 2u * MC_APP_RX_RING_LEN) && (mc_hal_can_receive(can, &f) == 0)) {
+        n++;
+        if (((f.flags & MC_HAL_CAN_FLAG_EXT) != 0u) || (f.id > MC_HAL_CAN_STD_ID_MAX) ||
+            (mc_can_id_node(f.id) != node)) {
+            app->rx_foreign++;
+            continue;
+        }
+        if (!mc_app_rx_ring_push(&app->rx, &f)) {
+            app->rx_overflows++;
+        }
+    }
+    return n;
+}
+
+/* -------------------------------------------------------------- slow loop */
+
+static float clamp(float x, float lo, float hi)
+{
+    if (x < lo) {
+        return lo;
+    }
+    return (x > hi) ? hi : x;
+}
+
+static void speed_step(mc_app_t *a)
+{
+    const mc_app_speed_cfg_t *s = &a->cfg.speed;
+    const float e = a->speed_ref_rad_s - a->drive->tm.omega_m_rad_s;
+    float iq;
+    a->speed_integ_a = clamp(a->speed_integ_a + (s->ki_dt_a_s_rad * e), -s->i_max_a, s->i_max_a);
+    iq = clamp((s->kp_a_s_rad * e) + a->speed_integ_a, -s->i_max_a, s->i_max_a);
+    (void)mc_drive_set_current_ref(a->drive, 0.0f, iq);
+}
+
+/* The law of the selected control mode is the one attached (control modes
+ * change only while disabled, so the drive is not running a law then). */
+static void attach_law(mc_app_t *a)
+{
+    const mc_app_law_t *law = NULL;
+    if (a->cmd.control_mode == MC_CAN_CTRL_SPEED) {
+        law = &a->cfg.speed_law;
+    } else if (a->cmd.control_mode == MC_CAN_CTRL_POSITION) {
+        law = &a->cfg.position_law;
+    }
+    if ((law == NULL) || (law->ctrl == NULL)) {
+        a->tm_src.ext = NULL;
+        return;
+    }
+    if ((a->drive->ctrl != law->ctrl) && !a->cmd.enabled) {
+        if (mc_drive_attach_ctrl(a->drive, law->ctrl) != 0) {
+            return;
+        }
+    }
+    a->tm_src.ext = law->tm_ext;
+}
+
+static void can_supervise(mc_app_t *a)
+{
+    mc_hal_can_status_t st;
+    uint32_t f = 0u;
+    if ((a->can == NULL) || (mc_hal_can_get_status(a->can, &st) != 0)) {
+        return;
+    }
+    if (st.rx_overrun_count != a->can_status.rx_overrun_count) {
+        a->hw_rx_overruns += st.rx_overrun_count - a->can_status.rx_overrun_count;
+        f |= MC_APP_FAULT_CAN_RX_OVERRUN;
+    }
+    a->can_status = st;
+    if (st.state == MC_HAL_CAN_STATE_BUS_OFF) {
+        f |= MC_APP_FAULT_CAN_BUS_OFF;
+    } else if (st.state == MC_HAL_CAN_STATE_ERROR_PASSIVE) {
+        f |= MC_APP_FAULT_CAN_PASSIVE;
+    }
+    a->faults |= f;
+    /* error-passive or bus-off: the host may not hear us, nor we it: stop
+     * under control, and no clear while it lasts */
+    mc_drive_warning_cause(a->drive, MC_DRIVE_WARN_CAN_BUS,
+                           (f & (MC_APP_FAULT_CAN_BUS_OFF | MC_APP_FAULT_CAN_PASSIVE)) != 0u);
+    /* The CAN run ends once the drive has stopped for the bus. */
+    if (a->cmd.enabled && ((a->drive->warnings & MC_DRIVE_WARN_CAN_BUS) != 0u) &&
+        (a->drive->mode != MC_DRIVE_MODE_STOPPING)) {
+        (void)mc_drive_set_mode(a->drive, MC_DRIVE_MODE_IDLE);
+        a->cmd.enabled = false;
+        a->cmd.stopping = false;
+        a->cmd.stop_reason = (uint8_t)MC_CAN_STOP_FAULT;
+    }
+}
+
+static float sat_f(uint32_t v, uint32_t max)
+{
+    return (float)((v > max) ? max : v);
+}
+
+static void status_send(mc_app_t *a)
+{
+    float v[MC_CAN_APP_STATUS_NSIG];
+    mc_hal_can_frame_t f;
+    const uint32_t state = (uint32_t)a->can_status.state & 0x3u;
+    const uint32_t key = (a->faults << 2u) | state;
+    if (key != a->status_sent_key) {
+        a->status_pending = true;
+    }
+    if (!a->status_pending || (a->can == NULL)) {
+        return;
+    }
+    v[MC_CAN_APP_STATUS_RESET_CAUSE] = (float)(a->reset_cause & 0x7Fu);
+    v[MC_CAN_APP_STATUS_CFG_STATUS] = (float)a->boot_status;
+    v[MC_CAN_APP_STATUS_CAN_STATE] = (float)state;
+    v[MC_CAN_APP_STATUS_APP_FAULTS] = (float)(a->faults & 0xFu);
+    v[MC_CAN_APP_STATUS_TX_ERR_COUNT] = sat_f(a->can_status.tx_err_count, 255u);
+    v[MC_CAN_APP_STATUS_RX_ERR_COUNT] = sat_f(a->can_status.rx_err_count, 255u);
+    v[MC_CAN_APP_STATUS_RX_LOST] = sat_f(a->rx_overflows + a->hw_rx_overruns, 0xFFFFu);
+    v[MC_CAN_APP_STATUS_SEQ] = (float)a->status_seq;
+    if ((mc_can_proto_pack(MC_CAN_MSG_APP_STATUS, a->cmd.cfg.node_id, v, MC_CAN_APP_STATUS_NSIG,
+                           &f) == MC_CAN_ERR_NONE) &&
+        (mc_hal_can_send(a->can, &f) == 0)) {
+        a->status_seq = (uint8_t)(a->status_seq + 1u);
+        a->status_frames++;
+        a->status_pending = false;
+        a->status_sent_key = key;
+    }
+}
+
+static void wdg_service(mc_app_t *a)
+{
+    const uint32_t runs = __atomic_load_n(&a->fast_runs, __ATOMIC_RELAXED);
+    if (!a->wdg_running) {
+        return;
+    }
+    /* this slow step ran; the fast loop must have run since the last feed */
+    if (runs != a->fast_runs_fed) {
+        if (mc_hal_wdg_feed(a->cfg.wdg) == 0) {
+            a->wdg_feeds++;
+        }
+        a->fast_runs_fed = runs;
+    }
+}
+
+uint32_t mc_app_slow_work(mc_app_t *app)
+{
+    const mc_hal_can_t *can = app->can;
+    const uint32_t faults_before = app->drive->faults | app->drive->warnings;
+    uint32_t n = 0u;
+    mc_hal_can_frame_t f;
+    /* commands, in reception order */
+    while ((n < MC_APP_RX_PER_STEP) && mc_app_rx_ring_pop(&app->rx, &f)) {
+        (void)mc_can_cmd_handle(&app->cmd, &f, can);
+        n++;
+    }
+    attach_law(app);
+    mc_can_cmd_step(&app->cmd);
+    if (app->comm != NULL) {
+        mc_comm_can_step(app->comm, can);
+    }
+    if (app->cmd.enabled && !app->was_enabled) {
+        app->speed_integ_a = 0.0f; /* a new run starts without old torque */
+    }
+    app->was_enabled = app->cmd.enabled;
+    if (app->cmd.enabled && (app->cmd.control_mode == MC_CAN_CTRL_SPEED) &&
+        (app->cfg.speed_law.ctrl == NULL)) {
+        speed_step(app);
+    }
+    can_supervise(app);
+    if ((faults_before != 0u) && ((app->drive->faults | app->drive->warnings) == 0u)) {
+        app->faults = MC_APP_FAULT_NONE; /* CLEAR_FAULTS went through */
+    }
+    app->cmd.can_state = (uint8_t)mc_app_can_state(app);
+    app->tm_sent = mc_telemetry_step(&app->tm, can, &app->tm_src);
+    status_send(app);
+    wdg_service(app);
+    return app->tm_sent;
+}
+
+void mc_app_slow_step(mc_app_t *app)
+{
+    mc_drive_slow_step(app->drive);
+    (void)mc_app_slow_work(app);
+}
+
+void mc_app_attach_commission(mc_app_t *app, mc_comm_can_t *m)
+{
+    app->comm = m;
+    mc_can_cmd_attach_commission(&app->cmd, mc_comm_can_command, mc_comm_can_busy, m);
+}
+
+uint32_t mc_app_can_state(const mc_app_t *app)
+{
+    return (uint32_t)app->can_status.state & 0x3u;
+}

@@ -1,0 +1,262 @@
+/**
+ * @file mc_app.h
+ * @brief The drive application around the drive: CAN receive (an interrupt
+ *        ring), the node filter, command handling, telemetry, the command
+ *        timeout, parameter access and the configuration loaded from flash,
+ *        the control modes (plug-ins), the CAN controller's state and the
+ *        watchdog. The MCU image's main and the SIL scenario (can-telemetry)
+ *        only bind it; both run exactly this code.
+ *
+ * Instances are the caller's (static on the MCU, no heap). One mc_app_t per
+ * drive; the drive (mc_drive_t) is the caller's too, since on the MCU it
+ * lives in core-coupled RAM and in the SIL inside the simulated board's rig.
+ *
+ * Life cycle
+ *   mc_app_boot()    reset cause (watchdog HAL), the configuration: the
+ *                    newest valid record of the A/B flash store, else the
+ *                    board's defaults, and why (boot_status, the heartbeat's
+ *                    cfg_status). A stored set that the board cannot run
+ *                    (another PWM rate or slow-loop divider than the board's
+ *                    fixed ones) boots the defaults with status INVALID.
+ *   mc_app_start()   the drive from those parameters (unless the caller
+ *                    initialised it itself), telemetry, command handler,
+ *                    parameter service, the hardware receive filter for
+ *                    this node's ids, the watchdog.
+ *   mc_app_fast_step()  ADC interrupt: the drive's fast step, and the mark
+ *                    that the fast loop ran.
+ *   mc_app_can_rx_isr() CAN receive interrupt: moves every received frame
+ *                    from the HAL into the ring, dropping other nodes' ids
+ *                    first; a full ring counts an overflow (rx_overflows).
+ *   mc_app_slow_step()  slow loop: the drive's slow step, then
+ *                    mc_app_slow_work(): commands from the ring, the command
+ *                    handler's supervision (timeout), the speed loop, the
+ *                    CAN controller's state, telemetry, the watchdog.
+ *
+ * Watchdog: fed at the end of a slow step only when the fast loop has run
+ * since the previous feed (mc_app_fast_step marks it): a hung fast loop (no
+ * ADC interrupt, or stuck in it) and a hung slow loop both stop the feeding,
+ * and the watchdog resets the MCU; the pins' reset state turns the bridge
+ * off. Around a flash erase (a configuration SAVE, bridge off, the CPU
+ * stalled for up to 2 s on a 128 KiB sector) the timeout is stretched to
+ * wdg_erase_timeout_ms and restored afterwards.
+ *
+ * APP_STATUS (tools/can/motordrive.dbc, cmd 0x0E): reset cause, boot
+ * status of the configuration, CAN state and error counters, application
+ * faults, frames lost; queued at the first slow step when the watchdog HAL
+ * reports a reset cause, and at every change of the CAN state or of the
+ * application faults (retried while the controller refuses to send).
+ *
+ * CAN controller state (slow loop, mc_hal_can_get_status): error-passive or
+ * bus-off latches MC_APP_FAULT_CAN_PASSIVE / MC_APP_FAULT_CAN_BUS_OFF and
+ * sets the drive's warning MC_DRIVE_WARN_CAN_BUS: a running drive makes a
+ * controlled stop (mc_drive.h, STOPPING) and cannot be enabled again until
+ * CLEAR_FAULTS once the controller is error-active or warning again; the
+ * CAN run ends with stop_reason FAULT when the drive has stopped.
+ *
+ * Control modes: CURRENT (the drive's dq loop); SPEED by the sensored speed
+ * loop of this module (a PI at the slow rate on the encoder speed writing
+ * the q current reference in CURRENT mode) or by a plugged speed law
+ * (mc_drive_ctrl_t in CTRL mode: sensorless with I-f start, PI2D, ...);
+ * POSITION by a plugged position law. A law's setpoint hook and telemetry
+ * extension come with it (mc_app_law_t).
+ */
+#ifndef MC_APP_H
+#define MC_APP_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "hal/flash.h"
+#include "hal/hal.h"
+#include "hal/wdg.h"
+#include "commission/mc_comm_can.h"
+#include "mc_can_cmd.h"
+#include "mc_cfg_store.h"
+#include "mc_drive.h"
+#include "mc_param_srv.h"
+#include "mc_params.h"
+#include "mc_telemetry.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Frames the receive ring holds (a power of two). */
+#define MC_APP_RX_RING_LEN 32u
+/** Frames handled per slow step (the rest wait in the ring). */
+#define MC_APP_RX_PER_STEP 16u
+
+/* Application faults (mc_app_t.faults): sticky until CLEAR_FAULTS. */
+#define MC_APP_FAULT_NONE           0u
+#define MC_APP_FAULT_CAN_PASSIVE    (1u << 0) /**< CAN controller error-passive */
+#define MC_APP_FAULT_CAN_BUS_OFF    (1u << 1) /**< CAN controller bus-off */
+#define MC_APP_FAULT_CAN_RX_OVERRUN (1u << 2) /**< receive ring (or controller FIFO) overflowed */
+#define MC_APP_FAULT_WDG            (1u << 3) /**< the watchdog could not be started */
+
+/* Configuration errors (bits) of mc_app_boot / mc_app_start. */
+#define MC_APP_CFG_OK         0u
+#define MC_APP_CFG_ERR_NULL   (1u << 0) /**< NULL app, cfg, hal, drive or defaults */
+#define MC_APP_CFG_ERR_PARAMS (1u << 1) /**< the parameters do not give a drive config */
+#define MC_APP_CFG_ERR_DRIVE  (1u << 2) /**< mc_drive_init refused (drive_err) */
+#define MC_APP_CFG_ERR_TM     (1u << 3) /**< telemetry refused (tm_err) */
+#define MC_APP_CFG_ERR_CMD    (1u << 4) /**< command handler refused (cmd_err) */
+#define MC_APP_CFG_ERR_STORE  (1u << 5) /**< the flash sectors refused by the store */
+#define MC_APP_CFG_ERR_WDG    (1u << 6) /**< wdg_timeout_ms out of range */
+#define MC_APP_CFG_ERR_SPEED  (1u << 7) /**< speed-loop gains negative or not finite */
+#define MC_APP_CFG_ERR_LAW    (1u << 8) /**< a plugged law refused by the drive */
+
+/** Single-producer (the CAN interrupt) single-consumer (the slow loop)
+ *  ring: the producer writes a slot, then publishes tail with a release
+ *  store; the consumer loads tail with acquire, copies the frame, then
+ *  publishes head (GCC/Clang __atomic builtins on 32-bit words: single
+ *  loads and stores on the Cortex-M4, with the barriers the ordering needs).
+ *  The indices run freely and wrap at 2^32; the slot is index % length. */
+typedef struct {
+    mc_hal_can_frame_t frames[MC_APP_RX_RING_LEN];
+    uint32_t head; /**< next frame to take; written by the consumer only */
+    uint32_t tail; /**< next free slot; written by the producer only */
+} mc_app_rx_ring_t;
+
+/** Push (producer side). Returns false, and stores nothing, when full. */
+bool mc_app_rx_ring_push(mc_app_rx_ring_t *r, const mc_hal_can_frame_t *p_frame);
+/** Pop (consumer side). Returns false when empty. */
+bool mc_app_rx_ring_pop(mc_app_rx_ring_t *r, mc_hal_can_frame_t *p_frame);
+
+/** Sensored speed loop at the slow rate: iq_ref = PI(omega_ref - omega_m),
+ *  clamped to +-i_max_a, integrator clamped too (anti-windup), id_ref = 0;
+ *  runs while the CAN control mode is SPEED (drive in CURRENT mode). */
+typedef struct {
+    float kp_a_s_rad;    /**< proportional gain [A/(rad/s)]; 0: no sensored speed mode */
+    float ki_dt_a_s_rad; /**< integral gain times the slow period [A/(rad/s)] */
+    float i_max_a;       /**< q current limit [A], <= the drive's i_max_a */
+} mc_app_speed_cfg_t;
+
+/** A control law plugged for SPEED or POSITION (CTRL mode). */
+typedef struct {
+    const mc_drive_ctrl_t *ctrl;      /**< the law (attached while its mode runs) */
+    mc_can_cmd_ref_fn set_ref;        /**< its setpoint */
+    void *ctx;                        /**< set_ref's context */
+    const mc_telemetry_ext_t *tm_ext; /**< its internals for OBSERVER ..., or NULL */
+} mc_app_law_t;
+
+typedef struct {
+    const mc_hal_flash_t *flash;   /**< configuration store's flash, or NULL */
+    uint32_t flash_sectors[2];     /**< its A and B sectors */
+    const mc_hal_wdg_t *wdg;       /**< independent watchdog, or NULL */
+    uint32_t wdg_timeout_ms;       /**< normal timeout (> 2 slow periods) */
+    uint32_t wdg_erase_timeout_ms; /**< timeout around a flash erase */
+    const mc_params_t *defaults;   /**< the board's defaults */
+    uint32_t pwm_hz_fixed;         /**< the board's PWM rate (0: any) */
+    uint32_t slow_loop_div_fixed;  /**< the board's slow divider (0: any) */
+    float tm_budget_frac;          /**< share of the bus telemetry may use */
+    uint16_t tm_ext_rate_hz[3];    /**< OBSERVER, CONTROLLER, STEPPER rates */
+    mc_app_speed_cfg_t speed;      /**< sensored speed loop */
+    mc_app_law_t speed_law;        /**< plugged speed law (ctrl NULL: the loop above) */
+    mc_app_law_t position_law;     /**< plugged position law (ctrl NULL: none) */
+    /** Program the hardware receive filter for this node's identifiers
+     *  (id & mask == node << 5); NULL: the board has none. */
+    int (*set_rx_filter)(void *ctx, uint32_t id, uint32_t mask);
+    void *filter_ctx;
+} mc_app_cfg_t;
+
+/* Fields ordered by size (pointers, structs, words, bytes): no padding. */
+typedef struct {
+    mc_drive_t *drive;
+    const mc_hal_t *hal;       /**< the drive's board */
+    const mc_hal_can_t *can;   /**< the CAN bus, or NULL */
+    mc_comm_can_t *comm;       /**< commissioning over CAN, or NULL */
+    mc_hal_flash_t flash_wrap; /**< the store's flash: stretches the watchdog */
+    mc_param_hook_t cmd_hook;  /**< the command handler's APPLY hook, chained */
+    mc_telemetry_src_t tm_src;
+    mc_can_cmd_t cmd;
+    mc_app_cfg_t cfg;
+    mc_param_srv_t srv;
+    mc_cfg_store_t store;
+    /* boot */
+    uint32_t reset_cause; /**< MC_HAL_WDG_RESET_* at boot */
+    /* CAN */
+    uint32_t rx_overflows;   /**< frames lost: ring full (in the interrupt) */
+    uint32_t rx_foreign;     /**< frames of other nodes dropped */
+    uint32_t hw_rx_overruns; /**< controller FIFO overruns (HAL status) */
+    uint32_t tm_sent;        /**< frames mask of the last telemetry step */
+    /* APP_STATUS (cmd 0x0E): at boot when a reset cause is known, and at each
+     * change of the CAN state or of the application faults; retried at the
+     * next slow steps while the HAL refuses it (bus-off) */
+    uint32_t status_sent_key; /**< (faults, can_state) of the last one queued */
+    uint32_t status_frames;   /**< APP_STATUS frames queued */
+    /* speed loop */
+    float speed_ref_rad_s;
+    float speed_integ_a;
+    /* supervision */
+    uint32_t faults;  /**< MC_APP_FAULT_* (sticky) */
+    uint32_t tick_hz; /**< slow-loop rate [Hz] */
+    /* watchdog */
+    uint32_t fast_runs;     /**< fast steps (interrupt; __atomic access) */
+    uint32_t fast_runs_fed; /**< fast_runs at the last feed */
+    uint32_t wdg_feeds;
+    /* errors of the start */
+    uint32_t drive_err, tm_err, cmd_err;
+    mc_hal_can_status_t can_status; /**< last status read */
+    mc_telemetry_cfg_t tm_cfg;      /**< the telemetry configuration asked for */
+    mc_telemetry_t tm;
+    mc_params_t params; /**< the configuration booted */
+    mc_app_rx_ring_t rx;
+    uint8_t boot_status; /**< mc_cfg_boot_t */
+    bool params_valid;   /**< the parameter service runs */
+    bool have_store;
+    bool status_pending;
+    uint8_t status_seq;
+    bool was_enabled; /**< CAN run state of the previous slow step */
+    bool wdg_running;
+} mc_app_t;
+
+/** Boot: reset cause, configuration (see the file comment). app is
+ *  zeroed first. Returns MC_APP_CFG_* bits (only NULL, STORE, WDG); with
+ *  STORE the defaults boot. */
+uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg);
+
+/**
+ * Start with the booted parameters (app->params) on the board hal, CAN on
+ * can (NULL: none; on the MCU hal->can). init_drive: initialise drive from
+ * them (mc_params_to_drive_cfg, mc_drive_init); false: the caller
+ * initialised it (the SIL with settings outside the parameter table), and
+ * parameter access is then not served. The booted PWM rate and slow-loop
+ * divider stay for the run: an APPLY that changes them is refused INVALID
+ * (MC_PARAMS_ERR_DRIVE). Returns MC_APP_CFG_* bits.
+ */
+uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
+                      const mc_hal_can_t *can, bool init_drive);
+
+/** ADC interrupt: drive fast step + fast-loop mark. Returns true when the
+ *  slow step is due. */
+bool mc_app_fast_step(mc_app_t *app);
+
+/** The fast-loop mark alone (when the caller runs the drive's fast step). */
+void mc_app_fast_mark(mc_app_t *app);
+
+/** CAN receive interrupt (or the SIL before each slow step): every frame
+ *  the HAL has goes into the ring (foreign ids dropped). Returns how many
+ *  were taken from the HAL. */
+uint32_t mc_app_can_rx_isr(mc_app_t *app);
+
+/** Slow loop: mc_drive_slow_step() then mc_app_slow_work(). */
+void mc_app_slow_step(mc_app_t *app);
+
+/** The application's part of the slow loop (see the file comment). Returns
+ *  the telemetry frames generated (bit = slot). */
+uint32_t mc_app_slow_work(mc_app_t *app);
+
+/** Commissioning over CAN (COMMISSION_CMD/STATUS/RESULT): m initialised by
+ *  the caller with mc_comm_can_init on app->drive and &app->srv (NULL when
+ *  parameter access is not served). The command handler refuses enable and
+ *  mode changes while it runs; the slow work steps it after the commands. */
+void mc_app_attach_commission(mc_app_t *app, mc_comm_can_t *m);
+
+/** HEARTBEAT can_state value (0 error-active .. 3 bus-off) now. */
+uint32_t mc_app_can_state(const mc_app_t *app);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_APP_H */

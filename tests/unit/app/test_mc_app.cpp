@@ -1,0 +1,315 @@
+// The application module (firmware/app/app/mc_app) on the fake HAL board:
+// the receive ring, the node filter, the boot from the A/B flash store, the
+// CAN controller's state (bus-off, error-passive) and the drive's reaction,
+// the watchdog fed only when both loops run, the watchdog stretched around
+// a flash erase. Every value asserted is exact: counters, states and bits
+// (no physical quantity is measured here).
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+extern "C" {
+#include "mc_app.h"
+#include "mc_can_proto.h"
+#include "mc_fake_flash.h"
+#include "mc_fake_wdg.h"
+#include "mc_hal_fake.h"
+}
+
+namespace
+{
+
+constexpr uint32_t kSectorBytes = 4096u;
+constexpr uint32_t kWdgMs = 50u;
+constexpr uint32_t kWdgEraseMs = 4000u;
+
+mc_hal_can_frame_t Frame(uint32_t id, std::vector<uint8_t> data, uint8_t flags = 0u)
+{
+    mc_hal_can_frame_t f{};
+    f.id = id;
+    f.flags = flags;
+    f.len = static_cast<uint8_t>(data.size());
+    std::memcpy(f.data, data.data(), data.size());
+    return f;
+}
+
+class McApp : public ::testing::Test
+{
+  protected:
+    void SetUp() override
+    {
+        mc_hal_fake_config_t fc{};
+        ASSERT_EQ(0, mc_hal_fake_config_default(&fc));
+        ASSERT_EQ(0, mc_hal_fake_init(&fake, &fc));
+        // temperatures readable and cool (the defaults supervise them)
+        fake.adc_temp.power_stage_temp_c = 25.0f;
+        fake.adc_temp.motor_temp_c = 25.0f;
+        fake.adc_temp.valid_mask = MC_HAL_ADC_TEMP_VALID_ALL;
+        defaults = mc_params_default;
+        ASSERT_EQ(MC_PARAMS_OK, mc_params_validate(&defaults));
+        const uint32_t sizes[2] = {kSectorBytes, kSectorBytes};
+        mem.assign(2u * kSectorBytes, 0xFFu);
+        ASSERT_EQ(0, mc_fake_flash_init(&flash, mem.data(), sizes, 2u));
+        mc_fake_wdg_init(&wdg, MC_HAL_WDG_RESET_WATCHDOG);
+        cfg.flash = &flash.dev;
+        cfg.flash_sectors[0] = 0u;
+        cfg.flash_sectors[1] = 1u;
+        cfg.wdg = &wdg.dev;
+        cfg.wdg_timeout_ms = kWdgMs;
+        cfg.wdg_erase_timeout_ms = kWdgEraseMs;
+        cfg.defaults = &defaults;
+        cfg.pwm_hz_fixed = defaults.pwm_hz;
+        cfg.slow_loop_div_fixed = defaults.slow_loop_div;
+        cfg.tm_budget_frac = 0.5f;
+        cfg.set_rx_filter = [](void *ctx, uint32_t id, uint32_t mask) {
+            auto *t = static_cast<McApp *>(ctx);
+            t->filter_id = id;
+            t->filter_mask = mask;
+            return 0;
+        };
+        cfg.filter_ctx = this;
+    }
+
+    void Start()
+    {
+        ASSERT_EQ(MC_APP_CFG_OK, mc_app_boot(&app, &cfg));
+        ASSERT_EQ(MC_APP_CFG_OK, mc_app_start(&app, &drive, &fake.board, fake.board.can, true));
+        ASSERT_EQ(0, mc_hal_fake_encoder_set(&fake, 0u, MC_HAL_ENCODER_FLAG_VALID));
+    }
+
+    // One PWM period as the MCU runs it: a conversion, the fast step, and
+    // the slow step when due.
+    void Period()
+    {
+        ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, defaults.vbus_v,
+                                                MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB |
+                                                    MC_HAL_ADC_VALID_VBUS));
+        if (mc_app_fast_step(&app)) {
+            mc_app_can_rx_isr(&app);
+            mc_app_slow_step(&app);
+        }
+    }
+
+    void SlowSteps(uint32_t n)
+    {
+        for (uint32_t i = 0; i < n * defaults.slow_loop_div; ++i) {
+            Period();
+        }
+    }
+
+    void Send(uint32_t cmd, std::vector<uint8_t> data)
+    {
+        const mc_hal_can_frame_t f = Frame(defaults.can_node_id << 5 | cmd, std::move(data));
+        ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &f));
+    }
+
+    void DrainTx()
+    {
+        mc_hal_can_frame_t f;
+        while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) {
+        }
+    }
+
+    mc_hal_fake_t fake{};
+    mc_params_t defaults{};
+    std::vector<uint8_t> mem;
+    mc_fake_flash_t flash{};
+    mc_fake_wdg_t wdg{};
+    mc_app_cfg_t cfg{};
+    mc_app_t app{};
+    mc_drive_t drive{};
+    uint32_t filter_id = 0xFFFFFFFFu, filter_mask = 0u;
+};
+
+TEST(McAppRing, OrderCapacityAndIndexWrap)
+{
+    static mc_app_rx_ring_t r{};
+    // start just below the 32-bit wrap of the free-running indices
+    r.head = r.tail = 0xFFFFFFF0u;
+    mc_hal_can_frame_t f{};
+    for (uint32_t i = 0; i < MC_APP_RX_RING_LEN; ++i) {
+        f.id = i;
+        ASSERT_TRUE(mc_app_rx_ring_push(&r, &f)) << i;
+    }
+    f.id = 999u;
+    EXPECT_FALSE(mc_app_rx_ring_push(&r, &f)) << "full: refused, nothing overwritten";
+    for (uint32_t i = 0; i < MC_APP_RX_RING_LEN; ++i) {
+        ASSERT_TRUE(mc_app_rx_ring_pop(&r, &f));
+        EXPECT_EQ(i, f.id) << "reception order across the index wrap";
+    }
+    EXPECT_FALSE(mc_app_rx_ring_pop(&r, &f));
+}
+
+TEST_F(McApp, BootWithoutRecordRunsTheDefaultsAndSaysSo)
+{
+    Start();
+    EXPECT_EQ(MC_CFG_BOOT_EMPTY, app.boot_status);
+    EXPECT_EQ(MC_CAN_VAL_CFG_STATUS_EMPTY, app.cmd.cfg_status) << "heartbeat cfg_status";
+    EXPECT_EQ(0, std::memcmp(&defaults, &app.params, sizeof defaults));
+    EXPECT_EQ(MC_HAL_WDG_RESET_WATCHDOG, app.reset_cause);
+    EXPECT_EQ(defaults.can_node_id << 5, filter_id) << "hardware filter: this node's ids";
+    EXPECT_EQ(0x7E0u, filter_mask);
+    EXPECT_EQ(MC_DRIVE_MODE_IDLE, drive.mode) << "boots with the bridge off";
+    EXPECT_FALSE(fake.pwm3.enabled);
+}
+
+TEST_F(McApp, BootLoadsTheNewestStoredRecordAndRefusesOneTheBoardCannotRun)
+{
+    mc_cfg_store_t st{};
+    const mc_cfg_store_cfg_t sc{&flash.dev, {0u, 1u}};
+    ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
+    mc_params_t p = defaults;
+    p.can_timeout_s = 0.75f;
+    ASSERT_EQ(0, mc_cfg_store_save(&st, &p));
+    Start();
+    EXPECT_EQ(MC_CFG_BOOT_STORED, app.boot_status);
+    EXPECT_EQ(0.75f, app.params.can_timeout_s) << "exact: the stored bits";
+    EXPECT_EQ(0.75f, app.cmd.cfg.timeout_s);
+
+    p.pwm_hz = defaults.pwm_hz / 2u; // a valid set, but not this board's PWM rate
+    ASSERT_EQ(MC_PARAMS_OK, mc_params_validate(&p));
+    ASSERT_EQ(0, mc_cfg_store_save(&st, &p));
+    mc_app_t again{};
+    ASSERT_EQ(MC_APP_CFG_OK, mc_app_boot(&again, &cfg));
+    EXPECT_EQ(MC_CFG_BOOT_INVALID, again.boot_status);
+    EXPECT_EQ(defaults.pwm_hz, again.params.pwm_hz);
+    EXPECT_EQ(defaults.can_timeout_s, again.params.can_timeout_s) << "the defaults, whole";
+}
+
+TEST_F(McApp, ReceiveInterruptDropsForeignIdsAndCountsOverflow)
+{
+    Start();
+    const uint32_t own = defaults.can_node_id << 5 | 0x17u; // HOST_HEARTBEAT
+    const uint32_t other = ((defaults.can_node_id + 1u) << 5) | 0x17u;
+    const mc_hal_can_frame_t f_own = Frame(own, {1});
+    const mc_hal_can_frame_t f_other = Frame(other, {1});
+    const mc_hal_can_frame_t f_ext = Frame(own, {1}, MC_HAL_CAN_FLAG_EXT);
+    ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &f_other));
+    ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &f_ext));
+    ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &f_own));
+    EXPECT_EQ(3u, mc_app_can_rx_isr(&app));
+    EXPECT_EQ(2u, app.rx_foreign);
+    // fill the ring: interrupts with no slow step in between
+    uint32_t pushed = 1u;
+    while (pushed < MC_APP_RX_RING_LEN + 3u) {
+        for (uint32_t k = 0; k < MC_HAL_FAKE_CAN_QUEUE_LEN && pushed < MC_APP_RX_RING_LEN + 3u;
+             ++k, ++pushed) {
+            ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &f_own));
+        }
+        mc_app_can_rx_isr(&app);
+    }
+    EXPECT_EQ(3u, app.rx_overflows) << "3 frames beyond the ring's 32";
+    // the slow loop handles MC_APP_RX_PER_STEP per step, in order
+    const uint32_t before = app.cmd.rx_accepted;
+    (void)mc_app_slow_work(&app);
+    EXPECT_EQ(before + MC_APP_RX_PER_STEP, app.cmd.rx_accepted);
+    (void)mc_app_slow_work(&app);
+    EXPECT_EQ(before + MC_APP_RX_RING_LEN, app.cmd.rx_accepted);
+}
+
+TEST_F(McApp, BusOffAndErrorPassiveStopTheDriveAndAreReported)
+{
+    for (const uint16_t tec : {uint16_t{256}, uint16_t{128}}) {
+        SCOPED_TRACE(tec);
+        SetUp();
+        app = mc_app_t{};
+        drive = mc_drive_t{};
+        Start();
+        Send(0x11u, {1}); // SET_CONTROL_MODE CURRENT
+        Send(0x10u, {1}); // SET_ENABLE 1
+        SlowSteps(2);
+        ASSERT_TRUE(app.cmd.enabled)
+            << "faults 0x" << std::hex << drive.faults << " err " << int(app.cmd.last_error)
+            << " cmd " << int(app.cmd.last_error_cmd);
+        ASSERT_EQ(MC_DRIVE_MODE_CURRENT, drive.mode);
+        ASSERT_EQ(0, mc_hal_fake_can_set_errors(&fake, tec, 0u));
+        SlowSteps(1);
+        const bool bus_off = tec > 255u;
+        EXPECT_EQ(bus_off ? 3u : 2u, mc_app_can_state(&app)) << "HEARTBEAT can_state";
+        EXPECT_EQ(bus_off ? MC_APP_FAULT_CAN_BUS_OFF : MC_APP_FAULT_CAN_PASSIVE, app.faults);
+        EXPECT_NE(0u, drive.warnings & MC_DRIVE_WARN_CAN_BUS);
+        EXPECT_NE(MC_DRIVE_MODE_CURRENT, drive.mode) << "a controlled stop began";
+        EXPECT_EQ(0u, drive.faults) << "a warning, not a critical fault";
+        SlowSteps(400); // the stop ends at standstill (the rotor is at rest here)
+        EXPECT_EQ(MC_DRIVE_MODE_IDLE, drive.mode);
+        EXPECT_FALSE(fake.pwm3.enabled);
+        EXPECT_FALSE(app.cmd.enabled);
+        EXPECT_EQ(MC_CAN_STOP_FAULT, app.cmd.stop_reason);
+        // no clear and no enable while the controller is still in that state
+        const uint32_t rejected = app.cmd.rx_rejected;
+        Send(0x15u, {}); // CLEAR_FAULTS
+        Send(0x10u, {1});
+        SlowSteps(1);
+        EXPECT_EQ(rejected + 2u, app.cmd.rx_rejected) << "both REFUSED";
+        EXPECT_FALSE(app.cmd.enabled);
+        EXPECT_NE(0u, drive.warnings & MC_DRIVE_WARN_CAN_BUS);
+        // the bus recovers: CLEAR_FAULTS, then enable works again
+        ASSERT_EQ(0, mc_hal_fake_can_set_errors(&fake, 0u, 0u));
+        SlowSteps(1);
+        EXPECT_EQ(0u, mc_app_can_state(&app));
+        Send(0x15u, {});
+        SlowSteps(1);
+        EXPECT_EQ(0u, drive.warnings);
+        EXPECT_EQ(MC_APP_FAULT_NONE, app.faults);
+        Send(0x10u, {1});
+        SlowSteps(1);
+        EXPECT_TRUE(app.cmd.enabled);
+        EXPECT_EQ(MC_DRIVE_MODE_CURRENT, drive.mode);
+    }
+}
+
+TEST_F(McApp, WatchdogFedOnlyWhenBothLoopsRun)
+{
+    Start();
+    EXPECT_EQ(1u, wdg.starts);
+    EXPECT_EQ(kWdgMs, wdg.timeout_ms);
+    SlowSteps(10);
+    EXPECT_EQ(10u, wdg.feeds) << "one feed per slow step while both loops run";
+
+    // hung fast loop: the slow work runs, the fast loop does not
+    const uint32_t feeds = wdg.feeds;
+    for (int i = 0; i < 100; ++i) {
+        (void)mc_app_slow_work(&app);
+        mc_fake_wdg_advance(&wdg, 1u);
+    }
+    EXPECT_EQ(feeds, wdg.feeds);
+    EXPECT_TRUE(wdg.expired) << "50 ms without a feed: the MCU resets";
+
+    // hung slow loop: fast steps only
+    mc_fake_wdg_init(&wdg, 0u);
+    ASSERT_EQ(0, mc_hal_wdg_start(&wdg.dev, kWdgMs));
+    for (int i = 0; i < 2000; ++i) {
+        ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, defaults.vbus_v,
+                                                MC_HAL_ADC_VALID_IA | MC_HAL_ADC_VALID_IB |
+                                                    MC_HAL_ADC_VALID_VBUS));
+        (void)mc_app_fast_step(&app);
+    }
+    mc_fake_wdg_advance(&wdg, 100u);
+    EXPECT_EQ(0u, wdg.feeds);
+    EXPECT_TRUE(wdg.expired);
+
+    // both again: fed at the next slow step
+    SlowSteps(1);
+    EXPECT_EQ(1u, wdg.feeds);
+}
+
+TEST_F(McApp, SaveStretchesTheWatchdogAroundTheErase)
+{
+    Start();
+    EXPECT_EQ(kWdgMs, wdg.timeout_max_ms);
+    // PARAM_REQ SAVE (opcode 3) until a save has to erase the other sector
+    uint32_t saves = 0u;
+    while (flash.erases == 0u && saves < 100u) {
+        Send(0x18u, {3, 0, 0, 0, 0, 0, 0, 0});
+        SlowSteps(1);
+        ++saves;
+        ASSERT_EQ(saves, app.store.saves) << "each SAVE stored";
+    }
+    ASSERT_EQ(1u, flash.erases);
+    EXPECT_EQ(3u, wdg.starts) << "start, stretched for the erase, restored";
+    EXPECT_EQ(kWdgEraseMs, wdg.timeout_max_ms);
+    EXPECT_EQ(kWdgMs, wdg.timeout_ms) << "normal timeout after the save";
+}
+
+} // namespace
