@@ -179,7 +179,7 @@ def main():
                         os.path.join(args.work, "run5"), "--flash", flash],
                        capture_output=True, text=True)
     assert r.returncode == 2 and "has no flash" in r.stderr, r.stderr
-    r, _, _ = sil.run("run6", [], flash=flash, extra=["--set", "rate_heartbeat_hz=0"],
+    r, _, _ = sil.run("run6", [], flash=flash, extra=["--set", "rate_heartbeat_hz=500"],
                       expect_rc=2)
     assert "valid parameter set" in r.stderr, r.stderr
     print("refusals: wrong size, scenario without flash, settings outside the table")

@@ -49,6 +49,8 @@ typedef enum {
     MC_CAN_ERR_BUDGET = 6,      /**< telemetry rates above the bus budget */
     MC_CAN_ERR_UNSUPPORTED = 7, /**< this build has no handler for it */
     MC_CAN_ERR_FORMAT = 8,      /**< remote, CAN FD frame on a classic id */
+    MC_CAN_ERR_STALE = 9,       /**< HOST_HEARTBEAT counter did not advance */
+    MC_CAN_ERR_HEARTBEAT_MIN = 10, /**< HEARTBEAT rate below MC_TM_HEARTBEAT_MIN_HZ */
     MC_CAN_ERR_ARG = 0xFE,      /**< API misuse (NULL, bad index, short array) */
     MC_CAN_ERR_IGNORED = 0xFF   /**< not addressed to this node */
 } mc_can_err_t;

@@ -41,7 +41,7 @@
 // during a run (the simulated PWM period and CAN tick are fixed at start):
 // such an APPLY is refused INVALID (MC_PARAMS_ERR_DRIVE). Without --flash
 // the service runs without a store (SAVE answers STORE), and with settings
-// outside the parameter table (e.g. rate_heartbeat_hz=0, a 10 kbit/s bus)
+// outside the parameter table (e.g. rate_heartbeat_hz=500, a 10 kbit/s bus)
 // without the service (PARAM_REQ: UNSUPPORTED).
 #include <chrono>
 #include <cmath>
@@ -71,22 +71,26 @@ namespace mcsim {
 namespace {
 
 const char* const kSlotParam[MC_TM_COUNT] = {
-    "rate_heartbeat_hz", "rate_currents_hz", "rate_voltages_hz",   "rate_speed_hz",
-    "rate_position_hz",  "rate_observer_hz", "rate_controller_hz", "rate_stepper_hz"};
-const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT", "CURRENTS", "VOLTAGES",   "SPEED",
-                                            "POSITION",  "OBSERVER", "CONTROLLER", "STEPPER"};
+    "rate_heartbeat_hz",    "rate_currents_hz",     "rate_voltages_hz",   "rate_speed_hz",
+    "rate_position_hz",     "rate_observer_hz",     "rate_controller_hz", "rate_stepper_hz",
+    "rate_current_refs_hz", "rate_position_ref_hz"};
+const char* const kSlotName[MC_TM_COUNT] = {
+    "HEARTBEAT", "CURRENTS",   "VOLTAGES", "SPEED",        "POSITION",
+    "OBSERVER",  "CONTROLLER", "STEPPER",  "CURRENT_REFS", "POSITION_REF"};
 // Signal names per slot, in DBC order (checked against the generated
 // signal counts below; tests/can compares the CSV header with the DBC).
 const std::vector<std::vector<std::string>> kSlotSignals = {
     {"mode", "control_mode", "enabled", "stopping", "stop_reason", "cfg_status", "faults",
      "last_error", "last_error_cmd", "seq"},
-    {"i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a", "seq"},
-    {"v_d_v", "v_q_v", "v_bus_v", "seq"},
-    {"omega_m_rad_s", "omega_ref_rad_s", "seq"},
-    {"theta_m_rad", "theta_ref_rad", "theta_e_rad", "seq"},
-    {"tau_l_hat_nm", "omega_hat_rad_s", "theta_hat_rad", "seq"},
-    {"nu_pu", "vartheta_pu", "seq"},
-    {"e1_rad", "e2_rad_s", "s1", "s2", "seq"}};
+    {"i_d_a", "i_q_a", "sat", "seq"},
+    {"v_d_v", "v_q_v", "v_bus_v", "sat", "seq"},
+    {"omega_m_rad_s", "omega_ref_rad_s", "sat", "seq"},
+    {"theta_m_rad", "theta_e_rad", "sat", "seq"},
+    {"tau_l_hat_nm", "omega_hat_rad_s", "theta_hat_rad", "sat", "seq"},
+    {"nu_pu", "vartheta_pu", "sat", "seq"},
+    {"e1_rad", "e2_rad_s", "s1", "s2", "seq"},
+    {"i_d_ref_a", "i_q_ref_a", "sat", "seq"},
+    {"theta_ref_rad", "sat", "seq"}};
 
 std::string env_or(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);
@@ -336,7 +340,7 @@ void run_can_telemetry(RunContext& ctx) {
     sil_hook.slow_loop_div = p.slow_loop_div;
     srv.hook = mc_param_hook_t{sil_param_check, sil_param_apply, &sil_hook};
   }
-  const mc_telemetry_src_t src{&d, &cmd, nullptr};
+  const mc_telemetry_src_t src{&d, &cmd, nullptr, &tm};
 
   std::vector<std::string> cols{"t", "tm_sent_mask", "tm_fail_mask", "omega_m_true_rad_s",
                                 "i_q_true_a"};
@@ -414,6 +418,10 @@ void run_can_telemetry(RunContext& ctx) {
   ctx.summary.set("cmd_accepted", cmd.rx_accepted);
   ctx.summary.set("cmd_rejected", cmd.rx_rejected);
   ctx.summary.set("cmd_reply_dropped", cmd.reply_dropped);
+  ctx.summary.set("cmd_reply_limited", cmd.reply_limited);
+  ctx.summary.set("cmd_rx_foreign", cmd.rx_foreign);
+  ctx.summary.set("cmd_poll_frames_max", cmd.poll_max);
+  ctx.summary.set("tm_frames_saturated", tm.saturated);
   ctx.summary.set("final_mode", static_cast<double>(d.mode));
   ctx.summary.set("final_enabled", cmd.enabled ? 1.0 : 0.0);
   ctx.summary.set("final_stop_reason", cmd.stop_reason);
@@ -461,7 +469,7 @@ const Registrar reg_can(
      {{"node_id", 1.0, "1", "CAN node id (id = node << 5 | cmd)", 0.0, 62.0},
       {"bitrate_kbps", 1000.0, "kbit/s", "bus bit rate for the budget check", 10.0, 1000.0},
       {"budget_pct", 50.0, "%", "share of the bus the telemetry may use", 1.0, 70.0},
-      {"rate_heartbeat_hz", 10.0, "Hz", "HEARTBEAT rate (0 = off)", 0.0, 1000.0},
+      {"rate_heartbeat_hz", 10.0, "Hz", "HEARTBEAT rate (at least 1 Hz)", 1.0, 1000.0},
       {"rate_currents_hz", 200.0, "Hz", "CURRENTS rate", 0.0, 1000.0},
       {"rate_voltages_hz", 100.0, "Hz", "VOLTAGES rate", 0.0, 1000.0},
       {"rate_speed_hz", 100.0, "Hz", "SPEED rate", 0.0, 1000.0},
@@ -470,6 +478,8 @@ const Registrar reg_can(
        0.0, 1000.0},
       {"rate_controller_hz", 0.0, "Hz", "CONTROLLER rate (nothing sent here)", 0.0, 1000.0},
       {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
+      {"rate_current_refs_hz", 100.0, "Hz", "CURRENT_REFS rate", 0.0, 1000.0},
+      {"rate_position_ref_hz", 0.0, "Hz", "POSITION_REF rate", 0.0, 1000.0},
       {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
       {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
       {"stop_decel_rad_s2", 200.0, "rad/s^2", "speed ramp of a safe stop", 0.01, 1e6},

@@ -118,21 +118,26 @@ class Drive:
         hold the setpoint for `duration` s with the keep-alive every
         `period` s, then disable. Returns the last heartbeat seen."""
         mode = mode.upper()
-        if mode not in ("CURRENT", "SPEED"):
-            raise UsageError(f"mode {mode.lower()!r}: current or speed")
-        code = {"CURRENT": 1, "SPEED": 2}[mode]
+        if mode not in ("CURRENT", "SPEED", "POSITION"):
+            raise UsageError(f"mode {mode.lower()!r}: current, speed or position")
+        code = {"CURRENT": 1, "SPEED": 2, "POSITION": 3}[mode]
 
         def ref():
             if mode == "CURRENT":
                 self.send("SET_CURRENT_REF", i_d_ref_a=i_d, i_q_ref_a=setpoint)
-            else:
+            elif mode == "SPEED":
                 self.send("SET_SPEED_REF", omega_ref_rad_s=setpoint)
+            else:  # multi-turn target [rad], from the position at enable
+                self.send("SET_POSITION_REF", theta_ref_rad=setpoint)
         self.send("SET_CONTROL_MODE", control_mode=code)
         self.wait_for(lambda n, v: self.check_cmd_error(n, v, "SET_CONTROL_MODE") or
                       (n == "HEARTBEAT" and v["control_mode"] == mode), self.timeout,
                       f"HEARTBEAT in control mode {mode}")
-        ref()
+        # a reference is refused while disabled (it would be a step on
+        # enable): enable starts from the present state, then the setpoint
         self.send("SET_ENABLE", enable=1)
+        self.host_heartbeat()
+        ref()
         last_hb = None
         t0 = time.monotonic()
         t_next = t0
@@ -147,7 +152,7 @@ class Drive:
                 if d is None:
                     continue
                 name, vals = d
-                for c in ("SET_ENABLE", "SET_CURRENT_REF", "SET_SPEED_REF"):
+                for c in ("SET_ENABLE", "SET_CURRENT_REF", "SET_SPEED_REF", "SET_POSITION_REF"):
                     self.check_cmd_error(name, vals, c)
                 if name == "HEARTBEAT":
                     last_hb = vals
@@ -156,7 +161,7 @@ class Drive:
                 if on_frame:
                     on_frame(name, vals)
         finally:
-            self.send("SET_ENABLE", enable=0)
+            self.send("DISABLE")
         return last_hb
 
 
