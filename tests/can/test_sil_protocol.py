@@ -12,7 +12,10 @@ from the DBC by cantools, commands from a candump script at simulated time:
     most the rate limit's burst + 50 per second;
  3. SET_TM_RATE HEARTBEAT 0 Hz is refused HEARTBEAT_MIN, and the HEARTBEAT
     keeps coming at its rate;
- 4. a flood at 100 % bus load from another node (1 Mbit/s of the shortest
+ 4. position mode over CAN with a multi-turn target: 10 turns
+    (62.8319 rad) reached and held (the POSITION telemetry's multi-turn
+    angle), the target echoed in POSITION_REF;
+ 5. a flood at 100 % bus load from another node (1 Mbit/s of the shortest
     frames, 21277 per second, delivered at their simulated time) costs no
     keep-alive: the drive stays enabled while the host's heartbeats come,
     every foreign frame is dropped by the receive filter, and no poll reads
@@ -119,6 +122,33 @@ def heartbeat_min(sil):
     print(f"HEARTBEAT 0 Hz refused HEARTBEAT_MIN; {len(late)} heartbeats in the 0.9 s after")
 
 
+def position_mode(sil):
+    target = 62.8319  # 10 turns, in the frame of POSITION.theta_m_rad (from boot)
+    cmds = [sil.frame(0.05, "SET_CONTROL_MODE", control_mode=3),
+            sil.frame(0.06, "SET_ENABLE", enable=1),
+            sil.frame(0.2, "SET_POSITION_REF", theta_ref_rad=target)]
+    cmds += [sil.frame(0.1 * k, "HOST_HEARTBEAT", counter=k) for k in range(1, 30)]
+    _r, s, frames = sil.run("position", cmds, duration=2.5,
+                            extra=["--set", "J_kgm2=0.01", "--set", "stop_decel_rad_s2=200"])
+    rows = rows_of(os.path.join(sil.work, "position"))
+    th0 = next(r["POSITION.theta_m_rad"] for r in rows if r["t"] >= 0.06)
+    pos = [(t, v) for t, n, v in frames if n == "POSITION"]
+    refs = [v["theta_ref_rad"] for _t, n, v in frames if n == "POSITION_REF" and _t > 0.25]
+    check(refs and all(abs(x - target) <= 0.5e-4 for x in refs),
+          f"POSITION_REF does not echo the target: {refs[:3]}")
+    # the trapezoid (150 rad/s, 200 rad/s^2) takes 1.17 s: at rest from 1.6 s
+    end = [v["theta_m_rad"] for t, v in pos if t >= 2.0]
+    err = max(abs(x - target) for x in end)
+    # one encoder count (2 pi / 8192 = 7.7e-4 rad) plus the signal's half step
+    check(err <= 7.7e-4 + 0.5e-4, f"final position error {err:.5f} rad")
+    over = max(v["theta_m_rad"] for _t, v in pos) - target
+    check(over <= 0.05, f"overshoot {over:.4f} rad")
+    check(s["final_faults"] == 0 and s["cmd_rejected"] == 0,
+          f"faults {s['final_faults']}, rejected {s['cmd_rejected']}")
+    print(f"position: from {th0:.4f} rad to {target} rad (10 turns); final error {err * 1e3:.3f} mrad, "
+          f"overshoot {over * 1e3:.2f} mrad")
+
+
 def foreign_flood(sil):
     n_per_s = 21277  # 1e6 bit/s / 47 bits (0-byte standard frame without stuff bits)
     t_end = 1.5
@@ -156,6 +186,7 @@ def main():
     timeout_stop_in_speed_mode(sil)
     stale_heartbeat(sil)
     heartbeat_min(sil)
+    position_mode(sil)
     foreign_flood(sil)
     if fails:
         print(f"{len(fails)} check(s) failed")

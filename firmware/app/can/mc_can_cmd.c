@@ -206,12 +206,15 @@ static int refs_from_present(mc_can_cmd_t *c)
         c->omega_ref_rad_s = w;
         return 0;
     }
-    case MC_CAN_CTRL_POSITION:
+    case MC_CAN_CTRL_POSITION: {
+        const float th = mc_telemetry_theta_multi_rad(c->tm, d);
         if (c->cfg.set_position_ref(c->cfg.hook_ctx, 0.0f) != 0) {
-            return -1;
+            return -1; /* hold the position at enable */
         }
-        c->theta_ref_rad = 0.0f;
+        c->theta_enable_rad = th;
+        c->theta_ref_rad = th;
         return 0;
+    }
     default:
         return -1;
     }
@@ -297,7 +300,7 @@ static mc_can_err_t do_position_ref(mc_can_cmd_t *c, float th)
     if ((c->control_mode != MC_CAN_CTRL_POSITION) || c->stopping || !c->enabled) {
         return MC_CAN_ERR_MODE;
     }
-    if (c->cfg.set_position_ref(c->cfg.hook_ctx, th) != 0) {
+    if (c->cfg.set_position_ref(c->cfg.hook_ctx, th - c->theta_enable_rad) != 0) {
         return MC_CAN_ERR_REFUSED;
     }
     c->theta_ref_rad = th;

@@ -11,14 +11,17 @@
  *   SET_ENABLE        1: enter the drive mode of the selected control mode,
  *                     the references starting from the present state:
  *                     CURRENT zero current, SPEED the measured speed,
- *                     POSITION the position at enable (target 0 rad);
+ *                     POSITION the position at enable;
  *                     0: as DISABLE
  *   SET_CONTROL_MODE  CURRENT, SPEED or POSITION; only while disabled; SPEED
  *                     and POSITION need the application's setpoint hooks
  *   SET_CURRENT_REF   id, iq references (control mode CURRENT)
  *   SET_SPEED_REF     speed reference (SPEED), |w| <= speed_max_rad_s
- *   SET_POSITION_REF  multi-turn angle target (POSITION) [rad], counted from
- *                     the position at enable, |theta| <= 200000 rad (DBC)
+ *   SET_POSITION_REF  multi-turn angle target (POSITION) [rad] in the frame
+ *                     of the POSITION telemetry (mc_telemetry_theta_multi_rad,
+ *                     from boot), |theta| <= 200000 rad (DBC); the hook gets
+ *                     it relative to the angle at enable (the position law
+ *                     counts from there)
  *                     The three references are refused (MODE) while the
  *                     drive is disabled: a reference set then would be a
  *                     step on enable.
@@ -142,7 +145,8 @@ typedef struct mc_can_cmd {
     uint8_t stop_reason;      /**< MC_CAN_STOP_* */
     uint32_t ticks_since_cmd; /**< steps since the last accepted command */
     float omega_ref_rad_s;    /**< last accepted speed reference */
-    float theta_ref_rad;      /**< last accepted angle reference */
+    float theta_ref_rad;      /**< last accepted angle reference (multi-turn) */
+    float theta_enable_rad;   /**< multi-turn angle at enable (telemetry's frame) */
     uint8_t last_error;       /**< mc_can_err_t of the last rejection */
     uint8_t last_error_cmd;
     uint8_t err_seq; /**< sequence counter of CMD_ERROR */

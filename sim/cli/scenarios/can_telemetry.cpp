@@ -20,7 +20,9 @@
 //
 // SPEED control mode is served by a speed PI in this scenario (the
 // application's set_speed_ref hook) that writes the current references in
-// the drive's CURRENT mode; POSITION is not offered (UNSUPPORTED).
+// the drive's CURRENT mode; POSITION by the position law
+// (firmware/app/ctrl/mc_ctrl_position: trapezoid to the multi-turn target of
+// SET_POSITION_REF, at speed_max_rad_s and stop_decel_rad_s2) in CTRL mode.
 //
 // Parameters (PARAM_REQ/PARAM_REPLY) are served as on the MCU: the
 // parameter service (firmware/app/config/mc_param_srv) on the drive, with
@@ -62,6 +64,7 @@ extern "C" {
 #include "mc_can_cmd.h"
 #include "mc_can_proto.h"
 #include "mc_cfg_store.h"
+#include "mc_ctrl_position.h"
 #include "mc_param_srv.h"
 #include "mc_params.h"
 #include "mc_telemetry.h"
@@ -110,9 +113,16 @@ struct SpeedLoop {
   }
 };
 
+struct AppHooks {
+  SpeedLoop* speed;
+  mc_ctrl_pos_t* pos;
+};
 int speed_hook(void* ctx, float ref) {
-  static_cast<SpeedLoop*>(ctx)->ref_rad_s = ref;
+  static_cast<AppHooks*>(ctx)->speed->ref_rad_s = ref;
   return 0;
+}
+int position_hook(void* ctx, float ref) {
+  return mc_ctrl_pos_set_target_rad(static_cast<AppHooks*>(ctx)->pos, ref) == 0u ? 0 : 1;
 }
 
 const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
@@ -310,6 +320,31 @@ void run_can_telemetry(RunContext& ctx) {
     speed.kp = static_cast<float>(o.J_kgm2 * bw / kt);
     speed.ki_dt = static_cast<float>(speed.kp * bw / 4.0 / tick_hz_d);
   }
+  // The position law for POSITION (its gains from the speed PI's).
+  mc_ctrl_pos_t pos{};
+  {
+    mc_ctrl_pos_cfg_t pc{};
+    pc.foc = d.cfg.foc;
+    pc.pole_pairs = d.cfg.pole_pairs;
+    pc.traj.v_max_rad_s = p.speed_max_rad_s;
+    pc.traj.a_max_rad_s2 = p.stop_decel_rad_s2;
+    pc.traj.d_max_rad_s2 = p.stop_decel_rad_s2;
+    pc.traj.dt_s = d.cfg.foc.dt_s;
+    const double bw = P.get("speed_bw_rad_s");
+    pc.pos_kp_per_s = static_cast<float>(bw / 4.0);
+    pc.vel_kp_a_s_rad = speed.kp;
+    pc.vel_ki_a_rad = static_cast<float>(speed.kp * bw / 4.0);
+    pc.vel_limit_rad_s = p.speed_max_rad_s;
+    pc.iq_max_a = speed.i_max_a;
+    pc.kt_nm_a = static_cast<float>(1.5 * 4.0 * 0.11);
+    pc.j_kgm2 = static_cast<float>(o.J_kgm2);
+    pc.ff_lead_s = static_cast<float>(1.0 / o.bw_rad_s + 1.5 / o.pwm_hz);
+    if (mc_ctrl_pos_init(&pos, &pc) != MC_CTRL_POS_ERR_NONE ||
+        mc_drive_attach_ctrl(&d, mc_ctrl_pos_ops(&pos)) != 0) {
+      throw UsageError("the position law refused the scenario's settings");
+    }
+  }
+  AppHooks hooks{&speed, &pos};
   mc_can_cmd_cfg_t cc{};
   cc.node_id = node;
   cc.tick_hz = tick_hz;
@@ -318,9 +353,10 @@ void run_can_telemetry(RunContext& ctx) {
   cc.stop_decel_rad_s2 = p.stop_decel_rad_s2;
   cc.speed_max_rad_s = p.speed_max_rad_s;
   cc.set_speed_ref = speed_hook;
-  cc.hook_ctx = &speed;
+  cc.set_position_ref = position_hook;
+  cc.hook_ctx = &hooks;
   cc.speed_drive_mode = MC_DRIVE_MODE_CURRENT;
-  cc.position_drive_mode = MC_DRIVE_MODE_IDLE;
+  cc.position_drive_mode = MC_DRIVE_MODE_CTRL;
   mc_can_cmd_t cmd{};
   const uint32_t cerr = mc_can_cmd_init(&cmd, &cc, &d, &tm);
   if (cerr != MC_CAN_CMD_CFG_OK) {
@@ -479,7 +515,7 @@ const Registrar reg_can(
       {"rate_controller_hz", 0.0, "Hz", "CONTROLLER rate (nothing sent here)", 0.0, 1000.0},
       {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
       {"rate_current_refs_hz", 100.0, "Hz", "CURRENT_REFS rate", 0.0, 1000.0},
-      {"rate_position_ref_hz", 0.0, "Hz", "POSITION_REF rate", 0.0, 1000.0},
+      {"rate_position_ref_hz", 50.0, "Hz", "POSITION_REF rate", 0.0, 1000.0},
       {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
       {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
       {"stop_decel_rad_s2", 200.0, "rad/s^2", "speed ramp of a safe stop", 0.01, 1e6},
