@@ -466,6 +466,34 @@ static float toward_zero(float x, float step)
     return 0.0f;
 }
 
+/* The end of a SPEED / POSITION stop: the bridge opens once the rotor is at
+ * rest, or when the stop has taken longer than it could. */
+static void end_at_rest(mc_can_cmd_t *c)
+{
+    const mc_drive_t *d = c->drive;
+    const float rest = (d->cfg.stop_rest_rad_s > 0.0f) ? d->cfg.stop_rest_rad_s
+                                                       : MC_CAN_STOP_REST_RAD_S;
+    if (!(mc_abs_f32(d->tm.omega_m_rad_s) > rest) || (c->stop_ticks_left == 0u)) {
+        end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
+        return;
+    }
+    c->stop_ticks_left--;
+}
+
+/* Start of a stop without the drive's controlled stop (mc_can_cmd.h). */
+static void stop_begin(mc_can_cmd_t *c)
+{
+    mc_drive_t *d = c->drive;
+    const float w0 = mc_isfinite_f32(d->tm.omega_m_rad_s) ? mc_abs_f32(d->tm.omega_m_rad_s) : 0.0f;
+    const float limit_s = (2.0f * w0 / c->cfg.stop_decel_rad_s2) + 0.1f;
+    c->stop_ticks_left = (uint32_t)(limit_s * (float)c->cfg.tick_hz);
+    c->stop_by_law = false;
+    if ((c->control_mode == MC_CAN_CTRL_POSITION) && (d->mode == MC_DRIVE_MODE_CTRL) &&
+        (d->ctrl != NULL) && (d->ctrl->stop != NULL)) {
+        c->stop_by_law = d->ctrl->stop(d->ctrl->ctx, c->cfg.stop_decel_rad_s2) == 0u;
+    }
+}
+
 static void stop_step(mc_can_cmd_t *c)
 {
     mc_drive_t *d = c->drive;
@@ -483,15 +511,22 @@ static void stop_step(mc_can_cmd_t *c)
     }
     if (c->control_mode == MC_CAN_CTRL_SPEED) {
         const float w = toward_zero(c->omega_ref_rad_s, c->cfg.stop_decel_rad_s2 * dt);
-        if ((c->cfg.set_speed_ref(c->cfg.hook_ctx, w) != 0) || (w == 0.0f)) {
+        if (c->cfg.set_speed_ref(c->cfg.hook_ctx, w) != 0) {
             c->omega_ref_rad_s = w;
             end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
             return;
         }
         c->omega_ref_rad_s = w;
+        if (w == 0.0f) {
+            end_at_rest(c); /* the speed loop brings the rotor to rest */
+        }
         return;
     }
-    end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT); /* POSITION, or the mode changed */
+    if (c->stop_by_law && (d->mode == MC_DRIVE_MODE_CTRL)) {
+        end_at_rest(c);
+        return;
+    }
+    end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT); /* POSITION without a stop op, or the mode changed */
 }
 
 void mc_can_cmd_step(mc_can_cmd_t *c)
@@ -523,6 +558,8 @@ void mc_can_cmd_step(mc_can_cmd_t *c)
          * standstill itself before it opens the bridge (mc_drive.h). */
         if (c->drive->cfg.stop_decel_rad_s2 > 0.0f) {
             (void)mc_drive_stop(c->drive);
+        } else {
+            stop_begin(c);
         }
     }
     if (c->stopping && (c->drive->cfg.stop_decel_rad_s2 > 0.0f)) {

@@ -67,8 +67,14 @@
  *   CURRENT   both current references ramp to zero at stop_ramp_a_per_s,
  *             then IDLE;
  *   SPEED     the speed reference ramps to zero at stop_decel_rad_s2
- *             through the application's hook, then IDLE;
- *   POSITION  IDLE at once (a held position cannot be ramped from here).
+ *             through the application's hook; the bridge opens when the
+ *             rotor is at rest (|omega_m| <= the drive's stop_rest_rad_s,
+ *             or MC_CAN_STOP_REST_RAD_S if that is 0), at the latest
+ *             2 |omega_0| / decel + 0.1 s after the stop began;
+ *   POSITION  with a control law that has a stop op (mc_drive_ctrl_t.stop,
+ *             e.g. the position law: it re-plans a stop at
+ *             stop_decel_rad_s2): that stop, then IDLE at rest as in SPEED;
+ *             without one, IDLE at once.
  * During the stop, setpoint and enable commands are refused (MODE);
  * SET_ENABLE 0 ends it at once. A drive fault while enabled ends the run
  * with stop_reason FAULT.
@@ -100,6 +106,10 @@ extern "C" {
 #define MC_CAN_STOP_CMD_TIMEOUT 1u
 #define MC_CAN_STOP_DISABLE_CMD 2u
 #define MC_CAN_STOP_FAULT       3u
+
+/** |omega_m| at which a CAN-side stop counts the rotor at rest when the
+ *  drive's stop_rest_rad_s is 0 [rad/s]. */
+#define MC_CAN_STOP_REST_RAD_S 0.5f
 
 /** Foreign frames (other nodes) mc_can_cmd_poll drops per call at most. */
 #define MC_CAN_RX_FOREIGN_MAX 64u
@@ -142,6 +152,8 @@ typedef struct mc_can_cmd {
     uint8_t control_mode;   /**< MC_CAN_CTRL_* */
     bool enabled;
     bool stopping;            /**< safe stop in progress */
+    bool stop_by_law;         /**< POSITION: the control law's stop op decelerates */
+    uint32_t stop_ticks_left; /**< steps the stop may still wait for rest */
     uint8_t stop_reason;      /**< MC_CAN_STOP_* */
     uint32_t ticks_since_cmd; /**< steps since the last accepted command */
     float omega_ref_rad_s;    /**< last accepted speed reference */
