@@ -454,7 +454,7 @@ TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
       {Frame(0x036, {2, 0xE8, 0x03}), MC_CAN_ERR_BUDGET},  // CURRENTS at 1000 Hz (see below)
       {Frame(0x036, {11, 1, 0}), MC_CAN_ERR_RANGE},
       {Frame(0x036, {1, 0, 0}), MC_CAN_ERR_HEARTBEAT_MIN},  // HEARTBEAT off
-      {Frame(0x037, {7}), MC_CAN_ERR_STALE},                 // the counter of the last one
+      {Frame(0x037, {7}), MC_CAN_ERR_STALE},                // the counter of the last one
   };
   ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {7})));
   // a 125 kbit/s bus: the present rates load it 55.1 %; CURRENTS at

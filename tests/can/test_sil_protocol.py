@@ -34,7 +34,7 @@ import shutil
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_sil_flash import Sil  # noqa: E402
+from test_sil_flash import Sil
 
 fails = []
 
@@ -148,7 +148,7 @@ def stale_heartbeat(sil):
 
 def heartbeat_min(sil):
     cmds = [sil.frame(0.05, "SET_TM_RATE", tm_cmd=1, rate_hz=0)]
-    _r, s, frames = sil.run("hbmin", cmds, duration=1.0)
+    _r, _s, frames = sil.run("hbmin", cmds, duration=1.0)
     errs = [v for _t, n, v in frames if n == "CMD_ERROR"]
     check([(v["rejected_cmd"], v["error"]) for v in errs] == [(0x16, 10)],
           f"SET_TM_RATE HEARTBEAT 0 Hz: replies {errs}")
@@ -196,7 +196,7 @@ def foreign_flood(sil):
     merged = sorted(hb + flood, key=lambda x: x[0])
     cmds += [line for t, line in merged if t >= 0.06]  # after the enable, in time order
     cmds = sorted(cmds)
-    _r, s, frames = sil.run("flood", cmds, duration=t_end)
+    _r, s, _frames = sil.run("flood", cmds, duration=t_end)
     rows = rows_of(os.path.join(sil.work, "flood"))
     # heartbeats up to 1.2 s: enabled, not stopping, until then
     running = [r for r in rows if 0.1 <= r["t"] <= 1.2]

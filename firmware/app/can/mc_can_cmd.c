@@ -471,8 +471,8 @@ static float toward_zero(float x, float step)
 static void end_at_rest(mc_can_cmd_t *c)
 {
     const mc_drive_t *d = c->drive;
-    const float rest = (d->cfg.stop_rest_rad_s > 0.0f) ? d->cfg.stop_rest_rad_s
-                                                       : MC_CAN_STOP_REST_RAD_S;
+    const float rest =
+        (d->cfg.stop_rest_rad_s > 0.0f) ? d->cfg.stop_rest_rad_s : MC_CAN_STOP_REST_RAD_S;
     if (!(mc_abs_f32(d->tm.omega_m_rad_s) > rest) || (c->stop_ticks_left == 0u)) {
         end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
         return;
@@ -526,7 +526,8 @@ static void stop_step(mc_can_cmd_t *c)
         end_at_rest(c);
         return;
     }
-    end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT); /* POSITION without a stop op, or the mode changed */
+    end_run(c,
+            (uint8_t)MC_CAN_STOP_CMD_TIMEOUT); /* POSITION without a stop op, or the mode changed */
 }
 
 void mc_can_cmd_step(mc_can_cmd_t *c)

@@ -12,10 +12,11 @@
 #include "transforms/mc_transforms.h"
 
 static const uint8_t k_slot_msg[MC_TM_COUNT] = {
-    (uint8_t)MC_CAN_MSG_HEARTBEAT,  (uint8_t)MC_CAN_MSG_CURRENTS, (uint8_t)MC_CAN_MSG_VOLTAGES,
-    (uint8_t)MC_CAN_MSG_SPEED,      (uint8_t)MC_CAN_MSG_POSITION, (uint8_t)MC_CAN_MSG_OBSERVER,
-    (uint8_t)MC_CAN_MSG_CONTROLLER, (uint8_t)MC_CAN_MSG_STEPPER,  (uint8_t)MC_CAN_MSG_CURRENT_REFS,
-    (uint8_t)MC_CAN_MSG_POSITION_REF,
+    (uint8_t)MC_CAN_MSG_HEARTBEAT,    (uint8_t)MC_CAN_MSG_CURRENTS,
+    (uint8_t)MC_CAN_MSG_VOLTAGES,     (uint8_t)MC_CAN_MSG_SPEED,
+    (uint8_t)MC_CAN_MSG_POSITION,     (uint8_t)MC_CAN_MSG_OBSERVER,
+    (uint8_t)MC_CAN_MSG_CONTROLLER,   (uint8_t)MC_CAN_MSG_STEPPER,
+    (uint8_t)MC_CAN_MSG_CURRENT_REFS, (uint8_t)MC_CAN_MSG_POSITION_REF,
 };
 
 #define NO_SAT 0xFFu

@@ -87,16 +87,15 @@ typedef enum {
 #define MC_TM_TICK_MAX_HZ     100000u
 
 /* Configuration errors (bits) of mc_telemetry_init / _set_rate. */
-#define MC_TM_CFG_OK          0u
-#define MC_TM_CFG_ERR_NULL    (1u << 0) /**< NULL argument */
-#define MC_TM_CFG_ERR_NODE    (1u << 1) /**< node_id > 62 */
-#define MC_TM_CFG_ERR_BITRATE (1u << 2) /**< bitrate outside [10 k, 1 M] bit/s */
-#define MC_TM_CFG_ERR_TICK    (1u << 3) /**< tick_hz 0 or > 100 kHz */
-#define MC_TM_CFG_ERR_RATE    (1u << 4) /**< a rate above tick_hz, or bad slot */
-#define MC_TM_CFG_ERR_BUDGET  (1u << 5) /**< budget not in (0, MC_TM_BUDGET_FRAC_MAX] */
-#define MC_TM_CFG_ERR_LOAD    (1u << 6) /**< load of the rates above the budget */
-#define MC_TM_CFG_ERR_HEARTBEAT \
-    (1u << 7) /**< HEARTBEAT rate below MC_TM_HEARTBEAT_MIN_HZ */
+#define MC_TM_CFG_OK            0u
+#define MC_TM_CFG_ERR_NULL      (1u << 0) /**< NULL argument */
+#define MC_TM_CFG_ERR_NODE      (1u << 1) /**< node_id > 62 */
+#define MC_TM_CFG_ERR_BITRATE   (1u << 2) /**< bitrate outside [10 k, 1 M] bit/s */
+#define MC_TM_CFG_ERR_TICK      (1u << 3) /**< tick_hz 0 or > 100 kHz */
+#define MC_TM_CFG_ERR_RATE      (1u << 4) /**< a rate above tick_hz, or bad slot */
+#define MC_TM_CFG_ERR_BUDGET    (1u << 5) /**< budget not in (0, MC_TM_BUDGET_FRAC_MAX] */
+#define MC_TM_CFG_ERR_LOAD      (1u << 6) /**< load of the rates above the budget */
+#define MC_TM_CFG_ERR_HEARTBEAT (1u << 7) /**< HEARTBEAT rate below MC_TM_HEARTBEAT_MIN_HZ */
 
 typedef struct {
     uint8_t node_id;               /**< 0..62 */
@@ -121,10 +120,10 @@ struct mc_telemetry; /* below */
 
 /** What the telemetry reads each step. */
 typedef struct {
-    const mc_drive_t *drive;        /**< required */
-    const struct mc_can_cmd *cmd;   /**< CAN command state, or NULL */
-    const mc_telemetry_ext_t *ext;  /**< control-law internals, or NULL */
-    const struct mc_telemetry *tm;  /**< for the multi-turn position, or NULL
+    const mc_drive_t *drive;       /**< required */
+    const struct mc_can_cmd *cmd;  /**< CAN command state, or NULL */
+    const mc_telemetry_ext_t *ext; /**< control-law internals, or NULL */
+    const struct mc_telemetry *tm; /**< for the multi-turn position, or NULL
                                          (POSITION then carries the single-turn
                                          angle) */
 } mc_telemetry_src_t;
