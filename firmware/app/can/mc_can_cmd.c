@@ -441,7 +441,8 @@ uint32_t mc_can_cmd_poll(mc_can_cmd_t *c, const mc_hal_can_t *can, uint32_t max_
     while ((n < max_frames) && (foreign < MC_CAN_RX_FOREIGN_MAX) &&
            (mc_hal_can_receive(can, &f) == 0)) {
         /* software acceptance filter: one comparison for another node's frame */
-        if (mc_can_id_node(f.id) != (uint32_t)c->cfg.node_id) {
+        if (((f.flags & MC_HAL_CAN_FLAG_EXT) != 0u) ||
+            (mc_can_id_node(f.id) != (uint32_t)c->cfg.node_id)) {
             foreign++;
             c->rx_foreign++;
             continue;

@@ -48,9 +48,10 @@
  * the HEARTBEAT, not answered. Frames for another node, extended frames
  * and frames with telemetry ids of other nodes are ignored silently.
  *
- * Receive filter: mc_can_cmd_poll() drops a frame of another node after one
- * comparison of its identifier, and such frames do not use the poll's
- * budget of max_frames handled frames (they have their own, larger one,
+ * Receive filter: mc_can_cmd_poll() drops a frame of another node (or an
+ * extended frame) after one comparison of its identifier, and such frames
+ * do not use the poll's budget of max_frames handled frames (they have
+ * their own, larger one,
  * MC_CAN_RX_FOREIGN_MAX per call), so a flood from other nodes cannot
  * delay this node's commands. At a 1 kHz tick the poll drains 64000
  * foreign frames per second, three times a 1 Mbit/s bus full of the
