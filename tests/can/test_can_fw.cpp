@@ -377,6 +377,13 @@ class CanCmd : public TelemetryOnDrive {
     EXPECT_EQ(static_cast<uint8_t>(e), c.last_error);
     EXPECT_EQ(cmd, c.last_error_cmd);
   }
+  // f disables the drive at once: bridge open, stop reason DISABLE_CMD.
+  void ExpectDisables(const mc_hal_can_frame_t& f) {
+    ASSERT_EQ(MC_CAN_ERR_NONE, Send(f));
+    EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
+    EXPECT_FALSE(c.enabled);
+    EXPECT_EQ(MC_CAN_STOP_DISABLE_CMD, c.stop_reason);
+  }
   void EnableCurrent() {
     ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x031, {1})));
     ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x030, {1})));
@@ -427,10 +434,7 @@ TEST_F(CanCmd, EnableAndSetCurrentReference) {
   EXPECT_FLOAT_EQ(1.25f, d.iq_ref_a);
   mc_hal_can_frame_t f;
   EXPECT_NE(0, mc_hal_fake_can_tx_pop(&fake, &f)) << "no reply to an accepted command";
-  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x030, {0})));
-  EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
-  EXPECT_FALSE(c.enabled);
-  EXPECT_EQ(MC_CAN_STOP_DISABLE_CMD, c.stop_reason);
+  ExpectDisables(Frame(0x030, {0}));
 }
 
 // Every rejected command: error reply, and neither the handler's state
@@ -711,10 +715,7 @@ TEST_F(CanCmd, DisableHasTheLowestIdOfTheNodeAndOpensTheBridge) {
     }
   }
   EnableCurrent();
-  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x020, {})));
-  EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
-  EXPECT_FALSE(c.enabled);
-  EXPECT_EQ(MC_CAN_STOP_DISABLE_CMD, c.stop_reason);
+  ExpectDisables(Frame(0x020, {}));
 }
 
 // Protocol 1 kept the drive enabled on one stale heartbeat repeated.

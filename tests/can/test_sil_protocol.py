@@ -27,14 +27,12 @@ from the DBC by cantools, commands from a candump script at simulated time:
 
     test_sil_protocol.py --mcsim MCSIM --work DIR --repo ROOT
 """
-import argparse
 import csv
 import os
-import shutil
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_sil_flash import Sil
+from test_sil_flash import setup
 
 fails = []
 
@@ -55,6 +53,18 @@ def hb_frames(frames):
     return [(t, s) for t, n, s in frames if n == "HEARTBEAT"]
 
 
+def stop_profile(rows):
+    """The stop of a run: (start time, speed then, deceleration between 80 %
+    and 20 % of it, the first row with the bridge open)."""
+    t_stop = next(r["t"] for r in rows if r["HEARTBEAT.stopping"] == 1.0)
+    w0 = next(r["omega_m_true_rad_s"] for r in rows if r["t"] >= t_stop)
+    a = next(r for r in rows if r["t"] > t_stop and r["omega_m_true_rad_s"] <= 0.8 * w0)
+    b = next(r for r in rows if r["t"] > t_stop and r["omega_m_true_rad_s"] <= 0.2 * w0)
+    meas = (a["omega_m_true_rad_s"] - b["omega_m_true_rad_s"]) / (b["t"] - a["t"])
+    idle = next(r for r in rows if r["t"] > t_stop and r["HEARTBEAT.mode"] == 0.0)
+    return t_stop, w0, meas, idle
+
+
 def timeout_stop_in_speed_mode(sil):
     # J 0.005 kg m^2: the speed PI's 3 A accelerate it at 0.66 * 3 / 0.005 = 396 rad/s^2
     cmds = [sil.frame(0.05, "SET_CONTROL_MODE", control_mode=2),
@@ -68,23 +78,18 @@ def timeout_stop_in_speed_mode(sil):
                                    "--set", "speed_bw_rad_s=60"])
     rows = rows_of(os.path.join(sil.work, "stop"))
     decel = s["param.stop_decel_rad_s2"]
-    t_stop = next(r["t"] for r in rows if r["HEARTBEAT.stopping"] == 1.0)
+    t_stop, w0, meas, idle = stop_profile(rows)
     tick = 1.0 / s["tick_hz"]
     # the stop begins timeout_s after the last heartbeat, to one tick
     check(abs(t_stop - (t_hb[-1] + s["param.timeout_s"])) <= 2 * tick,
           f"stop began at {t_stop:.4f} s, last heartbeat {t_hb[-1]:.3f} s")
-    w0 = next(r["omega_m_true_rad_s"] for r in rows if r["t"] >= t_stop)
     check(abs(w0 - 100.0) < 2.0, f"speed at the stop {w0:.2f} rad/s, not the 100 rad/s commanded")
     # deceleration between 80 % and 20 % of the initial speed (the ramp's
-    # straight part): within 10 % of the configured rate (the stop loop's P
-    # gain follows the ramp with a constant lag, the load is the inertia only)
-    a = next(r for r in rows if r["t"] > t_stop and r["omega_m_true_rad_s"] <= 0.8 * w0)
-    b = next(r for r in rows if r["t"] > t_stop and r["omega_m_true_rad_s"] <= 0.2 * w0)
-    meas = (a["omega_m_true_rad_s"] - b["omega_m_true_rad_s"]) / (b["t"] - a["t"])
+    # straight part): within 10 % of the configured rate (the speed loop
+    # follows the ramp with a lag that settles; the load is the inertia only)
     check(abs(meas - decel) <= 0.1 * decel, f"deceleration {meas:.1f} rad/s^2, configured {decel:g}")
     # the bridge opens at standstill: the first IDLE row has the rotor at rest
-    # (stop_rest_rad_s of the drive, plus the speed estimate's lag: 2 rad/s)
-    idle = next(r for r in rows if r["t"] > t_stop and r["HEARTBEAT.mode"] == 0.0)
+    # (the CAN layer's 0.5 rad/s, plus the speed estimate's lag: 2 rad/s)
     check(abs(idle["omega_m_true_rad_s"]) < 2.0,
           f"bridge opened at {idle['omega_m_true_rad_s']:.2f} rad/s (coasting)")
     t_ramp = w0 / decel
@@ -110,15 +115,10 @@ def timeout_stop_in_position_mode(sil):
                              extra=["--set", "J_kgm2=0.005", "--set", "stop_decel_rad_s2=200"])
     rows = rows_of(os.path.join(sil.work, "posstop"))
     decel = s["param.stop_decel_rad_s2"]
-    t_stop = next(r["t"] for r in rows if r["HEARTBEAT.stopping"] == 1.0)
-    w0 = next(r["omega_m_true_rad_s"] for r in rows if r["t"] >= t_stop)
+    t_stop, w0, meas, idle = stop_profile(rows)
     check(w0 > 100.0, f"speed at the stop {w0:.1f} rad/s: the move should be cruising")
-    a = next(r for r in rows if r["t"] > t_stop and r["omega_m_true_rad_s"] <= 0.8 * w0)
-    b = next(r for r in rows if r["t"] > t_stop and r["omega_m_true_rad_s"] <= 0.2 * w0)
-    meas = (a["omega_m_true_rad_s"] - b["omega_m_true_rad_s"]) / (b["t"] - a["t"])
     # the law's stop trapezoid followed by the cascade: within 10 %
     check(abs(meas - decel) <= 0.1 * decel, f"position stop: deceleration {meas:.1f} rad/s^2")
-    idle = next(r for r in rows if r["t"] > t_stop and r["HEARTBEAT.mode"] == 0.0)
     # at rest: the CAN layer's threshold (0.5 rad/s) plus a tick's change
     check(abs(idle["omega_m_true_rad_s"]) < 2.0,
           f"position stop: bridge opened at {idle['omega_m_true_rad_s']:.2f} rad/s")
@@ -212,14 +212,7 @@ def foreign_flood(sil):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--mcsim", required=True)
-    ap.add_argument("--work", required=True)
-    ap.add_argument("--repo", required=True)
-    args = ap.parse_args()
-    shutil.rmtree(args.work, ignore_errors=True)
-    os.makedirs(args.work)
-    sil = Sil(args)
+    _args, sil = setup()
     timeout_stop_in_speed_mode(sil)
     timeout_stop_in_position_mode(sil)
     stale_heartbeat(sil)
