@@ -109,17 +109,7 @@ static mc_param_status_t do_apply(mc_param_srv_t *s, uint32_t *p_value)
         }
         /* Only runtime parameters differ: the limits the running drive
          * reads every step (validated together above). */
-        mc_drive_cfg_t *d = &s->drive->cfg;
-        d->i_max_a = cfg.i_max_a;
-        d->i_trip_a = cfg.i_trip_a;
-        d->vbus_min_v = cfg.vbus_min_v;
-        d->vbus_max_v = cfg.vbus_max_v;
-        d->omega_max_rad_s = cfg.omega_max_rad_s;
-        d->temp_max_c = cfg.temp_max_c;
-        d->stall_current_frac = cfg.stall_current_frac;
-        d->stall_speed_rad_s = cfg.stall_speed_rad_s;
-        d->stall_time_s = cfg.stall_time_s;
-        d->i_unbalance_max_a = cfg.i_unbalance_max_a;
+        mc_drive_set_runtime_limits(s->drive, &cfg);
     } else {
         const mc_drive_ctrl_t *ctrl = s->drive->ctrl;
         if (mc_drive_init(s->drive, &cfg, s->hal) != MC_DRIVE_CFG_OK) {

@@ -803,6 +803,22 @@ int mc_drive_set_current_ref(mc_drive_t *d, float id_ref_a, float iq_ref_a)
     return 0;
 }
 
+void mc_drive_set_runtime_limits(mc_drive_t *d, const mc_drive_cfg_t *cfg)
+{
+    d->cfg.i_max_a = cfg->i_max_a;
+    d->cfg.i_trip_a = cfg->i_trip_a;
+    d->cfg.vbus_min_v = cfg->vbus_min_v;
+    d->cfg.vbus_max_v = cfg->vbus_max_v;
+    d->cfg.omega_max_rad_s = cfg->omega_max_rad_s;
+    d->cfg.temp_max_c = cfg->temp_max_c;
+    d->cfg.stall_current_frac = cfg->stall_current_frac;
+    d->cfg.stall_speed_rad_s = cfg->stall_speed_rad_s;
+    d->cfg.stall_time_s = cfg->stall_time_s;
+    d->cfg.i_unbalance_max_a = cfg->i_unbalance_max_a;
+    d->id_ref_a = mc_sat_f32(d->id_ref_a, -cfg->i_max_a, cfg->i_max_a);
+    d->iq_ref_a = mc_sat_f32(d->iq_ref_a, -cfg->i_max_a, cfg->i_max_a);
+}
+
 void mc_drive_raise_fault(mc_drive_t *d, uint32_t bits)
 {
     raise_fault(d, bits & MC_DRIVE_FAULT_EXTERNAL);

@@ -421,6 +421,14 @@ int mc_drive_stop(mc_drive_t *d);
  *  |ref| > i_max_a); on error the previous references stay. */
 int mc_drive_set_current_ref(mc_drive_t *d, float id_ref_a, float iq_ref_a);
 
+/** Take the limits that may change while the bridge is on (i_max_a,
+ *  i_trip_a, the bus window, omega_max_rad_s, temp_max_c, the stall and
+ *  unbalance supervision) from cfg, already validated as a whole by the
+ *  caller (mc_params_validate, mc_drive_init's rules). A lower i_max_a takes
+ *  effect at once: the present current references are clamped to it (sign
+ *  kept), so the drive never runs a reference above the limit in force. */
+void mc_drive_set_runtime_limits(mc_drive_t *d, const mc_drive_cfg_t *cfg);
+
 /** Raise a fault from the application (e.g. the CAN command timeout):
  *  same reaction as a detected fault. bits must be MC_DRIVE_FAULT_EXTERNAL. */
 void mc_drive_raise_fault(mc_drive_t *d, uint32_t bits);

@@ -215,6 +215,16 @@ TEST_F(ParamCan, WhileRunningOnlyRuntimeParameters)
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
     EXPECT_EQ(6.0f, d.cfg.i_max_a);
     EXPECT_EQ(MC_DRIVE_MODE_CURRENT, d.mode) << "a runtime apply does not stop the drive";
+    // A lower limit takes effect at once on the reference in force (found by
+    // can.fuzz_cmd: 4 A kept running after i_max_a became 2.77 A). Exact
+    // values: the clamp copies the limit, the sign is kept.
+    ASSERT_EQ(0, mc_drive_set_current_ref(&d, -1.0f, -5.5f));
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, Bits(2.5f)).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
+    EXPECT_EQ(-1.0f, d.id_ref_a) << "inside the new limit: unchanged";
+    EXPECT_EQ(-2.5f, d.iq_ref_a) << "clamped to the new i_max_a";
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, Bits(6.0f)).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
     EXPECT_TRUE(fake.pwm3.enabled);
     EXPECT_EQ(MC_PARAM_ERR_RUNNING, Req(MC_PARAM_OP_SAVE, 0).status);
     EXPECT_EQ(MC_PARAM_ERR_RUNNING, Req(MC_PARAM_OP_LOAD_DEFAULTS, 0).status);
