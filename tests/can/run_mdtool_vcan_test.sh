@@ -12,7 +12,9 @@ else
   case "$W" in *" "*) echo "work dir must not contain spaces" >&2; exit 2 ;; esac
   script=$W/vm_job.sh
   printf '#!/bin/sh\nexec bash %q %q %q %q %q\n' "$JOB" "$MCSIM" "$W" "$PY" "$ROOT" > "$script"
-  "$ROOT/tools/vm/mc_vm.sh" run "$script"
+  # the VM runs two SIL sessions (mdtool commands, then the parameter round
+  # trip): more than the default 600 s on a loaded machine
+  MC_VM_TIMEOUT=${MC_VM_TIMEOUT:-1100} "$ROOT/tools/vm/mc_vm.sh" run "$script"
 fi
 cd "$W/run"
 exec "$PY" - "$ROOT" <<'PYEOF'
