@@ -3,15 +3,18 @@
 #  1. host debug build: every test (unit, sil, can, lint, target);
 #  2. host-asan build: the same minus lint, fuzz, campaign and docs (the
 #     preset's filter), under ASan + UBSan;
-#  3. stm32f405 cross build with warnings as errors.
+#  3. the STM32F405 images (example board, ODrive v3.6, VESC 6) with warnings
+#     as errors and their size budgets.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=$(nproc)
 log() { printf '\033[1m[test]\033[0m %s\n' "$*"; }
 
-log "cross build: stm32f405"
-cmake --preset stm32f405 >/dev/null
-cmake --build --preset stm32f405 -j "$JOBS"
+for p in stm32f405 stm32f405-odrive36 stm32f405-vesc6; do
+  log "cross build: $p"
+  cmake --preset "$p" >/dev/null
+  cmake --build --preset "$p" -j "$JOBS"
+done
 
 log "host-asan build and tests (ASan + UBSan)"
 cmake --preset host-asan >/dev/null

@@ -1,6 +1,9 @@
 #include "drive_setup.hpp"
 
 #include "hal_host/sil_rig.hpp"
+extern "C" {
+#include "config/mc_gains.h"
+}
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +14,14 @@ namespace mcsim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+
+// The speed PI of every scenario: kp = J wc / kt, zero at wc / 4 (the
+// formula lives in firmware/app/config/mc_gains.c, shared with the drive).
+void speed_pi(double j_kgm2, double kt_nm_a, double wc_rad_s, float* p_kp, float* p_ki) {
+  if (mc_gains_speed_pi(j_kgm2, kt_nm_a, wc_rad_s, p_kp, p_ki) != MC_GAINS_OK) {
+    throw UsageError("no speed PI gains: J, kt and the crossover must be positive");
+  }
+}
 
 std::string num(double v) {
   std::ostringstream os;
@@ -93,7 +104,7 @@ Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
                      " A): raise pwm_hz or lower vbus_v");
   }
   Gains g;
-  g.kt_nm_a = 1.5 * m.pole_pairs * m.flux_wb;
+  g.kt_nm_a = mc_gains_kt_nm_a(m.pole_pairs, m.flux_wb);
   g.v_max_v = 0.95 * b.vbus_v / std::sqrt(3.0);
   g.cur_bw_rad_s = get("cur_bw_rad_s", 0.08 / T, &Gains::cur_bw_rad_s);
   g.i_limit_a =
@@ -119,7 +130,7 @@ Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
   g.speed_rated_eff_rad_s = std::min(m.speed_rated_rad_s, g.speed_limit_rad_s);
   g.enc_pll_bw_rad_s = get("enc_pll_bw_rad_s", std::min(1000.0, 0.1 / T), &Gains::enc_pll_bw_rad_s);
   g.speed_wc_rad_s =
-      get("speed_wc_rad_s", std::min(g.cur_bw_rad_s / 10.0, g.enc_pll_bw_rad_s / 4.0),
+      get("speed_wc_rad_s", mc_gains_speed_wc_rad_s(g.cur_bw_rad_s, g.enc_pll_bw_rad_s),
           &Gains::speed_wc_rad_s);
   g.speed_accel_rad_s2 = get("speed_accel_rad_s2", 0.5 * g.kt_nm_a * g.i_limit_a / m.j_kgm2,
                              &Gains::speed_accel_rad_s2);
@@ -317,7 +328,10 @@ mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
   // rest below 0.2 % of the rated speed. Warnings off (no thermal model).
   dc.stop_decel_rad_s2 = static_cast<float>(g.stop_decel_rad_s2);
   dc.stop_rest_rad_s = static_cast<float>(0.002 * g.speed_rated_eff_rad_s);
-  dc.stop_kp_a_s_rad = static_cast<float>(m.j_kgm2 * g.speed_wc_rad_s / g.kt_nm_a);
+  {
+    float stop_ki_unused = 0.0f;
+    speed_pi(m.j_kgm2, g.kt_nm_a, g.speed_wc_rad_s, &dc.stop_kp_a_s_rad, &stop_ki_unused);
+  }
   dc.stop_iq_ff_a =
       static_cast<float>(std::min(g.i_limit_a, m.j_kgm2 * g.stop_decel_rad_s2 / g.kt_nm_a));
   return dc;
@@ -361,8 +375,7 @@ mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g) {
   c.v_limit_ratio = 0.95f;
   c.vbus_max_v = static_cast<float>(1.5 * b.vbus_v);
   const double wc = g.sls_wc_rad_s;
-  c.speed_kp_a_s_rad = static_cast<float>(m.j_kgm2 * wc / g.kt_nm_a);
-  c.speed_ki_a_rad = static_cast<float>(c.speed_kp_a_s_rad * wc / 4.0);
+  speed_pi(m.j_kgm2, g.kt_nm_a, wc, &c.speed_kp_a_s_rad, &c.speed_ki_a_rad);
   c.iq_max_a = static_cast<float>(g.i_limit_a / 1.25);
   c.speed_slew_rad_s2 = static_cast<float>(0.5 * g.torque_rated_nm / m.j_kgm2);
   c.speed_max_rad_s = static_cast<float>(g.speed_limit_rad_s);
@@ -376,6 +389,7 @@ mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g) {
   c.blend_time_s = 0.05f;
   c.lowspeed_fallback = true;
   c.if_damping = true;
+  c.align_any_angle = true;  // the rotor may start anywhere (tests/sil/commission)
   return c;
 }
 
@@ -426,8 +440,7 @@ mc_ctrl_pos_cfg_t build_position_cfg(const MotorFiles& f, const Gains& g) {
   c.pos_kp_per_s = static_cast<float>(g.pos_kp_per_s);
   // The sensored speed PI's formula (kp = J wc / kt, zero at wc / 4).
   const double wc = g.speed_wc_rad_s;
-  c.vel_kp_a_s_rad = static_cast<float>(m.j_kgm2 * wc / g.kt_nm_a);
-  c.vel_ki_a_rad = static_cast<float>(c.vel_kp_a_s_rad * wc / 4.0);
+  speed_pi(m.j_kgm2, g.kt_nm_a, wc, &c.vel_kp_a_s_rad, &c.vel_ki_a_rad);
   c.vel_limit_rad_s = static_cast<float>(g.speed_limit_rad_s);
   c.iq_max_a = static_cast<float>(g.i_limit_a);
   c.kt_nm_a = static_cast<float>(g.kt_nm_a);
@@ -491,8 +504,7 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
     case Law::kSpeedPi: {
       mc_pi_f32_cfg_t pc{};
       const double wc = g.speed_wc_rad_s;
-      pc.kp = static_cast<float>(fd_.motor.j_kgm2 * wc / g.kt_nm_a);
-      pc.ki_per_s = static_cast<float>(pc.kp * wc / 4.0);
+      speed_pi(fd_.motor.j_kgm2, g.kt_nm_a, wc, &pc.kp, &pc.ki_per_s);
       pc.dt_s = static_cast<float>(T_);
       pc.out_min = static_cast<float>(-g.i_limit_a);
       pc.out_max = static_cast<float>(g.i_limit_a);

@@ -27,22 +27,37 @@ def check(ok, what):
     print(("ok   " if ok else "FAIL ") + what)
     if not ok:
         fails.append(what)
-rc = {f: int(open(f + ".rc").read()) for f in ("scan", "status", "config", "monitor", "run", "mcsim")}
-out = {f: open(f + ".out").read() for f in ("scan", "status", "config", "monitor", "run")}
+rc = {f: int(open(f + ".rc").read()) for f in ("scan", "status", "config", "monitor", "calibrate", "run", "mcsim")}
+out = {f: open(f + ".out").read() for f in ("scan", "status", "config", "monitor", "calibrate", "run")}
 check(rc["scan"] == 0 and "node 1: mode IDLE" in out["scan"], "scan finds node 1 (IDLE): " + out["scan"].strip())
 check(rc["status"] == 0 and "mode IDLE" in out["status"] and "CURRENTS" in out["status"],
       "status: heartbeat and telemetry")
 check(rc["config"] == 4 and "refused PARAM_REQ: UNSUPPORTED" in out["config"],
       "config get: the SIL's refusal decoded (no parameter service): " + out["config"].strip())
 check(rc["monitor"] == 0 and os.path.getsize("monitor.png") > 1000, "monitor --no-gui wrote monitor.png")
-check(rc["run"] == 0 and "ran speed 20" in out["run"], "run speed 20: " + out["run"].strip()[-200:])
+check(rc["calibrate"] == 0 and "DONE" in out["calibrate"] and "not staged" in out["calibrate"],
+      "calibrate: progress to DONE, results shown (no parameter service here): " + out["calibrate"].strip()[-300:])
+if rc["calibrate"] == 0:
+    import tomllib
+    cal = json.load(open("cal.json"))["results"]
+    with open(os.path.join(root, "sim", "motors", "paper002-test-motor.toml"), "rb") as f:
+        mot = tomllib.load(f)["motor"]
+    # issue 18's bounds (R 2 %, flux 3 %, pole pairs exact), on the live bus
+    check(abs(cal["r_ohm"] / mot["r_ohm"] - 1) < 0.02 and abs(cal["flux_wb"] / mot["flux_wb"] - 1) < 0.03
+          and cal["pole_pairs"] == mot["pole_pairs"], f"calibrate's results: {cal}")
+check(rc["run"] == 0 and "ran speed 20" in out["run"] and "settled: speed" in out["run"],
+      "run speed 20 --settle 1.0: " + out["run"].strip()[-200:])
 check(rc["mcsim"] == 0, "the SIL ended after the drive was disabled")
 s = json.load(open("can-telemetry.json"))
 check(s.get("final_stop_reason") == 2, f"the drive stopped on the disable command (stop_reason {s.get('final_stop_reason')})")
 import csv
 rows = list(csv.DictReader(open("can-telemetry.csv")))
 w = [float(r["omega_m_true_rad_s"]) for r in rows]
-check(max(w) > 15.0, f"the speed step reached {max(w):.1f} rad/s (ref 20)")
+# mdtool saw 3 SPEED frames in a row within 1.0 rad/s of 20 before it
+# disabled; the true speed of the plant agrees within the encoder tracking
+# loop's error (0.5 rad/s of slack on top of the band).
+near = [x for x in w if abs(x - 20.0) <= 1.5]
+check(len(near) > 0, f"the speed step reached 20 +- 1.5 rad/s (max {max(w):.2f})")
 rec = json.load(open("rec.json"))
 cd = [f for f in log.read_candump("candump.log")]
 log.convert("rec.blf", "rec.mf4")  # asammdf on the host (see mdtool_vcan.sh)

@@ -204,6 +204,12 @@ def main():
     sent = listener.recv(0.3)
     check(r.returncode == 2 and "outside its range [0.0, 100.0] ohm" in r.stderr and sent is None,
           f"out of range: exit 2, nothing sent, '{r.stderr.strip()}'")
+    while listener.recv(0.05) is not None:
+        pass
+    r = mdtool("run", "speed", "20", "--settle", "0", *bus)
+    sent = listener.recv(0.3)
+    check(r.returncode == 2 and "a tolerance > 0" in r.stderr and sent is None,
+          f"run --settle 0: exit 2, nothing sent, '{r.stderr.strip()}'")
     r = mdtool("config", "set", "pole_pairs=7.5", *bus)
     check(r.returncode == 2 and "whole number" in r.stderr, f"u32 not whole: '{r.stderr.strip()}'")
     r = mdtool("config", "set", "cfg_store_seq=3", *bus)

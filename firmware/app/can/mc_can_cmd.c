@@ -142,6 +142,33 @@ void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv)
     }
 }
 
+void mc_can_cmd_attach_commission(mc_can_cmd_t *c, mc_can_cmd_comm_fn fn, mc_can_cmd_busy_fn busy,
+                                  void *ctx)
+{
+    if (c == NULL) {
+        return;
+    }
+    c->comm_fn = fn;
+    c->comm_busy = (fn != NULL) ? busy : NULL;
+    c->comm_ctx = (fn != NULL) ? ctx : NULL;
+}
+
+static bool comm_busy(const mc_can_cmd_t *c)
+{
+    return (c->comm_busy != NULL) && c->comm_busy(c->comm_ctx);
+}
+
+static mc_can_err_t do_commission(mc_can_cmd_t *c, const float *v)
+{
+    if (c->comm_fn == NULL) {
+        return MC_CAN_ERR_UNSUPPORTED;
+    }
+    if ((v[MC_CAN_COMMISSION_CMD_ACTION] > 0.5f) && (c->enabled || c->stopping)) {
+        return MC_CAN_ERR_MODE; /* START / REPORT only while disabled */
+    }
+    return c->comm_fn(c->comm_ctx, v);
+}
+
 static mc_can_err_t do_param(mc_can_cmd_t *c, const mc_hal_can_t *can, const float *v,
                              const mc_hal_can_frame_t *p_frame)
 {
@@ -231,7 +258,7 @@ static mc_can_err_t do_enable(mc_can_cmd_t *c, bool on)
         }
         return MC_CAN_ERR_NONE;
     }
-    if (c->stopping) {
+    if (c->stopping || comm_busy(c)) {
         return MC_CAN_ERR_MODE;
     }
     if (c->enabled) {
@@ -263,7 +290,7 @@ static mc_can_err_t do_enable(mc_can_cmd_t *c, bool on)
 
 static mc_can_err_t do_control_mode(mc_can_cmd_t *c, uint32_t mode)
 {
-    if (c->enabled || c->stopping) {
+    if (c->enabled || c->stopping || comm_busy(c)) {
         return MC_CAN_ERR_MODE;
     }
     if (((mode == MC_CAN_CTRL_SPEED) && (c->cfg.set_speed_ref == NULL)) ||
@@ -347,7 +374,7 @@ static mc_can_err_t dispatch(mc_can_cmd_t *c, uint32_t msg, const float *v)
     case MC_CAN_MSG_SET_POSITION_REF:
         return do_position_ref(c, v[MC_CAN_SET_POSITION_REF_THETA_REF_RAD]);
     case MC_CAN_MSG_CLEAR_FAULTS:
-        if (c->enabled || c->stopping) {
+        if (c->enabled || c->stopping || comm_busy(c)) {
             return MC_CAN_ERR_MODE;
         }
         return (mc_drive_clear_faults(c->drive) == 0) ? MC_CAN_ERR_NONE : MC_CAN_ERR_REFUSED;
@@ -362,6 +389,8 @@ static mc_can_err_t dispatch(mc_can_cmd_t *c, uint32_t msg, const float *v)
         c->hb_last = n;
         return MC_CAN_ERR_NONE;
     }
+    case MC_CAN_MSG_COMMISSION_CMD:
+        return do_commission(c, v);
     default:
         return MC_CAN_ERR_UNKNOWN_CMD;
     }

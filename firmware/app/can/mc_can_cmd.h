@@ -36,6 +36,12 @@
  *                     (mc_param_srv.h), answered by one PARAM_REPLY with a
  *                     status; needs mc_can_cmd_attach_params (else
  *                     UNSUPPORTED)
+ *   COMMISSION_CMD    start / abort / report commissioning
+ *                     (commission/mc_comm_can.h); needs
+ *                     mc_can_cmd_attach_commission (else UNSUPPORTED);
+ *                     START refused MODE while enabled or stopping; while
+ *                     it runs SET_ENABLE 1, SET_CONTROL_MODE and
+ *                     CLEAR_FAULTS are refused MODE (SET_ENABLE 0 stops it)
  *
  * Validation, in this order, before anything changes: format (classic data
  * frame), known command, exact length, every signal in its DBC range, then
@@ -145,6 +151,11 @@ typedef struct {
     mc_drive_mode_t position_drive_mode; /**< same for POSITION */
 } mc_can_cmd_cfg_t;
 
+/** Commissioning front end (commission/mc_comm_can.h): the command with
+ *  its signal values in DBC order, and whether a sequence runs. */
+typedef mc_can_err_t (*mc_can_cmd_comm_fn)(void *ctx, const float *v);
+typedef bool (*mc_can_cmd_busy_fn)(const void *ctx);
+
 typedef struct mc_can_cmd {
     mc_can_cmd_cfg_t cfg;
     mc_drive_t *drive;
@@ -178,6 +189,9 @@ typedef struct mc_can_cmd {
     uint8_t cfg_status;     /**< HEARTBEAT.cfg_status: the boot status of the
                                        parameter store (EMPTY without one: the
                                        configuration is not from flash) */
+    mc_can_cmd_comm_fn comm_fn;   /**< COMMISSION_CMD, or NULL */
+    mc_can_cmd_busy_fn comm_busy; /**< commissioning runs, or NULL */
+    void *comm_ctx;
 } mc_can_cmd_t;
 
 /** Validate cfg and initialise c (disabled, control mode NONE). tm may be
@@ -193,6 +207,11 @@ uint32_t mc_can_cmd_init(mc_can_cmd_t *c, const mc_can_cmd_cfg_t *cfg, mc_drive_
  * limit. The node id and bit rate are used only at the next boot.
  */
 void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv);
+
+/** Serve COMMISSION_CMD with fn (NULL: detach; the command is then
+ *  UNSUPPORTED); busy tells when other commands must wait. */
+void mc_can_cmd_attach_commission(mc_can_cmd_t *c, mc_can_cmd_comm_fn fn, mc_can_cmd_busy_fn busy,
+                                  void *ctx);
 
 /**
  * Handle one received frame; on rejection queue a CMD_ERROR reply on can

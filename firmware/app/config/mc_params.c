@@ -107,6 +107,10 @@ uint32_t mc_params_to_drive_cfg(const mc_params_t *p, mc_drive_cfg_t *cfg)
     cfg->foc.decouple = true;
     cfg->pole_pairs = p->pole_pairs;
     cfg->encoder_offset_rad = p->encoder_offset_rad;
+    cfg->encoder_reversed = (p->encoder_reversed != 0u);
+    cfg->i_offset_a[0] = p->i_offset_a_a;
+    cfg->i_offset_a[1] = p->i_offset_b_a;
+    cfg->i_offset_a[2] = p->i_offset_c_a;
     cfg->speed_pll_bw_rad_s = p->speed_pll_bw_rad_s;
     cfg->slow_loop_div = p->slow_loop_div;
     cfg->i_max_a = p->i_max_a;

@@ -22,6 +22,9 @@ const mc_params_t mc_params_default = {
     .i_sense_max_a = 60.0f,
     .adc_bits = 12u,
     .encoder_cpr = 8192u,
+    .i_offset_a_a = 0.0f,
+    .i_offset_b_a = 0.0f,
+    .i_offset_c_a = 0.0f,
     .current_bw_rad_s = 1256.6371f,
     .v_limit_ratio = 0.95f,
     .slow_loop_div = 20u,
@@ -29,6 +32,7 @@ const mc_params_t mc_params_default = {
     .encoder_offset_rad = 0.0f,
     .speed_kp_a_s_rad = 0.05f,
     .speed_ki_a_rad = 1.0f,
+    .encoder_reversed = 0u,
     .obs_omega_crit_m_rad_s = 20.0f,
     .obs_pll_bw_rad_s = 400.0f,
     .i_trip_a = 15.0f,
@@ -75,6 +79,9 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {24u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_sense_max_a), {.f = 0.1f}, {.f = 2000.0f}, {.f = 60.0f}}, /* i_sense_max_a */
     {25u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, adc_bits), {.u = 8u}, {.u = 16u}, {.u = 12u}}, /* adc_bits */
     {26u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_cpr), {.u = 4u}, {.u = 16777216u}, {.u = 8192u}}, /* encoder_cpr */
+    {27u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_offset_a_a), {.f = -100.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* i_offset_a_a */
+    {28u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_offset_b_a), {.f = -100.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* i_offset_b_a */
+    {29u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_offset_c_a), {.f = -100.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* i_offset_c_a */
     {40u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, current_bw_rad_s), {.f = 10.0f}, {.f = 20000.0f}, {.f = 1256.6371f}}, /* current_bw_rad_s */
     {41u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, v_limit_ratio), {.f = 0.1f}, {.f = 1.0f}, {.f = 0.95f}}, /* v_limit_ratio */
     {42u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, slow_loop_div), {.u = 1u}, {.u = 1000u}, {.u = 20u}}, /* slow_loop_div */
@@ -82,6 +89,7 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {44u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_offset_rad), {.f = -6.2831855f}, {.f = 6.2831855f}, {.f = 0.0f}}, /* encoder_offset_rad */
     {45u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_kp_a_s_rad), {.f = 0.0f}, {.f = 100.0f}, {.f = 0.05f}}, /* speed_kp_a_s_rad */
     {46u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_ki_a_rad), {.f = 0.0f}, {.f = 10000.0f}, {.f = 1.0f}}, /* speed_ki_a_rad */
+    {47u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_reversed), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* encoder_reversed */
     {60u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, obs_omega_crit_m_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 20.0f}}, /* obs_omega_crit_m_rad_s */
     {61u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, obs_pll_bw_rad_s), {.f = 1.0f}, {.f = 10000.0f}, {.f = 400.0f}}, /* obs_pll_bw_rad_s */
     {70u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, i_trip_a), {.f = 0.01f}, {.f = 2000.0f}, {.f = 15.0f}}, /* i_trip_a */

@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 52u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 48u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 56u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 52u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -35,6 +35,9 @@
 #define MC_PARAM_ID_I_SENSE_MAX_A 24u
 #define MC_PARAM_ID_ADC_BITS 25u
 #define MC_PARAM_ID_ENCODER_CPR 26u
+#define MC_PARAM_ID_I_OFFSET_A_A 27u
+#define MC_PARAM_ID_I_OFFSET_B_A 28u
+#define MC_PARAM_ID_I_OFFSET_C_A 29u
 #define MC_PARAM_ID_CURRENT_BW_RAD_S 40u
 #define MC_PARAM_ID_V_LIMIT_RATIO 41u
 #define MC_PARAM_ID_SLOW_LOOP_DIV 42u
@@ -42,6 +45,7 @@
 #define MC_PARAM_ID_ENCODER_OFFSET_RAD 44u
 #define MC_PARAM_ID_SPEED_KP_A_S_RAD 45u
 #define MC_PARAM_ID_SPEED_KI_A_RAD 46u
+#define MC_PARAM_ID_ENCODER_REVERSED 47u
 #define MC_PARAM_ID_OBS_OMEGA_CRIT_M_RAD_S 60u
 #define MC_PARAM_ID_OBS_PLL_BW_RAD_S 61u
 #define MC_PARAM_ID_I_TRIP_A 70u
@@ -89,40 +93,44 @@
 #define MC_PARAM_IDX_I_SENSE_MAX_A 15u
 #define MC_PARAM_IDX_ADC_BITS 16u
 #define MC_PARAM_IDX_ENCODER_CPR 17u
-#define MC_PARAM_IDX_CURRENT_BW_RAD_S 18u
-#define MC_PARAM_IDX_V_LIMIT_RATIO 19u
-#define MC_PARAM_IDX_SLOW_LOOP_DIV 20u
-#define MC_PARAM_IDX_SPEED_PLL_BW_RAD_S 21u
-#define MC_PARAM_IDX_ENCODER_OFFSET_RAD 22u
-#define MC_PARAM_IDX_SPEED_KP_A_S_RAD 23u
-#define MC_PARAM_IDX_SPEED_KI_A_RAD 24u
-#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 25u
-#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 26u
-#define MC_PARAM_IDX_I_TRIP_A 27u
-#define MC_PARAM_IDX_VBUS_MIN_V 28u
-#define MC_PARAM_IDX_VBUS_MAX_V 29u
-#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 30u
-#define MC_PARAM_IDX_TEMP_MAX_C 31u
-#define MC_PARAM_IDX_STALL_CURRENT_FRAC 32u
-#define MC_PARAM_IDX_STALL_SPEED_RAD_S 33u
-#define MC_PARAM_IDX_STALL_TIME_S 34u
-#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 35u
-#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 36u
-#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 37u
-#define MC_PARAM_IDX_CAN_NODE_ID 38u
-#define MC_PARAM_IDX_CAN_BITRATE_BPS 39u
-#define MC_PARAM_IDX_CAN_TIMEOUT_S 40u
-#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 41u
-#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 42u
-#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 43u
-#define MC_PARAM_IDX_TM_CURRENTS_HZ 44u
-#define MC_PARAM_IDX_TM_VOLTAGES_HZ 45u
-#define MC_PARAM_IDX_TM_SPEED_HZ 46u
-#define MC_PARAM_IDX_TM_POSITION_HZ 47u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 48u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 49u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 50u
-#define MC_PARAM_IDX_CFG_PENDING 51u
+#define MC_PARAM_IDX_I_OFFSET_A_A 18u
+#define MC_PARAM_IDX_I_OFFSET_B_A 19u
+#define MC_PARAM_IDX_I_OFFSET_C_A 20u
+#define MC_PARAM_IDX_CURRENT_BW_RAD_S 21u
+#define MC_PARAM_IDX_V_LIMIT_RATIO 22u
+#define MC_PARAM_IDX_SLOW_LOOP_DIV 23u
+#define MC_PARAM_IDX_SPEED_PLL_BW_RAD_S 24u
+#define MC_PARAM_IDX_ENCODER_OFFSET_RAD 25u
+#define MC_PARAM_IDX_SPEED_KP_A_S_RAD 26u
+#define MC_PARAM_IDX_SPEED_KI_A_RAD 27u
+#define MC_PARAM_IDX_ENCODER_REVERSED 28u
+#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 29u
+#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 30u
+#define MC_PARAM_IDX_I_TRIP_A 31u
+#define MC_PARAM_IDX_VBUS_MIN_V 32u
+#define MC_PARAM_IDX_VBUS_MAX_V 33u
+#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 34u
+#define MC_PARAM_IDX_TEMP_MAX_C 35u
+#define MC_PARAM_IDX_STALL_CURRENT_FRAC 36u
+#define MC_PARAM_IDX_STALL_SPEED_RAD_S 37u
+#define MC_PARAM_IDX_STALL_TIME_S 38u
+#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 39u
+#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 40u
+#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 41u
+#define MC_PARAM_IDX_CAN_NODE_ID 42u
+#define MC_PARAM_IDX_CAN_BITRATE_BPS 43u
+#define MC_PARAM_IDX_CAN_TIMEOUT_S 44u
+#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 45u
+#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 46u
+#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 47u
+#define MC_PARAM_IDX_TM_CURRENTS_HZ 48u
+#define MC_PARAM_IDX_TM_VOLTAGES_HZ 49u
+#define MC_PARAM_IDX_TM_SPEED_HZ 50u
+#define MC_PARAM_IDX_TM_POSITION_HZ 51u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 52u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 53u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 54u
+#define MC_PARAM_IDX_CFG_PENDING 55u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -144,6 +152,9 @@ typedef struct {
     float i_sense_max_a; /**< Current-sense full scale; i_max_a and i_trip_a must stay below it. [A] */
     uint32_t adc_bits; /**< ADC resolution. */
     uint32_t encoder_cpr; /**< Encoder counts per mechanical revolution. */
+    float i_offset_a_a; /**< Current-sensor offset of phase a, subtracted from its reading (commissioning measures it). [A] */
+    float i_offset_b_a; /**< Current-sensor offset of phase b, subtracted from its reading (commissioning measures it). [A] */
+    float i_offset_c_a; /**< Current-sensor offset of phase c, subtracted from its reading (commissioning measures it). [A] */
     float current_bw_rad_s; /**< Current-loop bandwidth: kp = L bw, ki = R bw; bw / pwm_hz at most 0.5. [rad/s] */
     float v_limit_ratio; /**< Fraction of the modulator's circle the current loop may use. */
     uint32_t slow_loop_div; /**< Slow loop every this many fast steps. */
@@ -151,6 +162,7 @@ typedef struct {
     float encoder_offset_rad; /**< Electrical angle of the d axis at encoder count 0. [rad] */
     float speed_kp_a_s_rad; /**< Speed-loop proportional gain. [A.s/rad] */
     float speed_ki_a_rad; /**< Speed-loop integral gain. [A/rad] */
+    uint32_t encoder_reversed; /**< 1: the encoder counts down when the rotor turns positive (commissioning measures it). */
     float obs_omega_crit_m_rad_s; /**< Critical speed of the flux observer (sets its gain). [rad/s] */
     float obs_pll_bw_rad_s; /**< Bandwidth of the sensorless PLL. [rad/s] */
     float i_trip_a; /**< Instantaneous over-current trip on any phase; i_max_a <= it < i_sense_max_a. [A] */

@@ -210,6 +210,23 @@ uint32_t mc_ctrl_sls_reset(void *ctx)
     c->id_ref_a = 0.0f;
     c->iq_ref_a = 0.0f;
     c->dir = 1.0f;
+    c->al_x_a = 0.0f;
+    c->al_x_b = 0.0f;
+    c->al_i_prev_a = 0.0f;
+    c->al_i_prev_b = 0.0f;
+    c->al_p0_a = 0.0f;
+    c->al_p0_b = 0.0f;
+    c->al_u = 0.0f;
+    c->al_v = 0.0f;
+    c->al_n = 0.0f;
+    c->al_su = 0.0f;
+    c->al_sv = 0.0f;
+    c->al_suu = 0.0f;
+    c->al_svv = 0.0f;
+    c->al_suv = 0.0f;
+    c->al_sz = 0.0f;
+    c->al_suz = 0.0f;
+    c->al_svz = 0.0f;
     for (k = 0u; k < 4u; ++k) {
         c->v_hist_a[k] = 0.0f;
         c->v_hist_b[k] = 0.0f;
@@ -261,6 +278,110 @@ static void dead_comp_duties(const mc_ctrl_sls_t *c, float ia_a, float ib_a, mc_
     out->duty_a = mc_sat_f32(out->duty_a + (kd * dead_sign(ia_a, band)), 0.0f, 1.0f);
     out->duty_b = mc_sat_f32(out->duty_b + (kd * dead_sign(ib_a, band)), 0.0f, 1.0f);
     out->duty_c = mc_sat_f32(out->duty_c + (kd * dead_sign(-(ia_a + ib_a), band)), 0.0f, 1.0f);
+}
+
+/* The hold waits for a trusted circle fit up to this many align times. */
+#define ALIGN_WAIT 4.0f
+
+/* ALIGN: integrate the flux without correction (the observer's formula)
+ * and add the point to the circle fit's sums. */
+static void align_track(mc_ctrl_sls_t *c, float i_al, float i_be)
+{
+    const mc_ctrl_sls_cfg_t *cfg = &c->cfg;
+    const float inv_flux = 1.0f / cfg->flux_wb;
+    float ea;
+    float eb;
+    float u;
+    float v;
+    float z;
+    c->al_x_a += cfg->dt_s * (c->tm.v_alpha_obs_v - (0.5f * cfg->r_ohm * (c->al_i_prev_a + i_al)));
+    c->al_x_b += cfg->dt_s * (c->tm.v_beta_obs_v - (0.5f * cfg->r_ohm * (c->al_i_prev_b + i_be)));
+    c->al_i_prev_a = i_al;
+    c->al_i_prev_b = i_be;
+    ea = (c->al_x_a - (cfg->l_h * i_al)) * inv_flux;
+    eb = (c->al_x_b - (cfg->l_h * i_be)) * inv_flux;
+    if (c->al_n == 0.0f) {
+        c->al_p0_a = ea;
+        c->al_p0_b = eb;
+    }
+    u = ea - c->al_p0_a;
+    v = eb - c->al_p0_b;
+    z = (u * u) + (v * v);
+    c->al_u = u;
+    c->al_v = v;
+    c->al_n += 1.0f;
+    c->al_su += u;
+    c->al_sv += v;
+    c->al_suu += u * u;
+    c->al_svv += v * v;
+    c->al_suv += u * v;
+    c->al_sz += z;
+    c->al_suz += u * z;
+    c->al_svz += v * z;
+}
+
+/* The rotor angle at the end of ALIGN from the circle fit: the centre
+ * (a, b) and k of u^2 + v^2 = 2 a u + 2 b v + k by least squares
+ * (Kasa), trusted when the path spread (rms
+ * about its mean, about 0.05 of the flux: an arc of about 10 deg or more) and the fitted radius is
+ * within 20 % of the flux. Returns false otherwise: the rotor hardly moved,
+ * so it sits where the hold put it. */
+static bool align_fit(const mc_ctrl_sls_t *c, float *p_theta_rad)
+{
+    const float n = c->al_n;
+    float m11;
+    float m12;
+    float m13;
+    float m22;
+    float m23;
+    float m33;
+    float r1;
+    float r2;
+    float r3;
+    float det;
+    float a;
+    float b;
+    float k;
+    float rad2;
+    float spread;
+    if (n < 3.0f) {
+        return false;
+    }
+    spread =
+        ((c->al_suu - ((c->al_su * c->al_su) / n)) + (c->al_svv - ((c->al_sv * c->al_sv) / n))) / n;
+    if (!(spread >= 0.0025f)) {
+        return false;
+    }
+    /* normal equations of [2u 2v 1] [a b k]' = z */
+    m11 = 4.0f * c->al_suu;
+    m12 = 4.0f * c->al_suv;
+    m13 = 2.0f * c->al_su;
+    m22 = 4.0f * c->al_svv;
+    m23 = 2.0f * c->al_sv;
+    m33 = n;
+    r1 = 2.0f * c->al_suz;
+    r2 = 2.0f * c->al_svz;
+    r3 = c->al_sz;
+    det = (m11 * ((m22 * m33) - (m23 * m23))) - (m12 * ((m12 * m33) - (m23 * m13))) +
+          (m13 * ((m12 * m23) - (m22 * m13)));
+    if (!(mc_abs_f32(det) > 0.0f) || !mc_isfinite_f32(det)) {
+        return false;
+    }
+    a = ((r1 * ((m22 * m33) - (m23 * m23))) - (m12 * ((r2 * m33) - (m23 * r3))) +
+         (m13 * ((r2 * m23) - (m22 * r3)))) /
+        det;
+    b = ((m11 * ((r2 * m33) - (m23 * r3))) - (r1 * ((m12 * m33) - (m23 * m13))) +
+         (m13 * ((m12 * r3) - (r2 * m13)))) /
+        det;
+    k = ((m11 * ((m22 * r3) - (r2 * m23))) - (m12 * ((m12 * r3) - (r2 * m13))) +
+         (r1 * ((m12 * m23) - (m22 * m13)))) /
+        det;
+    rad2 = k + (a * a) + (b * b);
+    if (!(rad2 > 0.64f) || !(rad2 < 1.44f)) {
+        return false;
+    }
+    *p_theta_rad = mc_atan2_f32(c->al_v - b, c->al_u - a);
+    return true;
 }
 
 /* Preset the current PIs so that, in the frame theta with decoupling speed
@@ -393,9 +514,21 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     }
     c->ia_prev_a = m->ia_a;
     c->ib_prev_a = m->ib_a;
-    if (mc_fluxobs_f32_step(&c->obs, c->tm.v_alpha_obs_v, c->tm.v_beta_obs_v, i_al, i_be) !=
-        MC_FLUXOBS_ERR_NONE) {
-        err |= MC_CTRL_SLS_ERR_DIVERGED;
+    {
+        /* In ALIGN the observer still runs from the reset guess (angle 0)
+         * while the hold pulls the rotor from wherever it was: an estimate
+         * off the constraint circle there is expected, not a divergence.
+         * The estimate restarts from the hold's angle when ALIGN ends. */
+        const uint32_t oe =
+            mc_fluxobs_f32_step(&c->obs, c->tm.v_alpha_obs_v, c->tm.v_beta_obs_v, i_al, i_be);
+        if ((oe != MC_FLUXOBS_ERR_NONE) &&
+            !(cfg->align_any_angle && (c->phase == MC_CTRL_SLS_ALIGN) &&
+              (oe == MC_FLUXOBS_ERR_DIVERGED))) {
+            err |= MC_CTRL_SLS_ERR_DIVERGED;
+        }
+    }
+    if (cfg->align_any_angle && (c->phase == MC_CTRL_SLS_ALIGN)) {
+        align_track(c, i_al, i_be);
     }
     theta_hat = c->obs.theta_e_rad;
     (void)mc_spdpll_f32_step(&c->pll, theta_hat, &omega_hat_e);
@@ -407,12 +540,49 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     c->t_phase_s += cfg->dt_s;
 
     /* 3. phase logic */
-    if (c->phase == MC_CTRL_SLS_ALIGN) {
+    if ((c->phase == MC_CTRL_SLS_ALIGN) && !cfg->align_any_angle) {
         c->i_if_a =
             (cfg->align_time_s > 0.0f)
                 ? (cfg->if_current_a * mc_sat_f32(c->t_phase_s / cfg->align_time_s, 0.0f, 1.0f))
                 : cfg->if_current_a;
         if ((c->t_phase_s >= cfg->align_time_s) && (c->omega_cmd_m_rad_s != 0.0f)) {
+            c->phase = MC_CTRL_SLS_IF;
+            c->dir = sign_f32(c->omega_cmd_m_rad_s);
+            c->t_phase_s = 0.0f;
+            c->t_lockwait_s = 0.0f;
+        }
+    } else if (c->phase == MC_CTRL_SLS_ALIGN) {
+        /* Two holds, a quarter turn apart: the current ramps up along
+         * -pi/2 + pi/2 = 0 in the first half of align_time, then holds at
+         * pi/2 (the I-f frame at 0, its q axis). A rotor whose d axis sits
+         * opposite one hold's current feels no torque from it (an unstable
+         * rest), but the full torque from the other: from any start the
+         * rotor ends at the second hold's angle. */
+        const float half_s = 0.5f * cfg->align_time_s;
+        c->i_if_a = (half_s > 0.0f)
+                        ? (cfg->if_current_a * mc_sat_f32(c->t_phase_s / half_s, 0.0f, 1.0f))
+                        : cfg->if_current_a;
+        c->theta_if_e_rad = (c->t_phase_s < half_s) ? -MC_HALF_PI_F32 : 0.0f;
+        /* Observer and PLL restart at the rotor's angle, not from the
+         * reset guess, which knew nothing of the start angle: from the
+         * circle fit of the flux path once the rotor has moved enough for
+         * it (the hold waits for that up to ALIGN_WAIT align times: the
+         * rotor is barely damped and may still swing), else along the
+         * hold's current (the I-f frame's q axis), where a rotor that has
+         * not moved under the full hold current sits. */
+        float theta_rotor = c->theta_if_e_rad + MC_HALF_PI_F32;
+        float theta_fit = 0.0f;
+        const bool fitted = (c->t_phase_s >= cfg->align_time_s) && align_fit(c, &theta_fit);
+        if ((c->omega_cmd_m_rad_s != 0.0f) &&
+            (fitted || (c->t_phase_s >= (ALIGN_WAIT * cfg->align_time_s)))) {
+            if (fitted) {
+                theta_rotor = theta_fit;
+            }
+            (void)mc_fluxobs_f32_reset(&c->obs, theta_rotor, i_al, i_be);
+            (void)mc_spdpll_f32_reset(&c->pll, theta_rotor, 0.0f);
+            theta_hat = c->obs.theta_e_rad;
+            omega_hat_e = 0.0f;
+            omega_hat_m = 0.0f;
             c->phase = MC_CTRL_SLS_IF;
             c->dir = sign_f32(c->omega_cmd_m_rad_s);
             c->t_phase_s = 0.0f;

@@ -157,6 +157,13 @@ typedef struct {
     bool if_damping;            /**< I-f active damping from the observer's speed (true:
                                       -speed_kp (omega_hat - omega_if) along the estimated
                                       q axis, at most if_current_a / 2) */
+    bool align_any_angle;       /**< start from any rotor angle (true: two holds a
+                                      quarter turn apart, the observer restarted at
+                                      the angle the flux path's circle fit gives;
+                                      false: one hold, the observer from angle 0,
+                                      which needs the rotor near 0: diverges from
+                                      some other angles). f32 only: the q31 twin
+                                      refuses it (STARTUP) */
 } mc_ctrl_sls_cfg_t;
 
 /** Telemetry of the last fast step. */
@@ -197,6 +204,16 @@ typedef struct {
     float ia_prev_a, ib_prev_a;     /**< phase currents of the previous sample */
     uint32_t speed_count;
     uint32_t obs_err; /**< observer init error, if any */
+    /* ALIGN: the flux integrated without the observer's correction, and
+     * the sums of a circle fit (Kasa) of its path, in units of flux_wb
+     * relative to the first point: the path is a circle of radius flux
+     * about an unknown centre (the start angle's offset), whose centre
+     * gives the rotor angle whatever the rotor's start and swing. */
+    float al_x_a, al_x_b; /**< integrated flux [Wb] */
+    float al_i_prev_a, al_i_prev_b;
+    float al_p0_a, al_p0_b; /**< first point [flux units] */
+    float al_u, al_v;       /**< last point, relative to the first */
+    float al_n, al_su, al_sv, al_suu, al_svv, al_suv, al_sz, al_suz, al_svz;
     mc_ctrl_sls_tm_t tm;
     mc_drive_ctrl_t table; /**< the drive's plug-in table, bound to this instance */
 } mc_ctrl_sls_t;

@@ -101,6 +101,10 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
         /* the duty-side dead-time correction has no q31 version yet */
         err |= MC_CTRL_SLS_ERR_TIMING;
     }
+    if (f->align_any_angle) {
+        /* the any-angle start (circle fit of the flux path) is f32 only */
+        err |= MC_CTRL_SLS_ERR_STARTUP;
+    }
     if (!slsq_pos(cfg->i_base_a) || !slsq_pos(cfg->v_base_v) ||
         !slsq_pos(cfg->omega_base_e_rad_s) || !slsq_pos(cfg->flux_base_wb)) {
         return err | MC_CTRL_SLS_ERR_SCALE;

@@ -45,6 +45,7 @@
 // the service runs without a store (SAVE answers STORE), and with settings
 // outside the parameter table (e.g. rate_heartbeat_hz=500, a 10 kbit/s bus)
 // without the service (PARAM_REQ: UNSUPPORTED).
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -61,6 +62,7 @@
 #include "hal_host/socketcan.hpp"
 #include "scenario.hpp"
 extern "C" {
+#include "commission/mc_comm_can.h"
 #include "mc_can_cmd.h"
 #include "mc_can_proto.h"
 #include "mc_cfg_store.h"
@@ -154,6 +156,10 @@ mc_params_t scenario_params(const Params& P, const FocSilOptions& o, const mc_dr
   p.slow_loop_div = c.slow_loop_div;
   p.speed_pll_bw_rad_s = c.speed_pll_bw_rad_s;
   p.encoder_offset_rad = c.encoder_offset_rad;
+  p.encoder_reversed = c.encoder_reversed ? 1u : 0u;
+  p.i_offset_a_a = c.i_offset_a[0];
+  p.i_offset_b_a = c.i_offset_a[1];
+  p.i_offset_c_a = c.i_offset_a[2];
   p.i_trip_a = c.i_trip_a;
   p.vbus_min_v = c.vbus_min_v;
   p.vbus_max_v = c.vbus_max_v;
@@ -376,6 +382,33 @@ void run_can_telemetry(RunContext& ctx) {
     sil_hook.slow_loop_div = p.slow_loop_div;
     srv.hook = mc_param_hook_t{sil_param_check, sil_param_apply, &sil_hook};
   }
+  // Commissioning over CAN (COMMISSION_CMD, firmware/app/commission/
+  // mc_comm_can.h): the board's test limits as in the commission scenario,
+  // the results staged in the parameter service (when it is served).
+  static mc_comm_t comm;  // large; one run at a time
+  mc_comm_can_t comm_can{};
+  {
+    const double T = 1.0 / o.pwm_hz;
+    mc_comm_can_cfg_t k{};
+    k.base.dt_s = static_cast<float>(T);
+    k.base.i_test_a = static_cast<float>(0.25 * p.i_sense_max_a);
+    k.base.v_test_max_v = static_cast<float>(0.9 * o.vbus_v / std::sqrt(3.0));
+    k.base.offset_max_a = static_cast<float>(0.1 * p.i_sense_max_a);
+    k.base.dead_time_s = p.dead_time_s;
+    k.base.cur_bw_rad_s = static_cast<float>(0.08 / T);
+    k.base.speed_max_m_rad_s = p.speed_max_rad_s;
+    k.base.bemf_frac = 0.5f;
+    k.base.pole_pairs_max = 32;
+    k.base.three_shunts = o.three_shunts;
+    k.node_id = node;
+    k.status_div = std::max<uint32_t>(1u, tick_hz / 10u);
+    k.enc_pll_bw_rad_s = p.speed_pll_bw_rad_s;
+    if (mc_comm_can_init(&comm_can, &k, &comm, &d, serve_params ? &srv : nullptr) !=
+        MC_COMM_CAN_CFG_OK) {
+      throw UsageError("commissioning refused its configuration for this board");
+    }
+    mc_can_cmd_attach_commission(&cmd, mc_comm_can_command, mc_comm_can_busy, &comm_can);
+  }
   const mc_telemetry_src_t src{&d, &cmd, nullptr, &tm};
 
   std::vector<std::string> cols{"t", "tm_sent_mask", "tm_fail_mask", "omega_m_true_rad_s",
@@ -408,6 +441,7 @@ void run_can_telemetry(RunContext& ctx) {
     // application's speed loop, then telemetry.
     (void)mc_can_cmd_poll(&cmd, can, 16u);
     mc_can_cmd_step(&cmd);
+    mc_comm_can_step(&comm_can, can);
     if (cmd.enabled && cmd.control_mode == MC_CAN_CTRL_SPEED) speed.step();
     const uint32_t sent = mc_telemetry_step(&tm, can, &src);
     ++slow_steps;

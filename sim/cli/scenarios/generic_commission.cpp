@@ -186,14 +186,11 @@ double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, const Co
   o.drive_motor = &fi.motor;
   o.board_hook = [&](hal_host::PmsmBoardConfig& bc) {
     configure_plant(f, s, bc);
-    // The sensorless start (I-f from an observer reset at angle 0) needs
-    // the rotor where the library's sensorless tests start it
-    // (tests/sil/motors): from theta_e = 1 rad (this setup's default
-    // encoder offset on a 4-pole-pair motor) the alignment ramp leaves the
-    // rotor swinging and the observer's residual trips DIVERGED with the
-    // TRUE motor values as well. That is the start-up's limit, not the
-    // identified values'; the encoder is not used sensorless. The default
-    // start is theta_e = 0; a campaign sets others to map that limit.
+    // The sensorless run starts the rotor at sensorless_start_theta_e_rad
+    // (default 0): the I-f start holds the current at two angles and
+    // restarts its observer from the flux path's circle fit
+    // (mc_ctrl_sls_cfg_t.align_any_angle), so any start angle works
+    // (tests/sil/commission SensorlessStartAngle); the encoder is not used.
     if (law == Law::kSensorless) {
       bc.theta_m0_rad = s.sensorless_start_theta_e_rad / f.motor.pole_pairs;
     }

@@ -7,8 +7,11 @@
 # dependencies use instructions the emulated CPU lacks; the host converts); then mdtool scan, status,
 # config get (the SIL has no parameter service attached: the drive's
 # refusal, CMD_ERROR UNSUPPORTED, must come back decoded, exit 4), monitor
-# (headless, to a PNG) and run speed (the keep-alive sent by mdtool; the
-# drive stops when it disables). Leaves every output and exit code in
+# (headless, to a PNG) and run speed (the keep-alive sent by mdtool; held
+# until the measured speed settles, counted in telemetry frames, so a slow
+# emulated clock cannot fail it; the drive stops when it disables), and, before
+# the run, calibrate (commissioning over CAN: progress and results; the plant
+# without the scenario's flywheel). Leaves every output and exit code in
 # WORKDIR/run for tests/can/run_mdtool_vcan_test.sh to check on the host.
 set -u
 MCSIM=$1 W=$2 PY=$3 ROOT=$4
@@ -26,33 +29,40 @@ fi
 ip link set up "$IF" || exit 3
 # asammdf hidden (tests/can/vm/no_asammdf: its compiled deps SIGILL on the emulated CPU)
 export PYTHONPATH=$ROOT/tests/can/vm/no_asammdf:$ROOT/tools/mdtool/src
-MD() { "$PY" -m mdtool.cli "$@"; }
-BUS=(--interface socketcan --channel "$IF" --timeout 5)
 
 candump -L -r 16777216 "$IF" > candump.log &
 pids+=($!); CD=$!
 "$PY" -m mdtool.cli record rec.blf --channel "$IF" --report rec.json --ready rec.ready > record.out 2>&1 &
 REC=$!; pids+=("$REC")  # python itself (a shell function here would fork a subshell)
 wait_for 120 test -e rec.ready || { say "recorder did not start"; cat record.out; exit 1; }
-MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN" --duration 60 --set end_after_stop_s=0.3 \
+MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN" --duration 900 --set end_after_stop_s=0.3 \
   --set realtime=1 --set timeout_s=2.0 --set pwm_hz=2000 --set slow_loop_div=2 --set substeps=1 \
-  --set bw_hz=20 --set speed_pll_bw_rad_s=500 > mcsim.out 2>&1 &
+  --set bw_hz=20 --set speed_pll_bw_rad_s=500 --set J_kgm2=0.002 > mcsim.out 2>&1 &
 SIM=$!; pids+=("$SIM")
 wait_for 60 grep -q " 021#" candump.log || { say "no heartbeat from the SIL"; cat mcsim.out; exit 1; }
 say "drive is streaming"
-MD scan "${BUS[@]:0:4}" --timeout 2 > scan.out 2>&1; echo $? > scan.rc
-MD status "${BUS[@]}" > status.out 2>&1; echo $? > status.rc
-MD config get r_ohm "${BUS[@]}" > config.out 2>&1; echo $? > config.rc
-MD monitor HEARTBEAT.mode CURRENTS.i_q_a "${BUS[@]}" --no-gui --frames 10 --png monitor.png > monitor.out 2>&1
-echo $? > monitor.rc
-MD run speed 20 --duration 3 --keepalive 0.1 "${BUS[@]}" > run.out 2>&1; echo $? > run.rc
+# every mdtool command in one Python process (tests/can/vm/mdtool_batch.py:
+# the same entry point as the command line; one interpreter start instead of
+# five, which the emulated CPU makes slow on a busy machine); calibrate comes
+# before run (the SIL ends after the run's disable); this SIL runs outside the
+# parameter table (no service): results shown, not staged
+B="--interface socketcan --channel $IF"
+cat > steps.txt <<EOS
+scan scan $B --timeout 10
+status status $B --timeout 10 --listen 3
+config config get r_ohm $B --timeout 5
+monitor monitor HEARTBEAT.mode CURRENTS.i_q_a $B --timeout 5 --no-gui --frames 10 --png monitor.png
+calibrate calibrate $B --timeout 5 --progress-timeout 120 --json cal.json
+run run speed 20 --duration 1 --settle 1.0 --settle-timeout 300 --keepalive 0.1 $B --timeout 5
+EOS
+"$PY" "$ROOT/tests/can/vm/mdtool_batch.py" steps.txt > batch.out 2>&1
 say "run done ($(cat run.rc)); waiting for the SIL to end"
 wait "$SIM"; echo $? > mcsim.rc
 sleep 1
 kill -INT "$CD"; kill -TERM "$REC"
 wait "$CD" "$REC" 2>/dev/null
 echo $? > record.rc
-for f in scan status config monitor run record; do say "$f (exit $(cat $f.rc)): $(tail -c 600 $f.out)"; done
+for f in scan status config monitor calibrate run record; do say "$f (exit $(cat $f.rc)): $(tail -c 600 $f.out)"; done
 
 # Parameters over CAN against the firmware's parameter service: a SIL whose
 # settings form a valid parameter set (PWM 5 kHz, CAN tick 1 kHz) with a

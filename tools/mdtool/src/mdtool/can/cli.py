@@ -170,9 +170,12 @@ def cmd_run(a):
                 print(f"theta {vals['theta_m_rad']:.4f} rad (multi-turn)")
             if vals.get("sat") == 1 and a.verbose:
                 print(f"{name}: a value did not fit its signal (sat)")
-        hb = s.drive.run(a.mode, a.setpoint, a.duration, i_d=a.id, period=a.keepalive, on_frame=on_frame)
+        hb = s.drive.run(a.mode, a.setpoint, a.duration, i_d=a.id, period=a.keepalive, on_frame=on_frame,
+                         settle=a.settle, settle_timeout=a.settle_timeout)
         hb_after = s.drive.wait_for(lambda n, v: n == "HEARTBEAT" and v["enabled"] == 0, a.timeout,
                                     "HEARTBEAT showing the drive disabled")[1]
+    if a.settle is not None:
+        print(f"settled: {a.mode} {s.drive.last_measured:.3f} within {a.settle:g} of {a.setpoint:g}")
     print(f"ran {a.mode} {a.setpoint:g} for {a.duration:g} s ({n['frames']} frames from node {a.node}); "
           f"last heartbeat while running: {hb}; now: mode {hb_after['mode']}, enabled {hb_after['enabled']}")
     return 0
@@ -225,9 +228,64 @@ def cmd_convert(a):
 
 
 def cmd_calibrate(a):
-    raise UsageError("calibrate: commissioning over CAN is not in the protocol yet "
-                     "(tools/can/motordrive.dbc has no commissioning command); run it in the SIL "
-                     "with `mcsim run commission` meanwhile")
+    from .calibrate import ITEMS, calibrate, check_failed
+    from .errors import Refused
+    from .params import fmt_value, from_raw
+    table = _params(a)
+    with _Session(a) as s:
+        d = s.drive
+        # the configuration in use, where the drive serves its parameters
+        present = {}
+        try:
+            for _item, (_res, pname, _u) in ITEMS.items():
+                p = table.get(pname)
+                present[pname] = from_raw(p, d.param("READ", p["id"]))
+        except Refused as e:
+            if e.status != "UNSUPPORTED":
+                raise
+            present = {}
+
+        shown = {}
+
+        def progress(v):  # one line per change of step or percentage
+            line = f"  {v['step']:<11} {int(v['progress_pct']):>3} %"
+            if not a.quiet and shown.get("line") != line:
+                shown["line"] = line
+                print(line, flush=True)
+        summ = calibrate(d, a.i_test, a.v_test_max, a.speed_max, a.progress_timeout, progress)
+        if a.json:
+            with open(a.json, "w") as f:
+                json.dump(dict(summ, present=present), f, indent=1)
+        check_failed(summ)
+        print(f"{'result':<20}{'measured':>14}  {'unit':<10}{'in use':>14}{'change':>10}")
+        for _item, (res, pname, unit) in ITEMS.items():
+            v = summ["results"][res]
+            shown = v
+            if pname == "encoder_reversed":  # the drive sends the direction (+1/-1)
+                shown, v = int(v), (1 if v < 0 else 0)
+            p = table.get(pname)
+            old = present.get(pname)
+            ch = ""
+            if old is not None and p["type"] == "f32" and old != 0:
+                ch = f"{100.0 * (v - old) / abs(old):+.1f} %"
+            elif old is not None:
+                ch = "same" if v == old else "new"
+            print(f"{res:<20}{shown:>14.6g}  {unit:<10}"
+                  f"{fmt_value(p, old) if old is not None else '-':>14}{ch:>10}")
+        if not summ["staged"]:
+            print("not staged: this drive has no parameter service (results shown only)")
+            if a.save:
+                raise Refused("--save: the drive did not stage the results (no parameter service)",
+                              status="UNSUPPORTED")
+            return 0
+        if not a.save:
+            print("staged on the drive, not in effect: with --save mdtool applies them "
+                  "(PARAM_REQ APPLY, the whole-set check) and stores them (SAVE)")
+            return 0
+        d.param("APPLY")
+        seq = d.param("SAVE")
+        print(f"applied and saved (record {seq})")
+    return 0
 
 
 # --------------------------------------------------------------- monitor
@@ -268,6 +326,10 @@ def add_parsers(sub):
     p.add_argument("--id", type=float, default=0.0, help="current mode: i_d [A]")
     p.add_argument("--duration", type=float, default=1.0, help="[s] (then disable)")
     p.add_argument("--keepalive", type=float, default=0.05, help="keep-alive period [s]")
+    p.add_argument("--settle", type=float, metavar="TOL",
+                   help="after --duration, hold until 3 frames in a row of the measured speed "
+                   "[rad/s] or i_q [A] lie within TOL of the setpoint (exit 3 if not)")
+    p.add_argument("--settle-timeout", type=float, default=30.0, help="longest hold for --settle [s]")
     p.add_argument("--verbose", "-v", action="store_true")
     _bus_args(p)
     p.set_defaults(fn=cmd_run)
@@ -309,6 +371,18 @@ def add_parsers(sub):
     p.add_argument("dst")
     p.set_defaults(fn=cmd_convert)
 
-    p = sub.add_parser("calibrate", help="commissioning over CAN (not in the protocol yet)")
+    p = sub.add_parser("calibrate", help="commission a motor: measure R, Ld, Lq, flux, pole pairs, "
+                       "encoder offset and direction, current-sensor offsets; --save stores them")
+    p.add_argument("--i-test", type=float, default=0.0, help="test current [A] (0: the drive's default)")
+    p.add_argument("--v-test-max", type=float, default=0.0,
+                   help="largest test voltage [V] (0: the drive's default)")
+    p.add_argument("--speed-max", type=float, default=0.0,
+                   help="cap of the flux spin-up, mechanical [rad/s] (0: the drive's default)")
+    p.add_argument("--save", action="store_true", help="APPLY the staged results and SAVE them")
+    p.add_argument("--progress-timeout", type=float, default=5.0,
+                   help="give up when no progress arrives this long [s]")
+    p.add_argument("--json", help="write status, results and the configuration in use here")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
+    p.add_argument("--params-meta", help="parameter table (default: the package's params_meta.json)")
     _bus_args(p)
     p.set_defaults(fn=cmd_calibrate)

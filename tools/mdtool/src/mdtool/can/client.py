@@ -5,6 +5,7 @@ run with the keep-alive sent for you.
 Every wait has a timeout (NoReply); a refusal carries the drive's reason
 decoded from the DBC (PARAM_REPLY.status, CMD_ERROR.error).
 """
+import math
 import time
 
 from .dbc import CMD_MASK, by_cmd, cmd_of, decode_signals, encode_signals, frame_id, node_of
@@ -113,21 +114,34 @@ class Drive:
         return int(vals["value"])
 
     # --------------------------------------------------------------- run
-    def run(self, mode, setpoint, duration, i_d=0.0, period=0.05, on_frame=None):
+    def run(self, mode, setpoint, duration, i_d=0.0, period=0.05, on_frame=None,
+            settle=None, settle_timeout=30.0, settle_frames=3):
         """Select `mode` (current: setpoint = i_q [A]; speed: rad/s), enable,
         hold the setpoint for `duration` s with the keep-alive every
-        `period` s, then disable. Returns the last heartbeat seen."""
+        `period` s, then disable. Returns the last heartbeat seen.
+
+        With `settle` (same unit as the setpoint), hold on after `duration`
+        until `settle_frames` telemetry frames in a row (SPEED.omega_m_rad_s
+        or CURRENTS.i_q_a) lie within `settle` of the setpoint, for at most
+        `settle_timeout` s more; then disable. Not settled by then: NoReply
+        (the drive is disabled all the same). The criterion counts frames, not
+        seconds, so it holds however slowly the drive's clock runs against
+        this host's (a simulated drive on a busy machine)."""
         mode = mode.upper()
         if mode not in ("CURRENT", "SPEED", "POSITION"):
             raise UsageError(f"mode {mode.lower()!r}: current, speed or position")
+        if settle is not None and not (settle > 0 and math.isfinite(settle)):
+            raise UsageError(f"settle {settle!r}: a tolerance > 0")
         code = {"CURRENT": 1, "SPEED": 2, "POSITION": 3}[mode]
+        meas = {"SPEED": ("SPEED", "omega_m_rad_s"), "CURRENT": ("CURRENTS", "i_q_a"),
+                "POSITION": ("POSITION", "theta_m_rad")}[mode]
 
         def ref():
             if mode == "CURRENT":
                 self.send("SET_CURRENT_REF", i_d_ref_a=i_d, i_q_ref_a=setpoint)
             elif mode == "SPEED":
                 self.send("SET_SPEED_REF", omega_ref_rad_s=setpoint)
-            else:  # multi-turn target [rad], from the position at enable
+            else:  # multi-turn target [rad], in POSITION.theta_m_rad's frame
                 self.send("SET_POSITION_REF", theta_ref_rad=setpoint)
         self.send("SET_CONTROL_MODE", control_mode=code)
         self.wait_for(lambda n, v: self.check_cmd_error(n, v, "SET_CONTROL_MODE") or
@@ -139,10 +153,23 @@ class Drive:
         self.host_heartbeat()
         ref()
         last_hb = None
+        self.last_measured = None
+        inside = 0
         t0 = time.monotonic()
         t_next = t0
+
+        def holding():
+            el = time.monotonic() - t0
+            if el < duration:
+                return True
+            if settle is None or inside >= settle_frames:
+                return False
+            if el < duration + settle_timeout:
+                return True
+            raise NoReply(f"{meas[0]}.{meas[1]} did not settle within {settle:g} of {setpoint:g} "
+                          f"in {duration + settle_timeout:g} s (last {self.last_measured})")
         try:
-            while time.monotonic() - t0 < duration:
+            while holding():
                 now = time.monotonic()
                 if now >= t_next:
                     self.host_heartbeat()
@@ -158,6 +185,9 @@ class Drive:
                     last_hb = vals
                     if vals["mode"] == "FAULT":
                         raise Refused(f"the drive faulted (faults 0x{vals['faults']:04X})", status="FAULT")
+                if name == meas[0]:
+                    self.last_measured = vals[meas[1]]
+                    inside = inside + 1 if abs(vals[meas[1]] - setpoint) <= (settle or 0.0) else 0
                 if on_frame:
                     on_frame(name, vals)
         finally:

@@ -1,0 +1,127 @@
+/**
+ * @file mc_comm_can.h
+ * @brief Commissioning over CAN: COMMISSION_CMD starts, aborts or reports
+ *        the sequence of mc_commission.h; COMMISSION_STATUS tells its
+ *        progress; COMMISSION_RESULT carries what it measured; the results
+ *        are staged in the parameter table (tools/can/motordrive.dbc,
+ *        cmd 0x1C-0x1E).
+ *
+ * Bound to the CAN command handler by mc_can_cmd_attach_commission (the
+ * handler checks the frame, that the drive is not enabled or stopping, and
+ * then calls mc_comm_can_command); mc_comm_can_step runs in the slow loop.
+ *
+ * START (options 0 = the board's default from the cfg): refused MODE when
+ * a sequence runs or the drive is not IDLE, REFUSED with a fault latched
+ * (clear it first) or when the drive will not take the plug-in, RANGE when
+ * the options fail mc_comm_init. The drive's control-law plug-in is
+ * swapped for commissioning's and restored when the sequence ends.
+ * ABORT: bridge off at once (IDLE), the run ends FAILED with
+ * MC_COMM_ERR_ABORTED, nothing staged. REPORT: the results of the last
+ * successful run sent again (REFUSED when there are none).
+ *
+ * When the sequence is DONE: the drive goes IDLE and every result is
+ * written into the parameter service's staged set with the service's own
+ * WRITE checks (range, access): r_ohm, ld_h, lq_h, flux_wb, pole_pairs,
+ * encoder_offset_rad, encoder_reversed, i_offset_{a,b,c}_a (the offsets in
+ * use plus the measured ones), and, when the mechanics were measured,
+ * j_kgm2, b_nm_s_rad and the speed PI re-derived from them (mc_gains.h,
+ * the simulator's formulas). One refused write restores the staged set
+ * as it was: the run reports MC_COMM_ERR_RANGE and stages nothing. The
+ * host then APPLYs (the whole-set validation of PARAM_REQ APPLY, which also
+ * re-derives the current-loop gains) and SAVEs. A failed run stages
+ * nothing and the drive keeps the fault that stopped it.
+ */
+#ifndef MC_COMM_CAN_H
+#define MC_COMM_CAN_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "can/mc_can_proto.h"
+#include "commission/mc_commission.h"
+#include "config/mc_param_srv.h"
+#include "hal/can.h"
+#include "mc_drive.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* COMMISSION_CMD.action (DBC values). */
+#define MC_COMM_CAN_ABORT  0u
+#define MC_COMM_CAN_START  1u
+#define MC_COMM_CAN_REPORT 2u
+
+/* COMMISSION_RESULT.item (DBC values). */
+#define MC_COMM_CAN_ITEM_R_OHM              0u
+#define MC_COMM_CAN_ITEM_LD_H               1u
+#define MC_COMM_CAN_ITEM_LQ_H               2u
+#define MC_COMM_CAN_ITEM_FLUX_WB            3u
+#define MC_COMM_CAN_ITEM_POLE_PAIRS         4u
+#define MC_COMM_CAN_ITEM_ENCODER_OFFSET_RAD 5u
+#define MC_COMM_CAN_ITEM_ENCODER_DIRECTION  6u
+#define MC_COMM_CAN_ITEM_ADC_OFFSET_A_A     7u
+#define MC_COMM_CAN_ITEM_ADC_OFFSET_B_A     8u
+#define MC_COMM_CAN_ITEM_ADC_OFFSET_C_A     9u
+#define MC_COMM_CAN_ITEM_J_KGM2             10u
+#define MC_COMM_CAN_ITEM_B_NM_S_RAD         11u
+#define MC_COMM_CAN_ITEM_COUNT              12u
+
+/* Configuration errors of mc_comm_can_init. */
+#define MC_COMM_CAN_CFG_OK       0u
+#define MC_COMM_CAN_CFG_ERR_NULL (1u << 0) /**< NULL module, cfg, comm or drive */
+#define MC_COMM_CAN_CFG_ERR_VALUE \
+    (1u << 1) /**< base cfg refused by mc_comm_init,
+                                                 node > 62, status_div 0, speed_wc <= 0 */
+
+typedef struct {
+    mc_comm_cfg_t base;     /**< the board's defaults (START options 0) */
+    uint8_t node_id;        /**< 0..62 */
+    uint32_t status_div;    /**< slow steps between status frames while running */
+    float enc_pll_bw_rad_s; /**< encoder tracking loop (speed PI crossover) */
+} mc_comm_can_cfg_t;
+
+typedef struct {
+    mc_comm_can_cfg_t cfg;
+    mc_comm_t *comm;
+    mc_drive_t *drive;
+    mc_param_srv_t *params;           /**< NULL: results reported, not staged */
+    const mc_drive_ctrl_t *prev_ctrl; /**< the plug-in restored after a run */
+    bool running;
+    bool have_result; /**< the last run ended DONE */
+    bool staged;      /**< ... and its results are in params->staged */
+    uint32_t err;     /**< MC_COMM_ERR_* of the last run */
+    uint8_t step;     /**< mc_comm_step_t reported */
+    uint8_t status_seq;
+    uint8_t result_seq;
+    uint8_t result_next; /**< next item to send; COUNT: none pending */
+    bool status_due;
+    uint32_t div_n;
+    float result[MC_COMM_CAN_ITEM_COUNT];
+    uint32_t tx_dropped; /**< frames the HAL refused */
+} mc_comm_can_t;
+
+/** Validate cfg and bind: comm is (re)initialised with cfg->base, params
+ *  may be NULL. Returns MC_COMM_CAN_CFG_* bits; on error m is unchanged. */
+uint32_t mc_comm_can_init(mc_comm_can_t *m, const mc_comm_can_cfg_t *cfg, mc_comm_t *comm,
+                          mc_drive_t *drive, mc_param_srv_t *params);
+
+/** COMMISSION_CMD (signal values in DBC order, MC_CAN_COMMISSION_CMD_*):
+ *  MC_CAN_ERR_NONE or the refusal (nothing changed). */
+mc_can_err_t mc_comm_can_command(void *ctx, const float *v);
+
+/** true while a sequence runs (the CAN handler refuses enable and mode
+ *  commands meanwhile). */
+bool mc_comm_can_busy(const void *ctx);
+
+/** Slow loop: follows the sequence, stages the results when it is done,
+ *  sends COMMISSION_STATUS (every status_div steps while running and once
+ *  at the end) and the COMMISSION_RESULT frames (one per step). can may
+ *  be NULL (nothing sent). */
+void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_COMM_CAN_H */

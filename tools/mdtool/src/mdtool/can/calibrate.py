@@ -1,0 +1,122 @@
+"""Commissioning over CAN (firmware/app/commission/mc_comm_can.h):
+COMMISSION_CMD starts it, COMMISSION_STATUS tells its progress,
+COMMISSION_RESULT carries one measured value per frame (IEEE 754 single in
+the raw 32 bits of `value`). When the run is done the drive has staged the
+results in its parameter table; PARAM_REQ APPLY (the whole-set check) puts
+them into effect and SAVE stores them.
+"""
+import struct
+import time
+
+from .errors import NoReply, Refused
+
+#: COMMISSION_RESULT.item -> (result name, parameter it goes to, unit)
+ITEMS = {
+    "R_OHM": ("r_ohm", "r_ohm", "ohm"),
+    "LD_H": ("ld_h", "ld_h", "H"),
+    "LQ_H": ("lq_h", "lq_h", "H"),
+    "FLUX_WB": ("flux_wb", "flux_wb", "Wb"),
+    "POLE_PAIRS": ("pole_pairs", "pole_pairs", ""),
+    "ENCODER_OFFSET_RAD": ("encoder_offset_rad", "encoder_offset_rad", "rad"),
+    "ENCODER_DIRECTION": ("encoder_direction", "encoder_reversed", ""),
+    "ADC_OFFSET_A_A": ("i_offset_a_a", "i_offset_a_a", "A"),
+    "ADC_OFFSET_B_A": ("i_offset_b_a", "i_offset_b_a", "A"),
+    "ADC_OFFSET_C_A": ("i_offset_c_a", "i_offset_c_a", "A"),
+    "J_KGM2": ("j_kgm2", "j_kgm2", "kg.m^2"),
+    "B_NM_S_RAD": ("b_nm_s_rad", "b_nm_s_rad", "N.m.s/rad"),
+}
+#: MC_COMM_ERR_* bit names (firmware/app/commission/mc_commission.h)
+ERROR_BITS = ["OFFSET", "NO_MOTOR", "OPEN_PHASE", "ENCODER_NO_MOTION", "ROTOR_BLOCKED",
+              "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT", "VOLTAGE", "RANGE", "MEAS", "ABORTED"]
+ERROR_HELP = {
+    "OFFSET": "a current-sensor offset is implausible (sensor broken?)",
+    "NO_MOTOR": "no current flows on any axis: is a motor connected?",
+    "OPEN_PHASE": "one phase carries no current: check the wiring",
+    "ENCODER_NO_MOTION": "the rotor turned but the encoder did not count",
+    "ROTOR_BLOCKED": "the rotor did not turn: free it (no load, no brake)",
+    "WRONG_DIRECTION": "the rotor turned against the torque",
+    "ENCODER_BAD": "encoder counts inconsistent (no whole pole-pair count)",
+    "OVERCURRENT": "a phase current above 1.5 i_test",
+    "VOLTAGE": "a step needs more than v_test_max",
+    "RANGE": "a measured value is not plausible (or the parameter table refused it)",
+    "MEAS": "no encoder sample, or a non-finite one",
+    "ABORTED": "stopped (ABORT, disable, or the drive stopped it)",
+}
+
+
+def error_names(bits):
+    return [n for i, n in enumerate(ERROR_BITS) if bits >> i & 1] or (["UNKNOWN"] if bits else [])
+
+
+def f32_of(raw):
+    return struct.unpack("<f", struct.pack("<I", int(raw) & 0xFFFFFFFF))[0]
+
+
+class Collector:
+    """Status and results from decoded frames (name, values) of one node."""
+
+    def __init__(self):
+        self.status = None
+        self.statuses = []
+        self.results = {}
+
+    def feed(self, name, vals):
+        if name == "COMMISSION_STATUS":
+            self.status = vals
+            self.statuses.append(vals)
+        elif name == "COMMISSION_RESULT" and vals["item"] in ITEMS:
+            self.results[ITEMS[vals["item"]][0]] = f32_of(vals["value"])
+
+    @property
+    def ended(self):
+        return self.status is not None and self.status["step"] in ("DONE", "FAILED")
+
+    @property
+    def complete(self):
+        if not self.ended:
+            return False
+        return self.status["step"] == "FAILED" or len(self.results) == len(ITEMS)
+
+    def summary(self):
+        st = self.status or {}
+        return {"step": st.get("step"), "error": error_names(int(st.get("error", 0))),
+                "error_bits": int(st.get("error", 0)), "valid": int(st.get("valid", 0)),
+                "staged": bool(st.get("staged", 0)), "results": dict(self.results)}
+
+
+def calibrate(drive, i_test_a=0.0, v_test_max_v=0.0, speed_max_m_rad_s=0.0, timeout=30.0,
+              on_status=None):
+    """Start commissioning on `drive` (mdtool.can.client.Drive) and wait
+    until it ends and every result arrived. Raises Refused when the drive
+    refuses the command, NoReply when it falls silent for `timeout` s."""
+    col = Collector()
+    drive.send("COMMISSION_CMD", action=1, i_test_a=i_test_a, v_test_max_v=v_test_max_v,
+               speed_max_m_rad_s=speed_max_m_rad_s)
+    last = time.monotonic()
+    while not col.complete:
+        if time.monotonic() - last > timeout:
+            raise NoReply(f"no commissioning progress from node {drive.node} within {timeout:g} s")
+        d = drive.decode(drive.bus.recv(0.1))
+        if d is None:
+            continue
+        name, vals = d
+        drive.check_cmd_error(name, vals, "COMMISSION_CMD")
+        if name not in ("COMMISSION_STATUS", "COMMISSION_RESULT"):
+            continue
+        last = time.monotonic()
+        col.feed(name, vals)
+        if name == "COMMISSION_STATUS" and on_status:
+            on_status(vals)
+    return col.summary()
+
+
+def abort(drive):
+    drive.send("COMMISSION_CMD", action=0, i_test_a=0, v_test_max_v=0, speed_max_m_rad_s=0)
+
+
+def check_failed(summary):
+    if summary["step"] == "FAILED":
+        errs = summary["error"]
+        raise Refused("commissioning failed: " + ", ".join(
+            f"{e} ({ERROR_HELP.get(e, '')})" for e in errs) + "; nothing staged, bridge off",
+            status="|".join(errs))
