@@ -176,17 +176,17 @@ typedef struct mc_can_cmd {
     uint8_t err_seq; /**< sequence counter of CMD_ERROR */
     uint32_t rx_accepted;
     uint32_t rx_rejected;
-    uint32_t reply_dropped; /**< CMD_ERROR / PARAM_REPLY frames the HAL refused */
-    uint32_t reply_limited; /**< CMD_ERROR replies not sent: rate limit */
-    uint32_t rx_foreign;    /**< frames of other nodes dropped by the poll */
-    uint32_t poll_max;      /**< most frames (own + foreign) one poll read: the
+    uint32_t reply_dropped;       /**< CMD_ERROR / PARAM_REPLY frames the HAL refused */
+    uint32_t reply_limited;       /**< CMD_ERROR replies not sent: rate limit */
+    uint32_t rx_foreign;          /**< frames of other nodes dropped by the poll */
+    uint32_t poll_max;            /**< most frames (own + foreign) one poll read: the
                                  bound of the slow loop's CAN receive work */
-    uint32_t err_tokens;    /**< CMD_ERROR replies that may be sent now */
-    uint32_t err_acc;       /**< token refill accumulator, < tick_hz */
-    bool hb_have;           /**< a HOST_HEARTBEAT was accepted */
-    uint8_t hb_last;        /**< its counter */
-    mc_param_srv_t *params; /**< parameter service, or NULL */
-    uint8_t cfg_status;     /**< HEARTBEAT.cfg_status: the boot status of the
+    uint32_t err_tokens;          /**< CMD_ERROR replies that may be sent now */
+    uint32_t err_acc;             /**< token refill accumulator, < tick_hz */
+    bool hb_have;                 /**< a HOST_HEARTBEAT was accepted */
+    uint8_t hb_last;              /**< its counter */
+    mc_param_srv_t *params;       /**< parameter service, or NULL */
+    uint8_t cfg_status;           /**< HEARTBEAT.cfg_status: the boot status of the
                                        parameter store (EMPTY without one: the
                                        configuration is not from flash) */
     mc_can_cmd_comm_fn comm_fn;   /**< COMMISSION_CMD, or NULL */
