@@ -117,11 +117,11 @@ def main():
     print(f"frames lost (sequence gaps): {st['lost_total']}; bus load {100 * st['bus_load']:.2f} %")
 
     # 3. a command changed the setpoint
-    iq_tol = 0.5 * 0.002 + 1e-6  # CURRENTS.i_q_ref_a quantisation
-    iq_rows = [r for r in rows if abs(r[col["CURRENTS.i_q_ref_a"]] - a.iq_cmd_a) < 1e-6]
+    iq_tol = 0.5 * 0.001 + 1e-6  # CURRENT_REFS.i_q_ref_a quantisation
+    iq_rows = [r for r in rows if abs(r[col["CURRENT_REFS.i_q_ref_a"]] - a.iq_cmd_a) < 1e-6]
     check(len(iq_rows) > 0, f"the SIL never had i_q_ref = {a.iq_cmd_a} A (command not applied)")
-    iq_frames = [v for _t, v in per.get("CURRENTS", []) if abs(v["i_q_ref_a"] - a.iq_cmd_a) <= iq_tol]
-    check(len(iq_frames) > 0, f"no CURRENTS frame with i_q_ref_a = {a.iq_cmd_a} A")
+    iq_frames = [v for _t, v in per.get("CURRENT_REFS", []) if abs(v["i_q_ref_a"] - a.iq_cmd_a) <= iq_tol]
+    check(len(iq_frames) > 0, f"no CURRENT_REFS frame with i_q_ref_a = {a.iq_cmd_a} A")
 
     # 4. the malformed command was rejected with an error reply
     errs = [v for _t, v in per.get("CMD_ERROR", [])]
@@ -131,7 +131,7 @@ def main():
               for _t, v in per.get("HEARTBEAT", [])), "HEARTBEAT never reported the rejection")
     check(summ["cmd_rejected"] >= 1, "the SIL counted no rejected command")
     # nothing changed: the reference before and after the bad frame is a commanded one
-    refs = sorted({round(r[col["CURRENTS.i_q_ref_a"]], 6) for r in rows})
+    refs = sorted({round(r[col["CURRENT_REFS.i_q_ref_a"]], 6) for r in rows})
     check(all(any(abs(x - c) < 1e-6 for c in (0.0, 0.5, a.iq_cmd_a)) or
               0.0 < x < a.iq_cmd_a for x in refs),  # values between are the stop ramp
           f"unexpected i_q references {refs[:10]}")
@@ -145,7 +145,7 @@ def main():
           f"final state: mode {summ['final_mode']}, stop_reason {summ['final_stop_reason']}")
     check(summ["final_faults"] == 0, f"drive faulted: bits {summ['final_faults']}")
     last = rows[-1]
-    check(last[col["CURRENTS.i_q_ref_a"]] == 0.0, "i_q reference not zero after the stop")
+    check(last[col["CURRENT_REFS.i_q_ref_a"]] == 0.0, "i_q reference not zero after the stop")
     if a.timed:
         cmd_frames = mc_can.read_candump(a.cmds) if a.cmds else frames
         cmd_times = [t for t, _i, cid, d, fl in cmd_frames

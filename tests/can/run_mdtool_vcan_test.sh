@@ -12,7 +12,9 @@ else
   case "$W" in *" "*) echo "work dir must not contain spaces" >&2; exit 2 ;; esac
   script=$W/vm_job.sh
   printf '#!/bin/sh\nexec bash %q %q %q %q %q\n' "$JOB" "$MCSIM" "$W" "$PY" "$ROOT" > "$script"
-  "$ROOT/tools/vm/mc_vm.sh" run "$script"
+  # the VM runs two SIL sessions (mdtool commands, then the parameter round
+  # trip): more than the default 600 s on a loaded machine
+  MC_VM_TIMEOUT=${MC_VM_TIMEOUT:-1100} "$ROOT/tools/vm/mc_vm.sh" run "$script"
 fi
 cd "$W/run"
 exec "$PY" - "$ROOT" <<'PYEOF'
@@ -70,6 +72,27 @@ def per_id(fr):
     return d
 same = len(cd) == len(mf) and per_id(cd) == per_id(mf)
 check(same, f"rec.blf (as rec.mf4) holds the frames candump saw ({len(mf)} vs {len(cd)})")
+# parameters over CAN against the firmware (tests/can/vm/mdtool_vcan.sh)
+rc = {f: int(open(f + ".rc").read()) for f in ("cfg_get1", "cfg_set", "cfg_get2", "cfg_refuse", "cfg_mcsim2")}
+out = {f: open(f + ".out").read() for f in ("cfg_get1", "cfg_set", "cfg_get2", "cfg_refuse")}
+def value_of(text):
+    return float(text.split()[1])
+check(rc["cfg_get1"] == 0 and abs(value_of(out["cfg_get1"]) - 150.0) < 1e-3,
+      "config get: the scenario's speed_max_rad_s (150): " + out["cfg_get1"].strip())
+check(rc["cfg_set"] == 0 and "applied" in out["cfg_set"] and "saved (record 1)" in out["cfg_set"],
+      "config set --save: staged, applied, saved: " + out["cfg_set"].strip().replace("\n", "; "))
+# float32 of 123.5 is exact
+check(rc["cfg_get2"] == 0 and value_of(out["cfg_get2"]) == 123.5,
+      "config get after set: " + out["cfg_get2"].strip())
+check(rc["cfg_refuse"] == 0 and "status RANGE" in out["cfg_refuse"] and "after: 123.5" in out["cfg_refuse"],
+      "20000 rad/s (outside the table) refused RANGE by the drive, value kept: "
+      + out["cfg_refuse"].strip().replace("\n", "; "))
+s2 = json.load(open("cfg2/can-telemetry.json"))
+from mdtool.can.params import ParamTable
+pid = str(ParamTable().get("speed_max_rad_s")["id"])
+check(rc["cfg_mcsim2"] == 0 and s2.get("cfg_boot_status") == "STORED"
+      and pid in str(s2.get("cfg_from_store", "")).split(","),
+      f"second boot on the saved flash: {s2.get('cfg_boot_status')}, from store {s2.get('cfg_from_store')}")
 print("mdtool vcan checks: " + ("FAILED" if fails else "passed"))
 sys.exit(1 if fails else 0)
 PYEOF

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <deque>
 #include <random>
 
 #include "app_test_fixture.h"
@@ -44,14 +45,14 @@ TEST(CanProto, IdentifierLayout) {
   EXPECT_EQ(MC_CAN_MSG_COUNT, mc_can_proto_find(0x0Fu));  // unused id
 }
 
-// The same values cantools encodes to f40106ffff018005 (checked by hand
+// The same values cantools encodes to e8030030f8ff0005 (checked by hand
 // with cantools when the DBC was written; tests/can/test_dbc_c.py checks
 // every message against cantools at run time).
 TEST(CanProto, KnownFrameBytes) {
-  const float v[] = {1.0f, -2.0f, 16.382f, -16.384f, 5.0f};
+  const float v[] = {1.0f, -2.0f, 0.0f, 5.0f};
   mc_hal_can_frame_t f{};
-  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_pack(MC_CAN_MSG_CURRENTS, 1u, v, 5u, &f));
-  const uint8_t want[8] = {0xf4, 0x01, 0x06, 0xff, 0xff, 0x01, 0x80, 0x05};
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_pack(MC_CAN_MSG_CURRENTS, 1u, v, 4u, &f));
+  const uint8_t want[8] = {0xe8, 0x03, 0x00, 0x30, 0xf8, 0xff, 0x00, 0x05};
   EXPECT_EQ(0x022u, f.id);
   EXPECT_EQ(8u, f.len);
   EXPECT_EQ(0u, f.flags);
@@ -88,16 +89,19 @@ TEST(CanProto, RoundTripEveryMessageWithinHalfAStep) {
 
 TEST(CanProto, PackSaturatesAndMapsNaNToZero) {
   const mc_can_signal_t& s = mc_can_messages[MC_CAN_MSG_CURRENTS].signals[MC_CAN_CURRENTS_I_Q_A];
-  const float big[] = {100.0f, -100.0f, NAN, INFINITY, 0.0f};
+  const float big[] = {1e5f, -1e5f, 0.0f, 0.0f};
+  const float odd[] = {NAN, INFINITY, 0.0f, 0.0f};
   mc_hal_can_frame_t f{};
-  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_pack(MC_CAN_MSG_CURRENTS, 1u, big, 5u, &f));
-  float v[5];
+  float v[4];
   uint32_t m;
-  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&f, &m, v, 5u));
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_pack(MC_CAN_MSG_CURRENTS, 1u, big, 4u, &f));
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&f, &m, v, 4u));
   EXPECT_NEAR(s.max, v[0], QuantTol(s, s.max));
   EXPECT_NEAR(s.min, v[1], QuantTol(s, s.min));
-  EXPECT_EQ(0.0f, v[2]);
-  EXPECT_NEAR(s.max, v[3], QuantTol(s, s.max));
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_pack(MC_CAN_MSG_CURRENTS, 1u, odd, 4u, &f));
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&f, &m, v, 4u));
+  EXPECT_EQ(0.0f, v[0]);
+  EXPECT_NEAR(s.max, v[1], QuantTol(s, s.max));
 }
 
 TEST(CanProto, PackRejectsMisuseAndLeavesFrame) {
@@ -127,7 +131,7 @@ TEST(CanProto, UnpackRejectsFormatLengthIdAndRange) {
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {0})));  // control_mode 1..3
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {4})));
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x030, {2})));              // enable 0..1
-  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {9, 10, 0})));       // tm_cmd 1..8
+  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {11, 10, 0})));      // tm_cmd 1..10
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {1, 0xE9, 0x03})));  // 1001 Hz
   // 1000.001 rad/s: one raw step above the DBC maximum
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x033, {0x41, 0x42, 0x0F, 0x00})));
@@ -156,11 +160,11 @@ mc_telemetry_cfg_t TmCfg() {
 
 TEST(Telemetry, BusLoadFormula) {
   mc_telemetry_cfg_t c = TmCfg();
-  // 460 frames/s of 8 bytes, 135 bits each, on 1 Mbit/s; float sum exact
-  // to a few ulp.
-  EXPECT_NEAR(460.0 * 135.0 / 1e6, mc_telemetry_bus_load(&c), 1e-7);
+  // 460 frames/s of 8 bytes, 135 bits each, plus the CMD_ERROR replies at
+  // their limit (50/s, 135 bits), on 1 Mbit/s; float sum exact to a few ulp.
+  EXPECT_NEAR(510.0 * 135.0 / 1e6, mc_telemetry_bus_load(&c), 1e-7);
   c.bitrate_bps = 125000;
-  EXPECT_NEAR(460.0 * 135.0 / 125e3, mc_telemetry_bus_load(&c), 1e-6);
+  EXPECT_NEAR(510.0 * 135.0 / 125e3, mc_telemetry_bus_load(&c), 1e-6);
   EXPECT_EQ(0.0f, mc_telemetry_bus_load(nullptr));
 }
 
@@ -182,7 +186,8 @@ TEST(Telemetry, InitValidatesEachFieldAndLeavesStateOnError) {
   bad([](mc_telemetry_cfg_t* c) { c->bus_budget_frac = 0.71f; }, MC_TM_CFG_ERR_BUDGET);
   bad([](mc_telemetry_cfg_t* c) { c->bus_budget_frac = NAN; }, MC_TM_CFG_ERR_BUDGET);
   bad([](mc_telemetry_cfg_t* c) { c->rate_hz[1] = 1001; }, MC_TM_CFG_ERR_RATE);
-  // 125 kbit/s: 460 frames/s x 135 bits = 49.7 % > 40 %
+  bad([](mc_telemetry_cfg_t* c) { c->rate_hz[MC_TM_HEARTBEAT] = 0; }, MC_TM_CFG_ERR_HEARTBEAT);
+  // 125 kbit/s: (460 + 50 replies) frames/s x 135 bits = 55.1 % > 40 %
   bad(
       [](mc_telemetry_cfg_t* c) {
         c->bitrate_bps = 125000;
@@ -192,7 +197,7 @@ TEST(Telemetry, InitValidatesEachFieldAndLeavesStateOnError) {
   EXPECT_EQ(MC_TM_CFG_ERR_NULL, mc_telemetry_init(nullptr, nullptr));
   mc_telemetry_cfg_t ok = TmCfg();
   ok.bitrate_bps = 125000;
-  ok.bus_budget_frac = 0.5f;  // 49.7 % fits
+  ok.bus_budget_frac = 0.6f;  // 55.1 % fits
   EXPECT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &ok));
 }
 
@@ -224,7 +229,7 @@ TEST_F(TelemetryOnDrive, RatesAreExactPerSecond) {
   c.rate_hz[MC_TM_SPEED] = 1000;  // every tick
   mc_telemetry_t t;
   ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &c));
-  const mc_telemetry_src_t src{&d, nullptr, nullptr};
+  const mc_telemetry_src_t src{&d, nullptr, nullptr, nullptr};
   uint32_t counts[32] = {0};
   Run(&t, 1000, &src, counts);
   // a phase accumulator is exact over whole seconds: no tolerance
@@ -240,10 +245,11 @@ TEST_F(TelemetryOnDrive, RatesAreExactPerSecond) {
 TEST_F(TelemetryOnDrive, SequenceCountsEveryFrameEvenWhenTheHalRefuses) {
   mc_telemetry_cfg_t c = TmCfg();
   for (auto& r : c.rate_hz) r = 0;
+  c.rate_hz[MC_TM_HEARTBEAT] = 1;  // its minimum; first frame after 1 s
   c.rate_hz[MC_TM_CURRENTS] = 1000;
   mc_telemetry_t t;
   ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &c));
-  const mc_telemetry_src_t src{&d, nullptr, nullptr};
+  const mc_telemetry_src_t src{&d, nullptr, nullptr, nullptr};
   uint32_t counts[32] = {0};
   std::vector<mc_hal_can_frame_t> fr;
   Run(&t, 300, &src, counts, &fr);
@@ -263,12 +269,13 @@ TEST_F(TelemetryOnDrive, SequenceCountsEveryFrameEvenWhenTheHalRefuses) {
 TEST_F(TelemetryOnDrive, ControlLawMessagesOnlyWithData) {
   mc_telemetry_cfg_t c = TmCfg();
   for (auto& r : c.rate_hz) r = 0;
+  c.rate_hz[MC_TM_HEARTBEAT] = 1;  // its minimum; first frame after 1 s
   c.rate_hz[MC_TM_OBSERVER] = 100;
   c.rate_hz[MC_TM_STEPPER] = 100;
   mc_telemetry_t t;
   ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &c));
   uint32_t counts[32] = {0};
-  const mc_telemetry_src_t none{&d, nullptr, nullptr};
+  const mc_telemetry_src_t none{&d, nullptr, nullptr, nullptr};
   Run(&t, 100, &none, counts);
   EXPECT_EQ(0u, counts[MC_CAN_CMD_OBSERVER] + counts[MC_CAN_CMD_STEPPER]);
   mc_telemetry_ext_t x{};
@@ -276,7 +283,7 @@ TEST_F(TelemetryOnDrive, ControlLawMessagesOnlyWithData) {
   x.tau_l_hat_nm = 0.25f;
   x.omega_hat_rad_s = -12.5f;
   x.theta_hat_rad = 3.0f;
-  const mc_telemetry_src_t with{&d, nullptr, &x};
+  const mc_telemetry_src_t with{&d, nullptr, &x, nullptr};
   std::vector<mc_hal_can_frame_t> fr;
   Run(&t, 100, &with, counts, &fr);
   EXPECT_EQ(10u, counts[MC_CAN_CMD_OBSERVER]);
@@ -285,18 +292,19 @@ TEST_F(TelemetryOnDrive, ControlLawMessagesOnlyWithData) {
   uint32_t m;
   ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&fr.front(), &m, v, MC_CAN_NSIG_MAX));
   EXPECT_NEAR(0.25f, v[0], 0.0005f);  // half of 0.001 N m
-  EXPECT_NEAR(-12.5f, v[1], 0.01f);   // half of 0.02 rad/s
-  EXPECT_NEAR(3.0f, v[2], 0.00005f);  // half of 0.0001 rad
-  EXPECT_EQ(0.0f, v[3]);              // its first frame: sequence 0
+  EXPECT_NEAR(-12.5f, v[1], 0.005f);  // half of 0.01 rad/s
+  EXPECT_NEAR(3.0f, v[2], 0.0001f);   // half of 0.0002 rad
+  EXPECT_EQ(0.0f, v[MC_CAN_OBSERVER_SAT]);
+  EXPECT_EQ(0.0f, v[MC_CAN_OBSERVER_SEQ]);  // its first frame: sequence 0
   ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&fr.back(), &m, v, MC_CAN_NSIG_MAX));
-  EXPECT_EQ(9.0f, v[3]);  // the tenth
+  EXPECT_EQ(9.0f, v[MC_CAN_OBSERVER_SEQ]);  // the tenth
 }
 
 TEST_F(TelemetryOnDrive, CurrentsAreTheParkTransformOfThePhaseCurrents) {
   d.tm.ia_a = 2.0f;
   d.tm.ib_a = -1.0f;
   d.tm.theta_e_rad = 0.7f;
-  const mc_telemetry_src_t src{&d, nullptr, nullptr};
+  const mc_telemetry_src_t src{&d, nullptr, nullptr, nullptr};
   float v[MC_CAN_NSIG_MAX];
   ASSERT_TRUE(mc_telemetry_values(MC_TM_CURRENTS, &src, v));
   const double al = 2.0, be = (2.0 + 2.0 * -1.0) / std::sqrt(3.0);
@@ -310,14 +318,18 @@ TEST_F(TelemetryOnDrive, CurrentsAreTheParkTransformOfThePhaseCurrents) {
 TEST_F(TelemetryOnDrive, SetRateRefusesAboveBudget) {
   mc_telemetry_cfg_t c = TmCfg();
   c.bitrate_bps = 125000;
+  c.bus_budget_frac = 0.6f;
   mc_telemetry_t t;
   ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &c));
-  // +300 Hz of 135-bit frames at 125 kbit/s: 49.7 % + 32.4 % > 50 %
+  // +300 Hz of 135-bit frames at 125 kbit/s: 55.1 % + 32.4 % > 60 %
   EXPECT_EQ(MC_TM_CFG_ERR_LOAD, mc_telemetry_set_rate(&t, MC_TM_SPEED, 400));
   EXPECT_EQ(100u, t.cfg.rate_hz[MC_TM_SPEED]);
   EXPECT_EQ(MC_TM_CFG_ERR_RATE, mc_telemetry_set_rate(&t, MC_TM_COUNT, 1));
+  // the drive's own heartbeat cannot be switched off
+  EXPECT_EQ(MC_TM_CFG_ERR_HEARTBEAT, mc_telemetry_set_rate(&t, MC_TM_HEARTBEAT, 0));
+  EXPECT_EQ(10u, t.cfg.rate_hz[MC_TM_HEARTBEAT]);
   EXPECT_EQ(MC_TM_CFG_OK, mc_telemetry_set_rate(&t, MC_TM_SPEED, 0));
-  EXPECT_NEAR(360.0 * 135.0 / 125e3, t.load_frac, 1e-6);
+  EXPECT_NEAR((360.0 + 50.0) * 135.0 / 125e3, t.load_frac, 1e-6);
 }
 
 // --------------------------------------------------- command handler
@@ -364,6 +376,13 @@ class CanCmd : public TelemetryOnDrive {
     EXPECT_NE(0, mc_hal_fake_can_tx_pop(&fake, &f)) << "one reply only";
     EXPECT_EQ(static_cast<uint8_t>(e), c.last_error);
     EXPECT_EQ(cmd, c.last_error_cmd);
+  }
+  // f disables the drive at once: bridge open, stop reason DISABLE_CMD.
+  void ExpectDisables(const mc_hal_can_frame_t& f) {
+    ASSERT_EQ(MC_CAN_ERR_NONE, Send(f));
+    EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
+    EXPECT_FALSE(c.enabled);
+    EXPECT_EQ(MC_CAN_STOP_DISABLE_CMD, c.stop_reason);
   }
   void EnableCurrent() {
     ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x031, {1})));
@@ -415,10 +434,7 @@ TEST_F(CanCmd, EnableAndSetCurrentReference) {
   EXPECT_FLOAT_EQ(1.25f, d.iq_ref_a);
   mc_hal_can_frame_t f;
   EXPECT_NE(0, mc_hal_fake_can_tx_pop(&fake, &f)) << "no reply to an accepted command";
-  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x030, {0})));
-  EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
-  EXPECT_FALSE(c.enabled);
-  EXPECT_EQ(MC_CAN_STOP_DISABLE_CMD, c.stop_reason);
+  ExpectDisables(Frame(0x030, {0}));
 }
 
 // Every rejected command: error reply, and neither the handler's state
@@ -440,12 +456,16 @@ TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
       {Frame(0x02F, {}), MC_CAN_ERR_UNKNOWN_CMD},
       {Frame(0x032, {0, 0, 0xE8, 0x03}, MC_HAL_CAN_FLAG_RTR), MC_CAN_ERR_FORMAT},
       {Frame(0x036, {2, 0xE8, 0x03}), MC_CAN_ERR_BUDGET},  // CURRENTS at 1000 Hz (see below)
-      {Frame(0x036, {9, 1, 0}), MC_CAN_ERR_RANGE},
+      {Frame(0x036, {11, 1, 0}), MC_CAN_ERR_RANGE},
+      {Frame(0x036, {1, 0, 0}), MC_CAN_ERR_HEARTBEAT_MIN},  // HEARTBEAT off
+      {Frame(0x037, {7}), MC_CAN_ERR_STALE},                // the counter of the last one
   };
-  // a 125 kbit/s bus: the present rates load it 49.7 %; CURRENTS at
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {7})));
+  // a 125 kbit/s bus: the present rates load it 55.1 %; CURRENTS at
   // 1000 Hz would add 800 x 135 / 125e3 = 86 % > the 50 % budget
   tm.cfg.bitrate_bps = 125000;
   for (const auto& k : cases) {
+    c.err_tokens = MC_TM_ERR_REPLY_BURST;  // the rate limit is tested apart
     mc_drive_t d0 = d;
     mc_can_cmd_t c0 = c;
     mc_telemetry_t tm0 = tm;
@@ -458,10 +478,11 @@ TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
     c1.last_error_cmd = c0.last_error_cmd;
     c1.err_seq = c0.err_seq;
     c1.rx_rejected = c0.rx_rejected;
+    c1.err_tokens = c0.err_tokens;
     EXPECT_EQ(0, std::memcmp(&c0, &c1, sizeof c)) << "handler changed";
     EXPECT_EQ(c0.rx_rejected + 1u, c.rx_rejected);
   }
-  EXPECT_EQ(10u, c.err_seq);
+  EXPECT_EQ(12u, c.err_seq);
 }
 
 TEST_F(CanCmd, OtherNodesAndExtendedFramesAreIgnoredSilently) {
@@ -487,17 +508,18 @@ TEST_F(CanCmd, TimeoutRampsTheCurrentToZeroThenIdles) {
   Init();
   EnableCurrent();
   ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x032, {0, 0, 0xD0, 0x07})));  // i_q 2 A
-  // a heartbeat every 99 ticks keeps it running
+  // a heartbeat (counter advancing) every 99 ticks keeps it running
+  uint8_t n = 0;
   for (int k = 0; k < 500; ++k) {
     if (k % 99 == 0) {
-      ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {0})));
+      ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {n++})));
     }
     mc_can_cmd_step(&c);
   }
   ASSERT_TRUE(c.enabled);
   ASSERT_FALSE(c.stopping);
   // silence: the stop starts at the 100th tick after the last command
-  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {0})));
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {n++})));
   for (int k = 0; k < 99; ++k) mc_can_cmd_step(&c);
   EXPECT_FALSE(c.stopping);
   EXPECT_FLOAT_EQ(2.0f, d.iq_ref_a);
@@ -517,7 +539,7 @@ TEST_F(CanCmd, TimeoutRampsTheCurrentToZeroThenIdles) {
   EXPECT_EQ(0.0f, d.iq_ref_a);
   EXPECT_EQ(MC_CAN_STOP_CMD_TIMEOUT, c.stop_reason);
   // the heartbeat telemetry reports it
-  const mc_telemetry_src_t src{&d, &c, nullptr};
+  const mc_telemetry_src_t src{&d, &c, nullptr, nullptr};
   float v[MC_CAN_NSIG_MAX];
   ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
   EXPECT_EQ(static_cast<float>(MC_CAN_STOP_CMD_TIMEOUT), v[MC_CAN_HEARTBEAT_STOP_REASON]);
@@ -582,11 +604,261 @@ TEST_F(CanCmd, TelemetryRateCommand) {
 
 TEST_F(CanCmd, PollHandlesQueuedFramesAndBoundsTheWork) {
   Init();
-  const mc_hal_can_frame_t hb = Frame(0x037, {0});
-  for (int i = 0; i < 5; ++i) ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &hb));
+  for (uint8_t i = 0; i < 5; ++i) {
+    const mc_hal_can_frame_t hb = Frame(0x037, {i});
+    ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &hb));
+  }
   EXPECT_EQ(3u, mc_can_cmd_poll(&c, &fake.can_dev, 3u));
   EXPECT_EQ(2u, mc_can_cmd_poll(&c, &fake.can_dev, 16u));
   EXPECT_EQ(5u, c.rx_accepted);
+}
+
+// ------------------------------------------- telemetry for any motor
+// The library's 60 A-class motor: 40 A and 1290 rad/s arrive as such
+// (protocol 1 clipped them to 16.382 A and 655.34 rad/s), sat stays 0; a
+// value beyond the range is sent saturated with sat = 1.
+TEST_F(TelemetryOnDrive, SixtyAmpMotorValuesArriveUnclipped) {
+  // i_q = 40 A at theta_e = 0: i_alpha = 0, i_beta = 40 A -> ia = 0, ib = 40 sqrt(3)/2
+  d.tm.theta_e_rad = 0.0f;
+  d.tm.ia_a = 0.0f;
+  d.tm.ib_a = 40.0f * std::sqrt(3.0f) / 2.0f;
+  d.tm.iq_ref_a = 40.0f;
+  d.tm.omega_m_rad_s = 1290.0f;
+  mc_telemetry_cfg_t c = TmCfg();
+  for (auto& r : c.rate_hz) r = 0;
+  c.rate_hz[MC_TM_HEARTBEAT] = 1;
+  c.rate_hz[MC_TM_CURRENTS] = 1000;
+  c.rate_hz[MC_TM_SPEED] = 1000;
+  c.rate_hz[MC_TM_CURRENT_REFS] = 1000;
+  mc_telemetry_t t;
+  ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &c));
+  const mc_telemetry_src_t src{&d, nullptr, nullptr, &t};
+  uint32_t counts[32] = {0};
+  std::vector<mc_hal_can_frame_t> fr;
+  Run(&t, 1, &src, counts, &fr);
+  ASSERT_EQ(3u, fr.size());
+  for (const auto& f : fr) {
+    float v[MC_CAN_NSIG_MAX];
+    uint32_t m;
+    ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&f, &m, v, MC_CAN_NSIG_MAX));
+    if (m == MC_CAN_MSG_CURRENTS) {
+      // Park in float (1e-5 relative) plus half of the 1 mA step
+      EXPECT_NEAR(40.0f, v[MC_CAN_CURRENTS_I_Q_A], 0.0005f + 4e-4f);
+      EXPECT_NEAR(0.0f, v[MC_CAN_CURRENTS_I_D_A], 0.0005f + 4e-4f);
+      EXPECT_EQ(0.0f, v[MC_CAN_CURRENTS_SAT]);
+    } else if (m == MC_CAN_MSG_SPEED) {
+      EXPECT_NEAR(1290.0f, v[MC_CAN_SPEED_OMEGA_M_RAD_S], 0.0005f + 1e-4f);  // half a step + float
+      EXPECT_EQ(0.0f, v[MC_CAN_SPEED_SAT]);
+    } else {
+      ASSERT_EQ(MC_CAN_MSG_CURRENT_REFS, m);
+      EXPECT_NEAR(40.0f, v[MC_CAN_CURRENT_REFS_I_Q_REF_A], 0.0005f + 1e-5f);
+      EXPECT_EQ(0.0f, v[MC_CAN_CURRENT_REFS_SAT]);
+    }
+  }
+  EXPECT_EQ(0u, t.saturated);
+  // beyond the range (and NaN): saturated, and flagged
+  d.tm.omega_m_rad_s = 9000.0f;
+  d.tm.iq_ref_a = NAN;
+  fr.clear();
+  Run(&t, 1, &src, counts, &fr);
+  ASSERT_EQ(3u, fr.size());
+  float v[MC_CAN_NSIG_MAX];
+  uint32_t m;
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&fr[1], &m, v, MC_CAN_NSIG_MAX));
+  ASSERT_EQ(MC_CAN_MSG_SPEED, m);
+  EXPECT_NEAR(8388.607f, v[MC_CAN_SPEED_OMEGA_M_RAD_S], 1e-3f);  // the range's end, float
+  EXPECT_EQ(1.0f, v[MC_CAN_SPEED_SAT]);
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&fr[2], &m, v, MC_CAN_NSIG_MAX));
+  ASSERT_EQ(MC_CAN_MSG_CURRENT_REFS, m);
+  EXPECT_EQ(0.0f, v[MC_CAN_CURRENT_REFS_I_Q_REF_A]);  // NaN packs as 0 ...
+  EXPECT_EQ(1.0f, v[MC_CAN_CURRENT_REFS_SAT]);        // ... and says so
+  EXPECT_EQ(2u, t.saturated);
+}
+
+// Multi-turn position at 1290 rad/s (205 turns/s, 1.29 rad per 1 kHz tick)
+// and backwards: the unwrapped angle follows w t.
+TEST_F(TelemetryOnDrive, PositionIsMultiTurnAtAnySpeed) {
+  mc_telemetry_cfg_t c = TmCfg();
+  mc_telemetry_t t;
+  ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &c));
+  const mc_telemetry_src_t src{&d, nullptr, nullptr, &t};
+  const double two_pi = 6.283185307179586;
+  for (double w : {1290.0, -1290.0, 4000.0}) {
+    mc_telemetry_t tt;
+    ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&tt, &c));
+    const mc_telemetry_src_t s{&d, nullptr, nullptr, &tt};
+    d.tm.omega_m_rad_s = static_cast<float>(w);
+    for (int k = 0; k <= 1000; ++k) {
+      const double th = w * k * 1e-3;
+      d.tm.theta_m_rad = static_cast<float>(th - two_pi * std::floor(th / two_pi));
+      (void)mc_telemetry_step(&tt, &fake.can_dev, &s);
+      mc_hal_can_frame_t f;
+      while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) {
+      }
+    }
+    float v[MC_CAN_NSIG_MAX];
+    ASSERT_TRUE(mc_telemetry_values(MC_TM_POSITION, &s, v));
+    // w * 1 s, from 0; float of the in-turn angle and of turns * 2 pi:
+    // a few ulp of 4000 rad (5e-4 rad)
+    EXPECT_NEAR(w, v[MC_CAN_POSITION_THETA_M_RAD], 2e-3) << w;
+    EXPECT_EQ(0.0f, v[MC_CAN_POSITION_SAT]);
+  }
+  (void)src;
+}
+
+// ------------------------------------------------ protocol hardening
+TEST_F(CanCmd, DisableHasTheLowestIdOfTheNodeAndOpensTheBridge) {
+  Init();
+  for (uint32_t m = 0; m < MC_CAN_MSG_COUNT; ++m) {
+    if (m != MC_CAN_MSG_DISABLE) {
+      EXPECT_LT(mc_can_id(1u, MC_CAN_CMD_DISABLE), mc_can_id(1u, mc_can_messages[m].cmd));
+    }
+  }
+  EnableCurrent();
+  ExpectDisables(Frame(0x020, {}));
+}
+
+// Protocol 1 kept the drive enabled on one stale heartbeat repeated.
+TEST_F(CanCmd, AStaleHostHeartbeatIsNoKeepAlive) {
+  Init();
+  EnableCurrent();
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {42})));
+  int ticks = 0;
+  while (c.enabled && !c.stopping && ticks < 1000) {
+    if (ticks % 10 == 9) {
+      EXPECT_EQ(MC_CAN_ERR_STALE, Send(Frame(0x037, {42})));  // the same frame again
+    }
+    mc_can_cmd_step(&c);
+    ++ticks;
+  }
+  EXPECT_EQ(100, ticks);  // the timeout (100 ticks) counts from the last fresh one
+  // stopping, or already stopped (a rotor at rest: the bridge opens at once)
+  EXPECT_TRUE(c.stopping || (!c.enabled && c.stop_reason == MC_CAN_STOP_CMD_TIMEOUT));
+  EXPECT_EQ(static_cast<uint8_t>(MC_CAN_ERR_STALE), c.last_error);
+}
+
+TEST_F(CanCmd, ErrorRepliesAreRateLimitedAndCounted) {
+  Init();
+  // 16 bad frames per 1 kHz tick for 1 s (the poll's bound): protocol 1
+  // answered every one (16000/s); now a burst of 4, then 50 per second.
+  uint32_t replies = 0;
+  for (int k = 0; k < 1000; ++k) {
+    for (int i = 0; i < 16; ++i) (void)Send(Frame(0x03B, {}));
+    mc_hal_can_frame_t f;
+    while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) ++replies;
+    mc_can_cmd_step(&c);
+  }
+  // token bucket: burst + rate x 1 s, the last refill may fall after the end
+  EXPECT_GE(replies, MC_TM_ERR_REPLY_BURST + MC_TM_ERR_REPLY_MAX_HZ - 1u);
+  EXPECT_LE(replies, MC_TM_ERR_REPLY_BURST + MC_TM_ERR_REPLY_MAX_HZ);
+  EXPECT_EQ(16000u, c.rx_rejected);
+  EXPECT_EQ(16000u - replies, c.reply_limited);
+  EXPECT_EQ(static_cast<uint8_t>(MC_CAN_ERR_UNKNOWN_CMD), c.last_error);  // still reported
+}
+
+// A CAN HAL whose receive queue is a deque (the fake's holds 8 frames).
+struct QueueCan {
+  std::deque<mc_hal_can_frame_t> q;
+  static int Send(void*, const mc_hal_can_frame_t*) { return 0; }
+  static int Recv(void* ctx, mc_hal_can_frame_t* f) {
+    auto* self = static_cast<QueueCan*>(ctx);
+    if (self->q.empty()) return -EAGAIN;
+    *f = self->q.front();
+    self->q.pop_front();
+    return 0;
+  }
+  mc_hal_can_ops_t ops{Send, Recv, nullptr};
+  mc_hal_can_t dev{&ops, this};
+};
+
+// 100 % bus load from another node: at 1 Mbit/s the shortest frames (47
+// bits) come 21277 per second, 22 per 1 ms tick; the node's keep-alive
+// (every 50 ms) is still handled within its tick and the drive never times
+// out; the receive queue does not grow. Without the filter the foreign
+// frames used the poll's 16 frames per tick and the queue grew without end.
+TEST_F(CanCmd, AForeignFloodCostsNoKeepAlive) {
+  Init();
+  EnableCurrent();
+  QueueCan bus;
+  uint8_t n = 0;
+  size_t q_max = 0;
+  for (int k = 0; k < 2000; ++k) {
+    for (int i = 0; i < 22; ++i) bus.q.push_back(Frame(0x041, {}));  // node 2, 0 bytes
+    if (k % 50 == 0) bus.q.push_back(Frame(0x037, {n++}));
+    q_max = std::max(q_max, bus.q.size());
+    (void)mc_can_cmd_poll(&c, &bus.dev, 16u);
+    mc_can_cmd_step(&c);
+    ASSERT_TRUE(c.enabled && !c.stopping) << "tick " << k;
+    ASSERT_LT(c.ticks_since_cmd, 51u) << "keep-alive handled late, tick " << k;
+  }
+  EXPECT_EQ(0u, bus.q.size());
+  EXPECT_LE(q_max, 23u);  // one tick's frames
+  EXPECT_EQ(2000u * 22u, c.rx_foreign);
+  EXPECT_EQ(0u, c.rx_rejected);
+}
+
+// A reference set while disabled is refused: enable starts from the
+// present state (protocol 1 applied it as a step on enable).
+TEST_F(CanCmd, ReferencesWhileDisabledAreRefusedAndEnableStartsFromThePresent) {
+  Init();
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x031, {1})));
+  EXPECT_EQ(MC_CAN_ERR_MODE, Send(Frame(0x032, {0, 0, 0x40, 0x1F})));  // i_q 8 A
+  ExpectReply(0x12, MC_CAN_ERR_MODE, 4);
+  ASSERT_EQ(0, mc_drive_set_current_ref(&d, 0.0f, 8.0f));  // left by an earlier run
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x030, {1})));
+  EXPECT_EQ(0.0f, d.iq_ref_a);
+  EXPECT_EQ(0.0f, d.id_ref_a);
+}
+
+TEST_F(CanCmd, SpeedEnableStartsAtTheMeasuredSpeed) {
+  cc.set_speed_ref = SpeedHook;
+  Init();
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x031, {2})));
+  EXPECT_EQ(MC_CAN_ERR_MODE, Send(Frame(0x033, {0x50, 0xC3, 0x00, 0x00})));
+  ExpectReply(0x13, MC_CAN_ERR_MODE, 4);
+  EXPECT_EQ(0, g_speed_calls);
+  d.tm.omega_m_rad_s = 30.0f;  // still coasting
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x030, {1})));
+  EXPECT_EQ(1, g_speed_calls);
+  EXPECT_EQ(30.0f, g_speed_ref);
+  EXPECT_EQ(30.0f, c.omega_ref_rad_s);
+}
+
+int g_pos_calls = 0;
+float g_pos_ref = 0.0f;
+int PosHook(void*, float th) {
+  ++g_pos_calls;
+  g_pos_ref = th;
+  return 0;
+}
+
+// Position mode with a multi-turn target: 1000.5 rad (159 turns) and
+// -3.25 rad arrive as such (in the telemetry's frame; the hook gets them
+// relative to the angle at enable); beyond +-200000 rad is refused RANGE.
+TEST_F(CanCmd, PositionTargetIsMultiTurnAndRangeChecked) {
+  cc.set_position_ref = PosHook;
+  cc.position_drive_mode = MC_DRIVE_MODE_CURRENT;
+  g_pos_calls = 0;
+  Init();
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x031, {3})));
+  EXPECT_EQ(MC_CAN_ERR_MODE, Send(Frame(0x034, {0x08, 0xAA, 0x98, 0x00})));  // while disabled
+  ExpectReply(0x14, MC_CAN_ERR_MODE, 4);
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x030, {1})));
+  EXPECT_EQ(1, g_pos_calls);  // enable: hold the position at enable (relative 0)
+  EXPECT_EQ(0.0f, g_pos_ref);
+  const float th0 = d.tm.theta_m_rad;  // no telemetry step yet: the single-turn angle
+  EXPECT_EQ(th0, c.theta_enable_rad);
+  EXPECT_EQ(th0, c.theta_ref_rad);
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x034, {0x08, 0xAA, 0x98, 0x00})));  // cantools: 1000.5
+  EXPECT_NEAR(1000.5f - th0, g_pos_ref, 2e-4f);  // raw 10005000 * 0.0001f: float rounding
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x034, {0x0C, 0x81, 0xFF, 0xFF})));  // -3.25
+  EXPECT_NEAR(-3.25f - th0, g_pos_ref, 1e-6f);
+  EXPECT_NEAR(-3.25f, c.theta_ref_rad, 1e-6f);
+  // raw 2000010000 = 200001 rad (the check is in float: 200000.0001 would
+  // round to the limit itself)
+  EXPECT_EQ(MC_CAN_ERR_RANGE, Send(Frame(0x034, {0x10, 0xBB, 0x35, 0x77})));
+  ExpectReply(0x14, MC_CAN_ERR_RANGE, 4);
+  EXPECT_NEAR(-3.25f - th0, g_pos_ref, 1e-6f);
 }
 
 }  // namespace

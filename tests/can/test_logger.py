@@ -42,8 +42,8 @@ def main():
     seqs = [s for s in range(20) if s not in (4, 5)] + list(range(250, 256)) + list(range(4))
     for k, s in enumerate(seqs):
         t = 0.01 * k
-        data = mc_can.encode_signals(cur, {"i_d_a": 0.1 * k, "i_q_a": -0.5, "i_d_ref_a": 0.0,
-                                           "i_q_ref_a": 1.0, "seq": s})
+        data = mc_can.encode_signals(cur, {"i_d_a": 0.1 * k, "i_q_a": -0.5,
+                                           "seq": s})
         lines.append(mc_can.format_candump_line(100.0 + t, "can0", 0x22, data))
         if k % 10 == 0:
             d = mc_can.encode_signals(hb, {"mode": 1, "seq": k // 10})

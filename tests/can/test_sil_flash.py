@@ -101,7 +101,8 @@ def cfg_status(frames):
     return hb[0]
 
 
-def main():
+def setup():
+    """--mcsim --work --repo, a fresh work directory, and the Sil on them."""
     ap = argparse.ArgumentParser()
     ap.add_argument("--mcsim", required=True)
     ap.add_argument("--work", required=True)
@@ -109,7 +110,11 @@ def main():
     args = ap.parse_args()
     shutil.rmtree(args.work, ignore_errors=True)
     os.makedirs(args.work)
-    sil = Sil(args)
+    return args, Sil(args)
+
+
+def main():
+    args, sil = setup()
     boot = {"STORED": 0, "MIGRATED": 1, "EMPTY": 2, "CORRUPT": 3}
     flash = os.path.join(args.work, "drive.flash")
     SPEED_MAX, CURRENTS_HZ = 123.5, 50
@@ -179,7 +184,7 @@ def main():
                         os.path.join(args.work, "run5"), "--flash", flash],
                        capture_output=True, text=True)
     assert r.returncode == 2 and "has no flash" in r.stderr, r.stderr
-    r, _, _ = sil.run("run6", [], flash=flash, extra=["--set", "rate_heartbeat_hz=0"],
+    r, _, _ = sil.run("run6", [], flash=flash, extra=["--set", "rate_heartbeat_hz=500"],
                       expect_rc=2)
     assert "valid parameter set" in r.stderr, r.stderr
     print("refusals: wrong size, scenario without flash, settings outside the table")

@@ -793,13 +793,14 @@ CANSEND = [("select current mode", "SET_CONTROL_MODE", ["control_mode=1"]),
            ("select speed mode", "SET_CONTROL_MODE", ["control_mode=2"]),
            ("select position mode", "SET_CONTROL_MODE", ["control_mode=3"]),
            ("enable", "SET_ENABLE", ["enable=1"]),
-           ("disable", "SET_ENABLE", ["enable=0"]),
+           ("disable / e-stop (the node's lowest id)", "DISABLE", []),
            ("i_d = 0 A, i_q = 1.5 A", "SET_CURRENT_REF", ["i_d_ref_a=0", "i_q_ref_a=1.5"]),
            ("speed 50 rad/s", "SET_SPEED_REF", ["omega_ref_rad_s=50"]),
-           ("angle 3.1416 rad", "SET_POSITION_REF", ["theta_ref_rad=3.1416"]),
+           ("position 10 turns (62.8319 rad)", "SET_POSITION_REF", ["theta_ref_rad=62.8319"]),
            ("clear faults", "CLEAR_FAULTS", []),
            ("CURRENTS at 500 Hz", "SET_TM_RATE", ["tm_cmd=2", "rate_hz=500"]),
-           ("heartbeat (keep-alive)", "HOST_HEARTBEAT", ["counter=0"])]
+           ("heartbeat (keep-alive; the counter must advance)", "HOST_HEARTBEAT", ["counter=0"]),
+           ("next heartbeat", "HOST_HEARTBEAT", ["counter=1"])]
 
 
 @figure("can-cansend", [mc_can("encode", m, *a) for _, m, a in CANSEND],

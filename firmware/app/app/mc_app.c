@@ -228,7 +228,7 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     tc->rate_hz[MC_TM_VOLTAGES] = (uint16_t)p->tm_voltages_hz;
     tc->rate_hz[MC_TM_SPEED] = (uint16_t)p->tm_speed_hz;
     tc->rate_hz[MC_TM_POSITION] = (uint16_t)p->tm_position_hz;
-    for (i = 0u; i < 3u; i++) {
+    for (i = 0u; i < (uint32_t)MC_TM_COUNT - (uint32_t)MC_TM_OBSERVER; i++) {
         tc->rate_hz[(uint32_t)MC_TM_OBSERVER + i] = app->cfg.tm_ext_rate_hz[i];
     }
     app->tm_err = mc_telemetry_init(&app->tm, tc);
@@ -275,6 +275,7 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     app->tm_src.drive = drive;
     app->tm_src.cmd = &app->cmd;
     app->tm_src.ext = NULL;
+    app->tm_src.tm = &app->tm;
     app->status_pending = (app->reset_cause != MC_HAL_WDG_RESET_NONE);
 
     if (app->cfg.set_rx_filter != NULL) {

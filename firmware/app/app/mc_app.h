@@ -149,10 +149,12 @@ typedef struct {
     uint32_t pwm_hz_fixed;         /**< the board's PWM rate (0: any) */
     uint32_t slow_loop_div_fixed;  /**< the board's slow divider (0: any) */
     float tm_budget_frac;          /**< share of the bus telemetry may use */
-    uint16_t tm_ext_rate_hz[3];    /**< OBSERVER, CONTROLLER, STEPPER rates */
-    mc_app_speed_cfg_t speed;      /**< sensored speed loop */
-    mc_app_law_t speed_law;        /**< plugged speed law (ctrl NULL: the loop above) */
-    mc_app_law_t position_law;     /**< plugged position law (ctrl NULL: none) */
+    /** Rates of the messages past POSITION: OBSERVER, CONTROLLER, STEPPER,
+     *  CURRENT_REFS, POSITION_REF [Hz] (the parameter table has the first five). */
+    uint16_t tm_ext_rate_hz[MC_TM_COUNT - MC_TM_OBSERVER];
+    mc_app_speed_cfg_t speed;  /**< sensored speed loop */
+    mc_app_law_t speed_law;    /**< plugged speed law (ctrl NULL: the loop above) */
+    mc_app_law_t position_law; /**< plugged position law (ctrl NULL: none) */
     /** Program the hardware receive filter for this node's identifiers
      *  (id & mask == node << 5); NULL: the board has none. */
     int (*set_rx_filter)(void *ctx, uint32_t id, uint32_t mask);

@@ -64,6 +64,7 @@ uint32_t mc_can_cmd_init(mc_can_cmd_t *c, const mc_can_cmd_cfg_t *cfg, mc_drive_
     c->control_mode = (uint8_t)MC_CAN_CTRL_NONE;
     c->stop_reason = (uint8_t)MC_CAN_STOP_NONE;
     c->cfg_status = (uint8_t)MC_CAN_VAL_CFG_STATUS_EMPTY;
+    c->err_tokens = MC_TM_ERR_REPLY_BURST;
     return MC_CAN_CMD_CFG_OK;
 }
 
@@ -214,6 +215,38 @@ static void end_run(mc_can_cmd_t *c, uint8_t reason)
     c->stop_reason = reason;
 }
 
+/* The references of the selected control mode from the present state, so
+ * that enable is no step (mc_can_cmd.h). */
+static int refs_from_present(mc_can_cmd_t *c)
+{
+    const mc_drive_t *d = c->drive;
+    switch (c->control_mode) {
+    case MC_CAN_CTRL_CURRENT:
+        return mc_drive_set_current_ref(c->drive, 0.0f, 0.0f);
+    case MC_CAN_CTRL_SPEED: {
+        float w = mc_isfinite_f32(d->tm.omega_m_rad_s) ? d->tm.omega_m_rad_s : 0.0f;
+        const float lim = c->cfg.speed_max_rad_s;
+        w = (w > lim) ? lim : ((w < -lim) ? -lim : w);
+        if (c->cfg.set_speed_ref(c->cfg.hook_ctx, w) != 0) {
+            return -1;
+        }
+        c->omega_ref_rad_s = w;
+        return 0;
+    }
+    case MC_CAN_CTRL_POSITION: {
+        const float th = mc_telemetry_theta_multi_rad(c->tm, d);
+        if (c->cfg.set_position_ref(c->cfg.hook_ctx, 0.0f) != 0) {
+            return -1; /* hold the position at enable */
+        }
+        c->theta_enable_rad = th;
+        c->theta_ref_rad = th;
+        return 0;
+    }
+    default:
+        return -1;
+    }
+}
+
 static mc_can_err_t do_enable(mc_can_cmd_t *c, bool on)
 {
     mc_drive_mode_t mode;
@@ -244,6 +277,9 @@ static mc_can_err_t do_enable(mc_can_cmd_t *c, bool on)
     default:
         return MC_CAN_ERR_MODE; /* no control mode selected */
     }
+    if (refs_from_present(c) != 0) {
+        return MC_CAN_ERR_REFUSED;
+    }
     if (mc_drive_set_mode(c->drive, mode) != 0) {
         return MC_CAN_ERR_REFUSED;
     }
@@ -267,7 +303,7 @@ static mc_can_err_t do_control_mode(mc_can_cmd_t *c, uint32_t mode)
 
 static mc_can_err_t do_speed_ref(mc_can_cmd_t *c, float w)
 {
-    if ((c->control_mode != MC_CAN_CTRL_SPEED) || c->stopping) {
+    if ((c->control_mode != MC_CAN_CTRL_SPEED) || c->stopping || !c->enabled) {
         return MC_CAN_ERR_MODE;
     }
     {
@@ -288,10 +324,10 @@ static mc_can_err_t do_speed_ref(mc_can_cmd_t *c, float w)
 
 static mc_can_err_t do_position_ref(mc_can_cmd_t *c, float th)
 {
-    if ((c->control_mode != MC_CAN_CTRL_POSITION) || c->stopping) {
+    if ((c->control_mode != MC_CAN_CTRL_POSITION) || c->stopping || !c->enabled) {
         return MC_CAN_ERR_MODE;
     }
-    if (c->cfg.set_position_ref(c->cfg.hook_ctx, th) != 0) {
+    if (c->cfg.set_position_ref(c->cfg.hook_ctx, th - c->theta_enable_rad) != 0) {
         return MC_CAN_ERR_REFUSED;
     }
     c->theta_ref_rad = th;
@@ -309,18 +345,23 @@ static mc_can_err_t do_tm_rate(mc_can_cmd_t *c, float slot_cmd, float rate)
     if (err == MC_TM_CFG_OK) {
         return MC_CAN_ERR_NONE;
     }
+    if ((err & MC_TM_CFG_ERR_HEARTBEAT) != 0u) {
+        return MC_CAN_ERR_HEARTBEAT_MIN;
+    }
     return ((err & MC_TM_CFG_ERR_LOAD) != 0u) ? MC_CAN_ERR_BUDGET : MC_CAN_ERR_RANGE;
 }
 
 static mc_can_err_t dispatch(mc_can_cmd_t *c, uint32_t msg, const float *v)
 {
     switch (msg) {
+    case MC_CAN_MSG_DISABLE:
+        return do_enable(c, false);
     case MC_CAN_MSG_SET_ENABLE:
         return do_enable(c, v[MC_CAN_SET_ENABLE_ENABLE] > 0.5f);
     case MC_CAN_MSG_SET_CONTROL_MODE:
         return do_control_mode(c, (uint32_t)v[MC_CAN_SET_CONTROL_MODE_CONTROL_MODE]);
     case MC_CAN_MSG_SET_CURRENT_REF:
-        if ((c->control_mode != MC_CAN_CTRL_CURRENT) || c->stopping) {
+        if ((c->control_mode != MC_CAN_CTRL_CURRENT) || c->stopping || !c->enabled) {
             return MC_CAN_ERR_MODE;
         }
         if (mc_drive_set_current_ref(c->drive, v[MC_CAN_SET_CURRENT_REF_I_D_REF_A],
@@ -339,8 +380,15 @@ static mc_can_err_t dispatch(mc_can_cmd_t *c, uint32_t msg, const float *v)
         return (mc_drive_clear_faults(c->drive) == 0) ? MC_CAN_ERR_NONE : MC_CAN_ERR_REFUSED;
     case MC_CAN_MSG_SET_TM_RATE:
         return do_tm_rate(c, v[MC_CAN_SET_TM_RATE_TM_CMD], v[MC_CAN_SET_TM_RATE_RATE_HZ]);
-    case MC_CAN_MSG_HOST_HEARTBEAT:
+    case MC_CAN_MSG_HOST_HEARTBEAT: {
+        const uint8_t n = (uint8_t)v[MC_CAN_HOST_HEARTBEAT_COUNTER];
+        if (c->hb_have && (n == c->hb_last)) {
+            return MC_CAN_ERR_STALE; /* a repeat is no sign of a live host */
+        }
+        c->hb_have = true;
+        c->hb_last = n;
         return MC_CAN_ERR_NONE;
+    }
     case MC_CAN_MSG_COMMISSION_CMD:
         return do_commission(c, v);
     default:
@@ -359,6 +407,11 @@ static void reply_error(mc_can_cmd_t *c, const mc_hal_can_t *can, uint32_t cmd, 
     if (can == NULL) {
         return;
     }
+    if (c->err_tokens == 0u) {
+        c->reply_limited++; /* rate limit: counted, shown in the HEARTBEAT */
+        return;
+    }
+    c->err_tokens--;
     v[MC_CAN_CMD_ERROR_REJECTED_CMD] = (float)cmd;
     v[MC_CAN_CMD_ERROR_ERROR] = (float)(uint32_t)e;
     v[MC_CAN_CMD_ERROR_RX_LEN] = (float)len;
@@ -413,9 +466,21 @@ uint32_t mc_can_cmd_poll(mc_can_cmd_t *c, const mc_hal_can_t *can, uint32_t max_
     if ((c == NULL) || (can == NULL)) {
         return 0u;
     }
-    while ((n < max_frames) && (mc_hal_can_receive(can, &f) == 0)) {
+    uint32_t foreign = 0u;
+    while ((n < max_frames) && (foreign < MC_CAN_RX_FOREIGN_MAX) &&
+           (mc_hal_can_receive(can, &f) == 0)) {
+        /* software acceptance filter: one comparison for another node's frame */
+        if (((f.flags & MC_HAL_CAN_FLAG_EXT) != 0u) ||
+            (mc_can_id_node(f.id) != (uint32_t)c->cfg.node_id)) {
+            foreign++;
+            c->rx_foreign++;
+            continue;
+        }
         (void)mc_can_cmd_handle(c, &f, can);
         n++;
+    }
+    if ((n + foreign) > c->poll_max) {
+        c->poll_max = n + foreign;
     }
     return n;
 }
@@ -429,6 +494,34 @@ static float toward_zero(float x, float step)
         return x + step;
     }
     return 0.0f;
+}
+
+/* The end of a SPEED / POSITION stop: the bridge opens once the rotor is at
+ * rest, or when the stop has taken longer than it could. */
+static void end_at_rest(mc_can_cmd_t *c)
+{
+    const mc_drive_t *d = c->drive;
+    const float rest =
+        (d->cfg.stop_rest_rad_s > 0.0f) ? d->cfg.stop_rest_rad_s : MC_CAN_STOP_REST_RAD_S;
+    if (!(mc_abs_f32(d->tm.omega_m_rad_s) > rest) || (c->stop_ticks_left == 0u)) {
+        end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
+        return;
+    }
+    c->stop_ticks_left--;
+}
+
+/* Start of a stop without the drive's controlled stop (mc_can_cmd.h). */
+static void stop_begin(mc_can_cmd_t *c)
+{
+    mc_drive_t *d = c->drive;
+    const float w0 = mc_isfinite_f32(d->tm.omega_m_rad_s) ? mc_abs_f32(d->tm.omega_m_rad_s) : 0.0f;
+    const float limit_s = (2.0f * w0 / c->cfg.stop_decel_rad_s2) + 0.1f;
+    c->stop_ticks_left = (uint32_t)(limit_s * (float)c->cfg.tick_hz);
+    c->stop_by_law = false;
+    if ((c->control_mode == MC_CAN_CTRL_POSITION) && (d->mode == MC_DRIVE_MODE_CTRL) &&
+        (d->ctrl != NULL) && (d->ctrl->stop != NULL)) {
+        c->stop_by_law = d->ctrl->stop(d->ctrl->ctx, c->cfg.stop_decel_rad_s2) == 0u;
+    }
 }
 
 static void stop_step(mc_can_cmd_t *c)
@@ -448,15 +541,23 @@ static void stop_step(mc_can_cmd_t *c)
     }
     if (c->control_mode == MC_CAN_CTRL_SPEED) {
         const float w = toward_zero(c->omega_ref_rad_s, c->cfg.stop_decel_rad_s2 * dt);
-        if ((c->cfg.set_speed_ref(c->cfg.hook_ctx, w) != 0) || (w == 0.0f)) {
+        if (c->cfg.set_speed_ref(c->cfg.hook_ctx, w) != 0) {
             c->omega_ref_rad_s = w;
             end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
             return;
         }
         c->omega_ref_rad_s = w;
+        if (w == 0.0f) {
+            end_at_rest(c); /* the speed loop brings the rotor to rest */
+        }
         return;
     }
-    end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT); /* POSITION, or the mode changed */
+    if (c->stop_by_law && (d->mode == MC_DRIVE_MODE_CTRL)) {
+        end_at_rest(c);
+        return;
+    }
+    end_run(c,
+            (uint8_t)MC_CAN_STOP_CMD_TIMEOUT); /* POSITION without a stop op, or the mode changed */
 }
 
 void mc_can_cmd_step(mc_can_cmd_t *c)
@@ -466,6 +567,14 @@ void mc_can_cmd_step(mc_can_cmd_t *c)
     }
     if (c->ticks_since_cmd < 0xFFFFFFFFu) {
         c->ticks_since_cmd++;
+    }
+    /* CMD_ERROR token bucket: MC_TM_ERR_REPLY_MAX_HZ tokens per second */
+    c->err_acc += MC_TM_ERR_REPLY_MAX_HZ;
+    while (c->err_acc >= c->cfg.tick_hz) {
+        c->err_acc -= c->cfg.tick_hz;
+        if (c->err_tokens < MC_TM_ERR_REPLY_BURST) {
+            c->err_tokens++;
+        }
     }
     if (!c->enabled) {
         return;
@@ -480,6 +589,8 @@ void mc_can_cmd_step(mc_can_cmd_t *c)
          * standstill itself before it opens the bridge (mc_drive.h). */
         if (c->drive->cfg.stop_decel_rad_s2 > 0.0f) {
             (void)mc_drive_stop(c->drive);
+        } else {
+            stop_begin(c);
         }
     }
     if (c->stopping && (c->drive->cfg.stop_decel_rad_s2 > 0.0f)) {

@@ -5,16 +5,33 @@
  *        drive safely when the host falls silent.
  *
  * Commands (host -> drive, id = node_id << 5 | cmd):
- *   SET_ENABLE        1: enter the drive mode of the selected control mode;
- *                     0: outputs off at once (IDLE), stop_reason DISABLE_CMD
+ *   DISABLE           (cmd 0x00, the node's lowest id: it wins arbitration
+ *                     against everything the node and its host send)
+ *                     outputs off at once (IDLE), stop_reason DISABLE_CMD
+ *   SET_ENABLE        1: enter the drive mode of the selected control mode,
+ *                     the references starting from the present state:
+ *                     CURRENT zero current, SPEED the measured speed,
+ *                     POSITION the position at enable;
+ *                     0: as DISABLE
  *   SET_CONTROL_MODE  CURRENT, SPEED or POSITION; only while disabled; SPEED
  *                     and POSITION need the application's setpoint hooks
  *   SET_CURRENT_REF   id, iq references (control mode CURRENT)
  *   SET_SPEED_REF     speed reference (SPEED), |w| <= speed_max_rad_s
- *   SET_POSITION_REF  angle reference (POSITION), [0, 2 pi)
+ *   SET_POSITION_REF  multi-turn angle target (POSITION) [rad] in the frame
+ *                     of the POSITION telemetry (mc_telemetry_theta_multi_rad,
+ *                     from boot), |theta| <= 200000 rad (DBC); the hook gets
+ *                     it relative to the angle at enable (the position law
+ *                     counts from there)
+ *                     The three references are refused (MODE) while the
+ *                     drive is disabled: a reference set then would be a
+ *                     step on enable.
  *   CLEAR_FAULTS      mc_drive_clear_faults(); not while enabled
- *   SET_TM_RATE       one telemetry message's rate (bus budget checked)
- *   HOST_HEARTBEAT    keep-alive
+ *   SET_TM_RATE       one telemetry message's rate (bus budget checked;
+ *                     HEARTBEAT not below MC_TM_HEARTBEAT_MIN_HZ:
+ *                     HEARTBEAT_MIN)
+ *   HOST_HEARTBEAT    keep-alive; its counter must differ from the previous
+ *                     HOST_HEARTBEAT's (a repeat is refused STALE and does
+ *                     not count as a keep-alive)
  *   PARAM_REQ         parameter read / write / apply / save / load defaults
  *                     (mc_param_srv.h), answered by one PARAM_REPLY with a
  *                     status; needs mc_can_cmd_attach_params (else
@@ -31,11 +48,24 @@
  * the state (control mode, enabled, stopping) and the drive's own checks.
  * A rejected command changes nothing; the drive answers with CMD_ERROR
  * (rejected command id, error code, received length) and records it for
- * the heartbeat. Frames for another node, extended frames and frames with
- * telemetry ids of other nodes are ignored silently.
+ * the heartbeat. The answers are rate-limited (MC_TM_ERR_REPLY_MAX_HZ,
+ * bursts of MC_TM_ERR_REPLY_BURST; their load is in the telemetry's bus
+ * budget): beyond that a rejection is counted (reply_limited) and shown in
+ * the HEARTBEAT, not answered. Frames for another node, extended frames
+ * and frames with telemetry ids of other nodes are ignored silently.
+ *
+ * Receive filter: mc_can_cmd_poll() drops a frame of another node (or an
+ * extended frame) after one comparison of its identifier, and such frames
+ * do not use the poll's budget of max_frames handled frames (they have
+ * their own, larger one,
+ * MC_CAN_RX_FOREIGN_MAX per call), so a flood from other nodes cannot
+ * delay this node's commands. At a 1 kHz tick the poll drains 64000
+ * foreign frames per second, three times a 1 Mbit/s bus full of the
+ * shortest frames (about 21000 per second).
  *
  * Command timeout: while enabled, if no command is accepted for timeout_s
- * (any accepted command counts, HOST_HEARTBEAT is the cheapest), the drive
+ * (any accepted command counts, HOST_HEARTBEAT is the cheapest; a stale
+ * HOST_HEARTBEAT is not accepted), the drive
  * stops safely and reports stop_reason CMD_TIMEOUT. With the drive's
  * controlled stop configured (mc_drive_cfg_t.stop_decel_rad_s2 > 0) in any
  * control mode: mc_drive_stop(), the drive decelerates to standstill at
@@ -44,8 +74,14 @@
  *   CURRENT   both current references ramp to zero at stop_ramp_a_per_s,
  *             then IDLE;
  *   SPEED     the speed reference ramps to zero at stop_decel_rad_s2
- *             through the application's hook, then IDLE;
- *   POSITION  IDLE at once (a held position cannot be ramped from here).
+ *             through the application's hook; the bridge opens when the
+ *             rotor is at rest (|omega_m| <= the drive's stop_rest_rad_s,
+ *             or MC_CAN_STOP_REST_RAD_S if that is 0), at the latest
+ *             2 |omega_0| / decel + 0.1 s after the stop began;
+ *   POSITION  with a control law that has a stop op (mc_drive_ctrl_t.stop,
+ *             e.g. the position law: it re-plans a stop at
+ *             stop_decel_rad_s2): that stop, then IDLE at rest as in SPEED;
+ *             without one, IDLE at once.
  * During the stop, setpoint and enable commands are refused (MODE);
  * SET_ENABLE 0 ends it at once. A drive fault while enabled ends the run
  * with stop_reason FAULT.
@@ -77,6 +113,13 @@ extern "C" {
 #define MC_CAN_STOP_CMD_TIMEOUT 1u
 #define MC_CAN_STOP_DISABLE_CMD 2u
 #define MC_CAN_STOP_FAULT       3u
+
+/** |omega_m| at which a CAN-side stop counts the rotor at rest when the
+ *  drive's stop_rest_rad_s is 0 [rad/s]. */
+#define MC_CAN_STOP_REST_RAD_S 0.5f
+
+/** Foreign frames (other nodes) mc_can_cmd_poll drops per call at most. */
+#define MC_CAN_RX_FOREIGN_MAX 64u
 
 /* Configuration errors (bits) of mc_can_cmd_init. */
 #define MC_CAN_CMD_CFG_OK          0u
@@ -121,16 +164,27 @@ typedef struct mc_can_cmd {
     uint8_t control_mode;   /**< MC_CAN_CTRL_* */
     bool enabled;
     bool stopping;            /**< safe stop in progress */
+    bool stop_by_law;         /**< POSITION: the control law's stop op decelerates */
+    uint32_t stop_ticks_left; /**< steps the stop may still wait for rest */
     uint8_t stop_reason;      /**< MC_CAN_STOP_* */
     uint32_t ticks_since_cmd; /**< steps since the last accepted command */
     float omega_ref_rad_s;    /**< last accepted speed reference */
-    float theta_ref_rad;      /**< last accepted angle reference */
+    float theta_ref_rad;      /**< last accepted angle reference (multi-turn) */
+    float theta_enable_rad;   /**< multi-turn angle at enable (telemetry's frame) */
     uint8_t last_error;       /**< mc_can_err_t of the last rejection */
     uint8_t last_error_cmd;
     uint8_t err_seq; /**< sequence counter of CMD_ERROR */
     uint32_t rx_accepted;
     uint32_t rx_rejected;
     uint32_t reply_dropped;       /**< CMD_ERROR / PARAM_REPLY frames the HAL refused */
+    uint32_t reply_limited;       /**< CMD_ERROR replies not sent: rate limit */
+    uint32_t rx_foreign;          /**< frames of other nodes dropped by the poll */
+    uint32_t poll_max;            /**< most frames (own + foreign) one poll read: the
+                                 bound of the slow loop's CAN receive work */
+    uint32_t err_tokens;          /**< CMD_ERROR replies that may be sent now */
+    uint32_t err_acc;             /**< token refill accumulator, < tick_hz */
+    bool hb_have;                 /**< a HOST_HEARTBEAT was accepted */
+    uint8_t hb_last;              /**< its counter */
     mc_param_srv_t *params;       /**< parameter service, or NULL */
     uint8_t can_state;            /**< HEARTBEAT.can_state (mc_hal_can_bus_state_t): set by
                                  the application from the controller's status */
@@ -170,7 +224,9 @@ void mc_can_cmd_attach_commission(mc_can_cmd_t *c, mc_can_cmd_comm_fn fn, mc_can
 mc_can_err_t mc_can_cmd_handle(mc_can_cmd_t *c, const mc_hal_can_frame_t *p_frame,
                                const mc_hal_can_t *can);
 
-/** Receive and handle up to max_frames queued frames. Returns how many. */
+/** Receive and handle up to max_frames queued frames of this node,
+ *  dropping up to MC_CAN_RX_FOREIGN_MAX frames of other nodes on the way.
+ *  Returns how many frames were handled (foreign ones not counted). */
 uint32_t mc_can_cmd_poll(mc_can_cmd_t *c, const mc_hal_can_t *can, uint32_t max_frames);
 
 /** Supervision at tick_hz (slow loop): command timeout, safe-stop ramp,

@@ -16,43 +16,46 @@ static const mc_can_signal_t sig_heartbeat[11] = {
     {16u, 4u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* stop_reason [-] */
     {20u, 4u, false, 1.0f, 0.0f, 0.0f, 6.0f}, /* cfg_status [-] */
     {24u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* faults [-] */
-    {40u, 8u, false, 1.0f, 0.0f, 0.0f, 8.0f}, /* last_error [-] */
+    {40u, 8u, false, 1.0f, 0.0f, 0.0f, 10.0f}, /* last_error [-] */
     {48u, 8u, false, 1.0f, 0.0f, 0.0f, 31.0f}, /* last_error_cmd [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
-static const mc_can_signal_t sig_currents[5] = {
-    {0u, 14u, true, 0.002f, 0.0f, -16.384f, 16.382f}, /* i_d_a [A] */
-    {14u, 14u, true, 0.002f, 0.0f, -16.384f, 16.382f}, /* i_q_a [A] */
-    {28u, 14u, true, 0.002f, 0.0f, -16.384f, 16.382f}, /* i_d_ref_a [A] */
-    {42u, 14u, true, 0.002f, 0.0f, -16.384f, 16.382f}, /* i_q_ref_a [A] */
+static const mc_can_signal_t sig_currents[4] = {
+    {0u, 24u, true, 0.001f, 0.0f, -8388.608f, 8388.607f}, /* i_d_a [A] */
+    {24u, 24u, true, 0.001f, 0.0f, -8388.608f, 8388.607f}, /* i_q_a [A] */
+    {48u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
-static const mc_can_signal_t sig_voltages[4] = {
-    {0u, 16u, true, 0.01f, 0.0f, -327.68f, 327.67f}, /* v_d_v [V] */
-    {16u, 16u, true, 0.01f, 0.0f, -327.68f, 327.67f}, /* v_q_v [V] */
-    {32u, 16u, false, 0.01f, 0.0f, 0.0f, 655.35f}, /* v_bus_v [V] */
+static const mc_can_signal_t sig_voltages[5] = {
+    {0u, 18u, true, 0.01f, 0.0f, -1310.72f, 1310.71f}, /* v_d_v [V] */
+    {18u, 18u, true, 0.01f, 0.0f, -1310.72f, 1310.71f}, /* v_q_v [V] */
+    {36u, 19u, false, 0.01f, 0.0f, 0.0f, 5242.87f}, /* v_bus_v [V] */
+    {55u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
-static const mc_can_signal_t sig_speed[3] = {
-    {0u, 16u, true, 0.02f, 0.0f, -655.36f, 655.34f}, /* omega_m_rad_s [rad/s] */
-    {16u, 16u, true, 0.02f, 0.0f, -655.36f, 655.34f}, /* omega_ref_rad_s [rad/s] */
+static const mc_can_signal_t sig_speed[4] = {
+    {0u, 24u, true, 0.001f, 0.0f, -8388.608f, 8388.607f}, /* omega_m_rad_s [rad/s] */
+    {24u, 24u, true, 0.001f, 0.0f, -8388.608f, 8388.607f}, /* omega_ref_rad_s [rad/s] */
+    {48u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
 static const mc_can_signal_t sig_position[4] = {
-    {0u, 16u, false, 0.0001f, 0.0f, 0.0f, 6.5535f}, /* theta_m_rad [rad] */
-    {16u, 16u, false, 0.0001f, 0.0f, 0.0f, 6.5535f}, /* theta_ref_rad [rad] */
+    {0u, 32u, true, 0.0001f, 0.0f, -214748.3648f, 214748.3647f}, /* theta_m_rad [rad] */
     {32u, 16u, false, 0.0001f, 0.0f, 0.0f, 6.5535f}, /* theta_e_rad [rad] */
+    {48u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
-static const mc_can_signal_t sig_observer[4] = {
-    {0u, 16u, true, 0.001f, 0.0f, -32.768f, 32.767f}, /* tau_l_hat_nm [N.m] */
-    {16u, 16u, true, 0.02f, 0.0f, -655.36f, 655.34f}, /* omega_hat_rad_s [rad/s] */
-    {32u, 16u, false, 0.0001f, 0.0f, 0.0f, 6.5535f}, /* theta_hat_rad [rad] */
+static const mc_can_signal_t sig_observer[5] = {
+    {0u, 20u, true, 0.001f, 0.0f, -524.288f, 524.287f}, /* tau_l_hat_nm [N.m] */
+    {20u, 20u, true, 0.01f, 0.0f, -5242.88f, 5242.87f}, /* omega_hat_rad_s [rad/s] */
+    {40u, 15u, false, 0.0002f, 0.0f, 0.0f, 6.5534f}, /* theta_hat_rad [rad] */
+    {55u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
-static const mc_can_signal_t sig_controller[3] = {
+static const mc_can_signal_t sig_controller[4] = {
     {0u, 16u, true, 0.001f, 0.0f, -32.768f, 32.767f}, /* nu_pu [pu] */
     {16u, 16u, true, 0.001f, 0.0f, -32.768f, 32.767f}, /* vartheta_pu [pu] */
+    {32u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
 static const mc_can_signal_t sig_stepper[5] = {
@@ -60,6 +63,17 @@ static const mc_can_signal_t sig_stepper[5] = {
     {14u, 14u, true, 0.01f, 0.0f, -81.92f, 81.91f}, /* e2_rad_s [rad/s] */
     {28u, 14u, true, 0.01f, 0.0f, -81.92f, 81.91f}, /* s1 [-] */
     {42u, 14u, true, 0.01f, 0.0f, -81.92f, 81.91f}, /* s2 [-] */
+    {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
+};
+static const mc_can_signal_t sig_current_refs[4] = {
+    {0u, 24u, true, 0.001f, 0.0f, -8388.608f, 8388.607f}, /* i_d_ref_a [A] */
+    {24u, 24u, true, 0.001f, 0.0f, -8388.608f, 8388.607f}, /* i_q_ref_a [A] */
+    {48u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
+    {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
+};
+static const mc_can_signal_t sig_position_ref[3] = {
+    {0u, 32u, true, 0.0001f, 0.0f, -214748.3648f, 214748.3647f}, /* theta_ref_rad [rad] */
+    {32u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
 static const mc_can_signal_t sig_app_status[8] = {
@@ -86,10 +100,10 @@ static const mc_can_signal_t sig_set_speed_ref[1] = {
     {0u, 32u, true, 0.001f, 0.0f, -1000.0f, 1000.0f}, /* omega_ref_rad_s [rad/s] */
 };
 static const mc_can_signal_t sig_set_position_ref[1] = {
-    {0u, 16u, false, 0.0001f, 0.0f, 0.0f, 6.2831f}, /* theta_ref_rad [rad] */
+    {0u, 32u, true, 0.0001f, 0.0f, -200000.0f, 200000.0f}, /* theta_ref_rad [rad] */
 };
 static const mc_can_signal_t sig_set_tm_rate[2] = {
-    {0u, 8u, false, 1.0f, 0.0f, 1.0f, 8.0f}, /* tm_cmd [-] */
+    {0u, 8u, false, 1.0f, 0.0f, 1.0f, 10.0f}, /* tm_cmd [-] */
     {8u, 16u, false, 1.0f, 0.0f, 0.0f, 1000.0f}, /* rate_hz [Hz] */
 };
 static const mc_can_signal_t sig_host_heartbeat[1] = {
@@ -127,26 +141,29 @@ static const mc_can_signal_t sig_commission_result[3] = {
 };
 static const mc_can_signal_t sig_cmd_error[4] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 31.0f}, /* rejected_cmd [-] */
-    {8u, 8u, false, 1.0f, 0.0f, 1.0f, 8.0f}, /* error [-] */
+    {8u, 8u, false, 1.0f, 0.0f, 1.0f, 10.0f}, /* error [-] */
     {16u, 8u, false, 1.0f, 0.0f, 0.0f, 64.0f}, /* rx_len [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
 
 const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
+    {MC_CAN_CMD_DISABLE, 0u, MC_CAN_DIR_RX, 0u, NULL}, /* DISABLE */
     {MC_CAN_CMD_HEARTBEAT, 8u, MC_CAN_DIR_TX, 11u, sig_heartbeat}, /* HEARTBEAT */
-    {MC_CAN_CMD_CURRENTS, 8u, MC_CAN_DIR_TX, 5u, sig_currents}, /* CURRENTS */
-    {MC_CAN_CMD_VOLTAGES, 8u, MC_CAN_DIR_TX, 4u, sig_voltages}, /* VOLTAGES */
-    {MC_CAN_CMD_SPEED, 8u, MC_CAN_DIR_TX, 3u, sig_speed}, /* SPEED */
+    {MC_CAN_CMD_CURRENTS, 8u, MC_CAN_DIR_TX, 4u, sig_currents}, /* CURRENTS */
+    {MC_CAN_CMD_VOLTAGES, 8u, MC_CAN_DIR_TX, 5u, sig_voltages}, /* VOLTAGES */
+    {MC_CAN_CMD_SPEED, 8u, MC_CAN_DIR_TX, 4u, sig_speed}, /* SPEED */
     {MC_CAN_CMD_POSITION, 8u, MC_CAN_DIR_TX, 4u, sig_position}, /* POSITION */
-    {MC_CAN_CMD_OBSERVER, 8u, MC_CAN_DIR_TX, 4u, sig_observer}, /* OBSERVER */
-    {MC_CAN_CMD_CONTROLLER, 8u, MC_CAN_DIR_TX, 3u, sig_controller}, /* CONTROLLER */
+    {MC_CAN_CMD_OBSERVER, 8u, MC_CAN_DIR_TX, 5u, sig_observer}, /* OBSERVER */
+    {MC_CAN_CMD_CONTROLLER, 8u, MC_CAN_DIR_TX, 4u, sig_controller}, /* CONTROLLER */
     {MC_CAN_CMD_STEPPER, 8u, MC_CAN_DIR_TX, 5u, sig_stepper}, /* STEPPER */
+    {MC_CAN_CMD_CURRENT_REFS, 8u, MC_CAN_DIR_TX, 4u, sig_current_refs}, /* CURRENT_REFS */
+    {MC_CAN_CMD_POSITION_REF, 8u, MC_CAN_DIR_TX, 3u, sig_position_ref}, /* POSITION_REF */
     {MC_CAN_CMD_APP_STATUS, 8u, MC_CAN_DIR_TX, 8u, sig_app_status}, /* APP_STATUS */
     {MC_CAN_CMD_SET_ENABLE, 1u, MC_CAN_DIR_RX, 1u, sig_set_enable}, /* SET_ENABLE */
     {MC_CAN_CMD_SET_CONTROL_MODE, 1u, MC_CAN_DIR_RX, 1u, sig_set_control_mode}, /* SET_CONTROL_MODE */
     {MC_CAN_CMD_SET_CURRENT_REF, 4u, MC_CAN_DIR_RX, 2u, sig_set_current_ref}, /* SET_CURRENT_REF */
     {MC_CAN_CMD_SET_SPEED_REF, 4u, MC_CAN_DIR_RX, 1u, sig_set_speed_ref}, /* SET_SPEED_REF */
-    {MC_CAN_CMD_SET_POSITION_REF, 2u, MC_CAN_DIR_RX, 1u, sig_set_position_ref}, /* SET_POSITION_REF */
+    {MC_CAN_CMD_SET_POSITION_REF, 4u, MC_CAN_DIR_RX, 1u, sig_set_position_ref}, /* SET_POSITION_REF */
     {MC_CAN_CMD_CLEAR_FAULTS, 0u, MC_CAN_DIR_RX, 0u, NULL}, /* CLEAR_FAULTS */
     {MC_CAN_CMD_SET_TM_RATE, 3u, MC_CAN_DIR_RX, 2u, sig_set_tm_rate}, /* SET_TM_RATE */
     {MC_CAN_CMD_HOST_HEARTBEAT, 1u, MC_CAN_DIR_RX, 1u, sig_host_heartbeat}, /* HOST_HEARTBEAT */

@@ -41,16 +41,18 @@ extern "C" {
 
 typedef enum {
     MC_CAN_ERR_NONE = 0,
-    MC_CAN_ERR_UNKNOWN_CMD = 1, /**< no such command (or a telemetry id) */
-    MC_CAN_ERR_LENGTH = 2,      /**< data length differs from the DBC's */
-    MC_CAN_ERR_RANGE = 3,       /**< a signal outside its range */
-    MC_CAN_ERR_MODE = 4,        /**< not allowed in the present state */
-    MC_CAN_ERR_REFUSED = 5,     /**< the drive refused it (see its API) */
-    MC_CAN_ERR_BUDGET = 6,      /**< telemetry rates above the bus budget */
-    MC_CAN_ERR_UNSUPPORTED = 7, /**< this build has no handler for it */
-    MC_CAN_ERR_FORMAT = 8,      /**< remote, CAN FD frame on a classic id */
-    MC_CAN_ERR_ARG = 0xFE,      /**< API misuse (NULL, bad index, short array) */
-    MC_CAN_ERR_IGNORED = 0xFF   /**< not addressed to this node */
+    MC_CAN_ERR_UNKNOWN_CMD = 1,    /**< no such command (or a telemetry id) */
+    MC_CAN_ERR_LENGTH = 2,         /**< data length differs from the DBC's */
+    MC_CAN_ERR_RANGE = 3,          /**< a signal outside its range */
+    MC_CAN_ERR_MODE = 4,           /**< not allowed in the present state */
+    MC_CAN_ERR_REFUSED = 5,        /**< the drive refused it (see its API) */
+    MC_CAN_ERR_BUDGET = 6,         /**< telemetry rates above the bus budget */
+    MC_CAN_ERR_UNSUPPORTED = 7,    /**< this build has no handler for it */
+    MC_CAN_ERR_FORMAT = 8,         /**< remote, CAN FD frame on a classic id */
+    MC_CAN_ERR_STALE = 9,          /**< HOST_HEARTBEAT counter did not advance */
+    MC_CAN_ERR_HEARTBEAT_MIN = 10, /**< HEARTBEAT rate below MC_TM_HEARTBEAT_MIN_HZ */
+    MC_CAN_ERR_ARG = 0xFE,         /**< API misuse (NULL, bad index, short array) */
+    MC_CAN_ERR_IGNORED = 0xFF      /**< not addressed to this node */
 } mc_can_err_t;
 
 typedef enum {

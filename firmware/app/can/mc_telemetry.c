@@ -12,10 +12,29 @@
 #include "transforms/mc_transforms.h"
 
 static const uint8_t k_slot_msg[MC_TM_COUNT] = {
-    (uint8_t)MC_CAN_MSG_HEARTBEAT,  (uint8_t)MC_CAN_MSG_CURRENTS, (uint8_t)MC_CAN_MSG_VOLTAGES,
-    (uint8_t)MC_CAN_MSG_SPEED,      (uint8_t)MC_CAN_MSG_POSITION, (uint8_t)MC_CAN_MSG_OBSERVER,
-    (uint8_t)MC_CAN_MSG_CONTROLLER, (uint8_t)MC_CAN_MSG_STEPPER,
+    (uint8_t)MC_CAN_MSG_HEARTBEAT,    (uint8_t)MC_CAN_MSG_CURRENTS,
+    (uint8_t)MC_CAN_MSG_VOLTAGES,     (uint8_t)MC_CAN_MSG_SPEED,
+    (uint8_t)MC_CAN_MSG_POSITION,     (uint8_t)MC_CAN_MSG_OBSERVER,
+    (uint8_t)MC_CAN_MSG_CONTROLLER,   (uint8_t)MC_CAN_MSG_STEPPER,
+    (uint8_t)MC_CAN_MSG_CURRENT_REFS, (uint8_t)MC_CAN_MSG_POSITION_REF,
 };
+
+#define NO_SAT 0xFFu
+/* index of each slot's `sat` signal (NO_SAT: the message has none) */
+static const uint8_t k_slot_sat[MC_TM_COUNT] = {
+    NO_SAT,
+    (uint8_t)MC_CAN_CURRENTS_SAT,
+    (uint8_t)MC_CAN_VOLTAGES_SAT,
+    (uint8_t)MC_CAN_SPEED_SAT,
+    (uint8_t)MC_CAN_POSITION_SAT,
+    (uint8_t)MC_CAN_OBSERVER_SAT,
+    (uint8_t)MC_CAN_CONTROLLER_SAT,
+    NO_SAT,
+    (uint8_t)MC_CAN_CURRENT_REFS_SAT,
+    (uint8_t)MC_CAN_POSITION_REF_SAT,
+};
+
+#define TWO_PI_F 6.28318530717958647692f
 
 uint32_t mc_telemetry_msg(uint32_t slot)
 {
@@ -33,6 +52,9 @@ float mc_telemetry_bus_load(const mc_telemetry_cfg_t *cfg)
         const uint32_t dlc = mc_can_messages[k_slot_msg[i]].dlc;
         bits_per_s += (float)cfg->rate_hz[i] * (float)mc_can_frame_bits_worst(dlc);
     }
+    /* the rate-limited CMD_ERROR replies at their limit */
+    bits_per_s += (float)MC_TM_ERR_REPLY_MAX_HZ *
+                  (float)mc_can_frame_bits_worst(mc_can_messages[MC_CAN_MSG_CMD_ERROR].dlc);
     return bits_per_s / (float)cfg->bitrate_bps;
 }
 
@@ -44,6 +66,9 @@ static uint32_t check_rates(const mc_telemetry_cfg_t *cfg)
         if ((uint32_t)cfg->rate_hz[i] > cfg->tick_hz) {
             err |= MC_TM_CFG_ERR_RATE;
         }
+    }
+    if (cfg->rate_hz[MC_TM_HEARTBEAT] < MC_TM_HEARTBEAT_MIN_HZ) {
+        err |= MC_TM_CFG_ERR_HEARTBEAT;
     }
     if (mc_telemetry_bus_load(cfg) > cfg->bus_budget_frac) {
         err |= MC_TM_CFG_ERR_LOAD;
@@ -158,12 +183,67 @@ static void values_currents(const mc_telemetry_src_t *src, float *v)
     mc_park_f32(alpha, beta, s, co, &id, &iq);
     v[MC_CAN_CURRENTS_I_D_A] = id;
     v[MC_CAN_CURRENTS_I_Q_A] = iq;
-    v[MC_CAN_CURRENTS_I_D_REF_A] = tm->id_ref_a;
-    v[MC_CAN_CURRENTS_I_Q_REF_A] = tm->iq_ref_a;
 }
+
+float mc_telemetry_theta_multi_rad(const mc_telemetry_t *t, const mc_drive_t *drive)
+{
+    if ((t == NULL) || !t->have_theta) {
+        return (drive != NULL) ? drive->tm.theta_m_rad : 0.0f;
+    }
+    return (float)t->turns * TWO_PI_F + t->theta_prev_rad;
+}
+
+/* Unwrap the drive's single-turn angle: the turn count whose step is
+ * nearest the measured speed times the tick. */
+static void track_turns(mc_telemetry_t *t, const mc_drive_t *d)
+{
+    const float th = d->tm.theta_m_rad;
+    if (!mc_isfinite_f32(th)) {
+        return;
+    }
+    if (t->have_theta) {
+        const float dt = 1.0f / (float)t->cfg.tick_hz;
+        const float w = mc_isfinite_f32(d->tm.omega_m_rad_s) ? d->tm.omega_m_rad_s : 0.0f;
+        const float x = (w * dt - (th - t->theta_prev_rad)) / TWO_PI_F;
+        const float n = (x >= 0.0f) ? (float)(int32_t)(x + 0.5f) : -(float)(int32_t)(0.5f - x);
+        t->turns += (int32_t)n;
+    }
+    t->theta_prev_rad = th;
+    t->have_theta = true;
+}
+
+/* Set the slot's sat signal if another signal (seq excepted) is outside its
+ * range or not a number. */
+static void flag_saturation(uint32_t slot, float *v)
+{
+    const uint32_t si = (uint32_t)k_slot_sat[slot];
+    const mc_can_message_t *m = &mc_can_messages[k_slot_msg[slot]];
+    bool sat = false;
+    if (si == (uint32_t)NO_SAT) {
+        return;
+    }
+    for (uint32_t j = 0u; (j + 1u) < (uint32_t)m->n_signals; j++) {
+        const mc_can_signal_t *s = &m->signals[j];
+        if ((j != si) && (!mc_isfinite_f32(v[j]) || (v[j] < s->min) || (v[j] > s->max))) {
+            sat = true;
+        }
+    }
+    v[si] = sat ? 1.0f : 0.0f;
+}
+
+static bool values_of(uint32_t slot, const mc_telemetry_src_t *src, float *values);
 
 bool mc_telemetry_values(uint32_t slot, const mc_telemetry_src_t *src,
                          float values[MC_CAN_NSIG_MAX])
+{
+    if (!values_of(slot, src, values)) {
+        return false;
+    }
+    flag_saturation(slot, values);
+    return true;
+}
+
+static bool values_of(uint32_t slot, const mc_telemetry_src_t *src, float *values)
 {
     const mc_telemetry_ext_t *x;
     const mc_drive_t *d;
@@ -192,9 +272,16 @@ bool mc_telemetry_values(uint32_t slot, const mc_telemetry_src_t *src,
             (src->cmd != NULL) ? src->cmd->omega_ref_rad_s : 0.0f;
         return true;
     case MC_TM_POSITION:
-        values[MC_CAN_POSITION_THETA_M_RAD] = d->tm.theta_m_rad;
-        values[MC_CAN_POSITION_THETA_REF_RAD] = (src->cmd != NULL) ? src->cmd->theta_ref_rad : 0.0f;
+        values[MC_CAN_POSITION_THETA_M_RAD] = mc_telemetry_theta_multi_rad(src->tm, d);
         values[MC_CAN_POSITION_THETA_E_RAD] = d->tm.theta_e_rad;
+        return true;
+    case MC_TM_CURRENT_REFS:
+        values[MC_CAN_CURRENT_REFS_I_D_REF_A] = d->tm.id_ref_a;
+        values[MC_CAN_CURRENT_REFS_I_Q_REF_A] = d->tm.iq_ref_a;
+        return true;
+    case MC_TM_POSITION_REF:
+        values[MC_CAN_POSITION_REF_THETA_REF_RAD] =
+            (src->cmd != NULL) ? src->cmd->theta_ref_rad : 0.0f;
         return true;
     case MC_TM_OBSERVER:
         if ((x == NULL) || !x->have_observer) {
@@ -234,6 +321,9 @@ uint32_t mc_telemetry_step(mc_telemetry_t *t, const mc_hal_can_t *can,
     if (t == NULL) {
         return 0u;
     }
+    if ((src != NULL) && (src->drive != NULL)) {
+        track_turns(t, src->drive);
+    }
     for (i = 0u; i < (uint32_t)MC_TM_COUNT; i++) {
         float v[MC_CAN_NSIG_MAX] = {0.0f};
         mc_hal_can_frame_t f;
@@ -258,6 +348,9 @@ uint32_t mc_telemetry_step(mc_telemetry_t *t, const mc_hal_can_t *can,
         }
         t->seq[i] = (uint8_t)(t->seq[i] + 1u);
         sent |= 1u << i;
+        if ((k_slot_sat[i] != NO_SAT) && (v[k_slot_sat[i]] > 0.5f)) {
+            t->saturated++;
+        }
         rc = mc_hal_can_send(can, &f);
         if (rc == 0) {
             t->tx_frames++;

@@ -4,18 +4,33 @@
  *
  * Messages (tools/can/motordrive.dbc; slot = command id - 1):
  *   HEARTBEAT  drive mode, CAN control mode, enabled/stopping, stop reason,
- *              fault bits, last rejected command
+ *              fault bits, last rejected command; its rate is at least
+ *              MC_TM_HEARTBEAT_MIN_HZ (it cannot be switched off)
  *   CURRENTS   i_d, i_q (Park of the sampled phase currents at the FOC's
- *              electrical angle) and their references
+ *              electrical angle)
  *   VOLTAGES   v_d, v_q of the current loop (0 outside CURRENT mode), DC bus
  *   SPEED      mechanical speed (encoder tracking loop) and CAN reference
- *   POSITION   mechanical angle, CAN reference, electrical angle
+ *   POSITION   multi-turn mechanical angle, electrical angle
  *   OBSERVER, CONTROLLER, STEPPER
  *              internals of a plugged control law (mc_telemetry_ext_t);
  *              not sent while the application gives none.
+ *   CURRENT_REFS  the drive's dq current references
+ *   POSITION_REF  the multi-turn CAN position reference
  * Every frame ends with its message's rolling 8-bit sequence counter, which
  * advances for every frame generated, so a frame the HAL could not queue
  * shows up as a gap at the logger.
+ *
+ * Ranges: the signals are sized for any motor the configuration allows
+ * (currents +-8388 A at 1 mA, speeds +-8388 rad/s at 1 mrad/s, voltages
+ * +-1310 V, position +-214748 rad = 34178 turns at 0.1 mrad). A value that
+ * still does not fit is sent saturated to its range and the message's `sat`
+ * bit says so (also for a value that is not a number, sent as 0).
+ *
+ * Multi-turn position: mc_telemetry_step() unwraps the drive's encoder
+ * angle (theta_m, [0, 2 pi)) at every tick into whole turns, choosing the
+ * turn count whose step is nearest the measured speed times the tick, so it
+ * holds at any speed as long as the speed estimate is right to within half
+ * a turn per tick. Turns count from the first step (the angle at boot).
  *
  * Scheduling: mc_telemetry_step() is called at tick_hz (the slow loop).
  * A phase accumulator per message sends rate_hz frames per second on
@@ -53,8 +68,18 @@ typedef enum {
     MC_TM_OBSERVER = 5,
     MC_TM_CONTROLLER = 6,
     MC_TM_STEPPER = 7,
-    MC_TM_COUNT = 8
+    MC_TM_CURRENT_REFS = 8,
+    MC_TM_POSITION_REF = 9,
+    MC_TM_COUNT = 10
 } mc_tm_slot_t;
+
+#define MC_TM_HEARTBEAT_MIN_HZ 1u /**< the drive's HEARTBEAT cannot go below this */
+
+/** CMD_ERROR replies are limited to this many per second (token bucket of
+ *  MC_TM_ERR_REPLY_BURST); their worst-case load at this rate is part of
+ *  the bus budget (mc_telemetry_bus_load). */
+#define MC_TM_ERR_REPLY_MAX_HZ 50u
+#define MC_TM_ERR_REPLY_BURST  4u
 
 #define MC_TM_BUDGET_FRAC_MAX 0.7f /**< largest accepted bus_budget_frac */
 #define MC_TM_BITRATE_MIN_BPS 10000u
@@ -62,14 +87,15 @@ typedef enum {
 #define MC_TM_TICK_MAX_HZ     100000u
 
 /* Configuration errors (bits) of mc_telemetry_init / _set_rate. */
-#define MC_TM_CFG_OK          0u
-#define MC_TM_CFG_ERR_NULL    (1u << 0) /**< NULL argument */
-#define MC_TM_CFG_ERR_NODE    (1u << 1) /**< node_id > 62 */
-#define MC_TM_CFG_ERR_BITRATE (1u << 2) /**< bitrate outside [10 k, 1 M] bit/s */
-#define MC_TM_CFG_ERR_TICK    (1u << 3) /**< tick_hz 0 or > 100 kHz */
-#define MC_TM_CFG_ERR_RATE    (1u << 4) /**< a rate above tick_hz, or bad slot */
-#define MC_TM_CFG_ERR_BUDGET  (1u << 5) /**< budget not in (0, MC_TM_BUDGET_FRAC_MAX] */
-#define MC_TM_CFG_ERR_LOAD    (1u << 6) /**< load of the rates above the budget */
+#define MC_TM_CFG_OK            0u
+#define MC_TM_CFG_ERR_NULL      (1u << 0) /**< NULL argument */
+#define MC_TM_CFG_ERR_NODE      (1u << 1) /**< node_id > 62 */
+#define MC_TM_CFG_ERR_BITRATE   (1u << 2) /**< bitrate outside [10 k, 1 M] bit/s */
+#define MC_TM_CFG_ERR_TICK      (1u << 3) /**< tick_hz 0 or > 100 kHz */
+#define MC_TM_CFG_ERR_RATE      (1u << 4) /**< a rate above tick_hz, or bad slot */
+#define MC_TM_CFG_ERR_BUDGET    (1u << 5) /**< budget not in (0, MC_TM_BUDGET_FRAC_MAX] */
+#define MC_TM_CFG_ERR_LOAD      (1u << 6) /**< load of the rates above the budget */
+#define MC_TM_CFG_ERR_HEARTBEAT (1u << 7) /**< HEARTBEAT rate below MC_TM_HEARTBEAT_MIN_HZ */
 
 typedef struct {
     uint8_t node_id;               /**< 0..62 */
@@ -89,16 +115,20 @@ typedef struct {
     float e1_rad, e2_rad_s, s1, s2;
 } mc_telemetry_ext_t;
 
-struct mc_can_cmd; /* mc_can_cmd.h */
+struct mc_can_cmd;   /* mc_can_cmd.h */
+struct mc_telemetry; /* below */
 
 /** What the telemetry reads each step. */
 typedef struct {
     const mc_drive_t *drive;       /**< required */
     const struct mc_can_cmd *cmd;  /**< CAN command state, or NULL */
     const mc_telemetry_ext_t *ext; /**< control-law internals, or NULL */
+    const struct mc_telemetry *tm; /**< for the multi-turn position, or NULL
+                                         (POSITION then carries the single-turn
+                                         angle) */
 } mc_telemetry_src_t;
 
-typedef struct {
+typedef struct mc_telemetry {
     mc_telemetry_cfg_t cfg;
     uint32_t acc[MC_TM_COUNT]; /**< phase accumulators, < tick_hz */
     uint8_t seq[MC_TM_COUNT];  /**< next sequence number per message */
@@ -108,10 +138,16 @@ typedef struct {
     uint32_t tx_nobufs;        /**< ... of which tx queue full */
     uint32_t tx_busoff;        /**< ... of which bus-off */
     uint32_t last_fail_mask;   /**< slots whose frame the HAL refused, last step */
+    uint32_t saturated;        /**< frames sent with their sat bit set */
+    /* multi-turn position (see the header) */
+    bool have_theta;
+    float theta_prev_rad; /**< drive angle at the last tick, [0, 2 pi) */
+    int32_t turns;        /**< whole turns since the first tick */
 } mc_telemetry_t;
 
-/** Bus load (fraction of bitrate_bps) of cfg's rates; 0 for a NULL cfg or
- *  a zero bit rate. */
+/** Bus load (fraction of bitrate_bps) of cfg's rates plus the CMD_ERROR
+ *  replies at their limit (MC_TM_ERR_REPLY_MAX_HZ); 0 for a NULL cfg or a
+ *  zero bit rate. */
 float mc_telemetry_bus_load(const mc_telemetry_cfg_t *cfg);
 
 /** Validate cfg (including the load against the budget) and initialise t.
@@ -119,13 +155,15 @@ float mc_telemetry_bus_load(const mc_telemetry_cfg_t *cfg);
 uint32_t mc_telemetry_init(mc_telemetry_t *t, const mc_telemetry_cfg_t *cfg);
 
 /** Change one message's rate. Returns MC_TM_CFG_OK, MC_TM_CFG_ERR_NULL,
- *  MC_TM_CFG_ERR_RATE (bad slot or rate > tick_hz) or MC_TM_CFG_ERR_LOAD;
- *  on error nothing changes. */
+ *  MC_TM_CFG_ERR_RATE (bad slot or rate > tick_hz), MC_TM_CFG_ERR_HEARTBEAT
+ *  (HEARTBEAT below its minimum) or MC_TM_CFG_ERR_LOAD; on error nothing
+ *  changes. */
 uint32_t mc_telemetry_set_rate(mc_telemetry_t *t, uint32_t slot, uint16_t rate_hz);
 
 /**
  * The signal values message `slot` would carry now (sequence counter
- * excluded: values[last] is left as is), in DBC signal order.
+ * excluded: values[last] is left as is), in DBC signal order, with the
+ * message's `sat` signal set if another signal does not fit its range.
  * @return false if the source has no data for it (ext NULL or its have_*
  *         flag false, bad slot, NULL argument).
  */
@@ -140,6 +178,10 @@ bool mc_telemetry_values(uint32_t slot, const mc_telemetry_src_t *src,
  */
 uint32_t mc_telemetry_step(mc_telemetry_t *t, const mc_hal_can_t *can,
                            const mc_telemetry_src_t *src);
+
+/** Multi-turn mechanical angle [rad] of the last step (single-turn drive
+ *  angle before the first step). */
+float mc_telemetry_theta_multi_rad(const mc_telemetry_t *t, const mc_drive_t *drive);
 
 /** DBC message index (MC_CAN_MSG_*) of a slot. */
 uint32_t mc_telemetry_msg(uint32_t slot);

@@ -22,7 +22,10 @@
 //
 // SPEED control mode is served by the application's sensored speed loop (a
 // PI at the slow rate writing the current references in the drive's CURRENT
-// mode, gains below); POSITION is not offered (UNSUPPORTED).
+// mode, gains below); POSITION by the position law plugged into the
+// application's position slot (firmware/app/ctrl/mc_ctrl_position: trapezoid
+// to the multi-turn target of SET_POSITION_REF, at speed_max_rad_s and
+// stop_decel_rad_s2) in CTRL mode.
 //
 // Parameters (PARAM_REQ/PARAM_REPLY) are served as on the MCU: the
 // parameter service (firmware/app/config/mc_param_srv) on the drive, with
@@ -43,7 +46,7 @@
 // during a run (the simulated PWM period and CAN tick are fixed at start):
 // such an APPLY is refused INVALID (MC_PARAMS_ERR_DRIVE). Without --flash
 // the service runs without a store (SAVE answers STORE), and with settings
-// outside the parameter table (e.g. rate_heartbeat_hz=0, a 10 kbit/s bus)
+// outside the parameter table (e.g. rate_heartbeat_hz=500, a 10 kbit/s bus)
 // without the service (PARAM_REQ: UNSUPPORTED).
 #include <algorithm>
 #include <chrono>
@@ -65,6 +68,7 @@ extern "C" {
 #include "commission/mc_comm_can.h"
 #include "mc_app.h"
 #include "mc_can_proto.h"
+#include "mc_ctrl_position.h"
 #include "mc_params.h"
 }
 
@@ -72,26 +76,35 @@ namespace mcsim {
 namespace {
 
 const char* const kSlotParam[MC_TM_COUNT] = {
-    "rate_heartbeat_hz", "rate_currents_hz", "rate_voltages_hz",   "rate_speed_hz",
-    "rate_position_hz",  "rate_observer_hz", "rate_controller_hz", "rate_stepper_hz"};
-const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT", "CURRENTS", "VOLTAGES",   "SPEED",
-                                            "POSITION",  "OBSERVER", "CONTROLLER", "STEPPER"};
+    "rate_heartbeat_hz",    "rate_currents_hz",    "rate_voltages_hz",   "rate_speed_hz",
+    "rate_position_hz",     "rate_observer_hz",    "rate_controller_hz", "rate_stepper_hz",
+    "rate_current_refs_hz", "rate_position_ref_hz"};
+const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT",    "CURRENTS",    "VOLTAGES",   "SPEED",
+                                            "POSITION",     "OBSERVER",    "CONTROLLER", "STEPPER",
+                                            "CURRENT_REFS", "POSITION_REF"};
 // Signal names per slot, in DBC order (checked against the generated
 // signal counts below; tests/can compares the CSV header with the DBC).
 const std::vector<std::vector<std::string>> kSlotSignals = {
     {"mode", "control_mode", "enabled", "stopping", "can_state", "stop_reason", "cfg_status",
      "faults", "last_error", "last_error_cmd", "seq"},
-    {"i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a", "seq"},
-    {"v_d_v", "v_q_v", "v_bus_v", "seq"},
-    {"omega_m_rad_s", "omega_ref_rad_s", "seq"},
-    {"theta_m_rad", "theta_ref_rad", "theta_e_rad", "seq"},
-    {"tau_l_hat_nm", "omega_hat_rad_s", "theta_hat_rad", "seq"},
-    {"nu_pu", "vartheta_pu", "seq"},
-    {"e1_rad", "e2_rad_s", "s1", "s2", "seq"}};
+    {"i_d_a", "i_q_a", "sat", "seq"},
+    {"v_d_v", "v_q_v", "v_bus_v", "sat", "seq"},
+    {"omega_m_rad_s", "omega_ref_rad_s", "sat", "seq"},
+    {"theta_m_rad", "theta_e_rad", "sat", "seq"},
+    {"tau_l_hat_nm", "omega_hat_rad_s", "theta_hat_rad", "sat", "seq"},
+    {"nu_pu", "vartheta_pu", "sat", "seq"},
+    {"e1_rad", "e2_rad_s", "s1", "s2", "seq"},
+    {"i_d_ref_a", "i_q_ref_a", "sat", "seq"},
+    {"theta_ref_rad", "sat", "seq"}};
 
 std::string env_or(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);
   return (v != nullptr && *v != '\0') ? std::string(v) : fallback;
+}
+
+// SET_POSITION_REF: the position law's multi-turn target.
+int position_hook(void* ctx, float ref) {
+  return mc_ctrl_pos_set_target_rad(static_cast<mc_ctrl_pos_t*>(ctx), ref) == 0u ? 0 : 1;
 }
 
 const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
@@ -180,7 +193,7 @@ void run_can_telemetry(RunContext& ctx) {
   acfg.flash_sectors[1] = 1u;
   acfg.defaults = &p_scn;
   acfg.tm_budget_frac = static_cast<float>(P.get("budget_pct") / 100.0);
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < MC_TM_COUNT - MC_TM_OBSERVER; ++i) {
     acfg.tm_ext_rate_hz[i] = static_cast<uint16_t>(P.get(kSlotParam[MC_TM_OBSERVER + i]));
   }
   if ((mc_app_boot(&app, &acfg) & MC_APP_CFG_ERR_STORE) != 0u) {
@@ -255,6 +268,33 @@ void run_can_telemetry(RunContext& ctx) {
     app.cfg.speed.ki_dt_a_s_rad = static_cast<float>(kp * bw / 4.0 / tick_hz_d);
     app.cfg.speed.i_max_a = static_cast<float>(P.get("speed_i_max_a"));
   }
+  // The position law for POSITION (its gains from the speed PI's).
+  mc_ctrl_pos_t pos{};
+  {
+    mc_ctrl_pos_cfg_t pc{};
+    pc.foc = d.cfg.foc;
+    pc.pole_pairs = d.cfg.pole_pairs;
+    pc.traj.v_max_rad_s = p.speed_max_rad_s;
+    pc.traj.a_max_rad_s2 = p.stop_decel_rad_s2;
+    pc.traj.d_max_rad_s2 = p.stop_decel_rad_s2;
+    pc.traj.dt_s = d.cfg.foc.dt_s;
+    const double bw = P.get("speed_bw_rad_s");
+    pc.pos_kp_per_s = static_cast<float>(bw / 4.0);
+    pc.vel_kp_a_s_rad = app.cfg.speed.kp_a_s_rad;
+    pc.vel_ki_a_rad = static_cast<float>(app.cfg.speed.kp_a_s_rad * bw / 4.0);
+    pc.vel_limit_rad_s = p.speed_max_rad_s;
+    pc.iq_max_a = app.cfg.speed.i_max_a;
+    pc.kt_nm_a = static_cast<float>(1.5 * 4.0 * 0.11);
+    pc.j_kgm2 = static_cast<float>(o.J_kgm2);
+    pc.ff_lead_s = static_cast<float>(1.0 / o.bw_rad_s + 1.5 / o.pwm_hz);
+    if (mc_ctrl_pos_init(&pos, &pc) != MC_CTRL_POS_ERR_NONE) {
+      throw UsageError("the position law refused the scenario's settings");
+    }
+    app.cfg.position_law.ctrl = mc_ctrl_pos_ops(&pos);
+    app.cfg.position_law.set_ref = position_hook;
+    app.cfg.position_law.ctx = &pos;
+    app.cfg.position_law.tm_ext = nullptr;
+  }
   const uint32_t aerr = mc_app_start(&app, &d, sil.board().hal(), can, serve_params);
   if ((aerr & MC_APP_CFG_ERR_TM) != 0u) {
     throw UsageError("telemetry configuration refused (MC_TM_CFG bits 0x" +
@@ -324,6 +364,7 @@ void run_can_telemetry(RunContext& ctx) {
   const long n = std::lround(ctx.duration_s / T);
   const auto wall0 = std::chrono::steady_clock::now();
   uint64_t frames = 0, slow_steps = 0;
+  uint32_t rx_read_max = 0;  // frames taken from the HAL by one receive call
   std::vector<double> row(cols.size());
   for (long k = 1; k <= n; ++k) {
     sil.step();
@@ -331,7 +372,7 @@ void run_can_telemetry(RunContext& ctx) {
     // The slow loop's application work, as on the MCU: the frames received
     // since the previous step (the MCU's CAN interrupt), then commands,
     // supervision, the speed loop and telemetry.
-    (void)mc_app_can_rx_isr(&app);
+    rx_read_max = std::max(rx_read_max, mc_app_can_rx_isr(&app));
     const uint32_t sent = mc_app_slow_work(&app);
     ++slow_steps;
     frames += static_cast<uint64_t>(__builtin_popcount(sent));
@@ -377,6 +418,12 @@ void run_can_telemetry(RunContext& ctx) {
   ctx.summary.set("cmd_accepted", cmd.rx_accepted);
   ctx.summary.set("cmd_rejected", cmd.rx_rejected);
   ctx.summary.set("cmd_reply_dropped", cmd.reply_dropped);
+  ctx.summary.set("cmd_reply_limited", cmd.reply_limited);
+  // foreign frames: dropped by the application's receive path (before the
+  // ring) or by the command handler's own filter
+  ctx.summary.set("cmd_rx_foreign", app.rx_foreign + cmd.rx_foreign);
+  ctx.summary.set("cmd_poll_frames_max", std::max(rx_read_max, cmd.poll_max));
+  ctx.summary.set("tm_frames_saturated", tm.saturated);
   ctx.summary.set("final_mode", static_cast<double>(d.mode));
   ctx.summary.set("final_enabled", cmd.enabled ? 1.0 : 0.0);
   ctx.summary.set("final_stop_reason", cmd.stop_reason);
@@ -424,7 +471,7 @@ const Registrar reg_can(
      {{"node_id", 1.0, "1", "CAN node id (id = node << 5 | cmd)", 0.0, 62.0},
       {"bitrate_kbps", 1000.0, "kbit/s", "bus bit rate for the budget check", 10.0, 1000.0},
       {"budget_pct", 50.0, "%", "share of the bus the telemetry may use", 1.0, 70.0},
-      {"rate_heartbeat_hz", 10.0, "Hz", "HEARTBEAT rate (0 = off)", 0.0, 1000.0},
+      {"rate_heartbeat_hz", 10.0, "Hz", "HEARTBEAT rate (at least 1 Hz)", 1.0, 1000.0},
       {"rate_currents_hz", 200.0, "Hz", "CURRENTS rate", 0.0, 1000.0},
       {"rate_voltages_hz", 100.0, "Hz", "VOLTAGES rate", 0.0, 1000.0},
       {"rate_speed_hz", 100.0, "Hz", "SPEED rate", 0.0, 1000.0},
@@ -433,6 +480,8 @@ const Registrar reg_can(
        0.0, 1000.0},
       {"rate_controller_hz", 0.0, "Hz", "CONTROLLER rate (nothing sent here)", 0.0, 1000.0},
       {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
+      {"rate_current_refs_hz", 100.0, "Hz", "CURRENT_REFS rate", 0.0, 1000.0},
+      {"rate_position_ref_hz", 50.0, "Hz", "POSITION_REF rate", 0.0, 1000.0},
       {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
       {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
       {"stop_decel_rad_s2", 200.0, "rad/s^2", "speed ramp of a safe stop", 0.01, 1e6},

@@ -131,7 +131,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static mc_param_srv_t srv;
   require(mc_param_srv_init(&srv, &p, &d, &fake.board, &store, static_cast<uint8_t>(boot)) == 0);
   mc_can_cmd_attach_params(&c, &srv);
-  const mc_telemetry_src_t src{&d, &c, nullptr};
+  const mc_telemetry_src_t src{&d, &c, nullptr, nullptr};
 
   for (size_t k = 0; k + 12 <= size; k += 12) {
     const uint8_t* r = data + k;
@@ -147,9 +147,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       for (unsigned i = 0; i < MC_HAL_CAN_FD_MAX_LEN; ++i) f.data[i] = r[4 + (i % 8u)];
       check_unpack(f);
       const uint32_t rejected = c.rx_rejected;
+      const uint32_t limited = c.reply_limited;
       const mc_can_err_t e = mc_can_cmd_handle(&c, &f, &fake.can_dev);
       require(e == MC_CAN_ERR_NONE || e == MC_CAN_ERR_IGNORED ||
-              (e >= MC_CAN_ERR_UNKNOWN_CMD && e <= MC_CAN_ERR_FORMAT));
+              (e >= MC_CAN_ERR_UNKNOWN_CMD && e <= MC_CAN_ERR_HEARTBEAT_MIN));
+      // a rejection is answered unless the reply rate limit took it
+      const bool limited_now = c.reply_limited != limited;
       const bool rej = (e != MC_CAN_ERR_NONE && e != MC_CAN_ERR_IGNORED);
       require(c.rx_rejected == rejected + (rej ? 1u : 0u));
       const bool param_req = e == MC_CAN_ERR_NONE && mc_can_id_cmd(f.id) == MC_CAN_CMD_PARAM_REQ;
@@ -168,7 +171,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         require(m == MC_CAN_MSG_CMD_ERROR && v[MC_CAN_CMD_ERROR_ERROR] == static_cast<float>(e));
         ++replies;
       }
-      require(replies == (rej ? 1u : 0u));
+      require(replies == ((rej && !limited_now) ? 1u : 0u));
+      require(!limited_now || rej);
       require(param_replies == (param_req ? 1u : 0u));
     } else if (op == 2u) {
       const unsigned n = 1u + (r[0] >> 2);

@@ -63,4 +63,49 @@ kill -INT "$CD"; kill -TERM "$REC"
 wait "$CD" "$REC" 2>/dev/null
 echo $? > record.rc
 for f in scan status config monitor calibrate run record; do say "$f (exit $(cat $f.rc)): $(tail -c 600 $f.out)"; done
+
+# Parameters over CAN against the firmware's parameter service: a SIL whose
+# settings form a valid parameter set (PWM 5 kHz, CAN tick 1 kHz) with a
+# flash file. config get, set + apply + save, get again; a value outside
+# the table sent past mdtool's own check (the drive must refuse it RANGE
+# and keep its value); then a second boot on the same flash reads the saved
+# value back (boot STORED).
+SIMCFG=(--set realtime=1 --set pwm_hz=5000 --set slow_loop_div=5 --set substeps=1 --set bw_hz=50
+        --set speed_pll_bw_rad_s=500)
+MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN/cfg1" --duration 40 --flash cfg.flash \
+  "${SIMCFG[@]}" > cfg_mcsim1.out 2>&1 &
+SIM=$!; pids+=("$SIM")
+# the drive is up when its first HEARTBEAT (id 0x021) is on the bus
+timeout 120 candump -n 1 "$IF,021:7FF" > /dev/null 2>&1 || { say "no heartbeat from the parameter SIL"; cat cfg_mcsim1.out; exit 1; }
+cat > steps_cfg.txt <<EOS
+cfg_get1 config get speed_max_rad_s $B --timeout 5
+cfg_set config set speed_max_rad_s=123.5 --save $B --timeout 5
+cfg_get2 config get speed_max_rad_s $B --timeout 5
+EOS
+"$PY" "$ROOT/tests/can/vm/mdtool_batch.py" steps_cfg.txt > batch_cfg.out 2>&1
+"$PY" - "$IF" > cfg_refuse.out 2>&1 <<'PYEOF'
+import struct, sys
+import can
+from mdtool.can.client import Drive, Refused
+from mdtool.can.dbc import load_db
+from mdtool.can.params import ParamTable
+p = ParamTable().get("speed_max_rad_s")
+raw = struct.unpack("<I", struct.pack("<f", 20000.0))[0]  # table range 0.1 .. 10000
+with can.Bus(interface="socketcan", channel=sys.argv[1]) as bus:
+    d = Drive(bus, load_db(), node=1, timeout=5.0)
+    try:
+        d.param("WRITE", p["id"], raw)
+        print("status OK (not refused)")
+    except Refused as e:
+        print(f"status {e.status}")
+    v = struct.unpack("<f", struct.pack("<I", d.param("READ", p["id"])))[0]
+    print(f"after: {v:.6g}")
+PYEOF
+echo $? > cfg_refuse.rc
+# TERM (a background job of a non-interactive shell ignores INT); the
+# flash file holds every program call already
+kill -TERM "$SIM"; wait "$SIM" 2>/dev/null
+MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN/cfg2" --duration 1 --flash cfg.flash \
+  "${SIMCFG[@]}" > cfg_mcsim2.out 2>&1; echo $? > cfg_mcsim2.rc
+for f in cfg_get1 cfg_set cfg_get2 cfg_refuse cfg_mcsim2; do say "$f (exit $(cat $f.rc)): $(tail -c 400 $f.out)"; done
 exit 0

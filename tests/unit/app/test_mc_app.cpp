@@ -195,7 +195,9 @@ TEST_F(McApp, ReceiveInterruptDropsForeignIdsAndCountsOverflow)
     while (pushed < MC_APP_RX_RING_LEN + 3u) {
         for (uint32_t k = 0; k < MC_HAL_FAKE_CAN_QUEUE_LEN && pushed < MC_APP_RX_RING_LEN + 3u;
              ++k, ++pushed) {
-            ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &f_own));
+            // a new keep-alive counter each time: a repeated one is STALE
+            const mc_hal_can_frame_t f_next = Frame(own, {static_cast<uint8_t>(pushed + 1u)});
+            ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &f_next));
         }
         mc_app_can_rx_isr(&app);
     }

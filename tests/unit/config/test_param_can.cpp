@@ -286,7 +286,7 @@ TEST_F(ParamCan, SaveSurvivesRebootNodeIdOnlyAfterReset)
 TEST_F(ParamCan, HeartbeatSaysWhenDefaultsWereLoaded)
 {
     float v[MC_CAN_NSIG_MAX] = {0};
-    const mc_telemetry_src_t src = {&d, &c, nullptr};
+    const mc_telemetry_src_t src = {&d, &c, nullptr, nullptr};
     ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
     EXPECT_EQ(static_cast<float>(MC_CAN_VAL_CFG_STATUS_EMPTY), v[MC_CAN_HEARTBEAT_CFG_STATUS]);
     std::memset(mem.data(), 0x00, 64); // garbage where a record would start

@@ -166,6 +166,10 @@ def cmd_run(a):
             n["frames"] += 1
             if name == "SPEED" and a.verbose:
                 print(f"omega {vals['omega_m_rad_s']:.3f} rad/s (ref {vals['omega_ref_rad_s']:.3f})")
+            if name == "POSITION" and a.verbose:
+                print(f"theta {vals['theta_m_rad']:.4f} rad (multi-turn)")
+            if vals.get("sat") == 1 and a.verbose:
+                print(f"{name}: a value did not fit its signal (sat)")
         hb = s.drive.run(a.mode, a.setpoint, a.duration, i_d=a.id, period=a.keepalive, on_frame=on_frame,
                          settle=a.settle, settle_timeout=a.settle_timeout)
         hb_after = s.drive.wait_for(lambda n, v: n == "HEARTBEAT" and v["enabled"] == 0, a.timeout,
@@ -315,8 +319,10 @@ def add_parsers(sub):
     p.set_defaults(fn=cmd_config)
 
     p = sub.add_parser("run", help="run a mode with a setpoint; the keep-alive is sent for you")
-    p.add_argument("mode", choices=["current", "speed"])
-    p.add_argument("setpoint", type=float, help="current: i_q [A]; speed: [rad/s]")
+    p.add_argument("mode", choices=["current", "speed", "position"])
+    p.add_argument("setpoint", type=float,
+                   help="current: i_q [A]; speed: [rad/s]; position: multi-turn target [rad] from the "
+                        "position at enable")
     p.add_argument("--id", type=float, default=0.0, help="current mode: i_d [A]")
     p.add_argument("--duration", type=float, default=1.0, help="[s] (then disable)")
     p.add_argument("--keepalive", type=float, default=0.05, help="keep-alive period [s]")

@@ -128,24 +128,30 @@ class Drive:
         seconds, so it holds however slowly the drive's clock runs against
         this host's (a simulated drive on a busy machine)."""
         mode = mode.upper()
-        if mode not in ("CURRENT", "SPEED"):
-            raise UsageError(f"mode {mode.lower()!r}: current or speed")
+        if mode not in ("CURRENT", "SPEED", "POSITION"):
+            raise UsageError(f"mode {mode.lower()!r}: current, speed or position")
         if settle is not None and not (settle > 0 and math.isfinite(settle)):
             raise UsageError(f"settle {settle!r}: a tolerance > 0")
-        code = {"CURRENT": 1, "SPEED": 2}[mode]
-        meas = ("SPEED", "omega_m_rad_s") if mode == "SPEED" else ("CURRENTS", "i_q_a")
+        code = {"CURRENT": 1, "SPEED": 2, "POSITION": 3}[mode]
+        meas = {"SPEED": ("SPEED", "omega_m_rad_s"), "CURRENT": ("CURRENTS", "i_q_a"),
+                "POSITION": ("POSITION", "theta_m_rad")}[mode]
 
         def ref():
             if mode == "CURRENT":
                 self.send("SET_CURRENT_REF", i_d_ref_a=i_d, i_q_ref_a=setpoint)
-            else:
+            elif mode == "SPEED":
                 self.send("SET_SPEED_REF", omega_ref_rad_s=setpoint)
+            else:  # multi-turn target [rad], in POSITION.theta_m_rad's frame
+                self.send("SET_POSITION_REF", theta_ref_rad=setpoint)
         self.send("SET_CONTROL_MODE", control_mode=code)
         self.wait_for(lambda n, v: self.check_cmd_error(n, v, "SET_CONTROL_MODE") or
                       (n == "HEARTBEAT" and v["control_mode"] == mode), self.timeout,
                       f"HEARTBEAT in control mode {mode}")
-        ref()
+        # a reference is refused while disabled (it would be a step on
+        # enable): enable starts from the present state, then the setpoint
         self.send("SET_ENABLE", enable=1)
+        self.host_heartbeat()
+        ref()
         last_hb = None
         self.last_measured = None
         inside = 0
@@ -173,7 +179,7 @@ class Drive:
                 if d is None:
                     continue
                 name, vals = d
-                for c in ("SET_ENABLE", "SET_CURRENT_REF", "SET_SPEED_REF"):
+                for c in ("SET_ENABLE", "SET_CURRENT_REF", "SET_SPEED_REF", "SET_POSITION_REF"):
                     self.check_cmd_error(name, vals, c)
                 if name == "HEARTBEAT":
                     last_hb = vals
@@ -185,7 +191,7 @@ class Drive:
                 if on_frame:
                     on_frame(name, vals)
         finally:
-            self.send("SET_ENABLE", enable=0)
+            self.send("DISABLE")
         return last_hb
 
 
