@@ -41,6 +41,7 @@
 
 #include "mc_app.h"
 #include "mc_board.h"
+#include "mc_board_comm.h"
 #include "mc_board_f405.h"
 #include "mc_clock.h"
 #include "mc_cortexm.h"
@@ -84,6 +85,7 @@ typedef struct drive_board {
     mc_f405_can_filter_t node_filter[1];
     mc_params_t defaults;
     mc_app_cfg_t app;
+    mc_comm_can_cfg_t comm;
 } drive_board_t;
 
 static drive_board_t g_board;
@@ -244,6 +246,12 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
     b->app.set_rx_filter = set_node_filter;
     b->app.filter_ctx = b;
     return &b->app;
+}
+
+const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p)
+{
+    mc_board_comm_cfg_from(&MC_BOARD_DESC, p, &g_board.comm);
+    return &g_board.comm;
 }
 
 const mc_drive_cfg_t *mc_board_drive_cfg(void)

@@ -55,12 +55,21 @@ void PendSV_Handler(void);
  * app/ and the image's main own the statically allocated state). */
 static mc_drive_t g_drive MC_FAST_DATA;
 static mc_app_t g_app;
+static mc_comm_t g_comm;         /* commissioning's state (one run at a time) */
+static mc_comm_can_t g_comm_can; /* its CAN binding */
 static bool g_app_on;
 static volatile bool g_running;
 
 /* Boards without an application binding (the PIL board) keep this one. */
 __attribute__((weak)) const mc_app_cfg_t *mc_board_app_cfg(void)
 {
+    return NULL;
+}
+
+/* Boards without commissioning (the PIL board) keep this one. */
+__attribute__((weak)) const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p)
+{
+    (void)p;
     return NULL;
 }
 
@@ -119,6 +128,15 @@ int main(void)
         const uint32_t aerr = mc_app_start(&g_app, &g_drive, hal, hal->can, true);
         if (aerr != MC_APP_CFG_OK) {
             mc_board_halt((g_app.drive_err != 0u) ? g_app.drive_err : MC_DRIVE_CFG_ERR_NULL);
+        }
+        /* Commissioning over CAN where the board offers it; a configuration
+         * it refuses leaves it out (COMMISSION_CMD then answers UNSUPPORTED). */
+        const mc_comm_can_cfg_t *comm_cfg = mc_board_comm_cfg(&g_app.params);
+        /* cppcheck-suppress knownConditionTrueFalse ; the board's strong symbol replaces the weak NULL */
+        if ((comm_cfg != NULL) &&
+            (mc_comm_can_init(&g_comm_can, comm_cfg, &g_comm, &g_drive,
+                              g_app.params_valid ? &g_app.srv : NULL) == MC_COMM_CAN_CFG_OK)) {
+            mc_app_attach_commission(&g_app, &g_comm_can);
         }
         g_app_on = true;
     } else {

@@ -39,6 +39,12 @@ const mc_drive_cfg_t *mc_board_drive_cfg(void);
  *  mc_board_drive_cfg and the board's own command path. */
 const mc_app_cfg_t *mc_board_app_cfg(void);
 
+/** Commissioning over CAN for this board, from the booted parameters p
+ *  (test current and voltage from the board's sense range and lowest bus,
+ *  its dead time, the PWM period). NULL (the default of main.c, a weak
+ *  symbol; the PIL board): not offered, COMMISSION_CMD answers UNSUPPORTED. */
+const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p);
+
 /** Provided by main.c for the board's CAN receive interrupt: move the
  *  received frames into the application's ring (nothing before the
  *  application runs). */
