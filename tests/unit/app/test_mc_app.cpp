@@ -6,6 +6,8 @@
 // (no physical quantity is measured here).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cstring>
 #include <vector>
 
@@ -30,7 +32,7 @@ mc_hal_can_frame_t Frame(uint32_t id, std::vector<uint8_t> data, uint8_t flags =
     f.id = id;
     f.flags = flags;
     f.len = static_cast<uint8_t>(data.size());
-    std::memcpy(f.data, data.data(), data.size());
+    std::copy(data.begin(), data.end(), f.data); // an empty vector's data() may be NULL
     return f;
 }
 
