@@ -110,28 +110,6 @@ def calibrate(drive, i_test_a=0.0, v_test_max_v=0.0, speed_max_m_rad_s=0.0, time
     return col.summary()
 
 
-def wait_at_rest(drive, timeout, rest_rad_s=0.5, frames=3):
-    """After the flux test the rotor coasts. Enabling a mode into a turning
-    rotor starts the current loop from zero voltage against its back-EMF (an
-    over-current trip on a fast motor), so wait until `frames` SPEED frames
-    in a row show |omega_m| <= rest_rad_s. Returns the last speed seen [rad/s]
-    (None without SPEED telemetry); raises NoReply when it still turns after
-    `timeout` s."""
-    t_end = time.monotonic() + timeout
-    last, inside = None, 0
-    while inside < frames:
-        if time.monotonic() > t_end:
-            if last is None:
-                return None  # no SPEED telemetry: nothing to wait on
-            raise NoReply(f"the rotor still turns at {last:.3g} rad/s {timeout:g} s after commissioning")
-        d = drive.decode(drive.bus.recv(0.1))
-        if d is None or d[0] != "SPEED":
-            continue
-        last = d[1]["omega_m_rad_s"]
-        inside = inside + 1 if abs(last) <= rest_rad_s else 0
-    return last
-
-
 def abort(drive):
     drive.send("COMMISSION_CMD", action=0, i_test_a=0, v_test_max_v=0, speed_max_m_rad_s=0)
 

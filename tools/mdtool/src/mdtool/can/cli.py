@@ -228,7 +228,7 @@ def cmd_convert(a):
 
 
 def cmd_calibrate(a):
-    from .calibrate import ITEMS, calibrate, check_failed, wait_at_rest
+    from .calibrate import ITEMS, calibrate, check_failed
     from .errors import Refused
     from .params import fmt_value, from_raw
     table = _params(a)
@@ -272,10 +272,6 @@ def cmd_calibrate(a):
                 ch = "same" if v == old else "new"
             print(f"{res:<20}{shown:>14.6g}  {unit:<10}"
                   f"{fmt_value(p, old) if old is not None else '-':>14}{ch:>10}")
-        # the flux test leaves the rotor coasting: return when a run may start
-        w = wait_at_rest(d, a.progress_timeout)
-        if w is not None:
-            print(f"rotor at rest ({w:.3g} rad/s)")
         if not summ["staged"]:
             print("not staged: this drive has no parameter service (results shown only)")
             if a.save:
