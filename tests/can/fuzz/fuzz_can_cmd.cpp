@@ -80,7 +80,22 @@ void check_unpack(const mc_hal_can_frame_t& f) {
   float w[MC_CAN_NSIG_MAX];
   uint32_t m2;
   require(mc_can_proto_unpack(&r, &m2, w, MC_CAN_NSIG_MAX) == MC_CAN_ERR_NONE && m2 == m);
-  for (uint32_t i = 0; i < g.n_signals; ++i) require(w[i] == v[i]);
+  // A scaled signal wider than 24 bits (SET_POSITION_REF.theta_ref_rad: 32
+  // bits of 0.1 mrad) is carried as a float, whose spacing at |v| (2^-23 |v|
+  // per binade) reaches the 0.1 mrad step near 800 rad: the repack may then
+  // land on a neighbouring raw value. Tolerance: half a step (pack rounds to
+  // the raw grid) plus two float roundings (pack divides by the scale, unpack
+  // multiplies), each below 2^-24 |v| and so below one float spacing at |v|.
+  // Every signal of 24 bits or fewer must come back exactly.
+  for (uint32_t i = 0; i < g.n_signals; ++i) {
+    const mc_can_signal_t& s = g.signals[i];
+    if (s.length <= 24u) {
+      require(w[i] == v[i]);
+    } else {
+      const float ulp = std::nextafter(std::fabs(v[i]), INFINITY) - std::fabs(v[i]);
+      require(std::fabs(w[i] - v[i]) <= 0.5f * s.scale + 2.0f * ulp);
+    }
+  }
 }
 
 }  // namespace
