@@ -193,6 +193,41 @@ static mc_board_f405_t *B;
 static const mc_board_desc_t *DESC;
 static uint32_t g_enc;
 
+static float g_temp_v[2];
+
+/* Sensor temperature at pin voltage v (the board's table or cubic, as
+ * hal/stm32f405/mc_f405_adc.c converts it). */
+static float sensor_temp_c(const mc_f405_adc_temp_sensor_t *ts, float v)
+{
+    if (ts->n_table != 0u) {
+        const mc_f405_adc_temp_point_t *t = ts->p_table;
+        uint32_t k = 1u;
+        while (k < ts->n_table - 1u && v > t[k].v) {
+            k++;
+        }
+        return t[k - 1u].t_c + (v - t[k - 1u].v) * (t[k].t_c - t[k - 1u].t_c) / (t[k].v - t[k - 1u].v);
+    }
+    return ts->offset_c + v * (ts->slope_c_per_v + v * (ts->c2_c_per_v2 + v * ts->c3_c_per_v3));
+}
+
+/* The pin voltage of a sensor nearest 25 degC within its window. */
+static float room_temp_v(const mc_f405_adc_temp_sensor_t *ts)
+{
+    const float lo = (ts->n_table != 0u) ? ts->p_table[0].v : ts->v_min_v;
+    const float hi = (ts->n_table != 0u) ? ts->p_table[ts->n_table - 1u].v : ts->v_max_v;
+    float best = 0.5f * (lo + hi);
+    float err = 1e9f;
+    for (uint32_t k = 1u; k < 256u; k++) {
+        const float v = lo + (hi - lo) * (float)k / 256.0f;
+        const float e = mc_abs_f32(sensor_temp_c(ts, v) - 25.0f);
+        if (e < err) {
+            err = e;
+            best = v;
+        }
+    }
+    return best;
+}
+
 /* One conversion: phase currents of a 2 A vector at the encoder's electrical
  * angle plus 90 degrees, the bus at the middle of the board's window. */
 static void hw_sample(bool advance)
@@ -215,12 +250,9 @@ static void hw_sample(bool advance)
     g_regs.adc.JDR[a->rank_vbus] =
         (uint32_t)(vbus / (a->v_per_count * a->cfg.vbus_divider) + 0.5f);
     g_regs.adc.SR |= MC_F405_ADC_SR_JEOC;
-    /* The regular conversion of the thermistor being read: done, at the
-     * middle of the sensor's window. */
-    const mc_f405_adc_temp_sensor_t *ts =
-        (a->temp_slot == 0u) ? &a->cfg.temp_power_stage : &a->cfg.temp_motor;
-    const float tv = (ts->n_table != 0u) ? 0.5f * (ts->p_table[0].v + ts->p_table[ts->n_table - 1u].v)
-                                         : 0.5f * (ts->v_min_v + ts->v_max_v);
+    /* The regular conversion of the thermistor being read: done, at a
+     * room temperature. */
+    const float tv = (a->temp_slot == 0u) ? g_temp_v[0] : g_temp_v[1];
     g_regs.adc.DR = (uint32_t)(tv / a->v_per_count + 0.5f);
     g_regs.adc.SR |= MC_F405_ADC_SR_EOC;
 }
@@ -483,6 +515,8 @@ static int run(bool sensorless)
         return rc;
     }
     hw_idle_inputs();
+    g_temp_v[0] = room_temp_v(&B->adc.cfg.temp_power_stage);
+    g_temp_v[1] = room_temp_v(&B->adc.cfg.temp_motor);
     if (!sensorless) {
         check_filter();
     }
@@ -495,6 +529,12 @@ static int run(bool sensorless)
     send_cmd(MC_CAN_MSG_SET_SPEED_REF, ref, 1u);
     for (uint32_t k = 0u; k < WARMUP_PERIODS; k++) {
         if (k == 2u * D->cfg.slow_loop_div) {
+            /* The drive boots with OVERTEMP on a board whose thermistors are
+             * read in the slow loop (vesc6): the first slow step finds no
+             * conversion done yet (a finding of this bench, README). */
+            send_cmd(MC_CAN_MSG_CLEAR_FAULTS, on, 0u);
+        }
+        if (k == 4u * D->cfg.slow_loop_div) {
             /* after the mode has been handled (and its law attached) */
             send_cmd(MC_CAN_MSG_SET_ENABLE, on, 1u);
         }
