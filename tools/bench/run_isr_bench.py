@@ -31,7 +31,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from run_bench import run_image  # noqa: E402  (same folder)
+from run_bench import run_image  # same folder
 
 SYSCLK_HZ = 168e6
 PWM_HZ = (20e3, 40e3)
