@@ -65,20 +65,26 @@
 #include "mc_cortexm.h"
 #include "mc_ctrl_sensorless.h"
 
-#define TIM2_CR1 (*(volatile uint32_t *)0x40000000u)
-#define TIM2_EGR (*(volatile uint32_t *)0x40000014u)
-#define TIM2_CNT (*(volatile uint32_t *)0x40000024u)
-#define TIM2_PSC (*(volatile uint32_t *)0x40000028u)
-#define TIM2_ARR (*(volatile uint32_t *)0x4000002Cu)
+#define TIM2_CR1       (*(volatile uint32_t *)0x40000000u)
+#define TIM2_EGR       (*(volatile uint32_t *)0x40000014u)
+#define TIM2_CNT       (*(volatile uint32_t *)0x40000024u)
+#define TIM2_PSC       (*(volatile uint32_t *)0x40000028u)
+#define TIM2_ARR       (*(volatile uint32_t *)0x4000002Cu)
 #define ICSR_PENDSVCLR (1u << 27)
 
+#ifndef WARMUP_PERIODS
 #define WARMUP_PERIODS 2000u /* 100 ms: commands handled, loops settled */
-#define RUN_PERIODS    2000u /* 100 ms: 100 slow loops, 10 heartbeats */
-#define PART_CALLS     64u
-#define RX_FRAMES      64u
-#define SLOW_RUNS      200u /* slow loops with a full ring: every telemetry phase */
-#define I_VEC_A        2.0f
-#define ENC_STEP       3u /* counts per period: 0.37 rev/s at 2000 counts, 20 kHz */
+#endif
+#ifndef RUN_PERIODS
+#define RUN_PERIODS 2000u /* 100 ms: 100 slow loops, 10 heartbeats */
+#endif
+#define PART_CALLS 64u
+#define RX_FRAMES  64u
+#ifndef SLOW_RUNS
+#define SLOW_RUNS 200u /* slow loops with a full ring: every telemetry phase */
+#endif
+#define I_VEC_A  2.0f
+#define ENC_STEP 3u /* counts per period: 0.37 rev/s at 2000 counts, 20 kHz */
 
 /* ---- output ------------------------------------------------------------- */
 
@@ -205,7 +211,8 @@ static float sensor_temp_c(const mc_f405_adc_temp_sensor_t *ts, float v)
         while (k < ts->n_table - 1u && v > t[k].v) {
             k++;
         }
-        return t[k - 1u].t_c + (v - t[k - 1u].v) * (t[k].t_c - t[k - 1u].t_c) / (t[k].v - t[k - 1u].v);
+        return t[k - 1u].t_c +
+               (v - t[k - 1u].v) * (t[k].t_c - t[k - 1u].t_c) / (t[k].v - t[k - 1u].v);
     }
     return ts->offset_c + v * (ts->slope_c_per_v + v * (ts->c2_c_per_v2 + v * ts->c3_c_per_v3));
 }
@@ -247,8 +254,7 @@ static void hw_sample(bool advance)
         g_regs.adc.JDR[k] = (uint32_t)(a->offset_counts[p] + ph[p] / a->a_per_count[p] + 0.5f);
     }
     const float vbus = 0.5f * (DESC->vbus_min_v + DESC->vbus_max_v);
-    g_regs.adc.JDR[a->rank_vbus] =
-        (uint32_t)(vbus / (a->v_per_count * a->cfg.vbus_divider) + 0.5f);
+    g_regs.adc.JDR[a->rank_vbus] = (uint32_t)(vbus / (a->v_per_count * a->cfg.vbus_divider) + 0.5f);
     g_regs.adc.SR |= MC_F405_ADC_SR_JEOC;
     /* The regular conversion of the thermistor being read: done, at a
      * room temperature. */
@@ -341,13 +347,13 @@ static void part_adc(void)
 }
 static void part_pwm(void)
 {
-    g_sink = mc_hal_pwm3_set_duty(B->hal.pwm3, D->tm.foc.duty_a,
-                                  D->tm.foc.duty_b, D->tm.foc.duty_c);
+    g_sink =
+        mc_hal_pwm3_set_duty(B->hal.pwm3, D->tm.foc.duty_a, D->tm.foc.duty_b, D->tm.foc.duty_c);
 }
 static void part_law_pwm(void)
 {
-    g_sink = mc_hal_pwm3_set_duty(B->hal.pwm3, D->tm.ctrl_out.duty_a,
-                                  D->tm.ctrl_out.duty_b, D->tm.ctrl_out.duty_c);
+    g_sink = mc_hal_pwm3_set_duty(B->hal.pwm3, D->tm.ctrl_out.duty_a, D->tm.ctrl_out.duty_b,
+                                  D->tm.ctrl_out.duty_c);
 }
 static void part_mark(void)
 {
@@ -566,8 +572,7 @@ static int run(bool sensorless)
         }
         period(true);
     }
-    if (D->mode != want || D->faults != 0u ||
-        (sensorless && g_sls.phase != MC_CTRL_SLS_CLOSED)) {
+    if (D->mode != want || D->faults != 0u || (sensorless && g_sls.phase != MC_CTRL_SLS_CLOSED)) {
         out_kv("bad_mode", (uint32_t)D->mode);
         out_kv("faults", D->faults);
         return 21;
