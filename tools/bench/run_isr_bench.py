@@ -178,6 +178,10 @@ def main():
         if board != name:
             raise SystemExit(f"{elf}: image says board {board}, expected {name}")
         rep = board_report(board, rows, meta)
+        flt = rep["filter"]
+        if not (flt["filter_pass_ids"] == flt["filter_pass_own_ids"] == 32):
+            raise SystemExit(f"{board}: the node filter passes {flt}, not exactly this node's "
+                             "32 ids")
         rep["budget"] = budget(rep)
         boards.append(rep)
     report = {

@@ -400,14 +400,15 @@ def _mcu_cpu_budget(ctx, b):
                          f"{dl['can_rx']:g} µs",
                          f"{r['slow_full_ring']['max']} → {ld['slow']:g} % · {rt['slow']:g} / "
                          f"{dl['slow']:g} µs",
-                         f"{x['total_pct']:g} %", "all met" if x["deadlines_met"] else "**missed**"])
+                         f"{x['total_pct']:g} %", "all met" if x["deadlines_met"] else "**missed**",
+                         f"{bd['filter']['filter_pass_ids']} ({bd['filter']['filter_pass_own_ids']})"])
     return table(["board", "run",
                   "fast interrupt, 40 kHz: max instr → load · response / deadline",
                   f"CAN rx interrupt per frame, {b['boards'][0]['budget']['sensored']['can_frame_hz']:g}"
                   " frames/s: max instr → load · response / deadline",
                   "slow loop, 1 kHz, 16 frames + telemetry: max instr → load · response / deadline",
-                  "total load", "deadlines"], rows,
-                 ["---", "---", "---:", "---:", "---:", "---:", "---"])
+                  "total load", "deadlines", "ids of 2048 the node filter passes (this node's)"],
+                 rows, ["---", "---", "---:", "---:", "---:", "---:", "---", "---:"])
 
 
 # --- PI2D ----------------------------------------------------------------------
