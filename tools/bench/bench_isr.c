@@ -58,6 +58,7 @@
 #include <string.h>
 
 #include "bench_isr.h"
+#include "bench_out.h"
 #include "m4f/semihost.h"
 #include "math/mc_math.h"
 #include "mc_can_dbc.h"
@@ -88,39 +89,6 @@
 
 /* ---- output ------------------------------------------------------------- */
 
-static char g_line[320];
-static uint32_t g_pos;
-
-static void out_str(const char *s)
-{
-    while (*s != '\0' && g_pos + 1u < sizeof g_line) {
-        g_line[g_pos++] = *s++;
-    }
-    g_line[g_pos] = '\0';
-}
-
-static void out_u32(uint32_t v)
-{
-    char tmp[11];
-    int n = 0;
-    do {
-        tmp[n++] = (char)('0' + (char)(v % 10u));
-        v /= 10u;
-    } while (v != 0u);
-    while (n > 0) {
-        const char c[2] = {tmp[--n], '\0'};
-        out_str(c);
-    }
-}
-
-static void flush_line(void)
-{
-    out_str("\n");
-    mc_sh_write0(g_line);
-    g_pos = 0u;
-    g_line[0] = '\0';
-}
-
 typedef struct {
     uint32_t n, min, max, sum;
 } stat_t;
@@ -140,34 +108,34 @@ static void stat_add(stat_t *s, uint32_t v)
 /* {"board": .., "run": .., "part": .., "n": .., "min": .., "sum": .., "max": ..} */
 static void out_stat(const char *run, const char *part, const stat_t *s)
 {
-    out_str("{\"board\": \"");
-    out_str(MC_BENCH_BOARD);
-    out_str("\", \"run\": \"");
-    out_str(run);
-    out_str("\", \"part\": \"");
-    out_str(part);
-    out_str("\", \"n\": ");
-    out_u32(s->n);
-    out_str(", \"min\": ");
-    out_u32(s->min);
-    out_str(", \"sum\": ");
-    out_u32(s->sum);
-    out_str(", \"max\": ");
-    out_u32(s->max);
-    out_str("}");
-    flush_line();
+    bench_out_str("{\"board\": \"");
+    bench_out_str(MC_BENCH_BOARD);
+    bench_out_str("\", \"run\": \"");
+    bench_out_str(run);
+    bench_out_str("\", \"part\": \"");
+    bench_out_str(part);
+    bench_out_str("\", \"n\": ");
+    bench_out_u32(s->n);
+    bench_out_str(", \"min\": ");
+    bench_out_u32(s->min);
+    bench_out_str(", \"sum\": ");
+    bench_out_u32(s->sum);
+    bench_out_str(", \"max\": ");
+    bench_out_u32(s->max);
+    bench_out_str("}");
+    bench_out_flush();
 }
 
 static void out_kv(const char *key, uint32_t v)
 {
-    out_str("{\"board\": \"");
-    out_str(MC_BENCH_BOARD);
-    out_str("\", \"");
-    out_str(key);
-    out_str("\": ");
-    out_u32(v);
-    out_str("}");
-    flush_line();
+    bench_out_str("{\"board\": \"");
+    bench_out_str(MC_BENCH_BOARD);
+    bench_out_str("\", \"");
+    bench_out_str(key);
+    bench_out_str("\": ");
+    bench_out_u32(v);
+    bench_out_str("}");
+    bench_out_flush();
 }
 
 /* ---- counting ----------------------------------------------------------- */
