@@ -377,6 +377,10 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
     p_drv->temp.power_stage_temp_c = 0.0f;
     p_drv->temp.motor_temp_c = 0.0f;
     p_drv->temp.valid_mask = 0u;
+    p_drv->temp.absent_mask =
+        ((c->temp_power_stage.channel == MC_F405_ADC_CH_NONE) ? MC_HAL_ADC_TEMP_VALID_POWER_STAGE
+                                                              : 0u) |
+        ((c->temp_motor.channel == MC_F405_ADC_CH_NONE) ? MC_HAL_ADC_TEMP_VALID_MOTOR : 0u);
     p_drv->temp_running = false;
     p_drv->temp_slot = (c->temp_power_stage.channel != MC_F405_ADC_CH_NONE) ? 0u : 1u;
     have_temp = (c->temp_power_stage.channel != MC_F405_ADC_CH_NONE) ||

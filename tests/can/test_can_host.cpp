@@ -183,7 +183,7 @@ TEST(SocketCan, AppStopsTheDriveOnBusOffFromErrorFrames) {
   ASSERT_EQ(0, mc_hal_fake_config_default(&fc));
   static mc_hal_fake_t fake{};
   ASSERT_EQ(0, mc_hal_fake_init(&fake, &fc));
-  fake.adc_temp = mc_hal_adc_temp_t{25.0f, 25.0f, MC_HAL_ADC_TEMP_VALID_ALL};
+  fake.adc_temp = mc_hal_adc_temp_t{25.0f, 25.0f, MC_HAL_ADC_TEMP_VALID_ALL, 0u};
   ErrorFrameCan can;
   can.inner = fake.board.can;
   can.dev = mc_hal_can_t{&ops, &can};

@@ -438,14 +438,6 @@ static int image_setup(bool sensorless)
         return 10;
     }
     mc_app_cfg_t *app_cfg = bench_board_app_cfg();
-    /* A board without a motor thermistor (odrive36, vesc6) never has both
-     * temperatures valid: with the table's temp_max_c the drive's slow step
-     * raises OVERTEMP at once (a finding of this bench, README). Off here
-     * (temp_max_c 0), so that the drive runs: the slow step then does not
-     * read the temperatures. */
-    if (DESC->temp_motor.channel == MC_F405_ADC_CH_NONE) {
-        bench_board_defaults()->temp_max_c = 0.0f;
-    }
     if (sensorless) {
         if (sls_setup(app_cfg->defaults) != 0u) {
             return 11;
@@ -502,12 +494,6 @@ static int run(bool sensorless)
     send_cmd(MC_CAN_MSG_SET_CONTROL_MODE, mode, 1u);
     send_cmd(MC_CAN_MSG_SET_SPEED_REF, ref, 1u);
     for (uint32_t k = 0u; k < WARMUP_PERIODS; k++) {
-        if (k == 2u * D->cfg.slow_loop_div) {
-            /* The drive boots with OVERTEMP on a board whose thermistors are
-             * read in the slow loop (vesc6): the first slow step finds no
-             * conversion done yet (a finding of this bench, README). */
-            send_cmd(MC_CAN_MSG_CLEAR_FAULTS, on, 0u);
-        }
         if (k == 4u * D->cfg.slow_loop_div) {
             /* after the mode has been handled (and its law attached) */
             send_cmd(MC_CAN_MSG_SET_ENABLE, on, 1u);

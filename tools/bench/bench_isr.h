@@ -45,8 +45,6 @@ const mc_board_desc_t *bench_board_desc(void);
 /** The board's application configuration (mc_board_app_cfg's result,
  *  writable: the bench plugs a speed law into it). */
 mc_app_cfg_t *bench_board_app_cfg(void);
-/** The board's defaults (what boots: the store is empty), writable. */
-mc_params_t *bench_board_defaults(void);
 
 /* ---- bench_isr_main.c (the image's main) ---- */
 

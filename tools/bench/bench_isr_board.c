@@ -59,8 +59,3 @@ mc_app_cfg_t *bench_board_app_cfg(void)
     (void)mc_board_app_cfg();
     return &g_board.app;
 }
-
-mc_params_t *bench_board_defaults(void)
-{
-    return &g_board.defaults;
-}

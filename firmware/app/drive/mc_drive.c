@@ -549,6 +549,24 @@ int mc_drive_stop(mc_drive_t *d)
     return 0;
 }
 
+/* The temperatures, true when every sensor the board has gave a reading
+ * (a board without any gives none: false). An absent sensor's value reads
+ * as 0 degC, so it never trips or warns. */
+static bool read_temps(const mc_drive_t *d, mc_hal_adc_temp_t *t)
+{
+    if (mc_hal_adc_read_temp(d->hal->adc, t) != 0) {
+        return false;
+    }
+    const uint32_t fitted = MC_HAL_ADC_TEMP_VALID_ALL & ~t->absent_mask;
+    if ((fitted & MC_HAL_ADC_TEMP_VALID_POWER_STAGE) == 0u) {
+        t->power_stage_temp_c = 0.0f;
+    }
+    if ((fitted & MC_HAL_ADC_TEMP_VALID_MOTOR) == 0u) {
+        t->motor_temp_c = 0.0f;
+    }
+    return (fitted != 0u) && ((t->valid_mask & fitted) == fitted);
+}
+
 /* Slow-loop part of the controlled stop: warnings start one, standstill
  * (or its time limit) ends it. */
 static void stop_supervise(mc_drive_t *d, float slow_dt, const mc_hal_adc_temp_t *t, bool t_ok)
@@ -701,18 +719,20 @@ void mc_drive_slow_step(mc_drive_t *d)
     const float slow_dt = d->cfg.foc.dt_s * (float)d->cfg.slow_loop_div;
     mc_hal_adc_temp_t t = {0};
     bool t_ok = false;
-    if (d->cfg.temp_warn_c > 0.0f && d->cfg.temp_max_c <= 0.0f) {
-        t_ok = mc_hal_adc_read_temp(d->hal->adc, &t) == 0 &&
-               (t.valid_mask & MC_HAL_ADC_TEMP_VALID_ALL) == MC_HAL_ADC_TEMP_VALID_ALL;
+    if (d->cfg.temp_warn_c > 0.0f || d->cfg.temp_max_c > 0.0f) {
+        t_ok = read_temps(d, &t);
     }
     if (d->cfg.temp_max_c > 0.0f) {
-        const int rc = mc_hal_adc_read_temp(d->hal->adc, &t);
-        t_ok = rc == 0 && (t.valid_mask & MC_HAL_ADC_TEMP_VALID_ALL) == MC_HAL_ADC_TEMP_VALID_ALL;
-        /* Unreadable or invalid sensors count as too hot: the limit cannot
-         * be enforced without them. */
-        if (rc != 0 || (t.valid_mask & MC_HAL_ADC_TEMP_VALID_ALL) != MC_HAL_ADC_TEMP_VALID_ALL ||
-            !(t.power_stage_temp_c <= d->cfg.temp_max_c) ||
-            !(t.motor_temp_c <= d->cfg.temp_max_c)) {
+        /* A sensor without a reading for longer than the grace counts as too
+         * hot: the limit cannot be enforced without it. */
+        if (t_ok) {
+            d->temp_invalid_steps = 0u;
+        } else if (d->temp_invalid_steps <= MC_DRIVE_TEMP_INVALID_STEPS) {
+            d->temp_invalid_steps++; /* saturates one past the grace */
+        }
+        if (d->temp_invalid_steps > MC_DRIVE_TEMP_INVALID_STEPS ||
+            (t_ok && (!(t.power_stage_temp_c <= d->cfg.temp_max_c) ||
+                      !(t.motor_temp_c <= d->cfg.temp_max_c)))) {
             raise_fault(d, MC_DRIVE_FAULT_OVERTEMP);
         }
     }

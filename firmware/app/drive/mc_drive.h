@@ -106,7 +106,14 @@ typedef enum {
  * drive to a controlled stop (MC_DRIVE_MODE_STOPPING), then IDLE; CURRENT
  * and CTRL are refused while one is set (cleared by mc_drive_clear_faults
  * once the condition is gone). */
-#define MC_DRIVE_WARN_NONE     0u
+#define MC_DRIVE_WARN_NONE 0u
+/** Consecutive slow steps a fitted temperature sensor may be without a
+ *  reading before OVERTEMP trips: the STM32F405 board converts one
+ *  thermistor per slow step, so both have one after 2 steps from boot; 8
+ *  (8 ms at the 1 kHz slow rate) rides through that start and a single
+ *  disturbed conversion, far inside any thermal time constant. */
+#define MC_DRIVE_TEMP_INVALID_STEPS 8u
+
 #define MC_DRIVE_WARN_TEMP     (1u << 0) /**< power stage or motor above temp_warn_c */
 #define MC_DRIVE_WARN_VBUS_SAG (1u << 1) /**< DC bus below vbus_sag_v */
 #define MC_DRIVE_WARN_CAN_BUS \
@@ -295,7 +302,13 @@ typedef struct {
      * there they are off). */
     float omega_max_rad_s;    /**< over-speed trip, mechanical [rad/s]; also bounds
                                      the plausible encoder step (2x margin) */
-    float temp_max_c;         /**< over-temperature trip for power stage and motor [deg C] */
+    float temp_max_c;         /**< over-temperature trip for power stage and motor [deg C]:
+                                     a reading above it trips at once; a fitted
+                                     sensor without a reading (open, short, ADC
+                                     stuck) trips after MC_DRIVE_TEMP_INVALID_STEPS
+                                     slow steps; a sensor the board does not have
+                                     (HAL absent_mask) is not required, but a
+                                     board with none trips (limit unenforceable) */
     float stall_current_frac; /**< stall: |iq| >= this * i_max_a ... (0, 1] */
     float stall_speed_rad_s;  /**< ... while |omega_m| < this ... */
     float stall_time_s;       /**< ... for longer than this [s] */
@@ -420,6 +433,8 @@ typedef struct {
     float enc_rad_per_count;      /**< 2 pi / cpr (computed once per cpr, not per step) */
     float enc_max_step_counts;    /**< encoder-jump threshold per step [counts] */
     float stall_time_acc_s;       /**< time spent in the stall condition [s] */
+    uint32_t temp_invalid_steps;  /**< consecutive slow steps without a reading of
+                                       every fitted temperature sensor */
     uint32_t open_phase_trip;     /**< steps without conduction that trip (0: check off) */
     uint32_t open_phase_count[3]; /**< per phase: net steps without conduction */
     uint32_t open_phase_mask;     /**< phases found open (bit 0 = a), with the fault */

@@ -196,6 +196,14 @@ static void board_defaults(mc_params_t *p)
     p->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
     p->vbus_max_v = MC_BOARD_DESC.vbus_max_v;
     p->can_bitrate_bps = 500000u; /* the controller's rate (mc_board_f405.c) */
+    /* A board without any thermistor (the example board) cannot enforce a
+     * temperature limit: the drive would trip OVERTEMP at once with the
+     * table's temp_max_c, so the trip is off in its defaults (a user who
+     * sets it there gets OVERTEMP, the limit being unenforceable). */
+    if ((MC_BOARD_DESC.temp_power_stage.channel == MC_F405_ADC_CH_NONE) &&
+        (MC_BOARD_DESC.temp_motor.channel == MC_F405_ADC_CH_NONE)) {
+        p->temp_max_c = 0.0f;
+    }
 }
 
 const mc_app_cfg_t *mc_board_app_cfg(void)

@@ -172,6 +172,7 @@ int PmsmBoard::adc_read_temp(mc_hal_adc_temp_t* t) noexcept {
   t->power_stage_temp_c = 25.0f;
   t->motor_temp_c = 25.0f;
   t->valid_mask = MC_HAL_ADC_TEMP_VALID_ALL;
+  t->absent_mask = 0u;
   return 0;
 }
 

@@ -63,7 +63,11 @@ typedef struct mc_hal_adc_temp {
     float power_stage_temp_c; /**< power stage (FET / heat sink) [deg C] */
     float motor_temp_c;       /**< motor winding thermistor [deg C] */
     uint32_t valid_mask;      /**< MC_HAL_ADC_TEMP_VALID_* bits; a clear bit
-                                   means no sensor or open/short circuit */
+                                   means no reading: no sensor, none yet, or
+                                   open/short circuit */
+    uint32_t absent_mask;     /**< MC_HAL_ADC_TEMP_VALID_* bits of the sensors
+                                   this board does not have (0: both fitted);
+                                   the drive enforces its limit on the others */
 } mc_hal_adc_temp_t;
 
 typedef struct mc_hal_adc_ops {

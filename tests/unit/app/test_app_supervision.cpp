@@ -148,10 +148,60 @@ TEST_F(AppDriveSupervision, OverTemperatureAndInvalidSensor)
     mc_drive_slow_step(&d);
     EXPECT_EQ(MC_DRIVE_FAULT_OVERTEMP, d.faults) << "motor winding too hot";
 
+    // A fitted sensor without a reading: tolerated for the grace (a board
+    // converts one thermistor per slow step, so right after boot one has
+    // none yet), then it trips: the limit cannot be enforced without it.
     InitDrive();
     ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 20.0f, 20.0f, MC_HAL_ADC_TEMP_VALID_POWER_STAGE));
+    for (uint32_t k = 0; k < MC_DRIVE_TEMP_INVALID_STEPS; ++k)
+        mc_drive_slow_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults) << "within the grace";
     mc_drive_slow_step(&d);
     EXPECT_EQ(MC_DRIVE_FAULT_OVERTEMP, d.faults) << "a missing reading cannot be trusted";
+
+    // A reading that comes back within the grace restarts it.
+    InitDrive();
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 20.0f, 20.0f, 0u));
+    for (uint32_t k = 0; k < MC_DRIVE_TEMP_INVALID_STEPS; ++k)
+        mc_drive_slow_step(&d);
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 20.0f, 20.0f, MC_HAL_ADC_TEMP_VALID_ALL));
+    mc_drive_slow_step(&d);
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 20.0f, 20.0f, 0u));
+    for (uint32_t k = 0; k < MC_DRIVE_TEMP_INVALID_STEPS; ++k)
+        mc_drive_slow_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults) << "the grace counts consecutive steps";
+}
+
+TEST_F(AppDriveSupervision, TemperatureSensorTheBoardDoesNotHave)
+{
+    // ODrive v3.6: a power-stage thermistor, none on the motor. The motor
+    // channel is absent, not invalid: the drive runs and enforces the
+    // power stage's limit only (it used to trip OVERTEMP at the first slow
+    // step, so that board's image could never be enabled).
+    InitDrive();
+    fake.adc_temp.absent_mask = MC_HAL_ADC_TEMP_VALID_MOTOR;
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 40.0f, 0.0f, MC_HAL_ADC_TEMP_VALID_POWER_STAGE));
+    for (uint32_t k = 0; k < 10u * MC_DRIVE_TEMP_INVALID_STEPS; ++k)
+        mc_drive_slow_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
+    // an absent channel's value is ignored, whatever the HAL leaves in it
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 40.0f, 500.0f, MC_HAL_ADC_TEMP_VALID_POWER_STAGE));
+    mc_drive_slow_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 91.0f, 0.0f, MC_HAL_ADC_TEMP_VALID_POWER_STAGE));
+    mc_drive_slow_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_OVERTEMP, d.faults) << "the fitted sensor still trips at once";
+
+    // A board with no temperature sensor at all cannot enforce temp_max_c:
+    // it trips after the grace, as an unreadable sensor does.
+    InitDrive();
+    fake.adc_temp.absent_mask = MC_HAL_ADC_TEMP_VALID_ALL;
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 0.0f, 0.0f, 0u));
+    for (uint32_t k = 0; k < MC_DRIVE_TEMP_INVALID_STEPS; ++k)
+        mc_drive_slow_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
+    mc_drive_slow_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_OVERTEMP, d.faults);
 }
 
 TEST_F(AppDriveSupervision, StallAfterItsTime)

@@ -263,7 +263,8 @@ TEST_F(AdcBoard, TemperaturesAlternate)
 
     mc_hal_adc_temp_t t{};
     ASSERT_EQ(mc_hal_adc_read_temp(&drv.dev, &t), 0);
-    EXPECT_EQ(t.valid_mask, 0u); // nothing converted yet
+    EXPECT_EQ(t.valid_mask, 0u);  // nothing converted yet
+    EXPECT_EQ(t.absent_mask, 0u); // both sensors fitted
     EXPECT_EQ(adc.SQR3, 14u);
     EXPECT_NE(adc.CR2 & MC_F405_ADC_CR2_SWSTART, 0u);
 
@@ -349,6 +350,9 @@ TEST_F(AdcBoard, CubicTemperatureSensor)
     const double expect_c = 10.0 + 20.0 * v - 3.0 * v * v + 0.5 * v * v * v;
     EXPECT_EQ(t.valid_mask, MC_HAL_ADC_TEMP_VALID_POWER_STAGE);
     EXPECT_NEAR(t.power_stage_temp_c, expect_c, rel_tol(expect_c));
+    // no motor channel configured: reported absent (not fitted), which the
+    // drive does not require, unlike a fitted sensor without a reading
+    EXPECT_EQ(t.absent_mask, MC_HAL_ADC_TEMP_VALID_MOTOR);
 }
 
 // Table sensor: three points (0.5 V, 100 degC), (1.0 V, 60 degC), (2.0 V,
