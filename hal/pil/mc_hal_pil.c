@@ -101,6 +101,14 @@ void USART1_IRQHandler(void);
 void CAN1_RX0_IRQHandler(void);
 void HardFault_Handler(void);
 
+/* What the drive did to the bridge in a part of the period. */
+typedef struct {
+    uint32_t duty_set_count;
+    float duty[3]; /**< last accepted duties */
+    bool pwm_enabled;
+    uint32_t gate_kill_count;
+} pil_bridge_t;
+
 typedef struct {
     /* link */
     uint8_t rx[MC_PIL_MAX_FRAME];
@@ -140,10 +148,7 @@ typedef struct {
     uint32_t can_rx_overruns;
     /* the bridge when the application's slow work began */
     bool app_work_begun;
-    uint32_t drv_duty_set_count;
-    float drv_duty[3];
-    bool drv_pwm_enabled;
-    uint32_t drv_gate_kill_count;
+    pil_bridge_t drv;
 } pil_board_t;
 
 static pil_board_t g_pil;
@@ -639,15 +644,22 @@ void mc_board_apply_commands(mc_drive_t *d)
     g_pil.cmd_rc = (int32_t)rc;
 }
 
+static pil_bridge_t bridge_now(void)
+{
+    pil_bridge_t b;
+    b.duty_set_count = g_pil.duty_set_count;
+    b.duty[0] = g_pil.duty[0];
+    b.duty[1] = g_pil.duty[1];
+    b.duty[2] = g_pil.duty[2];
+    b.pwm_enabled = g_pil.pwm_enabled;
+    b.gate_kill_count = g_pil.gate_kill_count;
+    return b;
+}
+
 void mc_board_app_work_begin(void)
 {
     g_pil.app_work_begun = true;
-    g_pil.drv_duty_set_count = g_pil.duty_set_count;
-    g_pil.drv_duty[0] = g_pil.duty[0];
-    g_pil.drv_duty[1] = g_pil.duty[1];
-    g_pil.drv_duty[2] = g_pil.duty[2];
-    g_pil.drv_pwm_enabled = g_pil.pwm_enabled;
-    g_pil.drv_gate_kill_count = g_pil.gate_kill_count;
+    g_pil.drv = bridge_now();
     g_pil.duty_set_count = 0u;
     g_pil.gate_kill_count = 0u;
 }
@@ -655,31 +667,24 @@ void mc_board_app_work_begin(void)
 void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
 {
     mc_pil_out_t o;
+    /* Up to the application's slow work (all of it when none ran), and what
+     * the slow work did. */
+    const pil_bridge_t now = bridge_now();
+    const bool split = g_pil.app_work_begun;
+    const pil_bridge_t *drv = split ? &g_pil.drv : &now;
     o.seq = g_pil.meas.seq;
-    if (g_pil.app_work_begun) {
-        /* up to the application's slow work, and what it did */
-        o.duty_set_count = g_pil.drv_duty_set_count;
-        o.duty_a = g_pil.drv_duty[0];
-        o.duty_b = g_pil.drv_duty[1];
-        o.duty_c = g_pil.drv_duty[2];
-        o.pwm_enabled = g_pil.drv_pwm_enabled ? 1u : 0u;
-        o.gate_kill_count = g_pil.drv_gate_kill_count;
-        o.app_duty_set_count = g_pil.duty_set_count;
-        o.app_gate_kill_count = g_pil.gate_kill_count;
-    } else {
-        o.duty_set_count = g_pil.duty_set_count;
-        o.duty_a = g_pil.duty[0];
-        o.duty_b = g_pil.duty[1];
-        o.duty_c = g_pil.duty[2];
-        o.pwm_enabled = g_pil.pwm_enabled ? 1u : 0u;
-        o.gate_kill_count = g_pil.gate_kill_count;
-        o.app_duty_set_count = 0u;
-        o.app_gate_kill_count = 0u;
-    }
-    o.app_duty_a = g_pil.duty[0];
-    o.app_duty_b = g_pil.duty[1];
-    o.app_duty_c = g_pil.duty[2];
-    o.app_pwm_enabled = g_pil.pwm_enabled ? 1u : 0u;
+    o.duty_set_count = drv->duty_set_count;
+    o.duty_a = drv->duty[0];
+    o.duty_b = drv->duty[1];
+    o.duty_c = drv->duty[2];
+    o.pwm_enabled = drv->pwm_enabled ? 1u : 0u;
+    o.gate_kill_count = drv->gate_kill_count;
+    o.app_duty_set_count = split ? now.duty_set_count : 0u;
+    o.app_gate_kill_count = split ? now.gate_kill_count : 0u;
+    o.app_duty_a = now.duty[0];
+    o.app_duty_b = now.duty[1];
+    o.app_duty_c = now.duty[2];
+    o.app_pwm_enabled = now.pwm_enabled ? 1u : 0u;
     o.cmd_rc = g_pil.cmd_rc;
     o.mode = (uint32_t)d->mode;
     o.faults = d->faults;
