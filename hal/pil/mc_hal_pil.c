@@ -403,7 +403,7 @@ static int can_send(void *ctx, const mc_hal_can_frame_t *p_frame)
     if (rc != 0) {
         return rc;
     }
-    uint8_t buf[MC_PIL_MAX_FRAME];
+    uint8_t buf[MC_PIL_MAX_FRAME] = {0u};
     usart_send(buf, mc_pil_encode_can_tx(b->meas.seq, p_frame, buf, sizeof buf));
     return 0;
 }

@@ -654,7 +654,7 @@ int mc_pil_decode_can_rx(const uint8_t *buf, size_t n, mc_hal_can_frame_t *out)
     if (rc != MC_PIL_OK) {
         return rc;
     }
-    if ((size_t)buf[2] < 4u * CAN_HEAD_WORDS || !get_can(&r, (size_t)buf[2], out)) {
+    if ((size_t)buf[2] < (size_t)4u * CAN_HEAD_WORDS || !get_can(&r, (size_t)buf[2], out)) {
         return MC_PIL_ERR_LEN;
     }
     return MC_PIL_OK;
@@ -682,7 +682,7 @@ int mc_pil_decode_can_tx(const uint8_t *buf, size_t n, uint32_t *p_seq, mc_hal_c
     if (rc != MC_PIL_OK) {
         return rc;
     }
-    if ((size_t)buf[2] < 4u * (1u + CAN_HEAD_WORDS)) {
+    if ((size_t)buf[2] < (size_t)4u * (1u + CAN_HEAD_WORDS)) {
         return MC_PIL_ERR_LEN;
     }
     const uint32_t seq = get_u32(&r);
