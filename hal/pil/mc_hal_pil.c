@@ -20,6 +20,37 @@
  * -EBUSY enable while killed, one read per ADC sample), so the drive takes
  * the same decisions as in the software-in-the-loop run.
  *
+ * Two modes, chosen by the host at start-up (mc_pil_frame.h):
+ *   drive alone      (CFG): mc_board_app_cfg() returns NULL, main runs the
+ *                    drive on the received mc_drive_cfg_t, commands come in
+ *                    MEAS (tests/target/pil/test_pil_foc.cpp);
+ *   whole image      (PARAMS, APP): mc_board_app_cfg() binds the drive
+ *                    application (firmware/app/app/mc_app) as the drive
+ *                    boards do, with
+ *       CAN          over the link: CAN_RX frames go into a receive queue
+ *                    and pend CAN1_RX0, whose handler hands them to the
+ *                    application (mc_main_can_rx), as bxCAN's FIFO
+ *                    interrupt does on the board; every frame the
+ *                    application sends leaves at once as CAN_TX, tagged
+ *                    with the period. Send, receive and status answer as
+ *                    the SIL's hal_host::CandumpLogCan does (no bus errors,
+ *                    error-active, FD capable);
+ *       flash        RAM: QEMU does not model the F405's flash controller,
+ *                    so the configuration store runs on two 16 KiB sectors
+ *                    of SRAM with NOR semantics (hal/fake/mc_fake_flash.c),
+ *                    erased at boot; the geometry of the SIL's
+ *                    hal_host::FileFlash. A SAVE works within the run and is
+ *                    gone at the next boot;
+ *       watchdog     none (NULL), as in the SIL rig: QEMU's IWDG is not the
+ *                    point here and a lock-step run may stall on the host;
+ *       commissioning and the control-law plug-ins: not bound (main's weak
+ *                    mc_board_comm_cfg; no speed or position law: SPEED
+ *                    mode runs the application's sensored speed loop).
+ *     main.c calls mc_board_app_work_begin() between the drive's slow step
+ *     and the application's slow work: what the bridge did up to there is
+ *     applied before the host integrates the period, what the slow work did
+ *     after it (OUT app_*), which is where the SIL rig runs the slow work.
+ *
  * Emulation only: link errors, the END frame and hard faults leave through
  * ARM semihosting (exit codes below).
  */
@@ -31,6 +62,8 @@
 
 #include "mc_board.h"
 #include "mc_cortexm.h"
+#include "mc_fake_flash.h"
+#include "mc_params.h"
 #include "mc_pil_frame.h"
 #include "mc_stm32f405.h"
 
@@ -56,9 +89,25 @@
 #define PIL_BAUD             115200u
 
 #define PRIO_LINK_RX 1u
+#define PRIO_CAN_RX  8u /* as the drive board's CAN1_RX0 */
+
+/* The configuration store's RAM flash: hal_host::FileFlash's geometry. */
+#define PIL_FLASH_SECTORS      2u
+#define PIL_FLASH_SECTOR_BYTES (16u * 1024u)
+/* Received CAN frames not yet taken by the application (a power of two). */
+#define PIL_CAN_RX_LEN 64u
 
 void USART1_IRQHandler(void);
+void CAN1_RX0_IRQHandler(void);
 void HardFault_Handler(void);
+
+/* What the drive did to the bridge in a part of the period. */
+typedef struct {
+    uint32_t duty_set_count;
+    float duty[3]; /**< last accepted duties */
+    bool pwm_enabled;
+    uint32_t gate_kill_count;
+} pil_bridge_t;
 
 typedef struct {
     /* link */
@@ -84,10 +133,26 @@ typedef struct {
     mc_hal_encoder_t enc;
     mc_hal_tick_t tick;
     mc_hal_fault_t fault;
+    mc_hal_can_t can;
     mc_hal_t hal;
+    /* whole-image mode */
+    bool app_mode;
+    bool have_app;
+    mc_params_t defaults;
+    mc_app_cfg_t app;
+    mc_fake_flash_t flash;
+    /* CAN receive queue: written by the link interrupt, read by CAN1_RX0 */
+    mc_hal_can_frame_t can_rx[PIL_CAN_RX_LEN];
+    uint32_t can_rx_head;
+    uint32_t can_rx_tail;
+    uint32_t can_rx_overruns;
+    /* the bridge when the application's slow work began */
+    bool app_work_begun;
+    pil_bridge_t drv;
 } pil_board_t;
 
 static pil_board_t g_pil;
+static uint8_t g_flash_mem[PIL_FLASH_SECTORS * PIL_FLASH_SECTOR_BYTES];
 
 /* ---- semihosting (emulation only) -------------------------------------- */
 
@@ -176,6 +241,18 @@ static void handle_frame(int type)
         g_pil.adc_fresh = true;
         /* The conversion is "complete": run the fast loop as the ADC would. */
         mc_nvic_set_pending(MC_IRQ_ADC);
+    } else if (type == (int)MC_PIL_TYPE_CAN_RX && g_pil.app_mode) {
+        mc_hal_can_frame_t f;
+        if (mc_pil_decode_can_rx(g_pil.rx, n, &f) != MC_PIL_OK) {
+            sh_exit(PIL_EXIT_FRAME_ERROR);
+        }
+        if (g_pil.can_rx_tail - g_pil.can_rx_head < PIL_CAN_RX_LEN) {
+            g_pil.can_rx[g_pil.can_rx_tail % PIL_CAN_RX_LEN] = f;
+            __atomic_store_n(&g_pil.can_rx_tail, g_pil.can_rx_tail + 1u, __ATOMIC_RELEASE);
+        } else {
+            g_pil.can_rx_overruns++; /* as a full FIFO: counted, reported by status */
+        }
+        mc_nvic_set_pending(MC_IRQ_CAN1_RX0);
     } else if (type == (int)MC_PIL_TYPE_END) {
         int32_t code = 0;
         (void)mc_pil_decode_end(g_pil.rx, n, &code);
@@ -209,6 +286,16 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
         return (int)b->meas.adc_rc;
     }
     *p_sample = b->meas.adc;
+    return 0;
+}
+
+static int adc_read_temp(void *ctx, mc_hal_adc_temp_t *p_temp)
+{
+    const pil_board_t *b = ctx;
+    if (b->meas.temp_rc != 0) {
+        return (int)b->meas.temp_rc;
+    }
+    *p_temp = b->meas.temp;
     return 0;
 }
 
@@ -308,7 +395,48 @@ static int fault_gate_release(void *ctx)
     return -EBUSY;
 }
 
-static const mc_hal_adc_ops_t k_adc_ops = {adc_read, NULL};
+/* CAN over the link: answers as hal_host::CandumpLogCan (the SIL's). */
+static int can_send(void *ctx, const mc_hal_can_frame_t *p_frame)
+{
+    const pil_board_t *b = ctx;
+    const int rc = mc_hal_can_frame_check(p_frame, true);
+    if (rc != 0) {
+        return rc;
+    }
+    uint8_t buf[MC_PIL_MAX_FRAME] = {0u};
+    usart_send(buf, mc_pil_encode_can_tx(b->meas.seq, p_frame, buf, sizeof buf));
+    return 0;
+}
+
+static int can_receive(void *ctx, mc_hal_can_frame_t *p_frame)
+{
+    pil_board_t *b = ctx;
+    const uint32_t tail = __atomic_load_n(&b->can_rx_tail, __ATOMIC_ACQUIRE);
+    if (tail == b->can_rx_head) {
+        return -EAGAIN;
+    }
+    *p_frame = b->can_rx[b->can_rx_head % PIL_CAN_RX_LEN];
+    __atomic_store_n(&b->can_rx_head, b->can_rx_head + 1u, __ATOMIC_RELEASE);
+    return 0;
+}
+
+static int can_get_status(void *ctx, mc_hal_can_status_t *p_status)
+{
+    const pil_board_t *b = ctx;
+    memset(p_status, 0, sizeof *p_status);
+    p_status->state = MC_HAL_CAN_STATE_ERROR_ACTIVE;
+    p_status->rx_overrun_count = b->can_rx_overruns;
+    p_status->fd_capable = true;
+    return 0;
+}
+
+void CAN1_RX0_IRQHandler(void)
+{
+    mc_main_can_rx();
+}
+
+static const mc_hal_can_ops_t k_can_ops = {can_send, can_receive, can_get_status};
+static const mc_hal_adc_ops_t k_adc_ops = {adc_read, adc_read_temp};
 static const mc_hal_pwm3_ops_t k_pwm3_ops = {pwm_set_duty, pwm_enable, pwm_disable, pwm_get_state};
 static const mc_hal_encoder_ops_t k_enc_ops = {enc_read};
 static const mc_hal_tick_ops_t k_tick_ops = {tick_read, tick_freq};
@@ -332,7 +460,8 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
     g_pil.hal.pwm3 = &g_pil.pwm3;
     g_pil.hal.pwm2 = NULL;
     g_pil.hal.encoder = &g_pil.enc;
-    g_pil.hal.can = NULL;
+    g_pil.can = (mc_hal_can_t){&k_can_ops, &g_pil};
+    g_pil.hal.can = NULL; /* set in the whole-image mode */
     g_pil.hal.tick = &g_pil.tick;
     g_pil.hal.fault = &g_pil.fault;
 
@@ -344,30 +473,122 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
     return &g_pil.hal;
 }
 
-const mc_drive_cfg_t *mc_board_drive_cfg(void)
+/* Receive one whole frame by polling (before interrupts run). */
+static int poll_frame(void)
 {
-    /* The receiver is on (mc_board_init): tell the host, which waits for
-     * this before it sends CFG. Then, before interrupts, poll for CFG. */
-    uint8_t hello[MC_PIL_HEADER_LEN + MC_PIL_CRC_LEN] = {0u};
-    usart_send(hello, mc_pil_encode_hello(hello, sizeof hello));
-    while (!g_pil.have_cfg) {
+    for (;;) {
         if ((USART_SR & USART_SR_RXNE) == 0u) {
             continue;
         }
         const int type = rx_byte((uint8_t)(USART_DR & 0xFFu));
-        if (type == 0) {
-            continue;
+        if (type != 0) {
+            return type;
         }
-        const size_t n = g_pil.rx_len;
-        g_pil.rx_len = 0u;
-        if (type != (int)MC_PIL_TYPE_CFG ||
-            mc_pil_decode_cfg(g_pil.rx, n, &g_pil.cfg) != MC_PIL_OK) {
-            sh_write0("pil: expected a CFG frame\n");
-            sh_exit(PIL_EXIT_FRAME_ERROR);
-        }
-        g_pil.have_cfg = true;
     }
-    return &g_pil.cfg;
+}
+
+static void setup_fail(const char *what)
+{
+    sh_write0(what);
+    sh_exit(PIL_EXIT_FRAME_ERROR);
+}
+
+/* Whole-image mode: PARAMS frames onto the table's defaults, then APP. */
+static void receive_app_setup(int type)
+{
+    uint32_t ids[MC_PIL_PARAMS_MAX];
+    uint32_t raws[MC_PIL_PARAMS_MAX];
+    g_pil.defaults = mc_params_default;
+    while (type == (int)MC_PIL_TYPE_PARAMS) {
+        uint32_t n = 0u;
+        if (mc_pil_decode_params(g_pil.rx, g_pil.rx_len, ids, raws, &n) != MC_PIL_OK) {
+            setup_fail("pil: bad PARAMS frame\n");
+        }
+        for (uint32_t i = 0u; i < n; ++i) {
+            const mc_param_info_t *info = mc_param_find(ids[i], NULL);
+            if (info == NULL || mc_param_check_value(info, raws[i]) != MC_PARAM_OK) {
+                setup_fail("pil: unknown parameter or value out of range\n");
+            }
+            mc_param_set_raw(&g_pil.defaults, info, raws[i]);
+        }
+        g_pil.rx_len = 0u;
+        type = poll_frame();
+    }
+    mc_pil_app_t a;
+    if (type != (int)MC_PIL_TYPE_APP ||
+        mc_pil_decode_app(g_pil.rx, g_pil.rx_len, &a) != MC_PIL_OK) {
+        setup_fail("pil: expected an APP frame\n");
+    }
+    g_pil.rx_len = 0u;
+
+    mc_app_cfg_t *c = &g_pil.app;
+    memset(c, 0, sizeof *c);
+    c->defaults = &g_pil.defaults;
+    c->tm_budget_frac = a.tm_budget_frac;
+    for (uint32_t i = 0u; i < MC_PIL_TM_EXT_RATES; ++i) {
+        c->tm_ext_rate_hz[i] = (uint16_t)a.tm_ext_rate_hz[i];
+    }
+    c->speed.kp_a_s_rad = a.speed_kp_a_s_rad;
+    c->speed.ki_dt_a_s_rad = a.speed_ki_dt_a_s_rad;
+    c->speed.i_max_a = a.speed_i_max_a;
+    c->pwm_hz_fixed = a.pwm_hz_fixed;
+    c->slow_loop_div_fixed = a.slow_loop_div_fixed;
+    /* The tick counter's rate before the first period (mc_drive_init reads
+     * it for the control deadline); each MEAS brings it again. */
+    g_pil.meas.tick_hz = a.tick_hz;
+    /* An erased flash, as a new FileFlash file. */
+    static const uint32_t sector_bytes[PIL_FLASH_SECTORS] = {PIL_FLASH_SECTOR_BYTES,
+                                                             PIL_FLASH_SECTOR_BYTES};
+    memset(g_flash_mem, 0xFF, sizeof g_flash_mem);
+    if (mc_fake_flash_init(&g_pil.flash, g_flash_mem, sector_bytes, PIL_FLASH_SECTORS) == 0) {
+        c->flash = &g_pil.flash.dev;
+        c->flash_sectors[0] = 0u;
+        c->flash_sectors[1] = 1u;
+    }
+    c->wdg = NULL;
+    c->set_rx_filter = NULL;
+    g_pil.hal.can = &g_pil.can;
+    g_pil.app_mode = true;
+    g_pil.have_app = true;
+}
+
+/* Tell the host the receiver is on (mc_board_init), then, before
+ * interrupts, poll for the set-up: CFG (drive alone) or PARAMS/APP. */
+static void handshake(void)
+{
+    static bool done;
+    if (done) {
+        return;
+    }
+    done = true;
+    uint8_t hello[MC_PIL_HEADER_LEN + MC_PIL_CRC_LEN] = {0u};
+    usart_send(hello, mc_pil_encode_hello(hello, sizeof hello));
+    const int type = poll_frame();
+    if (type == (int)MC_PIL_TYPE_CFG) {
+        if (mc_pil_decode_cfg(g_pil.rx, g_pil.rx_len, &g_pil.cfg) != MC_PIL_OK) {
+            setup_fail("pil: bad CFG frame\n");
+        }
+        g_pil.rx_len = 0u;
+        g_pil.have_cfg = true;
+        return;
+    }
+    if (type == (int)MC_PIL_TYPE_PARAMS || type == (int)MC_PIL_TYPE_APP) {
+        receive_app_setup(type);
+        return;
+    }
+    setup_fail("pil: expected a CFG, PARAMS or APP frame\n");
+}
+
+const mc_app_cfg_t *mc_board_app_cfg(void)
+{
+    handshake();
+    return g_pil.have_app ? &g_pil.app : NULL;
+}
+
+const mc_drive_cfg_t *mc_board_drive_cfg(void)
+{
+    handshake();
+    return g_pil.have_cfg ? &g_pil.cfg : NULL;
 }
 
 static void send_ready(uint32_t err)
@@ -387,6 +608,10 @@ void mc_board_start(void)
     mc_nvic_set_priority(MC_IRQ_USART1, PRIO_LINK_RX);
     USART_CR1 |= USART_CR1_RXNEIE;
     mc_nvic_enable(MC_IRQ_USART1);
+    if (g_pil.app_mode) {
+        mc_nvic_set_priority(MC_IRQ_CAN1_RX0, PRIO_CAN_RX);
+        mc_nvic_enable(MC_IRQ_CAN1_RX0);
+    }
     if ((USART_SR & USART_SR_RXNE) != 0u) {
         mc_nvic_set_pending(MC_IRQ_USART1);
     }
@@ -419,16 +644,47 @@ void mc_board_apply_commands(mc_drive_t *d)
     g_pil.cmd_rc = (int32_t)rc;
 }
 
+static pil_bridge_t bridge_now(void)
+{
+    pil_bridge_t b;
+    b.duty_set_count = g_pil.duty_set_count;
+    b.duty[0] = g_pil.duty[0];
+    b.duty[1] = g_pil.duty[1];
+    b.duty[2] = g_pil.duty[2];
+    b.pwm_enabled = g_pil.pwm_enabled;
+    b.gate_kill_count = g_pil.gate_kill_count;
+    return b;
+}
+
+void mc_board_app_work_begin(void)
+{
+    g_pil.app_work_begun = true;
+    g_pil.drv = bridge_now();
+    g_pil.duty_set_count = 0u;
+    g_pil.gate_kill_count = 0u;
+}
+
 void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
 {
     mc_pil_out_t o;
+    /* Up to the application's slow work (all of it when none ran), and what
+     * the slow work did. */
+    const pil_bridge_t now = bridge_now();
+    const bool split = g_pil.app_work_begun;
+    const pil_bridge_t *drv = split ? &g_pil.drv : &now;
     o.seq = g_pil.meas.seq;
-    o.duty_set_count = g_pil.duty_set_count;
-    o.duty_a = g_pil.duty[0];
-    o.duty_b = g_pil.duty[1];
-    o.duty_c = g_pil.duty[2];
-    o.pwm_enabled = g_pil.pwm_enabled ? 1u : 0u;
-    o.gate_kill_count = g_pil.gate_kill_count;
+    o.duty_set_count = drv->duty_set_count;
+    o.duty_a = drv->duty[0];
+    o.duty_b = drv->duty[1];
+    o.duty_c = drv->duty[2];
+    o.pwm_enabled = drv->pwm_enabled ? 1u : 0u;
+    o.gate_kill_count = drv->gate_kill_count;
+    o.app_duty_set_count = split ? now.duty_set_count : 0u;
+    o.app_gate_kill_count = split ? now.gate_kill_count : 0u;
+    o.app_duty_a = now.duty[0];
+    o.app_duty_b = now.duty[1];
+    o.app_duty_c = now.duty[2];
+    o.app_pwm_enabled = now.pwm_enabled ? 1u : 0u;
     o.cmd_rc = g_pil.cmd_rc;
     o.mode = (uint32_t)d->mode;
     o.faults = d->faults;
@@ -445,6 +701,7 @@ void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
     o.slow_ran = slow_ran ? 1u : 0u;
     g_pil.duty_set_count = 0u;
     g_pil.gate_kill_count = 0u;
+    g_pil.app_work_begun = false;
 
     uint8_t buf[MC_PIL_MAX_FRAME];
     const size_t n = mc_pil_encode_out(&o, buf, sizeof buf);

@@ -1,5 +1,6 @@
 #include "foc_pil.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -26,6 +27,38 @@ FocPil::FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
   std::vector<uint8_t> buf = frame_buf();
   const std::size_t n = mc_pil_encode_cfg(&cfg, buf.data(), buf.size());
   link_.send(buf.data(), n);
+  expect_ready();
+}
+
+FocPil::FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
+               const PilAppSetup& setup)
+    : sil_(o), link_(link) {
+  const std::vector<uint8_t> hello = link_.receive_frame();
+  if (mc_pil_check_hello(hello.data(), hello.size()) != MC_PIL_OK) {
+    throw std::runtime_error("FocPil: expected HELLO from the target");
+  }
+  // Every parameter with a field, MC_PIL_PARAMS_MAX per frame.
+  std::vector<uint32_t> ids, raws;
+  for (const mc_param_info_t& info : mc_param_table) {
+    if (info.offset == MC_PARAM_NO_FIELD) continue;
+    ids.push_back(info.id);
+    raws.push_back(mc_param_get_raw(&setup.defaults, &info));
+  }
+  std::vector<uint8_t> buf = frame_buf();
+  for (std::size_t at = 0; at < ids.size(); at += MC_PIL_PARAMS_MAX) {
+    const auto k = static_cast<uint32_t>(std::min<std::size_t>(MC_PIL_PARAMS_MAX, ids.size() - at));
+    const std::size_t n =
+        mc_pil_encode_params(ids.data() + at, raws.data() + at, k, buf.data(), buf.size());
+    link_.send(buf.data(), n);
+  }
+  mc_pil_app_t app = setup.app;
+  (void)sil_.board().tick_freq(&app.tick_hz);  // this board's, whatever the caller gave
+  const std::size_t n = mc_pil_encode_app(&app, buf.data(), buf.size());
+  link_.send(buf.data(), n);
+  expect_ready();
+}
+
+void FocPil::expect_ready() {
   const std::vector<uint8_t> r = link_.receive_frame();
   if (mc_pil_decode_ready(r.data(), r.size(), &ready_) != MC_PIL_OK) {
     throw std::runtime_error("FocPil: expected READY from the target");
@@ -36,7 +69,9 @@ FocPil::FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
   }
 }
 
-const mc_pil_out_t& FocPil::step(const PilCommand& cmd) {
+const mc_pil_out_t& FocPil::step(const PilCommand& cmd,
+                                 const std::vector<mc_hal_can_frame_t>& can_rx,
+                                 std::vector<PilCanTx>* can_tx) {
   hal_host::PmsmBoard& b = sil_.board();
   b.sample();
 
@@ -45,6 +80,7 @@ const mc_pil_out_t& FocPil::step(const PilCommand& cmd) {
   m.adc_rc = b.adc_read(&m.adc);
   m.enc_rc = b.encoder_read(&m.enc);
   m.fault_rc = b.fault_read(&m.fault);
+  m.temp_rc = b.adc_read_temp(&m.temp);
   (void)b.tick_read(&m.tick_ticks);
   (void)b.tick_freq(&m.tick_hz);
   m.cmd_flags =
@@ -54,12 +90,30 @@ const mc_pil_out_t& FocPil::step(const PilCommand& cmd) {
   m.iq_ref_a = cmd.iq_ref_a;
 
   std::vector<uint8_t> buf = frame_buf();
+  for (const mc_hal_can_frame_t& f : can_rx) {
+    const std::size_t k = mc_pil_encode_can_rx(&f, buf.data(), buf.size());
+    if (k == 0) throw std::runtime_error("FocPil: CAN frame does not fit a link frame");
+    link_.send(buf.data(), k);
+  }
   const std::size_t n = mc_pil_encode_meas(&m, buf.data(), buf.size());
   link_.send(buf.data(), n);
-  const std::vector<uint8_t> r = link_.receive_frame();
-  if (mc_pil_decode_out(r.data(), r.size(), &out_) != MC_PIL_OK || out_.seq != seq_) {
-    throw std::runtime_error("FocPil: bad or out-of-sequence OUT frame at period " +
-                             std::to_string(seq_));
+  for (;;) {
+    const std::vector<uint8_t> r = link_.receive_frame();
+    if (mc_pil_frame_type(r.data(), r.size()) == MC_PIL_TYPE_CAN_TX) {
+      PilCanTx t;
+      if (mc_pil_decode_can_tx(r.data(), r.size(), &t.seq, &t.frame) != MC_PIL_OK ||
+          t.seq != seq_) {
+        throw std::runtime_error("FocPil: bad or out-of-sequence CAN_TX frame at period " +
+                                 std::to_string(seq_));
+      }
+      if (can_tx != nullptr) can_tx->push_back(t);
+      continue;
+    }
+    if (mc_pil_decode_out(r.data(), r.size(), &out_) != MC_PIL_OK || out_.seq != seq_) {
+      throw std::runtime_error("FocPil: bad or out-of-sequence OUT frame at period " +
+                               std::to_string(seq_));
+    }
+    break;
   }
 
   // What the drive did to the bridge this period, in the board's terms.
@@ -73,6 +127,20 @@ const mc_pil_out_t& FocPil::step(const PilCommand& cmd) {
     (void)b.pwm_disable();
   }
   b.advance();
+  // What the application's slow work did: after the integration, as in the
+  // SIL rig (drive alone: nothing, the enable state unchanged).
+  if (out_.app_duty_set_count > 0u &&
+      b.pwm_set_duty(out_.app_duty_a, out_.app_duty_b, out_.app_duty_c) != 0) {
+    throw std::runtime_error("FocPil: the board refused duties the target accepted");
+  }
+  if (out_.app_gate_kill_count > 0u) b.fault_gate_kill();
+  if (out_.app_pwm_enabled != out_.pwm_enabled) {
+    if (out_.app_pwm_enabled != 0u) {
+      (void)b.pwm_enable();
+    } else {
+      (void)b.pwm_disable();
+    }
+  }
   ++seq_;
   return out_;
 }

@@ -12,14 +12,24 @@
 //                      applied to the board -> board.advance()
 // The drive configuration is FocSil's (sent as CFG at start-up), so the SIL
 // and PIL runs of one FocSilOptions are the same experiment.
+//
+// Whole-image mode (the second constructor): the image binds the drive
+// application (firmware/app/app/mc_app) on the default parameters and the
+// binding sent at start-up (PARAMS, APP), and CAN frames travel with the
+// periods: step() delivers the given frames to the drive before the period
+// (CAN_RX) and returns those it sent (CAN_TX). What the application's slow
+// work did to the bridge is applied after the period's integration, where
+// the SIL rig of can-telemetry runs the slow work.
 #pragma once
 
 #include <functional>
 #include <memory>
+#include <vector>
 
 #include "foc_sil.hpp"
 #include "hal_host/pil_link.hpp"
 extern "C" {
+#include "mc_params.h"
 #include "mc_pil_frame.h"
 }
 
@@ -34,6 +44,19 @@ struct PilCommand {
   float iq_ref_a = 0.0f;
 };
 
+// The whole image's start-up: the board's default parameters and the rest
+// of the application's binding (mc_pil_frame.h).
+struct PilAppSetup {
+  mc_params_t defaults{};
+  mc_pil_app_t app{};
+};
+
+// A frame the image sent, and the period (MEAS seq) it left in.
+struct PilCanTx {
+  uint32_t seq = 0;
+  mc_hal_can_frame_t frame{};
+};
+
 class FocPil {
  public:
   // tweak_cfg (optional) edits the drive configuration before it is sent
@@ -42,9 +65,16 @@ class FocPil {
   FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
          const std::function<void(mc_drive_cfg_t&)>& tweak_cfg = nullptr);
 
-  // One PWM period (see the file comment). Throws std::runtime_error on a
-  // link error or a frame out of sequence.
-  const mc_pil_out_t& step(const PilCommand& cmd);
+  // Whole image: the application on setup.defaults (see the file comment).
+  // Throws std::runtime_error if QEMU fails or the application refuses.
+  FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link, const PilAppSetup& setup);
+
+  // One PWM period (see the file comment): can_rx are delivered to the
+  // drive's CAN before it, the frames it sends are appended to can_tx.
+  // Throws std::runtime_error on a link error or a frame out of sequence.
+  const mc_pil_out_t& step(const PilCommand& cmd,
+                           const std::vector<mc_hal_can_frame_t>& can_rx = {},
+                           std::vector<PilCanTx>* can_tx = nullptr);
 
   hal_host::PmsmBoard& board() { return sil_.board(); }
   const mc_pil_ready_t& ready() const { return ready_; }
@@ -53,6 +83,8 @@ class FocPil {
 
  private:
   FocSil sil_;  // owns the board; its own drive instance stays idle
+  void expect_ready();
+
   hal_host::PilLink link_;
   mc_pil_ready_t ready_{};
   mc_pil_out_t out_{};

@@ -9,9 +9,15 @@
 /* Payload sizes [32-bit words]. */
 #define CFG_WORDS   23u
 #define READY_WORDS 2u
-#define MEAS_WORDS  24u
-#define OUT_WORDS   21u
-#define END_WORDS   1u
+#define MEAS_WORDS  29u
+#define OUT_WORDS   27u
+#define APP_WORDS   12u
+/* CAN frames: id, time stamp, length and flags, then the data rounded up
+ * to whole words (CAN_TX: the period's seq first) */
+#define CAN_HEAD_WORDS 3u
+/* PARAMS: (id, raw) pairs */
+#define PARAM_PAIR_WORDS 2u
+#define END_WORDS        1u
 
 uint16_t mc_pil_crc16(const uint8_t *p, size_t n)
 {
@@ -291,6 +297,11 @@ size_t mc_pil_encode_meas(const mc_pil_meas_t *m, uint8_t *buf, size_t cap)
     put_u32(&w, m->mode);
     put_f32(&w, m->id_ref_a);
     put_f32(&w, m->iq_ref_a);
+    put_i32(&w, m->temp_rc);
+    put_f32(&w, m->temp.power_stage_temp_c);
+    put_f32(&w, m->temp.motor_temp_c);
+    put_u32(&w, m->temp.valid_mask);
+    put_u32(&w, m->temp.absent_mask);
     return finish(&w);
 }
 
@@ -330,6 +341,11 @@ int mc_pil_decode_meas(const uint8_t *buf, size_t n, mc_pil_meas_t *out)
     m.mode = get_u32(&r);
     m.id_ref_a = get_f32(&r);
     m.iq_ref_a = get_f32(&r);
+    m.temp_rc = get_i32(&r);
+    m.temp.power_stage_temp_c = get_f32(&r);
+    m.temp.motor_temp_c = get_f32(&r);
+    m.temp.valid_mask = get_u32(&r);
+    m.temp.absent_mask = get_u32(&r);
     *out = m;
     return MC_PIL_OK;
 }
@@ -363,6 +379,12 @@ size_t mc_pil_encode_out(const mc_pil_out_t *o, uint8_t *buf, size_t cap)
     put_u32(&w, o->ipsr_fast);
     put_u32(&w, o->ipsr_slow);
     put_u32(&w, o->slow_ran);
+    put_u32(&w, o->app_duty_set_count);
+    put_f32(&w, o->app_duty_a);
+    put_f32(&w, o->app_duty_b);
+    put_f32(&w, o->app_duty_c);
+    put_u32(&w, o->app_pwm_enabled);
+    put_u32(&w, o->app_gate_kill_count);
     return finish(&w);
 }
 
@@ -398,6 +420,12 @@ int mc_pil_decode_out(const uint8_t *buf, size_t n, mc_pil_out_t *out)
     o.ipsr_fast = get_u32(&r);
     o.ipsr_slow = get_u32(&r);
     o.slow_ran = get_u32(&r);
+    o.app_duty_set_count = get_u32(&r);
+    o.app_duty_a = get_f32(&r);
+    o.app_duty_b = get_f32(&r);
+    o.app_duty_c = get_f32(&r);
+    o.app_pwm_enabled = get_u32(&r);
+    o.app_gate_kill_count = get_u32(&r);
     *out = o;
     return MC_PIL_OK;
 }
@@ -443,4 +471,226 @@ int mc_pil_check_hello(const uint8_t *buf, size_t n)
 {
     reader_t r;
     return open_frame(&r, buf, n, MC_PIL_TYPE_HELLO, 0u);
+}
+
+/* ---- PARAMS ------------------------------------------------------------ */
+
+size_t mc_pil_encode_params(const uint32_t *ids, const uint32_t *raws, uint32_t n, uint8_t *buf,
+                            size_t cap)
+{
+    writer_t w;
+    if (ids == NULL || raws == NULL || n == 0u || n > MC_PIL_PARAMS_MAX ||
+        !begin(&w, buf, cap, MC_PIL_TYPE_PARAMS, PARAM_PAIR_WORDS * n)) {
+        return 0u;
+    }
+    for (uint32_t i = 0u; i < n; ++i) {
+        put_u32(&w, ids[i]);
+        put_u32(&w, raws[i]);
+    }
+    return finish(&w);
+}
+
+int mc_pil_decode_params(const uint8_t *buf, size_t n, uint32_t *ids, uint32_t *raws, uint32_t *p_n)
+{
+    reader_t r;
+    if (ids == NULL || raws == NULL || p_n == NULL) {
+        return MC_PIL_ERR_ARG;
+    }
+    const int t = mc_pil_frame_type(buf, n);
+    if (t < 0) {
+        return t;
+    }
+    if (t != (int)MC_PIL_TYPE_PARAMS) {
+        return MC_PIL_ERR_TYPE;
+    }
+    const uint32_t pairs = (uint32_t)buf[2] / (4u * PARAM_PAIR_WORDS);
+    if (pairs == 0u || pairs > MC_PIL_PARAMS_MAX ||
+        (uint32_t)buf[2] != 4u * PARAM_PAIR_WORDS * pairs) {
+        return MC_PIL_ERR_LEN;
+    }
+    const int rc = open_frame(&r, buf, n, MC_PIL_TYPE_PARAMS, PARAM_PAIR_WORDS * pairs);
+    if (rc != MC_PIL_OK) {
+        return rc;
+    }
+    for (uint32_t i = 0u; i < pairs; ++i) {
+        ids[i] = get_u32(&r);
+        raws[i] = get_u32(&r);
+    }
+    *p_n = pairs;
+    return MC_PIL_OK;
+}
+
+/* ---- APP --------------------------------------------------------------- */
+
+size_t mc_pil_encode_app(const mc_pil_app_t *a, uint8_t *buf, size_t cap)
+{
+    writer_t w;
+    if (a == NULL || !begin(&w, buf, cap, MC_PIL_TYPE_APP, APP_WORDS)) {
+        return 0u;
+    }
+    put_f32(&w, a->tm_budget_frac);
+    for (uint32_t i = 0u; i < MC_PIL_TM_EXT_RATES; ++i) {
+        put_u32(&w, a->tm_ext_rate_hz[i]);
+    }
+    put_f32(&w, a->speed_kp_a_s_rad);
+    put_f32(&w, a->speed_ki_dt_a_s_rad);
+    put_f32(&w, a->speed_i_max_a);
+    put_u32(&w, a->pwm_hz_fixed);
+    put_u32(&w, a->slow_loop_div_fixed);
+    put_u32(&w, a->tick_hz);
+    return finish(&w);
+}
+
+int mc_pil_decode_app(const uint8_t *buf, size_t n, mc_pil_app_t *out)
+{
+    reader_t r;
+    if (out == NULL) {
+        return MC_PIL_ERR_ARG;
+    }
+    const int rc = open_frame(&r, buf, n, MC_PIL_TYPE_APP, APP_WORDS);
+    if (rc != MC_PIL_OK) {
+        return rc;
+    }
+    mc_pil_app_t a;
+    a.tm_budget_frac = get_f32(&r);
+    for (uint32_t i = 0u; i < MC_PIL_TM_EXT_RATES; ++i) {
+        a.tm_ext_rate_hz[i] = get_u32(&r);
+    }
+    a.speed_kp_a_s_rad = get_f32(&r);
+    a.speed_ki_dt_a_s_rad = get_f32(&r);
+    a.speed_i_max_a = get_f32(&r);
+    a.pwm_hz_fixed = get_u32(&r);
+    a.slow_loop_div_fixed = get_u32(&r);
+    a.tick_hz = get_u32(&r);
+    *out = a;
+    return MC_PIL_OK;
+}
+
+/* ---- CAN_RX / CAN_TX ----------------------------------------------------- */
+
+static uint32_t can_data_words(uint8_t len)
+{
+    return ((uint32_t)len + 3u) / 4u;
+}
+
+static void put_can(writer_t *w, const mc_hal_can_frame_t *f)
+{
+    put_u32(w, f->id);
+    put_u32(w, f->timestamp_ticks);
+    put_u32(w, (uint32_t)f->len | ((uint32_t)f->flags << 8));
+    for (uint32_t k = 0u; k < can_data_words(f->len); ++k) {
+        uint32_t v = 0u;
+        for (uint32_t b = 0u; b < 4u; ++b) {
+            const uint32_t at = 4u * k + b;
+            if (at < (uint32_t)f->len) {
+                v |= (uint32_t)f->data[at] << (8u * b);
+            }
+        }
+        put_u32(w, v);
+    }
+}
+
+/* The frame's data length from the payload size and the length word; false
+ * if they disagree or the length is not a CAN (FD) length. */
+static bool get_can(reader_t *r, size_t payload_bytes, mc_hal_can_frame_t *f)
+{
+    mc_hal_can_frame_t c;
+    memset(&c, 0, sizeof c);
+    c.id = get_u32(r);
+    c.timestamp_ticks = get_u32(r);
+    const uint32_t lf = get_u32(r);
+    const uint32_t len = lf & 0xFFu;
+    if (len > MC_HAL_CAN_FD_MAX_LEN || !mc_hal_can_fd_len_valid((uint8_t)len) ||
+        payload_bytes != 4u * ((size_t)CAN_HEAD_WORDS + can_data_words((uint8_t)len))) {
+        return false;
+    }
+    c.len = (uint8_t)len;
+    c.flags = (uint8_t)((lf >> 8) & 0xFFu);
+    for (uint32_t k = 0u; k < can_data_words(c.len); ++k) {
+        const uint32_t v = get_u32(r);
+        for (uint32_t b = 0u; b < 4u; ++b) {
+            const uint32_t at = 4u * k + b;
+            if (at < len) {
+                c.data[at] = (uint8_t)((v >> (8u * b)) & 0xFFu);
+            }
+        }
+    }
+    *f = c;
+    return true;
+}
+
+/* Open a CAN frame of either type: check CRC and type; the payload size is
+ * checked by get_can. */
+static int open_can(reader_t *r, const uint8_t *buf, size_t n, mc_pil_type_t type)
+{
+    const int t = mc_pil_frame_type(buf, n);
+    if (t < 0) {
+        return t;
+    }
+    if (t != (int)type) {
+        return MC_PIL_ERR_TYPE;
+    }
+    r->buf = buf;
+    r->pos = MC_PIL_HEADER_LEN;
+    return MC_PIL_OK;
+}
+
+size_t mc_pil_encode_can_rx(const mc_hal_can_frame_t *f, uint8_t *buf, size_t cap)
+{
+    writer_t w;
+    if (f == NULL || f->len > MC_HAL_CAN_FD_MAX_LEN ||
+        !begin(&w, buf, cap, MC_PIL_TYPE_CAN_RX, CAN_HEAD_WORDS + can_data_words(f->len))) {
+        return 0u;
+    }
+    put_can(&w, f);
+    return finish(&w);
+}
+
+int mc_pil_decode_can_rx(const uint8_t *buf, size_t n, mc_hal_can_frame_t *out)
+{
+    reader_t r;
+    if (out == NULL) {
+        return MC_PIL_ERR_ARG;
+    }
+    const int rc = open_can(&r, buf, n, MC_PIL_TYPE_CAN_RX);
+    if (rc != MC_PIL_OK) {
+        return rc;
+    }
+    if ((size_t)buf[2] < (size_t)4u * CAN_HEAD_WORDS || !get_can(&r, (size_t)buf[2], out)) {
+        return MC_PIL_ERR_LEN;
+    }
+    return MC_PIL_OK;
+}
+
+size_t mc_pil_encode_can_tx(uint32_t seq, const mc_hal_can_frame_t *f, uint8_t *buf, size_t cap)
+{
+    writer_t w;
+    if (f == NULL || f->len > MC_HAL_CAN_FD_MAX_LEN ||
+        !begin(&w, buf, cap, MC_PIL_TYPE_CAN_TX, 1u + CAN_HEAD_WORDS + can_data_words(f->len))) {
+        return 0u;
+    }
+    put_u32(&w, seq);
+    put_can(&w, f);
+    return finish(&w);
+}
+
+int mc_pil_decode_can_tx(const uint8_t *buf, size_t n, uint32_t *p_seq, mc_hal_can_frame_t *out)
+{
+    reader_t r;
+    if (out == NULL || p_seq == NULL) {
+        return MC_PIL_ERR_ARG;
+    }
+    const int rc = open_can(&r, buf, n, MC_PIL_TYPE_CAN_TX);
+    if (rc != MC_PIL_OK) {
+        return rc;
+    }
+    if ((size_t)buf[2] < (size_t)4u * (1u + CAN_HEAD_WORDS)) {
+        return MC_PIL_ERR_LEN;
+    }
+    const uint32_t seq = get_u32(&r);
+    if (!get_can(&r, (size_t)buf[2] - 4u, out)) {
+        return MC_PIL_ERR_LEN;
+    }
+    *p_seq = seq;
+    return MC_PIL_OK;
 }

@@ -21,9 +21,23 @@
  *                   accepted duties, enable state, gate kill) and telemetry.
  *   host            applies OUT to the simulated board, integrates one period.
  * Start-up: target -> HELLO once its USART receives (bytes sent earlier
- * would be dropped), host -> CFG (the drive configuration), target -> READY
- * (the drive's init result). End: host -> END, the target exits
- * (semihosting).
+ * would be dropped), then one of
+ *   drive alone:     host -> CFG (the drive configuration);
+ *   whole image:     host -> PARAMS (one or more: the board's default
+ *                    parameter set, (id, raw value) pairs), APP (the rest of
+ *                    the application's binding); the image boots the
+ *                    application (firmware/app/app/mc_app) from them;
+ * then target -> READY (the drive's init result). End: host -> END, the
+ * target exits (semihosting).
+ *
+ * CAN in the whole-image mode, carried over the same link:
+ *   host -> target  CAN_RX before a period's MEAS: a frame the bus delivers
+ *                   to the drive (the board's CAN receive interrupt runs);
+ *   target -> host  CAN_TX between MEAS and OUT: a frame the application
+ *                   sent in that period (seq), in the order it sent them.
+ * OUT then also says what the application's slow work did to the bridge
+ * (app_*): the host applies it after integrating the period, where the SIL
+ * rig's slow work acts (sim/cli/scenarios/can_telemetry.cpp).
  *
  * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
  * and parse a complete frame. Built for the target (hal/pil/mc_hal_pil.c) and for the
@@ -50,13 +64,22 @@ extern "C" {
 #define MC_PIL_MAX_FRAME   (MC_PIL_HEADER_LEN + MC_PIL_MAX_PAYLOAD + MC_PIL_CRC_LEN)
 
 typedef enum {
-    MC_PIL_TYPE_CFG = 1,   /**< host -> target: mc_drive_cfg_t */
-    MC_PIL_TYPE_READY = 2, /**< target -> host: drive init result */
-    MC_PIL_TYPE_MEAS = 3,  /**< host -> target: one period's measurements and commands */
-    MC_PIL_TYPE_OUT = 4,   /**< target -> host: one period's bridge actions and telemetry */
-    MC_PIL_TYPE_END = 5,   /**< host -> target: stop, exit code in the payload */
-    MC_PIL_TYPE_HELLO = 6, /**< target -> host: receiver ready, empty payload */
+    MC_PIL_TYPE_CFG = 1,     /**< host -> target: mc_drive_cfg_t */
+    MC_PIL_TYPE_READY = 2,   /**< target -> host: drive init result */
+    MC_PIL_TYPE_MEAS = 3,    /**< host -> target: one period's measurements and commands */
+    MC_PIL_TYPE_OUT = 4,     /**< target -> host: one period's bridge actions and telemetry */
+    MC_PIL_TYPE_END = 5,     /**< host -> target: stop, exit code in the payload */
+    MC_PIL_TYPE_HELLO = 6,   /**< target -> host: receiver ready, empty payload */
+    MC_PIL_TYPE_PARAMS = 7,  /**< host -> target: default parameters, (id, raw) pairs */
+    MC_PIL_TYPE_APP = 8,     /**< host -> target: mc_pil_app_t, ends the set-up */
+    MC_PIL_TYPE_CAN_RX = 9,  /**< host -> target: one CAN frame received by the drive */
+    MC_PIL_TYPE_CAN_TX = 10, /**< target -> host: one CAN frame the drive sent */
 } mc_pil_type_t;
+
+/** (id, raw) pairs per PARAMS frame (the payload limit). */
+#define MC_PIL_PARAMS_MAX 31u
+/** Rates of the telemetry messages past POSITION (mc_app_cfg_t). */
+#define MC_PIL_TM_EXT_RATES 5u
 
 /* Decode errors. */
 #define MC_PIL_OK       0
@@ -85,6 +108,8 @@ typedef struct {
     uint32_t mode;               /**< mc_drive_mode_t, with MC_PIL_CMD_SET_MODE */
     float id_ref_a;              /**< with MC_PIL_CMD_SET_REFS */
     float iq_ref_a;
+    int32_t temp_rc;        /**< board adc read_temp() result */
+    mc_hal_adc_temp_t temp; /**< temperature channels, valid when temp_rc == 0 */
 } mc_pil_meas_t;
 
 /** Target -> host, once per period. */
@@ -106,7 +131,27 @@ typedef struct {
     uint32_t ipsr_fast; /**< exception number of the fast step (34 = ADC IRQ) */
     uint32_t ipsr_slow; /**< of the slow step (14 = PendSV), 0 if none ran */
     uint32_t slow_ran;
+    /* What the application's slow work did to the bridge (whole-image mode;
+     * zero counts and pwm_enabled unchanged otherwise): applied by the host
+     * after the period's integration. */
+    uint32_t app_duty_set_count;
+    float app_duty_a, app_duty_b, app_duty_c;
+    uint32_t app_pwm_enabled; /**< 1: modulating after the slow work */
+    uint32_t app_gate_kill_count;
 } mc_pil_out_t;
+
+/** Host -> target (whole-image mode): the application's binding besides the
+ *  parameters (the fields of mc_app_cfg_t the board gets from the rig). */
+typedef struct {
+    float tm_budget_frac;
+    uint32_t tm_ext_rate_hz[MC_PIL_TM_EXT_RATES];
+    float speed_kp_a_s_rad;
+    float speed_ki_dt_a_s_rad;
+    float speed_i_max_a;
+    uint32_t pwm_hz_fixed;
+    uint32_t slow_loop_div_fixed;
+    uint32_t tick_hz; /**< the board's tick frequency, answered before the first MEAS */
+} mc_pil_app_t;
 
 /** Target -> host after CFG. */
 typedef struct {
@@ -125,6 +170,13 @@ size_t mc_pil_encode_meas(const mc_pil_meas_t *m, uint8_t *buf, size_t cap);
 size_t mc_pil_encode_out(const mc_pil_out_t *o, uint8_t *buf, size_t cap);
 size_t mc_pil_encode_end(int32_t exit_code, uint8_t *buf, size_t cap);
 size_t mc_pil_encode_hello(uint8_t *buf, size_t cap);
+/** n (1..MC_PIL_PARAMS_MAX) parameter ids and raw values. */
+size_t mc_pil_encode_params(const uint32_t *ids, const uint32_t *raws, uint32_t n, uint8_t *buf,
+                            size_t cap);
+size_t mc_pil_encode_app(const mc_pil_app_t *a, uint8_t *buf, size_t cap);
+size_t mc_pil_encode_can_rx(const mc_hal_can_frame_t *f, uint8_t *buf, size_t cap);
+/** seq: the period (MEAS seq) in which the application sent f. */
+size_t mc_pil_encode_can_tx(uint32_t seq, const mc_hal_can_frame_t *f, uint8_t *buf, size_t cap);
 
 /**
  * Length of the frame that starts at buf given its first n bytes: 0 while
@@ -143,6 +195,14 @@ int mc_pil_decode_ready(const uint8_t *buf, size_t n, mc_pil_ready_t *out);
 int mc_pil_decode_meas(const uint8_t *buf, size_t n, mc_pil_meas_t *out);
 int mc_pil_decode_out(const uint8_t *buf, size_t n, mc_pil_out_t *out);
 int mc_pil_decode_end(const uint8_t *buf, size_t n, int32_t *out);
+/** ids and raws hold MC_PIL_PARAMS_MAX entries; *p_n the pairs decoded. */
+int mc_pil_decode_params(const uint8_t *buf, size_t n, uint32_t *ids, uint32_t *raws,
+                         uint32_t *p_n);
+int mc_pil_decode_app(const uint8_t *buf, size_t n, mc_pil_app_t *out);
+/** A data length that is not a CAN (FD) length, or one that disagrees with
+ *  the payload size: MC_PIL_ERR_LEN. */
+int mc_pil_decode_can_rx(const uint8_t *buf, size_t n, mc_hal_can_frame_t *out);
+int mc_pil_decode_can_tx(const uint8_t *buf, size_t n, uint32_t *p_seq, mc_hal_can_frame_t *out);
 /** MC_PIL_OK if buf is a complete HELLO frame. */
 int mc_pil_check_hello(const uint8_t *buf, size_t n);
 

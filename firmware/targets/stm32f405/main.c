@@ -17,8 +17,9 @@
  * The application (firmware/app/app/mc_app) is bound when the board gives
  * its configuration (mc_board_app_cfg): it boots the stored configuration
  * (or the board's defaults), initialises the drive from it and starts the
- * watchdog. A board without one (the PIL board) runs the drive alone on
- * mc_board_drive_cfg().
+ * watchdog. A board without one runs the drive alone on
+ * mc_board_drive_cfg() (the PIL board when the host asks for the drive
+ * alone; it binds the application when the host asks for the whole image).
  *
  * The FPU is enabled by the reset handler; FP context stacking is lazy, so
  * both handlers may use floats and an interrupted slow step keeps its FP
@@ -66,6 +67,14 @@ __attribute__((weak)) const mc_app_cfg_t *mc_board_app_cfg(void)
     return NULL;
 }
 
+/* Between the drive's slow step and the application's slow work: boards
+ * that need the boundary (the PIL board, which applies what the slow work
+ * does to the bridge after the host has integrated the period, as the SIL
+ * rig does) define it; the drive boards keep this one. */
+__attribute__((weak)) void mc_board_app_work_begin(void)
+{
+}
+
 /* Boards without commissioning (the PIL board) keep this one. */
 __attribute__((weak)) const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p)
 {
@@ -102,6 +111,7 @@ void PendSV_Handler(void)
 {
     mc_drive_slow_step(&g_drive);
     if (g_app_on) {
+        mc_board_app_work_begin();
         (void)mc_app_slow_work(&g_app);
     }
     mc_board_period_done(&g_drive, true);

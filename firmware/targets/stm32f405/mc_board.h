@@ -35,9 +35,15 @@ const mc_drive_cfg_t *mc_board_drive_cfg(void);
 
 /** The drive application's binding (flash store, watchdog, defaults, node
  *  filter), called once after mc_board_init. NULL (the default of main.c,
- *  a weak symbol; the PIL board): no application, the drive alone runs on
- *  mc_board_drive_cfg and the board's own command path. */
+ *  a weak symbol; the PIL board when the host asks for the drive alone): no
+ *  application, the drive alone runs on mc_board_drive_cfg and the board's
+ *  own command path. */
 const mc_app_cfg_t *mc_board_app_cfg(void);
+
+/** PendSV, between the drive's slow step and the application's slow work
+ *  (only when the application runs). A weak no-op in main.c; the PIL board
+ *  marks there which bridge actions belong to the slow work. */
+void mc_board_app_work_begin(void);
 
 /** Commissioning over CAN for this board, from the booted parameters p
  *  (test current and voltage from the board's sense range and lowest bus,

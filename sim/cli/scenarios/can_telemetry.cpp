@@ -59,6 +59,7 @@
 #include <thread>
 #include <vector>
 
+#include "app_binding.hpp"
 #include "foc_sil.hpp"
 #include "hal_host/candump_log.hpp"
 #include "hal_host/file_flash.hpp"
@@ -340,6 +341,24 @@ void run_can_telemetry(RunContext& ctx) {
       throw UsageError("commissioning refused its configuration for this board");
     }
     mc_app_attach_commission(&app, &comm_can);
+  }
+
+  // MCSIM_APP_BINDING_OUT=FILE: this binding, for the processor-in-the-loop
+  // twin (sim/cli/app_binding.hpp, tests/target/pil/test_pil_can.cpp).
+  if (const std::string out = env_or("MCSIM_APP_BINDING_OUT", ""); !out.empty()) {
+    AppBinding ab;
+    ab.plant = o;
+    ab.defaults = p_scn;
+    ab.tm_budget_frac = app.cfg.tm_budget_frac;
+    std::copy(std::begin(app.cfg.tm_ext_rate_hz), std::end(app.cfg.tm_ext_rate_hz),
+              std::begin(ab.tm_ext_rate_hz));
+    ab.speed = app.cfg.speed;
+    ab.pwm_hz_fixed = app.cfg.pwm_hz_fixed;
+    ab.slow_loop_div_fixed = app.cfg.slow_loop_div_fixed;
+    ab.serve_params = serve_params;
+    ab.position_law = app.cfg.position_law.ctrl != nullptr;
+    ab.commissioning = app.comm != nullptr;
+    write_app_binding(out, ab);
   }
 
   std::vector<std::string> cols{"t", "tm_sent_mask", "tm_fail_mask", "omega_m_true_rad_s",

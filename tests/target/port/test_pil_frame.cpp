@@ -54,9 +54,11 @@ TEST(PilFrame, MeasRoundTripKeepsEveryBit) {
   m.mode = MC_DRIVE_MODE_CURRENT;
   m.id_ref_a = -1.0f;
   m.iq_ref_a = std::numeric_limits<float>::infinity();
+  m.temp_rc = -ENOSYS;
+  m.temp = {25.0f, nan_with_payload(), 1u, 2u};
   uint8_t buf[MC_PIL_MAX_FRAME];
   const size_t n = mc_pil_encode_meas(&m, buf, sizeof buf);
-  ASSERT_EQ(n, 3u + 4u * 24u + 2u);
+  ASSERT_EQ(n, 3u + 4u * 29u + 2u);
   EXPECT_EQ(mc_pil_frame_len(buf, 3), n);
   EXPECT_EQ(mc_pil_frame_type(buf, n), MC_PIL_TYPE_MEAS);
   mc_pil_meas_t d{};
@@ -74,6 +76,10 @@ TEST(PilFrame, MeasRoundTripKeepsEveryBit) {
   EXPECT_EQ(d.tick_hz, 10000000u);
   EXPECT_EQ(d.cmd_flags, m.cmd_flags);
   EXPECT_TRUE(same_bits(d.iq_ref_a, m.iq_ref_a));
+  EXPECT_EQ(d.temp_rc, -ENOSYS);
+  EXPECT_TRUE(same_bits(d.temp.motor_temp_c, m.temp.motor_temp_c));
+  EXPECT_EQ(d.temp.valid_mask, 1u);
+  EXPECT_EQ(d.temp.absent_mask, 2u);
 }
 
 TEST(PilFrame, OutAndCfgRoundTrip) {
@@ -83,6 +89,10 @@ TEST(PilFrame, OutAndCfgRoundTrip) {
   o.duty_b = nan_with_payload();
   o.cmd_rc = -EBUSY;
   o.ipsr_fast = 34u;
+  o.app_duty_set_count = 1u;
+  o.app_duty_c = -0.0f;
+  o.app_pwm_enabled = 1u;
+  o.app_gate_kill_count = 2u;
   uint8_t buf[MC_PIL_MAX_FRAME];
   size_t n = mc_pil_encode_out(&o, buf, sizeof buf);
   mc_pil_out_t od{};
@@ -136,6 +146,85 @@ TEST(PilFrame, CorruptOrForeignFramesAreRefusedAndOutputUntouched) {
   ASSERT_EQ(mc_pil_encode_hello(hello, sizeof hello), 5u);
   EXPECT_EQ(mc_pil_check_hello(hello, 5), MC_PIL_OK);
   EXPECT_EQ(mc_pil_check_hello(buf, n), MC_PIL_ERR_TYPE);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(PilFrame, WholeImageFramesRoundTrip) {
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  // PARAMS: up to MC_PIL_PARAMS_MAX pairs per frame, none or more refused.
+  uint32_t ids[MC_PIL_PARAMS_MAX + 1], raws[MC_PIL_PARAMS_MAX + 1];
+  for (uint32_t i = 0; i <= MC_PIL_PARAMS_MAX; ++i) {
+    ids[i] = 100u + i;
+    raws[i] = 0xA5000000u ^ i;
+  }
+  EXPECT_EQ(mc_pil_encode_params(ids, raws, 0u, buf, sizeof buf), 0u);
+  EXPECT_EQ(mc_pil_encode_params(ids, raws, MC_PIL_PARAMS_MAX + 1u, buf, sizeof buf), 0u);
+  size_t n = mc_pil_encode_params(ids, raws, MC_PIL_PARAMS_MAX, buf, sizeof buf);
+  ASSERT_GT(n, 0u);
+  uint32_t ids_d[MC_PIL_PARAMS_MAX] = {}, raws_d[MC_PIL_PARAMS_MAX] = {}, k = 0;
+  ASSERT_EQ(mc_pil_decode_params(buf, n, ids_d, raws_d, &k), MC_PIL_OK);
+  ASSERT_EQ(k, MC_PIL_PARAMS_MAX);
+  for (uint32_t i = 0; i < k; ++i) {
+    EXPECT_EQ(ids_d[i], ids[i]);
+    EXPECT_EQ(raws_d[i], raws[i]);
+  }
+
+  mc_pil_app_t a{};
+  a.tm_budget_frac = 0.5f;
+  a.tm_ext_rate_hz[4] = 50u;
+  a.speed_kp_a_s_rad = std::nextafter(0.378f, 1.0f);
+  a.speed_i_max_a = nan_with_payload();
+  a.slow_loop_div_fixed = 10u;
+  n = mc_pil_encode_app(&a, buf, sizeof buf);
+  mc_pil_app_t ad{};
+  ASSERT_EQ(mc_pil_decode_app(buf, n, &ad), MC_PIL_OK);
+  EXPECT_TRUE(same_bits(ad, a));
+
+  // CAN frames of every data length keep their bytes; the TX seq travels.
+  for (uint8_t len : {0, 1, 3, 4, 5, 8, 12, 64}) {
+    mc_hal_can_frame_t f{};
+    f.id = 0x7FFu;
+    f.timestamp_ticks = 0x12345678u;
+    f.len = len;
+    f.flags = (len > 8u) ? MC_HAL_CAN_FLAG_FD : 0u;
+    for (uint8_t i = 0; i < len; ++i) f.data[i] = static_cast<uint8_t>(0xF0u ^ i);
+    n = mc_pil_encode_can_rx(&f, buf, sizeof buf);
+    mc_hal_can_frame_t fd{};
+    ASSERT_EQ(mc_pil_decode_can_rx(buf, n, &fd), MC_PIL_OK) << int(len);
+    EXPECT_TRUE(same_bits(fd, f)) << int(len);
+    n = mc_pil_encode_can_tx(42u, &f, buf, sizeof buf);
+    uint32_t seq = 0;
+    mc_hal_can_frame_t ft{};
+    ASSERT_EQ(mc_pil_decode_can_tx(buf, n, &seq, &ft), MC_PIL_OK) << int(len);
+    EXPECT_EQ(seq, 42u);
+    EXPECT_TRUE(same_bits(ft, f)) << int(len);
+    // The wrong decoder refuses it.
+    EXPECT_EQ(mc_pil_decode_can_rx(buf, n, &fd), MC_PIL_ERR_TYPE);
+  }
+}
+
+TEST(PilFrame, CanFrameWithALengthThatIsNoCanLengthIsRefused) {
+  mc_hal_can_frame_t f{};
+  f.id = 0x21u;
+  f.len = 8u;
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  size_t n = mc_pil_encode_can_rx(&f, buf, sizeof buf);
+  // Claim 12 bytes in the length word (an FD length, but the payload holds
+  // two data words, not three), then 9 (no CAN FD length). Re-seal the CRC
+  // each time so only the length check can refuse it.
+  for (uint8_t bad : {12, 9}) {
+    buf[MC_PIL_HEADER_LEN + 8u] = bad;
+    const uint16_t crc = mc_pil_crc16(&buf[1], n - 1u - MC_PIL_CRC_LEN);
+    buf[n - 2u] = static_cast<uint8_t>(crc & 0xFFu);
+    buf[n - 1u] = static_cast<uint8_t>(crc >> 8);
+    mc_hal_can_frame_t fd{};
+    fd.id = 0x555u;
+    EXPECT_EQ(mc_pil_decode_can_rx(buf, n, &fd), MC_PIL_ERR_LEN) << int(bad);
+    EXPECT_EQ(fd.id, 0x555u) << "output untouched";
+  }
 }
 
 }  // namespace
