@@ -25,7 +25,10 @@ from the DBC by cantools, commands from a candump script at simulated time:
     heartbeats come, every foreign frame is dropped in the receive
     interrupt (before the ring and the command handler), no own frame is
     lost, a tick takes only its millisecond's frames, and the run (plant,
-    telemetry, frames) is identical to the same run without the flood.
+    telemetry, frames) is identical to the same run without the flood;
+ 6. enabling SPEED mode into the rotor commissioning left coasting, at
+    several delays after DONE: no fault (the ASan failure of
+    can.mdtool_vcan after calibrate).
 
     test_sil_protocol.py --mcsim MCSIM --work DIR --repo ROOT
 """
@@ -261,6 +264,47 @@ def foreign_flood(sil):
           f"throughout, the run identical to the one without the flood")
 
 
+def enable_after_commissioning(sil):
+    """The VM test's drive (tests/can/vm/mdtool_vcan.sh: 2 kHz PWM, a 20 Hz
+    current loop, no flywheel) commissioned over CAN, then SPEED 20 rad/s
+    enabled while the rotor still coasts at about 60 rad/s from the flux
+    test, at several delays after DONE. Before the drive wrote the zero
+    vector into the duty registers when it opened the bridge, the first
+    enabled period ran on the commissioning's last voltage vector at a rotor
+    angle long gone and tripped OVERCURRENT at 8, 13 and 89 ms after DONE
+    (not at 0 or 21 ms): the ASan run of can.mdtool_vcan that failed after
+    calibrate (run refused SET_SPEED_REF with MODE, stop_reason FAULT)."""
+    vm = ["--set", "timeout_s=2.0", "--set", "pwm_hz=2000", "--set", "slow_loop_div=2",
+          "--set", "substeps=1", "--set", "bw_hz=20", "--set", "speed_pll_bw_rad_s=500",
+          "--set", "J_kgm2=0.002"]
+    start = [sil.frame(0.05, "COMMISSION_CMD", action=1, i_test_a=0, v_test_max_v=0,
+                       speed_max_m_rad_s=0)]
+    _r, _s, frames = sil.run("commission", start, duration=8.0, extra=vm)
+    done = next((t for t, n, v in frames if n == "COMMISSION_STATUS" and v["step"] == 7), None)
+    check(done is not None, "commissioning reached DONE")
+    if done is None:
+        return
+    for ms in (0, 8, 13, 21, 89):
+        t = done + ms / 1000.0
+        cmds = start + [sil.frame(t, "SET_CONTROL_MODE", control_mode=2),
+                        sil.frame(t + 0.0005, "SET_ENABLE", enable=1),
+                        sil.frame(t + 0.001, "SET_SPEED_REF", omega_ref_rad_s=20.0)]
+        cmds += [sil.frame(t + 0.1 * k, "HOST_HEARTBEAT", counter=k) for k in range(1, 11)]
+        name = f"enable_after_done_{ms}ms"
+        _r, s, _f = sil.run(name, sorted(cmds), duration=t + 1.1, extra=vm)
+        rows = rows_of(os.path.join(sil.work, name))
+        w0 = next(r["omega_m_true_rad_s"] for r in rows if r["t"] >= t)
+        w_end = rows[-1]["omega_m_true_rad_s"]
+        check(s["final_faults"] == 0 and s["final_stop_reason"] == 0 and s["cmd_rejected"] == 0,
+              f"enable {ms} ms after DONE at {w0:.1f} rad/s: faults {s['final_faults']}, "
+              f"stop reason {s['final_stop_reason']}, rejected {s['cmd_rejected']}")
+        # the speed PI (3 A) has settled on 20 rad/s a second later: within
+        # 1 rad/s (the 500 rad/s encoder loop's ripple at 2 kHz)
+        check(abs(w_end - 20.0) < 1.0, f"enable {ms} ms after DONE: {w_end:.2f} rad/s after 1 s")
+    print(f"enable after commissioning (DONE at {done:.3f} s, rotor coasting): no fault at "
+          f"0, 8, 13, 21, 89 ms after DONE")
+
+
 def main():
     _args, sil = setup()
     timeout_stop_in_speed_mode(sil)
@@ -269,6 +313,7 @@ def main():
     heartbeat_min(sil)
     position_mode(sil)
     foreign_flood(sil)
+    enable_after_commissioning(sil)
     if fails:
         print(f"{len(fails)} check(s) failed")
         return 1
