@@ -30,7 +30,7 @@ import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_sil_flash import setup
+from test_sil_flash import report, setup
 
 fails = []
 
@@ -216,11 +216,7 @@ def main():
     args, sil = setup()
     current_step(sil, args.repo)
     speed_step(sil, args.repo)
-    if fails:
-        print(f"{len(fails)} check(s) failed")
-        return 1
-    print("all checks passed")
-    return 0
+    return report(fails)
 
 
 if __name__ == "__main__":

@@ -37,7 +37,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_sil_flash import setup
+from test_sil_flash import report, setup
 
 fails = []
 
@@ -314,11 +314,7 @@ def main():
     position_mode(sil)
     foreign_flood(sil)
     enable_after_commissioning(sil)
-    if fails:
-        print(f"{len(fails)} check(s) failed")
-        return 1
-    print("all checks passed")
-    return 0
+    return report(fails)
 
 
 if __name__ == "__main__":
