@@ -127,9 +127,9 @@ struct CanBoard {
   uint32_t adc_bits = 12, encoder_cpr = 0;
   std::unique_ptr<FocSil> sil;
   std::unique_ptr<MotorRig> rig;
-  void step() { sil ? sil->step() : rig->step(); }
-  hal_host::PmsmBoard& board() { return sil ? sil->board() : rig->board(); }
-  mc_drive_t& drive() { return sil ? sil->drive() : rig->drive(); }
+  void step() const { sil ? sil->step() : rig->step(); }
+  hal_host::PmsmBoard& board() const { return sil ? sil->board() : rig->board(); }
+  mc_drive_t& drive() const { return sil ? sil->drive() : rig->drive(); }
 };
 
 // (Re)build the board for o (pwm_hz, slow_loop_div, bandwidths may come
