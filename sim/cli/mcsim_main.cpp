@@ -69,7 +69,7 @@ int cmd_describe(const std::vector<std::string>& args) {
   }
   std::printf("%s: %s\ndefault duration: %g s\nparameters (--set key=value):\n", s.name.c_str(),
               s.description.c_str(), s.default_duration_s);
-  if (s.motor_params && motor.empty()) {
+  if (s.motor_params && motor.empty() && !s.motor_optional) {
     std::printf(
         "  (ranges and defaults depend on the motor: describe %s --motor FILE "
         "[--board FILE])\n",

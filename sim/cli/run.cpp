@@ -22,6 +22,7 @@ std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& mo
     return nullptr;
   }
   if (motor.empty()) {
+    if (s.motor_optional && board.empty() && overrides.empty()) return nullptr;  // its own motor
     throw UsageError("scenario '" + s.name +
                      "' needs --motor FILE (and --board FILE "
                      "unless the motor file has a [board] table); see sim/motors/");

@@ -156,6 +156,9 @@ struct Scenario {
   /// The scenario's drive boots from the board's flash (mcsim --flash FILE):
   /// the configuration store of firmware/app/config on hal_host::FileFlash.
   bool takes_flash = false;
+  /// With motor_params: --motor is optional; without it the scenario runs
+  /// its own motor with `params` (RunContext::files null).
+  bool motor_optional = false;
 };
 
 /// Global registry; scenario files register themselves with a static

@@ -133,10 +133,12 @@ TEST(CanProto, UnpackRejectsFormatLengthIdAndRange) {
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x030, {2})));              // enable 0..1
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {11, 10, 0})));      // tm_cmd 1..10
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {1, 0xE9, 0x03})));  // 1001 Hz
-  // 1000.001 rad/s: one raw step above the DBC maximum
-  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x033, {0x41, 0x42, 0x0F, 0x00})));
-  EXPECT_EQ(MC_CAN_ERR_NONE, un(Frame(0x033, {0x40, 0x42, 0x0F, 0x00})));
-  EXPECT_NEAR(1000.0f, v[0], 1e-3f);  // raw 1000000 * 0.001f: float rounding of the scale
+  // 10000.001 rad/s: one raw step above the DBC maximum
+  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x033, {0x81, 0x96, 0x98, 0x00})));
+  EXPECT_EQ(MC_CAN_ERR_NONE, un(Frame(0x033, {0x80, 0x96, 0x98, 0x00})));
+  // raw 10000000 * 0.001f: float rounding of the scale, and float's spacing
+  // at 1e4 (0.98e-3)
+  EXPECT_NEAR(10000.0f, v[0], 2e-3f);
   EXPECT_EQ(MC_CAN_MSG_SET_SPEED_REF, m);
   EXPECT_EQ(MC_CAN_ERR_NONE, un(Frame(0x035, {})));  // CLEAR_FAULTS: no data
 }
@@ -428,8 +430,8 @@ TEST_F(CanCmd, EnableAndSetCurrentReference) {
   Init();
   EnableCurrent();
   EXPECT_TRUE(c.enabled);
-  // i_d = -0.5 A, i_q = 1.25 A
-  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x032, {0x0C, 0xFE, 0xE2, 0x04})));
+  // i_d = -0.5 A, i_q = 1.25 A (24-bit mA each)
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x032, {0x0C, 0xFE, 0xFF, 0xE2, 0x04, 0x00})));
   EXPECT_FLOAT_EQ(-0.5f, d.id_ref_a);
   EXPECT_FLOAT_EQ(1.25f, d.iq_ref_a);
   mc_hal_can_frame_t f;
@@ -442,19 +444,19 @@ TEST_F(CanCmd, EnableAndSetCurrentReference) {
 TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
   Init();
   EnableCurrent();
-  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x032, {0, 0, 0xE8, 0x03})));  // i_q 1 A
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x032, {0, 0, 0, 0xE8, 0x03, 0})));  // i_q 1 A
   struct Case {
     mc_hal_can_frame_t f;
     mc_can_err_t e;
   } cases[] = {
       {Frame(0x032, {0, 0, 0xE8}), MC_CAN_ERR_LENGTH},
-      {Frame(0x032, {0, 0, 0xA8, 0x61}), MC_CAN_ERR_RANGE},  // 25 A > the drive's i_max 20 A
-      {Frame(0x031, {2}), MC_CAN_ERR_MODE},                  // mode change while enabled
-      {Frame(0x033, {0, 0, 0, 0}), MC_CAN_ERR_MODE},         // speed ref in CURRENT mode
-      {Frame(0x035, {}), MC_CAN_ERR_MODE},                   // clear faults while enabled
+      {Frame(0x032, {0, 0, 0, 0xA8, 0x61, 0}), MC_CAN_ERR_RANGE},  // 25 A > the drive's i_max 20 A
+      {Frame(0x031, {2}), MC_CAN_ERR_MODE},                        // mode change while enabled
+      {Frame(0x033, {0, 0, 0, 0}), MC_CAN_ERR_MODE},               // speed ref in CURRENT mode
+      {Frame(0x035, {}), MC_CAN_ERR_MODE},                         // clear faults while enabled
       {Frame(0x022, {0, 0, 0, 0, 0, 0, 0, 0}), MC_CAN_ERR_UNKNOWN_CMD},  // a telemetry id
       {Frame(0x02F, {}), MC_CAN_ERR_UNKNOWN_CMD},
-      {Frame(0x032, {0, 0, 0xE8, 0x03}, MC_HAL_CAN_FLAG_RTR), MC_CAN_ERR_FORMAT},
+      {Frame(0x032, {0, 0, 0, 0xE8, 0x03, 0}, MC_HAL_CAN_FLAG_RTR), MC_CAN_ERR_FORMAT},
       {Frame(0x036, {2, 0xE8, 0x03}), MC_CAN_ERR_BUDGET},  // CURRENTS at 1000 Hz (see below)
       {Frame(0x036, {11, 1, 0}), MC_CAN_ERR_RANGE},
       {Frame(0x036, {1, 0, 0}), MC_CAN_ERR_HEARTBEAT_MIN},  // HEARTBEAT off
@@ -507,7 +509,7 @@ TEST_F(CanCmd, SpeedAndPositionNeedTheirHooks) {
 TEST_F(CanCmd, TimeoutRampsTheCurrentToZeroThenIdles) {
   Init();
   EnableCurrent();
-  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x032, {0, 0, 0xD0, 0x07})));  // i_q 2 A
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x032, {0, 0, 0, 0xD0, 0x07, 0})));  // i_q 2 A
   // a heartbeat (counter advancing) every 99 ticks keeps it running
   uint8_t n = 0;
   for (int k = 0; k < 500; ++k) {
@@ -527,8 +529,8 @@ TEST_F(CanCmd, TimeoutRampsTheCurrentToZeroThenIdles) {
   EXPECT_TRUE(c.stopping);
   // 100 A/s at 1 kHz: 0.1 A per tick (float steps: 1e-5 A)
   EXPECT_NEAR(1.9f, d.iq_ref_a, 1e-5f);
-  EXPECT_EQ(MC_CAN_ERR_MODE, Send(Frame(0x032, {0, 0, 0xD0, 0x07})));
-  ExpectReply(0x12, MC_CAN_ERR_MODE, 4);
+  EXPECT_EQ(MC_CAN_ERR_MODE, Send(Frame(0x032, {0, 0, 0, 0xD0, 0x07, 0})));
+  ExpectReply(0x12, MC_CAN_ERR_MODE, 6);
   int ticks = 1;
   while (c.enabled && ticks < 100) {
     mc_can_cmd_step(&c);
@@ -802,8 +804,8 @@ TEST_F(CanCmd, AForeignFloodCostsNoKeepAlive) {
 TEST_F(CanCmd, ReferencesWhileDisabledAreRefusedAndEnableStartsFromThePresent) {
   Init();
   ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x031, {1})));
-  EXPECT_EQ(MC_CAN_ERR_MODE, Send(Frame(0x032, {0, 0, 0x40, 0x1F})));  // i_q 8 A
-  ExpectReply(0x12, MC_CAN_ERR_MODE, 4);
+  EXPECT_EQ(MC_CAN_ERR_MODE, Send(Frame(0x032, {0, 0, 0, 0x40, 0x1F, 0})));  // i_q 8 A
+  ExpectReply(0x12, MC_CAN_ERR_MODE, 6);
   ASSERT_EQ(0, mc_drive_set_current_ref(&d, 0.0f, 8.0f));  // left by an earlier run
   ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x030, {1})));
   EXPECT_EQ(0.0f, d.iq_ref_a);

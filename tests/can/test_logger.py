@@ -99,10 +99,11 @@ def main():
 
     # encode: the cansend argument; bad input is a usage error
     r = cli("encode", "SET_CURRENT_REF", "i_q_ref_a=1.0")
-    check(r.stdout.strip() == "032#0000E803", f"encode: {r.stdout!r}")
+    # 6 bytes: i_d and i_q as 24-bit mA (version 3: any motor's current)
+    check(r.stdout.strip() == "032#000000E80300", f"encode: {r.stdout!r}")
     r = cli("--node", "5", "encode", "SET_CONTROL_MODE", "control_mode=SPEED")
     check(r.stdout.strip() == "0B1#02", f"encode node 5: {r.stdout!r}")
-    check(cli("encode", "SET_CURRENT_REF", "i_q_ref_a=99").returncode == 2, "out of range accepted")
+    check(cli("encode", "SET_CURRENT_REF", "i_q_ref_a=9999").returncode == 2, "out of range accepted")
     check(cli("encode", "NO_SUCH").returncode == 2, "unknown message accepted")
     tab = cli("table").stdout
     check(all(m.name in tab for m in db.messages), "table misses a message")

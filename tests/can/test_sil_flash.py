@@ -101,6 +101,15 @@ def cfg_status(frames):
     return hb[0]
 
 
+def report(fails):
+    """The exit code of a checks-list test: 0 when no check failed."""
+    if fails:
+        print(f"{len(fails)} check(s) failed")
+        return 1
+    print("all checks passed")
+    return 0
+
+
 def setup():
     """--mcsim --work --repo, a fresh work directory, and the Sil on them."""
     ap = argparse.ArgumentParser()

@@ -93,11 +93,11 @@ static const mc_can_signal_t sig_set_control_mode[1] = {
     {0u, 8u, false, 1.0f, 0.0f, 1.0f, 3.0f}, /* control_mode [-] */
 };
 static const mc_can_signal_t sig_set_current_ref[2] = {
-    {0u, 16u, true, 0.001f, 0.0f, -32.768f, 32.767f}, /* i_d_ref_a [A] */
-    {16u, 16u, true, 0.001f, 0.0f, -32.768f, 32.767f}, /* i_q_ref_a [A] */
+    {0u, 24u, true, 0.001f, 0.0f, -8388.608f, 8388.607f}, /* i_d_ref_a [A] */
+    {24u, 24u, true, 0.001f, 0.0f, -8388.608f, 8388.607f}, /* i_q_ref_a [A] */
 };
 static const mc_can_signal_t sig_set_speed_ref[1] = {
-    {0u, 32u, true, 0.001f, 0.0f, -1000.0f, 1000.0f}, /* omega_ref_rad_s [rad/s] */
+    {0u, 32u, true, 0.001f, 0.0f, -10000.0f, 10000.0f}, /* omega_ref_rad_s [rad/s] */
 };
 static const mc_can_signal_t sig_set_position_ref[1] = {
     {0u, 32u, true, 0.0001f, 0.0f, -200000.0f, 200000.0f}, /* theta_ref_rad [rad] */
@@ -161,7 +161,7 @@ const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
     {MC_CAN_CMD_APP_STATUS, 8u, MC_CAN_DIR_TX, 8u, sig_app_status}, /* APP_STATUS */
     {MC_CAN_CMD_SET_ENABLE, 1u, MC_CAN_DIR_RX, 1u, sig_set_enable}, /* SET_ENABLE */
     {MC_CAN_CMD_SET_CONTROL_MODE, 1u, MC_CAN_DIR_RX, 1u, sig_set_control_mode}, /* SET_CONTROL_MODE */
-    {MC_CAN_CMD_SET_CURRENT_REF, 4u, MC_CAN_DIR_RX, 2u, sig_set_current_ref}, /* SET_CURRENT_REF */
+    {MC_CAN_CMD_SET_CURRENT_REF, 6u, MC_CAN_DIR_RX, 2u, sig_set_current_ref}, /* SET_CURRENT_REF */
     {MC_CAN_CMD_SET_SPEED_REF, 4u, MC_CAN_DIR_RX, 1u, sig_set_speed_ref}, /* SET_SPEED_REF */
     {MC_CAN_CMD_SET_POSITION_REF, 4u, MC_CAN_DIR_RX, 1u, sig_set_position_ref}, /* SET_POSITION_REF */
     {MC_CAN_CMD_CLEAR_FAULTS, 0u, MC_CAN_DIR_RX, 0u, NULL}, /* CLEAR_FAULTS */

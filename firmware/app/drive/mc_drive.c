@@ -196,6 +196,17 @@ static void outputs_off(const mc_drive_t *d)
     if (d->hal->pwm3 != NULL && mc_hal_pwm3_disable(d->hal->pwm3) != 0) {
         confirmed = false;
     }
+    if (d->hal->pwm3 != NULL) {
+        /* The zero vector into the duty registers while the bridge is off:
+         * the timer latches it at its next update, so a later enable, whose
+         * own first duties take effect only at the update after it, closes
+         * the switches on the zero vector, not on the last run's voltage
+         * vector at a rotor angle long gone (after commissioning's last
+         * step at 60 rad/s, that stale vector drove the paper-002 motor to
+         * 15 A within the first 0.5 ms period at 2 kHz: OVERCURRENT on
+         * enable, depending on when the enable came) */
+        (void)mc_hal_pwm3_set_duty(d->hal->pwm3, 0.5f, 0.5f, 0.5f);
+    }
     if (d->hal->pwm2 != NULL && mc_hal_pwm2_disable(d->hal->pwm2) != 0) {
         confirmed = false;
     }

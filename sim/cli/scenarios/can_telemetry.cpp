@@ -11,6 +11,13 @@
 //                          ./can-telemetry.candump.log), time-stamped with
 //                          the simulated time, and commands from the
 //                          candump-format script MCSIM_CAN_CMDS if set.
+// The motor and board: the paper-002 test motor on FocSil's 200 V board
+// (no --motor), or any motor and board of sim/motors/ (--motor FILE
+// [--board FILE], MotorRig of drive_setup.hpp: the plant, sensors and the
+// drive's limits from the files, the gains of drive_setup.hpp and every one
+// of them settable with --set; the speed PI's defaults are the derived
+// speed_wc_rad_s and i_limit_a, speed_max_rad_s the derived speed limit).
+//
 // With --set realtime=1 the loop is paced to the wall clock (needed when
 // people or scripts send commands on a live interface).
 //
@@ -60,6 +67,7 @@
 #include <vector>
 
 #include "app_binding.hpp"
+#include "drive_setup.hpp"
 #include "foc_sil.hpp"
 #include "hal_host/candump_log.hpp"
 #include "hal_host/file_flash.hpp"
@@ -111,27 +119,103 @@ int position_hook(void* ctx, float ref) {
 const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
                                  "LAYOUT", "INVALID",  "FLASH"};
 
-// The scenario's settings and the drive configuration FocSil built from
-// them, as a parameter set (the board's defaults; see the header).
-mc_params_t scenario_params(const Params& P, const FocSilOptions& o, const mc_drive_cfg_t& c) {
+// The simulated motor, board and drive: FocSil (paper-002 test motor) or
+// MotorRig (the --motor/--board files). o holds the rates, inertia, bus and
+// bandwidths the rest of the scenario reads, for both.
+struct CanBoard {
+  FocSilOptions o;
+  double kt_nm_a = 0, b_nm_s_rad = 0, i_sense_max_a = 0, dead_time_s = 0;
+  uint32_t adc_bits = 12, encoder_cpr = 0;
+  std::unique_ptr<FocSil> sil;
+  std::unique_ptr<MotorRig> rig;
+  void step() const { sil ? sil->step() : rig->step(); }
+  hal_host::PmsmBoard& board() const { return sil ? sil->board() : rig->board(); }
+  mc_drive_t& drive() const { return sil ? sil->drive() : rig->drive(); }
+};
+
+// (Re)build the board for o (pwm_hz, slow_loop_div, bandwidths may come
+// from the flash).
+void build_board(CanBoard& cb, const RunContext& ctx) {
+  if (ctx.files == nullptr) {
+    const PmsmParams m = paper002_test_motor();
+    cb.kt_nm_a = 1.5 * m.pole_pairs * m.flux_wb;
+    cb.b_nm_s_rad = m.B_nms_rad;
+    cb.i_sense_max_a = 20.0;  // FocSil's board: 12-bit, 20 A, 8192 counts
+    cb.adc_bits = 12u;
+    cb.encoder_cpr = 8192u;
+    cb.dead_time_s = 0.0;  // the average-value inverter has none here
+    cb.sil = std::make_unique<FocSil>(cb.o);
+    return;
+  }
+  MotorFiles f = *ctx.files;
+  f.board.pwm_hz = cb.o.pwm_hz;
+  Gains g = derive_gains(f, &ctx.params);
+  g.cur_bw_rad_s = cb.o.bw_rad_s;
+  g.enc_pll_bw_rad_s = cb.o.speed_pll_bw_rad_s;
+  cb.kt_nm_a = g.kt_nm_a;
+  cb.b_nm_s_rad = f.motor.b_nm_s_rad;
+  cb.i_sense_max_a = f.board.i_sense_max_a;
+  cb.adc_bits = static_cast<uint32_t>(f.board.adc_bits);
+  cb.encoder_cpr = static_cast<uint32_t>(f.board.encoder_cpr);
+  cb.dead_time_s = f.board.dead_time_s;
+  RigOptions ro;
+  ro.law = Law::kCurrent;
+  const double load = ctx.params.get("load_nm");
+  ro.load_nm = [load](double) { return load; };
+  const int substeps = static_cast<int>(ctx.params.get("substeps"));
+  ro.board_hook = [substeps](hal_host::PmsmBoardConfig& bc) { bc.substeps = substeps; };
+  const unsigned div = cb.o.slow_loop_div;
+  ro.drive_hook = [div](mc_drive_cfg_t& dc) { dc.slow_loop_div = div; };
+  cb.rig = std::make_unique<MotorRig>(f, g, ro);
+}
+
+CanBoard make_board(const RunContext& ctx) {
+  const auto& P = ctx.params;
+  CanBoard cb;
+  FocSilOptions& o = cb.o;
+  o.substeps = static_cast<int>(P.get("substeps"));
+  o.slow_loop_div = static_cast<unsigned>(P.get("slow_loop_div"));
+  o.load_nm = P.get("load_nm");
+  if (ctx.files == nullptr) {
+    o.pwm_hz = P.get("pwm_hz");
+    o.J_kgm2 = P.get("J_kgm2");
+    o.bw_rad_s = 2.0 * 3.14159265358979 * P.get("bw_hz");
+    o.speed_pll_bw_rad_s = P.get("speed_pll_bw_rad_s");
+  } else {
+    const MotorFiles& f = *ctx.files;
+    o.pwm_hz = f.board.pwm_hz;
+    o.J_kgm2 = f.motor.j_kgm2;
+    o.vbus_v = f.board.vbus_v;
+    o.three_shunts = f.board.current_sensors == 3;
+    o.delay_periods = f.board.delay_periods;
+    o.bw_rad_s = P.get("cur_bw_rad_s");
+    o.speed_pll_bw_rad_s = P.get("enc_pll_bw_rad_s");
+  }
+  build_board(cb, ctx);
+  return cb;
+}
+
+// The scenario's settings and the drive configuration FocSil or MotorRig
+// built from them, as a parameter set (the board's defaults; see the header).
+mc_params_t scenario_params(const Params& P, const CanBoard& cb, const mc_drive_cfg_t& c) {
   mc_params_t p = mc_params_default;
-  const PmsmParams m = paper002_test_motor();
+  const FocSilOptions& o = cb.o;
   p.r_ohm = c.foc.r_ohm;
   p.ld_h = c.foc.ld_h;
   p.lq_h = c.foc.lq_h;
   p.flux_wb = c.foc.flux_wb;
   p.pole_pairs = c.pole_pairs;
   p.j_kgm2 = static_cast<float>(o.J_kgm2);
-  p.b_nm_s_rad = static_cast<float>(m.B_nms_rad);
+  p.b_nm_s_rad = static_cast<float>(cb.b_nm_s_rad);
   p.i_max_a = c.i_max_a;
   p.speed_max_rad_s = static_cast<float>(P.get("speed_max_rad_s"));
   p.vbus_v = static_cast<float>(o.vbus_v);
   p.pwm_hz = static_cast<uint32_t>(std::lround(o.pwm_hz));
-  p.dead_time_s = 0.0f;  // the average-value inverter has none here
+  p.dead_time_s = static_cast<float>(cb.dead_time_s);
   p.current_sensors = o.three_shunts ? 3u : 2u;
-  p.i_sense_max_a = 20.0f;  // FocSil's board: 12-bit, 20 A, 8192 counts
-  p.adc_bits = 12u;
-  p.encoder_cpr = 8192u;
+  p.i_sense_max_a = static_cast<float>(cb.i_sense_max_a);
+  p.adc_bits = cb.adc_bits;
+  p.encoder_cpr = cb.encoder_cpr;
   p.current_bw_rad_s = static_cast<float>(o.bw_rad_s);
   p.v_limit_ratio = c.foc.v_limit_ratio;
   p.slow_loop_div = c.slow_loop_div;
@@ -167,17 +251,10 @@ mc_params_t scenario_params(const Params& P, const FocSilOptions& o, const mc_dr
 
 void run_can_telemetry(RunContext& ctx) {
   const auto& P = ctx.params;
-  FocSilOptions o;
-  o.pwm_hz = P.get("pwm_hz");
-  o.substeps = static_cast<int>(P.get("substeps"));
-  o.slow_loop_div = static_cast<unsigned>(P.get("slow_loop_div"));
-  o.J_kgm2 = P.get("J_kgm2");
-  o.load_nm = P.get("load_nm");
-  o.bw_rad_s = 2.0 * 3.14159265358979 * P.get("bw_hz");
-  o.speed_pll_bw_rad_s = P.get("speed_pll_bw_rad_s");
-  auto sil_ptr = std::make_unique<FocSil>(o);
+  CanBoard cb = make_board(ctx);
+  FocSilOptions& o = cb.o;
   // Boot: the configuration (see the header).
-  const mc_params_t p_scn = scenario_params(P, o, sil_ptr->drive().cfg);
+  const mc_params_t p_scn = scenario_params(P, cb, cb.drive().cfg);
   const uint32_t scn_err = mc_params_validate(&p_scn);
   if (ctx.flash != nullptr && scn_err != MC_PARAMS_OK) {
     throw UsageError(
@@ -214,11 +291,10 @@ void run_can_telemetry(RunContext& ctx) {
       o.slow_loop_div = p.slow_loop_div;
       o.bw_rad_s = static_cast<double>(p.current_bw_rad_s);
       o.speed_pll_bw_rad_s = static_cast<double>(p.speed_pll_bw_rad_s);
-      sil_ptr = std::make_unique<FocSil>(o);
+      build_board(cb, ctx);
     }
   }
-  FocSil& sil = *sil_ptr;
-  mc_drive_t& d = sil.drive();
+  mc_drive_t& d = cb.drive();
   // The parameter service needs the drive to run exactly its parameters
   // (the application initialises it from them).
   const bool serve_params = scn_err == MC_PARAMS_OK;
@@ -229,7 +305,7 @@ void run_can_telemetry(RunContext& ctx) {
   const uint32_t tick_hz = static_cast<uint32_t>(std::lround(tick_hz_d));
 
   // CAN: a SocketCAN interface, or a candump log (and a command script).
-  hal_host::PmsmBoard& board = sil.board();
+  hal_host::PmsmBoard& board = cb.board();
   auto ticks = [&board]() {
     uint32_t t = 0;
     (void)board.tick_read(&t);
@@ -262,7 +338,7 @@ void run_can_telemetry(RunContext& ctx) {
   {
     // The application's speed loop: a PI on J dw/dt = Kt iq, kp = J bw / Kt,
     // ki = kp bw / 4 (critically damped), at the slow rate.
-    const double kt = 1.5 * 4.0 * 0.11;  // paper-002 test motor: 1.5 p Phi [N m/A]
+    const double kt = cb.kt_nm_a;  // 1.5 p Phi [N m/A]
     const double bw = P.get("speed_bw_rad_s");
     const float kp = static_cast<float>(o.J_kgm2 * bw / kt);
     app.cfg.speed.kp_a_s_rad = kp;
@@ -285,7 +361,7 @@ void run_can_telemetry(RunContext& ctx) {
     pc.vel_ki_a_rad = static_cast<float>(app.cfg.speed.kp_a_s_rad * bw / 4.0);
     pc.vel_limit_rad_s = p.speed_max_rad_s;
     pc.iq_max_a = app.cfg.speed.i_max_a;
-    pc.kt_nm_a = static_cast<float>(1.5 * 4.0 * 0.11);
+    pc.kt_nm_a = static_cast<float>(cb.kt_nm_a);
     pc.j_kgm2 = static_cast<float>(o.J_kgm2);
     pc.ff_lead_s = static_cast<float>(1.0 / o.bw_rad_s + 1.5 / o.pwm_hz);
     if (mc_ctrl_pos_init(&pos, &pc) != MC_CTRL_POS_ERR_NONE) {
@@ -296,7 +372,7 @@ void run_can_telemetry(RunContext& ctx) {
     app.cfg.position_law.ctx = &pos;
     app.cfg.position_law.tm_ext = nullptr;
   }
-  const uint32_t aerr = mc_app_start(&app, &d, sil.board().hal(), can, serve_params);
+  const uint32_t aerr = mc_app_start(&app, &d, board.hal(), can, serve_params);
   if ((aerr & MC_APP_CFG_ERR_TM) != 0u) {
     throw UsageError("telemetry configuration refused (MC_TM_CFG bits 0x" +
                      std::to_string(app.tm_err) + "), bus load " +
@@ -361,8 +437,8 @@ void run_can_telemetry(RunContext& ctx) {
     write_app_binding(out, ab);
   }
 
-  std::vector<std::string> cols{"t", "tm_sent_mask", "tm_fail_mask", "omega_m_true_rad_s",
-                                "i_q_true_a"};
+  std::vector<std::string> cols{
+      "t", "tm_sent_mask", "tm_fail_mask", "omega_m_true_rad_s", "i_q_true_a", "theta_m_true_rad"};
   for (int i = 0; i < MC_TM_COUNT; ++i) {
     const uint32_t msg = mc_telemetry_msg(static_cast<uint32_t>(i));
     if (kSlotSignals[i].size() != mc_can_messages[msg].n_signals) {
@@ -386,7 +462,7 @@ void run_can_telemetry(RunContext& ctx) {
   uint32_t rx_read_max = 0;  // frames taken from the HAL by one receive call
   std::vector<double> row(cols.size());
   for (long k = 1; k <= n; ++k) {
-    sil.step();
+    cb.step();
     if (k % static_cast<long>(o.slow_loop_div) != 0) continue;
     // The slow loop's application work, as on the MCU: the frames received
     // since the previous step (the MCU's CAN interrupt), then commands,
@@ -404,6 +480,7 @@ void run_can_telemetry(RunContext& ctx) {
     row[c++] = tm.last_fail_mask;
     row[c++] = board.state()(2);
     row[c++] = iq_true;
+    row[c++] = board.state()(3);  // multi-turn, from the start angle (0)
     for (uint32_t i = 0; i < MC_TM_COUNT; ++i) {
       float v[MC_CAN_NSIG_MAX] = {0};
       const bool have = mc_telemetry_values(i, &src, v);
@@ -442,6 +519,12 @@ void run_can_telemetry(RunContext& ctx) {
   // ring) or by the command handler's own filter
   ctx.summary.set("cmd_rx_foreign", app.rx_foreign + cmd.rx_foreign);
   ctx.summary.set("cmd_poll_frames_max", std::max(rx_read_max, cmd.poll_max));
+  // the receive interrupt's part: foreign frames dropped there (before the
+  // ring and the command handler), own frames lost to a full ring, and the
+  // most frames one call took from the HAL
+  ctx.summary.set("app_rx_foreign", app.rx_foreign);
+  ctx.summary.set("app_rx_overflows", app.rx_overflows);
+  ctx.summary.set("app_rx_read_max", rx_read_max);
   ctx.summary.set("tm_frames_saturated", tm.saturated);
   ctx.summary.set("final_mode", static_cast<double>(d.mode));
   ctx.summary.set("final_enabled", cmd.enabled ? 1.0 : 0.0);
@@ -482,47 +565,92 @@ void run_can_telemetry(RunContext& ctx) {
   }
 }
 
-const Registrar reg_can(
-    {"can-telemetry",
-     "FOC drive (paper-002 test motor) with CAN telemetry and commands: frames to SocketCAN "
-     "(MCSIM_CAN_IF=vcan0) or to a candump log (MCSIM_CAN_LOG, commands from MCSIM_CAN_CMDS)",
-     2.0,
-     {{"node_id", 1.0, "1", "CAN node id (id = node << 5 | cmd)", 0.0, 62.0},
-      {"bitrate_kbps", 1000.0, "kbit/s", "bus bit rate for the budget check", 10.0, 1000.0},
-      {"budget_pct", 50.0, "%", "share of the bus the telemetry may use", 1.0, 70.0},
-      {"rate_heartbeat_hz", 10.0, "Hz", "HEARTBEAT rate (at least 1 Hz)", 1.0, 1000.0},
-      {"rate_currents_hz", 200.0, "Hz", "CURRENTS rate", 0.0, 1000.0},
-      {"rate_voltages_hz", 100.0, "Hz", "VOLTAGES rate", 0.0, 1000.0},
-      {"rate_speed_hz", 100.0, "Hz", "SPEED rate", 0.0, 1000.0},
-      {"rate_position_hz", 50.0, "Hz", "POSITION rate", 0.0, 1000.0},
-      {"rate_observer_hz", 0.0, "Hz", "OBSERVER rate (no observer in this scenario: nothing sent)",
-       0.0, 1000.0},
-      {"rate_controller_hz", 0.0, "Hz", "CONTROLLER rate (nothing sent here)", 0.0, 1000.0},
-      {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
-      {"rate_current_refs_hz", 100.0, "Hz", "CURRENT_REFS rate", 0.0, 1000.0},
-      {"rate_position_ref_hz", 50.0, "Hz", "POSITION_REF rate", 0.0, 1000.0},
-      {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
-      {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
+// The CAN side's parameters, the same for every motor.
+std::vector<ParamSpec> can_params() {
+  return {{"node_id", 1.0, "1", "CAN node id (id = node << 5 | cmd)", 0.0, 62.0},
+          {"bitrate_kbps", 1000.0, "kbit/s", "bus bit rate for the budget check", 10.0, 1000.0},
+          {"budget_pct", 50.0, "%", "share of the bus the telemetry may use", 1.0, 70.0},
+          {"rate_heartbeat_hz", 10.0, "Hz", "HEARTBEAT rate (at least 1 Hz)", 1.0, 1000.0},
+          {"rate_currents_hz", 200.0, "Hz", "CURRENTS rate", 0.0, 1000.0},
+          {"rate_voltages_hz", 100.0, "Hz", "VOLTAGES rate", 0.0, 1000.0},
+          {"rate_speed_hz", 100.0, "Hz", "SPEED rate", 0.0, 1000.0},
+          {"rate_position_hz", 50.0, "Hz", "POSITION rate", 0.0, 1000.0},
+          {"rate_observer_hz", 0.0, "Hz",
+           "OBSERVER rate (no observer in this scenario: nothing sent)", 0.0, 1000.0},
+          {"rate_controller_hz", 0.0, "Hz", "CONTROLLER rate (nothing sent here)", 0.0, 1000.0},
+          {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
+          {"rate_current_refs_hz", 100.0, "Hz", "CURRENT_REFS rate", 0.0, 1000.0},
+          {"rate_position_ref_hz", 50.0, "Hz", "POSITION_REF rate", 0.0, 1000.0},
+          {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
+          {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
+          {"realtime", 0.0, "1", "1: pace the simulation to the wall clock", 0.0, 1.0},
+          {"end_after_stop_s", 0.0, "s",
+           "if > 0, end the run this long after a CAN-enabled run stopped (timeout, disable, "
+           "fault)",
+           0.0, 100.0},
+          {"substeps", 2.0, "1", "RK4 sub-steps per PWM period", 1.0, 64.0}};
+}
+
+// Without --motor: the paper-002 test motor on FocSil's board.
+std::vector<ParamSpec> own_params() {
+  std::vector<ParamSpec> v = can_params();
+  const std::vector<ParamSpec> own = {
       {"stop_decel_rad_s2", 200.0, "rad/s^2", "speed ramp of a safe stop", 0.01, 1e6},
       {"speed_max_rad_s", 150.0, "rad/s", "largest speed reference accepted", 0.1, 1000.0},
       {"speed_bw_rad_s", 20.0, "rad/s", "bandwidth of the scenario's speed PI", 0.1, 500.0},
       {"speed_i_max_a", 3.0, "A", "current limit of the speed PI", 0.0, 10.0},
-      {"realtime", 0.0, "1", "1: pace the simulation to the wall clock", 0.0, 1.0},
-      {"end_after_stop_s", 0.0, "s",
-       "if > 0, end the run this long after a CAN-enabled run stopped (timeout, disable, fault)",
-       0.0, 100.0},
       {"pwm_hz", 10000.0, "Hz", "PWM and current-loop rate", 1000.0, 100000.0},
       {"slow_loop_div", 10.0, "1", "slow loop (CAN) every this many PWM periods", 1.0, 1000.0},
-      {"substeps", 2.0, "1", "RK4 sub-steps per PWM period", 1.0, 64.0},
       {"bw_hz", 200.0, "Hz", "designed current-loop bandwidth", 1.0, 2000.0},
       {"speed_pll_bw_rad_s", 1000.0, "rad/s",
        "encoder tracking loop bandwidth (3 bw / pwm_hz <= 1)", 1.0, 6000.0},
       {"J_kgm2", 0.05, "kg m^2",
        "rotor + load inertia (a flywheel: 1 A accelerates it at 13 rad/s^2)", 1.0e-7, 100.0},
-      {"load_nm", 0.0, "N m", "constant load torque", -10.0, 10.0}},
-     run_can_telemetry,
-     {},
-     true});
+      {"load_nm", 0.0, "N m", "constant load torque", -10.0, 10.0}};
+  v.insert(v.end(), own.begin(), own.end());
+  return v;
+}
+
+// With --motor/--board: the gains of drive_setup.hpp (cur_bw_rad_s,
+// enc_pll_bw_rad_s, stop_decel_rad_s2, ...), the speed PI and the limits
+// from them; pwm_hz and J from the files (--set board.pwm_hz=,
+// motor.j_kgm2=).
+std::vector<ParamSpec> file_params(const MotorFiles& f) {
+  const Gains g = derive_gains(f, nullptr);
+  std::vector<ParamSpec> v = can_params();
+  const double torque_max_nm = g.kt_nm_a * g.i_limit_a;
+  const std::vector<ParamSpec> own = {
+      {"speed_max_rad_s", g.speed_limit_rad_s, "rad/s",
+       "largest speed reference accepted (derived: speed_limit_rad_s)", 0.1, 10000.0},
+      {"speed_bw_rad_s", g.speed_wc_rad_s, "rad/s",
+       "bandwidth of the scenario's speed PI (derived: speed_wc_rad_s)", 0.1, 1.0e4},
+      {"speed_i_max_a", g.i_limit_a, "A", "current limit of the speed PI (<= i_limit_a)", 0.0,
+       g.i_limit_a},
+      {"slow_loop_div", std::max(1.0, std::round(f.board.pwm_hz / 1000.0)), "1",
+       "slow loop (CAN) every this many PWM periods (about 1 kHz)", 1.0, 1000.0},
+      {"load_nm", 0.0, "N m", "constant load torque (at most the current limit's torque)",
+       -torque_max_nm, torque_max_nm}};
+  v.insert(v.end(), own.begin(), own.end());
+  const std::vector<ParamSpec> gains = gain_params(f);
+  v.insert(v.end(), gains.begin(), gains.end());
+  return v;
+}
+
+Scenario make_scenario() {
+  Scenario s{"can-telemetry",
+             "FOC drive (paper-002 test motor, or --motor FILE [--board FILE]) with CAN "
+             "telemetry and commands: frames to SocketCAN (MCSIM_CAN_IF=vcan0) or to a candump "
+             "log (MCSIM_CAN_LOG, commands from MCSIM_CAN_CMDS)",
+             2.0,
+             own_params(),
+             run_can_telemetry,
+             file_params,
+             true};
+  s.motor_optional = true;
+  return s;
+}
+
+const Registrar reg_can(make_scenario());
 
 }  // namespace
 }  // namespace mcsim

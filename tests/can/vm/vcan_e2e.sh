@@ -60,7 +60,7 @@ wait_for 60 grep -q " 021#" candump.log || { say "no heartbeat from the SIL"; ca
 say "drive is streaming; sending commands"
 
 read -r MODE ENABLE IQ05 IQ10 <<< "$MC_E2E_FRAMES"
-BAD=032#0000E8   # SET_CURRENT_REF with 3 data bytes instead of 4
+BAD=032#0000E8   # SET_CURRENT_REF with 3 data bytes instead of 6
 cansend "$IF" "$MODE"
 cansend "$IF" "$ENABLE"
 cansend "$IF" "$IQ05"
