@@ -80,21 +80,20 @@ void check_unpack(const mc_hal_can_frame_t& f) {
   float w[MC_CAN_NSIG_MAX];
   uint32_t m2;
   require(mc_can_proto_unpack(&r, &m2, w, MC_CAN_NSIG_MAX) == MC_CAN_ERR_NONE && m2 == m);
-  // A scaled signal wider than 24 bits (SET_POSITION_REF.theta_ref_rad: 32
-  // bits of 0.1 mrad) is carried as a float, whose spacing at |v| (2^-23 |v|
-  // per binade) reaches the 0.1 mrad step near 800 rad: the repack may then
-  // land on a neighbouring raw value. Tolerance: half a step (pack rounds to
-  // the raw grid) plus two float roundings (pack divides by the scale, unpack
-  // multiplies), each below 2^-24 |v| and so below one float spacing at |v|.
-  // Every signal of 24 bits or fewer must come back exactly.
+  // Values travel as floats: v = raw * scale rounded to a float, and pack
+  // rounds v / scale back to the raw grid. Both w and v lie on the raw grid
+  // (up to float rounding), so they must agree to half a step plus two float
+  // roundings (pack divides, unpack multiplies; each below 2^-24 |v|, so
+  // below one float spacing at |v|). Where the float's spacing at |v| is well
+  // below the step this allows no other raw value: the round trip is exact.
+  // Where it is not (SPEED.omega_m_rad_s, 24 bits of 1 mrad/s, near 8388
+  // rad/s: spacing 0.98 mrad/s; SET_POSITION_REF's 32 bits of 0.1 mrad
+  // beyond about 800 rad), the float itself cannot tell the neighbouring raw
+  // values apart, and the bound allows exactly that.
   for (uint32_t i = 0; i < g.n_signals; ++i) {
-    const mc_can_signal_t& s = g.signals[i];
-    if (s.length <= 24u) {
-      require(w[i] == v[i]);
-    } else {
-      const float ulp = std::nextafter(std::fabs(v[i]), INFINITY) - std::fabs(v[i]);
-      require(std::fabs(w[i] - v[i]) <= 0.5f * s.scale + 2.0f * ulp);
-    }
+    const float a = std::fabs(v[i]);
+    const float ulp = std::nextafter(a, INFINITY) - a;
+    require(std::fabs(w[i] - v[i]) <= 0.5f * g.signals[i].scale + 2.0f * ulp);
   }
 }
 
