@@ -185,8 +185,12 @@ uint32_t mc_law_gains_from_params(const mc_params_t *p, mc_gains_motor_t *m, mc_
     fix.cur_bw_rad_s = (double)p->current_bw_rad_s;
     fix.i_limit_a = (double)p->i_max_a;
     fix.enc_pll_bw_rad_s = (double)p->speed_pll_bw_rad_s;
-    fix.obs_crit_rad_s = (double)p->obs_omega_crit_m_rad_s;
-    fix.pll_bw_rad_s = (double)p->obs_pll_bw_rad_s;
+    if (p->obs_omega_crit_m_rad_s > 0.0f) { /* 0: derived */
+        fix.obs_crit_rad_s = (double)p->obs_omega_crit_m_rad_s;
+    }
+    if (p->obs_pll_bw_rad_s > 0.0f) {
+        fix.pll_bw_rad_s = (double)p->obs_pll_bw_rad_s;
+    }
     fix.pos_v_max_rad_s = (double)p->speed_max_rad_s;
     fix.pos_a_max_rad_s2 = (double)p->stop_decel_rad_s2;
     fix.pos_d_max_rad_s2 = (double)p->stop_decel_rad_s2;

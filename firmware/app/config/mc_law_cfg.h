@@ -70,7 +70,8 @@ void mc_law_motor_from_params(const mc_params_t *p, mc_gains_motor_t *m);
 /** The gains of a parameter set: derived from its motor values with the
  *  table's own settings taken as given: current_bw_rad_s, i_max_a (the
  *  current limit), speed_pll_bw_rad_s (the encoder loop),
- *  obs_omega_crit_m_rad_s and obs_pll_bw_rad_s (the observer), and the
+ *  obs_omega_crit_m_rad_s and obs_pll_bw_rad_s where not 0 (the observer;
+ *  0: derived), and the
  *  position move's cruise speed and acceleration (speed_max_rad_s,
  *  stop_decel_rad_s2). Returns mc_gains_derive's bits. */
 uint32_t mc_law_gains_from_params(const mc_params_t *p, mc_gains_motor_t *m, mc_gains_t *g);

@@ -4,6 +4,8 @@
  */
 #include "mc_param_srv.h"
 
+#include "mc_law_cfg.h"
+
 #include <stddef.h>
 
 int mc_param_srv_init(mc_param_srv_t *s, const mc_params_t *p, mc_drive_t *drive,
@@ -105,6 +107,12 @@ static mc_param_status_t do_apply(mc_param_srv_t *s, uint32_t *p_value)
         err = mc_params_to_drive_cfg(&s->staged, &cfg);
     }
     if (err != MC_PARAMS_OK) {
+        if ((err & MC_PARAMS_ERR_LAW) != 0u) {
+            const uint32_t why = mc_law_speed_check(&s->staged);
+            if (why != 0u) {
+                s->law_error = why; /* else the front end's hook set it */
+            }
+        }
         *p_value = err;
         return MC_PARAM_ERR_INVALID;
     }

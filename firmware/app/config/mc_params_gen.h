@@ -170,8 +170,8 @@ typedef struct {
     float speed_ki_a_rad; /**< Speed-loop integral gain. [A/rad] */
     uint32_t encoder_reversed; /**< 1: the encoder counts down when the rotor turns positive (commissioning measures it). */
     uint32_t speed_law; /**< Law of SPEED mode: 0 sensored speed PI (encoder), 1 sensorless (flux observer + PLL, I-f start), 2 PI2D (encoder); gains derived from the motor values (firmware/app/config/mc_law_cfg.h). */
-    float obs_omega_crit_m_rad_s; /**< Critical speed of the flux observer (sets its gain). [rad/s] */
-    float obs_pll_bw_rad_s; /**< Bandwidth of the sensorless PLL. [rad/s] */
+    float obs_omega_crit_m_rad_s; /**< Critical speed of the flux observer (sets its gain); 0: derived, 0.02 speed_rated_rad_s (firmware/app/config/mc_gains.c). [rad/s] */
+    float obs_pll_bw_rad_s; /**< Bandwidth of the sensorless PLL; 0: derived, min(300, 0.04 pwm_hz) (firmware/app/config/mc_gains.c). [rad/s] */
     float i_trip_a; /**< Instantaneous over-current trip on any phase; i_max_a <= it < i_sense_max_a. [A] */
     float vbus_min_v; /**< DC-bus under-voltage trip. [V] */
     float vbus_max_v; /**< DC-bus over-voltage trip. [V] */
