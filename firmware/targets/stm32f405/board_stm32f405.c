@@ -195,7 +195,7 @@ static void board_defaults(mc_params_t *p)
     p->encoder_cpr = MC_BOARD_DESC.enc_counts_per_rev;
     p->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
     p->vbus_max_v = MC_BOARD_DESC.vbus_max_v;
-    p->can_bitrate_bps = 500000u; /* the controller's rate (mc_board_f405.c) */
+    p->can_bitrate_bps = 500000u; /* the set-up's rate; a stored one applies at boot */
 }
 
 const mc_app_cfg_t *mc_board_app_cfg(void)
@@ -246,6 +246,16 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
     b->app.set_rx_filter = set_node_filter;
     b->app.filter_ctx = b;
     return &b->app;
+}
+
+int mc_board_can_bitrate(uint32_t bitrate_bps)
+{
+    const mc_board_f405_err_t e = mc_board_f405_can_set_bitrate(&g_board.f405, bitrate_bps);
+    if (e != MC_BOARD_F405_OK) {
+        g_board.f405.err = e; /* for the debugger: the bus stays at 500 kbit/s */
+        return -1;
+    }
+    return 0;
 }
 
 const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p)
