@@ -243,6 +243,10 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
         b->app.speed.ki_dt_a_s_rad = kp * bw / 4.0f / ((float)PWM_HZ / (float)SLOW_LOOP_DIV);
         b->app.speed.i_max_a = I_MAX_A;
     }
+    /* SPEED by the law of the speed_law parameter, POSITION by the
+     * position cascade, their gains from the motor values
+     * (firmware/app/config/mc_law_cfg.h) */
+    b->app.laws_from_params = true;
     b->app.set_rx_filter = set_node_filter;
     b->app.filter_ctx = b;
     return &b->app;
