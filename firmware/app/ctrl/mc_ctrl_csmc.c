@@ -172,13 +172,11 @@ uint32_t mc_ctrl_csmc_init(mc_ctrl_csmc_t *c, const mc_ctrl_csmc_cfg_t *cfg)
     c->tm.v_a_v = 0.0f;
     c->tm.v_b_v = 0.0f;
     c->tm.est = (mc_hgo_f32_est_t){0.0f, 0.0f, 0.0f};
-    c->ops.outputs = MC_DRIVE_OUT_PWM2;
-    c->ops.needs_encoder = true;
-    c->ops.reset = ctrl_reset;
-    c->ops.fast = ctrl_fast;
-    c->ops.slow = NULL;
-    c->ops.stop = NULL;
-    c->ops.ctx = c;
+    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM2,
+                               .needs_encoder = true,
+                               .reset = ctrl_reset,
+                               .fast = ctrl_fast,
+                               .ctx = c};
     return MC_CTRL_CSMC_ERR_NONE;
 }
 

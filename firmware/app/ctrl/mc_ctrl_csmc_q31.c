@@ -116,13 +116,11 @@ uint32_t mc_ctrl_csmc_q31_init(mc_ctrl_csmc_q31_t *c, const mc_ctrl_csmc_q31_cfg
     c->ref = (mc_ctrl_csmc_ref_t){0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
     (void)ctrl_reset(c);
     c->tm = tm0;
-    c->ops.outputs = MC_DRIVE_OUT_PWM2;
-    c->ops.needs_encoder = true;
-    c->ops.reset = ctrl_reset;
-    c->ops.fast = ctrl_fast;
-    c->ops.slow = NULL;
-    c->ops.stop = NULL;
-    c->ops.ctx = c;
+    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM2,
+                               .needs_encoder = true,
+                               .reset = ctrl_reset,
+                               .fast = ctrl_fast,
+                               .ctx = c};
     return MC_CTRL_CSMC_ERR_NONE;
 }
 

@@ -137,13 +137,11 @@ uint32_t mc_ctrl_pi2d_init(mc_ctrl_pi2d_t *c, const mc_ctrl_pi2d_cfg_t *cfg)
     c->theta_m_prev_rad = 0.0f;
     c->have_prev = false;
     c->tm = tm0;
-    c->ops.outputs = MC_DRIVE_OUT_PWM3;
-    c->ops.needs_encoder = true;
-    c->ops.reset = ctrl_reset;
-    c->ops.fast = ctrl_fast;
-    c->ops.slow = NULL;
-    c->ops.stop = NULL;
-    c->ops.ctx = c;
+    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
+                               .needs_encoder = true,
+                               .reset = ctrl_reset,
+                               .fast = ctrl_fast,
+                               .ctx = c};
     return MC_CTRL_PI2D_ERR_NONE;
 }
 

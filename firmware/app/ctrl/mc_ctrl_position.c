@@ -261,13 +261,12 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
     c->mode_seq = 0u;
     c->mode_ack = 0u;
     c->tm = tm0;
-    c->ops.outputs = MC_DRIVE_OUT_PWM3;
-    c->ops.needs_encoder = true;
-    c->ops.reset = ctrl_reset;
-    c->ops.fast = ctrl_fast;
-    c->ops.slow = NULL;
-    c->ops.ctx = c;
-    c->ops.stop = ctrl_stop;
+    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
+                               .needs_encoder = true,
+                               .reset = ctrl_reset,
+                               .fast = ctrl_fast,
+                               .stop = ctrl_stop,
+                               .ctx = c};
     return MC_CTRL_POS_ERR_NONE;
 }
 

@@ -159,13 +159,10 @@ uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
         return err;
     }
     c->omega_cmd_m_rad_s = 0.0f;
-    c->ops.outputs = MC_DRIVE_OUT_PWM3;
-    c->ops.needs_encoder = false;
-    c->ops.reset = mc_ctrl_sls_reset;
-    c->ops.fast = mc_ctrl_sls_fast;
-    c->ops.slow = NULL;
-    c->ops.stop = NULL;
-    c->ops.ctx = c;
+    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
+                               .reset = mc_ctrl_sls_reset,
+                               .fast = mc_ctrl_sls_fast,
+                               .ctx = c};
     c->tm.handovers = 0u;
     c->tm.fallbacks = 0u;
     return mc_ctrl_sls_reset(c);

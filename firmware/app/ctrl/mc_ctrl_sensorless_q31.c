@@ -220,13 +220,10 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
     c->lock_timeout_steps = slsq_steps(f->if_lock_timeout_s, f->dt_s);
     c->dead_on = f->dead_time_s > 0.0f;
     c->omega_cmd = 0;
-    c->ops.outputs = MC_DRIVE_OUT_PWM3;
-    c->ops.needs_encoder = false;
-    c->ops.reset = mc_ctrl_sls_q31_reset;
-    c->ops.fast = mc_ctrl_sls_q31_fast;
-    c->ops.slow = NULL;
-    c->ops.stop = NULL;
-    c->ops.ctx = c;
+    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
+                               .reset = mc_ctrl_sls_q31_reset,
+                               .fast = mc_ctrl_sls_q31_fast,
+                               .ctx = c};
     c->tm.handovers = 0u;
     c->tm.fallbacks = 0u;
     return mc_ctrl_sls_q31_reset(c);
