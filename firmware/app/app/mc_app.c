@@ -258,9 +258,9 @@ static uint32_t laws_init(mc_app_t *a, const mc_params_t *p, const laws_cfgs_t *
         l->pos_ok = mc_ctrl_pos_init(&l->pos, &c->pos) == 0u;
         err |= l->pos_ok ? 0u : MC_LAW_ERR_POS_INIT;
     }
-    l->sls_cfg = c->sls;
-    l->pi2d_cfg = c->pi2d;
-    l->pos_cfg = c->pos;
+    (void)memcpy(&l->sls_cfg, &c->sls, sizeof l->sls_cfg); /* padding too */
+    (void)memcpy(&l->pi2d_cfg, &c->pi2d, sizeof l->pi2d_cfg);
+    (void)memcpy(&l->pos_cfg, &c->pos, sizeof l->pos_cfg);
     return err;
 }
 
@@ -341,6 +341,21 @@ static void cmd_modes(const mc_app_t *a, mc_can_cmd_cfg_t *cc)
     }
 }
 
+/* Bytewise equality of two configurations built by the same builder (which
+ * zeroes them first, padding included, and they are stored with memcpy):
+ * any value that differs, differs here. */
+static bool same_bytes(const void *a, const void *b, size_t n)
+{
+    const uint8_t *pa = a;
+    const uint8_t *pb = b;
+    for (size_t i = 0u; i < n; i++) {
+        if (pa[i] != pb[i]) {
+            return false;
+        }
+    }
+    return true;
+}
+
 /* An APPLY's laws: unchanged, or rebuilt while disabled (see mc_app.h). */
 static uint32_t laws_check(mc_app_t *a, const mc_params_t *p)
 {
@@ -349,9 +364,9 @@ static uint32_t laws_check(mc_app_t *a, const mc_params_t *p)
     uint32_t err;
     laws_cfgs(a, p, &c);
     if ((p->speed_law == l->speed_law) && (c.gains_err == MC_GAINS_OK) &&
-        (memcmp(&c.sls, &l->sls_cfg, sizeof c.sls) == 0) &&
-        (memcmp(&c.pi2d, &l->pi2d_cfg, sizeof c.pi2d) == 0) &&
-        (memcmp(&c.pos, &l->pos_cfg, sizeof c.pos) == 0) &&
+        same_bytes(&c.sls, &l->sls_cfg, sizeof c.sls) &&
+        same_bytes(&c.pi2d, &l->pi2d_cfg, sizeof c.pi2d) &&
+        same_bytes(&c.pos, &l->pos_cfg, sizeof c.pos) &&
         (a->srv.active.encoder_cpr == p->encoder_cpr)) {
         return 0u;
     }
@@ -363,9 +378,8 @@ static uint32_t laws_check(mc_app_t *a, const mc_params_t *p)
     /* the selected speed law must run; the position law is offered when
      * it can (law_error says why not) */
     if ((err & ~(MC_LAW_ERR_POS_INIT)) != 0u) {
-        laws_cfgs_t old;
-        laws_cfgs(a, &a->srv.active, &old);
-        l->error = laws_init(a, &a->srv.active, &old); /* the laws before */
+        laws_cfgs(a, &a->srv.active, &c); /* the laws before (c reused: stack) */
+        l->error = laws_init(a, &a->srv.active, &c);
         a->srv.law_error = err;
         return MC_PARAMS_ERR_LAW;
     }

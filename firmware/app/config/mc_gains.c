@@ -48,9 +48,11 @@ double mc_gains_sqrt(double x)
     uint64_t q = 0u;
     uint64_t r = 0u;
     int32_t e;
-    if (!(x > 0.0) || (x > 1.7976931348623157e308)) {
-        /* 0 and inf are their own roots; NaN and negatives have none */
-        return ((x == 0.0) || (x > 0.0)) ? x : __builtin_nan("");
+    if (!(x >= 0.0)) {
+        return __builtin_nan(""); /* NaN and negatives have no root */
+    }
+    if ((x == 0.0) || (x > 1.7976931348623157e308)) {
+        return x; /* 0 and inf are their own roots */
     }
     (void)memcpy(&b, &x, sizeof b);
     e = (int32_t)((b >> 52u) & 0x7FFu);

@@ -364,8 +364,8 @@ TEST_F(McApp, ApplyChangesLawsOnlyWhileDisabledAndRefusesWithTheReason)
     cfg.laws_from_params = true;
     Start();
     uint32_t v = MC_LAW_SPEED_SENSORLESS;
-    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE,
-                                                MC_PARAM_ID_SPEED_LAW, &v));
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_SPEED_LAW, &v));
     v = 0u;
     ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
     EXPECT_EQ(app.laws.speed_law, MC_LAW_SPEED_SENSORLESS);
@@ -376,8 +376,8 @@ TEST_F(McApp, ApplyChangesLawsOnlyWhileDisabledAndRefusesWithTheReason)
     ASSERT_EQ(0, mc_drive_set_mode(&drive, MC_DRIVE_MODE_CURRENT));
     const mc_ctrl_sls_cfg_t before = app.laws.sls.cfg;
     v = F32Bits(0.5f * defaults.i_rated_a);
-    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE,
-                                                MC_PARAM_ID_I_RATED_A, &v));
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_RATED_A, &v));
     v = 0u;
     EXPECT_EQ(MC_PARAM_ERR_INVALID, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
     EXPECT_EQ(v, MC_PARAMS_ERR_LAW);
@@ -392,8 +392,7 @@ TEST_F(McApp, ApplyChangesLawsOnlyWhileDisabledAndRefusesWithTheReason)
 
     // Ld 20 % above Lq: the observer's round-rotor model does not hold
     v = F32Bits(1.2f * defaults.lq_h);
-    ASSERT_EQ(MC_PARAM_OK,
-              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_LD_H, &v));
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_LD_H, &v));
     v = 0u;
     EXPECT_EQ(MC_PARAM_ERR_INVALID, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
     EXPECT_EQ(v, MC_PARAMS_ERR_LAW);
