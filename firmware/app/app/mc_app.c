@@ -375,9 +375,11 @@ static uint32_t laws_check(mc_app_t *a, const mc_params_t *p)
         return MC_PARAMS_ERR_LAW;
     }
     err = laws_init(a, p, &c);
-    /* the selected speed law must run; the position law is offered when
-     * it can (law_error says why not) */
-    if ((err & ~(MC_LAW_ERR_POS_INIT)) != 0u) {
+    /* the selected speed law must run (the sensored PI needs only the
+     * encoder); the position law is offered when it can (law_error says
+     * why not) */
+    if ((err & ((p->speed_law == MC_LAW_SPEED_PI) ? MC_LAW_ERR_ENCODER : ~MC_LAW_ERR_POS_INIT)) !=
+        0u) {
         laws_cfgs(a, &a->srv.active, &c); /* the laws before (c reused: stack) */
         l->error = laws_init(a, &a->srv.active, &c);
         a->srv.law_error = err;

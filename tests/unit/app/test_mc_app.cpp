@@ -402,3 +402,31 @@ TEST_F(McApp, ApplyChangesLawsOnlyWhileDisabledAndRefusesWithTheReason)
     EXPECT_EQ(v, MC_GAINS_ERR_SALIENT);
     EXPECT_EQ(app.cfg.speed_law.ctrl, mc_ctrl_sls_ops(&app.laws.sls)); // kept
 }
+
+// With the sensored PI selected, values the other laws cannot run (here a
+// current limit at 95 % of the sensor's full scale: no margin for the
+// derived gains) are accepted: only POSITION goes, and law_error says why.
+TEST_F(McApp, SensoredPiKeepsRunningWhenOnlyThePositionLawIsRefused)
+{
+    cfg.laws_from_params = true;
+    cfg.speed.kp_a_s_rad = 0.05f; // the board's sensored PI
+    cfg.speed.ki_dt_a_s_rad = 1e-3f;
+    cfg.speed.i_max_a = 5.0f;
+    Start();
+    ASSERT_NE(app.cmd.cfg.set_position_ref, nullptr);
+    ASSERT_NE(app.cmd.cfg.set_speed_ref, nullptr);
+    // i_limit 0.95 of the sensor's range, above its 1 / 1.1; the trip at it
+    uint32_t v = F32Bits(0.95f * defaults.i_sense_max_a);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, &v));
+    v = F32Bits(defaults.i_sense_max_a);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_TRIP_A, &v));
+    v = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_EQ(app.srv.law_error, MC_GAINS_ERR_SENSE);
+    EXPECT_EQ(app.cfg.position_law.ctrl, nullptr);
+    EXPECT_EQ(app.cmd.cfg.set_position_ref, nullptr); // POSITION: UNSUPPORTED
+    EXPECT_NE(app.cmd.cfg.set_speed_ref, nullptr);    // the sensored PI
+    EXPECT_EQ(app.cmd.cfg.speed_drive_mode, MC_DRIVE_MODE_CURRENT);
+}
