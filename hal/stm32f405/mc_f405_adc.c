@@ -176,9 +176,13 @@ static int adc_read(void *ctx, mc_hal_adc_sample_t *p_sample)
     if ((r->SR & MC_F405_ADC_SR_JEOC) == 0u) {
         return -EAGAIN;
     }
-    for (k = 0u; k < p->n_inj; k++) {
-        raw[k] = r->JDR[k] & MC_F405_ADC_DATA_MASK;
-    }
+    /* All four data registers, unrolled (the fast loop's hot path): a rank
+     * beyond n_inj is read but never used, and reading JDRx has no side
+     * effect (RM0090 13.13.9). */
+    raw[0] = r->JDR[0] & MC_F405_ADC_DATA_MASK;
+    raw[1] = r->JDR[1] & MC_F405_ADC_DATA_MASK;
+    raw[2] = r->JDR[2] & MC_F405_ADC_DATA_MASK;
+    raw[3] = r->JDR[3] & MC_F405_ADC_DATA_MASK;
     r->SR = ~MC_F405_ADC_SR_JEOC; /* rc_w0: clear JEOC, leave the others */
 
     for (k = 0u; k < p->n_phase; k++) {

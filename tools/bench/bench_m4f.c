@@ -23,6 +23,7 @@
 #include <string.h>
 
 #include "bench_cases.h"
+#include "bench_out.h"
 #include "m4f/semihost.h"
 
 #define TIM2_CR1 (*(volatile uint32_t *)0x40000000u)
@@ -55,48 +56,13 @@ static __attribute__((noinline)) void empty_case(uint32_t i)
 
 /* ---- text output ------------------------------------------------------- */
 
-static char g_line[256];
-static uint32_t g_pos;
-
-static void out_str(const char *s)
-{
-    while (*s != '\0' && g_pos + 1u < sizeof g_line) {
-        g_line[g_pos++] = *s++;
-    }
-    g_line[g_pos] = '\0';
-}
-
-static void out_u32(uint32_t v)
-{
-    char tmp[11];
-    int n = 0;
-    do {
-        tmp[n++] = (char)('0' + (char)(v % 10u));
-        v /= 10u;
-    } while (v != 0u);
-    char s[12];
-    for (int k = 0; k < n; ++k) {
-        s[k] = tmp[n - 1 - k];
-    }
-    s[n] = '\0';
-    out_str(s);
-}
-
 /* mean with one decimal: sum / n, printed as <int>.<tenth> */
 static void out_mean(uint32_t sum, uint32_t n)
 {
     const uint32_t tenths = (10u * sum + n / 2u) / n;
-    out_u32(tenths / 10u);
-    out_str(".");
-    out_u32(tenths % 10u);
-}
-
-static void flush_line(void)
-{
-    out_str("\n");
-    mc_sh_write0(g_line);
-    g_pos = 0u;
-    g_line[0] = '\0';
+    bench_out_u32(tenths / 10u);
+    bench_out_str(".");
+    bench_out_u32(tenths % 10u);
 }
 
 /* ---- main -------------------------------------------------------------- */
@@ -115,22 +81,22 @@ static void run_case(const bench_case_t *c)
         mx = (d > mx) ? d : mx;
         sum += d;
     }
-    out_str("{\"name\": \"");
-    out_str(c->name);
-    out_str("\", \"format\": \"");
-    out_str(c->format);
-    out_str("\", \"kind\": \"");
-    out_str(c->kind);
-    out_str("\", \"calls\": ");
-    out_u32(c->calls);
-    out_str(", \"instr_min\": ");
-    out_u32(mn);
-    out_str(", \"instr_mean\": ");
+    bench_out_str("{\"name\": \"");
+    bench_out_str(c->name);
+    bench_out_str("\", \"format\": \"");
+    bench_out_str(c->format);
+    bench_out_str("\", \"kind\": \"");
+    bench_out_str(c->kind);
+    bench_out_str("\", \"calls\": ");
+    bench_out_u32(c->calls);
+    bench_out_str(", \"instr_min\": ");
+    bench_out_u32(mn);
+    bench_out_str(", \"instr_mean\": ");
     out_mean(sum, c->calls);
-    out_str(", \"instr_max\": ");
-    out_u32(mx);
-    out_str("}");
-    flush_line();
+    bench_out_str(", \"instr_max\": ");
+    bench_out_u32(mx);
+    bench_out_str("}");
+    bench_out_flush();
 }
 
 int main(void)
@@ -146,10 +112,10 @@ int main(void)
         const uint32_t d = measure_once(empty_case, i);
         g_overhead = (d < g_overhead) ? d : g_overhead;
     }
-    out_str("{\"overhead_instr\": ");
-    out_u32(g_overhead);
-    out_str("}");
-    flush_line();
+    bench_out_str("{\"overhead_instr\": ");
+    bench_out_u32(g_overhead);
+    bench_out_str("}");
+    bench_out_flush();
     if (TIM2_CNT == 0u) {
         mc_sh_write0("bench: TIM2 does not count (run under -icount shift=0)\n");
         return 2;

@@ -196,6 +196,22 @@ def bench_m4f():
     return Src(("bench_m4f",), "ctest -R target.bench_m4f", fn)
 
 
+ISR_BOARDS = ("example", "odrive36", "vesc6")
+
+
+def bench_isr():
+    def fn(ctx):
+        out = os.path.join(ctx.workdir(("bench_isr",)), "bench_isr.json")
+        cmd = [sys.executable, os.path.join(ROOT, "tools", "bench", "run_isr_bench.py"),
+               "--qemu", ctx.input("qemu"), "--out", out]
+        for b in ISR_BOARDS:
+            cmd += ["--elf", f"{b}={ctx.input(f'bench_isr_{b}_elf')}"]
+        run(cmd)
+        with open(out) as fh:
+            return json.load(fh)
+    return Src(("bench_isr",), "ctest -R target.bench_isr", fn)
+
+
 def bench_q31(cpu):
     machine = {"m3": "netduino2", "m4f": "netduinoplus2"}[cpu]
 
@@ -333,6 +349,66 @@ def _mcu_kernels(ctx, b):
                      f"{c['cpu_load_pct_at_20khz']:g} %"])
     return table(["case", "format", "instructions, mean", "min / max", "µs @168 MHz",
                   "load @20 kHz"], rows, ["---", "---", "---:", "---:", "---:", "---:"])
+
+
+@figure("mcu-isr", [bench_isr()], reason=EXACT_QEMU)
+def _mcu_isr(ctx, b):
+    rows = []
+    for bd in b["boards"]:
+        for run, r in bd["runs"].items():
+            isr, sd = r["isr"], r["isr_slow_due"]
+            l20, l40 = r["load_pct"]["20khz"], r["load_pct"]["40khz"]
+            rows.append([bd["board"], run, f"{isr['mean']:g}", str(isr["max"]), str(sd["max"]),
+                         f"{l20['cpi1_mean']:g} % / {l20['est_max']:g} %",
+                         f"{l40['cpi1_mean']:g} % / {l40['est_max']:g} %",
+                         str(r["target_instr"]),
+                         "met" if r["met"] else f"**not met** (max {isr['max']})"])
+    return table(["board", "run", "instructions, mean", "max", "max, slow loop pended",
+                  "load @20 kHz (mean, 1 cyc/instr / max, est.)",
+                  "load @40 kHz (mean, 1 cyc/instr / max, est.)", "target (max)", "target"],
+                 rows, ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---"])
+
+
+@figure("mcu-isr-parts", [bench_isr()], reason=EXACT_QEMU)
+def _mcu_isr_parts(ctx, b):
+    rows = []
+    for bd in b["boards"]:
+        for run, r in bd["runs"].items():
+            p = r["parts"]
+            law = p.get("foc") or p.get("law")
+            rows.append([bd["board"], run, f"{p['adc_read']['mean']:g}",
+                         f"{p['encoder_read']['mean']:g}",
+                         f"{law['mean']:g} ({'FOC' if 'foc' in p else 'law'})",
+                         f"{p['duties_write']['mean']:g}", f"{p['app_mark']['mean']:g}",
+                         f"{r['drive_rest_mean']:g}", f"{r['isr']['mean']:g}"])
+    return table(["board", "run", "ADC read", "encoder read", "FOC / law", "duties write",
+                  "app mark", "drive rest (checks, encoder tracking, supervision, hooks)",
+                  "whole interrupt"], rows,
+                 ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---:"])
+
+
+@figure("mcu-cpu-budget", [bench_isr()], reason=EXACT_QEMU)
+def _mcu_cpu_budget(ctx, b):
+    rows = []
+    for bd in b["boards"]:
+        for run, x in bd["budget"].items():
+            r = bd["runs"][run]
+            ld, rt, dl = x["load_pct"], x["response_us"], x["deadline_us"]
+            rows.append([bd["board"], run,
+                         f"{r['isr']['max']} → {ld['fast']:g} % · {rt['fast']:g} / {dl['fast']:g} µs",
+                         f"{r['can_rx']['max']} → {ld['can_rx']:g} % · {rt['can_rx']:g} / "
+                         f"{dl['can_rx']:g} µs",
+                         f"{r['slow_full_ring']['max']} → {ld['slow']:g} % · {rt['slow']:g} / "
+                         f"{dl['slow']:g} µs",
+                         f"{x['total_pct']:g} %", "all met" if x["deadlines_met"] else "**missed**",
+                         f"{bd['filter']['filter_pass_ids']} ({bd['filter']['filter_pass_own_ids']})"])
+    return table(["board", "run",
+                  "fast interrupt, 40 kHz: max instr → load · response / deadline",
+                  f"CAN rx interrupt per frame, {b['boards'][0]['budget']['sensored']['can_frame_hz']:g}"
+                  " frames/s: max instr → load · response / deadline",
+                  "slow loop, 1 kHz, 16 frames + telemetry: max instr → load · response / deadline",
+                  "total load", "deadlines", "ids of 2048 the node filter passes (this node's)"],
+                 rows, ["---", "---", "---:", "---:", "---:", "---:", "---", "---:"])
 
 
 # --- PI2D ----------------------------------------------------------------------

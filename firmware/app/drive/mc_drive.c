@@ -271,6 +271,20 @@ static void raise_fault(mc_drive_t *d, uint32_t bits)
     d->mode = MC_DRIVE_MODE_FAULT;
 }
 
+/* The per-cpr constants of the encoder path, computed when the counts per
+ * revolution (or, through mc_drive_set_runtime_limits, omega_max) change
+ * rather than every step: two float divisions (14 cycles each on the M4F)
+ * less per fast step, with the same expressions, so the same values. */
+static void enc_constants(mc_drive_t *d, uint32_t cpr)
+{
+    if (cpr != d->enc_cpr_cached) {
+        d->enc_rad_per_count = MC_TWO_PI_F32 / (float)cpr;
+        d->enc_max_step_counts =
+            2.0f * d->cfg.omega_max_rad_s * d->cfg.foc.dt_s * (float)cpr / MC_TWO_PI_F32 + 2.0f;
+        d->enc_cpr_cached = cpr;
+    }
+}
+
 static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
 {
     const uint32_t cpr = enc->counts_per_rev;
@@ -278,7 +292,7 @@ static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
     const uint32_t raw = (enc->count < cpr) ? enc->count : enc->count % cpr;
     /* A reversed encoder counts down as the rotor turns positive. */
     const uint32_t count = (d->cfg.encoder_reversed && raw != 0u) ? cpr - raw : raw;
-    const float rad_per_count = MC_TWO_PI_F32 / (float)cpr;
+    const float rad_per_count = d->enc_rad_per_count;
     /* Electrical position in integer counts first: exact for any count.
      * 32-bit when the product fits (always for cpr * poles < 2^32), which
      * spares the M4F a 64-bit library division. */
@@ -338,9 +352,7 @@ static uint32_t encoder_jump_fault(mc_drive_t *d, const mc_hal_encoder_sample_t 
         if (step > cpr / 2u) {
             step = cpr - step; /* the shorter way round the circle */
         }
-        const float max_step =
-            2.0f * d->cfg.omega_max_rad_s * d->cfg.foc.dt_s * (float)cpr / MC_TWO_PI_F32 + 2.0f;
-        if ((float)step > max_step) {
+        if ((float)step > d->enc_max_step_counts) {
             f = MC_DRIVE_FAULT_ENCODER;
         }
     }
@@ -602,6 +614,7 @@ bool mc_drive_fast_step(mc_drive_t *d)
         if (erc != 0 || (enc.flags & MC_HAL_ENCODER_FLAG_VALID) == 0u || enc.counts_per_rev == 0u) {
             f |= MC_DRIVE_FAULT_ENCODER;
         } else {
+            enc_constants(d, enc.counts_per_rev);
             f |= encoder_jump_fault(d, &enc);
             update_position(d, &enc);
             have_enc = true;
@@ -862,6 +875,7 @@ void mc_drive_set_runtime_limits(mc_drive_t *d, const mc_drive_cfg_t *cfg)
     d->cfg.vbus_min_v = cfg->vbus_min_v;
     d->cfg.vbus_max_v = cfg->vbus_max_v;
     d->cfg.omega_max_rad_s = cfg->omega_max_rad_s;
+    d->enc_cpr_cached = 0u; /* the encoder-jump threshold follows omega_max */
     d->cfg.temp_max_c = cfg->temp_max_c;
     d->cfg.stall_current_frac = cfg->stall_current_frac;
     d->cfg.stall_speed_rad_s = cfg->stall_speed_rad_s;

@@ -416,6 +416,9 @@ typedef struct {
     uint32_t foc_err;             /**< last FOC error bits (init or step) */
     uint32_t deadline_ticks;      /**< one PWM period in HAL ticks (0: no tick source) */
     uint32_t last_count_raw;      /**< encoder count of the previous step */
+    uint32_t enc_cpr_cached;      /**< counts per rev the two below are for (0: none yet) */
+    float enc_rad_per_count;      /**< 2 pi / cpr (computed once per cpr, not per step) */
+    float enc_max_step_counts;    /**< encoder-jump threshold per step [counts] */
     float stall_time_acc_s;       /**< time spent in the stall condition [s] */
     uint32_t open_phase_trip;     /**< steps without conduction that trip (0: check off) */
     uint32_t open_phase_count[3]; /**< per phase: net steps without conduction */
