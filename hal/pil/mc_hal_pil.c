@@ -43,9 +43,10 @@
  *                    gone at the next boot;
  *       watchdog     none (NULL), as in the SIL rig: QEMU's IWDG is not the
  *                    point here and a lock-step run may stall on the host;
- *       commissioning and the control-law plug-ins: not bound (main's weak
- *                    mc_board_comm_cfg; no speed or position law: SPEED
- *                    mode runs the application's sensored speed loop).
+ *       laws         from the parameters (laws_from_params), as on the
+ *                    drive boards and in the SIL: speed_law picks SPEED's
+ *                    law, the position law serves POSITION;
+ *       commissioning not bound (main's weak mc_board_comm_cfg).
  *     main.c calls mc_board_app_work_begin() between the drive's slow step
  *     and the application's slow work: what the bridge did up to there is
  *     applied before the host integrates the period, what the slow work did
@@ -533,6 +534,9 @@ static void receive_app_setup(int type)
     c->speed.i_max_a = a.speed_i_max_a;
     c->pwm_hz_fixed = a.pwm_hz_fixed;
     c->slow_loop_div_fixed = a.slow_loop_div_fixed;
+    /* The laws of SPEED and POSITION from the parameters, as on the drive
+     * boards and in the SIL's can-telemetry. */
+    c->laws_from_params = true;
     /* The tick counter's rate before the first period (mc_drive_init reads
      * it for the control deadline); each MEAS brings it again. */
     g_pil.meas.tick_hz = a.tick_hz;

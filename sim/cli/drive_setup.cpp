@@ -3,6 +3,7 @@
 #include "hal_host/sil_rig.hpp"
 extern "C" {
 #include "config/mc_gains.h"
+#include "config/mc_law_cfg.h"
 }
 
 #include <algorithm>
@@ -28,16 +29,6 @@ std::string num(double v) {
   os.precision(4);
   os << v;
   return os.str();
-}
-
-// Speed at which current i needs v_max (steady state, id = 0, iq = i):
-// (R i)^2 + 2 R i ke w + (ke^2 + (p L i)^2) w^2 = v_max^2, positive root.
-double voltage_limited_speed(const MotorSpec& m, double i_a, double v_max) {
-  const double ke = m.pole_pairs * m.flux_wb, pl = m.pole_pairs * m.lq_h * i_a;
-  const double a = ke * ke + pl * pl, b = 2.0 * m.r_ohm * i_a * ke,
-               c = m.r_ohm * i_a * m.r_ohm * i_a - v_max * v_max;
-  if (c >= 0.0) return 0.0;
-  return (-b + std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a);
 }
 
 // One gain: the derived value, unless the user set another one.
@@ -83,95 +74,126 @@ const Key kKeys[] = {
      "the drive's flux / the motor's (model error)"},
 };
 
+// The motor and board values the firmware's gain formulas take.
+mc_gains_motor_t gains_motor(const MotorFiles& f) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  mc_gains_motor_t gm{};
+  gm.r_ohm = m.r_ohm;
+  gm.ld_h = m.ld_h;
+  gm.lq_h = m.lq_h;
+  gm.flux_wb = m.flux_wb;
+  gm.pole_pairs = m.pole_pairs;
+  gm.j_kgm2 = m.j_kgm2;
+  gm.b_nm_s_rad = m.b_nm_s_rad;
+  gm.i_max_a = m.i_max_a;
+  gm.i_rated_a = m.i_rated_a;
+  gm.speed_max_rad_s = m.speed_max_rad_s;
+  gm.speed_rated_rad_s = m.speed_rated_rad_s;
+  gm.vbus_v = b.vbus_v;
+  gm.pwm_hz = b.pwm_hz;
+  gm.dead_time_s = b.dead_time_s;
+  gm.i_sense_max_a = b.i_sense_max_a;
+  gm.delay_periods = b.delay_periods;
+  return gm;
+}
+
+// The settable gains, in the firmware's struct and in Gains (one table).
+struct Pair {
+  double mc_gains_t::*c;
+  double Gains::*g;
+};
+const Pair kPairs[] = {
+    {&mc_gains_t::cur_bw_rad_s, &Gains::cur_bw_rad_s},
+    {&mc_gains_t::i_limit_a, &Gains::i_limit_a},
+    {&mc_gains_t::enc_pll_bw_rad_s, &Gains::enc_pll_bw_rad_s},
+    {&mc_gains_t::speed_wc_rad_s, &Gains::speed_wc_rad_s},
+    {&mc_gains_t::speed_accel_rad_s2, &Gains::speed_accel_rad_s2},
+    {&mc_gains_t::obs_crit_rad_s, &Gains::obs_crit_rad_s},
+    {&mc_gains_t::pll_bw_rad_s, &Gains::pll_bw_rad_s},
+    {&mc_gains_t::sls_wc_rad_s, &Gains::sls_wc_rad_s},
+    {&mc_gains_t::handover_rad_s, &Gains::handover_rad_s},
+    {&mc_gains_t::if_current_a, &Gains::if_current_a},
+    {&mc_gains_t::if_accel_rad_s2, &Gains::if_accel_rad_s2},
+    {&mc_gains_t::align_time_s, &Gains::align_time_s},
+    {&mc_gains_t::pi2d_wn_rad_s, &Gains::pi2d_wn_rad_s},
+    {&mc_gains_t::pi2d_a_per_s, &Gains::pi2d_a_per_s},
+    {&mc_gains_t::pos_kp_per_s, &Gains::pos_kp_per_s},
+    {&mc_gains_t::pos_v_max_rad_s, &Gains::pos_v_max_rad_s},
+    {&mc_gains_t::pos_a_max_rad_s2, &Gains::pos_a_max_rad_s2},
+    {&mc_gains_t::pos_d_max_rad_s2, &Gains::pos_d_max_rad_s2},
+    {&mc_gains_t::pos_filter_bw_rad_s, &Gains::pos_filter_bw_rad_s},
+    {&mc_gains_t::stop_decel_rad_s2, &Gains::stop_decel_rad_s2},
+    {&mc_gains_t::kt_nm_a, &Gains::kt_nm_a},
+    {&mc_gains_t::v_max_v, &Gains::v_max_v},
+    {&mc_gains_t::i_rated_eff_a, &Gains::i_rated_eff_a},
+    {&mc_gains_t::torque_rated_nm, &Gains::torque_rated_nm},
+    {&mc_gains_t::speed_limit_rad_s, &Gains::speed_limit_rad_s},
+    {&mc_gains_t::speed_rated_eff_rad_s, &Gains::speed_rated_eff_rad_s},
+    {&mc_gains_t::pi2d_coupling, &Gains::pi2d_coupling},
+};
+
+// The gains from the firmware's formulas (firmware/app/config/mc_gains.c,
+// the same the drive derives from its parameter table); a --set value that
+// differs from its derived default is taken as given.
 Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
   const MotorSpec& m = f.motor;
   const BoardSpec& b = f.board;
   const double T = 1.0 / b.pwm_hz;
   const double l_min = std::min(m.ld_h, m.lq_h);
-  auto get = [&](const char* key, double derived, double Gains::*field) {
-    return pick(p, key, derived, dflt ? dflt->*field : derived);
-  };
+  mc_gains_t fix{};
+  mc_gains_fix_none(&fix);
+  if (p != nullptr && dflt != nullptr) {
+    for (const auto& k : kKeys) {
+      const double v = p->get(k.key);
+      if (v == dflt->*(k.field)) continue;
+      for (const auto& q : kPairs) {
+        if (q.g == k.field) fix.*(q.c) = v;
+      }
+    }
+  }
+  const mc_gains_motor_t gm = gains_motor(f);
+  mc_gains_t c{};
+  const uint32_t err = mc_gains_derive(&gm, &fix, &c);
   // Refusals first: no gains make these safe.
-  if (l_min / m.r_ohm < 2.0 * T) {
+  if ((err & MC_GAINS_ERR_VALUE) != 0u) {
+    throw UsageError(m.file + ": no gains: a motor or board value is not positive");
+  }
+  if ((err & MC_GAINS_ERR_LR_SHORT) != 0u) {
     throw UsageError(m.file + ": no safe gains: the electrical time constant L/R = " +
                      num(l_min / m.r_ohm) + " s is shorter than two PWM periods (" + num(2 * T) +
                      " s at " + num(b.pwm_hz) + " Hz): raise pwm_hz");
   }
-  const double ripple = b.vbus_v * T / (4.0 * l_min);
-  if (ripple > m.i_max_a) {
+  if ((err & MC_GAINS_ERR_RIPPLE) != 0u) {
     throw UsageError(m.file + ": no safe gains: the PWM current ripple vbus T / (4 L) = " +
-                     num(ripple) + " A (peak to peak) exceeds i_max_a (" + num(m.i_max_a) +
-                     " A): raise pwm_hz or lower vbus_v");
+                     num(b.vbus_v * T / (4.0 * l_min)) + " A (peak to peak) exceeds i_max_a (" +
+                     num(m.i_max_a) + " A): raise pwm_hz or lower vbus_v");
   }
-  Gains g;
-  g.kt_nm_a = mc_gains_kt_nm_a(m.pole_pairs, m.flux_wb);
-  g.v_max_v = 0.95 * b.vbus_v / std::sqrt(3.0);
-  g.cur_bw_rad_s = get("cur_bw_rad_s", 0.08 / T, &Gains::cur_bw_rad_s);
-  g.i_limit_a =
-      get("i_limit_a", std::min({m.i_max_a, b.i_sense_max_a / 1.25, 0.8 * g.v_max_v / m.r_ohm}),
-          &Gains::i_limit_a);
-  if (g.i_limit_a < 0.1 * m.i_max_a) {
-    throw UsageError(m.file + ": no safe gains: the usable current " + num(g.i_limit_a) +
+  if ((err & MC_GAINS_ERR_I_LIMIT) != 0u) {
+    throw UsageError(m.file + ": no safe gains: the usable current " + num(c.i_limit_a) +
                      " A (sensor range / 1.25, bus through R) is below 10 % of i_max_a");
   }
-  if (g.i_limit_a > b.i_sense_max_a / 1.1) {
-    throw UsageError("i_limit_a " + num(g.i_limit_a) +
+  if ((err & MC_GAINS_ERR_SENSE) != 0u) {
+    throw UsageError("i_limit_a " + num(c.i_limit_a) +
                      " A leaves no margin to the current "
                      "sensor's full scale " +
                      num(b.i_sense_max_a) + " A");
   }
-  g.i_rated_eff_a = std::min(m.i_rated_a, g.i_limit_a);
-  g.torque_rated_nm = g.kt_nm_a * g.i_rated_eff_a;
-  g.speed_limit_rad_s =
-      std::min(m.speed_max_rad_s, 0.9 * voltage_limited_speed(m, g.i_rated_eff_a, g.v_max_v));
-  if (!(g.speed_limit_rad_s > 0.0)) {
+  if ((err & MC_GAINS_ERR_SPEED_LIMIT) != 0u) {
     throw UsageError(m.file + ": no safe gains: the bus cannot drive rated current at any speed");
   }
-  g.speed_rated_eff_rad_s = std::min(m.speed_rated_rad_s, g.speed_limit_rad_s);
-  g.enc_pll_bw_rad_s = get("enc_pll_bw_rad_s", std::min(1000.0, 0.1 / T), &Gains::enc_pll_bw_rad_s);
-  g.speed_wc_rad_s =
-      get("speed_wc_rad_s", mc_gains_speed_wc_rad_s(g.cur_bw_rad_s, g.enc_pll_bw_rad_s),
-          &Gains::speed_wc_rad_s);
-  g.speed_accel_rad_s2 = get("speed_accel_rad_s2", 0.5 * g.kt_nm_a * g.i_limit_a / m.j_kgm2,
-                             &Gains::speed_accel_rad_s2);
-  const double w_r = g.speed_rated_eff_rad_s;
-  g.obs_crit_rad_s = get("obs_crit_rad_s", 0.02 * w_r, &Gains::obs_crit_rad_s);
-  g.pll_bw_rad_s = get("pll_bw_rad_s", std::min(300.0, 0.04 / T), &Gains::pll_bw_rad_s);
-  g.sls_wc_rad_s = get("sls_wc_rad_s", std::min(g.pll_bw_rad_s / 3.0, g.cur_bw_rad_s / 10.0),
-                       &Gains::sls_wc_rad_s);
-  g.handover_rad_s = get("handover_rad_s", 0.1 * w_r, &Gains::handover_rad_s);
-  g.if_current_a =
-      get("if_current_a", std::min(g.i_limit_a, 0.8 * g.i_rated_eff_a), &Gains::if_current_a);
-  g.if_accel_rad_s2 =
-      get("if_accel_rad_s2", 0.15 * g.torque_rated_nm / m.j_kgm2, &Gains::if_accel_rad_s2);
-  const double t_hold = 2.0 * std::sqrt(0.2 * m.j_kgm2 / (m.pole_pairs * 0.3 * g.torque_rated_nm));
-  g.align_time_s =
-      get("align_time_s", std::clamp(t_hold, 10.0 / g.cur_bw_rad_s, 0.05), &Gains::align_time_s);
-  g.pi2d_wn_rad_s = get("pi2d_wn_rad_s", std::min(g.speed_wc_rad_s / 3.0, 0.5 * m.r_ohm / m.lq_h),
-                        &Gains::pi2d_wn_rad_s);
-  // The dirty-derivative pole sets the law's speed-error coupling into the
-  // q-current error, Delta ~ b kd / sigma = 3 wn a J / kt (mc_pi2d.h, (21));
-  // keeping it below 2 k2 keeps the q loop ahead of it (the 40 kW machine
-  // with a = 1000/s limit-cycled at +-i_limit).
-  const double sigma = g.kt_nm_a / m.j_kgm2;
-  g.pi2d_a_per_s = get("pi2d_a_per_s",
-                       std::min({g.enc_pll_bw_rad_s, 0.1 / T,
-                                 2.0 * g.cur_bw_rad_s * sigma / (3.0 * g.pi2d_wn_rad_s)}),
-                       &Gains::pi2d_a_per_s);
+  Gains g;
+  for (const auto& q : kPairs) g.*(q.g) = c.*(q.c);
   g.pi2d_ok = g.pi2d_a_per_s >= 3.0 * g.pi2d_wn_rad_s;
-  g.pos_kp_per_s = get("pos_kp_per_s", g.speed_wc_rad_s / 6.0, &Gains::pos_kp_per_s);
-  g.pos_v_max_rad_s = get("pos_v_max_rad_s", 0.5 * w_r, &Gains::pos_v_max_rad_s);
-  g.pos_a_max_rad_s2 = get("pos_a_max_rad_s2", g.speed_accel_rad_s2, &Gains::pos_a_max_rad_s2);
-  g.pos_d_max_rad_s2 = get("pos_d_max_rad_s2", g.speed_accel_rad_s2, &Gains::pos_d_max_rad_s2);
-  g.pos_filter_bw_rad_s = get("pos_filter_bw_rad_s", g.pos_kp_per_s, &Gains::pos_filter_bw_rad_s);
-  g.stop_decel_rad_s2 = get("stop_decel_rad_s2", g.speed_accel_rad_s2, &Gains::stop_decel_rad_s2);
   // Model errors: what the drive believes is the files' motor scaled by
   // these (the plant stays the files'); the gains above are not re-derived,
   // so a run shows the designed loops on a wrong model (MotorRig applies them).
+  auto get = [&](const char* key, double derived, double Gains::*field) {
+    return pick(p, key, derived, dflt ? dflt->*field : derived);
+  };
   g.model_r_scale = get("model_r_scale", 1.0, &Gains::model_r_scale);
   g.model_l_scale = get("model_l_scale", 1.0, &Gains::model_l_scale);
   g.model_flux_scale = get("model_flux_scale", 1.0, &Gains::model_flux_scale);
-  g.pi2d_coupling = sigma * m.pole_pairs * m.flux_wb / (m.lq_h * g.cur_bw_rad_s);
   return g;
 }
 
@@ -352,105 +374,39 @@ mc_fw_f32_cfg_t build_fw_cfg(const MotorFiles& f, const Gains& g) {
   return c;
 }
 
-mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g) {
-  const MotorSpec& m = f.motor;
-  const BoardSpec& b = f.board;
-  mc_ctrl_sls_cfg_t c{};
-  c.r_ohm = static_cast<float>(m.r_ohm);
-  c.l_h = static_cast<float>(m.lq_h);
-  c.flux_wb = static_cast<float>(m.flux_wb);
-  c.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
-  c.dt_s = static_cast<float>(1.0 / b.pwm_hz);
-  c.pwm_delay_periods = static_cast<uint32_t>(b.delay_periods);
-  // Speed loop at about 1 kHz.
-  c.speed_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
-  c.dead_time_s = static_cast<float>(b.dead_time_s);
-  c.dead_band_a = static_cast<float>(std::max(1e-3, 0.01 * m.i_rated_a));
-  c.dead_comp_duty = true;
-  c.omega_crit_m_rad_s = static_cast<float>(g.obs_crit_rad_s);
-  c.resid_tol = 0.3f;
-  c.resid_time_s = 0.05f;
-  c.pll_bw_rad_s = static_cast<float>(g.pll_bw_rad_s);
-  c.cur_bw_rad_s = static_cast<float>(g.cur_bw_rad_s);
-  c.v_limit_ratio = 0.95f;
-  c.vbus_max_v = static_cast<float>(1.5 * b.vbus_v);
-  const double wc = g.sls_wc_rad_s;
-  speed_pi(m.j_kgm2, g.kt_nm_a, wc, &c.speed_kp_a_s_rad, &c.speed_ki_a_rad);
-  c.iq_max_a = static_cast<float>(g.i_limit_a / 1.25);
-  c.speed_slew_rad_s2 = static_cast<float>(0.5 * g.torque_rated_nm / m.j_kgm2);
-  c.speed_max_rad_s = static_cast<float>(g.speed_limit_rad_s);
-  c.if_current_a = static_cast<float>(g.if_current_a);
-  c.align_time_s = static_cast<float>(g.align_time_s);
-  c.if_accel_rad_s2 = static_cast<float>(g.if_accel_rad_s2);
-  c.handover_speed_rad_s = static_cast<float>(g.handover_rad_s);
-  c.handover_hyst = 0.3f;
-  c.lock_tol = 0.2f;
-  c.if_lock_timeout_s = 0.5f;
-  c.blend_time_s = 0.05f;
-  c.lowspeed_fallback = true;
-  c.if_damping = true;
-  c.align_any_angle = true;  // the rotor may start anywhere (tests/sil/commission)
+namespace {
+mc_gains_t to_c(const Gains& g) {
+  mc_gains_t c{};
+  for (const auto& q : kPairs) c.*(q.c) = g.*(q.g);
   return c;
+}
+}  // namespace
+
+// The laws' configurations: firmware/app/config/mc_law_cfg.c, the same the
+// drive builds from its parameter table.
+mc_ctrl_sls_cfg_t build_sensorless_cfg(const MotorFiles& f, const Gains& g) {
+  const mc_gains_motor_t gm = gains_motor(f);
+  const mc_gains_t c = to_c(g);
+  mc_ctrl_sls_cfg_t sc{};
+  mc_law_sls_cfg(&gm, &c, &sc);
+  return sc;
 }
 
 mc_ctrl_pi2d_cfg_t build_pi2d_cfg(const MotorFiles& f, const Gains& g) {
-  const MotorSpec& m = f.motor;
-  const BoardSpec& b = f.board;
-  // As pi2d-motor (sim/cli/scenarios/pi2d.cpp): linearised mechanical loop
-  // s^3 + kd (b/a) s^2 + (kp - ki b/a) s + ki with a triple pole at -wn.
-  const double wn = g.pi2d_wn_rad_s, a = g.pi2d_a_per_s, bb = 1.0;
-  const double ki = wn * wn * wn, kd = 3.0 * wn * a / bb, kp = 3.0 * wn * wn + ki * bb / a;
+  const mc_gains_motor_t gm = gains_motor(f);
+  const mc_gains_t c = to_c(g);
   mc_ctrl_pi2d_cfg_t cc{};
-  mc_pi2d_f32_cfg_t& c = cc.law;
-  c.r_ohm = static_cast<float>(m.r_ohm);
-  c.l_h = static_cast<float>(m.lq_h);
-  c.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
-  c.ke_v_s_rad = static_cast<float>(m.pole_pairs * m.flux_wb);
-  c.kt_nm_a = static_cast<float>(g.kt_nm_a);
-  c.j_kgm2 = static_cast<float>(m.j_kgm2);
-  c.k1_per_s = static_cast<float>(g.cur_bw_rad_s);
-  c.k2_per_s = static_cast<float>(g.cur_bw_rad_s);
-  c.kp_per_s2 = static_cast<float>(kp);
-  c.kd_per_s2 = static_cast<float>(kd);
-  c.ki_per_s3 = static_cast<float>(ki);
-  c.a_per_s = static_cast<float>(a);
-  c.b = static_cast<float>(bb);
-  c.eps_per_s = static_cast<float>(2.0 * ki / kp);
-  c.dt_s = static_cast<float>(1.0 / b.pwm_hz);
-  c.iq_max_a = static_cast<float>(g.i_limit_a);
-  c.v_max_v = static_cast<float>(g.v_max_v);
-  c.nu_max_nm = static_cast<float>(2.0 * g.torque_rated_nm);
-  cc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
-  // Delay compensation (mc_ctrl_pi2d.h): the board's delay plus half a period.
-  cc.angle_advance_periods = static_cast<float>(b.delay_periods + 0.5);
+  (void)mc_law_pi2d_cfg(&gm, &c, &cc);  // its refusals: MotorRig's messages
   return cc;
 }
 
 mc_ctrl_pos_cfg_t build_position_cfg(const MotorFiles& f, const Gains& g) {
-  const MotorSpec& m = f.motor;
   const mc_drive_cfg_t dc = build_drive_cfg(f, g);
-  mc_ctrl_pos_cfg_t c{};
-  c.foc = dc.foc;
-  c.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
-  c.traj.v_max_rad_s = static_cast<float>(g.pos_v_max_rad_s);
-  c.traj.a_max_rad_s2 = static_cast<float>(g.pos_a_max_rad_s2);
-  c.traj.d_max_rad_s2 = static_cast<float>(g.pos_d_max_rad_s2);
-  c.traj.filter_bw_rad_s = static_cast<float>(g.pos_filter_bw_rad_s);
-  c.traj.dt_s = dc.foc.dt_s;
-  c.pos_kp_per_s = static_cast<float>(g.pos_kp_per_s);
-  // The sensored speed PI's formula (kp = J wc / kt, zero at wc / 4).
-  const double wc = g.speed_wc_rad_s;
-  speed_pi(m.j_kgm2, g.kt_nm_a, wc, &c.vel_kp_a_s_rad, &c.vel_ki_a_rad);
-  c.vel_limit_rad_s = static_cast<float>(g.speed_limit_rad_s);
-  c.iq_max_a = static_cast<float>(g.i_limit_a);
-  c.kt_nm_a = static_cast<float>(g.kt_nm_a);
-  c.j_kgm2 = static_cast<float>(m.j_kgm2);
-  c.b_nm_s_rad = static_cast<float>(m.b_nm_s_rad);
-  // Torque lags its reference by the current loop's 1/bw plus the board's
-  // computation delay and half a period (the PWM's zero-order hold).
-  c.ff_lead_s =
-      static_cast<float>(1.0 / g.cur_bw_rad_s + (f.board.delay_periods + 0.5) / f.board.pwm_hz);
-  return c;
+  const mc_gains_motor_t gm = gains_motor(f);
+  const mc_gains_t c = to_c(g);
+  mc_ctrl_pos_cfg_t pc{};
+  mc_law_pos_cfg(&gm, &c, &dc.foc, &pc);
+  return pc;
 }
 
 // ------------------------------------------------------------------ rig

@@ -442,6 +442,9 @@ static int image_setup(bool sensorless)
         if (sls_setup(app_cfg->defaults) != 0u) {
             return 11;
         }
+        /* this bench's own sensorless configuration, not the one the
+         * image builds from its parameters (speed_law) */
+        app_cfg->laws_from_params = false;
         app_cfg->speed_law.ctrl = mc_ctrl_sls_ops(&g_sls);
         app_cfg->speed_law.set_ref = sls_set_ref;
         app_cfg->speed_law.ctx = &g_sls;

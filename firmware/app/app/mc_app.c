@@ -5,6 +5,7 @@
 #include "mc_app.h"
 
 #include <stddef.h>
+#include <string.h>
 
 #include "math/mc_math.h"
 
@@ -157,24 +158,269 @@ static int position_ref_hook(void *ctx, float ref)
     return a->cfg.position_law.set_ref(a->cfg.position_law.ctx, ref);
 }
 
+/* ------------------------------------------------ the laws from parameters */
+
+static int sls_ref_hook(void *ctx, float ref)
+{
+    mc_app_t *a = ctx;
+    return (mc_ctrl_sls_set_speed_ref(&a->laws.sls, ref) == 0u) ? 0 : -1;
+}
+
+/* PI2D: the target; the slow work slews the law's reference to it. At
+ * enable (the command handler sets the present speed before the run) the
+ * reference starts there. */
+static int pi2d_ref_hook(void *ctx, float ref)
+{
+    mc_app_t *a = ctx;
+    if (!mc_isfinite_f32(ref)) {
+        return -1;
+    }
+    a->laws.target_rad_s = ref;
+    if (!a->cmd.enabled) {
+        a->laws.ref_rad_s = ref;
+        if (mc_ctrl_pi2d_set_ref(&a->laws.pi2d, ref, 0.0f, 0.0f, 0.0f) != 0u) {
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static int pos_ref_hook(void *ctx, float ref)
+{
+    mc_app_t *a = ctx;
+    return (mc_ctrl_pos_set_target_rad(&a->laws.pos, ref) == 0u) ? 0 : -1;
+}
+
+/* The configurations of every law for p (the builders zero them first, so
+ * that they compare bytewise). Returns the gains' bits; *p_sls_err etc. the
+ * builders' own. */
+typedef struct {
+    mc_ctrl_sls_cfg_t sls;
+    mc_ctrl_pi2d_cfg_t pi2d;
+    mc_ctrl_pos_cfg_t pos;
+    float accel_rad_s2;
+    uint32_t gains_err, pi2d_err;
+} laws_cfgs_t;
+
+static void laws_cfgs(const mc_app_t *a, const mc_params_t *p, laws_cfgs_t *c)
+{
+    mc_gains_motor_t m;
+    mc_gains_t g;
+    mc_drive_cfg_t dc;
+    (void)memset(c, 0, sizeof *c);
+    /* the current loop the set gives the drive (an APPLY re-initialises
+     * the drive after this check), else the drive's own (the SIL's) */
+    if (mc_params_to_drive_cfg(p, &dc) != MC_PARAMS_OK) {
+        dc.foc = a->drive->cfg.foc;
+    }
+    c->gains_err = mc_law_gains_from_params(p, &m, &g);
+    if (c->gains_err != MC_GAINS_OK) {
+        return;
+    }
+    mc_law_sls_cfg(&m, &g, &c->sls);
+    c->pi2d_err = mc_law_pi2d_cfg(&m, &g, &c->pi2d);
+    mc_law_pos_cfg(&m, &g, &dc.foc, &c->pos);
+    c->accel_rad_s2 = (float)g.speed_accel_rad_s2;
+}
+
+/* Initialise the laws the set selects from c; a law whose init refuses is
+ * left out. Returns law_error bits (of the selected laws). */
+static uint32_t laws_init(mc_app_t *a, const mc_params_t *p, const laws_cfgs_t *c)
+{
+    mc_app_laws_t *l = &a->laws;
+    uint32_t err = c->gains_err;
+    l->speed_law = p->speed_law;
+    l->sls_ok = false;
+    l->pi2d_ok = false;
+    l->pos_ok = false;
+    l->accel_rad_s2 = c->accel_rad_s2;
+    if (c->gains_err != MC_GAINS_OK) {
+        return err;
+    }
+    if (p->speed_law == MC_LAW_SPEED_SENSORLESS) {
+        l->sls_ok = mc_ctrl_sls_init(&l->sls, &c->sls) == 0u;
+        err |= l->sls_ok ? 0u : MC_LAW_ERR_SLS_INIT;
+    } else if (p->speed_law == MC_LAW_SPEED_PI2D) {
+        if (p->encoder_cpr == 0u) {
+            err |= MC_LAW_ERR_ENCODER;
+        } else if (c->pi2d_err != 0u) {
+            err |= c->pi2d_err;
+        } else {
+            l->pi2d_ok = mc_ctrl_pi2d_init(&l->pi2d, &c->pi2d) == 0u;
+            err |= l->pi2d_ok ? 0u : MC_LAW_ERR_PI2D_INIT;
+        }
+    } else if (p->encoder_cpr == 0u) {
+        err |= MC_LAW_ERR_ENCODER; /* the sensored PI */
+    } else {
+        /* the sensored PI: the application's loop */
+    }
+    if (p->encoder_cpr != 0u) {
+        l->pos_ok = mc_ctrl_pos_init(&l->pos, &c->pos) == 0u;
+        err |= l->pos_ok ? 0u : MC_LAW_ERR_POS_INIT;
+    }
+    (void)memcpy(&l->sls_cfg, &c->sls, sizeof l->sls_cfg); /* padding too */
+    (void)memcpy(&l->pi2d_cfg, &c->pi2d, sizeof l->pi2d_cfg);
+    (void)memcpy(&l->pos_cfg, &c->pos, sizeof l->pos_cfg);
+    return err;
+}
+
+/* The slots and the command handler's modes from the laws. */
+static void laws_plug(mc_app_t *a)
+{
+    mc_app_laws_t *l = &a->laws;
+    const mc_app_law_t z = {0};
+    a->cfg.speed_law = z;
+    a->cfg.position_law = z;
+    if (l->sls_ok) {
+        a->cfg.speed_law.ctrl = mc_ctrl_sls_ops(&l->sls);
+        a->cfg.speed_law.set_ref = sls_ref_hook;
+        a->cfg.speed_law.tm_ext = &l->sls_ext;
+    } else if (l->pi2d_ok) {
+        a->cfg.speed_law.ctrl = mc_ctrl_pi2d_ops(&l->pi2d);
+        a->cfg.speed_law.set_ref = pi2d_ref_hook;
+    } else {
+        /* the sensored PI, or nothing */
+    }
+    a->cfg.speed_law.ctx = a;
+    if (l->pos_ok) {
+        a->cfg.position_law.ctrl = mc_ctrl_pos_ops(&l->pos);
+        a->cfg.position_law.set_ref = pos_ref_hook;
+        a->cfg.position_law.ctx = a;
+    }
+}
+
+/* PI2D's reference towards the target at accel_rad_s2 (slow rate). */
+static void pi2d_slew(mc_app_t *a)
+{
+    mc_app_laws_t *l = &a->laws;
+    const float dt = 1.0f / (float)a->tick_hz;
+    const float step = l->accel_rad_s2 * dt;
+    const float e = l->target_rad_s - l->ref_rad_s;
+    float acc = 0.0f;
+    if (e > step) {
+        acc = l->accel_rad_s2;
+        l->ref_rad_s += step;
+    } else if (e < -step) {
+        acc = -l->accel_rad_s2;
+        l->ref_rad_s -= step;
+    } else {
+        l->ref_rad_s = l->target_rad_s;
+    }
+    (void)mc_ctrl_pi2d_set_ref(&l->pi2d, l->ref_rad_s, acc, 0.0f, 0.0f);
+}
+
+static void sls_ext_update(mc_app_t *a)
+{
+    mc_telemetry_ext_t *x = &a->laws.sls_ext;
+    x->have_observer = true;
+    x->tau_l_hat_nm = 0.0f; /* the law estimates no load torque */
+    x->omega_hat_rad_s = a->laws.sls.tm.omega_hat_m_rad_s;
+    x->theta_hat_rad = a->laws.sls.tm.theta_hat_e_rad;
+}
+
+/* Which laws the command handler offers (the slots, or the sensored PI). */
+static void cmd_modes(const mc_app_t *a, mc_can_cmd_cfg_t *cc)
+{
+    const bool pi_ok = !a->cfg.laws_from_params || ((a->laws.speed_law == MC_LAW_SPEED_PI) &&
+                                                    ((a->laws.error & MC_LAW_ERR_ENCODER) == 0u));
+    cc->set_speed_ref = NULL;
+    cc->set_position_ref = NULL;
+    cc->speed_drive_mode = MC_DRIVE_MODE_CURRENT;
+    cc->position_drive_mode = MC_DRIVE_MODE_IDLE;
+    if ((a->cfg.speed_law.ctrl != NULL) && (a->cfg.speed_law.set_ref != NULL)) {
+        cc->set_speed_ref = speed_ref_hook;
+        cc->speed_drive_mode = MC_DRIVE_MODE_CTRL;
+    } else if (pi_ok && (a->cfg.speed.kp_a_s_rad > 0.0f)) {
+        cc->set_speed_ref = speed_ref_hook;
+    } else {
+        /* SPEED unsupported */
+    }
+    if ((a->cfg.position_law.ctrl != NULL) && (a->cfg.position_law.set_ref != NULL)) {
+        cc->set_position_ref = position_ref_hook;
+        cc->position_drive_mode = MC_DRIVE_MODE_CTRL;
+    }
+}
+
+/* Bytewise equality of two configurations built by the same builder (which
+ * zeroes them first, padding included, and they are stored with memcpy):
+ * any value that differs, differs here. */
+static bool same_bytes(const void *a, const void *b, size_t n)
+{
+    const uint8_t *pa = a;
+    const uint8_t *pb = b;
+    for (size_t i = 0u; i < n; i++) {
+        if (pa[i] != pb[i]) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/* An APPLY's laws: unchanged, or rebuilt while disabled (see mc_app.h). */
+static uint32_t laws_check(mc_app_t *a, const mc_params_t *p)
+{
+    laws_cfgs_t c;
+    mc_app_laws_t *l = &a->laws;
+    uint32_t err;
+    laws_cfgs(a, p, &c);
+    if ((p->speed_law == l->speed_law) && (c.gains_err == MC_GAINS_OK) &&
+        same_bytes(&c.sls, &l->sls_cfg, sizeof c.sls) &&
+        same_bytes(&c.pi2d, &l->pi2d_cfg, sizeof c.pi2d) &&
+        same_bytes(&c.pos, &l->pos_cfg, sizeof c.pos) &&
+        (a->srv.active.encoder_cpr == p->encoder_cpr)) {
+        return 0u;
+    }
+    if (a->cmd.enabled || (a->drive->mode != MC_DRIVE_MODE_IDLE)) {
+        a->srv.law_error = MC_LAW_ERR_RUNNING;
+        return MC_PARAMS_ERR_LAW;
+    }
+    err = laws_init(a, p, &c);
+    /* the selected speed law must run (the sensored PI needs only the
+     * encoder); the position law is offered when it can (law_error says
+     * why not) */
+    if ((err & ((p->speed_law == MC_LAW_SPEED_PI) ? MC_LAW_ERR_ENCODER : ~MC_LAW_ERR_POS_INIT)) !=
+        0u) {
+        laws_cfgs(a, &a->srv.active, &c); /* the laws before (c reused: stack) */
+        l->error = laws_init(a, &a->srv.active, &c);
+        a->srv.law_error = err;
+        return MC_PARAMS_ERR_LAW;
+    }
+    l->error = err;
+    return 0u;
+}
+
 /* The parameter service's hook: the board's check (the PWM rate and the slow
  * divider stay the booted ones: the timer and the CAN tick run on them),
  * then the command handler's own check and apply (telemetry rates, timeout,
  * ramps, speed limit). */
 static uint32_t params_check(void *ctx, const mc_params_t *p)
 {
-    const mc_app_t *a = ctx;
+    mc_app_t *a = ctx;
     if ((p->pwm_hz != a->params.pwm_hz) || (p->slow_loop_div != a->params.slow_loop_div)) {
         return 1u;
     }
-    return (a->cmd_hook.check != NULL) ? a->cmd_hook.check(a->cmd_hook.ctx, p) : 0u;
+    if ((a->cmd_hook.check != NULL) && (a->cmd_hook.check(a->cmd_hook.ctx, p) != 0u)) {
+        return 1u;
+    }
+    /* last: it rebuilds the laws when they change (the apply follows) */
+    return a->cfg.laws_from_params ? laws_check(a, p) : 0u;
 }
 
 static void params_apply(void *ctx, const mc_params_t *p)
 {
-    const mc_app_t *a = ctx;
+    mc_app_t *a = ctx;
     if (a->cmd_hook.apply != NULL) {
         a->cmd_hook.apply(a->cmd_hook.ctx, p);
+    }
+    if (a->cfg.laws_from_params) {
+        mc_can_cmd_cfg_t cc = a->cmd.cfg;
+        laws_plug(a);
+        cmd_modes(a, &cc);
+        a->cmd.cfg.set_speed_ref = cc.set_speed_ref;
+        a->cmd.cfg.set_position_ref = cc.set_position_ref;
+        a->cmd.cfg.speed_drive_mode = cc.speed_drive_mode;
+        a->cmd.cfg.position_drive_mode = cc.position_drive_mode;
+        a->srv.law_error = a->laws.error;
     }
 }
 
@@ -242,21 +488,14 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     cc.stop_ramp_a_per_s = p->stop_ramp_a_per_s;
     cc.stop_decel_rad_s2 = p->stop_decel_rad_s2;
     cc.speed_max_rad_s = p->speed_max_rad_s;
-    cc.set_speed_ref = NULL;
-    cc.set_position_ref = NULL;
     cc.hook_ctx = app;
-    cc.speed_drive_mode = MC_DRIVE_MODE_CURRENT;
-    cc.position_drive_mode = MC_DRIVE_MODE_IDLE;
-    if ((app->cfg.speed_law.ctrl != NULL) && (app->cfg.speed_law.set_ref != NULL)) {
-        cc.set_speed_ref = speed_ref_hook;
-        cc.speed_drive_mode = MC_DRIVE_MODE_CTRL;
-    } else if (app->cfg.speed.kp_a_s_rad > 0.0f) {
-        cc.set_speed_ref = speed_ref_hook;
+    if (app->cfg.laws_from_params) {
+        laws_cfgs_t lc;
+        laws_cfgs(app, p, &lc);
+        app->laws.error = laws_init(app, p, &lc);
+        laws_plug(app);
     }
-    if ((app->cfg.position_law.ctrl != NULL) && (app->cfg.position_law.set_ref != NULL)) {
-        cc.set_position_ref = position_ref_hook;
-        cc.position_drive_mode = MC_DRIVE_MODE_CTRL;
-    }
+    cmd_modes(app, &cc);
     app->cmd_err = mc_can_cmd_init(&app->cmd, &cc, drive, &app->tm);
     if (app->cmd_err != MC_CAN_CMD_CFG_OK) {
         return MC_APP_CFG_ERR_CMD;
@@ -267,6 +506,7 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
             return MC_APP_CFG_ERR_PARAMS;
         }
         mc_can_cmd_attach_params(&app->cmd, &app->srv);
+        app->srv.law_error = app->laws.error;
         app->cmd_hook = app->srv.hook;
         app->srv.hook.check = params_check;
         app->srv.hook.apply = params_apply;
@@ -477,9 +717,17 @@ uint32_t mc_app_slow_work(mc_app_t *app)
         app->speed_integ_a = 0.0f; /* a new run starts without old torque */
     }
     app->was_enabled = app->cmd.enabled;
-    if (app->cmd.enabled && (app->cmd.control_mode == MC_CAN_CTRL_SPEED) &&
-        (app->cfg.speed_law.ctrl == NULL)) {
-        speed_step(app);
+    if (app->cmd.enabled && (app->cmd.control_mode == MC_CAN_CTRL_SPEED)) {
+        if (app->cfg.speed_law.ctrl == NULL) {
+            speed_step(app);
+        } else if (app->cfg.laws_from_params && app->laws.pi2d_ok) {
+            pi2d_slew(app);
+        } else {
+            /* the law slews its own reference */
+        }
+    }
+    if (app->cfg.laws_from_params && app->laws.sls_ok) {
+        sls_ext_update(app);
     }
     can_supervise(app);
     if ((faults_before != 0u) && ((app->drive->faults | app->drive->warnings) == 0u)) {

@@ -59,6 +59,22 @@
  * (mc_drive_ctrl_t in CTRL mode: sensorless with I-f start, PI2D, ...);
  * POSITION by a plugged position law. A law's setpoint hook and telemetry
  * extension come with it (mc_app_law_t).
+ *
+ * Laws from the parameters (mc_app_cfg_t.laws_from_params; the MCU images
+ * and the SIL): the application owns the sensorless, PI2D and position
+ * instances and fills the two slots itself from the booted parameters:
+ * SPEED runs the law the speed_law parameter selects (MC_LAW_SPEED_*: the
+ * sensored PI above, sensorless with I-f start, PI2D), POSITION the
+ * position cascade (with an encoder, encoder_cpr > 0). Gains come from the
+ * motor values (mc_law_cfg.h, mc_gains.h). A law its values cannot run is
+ * not plugged (SPEED or POSITION answers UNSUPPORTED) and the readonly
+ * parameter law_error says why. An APPLY rebuilds the laws: it is refused
+ * INVALID with MC_PARAMS_ERR_LAW when a law's init refuses the new values
+ * (law_error: why; the previous laws stay) or when it would change a law
+ * while a CAN run is enabled (MC_LAW_ERR_RUNNING): laws change only while
+ * disabled. PI2D's reference is slewed at the slow rate towards
+ * SET_SPEED_REF at the gains' speed_accel_rad_s2 (its acceleration is the
+ * law's feed-forward); the sensorless law slews its own.
  */
 #ifndef MC_APP_H
 #define MC_APP_H
@@ -72,7 +88,11 @@
 #include "commission/mc_comm_can.h"
 #include "mc_can_cmd.h"
 #include "mc_cfg_store.h"
+#include "mc_ctrl_pi2d.h"
+#include "mc_ctrl_position.h"
+#include "mc_ctrl_sensorless.h"
 #include "mc_drive.h"
+#include "mc_law_cfg.h"
 #include "mc_param_srv.h"
 #include "mc_params.h"
 #include "mc_telemetry.h"
@@ -155,11 +175,32 @@ typedef struct {
     mc_app_speed_cfg_t speed;  /**< sensored speed loop */
     mc_app_law_t speed_law;    /**< plugged speed law (ctrl NULL: the loop above) */
     mc_app_law_t position_law; /**< plugged position law (ctrl NULL: none) */
+    /** true: the two slots above are the application's, built from the
+     *  parameters (see the file comment); false: the caller's. */
+    bool laws_from_params;
     /** Program the hardware receive filter for this node's identifiers
      *  (id & mask == node << 5); NULL: the board has none. */
     int (*set_rx_filter)(void *ctx, uint32_t id, uint32_t mask);
     void *filter_ctx;
 } mc_app_cfg_t;
+
+/** The laws the application builds from the parameters, and the
+ *  configurations they were built from (to see what an APPLY changes). */
+typedef struct {
+    mc_ctrl_sls_t sls;
+    mc_ctrl_pi2d_t pi2d;
+    mc_ctrl_pos_t pos;
+    mc_ctrl_sls_cfg_t sls_cfg;
+    mc_ctrl_pi2d_cfg_t pi2d_cfg;
+    mc_ctrl_pos_cfg_t pos_cfg;
+    mc_telemetry_ext_t sls_ext; /**< OBSERVER from the sensorless law */
+    float accel_rad_s2;         /**< PI2D reference slew [rad/s^2] */
+    float target_rad_s;         /**< PI2D: SET_SPEED_REF */
+    float ref_rad_s;            /**< PI2D: the slewed reference */
+    uint32_t speed_law;         /**< MC_LAW_SPEED_* plugged */
+    uint32_t error;             /**< law_error: MC_GAINS_ERR_* | MC_LAW_ERR_* */
+    bool sls_ok, pi2d_ok, pos_ok;
+} mc_app_laws_t;
 
 /* Fields ordered by size (pointers, structs, words, bytes): no padding. */
 typedef struct {
@@ -203,6 +244,7 @@ typedef struct {
     mc_telemetry_t tm;
     mc_params_t params; /**< the configuration booted */
     mc_app_rx_ring_t rx;
+    mc_app_laws_t laws;  /**< laws_from_params */
     uint8_t boot_status; /**< mc_cfg_boot_t */
     bool params_valid;   /**< the parameter service runs */
     bool have_store;

@@ -4,6 +4,8 @@
  */
 #include "mc_param_srv.h"
 
+#include "mc_law_cfg.h"
+
 #include <stddef.h>
 
 int mc_param_srv_init(mc_param_srv_t *s, const mc_params_t *p, mc_drive_t *drive,
@@ -47,6 +49,8 @@ static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
         return (s->store != NULL) ? s->store->seq : 0u;
     case MC_PARAM_ID_CFG_PENDING:
         return s->pending ? 1u : 0u;
+    case MC_PARAM_ID_LAW_ERROR:
+        return s->law_error;
     default:
         return mc_param_get_raw(&s->staged, info);
     }
@@ -92,14 +96,23 @@ static mc_param_status_t do_apply(mc_param_srv_t *s, uint32_t *p_value)
 {
     mc_drive_cfg_t cfg;
     uint32_t err = mc_params_validate(&s->staged);
-    if ((err == MC_PARAMS_OK) && (s->hook.check != NULL) &&
-        (s->hook.check(s->hook.ctx, &s->staged) != 0u)) {
-        err = MC_PARAMS_ERR_DRIVE;
+    if ((err == MC_PARAMS_OK) && (s->hook.check != NULL)) {
+        /* the front end's refusal: a law it cannot run (LAW), else DRIVE */
+        const uint32_t h = s->hook.check(s->hook.ctx, &s->staged);
+        if (h != 0u) {
+            err = ((h & MC_PARAMS_ERR_LAW) != 0u) ? MC_PARAMS_ERR_LAW : MC_PARAMS_ERR_DRIVE;
+        }
     }
     if (err == MC_PARAMS_OK) {
         err = mc_params_to_drive_cfg(&s->staged, &cfg);
     }
     if (err != MC_PARAMS_OK) {
+        if ((err & MC_PARAMS_ERR_LAW) != 0u) {
+            const uint32_t why = mc_law_speed_check(&s->staged);
+            if (why != 0u) {
+                s->law_error = why; /* else the front end's hook set it */
+            }
+        }
         *p_value = err;
         return MC_PARAM_ERR_INVALID;
     }

@@ -64,6 +64,7 @@ typedef struct {
     uint8_t boot_status;   /**< mc_cfg_boot_t of the boot */
     mc_param_hook_t hook;  /**< optional (fields NULL) */
     uint32_t applied;      /**< successful APPLYs */
+    uint32_t law_error;    /**< the law_error parameter (the application's) */
 } mc_param_srv_t;
 
 /**

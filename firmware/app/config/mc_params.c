@@ -9,6 +9,7 @@
 
 #include "foc/mc_foc.h"
 #include "math/mc_math.h"
+#include "mc_law_cfg.h"
 
 static float as_f32(uint32_t raw)
 {
@@ -162,6 +163,9 @@ uint32_t mc_params_validate(const mc_params_t *p)
     }
     if ((mc_params_to_drive_cfg(p, &cfg) != MC_PARAMS_OK) || (mc_drive_check_cfg(&cfg) != 0u)) {
         err |= MC_PARAMS_ERR_DRIVE;
+    }
+    if (mc_law_speed_check(p) != 0u) {
+        err |= MC_PARAMS_ERR_LAW;
     }
     return err;
 }

@@ -51,6 +51,10 @@ typedef enum {
 #define MC_PARAMS_ERR_DRIVE \
     (1u << 6) /**< mc_drive_check_cfg refused the derived
                                                   mc_drive_cfg_t */
+#define MC_PARAMS_ERR_LAW \
+    (1u << 7) /**< the speed_law selected has no valid gains for these
+                   motor values, or its init refused them (the
+                   law_error parameter says why: mc_law_cfg.h) */
 
 /** Largest current_bw_rad_s * dt (dt = 1 / pwm_hz): above it the one-period
  *  computation delay costs too much phase (gains vs PWM rate). */

@@ -33,8 +33,9 @@ const mc_params_t mc_params_default = {
     .speed_kp_a_s_rad = 0.05f,
     .speed_ki_a_rad = 1.0f,
     .encoder_reversed = 0u,
-    .obs_omega_crit_m_rad_s = 20.0f,
-    .obs_pll_bw_rad_s = 400.0f,
+    .speed_law = 0u,
+    .obs_omega_crit_m_rad_s = 0.0f,
+    .obs_pll_bw_rad_s = 0.0f,
     .i_trip_a = 15.0f,
     .vbus_min_v = 12.0f,
     .vbus_max_v = 56.0f,
@@ -91,8 +92,9 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {45u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_kp_a_s_rad), {.f = 0.0f}, {.f = 100.0f}, {.f = 0.05f}}, /* speed_kp_a_s_rad */
     {46u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_ki_a_rad), {.f = 0.0f}, {.f = 10000.0f}, {.f = 1.0f}}, /* speed_ki_a_rad */
     {47u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_reversed), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* encoder_reversed */
-    {60u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, obs_omega_crit_m_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 20.0f}}, /* obs_omega_crit_m_rad_s */
-    {61u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, obs_pll_bw_rad_s), {.f = 1.0f}, {.f = 10000.0f}, {.f = 400.0f}}, /* obs_pll_bw_rad_s */
+    {48u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, speed_law), {.u = 0u}, {.u = 2u}, {.u = 0u}}, /* speed_law */
+    {60u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, obs_omega_crit_m_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* obs_omega_crit_m_rad_s */
+    {61u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, obs_pll_bw_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* obs_pll_bw_rad_s */
     {70u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, i_trip_a), {.f = 0.01f}, {.f = 2000.0f}, {.f = 15.0f}}, /* i_trip_a */
     {71u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, vbus_min_v), {.f = 0.5f}, {.f = 1000.0f}, {.f = 12.0f}}, /* vbus_min_v */
     {72u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, vbus_max_v), {.f = 1.0f}, {.f = 1000.0f}, {.f = 56.0f}}, /* vbus_max_v */
@@ -119,4 +121,5 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
     {202u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_store_seq */
     {203u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* cfg_pending */
+    {204u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* law_error */
 };

@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 57u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 53u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 59u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 54u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -46,6 +46,7 @@
 #define MC_PARAM_ID_SPEED_KP_A_S_RAD 45u
 #define MC_PARAM_ID_SPEED_KI_A_RAD 46u
 #define MC_PARAM_ID_ENCODER_REVERSED 47u
+#define MC_PARAM_ID_SPEED_LAW 48u
 #define MC_PARAM_ID_OBS_OMEGA_CRIT_M_RAD_S 60u
 #define MC_PARAM_ID_OBS_PLL_BW_RAD_S 61u
 #define MC_PARAM_ID_I_TRIP_A 70u
@@ -74,6 +75,7 @@
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
 #define MC_PARAM_ID_CFG_STORE_SEQ 202u
 #define MC_PARAM_ID_CFG_PENDING 203u
+#define MC_PARAM_ID_LAW_ERROR 204u
 
 /* Indices into mc_param_table[] (sorted by id). */
 #define MC_PARAM_IDX_R_OHM 0u
@@ -105,34 +107,36 @@
 #define MC_PARAM_IDX_SPEED_KP_A_S_RAD 26u
 #define MC_PARAM_IDX_SPEED_KI_A_RAD 27u
 #define MC_PARAM_IDX_ENCODER_REVERSED 28u
-#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 29u
-#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 30u
-#define MC_PARAM_IDX_I_TRIP_A 31u
-#define MC_PARAM_IDX_VBUS_MIN_V 32u
-#define MC_PARAM_IDX_VBUS_MAX_V 33u
-#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 34u
-#define MC_PARAM_IDX_TEMP_MAX_C 35u
-#define MC_PARAM_IDX_STALL_CURRENT_FRAC 36u
-#define MC_PARAM_IDX_STALL_SPEED_RAD_S 37u
-#define MC_PARAM_IDX_STALL_TIME_S 38u
-#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 39u
-#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 40u
-#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 41u
-#define MC_PARAM_IDX_ASC_ENABLE 42u
-#define MC_PARAM_IDX_CAN_NODE_ID 43u
-#define MC_PARAM_IDX_CAN_BITRATE_BPS 44u
-#define MC_PARAM_IDX_CAN_TIMEOUT_S 45u
-#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 46u
-#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 47u
-#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 48u
-#define MC_PARAM_IDX_TM_CURRENTS_HZ 49u
-#define MC_PARAM_IDX_TM_VOLTAGES_HZ 50u
-#define MC_PARAM_IDX_TM_SPEED_HZ 51u
-#define MC_PARAM_IDX_TM_POSITION_HZ 52u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 53u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 54u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 55u
-#define MC_PARAM_IDX_CFG_PENDING 56u
+#define MC_PARAM_IDX_SPEED_LAW 29u
+#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 30u
+#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 31u
+#define MC_PARAM_IDX_I_TRIP_A 32u
+#define MC_PARAM_IDX_VBUS_MIN_V 33u
+#define MC_PARAM_IDX_VBUS_MAX_V 34u
+#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 35u
+#define MC_PARAM_IDX_TEMP_MAX_C 36u
+#define MC_PARAM_IDX_STALL_CURRENT_FRAC 37u
+#define MC_PARAM_IDX_STALL_SPEED_RAD_S 38u
+#define MC_PARAM_IDX_STALL_TIME_S 39u
+#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 40u
+#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 41u
+#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 42u
+#define MC_PARAM_IDX_ASC_ENABLE 43u
+#define MC_PARAM_IDX_CAN_NODE_ID 44u
+#define MC_PARAM_IDX_CAN_BITRATE_BPS 45u
+#define MC_PARAM_IDX_CAN_TIMEOUT_S 46u
+#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 47u
+#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 48u
+#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 49u
+#define MC_PARAM_IDX_TM_CURRENTS_HZ 50u
+#define MC_PARAM_IDX_TM_VOLTAGES_HZ 51u
+#define MC_PARAM_IDX_TM_SPEED_HZ 52u
+#define MC_PARAM_IDX_TM_POSITION_HZ 53u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 54u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 55u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 56u
+#define MC_PARAM_IDX_CFG_PENDING 57u
+#define MC_PARAM_IDX_LAW_ERROR 58u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -165,8 +169,9 @@ typedef struct {
     float speed_kp_a_s_rad; /**< Speed-loop proportional gain. [A.s/rad] */
     float speed_ki_a_rad; /**< Speed-loop integral gain. [A/rad] */
     uint32_t encoder_reversed; /**< 1: the encoder counts down when the rotor turns positive (commissioning measures it). */
-    float obs_omega_crit_m_rad_s; /**< Critical speed of the flux observer (sets its gain). [rad/s] */
-    float obs_pll_bw_rad_s; /**< Bandwidth of the sensorless PLL. [rad/s] */
+    uint32_t speed_law; /**< Law of SPEED mode: 0 sensored speed PI (encoder), 1 sensorless (flux observer + PLL, I-f start), 2 PI2D (encoder); gains derived from the motor values (firmware/app/config/mc_law_cfg.h). */
+    float obs_omega_crit_m_rad_s; /**< Critical speed of the flux observer (sets its gain); 0: derived, 0.02 speed_rated_rad_s (firmware/app/config/mc_gains.c). [rad/s] */
+    float obs_pll_bw_rad_s; /**< Bandwidth of the sensorless PLL; 0: derived, min(300, 0.04 pwm_hz) (firmware/app/config/mc_gains.c). [rad/s] */
     float i_trip_a; /**< Instantaneous over-current trip on any phase; i_max_a <= it < i_sense_max_a. [A] */
     float vbus_min_v; /**< DC-bus under-voltage trip. [V] */
     float vbus_max_v; /**< DC-bus over-voltage trip. [V] */

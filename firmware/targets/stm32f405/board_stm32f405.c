@@ -195,7 +195,7 @@ static void board_defaults(mc_params_t *p)
     p->encoder_cpr = MC_BOARD_DESC.enc_counts_per_rev;
     p->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
     p->vbus_max_v = MC_BOARD_DESC.vbus_max_v;
-    p->can_bitrate_bps = 500000u; /* the controller's rate (mc_board_f405.c) */
+    p->can_bitrate_bps = 500000u; /* the set-up's rate; a stored one applies at boot */
     /* A board without any thermistor (the example board) cannot enforce a
      * temperature limit: the drive would trip OVERTEMP at once with the
      * table's temp_max_c, so the trip is off in its defaults (a user who
@@ -251,9 +251,23 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
         b->app.speed.ki_dt_a_s_rad = kp * bw / 4.0f / ((float)PWM_HZ / (float)SLOW_LOOP_DIV);
         b->app.speed.i_max_a = I_MAX_A;
     }
+    /* SPEED by the law of the speed_law parameter, POSITION by the
+     * position cascade, their gains from the motor values
+     * (firmware/app/config/mc_law_cfg.h) */
+    b->app.laws_from_params = true;
     b->app.set_rx_filter = set_node_filter;
     b->app.filter_ctx = b;
     return &b->app;
+}
+
+int mc_board_can_bitrate(uint32_t bitrate_bps)
+{
+    const mc_board_f405_err_t e = mc_board_f405_can_set_bitrate(&g_board.f405, bitrate_bps);
+    if (e != MC_BOARD_F405_OK) {
+        g_board.f405.err = e; /* for the debugger: the bus stays at 500 kbit/s */
+        return -1;
+    }
+    return 0;
 }
 
 const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p)

@@ -75,6 +75,13 @@ __attribute__((weak)) void mc_board_app_work_begin(void)
 {
 }
 
+/* Boards without a CAN controller of their own (the PIL board) keep this. */
+__attribute__((weak)) int mc_board_can_bitrate(uint32_t bitrate_bps)
+{
+    (void)bitrate_bps;
+    return 0;
+}
+
 /* Boards without commissioning (the PIL board) keep this one. */
 __attribute__((weak)) const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p)
 {
@@ -135,6 +142,11 @@ int main(void)
         /* A store that cannot be read boots the defaults (boot_status says
          * so); a configuration the drive refuses halts with the outputs off. */
         (void)mc_app_boot(&g_app, app_cfg);
+        /* The configuration's CAN bit rate (a reboot parameter: it takes
+         * effect here, at the boot after a SAVE). A refused rate keeps the
+         * set-up's 500 kbit/s; a stored set with another rate than 125k,
+         * 250k, 500k or 1M never boots (mc_params_validate, INVALID). */
+        (void)mc_board_can_bitrate(g_app.params.can_bitrate_bps);
         const uint32_t aerr = mc_app_start(&g_app, &g_drive, hal, hal->can, true);
         if (aerr != MC_APP_CFG_OK) {
             mc_board_halt((g_app.drive_err != 0u) ? g_app.drive_err : MC_DRIVE_CFG_ERR_NULL);

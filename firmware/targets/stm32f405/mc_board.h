@@ -45,6 +45,13 @@ const mc_app_cfg_t *mc_board_app_cfg(void);
  *  marks there which bridge actions belong to the slow work. */
 void mc_board_app_work_begin(void);
 
+/** The CAN bit rate of the booted configuration (can_bitrate_bps), applied
+ *  once after mc_app_boot and before the application starts: the board
+ *  re-times its controller (mc_board_f405_can_set_bitrate). Returns 0, or
+ *  -1 when the rate is refused (the controller keeps the set-up's 500
+ *  kbit/s). The default of main.c (weak; the PIL board): 0, nothing done. */
+int mc_board_can_bitrate(uint32_t bitrate_bps);
+
 /** Commissioning over CAN for this board, from the booted parameters p
  *  (test current and voltage from the board's sense range and lowest bus,
  *  its dead time, the PWM period). NULL (the default of main.c, a weak

@@ -27,12 +27,16 @@
 // those the HAL refused (tm_fail_mask), so a logger's decoded frames can be
 // matched one for one.
 //
-// SPEED control mode is served by the application's sensored speed loop (a
-// PI at the slow rate writing the current references in the drive's CURRENT
-// mode, gains below); POSITION by the position law plugged into the
-// application's position slot (firmware/app/ctrl/mc_ctrl_position: trapezoid
-// to the multi-turn target of SET_POSITION_REF, at speed_max_rad_s and
-// stop_decel_rad_s2) in CTRL mode.
+// The control laws are the application's, built from the parameters as on
+// the MCU (mc_app_cfg_t.laws_from_params, firmware/app/config/mc_law_cfg.h):
+// SPEED runs the law of the speed_law parameter (--set speed_law=N, or the
+// stored value with --flash): 0 the application's sensored speed PI (at the
+// slow rate, writing the current references in the drive's CURRENT mode,
+// gains below), 1 the sensorless law (flux observer + PLL, I-f start from
+// standstill), 2 PI2D; POSITION the position cascade
+// (firmware/app/ctrl/mc_ctrl_position: trapezoid to the multi-turn target
+// of SET_POSITION_REF, at speed_max_rad_s and stop_decel_rad_s2). Their
+// gains come from the motor values (mc_gains.c).
 //
 // Parameters (PARAM_REQ/PARAM_REPLY) are served as on the MCU: the
 // parameter service (firmware/app/config/mc_param_srv) on the drive, with
@@ -77,7 +81,6 @@ extern "C" {
 #include "commission/mc_comm_can.h"
 #include "mc_app.h"
 #include "mc_can_proto.h"
-#include "mc_ctrl_position.h"
 #include "mc_params.h"
 }
 
@@ -111,11 +114,6 @@ std::string env_or(const char* name, const std::string& fallback) {
   return (v != nullptr && *v != '\0') ? std::string(v) : fallback;
 }
 
-// SET_POSITION_REF: the position law's multi-turn target.
-int position_hook(void* ctx, float ref) {
-  return mc_ctrl_pos_set_target_rad(static_cast<mc_ctrl_pos_t*>(ctx), ref) == 0u ? 0 : 1;
-}
-
 const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
                                  "LAYOUT", "INVALID",  "FLASH"};
 
@@ -125,6 +123,7 @@ const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
 struct CanBoard {
   FocSilOptions o;
   double kt_nm_a = 0, b_nm_s_rad = 0, i_sense_max_a = 0, dead_time_s = 0;
+  double i_rated_a = 0, speed_rated_rad_s = 0;  // the laws' gains scale with them
   uint32_t adc_bits = 12, encoder_cpr = 0;
   std::unique_ptr<FocSil> sil;
   std::unique_ptr<MotorRig> rig;
@@ -140,7 +139,9 @@ void build_board(CanBoard& cb, const RunContext& ctx) {
     const PmsmParams m = paper002_test_motor();
     cb.kt_nm_a = 1.5 * m.pole_pairs * m.flux_wb;
     cb.b_nm_s_rad = m.B_nms_rad;
-    cb.i_sense_max_a = 20.0;  // FocSil's board: 12-bit, 20 A, 8192 counts
+    cb.i_rated_a = 4.24;            // paper 002 Table I: 3 A rms
+    cb.speed_rated_rad_s = 104.72;  // 1000 r/min
+    cb.i_sense_max_a = 20.0;        // FocSil's board: 12-bit, 20 A, 8192 counts
     cb.adc_bits = 12u;
     cb.encoder_cpr = 8192u;
     cb.dead_time_s = 0.0;  // the average-value inverter has none here
@@ -154,6 +155,8 @@ void build_board(CanBoard& cb, const RunContext& ctx) {
   g.enc_pll_bw_rad_s = cb.o.speed_pll_bw_rad_s;
   cb.kt_nm_a = g.kt_nm_a;
   cb.b_nm_s_rad = f.motor.b_nm_s_rad;
+  cb.i_rated_a = f.motor.i_rated_a;
+  cb.speed_rated_rad_s = f.motor.speed_rated_rad_s;
   cb.i_sense_max_a = f.board.i_sense_max_a;
   cb.adc_bits = static_cast<uint32_t>(f.board.adc_bits);
   cb.encoder_cpr = static_cast<uint32_t>(f.board.encoder_cpr);
@@ -207,6 +210,9 @@ mc_params_t scenario_params(const Params& P, const CanBoard& cb, const mc_drive_
   p.pole_pairs = c.pole_pairs;
   p.j_kgm2 = static_cast<float>(o.J_kgm2);
   p.b_nm_s_rad = static_cast<float>(cb.b_nm_s_rad);
+  p.i_rated_a = static_cast<float>(cb.i_rated_a);
+  p.speed_rated_rad_s = static_cast<float>(cb.speed_rated_rad_s);
+  p.speed_law = static_cast<uint32_t>(P.get("speed_law"));
   p.i_max_a = c.i_max_a;
   p.speed_max_rad_s = static_cast<float>(P.get("speed_max_rad_s"));
   p.vbus_v = static_cast<float>(o.vbus_v);
@@ -345,33 +351,8 @@ void run_can_telemetry(RunContext& ctx) {
     app.cfg.speed.ki_dt_a_s_rad = static_cast<float>(kp * bw / 4.0 / tick_hz_d);
     app.cfg.speed.i_max_a = static_cast<float>(P.get("speed_i_max_a"));
   }
-  // The position law for POSITION (its gains from the speed PI's).
-  mc_ctrl_pos_t pos{};
-  {
-    mc_ctrl_pos_cfg_t pc{};
-    pc.foc = d.cfg.foc;
-    pc.pole_pairs = d.cfg.pole_pairs;
-    pc.traj.v_max_rad_s = p.speed_max_rad_s;
-    pc.traj.a_max_rad_s2 = p.stop_decel_rad_s2;
-    pc.traj.d_max_rad_s2 = p.stop_decel_rad_s2;
-    pc.traj.dt_s = d.cfg.foc.dt_s;
-    const double bw = P.get("speed_bw_rad_s");
-    pc.pos_kp_per_s = static_cast<float>(bw / 4.0);
-    pc.vel_kp_a_s_rad = app.cfg.speed.kp_a_s_rad;
-    pc.vel_ki_a_rad = static_cast<float>(app.cfg.speed.kp_a_s_rad * bw / 4.0);
-    pc.vel_limit_rad_s = p.speed_max_rad_s;
-    pc.iq_max_a = app.cfg.speed.i_max_a;
-    pc.kt_nm_a = static_cast<float>(cb.kt_nm_a);
-    pc.j_kgm2 = static_cast<float>(o.J_kgm2);
-    pc.ff_lead_s = static_cast<float>(1.0 / o.bw_rad_s + 1.5 / o.pwm_hz);
-    if (mc_ctrl_pos_init(&pos, &pc) != MC_CTRL_POS_ERR_NONE) {
-      throw UsageError("the position law refused the scenario's settings");
-    }
-    app.cfg.position_law.ctrl = mc_ctrl_pos_ops(&pos);
-    app.cfg.position_law.set_ref = position_hook;
-    app.cfg.position_law.ctx = &pos;
-    app.cfg.position_law.tm_ext = nullptr;
-  }
+  // The laws of SPEED (speed_law) and POSITION from the parameters.
+  app.cfg.laws_from_params = true;
   const uint32_t aerr = mc_app_start(&app, &d, board.hal(), can, serve_params);
   if ((aerr & MC_APP_CFG_ERR_TM) != 0u) {
     throw UsageError("telemetry configuration refused (MC_TM_CFG bits 0x" +
@@ -530,6 +511,11 @@ void run_can_telemetry(RunContext& ctx) {
   ctx.summary.set("final_enabled", cmd.enabled ? 1.0 : 0.0);
   ctx.summary.set("final_stop_reason", cmd.stop_reason);
   ctx.summary.set("final_faults", d.faults);
+  // The laws (firmware/app/config/mc_law_cfg.h): which one SPEED ran, and
+  // why one is not available (the law_error parameter).
+  ctx.summary.set("speed_law", app.laws.speed_law);
+  ctx.summary.set("law_error", app.laws.error);
+  ctx.summary.set("sls_handovers", app.laws.sls.tm.handovers);
   if (ctx.flash != nullptr) {
     // What the drive booted from (cfg_from_store: ids of the parameters whose
     // stored value replaced the scenario's), and what the run did to the store.
@@ -575,14 +561,18 @@ std::vector<ParamSpec> can_params() {
           {"rate_voltages_hz", 100.0, "Hz", "VOLTAGES rate", 0.0, 1000.0},
           {"rate_speed_hz", 100.0, "Hz", "SPEED rate", 0.0, 1000.0},
           {"rate_position_hz", 50.0, "Hz", "POSITION rate", 0.0, 1000.0},
-          {"rate_observer_hz", 0.0, "Hz",
-           "OBSERVER rate (no observer in this scenario: nothing sent)", 0.0, 1000.0},
+          {"rate_observer_hz", 0.0, "Hz", "OBSERVER rate (sent while the sensorless law runs)", 0.0,
+           1000.0},
           {"rate_controller_hz", 0.0, "Hz", "CONTROLLER rate (nothing sent here)", 0.0, 1000.0},
           {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
           {"rate_current_refs_hz", 100.0, "Hz", "CURRENT_REFS rate", 0.0, 1000.0},
           {"rate_position_ref_hz", 50.0, "Hz", "POSITION_REF rate", 0.0, 1000.0},
           {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
           {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
+          {"speed_law", 0.0, "1",
+           "law of SPEED mode (parameter speed_law): 0 sensored PI, 1 sensorless (I-f start), "
+           "2 PI2D",
+           0.0, 2.0},
           {"realtime", 0.0, "1", "1: pace the simulation to the wall clock", 0.0, 1.0},
           {"end_after_stop_s", 0.0, "s",
            "if > 0, end the run this long after a CAN-enabled run stopped (timeout, disable, "

@@ -516,3 +516,60 @@ INSTANTIATE_TEST_SUITE_P(Boards, GateDriverBoard, ::testing::ValuesIn(kDrvBoards
                          [](const ::testing::TestParamInfo<Case> &i) {
                              return std::string(i.param.name);
                          });
+
+// The configuration's CAN bit rate on the controller (issue 19): BTR from
+// the APB1 clock (sysclk / 4 = 42 MHz) at the 87.5 % sample point, by the
+// formula of RM0090 §32.7.7, bit = (1 + BS1 + BS2) tq, tq = (BRP + 1) / pclk;
+// BTR = BRP | (BS1 - 1) << 16 | (BS2 - 1) << 20 | (SJW - 1) << 24. Values
+// worked by hand: the exact splits with the sample point nearest 87.5 %,
+// the one with more tq on a tie.
+//   125 kbit/s: 336 clocks: 16 tq of 21 clocks, sample at 14/16 = 87.5 %:
+//               BRP 20, BS1 13, BS2 2 -> 0x001C0014;
+//   250 kbit/s: 168 clocks: 8 tq of 21, sample at 7/8: BRP 20, BS1 6,
+//               BS2 1 -> 0x00050014 (no 16-tq split: 168 / 16 is not whole);
+//   500 kbit/s: 84 clocks: 14 tq of 6, sample at 12/14: -> 0x001A0005;
+//   1 Mbit/s:   42 clocks: 14 tq of 3 -> 0x001A0002.
+TEST_P(BoardSetup, CanBitRateFromTheParameter)
+{
+    const Case &c = GetParam();
+    Rig rig;
+    ASSERT_EQ(rig.setup(c.desc), MC_BOARD_F405_OK) << mc_board_f405_err_name(rig.board.err);
+    ASSERT_TRUE(rig.board.can_ok);
+    EXPECT_EQ(rig.can.BTR, 0x001A0005u); // the set-up's 500 kbit/s
+    const struct {
+        uint32_t bps, btr;
+    } kRates[] = {{125000u, 0x001C0014u},
+                  {250000u, 0x00050014u},
+                  {1000000u, 0x001A0002u},
+                  {500000u, 0x001A0005u}};
+    for (const auto &r : kRates) {
+        EXPECT_EQ(mc_board_f405_can_set_bitrate(&rig.board, r.bps), MC_BOARD_F405_OK) << r.bps;
+        EXPECT_EQ(rig.can.BTR, r.btr) << r.bps;
+        EXPECT_EQ(rig.board.can.cfg.bitrate_bps, r.bps);
+        EXPECT_EQ(rig.board.hal.can, &rig.board.can.dev) << r.bps;
+    }
+    // Unsupported rates: refused by name, the controller keeps its timing.
+    for (const uint32_t bps : {0u, 100000u, 800000u, 333333u, 2000000u}) {
+        EXPECT_EQ(mc_board_f405_can_set_bitrate(&rig.board, bps), MC_BOARD_F405_ERR_CAN_BITRATE)
+            << bps;
+        EXPECT_EQ(rig.can.BTR, 0x001A0005u) << bps;
+    }
+    EXPECT_STREQ(mc_board_f405_err_name(MC_BOARD_F405_ERR_CAN_BITRATE), "CAN bit rate");
+}
+
+// On the HSI fallback (16 MHz, APB1 4 MHz) 1 Mbit/s has 4 tq per bit, below
+// bxCAN's 8: refused although the parameter allows it; 125 kbit/s is timed
+// (32 clocks: 16 tq of 2, BRP 1, BS1 13, BS2 2 -> 0x001C0001).
+TEST(BoardCanBitRate, RateTheClockCannotTimeIsRefused)
+{
+    Rig rig;
+    rig.can.MSR = kCanMsrInak;
+    const mc_board_f405_periph_t p = rig.periph();
+    ASSERT_EQ(mc_board_f405_setup(&rig.board, &mc_board_odrive36_desc, &p, 16000000u, kPwmHz),
+              MC_BOARD_F405_OK);
+    const uint32_t btr0 = rig.can.BTR;
+    EXPECT_EQ(mc_board_f405_can_set_bitrate(&rig.board, 1000000u), MC_BOARD_F405_ERR_CAN_BITRATE);
+    EXPECT_EQ(rig.can.BTR, btr0);
+    EXPECT_EQ(mc_board_f405_can_set_bitrate(&rig.board, 125000u), MC_BOARD_F405_OK);
+    EXPECT_EQ(rig.can.BTR, 0x001C0001u);
+}

@@ -188,8 +188,8 @@ TEST(PilCanDemo, WholeImageTelemetryIsBitIdenticalToSil) {
   ASSERT_EQ(run_sil(dir), 0) << "mcsim failed: see " << dir << "/sil.stdout";
   const mcsim::AppBinding ab = mcsim::read_app_binding(dir + "/binding.txt");
   // The image always boots its application from the parameters; the SIL
-  // must have done the same, without the plug-ins the PIL board leaves out
-  // (the demo uses neither: no POSITION mode, no commissioning).
+  // must have done the same (laws from the parameters on both sides;
+  // commissioning, which the PIL board leaves out, is not in the demo).
   ASSERT_TRUE(ab.serve_params);
 
   const PilRun pil = run_pil(ab, dir);

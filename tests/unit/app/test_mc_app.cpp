@@ -317,3 +317,116 @@ TEST_F(McApp, SaveStretchesTheWatchdogAroundTheErase)
 }
 
 } // namespace
+
+// ---- the laws from the parameters (laws_from_params; issue 19) ------------
+
+namespace
+{
+uint32_t F32Bits(float v)
+{
+    uint32_t u = 0u;
+    std::memcpy(&u, &v, sizeof u);
+    return u;
+}
+} // namespace
+
+// speed_law selects the SPEED slot; the position law fills POSITION (the
+// defaults have an encoder); the command handler offers both in CTRL mode.
+TEST_F(McApp, LawsFromTheParametersFillTheSlots)
+{
+    cfg.laws_from_params = true;
+    for (const uint32_t law : {MC_LAW_SPEED_PI, MC_LAW_SPEED_SENSORLESS, MC_LAW_SPEED_PI2D}) {
+        defaults.speed_law = law;
+        Start();
+        EXPECT_EQ(app.laws.error, 0u) << law;
+        EXPECT_EQ(app.srv.law_error, 0u) << law;
+        EXPECT_TRUE(app.laws.pos_ok) << law;
+        EXPECT_EQ(app.cfg.position_law.ctrl, mc_ctrl_pos_ops(&app.laws.pos));
+        EXPECT_EQ(app.cmd.cfg.position_drive_mode, MC_DRIVE_MODE_CTRL);
+        const mc_drive_ctrl_t *want = nullptr;
+        if (law == MC_LAW_SPEED_SENSORLESS) {
+            want = mc_ctrl_sls_ops(&app.laws.sls);
+        } else if (law == MC_LAW_SPEED_PI2D) {
+            want = mc_ctrl_pi2d_ops(&app.laws.pi2d);
+        }
+        EXPECT_EQ(app.cfg.speed_law.ctrl, want) << law;
+        EXPECT_EQ(app.cmd.cfg.speed_drive_mode,
+                  want != nullptr ? MC_DRIVE_MODE_CTRL : MC_DRIVE_MODE_CURRENT)
+            << law;
+    }
+}
+
+// APPLY: the law changes while disabled; a change that would touch a law
+// while the bridge is on is refused INVALID (LAW), law_error RUNNING, and
+// the laws stay; a salient machine refuses the sensorless law by name.
+TEST_F(McApp, ApplyChangesLawsOnlyWhileDisabledAndRefusesWithTheReason)
+{
+    cfg.laws_from_params = true;
+    Start();
+    uint32_t v = MC_LAW_SPEED_SENSORLESS;
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_SPEED_LAW, &v));
+    v = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_EQ(app.laws.speed_law, MC_LAW_SPEED_SENSORLESS);
+    EXPECT_EQ(app.cfg.speed_law.ctrl, mc_ctrl_sls_ops(&app.laws.sls));
+    EXPECT_EQ(app.cmd.cfg.speed_drive_mode, MC_DRIVE_MODE_CTRL);
+
+    // the bridge on: i_rated_a (a runtime parameter) moves the I-f current
+    ASSERT_EQ(0, mc_drive_set_mode(&drive, MC_DRIVE_MODE_CURRENT));
+    const mc_ctrl_sls_cfg_t before = app.laws.sls.cfg;
+    v = F32Bits(0.5f * defaults.i_rated_a);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_RATED_A, &v));
+    v = 0u;
+    EXPECT_EQ(MC_PARAM_ERR_INVALID, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_EQ(v, MC_PARAMS_ERR_LAW);
+    EXPECT_EQ(app.srv.law_error, MC_LAW_ERR_RUNNING);
+    EXPECT_EQ(0, std::memcmp(&before, &app.laws.sls.cfg, sizeof before));
+    // disabled: the same APPLY goes through and rebuilds the law
+    ASSERT_EQ(0, mc_drive_set_mode(&drive, MC_DRIVE_MODE_IDLE));
+    v = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_LT(app.laws.sls.cfg.if_current_a, before.if_current_a);
+    EXPECT_EQ(app.srv.law_error, 0u);
+
+    // Ld 20 % above Lq: the observer's round-rotor model does not hold
+    v = F32Bits(1.2f * defaults.lq_h);
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_LD_H, &v));
+    v = 0u;
+    EXPECT_EQ(MC_PARAM_ERR_INVALID, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_EQ(v, MC_PARAMS_ERR_LAW);
+    v = 0u;
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_READ, MC_PARAM_ID_LAW_ERROR, &v));
+    EXPECT_EQ(v, MC_GAINS_ERR_SALIENT);
+    EXPECT_EQ(app.cfg.speed_law.ctrl, mc_ctrl_sls_ops(&app.laws.sls)); // kept
+}
+
+// With the sensored PI selected, values the other laws cannot run (here a
+// current limit at 95 % of the sensor's full scale: no margin for the
+// derived gains) are accepted: only POSITION goes, and law_error says why.
+TEST_F(McApp, SensoredPiKeepsRunningWhenOnlyThePositionLawIsRefused)
+{
+    cfg.laws_from_params = true;
+    cfg.speed.kp_a_s_rad = 0.05f; // the board's sensored PI
+    cfg.speed.ki_dt_a_s_rad = 1e-3f;
+    cfg.speed.i_max_a = 5.0f;
+    Start();
+    ASSERT_NE(app.cmd.cfg.set_position_ref, nullptr);
+    ASSERT_NE(app.cmd.cfg.set_speed_ref, nullptr);
+    // i_limit 0.95 of the sensor's range, above its 1 / 1.1; the trip at it
+    uint32_t v = F32Bits(0.95f * defaults.i_sense_max_a);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, &v));
+    v = F32Bits(defaults.i_sense_max_a);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_TRIP_A, &v));
+    v = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_EQ(app.srv.law_error, MC_GAINS_ERR_SENSE);
+    EXPECT_EQ(app.cfg.position_law.ctrl, nullptr);
+    EXPECT_EQ(app.cmd.cfg.set_position_ref, nullptr); // POSITION: UNSUPPORTED
+    EXPECT_NE(app.cmd.cfg.set_speed_ref, nullptr);    // the sensored PI
+    EXPECT_EQ(app.cmd.cfg.speed_drive_mode, MC_DRIVE_MODE_CURRENT);
+}

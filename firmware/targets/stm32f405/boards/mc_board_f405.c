@@ -305,6 +305,34 @@ bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board, const mc_boar
     return b->drv_ready;
 }
 
+mc_board_f405_err_t mc_board_f405_can_set_bitrate(mc_board_f405_t *p_board, uint32_t bitrate_bps)
+{
+    mc_f405_can_config_t cc;
+    uint32_t btr = 0u;
+    if (p_board == NULL) {
+        return MC_BOARD_F405_ERR_ARG;
+    }
+    if (!p_board->can_ok) {
+        return MC_BOARD_F405_OK; /* no CAN on this start: nothing to time */
+    }
+    cc = p_board->can.cfg;
+    if (((bitrate_bps != 125000u) && (bitrate_bps != 250000u) && (bitrate_bps != 500000u) &&
+         (bitrate_bps != 1000000u)) ||
+        (mc_f405_can_bit_timing(cc.pclk_hz, bitrate_bps, cc.sample_point_permille, cc.sjw_tq,
+                                &btr) != 0)) {
+        return MC_BOARD_F405_ERR_CAN_BITRATE;
+    }
+    if (bitrate_bps == cc.bitrate_bps) {
+        return MC_BOARD_F405_OK;
+    }
+    cc.bitrate_bps = bitrate_bps;
+    if (mc_f405_can_init(&p_board->can, &cc) != 0) {
+        p_board->can_ok = false;
+        p_board->hal.can = NULL;
+    }
+    return MC_BOARD_F405_OK;
+}
+
 const char *mc_board_f405_err_name(mc_board_f405_err_t err)
 {
     switch (err) {
@@ -326,6 +354,8 @@ const char *mc_board_f405_err_name(mc_board_f405_err_t err)
         return "SPI";
     case MC_BOARD_F405_ERR_GATE_DRIVER:
         return "gate driver";
+    case MC_BOARD_F405_ERR_CAN_BITRATE:
+        return "CAN bit rate";
     default:
         return "unknown";
     }

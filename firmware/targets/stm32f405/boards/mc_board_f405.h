@@ -71,7 +71,9 @@ typedef enum mc_board_f405_err {
     MC_BOARD_F405_ERR_ADC,
     MC_BOARD_F405_ERR_ENCODER,
     MC_BOARD_F405_ERR_SPI,
-    MC_BOARD_F405_ERR_GATE_DRIVER /**< DRV8301 set-up failed: drv.status says why */
+    MC_BOARD_F405_ERR_GATE_DRIVER, /**< DRV8301 set-up failed: drv.status says why */
+    MC_BOARD_F405_ERR_CAN_BITRATE  /**< CAN bit rate not 125k, 250k, 500k or 1M
+                                        bit/s, or not exact on the APB1 clock */
 } mc_board_f405_err_t;
 
 typedef struct mc_board_f405 {
@@ -135,6 +137,19 @@ mc_board_f405_err_t mc_board_f405_gate_driver_setup(mc_board_f405_t *p_board,
 bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board, const mc_board_desc_t *p_desc,
                                          const mc_hal_spi_t *p_spi, uint32_t period_us,
                                          bool drive_hw_fault);
+
+/**
+ * Re-program the CAN controller for bitrate_bps (the configuration's
+ * can_bitrate_bps, after boot): 125000, 250000, 500000 or 1000000, the bit
+ * timing (BTR) computed from the APB1 clock of the set-up (sysclk / 4) by
+ * mc_f405_can_bit_timing at the board's sample point. Another rate, or one
+ * the clock cannot time exactly, is refused with
+ * MC_BOARD_F405_ERR_CAN_BITRATE and nothing is written (the controller
+ * keeps its rate). On a board whose CAN did not start, MC_BOARD_F405_OK and
+ * nothing done. If the controller does not re-enter init mode, CAN is
+ * turned off (can_ok false, hal.can NULL), as at set-up.
+ */
+mc_board_f405_err_t mc_board_f405_can_set_bitrate(mc_board_f405_t *p_board, uint32_t bitrate_bps);
 
 /** Name of a set-up result ("ok", "gate driver", ...). */
 const char *mc_board_f405_err_name(mc_board_f405_err_t err);

@@ -1,0 +1,198 @@
+/**
+ * @file mc_law_cfg.c
+ * @brief The control laws' configurations from the gains: see mc_law_cfg.h.
+ */
+#include "mc_law_cfg.h"
+
+#include <string.h>
+
+static double dmax(double a, double b)
+{
+    return (a < b) ? b : a; /* std::max's choice */
+}
+
+static double dabs(double x)
+{
+    return (x < 0.0) ? -x : x;
+}
+
+/* std::round of x >= 0 (half away from zero) */
+static double round_pos(double x)
+{
+    const double f = (double)(uint64_t)x; /* floor; x - f is exact */
+    return ((x - f) >= 0.5) ? (f + 1.0) : f;
+}
+
+void mc_law_sls_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_sls_cfg_t *c)
+{
+    (void)memset(c, 0, sizeof *c); /* padding too: configurations compare bytewise */
+    c->r_ohm = (float)m->r_ohm;
+    c->l_h = (float)m->lq_h;
+    c->flux_wb = (float)m->flux_wb;
+    c->pole_pairs = (uint32_t)m->pole_pairs;
+    c->dt_s = (float)(1.0 / m->pwm_hz);
+    c->pwm_delay_periods = (uint32_t)m->delay_periods;
+    c->speed_div = (uint32_t)dmax(1.0, round_pos(m->pwm_hz / 1000.0)); /* about 1 kHz */
+    c->dead_time_s = (float)m->dead_time_s;
+    c->dead_band_a = (float)dmax(1e-3, 0.01 * m->i_rated_a);
+    c->dead_comp_duty = true;
+    c->omega_crit_m_rad_s = (float)g->obs_crit_rad_s;
+    c->resid_tol = 0.3f;
+    c->resid_time_s = 0.05f;
+    c->pll_bw_rad_s = (float)g->pll_bw_rad_s;
+    c->cur_bw_rad_s = (float)g->cur_bw_rad_s;
+    c->v_limit_ratio = 0.95f;
+    c->vbus_max_v = (float)(1.5 * m->vbus_v);
+    /* the sensored PI's formula at the sensorless crossover; a refusal
+     * (J or kt not positive) leaves 0, which mc_ctrl_sls_init refuses */
+    (void)mc_gains_speed_pi(m->j_kgm2, g->kt_nm_a, g->sls_wc_rad_s, &c->speed_kp_a_s_rad,
+                            &c->speed_ki_a_rad);
+    /* the I-f vector may reach 1.25 iq */
+    c->iq_max_a = (float)(g->i_limit_a / 1.25);
+    c->speed_slew_rad_s2 = (float)mc_gains_sls_slew_rad_s2(m, g);
+    c->speed_max_rad_s = (float)g->speed_limit_rad_s;
+    c->if_current_a = (float)g->if_current_a;
+    c->align_time_s = (float)g->align_time_s;
+    c->if_accel_rad_s2 = (float)g->if_accel_rad_s2;
+    c->handover_speed_rad_s = (float)g->handover_rad_s;
+    c->handover_hyst = 0.3f;
+    c->lock_tol = 0.2f;
+    c->if_lock_timeout_s = 0.5f;
+    c->blend_time_s = 0.05f;
+    c->lowspeed_fallback = true;
+    c->if_damping = true;
+    c->align_any_angle = true; /* the rotor may start anywhere */
+}
+
+uint32_t mc_law_pi2d_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_pi2d_cfg_t *cc)
+{
+    /* linearised mechanical loop s^3 + kd (b/a) s^2 + (kp - ki b/a) s + ki
+     * with a triple pole at -wn (as the pi2d-motor scenario) */
+    const double wn = g->pi2d_wn_rad_s;
+    const double a = g->pi2d_a_per_s;
+    const double bb = 1.0;
+    const double ki = wn * wn * wn;
+    const double kd = 3.0 * wn * a / bb;
+    const double kp = 3.0 * wn * wn + ki * bb / a;
+    const double lmax = dmax(m->ld_h, m->lq_h);
+    mc_pi2d_f32_cfg_t *c = &cc->law;
+    uint32_t err = MC_GAINS_OK;
+    (void)memset(cc, 0, sizeof *cc);
+    c->r_ohm = (float)m->r_ohm;
+    c->l_h = (float)m->lq_h;
+    c->pole_pairs = (uint32_t)m->pole_pairs;
+    c->ke_v_s_rad = (float)(m->pole_pairs * m->flux_wb);
+    c->kt_nm_a = (float)g->kt_nm_a;
+    c->j_kgm2 = (float)m->j_kgm2;
+    c->k1_per_s = (float)g->cur_bw_rad_s;
+    c->k2_per_s = (float)g->cur_bw_rad_s;
+    c->kp_per_s2 = (float)kp;
+    c->kd_per_s2 = (float)kd;
+    c->ki_per_s3 = (float)ki;
+    c->a_per_s = (float)a;
+    c->b = (float)bb;
+    c->eps_per_s = (float)(2.0 * ki / kp);
+    c->dt_s = (float)(1.0 / m->pwm_hz);
+    c->iq_max_a = (float)g->i_limit_a;
+    c->v_max_v = (float)g->v_max_v;
+    c->nu_max_nm = (float)(2.0 * g->torque_rated_nm);
+    cc->limit_mode = MC_SVPWM_LIMIT_CIRCLE;
+    /* the board's delay plus half a period (mc_ctrl_pi2d.h) */
+    cc->angle_advance_periods = (float)(m->delay_periods + 0.5);
+    if (!(a >= 3.0 * wn)) {
+        err |= MC_GAINS_ERR_PI2D_FILTER;
+    }
+    if (!(g->pi2d_coupling <= MC_GAINS_PI2D_COUPLING_MAX)) {
+        err |= MC_GAINS_ERR_PI2D_COUPLING;
+    }
+    if (dabs(m->ld_h - m->lq_h) > 0.05 * lmax) {
+        err |= MC_GAINS_ERR_SALIENT;
+    }
+    return err;
+}
+
+void mc_law_pos_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, const mc_foc_f32_cfg_t *foc,
+                    mc_ctrl_pos_cfg_t *c)
+{
+    (void)memset(c, 0, sizeof *c);
+    c->foc = *foc;
+    c->pole_pairs = (uint32_t)m->pole_pairs;
+    c->traj.v_max_rad_s = (float)g->pos_v_max_rad_s;
+    c->traj.a_max_rad_s2 = (float)g->pos_a_max_rad_s2;
+    c->traj.d_max_rad_s2 = (float)g->pos_d_max_rad_s2;
+    c->traj.filter_bw_rad_s = (float)g->pos_filter_bw_rad_s;
+    c->traj.dt_s = foc->dt_s;
+    c->pos_kp_per_s = (float)g->pos_kp_per_s;
+    /* the sensored speed PI's formula (kp = J wc / kt, zero at wc / 4);
+     * a refusal leaves 0, which mc_ctrl_pos_init refuses */
+    (void)mc_gains_speed_pi(m->j_kgm2, g->kt_nm_a, g->speed_wc_rad_s, &c->vel_kp_a_s_rad,
+                            &c->vel_ki_a_rad);
+    c->vel_limit_rad_s = (float)g->speed_limit_rad_s;
+    c->iq_max_a = (float)g->i_limit_a;
+    c->kt_nm_a = (float)g->kt_nm_a;
+    c->j_kgm2 = (float)m->j_kgm2;
+    c->b_nm_s_rad = (float)m->b_nm_s_rad;
+    /* torque lags its reference by the current loop's 1/bw plus the
+     * computation delay and half a period (the PWM's zero-order hold) */
+    c->ff_lead_s = (float)(1.0 / g->cur_bw_rad_s + (m->delay_periods + 0.5) / m->pwm_hz);
+}
+
+void mc_law_motor_from_params(const mc_params_t *p, mc_gains_motor_t *m)
+{
+    m->r_ohm = (double)p->r_ohm;
+    m->ld_h = (double)p->ld_h;
+    m->lq_h = (double)p->lq_h;
+    m->flux_wb = (double)p->flux_wb;
+    m->pole_pairs = (double)p->pole_pairs;
+    m->j_kgm2 = (double)p->j_kgm2;
+    m->b_nm_s_rad = (double)p->b_nm_s_rad;
+    m->i_max_a = (double)p->i_max_a;
+    m->i_rated_a = (double)p->i_rated_a;
+    m->speed_max_rad_s = (double)p->speed_max_rad_s;
+    m->speed_rated_rad_s = (double)p->speed_rated_rad_s;
+    m->vbus_v = (double)p->vbus_v;
+    m->pwm_hz = (double)p->pwm_hz;
+    m->dead_time_s = (double)p->dead_time_s;
+    m->i_sense_max_a = (double)p->i_sense_max_a;
+    m->delay_periods = 1.0;
+}
+
+uint32_t mc_law_speed_check(const mc_params_t *p)
+{
+    mc_gains_motor_t m;
+    mc_gains_t g;
+    uint32_t err;
+    if (p->speed_law == MC_LAW_SPEED_PI) {
+        return MC_GAINS_OK;
+    }
+    err = mc_law_gains_from_params(p, &m, &g);
+    if (err != MC_GAINS_OK) {
+        return err;
+    }
+    if (p->speed_law == MC_LAW_SPEED_PI2D) {
+        mc_ctrl_pi2d_cfg_t c;
+        return mc_law_pi2d_cfg(&m, &g, &c);
+    }
+    /* sensorless: a non-salient machine (the observer's model) */
+    return (dabs(m.ld_h - m.lq_h) > 0.05 * dmax(m.ld_h, m.lq_h)) ? MC_GAINS_ERR_SALIENT : 0u;
+}
+
+uint32_t mc_law_gains_from_params(const mc_params_t *p, mc_gains_motor_t *m, mc_gains_t *g)
+{
+    mc_gains_t fix;
+    mc_law_motor_from_params(p, m);
+    mc_gains_fix_none(&fix);
+    fix.cur_bw_rad_s = (double)p->current_bw_rad_s;
+    fix.i_limit_a = (double)p->i_max_a;
+    fix.enc_pll_bw_rad_s = (double)p->speed_pll_bw_rad_s;
+    if (p->obs_omega_crit_m_rad_s > 0.0f) { /* 0: derived */
+        fix.obs_crit_rad_s = (double)p->obs_omega_crit_m_rad_s;
+    }
+    if (p->obs_pll_bw_rad_s > 0.0f) {
+        fix.pll_bw_rad_s = (double)p->obs_pll_bw_rad_s;
+    }
+    fix.pos_v_max_rad_s = (double)p->speed_max_rad_s;
+    fix.pos_a_max_rad_s2 = (double)p->stop_decel_rad_s2;
+    fix.pos_d_max_rad_s2 = (double)p->stop_decel_rad_s2;
+    return mc_gains_derive(m, &fix, g);
+}

@@ -1,0 +1,129 @@
+// The laws' gains in C (firmware/app/config/mc_gains.c, mc_law_cfg.c): the
+// correctly rounded square root the derivation uses on targets without a
+// libm, the gains of the parameter table's defaults, and the named refusals.
+// The simulator's scenarios call the same functions (sim/cli/drive_setup.cpp),
+// so there is no second derivation to compare with.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+
+extern "C" {
+#include "mc_law_cfg.h"
+}
+
+namespace
+{
+
+uint64_t Bits(double x)
+{
+    uint64_t u = 0u;
+    std::memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+// IEEE 754 sqrt is correctly rounded; mc_gains_sqrt must give the same bits
+// as the host's sqrt (SSE2 SQRTSD) for any positive double, including
+// perfect squares, values next to them, subnormals and the extremes.
+TEST(GainsSqrt, BitIdenticalToIeeeSqrt)
+{
+    std::mt19937_64 rng(12345u);
+    std::uniform_int_distribution<uint64_t> any(1u, 0x7FEFFFFFFFFFFFFFull);
+    for (int i = 0; i < 200000; ++i) {
+        const uint64_t u = any(rng);
+        double x = 0.0;
+        std::memcpy(&x, &u, sizeof x);
+        ASSERT_EQ(Bits(mc_gains_sqrt(x)), Bits(std::sqrt(x))) << x;
+    }
+    for (double k = 1.0; k < 5000.0; k += 1.0) {
+        const double sq = k * k;
+        ASSERT_EQ(Bits(mc_gains_sqrt(sq)), Bits(k));
+        ASSERT_EQ(Bits(mc_gains_sqrt(std::nextafter(sq, 0.0))),
+                  Bits(std::sqrt(std::nextafter(sq, 0.0))));
+        ASSERT_EQ(Bits(mc_gains_sqrt(std::nextafter(sq, 1e300))),
+                  Bits(std::sqrt(std::nextafter(sq, 1e300))));
+    }
+    for (double x : {3.0, 0.2, 4.9e-324, 2.2250738585072014e-308, 1.7976931348623157e307, 1e-300}) {
+        EXPECT_EQ(Bits(mc_gains_sqrt(x)), Bits(std::sqrt(x))) << x;
+    }
+    EXPECT_EQ(mc_gains_sqrt(0.0), 0.0);
+    EXPECT_EQ(mc_gains_sqrt(std::numeric_limits<double>::infinity()),
+              std::numeric_limits<double>::infinity());
+    EXPECT_TRUE(std::isnan(mc_gains_sqrt(-1.0)));
+}
+
+// The table's defaults (the paper-002 test motor on a 48 V board) give every
+// law valid gains, and each law's init accepts its configuration.
+TEST(LawCfg, DefaultsGiveEveryLaw)
+{
+    mc_params_t p = mc_params_default;
+    mc_gains_motor_t m{};
+    mc_gains_t g{};
+    ASSERT_EQ(mc_law_gains_from_params(&p, &m, &g), MC_GAINS_OK);
+    // the settings the table fixes are taken as given
+    EXPECT_EQ(g.cur_bw_rad_s, static_cast<double>(p.current_bw_rad_s));
+    EXPECT_EQ(g.i_limit_a, static_cast<double>(p.i_max_a));
+    EXPECT_EQ(g.pos_v_max_rad_s, static_cast<double>(p.speed_max_rad_s));
+    // obs_* 0: derived, 0.02 of the rated speed the bus allows, and
+    // min(300, 0.04 pwm_hz)
+    EXPECT_EQ(g.obs_crit_rad_s, 0.02 * g.speed_rated_eff_rad_s);
+    EXPECT_LE(g.speed_rated_eff_rad_s, static_cast<double>(p.speed_rated_rad_s));
+    EXPECT_EQ(g.pll_bw_rad_s, std::min(300.0, 0.04 * p.pwm_hz));
+    mc_ctrl_sls_cfg_t sc{};
+    mc_law_sls_cfg(&m, &g, &sc);
+    static mc_ctrl_sls_t sls;
+    EXPECT_EQ(mc_ctrl_sls_init(&sls, &sc), 0u);
+    mc_ctrl_pi2d_cfg_t dc{};
+    EXPECT_EQ(mc_law_pi2d_cfg(&m, &g, &dc), 0u);
+    static mc_ctrl_pi2d_t pi2d;
+    EXPECT_EQ(mc_ctrl_pi2d_init(&pi2d, &dc), 0u);
+    mc_drive_cfg_t drive{};
+    ASSERT_EQ(mc_params_to_drive_cfg(&p, &drive), MC_PARAMS_OK);
+    mc_ctrl_pos_cfg_t pc{};
+    mc_law_pos_cfg(&m, &g, &drive.foc, &pc);
+    static mc_ctrl_pos_t pos;
+    EXPECT_EQ(mc_ctrl_pos_init(&pos, &pc), 0u);
+    for (uint32_t law : {MC_LAW_SPEED_PI, MC_LAW_SPEED_SENSORLESS, MC_LAW_SPEED_PI2D}) {
+        p.speed_law = law;
+        EXPECT_EQ(mc_law_speed_check(&p), 0u) << law;
+        EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK) << law;
+    }
+}
+
+// Each refusal by its name, and only for the law that needs it: the
+// sensored PI takes any motor the drive takes.
+TEST(LawCfg, RefusalsAreNamed)
+{
+    mc_params_t p = mc_params_default;
+    p.ld_h = 1.2f * p.lq_h; // salient: neither the observer nor PI2D
+    p.speed_law = MC_LAW_SPEED_PI;
+    EXPECT_EQ(mc_law_speed_check(&p), 0u);
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
+    p.speed_law = MC_LAW_SPEED_SENSORLESS;
+    EXPECT_EQ(mc_law_speed_check(&p), MC_GAINS_ERR_SALIENT);
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_LAW);
+    p.speed_law = MC_LAW_SPEED_PI2D;
+    EXPECT_NE(mc_law_speed_check(&p) & MC_GAINS_ERR_SALIENT, 0u);
+
+    // PI2D's empirical coupling bound: a light rotor with a strong magnet
+    p = mc_params_default;
+    p.speed_law = MC_LAW_SPEED_PI2D;
+    p.j_kgm2 = 1e-6f;
+    EXPECT_NE(mc_law_speed_check(&p) & MC_GAINS_ERR_PI2D_COUPLING, 0u);
+
+    // the current limit leaves no margin to the sensor (i_limit > i_sense / 1.1)
+    p = mc_params_default;
+    p.speed_law = MC_LAW_SPEED_SENSORLESS;
+    p.i_max_a = p.i_sense_max_a;
+    EXPECT_EQ(mc_law_speed_check(&p), MC_GAINS_ERR_SENSE);
+
+    // no motor values: nothing derived
+    mc_gains_motor_t m{};
+    mc_gains_t g{};
+    EXPECT_EQ(mc_gains_derive(&m, nullptr, &g), MC_GAINS_ERR_VALUE);
+    EXPECT_EQ(mc_gains_derive(nullptr, nullptr, &g), MC_GAINS_ERR_VALUE);
+}
+
+} // namespace
