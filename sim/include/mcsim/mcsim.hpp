@@ -2,6 +2,7 @@
 #ifndef MCSIM_MCSIM_HPP
 #define MCSIM_MCSIM_HPP
 
+#include "mcsim/cogging.hpp"
 #include "mcsim/frames.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/inverter.hpp"
