@@ -17,5 +17,6 @@
 #include "mcsim/status.hpp"
 #include "mcsim/stepper_2ph.hpp"
 #include "mcsim/stepper_power_stage.hpp"
+#include "mcsim/thermal.hpp"
 
 #endif  // MCSIM_MCSIM_HPP
