@@ -3,6 +3,7 @@
 #define MCSIM_MCSIM_HPP
 
 #include "mcsim/cogging.hpp"
+#include "mcsim/dc_link.hpp"
 #include "mcsim/frames.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/inverter.hpp"
