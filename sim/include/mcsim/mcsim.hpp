@@ -17,6 +17,7 @@
 #include "mcsim/sensors.hpp"
 #include "mcsim/status.hpp"
 #include "mcsim/stepper_2ph.hpp"
+#include "mcsim/stepper_common_leg_stage.hpp"
 #include "mcsim/stepper_power_stage.hpp"
 #include "mcsim/thermal.hpp"
 
