@@ -168,15 +168,19 @@ std::uint16_t As5047p::write_data(std::uint16_t data14) {
   return write_command(data14);  // the same layout: parity, 0, 14 bits
 }
 
-std::uint16_t As5047p::angle_code(double t_s, bool compensated) const {
+std::uint16_t As5047p::code_of(double t_s, bool compensated, double noise_rad) const {
   const double td = t_s - p_.latency_s;
   double th = motion_.theta_at(td);
   if (compensated) th += motion_.omega_at(td) * p_.latency_s;
-  const double a = static_cast<double>(p_.direction) * th + p_.mount_offset_rad;
+  const double a = static_cast<double>(p_.direction) * th + p_.mount_offset_rad + noise_rad;
   std::uint32_t code = angle_to_code(a, 14);
   if ((settings1_ & kDir) != 0U) code = (0x4000U - code) & 0x3FFFU;
   const std::uint32_t zero = ((zposm_ & 0xFFU) << 6U) | (zposl_ & 0x3FU);
   return static_cast<std::uint16_t>((code + 0x4000U - zero) & 0x3FFFU);
+}
+
+std::uint16_t As5047p::angle_code(double t_s, bool compensated) const {
+  return code_of(t_s, compensated, 0.0);
 }
 
 std::uint16_t As5047p::latch_angle(double t_s, bool compensated) {
@@ -184,17 +188,9 @@ std::uint16_t As5047p::latch_angle(double t_s, bool compensated) {
     // No usable field: the CORDIC angle is noise.
     return static_cast<std::uint16_t>(angle_to_code(kTwoPi * rng_.uniform_open01(), 14));
   }
-  if (!(p_.noise_rms_rad > 0.0)) return angle_code(t_s, compensated);
-  // Noise on the magnet's angle: shift the latency-evaluated angle.
-  const double noise = p_.noise_rms_rad * rng_.normal();
-  const double td = t_s - p_.latency_s;
-  double th = motion_.theta_at(td);
-  if (compensated) th += motion_.omega_at(td) * p_.latency_s;
-  const double a = static_cast<double>(p_.direction) * th + p_.mount_offset_rad + noise;
-  std::uint32_t code = angle_to_code(a, 14);
-  if ((settings1_ & kDir) != 0U) code = (0x4000U - code) & 0x3FFFU;
-  const std::uint32_t zero = ((zposm_ & 0xFFU) << 6U) | (zposl_ & 0x3FU);
-  return static_cast<std::uint16_t>((code + 0x4000U - zero) & 0x3FFFU);
+  // Noise on the magnet's angle (no draw for a noiseless chip).
+  const double noise = (p_.noise_rms_rad > 0.0) ? p_.noise_rms_rad * rng_.normal() : 0.0;
+  return code_of(t_s, compensated, noise);
 }
 
 std::uint16_t As5047p::reg(std::uint16_t address, double t_s, bool* ok) {
@@ -396,13 +392,17 @@ void Ma732::filter_to(double t1_s) {
   (void)filtered_.push(tf_, af_, da);
 }
 
-std::uint16_t Ma732::angle_code(double t_s) const {
+std::uint16_t Ma732::code_of(double t_s, double noise_rad) const {
   const double th = filtered_.theta_at(t_s - p_.latency_s);
-  const double a = static_cast<double>(p_.direction) * th + p_.mount_offset_rad;
+  const double a = static_cast<double>(p_.direction) * th + p_.mount_offset_rad + noise_rad;
   std::uint32_t code = angle_to_code(a, 16);
   if ((regs_[kRd] & kRdBit) != 0U) code = (0x10000U - code) & 0xFFFFU;
   const std::uint32_t zero = regs_[kZLow] | (static_cast<std::uint32_t>(regs_[kZHigh]) << 8U);
   return static_cast<std::uint16_t>((code + 0x10000U - zero) & 0xFFFFU);
+}
+
+std::uint16_t Ma732::angle_code(double t_s) const {
+  return code_of(t_s, 0.0);
 }
 
 std::uint16_t Ma732::latch_angle(double t_s) {
@@ -410,14 +410,7 @@ std::uint16_t Ma732::latch_angle(double t_s) {
     return static_cast<std::uint16_t>(angle_to_code(kTwoPi * rng_.uniform_open01(), 16));
   }
   const double sigma = noise_rms_rad();
-  if (!(sigma > 0.0)) return angle_code(t_s);
-  const double th = filtered_.theta_at(t_s - p_.latency_s);
-  const double a =
-      static_cast<double>(p_.direction) * th + p_.mount_offset_rad + sigma * rng_.normal();
-  std::uint32_t code = angle_to_code(a, 16);
-  if ((regs_[kRd] & kRdBit) != 0U) code = (0x10000U - code) & 0xFFFFU;
-  const std::uint32_t zero = regs_[kZLow] | (static_cast<std::uint32_t>(regs_[kZHigh]) << 8U);
-  return static_cast<std::uint16_t>((code + 0x10000U - zero) & 0xFFFFU);
+  return code_of(t_s, (sigma > 0.0) ? sigma * rng_.normal() : 0.0);
 }
 
 std::uint32_t Ma732::transfer(std::uint16_t mosi, double t_s, int bits) {

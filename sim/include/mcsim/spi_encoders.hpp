@@ -206,6 +206,8 @@ class As5047p {
 
  private:
   std::uint16_t reg(std::uint16_t address, double t_s, bool* ok);
+  // The code of the magnet angle (plus noise_rad) the signal path gives at t_s.
+  std::uint16_t code_of(double t_s, bool compensated, double noise_rad) const;
   std::uint16_t latch_angle(double t_s, bool compensated);
   std::uint16_t make_response(std::uint16_t data) const;
   As5047pParams p_{};
@@ -272,6 +274,7 @@ class Ma732 {
 
  private:
   void filter_to(double t1_s);
+  std::uint16_t code_of(double t_s, double noise_rad) const;
   std::uint16_t latch_angle(double t_s);
   Ma732Params p_{};
   MotionHistory motion_;                   // the shaft
