@@ -2,6 +2,7 @@
 #include "mcsim/hall.hpp"
 
 #include <cmath>
+#include <cstddef>
 
 #include "util.hpp"
 
@@ -45,8 +46,8 @@ double HallSensors::edge_e_rad(int sensor, bool rising) const {
   const int k = (sensor < 0) ? 0 : (sensor > 2 ? 2 : sensor);
   const double spacing = (p_.spacing == HallSpacing::k60) ? kPi / 3.0 : 2.0 * kPi / 3.0;
   const double phi = p_.offset_e_rad + k * spacing;
-  return rising ? wrap_2pi(phi + p_.edge_error_e_rad[2 * k])
-                : wrap_2pi(phi + kPi + p_.edge_error_e_rad[2 * k + 1]);
+  const std::size_t edge = 2U * static_cast<std::size_t>(k) + (rising ? 0U : 1U);
+  return wrap_2pi(phi + (rising ? 0.0 : kPi) + p_.edge_error_e_rad[edge]);
 }
 
 bool HallSensors::inside(int k, double th_e, bool high, double margin) const {
