@@ -20,9 +20,10 @@
 // ---------------------------------------------------------------- AS5047P
 // Frames (ams AS5047P datasheet, "SPI Interface"; the same command / read
 // data / write data scheme as the family's AS5055A datasheet v2-06 Figures
-// 15-19, which carry it with other bit positions; the positions below are
-// the AS5047P's, as the public drivers read them: ODrive's and moteus'
-// firmware, SimpleFOC's AS5047 driver):
+// 15-19 and AS5050's, which carry it with other bit positions; the
+// positions and register map below are the AS5047P's as public drivers use
+// them: moteus' fw/as5047.h (commit 1f4a195, 0xFFFF reads ANGLECOM, 14
+// data bits), SimpleFOC's Arduino-FOC-drivers AS5047 register layout):
 //   command    bit 15 PARC (even parity of bits 14:0), bit 14 R/W (1 read),
 //              bits 13:0 address
 //   read data  bit 15 PARD (even parity of bits 14:0), bit 14 EF (error
@@ -61,8 +62,9 @@
 // datasheet revision at hand.
 //
 // ------------------------------------------------------------------ MA732
-// Frames (MPS MA732 datasheet, "SPI"; the command format as MPS' MagAlpha
-// drivers and moteus' fw/ma732.h, commit 1f4a195, use it):
+// Frames (MPS MA732 datasheet, "SPI"; the command format as public drivers
+// use it: moteus' fw/ma732.h, commit 1f4a195, and unhuman's motorlib MA732
+// driver (3-bit command, 5-bit address, 8-bit value; 20 ms after a write)):
 //   angle read   MOSI 0x0000; MISO the 16-bit angle (its most significant
 //                bits first; an 8-bit frame returns the top byte only and
 //                executes no command)
