@@ -19,15 +19,19 @@
  *            interrupt runs the fast loop; temperatures as software-started
  *            regular conversions.
  *   encoder  TIM2..TIM5 in encoder mode 3 (x4), ARR = counts_per_rev - 1,
- *            index pulse via mc_f405_encoder_index_isr() from its EXTI ISR.
+ *            index pulse on an EXTI line latching the count
+ *            (mc_f405_encoder_index_isr() from its EXTI ISR).
  *   can      bxCAN (CAN1), classic frames, 3 tx mailboxes sent in request
  *            order, rx FIFO 0 (+ an optional software ring filled from the
  *            FIFO 0 interrupt), 32-bit mask filters, automatic bus-off
  *            recovery.
  *   tick     TIM2 or TIM5 (32-bit) free running. (The DWT cycle counter is
  *            not used: it reads 0 under QEMU.)
- *   spi      SPI1..3 master with a GPIO chip select, 16-bit frames (the
- *            gate driver's register interface; hal/spi.h).
+ *   spi      SPI1..3 master with a GPIO chip select, 16-bit and 32-clock
+ *            frames (the gate driver's register interface, an absolute
+ *            encoder; hal/spi.h); devices sharing one SPI each restore
+ *            their settings.
+ *   hall     three GPIO inputs as one 3-bit code (hal/hall.h).
  *   fault    BKIN of TIM1/TIM8 (hardware kill), gate-driver nFAULT and
  *            over-current comparator levels on GPIO, gate-driver enable pin;
  *            gate kill = EGR.BG on both timers + MOE cleared + enable low.
@@ -53,6 +57,7 @@
 #include <stdint.h>
 
 #include "hal/hal.h"
+#include "hal/hall.h"
 #include "hal/spi.h"
 #include "mc_f405_regs.h"
 
@@ -404,6 +409,27 @@ int mc_f405_encoder_index_rearm(mc_f405_encoder_t *p_drv);
  * @return the IRQ number, or 0xFFFFFFFF for a line above 15.
  */
 uint32_t mc_f405_exti_irq(uint32_t line);
+
+/* ======================================================================== */
+/* hall: three GPIO inputs                                                   */
+/* ======================================================================== */
+
+typedef struct mc_f405_hall_config {
+    mc_f405_pin_t pin[3]; /**< sensors A, B, C (code bits 0, 1, 2); active_low
+                               inverts a pin (an inverting input stage) */
+} mc_f405_hall_config_t;
+
+typedef struct mc_f405_hall {
+    mc_f405_hall_config_t cfg;
+    mc_hal_hall_t dev;
+} mc_f405_hall_t;
+
+/**
+ * The Hall inputs read from their ports' IDR (the pins' mode, pulls and
+ * filter are the board's GPIO set-up). Reading IDR has no side effect.
+ * @return 0; -EINVAL NULL, a pin without a port or above 15.
+ */
+int mc_f405_hall_init(mc_f405_hall_t *p_drv, const mc_f405_hall_config_t *p_cfg);
 
 /* ======================================================================== */
 /* spi: SPI1..3 master, one device on a GPIO chip select                     */

@@ -301,3 +301,35 @@ TEST(F405Exti, IrqOfEachLine)
     }
     EXPECT_EQ(mc_f405_exti_irq(16u), 0xFFFFFFFFu);
 }
+
+// Hall inputs: three IDR bits (RM0090 §8.4.5) as code bits 0..2; an
+// active-low pin inverts.
+TEST(F405Hall, CodeFromThreePins)
+{
+    mc_f405_gpio_regs_t gpioc{};
+    mc_f405_gpio_regs_t gpiob{};
+    mc_f405_hall_t hall{};
+    mc_f405_hall_config_t c{};
+    c.pin[0] = {&gpioc, 6u, false};
+    c.pin[1] = {&gpioc, 7u, false};
+    c.pin[2] = {&gpiob, 8u, false};
+    ASSERT_EQ(mc_f405_hall_init(&hall, &c), 0);
+    uint32_t code = 99u;
+    gpioc.IDR = (1u << 6);
+    gpiob.IDR = (1u << 8) | (1u << 7); // PB7 is not a Hall pin
+    ASSERT_EQ(mc_hal_hall_read(&hall.dev, &code), 0);
+    EXPECT_EQ(code, 5u); // A and C
+    gpioc.IDR = (1u << 7);
+    gpiob.IDR = 0u;
+    ASSERT_EQ(mc_hal_hall_read(&hall.dev, &code), 0);
+    EXPECT_EQ(code, 2u);
+    c.pin[1].active_low = true;
+    ASSERT_EQ(mc_f405_hall_init(&hall, &c), 0);
+    ASSERT_EQ(mc_hal_hall_read(&hall.dev, &code), 0);
+    EXPECT_EQ(code, 0u);
+    EXPECT_EQ(mc_hal_hall_read(&hall.dev, nullptr), -EINVAL);
+    c.pin[2].p_port = nullptr;
+    EXPECT_EQ(mc_f405_hall_init(&hall, &c), -EINVAL);
+    c.pin[2] = {&gpiob, 16u, false};
+    EXPECT_EQ(mc_f405_hall_init(&hall, &c), -EINVAL);
+}
