@@ -353,9 +353,9 @@ def load_board(folder):
         if sg in HALL_SIGNALS and p["name"] not in {pins[e]["name"] for e in ENC_PIN_SIGNALS
                                                     if e in pins}:
             raise BoardError(f"{name}: {sg} on {p['name']}, not on an encoder pin")
-    if "enc_spi_cs" in pins:
-        if pins["enc_spi_cs"]["mode"] != "output" or pins["enc_spi_cs"]["init"] != 1:
-            raise BoardError(f"{name}: enc_spi_cs must be an output starting high (released)")
+    cs = pins.get("enc_spi_cs")
+    if cs is not None and (cs["mode"] != "output" or cs["init"] != 1):
+        raise BoardError(f"{name}: enc_spi_cs must be an output starting high (released)")
 
     src = need(t, "source", where, dict)
     for k in ("repository", "commit", "files"):
