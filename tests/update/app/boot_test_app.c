@@ -23,6 +23,7 @@
 #include "mc_boot_sh.h"
 #include "mc_can_proto.h"
 #include "mc_cfg_store.h"
+#include "mc_cortexm.h"
 #include "mc_f405_flash.h"
 #include "mc_image_header.h"
 #include "mc_params_gen.h"
