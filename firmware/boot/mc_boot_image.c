@@ -165,7 +165,6 @@ static bool vectors_ok(const mc_boot_slot_t *s, const uint32_t vec[2], uint32_t 
 mc_boot_img_t mc_boot_image_check(const mc_boot_slot_t *s, mc_boot_image_hdr_t *p_hdr)
 {
     mc_boot_image_hdr_t h = {0};
-    uint32_t vec[2] = {0u, 0u};
     uint32_t crc = 0u;
     mc_boot_img_t r;
     if ((s == NULL) || (mc_boot_slot_bytes(s) < MC_BOOT_IMAGE_MIN_BYTES)) {
@@ -179,14 +178,15 @@ mc_boot_img_t mc_boot_image_check(const mc_boot_slot_t *s, mc_boot_image_hdr_t *
         r = mc_boot_image_check_hdr(s, &h);
     }
     if (r == MC_BOOT_IMG_OK) {
-        if (mc_boot_slot_crc(s, h.image_bytes, &crc) != 0) {
+        uint32_t vec[2] = {0u, 0u};
+        const bool read_ok = (mc_boot_slot_crc(s, h.image_bytes, &crc) == 0) &&
+                             (mc_boot_slot_read(s, 0u, vec, sizeof vec) == 0);
+        if (!read_ok) {
             r = MC_BOOT_IMG_FLASH;
         } else if (crc != h.crc32) {
             r = MC_BOOT_IMG_CRC;
         } else if (h.commit != MC_BOOT_COMMIT_MAGIC) {
             r = MC_BOOT_IMG_UNCOMMITTED;
-        } else if (mc_boot_slot_read(s, 0u, vec, sizeof vec) != 0) {
-            r = MC_BOOT_IMG_FLASH;
         } else if (!vectors_ok(s, vec, h.image_bytes)) {
             r = MC_BOOT_IMG_VECTORS;
         } else {

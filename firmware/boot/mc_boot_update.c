@@ -157,10 +157,7 @@ static int program_checked(mc_boot_update_t *u, uint32_t off, const uint8_t *buf
         !mc_boot_slot_locate(&u->cfg.slot, off, &sector, &sector_off, &room) || (room < len)) {
         return -EINVAL;
     }
-    for (uint32_t i = 0u; i < len / 4u; ++i) {
-        words[i] = (uint32_t)buf[4u * i] | ((uint32_t)buf[4u * i + 1u] << 8) |
-                   ((uint32_t)buf[4u * i + 2u] << 16) | ((uint32_t)buf[4u * i + 3u] << 24);
-    }
+    (void)memcpy(words, buf, len); /* little-endian, as the flash's words */
     rc = mc_hal_flash_program(u->cfg.slot.flash, sector, sector_off, words, len / 4u);
     if (rc == 0) {
         rc = mc_hal_flash_read(u->cfg.slot.flash, sector, sector_off, back, len);
@@ -245,9 +242,8 @@ static void do_write(mc_boot_update_t *u, const mc_boot_msg_t *q, reply_t *r, ui
 static void do_verify(mc_boot_update_t *u, const mc_boot_msg_t *q, reply_t *r)
 {
     mc_boot_image_hdr_t h;
-    mc_boot_img_t c;
     if ((u->state == ST_RECEIVING) && (u->next_block == u->n_blocks) && !u->blk_open) {
-        c = mc_boot_image_check(&u->cfg.slot, &h);
+        const mc_boot_img_t c = mc_boot_image_check(&u->cfg.slot, &h);
         r->value = h.crc32;
         if (c == MC_BOOT_IMG_FLASH) {
             r->status = S_FLASH;
@@ -405,13 +401,12 @@ static uint32_t block_complete(mc_boot_update_t *u, mc_hal_can_frame_t *p_reply)
 {
     const reply_t ok = {MC_CAN_VAL_BOOT_OP_WRITE, S_OK, 0u};
     reply_t r = ok;
-    uint32_t st;
     u->blk_open = false;
     if (mc_crc32(u->blk, u->blk_len) != u->blk_crc) {
         return block_failed(u, S_BLOCK_CRC, p_reply);
     }
     if (!u->blk_repeat) {
-        st = (u->blk_index == HDR_BLOCK) ? header_block(u) : S_OK;
+        const uint32_t st = (u->blk_index == HDR_BLOCK) ? header_block(u) : S_OK;
         if (st != S_OK) {
             return block_failed(u, st, p_reply);
         }

@@ -93,6 +93,7 @@ static void iwdg_stretch(void)
     w->RLR = MC_F405_IWDG_RLR_MAX;
     for (uint32_t i = 0u; (i < MC_F405_IWDG_SR_POLLS) && (w->SR != 0u); ++i) {
     }
+    /* cppcheck-suppress redundantAssignment ; KR is a write-only key register: each write acts */
     w->KR = MC_F405_IWDG_KEY_RELOAD;
 }
 
