@@ -91,6 +91,23 @@ TEST_F(BootUpdate, WholeUpdateThenTheNewImageBoots)
     ExpectNewImageBoots();
 }
 
+TEST_F(BootUpdate, TheApplicationsConfigurationLoadsAsBeforeTheUpdate)
+{
+    // the store as the new image's mc_app_boot reads it: the same record,
+    // STORED, every parameter the same (node 5 included)
+    static mc_cfg_store_t store;
+    const mc_cfg_store_cfg_t sc = dev.Store();
+    mc_params_t before{}, after{};
+    ASSERT_EQ(0, mc_cfg_store_init(&store, &sc));
+    ASSERT_EQ(MC_CFG_BOOT_STORED, mc_cfg_store_load(&store, &before));
+    const auto r = host.Update(new_img, kBoard);
+    ASSERT_TRUE(r && r->status == MC_CAN_VAL_BOOT_STATUS_OK);
+    ASSERT_EQ(0, mc_cfg_store_init(&store, &sc));
+    EXPECT_EQ(MC_CFG_BOOT_STORED, mc_cfg_store_load(&store, &after));
+    EXPECT_EQ(0, std::memcmp(&before, &after, sizeof before));
+    EXPECT_EQ(kNode, after.can_node_id);
+}
+
 TEST_F(BootUpdate, InfoVersionAndAnnounce)
 {
     auto r = host.Req(MC_CAN_VAL_BOOT_OP_INFO);
