@@ -4,6 +4,7 @@
  */
 #include "mc_boot_image.h"
 
+#include "mc_boot_layout.h"
 #include "mc_crc32.h"
 
 /* Bytes read per flash call while computing a CRC (stack buffer). */
@@ -31,6 +32,22 @@ uint32_t mc_boot_crc32_update(const mc_boot_crc_table_t *tab, uint32_t state, co
         c = tab->t[(c ^ (uint32_t)p[i]) & 0xFFu] ^ (c >> 8);
     }
     return c;
+}
+
+mc_boot_slot_t mc_boot_slot_layout1(const mc_hal_flash_t *flash, uint32_t board_id,
+                                    const mc_boot_crc_table_t *crc)
+{
+    mc_boot_slot_t s;
+    s.flash = flash;
+    s.first_sector = MC_BOOT_APP_FIRST_SECTOR;
+    s.n_sectors = MC_BOOT_APP_SECTORS;
+    s.addr = MC_BOOT_APP_ADDR;
+    s.ram_start = MC_BOOT_RAM_START;
+    s.ram_end = MC_BOOT_RAM_END;
+    s.board_id = board_id;
+    s.layout_id = MC_BOOT_LAYOUT_ID;
+    s.crc_table = crc;
+    return s;
 }
 
 uint32_t mc_boot_slot_bytes(const mc_boot_slot_t *s)

@@ -120,6 +120,12 @@ typedef struct mc_boot_slot {
     const mc_boot_crc_table_t *crc_table;
 } mc_boot_slot_t;
 
+/** The STM32F405's application slot of layout 1 (mc_boot_layout.h: sectors
+ *  1..9 at 0x08004000, SRAM for the stack) on flash, for board_id, with the
+ *  CRC table crc (or NULL). */
+mc_boot_slot_t mc_boot_slot_layout1(const mc_hal_flash_t *flash, uint32_t board_id,
+                                    const mc_boot_crc_table_t *crc);
+
 /** The slot's size [bytes] (sum of its sectors), 0 when a sector is unknown
  *  or the description is incomplete. */
 uint32_t mc_boot_slot_bytes(const mc_boot_slot_t *s);

@@ -30,6 +30,7 @@
 #include <string.h>
 
 #include "hal/flash.h"
+#include "mc_boot_flash_ro.h"
 #include "mc_boot_handoff.h"
 #include "mc_boot_layout.h"
 #include "mc_boot_run.h"
@@ -48,6 +49,7 @@ void HardFault_Handler(void);
 
 typedef struct {
     mc_hal_flash_t flash;
+    mc_f405_flash_t mem; /* the memory-mapped array as QEMU loaded it: reads only */
     mc_hal_can_t can;
     bool dirty;  /* this boot erased or programmed: reads from the host */
     bool linked; /* the link is open */
@@ -111,9 +113,8 @@ static bool in_slot(uint32_t sector)
 
 static int op_sector_size(void *ctx, uint32_t sector, uint32_t *p_bytes)
 {
-    uint32_t off = 0u;
     (void)ctx;
-    return mc_f405_flash_sector_geometry(sector, &off, p_bytes);
+    return mc_hal_flash_sector_size(&g_pb.mem.dev, sector, p_bytes);
 }
 
 static int op_erase(void *ctx, uint32_t sector)
@@ -166,15 +167,12 @@ static int op_read(void *ctx, uint32_t sector, uint32_t offset, void *p_buf, uin
     uint32_t bytes = 0u;
     uint8_t *out = (uint8_t *)p_buf;
     (void)ctx;
+    if (!g_pb.dirty) {
+        return mc_hal_flash_read(&g_pb.mem.dev, sector, offset, p_buf, len);
+    }
     if ((mc_f405_flash_sector_geometry(sector, &base, &bytes) != 0) || (offset > bytes) ||
         (len > bytes - offset)) {
         return -EINVAL;
-    }
-    if (!g_pb.dirty) {
-        for (uint32_t i = 0u; i < len; ++i) {
-            out[i] = *mc_reg8((uintptr_t)MC_BOOT_FLASH_BASE + base + offset + i);
-        }
-        return 0;
     }
     for (uint32_t done = 0u; done < len;) {
         const uint32_t n =
@@ -261,17 +259,7 @@ static void board_reset(void *ctx)
 
 static mc_boot_slot_t slot(void)
 {
-    mc_boot_slot_t s;
-    s.flash = &g_pb.flash;
-    s.first_sector = MC_BOOT_APP_FIRST_SECTOR;
-    s.n_sectors = MC_BOOT_APP_SECTORS;
-    s.addr = MC_BOOT_APP_ADDR;
-    s.ram_start = MC_BOOT_RAM_START;
-    s.ram_end = MC_BOOT_RAM_END;
-    s.board_id = MC_BOOT_BOARD_ID;
-    s.layout_id = MC_BOOT_LAYOUT_ID;
-    s.crc_table = &g_pb.crc;
-    return s;
+    return mc_boot_slot_layout1(&g_pb.flash, MC_BOOT_BOARD_ID, &g_pb.crc);
 }
 
 int main(void)
@@ -280,6 +268,7 @@ int main(void)
     mc_boot_update_cfg_t uc;
     mc_boot_board_t b;
     mc_boot_link_msg_t hello = {.type = (uint8_t)MC_BOOT_LINK_HELLO, .len = 0u};
+    mc_boot_flash_ro_init(&g_pb.mem);
     g_pb.flash.ops = &k_flash_ops;
     g_pb.flash.ctx = &g_pb;
     g_pb.can.ops = &k_can_ops;

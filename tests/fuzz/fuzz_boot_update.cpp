@@ -39,12 +39,12 @@ constexpr uint32_t kSlotFirst = 1u, kSlotN = 3u;
 constexpr uint32_t kImageBytes = 2500u;
 constexpr size_t kRecord = 10u;
 
-void die(const char *why) {
+void die(const char* why) {
   (void)why;
   std::abort();
 }
 
-uint32_t le32(const uint8_t *p) {
+uint32_t le32(const uint8_t* p) {
   return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
 }
 
@@ -69,31 +69,25 @@ struct Rig {
     return o;
   }
   mc_boot_slot_t slot() {
-    mc_boot_slot_t s{};
-    s.flash = &checked;
-    s.first_sector = kSlotFirst;
-    s.n_sectors = kSlotN;
-    s.addr = MC_BOOT_APP_ADDR;
-    s.ram_start = MC_BOOT_RAM_START;
-    s.ram_end = MC_BOOT_RAM_END;
-    s.board_id = MC_BOOT_BOARD_PIL;
-    s.layout_id = MC_BOOT_LAYOUT_ID;
-    s.crc_table = &crc;
+    mc_boot_slot_t s = mc_boot_slot_layout1(&checked, MC_BOOT_BOARD_PIL, &crc);
+    s.n_sectors = kSlotN;  // this small map's slot
     return s;
   }
 };
 
-Rig *g;
+Rig* g;
 
-int w_size(void *, uint32_t s, uint32_t *b) { return mc_hal_flash_sector_size(&g->fake.dev, s, b); }
+int w_size(void*, uint32_t s, uint32_t* b) {
+  return mc_hal_flash_sector_size(&g->fake.dev, s, b);
+}
 
-int w_erase(void *, uint32_t s) {
+int w_erase(void*, uint32_t s) {
   if (s < kSlotFirst || s >= kSlotFirst + kSlotN) die("erase outside the slot");
   if (s == kSlotFirst) g->next_off = 0u;  // a BEGIN starts over
   return mc_hal_flash_erase(&g->fake.dev, s);
 }
 
-int w_program(void *, uint32_t s, uint32_t off, const uint32_t *w, uint32_t n) {
+int w_program(void*, uint32_t s, uint32_t off, const uint32_t* w, uint32_t n) {
   if (s < kSlotFirst || s >= kSlotFirst + kSlotN) die("program outside the slot");
   const uint32_t at = g->start(s) + off;
   const uint32_t rel = at - g->slot_start;
@@ -108,13 +102,15 @@ int w_program(void *, uint32_t s, uint32_t off, const uint32_t *w, uint32_t n) {
   } else {
     if (rel < g->next_off) die("a program behind the last one");
     if (n * 4u > MC_BOOT_BLOCK_BYTES || rel % MC_BOOT_BLOCK_BYTES != 0u) die("not one block");
-    if (!g->write_seen || rel / MC_BOOT_BLOCK_BYTES != g->write_block) die("a block no WRITE announced");
+    if (!g->write_seen || rel / MC_BOOT_BLOCK_BYTES != g->write_block)
+      die("a block no WRITE announced");
     std::vector<uint8_t> b(n * 4u);
     std::memcpy(b.data(), w, b.size());
     // the bytes the chunks carried: their CRC-32 is the WRITE's, and the
     // block is written as they were (the header's commit word erased)
     std::vector<uint8_t> sent(g->shadow, g->shadow + b.size());
-    if (mc_crc32(sent.data(), sent.size()) != g->write_crc) die("a block that does not match its WRITE");
+    if (mc_crc32(sent.data(), sent.size()) != g->write_crc)
+      die("a block that does not match its WRITE");
     if (rel / MC_BOOT_BLOCK_BYTES == MC_BOOT_HDR_OFFSET / MC_BOOT_BLOCK_BYTES) {
       const uint32_t c = MC_BOOT_COMMIT_WORD_OFFSET % MC_BOOT_BLOCK_BYTES;
       if (le32(&b[c]) != 0xFFFFFFFFu) die("the header's block with its commit word set");
@@ -126,7 +122,7 @@ int w_program(void *, uint32_t s, uint32_t off, const uint32_t *w, uint32_t n) {
   return mc_hal_flash_program(&g->fake.dev, s, off, w, n);
 }
 
-int w_read(void *, uint32_t s, uint32_t off, void *p, uint32_t len) {
+int w_read(void*, uint32_t s, uint32_t off, void* p, uint32_t len) {
   return mc_hal_flash_read(&g->fake.dev, s, off, p, len);
 }
 
@@ -140,16 +136,17 @@ std::vector<uint8_t> make_image() {
   put(0u, MC_BOOT_RAM_END);
   put(4u, (MC_BOOT_APP_ADDR + MC_BOOT_IMAGE_MIN_BYTES) | 1u);
   const uint32_t h[6] = {MC_BOOT_IMAGE_MAGIC, MC_BOOT_HDR_VERSION, MC_BOOT_BOARD_PIL,
-                         MC_BOOT_LAYOUT_ID, 0x010203u, kImageBytes};
+                         MC_BOOT_LAYOUT_ID,   0x010203u,           kImageBytes};
   for (uint32_t i = 0u; i < 6u; ++i) put(MC_BOOT_HDR_OFFSET + 4u * i, h[i]);
   uint32_t c = mc_crc32_update(MC_CRC32_INIT, img.data(), MC_BOOT_CRC_WORD_OFFSET);
-  c = mc_crc32_final(mc_crc32_update(c, &img[MC_BOOT_IMAGE_MIN_BYTES], kImageBytes - MC_BOOT_IMAGE_MIN_BYTES));
+  c = mc_crc32_final(
+      mc_crc32_update(c, &img[MC_BOOT_IMAGE_MIN_BYTES], kImageBytes - MC_BOOT_IMAGE_MIN_BYTES));
   put(MC_BOOT_CRC_WORD_OFFSET, c);
   put(MC_BOOT_COMMIT_WORD_OFFSET, MC_BOOT_COMMIT_MAGIC);
   return img;
 }
 
-mc_hal_can_frame_t frame(uint32_t cmd, const uint8_t *d8) {
+mc_hal_can_frame_t frame(uint32_t cmd, const uint8_t* d8) {
   mc_hal_can_frame_t f{};
   f.id = mc_can_id(kNode, cmd);
   f.len = 8u;
@@ -163,16 +160,17 @@ mc_hal_can_frame_t req(uint32_t op, uint32_t arg, uint32_t value) {
   return frame(MC_CAN_CMD_BOOT_REQ, d);
 }
 
-void deliver(const mc_hal_can_frame_t &f) {
+void deliver(const mc_hal_can_frame_t& f) {
   if (f.id == mc_can_id(kNode, MC_CAN_CMD_BOOT_REQ) && f.len == 8u &&
-      f.data[0] == MC_CAN_VAL_BOOT_OP_WRITE && (f.flags & (MC_HAL_CAN_FLAG_EXT | MC_HAL_CAN_FLAG_RTR |
-                                                           MC_HAL_CAN_FLAG_FD)) == 0u) {
+      f.data[0] == MC_CAN_VAL_BOOT_OP_WRITE &&
+      (f.flags & (MC_HAL_CAN_FLAG_EXT | MC_HAL_CAN_FLAG_RTR | MC_HAL_CAN_FLAG_FD)) == 0u) {
     g->write_seen = true;  // what the bootloader will hold the block to
     g->write_block = uint32_t(f.data[1]) | uint32_t(f.data[2]) << 8 | uint32_t(f.data[3]) << 16;
     g->write_crc = le32(&f.data[4]);
     std::memset(g->shadow, 0, sizeof g->shadow);
   }
-  if (f.id == mc_can_id(kNode, MC_CAN_CMD_BOOT_DATA) && f.len == 8u && f.data[0] < MC_BOOT_BLOCK_CHUNKS &&
+  if (f.id == mc_can_id(kNode, MC_CAN_CMD_BOOT_DATA) && f.len == 8u &&
+      f.data[0] < MC_BOOT_BLOCK_CHUNKS &&
       (f.flags & (MC_HAL_CAN_FLAG_EXT | MC_HAL_CAN_FLAG_RTR | MC_HAL_CAN_FLAG_FD)) == 0u) {
     std::memcpy(&g->shadow[f.data[0] * MC_BOOT_CHUNK_BYTES], &f.data[1], MC_BOOT_CHUNK_BYTES);
   }
@@ -180,12 +178,14 @@ void deliver(const mc_hal_can_frame_t &f) {
   r.len = 0xEEu;
   const uint32_t n = mc_boot_update_rx(&g->u, &f, &r);
   if (n > 1u) die("more than one reply");
-  if (n == 1u && (r.id != mc_can_id(kNode, MC_CAN_CMD_BOOT_REPLY) || r.len != 8u || r.flags != 0u ||
-                  r.data[2] < MC_CAN_VAL_BOOT_STATE_IDLE || r.data[2] > MC_CAN_VAL_BOOT_STATE_COMMITTED))
+  if (n == 1u &&
+      (r.id != mc_can_id(kNode, MC_CAN_CMD_BOOT_REPLY) || r.len != 8u || r.flags != 0u ||
+       r.data[2] < MC_CAN_VAL_BOOT_STATE_IDLE || r.data[2] > MC_CAN_VAL_BOOT_STATE_COMMITTED))
     die("a malformed reply");
   if (g->committed) {
     mc_boot_slot_t s = g->slot();
-    if (mc_boot_image_check(&s, nullptr) != MC_BOOT_IMG_OK) die("committed an image that fails the check");
+    if (mc_boot_image_check(&s, nullptr) != MC_BOOT_IMG_OK)
+      die("committed an image that fails the check");
   }
 }
 
@@ -209,10 +209,10 @@ void good_block(uint32_t k, uint32_t fault, uint32_t i, uint8_t x) {
   if (fault == 2u) fr.insert(fr.begin() + i, fr[i]);
   if (fault == 3u && i + 1u < fr.size()) std::swap(fr[i], fr[i + 1u]);
   if (fault == 4u) fr[i].data[1u + x % 7u] ^= uint8_t(1u + x);
-  for (const auto &f : fr) deliver(f);
+  for (const auto& f : fr) deliver(f);
 }
 
-void record(const uint8_t *r) {
+void record(const uint8_t* r) {
   const uint8_t kind = r[0] % 9u;
   mc_hal_can_frame_t f{};
   mc_hal_can_frame_t a{};
@@ -231,9 +231,10 @@ void record(const uint8_t *r) {
       deliver(frame(MC_CAN_CMD_BOOT_DATA, &r[1]));
       break;
     case 3:  // the right BEGIN (or one field off)
-      deliver(req(MC_CAN_VAL_BOOT_OP_BEGIN,
-                  (MC_BOOT_BOARD_PIL | MC_BOOT_LAYOUT_ID << 8 | MC_BOOT_HDR_VERSION << 16) ^ (r[1] & r[2]),
-                  kImageBytes ^ (r[3] & r[4])));
+      deliver(req(
+          MC_CAN_VAL_BOOT_OP_BEGIN,
+          (MC_BOOT_BOARD_PIL | MC_BOOT_LAYOUT_ID << 8 | MC_BOOT_HDR_VERSION << 16) ^ (r[1] & r[2]),
+          kImageBytes ^ (r[3] & r[4])));
       break;
     case 4:  // the right block, perhaps with one fault
     case 5:
@@ -257,13 +258,14 @@ void record(const uint8_t *r) {
 
 }  // namespace
 
-extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   Rig rig;
   g = &rig;
   uint32_t total = 0u;
   for (uint32_t b : kSectors) total += b;
   rig.mem.assign(total, 0xFFu);
-  for (uint32_t i = 0u; i < rig.start(kSlotFirst); ++i) rig.mem[i] = uint8_t(i);  // "the bootloader"
+  for (uint32_t i = 0u; i < rig.start(kSlotFirst); ++i)
+    rig.mem[i] = uint8_t(i);  // "the bootloader"
   for (uint32_t i = rig.start(4u); i < total; ++i) rig.mem[i] = uint8_t(i * 7u);  // "configuration"
   rig.img = make_image();
   std::memcpy(&rig.mem[rig.start(kSlotFirst)], rig.img.data(), rig.img.size());  // an old image

@@ -93,16 +93,8 @@ struct Device {
     }
     mc_boot_slot_t Slot(uint32_t board = MC_BOOT_BOARD_EXAMPLE) const
     {
-        mc_boot_slot_t s{};
-        s.flash = &flash.dev;
-        s.first_sector = slot_first;
-        s.n_sectors = slot_n;
-        s.addr = MC_BOOT_APP_ADDR;
-        s.ram_start = MC_BOOT_RAM_START;
-        s.ram_end = MC_BOOT_RAM_END;
-        s.board_id = board;
-        s.layout_id = MC_BOOT_LAYOUT_ID;
-        s.crc_table = &crc;
+        mc_boot_slot_t s = mc_boot_slot_layout1(&flash.dev, board, &crc);
+        s.n_sectors = slot_n; // the small map's slot is shorter
         return s;
     }
     mc_cfg_store_cfg_t Store() const

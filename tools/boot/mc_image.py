@@ -51,10 +51,7 @@ def cmd_seal(a):
     if data != sealed:
         raise UsageError(f"{out}: the sealed ELF does not give the sealed image (is the header "
                          "the last word of its section?)")
-    h = image.check(data)
-    print(f"{os.path.basename(a.elf)}: image {h['image_bytes']} bytes, CRC-32 0x{h['crc32']:08X}, "
-          f"{image.board_name(h['board_id'])}, layout {h['layout_id']}, "
-          f"version {image.version_text(h['app_version'])} -> {out}")
+    print(f"{os.path.basename(a.elf)}: {image.describe(image.check(data))} -> {out}")
     return 0
 
 
@@ -66,9 +63,8 @@ def cmd_info(a):
     except UsageError as e:
         print(f"{a.image}: {e}", file=sys.stderr)
         return 1
-    print(f"{a.image}: {image.board_name(h['board_id'])}, layout {h['layout_id']}, version "
-          f"{image.version_text(h['app_version'])}, {h['image_bytes']} bytes, CRC-32 "
-          f"0x{h['crc32']:08X}, {'committed' if h['commit'] == image.COMMIT_MAGIC else 'not committed'}")
+    print(f"{a.image}: {image.describe(h)}, "
+          f"{'committed' if h['commit'] == image.COMMIT_MAGIC else 'not committed'}")
     return 0
 
 

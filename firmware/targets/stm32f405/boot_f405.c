@@ -99,17 +99,7 @@ static void iwdg_stretch(void)
 
 static mc_boot_slot_t slot(void)
 {
-    mc_boot_slot_t s;
-    s.flash = &g_boot.flash.dev;
-    s.first_sector = MC_BOOT_APP_FIRST_SECTOR;
-    s.n_sectors = MC_BOOT_APP_SECTORS;
-    s.addr = MC_BOOT_APP_ADDR;
-    s.ram_start = MC_BOOT_RAM_START;
-    s.ram_end = MC_BOOT_RAM_END;
-    s.board_id = MC_BOOT_BOARD_ID;
-    s.layout_id = MC_BOOT_LAYOUT_ID;
-    s.crc_table = &g_boot.crc;
-    return s;
+    return mc_boot_slot_layout1(&g_boot.flash.dev, MC_BOOT_BOARD_ID, &g_boot.crc);
 }
 
 static void decide(bool asked)

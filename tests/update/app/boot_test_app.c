@@ -18,13 +18,12 @@
 #include <stdint.h>
 
 #include "mc_boot_enter.h"
+#include "mc_boot_flash_ro.h"
 #include "mc_boot_handoff.h"
 #include "mc_boot_layout.h"
 #include "mc_boot_sh.h"
 #include "mc_can_proto.h"
 #include "mc_cfg_store.h"
-#include "mc_cortexm.h"
-#include "mc_f405_flash.h"
 #include "mc_image_header.h"
 #include "mc_params_gen.h"
 
@@ -43,36 +42,11 @@ void HardFault_Handler(void)
     mc_boot_sh_exit(MC_BOOT_SH_EXIT_HARD_FAULT);
 }
 
-/* Read-only flash on the memory-mapped array: the store's reader. */
-static int op_size(void *ctx, uint32_t sector, uint32_t *p_bytes)
-{
-    uint32_t off = 0u;
-    (void)ctx;
-    return mc_f405_flash_sector_geometry(sector, &off, p_bytes);
-}
-
-static int op_read(void *ctx, uint32_t sector, uint32_t offset, void *p_buf, uint32_t len)
-{
-    uint32_t base = 0u;
-    uint32_t bytes = 0u;
-    uint8_t *out = (uint8_t *)p_buf;
-    (void)ctx;
-    if ((mc_f405_flash_sector_geometry(sector, &base, &bytes) != 0) || (offset > bytes) ||
-        (len > bytes - offset)) {
-        return -EINVAL;
-    }
-    for (uint32_t i = 0u; i < len; ++i) {
-        out[i] = *mc_reg8((uintptr_t)MC_BOOT_FLASH_BASE + base + offset + i);
-    }
-    return 0;
-}
-
-static const mc_hal_flash_ops_t k_ro_flash = {op_size, NULL, NULL, op_read};
-
 static uint8_t node_id(void)
 {
-    const mc_hal_flash_t flash = {&k_ro_flash, NULL};
-    const mc_cfg_store_cfg_t c = {&flash, {MC_BOOT_CFG_SECTOR_A, MC_BOOT_CFG_SECTOR_B}};
+    static mc_f405_flash_t flash;
+    mc_boot_flash_ro_init(&flash);
+    const mc_cfg_store_cfg_t c = {&flash.dev, {MC_BOOT_CFG_SECTOR_A, MC_BOOT_CFG_SECTOR_B}};
     uint32_t raw = 1u;
     if ((mc_cfg_store_init(&g_store, &c) != 0) ||
         (mc_cfg_store_find_raw(&g_store, MC_PARAM_ID_CAN_NODE_ID, &raw) != 0) || (raw > 62u)) {

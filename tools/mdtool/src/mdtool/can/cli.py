@@ -297,8 +297,7 @@ def cmd_flash(a):
     if not (0 < a.timeout <= 60 and 0 <= a.retries <= 20 and 0 < a.wait <= 600):
         raise UsageError("--timeout 0..60 s, --retries 0..20, --wait 0..600 s")
     data, hdr = read_image(a.image)  # checked before the bus is touched
-    print(f"{a.image}: {image.board_name(hdr['board_id'])}, layout {hdr['layout_id']}, version "
-          f"{image.version_text(hdr['app_version'])}, {len(data)} bytes, CRC-32 0x{hdr['crc32']:08X}")
+    print(f"{a.image}: {image.describe(hdr)}")
     db = _db(a)
     bus = open_bus(a.interface, a.channel, a.bitrate)
     try:

@@ -46,6 +46,12 @@ def board_name(b):
     return BOARDS.get(b, f"board {b}")
 
 
+def describe(h):
+    """One line about an image's header: board, layout, version, length, CRC-32."""
+    return (f"{board_name(h['board_id'])}, layout {h['layout_id']}, version "
+            f"{version_text(h['app_version'])}, {h['image_bytes']} bytes, CRC-32 0x{h['crc32']:08X}")
+
+
 def header(data):
     """The header fields of an image (a dict), or UsageError if it has none."""
     if len(data) < MIN_BYTES:
