@@ -18,7 +18,8 @@
  * table (as the application applies it first: gate driver disabled, the
  * bridge's inputs low or floating with the driver's pull-downs; no timer
  * runs), TIM5 as the millisecond clock, CAN1 at the stored bit rate with
- * its receive interrupt, the IWDG started at 4 s (a 128 KiB sector erase
+ * its receive interrupt and a hardware filter passing only this node's 32
+ * identifiers, the IWDG started at 4 s (a 128 KiB sector erase
  * takes up to 2 s) and fed in the loop. The loop serves mc_boot_update and
  * resets after COMMIT or RUN, once the last reply has left.
  *
@@ -57,6 +58,8 @@ extern const mc_board_desc_t MC_BOARD_DESC;
 #define RCC_APB1ENR_TIM5EN        (1u << 3)
 #define RCC_APB1ENR_CAN1EN        (1u << 25)
 #define PRIO_CAN_RX               8u
+#define RCC_CSR_LSIRDY            (1u << 1) /* RM0090 7.3.21 */
+#define NODE_MASK                 0x7E0u    /* the node bits of an 11-bit id */
 
 void CAN1_RX0_IRQHandler(void);
 
@@ -65,6 +68,7 @@ typedef struct {
     mc_f405_tick_t tick;
     mc_f405_can_t can;
     mc_f405_iwdg_t iwdg;
+    mc_f405_can_filter_t node_filter[1];
     mc_boot_crc_table_t crc;
     mc_cfg_store_t store;
     mc_boot_start_t start;
@@ -83,11 +87,15 @@ static void *periph_at(uintptr_t a)
 }
 
 /* A running IWDG (the application's, 50 ms) gets the longest timeout before
- * the image check: unlock, PR /256, RLR max, reload. A stopped one is not
- * started by these writes. */
+ * the image check: unlock, PR /256, RLR max, reload. A running IWDG keeps
+ * the LSI on (RCC_CSR.LSIRDY); without it nothing is written (the update of
+ * PR and RLR would never complete with the LSI off). */
 static void iwdg_stretch(void)
 {
     mc_f405_iwdg_regs_t *w = periph_at(MC_F405_IWDG_BASE);
+    if ((MC_REG32(MC_F405_RCC_CSR_ADDR) & RCC_CSR_LSIRDY) == 0u) {
+        return;
+    }
     w->KR = MC_F405_IWDG_KEY_UNLOCK;
     w->PR = MC_F405_IWDG_PR_MAX;
     w->RLR = MC_F405_IWDG_RLR_MAX;
@@ -137,6 +145,9 @@ static bool peripherals(uint32_t sysclk_hz)
     const mc_f405_tick_config_t tc = {periph_at(MC_F405_TIM5_BASE), sysclk_hz / 2u, 0u};
     (void)mc_f405_tick_init(&g_boot.tick, &tc);
     g_boot.ticks_1ms = g_boot.tick.freq_hz / 1000u;
+    g_boot.node_filter[0].id = (uint32_t)g_boot.start.node_id << 5;
+    g_boot.node_filter[0].mask = NODE_MASK;
+    g_boot.node_filter[0].ext = false;
     const mc_f405_can_config_t cc = {
         .p_can = periph_at(MC_F405_CAN1_BASE),
         .pclk_hz = sysclk_hz / 4u,
@@ -145,8 +156,8 @@ static bool peripherals(uint32_t sysclk_hz)
         .sjw_tq = 1u,
         .auto_bus_off_recovery = true,
         .no_auto_retransmit = false,
-        .p_filters = NULL, /* this node's frames are picked by mc_boot_update */
-        .n_filters = 0u,
+        .p_filters = g_boot.node_filter, /* only this node's 32 identifiers */
+        .n_filters = 1u,
         .filter_bank_start = 0u,
         .rx_irq = true,
         .p_tick = &g_boot.tick.dev,
