@@ -309,6 +309,11 @@ class EmuNode:
         return True
 
 
+def zlib_crc(data):
+    import zlib
+    return zlib.crc32(data) & 0xFFFFFFFF
+
+
 def make_flash(boot_bin, app_bin=None, cfg_records=None, out=None):
     """A 1 MiB flash file: the bootloader, the application (sealed) at the
     slot, configuration records (bytes) at sector 10."""

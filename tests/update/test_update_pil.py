@@ -76,7 +76,9 @@ class Rig:
         return E.EmuNode(self.a.qemu, self.file, os.path.join(self.work, "q"))
 
     def flasher(self, node, quiet=True):
-        return flash.Flasher(node.bus(), self.db, NODE, timeout=1.0,
+        # 5 s: a block's answer comes within milliseconds on an idle machine;
+        # the margin is for a loaded one (QEMU and the host share two cores)
+        return flash.Flasher(node.bus(), self.db, NODE, timeout=5.0,
                              progress=None if quiet else print)
 
 
@@ -263,6 +265,23 @@ def test_enter(rig):
     check(str(fl.ask("INFO")["boot_state"]) == "APP", "a wrong token entered the bootloader")
     r = fl.enter()
     check(str(r["boot_reason"]) == "REQUESTED", f"the bootloader says {r['boot_reason']}")
+    # a block sent twice (a host that gave up waiting): both copies are
+    # answered, the second not written; the stale answer does not fail the
+    # next block
+    fl.ask("BEGIN", rig.h2["board_id"] | (1 << 8) | (1 << 16), len(rig.v2),
+           timeout=flash.erase_timeout(len(rig.v2)))
+    for _ in range(2):
+        fl.request("WRITE", 0, E.zlib_crc(rig.v2[:256]))
+        for f in flash.data_frames(rig.v2[:256]):
+            fl._send(flash.CMD_DATA, f)
+    check(fl.block_reply(0)["value"] == 1, "block 0 taken")
+    steps = node.steps
+    try:
+        fl.write_block(rig.v2, 1)
+    except (NoReply, Refused) as e:
+        check(False, f"block 1 after a block sent twice: {e}")
+    check(node.steps == steps + 1, f"{node.steps - steps} programs for block 1 (block 0 twice: once)")
+    fl.ask("ABORT")
     node.close()
     # an erased slot: the bootloader announces EMPTY; flash version 2 into it
     blank = bytearray(rig.initial())

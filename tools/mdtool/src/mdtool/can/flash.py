@@ -139,6 +139,18 @@ class Flasher:
         raise NoReply(f"node {self.node} confirmed ENTER but its bootloader did not answer "
                       f"within {wait:g} s")
 
+    def block_reply(self, k):
+        """The answer to block k. Answers to an earlier block (one resent
+        after its answer came late: the node answers the copy too) are
+        passed over."""
+        t_end = time.monotonic() + self.timeout
+        while True:
+            r = self.reply("WRITE", max(t_end - time.monotonic(), 0.0))
+            ok, v = str(r["boot_status"]) == "OK", r["value"]
+            if (ok and v <= k) or (not ok and v < k):
+                continue  # stale: about an earlier block
+            return r
+
     def write_block(self, data, k):
         """Block k until the bootloader took it; its reply."""
         blk = data[k * BLOCK:(k + 1) * BLOCK]
@@ -149,14 +161,17 @@ class Flasher:
             for f in data_frames(blk):
                 self._send(CMD_DATA, f)
             try:
-                r = self.reply("WRITE", self.timeout)
+                r = self.block_reply(k)
             except NoReply as e:
                 last = e
                 continue  # the answer was lost, or a frame: send the block again
-            if str(r["boot_status"]) == "OK" and r["value"] == k + 1:
+            st = str(r["boot_status"])
+            if st == "OK" and r["value"] == k + 1:
                 return r
-            last = Refused(f"node {self.node} refused block {k}: {r['boot_status']}", status=str(r["boot_status"]))
-            if str(r["boot_status"]) not in ("SEQUENCE", "BLOCK_CRC", "FORMAT"):
+            last = Refused(f"node {self.node} refused block {k}: {st}"
+                           + (f" ({STATUS_HELP[st]})" if st in STATUS_HELP else "")
+                           + ("" if st != "OK" else f" (it expects block {r['value']})"), status=st)
+            if st not in ("SEQUENCE", "BLOCK_CRC", "FORMAT"):
                 break  # HEADER, FLASH, STATE: sending it again will not help
         raise last
 
