@@ -209,7 +209,7 @@ class EmuNode:
         except queue.Empty:
             return None
 
-    def hello(self, timeout=10.0):
+    def hello(self, timeout=30.0):
         """The first HELLO of this power-on (role, version, reason, node)."""
         t_end = time.monotonic() + timeout
         while time.monotonic() < t_end:

@@ -112,7 +112,8 @@ def main():
     try:
         # ---- the update of two nodes in turn
         t0 = time.monotonic()
-        r = mdtool(port, "flash", a.v2, "-n", "5", "-n", "6", "--timeout", "5")
+        # long timeouts: the nodes are lock-step, QEMU may stall on a loaded machine
+        r = mdtool(port, "flash", a.v2, "-n", "5", "-n", "6", "--timeout", "20", "--wait", "60")
         print(r.stdout + r.stderr)
         check(r.returncode == 0, f"mdtool flash -n 5 -n 6: exit {r.returncode}")
         for nid in (5, 6):
@@ -164,9 +165,9 @@ def main():
         stop.set()
         th.join(timeout=10)
         data, hdr = flash.read_image(a.pil)
-        fl = flash.Flasher(nodes[0].bus(), dbc.load_db(None), 5, timeout=5.0, progress=None)
+        fl = flash.Flasher(nodes[0].bus(), dbc.load_db(None), 5, timeout=20.0, progress=None)
         fl.check_target(hdr)
-        fl.enter()
+        fl.enter(wait=30.0)
         fl.update(data, hdr)
         t_end = time.monotonic() + 10
         while nodes[0].running() and time.monotonic() < t_end:

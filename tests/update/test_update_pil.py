@@ -76,9 +76,11 @@ class Rig:
         return E.EmuNode(self.a.qemu, self.file, os.path.join(self.work, "q"))
 
     def flasher(self, node, quiet=True):
-        # 5 s: a block's answer comes within milliseconds on an idle machine;
-        # the margin is for a loaded one (QEMU and the host share two cores)
-        return flash.Flasher(node.bus(), self.db, NODE, timeout=5.0,
+        # An answer comes within milliseconds on an idle machine; the run is
+        # lock-step (the node's clock is the host's), so a long timeout only
+        # costs time when something hangs, and a machine shared by many jobs
+        # may stall QEMU for seconds
+        return flash.Flasher(node.bus(), self.db, NODE, timeout=20.0,
                              progress=None if quiet else print)
 
 
@@ -95,7 +97,7 @@ def classify(rig, contents):
     starts an image must hold exactly that image."""
     node = rig.node(contents)
     node.power_on()
-    h = node.hello(timeout=10.0)
+    h = node.hello(timeout=30.0)
     try:
         if h is None:
             return ("none", f"no HELLO (QEMU exit status {node.exit_status()})"), node
@@ -123,9 +125,9 @@ def complete(rig, node):
     fl.check_target(rig.h2)
     r = fl.ask("INFO")
     if str(r["boot_state"]) == "APP":
-        fl.enter()
+        fl.enter(wait=30.0)
     fl.update(rig.v2, rig.h2)
-    t_end = time.monotonic() + 10
+    t_end = time.monotonic() + 30
     while node.running() and time.monotonic() < t_end:  # the bootloader's reset
         time.sleep(0.005)
     return node.reset_requested
@@ -137,7 +139,7 @@ def test_power_cut(rig):
     node = rig.node(rig.initial())
     node.power_on()
     node.hello()
-    rig.flasher(node).flash(rig.v2, rig.h2)
+    rig.flasher(node).flash(rig.v2, rig.h2, wait=30.0)
     steps = node.steps
     node.close()
     final = Path(rig.file).read_bytes()
@@ -156,7 +158,7 @@ def test_power_cut(rig):
         node.hello()
         node.cut_at(k, "half")
         try:
-            rig.flasher(node).flash(rig.v2, rig.h2)
+            rig.flasher(node).flash(rig.v2, rig.h2, wait=30.0)
             check(False, f"step {k}: the update went through a cut")
         except E.PowerCut:
             pass  # the node died mid-update
@@ -176,7 +178,10 @@ def test_power_cut(rig):
                     reasons[detail] = reasons.get(detail, 0) + 1
                 check(cfg_sectors(contents) == cfg_sectors(rig.initial()),
                       f"{what}: the configuration changed")
-                done = complete(rig, node)
+                try:
+                    done = complete(rig, node)
+                except (NoReply, Refused) as e:
+                    done = check(False, f"{what}: completing the update: {e}")
                 node.close()
                 after = Path(rig.file).read_bytes()
                 check(done and after == final, f"{what}: the update did not complete to the reference")
@@ -209,7 +214,7 @@ def test_refusals(rig):
         check("is for vesc6" in str(e), f"refusal names the boards: {e}")
     check(node.steps == 0, "a refused image erased or wrote something")
     # the bootloader refuses it too, before erasing: BEGIN with the other board
-    fl.enter()
+    fl.enter(wait=30.0)
     try:
         fl.ask("BEGIN", 3 | (1 << 8) | (1 << 16), len(other))
         check(False, "BEGIN for another board accepted")
@@ -263,7 +268,7 @@ def test_enter(rig):
         check(e.status == "KEY", f"a wrong token: {e.status}")
     node.tick(50)
     check(str(fl.ask("INFO")["boot_state"]) == "APP", "a wrong token entered the bootloader")
-    r = fl.enter()
+    r = fl.enter(wait=30.0)
     check(str(r["boot_reason"]) == "REQUESTED", f"the bootloader says {r['boot_reason']}")
     # a block sent twice (a host that gave up waiting): both copies are
     # answered, the second not written; the stale answer does not fail the
@@ -299,7 +304,7 @@ def test_enter(rig):
         if m is not None and m.arbitration_id == (NODE << 5 | 0x0F) and m.data[0] == 0:
             ann = m
     check(ann is not None and ann.data[3] == 2, f"no ANNOUNCE with reason EMPTY ({ann})")
-    rig.flasher(node).flash(rig.v2, rig.h2)
+    rig.flasher(node).flash(rig.v2, rig.h2, wait=30.0)
     node.close()
     print("[enter] ENTER needs its key and token; an erased node announces itself and is flashed")
 
