@@ -7,9 +7,6 @@
 #include <errno.h>
 #include <stddef.h>
 
-#define DIAG_PERIOD_MIN 2u
-#define DIAG_PERIOD_MAX 1000000u
-
 static uint16_t with_parity(uint32_t w15)
 {
     const uint32_t w = w15 & 0x7FFFu;
@@ -173,10 +170,8 @@ static const mc_hal_encoder_ops_t as5047p_ops = {
 
 int mc_as5047p_init(mc_as5047p_t *p_drv, const mc_as5047p_config_t *p_cfg)
 {
-    if ((p_drv == NULL) || (p_cfg == NULL) || (p_cfg->p_spi == NULL) ||
-        (p_cfg->bad_reads_max == 0u) || (p_cfg->bad_reads_max > MC_SPIENC_BAD_READS_MAX) ||
-        ((p_cfg->diag_period != 0u) &&
-         ((p_cfg->diag_period < DIAG_PERIOD_MIN) || (p_cfg->diag_period > DIAG_PERIOD_MAX)))) {
+    if ((p_drv == NULL) || (p_cfg == NULL) ||
+        !mc_spienc_cfg_ok(p_cfg->p_spi, p_cfg->bad_reads_max, p_cfg->diag_period)) {
         return -EINVAL;
     }
     p_drv->cfg = *p_cfg;

@@ -7,10 +7,8 @@
 #include <errno.h>
 #include <stddef.h>
 
-#define DIAG_PERIOD_MIN 2u
-#define DIAG_PERIOD_MAX 1000000u
-#define ADDRESS_MASK    0x1Fu
-#define PARITY_BIT      (1u << 15) /* of a 32-clock frame: the 17th clock */
+#define ADDRESS_MASK 0x1Fu
+#define PARITY_BIT   (1u << 15) /* of a 32-clock frame: the 17th clock */
 
 uint16_t mc_ma732_cmd_read(uint32_t address)
 {
@@ -103,10 +101,8 @@ static const mc_hal_encoder_ops_t ma732_ops = {
 
 int mc_ma732_init(mc_ma732_t *p_drv, const mc_ma732_config_t *p_cfg)
 {
-    if ((p_drv == NULL) || (p_cfg == NULL) || (p_cfg->p_spi == NULL) ||
-        (p_cfg->bad_reads_max == 0u) || (p_cfg->bad_reads_max > MC_SPIENC_BAD_READS_MAX) ||
-        ((p_cfg->diag_period != 0u) &&
-         ((p_cfg->diag_period < DIAG_PERIOD_MIN) || (p_cfg->diag_period > DIAG_PERIOD_MAX)))) {
+    if ((p_drv == NULL) || (p_cfg == NULL) ||
+        !mc_spienc_cfg_ok(p_cfg->p_spi, p_cfg->bad_reads_max, p_cfg->diag_period)) {
         return -EINVAL;
     }
     p_drv->cfg = *p_cfg;

@@ -6,6 +6,16 @@
 
 #include <stddef.h>
 
+#define DIAG_PERIOD_MIN 2u
+#define DIAG_PERIOD_MAX 1000000u
+
+bool mc_spienc_cfg_ok(const void *p_spi, uint32_t bad_reads_max, uint32_t diag_period)
+{
+    return (p_spi != NULL) && (bad_reads_max != 0u) && (bad_reads_max <= MC_SPIENC_BAD_READS_MAX) &&
+           ((diag_period == 0u) ||
+            ((diag_period >= DIAG_PERIOD_MIN) && (diag_period <= DIAG_PERIOD_MAX)));
+}
+
 void mc_spienc_hold_init(mc_spienc_hold_t *p_hold, uint32_t bad_reads_max, uint32_t cpr)
 {
     if (p_hold == NULL) {

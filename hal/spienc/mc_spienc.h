@@ -72,6 +72,10 @@ typedef struct mc_spienc_hold {
     uint32_t n_held;        /**< reads without an angle by design (diagnostics) */
 } mc_spienc_hold_t;
 
+/** The drivers' shared limits: bad_reads_max 1 .. MC_SPIENC_BAD_READS_MAX,
+ *  diag_period 0 (none) or 2 .. 1000000 (1 would leave no angle). */
+bool mc_spienc_cfg_ok(const void *p_spi, uint32_t bad_reads_max, uint32_t diag_period);
+
 /** Start the rule: nothing read yet. */
 void mc_spienc_hold_init(mc_spienc_hold_t *p_hold, uint32_t bad_reads_max, uint32_t cpr);
 
