@@ -108,6 +108,39 @@ static void vec_damp(mc_ctrl_align_vec_t *v, float omega_err_m_rad_s)
     v->iq_cmd_a = mc_sat_f32(iq, -lim, lim);
 }
 
+/* The vector's part of init. */
+static void vec_setup(mc_ctrl_align_vec_t *v, const mc_foc_f32_t *foc, float damping_a_s_rad,
+                      float i_max_a)
+{
+    v->foc = *foc;
+    v->damping_a_s_rad = damping_a_s_rad;
+    v->i_max_a = i_max_a;
+}
+
+/* A failed law: no current, its failure returned every period. */
+static uint32_t vec_off(mc_ctrl_align_vec_t *v, const mc_drive_meas_t *m, mc_drive_out_t *out,
+                        uint32_t fail)
+{
+    v->i_cmd_a = 0.0f;
+    v->iq_cmd_a = 0.0f;
+    (void)vec_output(v, m, out);
+    return fail;
+}
+
+/* The drive's table of a law (3-phase bridge, encoder needed). */
+static mc_drive_ctrl_t
+plugin_ops(uint32_t (*reset)(void *ctx),
+           uint32_t (*fast)(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out), void *ctx)
+{
+    return (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
+                             .needs_encoder = true,
+                             .reset = reset,
+                             .fast = fast,
+                             .slow = NULL,
+                             .ctx = ctx,
+                             .stop = NULL};
+}
+
 /* A linear ramp of the magnitude from i0 to i1 over n periods; true at its end. */
 static bool vec_ramp(mc_ctrl_align_vec_t *v, float i0, float i1, uint32_t k, uint32_t n)
 {
@@ -323,16 +356,11 @@ uint32_t mc_ctrl_align_fast(mc_ctrl_align_t *c, const mc_drive_meas_t *m, mc_dri
         return MC_CTRL_ALIGN_ERR_NULL;
     }
     if (c->phase == AL_FAILED) {
-        c->v.i_cmd_a = 0.0f;
-        c->v.iq_cmd_a = 0.0f;
-        (void)vec_output(&c->v, m, out);
-        return c->res.fail;
+        return vec_off(&c->v, m, out, c->res.fail);
     }
     e = vec_measure(&c->v, m);
     if (e != MC_CTRL_ALIGN_ERR_NONE) {
-        (void)al_fail(c, e);
-        (void)vec_output(&c->v, m, out);
-        return e;
+        return vec_off(&c->v, m, out, al_fail(c, e));
     }
     const float t = mc_fabs_f32(c->v.travel_m_rad);
     c->res.travel_peak_m_rad = (t > c->res.travel_peak_m_rad) ? t : c->res.travel_peak_m_rad;
@@ -426,19 +454,11 @@ uint32_t mc_ctrl_align_init(mc_ctrl_align_t *c, const mc_ctrl_align_cfg_t *cfg)
         return MC_CTRL_ALIGN_ERR_FOC;
     }
     c->cfg = *cfg;
-    c->v.foc = foc;
-    c->v.damping_a_s_rad = cfg->damping_a_s_rad;
-    c->v.i_max_a = cfg->i_max_a;
+    vec_setup(&c->v, &foc, cfg->damping_a_s_rad, cfg->i_max_a);
     c->n_ramp = periods(cfg->t_ramp_s, cfg->foc.dt_s);
     c->n_settle = periods(cfg->t_settle_s, cfg->foc.dt_s);
     c->n_timeout = periods(cfg->t_timeout_s, cfg->foc.dt_s);
-    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
-                               .needs_encoder = true,
-                               .reset = al_ops_reset,
-                               .fast = al_ops_fast,
-                               .slow = NULL,
-                               .ctx = c,
-                               .stop = NULL};
+    c->ops = plugin_ops(al_ops_reset, al_ops_fast, c);
     return mc_ctrl_align_reset(c);
 }
 
@@ -595,10 +615,7 @@ uint32_t mc_ctrl_idx_fast(mc_ctrl_idx_t *c, const mc_drive_meas_t *m, mc_drive_o
         ix_measure(c, m);
     }
     if (c->phase == IX_FAILED) {
-        c->v.i_cmd_a = 0.0f;
-        c->v.iq_cmd_a = 0.0f;
-        (void)vec_output(&c->v, m, out);
-        return c->res.fail;
+        return vec_off(&c->v, m, out, c->res.fail);
     }
     e = vec_output(&c->v, m, out);
     return (e != MC_CTRL_ALIGN_ERR_NONE) ? ix_fail(c, e) : MC_CTRL_ALIGN_ERR_NONE;
@@ -652,17 +669,9 @@ uint32_t mc_ctrl_idx_init(mc_ctrl_idx_t *c, const mc_ctrl_idx_cfg_t *cfg)
         return MC_CTRL_ALIGN_ERR_FOC;
     }
     c->cfg = *cfg;
-    c->v.foc = foc;
-    c->v.damping_a_s_rad = cfg->damping_a_s_rad;
-    c->v.i_max_a = cfg->i_max_a;
+    vec_setup(&c->v, &foc, cfg->damping_a_s_rad, cfg->i_max_a);
     c->n_ramp = periods(cfg->t_ramp_s, cfg->foc.dt_s);
-    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
-                               .needs_encoder = true,
-                               .reset = ix_ops_reset,
-                               .fast = ix_ops_fast,
-                               .slow = NULL,
-                               .ctx = c,
-                               .stop = NULL};
+    c->ops = plugin_ops(ix_ops_reset, ix_ops_fast, c);
     return mc_ctrl_idx_reset(c);
 }
 

@@ -141,15 +141,23 @@ struct Bench {
     void step(const mc_ctrl_align_vec_t &v)
     {
         (void)mc_drive_fast_step(&d);
+        th_lo = std::fmin(th_lo, rotor.th - th_power_up);
+        th_hi = std::fmax(th_hi, rotor.th - th_power_up);
         if (d.mode != MC_DRIVE_MODE_CTRL) {
             rotor.advance(0.0, 0.0, 0.0, kDt);
             sample(0.0, 0.0);
             return;
         }
+        i_peak = std::fmax(
+            i_peak, std::hypot(static_cast<double>(v.i_cmd_a), static_cast<double>(v.iq_cmd_a)));
+        iq_peak = std::fmax(iq_peak, std::fabs(static_cast<double>(v.iq_cmd_a)));
         rotor.advance(v.theta_cmd_e_rad, v.i_cmd_a, v.iq_cmd_a, kDt);
         sample(v.theta_cmd_e_rad, v.i_cmd_a, v.iq_cmd_a);
     }
     double last_th = 0.0;
+    // what the plug-in commanded and where the rotor went (from power-up)
+    double i_peak = 0.0, iq_peak = 0.0;
+    double th_lo = 0.0, th_hi = 0.0; // [rad mech.]
 };
 
 mc_ctrl_align_cfg_t align_cfg(const mc_drive_cfg_t &dc)
@@ -559,4 +567,109 @@ TEST(CtrlIdx, EncoderReadErrorIsNamed)
     ASSERT_EQ(mc_ctrl_align_init(&al, &ac), MC_CTRL_ALIGN_ERR_NONE);
     EXPECT_EQ(mc_ctrl_align_fast(&al, &m, &out), MC_CTRL_ALIGN_ERR_MEAS);
     EXPECT_EQ(mc_ctrl_align_fast(nullptr, &m, &out), MC_CTRL_ALIGN_ERR_NULL);
+}
+
+// Bounded current: the vector never exceeds its configured magnitude, and
+// with a damping gain high enough to ask for more than the drive's limit
+// (a frictionless rotor ringing at the first snap), the damping current is
+// cut so that |i| <= i_max_a. Tolerance: float rounding of sqrt(i_max^2 -
+// i^2) (1e-4 A).
+TEST(CtrlAlign, CurrentStaysWithinItsBounds)
+{
+    {
+        Bench b;
+        b.init(2.2);
+        mc_ctrl_align_t al{};
+        const mc_ctrl_align_result_t r = run_align(b, al);
+        ASSERT_EQ(r.status, MC_CTRL_ALIGN_DONE) << r.fail;
+        EXPECT_LE(b.i_peak, 5.0 + 1e-4); // i_align_a, no damping: iq = 0
+        EXPECT_GE(b.i_peak, 5.0 - 1e-4); // and it did reach it
+        EXPECT_EQ(b.iq_peak, 0.0);
+    }
+    {
+        Bench b;
+        b.rotor.b_nms = 0.0;
+        b.init(2.2);
+        mc_ctrl_align_t al{};
+        // 50 A s/rad: at the snap's ~30 rad/s it asks for ~1500 A of iq
+        const mc_ctrl_align_result_t r = run_align(b, al, 60000, 50.0f);
+        (void)r; // the outcome is not the point: the bound is
+        const double i_max = b.cfg.i_max_a;
+        EXPECT_GT(b.iq_peak, 1.0);         // the damping current was there
+        EXPECT_LE(b.i_peak, i_max + 1e-4); // and cut at the drive's limit
+        EXPECT_LT(b.iq_peak, i_max + 1e-4);
+    }
+}
+
+// The index search's current: the vector's magnitude is i_search_a (no
+// damping configured), the damping current at most the rest of i_max_a.
+TEST(CtrlIdx, CurrentStaysWithinItsBounds)
+{
+    for (const float damping : {0.0f, 50.0f}) {
+        Bench b;
+        b.has_index = true;
+        b.index_at = 2.0;
+        b.init(0.3);
+        mc_ctrl_idx_t ix{};
+        mc_ctrl_idx_cfg_t c = idx_cfg(b.cfg, &b.fake.encoder_dev);
+        c.damping_a_s_rad = damping;
+        const mc_ctrl_idx_result_t r = run_idx(b, ix, c);
+        ASSERT_EQ(r.status, MC_CTRL_ALIGN_DONE) << r.fail;
+        if (damping == 0.0f) {
+            EXPECT_NEAR(b.i_peak, 5.0, 1e-4);
+        } else {
+            EXPECT_GT(b.iq_peak, 1.0);
+            EXPECT_LE(b.i_peak, static_cast<double>(b.cfg.i_max_a) + 1e-4);
+        }
+    }
+}
+
+// Both directions: first_direction = -1 searches backwards first (the mark
+// behind the rotor is found without a forward move beyond the first
+// snap); a mark ahead is found after the backward leg ends at travel_max,
+// turned forward. Travel never beyond travel_max (+ the coast, 0.05 rad as
+// in NotFoundAfterBothDirections) either way.
+TEST(CtrlIdx, SearchesBothDirections)
+{
+    {
+        Bench b;
+        b.has_index = true;
+        b.index_at = -1.0; // 1.3 rad behind
+        b.init(0.3);
+        mc_ctrl_idx_t ix{};
+        mc_ctrl_idx_cfg_t c = idx_cfg(b.cfg, &b.fake.encoder_dev);
+        c.first_direction = -1;
+        const mc_ctrl_idx_result_t r = run_idx(b, ix, c);
+        ASSERT_EQ(r.status, MC_CTRL_ALIGN_DONE) << r.fail;
+        EXPECT_EQ(r.direction, -1);
+        EXPECT_NEAR(r.travel_at_index_m_rad, -1.3, kPi / kPolePairs + 0.01);
+        EXPECT_LE(b.th_hi, kPi / kPolePairs + 0.01); // no forward leg
+    }
+    {
+        Bench b;
+        b.has_index = true;
+        // 1.3 rad ahead, 2 pi - 1.3 = 4.98 rad behind: within one leg's
+        // travel forward, beyond it backward
+        b.index_at = 1.6;
+        b.init(0.3);
+        mc_ctrl_idx_t ix{};
+        mc_ctrl_idx_cfg_t c = idx_cfg(b.cfg, &b.fake.encoder_dev);
+        c.first_direction = -1;
+        c.travel_max_m_rad = static_cast<float>(2.0 * kPi / kPolePairs * 1.5); // 2.36 rad
+        const mc_ctrl_idx_result_t r = run_idx(b, ix, c);
+        ASSERT_EQ(r.status, MC_CTRL_ALIGN_DONE) << r.fail;
+        EXPECT_EQ(r.direction, 1);
+        EXPECT_LE(-b.th_lo, c.travel_max_m_rad + 0.05); // the backward leg's bound
+        EXPECT_GE(-b.th_lo, c.travel_max_m_rad - 0.01); // and it went all of it
+    }
+    {
+        Bench b; // no mark: the bound holds both ways
+        b.init(0.3);
+        mc_ctrl_idx_t ix{};
+        const mc_ctrl_idx_cfg_t c = idx_cfg(b.cfg, &b.fake.encoder_dev);
+        const mc_ctrl_idx_result_t r = run_idx(b, ix, c);
+        ASSERT_EQ(r.fail, MC_CTRL_ALIGN_ERR_NOT_FOUND);
+        EXPECT_NEAR(b.th_hi, c.travel_max_m_rad, 0.05);
+        EXPECT_NEAR(-b.th_lo, c.travel_max_m_rad, 0.05);
+    }
 }
