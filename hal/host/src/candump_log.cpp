@@ -133,30 +133,38 @@ bool candump_parse(const std::string& line, double* t_s, mc_hal_can_frame_t* f) 
   return true;
 }
 
+CandumpScript::CandumpScript(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read CAN command script '" + path + "'");
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
+    Timed tf{};
+    if (!candump_parse(line, &tf.t_s, &tf.f)) {
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": not a candump -L line");
+    }
+    if (!frames_.empty() && tf.t_s < frames_.back().t_s) {
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": time goes backwards");
+    }
+    frames_.push_back(tf);
+  }
+}
+
+bool CandumpScript::next_due(double now_s, mc_hal_can_frame_t* f) {
+  if (next_ >= frames_.size() || frames_[next_].t_s > now_s) return false;
+  *f = frames_[next_++].f;
+  return true;
+}
+
 CandumpLogCan::CandumpLogCan(const std::string& out_path, const std::string& iface,
                              std::function<double()> now_s, const std::string& rx_path,
                              std::function<uint32_t()> now_ticks)
     : iface_(iface), now_s_(std::move(now_s)), now_ticks_(std::move(now_ticks)) {
   if (!now_s_) throw std::invalid_argument("CandumpLogCan: a clock is required");
-  if (!rx_path.empty()) {
-    std::ifstream in(rx_path);
-    if (!in) throw std::runtime_error("cannot read CAN command script '" + rx_path + "'");
-    std::string line;
-    int n = 0;
-    while (std::getline(in, line)) {
-      ++n;
-      if (!line.empty() && line.back() == '\r') line.pop_back();
-      if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
-      Timed tf{};
-      if (!candump_parse(line, &tf.t_s, &tf.f)) {
-        throw std::runtime_error(rx_path + ":" + std::to_string(n) + ": not a candump -L line");
-      }
-      if (!script_.empty() && tf.t_s < script_.back().t_s) {
-        throw std::runtime_error(rx_path + ":" + std::to_string(n) + ": time goes backwards");
-      }
-      script_.push_back(tf);
-    }
-  }
+  if (!rx_path.empty()) script_ = std::make_unique<CandumpScript>(rx_path);
   if (!out_path.empty()) {
     out_ = std::fopen(out_path.c_str(), "w");
     if (out_ == nullptr) {
@@ -195,17 +203,15 @@ int CandumpLogCan::send(const mc_hal_can_frame_t* f) noexcept {
 }
 
 int CandumpLogCan::receive(mc_hal_can_frame_t* f) noexcept {
-  if (next_ >= script_.size()) return -EAGAIN;
+  if (!script_) return -EAGAIN;
   double now = 0.0;
   try {
     now = now_s_();
   } catch (...) {
     return -EIO;
   }
-  if (script_[next_].t_s > now) return -EAGAIN;
-  *f = script_[next_].f;
+  if (!script_->next_due(now, f)) return -EAGAIN;
   f->timestamp_ticks = now_ticks_ ? now_ticks_() : 0u;
-  ++next_;
   ++stats_.rx_frames;
   return 0;
 }
