@@ -27,6 +27,10 @@ case "$target" in
     "$CXX" "${FLAGS[@]}" -std=c++17 -I firmware/kernels -I firmware/app -I firmware/app/drive -I firmware/app/ctrl -I firmware/app/can -I hal/include -I hal/fake \
       tests/fuzz/fuzz_drive_api.cpp "${objs[@]}" -o "$work/fuzz_$target"
     ;;
+  socketcand)
+    "$CXX" "${FLAGS[@]}" -std=c++17 -I hal/host/include -I hal/include tests/fuzz/fuzz_socketcand.cpp \
+      hal/host/src/socketcand_proto.cpp -o "$work/fuzz_$target"
+    ;;
   *) echo "unknown fuzz target $target" >&2; exit 2 ;;
 esac
 cp -n tests/fuzz/corpus/"$target"/* "$work/corpus-$target/" 2>/dev/null || true
