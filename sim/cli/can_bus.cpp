@@ -46,8 +46,13 @@ std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& 
   } catch (const std::runtime_error& e) {
     throw UsageError(e.what());
   }
+  if (n > 0 && can->socketcand() == nullptr) {
+    throw UsageError("MCSIM_CAN_WAIT_CLIENTS=" + wait +
+                     ": clients are waited for on a socketcand bus only "
+                     "(MCSIM_CAN_IF=socketcand:HOST:PORT)");
+  }
   if (!c.interface.empty()) std::fprintf(stderr, "mcsim: %s\n", can->describe().c_str());
-  if (can->socketcand() != nullptr && n > 0) {
+  if (n > 0) {
     std::fprintf(stderr, "mcsim: waiting for %lu client(s) in raw mode\n", n);
     can->wait_for_clients();
   }

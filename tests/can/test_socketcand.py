@@ -150,6 +150,30 @@ def bit_for_bit(mcsim, W):
           f"{s['socketcand_tx_client_drops']} dropped for the client")
 
 
+# ------------------------------------------------------- refused settings
+def refusals(mcsim, W):
+    """A transport mcsim cannot use: exit 2 with the reason, nothing run."""
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        cases = [({"MCSIM_CAN_IF": "socketcand:127.0.0.1"}, "expected socketcand:HOST:PORT"),
+                 ({"MCSIM_CAN_IF": "socketcand:127.0.0.1:70000"}, "expected socketcand:HOST:PORT"),
+                 ({"MCSIM_CAN_IF": "socketcand:no.such.host:0"}, "is not an IPv4 address"),
+                 ({"MCSIM_CAN_IF": f"socketcand:127.0.0.1:{port}"}, "Address already in use"),
+                 ({"MCSIM_CAN_IF": "socketcand:127.0.0.1:0", "MCSIM_CAN_WAIT_CLIENTS": "x"},
+                  "a number of clients"),
+                 ({"MCSIM_CAN_WAIT_CLIENTS": "1"}, "on a socketcand bus only")]
+        for k, (env_extra, want) in enumerate(cases):
+            env = {key: v for key, v in os.environ.items() if not key.startswith("MCSIM_CAN")}
+            env.update(env_extra, MCSIM_CAN_LOG=os.path.join(W, "refused.log"))
+            r = subprocess.run([mcsim, "run", "can-telemetry", "--out", os.path.join(W, f"refused{k}")],
+                               env=env, capture_output=True, text=True, timeout=60)
+            check(r.returncode == 2 and want in r.stderr and not os.path.exists(
+                os.path.join(W, f"refused{k}", "can-telemetry.json")),
+                f"{env_extra}: exit {r.returncode}, '{r.stderr.strip()}'")
+
+
 # ----------------------------------------------------- 2. the served drive
 def raw_client(port):
     s = socket.create_connection(("127.0.0.1", port), timeout=5)
@@ -350,6 +374,7 @@ def main():
     shutil.rmtree(W, ignore_errors=True)
     os.makedirs(W)
     t0 = time.monotonic()
+    refusals(os.path.abspath(a.mcsim), W)
     bit_for_bit(os.path.abspath(a.mcsim), W)
     served_drive(os.path.abspath(a.mcsim), W, sys.executable)
     print(f"socketcand checks ({time.monotonic() - t0:.0f} s): "
