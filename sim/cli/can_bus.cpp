@@ -30,6 +30,14 @@ std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& 
                      std::to_string(hal_host::SocketcandCan::kMaxClients));
   }
   c.wait_clients = n;
+  std::string host, why;
+  uint16_t port = 0;
+  if (n > 0 && !hal_host::parse_socketcand_interface(c.interface, &host, &port, &why) &&
+      why.empty()) {
+    throw UsageError("MCSIM_CAN_WAIT_CLIENTS=" + wait +
+                     ": clients are waited for on a socketcand bus only "
+                     "(MCSIM_CAN_IF=socketcand:HOST:PORT)");
+  }
   c.now_s = [&board]() { return board.t_s(); };
   c.now_ticks = [&board]() {
     uint32_t t = 0;
@@ -45,11 +53,6 @@ std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& 
                      "with MCSIM_CAN_IF=socketcand:127.0.0.1:29536)");
   } catch (const std::runtime_error& e) {
     throw UsageError(e.what());
-  }
-  if (n > 0 && can->socketcand() == nullptr) {
-    throw UsageError("MCSIM_CAN_WAIT_CLIENTS=" + wait +
-                     ": clients are waited for on a socketcand bus only "
-                     "(MCSIM_CAN_IF=socketcand:HOST:PORT)");
   }
   if (!c.interface.empty()) std::fprintf(stderr, "mcsim: %s\n", can->describe().c_str());
   if (n > 0) {

@@ -170,7 +170,8 @@ def refusals(mcsim, W):
             r = subprocess.run([mcsim, "run", "can-telemetry", "--out", os.path.join(W, f"refused{k}")],
                                env=env, capture_output=True, text=True, timeout=60)
             check(r.returncode == 2 and want in r.stderr and not os.path.exists(
-                os.path.join(W, f"refused{k}", "can-telemetry.json")),
+                os.path.join(W, f"refused{k}", "can-telemetry.json")) and not os.path.exists(
+                os.path.join(W, "refused.log")),
                 f"{env_extra}: exit {r.returncode}, '{r.stderr.strip()}'")
 
 
