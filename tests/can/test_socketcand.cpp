@@ -156,8 +156,9 @@ TEST(SocketcandProto, FramesAreWrittenAsSocketcandAndPythonCanReadThem) {
 // A blocking TCP client with a receive timeout.
 class Client {
  public:
-  explicit Client(uint16_t port) {
+  explicit Client(uint16_t port, int rcvbuf = 0) {
     fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (rcvbuf > 0) (void)setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
     struct sockaddr_in a {};
     a.sin_family = AF_INET;
     a.sin_port = htons(port);
@@ -170,6 +171,7 @@ class Client {
     fd_ = -1;
   }
   bool ok() const { return ok_; }
+  int fd() const { return fd_; }
   void Send(const std::string& s) {
     ASSERT_EQ(static_cast<ssize_t>(s.size()), ::send(fd_, s.data(), s.size(), MSG_NOSIGNAL));
   }
@@ -338,6 +340,35 @@ TEST_F(Server, ClientsComeAndGoAndTheRunEndsWithEverythingSent) {
   EXPECT_EQ(0u, srv.stats().unflushed_clients);
   Client c(srv.port());
   EXPECT_FALSE(c.ok()) << "no longer listening";
+}
+
+TEST(SocketcandServer, BoundsWhatItQueuesForAClientThatDoesNotRead) {
+  // a 4 KiB queue per client (the default is kMaxClientQueueBytes)
+  SocketcandCan srv(
+      "127.0.0.1", 0, "can0", []() { return 1.0; }, nullptr, 4096);
+  // small receive buffers: TCP's own buffers fill sooner
+  Client slow(srv.port(), 4096), talker(srv.port(), 4096);
+  slow.Raw(srv);
+  // the kernel's buffers take the first megabytes: send until the server
+  // has to drop frames for this client
+  const mc_hal_can_frame_t f = Fr(0x21, {1, 2, 3, 4, 5, 6, 7, 8});
+  for (int i = 0; i < 1000000 && srv.stats().tx_client_drops == 0; ++i) {
+    ASSERT_EQ(0, mc_hal_can_send(srv.hal(), &f));
+  }
+  EXPECT_GT(srv.stats().tx_client_drops, 0u) << "dropped for it and counted";
+  EXPECT_EQ(1u, srv.raw_clients()) << "a slow reader stays connected";
+  // one that sends commands and never reads their replies is disconnected
+  EXPECT_EQ("< hi >", talker.Read(srv, 0.1));
+  std::string echoes;
+  for (int i = 0; i < 4000; ++i) echoes += "< echo >";
+  bool gone = false;
+  for (int round = 0; round < 5000 && !gone; ++round) {
+    (void)::send(talker.fd(), echoes.data(), echoes.size(), MSG_NOSIGNAL | MSG_DONTWAIT);
+    srv.service();
+    gone = srv.clients() == 1;
+  }
+  EXPECT_TRUE(gone) << "the talker was disconnected";
+  EXPECT_EQ(1u, srv.raw_clients());
 }
 
 TEST(SocketcandServer, RefusesAnAddressItCannotUse) {

@@ -1,5 +1,6 @@
 #include "hal_host/socketcand.hpp"
 
+#include <algorithm>
 #include <arpa/inet.h>
 #include <cerrno>
 #include <cstring>
@@ -48,9 +49,11 @@ constexpr size_t kCompactBytes = 64u << 10;
 }  // namespace
 
 SocketcandCan::SocketcandCan(const std::string& host, uint16_t port, const std::string& channel,
-                             std::function<double()> now_s, std::function<uint32_t()> now_ticks)
+                             std::function<double()> now_s, std::function<uint32_t()> now_ticks,
+                             size_t queue_bytes)
     : host_(host == "localhost" ? "127.0.0.1" : host),
       channel_(channel),
+      queue_bytes_(queue_bytes),
       now_s_(std::move(now_s)),
       now_ticks_(std::move(now_ticks)) {
   const std::string where = host + ":" + std::to_string(port);
@@ -93,11 +96,9 @@ SocketcandCan::~SocketcandCan() {
 }
 
 size_t SocketcandCan::raw_clients() const {
-  size_t n = 0;
-  for (const auto& c : clients_) {
-    if (c->mode == Mode::kRaw && !c->holding && !c->closing && !c->dead) ++n;
-  }
-  return n;
+  return static_cast<size_t>(std::count_if(clients_.begin(), clients_.end(), [](const auto& c) {
+    return c->mode == Mode::kRaw && !c->holding && !c->closing && !c->dead;
+  }));
 }
 
 void SocketcandCan::close_client(Client& c) noexcept {
@@ -107,6 +108,10 @@ void SocketcandCan::close_client(Client& c) noexcept {
 }
 
 void SocketcandCan::reply(Client& c, const std::string& text) noexcept {
+  if (c.out.size() - c.off + text.size() > queue_bytes_) {
+    close_client(c);  // it sends and never reads: its replies would grow without bound
+    return;
+  }
   try {
     c.out += text;
   } catch (...) {
@@ -115,11 +120,15 @@ void SocketcandCan::reply(Client& c, const std::string& text) noexcept {
 }
 
 void SocketcandCan::queue_frame(Client& c, const std::string& line) noexcept {
-  if (c.out.size() - c.off + line.size() > kMaxClientQueueBytes) {
+  if (c.out.size() - c.off + line.size() > queue_bytes_) {
     ++stats_.tx_client_drops;
     return;
   }
-  reply(c, line);
+  try {
+    c.out += line;
+  } catch (...) {
+    close_client(c);
+  }
 }
 
 void SocketcandCan::accept_new() noexcept {
@@ -188,9 +197,8 @@ void SocketcandCan::inject(const Client& from, const mc_hal_can_frame_t& f) noex
 void SocketcandCan::handle(Client& c, const std::string& body) noexcept {
   socketcand::Command cmd;
   std::string why;
-  bool ok = false;
   try {
-    ok = socketcand::parse_command(body, &cmd, &why);
+    bool ok = socketcand::parse_command(body, &cmd, &why);
     if (ok && c.mode == Mode::kNoBus && cmd.verb != socketcand::Verb::kOpen) {
       ok = false;
       why = "open the bus first: open " + channel_;
@@ -363,7 +371,7 @@ void SocketcandCan::write_client(Client& c) noexcept {
 
 void SocketcandCan::service() noexcept {
   accept_new();
-  for (auto& cp : clients_) {
+  for (const auto& cp : clients_) {
     Client& c = *cp;
     if (!c.closing) read_client(c);
     update_hold(c);
@@ -397,7 +405,7 @@ bool SocketcandCan::finish(double timeout_s) {
   const auto t0 = Clock::now();
   bool flushed = false;
   for (;;) {
-    for (auto& c : clients_) c->holding = false;
+    for (const auto& c : clients_) c->holding = false;
     service();
     flushed = true;
     for (const auto& c : clients_) flushed = flushed && c->off == c->out.size();
@@ -408,7 +416,7 @@ bool SocketcandCan::finish(double timeout_s) {
   // resets the connection, which may discard what the client has not read
   // yet), then close: the kernel sends what it holds, then the end.
   char buf[kReadChunk];
-  for (auto& c : clients_) {
+  for (const auto& c : clients_) {
     if (c->off != c->out.size()) ++stats_.unflushed_clients;
     while (c->fd >= 0 && ::recv(c->fd, buf, sizeof buf, MSG_DONTWAIT) > 0) {
     }

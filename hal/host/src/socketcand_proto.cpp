@@ -1,8 +1,10 @@
 #include "hal_host/socketcand_proto.hpp"
 
+#include <algorithm>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <vector>
 
 namespace hal_host {
@@ -113,10 +115,8 @@ bool is_unsupported(const std::string& verb) {
   static const char* const kKnown[] = {
       "add",    "update",      "delete",     "filter",    "muxfilter", "subscribe", "unsubscribe",
       "fdsend", "controlmode", "statistics", "isotpmode", "isotpconf", "sendpdu"};
-  for (const char* k : kKnown) {
-    if (verb == k) return true;
-  }
-  return false;
+  return std::any_of(std::begin(kKnown), std::end(kKnown),
+                     [&verb](const char* k) { return verb == k; });
 }
 
 std::string hex_id(const mc_hal_can_frame_t& f) {
@@ -185,7 +185,7 @@ CommandSplitter::Event CommandSplitter::next(std::string* text) {
     }
     const size_t k = buf_.find_first_of("<>", 1);
     if (k == std::string::npos && buf_.size() < kMaxCommandBytes) return Event::kNone;
-    if (k == std::string::npos || k >= kMaxCommandBytes) {
+    if (k >= kMaxCommandBytes) {     // npos too: no end within the limit
       if (k == std::string::npos) {  // drop what came, and the rest up to its end
         buf_.clear();
         skipping_ = true;
@@ -202,11 +202,10 @@ CommandSplitter::Event CommandSplitter::next(std::string* text) {
     }
     std::string body = buf_.substr(1, k - 1);
     buf_.erase(0, k + 1);
-    for (char c : body) {
-      if (c != '\t' && (c < 0x20 || c > 0x7E)) {
-        *text = "a byte in a command that is not printable ASCII";
-        return Event::kError;
-      }
+    if (std::any_of(body.begin(), body.end(),
+                    [](char c) { return c != '\t' && (c < 0x20 || c > 0x7E); })) {
+      *text = "a byte in a command that is not printable ASCII";
+      return Event::kError;
     }
     *text = std::move(body);
     return Event::kCommand;
@@ -243,9 +242,8 @@ std::string format_send(const mc_hal_can_frame_t& f) {
 
 std::string format_error(const std::string& reason) {
   std::string r = reason;
-  for (char& c : r) {
-    if (c == '<' || c == '>' || c < 0x20 || c > 0x7E) c = '?';
-  }
+  std::replace_if(
+      r.begin(), r.end(), [](char c) { return c == '<' || c == '>' || c < 0x20 || c > 0x7E; }, '?');
   return "< error " + r + " >";
 }
 

@@ -16,7 +16,9 @@
 //   whenever receive() finds its queue empty (once per slow-loop step) and
 //   written to after every send(). A client that reads slowly has its
 //   frames queued (kMaxClientQueueBytes each; beyond it frames are dropped
-//   for that client and counted: its sequence counters show the gap).
+//   for that client and counted: its sequence counters show the gap; a
+//   client whose replies to its own commands would pass that size, as it
+//   sends and never reads, is disconnected).
 // - A malformed command is answered < error REASON > and changes nothing;
 //   < open > of another bus is answered < error could not open bus > and
 //   the connection closed (as socketcand does).
@@ -67,8 +69,10 @@ class SocketcandCan {
   // Listens on host (an IPv4 address or "localhost") and port. Throws
   // std::runtime_error naming the address and the failing call. now_s
   // stamps the frames sent to clients; now_ticks the frames received.
+  // queue_bytes: the per-client queue (tests make it small).
   SocketcandCan(const std::string& host, uint16_t port, const std::string& channel,
-                std::function<double()> now_s, std::function<uint32_t()> now_ticks = nullptr);
+                std::function<double()> now_s, std::function<uint32_t()> now_ticks = nullptr,
+                size_t queue_bytes = kMaxClientQueueBytes);
   ~SocketcandCan();
   SocketcandCan(const SocketcandCan&) = delete;
   SocketcandCan& operator=(const SocketcandCan&) = delete;
@@ -128,6 +132,7 @@ class SocketcandCan {
   uint32_t diag_seq_ = 0;
   std::string host_, channel_;
   uint16_t port_ = 0;
+  size_t queue_bytes_;
   std::function<double()> now_s_;
   std::function<uint32_t()> now_ticks_;
   std::vector<std::unique_ptr<Client>> clients_;
