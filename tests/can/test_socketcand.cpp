@@ -17,6 +17,7 @@
 #include <thread>
 #include <unistd.h>
 
+#include "can_test_frame.hpp"
 #include "hal_host/can_transport.hpp"
 #include "hal_host/socketcand.hpp"
 #include "hal_host/socketcand_proto.hpp"
@@ -25,16 +26,6 @@ namespace {
 
 using hal_host::SocketcandCan;
 namespace sc = hal_host::socketcand;
-
-mc_hal_can_frame_t Fr(uint32_t id, std::initializer_list<uint8_t> b, uint8_t flags = 0) {
-  mc_hal_can_frame_t f{};
-  f.id = id;
-  f.flags = flags;
-  f.len = static_cast<uint8_t>(b.size());
-  size_t i = 0;
-  for (uint8_t x : b) f.data[i++] = x;
-  return f;
-}
 
 bool SameFrame(const mc_hal_can_frame_t& a, const mc_hal_can_frame_t& b) {
   return a.id == b.id && a.flags == b.flags && a.len == b.len &&

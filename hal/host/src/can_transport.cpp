@@ -3,23 +3,13 @@
 #include <cstdlib>
 #include <stdexcept>
 
+#include "hal_host/can_ops.hpp"
 #include "hal_host/candump_log.hpp"
 #include "hal_host/socketcan.hpp"
 #include "hal_host/socketcand.hpp"
 
 namespace hal_host {
 namespace {
-
-int op_send(void* ctx, const mc_hal_can_frame_t* f) {
-  return static_cast<CanTransport*>(ctx)->send(f);
-}
-int op_receive(void* ctx, mc_hal_can_frame_t* f) {
-  return static_cast<CanTransport*>(ctx)->receive(f);
-}
-int op_status(void* ctx, mc_hal_can_status_t* s) {
-  return static_cast<CanTransport*>(ctx)->get_status(s);
-}
-const mc_hal_can_ops_t kOps = {op_send, op_receive, op_status};
 
 constexpr char kPrefix[] = "socketcand:";
 constexpr double kFinishTimeoutS = 10.0;  // longest wait for slow clients at the end
@@ -68,7 +58,7 @@ CanTransport::CanTransport(const CanTransportConfig& cfg) : cfg_(cfg) {
   if (!log_ && !cfg_.script_path.empty()) {
     script_ = std::make_unique<CandumpScript>(cfg_.script_path);
   }
-  dev_.ops = &kOps;
+  dev_.ops = can_ops<CanTransport>();
   dev_.ctx = this;
 }
 

@@ -8,19 +8,10 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "hal_host/can_ops.hpp"
+
 namespace hal_host {
 namespace {
-
-int op_send(void* ctx, const mc_hal_can_frame_t* f) {
-  return static_cast<CandumpLogCan*>(ctx)->send(f);
-}
-int op_receive(void* ctx, mc_hal_can_frame_t* f) {
-  return static_cast<CandumpLogCan*>(ctx)->receive(f);
-}
-int op_status(void* ctx, mc_hal_can_status_t* s) {
-  return static_cast<CandumpLogCan*>(ctx)->get_status(s);
-}
-const mc_hal_can_ops_t kOps = {op_send, op_receive, op_status};
 
 int hex_digit(char c) {
   if (c >= '0' && c <= '9') return c - '0';
@@ -171,7 +162,7 @@ CandumpLogCan::CandumpLogCan(const std::string& out_path, const std::string& ifa
       throw std::runtime_error("cannot write CAN log '" + out_path + "': " + std::strerror(errno));
     }
   }
-  dev_.ops = &kOps;
+  dev_.ops = can_ops<CandumpLogCan>();
   dev_.ctx = this;
 }
 

@@ -16,19 +16,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "hal_host/can_ops.hpp"
+
 namespace hal_host {
 namespace {
-
-int op_send(void* ctx, const mc_hal_can_frame_t* f) {
-  return static_cast<SocketcandCan*>(ctx)->send(f);
-}
-int op_receive(void* ctx, mc_hal_can_frame_t* f) {
-  return static_cast<SocketcandCan*>(ctx)->receive(f);
-}
-int op_status(void* ctx, mc_hal_can_status_t* s) {
-  return static_cast<SocketcandCan*>(ctx)->get_status(s);
-}
-const mc_hal_can_ops_t kOps = {op_send, op_receive, op_status};
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) {
@@ -83,7 +74,7 @@ SocketcandCan::SocketcandCan(const std::string& host, uint16_t port, const std::
   if (getsockname(listen_fd_, reinterpret_cast<struct sockaddr*>(&a), &len) == 0) {
     port_ = ntohs(a.sin_port);
   }
-  dev_.ops = &kOps;
+  dev_.ops = can_ops<SocketcandCan>();
   dev_.ctx = this;
 }
 
