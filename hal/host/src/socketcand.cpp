@@ -422,7 +422,7 @@ int SocketcandCan::send(const mc_hal_can_frame_t* f) noexcept {
   if (rc != 0) return rc;
   ++stats_.tx_frames;
   std::string line;
-  for (auto& c : clients_) {
+  for (const auto& c : clients_) {
     if (c->mode != Mode::kRaw || c->closing || c->dead) continue;
     try {
       if (line.empty()) line = socketcand::format_frame(now_s_(), *f);
