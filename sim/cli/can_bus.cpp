@@ -16,7 +16,7 @@ std::string env_or(const char* name, const std::string& fallback) {
 
 }  // namespace
 
-std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& board) {
+std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& board, bool paced) {
   hal_host::CanTransportConfig c;
   c.interface = env_or("MCSIM_CAN_IF", "");
   c.log_path = env_or("MCSIM_CAN_LOG", "can-telemetry.candump.log");
@@ -55,6 +55,11 @@ std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& 
     throw UsageError(e.what());
   }
   if (!c.interface.empty()) std::fprintf(stderr, "mcsim: %s\n", can->describe().c_str());
+  if (!c.interface.empty() && !paced) {
+    std::fprintf(stderr,
+                 "mcsim: note: the run is not paced to the wall clock (--set realtime=1 paces "
+                 "it for people and tools on the bus)\n");
+  }
   if (n > 0) {
     std::fprintf(stderr, "mcsim: waiting for %lu client(s) in raw mode\n", n);
     can->wait_for_clients();

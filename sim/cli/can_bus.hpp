@@ -26,7 +26,9 @@
 namespace mcsim {
 
 // Throws UsageError with the reason when the transport cannot be opened.
-std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& board);
+// paced: the run follows the wall clock (a note on stderr when a live bus
+// is served without it).
+std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& board, bool paced);
 // End of the run: the log flushed (UsageError-free: a write error is a
 // runtime_error), socketcand clients served what is queued, counters set.
 void close_can_bus(hal_host::CanTransport& can, Summary& summary);

@@ -315,7 +315,8 @@ void run_can_telemetry(RunContext& ctx) {
 
   // CAN: a candump log, SocketCAN or a socketcand server (sim/cli/can_bus.hpp).
   hal_host::PmsmBoard& board = cb.board();
-  const std::unique_ptr<hal_host::CanTransport> can_bus = open_can_bus(board);
+  const std::unique_ptr<hal_host::CanTransport> can_bus =
+      open_can_bus(board, P.get("realtime") != 0.0);
   const mc_hal_can_t* can = can_bus->hal();
 
   {
