@@ -23,6 +23,7 @@ import itertools
 import json
 import os
 import shutil
+import socket
 import subprocess
 import sys
 import threading
@@ -43,8 +44,9 @@ def check(ok, what):
         fails.append(what)
 
 
-def mdtool(*args, **kw):
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [SRC, os.environ.get("PYTHONPATH")])))
+def mdtool(*args, env=None, **kw):
+    env = dict(env or os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [SRC, env.get("PYTHONPATH")]))
     return subprocess.run([sys.executable, "-m", "mdtool.cli", *args], capture_output=True, text=True,
                           env=env, timeout=120, **kw)
 
@@ -233,6 +235,29 @@ def main():
     r = mdtool("decode", os.path.join(W, "missing.log"), "--out", W)
     check(r.returncode == 2 and "cannot read" in r.stderr, f"missing log: '{r.stderr.strip()}'")
     listener.shutdown()
+    # socketcand: no host/port anywhere; nobody listening (refused at once:
+    # python-can's own client would retry for 10 s)
+    env = {k: v for k, v in os.environ.items() if k not in ("CAN_CONFIG", "MDTOOL_HOST", "MDTOOL_PORT")}
+    r = mdtool("scan", "-i", "socketcand", env=dict(env, HOME=W))
+    check(r.returncode == 2 and "give the server's --host and --port" in r.stderr,
+          f"socketcand without host and port: '{r.stderr.strip()}'")
+    with socket.socket() as free:
+        free.bind(("127.0.0.1", 0))
+        port = free.getsockname()[1]  # closed again: nobody listens there
+    t0 = time.monotonic()
+    r = mdtool("status", "-i", "socketcand", "--host", "127.0.0.1", "--port", str(port), env=dict(env, HOME=W))
+    check(r.returncode == 2 and f"no server at 127.0.0.1:{port}" in r.stderr and time.monotonic() - t0 < 8,
+          f"socketcand, nobody listening: '{r.stderr.strip()}' in {time.monotonic() - t0:.1f} s")
+
+    # calibrate's table: the measured value and the one in use in the
+    # parameter's convention (the drive reports the encoder's direction +-1)
+    from mdtool.can import calibrate, params
+    table = params.ParamTable()
+    res = {v[0]: 1.0 for v in calibrate.ITEMS.values()}
+    for direction, in_use, want in ((-1.0, 1, (1, "same")), (1.0, 0, (0, "same")), (1.0, 1, (0, "new"))):
+        res["encoder_direction"] = direction
+        row = next(r for r in calibrate.rows(res, {"encoder_reversed": in_use}, table) if r[0] == "encoder_reversed")
+        check((row[1], row[4]) == want, f"calibrate row: direction {direction:+g}, in use {in_use}: {row}")
 
     print(f"mdtool CAN checks: {'FAILED: ' + str(len(fails)) if fails else 'passed'}")
     return 1 if fails else 0

@@ -11,6 +11,8 @@ import time
 from .errors import NoReply, Refused
 
 #: COMMISSION_RESULT.item -> (result name, parameter it goes to, unit)
+#: (the results keep the drive's conventions; PARAM_VALUE converts one to the
+#: parameter's where they differ)
 ITEMS = {
     "R_OHM": ("r_ohm", "r_ohm", "ohm"),
     "LD_H": ("ld_h", "ld_h", "H"),
@@ -25,6 +27,31 @@ ITEMS = {
     "J_KGM2": ("j_kgm2", "j_kgm2", "kg.m^2"),
     "B_NM_S_RAD": ("b_nm_s_rad", "b_nm_s_rad", "N.m.s/rad"),
 }
+#: result -> its value in the parameter's convention: the drive reports the
+#: encoder's direction (+1: counts up for a positive rotation, -1: down),
+#: the parameter encoder_reversed is 1 when it counts down (as the firmware
+#: stages it, mc_comm_can.c)
+PARAM_VALUE = {"encoder_direction": lambda d: 1 if d < 0 else 0}
+
+
+def rows(results, present, table):
+    """The calibrate table: one row per parameter a result goes to, the
+    measured value and the one in use in the same (the parameter's)
+    convention. (parameter, measured, unit, in use or None, change text)."""
+    out = []
+    for res, pname, unit in ITEMS.values():
+        v = PARAM_VALUE.get(res, lambda x: x)(results[res])
+        p = table.get(pname)
+        old = present.get(pname)
+        ch = ""
+        if old is not None and p["type"] == "f32" and old != 0:
+            ch = f"{100.0 * (v - old) / abs(old):+.1f} %"
+        elif old is not None:
+            ch = "same" if v == old else "new"
+        out.append((pname, v, unit, old, ch))
+    return out
+
+
 #: MC_COMM_ERR_* bit names (firmware/app/commission/mc_commission.h)
 ERROR_BITS = ["OFFSET", "NO_MOTOR", "OPEN_PHASE", "ENCODER_NO_MOTION", "ROTOR_BLOCKED",
               "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT", "VOLTAGE", "RANGE", "MEAS", "ABORTED"]

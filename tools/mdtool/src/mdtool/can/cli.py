@@ -22,10 +22,28 @@ def _bus_args(p, with_node=True):
     g.add_argument("--channel", "-c", default=os.environ.get("MDTOOL_CHANNEL", "can0"),
                    help="channel: can0, vcan0, /dev/ttyACM0, PCAN_USBBUS1, ... (default can0)")
     g.add_argument("--bitrate", "-b", type=int, help="bit rate [bit/s] where the interface sets it")
+    g.add_argument("--host", help="socketcand: the server's address (or $MDTOOL_HOST, or python-can's "
+                                  "configuration: CAN_CONFIG, ~/.canrc)")
+    g.add_argument("--port", type=int,
+                   help="socketcand: the server's TCP port (or $MDTOOL_PORT, or python-can's configuration)")
     if with_node:
         g.add_argument("--node", "-n", type=int, default=1, help="drive node id 0..62 (default 1)")
         g.add_argument("--timeout", type=float, default=1.0, help="reply timeout [s] (default 1)")
     g.add_argument("--dbc", help="DBC file (default: the package's, see mdtool.can.paths)")
+
+
+def _bus_opts(a):
+    """The interface options beyond interface/channel/bitrate (socketcand's
+    host and port) given as options or in $MDTOOL_HOST / $MDTOOL_PORT;
+    python-can's configuration supplies what is not given."""
+    host = a.host or os.environ.get("MDTOOL_HOST") or None
+    port = a.port
+    if port is None and os.environ.get("MDTOOL_PORT"):
+        try:
+            port = int(os.environ["MDTOOL_PORT"])
+        except ValueError:
+            raise UsageError(f"$MDTOOL_PORT={os.environ['MDTOOL_PORT']!r}: a TCP port number") from None
+    return {k: v for k, v in (("host", host), ("port", port)) if v is not None}
 
 
 def _db(a):
@@ -38,7 +56,7 @@ class _Session:
         from .client import Drive
         from .record import open_bus
         self.db = _db(a)
-        self.bus = open_bus(a.interface, a.channel, a.bitrate)
+        self.bus = open_bus(a.interface, a.channel, a.bitrate, **_bus_opts(a))
         self.drive = Drive(self.bus, self.db, a.node, a.timeout)
 
     def __enter__(self):
@@ -53,7 +71,7 @@ def cmd_scan(a):
     from .client import scan
     from .record import open_bus
     db = _db(a)
-    bus = open_bus(a.interface, a.channel, a.bitrate)
+    bus = open_bus(a.interface, a.channel, a.bitrate, **_bus_opts(a))
     try:
         found = scan(bus, db, a.timeout)
     finally:
@@ -186,7 +204,7 @@ def cmd_record(a):
     from .record import record
     db = _db(a)
     rep = record(a.out, db, a.node, interface=a.interface, channel=a.channel, bitrate=a.bitrate,
-                 duration=a.duration, ready=a.ready, report=a.report)
+                 duration=a.duration, ready=a.ready, report=a.report, bus_opts=_bus_opts(a))
     if rep["kernel_dropped"] or rep["seq_lost"]:
         print(f"mdtool: record: frames lost (kernel {rep['kernel_dropped']}, sequence gaps "
               f"{rep['seq_lost']})", file=sys.stderr)
@@ -228,7 +246,7 @@ def cmd_convert(a):
 
 
 def cmd_calibrate(a):
-    from .calibrate import ITEMS, calibrate, check_failed
+    from .calibrate import ITEMS, calibrate, check_failed, rows
     from .errors import Refused
     from .params import fmt_value, from_raw
     table = _params(a)
@@ -257,21 +275,10 @@ def cmd_calibrate(a):
             with open(a.json, "w") as f:
                 json.dump(dict(summ, present=present), f, indent=1)
         check_failed(summ)
-        print(f"{'result':<20}{'measured':>14}  {'unit':<10}{'in use':>14}{'change':>10}")
-        for _item, (res, pname, unit) in ITEMS.items():
-            v = summ["results"][res]
-            shown = v
-            if pname == "encoder_reversed":  # the drive sends the direction (+1/-1)
-                shown, v = int(v), (1 if v < 0 else 0)
-            p = table.get(pname)
-            old = present.get(pname)
-            ch = ""
-            if old is not None and p["type"] == "f32" and old != 0:
-                ch = f"{100.0 * (v - old) / abs(old):+.1f} %"
-            elif old is not None:
-                ch = "same" if v == old else "new"
-            print(f"{res:<20}{shown:>14.6g}  {unit:<10}"
-                  f"{fmt_value(p, old) if old is not None else '-':>14}{ch:>10}")
+        print(f"{'parameter':<20}{'measured':>14}  {'unit':<10}{'in use':>14}{'change':>10}")
+        for pname, v, unit, old, ch in rows(summ["results"], present, table):
+            print(f"{pname:<20}{v:>14.6g}  {unit:<10}"
+                  f"{fmt_value(table.get(pname), old) if old is not None else '-':>14}{ch:>10}")
         if not summ["staged"]:
             print("not staged: this drive has no parameter service (results shown only)")
             if a.save:

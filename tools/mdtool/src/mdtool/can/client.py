@@ -55,8 +55,10 @@ class Drive:
         self.bus.send(can.Message(arbitration_id=frame_id(self.node, cmd_of(msg)), data=data,
                                   is_extended_id=False))
 
-    def decode(self, m, node=None):
-        """(message name, values) of a frame of `node` (default: ours), else None."""
+    def decode(self, m, node=None, names=True):
+        """(message name, values) of a frame of `node` (default: ours), else
+        None. Enumerated signals carry their DBC names, unless names=False
+        (every value a number, e.g. to plot it)."""
         if m is None or m.is_extended_id or m.is_error_frame or m.is_remote_frame:
             return None
         if node_of(m.arbitration_id) != (self.node if node is None else node):
@@ -64,7 +66,8 @@ class Drive:
         msg = self.table.get(m.arbitration_id & CMD_MASK)
         if msg is None or len(m.data) != msg.length:
             return None
-        return msg.name, named(msg, decode_signals(msg, m.data))
+        vals = decode_signals(msg, m.data)
+        return msg.name, (named(msg, vals) if names else vals)
 
     def wait_for(self, pred, timeout, what):
         """The first decoded frame of our node for which pred(name, values)
