@@ -6,7 +6,10 @@
 #     ASan natively in the other can tests; ASan inside an emulated VM only
 #     slows a wall-clock-paced test), under ASan + UBSan;
 #  3. the STM32F405 images (example board, ODrive v3.6, VESC 6) with warnings
-#     as errors and their size budgets.
+#     as errors and their size budgets;
+#  4. the host-release preset built whole (every target; its tests are the
+#     debug build's): users build it, and its -O3 finds warnings (errors
+#     here) that the debug build's -O0 does not.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=$(nproc)
@@ -17,6 +20,10 @@ for p in stm32f405 stm32f405-odrive36 stm32f405-vesc6; do
   cmake --preset "$p" >/dev/null
   cmake --build --preset "$p" -j "$JOBS"
 done
+
+log "host-release build (the optimised preset, whole)"
+cmake --preset host-release >/dev/null
+cmake --build --preset host-release -j "$JOBS"
 
 log "host-asan build and tests (ASan + UBSan)"
 cmake --preset host-asan >/dev/null
