@@ -306,8 +306,11 @@ def cmd_calibrate(a):
     with _Session(a) as s:
         d = s.drive
         # the start frame's options within their signals, before any frame
-        d.frame("COMMISSION_CMD", action=1, i_test_a=a.i_test, v_test_max_v=a.v_test_max,
-                speed_max_m_rad_s=a.speed_max)
+        try:
+            d.frame("COMMISSION_CMD", action=1, i_test_a=a.i_test, v_test_max_v=a.v_test_max,
+                    speed_max_m_rad_s=a.speed_max)
+        except UsageError as e:
+            raise UsageError(f"calibrate options refused: {e}; nothing sent") from None
         # the configuration in use, where the drive serves its parameters
         present = {}
         try:
@@ -366,6 +369,9 @@ def cmd_calibrate(a):
 # --------------------------------------------------------------- monitor
 def cmd_monitor(a):
     from .monitor import monitor
+    if a.png:
+        from .files import check_writable
+        check_writable(a.png, "--png file")
     with _Session(a) as s:
         return monitor(s.drive, a.signals, window_s=a.window, frames=a.frames, png=a.png,
                        no_gui=a.no_gui, duration=a.duration)
