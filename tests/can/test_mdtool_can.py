@@ -10,9 +10,9 @@ frames and on python-can's virtual bus:
 - the SIL log converted to each format (`mdtool convert`, its simulated
   time stamps kept): `mdtool decode` and `mdtool stats` of every format
   equal mc_can.py's on the SIL log;
-- the CLI's errors: no reply within the timeout (exit 3), a value out of
-  range refused here with its range from params_meta.json and nothing sent
-  (exit 2), unknown parameter / log format / interface, a malformed TOML;
+- the CLI's errors: no reply within the timeout (exit 3), a u32 not whole,
+  a readonly or unknown parameter, a log format / interface, a misplaced
+  key of a TOML file (exit 2; that nothing is sent then: can.mdtool_bus);
 - the DBC and the parameter table the package uses are the repository's
   (and the installed copies equal them).
 
@@ -194,24 +194,14 @@ def main():
     check(fast is not None and fast == slow and len(fast) == len(mix),
           f"MF4 array reader equals python-can's MF4Reader ({0 if fast is None else len(fast)} frames)")
 
-    # ---- the CLI's errors (python-can virtual bus: nobody answers)
+    # ---- the CLI's errors (python-can virtual bus: nobody answers). What a
+    # refused command sends (nothing) is checked on the bus the subprocess
+    # uses in can.mdtool_bus (test_mdtool_bus.py): a listener here would not
+    # see a subprocess's virtual bus.
     bus = ["--interface", "virtual", "--channel", "mdtool_errors", "--timeout", "0.3"]
-    listener = can.Bus(interface="virtual", channel="mdtool_errors")
     r = mdtool("config", "get", "r_ohm", *bus)
     check(r.returncode == 3 and "no PARAM_REPLY" in r.stderr and "within 0.3 s" in r.stderr,
           f"no reply: exit 3, '{r.stderr.strip()}'")
-    while listener.recv(0.05) is not None:
-        pass
-    r = mdtool("config", "set", "r_ohm=1e9", *bus)
-    sent = listener.recv(0.3)
-    check(r.returncode == 2 and "outside its range [0.0, 100.0] ohm" in r.stderr and sent is None,
-          f"out of range: exit 2, nothing sent, '{r.stderr.strip()}'")
-    while listener.recv(0.05) is not None:
-        pass
-    r = mdtool("run", "speed", "20", "--settle", "0", *bus)
-    sent = listener.recv(0.3)
-    check(r.returncode == 2 and "a tolerance > 0" in r.stderr and sent is None,
-          f"run --settle 0: exit 2, nothing sent, '{r.stderr.strip()}'")
     r = mdtool("config", "set", "pole_pairs=7.5", *bus)
     check(r.returncode == 2 and "whole number" in r.stderr, f"u32 not whole: '{r.stderr.strip()}'")
     r = mdtool("config", "set", "cfg_store_seq=3", *bus)
@@ -234,7 +224,6 @@ def main():
     check(r.returncode == 3 and "no drive heartbeat" in r.stderr, f"scan, nobody there: '{r.stderr.strip()}'")
     r = mdtool("decode", os.path.join(W, "missing.log"), "--out", W)
     check(r.returncode == 2 and "cannot read" in r.stderr, f"missing log: '{r.stderr.strip()}'")
-    listener.shutdown()
     # socketcand: no host/port anywhere; nobody listening (refused at once:
     # python-can's own client would retry for 10 s)
     env = {k: v for k, v in os.environ.items() if k not in ("CAN_CONFIG", "MDTOOL_HOST", "MDTOOL_PORT")}

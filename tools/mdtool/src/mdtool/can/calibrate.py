@@ -112,13 +112,29 @@ class Collector:
 
 
 def calibrate(drive, i_test_a=0.0, v_test_max_v=0.0, speed_max_m_rad_s=0.0, timeout=30.0,
-              on_status=None):
+              on_status=None, abort_on_exit=False):
     """Start commissioning on `drive` (mdtool.can.client.Drive) and wait
     until it ends and every result arrived. Raises Refused when the drive
-    refuses the command, NoReply when it falls silent for `timeout` s."""
+    refuses the command, NoReply when it falls silent for `timeout` s.
+    With `abort_on_exit`, leaving before the drive ended it (no progress,
+    an exception, Ctrl-C / SIGTERM) sends ABORT first."""
     col = Collector()
-    drive.send("COMMISSION_CMD", action=1, i_test_a=i_test_a, v_test_max_v=v_test_max_v,
-               speed_max_m_rad_s=speed_max_m_rad_s)
+    start = drive.frame("COMMISSION_CMD", action=1, i_test_a=i_test_a, v_test_max_v=v_test_max_v,
+                        speed_max_m_rad_s=speed_max_m_rad_s)
+    drive.bus.send(start)
+    refused = False
+    try:
+        _follow(drive, col, timeout, on_status)
+    except Refused:
+        refused = True  # the start was refused: nothing runs to abort
+        raise
+    finally:
+        if abort_on_exit and not col.ended and not refused:
+            abort(drive)
+    return col.summary()
+
+
+def _follow(drive, col, timeout, on_status):
     last = time.monotonic()
     while not col.complete:
         if time.monotonic() - last > timeout:
@@ -134,7 +150,6 @@ def calibrate(drive, i_test_a=0.0, v_test_max_v=0.0, speed_max_m_rad_s=0.0, time
         col.feed(name, vals)
         if name == "COMMISSION_STATUS" and on_status:
             on_status(vals)
-    return col.summary()
 
 
 def abort(drive):
