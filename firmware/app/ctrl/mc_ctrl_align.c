@@ -134,6 +134,7 @@ plugin_ops(uint32_t (*reset)(void *ctx),
 {
     return (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
                              .needs_encoder = true,
+                             .finds_angle = true,
                              .reset = reset,
                              .fast = fast,
                              .slow = NULL,

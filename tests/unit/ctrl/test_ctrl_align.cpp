@@ -7,6 +7,7 @@
 // angle (an incremental encoder), the index a mark at a mechanical angle.
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <cmath>
 
 #include "app_test_fixture.h"
@@ -672,4 +673,47 @@ TEST(CtrlIdx, SearchesBothDirections)
         EXPECT_NEAR(b.th_hi, c.travel_max_m_rad, 0.05);
         EXPECT_NEAR(-b.th_lo, c.travel_max_m_rad, 0.05);
     }
+}
+
+// The drive's angle reference with the plug-ins (mc_drive.h): an ALIGN
+// drive refuses CURRENT after power-up (NEED_ALIGN), runs the alignment
+// (it finds the angle), takes its offset and then runs CURRENT with it; an
+// INDEX drive refuses until the search has found the mark, with the
+// encoder-jump check on (the count's jump at the index is not a fault).
+TEST(CtrlAngleRef, AlignmentThenSensored)
+{
+    Bench b;
+    b.cfg.angle_ref = MC_DRIVE_ANGLE_REF_ALIGN;
+    b.init(1.9);
+    EXPECT_EQ(mc_drive_angle_state(&b.d), MC_DRIVE_ANGLE_NEED_ALIGN);
+    EXPECT_EQ(-EACCES, mc_drive_set_mode(&b.d, MC_DRIVE_MODE_CURRENT));
+    mc_ctrl_align_t al{};
+    const mc_ctrl_align_result_t r = run_align(b, al);
+    ASSERT_EQ(r.status, MC_CTRL_ALIGN_DONE) << r.fail;
+    ASSERT_EQ(0, mc_drive_set_mode(&b.d, MC_DRIVE_MODE_IDLE));
+    ASSERT_EQ(0, mc_drive_set_encoder_offset(&b.d, r.offset_e_rad));
+    EXPECT_EQ(mc_drive_angle_state(&b.d), MC_DRIVE_ANGLE_KNOWN);
+    ASSERT_EQ(0, mc_drive_set_mode(&b.d, MC_DRIVE_MODE_CURRENT));
+    b.step(al.v);
+    // the drive's angle is the rotor's: 0.01 rad el. as OffsetAtAnyPowerUpAngle
+    EXPECT_NEAR(wrap_pi(b.d.tm.theta_e_rad - kPolePairs * b.rotor.th), 0.0, 0.01);
+}
+
+TEST(CtrlAngleRef, IndexSearchThenSensored)
+{
+    Bench b;
+    b.cfg.angle_ref = MC_DRIVE_ANGLE_REF_INDEX;
+    b.cfg.omega_max_rad_s = 200.0f; // the jump check on
+    b.has_index = true;
+    b.index_at = 2.0;
+    b.init(0.3);
+    EXPECT_EQ(mc_drive_angle_state(&b.d), MC_DRIVE_ANGLE_NEED_INDEX);
+    EXPECT_EQ(-EACCES, mc_drive_set_mode(&b.d, MC_DRIVE_MODE_CURRENT));
+    mc_ctrl_idx_t ix{};
+    const mc_ctrl_idx_result_t r = run_idx(b, ix, idx_cfg(b.cfg, &b.fake.encoder_dev));
+    ASSERT_EQ(r.status, MC_CTRL_ALIGN_DONE) << r.fail;
+    EXPECT_EQ(b.d.faults, 0u);
+    EXPECT_EQ(mc_drive_angle_state(&b.d), MC_DRIVE_ANGLE_KNOWN);
+    ASSERT_EQ(0, mc_drive_set_mode(&b.d, MC_DRIVE_MODE_IDLE));
+    EXPECT_EQ(0, mc_drive_set_mode(&b.d, MC_DRIVE_MODE_CURRENT));
 }
