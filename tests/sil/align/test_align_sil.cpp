@@ -6,6 +6,7 @@
 // at index_angle_rad. The offset the drive needs is then p theta_m0.
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -42,7 +43,8 @@ struct Sil {
   mc_drive_cfg_t dc{};
   mc_drive_t d{};
 
-  Sil(double theta_m0, double load_nm, bool index, double index_at) {
+  Sil(double theta_m0, double load_nm, bool index, double index_at,
+      uint32_t angle_ref = MC_DRIVE_ANGLE_REF_STORED) {
     hal_host::PmsmBoardConfig bc;
     bc.motor.R_ohm = 0.675;
     bc.motor.Ld_h = 1.14e-3;
@@ -88,12 +90,25 @@ struct Sil {
     dc.i_trip_a = 15.0f;
     dc.vbus_min_v = 10.0f;
     dc.vbus_max_v = 60.0f;
-    // omega_max 0: the plausibility check of the encoder step is off,
-    // the index search's re-reference (a jump of the count) must not
-    // trip it (the integration resets the unwrapping there)
+    // the encoder-step check on: the count's jump at the index is no
+    // fault (the drive restarts its tracking there, INDEX)
+    dc.omega_max_rad_s = 300.0f;
+    dc.angle_ref = angle_ref;
     EXPECT_EQ(mc_drive_init(&d, &dc, board->hal()), MC_DRIVE_CFG_OK);
   }
   void step() { (void)hal_host::sil_period(*board, d); }
+  // The sensored use of the angle: CURRENT mode from IDLE, iq 2 A for 20 ms
+  // (the current loop settles, 500 Hz); the torque the plant makes.
+  double torque_at_iq_2a() {
+    EXPECT_EQ(mc_drive_set_mode(&d, MC_DRIVE_MODE_IDLE), 0);
+    EXPECT_EQ(mc_drive_set_current_ref(&d, 0.0f, 2.0f), 0);
+    EXPECT_EQ(mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT), 0);
+    for (int n = 0; n < 400; ++n) {
+      step();
+    }
+    EXPECT_EQ(d.faults, 0u);
+    return board->torque_nm();
+  }
 };
 
 mc_ctrl_align_cfg_t align_cfg(const mc_drive_cfg_t& dc) {
@@ -132,18 +147,23 @@ mc_ctrl_align_result_t run_align(Sil& s, mc_ctrl_align_t& al, double t_max_s = 1
 
 }  // namespace
 
-// Eight power-ups at random rotor angles: the offset found is p theta_m0
-// within 0.02 rad el. (the count's step, 4 x 2 pi / 8192 = 3.1e-3 rad el.,
-// and where the rotor comes to rest on the vector within omega_still).
-// Then the drive, given that offset, makes torque in the direction and of
-// the size its q current asks for (a check of the offset's use, not only
-// its value).
+// Eight power-ups at random rotor angles on a drive whose angle is ALIGN
+// (an incremental encoder without index): CURRENT is refused until the
+// alignment ran (NEED_ALIGN); the offset found is p theta_m0 within 0.02
+// rad el. (the count's step, 4 x 2 pi / 8192 = 3.1e-3 rad el., and where
+// the rotor comes to rest on the vector within omega_still). Then the
+// drive, given that offset, makes torque in the direction and of the size
+// its q current asks for, at every power-up (a check of the offset's use,
+// not only its value: kt iq, 2 %, cos of the offset error > 0.999 and the
+// plant's cogging-free torque).
 TEST(AlignSil, OffsetAtRandomPowerUpAngles) {
   std::mt19937_64 rng(20260531u);
   std::uniform_real_distribution<double> angle(0.0, 2.0 * kPi);
   for (int k = 0; k < 8; ++k) {
     const double th0 = angle(rng);
-    Sil s(th0, 0.0, false, 0.0);
+    Sil s(th0, 0.0, false, 0.0, MC_DRIVE_ANGLE_REF_ALIGN);
+    EXPECT_EQ(mc_drive_angle_state(&s.d), MC_DRIVE_ANGLE_NEED_ALIGN);
+    EXPECT_EQ(mc_drive_set_mode(&s.d, MC_DRIVE_MODE_CURRENT), -EACCES);
     mc_ctrl_align_t al{};
     const mc_ctrl_align_result_t r = run_align(s, al);
     ASSERT_EQ(r.status, MC_CTRL_ALIGN_DONE) << k << " fail " << r.fail;
@@ -152,19 +172,9 @@ TEST(AlignSil, OffsetAtRandomPowerUpAngles) {
     EXPECT_EQ(s.d.faults, 0u);
     // bounded motion: the snap and the sweeps, within the limit
     EXPECT_LE(r.travel_peak_m_rad, align_cfg(s.dc).travel_max_m_rad);
-    if (k == 0) {
-      // the offset in use: CURRENT mode, iq 2 A: torque kt iq
-      // (cos of the offset error: > 0.999)
-      s.dc.encoder_offset_rad = r.offset_e_rad;
-      ASSERT_EQ(mc_drive_init(&s.d, &s.dc, s.board->hal()), MC_DRIVE_CFG_OK);
-      ASSERT_EQ(mc_drive_set_current_ref(&s.d, 0.0f, 2.0f), 0);
-      ASSERT_EQ(mc_drive_set_mode(&s.d, MC_DRIVE_MODE_CURRENT), 0);
-      for (int n = 0; n < 400; ++n) {  // 20 ms: the current loop settles (500 Hz)
-        s.step();
-      }
-      // the load-free rotor accelerates; the torque is the motor's
-      EXPECT_NEAR(s.board->torque_nm(), kKt * 2.0, 0.02 * kKt * 2.0);
-    }
+    ASSERT_EQ(mc_drive_set_mode(&s.d, MC_DRIVE_MODE_IDLE), 0);
+    ASSERT_EQ(mc_drive_set_encoder_offset(&s.d, r.offset_e_rad), 0);
+    EXPECT_NEAR(s.torque_at_iq_2a(), kKt * 2.0, 0.02 * kKt * 2.0) << k;
   }
 }
 
@@ -226,7 +236,11 @@ TEST(AlignSil, IndexSearchFindsTheMark) {
   std::uniform_real_distribution<double> angle(0.0, 2.0 * kPi);
   for (int k = 0; k < 4; ++k) {
     const double th0 = angle(rng);
-    Sil s(th0, 0.0, true, 1.0);
+    Sil s(th0, 0.0, true, 1.0, MC_DRIVE_ANGLE_REF_INDEX);
+    // the offset stored relative to the index: the d axis at the mark
+    s.d.cfg.encoder_offset_rad = static_cast<float>(wrap_2pi(kPolePairs * 1.0));
+    EXPECT_EQ(mc_drive_angle_state(&s.d), MC_DRIVE_ANGLE_NEED_INDEX);
+    EXPECT_EQ(mc_drive_set_mode(&s.d, MC_DRIVE_MODE_CURRENT), -EACCES);
     mc_ctrl_idx_t ix{};
     const mc_ctrl_idx_cfg_t c = idx_cfg(s.dc, s.board->hal()->encoder);
     ASSERT_EQ(mc_ctrl_idx_init(&ix, &c), MC_CTRL_ALIGN_ERR_NONE);
@@ -248,6 +262,10 @@ TEST(AlignSil, IndexSearchFindsTheMark) {
     double dc = static_cast<double>(smp.count) - want;
     dc -= 8192.0 * std::round(dc / 8192.0);
     EXPECT_LE(std::fabs(dc), 1.0) << k;
+    // the stored offset now holds: sensored torque as the q current asks
+    // (the tolerance of OffsetAtRandomPowerUpAngles)
+    EXPECT_EQ(mc_drive_angle_state(&s.d), MC_DRIVE_ANGLE_KNOWN);
+    EXPECT_NEAR(s.torque_at_iq_2a(), kKt * 2.0, 0.02 * kKt * 2.0) << k;
   }
 }
 
