@@ -47,7 +47,7 @@ class AppDriveCtrl : public AppDrive
     mc_drive_ctrl_t Law(uint32_t outputs, bool needs_encoder = true)
     {
         return mc_drive_ctrl_t{outputs,   needs_encoder, stub_reset, stub_fast,
-                               stub_slow, &law,          nullptr};
+                               stub_slow, &law,          nullptr,    false};
     }
     StubLaw law;
 };
