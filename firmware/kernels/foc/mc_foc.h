@@ -166,7 +166,7 @@ typedef struct {
     float v_max_per_vbus; /**< v_limit_ratio times the modulator's largest voltage per volt
                                  of bus: 1/sqrt(3) (circle) or 2/3 (hexagon) (derived) */
     bool decouple;
-    bool svpwm_linear; /**< circle limit and v_limit_ratio <= MC_FOC_LINEAR_RATIO: the
+    bool svpwm_linear;        /**< circle limit and v_limit_ratio <= MC_FOC_LINEAR_RATIO: the
                                  modulator never limits what the dq step allows (derived) */
     float delay_comp_periods; /**< advance of the voltage angle [periods] */
     float adv_s;              /**< delay_comp_periods * dt_s: theta_v = theta + adv_s omega
@@ -278,12 +278,14 @@ uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32
  * The whole fast step from alpha-beta currents (the caller did the Clarke
  * transform, e.g. for an observer that needs them too): Park at theta_e
  * (mc_sincos_f32), dq step, inverse Park at the voltage angle
- * (mc_foc_f32_voltage_angle), modulator limit (fed back to the PIs), SVPWM. mc_foc_f32_step is exactly this after its Clarke transform.
+ * (mc_foc_f32_voltage_angle), modulator limit (fed back to the PIs),
+ * SVPWM. mc_foc_f32_step is exactly this after its Clarke transform.
  * Arguments as in mc_foc_f32_in_t (alpha/beta currents amplitude
  * invariant, mc_clarke_f32), passed by value so that they stay in
  * registers. Non-finite alpha/beta current or angle:
  * MC_FOC_ERR_NAN_INPUT (id, iq reported 0); so is a voltage angle that
- * overflows (a finite speed so large that adv_s omega_e is infinite); the dq step's inputs and errors
+ * overflows (a finite speed so large that adv_s omega_e is infinite); the
+ * dq step's inputs and errors
  * as in mc_foc_f32_step_dq (out->id_a, iq_a are the measured values then).
  * Fills *out (duties 0.5 and zero voltages on error). Returns the
  * MC_FOC_ERR_* bits raised by this step.

@@ -132,10 +132,8 @@ static void foc_q31_core(mc_foc_q31_t *st, q31_t id_ref, q31_t iq_ref, q31_t id,
 
     if (st->decouple) {
         /* the currents predicted for the voltage's interval (mc_foc_q31.h) */
-        const q31_t id_ff =
-            mc_q31_add_sat(id, mc_q31_mul(st->pred_d, mc_q31_sub_sat(id_ref, id)));
-        const q31_t iq_ff =
-            mc_q31_add_sat(iq, mc_q31_mul(st->pred_q, mc_q31_sub_sat(iq_ref, iq)));
+        const q31_t id_ff = mc_q31_add_sat(id, mc_q31_mul(st->pred_d, mc_q31_sub_sat(id_ref, id)));
+        const q31_t iq_ff = mc_q31_add_sat(iq, mc_q31_mul(st->pred_q, mc_q31_sub_sat(iq_ref, iq)));
         ff_d = mc_q46_to_q31(-mc_q46_mul_q31(st->g_ff_d, mc_q31_mul(omega_e, iq_ff)));
         ff_q = mc_q46_to_q31(mc_q46_add(mc_q46_mul_q31(st->g_ff_q, mc_q31_mul(omega_e, id_ff)),
                                         mc_q46_mul_q31(st->g_ff_psi, omega_e)));

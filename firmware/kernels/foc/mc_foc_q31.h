@@ -71,10 +71,10 @@ typedef struct {
 typedef struct {
     mc_pi_q31_t pi_d;
     mc_pi_q31_t pi_q;
-    mc_q46_gain_t g_ff_d;   /**< omega_base L_q i_base / v_base */
-    mc_q46_gain_t g_ff_q;   /**< omega_base L_d i_base / v_base */
-    mc_q46_gain_t g_ff_psi; /**< omega_base psi / v_base */
-    mc_q46_gain_t g_vmax;   /**< v_limit_ratio / sqrt(3) */
+    mc_q46_gain_t g_ff_d;     /**< omega_base L_q i_base / v_base */
+    mc_q46_gain_t g_ff_q;     /**< omega_base L_d i_base / v_base */
+    mc_q46_gain_t g_ff_psi;   /**< omega_base psi / v_base */
+    mc_q46_gain_t g_vmax;     /**< v_limit_ratio / sqrt(3) */
     mc_q46_gain_t g_adv;      /**< delay_comp_periods dt omega_base / pi: q31 turn per pu speed */
     float adv_pu_per_period;  /**< dt omega_base / pi (derived) */
     float delay_comp_periods; /**< advance of the voltage angle [periods] */

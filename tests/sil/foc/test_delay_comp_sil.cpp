@@ -58,10 +58,9 @@ struct Result {
 // omega_e T of the run; pwm_hz overrides the board's PWM rate (the 56 V bus
 // reaches omega_e T = 0.6 at 16 kHz: 457 rad/s, 25 V of back-EMF).
 Result run(double we_t, double pwm_hz, bool compensate) {
-  mcsim::MotorFiles f = mcsim::load_motor_files(std::string(MCSIM_MOTORS_DIR) +
-                                                    "/u8-class-kv100.toml",
-                                                std::string(MCSIM_MOTORS_DIR) +
-                                                    "/odrive-v36-56v.toml");
+  mcsim::MotorFiles f =
+      mcsim::load_motor_files(std::string(MCSIM_MOTORS_DIR) + "/u8-class-kv100.toml",
+                              std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-56v.toml");
   f.board.pwm_hz = pwm_hz;
   const double T = 1.0 / pwm_hz;
   const double w_m = we_t / (T * f.motor.pole_pairs);
@@ -84,7 +83,8 @@ Result run(double we_t, double pwm_hz, bool compensate) {
   const double design = std::log(9.0) / g.cur_bw_rad_s;
   const double i_step = 0.5 * g.i_rated_eff_a;
   // 10 ms at speed before the first step (the encoder's tracking loop settles)
-  const double t_iq = t_ramp + 0.01, t_id = t_iq + 12 * design + 2e-3, t_end = t_id + 12 * design + 2e-3;
+  const double t_iq = t_ramp + 0.01, t_id = t_iq + 12 * design + 2e-3,
+               t_end = t_id + 12 * design + 2e-3;
   Rise rq(t_iq, i_step), rd(t_id, 0.5 * i_step);
   Result r;
   for (long k = 0; rig.board().t_s() < t_end; ++k) {
@@ -131,9 +131,9 @@ class DelayCompSil : public ::testing::TestWithParam<double> {};
 // omega_e T from where the uncompensated loop tripped (0.3) to 0.6 rad (ten
 // samples per electrical period), 16 kHz.
 TEST_P(DelayCompSil, CurrentLoopHoldsAndMeetsItsRiseTime) {
-  const mcsim::MotorFiles f = mcsim::load_motor_files(
-      std::string(MCSIM_MOTORS_DIR) + "/u8-class-kv100.toml",
-      std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-56v.toml");
+  const mcsim::MotorFiles f =
+      mcsim::load_motor_files(std::string(MCSIM_MOTORS_DIR) + "/u8-class-kv100.toml",
+                              std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-56v.toml");
   const double i_step = 0.5 * mcsim::derive_gains(f, nullptr).i_rated_eff_a;
   const Result r = run(GetParam(), 16000.0, true);
   expect_controlled(r, i_step);

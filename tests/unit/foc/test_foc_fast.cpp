@@ -120,8 +120,8 @@ uint32_t RefStepAb(mc_foc_f32_t *st, float al, float be, const mc_foc_f32_in_t &
         if (inputs_ok && (st->adv_s > 0.0f) && !Finite(th_v)) {
             err = MC_FOC_ERR_NAN_INPUT;
         } else {
-            err = RefDq(st, in.id_ref_a, in.iq_ref_a, id, iq, in.omega_e_rad_s, in.vbus_v, &vd,
-                        &vq);
+            err =
+                RefDq(st, in.id_ref_a, in.iq_ref_a, id, iq, in.omega_e_rad_s, in.vbus_v, &vd, &vq);
         }
         if (st->adv_s > 0.0f) {
             mc_sincos_f32(th_v, &s, &c);
