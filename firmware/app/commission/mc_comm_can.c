@@ -47,6 +47,25 @@ static float option(float v, float dflt)
     return (v > 0.0f) ? v : dflt;
 }
 
+#define INV_SQRT3_F 0.57735026918962576f
+
+/* The test values in force against the drive's limits (mc_comm_can.h). */
+static bool within_limits(const mc_comm_can_t *m, const mc_comm_cfg_t *cc)
+{
+    const mc_drive_t *d = m->drive;
+    const float vbus = d->tm.vbus_v;
+    if (!(cc->i_test_a <= d->cfg.i_max_a)) {
+        return false;
+    }
+    if (!mc_isfinite_f32(vbus) || !(vbus > 0.0f) || !(cc->v_test_max_v <= vbus * INV_SQRT3_F)) {
+        return false;
+    }
+    if ((d->cfg.omega_max_rad_s > 0.0f) && !(cc->speed_max_m_rad_s < d->cfg.omega_max_rad_s)) {
+        return false;
+    }
+    return (m->params == NULL) || (cc->speed_max_m_rad_s <= m->params->active.speed_max_rad_s);
+}
+
 static mc_can_err_t start(mc_comm_can_t *m, const float *v)
 {
     mc_drive_t *d = m->drive;
@@ -65,8 +84,8 @@ static mc_can_err_t start(mc_comm_can_t *m, const float *v)
     cc.speed_max_m_rad_s = option(v[MC_CAN_COMMISSION_CMD_SPEED_MAX_M_RAD_S], cc.speed_max_m_rad_s);
     {
         mc_comm_t probe;
-        if (mc_comm_init(&probe, &cc) != MC_COMM_CFG_OK) {
-            return MC_CAN_ERR_RANGE;
+        if ((mc_comm_init(&probe, &cc) != MC_COMM_CFG_OK) || !within_limits(m, &cc)) {
+            return MC_CAN_ERR_RANGE; /* nothing energised */
         }
     }
     m->prev_ctrl = d->ctrl;
@@ -103,6 +122,14 @@ static void finish(mc_comm_can_t *m, uint32_t err)
     m->err = err;
     m->step = (uint8_t)((err == MC_COMM_ERR_NONE) ? MC_COMM_STEP_DONE : MC_COMM_STEP_FAILED);
     m->status_due = true;
+}
+
+void mc_comm_can_host_lost(void *ctx)
+{
+    mc_comm_can_t *m = (mc_comm_can_t *)ctx;
+    if ((m != NULL) && m->running) {
+        finish(m, m->comm->err | MC_COMM_ERR_ABORTED | MC_COMM_ERR_HOST_LOST);
+    }
 }
 
 mc_can_err_t mc_comm_can_command(void *ctx, const float *v)
@@ -244,6 +271,12 @@ static void follow(mc_comm_can_t *m)
     }
 }
 
+/* A reply frame may go out now (a token of lim, or no limiter). */
+static bool may_send(mc_tm_reply_lim_t *lim)
+{
+    return (lim == NULL) || mc_tm_reply_lim_take(lim);
+}
+
 static void send(mc_comm_can_t *m, const mc_hal_can_t *can, uint32_t msg, const float *v,
                  uint32_t n, uint32_t raw_value)
 {
@@ -262,7 +295,7 @@ static void send(mc_comm_can_t *m, const mc_hal_can_t *can, uint32_t msg, const 
     }
 }
 
-void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can)
+void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can, mc_tm_reply_lim_t *lim)
 {
     if (m == NULL) {
         return;
@@ -274,6 +307,9 @@ void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can)
         m->status_due = false;
         m->result_next = (uint8_t)MC_COMM_CAN_ITEM_COUNT;
         return;
+    }
+    if ((m->status_due || (m->result_next < (uint8_t)MC_COMM_CAN_ITEM_COUNT)) && !may_send(lim)) {
+        return; /* the reply limiter: the frame waits for a later step */
     }
     if (m->status_due) {
         float v[MC_CAN_COMMISSION_STATUS_NSIG];
