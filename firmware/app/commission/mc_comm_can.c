@@ -48,22 +48,51 @@ static float option(float v, float dflt)
 }
 
 #define INV_SQRT3_F 0.57735026918962576f
+/** A default spin-up cap keeps this far below the over-speed trip. */
+#define TRIP_MARGIN 0.9f
 
-/* The test values in force against the drive's limits (mc_comm_can.h). */
-static bool within_limits(const mc_comm_can_t *m, const mc_comm_cfg_t *cc)
+/* The drive's limits on the test values (mc_comm_can.h): current, voltage
+ * (0 when the bus is not measured), speed (and the trip it must stay
+ * strictly below; 0: off). */
+typedef struct {
+    float i_a, v_v, w_rad_s, w_trip_rad_s;
+} limits_t;
+
+static limits_t limits_of(const mc_comm_can_t *m)
 {
     const mc_drive_t *d = m->drive;
     const float vbus = d->tm.vbus_v;
-    if (!(cc->i_test_a <= d->cfg.i_max_a)) {
-        return false;
+    limits_t l;
+    l.i_a = d->cfg.i_max_a;
+    l.v_v = (mc_isfinite_f32(vbus) && (vbus > 0.0f)) ? vbus * INV_SQRT3_F : 0.0f;
+    l.w_rad_s = (m->params != NULL) ? m->params->active.speed_max_rad_s : 3.4e38f;
+    l.w_trip_rad_s = (d->cfg.omega_max_rad_s > 0.0f) ? d->cfg.omega_max_rad_s : 0.0f;
+    return l;
+}
+
+static bool within_limits(const limits_t *l, const mc_comm_cfg_t *cc)
+{
+    return (cc->i_test_a <= l->i_a) && (cc->v_test_max_v <= l->v_v) &&
+           (cc->speed_max_m_rad_s <= l->w_rad_s) &&
+           ((l->w_trip_rad_s == 0.0f) || (cc->speed_max_m_rad_s < l->w_trip_rad_s));
+}
+
+static float min_f(float a, float b)
+{
+    return (a < b) ? a : b;
+}
+
+/* The board's defaults bounded by the drive's limits: a zero option always
+ * takes a value the drive allows (the image's boards default to a quarter
+ * of their current-sense range, above a small motor's i_max_a). */
+static void bound_defaults(const limits_t *l, mc_comm_cfg_t *cc)
+{
+    cc->i_test_a = min_f(cc->i_test_a, l->i_a);
+    cc->v_test_max_v = min_f(cc->v_test_max_v, l->v_v);
+    cc->speed_max_m_rad_s = min_f(cc->speed_max_m_rad_s, l->w_rad_s);
+    if (l->w_trip_rad_s > 0.0f) {
+        cc->speed_max_m_rad_s = min_f(cc->speed_max_m_rad_s, TRIP_MARGIN * l->w_trip_rad_s);
     }
-    if (!mc_isfinite_f32(vbus) || !(vbus > 0.0f) || !(cc->v_test_max_v <= vbus * INV_SQRT3_F)) {
-        return false;
-    }
-    if ((d->cfg.omega_max_rad_s > 0.0f) && !(cc->speed_max_m_rad_s < d->cfg.omega_max_rad_s)) {
-        return false;
-    }
-    return (m->params == NULL) || (cc->speed_max_m_rad_s <= m->params->active.speed_max_rad_s);
 }
 
 static mc_can_err_t start(mc_comm_can_t *m, const float *v)
@@ -79,12 +108,15 @@ static mc_can_err_t start(mc_comm_can_t *m, const float *v)
     if (d->mode != MC_DRIVE_MODE_IDLE) {
         return MC_CAN_ERR_MODE;
     }
-    cc.i_test_a = option(v[MC_CAN_COMMISSION_CMD_I_TEST_A], cc.i_test_a);
-    cc.v_test_max_v = option(v[MC_CAN_COMMISSION_CMD_V_TEST_MAX_V], cc.v_test_max_v);
-    cc.speed_max_m_rad_s = option(v[MC_CAN_COMMISSION_CMD_SPEED_MAX_M_RAD_S], cc.speed_max_m_rad_s);
     {
+        const limits_t lim = limits_of(m);
         mc_comm_t probe;
-        if ((mc_comm_init(&probe, &cc) != MC_COMM_CFG_OK) || !within_limits(m, &cc)) {
+        bound_defaults(&lim, &cc);
+        cc.i_test_a = option(v[MC_CAN_COMMISSION_CMD_I_TEST_A], cc.i_test_a);
+        cc.v_test_max_v = option(v[MC_CAN_COMMISSION_CMD_V_TEST_MAX_V], cc.v_test_max_v);
+        cc.speed_max_m_rad_s =
+            option(v[MC_CAN_COMMISSION_CMD_SPEED_MAX_M_RAD_S], cc.speed_max_m_rad_s);
+        if ((mc_comm_init(&probe, &cc) != MC_COMM_CFG_OK) || !within_limits(&lim, &cc)) {
             return MC_CAN_ERR_RANGE; /* nothing energised */
         }
     }

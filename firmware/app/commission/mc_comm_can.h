@@ -17,14 +17,16 @@
  * nothing is energised. The drive's control-law plug-in is swapped for
  * commissioning's and restored when the sequence ends.
  *
- * The drive's limits, checked on the test values in force (the options,
- * or the defaults for zeros): i_test_a <= the drive's i_max_a;
- * v_test_max_v <= the largest voltage vector the measured bus can make,
- * v_bus / sqrt(3) (a bus not measured, not finite or not positive: RANGE);
- * speed_max_m_rad_s <= the speed limit of the parameter set in force
- * (speed_max_rad_s, with a parameter service) and below the drive's
- * over-speed trip (omega_max_rad_s, when it is on). Protocol 3 accepted
- * 65 A on a 20 A sensor and 600 V on a 200 V bus.
+ * The drive's limits, checked on the test values in force: i_test_a <=
+ * the drive's i_max_a; v_test_max_v <= the largest voltage vector the
+ * measured bus can make, v_bus / sqrt(3) (a bus not measured, not finite
+ * or not positive: RANGE); speed_max_m_rad_s <= the speed limit of the
+ * parameter set in force (speed_max_rad_s, with a parameter service) and
+ * below the drive's over-speed trip (omega_max_rad_s, when it is on). An
+ * option beyond them is refused; a zero option takes the board's default
+ * bounded by them (the spin-up cap to 0.9 of the trip). Protocol 3
+ * accepted 65 A on a 20 A sensor and 600 V on a 200 V bus, and the
+ * image's default, a quarter of the sense range, above i_max_a.
  *
  * Keep-alive: the CAN handler times a running sequence out as an enabled
  * drive (mc_can_cmd.h): without a fresh HOST_HEARTBEAT for timeout_s it

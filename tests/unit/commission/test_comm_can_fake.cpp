@@ -388,7 +388,8 @@ TEST_F(CommCan, AdvancingHeartbeatsKeepItRepeatsDoNot) {
 
 // Issue 28: i_test 65 A on a 20 A sensor and v_test_max 600 V on a 200 V
 // bus were accepted. The test values in force are checked against the
-// drive's limits: refused RANGE, nothing energised, nothing changed.
+// drive's limits: an option beyond them refused RANGE, nothing energised,
+// nothing changed; a zero option bounded by them.
 TEST_F(CommCan, TestValuesBeyondTheDrivesLimitsAreRefusedNothingEnergised) {
   Boot();
   const float v_max = kVbus / std::sqrt(3.0f);  // the vector the bus can make
@@ -409,13 +410,42 @@ TEST_F(CommCan, TestValuesBeyondTheDrivesLimitsAreRefusedNothingEnergised) {
     EXPECT_FALSE(fake.pwm3.enabled) << k.what;
     EXPECT_EQ(0, std::memcmp(&d0, &d, sizeof d)) << k.what << ": the drive changed";
   }
-  // the board's default 10 V above a sagging bus (a measurement, not the nominal)
-  ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, 15.0f, kMask3));
-  (void)mc_drive_fast_step(&d);
+  // a bus not measured (the fast loop has not sampled it): refused
+  d.tm.vbus_v = 0.0f;
+  EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START)) << "no bus measured";
+  EXPECT_FALSE(fake.pwm3.enabled);
+  // A zero option takes the board's default bounded by the drive's limits
+  // (the images' boards default to a quarter of their sense range, above a
+  // small motor's i_max_a): the bus sagging to 15 V bounds the 10 V
+  // default to 15 V / sqrt 3, i_max_a 3 A the 4 A, speed_max_rad_s 50 the
+  // 100 rad/s (each exact: min of two floats).
+  auto sample = [&](float vbus) {  // one conversion, one fast step
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, vbus, kMask3));
+    (void)mc_drive_fast_step(&d);
+  };
+  auto apply = [&](float i_max, float w_max) {  // the runtime limits, by the service
+    uint32_t raw = 0;
+    std::memcpy(&raw, &i_max, sizeof raw);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, &raw));
+    std::memcpy(&raw, &w_max, sizeof raw);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_SPEED_MAX_RAD_S, &raw));
+    raw = 0;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&srv, MC_PARAM_OP_APPLY, 0u, &raw));
+  };
+  apply(3.0f, 50.0f);
+  sample(15.0f);
   ASSERT_EQ(15.0f, d.tm.vbus_v);
-  EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START)) << "10 V > 15 V / sqrt 3";
-  ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, kVbus, kMask3));
-  (void)mc_drive_fast_step(&d);
+  ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START));
+  EXPECT_EQ(15.0f * 0.57735026918962576f, comm.cfg.v_test_max_v);
+  EXPECT_EQ(3.0f, comm.cfg.i_test_a);
+  EXPECT_EQ(50.0f, comm.cfg.speed_max_m_rad_s);
+  ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_ABORT));
+  // an option above them is still refused
+  EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START, 3.5f));
+  apply(p.i_max_a, p.speed_max_rad_s);
+  sample(kVbus);
   // without the parameter set the over-speed trip bounds it
   m.params = nullptr;
   EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START, 0.0f, 0.0f, d.cfg.omega_max_rad_s));
