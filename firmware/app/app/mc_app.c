@@ -424,6 +424,46 @@ static void params_apply(void *ctx, const mc_params_t *p)
     }
 }
 
+/* BOOT_REQ (can/mc_boot_enter.h), answered on can. */
+static void boot_req(void *ctx, const mc_hal_can_frame_t *p_frame, bool busy,
+                     const mc_hal_can_t *can)
+{
+    mc_app_t *a = ctx;
+    mc_hal_can_frame_t r;
+    if ((mc_boot_enter_handle(&a->boot, p_frame, busy, &r) == 1u) && (can != NULL) &&
+        (mc_hal_can_send(can, &r) != 0)) {
+        a->cmd.reply_dropped++;
+    }
+}
+
+static void boot_start(mc_app_t *a)
+{
+    uint32_t seed = 0u;
+    if ((a->cfg.boot == NULL) || (a->cfg.enter_boot == NULL)) {
+        return;
+    }
+    (void)mc_hal_tick_read(a->hal->tick, &seed);
+    mc_boot_enter_init(&a->boot, a->cfg.boot, a->cmd.cfg.node_id, a->tick_hz, seed);
+    mc_can_cmd_attach_boot(&a->cmd, boot_req, a);
+    a->boot_on = true;
+}
+
+/* A confirmed ENTER, one slow step after its OK was queued: bridge off,
+ * then the board resets into the bootloader. */
+static void boot_service(mc_app_t *a)
+{
+    if (!a->boot_on) {
+        return;
+    }
+    if (mc_boot_enter_due(&a->boot)) {
+        (void)mc_drive_set_mode(a->drive, MC_DRIVE_MODE_IDLE);
+        a->boot_entries++;
+        a->cfg.enter_boot(a->cfg.boot_ctx);
+        a->boot.due = false; /* only off the MCU does enter_boot return */
+    }
+    mc_boot_enter_step(&a->boot);
+}
+
 static bool speed_cfg_ok(const mc_app_speed_cfg_t *s)
 {
     return mc_isfinite_f32(s->kp_a_s_rad) && mc_isfinite_f32(s->ki_dt_a_s_rad) &&
@@ -512,6 +552,7 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
         app->srv.hook.apply = params_apply;
         app->srv.hook.ctx = app;
     }
+    boot_start(app);
     app->tm_src.drive = drive;
     app->tm_src.cmd = &app->cmd;
     app->tm_src.ext = NULL;
@@ -703,6 +744,7 @@ uint32_t mc_app_slow_work(mc_app_t *app)
     const uint32_t faults_before = app->drive->faults | app->drive->warnings;
     uint32_t n = 0u;
     mc_hal_can_frame_t f;
+    boot_service(app);
     /* commands, in reception order */
     while ((n < MC_APP_RX_PER_STEP) && mc_app_rx_ring_pop(&app->rx, &f)) {
         (void)mc_can_cmd_handle(&app->cmd, &f, can);

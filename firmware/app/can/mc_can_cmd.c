@@ -168,6 +168,28 @@ static bool comm_busy(const mc_can_cmd_t *c)
     return (c->comm_busy != NULL) && c->comm_busy(c->comm_ctx);
 }
 
+void mc_can_cmd_attach_boot(mc_can_cmd_t *c, mc_can_cmd_boot_fn fn, void *ctx)
+{
+    if (c == NULL) {
+        return;
+    }
+    c->boot_fn = fn;
+    c->boot_ctx = (fn != NULL) ? ctx : NULL;
+}
+
+static mc_can_err_t do_boot(mc_can_cmd_t *c, const mc_hal_can_t *can,
+                            const mc_hal_can_frame_t *p_frame)
+{
+    if (c->boot_fn == NULL) {
+        return MC_CAN_ERR_UNSUPPORTED;
+    }
+    if ((can != NULL) && !mc_tm_reply_lim_take(&c->reply)) {
+        return MC_CAN_ERR_LIMITED; /* its BOOT_REPLY could not go out: not served */
+    }
+    c->boot_fn(c->boot_ctx, p_frame, c->enabled || c->stopping || comm_busy(c), can);
+    return MC_CAN_ERR_NONE; /* answered, with its status, by BOOT_REPLY */
+}
+
 static mc_can_err_t do_commission(mc_can_cmd_t *c, const float *v)
 {
     const bool was_busy = comm_busy(c);
@@ -433,6 +455,8 @@ static mc_can_err_t dispatch(mc_can_cmd_t *c, uint32_t msg, const float *v)
         return do_host_heartbeat(c, (uint8_t)v[MC_CAN_HOST_HEARTBEAT_COUNTER]);
     case MC_CAN_MSG_COMMISSION_CMD:
         return do_commission(c, v);
+    case MC_CAN_MSG_BOOT_DATA:
+        return MC_CAN_ERR_MODE; /* the bootloader's: not while the application runs */
     default:
         return MC_CAN_ERR_UNKNOWN_CMD;
     }
@@ -489,6 +513,8 @@ mc_can_err_t mc_can_cmd_handle(mc_can_cmd_t *c, const mc_hal_can_frame_t *p_fram
     }
     if ((e == MC_CAN_ERR_NONE) && (msg == MC_CAN_MSG_PARAM_REQ)) {
         e = do_param(c, can, v, p_frame);
+    } else if ((e == MC_CAN_ERR_NONE) && (msg == MC_CAN_MSG_BOOT_REQ)) {
+        e = do_boot(c, can, p_frame);
     } else if (e == MC_CAN_ERR_NONE) {
         e = dispatch(c, msg, v);
     }

@@ -39,6 +39,11 @@
  *                     PARAM_REPLY with a status; needs
  *                     mc_can_cmd_attach_params (else UNSUPPORTED); served
  *                     only when its reply can go out (below)
+ *   BOOT_REQ          firmware update requests the application serves
+ *                     (INFO, VERSION, the confirmed ENTER; can/mc_boot_enter.h),
+ *                     each answered by its BOOT_REPLY; needs
+ *                     mc_can_cmd_attach_boot (else UNSUPPORTED). BOOT_DATA
+ *                     is the bootloader's: refused MODE
  *   COMMISSION_CMD    start / abort / report commissioning
  *                     (commission/mc_comm_can.h); needs
  *                     mc_can_cmd_attach_commission (else UNSUPPORTED);
@@ -55,8 +60,9 @@
  * the heartbeat. Frames for another node, extended frames and frames with
  * telemetry ids of other nodes are ignored silently.
  *
- * Replies: every reply (CMD_ERROR, PARAM_REPLY, and the commissioning
- * frames through mc_comm_can_step) takes a token of one limiter, `reply`
+ * Replies: every reply (CMD_ERROR, PARAM_REPLY, the application's
+ * BOOT_REPLY, and the commissioning frames through mc_comm_can_step)
+ * takes a token of one limiter, `reply`
  * (mc_telemetry.h: MC_TM_REPLY_BURST, MC_TM_REPLY_MAX_HZ; reserved in the
  * telemetry's bus budget). A CMD_ERROR without a token is not sent: the
  * rejection is counted (reply_limited) and still shown in the HEARTBEAT.
@@ -65,7 +71,9 @@
  * else); while a reply is held a further PARAM_REQ is not served at all
  * (LIMITED, counted, in the HEARTBEAT): a host that waits for each reply
  * is never refused, a flood costs the bus the limiter's share and the
- * drive nothing.
+ * drive nothing. A BOOT_REQ takes its token before it is served (no held
+ * slot: without one, LIMITED; the boot handler's own budget,
+ * mc_boot_proto.h, is the looser one).
  *
  * Receive filter: mc_can_cmd_poll() drops a frame of another node (or an
  * extended frame) after one comparison of its identifier, and such frames
@@ -181,6 +189,12 @@ typedef mc_can_err_t (*mc_can_cmd_comm_fn)(void *ctx, const float *v);
 typedef bool (*mc_can_cmd_busy_fn)(const void *ctx);
 typedef void (*mc_can_cmd_lost_fn)(void *ctx);
 
+/** Firmware update requests (BOOT_REQ): the frame, whether the drive must
+ *  not stop now (enabled, stopping, commissioning); the handler answers
+ *  on can itself (BOOT_REPLY). */
+typedef void (*mc_can_cmd_boot_fn)(void *ctx, const mc_hal_can_frame_t *p_frame, bool busy,
+                                   const mc_hal_can_t *can);
+
 typedef struct mc_can_cmd {
     mc_can_cmd_cfg_t cfg;
     mc_drive_t *drive;
@@ -224,6 +238,8 @@ typedef struct mc_can_cmd {
     mc_can_cmd_busy_fn comm_busy; /**< commissioning runs, or NULL */
     mc_can_cmd_lost_fn comm_lost; /**< abort it: the keep-alive stopped, or NULL */
     void *comm_ctx;
+    mc_can_cmd_boot_fn boot_fn; /**< BOOT_REQ, or NULL */
+    void *boot_ctx;
 } mc_can_cmd_t;
 
 /** Validate cfg and initialise c (disabled, control mode NONE). tm may be
@@ -245,6 +261,9 @@ void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv);
  *  keep-alive is needed; lost aborts the sequence when it stops. */
 void mc_can_cmd_attach_commission(mc_can_cmd_t *c, mc_can_cmd_comm_fn fn, mc_can_cmd_busy_fn busy,
                                   mc_can_cmd_lost_fn lost, void *ctx);
+
+/** Serve BOOT_REQ with fn (NULL: detach; the request is then UNSUPPORTED). */
+void mc_can_cmd_attach_boot(mc_can_cmd_t *c, mc_can_cmd_boot_fn fn, void *ctx);
 
 /**
  * Handle one received frame; on rejection queue a CMD_ERROR reply on can

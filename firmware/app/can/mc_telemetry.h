@@ -47,7 +47,8 @@
  * and other nodes keep at least 30 % of the bus.
  *
  * Replies: every frame the drive sends in answer to a host (CMD_ERROR,
- * PARAM_REPLY, COMMISSION_STATUS, COMMISSION_RESULT) takes a token of one
+ * PARAM_REPLY, COMMISSION_STATUS, COMMISSION_RESULT, the application's
+ * BOOT_REPLY) takes a token of one
  * limiter (mc_tm_reply_lim_t, the command handler's): a bucket of
  * MC_TM_REPLY_BURST tokens refilled at MC_TM_REPLY_MAX_HZ. In any window
  * of T seconds at most MC_TM_REPLY_BURST + MC_TM_REPLY_MAX_HZ * T + 1

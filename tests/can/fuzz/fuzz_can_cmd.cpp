@@ -175,7 +175,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       const mc_can_err_t e = mc_can_cmd_handle(&c, &f, &fake.can_dev);
       require(e == MC_CAN_ERR_NONE || e == MC_CAN_ERR_IGNORED ||
               (e >= MC_CAN_ERR_UNKNOWN_CMD && e <= MC_CAN_ERR_LIMITED));
-      require(e != MC_CAN_ERR_LIMITED || held_before);
+      require(e != MC_CAN_ERR_LIMITED || held_before || mc_can_id_cmd(f.id) == MC_CAN_CMD_BOOT_REQ);
       // only a fresh HOST_HEARTBEAT or the start of a run is a keep-alive
       if (c.ticks_since_alive != alive_before) {
         require(c.ticks_since_alive == 0u && e == MC_CAN_ERR_NONE &&

@@ -90,6 +90,7 @@ hal_host::PilLinkOptions link_options() {
   hal_host::PilLinkOptions l;
   l.qemu = MC_QEMU_ARM;
   l.elf = MC_PIL_ELF;
+  l.boot_elf = MC_BOOT_PIL_ELF;  // the image starts through the bootloader
   l.semihost_log = work_dir() + "/pil_semihost.log";
   // Lock-step: the target answers every frame; this only bounds how long a
   // crashed target is waited for on a loaded machine.

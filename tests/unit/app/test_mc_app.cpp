@@ -351,7 +351,7 @@ TEST_F(McApp, AFloodOfRequestsCostsTheBusAtMostTheRepliesShare)
     const uint32_t node = defaults.can_node_id;
     const mc_hal_can_frame_t read =
         Frame(node << 5 | 0x18u, {0, MC_PARAM_ID_R_OHM, 0, 0, 0, 0, 0, 0});
-    const mc_hal_can_frame_t bad = Frame(node << 5 | 0x1Bu, {});
+    const mc_hal_can_frame_t bad = Frame(node << 5 | 0x0Du, {});
     constexpr uint32_t kSeconds = 10u, kPerStep = 10u;
     const uint32_t steps_per_s = app.tick_hz;
     uint32_t replies = 0u, replies_max_1s = 0u, hb = 0u, cur = 0u, answered = 0u;

@@ -8,7 +8,8 @@
 
 CAN (mdtool/can; every command: --interface/--channel/--bitrate, --node):
     mdtool scan | status | config ... | run MODE SETPOINT | monitor SIG... |
-           record OUT | decode LOG --out DIR | stats LOG | convert SRC DST
+           record OUT | decode LOG --out DIR | stats LOG | convert SRC DST |
+           flash IMAGE [-n NODE ...]
 
 Exit codes: 0 ok, 2 usage error (a malformed campaign file: "FILE:LINE:
 reason"; CAN: also a value refused here before sending), 1 failure, 3

@@ -301,6 +301,28 @@ def cmd_calibrate(a):
     return 0
 
 
+# ----------------------------------------------------------------- flash
+def cmd_flash(a):
+    from . import image
+    from .flash import Flasher, parse_nodes, read_image
+    from .record import open_bus
+    nodes = parse_nodes(a.node)
+    if not (0 < a.timeout <= 60 and 0 <= a.retries <= 20 and 0 < a.wait <= 600):
+        raise UsageError("--timeout 0..60 s, --retries 0..20, --wait 0..600 s")
+    data, hdr = read_image(a.image)  # checked before the bus is touched
+    print(f"{a.image}: {image.describe(hdr)}")
+    db = _db(a)
+    bus = open_bus(a.interface, a.channel, a.bitrate)
+    try:
+        for n in nodes:
+            Flasher(bus, db, n, a.timeout, a.retries,
+                    progress=None if a.quiet else (lambda s: print(s, flush=True))).flash(data, hdr, a.wait)
+            print(f"node {n}: updated to {image.version_text(hdr['app_version'])}")
+    finally:
+        bus.shutdown()
+    return 0
+
+
 # --------------------------------------------------------------- monitor
 def cmd_monitor(a):
     from .monitor import monitor
@@ -346,6 +368,20 @@ def add_parsers(sub):
     p.add_argument("--verbose", "-v", action="store_true")
     _bus_args(p)
     p.set_defaults(fn=cmd_run)
+
+    p = sub.add_parser("flash", help="an application image into drives over CAN, through their "
+                       "bootloader: checked, written, verified, started (firmware/boot/README.md)")
+    p.add_argument("image", help="a sealed application image (.bin of the build, e.g. "
+                   "build/stm32f405-vesc6/firmware/targets/stm32f405/mc_stm32f405.bin)")
+    p.add_argument("--node", "-n", action="append", metavar="N[,N...]",
+                   help="node id(s), flashed in turn (repeat or separate by commas; default 1)")
+    p.add_argument("--timeout", type=float, default=1.0, help="reply timeout [s] (default 1)")
+    p.add_argument("--retries", type=int, default=3, help="resends of a refused or unanswered block")
+    p.add_argument("--wait", type=float, default=10.0,
+                   help="longest wait for the bootloader, and for the new image to answer [s]")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
+    _bus_args(p, with_node=False)
+    p.set_defaults(fn=cmd_flash)
 
     p = sub.add_parser("monitor", help="live plot of chosen signals (matplotlib)")
     p.add_argument("signals", nargs="+", help="MESSAGE.signal, e.g. SPEED.omega_m_rad_s CURRENTS.i_q_a")
