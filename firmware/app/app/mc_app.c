@@ -136,6 +136,7 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
             app->boot_status = (uint8_t)b;
         }
     }
+    app->status_sent_cfg = app->boot_status;
     return err;
 }
 
@@ -699,14 +700,16 @@ static void status_send(mc_app_t *a)
     mc_hal_can_frame_t f;
     const uint32_t state = (uint32_t)a->can_status.state & 0x3u;
     const uint32_t key = (a->faults << 2u) | state;
-    if (key != a->status_sent_key) {
+    /* the store's status as the heartbeat says it (a SAVE changes it) */
+    const uint8_t cfg = (a->cmd.params != NULL) ? a->cmd.params->store_status : a->boot_status;
+    if ((key != a->status_sent_key) || (cfg != a->status_sent_cfg)) {
         a->status_pending = true;
     }
     if (!a->status_pending || (a->can == NULL)) {
         return;
     }
     v[MC_CAN_APP_STATUS_RESET_CAUSE] = (float)(a->reset_cause & 0x7Fu);
-    v[MC_CAN_APP_STATUS_CFG_STATUS] = (float)a->boot_status;
+    v[MC_CAN_APP_STATUS_CFG_STATUS] = (float)cfg;
     v[MC_CAN_APP_STATUS_CAN_STATE] = (float)state;
     v[MC_CAN_APP_STATUS_APP_FAULTS] = (float)(a->faults & 0xFu);
     v[MC_CAN_APP_STATUS_TX_ERR_COUNT] = sat_f(a->can_status.tx_err_count, 255u);
@@ -720,6 +723,7 @@ static void status_send(mc_app_t *a)
         a->status_frames++;
         a->status_pending = false;
         a->status_sent_key = key;
+        a->status_sent_cfg = cfg;
     }
 }
 

@@ -235,9 +235,11 @@ typedef struct {
     uint32_t hw_rx_overruns; /**< controller FIFO overruns (HAL status) */
     uint32_t tm_sent;        /**< frames mask of the last telemetry step */
     /* APP_STATUS (cmd 0x0E): at boot when a reset cause is known, and at each
-     * change of the CAN state or of the application faults; retried at the
-     * next slow steps while the HAL refuses it (bus-off) */
+     * change of the CAN state, of the application faults or of the store's
+     * status (a SAVE); retried at the next slow steps while the HAL refuses
+     * it (bus-off) */
     uint32_t status_sent_key; /**< (faults, can_state) of the last one queued */
+    uint8_t status_sent_cfg;  /**< cfg_status of the last one queued (boot: the boot status) */
     uint32_t status_frames;   /**< APP_STATUS frames queued */
     /* speed loop */
     float speed_ref_rad_s;

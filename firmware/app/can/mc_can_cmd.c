@@ -139,7 +139,7 @@ void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv)
         srv->hook.apply = params_apply;
         srv->hook.ctx = c;
         srv->tick_hz = c->cfg.tick_hz; /* mc_can_cmd_step ticks it */
-        c->cfg_status = srv->boot_status;
+        c->cfg_status = srv->store_status;
     }
 }
 
@@ -240,6 +240,7 @@ static mc_can_err_t do_param(mc_can_cmd_t *c, const mc_hal_can_t *can, const flo
         value |= (uint32_t)p_frame->data[4u + i] << (8u * i);
     }
     st = mc_param_srv_request(c->params, op, id, &value);
+    c->cfg_status = c->params->store_status; /* a SAVE changes it */
     if (can == NULL) {
         return MC_CAN_ERR_NONE;
     }

@@ -231,9 +231,10 @@ typedef struct mc_can_cmd {
     mc_param_srv_t *params;       /**< parameter service, or NULL */
     uint8_t can_state;            /**< HEARTBEAT.can_state (mc_hal_can_bus_state_t): set by
                                  the application from the controller's status */
-    uint8_t cfg_status;           /**< HEARTBEAT.cfg_status: the boot status of the
-                                       parameter store (EMPTY without one: the
-                                       configuration is not from flash) */
+    uint8_t cfg_status;           /**< HEARTBEAT.cfg_status: the parameter store's
+                                       status (mc_param_srv_t.store_status: the boot
+                                       status, STORED after a SAVE); EMPTY without a
+                                       service (the configuration is not from flash) */
     mc_can_cmd_comm_fn comm_fn;   /**< COMMISSION_CMD, or NULL */
     mc_can_cmd_busy_fn comm_busy; /**< commissioning runs, or NULL */
     mc_can_cmd_lost_fn comm_lost; /**< abort it: the keep-alive stopped, or NULL */

@@ -25,6 +25,7 @@ int mc_param_srv_init(mc_param_srv_t *s, const mc_params_t *p, mc_drive_t *drive
     s->hal = hal;
     s->store = store;
     s->boot_status = boot_status;
+    s->store_status = boot_status;
     s->save_tokens = MC_PARAM_SAVE_BURST;
     return 0;
 }
@@ -67,7 +68,7 @@ static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
     case MC_PARAM_ID_CFG_LAYOUT_VERSION:
         return MC_PARAMS_LAYOUT_VERSION;
     case MC_PARAM_ID_CFG_STORE_STATUS:
-        return s->boot_status;
+        return s->store_status;
     case MC_PARAM_ID_CFG_STORE_SEQ:
         return (s->store != NULL) ? s->store->seq : 0u;
     case MC_PARAM_ID_CFG_PENDING:
@@ -138,7 +139,8 @@ static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
         return MC_PARAM_ERR_STORE;
     }
     if (mc_cfg_store_holds(s->store, &s->active)) {
-        s->saves_skipped++;
+        s->saves_skipped++; /* the newest record is the applied set */
+        s->store_status = (uint8_t)MC_CFG_BOOT_STORED;
         *p_value = s->store->seq;
         return MC_PARAM_OK;
     }
@@ -151,8 +153,10 @@ static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
     }
     s->save_tokens--; /* an attempt may have erased: it counts */
     if (mc_cfg_store_save(s->store, &s->active) != 0) {
+        s->store_status = (uint8_t)MC_CFG_BOOT_FLASH;
         return MC_PARAM_ERR_STORE;
     }
+    s->store_status = (uint8_t)MC_CFG_BOOT_STORED;
     *p_value = s->store->seq;
     return MC_PARAM_OK;
 }
