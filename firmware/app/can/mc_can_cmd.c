@@ -186,7 +186,11 @@ static mc_can_err_t do_boot(mc_can_cmd_t *c, const mc_hal_can_t *can,
     if ((can != NULL) && !mc_tm_reply_lim_take(&c->reply)) {
         return MC_CAN_ERR_LIMITED; /* its BOOT_REPLY could not go out: not served */
     }
-    c->boot_fn(c->boot_ctx, p_frame, c->enabled || c->stopping || comm_busy(c), can);
+    /* a reset refills the SAVE bucket: not before it is full again */
+    c->boot_fn(c->boot_ctx, p_frame,
+               c->enabled || c->stopping || comm_busy(c) ||
+                   !mc_param_srv_save_budget_full(c->params),
+               can);
     return MC_CAN_ERR_NONE; /* answered, with its status, by BOOT_REPLY */
 }
 

@@ -190,7 +190,8 @@ typedef bool (*mc_can_cmd_busy_fn)(const void *ctx);
 typedef void (*mc_can_cmd_lost_fn)(void *ctx);
 
 /** Firmware update requests (BOOT_REQ): the frame, whether the drive must
- *  not stop now (enabled, stopping, commissioning); the handler answers
+ *  not reset now (enabled, stopping, commissioning, or the SAVE bucket not
+ *  full: mc_param_srv_save_budget_full); the handler answers
  *  on can itself (BOOT_REPLY). */
 typedef void (*mc_can_cmd_boot_fn)(void *ctx, const mc_hal_can_frame_t *p_frame, bool busy,
                                    const mc_hal_can_t *can);

@@ -283,3 +283,8 @@ mc_param_status_t mc_param_srv_request(mc_param_srv_t *s, uint32_t op, uint32_t 
         return MC_PARAM_OK;
     }
 }
+
+bool mc_param_srv_save_budget_full(const mc_param_srv_t *s)
+{
+    return (s == NULL) || (s->save_tokens >= MC_PARAM_SAVE_BURST);
+}

@@ -41,7 +41,10 @@
  * firmware/app/config/README.md (measured by test_mc_app, McAppGuards,
  * which requires the F405's 10 000 cycles to last at least 10 years of
  * it: a parameter table grown past about 120 stored parameters needs a
- * longer MC_PARAM_SAVE_PERIOD_S). The time base is mc_param_srv_tick (the CAN
+ * longer MC_PARAM_SAVE_PERIOD_S). A reset refills the bucket: the one
+ * reset a CAN node can cause, into the bootloader (BOOT_REQ ENTER), is
+ * refused BUSY until the bucket is full again (mc_param_srv_save_budget_full),
+ * so resets add no SAVE to that bound. The time base is mc_param_srv_tick (the CAN
  * handler's step): without it the bucket does not refill and the CONFIRM
  * window does not close.
  *
@@ -137,6 +140,11 @@ mc_param_status_t mc_param_srv_request(mc_param_srv_t *s, uint32_t op, uint32_t 
 /** The time base, called at tick_hz (> 0): the SAVE bucket's refill and
  *  the CONFIRM window. */
 void mc_param_srv_tick(mc_param_srv_t *s, uint32_t tick_hz);
+
+/** The SAVE bucket is full (or there is no service): a reset now gives the
+ *  next boot no SAVE the limiter had not already allowed. The application
+ *  refuses to reset into the bootloader otherwise (BOOT_REQ ENTER BUSY). */
+bool mc_param_srv_save_budget_full(const mc_param_srv_t *s);
 
 #ifdef __cplusplus
 }

@@ -478,6 +478,48 @@ TEST_F(ParamCan, SaveSkipsAnUnchangedSetAndIsRateLimited)
     EXPECT_EQ(i_max, p.i_max_a);
 }
 
+// The bucket refilled at a reset, and a CAN node can reset the drive: ENTER
+// the bootloader, then its RUN. 4 SAVEs, a reset, 4 more, ... would have
+// written as fast as the bootloader cycles. The application's side of the
+// update now sees "busy" (ENTER refused BUSY) until the bucket is full
+// again, so a reset gives no SAVE the limiter had not allowed. Exact: the
+// refill is counted in the 1 kHz supervision steps.
+TEST_F(ParamCan, NoResetIntoTheBootloaderBeforeTheSaveBucketIsFull)
+{
+    struct Seen {
+        int calls = 0;
+        bool busy = false;
+    } seen;
+    mc_can_cmd_attach_boot(
+        &c,
+        [](void *ctx, const mc_hal_can_frame_t *, bool busy, const mc_hal_can_t *) {
+            auto *k = static_cast<Seen *>(ctx);
+            k->calls++;
+            k->busy = busy;
+        },
+        &seen);
+    mc_hal_can_frame_t enter{};
+    enter.id = mc_can_id(c.cfg.node_id, MC_CAN_CMD_BOOT_REQ);
+    enter.len = 8;
+    auto boot_busy = [&]() {
+        c.reply.tokens = MC_TM_REPLY_BURST;
+        EXPECT_EQ(MC_CAN_ERR_NONE, mc_can_cmd_handle(&c, &enter, fake.board.can));
+        return seen.busy;
+    };
+    top_up = true;
+    EXPECT_FALSE(boot_busy()) << "a full bucket (boot): the update may reset";
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status) << "unchanged: no token";
+    EXPECT_TRUE(boot_busy()) << "one token spent";
+    for (uint32_t k = 0; k + 1u < MC_PARAM_SAVE_PERIOD_S * 1000u; ++k) {
+        mc_can_cmd_step(&c);
+    }
+    EXPECT_TRUE(boot_busy()) << "1 ms before the refill";
+    mc_can_cmd_step(&c);
+    EXPECT_FALSE(boot_busy()) << "full again";
+    EXPECT_EQ(4, seen.calls);
+}
+
 TEST_F(ParamCan, HeartbeatReportsTheStoreAfterASave)
 {
     // the heartbeat said the boot status (EMPTY) after a SAVE until the
