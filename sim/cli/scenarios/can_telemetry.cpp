@@ -8,7 +8,9 @@
 //   MCSIM_CAN_IF=vcan0     a SocketCAN interface (hal_host::SocketCan):
 //                          telemetry out, commands in (cansend, mc_can.py);
 //   otherwise              the candump log MCSIM_CAN_LOG (default
-//                          ./can-telemetry.candump.log), time-stamped with
+//                          DIR/can-telemetry.candump.log, DIR the run's
+//                          --out; in memory, mdtool.sil, MCSIM_CAN_LOG must
+//                          be set), time-stamped with
 //                          the simulated time, and commands from the
 //                          candump-format script MCSIM_CAN_CMDS if set.
 // The motor and board: the paper-002 test motor on FocSil's 200 V board
@@ -77,6 +79,7 @@
 #include "hal_host/file_flash.hpp"
 #include "hal_host/socketcan.hpp"
 #include "scenario.hpp"
+#include "verdict.hpp"
 extern "C" {
 #include "commission/mc_comm_can.h"
 #include "mc_app.h"
@@ -112,6 +115,17 @@ const std::vector<std::vector<std::string>> kSlotSignals = {
 std::string env_or(const char* name, const std::string& fallback) {
   const char* v = std::getenv(name);
   return (v != nullptr && *v != '\0') ? std::string(v) : fallback;
+}
+
+// The candump log: MCSIM_CAN_LOG, else can-telemetry.candump.log in the
+// run's output directory (never the current directory).
+std::string can_log_path(const RunContext& ctx) {
+  const std::string log = env_or("MCSIM_CAN_LOG", "");
+  if (!log.empty()) return log;
+  if (ctx.out_dir.empty()) {
+    throw UsageError("can-telemetry in memory has no output directory: set MCSIM_CAN_LOG=FILE");
+  }
+  return ctx.out_dir + "/can-telemetry.candump.log";
 }
 
 const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
@@ -330,7 +344,7 @@ void run_can_telemetry(RunContext& ctx) {
     }
     can = sock->hal();
   } else {
-    const std::string log = env_or("MCSIM_CAN_LOG", "can-telemetry.candump.log");
+    const std::string log = can_log_path(ctx);
     try {
       logcan = std::make_unique<hal_host::CandumpLogCan>(
           log, env_or("MCSIM_CAN_LOG_IFACE", "can0"), [&board]() { return board.t_s(); },
@@ -437,7 +451,7 @@ void run_can_telemetry(RunContext& ctx) {
   bool was_enabled = false;
   double t_end_early = -1.0;
   const double T = board.period_s();
-  const long n = std::lround(ctx.duration_s / T);
+  const long n = step_count(ctx.duration_s, T);
   const auto wall0 = std::chrono::steady_clock::now();
   uint64_t frames = 0, slow_steps = 0;
   uint32_t rx_read_max = 0;  // frames taken from the HAL by one receive call
@@ -511,6 +525,7 @@ void run_can_telemetry(RunContext& ctx) {
   ctx.summary.set("final_enabled", cmd.enabled ? 1.0 : 0.0);
   ctx.summary.set("final_stop_reason", cmd.stop_reason);
   ctx.summary.set("final_faults", d.faults);
+  ctx.summary.set_text("final_fault_names", drive_fault_names(d.faults));
   // The laws (firmware/app/config/mc_law_cfg.h): which one SPEED ran, and
   // why one is not available (the law_error parameter).
   ctx.summary.set("speed_law", app.laws.speed_law);
@@ -545,10 +560,16 @@ void run_can_telemetry(RunContext& ctx) {
     ctx.summary.set("socketcan_rx_error_frames", static_cast<double>(s.rx_error_frames));
     ctx.summary.set("socketcan_rx_dropped", s.rx_dropped);
   } else {
-    ctx.summary.set_text("can_log", env_or("MCSIM_CAN_LOG", "can-telemetry.candump.log"));
+    ctx.summary.set_text("can_log", can_log_path(ctx));
     ctx.summary.set("can_log_frames", static_cast<double>(logcan->stats().tx_frames));
     ctx.summary.set("can_script_frames", static_cast<double>(logcan->stats().rx_frames));
   }
+  CanTelemetryFigures fig;
+  fig.tm_frames_dropped = tm.tx_dropped;
+  fig.rx_overflows = app.rx_overflows;
+  fig.flash_persist_errors = ctx.flash != nullptr ? ctx.flash->persist_errors() : 0.0;
+  fig.final_faults = d.faults;
+  write_verdict(ctx.summary, judge_can_telemetry(fig));
 }
 
 // The CAN side's parameters, the same for every motor.
