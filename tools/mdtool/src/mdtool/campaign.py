@@ -358,8 +358,10 @@ def load(path: str) -> Campaign:
 
     motor, board = file_key("motor"), file_key("board")
     dur = c.get("duration_s")
-    if dur is not None and not (_number(dur) and dur > 0):
-        raise err("campaign", "duration_s", "duration_s must be a positive number")
+    if dur is not None and not (_number(dur) and 0 < dur <= sil.MAX_DURATION_S):
+        raise err("campaign", "duration_s",
+                  f"duration_s must be a number in (0, {sil.MAX_DURATION_S:g}] s (one simulated "
+                  "hour: the longest run mcsim takes)")
     seed = c.get("seed", 1)
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise err("campaign", "seed", "seed must be a non-negative integer")
@@ -377,6 +379,10 @@ def load(path: str) -> Campaign:
     scen = {s["name"]: s for s in sil.scenarios()}
     if c["scenario"] not in scen:
         raise err("campaign", "scenario", f"unknown scenario '{c['scenario']}' (see 'mcsim list')")
+    if dur is not None and not scen[c["scenario"]]["takes_duration"]:
+        raise err("campaign", "duration_s",
+                  f"scenario '{c['scenario']}' takes no duration_s: its length is set by what it "
+                  "does")
     try:
         specs = {p["key"]: p for p in sil.params(c["scenario"], motor, board)}
     except sil.UsageError as e:
@@ -582,10 +588,15 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
             summary, kind, error = r.summary, r.error_kind, r.error
         except sil.UsageError as e:
             summary, kind, error = {}, "usage", str(e)
-    crit = {name: Criterion(name, text)(summary) if kind is None else False
+    # kind "verdict": the run ended and judged itself not a pass (mcsim exit
+    # 1); its summary is whole, so the criteria are evaluated on it too.
+    ran = kind in (None, "verdict")
+    crit = {name: Criterion(name, text)(summary) if ran else False
             for name, text in spec.criteria}
-    row["status"] = ("refused" if kind == "usage" else "fault" if kind == "failed"
-                     else "pass" if all(crit.values()) else "fail")
+    verdict = summary.get("verdict", "")
+    faulted = kind == "failed" or (kind == "verdict" and verdict.startswith("faulted"))
+    row["status"] = ("refused" if kind == "usage" else "fault" if faulted
+                     else "pass" if kind is None and all(crit.values()) else "fail")
     row["error"] = error
     row["pass"] = row["status"] == "pass"
     for name, ok in crit.items():
