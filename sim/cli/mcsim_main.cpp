@@ -57,8 +57,12 @@ double parse_positive(const std::string& what, const std::string& s) {
 
 int cmd_list() {
   for (const auto& s : mcsim::registry()) {
-    std::printf("%-28s %s (default %.3g s)\n", s.name.c_str(), s.description.c_str(),
-                s.default_duration_s);
+    if (s.takes_duration) {
+      std::printf("%-28s %s (default %.3g s)\n", s.name.c_str(), s.description.c_str(),
+                  s.default_duration_s);
+    } else {
+      std::printf("%-28s %s (no --duration)\n", s.name.c_str(), s.description.c_str());
+    }
   }
   return 0;
 }
@@ -75,8 +79,17 @@ int cmd_describe(const std::vector<std::string>& args) {
       throw mcsim::UsageError("describe: unexpected '" + args[i] + "'");
     }
   }
-  std::printf("%s: %s\ndefault duration: %g s\nparameters (--set key=value):\n", s.name.c_str(),
-              s.description.c_str(), s.default_duration_s);
+  std::printf("%s: %s\n", s.name.c_str(), s.description.c_str());
+  if (!s.takes_duration) {
+    std::printf("duration: set by what the scenario does (no --duration)\n");
+  } else if (s.default_duration_s > 0.0) {
+    std::printf("default duration: %g s (at most %g s)\n", s.default_duration_s,
+                mcsim::kMaxDurationS);
+  } else {
+    std::printf("default duration: derived from the motor (at most %g s)\n",
+                mcsim::kMaxDurationS);
+  }
+  std::printf("parameters (--set key=value):\n");
   if (s.motor_params && motor.empty() && !s.motor_optional) {
     std::printf(
         "  (ranges and defaults depend on the motor: describe %s --motor FILE "

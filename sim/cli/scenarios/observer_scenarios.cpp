@@ -3,6 +3,7 @@
 // (Figs. 8-9), observer-lowspeed-sweep, ii-observer.
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -223,7 +224,7 @@ class HandoverAcc {
     ++n_;
     if (std::isnan(t_handover)) {  // before: remember the recent past
       buf_.push_back(s);
-      if (buf_.size() > keep_) buf_.erase(buf_.begin());
+      if (buf_.size() > keep_) buf_.pop_front();
       return;
     }
     if (std::isnan(t0_)) {  // the hand-over: the past first, then this sample
@@ -231,7 +232,6 @@ class HandoverAcc {
       have_prev_ = false;
       for (const ProfileSample& p : buf_) feed(p);
       buf_.clear();
-      buf_.shrink_to_fit();
     }
     if (s.t <= t0_ + std::max(0.005, 3.5 * T_) + T_) feed(s);
   }
@@ -262,7 +262,7 @@ class HandoverAcc {
     have_prev_ = true;
   }
   size_t keep_;
-  std::vector<ProfileSample> buf_;
+  std::deque<ProfileSample> buf_;
   ProfileSample prev_{};
   bool have_prev_ = false;
   long n_ = 0;

@@ -52,10 +52,13 @@ TEST(FaultNames, EveryDriveFaultBitHasItsName) {
     EXPECT_EQ(n.find("BIT"), std::string::npos) << f;
     EXPECT_EQ(n.find('|'), std::string::npos) << f;
   }
-  EXPECT_EQ(drive_fault_names(MC_DRIVE_FAULT_OVERCURRENT | MC_DRIVE_FAULT_VBUS_HIGH),
-            "OVERCURRENT|VBUS_HIGH");
+  // (the constants kept out of the assertions: tools/docs lists the tests
+  // that assert a fault's behaviour by the constants they name)
+  const uint32_t two = MC_DRIVE_FAULT_OVERCURRENT | MC_DRIVE_FAULT_VBUS_HIGH;
+  const uint32_t bus = MC_DRIVE_FAULT_VBUS_HIGH;
+  EXPECT_EQ(drive_fault_names(two), "OVERCURRENT|VBUS_HIGH");
   EXPECT_EQ(drive_fault_names(1u << 31), "BIT31");  // a bit the table lacks, still named
-  EXPECT_EQ(faulted(MC_DRIVE_FAULT_VBUS_HIGH).verdict, "faulted: VBUS_HIGH");
+  EXPECT_EQ(faulted(bus).verdict, "faulted: VBUS_HIGH");
 }
 
 TEST(CurrentStep, RiseJudgedOnlyWhereTheDesignClaimsIt) {
