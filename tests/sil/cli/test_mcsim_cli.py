@@ -241,6 +241,25 @@ class RunOutputs(unittest.TestCase):
             self.assertEqual(json.load(f)["can_log"], log)
 
 
+    def test_can_telemetry_judges_its_job(self):
+        # 100 of the node's own frames at one instant: the receive ring holds
+        # 32 and the slow step takes 16; the rest are lost: "commands lost".
+        script = os.path.join(self.out, "burst.log")
+        with open(script, "w") as f:
+            f.write("(000.100000) can0 03F#\n" * 100)
+        out = os.path.join(self.out, "run")
+        p = subprocess.run([ARGS.mcsim, "run", "can-telemetry", "--out", out, "--duration", "0.2"],
+                           capture_output=True, text=True, timeout=300,
+                           env=dict(os.environ, MCSIM_CAN_CMDS=script,
+                                    MCSIM_CAN_LOG=os.path.join(self.out, "can.log")))
+        self.assertEqual(p.returncode, 1, p.stderr)
+        with open(os.path.join(out, "can-telemetry.json")) as f:
+            s = json.load(f)
+        self.assertEqual(s["verdict"], "commands lost")
+        self.assertGreater(s["app_rx_overflows"], 0)
+        self.assertTrue(os.path.exists(os.path.join(out, "can-telemetry.partial.csv")))
+
+
 class Verdicts(unittest.TestCase):
     """Every scenario writes a verdict; mcsim exits 1 when it is not a pass
     (or "none": no claim), with the partial trajectory and the summary."""
@@ -337,4 +356,5 @@ if __name__ == "__main__":
     ap.add_argument("--mcsim", required=True)
     ap.add_argument("--plot", required=True)
     ARGS, rest = ap.parse_known_args()
+    ARGS.mcsim = os.path.abspath(ARGS.mcsim)  # some tests run mcsim in another directory
     unittest.main(argv=[sys.argv[0], "-v", *rest])
