@@ -86,8 +86,7 @@ int cmd_describe(const std::vector<std::string>& args) {
     std::printf("default duration: %g s (at most %g s)\n", s.default_duration_s,
                 mcsim::kMaxDurationS);
   } else {
-    std::printf("default duration: derived from the motor (at most %g s)\n",
-                mcsim::kMaxDurationS);
+    std::printf("default duration: derived from the motor (at most %g s)\n", mcsim::kMaxDurationS);
   }
   std::printf("parameters (--set key=value):\n");
   if (s.motor_params && motor.empty() && !s.motor_optional) {

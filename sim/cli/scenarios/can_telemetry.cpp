@@ -120,7 +120,7 @@ std::string env_or(const char* name, const std::string& fallback) {
 // The candump log: MCSIM_CAN_LOG, else can-telemetry.candump.log in the
 // run's output directory (never the current directory).
 std::string can_log_path(const RunContext& ctx) {
-  const std::string log = env_or("MCSIM_CAN_LOG", "");
+  std::string log = env_or("MCSIM_CAN_LOG", "");
   if (!log.empty()) return log;
   if (ctx.out_dir.empty()) {
     throw UsageError("can-telemetry in memory has no output directory: set MCSIM_CAN_LOG=FILE");
