@@ -102,6 +102,7 @@ RunOutcome execute_run(const PreparedRun& run, RowSink& sink, Summary& summary, 
     out.message = std::string("run failed: ") + e.what();
     summary.set_text("verdict", std::string("failed: ") + e.what());
     summary.set_text("verdict_detail", "the run stopped on its way");
+    summary.set("stopped", 1.0);
   }
   progress.done();
   summary.set("rows", static_cast<double>(sink.rows()));
@@ -112,6 +113,8 @@ RunOutcome execute_run(const PreparedRun& run, RowSink& sink, Summary& summary, 
   }
   if (v->second == "pass" || v->second == "none") return out;
   out.kind = RunOutcome::Kind::kFailed;
+  const auto st = summary.numbers().find("stopped");
+  out.stopped = st != summary.numbers().end() && st->second != 0.0;
   const auto d = summary.texts().find("verdict_detail");
   out.message = "run failed: " + v->second +
                 (d != summary.texts().end() && !d->second.empty() ? " (" + d->second + ")" : "");

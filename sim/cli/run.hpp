@@ -53,8 +53,9 @@ struct RunOutcome {
     kRefused,  ///< a setting refused inside the run (UsageError); exit 2
   };
   Kind kind = Kind::kPass;
-  /// kFailed: the run stopped on its way (an exception) rather than ran to
-  /// the end it chose and judged itself.
+  /// kFailed: the run stopped on its way (an exception, a drive fault, a
+  /// sequence that stopped: the summary's stopped = 1) rather than ran to
+  /// its end and judged itself.
   bool stopped = false;
   /// kFailed, kRefused: what mcsim prints after "mcsim: ".
   std::string message;

@@ -80,6 +80,7 @@ Verdict Judge::verdict() const {
 void write_verdict(Summary& s, const Verdict& v) {
   s.set_text("verdict", v.verdict);
   s.set_text("verdict_detail", v.detail);
+  s.set("stopped", v.stopped ? 1.0 : 0.0);
 }
 
 void write_no_claim(Summary& s, const std::string& why) {
@@ -121,7 +122,7 @@ std::string drive_fault_names(uint32_t faults) {
 
 Verdict faulted(uint32_t faults, const std::string& extra) {
   return Verdict{"faulted: " + drive_fault_names(faults),
-                 extra.empty() ? "the drive faulted and opened the bridge" : extra};
+                 extra.empty() ? "the drive faulted and opened the bridge" : extra, true};
 }
 
 // ------------------------------------------------------------ current-step
@@ -290,10 +291,12 @@ Verdict judge_regen_stop(const RegenFigures& f) {
 // 2 % of its target and the sensorless one within 5 %
 // (CommissionThenRun); a law that refuses the motor is not judged.
 Verdict judge_commission(const CommissionFigures& f) {
+  if (!f.done) {
+    return Verdict{"commissioning failed: " + f.error_names,
+                   "the sequence stopped with its error (MC_COMM_ERR_*) and opened the bridge",
+                   true};
+  }
   Judge j;
-  j.require("commissioning failed", f.done,
-            f.done ? "the sequence finished" : "the sequence stopped: " + f.error_names);
-  if (!f.done) return j.verdict();
   const std::string acc = "identification inaccurate";
   j.at_most(acc, "|R error|", std::abs(f.r_frac), 0.02);
   j.at_most(acc, "|Ld error|", std::abs(f.ld_frac), 0.05);

@@ -9,6 +9,9 @@
 //                   the scenario's judge lists them)
 //   verdict_detail  each check that failed (all of them for a pass) with its
 //                   figure and the bound it was held to
+//   stopped         1 when the run ended before its end: the drive faulted
+//                   (and opened the bridge), a sequence stopped with its
+//                   error, or the run threw; 0 when it ran to its end
 //
 // mcsim exits 1 when the verdict is neither "pass" nor "none" (run.hpp).
 // The judges take the figures a scenario computed (plain numbers) and hold
@@ -27,6 +30,7 @@ namespace mcsim {
 struct Verdict {
   std::string verdict;  ///< "pass", "none" or the failure's name
   std::string detail;
+  bool stopped = false;  ///< the run ended before its end (a fault, a sequence stopped)
   bool pass() const { return verdict == "pass" || verdict == "none"; }
 };
 
@@ -58,7 +62,7 @@ class Judge {
   std::vector<std::string> notes_;
 };
 
-/// Writes verdict and verdict_detail.
+/// Writes verdict, verdict_detail and stopped.
 void write_verdict(Summary& s, const Verdict& v);
 /// A scenario with no claim to check: verdict "none", the reason as detail.
 void write_no_claim(Summary& s, const std::string& why);
@@ -66,7 +70,7 @@ void write_no_claim(Summary& s, const std::string& why);
 /// The drive's fault bits (MC_DRIVE_FAULT_*) by name, "|"-separated, in bit
 /// order ("OVERCURRENT|VBUS_HIGH"); a bit without a name as "BIT<n>".
 std::string drive_fault_names(uint32_t faults);
-/// "faulted: <names>"; extra (e.g. the law's reason) in the detail.
+/// "faulted: <names>" (stopped); extra (e.g. the law's reason) in the detail.
 Verdict faulted(uint32_t faults, const std::string& extra = "");
 
 // ------------------------------------------------ scenarios for any motor

@@ -406,7 +406,7 @@ void run_sensorless(RunContext& ctx) {
     const bool no_lock = (d.faults & MC_DRIVE_FAULT_CONTROL) != 0u &&
                          (d.tm.ctrl_err & MC_CTRL_SLS_ERR_NO_LOCK) != 0u;
     return write_verdict(ctx.summary,
-                         no_lock ? Verdict{"not locked", why} : faulted(d.faults, why));
+                         no_lock ? Verdict{"not locked", why, true} : faulted(d.faults, why));
   }
   ctx.summary.set("locked", (tm.phase == MC_CTRL_SLS_CLOSED) ? 1.0 : 0.0);
   ctx.summary.set("angle_err_max_rad", ang_max);

@@ -245,15 +245,18 @@ class Verdicts(unittest.TestCase):
         s = self.failed("commission", "--set", "motor.b_nm_s_rad=0.01")
         self.assertEqual(s["verdict"], "identification inaccurate")
         self.assertIn("|flux error|", s["verdict_detail"])
-        # and a sequence that stops is named by its error
+        self.assertEqual(s["stopped"], 0)  # it ran to its end
+        # and a sequence that stops is named by its error (sensor noise of
+        # 2 A rms, 2.5 % of the 80 A range: the test current trips)
         s = self.failed("commission", "--set", "noise_rms_a=2")
-        self.assertEqual(s["verdict"], "commissioning failed")
-        self.assertIn("OVERCURRENT", s["verdict_detail"])
+        self.assertEqual(s["verdict"], "commissioning failed: OVERCURRENT")
+        self.assertEqual(s["stopped"], 1)
 
     def test_faults_are_named(self):
         s = self.failed("current-step", "--duration", "0.01", "--set", "iq_step_a=60",
                         "--set", "cur_bw_rad_s=1e5")
         self.assertEqual(s["verdict"], "faulted: OVERCURRENT")
+        self.assertEqual(s["stopped"], 1)
         # the IPM motor on a supply that cannot sink, no brake resistor: the
         # bus trips (by name, not "bits 16")
         s = self.failed("regen-stop", "--set", "brake=off",

@@ -125,6 +125,10 @@ void run_outcome(RunContext& ctx) {
       throw UsageError("refused inside");
     case 4:
       throw std::runtime_error("plant state diverged");
+    case 5: {
+      const uint32_t overspeed = MC_DRIVE_FAULT_OVERSPEED;
+      return write_verdict(ctx.summary, faulted(overspeed));
+    }
     default:
       return;  // no verdict: a programming error
   }
@@ -132,7 +136,7 @@ void run_outcome(RunContext& ctx) {
 const Registrar reg_outcome({"test-outcome",
                              "a test scenario",
                              1.0,
-                             {{"how", 0.0, "1", "how the run ends", 0.0, 5.0}},
+                             {{"how", 0.0, "1", "how the run ends", 0.0, 6.0}},
                              run_outcome});
 
 RunOutcome outcome(int how, Summary* s) {
@@ -144,7 +148,7 @@ RunOutcome outcome(int how, Summary* s) {
 
 TEST(Runner, EachWayARunEnds) {
   using K = RunOutcome::Kind;
-  Summary s0, s1, s2, s3, s4, s5;
+  Summary s0, s1, s2, s3, s4, s5, s6;
   EXPECT_EQ(outcome(0, &s0).kind, K::kPass);
   EXPECT_EQ(outcome(1, &s1).kind, K::kPass);
   EXPECT_EQ(s1.texts().at("verdict"), "none");
@@ -160,7 +164,12 @@ TEST(Runner, EachWayARunEnds) {
   EXPECT_TRUE(x.stopped);
   EXPECT_EQ(s4.texts().at("verdict"), "failed: plant state diverged");
   EXPECT_EQ(s4.numbers().at("rows"), 1.0);
-  EXPECT_THROW(outcome(5, &s5), std::logic_error);
+  const RunOutcome ft = outcome(5, &s5);  // a fault ends the run: stopped
+  EXPECT_EQ(ft.kind, K::kFailed);
+  EXPECT_TRUE(ft.stopped);
+  EXPECT_EQ(s5.numbers().at("stopped"), 1.0);
+  EXPECT_EQ(s2.numbers().at("stopped"), 0.0);
+  EXPECT_THROW(outcome(6, &s6), std::logic_error);
 }
 
 TEST(Runner, DurationsAreBounded) {

@@ -39,8 +39,9 @@ class CountingSink : public mcsim::ColumnSink {
 // a duration out of range) raise UsageError before anything runs; a run that
 // does not pass returns its summary (with its verdict) and trajectory with
 // mcsim's message and error_kind: "usage" (a setting refused inside the run:
-// mcsim's exit code 2), "failed" (the run stopped on its way: exit 1) or
-// "verdict" (it ran and its verdict is not a pass: exit 1).
+// mcsim's exit code 2), "failed" (the run stopped on its way: a drive fault,
+// a sequence that stopped, an error; exit 1) or "verdict" (it ran to its end
+// and its verdict is not a pass: exit 1).
 nb::dict run(const std::string& scenario, const std::string& motor, const std::string& board,
              const Sets& sets, double duration_s, bool trajectory) {
   mcsim::PreparedRun prepared = mcsim::prepare_run(scenario, motor, board, sets, "", duration_s);

@@ -588,14 +588,14 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
             summary, kind, error = r.summary, r.error_kind, r.error
         except sil.UsageError as e:
             summary, kind, error = {}, "usage", str(e)
-    # kind "verdict": the run ended and judged itself not a pass (mcsim exit
-    # 1); its summary is whole, so the criteria are evaluated on it too.
+    # kind "verdict": the run ran to its end and judged itself not a pass
+    # (mcsim exit 1): "fail", its summary whole, so the criteria are
+    # evaluated on it too. kind "failed": it stopped on its way (a drive
+    # fault, commissioning stopped with its error): "fault".
     ran = kind in (None, "verdict")
     crit = {name: Criterion(name, text)(summary) if ran else False
             for name, text in spec.criteria}
-    verdict = summary.get("verdict", "")
-    faulted = kind == "failed" or (kind == "verdict" and verdict.startswith("faulted"))
-    row["status"] = ("refused" if kind == "usage" else "fault" if faulted
+    row["status"] = ("refused" if kind == "usage" else "fault" if kind == "failed"
                      else "pass" if kind is None and all(crit.values()) else "fail")
     row["error"] = error
     row["pass"] = row["status"] == "pass"

@@ -64,8 +64,9 @@ class Result:
     data: np.ndarray  # (rows, columns), float64
     summary: dict[str, Any]
     error: str | None = None
-    # None (passed), "usage" (refused: exit 2), "failed" (stopped on its way)
-    # or "verdict" (ran, verdict not a pass); both of the last are exit 1
+    # None (passed), "usage" (refused: exit 2), "failed" (stopped on its way:
+    # a drive fault, a sequence that stopped, an error) or "verdict" (ran to
+    # its end, verdict not a pass); both of the last are exit 1
     error_kind: str | None = None
     objects: dict[str, dict[str, float]] = field(default_factory=dict)
 
