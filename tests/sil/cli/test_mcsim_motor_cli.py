@@ -17,6 +17,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import tomllib
 import unittest
 
 ARGS = None
@@ -83,6 +84,52 @@ class MotorCli(unittest.TestCase):
                 "iq_step_a=70", check=False)
         self.assertEqual(p.returncode, 2)
         self.assertIn("out of range", p.stderr)
+
+    def test_a_second_board_or_motor_table_is_refused(self):
+        # paper002-40kw.toml holds [motor] and [board]: with another --board
+        # its [board] would be ignored; as a --board file its [motor] would.
+        both, board = lib("paper002-40kw"), lib("odrive-v36-24v")
+        with open(both) as f:
+            line = {ln.strip(): i + 1 for i, ln in enumerate(f)
+                    if ln.strip() in ("[motor]", "[board]")}
+        self.assert_usage_error(
+            run("run", "current-step", "--out", self.out, "--motor", both, "--board", board,
+                check=False), [f"mcsim: {both}:{line['[board]']}: a [board] table here and --board"])
+        self.assert_usage_error(
+            run("run", "current-step", "--out", self.out, "--motor", lib("odrive-d5065"),
+                "--board", both, check=False),
+            [f"mcsim: {both}:{line['[motor]']}: a [motor] table in the --board file"])
+        # the same file named twice is one motor and one board
+        p = run("run", "current-step", "--out", self.out, "--motor", both, "--board", both,
+                "--duration", "0.002", check=False)
+        self.assertNotEqual(p.returncode, 2, p.stderr)
+
+    def test_no_safe_gains_names_the_value_s_file_and_line(self):
+        # The refusal leads with the value its remedy changes, in the board
+        # file (it named the motor file, without a line), and names the
+        # motor's values it weighed with their lines.
+        board, motor = lib("odrive-v36-24v"), lib("odrive-d5065")
+        at = {}
+        for path in (board, motor):
+            with open(path) as f:
+                for i, ln in enumerate(f):
+                    if "=" in ln and not ln.startswith("#"):
+                        at[ln.split("=")[0].strip()] = f"{path}:{i + 1}"
+        # R 0.2 ohm: L/R = 79 us, under two periods at 24 kHz (83 us)
+        p = run("run", "current-step", "--out", self.out, *d5065(), "--set", "motor.r_ohm=0.2",
+                check=False)
+        self.assert_usage_error(p, [f"mcsim: {at['pwm_hz']}: no safe gains: the electrical",
+                                    f"L at {at['ld_h']}", "r_ohm at --set motor.r_ohm=0.2"])
+        # 200 V at 24 kHz on 15.7 uH: 133 A of ripple above the 65 A limit
+        p = run("run", "current-step", "--out", self.out, *d5065(), "--set", "board.vbus_v=200",
+                check=False)
+        self.assert_usage_error(p, [f"mcsim: {at['pwm_hz']}: no safe gains: the PWM current ripple",
+                                    f"65 A at {at['i_max_a']}", "at --set board.vbus_v=200"])
+        # a 1 A sensor for a 65 A motor
+        p = run("run", "current-step", "--out", self.out, *d5065(), "--set",
+                "board.i_sense_max_a=1", check=False)
+        self.assert_usage_error(p, ["mcsim: --set board.i_sense_max_a=1: no safe gains: the usable",
+                                    f"65 A at {at['i_max_a']}"])
 
     def test_unknown_key_is_refused(self):
         self.assert_usage_error(
@@ -172,6 +219,37 @@ class FileOverrides(unittest.TestCase):
             for w in words:
                 self.assertIn(w, p.stderr)
             self.assertEqual(os.listdir(self.out), [], kv + ": a refused run must write nothing")
+
+    def test_file_ranges_are_the_firmware_table_s(self):
+        # Every motor/board key the drive's parameter table also holds is
+        # refused just outside the table's range (mcsim once took
+        # pole_pairs 100, pwm_hz 200 kHz, adc_bits 24, encoder_cpr 1-3) and
+        # the four that differed are taken at the table's bounds.
+        with open(ARGS.params, "rb") as f:
+            table = {p["name"]: p for p in tomllib.load(f)["param"]
+                     if p["group"] in ("motor", "board") and not p["name"].startswith("i_offset")}
+        self.assertEqual(len(table), 18, "the keys the files share with the table")
+        for name, p in sorted(table.items()):
+            grp = p["group"]
+            step = 1 if p["type"] == "u32" else None
+            bad = [p["max"] + 1 if step else p["max"] * 1.5]
+            if p["min"] > 0:
+                bad.append(p["min"] - 1 if step else p["min"] / 2)
+            for v in bad:
+                kv = f"{grp}.{name}={v!r}"
+                r = run("run", "current-step", "--out", self.out, *d5065(), "--duration", "0.002",
+                        "--set", kv, check=False)
+                self.assertEqual(r.returncode, 2, kv + ": " + r.stderr)
+                self.assertIn(f"--set {kv}: '{name}' = ", r.stderr)
+                self.assertIn("out of range", r.stderr)
+        for kv, scen in (("motor.pole_pairs=64", "current-step"),
+                         ("board.pwm_hz=60000", "current-step"),
+                         ("board.adc_bits=16", "current-step"),
+                         ("board.encoder_cpr=4", "current-step"),
+                         ("board.encoder_cpr=0", "sensorless-speed-step")):  # no encoder
+            r = run("run", scen, "--out", os.path.join(self.out, kv), *d5065(),
+                    "--duration", "0.002", "--set", kv, check=False)
+            self.assertNotEqual(r.returncode, 2, kv + ": " + r.stderr)
 
     def test_model_error_changes_the_run_default_is_bit_identical(self):
         # 0.01 s: both steps' start only (the verdict, target not reached,
@@ -270,6 +348,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--mcsim", required=True)
     ap.add_argument("--motors", required=True)
+    ap.add_argument("--params", required=True, help="tools/config/params.toml")
     ARGS, rest = ap.parse_known_args()
     unittest.main(argv=[sys.argv[0], *rest], verbosity=2)
 
