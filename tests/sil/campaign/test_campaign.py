@@ -258,13 +258,18 @@ class Verdicts(unittest.TestCase):
         self.assertIn("target not reached", set(fail["out.verdict"]))
         self.assertLessEqual(set(fail["out.verdict"]), {"target not reached", "not settled"})
         self.assertTrue(fail["pass.ran"].all())  # the criteria still hold: the verdict fails it
-        for e, v in zip(fail["error"], fail["out.verdict"], strict=True):
-            self.assertTrue(e.startswith(f"run failed: {v} ("), e)
+        # the error is the named reason (the report groups runs by it), its
+        # figures in verdict_detail
+        for e, v, d in zip(fail["error"], fail["out.verdict"], fail["verdict_detail"],
+                           strict=True):
+            self.assertEqual(e, f"run failed: {v}")
+            self.assertIn(" FAILED", d)  # each failed check with its figure and bound
         # a drive fault is a fault, by name
         fault = df[df["status"] == "fault"]
         self.assertGreater(len(fault), 0)
-        for v in fault["out.verdict"]:
+        for e, v in zip(fault["error"], fault["out.verdict"], strict=True):
             self.assertTrue(v.startswith("faulted: "), v)
+            self.assertEqual(e, f"run failed: {v}")
 
     def test_duration_bounds(self):
         head = ("[campaign]\nname = 'd'\nscenario = '{s}'\n"
@@ -428,8 +433,10 @@ class ExpressionLimits(unittest.TestCase):
                       "387420489 would have more than 4096 bits", df.loc[9, "error"])
         self.assertEqual(df.loc[2, "status"], "fail")
         self.assertEqual(df.loc[2, "in.iq_step_a"], 3.0)
-        self.assertRegex(df.loc[2, "error"], r"^pass criterion 'big': expression limit: \d+ \*\* "
-                         r"1000000000 would have more than 4096 bits$")
+        # after the run's own verdict (4 ms end before the d step)
+        self.assertRegex(df.loc[2, "error"], r"^run failed: target not reached; pass criterion "
+                         r"'big': expression limit: \d+ \*\* 1000000000 would have more than "
+                         r"4096 bits$")
 
     def test_evaluator(self):
         from mdtool.expr import Criterion, Expr, ExprLimit

@@ -501,7 +501,9 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
         # the named reason (the report groups runs by it); its figures apart
         error = "run failed: " + verdict
         row["verdict_detail"] = summary.get("verdict_detail", "")
-    row["error"] = error if error or not why else "; ".join(why)
+    # an evaluator's limit is named after the run's own error (a verdict)
+    parts = ([error] if error else []) + why
+    row["error"] = "; ".join(parts) if parts else error
     row["pass"] = row["status"] == "pass"
     for name, ok in crit.items():
         row["pass." + name] = ok
