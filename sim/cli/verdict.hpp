@@ -145,6 +145,9 @@ struct CommissionFigures {
   bool verify = false;
   double verify_sensored_err_frac = 0, verify_sensorless_err_frac = 0;
   bool sensorless_refused = false;  // the law takes no such motor (a salient one)
+  // the motor and board have no safe gains for the speed PI (the pair's
+  // limit, e.g. PWM ripple above i_max_a, not the identification's)
+  bool sensored_refused = false;
 };
 Verdict judge_commission(const CommissionFigures& f);
 

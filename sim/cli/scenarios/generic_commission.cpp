@@ -314,7 +314,8 @@ void run_commission_scenario(RunContext& ctx) {
   if (ctx.params.get("verify") > 0.5) {
     // verify.LAW_faulted: 1 if the drive faulted on the way (the error is
     // then NaN), 0 if not. A law that refuses this motor (the sensorless
-    // law takes no salient machine) leaves its error NaN, no _faulted, and
+    // law takes no salient machine; either law a pair without safe gains)
+    // leaves its error NaN, no _faulted, and
     // says why; commissioning itself succeeded, so the run does not fail.
     double w = 0;
     const auto verify = [&](Law law, const char* name) {
@@ -325,7 +326,11 @@ void run_commission_scenario(RunContext& ctx) {
       } catch (const UsageError& e) {
         ctx.summary.set(std::string("verify.") + name + "_speed_err_frac", std::nan(""));
         ctx.summary.set_text(std::string("verify.") + name + "_refused", e.what());
-        if (law == Law::kSensorless) fig.sensorless_refused = true;
+        if (law == Law::kSensorless) {
+          fig.sensorless_refused = true;
+        } else {
+          fig.sensored_refused = true;  // no safe gains for this motor and board
+        }
       }
     };
     verify(Law::kSpeedPi, "sensored");

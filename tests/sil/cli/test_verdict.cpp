@@ -83,6 +83,28 @@ TEST(CurrentStep, RiseJudgedOnlyWhereTheDesignClaimsIt) {
   EXPECT_EQ(judge_current_step(f).verdict, "target not reached");
 }
 
+TEST(Commission, AVerificationTheLawRefusesIsNotJudged) {
+  CommissionFigures f;
+  f.done = true;
+  f.duration_s = 5;
+  f.verify = true;
+  f.verify_sensored_err_frac = 0.01;
+  f.verify_sensorless_err_frac = 0.03;
+  EXPECT_EQ(judge_commission(f).verdict, "pass");
+  f.verify_sensored_err_frac = std::nan("");  // the speed step faulted
+  EXPECT_EQ(judge_commission(f).verdict, "verification failed");
+  f.sensored_refused = true;  // no safe gains for this pair: not run
+  const Verdict v = judge_commission(f);
+  EXPECT_EQ(v.verdict, "pass");
+  EXPECT_NE(v.detail.find("no safe gains for the sensored law: not run"), std::string::npos);
+  f.flux_frac = 0.04;  // identification still judged
+  EXPECT_EQ(judge_commission(f).verdict, "identification inaccurate");
+  f.done = false;
+  f.error_names = "ROTOR_BLOCKED";
+  EXPECT_EQ(judge_commission(f).verdict, "commissioning failed: ROTOR_BLOCKED");
+  EXPECT_TRUE(judge_commission(f).stopped);
+}
+
 TEST(StepCount, RefusesACountThatDoesNotFit) {
   EXPECT_EQ(step_count(1.0, 5e-5), 20000);
   EXPECT_EQ(step_count(0.0, 5e-5), 0);
