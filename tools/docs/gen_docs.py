@@ -115,9 +115,9 @@ class Ctx:
                 f.result()
 
 
-def run(cmd, cwd=ROOT, timeout=900):
+def run(cmd, cwd=ROOT, timeout=900, ok=(0,)):
     p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout, check=False)
-    if p.returncode != 0:
+    if p.returncode not in ok:
         raise DocError(f"{' '.join(cmd)} exited {p.returncode}:\n{p.stdout[-2000:]}{p.stderr[-2000:]}")
     return p.stdout
 
@@ -134,8 +134,11 @@ def mcsim_cmd(scenario, sets=(), motor=None, board=None):
     return c
 
 
-def mcsim(scenario, *sets, motor=None, board=None):
-    """`mcsim run`: its JSON summary and its CSV (a list of dicts of floats)."""
+def mcsim(scenario, *sets, motor=None, board=None, judged=True):
+    """`mcsim run`: its JSON summary and its CSV (a list of dicts of floats).
+    judged=False: a run the table shows whatever its verdict (mcsim exits 1
+    when it is not a pass, the rows then in <scenario>.partial.csv); the
+    summary's verdict says which. Otherwise a failed verdict is an error."""
     def fn(ctx):
         out = ctx.workdir(("mcsim", scenario, sets, motor, board))
         cmd = [ctx.input("mcsim"), "run", scenario, "--out", out]
@@ -145,13 +148,17 @@ def mcsim(scenario, *sets, motor=None, board=None):
             cmd += ["--board", os.path.join(ROOT, "sim", "motors", board + ".toml")]
         for s in sets:
             cmd += ["--set", s]
-        run(cmd)
+        run(cmd, ok=(0,) if judged else (0, 1))
         with open(os.path.join(out, scenario + ".json")) as f:
             summary = json.load(f)
-        with open(os.path.join(out, scenario + ".csv"), newline="") as f:
+        path = os.path.join(out, scenario + ".csv")
+        if not os.path.exists(path):
+            path = os.path.join(out, scenario + ".partial.csv")
+        with open(path, newline="") as f:
             rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
-        return {"summary": summary, "rows": rows, "csv": os.path.join(out, scenario + ".csv")}
-    return Src(("mcsim", scenario, sets, motor, board), mcsim_cmd(scenario, sets, motor, board), fn)
+        return {"summary": summary, "rows": rows, "csv": path}
+    return Src(("mcsim", scenario, sets, motor, board, judged), mcsim_cmd(scenario, sets, motor, board),
+               fn)
 
 
 def gtest(binary, filt="*"):
@@ -510,7 +517,11 @@ DT_CASES = [("observer, 80 % of t_dead", ["dead_time_s=2e-6", "dead_comp_frac=0.
 
 
 def _dt_src(load, sets):
-    return mcsim("observer-test-motor", "t_load_s=0.5", f"load_frac={load}", *sets)
+    # With the dead time the speed ripples by tens of r/min and may keep an
+    # offset of a few: several of these runs fail observer-test-motor's
+    # verdict (load not held, not settled). The table shows by how much.
+    return mcsim("observer-test-motor", "t_load_s=0.5", f"load_frac={load}", *sets,
+                 judged=False)
 
 
 def _dt_srcs():
@@ -876,7 +887,11 @@ CANSEND = [("select current mode", "SET_CONTROL_MODE", ["control_mode=1"]),
            ("clear faults", "CLEAR_FAULTS", []),
            ("CURRENTS at 500 Hz", "SET_TM_RATE", ["tm_cmd=2", "rate_hz=500"]),
            ("heartbeat (keep-alive; the counter must advance)", "HOST_HEARTBEAT", ["counter=0"]),
-           ("next heartbeat", "HOST_HEARTBEAT", ["counter=1"])]
+           ("next heartbeat", "HOST_HEARTBEAT", ["counter=1"]),
+           ("node id 5: WRITE (answered NEEDS_CONFIRM)", "PARAM_REQ",
+            ["opcode=1", "param_id=110", "value=5"]),
+           ("... its CONFIRM, the very next request", "PARAM_REQ",
+            ["opcode=5", "param_id=110", "value=5"])]
 
 
 @figure("can-cansend", [mc_can("encode", m, *a) for _, m, a in CANSEND],
@@ -886,6 +901,41 @@ def _can_cansend(ctx, *outs):
     for (lab, m, a), o in zip(CANSEND, outs, strict=False):
         rows.append([lab, f"`mc_can.py encode {' '.join([m] + a)}`", f"`cansend vcan0 {o.strip()}`"])
     return table(["command", "encoded by", "frame (node 1)"], rows)
+
+
+@figure("can-reply-flood", [gtest("test_mc_app", "McApp.AFloodOfRequests*")])
+def _can_reply_flood(ctx, t):
+    k = "McApp.AFloodOfRequestsCostsTheBusAtMostTheRepliesShare"
+    bus = prop(t, k, "bitrate_bps")
+    rows = [["requests per second", g(prop(t, k, "flood_requests_per_s"), 5), "-"],
+            ["their replies' load, were each one answered",
+             f"{g(100 * prop(t, k, 'unanswered_load_would_be'), 3)} % of {g(bus / 1e3, 3)} kbit/s", "-"],
+            ["replies in the busiest second", g(prop(t, k, "replies_max_in_1s"), 3),
+             f"≤ {g(prop(t, k, 'replies_max_in_1s.bound'), 3)}"],
+            ["their load", f"{g(100 * prop(t, k, 'reply_load_max_1s'), 3)} %",
+             f"≤ {g(100 * prop(t, k, 'reply_load_max_1s.bound'), 3)} % (the budget's reserve)"],
+            ["replies per second, mean of 10 s", g(prop(t, k, "replies_per_s_mean"), 3),
+             f"≤ {g(prop(t, k, 'replies_per_s_mean.bound'), 3)}"],
+            ["requests not answered (counted, `reply_limited`)",
+             f"{g(100 * prop(t, k, 'requests_unanswered'), 4)} %", "-"]]
+    return table(["", "measured", "test bound"], rows)
+
+
+@figure("config-flash-wear", [gtest("test_mc_app", "McApp.FlashWear*")])
+def _config_flash_wear(ctx, t):
+    k = "McApp.FlashWearUnderTheSaveRateLimitOnTheF405Sectors"
+    rows = [["record", f"{g(prop(t, k, 'record_bytes'), 4)} bytes"],
+            ["records per 128 KiB sector (counted between two erases)",
+             g(prop(t, k, "records_per_sector"), 4)],
+            ["SAVE rate limit", f"{g(prop(t, k, 'save_burst'))}, then one per "
+                                f"{g(prop(t, k, 'save_period_s'))} s"],
+            ["saves written in the first hour of nonstop changed SAVEs",
+             g(prop(t, k, "saves_first_hour"), 3)],
+            ["worst case: erases per sector per year", g(prop(t, k, "erases_per_sector_per_year"), 3)],
+            ["the F405's 10 000 cycles last",
+             f"{g(prop(t, k, 'years_to_10k_cycles'), 3)} years (test bound ≥ "
+             f"{g(prop(t, k, 'years_to_10k_cycles.bound'))})"]]
+    return table(["", ""], rows)
 
 
 def _motor_library_pairs():

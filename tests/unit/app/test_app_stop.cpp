@@ -238,7 +238,7 @@ TEST_F(AppStop, CanCommandTimeoutDeceleratesAtTheConfiguredRate)
     // No further command: the timeout (100 ticks of the slow loop = 1000
     // fast steps) starts the stop in its 100th slow step.
     const StopTrace tr = RunStop(1000);
-    EXPECT_GE(c.ticks_since_cmd, 100u);
+    EXPECT_GE(c.ticks_since_alive, 100u);
     ExpectControlledStop(tr, MC_DRIVE_STOP_CMD);
     EXPECT_FALSE(c.enabled);
     EXPECT_EQ(MC_CAN_STOP_CMD_TIMEOUT, c.stop_reason);
