@@ -115,8 +115,8 @@ static void foc_set_delay(mc_foc_f32_t *st, float periods)
 {
     st->delay_comp_periods = periods;
     st->adv_s = periods * st->dt_s;
-    st->pred_d = mc_foc_pred_weight(periods, st->dt_s, st->pi_d.kp, st->ld_h);
-    st->pred_q = mc_foc_pred_weight(periods, st->dt_s, st->pi_q.kp, st->lq_h);
+    st->pred_d = mc_foc_f32_eval_pred_weight(periods, st->dt_s, st->pi_d.kp, st->ld_h);
+    st->pred_q = mc_foc_f32_eval_pred_weight(periods, st->dt_s, st->pi_q.kp, st->lq_h);
 }
 
 uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
@@ -191,7 +191,7 @@ uint32_t mc_foc_f32_set_delay_comp(mc_foc_f32_t *st, float periods)
     if (st == NULL) {
         return MC_FOC_ERR_NULL;
     }
-    if (!mc_foc_delay_comp_ok(periods)) {
+    if (!mc_foc_f32_validate_delay_comp(periods)) {
         return MC_FOC_ERR_DELAY;
     }
     foc_set_delay(st, periods);
@@ -477,7 +477,7 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
     /* the voltage angle: non-finite for a non-finite speed (0 * inf is
      * NaN), which sends the step to the checked path before anything is
      * committed */
-    const float theta_v = mc_foc_f32_voltage_angle(st, theta, omega);
+    const float theta_v = mc_foc_f32_eval_voltage_angle(st, theta, omega);
 
     /* NaN fails both; a non-finite current shows in the PIs */
     if (!foc_theta_vbus_fast_ok(st, theta, vbus) || !foc_theta_fast_ok(theta_v)) {
@@ -541,7 +541,7 @@ static uint32_t foc_step_fail(mc_foc_f32_t *st, mc_foc_f32_out_t *out, uint32_t 
 static uint32_t foc_voltage_sincos(const mc_foc_f32_t *st, float theta, float omega, float sin_th,
                                    float cos_th, float *p_sin_v, float *p_cos_v)
 {
-    const float theta_v = mc_foc_f32_voltage_angle(st, theta, omega);
+    const float theta_v = mc_foc_f32_eval_voltage_angle(st, theta, omega);
 
     if (!(st->adv_s > 0.0f)) {
         *p_sin_v = sin_th;

@@ -36,7 +36,7 @@
  * has turned 1.5 omega_e T further. The inverse Park (and the Park of the
  * modulator's cut, fed back to the PIs) therefore runs at the voltage angle
  *     theta_v = theta_e + delay_comp_periods * dt_s * omega_e
- * (mc_foc_f32_voltage_angle), delay_comp_periods = MC_FOC_DELAY_COMP_PERIODS
+ * (mc_foc_f32_eval_voltage_angle), delay_comp_periods = MC_FOC_DELAY_COMP_PERIODS
  * (1.5: the drive's one period of computation delay plus the half period of
  * the zero-order hold) from init; mc_foc_f32_set_delay_comp changes it
  * (0: off, the sampled angle for both transforms). The decoupling terms
@@ -230,14 +230,14 @@ uint32_t mc_foc_f32_set_delay_comp(mc_foc_f32_t *st, float periods);
 
 /** The decoupling's prediction weight of one axis (shared by the twins):
  *  min(1, periods dt kp / L), kp / L the axis' designed bandwidth. */
-static inline float mc_foc_pred_weight(float periods, float dt_s, float kp, float l_h)
+static inline float mc_foc_f32_eval_pred_weight(float periods, float dt_s, float kp, float l_h)
 {
     const float w = periods * dt_s * (kp / l_h);
     return (w < 1.0f) ? w : 1.0f;
 }
 
 /** true when periods is a valid delay compensation (shared by the twins). */
-static inline bool mc_foc_delay_comp_ok(float periods)
+static inline bool mc_foc_f32_validate_delay_comp(float periods)
 {
     return (periods >= 0.0f) && (periods <= MC_FOC_DELAY_COMP_MAX); /* false for NaN */
 }
@@ -247,8 +247,8 @@ static inline bool mc_foc_delay_comp_ok(float periods)
  * comment): theta_e + adv_s * omega_e, not wrapped; the whole steps use it
  * for the inverse Park. st is not checked (a valid, initialised state).
  */
-static inline float mc_foc_f32_voltage_angle(const mc_foc_f32_t *st, float theta_e_rad,
-                                             float omega_e_rad_s)
+static inline float mc_foc_f32_eval_voltage_angle(const mc_foc_f32_t *st, float theta_e_rad,
+                                                  float omega_e_rad_s)
 {
     return theta_e_rad + (st->adv_s * omega_e_rad_s);
 }
@@ -278,7 +278,7 @@ uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32
  * The whole fast step from alpha-beta currents (the caller did the Clarke
  * transform, e.g. for an observer that needs them too): Park at theta_e
  * (mc_sincos_f32), dq step, inverse Park at the voltage angle
- * (mc_foc_f32_voltage_angle), modulator limit (fed back to the PIs),
+ * (mc_foc_f32_eval_voltage_angle), modulator limit (fed back to the PIs),
  * SVPWM. mc_foc_f32_step is exactly this after its Clarke transform.
  * Arguments as in mc_foc_f32_in_t (alpha/beta currents amplitude
  * invariant, mc_clarke_f32), passed by value so that they stay in

@@ -27,8 +27,8 @@ static uint32_t foc_q31_set_adv(mc_foc_q31_t *st, float periods)
     }
     st->g_adv = g;
     st->delay_comp_periods = periods;
-    st->pred_d = mc_q31_from_f32(mc_foc_pred_weight(periods, 1.0f, st->bw_dt_d, 1.0f));
-    st->pred_q = mc_q31_from_f32(mc_foc_pred_weight(periods, 1.0f, st->bw_dt_q, 1.0f));
+    st->pred_d = mc_q31_from_f32(mc_foc_f32_eval_pred_weight(periods, 1.0f, st->bw_dt_d, 1.0f));
+    st->pred_q = mc_q31_from_f32(mc_foc_f32_eval_pred_weight(periods, 1.0f, st->bw_dt_q, 1.0f));
     return MC_FOC_ERR_NONE;
 }
 
@@ -37,7 +37,7 @@ uint32_t mc_foc_q31_set_delay_comp(mc_foc_q31_t *st, float periods)
     if (st == NULL) {
         return MC_FOC_ERR_NULL;
     }
-    if (!mc_foc_delay_comp_ok(periods)) {
+    if (!mc_foc_f32_validate_delay_comp(periods)) {
         return MC_FOC_ERR_DELAY;
     }
     return foc_q31_set_adv(st, periods);
@@ -215,7 +215,7 @@ uint32_t mc_foc_q31_step(mc_foc_q31_t *st, const mc_foc_q31_in_t *in, mc_foc_q31
     }
     foc_q31_core(st, in->id_ref, in->iq_ref, id, iq, in->omega_e, in->vbus, &vd, &vq);
     if (st->delay_comp_periods > 0.0f) {
-        mc_sincos_q31(mc_foc_q31_voltage_angle(st, in->theta_e, in->omega_e), &s_v, &c_v);
+        mc_sincos_q31(mc_foc_q31_eval_voltage_angle(st, in->theta_e, in->omega_e), &s_v, &c_v);
     } else {
         s_v = s;
         c_v = c;

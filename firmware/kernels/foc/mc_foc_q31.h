@@ -34,12 +34,12 @@
  * modulator's own rounding, reported in svpwm_flags).
  * Computation delay: as the f32 kernel (mc_foc.h), the inverse Park runs
  * at the voltage angle theta_e + delay_comp_periods dt omega_e
- * (mc_foc_q31_voltage_angle: the advance as the Q46 gain
+ * (mc_foc_q31_eval_voltage_angle: the advance as the Q46 gain
  * delay_comp_periods dt omega_base / pi times omega_e, rounded to a q31
  * turn, saturated at half a turn, added with the turn's wrap), 1.5 periods
  * from init, mc_foc_q31_set_delay_comp to change it (same rule,
- * mc_foc_delay_comp_ok); the decoupling's currents predicted as
- * i + w (i_ref - i) with the f32 kernel's w (mc_foc_pred_weight) as a q31
+ * mc_foc_f32_validate_delay_comp); the decoupling's currents predicted as
+ * i + w (i_ref - i) with the f32 kernel's w (mc_foc_f32_eval_pred_weight) as a q31
  * fraction, the difference saturated at one base.
  * Error vs f32: tests/unit/q31/test_foc_q31.cpp.
  */
@@ -116,7 +116,8 @@ uint32_t mc_foc_q31_set_delay_comp(mc_foc_q31_t *st, float periods);
 
 /** The voltage angle (q31 turn) of a step at theta_e, omega_e (see the file
  *  comment); st is not checked. */
-static inline q31_t mc_foc_q31_voltage_angle(const mc_foc_q31_t *st, q31_t theta_e, q31_t omega_e)
+static inline q31_t mc_foc_q31_eval_voltage_angle(const mc_foc_q31_t *st, q31_t theta_e,
+                                                  q31_t omega_e)
 {
     return mc_q31_angle_add(theta_e, mc_q46_to_q31(mc_q46_mul_q31(st->g_adv, omega_e)));
 }

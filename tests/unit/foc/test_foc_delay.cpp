@@ -93,8 +93,8 @@ TEST(FocDelay, VoltageAngleF32AndQ31MatchTheClosedForm)
         const double w = static_cast<double>(w_q) / kTwo31 * kWb;
         const double want = th + 1.5 * static_cast<double>(kDt) * w; // the closed form
         const double got_f =
-            mc_foc_f32_voltage_angle(&f, static_cast<float>(th), static_cast<float>(w));
-        const double got_q = AngRad(mc_foc_q31_voltage_angle(&q, th_q, w_q));
+            mc_foc_f32_eval_voltage_angle(&f, static_cast<float>(th), static_cast<float>(w));
+        const double got_q = AngRad(mc_foc_q31_eval_voltage_angle(&q, th_q, w_q));
         worst_f = std::max(worst_f, std::abs(got_f - want));
         worst_q = std::max(worst_q, std::abs(Wrap(got_q - want)));
         worst_fq = std::max(worst_fq, std::abs(Wrap(got_q - got_f)));
@@ -121,7 +121,7 @@ TEST(FocDelay, Q31AngleWrapsAtHalfATurn)
     // voltage angle comes out near -pi + 0.625 + 0.01, not saturated at pi.
     const double th = kPi - 0.01;
     const q31_t w_q = static_cast<q31_t>(1) << 30;
-    const double got = AngRad(mc_foc_q31_voltage_angle(&q, AngQ(th), w_q));
+    const double got = AngRad(mc_foc_q31_eval_voltage_angle(&q, AngQ(th), w_q));
     EXPECT_NEAR(got, Wrap(th + 1.5 * static_cast<double>(kDt) * 10000.0), 1e-6);
     EXPECT_LT(got, 0.0);
 }
