@@ -45,7 +45,7 @@ def main():
     r = run("gen", "--root", a.work)
     check(r.returncode == 0, f"gen failed: {r.stderr}")
     boards = mc_boards.load_all()
-    check({b["name"] for b in boards} == {"example", "odrive36", "vesc6"},
+    check({b["name"] for b in boards} == {"example", "odrive36", "odrive36_24v", "vesc6"},
           f"boards found: {[b['name'] for b in boards]}")
     rels = [mc_boards.README_REL]
     for b in boards:
