@@ -267,10 +267,11 @@ BoardSpec read_board(const std::string& path, const toml::table& t, const SetSou
              " is out of range: 0 (no encoder) or [" + std::to_string(static_cast<long>(cpr.lo)) +
              ", " + std::to_string(static_cast<long>(cpr.hi)) + "]" + kFwTable);
   }
-  b.i_adc_full_scale_a = r.num_or("i_adc_full_scale_a", b.i_sense_max_a, b.i_sense_max_a, 1.0e5,
-                                  false, "A (at least i_sense_max_a)");
-  b.vbus_sense_max_v =
-      r.num_or("vbus_sense_max_v", 2.0 * b.vbus_v, b.vbus_v, 1.0e4, true, "V (above vbus_v)");
+  // 0 when absent: the ranges follow i_sense_max_a and vbus_v (BoardSpec),
+  // also when a scenario changes those after the files are read
+  b.i_adc_full_scale_a = r.num_or("i_adc_full_scale_a", 0.0, b.i_sense_max_a, 1.0e5, false,
+                                  "A (at least i_sense_max_a)");
+  b.vbus_sense_max_v = r.num_or("vbus_sense_max_v", 0.0, b.vbus_v, 1.0e4, true, "V (above vbus_v)");
   b.delay_periods = static_cast<int>(r.int_or("delay_periods", 1, 0, 4));
   b.dc_link_c_f = r.num_or("dc_link_c_f", 0.0, 0.0, 10.0, false, "F");
   b.source_r_ohm = r.num_or("source_r_ohm", 0.05, 1.0e-4, 1.0e3, false, "ohm");

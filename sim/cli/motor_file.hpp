@@ -84,15 +84,22 @@ struct BoardSpec {
   double vbus_v = 0, pwm_hz = 0, dead_time_s = 0;
   int current_sensors = 2;
   double i_sense_max_a = 0;
-  double i_adc_full_scale_a = 0;  // the converter's range (quantisation); >= i_sense_max_a
+  double i_adc_full_scale_a = 0;  // the converter's range (quantisation); 0: i_sense_max_a
   int adc_bits = 12;
-  double vbus_sense_max_v = 0;  // the bus sensor's range
+  double vbus_sense_max_v = 0;  // the bus sensor's range; 0: 2 vbus_v
   long encoder_cpr = 0;
   int delay_periods = 1;
   double dc_link_c_f = 0;  // 0: stiff bus
   double source_r_ohm = 0.05;
   bool source_sink = false;
   double brake_r_ohm = 0;
+  // The sensor models' ranges (a BoardSpec built in code leaves them 0).
+  double adc_full_scale_a() const {
+    return i_adc_full_scale_a > 0 ? i_adc_full_scale_a : i_sense_max_a;
+  }
+  double vbus_full_scale_v() const {
+    return vbus_sense_max_v > 0 ? vbus_sense_max_v : 2.0 * vbus_v;
+  }
 };
 
 /// The files given on the command line, parsed and validated.

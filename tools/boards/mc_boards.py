@@ -10,8 +10,13 @@ is generated from them.
 Each board folder holds
     pins.csv    signal,port_pin,mode,af,pull,otype,speed,init (comment lines
                 start with '#'; they name the public source and its commit)
-    board.toml  name, source, PWM dead time and break input, pin polarities,
-                sense scaling, thermistors, encoder, DRV8301 set-up
+    board.toml  name, source, PWM rate, dead time and break input, pin
+                polarities, sense scaling, nominal supply, brake chopper,
+                thermistors, encoder, DRV8301 set-up
+A variant folder holds only a board.toml naming its base (base = "<folder>"):
+its tables are merged over the base's key by key and the base's pins.csv
+applies (odrive36_24v). mcsim reads the same board.toml
+(sim/cli/board_desc.hpp, the same formulas; tests/sil/boards keeps them equal).
 
 Generated (paths relative to the repository root):
     <board>/mc_board_<board>_gen.h   declares mc_board_<board>_desc
