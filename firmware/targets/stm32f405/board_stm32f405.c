@@ -78,7 +78,7 @@ extern const mc_board_desc_t MC_BOARD_DESC;
 #define I_MAX_A          10.0f
 #define I_TRIP_A         15.0f
 #define DELAY_POLL_SLACK 1000u
-#define SLOW_LOOP_DIV    ((PWM_HZ + 500u) / 1000u)
+#define SLOW_LOOP_DIV    (slow_loop_div())
 #define SLOW_PERIOD_US   (1000000u * SLOW_LOOP_DIV / PWM_HZ) /* 1000 us at 20/24/30 kHz */
 #define CFG_SECTOR_A     10u
 #define CFG_SECTOR_B     11u
@@ -90,6 +90,13 @@ extern const mc_board_desc_t MC_BOARD_DESC;
 #define WDG_ERASE_MS     4000u /* >= 2.7 s at the fastest LSI: a 128 KiB erase */
 #define TM_BUDGET_FRAC   0.5f
 #define TX_DRAIN_POLLS   200000u /* >= 5 ms of TSR reads: the OK of ENTER leaves */
+
+/* The slow loop's divider: about 1 kHz at the board's PWM rate (20, 24
+ * and 30 at 20, 24 and 30 kHz). */
+static uint32_t slow_loop_div(void)
+{
+    return (PWM_HZ + 500u) / 1000u;
+}
 
 void CAN1_RX0_IRQHandler(void);
 void EXTI0_IRQHandler(void);
