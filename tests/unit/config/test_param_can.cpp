@@ -67,7 +67,9 @@ class ParamCan : public ::testing::Test
         cc.tick_hz = 1000;
         cc.timeout_s = p.can_timeout_s;
         cc.stop_ramp_a_per_s = p.stop_ramp_a_per_s;
-        cc.stop_decel_rad_s2 = p.stop_decel_rad_s2;
+        mc_params_eff_t e;
+        ASSERT_EQ(MC_GAINS_OK, mc_params_resolve(&p, &e));
+        cc.stop_decel_rad_s2 = e.p.stop_decel_rad_s2;
         cc.speed_max_rad_s = p.speed_max_rad_s;
         ASSERT_EQ(MC_CAN_CMD_CFG_OK, mc_can_cmd_init(&c, &cc, &d, &tm));
         ASSERT_EQ(0,
@@ -181,6 +183,7 @@ TEST_F(ParamCan, InconsistentSetRefusedAsAWhole)
     // each value in range; together the trip (15 A) exceeds the sensor (12 A)
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_SENSE_MAX_A, Bits(12.0f)).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, Bits(8.0f)).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_TRIP_A, Bits(15.0f)).status);
     Reply r = Req(MC_PARAM_OP_APPLY, 0);
     EXPECT_EQ(MC_PARAM_ERR_INVALID, r.status);
     EXPECT_EQ(MC_PARAMS_ERR_SENSE, r.value);
