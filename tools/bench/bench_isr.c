@@ -388,9 +388,12 @@ static int sls_set_ref(void *ctx, float ref)
 /* The law from the board's defaults (the paper-002 motor), gains by the
  * simulator's rules (sim/cli/drive_setup.cpp); the divergence monitor wide
  * open, since the bench has no plant (the observer sees synthetic currents). */
-static uint32_t sls_setup(const mc_params_t *p)
+static uint32_t sls_setup(const mc_params_t *raw)
 {
     mc_ctrl_sls_cfg_t c;
+    mc_params_eff_t e;
+    const mc_params_t *p = &e.p; /* the derived bandwidths resolved */
+    (void)mc_params_resolve(raw, &e);
     memset(&c, 0, sizeof c);
     c.r_ohm = p->r_ohm;
     c.l_h = p->lq_h;
@@ -509,7 +512,7 @@ static int run(bool sensorless)
         }
         period(false);
     }
-    const mc_drive_mode_t want = sensorless ? MC_DRIVE_MODE_CTRL : MC_DRIVE_MODE_CURRENT;
+    const mc_drive_mode_t want = MC_DRIVE_MODE_CTRL; /* every speed law */
     if (D->mode != want) {
         out_kv("stop_reason", A->cmd.stop_reason);
         out_kv("last_error", A->cmd.last_error);

@@ -66,13 +66,13 @@
  * Command timeout: while enabled, if no command is accepted for timeout_s
  * (any accepted command counts, HOST_HEARTBEAT is the cheapest; a stale
  * HOST_HEARTBEAT is not accepted), the drive
- * stops safely and reports stop_reason CMD_TIMEOUT. With the drive's
- * controlled stop configured (mc_drive_cfg_t.stop_decel_rad_s2 > 0) in any
- * control mode: mc_drive_stop(), the drive decelerates to standstill at
- * that rate and opens the bridge (MODE_STOPPING); the run ends when it has.
- * Without it:
- *   CURRENT   both current references ramp to zero at stop_ramp_a_per_s,
- *             then IDLE;
+ * stops safely and reports stop_reason CMD_TIMEOUT.
+ *   CURRENT   (torque mode, any configuration) both current references
+ *             ramp to zero at stop_ramp_a_per_s, then IDLE.
+ * SPEED and POSITION with the drive's controlled stop configured
+ * (mc_drive_cfg_t.stop_decel_rad_s2 > 0; always from the parameter table):
+ * mc_drive_stop(), the drive decelerates to standstill at that rate and
+ * opens the bridge (MODE_STOPPING); the run ends when it has. Without it:
  *   SPEED     the speed reference ramps to zero at stop_decel_rad_s2
  *             through the application's hook; the bridge opens when the
  *             rotor is at rest (|omega_m| <= the drive's stop_rest_rad_s,
@@ -165,6 +165,7 @@ typedef struct mc_can_cmd {
     bool enabled;
     bool stopping;            /**< safe stop in progress */
     bool stop_by_law;         /**< POSITION: the control law's stop op decelerates */
+    bool stop_by_drive;       /**< the drive's controlled stop (SPEED, POSITION) */
     uint32_t stop_ticks_left; /**< steps the stop may still wait for rest */
     uint8_t stop_reason;      /**< MC_CAN_STOP_* */
     uint32_t ticks_since_cmd; /**< steps since the last accepted command */

@@ -343,22 +343,24 @@ TEST_F(McApp, LawsFromTheParametersFillTheSlots)
         EXPECT_TRUE(app.laws.pos_ok) << law;
         EXPECT_EQ(app.cfg.position_law.ctrl, mc_ctrl_pos_ops(&app.laws.pos));
         EXPECT_EQ(app.cmd.cfg.position_drive_mode, MC_DRIVE_MODE_CTRL);
-        const mc_drive_ctrl_t *want = nullptr;
+        const mc_drive_ctrl_t *want = mc_ctrl_speed_ops(&app.laws.spd);
         if (law == MC_LAW_SPEED_SENSORLESS) {
             want = mc_ctrl_sls_ops(&app.laws.sls);
         } else if (law == MC_LAW_SPEED_PI2D) {
             want = mc_ctrl_pi2d_ops(&app.laws.pi2d);
         }
         EXPECT_EQ(app.cfg.speed_law.ctrl, want) << law;
-        EXPECT_EQ(app.cmd.cfg.speed_drive_mode,
-                  want != nullptr ? MC_DRIVE_MODE_CTRL : MC_DRIVE_MODE_CURRENT)
-            << law;
+        // every speed law runs in CTRL mode on the drive's shaped reference
+        EXPECT_EQ(app.cmd.cfg.speed_drive_mode, MC_DRIVE_MODE_CTRL) << law;
+        EXPECT_TRUE(want->uses_speed_ref) << law;
     }
 }
 
-// APPLY: the law changes while disabled; a change that would touch a law
-// while the bridge is on is refused INVALID (LAW), law_error RUNNING, and
-// the laws stay; a salient machine refuses the sensorless law by name.
+// APPLY: the law changes while disabled; with the bridge on a runtime
+// parameter is applied to the running drive (here a lower current limit)
+// and no law is rebuilt: the law saturates at the drive's limit in force;
+// the rebuild waits for the bridge to be off. A salient machine refuses the
+// sensorless law by name.
 TEST_F(McApp, ApplyChangesLawsOnlyWhileDisabledAndRefusesWithTheReason)
 {
     cfg.laws_from_params = true;
@@ -372,22 +374,27 @@ TEST_F(McApp, ApplyChangesLawsOnlyWhileDisabledAndRefusesWithTheReason)
     EXPECT_EQ(app.cfg.speed_law.ctrl, mc_ctrl_sls_ops(&app.laws.sls));
     EXPECT_EQ(app.cmd.cfg.speed_drive_mode, MC_DRIVE_MODE_CTRL);
 
-    // the bridge on: i_rated_a (a runtime parameter) moves the I-f current
+    // the bridge on: i_max_a (a runtime parameter) goes into the drive at
+    // once, the law's configuration stays
     ASSERT_EQ(0, mc_drive_set_mode(&drive, MC_DRIVE_MODE_CURRENT));
     const mc_ctrl_sls_cfg_t before = app.laws.sls.cfg;
-    v = F32Bits(0.5f * defaults.i_rated_a);
+    v = F32Bits(0.5f * defaults.i_max_a);
     ASSERT_EQ(MC_PARAM_OK,
-              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_RATED_A, &v));
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, &v));
     v = 0u;
-    EXPECT_EQ(MC_PARAM_ERR_INVALID, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
-    EXPECT_EQ(v, MC_PARAMS_ERR_LAW);
-    EXPECT_EQ(app.srv.law_error, MC_LAW_ERR_RUNNING);
+    EXPECT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_EQ(drive.cfg.i_max_a, 0.5f * defaults.i_max_a);
+    EXPECT_EQ(app.srv.law_error, 0u);
     EXPECT_EQ(0, std::memcmp(&before, &app.laws.sls.cfg, sizeof before));
-    // disabled: the same APPLY goes through and rebuilds the law
+    // a stopped parameter (the law's) with the bridge on: RUNNING, nothing changes
+    v = F32Bits(0.5f * defaults.i_rated_a);
+    EXPECT_EQ(MC_PARAM_ERR_RUNNING,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_RATED_A, &v));
+    // disabled: the next APPLY rebuilds the law from the lower limit
     ASSERT_EQ(0, mc_drive_set_mode(&drive, MC_DRIVE_MODE_IDLE));
     v = 0u;
     ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
-    EXPECT_LT(app.laws.sls.cfg.if_current_a, before.if_current_a);
+    EXPECT_LT(app.laws.sls.cfg.iq_max_a, before.iq_max_a);
     EXPECT_EQ(app.srv.law_error, 0u);
 
     // Ld 20 % above Lq: the observer's round-rotor model does not hold
@@ -404,29 +411,25 @@ TEST_F(McApp, ApplyChangesLawsOnlyWhileDisabledAndRefusesWithTheReason)
 }
 
 // With the sensored PI selected, values the other laws cannot run (here a
-// current limit at 95 % of the sensor's full scale: no margin for the
-// derived gains) are accepted: only POSITION goes, and law_error says why.
+// current loop so slow that the position law's torque feed-forward would
+// lead by more than its 0.1 s bound) are accepted: only POSITION goes, and
+// law_error says why.
 TEST_F(McApp, SensoredPiKeepsRunningWhenOnlyThePositionLawIsRefused)
 {
     cfg.laws_from_params = true;
-    cfg.speed.kp_a_s_rad = 0.05f; // the board's sensored PI
-    cfg.speed.ki_dt_a_s_rad = 1e-3f;
-    cfg.speed.i_max_a = 5.0f;
     Start();
     ASSERT_NE(app.cmd.cfg.set_position_ref, nullptr);
     ASSERT_NE(app.cmd.cfg.set_speed_ref, nullptr);
-    // i_limit 0.95 of the sensor's range, above its 1 / 1.1; the trip at it
-    uint32_t v = F32Bits(0.95f * defaults.i_sense_max_a);
+    // 9 rad/s: ff_lead = 1 / bw + 1.5 T = 0.111 s > 0.1 s
+    uint32_t v = F32Bits(9.0f);
     ASSERT_EQ(MC_PARAM_OK,
-              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, &v));
-    v = F32Bits(defaults.i_sense_max_a);
-    ASSERT_EQ(MC_PARAM_OK,
-              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_TRIP_A, &v));
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_CURRENT_BW_RAD_S, &v));
     v = 0u;
     ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
-    EXPECT_EQ(app.srv.law_error, MC_GAINS_ERR_SENSE);
+    EXPECT_EQ(app.srv.law_error, MC_LAW_ERR_POS_INIT);
     EXPECT_EQ(app.cfg.position_law.ctrl, nullptr);
     EXPECT_EQ(app.cmd.cfg.set_position_ref, nullptr); // POSITION: UNSUPPORTED
-    EXPECT_NE(app.cmd.cfg.set_speed_ref, nullptr);    // the sensored PI
-    EXPECT_EQ(app.cmd.cfg.speed_drive_mode, MC_DRIVE_MODE_CURRENT);
+    EXPECT_NE(app.cmd.cfg.set_speed_ref, nullptr);    // the sensored speed law
+    EXPECT_EQ(app.cfg.speed_law.ctrl, mc_ctrl_speed_ops(&app.laws.spd));
+    EXPECT_EQ(app.cmd.cfg.speed_drive_mode, MC_DRIVE_MODE_CTRL);
 }
