@@ -148,8 +148,8 @@ def speed_step(sil, repo):
     # the 24 V board (270 KV x 24 V = 679 rad/s no-load); on 56 V it turns
     # 1583 rad/s no-load, and the drive's overspeed trip is 1.5x this value.
     # speed_max_rad_s 9000: the CAN limit, so that item 3's reference passes
-    # the command check and reaches the telemetry. speed_i_max_a 20: the
-    # speed PI's current (4100 rad/s^2 on the bare rotor).
+    # the command check and reaches the telemetry. speed_ramp_rad_s2 4100:
+    # the speed reference's ramp (what 20 A gives the bare rotor).
     # board.pwm_hz 48000: at the board's 24 kHz the firmware's current loop,
     # which does not compensate the rotation of the rotor frame during its
     # one-period computation delay (1.5 omega_e T = 0.56 rad at 1290 rad/s
@@ -159,7 +159,7 @@ def speed_step(sil, repo):
                             extra=motor_args(repo) + ["--set", "board.pwm_hz=48000",
                                                       "--set", "motor.speed_max_rad_s=1400",
                                                       "--set", "speed_max_rad_s=9000",
-                                                      "--set", "speed_i_max_a=20"])
+                                                      "--set", "speed_ramp_rad_s2=4100"])
     out = os.path.join(sil.work, "speed")
     rows = rows_of(out)
     md = mdtool_decode(repo, os.path.join(sil.work, "speed.can.log"), os.path.join(out, "md"))

@@ -36,7 +36,7 @@ pids+=($!); CD=$!
 REC=$!; pids+=("$REC")  # python itself (a shell function here would fork a subshell)
 wait_for 120 test -e rec.ready || { say "recorder did not start"; cat record.out; exit 1; }
 MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN" --duration 900 --set end_after_stop_s=0.3 \
-  --set realtime=1 --set timeout_s=2.0 --set pwm_hz=2000 --set slow_loop_div=2 --set substeps=1 \
+  --set realtime=1 --set timeout_s=2.0 --set pwm_hz=5000 --set slow_loop_div=5 --set substeps=1 \
   --set bw_hz=20 --set speed_pll_bw_rad_s=500 --set J_kgm2=0.002 > mcsim.out 2>&1 &
 SIM=$!; pids+=("$SIM")
 wait_for 60 grep -q " 021#" candump.log || { say "no heartbeat from the SIL"; cat mcsim.out; exit 1; }
