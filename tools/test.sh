@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
 # The whole test suite (called by tools/bootstrap.sh test, after set-up):
 #  1. host debug build: every test (unit, sil, can, lint, target);
-#  2. host-asan build: the same minus lint, fuzz, campaign, docs and the two
+#  2. host-asan build: the same minus lint, fuzz, campaign, docs, the two
 #     SocketCAN VM tests (the preset's filter: the SIL's CAN code runs under
 #     ASan natively in the other can tests; ASan inside an emulated VM only
-#     slows a wall-clock-paced test), under ASan + UBSan;
+#     slows a wall-clock-paced test) and can.mdtool_bus (Python alone), under
+#     ASan + UBSan;
 #  3. the STM32F405 images (example board, ODrive v3.6, VESC 6) with warnings
-#     as errors and their size budgets.
+#     as errors and their size budgets;
+#  4. the host-release preset built whole (every target; its tests are the
+#     debug build's): users build it, and its -O3 finds warnings (errors
+#     here) that the debug build's -O0 does not.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=$(nproc)
@@ -17,6 +21,10 @@ for p in stm32f405 stm32f405-odrive36 stm32f405-vesc6; do
   cmake --preset "$p" >/dev/null
   cmake --build --preset "$p" -j "$JOBS"
 done
+
+log "host-release build (the optimised preset, whole)"
+cmake --preset host-release >/dev/null
+cmake --build --preset host-release -j "$JOBS"
 
 log "host-asan build and tests (ASan + UBSan)"
 cmake --preset host-asan >/dev/null

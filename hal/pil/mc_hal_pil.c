@@ -46,7 +46,11 @@
  *       laws         from the parameters (laws_from_params), as on the
  *                    drive boards and in the SIL: speed_law picks SPEED's
  *                    law, the position law serves POSITION;
- *       commissioning not bound (main's weak mc_board_comm_cfg).
+ *       commissioning not bound (main's weak mc_board_comm_cfg);
+ *       update       BOOT_REQ INFO, VERSION and the confirmed ENTER answered
+ *                    from the image header (mc_image_header.h), ENTER
+ *                    resetting into the bootloader through the mailbox
+ *                    (mc_boot_handoff.h), as on the drive boards.
  *     Both loops run within the period (the ADC interrupt, then PendSV),
  *     as in the SIL's one period (hal_host::app_period): OUT carries what
  *     the bridge does in the next period.
@@ -61,8 +65,10 @@
 #include <string.h>
 
 #include "mc_board.h"
+#include "mc_boot_handoff.h"
 #include "mc_cortexm.h"
 #include "mc_fake_flash.h"
+#include "mc_image_header.h"
 #include "mc_params.h"
 #include "mc_pil_frame.h"
 #include "mc_stm32f405.h"
@@ -544,6 +550,9 @@ static void receive_app_setup(int type)
     }
     c->wdg = NULL;
     c->set_rx_filter = NULL;
+    c->boot = &mc_image_boot_cfg;
+    c->enter_boot = mc_boot_mailbox_enter; /* frames are sent at once: nothing to drain */
+    c->boot_ctx = NULL;
     g_pil.hal.can = &g_pil.can;
     g_pil.app_mode = true;
     g_pil.have_app = true;

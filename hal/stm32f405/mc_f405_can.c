@@ -434,3 +434,10 @@ int mc_f405_can_init(mc_f405_can_t *p_drv, const mc_f405_can_config_t *p_cfg)
     r->MCR = mcr; /* request normal mode: joins after 11 recessive bits */
     return 0;
 }
+
+bool mc_f405_can_tx_idle(const mc_f405_can_t *p_drv)
+{
+    const uint32_t all =
+        MC_F405_CAN_TSR_TME(0u) | MC_F405_CAN_TSR_TME(1u) | MC_F405_CAN_TSR_TME(2u);
+    return (p_drv != NULL) && ((p_drv->cfg.p_can->TSR & all) == all);
+}

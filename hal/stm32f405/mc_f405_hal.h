@@ -486,6 +486,10 @@ int mc_f405_can_set_filters(mc_f405_can_t *p_drv, const mc_f405_can_filter_t *p_
 /** CAN1 RX0 ISR body (rx_irq mode): move FIFO 0 into the ring. */
 void mc_f405_can_rx_isr(mc_f405_can_t *p_drv);
 
+/** All three transmit mailboxes empty: every frame queued has left (or
+ *  was aborted). A board waits for it before a reset. */
+bool mc_f405_can_tx_idle(const mc_f405_can_t *p_drv);
+
 #ifdef __cplusplus
 }
 #endif

@@ -269,6 +269,13 @@ hal_host::PmsmBoardConfig build_board_cfg(const MotorFiles& f) {
   bc.motor.pole_pairs = m.pole_pairs;
   bc.motor.J_kgm2 = m.j_kgm2;
   bc.motor.B_nms_rad = m.b_nm_s_rad;
+  bc.motor.cogging.slots = m.slots;  // the plant's cogging (none by default)
+  bc.motor.cogging.amplitude_nm = m.cogging_nm;
+  bc.motor.cogging.phase_rad = m.cogging_phase_rad;
+  for (int k = 0; k < mcsim::CoggingParams::kMaxHarmonics; ++k) {
+    bc.motor.cogging.harmonic_nm[k] = m.cogging_h_nm[k];
+    bc.motor.cogging.harmonic_phase_rad[k] = m.cogging_h_phase_rad[k];
+  }
   bc.inverter.t_pwm_s = 1.0 / b.pwm_hz;
   bc.inverter.t_dead_s = b.dead_time_s;
   bc.inverter.i_dead_band_a = std::max(1e-3, 0.01 * m.i_rated_a);

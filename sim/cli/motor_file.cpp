@@ -155,6 +155,26 @@ void check_top(const std::string& path, const toml::table& root) {
   }
 }
 
+// The cogging keys of [motor] (see motor_file.hpp); a torque without slots
+// is refused (its order would be unknown).
+void read_cogging(TableReader& r, MotorSpec* m) {
+  m->slots = static_cast<int>(r.int_or("slots", 0, 0, 1000));
+  m->cogging_nm = r.num_or("cogging_nm", 0.0, 0.0, 1.0e3, false, "N m");
+  m->cogging_phase_rad = r.num_or("cogging_phase_rad", 0.0, -10.0, 10.0, false, "rad");
+  bool any = m->cogging_nm > 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const std::string h = "cogging_h" + std::to_string(k + 2);
+    m->cogging_h_nm[k] = r.num_or(h + "_nm", 0.0, 0.0, 1.0e3, false, "N m");
+    m->cogging_h_phase_rad[k] = r.num_or(h + "_phase_rad", 0.0, -10.0, 10.0, false, "rad");
+    any = any || m->cogging_h_nm[k] > 0.0;
+  }
+  if (any && m->slots == 0) {
+    const std::string key = m->cogging_nm > 0.0 ? "cogging_nm" : "cogging_h2_nm";
+    fail(r.src(key), r.line(key),
+         "a cogging torque needs 'slots' (its order is lcm(slots, poles))");
+  }
+}
+
 MotorSpec read_motor(const std::string& path, const toml::table& t, const SetSources& sets) {
   TableReader r(path, "motor", t, sets);
   MotorSpec m;
@@ -173,6 +193,7 @@ MotorSpec read_motor(const std::string& path, const toml::table& t, const SetSou
   m.i_rated_a = r.num_or("i_rated_a", 0.5 * m.i_max_a, 0.0, m.i_max_a, true, "A (at most i_max_a)");
   m.speed_rated_rad_s = r.num_or("speed_rated_rad_s", 0.8 * m.speed_max_rad_s, 0.0,
                                  m.speed_max_rad_s, true, "rad/s (at most speed_max_rad_s)");
+  read_cogging(r, &m);
   if (m.ld_h > 1.05 * m.lq_h) {
     fail(r.src("ld_h"), r.line("ld_h"),
          "ld_h exceeds lq_h by more than 5 %: only surface (Ld = Lq) and interior "

@@ -12,6 +12,12 @@
 //          optional: i_rated_a (continuous peak phase current; default
 //          i_max_a / 2), speed_rated_rad_s (default 0.8 speed_max_rad_s),
 //          source (text: where the numbers come from).
+//          Cogging (optional, mcsim::CoggingParams; default none): slots
+//          (stator slots), cogging_nm (peak of the fundamental, order
+//          lcm(slots, 2 pole_pairs) per turn), cogging_phase_rad, and the
+//          harmonics of orders 2, 3, 4 times it: cogging_h2_nm,
+//          cogging_h2_phase_rad, ... cogging_h4_phase_rad. A cogging
+//          torque needs slots.
 //          Ld may be below Lq (interior magnets, salient): the field-weakening
 //          scenario uses MTPA for it; the sensorless and PI^2D laws refuse a
 //          motor whose Ld and Lq differ by more than 5 % (they assume Ld = Lq).
@@ -46,6 +52,9 @@ struct MotorSpec {
   int pole_pairs = 0;
   double j_kgm2 = 0, b_nm_s_rad = 0, i_max_a = 0, speed_max_rad_s = 0;
   double i_rated_a = 0, speed_rated_rad_s = 0;
+  int slots = 0;  // 0: no cogging
+  double cogging_nm = 0, cogging_phase_rad = 0;
+  double cogging_h_nm[3] = {0, 0, 0}, cogging_h_phase_rad[3] = {0, 0, 0};  // orders 2N..4N
 };
 
 struct BoardSpec {

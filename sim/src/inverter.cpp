@@ -1,5 +1,7 @@
 #include "mcsim/inverter.hpp"
 
+#include <cmath>
+
 #include "mcsim/frames.hpp"
 #include "util.hpp"
 
@@ -75,6 +77,35 @@ double Inverter3Ph::dc_current_a(const Eigen::Vector3d& duty_abc, const Eigen::V
     i_dc += detail::clamp(duty_abc(k), 0.0, 1.0) * i_abc_a(k);
   }
   return i_dc;
+}
+
+Status InverterCommonLeg::configure(const InverterParams& p) {
+  return legs_.configure(p);
+}
+
+Eigen::Vector3d InverterCommonLeg::pole_voltages_v(const Eigen::Vector3d& duty, double vbus_v,
+                                                   const Eigen::Vector2d& i_ab_a) const {
+  return legs_.pole_voltages_v(duty, vbus_v, leg_currents_a(i_ab_a));
+}
+
+Eigen::Vector2d InverterCommonLeg::voltages_v(const Eigen::Vector3d& duty, double vbus_v,
+                                              const Eigen::Vector2d& i_ab_a) const {
+  const Eigen::Vector3d v = pole_voltages_v(duty, vbus_v, i_ab_a);
+  return {v(0) - v(2), v(1) - v(2)};
+}
+
+double InverterCommonLeg::dc_current_a(const Eigen::Vector3d& duty, const Eigen::Vector2d& i_ab_a) {
+  return Inverter3Ph::dc_current_a(duty, leg_currents_a(i_ab_a));
+}
+
+bool InverterCommonLeg::reachable(const Eigen::Vector2d& v_ab, double vbus_v) {
+  const double lim = vbus_v * (1.0 + 1e-12);
+  return std::fabs(v_ab(0)) <= lim && std::fabs(v_ab(1)) <= lim &&
+         std::fabs(v_ab(0) - v_ab(1)) <= lim;
+}
+
+double InverterCommonLeg::max_quadrature_amplitude_v(double vbus_v) {
+  return vbus_v * 0.70710678118654752440;  // 1 / sqrt(2)
 }
 
 Status InverterHBridge2::configure(const InverterParams& p) {

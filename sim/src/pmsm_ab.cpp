@@ -10,6 +10,7 @@ Status PmsmAb::configure(const PmsmParams& p) {
   const Status s = p.validate();
   if (s == Status::kOk) {
     p_ = p;
+    (void)cog_.configure(p.cogging, p.pole_pairs);  // validated above
   }
   return s;
 }
@@ -54,7 +55,9 @@ PmsmAb::State PmsmAb::deriv(double t_s, const State& x, const Input& u) const {
   State dx;
   dx(kIalpha) = di(0);
   dx(kIbeta) = di(1);
-  dx(kOmegaM) = (torque_nm(x) - p_.B_nms_rad * w_m - load_nm(t_s, x)) / p_.J_kgm2;
+  double net_nm = torque_nm(x) - p_.B_nms_rad * w_m - load_nm(t_s, x);
+  if (cog_.active()) net_nm += cog_.torque_nm(x(kThetaM));
+  dx(kOmegaM) = net_nm / p_.J_kgm2;
   dx(kThetaM) = w_m;
   return dx;
 }

@@ -26,13 +26,28 @@ Status PmsmParams::validate() const {
   if (B_nms_rad < 0.0) {
     return Status::kNegativeFriction;
   }
-  return load.validate();
+  const Status sl = load.validate();
+  if (sl != Status::kOk) return sl;
+  return cogging.validate();
 }
 
 Status PmsmDq::configure(const PmsmParams& p) {
   const Status s = p.validate();
   if (s == Status::kOk) {
     p_ = p;
+    (void)cog_.configure(p.cogging, p.pole_pairs);  // validated above
+  }
+  return s;
+}
+
+Status PmsmDq::set_electrical(double r_ohm, double flux_wb) {
+  PmsmParams p = p_;
+  p.R_ohm = r_ohm;
+  p.flux_wb = flux_wb;
+  const Status s = p.validate();
+  if (s == Status::kOk) {
+    p_.R_ohm = r_ohm;
+    p_.flux_wb = flux_wb;
   }
   return s;
 }
@@ -46,7 +61,9 @@ PmsmDq::State PmsmDq::deriv(double t_s, const State& x, const Input& u) const {
   State dx;
   dx(kId) = (u(kVd) - p_.R_ohm * i_d + w_e * p_.Lq_h * i_q) / p_.Ld_h;
   dx(kIq) = (u(kVq) - p_.R_ohm * i_q - w_e * (p_.Ld_h * i_d + p_.flux_wb)) / p_.Lq_h;
-  dx(kOmegaM) = (torque_nm(x) - p_.B_nms_rad * w_m - load_nm(t_s, x)) / p_.J_kgm2;
+  double net_nm = torque_nm(x) - p_.B_nms_rad * w_m - load_nm(t_s, x);
+  if (cog_.active()) net_nm += cog_.torque_nm(x(kThetaM));
+  dx(kOmegaM) = net_nm / p_.J_kgm2;
   dx(kThetaM) = w_m;
   return dx;
 }

@@ -7,6 +7,7 @@ Status PmsmOpenPhase::configure(const PmsmParams& p, int open_phase) {
   if (st != Status::kOk) return st;
   if (open_phase < 0 || open_phase > 2) return Status::kBadPhase;
   p_ = p;
+  (void)cog_.configure(p.cogging, p.pole_pairs);  // validated above
   x_ = open_phase;
   pp_ = static_cast<double>(p.pole_pairs);
   lsum_ = p.Ld_h + p.Lq_h;

@@ -53,7 +53,7 @@ Status PmsmPowerStageParams::validate() const {
   if (!(vbus_v > 0.0) || !detail::all_finite({vbus_v, theta_m0_rad, omega_m0_rad_s})) {
     return Status::kNotFinite;
   }
-  return Status::kOk;
+  return thermal_enabled ? thermal.validate() : Status::kOk;
 }
 
 Status PmsmPowerStage::configure(const PmsmPowerStageParams& p) {
@@ -71,7 +71,30 @@ Status PmsmPowerStage::configure(const PmsmPowerStageParams& p) {
   open_phase_ = -1;
   open_fresh_ = true;
   open_i_a_ = 0.0;
+  thermal_on_ = p.thermal_enabled;
+  if (thermal_on_) {
+    (void)thermal_.configure(p.thermal);  // validated above
+    apply_temperatures();
+  }
   return Status::kOk;
+}
+
+void PmsmPowerStage::apply_temperatures() {
+  // R and flux at the present temperatures; a temperature so far out that
+  // either would leave its range (R <= 0 below -234 C, flux < 0 hundreds of
+  // K above T_ref) keeps the previous values.
+  const double r = p_.motor.R_ohm * thermal_.resistance_factor();
+  const double flux = p_.motor.flux_wb * thermal_.flux_factor();
+  if (plant_.set_electrical(r, flux) == Status::kOk && open_phase_ >= 0) {
+    (void)open_plant_.configure(plant_.params(), open_phase_);
+  }
+}
+
+void PmsmPowerStage::thermal_period(double isq0) {
+  const double isq1 = current_sq_a2();
+  const double omega_e = static_cast<double>(p_.motor.pole_pairs) * x_(PmsmRotorFrame::kOmegaM);
+  thermal_.advance(p_.inverter.t_pwm_s, 1, 0.5 * (isq0 + isq1), omega_e, p_.motor.R_ohm);
+  apply_temperatures();
 }
 
 Status PmsmPowerStage::set_open_phase(int phase) {
@@ -201,6 +224,7 @@ void PmsmPowerStage::advance_open_phase(const Eigen::Vector3d& duty, bool switch
 
 Status PmsmPowerStage::advance_special(const Eigen::Vector3d& duty, bool switching) {
   if (!std::isfinite(t_s_)) return Status::kNotFinite;
+  const double isq0 = thermal_on_ ? current_sq_a2() : 0.0;
   const int n = p_.substeps;
   if (open_phase_ >= 0) {
     advance_open_phase(duty, switching);
@@ -208,7 +232,7 @@ Status PmsmPowerStage::advance_special(const Eigen::Vector3d& duty, bool switchi
     freewheel(p_.inverter.t_pwm_s / n, n);
     duty_applied_ = Eigen::Vector3d::Constant(0.5);
   }
-  end_period();
+  end_period(isq0);
   return Status::kOk;
 }
 

@@ -12,11 +12,18 @@ Status PmsmRotorFrame::configure(const PmsmParams& p) {
   inv_ld_ = 1.0 / p.Ld_h;
   inv_lq_ = 1.0 / p.Lq_h;
   inv_j_ = 1.0 / p.J_kgm2;
-  load_is_const_ = p.load.kind == LoadKind::kConstant && !(p.load.coulomb_nm > 0.0);
+  load_is_const_ =
+      p.load.kind == LoadKind::kConstant && !(p.load.coulomb_nm > 0.0) && !dq_.cogging().active();
   const_load_nm_ = p.load.tau0_nm;
   plan_period_s_ = 0.0;  // step constants depend on the parameters: re-plan
   plan_n_sub_ = 0;
   return Status::kOk;
+}
+
+Status PmsmRotorFrame::set_electrical(double r_ohm, double flux_wb) {
+  const Status st = dq_.set_electrical(r_ohm, flux_wb);
+  if (st == Status::kOk) plan_period_s_ = 0.0;  // the step constants depend on R, flux
+  return st;
 }
 
 PmsmRotorFrame::State PmsmRotorFrame::make_state(double id_a, double iq_a, double omega_m,
@@ -74,6 +81,7 @@ PmsmRotorFrame::Y6 PmsmRotorFrame::rk4_substeps(const Y6& y0, const Input& u, do
             ((a.c + (b.c + b.c)) + c.c) * k3,     ((a.s + (b.s + b.s)) + c.s) * k3};
   };
   const PmsmParams& p = dq_.params();
+  const CoggingTorque& cog = dq_.cogging();
   const double h = stage_[1].sigma;
   const double half = stage_[0].sigma;
   // The input terms, constant over the period (ZOH): sigma/L times v.
@@ -88,7 +96,8 @@ PmsmRotorFrame::Y6 PmsmRotorFrame::rk4_substeps(const Y6& y0, const Input& u, do
   //   v_d = c v_alpha + s v_beta,  v_q = c v_beta - s v_alpha.
   const auto stage = [&](const Y& y, int k, double t_s) -> Y {
     const StageConsts& c = stage_[k];
-    const double l = kConstLoad ? c.l : c.inv_j * p.load.eval_nm(t_s, y.th, y.wm);
+    double l = kConstLoad ? c.l : c.inv_j * p.load.eval_nm(t_s, y.th, y.wm);
+    if (!kConstLoad && cog.active()) l -= c.inv_j * cog.torque_nm(y.th);
     const double w = c.w_e * y.wm;
     Y g;
     g.id = (y.c * ad[k] + y.s * bd[k]) + (c.x_d * (y.wm * y.iq) - c.r_d * y.id);

@@ -232,16 +232,26 @@ EncoderReading Encoder::sample(double theta_m_rad) {
   const double cpr = static_cast<double>(p_.counts_per_rev);
   const std::int64_t cpr_i = p_.counts_per_rev;
   EncoderReading r;
-  r.count = floor_turns(theta_m_rad * cpr) - edge0_;
+  const std::int64_t edge = floor_turns(theta_m_rad * cpr);
+  r.count = edge - edge0_;
+  // Quadrature state of the absolute edge number: 0 -> (0,0), 1 -> (1,0),
+  // 2 -> (1,1), 3 -> (0,1).
+  const std::int64_t q = edge & 3;
+  r.a = (q == 1) || (q == 2);
+  r.b = (q >= 2);
   std::int64_t in_rev = r.count;
   if (p_.has_index) {
     const std::int64_t rev = floor_turns(theta_m_rad - p_.index_angle_rad);
     if (rev != rev_idx_) {
       index_seen_ = true;  // the index mark was crossed since the last sample
+      r.index_crossed = true;
     }
     rev_idx_ = rev;
+    const std::int64_t abs_edge = floor_turns((theta_m_rad - p_.index_angle_rad) * cpr);
+    const std::int64_t abs_in_rev = ((abs_edge % cpr_i) + cpr_i) % cpr_i;
+    r.z = (abs_in_rev == 0);
     if (index_seen_) {
-      in_rev = floor_turns((theta_m_rad - p_.index_angle_rad) * cpr);
+      in_rev = abs_edge;
     }
   }
   if (in_rev_mask_ >= 0) {

@@ -54,6 +54,14 @@ const char* status_name(Status s) {
       return "bad_base";
     case Status::kBadPhase:
       return "bad_phase";
+    case Status::kBadCogging:
+      return "bad_cogging";
+    case Status::kBadThermal:
+      return "bad_thermal";
+    case Status::kBadSensor:
+      return "bad_sensor";
+    case Status::kBadLoadCount:
+      return "bad_load_count";
   }
   return "unknown";
 }

@@ -42,7 +42,7 @@ TEST(CanProto, IdentifierLayout) {
   EXPECT_EQ(5u, mc_can_id_node(mc_can_id(5u, 0x17u)));
   EXPECT_EQ(0x17u, mc_can_id_cmd(mc_can_id(5u, 0x17u)));
   EXPECT_EQ(MC_CAN_MSG_HEARTBEAT, mc_can_proto_find(MC_CAN_CMD_HEARTBEAT));
-  EXPECT_EQ(MC_CAN_MSG_COUNT, mc_can_proto_find(0x0Fu));  // unused id
+  EXPECT_EQ(MC_CAN_MSG_COUNT, mc_can_proto_find(0x0Du));  // unused id
 }
 
 // The same values cantools encodes to e8030030f8ff0005 (checked by hand
@@ -125,7 +125,7 @@ TEST(CanProto, UnpackRejectsFormatLengthIdAndRange) {
   EXPECT_EQ(MC_CAN_ERR_FORMAT, un(Frame(0x031, {1}, MC_HAL_CAN_FLAG_RTR)));
   EXPECT_EQ(MC_CAN_ERR_FORMAT, un(Frame(0x031, {1}, MC_HAL_CAN_FLAG_FD)));
   EXPECT_EQ(MC_CAN_ERR_FORMAT, un(Frame(0x031, {1}, MC_HAL_CAN_FLAG_EXT)));
-  EXPECT_EQ(MC_CAN_ERR_UNKNOWN_CMD, un(Frame(0x02F, {1})));
+  EXPECT_EQ(MC_CAN_ERR_UNKNOWN_CMD, un(Frame(0x02D, {1})));
   EXPECT_EQ(MC_CAN_ERR_LENGTH, un(Frame(0x032, {0, 0, 0xE8})));
   EXPECT_EQ(MC_CAN_ERR_LENGTH, un(Frame(0x031, {})));
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {0})));  // control_mode 1..3
@@ -455,7 +455,7 @@ TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
       {Frame(0x033, {0, 0, 0, 0}), MC_CAN_ERR_MODE},               // speed ref in CURRENT mode
       {Frame(0x035, {}), MC_CAN_ERR_MODE},                         // clear faults while enabled
       {Frame(0x022, {0, 0, 0, 0, 0, 0, 0, 0}), MC_CAN_ERR_UNKNOWN_CMD},  // a telemetry id
-      {Frame(0x02F, {}), MC_CAN_ERR_UNKNOWN_CMD},
+      {Frame(0x02D, {}), MC_CAN_ERR_UNKNOWN_CMD},
       {Frame(0x032, {0, 0, 0, 0xE8, 0x03, 0}, MC_HAL_CAN_FLAG_RTR), MC_CAN_ERR_FORMAT},
       {Frame(0x036, {2, 0xE8, 0x03}), MC_CAN_ERR_BUDGET},  // CURRENTS at 1000 Hz (see below)
       {Frame(0x036, {11, 1, 0}), MC_CAN_ERR_RANGE},
@@ -745,7 +745,7 @@ TEST_F(CanCmd, ErrorRepliesAreRateLimitedAndCounted) {
   // answered every one (16000/s); now a burst of 4, then 50 per second.
   uint32_t replies = 0;
   for (int k = 0; k < 1000; ++k) {
-    for (int i = 0; i < 16; ++i) (void)Send(Frame(0x03B, {}));
+    for (int i = 0; i < 16; ++i) (void)Send(Frame(0x02D, {}));
     mc_hal_can_frame_t f;
     while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) ++replies;
     mc_can_cmd_step(&c);

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <system_error>
 
+#include "can_test_frame.hpp"
 #include "hal_host/candump_log.hpp"
 #include "hal_host/socketcan.hpp"
 extern "C" {
@@ -19,16 +20,6 @@ extern "C" {
 }
 
 namespace {
-
-mc_hal_can_frame_t Fr(uint32_t id, std::initializer_list<uint8_t> b, uint8_t flags = 0) {
-  mc_hal_can_frame_t f{};
-  f.id = id;
-  f.flags = flags;
-  f.len = static_cast<uint8_t>(b.size());
-  size_t i = 0;
-  for (uint8_t x : b) f.data[i++] = x;
-  return f;
-}
 
 std::string Slurp(const std::string& p) {
   std::ifstream in(p);

@@ -5,7 +5,8 @@ decoded from the DBC by cantools:
 
  1. run 1 on a new file: boot EMPTY (summary and HEARTBEAT.cfg_status);
     PARAM_REQ WRITE speed_max_rad_s and tm_currents_hz, APPLY, SAVE: all OK,
-    SAVE answers record sequence 1; the file is a 32 KiB flash image;
+    SAVE answers record sequence 1 and from then on the heartbeat says
+    STORED (the store's status); the file is a 32 KiB flash image;
  2. run 2 on the same file: boot STORED, the summary names the parameters
     taken from the store, READ gives back both values, the CURRENTS frames
     come at the stored rate, a speed reference above the stored limit is
@@ -142,10 +143,15 @@ def main():
     assert all(x["status"] == 0 for x in rep), rep
     assert rep[3]["value"] == 1, rep  # SAVE: record sequence number
     assert s["cfg_boot_status"] == "EMPTY" and s["cfg_saves"] == 1, s
-    assert cfg_status(fr) == boot["EMPTY"]
+    # the heartbeat reports the store: EMPTY until the SAVE at 0.13 s, then
+    # STORED (the first heartbeat after it is at most one period, 0.1 s, later)
+    hb = [(t, v["cfg_status"]) for t, n, v in fr if n == "HEARTBEAT"]
+    before, after = [c for t, c in hb if t < 0.13], [c for t, c in hb if t > 0.13]
+    assert before and set(before) == {boot["EMPTY"]}, hb
+    assert after and set(after) == {boot["STORED"]}, hb
     assert os.path.getsize(flash) == 32768
     assert not os.path.exists(flash + ".tmp")
-    print("run 1: EMPTY, write/apply/save OK, seq 1")
+    print("run 1: EMPTY, write/apply/save OK, seq 1, the heartbeat STORED after the save")
 
     # 2. the next run boots with it
     r, s, fr = sil.run("run2", read_both + [

@@ -27,6 +27,22 @@ case "$target" in
     "$CXX" "${FLAGS[@]}" -std=c++17 -I firmware/kernels -I firmware/app -I firmware/app/drive -I firmware/app/ctrl -I firmware/app/can -I hal/include -I hal/fake \
       tests/fuzz/fuzz_drive_api.cpp "${objs[@]}" -o "$work/fuzz_$target"
     ;;
+  boot_update)
+    inc=(-I firmware/boot -I firmware/app -I firmware/app/can -I firmware/app/config
+         -I firmware/app/drive -I firmware/app/ctrl -I firmware/kernels -I hal/include -I hal/fake)
+    objs=()
+    for f in firmware/boot/mc_boot_image.c firmware/boot/mc_boot_update.c \
+             firmware/app/can/mc_boot_proto.c firmware/app/config/mc_crc32.c hal/fake/mc_fake_flash.c; do
+      o="$work/obj-$target/$(echo "$f" | tr '/' '_').o"
+      "$CC" "${FLAGS[@]/-fsanitize=fuzzer,/-fsanitize=fuzzer-no-link,}" -std=c11 "${inc[@]}" -c "$f" -o "$o"
+      objs+=("$o")
+    done
+    "$CXX" "${FLAGS[@]}" -std=c++17 "${inc[@]}" tests/fuzz/fuzz_boot_update.cpp "${objs[@]}" \
+      -o "$work/fuzz_$target"
+  socketcand)
+    "$CXX" "${FLAGS[@]}" -std=c++17 -I hal/host/include -I hal/include tests/fuzz/fuzz_socketcand.cpp \
+      hal/host/src/socketcand_proto.cpp -o "$work/fuzz_$target"
+    ;;
   *) echo "unknown fuzz target $target" >&2; exit 2 ;;
 esac
 cp -n tests/fuzz/corpus/"$target"/* "$work/corpus-$target/" 2>/dev/null || true

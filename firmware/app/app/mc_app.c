@@ -136,6 +136,7 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
             app->boot_status = (uint8_t)b;
         }
     }
+    app->status_sent_cfg = app->boot_status;
     return err;
 }
 
@@ -383,6 +384,46 @@ static void params_apply(void *ctx, const mc_params_t *p)
     }
 }
 
+/* BOOT_REQ (can/mc_boot_enter.h), answered on can. */
+static void boot_req(void *ctx, const mc_hal_can_frame_t *p_frame, bool busy,
+                     const mc_hal_can_t *can)
+{
+    mc_app_t *a = ctx;
+    mc_hal_can_frame_t r;
+    if ((mc_boot_enter_handle(&a->boot, p_frame, busy, &r) == 1u) && (can != NULL) &&
+        (mc_hal_can_send(can, &r) != 0)) {
+        a->cmd.reply_dropped++;
+    }
+}
+
+static void boot_start(mc_app_t *a)
+{
+    uint32_t seed = 0u;
+    if ((a->cfg.boot == NULL) || (a->cfg.enter_boot == NULL)) {
+        return;
+    }
+    (void)mc_hal_tick_read(a->hal->tick, &seed);
+    mc_boot_enter_init(&a->boot, a->cfg.boot, a->cmd.cfg.node_id, a->tick_hz, seed);
+    mc_can_cmd_attach_boot(&a->cmd, boot_req, a);
+    a->boot_on = true;
+}
+
+/* A confirmed ENTER, one slow step after its OK was queued: bridge off,
+ * then the board resets into the bootloader. */
+static void boot_service(mc_app_t *a)
+{
+    if (!a->boot_on) {
+        return;
+    }
+    if (mc_boot_enter_due(&a->boot)) {
+        (void)mc_drive_set_mode(a->drive, MC_DRIVE_MODE_IDLE);
+        a->boot_entries++;
+        a->cfg.enter_boot(a->cfg.boot_ctx);
+        a->boot.due = false; /* only off the MCU does enter_boot return */
+    }
+    mc_boot_enter_step(&a->boot);
+}
+
 uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
                       const mc_hal_can_t *can, bool init_drive)
 {
@@ -467,6 +508,7 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
         app->srv.hook.apply = params_apply;
         app->srv.hook.ctx = app;
     }
+    boot_start(app);
     app->tm_src.drive = drive;
     app->tm_src.cmd = &app->cmd;
     app->tm_src.ext = NULL;
@@ -595,14 +637,16 @@ static void status_send(mc_app_t *a)
     mc_hal_can_frame_t f;
     const uint32_t state = (uint32_t)a->can_status.state & 0x3u;
     const uint32_t key = (a->faults << 2u) | state;
-    if (key != a->status_sent_key) {
+    /* the store's status as the heartbeat says it (a SAVE changes it) */
+    const uint8_t cfg = (a->cmd.params != NULL) ? a->cmd.params->store_status : a->boot_status;
+    if ((key != a->status_sent_key) || (cfg != a->status_sent_cfg)) {
         a->status_pending = true;
     }
     if (!a->status_pending || (a->can == NULL)) {
         return;
     }
     v[MC_CAN_APP_STATUS_RESET_CAUSE] = (float)(a->reset_cause & 0x7Fu);
-    v[MC_CAN_APP_STATUS_CFG_STATUS] = (float)a->boot_status;
+    v[MC_CAN_APP_STATUS_CFG_STATUS] = (float)cfg;
     v[MC_CAN_APP_STATUS_CAN_STATE] = (float)state;
     v[MC_CAN_APP_STATUS_APP_FAULTS] = (float)(a->faults & 0xFu);
     v[MC_CAN_APP_STATUS_TX_ERR_COUNT] = sat_f(a->can_status.tx_err_count, 255u);
@@ -616,6 +660,7 @@ static void status_send(mc_app_t *a)
         a->status_frames++;
         a->status_pending = false;
         a->status_sent_key = key;
+        a->status_sent_cfg = cfg;
     }
 }
 
@@ -640,6 +685,7 @@ uint32_t mc_app_slow_work(mc_app_t *app)
     const uint32_t faults_before = app->drive->faults | app->drive->warnings;
     uint32_t n = 0u;
     mc_hal_can_frame_t f;
+    boot_service(app);
     /* commands, in reception order; the law of the control mode is
      * attached before each (a SET_ENABLE right after its SET_CONTROL_MODE
      * finds its law in place) */

@@ -58,6 +58,12 @@
  * with I-f start, PI2D, ...); POSITION by a plugged position law. A law's
  * setpoint hook and telemetry extension come with it (mc_app_law_t).
  *
+ * Firmware update (mc_app_cfg_t.boot and enter_boot, the board's): BOOT_REQ
+ * INFO, VERSION and the confirmed ENTER (can/mc_boot_enter.h). Once ENTER
+ * is confirmed, the next slow step opens the bridge and calls enter_boot,
+ * which resets into the bootloader (the board's; it does not return on the
+ * MCU). Without a binding BOOT_REQ is refused UNSUPPORTED.
+ *
  * Laws from the parameters (mc_app_cfg_t.laws_from_params; the MCU images
  * and the SIL): the application owns the sensorless, PI2D and position
  * instances and fills the two slots itself from the booted parameters:
@@ -88,6 +94,7 @@
 #include "hal/hal.h"
 #include "hal/wdg.h"
 #include "commission/mc_comm_can.h"
+#include "mc_boot_enter.h"
 #include "mc_can_cmd.h"
 #include "mc_cfg_store.h"
 #include "mc_ctrl_pi2d.h"
@@ -175,6 +182,11 @@ typedef struct {
      *  (id & mask == node << 5); NULL: the board has none. */
     int (*set_rx_filter)(void *ctx, uint32_t id, uint32_t mask);
     void *filter_ctx;
+    /** The running image's identity for BOOT_REQ, or NULL (not served). */
+    const mc_boot_enter_cfg_t *boot;
+    /** Reset into the bootloader (after a confirmed ENTER); with boot. */
+    void (*enter_boot)(void *ctx);
+    void *boot_ctx;
 } mc_app_cfg_t;
 
 /** The laws the application builds from the parameters, and the
@@ -216,9 +228,11 @@ typedef struct {
     uint32_t hw_rx_overruns; /**< controller FIFO overruns (HAL status) */
     uint32_t tm_sent;        /**< frames mask of the last telemetry step */
     /* APP_STATUS (cmd 0x0E): at boot when a reset cause is known, and at each
-     * change of the CAN state or of the application faults; retried at the
-     * next slow steps while the HAL refuses it (bus-off) */
+     * change of the CAN state, of the application faults or of the store's
+     * status (a SAVE); retried at the next slow steps while the HAL refuses
+     * it (bus-off) */
     uint32_t status_sent_key; /**< (faults, can_state) of the last one queued */
+    uint8_t status_sent_cfg;  /**< cfg_status of the last one queued (boot: the boot status) */
     uint32_t status_frames;   /**< APP_STATUS frames queued */
     /* supervision */
     uint32_t faults;  /**< MC_APP_FAULT_* (sticky) */
@@ -234,15 +248,18 @@ typedef struct {
     mc_telemetry_t tm;
     mc_params_t params; /**< the configuration booted */
     mc_app_rx_ring_t rx;
-    mc_app_laws_t laws;  /**< laws_from_params */
-    uint8_t boot_status; /**< mc_cfg_boot_t */
-    bool params_valid;   /**< the parameter service runs */
+    mc_app_laws_t laws;    /**< laws_from_params */
+    mc_boot_enter_t boot;  /**< BOOT_REQ (cfg.boot) */
+    uint32_t boot_entries; /**< enter_boot calls (it returns only off the MCU) */
+    uint8_t boot_status;   /**< mc_cfg_boot_t */
+    bool params_valid;     /**< the parameter service runs */
     bool have_store;
     bool status_pending;
     uint8_t status_seq;
     bool was_enabled;  /**< CAN run state of the previous slow step */
     bool laws_rebuilt; /**< the last APPLY's check rebuilt the laws (bridge off) */
     bool wdg_running;
+    bool boot_on; /**< BOOT_REQ served */
 } mc_app_t;
 
 /** What a scenario reads of the drive after a period (the simulator's

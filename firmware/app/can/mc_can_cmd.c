@@ -140,7 +140,7 @@ void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv)
         srv->hook.check = params_check;
         srv->hook.apply = params_apply;
         srv->hook.ctx = c;
-        c->cfg_status = srv->boot_status;
+        c->cfg_status = srv->store_status;
     }
 }
 
@@ -158,6 +158,25 @@ void mc_can_cmd_attach_commission(mc_can_cmd_t *c, mc_can_cmd_comm_fn fn, mc_can
 static bool comm_busy(const mc_can_cmd_t *c)
 {
     return (c->comm_busy != NULL) && c->comm_busy(c->comm_ctx);
+}
+
+void mc_can_cmd_attach_boot(mc_can_cmd_t *c, mc_can_cmd_boot_fn fn, void *ctx)
+{
+    if (c == NULL) {
+        return;
+    }
+    c->boot_fn = fn;
+    c->boot_ctx = (fn != NULL) ? ctx : NULL;
+}
+
+static mc_can_err_t do_boot(mc_can_cmd_t *c, const mc_hal_can_t *can,
+                            const mc_hal_can_frame_t *p_frame)
+{
+    if (c->boot_fn == NULL) {
+        return MC_CAN_ERR_UNSUPPORTED;
+    }
+    c->boot_fn(c->boot_ctx, p_frame, c->enabled || c->stopping || comm_busy(c), can);
+    return MC_CAN_ERR_NONE; /* answered, with its status, by BOOT_REPLY */
 }
 
 static mc_can_err_t do_commission(mc_can_cmd_t *c, const float *v)
@@ -188,6 +207,7 @@ static mc_can_err_t do_param(mc_can_cmd_t *c, const mc_hal_can_t *can, const flo
         value |= (uint32_t)p_frame->data[4u + i] << (8u * i);
     }
     st = mc_param_srv_request(c->params, op, id, &value);
+    c->cfg_status = c->params->store_status; /* a SAVE changes it */
     if (can == NULL) {
         return MC_CAN_ERR_NONE;
     }
@@ -393,6 +413,8 @@ static mc_can_err_t dispatch(mc_can_cmd_t *c, uint32_t msg, const float *v)
     }
     case MC_CAN_MSG_COMMISSION_CMD:
         return do_commission(c, v);
+    case MC_CAN_MSG_BOOT_DATA:
+        return MC_CAN_ERR_MODE; /* the bootloader's: not while the application runs */
     default:
         return MC_CAN_ERR_UNKNOWN_CMD;
     }
@@ -449,6 +471,8 @@ mc_can_err_t mc_can_cmd_handle(mc_can_cmd_t *c, const mc_hal_can_frame_t *p_fram
     }
     if ((e == MC_CAN_ERR_NONE) && (msg == MC_CAN_MSG_PARAM_REQ)) {
         e = do_param(c, can, v, p_frame);
+    } else if ((e == MC_CAN_ERR_NONE) && (msg == MC_CAN_MSG_BOOT_REQ)) {
+        e = do_boot(c, can, p_frame);
     } else if (e == MC_CAN_ERR_NONE) {
         e = dispatch(c, msg, v);
     }

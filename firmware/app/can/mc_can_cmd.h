@@ -36,6 +36,11 @@
  *                     (mc_param_srv.h), answered by one PARAM_REPLY with a
  *                     status; needs mc_can_cmd_attach_params (else
  *                     UNSUPPORTED)
+ *   BOOT_REQ          firmware update requests the application serves
+ *                     (INFO, VERSION, the confirmed ENTER; can/mc_boot_enter.h),
+ *                     each answered by its BOOT_REPLY; needs
+ *                     mc_can_cmd_attach_boot (else UNSUPPORTED). BOOT_DATA
+ *                     is the bootloader's: refused MODE
  *   COMMISSION_CMD    start / abort / report commissioning
  *                     (commission/mc_comm_can.h); needs
  *                     mc_can_cmd_attach_commission (else UNSUPPORTED);
@@ -156,6 +161,12 @@ typedef struct {
 typedef mc_can_err_t (*mc_can_cmd_comm_fn)(void *ctx, const float *v);
 typedef bool (*mc_can_cmd_busy_fn)(const void *ctx);
 
+/** Firmware update requests (BOOT_REQ): the frame, whether the drive must
+ *  not stop now (enabled, stopping, commissioning); the handler answers
+ *  on can itself (BOOT_REPLY). */
+typedef void (*mc_can_cmd_boot_fn)(void *ctx, const mc_hal_can_frame_t *p_frame, bool busy,
+                                   const mc_hal_can_t *can);
+
 typedef struct mc_can_cmd {
     mc_can_cmd_cfg_t cfg;
     mc_drive_t *drive;
@@ -189,12 +200,15 @@ typedef struct mc_can_cmd {
     mc_param_srv_t *params;       /**< parameter service, or NULL */
     uint8_t can_state;            /**< HEARTBEAT.can_state (mc_hal_can_bus_state_t): set by
                                  the application from the controller's status */
-    uint8_t cfg_status;           /**< HEARTBEAT.cfg_status: the boot status of the
-                                       parameter store (EMPTY without one: the
-                                       configuration is not from flash) */
+    uint8_t cfg_status;           /**< HEARTBEAT.cfg_status: the parameter store's
+                                       status (mc_param_srv_t.store_status: the boot
+                                       status, STORED after a SAVE); EMPTY without a
+                                       service (the configuration is not from flash) */
     mc_can_cmd_comm_fn comm_fn;   /**< COMMISSION_CMD, or NULL */
     mc_can_cmd_busy_fn comm_busy; /**< commissioning runs, or NULL */
     void *comm_ctx;
+    mc_can_cmd_boot_fn boot_fn; /**< BOOT_REQ, or NULL */
+    void *boot_ctx;
 } mc_can_cmd_t;
 
 /** Validate cfg and initialise c (disabled, control mode NONE). tm may be
@@ -215,6 +229,9 @@ void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv);
  *  UNSUPPORTED); busy tells when other commands must wait. */
 void mc_can_cmd_attach_commission(mc_can_cmd_t *c, mc_can_cmd_comm_fn fn, mc_can_cmd_busy_fn busy,
                                   void *ctx);
+
+/** Serve BOOT_REQ with fn (NULL: detach; the request is then UNSUPPORTED). */
+void mc_can_cmd_attach_boot(mc_can_cmd_t *c, mc_can_cmd_boot_fn fn, void *ctx);
 
 /**
  * Handle one received frame; on rejection queue a CMD_ERROR reply on can

@@ -86,6 +86,13 @@ static const mc_can_signal_t sig_app_status[8] = {
     {40u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* rx_lost [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
+static const mc_can_signal_t sig_boot_reply[5] = {
+    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* boot_op [-] */
+    {8u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* boot_status [-] */
+    {16u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* boot_state [-] */
+    {24u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* boot_reason [-] */
+    {32u, 32u, false, 1.0f, 0.0f, 0.0f, 4294967295.0f}, /* value [-] */
+};
 static const mc_can_signal_t sig_set_enable[1] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* enable [-] */
 };
@@ -119,6 +126,21 @@ static const mc_can_signal_t sig_param_reply[4] = {
     {8u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* param_id [-] */
     {24u, 8u, false, 1.0f, 0.0f, 0.0f, 8.0f}, /* status [-] */
     {32u, 32u, false, 1.0f, 0.0f, 0.0f, 4294967295.0f}, /* value [-] */
+};
+static const mc_can_signal_t sig_boot_req[3] = {
+    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* boot_op [-] */
+    {8u, 24u, false, 1.0f, 0.0f, 0.0f, 16777215.0f}, /* arg [-] */
+    {32u, 32u, false, 1.0f, 0.0f, 0.0f, 4294967295.0f}, /* value [-] */
+};
+static const mc_can_signal_t sig_boot_data[8] = {
+    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* chunk [-] */
+    {8u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* d0 [-] */
+    {16u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* d1 [-] */
+    {24u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* d2 [-] */
+    {32u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* d3 [-] */
+    {40u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* d4 [-] */
+    {48u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* d5 [-] */
+    {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* d6 [-] */
 };
 static const mc_can_signal_t sig_commission_cmd[4] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 2.0f}, /* action [-] */
@@ -159,6 +181,7 @@ const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
     {MC_CAN_CMD_CURRENT_REFS, 8u, MC_CAN_DIR_TX, 4u, sig_current_refs}, /* CURRENT_REFS */
     {MC_CAN_CMD_POSITION_REF, 8u, MC_CAN_DIR_TX, 3u, sig_position_ref}, /* POSITION_REF */
     {MC_CAN_CMD_APP_STATUS, 8u, MC_CAN_DIR_TX, 8u, sig_app_status}, /* APP_STATUS */
+    {MC_CAN_CMD_BOOT_REPLY, 8u, MC_CAN_DIR_TX, 5u, sig_boot_reply}, /* BOOT_REPLY */
     {MC_CAN_CMD_SET_ENABLE, 1u, MC_CAN_DIR_RX, 1u, sig_set_enable}, /* SET_ENABLE */
     {MC_CAN_CMD_SET_CONTROL_MODE, 1u, MC_CAN_DIR_RX, 1u, sig_set_control_mode}, /* SET_CONTROL_MODE */
     {MC_CAN_CMD_SET_CURRENT_REF, 6u, MC_CAN_DIR_RX, 2u, sig_set_current_ref}, /* SET_CURRENT_REF */
@@ -169,6 +192,8 @@ const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
     {MC_CAN_CMD_HOST_HEARTBEAT, 1u, MC_CAN_DIR_RX, 1u, sig_host_heartbeat}, /* HOST_HEARTBEAT */
     {MC_CAN_CMD_PARAM_REQ, 8u, MC_CAN_DIR_RX, 3u, sig_param_req}, /* PARAM_REQ */
     {MC_CAN_CMD_PARAM_REPLY, 8u, MC_CAN_DIR_TX, 4u, sig_param_reply}, /* PARAM_REPLY */
+    {MC_CAN_CMD_BOOT_REQ, 8u, MC_CAN_DIR_RX, 3u, sig_boot_req}, /* BOOT_REQ */
+    {MC_CAN_CMD_BOOT_DATA, 8u, MC_CAN_DIR_RX, 8u, sig_boot_data}, /* BOOT_DATA */
     {MC_CAN_CMD_COMMISSION_CMD, 8u, MC_CAN_DIR_RX, 4u, sig_commission_cmd}, /* COMMISSION_CMD */
     {MC_CAN_CMD_COMMISSION_STATUS, 8u, MC_CAN_DIR_TX, 6u, sig_commission_status}, /* COMMISSION_STATUS */
     {MC_CAN_CMD_COMMISSION_RESULT, 8u, MC_CAN_DIR_TX, 3u, sig_commission_result}, /* COMMISSION_RESULT */

@@ -204,6 +204,42 @@ mc_cfg_boot_t mc_cfg_store_load(mc_cfg_store_t *s, mc_params_t *p_out)
     return st;
 }
 
+int mc_cfg_store_find_raw(mc_cfg_store_t *s, uint32_t id, uint32_t *p_raw)
+{
+    bool any = false;
+    uint32_t hdr[MC_CFG_HDR_WORDS];
+    uint32_t words = 0u;
+    uint32_t i;
+    if ((s == NULL) || (p_raw == NULL)) {
+        return -EINVAL;
+    }
+    if (scan(s, &any) != 0) {
+        return -EIO;
+    }
+    if (s->active < 0) {
+        return -ENOENT;
+    }
+    i = (uint32_t)s->active;
+    if (check_record(s, i, s->newest_off, &words, hdr) != 0) {
+        return -EIO; /* valid during the scan, not now */
+    }
+    if ((hdr[1] & 0xFFFFu) != MC_CFG_FORMAT) {
+        return -ENOENT;
+    }
+    for (uint32_t k = 0u; k < (hdr[3] & 0xFFFFu); ++k) {
+        uint32_t e[2];
+        if (mc_hal_flash_read(s->cfg.flash, s->cfg.sector[i],
+                              s->newest_off + (MC_CFG_HDR_WORDS + 2u * k) * W, e, 2u * W) != 0) {
+            return -EIO;
+        }
+        if (e[0] == id) {
+            *p_raw = e[1];
+            return 0;
+        }
+    }
+    return -ENOENT;
+}
+
 /* [off, off + bytes) of sector i reads erased. */
 static bool region_erased(const mc_cfg_store_t *s, uint32_t i, uint32_t off, uint32_t bytes)
 {

@@ -102,6 +102,17 @@ int mc_cfg_store_init(mc_cfg_store_t *s, const mc_cfg_store_cfg_t *cfg);
 mc_cfg_boot_t mc_cfg_store_load(mc_cfg_store_t *s, mc_params_t *p_out);
 
 /**
+ * The raw value of parameter id in the newest valid record, whatever the
+ * record's table layout version (ids keep their meaning across layouts):
+ * for readers that do not hold the parameter table, the bootloader (its
+ * node id and bit rate). Nothing is validated beyond the record's CRC and
+ * format: the caller range-checks the value.
+ * @return 0 and *p_raw; -ENOENT (no valid record, another record format, or
+ *         no such id in it); -EIO (the flash could not be read); -EINVAL.
+ */
+int mc_cfg_store_find_raw(mc_cfg_store_t *s, uint32_t id, uint32_t *p_raw);
+
+/**
  * Write p as a new record (p must pass mc_params_validate: the store never
  * holds a configuration the drive would refuse). BLOCKING (may erase a
  * sector): only while the bridge is off.

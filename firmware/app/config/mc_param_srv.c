@@ -25,6 +25,7 @@ int mc_param_srv_init(mc_param_srv_t *s, const mc_params_t *p, mc_drive_t *drive
     s->hal = hal;
     s->store = store;
     s->boot_status = boot_status;
+    s->store_status = boot_status;
     return 0;
 }
 
@@ -44,7 +45,7 @@ static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
     case MC_PARAM_ID_CFG_LAYOUT_VERSION:
         return MC_PARAMS_LAYOUT_VERSION;
     case MC_PARAM_ID_CFG_STORE_STATUS:
-        return s->boot_status;
+        return s->store_status;
     case MC_PARAM_ID_CFG_STORE_SEQ:
         return (s->store != NULL) ? s->store->seq : 0u;
     case MC_PARAM_ID_CFG_PENDING:
@@ -173,9 +174,14 @@ mc_param_status_t mc_param_srv_request(mc_param_srv_t *s, uint32_t op, uint32_t 
         if (bridge_on(s)) {
             return MC_PARAM_ERR_RUNNING; /* an erase stalls the CPU for up to seconds */
         }
-        if ((s->store == NULL) || (mc_cfg_store_save(s->store, &s->active) != 0)) {
+        if (s->store == NULL) {
             return MC_PARAM_ERR_STORE;
         }
+        if (mc_cfg_store_save(s->store, &s->active) != 0) {
+            s->store_status = (uint8_t)MC_CFG_BOOT_FLASH;
+            return MC_PARAM_ERR_STORE;
+        }
+        s->store_status = (uint8_t)MC_CFG_BOOT_STORED;
         *p_value = s->store->seq;
         return MC_PARAM_OK;
     default: /* MC_PARAM_OP_LOAD_DEFAULTS */

@@ -62,6 +62,10 @@ typedef struct {
     const mc_hal_t *hal;
     mc_cfg_store_t *store; /**< NULL: SAVE answers STORE */
     uint8_t boot_status;   /**< mc_cfg_boot_t of the boot */
+    uint8_t store_status;  /**< the store's status now (HEARTBEAT.cfg_status,
+                                cfg_store_status): the boot status until a SAVE,
+                                then STORED (the applied set is the newest record)
+                                or, when the SAVE failed, FLASH */
     mc_param_hook_t hook;  /**< optional (fields NULL) */
     uint32_t applied;      /**< successful APPLYs */
     uint32_t law_error;    /**< the law_error parameter (the application's) */

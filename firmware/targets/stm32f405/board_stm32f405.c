@@ -22,6 +22,10 @@
  *                 (50 ms, 4 s around an erase) and the reset flags of
  *                 RCC_CSR, the board's defaults below (what runs when no
  *                 stored configuration is valid).
+ *   update        BOOT_REQ INFO, VERSION and the confirmed ENTER answered
+ *                 from this image's header (mc_image_header.h); ENTER
+ *                 waits for the OK to leave, then resets into the
+ *                 bootloader through the mailbox (mc_boot_handoff.h).
  *   gate driver   EN_GATE and nFAULT pins; a DRV8301 set up over SPI3
  *                 (gain, over-current threshold and mode) and verified
  *                 before the drive starts; a failed set-up halts the image
@@ -43,10 +47,12 @@
 #include "mc_board.h"
 #include "mc_board_comm.h"
 #include "mc_board_f405.h"
+#include "mc_boot_handoff.h"
 #include "mc_clock.h"
 #include "mc_cortexm.h"
 #include "mc_f405_flash.h"
 #include "mc_f405_iwdg.h"
+#include "mc_image_header.h"
 #include "mc_params.h"
 #include "mc_stm32f405.h"
 
@@ -74,6 +80,7 @@ extern const mc_board_desc_t MC_BOARD_DESC;
 #define WDG_TIMEOUT_MS   50u   /* 50 slow periods; >= 34 ms at the fastest LSI */
 #define WDG_ERASE_MS     4000u /* >= 2.7 s at the fastest LSI: a 128 KiB erase */
 #define TM_BUDGET_FRAC   0.5f
+#define TX_DRAIN_POLLS   200000u /* >= 5 ms of TSR reads: the OK of ENTER leaves */
 
 void CAN1_RX0_IRQHandler(void);
 
@@ -135,6 +142,17 @@ static int set_node_filter(void *ctx, uint32_t id, uint32_t mask)
     b->node_filter[0].mask = mask;
     b->node_filter[0].ext = false;
     return mc_f405_can_set_filters(&b->f405.can, b->node_filter, 1u);
+}
+
+/* A confirmed ENTER (mc_app.h): the bridge is off; the OK leaves, then the
+ * bootloader. */
+static void enter_boot(void *ctx)
+{
+    const drive_board_t *b = ctx;
+    for (uint32_t i = 0u;
+         (i < TX_DRAIN_POLLS) && b->f405.can_ok && !mc_f405_can_tx_idle(&b->f405.can); ++i) {
+    }
+    mc_boot_mailbox_enter(NULL);
 }
 
 const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
@@ -243,6 +261,9 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
     b->app.laws_from_params = true;
     b->app.set_rx_filter = set_node_filter;
     b->app.filter_ctx = b;
+    b->app.boot = &mc_image_boot_cfg;
+    b->app.enter_boot = enter_boot;
+    b->app.boot_ctx = b;
     return &b->app;
 }
 

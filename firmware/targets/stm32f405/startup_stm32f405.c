@@ -2,9 +2,13 @@
  * @file startup_stm32f405.c
  * @brief Reset handler and vector table of the STM32F405 (Cortex-M4F).
  *
- * Reset: enable the FPU (CP10/CP11 full access, before any floating-point
- * instruction; lazy FP context stacking is the reset default and is set
- * explicitly), copy .data from flash, zero .bss and .ccmbss, then main().
+ * Reset: point VTOR at this image's vector table (an application linked
+ * into the slot behind the bootloader, firmware/boot/mc_boot_layout.h, takes
+ * its interrupts from its own table; the bootloader at 0x08000000 sets the
+ * reset value), enable the FPU (CP10/CP11 full access, before any
+ * floating-point instruction; lazy FP context stacking is the reset default
+ * and is set explicitly), copy .data from flash, zero .bss and .ccmbss, then
+ * main().
  * The clock tree is set by main (mc_clock.h), not here, so that its result
  * can be reported.
  *
@@ -138,8 +142,11 @@ static size_t words_between(const uint32_t *start, const uint32_t *end)
     return (size_t)(((uintptr_t)end - (uintptr_t)start) / sizeof(uint32_t));
 }
 
+static void vtor_set(void);
+
 void Reset_Handler(void)
 {
+    vtor_set();
     /* FPU first: the C code below may already use FP registers. */
     MC_SCB_CPACR |= MC_SCB_CPACR_FPU_FULL;
     mc_dsb();
@@ -202,3 +209,10 @@ __attribute__((section(".isr_vector"),
     CRYP_IRQHandler, HASH_RNG_IRQHandler, /* 80 */
     FPU_IRQHandler,                       /* 81 */
 };
+
+static void vtor_set(void)
+{
+    /* NOLINTNEXTLINE(performance-no-int-to-ptr): the table's address as the register wants it */
+    MC_SCB_VTOR = (uint32_t)(uintptr_t)mc_vectors;
+    mc_dsb();
+}

@@ -8,19 +8,10 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "hal_host/can_ops.hpp"
+
 namespace hal_host {
 namespace {
-
-int op_send(void* ctx, const mc_hal_can_frame_t* f) {
-  return static_cast<CandumpLogCan*>(ctx)->send(f);
-}
-int op_receive(void* ctx, mc_hal_can_frame_t* f) {
-  return static_cast<CandumpLogCan*>(ctx)->receive(f);
-}
-int op_status(void* ctx, mc_hal_can_status_t* s) {
-  return static_cast<CandumpLogCan*>(ctx)->get_status(s);
-}
-const mc_hal_can_ops_t kOps = {op_send, op_receive, op_status};
 
 int hex_digit(char c) {
   if (c >= '0' && c <= '9') return c - '0';
@@ -133,6 +124,32 @@ bool candump_parse(const std::string& line, double* t_s, mc_hal_can_frame_t* f) 
   return true;
 }
 
+CandumpScript::CandumpScript(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read CAN command script '" + path + "'");
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
+    Timed tf{};
+    if (!candump_parse(line, &tf.t_s, &tf.f)) {
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": not a candump -L line");
+    }
+    if (!frames_.empty() && tf.t_s < frames_.back().t_s) {
+      throw std::runtime_error(path + ":" + std::to_string(n) + ": time goes backwards");
+    }
+    frames_.push_back(tf);
+  }
+}
+
+bool CandumpScript::next_due(double now_s, mc_hal_can_frame_t* f) {
+  if (next_ >= frames_.size() || frames_[next_].t_s > now_s) return false;
+  *f = frames_[next_++].f;
+  return true;
+}
+
 CandumpLogCan::CandumpLogCan(const std::string& out_path, const std::string& iface,
                              std::function<double()> now_s, const std::string& rx_path,
                              std::function<uint32_t()> now_ticks, std::function<double()> rx_now_s)
@@ -142,32 +159,14 @@ CandumpLogCan::CandumpLogCan(const std::string& out_path, const std::string& ifa
       now_ticks_(std::move(now_ticks)) {
   if (!now_s_) throw std::invalid_argument("CandumpLogCan: a clock is required");
   if (!rx_now_s_) rx_now_s_ = now_s_;
-  if (!rx_path.empty()) {
-    std::ifstream in(rx_path);
-    if (!in) throw std::runtime_error("cannot read CAN command script '" + rx_path + "'");
-    std::string line;
-    int n = 0;
-    while (std::getline(in, line)) {
-      ++n;
-      if (!line.empty() && line.back() == '\r') line.pop_back();
-      if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
-      Timed tf{};
-      if (!candump_parse(line, &tf.t_s, &tf.f)) {
-        throw std::runtime_error(rx_path + ":" + std::to_string(n) + ": not a candump -L line");
-      }
-      if (!script_.empty() && tf.t_s < script_.back().t_s) {
-        throw std::runtime_error(rx_path + ":" + std::to_string(n) + ": time goes backwards");
-      }
-      script_.push_back(tf);
-    }
-  }
+  if (!rx_path.empty()) script_ = std::make_unique<CandumpScript>(rx_path);
   if (!out_path.empty()) {
     out_ = std::fopen(out_path.c_str(), "w");
     if (out_ == nullptr) {
       throw std::runtime_error("cannot write CAN log '" + out_path + "': " + std::strerror(errno));
     }
   }
-  dev_.ops = &kOps;
+  dev_.ops = can_ops<CandumpLogCan>();
   dev_.ctx = this;
 }
 
@@ -199,17 +198,15 @@ int CandumpLogCan::send(const mc_hal_can_frame_t* f) noexcept {
 }
 
 int CandumpLogCan::receive(mc_hal_can_frame_t* f) noexcept {
-  if (next_ >= script_.size()) return -EAGAIN;
+  if (!script_) return -EAGAIN;
   double now = 0.0;
   try {
     now = rx_now_s_();
   } catch (...) {
     return -EIO;
   }
-  if (script_[next_].t_s > now) return -EAGAIN;
-  *f = script_[next_].f;
+  if (!script_->next_due(now, f)) return -EAGAIN;
   f->timestamp_ticks = now_ticks_ ? now_ticks_() : 0u;
-  ++next_;
   ++stats_.rx_frames;
   return 0;
 }

@@ -81,7 +81,11 @@ void PilLink::start() {
   } else {
     args.insert(args.end(), {"-semihosting-config", "enable=on,target=native"});
   }
-  args.insert(args.end(), {"-kernel", opt_.elf});
+  if (opt_.boot_elf.empty()) {
+    args.insert(args.end(), {"-kernel", opt_.elf});
+  } else {
+    args.insert(args.end(), {"-kernel", opt_.boot_elf, "-device", "loader,file=" + opt_.elf});
+  }
   std::vector<char*> argv;
   argv.reserve(args.size() + 1);
   for (auto& a : args) argv.push_back(a.data());

@@ -12,19 +12,10 @@
 #include <system_error>
 #include <unistd.h>
 
+#include "hal_host/can_ops.hpp"
+
 namespace hal_host {
 namespace {
-
-int op_send(void* ctx, const mc_hal_can_frame_t* f) {
-  return static_cast<SocketCan*>(ctx)->send(f);
-}
-int op_receive(void* ctx, mc_hal_can_frame_t* f) {
-  return static_cast<SocketCan*>(ctx)->receive(f);
-}
-int op_status(void* ctx, mc_hal_can_status_t* s) {
-  return static_cast<SocketCan*>(ctx)->get_status(s);
-}
-const mc_hal_can_ops_t kOps = {op_send, op_receive, op_status};
 
 [[noreturn]] void fail(int err, const std::string& what, const std::string& ifname) {
   throw std::system_error(err, std::generic_category(), "SocketCAN " + ifname + ": " + what);
@@ -77,7 +68,7 @@ SocketCan::SocketCan(const std::string& ifname, bool fd, std::function<uint32_t(
   }
   status_.state = MC_HAL_CAN_STATE_ERROR_ACTIVE;
   status_.fd_capable = fd_capable_;
-  dev_.ops = &kOps;
+  dev_.ops = can_ops<SocketCan>();
   dev_.ctx = this;
 }
 

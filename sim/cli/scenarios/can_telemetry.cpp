@@ -4,13 +4,17 @@
 // flash configuration, sensored speed loop) bound to it; this file only binds
 // the application to the simulated board, its CAN and its flash file.
 //
-// Where the frames go (environment, since scenario parameters are numbers):
+// Where the frames go (environment, since scenario parameters are numbers;
+// sim/cli/can_bus.hpp):
 //   MCSIM_CAN_IF=vcan0     a SocketCAN interface (hal_host::SocketCan):
 //                          telemetry out, commands in (cansend, mc_can.py);
+//   MCSIM_CAN_IF=socketcand:127.0.0.1:29536
+//                          a socketcand server (hal_host::SocketcandCan) for
+//                          python-can's socketcand interface (mdtool);
 //   otherwise              the candump log MCSIM_CAN_LOG (default
 //                          ./can-telemetry.candump.log), time-stamped with
-//                          the simulated time, and commands from the
-//                          candump-format script MCSIM_CAN_CMDS if set.
+//                          the simulated time;
+// commands from the candump-format script MCSIM_CAN_CMDS if set (any of them).
 // The motor and board: the paper-002 test motor on FocSil's 200 V board
 // (no --motor), or any motor and board of sim/motors/ (--motor FILE
 // [--board FILE], MotorRig of drive_setup.hpp: the plant, sensors and the
@@ -71,12 +75,11 @@
 #include <vector>
 
 #include "app_binding.hpp"
+#include "can_bus.hpp"
 #include "drive_setup.hpp"
 #include "foc_sil.hpp"
 #include "hal_host/app_rig.hpp"
-#include "hal_host/candump_log.hpp"
 #include "hal_host/file_flash.hpp"
-#include "hal_host/socketcan.hpp"
 #include "scenario.hpp"
 extern "C" {
 #include "commission/mc_comm_can.h"
@@ -320,40 +323,11 @@ void run_can_telemetry(RunContext& ctx) {
   }
   const uint32_t tick_hz = static_cast<uint32_t>(std::lround(tick_hz_d));
 
-  // CAN: a SocketCAN interface, or a candump log (and a command script).
+  // CAN: a candump log, SocketCAN or a socketcand server (sim/cli/can_bus.hpp).
   hal_host::PmsmBoard& board = cb.board();
-  auto ticks = [&board]() {
-    uint32_t t = 0;
-    (void)board.tick_read(&t);
-    return t;
-  };
-  const std::string iface = env_or("MCSIM_CAN_IF", "");
-  std::unique_ptr<hal_host::SocketCan> sock;
-  std::unique_ptr<hal_host::CandumpLogCan> logcan;
-  const mc_hal_can_t* can = nullptr;
-  if (!iface.empty()) {
-    try {
-      sock = std::make_unique<hal_host::SocketCan>(iface, false, ticks);
-    } catch (const std::system_error& e) {
-      throw UsageError(std::string(e.what()) +
-                       " (is the interface up? see tools/vm for a VM with vcan)");
-    }
-    can = sock->hal();
-  } else {
-    const std::string log = env_or("MCSIM_CAN_LOG", "can-telemetry.candump.log");
-    try {
-      // a period's frames stamped with its end (the drive's loops run within
-      // it), the script's frames received at the start of a period
-      // (hal_host::app_period's receive interrupt) once their stamp is reached
-      logcan = std::make_unique<hal_host::CandumpLogCan>(
-          log, env_or("MCSIM_CAN_LOG_IFACE", "can0"),
-          [&board]() { return board.t_s() + board.period_s(); }, env_or("MCSIM_CAN_CMDS", ""),
-          ticks, [&board]() { return board.t_s(); });
-    } catch (const std::runtime_error& e) {
-      throw UsageError(e.what());
-    }
-    can = logcan->hal();
-  }
+  const std::unique_ptr<hal_host::CanTransport> can_bus =
+      open_can_bus(board, P.get("realtime") != 0.0);
+  const mc_hal_can_t* can = can_bus->hal();
 
   // The laws of SPEED (speed_law) and POSITION from the parameters.
   app.cfg.laws_from_params = true;
@@ -485,7 +459,7 @@ void run_can_telemetry(RunContext& ctx) {
     }
   }
   ctx.summary.set("t_end_s", board.t_s());
-  if (logcan && !logcan->flush()) throw std::runtime_error("write error on the CAN log");
+  close_can_bus(*can_bus, ctx.summary);
 
   ctx.summary.set("tick_hz", tick_hz);
   ctx.summary.set("bus_load_frac", tm.load_frac);
@@ -537,19 +511,6 @@ void run_can_telemetry(RunContext& ctx) {
     ctx.summary.set("cfg_saves", app.store.saves);
     ctx.summary.set("cfg_applied", app.srv.applied);
     ctx.summary.set("flash_persist_errors", ctx.flash->persist_errors());
-  }
-  if (sock) {
-    const auto& s = sock->stats();
-    ctx.summary.set_text("can_interface", iface);
-    ctx.summary.set("socketcan_tx_nobufs", static_cast<double>(s.tx_nobufs));
-    ctx.summary.set("socketcan_tx_netdown", static_cast<double>(s.tx_netdown));
-    ctx.summary.set("socketcan_rx_frames", static_cast<double>(s.rx_frames));
-    ctx.summary.set("socketcan_rx_error_frames", static_cast<double>(s.rx_error_frames));
-    ctx.summary.set("socketcan_rx_dropped", s.rx_dropped);
-  } else {
-    ctx.summary.set_text("can_log", env_or("MCSIM_CAN_LOG", "can-telemetry.candump.log"));
-    ctx.summary.set("can_log_frames", static_cast<double>(logcan->stats().tx_frames));
-    ctx.summary.set("can_script_frames", static_cast<double>(logcan->stats().rx_frames));
   }
 }
 
@@ -641,8 +602,9 @@ std::vector<ParamSpec> file_params(const MotorFiles& f) {
 Scenario make_scenario() {
   Scenario s{"can-telemetry",
              "FOC drive (paper-002 test motor, or --motor FILE [--board FILE]) with CAN "
-             "telemetry and commands: frames to SocketCAN (MCSIM_CAN_IF=vcan0) or to a candump "
-             "log (MCSIM_CAN_LOG, commands from MCSIM_CAN_CMDS)",
+             "telemetry and commands: frames to SocketCAN (MCSIM_CAN_IF=vcan0), a socketcand "
+             "server (MCSIM_CAN_IF=socketcand:127.0.0.1:29536) or a candump log "
+             "(MCSIM_CAN_LOG; commands from MCSIM_CAN_CMDS)",
              2.0,
              own_params(),
              run_can_telemetry,

@@ -22,6 +22,17 @@
 // holds to rounding; a test checks it, and the regen-stop scenario checks
 // the motor side (E_inverter against kinetic energy and losses) with it.
 //
+// Several loads (advance_loads): the inverters of several axes on the one
+// capacitor and supply (issue 34 item 2: braking on one axis feeds the
+// other), i_inv = sum_k i_inv_k; each load's energy integral v i_inv_k is
+// kept apart (load_j(k)), so the balance reads
+//   E_source = E_rs + E_brake + sum_k E_load_k + (C/2)(v^2 - v0^2).
+//
+// The supply's current: source_a() at the present voltage, and
+// source_avg_a() the mean of i_s over the last advance (the charge the
+// source delivered over it, in closed form like the energies; positive:
+// drawn from the supply). It is the plant's i_bus_a of issue 33.
+//
 // Nothing here allocates; no firmware header (the plant is independent).
 #ifndef MCSIM_DC_LINK_HPP
 #define MCSIM_DC_LINK_HPP
@@ -32,6 +43,8 @@
 #include "mcsim/status.hpp"
 
 namespace mcsim {
+
+constexpr int kDcLinkMaxLoads = 4;
 
 struct DcLinkParams {
   double source_v = 24.0;      // open-circuit supply voltage [V], > 0
@@ -54,6 +67,8 @@ struct DcLinkEnergy {
   double source_r_j = 0;  // dissipated in r_s
   double brake_j = 0;     // dissipated in the brake resistor
   double inverter_j = 0;  // drawn by the inverter (integral v i_inv; < 0 when braking)
+  double load_j[kDcLinkMaxLoads] = {0, 0, 0, 0};  // per load (advance_loads); [0] for advance()
+  double source_c = 0;  // charge delivered by the source (integral i_s) [C]
 };
 
 class DcLink {
@@ -65,6 +80,7 @@ class DcLink {
     v_ = p.source_v;
     v0_ = v_;
     e_ = DcLinkEnergy{};
+    source_avg_a_ = 0.0;
     return Status::kOk;
   }
   const DcLinkParams& params() const { return p_; }
@@ -77,11 +93,37 @@ class DcLink {
     const double i = (p_.source_v - v_) / p_.source_r_ohm;
     return (!p_.source_sink && i < 0.0) ? 0.0 : i;
   }
+  // Mean source current over the last advance (0 before the first) [A].
+  double source_avg_a() const { return source_avg_a_; }
+  // Energy drawn by load k (< 0: fed back) since configure() [J]; 0 for k
+  // outside [0, kDcLinkMaxLoads).
+  double load_j(int k) const { return (k >= 0 && k < kDcLinkMaxLoads) ? e_.load_j[k] : 0.0; }
 
   // Advance by h_s with the inverter current i_inv_a and the brake duty
   // brake_duty (clamped to [0, 1]; ignored without a resistor) held
   // constant, in n equal sub-steps.
   void advance(double h_s, int n, double i_inv_a, double brake_duty) {
+    (void)advance_loads(h_s, n, &i_inv_a, 1, brake_duty);  // one load: cannot fail
+  }
+
+  // Advance with n_loads inverters (i_inv_a[k], each held) on the link:
+  // their currents add. kBadLoadCount (nothing changed) for n_loads outside
+  // [1, kDcLinkMaxLoads] or a null pointer.
+  Status advance_loads(double h_s, int n, const double* i_inv_a, int n_loads, double brake_duty) {
+    if (i_inv_a == nullptr || n_loads < 1 || n_loads > kDcLinkMaxLoads) {
+      return Status::kBadLoadCount;
+    }
+    double i_sum = i_inv_a[0];
+    for (int k = 1; k < n_loads; ++k) i_sum += i_inv_a[k];
+    const double q0 = e_.source_c;
+    advance_total(h_s, n, i_sum, brake_duty, i_inv_a, n_loads);
+    source_avg_a_ = (h_s > 0.0) ? (e_.source_c - q0) / h_s : 0.0;
+    return Status::kOk;
+  }
+
+ private:
+  void advance_total(double h_s, int n, double i_inv_a, double brake_duty, const double* loads,
+                     int n_loads) {
     const double d = (p_.brake_r_ohm > 0.0) ? std::clamp(brake_duty, 0.0, 1.0) : 0.0;
     const double gb = (p_.brake_r_ohm > 0.0) ? d / p_.brake_r_ohm : 0.0;
     const double h = h_s / n;
@@ -107,17 +149,17 @@ class DcLink {
             t = std::min(left, (vs - v_) / a);
           }
         }
-        sub(t, a, b, gs, gb, i_inv_a);
+        sub(t, a, b, gs, gb, i_inv_a, loads, n_loads);
         if (t < left) v_ = p_.source_v;  // stopped at the crossing
         left -= t;
       }
     }
   }
 
- private:
   // One exact piece: v' = a - b v over t; energies from the integrals of v
   // and v^2 in closed form.
-  void sub(double t, double a, double b, double gs, double gb, double i_inv) {
+  void sub(double t, double a, double b, double gs, double gb, double i_inv, const double* loads,
+           int n_loads) {
     if (!(t > 0.0)) return;
     const double v0 = v_;
     double v1, iv, iv2;  // v(t), int v, int v^2
@@ -138,11 +180,14 @@ class DcLink {
     e_.source_r_j += gs * (vs * vs * t - 2.0 * vs * iv + iv2);
     e_.brake_j += gb * iv2;
     e_.inverter_j += i_inv * iv;
+    for (int k = 0; k < n_loads; ++k) e_.load_j[k] += loads[k] * iv;
+    e_.source_c += gs * (vs * t - iv);
     v_ = v1;
   }
 
   DcLinkParams p_{};
   double v_ = 24.0, v0_ = 24.0;
+  double source_avg_a_ = 0.0;
   DcLinkEnergy e_{};
 };
 

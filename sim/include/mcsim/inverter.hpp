@@ -21,6 +21,28 @@
 //   v_x = clamp(d_x vbus - 2 sat(i_x / i_dead_band_a) (t_dead/T_pwm) vbus, -vbus, vbus)
 // (both legs of a bridge lose the dead time with the same sign relative to the
 // winding current, hence the factor 2).
+//
+// InverterCommonLeg: a three-leg bridge driving a two-phase stepper with a
+// common leg (issue 34 item 3; SimpleFOC's hybrid-stepper driver wires it
+// so): winding a between legs 1 and 3, winding b between legs 2 and 3.
+//   duty (3, each clamped to [0, 1]), vbus_v, i_ab_a (winding currents,
+//   positive from leg 1 (2) through the winding into the common leg 3)
+//   leg currents (positive out of the leg): i_1 = i_a, i_2 = i_b,
+//   i_3 = -(i_a + i_b)
+//   pole voltages v_k as Inverter3Ph's (same dead-time term with i_k)
+//   winding voltages v_a = v_1 - v_3, v_b = v_2 - v_3
+// Voltage limit. With every pole in [0, V] the reachable (v_a, v_b) are
+// the differences of two poles each against the same third: |v_a| <= V,
+// |v_b| <= V and |v_a - v_b| = |v_1 - v_2| <= V, a hexagon with vertices
+// (V, 0), (V, V), (0, V), (-V, 0), (-V, -V), (0, -V); and every point of it
+// is reachable (v_3 = max(0, -v_a, -v_b) puts all three poles in [0, V]).
+// A stepper is driven by quadrature voltages (U cos p, U sin p): the
+// binding edge is |v_a - v_b| = sqrt(2) U |cos(p + pi/4)| <= V, so the
+// amplitude reachable at every angle is
+//   U_max = V / sqrt(2)  (0.707 V),
+// against V for two full H-bridges (the square |v_a|, |v_b| <= V). The
+// common-mode choice (the firmware's) does not change the windings'
+// voltages; the DC current is sum_k d_k i_k as for the three-phase bridge.
 #ifndef MCSIM_INVERTER_HPP
 #define MCSIM_INVERTER_HPP
 
@@ -60,6 +82,34 @@ class Inverter3Ph {
 
  private:
   InverterParams p_{};
+};
+
+class InverterCommonLeg {
+ public:
+  InverterCommonLeg() = default;
+  // Validates p; on error returns the code and keeps the previous parameters.
+  Status configure(const InverterParams& p);
+  const InverterParams& params() const { return legs_.params(); }
+
+  // Leg (pole) voltages to the negative rail [V].
+  Eigen::Vector3d pole_voltages_v(const Eigen::Vector3d& duty, double vbus_v,
+                                  const Eigen::Vector2d& i_ab_a) const;
+  // Winding voltages (v_a, v_b) = (v_1 - v_3, v_2 - v_3) [V].
+  Eigen::Vector2d voltages_v(const Eigen::Vector3d& duty, double vbus_v,
+                             const Eigen::Vector2d& i_ab_a) const;
+  // The leg currents (i_a, i_b, -(i_a + i_b)), positive out of the leg [A].
+  static Eigen::Vector3d leg_currents_a(const Eigen::Vector2d& i_ab_a) {
+    return {i_ab_a(0), i_ab_a(1), -(i_ab_a(0) + i_ab_a(1))};
+  }
+  // Average DC-bus current drawn by the bridge [A]: sum d_k i_k.
+  static double dc_current_a(const Eigen::Vector3d& duty, const Eigen::Vector2d& i_ab_a);
+  // The hexagon: |v_a|, |v_b|, |v_a - v_b| all <= vbus (to rel. 1e-12).
+  static bool reachable(const Eigen::Vector2d& v_ab, double vbus_v);
+  // The quadrature amplitude reachable at every angle: vbus / sqrt(2).
+  static double max_quadrature_amplitude_v(double vbus_v);
+
+ private:
+  Inverter3Ph legs_;
 };
 
 class InverterHBridge2 {

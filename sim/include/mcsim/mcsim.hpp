@@ -2,7 +2,10 @@
 #ifndef MCSIM_MCSIM_HPP
 #define MCSIM_MCSIM_HPP
 
+#include "mcsim/cogging.hpp"
+#include "mcsim/dc_link.hpp"
 #include "mcsim/frames.hpp"
+#include "mcsim/hall.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/inverter.hpp"
 #include "mcsim/load_torque.hpp"
@@ -13,8 +16,11 @@
 #include "mcsim/pmsm_power_stage.hpp"
 #include "mcsim/pmsm_rotor_frame.hpp"
 #include "mcsim/sensors.hpp"
+#include "mcsim/spi_encoders.hpp"
 #include "mcsim/status.hpp"
 #include "mcsim/stepper_2ph.hpp"
+#include "mcsim/stepper_common_leg_stage.hpp"
 #include "mcsim/stepper_power_stage.hpp"
+#include "mcsim/thermal.hpp"
 
 #endif  // MCSIM_MCSIM_HPP

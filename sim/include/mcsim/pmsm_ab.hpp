@@ -55,6 +55,7 @@ class PmsmAb {
 
  private:
   PmsmParams p_{};
+  CoggingTorque cog_{};
 };
 
 }  // namespace mcsim

@@ -12,7 +12,8 @@
 // Equations (omega_e = p omega_m, amplitude-invariant dq):
 //   Ld di_d/dt = v_d - R i_d + omega_e Lq i_q
 //   Lq di_q/dt = v_q - R i_q - omega_e (Ld i_d + flux)
-//   J dw_m/dt  = 3/2 p (flux i_q + (Ld - Lq) i_d i_q) - B w_m - load(t, th_m, w_m)
+//   J dw_m/dt  = 3/2 p (flux i_q + (Ld - Lq) i_d i_q) + cog(th_m) - B w_m
+//                - load(t, th_m, w_m)     (cog: cogging.hpp, 0 by default)
 //   dth_m/dt   = w_m
 #ifndef MCSIM_PMSM_DQ_HPP
 #define MCSIM_PMSM_DQ_HPP
@@ -35,11 +36,18 @@ class PmsmDq {
   // Validates p; on error returns the code and keeps the previous parameters.
   Status configure(const PmsmParams& p);
   const PmsmParams& params() const { return p_; }
+  // Resistance and PM flux only (e.g. from a thermal model); the same
+  // checks as configure() (kNonPositiveResistance, kNegativeFlux,
+  // kNotFinite), nothing changed on error.
+  Status set_electrical(double r_ohm, double flux_wb);
+  const CoggingTorque& cogging() const { return cog_; }
 
   State deriv(double t_s, const State& x, const Input& u) const;
 
-  double torque_nm(const State& x) const;                      // electromagnetic
-  double load_nm(double t_s, const State& x) const;            // load model incl. Coulomb
+  double torque_nm(const State& x) const;            // electromagnetic
+  double load_nm(double t_s, const State& x) const;  // load model incl. Coulomb
+  double cogging_nm(const State& x) const { return cog_.torque_nm(x(kThetaM)); }
+  double cogging_energy_j(const State& x) const { return cog_.energy_j(x(kThetaM)); }
   double input_power_w(const State& x, const Input& u) const;  // 3/2 v.i
   double copper_loss_w(const State& x) const;                  // 3/2 R |i|^2
   double magnetic_energy_j(const State& x) const;              // 3/4 (Ld id^2 + Lq iq^2)
@@ -47,6 +55,7 @@ class PmsmDq {
 
  private:
   PmsmParams p_{};
+  CoggingTorque cog_{};
 };
 
 }  // namespace mcsim

@@ -83,7 +83,9 @@ class PmsmOpenPhase {
     const double tau_e = pp_ * (0.5 * i * i * dl + i * dpsi);
     State dx;
     dx(kI) = (u(0) - 2.0 * p_.R_ohm * i - we * dpsi - we * dl * i) / l;
-    dx(kOmegaM) = (tau_e - p_.B_nms_rad * wm - p_.load.eval_nm(t_s, x(kThetaM), wm)) / p_.J_kgm2;
+    double net_nm = tau_e - p_.B_nms_rad * wm - p_.load.eval_nm(t_s, x(kThetaM), wm);
+    if (cog_.active()) net_nm += cog_.torque_nm(x(kThetaM));
+    dx(kOmegaM) = net_nm / p_.J_kgm2;
     dx(kThetaM) = wm;
     dx(kCos) = -we * s;
     dx(kSin) = we * c;
@@ -109,6 +111,7 @@ class PmsmOpenPhase {
 
  private:
   PmsmParams p_{};
+  CoggingTorque cog_{};
   int x_ = 0;
   double pp_ = 4.0;
   double lsum_ = 2.0e-4, ldiff_ = 0.0;  // Ld + Lq, Ld - Lq

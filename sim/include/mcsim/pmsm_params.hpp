@@ -11,6 +11,7 @@
 #ifndef MCSIM_PMSM_PARAMS_HPP
 #define MCSIM_PMSM_PARAMS_HPP
 
+#include "mcsim/cogging.hpp"
 #include "mcsim/load_torque.hpp"
 #include "mcsim/status.hpp"
 
@@ -22,13 +23,14 @@ struct PmsmParams {
   double Lq_h = 1.0e-4;   // q-axis inductance (Ld != Lq: reluctance torque)
   double flux_wb = 0.01;  // PM flux linkage (peak, per phase); 0 allowed
   int pole_pairs = 4;
-  double J_kgm2 = 1.0e-5;  // rotor + load inertia
-  double B_nms_rad = 0.0;  // viscous friction
-  LoadTorque load{};       // load torque model (plus optional Coulomb)
+  double J_kgm2 = 1.0e-5;   // rotor + load inertia
+  double B_nms_rad = 0.0;   // viscous friction
+  LoadTorque load{};        // load torque model (plus optional Coulomb)
+  CoggingParams cogging{};  // cogging torque (cogging.hpp); default none
 
   // kOk or the first failing check: kNotFinite, kNonPositiveResistance,
   // kNonPositiveInductance, kNegativeFlux, kBadPolePairs, kNonPositiveInertia,
-  // kNegativeFriction, kBadLoad.
+  // kNegativeFriction, kBadLoad, kBadCogging.
   Status validate() const;
 };
 

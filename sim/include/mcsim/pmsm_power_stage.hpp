@@ -45,6 +45,7 @@
 #include "mcsim/pmsm_params.hpp"
 #include "mcsim/pmsm_rotor_frame.hpp"
 #include "mcsim/status.hpp"
+#include "mcsim/thermal.hpp"
 
 namespace mcsim {
 
@@ -55,10 +56,18 @@ struct PmsmPowerStageParams {
   int substeps = 4;             // RK4 sub-steps per period, >= 1
   double theta_m0_rad = 0.0;    // initial rotor angle
   double omega_m0_rad_s = 0.0;  // initial speed
+  // Temperatures (thermal.hpp): off by default (R and flux constant, bit
+  // for bit the stage without it). On: the thermal model advances once per
+  // period with the period's mean |i_dq|^2 (trapezoid of its ends) and the
+  // speed at its end, and the plant's R and flux follow R(T_w), flux(T_m)
+  // from the next period on; motor.R_ohm and motor.flux_wb are their values
+  // at thermal.t_ref_c.
+  bool thermal_enabled = false;
+  ThermalParams thermal{};
 
   // kOk or the first failing check: motor.validate(), inverter.validate(),
   // kBadStepCount (substeps < 1), kNotFinite (vbus_v not > 0 or not finite,
-  // an initial condition not finite).
+  // an initial condition not finite), thermal.validate() when enabled.
   Status validate() const;
 };
 
@@ -83,6 +92,7 @@ class PmsmPowerStage {
       return advance_special(duty_abc, switching && !disconnected_);
     }
     open_circuit_ = false;
+    const double isq0 = thermal_on_ ? current_sq_a2() : 0.0;
     duty_applied_ = duty_abc;
     // The inverter uses the phase currents only for the dead-time error.
     const Eigen::Vector3d i =
@@ -91,7 +101,7 @@ class PmsmPowerStage {
     v_ab_applied_ = v;
     const Status s = plant_.advance_zoh(v, t_s_, p_.inverter.t_pwm_s, p_.substeps, &x_);
     if (s != Status::kOk) return s;
-    end_period();
+    end_period(isq0);
     return Status::kOk;
   }
 
@@ -137,16 +147,24 @@ class PmsmPowerStage {
   const Eigen::Vector2d& v_alpha_beta_applied() const { return v_ab_applied_; }
   // True while no current flows with the bridge off (the diodes block).
   bool open_circuit() const { return open_circuit_; }
+  // The thermal model, nullptr when thermal_enabled is false. The plant's
+  // present R and flux: plant().params().R_ohm, .flux_wb.
+  const ThermalModel* thermal() const { return thermal_on_ ? &thermal_ : nullptr; }
 
  private:
   // The bridge off, or a phase open.
   Status advance_special(const Eigen::Vector3d& duty, bool switching);
   // (cos, sin) of the electrical angle are integrated as states; re-derive
   // them from theta_m every 32 periods (drift per period is O(h^5)).
-  void end_period() {
+  // isq0: |i_dq|^2 at the period's start (for the thermal model).
+  void end_period(double isq0) {
+    if (thermal_on_) thermal_period(isq0);
     if ((++period_count_ & 31U) == 0U) plant_.resync(&x_);
     t_s_ += p_.inverter.t_pwm_s;
   }
+  double current_sq_a2() const { return x_(0) * x_(0) + x_(1) * x_(1); }
+  void thermal_period(double isq0);
+  void apply_temperatures();
   void freewheel(double h_s, int n);
   void advance_open_phase(const Eigen::Vector3d& duty, bool switching);
 
@@ -167,6 +185,8 @@ class PmsmPowerStage {
   bool disconnected_ = false;
   bool open_fresh_ = true;
   bool open_circuit_ = true;
+  ThermalModel thermal_;
+  bool thermal_on_ = false;
 };
 
 }  // namespace mcsim

@@ -51,6 +51,9 @@ class PmsmRotorFrame {
 
   // Validates p; on error returns the code and keeps the previous parameters.
   Status configure(const PmsmParams& p);
+  // Resistance and PM flux only (PmsmDq::set_electrical; the step
+  // constants are re-planned at the next advance_zoh()).
+  Status set_electrical(double r_ohm, double flux_wb);
   const PmsmParams& params() const { return dq_.params(); }
   const PmsmDq& dq() const { return dq_; }
 
@@ -65,7 +68,8 @@ class PmsmRotorFrame {
     State dx;
     dx(kId) = (vd - p.R_ohm * id + we * p.Lq_h * iq) * inv_ld_;
     dx(kIq) = (vq - p.R_ohm * iq - we * (p.Ld_h * id + p.flux_wb)) * inv_lq_;
-    const double tau_l = load_is_const_ ? const_load_nm_ : p.load.eval_nm(t_s, x(kThetaM), wm);
+    double tau_l = load_is_const_ ? const_load_nm_ : p.load.eval_nm(t_s, x(kThetaM), wm);
+    if (dq_.cogging().active()) tau_l -= dq_.cogging().torque_nm(x(kThetaM));
     dx(kOmegaM) = (tau_e - p.B_nms_rad * wm - tau_l) * inv_j_;
     dx(kThetaM) = wm;
     dx(kCos) = -we * s;
@@ -118,7 +122,7 @@ class PmsmRotorFrame {
 
   PmsmDq dq_;
   double pp_ = 1.0, kt_ = 1.5, inv_ld_ = 0.0, inv_lq_ = 0.0, inv_j_ = 0.0;
-  bool load_is_const_ = true;  // constant load, no Coulomb term: skip the call
+  bool load_is_const_ = true;  // constant load, no Coulomb, no cogging: skip the call
   double const_load_nm_ = 0.0;
   // advance_zoh() step constants for (plan_period_s_, plan_n_sub_); a period
   // of 0 means not planned.

@@ -16,6 +16,15 @@
 // relative to the angle at reset(); with an index, once the shaft has crossed
 // index_angle_rad (mod 2 pi) the reported count becomes absolute, i.e.
 // floor((theta_m - index_angle_rad) cpr / 2 pi) mod cpr.
+// Power-up: reset(theta_m0) is the board's power-up with the rotor at
+// theta_m0 (an incremental encoder counts from 0 there). The lines as a
+// receiver sees them: with E = floor(dir theta_m cpr / 2 pi) (the absolute
+// edge number, which the shaft fixes, not the power-up), the quadrature
+// state E mod 4 = 0, 1, 2, 3 gives (A, B) = (0, 0), (1, 0), (1, 1), (0, 1)
+// (A leads B counting up, one edge per count), and Z is high over the
+// first count after the index mark (floor((dir theta_m - index) cpr / 2 pi)
+// mod cpr == 0), the pulse an EXTI line sees; index_crossed reports that
+// the mark was passed since the previous sample.
 #ifndef MCSIM_SENSORS_HPP
 #define MCSIM_SENSORS_HPP
 
@@ -112,7 +121,9 @@ struct EncoderReading {
   std::int64_t count = 0;         // unwrapped counter since reset (edges)
   std::int32_t count_in_rev = 0;  // [0, cpr): relative, or absolute once index seen
   bool index_seen = false;
-  double angle_rad = 0.0;  // count_in_rev * 2 pi / cpr
+  double angle_rad = 0.0;                // count_in_rev * 2 pi / cpr
+  bool a = false, b = false, z = false;  // line levels (z always low without an index)
+  bool index_crossed = false;            // the mark was passed since the last sample
 };
 
 class Encoder {

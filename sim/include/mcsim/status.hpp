@@ -31,6 +31,10 @@ enum class Status : int {
   kNonSalientRequired,         // normalisation needs Ld == Lq and B == 0
   kBadBase,                    // a normalisation base value <= 0
   kBadPhase,                   // phase index outside 0..2
+  kBadCogging,                 // cogging: slots < 0 or > 1000, an amplitude < 0
+  kBadThermal,                 // thermal network: a resistance or capacity <= 0, ...
+  kBadSensor,                  // Hall / SPI encoder parameter out of range
+  kBadLoadCount,               // DC link: number of loads outside 1..kMaxLoads
 };
 
 // Short stable name of a status code (for test and log messages).

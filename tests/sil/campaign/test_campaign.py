@@ -53,7 +53,10 @@ def mdtool(*argv, check=True, timeout=240):
 
 
 def results(out, drop=("wall_s", "worker")):
-    return pd.read_parquet(os.path.join(out, "results.parquet")).drop(columns=list(drop))
+    # mdtool's reader (pyarrow from the path): pandas' read_parquet can abort
+    # this process at exit (mdtool/parquet.py)
+    from mdtool.parquet import read_parquet
+    return read_parquet(os.path.join(out, "results.parquet")).drop(columns=list(drop))
 
 
 def parts(out):
@@ -129,6 +132,27 @@ class Campaigns(unittest.TestCase):
         self.assertGreaterEqual(len(first), 3)
         p = mdtool("sweep", self.file, "--out", out, "--serial", "--quiet")
         self.assertIn(f'"already": {len(first)}, "ran": {NRUNS - len(first)}', p.stdout)
+        pd.testing.assert_frame_equal(results(out), results(self.serial), check_exact=True)
+
+    def test_damaged_part_named_then_run_again(self):
+        out = os.path.join(ARGS.work, "damaged")
+        shutil.rmtree(out, ignore_errors=True)
+        mdtool("sweep", self.file, "--out", out, "--serial", "--max-runs", "4", "--chunk", "1",
+               "--quiet", check=False)
+        part = os.path.join(out, "parts", "part-000000001.parquet")
+        with open(part, "rb") as f:
+            data = f.read()
+        with open(part, "wb") as f:  # a truncated file (a full disk, a copy cut short)
+            f.write(data[: len(data) // 2])
+        p = mdtool("report", out, check=False)
+        self.assertEqual(p.returncode, 2, p.stderr)
+        self.assertIn(f"mdtool: {part}: damaged part (", p.stderr)
+        self.assertNotIn("Traceback", p.stderr)
+        p = mdtool("sweep", self.file, "--out", out, "--serial", "--quiet")
+        self.assertIn(f"{part}: damaged part (", p.stderr)
+        self.assertIn("set aside as part-000000001.parquet.damaged; its runs run again", p.stderr)
+        self.assertIn('"already": 3, "ran": 9, "remaining": 0', p.stdout)
+        self.assertTrue(os.path.exists(part + ".damaged"))
         pd.testing.assert_frame_equal(results(out), results(self.serial), check_exact=True)
 
     def test_changed_file_refused_on_resume(self):
@@ -265,7 +289,7 @@ class Report(unittest.TestCase):
         self.assertIn(f"| **all** | {len(df)} | {st.get('pass', 0)} | {st.get('fail', 0)} | "
                       f"{st.get('refused', 0)} | {st.get('fault', 0)} |", md)
         # The copy holds the same rows, with paths relative to the directory it was made in.
-        copy = pd.read_parquet(os.path.join(rep, "results.parquet")).drop(columns=["wall_s"])
+        copy = results(rep, drop=("wall_s",))
         self.assertNotIn("worker", copy.columns)
         self.assertEqual(list(copy["run_id"]), list(df["run_id"]))
         self.assertFalse(copy["motor"].iloc[0].startswith("/"))
@@ -317,6 +341,78 @@ class BenchPage(unittest.TestCase):
             self.assertIn("**The machine was busy** (load average up to 5 on 2 cores", f.read())
 
 
+LIMITS = """\
+[campaign]
+name = "limits"
+scenario = "current-step"
+motor = "{root}/sim/motors/odrive-d5065.toml"
+board = "{root}/sim/motors/odrive-v36-24v.toml"
+duration_s = 0.004
+
+[vars]
+n = [2, 9]
+
+[derived]
+iq_step_a = "3.0 + n ** n ** n / 1e300"    # n = 9: 9 ** 387420489, refused by the evaluator
+
+[pass]
+big = "(round(abs(iq_final_a)) + 2) ** 10**9 > 0"   # an integer power of 1e9: refused too
+"""
+
+
+class ExpressionLimits(unittest.TestCase):
+    """An expression reading a run's values is bounded when it is evaluated:
+    the run's row names the limit instead of hanging the run or the sweep."""
+
+    def test_in_rows(self):
+        path = os.path.join(ARGS.work, "limits.toml")
+        with open(path, "w") as f:
+            f.write(LIMITS.format(root=ARGS.root))
+        out = os.path.join(ARGS.work, "limits")
+        shutil.rmtree(out, ignore_errors=True)
+        mdtool("sweep", path, "--out", out, "--serial", "--quiet", timeout=120)
+        df = results(out).set_index("var.n")
+        self.assertEqual(df.loc[9, "status"], "refused")
+        self.assertIn("derived iq_step_a = '3.0 + n ** n ** n / 1e300': expression limit: 9 ** "
+                      "387420489 would have more than 4096 bits", df.loc[9, "error"])
+        self.assertEqual(df.loc[2, "status"], "fail")
+        self.assertEqual(df.loc[2, "in.iq_step_a"], 3.0)
+        self.assertRegex(df.loc[2, "error"], r"^pass criterion 'big': expression limit: \d+ \*\* "
+                         r"1000000000 would have more than 4096 bits$")
+
+    def test_evaluator(self):
+        from mdtool.expr import Criterion, Expr, ExprLimit
+        cases = [  # (text, values, the refusal)
+            ("x ** y", {"x": 9, "y": 9 ** 9}, "9 ** 387420489 would have more than 4096 bits"),
+            ("s * n", {"s": "a", "n": 10 ** 10}, "str * int: arithmetic takes numbers only"),
+            ("s + s", {"s": "a"}, "str + str: arithmetic takes numbers only"),
+            ("-s", {"s": "a"}, "a sign on str"),
+            ("x * x", {"x": 2 ** 3000}, "an integer of more than 4096 bits"),
+            ("round(x, n)", {"x": 5, "n": -10 ** 10}, "round's digits -10000000000"),
+            ("floor(x) ** 5", {"x": 1e300}, "would have more than 4096 bits"),
+        ]
+        for text, env, why in cases:
+            with self.subTest(text=text):
+                with self.assertRaises(ExprLimit) as cm:
+                    Expr("e", text).value(env)
+                self.assertIn(why, str(cm.exception))
+        # within the limits, the language is Python's
+        self.assertEqual(Expr("e", "x ** 100 % 7").value({"x": 3}), 3 ** 100 % 7)
+        self.assertEqual(Expr("e", "2 ** 4095 > x").value({"x": 1.0}), True)
+        self.assertEqual(Expr("e", "law == 'pi2d'").value({"law": "pi2d"}), True)
+        self.assertEqual(Expr("e", "round(x, 2)").value({"x": 1.2345}), 1.23)
+        # a criterion the evaluator refuses fails, with the reason
+        self.assertEqual(Criterion("c", "x ** y > 0").judge({"x": 3, "y": 10 ** 9}),
+                         (False, "pass criterion 'c': expression limit: 3 ** 1000000000 would have "
+                          "more than 4096 bits"))
+        self.assertEqual(Criterion("c", "x > 0").judge({}), (False, None))  # a missing key
+        # nesting is bounded when the expression is read, whatever the caller's stack
+        self.assertEqual(Expr("e", "-" * 98 + "x").value({"x": 1}), 1)
+        with self.assertRaises(ValueError) as cm:
+            Expr("e", "-" * 101 + "x")
+        self.assertIn("expression limit: nested deeper than 100", str(cm.exception))
+
+
 BAD = [
     # (text, line, reason fragment)
     ("[campaign\nname = 'x'\n", 1, "malformed TOML"),
@@ -349,6 +445,23 @@ BAD = [
     ("{head}\n[derived]\niq_step_a = 2.0\n", 7, "must be an expression in a string"),
     ("{head}\n[derived]\nnot_a_key = '2.0'\n", 7, "unknown key 'not_a_key'"),
     ("{head}\n[derived]\niq_step_a = 'open(1)'\n", 7, "only calls to"),
+    # the evaluator's limits (mdtool/expr.py): refused when the file is loaded
+    ("{head}\n[pass]\nok = 'iq_rise_time_s < 9**9**9'\n", 7,
+     "pass criterion 'ok': `9 ** 9 ** 9` fails: expression limit: 9 ** 387420489 would have "
+     "more than 4096 bits"),
+    ("{head}\n[derived]\niq_step_a = \"'a' * 10**10\"\n", 7,
+     "derived iq_step_a: `'a' * 10 ** 10` fails: expression limit: str * int: arithmetic takes "
+     "numbers only"),
+    ("{head}\n[pass]\nok = '" + "1 + " * 300 + "1'\n", 7,
+     "pass criterion 'ok': expression limit: longer than 1000 characters"),
+    ("{head}\n[pass]\nok = 'iq_rise_time_s < 1 / 0'\n", 7, "`1 / 0` fails: division by zero"),
+    # a range is bounded before it is expanded
+    ("{head}\n[sweep]\niq_step_a = {{ start = 1.0, stop = 2.0, num = 4611686018427387904 }}\n", 7,
+     "range for iq_step_a: num = 4611686018427387904: at most 1000000 points in a range"),
+    ("{head}\n[sweep]\niq_step_a = {{ start = 1.0, stop = 2.0, num = 1000 }}\n"
+     "cur_bw_rad_s = {{ start = 1000.0, stop = 2000.0, num = 1000 }}\n"
+     "id_step_a = {{ start = -1.0, stop = 0.0, num = 1000 }}\n", 6,
+     "1000000000 runs: more than 100000000"),
 ]
 
 
@@ -363,7 +476,7 @@ class Malformed(unittest.TestCase):
                 with open(path, "w") as f:
                     f.write(text.format(head=head.rstrip("\n")))
                 out = os.path.join(ARGS.work, f"bad{i}.out")
-                p = mdtool("sweep", path, "--out", out, "--serial", check=False)
+                p = mdtool("sweep", path, "--out", out, "--serial", check=False, timeout=120)
                 self.assertEqual(p.returncode, 2, p.stderr)
                 self.assertTrue(p.stderr.startswith(f"mdtool: {path}:{line}: "), p.stderr)
                 self.assertIn(reason, p.stderr)

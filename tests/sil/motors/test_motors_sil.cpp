@@ -163,5 +163,34 @@ TEST(MotorFile, PwmTooSlowForLOverRIsRefused) {
   }
 }
 
+// Cogging keys (issue 35): parsed, handed to the plant, a torque without
+// slots refused with its line.
+TEST(MotorFile, CoggingKeysReachThePlant) {
+  std::string t = kGood;
+  t.replace(t.find("[board]"), 0,
+            "slots = 12\ncogging_nm = 0.02\ncogging_phase_rad = 0.5\ncogging_h3_nm = 0.004\n");
+  const MotorFiles f = load_motor_files(write("cog.toml", t), "");
+  EXPECT_EQ(f.motor.slots, 12);
+  const hal_host::PmsmBoardConfig bc = build_board_cfg(f);
+  EXPECT_EQ(bc.motor.cogging.slots, 12);
+  EXPECT_EQ(bc.motor.cogging.amplitude_nm, 0.02);
+  EXPECT_EQ(bc.motor.cogging.phase_rad, 0.5);
+  EXPECT_EQ(bc.motor.cogging.harmonic_nm[1], 0.004);
+  EXPECT_EQ(bc.motor.cogging.harmonic_nm[0], 0.0);
+  EXPECT_EQ(mcsim::cogging_order(bc.motor.cogging.slots, bc.motor.pole_pairs), 84);
+  // The default file: none.
+  EXPECT_FALSE(
+      build_board_cfg(load_motor_files(write("good2.toml", kGood), "")).motor.cogging.active());
+  std::string u = kGood;
+  u.replace(u.find("[board]"), 0, "cogging_nm = 0.02\n");  // line 12, no slots
+  const std::string pu = write("cog_noslots.toml", u);
+  EXPECT_EQ(error_of(pu).rfind(pu + ":12: a cogging torque needs 'slots'", 0), 0u) << error_of(pu);
+  std::string v = kGood;
+  v.replace(v.find("[board]"), 0, "slots = 12\ncogging_nm = -1\n");  // line 13
+  const std::string pv = write("cog_neg.toml", v);
+  EXPECT_EQ(error_of(pv).rfind(pv + ":13: 'cogging_nm' = -1 N m is out of range", 0), 0u)
+      << error_of(pv);
+}
+
 }  // namespace
 }  // namespace mcsim

@@ -116,6 +116,52 @@ TEST(SimAlloc, PowerStagesDoNotAllocate) {
   EXPECT_TRUE(std::isfinite(stepper.state().sum()));
 }
 
+TEST(SimAlloc, NewPlantModelsDoNotAllocate) {
+  // Cogging and the thermal network in the PMSM stage, two stages on one DC
+  // link, the stepper's common-leg bridge on and off, the Hall sensors and
+  // the SPI encoders' frames (with noise and line errors).
+  mcsim::PmsmPowerStageParams pp;
+  pp.motor.J_kgm2 = 1.0e-4;
+  pp.motor.cogging.slots = 12;
+  pp.motor.cogging.amplitude_nm = 0.01;
+  pp.thermal_enabled = true;
+  mcsim::PmsmPowerStage ax[2];
+  ASSERT_EQ(ax[0].configure(pp), mcsim::Status::kOk);
+  ASSERT_EQ(ax[1].configure(pp), mcsim::Status::kOk);
+  mcsim::DcLink link;
+  ASSERT_EQ(link.configure(mcsim::DcLinkParams{}), mcsim::Status::kOk);
+  mcsim::StepperCommonLegStage stepper;
+  ASSERT_EQ(stepper.configure(mcsim::StepperCommonLegStageParams{}), mcsim::Status::kOk);
+  mcsim::HallSensors hall;
+  ASSERT_EQ(hall.configure(mcsim::HallParams{}), mcsim::Status::kOk);
+  mcsim::As5047pParams ap;
+  ap.noise_rms_rad = 1.0e-3;
+  ap.line.miso_error_rate = 0.1;
+  mcsim::As5047p as;
+  ASSERT_EQ(as.configure(ap), mcsim::Status::kOk);
+  mcsim::Ma732Params mp;
+  mp.line.miso_error_rate = 0.1;
+  mcsim::Ma732 ma;
+  ASSERT_EQ(ma.configure(mp), mcsim::Status::kOk);
+  double checksum = 0.0;
+  const long before = g_new_calls.load();
+  for (int k = 0; k < 2000; ++k) {
+    const bool on = (k % 500) < 250;
+    ASSERT_EQ(ax[0].advance(Eigen::Vector3d(0.6, 0.4, 0.5), true), mcsim::Status::kOk);
+    ASSERT_EQ(ax[1].advance(Eigen::Vector3d(0.4, 0.6, 0.5), true), mcsim::Status::kOk);
+    const double i_inv[2] = {1.0, -0.5};
+    ASSERT_EQ(link.advance_loads(50.0e-6, 4, i_inv, 2, 0.0), mcsim::Status::kOk);
+    ASSERT_EQ(stepper.advance(Eigen::Vector3d(0.7, 0.4, 0.2), on), mcsim::Status::kOk);
+    const double t = k * 50.0e-6, th = ax[0].rotor_frame_state()(3);
+    const double w = ax[0].rotor_frame_state()(2);
+    ASSERT_EQ(as.observe(t, th, w), mcsim::Status::kOk);
+    ASSERT_EQ(ma.observe(t, th, w), mcsim::Status::kOk);
+    checksum += hall.sample(th) + as.transfer(0xFFFF, t) + ma.transfer(0x0000, t, 17);
+  }
+  EXPECT_EQ(g_new_calls.load() - before, 0);  // exact: not a single heap allocation
+  EXPECT_TRUE(std::isfinite(checksum + ax[0].thermal()->winding_c() + link.v()));
+}
+
 TEST(SimAlloc, CounterSeesAllocations) {
   // Proves the counter works, so the test above can fail.
   const long before = g_new_calls.load();

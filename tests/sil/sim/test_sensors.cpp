@@ -2,6 +2,7 @@
 // determinism per seed; encoder quantisation and index.
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <set>
 #include <vector>
 
@@ -280,6 +281,78 @@ TEST(SimEncoder, IndexMakesTheCountAbsolute) {
   bad.counts_per_rev = 0;
   EXPECT_EQ(e.configure(bad), Status::kBadCounts);
   EXPECT_TRUE(e.sample(1.3).index_seen);  // unchanged by the failed configure
+}
+
+TEST(SimEncoder, LinesAreQuadratureWithOneIndexPulsePerTurn) {
+  // A and B: a Gray sequence (one line changes per count, A leading B
+  // counting up), cpr edges per turn; Z: high over one count per turn, at
+  // the index mark, the first crossing flagged.
+  EncoderParams p;
+  p.counts_per_rev = 400;
+  p.has_index = true;
+  p.index_angle_rad = 2.0;
+  Encoder e;
+  ASSERT_EQ(e.configure(p), Status::kOk);
+  const double th0 = 0.7;
+  e.reset(th0);
+  mcsim::EncoderReading prev = e.sample(th0);
+  EXPECT_EQ(prev.count, 0);  // counts from 0 at the power-up angle
+  int edges = 0, z_samples = 0, crossings = 0;
+  const double step = 2.0 * kPi / 400.0 / 16.0;  // 16 samples per count
+  for (int k = 1; k <= 2 * 400 * 16; ++k) {      // two turns up
+    const double th = th0 + k * step;
+    const mcsim::EncoderReading r = e.sample(th);
+    const int da = (r.a != prev.a) ? 1 : 0, db = (r.b != prev.b) ? 1 : 0;
+    ASSERT_LE(da + db, 1) << "k=" << k;  // never both lines at once
+    if (da + db == 1) {
+      ++edges;
+      // Counting up: the state advances (0,0) -> (1,0) -> (1,1) -> (0,1).
+      const int q0 = prev.a ? (prev.b ? 2 : 1) : (prev.b ? 3 : 0);
+      const int q1 = r.a ? (r.b ? 2 : 1) : (r.b ? 3 : 0);
+      ASSERT_EQ(q1, (q0 + 1) % 4) << "k=" << k;
+      ASSERT_EQ(r.count, prev.count + 1);
+    }
+    if (r.z) ++z_samples;
+    if (r.index_crossed) {
+      ++crossings;
+      // Z rises at the mark: th just past 2.0 (mod 2 pi).
+      const double past = std::fmod(th - 2.0 + 4.0 * kPi, 2.0 * kPi);
+      EXPECT_LT(past, step + 1e-12);
+      EXPECT_TRUE(r.z);
+    }
+    prev = r;
+  }
+  EXPECT_EQ(edges, 800);
+  EXPECT_EQ(crossings, 2);
+  EXPECT_NEAR(z_samples, 2 * 16, 2);  // one count wide, twice
+}
+
+TEST(SimEncoder, PowerUpAtAnyAngleCountsFromZeroThenIndexGivesTheAbsoluteAngle) {
+  // Eight power-ups at random rotor angles: the count is 0 at power-up
+  // whatever the angle; after the index the count in the turn is the
+  // angle from the mark, the same at every power-up.
+  EncoderParams p;
+  p.counts_per_rev = 8192;
+  p.has_index = true;
+  p.index_angle_rad = 0.9;
+  Encoder e;
+  ASSERT_EQ(e.configure(p), Status::kOk);
+  std::mt19937_64 rng(2024);
+  std::uniform_real_distribution<double> u(0.0, 2.0 * kPi);
+  for (int n = 0; n < 8; ++n) {
+    const double th0 = u(rng);
+    e.reset(th0);
+    EXPECT_EQ(e.sample(th0).count, 0);
+    EXPECT_FALSE(e.sample(th0).index_seen);
+    // One turn forward in small steps passes the mark once.
+    mcsim::EncoderReading r;
+    for (int k = 1; k <= 1000; ++k) r = e.sample(th0 + 2.0 * kPi * k / 1000.0);
+    EXPECT_TRUE(r.index_seen);
+    const double from_mark = std::fmod(th0 - 0.9 + 2.0 * kPi, 2.0 * kPi);
+    // The absolute count is floor(from_mark / step) (the same turn position).
+    EXPECT_EQ(r.count_in_rev, static_cast<std::int32_t>(std::floor(from_mark * 8192 / (2 * kPi))))
+        << "power-up " << n;
+  }
 }
 
 }  // namespace

@@ -81,6 +81,7 @@ hal_host::PilLinkOptions link_options(const std::string& log_name) {
   hal_host::PilLinkOptions l;
   l.qemu = MC_QEMU_ARM;
   l.elf = MC_PIL_ELF;
+  l.boot_elf = MC_BOOT_PIL_ELF;  // the image starts through the bootloader
   l.semihost_log = std::string(MC_PIL_LOG_DIR) + "/" + log_name;
   return l;
 }

@@ -298,6 +298,37 @@ TEST_F(McApp, WatchdogFedOnlyWhenBothLoopsRun)
     EXPECT_EQ(1u, wdg.feeds);
 }
 
+// APP_STATUS.cfg_status is the heartbeat's: the store's status, sent again
+// when a SAVE changes it (it said the boot status until the next boot).
+TEST_F(McApp, AppStatusReportsTheStoreAfterASave)
+{
+    auto statuses = [this]() {
+        std::vector<float> got;
+        mc_hal_can_frame_t f;
+        while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) {
+            uint32_t msg = 0u;
+            float v[MC_CAN_NSIG_MAX] = {0};
+            if ((f.id & 0x1Fu) == MC_CAN_CMD_APP_STATUS &&
+                mc_can_proto_unpack(&f, &msg, v, MC_CAN_NSIG_MAX) == MC_CAN_ERR_NONE) {
+                got.push_back(v[MC_CAN_APP_STATUS_CFG_STATUS]);
+            }
+        }
+        return got;
+    };
+    Start();
+    SlowSteps(2);
+    EXPECT_EQ(std::vector<float>{static_cast<float>(MC_CAN_VAL_CFG_STATUS_EMPTY)}, statuses())
+        << "at boot (a reset cause is known)";
+    SlowSteps(2);
+    EXPECT_TRUE(statuses().empty()) << "nothing changed";
+    Send(0x18u, {3, 0, 0, 0, 0, 0, 0, 0}); // PARAM_REQ SAVE
+    SlowSteps(2);
+    EXPECT_EQ(1u, app.store.saves);
+    EXPECT_EQ(std::vector<float>{static_cast<float>(MC_CAN_VAL_CFG_STATUS_STORED)}, statuses());
+    EXPECT_EQ(static_cast<uint8_t>(MC_CAN_VAL_CFG_STATUS_STORED), app.cmd.cfg_status)
+        << "the heartbeat's value";
+}
+
 TEST_F(McApp, SaveStretchesTheWatchdogAroundTheErase)
 {
     Start();

@@ -300,4 +300,37 @@ TEST_F(ParamCan, HeartbeatSaysWhenDefaultsWereLoaded)
     EXPECT_EQ(0, std::memcmp(&p, &mc_params_default, sizeof p));
 }
 
+TEST_F(ParamCan, HeartbeatReportsTheStoreAfterASave)
+{
+    // the heartbeat said the boot status (EMPTY) after a SAVE until the
+    // next boot: it reports what the store holds now
+    float v[MC_CAN_NSIG_MAX] = {0};
+    const mc_telemetry_src_t src = {&d, &c, nullptr, nullptr};
+    ASSERT_EQ(MC_CFG_BOOT_EMPTY, boot);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, Bits(7.0f)).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
+    ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
+    EXPECT_EQ(static_cast<float>(MC_CAN_VAL_CFG_STATUS_EMPTY), v[MC_CAN_HEARTBEAT_CFG_STATUS])
+        << "applied, not saved: the store is still empty";
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status);
+    ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
+    EXPECT_EQ(static_cast<float>(MC_CAN_VAL_CFG_STATUS_STORED), v[MC_CAN_HEARTBEAT_CFG_STATUS]);
+    EXPECT_EQ(static_cast<uint32_t>(MC_CFG_BOOT_STORED),
+              Req(MC_PARAM_OP_READ, MC_PARAM_ID_CFG_STORE_STATUS).value);
+    EXPECT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_EMPTY), srv.boot_status) << "the boot's, kept";
+    // a SAVE the flash refuses: the heartbeat says so
+    flash.fail_next = -EIO;
+    EXPECT_EQ(MC_PARAM_ERR_STORE, Req(MC_PARAM_OP_SAVE, 0).status);
+    ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
+    EXPECT_EQ(static_cast<float>(MC_CAN_VAL_CFG_STATUS_FLASH), v[MC_CAN_HEARTBEAT_CFG_STATUS]);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status);
+    ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
+    EXPECT_EQ(static_cast<float>(MC_CAN_VAL_CFG_STATUS_STORED), v[MC_CAN_HEARTBEAT_CFG_STATUS]);
+    // and the next boot agrees
+    Boot();
+    EXPECT_EQ(MC_CFG_BOOT_STORED, boot);
+    ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
+    EXPECT_EQ(static_cast<float>(MC_CAN_VAL_CFG_STATUS_STORED), v[MC_CAN_HEARTBEAT_CFG_STATUS]);
+}
+
 } // namespace

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,28 @@ std::string candump_format(double t_s, const std::string& iface, const mc_hal_ca
 // Parse one line; false if it is not a candump -L line (error frames, with
 // the CAN_ERR_FLAG bit in an 8-digit id, are not data frames: false too).
 bool candump_parse(const std::string& line, double* t_s, mc_hal_can_frame_t* f);
+
+// A command script: candump -L lines (blank lines and lines starting with
+// '#' skipped), time stamps non-decreasing. Each frame is handed out once
+// the caller's clock has reached its time stamp.
+class CandumpScript {
+ public:
+  // Throws std::runtime_error naming the file that cannot be read or the
+  // line that cannot be used.
+  explicit CandumpScript(const std::string& path);
+  // The next frame whose time has come (timestamp_ticks as in the file: 0).
+  bool next_due(double now_s, mc_hal_can_frame_t* f);
+  size_t size() const { return frames_.size(); }
+  size_t taken() const { return next_; }
+
+ private:
+  struct Timed {
+    double t_s;
+    mc_hal_can_frame_t f;
+  };
+  std::vector<Timed> frames_;
+  size_t next_ = 0;
+};
 
 struct CandumpLogStats {
   uint64_t tx_frames = 0;
@@ -66,18 +89,13 @@ class CandumpLogCan {
   int get_status(mc_hal_can_status_t* st) noexcept;
 
  private:
-  struct Timed {
-    double t_s;
-    mc_hal_can_frame_t f;
-  };
   std::FILE* out_ = nullptr;
   bool write_error_ = false;
   std::string iface_;
   std::function<double()> now_s_;
   std::function<double()> rx_now_s_;
   std::function<uint32_t()> now_ticks_;
-  std::vector<Timed> script_;
-  size_t next_ = 0;
+  std::unique_ptr<CandumpScript> script_;
   CandumpLogStats stats_;
   mc_hal_can_t dev_{};
 };

@@ -19,8 +19,14 @@
 namespace hal_host {
 
 struct PilLinkOptions {
-  std::string qemu;          // qemu-system-arm executable
-  std::string elf;           // the PIL firmware image
+  std::string qemu;  // qemu-system-arm executable
+  std::string elf;   // the PIL firmware image
+  // The emulated bootloader (firmware/boot, hal/pil/mc_boot_pil.c), or ""
+  // for an image linked to start at the reset vector. With it, QEMU loads
+  // both; the bootloader checks the image (linked for the application slot,
+  // sealed) and starts it, or exits (status 4: it found no host for an
+  // update) when the image is not valid.
+  std::string boot_elf;
   std::string semihost_log;  // file for the target's semihosting text ("" = none)
   double receive_timeout_s = 10.0;
 };

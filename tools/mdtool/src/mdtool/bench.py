@@ -29,6 +29,8 @@ import tempfile
 import time
 from typing import Any
 
+from .parquet import write_parquet
+
 SCEN = "current-step"
 SIZING_RUNS = 100_000
 SIZING_CORES = (2, 32, 128, 512)
@@ -113,7 +115,7 @@ def _cluster(n_workers: int, per: int, motor: str, board: str, duration: float,
         if parquet_dir:
             rows = [row for r in res for row in r[0]]
             p = os.path.join(parquet_dir, "rows.parquet")
-            pd.DataFrame(rows).to_parquet(p, index=False)
+            write_parquet(pd.DataFrame(rows), p)
             out["parquet_bytes_per_row"] = os.path.getsize(p) / len(rows)
         return out
 

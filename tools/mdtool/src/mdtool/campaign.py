@@ -36,7 +36,6 @@ motor and board files (paths and SHA-256) and the firmware's git hash.
 """
 from __future__ import annotations
 
-import ast
 import hashlib
 import json
 import math
@@ -50,6 +49,9 @@ from typing import Any
 
 import numpy as np
 
+from .expr import CONSTS, FUNCS, Criterion, Expr, ExprLimit  # noqa: F401 (Expr, ExprLimit: the API)
+from .parquet import read_parquet, write_parquet
+
 try:
     import tomllib
 except ModuleNotFoundError:  # Python < 3.11
@@ -58,6 +60,11 @@ except ModuleNotFoundError:  # Python < 3.11
 
 class CampaignError(ValueError):
     """A malformed campaign file: "FILE:LINE: reason"."""
+
+
+MAX_RUNS = 100_000_000          # runs of one campaign
+MAX_RANGE_POINTS = 1_000_000    # values of one {start, stop, num} range
+MAX_FILE_BYTES = 16 << 20       # a campaign file (the shipped ones: < 10 kB)
 
 
 # ------------------------------------------------------------ file locations
@@ -85,127 +92,9 @@ class _Lines:
         return self.tables.get(table, 1)
 
 
-# ---------------------------------------------------------- pass expressions
-_FUNCS = {"abs": abs, "min": min, "max": max, "isnan": math.isnan, "isfinite": math.isfinite,
-          "sqrt": math.sqrt, "log10": math.log10, "log": math.log, "exp": math.exp,
-          "round": round, "floor": math.floor, "ceil": math.ceil}
-_CONSTS = {"pi": math.pi}
-_NODES = (ast.Expression, ast.BoolOp, ast.And, ast.Or, ast.UnaryOp, ast.Not, ast.USub, ast.UAdd,
-          ast.BinOp, ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow, ast.Mod, ast.Compare, ast.Eq,
-          ast.NotEq, ast.Lt, ast.LtE, ast.Gt, ast.GtE, ast.Name, ast.Load, ast.Attribute,
-          ast.Constant, ast.Call, ast.IfExp)
-
-
-def _dotted(node: ast.AST) -> str | None:
-    if isinstance(node, ast.Name):
-        return node.id
-    if isinstance(node, ast.Attribute):
-        base = _dotted(node.value)
-        return None if base is None else base + "." + node.attr
-    return None
-
-
-class Expr:
-    """A Python-syntax expression over named values (dotted names such as
-    param.speed_rad_s or motor.r_ohm included): numbers, arithmetic,
-    comparisons, and/or/not, x if c else y, the constant pi and the
-    functions abs min max isnan isfinite sqrt log log10 exp round floor ceil.
-    `what` names it in messages ("pass criterion 'ok'")."""
-
-    def __init__(self, what: str, text: str):
-        self.what, self.text = what, text
-        try:
-            tree = ast.parse(text, mode="eval")
-        except SyntaxError as e:
-            raise ValueError(f"{what}: {e.msg}: {text!r}") from None
-        for node in ast.walk(tree):
-            if not isinstance(node, _NODES):
-                raise ValueError(f"{what}: {type(node).__name__} is not allowed in {text!r}")
-            if isinstance(node, ast.Call) and (not isinstance(node.func, ast.Name)
-                                               or node.func.id not in _FUNCS or node.keywords):
-                raise ValueError(f"{what}: only calls to "
-                                 f"{', '.join(sorted(_FUNCS))} are allowed in {text!r}")
-            if isinstance(node, ast.Attribute) and _dotted(node) is None:
-                raise ValueError(f"{what}: malformed name in {text!r}")
-        self.tree = tree
-
-    def names(self) -> set[str]:
-        """The values it reads (function names and constants excepted)."""
-        out: set[str] = set()
-
-        def walk(n: ast.AST):
-            if isinstance(n, ast.Call):
-                for a in n.args:
-                    walk(a)
-                return
-            if isinstance(n, (ast.Name, ast.Attribute)):
-                key = _dotted(n)
-                if key not in _CONSTS:
-                    out.add(key)
-                return
-            for c in ast.iter_child_nodes(n):
-                walk(c)
-
-        walk(self.tree)
-        return out
-
-    def value(self, env: dict[str, Any]) -> Any:
-        """The value; KeyError for a name env lacks, ArithmeticError/ValueError/TypeError."""
-        def ev(n: ast.AST) -> Any:
-            if isinstance(n, ast.Expression):
-                return ev(n.body)
-            if isinstance(n, ast.Constant):
-                return n.value
-            if isinstance(n, (ast.Name, ast.Attribute)):
-                key = _dotted(n)
-                if key in env:
-                    return env[key]
-                if key in _CONSTS:
-                    return _CONSTS[key]
-                raise KeyError(key)
-            if isinstance(n, ast.BoolOp):
-                vals = (ev(v) for v in n.values)
-                return all(vals) if isinstance(n.op, ast.And) else any(vals)
-            if isinstance(n, ast.UnaryOp):
-                v = ev(n.operand)
-                return (not v) if isinstance(n.op, ast.Not) else (-v if isinstance(n.op, ast.USub) else v)
-            if isinstance(n, ast.BinOp):
-                a, b = ev(n.left), ev(n.right)
-                op = type(n.op)
-                return {ast.Add: lambda: a + b, ast.Sub: lambda: a - b, ast.Mult: lambda: a * b,
-                        ast.Div: lambda: a / b, ast.Pow: lambda: a ** b, ast.Mod: lambda: a % b}[op]()
-            if isinstance(n, ast.Compare):
-                left = ev(n.left)
-                for op, c in zip(n.ops, n.comparators):
-                    right = ev(c)
-                    ok = {ast.Eq: left == right, ast.NotEq: left != right, ast.Lt: left < right,
-                          ast.LtE: left <= right, ast.Gt: left > right,
-                          ast.GtE: left >= right}[type(op)]
-                    if not ok:
-                        return False
-                    left = right
-                return True
-            if isinstance(n, ast.IfExp):
-                return ev(n.body) if ev(n.test) else ev(n.orelse)
-            if isinstance(n, ast.Call):
-                return _FUNCS[n.func.id](*[ev(a) for a in n.args])
-            raise TypeError(type(n).__name__)
-
-        return ev(self.tree)
-
-
-class Criterion(Expr):
-    """A pass criterion: an Expr over the summary's keys; true or false."""
-
-    def __init__(self, name: str, text: str):
-        super().__init__(f"pass criterion '{name}'", text)
-        self.name = name
-
-    def __call__(self, summary: dict[str, Any]) -> bool:
-        try:
-            return bool(self.value(summary))
-        except (KeyError, TypeError, ValueError, ArithmeticError):
-            return False  # a missing key (e.g. a faulted run) or NaN math fails the criterion
+# ----------------------------------------- pass criteria and derived values
+# the language and its limits: mdtool/expr.py
+_FUNCS, _CONSTS = FUNCS, CONSTS
 
 
 # ------------------------------------------------------------------ the file
@@ -312,9 +201,11 @@ def load(path: str) -> Campaign:
 
     try:
         with open(path, "rb") as f:
-            raw = f.read()
+            raw = f.read(MAX_FILE_BYTES + 1)
     except OSError as e:
         raise CampaignError(f"{path}:1: cannot read the file: {e.strerror}") from None
+    if len(raw) > MAX_FILE_BYTES:
+        raise CampaignError(f"{path}:1: more than {MAX_FILE_BYTES} bytes: not a campaign file")
     text = raw.decode("utf-8", errors="replace")
     try:
         doc = tomllib.loads(text)
@@ -431,8 +322,12 @@ def load(path: str) -> Campaign:
                 raise err(table, k, f"a range for {k} is {{ start = A, stop = B, num = N "
                           f"[, log = true] }}")
             if not (_number(v["start"]) and _number(v["stop"]) and isinstance(v["num"], int)
-                    and v["num"] >= 1):
+                    and not isinstance(v["num"], bool) and v["num"] >= 1):
                 raise err(table, k, f"range for {k}: start and stop numbers, num an integer >= 1")
+            if v["num"] > MAX_RANGE_POINTS:  # refused before a value is made
+                raise err(table, k, f"range for {k}: num = {v['num']}: at most "
+                          f"{MAX_RANGE_POINTS} points in a range (a campaign: at most "
+                          f"{MAX_RUNS} runs)")
             if v.get("log", False):
                 if v["start"] <= 0 or v["stop"] <= 0:
                     raise err(table, k, f"log range for {k} needs positive start and stop")
@@ -526,8 +421,8 @@ def load(path: str) -> Campaign:
                     seed=seed, samples=samples, fixed=dict(fixed), axes=axes, criteria=criteria,
                     sha256=hashlib.sha256(raw).hexdigest(), has_seed_param="seed" in specs,
                     param_specs=specs, derived=derived_exprs)
-    if camp.n_runs() > 100_000_000:
-        raise err("sweep", None, f"{camp.n_runs()} runs: more than 1e8")
+    if camp.n_runs() > MAX_RUNS:
+        raise err("sweep", None, f"{camp.n_runs()} runs: more than {MAX_RUNS}")
     return camp
 
 
@@ -582,11 +477,15 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
             summary, kind, error = r.summary, r.error_kind, r.error
         except sil.UsageError as e:
             summary, kind, error = {}, "usage", str(e)
-    crit = {name: Criterion(name, text)(summary) if kind is None else False
-            for name, text in spec.criteria}
+    crit, why = {}, []
+    for name, text in spec.criteria:
+        ok, reason = Criterion(name, text).judge(summary) if kind is None else (False, None)
+        crit[name] = ok
+        if reason:
+            why.append(reason)  # a limit of the evaluator refused it: named in the row
     row["status"] = ("refused" if kind == "usage" else "fault" if kind == "failed"
                      else "pass" if all(crit.values()) else "fail")
-    row["error"] = error
+    row["error"] = error if error or not why else "; ".join(why)
     row["pass"] = row["status"] == "pass"
     for name, ok in crit.items():
         row["pass." + name] = ok
@@ -618,17 +517,49 @@ def _parts_dir(out: str) -> str:
     return os.path.join(out, "parts")
 
 
-def finished_ids(out: str) -> set[int]:
-    import pyarrow.parquet as pq
+class DamagedPart(CampaignError):
+    """A part file that cannot be read (truncated, overwritten, not Parquet)."""
 
-    ids: set[int] = set()
+    def __init__(self, path: str, reason: str):
+        super().__init__(f"{path}: damaged part ({reason}); `mdtool sweep` into this folder "
+                         f"sets it aside and runs its runs again")
+        self.path, self.reason = path, reason
+
+
+def _read_part(path: str, columns: list[str] | None = None):
+    """A part as a DataFrame, or DamagedPart naming the file and the reason."""
+    import pyarrow as pa
+
+    try:
+        df = read_parquet(path, columns=columns)
+    except (pa.ArrowException, OSError, ValueError) as e:
+        raise DamagedPart(path, (str(e).splitlines() or [type(e).__name__])[0]) from None
+    if "run_id" not in df.columns:
+        raise DamagedPart(path, "no run_id column")
+    return df
+
+
+def _parts(out: str) -> list[str]:
     d = _parts_dir(out)
-    if not os.path.isdir(d):
-        return ids
-    for f in sorted(os.listdir(d)):
-        if f.endswith(".parquet"):
-            ids.update(pq.read_table(os.path.join(d, f), columns=["run_id"])
-                       .column("run_id").to_pylist())
+    return [os.path.join(d, f) for f in sorted(os.listdir(d))
+            if f.endswith(".parquet")] if os.path.isdir(d) else []
+
+
+def finished_ids(out: str, set_aside: bool = False) -> set[int]:
+    """The run ids of OUT's readable parts. A damaged part (a truncated
+    file, say) is DamagedPart, or with `set_aside` renamed to
+    NAME.damaged (kept for a look) with a note on stderr: its runs are not
+    finished, so the sweep runs them again."""
+    ids: set[int] = set()
+    for path in _parts(out):
+        try:
+            ids.update(_read_part(path, columns=["run_id"])["run_id"].tolist())
+        except DamagedPart as e:
+            if not set_aside:
+                raise
+            os.replace(path, path + ".damaged")
+            print(f"mdtool: {path}: damaged part ({e.reason}): set aside as "
+                  f"{os.path.basename(path)}.damaged; its runs run again", file=sys.stderr)
     return ids
 
 
@@ -638,19 +569,15 @@ def _write_part(out: str, rows: list[dict[str, Any]], files: dict) -> None:
     df = pd.DataFrame(rows)
     for k, v in files.items():
         df[k] = v
-    name = f"part-{rows[0]['run_id']:09d}.parquet"
-    tmp = os.path.join(_parts_dir(out), "." + name + ".tmp")
-    df.to_parquet(tmp, index=False)
-    os.replace(tmp, os.path.join(_parts_dir(out), name))
+    write_parquet(df, os.path.join(_parts_dir(out), f"part-{rows[0]['run_id']:09d}.parquet"))
 
 
 def read_results(out: str):
-    """Every finished run of OUT (the parts; results.parquet is their merge)."""
+    """Every finished run of OUT (the parts; results.parquet is their merge).
+    A damaged part is DamagedPart (exit 2): `mdtool sweep` runs its runs again."""
     import pandas as pd
 
-    d = _parts_dir(out)
-    parts = [pd.read_parquet(os.path.join(d, f)) for f in sorted(os.listdir(d))
-             if f.endswith(".parquet")] if os.path.isdir(d) else []
+    parts = [_read_part(p) for p in _parts(out)]
     if not parts:
         return pd.DataFrame()
     df = pd.concat(parts, ignore_index=True, sort=False)
@@ -718,7 +645,7 @@ def sweep(path: str, out: str, scheduler: str | None = None, workers: int | None
     _prepare_out(camp, out)
     files = {"motor_sha256": _sha256(camp.motor), "board_sha256": _sha256(camp.board)}
     total = camp.n_runs()
-    done = finished_ids(out)
+    done = finished_ids(out, set_aside=True)
     todo = [i for i in range(total) if i not in done]
     if max_runs is not None:
         todo = todo[:max_runs]
@@ -765,10 +692,7 @@ def sweep(path: str, out: str, scheduler: str | None = None, workers: int | None
         prog.close()
     remaining = total - len(done) - ran
     if remaining == 0:
-        df = read_results(out)
-        tmp = os.path.join(out, ".results.parquet.tmp")
-        df.to_parquet(tmp, index=False)
-        os.replace(tmp, os.path.join(out, "results.parquet"))
+        write_parquet(read_results(out), os.path.join(out, "results.parquet"))
     return {"campaign": camp.name, "out": out, "total": total, "already": len(done), "ran": ran,
             "remaining": remaining}
 

@@ -8,13 +8,15 @@
 
 CAN (mdtool/can; every command: --interface/--channel/--bitrate, --node):
     mdtool scan | status | config ... | run MODE SETPOINT | monitor SIG... |
-           record OUT | decode LOG --out DIR | stats LOG | convert SRC DST
+           record OUT | decode LOG --out DIR | stats LOG | convert SRC DST |
+           flash IMAGE [-n NODE ...]
 
 Exit codes: 0 ok, 2 usage error (a malformed campaign file: "FILE:LINE:
 reason"; CAN: also a value refused here before sending), 1 failure, 3
 campaign stopped before every run finished (--max-runs): run the same
 command again to resume; CAN commands: 3 no reply from the drive within the
-timeout, 4 refused by the drive (its reason printed).
+timeout, 4 refused by the drive (its reason printed); 130 interrupted by
+Ctrl-C (SIGINT), 143 by SIGTERM (CAN commands; `run` has sent DISABLE).
 """
 from __future__ import annotations
 
@@ -107,7 +109,40 @@ def cmd_sil(a) -> int:
     return 0
 
 
+def _run_can(a) -> int:
+    """A CAN command with its documented exit code every time: CanToolError's
+    (2, 3, 4, 1), 130/143 for SIGINT/SIGTERM (Interrupted, after the
+    command's clean-up: run's DISABLE), 1 for a bus or file error."""
+    from .can.cli import signals_raise
+    from .can.errors import CanToolError, Interrupted
+
+    try:
+        with signals_raise():
+            return a.fn(a)
+    except CanToolError as e:
+        print(f"mdtool: {e}", file=sys.stderr)
+        return e.exit_code
+    except Interrupted as e:
+        print(f"mdtool: {e}", file=sys.stderr)
+        return e.exit_code
+    except KeyboardInterrupt:  # before the handlers were in place
+        print("mdtool: interrupted by SIGINT", file=sys.stderr)
+        return 130
+    except OSError as e:  # a file; python-can's CanError (an Exception) below
+        print(f"mdtool: {e}", file=sys.stderr)
+        return 1
+    except Exception as e:
+        import can
+
+        if isinstance(e, can.CanError):
+            print(f"mdtool: CAN bus error: {e}", file=sys.stderr)
+            return 1
+        raise
+
+
 def main(argv=None) -> int:
+    from .can.cli import add_parsers, count
+
     ap = argparse.ArgumentParser(prog="mdtool", description="motor-drive host tool")
     sub = ap.add_subparsers(dest="cmd", required=True)
 
@@ -116,10 +151,11 @@ def main(argv=None) -> int:
     s.add_argument("--out", help="results folder (default out/campaigns/NAME)")
     s.add_argument("--scheduler", help="address of a running Dask scheduler "
                    "(default: a local cluster on every core)")
-    s.add_argument("--workers", type=int, help="local workers (default: the core count)")
+    s.add_argument("--workers", type=count(1, 4096), help="local workers (default: the core count)")
     s.add_argument("--serial", action="store_true", help="no Dask: run in this process")
-    s.add_argument("--max-runs", type=int, help="stop after this many new runs (resume later)")
-    s.add_argument("--chunk", type=int, help="runs per task and per Parquet part")
+    s.add_argument("--max-runs", type=count(0, 10**9),
+                   help="stop after this many new runs (resume later)")
+    s.add_argument("--chunk", type=count(1, 1_000_000), help="runs per task and per Parquet part")
     s.add_argument("--quiet", action="store_true", help="no progress")
     s.set_defaults(fn=cmd_sweep)
 
@@ -162,23 +198,19 @@ def main(argv=None) -> int:
     s.add_argument("--set", action="append", default=[])
     s.set_defaults(fn=cmd_sil)
 
-    from .can.cli import add_parsers
-
     add_parsers(sub)
 
     a = ap.parse_args(argv)
-    from .can.errors import CanToolError
-
-    try:
-        if a.fn.__module__ == "mdtool.can.cli":
-            return a.fn(a)
-    except CanToolError as e:
-        print(f"mdtool: {e}", file=sys.stderr)
-        return e.exit_code
+    if a.fn.__module__ == "mdtool.can.cli":
+        return _run_can(a)
     from .campaign import CampaignError
 
     try:
         return a.fn(a)
+    except KeyboardInterrupt:
+        print("mdtool: interrupted (Ctrl-C); a campaign resumes where it stopped when the "
+              "same command runs again", file=sys.stderr)
+        return 130
     except CampaignError as e:
         print(f"mdtool: {e}", file=sys.stderr)
         return 2

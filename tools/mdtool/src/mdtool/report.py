@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from .parquet import write_parquet
+
 RANK = {"pass": 0, "fail": 1, "refused": 2, "fault": 3}
 COLORS = ["#2e7d32", "#f9a825", "#9e9e9e", "#c62828"]
 
@@ -82,12 +84,6 @@ def parse_hist(spec: str) -> tuple[str, float]:
 def make(out: str, x: str | None = None, y: str | None = None, metric: str | None = None,
          out_dir: str | None = None, hists: list[str] | None = None,
          with_results: bool = False) -> dict[str, Any]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
-
     from .campaign import read_results
 
     df = read_results(out)
@@ -102,6 +98,14 @@ def make(out: str, x: str | None = None, y: str | None = None, metric: str | Non
     for k in [x, y] + [h for h, _ in hist_specs]:
         if k is not None and k not in df.columns:
             raise ValueError(f"no column {k} in {out} (swept: {', '.join(keys)})")
+    if metric and metric != "pass_rate" and _key(metric, "out.") not in df.columns:
+        raise ValueError(f"no column {_key(metric, 'out.')} in {out}")
+    import matplotlib  # after the checks: a refused report costs no plotting set-up
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+
     out_dir = out_dir or os.path.join(out, "report")
     os.makedirs(out_dir, exist_ok=True)
     d = df.copy()
@@ -184,9 +188,7 @@ def _copy_results(df, path: str) -> str:
     for c in ("motor", "board"):
         if c in d.columns:
             d[c] = d[c].map(lambda p: os.path.relpath(p) if isinstance(p, str) else p)
-    tmp = path + ".tmp"
-    d.to_parquet(tmp, index=False)
-    os.replace(tmp, path)
+    write_parquet(d, path)
     return path
 
 

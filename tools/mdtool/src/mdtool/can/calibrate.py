@@ -11,6 +11,8 @@ import time
 from .errors import NoReply, Refused
 
 #: COMMISSION_RESULT.item -> (result name, parameter it goes to, unit)
+#: (the results keep the drive's conventions; PARAM_VALUE converts one to the
+#: parameter's where they differ)
 ITEMS = {
     "R_OHM": ("r_ohm", "r_ohm", "ohm"),
     "LD_H": ("ld_h", "ld_h", "H"),
@@ -25,6 +27,31 @@ ITEMS = {
     "J_KGM2": ("j_kgm2", "j_kgm2", "kg.m^2"),
     "B_NM_S_RAD": ("b_nm_s_rad", "b_nm_s_rad", "N.m.s/rad"),
 }
+#: result -> its value in the parameter's convention: the drive reports the
+#: encoder's direction (+1: counts up for a positive rotation, -1: down),
+#: the parameter encoder_reversed is 1 when it counts down (as the firmware
+#: stages it, mc_comm_can.c)
+PARAM_VALUE = {"encoder_direction": lambda d: 1 if d < 0 else 0}
+
+
+def rows(results, present, table):
+    """The calibrate table: one row per parameter a result goes to, the
+    measured value and the one in use in the same (the parameter's)
+    convention. (parameter, measured, unit, in use or None, change text)."""
+    out = []
+    for res, pname, unit in ITEMS.values():
+        v = PARAM_VALUE.get(res, lambda x: x)(results[res])
+        p = table.get(pname)
+        old = present.get(pname)
+        ch = ""
+        if old is not None and p["type"] == "f32" and old != 0:
+            ch = f"{100.0 * (v - old) / abs(old):+.1f} %"
+        elif old is not None:
+            ch = "same" if v == old else "new"
+        out.append((pname, v, unit, old, ch))
+    return out
+
+
 #: MC_COMM_ERR_* bit names (firmware/app/commission/mc_commission.h)
 ERROR_BITS = ["OFFSET", "NO_MOTOR", "OPEN_PHASE", "ENCODER_NO_MOTION", "ROTOR_BLOCKED",
               "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT", "VOLTAGE", "RANGE", "MEAS", "ABORTED"]
@@ -85,13 +112,29 @@ class Collector:
 
 
 def calibrate(drive, i_test_a=0.0, v_test_max_v=0.0, speed_max_m_rad_s=0.0, timeout=30.0,
-              on_status=None):
+              on_status=None, abort_on_exit=False):
     """Start commissioning on `drive` (mdtool.can.client.Drive) and wait
     until it ends and every result arrived. Raises Refused when the drive
-    refuses the command, NoReply when it falls silent for `timeout` s."""
+    refuses the command, NoReply when it falls silent for `timeout` s.
+    With `abort_on_exit`, leaving before the drive ended it (no progress,
+    an exception, Ctrl-C / SIGTERM) sends ABORT first."""
     col = Collector()
-    drive.send("COMMISSION_CMD", action=1, i_test_a=i_test_a, v_test_max_v=v_test_max_v,
-               speed_max_m_rad_s=speed_max_m_rad_s)
+    start = drive.frame("COMMISSION_CMD", action=1, i_test_a=i_test_a, v_test_max_v=v_test_max_v,
+                        speed_max_m_rad_s=speed_max_m_rad_s)
+    drive.bus.send(start)
+    refused = False
+    try:
+        _follow(drive, col, timeout, on_status)
+    except Refused:
+        refused = True  # the start was refused: nothing runs to abort
+        raise
+    finally:
+        if abort_on_exit and not col.ended and not refused:
+            abort(drive)
+    return col.summary()
+
+
+def _follow(drive, col, timeout, on_status):
     last = time.monotonic()
     while not col.complete:
         if time.monotonic() - last > timeout:
@@ -107,7 +150,6 @@ def calibrate(drive, i_test_a=0.0, v_test_max_v=0.0, speed_max_m_rad_s=0.0, time
         col.feed(name, vals)
         if name == "COMMISSION_STATUS" and on_status:
             on_status(vals)
-    return col.summary()
 
 
 def abort(drive):

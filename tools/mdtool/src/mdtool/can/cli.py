@@ -1,17 +1,75 @@
 """The `mdtool` CAN subcommands (added to mdtool.cli's parser).
 
 Every command that talks to a drive takes --interface/--channel/--bitrate
-(any python-can interface), --node and --timeout. Exit codes: 0 ok,
+(any python-can interface), --node and --timeout. Every argument and input
+file is checked before the first frame is sent. Exit codes: 0 ok,
 2 usage (bad argument, file, or a value refused here before sending),
 3 no reply within the timeout, 4 refused by the drive (its reason printed),
-1 other failures (frames lost while recording).
+1 other failures (frames lost while recording, a bus or file error),
+130 / 143 interrupted by SIGINT (Ctrl-C) / SIGTERM (`run` has sent DISABLE,
+`calibrate` ABORT).
 """
+import contextlib
 import json
+import math
 import os
+import signal
 import sys
+import threading
 import time
 
-from .errors import UsageError
+from .errors import Interrupted, UsageError
+
+
+def bounded(lo, hi, unit="s", low_open=False):
+    """An argparse type: a finite number in [lo, hi] (or (lo, hi]); anything
+    else is a usage error (exit 2) before anything is sent."""
+    import argparse
+
+    def parse(text):
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if not (math.isfinite(v) and (lo < v if low_open else lo <= v) and v <= hi):
+            raise argparse.ArgumentTypeError(
+                f"{text} is outside {'(' if low_open else '['}{lo:g}, {hi:g}] {unit}".rstrip())
+        return v
+    return parse
+
+
+def count(lo, hi):
+    import argparse
+
+    def parse(text):
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+        if not lo <= v <= hi:
+            raise argparse.ArgumentTypeError(f"{v} is outside [{lo}, {hi}]")
+        return v
+    return parse
+
+
+@contextlib.contextmanager
+def signals_raise():
+    """While a command talks to a drive, SIGINT and SIGTERM raise
+    Interrupted in the main thread, so every `finally` on the way out runs
+    (run's DISABLE, calibrate's ABORT); the previous handlers come back
+    after. Outside the main thread (a library caller) nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def on_signal(signum, _frame):
+        raise Interrupted(signum)
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
 
 
 def _bus_args(p, with_node=True):
@@ -21,11 +79,31 @@ def _bus_args(p, with_node=True):
                         "(default socketcan, or $MDTOOL_INTERFACE)")
     g.add_argument("--channel", "-c", default=os.environ.get("MDTOOL_CHANNEL", "can0"),
                    help="channel: can0, vcan0, /dev/ttyACM0, PCAN_USBBUS1, ... (default can0)")
-    g.add_argument("--bitrate", "-b", type=int, help="bit rate [bit/s] where the interface sets it")
+    g.add_argument("--bitrate", "-b", type=count(1000, 10_000_000),
+                   help="bit rate [bit/s] where the interface sets it")
+    g.add_argument("--host", help="socketcand: the server's address (or $MDTOOL_HOST, or python-can's "
+                                  "configuration: CAN_CONFIG, ~/.canrc)")
+    g.add_argument("--port", type=count(1, 65535),
+                   help="socketcand: the server's TCP port (or $MDTOOL_PORT, or python-can's configuration)")
     if with_node:
-        g.add_argument("--node", "-n", type=int, default=1, help="drive node id 0..62 (default 1)")
-        g.add_argument("--timeout", type=float, default=1.0, help="reply timeout [s] (default 1)")
+        g.add_argument("--node", "-n", type=count(0, 62), default=1, help="drive node id 0..62 (default 1)")
+        g.add_argument("--timeout", type=bounded(0.0, 60.0, low_open=True), default=1.0,
+                       help="reply timeout [s], (0, 60] (default 1)")
     g.add_argument("--dbc", help="DBC file (default: the package's, see mdtool.can.paths)")
+
+
+def _bus_opts(a):
+    """The interface options beyond interface/channel/bitrate (socketcand's
+    host and port) given as options or in $MDTOOL_HOST / $MDTOOL_PORT;
+    python-can's configuration supplies what is not given."""
+    host = a.host or os.environ.get("MDTOOL_HOST") or None
+    port = a.port
+    if port is None and os.environ.get("MDTOOL_PORT"):
+        try:
+            port = int(os.environ["MDTOOL_PORT"])
+        except ValueError:
+            raise UsageError(f"$MDTOOL_PORT={os.environ['MDTOOL_PORT']!r}: a TCP port number") from None
+    return {k: v for k, v in (("host", host), ("port", port)) if v is not None}
 
 
 def _db(a):
@@ -38,7 +116,7 @@ class _Session:
         from .client import Drive
         from .record import open_bus
         self.db = _db(a)
-        self.bus = open_bus(a.interface, a.channel, a.bitrate)
+        self.bus = open_bus(a.interface, a.channel, a.bitrate, **_bus_opts(a))
         self.drive = Drive(self.bus, self.db, a.node, a.timeout)
 
     def __enter__(self):
@@ -53,7 +131,7 @@ def cmd_scan(a):
     from .client import scan
     from .record import open_bus
     db = _db(a)
-    bus = open_bus(a.interface, a.channel, a.bitrate)
+    bus = open_bus(a.interface, a.channel, a.bitrate, **_bus_opts(a))
     try:
         found = scan(bus, db, a.timeout)
     finally:
@@ -99,6 +177,7 @@ def _read(drive, p):
 
 
 def cmd_config(a):
+    from .files import check_writable
     from .params import fmt_value, from_raw, read_toml, to_raw, write_toml
     table = _params(a)
     if a.action == "list":  # offline: the table itself
@@ -119,8 +198,12 @@ def cmd_config(a):
         if not a.items or len(a.items) != 1:
             raise UsageError("config load FILE (a motor, board or drive TOML file)")
         writes = [(k, table.check(k, v)) for k, v in read_toml(a.items[0], table)]
-    elif a.action == "export" and (not a.items or len(a.items) != 1):
-        raise UsageError("config export FILE")
+    elif a.action == "export":
+        if not a.items or len(a.items) != 1:
+            raise UsageError("config export FILE")
+        check_writable(a.items[0], "config export file")
+    elif a.action in ("save", "defaults") and a.items:
+        raise UsageError(f"config {a.action} takes no names or files (got {' '.join(a.items)})")
     names = a.items if a.action == "get" else []
     sel = [table.get(n) for n in names] if names else table.params
 
@@ -159,6 +242,9 @@ def cmd_config(a):
 
 # ------------------------------------------------------------------- run
 def cmd_run(a):
+    from .client import RUN_LIMITS, check_limit
+    for name in ("duration", "keepalive", "settle_timeout"):
+        check_limit(name, getattr(a, name), RUN_LIMITS)
     with _Session(a) as s:
         n = {"frames": 0}
 
@@ -186,7 +272,7 @@ def cmd_record(a):
     from .record import record
     db = _db(a)
     rep = record(a.out, db, a.node, interface=a.interface, channel=a.channel, bitrate=a.bitrate,
-                 duration=a.duration, ready=a.ready, report=a.report)
+                 duration=a.duration, ready=a.ready, report=a.report, bus_opts=_bus_opts(a))
     if rep["kernel_dropped"] or rep["seq_lost"]:
         print(f"mdtool: record: frames lost (kernel {rep['kernel_dropped']}, sequence gaps "
               f"{rep['seq_lost']})", file=sys.stderr)
@@ -228,12 +314,21 @@ def cmd_convert(a):
 
 
 def cmd_calibrate(a):
-    from .calibrate import ITEMS, calibrate, check_failed
+    from .calibrate import ITEMS, calibrate, check_failed, rows
     from .errors import Refused
     from .params import fmt_value, from_raw
     table = _params(a)
+    if a.json:
+        from .files import check_writable
+        check_writable(a.json, "--json file")
     with _Session(a) as s:
         d = s.drive
+        # the start frame's options within their signals, before any frame
+        try:
+            d.frame("COMMISSION_CMD", action=1, i_test_a=a.i_test, v_test_max_v=a.v_test_max,
+                    speed_max_m_rad_s=a.speed_max)
+        except UsageError as e:
+            raise UsageError(f"calibrate options refused: {e}; nothing sent") from None
         # the configuration in use, where the drive serves its parameters
         present = {}
         try:
@@ -252,26 +347,16 @@ def cmd_calibrate(a):
             if not a.quiet and shown.get("line") != line:
                 shown["line"] = line
                 print(line, flush=True)
-        summ = calibrate(d, a.i_test, a.v_test_max, a.speed_max, a.progress_timeout, progress)
+        summ = calibrate(d, a.i_test, a.v_test_max, a.speed_max, a.progress_timeout, progress,
+                         abort_on_exit=True)
         if a.json:
             with open(a.json, "w") as f:
                 json.dump(dict(summ, present=present), f, indent=1)
         check_failed(summ)
-        print(f"{'result':<20}{'measured':>14}  {'unit':<10}{'in use':>14}{'change':>10}")
-        for _item, (res, pname, unit) in ITEMS.items():
-            v = summ["results"][res]
-            shown = v
-            if pname == "encoder_reversed":  # the drive sends the direction (+1/-1)
-                shown, v = int(v), (1 if v < 0 else 0)
-            p = table.get(pname)
-            old = present.get(pname)
-            ch = ""
-            if old is not None and p["type"] == "f32" and old != 0:
-                ch = f"{100.0 * (v - old) / abs(old):+.1f} %"
-            elif old is not None:
-                ch = "same" if v == old else "new"
-            print(f"{res:<20}{shown:>14.6g}  {unit:<10}"
-                  f"{fmt_value(p, old) if old is not None else '-':>14}{ch:>10}")
+        print(f"{'parameter':<20}{'measured':>14}  {'unit':<10}{'in use':>14}{'change':>10}")
+        for pname, v, unit, old, ch in rows(summ["results"], present, table):
+            print(f"{pname:<20}{v:>14.6g}  {unit:<10}"
+                  f"{fmt_value(table.get(pname), old) if old is not None else '-':>14}{ch:>10}")
         if not summ["staged"]:
             print("not staged: this drive has no parameter service (results shown only)")
             if a.save:
@@ -288,9 +373,32 @@ def cmd_calibrate(a):
     return 0
 
 
+# ----------------------------------------------------------------- flash
+def cmd_flash(a):
+    from . import image
+    from .flash import Flasher, parse_nodes, read_image
+    from .record import open_bus
+    nodes = parse_nodes(a.node)
+    data, hdr = read_image(a.image)  # checked before the bus is touched
+    print(f"{a.image}: {image.describe(hdr)}")
+    db = _db(a)
+    bus = open_bus(a.interface, a.channel, a.bitrate, **_bus_opts(a))
+    try:
+        for n in nodes:
+            Flasher(bus, db, n, a.timeout, a.retries,
+                    progress=None if a.quiet else (lambda s: print(s, flush=True))).flash(data, hdr, a.wait)
+            print(f"node {n}: updated to {image.version_text(hdr['app_version'])}")
+    finally:
+        bus.shutdown()
+    return 0
+
+
 # --------------------------------------------------------------- monitor
 def cmd_monitor(a):
     from .monitor import monitor
+    if a.png:
+        from .files import check_writable
+        check_writable(a.png, "--png file")
     with _Session(a) as s:
         return monitor(s.drive, a.signals, window_s=a.window, frames=a.frames, png=a.png,
                        no_gui=a.no_gui, duration=a.duration)
@@ -299,12 +407,14 @@ def cmd_monitor(a):
 def add_parsers(sub):
     p = sub.add_parser("scan", help="nodes on the bus (from their heartbeats)")
     _bus_args(p, with_node=False)
-    p.add_argument("--timeout", type=float, default=1.0, help="listen this long [s]")
+    p.add_argument("--timeout", type=bounded(0.0, 60.0, low_open=True), default=1.0,
+                   help="listen this long [s], (0, 60]")
     p.set_defaults(fn=cmd_scan)
 
     p = sub.add_parser("status", help="a drive's heartbeat and latest telemetry")
     _bus_args(p)
-    p.add_argument("--listen", type=float, default=0.3, help="collect telemetry this long [s]")
+    p.add_argument("--listen", type=bounded(0.0, 60.0), default=0.3,
+                   help="collect telemetry this long [s], [0, 60]")
     p.add_argument("--json", action="store_true")
     p.set_defaults(fn=cmd_status)
 
@@ -324,21 +434,43 @@ def add_parsers(sub):
                    help="current: i_q [A]; speed: [rad/s]; position: multi-turn target [rad] from the "
                         "position at enable")
     p.add_argument("--id", type=float, default=0.0, help="current mode: i_d [A]")
-    p.add_argument("--duration", type=float, default=1.0, help="[s] (then disable)")
-    p.add_argument("--keepalive", type=float, default=0.05, help="keep-alive period [s]")
+    p.add_argument("--duration", type=bounded(0.0, 86400.0), default=1.0,
+                   help="[s], [0, 86400] (then disable)")
+    p.add_argument("--keepalive", type=bounded(0.01, 1.0), default=0.05,
+                   help="keep-alive period [s], [0.01, 1] (keep it under half the drive's "
+                        "can_timeout_s)")
     p.add_argument("--settle", type=float, metavar="TOL",
                    help="after --duration, hold until 3 frames in a row of the measured speed "
                    "[rad/s] or i_q [A] lie within TOL of the setpoint (exit 3 if not)")
-    p.add_argument("--settle-timeout", type=float, default=30.0, help="longest hold for --settle [s]")
+    p.add_argument("--settle-timeout", type=bounded(0.0, 3600.0), default=30.0,
+                   help="longest hold for --settle [s], [0, 3600]")
     p.add_argument("--verbose", "-v", action="store_true")
     _bus_args(p)
     p.set_defaults(fn=cmd_run)
 
+    p = sub.add_parser("flash", help="an application image into drives over CAN, through their "
+                       "bootloader: checked, written, verified, started (firmware/boot/README.md)")
+    p.add_argument("image", help="a sealed application image (.bin of the build, e.g. "
+                   "build/stm32f405-vesc6/firmware/targets/stm32f405/mc_stm32f405.bin)")
+    p.add_argument("--node", "-n", action="append", metavar="N[,N...]",
+                   help="node id(s), flashed in turn (repeat or separate by commas; default 1)")
+    p.add_argument("--timeout", type=bounded(0.0, 60.0, low_open=True), default=1.0,
+                   help="reply timeout [s], (0, 60] (default 1)")
+    p.add_argument("--retries", type=count(0, 20), default=3,
+                   help="resends of a refused or unanswered block, 0..20 (default 3)")
+    p.add_argument("--wait", type=bounded(0.0, 600.0, low_open=True), default=10.0,
+                   help="longest wait for the bootloader, and for the new image to answer [s], (0, 600]")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
+    _bus_args(p, with_node=False)
+    p.set_defaults(fn=cmd_flash)
+
     p = sub.add_parser("monitor", help="live plot of chosen signals (matplotlib)")
     p.add_argument("signals", nargs="+", help="MESSAGE.signal, e.g. SPEED.omega_m_rad_s CURRENTS.i_q_a")
-    p.add_argument("--window", type=float, default=5.0, help="seconds shown")
-    p.add_argument("--frames", type=int, help="stop after this many animation frames")
-    p.add_argument("--duration", type=float, help="stop after this long [s]")
+    p.add_argument("--window", type=bounded(0.0, 3600.0, low_open=True), default=5.0,
+                   help="seconds shown, (0, 3600]")
+    p.add_argument("--frames", type=count(1, 1_000_000), help="stop after this many animation frames")
+    p.add_argument("--duration", type=bounded(0.0, 1e6, low_open=True),
+                   help="stop after this long [s], (0, 1e6]")
     p.add_argument("--png", help="write the final figure here")
     p.add_argument("--no-gui", action="store_true", help="headless (Agg): collect, then write --png")
     _bus_args(p)
@@ -346,7 +478,8 @@ def add_parsers(sub):
 
     p = sub.add_parser("record", help="record the bus (.log candump, .blf, .asc, .mf4, .csv, .trc)")
     p.add_argument("out")
-    p.add_argument("--duration", type=float, default=0.0, help="seconds (0: until Ctrl-C / SIGTERM)")
+    p.add_argument("--duration", type=bounded(0.0, 1e6), default=0.0,
+                   help="seconds, [0, 1e6] (0: until Ctrl-C / SIGTERM)")
     p.add_argument("--ready", help="touch this file once the bus is open")
     p.add_argument("--report", help="frames, kernel drops, sequence gaps as JSON")
     _bus_args(p)
@@ -356,13 +489,14 @@ def add_parsers(sub):
                           ("stats", cmd_stats, "frames per message, sequence gaps, bus load")):
         p = sub.add_parser(name, help=hlp)
         p.add_argument("log")
-        p.add_argument("--node", "-n", type=int, default=1)
+        p.add_argument("--node", "-n", type=count(0, 62), default=1)
         p.add_argument("--dbc")
         if name == "decode":
             p.add_argument("--out", required=True, help="output directory")
             p.add_argument("--merged", action="store_true", help="one merged.csv")
         else:
-            p.add_argument("--bitrate", type=float, default=1e6, help="[bit/s] (default 1e6)")
+            p.add_argument("--bitrate", type=bounded(1e3, 1e7, "bit/s"), default=1e6,
+                           help="[bit/s] (default 1e6)")
             p.add_argument("--json")
         p.set_defaults(fn=fn)
 
@@ -379,8 +513,8 @@ def add_parsers(sub):
     p.add_argument("--speed-max", type=float, default=0.0,
                    help="cap of the flux spin-up, mechanical [rad/s] (0: the drive's default)")
     p.add_argument("--save", action="store_true", help="APPLY the staged results and SAVE them")
-    p.add_argument("--progress-timeout", type=float, default=5.0,
-                   help="give up when no progress arrives this long [s]")
+    p.add_argument("--progress-timeout", type=bounded(0.0, 3600.0, low_open=True), default=5.0,
+                   help="give up when no progress arrives this long [s], (0, 3600]")
     p.add_argument("--json", help="write status, results and the configuration in use here")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
     p.add_argument("--params-meta", help="parameter table (default: the package's params_meta.json)")

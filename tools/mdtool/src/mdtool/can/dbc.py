@@ -3,9 +3,11 @@
 Identifiers are node_id << 5 | cmd; the DBC is written for node 1. The own
 little-endian decoder is independent of cantools' (the tests cross-check).
 """
+import math
 import re
 
 from .errors import UsageError
+from .files import DBC_LIMIT_BYTES, read_text
 from .paths import dbc_path
 
 DBC_NODE = 1  # node id the DBC file's frame ids are written for
@@ -17,9 +19,10 @@ NODE_MAX = 62  # 63 (all ones) is kept free for a broadcast address
 def load_db(path=None):
     import cantools  # imported here so --help works without the venv
     path = path or dbc_path()
+    text = read_text(path, DBC_LIMIT_BYTES, "DBC file")
     try:
-        return cantools.database.load_file(path, strict=True)
-    except (OSError, cantools.database.UnsupportedDatabaseFormatError) as e:
+        return cantools.database.load_string(text, database_format="dbc", strict=True)
+    except (cantools.database.UnsupportedDatabaseFormatError, cantools.database.Error) as e:
         raise UsageError(f"cannot load DBC {path}: {e}") from e
 
 
@@ -65,6 +68,8 @@ def encode_signals(msg, values):
     word = 0
     for s in msg.signals:
         v = values.get(s.name, 0.0)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise UsageError(f"{msg.name}.{s.name}={v}: not a finite number")
         if s.minimum is not None and not (s.minimum - s.scale / 2 <= v <= s.maximum + s.scale / 2):
             raise UsageError(f"{msg.name}.{s.name}={v} outside [{s.minimum}, {s.maximum}]")
         raw = round((v - s.offset) / s.scale)

@@ -28,3 +28,16 @@ class Refused(CanToolError):
         super().__init__(message)
         self.status = status
         self.value = value
+
+
+class Interrupted(BaseException):
+    """SIGINT (Ctrl-C) or SIGTERM while a command ran; exit code 128 +
+    the signal's number (130, 143), as a shell reports a process the signal
+    ended. A BaseException, as KeyboardInterrupt: no `except Exception`
+    on the way swallows it, and every `finally` (DISABLE) still runs."""
+
+    def __init__(self, signum):
+        import signal
+        super().__init__(f"interrupted by {signal.Signals(signum).name}")
+        self.signum = signum
+        self.exit_code = 128 + signum

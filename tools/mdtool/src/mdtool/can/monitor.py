@@ -6,6 +6,7 @@ Live: a FuncAnimation that drains the bus at every frame. Headless
 """
 import collections
 import os
+import sys
 import time
 
 from .errors import UsageError
@@ -32,18 +33,23 @@ def monitor(drive, signals, window_s=5.0, frames=None, png=None, no_gui=False, d
             raise UsageError(f"{s}: unknown message {msg_name!r}") from None
         if not dot or sig not in [x.name for x in msg.signals]:
             raise UsageError(f"{s}: {msg.name} has the signals {', '.join(x.name for x in msg.signals)}")
-        want.append((msg.name, sig, next(x.unit for x in msg.signals if x.name == sig)))
+        want.append((msg.name, sig, next(x for x in msg.signals if x.name == sig)))
     data = {w[:2]: collections.deque() for w in want}
+    counts = dict.fromkeys(data, 0)
     fig, axes = plt.subplots(len(want), 1, sharex=True, squeeze=False, figsize=(8, 2.2 * len(want) + 0.8))
     lines = []
-    for ax, (m, sig, unit) in zip(axes[:, 0], want):
-        (ln,) = ax.plot([], [], lw=1)
-        ax.set_ylabel(f"{sig}\n[{unit or '-'}]" if unit else sig)
+    for ax, (m, sig, s) in zip(axes[:, 0], want):
+        (ln,) = ax.plot([], [], lw=1, drawstyle="steps-post" if s.choices else "default")
+        ax.set_ylabel(f"{sig}\n[{s.unit}]" if s.unit else sig)
+        if s.choices:  # an enumerated signal: its value, with the DBC's names on the axis
+            ax.set_yticks(sorted(int(k) for k in s.choices))
+            ax.set_yticklabels([str(s.choices[k]) for k in sorted(s.choices)], fontsize=7)
         ax.set_title(m, fontsize=8, loc="left")
         ax.grid(True, alpha=0.3)
         lines.append(ln)
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(f"node {drive.node}")
+    enums = {(m, sig): (min(map(int, s.choices)), max(map(int, s.choices))) for m, sig, s in want if s.choices}
     t0 = time.monotonic()
     stats = {"frames": 0}
 
@@ -52,17 +58,18 @@ def monitor(drive, signals, window_s=5.0, frames=None, png=None, no_gui=False, d
             m = drive.bus.recv(0.0)
             if m is None:
                 break
-            d = drive.decode(m)
+            d = drive.decode(m, names=False)  # numbers, enumerated signals too
             if d is None:
                 continue
             name, vals = d
             now = time.monotonic() - t0
             for (mn, sig), q in data.items():
-                if mn == name and isinstance(vals[sig], (int, float)):
+                if mn == name:
                     q.append((now, float(vals[sig])))
+                    counts[(mn, sig)] += 1
                     stats["frames"] += 1
         now = time.monotonic() - t0
-        for (_key, q), ln, ax in zip(data.items(), lines, axes[:, 0]):
+        for (key, q), ln, ax in zip(data.items(), lines, axes[:, 0]):
             while q and q[0][0] < now - window_s:
                 q.popleft()
             if q:
@@ -70,6 +77,8 @@ def monitor(drive, signals, window_s=5.0, frames=None, png=None, no_gui=False, d
                 ax.relim()
                 ax.autoscale_view()
             ax.set_xlim(max(0.0, now - window_s), max(window_s, now))
+            if key in enums:  # the whole range of names stays on the axis
+                ax.set_ylim(enums[key][0] - 0.5, enums[key][1] + 0.5)
         return lines
 
     if headless:
@@ -86,7 +95,10 @@ def monitor(drive, signals, window_s=5.0, frames=None, png=None, no_gui=False, d
         del anim
     if png:
         fig.savefig(png, dpi=100)
-        print(f"{png}: {stats['frames']} samples of {', '.join(f'{m}.{s}' for m, s, _ in want)}")
+        print(f"{png}: " + ", ".join(f"{m}.{s} {counts[(m, s)]} samples" for m, s, _ in want))
+    for (m, s), n in counts.items():
+        if n == 0:
+            print(f"mdtool: monitor: no sample of {m}.{s} from node {drive.node}", file=sys.stderr)
     if stats["frames"] == 0:
         print(f"mdtool: monitor: no sample of the chosen signals from node {drive.node}")
         return 3

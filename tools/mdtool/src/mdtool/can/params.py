@@ -12,6 +12,7 @@ import math
 import struct
 
 from .errors import UsageError
+from .files import META_LIMIT_BYTES, READ_LIMIT_BYTES, read_text, write_atomic
 from .paths import params_meta_path
 
 SECTIONS = ("motor", "board", "drive")
@@ -21,10 +22,12 @@ DESCRIPTIVE_KEYS = ("name", "source")
 class ParamTable:
     def __init__(self, path=None):
         path = path or params_meta_path()
+        text = read_text(path, META_LIMIT_BYTES, "parameter table")
         try:
-            with open(path) as f:
-                meta = json.load(f)
-        except (OSError, ValueError) as e:
+            meta = json.loads(text)
+            if not isinstance(meta.get("params"), list):
+                raise ValueError("no list 'params'")
+        except (ValueError, AttributeError) as e:
             raise UsageError(f"cannot read the parameter table {path}: {e}") from e
         self.path = path
         self.params = meta["params"]
@@ -57,7 +60,10 @@ class ParamTable:
                 value = float(value)
             except ValueError:
                 raise UsageError(f"{name}: not a number: {value!r}") from None
-        value = float(value)
+        try:
+            value = float(value)
+        except OverflowError:
+            raise UsageError(f"{name}: {value} is too large for a number") from None
         if not math.isfinite(value):
             raise UsageError(f"{name}: {value} is not finite")
         if p["type"] == "u32":
@@ -99,13 +105,12 @@ def fmt_value(p, v):
 
 
 def read_toml(path, table):
-    """[(name, value)] in file order from a motor/board/drive TOML file."""
+    """[(name, value)] in file order from a motor/board/drive TOML file (at
+    most files.READ_LIMIT_BYTES); a file without a parameter is refused."""
     import tomllib
+    text = read_text(path, READ_LIMIT_BYTES, "drive file")
     try:
-        with open(path, "rb") as f:
-            doc = tomllib.load(f)
-    except OSError as e:
-        raise UsageError(f"cannot read {path}: {e.strerror}") from e
+        doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise UsageError(f"{path}: not valid TOML: {e}") from e
     out = []
@@ -123,6 +128,9 @@ def read_toml(path, table):
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise UsageError(f"{path}: [{sec}] {k}: a number is expected, got {v!r}")
             out.append((k, v))
+    if not out:
+        raise UsageError(f"{path}: no parameter in it (a [motor], [board] or [drive] table with "
+                         f"at least one parameter is expected); nothing sent")
     return out
 
 
@@ -141,5 +149,4 @@ def write_toml(path, table, values, header):
                 lines.append(f"# {p['name']} = {v}  # readonly")
             else:
                 lines.append(f"{p['name']} = {v}  # {note}")
-    with open(path, "w") as f:
-        f.write("\n".join(lines) + "\n")
+    write_atomic(path, "\n".join(lines) + "\n")

@@ -5,6 +5,7 @@ telemetry are counted as frames arrive (log.SeqCounter).
 """
 import contextlib
 import json
+import logging
 import signal
 import time
 
@@ -154,7 +155,7 @@ def _interrupt_flag():
 
 
 def record(out, db, node, interface="socketcan", channel="can0", bitrate=None, duration=0.0,
-           ready=None, report=None, bus=None, stop=None, log=print):
+           ready=None, report=None, bus=None, stop=None, log=print, bus_opts=None):
     """Record until `duration` seconds passed (0: until SIGINT/SIGTERM or
     stop["now"]) into `out` (format by extension). On SocketCAN the socket
     is read directly (kernel drops from SO_RXQ_OVFL); on any other
@@ -172,7 +173,7 @@ def record(out, db, node, interface="socketcan", channel="can0", bitrate=None, d
         if bus is None and interface == "socketcan":
             rec = SocketcanRecorder(channel)
         elif bus is None:
-            bus = open_bus(interface, channel, bitrate)
+            bus = open_bus(interface, channel, bitrate, **(bus_opts or {}))
             own_bus = True
         if ready:
             open(ready, "w").close()
@@ -227,6 +228,31 @@ def record(out, db, node, interface="socketcan", channel="can0", bitrate=None, d
     return rep
 
 
+def _socketcand_reachable(args):
+    """python-can's socketcand client retries a refused connection for 10 s
+    (logging each try): find out first, in one try, whether a server answers
+    at host:port (from the arguments or python-can's configuration)."""
+    import socket
+
+    import can
+    cfg = can.util.load_config(config=dict(args))
+    host, port = cfg.get("host"), cfg.get("port")
+    if host is None or port is None:
+        raise UsageError("socketcand: give the server's --host and --port (or $MDTOOL_HOST, $MDTOOL_PORT, "
+                         "or host and port in python-can's configuration: CAN_CONFIG, ~/.canrc)")
+    try:
+        port = int(port)
+        with socket.create_connection((host, port), timeout=SOCKETCAND_CONNECT_S):
+            pass
+    except (OSError, ValueError) as e:
+        raise UsageError(f"socketcand: no server at {host}:{port} ({e}); is the drive running? "
+                         "(mcsim with MCSIM_CAN_IF=socketcand:HOST:PORT)") from e
+    args.update(host=host, port=port)
+
+
+SOCKETCAND_CONNECT_S = 3.0
+
+
 def open_bus(interface, channel, bitrate=None, **kw):
     """A python-can bus, with a clear error when it cannot be opened."""
     import can
@@ -234,6 +260,11 @@ def open_bus(interface, channel, bitrate=None, **kw):
     if bitrate:
         args["bitrate"] = int(bitrate)
     try:
+        if interface == "socketcand":
+            _socketcand_reachable(args)
+            # python-can's client logs a WARNING each time a TCP read ends in
+            # the middle of a frame, which is normal on a stream: keep errors only
+            logging.getLogger("can.interfaces.socketcand").setLevel(logging.ERROR)
         return can.Bus(**args)
-    except (can.CanError, OSError, ValueError, ImportError) as e:
+    except (can.CanError, OSError, ValueError, ImportError, TypeError) as e:
         raise UsageError(f"cannot open CAN interface {interface!r} channel {channel!r}: {e}") from e
