@@ -359,6 +359,9 @@ static uint32_t params_check(void *ctx, const mc_params_t *p)
     if ((p->pwm_hz != a->params.pwm_hz) || (p->slow_loop_div != a->params.slow_loop_div)) {
         return 1u;
     }
+    if ((p->brake_enable != 0u) && (a->hal->brake == NULL)) {
+        return MC_PARAMS_ERR_BOARD; /* no brake chopper on this board */
+    }
     if ((a->cmd_hook.check != NULL) && (a->cmd_hook.check(a->cmd_hook.ctx, p) != 0u)) {
         return 1u;
     }
@@ -438,6 +441,16 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     app->drive = drive;
     app->hal = hal;
     app->can = can;
+    if ((p->brake_enable != 0u) && (hal->brake == NULL)) {
+        /* a stored set this board cannot run (no brake chopper): the
+         * defaults boot and cfg_store_status says so */
+        if ((app->cfg.defaults == NULL) || (app->cfg.defaults->brake_enable != 0u)) {
+            return MC_APP_CFG_ERR_PARAMS;
+        }
+        app->params = *app->cfg.defaults;
+        app->boot_status = (uint8_t)MC_CFG_BOOT_INVALID;
+        app->status_sent_cfg = app->boot_status;
+    }
     app->params_valid = init_drive && (mc_params_validate(p) == MC_PARAMS_OK);
     if (init_drive) {
         mc_drive_cfg_t dc;

@@ -21,7 +21,11 @@
  *   mc_app_start()   the drive from those parameters (unless the caller
  *                    initialised it itself), telemetry, command handler,
  *                    parameter service, the hardware receive filter for
- *                    this node's ids, the watchdog.
+ *                    this node's ids, the watchdog. A stored set with
+ *                    brake_enable on a board without a brake chopper
+ *                    (mc_hal_t.brake NULL) boots the defaults with status
+ *                    INVALID; an APPLY of it is refused INVALID with
+ *                    MC_PARAMS_ERR_BOARD (nothing changes).
  *   mc_app_fast_step()  ADC interrupt: the drive's fast step, and the mark
  *                    that the fast loop ran.
  *   mc_app_can_rx_isr() CAN receive interrupt: moves every received frame

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include <cstring>
 #include <vector>
@@ -463,4 +464,129 @@ TEST_F(McApp, SensoredPiKeepsRunningWhenOnlyThePositionLawIsRefused)
     EXPECT_NE(app.cmd.cfg.set_speed_ref, nullptr);    // the sensored speed law
     EXPECT_EQ(app.cfg.speed_law.ctrl, mc_ctrl_speed_ops(&app.laws.spd));
     EXPECT_EQ(app.cmd.cfg.speed_drive_mode, MC_DRIVE_MODE_CTRL);
+}
+
+namespace
+{
+std::vector<uint8_t> I32Le(int32_t v)
+{
+    const auto u = static_cast<uint32_t>(v);
+    return {static_cast<uint8_t>(u), static_cast<uint8_t>(u >> 8), static_cast<uint8_t>(u >> 16),
+            static_cast<uint8_t>(u >> 24)};
+}
+} // namespace
+
+// A current limit lowered at run time (a runtime parameter written and
+// applied over the parameter service while the bridge is on) under every
+// law the parameters offer: the law asking for more than the new limit
+// (the rotor held: the speed and position errors grow; the sensorless law
+// in its I-f start at 0.8 i_rated = 2.4 A) is saturated at the limit from
+// the next period, the run goes on (CTRL mode, enabled, no fault): the
+// reference is neither dropped nor run above the limit. Exact: the clamp
+// is a comparison and a copy of the limit (sign kept).
+TEST_F(McApp, LowerCurrentLimitAtRunTimeSaturatesEveryLaw)
+{
+    constexpr float kLow = 1.5f; // below the I-f current and the saturated 10 A
+    struct Case {
+        uint32_t law;
+        uint8_t mode;
+        uint32_t cmd;
+        int32_t ref; // SET_SPEED_REF (mrad/s) or SET_POSITION_REF (0.1 mrad)
+    };
+    const Case cases[] = {
+        {MC_LAW_SPEED_PI, MC_CAN_CTRL_SPEED, 0x13u, 100000},
+        {MC_LAW_SPEED_SENSORLESS, MC_CAN_CTRL_SPEED, 0x13u, 100000},
+        {MC_LAW_SPEED_PI2D, MC_CAN_CTRL_SPEED, 0x13u, 100000},
+        {MC_LAW_SPEED_PI, MC_CAN_CTRL_POSITION, 0x14u, 200000},
+    };
+    for (const Case &c : cases) {
+        SCOPED_TRACE(testing::Message() << "law " << c.law << " mode " << int(c.mode));
+        SetUp();
+        app = mc_app_t{};
+        drive = mc_drive_t{};
+        cfg.laws_from_params = true;
+        defaults.speed_law = c.law;
+        Start();
+        Send(0x11u, {c.mode}); // SET_CONTROL_MODE
+        Send(0x10u, {1});      // SET_ENABLE
+        Send(c.cmd, I32Le(c.ref));
+        SlowSteps(100);
+        ASSERT_TRUE(app.cmd.enabled) << "faults 0x" << std::hex << drive.faults;
+        ASSERT_EQ(MC_DRIVE_MODE_CTRL, drive.mode);
+        mc_app_probe_t p{};
+        mc_app_probe(&app, &p);
+        const float before = std::max(std::fabs(p.id_ref_a), std::fabs(p.iq_ref_a));
+        ASSERT_GT(before, kLow) << "the law asks for more than the new limit";
+
+        uint32_t v = F32Bits(kLow);
+        ASSERT_EQ(MC_PARAM_OK,
+                  mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, &v));
+        v = 0u;
+        ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+        ASSERT_EQ(kLow, drive.cfg.i_max_a);
+        for (uint32_t k = 0; k < 20u * defaults.slow_loop_div; ++k) {
+            Period();
+            mc_app_probe(&app, &p);
+            ASSERT_LE(std::fabs(p.id_ref_a), kLow) << k;
+            ASSERT_LE(std::fabs(p.iq_ref_a), kLow) << k;
+        }
+        // saturated at the limit, not dropped to zero
+        EXPECT_EQ(kLow, std::max(std::fabs(p.id_ref_a), std::fabs(p.iq_ref_a)));
+        EXPECT_TRUE(app.cmd.enabled);
+        EXPECT_EQ(MC_DRIVE_MODE_CTRL, drive.mode);
+        EXPECT_EQ(0u, drive.faults);
+        EXPECT_EQ(0u, p.ctrl_err);
+    }
+}
+
+// A board without a brake chopper (mc_hal_t.brake NULL) refuses brake_enable
+// with the named reason (APPLY INVALID, MC_PARAMS_ERR_BOARD) and nothing
+// changes; a board with one takes it (the chopper's thresholds reach the
+// drive). A stored set with the chopper on, booted on a board without one,
+// is a set this board cannot run: the defaults boot (cfg_store_status
+// INVALID); defaults with it are a board's configuration error.
+TEST_F(McApp, BrakeParametersRefusedByABoardWithoutAChopper)
+{
+    const mc_hal_brake_t *chopper = fake.board.brake;
+    ASSERT_NE(nullptr, chopper);
+    fake.board.brake = nullptr;
+    Start();
+    uint32_t v = 1u;
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_BRAKE_ENABLE, &v));
+    v = 0u;
+    EXPECT_EQ(MC_PARAM_ERR_INVALID, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_EQ(MC_PARAMS_ERR_BOARD, v);
+    EXPECT_EQ(0u, app.srv.active.brake_enable);
+    EXPECT_EQ(0.0f, drive.cfg.brake_on_v);
+    EXPECT_EQ(0.0f, drive.cfg.brake_full_v);
+    // the same set saved on a board with a chopper, then booted without one
+    SetUp();
+    app = mc_app_t{};
+    drive = mc_drive_t{};
+    fake.board.brake = chopper;
+    Start();
+    v = 1u;
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_BRAKE_ENABLE, &v));
+    v = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_GT(drive.cfg.brake_on_v, defaults.vbus_v);
+    EXPECT_GT(drive.cfg.brake_full_v, drive.cfg.brake_on_v);
+    Send(0x18u, {3, 0, 0, 0, 0, 0, 0, 0}); // PARAM_REQ SAVE
+    SlowSteps(2);
+    ASSERT_EQ(1u, app.store.saves);
+    app = mc_app_t{};
+    drive = mc_drive_t{};
+    fake.board.brake = nullptr;
+    Start();
+    EXPECT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_INVALID), app.boot_status);
+    EXPECT_EQ(0u, app.params.brake_enable);
+    EXPECT_EQ(0.0f, drive.cfg.brake_on_v);
+    // defaults with the chopper on a board without one: refused
+    app = mc_app_t{};
+    drive = mc_drive_t{};
+    defaults.brake_enable = 1u;
+    ASSERT_EQ(MC_APP_CFG_OK, mc_app_boot(&app, &cfg));
+    EXPECT_EQ(MC_APP_CFG_ERR_PARAMS, mc_app_start(&app, &drive, &fake.board, fake.board.can, true));
 }
