@@ -270,7 +270,8 @@ def foreign_flood(sil):
 
 
 def enable_after_commissioning(sil):
-    """The VM test's drive (tests/can/vm/mdtool_vcan.sh: 5 kHz PWM (2 kHz ripples more than the 10 A limit: no safe gains), a 20 Hz
+    """The VM test's drive (tests/can/vm/mdtool_vcan.sh: 5 kHz PWM (at 2 kHz
+    the current ripple exceeds the 10 A limit: no safe gains), a 20 Hz
     current loop, no flywheel) commissioned over CAN, then SPEED 20 rad/s
     enabled while the rotor still coasts at about 60 rad/s from the flux
     test, at several delays after DONE. Before the drive wrote the zero

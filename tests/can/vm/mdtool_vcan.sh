@@ -5,8 +5,8 @@
 # The SIL drive (mcsim can-telemetry, paced to the wall clock) on vcan0;
 # candump -L and `mdtool record rec.blf` record (not .mf4 in the VM: asammdf's compiled
 # dependencies use instructions the emulated CPU lacks; the host converts); then mdtool scan, status,
-# config get (the SIL has no parameter service attached: the drive's
-# refusal, CMD_ERROR UNSUPPORTED, must come back decoded, exit 4), monitor
+# config get (the SIL serves the parameter table its scenario set builds,
+# as the image does: the value comes back), monitor
 # (headless, to a PNG) and run speed (the keep-alive sent by mdtool; held
 # until the measured speed settles, counted in telemetry frames, so a slow
 # emulated clock cannot fail it; the drive stops when it disables), and, before
@@ -44,8 +44,8 @@ say "drive is streaming"
 # every mdtool command in one Python process (tests/can/vm/mdtool_batch.py:
 # the same entry point as the command line; one interpreter start instead of
 # five, which the emulated CPU makes slow on a busy machine); calibrate comes
-# before run (the SIL ends after the run's disable); this SIL runs outside the
-# parameter table (no service): results shown, not staged
+# before run (the SIL ends after the run's disable); the results are staged
+# on the drive's parameter service (not applied: no --save)
 B="--interface socketcan --channel $IF"
 cat > steps.txt <<EOS
 scan scan $B --timeout 10
