@@ -39,6 +39,7 @@ case "$target" in
     done
     "$CXX" "${FLAGS[@]}" -std=c++17 "${inc[@]}" tests/fuzz/fuzz_boot_update.cpp "${objs[@]}" \
       -o "$work/fuzz_$target"
+    ;;
   socketcand)
     "$CXX" "${FLAGS[@]}" -std=c++17 -I hal/host/include -I hal/include tests/fuzz/fuzz_socketcand.cpp \
       hal/host/src/socketcand_proto.cpp -o "$work/fuzz_$target"
