@@ -592,178 +592,137 @@ TEST_F(McApp, BrakeParametersRefusedByABoardWithoutAChopper)
     EXPECT_EQ(MC_APP_CFG_ERR_PARAMS, mc_app_start(&app, &drive, &fake.board, fake.board.can, true));
 }
 
-// Every runtime parameter is read by the running drive: with the bridge on
-// (CURRENT mode over CAN), each is written over the parameter service to a
-// value other than its effective one (derived values resolved first: 1.02x,
-// 0.98x, 0.8x, 1.25x, the range's ends: the first the set accepts) and
-// applied; the drive's configuration, the
-// command handler or the telemetry it runs must change. (The brake chopper
-// is on, fake board with one, so its thresholds are live.) A parameter no
-// accepted value of which changes anything is one the drive does not read.
-TEST_F(McApp, EveryRuntimeParameterChangesTheRunningDrive)
+namespace
 {
-    defaults.brake_enable = 1u;
-    ASSERT_EQ(MC_PARAMS_OK, mc_params_validate(&defaults));
-    cfg.laws_from_params = true;
-    uint32_t tested = 0u;
-    for (uint32_t i = 0; i < MC_PARAM_COUNT; ++i) {
-        const mc_param_info_t &info = mc_param_table[i];
-        if (info.access != MC_PARAM_ACCESS_RUNTIME) {
-            continue;
+// Values of one parameter other than its effective one (derived values
+// resolved first): 1.02x, 0.98x, 0.8x, 1.25x, 0.5x, 1 %, 10 % and 50 % into
+// the range, the range's ends; integers one up, one down, the ends.
+std::vector<uint32_t> OtherValues(const mc_param_info_t &info, uint32_t now)
+{
+    std::vector<uint32_t> cands;
+    if (info.type == MC_PARAM_TYPE_F32) {
+        float f = 0.0f;
+        std::memcpy(&f, &now, sizeof f);
+        const float span = info.max.f - info.min.f;
+        for (const float c :
+             {1.02f * f, 0.98f * f, 0.8f * f, 1.25f * f, 0.5f * f, info.min.f + 0.01f * span,
+              info.min.f + 0.1f * span, info.min.f + 0.5f * span, info.min.f, info.max.f}) {
+            cands.push_back(F32Bits(c));
         }
-        SCOPED_TRACE(mc_param_names[i]);
-        mc_params_eff_t eff{};
-        ASSERT_EQ(0u, mc_params_resolve(&defaults, &eff));
-        const uint32_t now = mc_param_get_raw(&eff.p, &info);
-        std::vector<uint32_t> cands;
-        if (info.type == MC_PARAM_TYPE_F32) {
-            float f = 0.0f;
-            std::memcpy(&f, &now, sizeof f);
-            const float span = info.max.f - info.min.f;
-            for (const float c :
-                 {1.02f * f, 0.98f * f, 0.8f * f, 1.25f * f, 0.5f * f, info.min.f + 0.01f * span,
-                  info.min.f + 0.1f * span, info.min.f + 0.5f * span, info.min.f, info.max.f}) {
-                cands.push_back(F32Bits(c));
-            }
-        } else {
-            for (const uint32_t c : {now + 1u, now - 1u, info.min.u, info.max.u}) {
-                cands.push_back(c);
-            }
-        }
-        bool accepted = false, changed = false;
-        for (const uint32_t c : cands) {
-            if (c == now || mc_param_check_value(&info, c) != MC_PARAM_OK) {
+    } else {
+        cands = {now + 1u, now - 1u, info.min.u, info.max.u};
+    }
+    return cands;
+}
+
+// What the drive runs from its parameters: its configuration, the command
+// handler's, the telemetry and the laws' configurations.
+struct Running {
+    mc_drive_cfg_t dc;
+    mc_can_cmd_cfg_t cc;
+    mc_telemetry_t tm;
+    mc_app_laws_t laws;
+    bool operator!=(const Running &o) const
+    {
+        return std::memcmp(&dc, &o.dc, sizeof dc) != 0 || std::memcmp(&cc, &o.cc, sizeof cc) != 0 ||
+               std::memcmp(&tm, &o.tm, sizeof tm) != 0 ||
+               std::memcmp(&laws.spd_cfg, &o.laws.spd_cfg, sizeof laws.spd_cfg) != 0 ||
+               std::memcmp(&laws.sls_cfg, &o.laws.sls_cfg, sizeof laws.sls_cfg) != 0 ||
+               std::memcmp(&laws.pi2d_cfg, &o.laws.pi2d_cfg, sizeof laws.pi2d_cfg) != 0 ||
+               std::memcmp(&laws.pos_cfg, &o.laws.pos_cfg, sizeof laws.pos_cfg) != 0 ||
+               laws.speed_law != o.laws.speed_law;
+    }
+};
+} // namespace
+
+// Every parameter of one access class is read by the drive: with the
+// bridge on (RUNTIME: CURRENT mode over CAN) or off (STOPPED), each is
+// written over the parameter service to another value (OtherValues: the
+// first the whole-set check accepts) and applied; what the drive runs
+// (Running) must change. The brake chopper is on (the fake board has one)
+// so that its thresholds are live. Returns the parameters no accepted value
+// of which changes anything: ones the drive does not read.
+class McAppEveryParam : public McApp
+{
+  protected:
+    std::vector<std::string> Unread(uint8_t access, uint32_t *tested)
+    {
+        std::vector<std::string> unread;
+        for (uint32_t i = 0; i < MC_PARAM_COUNT; ++i) {
+            const mc_param_info_t &info = mc_param_table[i];
+            if (info.access != access) {
                 continue;
             }
-            SetUp();
+            SCOPED_TRACE(mc_param_names[i]);
+            defaults = mc_params_default;
             defaults.brake_enable = 1u;
-            cfg.laws_from_params = true;
-            app = mc_app_t{};
-            drive = mc_drive_t{};
-            Start();
+            mc_params_eff_t eff{};
+            EXPECT_EQ(0u, mc_params_resolve(&defaults, &eff));
+            const uint32_t now = mc_param_get_raw(&eff.p, &info);
+            bool changed = false;
+            for (const uint32_t c : OtherValues(info, now)) {
+                if (c != now && mc_param_check_value(&info, c) == MC_PARAM_OK &&
+                    WriteApplyChanges(info.id, c, access == MC_PARAM_ACCESS_RUNTIME)) {
+                    changed = true;
+                    break;
+                }
+            }
+            if (!changed) {
+                unread.push_back(mc_param_names[i]);
+            }
+            ++*tested;
+        }
+        return unread;
+    }
+
+    // A fresh drive, bridge on or off; id written to raw and applied. True
+    // when the set was accepted and what the drive runs changed.
+    bool WriteApplyChanges(uint32_t id, uint32_t raw, bool bridge_on)
+    {
+        SetUp();
+        defaults.brake_enable = 1u;
+        cfg.laws_from_params = true;
+        app = mc_app_t{};
+        drive = mc_drive_t{};
+        Start();
+        if (bridge_on) {
             Send(0x11u, {1}); // SET_CONTROL_MODE CURRENT
             Send(0x10u, {1}); // SET_ENABLE
-            SlowSteps(2);
-            ASSERT_EQ(MC_DRIVE_MODE_CURRENT, drive.mode);
-            const mc_drive_cfg_t dc = drive.cfg;
-            const mc_can_cmd_cfg_t cc = app.cmd.cfg;
-            const mc_telemetry_t tm = app.tm;
-            uint32_t v = c;
-            if (mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, info.id, &v) != MC_PARAM_OK) {
-                continue;
-            }
-            v = 0u;
-            if (mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v) != MC_PARAM_OK) {
-                continue; // a value the cross checks refuse: the next one
-            }
-            accepted = true;
-            changed = std::memcmp(&dc, &drive.cfg, sizeof dc) != 0 ||
-                      std::memcmp(&cc, &app.cmd.cfg, sizeof cc) != 0 ||
-                      std::memcmp(&tm, &app.tm, sizeof tm) != 0;
-            if (changed) {
-                break;
-            }
         }
-        EXPECT_TRUE(accepted) << "no value accepted while running";
-        EXPECT_TRUE(changed) << "written and applied, nothing the drive runs changed";
-        ++tested;
+        SlowSteps(2);
+        EXPECT_EQ(bridge_on ? MC_DRIVE_MODE_CURRENT : MC_DRIVE_MODE_IDLE, drive.mode);
+        const Running before{drive.cfg, app.cmd.cfg, app.tm, app.laws};
+        uint32_t v = raw;
+        if (mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, id, &v) != MC_PARAM_OK) {
+            return false;
+        }
+        // the open-phase check runs with both of its values or neither
+        if (id == MC_PARAM_ID_OPEN_PHASE_I_MIN_A || id == MC_PARAM_ID_OPEN_PHASE_TIME_S) {
+            const bool cur = id == MC_PARAM_ID_OPEN_PHASE_I_MIN_A;
+            v = F32Bits(cur ? 0.05f : 0.5f); // the other: 50 ms, or 0.5 A
+            EXPECT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE,
+                                                        cur ? MC_PARAM_ID_OPEN_PHASE_TIME_S
+                                                            : MC_PARAM_ID_OPEN_PHASE_I_MIN_A,
+                                                        &v));
+        }
+        v = 0u;
+        if (mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v) != MC_PARAM_OK) {
+            return false; // a value the cross checks refuse: the next one
+        }
+        return Running{drive.cfg, app.cmd.cfg, app.tm, app.laws} != before;
     }
+};
+
+TEST_F(McAppEveryParam, EveryRuntimeParameterChangesTheRunningDrive)
+{
+    uint32_t tested = 0u;
+    EXPECT_EQ(std::vector<std::string>{}, Unread(MC_PARAM_ACCESS_RUNTIME, &tested));
     EXPECT_GE(tested, 20u);
 }
 
-// The same for every parameter that changes only while the bridge is off:
-// with the bridge off each is written over the parameter service to a
-// value other than its effective one (derived values resolved first: 1.02x,
-// 0.98x, 0.8x, 1.25x, the range's ends: the first the set accepts) and
-// applied; the drive's configuration, the
-// command handler, the telemetry or the laws' configurations must change. (The brake chopper
-// is on, fake board with one, so its thresholds are live.) A parameter no
-// accepted value of which changes anything is one the drive does not read.
-TEST_F(McApp, EveryStoppedParameterChangesTheDriveOrItsLaws)
+TEST_F(McAppEveryParam, EveryStoppedParameterChangesTheDriveOrItsLaws)
 {
-    defaults.brake_enable = 1u;
-    ASSERT_EQ(MC_PARAMS_OK, mc_params_validate(&defaults));
-    cfg.laws_from_params = true;
     uint32_t tested = 0u;
-    std::vector<std::string> unread;
-    for (uint32_t i = 0; i < MC_PARAM_COUNT; ++i) {
-        const mc_param_info_t &info = mc_param_table[i];
-        if (info.access != MC_PARAM_ACCESS_STOPPED) {
-            continue;
-        }
-        SCOPED_TRACE(mc_param_names[i]);
-        mc_params_eff_t eff{};
-        ASSERT_EQ(0u, mc_params_resolve(&defaults, &eff));
-        const uint32_t now = mc_param_get_raw(&eff.p, &info);
-        std::vector<uint32_t> cands;
-        if (info.type == MC_PARAM_TYPE_F32) {
-            float f = 0.0f;
-            std::memcpy(&f, &now, sizeof f);
-            const float span = info.max.f - info.min.f;
-            for (const float c :
-                 {1.02f * f, 0.98f * f, 0.8f * f, 1.25f * f, 0.5f * f, info.min.f + 0.01f * span,
-                  info.min.f + 0.1f * span, info.min.f + 0.5f * span, info.min.f, info.max.f}) {
-                cands.push_back(F32Bits(c));
-            }
-        } else {
-            for (const uint32_t c : {now + 1u, now - 1u, info.min.u, info.max.u}) {
-                cands.push_back(c);
-            }
-        }
-        bool accepted = false, changed = false;
-        for (const uint32_t c : cands) {
-            if (c == now || mc_param_check_value(&info, c) != MC_PARAM_OK) {
-                continue;
-            }
-            SetUp();
-            defaults.brake_enable = 1u;
-            cfg.laws_from_params = true;
-            app = mc_app_t{};
-            drive = mc_drive_t{};
-            Start();
-            SlowSteps(2);
-            ASSERT_EQ(MC_DRIVE_MODE_IDLE, drive.mode);
-            const mc_drive_cfg_t dc = drive.cfg;
-            const mc_can_cmd_cfg_t cc = app.cmd.cfg;
-            const mc_telemetry_t tm = app.tm;
-            const mc_app_laws_t laws = app.laws;
-            uint32_t v = c;
-            if (mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, info.id, &v) != MC_PARAM_OK) {
-                continue;
-            }
-            // the open-phase check runs with both of its values or neither
-            const std::string name = mc_param_names[i];
-            if (name == "open_phase_i_min_a" || name == "open_phase_time_s") {
-                const bool cur = name == "open_phase_i_min_a";
-                v = F32Bits(cur ? 0.05f : 0.5f); // the other: 50 ms, or 0.5 A
-                ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE,
-                                                            cur ? MC_PARAM_ID_OPEN_PHASE_TIME_S
-                                                                : MC_PARAM_ID_OPEN_PHASE_I_MIN_A,
-                                                            &v));
-            }
-            v = 0u;
-            if (mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v) != MC_PARAM_OK) {
-                continue; // a value the cross checks refuse: the next one
-            }
-            accepted = true;
-            changed = std::memcmp(&dc, &drive.cfg, sizeof dc) != 0 ||
-                      std::memcmp(&cc, &app.cmd.cfg, sizeof cc) != 0 ||
-                      std::memcmp(&tm, &app.tm, sizeof tm) != 0 ||
-                      std::memcmp(&laws.spd_cfg, &app.laws.spd_cfg, sizeof laws.spd_cfg) != 0 ||
-                      std::memcmp(&laws.sls_cfg, &app.laws.sls_cfg, sizeof laws.sls_cfg) != 0 ||
-                      std::memcmp(&laws.pi2d_cfg, &app.laws.pi2d_cfg, sizeof laws.pi2d_cfg) != 0 ||
-                      std::memcmp(&laws.pos_cfg, &app.laws.pos_cfg, sizeof laws.pos_cfg) != 0 ||
-                      laws.speed_law != app.laws.speed_law;
-            if (changed) {
-                break;
-            }
-        }
-        if (!(accepted && changed)) {
-            unread.push_back(mc_param_names[i]);
-        }
-        ++tested;
-    }
-    EXPECT_GE(tested, 40u);
     // Known, each with its reason; the list must shrink, never grow:
     //  pwm_hz, slow_loop_div  the board's fixed rates (mc_app_cfg_t.pwm_hz_fixed:
     //                         any other is refused), read at boot
@@ -778,5 +737,6 @@ TEST_F(McApp, EveryStoppedParameterChangesTheDriveOrItsLaws)
     const std::vector<std::string> known = {"pwm_hz",    "current_sensors", "i_sense_max_a",
                                             "adc_bits",  "encoder_cpr",     "slow_loop_div",
                                             "asc_enable"};
-    EXPECT_EQ(known, unread);
+    EXPECT_EQ(known, Unread(MC_PARAM_ACCESS_STOPPED, &tested));
+    EXPECT_GE(tested, 40u);
 }
