@@ -386,5 +386,50 @@ TEST_F(AppDriveCtrl, CurrentLoopStartsOnTheBackEmfOfATurningRotor)
     EXPECT_GT(std::fabs(da - 0.5f), 1e-3f) << "not the zero vector";
 }
 
+// The regenerative limit is the drive's for every law that gives current
+// references in the rotor's frame: a braking q reference (iq against the
+// frame's speed) is scaled by (end - vbus) / (end - start) as the bus rises
+// between the two thresholds, and the law is told the factor next step (its
+// anti-windup tracks it). A motoring reference, or one outside the rotor's
+// frame (rotor_frame false: I-f start), passes unscaled. Exact: one float
+// product of the same operands as the drive's.
+TEST_F(AppDriveCtrl, RegenLimitAppliesToCurrentLaws)
+{
+    cfg.vbus_regen_start_v = 30.0f;
+    cfg.vbus_regen_end_v = 40.0f;
+    InitDrive();
+    mc_drive_ctrl_t c = Law(MC_DRIVE_OUT_CURRENT);
+    ASSERT_EQ(0, mc_drive_attach_ctrl(&d, &c));
+    law.out = mc_drive_out_t{};
+    law.out.iq_ref_a = 5.0f;
+    law.out.omega_e_rad_s = -100.0f; // braking: iq against the speed
+    law.out.rotor_frame = true;
+    ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL));
+    const float vbus = 36.0f;
+    const float k = (40.0f - vbus) / (40.0f - 30.0f); // 0.4
+    auto step = [&]() {
+        ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, vbus, kMask3));
+        (void)mc_drive_fast_step(&d);
+    };
+    step();
+    EXPECT_EQ(k, d.tm.regen_scale);
+    EXPECT_EQ(k * 5.0f, d.tm.iq_ref_a);
+    step();
+    EXPECT_EQ(k, law.last.regen_scale);
+    EXPECT_EQ(k * 5.0f, law.last.iq_applied_a);
+    // motoring: unscaled
+    law.out.omega_e_rad_s = 100.0f;
+    step();
+    EXPECT_EQ(1.0f, d.tm.regen_scale);
+    EXPECT_EQ(5.0f, d.tm.iq_ref_a);
+    // not the rotor's frame: unscaled
+    law.out.omega_e_rad_s = -100.0f;
+    law.out.rotor_frame = false;
+    step();
+    EXPECT_EQ(1.0f, d.tm.regen_scale);
+    EXPECT_EQ(5.0f, d.tm.iq_ref_a);
+    EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
+}
+
 } // namespace
 } // namespace apptest
