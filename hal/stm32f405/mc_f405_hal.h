@@ -19,15 +19,19 @@
  *            interrupt runs the fast loop; temperatures as software-started
  *            regular conversions.
  *   encoder  TIM2..TIM5 in encoder mode 3 (x4), ARR = counts_per_rev - 1,
- *            index pulse via mc_f405_encoder_index_isr() from its EXTI ISR.
+ *            index pulse on an EXTI line latching the count
+ *            (mc_f405_encoder_index_isr() from its EXTI ISR).
  *   can      bxCAN (CAN1), classic frames, 3 tx mailboxes sent in request
  *            order, rx FIFO 0 (+ an optional software ring filled from the
  *            FIFO 0 interrupt), 32-bit mask filters, automatic bus-off
  *            recovery.
  *   tick     TIM2 or TIM5 (32-bit) free running. (The DWT cycle counter is
  *            not used: it reads 0 under QEMU.)
- *   spi      SPI1..3 master with a GPIO chip select, 16-bit frames (the
- *            gate driver's register interface; hal/spi.h).
+ *   spi      SPI1..3 master with a GPIO chip select, 16-bit and 32-clock
+ *            frames (the gate driver's register interface, an absolute
+ *            encoder; hal/spi.h); devices sharing one SPI each restore
+ *            their settings.
+ *   hall     three GPIO inputs as one 3-bit code (hal/hall.h).
  *   fault    BKIN of TIM1/TIM8 (hardware kill), gate-driver nFAULT and
  *            over-current comparator levels on GPIO, gate-driver enable pin;
  *            gate kill = EGR.BG on both timers + MOE cleared + enable low.
@@ -53,6 +57,7 @@
 #include <stdint.h>
 
 #include "hal/hal.h"
+#include "hal/hall.h"
 #include "hal/spi.h"
 #include "mc_f405_regs.h"
 
@@ -328,27 +333,103 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg);
 /* encoder: TIMx encoder mode                                                */
 /* ======================================================================== */
 
+/**
+ * The encoder's index pulse on a GPIO pin through EXTI (RM0090 §12.2): the
+ * pin's EXTI line (= pin number) is routed to its port by SYSCFG_EXTICR,
+ * triggered on one edge, its interrupt unmasked. The EXTI interrupt
+ * (mc_f405_exti_irq(pin): EXTI0..4, EXTI9_5 or EXTI15_10) calls
+ * mc_f405_encoder_index_isr(), which latches the counter at the first
+ * index after init or a re-arm and masks the line. From then on the driver
+ * reports the count relative to that latch, (CNT - index_count) mod cpr,
+ * with MC_HAL_ENCODER_FLAG_INDEX: count 0 is the index. The counter itself
+ * is never written (a software write of CNT would lose the edges counted
+ * between the index and the write). The latch is read in the ISR, so it
+ * lags the edge by the interrupt's latency: at most (latency x count
+ * rate) counts, e.g. 0.2 us at 8192 counts/rev and 50 rev/s = 0.08 counts
+ * with the index interrupt at the highest priority (see the board
+ * binding).
+ */
+typedef struct mc_f405_encoder_index {
+    mc_f405_exti_regs_t *p_exti;     /**< EXTI, or NULL: no index input */
+    mc_f405_syscfg_regs_t *p_syscfg; /**< SYSCFG (EXTICR); required with p_exti */
+    uint8_t port;                    /**< the pin's port, 0 = A .. 8 = I */
+    uint8_t pin;                     /**< 0..15, also its EXTI line */
+    bool falling_edge;               /**< trigger on the falling edge (else rising:
+                                          ODrive v3.6 and VESC 6, a high pulse) */
+} mc_f405_encoder_index_t;
+
 typedef struct mc_f405_encoder_config {
-    mc_f405_tim_regs_t *p_tim;   /**< TIM3/TIM4 (16 bit) or TIM2/TIM5 */
-    uint32_t counts_per_rev;     /**< x4 counts, 1 .. 65536 (16-bit timer)
-                                        or 1 .. 2^32-1 with counter_32bit */
-    bool counter_32bit;          /**< p_tim is TIM2 or TIM5 */
-    uint8_t input_filter;        /**< ICxF 0..15 on TI1 and TI2 */
-    bool invert;                 /**< count the other way (CC1P) */
-    const mc_hal_tick_t *p_tick; /**< timestamps; NULL: 0 */
+    mc_f405_tim_regs_t *p_tim;     /**< TIM3/TIM4 (16 bit) or TIM2/TIM5 */
+    uint32_t counts_per_rev;       /**< x4 counts, 1 .. 65536 (16-bit timer)
+                                          or 1 .. 2^32-1 with counter_32bit */
+    bool counter_32bit;            /**< p_tim is TIM2 or TIM5 */
+    uint8_t input_filter;          /**< ICxF 0..15 on TI1 and TI2 */
+    bool invert;                   /**< count the other way (CC1P) */
+    const mc_hal_tick_t *p_tick;   /**< timestamps; NULL: 0 */
+    mc_f405_encoder_index_t index; /**< index input; p_exti NULL: none */
 } mc_f405_encoder_config_t;
 
 typedef struct mc_f405_encoder {
     mc_f405_encoder_config_t cfg;
-    volatile bool index_seen;
+    volatile bool index_seen;       /**< the index has been latched */
+    volatile uint32_t index_count;  /**< CNT at the index (raw, relative to init) */
+    volatile uint32_t index_events; /**< index interrupts handled since init */
     mc_hal_encoder_t dev;
 } mc_f405_encoder_t;
 
-/** @return 0; -EINVAL NULL, counts_per_rev out of range, filter > 15. */
+/**
+ * Configure the timer (encoder mode 3, ARR = cpr - 1, CNT = 0, counting)
+ * and, with cfg.index.p_exti, the index line: IMR masked while EXTICR
+ * (port), RTSR/FTSR (the edge; the other edge cleared) and PR (a stale
+ * pending bit cleared) are written, then unmasked. EMR is left alone.
+ * @return 0; -EINVAL NULL, counts_per_rev out of range, filter > 15, an
+ *         index with no SYSCFG, port > 8 or pin > 15 (nothing written).
+ */
 int mc_f405_encoder_init(mc_f405_encoder_t *p_drv, const mc_f405_encoder_config_t *p_cfg);
 
-/** Index pulse seen (call from its EXTI ISR): counter to 0, index flag. */
-void mc_f405_encoder_index_isr(mc_f405_encoder_t *p_drv);
+/**
+ * EXTI interrupt body (ISR context; several lines may share the vector):
+ * when the index line is pending, clears it (PR, write 1) and, at the first
+ * index since init or re-arm, latches CNT into index_count, sets index_seen
+ * and masks the line (the index is found; later pulses raise no
+ * interrupt). @return true when the index line was pending (handled).
+ */
+bool mc_f405_encoder_index_isr(mc_f405_encoder_t *p_drv);
+
+/**
+ * Forget the index and wait for the next one (a new index search): the
+ * count is reported relative to power-up again until it is latched anew.
+ * @return 0; -EINVAL NULL or no index configured.
+ */
+int mc_f405_encoder_index_rearm(mc_f405_encoder_t *p_drv);
+
+/**
+ * NVIC interrupt number of EXTI line 0..15 (RM0090 table 61): lines 0..4
+ * have their own (6..10), 5..9 share EXTI9_5 (23), 10..15 EXTI15_10 (40).
+ * @return the IRQ number, or 0xFFFFFFFF for a line above 15.
+ */
+uint32_t mc_f405_exti_irq(uint32_t line);
+
+/* ======================================================================== */
+/* hall: three GPIO inputs                                                   */
+/* ======================================================================== */
+
+typedef struct mc_f405_hall_config {
+    mc_f405_pin_t pin[3]; /**< sensors A, B, C (code bits 0, 1, 2); active_low
+                               inverts a pin (an inverting input stage) */
+} mc_f405_hall_config_t;
+
+typedef struct mc_f405_hall {
+    mc_f405_hall_config_t cfg;
+    mc_hal_hall_t dev;
+} mc_f405_hall_t;
+
+/**
+ * The Hall inputs read from their ports' IDR (the pins' mode, pulls and
+ * filter are the board's GPIO set-up). Reading IDR has no side effect.
+ * @return 0; -EINVAL NULL, a pin without a port or above 15.
+ */
+int mc_f405_hall_init(mc_f405_hall_t *p_drv, const mc_f405_hall_config_t *p_cfg);
 
 /* ======================================================================== */
 /* spi: SPI1..3 master, one device on a GPIO chip select                     */
@@ -373,6 +454,10 @@ typedef struct mc_f405_spi_config {
     uint8_t mode;              /**< SPI mode 0..3: CPOL = bit 1, CPHA = bit 0 */
     mc_f405_pin_t cs;          /**< chip select (output; active_low as the
                                       device wants); required */
+    uint32_t cs_gap_reads;     /**< SR reads with the chip select released
+                                      after a frame (its high time before
+                                      the next one); 0: MC_F405_SPI_CS_GAP_READS
+                                      (the DRV8301's 1.5 us) */
 } mc_f405_spi_config_t;
 
 typedef struct mc_f405_spi {
@@ -387,6 +472,14 @@ typedef struct mc_f405_spi {
  * full duplex, no CRC; chip select driven to its released level and made an
  * output; then SPE. Pin alternate functions (SCK, MISO, MOSI) and the
  * peripheral clock are the board's.
+ *
+ * Devices sharing one SPI (the ODrive v3.6's SPI3: two DRV8301 and an
+ * absolute encoder, each with its own mode and bit rate): one driver per
+ * device on the same registers. A transfer that finds CR1 set for another
+ * device rewrites it with SPE clear, then with SPE (RM0090 §28.3.3: BR,
+ * CPOL and CPHA change only while the SPI is disabled; the previous frame
+ * has ended, BSY clear). The transfers must never overlap (hal/spisched).
+ * transfer32 (hal/spi.h) shifts two 16-bit words under one chip select.
  * @return 0; -EINVAL NULL, zero clock, mode > 3, no chip-select pin or pin
  *         > 15, max_sck_hz below PCLK / 256 (nothing written).
  */

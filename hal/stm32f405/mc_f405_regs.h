@@ -40,6 +40,8 @@ extern "C" {
 #define MC_F405_SPI2_BASE       0x40003800u /* APB1 */
 #define MC_F405_SPI3_BASE       0x40003C00u /* APB1 */
 #define MC_F405_SPI1_BASE       0x40013000u /* APB2 */
+#define MC_F405_SYSCFG_BASE     0x40013800u /* APB2 */
+#define MC_F405_EXTI_BASE       0x40013C00u /* APB2 */
 #define MC_F405_GPIOA_BASE      0x40020000u /* AHB1, one port per 0x400 */
 #define MC_F405_GPIO_STRIDE     0x400u
 
@@ -301,6 +303,30 @@ typedef struct mc_f405_gpio_regs {
 /** Ports A..I of the STM32F405/407 (LQFP64 bonds A, B, C, D2 and H0/H1). */
 #define MC_F405_GPIO_PORTS 9u
 
+/* ---- SYSCFG (§9.2) and EXTI (§12.3) ----------------------------------- */
+
+typedef struct mc_f405_syscfg_regs {
+    volatile uint32_t MEMRMP;    /* 0x00 */
+    volatile uint32_t PMC;       /* 0x04 */
+    volatile uint32_t EXTICR[4]; /* 0x08..0x14: EXTIx[3:0] = port of line x
+                                    (0 = A .. 8 = I), 4 lines per register */
+    volatile uint32_t RESERVED[2];
+    volatile uint32_t CMPCR; /* 0x20 */
+} mc_f405_syscfg_regs_t;
+
+/** EXTI lines 0..22, one bit each (0..15: GPIO pin number of any port). */
+typedef struct mc_f405_exti_regs {
+    volatile uint32_t IMR;   /* 0x00 interrupt mask: 1 = line's interrupt enabled */
+    volatile uint32_t EMR;   /* 0x04 event mask */
+    volatile uint32_t RTSR;  /* 0x08 rising-edge trigger */
+    volatile uint32_t FTSR;  /* 0x0C falling-edge trigger */
+    volatile uint32_t SWIER; /* 0x10 software interrupt */
+    volatile uint32_t PR;    /* 0x14 pending, rc_w1 (write 1 clears) */
+} mc_f405_exti_regs_t;
+
+/** RCC_APB2ENR SYSCFGEN (§7.3.14): SYSCFG clock (EXTICR writes need it). */
+#define MC_F405_RCC_APB2ENR_SYSCFGEN (1u << 14)
+
 /* ---- Peripheral pointers on the MCU ------------------------------------ */
 
 #define MC_F405_TIM1       ((mc_f405_tim_regs_t *)(uintptr_t)MC_F405_TIM1_BASE)
@@ -313,6 +339,8 @@ typedef struct mc_f405_gpio_regs {
 #define MC_F405_ADC_COMMON ((mc_f405_adc_common_regs_t *)(uintptr_t)MC_F405_ADC_COMMON_BASE)
 #define MC_F405_CAN1       ((mc_f405_can_regs_t *)(uintptr_t)MC_F405_CAN1_BASE)
 #define MC_F405_SPI3       ((mc_f405_spi_regs_t *)(uintptr_t)MC_F405_SPI3_BASE)
+#define MC_F405_SYSCFG     ((mc_f405_syscfg_regs_t *)(uintptr_t)MC_F405_SYSCFG_BASE)
+#define MC_F405_EXTI       ((mc_f405_exti_regs_t *)(uintptr_t)MC_F405_EXTI_BASE)
 /** GPIO port n: 0 = A, 1 = B, ... */
 #define MC_F405_GPIO(n) ((mc_f405_gpio_regs_t *)(MC_F405_GPIOA_BASE + MC_F405_GPIO_STRIDE * (n)))
 
@@ -338,6 +366,9 @@ _Static_assert(offsetof(mc_f405_gpio_regs_t, BSRR) == 0x18u, "GPIO BSRR");
 _Static_assert(offsetof(mc_f405_gpio_regs_t, AFR) == 0x20u, "GPIO AFRL");
 _Static_assert(offsetof(mc_f405_spi_regs_t, DR) == 0x0Cu, "SPI DR");
 _Static_assert(offsetof(mc_f405_spi_regs_t, I2SPR) == 0x20u, "SPI I2SPR");
+_Static_assert(offsetof(mc_f405_syscfg_regs_t, EXTICR) == 0x08u, "SYSCFG EXTICR1");
+_Static_assert(offsetof(mc_f405_syscfg_regs_t, CMPCR) == 0x20u, "SYSCFG CMPCR");
+_Static_assert(offsetof(mc_f405_exti_regs_t, PR) == 0x14u, "EXTI PR");
 #endif
 
 #ifdef __cplusplus

@@ -12,6 +12,9 @@
 #define ENC_MAX_CPR_16BIT 0x10000u /* ARR = cpr - 1 must fit in 16 bits */
 #define IC_FILTER_MAX     15u
 #define PSC_MAX           0xFFFFu
+#define GPIO_PORT_MAX     8u  /* I */
+#define EXTI_LINE_MAX     15u /* the GPIO lines */
+#define EXTICR_FIELD_MASK 0xFu
 
 static uint32_t now_ticks(const mc_hal_tick_t *p_tick)
 {
@@ -24,6 +27,13 @@ static uint32_t now_ticks(const mc_hal_tick_t *p_tick)
 }
 
 /* ---- encoder ----------------------------------------------------------- */
+
+/* Count relative to the latched index: (count - index) mod cpr, both in
+ * 0 .. cpr - 1 (no overflow for a 32-bit counter). */
+static uint32_t rel_to_index(uint32_t count, uint32_t index, uint32_t cpr)
+{
+    return (count >= index) ? (count - index) : (count + (cpr - index));
+}
 
 static int encoder_read(void *ctx, mc_hal_encoder_sample_t *p_sample)
 {
@@ -46,8 +56,17 @@ static int encoder_read(void *ctx, mc_hal_encoder_sample_t *p_sample)
     /* ARR = cpr - 1 keeps CNT in range; anything else is a broken timer. */
     if (count < p->cfg.counts_per_rev) {
         flags |= MC_HAL_ENCODER_FLAG_VALID;
+        /* index_seen is set after index_count by the ISR: a true flag
+         * means the latch is complete. */
         if (p->index_seen) {
-            flags |= MC_HAL_ENCODER_FLAG_INDEX;
+            const uint32_t index = p->index_count;
+            if (index < p->cfg.counts_per_rev) {
+                count = rel_to_index(count, index, p->cfg.counts_per_rev);
+                flags |= MC_HAL_ENCODER_FLAG_INDEX;
+            } else {
+                flags = 0u; /* a latch outside the turn: the timer was broken */
+                count = 0u;
+            }
         }
     } else {
         count = 0u;
@@ -63,6 +82,35 @@ static const mc_hal_encoder_ops_t encoder_ops = {
     .read = encoder_read,
 };
 
+static bool index_cfg_ok(const mc_f405_encoder_index_t *ix)
+{
+    return (ix->p_exti == NULL) ||
+           ((ix->p_syscfg != NULL) && (ix->port <= GPIO_PORT_MAX) && (ix->pin <= EXTI_LINE_MAX));
+}
+
+/* Route the pin's EXTI line to its port, one edge, pending cleared, then
+ * unmasked (RM0090 §9.2.3..6 EXTICR, §12.3 IMR/RTSR/FTSR/PR). */
+static void index_setup(const mc_f405_encoder_index_t *ix)
+{
+    const uint32_t bit = 1u << ix->pin;
+    const uint32_t reg = (uint32_t)ix->pin / 4u;
+    const uint32_t shift = 4u * ((uint32_t)ix->pin % 4u);
+    mc_f405_exti_regs_t *e = ix->p_exti;
+
+    e->IMR &= ~bit;
+    ix->p_syscfg->EXTICR[reg] =
+        (ix->p_syscfg->EXTICR[reg] & ~(EXTICR_FIELD_MASK << shift)) | ((uint32_t)ix->port << shift);
+    if (ix->falling_edge) {
+        e->FTSR |= bit;
+        e->RTSR &= ~bit;
+    } else {
+        e->RTSR |= bit;
+        e->FTSR &= ~bit;
+    }
+    e->PR = bit;
+    e->IMR |= bit;
+}
+
 int mc_f405_encoder_init(mc_f405_encoder_t *p_drv, const mc_f405_encoder_config_t *p_cfg)
 {
     mc_f405_tim_regs_t *t;
@@ -73,11 +121,13 @@ int mc_f405_encoder_init(mc_f405_encoder_t *p_drv, const mc_f405_encoder_config_
     }
     if ((p_cfg->counts_per_rev == 0u) ||
         (!p_cfg->counter_32bit && (p_cfg->counts_per_rev > ENC_MAX_CPR_16BIT)) ||
-        (p_cfg->input_filter > IC_FILTER_MAX)) {
+        (p_cfg->input_filter > IC_FILTER_MAX) || !index_cfg_ok(&p_cfg->index)) {
         return -EINVAL;
     }
     p_drv->cfg = *p_cfg;
     p_drv->index_seen = false;
+    p_drv->index_count = 0u;
+    p_drv->index_events = 0u;
     p_drv->dev.ops = &encoder_ops;
     p_drv->dev.ctx = p_drv;
 
@@ -97,16 +147,72 @@ int mc_f405_encoder_init(mc_f405_encoder_t *p_drv, const mc_f405_encoder_config_
     t->EGR = MC_F405_TIM_EGR_UG;
     t->CNT = 0u;
     t->CR1 = MC_F405_TIM_CR1_CEN;
+    if (p_cfg->index.p_exti != NULL) {
+        index_setup(&p_cfg->index);
+    }
     return 0;
 }
 
-void mc_f405_encoder_index_isr(mc_f405_encoder_t *p_drv)
+bool mc_f405_encoder_index_isr(mc_f405_encoder_t *p_drv)
 {
-    if (p_drv == NULL) {
-        return;
+    mc_f405_exti_regs_t *e;
+    uint32_t bit;
+    uint32_t count;
+
+    if ((p_drv == NULL) || (p_drv->cfg.index.p_exti == NULL)) {
+        return false;
     }
-    p_drv->cfg.p_tim->CNT = 0u;
-    p_drv->index_seen = true;
+    e = p_drv->cfg.index.p_exti;
+    bit = 1u << p_drv->cfg.index.pin;
+    /* The pending bit is set by an edge even while the line is masked
+     * (RM0090 §12.2, the controller's block diagram: the mask gates the request, not the pending
+     * register): a masked line is not this interrupt's. */
+    if (((e->PR & e->IMR) & bit) == 0u) {
+        return false; /* another line of a shared vector, or masked */
+    }
+    count = p_drv->cfg.p_tim->CNT; /* first: the latch lags the edge least */
+    if (!p_drv->cfg.counter_32bit) {
+        count &= 0xFFFFu;
+    }
+    e->PR = bit;
+    p_drv->index_events++;
+    if (!p_drv->index_seen) {
+        p_drv->index_count = count;
+        p_drv->index_seen = true; /* after the count: readers see a whole latch */
+        e->IMR &= ~bit;
+    }
+    return true;
+}
+
+int mc_f405_encoder_index_rearm(mc_f405_encoder_t *p_drv)
+{
+    mc_f405_exti_regs_t *e;
+    uint32_t bit;
+
+    if ((p_drv == NULL) || (p_drv->cfg.index.p_exti == NULL)) {
+        return -EINVAL;
+    }
+    e = p_drv->cfg.index.p_exti;
+    bit = 1u << p_drv->cfg.index.pin;
+    e->IMR &= ~bit;
+    p_drv->index_seen = false;
+    p_drv->index_count = 0u;
+    e->PR = bit; /* an edge seen while masked is not this search's */
+    e->IMR |= bit;
+    return 0;
+}
+
+uint32_t mc_f405_exti_irq(uint32_t line)
+{
+    static const uint8_t k_irq_0_4[5] = {6u, 7u, 8u, 9u, 10u};
+
+    if (line <= 4u) {
+        return k_irq_0_4[line];
+    }
+    if (line <= 9u) {
+        return 23u;
+    }
+    return (line <= EXTI_LINE_MAX) ? 40u : 0xFFFFFFFFu;
 }
 
 /* ---- tick -------------------------------------------------------------- */

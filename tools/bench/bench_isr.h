@@ -31,6 +31,8 @@ typedef struct {
     mc_f405_adc_common_regs_t adc_common;
     mc_f405_can_regs_t can;
     mc_f405_spi_regs_t spi3;
+    mc_f405_syscfg_regs_t syscfg;
+    mc_f405_exti_regs_t exti;
 } bench_regs_t;
 
 /* ---- bench_isr_board.c (the board binding) ---- */

@@ -33,6 +33,8 @@ const mc_hal_t *bench_board_init(bench_regs_t *regs)
     p.p_adc_common = &regs->adc_common;
     p.p_can1 = &regs->can;
     p.p_spi3 = &regs->spi3;
+    p.p_syscfg = &regs->syscfg;
+    p.p_exti = &regs->exti;
     p.delay_us = no_delay;
     p.delay_ctx = NULL;
     regs->can.MSR = MC_F405_CAN_MSR_INAK; /* init mode acknowledged */

@@ -18,8 +18,14 @@ Generated (paths relative to the repository root):
     <board>/mc_board_<board>_gen.c   the GPIO table and the description
     boards/README.md                 the tables between the generated markers
 
-A board is refused (exit 2, nothing written) when a pin is used twice, a
-signal the drive needs is missing, a signal sits on a pin or alternate
+Alternate pin functions: the Hall sensors (hall_a, hall_b, hall_c) sit on
+the pins of the incremental encoder (enc_a, enc_b, enc_z) on both boards;
+a hall_* signal may share its pin with an enc_* signal (and only that).
+The boot GPIO table leaves the hall_* rows out; they are generated as a
+second table (the board applies it when the sensor is Hall).
+
+A board is refused (exit 2, nothing written) when a pin is used twice
+(outside the Hall/encoder alternates), a signal the drive needs is missing, a signal sits on a pin or alternate
 function that cannot carry it (STM32F405 datasheet DS8626, table 9
 "alternate function mapping"; ADC channels from its pinout table), a debug
 pin (PA13 SWDIO, PA14 SWCLK) is taken, a field is malformed, or the DRV8301
@@ -73,6 +79,11 @@ AF_FUNCTIONS = {
 # ADC1 channels (ADC123_IN0..IN15 on the STM32F405's pins).
 ADC_CHANNELS = {**{f"PA{i}": i for i in range(8)}, "PB0": 8, "PB1": 9,
                 **{f"PC{i}": 10 + i for i in range(6)}}
+# Alternate functions of the encoder's pins: the Hall inputs.
+HALL_SIGNALS = ["hall_a", "hall_b", "hall_c"]
+ENC_PIN_SIGNALS = {"enc_a", "enc_b", "enc_z"}
+ENCODER_TYPES = {"abi": "MC_BOARD_ENC_ABI", "as5047p": "MC_BOARD_ENC_AS5047P",
+                 "ma732": "MC_BOARD_ENC_MA732", "hall": "MC_BOARD_ENC_HALL"}
 REQUIRED = ["pwm_ah", "pwm_al", "pwm_bh", "pwm_bl", "pwm_ch", "pwm_cl",
             "adc_ib", "adc_vbus", "enc_a", "enc_b", "can_rx", "can_tx",
             "gate_enable", "gate_fault"]
@@ -128,6 +139,12 @@ def parse_port_pin(text, where):
     return PORTS.index(m.group(1)), int(m.group(2))
 
 
+def alternates(sig_a, sig_b):
+    """Two signals that may share a pin: a Hall input and an encoder input."""
+    pair = {sig_a, sig_b}
+    return len(pair & set(HALL_SIGNALS)) == 1 and len(pair & ENC_PIN_SIGNALS) == 1
+
+
 def load_pins(path):
     with open(path, newline="") as f:
         text = f.read()
@@ -149,7 +166,7 @@ def load_pins(path):
             raise BoardError(f"{where}: signal {sig} listed twice")
         port, pin = parse_port_pin(p["port_pin"], where)
         name = p["port_pin"]
-        if name in seen_pin:
+        if name in seen_pin and not alternates(seen_pin[name], sig):
             raise BoardError(f"{where}: pin {name} used twice ({seen_pin[name]} and {sig})")
         if name in DEBUG_PINS:
             raise BoardError(f"{where}: {name} is the debug port's {DEBUG_PINS[name]}")
@@ -182,7 +199,7 @@ def load_pins(path):
         elif p["init"]:
             raise BoardError(f"{where}: init given for a {mode} pin")
         seen_signal[sig] = name
-        seen_pin[name] = sig
+        seen_pin.setdefault(name, sig)
         pins.append({"signal": sig, "name": name, "port": port, "pin": pin, "mode": mode, "af": af,
                          "pull": p["pull"], "otype": otype, "speed": speed, "init": init})
     return comments, pins
@@ -324,6 +341,21 @@ def load_board(folder):
     for sig, mode in (("gate_enable", "output"), ("gate_fault", "input")):
         if pins[sig]["mode"] != mode:
             raise BoardError(f"{name}: {sig} must be an {mode}")
+    if "enc_z" in pins and pins["enc_z"]["mode"] != "input":
+        raise BoardError(f"{name}: enc_z (the index, an EXTI line) must be an input")
+    halls = [sg for sg in HALL_SIGNALS if sg in pins]
+    if halls and len(halls) != len(HALL_SIGNALS):
+        raise BoardError(f"{name}: Hall sensors need all of {', '.join(HALL_SIGNALS)}")
+    for sg in halls:
+        if pins[sg]["mode"] != "input":
+            raise BoardError(f"{name}: {sg} must be an input")
+    for sg, p in pins.items():
+        if sg in HALL_SIGNALS and p["name"] not in {pins[e]["name"] for e in ENC_PIN_SIGNALS
+                                                    if e in pins}:
+            raise BoardError(f"{name}: {sg} on {p['name']}, not on an encoder pin")
+    cs = pins.get("enc_spi_cs")
+    if cs is not None and (cs["mode"] != "output" or cs["init"] != 1):
+        raise BoardError(f"{name}: enc_spi_cs must be an output starting high (released)")
 
     src = need(t, "source", where, dict)
     for k in ("repository", "commit", "files"):
@@ -399,6 +431,13 @@ def load_board(folder):
     filt = need(enc, "input_filter", where + " [encoder]", int)
     if not (1 <= cpr <= 65536 and 0 <= filt <= 15):
         raise BoardError(f"{where}: encoder counts_per_rev 1..65536 (TIM3), input_filter 0..15")
+    enc_type = enc.get("type", "abi")
+    if enc_type not in ENCODER_TYPES:
+        raise BoardError(f"{where}: encoder.type is one of {sorted(ENCODER_TYPES)}")
+    if enc_type == "hall" and not halls:
+        raise BoardError(f"{name}: encoder.type hall without hall_a..hall_c pins")
+    if enc_type in ("as5047p", "ma732") and "enc_spi_cs" not in pins:
+        raise BoardError(f"{name}: encoder.type {enc_type} without an enc_spi_cs pin")
 
     drv = t.get("drv8301")
     has_spi = [s for s in SPI_SIGNALS if s in pins]
@@ -410,6 +449,9 @@ def load_board(folder):
     else:
         if len(has_spi) != len(SPI_SIGNALS):
             raise BoardError(f"{name}: a DRV8301 needs {', '.join(SPI_SIGNALS)}")
+    if "enc_spi_cs" in pins and drv is None:
+        raise BoardError(f"{name}: enc_spi_cs: the encoder shares the DRV8301's SPI3")
+    if drv is not None:
         if pins["drv_spi_cs"]["mode"] != "output" or pins["drv_spi_cs"]["init"] != 1:
             raise BoardError(f"{name}: drv_spi_cs must be an output starting high (released)")
         wd = where + " [drv8301]"
@@ -439,7 +481,8 @@ def load_board(folder):
                 "deadtime_ns": deadtime_ns, "break_input": brk, "vref": vref, "shunt": shunt,
                 "gain": float(gain), "offset": offset, "divider": divider, "margin": margin,
                 "i_max": i_max, "vbus_min": vbus_min, "vbus_max": vbus_max, "amplifier": amplifier,
-                "therm": therm, "cpr": cpr, "filt": filt, "drv": drv, "notes": t.get("notes", [])}
+                "therm": therm, "cpr": cpr, "filt": filt, "drv": drv, "notes": t.get("notes", []),
+                "enc_type": enc_type}
 
 
 def board_folders(boards_dir):
@@ -481,7 +524,7 @@ def pin_ref(b, sig):
     p = b["by_signal"].get(sig)
     if p is None:
         return "{MC_BOARD_PORT_NONE, 0u, false}"
-    low = "true" if b["active_low"].get(sig, sig == "drv_spi_cs") else "false"
+    low = "true" if b["active_low"].get(sig, sig in ("drv_spi_cs", "enc_spi_cs")) else "false"
     return f"{{{p['port']}u, {p['pin']}u, {low}}} /* {p['name']} */"
 
 
@@ -518,6 +561,21 @@ def therm_tables(b):
     return out
 
 
+def gpio_table_lines(var, pins, comment):
+    """A GPIO table as C lines (a leading blank line)."""
+    lines = ["", f"/* {comment} */", f"static const mc_board_gpio_port_init_t {var}[] = {{"]
+    for e in gpio_table(pins):
+        sigs = ", ".join(f"{p['name']} {p['signal']}" for p in pins if p["port"] == e["port"])
+        lines.append(f"    {{ /* port {PORTS[e['port']]}: {sigs} */")
+        lines.append(f"        .port = {e['port']}u,")
+        for k in ("moder", "otyper", "ospeedr", "pupdr", "afrl", "afrh"):
+            lines.append(f"        .{k}_mask = 0x{e[k + '_mask']:08X}u, .{k} = 0x{e[k]:08X}u,")
+        lines.append(f"        .bsrr = 0x{e['bsrr']:08X}u,")
+        lines.append("    },")
+    lines.append("};")
+    return lines
+
+
 def gen_header(b):
     n = b["name"]
     g = f"MC_BOARD_{n.upper()}_GEN_H"
@@ -544,21 +602,18 @@ def gen_source(b):
              f" * Source: {src['repository']} at commit {src['commit']}:"]
     lines += [f" *   {f}" for f in src["files"]]
     lines += [" */", f'#include "mc_board_{n}_gen.h"', "",
-              "/* GPIO set-up per port (pins.csv): masks of the pins the board owns. */",
-              "static const mc_board_gpio_port_init_t k_gpio[] = {"]
-    table = gpio_table(b["pins"])
-    for e in table:
-        sigs = ", ".join(f"{p['name']} {p['signal']}" for p in b["pins"] if p["port"] == e["port"])
-        lines.append(f"    {{ /* port {PORTS[e['port']]}: {sigs} */")
-        lines.append(f"        .port = {e['port']}u,")
-        for k in ("moder", "otyper", "ospeedr", "pupdr", "afrl", "afrh"):
-            lines.append(f"        .{k}_mask = 0x{e[k + '_mask']:08X}u, .{k} = 0x{e[k]:08X}u,")
-        lines.append(f"        .bsrr = 0x{e['bsrr']:08X}u,")
-        lines.append("    },")
-    lines.append("};")
+              ]
+    boot_pins = [p for p in b["pins"] if p["signal"] not in HALL_SIGNALS]
+    table = gpio_table(boot_pins)
+    lines += gpio_table_lines("k_gpio", boot_pins,
+                              "GPIO set-up per port (pins.csv): masks of the pins the board owns.")[1:]
+    hall_pins = [p for p in b["pins"] if p["signal"] in HALL_SIGNALS]
+    if hall_pins:
+        lines += gpio_table_lines("k_gpio_hall", hall_pins,
+                                  "The Hall inputs on the encoder's pins (applied instead of them).")
     lines += therm_tables(b)
     mask = 0
-    for e in table:
+    for e in gpio_table(b["pins"]):
         mask |= 1 << e["port"]
     drv = b["drv"]
     if drv:
@@ -604,6 +659,12 @@ def gen_source(b):
               f"    .vbus_max_v = {cfloat(b['vbus_max'])},",
               f"    .enc_counts_per_rev = {b['cpr']}u,",
               f"    .enc_input_filter = {b['filt']}u,",
+              f"    .enc_type = {ENCODER_TYPES[b['enc_type']]},",
+              f"    .enc_index = {pin_ref(b, 'enc_z')},",
+              f"    .p_gpio_hall = {'k_gpio_hall' if hall_pins else 'NULL'},",
+              f"    .n_gpio_hall = {len(gpio_table(hall_pins))}u,",
+              "    .hall = {" + ", ".join(pin_ref(b, h) for h in HALL_SIGNALS) + "},",
+              f"    .enc_spi_cs = {pin_ref(b, 'enc_spi_cs')},",
               f"    .has_drv8301 = {'true' if drv else 'false'},",
               f"    .drv8301 = {drv_init},",
               f"    .drv_spi_cs = {pin_ref(b, 'drv_spi_cs')},",
@@ -630,6 +691,8 @@ def gen_readme_section(boards):
         for p in b["pins"]:
             ch = ADC_CHANNELS.get(p["name"]) if p["mode"] == "analog" else None
             mode = p["mode"] + (f" (starts {p['init']})" if p["mode"] == "output" else "")
+            if p["signal"] in HALL_SIGNALS:
+                mode += " (Hall: instead of the encoder on this pin)"
             out.append(f"| {p['signal']} | {p['name']} | {mode} | "
                        f"{'' if p['af'] is None else p['af']} | {p['pull']} | "
                        f"{'' if ch is None else 'IN' + str(ch)} |")
@@ -648,7 +711,9 @@ def gen_readme_section(boards):
                 f"| bus limits | {fmt(b['vbus_min'])} .. {fmt(b['vbus_max'])} V |",
                 f"| dead time | {b['deadtime_ns']} ns |",
                 f"| break input (TIM1_BKIN) | {b['break_input']} |",
-                f"| encoder | TIM3, {b['cpr']} counts/rev, filter {b['filt']} |"]
+                f"| encoder | TIM3, {b['cpr']} counts/rev, filter {b['filt']}"
+                + (", index on EXTI" if "enc_z" in b["by_signal"] else "") + " |",
+                f"| position sensor fitted (board.toml) | {b['enc_type']} |"]
         for slot in ("power_stage", "motor"):
             th = b["therm"][slot]
             if th is None:

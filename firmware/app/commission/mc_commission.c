@@ -887,6 +887,7 @@ const mc_drive_ctrl_t *mc_comm_ops(mc_comm_t *c)
     c->ops = (mc_drive_ctrl_t){
         .outputs = MC_DRIVE_OUT_PWM3,
         .needs_encoder = true,
+        .finds_angle = true, /* it measures the encoder offset */
         .reset = reset_cb,
         .fast = fast_cb,
         .slow = NULL,

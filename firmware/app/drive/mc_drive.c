@@ -82,6 +82,9 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
         !mc_isfinite_f32(cfg->i_offset_a[1]) || !mc_isfinite_f32(cfg->i_offset_a[2])) {
         err |= MC_DRIVE_CFG_ERR_OFFSET;
     }
+    if (cfg->angle_ref > MC_DRIVE_ANGLE_REF_ALIGN) {
+        err |= MC_DRIVE_CFG_ERR_ANGLE_REF;
+    }
     const float sup[6] = {cfg->omega_max_rad_s,   cfg->temp_max_c,   cfg->stall_current_frac,
                           cfg->stall_speed_rad_s, cfg->stall_time_s, cfg->i_unbalance_max_a};
     for (unsigned k = 0u; k < 6u; ++k) {
@@ -377,6 +380,21 @@ static uint32_t encoder_jump_fault(mc_drive_t *d, const mc_hal_encoder_sample_t 
     }
     d->last_count_raw = count;
     return f;
+}
+
+/* The index seen (INDEX): the HAL reports the count relative to it from
+ * this sample on, a jump that is no motion: the speed tracking starts over
+ * from this count (unprimed, so the jump check skips this sample). */
+static void index_rebase(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
+{
+    const bool seen = (enc->flags & MC_HAL_ENCODER_FLAG_INDEX) != 0u;
+    if (seen && !d->index_seen && (d->cfg.angle_ref == MC_DRIVE_ANGLE_REF_INDEX)) {
+        /* validated at init (MC_DRIVE_CFG_ERR_SPEED_PLL): cannot fail */
+        const mc_enctrack_f32_cfg_t tc = {.bw_rad_s = d->cfg.speed_pll_bw_rad_s,
+                                          .dt_s = d->cfg.foc.dt_s};
+        (void)mc_enctrack_f32_init(&d->enc_trk, &tc);
+    }
+    d->index_seen = seen;
 }
 
 /* Open-phase check of one CURRENT-mode step (mc_drive.h): per phase, a
@@ -812,6 +830,7 @@ bool mc_drive_fast_step(mc_drive_t *d)
             f |= MC_DRIVE_FAULT_ENCODER;
         } else {
             enc_constants(d, enc.counts_per_rev);
+            index_rebase(d, &enc);
             f |= encoder_jump_fault(d, &enc);
             update_position(d, &enc);
             have_enc = true;
@@ -995,6 +1014,31 @@ static int enable_ctrl_bridge(mc_drive_t *d)
     return 0;
 }
 
+uint32_t mc_drive_angle_state(const mc_drive_t *d)
+{
+    if ((d->cfg.angle_ref == MC_DRIVE_ANGLE_REF_INDEX) && !d->index_seen) {
+        return MC_DRIVE_ANGLE_NEED_INDEX;
+    }
+    if ((d->cfg.angle_ref == MC_DRIVE_ANGLE_REF_ALIGN) && !d->aligned) {
+        return MC_DRIVE_ANGLE_NEED_ALIGN;
+    }
+    return MC_DRIVE_ANGLE_KNOWN;
+}
+
+int mc_drive_set_encoder_offset(mc_drive_t *d, float offset_e_rad)
+{
+    if (!mc_isfinite_f32(offset_e_rad) || (offset_e_rad < 0.0f) ||
+        !(offset_e_rad < MC_TWO_PI_F32)) {
+        return -EINVAL;
+    }
+    if ((d->mode == MC_DRIVE_MODE_CURRENT) || (d->mode == MC_DRIVE_MODE_STOPPING)) {
+        return -EBUSY;
+    }
+    d->cfg.encoder_offset_rad = offset_e_rad;
+    d->aligned = true;
+    return 0;
+}
+
 int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl)
 {
     if (d->mode != MC_DRIVE_MODE_IDLE && d->mode != MC_DRIVE_MODE_FAULT) {
@@ -1046,6 +1090,9 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
         if (d->hal->pwm3 == NULL || d->hal->encoder == NULL) {
             return -ENODEV;
         }
+        if (mc_drive_angle_state(d) != MC_DRIVE_ANGLE_KNOWN) {
+            return -EACCES;
+        }
         mc_foc_f32_reset(&d->foc);
         if (d->cfg.fw_enable) {
             (void)mc_fw_f32_reset(&d->fw);
@@ -1078,6 +1125,10 @@ int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode)
         }
         if (d->ctrl == NULL) {
             return -ENODEV;
+        }
+        if (d->ctrl->needs_encoder && !d->ctrl->finds_angle &&
+            (mc_drive_angle_state(d) != MC_DRIVE_ANGLE_KNOWN)) {
+            return -EACCES;
         }
         if (d->ctrl->reset != NULL && d->ctrl->reset(d->ctrl->ctx) != 0u) {
             return -EINVAL;

@@ -196,8 +196,9 @@ typedef enum {
 #define MC_DRIVE_CFG_ERR_ASC \
     (1u << 14) /**< asc_enable without a 3-phase motor model: flux_wb or ld_h
                                                    not > 0, or flux / Ld not below i_trip_a */
+#define MC_DRIVE_CFG_ERR_ANGLE_REF (1u << 15) /**< angle_ref not one of MC_DRIVE_ANGLE_REF_* */
 #define MC_DRIVE_CFG_ERR_DEAD_TIME \
-    (1u << 15) /**< dead_time_comp with dead_time_s outside [0, dt/2) or
+    (1u << 16) /**< dead_time_comp with dead_time_s outside [0, dt/2) or
                     dead_band_a negative, or either not finite */
 #define MC_DRIVE_CFG_ERR_BUS_POWER \
     (1u << 12) /**< regen limit or brake chopper thresholds:
@@ -279,11 +280,41 @@ typedef enum {
  * current is cut.
  */
 
+/*
+ * The angle reference after a power-up (cfg.angle_ref): what makes
+ * encoder_offset_rad true for the count the encoder reports.
+ *   STORED  the stored offset holds from power-up: an absolute encoder
+ *           (AS5047P, MA732), Hall sensors, or a bench that starts every
+ *           run from the angle at which the offset was measured;
+ *   INDEX   the offset is relative to the index: true from the first
+ *           encoder sample with MC_HAL_ENCODER_FLAG_INDEX (the HAL then
+ *           reports the count relative to the index: the drive re-bases its
+ *           speed tracking in that sample, and does not take the count's
+ *           jump for an encoder fault); the index search
+ *           (ctrl/mc_ctrl_align.h) finds it;
+ *   ALIGN   an incremental encoder without index: the stored offset is
+ *           stale after every power-up; true once an alignment has measured
+ *           it (mc_drive_set_encoder_offset); lost at every mc_drive_init.
+ * Until the angle is known (mc_drive_angle_state), CURRENT mode and every
+ * law that needs the encoder are refused with -EACCES, except a law that
+ * finds the angle itself (mc_drive_ctrl_t.finds_angle: the alignment and
+ * the index search). Never a stale offset.
+ */
+#define MC_DRIVE_ANGLE_REF_STORED 0u
+#define MC_DRIVE_ANGLE_REF_INDEX  1u
+#define MC_DRIVE_ANGLE_REF_ALIGN  2u
+
+/** mc_drive_angle_state(): the angle is known, or what it waits for. */
+#define MC_DRIVE_ANGLE_KNOWN      0u
+#define MC_DRIVE_ANGLE_NEED_INDEX 1u /**< INDEX: no index seen since power-up */
+#define MC_DRIVE_ANGLE_NEED_ALIGN 2u /**< ALIGN: no alignment since power-up */
+
 /** Drive configuration (copied at init). */
 typedef struct {
     mc_foc_f32_cfg_t foc;     /**< current loop; foc.dt_s is the PWM period [s] */
     uint32_t pole_pairs;      /**< electrical turns per mechanical turn, >= 1 */
     float encoder_offset_rad; /**< electrical angle of the d axis at encoder count 0 [rad] */
+    uint32_t angle_ref;       /**< MC_DRIVE_ANGLE_REF_* (0: STORED) */
     bool encoder_reversed;    /**< the encoder counts down when the rotor turns positive
                                      (commissioning's encoder_direction = -1): the drive
                                      uses cpr - count */
@@ -437,6 +468,10 @@ typedef struct {
      *  mc_drive_meas_t.omega_ref_rad_s) and stops it by ramping that to 0
      *  (stop is then not used). */
     bool uses_speed_ref;
+    /** Measures the angle reference itself (alignment, index search,
+     *  commissioning): runs before the angle is known (MC_DRIVE_ANGLE_REF_*).
+     *  Last, so that a table written in order leaves it false. */
+    bool finds_angle;
 } mc_drive_ctrl_t;
 
 /** What the last fast step saw and did (telemetry snapshot). */
@@ -496,6 +531,8 @@ typedef struct {
     float speed_alpha_rad_s2; /**< its acceleration of the last step [rad/s^2] */
     /* the current loop's last step, handed to the law (mc_drive_meas_t) */
     float v_ab_prev_v[2]; /**< alpha-beta voltage commanded [V] */
+    bool index_seen;            /**< the last encoder sample had MC_HAL_ENCODER_FLAG_INDEX */
+    bool aligned;               /**< ALIGN: mc_drive_set_encoder_offset since init */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns
@@ -516,9 +553,24 @@ void mc_drive_slow_step(mc_drive_t *d);
 /** Change mode. IDLE always accepted; CURRENT and CTRL only from IDLE (or
  *  the same mode) with no fault. Returns 0, -EINVAL (unknown mode, or the
  *  law's reset refused), -ENODEV (CURRENT without pwm3 or encoder, CTRL with
- *  no law attached) or -EBUSY (in fault, or the bridge could not be
- *  enabled); on error nothing changes and the outputs stay off. */
+ *  no law attached), -EACCES (CURRENT, or a law that needs the encoder and
+ *  does not find the angle itself, before the angle reference is known:
+ *  mc_drive_angle_state() names what it waits for) or -EBUSY (in fault, or
+ *  the bridge could not be enabled); on error nothing changes and the
+ *  outputs stay off. */
 int mc_drive_set_mode(mc_drive_t *d, mc_drive_mode_t mode);
+
+/** The angle reference (see MC_DRIVE_ANGLE_REF_*): MC_DRIVE_ANGLE_KNOWN,
+ *  or MC_DRIVE_ANGLE_NEED_INDEX / _NEED_ALIGN, the reason the sensored
+ *  modes are refused. */
+uint32_t mc_drive_angle_state(const mc_drive_t *d);
+
+/** Take an offset an alignment measured (the electrical angle of the d axis
+ *  at encoder count 0, [0, 2 pi)) as encoder_offset_rad; the angle is then
+ *  known (ALIGN). Not while CURRENT runs on the old one. Returns 0, -EINVAL
+ *  (not finite or outside [0, 2 pi)) or -EBUSY (CURRENT or STOPPING); on
+ *  error nothing changes. */
+int mc_drive_set_encoder_offset(mc_drive_t *d, float offset_e_rad);
 
 /** Attach (or, with NULL, detach) a control law for CTRL mode. Only while
  *  not running (IDLE or FAULT). Returns 0; -EBUSY while running; -EINVAL

@@ -9,7 +9,11 @@
  *                 TIM1 TRGO = OC4REF, 1 us before the counter peak.
  *   ADC1          injected: the board's measured phases and bus voltage;
  *                 JEOC interrupt runs the fast loop. Temperatures regular.
- *   encoder       TIM3. tick TIM5 (32 bit, 84 MHz). CAN1 500 kbit/s: every
+ *   encoder       the board's fitted sensor (board.toml [encoder] type,
+ *                 mc_board_f405.h): TIM3 with its index on EXTI (the EXTI
+ *                 interrupt, priority 0 as the fast loop, latches the count
+ *                 at the first index), an AS5047P or MA732 on SPI3, or the
+ *                 Hall inputs. tick TIM5 (32 bit, 84 MHz). CAN1 500 kbit/s: every
  *                 frame accepted until the application has loaded its
  *                 configuration, then only this node's identifiers
  *                 (mc_f405_can_set_filters, id & 0x7E0 == node << 5). The
@@ -29,7 +33,10 @@
  *   gate driver   EN_GATE and nFAULT pins; a DRV8301 set up over SPI3
  *                 (gain, over-current threshold and mode) and verified
  *                 before the drive starts; a failed set-up halts the image
- *                 with the gates killed. The slow loop's end supervises it
+ *                 with the gates killed. SPI3 is scheduled (hal/spisched):
+ *                 once the fast loop runs, the DRV8301's frames run in the
+ *                 fast-loop interrupt, one per period before the drive's
+ *                 step (and its encoder frame). The slow loop's end supervises it
  *                 (mc_board_f405_gate_driver_supervise): set up again after
  *                 a gate kill and release, status registers read when nFAULT
  *                 asserts (g_board.f405.drv.faults, names:
@@ -83,6 +90,13 @@ extern const mc_board_desc_t MC_BOARD_DESC;
 #define TX_DRAIN_POLLS   200000u /* >= 5 ms of TSR reads: the OK of ENTER leaves */
 
 void CAN1_RX0_IRQHandler(void);
+void EXTI0_IRQHandler(void);
+void EXTI1_IRQHandler(void);
+void EXTI2_IRQHandler(void);
+void EXTI3_IRQHandler(void);
+void EXTI4_IRQHandler(void);
+void EXTI9_5_IRQHandler(void);
+void EXTI15_10_IRQHandler(void);
 
 typedef struct drive_board {
     mc_board_f405_t f405;
@@ -132,6 +146,48 @@ void CAN1_RX0_IRQHandler(void)
     mc_main_can_rx();
 }
 
+/* The encoder's index on its EXTI line (whichever vector the board's pin
+ * has; a shared vector's other lines are not this board's). */
+static void index_irq(void)
+{
+    (void)mc_f405_encoder_index_isr(&g_board.f405.enc);
+}
+
+void EXTI0_IRQHandler(void)
+{
+    index_irq();
+}
+
+void EXTI1_IRQHandler(void)
+{
+    index_irq();
+}
+
+void EXTI2_IRQHandler(void)
+{
+    index_irq();
+}
+
+void EXTI3_IRQHandler(void)
+{
+    index_irq();
+}
+
+void EXTI4_IRQHandler(void)
+{
+    index_irq();
+}
+
+void EXTI9_5_IRQHandler(void)
+{
+    index_irq();
+}
+
+void EXTI15_10_IRQHandler(void)
+{
+    index_irq();
+}
+
 static int set_node_filter(void *ctx, uint32_t id, uint32_t mask)
 {
     drive_board_t *b = ctx;
@@ -173,6 +229,8 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
     p.p_adc_common = periph_at(MC_F405_ADC_COMMON_BASE);
     p.p_can1 = periph_at(MC_F405_CAN1_BASE);
     p.p_spi3 = periph_at(MC_F405_SPI3_BASE);
+    p.p_syscfg = periph_at(MC_F405_SYSCFG_BASE);
+    p.p_exti = periph_at(MC_F405_EXTI_BASE);
     p.delay_us = delay_us;
     p.delay_ctx = &g_board.f405.tick;
 
@@ -183,10 +241,13 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
         MC_BOARD_F405_OK) {
         return NULL;
     }
-    if (mc_board_f405_gate_driver_setup(&g_board.f405, &MC_BOARD_DESC, &g_board.f405.spi.dev) !=
+    if (mc_board_f405_gate_driver_setup(&g_board.f405, &MC_BOARD_DESC, &g_board.f405.sched.dev) !=
         MC_BOARD_F405_OK) {
         return NULL;
     }
+    /* From here on the fast loop owns SPI3: the DRV8301's frames go through
+     * its slot (nothing in thread mode uses the bus after this). */
+    mc_spisched_defer(&g_board.f405.sched);
     return &g_board.f405.hal;
 }
 
@@ -330,6 +391,14 @@ void mc_board_start(void)
         mc_nvic_set_priority(MC_IRQ_CAN1_RX0, 8u);
         mc_nvic_enable(MC_IRQ_CAN1_RX0);
     }
+    /* The index: at the fast loop's priority (0), so the latch waits at
+     * most one fast step (the index search turns slowly: a fraction of a
+     * count at its speed). */
+    if ((MC_BOARD_DESC.enc_type == MC_BOARD_ENC_ABI) &&
+        (mc_board_f405_exti_irq(&MC_BOARD_DESC) != 0xFFFFFFFFu)) {
+        mc_nvic_set_priority(mc_board_f405_exti_irq(&MC_BOARD_DESC), 0u);
+        mc_nvic_enable(mc_board_f405_exti_irq(&MC_BOARD_DESC));
+    }
 }
 
 void mc_board_fast_irq_ack(void)
@@ -339,6 +408,9 @@ void mc_board_fast_irq_ack(void)
 
 void mc_board_apply_commands(mc_drive_t *d)
 {
+    /* ADC interrupt, before the drive's step (and its encoder frame): one
+     * waiting DRV8301 frame on SPI3. */
+    (void)mc_board_f405_fast_slot(&g_board.f405);
     /* Commands arrive over CAN (firmware/app CAN protocol), outside this
      * binding. While the DRV8301 does not hold its set-up (after a gate
      * kill until the slow loop has written it again) the drive is held in
@@ -354,8 +426,8 @@ void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
         return;
     }
     /* PendSV (slow loop) context: a few SPI frames when something happens. */
-    (void)mc_board_f405_gate_driver_supervise(&g_board.f405, &MC_BOARD_DESC, &g_board.f405.spi.dev,
-                                              SLOW_PERIOD_US,
+    (void)mc_board_f405_gate_driver_supervise(&g_board.f405, &MC_BOARD_DESC,
+                                              &g_board.f405.sched.dev, SLOW_PERIOD_US,
                                               (d->faults & MC_DRIVE_FAULT_HW_INPUT) != 0u);
 }
 

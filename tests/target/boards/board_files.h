@@ -29,6 +29,12 @@ struct Pin {
     int init = -1; // outputs: 0 or 1
 };
 
+// Hall inputs: alternates of the encoder's pins in pins.csv.
+inline bool is_hall(const std::string &signal)
+{
+    return signal == "hall_a" || signal == "hall_b" || signal == "hall_c";
+}
+
 inline std::string dir(const std::string &board)
 {
     return std::string(MC_BOARDS_DIR) + "/" + board;

@@ -77,6 +77,9 @@ TEST_P(BoardPins, GpioRegistersMatchPinsCsv)
 
     std::set<std::pair<int, int>> listed;
     for (const auto &p : pins) {
+        if (boards::is_hall(p.signal)) {
+            continue; // an alternate of an encoder pin: the Hall table's (below)
+        }
         SCOPED_TRACE(p.signal + " " + p.name);
         listed.insert({p.port, p.pin});
         const mc_f405_gpio_regs_t &g = ports[p.port];
@@ -120,12 +123,75 @@ TEST_P(BoardPins, GpioRegistersMatchPinsCsv)
     EXPECT_EQ(c.desc->gpio_port_mask, mask);
 }
 
+// The Hall inputs' table (applied instead of the encoder's pins when the
+// sensor is Hall): each hall_* row of pins.csv on its pin, nothing else
+// touched; and each sits on one of enc_a, enc_b, enc_z's pins.
+TEST_P(BoardPins, HallTableMatchesPinsCsv)
+{
+    const Case &c = GetParam();
+    const auto pins = boards::read_pins(c.name);
+    std::set<std::pair<int, int>> hall;
+    std::set<std::string> enc_pins;
+    for (const char *e : {"enc_a", "enc_b", "enc_z"}) {
+        if (boards::find(pins, e) != nullptr) {
+            enc_pins.insert(boards::find(pins, e)->name);
+        }
+    }
+    mc_f405_gpio_regs_t ports[MC_F405_GPIO_PORTS];
+    mc_f405_gpio_regs_t *ptr[MC_F405_GPIO_PORTS];
+    for (unsigned k = 0; k < MC_F405_GPIO_PORTS; ++k) {
+        ports[k] = mc_f405_gpio_regs_t{};
+        ports[k].MODER = kPattern;
+        ports[k].PUPDR = kPattern;
+        ports[k].AFR[0] = kPattern;
+        ports[k].AFR[1] = kPattern;
+        ptr[k] = &ports[k];
+    }
+    if (c.desc->p_gpio_hall == nullptr) {
+        for (const auto &p : pins) {
+            EXPECT_FALSE(boards::is_hall(p.signal)) << p.signal;
+        }
+        return;
+    }
+    mc_board_gpio_apply(c.desc->p_gpio_hall, c.desc->n_gpio_hall, ptr);
+    int n = 0;
+    for (const auto &p : pins) {
+        if (!boards::is_hall(p.signal)) {
+            continue;
+        }
+        ++n;
+        SCOPED_TRACE(p.signal + " " + p.name);
+        hall.insert({p.port, p.pin});
+        EXPECT_EQ(enc_pins.count(p.name), 1u);
+        EXPECT_EQ(p.mode, "input");
+        const mc_f405_gpio_regs_t &g = ports[p.port];
+        EXPECT_EQ(field(g.MODER, 2 * p.pin, 2), 0u); // input
+        EXPECT_EQ(field(g.PUPDR, 2 * p.pin, 2), boards::pupdr_code(p.pull));
+        EXPECT_EQ(field(g.AFR[p.pin / 8], 4 * (p.pin % 8), 4), 0u);
+        const auto &hp = c.desc->hall[(p.signal == "hall_a") ? 0 : (p.signal == "hall_b") ? 1 : 2];
+        EXPECT_EQ(hp.port, p.port);
+        EXPECT_EQ(hp.pin, p.pin);
+    }
+    EXPECT_EQ(n, 3);
+    for (int port = 0; port < int(MC_F405_GPIO_PORTS); ++port) {
+        for (int pin = 0; pin < 16; ++pin) {
+            if (hall.count({port, pin}) == 0u) {
+                EXPECT_EQ(field(ports[port].MODER, 2 * pin, 2), field(kPattern, 2 * pin, 2));
+            }
+        }
+    }
+}
+
 TEST_P(BoardPins, NoPinTwiceAndNeededSignalsPresent)
 {
     const Case &c = GetParam();
     const auto pins = boards::read_pins(c.name);
     std::set<std::string> names, signals;
     for (const auto &p : pins) {
+        if (boards::is_hall(p.signal)) {
+            EXPECT_TRUE(signals.insert(p.signal).second) << p.signal << " listed twice";
+            continue; // shares an encoder pin (HallTableMatchesPinsCsv)
+        }
         EXPECT_TRUE(names.insert(p.name).second) << p.name << " used twice";
         EXPECT_TRUE(signals.insert(p.signal).second) << p.signal << " listed twice";
         EXPECT_NE(p.name, "PA13") << "SWDIO taken";
@@ -235,4 +301,34 @@ TEST(BoardFacts, Vesc6GateEnableAndThreeShunts)
     EXPECT_EQ(mc_board_vesc6_desc.adc_ch_ib, 11u);
     EXPECT_EQ(mc_board_vesc6_desc.adc_ch_ic, 12u);
     EXPECT_EQ(mc_board_vesc6_desc.adc_ch_vbus, 13u);
+}
+
+// The index and Hall pins of the two real boards, from their sources
+// (ODrive board.cpp M0_ENC_Z PC9 and hallA/B/C on ENC0_A/B/Z; VESC
+// hw_60_core.h HW_HALL_ENC_GPIO1..3 PC6..PC8, HW_ENC_EXTI_LINE 8), and the
+// ODrive's SPI encoder chip select GPIO1 = PA0 (encoder.hpp
+// abs_spi_cs_gpio_pin 1).
+TEST(BoardFacts, IndexHallAndSpiEncoderPins)
+{
+    const auto od = boards::read_pins("odrive36");
+    EXPECT_EQ(boards::find(od, "enc_z")->name, "PC9");
+    EXPECT_EQ(boards::find(od, "hall_a")->name, "PB4");
+    EXPECT_EQ(boards::find(od, "hall_b")->name, "PB5");
+    EXPECT_EQ(boards::find(od, "hall_c")->name, "PC9");
+    EXPECT_EQ(boards::find(od, "enc_spi_cs")->name, "PA0");
+    EXPECT_EQ(boards::find(od, "enc_spi_cs")->init, 1);
+    EXPECT_EQ(mc_board_odrive36_desc.enc_index.port, 2u);
+    EXPECT_EQ(mc_board_odrive36_desc.enc_index.pin, 9u);
+    EXPECT_EQ(mc_board_odrive36_desc.enc_spi_cs.port, 0u);
+    EXPECT_EQ(mc_board_odrive36_desc.enc_spi_cs.pin, 0u);
+    EXPECT_TRUE(mc_board_odrive36_desc.enc_spi_cs.active_low);
+    const auto ve = boards::read_pins("vesc6");
+    EXPECT_EQ(boards::find(ve, "enc_z")->name, "PC8");
+    EXPECT_EQ(boards::find(ve, "hall_a")->name, "PC6");
+    EXPECT_EQ(boards::find(ve, "hall_b")->name, "PC7");
+    EXPECT_EQ(boards::find(ve, "hall_c")->name, "PC8");
+    EXPECT_EQ(boards::find(ve, "enc_spi_cs"), nullptr);
+    EXPECT_EQ(mc_board_vesc6_desc.enc_index.pin, 8u);
+    EXPECT_EQ(mc_board_example_desc.enc_index.port, MC_BOARD_PORT_NONE);
+    EXPECT_EQ(mc_board_example_desc.p_gpio_hall, nullptr);
 }

@@ -47,7 +47,7 @@ constexpr double kVref = 3.3;
 // RM0090 bit positions.
 constexpr uint32_t kApb1Tim3 = 1u << 1, kApb1Tim5 = 1u << 3, kApb1Spi3 = 1u << 15,
                    kApb1Can1 = 1u << 25;
-constexpr uint32_t kApb2Tim1 = 1u << 0, kApb2Adc1 = 1u << 8;
+constexpr uint32_t kApb2Tim1 = 1u << 0, kApb2Adc1 = 1u << 8, kApb2Syscfg = 1u << 14;
 constexpr uint32_t kBdtrBke = 1u << 12, kBdtrBkp = 1u << 13, kBdtrMoe = 1u << 15;
 constexpr uint32_t kEgrBg = 1u << 7;
 constexpr uint32_t kCanMsrInak = 1u << 0;
@@ -60,6 +60,8 @@ struct Rig {
     mc_f405_adc_common_regs_t adc_common{};
     mc_f405_can_regs_t can{};
     mc_f405_spi_regs_t spi3{};
+    mc_f405_syscfg_regs_t syscfg{};
+    mc_f405_exti_regs_t exti{};
     std::vector<uint32_t> delays;
     mc_board_f405_t board{};
 
@@ -84,6 +86,8 @@ struct Rig {
         p.p_adc_common = &adc_common;
         p.p_can1 = &can;
         p.p_spi3 = &spi3;
+        p.p_syscfg = &syscfg;
+        p.p_exti = &exti;
         p.delay_us = &Rig::delay;
         p.delay_ctx = this;
         return p;
@@ -171,11 +175,31 @@ TEST_P(BoardSetup, ClocksPinsTimersAndAdc)
     }
     EXPECT_EQ(rig.ahb1, ports);
     EXPECT_EQ(rig.apb1, kApb1Tim3 | kApb1Tim5 | kApb1Can1 | (c.desc->has_drv8301 ? kApb1Spi3 : 0u));
-    EXPECT_EQ(rig.apb2, kApb2Tim1 | kApb2Adc1);
+    const auto *z = boards::find(pins, "enc_z");
+    EXPECT_EQ(rig.apb2, kApb2Tim1 | kApb2Adc1 | (z != nullptr ? kApb2Syscfg : 0u));
+
+    // The index (enc_z) on its EXTI line (RM0090 §9.2.3..6: EXTICRn holds
+    // lines 4(n-1)..4n-1, 4 bits each, the port's number; §12.3: rising
+    // edge, unmasked), the TIM3 encoder as the drive's encoder.
+    if (z != nullptr) {
+        EXPECT_EQ((rig.syscfg.EXTICR[z->pin / 4] >> (4 * (z->pin % 4))) & 0xFu, unsigned(z->port));
+        EXPECT_EQ(rig.exti.RTSR, 1u << z->pin);
+        EXPECT_EQ(rig.exti.FTSR, 0u);
+        EXPECT_EQ(rig.exti.IMR, 1u << z->pin);
+        EXPECT_EQ(mc_board_f405_exti_irq(c.desc),
+                  z->pin <= 4 ? 6u + z->pin : (z->pin <= 9 ? 23u : 40u));
+    } else {
+        EXPECT_EQ(rig.exti.IMR, 0u);
+        EXPECT_EQ(mc_board_f405_exti_irq(c.desc), 0xFFFFFFFFu);
+    }
+    EXPECT_EQ(rig.board.hal.encoder, &rig.board.enc.dev);
 
     // No driver undid a pin's mode (a BKIN left in its alternate function,
     // the chip select and gate enable outputs, nFAULT an input).
     for (const auto &p : pins) {
+        if (boards::is_hall(p.signal)) {
+            continue; // the Hall table is not applied with the encoder fitted
+        }
         EXPECT_EQ((rig.gpio[p.port].MODER >> (2 * p.pin)) & 3u, boards::moder_code(p.mode))
             << p.signal;
     }
@@ -516,6 +540,89 @@ INSTANTIATE_TEST_SUITE_P(Boards, GateDriverBoard, ::testing::ValuesIn(kDrvBoards
                          [](const ::testing::TestParamInfo<Case> &i) {
                              return std::string(i.param.name);
                          });
+
+// The ODrive v3.6 with an absolute encoder on SPI3 (board.toml type
+// as5047p or ma732): its own device on the shared SPI3 (RM0090 §28.5.1
+// CR1: the AS5047P in mode 1 at 42 MHz / 8 = 5.25 MHz <= 10 MHz, BR = 010;
+// the MA732 in mode 3 at 42 / 2 = 21 MHz <= 25 MHz, BR = 000), chip
+// select PA0 (GPIO1) released high, the chip driver as the drive's
+// encoder, probed at set-up. A register file answers every frame with the
+// word sent (loopback): no chip answers so, and the set-up says so.
+TEST(BoardSpiEncoder, OdriveAbsoluteEncoderOnSpi3)
+{
+    constexpr uint32_t kCpha = 1u << 0, kCpol = 1u << 1, kMstr = 1u << 2, kSpe = 1u << 6,
+                       kSsi = 1u << 8, kSsm = 1u << 9, kDff = 1u << 11;
+    for (const auto type : {MC_BOARD_ENC_AS5047P, MC_BOARD_ENC_MA732}) {
+        mc_board_desc_t d = mc_board_odrive36_desc;
+        d.enc_type = type;
+        Rig rig;
+        rig.spi3.SR = (1u << 0) | (1u << 1); // RXNE, TXE: frames complete
+        EXPECT_EQ(rig.setup(&d), MC_BOARD_F405_ERR_SPIENC);
+        EXPECT_EQ(rig.board.enc_probe_rc, -EPROTO);
+        const bool as = (type == MC_BOARD_ENC_AS5047P);
+        EXPECT_EQ(rig.board.enc_spi.cr1,
+                  kMstr | kSpe | kSsi | kSsm | kDff | kCpha | (as ? (2u << 3) : kCpol));
+        EXPECT_EQ(rig.board.enc_spi.sck_hz, as ? 5250000u : 21000000u);
+        EXPECT_EQ(rig.board.enc_spi.cfg.cs.p_port, &rig.gpio[0]);
+        EXPECT_EQ(rig.board.enc_spi.cfg.cs.pin, 0u);
+        EXPECT_TRUE(rig.board.enc_spi.cfg.cs.active_low);
+        EXPECT_EQ((rig.gpio[0].MODER >> 0) & 3u, 1u); // PA0 output
+        EXPECT_EQ(rig.gpio[0].BSRR & 1u, 1u);         // released (high) last
+        EXPECT_EQ(rig.board.hal.encoder, as ? &rig.board.as5047p.dev : &rig.board.ma732.dev);
+        EXPECT_NE(rig.apb1 & kApb1Spi3, 0u);
+    }
+    // A board without a chip select for it refuses the type.
+    mc_board_desc_t d = mc_board_vesc6_desc;
+    d.enc_type = MC_BOARD_ENC_AS5047P;
+    Rig rig;
+    EXPECT_EQ(rig.setup(&d), MC_BOARD_F405_ERR_ARG);
+    EXPECT_STREQ(mc_board_f405_err_name(MC_BOARD_F405_ERR_SPIENC), "absolute encoder");
+}
+
+// Hall sensors fitted (board.toml type hall): the Hall table over the
+// encoder's pins (inputs with pull-ups), the inputs read as one code, no
+// encoder for the drive until the Hall kernel is bound to it.
+TEST(BoardHall, HallInputsOnTheEncoderPins)
+{
+    for (const Case &c : kDrvBoards) {
+        SCOPED_TRACE(c.name);
+        mc_board_desc_t d = *c.desc;
+        d.enc_type = MC_BOARD_ENC_HALL;
+        Rig rig;
+        ASSERT_EQ(rig.setup(&d), MC_BOARD_F405_OK) << mc_board_f405_err_name(rig.board.err);
+        EXPECT_EQ(rig.board.hal.encoder, nullptr);
+        const auto pins = boards::read_pins(c.name);
+        uint32_t want = 0u;
+        for (int k = 0; k < 3; ++k) {
+            const char *sig[3] = {"hall_a", "hall_b", "hall_c"};
+            const auto *p = boards::find(pins, sig[k]);
+            ASSERT_NE(p, nullptr);
+            EXPECT_EQ((rig.gpio[p->port].MODER >> (2 * p->pin)) & 3u, 0u) << sig[k]; // input
+            EXPECT_EQ((rig.gpio[p->port].PUPDR >> (2 * p->pin)) & 3u, 1u) << sig[k]; // pull-up
+            if (k != 1) {
+                rig.gpio[p->port].IDR |= 1u << p->pin; // A and C high: code 5
+                want |= 1u << k;
+            }
+        }
+        uint32_t code = 0u;
+        ASSERT_EQ(mc_hal_hall_read(&rig.board.hall.dev, &code), 0);
+        EXPECT_EQ(code, want);
+    }
+}
+
+// SPI3 scheduled on the gate-driver boards: the slow side's handle (the
+// one the binding hands to the DRV8301 calls) runs frames directly until
+// the fast loop starts (mc_spisched_defer).
+TEST(BoardSpiSchedule, GateDriverHandleDirectUntilDeferred)
+{
+    Rig rig;
+    ASSERT_EQ(rig.setup(&mc_board_odrive36_desc), MC_BOARD_F405_OK);
+    rig.spi3.SR = (1u << 0) | (1u << 1);
+    uint16_t rx = 0u;
+    ASSERT_EQ(mc_hal_spi_transfer16(&rig.board.sched.dev, 0x9000u, &rx), 0);
+    EXPECT_EQ(rig.spi3.DR, 0x9000u);                   // on the bus at once
+    EXPECT_FALSE(mc_board_f405_fast_slot(&rig.board)); // nothing waits
+}
 
 // The configuration's CAN bit rate on the controller (issue 19): BTR from
 // the APB1 clock (sysclk / 4 = 42 MHz) at the 87.5 % sample point, by the

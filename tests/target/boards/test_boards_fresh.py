@@ -81,6 +81,15 @@ def main():
                                                        "gain_v_per_v = 20")),
         "40 hex digits": ("toml", sub(toml, r'^commit = "f9b5', 'commit = "zz')),
         "oc_adj_set is 0..31": ("toml", sub(toml, r"^oc_adj_set = 21", "oc_adj_set = 32")),
+        # a Hall input may share an encoder pin, nothing else
+        "not on an encoder pin": ("pins", sub(pins, r"^hall_c,PC9,", "hall_c,PC3,")),
+        "used twice (pwm_ah": ("pins", sub(pins, r"^hall_a,PB4,", "hall_a,PA8,")),
+        "need all of": ("pins", sub(pins, r"^hall_b,.*\n", "")),
+        "enc_z (the index, an EXTI line) must be an input":
+            ("pins", sub(pins, r"^enc_z,PC9,input,,down,,,", "enc_z,PC9,output,,none,pp,low,0")),
+        "must be an output starting high (released)":
+            ("pins", sub(pins, r"^(enc_spi_cs,PA0,output,,none,pp,low,)1", r"\g<1>0")),
+        "encoder.type is one of": ("toml", sub(toml, r'^type = "abi"', 'type = "resolver"')),
     }
     for what, (which, text) in bad.items():
         d = os.path.join(a.work, "bad", "odrive36")

@@ -105,7 +105,7 @@ class Drv8301Model
         return 0;
     }
 
-    static inline const mc_hal_spi_ops_t ops_ = {&Drv8301Model::transfer};
+    static inline const mc_hal_spi_ops_t ops_ = {&Drv8301Model::transfer, nullptr};
 };
 
 #endif

@@ -156,3 +156,53 @@ TEST_F(SpiBoard, DisabledPeripheralIsIoError)
     EXPECT_EQ(mc_hal_spi_transfer16(&drv.dev, 0x9000u, nullptr), -EIO);
     EXPECT_EQ(gpioc.BSRR, 0u);
 }
+
+// Two devices on one SPI (the ODrive v3.6's SPI3: the DRV8301 in mode 1 at
+// 2.625 MHz on PC13, an MA732 in mode 3 at 21 MHz on PA0): each transfer
+// finds CR1 set for the other device and restores its own (RM0090
+// §28.3.3: BR/CPOL/CPHA are changed with SPE = 0, then SPE set again).
+TEST_F(SpiBoard, SharedBusRestoresEachDevicesSettings)
+{
+    mc_f405_gpio_regs_t gpioa{};
+    const mc_f405_spi_config_t c = cfg();
+    ASSERT_EQ(mc_f405_spi_init(&drv, &c), 0);
+    const uint32_t cr1_drv = spi.CR1;
+    mc_f405_spi_t enc{};
+    mc_f405_spi_config_t ce = cfg();
+    ce.max_sck_hz = 25000000u; // 42 MHz / 2 = 21 MHz: BR = 000
+    ce.mode = 3u;
+    ce.cs = {&gpioa, 0u, true};
+    ce.cs_gap_reads = 16u;
+    ASSERT_EQ(mc_f405_spi_init(&enc, &ce), 0);
+    const uint32_t cr1_enc = kCpha | kCpol | kMstr | kSpe | kSsi | kSsm | kDff;
+    EXPECT_EQ(spi.CR1, cr1_enc);
+    EXPECT_EQ(enc.sck_hz, 21000000u);
+
+    spi.SR = kTxe | kRxne;
+    ASSERT_EQ(mc_hal_spi_transfer16(&drv.dev, 0x9000u, nullptr), 0);
+    EXPECT_EQ(spi.CR1, cr1_drv);
+    EXPECT_EQ(gpioc.BSRR, 1u << 13); // the DRV8301's chip select
+    gpioa.BSRR = 0u;
+    ASSERT_EQ(mc_hal_spi_transfer16(&enc.dev, 0x0000u, nullptr), 0);
+    EXPECT_EQ(spi.CR1, cr1_enc);
+    EXPECT_EQ(gpioa.BSRR, 1u << 0); // the encoder's, released last
+}
+
+// 32 clocks under one chip select: the high word first (MSB first), the
+// received words assembled the same way (loopback: rx = tx).
+TEST_F(SpiBoard, Transfer32TwoWordsOneFrame)
+{
+    const mc_f405_spi_config_t c = cfg();
+    ASSERT_EQ(mc_f405_spi_init(&drv, &c), 0);
+    spi.SR = kTxe | kRxne;
+    uint32_t rx = 0u;
+    ASSERT_EQ(mc_hal_spi_transfer32(&drv.dev, 0x12345678u, &rx), 0);
+    EXPECT_EQ(spi.DR, 0x5678u); // the last word written
+    EXPECT_EQ(rx, 0x12345678u);
+    EXPECT_EQ(gpioc.BSRR, 1u << 13);
+
+    spi.SR = 0u; // TXE never set: -EIO, rx untouched, chip select released
+    rx = 7u;
+    EXPECT_EQ(mc_hal_spi_transfer32(&drv.dev, 1u, &rx), -EIO);
+    EXPECT_EQ(rx, 7u);
+}

@@ -6,9 +6,10 @@
  *
  * Peripherals are the same on every board (the generator refuses a pin map
  * that needs another): TIM1 complementary PWM (CH1..3, CH1N..3N, optional
- * BKIN), ADC1 injected conversions, TIM3 encoder (CH1, CH2), TIM5 tick,
- * CAN1, and SPI3 for a DRV8301. mc_board_f405.h binds a description to the
- * hal/stm32f405 drivers.
+ * BKIN), ADC1 injected conversions, TIM3 encoder (CH1, CH2) with its index
+ * on an EXTI line, TIM5 tick, CAN1, and SPI3 for a DRV8301 and an absolute
+ * encoder; Hall inputs as GPIO on the encoder's pins. mc_board_f405.h
+ * binds a description to the hal/stm32f405 drivers.
  */
 #ifndef MC_BOARD_DESC_H
 #define MC_BOARD_DESC_H
@@ -25,6 +26,16 @@ extern "C" {
 
 /** mc_board_pin_t.port of a signal the board does not have. */
 #define MC_BOARD_PORT_NONE 0xFFu
+
+/** The position sensor a board has fitted by default (board.toml
+ *  [encoder] type): the A/B(/Z) encoder on TIM3, an absolute encoder on
+ *  SPI3 (enc_spi_cs), or Hall sensors on the encoder's pins. */
+typedef enum mc_board_enc_type {
+    MC_BOARD_ENC_ABI = 0,
+    MC_BOARD_ENC_AS5047P = 1,
+    MC_BOARD_ENC_MA732 = 2,
+    MC_BOARD_ENC_HALL = 3
+} mc_board_enc_type_t;
 
 /** One pin: port 0 = A .. 8 = I, pin 0..15, asserted level. */
 typedef struct mc_board_pin {
@@ -85,9 +96,17 @@ typedef struct mc_board_desc {
     /* supply limits of the board (the drive's configuration may be narrower) */
     float vbus_min_v;
     float vbus_max_v;
-    /* TIM3 encoder */
-    uint32_t enc_counts_per_rev;
+    /* position sensors */
+    uint32_t enc_counts_per_rev; /**< TIM3 encoder */
     uint8_t enc_input_filter;
+    mc_board_enc_type_t enc_type;                 /**< fitted by default */
+    mc_board_pin_t enc_index;                     /**< enc_z: the index pulse (EXTI line = pin) */
+    const mc_board_gpio_port_init_t *p_gpio_hall; /**< the Hall inputs' GPIO
+                                                       set-up on the encoder's
+                                                       pins; NULL: none */
+    uint32_t n_gpio_hall;
+    mc_board_pin_t hall[3];    /**< hall_a, hall_b, hall_c (code bits 0, 1, 2) */
+    mc_board_pin_t enc_spi_cs; /**< an absolute encoder's chip select on SPI3 */
     /* DRV8301 on SPI3 */
     bool has_drv8301;
     mc_drv8301_config_t drv8301;

@@ -33,17 +33,31 @@ static void delay(const mc_board_f405_periph_t *p, uint32_t us)
     }
 }
 
+static bool has_pin(mc_board_pin_t b)
+{
+    return b.port < MC_F405_GPIO_PORTS;
+}
+
+static bool spi_encoder(const mc_board_desc_t *d)
+{
+    return (d->enc_type == MC_BOARD_ENC_AS5047P) || (d->enc_type == MC_BOARD_ENC_MA732);
+}
+
 static void clocks_on(const mc_board_desc_t *d, const mc_board_f405_periph_t *p)
 {
     uint32_t apb1 =
         MC_BOARD_F405_APB1ENR_TIM3EN | MC_BOARD_F405_APB1ENR_TIM5EN | MC_BOARD_F405_APB1ENR_CAN1EN;
+    uint32_t apb2 = MC_BOARD_F405_APB2ENR_TIM1EN | MC_BOARD_F405_APB2ENR_ADC1EN;
 
-    if (d->has_drv8301) {
+    if (d->has_drv8301 || spi_encoder(d)) {
         apb1 |= MC_BOARD_F405_APB1ENR_SPI3EN;
+    }
+    if (has_pin(d->enc_index)) {
+        apb2 |= MC_BOARD_F405_APB2ENR_SYSCFGEN; /* EXTICR */
     }
     *p->p_rcc_ahb1enr |= d->gpio_port_mask; /* GPIOxEN = bit x */
     *p->p_rcc_apb1enr |= apb1;
-    *p->p_rcc_apb2enr |= MC_BOARD_F405_APB2ENR_TIM1EN | MC_BOARD_F405_APB2ENR_ADC1EN;
+    *p->p_rcc_apb2enr |= apb2;
     mc_dsb(); /* the clocks are on before the first register access */
 }
 
@@ -54,7 +68,10 @@ static bool periph_complete(const mc_board_desc_t *d, const mc_board_f405_periph
     if ((p->p_rcc_ahb1enr == NULL) || (p->p_rcc_apb1enr == NULL) || (p->p_rcc_apb2enr == NULL) ||
         (p->p_tim1 == NULL) || (p->p_tim3 == NULL) || (p->p_tim5 == NULL) || (p->p_adc1 == NULL) ||
         (p->p_adc_common == NULL) || (p->p_can1 == NULL) ||
-        (d->has_drv8301 && (p->p_spi3 == NULL))) {
+        ((d->has_drv8301 || spi_encoder(d)) && (p->p_spi3 == NULL)) ||
+        (has_pin(d->enc_index) && ((p->p_syscfg == NULL) || (p->p_exti == NULL))) ||
+        (spi_encoder(d) && !has_pin(d->enc_spi_cs)) ||
+        ((d->enc_type == MC_BOARD_ENC_HALL) && (d->p_gpio_hall == NULL))) {
         return false;
     }
     for (k = 0u; k < MC_F405_GPIO_PORTS; k++) {
@@ -69,6 +86,94 @@ static mc_board_f405_err_t fail(mc_board_f405_t *b, mc_board_f405_err_t err)
 {
     b->err = err;
     return err;
+}
+
+/* SPI3 shared by the fast loop and the slow loop (mc_spisched.h): the
+ * DRV8301's frames direct until mc_spisched_defer. */
+static int setup_sched(mc_board_f405_t *b)
+{
+    const mc_spisched_config_t c = {
+        .p_dev = &b->spi.dev,
+        .p_tick = &b->tick.dev,
+        .timeout_us = MC_SPISCHED_TIMEOUT_US_DEFAULT,
+        .wait = NULL,
+        .wait_ctx = NULL,
+    };
+    return mc_spisched_init(&b->sched, &c);
+}
+
+/* An absolute encoder on SPI3: its device, its driver, its probe. */
+static mc_board_f405_err_t setup_spi_encoder(mc_board_f405_t *b, const mc_board_desc_t *d,
+                                             const mc_board_f405_periph_t *p, uint32_t pclk1_hz)
+{
+    const bool as5047p = (d->enc_type == MC_BOARD_ENC_AS5047P);
+    const mc_f405_spi_config_t sc = {
+        .p_spi = p->p_spi3,
+        .pclk_hz = pclk1_hz,
+        .max_sck_hz = as5047p ? MC_AS5047P_SPI_MAX_HZ : MC_MA732_SPI_MAX_HZ,
+        .mode = (uint8_t)(as5047p ? MC_AS5047P_SPI_MODE : MC_MA732_SPI_MODE),
+        .cs = pin_of(p, d->enc_spi_cs),
+        .cs_gap_reads = MC_BOARD_F405_SPIENC_CS_GAP_READS,
+    };
+    if (mc_f405_spi_init(&b->enc_spi, &sc) != 0) {
+        return MC_BOARD_F405_ERR_SPI;
+    }
+    if (as5047p) {
+        const mc_as5047p_config_t c = {
+            .p_spi = &b->enc_spi.dev,
+            .p_tick = &b->tick.dev,
+            .daec = true,
+            .bad_reads_max = MC_BOARD_F405_SPIENC_BAD_READS,
+            .diag_period = MC_BOARD_F405_SPIENC_DIAG_PERIOD,
+        };
+        if (mc_as5047p_init(&b->as5047p, &c) != 0) {
+            return MC_BOARD_F405_ERR_SPIENC;
+        }
+        b->enc_probe_rc = mc_as5047p_probe(&b->as5047p);
+        b->hal.encoder = &b->as5047p.dev;
+    } else {
+        const mc_ma732_config_t c = {
+            .p_spi = &b->enc_spi.dev,
+            .p_tick = &b->tick.dev,
+            .parity = true,
+            .bad_reads_max = MC_BOARD_F405_SPIENC_BAD_READS,
+            .diag_period = MC_BOARD_F405_SPIENC_DIAG_PERIOD,
+        };
+        if (mc_ma732_init(&b->ma732, &c) != 0) {
+            return MC_BOARD_F405_ERR_SPIENC;
+        }
+        b->enc_probe_rc = mc_ma732_probe(&b->ma732);
+        b->hal.encoder = &b->ma732.dev;
+    }
+    return (b->enc_probe_rc == 0) ? MC_BOARD_F405_OK : MC_BOARD_F405_ERR_SPIENC;
+}
+
+/* The position sensor the board names (hal.encoder, or the Hall inputs). */
+static mc_board_f405_err_t setup_sensor(mc_board_f405_t *b, const mc_board_desc_t *d,
+                                        const mc_board_f405_periph_t *p, uint32_t pclk1_hz)
+{
+    b->enc_probe_rc = 0;
+    b->hal.encoder = NULL;
+    switch (d->enc_type) {
+    case MC_BOARD_ENC_ABI:
+        b->hal.encoder = &b->enc.dev;
+        return MC_BOARD_F405_OK;
+    case MC_BOARD_ENC_HALL: {
+        mc_f405_hall_config_t hc;
+        uint32_t k;
+        /* the Hall inputs take over the encoder's pins */
+        mc_board_gpio_apply(d->p_gpio_hall, d->n_gpio_hall, p->p_gpio);
+        for (k = 0u; k < 3u; k++) {
+            hc.pin[k] = pin_of(p, d->hall[k]);
+        }
+        return (mc_f405_hall_init(&b->hall, &hc) == 0) ? MC_BOARD_F405_OK : MC_BOARD_F405_ERR_HALL;
+    }
+    case MC_BOARD_ENC_AS5047P:
+    case MC_BOARD_ENC_MA732:
+        return setup_spi_encoder(b, d, p, pclk1_hz);
+    default:
+        return MC_BOARD_F405_ERR_ARG;
+    }
 }
 
 mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board_desc_t *p_desc,
@@ -179,6 +284,14 @@ mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board
         .input_filter = d->enc_input_filter,
         .invert = false,
         .p_tick = &b->tick.dev,
+        .index =
+            {
+                .p_exti = has_pin(d->enc_index) ? p->p_exti : NULL,
+                .p_syscfg = p->p_syscfg,
+                .port = d->enc_index.port,
+                .pin = d->enc_index.pin,
+                .falling_edge = d->enc_index.active_low,
+            },
     };
     if (mc_f405_encoder_init(&b->enc, &ec) != 0) {
         return fail(b, MC_BOARD_F405_ERR_ENCODER);
@@ -213,10 +326,17 @@ mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board
         }
     }
 
+    if (d->has_drv8301 && (setup_sched(b) != 0)) {
+        return fail(b, MC_BOARD_F405_ERR_SPI);
+    }
+    const mc_board_f405_err_t se = setup_sensor(b, d, p, pclk1_hz);
+    if (se != MC_BOARD_F405_OK) {
+        return fail(b, se);
+    }
+
     b->hal.adc = &b->adc.dev;
     b->hal.pwm3 = &b->pwm3.dev;
     b->hal.pwm2 = NULL;
-    b->hal.encoder = &b->enc.dev;
     b->hal.can = b->can_ok ? &b->can.dev : NULL;
     b->hal.tick = &b->tick.dev;
     b->hal.fault = &b->fault.dev;
@@ -333,6 +453,19 @@ mc_board_f405_err_t mc_board_f405_can_set_bitrate(mc_board_f405_t *p_board, uint
     return MC_BOARD_F405_OK;
 }
 
+bool mc_board_f405_fast_slot(mc_board_f405_t *p_board)
+{
+    return (p_board != NULL) && mc_spisched_fast_slot(&p_board->sched);
+}
+
+uint32_t mc_board_f405_exti_irq(const mc_board_desc_t *p_desc)
+{
+    if ((p_desc == NULL) || !has_pin(p_desc->enc_index)) {
+        return 0xFFFFFFFFu;
+    }
+    return mc_f405_exti_irq(p_desc->enc_index.pin);
+}
+
 const char *mc_board_f405_err_name(mc_board_f405_err_t err)
 {
     switch (err) {
@@ -356,6 +489,10 @@ const char *mc_board_f405_err_name(mc_board_f405_err_t err)
         return "gate driver";
     case MC_BOARD_F405_ERR_CAN_BITRATE:
         return "CAN bit rate";
+    case MC_BOARD_F405_ERR_SPIENC:
+        return "absolute encoder";
+    case MC_BOARD_F405_ERR_HALL:
+        return "Hall inputs";
     default:
         return "unknown";
     }

@@ -17,6 +17,24 @@
  * DRV8301 registers are then written and verified by
  * mc_board_f405_gate_driver_setup() over an SPI handle (the SPI3 driver on
  * the MCU, a model of the chip in the tests).
+ *
+ * Position sensor (desc enc_type; the drive reads hal.encoder):
+ *   abi      TIM3 encoder; with an enc_z pin its index on EXTI (SYSCFG
+ *            clock on, EXTICR, rising edge): the board's EXTI interrupt
+ *            calls mc_f405_encoder_index_isr(&enc) (mc_board_f405_exti_irq
+ *            names the IRQ to enable);
+ *   as5047p, an absolute encoder on SPI3 (its own device: enc_spi, chip
+ *   ma732    select enc_spi_cs, the chip's mode and rate; the MA732 in
+ *            32-clock frames with parity), probed at set-up, read by the
+ *            drive's fast step (hal.encoder = the chip driver's). The
+ *            DRV8301 on the same bus goes through the schedule (sched):
+ *            hand sched.dev to mc_board_f405_gate_driver_setup and _supervise,
+ *            call mc_board_f405_fast_slot() once per fast period outside the
+ *            drive's step, and mc_spisched_defer(&sched) before the fast loop
+ *            starts;
+ *   hall     the Hall GPIO table over the encoder's pins; the inputs as
+ *            mc_f405_hall (hall.dev); hal.encoder NULL: the drive has no
+ *            encoder until the Hall kernel is bound to it (firmware/kernels/hall).
  */
 #ifndef MC_BOARD_F405_H
 #define MC_BOARD_F405_H
@@ -25,7 +43,11 @@
 #include <stdint.h>
 
 #include "hal/hal.h"
+#include "hal/hall.h"
+#include "mc_as5047p.h"
 #include "mc_board_desc.h"
+#include "mc_ma732.h"
+#include "mc_spisched.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -36,12 +58,22 @@ extern "C" {
 #define MC_BOARD_F405_GATE_STARTUP_US 20000u
 
 /** RCC enable bits the set-up writes (RM0090 §7.3.10, §7.3.13, §7.3.14). */
-#define MC_BOARD_F405_APB1ENR_TIM3EN (1u << 1)
-#define MC_BOARD_F405_APB1ENR_TIM5EN (1u << 3)
-#define MC_BOARD_F405_APB1ENR_SPI3EN (1u << 15)
-#define MC_BOARD_F405_APB1ENR_CAN1EN (1u << 25)
-#define MC_BOARD_F405_APB2ENR_TIM1EN (1u << 0)
-#define MC_BOARD_F405_APB2ENR_ADC1EN (1u << 8)
+#define MC_BOARD_F405_APB1ENR_TIM3EN   (1u << 1)
+#define MC_BOARD_F405_APB1ENR_TIM5EN   (1u << 3)
+#define MC_BOARD_F405_APB1ENR_SPI3EN   (1u << 15)
+#define MC_BOARD_F405_APB1ENR_CAN1EN   (1u << 25)
+#define MC_BOARD_F405_APB2ENR_TIM1EN   (1u << 0)
+#define MC_BOARD_F405_APB2ENR_ADC1EN   (1u << 8)
+#define MC_BOARD_F405_APB2ENR_SYSCFGEN (1u << 14)
+
+/** An absolute encoder on SPI3: the chip's SCK limit and mode
+ *  (mc_as5047p.h, mc_ma732.h; 42 MHz APB1 / 8 = 5.25 MHz for the AS5047P's
+ *  10 MHz, / 2 = 21 MHz for the MA732's 25 MHz), its chip-select high time
+ *  (16 SR reads >= 380 ns, the AS5047P needs 350 ns), bad reads in a row
+ *  that fault the drive and the diagnostic period [reads]. */
+#define MC_BOARD_F405_SPIENC_CS_GAP_READS 16u
+#define MC_BOARD_F405_SPIENC_BAD_READS    MC_SPIENC_BAD_READS_DEFAULT
+#define MC_BOARD_F405_SPIENC_DIAG_PERIOD  1000u
 
 typedef struct mc_board_f405_periph {
     mc_f405_gpio_regs_t *p_gpio[MC_F405_GPIO_PORTS]; /**< A..I */
@@ -55,6 +87,8 @@ typedef struct mc_board_f405_periph {
     mc_f405_adc_common_regs_t *p_adc_common;
     mc_f405_can_regs_t *p_can1;
     mc_f405_spi_regs_t *p_spi3;
+    mc_f405_syscfg_regs_t *p_syscfg; /**< the index's EXTI routing (boards with enc_z) */
+    mc_f405_exti_regs_t *p_exti;
     /** Busy wait of at least `us` microseconds (the tick driver on the MCU). */
     void (*delay_us)(void *ctx, uint32_t us);
     void *delay_ctx;
@@ -72,8 +106,11 @@ typedef enum mc_board_f405_err {
     MC_BOARD_F405_ERR_ENCODER,
     MC_BOARD_F405_ERR_SPI,
     MC_BOARD_F405_ERR_GATE_DRIVER, /**< DRV8301 set-up failed: drv.status says why */
-    MC_BOARD_F405_ERR_CAN_BITRATE  /**< CAN bit rate not 125k, 250k, 500k or 1M
+    MC_BOARD_F405_ERR_CAN_BITRATE, /**< CAN bit rate not 125k, 250k, 500k or 1M
                                         bit/s, or not exact on the APB1 clock */
+    MC_BOARD_F405_ERR_SPIENC,      /**< the absolute encoder the board names does
+                                        not answer as it should (enc_probe_rc) */
+    MC_BOARD_F405_ERR_HALL         /**< the Hall inputs could not be set up */
 } mc_board_f405_err_t;
 
 typedef struct mc_board_f405 {
@@ -85,6 +122,14 @@ typedef struct mc_board_f405 {
     mc_f405_can_t can;
     mc_f405_spi_t spi;
     mc_drv8301_t drv;
+    mc_spisched_t sched;   /**< SPI3 shared by the fast loop (encoder) and the
+                              slow loop (DRV8301): hand sched.dev, not
+                              spi.dev, to the gate-driver calls */
+    mc_f405_spi_t enc_spi; /**< the absolute encoder's device on SPI3 */
+    mc_as5047p_t as5047p;
+    mc_ma732_t ma732;
+    int enc_probe_rc;    /**< the absolute encoder's probe (0 ok) */
+    mc_f405_hall_t hall; /**< the Hall inputs (enc_type hall) */
     mc_hal_t hal;
     bool can_ok; /**< CAN left init mode (else hal.can NULL) */
     mc_board_f405_err_t err;
@@ -150,6 +195,15 @@ bool mc_board_f405_gate_driver_supervise(mc_board_f405_t *p_board, const mc_boar
  * turned off (can_ok false, hal.can NULL), as at set-up.
  */
 mc_board_f405_err_t mc_board_f405_can_set_bitrate(mc_board_f405_t *p_board, uint32_t bitrate_bps);
+
+/** Fast loop, once per period (the ADC interrupt, outside the drive's
+ *  step): a slow-loop frame for the DRV8301, if one waits (mc_spisched.h).
+ *  @return true when one ran. */
+bool mc_board_f405_fast_slot(mc_board_f405_t *p_board);
+
+/** NVIC interrupt of the board's index line (mc_f405_exti_irq of its pin),
+ *  or 0xFFFFFFFF when it has none. */
+uint32_t mc_board_f405_exti_irq(const mc_board_desc_t *p_desc);
 
 /** Name of a set-up result ("ok", "gate driver", ...). */
 const char *mc_board_f405_err_name(mc_board_f405_err_t err);

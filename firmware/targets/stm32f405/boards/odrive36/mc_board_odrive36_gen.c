@@ -13,6 +13,8 @@
  *   Firmware/Drivers/DRV8301/drv8301.cpp
  *   Firmware/MotorControl/motor.cpp
  *   Firmware/MotorControl/encoder.hpp
+ *   Firmware/MotorControl/encoder.cpp
+ *   Firmware/Drivers/STM32/stm32_gpio.cpp
  *   Firmware/MotorControl/low_level.cpp
  *   Firmware/Tupfile.lua
  */
@@ -20,15 +22,15 @@
 
 /* GPIO set-up per port (pins.csv): masks of the pins the board owns. */
 static const mc_board_gpio_port_init_t k_gpio[] = {
-    { /* port A: PA8 pwm_ah, PA9 pwm_bh, PA10 pwm_ch, PA6 adc_vbus, PA7 m1_pwm_al */
+    { /* port A: PA8 pwm_ah, PA9 pwm_bh, PA10 pwm_ch, PA6 adc_vbus, PA0 enc_spi_cs, PA7 m1_pwm_al */
         .port = 0u,
-        .moder_mask = 0x003FF000u, .moder = 0x002A7000u,
-        .otyper_mask = 0x000007C0u, .otyper = 0x00000000u,
-        .ospeedr_mask = 0x003FF000u, .ospeedr = 0x00000000u,
-        .pupdr_mask = 0x003FF000u, .pupdr = 0x00000000u,
-        .afrl_mask = 0xFF000000u, .afrl = 0x00000000u,
+        .moder_mask = 0x003FF003u, .moder = 0x002A7001u,
+        .otyper_mask = 0x000007C1u, .otyper = 0x00000000u,
+        .ospeedr_mask = 0x003FF003u, .ospeedr = 0x00000000u,
+        .pupdr_mask = 0x003FF003u, .pupdr = 0x00000000u,
+        .afrl_mask = 0xFF00000Fu, .afrl = 0x00000000u,
         .afrh_mask = 0x00000FFFu, .afrh = 0x00000111u,
-        .bsrr = 0x00800000u,
+        .bsrr = 0x00800001u,
     },
     { /* port B: PB13 pwm_al, PB14 pwm_bl, PB15 pwm_cl, PB4 enc_a, PB5 enc_b, PB8 can_rx, PB9 can_tx, PB12 gate_enable, PB0 m1_pwm_bl, PB1 m1_pwm_cl, PB10 brake_l, PB11 brake_h */
         .port = 1u,
@@ -58,6 +60,30 @@ static const mc_board_gpio_port_init_t k_gpio[] = {
         .pupdr_mask = 0x00000030u, .pupdr = 0x00000010u,
         .afrl_mask = 0x00000F00u, .afrl = 0x00000000u,
         .afrh_mask = 0x00000000u, .afrh = 0x00000000u,
+        .bsrr = 0x00000000u,
+    },
+};
+
+/* The Hall inputs on the encoder's pins (applied instead of them). */
+static const mc_board_gpio_port_init_t k_gpio_hall[] = {
+    { /* port B: PB4 hall_a, PB5 hall_b */
+        .port = 1u,
+        .moder_mask = 0x00000F00u, .moder = 0x00000000u,
+        .otyper_mask = 0x00000030u, .otyper = 0x00000000u,
+        .ospeedr_mask = 0x00000F00u, .ospeedr = 0x00000000u,
+        .pupdr_mask = 0x00000F00u, .pupdr = 0x00000500u,
+        .afrl_mask = 0x00FF0000u, .afrl = 0x00000000u,
+        .afrh_mask = 0x00000000u, .afrh = 0x00000000u,
+        .bsrr = 0x00000000u,
+    },
+    { /* port C: PC9 hall_c */
+        .port = 2u,
+        .moder_mask = 0x000C0000u, .moder = 0x00000000u,
+        .otyper_mask = 0x00000200u, .otyper = 0x00000000u,
+        .ospeedr_mask = 0x000C0000u, .ospeedr = 0x00000000u,
+        .pupdr_mask = 0x000C0000u, .pupdr = 0x00040000u,
+        .afrl_mask = 0x00000000u, .afrl = 0x00000000u,
+        .afrh_mask = 0x000000F0u, .afrh = 0x00000000u,
         .bsrr = 0x00000000u,
     },
 };
@@ -98,6 +124,12 @@ const mc_board_desc_t mc_board_odrive36_desc = {
     .vbus_max_v = 56.0f,
     .enc_counts_per_rev = 8192u,
     .enc_input_filter = 4u,
+    .enc_type = MC_BOARD_ENC_ABI,
+    .enc_index = {2u, 9u, false} /* PC9 */,
+    .p_gpio_hall = k_gpio_hall,
+    .n_gpio_hall = 2u,
+    .hall = {{1u, 4u, false} /* PB4 */, {1u, 5u, false} /* PB5 */, {2u, 9u, false} /* PC9 */},
+    .enc_spi_cs = {0u, 0u, true} /* PA0 */,
     .has_drv8301 = true,
     .drv8301 = {
         .gain = MC_DRV8301_GAIN_40,

@@ -59,6 +59,20 @@ static const mc_board_gpio_port_init_t k_gpio[] = {
     },
 };
 
+/* The Hall inputs on the encoder's pins (applied instead of them). */
+static const mc_board_gpio_port_init_t k_gpio_hall[] = {
+    { /* port C: PC6 hall_a, PC7 hall_b, PC8 hall_c */
+        .port = 2u,
+        .moder_mask = 0x0003F000u, .moder = 0x00000000u,
+        .otyper_mask = 0x000001C0u, .otyper = 0x00000000u,
+        .ospeedr_mask = 0x0003F000u, .ospeedr = 0x00000000u,
+        .pupdr_mask = 0x0003F000u, .pupdr = 0x00015000u,
+        .afrl_mask = 0xFF000000u, .afrl = 0x00000000u,
+        .afrh_mask = 0x0000000Fu, .afrh = 0x00000000u,
+        .bsrr = 0x00000000u,
+    },
+};
+
 /* adc_temp_fet: pin voltage [V] -> temperature [degC]. */
 static const mc_f405_adc_temp_point_t k_temp_power_stage[17] = {
     {0.388136238f, -20.0f},
@@ -138,6 +152,12 @@ const mc_board_desc_t mc_board_vesc6_desc = {
     .vbus_max_v = 57.0f,
     .enc_counts_per_rev = 8192u,
     .enc_input_filter = 4u,
+    .enc_type = MC_BOARD_ENC_ABI,
+    .enc_index = {2u, 8u, false} /* PC8 */,
+    .p_gpio_hall = k_gpio_hall,
+    .n_gpio_hall = 1u,
+    .hall = {{2u, 6u, false} /* PC6 */, {2u, 7u, false} /* PC7 */, {2u, 8u, false} /* PC8 */},
+    .enc_spi_cs = {MC_BOARD_PORT_NONE, 0u, false},
     .has_drv8301 = true,
     .drv8301 = {
         .gain = MC_DRV8301_GAIN_20,
