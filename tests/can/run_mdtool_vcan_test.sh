@@ -73,8 +73,9 @@ def per_id(fr):
 same = len(cd) == len(mf) and per_id(cd) == per_id(mf)
 check(same, f"rec.blf (as rec.mf4) holds the frames candump saw ({len(mf)} vs {len(cd)})")
 # parameters over CAN against the firmware (tests/can/vm/mdtool_vcan.sh)
-rc = {f: int(open(f + ".rc").read()) for f in ("cfg_get1", "cfg_set", "cfg_get2", "cfg_refuse", "cfg_mcsim2")}
-out = {f: open(f + ".out").read() for f in ("cfg_get1", "cfg_set", "cfg_get2", "cfg_refuse")}
+rc = {f: int(open(f + ".rc").read()) for f in ("cfg_get1", "cfg_set", "cfg_get2", "cfg_node", "cfg_refuse",
+                                                 "cfg_mcsim2")}
+out = {f: open(f + ".out").read() for f in ("cfg_get1", "cfg_set", "cfg_get2", "cfg_node", "cfg_refuse")}
 def value_of(text):
     return float(text.split()[1])
 check(rc["cfg_get1"] == 0 and abs(value_of(out["cfg_get1"]) - 150.0) < 1e-3,
@@ -84,6 +85,10 @@ check(rc["cfg_set"] == 0 and "applied" in out["cfg_set"] and "saved (record 1)" 
 # float32 of 123.5 is exact
 check(rc["cfg_get2"] == 0 and value_of(out["cfg_get2"]) == 123.5,
       "config get after set: " + out["cfg_get2"].strip())
+check(rc["cfg_node"] == 0 and "can_node_id: confirmed" in out["cfg_node"]
+      and "can_node_id = 2 " in out["cfg_node"],
+      "a new node id: WRITE answered NEEDS_CONFIRM, mdtool's CONFIRM staged it: "
+      + out["cfg_node"].strip().replace("\n", "; "))
 check(rc["cfg_refuse"] == 0 and "status RANGE" in out["cfg_refuse"] and "after: 123.5" in out["cfg_refuse"],
       "20000 rad/s (outside the table) refused RANGE by the drive, value kept: "
       + out["cfg_refuse"].strip().replace("\n", "; "))

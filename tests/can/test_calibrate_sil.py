@@ -114,7 +114,10 @@ def main():
              sil.frame(0.32, "COMMISSION_CMD", action=1, i_test_a=0, v_test_max_v=0, speed_max_m_rad_s=0),
              sil.frame(11.0, "PARAM_REQ", opcode=2, param_id=0, value=0),
              sil.frame(11.1, "PARAM_REQ", opcode=3, param_id=0, value=0)]
-    fr = sil.run("run1", cmds, 11.3, flash)
+    # the host's keep-alive while commissioning runs (without it the drive
+    # aborts the sequence timeout_s after START)
+    cmds += [sil.frame(0.06 + 0.1 * k, "HOST_HEARTBEAT", counter=k % 256) for k in range(110)]
+    fr = sil.run("run1", sorted(cmds), 11.3, flash)
     rep = replies(fr)
     truth = {r["param_id"]: r for r in rep if r["opcode"] == "READ"}
     truth = {n: sil.value(n, truth[sil.pid[n]]["value"]) for n in truth_names if sil.pid[n] in truth}

@@ -467,7 +467,7 @@ TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
   // 1000 Hz would add 800 x 135 / 125e3 = 86 % > the 50 % budget
   tm.cfg.bitrate_bps = 125000;
   for (const auto& k : cases) {
-    c.err_tokens = MC_TM_ERR_REPLY_BURST;  // the rate limit is tested apart
+    c.reply.tokens = MC_TM_REPLY_BURST;  // the rate limit is tested apart
     mc_drive_t d0 = d;
     mc_can_cmd_t c0 = c;
     mc_telemetry_t tm0 = tm;
@@ -480,7 +480,7 @@ TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
     c1.last_error_cmd = c0.last_error_cmd;
     c1.err_seq = c0.err_seq;
     c1.rx_rejected = c0.rx_rejected;
-    c1.err_tokens = c0.err_tokens;
+    c1.reply = c0.reply;
     EXPECT_EQ(0, std::memcmp(&c0, &c1, sizeof c)) << "handler changed";
     EXPECT_EQ(c0.rx_rejected + 1u, c.rx_rejected);
   }
@@ -739,20 +739,139 @@ TEST_F(CanCmd, AStaleHostHeartbeatIsNoKeepAlive) {
   EXPECT_EQ(static_cast<uint8_t>(MC_CAN_ERR_STALE), c.last_error);
 }
 
+// Issue 28, finding 1: any accepted frame was a keep-alive. Measured then
+// (current mode, host heartbeats stop at 0.3 s, timeout 0.5 s): the same
+// SET_CURRENT_REF every 100 ms, a PARAM_REQ READ every 100 ms (even of an
+// unknown id), a no-op SET_TM_RATE, or a HOST_HEARTBEAT alternating
+// 0,1,0,1 kept the drive enabled to the end of the run. Here, at the
+// fixture's 1 kHz step and 0.1 s timeout: heartbeats every 50 ms up to
+// tick 300, then one of those frames every 20 ms. Each time the stop
+// begins exactly timeout_ticks after the last fresh heartbeat (integers:
+// exact).
+TEST_F(CanCmd, OnlyAnAdvancingHostHeartbeatKeepsTheDriveAlive) {
+  struct Case {
+    const char* what;
+    mc_hal_can_frame_t f;
+  } cases[] = {
+      {"the same SET_CURRENT_REF", Frame(0x032, {0, 0, 0, 0xE8, 0x03, 0})},
+      {"PARAM_REQ READ of an unknown id", Frame(0x038, {0, 0x13, 0, 0, 0, 0, 0, 0})},
+      {"a no-op SET_TM_RATE", Frame(0x036, {4, 50, 0})},
+      {"SET_ENABLE 1 again", Frame(0x030, {1})},
+      {"a repeated HOST_HEARTBEAT", Frame(0x037, {5})},
+  };
+  for (const auto& k : cases) {
+    SetUp();
+    Init();
+    EnableCurrent();
+    int last_fresh = -1, stop_at = -1;
+    uint8_t n = 0;
+    for (int t = 0; t < 1000 && stop_at < 0; ++t) {
+      if (t <= 300 && t % 50 == 0) {
+        ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {n++}))) << k.what;
+        last_fresh = t;
+      } else if (t > 300 && t % 20 == 0) {
+        (void)Send(k.f);
+      }
+      mc_can_cmd_step(&c);
+      if (c.stopping || !c.enabled) stop_at = t;
+    }
+    EXPECT_EQ(last_fresh + static_cast<int>(c.timeout_ticks) - 1, stop_at) << k.what;
+    EXPECT_TRUE(c.stopping || c.stop_reason == MC_CAN_STOP_CMD_TIMEOUT) << k.what;
+  }
+}
+
+// The alternating 0,1,0,1 of the issue, from the start of a run: 0 sets the
+// reference, 1 advances, then every frame is a step of 255 or 0: STALE.
+TEST_F(CanCmd, AnAlternatingHeartbeatIsNoKeepAlive) {
+  Init();
+  EnableCurrent();
+  int stop_at = -1, last_ok = -1;
+  for (int t = 0; t < 1000 && stop_at < 0; ++t) {
+    if (t % 10 == 0) {
+      const mc_can_err_t e = Send(Frame(0x037, {static_cast<uint8_t>((t / 10) % 2)}));
+      if (e == MC_CAN_ERR_NONE) {
+        last_ok = t;
+      } else {
+        EXPECT_EQ(MC_CAN_ERR_STALE, e);
+      }
+    }
+    mc_can_cmd_step(&c);
+    if (c.stopping || !c.enabled) stop_at = t;
+  }
+  EXPECT_EQ(10, last_ok) << "0 then 1 accepted, nothing after";
+  EXPECT_EQ(10 + 99, stop_at);
+}
+
+// The counter advances modulo 256 by 1..MC_CAN_HB_STEP_MAX: across the
+// wrap, with up to 7 frames lost; a larger jump, a step back and a repeat
+// are STALE and change nothing (the reference stays).
+TEST_F(CanCmd, HeartbeatCounterAdvancesModuloWrapByABoundedStep) {
+  Init();
+  EnableCurrent();
+  const struct {
+    uint8_t n;
+    mc_can_err_t e;
+  } seq[] = {
+      {250, MC_CAN_ERR_NONE},   // the run's first: the reference
+      {251, MC_CAN_ERR_NONE},   // +1
+      {255, MC_CAN_ERR_NONE},   // +4
+      {3, MC_CAN_ERR_NONE},     // +4 across the wrap
+      {11, MC_CAN_ERR_NONE},    // +8: the largest step
+      {20, MC_CAN_ERR_STALE},   // +9
+      {10, MC_CAN_ERR_STALE},   // -1
+      {11, MC_CAN_ERR_STALE},   // a repeat
+      {139, MC_CAN_ERR_STALE},  // +128
+      {12, MC_CAN_ERR_NONE},    // +1 from 11: the reference did not move
+  };
+  for (const auto& k : seq) {
+    c.reply.tokens = MC_TM_REPLY_BURST;  // the replies are tested apart
+    c.ticks_since_alive = 7u;
+    EXPECT_EQ(k.e, Send(Frame(0x037, {k.n}))) << int(k.n);
+    EXPECT_EQ(k.e == MC_CAN_ERR_NONE ? 0u : 7u, c.ticks_since_alive) << int(k.n);
+    mc_hal_can_frame_t f;
+    while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) {
+    }
+  }
+  EXPECT_EQ(12u, c.hb_last);
+}
+
+// A new run (enable) takes its first HOST_HEARTBEAT as the reference: a
+// host that restarts its counter (a new mdtool process) is not STALE, and
+// the timeout counts from the enable itself.
+TEST_F(CanCmd, EnableStartsTheTimeoutAndANewReference) {
+  Init();
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {200})));
+  for (int t = 0; t < 500; ++t) mc_can_cmd_step(&c);  // disabled: no timeout
+  EXPECT_FALSE(c.stopping);
+  EnableCurrent();
+  EXPECT_EQ(0u, c.ticks_since_alive);
+  EXPECT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {0})));  // 200 -> 0 would be STALE in a run
+  for (int t = 0; t < 99; ++t) mc_can_cmd_step(&c);
+  EXPECT_TRUE(c.enabled && !c.stopping);
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x037, {1})));
+  for (int t = 0; t < 99; ++t) mc_can_cmd_step(&c);
+  EXPECT_TRUE(c.enabled && !c.stopping);
+  mc_can_cmd_step(&c);
+  EXPECT_TRUE(c.stopping || !c.enabled) << "100 ticks after the last heartbeat";
+}
+
 TEST_F(CanCmd, ErrorRepliesAreRateLimitedAndCounted) {
   Init();
   // 16 bad frames per 1 kHz tick for 1 s (the poll's bound): protocol 1
-  // answered every one (16000/s); now a burst of 4, then 50 per second.
+  // answered every one (16000/s); now the reply limiter's burst of 10,
+  // then 40 per second.
   uint32_t replies = 0;
   for (int k = 0; k < 1000; ++k) {
-    for (int i = 0; i < 16; ++i) (void)Send(Frame(0x02D, {}));
-    mc_hal_can_frame_t f;
-    while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) ++replies;
+    for (int i = 0; i < 16; ++i) {
+      (void)Send(Frame(0x02D, {}));
+      mc_hal_can_frame_t f;  // the bus takes each (the fake's queue holds 8)
+      while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) ++replies;
+    }
     mc_can_cmd_step(&c);
   }
   // token bucket: burst + rate x 1 s, the last refill may fall after the end
-  EXPECT_GE(replies, MC_TM_ERR_REPLY_BURST + MC_TM_ERR_REPLY_MAX_HZ - 1u);
-  EXPECT_LE(replies, MC_TM_ERR_REPLY_BURST + MC_TM_ERR_REPLY_MAX_HZ);
+  EXPECT_GE(replies, MC_TM_REPLY_BURST + MC_TM_REPLY_MAX_HZ - 1u);
+  EXPECT_LE(replies, MC_TM_REPLY_BURST + MC_TM_REPLY_MAX_HZ);
   EXPECT_EQ(16000u, c.rx_rejected);
   EXPECT_EQ(16000u - replies, c.reply_limited);
   EXPECT_EQ(static_cast<uint8_t>(MC_CAN_ERR_UNKNOWN_CMD), c.last_error);  // still reported
@@ -791,7 +910,7 @@ TEST_F(CanCmd, AForeignFloodCostsNoKeepAlive) {
     (void)mc_can_cmd_poll(&c, &bus.dev, 16u);
     mc_can_cmd_step(&c);
     ASSERT_TRUE(c.enabled && !c.stopping) << "tick " << k;
-    ASSERT_LT(c.ticks_since_cmd, 51u) << "keep-alive handled late, tick " << k;
+    ASSERT_LT(c.ticks_since_alive, 51u) << "keep-alive handled late, tick " << k;
   }
   EXPECT_EQ(0u, bus.q.size());
   EXPECT_LE(q_max, 23u);  // one tick's frames

@@ -285,14 +285,17 @@ def enable_after_commissioning(sil):
           "--set", "J_kgm2=0.002", "--set", "speed_ramp_rad_s2=200"]
     start = [sil.frame(0.05, "COMMISSION_CMD", action=1, i_test_a=0, v_test_max_v=0,
                        speed_max_m_rad_s=0)]
-    _r, _s, frames = sil.run("commission", start, duration=8.0, extra=vm)
+    # the host's keep-alive while it runs (commissioning needs it)
+    alive = [sil.frame(0.06 + 0.1 * k, "HOST_HEARTBEAT", counter=k % 256) for k in range(80)]
+    _r, _s, frames = sil.run("commission", sorted(start + alive), duration=8.0, extra=vm)
     done = next((t for t, n, v in frames if n == "COMMISSION_STATUS" and v["step"] == 7), None)
     check(done is not None, "commissioning reached DONE")
     if done is None:
         return
     for ms in (0, 8, 13, 21, 89):
         t = done + ms / 1000.0
-        cmds = start + [sil.frame(t, "SET_CONTROL_MODE", control_mode=2),
+        cmds = start + [a for a in alive if a < sil.frame(t, "HOST_HEARTBEAT", counter=0)]
+        cmds += [sil.frame(t, "SET_CONTROL_MODE", control_mode=2),
                         sil.frame(t + 0.0005, "SET_ENABLE", enable=1),
                         sil.frame(t + 0.001, "SET_SPEED_REF", omega_ref_rad_s=20.0)]
         cmds += [sil.frame(t + 0.1 * k, "HOST_HEARTBEAT", counter=k) for k in range(1, 11)]

@@ -257,6 +257,26 @@ TEST_F(AppBoot, BootDataAndAnUnboundBoardAreRefused)
     EXPECT_EQ(uint8_t{MC_CAN_ERR_UNSUPPORTED}, e->data[1]);
 }
 
+// Issue 28: every reply of the application passes the one limiter of the
+// CAN handler (mc_telemetry.h), BOOT_REPLY too: a BOOT_REQ INFO every 1 ms
+// slow step for 1 s gets the bucket's 10 and 39 of the 40 refills (the
+// 40th falls after the last request), the rest not served and counted.
+// Exact: frame counts.
+TEST_F(AppBoot, BootRepliesPassTheApplicationsReplyLimiter)
+{
+    const mc_hal_can_frame_t f = ReqFrame(kNode, MC_CAN_VAL_BOOT_OP_INFO, 0u, 0u);
+    uint32_t replies = 0u;
+    for (uint32_t k = 0u; k < app.tick_hz; ++k) {
+        if (Send(f, MC_CAN_CMD_BOOT_REPLY)) {
+            ++replies;
+        }
+    }
+    EXPECT_EQ(MC_TM_REPLY_BURST + MC_TM_REPLY_MAX_HZ - 1u, replies);
+    EXPECT_LE(replies, MC_TM_REPLY_RESERVE_HZ) << "the bus budget's reserve for one second";
+    EXPECT_EQ(app.tick_hz - replies, app.cmd.reply_limited);
+    EXPECT_EQ(uint8_t{MC_CAN_ERR_LIMITED}, app.cmd.last_error);
+}
+
 TEST(BootProto, ByteLayoutEqualsTheDbcCodec)
 {
     // mc_boot_reply_frame / mc_boot_req_decode against the table-driven

@@ -47,8 +47,10 @@
  * 10 ms through the CAN interrupt); then per part (ADC read, FOC or law,
  * application mark, duties write) on copies of the state; then the CAN
  * receive interrupt per frame and the slow loop with a full ring of
- * MC_APP_RX_PER_STEP command frames (parameter reads, each answered) over
- * every phase of the telemetry schedule.
+ * MC_APP_RX_PER_STEP command frames (parameter reads) over every phase of
+ * the telemetry schedule, the reply limiter's bucket full before each (its
+ * worst case: MC_TM_REPLY_BURST reads answered, one more served and its
+ * reply held, the rest not served).
  *
  * Output: one JSON object per line over semihosting (run_isr_bench.py).
  */
@@ -578,9 +580,13 @@ static int run(bool sensorless)
     out_stat(name, "can_rx", &rx);
 
     /* Slow loop with a full ring: MC_APP_RX_PER_STEP frames (a heartbeat
-     * and parameter reads, each answered) before every slow step. */
+     * and parameter reads) before every slow step, with the reply
+     * limiter's bucket full (as after a quiet quarter second): the most
+     * requests one slow step serves. */
     memset(&g_slow, 0, sizeof g_slow);
     for (uint32_t r = 0u; r < SLOW_RUNS; r++) {
+        A->cmd.reply.tokens = MC_TM_REPLY_BURST;
+        A->cmd.held_have = false;
         send_heartbeat();
         for (uint32_t k = 1u; k < MC_APP_RX_PER_STEP; k++) {
             hw_can_frame(MC_CAN_MSG_PARAM_REQ, req, 3u);

@@ -876,7 +876,11 @@ CANSEND = [("select current mode", "SET_CONTROL_MODE", ["control_mode=1"]),
            ("clear faults", "CLEAR_FAULTS", []),
            ("CURRENTS at 500 Hz", "SET_TM_RATE", ["tm_cmd=2", "rate_hz=500"]),
            ("heartbeat (keep-alive; the counter must advance)", "HOST_HEARTBEAT", ["counter=0"]),
-           ("next heartbeat", "HOST_HEARTBEAT", ["counter=1"])]
+           ("next heartbeat", "HOST_HEARTBEAT", ["counter=1"]),
+           ("node id 5: WRITE (answered NEEDS_CONFIRM)", "PARAM_REQ",
+            ["opcode=1", "param_id=110", "value=5"]),
+           ("... its CONFIRM, the very next request", "PARAM_REQ",
+            ["opcode=5", "param_id=110", "value=5"])]
 
 
 @figure("can-cansend", [mc_can("encode", m, *a) for _, m, a in CANSEND],
@@ -886,6 +890,41 @@ def _can_cansend(ctx, *outs):
     for (lab, m, a), o in zip(CANSEND, outs, strict=False):
         rows.append([lab, f"`mc_can.py encode {' '.join([m] + a)}`", f"`cansend vcan0 {o.strip()}`"])
     return table(["command", "encoded by", "frame (node 1)"], rows)
+
+
+@figure("can-reply-flood", [gtest("test_mc_app", "McApp.AFloodOfRequests*")])
+def _can_reply_flood(ctx, t):
+    k = "McApp.AFloodOfRequestsCostsTheBusAtMostTheRepliesShare"
+    bus = prop(t, k, "bitrate_bps")
+    rows = [["requests per second", g(prop(t, k, "flood_requests_per_s"), 5), "-"],
+            ["their replies' load, were each one answered",
+             f"{g(100 * prop(t, k, 'unanswered_load_would_be'), 3)} % of {g(bus / 1e3, 3)} kbit/s", "-"],
+            ["replies in the busiest second", g(prop(t, k, "replies_max_in_1s"), 3),
+             f"≤ {g(prop(t, k, 'replies_max_in_1s.bound'), 3)}"],
+            ["their load", f"{g(100 * prop(t, k, 'reply_load_max_1s'), 3)} %",
+             f"≤ {g(100 * prop(t, k, 'reply_load_max_1s.bound'), 3)} % (the budget's reserve)"],
+            ["replies per second, mean of 10 s", g(prop(t, k, "replies_per_s_mean"), 3),
+             f"≤ {g(prop(t, k, 'replies_per_s_mean.bound'), 3)}"],
+            ["requests not answered (counted, `reply_limited`)",
+             f"{g(100 * prop(t, k, 'requests_unanswered'), 4)} %", "-"]]
+    return table(["", "measured", "test bound"], rows)
+
+
+@figure("config-flash-wear", [gtest("test_mc_app", "McApp.FlashWear*")])
+def _config_flash_wear(ctx, t):
+    k = "McApp.FlashWearUnderTheSaveRateLimitOnTheF405Sectors"
+    rows = [["record", f"{g(prop(t, k, 'record_bytes'), 4)} bytes"],
+            ["records per 128 KiB sector (counted between two erases)",
+             g(prop(t, k, "records_per_sector"), 4)],
+            ["SAVE rate limit", f"{g(prop(t, k, 'save_burst'))}, then one per "
+                                f"{g(prop(t, k, 'save_period_s'))} s"],
+            ["saves written in the first hour of nonstop changed SAVEs",
+             g(prop(t, k, "saves_first_hour"), 3)],
+            ["worst case: erases per sector per year", g(prop(t, k, "erases_per_sector_per_year"), 3)],
+            ["the F405's 10 000 cycles last",
+             f"{g(prop(t, k, 'years_to_10k_cycles'), 3)} years (test bound ≥ "
+             f"{g(prop(t, k, 'years_to_10k_cycles.bound'))})"]]
+    return table(["", ""], rows)
 
 
 def _motor_library_pairs():

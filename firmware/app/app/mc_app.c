@@ -710,7 +710,7 @@ uint32_t mc_app_slow_work(mc_app_t *app)
     attach_law(app);
     mc_can_cmd_step(&app->cmd);
     if (app->comm != NULL) {
-        mc_comm_can_step(app->comm, can);
+        mc_comm_can_step(app->comm, can, &app->cmd.reply);
     }
     app->was_enabled = app->cmd.enabled;
     if (app->cfg.laws_from_params && app->laws.sls_ok) {
@@ -795,7 +795,8 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
 void mc_app_attach_commission(mc_app_t *app, mc_comm_can_t *m)
 {
     app->comm = m;
-    mc_can_cmd_attach_commission(&app->cmd, mc_comm_can_command, mc_comm_can_busy, m);
+    mc_can_cmd_attach_commission(&app->cmd, mc_comm_can_command, mc_comm_can_busy,
+                                 mc_comm_can_host_lost, m);
 }
 
 uint32_t mc_app_can_state(const mc_app_t *app)

@@ -64,7 +64,7 @@ uint32_t mc_can_cmd_init(mc_can_cmd_t *c, const mc_can_cmd_cfg_t *cfg, mc_drive_
     c->control_mode = (uint8_t)MC_CAN_CTRL_NONE;
     c->stop_reason = (uint8_t)MC_CAN_STOP_NONE;
     c->cfg_status = (uint8_t)MC_CAN_VAL_CFG_STATUS_EMPTY;
-    c->err_tokens = MC_TM_ERR_REPLY_BURST;
+    mc_tm_reply_lim_init(&c->reply, cfg->tick_hz);
     return MC_CAN_CMD_CFG_OK;
 }
 
@@ -140,19 +140,29 @@ void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv)
         srv->hook.check = params_check;
         srv->hook.apply = params_apply;
         srv->hook.ctx = c;
+        srv->tick_hz = c->cfg.tick_hz; /* mc_can_cmd_step ticks it */
         c->cfg_status = srv->store_status;
     }
 }
 
 void mc_can_cmd_attach_commission(mc_can_cmd_t *c, mc_can_cmd_comm_fn fn, mc_can_cmd_busy_fn busy,
-                                  void *ctx)
+                                  mc_can_cmd_lost_fn lost, void *ctx)
 {
     if (c == NULL) {
         return;
     }
     c->comm_fn = fn;
     c->comm_busy = (fn != NULL) ? busy : NULL;
+    c->comm_lost = (fn != NULL) ? lost : NULL;
     c->comm_ctx = (fn != NULL) ? ctx : NULL;
+}
+
+/* A run begins (enable, commissioning START): the keep-alive counts from
+ * now, and the run's first HOST_HEARTBEAT sets the counter's reference. */
+static void run_begin(mc_can_cmd_t *c)
+{
+    c->ticks_since_alive = 0u;
+    c->hb_have = false;
 }
 
 static bool comm_busy(const mc_can_cmd_t *c)
@@ -175,19 +185,45 @@ static mc_can_err_t do_boot(mc_can_cmd_t *c, const mc_hal_can_t *can,
     if (c->boot_fn == NULL) {
         return MC_CAN_ERR_UNSUPPORTED;
     }
-    c->boot_fn(c->boot_ctx, p_frame, c->enabled || c->stopping || comm_busy(c), can);
+    if ((can != NULL) && !mc_tm_reply_lim_take(&c->reply)) {
+        return MC_CAN_ERR_LIMITED; /* its BOOT_REPLY could not go out: not served */
+    }
+    /* a reset refills the SAVE bucket: not before it is full again */
+    c->boot_fn(c->boot_ctx, p_frame,
+               c->enabled || c->stopping || comm_busy(c) ||
+                   !mc_param_srv_save_budget_full(c->params),
+               can);
     return MC_CAN_ERR_NONE; /* answered, with its status, by BOOT_REPLY */
 }
 
 static mc_can_err_t do_commission(mc_can_cmd_t *c, const float *v)
 {
+    const bool was_busy = comm_busy(c);
+    mc_can_err_t e;
     if (c->comm_fn == NULL) {
         return MC_CAN_ERR_UNSUPPORTED;
     }
     if ((v[MC_CAN_COMMISSION_CMD_ACTION] > 0.5f) && (c->enabled || c->stopping)) {
         return MC_CAN_ERR_MODE; /* START / REPORT only while disabled */
     }
-    return c->comm_fn(c->comm_ctx, v);
+    e = c->comm_fn(c->comm_ctx, v);
+    if ((e == MC_CAN_ERR_NONE) && !was_busy && comm_busy(c)) {
+        run_begin(c); /* START: it needs the keep-alive from now */
+        c->stop_reason = (uint8_t)MC_CAN_STOP_NONE;
+    }
+    return e;
+}
+
+/* Send a reply under the limiter; false: no token (nothing sent). */
+static bool reply_send(mc_can_cmd_t *c, const mc_hal_can_t *can, const mc_hal_can_frame_t *f)
+{
+    if (!mc_tm_reply_lim_take(&c->reply)) {
+        return false;
+    }
+    if (mc_hal_can_send(can, f) != 0) {
+        c->reply_dropped++;
+    }
+    return true;
 }
 
 static mc_can_err_t do_param(mc_can_cmd_t *c, const mc_hal_can_t *can, const float *v,
@@ -201,6 +237,9 @@ static mc_can_err_t do_param(mc_can_cmd_t *c, const mc_hal_can_t *can, const flo
     mc_hal_can_frame_t f;
     if (c->params == NULL) {
         return MC_CAN_ERR_UNSUPPORTED;
+    }
+    if ((can != NULL) && !mc_tm_reply_lim_ready(&c->reply) && c->held_have) {
+        return MC_CAN_ERR_LIMITED; /* no token and the held slot taken: not served */
     }
     /* the value is the raw 32 bits (a float32 signal would lose them) */
     for (uint32_t i = 0u; i < 4u; ++i) {
@@ -223,8 +262,10 @@ static mc_can_err_t do_param(mc_can_cmd_t *c, const mc_hal_can_t *can, const flo
     for (uint32_t i = 0u; i < 4u; ++i) {
         f.data[4u + i] = (uint8_t)(value >> (8u * i));
     }
-    if (mc_hal_can_send(can, &f) != 0) {
-        c->reply_dropped++;
+    if (!reply_send(c, can, &f)) {
+        c->held = f; /* goes out at the next step with a token */
+        c->held_can = can;
+        c->held_have = true;
     }
     return MC_CAN_ERR_NONE; /* answered, with its status, by PARAM_REPLY */
 }
@@ -284,7 +325,7 @@ static mc_can_err_t do_enable(mc_can_cmd_t *c, bool on)
         return MC_CAN_ERR_MODE;
     }
     if (c->enabled) {
-        return MC_CAN_ERR_NONE;
+        return MC_CAN_ERR_NONE; /* no new run: the keep-alive counts on */
     }
     switch (c->control_mode) {
     case MC_CAN_CTRL_CURRENT:
@@ -307,6 +348,21 @@ static mc_can_err_t do_enable(mc_can_cmd_t *c, bool on)
     }
     c->enabled = true;
     c->stop_reason = (uint8_t)MC_CAN_STOP_NONE;
+    run_begin(c);
+    return MC_CAN_ERR_NONE;
+}
+
+/* The keep-alive (mc_can_cmd.h): the counter advanced by 1..MC_CAN_HB_STEP_MAX
+ * modulo 256 over the last accepted one, or the run's first. */
+static mc_can_err_t do_host_heartbeat(mc_can_cmd_t *c, uint8_t n)
+{
+    const uint32_t step = (uint32_t)(uint8_t)(n - c->hb_last);
+    if (c->hb_have && ((step == 0u) || (step > MC_CAN_HB_STEP_MAX))) {
+        return MC_CAN_ERR_STALE; /* a repeat, a step back or a jump: no live host */
+    }
+    c->hb_have = true;
+    c->hb_last = n;
+    c->ticks_since_alive = 0u;
     return MC_CAN_ERR_NONE;
 }
 
@@ -402,15 +458,8 @@ static mc_can_err_t dispatch(mc_can_cmd_t *c, uint32_t msg, const float *v)
         return (mc_drive_clear_faults(c->drive) == 0) ? MC_CAN_ERR_NONE : MC_CAN_ERR_REFUSED;
     case MC_CAN_MSG_SET_TM_RATE:
         return do_tm_rate(c, v[MC_CAN_SET_TM_RATE_TM_CMD], v[MC_CAN_SET_TM_RATE_RATE_HZ]);
-    case MC_CAN_MSG_HOST_HEARTBEAT: {
-        const uint8_t n = (uint8_t)v[MC_CAN_HOST_HEARTBEAT_COUNTER];
-        if (c->hb_have && (n == c->hb_last)) {
-            return MC_CAN_ERR_STALE; /* a repeat is no sign of a live host */
-        }
-        c->hb_have = true;
-        c->hb_last = n;
-        return MC_CAN_ERR_NONE;
-    }
+    case MC_CAN_MSG_HOST_HEARTBEAT:
+        return do_host_heartbeat(c, (uint8_t)v[MC_CAN_HOST_HEARTBEAT_COUNTER]);
     case MC_CAN_MSG_COMMISSION_CMD:
         return do_commission(c, v);
     case MC_CAN_MSG_BOOT_DATA:
@@ -431,21 +480,21 @@ static void reply_error(mc_can_cmd_t *c, const mc_hal_can_t *can, uint32_t cmd, 
     if (can == NULL) {
         return;
     }
-    if (c->err_tokens == 0u) {
+    if (!mc_tm_reply_lim_ready(&c->reply)) {
         c->reply_limited++; /* rate limit: counted, shown in the HEARTBEAT */
         return;
     }
-    c->err_tokens--;
     v[MC_CAN_CMD_ERROR_REJECTED_CMD] = (float)cmd;
     v[MC_CAN_CMD_ERROR_ERROR] = (float)(uint32_t)e;
     v[MC_CAN_CMD_ERROR_RX_LEN] = (float)len;
     v[MC_CAN_CMD_ERROR_SEQ] = (float)c->err_seq;
     c->err_seq = (uint8_t)(c->err_seq + 1u);
-    if ((mc_can_proto_pack(MC_CAN_MSG_CMD_ERROR, c->cfg.node_id, v, MC_CAN_CMD_ERROR_NSIG, &f) !=
-         MC_CAN_ERR_NONE) ||
-        (mc_hal_can_send(can, &f) != 0)) {
+    if (mc_can_proto_pack(MC_CAN_MSG_CMD_ERROR, c->cfg.node_id, v, MC_CAN_CMD_ERROR_NSIG, &f) !=
+        MC_CAN_ERR_NONE) {
         c->reply_dropped++;
+        return;
     }
+    (void)reply_send(c, can, &f); /* a token is there (checked above) */
 }
 
 mc_can_err_t mc_can_cmd_handle(mc_can_cmd_t *c, const mc_hal_can_frame_t *p_frame,
@@ -480,8 +529,7 @@ mc_can_err_t mc_can_cmd_handle(mc_can_cmd_t *c, const mc_hal_can_frame_t *p_fram
         reply_error(c, can, cmd, p_frame->len, e);
         return e;
     }
-    c->rx_accepted++;
-    c->ticks_since_cmd = 0u;
+    c->rx_accepted++; /* no keep-alive by itself (mc_can_cmd.h) */
     return MC_CAN_ERR_NONE;
 }
 
@@ -591,39 +639,38 @@ void mc_can_cmd_step(mc_can_cmd_t *c)
     if (c == NULL) {
         return;
     }
-    if (c->ticks_since_cmd < 0xFFFFFFFFu) {
-        c->ticks_since_cmd++;
+    if (c->ticks_since_alive < 0xFFFFFFFFu) {
+        c->ticks_since_alive++;
     }
-    /* CMD_ERROR token bucket: MC_TM_ERR_REPLY_MAX_HZ tokens per second */
-    c->err_acc += MC_TM_ERR_REPLY_MAX_HZ;
-    while (c->err_acc >= c->cfg.tick_hz) {
-        c->err_acc -= c->cfg.tick_hz;
-        if (c->err_tokens < MC_TM_ERR_REPLY_BURST) {
-            c->err_tokens++;
-        }
+    mc_tm_reply_lim_step(&c->reply);
+    if (c->held_have && reply_send(c, c->held_can, &c->held)) {
+        c->held_have = false; /* the held PARAM_REPLY first */
+    }
+    if (c->params != NULL) {
+        mc_param_srv_tick(c->params, c->cfg.tick_hz);
     }
     if (!c->enabled) {
+        if (comm_busy(c) && (c->ticks_since_alive >= c->timeout_ticks) && (c->comm_lost != NULL)) {
+            c->comm_lost(c->comm_ctx); /* commissioning without a host: bridge off */
+            c->stop_reason = (uint8_t)MC_CAN_STOP_CMD_TIMEOUT;
+        }
         return;
     }
     if (c->drive->mode == MC_DRIVE_MODE_FAULT) {
         end_run(c, (uint8_t)MC_CAN_STOP_FAULT);
         return;
     }
-    if (!c->stopping && (c->ticks_since_cmd >= c->timeout_ticks)) {
+    if (!c->stopping && (c->ticks_since_alive >= c->timeout_ticks)) {
         c->stopping = true;
-        /* SPEED and POSITION with a controlled stop configured: the drive
-         * decelerates to standstill itself before it opens the bridge
-         * (mc_drive.h). CURRENT (torque) mode: the torque ramps to zero at
-         * stop_ramp_a_per_s, whatever the load then does. */
-        c->stop_by_drive =
-            (c->control_mode != MC_CAN_CTRL_CURRENT) && (c->drive->cfg.stop_decel_rad_s2 > 0.0f);
-        if (c->stop_by_drive) {
+        /* With a controlled stop configured the drive decelerates to
+         * standstill itself before it opens the bridge (mc_drive.h). */
+        if (c->drive->cfg.stop_decel_rad_s2 > 0.0f) {
             (void)mc_drive_stop(c->drive);
         } else {
             stop_begin(c);
         }
     }
-    if (c->stopping && c->stop_by_drive) {
+    if (c->stopping && (c->drive->cfg.stop_decel_rad_s2 > 0.0f)) {
         if (c->drive->mode != MC_DRIVE_MODE_STOPPING) {
             end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
         }

@@ -29,13 +29,16 @@
  *   SET_TM_RATE       one telemetry message's rate (bus budget checked;
  *                     HEARTBEAT not below MC_TM_HEARTBEAT_MIN_HZ:
  *                     HEARTBEAT_MIN)
- *   HOST_HEARTBEAT    keep-alive; its counter must differ from the previous
- *                     HOST_HEARTBEAT's (a repeat is refused STALE and does
- *                     not count as a keep-alive)
+ *   HOST_HEARTBEAT    keep-alive (the only one, below): its counter must
+ *                     advance by 1..MC_CAN_HB_STEP_MAX modulo 256 over the
+ *                     last accepted one; a repeat, a step back or a larger
+ *                     jump is refused STALE and changes nothing (the first
+ *                     one of a run sets the reference)
  *   PARAM_REQ         parameter read / write / apply / save / load defaults
- *                     (mc_param_srv.h), answered by one PARAM_REPLY with a
- *                     status; needs mc_can_cmd_attach_params (else
- *                     UNSUPPORTED)
+ *                     / confirm (mc_param_srv.h), answered by one
+ *                     PARAM_REPLY with a status; needs
+ *                     mc_can_cmd_attach_params (else UNSUPPORTED); served
+ *                     only when its reply can go out (below)
  *   BOOT_REQ          firmware update requests the application serves
  *                     (INFO, VERSION, the confirmed ENTER; can/mc_boot_enter.h),
  *                     each answered by its BOOT_REPLY; needs
@@ -46,18 +49,31 @@
  *                     mc_can_cmd_attach_commission (else UNSUPPORTED);
  *                     START refused MODE while enabled or stopping; while
  *                     it runs SET_ENABLE 1, SET_CONTROL_MODE and
- *                     CLEAR_FAULTS are refused MODE (SET_ENABLE 0 stops it)
+ *                     CLEAR_FAULTS are refused MODE (SET_ENABLE 0 stops
+ *                     it), and it needs the keep-alive as an enabled drive
  *
  * Validation, in this order, before anything changes: format (classic data
  * frame), known command, exact length, every signal in its DBC range, then
  * the state (control mode, enabled, stopping) and the drive's own checks.
  * A rejected command changes nothing; the drive answers with CMD_ERROR
  * (rejected command id, error code, received length) and records it for
- * the heartbeat. The answers are rate-limited (MC_TM_ERR_REPLY_MAX_HZ,
- * bursts of MC_TM_ERR_REPLY_BURST; their load is in the telemetry's bus
- * budget): beyond that a rejection is counted (reply_limited) and shown in
- * the HEARTBEAT, not answered. Frames for another node, extended frames
- * and frames with telemetry ids of other nodes are ignored silently.
+ * the heartbeat. Frames for another node, extended frames and frames with
+ * telemetry ids of other nodes are ignored silently.
+ *
+ * Replies: every reply (CMD_ERROR, PARAM_REPLY, the application's
+ * BOOT_REPLY, and the commissioning frames through mc_comm_can_step)
+ * takes a token of one limiter, `reply`
+ * (mc_telemetry.h: MC_TM_REPLY_BURST, MC_TM_REPLY_MAX_HZ; reserved in the
+ * telemetry's bus budget). A CMD_ERROR without a token is not sent: the
+ * rejection is counted (reply_limited) and still shown in the HEARTBEAT.
+ * A PARAM_REQ is served only if its PARAM_REPLY can go out now or wait in
+ * the one held slot (sent at the next step with a token, before anything
+ * else); while a reply is held a further PARAM_REQ is not served at all
+ * (LIMITED, counted, in the HEARTBEAT): a host that waits for each reply
+ * is never refused, a flood costs the bus the limiter's share and the
+ * drive nothing. A BOOT_REQ takes its token before it is served (no held
+ * slot: without one, LIMITED; the boot handler's own budget,
+ * mc_boot_proto.h, is the looser one).
  *
  * Receive filter: mc_can_cmd_poll() drops a frame of another node (or an
  * extended frame) after one comparison of its identifier, and such frames
@@ -68,16 +84,20 @@
  * foreign frames per second, three times a 1 Mbit/s bus full of the
  * shortest frames (about 21000 per second).
  *
- * Command timeout: while enabled, if no command is accepted for timeout_s
- * (any accepted command counts, HOST_HEARTBEAT is the cheapest; a stale
- * HOST_HEARTBEAT is not accepted), the drive
- * stops safely and reports stop_reason CMD_TIMEOUT.
- *   CURRENT   (torque mode, any configuration) both current references
- *             ramp to zero at stop_ramp_a_per_s, then IDLE.
- * SPEED and POSITION with the drive's controlled stop configured
- * (mc_drive_cfg_t.stop_decel_rad_s2 > 0; always from the parameter table):
- * mc_drive_stop(), the drive decelerates to standstill at that rate and
- * opens the bridge (MODE_STOPPING); the run ends when it has. Without it:
+ * Command timeout: while enabled (and while commissioning runs), only a
+ * HOST_HEARTBEAT whose counter advanced (above) keeps the drive alive; no
+ * other command does (protocol 3 counted any accepted command, refused
+ * PARAM_REQs included). A run (enable, commissioning START) starts the
+ * count and takes its first HOST_HEARTBEAT's counter as the reference.
+ * If no keep-alive arrives for timeout_s the drive stops safely and
+ * reports stop_reason CMD_TIMEOUT (commissioning: aborted with
+ * MC_COMM_ERR_HOST_LOST, bridge off at once). With the drive's
+ * controlled stop configured (mc_drive_cfg_t.stop_decel_rad_s2 > 0) in any
+ * control mode: mc_drive_stop(), the drive decelerates to standstill at
+ * that rate and opens the bridge (MODE_STOPPING); the run ends when it has.
+ * Without it:
+ *   CURRENT   both current references ramp to zero at stop_ramp_a_per_s,
+ *             then IDLE;
  *   SPEED     the speed reference ramps to zero at stop_decel_rad_s2
  *             through the application's hook; the bridge opens when the
  *             rotor is at rest (|omega_m| <= the drive's stop_rest_rad_s,
@@ -126,6 +146,12 @@ extern "C" {
 /** Foreign frames (other nodes) mc_can_cmd_poll drops per call at most. */
 #define MC_CAN_RX_FOREIGN_MAX 64u
 
+/** Largest advance of the HOST_HEARTBEAT counter (modulo 256) accepted as
+ *  a keep-alive: a host may lose up to 7 frames in a row and go on. A
+ *  random counter passes with probability 8/256; a repeated set of values
+ *  needs at least 256 / 8 = 32 different frames in a cycle. */
+#define MC_CAN_HB_STEP_MAX 8u
+
 /* Configuration errors (bits) of mc_can_cmd_init. */
 #define MC_CAN_CMD_CFG_OK          0u
 #define MC_CAN_CMD_CFG_ERR_NULL    (1u << 0) /**< NULL command state, cfg or drive */
@@ -157,12 +183,15 @@ typedef struct {
 } mc_can_cmd_cfg_t;
 
 /** Commissioning front end (commission/mc_comm_can.h): the command with
- *  its signal values in DBC order, and whether a sequence runs. */
+ *  its signal values in DBC order, whether a sequence runs, and the abort
+ *  when the host's keep-alive stops. */
 typedef mc_can_err_t (*mc_can_cmd_comm_fn)(void *ctx, const float *v);
 typedef bool (*mc_can_cmd_busy_fn)(const void *ctx);
+typedef void (*mc_can_cmd_lost_fn)(void *ctx);
 
 /** Firmware update requests (BOOT_REQ): the frame, whether the drive must
- *  not stop now (enabled, stopping, commissioning); the handler answers
+ *  not reset now (enabled, stopping, commissioning, or the SAVE bucket not
+ *  full: mc_param_srv_save_budget_full); the handler answers
  *  on can itself (BOOT_REPLY). */
 typedef void (*mc_can_cmd_boot_fn)(void *ctx, const mc_hal_can_frame_t *p_frame, bool busy,
                                    const mc_hal_can_t *can);
@@ -174,28 +203,31 @@ typedef struct mc_can_cmd {
     uint32_t timeout_ticks; /**< derived at init */
     uint8_t control_mode;   /**< MC_CAN_CTRL_* */
     bool enabled;
-    bool stopping;            /**< safe stop in progress */
-    bool stop_by_law;         /**< POSITION: the control law's stop op decelerates */
-    bool stop_by_drive;       /**< the drive's controlled stop (SPEED, POSITION) */
-    uint32_t stop_ticks_left; /**< steps the stop may still wait for rest */
-    uint8_t stop_reason;      /**< MC_CAN_STOP_* */
-    uint32_t ticks_since_cmd; /**< steps since the last accepted command */
-    float omega_ref_rad_s;    /**< last accepted speed reference */
-    float theta_ref_rad;      /**< last accepted angle reference (multi-turn) */
-    float theta_enable_rad;   /**< multi-turn angle at enable (telemetry's frame) */
-    uint8_t last_error;       /**< mc_can_err_t of the last rejection */
+    bool stopping;              /**< safe stop in progress */
+    bool stop_by_law;           /**< POSITION: the control law's stop op decelerates */
+    uint32_t stop_ticks_left;   /**< steps the stop may still wait for rest */
+    uint8_t stop_reason;        /**< MC_CAN_STOP_* */
+    uint32_t ticks_since_alive; /**< steps since the last keep-alive (a fresh
+                                     HOST_HEARTBEAT, or the start of a run) */
+    float omega_ref_rad_s;      /**< last accepted speed reference */
+    float theta_ref_rad;        /**< last accepted angle reference (multi-turn) */
+    float theta_enable_rad;     /**< multi-turn angle at enable (telemetry's frame) */
+    uint8_t last_error;         /**< mc_can_err_t of the last rejection */
     uint8_t last_error_cmd;
     uint8_t err_seq; /**< sequence counter of CMD_ERROR */
     uint32_t rx_accepted;
     uint32_t rx_rejected;
     uint32_t reply_dropped;       /**< CMD_ERROR / PARAM_REPLY frames the HAL refused */
-    uint32_t reply_limited;       /**< CMD_ERROR replies not sent: rate limit */
+    uint32_t reply_limited;       /**< replies not sent (CMD_ERROR) or requests not
+                                       served (PARAM_REQ): the reply limiter */
     uint32_t rx_foreign;          /**< frames of other nodes dropped by the poll */
     uint32_t poll_max;            /**< most frames (own + foreign) one poll read: the
                                  bound of the slow loop's CAN receive work */
-    uint32_t err_tokens;          /**< CMD_ERROR replies that may be sent now */
-    uint32_t err_acc;             /**< token refill accumulator, < tick_hz */
-    bool hb_have;                 /**< a HOST_HEARTBEAT was accepted */
+    mc_tm_reply_lim_t reply;      /**< the one limiter of every reply */
+    mc_hal_can_frame_t held;      /**< a PARAM_REPLY waiting for a token */
+    const mc_hal_can_t *held_can; /**< ... the bus it goes to */
+    bool held_have;               /**< ... there is one */
+    bool hb_have;                 /**< a HOST_HEARTBEAT was accepted in this run */
     uint8_t hb_last;              /**< its counter */
     mc_param_srv_t *params;       /**< parameter service, or NULL */
     uint8_t can_state;            /**< HEARTBEAT.can_state (mc_hal_can_bus_state_t): set by
@@ -206,6 +238,7 @@ typedef struct mc_can_cmd {
                                        service (the configuration is not from flash) */
     mc_can_cmd_comm_fn comm_fn;   /**< COMMISSION_CMD, or NULL */
     mc_can_cmd_busy_fn comm_busy; /**< commissioning runs, or NULL */
+    mc_can_cmd_lost_fn comm_lost; /**< abort it: the keep-alive stopped, or NULL */
     void *comm_ctx;
     mc_can_cmd_boot_fn boot_fn; /**< BOOT_REQ, or NULL */
     void *boot_ctx;
@@ -226,9 +259,10 @@ uint32_t mc_can_cmd_init(mc_can_cmd_t *c, const mc_can_cmd_cfg_t *cfg, mc_drive_
 void mc_can_cmd_attach_params(mc_can_cmd_t *c, mc_param_srv_t *srv);
 
 /** Serve COMMISSION_CMD with fn (NULL: detach; the command is then
- *  UNSUPPORTED); busy tells when other commands must wait. */
+ *  UNSUPPORTED); busy tells when other commands must wait and when the
+ *  keep-alive is needed; lost aborts the sequence when it stops. */
 void mc_can_cmd_attach_commission(mc_can_cmd_t *c, mc_can_cmd_comm_fn fn, mc_can_cmd_busy_fn busy,
-                                  void *ctx);
+                                  mc_can_cmd_lost_fn lost, void *ctx);
 
 /** Serve BOOT_REQ with fn (NULL: detach; the request is then UNSUPPORTED). */
 void mc_can_cmd_attach_boot(mc_can_cmd_t *c, mc_can_cmd_boot_fn fn, void *ctx);
@@ -247,8 +281,10 @@ mc_can_err_t mc_can_cmd_handle(mc_can_cmd_t *c, const mc_hal_can_frame_t *p_fram
  *  Returns how many frames were handled (foreign ones not counted). */
 uint32_t mc_can_cmd_poll(mc_can_cmd_t *c, const mc_hal_can_t *can, uint32_t max_frames);
 
-/** Supervision at tick_hz (slow loop): command timeout, safe-stop ramp,
- *  end of the run on a drive fault. */
+/** Supervision at tick_hz (slow loop): the reply limiter's refill and the
+ *  held PARAM_REPLY, the parameter service's SAVE limiter, command timeout
+ *  (also of commissioning), safe-stop ramp, end of the run on a drive
+ *  fault. */
 void mc_can_cmd_step(mc_can_cmd_t *c);
 
 #ifdef __cplusplus

@@ -16,7 +16,7 @@ static const mc_can_signal_t sig_heartbeat[11] = {
     {16u, 4u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* stop_reason [-] */
     {20u, 4u, false, 1.0f, 0.0f, 0.0f, 6.0f}, /* cfg_status [-] */
     {24u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* faults [-] */
-    {40u, 8u, false, 1.0f, 0.0f, 0.0f, 10.0f}, /* last_error [-] */
+    {40u, 8u, false, 1.0f, 0.0f, 0.0f, 11.0f}, /* last_error [-] */
     {48u, 8u, false, 1.0f, 0.0f, 0.0f, 31.0f}, /* last_error_cmd [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
@@ -117,14 +117,14 @@ static const mc_can_signal_t sig_host_heartbeat[1] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* counter [-] */
 };
 static const mc_can_signal_t sig_param_req[3] = {
-    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 4.0f}, /* opcode [-] */
+    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 5.0f}, /* opcode [-] */
     {8u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* param_id [-] */
     {32u, 32u, false, 1.0f, 0.0f, 0.0f, 4294967295.0f}, /* value [-] */
 };
 static const mc_can_signal_t sig_param_reply[4] = {
-    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 4.0f}, /* opcode [-] */
+    {0u, 8u, false, 1.0f, 0.0f, 0.0f, 5.0f}, /* opcode [-] */
     {8u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* param_id [-] */
-    {24u, 8u, false, 1.0f, 0.0f, 0.0f, 8.0f}, /* status [-] */
+    {24u, 8u, false, 1.0f, 0.0f, 0.0f, 11.0f}, /* status [-] */
     {32u, 32u, false, 1.0f, 0.0f, 0.0f, 4294967295.0f}, /* value [-] */
 };
 static const mc_can_signal_t sig_boot_req[3] = {
@@ -163,7 +163,7 @@ static const mc_can_signal_t sig_commission_result[3] = {
 };
 static const mc_can_signal_t sig_cmd_error[4] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 31.0f}, /* rejected_cmd [-] */
-    {8u, 8u, false, 1.0f, 0.0f, 1.0f, 10.0f}, /* error [-] */
+    {8u, 8u, false, 1.0f, 0.0f, 1.0f, 11.0f}, /* error [-] */
     {16u, 8u, false, 1.0f, 0.0f, 0.0f, 64.0f}, /* rx_len [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };

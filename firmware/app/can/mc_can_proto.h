@@ -49,8 +49,13 @@ typedef enum {
     MC_CAN_ERR_BUDGET = 6,         /**< telemetry rates above the bus budget */
     MC_CAN_ERR_UNSUPPORTED = 7,    /**< this build has no handler for it */
     MC_CAN_ERR_FORMAT = 8,         /**< remote, CAN FD frame on a classic id */
-    MC_CAN_ERR_STALE = 9,          /**< HOST_HEARTBEAT counter did not advance */
+    MC_CAN_ERR_STALE = 9,          /**< HOST_HEARTBEAT counter did not advance by
+                                        1..MC_CAN_HB_STEP_MAX (a repeat, a step back,
+                                        a jump) */
     MC_CAN_ERR_HEARTBEAT_MIN = 10, /**< HEARTBEAT rate below MC_TM_HEARTBEAT_MIN_HZ */
+    MC_CAN_ERR_LIMITED = 11,       /**< not served: its reply could not be sent under
+                                        the reply rate limit (PARAM_REQ while another
+                                        waits; only in HEARTBEAT.last_error) */
     MC_CAN_ERR_ARG = 0xFE,         /**< API misuse (NULL, bad index, short array) */
     MC_CAN_ERR_IGNORED = 0xFF      /**< not addressed to this node */
 } mc_can_err_t;

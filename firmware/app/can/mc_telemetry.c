@@ -52,10 +52,49 @@ float mc_telemetry_bus_load(const mc_telemetry_cfg_t *cfg)
         const uint32_t dlc = mc_can_messages[k_slot_msg[i]].dlc;
         bits_per_s += (float)cfg->rate_hz[i] * (float)mc_can_frame_bits_worst(dlc);
     }
-    /* the rate-limited CMD_ERROR replies at their limit */
-    bits_per_s += (float)MC_TM_ERR_REPLY_MAX_HZ *
-                  (float)mc_can_frame_bits_worst(mc_can_messages[MC_CAN_MSG_CMD_ERROR].dlc);
+    /* the rate-limited replies: the most one second can carry */
+    bits_per_s += (float)MC_TM_REPLY_RESERVE_HZ * (float)mc_can_frame_bits_worst(MC_TM_REPLY_DLC);
     return bits_per_s / (float)cfg->bitrate_bps;
+}
+
+void mc_tm_reply_lim_init(mc_tm_reply_lim_t *l, uint32_t tick_hz)
+{
+    if (l == NULL) {
+        return;
+    }
+    l->tick_hz = (tick_hz == 0u) ? 1u : tick_hz;
+    l->tokens = MC_TM_REPLY_BURST;
+    l->acc = 0u;
+    l->taken = 0u;
+}
+
+void mc_tm_reply_lim_step(mc_tm_reply_lim_t *l)
+{
+    if ((l == NULL) || (l->tick_hz == 0u)) {
+        return;
+    }
+    l->acc += MC_TM_REPLY_MAX_HZ;
+    while (l->acc >= l->tick_hz) {
+        l->acc -= l->tick_hz;
+        if (l->tokens < MC_TM_REPLY_BURST) {
+            l->tokens++;
+        }
+    }
+}
+
+bool mc_tm_reply_lim_ready(const mc_tm_reply_lim_t *l)
+{
+    return (l != NULL) && (l->tokens > 0u);
+}
+
+bool mc_tm_reply_lim_take(mc_tm_reply_lim_t *l)
+{
+    if (!mc_tm_reply_lim_ready(l)) {
+        return false;
+    }
+    l->tokens--;
+    l->taken++;
+    return true;
 }
 
 static uint32_t check_rates(const mc_telemetry_cfg_t *cfg)

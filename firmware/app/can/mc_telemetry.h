@@ -38,11 +38,23 @@
  * phases so their frames do not all fall on the same tick.
  *
  * Bus budget: the load of a configuration is
- *     sum over messages of rate_hz * (55 + 10 dlc) / bitrate_bps
+ *     (sum over messages of rate_hz * (55 + 10 dlc)
+ *      + MC_TM_REPLY_RESERVE_HZ * (55 + 10 * 8)) / bitrate_bps
  * (worst-case stuffed length of an 11-bit classic frame, intermission
- * included). init and mc_telemetry_set_rate() refuse a configuration whose
- * load exceeds bus_budget_frac, itself at most MC_TM_BUDGET_FRAC_MAX so
- * that commands, replies and other nodes keep at least 30 % of the bus.
+ * included; the second term the replies, below). init and
+ * mc_telemetry_set_rate() refuse a configuration whose load exceeds
+ * bus_budget_frac, itself at most MC_TM_BUDGET_FRAC_MAX so that commands
+ * and other nodes keep at least 30 % of the bus.
+ *
+ * Replies: every frame the drive sends in answer to a host (CMD_ERROR,
+ * PARAM_REPLY, COMMISSION_STATUS, COMMISSION_RESULT, the application's
+ * BOOT_REPLY) takes a token of one
+ * limiter (mc_tm_reply_lim_t, the command handler's): a bucket of
+ * MC_TM_REPLY_BURST tokens refilled at MC_TM_REPLY_MAX_HZ. In any window
+ * of T seconds at most MC_TM_REPLY_BURST + MC_TM_REPLY_MAX_HZ * T + 1
+ * replies go out: 50 in any second, 40 per second sustained, whatever
+ * arrives; the budget reserves MC_TM_REPLY_RESERVE_HZ = 50 frames per
+ * second of the longest reply (8 bytes) for them.
  */
 #ifndef MC_TELEMETRY_H
 #define MC_TELEMETRY_H
@@ -75,11 +87,15 @@ typedef enum {
 
 #define MC_TM_HEARTBEAT_MIN_HZ 1u /**< the drive's HEARTBEAT cannot go below this */
 
-/** CMD_ERROR replies are limited to this many per second (token bucket of
- *  MC_TM_ERR_REPLY_BURST); their worst-case load at this rate is part of
- *  the bus budget (mc_telemetry_bus_load). */
-#define MC_TM_ERR_REPLY_MAX_HZ 50u
-#define MC_TM_ERR_REPLY_BURST  4u
+/** Replies (CMD_ERROR, PARAM_REPLY, COMMISSION_*) sustained per second
+ *  and the bucket's depth (see the file comment). */
+#define MC_TM_REPLY_MAX_HZ 40u
+#define MC_TM_REPLY_BURST  10u
+/** Reply frames per second the bus budget reserves: the most a window of
+ *  one second can carry. */
+#define MC_TM_REPLY_RESERVE_HZ (MC_TM_REPLY_MAX_HZ + MC_TM_REPLY_BURST)
+/** Data bytes of the longest reply (all four are 8 bytes). */
+#define MC_TM_REPLY_DLC 8u
 
 #define MC_TM_BUDGET_FRAC_MAX 0.7f /**< largest accepted bus_budget_frac */
 #define MC_TM_BITRATE_MIN_BPS 10000u
@@ -96,6 +112,24 @@ typedef enum {
 #define MC_TM_CFG_ERR_BUDGET    (1u << 5) /**< budget not in (0, MC_TM_BUDGET_FRAC_MAX] */
 #define MC_TM_CFG_ERR_LOAD      (1u << 6) /**< load of the rates above the budget */
 #define MC_TM_CFG_ERR_HEARTBEAT (1u << 7) /**< HEARTBEAT rate below MC_TM_HEARTBEAT_MIN_HZ */
+
+/** The reply limiter: a token bucket refilled at MC_TM_REPLY_MAX_HZ by a
+ *  step at tick_hz. */
+typedef struct {
+    uint32_t tick_hz; /**< call rate of mc_tm_reply_lim_step [Hz], > 0 */
+    uint32_t tokens;  /**< replies that may go out now, <= MC_TM_REPLY_BURST */
+    uint32_t acc;     /**< refill accumulator, < tick_hz */
+    uint32_t taken;   /**< tokens taken since init */
+} mc_tm_reply_lim_t;
+
+/** A full bucket for a step at tick_hz (0 is taken as 1). */
+void mc_tm_reply_lim_init(mc_tm_reply_lim_t *l, uint32_t tick_hz);
+/** One step (at tick_hz): the refill. */
+void mc_tm_reply_lim_step(mc_tm_reply_lim_t *l);
+/** Take a token for one reply: true if the reply may go out now. */
+bool mc_tm_reply_lim_take(mc_tm_reply_lim_t *l);
+/** A token is there (nothing taken). */
+bool mc_tm_reply_lim_ready(const mc_tm_reply_lim_t *l);
 
 typedef struct {
     uint8_t node_id;               /**< 0..62 */
@@ -145,9 +179,9 @@ typedef struct mc_telemetry {
     int32_t turns;        /**< whole turns since the first tick */
 } mc_telemetry_t;
 
-/** Bus load (fraction of bitrate_bps) of cfg's rates plus the CMD_ERROR
- *  replies at their limit (MC_TM_ERR_REPLY_MAX_HZ); 0 for a NULL cfg or a
- *  zero bit rate. */
+/** Bus load (fraction of bitrate_bps) of cfg's rates plus the replies'
+ *  reserve (MC_TM_REPLY_RESERVE_HZ frames of MC_TM_REPLY_DLC bytes); 0 for
+ *  a NULL cfg or a zero bit rate. */
 float mc_telemetry_bus_load(const mc_telemetry_cfg_t *cfg);
 
 /** Validate cfg (including the load against the budget) and initialise t.

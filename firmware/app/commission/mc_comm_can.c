@@ -47,6 +47,54 @@ static float option(float v, float dflt)
     return (v > 0.0f) ? v : dflt;
 }
 
+#define INV_SQRT3_F 0.57735026918962576f
+/** A default spin-up cap keeps this far below the over-speed trip. */
+#define TRIP_MARGIN 0.9f
+
+/* The drive's limits on the test values (mc_comm_can.h): current, voltage
+ * (0 when the bus is not measured), speed (and the trip it must stay
+ * strictly below; 0: off). */
+typedef struct {
+    float i_a, v_v, w_rad_s, w_trip_rad_s;
+} limits_t;
+
+static limits_t limits_of(const mc_comm_can_t *m)
+{
+    const mc_drive_t *d = m->drive;
+    const float vbus = d->tm.vbus_v;
+    limits_t l;
+    l.i_a = d->cfg.i_max_a;
+    l.v_v = (mc_isfinite_f32(vbus) && (vbus > 0.0f)) ? vbus * INV_SQRT3_F : 0.0f;
+    l.w_rad_s = (m->params != NULL) ? m->params->active.speed_max_rad_s : 3.4e38f;
+    l.w_trip_rad_s = (d->cfg.omega_max_rad_s > 0.0f) ? d->cfg.omega_max_rad_s : 0.0f;
+    return l;
+}
+
+static bool within_limits(const limits_t *l, const mc_comm_cfg_t *cc)
+{
+    return (cc->i_test_a <= l->i_a) && (cc->v_test_max_v <= l->v_v) &&
+           (cc->speed_max_m_rad_s <= l->w_rad_s) &&
+           ((l->w_trip_rad_s == 0.0f) || (cc->speed_max_m_rad_s < l->w_trip_rad_s));
+}
+
+static float min_f(float a, float b)
+{
+    return (a < b) ? a : b;
+}
+
+/* The board's defaults bounded by the drive's limits: a zero option always
+ * takes a value the drive allows (the image's boards default to a quarter
+ * of their current-sense range, above a small motor's i_max_a). */
+static void bound_defaults(const limits_t *l, mc_comm_cfg_t *cc)
+{
+    cc->i_test_a = min_f(cc->i_test_a, l->i_a);
+    cc->v_test_max_v = min_f(cc->v_test_max_v, l->v_v);
+    cc->speed_max_m_rad_s = min_f(cc->speed_max_m_rad_s, l->w_rad_s);
+    if (l->w_trip_rad_s > 0.0f) {
+        cc->speed_max_m_rad_s = min_f(cc->speed_max_m_rad_s, TRIP_MARGIN * l->w_trip_rad_s);
+    }
+}
+
 static mc_can_err_t start(mc_comm_can_t *m, const float *v)
 {
     mc_drive_t *d = m->drive;
@@ -60,13 +108,16 @@ static mc_can_err_t start(mc_comm_can_t *m, const float *v)
     if (d->mode != MC_DRIVE_MODE_IDLE) {
         return MC_CAN_ERR_MODE;
     }
-    cc.i_test_a = option(v[MC_CAN_COMMISSION_CMD_I_TEST_A], cc.i_test_a);
-    cc.v_test_max_v = option(v[MC_CAN_COMMISSION_CMD_V_TEST_MAX_V], cc.v_test_max_v);
-    cc.speed_max_m_rad_s = option(v[MC_CAN_COMMISSION_CMD_SPEED_MAX_M_RAD_S], cc.speed_max_m_rad_s);
     {
+        const limits_t lim = limits_of(m);
         mc_comm_t probe;
-        if (mc_comm_init(&probe, &cc) != MC_COMM_CFG_OK) {
-            return MC_CAN_ERR_RANGE;
+        bound_defaults(&lim, &cc);
+        cc.i_test_a = option(v[MC_CAN_COMMISSION_CMD_I_TEST_A], cc.i_test_a);
+        cc.v_test_max_v = option(v[MC_CAN_COMMISSION_CMD_V_TEST_MAX_V], cc.v_test_max_v);
+        cc.speed_max_m_rad_s =
+            option(v[MC_CAN_COMMISSION_CMD_SPEED_MAX_M_RAD_S], cc.speed_max_m_rad_s);
+        if ((mc_comm_init(&probe, &cc) != MC_COMM_CFG_OK) || !within_limits(&lim, &cc)) {
+            return MC_CAN_ERR_RANGE; /* nothing energised */
         }
     }
     m->prev_ctrl = d->ctrl;
@@ -103,6 +154,14 @@ static void finish(mc_comm_can_t *m, uint32_t err)
     m->err = err;
     m->step = (uint8_t)((err == MC_COMM_ERR_NONE) ? MC_COMM_STEP_DONE : MC_COMM_STEP_FAILED);
     m->status_due = true;
+}
+
+void mc_comm_can_host_lost(void *ctx)
+{
+    mc_comm_can_t *m = (mc_comm_can_t *)ctx;
+    if ((m != NULL) && m->running) {
+        finish(m, m->comm->err | MC_COMM_ERR_ABORTED | MC_COMM_ERR_HOST_LOST);
+    }
 }
 
 mc_can_err_t mc_comm_can_command(void *ctx, const float *v)
@@ -240,6 +299,12 @@ static void follow(mc_comm_can_t *m)
     }
 }
 
+/* A reply frame may go out now (a token of lim, or no limiter). */
+static bool may_send(mc_tm_reply_lim_t *lim)
+{
+    return (lim == NULL) || mc_tm_reply_lim_take(lim);
+}
+
 static void send(mc_comm_can_t *m, const mc_hal_can_t *can, uint32_t msg, const float *v,
                  uint32_t n, uint32_t raw_value)
 {
@@ -258,7 +323,7 @@ static void send(mc_comm_can_t *m, const mc_hal_can_t *can, uint32_t msg, const 
     }
 }
 
-void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can)
+void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can, mc_tm_reply_lim_t *lim)
 {
     if (m == NULL) {
         return;
@@ -270,6 +335,9 @@ void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can)
         m->status_due = false;
         m->result_next = (uint8_t)MC_COMM_CAN_ITEM_COUNT;
         return;
+    }
+    if ((m->status_due || (m->result_next < (uint8_t)MC_COMM_CAN_ITEM_COUNT)) && !may_send(lim)) {
+        return; /* the reply limiter: the frame waits for a later step */
     }
     if (m->status_due) {
         float v[MC_CAN_COMMISSION_STATUS_NSIG];

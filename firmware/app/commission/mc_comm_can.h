@@ -13,8 +13,29 @@
  * START (options 0 = the board's default from the cfg): refused MODE when
  * a sequence runs or the drive is not IDLE, REFUSED with a fault latched
  * (clear it first) or when the drive will not take the plug-in, RANGE when
- * the options fail mc_comm_init. The drive's control-law plug-in is
- * swapped for commissioning's and restored when the sequence ends.
+ * the options fail mc_comm_init or the drive's limits (below); refused,
+ * nothing is energised. The drive's control-law plug-in is swapped for
+ * commissioning's and restored when the sequence ends.
+ *
+ * The drive's limits, checked on the test values in force: i_test_a <=
+ * the drive's i_max_a; v_test_max_v <= the largest voltage vector the
+ * measured bus can make, v_bus / sqrt(3) (a bus not measured, not finite
+ * or not positive: RANGE); speed_max_m_rad_s <= the speed limit of the
+ * parameter set in force (speed_max_rad_s, with a parameter service) and
+ * below the drive's over-speed trip (omega_max_rad_s, when it is on). An
+ * option beyond them is refused; a zero option takes the board's default
+ * bounded by them (the spin-up cap to 0.9 of the trip). Protocol 3
+ * accepted 65 A on a 20 A sensor and 600 V on a 200 V bus, and the
+ * image's default, a quarter of the sense range, above i_max_a.
+ *
+ * Keep-alive: the CAN handler times a running sequence out as an enabled
+ * drive (mc_can_cmd.h): without a fresh HOST_HEARTBEAT for timeout_s it
+ * calls mc_comm_can_host_lost(): the bridge opens at once and the run
+ * ends FAILED with MC_COMM_ERR_ABORTED | MC_COMM_ERR_HOST_LOST.
+ *
+ * Frames: COMMISSION_STATUS and COMMISSION_RESULT are replies and take a
+ * token of the CAN handler's reply limiter (mc_comm_can_step's lim); one
+ * without a token waits for a later step (nothing is lost).
  * ABORT: bridge off at once (IDLE), the run ends FAILED with
  * MC_COMM_ERR_ABORTED, nothing staged. REPORT: the results of the last
  * successful run sent again (REFUSED when there are none).
@@ -38,6 +59,7 @@
 #include <stdint.h>
 
 #include "can/mc_can_proto.h"
+#include "can/mc_telemetry.h"
 #include "commission/mc_commission.h"
 #include "config/mc_param_srv.h"
 #include "hal/can.h"
@@ -114,11 +136,16 @@ mc_can_err_t mc_comm_can_command(void *ctx, const float *v);
  *  commands meanwhile). */
 bool mc_comm_can_busy(const void *ctx);
 
+/** The host's keep-alive stopped (the CAN handler's timeout): a running
+ *  sequence ends at once, bridge off, MC_COMM_ERR_HOST_LOST. */
+void mc_comm_can_host_lost(void *ctx);
+
 /** Slow loop: follows the sequence, stages the results when it is done,
  *  sends COMMISSION_STATUS (every status_div steps while running and once
- *  at the end) and the COMMISSION_RESULT frames (one per step). can may
- *  be NULL (nothing sent). */
-void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can);
+ *  at the end) and the COMMISSION_RESULT frames (one per step), each with
+ *  a token of lim (NULL: no limiter; the application passes the CAN
+ *  handler's). can may be NULL (nothing sent). */
+void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can, mc_tm_reply_lim_t *lim);
 
 #ifdef __cplusplus
 }

@@ -82,6 +82,7 @@ extern "C" {
 #define MC_COMM_ERR_RANGE       (1u << 9)  /**< an identified value not plausible */
 #define MC_COMM_ERR_MEAS        (1u << 10) /**< no encoder sample or a non-finite one */
 #define MC_COMM_ERR_ABORTED     (1u << 11) /**< mc_comm_abort() */
+#define MC_COMM_ERR_HOST_LOST   (1u << 12) /**< the host's keep-alive stopped (CAN) */
 
 /* Configuration errors of mc_comm_init. */
 #define MC_COMM_CFG_OK        0u

@@ -108,7 +108,7 @@ static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any)
         if (rc != 0) {
             return 0; /* a cut record: the rest of the sector is unusable */
         }
-        if ((s->active < 0) || (hdr[2] > s->seq)) {
+        if ((s->active < 0) || mc_cfg_store_seq_newer(hdr[2], s->seq)) {
             s->seq = hdr[2];
             s->active = (int32_t)i;
             s->newest_off = off;
@@ -256,26 +256,23 @@ static bool region_erased(const mc_cfg_store_t *s, uint32_t i, uint32_t off, uin
     return true;
 }
 
-int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p)
+uint32_t mc_cfg_store_seq_next(uint32_t seq)
 {
-    const uint32_t bytes = MC_CFG_REC_WORDS * W;
+    return (seq == 0xFFFFFFFFu) ? 1u : seq + 1u;
+}
+
+bool mc_cfg_store_seq_newer(uint32_t a, uint32_t b)
+{
+    return (int32_t)(a - b) > 0;
+}
+
+/* s->rec: the record of p with sequence number seq (CRC included). */
+static void build_record(mc_cfg_store_t *s, const mc_params_t *p, uint32_t seq)
+{
     uint32_t k = 0u;
-    uint32_t target;
-    uint32_t off;
-    uint32_t words = 0u;
-    uint32_t hdr[MC_CFG_HDR_WORDS];
-    if ((s == NULL) || (p == NULL) || (mc_params_validate(p) != MC_PARAMS_OK)) {
-        return -EINVAL;
-    }
-    if (!s->scanned) {
-        bool any = false;
-        if (scan(s, &any) != 0) {
-            return -EIO;
-        }
-    }
     s->rec[k++] = MC_CFG_MAGIC;
     s->rec[k++] = MC_CFG_FORMAT | ((uint32_t)MC_PARAMS_LAYOUT_VERSION << 16);
-    s->rec[k++] = s->seq + 1u;
+    s->rec[k++] = seq;
     s->rec[k++] = MC_PARAM_STORED_COUNT | 0xFFFF0000u;
     for (uint32_t i = 0u; i < MC_PARAM_COUNT; ++i) {
         const mc_param_info_t *info = &mc_param_table[i];
@@ -285,6 +282,55 @@ int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p)
         }
     }
     s->rec[k] = mc_crc32(s->rec, (size_t)k * W);
+}
+
+static int scan_once(mc_cfg_store_t *s)
+{
+    bool any = false;
+    if (s->scanned) {
+        return 0;
+    }
+    return scan(s, &any);
+}
+
+bool mc_cfg_store_holds(mc_cfg_store_t *s, const mc_params_t *p)
+{
+    uint32_t words = 0u;
+    uint32_t hdr[MC_CFG_HDR_WORDS];
+    if ((s == NULL) || (p == NULL) || (scan_once(s) != 0) || (s->active < 0)) {
+        return false;
+    }
+    /* the newest record is valid (checked again: the flash may have failed
+     * since the scan) and as long as ours */
+    if ((check_record(s, (uint32_t)s->active, s->newest_off, &words, hdr) != 0) ||
+        (words != MC_CFG_REC_WORDS)) {
+        return false;
+    }
+    build_record(s, p, hdr[2]);
+    for (uint32_t k = 0u; k + 1u < MC_CFG_REC_WORDS; ++k) {
+        uint32_t w;
+        if ((read_word(s, (uint32_t)s->active, s->newest_off + k * W, &w) != 0) ||
+            (w != s->rec[k])) {
+            return false;
+        }
+    }
+    return true;
+}
+
+int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p)
+{
+    const uint32_t bytes = MC_CFG_REC_WORDS * W;
+    uint32_t target;
+    uint32_t off;
+    uint32_t words = 0u;
+    uint32_t hdr[MC_CFG_HDR_WORDS];
+    if ((s == NULL) || (p == NULL) || (mc_params_validate(p) != MC_PARAMS_OK)) {
+        return -EINVAL;
+    }
+    if (scan_once(s) != 0) {
+        return -EIO;
+    }
+    build_record(s, p, mc_cfg_store_seq_next(s->seq));
 
     target = (s->active >= 0) ? (uint32_t)s->active : 0u;
     off = s->append_off[target];

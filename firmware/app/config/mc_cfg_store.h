@@ -9,7 +9,8 @@
  *   0  magic 0x4746434D ("MCFG")
  *   1  format (bits 0..15, MC_CFG_FORMAT) | table layout version (16..31,
  *      MC_PARAMS_LAYOUT_VERSION of the firmware that wrote it)
- *   2  sequence number (1, 2, ...: one more than the newest record seen)
+ *   2  sequence number (1, 2, ...: one more than the newest record seen;
+ *      after 0xFFFFFFFF comes 1, 0 is never written)
  *   3  n = number of entries (bits 0..15; bits 16..31 are 0xFFFF)
  *   4 ..          n entries of two words: parameter id, raw value
  *   4 + 2n        CRC-32 of words 0 .. 3 + 2n
@@ -23,11 +24,23 @@
  * newest record (the new one has no valid CRC) or the new one. The record
  * is read back and its CRC checked before the save reports success.
  *
+ * Sequence numbers are compared in serial-number arithmetic (RFC 1982):
+ * a is newer than b when (int32_t)(a - b) > 0. Every valid record in the
+ * two sectors was written since the older sector's last erase, so their
+ * numbers span far less than 2^31 and the newest is well defined across
+ * the wrap from 0xFFFFFFFF to 1 (protocol 3's store compared them as
+ * plain integers: the save after 0xFFFFFFFF wrote 0, was answered OK, and
+ * the next boot took the old record).
+ *
+ * Unchanged: mc_cfg_store_holds() tells whether the newest record already
+ * holds exactly the record a save of p would write (format, layout, every
+ * id and raw value): the parameter service skips such a SAVE (no erase,
+ * no program: flash wear is a budget, mc_param_srv.h).
+ *
  * Boot (mc_cfg_store_load): both sectors are scanned; a sector's scan ends
  * at an erased word or at the first word sequence that is not a valid
  * record (a cut record: the rest of that sector is not used again until it
- * is erased). Of all valid records the one with the largest sequence number
- * is decoded:
+ * is erased). Of all valid records the newest (above) is decoded:
  *   format differs, or a layout version other than this firmware's that no
  *   migration knows        -> MC_CFG_BOOT_LAYOUT, defaults (named fault)
  *   a value out of range, or the whole set refused by mc_params_validate
@@ -44,6 +57,7 @@
 #ifndef MC_CFG_STORE_H
 #define MC_CFG_STORE_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "hal/flash.h"
@@ -80,7 +94,7 @@ typedef struct {
 typedef struct {
     mc_cfg_store_cfg_t cfg;
     uint32_t sector_bytes[2];
-    uint32_t seq;           /**< largest sequence number of a valid record (0: none) */
+    uint32_t seq;           /**< sequence number of the newest valid record (0: none) */
     int32_t active;         /**< 0/1: the sector of the newest valid record; -1: none */
     uint32_t newest_off;    /**< its offset */
     uint32_t append_off[2]; /**< next free offset per sector, MC_CFG_OFF_NONE if unusable */
@@ -120,6 +134,19 @@ int mc_cfg_store_find_raw(mc_cfg_store_t *s, uint32_t id, uint32_t *p_raw);
  *         or read-back mismatch: the previous record stays the newest).
  */
 int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p);
+
+/** The sequence number after seq (1 after 0xFFFFFFFF: 0 means none). */
+uint32_t mc_cfg_store_seq_next(uint32_t seq);
+
+/** a newer than b in serial-number arithmetic ((int32_t)(a - b) > 0). */
+bool mc_cfg_store_seq_newer(uint32_t a, uint32_t b);
+
+/**
+ * The newest valid record is exactly the record mc_cfg_store_save(s, p)
+ * would write, sequence number and CRC aside (scans first if needed).
+ * false also for NULL arguments, no record or a flash read error.
+ */
+bool mc_cfg_store_holds(mc_cfg_store_t *s, const mc_params_t *p);
 
 #ifdef __cplusplus
 }

@@ -26,7 +26,30 @@ int mc_param_srv_init(mc_param_srv_t *s, const mc_params_t *p, mc_drive_t *drive
     s->store = store;
     s->boot_status = boot_status;
     s->store_status = boot_status;
+    s->save_tokens = MC_PARAM_SAVE_BURST;
     return 0;
+}
+
+void mc_param_srv_tick(mc_param_srv_t *s, uint32_t tick_hz)
+{
+    if ((s == NULL) || (tick_hz == 0u)) {
+        return;
+    }
+    s->tick_hz = tick_hz;
+    if (s->confirm_have) {
+        if (s->confirm_left == 0u) {
+            s->confirm_have = false; /* the window closed */
+        } else {
+            s->confirm_left--;
+        }
+    }
+    if (s->save_tokens < MC_PARAM_SAVE_BURST) {
+        s->save_acc++;
+        if (s->save_acc >= MC_PARAM_SAVE_PERIOD_S * tick_hz) {
+            s->save_acc = 0u;
+            s->save_tokens++;
+        }
+    }
 }
 
 static bool bridge_on(const mc_param_srv_t *s)
@@ -74,9 +97,82 @@ static mc_param_status_t do_write(mc_param_srv_t *s, uint32_t id, uint32_t value
     if ((info->access != MC_PARAM_ACCESS_RUNTIME) && bridge_on(s)) {
         return MC_PARAM_ERR_RUNNING;
     }
+    if ((info->access == MC_PARAM_ACCESS_REBOOT) && (value != mc_param_get_raw(&s->staged, info))) {
+        /* the node id or bit rate: only with the CONFIRM that must follow */
+        s->confirm_have = true;
+        s->confirm_id = id;
+        s->confirm_value = value;
+        s->confirm_left = MC_PARAM_CONFIRM_WINDOW_S * s->tick_hz;
+        return MC_PARAM_ERR_NEEDS_CONFIRM;
+    }
     mc_param_set_raw(&s->staged, info, value);
     s->pending = true;
     return MC_PARAM_OK;
+}
+
+/* The CONFIRM of the armed reboot parameter (the request just before). */
+static mc_param_status_t do_confirm(mc_param_srv_t *s, bool armed, uint32_t id, uint32_t value)
+{
+    const mc_param_info_t *info;
+    if (!armed || (id != s->confirm_id) || (value != s->confirm_value)) {
+        return MC_PARAM_ERR_NOT_CONFIRMED;
+    }
+    if (bridge_on(s)) {
+        return MC_PARAM_ERR_RUNNING;
+    }
+    info = mc_param_find(id, NULL); /* found at the WRITE: the table is const */
+    if (info == NULL) {
+        return MC_PARAM_ERR_NOT_CONFIRMED;
+    }
+    mc_param_set_raw(&s->staged, info, value);
+    s->pending = true;
+    return MC_PARAM_OK;
+}
+
+/* SAVE (mc_param_srv.h): unchanged skipped, the rate limit, the store. */
+static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
+{
+    if (bridge_on(s)) {
+        return MC_PARAM_ERR_RUNNING; /* an erase stalls the CPU for up to seconds */
+    }
+    if (s->store == NULL) {
+        return MC_PARAM_ERR_STORE;
+    }
+    if (mc_cfg_store_holds(s->store, &s->active)) {
+        s->saves_skipped++; /* the newest record is the applied set */
+        s->store_status = (uint8_t)MC_CFG_BOOT_STORED;
+        *p_value = s->store->seq;
+        return MC_PARAM_OK;
+    }
+    if (s->save_tokens == 0u) {
+        const uint32_t hz = (s->tick_hz == 0u) ? 1u : s->tick_hz;
+        const uint32_t left = MC_PARAM_SAVE_PERIOD_S * hz - s->save_acc;
+        s->saves_limited++;
+        *p_value = (left + hz - 1u) / hz;
+        return MC_PARAM_ERR_RATE_LIMIT;
+    }
+    s->save_tokens--; /* an attempt may have erased: it counts */
+    if (mc_cfg_store_save(s->store, &s->active) != 0) {
+        s->store_status = (uint8_t)MC_CFG_BOOT_FLASH;
+        return MC_PARAM_ERR_STORE;
+    }
+    s->store_status = (uint8_t)MC_CFG_BOOT_STORED;
+    *p_value = s->store->seq;
+    return MC_PARAM_OK;
+}
+
+/* LOAD_DEFAULTS: the defaults staged, the reboot parameters kept. */
+static void load_defaults(mc_param_srv_t *s)
+{
+    mc_params_t p = mc_params_default;
+    for (uint32_t i = 0u; i < MC_PARAM_COUNT; ++i) {
+        const mc_param_info_t *info = &mc_param_table[i];
+        if (info->access == MC_PARAM_ACCESS_REBOOT) {
+            mc_param_set_raw(&p, info, mc_param_get_raw(&s->staged, info));
+        }
+    }
+    s->staged = p;
+    s->pending = true;
 }
 
 /* A stopped or reboot parameter differs between staged and active. */
@@ -153,9 +249,13 @@ static mc_param_status_t do_apply(mc_param_srv_t *s, uint32_t *p_value)
 mc_param_status_t mc_param_srv_request(mc_param_srv_t *s, uint32_t op, uint32_t id,
                                        uint32_t *p_value)
 {
+    bool armed;
     if ((s == NULL) || (p_value == NULL)) {
         return MC_PARAM_ERR_OPCODE;
     }
+    /* a CONFIRM counts only as the very next request after its WRITE */
+    armed = s->confirm_have;
+    s->confirm_have = false;
     if (op == MC_PARAM_OP_READ) {
         const mc_param_info_t *info = mc_param_find(id, NULL);
         if (info == NULL) {
@@ -164,7 +264,7 @@ mc_param_status_t mc_param_srv_request(mc_param_srv_t *s, uint32_t op, uint32_t 
         *p_value = read_value(s, info);
         return MC_PARAM_OK;
     }
-    if (op > MC_PARAM_OP_LOAD_DEFAULTS) {
+    if (op > MC_PARAM_OP_CONFIRM) {
         return MC_PARAM_ERR_OPCODE;
     }
     if (fault_latched(s)) {
@@ -178,26 +278,20 @@ mc_param_status_t mc_param_srv_request(mc_param_srv_t *s, uint32_t op, uint32_t 
         return do_apply(s, p_value);
     case MC_PARAM_OP_SAVE:
         *p_value = 0u;
-        if (bridge_on(s)) {
-            return MC_PARAM_ERR_RUNNING; /* an erase stalls the CPU for up to seconds */
-        }
-        if (s->store == NULL) {
-            return MC_PARAM_ERR_STORE;
-        }
-        if (mc_cfg_store_save(s->store, &s->active) != 0) {
-            s->store_status = (uint8_t)MC_CFG_BOOT_FLASH;
-            return MC_PARAM_ERR_STORE;
-        }
-        s->store_status = (uint8_t)MC_CFG_BOOT_STORED;
-        *p_value = s->store->seq;
-        return MC_PARAM_OK;
+        return do_save(s, p_value);
+    case MC_PARAM_OP_CONFIRM:
+        return do_confirm(s, armed, id, *p_value);
     default: /* MC_PARAM_OP_LOAD_DEFAULTS */
         *p_value = 0u;
         if (bridge_on(s)) {
             return MC_PARAM_ERR_RUNNING;
         }
-        s->staged = mc_params_default;
-        s->pending = true;
+        load_defaults(s);
         return MC_PARAM_OK;
     }
+}
+
+bool mc_param_srv_save_budget_full(const mc_param_srv_t *s)
+{
+    return (s == NULL) || (s->save_tokens >= MC_PARAM_SAVE_BURST);
 }

@@ -28,17 +28,23 @@ extern "C" {
 /** Status of one parameter operation (the CAN PARAM_REPLY.status values). */
 typedef enum {
     MC_PARAM_OK = 0,
-    MC_PARAM_ERR_UNKNOWN_ID = 1, /**< no parameter with this id */
-    MC_PARAM_ERR_READONLY = 2,   /**< written, but computed by the drive */
-    MC_PARAM_ERR_RANGE = 3,      /**< outside [min, max], or NaN/inf */
-    MC_PARAM_ERR_RUNNING = 4,    /**< stopped/reboot parameter (or save, load
+    MC_PARAM_ERR_UNKNOWN_ID = 1,     /**< no parameter with this id */
+    MC_PARAM_ERR_READONLY = 2,       /**< written, but computed by the drive */
+    MC_PARAM_ERR_RANGE = 3,          /**< outside [min, max], or NaN/inf */
+    MC_PARAM_ERR_RUNNING = 4,        /**< stopped/reboot parameter (or save, load
                                       defaults, an apply that needs it) while
                                       the bridge is on */
-    MC_PARAM_ERR_FAULT = 5,      /**< a fault is latched: only the clear path */
-    MC_PARAM_ERR_INVALID = 6,    /**< the whole configuration fails validation
+    MC_PARAM_ERR_FAULT = 5,          /**< a fault is latched: only the clear path */
+    MC_PARAM_ERR_INVALID = 6,        /**< the whole configuration fails validation
                                       (see PARAM_REPLY.value: MC_PARAMS_ERR_* bits) */
-    MC_PARAM_ERR_STORE = 7,      /**< the flash store failed */
-    MC_PARAM_ERR_OPCODE = 8,     /**< unknown opcode */
+    MC_PARAM_ERR_STORE = 7,          /**< the flash store failed */
+    MC_PARAM_ERR_OPCODE = 8,         /**< unknown opcode */
+    MC_PARAM_ERR_NEEDS_CONFIRM = 9,  /**< a reboot parameter's new value waits
+                                          for its CONFIRM (nothing staged yet) */
+    MC_PARAM_ERR_NOT_CONFIRMED = 10, /**< CONFIRM without the WRITE just before
+                                          it, of another id or value, or late */
+    MC_PARAM_ERR_RATE_LIMIT = 11,    /**< SAVE refused by its rate limit (the
+                                          value: seconds until the next one) */
 } mc_param_status_t;
 
 /* Whole-configuration errors (bits) of mc_params_validate. */

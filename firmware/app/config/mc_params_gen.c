@@ -132,31 +132,31 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {64u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, sls_if_current_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* sls_if_current_a */
     {65u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, sls_if_accel_rad_s2), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* sls_if_accel_rad_s2 */
     {66u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, sls_align_time_s), {.f = 0.0f}, {.f = 1.0f}, {.f = 0.0f}}, /* sls_align_time_s */
-    {70u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, i_trip_a), {.f = 0.0f}, {.f = 2000.0f}, {.f = 0.0f}}, /* i_trip_a */
-    {71u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, vbus_min_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_min_v */
-    {72u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, vbus_max_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_max_v */
-    {73u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, omega_max_rad_s), {.f = 0.0f}, {.f = 20000.0f}, {.f = 0.0f}}, /* omega_max_rad_s */
-    {74u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, temp_max_c), {.f = 0.0f}, {.f = 200.0f}, {.f = 100.0f}}, /* temp_max_c */
+    {70u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_trip_a), {.f = 0.0f}, {.f = 2000.0f}, {.f = 0.0f}}, /* i_trip_a */
+    {71u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_min_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_min_v */
+    {72u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_max_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_max_v */
+    {73u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, omega_max_rad_s), {.f = 0.0f}, {.f = 20000.0f}, {.f = 0.0f}}, /* omega_max_rad_s */
+    {74u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, temp_max_c), {.f = 0.0f}, {.f = 200.0f}, {.f = 100.0f}}, /* temp_max_c */
     {75u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, brake_enable), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* brake_enable */
-    {76u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, brake_on_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* brake_on_v */
-    {77u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, brake_full_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* brake_full_v */
-    {78u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, vbus_regen_start_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_regen_start_v */
-    {79u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, vbus_regen_end_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_regen_end_v */
-    {80u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, regen_id_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* regen_id_a */
-    {81u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, temp_warn_c), {.f = 0.0f}, {.f = 200.0f}, {.f = 0.0f}}, /* temp_warn_c */
-    {82u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, vbus_sag_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_sag_v */
-    {90u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, stall_current_frac), {.f = 0.0f}, {.f = 1.0f}, {.f = 0.9f}}, /* stall_current_frac */
-    {91u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, stall_speed_rad_s), {.f = 0.0f}, {.f = 1000.0f}, {.f = 1.0f}}, /* stall_speed_rad_s */
-    {92u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, stall_time_s), {.f = 0.0f}, {.f = 60.0f}, {.f = 2.0f}}, /* stall_time_s */
-    {93u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, i_unbalance_max_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* i_unbalance_max_a */
+    {76u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, brake_on_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* brake_on_v */
+    {77u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, brake_full_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* brake_full_v */
+    {78u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_regen_start_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_regen_start_v */
+    {79u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_regen_end_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_regen_end_v */
+    {80u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, regen_id_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* regen_id_a */
+    {81u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, temp_warn_c), {.f = 0.0f}, {.f = 200.0f}, {.f = 0.0f}}, /* temp_warn_c */
+    {82u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_sag_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_sag_v */
+    {90u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stall_current_frac), {.f = 0.0f}, {.f = 1.0f}, {.f = 0.9f}}, /* stall_current_frac */
+    {91u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stall_speed_rad_s), {.f = 0.0f}, {.f = 1000.0f}, {.f = 1.0f}}, /* stall_speed_rad_s */
+    {92u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stall_time_s), {.f = 0.0f}, {.f = 60.0f}, {.f = 2.0f}}, /* stall_time_s */
+    {93u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_unbalance_max_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* i_unbalance_max_a */
     {94u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, open_phase_i_min_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* open_phase_i_min_a */
     {95u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, open_phase_time_s), {.f = 0.0f}, {.f = 10.0f}, {.f = 0.0f}}, /* open_phase_time_s */
     {96u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, asc_enable), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* asc_enable */
     {110u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, can_node_id), {.u = 0u}, {.u = 62u}, {.u = 1u}}, /* can_node_id */
     {111u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, can_bitrate_bps), {.u = 125000u}, {.u = 1000000u}, {.u = 500000u}}, /* can_bitrate_bps */
-    {112u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, can_timeout_s), {.f = 0.01f}, {.f = 60.0f}, {.f = 0.5f}}, /* can_timeout_s */
-    {113u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, stop_ramp_a_per_s), {.f = 0.1f}, {.f = 100000.0f}, {.f = 100.0f}}, /* stop_ramp_a_per_s */
-    {114u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, stop_decel_rad_s2), {.f = 0.0f}, {.f = 100000.0f}, {.f = 0.0f}}, /* stop_decel_rad_s2 */
+    {112u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, can_timeout_s), {.f = 0.01f}, {.f = 60.0f}, {.f = 0.5f}}, /* can_timeout_s */
+    {113u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stop_ramp_a_per_s), {.f = 0.1f}, {.f = 100000.0f}, {.f = 100.0f}}, /* stop_ramp_a_per_s */
+    {114u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stop_decel_rad_s2), {.f = 0.0f}, {.f = 100000.0f}, {.f = 0.0f}}, /* stop_decel_rad_s2 */
     {115u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, tm_heartbeat_hz), {.u = 1u}, {.u = 100u}, {.u = 10u}}, /* tm_heartbeat_hz */
     {116u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, tm_currents_hz), {.u = 0u}, {.u = 1000u}, {.u = 100u}}, /* tm_currents_hz */
     {117u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, tm_voltages_hz), {.u = 0u}, {.u = 1000u}, {.u = 50u}}, /* tm_voltages_hz */

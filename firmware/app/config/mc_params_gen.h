@@ -257,7 +257,7 @@ typedef struct {
     uint32_t asc_enable; /**< Active short circuit (low sides on) for a fault above the speed whose back-EMF exceeds the bus; needs flux/Ld < i_trip_a (app README). */
     uint32_t can_node_id; /**< CAN node id (id = node_id << 5 | cmd); takes effect after save + reset. */
     uint32_t can_bitrate_bps; /**< CAN bit rate (125k, 250k, 500k or 1M); takes effect after save + reset. [bit/s] */
-    float can_timeout_s; /**< Command timeout while enabled: no accepted command for this long stops the drive. [s] */
+    float can_timeout_s; /**< Command timeout while enabled or commissioning: no advancing HOST_HEARTBEAT for this long stops the drive. [s] */
     float stop_ramp_a_per_s; /**< Current ramp of a safe stop. [A/s] */
     float stop_decel_rad_s2; /**< Deceleration of a controlled stop (command timeout, warnings); 0: derived, the speed ramp speed_ramp_rad_s2. [rad/s^2] */
     uint32_t tm_heartbeat_hz; /**< HEARTBEAT rate (cannot be switched off). [Hz] */

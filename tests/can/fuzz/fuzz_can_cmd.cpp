@@ -12,9 +12,16 @@
 //     decoded value lies within its signal's range (half a step of slack);
 //     repacking the values gives back the same frame data;
 //   - the handler's result is NONE, IGNORED or a code the DBC defines, and
-//     a rejected frame (not IGNORED) produced exactly one CMD_ERROR;
+//     a rejected frame (not IGNORED) produced exactly one CMD_ERROR unless
+//     the reply limiter took it (counted);
 //   - a PARAM_REQ for this node that the handler accepted got exactly one
-//     PARAM_REPLY with its opcode and id and a status the DBC defines;
+//     PARAM_REPLY with its opcode and id and a status the DBC defines, at
+//     once or (held by the reply limiter) at a later tick, and nothing
+//     else is ever sent; one refused LIMITED came while a reply was held;
+//   - the keep-alive: only an accepted HOST_HEARTBEAT or the enable of a
+//     run resets the command timeout, and after a tick a run that is
+//     neither stopping nor ended has had one within timeout_s;
+//   - the reply limiter's bucket never holds more than its depth;
 //   - enabled only while the drive runs (CURRENT/CTRL), stopping implies
 //     enabled; |references| within the drive's i_max (the one in force:
 //     an APPLY may change it).
@@ -162,9 +169,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       check_unpack(f);
       const uint32_t rejected = c.rx_rejected;
       const uint32_t limited = c.reply_limited;
+      const bool held_before = c.held_have;
+      const uint32_t alive_before = c.ticks_since_alive;
+      const bool enabled_before = c.enabled;
       const mc_can_err_t e = mc_can_cmd_handle(&c, &f, &fake.can_dev);
       require(e == MC_CAN_ERR_NONE || e == MC_CAN_ERR_IGNORED ||
-              (e >= MC_CAN_ERR_UNKNOWN_CMD && e <= MC_CAN_ERR_HEARTBEAT_MIN));
+              (e >= MC_CAN_ERR_UNKNOWN_CMD && e <= MC_CAN_ERR_LIMITED));
+      require(e != MC_CAN_ERR_LIMITED || held_before || mc_can_id_cmd(f.id) == MC_CAN_CMD_BOOT_REQ);
+      // only a fresh HOST_HEARTBEAT or the start of a run is a keep-alive
+      if (c.ticks_since_alive != alive_before) {
+        require(c.ticks_since_alive == 0u && e == MC_CAN_ERR_NONE &&
+                (mc_can_id_cmd(f.id) == MC_CAN_CMD_HOST_HEARTBEAT ||
+                 (mc_can_id_cmd(f.id) == MC_CAN_CMD_SET_ENABLE && !enabled_before && c.enabled)));
+      }
       // a rejection is answered unless the reply rate limit took it
       const bool limited_now = c.reply_limited != limited;
       const bool rej = (e != MC_CAN_ERR_NONE && e != MC_CAN_ERR_IGNORED);
@@ -178,7 +195,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         require(mc_can_proto_unpack(&out, &m, v, MC_CAN_NSIG_MAX) == MC_CAN_ERR_NONE);
         if (m == MC_CAN_MSG_PARAM_REPLY) {
           require(param_req && out.data[0] == f.data[0] && out.data[1] == f.data[1] &&
-                  out.data[2] == f.data[2] && out.data[3] <= MC_PARAM_ERR_OPCODE);
+                  out.data[2] == f.data[2] && out.data[3] <= MC_PARAM_ERR_RATE_LIMIT);
           ++param_replies;
           continue;
         }
@@ -187,7 +204,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       }
       require(replies == ((rej && !limited_now) ? 1u : 0u));
       require(!limited_now || rej);
-      require(param_replies == (param_req ? 1u : 0u));
+      // answered now, or held for a later tick (then the slot was free)
+      const bool held_now = param_req && !held_before && c.held_have;
+      require(param_replies == ((param_req && !held_now) ? 1u : 0u));
+      if (held_now) {
+        require(c.held.data[0] == f.data[0] && c.held.data[1] == f.data[1] &&
+                c.held.data[2] == f.data[2] && c.held.data[3] <= MC_PARAM_ERR_RATE_LIMIT);
+      }
     } else if (op == 2u) {
       const unsigned n = 1u + (r[0] >> 2);
       for (unsigned i = 0; i < n; ++i) {
@@ -197,7 +220,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         for (unsigned j = 0; j < d.cfg.slow_loop_div; ++j) {
           if (mc_drive_fast_step(&d)) mc_drive_slow_step(&d);
         }
+        const bool held = c.held_have;
+        const mc_hal_can_frame_t held_f = c.held;
         mc_can_cmd_step(&c);
+        require(!c.enabled || c.stopping || c.ticks_since_alive < c.timeout_ticks);
+        // a tick sends nothing but the held PARAM_REPLY
+        mc_hal_can_frame_t out;
+        uint32_t n_out = 0;
+        while (mc_hal_fake_can_tx_pop(&fake, &out) == 0) {
+          require(held && !c.held_have && out.id == held_f.id && out.len == held_f.len &&
+                  std::memcmp(out.data, held_f.data, out.len) == 0);
+          ++n_out;
+        }
+        require(n_out <= 1u);
       }
     } else {
       (void)mc_telemetry_step(&tm, &fake.can_dev, &src);
@@ -209,6 +244,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       }
     }
     require(!c.stopping || c.enabled);
+    require(c.reply.tokens <= MC_TM_REPLY_BURST);
     require(!c.enabled || d.mode == MC_DRIVE_MODE_CURRENT || d.mode == MC_DRIVE_MODE_CTRL);
     require(std::fabs(d.id_ref_a) <= d.cfg.i_max_a && std::fabs(d.iq_ref_a) <= d.cfg.i_max_a);
   }

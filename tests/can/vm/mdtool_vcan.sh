@@ -68,7 +68,8 @@ for f in scan status config monitor calibrate run record; do say "$f (exit $(cat
 # settings form a valid parameter set (PWM 5 kHz, CAN tick 1 kHz) with a
 # flash file. config get, set + apply + save, get again; a value outside
 # the table sent past mdtool's own check (the drive must refuse it RANGE
-# and keep its value); then a second boot on the same flash reads the saved
+# and keep its value); a new node id staged (mdtool sends the CONFIRM the
+# drive asks for); then a second boot on the same flash reads the saved
 # value back (boot STORED).
 SIMCFG=(--set realtime=1 --set pwm_hz=5000 --set slow_loop_div=5 --set substeps=1 --set bw_hz=50
         --set speed_pll_bw_rad_s=500)
@@ -81,6 +82,7 @@ cat > steps_cfg.txt <<EOS
 cfg_get1 config get speed_max_rad_s $B --timeout 5
 cfg_set config set speed_max_rad_s=123.5 --save $B --timeout 5
 cfg_get2 config get speed_max_rad_s $B --timeout 5
+cfg_node config set can_node_id=2 --no-apply $B --timeout 5
 EOS
 "$PY" "$ROOT/tests/can/vm/mdtool_batch.py" steps_cfg.txt > batch_cfg.out 2>&1
 "$PY" - "$IF" > cfg_refuse.out 2>&1 <<'PYEOF'
@@ -107,5 +109,5 @@ echo $? > cfg_refuse.rc
 kill -TERM "$SIM"; wait "$SIM" 2>/dev/null
 MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN/cfg2" --duration 1 --flash cfg.flash \
   "${SIMCFG[@]}" > cfg_mcsim2.out 2>&1; echo $? > cfg_mcsim2.rc
-for f in cfg_get1 cfg_set cfg_get2 cfg_refuse cfg_mcsim2; do say "$f (exit $(cat $f.rc)): $(tail -c 400 $f.out)"; done
+for f in cfg_get1 cfg_set cfg_get2 cfg_node cfg_refuse cfg_mcsim2; do say "$f (exit $(cat $f.rc)): $(tail -c 400 $f.out)"; done
 exit 0

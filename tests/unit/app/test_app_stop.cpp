@@ -241,16 +241,11 @@ TEST_F(AppStop, CanCommandTimeoutInTorqueModeRampsTheTorqueDown)
     ASSERT_EQ(MC_DRIVE_MODE_CURRENT, d.mode);
     ASSERT_EQ(0, mc_drive_set_current_ref(&d, 0.0f, 2.0f));
     can_ = &c;
-    // No further command: the timeout (100 slow ticks = 1000 fast steps),
-    // then 2 A at 100 A/s = 20 ms = 40 slow ticks down to 0.
-    std::vector<float> iq; // the q reference at each slow step of the stop
-    long steps = 0;
-    while (c.enabled && steps < 4000) {
-        if (Step() && c.stopping) {
-            iq.push_back(d.iq_ref_a);
-        }
-        ++steps;
-    }
+    // No further command: the timeout (100 ticks of the slow loop = 1000
+    // fast steps) starts the stop in its 100th slow step.
+    const StopTrace tr = RunStop(1000);
+    EXPECT_GE(c.ticks_since_alive, 100u);
+    ExpectControlledStop(tr, MC_DRIVE_STOP_CMD);
     EXPECT_FALSE(c.enabled);
     EXPECT_EQ(MC_CAN_STOP_CMD_TIMEOUT, c.stop_reason);
     EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "mc_record.hpp"
+
 extern "C" {
 #include "mc_app.h"
 #include "mc_can_proto.h"
@@ -335,11 +337,23 @@ TEST_F(McApp, SaveStretchesTheWatchdogAroundTheErase)
 {
     Start();
     EXPECT_EQ(kWdgMs, wdg.timeout_max_ms);
-    // PARAM_REQ SAVE (opcode 3) until a save has to erase the other sector
+    // PARAM_REQ SAVE (opcode 3) of a changed set (WRITE can_timeout_s,
+    // APPLY) until a save has to erase the other sector; the requests 25 ms
+    // apart (the reply limiter's refill), SAVE's rate limit tested apart
     uint32_t saves = 0u;
     while (flash.erases == 0u && saves < 100u) {
+        const float t = (saves % 2u == 0u) ? 0.75f : 0.5f;
+        uint32_t u = 0u;
+        std::memcpy(&u, &t, sizeof u);
+        Send(0x18u, {1, MC_PARAM_ID_CAN_TIMEOUT_S, 0, 0, static_cast<uint8_t>(u),
+                     static_cast<uint8_t>(u >> 8), static_cast<uint8_t>(u >> 16),
+                     static_cast<uint8_t>(u >> 24)});
+        SlowSteps(25);
+        Send(0x18u, {2, 0, 0, 0, 0, 0, 0, 0});
+        SlowSteps(25);
+        app.srv.save_tokens = MC_PARAM_SAVE_BURST;
         Send(0x18u, {3, 0, 0, 0, 0, 0, 0, 0});
-        SlowSteps(1);
+        SlowSteps(25);
         ++saves;
         ASSERT_EQ(saves, app.store.saves) << "each SAVE stored";
     }
@@ -347,6 +361,148 @@ TEST_F(McApp, SaveStretchesTheWatchdogAroundTheErase)
     EXPECT_EQ(3u, wdg.starts) << "start, stretched for the erase, restored";
     EXPECT_EQ(kWdgEraseMs, wdg.timeout_max_ms);
     EXPECT_EQ(kWdgMs, wdg.timeout_ms) << "normal timeout after the save";
+}
+
+// ---- issue 28: replies and the flash as budgets --------------------------
+
+uint32_t CmdOf(const mc_hal_can_frame_t &f)
+{
+    return f.id & 0x1Fu;
+}
+
+// 10 000 PARAM_REQ in 1 s used to give 10 000 replies (1.35 Mbit/s on a
+// 1 Mbit/s bus). Here 10 requests per 1 ms slow step for 10 s (half a
+// valid READ, half an unknown command, delivered by two receive
+// interrupts per step as they arrive): every reply (PARAM_REPLY and
+// CMD_ERROR) passes the one limiter, so no second carries more than the
+// MC_TM_REPLY_RESERVE_HZ frames the bus budget reserves, and the run
+// averages MC_TM_REPLY_MAX_HZ; the telemetry keeps its rates. Exact:
+// frame counts.
+TEST_F(McApp, AFloodOfRequestsCostsTheBusAtMostTheRepliesShare)
+{
+    Start();
+    const uint32_t node = defaults.can_node_id;
+    const mc_hal_can_frame_t read =
+        Frame(node << 5 | 0x18u, {0, MC_PARAM_ID_R_OHM, 0, 0, 0, 0, 0, 0});
+    const mc_hal_can_frame_t bad = Frame(node << 5 | 0x0Du, {});
+    constexpr uint32_t kSeconds = 10u, kPerStep = 10u;
+    const uint32_t steps_per_s = app.tick_hz;
+    uint32_t replies = 0u, replies_max_1s = 0u, hb = 0u, cur = 0u, answered = 0u;
+    for (uint32_t sec = 0u; sec < kSeconds; ++sec) {
+        uint32_t in_this_s = 0u;
+        for (uint32_t k = 0u; k < steps_per_s; ++k) {
+            for (uint32_t i = 0u; i < kPerStep; ++i) {
+                ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, (i % 2u == 0u) ? &read : &bad));
+                if (i == kPerStep / 2u - 1u) {
+                    mc_app_can_rx_isr(&app); // the fake's queue holds 8
+                }
+            }
+            SlowSteps(1);
+            mc_hal_can_frame_t f;
+            while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) {
+                const uint32_t cmd = CmdOf(f);
+                if (cmd == MC_CAN_CMD_PARAM_REPLY || cmd == MC_CAN_CMD_CMD_ERROR) {
+                    ++in_this_s;
+                    answered += (cmd == MC_CAN_CMD_PARAM_REPLY) ? 1u : 0u;
+                } else if (cmd == MC_CAN_CMD_HEARTBEAT) {
+                    ++hb;
+                } else if (cmd == MC_CAN_CMD_CURRENTS) {
+                    ++cur;
+                }
+            }
+        }
+        replies += in_this_s;
+        replies_max_1s = std::max(replies_max_1s, in_this_s);
+    }
+    const uint32_t sent = kSeconds * steps_per_s * kPerStep;
+    EXPECT_EQ(0u, app.rx_overflows) << "every request reached the handler";
+    EXPECT_EQ(sent, app.cmd.rx_accepted + app.cmd.rx_rejected);
+    // the bucket's depth plus the refill: 10 + 40 per second; the first
+    // step's 10 replies overfill the fake's 8-frame transmit queue (a
+    // frame the HAL refuses is counted, reply_dropped)
+    EXPECT_EQ(2u, app.cmd.reply_dropped);
+    EXPECT_EQ(MC_TM_REPLY_BURST + MC_TM_REPLY_MAX_HZ * kSeconds, replies + app.cmd.reply_dropped);
+    EXPECT_LE(replies_max_1s, MC_TM_REPLY_RESERVE_HZ);
+    EXPECT_EQ(sent - replies - app.cmd.reply_dropped, app.cmd.reply_limited)
+        << "each request not answered is counted";
+    EXPECT_GT(answered, 0u) << "READs are still answered";
+    EXPECT_EQ(kSeconds * defaults.tm_heartbeat_hz, hb) << "telemetry at its rates";
+    EXPECT_EQ(kSeconds * defaults.tm_currents_hz, cur);
+    const double bits = mc_can_frame_bits_worst(8u);
+    const double bus = static_cast<double>(defaults.can_bitrate_bps);
+    const double reserve = MC_TM_REPLY_RESERVE_HZ * bits / bus;
+    mc_record("flood_requests_per_s", static_cast<double>(sent) / kSeconds);
+    mc_record("bitrate_bps", bus);
+    mc_record("replies_per_s_mean", static_cast<double>(replies) / kSeconds,
+              MC_TM_REPLY_RESERVE_HZ);
+    mc_record("replies_max_in_1s", replies_max_1s, MC_TM_REPLY_RESERVE_HZ);
+    mc_record("reply_load_max_1s", replies_max_1s * bits / bus, reserve);
+    mc_record("requests_unanswered", static_cast<double>(app.cmd.reply_limited) / sent);
+    mc_record("unanswered_load_would_be", static_cast<double>(sent) / kSeconds * bits / bus);
+}
+
+// Flash wear, the worst case: a host saves a changed set whenever the
+// limiter lets it, on the STM32F405's configuration sectors (10 and 11,
+// 128 KiB each). Measured: saves per hour through the parameter service's
+// own time base, records per sector by counting saves between two erases;
+// from them the erases per sector and year, which must leave the F405's
+// 10 000 erase cycles (datasheet DS8626, N_END) at least 10 years.
+TEST_F(McApp, FlashWearUnderTheSaveRateLimitOnTheF405Sectors)
+{
+    constexpr uint32_t kF405Sector = 128u * 1024u;
+    const uint32_t sizes[2] = {kF405Sector, kF405Sector};
+    mem.assign(2u * kF405Sector, 0xFFu);
+    ASSERT_EQ(0, mc_fake_flash_init(&flash, mem.data(), sizes, 2u));
+    Start();
+    float t = 0.5f;
+    auto save_changed = [&]() {
+        t = (t == 0.5f) ? 0.75f : 0.5f;
+        uint32_t v = 0u;
+        std::memcpy(&v, &t, sizeof v);
+        EXPECT_EQ(MC_PARAM_OK,
+                  mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_TIMEOUT_S, &v));
+        v = 0u;
+        EXPECT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+        v = 0u;
+        return mc_param_srv_request(&app.srv, MC_PARAM_OP_SAVE, 0u, &v);
+    };
+    // one hour, a try every second (the limiter's own time base at tick_hz)
+    // (a try whose set equals the newest record is answered OK unwritten)
+    for (uint32_t sec = 0u; sec < 3600u; ++sec) {
+        const mc_param_status_t st = save_changed();
+        ASSERT_TRUE(st == MC_PARAM_OK || st == MC_PARAM_ERR_RATE_LIMIT) << st;
+        for (uint32_t k = 0u; k < app.tick_hz; ++k) {
+            mc_param_srv_tick(&app.srv, app.tick_hz);
+        }
+    }
+    const uint32_t saves_1h = app.store.saves;
+    // the bucket's 4, then one per 120 s (the 30th refill at 3600 s falls
+    // after the last try)
+    EXPECT_EQ(MC_PARAM_SAVE_BURST + 3600u / MC_PARAM_SAVE_PERIOD_S - 1u, saves_1h);
+    // records per sector: saves between two erases (the limiter set aside)
+    uint32_t saves = 0u, first = 0u;
+    while (flash.erases < 2u && saves < 10000u) {
+        app.srv.save_tokens = MC_PARAM_SAVE_BURST;
+        ASSERT_EQ(MC_PARAM_OK, save_changed());
+        ++saves;
+        if (flash.erases == 1u && first == 0u) {
+            first = saves;
+        }
+    }
+    const uint32_t per_sector = saves - first;
+    EXPECT_EQ(kF405Sector / (MC_CFG_REC_WORDS * 4u), per_sector);
+    // the sustained rate (the burst does not repeat without a reset)
+    const double per_hour = 3600.0 / MC_PARAM_SAVE_PERIOD_S;
+    const double erases_year = per_hour * 8766.0 / (2.0 * per_sector);
+    const double years = 10000.0 / erases_year;
+    EXPECT_GE(years, 10.0);
+    mc_record("record_bytes", MC_CFG_REC_WORDS * 4.0);
+    mc_record("records_per_sector", per_sector);
+    mc_record("save_burst", MC_PARAM_SAVE_BURST);
+    mc_record("save_period_s", MC_PARAM_SAVE_PERIOD_S);
+    mc_record("saves_first_hour", saves_1h);
+    mc_record("erases_per_sector_per_year", erases_year);
+    mc_record("years_to_10k_cycles", years, 10.0);
 }
 
 } // namespace

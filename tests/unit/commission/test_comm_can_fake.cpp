@@ -9,6 +9,7 @@
 // measurements themselves are tested on the plant: tests/sil/commission).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -37,11 +38,13 @@ class CommCan : public AppDrive {
     p = mc_params_default;
     ASSERT_EQ(MC_PARAMS_OK, mc_params_to_drive_cfg(&p, &cfg));
     InitDrive();
+    GoodSample();  // the bus measured, as by the fast loop of a drive at rest
+    (void)mc_drive_fast_step(&d);
     ASSERT_EQ(0, mc_param_srv_init(&srv, &p, &d, hal, nullptr, 0u));
     mc_can_cmd_cfg_t cc{};
     cc.node_id = 1u;
     cc.tick_hz = 2000u;
-    cc.timeout_s = 0.5f;
+    cc.timeout_s = timeout_s;
     cc.stop_ramp_a_per_s = 20.0f;
     cc.stop_decel_rad_s2 = 100.0f;
     cc.speed_max_rad_s = 100.0f;
@@ -62,7 +65,10 @@ class CommCan : public AppDrive {
     k.status_div = 200u;  // 10 Hz at the 2 kHz slow loop
     k.enc_pll_bw_rad_s = 1000.0f;
     ASSERT_EQ(MC_COMM_CAN_CFG_OK, mc_comm_can_init(&m, &k, &comm, &d, &srv));
-    if (attach) mc_can_cmd_attach_commission(&c, mc_comm_can_command, mc_comm_can_busy, &m);
+    if (attach) {
+      mc_can_cmd_attach_commission(&c, mc_comm_can_command, mc_comm_can_busy, mc_comm_can_host_lost,
+                                   &m);
+    }
   }
   mc_can_err_t Handle(uint32_t msg, const std::vector<float>& v) {
     mc_hal_can_frame_t f{};
@@ -71,22 +77,36 @@ class CommCan : public AppDrive {
                                                  static_cast<uint32_t>(v.size()), &f));
     return mc_can_cmd_handle(&c, &f, &fake.can_dev);
   }
-  mc_can_err_t Comm(uint32_t action, float i_test = 0.0f) {
-    return Handle(MC_CAN_MSG_COMMISSION_CMD, {static_cast<float>(action), i_test, 0.0f, 0.0f});
+  mc_can_err_t Comm(uint32_t action, float i_test = 0.0f, float v_test = 0.0f, float speed = 0.0f) {
+    return Handle(MC_CAN_MSG_COMMISSION_CMD, {static_cast<float>(action), i_test, v_test, speed});
   }
-  // n PWM periods with zero phase currents, the slow loop every kSlowDiv;
-  // the bus takes the frames sent at each slow step (the fake's queue
-  // holds 8, a bus controller's mailboxes empty as fast).
+  // n PWM periods with zero phase currents, the slow loop every kSlowDiv:
+  // the command handler's step (timeout, reply limiter), the host's
+  // HOST_HEARTBEAT every hb_every slow steps while `host`, and the
+  // commissioning step with the handler's reply limiter; the bus takes the
+  // frames sent at each slow step (the fake's queue holds 8, a bus
+  // controller's mailboxes empty as fast).
   void Run(uint32_t n) {
     for (uint32_t k = 1; k <= n; ++k) {
       ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, kVbus, kMask3));
       (void)mc_drive_fast_step(&d);
       if (k % kSlowDiv == 0u) {
-        mc_comm_can_step(&m, &fake.can_dev);
+        if (host && (slow_n % hb_every == 0u)) {
+          ASSERT_EQ(MC_CAN_ERR_NONE, Handle(MC_CAN_MSG_HOST_HEARTBEAT, {static_cast<float>(hb)}));
+          hb = static_cast<uint8_t>(hb + 1u);
+        }
+        ++slow_n;
+        mc_can_cmd_step(&c);
+        mc_comm_can_step(&m, &fake.can_dev, &c.reply);
         Collect();
       }
     }
   }
+  bool host = true;          // the host sends its keep-alive ...
+  uint32_t hb_every = 100u;  // ... every this many slow steps
+  float timeout_s = 0.5f;    // the command timeout (1000 slow steps)
+  uint8_t hb = 0;
+  uint32_t slow_n = 0;
   void Collect() {
     mc_hal_can_frame_t f;
     while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) {
@@ -222,7 +242,10 @@ TEST_F(CommCan, DoneStagesEveryResultThenApplyPutsThemInEffect) {
   const mc_params_t active_before = srv.active;
   comm.res = FullResultWithMech();
   comm.step = MC_COMM_STEP_DONE;  // as the plug-in leaves it
-  Run(20u * kSlowDiv);
+  // 13 frames under the reply limiter: what is left of the bucket (the
+  // progress statuses took it), then one token per 50 slow steps (40 per
+  // second at 2 kHz)
+  Run(1000u * kSlowDiv);
   EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
   EXPECT_FALSE(fake.pwm3.enabled);
   ASSERT_TRUE(m.staged);
@@ -251,7 +274,7 @@ TEST_F(CommCan, DoneStagesEveryResultThenApplyPutsThemInEffect) {
                                            e.g.speed_wc_rad_s, &kp, &ki));
   EXPECT_EQ(kp, e.p.speed_kp_a_s_rad);
   EXPECT_EQ(ki, e.p.speed_ki_a_rad);
-  // the end status, then one result per slow step, bit-exact
+  // the end status, then the results in order, bit-exact
   const auto rx = Drain();
   ASSERT_EQ(1u + MC_COMM_CAN_ITEM_COUNT, rx.size());
   EXPECT_EQ(MC_CAN_MSG_COMMISSION_STATUS, rx[0].msg);
@@ -283,7 +306,7 @@ TEST_F(CommCan, DoneStagesEveryResultThenApplyPutsThemInEffect) {
   EXPECT_EQ(kid, d.cfg.foc.ki_d_v_per_as);
   // REPORT sends them again
   ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_REPORT));
-  Run(20u * kSlowDiv);
+  Run(1000u * kSlowDiv);
   EXPECT_EQ(1u + MC_COMM_CAN_ITEM_COUNT, Drain().size());
 }
 
@@ -303,6 +326,137 @@ TEST_F(CommCan, AResultTheTableRefusesStagesNothing) {
       << "the writes before the refused one are undone";
   EXPECT_FALSE(srv.pending);
   for (const auto& r : Drain()) EXPECT_NE(MC_CAN_MSG_COMMISSION_RESULT, r.msg);
+}
+
+// Issue 28: commissioning energised the motor from one frame and ran on
+// with no host alive. Now it needs the keep-alive as an enabled drive. On
+// the fake (no current flows) the sequence fails NO_MOTOR after about
+// 0.2 s, so the timeout here is 0.05 s (100 slow steps) and the host's
+// heartbeats come every 40 steps. The host falls silent after its
+// heartbeat at slow step 40; at step 140 the bridge is open, the run
+// FAILED with HOST_LOST, the HEARTBEAT's stop reason CMD_TIMEOUT. Exact:
+// the step counts are integers.
+TEST_F(CommCan, RunWithoutTheHostsKeepAliveIsAbortedAtTheTimeout) {
+  timeout_s = 0.05f;
+  hb_every = 40u;
+  Boot();
+  ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START));
+  ASSERT_TRUE(fake.pwm3.enabled);
+  Run(60u * kSlowDiv);  // heartbeats at slow steps 0 and 40
+  host = false;         // silence from here
+  uint32_t steps = 0;
+  while (m.running && steps < 4000u) {
+    Run(kSlowDiv);
+    ++steps;
+  }
+  EXPECT_EQ(140u, 60u + steps) << "the timeout (100 steps) after the last heartbeat (step 40)";
+  EXPECT_FALSE(m.running);
+  EXPECT_FALSE(fake.pwm3.enabled) << "bridge open";
+  EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
+  EXPECT_EQ(MC_COMM_ERR_ABORTED | MC_COMM_ERR_HOST_LOST, m.err);
+  EXPECT_EQ(static_cast<uint8_t>(MC_COMM_STEP_FAILED), m.step);
+  EXPECT_EQ(MC_CAN_STOP_CMD_TIMEOUT, c.stop_reason);
+  Run(100u * kSlowDiv);  // the end status under the reply limiter
+  bool said = false;
+  for (const auto& r : Drain()) {
+    if (r.msg == MC_CAN_MSG_COMMISSION_STATUS &&
+        r.v[MC_CAN_COMMISSION_STATUS_STEP] == static_cast<float>(MC_COMM_STEP_FAILED)) {
+      said = r.v[MC_CAN_COMMISSION_STATUS_ERROR] ==
+             static_cast<float>(MC_COMM_ERR_ABORTED | MC_COMM_ERR_HOST_LOST);
+    }
+  }
+  EXPECT_TRUE(said) << "COMMISSION_STATUS FAILED with ABORTED | HOST_LOST";
+}
+
+// With the host alive the same run goes on past the timeout (three of
+// them): only a fresh HOST_HEARTBEAT keeps it, a repeated counter does not.
+TEST_F(CommCan, AdvancingHeartbeatsKeepItRepeatsDoNot) {
+  timeout_s = 0.05f;
+  hb_every = 40u;
+  Boot();
+  ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START));
+  Run(300u * kSlowDiv);  // heartbeats at 0, 40, ..., 280
+  EXPECT_TRUE(m.running) << "err 0x" << std::hex << m.err;
+  host = false;
+  uint32_t steps = 0;
+  for (; steps < 400u && m.running; ++steps) {
+    if (steps % 20u == 0u) {  // the last counter again
+      EXPECT_EQ(MC_CAN_ERR_STALE, Handle(MC_CAN_MSG_HOST_HEARTBEAT,
+                                         {static_cast<float>(static_cast<uint8_t>(hb - 1u))}));
+    }
+    Run(kSlowDiv);
+  }
+  EXPECT_EQ(80u, steps) << "timeout 100 steps after the last fresh one (step 280)";
+  EXPECT_FALSE(m.running);
+  EXPECT_EQ(MC_COMM_ERR_ABORTED | MC_COMM_ERR_HOST_LOST, m.err);
+}
+
+// Issue 28: i_test 65 A on a 20 A sensor and v_test_max 600 V on a 200 V
+// bus were accepted. The test values in force are checked against the
+// drive's limits: an option beyond them refused RANGE, nothing energised,
+// nothing changed; a zero option bounded by them.
+TEST_F(CommCan, TestValuesBeyondTheDrivesLimitsAreRefusedNothingEnergised) {
+  Boot();
+  const float v_max = kVbus / std::sqrt(3.0f);  // the vector the bus can make
+  struct Case {
+    float i, v, w;
+    const char* what;
+  } cases[] = {
+      {p.i_max_a + 0.01f, 0.0f, 0.0f, "i_test above i_max_a"},
+      {65.0f, 0.0f, 0.0f, "the issue's 65 A"},
+      {0.0f, v_max + 0.01f, 0.0f, "v_test_max above v_bus / sqrt 3"},
+      {0.0f, 600.0f, 0.0f, "the issue's 600 V"},
+      {0.0f, 0.0f, p.speed_max_rad_s + 0.1f, "speed above speed_max_rad_s"},
+  };
+  for (const auto& k : cases) {
+    const mc_drive_t d0 = d;
+    EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START, k.i, k.v, k.w)) << k.what;
+    EXPECT_FALSE(m.running) << k.what;
+    EXPECT_FALSE(fake.pwm3.enabled) << k.what;
+    EXPECT_EQ(0, std::memcmp(&d0, &d, sizeof d)) << k.what << ": the drive changed";
+  }
+  // a bus not measured (the fast loop has not sampled it): refused
+  d.tm.vbus_v = 0.0f;
+  EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START)) << "no bus measured";
+  EXPECT_FALSE(fake.pwm3.enabled);
+  // A zero option takes the board's default bounded by the drive's limits
+  // (the images' boards default to a quarter of their sense range, above a
+  // small motor's i_max_a): the bus sagging to 15 V bounds the 10 V
+  // default to 15 V / sqrt 3, i_max_a 3 A the 4 A, speed_max_rad_s 50 the
+  // 100 rad/s (each exact: min of two floats).
+  auto sample = [&](float vbus) {  // one conversion, one fast step
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 0.0f, 0.0f, 0.0f, vbus, kMask3));
+    (void)mc_drive_fast_step(&d);
+  };
+  auto apply = [&](float i_max, float w_max) {  // the runtime limits, by the service
+    uint32_t raw = 0;
+    std::memcpy(&raw, &i_max, sizeof raw);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, &raw));
+    std::memcpy(&raw, &w_max, sizeof raw);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_SPEED_MAX_RAD_S, &raw));
+    raw = 0;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&srv, MC_PARAM_OP_APPLY, 0u, &raw));
+  };
+  apply(3.0f, 50.0f);
+  sample(15.0f);
+  ASSERT_EQ(15.0f, d.tm.vbus_v);
+  ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START));
+  EXPECT_EQ(15.0f * 0.57735026918962576f, comm.cfg.v_test_max_v);
+  EXPECT_EQ(3.0f, comm.cfg.i_test_a);
+  EXPECT_EQ(50.0f, comm.cfg.speed_max_m_rad_s);
+  ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_ABORT));
+  // an option above them is still refused
+  EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START, 3.5f));
+  apply(p.i_max_a, p.speed_max_rad_s);
+  sample(kVbus);
+  // without the parameter set the over-speed trip bounds it
+  m.params = nullptr;
+  EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START, 0.0f, 0.0f, d.cfg.omega_max_rad_s));
+  // at the limits themselves: accepted (the DBC's steps: 1 mA, 10 mV, 0.1 rad/s)
+  EXPECT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START, p.i_max_a, 13.85f, 590.0f));
+  EXPECT_TRUE(m.running);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 // exactly the defaults / the previous record, never a mixture.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -234,12 +235,22 @@ TEST(CfgStore, FlashErrorKeepsPrevious)
 // half done), reboot, and require exactly the previous configuration; the
 // store must then save and load normally. A cut after the last step (no
 // cut) must give the new one.
-void PowerCutSweep(uint32_t sector_bytes, uint32_t saves, uint32_t *p_cases, uint32_t *p_erase_cuts)
+// first_seq != 0: the store starts with one record of that sequence number
+// (written by hand), and every save's number is checked.
+void PowerCutSweep(uint32_t sector_bytes, uint32_t saves, uint32_t *p_cases, uint32_t *p_erase_cuts,
+                   uint32_t first_seq = 0u)
 {
     Rig r(sector_bytes);
     mc_params_t p{};
-    r.Boot(&p);
     mc_params_t old = mc_params_default;
+    if (first_seq != 0u) {
+        old = Variant(100);
+        const auto rec = Record(MC_PARAMS_LAYOUT_VERSION, first_seq, Entries(old));
+        std::memcpy(r.Sector(1), rec.data(), rec.size() * 4u);
+    }
+    r.Boot(&p);
+    ASSERT_TRUE(Same(p, old));
+    uint32_t seq = first_seq;
     for (uint32_t i = 0; i < saves; ++i) {
         const mc_params_t next = Variant(i);
         const std::vector<uint8_t> before = r.mem;
@@ -277,7 +288,9 @@ void PowerCutSweep(uint32_t sector_bytes, uint32_t saves, uint32_t *p_cases, uin
         }
         r.mem = after;
         ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
-        ASSERT_TRUE(Same(p, next));
+        ASSERT_TRUE(Same(p, next)) << "save " << i;
+        seq = (seq == 0xFFFFFFFFu) ? 1u : seq + 1u; // 0 means "none": skipped
+        ASSERT_EQ(r.store.seq, seq) << "save " << i;
         old = next;
     }
 }
@@ -299,6 +312,57 @@ TEST(CfgStore, PowerCutAtEveryStepAppendAndSwitch)
     // 2 records per sector: saves 3, 5, 7 start a sector (erase)
     EXPECT_EQ(cases, 2u * (7u * MC_CFG_REC_WORDS + 3u));
     EXPECT_EQ(erase_cuts, 2u * 3u);
+}
+
+// The sequence number's wrap (issue 28: at 0xFFFFFFFF the next save wrote
+// 0, was answered OK, and the next boot took the old record). From
+// 0xFFFFFFFE on, through 0xFFFFFFFF, 1, 2, ...: every save boots as the
+// newest, with a power cut at every step of every save leaving the old
+// set, in both sector layouts (appends, and a switch at every save).
+TEST(CfgStore, SequenceNumberWrapsAndTheNewestStillWins)
+{
+    uint32_t cases = 0, erase_cuts = 0;
+    PowerCutSweep(kRecBytes * 2u + 32u, 5, &cases, &erase_cuts, 0xFFFFFFFEu);
+    // the hand-made record fills half of A: saves 2 and 4 start a sector
+    EXPECT_EQ(cases, 2u * (5u * MC_CFG_REC_WORDS + 2u));
+    EXPECT_EQ(erase_cuts, 2u * 2u);
+    cases = erase_cuts = 0;
+    PowerCutSweep(kRecBytes + 16u, 4, &cases, &erase_cuts, 0xFFFFFFFEu);
+    EXPECT_EQ(erase_cuts, 2u * 4u) << "every save erases";
+    // the comparison itself: serial-number arithmetic
+    EXPECT_TRUE(mc_cfg_store_seq_newer(1u, 0xFFFFFFFFu));
+    EXPECT_TRUE(mc_cfg_store_seq_newer(0xFFFFFFFFu, 0xFFFFFFFEu));
+    EXPECT_FALSE(mc_cfg_store_seq_newer(0xFFFFFFFFu, 1u));
+    EXPECT_EQ(1u, mc_cfg_store_seq_next(0xFFFFFFFFu));
+    EXPECT_EQ(0xFFFFFFFFu, mc_cfg_store_seq_next(0xFFFFFFFEu));
+}
+
+// mc_cfg_store_holds: the newest record is exactly what a save would write
+// (the parameter service skips such a SAVE); a changed value, an older
+// record, or no record at all is not.
+TEST(CfgStore, HoldsTellsAnUnchangedSet)
+{
+    Rig r(kRecBytes * 3u + 64u);
+    mc_params_t p{};
+    r.Boot(&p);
+    const mc_params_t a = Variant(1), b = Variant(2);
+    EXPECT_FALSE(mc_cfg_store_holds(&r.store, &a)) << "empty store";
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &a), 0);
+    EXPECT_TRUE(mc_cfg_store_holds(&r.store, &a));
+    EXPECT_FALSE(mc_cfg_store_holds(&r.store, &b));
+    mc_params_t a1 = a;
+    a1.i_max_a = std::nextafter(a.i_max_a, 100.0f); // one ulp
+    EXPECT_FALSE(mc_cfg_store_holds(&r.store, &a1));
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &b), 0);
+    EXPECT_FALSE(mc_cfg_store_holds(&r.store, &a)) << "a is only in the older record";
+    r.Boot(&p);
+    EXPECT_TRUE(mc_cfg_store_holds(&r.store, &b)) << "after a reboot too";
+    // a record of another layout holding the same values is not ours
+    Rig r2(4096);
+    const auto rec = Record(MC_PARAMS_LAYOUT_VERSION + 1u, 3, Entries(a));
+    std::memcpy(r2.Sector(1), rec.data(), rec.size() * 4u);
+    r2.Boot(&p);
+    EXPECT_FALSE(mc_cfg_store_holds(&r2.store, &a));
 }
 
 } // namespace

@@ -87,9 +87,21 @@ class ParamCan : public ::testing::Test
         f.data[2] = static_cast<uint8_t>(id >> 8);
         for (int i = 0; i < 4; ++i)
             f.data[4 + i] = static_cast<uint8_t>(value >> (8 * i));
+        if (top_up) {
+            c.reply.tokens = MC_TM_REPLY_BURST; // time counted by the test alone
+        }
         EXPECT_EQ(MC_CAN_ERR_NONE, mc_can_cmd_handle(&c, &f, fake.board.can));
+        // as a host does: wait for the reply (the reply limiter may hold it
+        // for a few supervision steps: one token per 25 ms)
         mc_hal_can_frame_t r{};
-        EXPECT_EQ(0, mc_hal_fake_can_tx_pop(&fake, &r)) << "one PARAM_REPLY per request";
+        int waited = 0;
+        while (mc_hal_fake_can_tx_pop(&fake, &r) != 0 && waited < 100) {
+            mc_can_cmd_step(&c);
+            ++waited;
+        }
+        EXPECT_LE(waited, 25) << "a reply held longer than one token's refill";
+        mc_hal_can_frame_t more{};
+        EXPECT_NE(0, mc_hal_fake_can_tx_pop(&fake, &more)) << "one PARAM_REPLY per request";
         EXPECT_EQ(mc_can_id(c.cfg.node_id, MC_CAN_CMD_PARAM_REPLY), r.id);
         EXPECT_EQ(8u, r.len);
         Reply out{r.data[0], static_cast<uint32_t>(r.data[1] | (r.data[2] << 8)), r.data[3], 0};
@@ -118,6 +130,7 @@ class ParamCan : public ::testing::Test
     mc_telemetry_t tm{};
     mc_can_cmd_t c{};
     mc_param_srv_t srv{};
+    bool top_up = false; // Req tops the reply limiter up (tested apart)
 };
 
 TEST_F(ParamCan, ReadValuesAndStatus)
@@ -266,7 +279,9 @@ TEST_F(ParamCan, FaultLatchedOnlyReadsAndTheClearPath)
 TEST_F(ParamCan, SaveSurvivesRebootNodeIdOnlyAfterReset)
 {
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, Bits(7.0f)).status);
-    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
+    EXPECT_EQ(MC_PARAM_ERR_NEEDS_CONFIRM,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_CONFIRM, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
     EXPECT_EQ(1u, c.cfg.node_id) << "the node id changes only after save + reset";
     Reply r = Req(MC_PARAM_OP_SAVE, 0);
@@ -277,13 +292,17 @@ TEST_F(ParamCan, SaveSurvivesRebootNodeIdOnlyAfterReset)
     EXPECT_EQ(5u, c.cfg.node_id);
     EXPECT_EQ(7.0f, d.cfg.i_max_a);
     EXPECT_EQ(Bits(7.0f), Req(MC_PARAM_OP_READ, MC_PARAM_ID_I_MAX_A).value); // node 5 now
-    // defaults: staged, applied, saved, and after a reset the node is 1 again
+    // defaults: staged, applied, saved, and after a reset every value is the
+    // default but the node id and bit rate, which LOAD_DEFAULTS keeps (it
+    // cannot move the node: that takes a WRITE and its CONFIRM)
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_LOAD_DEFAULTS, 0).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status);
     Boot();
-    EXPECT_EQ(0, std::memcmp(&p, &mc_params_default, sizeof p));
-    EXPECT_EQ(1u, c.cfg.node_id);
+    mc_params_t want = mc_params_default;
+    want.can_node_id = 5u;
+    EXPECT_EQ(0, std::memcmp(&p, &want, sizeof p));
+    EXPECT_EQ(5u, c.cfg.node_id);
 }
 
 TEST_F(ParamCan, HeartbeatSaysWhenDefaultsWereLoaded)
@@ -298,6 +317,210 @@ TEST_F(ParamCan, HeartbeatSaysWhenDefaultsWereLoaded)
     ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
     EXPECT_EQ(static_cast<float>(MC_CAN_VAL_CFG_STATUS_CORRUPT), v[MC_CAN_HEARTBEAT_CFG_STATUS]);
     EXPECT_EQ(0, std::memcmp(&p, &mc_params_default, sizeof p));
+}
+
+// ---- issue 28: the access classes protect, the flash is a budget ----------
+
+// Protections could be switched off while the motor ran (omega_max 0,
+// temp_max 0, stall detection 0, can_timeout_s 60: WRITE + APPLY answered
+// OK with the bridge on). Every trip, supervision limit, the command
+// timeout and the stop ramps are `stopped` now: refused RUNNING, nothing
+// staged; the same writes go through once the bridge is off.
+TEST_F(ParamCan, ProtectionsCannotBeSwitchedOffWhileRunning)
+{
+    struct W {
+        uint32_t id;
+        uint32_t raw;
+    } writes[] = {
+        {MC_PARAM_ID_OMEGA_MAX_RAD_S, Bits(0.0f)},   {MC_PARAM_ID_TEMP_MAX_C, Bits(0.0f)},
+        {MC_PARAM_ID_STALL_TIME_S, Bits(0.0f)},      {MC_PARAM_ID_STALL_CURRENT_FRAC, Bits(0.0f)},
+        {MC_PARAM_ID_STALL_SPEED_RAD_S, Bits(0.0f)}, {MC_PARAM_ID_I_UNBALANCE_MAX_A, Bits(0.0f)},
+        {MC_PARAM_ID_CAN_TIMEOUT_S, Bits(60.0f)},    {MC_PARAM_ID_I_TRIP_A, Bits(59.0f)},
+        {MC_PARAM_ID_VBUS_MAX_V, Bits(1000.0f)},     {MC_PARAM_ID_VBUS_MIN_V, Bits(0.5f)},
+        {MC_PARAM_ID_STOP_DECEL_RAD_S2, Bits(0.1f)}, {MC_PARAM_ID_STOP_RAMP_A_PER_S, Bits(0.1f)},
+    };
+    Run();
+    const mc_params_t staged = srv.staged;
+    for (const W &w : writes) {
+        const mc_param_info_t *info = mc_param_find(w.id, nullptr);
+        ASSERT_NE(nullptr, info);
+        EXPECT_EQ(MC_PARAM_ACCESS_STOPPED, info->access) << "id " << w.id;
+        EXPECT_EQ(MC_PARAM_ERR_RUNNING, Req(MC_PARAM_OP_WRITE, w.id, w.raw).status)
+            << "id " << w.id;
+    }
+    EXPECT_EQ(0, std::memcmp(&staged, &srv.staged, sizeof staged)) << "nothing staged";
+    EXPECT_FALSE(srv.pending);
+    EXPECT_EQ(600.0f, d.cfg.omega_max_rad_s);
+    EXPECT_EQ(500u, c.timeout_ticks);
+    // bridge off: allowed (the operator's decision, with the motor at rest)
+    ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_IDLE));
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_OMEGA_MAX_RAD_S, Bits(0.0f)).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_TIMEOUT_S, Bits(2.0f)).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
+    EXPECT_EQ(0.0f, d.cfg.omega_max_rad_s);
+    EXPECT_EQ(2000u, c.timeout_ticks);
+}
+
+// Three frames (WRITE node id, APPLY, SAVE) used to move the drive off its
+// bus at the next boot. A node id or bit rate now needs a CONFIRM, the
+// very next request, same id and value, within 2 s; every other way
+// stages nothing.
+TEST_F(ParamCan, NodeIdAndBitRateNeedTheirConfirmRightAfterTheWrite)
+{
+    top_up = true;
+    // the issue's three frames: refused, the store keeps node 1
+    EXPECT_EQ(MC_PARAM_ERR_NEEDS_CONFIRM,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
+    EXPECT_EQ(1u, srv.staged.can_node_id) << "nothing staged by the WRITE";
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status);
+    Boot();
+    EXPECT_EQ(1u, c.cfg.node_id);
+    // CONFIRM without its WRITE, of another value or id, after another request
+    const mc_params_t staged = srv.staged;
+    EXPECT_EQ(MC_PARAM_ERR_NOT_CONFIRMED,
+              Req(MC_PARAM_OP_CONFIRM, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
+    EXPECT_EQ(MC_PARAM_ERR_NEEDS_CONFIRM,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
+    EXPECT_EQ(MC_PARAM_ERR_NOT_CONFIRMED,
+              Req(MC_PARAM_OP_CONFIRM, MC_PARAM_ID_CAN_NODE_ID, 6u).status);
+    EXPECT_EQ(MC_PARAM_ERR_NOT_CONFIRMED,
+              Req(MC_PARAM_OP_CONFIRM, MC_PARAM_ID_CAN_NODE_ID, 5u).status)
+        << "a failed CONFIRM disarms";
+    EXPECT_EQ(MC_PARAM_ERR_NEEDS_CONFIRM,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_BITRATE_BPS, 250000u).status);
+    EXPECT_EQ(MC_PARAM_ERR_NOT_CONFIRMED,
+              Req(MC_PARAM_OP_CONFIRM, MC_PARAM_ID_CAN_NODE_ID, 250000u).status);
+    EXPECT_EQ(MC_PARAM_ERR_NEEDS_CONFIRM,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_BITRATE_BPS, 250000u).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_READ, MC_PARAM_ID_CAN_BITRATE_BPS).status);
+    EXPECT_EQ(MC_PARAM_ERR_NOT_CONFIRMED,
+              Req(MC_PARAM_OP_CONFIRM, MC_PARAM_ID_CAN_BITRATE_BPS, 250000u).status)
+        << "not the very next request";
+    EXPECT_EQ(0, std::memcmp(&staged, &srv.staged, sizeof staged));
+    // the window: 2 s at the 1 kHz supervision step (2000 steps), exact
+    EXPECT_EQ(MC_PARAM_ERR_NEEDS_CONFIRM,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
+    for (int k = 0; k < 2001; ++k) {
+        mc_can_cmd_step(&c);
+    }
+    EXPECT_EQ(MC_PARAM_ERR_NOT_CONFIRMED,
+              Req(MC_PARAM_OP_CONFIRM, MC_PARAM_ID_CAN_NODE_ID, 5u).status)
+        << "late";
+    EXPECT_EQ(MC_PARAM_ERR_NEEDS_CONFIRM,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
+    for (int k = 0; k < 1990; ++k) {
+        mc_can_cmd_step(&c);
+    }
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_CONFIRM, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
+    EXPECT_EQ(5u, srv.staged.can_node_id);
+    // writing the value already staged needs no confirmation
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_NODE_ID, 5u).status);
+    // LOAD_DEFAULTS keeps the staged node id and bit rate
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_LOAD_DEFAULTS, 0).status);
+    EXPECT_EQ(5u, srv.staged.can_node_id);
+    EXPECT_EQ(500000u, srv.staged.can_bitrate_bps);
+    // and it takes effect after APPLY, SAVE and a reset only
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status);
+    EXPECT_EQ(1u, c.cfg.node_id);
+    Boot();
+    EXPECT_EQ(5u, c.cfg.node_id);
+}
+
+// 2000 SAVEs in 2 s were all written (55 erases on the issue's SIL flash).
+// Now an unchanged set is not written at all, and changed sets go through
+// the bucket: 4, then one per 120 s; RATE_LIMIT says how long to wait.
+TEST_F(ParamCan, SaveSkipsAnUnchangedSetAndIsRateLimited)
+{
+    top_up = true;
+    Reply r = Req(MC_PARAM_OP_SAVE, 0);
+    ASSERT_EQ(MC_PARAM_OK, r.status);
+    EXPECT_EQ(1u, r.value);
+    const uint32_t steps = flash.steps;
+    for (int k = 0; k < 2000; ++k) {
+        r = Req(MC_PARAM_OP_SAVE, 0);
+        ASSERT_EQ(MC_PARAM_OK, r.status) << k;
+        ASSERT_EQ(1u, r.value) << "the record that holds the set";
+        mc_can_cmd_step(&c); // 1 ms
+    }
+    EXPECT_EQ(steps, flash.steps) << "no erase, no program for an unchanged set";
+    EXPECT_EQ(2000u, srv.saves_skipped);
+    EXPECT_EQ(1u, store.saves);
+    // changed sets: 3 more tokens in the bucket (4 at boot, one used)
+    float i_max = 5.0f;
+    auto change = [&]() {
+        i_max += 0.5f;
+        ASSERT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, Bits(i_max)).status);
+        ASSERT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
+    };
+    for (uint32_t k = 0; k < 3; ++k) {
+        change();
+        EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status);
+    }
+    EXPECT_EQ(4u, store.saves);
+    change();
+    r = Req(MC_PARAM_OP_SAVE, 0);
+    EXPECT_EQ(MC_PARAM_ERR_RATE_LIMIT, r.status);
+    // the bucket refills one per 120 s; 2 s of steps have passed since it
+    // began refilling (the first SAVE used its first token): 118 s to wait
+    EXPECT_EQ(118u, r.value) << "seconds until the next SAVE";
+    const uint32_t steps2 = flash.steps;
+    for (uint32_t k = 0; k < 117999u; ++k) {
+        mc_can_cmd_step(&c);
+    }
+    EXPECT_EQ(MC_PARAM_ERR_RATE_LIMIT, Req(MC_PARAM_OP_SAVE, 0).status) << "1 ms early";
+    EXPECT_EQ(steps2, flash.steps) << "a refused SAVE touches no flash";
+    mc_can_cmd_step(&c);
+    r = Req(MC_PARAM_OP_SAVE, 0);
+    EXPECT_EQ(MC_PARAM_OK, r.status);
+    EXPECT_EQ(5u, r.value);
+    EXPECT_EQ(2u, srv.saves_limited);
+    // a reboot boots the newest
+    Boot();
+    EXPECT_EQ(i_max, p.i_max_a);
+}
+
+// The bucket refilled at a reset, and a CAN node can reset the drive: ENTER
+// the bootloader, then its RUN. 4 SAVEs, a reset, 4 more, ... would have
+// written as fast as the bootloader cycles. The application's side of the
+// update now sees "busy" (ENTER refused BUSY) until the bucket is full
+// again, so a reset gives no SAVE the limiter had not allowed. Exact: the
+// refill is counted in the 1 kHz supervision steps.
+TEST_F(ParamCan, NoResetIntoTheBootloaderBeforeTheSaveBucketIsFull)
+{
+    struct Seen {
+        int calls = 0;
+        bool busy = false;
+    } seen;
+    mc_can_cmd_attach_boot(
+        &c,
+        [](void *ctx, const mc_hal_can_frame_t *, bool busy, const mc_hal_can_t *) {
+            auto *k = static_cast<Seen *>(ctx);
+            k->calls++;
+            k->busy = busy;
+        },
+        &seen);
+    mc_hal_can_frame_t enter{};
+    enter.id = mc_can_id(c.cfg.node_id, MC_CAN_CMD_BOOT_REQ);
+    enter.len = 8;
+    auto boot_busy = [&]() {
+        c.reply.tokens = MC_TM_REPLY_BURST;
+        EXPECT_EQ(MC_CAN_ERR_NONE, mc_can_cmd_handle(&c, &enter, fake.board.can));
+        return seen.busy;
+    };
+    top_up = true;
+    EXPECT_FALSE(boot_busy()) << "a full bucket (boot): the update may reset";
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status) << "unchanged: no token";
+    EXPECT_TRUE(boot_busy()) << "one token spent";
+    for (uint32_t k = 0; k + 1u < MC_PARAM_SAVE_PERIOD_S * 1000u; ++k) {
+        mc_can_cmd_step(&c);
+    }
+    EXPECT_TRUE(boot_busy()) << "1 ms before the refill";
+    mc_can_cmd_step(&c);
+    EXPECT_FALSE(boot_busy()) << "full again";
+    EXPECT_EQ(4, seen.calls);
 }
 
 TEST_F(ParamCan, HeartbeatReportsTheStoreAfterASave)
@@ -318,7 +541,14 @@ TEST_F(ParamCan, HeartbeatReportsTheStoreAfterASave)
     EXPECT_EQ(static_cast<uint32_t>(MC_CFG_BOOT_STORED),
               Req(MC_PARAM_OP_READ, MC_PARAM_ID_CFG_STORE_STATUS).value);
     EXPECT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_EMPTY), srv.boot_status) << "the boot's, kept";
-    // a SAVE the flash refuses: the heartbeat says so
+    // a SAVE of the unchanged set writes nothing and the set is stored
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_SAVE, 0).status);
+    ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));
+    EXPECT_EQ(static_cast<float>(MC_CAN_VAL_CFG_STATUS_STORED), v[MC_CAN_HEARTBEAT_CFG_STATUS]);
+    EXPECT_EQ(1u, srv.saves_skipped);
+    // a SAVE of a changed set the flash refuses: the heartbeat says so
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, Bits(7.5f)).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
     flash.fail_next = -EIO;
     EXPECT_EQ(MC_PARAM_ERR_STORE, Req(MC_PARAM_OP_SAVE, 0).status);
     ASSERT_TRUE(mc_telemetry_values(MC_TM_HEARTBEAT, &src, v));

@@ -54,7 +54,8 @@ def rows(results, present, table):
 
 #: MC_COMM_ERR_* bit names (firmware/app/commission/mc_commission.h)
 ERROR_BITS = ["OFFSET", "NO_MOTOR", "OPEN_PHASE", "ENCODER_NO_MOTION", "ROTOR_BLOCKED",
-              "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT", "VOLTAGE", "RANGE", "MEAS", "ABORTED"]
+              "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT", "VOLTAGE", "RANGE", "MEAS", "ABORTED",
+              "HOST_LOST"]
 ERROR_HELP = {
     "OFFSET": "a current-sensor offset is implausible (sensor broken?)",
     "NO_MOTOR": "no current flows on any axis: is a motor connected?",
@@ -68,6 +69,7 @@ ERROR_HELP = {
     "RANGE": "a measured value is not plausible (or the parameter table refused it)",
     "MEAS": "no encoder sample, or a non-finite one",
     "ABORTED": "stopped (ABORT, disable, or the drive stopped it)",
+    "HOST_LOST": "the host's keep-alive (HOST_HEARTBEAT) stopped: the drive aborted it",
 }
 
 
@@ -112,19 +114,22 @@ class Collector:
 
 
 def calibrate(drive, i_test_a=0.0, v_test_max_v=0.0, speed_max_m_rad_s=0.0, timeout=30.0,
-              on_status=None, abort_on_exit=False):
+              on_status=None, abort_on_exit=False, keepalive=0.05):
     """Start commissioning on `drive` (mdtool.can.client.Drive) and wait
-    until it ends and every result arrived. Raises Refused when the drive
-    refuses the command, NoReply when it falls silent for `timeout` s.
-    With `abort_on_exit`, leaving before the drive ended it (no progress,
-    an exception, Ctrl-C / SIGTERM) sends ABORT first."""
+    until it ends and every result arrived, sending the keep-alive
+    (HOST_HEARTBEAT every `keepalive` s: the drive aborts a run whose host
+    falls silent, error HOST_LOST). Raises Refused when the drive refuses
+    the command, NoReply when it falls silent for `timeout` s. With
+    `abort_on_exit`, leaving before the drive ended it (no progress, an
+    exception, Ctrl-C / SIGTERM) sends ABORT first."""
     col = Collector()
     start = drive.frame("COMMISSION_CMD", action=1, i_test_a=i_test_a, v_test_max_v=v_test_max_v,
                         speed_max_m_rad_s=speed_max_m_rad_s)
     drive.bus.send(start)
+    drive.host_heartbeat()
     refused = False
     try:
-        _follow(drive, col, timeout, on_status)
+        _follow(drive, col, timeout, on_status, keepalive)
     except Refused:
         refused = True  # the start was refused: nothing runs to abort
         raise
@@ -134,12 +139,15 @@ def calibrate(drive, i_test_a=0.0, v_test_max_v=0.0, speed_max_m_rad_s=0.0, time
     return col.summary()
 
 
-def _follow(drive, col, timeout, on_status):
-    last = time.monotonic()
+def _follow(drive, col, timeout, on_status, keepalive):
+    last = t_hb = time.monotonic()
     while not col.complete:
+        if time.monotonic() - t_hb >= keepalive:
+            drive.host_heartbeat()
+            t_hb = time.monotonic()
         if time.monotonic() - last > timeout:
             raise NoReply(f"no commissioning progress from node {drive.node} within {timeout:g} s")
-        d = drive.decode(drive.bus.recv(0.1))
+        d = drive.decode(drive.bus.recv(min(0.1, keepalive)))
         if d is None:
             continue
         name, vals = d

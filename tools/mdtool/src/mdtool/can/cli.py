@@ -176,6 +176,19 @@ def _read(drive, p):
     return from_raw(p, drive.param("READ", p["id"]))
 
 
+def _write(drive, p, raw):
+    """WRITE; a new node id or bit rate (access reboot) is staged only by
+    the CONFIRM the drive asks for as the very next request."""
+    from .errors import Refused
+    try:
+        return drive.param("WRITE", p["id"], raw)
+    except Refused as e:
+        if e.status != "NEEDS_CONFIRM":
+            raise
+    print(f"{p['name']}: confirmed (in effect after APPLY, SAVE and a reset of the drive)")
+    return drive.param("CONFIRM", p["id"], raw)
+
+
 def cmd_config(a):
     from .files import check_writable
     from .params import fmt_value, from_raw, read_toml, to_raw, write_toml
@@ -229,7 +242,7 @@ def cmd_config(a):
             print("defaults staged")
         for k, v in writes:
             p = table.get(k)
-            got = d.param("WRITE", p["id"], to_raw(p, v))
+            got = _write(d, p, to_raw(p, v))
             print(f"{k} = {fmt_value(p, from_raw(p, got))} {p['unit']} (staged)")
         if a.action in ("set", "load", "defaults") and not a.no_apply:
             d.param("APPLY")

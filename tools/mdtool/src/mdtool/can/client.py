@@ -11,7 +11,7 @@ import time
 from .dbc import CMD_MASK, by_cmd, cmd_of, decode_signals, encode_signals, frame_id, node_of
 from .errors import CanToolError, NoReply, Refused, UsageError
 
-OPS = {"READ": 0, "WRITE": 1, "APPLY": 2, "SAVE": 3, "LOAD_DEFAULTS": 4}
+OPS = {"READ": 0, "WRITE": 1, "APPLY": 2, "SAVE": 3, "LOAD_DEFAULTS": 4, "CONFIRM": 5}
 #: What a PARAM_REPLY status means (firmware/app/config/README.md).
 STATUS_HELP = {
     "UNKNOWN_ID": "no parameter with this id on the drive",
@@ -22,8 +22,12 @@ STATUS_HELP = {
     "INVALID": "the staged set fails validation as a whole",
     "STORE": "the drive has no parameter store (or writing it failed)",
     "OPCODE": "unknown operation",
+    "NEEDS_CONFIRM": "a new node id or bit rate needs PARAM_REQ CONFIRM as the very next request",
+    "NOT_CONFIRMED": "CONFIRM without its WRITE right before it (or another value, or too late)",
+    "RATE_LIMIT": "SAVE is rate-limited (4, then one per 120 s)",
 }
-ERROR_HELP = {"UNSUPPORTED": "this drive does not offer it (e.g. no parameter service attached)"}
+ERROR_HELP = {"UNSUPPORTED": "this drive does not offer it (e.g. no parameter service attached)",
+              "LIMITED": "not served: the drive's reply rate limit (wait for each reply)"}
 
 
 def named(msg, vals):
@@ -142,7 +146,8 @@ class Drive:
         _n, vals = self.wait_for(match, timeout or self.timeout, f"PARAM_REPLY to {op}")
         if vals["status"] != "OK":
             st = vals["status"]
-            raise Refused(f"the drive refused {op}: {st}" + (f" ({STATUS_HELP[st]})" if st in STATUS_HELP else ""),
+            why = STATUS_HELP.get(st, "") + (f"; {int(vals['value'])} s to wait" if st == "RATE_LIMIT" else "")
+            raise Refused(f"the drive refused {op}: {st}" + (f" ({why})" if why else ""),
                           status=st, value=int(vals["value"]))
         return int(vals["value"])
 
