@@ -439,6 +439,15 @@ TEST_F(CommCan, TestValuesBeyondTheDrivesLimitsAreRefusedNothingEnergised) {
     raw = 0;
     ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&srv, MC_PARAM_OP_APPLY, 0u, &raw));
   };
+  {
+    // the under-voltage trip at 12 V (derived it is half of vbus_v, 24 V:
+    // a 15 V bus would be a fault, not a sag)
+    uint32_t raw = 0;
+    const float v_min = 12.0f;
+    std::memcpy(&raw, &v_min, sizeof raw);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_VBUS_MIN_V, &raw));
+  }
   apply(3.0f, 50.0f);
   sample(15.0f);
   ASSERT_EQ(15.0f, d.tm.vbus_v);
@@ -455,7 +464,9 @@ TEST_F(CommCan, TestValuesBeyondTheDrivesLimitsAreRefusedNothingEnergised) {
   m.params = nullptr;
   EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START, 0.0f, 0.0f, d.cfg.omega_max_rad_s));
   // at the limits themselves: accepted (the DBC's steps: 1 mA, 10 mV, 0.1 rad/s)
-  EXPECT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START, p.i_max_a, 13.85f, 590.0f));
+  // (10 rad/s below the trip: 440 of the derived 1.5 speed_max_rad_s)
+  EXPECT_EQ(MC_CAN_ERR_NONE,
+            Comm(MC_COMM_CAN_START, p.i_max_a, 13.85f, d.cfg.omega_max_rad_s - 10.0f));
   EXPECT_TRUE(m.running);
 }
 

@@ -341,6 +341,8 @@ TEST_F(ParamCan, ProtectionsCannotBeSwitchedOffWhileRunning)
     };
     Run();
     const mc_params_t staged = srv.staged;
+    const float w_trip = d.cfg.omega_max_rad_s; // derived: 1.5 speed_max_rad_s
+    ASSERT_GT(w_trip, 0.0f);
     for (const W &w : writes) {
         const mc_param_info_t *info = mc_param_find(w.id, nullptr);
         ASSERT_NE(nullptr, info);
@@ -350,14 +352,16 @@ TEST_F(ParamCan, ProtectionsCannotBeSwitchedOffWhileRunning)
     }
     EXPECT_EQ(0, std::memcmp(&staged, &srv.staged, sizeof staged)) << "nothing staged";
     EXPECT_FALSE(srv.pending);
-    EXPECT_EQ(600.0f, d.cfg.omega_max_rad_s);
+    EXPECT_EQ(w_trip, d.cfg.omega_max_rad_s);
     EXPECT_EQ(500u, c.timeout_ticks);
-    // bridge off: allowed (the operator's decision, with the motor at rest)
+    // bridge off: allowed (the operator's decision, with the motor at rest;
+    // 0 is the derived trip, so another value)
     ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_IDLE));
-    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_OMEGA_MAX_RAD_S, Bits(0.0f)).status);
+    EXPECT_EQ(MC_PARAM_OK,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_OMEGA_MAX_RAD_S, Bits(2.0f * w_trip)).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_TIMEOUT_S, Bits(2.0f)).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
-    EXPECT_EQ(0.0f, d.cfg.omega_max_rad_s);
+    EXPECT_EQ(2.0f * w_trip, d.cfg.omega_max_rad_s);
     EXPECT_EQ(2000u, c.timeout_ticks);
 }
 
