@@ -20,6 +20,11 @@ int cmd_bench(const std::vector<std::string>& args) {
       if (*end != '\0' || !(sim_s > 0.0) || !std::isfinite(sim_s)) {
         throw UsageError("bench: malformed --duration '" + args[i] + "'");
       }
+      if (sim_s > kMaxDurationS) {
+        throw UsageError("bench: --duration " + args[i] + " s is above " +
+                         std::to_string(static_cast<int>(kMaxDurationS)) +
+                         " s (one simulated hour, the longest run mcsim takes)");
+      }
     } else {
       throw UsageError("bench: unknown option '" + args[i] + "'");
     }
@@ -28,7 +33,7 @@ int cmd_bench(const std::vector<std::string>& args) {
   FocSil sil(o);
   mc_drive_t& d = sil.drive();
   if (mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT) != 0) throw std::runtime_error("mode refused");
-  const long n = std::lround(sim_s * o.pwm_hz);
+  const long n = step_count(sim_s, 1.0 / o.pwm_hz);
   // A load that keeps the loop busy: a symmetric square-wave q current
   // (+-2 A, 50 ms half-periods) swings the rotor between about +-66 rad/s,
   // so decoupling and the speed-dependent paths run, inside the drive's

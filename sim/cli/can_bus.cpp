@@ -16,10 +16,19 @@ std::string env_or(const char* name, const std::string& fallback) {
 
 }  // namespace
 
-std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& board, bool paced) {
+std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& board, bool paced,
+                                                     const std::string& out_dir) {
   hal_host::CanTransportConfig c;
   c.interface = env_or("MCSIM_CAN_IF", "");
-  c.log_path = env_or("MCSIM_CAN_LOG", "can-telemetry.candump.log");
+  // The candump log: MCSIM_CAN_LOG, else in the run's output directory
+  // (never the current directory).
+  c.log_path = env_or("MCSIM_CAN_LOG", "");
+  if (c.log_path.empty() && c.interface.empty()) {
+    if (out_dir.empty()) {
+      throw UsageError("can-telemetry in memory has no output directory: set MCSIM_CAN_LOG=FILE");
+    }
+    c.log_path = out_dir + "/can-telemetry.candump.log";
+  }
   c.log_iface = env_or("MCSIM_CAN_LOG_IFACE", "can0");
   c.script_path = env_or("MCSIM_CAN_CMDS", "");
   const std::string wait = env_or("MCSIM_CAN_WAIT_CLIENTS", "0");

@@ -98,6 +98,58 @@ mc_gains_motor_t gains_motor(const MotorFiles& f) {
   return gm;
 }
 
+// Where a file key's value came from ("FILE:LINE", or the --set that
+// replaced it); the file itself for a key left at its default.
+std::string where(const KeySources& at, const std::string& key, const std::string& file) {
+  const auto it = at.find(key);
+  return it != at.end() ? it->second : file;
+}
+
+// The refusals of mc_gains_derive's errors: no gains make these safe. Each
+// names the value its remedy changes (file and line, or its --set) and the
+// other side's values it was weighed against.
+void refuse_unsafe(const MotorFiles& f, uint32_t err, double i_limit_a) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  const double T = 1.0 / b.pwm_hz;
+  const double l_min = std::min(m.ld_h, m.lq_h);
+  const std::string l_at = where(m.at, m.ld_h <= m.lq_h ? "ld_h" : "lq_h", m.file);
+  if ((err & MC_GAINS_ERR_VALUE) != 0u) {
+    throw UsageError(m.file + ", " + b.file + ": no gains: a motor or board value is not positive");
+  }
+  if ((err & MC_GAINS_ERR_LR_SHORT) != 0u) {
+    throw UsageError(where(b.at, "pwm_hz", b.file) +
+                     ": no safe gains: the electrical time constant L/R = " + num(l_min / m.r_ohm) +
+                     " s (L at " + l_at + ", r_ohm at " + where(m.at, "r_ohm", m.file) +
+                     ") is shorter than two PWM periods (" + num(2 * T) + " s at " + num(b.pwm_hz) +
+                     " Hz): raise pwm_hz");
+  }
+  if ((err & MC_GAINS_ERR_RIPPLE) != 0u) {
+    throw UsageError(where(b.at, "pwm_hz", b.file) +
+                     ": no safe gains: the PWM current ripple vbus T / (4 L) = " +
+                     num(b.vbus_v * T / (4.0 * l_min)) + " A (peak to peak; L at " + l_at +
+                     ") exceeds i_max_a (" + num(m.i_max_a) + " A at " +
+                     where(m.at, "i_max_a", m.file) + "): raise pwm_hz or lower vbus_v (at " +
+                     where(b.at, "vbus_v", b.file) + ")");
+  }
+  if ((err & MC_GAINS_ERR_I_LIMIT) != 0u) {
+    throw UsageError(where(b.at, "i_sense_max_a", b.file) + ": no safe gains: the usable current " +
+                     num(i_limit_a) +
+                     " A (sensor range / 1.25, bus through R) is below 10 % of i_max_a (" +
+                     num(m.i_max_a) + " A at " + where(m.at, "i_max_a", m.file) + ")");
+  }
+  if ((err & MC_GAINS_ERR_SENSE) != 0u) {
+    throw UsageError(where(b.at, "i_sense_max_a", b.file) + ": i_limit_a " + num(i_limit_a) +
+                     " A leaves no margin to the current sensor's full scale " +
+                     num(b.i_sense_max_a) + " A");
+  }
+  if ((err & MC_GAINS_ERR_SPEED_LIMIT) != 0u) {
+    throw UsageError(where(b.at, "vbus_v", b.file) + ": no safe gains: the bus (" + num(b.vbus_v) +
+                     " V) cannot drive rated current (" + num(m.i_rated_a) +
+                     " A, the motor's R and flux: " + m.file + ") at any speed");
+  }
+}
+
 // The settable gains, in the firmware's struct and in Gains (one table).
 struct Pair {
   double mc_gains_t::*c;
@@ -139,10 +191,6 @@ const Pair kPairs[] = {
 // the same the drive derives from its parameter table); a --set value that
 // differs from its derived default is taken as given.
 Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
-  const MotorSpec& m = f.motor;
-  const BoardSpec& b = f.board;
-  const double T = 1.0 / b.pwm_hz;
-  const double l_min = std::min(m.ld_h, m.lq_h);
   mc_gains_t fix{};
   mc_gains_fix_none(&fix);
   if (p != nullptr && dflt != nullptr) {
@@ -158,32 +206,7 @@ Gains derive(const MotorFiles& f, const Params* p, const Gains* dflt) {
   mc_gains_t c{};
   const uint32_t err = mc_gains_derive(&gm, &fix, &c);
   // Refusals first: no gains make these safe.
-  if ((err & MC_GAINS_ERR_VALUE) != 0u) {
-    throw UsageError(m.file + ": no gains: a motor or board value is not positive");
-  }
-  if ((err & MC_GAINS_ERR_LR_SHORT) != 0u) {
-    throw UsageError(m.file + ": no safe gains: the electrical time constant L/R = " +
-                     num(l_min / m.r_ohm) + " s is shorter than two PWM periods (" + num(2 * T) +
-                     " s at " + num(b.pwm_hz) + " Hz): raise pwm_hz");
-  }
-  if ((err & MC_GAINS_ERR_RIPPLE) != 0u) {
-    throw UsageError(m.file + ": no safe gains: the PWM current ripple vbus T / (4 L) = " +
-                     num(b.vbus_v * T / (4.0 * l_min)) + " A (peak to peak) exceeds i_max_a (" +
-                     num(m.i_max_a) + " A): raise pwm_hz or lower vbus_v");
-  }
-  if ((err & MC_GAINS_ERR_I_LIMIT) != 0u) {
-    throw UsageError(m.file + ": no safe gains: the usable current " + num(c.i_limit_a) +
-                     " A (sensor range / 1.25, bus through R) is below 10 % of i_max_a");
-  }
-  if ((err & MC_GAINS_ERR_SENSE) != 0u) {
-    throw UsageError("i_limit_a " + num(c.i_limit_a) +
-                     " A leaves no margin to the current "
-                     "sensor's full scale " +
-                     num(b.i_sense_max_a) + " A");
-  }
-  if ((err & MC_GAINS_ERR_SPEED_LIMIT) != 0u) {
-    throw UsageError(m.file + ": no safe gains: the bus cannot drive rated current at any speed");
-  }
+  refuse_unsafe(f, err, c.i_limit_a);
   Gains g;
   for (const auto& q : kPairs) g.*(q.g) = c.*(q.c);
   g.pi2d_ok = g.pi2d_a_per_s >= 3.0 * g.pi2d_wn_rad_s;

@@ -9,7 +9,15 @@
 //                              configuration stored there and saves to it)
 //   mcsim bench [--duration S]
 //
-// Exit codes: 0 ok, 2 usage error (nothing written), 1 run failure.
+// Exit codes (sim/README.md, "Verdicts"):
+//   0  the run passed its verdict (or has no claim to check): DIR/<scenario>.csv
+//      and DIR/<scenario>.json;
+//   1  the run failed: its verdict is not a pass (not settled, faulted: ...),
+//      or it stopped on its way; DIR/<scenario>.partial.csv (the rows it
+//      wrote) and DIR/<scenario>.json (with the verdict);
+//   2  a usage error or a setting the scenario refused, before or during
+//      the run: nothing written (a directory --out created is removed).
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -49,8 +57,12 @@ double parse_positive(const std::string& what, const std::string& s) {
 
 int cmd_list() {
   for (const auto& s : mcsim::registry()) {
-    std::printf("%-28s %s (default %.3g s)\n", s.name.c_str(), s.description.c_str(),
-                s.default_duration_s);
+    if (s.takes_duration) {
+      std::printf("%-28s %s (default %.3g s)\n", s.name.c_str(), s.description.c_str(),
+                  s.default_duration_s);
+    } else {
+      std::printf("%-28s %s (no --duration)\n", s.name.c_str(), s.description.c_str());
+    }
   }
   return 0;
 }
@@ -67,8 +79,16 @@ int cmd_describe(const std::vector<std::string>& args) {
       throw mcsim::UsageError("describe: unexpected '" + args[i] + "'");
     }
   }
-  std::printf("%s: %s\ndefault duration: %g s\nparameters (--set key=value):\n", s.name.c_str(),
-              s.description.c_str(), s.default_duration_s);
+  std::printf("%s: %s\n", s.name.c_str(), s.description.c_str());
+  if (!s.takes_duration) {
+    std::printf("duration: set by what the scenario does (no --duration)\n");
+  } else if (s.default_duration_s > 0.0) {
+    std::printf("default duration: %g s (at most %g s)\n", s.default_duration_s,
+                mcsim::kMaxDurationS);
+  } else {
+    std::printf("default duration: derived from the motor (at most %g s)\n", mcsim::kMaxDurationS);
+  }
+  std::printf("parameters (--set key=value):\n");
   if (s.motor_params && motor.empty() && !s.motor_optional) {
     std::printf(
         "  (ranges and defaults depend on the motor: describe %s --motor FILE "
@@ -89,11 +109,67 @@ int cmd_describe(const std::vector<std::string>& args) {
   return 0;
 }
 
+// The directories of path that do not exist yet, outermost first.
+std::vector<std::filesystem::path> missing_dirs(const std::string& path) {
+  std::vector<std::filesystem::path> v;
+  std::error_code ec;
+  for (std::filesystem::path p = std::filesystem::absolute(path, ec).lexically_normal();
+       !p.empty() && !std::filesystem::exists(p, ec); p = p.parent_path()) {
+    v.insert(v.begin(), p);
+    if (p == p.parent_path()) break;
+  }
+  return v;
+}
+
+// The entries of dir whose names start with prefix.
+std::vector<std::string> entries(const std::string& dir, const std::string& prefix) {
+  std::vector<std::string> v;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string n = e.path().filename().string();
+    if (n.rfind(prefix, 0) == 0) v.push_back(n);
+  }
+  return v;
+}
+
+// A refused run leaves nothing: the files it created in out_dir (named
+// after the scenario: its CSV and JSON parts, a scenario's own files such as
+// can-telemetry's default CAN log), then the directories mcsim created.
+void remove_traces(const std::string& out_dir, const std::string& prefix,
+                   const std::vector<std::string>& before,
+                   const std::vector<std::filesystem::path>& created) {
+  std::error_code ec;
+  for (const auto& n : entries(out_dir, prefix)) {
+    if (std::find(before.begin(), before.end(), n) == before.end()) {
+      std::filesystem::remove(std::filesystem::path(out_dir) / n, ec);
+    }
+  }
+  for (auto it = created.rbegin(); it != created.rend(); ++it) {
+    std::filesystem::remove(*it, ec);  // only if empty
+  }
+}
+
+void write_json(const std::string& path, const mcsim::Summary& summary) {
+  const std::string tmp = path + ".part";
+  std::FILE* jf = std::fopen(tmp.c_str(), "w");
+  if (jf == nullptr) throw mcsim::UsageError("cannot write '" + tmp + "'");
+  const std::string js = summary.to_json();
+  const bool ok = std::fputs(js.c_str(), jf) >= 0;
+  if (std::fclose(jf) != 0 || !ok) {
+    std::remove(tmp.c_str());
+    throw mcsim::UsageError("write error on '" + tmp + "'");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw mcsim::UsageError("cannot write '" + path + "'");
+  }
+}
+
 int cmd_run(const std::vector<std::string>& args) {
   if (args.empty()) throw mcsim::UsageError("run: missing scenario name");
   const auto& scen = mcsim::need_scenario(args[0]);
   std::string out_dir;
-  double duration = scen.default_duration_s;
+  double duration = 0.0;  // the scenario's own
   std::vector<std::pair<std::string, std::string>> sets;
   std::string motor_path, board_path, flash_path;
   for (size_t i = 1; i < args.size(); ++i) {
@@ -125,38 +201,48 @@ int cmd_run(const std::vector<std::string>& args) {
     }
   }
   if (out_dir.empty()) throw mcsim::UsageError("run: --out DIR is required");
-  // Scenario, motor and board files and every --set before anything is
-  // written: a bad input changes nothing.
+  // Scenario, motor and board files, the duration and every --set before
+  // anything is written: a bad input changes nothing.
   const mcsim::PreparedRun run =
-      mcsim::prepare_run(scen.name, motor_path, board_path, sets, flash_path);
+      mcsim::prepare_run(scen.name, motor_path, board_path, sets, flash_path, duration);
 
+  const std::vector<std::filesystem::path> created = missing_dirs(out_dir);
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
   if (ec || !std::filesystem::is_directory(out_dir) || access(out_dir.c_str(), W_OK) != 0) {
     throw mcsim::UsageError("output directory '" + out_dir + "' cannot be created or written");
   }
+  const std::string prefix = scen.name + ".";
+  const std::vector<std::string> before = entries(out_dir, prefix);
   const std::string base = out_dir + "/" + scen.name;
-  mcsim::CsvWriter csv(base + ".csv");
+  mcsim::RunOutcome outcome;
   mcsim::Summary summary;
-  mcsim::Progress progress(isatty(STDERR_FILENO) != 0);
-  mcsim::execute_run(run, duration, csv, summary, progress);
-
-  const std::string json_tmp = base + ".json.part";
-  std::FILE* jf = std::fopen(json_tmp.c_str(), "w");
-  if (jf == nullptr) throw mcsim::UsageError("cannot write '" + json_tmp + "'");
-  const std::string js = summary.to_json();
-  const bool ok = std::fputs(js.c_str(), jf) >= 0;
-  if (std::fclose(jf) != 0 || !ok) {
-    std::remove(json_tmp.c_str());
-    throw mcsim::UsageError("write error on '" + json_tmp + "'");
+  {
+    mcsim::CsvWriter csv(base + ".csv");
+    mcsim::Progress progress(isatty(STDERR_FILENO) != 0);
+    outcome = mcsim::execute_run(run, csv, summary, progress, out_dir);
+    if (outcome.kind != mcsim::RunOutcome::Kind::kRefused) {
+      const bool pass = outcome.kind == mcsim::RunOutcome::Kind::kPass;
+      const std::string csv_path = base + (pass ? ".csv" : ".partial.csv");
+      write_json(base + ".json", summary);
+      csv.commit_as(csv_path);
+      // no stale trajectory of an earlier run beside this run's summary
+      std::remove((base + (pass ? ".partial.csv" : ".csv")).c_str());
+      std::printf("%s (%zu rows)\n%s.json\n", csv_path.c_str(), csv.rows(), base.c_str());
+    }
   }
-  csv.commit();
-  if (std::rename(json_tmp.c_str(), (base + ".json").c_str()) != 0) {
-    std::remove(json_tmp.c_str());
-    throw mcsim::UsageError("cannot write '" + base + ".json'");
+  switch (outcome.kind) {
+    case mcsim::RunOutcome::Kind::kPass:
+      return 0;
+    case mcsim::RunOutcome::Kind::kFailed:
+      std::fprintf(stderr, "mcsim: %s\n", outcome.message.c_str());
+      return 1;
+    case mcsim::RunOutcome::Kind::kRefused:
+      break;
   }
-  std::printf("%s.csv (%zu rows)\n%s.json\n", base.c_str(), csv.rows(), base.c_str());
-  return 0;
+  remove_traces(out_dir, prefix, before, created);
+  std::fprintf(stderr, "mcsim: %s\n", outcome.message.c_str());
+  return 2;
 }
 
 }  // namespace

@@ -1,16 +1,35 @@
 #include "motor_file.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <filesystem>
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
+#include <system_error>
 #include <utility>
 #include <toml++/toml.h>
 
 #include "scenario.hpp"
+#include "config/mc_params.h"
 
 namespace mcsim {
 namespace {
+
+// The firmware's range of one parameter (tools/config/params.toml, through
+// its generated table), as doubles.
+struct FwRange {
+  double lo, hi;
+};
+FwRange fw_range(uint32_t id) {
+  const mc_param_info_t* p = mc_param_find(id, nullptr);
+  if (p == nullptr) throw std::logic_error("parameter " + std::to_string(id) + " not in the table");
+  if (p->type == MC_PARAM_TYPE_F32) return {p->min.f, p->max.f};
+  return {static_cast<double>(p->min.u), static_cast<double>(p->max.u)};
+}
+const char* const kFwTable = " (the drive's parameter table, tools/config/params.toml)";
 
 // "FILE:LINE: reason"; for a value given on the command line (its source is
 // the --set, see apply_overrides) "--set KEY=VALUE: reason".
@@ -41,8 +60,7 @@ class TableReader {
   }
 
   const toml::node* need(const std::string& key) {
-    seen_.insert(key);
-    const toml::node* n = t_.get(key);
+    const toml::node* n = maybe(key);
     if (n == nullptr) {
       fail(file_, line_of(t_), "[" + name_ + "] is missing the required key '" + key + "'");
     }
@@ -50,8 +68,15 @@ class TableReader {
   }
   const toml::node* maybe(const std::string& key) {
     seen_.insert(key);
-    return t_.get(key);
+    const toml::node* n = t_.get(key);
+    if (n != nullptr) {
+      const auto it = sets_.find(key);
+      at_[key] = it == sets_.end() ? file_ + ":" + std::to_string(line_of(*n)) : it->second;
+    }
+    return n;
   }
+  // "FILE:LINE" or "--set ..." of each key read.
+  const KeySources& sources() const { return at_; }
 
   std::string text(const std::string& key, bool required) {
     const toml::node* n = required ? need(key) : maybe(key);
@@ -61,18 +86,36 @@ class TableReader {
   }
 
   // A finite number in [lo, hi] (integers accepted). lo_open: lo excluded.
+  // why: said after the range (where it comes from).
   double number(const toml::node* n, const std::string& key, double lo, double hi, bool lo_open,
-                const std::string& unit) const {
+                const std::string& unit, const std::string& why = "") const {
     if (!n->is_number())
       fail(src(key), line_of(*n), "'" + key + "' must be a number (" + unit + ")");
     const double v = n->value<double>().value_or(std::nan(""));
     if (!std::isfinite(v) || v > hi || (lo_open ? v <= lo : v < lo)) {
       std::ostringstream os;
       os << "'" << key << "' = " << v << " " << unit << " is out of range " << (lo_open ? "(" : "[")
-         << lo << ", " << hi << "]";
+         << lo << ", " << hi << "]" << why;
       fail(src(key), line_of(*n), os.str());
     }
     return v;
+  }
+  // A key the firmware's table holds too: [lo, hi] narrowed to its range.
+  // dflt: the value when the key is absent (NaN: required).
+  double fw_num(const std::string& key, uint32_t id, double dflt, double lo, double hi,
+                bool lo_open, const std::string& unit) {
+    const FwRange fw = fw_range(id);
+    if (fw.lo > lo || (fw.lo == lo && !lo_open)) {
+      lo = fw.lo;
+      lo_open = false;
+    }
+    hi = std::min(hi, fw.hi);
+    const toml::node* n = std::isnan(dflt) ? need(key) : maybe(key);
+    return n == nullptr ? dflt : number(n, key, lo, hi, lo_open, unit, kFwTable);
+  }
+  long fw_int(const std::string& key, uint32_t id) {
+    const FwRange fw = fw_range(id);
+    return integer(need(key), key, static_cast<long>(fw.lo), static_cast<long>(fw.hi), kFwTable);
   }
   double num(const std::string& key, double lo, double hi, bool lo_open, const std::string& unit) {
     return number(need(key), key, lo, hi, lo_open, unit);
@@ -82,13 +125,14 @@ class TableReader {
     const toml::node* n = maybe(key);
     return n == nullptr ? dflt : number(n, key, lo, hi, lo_open, unit);
   }
-  long integer(const toml::node* n, const std::string& key, long lo, long hi) const {
+  long integer(const toml::node* n, const std::string& key, long lo, long hi,
+               const std::string& why = "") const {
     if (!n->is_integer()) fail(src(key), line_of(*n), "'" + key + "' must be an integer");
     const long v = static_cast<long>(n->value<int64_t>().value_or(0));
     if (v < lo || v > hi) {
       fail(src(key), line_of(*n),
            "'" + key + "' = " + std::to_string(v) + " is out of range [" + std::to_string(lo) +
-               ", " + std::to_string(hi) + "]");
+               ", " + std::to_string(hi) + "]" + why);
     }
     return v;
   }
@@ -129,6 +173,7 @@ class TableReader {
   const toml::table& t_;
   const SetSources& sets_;
   std::set<std::string> seen_;
+  KeySources at_;
 };
 
 toml::table parse(const std::string& path) {
@@ -181,18 +226,23 @@ MotorSpec read_motor(const std::string& path, const toml::table& t, const SetSou
   m.file = path;
   m.name = r.text("name", true);
   m.source = r.text("source", false);
-  m.r_ohm = r.num("r_ohm", 1.0e-4, 1.0e3, false, "ohm");
-  m.ld_h = r.num("ld_h", 1.0e-7, 10.0, false, "H");
-  m.lq_h = r.num("lq_h", 1.0e-7, 10.0, false, "H");
-  m.flux_wb = r.num("flux_wb", 1.0e-5, 10.0, false, "Wb");
-  m.pole_pairs = static_cast<int>(r.int_req("pole_pairs", 1, 100));
-  m.j_kgm2 = r.num("j_kgm2", 1.0e-9, 1.0e3, false, "kg m^2");
-  m.b_nm_s_rad = r.num("b_nm_s_rad", 0.0, 1.0e3, false, "N m s/rad");
-  m.i_max_a = r.num("i_max_a", 0.0, 1.0e4, true, "A");
-  m.speed_max_rad_s = r.num("speed_max_rad_s", 0.0, 1.0e5, true, "rad/s");
-  m.i_rated_a = r.num_or("i_rated_a", 0.5 * m.i_max_a, 0.0, m.i_max_a, true, "A (at most i_max_a)");
-  m.speed_rated_rad_s = r.num_or("speed_rated_rad_s", 0.8 * m.speed_max_rad_s, 0.0,
-                                 m.speed_max_rad_s, true, "rad/s (at most speed_max_rad_s)");
+  const double req = std::nan("");  // fw_num: a required key
+  m.r_ohm = r.fw_num("r_ohm", MC_PARAM_ID_R_OHM, req, 1.0e-4, 1.0e3, false, "ohm");
+  m.ld_h = r.fw_num("ld_h", MC_PARAM_ID_LD_H, req, 1.0e-7, 10.0, false, "H");
+  m.lq_h = r.fw_num("lq_h", MC_PARAM_ID_LQ_H, req, 1.0e-7, 10.0, false, "H");
+  m.flux_wb = r.fw_num("flux_wb", MC_PARAM_ID_FLUX_WB, req, 1.0e-5, 10.0, false, "Wb");
+  m.pole_pairs = static_cast<int>(r.fw_int("pole_pairs", MC_PARAM_ID_POLE_PAIRS));
+  m.j_kgm2 = r.fw_num("j_kgm2", MC_PARAM_ID_J_KGM2, req, 1.0e-9, 1.0e3, false, "kg m^2");
+  m.b_nm_s_rad =
+      r.fw_num("b_nm_s_rad", MC_PARAM_ID_B_NM_S_RAD, req, 0.0, 1.0e3, false, "N m s/rad");
+  m.i_max_a = r.fw_num("i_max_a", MC_PARAM_ID_I_MAX_A, req, 0.0, 1.0e4, true, "A");
+  m.speed_max_rad_s =
+      r.fw_num("speed_max_rad_s", MC_PARAM_ID_SPEED_MAX_RAD_S, req, 0.0, 1.0e5, true, "rad/s");
+  m.i_rated_a = r.fw_num("i_rated_a", MC_PARAM_ID_I_RATED_A, 0.5 * m.i_max_a, 0.0, m.i_max_a, true,
+                         "A (at most i_max_a)");
+  m.speed_rated_rad_s =
+      r.fw_num("speed_rated_rad_s", MC_PARAM_ID_SPEED_RATED_RAD_S, 0.8 * m.speed_max_rad_s, 0.0,
+               m.speed_max_rad_s, true, "rad/s (at most speed_max_rad_s)");
   read_cogging(r, &m);
   if (m.ld_h > 1.05 * m.lq_h) {
     fail(r.src("ld_h"), r.line("ld_h"),
@@ -200,6 +250,7 @@ MotorSpec read_motor(const std::string& path, const toml::table& t, const SetSou
          "(Ld < Lq) magnet machines are modelled");
   }
   r.reject_unknown();
+  m.at = r.sources();
   return m;
 }
 
@@ -209,19 +260,31 @@ BoardSpec read_board(const std::string& path, const toml::table& t, const SetSou
   b.file = path;
   b.name = r.text("name", true);
   b.source = r.text("source", false);
-  b.vbus_v = r.num("vbus_v", 0.0, 2000.0, true, "V");
-  b.pwm_hz = r.num("pwm_hz", 1000.0, 200000.0, false, "Hz");
-  b.dead_time_s = r.num("dead_time_s", 0.0, 0.1 / b.pwm_hz, false, "s (at most 10 % of a period)");
-  b.current_sensors = static_cast<int>(r.int_req("current_sensors", 2, 3));
-  b.i_sense_max_a = r.num("i_sense_max_a", 0.0, 1.0e5, true, "A");
-  b.adc_bits = static_cast<int>(r.int_req("adc_bits", 8, 24));
-  b.encoder_cpr = r.int_req("encoder_cpr", 0, 1L << 24);
+  const double req = std::nan("");  // fw_num: a required key
+  b.vbus_v = r.fw_num("vbus_v", MC_PARAM_ID_VBUS_V, req, 0.0, 2000.0, true, "V");
+  b.pwm_hz = r.fw_num("pwm_hz", MC_PARAM_ID_PWM_HZ, req, 1000.0, 200000.0, false, "Hz");
+  b.dead_time_s = r.fw_num("dead_time_s", MC_PARAM_ID_DEAD_TIME_S, req, 0.0, 0.1 / b.pwm_hz, false,
+                           "s (at most 10 % of a period)");
+  b.current_sensors = static_cast<int>(r.fw_int("current_sensors", MC_PARAM_ID_CURRENT_SENSORS));
+  b.i_sense_max_a =
+      r.fw_num("i_sense_max_a", MC_PARAM_ID_I_SENSE_MAX_A, req, 0.0, 1.0e5, true, "A");
+  b.adc_bits = static_cast<int>(r.fw_int("adc_bits", MC_PARAM_ID_ADC_BITS));
+  // 0: no encoder (mcsim's); else the firmware's range
+  const FwRange cpr = fw_range(MC_PARAM_ID_ENCODER_CPR);
+  b.encoder_cpr = r.int_req("encoder_cpr", 0, static_cast<long>(cpr.hi));
+  if (b.encoder_cpr != 0 && b.encoder_cpr < static_cast<long>(cpr.lo)) {
+    fail(r.src("encoder_cpr"), r.line("encoder_cpr"),
+         "'encoder_cpr' = " + std::to_string(b.encoder_cpr) +
+             " is out of range: 0 (no encoder) or [" + std::to_string(static_cast<long>(cpr.lo)) +
+             ", " + std::to_string(static_cast<long>(cpr.hi)) + "]" + kFwTable);
+  }
   b.delay_periods = static_cast<int>(r.int_or("delay_periods", 1, 0, 4));
   b.dc_link_c_f = r.num_or("dc_link_c_f", 0.0, 0.0, 10.0, false, "F");
   b.source_r_ohm = r.num_or("source_r_ohm", 0.05, 1.0e-4, 1.0e3, false, "ohm");
   b.source_sink = r.boolean_or("source_sink", false);
   b.brake_r_ohm = r.num_or("brake_r_ohm", 0.0, 0.0, 1.0e4, false, "ohm");
   r.reject_unknown();
+  b.at = r.sources();
   return b;
 }
 
@@ -273,8 +336,20 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
     const SetSources bsets = apply_overrides(*bt, "board", overrides);
     f.board = read_board(motor_path, *bt, bsets);
   } else {
+    std::error_code ec;  // the same file named twice holds both, as one
+    const bool same = std::filesystem::equivalent(motor_path, board_path, ec);
+    if (const toml::node* other = mroot.get("board"); other != nullptr && !same) {
+      fail(motor_path, line_of(*other),
+           "a [board] table here and --board " + board_path +
+               ": one of them would be ignored (remove this one, or the --board)");
+    }
     toml::table broot = parse(board_path);
     check_top(board_path, broot);
+    if (const toml::node* other = broot.get("motor"); other != nullptr && !same) {
+      fail(board_path, line_of(*other),
+           "a [motor] table in the --board file would be ignored (the motor is --motor " +
+               motor_path + "'s): remove it");
+    }
     toml::table* bt = broot["board"].as_table();
     if (bt == nullptr) fail(board_path, 1, "no [board] table");
     const SetSources bsets = apply_overrides(*bt, "board", overrides);

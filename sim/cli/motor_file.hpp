@@ -38,16 +38,30 @@
 // or out-of-range key, a missing table) is a UsageError whose text is
 // "<file>:<line>: <reason>" (line of the offending key, or of the table /
 // line 1 when the key is missing).
+//
+// The keys the firmware's parameter table also holds (tools/config/
+// params.toml: r_ohm ... speed_rated_rad_s, vbus_v ... encoder_cpr) are held
+// to its ranges too, so a file mcsim runs is one the drive accepts (an
+// encoder_cpr of 0, no encoder, is mcsim's own). When --board FILE is given,
+// a [board] table in the motor file is refused, and so is a [motor] table in
+// the board file (one of the two would be ignored), unless both name the
+// same file.
 #pragma once
 
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace mcsim {
 
+/// Where each key's value came from: "FILE:LINE" or the "--set KEY=VALUE"
+/// that replaced it (refusals after the files are read name it).
+using KeySources = std::map<std::string, std::string>;
+
 struct MotorSpec {
   std::string name, source, file;
+  KeySources at;
   double r_ohm = 0, ld_h = 0, lq_h = 0, flux_wb = 0;
   int pole_pairs = 0;
   double j_kgm2 = 0, b_nm_s_rad = 0, i_max_a = 0, speed_max_rad_s = 0;
@@ -59,6 +73,7 @@ struct MotorSpec {
 
 struct BoardSpec {
   std::string name, source, file;
+  KeySources at;
   double vbus_v = 0, pwm_hz = 0, dead_time_s = 0;
   int current_sensors = 2;
   double i_sense_max_a = 0;

@@ -1,5 +1,7 @@
 #include "run.hpp"
 
+#include <sstream>
+
 namespace mcsim {
 
 const Scenario& need_scenario(const std::string& name) {
@@ -33,9 +35,24 @@ std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& mo
 PreparedRun prepare_run(const std::string& scenario, const std::string& motor_path,
                         const std::string& board_path,
                         const std::vector<std::pair<std::string, std::string>>& sets,
-                        const std::string& flash_path) {
+                        const std::string& flash_path, double duration_s) {
   PreparedRun r;
   r.scenario = &need_scenario(scenario);
+  if (duration_s != 0.0) {
+    if (!r.scenario->takes_duration) {
+      throw UsageError("scenario '" + r.scenario->name +
+                       "' takes no --duration: its length is set by what it does (see 'mcsim "
+                       "describe " +
+                       r.scenario->name + "')");
+    }
+    if (!(duration_s > 0.0) || duration_s > kMaxDurationS) {
+      std::ostringstream os;
+      os << "duration " << duration_s << " s is out of range (0, " << kMaxDurationS
+         << "] s (one simulated hour: the longest run mcsim takes)";
+      throw UsageError(os.str());
+    }
+  }
+  r.duration_s = duration_s > 0.0 ? duration_s : r.scenario->default_duration_s;
   // motor.KEY= and board.KEY= edit the files (scenarios for any motor);
   // every other key is a scenario parameter.
   Overrides file_sets;
@@ -65,16 +82,43 @@ PreparedRun prepare_run(const std::string& scenario, const std::string& motor_pa
   return r;
 }
 
-void execute_run(const PreparedRun& run, double duration_s, RowSink& sink, Summary& summary,
-                 Progress& progress) {
+RunOutcome execute_run(const PreparedRun& run, RowSink& sink, Summary& summary, Progress& progress,
+                       const std::string& out_dir) {
   const Scenario& scen = *run.scenario;
-  RunContext ctx{duration_s, run.params, sink, summary, progress, run.files.get(), run.flash.get()};
+  RunContext ctx{run.duration_s,  run.params,      sink,   summary, progress,
+                 run.files.get(), run.flash.get(), out_dir};
   summary.set_text("scenario", scen.name);
-  summary.set("duration_s", duration_s);
+  summary.set("duration_s", run.duration_s);
   for (const auto& kv : run.params.values()) summary.set("param." + kv.first, kv.second);
-  scen.run(ctx);
+  RunOutcome out;
+  try {
+    scen.run(ctx);
+  } catch (const UsageError& e) {
+    out.kind = RunOutcome::Kind::kRefused;
+    out.message = e.what();
+  } catch (const std::exception& e) {
+    out.kind = RunOutcome::Kind::kFailed;
+    out.stopped = true;
+    out.message = std::string("run failed: ") + e.what();
+    summary.set_text("verdict", std::string("failed: ") + e.what());
+    summary.set_text("verdict_detail", "the run stopped on its way");
+    summary.set("stopped", 1.0);
+  }
   progress.done();
   summary.set("rows", static_cast<double>(sink.rows()));
+  if (out.kind != RunOutcome::Kind::kPass) return out;
+  const auto v = summary.texts().find("verdict");
+  if (v == summary.texts().end()) {
+    throw std::logic_error("scenario '" + scen.name + "' returned without a verdict");
+  }
+  if (v->second == "pass" || v->second == "none") return out;
+  out.kind = RunOutcome::Kind::kFailed;
+  const auto st = summary.numbers().find("stopped");
+  out.stopped = st != summary.numbers().end() && st->second != 0.0;
+  const auto d = summary.texts().find("verdict_detail");
+  out.message = "run failed: " + v->second +
+                (d != summary.texts().end() && !d->second.empty() ? " (" + d->second + ")" : "");
+  return out;
 }
 
 }  // namespace mcsim

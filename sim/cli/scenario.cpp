@@ -115,16 +115,39 @@ void ColumnSink::row(const double* values, size_t n) {
   ++rows_;
 }
 
-void CsvWriter::commit() {
+void CsvWriter::commit_as(const std::string& path) {
   if (std::fflush(f_) != 0 || std::ferror(f_)) {
     throw UsageError("write error on '" + tmp_path_ + "'");
   }
   std::fclose(f_);
   f_ = nullptr;
-  if (std::rename(tmp_path_.c_str(), final_path_.c_str()) != 0) {
-    throw UsageError("cannot rename to '" + final_path_ + "': " + std::strerror(errno));
+  if (std::rename(tmp_path_.c_str(), path.c_str()) != 0) {
+    throw UsageError("cannot rename to '" + path + "': " + std::strerror(errno));
   }
   committed_ = true;
+}
+
+double run_duration(RunContext& ctx, double own_s) {
+  const double d = ctx.duration_s > 0.0 ? ctx.duration_s : own_s;
+  if (!(d > 0.0) || d > kMaxDurationS) {
+    std::ostringstream os;
+    os << "the run this scenario derives (" << d << " s) is outside (0, " << kMaxDurationS
+       << "] s; give a shorter --duration";
+    throw UsageError(os.str());
+  }
+  ctx.summary.set("duration_s", d);
+  return d;
+}
+
+long step_count(double duration_s, double period_s) {
+  const double n = duration_s / period_s;
+  if (!std::isfinite(n) || !(duration_s >= 0.0) || !(period_s > 0.0) || n > kMaxSteps) {
+    std::ostringstream os;
+    os << "a run of " << duration_s << " s in periods of " << period_s << " s needs " << n
+       << " periods, more than the " << kMaxSteps << " a run may take";
+    throw UsageError(os.str());
+  }
+  return std::lround(n);
 }
 
 static std::string json_number(double v) {
@@ -135,11 +158,85 @@ static std::string json_number(double v) {
   return os.str();
 }
 
-static std::string json_string(const std::string& s) {
+namespace {
+
+// Length of the valid UTF-8 sequence at s[i], or 0 (RFC 3629: no overlong
+// forms, no surrogates, at most U+10FFFF).
+size_t utf8_len(const std::string& s, size_t i) {
+  const auto b = [&](size_t k) { return static_cast<unsigned char>(s[k]); };
+  const unsigned char c = b(i);
+  size_t n = 0;
+  unsigned char lo = 0x80, hi = 0xBF;  // bounds of the second byte
+  if (c < 0x80) return 1;
+  if (c >= 0xC2 && c <= 0xDF) {
+    n = 2;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    n = 3;
+    if (c == 0xE0) lo = 0xA0;
+    if (c == 0xED) hi = 0x9F;
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    n = 4;
+    if (c == 0xF0) lo = 0x90;
+    if (c == 0xF4) hi = 0x8F;
+  } else {
+    return 0;
+  }
+  if (i + n > s.size() || b(i + 1) < lo || b(i + 1) > hi) return 0;
+  for (size_t k = 2; k < n; ++k) {
+    if (b(i + k) < 0x80 || b(i + k) > 0xBF) return 0;
+  }
+  return n;
+}
+
+}  // namespace
+
+std::string json_string(const std::string& s) {
   std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
+  for (size_t i = 0; i < s.size();) {
+    const unsigned char c = static_cast<unsigned char>(s[i]);
+    const size_t n = utf8_len(s, i);
+    if (n == 0) {
+      out += "\\ufffd";
+      ++i;
+      continue;
+    }
+    if (n > 1) {
+      out.append(s, i, n);
+      i += n;
+      continue;
+    }
+    switch (c) {
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\b':
+        out += "\\b";
+        break;
+      case '\f':
+        out += "\\f";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      default:
+        if (c < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", c);
+          out += buf;
+        } else {
+          out += static_cast<char>(c);
+        }
+    }
+    ++i;
   }
   return out + "\"";
 }

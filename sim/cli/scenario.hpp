@@ -23,6 +23,22 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The longest run mcsim accepts (--duration, a campaign's duration_s, a
+/// scenario's own duration): one simulated hour. The longest default run is
+/// 14 s; an hour of the 20 kHz drive is 7.2e7 PWM periods, about 5 minutes
+/// at the release build's 250x real time (sim/README.md), and a typo such as
+/// 1e300 is refused instead of running zero steps.
+constexpr double kMaxDurationS = 3600.0;
+/// The most periods (control or integration steps) one run may take: a
+/// count every scenario's loop counter holds, and above what an hour of a
+/// 100 kHz board needs (3.6e8).
+constexpr double kMaxSteps = 1.0e9;
+
+/// The number of periods of period_s in duration_s (rounded to nearest), or
+/// UsageError naming both when it is not finite, negative or above
+/// kMaxSteps: a count that does not fit is refused, never wrapped.
+long step_count(double duration_s, double period_s);
+
 /// One declared parameter of a scenario, settable with --set key=value.
 struct ParamSpec {
   std::string key;
@@ -65,7 +81,8 @@ class RowSink {
 
 /// Column-oriented CSV: the header is fixed by the first call to columns(),
 /// each row must have exactly that many values. Written to a temporary file
-/// and renamed into place by commit(), so a failed run leaves nothing behind.
+/// (final_path + ".part") and renamed into place by commit() or commit_as();
+/// without either the destructor removes it.
 class CsvWriter : public RowSink {
  public:
   CsvWriter(const std::string& final_path);
@@ -75,7 +92,9 @@ class CsvWriter : public RowSink {
   using RowSink::row;
   void columns(const std::vector<std::string>& names) override;
   void row(const double* values, size_t n) override;
-  void commit();
+  void commit() { commit_as(final_path_); }
+  /// Renamed to path instead (mcsim: <scenario>.partial.csv for a failed run).
+  void commit_as(const std::string& path);
 
  private:
   std::string final_path_, tmp_path_;
@@ -99,6 +118,12 @@ class ColumnSink : public RowSink {
   std::vector<double> data_;
   bool have_header_ = false;
 };
+
+/// s as a JSON string literal (quotes included): `"` and `\` escaped, every
+/// control character (U+0000..U+001F) as \b \f \n \r \t or \u00XX, and each
+/// byte that is not part of valid UTF-8 (a file name's raw bytes) as \ufffd,
+/// so any name or path gives valid JSON (RFC 8259).
+std::string json_string(const std::string& s);
 
 /// Summary metrics written as a flat JSON object next to the CSV.
 class Summary {
@@ -131,6 +156,8 @@ class Progress {
 };
 
 struct RunContext {
+  /// The run's duration: --duration, else the scenario's default; 0 for the
+  /// scenarios for any motor without --duration (they derive their own).
   double duration_s = 0.0;
   const Params& params;
   RowSink& csv;  ///< the trajectory (a CSV file for the CLI)
@@ -141,7 +168,16 @@ struct RunContext {
   /// --flash FILE: the simulated board's flash (scenarios with takes_flash
   /// only; else null).
   hal_host::FileFlash* flash = nullptr;
+  /// The run's output directory (mcsim run --out), where a scenario puts
+  /// any file of its own; empty when the rows stay in memory (mdtool.sil).
+  std::string out_dir = {};
 };
+
+/// The run's duration: ctx.duration_s when given (prepare_run checked it),
+/// else own_s, the length the scenario derives for itself (from the motor),
+/// refused with UsageError above kMaxDurationS. Written to the summary's
+/// duration_s.
+double run_duration(RunContext& ctx, double own_s);
 
 struct Scenario {
   std::string name;
@@ -159,6 +195,9 @@ struct Scenario {
   /// With motor_params: --motor is optional; without it the scenario runs
   /// its own motor with `params` (RunContext::files null).
   bool motor_optional = false;
+  /// False: the run's length is set by what it does (a commissioning
+  /// sequence, a list of speeds, no time at all), and --duration is refused.
+  bool takes_duration = true;
 };
 
 /// Global registry; scenario files register themselves with a static

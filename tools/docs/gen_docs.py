@@ -115,9 +115,9 @@ class Ctx:
                 f.result()
 
 
-def run(cmd, cwd=ROOT, timeout=900):
+def run(cmd, cwd=ROOT, timeout=900, ok=(0,)):
     p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout, check=False)
-    if p.returncode != 0:
+    if p.returncode not in ok:
         raise DocError(f"{' '.join(cmd)} exited {p.returncode}:\n{p.stdout[-2000:]}{p.stderr[-2000:]}")
     return p.stdout
 
@@ -134,8 +134,11 @@ def mcsim_cmd(scenario, sets=(), motor=None, board=None):
     return c
 
 
-def mcsim(scenario, *sets, motor=None, board=None):
-    """`mcsim run`: its JSON summary and its CSV (a list of dicts of floats)."""
+def mcsim(scenario, *sets, motor=None, board=None, judged=True):
+    """`mcsim run`: its JSON summary and its CSV (a list of dicts of floats).
+    judged=False: a run the table shows whatever its verdict (mcsim exits 1
+    when it is not a pass, the rows then in <scenario>.partial.csv); the
+    summary's verdict says which. Otherwise a failed verdict is an error."""
     def fn(ctx):
         out = ctx.workdir(("mcsim", scenario, sets, motor, board))
         cmd = [ctx.input("mcsim"), "run", scenario, "--out", out]
@@ -145,13 +148,17 @@ def mcsim(scenario, *sets, motor=None, board=None):
             cmd += ["--board", os.path.join(ROOT, "sim", "motors", board + ".toml")]
         for s in sets:
             cmd += ["--set", s]
-        run(cmd)
+        run(cmd, ok=(0,) if judged else (0, 1))
         with open(os.path.join(out, scenario + ".json")) as f:
             summary = json.load(f)
-        with open(os.path.join(out, scenario + ".csv"), newline="") as f:
+        path = os.path.join(out, scenario + ".csv")
+        if not os.path.exists(path):
+            path = os.path.join(out, scenario + ".partial.csv")
+        with open(path, newline="") as f:
             rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
-        return {"summary": summary, "rows": rows, "csv": os.path.join(out, scenario + ".csv")}
-    return Src(("mcsim", scenario, sets, motor, board), mcsim_cmd(scenario, sets, motor, board), fn)
+        return {"summary": summary, "rows": rows, "csv": path}
+    return Src(("mcsim", scenario, sets, motor, board, judged), mcsim_cmd(scenario, sets, motor, board),
+               fn)
 
 
 def gtest(binary, filt="*"):
@@ -510,7 +517,11 @@ DT_CASES = [("observer, 80 % of t_dead", ["dead_time_s=2e-6", "dead_comp_frac=0.
 
 
 def _dt_src(load, sets):
-    return mcsim("observer-test-motor", "t_load_s=0.5", f"load_frac={load}", *sets)
+    # With the dead time the speed ripples by tens of r/min and may keep an
+    # offset of a few: several of these runs fail observer-test-motor's
+    # verdict (load not held, not settled). The table shows by how much.
+    return mcsim("observer-test-motor", "t_load_s=0.5", f"load_frac={load}", *sets,
+                 judged=False)
 
 
 def _dt_srcs():

@@ -12,8 +12,9 @@
 //                          a socketcand server (hal_host::SocketcandCan) for
 //                          python-can's socketcand interface (mdtool);
 //   otherwise              the candump log MCSIM_CAN_LOG (default
-//                          ./can-telemetry.candump.log), time-stamped with
-//                          the simulated time;
+//                          DIR/can-telemetry.candump.log, DIR the run's
+//                          --out; in memory, mdtool.sil, MCSIM_CAN_LOG must
+//                          be set), time-stamped with the simulated time;
 // commands from the candump-format script MCSIM_CAN_CMDS if set (any of them).
 // The motor and board: the paper-002 test motor on FocSil's 200 V board
 // (no --motor), or any motor and board of sim/motors/ (--motor FILE
@@ -81,6 +82,7 @@
 #include "hal_host/app_rig.hpp"
 #include "hal_host/file_flash.hpp"
 #include "scenario.hpp"
+#include "verdict.hpp"
 extern "C" {
 #include "commission/mc_comm_can.h"
 #include "mc_app.h"
@@ -326,7 +328,7 @@ void run_can_telemetry(RunContext& ctx) {
   // CAN: a candump log, SocketCAN or a socketcand server (sim/cli/can_bus.hpp).
   hal_host::PmsmBoard& board = cb.board();
   const std::unique_ptr<hal_host::CanTransport> can_bus =
-      open_can_bus(board, P.get("realtime") != 0.0);
+      open_can_bus(board, P.get("realtime") != 0.0, ctx.out_dir);
   const mc_hal_can_t* can = can_bus->hal();
 
   // The laws of SPEED (speed_law) and POSITION from the parameters.
@@ -414,7 +416,7 @@ void run_can_telemetry(RunContext& ctx) {
   bool was_enabled = false;
   double t_end_early = -1.0;
   const double T = board.period_s();
-  const long n = std::lround(ctx.duration_s / T);
+  const long n = step_count(ctx.duration_s, T);
   const auto wall0 = std::chrono::steady_clock::now();
   uint64_t frames = 0, slow_steps = 0;
   uint32_t rx_read_max = 0;  // frames taken from the HAL by one receive call
@@ -487,6 +489,7 @@ void run_can_telemetry(RunContext& ctx) {
   ctx.summary.set("final_enabled", cmd.enabled ? 1.0 : 0.0);
   ctx.summary.set("final_stop_reason", cmd.stop_reason);
   ctx.summary.set("final_faults", d.faults);
+  ctx.summary.set_text("final_fault_names", drive_fault_names(d.faults));
   // The laws (firmware/app/config/mc_law_cfg.h): which one SPEED ran, and
   // why one is not available (the law_error parameter).
   ctx.summary.set("speed_law", app.laws.speed_law);
@@ -512,6 +515,12 @@ void run_can_telemetry(RunContext& ctx) {
     ctx.summary.set("cfg_applied", app.srv.applied);
     ctx.summary.set("flash_persist_errors", ctx.flash->persist_errors());
   }
+  CanTelemetryFigures fig;
+  fig.tm_frames_dropped = tm.tx_dropped;
+  fig.rx_overflows = app.rx_overflows;
+  fig.flash_persist_errors = ctx.flash != nullptr ? ctx.flash->persist_errors() : 0.0;
+  fig.final_faults = d.faults;
+  write_verdict(ctx.summary, judge_can_telemetry(fig));
 }
 
 // The CAN side's parameters, the same for every motor.

@@ -2,6 +2,7 @@
 // board (see csmc_drive.hpp), and the csmc-drive scenario.
 #include "csmc_drive.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -11,11 +12,20 @@
 #include "mc_ctrl_csmc.h"
 #include "mc_drive.h"
 #include "scenario.hpp"
+#include "verdict.hpp"
 
 namespace mcsim {
 namespace csmc {
 
 DriveResult run_drive(const DriveOptions& o) {
+  std::vector<DriveSample> trace;
+  DriveResult r = run_drive(o, [&trace](const DriveSample& s) { trace.push_back(s); });
+  r.trace = std::move(trace);
+  return r;
+}
+
+DriveResult run_drive(const DriveOptions& o,
+                      const std::function<void(const DriveSample&)>& on_sample) {
   hal_host::StepperBoardConfig bc;
   bc.motor.R_ohm = o.plant.R_ohm;
   bc.motor.L_h = o.plant.L_h;
@@ -97,17 +107,16 @@ DriveResult run_drive(const DriveOptions& o) {
     throw std::runtime_error("reference rejected");
   }
   DriveResult r;
-  const long n = std::lround(o.duration_s * o.pwm_hz);
-  r.trace.reserve(static_cast<size_t>(n) + 1);
+  const long n = step_count(o.duration_s, 1.0 / o.pwm_hz);
   const auto record = [&] {
     const auto& x = board.state();
     const auto& tm = ctrl.tm;
-    r.trace.push_back(
-        DriveSample{board.t_s() - bc.t_pwm_s, phi0 + o.step_rad, x(Stepper2Ph::kThetaM),
-                    x(Stepper2Ph::kThetaM) - phi0 - o.step_rad, tm.i_d_a, tm.i_q_a,
-                    x(Stepper2Ph::kOmegaM), tm.out.v_d_v, tm.out.v_q_v, d.tm.ctrl_out.duty2_a,
-                    d.tm.ctrl_out.duty2_b, static_cast<double>(d.faults), tm.in.e2_rad,
-                    tm.in.de2_rad_s, tm.in.dde2_rad_s2, tm.out.s1_a, tm.out.s2_rad_s2});
+    on_sample(DriveSample{board.t_s() - bc.t_pwm_s, phi0 + o.step_rad, x(Stepper2Ph::kThetaM),
+                          x(Stepper2Ph::kThetaM) - phi0 - o.step_rad, tm.i_d_a, tm.i_q_a,
+                          x(Stepper2Ph::kOmegaM), tm.out.v_d_v, tm.out.v_q_v, d.tm.ctrl_out.duty2_a,
+                          d.tm.ctrl_out.duty2_b, static_cast<double>(d.faults), tm.in.e2_rad,
+                          tm.in.de2_rad_s, tm.in.dde2_rad_s2, tm.out.s1_a, tm.out.s2_rad_s2});
+    ++r.samples;
   };
   for (long k = 0; k <= n; ++k) (void)hal_host::sil_period(board, d, hal_host::NoHook{}, record);
   r.faults = d.faults;
@@ -116,6 +125,13 @@ DriveResult run_drive(const DriveOptions& o) {
 
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+
+// csmc-drive (tests/sil/csmc DrivePluginRegulatesTheStepperOnTheSimulated-
+// Board): no fault; in the last 0.1 s the position error stays within 2
+// encoder counts (the measurement's resolution) without v_q sign changes
+// (no chattering); the step overshoots by less than 2 % and settles (2 %)
+// within 0.06 s. The window needs 0.1 s after that: a run of 0.16 s.
 void run_drive_scenario(RunContext& ctx) {
   DriveOptions o;
   o.duration_s = ctx.duration_s;
@@ -128,24 +144,36 @@ void run_drive_scenario(RunContext& ctx) {
   o.delay_periods = static_cast<int>(ctx.params.get("delay_periods"));
   o.mu1_a = ctx.params.get("mu1_a");
   o.mu2_rad_s2 = ctx.params.get("mu2_rad_s2");
-  const DriveResult r = run_drive(o);
   ctx.csv.columns({"t", "phi_d_rad", "x4_rad", "e2_rad", "x1_a", "x2_a", "x3_rad_s", "u1_v", "u2_v",
                    "duty2_a_1", "duty2_b_1", "fault_1", "e2_meas_rad", "de2_meas_rad_s",
                    "dde2_meas_rad_s2", "s1_a", "s2_rad_s2"});
-  const size_t every = std::max<size_t>(1, r.trace.size() / 5000);
-  for (size_t k = 0; k < r.trace.size(); ++k) {
-    if (k % every != 0 && k + 1 != r.trace.size()) continue;
-    const DriveSample& s = r.trace[k];
-    ctx.csv.row({s.t, s.phi_d, s.phi, s.e2, s.i_d, s.i_q, s.w, s.v_d, s.v_q, s.duty_a, s.duty_b,
-                 s.fault, s.e2_meas, s.de2_meas, s.dde2_meas, s.s1, s.s2});
-  }
-  double emax = 0.0, over = 0.0, last_out = 0.0;
-  long changes = 0;
-  double prev = 0.0;
-  const double t_end = r.trace.back().t, win = 0.1;
-  for (const DriveSample& s : r.trace) {
+  // One sample per period from the fast step before the loop's first
+  // period to the last: n + 1 of them; about 5000 rows and the last.
+  const long n_samples = step_count(o.duration_s, 1.0 / o.pwm_hz) + 1;
+  const long every = std::max(1L, n_samples / 5000);
+  const double win = 0.1;
+  // The last 0.1 s (plus a period) kept for the steady-state window, whose
+  // start is known only at the end (the last sample's time).
+  const size_t keep = static_cast<size_t>(std::ceil(win * o.pwm_hz)) + 2;
+  std::vector<DriveSample> tail(keep);
+  long k = 0;
+  double over = 0.0, last_out = 0.0;
+  const DriveResult r = run_drive(o, [&](const DriveSample& s) {
+    if (k % every == 0 || k + 1 == n_samples) {
+      ctx.csv.row({s.t, s.phi_d, s.phi, s.e2, s.i_d, s.i_q, s.w, s.v_d, s.v_q, s.duty_a, s.duty_b,
+                   s.fault, s.e2_meas, s.de2_meas, s.dde2_meas, s.s1, s.s2});
+    }
     over = std::max(over, s.e2);
     if (std::abs(s.e2) > 0.02 * o.step_rad) last_out = s.t;
+    tail[static_cast<size_t>(k) % keep] = s;
+    ++k;
+  });
+  double emax = 0.0, prev = 0.0;
+  long changes = 0;
+  const long first = std::max(0L, k - static_cast<long>(keep));
+  const double t_end = tail[static_cast<size_t>(k - 1) % keep].t;
+  for (long i = first; i < k; ++i) {
+    const DriveSample& s = tail[static_cast<size_t>(i) % keep];
     if (s.t >= t_end - win) {
       emax = std::max(emax, std::abs(s.e2));
       if ((s.v_q > 0.0 && prev < 0.0) || (s.v_q < 0.0 && prev > 0.0)) ++changes;
@@ -153,10 +181,22 @@ void run_drive_scenario(RunContext& ctx) {
     }
   }
   ctx.summary.set("faults", static_cast<double>(r.faults));
+  ctx.summary.set_text("fault_names", drive_fault_names(r.faults));
   ctx.summary.set("overshoot_pct", 100.0 * over / o.step_rad);
   ctx.summary.set("settling_2pct_s", last_out);
   ctx.summary.set("e2_ss_max_abs_rad", emax);
   ctx.summary.set("vq_sign_changes_per_s", static_cast<double>(changes) / win);
+  if (r.faults != 0u) return write_verdict(ctx.summary, faulted(r.faults));
+  Judge j;
+  j.at_least("too short to judge", "duration [s]", o.duration_s, 0.16,
+             "0.06 s to settle + the 0.1 s window");
+  j.at_most("steady-state error", "|e2| in the last 0.1 s [rad]", emax,
+            2.0 * 2.0 * kPi / o.encoder_cpr, "2 encoder counts");
+  j.at_most("chattering", "v_q sign changes in the last 0.1 s [1/s]",
+            static_cast<double>(changes) / win, 0.0);
+  j.at_most("overshoot", "overshoot / step", over / o.step_rad, 0.02);
+  j.at_most("not settled", "2 % settling time [s]", last_out, 0.06);
+  write_verdict(ctx.summary, j.verdict());
 }
 
 const Registrar reg_drive(

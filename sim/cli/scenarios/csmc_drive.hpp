@@ -6,6 +6,7 @@
 // computation delay, duties on the HAL's pwm2.
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "csmc_loop.hpp"
@@ -42,11 +43,16 @@ struct DriveSample {
 };
 
 struct DriveResult {
-  std::vector<DriveSample> trace;
+  std::vector<DriveSample> trace;  ///< run_drive(o) only
   unsigned faults = 0;
+  long samples = 0;  ///< one per PWM period
 };
 
+/// The loop for duration_s: the first form keeps every period's sample in
+/// trace; the second hands each to on_sample and keeps none.
 DriveResult run_drive(const DriveOptions& o);
+DriveResult run_drive(const DriveOptions& o,
+                      const std::function<void(const DriveSample&)>& on_sample);
 
 }  // namespace csmc
 }  // namespace mcsim

@@ -10,6 +10,7 @@
 #include "mc_ctrl_csmc.h"
 #include "mcsim/integrator.hpp"
 #include "mcsim/stepper_2ph.hpp"
+#include "scenario.hpp"
 
 namespace mcsim {
 namespace csmc {
@@ -105,6 +106,15 @@ Ref reference(const LoopOptions& o, double t) {
 }  // namespace
 
 LoopResult run_loop(const LoopOptions& o) {
+  std::vector<Sample> trace;
+  const long n = step_count(o.duration_s, o.dt_s);
+  trace.reserve(static_cast<size_t>(n) / std::max<size_t>(1, o.record_every) + 2);
+  LoopResult r = run_loop(o, [&trace](const Sample& s) { trace.push_back(s); });
+  r.trace = std::move(trace);
+  return r;
+}
+
+LoopResult run_loop(const LoopOptions& o, const SampleFn& on_sample) {
   Stepper2PhParams p;
   p.R_ohm = o.plant.R_ohm;
   p.L_h = o.plant.L_h;
@@ -137,9 +147,8 @@ LoopResult run_loop(const LoopOptions& o) {
   const uint32_t nr = static_cast<uint32_t>(o.plant.rotor_teeth);
 
   LoopResult res;
-  const long n = std::lround(o.duration_s / o.dt_s);
+  const long n = step_count(o.duration_s, o.dt_s);
   const size_t every = std::max<size_t>(1, o.record_every);
-  res.trace.reserve(static_cast<size_t>(n) / every + 2);
   Stepper2Ph::State x = Stepper2Ph::State::Zero();
   const mc_ctrl_csmc_tm_t& tm = ctrl.tm;
   for (long k = 0; k <= n; ++k) {
@@ -164,9 +173,22 @@ LoopResult run_loop(const LoopOptions& o) {
     }
 
     if (k % static_cast<long>(every) == 0 || k == n) {
-      res.trace.push_back(Sample{t, tm.in.e1_a, tm.in.e2_rad, tm.i_d_a, tm.i_q_a, m.omega_m_rad_s,
-                                 x(Stepper2Ph::kThetaM), tm.out.v_d_v, tm.out.v_q_v, tm.est.z1,
-                                 tm.est.z2, tm.est.z3, tm.out.s1_a, tm.out.s2_rad_s2, r.phi});
+      res.last = Sample{t,
+                        tm.in.e1_a,
+                        tm.in.e2_rad,
+                        tm.i_d_a,
+                        tm.i_q_a,
+                        m.omega_m_rad_s,
+                        x(Stepper2Ph::kThetaM),
+                        tm.out.v_d_v,
+                        tm.out.v_q_v,
+                        tm.est.z1,
+                        tm.est.z2,
+                        tm.est.z3,
+                        tm.out.s1_a,
+                        tm.out.s2_rad_s2,
+                        r.phi};
+      on_sample(res.last);
     }
     if (k == n) {
       res.t_end = t;
@@ -182,54 +204,71 @@ LoopResult run_loop(const LoopOptions& o) {
   return res;
 }
 
+StepAcc::StepAcc(double t_from, double t_to, double phi_final_rad, double step_rad)
+    : t_from_(t_from),
+      t_to_(t_to),
+      phi_final_(phi_final_rad),
+      step_(step_rad),
+      sgn_(step_rad >= 0.0 ? 1.0 : -1.0),
+      band_(0.02 * std::abs(step_rad)),
+      last_out_(t_from) {}
+
+void StepAcc::add(const Sample& s) {
+  if (s.t < t_from_ || s.t > t_to_) return;
+  const double d = s.x4 - phi_final_;
+  over_ = std::max(over_, sgn_ * d);
+  if (std::abs(d) > band_) last_out_ = s.t;
+}
+
+StepMetrics StepAcc::result() const {
+  StepMetrics m;
+  m.overshoot_frac = over_ / std::abs(step_);
+  m.settling_s = last_out_ - t_from_;
+  return m;
+}
+
 StepMetrics step_metrics(const std::vector<Sample>& tr, double t_from, double t_to,
                          double phi_final_rad, double step_rad) {
-  StepMetrics m;
-  const double sgn = step_rad >= 0.0 ? 1.0 : -1.0;
-  const double band = 0.02 * std::abs(step_rad);
-  double over = 0.0, last_out = t_from;
-  for (const Sample& s : tr) {
-    if (s.t < t_from || s.t > t_to) continue;
-    const double d = s.x4 - phi_final_rad;
-    over = std::max(over, sgn * d);
-    if (std::abs(d) > band) last_out = s.t;
+  StepAcc a(t_from, t_to, phi_final_rad, step_rad);
+  for (const Sample& s : tr) a.add(s);
+  return a.result();
+}
+
+void WindowAcc::add(const Sample& s) {
+  if (s.t < t_from_ || s.t > t_to_) return;
+  const double v = s.*field_;
+  if (n_ == 0) {
+    lo_ = hi_ = v;
+    t0_ = s.t;
+  } else if ((v > 0.0 && prev_ < 0.0) || (v < 0.0 && prev_ > 0.0)) {
+    ++changes_;
   }
-  m.overshoot_frac = over / std::abs(step_rad);
-  m.settling_s = last_out - t_from;
-  return m;
+  if (v != 0.0) prev_ = v;
+  lo_ = std::min(lo_, v);
+  hi_ = std::max(hi_, v);
+  w_.max_abs = std::max(w_.max_abs, std::abs(v));
+  sum_ += v;
+  sum2_ += v * v;
+  t1_ = s.t;
+  ++n_;
+}
+
+WindowStats WindowAcc::result() const {
+  WindowStats w = w_;
+  if (n_ > 0) {
+    w.mean = sum_ / static_cast<double>(n_);
+    w.rms = std::sqrt(sum2_ / static_cast<double>(n_));
+    w.peak_to_peak = hi_ - lo_;
+    if (t1_ > t0_) w.sign_changes_per_s = static_cast<double>(changes_) / (t1_ - t0_);
+  }
+  return w;
 }
 
 WindowStats window_stats(const std::vector<Sample>& tr, double Sample::*field, double t_from,
                          double t_to) {
-  WindowStats w;
-  double sum = 0.0, sum2 = 0.0, lo = 0.0, hi = 0.0, t0 = 0.0, t1 = 0.0;
-  long n = 0, changes = 0;
-  double prev = 0.0;
-  for (const Sample& s : tr) {
-    if (s.t < t_from || s.t > t_to) continue;
-    const double v = s.*field;
-    if (n == 0) {
-      lo = hi = v;
-      t0 = s.t;
-    } else if ((v > 0.0 && prev < 0.0) || (v < 0.0 && prev > 0.0)) {
-      ++changes;
-    }
-    if (v != 0.0) prev = v;
-    lo = std::min(lo, v);
-    hi = std::max(hi, v);
-    w.max_abs = std::max(w.max_abs, std::abs(v));
-    sum += v;
-    sum2 += v * v;
-    t1 = s.t;
-    ++n;
-  }
-  if (n > 0) {
-    w.mean = sum / static_cast<double>(n);
-    w.rms = std::sqrt(sum2 / static_cast<double>(n));
-    w.peak_to_peak = hi - lo;
-    if (t1 > t0) w.sign_changes_per_s = static_cast<double>(changes) / (t1 - t0);
-  }
-  return w;
+  WindowAcc a(field, t_from, t_to);
+  for (const Sample& s : tr) a.add(s);
+  return a.result();
 }
 
 }  // namespace csmc

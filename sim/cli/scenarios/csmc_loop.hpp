@@ -17,6 +17,7 @@
 // (T = 0.1 ms). Used by the csmc-* scenarios and by tests/sil/csmc.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -63,10 +64,15 @@ struct Sample {
 };
 
 struct LoopResult {
-  std::vector<Sample> trace;
+  std::vector<Sample> trace;  ///< run_loop(o) only; empty when streamed
   double t_end = 0.0;
   double e2_end = 0.0;
+  Sample last{};  ///< the last recorded sample
 };
+
+/// Called with every recorded sample (every record_every-th period and the
+/// last), in order.
+using SampleFn = std::function<void(const Sample&)>;
 
 // The paper's controller settings (Sec. III and IV).
 //   model_law: eq. (5) with beta functions (Fig. 2), else -M sat (Fig. 3-5)
@@ -79,8 +85,11 @@ mc_hgo_f32_cfg_t paper_hgo(double eps_s);
 // {-1, -2+-j} (q). Throws std::runtime_error if the kernels refuse.
 void paper_servo(double w0_rad_s, mc_csmc_f32_cfg_t* cfg);
 
-// Runs the loop; throws std::runtime_error if a kernel init fails.
+// Runs the loop; throws std::runtime_error if a kernel init fails. The
+// first form keeps the recorded samples in trace (tests); the second hands
+// each to on_sample and keeps none (the scenarios: constant memory).
 LoopResult run_loop(const LoopOptions& o);
+LoopResult run_loop(const LoopOptions& o, const SampleFn& on_sample);
 
 // Step-response figures of the trace between t_from and t_to for a step of
 // size step_rad whose final value is phi_final_rad:
@@ -92,6 +101,16 @@ struct StepMetrics {
 };
 StepMetrics step_metrics(const std::vector<Sample>& tr, double t_from, double t_to,
                          double phi_final_rad, double step_rad);
+/// step_metrics fed one sample at a time (the same figures, in constant memory).
+class StepAcc {
+ public:
+  StepAcc(double t_from, double t_to, double phi_final_rad, double step_rad);
+  void add(const Sample& s);
+  StepMetrics result() const;
+
+ private:
+  double t_from_, t_to_, phi_final_, step_, sgn_, band_, over_ = 0.0, last_out_;
+};
 
 // Statistics of a signal over [t_from, t_to].
 struct WindowStats {
@@ -100,6 +119,21 @@ struct WindowStats {
 };
 WindowStats window_stats(const std::vector<Sample>& tr, double Sample::*field, double t_from,
                          double t_to);
+/// window_stats fed one sample at a time.
+class WindowAcc {
+ public:
+  WindowAcc(double Sample::*field, double t_from, double t_to)
+      : field_(field), t_from_(t_from), t_to_(t_to) {}
+  void add(const Sample& s);
+  WindowStats result() const;
+
+ private:
+  double Sample::*field_;
+  double t_from_, t_to_;
+  WindowStats w_{};
+  double sum_ = 0.0, sum2_ = 0.0, lo_ = 0.0, hi_ = 0.0, t0_ = 0.0, t1_ = 0.0, prev_ = 0.0;
+  long n_ = 0, changes_ = 0;
+};
 
 }  // namespace csmc
 }  // namespace mcsim

@@ -40,6 +40,7 @@
 
 #include "drive_setup.hpp"
 #include "scenario.hpp"
+#include "verdict.hpp"
 
 namespace mcsim {
 namespace {
@@ -114,10 +115,6 @@ std::vector<ParamSpec> fw_params(const MotorFiles& f) {
   return p;
 }
 
-std::string faults_text(uint32_t f) {
-  return "drive fault bits " + std::to_string(f);
-}
-
 // One CSV row (part 2 and part 3): the true dq currents, the drive's
 // references and voltages, the bus.
 void write_row(RunContext& ctx, MotorRig& rig) {
@@ -149,7 +146,7 @@ void run_fault(RunContext& ctx, MotorRig& rig, long every) {
   const double w0 = board.state()(2);
   const double vbus0 = board.vbus_v();
   mc_drive_raise_fault(&rig.drive(), MC_DRIVE_FAULT_EXTERNAL);
-  const long nf = std::lround(ctx.params.get("fault_s") / rig.period_s());
+  const long nf = step_count(ctx.params.get("fault_s"), rig.period_s());
   double vpk = vbus0, ipk = 0, tq_min = 0;
   long asc_steps = 0;
   for (long k = 0; k < nf; ++k) {
@@ -175,6 +172,8 @@ void run_fault(RunContext& ctx, MotorRig& rig, long every) {
   ctx.summary.set("fault_omega_end_rad_s", board.state()(2));
   ctx.summary.set("fault_first", rig.drive().first_fault);
   ctx.summary.set("fault_bits", rig.drive().faults);
+  ctx.summary.set_text("fault_first_name", drive_fault_names(rig.drive().first_fault));
+  ctx.summary.set_text("fault_names", drive_fault_names(rig.drive().faults));
 }
 
 void run_fw(RunContext& ctx) {
@@ -208,7 +207,12 @@ void run_fw(RunContext& ctx) {
         throw UsageError("current command rejected by the drive");
       }
       for (long k = 0; k < nh; ++k) rig.step();
-      if (rig.drive().faults != 0u) throw std::runtime_error(faults_text(rig.drive().faults));
+      if (rig.drive().faults != 0u) {
+        ctx.summary.set("faults", rig.drive().faults);
+        ctx.summary.set_text("fault_names", drive_fault_names(rig.drive().faults));
+        return write_verdict(ctx.summary,
+                             faulted(rig.drive().faults, "in part 1 (MTPA on the dyno)"));
+      }
       double id, iq;
       rig.board().true_dq_a(&id, &iq);
       const double I = std::hypot(id, iq);
@@ -232,9 +236,7 @@ void run_fw(RunContext& ctx) {
   const double w_base = base_speed(m, g.i_rated_eff_a, v_fw);
   const double w_t = std::min(P.get("speed_factor") * w_base, m.speed_max_rad_s);
   const double t0 = 0.01, t_acc = w_t / g.speed_accel_rad_s2;
-  const double dur =
-      ctx.duration_s > 0 ? ctx.duration_s : t0 + t_acc + 40.0 / g.speed_wc_rad_s + P.get("hold_s");
-  ctx.summary.set("duration_s", dur);
+  const double dur = run_duration(ctx, t0 + t_acc + 40.0 / g.speed_wc_rad_s + P.get("hold_s"));
   const double t_hold = dur - P.get("hold_s");
   RigOptions o;
   o.law = Law::kSpeedPi;
@@ -248,7 +250,7 @@ void run_fw(RunContext& ctx) {
     if (isense > 0.0) c.i_trip_a = static_cast<float>(0.98 * isense);
   };
   MotorRig rig(f, g, o);
-  const long n = std::lround(dur / T);
+  const long n = step_count(dur, T);
   const long every =
       P.get("csv_every") > 0 ? std::lround(P.get("csv_every")) : std::max(1L, n / 20000);
   ctx.csv.columns({"t", "i_d_a", "i_q_a", "i_d_ref_a", "i_q_ref_a", "omega_m_rad_s",
@@ -275,7 +277,10 @@ void run_fw(RunContext& ctx) {
   record_setup(f, g, ctx.summary);
   const mc_drive_t& d = rig.drive();
   ctx.summary.set("faults", d.faults);
-  if (d.faults != 0u) throw std::runtime_error(faults_text(d.faults));
+  if (d.faults != 0u) {
+    ctx.summary.set_text("fault_names", drive_fault_names(d.faults));
+    return write_verdict(ctx.summary, faulted(d.faults, "in part 2 (the speed ramp)"));
+  }
   ctx.summary.set("base_speed_rad_s", w_base);
   ctx.summary.set("target_speed_rad_s", w_t);
   ctx.summary.set("target_over_base", w_t / w_base);
@@ -292,6 +297,16 @@ void run_fw(RunContext& ctx) {
                   vbus / (std::sqrt(3.0) * m.pole_pairs * m.flux_wb));
   ctx.summary.set("short_circuit_current_a", m.flux_wb / m.ld_h);
   if (fault) run_fault(ctx, rig, every);
+  FieldWeakeningFigures fig;
+  fig.mtpa_rel_err_max = mtpa_err;
+  fig.omega_final_rad_s = w;
+  fig.target_rad_s = w_t;
+  fig.i_peak_a = i_pk;
+  fig.i_limit_a = g.i_limit_a;
+  fig.id_min_a = id_min;
+  fig.id_demag_bound_a = d.fw.id_min_a;
+  fig.fault_part = fault;
+  write_verdict(ctx.summary, judge_field_weakening(fig));
 }
 
 const Registrar reg_fw(

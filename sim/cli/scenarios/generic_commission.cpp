@@ -9,6 +9,7 @@
 
 #include "hal_host/sil_rig.hpp"
 #include "scenario.hpp"
+#include "verdict.hpp"
 
 namespace mcsim {
 namespace {
@@ -274,9 +275,10 @@ void run_commission_scenario(RunContext& ctx) {
                                   {"adc_offset_c_a", run.true_adc_offset_a[2]},
                                   {"j_kgm2", f.motor.j_kgm2},
                                   {"b_nm_s_rad", f.motor.b_nm_s_rad}});
-  if (!run.done) {
-    throw std::runtime_error("commissioning stopped: " + commission_error_names(run.err));
-  }
+  CommissionFigures fig;
+  fig.duration_s = run.duration_s;
+  fig.error_names = commission_error_names(run.err);
+  if (!run.done) return write_verdict(ctx.summary, judge_commission(fig));
   std::map<std::string, double> id = {{"r_ohm", r.r_ohm},
                                       {"ld_h", r.ld_h},
                                       {"lq_h", r.lq_h},
@@ -312,7 +314,8 @@ void run_commission_scenario(RunContext& ctx) {
   if (ctx.params.get("verify") > 0.5) {
     // verify.LAW_faulted: 1 if the drive faulted on the way (the error is
     // then NaN), 0 if not. A law that refuses this motor (the sensorless
-    // law takes no salient machine) leaves its error NaN, no _faulted, and
+    // law takes no salient machine; either law a pair without safe gains)
+    // leaves its error NaN, no _faulted, and
     // says why; commissioning itself succeeded, so the run does not fail.
     double w = 0;
     const auto verify = [&](Law law, const char* name) {
@@ -323,12 +326,33 @@ void run_commission_scenario(RunContext& ctx) {
       } catch (const UsageError& e) {
         ctx.summary.set(std::string("verify.") + name + "_speed_err_frac", std::nan(""));
         ctx.summary.set_text(std::string("verify.") + name + "_refused", e.what());
+        if (law == Law::kSensorless) {
+          fig.sensorless_refused = true;
+        } else {
+          fig.sensored_refused = true;  // no safe gains for this motor and board
+        }
       }
     };
     verify(Law::kSpeedPi, "sensored");
     verify(Law::kSensorless, "sensorless");
     ctx.summary.set("verify.speed_target_rad_s", w);
   }
+  const auto& n = ctx.summary.numbers();
+  fig.done = true;
+  fig.r_frac = r.r_ohm / f.motor.r_ohm - 1;
+  fig.ld_frac = r.ld_h / f.motor.ld_h - 1;
+  fig.lq_frac = r.lq_h / f.motor.lq_h - 1;
+  fig.flux_frac = r.flux_wb / f.motor.flux_wb - 1;
+  fig.pole_pairs_diff = static_cast<double>(r.pole_pairs) - f.motor.pole_pairs;
+  fig.encoder_offset_deg = e_off * 180 / kPi;
+  fig.adc_offset_max_frac = e_adc / f.board.i_sense_max_a;
+  fig.direction_right = r.encoder_direction == run.true_encoder_direction;
+  fig.verify = ctx.params.get("verify") > 0.5;
+  if (fig.verify) {
+    fig.verify_sensored_err_frac = n.at("verify.sensored_speed_err_frac");
+    fig.verify_sensorless_err_frac = n.at("verify.sensorless_speed_err_frac");
+  }
+  write_verdict(ctx.summary, judge_commission(fig));
 }
 
 const Registrar reg_commission(
@@ -339,7 +363,10 @@ const Registrar reg_commission(
      0.0,
      {},
      run_commission_scenario,
-     commission_params});
+     commission_params,
+     /*takes_flash=*/false,
+     /*motor_optional=*/false,
+     /*takes_duration=*/false});
 
 }  // namespace
 }  // namespace mcsim

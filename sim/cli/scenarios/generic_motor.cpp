@@ -9,6 +9,7 @@
 
 #include "drive_setup.hpp"
 #include "scenario.hpp"
+#include "verdict.hpp"
 
 namespace mcsim {
 namespace {
@@ -47,14 +48,7 @@ class RiseTimer {
 };
 
 std::string fault_names(uint32_t f, uint32_t ctrl_err) {
-  static const char* const names[] = {"ADC",       "MEAS_NAN",  "OVERCURRENT", "VBUS_LOW",
-                                      "VBUS_HIGH", "ENCODER",   "CONTROL",     "PWM",
-                                      "HW_INPUT",  "OVERSPEED", "OVERTEMP",    "OVERRUN",
-                                      "STALL",     "EXTERNAL",  "UNBALANCED",  "OPEN_PHASE"};
-  std::string s;
-  for (int i = 0; i < 16; ++i) {
-    if (f & (1u << i)) s += (s.empty() ? "" : "|") + std::string(names[i]);
-  }
+  std::string s = drive_fault_names(f);
   if ((f & MC_DRIVE_FAULT_CONTROL) != 0u) {
     s += " (law error bits " + std::to_string(ctrl_err) + ")";
   }
@@ -109,10 +103,8 @@ long csv_every(const RunContext& ctx, long n) {
 }
 
 // The run's duration: --duration, or the scenario's own from the motor.
-double duration(const RunContext& ctx, double auto_s) {
-  const double d = ctx.duration_s > 0 ? ctx.duration_s : auto_s;
-  ctx.summary.set("duration_s", d);
-  return d;
+double duration(RunContext& ctx, double auto_s) {
+  return run_duration(ctx, auto_s);
 }
 
 ParamSpec csv_every_spec() {
@@ -154,7 +146,7 @@ void run_current_step(RunContext& ctx) {
   const double t_iq = 10 * T, t_id = t_iq + 12 * design + 2e-3;
   const double dur = duration(ctx, t_id + 12 * design + 2e-3);
   const double iq_s = ctx.params.get("iq_step_a"), id_s = ctx.params.get("id_step_a");
-  const long n = std::lround(dur / T);
+  const long n = step_count(dur, T);
   Recorder rec{ctx, rig, false, csv_every(ctx, n)};
   rec.header();
   RiseTimer rq(t_iq, 0.0, iq_s), rd(t_id, 0.0, id_s);
@@ -178,7 +170,7 @@ void run_current_step(RunContext& ctx) {
   ctx.summary.set("faults", d.faults);
   if (d.faults != 0u) {
     ctx.summary.set_text("fault_names", fault_names(d.faults, d.tm.ctrl_err));
-    throw std::runtime_error("drive faulted: " + fault_names(d.faults, d.tm.ctrl_err));
+    return write_verdict(ctx.summary, faulted(d.faults, fault_names(d.faults, d.tm.ctrl_err)));
   }
   ctx.summary.set("rise_time_designed_s", design);
   ctx.summary.set("iq_rise_time_s", rq.rise_s());
@@ -189,6 +181,18 @@ void run_current_step(RunContext& ctx) {
   ctx.summary.set("ki_q_v_per_as", rig.drive_cfg().foc.ki_q_v_per_as);
   ctx.summary.set("iq_final_a", iq);
   ctx.summary.set("id_final_a", id);
+  CurrentStepFigures fig;
+  fig.iq_step_a = iq_s;
+  fig.id_step_a = id_s;
+  fig.iq_rise_ratio = rq.rise_s() / design;
+  fig.id_rise_ratio = rd.rise_s() / design;
+  fig.iq_final_a = iq;
+  fig.id_final_a = id;
+  fig.lsb_a = 2.0 * f.board.i_sense_max_a / std::ldexp(1.0, f.board.adc_bits);
+  fig.t_id_step_s = t_id;
+  fig.duration_s = dur;
+  fig.bw_t = g.cur_bw_rad_s * T;
+  write_verdict(ctx.summary, judge_current_step(fig));
 }
 
 const Registrar reg_current(
@@ -237,7 +241,7 @@ void run_speed(RunContext& ctx, bool load_step) {
   MotorFiles fr = f;
   MotorRig rig(fr, g, o);
   const double T = rig.period_s();
-  const long n = std::lround(dur / T);
+  const long n = step_count(dur, T);
   Recorder rec{ctx, rig, false, csv_every(ctx, n)};
   rec.header();
   const double band = 0.02 * std::abs(w_t);
@@ -270,7 +274,7 @@ void run_speed(RunContext& ctx, bool load_step) {
   ctx.summary.set("faults", d.faults);
   if (d.faults != 0u) {
     ctx.summary.set_text("fault_names", fault_names(d.faults, d.tm.ctrl_err));
-    throw std::runtime_error("drive faulted: " + fault_names(d.faults, d.tm.ctrl_err));
+    return write_verdict(ctx.summary, faulted(d.faults, fault_names(d.faults, d.tm.ctrl_err)));
   }
   if (load_step) {
     ctx.summary.set("t_load_step_s", t_load);
@@ -287,6 +291,16 @@ void run_speed(RunContext& ctx, bool load_step) {
   ctx.summary.set("omega_err_max_steady_rad_s", werr_max_ss);
   ctx.summary.set("iq_abs_max_a", iq_max);
   ctx.summary.set("load_nm", tau_l);
+  SpeedStepFigures fig;
+  fig.load_step = load_step;
+  fig.target_rad_s = w_t;
+  fig.speed_limit_rad_s = g.speed_limit_rad_s;
+  fig.werr_max_steady_rad_s = werr_max_ss;
+  fig.id_max_steady_frac_rated = id_max_ss / g.i_rated_eff_a;
+  fig.t_steady_from_s = t_ss;
+  fig.t_event_s = load_step ? t_load : t0 + t_acc;
+  fig.duration_s = dur;
+  write_verdict(ctx.summary, judge_speed_step(fig));
 }
 
 const Registrar reg_speed(
@@ -348,7 +362,7 @@ void run_sensorless(RunContext& ctx) {
   MotorRig rig(f, g, o);
   rig.set_speed_ref(w_t);
   const double T = rig.period_s();
-  const long n = std::lround(dur / T);
+  const long n = step_count(dur, T);
   Recorder rec{ctx, rig, true, csv_every(ctx, n)};
   rec.header();
   const double band = 0.05 * std::abs(w_t);
@@ -389,7 +403,10 @@ void run_sensorless(RunContext& ctx) {
                                 ? sls_reason(d.tm.ctrl_err)
                                 : "drive fault " + fault_names(d.faults, d.tm.ctrl_err);
     ctx.summary.set_text("fault_names", why);
-    throw std::runtime_error(why);
+    const bool no_lock = (d.faults & MC_DRIVE_FAULT_CONTROL) != 0u &&
+                         (d.tm.ctrl_err & MC_CTRL_SLS_ERR_NO_LOCK) != 0u;
+    return write_verdict(ctx.summary,
+                         no_lock ? Verdict{"not locked", why, true} : faulted(d.faults, why));
   }
   ctx.summary.set("locked", (tm.phase == MC_CTRL_SLS_CLOSED) ? 1.0 : 0.0);
   ctx.summary.set("angle_err_max_rad", ang_max);
@@ -400,6 +417,14 @@ void run_sensorless(RunContext& ctx) {
   ctx.summary.set("tracks", werr_end <= band ? 1.0 : 0.0);
   ctx.summary.set("load0_nm", tau0);
   ctx.summary.set("load1_nm", tau1);
+  SensorlessFigures fig;
+  fig.target_rad_s = w_t;
+  fig.locked = tm.phase == MC_CTRL_SLS_CLOSED;
+  fig.werr_max_end_rad_s = werr_end;
+  fig.angle_err_max_rad = ang_max;
+  fig.t_load_step_s = t_load;
+  fig.duration_s = dur;
+  write_verdict(ctx.summary, judge_sensorless(fig));
 }
 
 const Registrar reg_sls(

@@ -26,6 +26,7 @@
 
 #include "drive_setup.hpp"
 #include "scenario.hpp"
+#include "verdict.hpp"
 
 namespace mcsim {
 namespace {
@@ -82,9 +83,8 @@ void run_position(RunContext& ctx) {
   // Streamed: a smooth (1 - cos) profile of the trapezoid's length.
   const double t_stream = t_pred0;
   const double settle = 20.0 / g.pos_kp_per_s;
-  const double dur = ctx.duration_s > 0 ? ctx.duration_s : t0 + t_move_total + settle;
-  ctx.summary.set("duration_s", dur);
-  const long n = std::lround(dur / T);
+  const double dur = run_duration(ctx, t0 + t_move_total + settle);
+  const long n = step_count(dur, T);
   const long every = std::lround(ctx.params.get("csv_every")) > 0
                          ? std::lround(ctx.params.get("csv_every"))
                          : std::max(1L, n / 20000);
@@ -199,8 +199,10 @@ void run_position(RunContext& ctx) {
   mc_drive_t& dr = rig.drive();
   ctx.summary.set("faults", dr.faults);
   if (dr.faults != 0u) {
-    throw std::runtime_error("drive faulted: bits " + std::to_string(dr.faults) +
-                             " (law error bits " + std::to_string(dr.tm.ctrl_err) + ")");
+    const std::string names = drive_fault_names(dr.faults);
+    ctx.summary.set_text("fault_names", names);
+    return write_verdict(ctx.summary, faulted(dr.faults, names + " (law error bits " +
+                                                             std::to_string(dr.tm.ctrl_err) + ")"));
   }
   if (stream) t_pred = t_stream;
   ctx.summary.set_text("mode", stream ? "stream" : (replanned ? "replan" : "trapezoid"));
@@ -222,6 +224,21 @@ void run_position(RunContext& ctx) {
   ctx.summary.set("v_max_rad_s", v);
   ctx.summary.set("a_max_rad_s2", a);
   ctx.summary.set("d_max_rad_s2", d);
+  PositionFigures fig;
+  fig.stream = stream;
+  fig.final_err_counts = err_counts;
+  fig.overshoot_rad = std::max(0.0, overshoot);
+  fig.move_time_s = t_last_out - t0;
+  fig.move_time_pred_s = t_pred;
+  fig.dv_ref_max_rad_s = dv_max;
+  fig.a_max_rad_s2 = a;
+  fig.d_max_rad_s2 = d;
+  fig.pos_kp_per_s = g.pos_kp_per_s;
+  fig.enc_bw_rad_s = g.enc_pll_bw_rad_s;
+  fig.period_s = T;
+  fig.duration_s = dur;
+  fig.track_err_max_rad = track_max;
+  write_verdict(ctx.summary, judge_position(fig));
 }
 
 const Registrar reg_position(

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "scenario.hpp"
+#include "verdict.hpp"
 
 namespace mcsim {
 namespace {
@@ -37,7 +38,7 @@ void run_phase(RunContext& ctx) {
   const double extra = ctx.params.get("extra_omega0");
   if (extra >= 0.0) omegas.push_back(extra);
   ctx.csv.columns({"omega0_1", "traj_1", "t", "chi1_1", "chi2_1", "angle_err_rad"});
-  const long steps = std::lround(s_end / h);
+  const long steps = step_count(s_end, h);
   const long every = std::max(1L, steps / 300);
   int traj = 0;
   for (double W : omegas) {
@@ -68,6 +69,9 @@ void run_phase(RunContext& ctx) {
     }
   }
   ctx.summary.set("trajectories", traj);
+  write_no_claim(ctx.summary,
+                 "phase portraits of the observer's error system (paper 002 Figs. 2-3): the "
+                 "trajectories are the result; the equilibria of Prop. 4 are in the summary");
 }
 
 const Registrar reg_phase({"observer-error-phase",

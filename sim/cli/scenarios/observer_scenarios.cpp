@@ -3,6 +3,7 @@
 // (Figs. 8-9), observer-lowspeed-sweep, ii-observer.
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -11,6 +12,7 @@
 #include "observer_sil.hpp"
 #include "scenario.hpp"
 #include "scenarios/q31_loops.hpp"
+#include "verdict.hpp"
 extern "C" {
 #include "math/mc_math.h"
 #include "observer/mc_iiobs.h"
@@ -56,15 +58,23 @@ std::vector<ParamSpec> common_params() {
   };
 }
 
-// A run of the sensorless drive with a speed reference profile and a load
-// profile; writes the standard CSV and collects metrics.
-struct RunResult {
-  std::vector<double> t, w, wref, what, err, iq, tau_e;
-  double first_handover_s = std::nan("");
-  uint32_t faults = 0;
+// One sample of a profile run (after the period's step).
+struct ProfileSample {
+  double t, w, wref, what, err, iq, tau_e;
 };
 
-RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(double)>& ref) {
+// A run of the sensorless drive with a speed reference profile and a load
+// profile; writes the standard CSV (about 6000 rows) and hands every
+// period's sample to each(): the metrics are computed on the fly, so the
+// run keeps no trajectory in memory.
+struct RunResult {
+  double first_handover_s = std::nan("");
+  uint32_t faults = 0;
+  double w_last = 0.0;
+};
+
+RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(double)>& ref,
+                      const std::function<void(const ProfileSample&, const RunResult&)>& each) {
   ctx.csv.columns({"t",
                    "omega_m_rad_s",
                    "omega_ref_rad_s",
@@ -87,7 +97,7 @@ RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(doub
                    "phase_1",
                    "fault_1"});
   const double T = sil.board().period_s();
-  const long n = std::lround(ctx.duration_s / T);
+  const long n = step_count(ctx.duration_s, T);
   const long every = std::max(1L, n / 6000);
   RunResult r;
   uint32_t handovers = 0;
@@ -102,15 +112,12 @@ RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(doub
     double id, iq;
     sil.board().true_dq_a(&id, &iq);
     const auto& tm = sil.tm();
-    r.t.push_back(tt);
-    r.w.push_back(x(2));
-    r.wref.push_back(ref(t));
-    r.what.push_back(tm.omega_hat_m_rad_s);
-    r.err.push_back(sil.angle_error());
-    r.iq.push_back(iq);
-    r.tau_e.push_back(sil.board().torque_nm());
     if (tm.handovers != handovers && std::isnan(r.first_handover_s)) r.first_handover_s = tt;
     handovers = tm.handovers;
+    r.w_last = x(2);
+    each(ProfileSample{tt, x(2), ref(t), tm.omega_hat_m_rad_s, sil.angle_error(), iq,
+                       sil.board().torque_nm()},
+         r);
     if (k % every == 0 || k == n) {
       double xa = 0, xb = 0;
       sil.flux_hat_wb(&xa, &xb);
@@ -145,66 +152,131 @@ RunResult run_profile(RunContext& ctx, Sil& sil, const std::function<double(doub
   return r;
 }
 
-// max |y| over t in [a, b)
-double max_abs(const RunResult& r, const std::vector<double>& y, double a, double b) {
-  double m = 0;
-  for (size_t k = 0; k < r.t.size(); ++k)
-    if (r.t[k] >= a && r.t[k] < b) m = std::max(m, std::abs(y[k]));
-  return m;
-}
-double mean(const RunResult& r, const std::vector<double>& y, double a, double b) {
-  double s = 0;
-  long n = 0;
-  for (size_t k = 0; k < r.t.size(); ++k)
-    if (r.t[k] >= a && r.t[k] < b) {
-      s += y[k];
-      ++n;
+// max |y| over t in [a, b), fed in time order.
+class WinMax {
+ public:
+  WinMax(double a, double b) : a_(a), b_(b) {}
+  void add(double t, double y) {
+    if (t >= a_ && t < b_) m_ = std::max(m_, std::abs(y));
+  }
+  double value() const { return m_; }
+
+ private:
+  double a_, b_, m_ = 0.0;
+};
+
+// mean of y over t in [a, b) (NaN if empty), summed in time order.
+class WinMean {
+ public:
+  WinMean(double a, double b) : a_(a), b_(b) {}
+  void add(double t, double y) {
+    if (t >= a_ && t < b_) {
+      s_ += y;
+      ++n_;
     }
-  return n ? s / static_cast<double>(n) : std::nan("");
-}
-double stddev(const RunResult& r, const std::vector<double>& y, double a, double b) {
-  const double m = mean(r, y, a, b);
-  double s = 0;
-  long n = 0;
-  for (size_t k = 0; k < r.t.size(); ++k)
-    if (r.t[k] >= a && r.t[k] < b) {
-      s += (y[k] - m) * (y[k] - m);
-      ++n;
-    }
-  return n ? std::sqrt(s / static_cast<double>(n)) : std::nan("");
-}
+  }
+  double value() const { return n_ ? s_ / static_cast<double>(n_) : std::nan(""); }
+
+ private:
+  double a_, b_, s_ = 0.0;
+  long n_ = 0;
+};
+
+// Values over a window [a, b) kept for a two-pass statistic: memory set by
+// the window's length, not the run's.
+class WinValues {
+ public:
+  WinValues(double a, double b) : a_(a), b_(b) {}
+  void add(double t, double y) {
+    if (t >= a_ && t < b_) v_.push_back(y);
+  }
+  double mean() const {
+    double s = 0;
+    for (double y : v_) s += y;
+    return v_.empty() ? std::nan("") : s / static_cast<double>(v_.size());
+  }
+  double stddev() const {
+    const double m = mean();
+    double s = 0;
+    for (double y : v_) s += (y - m) * (y - m);
+    return v_.empty() ? std::nan("") : std::sqrt(s / static_cast<double>(v_.size()));
+  }
+
+ private:
+  double a_, b_;
+  std::vector<double> v_;
+};
 
 // Transient at the first hand-over (IF -> CLOSED): the largest change of
 // the electromagnetic torque and of the true q current over one PWM period
 // within 3 periods either side of the switch, against the largest
 // per-period change in the 20 ms of I-f before it; and the torque change
 // over the following 5 ms (set by the speed loop taking over, not by the
-// switch).
-void handover_metrics(const RunResult& r, Summary& s) {
-  s.set("handover_time_s", r.first_handover_s);
-  if (std::isnan(r.first_handover_s)) return;
-  const double t0 = r.first_handover_s;
-  const double T = r.t.size() > 1 ? r.t[1] - r.t[0] : 1.0;
-  double jump = 0, jump_iq = 0, before = 0, tau0 = std::nan(""), dtau5 = 0;
-  for (size_t k = 1; k < r.t.size(); ++k) {
-    const double d = std::abs(r.tau_e[k] - r.tau_e[k - 1]);
-    if (std::abs(r.t[k] - t0) <= 3.5 * T) {
-      jump = std::max(jump, d);
-      jump_iq = std::max(jump_iq, std::abs(r.iq[k] - r.iq[k - 1]));
-      if (std::isnan(tau0)) tau0 = r.tau_e[k - 1];
+// switch). Fed every sample; keeps the last 20 ms (and a few periods) until
+// the hand-over and then the 5 ms after it.
+class HandoverAcc {
+ public:
+  explicit HandoverAcc(double period_s)
+      : keep_(static_cast<size_t>(std::ceil(0.02 / period_s)) + 8) {}
+  void add(const ProfileSample& s, double t_handover) {
+    if (n_ == 1) T_ = s.t - first_t_;
+    if (n_ == 0) first_t_ = s.t;
+    ++n_;
+    if (std::isnan(t_handover)) {  // before: remember the recent past
+      buf_.push_back(s);
+      if (buf_.size() > keep_) buf_.pop_front();
+      return;
     }
-    if (r.t[k] >= t0 - 0.02 && r.t[k] < t0 - 3.5 * T) before = std::max(before, d);
-    if (!std::isnan(tau0) && r.t[k] > t0 && r.t[k] <= t0 + 0.005) {
-      dtau5 = std::max(dtau5, std::abs(r.tau_e[k] - tau0));
+    if (std::isnan(t0_)) {  // the hand-over: the past first, then this sample
+      t0_ = t_handover;
+      have_prev_ = false;
+      for (const ProfileSample& p : buf_) feed(p);
+      buf_.clear();
     }
+    if (s.t <= t0_ + std::max(0.005, 3.5 * T_) + T_) feed(s);
   }
-  s.set("handover_torque_step_per_period_nm", jump);
-  s.set("handover_iq_step_per_period_a", jump_iq);
-  s.set("if_torque_step_per_period_nm", before);
-  s.set("handover_torque_change_5ms_nm", dtau5);
-}
+  void write(Summary& sm) const {
+    sm.set("handover_time_s", t0_);
+    if (std::isnan(t0_)) return;
+    sm.set("handover_torque_step_per_period_nm", jump_);
+    sm.set("handover_iq_step_per_period_a", jump_iq_);
+    sm.set("if_torque_step_per_period_nm", before_);
+    sm.set("handover_torque_change_5ms_nm", dtau5_);
+  }
+
+ private:
+  void feed(const ProfileSample& s) {
+    if (have_prev_) {
+      const double d = std::abs(s.tau_e - prev_.tau_e);
+      if (std::abs(s.t - t0_) <= 3.5 * T_) {
+        jump_ = std::max(jump_, d);
+        jump_iq_ = std::max(jump_iq_, std::abs(s.iq - prev_.iq));
+        if (std::isnan(tau0_)) tau0_ = prev_.tau_e;
+      }
+      if (s.t >= t0_ - 0.02 && s.t < t0_ - 3.5 * T_) before_ = std::max(before_, d);
+      if (!std::isnan(tau0_) && s.t > t0_ && s.t <= t0_ + 0.005) {
+        dtau5_ = std::max(dtau5_, std::abs(s.tau_e - tau0_));
+      }
+    }
+    prev_ = s;
+    have_prev_ = true;
+  }
+  size_t keep_;
+  std::deque<ProfileSample> buf_;
+  ProfileSample prev_{};
+  bool have_prev_ = false;
+  long n_ = 0;
+  double first_t_ = 0.0, T_ = 1.0, t0_ = std::nan(""), tau0_ = std::nan("");
+  double jump_ = 0, jump_iq_ = 0, before_ = 0, dtau5_ = 0;
+};
 
 // ------------------------------------------------------- observer-table1
+// Paper 002 Figs. 5-7 on the 40 kW machine: the verdict holds the drive to
+// what the figures show: no fault, the I-f start handed over to the
+// observer, the angle error after 1 s within 0.1 rad electrical (measured
+// 0.002: the estimate follows the rotor) and the rated load step at
+// 1500 r/min rejected: 0.3 s after it the mean speed error is within 1 % of
+// the reference (measured 0.02 %; the dip itself, 9 %, is reported).
 void run_table1(RunContext& ctx) {
   const Machine m = table1_40kw();
   const SilOptions o = options_from(ctx.params);
@@ -220,20 +292,30 @@ void run_table1(RunContext& ctx) {
     if (t < 2.2) return 1000 * kRpm;
     return 1500 * kRpm;
   };
-  const RunResult r = run_profile(ctx, sil, ref);
+  HandoverAcc ho(sil.board().period_s());
+  WinMax ang(1.0, 1e9), dip(1.2, 1.6);
+  WinMean rec(1.5, 1.6);
+  const RunResult r = run_profile(ctx, sil, ref, [&](const ProfileSample& p, const RunResult& rr) {
+    ho.add(p, rr.first_handover_s);
+    ang.add(p.t, p.err);
+    dip.add(p.t, p.wref - p.w);
+    rec.add(p.t, p.wref - p.w);
+  });
   ctx.summary.set("fault_bits", r.faults);
-  handover_metrics(r, ctx.summary);
-  ctx.summary.set("angle_err_max_after_1s_rad", max_abs(r, r.err, 1.0, 1e9));
-  ctx.summary.set("speed_dip_load_step_rad_s", max_abs(
-                                                   r,
-                                                   [&] {
-                                                     std::vector<double> e(r.w.size());
-                                                     for (size_t k = 0; k < e.size(); ++k)
-                                                       e[k] = r.wref[k] - r.w[k];
-                                                     return e;
-                                                   }(),
-                                                   1.2, 1.6));
-  if (r.faults) throw std::runtime_error("drive faulted: bits " + std::to_string(r.faults));
+  ctx.summary.set_text("fault_names", drive_fault_names(r.faults));
+  ho.write(ctx.summary);
+  ctx.summary.set("angle_err_max_after_1s_rad", ang.value());
+  ctx.summary.set("speed_dip_load_step_rad_s", dip.value());
+  if (r.faults) return write_verdict(ctx.summary, faulted(r.faults));
+  Judge j;
+  j.at_least("too short to judge", "duration [s]", ctx.duration_s, 1.6,
+             "the first load step's window ends at 1.6 s");
+  j.require("not locked", !std::isnan(r.first_handover_s),
+            "the I-f start handed over to the observer");
+  j.at_most("angle error too large", "max |theta_e error| after 1 s [rad]", ang.value(), 0.1);
+  j.at_most("load not rejected", "|mean speed error| 0.3 s after the load step [rad/s]",
+            std::abs(rec.value()), 0.01 * 1500 * kRpm, "1 % of the reference");
+  write_verdict(ctx.summary, j.verdict());
 }
 
 auto table1_params() {
@@ -249,6 +331,17 @@ const Registrar reg_table1({"observer-table1",
                             3.0, table1_params(), run_table1});
 
 // --------------------------------------------------- observer-test-motor
+// Paper 002 Figs. 8-9 on the 0.3 kW motor: no fault and the hand-over, in
+// every profile. Profiles 0 and 1 (Fig. 8, the load step): the speed dip
+// within 60 r/min (tests/sil/observer: a full-load step at 200 r/min, 23
+// measured; the figure's dip is of that order) and the speed back on the
+// reference, the mean error over the last 0.3 s of the load within
+// 2 r/min (the speed loop's integral action; the dead-time cases of
+// sim/README leave a ripple, not an offset). Profile 3 (start-stop): the
+// law falls back to I-f on the way down and the rotor ends within 0.05
+// rad/s of standstill (tests/sil/observer StopsAndHoldsLoadAtStandstill).
+// Profile 2 (the ramp of Fig. 9) claims no more than the fault and the
+// hand-over.
 void run_test_motor(RunContext& ctx) {
   const Machine m = test_motor_300w();
   SilOptions o = options_from(ctx.params);
@@ -279,28 +372,52 @@ void run_test_motor(RunContext& ctx) {
   sil.record(ctx.summary);
   ctx.summary.set("profile", profile);
   ctx.summary.set("load_step_nm", tl);
-  const RunResult r = run_profile(ctx, sil, ref);
+  HandoverAcc ho(sil.board().period_s());
+  WinMax e_max(t_step, t_step + 1.0);
+  WinMean e_mean(t_step + 0.7, t_step + 1.0), a_no(t_step - 0.3, t_step),
+      a_full(t_step + 0.7, t_step + 1.0);
+  double ang_after = 0.0;
+  const RunResult r = run_profile(ctx, sil, ref, [&](const ProfileSample& p, const RunResult& rr) {
+    ho.add(p, rr.first_handover_s);
+    const double e = p.wref - p.w;
+    e_max.add(p.t, e);
+    e_mean.add(p.t, e);
+    a_no.add(p.t, p.err);
+    a_full.add(p.t, p.err);
+    if (p.t >= rr.first_handover_s + 0.3) ang_after = std::max(ang_after, std::abs(p.err));
+  });
   ctx.summary.set("fault_bits", r.faults);
-  handover_metrics(r, ctx.summary);
-  std::vector<double> e(r.w.size());
-  for (size_t k = 0; k < e.size(); ++k) e[k] = r.wref[k] - r.w[k];
+  ctx.summary.set_text("fault_names", drive_fault_names(r.faults));
+  ho.write(ctx.summary);
   if (profile <= 1) {
-    ctx.summary.set("speed_err_max_load_step_rad_s", max_abs(r, e, t_step, t_step + 1.0));
-    ctx.summary.set("speed_err_max_load_step_rpm", max_abs(r, e, t_step, t_step + 1.0) / kRpm);
-    ctx.summary.set("speed_err_mean_last_0.3s_of_load_rad_s",
-                    mean(r, e, t_step + 0.7, t_step + 1.0));
-    ctx.summary.set("angle_err_mean_no_load_rad", mean(r, r.err, t_step - 0.3, t_step));
-    ctx.summary.set("angle_err_mean_full_load_rad", mean(r, r.err, t_step + 0.7, t_step + 1.0));
-    ctx.summary.set("angle_err_max_after_handover_rad",
-                    max_abs(r, r.err, r.first_handover_s + 0.3, 1e9));
+    ctx.summary.set("speed_err_max_load_step_rad_s", e_max.value());
+    ctx.summary.set("speed_err_max_load_step_rpm", e_max.value() / kRpm);
+    ctx.summary.set("speed_err_mean_last_0.3s_of_load_rad_s", e_mean.value());
+    ctx.summary.set("angle_err_mean_no_load_rad", a_no.value());
+    ctx.summary.set("angle_err_mean_full_load_rad", a_full.value());
+    ctx.summary.set("angle_err_max_after_handover_rad", ang_after);
   }
   if (profile == 3) {
-    double t_fb = std::nan("");
     ctx.summary.set("fallbacks", sil.tm().fallbacks);
-    (void)t_fb;
-    ctx.summary.set("speed_final_rad_s", r.w.back());
+    ctx.summary.set("speed_final_rad_s", r.w_last);
   }
-  if (r.faults) throw std::runtime_error("drive faulted: bits " + std::to_string(r.faults));
+  if (r.faults) return write_verdict(ctx.summary, faulted(r.faults));
+  Judge j;
+  j.require("not locked", !std::isnan(r.first_handover_s),
+            "the I-f start handed over to the observer");
+  if (profile <= 1) {
+    j.at_least("too short to judge", "duration [s]", ctx.duration_s, t_step + 1.0,
+               "the load step's second");
+    j.at_most("load not held", "speed dip at the load step [r/min]", e_max.value() / kRpm, 60.0);
+    j.at_most("not settled", "|mean speed error| over the last 0.3 s of the load [r/min]",
+              std::abs(e_mean.value()) / kRpm, 2.0);
+  } else if (profile == 3) {
+    j.at_least("too short to judge", "duration [s]", ctx.duration_s, t_step + 1.0,
+               "the stop's second");
+    j.at_least("no fallback", "fallbacks to I-f", sil.tm().fallbacks, 1.0);
+    j.at_most("not stopped", "|speed| at the end [rad/s]", std::abs(r.w_last), 0.05);
+  }
+  write_verdict(ctx.summary, j.verdict());
 }
 
 auto test_motor_params() {
@@ -351,8 +468,12 @@ void run_sweep(RunContext& ctx) {
       return rpm * kRpm;
     };
     const double T = sil.board().period_s();
-    const long n = std::lround(t3 / T);
-    std::vector<double> w, e;
+    const long n = step_count(t3, T);
+    // mean speed and angle error, speed ripple (rms about the mean, from
+    // sums about the first sample) and the largest angle error over the
+    // last half of the hold, on the fly
+    long cnt = 0;
+    double sw = 0, se = 0, c0 = 0, s1 = 0, s2 = 0, emax = 0;
     uint32_t faults = 0;
     double t_fault = std::nan("");
     for (long k = 0; k < n; ++k) {
@@ -365,30 +486,37 @@ void run_sweep(RunContext& ctx) {
         break;
       }
       if (sil.t_s() >= t2 + 0.5 * hold) {
-        w.push_back(sil.board().state()(2));
-        e.push_back(sil.angle_error());
+        const double w = sil.board().state()(2), e = sil.angle_error();
+        if (cnt == 0) c0 = w;
+        sw += w;
+        se += e;
+        s1 += w - c0;
+        s2 += (w - c0) * (w - c0);
+        emax = std::max(emax, std::abs(e));
+        ++cnt;
       }
     }
-    double wm = 0, wr = 0, em = 0, emax = 0;
-    for (double v : w) wm += v;
-    for (double v : e) em += v;
-    if (!w.empty()) {
-      wm /= static_cast<double>(w.size());
-      em /= static_cast<double>(e.size());
-      for (double v : w) wr += (v - wm) * (v - wm);
-      wr = std::sqrt(wr / static_cast<double>(w.size()));
-      for (double v : e) emax = std::max(emax, std::abs(v));
+    double wm = 0, wr = 0, em = 0;
+    if (cnt > 0) {
+      const double nn = static_cast<double>(cnt);
+      wm = sw / nn;
+      em = se / nn;
+      wr = std::sqrt(std::max(0.0, s2 / nn - (s1 / nn) * (s1 / nn)));
     }
     // Works: no fault, mean speed within max(3 r/min, 10 %) of the
     // reference, angle error below 0.35 rad (20 deg: torque still 94 %).
-    const bool works = faults == 0 && !w.empty() &&
+    const bool empty = cnt == 0;
+    const bool works = faults == 0 && !empty &&
                        std::abs(wm / kRpm - rpm) <= std::max(3.0, 0.1 * rpm) && emax < 0.35;
-    ctx.csv.row({rpm, works ? 1.0 : 0.0, w.empty() ? std::nan("") : wm / kRpm,
-                 w.empty() ? std::nan("") : wr / kRpm, w.empty() ? std::nan("") : em,
-                 w.empty() ? std::nan("") : emax, static_cast<double>(faults),
+    ctx.csv.row({rpm, works ? 1.0 : 0.0, empty ? std::nan("") : wm / kRpm,
+                 empty ? std::nan("") : wr / kRpm, empty ? std::nan("") : em,
+                 empty ? std::nan("") : emax, static_cast<double>(faults),
                  static_cast<double>(sil.drive().tm.ctrl_err), t_fault});
     ctx.progress.update(++idx, static_cast<double>(speeds.size()));
   }
+  write_no_claim(ctx.summary,
+                 "a map of where the sensorless loop stops working (one row per speed, with "
+                 "whether it works and its drive fault): its rows are the result");
 }
 
 auto sweep_params() {
@@ -410,7 +538,13 @@ const Registrar reg_sweep({"observer-lowspeed-sweep",
                            "Sensorless loop on the 0.3 kW test motor from 400 r/min down to "
                            "standstill (low-speed fallback off): one row per speed with the "
                            "steady angle error, speed ripple and whether the loop works",
-                           0.0, sweep_params(), run_sweep});
+                           0.0,
+                           sweep_params(),
+                           run_sweep,
+                           {},
+                           /*takes_flash=*/false,
+                           /*motor_optional=*/false,
+                           /*takes_duration=*/false});
 
 // ----------------------------------------------------------- ii-observer
 void run_ii(RunContext& ctx) {
@@ -460,13 +594,21 @@ void run_ii(RunContext& ctx) {
 
   ctx.csv.columns({"t", "omega_m_rad_s", "omega_ii_rad_s", "omega_pll_rad_s", "omega_dd_rad_s",
                    "tau_load_nm", "tau_load_ii_nm", "tau_e_est_nm", "theta_m_enc_rad", "r_1"});
-  const long n = std::lround(ctx.duration_s / dt);
+  const long n = step_count(ctx.duration_s, dt);
   const long every = std::max(1L, n / 6000);
-  std::vector<double> tv, ew_ii, ew_pll, ew_dd, el;
+  // The statistics' windows, fed on the fly (the two-pass ones keep their
+  // window's values: memory set by the 0.3 s and 0.2 s windows).
+  WinValues ii_ss(t_step - 0.3, t_step), pll_ss(t_step - 0.3, t_step), dd_ss(t_step - 0.3, t_step);
+  WinMax ii_ls(t_step, t_step + 0.3), pll_ls(t_step, t_step + 0.3), dd_ls(t_step, t_step + 0.3);
+  WinValues load_end(ctx.duration_s - 0.2, 1e9);
   for (long k = 0; k <= n; ++k) {
     mc_ctrl_sls_set_speed_ref(&sil.ctrl(), static_cast<float>(w0));
     sil.step();
-    if (sil.drive().faults) throw std::runtime_error("drive faulted");
+    if (sil.drive().faults) {
+      ctx.summary.set("fault_bits", sil.drive().faults);
+      ctx.summary.set_text("fault_names", drive_fault_names(sil.drive().faults));
+      return write_verdict(ctx.summary, faulted(sil.drive().faults));
+    }
     const double t = sil.t_s();
     const auto& tmd = sil.drive().tm;
     const double th = tmd.theta_m_rad;  // encoder, quantised
@@ -495,28 +637,41 @@ void run_ii(RunContext& ctx) {
     dd += bw * dt * (dth / dt - dd);
     const double w = sil.board().state()(2);
     const double wi = mc_iiobs_f32_get_omega_m_rad_s(&ii), li = mc_iiobs_f32_get_tau_load_nm(&ii);
-    tv.push_back(t);
-    ew_ii.push_back(wi - w);
-    ew_pll.push_back(wp - w);
-    ew_dd.push_back(dd - w);
-    el.push_back(li - sil.load_nm(t));
+    ii_ss.add(t, wi - w);
+    pll_ss.add(t, wp - w);
+    dd_ss.add(t, dd - w);
+    ii_ls.add(t, wi - w);
+    pll_ls.add(t, wp - w);
+    dd_ls.add(t, dd - w);
+    load_end.add(t, li - sil.load_nm(t));
     if (k % every == 0 || k == n) {
       ctx.csv.row({t, w, wi, wp, dd, sil.load_nm(t), li, tau_now, th, ii.r});
       ctx.progress.update(t, ctx.duration_s);
     }
   }
-  RunResult r;
-  r.t = tv;
   // steady noise (rms of the error) before the load step, and the largest
   // error after it
-  ctx.summary.set("ii_speed_err_rms_steady_rad_s", stddev(r, ew_ii, t_step - 0.3, t_step));
-  ctx.summary.set("pll_speed_err_rms_steady_rad_s", stddev(r, ew_pll, t_step - 0.3, t_step));
-  ctx.summary.set("dd_speed_err_rms_steady_rad_s", stddev(r, ew_dd, t_step - 0.3, t_step));
-  ctx.summary.set("ii_speed_err_max_load_step_rad_s", max_abs(r, ew_ii, t_step, t_step + 0.3));
-  ctx.summary.set("pll_speed_err_max_load_step_rad_s", max_abs(r, ew_pll, t_step, t_step + 0.3));
-  ctx.summary.set("dd_speed_err_max_load_step_rad_s", max_abs(r, ew_dd, t_step, t_step + 0.3));
-  ctx.summary.set("ii_load_err_mean_final_nm", mean(r, el, ctx.duration_s - 0.2, 1e9));
-  ctx.summary.set("ii_load_err_rms_final_nm", stddev(r, el, ctx.duration_s - 0.2, 1e9));
+  ctx.summary.set("ii_speed_err_rms_steady_rad_s", ii_ss.stddev());
+  ctx.summary.set("pll_speed_err_rms_steady_rad_s", pll_ss.stddev());
+  ctx.summary.set("dd_speed_err_rms_steady_rad_s", dd_ss.stddev());
+  ctx.summary.set("ii_speed_err_max_load_step_rad_s", ii_ls.value());
+  ctx.summary.set("pll_speed_err_max_load_step_rad_s", pll_ls.value());
+  ctx.summary.set("dd_speed_err_max_load_step_rad_s", dd_ls.value());
+  ctx.summary.set("ii_load_err_mean_final_nm", load_end.mean());
+  ctx.summary.set("ii_load_err_rms_final_nm", load_end.stddev());
+  // Paper 002 Sec. IV (tests/sil/observer IiObserverEstimatesLoadFromEncoder):
+  // the I&I observer finds the load, which the PLL and the derivative do
+  // not estimate: its mean error over the last 0.2 s within 1 % of the
+  // rated torque (measured 1e-4 N m of 3). That needs the run to reach
+  // 0.4 s past the step (24 time constants of k1 at the default bandwidth).
+  // The speed estimates' noise is compared, not judged (the I&I's is the
+  // largest at this bandwidth).
+  Judge j;
+  j.at_least("too short to judge", "duration [s]", ctx.duration_s, t_step + 0.4,
+             "the load step + 0.4 s");
+  j.at_most("load not estimated", "|mean load error| at the end [N m]", std::abs(load_end.mean()),
+            0.01 * m.rated_torque_nm, "1 % of rated torque");
+  write_verdict(ctx.summary, j.verdict());
 }
 
 auto ii_params() {

@@ -16,6 +16,8 @@
 #include "scenario.hpp"
 #include "scenarios/pi2d_sil.hpp"
 #include "scenarios/q31_loops.hpp"
+#include "spill.hpp"
+#include "verdict.hpp"
 
 extern "C" {
 #include "mc_ctrl_pi2d.h"
@@ -92,7 +94,7 @@ long run_paper(const PaperOptions& o, const std::function<void(const PaperSample
   InputDelay<PmsmNormalised::Input, 4> delay;
   delay.configure(static_cast<size_t>(o.delay_periods), PmsmNormalised::Input::Zero());
   PmsmNormalised::State x = PmsmNormalised::State::Zero();
-  const long n = std::lround(o.duration / T);
+  const long n = step_count(o.duration, T);
   for (long k = 0; k <= n; ++k) {
     const double t = static_cast<double>(k) / o.rate_hz;  // corners land exactly
     const SpeedRef r = paper_profile(t);
@@ -292,7 +294,7 @@ MotorMetrics run_motor(const MotorOptions& o, bool use_pi2d, double duration_s,
   double w_f = 0.0, th_prev = 0.0;
   bool have_prev = false;
 
-  const long n = std::lround(duration_s / T);
+  const long n = step_count(duration_s, T);
   const double w_r = o.speed_rpm * 2.0 * kPi / 60.0;
   MotorMetrics mm;
   double sum_e2 = 0.0;
@@ -371,6 +373,47 @@ MotorMetrics run_motor(const MotorOptions& o, bool use_pi2d, double duration_s,
   return mm;
 }
 
+// Section V (paper 000, Fig. 5): once the profile is over (the speed held
+// at 0 from t = 9, the load staying), the speed error stays below 0.05
+// (normalised; measured 0.018 on the f32 and q31 kernels, tests/sil/pi2d
+// ReproducesSectionVBehaviour, tests/sil/q31). The window needs the run to
+// reach t = 11 (1 s of it).
+void check_paper(Judge& j, double duration, double max_e3_after_10) {
+  j.at_least("too short to judge", "duration", duration, 11.0, "the window from t = 10 needs 1 s");
+  j.at_most("speed not tracked", "max |x3 - x3_ref| after t = 10", max_e3_after_10, 0.05);
+}
+
+// pi2d-motor (tests/sil/pi2d Pi2dMotor): no fault in either loop; the PI2D
+// loop settles within 1 % of rated speed 0.2 s after the rated-load step
+// (measured 0.06 s), with a dip below 17 rad/s (16 % of rated; measured
+// 11), the current within the limit + 0.5 A (the loop's transient past the
+// clamp); and it rejects the load better than the cascade of the same
+// bandwidth: a smaller dip. The load-step figures need the run to pass the
+// settling window (t_load + 0.25 s) and a load to step.
+Verdict judge_motor(const MotorOptions& o, double duration, const MotorMetrics& pi2d,
+                    const MotorMetrics& cascade) {
+  if (pi2d.faults != 0u || cascade.faults != 0u) {
+    return faulted(pi2d.faults | cascade.faults,
+                   "PI2D: " + drive_fault_names(pi2d.faults) +
+                       ", cascade: " + drive_fault_names(cascade.faults));
+  }
+  Judge j;
+  j.at_least("too short to judge", "duration [s]", duration, o.t_load_s + 0.25,
+             "the load step + 0.25 s");
+  j.at_most("current limit exceeded", "PI2D peak current [A]", pi2d.peak_current_a,
+            o.i_limit_a + 0.5);
+  if (o.load_nm != 0.0) {
+    j.at_most("not settled", "PI2D settling after the load step [s]", pi2d.settle_after_load_s,
+              0.2);
+    j.at_most("load rejection", "PI2D load-step dip [rad/s]", pi2d.load_dip_rad_s, 17.0);
+    j.at_least("load rejection", "cascade dip - PI2D dip [rad/s]",
+               cascade.load_dip_rad_s - pi2d.load_dip_rad_s, 0.0, "PI2D rejects the load better");
+  } else {
+    j.note("no load step (load_nm = 0): the load figures are not judged");
+  }
+  return j.verdict();
+}
+
 }  // namespace pi2d
 
 // ------------------------------------------------------------- scenarios
@@ -408,6 +451,9 @@ void run_pi2d_paper(RunContext& ctx) {
   ctx.summary.set("nu_final", last.nu);
   ctx.summary.set("max_abs_e3_after_10", max_e3_late);
   ctx.summary.set("max_abs_u2", max_u2);
+  Judge j;
+  pi2d::check_paper(j, ctx.duration_s, max_e3_late);
+  write_verdict(ctx.summary, j.verdict());
 }
 
 const Registrar reg_paper(
@@ -437,26 +483,35 @@ pi2d::MotorOptions motor_options(const Params& p) {
 
 void run_pi2d_motor(RunContext& ctx) {
   const pi2d::MotorOptions o = motor_options(ctx.params);
-  std::vector<pi2d::MotorSample> a, b;
   const bool q31 = ctx.params.get("kernels") != 0.0;
   ctx.summary.set_text("kernels", q31 ? "q31" : "f32");  // the PI2D run; the cascade is f32
-  auto keep_a = [&](const pi2d::MotorSample& s) { a.push_back(s); };
+  // The PI2D run's rows (every 4th sample: 5 kHz) wait in a temporary file
+  // for the cascade's, so memory does not grow with the run.
+  constexpr size_t kW = 11;
+  Spill spill(kW);
+  long ka = 0;
+  auto keep_a = [&](const pi2d::MotorSample& s) {
+    if (ka++ % 4 != 0) return;
+    const double v[kW] = {s.t,      s.omega_ref, s.load, s.omega_m, s.id,     s.iq,
+                          s.iq_ref, s.vd,        s.vq,   s.nu,      s.theta_f};
+    spill.put(v);
+  };
   const pi2d::MotorMetrics ma = q31 ? q31loop::run_motor_q31(o, ctx.duration_s, keep_a)
                                     : pi2d::run_motor(o, true, ctx.duration_s, keep_a);
   ctx.progress.update(0.5 * ctx.duration_s, ctx.duration_s);
-  const pi2d::MotorMetrics mb = pi2d::run_motor(
-      o, false, ctx.duration_s, [&](const pi2d::MotorSample& s) { b.push_back(s); });
   ctx.csv.columns({"t", "omega_ref_rad_s", "load_nm", "pi2d_omega_m_rad_s", "pi2d_i_d_a",
                    "pi2d_i_q_a", "pi2d_i_q_ref_a", "pi2d_v_d_v", "pi2d_v_q_v", "pi2d_nu_nm",
                    "pi2d_theta_f_rad", "pi_omega_m_rad_s", "pi_i_d_a", "pi_i_q_a", "pi_i_q_ref_a",
                    "pi_v_d_v", "pi_v_q_v", "pi_omega_meas_rad_s"});
-  const size_t n = std::min(a.size(), b.size());
-  for (size_t k = 0; k < n; k += 4) {  // 5 kHz rows
-    const auto& s = a[k];
-    const auto& c = b[k];
-    ctx.csv.row({s.t, s.omega_ref, s.load, s.omega_m, s.id, s.iq, s.iq_ref, s.vd, s.vq, s.nu,
-                 s.theta_f, c.omega_m, c.id, c.iq, c.iq_ref, c.vd, c.vq, c.theta_f});
-  }
+  spill.rewind();
+  long kb = 0;
+  double a[kW];
+  const pi2d::MotorMetrics mb =
+      pi2d::run_motor(o, false, ctx.duration_s, [&](const pi2d::MotorSample& c) {
+        if (kb++ % 4 != 0 || !spill.get(a)) return;  // 5 kHz rows
+        ctx.csv.row({a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7], a[8], a[9], a[10], c.omega_m,
+                     c.id, c.iq, c.iq_ref, c.vd, c.vq, c.theta_f});
+      });
   auto put = [&](const char* name, const pi2d::MotorMetrics& m) {
     const std::string p(name);
     ctx.summary.set(p + ".rms_speed_error_rad_s", m.rms_err_rad_s);
@@ -465,6 +520,7 @@ void run_pi2d_motor(RunContext& ctx) {
     ctx.summary.set(p + ".settling_after_load_s", m.settle_after_load_s);
     ctx.summary.set(p + ".load_step_dip_rad_s", m.load_dip_rad_s);
     ctx.summary.set(p + ".faults", m.faults);
+    ctx.summary.set_text(p + ".fault_names", drive_fault_names(m.faults));
   };
   put("pi2d", ma);
   put("cascade", mb);
@@ -476,11 +532,7 @@ void run_pi2d_motor(RunContext& ctx) {
   std::printf("%-22s %12.4f %12.4f\n", "settling (1%) s", ma.settle_after_load_s,
               mb.settle_after_load_s);
   std::printf("%-22s %12.3f %12.3f\n", "load-step dip rad/s", ma.load_dip_rad_s, mb.load_dip_rad_s);
-  if (ma.faults != 0u || mb.faults != 0u) {
-    throw std::runtime_error("drive faulted (MC_DRIVE_FAULT bits pi2d " +
-                             std::to_string(ma.faults) + ", cascade " + std::to_string(mb.faults) +
-                             ")");
-  }
+  write_verdict(ctx.summary, pi2d::judge_motor(o, ctx.duration_s, ma, mb));
 }
 
 const Registrar reg_motor(
@@ -550,6 +602,9 @@ void run_pi2d_certificate(RunContext& ctx) {
   ctx.summary.set("c38_k2_min_per_s", r.c38_k2_min_per_s);
   ctx.summary.set("c38_printed_margin", r.c38_printed_margin);
   ctx.summary.set("holds", r.holds ? 1.0 : 0.0);
+  write_no_claim(ctx.summary,
+                 "evaluates the proof's sufficient conditions for the gains given: whether they "
+                 "hold is the result (holds, the margins), not a pass or a failure of the run");
 }
 
 const Registrar reg_cert(
@@ -563,7 +618,11 @@ const Registrar reg_cert(
       {"id_min_a", -0.5, "A", "lower bound of x1", -100.0, 100.0},
       {"id_max_a", 0.5, "A", "upper bound of x1", -100.0, 100.0},
       {"iq_abs_max_a", 5.0, "A", "bound of |x2|", 0.0, 100.0}},
-     run_pi2d_certificate});
+     run_pi2d_certificate,
+     {},
+     /*takes_flash=*/false,
+     /*motor_optional=*/false,
+     /*takes_duration=*/false});
 
 }  // namespace
 }  // namespace mcsim

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hal_host/pmsm_board.hpp"
+#include "verdict.hpp"
 
 extern "C" {
 #include "mc_drive.h"
@@ -95,6 +96,12 @@ hal_host::PmsmBoardConfig motor_board_cfg(const MotorOptions& o);
 mc_drive_cfg_t motor_drive_cfg(const MotorOptions& o);
 MotorMetrics run_motor(const MotorOptions& o, bool pi2d, double duration_s,
                        const std::function<void(const MotorSample&)>& row);
+
+// The verdicts of pi2d-paper (the speed error after t = 10, checked into j)
+// and pi2d-motor (both loops; the thresholds and their reasons in pi2d.cpp).
+void check_paper(Judge& j, double duration, double max_e3_after_10);
+Verdict judge_motor(const MotorOptions& o, double duration, const MotorMetrics& pi2d,
+                    const MotorMetrics& cascade);
 
 }  // namespace pi2d
 }  // namespace mcsim

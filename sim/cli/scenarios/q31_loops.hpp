@@ -54,8 +54,10 @@ pi2d::MotorMetrics run_motor_q31(const pi2d::MotorOptions& o, double duration_s,
 
 // Bases of the paper-001 loop.
 mc_csmc_q31_bases_t paper_csmc_bases();
-// csmc::run_loop with the q31 plug-in mc_ctrl_csmc_q31 (state feedback only).
+// csmc::run_loop with the q31 plug-in mc_ctrl_csmc_q31 (state feedback only):
+// the trace kept (tests), or each recorded sample handed on (scenarios).
 csmc::LoopResult run_csmc_q31(const csmc::LoopOptions& o);
+csmc::LoopResult run_csmc_q31(const csmc::LoopOptions& o, const csmc::SampleFn& on_sample);
 
 }  // namespace q31loop
 }  // namespace mcsim

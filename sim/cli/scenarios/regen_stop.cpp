@@ -21,6 +21,7 @@
 
 #include "drive_setup.hpp"
 #include "scenario.hpp"
+#include "verdict.hpp"
 
 namespace mcsim {
 namespace {
@@ -75,10 +76,7 @@ void run_regen(RunContext& ctx) {
   const MotorSpec& m = f.motor;
   const double ke_j = 0.5 * m.j_kgm2 * w_t * w_t;
   const double p_cu = std::max(1e-9, 1.5 * m.r_ohm * g.i_limit_a * g.i_limit_a);
-  const double dur = ctx.duration_s > 0
-                         ? ctx.duration_s
-                         : t_stop + std::max(20.0 * t_acc, 10.0 * ke_j / p_cu) + t_set;
-  ctx.summary.set("duration_s", dur);
+  const double dur = run_duration(ctx, t_stop + std::max(20.0 * t_acc, 10.0 * ke_j / p_cu) + t_set);
   RigOptions ro;
   ro.law = Law::kSpeedPi;
   MotorRig rig(f, g, ro);
@@ -86,7 +84,7 @@ void run_regen(RunContext& ctx) {
   const mcsim::DcLink* link = board.dc_link();
   if (link == nullptr) throw std::logic_error("regen-stop: the board has no DC link");
   const double T = rig.period_s();
-  const long n = std::lround(dur / T);
+  const long n = step_count(dur, T);
   const long every =
       P.get("csv_every") > 0 ? std::lround(P.get("csv_every")) : std::max(1L, n / 20000);
   ctx.csv.columns({"t", "omega_m_rad_s", "omega_ref_rad_s", "i_d_a", "i_q_a", "i_d_ref_a",
@@ -152,8 +150,10 @@ void run_regen(RunContext& ctx) {
   const mc_drive_t& d = rig.drive();
   ctx.summary.set("faults", d.faults);
   ctx.summary.set_text("brake", brake ? "on" : "off");
-  if (d.faults != 0u)
-    throw std::runtime_error("drive faulted in regen-stop: bits " + std::to_string(d.faults));
+  if (d.faults != 0u) {
+    ctx.summary.set_text("fault_names", drive_fault_names(d.faults));
+    return write_verdict(ctx.summary, faulted(d.faults));
+  }
   const auto& e = link->energy();
   const double ke1 = 0.5 * m.j_kgm2 * w * w, em1 = emag(id, iq);
   const double lhs = (e.source_j - src0) + (ke0 - ke1) + (em0 - em1);
@@ -177,6 +177,12 @@ void run_regen(RunContext& ctx) {
   ctx.summary.set("cap_delta_j", link->cap_delta_j() - cap0);
   ctx.summary.set("energy_balance_residual_j", lhs - rhs);
   ctx.summary.set("energy_balance_rel_err", (lhs - rhs) / std::max(1e-12, ke0));
+  RegenFigures fig;
+  fig.stop_time_s = t_still - t_stop;
+  fig.vbus_peak_v = vpk;
+  fig.vbus_trip_v = trip;
+  fig.energy_balance_rel_err = (lhs - rhs) / std::max(1e-12, ke0);
+  write_verdict(ctx.summary, judge_regen_stop(fig));
 }
 
 const Registrar reg_regen(

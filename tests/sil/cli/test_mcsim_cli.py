@@ -65,10 +65,15 @@ class Cli(unittest.TestCase):
         # with the accepted names listed.
         p = run("run", "csmc-state-feedback", "--out", self.out, "--set", "kernels=f64", check=False)
         self.assert_usage_error(p, ["kernels", "f32", "q31"])
-        run("run", "csmc-state-feedback", "--out", self.out, "--duration", "0.05",
-            "--set", "kernels=q31")
+        # 0.05 s is too short for the second step (the verdict's): exit 1,
+        # with the summary written.
+        p = run("run", "csmc-state-feedback", "--out", self.out, "--duration", "0.05",
+                "--set", "kernels=q31", check=False)
+        self.assertEqual(p.returncode, 1, p.stderr)
         with open(os.path.join(self.out, "csmc-state-feedback.json")) as f:
-            self.assertEqual(json.load(f)["kernels"], "q31")
+            s = json.load(f)
+        self.assertEqual(s["kernels"], "q31")
+        self.assertEqual(s["verdict"], "too short to judge")
 
     def test_kernels_on_every_scenario_that_has_them(self):
         # Each scenario that lists the kernels key takes both names, and the
@@ -78,10 +83,13 @@ class Cli(unittest.TestCase):
         p = run("run", "observer-test-motor", "--out", self.out, "--set", "kernels=q64",
                 check=False)
         self.assert_usage_error(p, ["kernels", "f32", "q31"])
-        run("run", "observer-test-motor", "--out", self.out, "--duration", "0.3",
-            "--set", "kernels=q31")
+        # 0.3 s is shorter than the load step's second the verdict needs: exit 1
+        p = run("run", "observer-test-motor", "--out", self.out, "--duration", "0.3",
+                "--set", "kernels=q31", check=False)
+        self.assertEqual(p.returncode, 1, p.stderr)
         with open(os.path.join(self.out, "observer-test-motor.json")) as f:
             summary = json.load(f)
+        self.assertEqual(summary["verdict"], "too short to judge")
         self.assertEqual(summary["kernels"], "q31")
         self.assertEqual(summary["q31_i_base_a"], 20.0)
         self.assertEqual(summary["q31_v_base_v"], 400.0)
@@ -108,19 +116,20 @@ class Cli(unittest.TestCase):
         self.assertEqual(os.listdir(self.out), ["file"])
 
     def test_run_writes_csv_and_json_with_units(self):
-        run("run", "foc-current-step", "--out", self.out, "--duration", "0.005")
+        run("run", "foc-current-step", "--out", self.out)
         self.assertEqual(sorted(os.listdir(self.out)),
                          ["foc-current-step.csv", "foc-current-step.json"])
         with open(os.path.join(self.out, "foc-current-step.csv")) as f:
             rows = list(csv.reader(f))
         self.assertEqual(rows[0][0], "t")
         self.assertIn("i_q_a", rows[0])
-        # 0.005 s at 20 kHz: 100 periods plus the initial row.
-        self.assertEqual(len(rows) - 1, 101)
+        # 0.03 s at 20 kHz: 600 periods plus the initial row.
+        self.assertEqual(len(rows) - 1, 601)
         with open(os.path.join(self.out, "foc-current-step.json")) as f:
             summary = json.load(f)
         self.assertEqual(summary["scenario"], "foc-current-step")
-        self.assertEqual(summary["rows"], 101)
+        self.assertEqual(summary["rows"], 601)
+        self.assertEqual(summary["verdict"], "pass")
 
     def test_bench_reports_json(self):
         # The contract of `mcsim bench` (no wall-clock threshold: the figures
@@ -148,8 +157,8 @@ class Cli(unittest.TestCase):
             self.assertIn("bench", p.stderr)
 
     def test_plot_makes_png(self):
-        run("run", "stepper-constant-voltage", "--out", self.out, "--duration", "0.05")
-        csv_path = os.path.join(self.out, "stepper-constant-voltage.csv")
+        run("run", "foc-current-step", "--out", self.out)
+        csv_path = os.path.join(self.out, "foc-current-step.csv")
         p = subprocess.run([sys.executable, ARGS.plot, csv_path], capture_output=True, text=True)
         self.assertEqual(p.returncode, 0, p.stderr)
         png = csv_path[:-4] + ".png"
@@ -161,6 +170,149 @@ class Cli(unittest.TestCase):
         p = subprocess.run([sys.executable, ARGS.plot, bad], capture_output=True, text=True)
         self.assertNotEqual(p.returncode, 0)
         self.assertIn("not an mcsim CSV", p.stderr)
+
+
+class RunOutputs(unittest.TestCase):
+    """What a run leaves in --out: the summary JSON valid for any name or
+    path, nothing after a refusal raised inside the run, can-telemetry's CAN
+    log inside --out."""
+
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.out = self.tmp.name
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def test_json_escapes_every_control_character(self):
+        # A flash file whose name holds every control character a path can
+        # hold (U+0001..U+001F; NUL ends a path) and bytes that are not UTF-8:
+        # the summary names it (flash_file) and must stay valid JSON, the
+        # controls escaped, the invalid bytes as U+FFFD.
+        ctrl = bytes(range(1, 32)) + b"\x7f"
+        name = b"flash-" + ctrl.replace(b"/", b"") + b"-\xff\xc3(-.flash"
+        path = os.path.join(os.fsencode(self.out), name)
+        out = os.path.join(self.out, "run")
+        p = subprocess.run([os.fsencode(ARGS.mcsim), b"run", b"can-telemetry", b"--out",
+                            os.fsencode(out), b"--duration", b"0.05", b"--flash", path],
+                           capture_output=True, timeout=300,
+                           env=dict(os.environ, MCSIM_CAN_LOG=os.path.join(self.out, "can.log")))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        with open(os.path.join(out, "can-telemetry.json"), "rb") as f:
+            raw = f.read()
+        s = json.loads(raw.decode("utf-8"))  # strict: raw controls are invalid
+        expect = os.fsdecode(path).encode("utf-8", "surrogateescape").decode("utf-8", "replace")
+        self.assertEqual(s["flash_file"], expect)
+        for c in ctrl[:-1]:  # 0x7f is valid in a JSON string; the others never raw
+            self.assertNotIn(bytes([c]), raw.replace(b"\n", b""))
+
+    def test_refusal_inside_the_run_leaves_nothing(self):
+        # The telemetry schedule is checked inside the run (after the CAN log
+        # was opened): refused, exit 2, and --out as it was: a directory
+        # mcsim made is removed, an existing one keeps only its own files.
+        bad = ["--set", "budget_pct=1", "--set", "rate_currents_hz=1000"]
+        env = {k: v for k, v in os.environ.items() if k != "MCSIM_CAN_LOG"}
+        made = os.path.join(self.out, "a", "b")
+        p = subprocess.run([ARGS.mcsim, "run", "can-telemetry", "--out", made, *bad],
+                           capture_output=True, text=True, timeout=300, env=env)
+        self.assertEqual(p.returncode, 2, p.stderr)
+        self.assertIn("telemetry configuration refused", p.stderr)
+        self.assertEqual(os.listdir(self.out), [])
+        with open(os.path.join(self.out, "mine.txt"), "w") as f:
+            f.write("x")
+        p = subprocess.run([ARGS.mcsim, "run", "can-telemetry", "--out", self.out, *bad],
+                           capture_output=True, text=True, timeout=300, env=env)
+        self.assertEqual(p.returncode, 2, p.stderr)
+        self.assertEqual(os.listdir(self.out), ["mine.txt"])
+
+    def test_can_log_goes_into_out_not_the_current_directory(self):
+        env = {k: v for k, v in os.environ.items() if k != "MCSIM_CAN_LOG"}
+        cwd = os.path.join(self.out, "cwd")
+        os.mkdir(cwd)
+        out = os.path.join(self.out, "run")
+        p = subprocess.run([ARGS.mcsim, "run", "can-telemetry", "--out", out, "--duration",
+                            "0.1"], capture_output=True, text=True, timeout=300, env=env, cwd=cwd)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertEqual(os.listdir(cwd), [])
+        log = os.path.join(out, "can-telemetry.candump.log")
+        with open(log) as f:
+            self.assertGreater(len(f.readlines()), 0)
+        with open(os.path.join(out, "can-telemetry.json")) as f:
+            self.assertEqual(json.load(f)["can_log"], log)
+
+
+    def test_can_telemetry_judges_its_job(self):
+        # 100 of the node's own frames at one instant: the receive ring holds
+        # 32 and the slow step takes 16; the rest are lost: "commands lost".
+        script = os.path.join(self.out, "burst.log")
+        with open(script, "w") as f:
+            f.write("(000.100000) can0 03F#\n" * 100)
+        out = os.path.join(self.out, "run")
+        p = subprocess.run([ARGS.mcsim, "run", "can-telemetry", "--out", out, "--duration", "0.2"],
+                           capture_output=True, text=True, timeout=300,
+                           env=dict(os.environ, MCSIM_CAN_CMDS=script,
+                                    MCSIM_CAN_LOG=os.path.join(self.out, "can.log")))
+        self.assertEqual(p.returncode, 1, p.stderr)
+        with open(os.path.join(out, "can-telemetry.json")) as f:
+            s = json.load(f)
+        self.assertEqual(s["verdict"], "commands lost")
+        self.assertGreater(s["app_rx_overflows"], 0)
+        self.assertTrue(os.path.exists(os.path.join(out, "can-telemetry.partial.csv")))
+
+
+class Verdicts(unittest.TestCase):
+    """Every scenario writes a verdict; mcsim exits 1 when it is not a pass
+    (or "none": no claim), with the partial trajectory and the summary."""
+
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.out = self.tmp.name
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def summary(self, name):
+        with open(os.path.join(self.out, name + ".json")) as f:
+            return json.load(f)
+
+    def test_pass_no_claim_and_fail(self):
+        run("run", "foc-current-step", "--out", self.out)
+        self.assertEqual(self.summary("foc-current-step")["verdict"], "pass")
+        run("run", "pi2d-certificate", "--out", self.out)
+        s = self.summary("pi2d-certificate")
+        self.assertEqual(s["verdict"], "none")
+        self.assertIn("not a pass or a failure", s["verdict_detail"])
+        # A run too short to settle: 5 ms, while the rotor still accelerates
+        # (it reaches the closed form's speed within 1e-4 after about 0.05 s).
+        p = run("run", "pmsm-open-loop-step", "--out", self.out, "--duration", "0.005",
+                check=False)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertIn("mcsim: run failed: not settled", p.stderr)
+        self.assertEqual(sorted(f for f in os.listdir(self.out) if f.startswith("pmsm")),
+                         ["pmsm-open-loop-step.json", "pmsm-open-loop-step.partial.csv"])
+        s = self.summary("pmsm-open-loop-step")
+        self.assertEqual(s["verdict"], "not settled")
+        self.assertIn("FAILED", s["verdict_detail"])
+        self.assertIn("<= 0.0001", s["verdict_detail"])  # the bound, stated
+        # the run passes again: its CSV replaces the failed run's
+        run("run", "pmsm-open-loop-step", "--out", self.out)
+        self.assertEqual(sorted(f for f in os.listdir(self.out) if f.startswith("pmsm")),
+                         ["pmsm-open-loop-step.csv", "pmsm-open-loop-step.json"])
+
+    def test_bound_durations(self):
+        for bad in ("1e300", "3600.5", "inf", "1e400"):
+            self.assert_refused(["foc-current-step", "--duration", bad], "duration")
+        self.assert_refused(["pi2d-certificate", "--duration", "1"], "takes no --duration")
+        # 3600 s at dt = 1 us: 3.6e9 periods, more than a run may take
+        self.assert_refused(["csmc-state-feedback", "--duration", "3600", "--set", "dt_s=1e-6"],
+                            "more than the 1e+09 a run may take")
+
+    def assert_refused(self, argv, words):
+        out = os.path.join(self.out, "refused")
+        p = run("run", argv[0], "--out", out, *argv[1:], check=False)
+        self.assertEqual(p.returncode, 2, p.stderr)
+        self.assertIn(words, p.stderr)
+        self.assertFalse(os.path.exists(out), "a refused run must write nothing")
 
 
 class PlantScenarios(unittest.TestCase):
@@ -204,4 +356,5 @@ if __name__ == "__main__":
     ap.add_argument("--mcsim", required=True)
     ap.add_argument("--plot", required=True)
     ARGS, rest = ap.parse_known_args()
+    ARGS.mcsim = os.path.abspath(ARGS.mcsim)  # some tests run mcsim in another directory
     unittest.main(argv=[sys.argv[0], "-v", *rest])

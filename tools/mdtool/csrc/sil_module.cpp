@@ -35,14 +35,16 @@ class CountingSink : public mcsim::ColumnSink {
   }
 };
 
-// One run. Invalid inputs (unknown scenario, bad motor file, bad key=value)
-// raise UsageError before anything runs; a run that fails on its way
-// (refused settings, a drive fault) returns its partial summary and
-// trajectory with error_kind "usage" or "failed" and mcsim's message.
+// One run. Invalid inputs (unknown scenario, bad motor file, bad key=value,
+// a duration out of range) raise UsageError before anything runs; a run that
+// does not pass returns its summary (with its verdict) and trajectory with
+// mcsim's message and error_kind: "usage" (a setting refused inside the run:
+// mcsim's exit code 2), "failed" (the run stopped on its way: a drive fault,
+// a sequence that stopped, an error; exit 1) or "verdict" (it ran to its end
+// and its verdict is not a pass: exit 1).
 nb::dict run(const std::string& scenario, const std::string& motor, const std::string& board,
              const Sets& sets, double duration_s, bool trajectory) {
-  mcsim::PreparedRun prepared = mcsim::prepare_run(scenario, motor, board, sets);
-  if (duration_s <= 0) duration_s = prepared.scenario->default_duration_s;
+  mcsim::PreparedRun prepared = mcsim::prepare_run(scenario, motor, board, sets, "", duration_s);
   mcsim::ColumnSink* sink = trajectory ? new mcsim::ColumnSink() : new CountingSink();
   nb::capsule owner(sink, [](void* p) noexcept { delete static_cast<mcsim::ColumnSink*>(p); });
   mcsim::Summary summary;
@@ -50,15 +52,10 @@ nb::dict run(const std::string& scenario, const std::string& motor, const std::s
   std::string error, kind;
   {
     nb::gil_scoped_release unlocked;
-    try {
-      mcsim::execute_run(prepared, duration_s, *sink, summary, progress);
-    } catch (const mcsim::UsageError& e) {
-      kind = "usage";
-      error = e.what();
-    } catch (const std::exception& e) {
-      kind = "failed";
-      error = std::string("run failed: ") + e.what();
-    }
+    const mcsim::RunOutcome o = mcsim::execute_run(prepared, *sink, summary, progress);
+    error = o.message;
+    if (o.kind == mcsim::RunOutcome::Kind::kRefused) kind = "usage";
+    if (o.kind == mcsim::RunOutcome::Kind::kFailed) kind = o.stopped ? "failed" : "verdict";
   }
   const size_t ncols = sink->names().size();
   const size_t nrows = trajectory ? sink->rows() : 0;
@@ -86,7 +83,8 @@ nb::dict run(const std::string& scenario, const std::string& motor, const std::s
 nb::list scenarios() {
   nb::list l;
   for (const auto& s : mcsim::registry()) {
-    l.append(nb::make_tuple(s.name, s.description, s.default_duration_s, bool(s.motor_params)));
+    l.append(nb::make_tuple(s.name, s.description, s.default_duration_s, bool(s.motor_params),
+                            s.takes_duration));
   }
   return l;
 }
@@ -121,6 +119,7 @@ NB_MODULE(_sil, m) {
         nb::arg("duration_s"), nb::arg("trajectory") = true);
   m.def("scenarios", &scenarios);
   m.def("params", &params, nb::arg("scenario"), nb::arg("motor"), nb::arg("board"));
+  m.attr("max_duration_s") = mcsim::kMaxDurationS;  // the longest run (scenario.hpp)
   m.attr("git_hash") = MDTOOL_GIT_HASH;
   m.attr("build_type") = MDTOOL_BUILD_TYPE;  // CMake's build type: Debug, Release, ...
 }

@@ -249,8 +249,10 @@ def load(path: str) -> Campaign:
 
     motor, board = file_key("motor"), file_key("board")
     dur = c.get("duration_s")
-    if dur is not None and not (_number(dur) and dur > 0):
-        raise err("campaign", "duration_s", "duration_s must be a positive number")
+    if dur is not None and not (_number(dur) and 0 < dur <= sil.MAX_DURATION_S):
+        raise err("campaign", "duration_s",
+                  f"duration_s must be a number in (0, {sil.MAX_DURATION_S:g}] s (one simulated "
+                  "hour: the longest run mcsim takes)")
     seed = c.get("seed", 1)
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise err("campaign", "seed", "seed must be a non-negative integer")
@@ -268,6 +270,10 @@ def load(path: str) -> Campaign:
     scen = {s["name"]: s for s in sil.scenarios()}
     if c["scenario"] not in scen:
         raise err("campaign", "scenario", f"unknown scenario '{c['scenario']}' (see 'mcsim list')")
+    if dur is not None and not scen[c["scenario"]]["takes_duration"]:
+        raise err("campaign", "duration_s",
+                  f"scenario '{c['scenario']}' takes no duration_s: its length is set by what it "
+                  "does")
     try:
         specs = {p["key"]: p for p in sil.params(c["scenario"], motor, board)}
     except sil.UsageError as e:
@@ -477,15 +483,27 @@ def run_one(spec: RunSpec) -> dict[str, Any]:
             summary, kind, error = r.summary, r.error_kind, r.error
         except sil.UsageError as e:
             summary, kind, error = {}, "usage", str(e)
+    # kind "verdict": the run ran to its end and judged itself not a pass
+    # (mcsim exit 1): "fail", its summary whole, so the criteria are
+    # evaluated on it too. kind "failed": it stopped on its way (a drive
+    # fault, commissioning stopped with its error): "fault".
+    ran = kind in (None, "verdict")
     crit, why = {}, []
     for name, text in spec.criteria:
-        ok, reason = Criterion(name, text).judge(summary) if kind is None else (False, None)
+        ok, reason = Criterion(name, text).judge(summary) if ran else (False, None)
         crit[name] = ok
         if reason:
             why.append(reason)  # a limit of the evaluator refused it: named in the row
     row["status"] = ("refused" if kind == "usage" else "fault" if kind == "failed"
-                     else "pass" if all(crit.values()) else "fail")
-    row["error"] = error if error or not why else "; ".join(why)
+                     else "pass" if kind is None and all(crit.values()) else "fail")
+    verdict = summary.get("verdict") if kind in ("failed", "verdict") else None
+    if isinstance(verdict, str) and verdict:
+        # the named reason (the report groups runs by it); its figures apart
+        error = "run failed: " + verdict
+        row["verdict_detail"] = summary.get("verdict_detail", "")
+    # an evaluator's limit is named after the run's own error (a verdict)
+    parts = ([error] if error else []) + why
+    row["error"] = "; ".join(parts) if parts else error
     row["pass"] = row["status"] == "pass"
     for name, ok in crit.items():
         row["pass." + name] = ok

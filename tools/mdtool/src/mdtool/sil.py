@@ -16,8 +16,9 @@ the values here are the full doubles those were printed from.
 Errors are exceptions with mcsim's messages (what it prints after "mcsim: "):
 UsageError (a ValueError; mcsim's exit code 2) for invalid inputs and
 settings a scenario refuses, RunFailed (a RuntimeError; exit code 1) for a
-run that failed on its way, such as a drive fault. Both carry the partial
-`summary` and `trajectory` of a run that started.
+run whose verdict is not a pass (summary["verdict"]: "not settled",
+"faulted: OVERCURRENT", ...) or that stopped on its way. Both carry the
+partial `summary` and `trajectory` of a run that started.
 """
 from __future__ import annotations
 
@@ -35,6 +36,8 @@ from . import _sil
 GIT_HASH: str = _sil.git_hash
 #: CMake's build type of the extension (Debug runs several times slower).
 BUILD_TYPE: str = _sil.build_type
+#: The longest run mcsim accepts [s] (--duration, a campaign's duration_s).
+MAX_DURATION_S: float = _sil.max_duration_s
 
 
 class UsageError(ValueError):
@@ -61,7 +64,10 @@ class Result:
     data: np.ndarray  # (rows, columns), float64
     summary: dict[str, Any]
     error: str | None = None
-    error_kind: str | None = None  # None, "usage" or "failed"
+    # None (passed), "usage" (refused: exit 2), "failed" (stopped on its way:
+    # a drive fault, a sequence that stopped, an error) or "verdict" (ran to
+    # its end, verdict not a pass); both of the last are exit 1
+    error_kind: str | None = None
     objects: dict[str, dict[str, float]] = field(default_factory=dict)
 
     @property
@@ -145,15 +151,17 @@ def run(scenario: str, motor: str | os.PathLike | None = None,
     r = run_raw(scenario, motor, board, params, duration, seed)
     if r.error_kind == "usage":
         raise UsageError(r.error, r.summary, r.trajectory)
-    if r.error_kind == "failed":
+    if r.error_kind in ("failed", "verdict"):
         raise RunFailed(r.error, r.summary, r.trajectory)
     return r
 
 
 def scenarios() -> list[dict[str, Any]]:
-    """The registered scenarios (as `mcsim list`)."""
-    return [{"name": n, "description": d, "default_duration_s": t, "any_motor": m}
-            for n, d, t, m in _sil.scenarios()]
+    """The registered scenarios (as `mcsim list`); takes_duration False: the
+    run's length is set by what it does and a duration is refused."""
+    return [{"name": n, "description": d, "default_duration_s": t, "any_motor": m,
+             "takes_duration": td}
+            for n, d, t, m, td in _sil.scenarios()]
 
 
 def params(scenario: str, motor: str | os.PathLike | None = None,
