@@ -4,8 +4,9 @@
 #  2. host-asan build: the same minus lint, fuzz, campaign, docs, the two
 #     SocketCAN VM tests (the preset's filter: the SIL's CAN code runs under
 #     ASan natively in the other can tests; ASan inside an emulated VM only
-#     slows a wall-clock-paced test) and can.mdtool_bus (Python alone), under
-#     ASan + UBSan;
+#     slows a wall-clock-paced test), can.mdtool_bus (Python alone) and
+#     sil.mcsim_memory (ASan's quarantine and shadow memory make peak RSS a
+#     measure of the sanitizer, not of the scenario), under ASan + UBSan;
 #  3. the STM32F405 images (example board, ODrive v3.6, VESC 6) with warnings
 #     as errors and their size budgets;
 #  4. the host-release preset built whole (every target; its tests are the

@@ -184,7 +184,13 @@ def test_power_cut(rig):
                     done = check(False, f"{what}: completing the update: {e}")
                 node.close()
                 after = Path(rig.file).read_bytes()
-                check(done and after == final, f"{what}: the update did not complete to the reference")
+                if not done:
+                    check(False, f"{what}: the bootloader did not reset within 30 s of the completed update")
+                else:
+                    differs = [i for i in range(min(len(after), len(final))) if after[i] != final[i]]
+                    check(after == final, f"{what}: the flash after the completed update differs from the "
+                          f"reference at {len(differs)} bytes (first at 0x{differs[0] if differs else 0:x}; "
+                          f"sizes {len(after)}, {len(final)})")
             else:
                 node.close()
             seen[key] = res

@@ -110,6 +110,15 @@ static uint32_t foc_vbus_fast_bound(float v_max_per_vbus, float out_max)
     return b;
 }
 
+/* The delay compensation's derived values for a valid periods (mc_foc.h). */
+static void foc_set_delay(mc_foc_f32_t *st, float periods)
+{
+    st->delay_comp_periods = periods;
+    st->adv_s = periods * st->dt_s;
+    st->pred_d = mc_foc_f32_eval_pred_weight(periods, st->dt_s, st->pi_d.kp, st->ld_h);
+    st->pred_q = mc_foc_f32_eval_pred_weight(periods, st->dt_s, st->pi_q.kp, st->lq_h);
+}
+
 uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
 {
     uint32_t err = MC_FOC_ERR_NONE;
@@ -171,7 +180,21 @@ uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
     st->vbus_fast_bits = st->vbus_fast_bound;
     st->svpwm_linear =
         (cfg->limit_mode == MC_SVPWM_LIMIT_CIRCLE) && (cfg->v_limit_ratio <= MC_FOC_LINEAR_RATIO);
+    st->dt_s = cfg->dt_s;
+    foc_set_delay(st, MC_FOC_DELAY_COMP_PERIODS);
     st->flags = MC_FOC_ERR_NONE;
+    return MC_FOC_ERR_NONE;
+}
+
+uint32_t mc_foc_f32_set_delay_comp(mc_foc_f32_t *st, float periods)
+{
+    if (st == NULL) {
+        return MC_FOC_ERR_NULL;
+    }
+    if (!mc_foc_f32_validate_delay_comp(periods)) {
+        return MC_FOC_ERR_DELAY;
+    }
+    foc_set_delay(st, periods);
     return MC_FOC_ERR_NONE;
 }
 
@@ -211,12 +234,16 @@ static uint32_t foc_check_inputs(float id_ref_a, float iq_ref_a, float id_a, flo
     return MC_FOC_ERR_NONE;
 }
 
-/* The decoupling feed-forward, -omega L_q i_q and omega (L_d i_d + psi);
- * its gains are 0 without decoupling (then the terms are +-0, or NaN for a
- * non-finite speed). */
-static inline void foc_feed_forward(const mc_foc_f32_t *st, float id_a, float iq_a,
-                                    float omega_e_rad_s, float *p_ff_d, float *p_ff_q)
+/* The decoupling feed-forward, -omega L_q i_q and omega (L_d i_d + psi),
+ * with the currents predicted for the interval the voltage acts over
+ * (i + w (i_ref - i), mc_foc.h); its gains are 0 without decoupling (then
+ * the terms are +-0, or NaN for a non-finite speed or current). */
+static inline void foc_feed_forward(const mc_foc_f32_t *st, float id_ref_a, float iq_ref_a,
+                                    float id_a, float iq_a, float omega_e_rad_s, float *p_ff_d,
+                                    float *p_ff_q)
 {
+    id_a += st->pred_d * (id_ref_a - id_a);
+    iq_a += st->pred_q * (iq_ref_a - iq_a);
     /* -(w (L_q i_q)) as w ((-L_q) i_q): the same bits (rounding is
      * symmetric, and the signs of zeros agree), no negation left to store */
     *p_ff_d = omega_e_rad_s * (st->ff_nlq_h * iq_a);
@@ -238,7 +265,7 @@ static uint32_t foc_dq_core(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
     mc_pi_f32_t pi_d_saved = st->pi_d;
     mc_pi_f32_t pi_q_saved = st->pi_q;
 
-    foc_feed_forward(st, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
+    foc_feed_forward(st, id_ref_a, iq_ref_a, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
 
     /* The FOC owns both PIs and keeps its own sticky flags: clear theirs so
      * that a refusal in this step shows. */
@@ -308,10 +335,14 @@ FOC_INLINE bool foc_vbus_fast_ok(const mc_foc_f32_t *st, float vbus_v)
 /* |theta| <= MC_MATH_NEAR_LIMIT_RAD (256 = bits 0x43800000; false for NaN
  * and inf) and foc_vbus_fast_ok(vbus): the angle's bits without the sign,
  * compared in one. */
+FOC_INLINE bool foc_theta_fast_ok(float theta_rad)
+{
+    return (foc_bits_of(theta_rad) << 1) <= (0x43800000u << 1);
+}
+
 FOC_INLINE bool foc_theta_vbus_fast_ok(const mc_foc_f32_t *st, float theta_rad, float vbus_v)
 {
-    const bool theta_ok = (foc_bits_of(theta_rad) << 1) <= (0x43800000u << 1);
-    return theta_ok & foc_vbus_fast_ok(st, vbus_v);
+    return foc_theta_fast_ok(theta_rad) & foc_vbus_fast_ok(st, vbus_v);
 }
 
 /* The dq step of foc_dq_core for 0 < vbus <= the bus bound (foc_vbus_fast_ok:
@@ -336,7 +367,7 @@ FOC_INLINE bool foc_dq_fast(mc_foc_f32_t *st, float id_ref_a, float iq_ref_a, fl
 
     /* a non-finite speed makes both terms non-finite (0 * inf is NaN):
      * caught by the PIs' tests */
-    foc_feed_forward(st, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
+    foc_feed_forward(st, id_ref_a, iq_ref_a, id_a, iq_a, omega_e_rad_s, &ff_d, &ff_q);
     const float e_d = id_ref_a - id_a;
     const float e_q = iq_ref_a - iq_a;
 
@@ -438,12 +469,18 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
 {
     float sin_th;
     float cos_th;
+    float sin_v;
+    float cos_v;
     float id;
     float iq;
     foc_applied_t v;
+    /* the voltage angle: non-finite for a non-finite speed (0 * inf is
+     * NaN), which sends the step to the checked path before anything is
+     * committed */
+    const float theta_v = mc_foc_f32_eval_voltage_angle(st, theta, omega);
 
     /* NaN fails both; a non-finite current shows in the PIs */
-    if (!foc_theta_vbus_fast_ok(st, theta, vbus)) {
+    if (!foc_theta_vbus_fast_ok(st, theta, vbus) || !foc_theta_fast_ok(theta_v)) {
         return false;
     }
     mc_sincos_near_f32(theta, &sin_th, &cos_th); /* = mc_sincos_f32 here */
@@ -451,11 +488,17 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
     if (!foc_dq_fast(st, id_ref, iq_ref, id, iq, omega, vbus, &v.vd, &v.vq)) {
         return false;
     }
+    if (st->adv_s > 0.0f) {
+        mc_sincos_near_f32(theta_v, &sin_v, &cos_v);
+    } else {
+        sin_v = sin_th;
+        cos_v = cos_th;
+    }
 
     /* From here on nothing can fail: vd, vq, sin, cos are finite and
      * 0 < vbus <= 2^59. Modulator limit and duties as mc_svpwm_limit_f32
      * followed by mc_svpwm_f32 on the limited vector. */
-    mc_inv_park_f32(v.vd, v.vq, sin_th, cos_th, &v.v_alpha, &v.v_beta);
+    mc_inv_park_f32(v.vd, v.vq, sin_v, cos_v, &v.v_alpha, &v.v_beta);
     if (MC_PI_LIKELY(st->svpwm_linear)) {
         /* mc_svpwm_f32's linear case: its first test |v_alpha|, |v_beta|
          * <= vbus holds (|v| <= v_max (1 + 1e-6) < 0.58 vbus), and so does
@@ -465,7 +508,7 @@ FOC_INLINE bool foc_step_fast(mc_foc_f32_t *st, float i_alpha, float i_beta, flo
                                    &out->duty_c);
         out->svpwm_flags = MC_SVPWM_FLAG_NONE;
     } else {
-        v = foc_modulate_general(st, v, vbus, sin_th, cos_th, out);
+        v = foc_modulate_general(st, v, vbus, sin_v, cos_v, out);
     }
     out->id_a = id;
     out->iq_a = iq;
@@ -492,6 +535,26 @@ static uint32_t foc_step_fail(mc_foc_f32_t *st, mc_foc_f32_out_t *out, uint32_t 
     return err;
 }
 
+/* sin and cos of the voltage angle for a finite theta and omega (the sampled
+ * angle's when the compensation is off); MC_FOC_ERR_NAN_INPUT when the
+ * advanced angle overflows. */
+static uint32_t foc_voltage_sincos(const mc_foc_f32_t *st, float theta, float omega, float sin_th,
+                                   float cos_th, float *p_sin_v, float *p_cos_v)
+{
+    const float theta_v = mc_foc_f32_eval_voltage_angle(st, theta, omega);
+
+    if (!(st->adv_s > 0.0f)) {
+        *p_sin_v = sin_th;
+        *p_cos_v = cos_th;
+        return MC_FOC_ERR_NONE;
+    }
+    if (!mc_isfinite_f32(theta_v)) {
+        return MC_FOC_ERR_NAN_INPUT;
+    }
+    mc_sincos_f32(theta_v, p_sin_v, p_cos_v);
+    return MC_FOC_ERR_NONE;
+}
+
 /* The checked whole step from alpha-beta currents: errors, refusals, and
  * what the fast path left. */
 static uint32_t foc_step_checked(mc_foc_f32_t *st, float i_alpha, float i_beta, float theta,
@@ -501,6 +564,8 @@ static uint32_t foc_step_checked(mc_foc_f32_t *st, float i_alpha, float i_beta, 
     uint32_t err;
     float sin_th = 0.0f;
     float cos_th = 1.0f;
+    float sin_v = 0.0f;
+    float cos_v = 1.0f;
     float id = 0.0f;
     float iq = 0.0f;
     float vd = 0.0f;
@@ -523,20 +588,23 @@ static uint32_t foc_step_checked(mc_foc_f32_t *st, float i_alpha, float i_beta, 
     out->iq_a = iq;
     err = foc_check_inputs(id_ref, iq_ref, id, iq, omega, vbus);
     if (err == MC_FOC_ERR_NONE) {
+        err = foc_voltage_sincos(st, theta, omega, sin_th, cos_th, &sin_v, &cos_v);
+    }
+    if (err == MC_FOC_ERR_NONE) {
         err = foc_dq_core(st, id_ref, iq_ref, id, iq, omega, vbus, &vd, &vq);
     }
     if (err != MC_FOC_ERR_NONE) {
         return foc_step_fail(st, out, err);
     }
 
-    mc_inv_park_f32(vd, vq, sin_th, cos_th, &v_alpha, &v_beta);
+    mc_inv_park_f32(vd, vq, sin_v, cos_v, &v_alpha, &v_beta);
     va_lim = v_alpha;
     vb_lim = v_beta;
     out->svpwm_flags = mc_svpwm_limit_f32(&va_lim, &vb_lim, vbus, st->limit_mode);
     if ((out->svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u) {
         v_alpha = va_lim;
         v_beta = vb_lim;
-        foc_track_applied(st, v_alpha, v_beta, sin_th, cos_th, &vd, &vq);
+        foc_track_applied(st, v_alpha, v_beta, sin_v, cos_v, &vd, &vq);
     }
     out->svpwm_flags |= mc_svpwm_f32(v_alpha, v_beta, vbus, st->limit_mode, &out->duty_a,
                                      &out->duty_b, &out->duty_c);

@@ -29,6 +29,24 @@
  * the applied vector (mc_svpwm_limit_f32) is then transformed back to dq and
  * fed to both PIs (mc_pi_f32_track).
  *
+ * Computation delay (the whole steps): the currents sampled at t_k are
+ * transformed at the angle theta_e they were sampled at (Park), but the
+ * duties computed from them take effect one period later and are held for
+ * one period, so on average the voltage acts at t_k + 1.5 T, when the rotor
+ * has turned 1.5 omega_e T further. The inverse Park (and the Park of the
+ * modulator's cut, fed back to the PIs) therefore runs at the voltage angle
+ *     theta_v = theta_e + delay_comp_periods * dt_s * omega_e
+ * (mc_foc_f32_eval_voltage_angle), delay_comp_periods = MC_FOC_DELAY_COMP_PERIODS
+ * (1.5: the drive's one period of computation delay plus the half period of
+ * the zero-order hold) from init; mc_foc_f32_set_delay_comp changes it
+ * (0: off, the sampled angle for both transforms). The decoupling terms
+ * omega_e L i act over the same interval, so they use the current predicted
+ * for it from the designed first-order response,
+ *     i_ff = i + w (i_ref - i),  w = min(1, delay_comp_periods dt_s kp / L)
+ * per axis (kp / L is the designed bandwidth; w = 0 with the compensation
+ * off: the measured current). Derivation and measured effect: README,
+ * "Computation-delay compensation".
+ *
  * Non-finite input (any current, reference, angle, speed or vbus): the step
  * outputs zero voltage (duties 0.5), sets the sticky MC_FOC_ERR_NAN_INPUT,
  * and leaves both integrators untouched. vbus <= 0: the same with
@@ -91,6 +109,16 @@ extern "C" {
 #define MC_FOC_ERR_VBUS      (1u << 9)  /**< sticky: vbus <= 0 */
 #define MC_FOC_ERR_PI        (1u << 10) /**< sticky: a PI refused its step */
 #define MC_FOC_ERR_BW        (1u << 11) /**< bandwidth helper: bw <= 0 or not finite */
+/* (1u << 12) is MC_FOC_ERR_SCALE of the q31 twin */
+#define MC_FOC_ERR_DELAY \
+    (1u << 13) /**< delay compensation not finite or outside [0, MC_FOC_DELAY_COMP_MAX] */
+
+/** Default advance of the voltage angle, in control periods: one period of
+ *  computation delay (duties written one period after the sample) plus half
+ *  a period (the zero-order hold's mean delay). */
+#define MC_FOC_DELAY_COMP_PERIODS 1.5f
+/** Largest accepted advance (periods): a computation delay of up to 3.5. */
+#define MC_FOC_DELAY_COMP_MAX 4.0f
 
 /** Largest v_limit_ratio (circle limit) at which the modulator is known to
  *  stay in its linear case: |v| <= 0.99 vbus / sqrt(3) (1 + 1e-6) = 0.5716
@@ -138,9 +166,15 @@ typedef struct {
     float v_max_per_vbus; /**< v_limit_ratio times the modulator's largest voltage per volt
                                  of bus: 1/sqrt(3) (circle) or 2/3 (hexagon) (derived) */
     bool decouple;
-    bool svpwm_linear; /**< circle limit and v_limit_ratio <= MC_FOC_LINEAR_RATIO: the
+    bool svpwm_linear;        /**< circle limit and v_limit_ratio <= MC_FOC_LINEAR_RATIO: the
                                  modulator never limits what the dq step allows (derived) */
-    uint32_t flags;    /**< sticky MC_FOC_ERR_* */
+    float delay_comp_periods; /**< advance of the voltage angle [periods] */
+    float adv_s;              /**< delay_comp_periods * dt_s: theta_v = theta + adv_s omega
+                                   (derived) */
+    float dt_s;               /**< control period [s] */
+    float pred_d;             /**< w of the d current in the decoupling (derived) */
+    float pred_q;             /**< w of the q current in the decoupling (derived) */
+    uint32_t flags;           /**< sticky MC_FOC_ERR_* */
 } mc_foc_f32_t;
 
 /** Inputs of the whole fast step. */
@@ -186,6 +220,39 @@ uint32_t mc_foc_f32_gains_from_bandwidth(float r_ohm, float l_h, float bw_rad_s,
  */
 uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg);
 
+/**
+ * Set the computation-delay compensation: the voltage angle is advanced by
+ * periods * dt_s * omega_e (0: off). Returns MC_FOC_ERR_DELAY (periods not
+ * finite or outside [0, MC_FOC_DELAY_COMP_MAX]) or MC_FOC_ERR_NULL with st
+ * unchanged; kept by mc_foc_f32_reset.
+ */
+uint32_t mc_foc_f32_set_delay_comp(mc_foc_f32_t *st, float periods);
+
+/** The decoupling's prediction weight of one axis (shared by the twins):
+ *  min(1, periods dt kp / L), kp / L the axis' designed bandwidth. */
+static inline float mc_foc_f32_eval_pred_weight(float periods, float dt_s, float kp, float l_h)
+{
+    const float w = periods * dt_s * (kp / l_h);
+    return (w < 1.0f) ? w : 1.0f;
+}
+
+/** true when periods is a valid delay compensation (shared by the twins). */
+static inline bool mc_foc_f32_validate_delay_comp(float periods)
+{
+    return (periods >= 0.0f) && (periods <= MC_FOC_DELAY_COMP_MAX); /* false for NaN */
+}
+
+/**
+ * The angle the voltage of this step acts at on average (see the file
+ * comment): theta_e + adv_s * omega_e, not wrapped; the whole steps use it
+ * for the inverse Park. st is not checked (a valid, initialised state).
+ */
+static inline float mc_foc_f32_eval_voltage_angle(const mc_foc_f32_t *st, float theta_e_rad,
+                                                  float omega_e_rad_s)
+{
+    return theta_e_rad + (st->adv_s * omega_e_rad_s);
+}
+
 /** Integrators to 0, sticky flags cleared. Returns MC_FOC_ERR_NONE, or
  *  MC_FOC_ERR_NULL for a NULL st. */
 uint32_t mc_foc_f32_reset(mc_foc_f32_t *st);
@@ -210,12 +277,15 @@ uint32_t mc_foc_f32_step(mc_foc_f32_t *st, const mc_foc_f32_in_t *in, mc_foc_f32
 /**
  * The whole fast step from alpha-beta currents (the caller did the Clarke
  * transform, e.g. for an observer that needs them too): Park at theta_e
- * (mc_sincos_f32), dq step, inverse Park, modulator limit (fed back to the
- * PIs), SVPWM. mc_foc_f32_step is exactly this after its Clarke transform.
+ * (mc_sincos_f32), dq step, inverse Park at the voltage angle
+ * (mc_foc_f32_eval_voltage_angle), modulator limit (fed back to the PIs),
+ * SVPWM. mc_foc_f32_step is exactly this after its Clarke transform.
  * Arguments as in mc_foc_f32_in_t (alpha/beta currents amplitude
  * invariant, mc_clarke_f32), passed by value so that they stay in
  * registers. Non-finite alpha/beta current or angle:
- * MC_FOC_ERR_NAN_INPUT (id, iq reported 0); the dq step's inputs and errors
+ * MC_FOC_ERR_NAN_INPUT (id, iq reported 0); so is a voltage angle that
+ * overflows (a finite speed so large that adv_s omega_e is infinite); the
+ * dq step's inputs and errors
  * as in mc_foc_f32_step_dq (out->id_a, iq_a are the measured values then).
  * Fills *out (duties 0.5 and zero voltages on error). Returns the
  * MC_FOC_ERR_* bits raised by this step.

@@ -16,6 +16,33 @@ static bool fq31_pos(float x)
     return (x > 0.0f) && mc_isfinite_f32(x);
 }
 
+/* The advance gain for a valid periods (MC_FOC_ERR_SCALE if it does not fit,
+ * nothing written then). */
+static uint32_t foc_q31_set_adv(mc_foc_q31_t *st, float periods)
+{
+    mc_q46_gain_t g;
+
+    if (!mc_q46_gain_from_f32(periods * st->adv_pu_per_period, &g)) {
+        return MC_FOC_ERR_SCALE;
+    }
+    st->g_adv = g;
+    st->delay_comp_periods = periods;
+    st->pred_d = mc_q31_from_f32(mc_foc_f32_eval_pred_weight(periods, 1.0f, st->bw_dt_d, 1.0f));
+    st->pred_q = mc_q31_from_f32(mc_foc_f32_eval_pred_weight(periods, 1.0f, st->bw_dt_q, 1.0f));
+    return MC_FOC_ERR_NONE;
+}
+
+uint32_t mc_foc_q31_set_delay_comp(mc_foc_q31_t *st, float periods)
+{
+    if (st == NULL) {
+        return MC_FOC_ERR_NULL;
+    }
+    if (!mc_foc_f32_validate_delay_comp(periods)) {
+        return MC_FOC_ERR_DELAY;
+    }
+    return foc_q31_set_adv(st, periods);
+}
+
 uint32_t mc_foc_q31_init(mc_foc_q31_t *st, const mc_foc_q31_cfg_t *cfg)
 {
     mc_foc_f32_t ref;
@@ -65,6 +92,12 @@ uint32_t mc_foc_q31_init(mc_foc_q31_t *st, const mc_foc_q31_cfg_t *cfg)
                               &t.g_vmax)) {
         return MC_FOC_ERR_SCALE;
     }
+    t.adv_pu_per_period = (f->dt_s * cfg->omega_base_rad_s) / MC_PI_F32;
+    t.bw_dt_d = f->dt_s * (f->kp_d_v_per_a / f->ld_h);
+    t.bw_dt_q = f->dt_s * (f->kp_q_v_per_a / f->lq_h);
+    if (foc_q31_set_adv(&t, ref.delay_comp_periods) != MC_FOC_ERR_NONE) {
+        return MC_FOC_ERR_SCALE;
+    }
     t.decouple = f->decouple;
     t.vd = 0;
     t.vq = 0;
@@ -98,8 +131,11 @@ static void foc_q31_core(mc_foc_q31_t *st, q31_t id_ref, q31_t iq_ref, q31_t id,
     uint64_t room;
 
     if (st->decouple) {
-        ff_d = mc_q46_to_q31(-mc_q46_mul_q31(st->g_ff_d, mc_q31_mul(omega_e, iq)));
-        ff_q = mc_q46_to_q31(mc_q46_add(mc_q46_mul_q31(st->g_ff_q, mc_q31_mul(omega_e, id)),
+        /* the currents predicted for the voltage's interval (mc_foc_q31.h) */
+        const q31_t id_ff = mc_q31_add_sat(id, mc_q31_mul(st->pred_d, mc_q31_sub_sat(id_ref, id)));
+        const q31_t iq_ff = mc_q31_add_sat(iq, mc_q31_mul(st->pred_q, mc_q31_sub_sat(iq_ref, iq)));
+        ff_d = mc_q46_to_q31(-mc_q46_mul_q31(st->g_ff_d, mc_q31_mul(omega_e, iq_ff)));
+        ff_q = mc_q46_to_q31(mc_q46_add(mc_q46_mul_q31(st->g_ff_q, mc_q31_mul(omega_e, id_ff)),
                                         mc_q46_mul_q31(st->g_ff_psi, omega_e)));
     }
     (void)mc_pi_q31_step_lim(&st->pi_d, mc_q31_sub_sat(id_ref, id), ff_d, (q31_t)-v_max, v_max,
@@ -141,6 +177,8 @@ uint32_t mc_foc_q31_step(mc_foc_q31_t *st, const mc_foc_q31_in_t *in, mc_foc_q31
     q31_t i_beta;
     q31_t s;
     q31_t c;
+    q31_t s_v;
+    q31_t c_v;
     q31_t id;
     q31_t iq;
     q31_t vd = 0;
@@ -176,7 +214,13 @@ uint32_t mc_foc_q31_step(mc_foc_q31_t *st, const mc_foc_q31_in_t *in, mc_foc_q31
         return MC_FOC_ERR_VBUS;
     }
     foc_q31_core(st, in->id_ref, in->iq_ref, id, iq, in->omega_e, in->vbus, &vd, &vq);
-    mc_inv_park_q31(vd, vq, s, c, &va, &vb);
+    if (st->delay_comp_periods > 0.0f) {
+        mc_sincos_q31(mc_foc_q31_eval_voltage_angle(st, in->theta_e, in->omega_e), &s_v, &c_v);
+    } else {
+        s_v = s;
+        c_v = c;
+    }
+    mc_inv_park_q31(vd, vq, s_v, c_v, &va, &vb);
     out->svpwm_flags = mc_svpwm_q31(va, vb, in->vbus, MC_SVPWM_LIMIT_CIRCLE, &out->duty_a,
                                     &out->duty_b, &out->duty_c);
     st->vd = vd;

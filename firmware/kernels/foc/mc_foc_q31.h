@@ -32,6 +32,15 @@
  * tracking step to feed the hexagon's extra cut back. With the circle the
  * dq limit is the modulator's, so nothing is cut after the PIs (up to the
  * modulator's own rounding, reported in svpwm_flags).
+ * Computation delay: as the f32 kernel (mc_foc.h), the inverse Park runs
+ * at the voltage angle theta_e + delay_comp_periods dt omega_e
+ * (mc_foc_q31_eval_voltage_angle: the advance as the Q46 gain
+ * delay_comp_periods dt omega_base / pi times omega_e, rounded to a q31
+ * turn, saturated at half a turn, added with the turn's wrap), 1.5 periods
+ * from init, mc_foc_q31_set_delay_comp to change it (same rule,
+ * mc_foc_f32_validate_delay_comp); the decoupling's currents predicted as
+ * i + w (i_ref - i) with the f32 kernel's w (mc_foc_f32_eval_pred_weight) as a q31
+ * fraction, the difference saturated at one base.
  * Error vs f32: tests/unit/q31/test_foc_q31.cpp.
  */
 #ifndef MC_FOC_Q31_H
@@ -62,10 +71,17 @@ typedef struct {
 typedef struct {
     mc_pi_q31_t pi_d;
     mc_pi_q31_t pi_q;
-    mc_q46_gain_t g_ff_d;   /**< omega_base L_q i_base / v_base */
-    mc_q46_gain_t g_ff_q;   /**< omega_base L_d i_base / v_base */
-    mc_q46_gain_t g_ff_psi; /**< omega_base psi / v_base */
-    mc_q46_gain_t g_vmax;   /**< v_limit_ratio / sqrt(3) */
+    mc_q46_gain_t g_ff_d;     /**< omega_base L_q i_base / v_base */
+    mc_q46_gain_t g_ff_q;     /**< omega_base L_d i_base / v_base */
+    mc_q46_gain_t g_ff_psi;   /**< omega_base psi / v_base */
+    mc_q46_gain_t g_vmax;     /**< v_limit_ratio / sqrt(3) */
+    mc_q46_gain_t g_adv;      /**< delay_comp_periods dt omega_base / pi: q31 turn per pu speed */
+    float adv_pu_per_period;  /**< dt omega_base / pi (derived) */
+    float delay_comp_periods; /**< advance of the voltage angle [periods] */
+    float bw_dt_d;            /**< dt kp_d / L_d (derived) */
+    float bw_dt_q;            /**< dt kp_q / L_q (derived) */
+    q31_t pred_d;             /**< w of the d current in the decoupling, q31 fraction */
+    q31_t pred_q;             /**< w of the q current in the decoupling, q31 fraction */
     bool decouple;
     q31_t vd; /**< last applied voltages (pu) */
     q31_t vq;
@@ -93,6 +109,18 @@ typedef struct {
 /** Validate cfg (MC_FOC_ERR_* as the f32 kernel, plus _SCALE and _LIMIT_MODE
  *  for the hexagon) and initialise st. On error st is not written. */
 uint32_t mc_foc_q31_init(mc_foc_q31_t *st, const mc_foc_q31_cfg_t *cfg);
+
+/** The delay compensation (mc_foc_f32_set_delay_comp's rule): returns
+ *  MC_FOC_ERR_DELAY, MC_FOC_ERR_NULL (st unchanged) or MC_FOC_ERR_NONE. */
+uint32_t mc_foc_q31_set_delay_comp(mc_foc_q31_t *st, float periods);
+
+/** The voltage angle (q31 turn) of a step at theta_e, omega_e (see the file
+ *  comment); st is not checked. */
+static inline q31_t mc_foc_q31_eval_voltage_angle(const mc_foc_q31_t *st, q31_t theta_e,
+                                                  q31_t omega_e)
+{
+    return mc_q31_angle_add(theta_e, mc_q46_to_q31(mc_q46_mul_q31(st->g_adv, omega_e)));
+}
 
 /** Integrators and voltages to 0, flags cleared. Returns MC_FOC_ERR_NONE,
  *  or MC_FOC_ERR_NULL for a NULL st. */

@@ -181,6 +181,10 @@ double CoupledRunWorstDeviation(bool decouple, double omega)
     mc_foc_f32_t st;
     EXPECT_EQ(mc_foc_f32_init(&st0, &c), MC_FOC_ERR_NONE);
     EXPECT_EQ(mc_foc_f32_init(&st, &c), MC_FOC_ERR_NONE);
+    // this plant applies the voltage at once (no computation delay): the
+    // delay compensation is off (tests/unit/foc/test_foc_delay.cpp)
+    EXPECT_EQ(mc_foc_f32_set_delay_comp(&st0, 0.0f), MC_FOC_ERR_NONE);
+    EXPECT_EQ(mc_foc_f32_set_delay_comp(&st, 0.0f), MC_FOC_ERR_NONE);
     const RlAxis axis(kR, kL, kDt);
     double id0 = 0.0, iq0 = 0.0, id = 0.0, iq = 0.0, worst = 0.0;
     for (int k = 0; k < 400; ++k) {
@@ -435,7 +439,12 @@ TEST(FocF32, WholeStepLineToLineMatchesInverseTransforms)
                     EXPECT_NEAR(out.id_a, id_true, 2e-5 * 2.5);
                     EXPECT_NEAR(out.iq_a, iq_true, 2e-5 * 2.5);
                     double v[3];
-                    PhaseVoltages(out.vd_v, out.vq_v, static_cast<double>(in.theta_e_rad), v);
+                    // the inverse Park at the voltage angle theta + 1.5 T omega
+                    // (mc_foc.h, computation delay)
+                    PhaseVoltages(out.vd_v, out.vq_v,
+                                  static_cast<double>(in.theta_e_rad) +
+                                      1.5 * static_cast<double>(kDt) * in.omega_e_rad_s,
+                                  v);
                     const double d[3] = {out.duty_a, out.duty_b, out.duty_c};
                     for (int p = 0; p < 3; ++p) {
                         const int n = (p + 1) % 3;

@@ -54,8 +54,11 @@ uint32_t RefDq(mc_foc_f32_t *st, float id_ref, float iq_ref, float id, float iq,
     EXPECT_EQ(st->ff_lq_h, st->decouple ? st->lq_h : 0.0f);
     EXPECT_EQ(st->ff_ld_h, st->decouple ? st->ld_h : 0.0f);
     EXPECT_EQ(st->ff_flux_wb, st->decouple ? st->flux_wb : 0.0f);
-    const float ff_d = -(omega * (st->ff_lq_h * iq));
-    const float ff_q = omega * ((st->ff_ld_h * id) + st->ff_flux_wb);
+    // mc_foc.h: the decoupling's currents predicted as i + w (i_ref - i)
+    const float id_ff = id + (st->pred_d * (id_ref - id));
+    const float iq_ff = iq + (st->pred_q * (iq_ref - iq));
+    const float ff_d = -(omega * (st->ff_lq_h * iq_ff));
+    const float ff_q = omega * ((st->ff_ld_h * id_ff) + st->ff_flux_wb);
     const mc_pi_f32_t d_saved = st->pi_d;
     const mc_pi_f32_t q_saved = st->pi_q;
     st->pi_d.flags = MC_PI_ERR_NONE;
@@ -108,7 +111,21 @@ uint32_t RefStepAb(mc_foc_f32_t *st, float al, float be, const mc_foc_f32_in_t &
         mc_park_f32(al, be, s, c, &id, &iq);
         out->id_a = id;
         out->iq_a = iq;
-        err = RefDq(st, in.id_ref_a, in.iq_ref_a, id, iq, in.omega_e_rad_s, in.vbus_v, &vd, &vq);
+        // mc_foc.h: the voltage angle theta + adv_s omega; one that overflows
+        // (inputs otherwise good) is a non-finite input, nothing committed
+        const float th_v = in.theta_e_rad + (st->adv_s * in.omega_e_rad_s);
+        const bool inputs_ok = Finite(in.id_ref_a) && Finite(in.iq_ref_a) && Finite(id) &&
+                               Finite(iq) && Finite(in.omega_e_rad_s) && Finite(in.vbus_v) &&
+                               (in.vbus_v > 0.0f);
+        if (inputs_ok && (st->adv_s > 0.0f) && !Finite(th_v)) {
+            err = MC_FOC_ERR_NAN_INPUT;
+        } else {
+            err =
+                RefDq(st, in.id_ref_a, in.iq_ref_a, id, iq, in.omega_e_rad_s, in.vbus_v, &vd, &vq);
+        }
+        if (st->adv_s > 0.0f) {
+            mc_sincos_f32(th_v, &s, &c);
+        }
     }
     if (err != MC_FOC_ERR_NONE) {
         st->flags |= err;
