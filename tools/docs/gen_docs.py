@@ -810,8 +810,11 @@ def _drive_stop(ctx, t):
                               ("StopSil.SpeedModeTimeoutStopPaperMotor", "speed (command timeout)",
                                "paper-002 test motor")):
         rows.append([mode, motor, g(prop(t, test, "stop_time_ratio"), 4),
-                     f"0.95 … {g(prop(t, test, 'stop_time_ratio.bound'), 3)}"])
-    return table(["mode", "motor", "stop time / (ω₀ / decel)", "test bounds"], rows)
+                     f"0.95 … {g(prop(t, test, 'stop_time_ratio.bound'), 3)}",
+                     g(prop(t, test, "reverse_speed_rad_s"), 3),
+                     g(prop(t, test, "reverse_speed_rad_s.bound"), 3)])
+    return table(["mode", "motor", "stop time / (ω₀ / decel)", "test bounds",
+                  "largest backward speed [rad/s]", "bound (2 decel T)"], rows)
 
 
 ASC_RUNS = [("off", ()), ("on", ("fault_i_sense_max_a=250",)), ("on", ())]

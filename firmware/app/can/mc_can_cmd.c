@@ -662,15 +662,21 @@ void mc_can_cmd_step(mc_can_cmd_t *c)
     }
     if (!c->stopping && (c->ticks_since_alive >= c->timeout_ticks)) {
         c->stopping = true;
-        /* With a controlled stop configured the drive decelerates to
-         * standstill itself before it opens the bridge (mc_drive.h). */
-        if (c->drive->cfg.stop_decel_rad_s2 > 0.0f) {
+        /* SPEED and POSITION with a controlled stop configured: the drive
+         * decelerates to standstill itself before it opens the bridge
+         * (mc_drive.h). CURRENT (torque) mode: the torque ramps to zero at
+         * stop_ramp_a_per_s, then the bridge opens, whatever the load does
+         * (the host owned the torque, not the speed: a speed-controlled stop
+         * would brake, or drive, against it). */
+        c->stop_by_drive =
+            (c->control_mode != MC_CAN_CTRL_CURRENT) && (c->drive->cfg.stop_decel_rad_s2 > 0.0f);
+        if (c->stop_by_drive) {
             (void)mc_drive_stop(c->drive);
         } else {
             stop_begin(c);
         }
     }
-    if (c->stopping && (c->drive->cfg.stop_decel_rad_s2 > 0.0f)) {
+    if (c->stopping && c->stop_by_drive) {
         if (c->drive->mode != MC_DRIVE_MODE_STOPPING) {
             end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
         }

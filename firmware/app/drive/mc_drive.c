@@ -730,6 +730,10 @@ static void begin_stop(mc_drive_t *d, uint32_t cause)
         return;
     }
     d->stop_from_ctrl = ctrl;
+    d->stop_dir = 0.0f;
+    if ((d->hal->encoder != NULL) && d->enc_trk.primed && (w_enc > d->cfg.stop_rest_rad_s)) {
+        d->stop_dir = (d->enc_trk.omega_rad_s > 0.0f) ? 1.0f : -1.0f;
+    }
     d->stop_omega_ref_rad_s = d->enc_trk.omega_rad_s;
     d->stop_time_s = 0.0f;
     d->stop_time_max_s = (2.0f * w0 / d->cfg.stop_decel_rad_s2) + 0.1f;
@@ -760,6 +764,24 @@ static bool read_temps(const mc_drive_t *d, mc_hal_adc_temp_t *t)
     return (fitted != 0u) && ((t->valid_mask & fitted) == fitted);
 }
 
+/* The end of a controlled stop: the bridge opens, IDLE. */
+static void stop_end(mc_drive_t *d)
+{
+    outputs_off(d);
+    d->id_ref_a = 0.0f;
+    d->iq_ref_a = 0.0f;
+    d->mode = MC_DRIVE_MODE_IDLE;
+}
+
+/* Fast-step part of the controlled stop: the encoder speed crossed zero
+ * against the direction the stop began in, so the rotor has just been at
+ * rest; braking on would drive it backwards (mc_drive.h, STOPPING). */
+static bool stop_reversed(const mc_drive_t *d, bool have_enc)
+{
+    return have_enc && (d->mode == MC_DRIVE_MODE_STOPPING) &&
+           ((d->enc_trk.omega_rad_s * d->stop_dir) < 0.0f);
+}
+
 /* Slow-loop part of the controlled stop: warnings start one, standstill
  * (or its time limit) ends it. */
 static void stop_supervise(mc_drive_t *d, float slow_dt, const mc_hal_adc_temp_t *t, bool t_ok)
@@ -788,10 +810,7 @@ static void stop_supervise(mc_drive_t *d, float slow_dt, const mc_hal_adc_temp_t
                                : (d->stop_omega_ref_rad_s == 0.0f);
     if ((ramp_done && mc_abs_f32(d->enc_trk.omega_rad_s) <= d->cfg.stop_rest_rad_s) ||
         d->stop_time_s > d->stop_time_max_s) {
-        outputs_off(d);
-        d->id_ref_a = 0.0f;
-        d->iq_ref_a = 0.0f;
-        d->mode = MC_DRIVE_MODE_IDLE;
+        stop_end(d);
     }
 }
 
@@ -841,6 +860,9 @@ bool mc_drive_fast_step(mc_drive_t *d)
         }
     }
 
+    if (stop_reversed(d, have_enc)) {
+        stop_end(d);
+    }
     /* the current loop's last reference, for a law's anti-windup */
     const float iq_applied_prev = d->tm.iq_ref_a;
     d->tm.id_ref_a = d->id_ref_a;

@@ -43,7 +43,10 @@
  *            J decel / (kt stop_kp));
  *            from CTRL mode the law's stop op decelerates (a law without
  *            one: the bridge opens at once). Standstill: the ramp at 0 and
- *            |omega| <= stop_rest_rad_s; the bridge opens anyway after
+ *            |omega| <= stop_rest_rad_s (checked in the slow step), or,
+ *            with an encoder, the encoder speed crossing zero against the
+ *            direction the stop began in (checked in every fast step: a
+ *            stop never drives the rotor backwards); the bridge opens anyway after
  *            2 |omega_0| / decel + 0.1 s. stop_decel_rad_s2 = 0: no
  *            controlled stop (the bridge opens at once, as IDLE).
  *            Critical faults (every MC_DRIVE_FAULT_*: over-current, gate
@@ -524,6 +527,9 @@ typedef struct {
     float stop_omega_ref_rad_s; /**< STOPPING from CURRENT: the speed ramp [rad/s] */
     float stop_time_s;          /**< time in STOPPING [s] */
     float stop_time_max_s;      /**< STOPPING: open the bridge after this [s] */
+    float stop_dir;             /**< STOPPING: sign of the encoder speed the stop began
+                                     at (+1, -1; 0: at rest or no encoder): the stop
+                                     ends when the speed crosses zero */
     bool asc_active;            /**< FAULT with the low-side switches on (asc_enable) */
     /* speed reference shaping (uses_speed_ref laws) */
     float speed_target_rad_s; /**< mc_drive_set_speed_ref's target [rad/s] */
