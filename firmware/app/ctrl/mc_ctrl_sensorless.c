@@ -222,17 +222,6 @@ uint32_t mc_ctrl_sls_reset(void *ctx)
 
 /* Dead-time voltage error of one leg in units of (dead_time / dt) vbus:
  * sat(i / band), +-1 outside the band (a hard sign for band = 0). */
-static float dead_sign(float i_a, float band_a)
-{
-    if (band_a > 0.0f) {
-        return mc_sat_f32(i_a / band_a, -1.0f, 1.0f);
-    }
-    if (i_a > 0.0f) {
-        return 1.0f;
-    }
-    return (i_a < 0.0f) ? -1.0f : 0.0f;
-}
-
 /* Alpha-beta voltage lost to the dead time over the last period. */
 static void dead_time_error(const mc_ctrl_sls_t *c, float ia_a, float ib_a, float vbus_v,
                             float *p_va, float *p_vb)
@@ -240,9 +229,9 @@ static void dead_time_error(const mc_ctrl_sls_t *c, float ia_a, float ib_a, floa
     const float k = (c->cfg.dead_time_s / c->cfg.dt_s) * vbus_v;
     const float ia = 0.5f * (ia_a + c->ia_prev_a);
     const float ib = 0.5f * (ib_a + c->ib_prev_a);
-    const float sa = dead_sign(ia, c->cfg.dead_band_a);
-    const float sb = dead_sign(ib, c->cfg.dead_band_a);
-    const float sc = dead_sign(-(ia + ib), c->cfg.dead_band_a);
+    const float sa = mc_sign_band_f32(ia, c->cfg.dead_band_a);
+    const float sb = mc_sign_band_f32(ib, c->cfg.dead_band_a);
+    const float sc = mc_sign_band_f32(-(ia + ib), c->cfg.dead_band_a);
 
     /* amplitude-invariant Clarke of the three leg errors (common mode drops) */
     *p_va = k * (2.0f / 3.0f) * (sa - (0.5f * (sb + sc)));

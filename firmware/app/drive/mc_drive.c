@@ -499,26 +499,15 @@ static uint32_t brake_step(mc_drive_t *d, float vbus_v)
 
 /* Dead-time error of one leg, in units of (dead_time / dt) vbus:
  * sat(i / band), +-1 outside the band (a hard sign for band = 0). */
-static float dead_sign(float i_a, float band_a)
-{
-    if (band_a > 0.0f) {
-        return mc_sat_f32(i_a / band_a, -1.0f, 1.0f);
-    }
-    if (i_a > 0.0f) {
-        return 1.0f;
-    }
-    return (i_a < 0.0f) ? -1.0f : 0.0f;
-}
-
 /* Dead-time compensation (cfg.dead_time_comp): each leg's duty plus
- * dead_sign(i_x) dead_time / dt from the step's sample, clamped to [0, 1]. */
+ * mc_sign_band_f32(i_x) dead_time / dt from the step's sample, clamped to [0, 1]. */
 static void dead_comp(const mc_drive_t *d, const float i_a[3], mc_foc_f32_out_t *o)
 {
     const float kd = d->cfg.dead_time_s / d->cfg.foc.dt_s;
     const float band = d->cfg.dead_band_a;
-    o->duty_a = mc_sat_f32(o->duty_a + (kd * dead_sign(i_a[0], band)), 0.0f, 1.0f);
-    o->duty_b = mc_sat_f32(o->duty_b + (kd * dead_sign(i_a[1], band)), 0.0f, 1.0f);
-    o->duty_c = mc_sat_f32(o->duty_c + (kd * dead_sign(i_a[2], band)), 0.0f, 1.0f);
+    o->duty_a = mc_sat_f32(o->duty_a + (kd * mc_sign_band_f32(i_a[0], band)), 0.0f, 1.0f);
+    o->duty_b = mc_sat_f32(o->duty_b + (kd * mc_sign_band_f32(i_a[1], band)), 0.0f, 1.0f);
+    o->duty_c = mc_sat_f32(o->duty_c + (kd * mc_sign_band_f32(i_a[2], band)), 0.0f, 1.0f);
 }
 
 /* A law's frame jump (out.reframe): preset the current PIs so that, in the
