@@ -167,6 +167,19 @@ class EmuNode:
     def running(self):
         return self.proc is not None and self.proc.poll() is None
 
+    def wait_reset(self, timeout):
+        """True once the target asked for a reset (RESET on the link) and its
+        QEMU stopped. The target writes RESET, then exits: the process can be
+        gone before the reader thread has taken RESET from the FIFO (a loaded
+        machine delays the thread, not the exit), so an exit alone proves
+        nothing yet; False when neither comes within `timeout` seconds."""
+        t_end = time.monotonic() + timeout
+        while time.monotonic() < t_end:
+            if self.reset_requested and not self.running():
+                return True
+            time.sleep(0.005)
+        return self.reset_requested and not self.running()
+
     def exit_status(self):
         return None if self.proc is None else self.proc.poll()
 

@@ -127,10 +127,7 @@ def complete(rig, node):
     if str(r["boot_state"]) == "APP":
         fl.enter(wait=30.0)
     fl.update(rig.v2, rig.h2)
-    t_end = time.monotonic() + 30
-    while node.running() and time.monotonic() < t_end:  # the bootloader's reset
-        time.sleep(0.005)
-    return node.reset_requested
+    return node.wait_reset(30.0)  # the bootloader's reset after COMMIT
 
 
 def test_power_cut(rig):
