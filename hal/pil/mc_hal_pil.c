@@ -51,10 +51,9 @@
  *                    from the image header (mc_image_header.h), ENTER
  *                    resetting into the bootloader through the mailbox
  *                    (mc_boot_handoff.h), as on the drive boards.
- *     main.c calls mc_board_app_work_begin() between the drive's slow step
- *     and the application's slow work: what the bridge did up to there is
- *     applied before the host integrates the period, what the slow work did
- *     after it (OUT app_*), which is where the SIL rig runs the slow work.
+ *     Both loops run within the period (the ADC interrupt, then PendSV),
+ *     as in the SIL's one period (hal_host::app_period): OUT carries what
+ *     the bridge does in the next period.
  *
  * Emulation only: link errors, the END frame and hard faults leave through
  * ARM semihosting (exit codes below).
@@ -153,9 +152,6 @@ typedef struct {
     uint32_t can_rx_head;
     uint32_t can_rx_tail;
     uint32_t can_rx_overruns;
-    /* the bridge when the application's slow work began */
-    bool app_work_begun;
-    pil_bridge_t drv;
 } pil_board_t;
 
 static pil_board_t g_pil;
@@ -535,9 +531,6 @@ static void receive_app_setup(int type)
     for (uint32_t i = 0u; i < MC_PIL_TM_EXT_RATES; ++i) {
         c->tm_ext_rate_hz[i] = (uint16_t)a.tm_ext_rate_hz[i];
     }
-    c->speed.kp_a_s_rad = a.speed_kp_a_s_rad;
-    c->speed.ki_dt_a_s_rad = a.speed_ki_dt_a_s_rad;
-    c->speed.i_max_a = a.speed_i_max_a;
     c->pwm_hz_fixed = a.pwm_hz_fixed;
     c->slow_loop_div_fixed = a.slow_loop_div_fixed;
     /* The laws of SPEED and POSITION from the parameters, as on the drive
@@ -669,22 +662,11 @@ static pil_bridge_t bridge_now(void)
     return b;
 }
 
-void mc_board_app_work_begin(void)
-{
-    g_pil.app_work_begun = true;
-    g_pil.drv = bridge_now();
-    g_pil.duty_set_count = 0u;
-    g_pil.gate_kill_count = 0u;
-}
-
 void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
 {
     mc_pil_out_t o;
-    /* Up to the application's slow work (all of it when none ran), and what
-     * the slow work did. */
     const pil_bridge_t now = bridge_now();
-    const bool split = g_pil.app_work_begun;
-    const pil_bridge_t *drv = split ? &g_pil.drv : &now;
+    const pil_bridge_t *drv = &now;
     o.seq = g_pil.meas.seq;
     o.duty_set_count = drv->duty_set_count;
     o.duty_a = drv->duty[0];
@@ -692,12 +674,6 @@ void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
     o.duty_c = drv->duty[2];
     o.pwm_enabled = drv->pwm_enabled ? 1u : 0u;
     o.gate_kill_count = drv->gate_kill_count;
-    o.app_duty_set_count = split ? now.duty_set_count : 0u;
-    o.app_gate_kill_count = split ? now.gate_kill_count : 0u;
-    o.app_duty_a = now.duty[0];
-    o.app_duty_b = now.duty[1];
-    o.app_duty_c = now.duty[2];
-    o.app_pwm_enabled = now.pwm_enabled ? 1u : 0u;
     o.cmd_rc = g_pil.cmd_rc;
     o.mode = (uint32_t)d->mode;
     o.faults = d->faults;
@@ -714,7 +690,6 @@ void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
     o.slow_ran = slow_ran ? 1u : 0u;
     g_pil.duty_set_count = 0u;
     g_pil.gate_kill_count = 0u;
-    g_pil.app_work_begun = false;
 
     uint8_t buf[MC_PIL_MAX_FRAME];
     const size_t n = mc_pil_encode_out(&o, buf, sizeof buf);

@@ -42,9 +42,6 @@ void write_app_binding(const std::string& path, const AppBinding& b) {
   for (int i = 0; i < MC_TM_COUNT - MC_TM_OBSERVER; ++i) {
     f << "app.tm_ext_rate_hz." << i << " " << b.tm_ext_rate_hz[i] << "\n";
   }
-  f << "app.speed.kp_a_s_rad " << hexf(b.speed.kp_a_s_rad) << "\n";
-  f << "app.speed.ki_dt_a_s_rad " << hexf(b.speed.ki_dt_a_s_rad) << "\n";
-  f << "app.speed.i_max_a " << hexf(b.speed.i_max_a) << "\n";
   f << "app.pwm_hz_fixed " << b.pwm_hz_fixed << "\n";
   f << "app.slow_loop_div_fixed " << b.slow_loop_div_fixed << "\n";
   f << "app.serve_params " << (b.serve_params ? 1 : 0) << "\n";
@@ -113,9 +110,6 @@ AppBinding read_app_binding(const std::string& path) {
   for (int i = 0; i < MC_TM_COUNT - MC_TM_OBSERVER; ++i) {
     b.tm_ext_rate_hz[i] = static_cast<uint16_t>(u("app.tm_ext_rate_hz." + std::to_string(i)));
   }
-  b.speed.kp_a_s_rad = static_cast<float>(d("app.speed.kp_a_s_rad"));
-  b.speed.ki_dt_a_s_rad = static_cast<float>(d("app.speed.ki_dt_a_s_rad"));
-  b.speed.i_max_a = static_cast<float>(d("app.speed.i_max_a"));
   b.pwm_hz_fixed = u("app.pwm_hz_fixed");
   b.slow_loop_div_fixed = u("app.slow_loop_div_fixed");
   b.serve_params = u("app.serve_params") != 0;

@@ -25,7 +25,6 @@ struct AppBinding {
   mc_params_t defaults{};       // the board's defaults (mc_app_cfg_t.defaults)
   float tm_budget_frac = 0.0f;  // mc_app_cfg_t fields the rig sets
   uint16_t tm_ext_rate_hz[MC_TM_COUNT - MC_TM_OBSERVER] = {};
-  mc_app_speed_cfg_t speed{};
   uint32_t pwm_hz_fixed = 0;
   uint32_t slow_loop_div_fixed = 0;
   bool serve_params = false;   // the application initialised the drive from defaults

@@ -183,6 +183,8 @@ const Pair kPairs[] = {
     {&mc_gains_t::speed_limit_rad_s, &Gains::speed_limit_rad_s},
     {&mc_gains_t::speed_rated_eff_rad_s, &Gains::speed_rated_eff_rad_s},
     {&mc_gains_t::pi2d_coupling, &Gains::pi2d_coupling},
+    {&mc_gains_t::speed_kp_a_s_rad, &Gains::speed_kp_a_s_rad},
+    {&mc_gains_t::speed_ki_a_rad, &Gains::speed_ki_a_rad},
 };
 
 // The gains from the firmware's formulas (firmware/app/config/mc_gains.c,
@@ -379,6 +381,7 @@ mc_drive_cfg_t build_drive_cfg(const MotorFiles& f, const Gains& g) {
   // Controlled stop: the speed PI's kp, the feed-forward J decel / kt;
   // rest below 0.2 % of the rated speed. Warnings off (no thermal model).
   dc.stop_decel_rad_s2 = static_cast<float>(g.stop_decel_rad_s2);
+  dc.speed_accel_rad_s2 = static_cast<float>(g.speed_accel_rad_s2);
   dc.stop_rest_rad_s = static_cast<float>(0.002 * g.speed_rated_eff_rad_s);
   {
     float stop_ki_unused = 0.0f;
@@ -431,11 +434,10 @@ mc_ctrl_pi2d_cfg_t build_pi2d_cfg(const MotorFiles& f, const Gains& g) {
 }
 
 mc_ctrl_pos_cfg_t build_position_cfg(const MotorFiles& f, const Gains& g) {
-  const mc_drive_cfg_t dc = build_drive_cfg(f, g);
   const mc_gains_motor_t gm = gains_motor(f);
   const mc_gains_t c = to_c(g);
   mc_ctrl_pos_cfg_t pc{};
-  mc_law_pos_cfg(&gm, &c, &dc.foc, &pc);
+  mc_law_pos_cfg(&gm, &c, &pc);
   return pc;
 }
 
@@ -476,7 +478,14 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
     dcfg_.fw = build_fw_cfg(fd_, g);
   }
   if (o_.drive_hook) o_.drive_hook(dcfg_);
-  if (o_.law == Law::kSensorless) dcfg_.stall_current_frac = 0.0f;
+  if (o_.law == Law::kSensorless) {
+    dcfg_.stall_current_frac = 0.0f;
+    // the law's duty-side dead-time correction is the drive's current loop's
+    const mc_ctrl_sls_cfg_t sc = build_sensorless_cfg(fd_, g);
+    dcfg_.dead_time_comp = sc.dead_comp_duty && sc.dead_time_s > 0.0f;
+    dcfg_.dead_time_s = sc.dead_time_s;
+    dcfg_.dead_band_a = sc.dead_band_a;
+  }
   const uint32_t derr = mc_drive_init(&drive_, &dcfg_, board_->hal());
   if (derr != MC_DRIVE_CFG_OK) {
     throw UsageError(
@@ -569,16 +578,18 @@ MotorRig::MotorRig(const MotorFiles& f, const Gains& g, RigOptions o)
 
 void MotorRig::set_speed_ref(double omega_m_rad_s) {
   w_cmd_ = omega_m_rad_s;
-  if (o_.law == Law::kSensorless) {
-    if (mc_ctrl_sls_set_speed_ref(&sls_, static_cast<float>(omega_m_rad_s)) != 0u) {
-      throw UsageError("speed reference rejected by the sensorless law");
+  if (o_.law == Law::kSensorless || o_.law == Law::kPi2d) {
+    // the drive shapes these laws' reference
+    if (mc_drive_set_speed_ref(&drive_, static_cast<float>(omega_m_rad_s)) != 0) {
+      throw UsageError("speed reference rejected by the drive");
     }
   }
 }
 
 double MotorRig::omega_ref_rad_s() const {
   if (o_.law == Law::kPosition) return pos_.tm.omega_ref_rad_s;
-  return o_.law == Law::kSensorless ? static_cast<double>(sls_.tm.omega_ref_m_rad_s) : w_ref_;
+  if (o_.law == Law::kSensorless || o_.law == Law::kPi2d) return drive_.speed_ref_rad_s;
+  return w_ref_;
 }
 
 void MotorRig::step() {
@@ -593,18 +604,13 @@ void MotorRig::set_references() {
   if (o_.law == Law::kSpeedPi && drive_.tm.regen_scale < 1.0f) {
     (void)mc_pi_f32_track(&spi_, drive_.tm.iq_ref_a);
   }
-  if (o_.law == Law::kSpeedPi || o_.law == Law::kPi2d) {
+  if (o_.law == Law::kSpeedPi) {
     // Reference slewed at speed_accel_rad_s2 (exact: constant acceleration
     // over the period, then clamp at the target).
     const double amax = g_.speed_accel_rad_s2;
     const double err = w_cmd_ - w_ref_;
     a_ref_ = std::abs(err) <= amax * T_ ? err / T_ : std::copysign(amax, err);
-    if (o_.law == Law::kPi2d) {
-      if (mc_ctrl_pi2d_set_ref(&pi2d_, static_cast<float>(w_ref_), static_cast<float>(a_ref_), 0.0f,
-                               0.0f) != 0u) {
-        throw std::runtime_error("PI2D reference rejected");
-      }
-    } else {
+    {
       // The drive's encoder PLL speed of the previous step (a speed loop in
       // a lower-priority task sees it one period late).
       float iq = 0.0f;
@@ -637,12 +643,9 @@ void MotorRig::dq_refs(double* id, double* iq) const {
       *iq = pi2d_.tm.iq_ref_a;
       return;
     case Law::kPosition:
-      *id = 0.0;
-      *iq = pos_.tm.iq_ref_a;
-      return;
     case Law::kSensorless:
-      *id = sls_.tm.id_ref_a;
-      *iq = sls_.tm.iq_ref_a;
+      *id = drive_.tm.id_ref_a;
+      *iq = drive_.tm.iq_ref_a;
       return;
     default:
       *id = drive_.id_ref_a;

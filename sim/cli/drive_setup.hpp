@@ -99,6 +99,7 @@ struct Gains {
   double model_r_scale = 1, model_l_scale = 1, model_flux_scale = 1;  // drive's / motor's
   // derived, not settable
   double kt_nm_a = 0, v_max_v = 0;
+  double speed_kp_a_s_rad = 0, speed_ki_a_rad = 0;  // the speed PI at speed_wc
   bool pi2d_ok = true;       // the PI^2D filter pole could be placed (see above)
   double pi2d_coupling = 0;  // kt ke / (J L k2) [rad/s]; PI^2D refused above 300
 };

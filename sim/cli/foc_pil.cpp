@@ -127,20 +127,6 @@ const mc_pil_out_t& FocPil::step(const PilCommand& cmd,
     (void)b.pwm_disable();
   }
   b.advance();
-  // What the application's slow work did: after the integration, as in the
-  // SIL rig (drive alone: nothing, the enable state unchanged).
-  if (out_.app_duty_set_count > 0u &&
-      b.pwm_set_duty(out_.app_duty_a, out_.app_duty_b, out_.app_duty_c) != 0) {
-    throw std::runtime_error("FocPil: the board refused duties the target accepted");
-  }
-  if (out_.app_gate_kill_count > 0u) b.fault_gate_kill();
-  if (out_.app_pwm_enabled != out_.pwm_enabled) {
-    if (out_.app_pwm_enabled != 0u) {
-      (void)b.pwm_enable();
-    } else {
-      (void)b.pwm_disable();
-    }
-  }
   ++seq_;
   return out_;
 }

@@ -17,9 +17,8 @@
 // application (firmware/app/app/mc_app) on the default parameters and the
 // binding sent at start-up (PARAMS, APP), and CAN frames travel with the
 // periods: step() delivers the given frames to the drive before the period
-// (CAN_RX) and returns those it sent (CAN_TX). What the application's slow
-// work did to the bridge is applied after the period's integration, where
-// the SIL rig of can-telemetry runs the slow work.
+// (CAN_RX) and returns those it sent (CAN_TX). Both loops run within the
+// period, as in the SIL's one period (hal_host::app_period).
 #pragma once
 
 #include <functional>

@@ -32,11 +32,11 @@ out = {f: open(f + ".out").read() for f in ("scan", "status", "config", "monitor
 check(rc["scan"] == 0 and "node 1: mode IDLE" in out["scan"], "scan finds node 1 (IDLE): " + out["scan"].strip())
 check(rc["status"] == 0 and "mode IDLE" in out["status"] and "CURRENTS" in out["status"],
       "status: heartbeat and telemetry")
-check(rc["config"] == 4 and "refused PARAM_REQ: UNSUPPORTED" in out["config"],
-      "config get: the SIL's refusal decoded (no parameter service): " + out["config"].strip())
+check(rc["config"] == 0 and out["config"].startswith("r_ohm") and "stopped" in out["config"],
+      "config get: the SIL serves the parameter table, as the image: " + out["config"].strip())
 check(rc["monitor"] == 0 and os.path.getsize("monitor.png") > 1000, "monitor --no-gui wrote monitor.png")
-check(rc["calibrate"] == 0 and "DONE" in out["calibrate"] and "not staged" in out["calibrate"],
-      "calibrate: progress to DONE, results shown (no parameter service here): " + out["calibrate"].strip()[-300:])
+check(rc["calibrate"] == 0 and "DONE" in out["calibrate"] and "staged on the drive" in out["calibrate"],
+      "calibrate: progress to DONE, results staged on the drive: " + out["calibrate"].strip()[-300:])
 if rc["calibrate"] == 0:
     import tomllib
     cal = json.load(open("cal.json"))["results"]

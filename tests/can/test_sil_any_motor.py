@@ -19,7 +19,9 @@ version 1 logged as 16.382 A and whose 1290 rad/s it logged as 655.34 rad/s.
     speed_max_rad_s 9000; SPEED's 24-bit field ends at 8388.607 rad/s):
     SPEED.omega_ref_rad_s is sent clamped at 8388.607 with sat = 1 (a wrap
     would read -7777.216), and the drive counts the frames
-    (tm_frames_saturated).
+    (tm_frames_saturated);
+ 4. the host falls silent at 200 rad/s in SPEED mode: the command timeout's
+    controlled stop never turns the rotor backwards (speed_timeout_stop).
 
     test_sil_any_motor.py --mcsim MCSIM --work DIR --repo ROOT
 """
@@ -28,6 +30,7 @@ import itertools
 import os
 import subprocess
 import sys
+import tomllib
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_sil_flash import report, setup
@@ -148,8 +151,8 @@ def speed_step(sil, repo):
     # the 24 V board (270 KV x 24 V = 679 rad/s no-load); on 56 V it turns
     # 1583 rad/s no-load, and the drive's overspeed trip is 1.5x this value.
     # speed_max_rad_s 9000: the CAN limit, so that item 3's reference passes
-    # the command check and reaches the telemetry. speed_i_max_a 20: the
-    # speed PI's current (4100 rad/s^2 on the bare rotor).
+    # the command check and reaches the telemetry. speed_ramp_rad_s2 4100:
+    # the speed reference's ramp (what 20 A gives the bare rotor).
     # board.pwm_hz 48000: at the board's 24 kHz the firmware's current loop,
     # which does not compensate the rotation of the rotor frame during its
     # one-period computation delay (1.5 omega_e T = 0.56 rad at 1290 rad/s
@@ -159,7 +162,7 @@ def speed_step(sil, repo):
                             extra=motor_args(repo) + ["--set", "board.pwm_hz=48000",
                                                       "--set", "motor.speed_max_rad_s=1400",
                                                       "--set", "speed_max_rad_s=9000",
-                                                      "--set", "speed_i_max_a=20"])
+                                                      "--set", "speed_ramp_rad_s2=4100"])
     out = os.path.join(sil.work, "speed")
     rows = rows_of(out)
     md = mdtool_decode(repo, os.path.join(sil.work, "speed.can.log"), os.path.join(out, "md"))
@@ -212,10 +215,43 @@ def speed_step(sil, repo):
           f"{err_th * 1e3:.1f} mrad; 9000 rad/s sent as {over[0]['omega_ref_rad_s'] if over else None}")
 
 
+def speed_timeout_stop(sil, repo):
+    """The host falls silent while the rotor turns at 200 rad/s in SPEED
+    mode: the drive's controlled stop ramps the speed law's reference to 0
+    at stop_decel_rad_s2 and opens the bridge at rest. It never turns the
+    rotor backwards (before the rule, a stop like this one drove a U8-class
+    rotor to -18.7 rad/s): the bridge opens in the PWM period whose encoder
+    speed crosses zero, so the plant's speed goes below zero by at most two
+    periods of the deceleration (the period of the crossing, the one its
+    current still acts in)."""
+    cmds = [sil.frame(0.05, "SET_CONTROL_MODE", control_mode=2),
+            sil.frame(0.06, "SET_ENABLE", enable=1),
+            sil.frame(0.07, "SET_SPEED_REF", omega_ref_rad_s=200.0)]
+    cmds += [sil.frame(0.1 * k + 0.005, "HOST_HEARTBEAT", counter=k) for k in range(1, 5)]
+    _r, s, _frames = sil.run("speed_timeout", sorted(cmds), duration=1.5,
+                             extra=motor_args(repo))
+    rows = rows_of(os.path.join(sil.work, "speed_timeout"))
+    t_last = 0.405  # the last heartbeat
+    before = [r["omega_m_true_rad_s"] for r in rows if 0.3 <= r["t"] <= t_last]
+    check(before and min(before) > 190.0, f"at speed before the silence: {min(before):.1f} rad/s")
+    check(s["final_stop_reason"] == 1 and s["final_mode"] == 0 and s["final_faults"] == 0,
+          f"stopped for CMD_TIMEOUT in IDLE without a fault: reason {s['final_stop_reason']}, "
+          f"mode {s['final_mode']}, faults {s['final_faults']}")
+    decel = s["param.stop_decel_rad_s2"]
+    with open(motor_args(repo)[3], "rb") as f:
+        pwm_hz = tomllib.load(f)["board"]["pwm_hz"]
+    bound = 2.0 * decel / pwm_hz
+    back = max(-r["omega_m_true_rad_s"] for r in rows if r["t"] >= t_last)
+    check(decel > 0.0 and back <= bound,
+          f"largest backward speed during the stop {back:.4f} rad/s (<= 2 decel T = {bound:.4f})")
+    print(f"speed timeout stop from 200 rad/s at {decel:.0f} rad/s^2: backward {back:.4f} rad/s")
+
+
 def main():
     args, sil = setup()
     current_step(sil, args.repo)
     speed_step(sil, args.repo)
+    speed_timeout_stop(sil, args.repo)
     return report(fails)
 
 

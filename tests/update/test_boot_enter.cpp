@@ -159,8 +159,6 @@ class AppBoot : public ::testing::Test
         defaults = mc_params_default;
         cfg.defaults = &defaults;
         cfg.tm_budget_frac = 0.5f;
-        cfg.speed.kp_a_s_rad = 0.1f;
-        cfg.speed.i_max_a = 1.0f;
         cfg.boot = &kImage;
         cfg.enter_boot = [](void *ctx) { static_cast<AppBoot *>(ctx)->entered++; };
         cfg.boot_ctx = this;

@@ -44,8 +44,9 @@
  * The phase currents are a 2 A vector turning with the encoder's angle.
  * Each run: a warm-up, then RUN_PERIODS periods counted (the ADC interrupt
  * every period, PendSV every slow_loop_div, a host heartbeat frame every
- * 10 ms through the CAN interrupt); then per part (ADC read, FOC or law,
- * application mark, duties write) on copies of the state; then the CAN
+ * 10 ms through the CAN interrupt); then per part (ADC read, the speed
+ * law, the drive's FOC step, application mark, duties write) on copies of
+ * the state; then the CAN
  * receive interrupt per frame and the slow loop with a full ring of
  * MC_APP_RX_PER_STEP command frames (parameter reads) over every phase of
  * the telemetry schedule, the reply limiter's bucket full before each (its
@@ -305,6 +306,7 @@ static void period(bool counted)
 
 static mc_ctrl_sls_t g_sls;
 static mc_ctrl_sls_t g_sls_copy;
+static mc_ctrl_speed_t g_spd_copy;
 static mc_foc_f32_t g_foc_copy;
 static mc_foc_f32_out_t g_foc_out;
 static mc_hal_adc_sample_t g_adc_s;
@@ -319,11 +321,6 @@ static void part_pwm(void)
 {
     g_sink =
         mc_hal_pwm3_set_duty(B->hal.pwm3, D->tm.foc.duty_a, D->tm.foc.duty_b, D->tm.foc.duty_c);
-}
-static void part_law_pwm(void)
-{
-    g_sink = mc_hal_pwm3_set_duty(B->hal.pwm3, D->tm.ctrl_out.duty_a, D->tm.ctrl_out.duty_b,
-                                  D->tm.ctrl_out.duty_c);
 }
 static void part_mark(void)
 {
@@ -349,7 +346,9 @@ static void part_foc(void)
     };
     g_sink = (int)mc_foc_f32_step(&g_foc_copy, &in, &g_foc_out);
 }
-static void part_law(void)
+/* The measurement the drive hands a law (mc_drive_fast_step), from the
+ * state the run left: the shaped speed reference, the limit in force. */
+static mc_drive_meas_t law_meas(void)
 {
     const mc_drive_meas_t m = {
         .ia_a = D->tm.ia_a,
@@ -364,8 +363,26 @@ static void part_law(void)
         .enc_cpr = DESC->enc_counts_per_rev,
         .dt_s = D->cfg.foc.dt_s,
         .fast_count = D->fast_count,
+        .i_max_a = D->cfg.i_max_a,
+        .iq_applied_a = D->tm.iq_ref_a,
+        .regen_scale = D->tm.regen_scale,
+        .v_alpha_prev_v = D->v_ab_prev_v[0],
+        .v_beta_prev_v = D->v_ab_prev_v[1],
+        .have_speed_ref = true,
+        .omega_ref_rad_s = D->speed_ref_rad_s,
+        .alpha_ref_rad_s2 = D->speed_alpha_rad_s2,
     };
+    return m;
+}
+static void part_law(void)
+{
+    const mc_drive_meas_t m = law_meas();
     g_sink = (int)mc_ctrl_sls_fast(&g_sls_copy, &m, &g_law_out);
+}
+static void part_speed_law(void)
+{
+    const mc_drive_meas_t m = law_meas();
+    g_sink = (int)mc_ctrl_speed_fast(&g_spd_copy, &m, &g_law_out);
 }
 
 static stat_t parts(fn_t fn, bool adc)
@@ -390,9 +407,12 @@ static int sls_set_ref(void *ctx, float ref)
 /* The law from the board's defaults (the paper-002 motor), gains by the
  * simulator's rules (sim/cli/drive_setup.cpp); the divergence monitor wide
  * open, since the bench has no plant (the observer sees synthetic currents). */
-static uint32_t sls_setup(const mc_params_t *p)
+static uint32_t sls_setup(const mc_params_t *raw)
 {
     mc_ctrl_sls_cfg_t c;
+    mc_params_eff_t e;
+    const mc_params_t *p = &e.p; /* the derived bandwidths resolved */
+    (void)mc_params_resolve(raw, &e);
     memset(&c, 0, sizeof c);
     c.r_ohm = p->r_ohm;
     c.l_h = p->lq_h;
@@ -511,7 +531,7 @@ static int run(bool sensorless)
         }
         period(false);
     }
-    const mc_drive_mode_t want = sensorless ? MC_DRIVE_MODE_CTRL : MC_DRIVE_MODE_CURRENT;
+    const mc_drive_mode_t want = MC_DRIVE_MODE_CTRL; /* every speed law */
     if (D->mode != want) {
         out_kv("stop_reason", A->cmd.stop_reason);
         out_kv("last_error", A->cmd.last_error);
@@ -546,17 +566,19 @@ static int run(bool sensorless)
     out_stat(name, "adc_read", &s);
     s = parts(part_enc, false);
     out_stat(name, "encoder_read", &s);
+    /* every speed law hands its currents to the drive's FOC step */
     if (sensorless) {
         g_sls_copy = g_sls;
         s = parts(part_law, false);
-        out_stat(name, "law", &s);
-        s = parts(part_law_pwm, false);
     } else {
-        g_foc_copy = D->foc;
-        s = parts(part_foc, false);
-        out_stat(name, "foc", &s);
-        s = parts(part_pwm, false);
+        g_spd_copy = *(const mc_ctrl_speed_t *)D->ctrl->ctx;
+        s = parts(part_speed_law, false);
     }
+    out_stat(name, "law", &s);
+    g_foc_copy = D->foc;
+    s = parts(part_foc, false);
+    out_stat(name, "foc", &s);
+    s = parts(part_pwm, false);
     out_stat(name, "duties_write", &s);
     s = parts(part_mark, false);
     out_stat(name, "app_mark", &s);

@@ -9,7 +9,7 @@ and writes a JSON report:
 
 - per board and run (sensored, sensorless): the whole fast interrupt (mean,
   max over RUN_PERIODS periods, and over the periods that pend the slow
-  loop), its parts (ADC read, encoder read, FOC or law, duties write,
+  loop), its parts (ADC read, encoder read, speed law, FOC, duties write,
   application mark; the rest is the drive's supervision and glue), the CAN
   receive interrupt per frame, the slow loop (normal and with a full ring of
   16 command frames, each answered, over every telemetry phase);
@@ -105,9 +105,8 @@ def board_report(board, rows, meta):
     runs = {}
     for run, target in (("sensored", TARGET_SENSORED), ("sensorless", TARGET_SENSORLESS)):
         isr = rows[(run, "isr")]
-        main_part = "foc" if run == "sensored" else "law"
         parts = {p: rows[(run, p)] for p in
-                 ("adc_read", "encoder_read", main_part, "duties_write", "app_mark")}
+                 ("adc_read", "encoder_read", "law", "foc", "duties_write", "app_mark")}
         rest = isr["mean"] - sum(p["mean"] for p in parts.values())
         runs[run] = {
             "isr": isr, "isr_slow_due": rows[(run, "isr_slow_due")],

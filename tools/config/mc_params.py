@@ -31,7 +31,7 @@ TABLE = os.path.join(HERE, "params.toml")
 
 TYPES = {"f32": 0, "u32": 1}
 ACCESS = {"runtime": 0, "stopped": 1, "reboot": 2, "readonly": 3}
-GROUPS = ("motor", "board", "control", "observer", "limit", "fault", "can", "status")
+GROUPS = ("motor", "board", "control", "observer", "law", "limit", "fault", "can", "status")
 FIELDS = ("id", "name", "type", "unit", "min", "max", "default", "access", "group", "desc")
 
 OUT_H = "firmware/app/config/mc_params_gen.h"
@@ -155,6 +155,10 @@ def gen_h(table):
           "extern const mc_params_t mc_params_default;", "",
           "/** Every parameter, sorted by id. */",
           "extern const mc_param_info_t mc_param_table[MC_PARAM_COUNT];", "",
+          "/** Name and unit of each mc_param_table entry (same index): for host tools",
+          " *  and the simulator (an image that does not use them drops them at link). */",
+          "extern const char *const mc_param_names[MC_PARAM_COUNT];",
+          "extern const char *const mc_param_units[MC_PARAM_COUNT];", "",
           "#endif /* MC_PARAMS_GEN_H */", ""]
     return "\n".join(h)
 
@@ -176,6 +180,10 @@ def gen_c(table):
         c.append(f"    {{{p['id']}u, MC_PARAM_TYPE_{p['type'].upper()}, "
                  f"MC_PARAM_ACCESS_{acc_names[ACCESS[p['access']]]}, {off}, "
                  f"{c_value(p, 'min')}, {c_value(p, 'max')}, {c_value(p, 'default')}}}, /* {p['name']} */")
+    c += ["};", "", "const char *const mc_param_names[MC_PARAM_COUNT] = {"]
+    c += [f'    "{p["name"]}",' for p in ps]
+    c += ["};", "", "const char *const mc_param_units[MC_PARAM_COUNT] = {"]
+    c += [f'    "{p["unit"]}",' for p in ps]
     c += ["};", ""]
     return "\n".join(c)
 

@@ -382,16 +382,16 @@ def _mcu_isr_parts(ctx, b):
     for bd in b["boards"]:
         for run, r in bd["runs"].items():
             p = r["parts"]
-            law = p.get("foc") or p.get("law")
             rows.append([bd["board"], run, f"{p['adc_read']['mean']:g}",
-                         f"{p['encoder_read']['mean']:g}",
-                         f"{law['mean']:g} ({'FOC' if 'foc' in p else 'law'})",
+                         f"{p['encoder_read']['mean']:g}", f"{p['law']['mean']:g}",
+                         f"{p['foc']['mean']:g}",
                          f"{p['duties_write']['mean']:g}", f"{p['app_mark']['mean']:g}",
                          f"{r['drive_rest_mean']:g}", f"{r['isr']['mean']:g}"])
-    return table(["board", "run", "ADC read", "encoder read", "FOC / law", "duties write",
-                  "app mark", "drive rest (checks, encoder tracking, supervision, hooks)",
-                  "whole interrupt"], rows,
-                 ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---:"])
+    return table(["board", "run", "ADC read", "encoder read", "speed law", "FOC step",
+                  "duties write", "app mark",
+                  "drive rest (checks, encoder tracking, reference shaping, dead-time "
+                  "compensation, supervision, hooks)", "whole interrupt"], rows,
+                 ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---:", "---:"])
 
 
 @figure("mcu-cpu-budget", [bench_isr()], reason=EXACT_QEMU)
@@ -810,8 +810,11 @@ def _drive_stop(ctx, t):
                               ("StopSil.SpeedModeTimeoutStopPaperMotor", "speed (command timeout)",
                                "paper-002 test motor")):
         rows.append([mode, motor, g(prop(t, test, "stop_time_ratio"), 4),
-                     f"0.95 … {g(prop(t, test, 'stop_time_ratio.bound'), 3)}"])
-    return table(["mode", "motor", "stop time / (ω₀ / decel)", "test bounds"], rows)
+                     f"0.95 … {g(prop(t, test, 'stop_time_ratio.bound'), 3)}",
+                     g(prop(t, test, "reverse_speed_rad_s"), 3),
+                     g(prop(t, test, "reverse_speed_rad_s.bound"), 3)])
+    return table(["mode", "motor", "stop time / (ω₀ / decel)", "test bounds",
+                  "largest backward speed [rad/s]", "bound (2 decel T)"], rows)
 
 
 ASC_RUNS = [("off", ()), ("on", ("fault_i_sense_max_a=250",)), ("on", ())]

@@ -146,11 +146,7 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
 static int speed_ref_hook(void *ctx, float ref)
 {
     mc_app_t *a = ctx;
-    if (a->cfg.speed_law.ctrl != NULL) {
-        return a->cfg.speed_law.set_ref(a->cfg.speed_law.ctx, ref);
-    }
-    a->speed_ref_rad_s = ref;
-    return 0;
+    return a->cfg.speed_law.set_ref(a->cfg.speed_law.ctx, ref);
 }
 
 static int position_ref_hook(void *ctx, float ref)
@@ -161,29 +157,16 @@ static int position_ref_hook(void *ctx, float ref)
 
 /* ------------------------------------------------ the laws from parameters */
 
-static int sls_ref_hook(void *ctx, float ref)
+/* Every speed law of the parameters takes the drive's shaped reference: the
+ * target goes to the drive (the sensorless law's own speed limit, lower
+ * than the command handler's, refuses above it). */
+static int drive_speed_hook(void *ctx, float ref)
 {
     mc_app_t *a = ctx;
-    return (mc_ctrl_sls_set_speed_ref(&a->laws.sls, ref) == 0u) ? 0 : -1;
-}
-
-/* PI2D: the target; the slow work slews the law's reference to it. At
- * enable (the command handler sets the present speed before the run) the
- * reference starts there. */
-static int pi2d_ref_hook(void *ctx, float ref)
-{
-    mc_app_t *a = ctx;
-    if (!mc_isfinite_f32(ref)) {
+    if (a->laws.sls_ok && !(mc_abs_f32(ref) <= a->laws.sls_speed_max_rad_s)) {
         return -1;
     }
-    a->laws.target_rad_s = ref;
-    if (!a->cmd.enabled) {
-        a->laws.ref_rad_s = ref;
-        if (mc_ctrl_pi2d_set_ref(&a->laws.pi2d, ref, 0.0f, 0.0f, 0.0f) != 0u) {
-            return -1;
-        }
-    }
-    return 0;
+    return mc_drive_set_speed_ref(a->drive, ref);
 }
 
 static int pos_ref_hook(void *ctx, float ref)
@@ -196,32 +179,26 @@ static int pos_ref_hook(void *ctx, float ref)
  * that they compare bytewise). Returns the gains' bits; *p_sls_err etc. the
  * builders' own. */
 typedef struct {
+    mc_ctrl_speed_cfg_t spd;
     mc_ctrl_sls_cfg_t sls;
     mc_ctrl_pi2d_cfg_t pi2d;
     mc_ctrl_pos_cfg_t pos;
-    float accel_rad_s2;
     uint32_t gains_err, pi2d_err;
 } laws_cfgs_t;
 
-static void laws_cfgs(const mc_app_t *a, const mc_params_t *p, laws_cfgs_t *c)
+static void laws_cfgs(const mc_params_t *p, laws_cfgs_t *c)
 {
     mc_gains_motor_t m;
     mc_gains_t g;
-    mc_drive_cfg_t dc;
     (void)memset(c, 0, sizeof *c);
-    /* the current loop the set gives the drive (an APPLY re-initialises
-     * the drive after this check), else the drive's own (the SIL's) */
-    if (mc_params_to_drive_cfg(p, &dc) != MC_PARAMS_OK) {
-        dc.foc = a->drive->cfg.foc;
-    }
     c->gains_err = mc_law_gains_from_params(p, &m, &g);
     if (c->gains_err != MC_GAINS_OK) {
         return;
     }
+    mc_law_speed_cfg(&m, &g, &c->spd);
     mc_law_sls_cfg(&m, &g, &c->sls);
     c->pi2d_err = mc_law_pi2d_cfg(&m, &g, &c->pi2d);
-    mc_law_pos_cfg(&m, &g, &dc.foc, &c->pos);
-    c->accel_rad_s2 = (float)g.speed_accel_rad_s2;
+    mc_law_pos_cfg(&m, &g, &c->pos);
 }
 
 /* Initialise the laws the set selects from c; a law whose init refuses is
@@ -231,10 +208,11 @@ static uint32_t laws_init(mc_app_t *a, const mc_params_t *p, const laws_cfgs_t *
     mc_app_laws_t *l = &a->laws;
     uint32_t err = c->gains_err;
     l->speed_law = p->speed_law;
+    l->spd_ok = false;
     l->sls_ok = false;
     l->pi2d_ok = false;
     l->pos_ok = false;
-    l->accel_rad_s2 = c->accel_rad_s2;
+    l->sls_speed_max_rad_s = c->sls.speed_max_rad_s;
     if (c->gains_err != MC_GAINS_OK) {
         return err;
     }
@@ -251,15 +229,17 @@ static uint32_t laws_init(mc_app_t *a, const mc_params_t *p, const laws_cfgs_t *
             err |= l->pi2d_ok ? 0u : MC_LAW_ERR_PI2D_INIT;
         }
     } else if (p->encoder_cpr == 0u) {
-        err |= MC_LAW_ERR_ENCODER; /* the sensored PI */
+        err |= MC_LAW_ERR_ENCODER; /* the sensored speed law */
     } else {
-        /* the sensored PI: the application's loop */
+        l->spd_ok = mc_ctrl_speed_init(&l->spd, &c->spd) == 0u;
+        err |= l->spd_ok ? 0u : MC_LAW_ERR_SPD_INIT;
     }
     if (p->encoder_cpr != 0u) {
         l->pos_ok = mc_ctrl_pos_init(&l->pos, &c->pos) == 0u;
         err |= l->pos_ok ? 0u : MC_LAW_ERR_POS_INIT;
     }
-    (void)memcpy(&l->sls_cfg, &c->sls, sizeof l->sls_cfg); /* padding too */
+    (void)memcpy(&l->spd_cfg, &c->spd, sizeof l->spd_cfg); /* padding too */
+    (void)memcpy(&l->sls_cfg, &c->sls, sizeof l->sls_cfg);
     (void)memcpy(&l->pi2d_cfg, &c->pi2d, sizeof l->pi2d_cfg);
     (void)memcpy(&l->pos_cfg, &c->pos, sizeof l->pos_cfg);
     return err;
@@ -272,15 +252,16 @@ static void laws_plug(mc_app_t *a)
     const mc_app_law_t z = {0};
     a->cfg.speed_law = z;
     a->cfg.position_law = z;
+    a->cfg.speed_law.set_ref = drive_speed_hook;
     if (l->sls_ok) {
         a->cfg.speed_law.ctrl = mc_ctrl_sls_ops(&l->sls);
-        a->cfg.speed_law.set_ref = sls_ref_hook;
         a->cfg.speed_law.tm_ext = &l->sls_ext;
     } else if (l->pi2d_ok) {
         a->cfg.speed_law.ctrl = mc_ctrl_pi2d_ops(&l->pi2d);
-        a->cfg.speed_law.set_ref = pi2d_ref_hook;
+    } else if (l->spd_ok) {
+        a->cfg.speed_law.ctrl = mc_ctrl_speed_ops(&l->spd);
     } else {
-        /* the sensored PI, or nothing */
+        a->cfg.speed_law.set_ref = NULL; /* SPEED unsupported */
     }
     a->cfg.speed_law.ctx = a;
     if (l->pos_ok) {
@@ -288,26 +269,6 @@ static void laws_plug(mc_app_t *a)
         a->cfg.position_law.set_ref = pos_ref_hook;
         a->cfg.position_law.ctx = a;
     }
-}
-
-/* PI2D's reference towards the target at accel_rad_s2 (slow rate). */
-static void pi2d_slew(mc_app_t *a)
-{
-    mc_app_laws_t *l = &a->laws;
-    const float dt = 1.0f / (float)a->tick_hz;
-    const float step = l->accel_rad_s2 * dt;
-    const float e = l->target_rad_s - l->ref_rad_s;
-    float acc = 0.0f;
-    if (e > step) {
-        acc = l->accel_rad_s2;
-        l->ref_rad_s += step;
-    } else if (e < -step) {
-        acc = -l->accel_rad_s2;
-        l->ref_rad_s -= step;
-    } else {
-        l->ref_rad_s = l->target_rad_s;
-    }
-    (void)mc_ctrl_pi2d_set_ref(&l->pi2d, l->ref_rad_s, acc, 0.0f, 0.0f);
 }
 
 static void sls_ext_update(mc_app_t *a)
@@ -322,19 +283,13 @@ static void sls_ext_update(mc_app_t *a)
 /* Which laws the command handler offers (the slots, or the sensored PI). */
 static void cmd_modes(const mc_app_t *a, mc_can_cmd_cfg_t *cc)
 {
-    const bool pi_ok = !a->cfg.laws_from_params || ((a->laws.speed_law == MC_LAW_SPEED_PI) &&
-                                                    ((a->laws.error & MC_LAW_ERR_ENCODER) == 0u));
     cc->set_speed_ref = NULL;
     cc->set_position_ref = NULL;
-    cc->speed_drive_mode = MC_DRIVE_MODE_CURRENT;
+    cc->speed_drive_mode = MC_DRIVE_MODE_IDLE;
     cc->position_drive_mode = MC_DRIVE_MODE_IDLE;
     if ((a->cfg.speed_law.ctrl != NULL) && (a->cfg.speed_law.set_ref != NULL)) {
         cc->set_speed_ref = speed_ref_hook;
         cc->speed_drive_mode = MC_DRIVE_MODE_CTRL;
-    } else if (pi_ok && (a->cfg.speed.kp_a_s_rad > 0.0f)) {
-        cc->set_speed_ref = speed_ref_hook;
-    } else {
-        /* SPEED unsupported */
     }
     if ((a->cfg.position_law.ctrl != NULL) && (a->cfg.position_law.set_ref != NULL)) {
         cc->set_position_ref = position_ref_hook;
@@ -357,33 +312,37 @@ static bool same_bytes(const void *a, const void *b, size_t n)
     return true;
 }
 
-/* An APPLY's laws: unchanged, or rebuilt while disabled (see mc_app.h). */
+/* An APPLY's laws: unchanged, or rebuilt while disabled (see mc_app.h).
+ * With the bridge on only runtime parameters can differ (the service
+ * refuses the others): the laws stay as they are and take the drive's
+ * limits in force each step. */
 static uint32_t laws_check(mc_app_t *a, const mc_params_t *p)
 {
     laws_cfgs_t c;
     mc_app_laws_t *l = &a->laws;
     uint32_t err;
-    laws_cfgs(a, p, &c);
+    if (a->cmd.enabled || (a->drive->mode != MC_DRIVE_MODE_IDLE)) {
+        a->laws_rebuilt = false;
+        return 0u;
+    }
+    laws_cfgs(p, &c);
+    a->laws_rebuilt = true;
     if ((p->speed_law == l->speed_law) && (c.gains_err == MC_GAINS_OK) &&
+        same_bytes(&c.spd, &l->spd_cfg, sizeof c.spd) &&
         same_bytes(&c.sls, &l->sls_cfg, sizeof c.sls) &&
         same_bytes(&c.pi2d, &l->pi2d_cfg, sizeof c.pi2d) &&
         same_bytes(&c.pos, &l->pos_cfg, sizeof c.pos) &&
         (a->srv.active.encoder_cpr == p->encoder_cpr)) {
         return 0u;
     }
-    if (a->cmd.enabled || (a->drive->mode != MC_DRIVE_MODE_IDLE)) {
-        a->srv.law_error = MC_LAW_ERR_RUNNING;
-        return MC_PARAMS_ERR_LAW;
-    }
     err = laws_init(a, p, &c);
-    /* the selected speed law must run (the sensored PI needs only the
-     * encoder); the position law is offered when it can (law_error says
-     * why not) */
-    if ((err & ((p->speed_law == MC_LAW_SPEED_PI) ? MC_LAW_ERR_ENCODER : ~MC_LAW_ERR_POS_INIT)) !=
-        0u) {
-        laws_cfgs(a, &a->srv.active, &c); /* the laws before (c reused: stack) */
+    /* the selected speed law must run; the position law is offered when it
+     * can (law_error says why not) */
+    if ((err & ~MC_LAW_ERR_POS_INIT) != 0u) {
+        laws_cfgs(&a->srv.active, &c); /* the laws before (c reused: stack) */
         l->error = laws_init(a, &a->srv.active, &c);
         a->srv.law_error = err;
+        a->laws_rebuilt = false;
         return MC_PARAMS_ERR_LAW;
     }
     l->error = err;
@@ -400,6 +359,9 @@ static uint32_t params_check(void *ctx, const mc_params_t *p)
     if ((p->pwm_hz != a->params.pwm_hz) || (p->slow_loop_div != a->params.slow_loop_div)) {
         return 1u;
     }
+    if ((p->brake_enable != 0u) && (a->hal->brake == NULL)) {
+        return MC_PARAMS_ERR_BOARD; /* no brake chopper on this board */
+    }
     if ((a->cmd_hook.check != NULL) && (a->cmd_hook.check(a->cmd_hook.ctx, p) != 0u)) {
         return 1u;
     }
@@ -413,7 +375,7 @@ static void params_apply(void *ctx, const mc_params_t *p)
     if (a->cmd_hook.apply != NULL) {
         a->cmd_hook.apply(a->cmd_hook.ctx, p);
     }
-    if (a->cfg.laws_from_params) {
+    if (a->cfg.laws_from_params && a->laws_rebuilt) {
         mc_can_cmd_cfg_t cc = a->cmd.cfg;
         laws_plug(a);
         cmd_modes(a, &cc);
@@ -465,13 +427,6 @@ static void boot_service(mc_app_t *a)
     mc_boot_enter_step(&a->boot);
 }
 
-static bool speed_cfg_ok(const mc_app_speed_cfg_t *s)
-{
-    return mc_isfinite_f32(s->kp_a_s_rad) && mc_isfinite_f32(s->ki_dt_a_s_rad) &&
-           mc_isfinite_f32(s->i_max_a) && (s->kp_a_s_rad >= 0.0f) && (s->ki_dt_a_s_rad >= 0.0f) &&
-           (s->i_max_a >= 0.0f);
-}
-
 uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
                       const mc_hal_can_t *can, bool init_drive)
 {
@@ -486,8 +441,15 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     app->drive = drive;
     app->hal = hal;
     app->can = can;
-    if (!speed_cfg_ok(&app->cfg.speed)) {
-        return MC_APP_CFG_ERR_SPEED;
+    if ((p->brake_enable != 0u) && (hal->brake == NULL)) {
+        /* a stored set this board cannot run (no brake chopper): the
+         * defaults boot and cfg_store_status says so */
+        if ((app->cfg.defaults == NULL) || (app->cfg.defaults->brake_enable != 0u)) {
+            return MC_APP_CFG_ERR_PARAMS;
+        }
+        app->params = *app->cfg.defaults;
+        app->boot_status = (uint8_t)MC_CFG_BOOT_INVALID;
+        app->status_sent_cfg = app->boot_status;
     }
     app->params_valid = init_drive && (mc_params_validate(p) == MC_PARAMS_OK);
     if (init_drive) {
@@ -527,12 +489,18 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     cc.tick_hz = app->tick_hz;
     cc.timeout_s = p->can_timeout_s;
     cc.stop_ramp_a_per_s = p->stop_ramp_a_per_s;
-    cc.stop_decel_rad_s2 = p->stop_decel_rad_s2;
-    cc.speed_max_rad_s = p->speed_max_rad_s;
+    {
+        /* the derived stop deceleration (mc_params_resolve); a set without
+         * gains leaves the command handler's rule to refuse it */
+        mc_params_eff_t e;
+        (void)mc_params_resolve(p, &e);
+        cc.stop_decel_rad_s2 = e.p.stop_decel_rad_s2;
+        cc.speed_max_rad_s = p->speed_max_rad_s;
+    }
     cc.hook_ctx = app;
     if (app->cfg.laws_from_params) {
         laws_cfgs_t lc;
-        laws_cfgs(app, p, &lc);
+        laws_cfgs(p, &lc);
         app->laws.error = laws_init(app, p, &lc);
         laws_plug(app);
     }
@@ -616,24 +584,6 @@ uint32_t mc_app_can_rx_isr(mc_app_t *app)
 }
 
 /* -------------------------------------------------------------- slow loop */
-
-static float clamp(float x, float lo, float hi)
-{
-    if (x < lo) {
-        return lo;
-    }
-    return (x > hi) ? hi : x;
-}
-
-static void speed_step(mc_app_t *a)
-{
-    const mc_app_speed_cfg_t *s = &a->cfg.speed;
-    const float e = a->speed_ref_rad_s - a->drive->tm.omega_m_rad_s;
-    float iq;
-    a->speed_integ_a = clamp(a->speed_integ_a + (s->ki_dt_a_s_rad * e), -s->i_max_a, s->i_max_a);
-    iq = clamp((s->kp_a_s_rad * e) + a->speed_integ_a, -s->i_max_a, s->i_max_a);
-    (void)mc_drive_set_current_ref(a->drive, 0.0f, iq);
-}
 
 /* The law of the selected control mode is the one attached (control modes
  * change only while disabled, so the drive is not running a law then). */
@@ -749,8 +699,11 @@ uint32_t mc_app_slow_work(mc_app_t *app)
     uint32_t n = 0u;
     mc_hal_can_frame_t f;
     boot_service(app);
-    /* commands, in reception order */
+    /* commands, in reception order; the law of the control mode is
+     * attached before each (a SET_ENABLE right after its SET_CONTROL_MODE
+     * finds its law in place) */
     while ((n < MC_APP_RX_PER_STEP) && mc_app_rx_ring_pop(&app->rx, &f)) {
+        attach_law(app);
         (void)mc_can_cmd_handle(&app->cmd, &f, can);
         n++;
     }
@@ -759,19 +712,7 @@ uint32_t mc_app_slow_work(mc_app_t *app)
     if (app->comm != NULL) {
         mc_comm_can_step(app->comm, can, &app->cmd.reply);
     }
-    if (app->cmd.enabled && !app->was_enabled) {
-        app->speed_integ_a = 0.0f; /* a new run starts without old torque */
-    }
     app->was_enabled = app->cmd.enabled;
-    if (app->cmd.enabled && (app->cmd.control_mode == MC_CAN_CTRL_SPEED)) {
-        if (app->cfg.speed_law.ctrl == NULL) {
-            speed_step(app);
-        } else if (app->cfg.laws_from_params && app->laws.pi2d_ok) {
-            pi2d_slew(app);
-        } else {
-            /* the law slews its own reference */
-        }
-    }
     if (app->cfg.laws_from_params && app->laws.sls_ok) {
         sls_ext_update(app);
     }
@@ -790,6 +731,65 @@ void mc_app_slow_step(mc_app_t *app)
 {
     mc_drive_slow_step(app->drive);
     (void)mc_app_slow_work(app);
+}
+
+void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
+{
+    const mc_drive_t *d = app->drive;
+    const mc_drive_ctrl_t *ctrl = d->ctrl;
+    const mc_app_laws_t *l = &app->laws;
+    const mc_app_probe_t z = {0};
+    *p = z;
+    p->mode = (uint32_t)d->mode;
+    p->faults = d->faults;
+    p->first_fault = d->first_fault;
+    p->warnings = d->warnings;
+    p->ctrl_err = d->tm.ctrl_err;
+    p->stop_cause = d->stop_cause;
+    p->cmd_enabled = app->cmd.enabled ? 1u : 0u;
+    p->cmd_stop_reason = app->cmd.stop_reason;
+    p->law_error = l->error;
+    p->id_ref_a = d->tm.id_ref_a;
+    p->iq_ref_a = d->tm.iq_ref_a;
+    p->id_a = d->tm.foc.id_a;
+    p->iq_a = d->tm.foc.iq_a;
+    p->vd_v = d->tm.foc.vd_v;
+    p->vq_v = d->tm.foc.vq_v;
+    p->theta_e_rad = d->tm.theta_e_rad;
+    p->omega_m_rad_s = d->tm.omega_m_rad_s;
+    p->vbus_v = d->tm.vbus_v;
+    p->regen_scale = d->tm.regen_scale;
+    p->brake_duty = d->tm.brake_duty;
+    p->fw_v_mag_v = d->tm.fw.v_mag_v;
+    p->fw_v_max_v = d->tm.fw.v_max_v;
+    p->omega_ref_rad_s = d->speed_ref_rad_s;
+    p->asc_active = d->asc_active ? 1u : 0u;
+    if ((ctrl != NULL) && app->cfg.laws_from_params) {
+        if (l->pi2d_ok && (ctrl == &l->pi2d.ops)) {
+            p->id_ref_a = l->pi2d.tm.id_ref_a;
+            p->iq_ref_a = l->pi2d.tm.iq_ref_a;
+            p->id_a = l->pi2d.tm.id_a;
+            p->iq_a = l->pi2d.tm.iq_a;
+            p->vd_v = l->pi2d.tm.vd_v;
+            p->vq_v = l->pi2d.tm.vq_v;
+        }
+        if (l->pos_ok && (ctrl == &l->pos.ops)) {
+            p->omega_ref_rad_s = l->pos.tm.omega_ref_rad_s;
+        }
+    }
+    if (app->cfg.laws_from_params && l->sls_ok) {
+        p->sls_phase = (uint32_t)l->sls.tm.phase;
+        p->sls_handovers = l->sls.tm.handovers;
+        p->sls_fallbacks = l->sls.tm.fallbacks;
+        p->sls_theta_hat_e_rad = l->sls.tm.theta_hat_e_rad;
+    }
+    if (app->cfg.laws_from_params && l->pos_ok) {
+        p->pos_turns = l->pos.tm.turns;
+        p->pos_count = l->pos.tm.count;
+        p->pos_theta_ref_rad = l->pos.tm.theta_ref_rad;
+        p->pos_traj_duration_s = mc_traj_f32_get_duration_s(&l->pos.traj);
+        p->pos_traj_k = l->pos.traj.k;
+    }
 }
 
 void mc_app_attach_commission(mc_app_t *app, mc_comm_can_t *m)

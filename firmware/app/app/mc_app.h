@@ -21,7 +21,11 @@
  *   mc_app_start()   the drive from those parameters (unless the caller
  *                    initialised it itself), telemetry, command handler,
  *                    parameter service, the hardware receive filter for
- *                    this node's ids, the watchdog.
+ *                    this node's ids, the watchdog. A stored set with
+ *                    brake_enable on a board without a brake chopper
+ *                    (mc_hal_t.brake NULL) boots the defaults with status
+ *                    INVALID; an APPLY of it is refused INVALID with
+ *                    MC_PARAMS_ERR_BOARD (nothing changes).
  *   mc_app_fast_step()  ADC interrupt: the drive's fast step, and the mark
  *                    that the fast loop ran.
  *   mc_app_can_rx_isr() CAN receive interrupt: moves every received frame
@@ -29,8 +33,8 @@
  *                    first; a full ring counts an overflow (rx_overflows).
  *   mc_app_slow_step()  slow loop: the drive's slow step, then
  *                    mc_app_slow_work(): commands from the ring, the command
- *                    handler's supervision (timeout), the speed loop, the
- *                    CAN controller's state, telemetry, the watchdog.
+ *                    handler's supervision (timeout), the CAN controller's
+ *                    state, telemetry, the watchdog.
  *
  * Watchdog: fed at the end of a slow step only when the fast loop has run
  * since the previous feed (mc_app_fast_step marks it): a hung fast loop (no
@@ -53,12 +57,10 @@
  * CLEAR_FAULTS once the controller is error-active or warning again; the
  * CAN run ends with stop_reason FAULT when the drive has stopped.
  *
- * Control modes: CURRENT (the drive's dq loop); SPEED by the sensored speed
- * loop of this module (a PI at the slow rate on the encoder speed writing
- * the q current reference in CURRENT mode) or by a plugged speed law
- * (mc_drive_ctrl_t in CTRL mode: sensorless with I-f start, PI2D, ...);
- * POSITION by a plugged position law. A law's setpoint hook and telemetry
- * extension come with it (mc_app_law_t).
+ * Control modes: CURRENT (the drive's dq loop); SPEED by a plugged speed
+ * law (mc_drive_ctrl_t in CTRL mode: the sensored speed law, sensorless
+ * with I-f start, PI2D, ...); POSITION by a plugged position law. A law's
+ * setpoint hook and telemetry extension come with it (mc_app_law_t).
  *
  * Firmware update (mc_app_cfg_t.boot and enter_boot, the board's): BOOT_REQ
  * INFO, VERSION and the confirmed ENTER (can/mc_boot_enter.h). Once ENTER
@@ -70,17 +72,21 @@
  * and the SIL): the application owns the sensorless, PI2D and position
  * instances and fills the two slots itself from the booted parameters:
  * SPEED runs the law the speed_law parameter selects (MC_LAW_SPEED_*: the
- * sensored PI above, sensorless with I-f start, PI2D), POSITION the
- * position cascade (with an encoder, encoder_cpr > 0). Gains come from the
- * motor values (mc_law_cfg.h, mc_gains.h). A law its values cannot run is
+ * sensored speed law mc_ctrl_speed, sensorless with I-f start, PI2D),
+ * POSITION the position cascade (with an encoder, encoder_cpr > 0). Gains
+ * come from the parameters (derived from the motor values unless set:
+ * mc_params.h, mc_law_cfg.h, mc_gains.h). A law its values cannot run is
  * not plugged (SPEED or POSITION answers UNSUPPORTED) and the readonly
- * parameter law_error says why. An APPLY rebuilds the laws: it is refused
- * INVALID with MC_PARAMS_ERR_LAW when a law's init refuses the new values
- * (law_error: why; the previous laws stay) or when it would change a law
- * while a CAN run is enabled (MC_LAW_ERR_RUNNING): laws change only while
- * disabled. PI2D's reference is slewed at the slow rate towards
- * SET_SPEED_REF at the gains' speed_accel_rad_s2 (its acceleration is the
- * law's feed-forward); the sensorless law slews its own.
+ * parameter law_error says why. An APPLY with the bridge off rebuilds the
+ * laws; it is refused INVALID with MC_PARAMS_ERR_LAW when a law's init
+ * refuses the new values (law_error: why; the previous laws stay). With the
+ * bridge on an APPLY changes only runtime parameters (the service refuses
+ * the others, RUNNING) and never rebuilds a law: the laws take the drive's
+ * limits in force each step (a lower i_max_a saturates them at once). The
+ * speed laws' reference is the drive's (mc_drive_set_speed_ref): SET_SPEED_REF
+ * sets its target, the drive slews it at speed_ramp_rad_s2 (its
+ * acceleration is the laws' feed-forward) and ramps it to zero in a
+ * controlled stop: one owner of the reference for every speed law.
  */
 #ifndef MC_APP_H
 #define MC_APP_H
@@ -98,6 +104,7 @@
 #include "mc_ctrl_pi2d.h"
 #include "mc_ctrl_position.h"
 #include "mc_ctrl_sensorless.h"
+#include "mc_ctrl_speed.h"
 #include "mc_drive.h"
 #include "mc_law_cfg.h"
 #include "mc_param_srv.h"
@@ -129,7 +136,7 @@ extern "C" {
 #define MC_APP_CFG_ERR_CMD    (1u << 4) /**< command handler refused (cmd_err) */
 #define MC_APP_CFG_ERR_STORE  (1u << 5) /**< the flash sectors refused by the store */
 #define MC_APP_CFG_ERR_WDG    (1u << 6) /**< wdg_timeout_ms out of range */
-#define MC_APP_CFG_ERR_SPEED  (1u << 7) /**< speed-loop gains negative or not finite */
+#define MC_APP_CFG_ERR_SPEED  (1u << 7) /**< (unused: the speed loop is a law) */
 #define MC_APP_CFG_ERR_LAW    (1u << 8) /**< a plugged law refused by the drive */
 
 /** Single-producer (the CAN interrupt) single-consumer (the slow loop)
@@ -148,15 +155,6 @@ typedef struct {
 bool mc_app_rx_ring_push(mc_app_rx_ring_t *r, const mc_hal_can_frame_t *p_frame);
 /** Pop (consumer side). Returns false when empty. */
 bool mc_app_rx_ring_pop(mc_app_rx_ring_t *r, mc_hal_can_frame_t *p_frame);
-
-/** Sensored speed loop at the slow rate: iq_ref = PI(omega_ref - omega_m),
- *  clamped to +-i_max_a, integrator clamped too (anti-windup), id_ref = 0;
- *  runs while the CAN control mode is SPEED (drive in CURRENT mode). */
-typedef struct {
-    float kp_a_s_rad;    /**< proportional gain [A/(rad/s)]; 0: no sensored speed mode */
-    float ki_dt_a_s_rad; /**< integral gain times the slow period [A/(rad/s)] */
-    float i_max_a;       /**< q current limit [A], <= the drive's i_max_a */
-} mc_app_speed_cfg_t;
 
 /** A control law plugged for SPEED or POSITION (CTRL mode). */
 typedef struct {
@@ -179,8 +177,7 @@ typedef struct {
     /** Rates of the messages past POSITION: OBSERVER, CONTROLLER, STEPPER,
      *  CURRENT_REFS, POSITION_REF [Hz] (the parameter table has the first five). */
     uint16_t tm_ext_rate_hz[MC_TM_COUNT - MC_TM_OBSERVER];
-    mc_app_speed_cfg_t speed;  /**< sensored speed loop */
-    mc_app_law_t speed_law;    /**< plugged speed law (ctrl NULL: the loop above) */
+    mc_app_law_t speed_law;    /**< plugged speed law (ctrl NULL: SPEED unsupported) */
     mc_app_law_t position_law; /**< plugged position law (ctrl NULL: none) */
     /** true: the two slots above are the application's, built from the
      *  parameters (see the file comment); false: the caller's. */
@@ -199,19 +196,19 @@ typedef struct {
 /** The laws the application builds from the parameters, and the
  *  configurations they were built from (to see what an APPLY changes). */
 typedef struct {
+    mc_ctrl_speed_t spd;
     mc_ctrl_sls_t sls;
     mc_ctrl_pi2d_t pi2d;
     mc_ctrl_pos_t pos;
+    mc_ctrl_speed_cfg_t spd_cfg;
     mc_ctrl_sls_cfg_t sls_cfg;
     mc_ctrl_pi2d_cfg_t pi2d_cfg;
     mc_ctrl_pos_cfg_t pos_cfg;
     mc_telemetry_ext_t sls_ext; /**< OBSERVER from the sensorless law */
-    float accel_rad_s2;         /**< PI2D reference slew [rad/s^2] */
-    float target_rad_s;         /**< PI2D: SET_SPEED_REF */
-    float ref_rad_s;            /**< PI2D: the slewed reference */
+    float sls_speed_max_rad_s;  /**< the sensorless law's speed limit [rad/s] */
     uint32_t speed_law;         /**< MC_LAW_SPEED_* plugged */
     uint32_t error;             /**< law_error: MC_GAINS_ERR_* | MC_LAW_ERR_* */
-    bool sls_ok, pi2d_ok, pos_ok;
+    bool spd_ok, sls_ok, pi2d_ok, pos_ok;
 } mc_app_laws_t;
 
 /* Fields ordered by size (pointers, structs, words, bytes): no padding. */
@@ -241,9 +238,6 @@ typedef struct {
     uint32_t status_sent_key; /**< (faults, can_state) of the last one queued */
     uint8_t status_sent_cfg;  /**< cfg_status of the last one queued (boot: the boot status) */
     uint32_t status_frames;   /**< APP_STATUS frames queued */
-    /* speed loop */
-    float speed_ref_rad_s;
-    float speed_integ_a;
     /* supervision */
     uint32_t faults;  /**< MC_APP_FAULT_* (sticky) */
     uint32_t tick_hz; /**< slow-loop rate [Hz] */
@@ -266,10 +260,42 @@ typedef struct {
     bool have_store;
     bool status_pending;
     uint8_t status_seq;
-    bool was_enabled; /**< CAN run state of the previous slow step */
+    bool was_enabled;  /**< CAN run state of the previous slow step */
+    bool laws_rebuilt; /**< the last APPLY's check rebuilt the laws (bridge off) */
     bool wdg_running;
     bool boot_on; /**< BOOT_REQ served */
 } mc_app_t;
+
+/** What a scenario reads of the drive after a period (the simulator's
+ *  scenarios, in the SIL and through the processor-in-the-loop link): the
+ *  drive's state and its loops' signals, and the plugged laws' telemetry. */
+typedef struct {
+    uint32_t mode, faults, first_fault, warnings, ctrl_err, stop_cause;
+    uint32_t cmd_enabled, cmd_stop_reason, law_error;
+    float id_ref_a, iq_ref_a; /**< the current loop's references (PI2D: the law's) */
+    float id_a, iq_a;         /**< measured, in the loop's frame [A] */
+    float vd_v, vq_v;         /**< the loop's voltage [V] */
+    float theta_e_rad;        /**< the encoder's electrical angle [rad] */
+    float omega_m_rad_s;      /**< the encoder tracking loop's speed [rad/s] */
+    float vbus_v;
+    float regen_scale, brake_duty;
+    float fw_v_mag_v, fw_v_max_v; /**< field weakening: |v| and its target [V] */
+    float omega_ref_rad_s;        /**< the speed law's reference; the position law's
+                                       trajectory speed [rad/s] */
+    uint32_t asc_active;
+    /* the sensorless law */
+    uint32_t sls_phase, sls_handovers, sls_fallbacks;
+    float sls_theta_hat_e_rad;
+    /* the position law */
+    int32_t pos_turns;
+    uint32_t pos_count;
+    float pos_theta_ref_rad;
+    float pos_traj_duration_s;
+    uint32_t pos_traj_k;
+} mc_app_probe_t;
+
+/** Fill *p from the application and its drive (after a period). */
+void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p);
 
 /** Boot: reset cause, configuration (see the file comment). app is
  *  zeroed first. Returns MC_APP_CFG_* bits (only NULL, STORE, WDG); with
@@ -288,8 +314,10 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg);
 uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
                       const mc_hal_can_t *can, bool init_drive);
 
-/** ADC interrupt: drive fast step + fast-loop mark. Returns true when the
- *  slow step is due. */
+/** The body of the image's ADC interrupt (main.c ADC_IRQHandler, and the
+ *  simulator's one period, hal_host::app_period): the drive's fast step and
+ *  the fast-loop mark. Returns true when the slow step is due (the image
+ *  pends PendSV, whose body is mc_app_slow_step). */
 bool mc_app_fast_step(mc_app_t *app);
 
 /** The fast-loop mark alone (when the caller runs the drive's fast step). */
@@ -300,7 +328,9 @@ void mc_app_fast_mark(mc_app_t *app);
  *  were taken from the HAL. */
 uint32_t mc_app_can_rx_isr(mc_app_t *app);
 
-/** Slow loop: mc_drive_slow_step() then mc_app_slow_work(). */
+/** The body of the image's PendSV (main.c PendSV_Handler, and the
+ *  simulator's hal_host::app_period): mc_drive_slow_step() then
+ *  mc_app_slow_work(). */
 void mc_app_slow_step(mc_app_t *app);
 
 /** The application's part of the slow loop (see the file comment). Returns

@@ -107,10 +107,12 @@ static uint32_t params_check(void *ctx, const mc_params_t *p)
 static void params_apply(void *ctx, const mc_params_t *p)
 {
     mc_can_cmd_t *c = (mc_can_cmd_t *)ctx;
+    mc_params_eff_t e;
+    (void)mc_params_resolve(p, &e); /* validated by the service before */
     c->cfg.timeout_s = p->can_timeout_s;
     c->timeout_ticks = (uint32_t)(p->can_timeout_s * (float)c->cfg.tick_hz + 0.5f);
     c->cfg.stop_ramp_a_per_s = p->stop_ramp_a_per_s;
-    c->cfg.stop_decel_rad_s2 = p->stop_decel_rad_s2;
+    c->cfg.stop_decel_rad_s2 = e.p.stop_decel_rad_s2;
     c->cfg.speed_max_rad_s = p->speed_max_rad_s;
     if (c->tm != NULL) {
         uint32_t rate[MC_TM_POSITION + 1u];
@@ -660,15 +662,21 @@ void mc_can_cmd_step(mc_can_cmd_t *c)
     }
     if (!c->stopping && (c->ticks_since_alive >= c->timeout_ticks)) {
         c->stopping = true;
-        /* With a controlled stop configured the drive decelerates to
-         * standstill itself before it opens the bridge (mc_drive.h). */
-        if (c->drive->cfg.stop_decel_rad_s2 > 0.0f) {
+        /* SPEED and POSITION with a controlled stop configured: the drive
+         * decelerates to standstill itself before it opens the bridge
+         * (mc_drive.h). CURRENT (torque) mode: the torque ramps to zero at
+         * stop_ramp_a_per_s, then the bridge opens, whatever the load does
+         * (the host owned the torque, not the speed: a speed-controlled stop
+         * would brake, or drive, against it). */
+        c->stop_by_drive =
+            (c->control_mode != MC_CAN_CTRL_CURRENT) && (c->drive->cfg.stop_decel_rad_s2 > 0.0f);
+        if (c->stop_by_drive) {
             (void)mc_drive_stop(c->drive);
         } else {
             stop_begin(c);
         }
     }
-    if (c->stopping && (c->drive->cfg.stop_decel_rad_s2 > 0.0f)) {
+    if (c->stopping && c->stop_by_drive) {
         if (c->drive->mode != MC_DRIVE_MODE_STOPPING) {
             end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
         }

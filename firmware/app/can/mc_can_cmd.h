@@ -91,13 +91,14 @@
  * count and takes its first HOST_HEARTBEAT's counter as the reference.
  * If no keep-alive arrives for timeout_s the drive stops safely and
  * reports stop_reason CMD_TIMEOUT (commissioning: aborted with
- * MC_COMM_ERR_HOST_LOST, bridge off at once). With the drive's
- * controlled stop configured (mc_drive_cfg_t.stop_decel_rad_s2 > 0) in any
- * control mode: mc_drive_stop(), the drive decelerates to standstill at
- * that rate and opens the bridge (MODE_STOPPING); the run ends when it has.
- * Without it:
- *   CURRENT   both current references ramp to zero at stop_ramp_a_per_s,
- *             then IDLE;
+ * MC_COMM_ERR_HOST_LOST, bridge off at once).
+ *   CURRENT   (torque mode, any configuration) both current references
+ *             ramp to zero at stop_ramp_a_per_s, then IDLE.
+ * SPEED and POSITION with the drive's controlled stop configured
+ * (mc_drive_cfg_t.stop_decel_rad_s2 > 0; always from the parameter table):
+ * mc_drive_stop(), the drive decelerates to standstill at that rate without
+ * reversing the rotor and opens the bridge (MODE_STOPPING); the run ends
+ * when it has. Without it:
  *   SPEED     the speed reference ramps to zero at stop_decel_rad_s2
  *             through the application's hook; the bridge opens when the
  *             rotor is at rest (|omega_m| <= the drive's stop_rest_rad_s,
@@ -205,6 +206,7 @@ typedef struct mc_can_cmd {
     bool enabled;
     bool stopping;              /**< safe stop in progress */
     bool stop_by_law;           /**< POSITION: the control law's stop op decelerates */
+    bool stop_by_drive;         /**< the drive's controlled stop (SPEED, POSITION) */
     uint32_t stop_ticks_left;   /**< steps the stop may still wait for rest */
     uint8_t stop_reason;        /**< MC_CAN_STOP_* */
     uint32_t ticks_since_alive; /**< steps since the last keep-alive (a fresh

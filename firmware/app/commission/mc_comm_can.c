@@ -253,16 +253,12 @@ static bool stage(mc_comm_can_t *m)
          write_f32(s, MC_PARAM_ID_I_OFFSET_B_A, o[MC_COMM_CAN_ITEM_ADC_OFFSET_B_A]) &&
          write_f32(s, MC_PARAM_ID_I_OFFSET_C_A, o[MC_COMM_CAN_ITEM_ADC_OFFSET_C_A]);
     if (ok && ((r->valid & MC_COMM_HAVE_MECH) != 0u)) {
-        float kp = 0.0f;
-        float ki = 0.0f;
-        const double kt = mc_gains_kt_nm_a((double)r->pole_pairs, (double)r->flux_wb);
-        const double wc = mc_gains_speed_wc_rad_s((double)s->staged.current_bw_rad_s,
-                                                  (double)m->cfg.enc_pll_bw_rad_s);
+        /* the speed gains follow the identified inertia: 0 = derived from
+         * it (mc_params_resolve: kp = J wc / kt, zero at wc / 4) */
         ok = write_f32(s, MC_PARAM_ID_J_KGM2, r->j_kgm2) &&
              write_f32(s, MC_PARAM_ID_B_NM_S_RAD, r->b_nm_s_rad) &&
-             (mc_gains_speed_pi((double)r->j_kgm2, kt, wc, &kp, &ki) == MC_GAINS_OK) &&
-             write_f32(s, MC_PARAM_ID_SPEED_KP_A_S_RAD, kp) &&
-             write_f32(s, MC_PARAM_ID_SPEED_KI_A_RAD, ki);
+             write_f32(s, MC_PARAM_ID_SPEED_KP_A_S_RAD, 0.0f) &&
+             write_f32(s, MC_PARAM_ID_SPEED_KI_A_RAD, 0.0f);
     }
     if (!ok) {
         s->staged = keep;

@@ -117,6 +117,8 @@ void mc_gains_fix_none(mc_gains_t *fix)
     fix->enc_pll_bw_rad_s = nan;
     fix->speed_wc_rad_s = nan;
     fix->speed_accel_rad_s2 = nan;
+    fix->speed_kp_a_s_rad = nan;
+    fix->speed_ki_a_rad = nan;
     fix->obs_crit_rad_s = nan;
     fix->pll_bw_rad_s = nan;
     fix->sls_wc_rad_s = nan;
@@ -220,6 +222,15 @@ uint32_t mc_gains_derive(const mc_gains_motor_t *m, const mc_gains_t *fix, mc_ga
         pick(fix->speed_wc_rad_s, mc_gains_speed_wc_rad_s(g->cur_bw_rad_s, g->enc_pll_bw_rad_s));
     g->speed_accel_rad_s2 =
         pick(fix->speed_accel_rad_s2, 0.5 * g->kt_nm_a * g->i_limit_a / m->j_kgm2);
+    {
+        /* the speed PI at speed_wc (kp = J wc / kt, zero at wc / 4); a gain
+         * given alone keeps the other derived */
+        float kp = 0.0f;
+        float ki = 0.0f;
+        (void)mc_gains_speed_pi(m->j_kgm2, g->kt_nm_a, g->speed_wc_rad_s, &kp, &ki);
+        g->speed_kp_a_s_rad = pick(fix->speed_kp_a_s_rad, (double)kp);
+        g->speed_ki_a_rad = pick(fix->speed_ki_a_rad, (double)ki);
+    }
     w_r = g->speed_rated_eff_rad_s;
     g->obs_crit_rad_s = pick(fix->obs_crit_rad_s, 0.02 * w_r);
     g->pll_bw_rad_s = pick(fix->pll_bw_rad_s, dmin(300.0, 0.04 / T));

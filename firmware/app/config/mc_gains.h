@@ -69,6 +69,8 @@ typedef struct {
  *  the first block is settable, the second derived only. */
 typedef struct {
     double cur_bw_rad_s, i_limit_a, enc_pll_bw_rad_s, speed_wc_rad_s, speed_accel_rad_s2;
+    double speed_kp_a_s_rad, speed_ki_a_rad; /**< the sensored speed PI (mc_gains_speed_pi at
+                                                  speed_wc; float values held in double) */
     double obs_crit_rad_s, pll_bw_rad_s, sls_wc_rad_s, handover_rad_s;
     double if_current_a, if_accel_rad_s2, align_time_s;
     double pi2d_wn_rad_s, pi2d_a_per_s;

@@ -62,6 +62,20 @@ void mc_law_sls_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_sls_
     c->lowspeed_fallback = true;
     c->if_damping = true;
     c->align_any_angle = true; /* the rotor may start anywhere */
+    c->ref_from_drive = true;  /* the drive shapes the reference (ramp, stop) */
+}
+
+void mc_law_speed_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_speed_cfg_t *c)
+{
+    (void)memset(c, 0, sizeof *c); /* padding too: configurations compare bytewise */
+    c->kp_a_s_rad = (float)g->speed_kp_a_s_rad;
+    c->ki_a_rad = (float)g->speed_ki_a_rad;
+    c->dt_s = (float)(1.0 / m->pwm_hz);
+    c->iq_max_a = (float)g->i_limit_a;
+    c->kt_nm_a = (float)g->kt_nm_a;
+    c->j_kgm2 = (float)m->j_kgm2;
+    c->b_nm_s_rad = (float)m->b_nm_s_rad;
+    c->pole_pairs = (uint32_t)m->pole_pairs;
 }
 
 uint32_t mc_law_pi2d_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_pi2d_cfg_t *cc)
@@ -99,6 +113,7 @@ uint32_t mc_law_pi2d_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl
     cc->limit_mode = MC_SVPWM_LIMIT_CIRCLE;
     /* the board's delay plus half a period (mc_ctrl_pi2d.h) */
     cc->angle_advance_periods = (float)(m->delay_periods + 0.5);
+    cc->ref_from_drive = true; /* the drive shapes the reference (ramp, stop) */
     if (!(a >= 3.0 * wn)) {
         err |= MC_GAINS_ERR_PI2D_FILTER;
     }
@@ -111,22 +126,21 @@ uint32_t mc_law_pi2d_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl
     return err;
 }
 
-void mc_law_pos_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, const mc_foc_f32_cfg_t *foc,
-                    mc_ctrl_pos_cfg_t *c)
+void mc_law_pos_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_pos_cfg_t *c)
 {
     (void)memset(c, 0, sizeof *c);
-    c->foc = *foc;
+    c->dt_s = (float)(1.0 / m->pwm_hz);
     c->pole_pairs = (uint32_t)m->pole_pairs;
     c->traj.v_max_rad_s = (float)g->pos_v_max_rad_s;
     c->traj.a_max_rad_s2 = (float)g->pos_a_max_rad_s2;
     c->traj.d_max_rad_s2 = (float)g->pos_d_max_rad_s2;
     c->traj.filter_bw_rad_s = (float)g->pos_filter_bw_rad_s;
-    c->traj.dt_s = foc->dt_s;
+    c->traj.dt_s = c->dt_s;
     c->pos_kp_per_s = (float)g->pos_kp_per_s;
-    /* the sensored speed PI's formula (kp = J wc / kt, zero at wc / 4);
-     * a refusal leaves 0, which mc_ctrl_pos_init refuses */
-    (void)mc_gains_speed_pi(m->j_kgm2, g->kt_nm_a, g->speed_wc_rad_s, &c->vel_kp_a_s_rad,
-                            &c->vel_ki_a_rad);
+    /* the sensored speed PI (speed_kp, speed_ki: derived at speed_wc
+     * unless set) */
+    c->vel_kp_a_s_rad = (float)g->speed_kp_a_s_rad;
+    c->vel_ki_a_rad = (float)g->speed_ki_a_rad;
     c->vel_limit_rad_s = (float)g->speed_limit_rad_s;
     c->iq_max_a = (float)g->i_limit_a;
     c->kt_nm_a = (float)g->kt_nm_a;
@@ -177,22 +191,37 @@ uint32_t mc_law_speed_check(const mc_params_t *p)
     return (dabs(m.ld_h - m.lq_h) > 0.05 * dmax(m.ld_h, m.lq_h)) ? MC_GAINS_ERR_SALIENT : 0u;
 }
 
+/* A fixed gain from a parameter: 0 means derived (NaN for mc_gains_derive). */
+static double fixed(float v)
+{
+    return (v > 0.0f) ? (double)v : __builtin_nan("");
+}
+
 uint32_t mc_law_gains_from_params(const mc_params_t *p, mc_gains_motor_t *m, mc_gains_t *g)
 {
     mc_gains_t fix;
     mc_law_motor_from_params(p, m);
     mc_gains_fix_none(&fix);
-    fix.cur_bw_rad_s = (double)p->current_bw_rad_s;
-    fix.i_limit_a = (double)p->i_max_a;
-    fix.enc_pll_bw_rad_s = (double)p->speed_pll_bw_rad_s;
-    if (p->obs_omega_crit_m_rad_s > 0.0f) { /* 0: derived */
-        fix.obs_crit_rad_s = (double)p->obs_omega_crit_m_rad_s;
-    }
-    if (p->obs_pll_bw_rad_s > 0.0f) {
-        fix.pll_bw_rad_s = (double)p->obs_pll_bw_rad_s;
-    }
-    fix.pos_v_max_rad_s = (double)p->speed_max_rad_s;
-    fix.pos_a_max_rad_s2 = (double)p->stop_decel_rad_s2;
-    fix.pos_d_max_rad_s2 = (double)p->stop_decel_rad_s2;
+    fix.cur_bw_rad_s = fixed(p->current_bw_rad_s);
+    fix.enc_pll_bw_rad_s = fixed(p->speed_pll_bw_rad_s);
+    fix.speed_wc_rad_s = fixed(p->speed_bw_rad_s);
+    fix.speed_kp_a_s_rad = fixed(p->speed_kp_a_s_rad);
+    fix.speed_ki_a_rad = fixed(p->speed_ki_a_rad);
+    fix.speed_accel_rad_s2 = fixed(p->speed_ramp_rad_s2);
+    fix.obs_crit_rad_s = fixed(p->obs_omega_crit_m_rad_s);
+    fix.pll_bw_rad_s = fixed(p->obs_pll_bw_rad_s);
+    fix.sls_wc_rad_s = fixed(p->sls_speed_bw_rad_s);
+    fix.handover_rad_s = fixed(p->sls_handover_rad_s);
+    fix.if_current_a = fixed(p->sls_if_current_a);
+    fix.if_accel_rad_s2 = fixed(p->sls_if_accel_rad_s2);
+    fix.align_time_s = fixed(p->sls_align_time_s);
+    fix.pi2d_wn_rad_s = fixed(p->pi2d_wn_rad_s);
+    fix.pi2d_a_per_s = fixed(p->pi2d_a_per_s);
+    fix.pos_kp_per_s = fixed(p->pos_kp_per_s);
+    fix.pos_v_max_rad_s = fixed(p->traj_v_max_rad_s);
+    fix.pos_a_max_rad_s2 = fixed(p->traj_a_max_rad_s2);
+    fix.pos_d_max_rad_s2 = fixed(p->traj_d_max_rad_s2);
+    fix.pos_filter_bw_rad_s = fixed(p->traj_filter_bw_rad_s);
+    fix.stop_decel_rad_s2 = fixed(p->stop_decel_rad_s2);
     return mc_gains_derive(m, &fix, g);
 }

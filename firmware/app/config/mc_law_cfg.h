@@ -21,6 +21,7 @@
 #include "mc_ctrl_pi2d.h"
 #include "mc_ctrl_position.h"
 #include "mc_ctrl_sensorless.h"
+#include "mc_ctrl_speed.h"
 #include "mc_gains.h"
 #include "mc_params.h"
 
@@ -39,7 +40,10 @@ extern "C" {
 #define MC_LAW_ERR_PI2D_INIT (1u << 17) /**< mc_ctrl_pi2d_init refused PI2D */
 #define MC_LAW_ERR_POS_INIT  (1u << 18) /**< mc_ctrl_pos_init refused the position law */
 #define MC_LAW_ERR_RUNNING   (1u << 19) /**< an APPLY would change a law while it runs */
-#define MC_LAW_ERR_ENCODER   (1u << 20) /**< PI2D or position on a drive without an encoder */
+#define MC_LAW_ERR_ENCODER \
+    (1u << 20)                         /**< a sensored law (speed, PI2D, position) on a drive
+                                              without an encoder */
+#define MC_LAW_ERR_SPD_INIT (1u << 21) /**< mc_ctrl_speed_init refused the sensored speed law */
 
 /** MC_GAINS_ERR_* bits that refuse the speed law `law` (the sensored PI:
  *  none; sensorless: the gains' refusals and saliency; PI2D: those and its
@@ -56,24 +60,25 @@ void mc_law_sls_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_sls_
  *  MC_GAINS_ERR_PI2D_COUPLING, MC_GAINS_ERR_SALIENT; *c is written anyway. */
 uint32_t mc_law_pi2d_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_pi2d_cfg_t *c);
 
-/** The position cascade on the drive's current loop foc: P gain, velocity
- *  PI (the sensored speed PI's formula at speed_wc), trajectory limits,
- *  torque feed-forward lead 1/cur_bw + (delay + 0.5) T. */
-void mc_law_pos_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, const mc_foc_f32_cfg_t *foc,
-                    mc_ctrl_pos_cfg_t *c);
+/** The position cascade on the drive's current loop: P gain, velocity PI
+ *  (the sensored speed PI: speed_kp, speed_ki), trajectory limits, torque
+ *  feed-forward lead 1/cur_bw + (delay + 0.5) T. */
+void mc_law_pos_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_pos_cfg_t *c);
+
+/** The sensored speed law (mc_ctrl_speed.h): speed_kp, speed_ki at the PWM
+ *  rate, the current limit, the torque feed-forward's kt, J, B. */
+void mc_law_speed_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_speed_cfg_t *c);
 
 /** The motor and board values of a parameter set (one PWM period of
  *  computation delay, as the drive's fast loop writes the duties for the
  *  next period). */
 void mc_law_motor_from_params(const mc_params_t *p, mc_gains_motor_t *m);
 
-/** The gains of a parameter set: derived from its motor values with the
- *  table's own settings taken as given: current_bw_rad_s, i_max_a (the
- *  current limit), speed_pll_bw_rad_s (the encoder loop),
- *  obs_omega_crit_m_rad_s and obs_pll_bw_rad_s where not 0 (the observer;
- *  0: derived), and the
- *  position move's cruise speed and acceleration (speed_max_rad_s,
- *  stop_decel_rad_s2). Returns mc_gains_derive's bits. */
+/** The gains of a parameter set: derived from its motor values
+ *  (mc_gains_derive), every gain parameter that is not 0 taken as given
+ *  (current_bw, speed_pll_bw, speed_bw, speed_kp/ki, speed_ramp, the
+ *  observer's, the sensorless start's, PI2D's, the position loop's and the
+ *  trajectory's, stop_decel). Returns mc_gains_derive's bits. */
 uint32_t mc_law_gains_from_params(const mc_params_t *p, mc_gains_motor_t *m, mc_gains_t *g);
 
 #ifdef __cplusplus

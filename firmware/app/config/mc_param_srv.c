@@ -194,10 +194,17 @@ static mc_param_status_t do_apply(mc_param_srv_t *s, uint32_t *p_value)
     mc_drive_cfg_t cfg;
     uint32_t err = mc_params_validate(&s->staged);
     if ((err == MC_PARAMS_OK) && (s->hook.check != NULL)) {
-        /* the front end's refusal: a law it cannot run (LAW), else DRIVE */
+        /* the front end's refusal: a law it cannot run (LAW), a value the
+         * board cannot run (BOARD), else DRIVE */
         const uint32_t h = s->hook.check(s->hook.ctx, &s->staged);
-        if (h != 0u) {
-            err = ((h & MC_PARAMS_ERR_LAW) != 0u) ? MC_PARAMS_ERR_LAW : MC_PARAMS_ERR_DRIVE;
+        if ((h & MC_PARAMS_ERR_LAW) != 0u) {
+            err = MC_PARAMS_ERR_LAW;
+        } else if ((h & MC_PARAMS_ERR_BOARD) != 0u) {
+            err = MC_PARAMS_ERR_BOARD;
+        } else if (h != 0u) {
+            err = MC_PARAMS_ERR_DRIVE;
+        } else {
+            /* accepted */
         }
     }
     if (err == MC_PARAMS_OK) {

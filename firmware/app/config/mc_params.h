@@ -18,6 +18,7 @@
 #include <stdint.h>
 
 #include "mc_drive.h"
+#include "mc_gains.h"
 #include "mc_params_gen.h"
 
 #ifdef __cplusplus
@@ -61,12 +62,46 @@ typedef enum {
     (1u << 7) /**< the speed_law selected has no valid gains for these
                    motor values, or its init refused them (the
                    law_error parameter says why: mc_law_cfg.h) */
+#define MC_PARAMS_ERR_GAINS \
+    (1u << 8)                           /**< no safe gains for these motor and board values
+                   (mc_params_resolve returns the MC_GAINS_ERR_* reason) */
+#define MC_PARAMS_ERR_ENCODER (1u << 9) /**< encoder_cpr 1 to 3 (0: none, else >= 4) */
+#define MC_PARAMS_ERR_BOARD \
+    (1u << 10) /**< the board cannot run it: brake_enable on a board
+                    without a brake chopper (the application's check,
+                    mc_app.h) */
 
 /** Largest current_bw_rad_s * dt (dt = 1 / pwm_hz): above it the one-period
  *  computation delay costs too much phase (gains vs PWM rate). */
 #define MC_PARAMS_BW_DT_MAX 0.5f
 /** Largest dead time as a fraction of the PWM period. */
 #define MC_PARAMS_DEAD_TIME_FRAC_MAX 0.1f
+
+/**
+ * What the drive runs from a parameter set. Parameters whose value 0 means
+ * "derived" (their description says from what) are replaced by their
+ * derivation, the others copied; the laws' gains (mc_gains_derive) come
+ * with it. The formulas are mc_gains.c's (gains) and mc_params.c's (the
+ * drive's supervision, braking and stop), one place for the images and the
+ * simulator. i_limit_a (the current limit every reference is held to) is
+ * the gains' i_limit_a: min(i_max_a, i_sense_max_a / 1.25, 0.8 v_max / r).
+ */
+typedef struct {
+    mc_params_t p;      /**< the set with every derived value filled in */
+    mc_gains_motor_t m; /**< its motor and board values */
+    mc_gains_t g;       /**< the gains (and the derived limits: i_limit_a, ...) */
+} mc_params_eff_t;
+
+/** Resolve p into *e (see mc_params_eff_t). Returns MC_GAINS_OK or the
+ *  MC_GAINS_ERR_* bits that refuse the motor and board values (no safe
+ *  gains); *e is written in full either way, for the caller's messages. */
+uint32_t mc_params_resolve(const mc_params_t *p, mc_params_eff_t *e);
+
+/** The drive configuration of a resolved set (see mc_params_to_drive_cfg). */
+void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg);
+
+/** Index of the parameter named name (mc_param_names), or -1. */
+int32_t mc_param_find_name(const char *name);
 
 /** Row of parameter id, or NULL; *p_idx (may be NULL) its table index. */
 const mc_param_info_t *mc_param_find(uint32_t id, uint32_t *p_idx);
@@ -84,9 +119,12 @@ void mc_param_set_raw(mc_params_t *p, const mc_param_info_t *info, uint32_t raw)
  *  validation of the derived mc_drive_cfg_t. Returns MC_PARAMS_ERR_* bits. */
 uint32_t mc_params_validate(const mc_params_t *p);
 
-/** The drive configuration the parameters describe (FOC gains from the
- *  current-loop bandwidth: kp = L bw, ki = R bw; dt = 1 / pwm_hz). Returns
- *  MC_PARAMS_OK or MC_PARAMS_ERR_NULL / _RANGE (no gains); not validated. */
+/** The drive configuration the parameters describe, resolved
+ *  (mc_params_resolve): FOC gains from the current-loop bandwidth (kp = L
+ *  bw, ki = R bw), dt = 1 / pwm_hz, the current limit i_limit, supervision,
+ *  controlled stop, braking (the chopper only with brake_enable), MTPA and
+ *  field weakening (fw_enable). Returns MC_PARAMS_OK, MC_PARAMS_ERR_NULL,
+ *  _RANGE (pwm_hz 0) or _GAINS (no safe gains); not validated. */
 uint32_t mc_params_to_drive_cfg(const mc_params_t *p, mc_drive_cfg_t *cfg);
 
 #ifdef __cplusplus

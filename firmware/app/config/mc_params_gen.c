@@ -25,22 +25,41 @@ const mc_params_t mc_params_default = {
     .i_offset_a_a = 0.0f,
     .i_offset_b_a = 0.0f,
     .i_offset_c_a = 0.0f,
-    .current_bw_rad_s = 1256.6371f,
+    .current_bw_rad_s = 0.0f,
     .v_limit_ratio = 0.95f,
     .slow_loop_div = 20u,
-    .speed_pll_bw_rad_s = 1000.0f,
+    .speed_pll_bw_rad_s = 0.0f,
     .encoder_offset_rad = 0.0f,
-    .speed_kp_a_s_rad = 0.05f,
-    .speed_ki_a_rad = 1.0f,
+    .speed_kp_a_s_rad = 0.0f,
+    .speed_ki_a_rad = 0.0f,
     .encoder_reversed = 0u,
     .speed_law = 0u,
+    .speed_bw_rad_s = 0.0f,
+    .speed_ramp_rad_s2 = 0.0f,
+    .fw_enable = 0u,
+    .fw_v_margin = 0.9f,
+    .fw_ki_a_per_vs = 0.0f,
+    .dead_time_comp = 1u,
     .obs_omega_crit_m_rad_s = 0.0f,
     .obs_pll_bw_rad_s = 0.0f,
-    .i_trip_a = 15.0f,
-    .vbus_min_v = 12.0f,
-    .vbus_max_v = 56.0f,
-    .omega_max_rad_s = 600.0f,
+    .sls_speed_bw_rad_s = 0.0f,
+    .sls_handover_rad_s = 0.0f,
+    .sls_if_current_a = 0.0f,
+    .sls_if_accel_rad_s2 = 0.0f,
+    .sls_align_time_s = 0.0f,
+    .i_trip_a = 0.0f,
+    .vbus_min_v = 0.0f,
+    .vbus_max_v = 0.0f,
+    .omega_max_rad_s = 0.0f,
     .temp_max_c = 100.0f,
+    .brake_enable = 0u,
+    .brake_on_v = 0.0f,
+    .brake_full_v = 0.0f,
+    .vbus_regen_start_v = 0.0f,
+    .vbus_regen_end_v = 0.0f,
+    .regen_id_a = 0.0f,
+    .temp_warn_c = 0.0f,
+    .vbus_sag_v = 0.0f,
     .stall_current_frac = 0.9f,
     .stall_speed_rad_s = 1.0f,
     .stall_time_s = 2.0f,
@@ -52,12 +71,19 @@ const mc_params_t mc_params_default = {
     .can_bitrate_bps = 500000u,
     .can_timeout_s = 0.5f,
     .stop_ramp_a_per_s = 100.0f,
-    .stop_decel_rad_s2 = 500.0f,
+    .stop_decel_rad_s2 = 0.0f,
     .tm_heartbeat_hz = 10u,
     .tm_currents_hz = 100u,
     .tm_voltages_hz = 50u,
     .tm_speed_hz = 50u,
     .tm_position_hz = 0u,
+    .pi2d_wn_rad_s = 0.0f,
+    .pi2d_a_per_s = 0.0f,
+    .pos_kp_per_s = 0.0f,
+    .traj_v_max_rad_s = 0.0f,
+    .traj_a_max_rad_s2 = 0.0f,
+    .traj_d_max_rad_s2 = 0.0f,
+    .traj_filter_bw_rad_s = 0.0f,
 };
 
 #define NO_FIELD MC_PARAM_NO_FIELD
@@ -71,35 +97,54 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {6u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, j_kgm2), {.f = 0.0f}, {.f = 100.0f}, {.f = 0.001f}}, /* j_kgm2 */
     {7u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, b_nm_s_rad), {.f = 0.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* b_nm_s_rad */
     {8u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, i_max_a), {.f = 0.01f}, {.f = 1000.0f}, {.f = 10.0f}}, /* i_max_a */
-    {9u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_max_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 300.0f}}, /* speed_max_rad_s */
-    {10u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, i_rated_a), {.f = 0.01f}, {.f = 1000.0f}, {.f = 3.0f}}, /* i_rated_a */
-    {11u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_rated_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 104.7f}}, /* speed_rated_rad_s */
+    {9u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, speed_max_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 300.0f}}, /* speed_max_rad_s */
+    {10u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_rated_a), {.f = 0.01f}, {.f = 1000.0f}, {.f = 3.0f}}, /* i_rated_a */
+    {11u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, speed_rated_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 104.7f}}, /* speed_rated_rad_s */
     {20u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_v), {.f = 1.0f}, {.f = 1000.0f}, {.f = 48.0f}}, /* vbus_v */
     {21u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, pwm_hz), {.u = 5000u}, {.u = 60000u}, {.u = 20000u}}, /* pwm_hz */
     {22u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, dead_time_s), {.f = 0.0f}, {.f = 5e-06f}, {.f = 2.5e-07f}}, /* dead_time_s */
     {23u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, current_sensors), {.u = 2u}, {.u = 3u}, {.u = 2u}}, /* current_sensors */
     {24u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_sense_max_a), {.f = 0.1f}, {.f = 2000.0f}, {.f = 60.0f}}, /* i_sense_max_a */
     {25u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, adc_bits), {.u = 8u}, {.u = 16u}, {.u = 12u}}, /* adc_bits */
-    {26u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_cpr), {.u = 4u}, {.u = 16777216u}, {.u = 8192u}}, /* encoder_cpr */
+    {26u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_cpr), {.u = 0u}, {.u = 16777216u}, {.u = 8192u}}, /* encoder_cpr */
     {27u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_offset_a_a), {.f = -100.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* i_offset_a_a */
     {28u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_offset_b_a), {.f = -100.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* i_offset_b_a */
     {29u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_offset_c_a), {.f = -100.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* i_offset_c_a */
-    {40u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, current_bw_rad_s), {.f = 10.0f}, {.f = 20000.0f}, {.f = 1256.6371f}}, /* current_bw_rad_s */
+    {40u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, current_bw_rad_s), {.f = 0.0f}, {.f = 20000.0f}, {.f = 0.0f}}, /* current_bw_rad_s */
     {41u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, v_limit_ratio), {.f = 0.1f}, {.f = 1.0f}, {.f = 0.95f}}, /* v_limit_ratio */
     {42u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, slow_loop_div), {.u = 1u}, {.u = 1000u}, {.u = 20u}}, /* slow_loop_div */
-    {43u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, speed_pll_bw_rad_s), {.f = 1.0f}, {.f = 10000.0f}, {.f = 1000.0f}}, /* speed_pll_bw_rad_s */
+    {43u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, speed_pll_bw_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* speed_pll_bw_rad_s */
     {44u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_offset_rad), {.f = -6.2831855f}, {.f = 6.2831855f}, {.f = 0.0f}}, /* encoder_offset_rad */
-    {45u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_kp_a_s_rad), {.f = 0.0f}, {.f = 100.0f}, {.f = 0.05f}}, /* speed_kp_a_s_rad */
-    {46u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_ki_a_rad), {.f = 0.0f}, {.f = 10000.0f}, {.f = 1.0f}}, /* speed_ki_a_rad */
+    {45u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, speed_kp_a_s_rad), {.f = 0.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* speed_kp_a_s_rad */
+    {46u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, speed_ki_a_rad), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* speed_ki_a_rad */
     {47u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_reversed), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* encoder_reversed */
     {48u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, speed_law), {.u = 0u}, {.u = 2u}, {.u = 0u}}, /* speed_law */
+    {49u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, speed_bw_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* speed_bw_rad_s */
+    {50u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, speed_ramp_rad_s2), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* speed_ramp_rad_s2 */
+    {51u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, fw_enable), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* fw_enable */
+    {52u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, fw_v_margin), {.f = 0.5f}, {.f = 1.0f}, {.f = 0.9f}}, /* fw_v_margin */
+    {53u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, fw_ki_a_per_vs), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* fw_ki_a_per_vs */
+    {54u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, dead_time_comp), {.u = 0u}, {.u = 1u}, {.u = 1u}}, /* dead_time_comp */
     {60u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, obs_omega_crit_m_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* obs_omega_crit_m_rad_s */
     {61u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, obs_pll_bw_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* obs_pll_bw_rad_s */
-    {70u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_trip_a), {.f = 0.01f}, {.f = 2000.0f}, {.f = 15.0f}}, /* i_trip_a */
-    {71u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_min_v), {.f = 0.5f}, {.f = 1000.0f}, {.f = 12.0f}}, /* vbus_min_v */
-    {72u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_max_v), {.f = 1.0f}, {.f = 1000.0f}, {.f = 56.0f}}, /* vbus_max_v */
-    {73u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, omega_max_rad_s), {.f = 0.0f}, {.f = 20000.0f}, {.f = 600.0f}}, /* omega_max_rad_s */
+    {62u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, sls_speed_bw_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* sls_speed_bw_rad_s */
+    {63u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, sls_handover_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* sls_handover_rad_s */
+    {64u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, sls_if_current_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* sls_if_current_a */
+    {65u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, sls_if_accel_rad_s2), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* sls_if_accel_rad_s2 */
+    {66u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, sls_align_time_s), {.f = 0.0f}, {.f = 1.0f}, {.f = 0.0f}}, /* sls_align_time_s */
+    {70u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_trip_a), {.f = 0.0f}, {.f = 2000.0f}, {.f = 0.0f}}, /* i_trip_a */
+    {71u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_min_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_min_v */
+    {72u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_max_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_max_v */
+    {73u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, omega_max_rad_s), {.f = 0.0f}, {.f = 20000.0f}, {.f = 0.0f}}, /* omega_max_rad_s */
     {74u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, temp_max_c), {.f = 0.0f}, {.f = 200.0f}, {.f = 100.0f}}, /* temp_max_c */
+    {75u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, brake_enable), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* brake_enable */
+    {76u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, brake_on_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* brake_on_v */
+    {77u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, brake_full_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* brake_full_v */
+    {78u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_regen_start_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_regen_start_v */
+    {79u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_regen_end_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_regen_end_v */
+    {80u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, regen_id_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* regen_id_a */
+    {81u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, temp_warn_c), {.f = 0.0f}, {.f = 200.0f}, {.f = 0.0f}}, /* temp_warn_c */
+    {82u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_sag_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* vbus_sag_v */
     {90u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stall_current_frac), {.f = 0.0f}, {.f = 1.0f}, {.f = 0.9f}}, /* stall_current_frac */
     {91u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stall_speed_rad_s), {.f = 0.0f}, {.f = 1000.0f}, {.f = 1.0f}}, /* stall_speed_rad_s */
     {92u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stall_time_s), {.f = 0.0f}, {.f = 60.0f}, {.f = 2.0f}}, /* stall_time_s */
@@ -111,15 +156,198 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {111u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, can_bitrate_bps), {.u = 125000u}, {.u = 1000000u}, {.u = 500000u}}, /* can_bitrate_bps */
     {112u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, can_timeout_s), {.f = 0.01f}, {.f = 60.0f}, {.f = 0.5f}}, /* can_timeout_s */
     {113u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stop_ramp_a_per_s), {.f = 0.1f}, {.f = 100000.0f}, {.f = 100.0f}}, /* stop_ramp_a_per_s */
-    {114u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stop_decel_rad_s2), {.f = 0.1f}, {.f = 100000.0f}, {.f = 500.0f}}, /* stop_decel_rad_s2 */
+    {114u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, stop_decel_rad_s2), {.f = 0.0f}, {.f = 100000.0f}, {.f = 0.0f}}, /* stop_decel_rad_s2 */
     {115u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, tm_heartbeat_hz), {.u = 1u}, {.u = 100u}, {.u = 10u}}, /* tm_heartbeat_hz */
     {116u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, tm_currents_hz), {.u = 0u}, {.u = 1000u}, {.u = 100u}}, /* tm_currents_hz */
     {117u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, tm_voltages_hz), {.u = 0u}, {.u = 1000u}, {.u = 50u}}, /* tm_voltages_hz */
     {118u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, tm_speed_hz), {.u = 0u}, {.u = 1000u}, {.u = 50u}}, /* tm_speed_hz */
     {119u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, tm_position_hz), {.u = 0u}, {.u = 1000u}, {.u = 0u}}, /* tm_position_hz */
+    {130u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, pi2d_wn_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* pi2d_wn_rad_s */
+    {131u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, pi2d_a_per_s), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* pi2d_a_per_s */
+    {132u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, pos_kp_per_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* pos_kp_per_s */
+    {133u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, traj_v_max_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* traj_v_max_rad_s */
+    {134u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, traj_a_max_rad_s2), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* traj_a_max_rad_s2 */
+    {135u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, traj_d_max_rad_s2), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* traj_d_max_rad_s2 */
+    {136u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, traj_filter_bw_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* traj_filter_bw_rad_s */
     {200u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_layout_version */
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
     {202u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_store_seq */
     {203u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* cfg_pending */
     {204u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* law_error */
+};
+
+const char *const mc_param_names[MC_PARAM_COUNT] = {
+    "r_ohm",
+    "ld_h",
+    "lq_h",
+    "flux_wb",
+    "pole_pairs",
+    "j_kgm2",
+    "b_nm_s_rad",
+    "i_max_a",
+    "speed_max_rad_s",
+    "i_rated_a",
+    "speed_rated_rad_s",
+    "vbus_v",
+    "pwm_hz",
+    "dead_time_s",
+    "current_sensors",
+    "i_sense_max_a",
+    "adc_bits",
+    "encoder_cpr",
+    "i_offset_a_a",
+    "i_offset_b_a",
+    "i_offset_c_a",
+    "current_bw_rad_s",
+    "v_limit_ratio",
+    "slow_loop_div",
+    "speed_pll_bw_rad_s",
+    "encoder_offset_rad",
+    "speed_kp_a_s_rad",
+    "speed_ki_a_rad",
+    "encoder_reversed",
+    "speed_law",
+    "speed_bw_rad_s",
+    "speed_ramp_rad_s2",
+    "fw_enable",
+    "fw_v_margin",
+    "fw_ki_a_per_vs",
+    "dead_time_comp",
+    "obs_omega_crit_m_rad_s",
+    "obs_pll_bw_rad_s",
+    "sls_speed_bw_rad_s",
+    "sls_handover_rad_s",
+    "sls_if_current_a",
+    "sls_if_accel_rad_s2",
+    "sls_align_time_s",
+    "i_trip_a",
+    "vbus_min_v",
+    "vbus_max_v",
+    "omega_max_rad_s",
+    "temp_max_c",
+    "brake_enable",
+    "brake_on_v",
+    "brake_full_v",
+    "vbus_regen_start_v",
+    "vbus_regen_end_v",
+    "regen_id_a",
+    "temp_warn_c",
+    "vbus_sag_v",
+    "stall_current_frac",
+    "stall_speed_rad_s",
+    "stall_time_s",
+    "i_unbalance_max_a",
+    "open_phase_i_min_a",
+    "open_phase_time_s",
+    "asc_enable",
+    "can_node_id",
+    "can_bitrate_bps",
+    "can_timeout_s",
+    "stop_ramp_a_per_s",
+    "stop_decel_rad_s2",
+    "tm_heartbeat_hz",
+    "tm_currents_hz",
+    "tm_voltages_hz",
+    "tm_speed_hz",
+    "tm_position_hz",
+    "pi2d_wn_rad_s",
+    "pi2d_a_per_s",
+    "pos_kp_per_s",
+    "traj_v_max_rad_s",
+    "traj_a_max_rad_s2",
+    "traj_d_max_rad_s2",
+    "traj_filter_bw_rad_s",
+    "cfg_layout_version",
+    "cfg_store_status",
+    "cfg_store_seq",
+    "cfg_pending",
+    "law_error",
+};
+
+const char *const mc_param_units[MC_PARAM_COUNT] = {
+    "ohm",
+    "H",
+    "H",
+    "Wb",
+    "",
+    "kg.m^2",
+    "N.m.s/rad",
+    "A",
+    "rad/s",
+    "A",
+    "rad/s",
+    "V",
+    "Hz",
+    "s",
+    "",
+    "A",
+    "",
+    "",
+    "A",
+    "A",
+    "A",
+    "rad/s",
+    "",
+    "",
+    "rad/s",
+    "rad",
+    "A.s/rad",
+    "A/rad",
+    "",
+    "",
+    "rad/s",
+    "rad/s^2",
+    "",
+    "",
+    "A/(V.s)",
+    "",
+    "rad/s",
+    "rad/s",
+    "rad/s",
+    "rad/s",
+    "A",
+    "rad/s^2",
+    "s",
+    "A",
+    "V",
+    "V",
+    "rad/s",
+    "degC",
+    "",
+    "V",
+    "V",
+    "V",
+    "V",
+    "A",
+    "degC",
+    "V",
+    "",
+    "rad/s",
+    "s",
+    "A",
+    "A",
+    "s",
+    "",
+    "",
+    "bit/s",
+    "s",
+    "A/s",
+    "rad/s^2",
+    "Hz",
+    "Hz",
+    "Hz",
+    "Hz",
+    "Hz",
+    "rad/s",
+    "1/s",
+    "1/s",
+    "rad/s",
+    "rad/s^2",
+    "rad/s^2",
+    "rad/s",
+    "",
+    "",
+    "",
+    "",
+    "",
 };

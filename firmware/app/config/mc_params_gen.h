@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 59u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 54u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 85u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 80u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -47,13 +47,32 @@
 #define MC_PARAM_ID_SPEED_KI_A_RAD 46u
 #define MC_PARAM_ID_ENCODER_REVERSED 47u
 #define MC_PARAM_ID_SPEED_LAW 48u
+#define MC_PARAM_ID_SPEED_BW_RAD_S 49u
+#define MC_PARAM_ID_SPEED_RAMP_RAD_S2 50u
+#define MC_PARAM_ID_FW_ENABLE 51u
+#define MC_PARAM_ID_FW_V_MARGIN 52u
+#define MC_PARAM_ID_FW_KI_A_PER_VS 53u
+#define MC_PARAM_ID_DEAD_TIME_COMP 54u
 #define MC_PARAM_ID_OBS_OMEGA_CRIT_M_RAD_S 60u
 #define MC_PARAM_ID_OBS_PLL_BW_RAD_S 61u
+#define MC_PARAM_ID_SLS_SPEED_BW_RAD_S 62u
+#define MC_PARAM_ID_SLS_HANDOVER_RAD_S 63u
+#define MC_PARAM_ID_SLS_IF_CURRENT_A 64u
+#define MC_PARAM_ID_SLS_IF_ACCEL_RAD_S2 65u
+#define MC_PARAM_ID_SLS_ALIGN_TIME_S 66u
 #define MC_PARAM_ID_I_TRIP_A 70u
 #define MC_PARAM_ID_VBUS_MIN_V 71u
 #define MC_PARAM_ID_VBUS_MAX_V 72u
 #define MC_PARAM_ID_OMEGA_MAX_RAD_S 73u
 #define MC_PARAM_ID_TEMP_MAX_C 74u
+#define MC_PARAM_ID_BRAKE_ENABLE 75u
+#define MC_PARAM_ID_BRAKE_ON_V 76u
+#define MC_PARAM_ID_BRAKE_FULL_V 77u
+#define MC_PARAM_ID_VBUS_REGEN_START_V 78u
+#define MC_PARAM_ID_VBUS_REGEN_END_V 79u
+#define MC_PARAM_ID_REGEN_ID_A 80u
+#define MC_PARAM_ID_TEMP_WARN_C 81u
+#define MC_PARAM_ID_VBUS_SAG_V 82u
 #define MC_PARAM_ID_STALL_CURRENT_FRAC 90u
 #define MC_PARAM_ID_STALL_SPEED_RAD_S 91u
 #define MC_PARAM_ID_STALL_TIME_S 92u
@@ -71,6 +90,13 @@
 #define MC_PARAM_ID_TM_VOLTAGES_HZ 117u
 #define MC_PARAM_ID_TM_SPEED_HZ 118u
 #define MC_PARAM_ID_TM_POSITION_HZ 119u
+#define MC_PARAM_ID_PI2D_WN_RAD_S 130u
+#define MC_PARAM_ID_PI2D_A_PER_S 131u
+#define MC_PARAM_ID_POS_KP_PER_S 132u
+#define MC_PARAM_ID_TRAJ_V_MAX_RAD_S 133u
+#define MC_PARAM_ID_TRAJ_A_MAX_RAD_S2 134u
+#define MC_PARAM_ID_TRAJ_D_MAX_RAD_S2 135u
+#define MC_PARAM_ID_TRAJ_FILTER_BW_RAD_S 136u
 #define MC_PARAM_ID_CFG_LAYOUT_VERSION 200u
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
 #define MC_PARAM_ID_CFG_STORE_SEQ 202u
@@ -108,35 +134,61 @@
 #define MC_PARAM_IDX_SPEED_KI_A_RAD 27u
 #define MC_PARAM_IDX_ENCODER_REVERSED 28u
 #define MC_PARAM_IDX_SPEED_LAW 29u
-#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 30u
-#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 31u
-#define MC_PARAM_IDX_I_TRIP_A 32u
-#define MC_PARAM_IDX_VBUS_MIN_V 33u
-#define MC_PARAM_IDX_VBUS_MAX_V 34u
-#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 35u
-#define MC_PARAM_IDX_TEMP_MAX_C 36u
-#define MC_PARAM_IDX_STALL_CURRENT_FRAC 37u
-#define MC_PARAM_IDX_STALL_SPEED_RAD_S 38u
-#define MC_PARAM_IDX_STALL_TIME_S 39u
-#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 40u
-#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 41u
-#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 42u
-#define MC_PARAM_IDX_ASC_ENABLE 43u
-#define MC_PARAM_IDX_CAN_NODE_ID 44u
-#define MC_PARAM_IDX_CAN_BITRATE_BPS 45u
-#define MC_PARAM_IDX_CAN_TIMEOUT_S 46u
-#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 47u
-#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 48u
-#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 49u
-#define MC_PARAM_IDX_TM_CURRENTS_HZ 50u
-#define MC_PARAM_IDX_TM_VOLTAGES_HZ 51u
-#define MC_PARAM_IDX_TM_SPEED_HZ 52u
-#define MC_PARAM_IDX_TM_POSITION_HZ 53u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 54u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 55u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 56u
-#define MC_PARAM_IDX_CFG_PENDING 57u
-#define MC_PARAM_IDX_LAW_ERROR 58u
+#define MC_PARAM_IDX_SPEED_BW_RAD_S 30u
+#define MC_PARAM_IDX_SPEED_RAMP_RAD_S2 31u
+#define MC_PARAM_IDX_FW_ENABLE 32u
+#define MC_PARAM_IDX_FW_V_MARGIN 33u
+#define MC_PARAM_IDX_FW_KI_A_PER_VS 34u
+#define MC_PARAM_IDX_DEAD_TIME_COMP 35u
+#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 36u
+#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 37u
+#define MC_PARAM_IDX_SLS_SPEED_BW_RAD_S 38u
+#define MC_PARAM_IDX_SLS_HANDOVER_RAD_S 39u
+#define MC_PARAM_IDX_SLS_IF_CURRENT_A 40u
+#define MC_PARAM_IDX_SLS_IF_ACCEL_RAD_S2 41u
+#define MC_PARAM_IDX_SLS_ALIGN_TIME_S 42u
+#define MC_PARAM_IDX_I_TRIP_A 43u
+#define MC_PARAM_IDX_VBUS_MIN_V 44u
+#define MC_PARAM_IDX_VBUS_MAX_V 45u
+#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 46u
+#define MC_PARAM_IDX_TEMP_MAX_C 47u
+#define MC_PARAM_IDX_BRAKE_ENABLE 48u
+#define MC_PARAM_IDX_BRAKE_ON_V 49u
+#define MC_PARAM_IDX_BRAKE_FULL_V 50u
+#define MC_PARAM_IDX_VBUS_REGEN_START_V 51u
+#define MC_PARAM_IDX_VBUS_REGEN_END_V 52u
+#define MC_PARAM_IDX_REGEN_ID_A 53u
+#define MC_PARAM_IDX_TEMP_WARN_C 54u
+#define MC_PARAM_IDX_VBUS_SAG_V 55u
+#define MC_PARAM_IDX_STALL_CURRENT_FRAC 56u
+#define MC_PARAM_IDX_STALL_SPEED_RAD_S 57u
+#define MC_PARAM_IDX_STALL_TIME_S 58u
+#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 59u
+#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 60u
+#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 61u
+#define MC_PARAM_IDX_ASC_ENABLE 62u
+#define MC_PARAM_IDX_CAN_NODE_ID 63u
+#define MC_PARAM_IDX_CAN_BITRATE_BPS 64u
+#define MC_PARAM_IDX_CAN_TIMEOUT_S 65u
+#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 66u
+#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 67u
+#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 68u
+#define MC_PARAM_IDX_TM_CURRENTS_HZ 69u
+#define MC_PARAM_IDX_TM_VOLTAGES_HZ 70u
+#define MC_PARAM_IDX_TM_SPEED_HZ 71u
+#define MC_PARAM_IDX_TM_POSITION_HZ 72u
+#define MC_PARAM_IDX_PI2D_WN_RAD_S 73u
+#define MC_PARAM_IDX_PI2D_A_PER_S 74u
+#define MC_PARAM_IDX_POS_KP_PER_S 75u
+#define MC_PARAM_IDX_TRAJ_V_MAX_RAD_S 76u
+#define MC_PARAM_IDX_TRAJ_A_MAX_RAD_S2 77u
+#define MC_PARAM_IDX_TRAJ_D_MAX_RAD_S2 78u
+#define MC_PARAM_IDX_TRAJ_FILTER_BW_RAD_S 79u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 80u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 81u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 82u
+#define MC_PARAM_IDX_CFG_PENDING 83u
+#define MC_PARAM_IDX_LAW_ERROR 84u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -147,8 +199,8 @@ typedef struct {
     uint32_t pole_pairs; /**< Electrical turns per mechanical turn. */
     float j_kgm2; /**< Rotor (plus load) inertia, for observers and derived speed gains. [kg.m^2] */
     float b_nm_s_rad; /**< Viscous friction. [N.m.s/rad] */
-    float i_max_a; /**< Largest |id_ref|, |iq_ref| accepted; at most i_sense_max_a. [A] */
-    float speed_max_rad_s; /**< Largest |speed reference| (mechanical). [rad/s] */
+    float i_max_a; /**< Largest phase current of the motor; the drive limits every current reference to i_limit = min(i_max_a, i_sense_max_a / 1.25, 0.8 v_max / r_ohm), v_max = 0.95 vbus_v / sqrt 3 (firmware/app/config/mc_gains.c). [A] */
+    float speed_max_rad_s; /**< Largest speed of the motor (mechanical); speed references are limited to min(this, 0.9 of the speed at which rated current needs v_max) (mc_gains.c). [rad/s] */
     float i_rated_a; /**< Rated (continuous) current; gains and start-up currents are derived from it. [A] */
     float speed_rated_rad_s; /**< Rated speed (mechanical); the observer's critical speed and hand-over derive from it. [rad/s] */
     float vbus_v; /**< Nominal DC-bus voltage. [V] */
@@ -157,26 +209,45 @@ typedef struct {
     uint32_t current_sensors; /**< Phase-current sensors (2 or 3 shunts). */
     float i_sense_max_a; /**< Current-sense full scale; i_max_a and i_trip_a must stay below it. [A] */
     uint32_t adc_bits; /**< ADC resolution. */
-    uint32_t encoder_cpr; /**< Encoder counts per mechanical revolution. */
+    uint32_t encoder_cpr; /**< Encoder counts per mechanical revolution; 0: no encoder (sensorless only); 1 to 3 are refused. */
     float i_offset_a_a; /**< Current-sensor offset of phase a, subtracted from its reading (commissioning measures it). [A] */
     float i_offset_b_a; /**< Current-sensor offset of phase b, subtracted from its reading (commissioning measures it). [A] */
     float i_offset_c_a; /**< Current-sensor offset of phase c, subtracted from its reading (commissioning measures it). [A] */
-    float current_bw_rad_s; /**< Current-loop bandwidth: kp = L bw, ki = R bw; bw / pwm_hz at most 0.5. [rad/s] */
+    float current_bw_rad_s; /**< Current-loop bandwidth: kp = L bw, ki = R bw; bw / pwm_hz at most 0.5; 0: derived, 0.08 pwm_hz. [rad/s] */
     float v_limit_ratio; /**< Fraction of the modulator's circle the current loop may use. */
     uint32_t slow_loop_div; /**< Slow loop every this many fast steps. */
-    float speed_pll_bw_rad_s; /**< Bandwidth of the encoder speed-tracking loop; 3 bw / pwm_hz at most 1. [rad/s] */
+    float speed_pll_bw_rad_s; /**< Bandwidth of the encoder speed-tracking loop; 3 bw / pwm_hz at most 1; 0: derived, min(1000, 0.1 pwm_hz). [rad/s] */
     float encoder_offset_rad; /**< Electrical angle of the d axis at encoder count 0. [rad] */
-    float speed_kp_a_s_rad; /**< Speed-loop proportional gain. [A.s/rad] */
-    float speed_ki_a_rad; /**< Speed-loop integral gain. [A/rad] */
+    float speed_kp_a_s_rad; /**< Speed-loop proportional gain (sensored speed law, position cascade's velocity loop, controlled stop); 0: derived, J speed_bw / kt. [A.s/rad] */
+    float speed_ki_a_rad; /**< Speed-loop integral gain; 0: derived, kp speed_bw / 4 (the PI's zero a quarter of the crossover). [A/rad] */
     uint32_t encoder_reversed; /**< 1: the encoder counts down when the rotor turns positive (commissioning measures it). */
     uint32_t speed_law; /**< Law of SPEED mode: 0 sensored speed PI (encoder), 1 sensorless (flux observer + PLL, I-f start), 2 PI2D (encoder); gains derived from the motor values (firmware/app/config/mc_law_cfg.h). */
+    float speed_bw_rad_s; /**< Crossover of the speed loops (sensored speed law, position cascade); 0: derived, min(current_bw / 10, speed_pll_bw / 4). [rad/s] */
+    float speed_ramp_rad_s2; /**< Slew rate of the speed reference of every speed law (the drive shapes it; its acceleration is the laws' feed-forward); 0: derived, 0.5 kt i_limit / J. [rad/s^2] */
+    uint32_t fw_enable; /**< 1: MTPA and field weakening on the current loop (CURRENT mode and the laws that give current references; firmware/kernels/fw). */
+    float fw_v_margin; /**< Field weakening: the voltage magnitude it holds, as a fraction of the modulator's circle. */
+    float fw_ki_a_per_vs; /**< Field-weakening voltage loop gain; 0: derived, current_bw / (10 p speed_max ld): a tenth of the current loop at the top speed. [A/(V.s)] */
+    uint32_t dead_time_comp; /**< 1: the current loop adds each leg's dead-time error to its duty, sat(i / band) dead_time_s pwm_hz with a band of 1 % of i_rated_a (at least 1 mA). */
     float obs_omega_crit_m_rad_s; /**< Critical speed of the flux observer (sets its gain); 0: derived, 0.02 speed_rated_rad_s (firmware/app/config/mc_gains.c). [rad/s] */
     float obs_pll_bw_rad_s; /**< Bandwidth of the sensorless PLL; 0: derived, min(300, 0.04 pwm_hz) (firmware/app/config/mc_gains.c). [rad/s] */
-    float i_trip_a; /**< Instantaneous over-current trip on any phase; i_max_a <= it < i_sense_max_a. [A] */
-    float vbus_min_v; /**< DC-bus under-voltage trip. [V] */
-    float vbus_max_v; /**< DC-bus over-voltage trip. [V] */
-    float omega_max_rad_s; /**< Over-speed trip (mechanical); 0 = off. [rad/s] */
+    float sls_speed_bw_rad_s; /**< Crossover of the sensorless speed loop; 0: derived, min(obs_pll_bw / 3, current_bw / 10). [rad/s] */
+    float sls_handover_rad_s; /**< I-f to closed-loop hand-over speed (mechanical); 0: derived, 0.1 of the rated speed the bus allows. [rad/s] */
+    float sls_if_current_a; /**< I-f start current; 0: derived, min(i_limit, 0.8 rated current). [A] */
+    float sls_if_accel_rad_s2; /**< I-f frequency ramp (mechanical); 0: derived, 0.15 rated torque / J. [rad/s^2] */
+    float sls_align_time_s; /**< Alignment current ramp before the I-f start; 0: derived (mc_gains.c: a 30 % rated load cannot turn the rotor 0.2 rad meanwhile). [s] */
+    float i_trip_a; /**< Instantaneous over-current trip on any phase; i_limit <= it <= i_sense_max_a; 0: derived, min(1.6 i_limit, 0.98 i_sense_max_a). [A] */
+    float vbus_min_v; /**< DC-bus under-voltage trip; 0: derived, 0.5 vbus_v. [V] */
+    float vbus_max_v; /**< DC-bus over-voltage trip; 0: derived, 1.5 vbus_v. [V] */
+    float omega_max_rad_s; /**< Over-speed trip (mechanical); 0: derived, 1.5 speed_max_rad_s. [rad/s] */
     float temp_max_c; /**< Over-temperature trip, power stage and motor; 0 = off. [degC] */
+    uint32_t brake_enable; /**< 1: drive the brake chopper from the bus voltage (a board without one refuses it: MC_PARAMS_ERR_BOARD). */
+    float brake_on_v; /**< Brake chopper: duty 0 at and below this bus voltage; 0: derived, vbus_v + 0.2 (vbus_max - vbus_v). [V] */
+    float brake_full_v; /**< Brake chopper: duty 1 at and above this bus voltage; 0: derived, vbus_v + 0.45 (vbus_max - vbus_v). [V] */
+    float vbus_regen_start_v; /**< Regenerative current limit: full braking current below this bus voltage; 0: derived, vbus_v + 0.5 (vbus_max - vbus_v). [V] */
+    float vbus_regen_end_v; /**< Regenerative current limit: no braking current at and above this bus voltage; 0: derived, vbus_v + 0.8 (vbus_max - vbus_v). [V] */
+    float regen_id_a; /**< d current injected while the regen limit cuts the braking current (burns the energy in the windings); 0: derived, min(i_limit, 0.5 flux / ld). [A] */
+    float temp_warn_c; /**< Over-temperature warning: a controlled stop above it (power stage or motor), below temp_max_c; 0 = off. [degC] */
+    float vbus_sag_v; /**< Bus-sag warning: a controlled stop while the bus is below it (above vbus_min_v); 0 = off. [V] */
     float stall_current_frac; /**< Stall: |iq| at least this fraction of i_max_a ... */
     float stall_speed_rad_s; /**< ... while |omega_m| is below this ... [rad/s] */
     float stall_time_s; /**< ... for longer than this trips; 0 = off. [s] */
@@ -188,12 +259,19 @@ typedef struct {
     uint32_t can_bitrate_bps; /**< CAN bit rate (125k, 250k, 500k or 1M); takes effect after save + reset. [bit/s] */
     float can_timeout_s; /**< Command timeout while enabled or commissioning: no advancing HOST_HEARTBEAT for this long stops the drive. [s] */
     float stop_ramp_a_per_s; /**< Current ramp of a safe stop. [A/s] */
-    float stop_decel_rad_s2; /**< Speed ramp of a safe stop. [rad/s^2] */
+    float stop_decel_rad_s2; /**< Deceleration of a controlled stop (command timeout, warnings); 0: derived, the speed ramp speed_ramp_rad_s2. [rad/s^2] */
     uint32_t tm_heartbeat_hz; /**< HEARTBEAT rate (cannot be switched off). [Hz] */
     uint32_t tm_currents_hz; /**< CURRENTS rate; 0 = off. [Hz] */
     uint32_t tm_voltages_hz; /**< VOLTAGES rate; 0 = off. [Hz] */
     uint32_t tm_speed_hz; /**< SPEED rate; 0 = off. [Hz] */
     uint32_t tm_position_hz; /**< POSITION rate; 0 = off. [Hz] */
+    float pi2d_wn_rad_s; /**< PI2D triple pole; 0: derived, min(speed_bw / 3, 0.5 r / lq). [rad/s] */
+    float pi2d_a_per_s; /**< PI2D dirty-derivative pole; 0: derived, min(speed_pll_bw, 0.1 pwm_hz, 2 current_bw kt / (3 J wn)). [1/s] */
+    float pos_kp_per_s; /**< Position loop P gain; 0: derived, speed_bw / 6. [1/s] */
+    float traj_v_max_rad_s; /**< Trajectory cruise speed of a position move; 0: derived, 0.5 of the rated speed the bus allows. [rad/s] */
+    float traj_a_max_rad_s2; /**< Trajectory acceleration; 0: derived, the speed ramp. [rad/s^2] */
+    float traj_d_max_rad_s2; /**< Trajectory deceleration; 0: derived, the speed ramp. [rad/s^2] */
+    float traj_filter_bw_rad_s; /**< Input filter of streamed position setpoints; 0: derived, pos_kp. [rad/s] */
 } mc_params_t;
 
 /** Defaults ("load defaults", and a drive with an empty store). */
@@ -201,5 +279,10 @@ extern const mc_params_t mc_params_default;
 
 /** Every parameter, sorted by id. */
 extern const mc_param_info_t mc_param_table[MC_PARAM_COUNT];
+
+/** Name and unit of each mc_param_table entry (same index): for host tools
+ *  and the simulator (an image that does not use them drops them at link). */
+extern const char *const mc_param_names[MC_PARAM_COUNT];
+extern const char *const mc_param_units[MC_PARAM_COUNT];
 
 #endif /* MC_PARAMS_GEN_H */

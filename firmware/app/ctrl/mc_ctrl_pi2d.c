@@ -40,6 +40,24 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         c->have_prev = true;
     }
     c->theta_m_prev_rad = m->theta_m_rad;
+    if (c->cfg.ref_from_drive) {
+        /* the drive's shaped reference (its ramp and controlled stop) */
+        if (!m->have_speed_ref) {
+            return MC_CTRL_PI2D_ERR_REF;
+        }
+        c->omega_ref_rad_s = m->omega_ref_rad_s;
+        c->alpha_ref_rad_s2 = m->alpha_ref_rad_s2;
+        c->jerk_ref_rad_s3 = 0.0f;
+    }
+    {
+        /* the drive's current limit in force, when it is below the law's */
+        const float lim = (m->i_max_a > 0.0f) && (m->i_max_a < c->cfg.law.iq_max_a)
+                              ? m->i_max_a
+                              : c->cfg.law.iq_max_a;
+        if (lim != c->law.cfg.iq_max_a) {
+            (void)mc_pi2d_f32_set_iq_max(&c->law, lim);
+        }
+    }
 
     float i_alpha, i_beta, s, co, id, iq;
     mc_clarke_f32(m->ia_a, m->ib_a, &i_alpha, &i_beta);
@@ -141,7 +159,8 @@ uint32_t mc_ctrl_pi2d_init(mc_ctrl_pi2d_t *c, const mc_ctrl_pi2d_cfg_t *cfg)
                                .needs_encoder = true,
                                .reset = ctrl_reset,
                                .fast = ctrl_fast,
-                               .ctx = c};
+                               .ctx = c,
+                               .uses_speed_ref = cfg->ref_from_drive};
     return MC_CTRL_PI2D_ERR_NONE;
 }
 

@@ -19,6 +19,10 @@
  * (mechanical) in force from the next fast step on; the plug-in integrates
  * the position reference exactly for a constant acceleration over a period:
  * theta_ref += omega dt + alpha dt^2/2, omega += alpha dt between calls.
+ * With cfg.ref_from_drive the drive's shaped reference (mc_drive_meas_t)
+ * replaces it each step. The clamp of the q current the law asks for is
+ * the lower of its own and the drive's current limit in force
+ * (mc_drive_meas_t.i_max_a: a limit lowered at run time applies at once).
  *
  * Telemetry (mc_ctrl_pi2d_t.tm): the law's signals of the last fast step,
  * for the drive's telemetry and the CAN stream.
@@ -62,6 +66,11 @@ typedef struct {
      *  speed is the reference's (the law is position-only). 0: off (the
      *  paper's law as printed). [0, 4]. */
     float angle_advance_periods;
+    /** The speed reference is the drive's shaped one (uses_speed_ref:
+     *  mc_drive_set_speed_ref, the drive's ramp and controlled stop; its
+     *  acceleration is the law's feed-forward, jerk 0); false: the law's own
+     *  (mc_ctrl_pi2d_set_ref). */
+    bool ref_from_drive;
 } mc_ctrl_pi2d_cfg_t;
 
 /** Telemetry of the last fast step. */

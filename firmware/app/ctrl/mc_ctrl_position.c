@@ -48,8 +48,6 @@ static uint32_t ctrl_reset(void *ctx)
     if (c == NULL) {
         return MC_CTRL_POS_ERR_NULL;
     }
-    mc_foc_f32_reset(&c->foc);
-    c->foc_err = 0u;
     c->have_prev = false;
     c->turns = 0;
     c->base_turns = 0;
@@ -139,30 +137,24 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     const float e_pos = r.x_rad - x;
     const float w_cmd = clampf(r.v_rad_s + (c->cfg.pos_kp_per_s * e_pos), c->cfg.vel_limit_rad_s);
     const float ff = ((c->cfg.j_kgm2 * a_ff) + (c->cfg.b_nm_s_rad * r.v_rad_s)) / c->cfg.kt_nm_a;
-    float iq_ref;
-    (void)mc_pi_f32_step_ff(&c->vel_pi, w_cmd - m->omega_m_rad_s, ff, &iq_ref);
-
-    mc_foc_f32_in_t in;
-    in.ia_a = m->ia_a;
-    in.ib_a = m->ib_a;
-    in.ic_a = m->ic_a;
-    in.three_phase = false;
-    in.theta_e_rad = m->theta_e_rad;
-    in.omega_e_rad_s = m->omega_m_rad_s * (float)c->cfg.pole_pairs;
-    in.vbus_v = m->vbus_v;
-    in.id_ref_a = 0.0f;
-    in.iq_ref_a = iq_ref;
-    mc_foc_f32_out_t fo;
-    const uint32_t ferr = mc_foc_f32_step(&c->foc, &in, &fo);
-    if (ferr != MC_FOC_ERR_NONE) {
-        c->foc_err = ferr;
-        err |= MC_CTRL_POS_ERR_FOC;
+    /* the drive's current limit in force: the output saturates there and
+     * the integrator with it (a lower limit set at run time included) */
+    const float lim = (m->i_max_a < c->cfg.iq_max_a) ? m->i_max_a : c->cfg.iq_max_a;
+    float iq_ref = 0.0f;
+    if (m->regen_scale < 1.0f) {
+        (void)mc_pi_f32_track(&c->vel_pi, m->iq_applied_a); /* the regen limit cut it */
     }
-    out->duty_a = fo.duty_a;
-    out->duty_b = fo.duty_b;
-    out->duty_c = fo.duty_c;
-    out->duty2_a = 0.0f;
-    out->duty2_b = 0.0f;
+    if (mc_pi_f32_step_lim(&c->vel_pi, w_cmd - m->omega_m_rad_s, ff, -lim, lim, &iq_ref) !=
+        MC_PI_ERR_NONE) {
+        err |= MC_CTRL_POS_ERR_MEAS;
+    }
+    /* the drive's current loop at the encoder's angle */
+    out->id_ref_a = 0.0f;
+    out->iq_ref_a = iq_ref;
+    out->theta_e_rad = m->theta_e_rad;
+    out->omega_e_rad_s = m->omega_m_rad_s * (float)c->cfg.pole_pairs;
+    out->rotor_frame = true;
+    out->reframe = false;
 
     c->tm.turns = c->turns;
     c->tm.count = count;
@@ -174,8 +166,6 @@ static uint32_t ctrl_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     c->tm.alpha_ref_rad_s2 = r.a_rad_s2;
     c->tm.omega_cmd_rad_s = w_cmd;
     c->tm.iq_ref_a = iq_ref;
-    c->tm.id_a = fo.id_a;
-    c->tm.iq_a = fo.iq_a;
     c->tm.done = r.done;
     return err;
 }
@@ -202,17 +192,14 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
         return MC_CTRL_POS_ERR_NULL;
     }
     uint32_t err = MC_CTRL_POS_ERR_NONE;
-    mc_foc_f32_t foc;
-    if (mc_foc_f32_init(&foc, &cfg->foc) != MC_FOC_ERR_NONE) {
-        err |= MC_CTRL_POS_ERR_FOC;
-    }
     mc_traj_f32_t traj;
     if (mc_traj_f32_init(&traj, &cfg->traj) != MC_TRAJ_ERR_NONE) {
         err |= MC_CTRL_POS_ERR_TRAJ;
     }
     if (!nonneg_finite(cfg->pos_kp_per_s) || !nonneg_finite(cfg->vel_kp_a_s_rad) ||
         !nonneg_finite(cfg->vel_ki_a_rad) || !nonneg_finite(cfg->ff_lead_s) ||
-        !(cfg->ff_lead_s <= 0.1f) || !(cfg->pos_kp_per_s * cfg->foc.dt_s <= 1.0f)) {
+        !(cfg->ff_lead_s <= 0.1f) || !(cfg->pos_kp_per_s * cfg->dt_s <= 1.0f) ||
+        !mc_isfinite_f32(cfg->dt_s) || !(cfg->dt_s > 0.0f)) {
         err |= MC_CTRL_POS_ERR_GAIN;
     }
     if (!(mc_isfinite_f32(cfg->vel_limit_rad_s) && (cfg->vel_limit_rad_s > 0.0f)) ||
@@ -222,11 +209,11 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
         err |= MC_CTRL_POS_ERR_LIMIT;
     }
     mc_pi_f32_t pi;
-    if ((err & (MC_CTRL_POS_ERR_GAIN | MC_CTRL_POS_ERR_LIMIT | MC_CTRL_POS_ERR_FOC)) == 0u) {
+    if ((err & (MC_CTRL_POS_ERR_GAIN | MC_CTRL_POS_ERR_LIMIT)) == 0u) {
         mc_pi_f32_cfg_t pc;
         pc.kp = cfg->vel_kp_a_s_rad;
         pc.ki_per_s = cfg->vel_ki_a_rad;
-        pc.dt_s = cfg->foc.dt_s;
+        pc.dt_s = cfg->dt_s;
         pc.out_min = -cfg->iq_max_a;
         pc.out_max = cfg->iq_max_a;
         pc.aw = MC_PI_AW_CLAMP;
@@ -240,10 +227,8 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
     }
     const mc_ctrl_pos_tm_t tm0 = {0};
     c->cfg = *cfg;
-    c->foc = foc;
     c->vel_pi = pi;
     c->traj = traj;
-    c->foc_err = 0u;
     c->have_prev = false;
     c->count_prev = 0u;
     c->turns = 0;
@@ -261,7 +246,7 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
     c->mode_seq = 0u;
     c->mode_ack = 0u;
     c->tm = tm0;
-    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
+    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_CURRENT,
                                .needs_encoder = true,
                                .reset = ctrl_reset,
                                .fast = ctrl_fast,

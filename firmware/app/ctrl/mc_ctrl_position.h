@@ -2,7 +2,8 @@
  * @file mc_ctrl_position.h
  * @brief Position control of a PMSM on its encoder, as a control law for the
  *        drive's CTRL mode (mc_drive_attach_ctrl): trajectory -> position P
- *        -> velocity PI -> dq current loop -> 3-phase duties.
+ *        -> velocity PI -> the q current reference of the drive's current
+ *        loop (MC_DRIVE_OUT_CURRENT).
  *
  * Each fast step (the PWM rate):
  *   1. multi-turn position: the encoder count is unwrapped into whole turns
@@ -18,9 +19,12 @@
  *      mode, a critically damped second-order filter of streamed setpoints.
  *   3. position loop:  v_cmd = v_ref + kp_pos (x_ref - x), |v_cmd| <= vel_limit
  *   4. velocity loop:  iq = PI(v_cmd - omega) + (J a_ref(t + lead) + B v_ref) / kt,
- *      |iq| <= iq_max (clamping anti-windup); omega is the drive's encoder
+ *      |iq| <= the lower of iq_max and the drive's current limit in force
+ *      (clamping anti-windup against it; the integrator tracks what the
+ *      drive's regenerative limit applied); omega is the drive's encoder
  *      tracking-loop speed (mc_drive_meas_t.omega_m_rad_s).
- *   5. current loop:   the FOC kernel (id = 0) at the drive's electrical angle.
+ *   5. current loop:   the drive's (id = 0 at the encoder's electrical
+ *      angle: field weakening, the regen limit and the FOC step there).
  *
  * Setpoints (mc_ctrl_pos_set_target*, set_input_mode, set_limits) may be
  * called from a lower-priority context: they are latched and taken by the
@@ -47,7 +51,7 @@ extern "C" {
 
 #define MC_CTRL_POS_ERR_NONE 0u
 #define MC_CTRL_POS_ERR_NULL (1u << 0) /**< NULL pointer */
-#define MC_CTRL_POS_ERR_FOC  (1u << 1) /**< current-loop config rejected, or its step failed */
+#define MC_CTRL_POS_ERR_FOC  (1u << 1) /**< (unused: the current loop is the drive's) */
 #define MC_CTRL_POS_ERR_TRAJ (1u << 2) /**< trajectory config rejected, or a setpoint refused */
 #define MC_CTRL_POS_ERR_GAIN \
     (1u << 3) /**< a loop gain negative / not finite, kp_pos dt > 1,
@@ -59,9 +63,9 @@ extern "C" {
 #define MC_CTRL_POS_ERR_REF  (1u << 6) /**< non-finite setpoint or limit: refused */
 
 typedef struct {
-    mc_foc_f32_cfg_t foc;   /**< current loop (as the drive's); foc.dt_s = PWM period */
+    float dt_s;             /**< the fast step (PWM period) [s] */
     uint32_t pole_pairs;    /**< for the electrical speed of the decoupling, >= 1 */
-    mc_traj_f32_cfg_t traj; /**< trajectory limits and input filter; traj.dt_s = foc.dt_s */
+    mc_traj_f32_cfg_t traj; /**< trajectory limits and input filter; traj.dt_s = dt_s */
     float pos_kp_per_s;     /**< position P gain [(rad/s)/rad], kp dt <= 1 */
     float vel_kp_a_s_rad;   /**< velocity PI proportional gain [A/(rad/s)] */
     float vel_ki_a_rad;     /**< velocity PI integral gain [A/rad] */
@@ -86,16 +90,13 @@ typedef struct {
     float alpha_ref_rad_s2; /**< trajectory acceleration [rad/s^2] */
     float omega_cmd_rad_s;  /**< velocity command after the position loop [rad/s] */
     float iq_ref_a;         /**< velocity-loop output [A] */
-    float id_a, iq_a;       /**< measured dq currents [A] */
     bool done;              /**< trajectory finished (reference at rest on the target) */
 } mc_ctrl_pos_tm_t;
 
 typedef struct {
     mc_ctrl_pos_cfg_t cfg;
-    mc_foc_f32_t foc;
     mc_pi_f32_t vel_pi;
     mc_traj_f32_t traj;
-    uint32_t foc_err;
     /* multi-turn bookkeeping */
     bool have_prev;
     uint32_t count_prev;
@@ -113,7 +114,8 @@ typedef struct {
     mc_drive_ctrl_t ops;
 } mc_ctrl_pos_t;
 
-/** Validate cfg and initialise c and its ops table (PWM3, needs the encoder). */
+/** Validate cfg and initialise c and its ops table (current references,
+ *  needs the encoder). */
 uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg);
 
 /** The ops table to attach: mc_drive_attach_ctrl(d, mc_ctrl_pos_ops(c)). */

@@ -86,7 +86,6 @@ uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
     uint32_t err;
     mc_fluxobs_f32_cfg_t oc;
     mc_spdpll_f32_cfg_t pc;
-    mc_foc_f32_cfg_t fc;
     mc_pi_f32_cfg_t sc;
     float kp = 0.0f;
     float ki = 0.0f;
@@ -120,28 +119,13 @@ uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
     if (mc_spdpll_f32_init(&c->pll, &pc) != MC_SPDPLL_ERR_NONE) {
         err |= MC_CTRL_SLS_ERR_PLL;
     }
-    if (mc_foc_f32_gains_from_bandwidth(cfg->r_ohm, cfg->l_h, cfg->cur_bw_rad_s, &kp, &ki) !=
-        MC_FOC_ERR_NONE) {
+    /* the current loop is the drive's (MC_DRIVE_OUT_CURRENT); its
+     * bandwidth is checked as the q31 twin builds its own from it */
+    if ((mc_foc_f32_gains_from_bandwidth(cfg->r_ohm, cfg->l_h, cfg->cur_bw_rad_s, &kp, &ki) !=
+         MC_FOC_ERR_NONE) ||
+        !(cfg->v_limit_ratio > 0.0f) || !(cfg->v_limit_ratio <= 1.0f) ||
+        !(cfg->vbus_max_v > 0.0f) || !mc_isfinite_f32(cfg->vbus_max_v)) {
         err |= MC_CTRL_SLS_ERR_CURRENT;
-    } else {
-        fc.r_ohm = cfg->r_ohm;
-        fc.ld_h = cfg->l_h;
-        fc.lq_h = cfg->l_h;
-        fc.flux_wb = cfg->flux_wb;
-        fc.kp_d_v_per_a = kp;
-        fc.ki_d_v_per_as = ki;
-        fc.kp_q_v_per_a = kp;
-        fc.ki_q_v_per_as = ki;
-        fc.dt_s = cfg->dt_s;
-        fc.aw = MC_PI_AW_CLAMP;
-        fc.kaw_per_s = 0.0f;
-        fc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
-        fc.v_limit_ratio = cfg->v_limit_ratio;
-        fc.v_abs_max_v = cfg->vbus_max_v;
-        fc.decouple = true;
-        if (mc_foc_f32_init(&c->foc, &fc) != MC_FOC_ERR_NONE) {
-            err |= MC_CTRL_SLS_ERR_CURRENT;
-        }
     }
     if ((err & MC_CTRL_SLS_ERR_SPEED) == 0u) {
         sc.kp = cfg->speed_kp_a_s_rad;
@@ -159,10 +143,11 @@ uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
         return err;
     }
     c->omega_cmd_m_rad_s = 0.0f;
-    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
+    c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_CURRENT,
                                .reset = mc_ctrl_sls_reset,
                                .fast = mc_ctrl_sls_fast,
-                               .ctx = c};
+                               .ctx = c,
+                               .uses_speed_ref = cfg->ref_from_drive};
     c->tm.handovers = 0u;
     c->tm.fallbacks = 0u;
     return mc_ctrl_sls_reset(c);
@@ -195,8 +180,8 @@ uint32_t mc_ctrl_sls_reset(void *ctx)
     }
     (void)mc_fluxobs_f32_reset(&c->obs, 0.0f, 0.0f, 0.0f);
     (void)mc_spdpll_f32_reset(&c->pll, 0.0f, 0.0f);
-    mc_foc_f32_reset(&c->foc);
     (void)mc_pi_f32_reset(&c->speed_pi, 0.0f);
+    c->reframe = false;
     c->phase = MC_CTRL_SLS_ALIGN;
     c->omega_ref_m_rad_s = 0.0f;
     c->theta_if_e_rad = 0.0f;
@@ -237,17 +222,6 @@ uint32_t mc_ctrl_sls_reset(void *ctx)
 
 /* Dead-time voltage error of one leg in units of (dead_time / dt) vbus:
  * sat(i / band), +-1 outside the band (a hard sign for band = 0). */
-static float dead_sign(float i_a, float band_a)
-{
-    if (band_a > 0.0f) {
-        return mc_sat_f32(i_a / band_a, -1.0f, 1.0f);
-    }
-    if (i_a > 0.0f) {
-        return 1.0f;
-    }
-    return (i_a < 0.0f) ? -1.0f : 0.0f;
-}
-
 /* Alpha-beta voltage lost to the dead time over the last period. */
 static void dead_time_error(const mc_ctrl_sls_t *c, float ia_a, float ib_a, float vbus_v,
                             float *p_va, float *p_vb)
@@ -255,26 +229,13 @@ static void dead_time_error(const mc_ctrl_sls_t *c, float ia_a, float ib_a, floa
     const float k = (c->cfg.dead_time_s / c->cfg.dt_s) * vbus_v;
     const float ia = 0.5f * (ia_a + c->ia_prev_a);
     const float ib = 0.5f * (ib_a + c->ib_prev_a);
-    const float sa = dead_sign(ia, c->cfg.dead_band_a);
-    const float sb = dead_sign(ib, c->cfg.dead_band_a);
-    const float sc = dead_sign(-(ia + ib), c->cfg.dead_band_a);
+    const float sa = mc_sign_band_f32(ia, c->cfg.dead_band_a);
+    const float sb = mc_sign_band_f32(ib, c->cfg.dead_band_a);
+    const float sc = mc_sign_band_f32(-(ia + ib), c->cfg.dead_band_a);
 
     /* amplitude-invariant Clarke of the three leg errors (common mode drops) */
     *p_va = k * (2.0f / 3.0f) * (sa - (0.5f * (sb + sc)));
     *p_vb = k * MC_INV_SQRT3_F32 * (sb - sc);
-}
-
-/* Duty-side dead-time correction (cfg.dead_comp_duty): each leg's duty
- * plus dead_sign(i_x) dead_time / dt, from the latest current sample,
- * clamped to [0, 1]. */
-static void dead_comp_duties(const mc_ctrl_sls_t *c, float ia_a, float ib_a, mc_drive_out_t *out)
-{
-    const float kd = c->cfg.dead_time_s / c->cfg.dt_s;
-    const float band = c->cfg.dead_band_a;
-
-    out->duty_a = mc_sat_f32(out->duty_a + (kd * dead_sign(ia_a, band)), 0.0f, 1.0f);
-    out->duty_b = mc_sat_f32(out->duty_b + (kd * dead_sign(ib_a, band)), 0.0f, 1.0f);
-    out->duty_c = mc_sat_f32(out->duty_c + (kd * dead_sign(-(ia_a + ib_a), band)), 0.0f, 1.0f);
 }
 
 /* The hold waits for a trusted circle fit up to this many align times. */
@@ -381,35 +342,12 @@ static bool align_fit(const mc_ctrl_sls_t *c, float *p_theta_rad)
     return true;
 }
 
-/* Preset the current PIs so that, in the frame theta with decoupling speed
- * omega_e, the next output reproduces the last commanded voltage. */
-static void preset_current_pis(mc_ctrl_sls_t *c, float theta_e, float omega_e, float id_m,
-                               float iq_m)
-{
-    float s;
-    float co;
-    float vd;
-    float vq;
-    const float kp = c->foc.pi_d.kp;
-
-    mc_sincos_f32(theta_e, &s, &co);
-    mc_park_f32(c->v_hist_a[0], c->v_hist_b[0], s, co, &vd, &vq);
-    vd = vd + (omega_e * c->cfg.l_h * iq_m) - (kp * (c->id_ref_a - id_m));
-    vq = vq - (omega_e * c->cfg.l_h * id_m) - (omega_e * c->cfg.flux_wb) -
-         (kp * (c->iq_ref_a - iq_m));
-    (void)mc_pi_f32_reset(&c->foc.pi_d, vd);
-    (void)mc_pi_f32_reset(&c->foc.pi_q, vq);
-}
-
 /* IF -> CLOSED, keeping the current vector and the torque. */
-static void handover_to_closed(mc_ctrl_sls_t *c, float i_al, float i_be, float theta_hat,
-                               float omega_hat_e)
+static void handover_to_closed(mc_ctrl_sls_t *c, float omega_hat_e)
 {
     float s;
     float co;
-    float id_m;
-    float iq_m;
-    const float d = mc_wrap_pi_f32(c->theta_if_e_rad - theta_hat);
+    const float d = mc_wrap_pi_f32(c->theta_if_e_rad - c->obs.theta_e_rad);
     const float id_if = c->id_ref_a; /* last references, I-f frame */
     const float iq_if = c->iq_ref_a;
 
@@ -418,9 +356,7 @@ static void handover_to_closed(mc_ctrl_sls_t *c, float i_al, float i_be, float t
     c->id_ref_a = (co * id_if) - (s * iq_if);
     c->iq_ref_a = (s * id_if) + (co * iq_if);
     (void)mc_pi_f32_reset(&c->speed_pi, c->iq_ref_a);
-    mc_sincos_f32(theta_hat, &s, &co);
-    mc_park_f32(i_al, i_be, s, co, &id_m, &iq_m);
-    preset_current_pis(c, theta_hat, omega_hat_e, id_m, iq_m);
+    c->reframe = true; /* the drive keeps the voltage vector in the new frame */
     c->omega_ref_m_rad_s = omega_hat_e / (float)c->cfg.pole_pairs;
     c->phase = MC_CTRL_SLS_CLOSED;
     c->t_phase_s = 0.0f;
@@ -438,13 +374,8 @@ static void handover_to_closed(mc_ctrl_sls_t *c, float i_al, float i_be, float t
  * is raised to I = max(I_if, 1.25 |iq|) (|sin delta| <= 0.8): only id
  * steps, from 0 to I cos(delta) > 0, which produces no torque on a
  * non-salient machine; the current loop takes it over its bandwidth. */
-static void fallback_to_if(mc_ctrl_sls_t *c, float i_al, float i_be, float theta_hat,
-                           float omega_hat_e)
+static void fallback_to_if(mc_ctrl_sls_t *c, float theta_hat, float omega_hat_e)
 {
-    float s;
-    float co;
-    float id_m;
-    float iq_m;
     float mag = 1.25f * mc_abs_f32(c->iq_ref_a);
     float delta;
 
@@ -459,9 +390,7 @@ static void fallback_to_if(mc_ctrl_sls_t *c, float i_al, float i_be, float theta
     c->dir = sign_f32(omega_hat_e);
     c->id_ref_a = 0.0f;
     c->iq_ref_a = mag;
-    mc_sincos_f32(c->theta_if_e_rad, &s, &co);
-    mc_park_f32(i_al, i_be, s, co, &id_m, &iq_m);
-    preset_current_pis(c, c->theta_if_e_rad, 0.0f, id_m, iq_m);
+    c->reframe = true; /* the drive keeps the voltage vector in the I-f frame */
     c->phase = MC_CTRL_SLS_IF;
     c->t_phase_s = 0.0f;
     c->t_lockwait_s = 0.0f;
@@ -483,7 +412,8 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     float theta_ctrl;
     float omega_ctrl;
     uint32_t k;
-    mc_foc_f32_out_t fo;
+    float cmd;
+    float lim;
     const uint32_t delay_idx = (c == NULL) ? 0u : c->cfg.pwm_delay_periods;
 
     if ((c == NULL) || (m == NULL) || (out == NULL)) {
@@ -496,13 +426,21 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     pp = (float)cfg->pole_pairs;
     ho_e = cfg->handover_speed_rad_s * pp;
 
-    /* 1. observer on the voltage that acted over the last period */
+    /* 1. observer on the voltage that acted over the last period: the
+     * drive's current loop commanded it (its history, newest first) */
+    for (k = 3u; k > 0u; --k) {
+        c->v_hist_a[k] = c->v_hist_a[k - 1u];
+        c->v_hist_b[k] = c->v_hist_b[k - 1u];
+    }
+    c->v_hist_a[0] = m->v_alpha_prev_v;
+    c->v_hist_b[0] = m->v_beta_prev_v;
     mc_clarke_f32(m->ia_a, m->ib_a, &i_al, &i_be);
     {
         float dva = 0.0f;
         float dvb = 0.0f;
-        /* With the duty-side correction the commanded voltage is taken as
-         * applied (the correction cancels the error it estimates). */
+        /* With the duty-side correction (the drive's dead_time_comp) the
+         * commanded voltage is taken as applied (the correction cancels the
+         * error it estimates). */
         if ((cfg->dead_time_s > 0.0f) && !cfg->dead_comp_duty) {
             dead_time_error(c, m->ia_a, m->ib_a, m->vbus_v, &dva, &dvb);
         }
@@ -531,9 +469,19 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     (void)mc_spdpll_f32_step(&c->pll, theta_hat, &omega_hat_e);
     omega_hat_m = omega_hat_e / pp;
 
-    /* 2. reference slew */
-    c->omega_ref_m_rad_s =
-        slew_f32(c->omega_ref_m_rad_s, c->omega_cmd_m_rad_s, cfg->speed_slew_rad_s2 * cfg->dt_s);
+    /* 2. reference: the drive's shaped one (ref_from_drive; the phase logic
+     * then reads it as the command too), or the law's own slew */
+    if (cfg->ref_from_drive) {
+        if (!m->have_speed_ref) {
+            return MC_CTRL_SLS_ERR_REF;
+        }
+        c->omega_ref_m_rad_s = m->omega_ref_rad_s;
+        c->omega_cmd_m_rad_s = m->omega_ref_rad_s;
+    } else {
+        c->omega_ref_m_rad_s = slew_f32(c->omega_ref_m_rad_s, c->omega_cmd_m_rad_s,
+                                        cfg->speed_slew_rad_s2 * cfg->dt_s);
+    }
+    cmd = c->omega_cmd_m_rad_s;
     c->t_phase_s += cfg->dt_s;
 
     /* 3. phase logic */
@@ -542,9 +490,9 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
             (cfg->align_time_s > 0.0f)
                 ? (cfg->if_current_a * mc_sat_f32(c->t_phase_s / cfg->align_time_s, 0.0f, 1.0f))
                 : cfg->if_current_a;
-        if ((c->t_phase_s >= cfg->align_time_s) && (c->omega_cmd_m_rad_s != 0.0f)) {
+        if ((c->t_phase_s >= cfg->align_time_s) && (cmd != 0.0f)) {
             c->phase = MC_CTRL_SLS_IF;
-            c->dir = sign_f32(c->omega_cmd_m_rad_s);
+            c->dir = sign_f32(cmd);
             c->t_phase_s = 0.0f;
             c->t_lockwait_s = 0.0f;
         }
@@ -570,8 +518,7 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         float theta_rotor = c->theta_if_e_rad + MC_HALF_PI_F32;
         float theta_fit = 0.0f;
         const bool fitted = (c->t_phase_s >= cfg->align_time_s) && align_fit(c, &theta_fit);
-        if ((c->omega_cmd_m_rad_s != 0.0f) &&
-            (fitted || (c->t_phase_s >= (ALIGN_WAIT * cfg->align_time_s)))) {
+        if ((cmd != 0.0f) && (fitted || (c->t_phase_s >= (ALIGN_WAIT * cfg->align_time_s)))) {
             if (fitted) {
                 theta_rotor = theta_fit;
             }
@@ -581,7 +528,7 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
             omega_hat_e = 0.0f;
             omega_hat_m = 0.0f;
             c->phase = MC_CTRL_SLS_IF;
-            c->dir = sign_f32(c->omega_cmd_m_rad_s);
+            c->dir = sign_f32(cmd);
             c->t_phase_s = 0.0f;
             c->t_lockwait_s = 0.0f;
         }
@@ -592,13 +539,13 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
             slew_f32(c->omega_if_e_rad_s, target, cfg->if_accel_rad_s2 * pp * cfg->dt_s);
         c->i_if_a = slew_f32(c->i_if_a, cfg->if_current_a,
                              cfg->if_current_a * cfg->dt_s / cfg->blend_time_s);
-        if ((mc_abs_f32(c->omega_cmd_m_rad_s) > cfg->handover_speed_rad_s) &&
+        if ((mc_abs_f32(cmd) > cfg->handover_speed_rad_s) &&
             (mc_abs_f32(c->omega_if_e_rad_s) >= (0.999f * ho_e))) {
             const bool locked = (mc_abs_f32(omega_hat_e - c->omega_if_e_rad_s) <=
                                  (cfg->lock_tol * mc_abs_f32(c->omega_if_e_rad_s))) &&
                                 ((c->obs.flags & MC_FLUXOBS_ERR_DIVERGED) == 0u);
             if (locked) {
-                handover_to_closed(c, i_al, i_be, theta_hat, omega_hat_e);
+                handover_to_closed(c, omega_hat_e);
             } else {
                 c->t_lockwait_s += cfg->dt_s;
                 if (c->t_lockwait_s > cfg->if_lock_timeout_s) {
@@ -608,18 +555,25 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         }
     } else {
         const float lo = cfg->handover_speed_rad_s * (1.0f - cfg->handover_hyst);
-        if (cfg->lowspeed_fallback && (mc_abs_f32(c->omega_cmd_m_rad_s) < lo) &&
-            (mc_abs_f32(omega_hat_m) < lo)) {
-            fallback_to_if(c, i_al, i_be, theta_hat, omega_hat_e);
+        if (cfg->lowspeed_fallback && (mc_abs_f32(cmd) < lo) && (mc_abs_f32(omega_hat_m) < lo)) {
+            fallback_to_if(c, theta_hat, omega_hat_e);
         }
     }
 
+    /* the torque limit: the configured one, or the drive's current limit in
+     * force (a lower limit set at run time) over the I-f vector's 1.25 */
+    lim = ((m->i_max_a / 1.25f) < cfg->iq_max_a) ? (m->i_max_a / 1.25f) : cfg->iq_max_a;
     if (c->phase == MC_CTRL_SLS_CLOSED) {
-        /* speed loop at dt * speed_div */
+        /* speed loop at dt * speed_div; the integrator tracks what the
+         * drive's regenerative limit applied, saturates at the limit */
+        if (m->regen_scale < 1.0f) {
+            (void)mc_pi_f32_track(&c->speed_pi, m->iq_applied_a);
+        }
         c->speed_count++;
         if (c->speed_count >= cfg->speed_div) {
             c->speed_count = 0u;
-            (void)mc_pi_f32_step(&c->speed_pi, c->omega_ref_m_rad_s - omega_hat_m, &c->iq_ref_a);
+            (void)mc_pi_f32_step_lim(&c->speed_pi, c->omega_ref_m_rad_s - omega_hat_m, 0.0f, -lim,
+                                     lim, &c->iq_ref_a);
         }
         /* id from the hand-over decays to 0 over blend_time */
         c->id_ref_a =
@@ -652,25 +606,16 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         omega_ctrl = 0.0f;
     }
 
-    /* 4. current loop, from the alpha-beta currents of step 1 */
-    if (mc_foc_f32_step_ab(&c->foc, i_al, i_be, theta_ctrl, omega_ctrl, m->vbus_v, c->id_ref_a,
-                           c->iq_ref_a, &fo) != MC_FOC_ERR_NONE) {
-        err |= MC_CTRL_SLS_ERR_FOC;
-    }
-    out->duty_a = fo.duty_a;
-    out->duty_b = fo.duty_b;
-    out->duty_c = fo.duty_c;
-    out->duty2_a = 0.0f;
-    out->duty2_b = 0.0f;
-    for (k = 3u; k > 0u; --k) {
-        c->v_hist_a[k] = c->v_hist_a[k - 1u];
-        c->v_hist_b[k] = c->v_hist_b[k - 1u];
-    }
-    c->v_hist_a[0] = fo.v_alpha_v;
-    c->v_hist_b[0] = fo.v_beta_v;
-    if (cfg->dead_comp_duty && (cfg->dead_time_s > 0.0f)) {
-        dead_comp_duties(c, m->ia_a, m->ib_a, out);
-    }
+    /* 4. the drive's current loop: the references in the frame the law
+     * controls (the rotor's estimate once closed), the voltage kept across
+     * a frame jump */
+    out->id_ref_a = c->id_ref_a;
+    out->iq_ref_a = c->iq_ref_a;
+    out->theta_e_rad = theta_ctrl;
+    out->omega_e_rad_s = omega_ctrl;
+    out->rotor_frame = c->phase == MC_CTRL_SLS_CLOSED;
+    out->reframe = c->reframe;
+    c->reframe = false;
 
     c->tm.phase = c->phase;
     c->tm.theta_hat_e_rad = theta_hat;
@@ -682,8 +627,6 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
     c->tm.i_beta_a = i_be;
     c->tm.id_ref_a = c->id_ref_a;
     c->tm.iq_ref_a = c->iq_ref_a;
-    c->tm.id_a = fo.id_a;
-    c->tm.iq_a = fo.iq_a;
     c->tm.obs_resid = c->obs.resid;
     return err;
 }

@@ -6,23 +6,31 @@
  *
  * Each fast step (PWM rate), from the phase currents only:
  *   1. Clarke -> i_ab; the alpha-beta voltage applied over the period that
- *      just ended (the law's own command pwm_delay_periods + 1 steps ago,
+ *      just ended (the drive's current loop commanded it pwm_delay_periods
+ *      steps before: mc_drive_meas_t.v_alpha_prev_v into the law's history,
  *      after the modulator's limit, minus the dead-time voltage error
  *      sat(i_x / dead_band) (dead_time / dt) vbus of each leg, with the
  *      mean of the currents at both ends of the period; with
- *      dead_comp_duty the duties carry the correction instead, see 3, and
- *      the commanded voltage is used) -> flux gradient observer
- *      (mc_fluxobs) -> theta_hat; PLL (mc_spdpll) -> omega_hat.
+ *      dead_comp_duty the drive's duties carry the correction instead
+ *      (mc_drive_cfg_t.dead_time_comp), and the commanded voltage is used)
+ *      -> flux gradient observer (mc_fluxobs) -> theta_hat; PLL
+ *      (mc_spdpll) -> omega_hat.
  *      At low speed the back-EMF is a few volts and an uncompensated
  *      2 us dead time at 8 kHz and 200 V is 3.2 V per leg: the observer
  *      integrates it as flux.
  *   2. Every speed_div steps: speed PI on the PLL speed -> iq_ref, limited
- *      to +-iq_max_a (torque limit), clamping anti-windup.
- *   3. dq current PIs with decoupling (mc_foc) in the frame of theta_hat,
- *      inverse Park, SVPWM -> duties. With dead_comp_duty, each leg's duty
- *      is raised by sat(i_x / dead_band) dead_time / dt (the latest
- *      sample's sign): the current loop then no longer sees the dead-time
- *      error as a disturbance. Without it, at light load (phase currents
+ *      to +-iq_max_a (torque limit; the drive's current limit in force /
+ *      1.25 when lower), clamping anti-windup; the integrator tracks what
+ *      the drive's regenerative limit applied. The reference is the drive's
+ *      shaped one with ref_from_drive (the drive's ramp and controlled
+ *      stop), else the law's own slew.
+ *   3. the current references in the frame the law controls go to the
+ *      drive's current loop (MC_DRIVE_OUT_CURRENT: MTPA / field weakening
+ *      and the regen limit once the frame is the rotor's estimate, the
+ *      dq PIs with decoupling, SVPWM, the duty-side dead-time correction);
+ *      across a hand-over or fallback the drive presets its current PIs so
+ *      that the voltage vector is continuous (mc_drive_out_t.reframe).
+ *      Without the dead-time correction, at light load (phase currents
  *      near zero) that error makes the speed loop oscillate (README,
  *      "Light load with dead time").
  *
@@ -157,6 +165,11 @@ typedef struct {
     bool if_damping;            /**< I-f active damping from the observer's speed (true:
                                       -speed_kp (omega_hat - omega_if) along the estimated
                                       q axis, at most if_current_a / 2) */
+    bool ref_from_drive;        /**< the speed reference is the drive's shaped one
+                                      (uses_speed_ref: mc_drive_set_speed_ref, the
+                                      drive's ramp and controlled stop); false: the
+                                      law's own (mc_ctrl_sls_set_speed_ref, slewed at
+                                      speed_slew_rad_s2). f32 only */
     bool align_any_angle;       /**< start from any rotor angle (true: two holds a
                                       quarter turn apart, the observer restarted at
                                       the angle the flux path's circle fit gives;
@@ -177,10 +190,12 @@ typedef struct {
     float i_alpha_a, i_beta_a;         /**< currents fed to the observer [A] */
     float v_alpha_obs_v, v_beta_obs_v; /**< voltage fed to the observer [V] */
     float id_ref_a, iq_ref_a;          /**< current references in the control frame [A] */
-    float id_a, iq_a;                  /**< measured currents in the control frame [A] */
-    float obs_resid;                   /**< observer residual |e|/flux - 1 */
-    uint32_t handovers;                /**< number of IF -> CLOSED hand-overs */
-    uint32_t fallbacks;                /**< number of CLOSED -> IF returns */
+    float id_a, iq_a;   /**< measured currents in the control frame [A] (the q31 twin,
+                           which runs its own current loop; the f32 plug-in hands its
+                           references to the drive's, whose tm.foc has them: 0 here) */
+    float obs_resid;    /**< observer residual |e|/flux - 1 */
+    uint32_t handovers; /**< number of IF -> CLOSED hand-overs */
+    uint32_t fallbacks; /**< number of CLOSED -> IF returns */
 } mc_ctrl_sls_tm_t;
 
 typedef struct {
@@ -188,8 +203,8 @@ typedef struct {
     float gamma; /**< observer gain from omega_crit [1/(Wb^2 s)] */
     mc_fluxobs_f32_t obs;
     mc_spdpll_f32_t pll;
-    mc_foc_f32_t foc;
     mc_pi_f32_t speed_pi;
+    bool reframe; /**< a hand-over or fallback this step: out.reframe */
     mc_ctrl_sls_phase_t phase;
     float omega_cmd_m_rad_s; /**< requested speed [rad/s] */
     float omega_ref_m_rad_s; /**< slewed reference [rad/s] */

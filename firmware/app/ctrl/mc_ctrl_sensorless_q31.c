@@ -83,6 +83,8 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
     uint32_t obs_err;
     float pp;
     float wbm;
+    float kp_cur = 0.0f;
+    float ki_cur = 0.0f;
     bool ok;
     bool band_on;
     mc_q46_gain_t g_dtheta;
@@ -97,8 +99,9 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
     }
     f = &cfg->f;
     err = mc_ctrl_sls_init(&ref, f);
-    if (f->dead_comp_duty) {
-        /* the duty-side dead-time correction has no q31 version yet */
+    if (f->dead_comp_duty || f->ref_from_drive) {
+        /* the duty-side dead-time correction has no q31 version yet, and the
+         * twin runs its own current loop and reference (a voltage-level law) */
         err |= MC_CTRL_SLS_ERR_TIMING;
     }
     if (f->align_any_angle) {
@@ -136,15 +139,18 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
     if (mc_spdpll_q31_init(&pll, &pc) != MC_SPDPLL_ERR_NONE) {
         err |= MC_CTRL_SLS_ERR_PLL | MC_CTRL_SLS_ERR_SCALE;
     }
-    /* the current loop and the speed PI exactly as mc_ctrl_sls_init forms them */
+    /* the current loop (kp = L bw, ki = R bw: the f32 plug-in hands the
+     * same references to the drive's loop of these gains) and the speed PI
+     * exactly as mc_ctrl_sls_init forms it */
+    (void)mc_foc_f32_gains_from_bandwidth(f->r_ohm, f->l_h, f->cur_bw_rad_s, &kp_cur, &ki_cur);
     fc.f.r_ohm = f->r_ohm;
     fc.f.ld_h = f->l_h;
     fc.f.lq_h = f->l_h;
     fc.f.flux_wb = f->flux_wb;
-    fc.f.kp_d_v_per_a = ref.foc.pi_d.kp;
-    fc.f.ki_d_v_per_as = ref.foc.pi_d.ki_per_s;
-    fc.f.kp_q_v_per_a = ref.foc.pi_q.kp;
-    fc.f.ki_q_v_per_as = ref.foc.pi_q.ki_per_s;
+    fc.f.kp_d_v_per_a = kp_cur;
+    fc.f.ki_d_v_per_as = ki_cur;
+    fc.f.kp_q_v_per_a = kp_cur;
+    fc.f.ki_q_v_per_as = ki_cur;
     fc.f.dt_s = f->dt_s;
     fc.f.aw = MC_PI_AW_CLAMP;
     fc.f.kaw_per_s = 0.0f;
@@ -175,7 +181,7 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
     /* gains of the plug-in's own q31 arithmetic */
     ok = mc_q46_gain_from_f32((cfg->omega_base_e_rad_s * f->dt_s) / MC_PI_F32, &g_dtheta) &&
          mc_q46_gain_from_f32((f->speed_kp_a_s_rad * wbm) / cfg->i_base_a, &g_damp) &&
-         mc_q46_gain_from_f32((ref.foc.pi_d.kp * cfg->i_base_a) / cfg->v_base_v, &g_kp_cur) &&
+         mc_q46_gain_from_f32((kp_cur * cfg->i_base_a) / cfg->v_base_v, &g_kp_cur) &&
          mc_q46_gain_from_f32((f->dead_time_s / f->dt_s) * (4.0f / 3.0f), &g_dead_a) &&
          mc_q46_gain_from_f32((f->dead_time_s / f->dt_s) * (2.0f * MC_INV_SQRT3_F32), &g_dead_b);
     /* a dead band below 2^-29 of the current base (far below one ADC LSB)

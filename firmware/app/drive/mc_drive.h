@@ -43,7 +43,10 @@
  *            J decel / (kt stop_kp));
  *            from CTRL mode the law's stop op decelerates (a law without
  *            one: the bridge opens at once). Standstill: the ramp at 0 and
- *            |omega| <= stop_rest_rad_s; the bridge opens anyway after
+ *            |omega| <= stop_rest_rad_s (checked in the slow step), or,
+ *            with an encoder, the encoder speed crossing zero against the
+ *            direction the stop began in (checked in every fast step: a
+ *            stop never drives the rotor backwards); the bridge opens anyway after
  *            2 |omega_0| / decel + 0.1 s. stop_decel_rad_s2 = 0: no
  *            controlled stop (the bridge opens at once, as IDLE).
  *            Critical faults (every MC_DRIVE_FAULT_*: over-current, gate
@@ -197,6 +200,9 @@ typedef enum {
     (1u << 14) /**< asc_enable without a 3-phase motor model: flux_wb or ld_h
                                                    not > 0, or flux / Ld not below i_trip_a */
 #define MC_DRIVE_CFG_ERR_ANGLE_REF (1u << 15) /**< angle_ref not one of MC_DRIVE_ANGLE_REF_* */
+#define MC_DRIVE_CFG_ERR_DEAD_TIME \
+    (1u << 16) /**< dead_time_comp with dead_time_s outside [0, dt/2) or
+                    dead_band_a negative, or either not finite */
 #define MC_DRIVE_CFG_ERR_BUS_POWER \
     (1u << 12) /**< regen limit or brake chopper thresholds:
                                                    not finite, only one of a pair 0, or not
@@ -370,7 +376,18 @@ typedef struct {
                                      0: none */
     float brake_on_v;         /**< brake chopper: duty 0 at and below this [V] ... */
     float brake_full_v;       /**< ... duty 1 at and above this one [V], <= vbus_max_v */
-    /* MTPA and field weakening (CURRENT mode; kernels/fw/mc_fw.h). With
+    /* Speed reference shaping (the speed laws, mc_drive_ctrl_t.uses_speed_ref):
+     * the target of mc_drive_set_speed_ref() slewed at this rate [rad/s^2];
+     * 0: no slew (a step). */
+    float speed_accel_rad_s2;
+    /* Dead-time compensation of the current loop (CURRENT mode and the laws
+     * that give current references): each leg's duty plus
+     * sat(i_x / dead_band_a) dead_time_s / dt, from the step's sample. */
+    bool dead_time_comp;
+    float dead_time_s; /**< the bridge's dead time [s], [0, dt/2) */
+    float dead_band_a; /**< current over which the error reverses (linear inside) [A], >= 0 */
+    /* MTPA and field weakening (CURRENT mode, and the laws that give current
+     * references in the rotor's frame; kernels/fw/mc_fw.h). With
      * fw_enable, iq_ref_a is the signed current command: the kernel turns it
      * into (id, iq) on the MTPA curve, weakened by the voltage loop, inside
      * the circle fw.i_max_a; the d reference is then min(id_ref_a, kernel's).
@@ -386,6 +403,11 @@ typedef struct {
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
 #define MC_DRIVE_OUT_PWM3 1u /**< 3-phase inverter: duty_a..c in [0, 1] */
 #define MC_DRIVE_OUT_PWM2 2u /**< dual H-bridge (stepper): duty2_a, duty2_b in [-1, 1] */
+/** Current references on the 3-phase inverter: the drive's current loop
+ *  runs them (MTPA / field weakening and the regenerative limit in the
+ *  rotor's frame, the current limit, the FOC step, dead-time compensation),
+ *  the same loop as CURRENT mode: see "Laws that give current references". */
+#define MC_DRIVE_OUT_CURRENT 4u
 
 /** Measurements handed to a plugged control law, once per fast step. */
 typedef struct {
@@ -400,12 +422,31 @@ typedef struct {
     uint32_t enc_cpr;    /**< counts per mechanical revolution */
     float dt_s;          /**< fast-loop period [s] */
     uint32_t fast_count; /**< fast steps since init (wraps) */
+    /* the drive's shaped speed reference (a law with uses_speed_ref) */
+    bool have_speed_ref;    /**< the two below are valid */
+    float omega_ref_rad_s;  /**< speed reference of this step [rad/s] */
+    float alpha_ref_rad_s2; /**< its acceleration over the step [rad/s^2] */
+    /* the current loop (MC_DRIVE_OUT_CURRENT laws) */
+    float i_max_a;        /**< the current limit in force [A]: saturate there */
+    float iq_applied_a;   /**< q reference the loop applied last step (after the
+                                  limit, field weakening, the regen limit) [A] */
+    float regen_scale;    /**< the regenerative limit's factor of last step, [0, 1] */
+    float v_alpha_prev_v; /**< alpha-beta voltage the loop commanded last step [V] */
+    float v_beta_prev_v;
 } mc_drive_meas_t;
 
 /** What a control law asks the bridge to do this period. */
 typedef struct {
     float duty_a, duty_b, duty_c; /**< MC_DRIVE_OUT_PWM3 */
     float duty2_a, duty2_b;       /**< MC_DRIVE_OUT_PWM2 */
+    /* MC_DRIVE_OUT_CURRENT */
+    float id_ref_a, iq_ref_a; /**< current references in the frame theta_e_rad [A] */
+    float theta_e_rad;        /**< the frame's electrical angle [rad] */
+    float omega_e_rad_s;      /**< the frame's electrical speed (decoupling) [rad/s] */
+    bool rotor_frame;         /**< the frame is the rotor's (field weakening, regen
+                                   limit and open-phase check apply) */
+    bool reframe;             /**< the frame jumped: the current PIs are preset so
+                                   that the voltage vector stays where it was */
 } mc_drive_out_t;
 
 /**
@@ -416,7 +457,7 @@ typedef struct {
  * table and ctx must outlive the drive's use of them.
  */
 typedef struct {
-    uint32_t outputs;             /**< MC_DRIVE_OUT_PWM3 or MC_DRIVE_OUT_PWM2 */
+    uint32_t outputs;             /**< MC_DRIVE_OUT_PWM3, _PWM2 or _CURRENT */
     bool needs_encoder;           /**< refuse to attach without an encoder */
     uint32_t (*reset)(void *ctx); /**< may be NULL */
     uint32_t (*fast)(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out);
@@ -426,6 +467,10 @@ typedef struct {
      *  decel_rad_s2 [rad/s^2] and hold; fast() keeps running. NULL: the law
      *  cannot stop itself and the drive opens the bridge at once. */
     uint32_t (*stop)(void *ctx, float decel_rad_s2);
+    /** A speed law: the drive shapes its reference (mc_drive_set_speed_ref,
+     *  mc_drive_meas_t.omega_ref_rad_s) and stops it by ramping that to 0
+     *  (stop is then not used). */
+    bool uses_speed_ref;
     /** Measures the angle reference itself (alignment, index search,
      *  commissioning): runs before the angle is known (MC_DRIVE_ANGLE_REF_*).
      *  Last, so that a table written in order leaves it false. */
@@ -482,9 +527,18 @@ typedef struct {
     float stop_omega_ref_rad_s; /**< STOPPING from CURRENT: the speed ramp [rad/s] */
     float stop_time_s;          /**< time in STOPPING [s] */
     float stop_time_max_s;      /**< STOPPING: open the bridge after this [s] */
+    float stop_dir;             /**< STOPPING: sign of the encoder speed the stop began
+                                     at (+1, -1; 0: at rest or no encoder): the stop
+                                     ends when the speed crosses zero */
     bool asc_active;            /**< FAULT with the low-side switches on (asc_enable) */
-    bool index_seen;            /**< the last encoder sample had MC_HAL_ENCODER_FLAG_INDEX */
-    bool aligned;               /**< ALIGN: mc_drive_set_encoder_offset since init */
+    /* speed reference shaping (uses_speed_ref laws) */
+    float speed_target_rad_s; /**< mc_drive_set_speed_ref's target [rad/s] */
+    float speed_ref_rad_s;    /**< the shaped reference [rad/s] */
+    float speed_alpha_rad_s2; /**< its acceleration of the last step [rad/s^2] */
+    /* the current loop's last step, handed to the law (mc_drive_meas_t) */
+    float v_ab_prev_v[2]; /**< alpha-beta voltage commanded [V] */
+    bool index_seen;      /**< the last encoder sample had MC_HAL_ENCODER_FLAG_INDEX */
+    bool aligned;         /**< ALIGN: mc_drive_set_encoder_offset since init */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns
@@ -535,16 +589,25 @@ int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl);
  *  (also when already stopping or stopped). */
 int mc_drive_stop(mc_drive_t *d);
 
+/** Set the speed target of a speed law (uses_speed_ref): the drive slews
+ *  its reference to it at cfg.speed_accel_rad_s2 each fast step. Returns 0
+ *  or -EINVAL (NaN, inf); the caller checks the speed limit. While the
+ *  bridge is off the reference starts there at the next enable. */
+int mc_drive_set_speed_ref(mc_drive_t *d, float omega_m_rad_s);
+
 /** Set the dq current references. Returns 0 or -EINVAL (NaN, inf, or
  *  |ref| > i_max_a); on error the previous references stay. */
 int mc_drive_set_current_ref(mc_drive_t *d, float id_ref_a, float iq_ref_a);
 
 /** Take the limits that may change while the bridge is on (i_max_a,
  *  i_trip_a, the bus window, omega_max_rad_s, temp_max_c, the stall and
- *  unbalance supervision) from cfg, already validated as a whole by the
- *  caller (mc_params_validate, mc_drive_init's rules). A lower i_max_a takes
- *  effect at once: the present current references are clamped to it (sign
- *  kept), so the drive never runs a reference above the limit in force. */
+ *  unbalance supervision, the warnings, the controlled stop, the speed
+ *  reference's slew, the regenerative limit and the brake chopper) from
+ *  cfg, already validated as a whole by the caller (mc_params_validate,
+ *  mc_drive_init's rules). A lower i_max_a takes effect at once: the present
+ *  current references are clamped to it (sign kept), so the drive never
+ *  runs a reference above the limit in force, and a law giving current
+ *  references saturates at it from the next step (mc_drive_meas_t.i_max_a). */
 void mc_drive_set_runtime_limits(mc_drive_t *d, const mc_drive_cfg_t *cfg);
 
 /** Raise a fault from the application (e.g. the CAN command timeout):

@@ -54,6 +54,20 @@ static inline float mc_sat_f32(float x, float lo, float hi)
     return x;
 }
 
+/** The sign of x softened over a band: x / band clamped to [-1, 1] for
+ * band > 0, else -1, 0 or +1 (the dead-time compensation's current sign,
+ * shared by the drive and the sensorless observer's voltage error). */
+static inline float mc_sign_band_f32(float x, float band)
+{
+    if (band > 0.0f) {
+        return mc_sat_f32(x / band, -1.0f, 1.0f);
+    }
+    if (x > 0.0f) {
+        return 1.0f;
+    }
+    return (x < 0.0f) ? -1.0f : 0.0f;
+}
+
 /** |x| without libm. */
 static inline float mc_abs_f32(float x)
 {

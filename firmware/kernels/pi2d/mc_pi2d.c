@@ -137,6 +137,18 @@ uint32_t mc_pi2d_f32_init(mc_pi2d_f32_t *st, const mc_pi2d_f32_cfg_t *cfg)
     return MC_PI2D_ERR_NONE;
 }
 
+uint32_t mc_pi2d_f32_set_iq_max(mc_pi2d_f32_t *st, float iq_max_a)
+{
+    if (st == NULL) {
+        return MC_PI2D_ERR_NULL;
+    }
+    if (!pos_finite(iq_max_a)) {
+        return MC_PI2D_ERR_LIMITS;
+    }
+    st->cfg.iq_max_a = iq_max_a;
+    return MC_PI2D_ERR_NONE;
+}
+
 uint32_t mc_pi2d_f32_reset(mc_pi2d_f32_t *st, float qc0_rad, float nu0_nm)
 {
     if (st == NULL) {

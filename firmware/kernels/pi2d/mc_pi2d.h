@@ -194,6 +194,11 @@ uint32_t mc_pi2d_f32_init(mc_pi2d_f32_t *st, const mc_pi2d_f32_cfg_t *cfg);
  *  Non-finite values: MC_PI2D_ERR_NAN_INPUT returned, st not written. */
 uint32_t mc_pi2d_f32_reset(mc_pi2d_f32_t *st, float qc0_rad, float nu0_nm);
 
+/** Set the clamp of x2* (the q current the law asks for) at run time, e.g.
+ *  to a current limit lowered while it runs. Returns 0, or
+ *  MC_PI2D_ERR_LIMITS (nothing changes) for a value <= 0 or not finite. */
+uint32_t mc_pi2d_f32_set_iq_max(mc_pi2d_f32_t *st, float iq_max_a);
+
 /** One control step. Returns 0, or MC_PI2D_ERR_NAN_INPUT when an input is not
  *  finite (or so large that x2*, rho or u1^2 + u2^2 overflows): then *out is
  *  all zero (zero voltage), the state is unchanged and the flag is sticky.

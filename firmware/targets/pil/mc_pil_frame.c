@@ -10,8 +10,8 @@
 #define CFG_WORDS   23u
 #define READY_WORDS 2u
 #define MEAS_WORDS  29u
-#define OUT_WORDS   27u
-#define APP_WORDS   12u
+#define OUT_WORDS   21u
+#define APP_WORDS   9u
 /* CAN frames: id, time stamp, length and flags, then the data rounded up
  * to whole words (CAN_TX: the period's seq first) */
 #define CAN_HEAD_WORDS 3u
@@ -379,12 +379,6 @@ size_t mc_pil_encode_out(const mc_pil_out_t *o, uint8_t *buf, size_t cap)
     put_u32(&w, o->ipsr_fast);
     put_u32(&w, o->ipsr_slow);
     put_u32(&w, o->slow_ran);
-    put_u32(&w, o->app_duty_set_count);
-    put_f32(&w, o->app_duty_a);
-    put_f32(&w, o->app_duty_b);
-    put_f32(&w, o->app_duty_c);
-    put_u32(&w, o->app_pwm_enabled);
-    put_u32(&w, o->app_gate_kill_count);
     return finish(&w);
 }
 
@@ -420,12 +414,6 @@ int mc_pil_decode_out(const uint8_t *buf, size_t n, mc_pil_out_t *out)
     o.ipsr_fast = get_u32(&r);
     o.ipsr_slow = get_u32(&r);
     o.slow_ran = get_u32(&r);
-    o.app_duty_set_count = get_u32(&r);
-    o.app_duty_a = get_f32(&r);
-    o.app_duty_b = get_f32(&r);
-    o.app_duty_c = get_f32(&r);
-    o.app_pwm_enabled = get_u32(&r);
-    o.app_gate_kill_count = get_u32(&r);
     *out = o;
     return MC_PIL_OK;
 }
@@ -532,9 +520,6 @@ size_t mc_pil_encode_app(const mc_pil_app_t *a, uint8_t *buf, size_t cap)
     for (uint32_t i = 0u; i < MC_PIL_TM_EXT_RATES; ++i) {
         put_u32(&w, a->tm_ext_rate_hz[i]);
     }
-    put_f32(&w, a->speed_kp_a_s_rad);
-    put_f32(&w, a->speed_ki_dt_a_s_rad);
-    put_f32(&w, a->speed_i_max_a);
     put_u32(&w, a->pwm_hz_fixed);
     put_u32(&w, a->slow_loop_div_fixed);
     put_u32(&w, a->tick_hz);
@@ -556,9 +541,6 @@ int mc_pil_decode_app(const uint8_t *buf, size_t n, mc_pil_app_t *out)
     for (uint32_t i = 0u; i < MC_PIL_TM_EXT_RATES; ++i) {
         a.tm_ext_rate_hz[i] = get_u32(&r);
     }
-    a.speed_kp_a_s_rad = get_f32(&r);
-    a.speed_ki_dt_a_s_rad = get_f32(&r);
-    a.speed_i_max_a = get_f32(&r);
     a.pwm_hz_fixed = get_u32(&r);
     a.slow_loop_div_fixed = get_u32(&r);
     a.tick_hz = get_u32(&r);

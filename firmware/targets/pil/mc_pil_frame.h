@@ -35,9 +35,9 @@
  *                   to the drive (the board's CAN receive interrupt runs);
  *   target -> host  CAN_TX between MEAS and OUT: a frame the application
  *                   sent in that period (seq), in the order it sent them.
- * OUT then also says what the application's slow work did to the bridge
- * (app_*): the host applies it after integrating the period, where the SIL
- * rig's slow work acts (sim/cli/scenarios/can_telemetry.cpp).
+ * Both loops run within the period, as on the drive board (main.c: the
+ * ADC interrupt, then PendSV): OUT is what the bridge does for the next
+ * period, whatever part of the application set it.
  *
  * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
  * and parse a complete frame. Built for the target (hal/pil/mc_hal_pil.c) and for the
@@ -134,10 +134,6 @@ typedef struct {
     /* What the application's slow work did to the bridge (whole-image mode;
      * zero counts and pwm_enabled unchanged otherwise): applied by the host
      * after the period's integration. */
-    uint32_t app_duty_set_count;
-    float app_duty_a, app_duty_b, app_duty_c;
-    uint32_t app_pwm_enabled; /**< 1: modulating after the slow work */
-    uint32_t app_gate_kill_count;
 } mc_pil_out_t;
 
 /** Host -> target (whole-image mode): the application's binding besides the
@@ -145,9 +141,6 @@ typedef struct {
 typedef struct {
     float tm_budget_frac;
     uint32_t tm_ext_rate_hz[MC_PIL_TM_EXT_RATES];
-    float speed_kp_a_s_rad;
-    float speed_ki_dt_a_s_rad;
-    float speed_i_max_a;
     uint32_t pwm_hz_fixed;
     uint32_t slow_loop_div_fixed;
     uint32_t tick_hz; /**< the board's tick frequency, answered before the first MEAS */

@@ -273,11 +273,8 @@ static void board_defaults(mc_params_t *p)
     p->lq_h = 1.14e-3f;
     p->flux_wb = 0.11f;
     p->pole_pairs = 4u;
-    p->current_bw_rad_s = CURRENT_BW_RAD_S;
     p->v_limit_ratio = 0.95f;
-    p->speed_pll_bw_rad_s = 1000.0f;
     p->i_max_a = I_MAX_A;
-    p->i_trip_a = I_TRIP_A;
     p->i_sense_max_a = MC_BOARD_DESC.i_sense_max_a;
     p->dead_time_s = (float)MC_BOARD_DESC.deadtime_ns * 1e-9f;
     p->encoder_cpr = MC_BOARD_DESC.enc_counts_per_rev;
@@ -328,20 +325,9 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
         b->app.wdg_timeout_ms = WDG_TIMEOUT_MS;
         b->app.wdg_erase_timeout_ms = WDG_ERASE_MS;
     }
-    {
-        /* Sensored speed loop at the slow rate on the default motor:
-         * kp = J bw / kt, ki = kp bw / 4 (critically damped), bw 20 rad/s,
-         * J of the defaults; kt = 1.5 p psi. */
-        const float kt = 1.5f * (float)b->defaults.pole_pairs * b->defaults.flux_wb;
-        const float bw = 20.0f;
-        const float kp = b->defaults.j_kgm2 * bw / kt;
-        b->app.speed.kp_a_s_rad = kp;
-        b->app.speed.ki_dt_a_s_rad = kp * bw / 4.0f / ((float)PWM_HZ / (float)SLOW_LOOP_DIV);
-        b->app.speed.i_max_a = I_MAX_A;
-    }
     /* SPEED by the law of the speed_law parameter, POSITION by the
-     * position cascade, their gains from the motor values
-     * (firmware/app/config/mc_law_cfg.h) */
+     * position cascade, every gain from the parameters (derived from the
+     * motor values unless set: firmware/app/config/mc_params.h) */
     b->app.laws_from_params = true;
     b->app.set_rx_filter = set_node_filter;
     b->app.filter_ctx = b;

@@ -4,14 +4,17 @@
  *        the two loops in their interrupts.
  *
  *   ADC_IRQHandler  (IRQ 18, priority 0, the highest): fast loop, once per
- *                   PWM period: mc_drive_fast_step() and the application's
- *                   fast-loop mark (watchdog); every slow_loop_div periods
- *                   it pends PendSV.
+ *                   PWM period: mc_app_fast_step() (the drive's fast step
+ *                   and the application's fast-loop mark for the watchdog);
+ *                   every slow_loop_div periods it pends PendSV.
  *   CAN1_RX0        (the board's, priority 8): received frames into the
  *                   application's ring (mc_main_can_rx).
- *   PendSV_Handler  (priority 15, the lowest): slow loop, mc_drive_slow_step()
- *                   and the application's slow work (commands, timeout,
- *                   speed loop, CAN state, telemetry, watchdog feed).
+ *   PendSV_Handler  (priority 15, the lowest): slow loop, mc_app_slow_step()
+ *                   (the drive's slow step and the application's slow work:
+ *                   commands, timeout, CAN state, telemetry, watchdog feed).
+ * The two bodies are the application's functions, which the simulator's
+ * one period (hal/host/include/hal_host/app_rig.hpp) calls in the same
+ * order: what a scenario shows is what this image runs.
  *   main            sleeps (WFI) between interrupts.
  *
  * The application (firmware/app/app/mc_app) is bound when the board gives
@@ -67,14 +70,6 @@ __attribute__((weak)) const mc_app_cfg_t *mc_board_app_cfg(void)
     return NULL;
 }
 
-/* Between the drive's slow step and the application's slow work: boards
- * that need the boundary (the PIL board, which applies what the slow work
- * does to the bridge after the host has integrated the period, as the SIL
- * rig does) define it; the drive boards keep this one. */
-__attribute__((weak)) void mc_board_app_work_begin(void)
-{
-}
-
 /* Boards without a CAN controller of their own (the PIL board) keep this. */
 __attribute__((weak)) int mc_board_can_bitrate(uint32_t bitrate_bps)
 {
@@ -103,10 +98,7 @@ void ADC_IRQHandler(void)
         return;
     }
     mc_board_apply_commands(&g_drive);
-    const bool slow_due = mc_drive_fast_step(&g_drive);
-    if (g_app_on) {
-        mc_app_fast_mark(&g_app);
-    }
+    const bool slow_due = g_app_on ? mc_app_fast_step(&g_app) : mc_drive_fast_step(&g_drive);
     if (slow_due) {
         mc_scb_pend_pendsv(); /* period_done follows the slow step */
     } else {
@@ -116,10 +108,10 @@ void ADC_IRQHandler(void)
 
 void PendSV_Handler(void)
 {
-    mc_drive_slow_step(&g_drive);
     if (g_app_on) {
-        mc_board_app_work_begin();
-        (void)mc_app_slow_work(&g_app);
+        mc_app_slow_step(&g_app);
+    } else {
+        mc_drive_slow_step(&g_drive);
     }
     mc_board_period_done(&g_drive, true);
 }

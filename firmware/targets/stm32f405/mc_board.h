@@ -40,11 +40,6 @@ const mc_drive_cfg_t *mc_board_drive_cfg(void);
  *  own command path. */
 const mc_app_cfg_t *mc_board_app_cfg(void);
 
-/** PendSV, between the drive's slow step and the application's slow work
- *  (only when the application runs). A weak no-op in main.c; the PIL board
- *  marks there which bridge actions belong to the slow work. */
-void mc_board_app_work_begin(void);
-
 /** The CAN bit rate of the booted configuration (can_bitrate_bps), applied
  *  once after mc_app_boot and before the application starts: the board
  *  re-times its controller (mc_board_f405_can_set_bitrate). Returns 0, or

@@ -12,6 +12,8 @@ void mc_board_comm_cfg_from(const mc_board_desc_t *p_desc, const mc_params_t *p,
     const float dt_s = 1.0f / (float)p->pwm_hz;
     const mc_comm_can_cfg_t zero = {0};
     mc_comm_can_cfg_t k = zero;
+    mc_params_eff_t e;
+    (void)mc_params_resolve(p, &e); /* the encoder loop's bandwidth, derived unless set */
     k.base.dt_s = dt_s;
     k.base.i_test_a = 0.25f * p_desc->i_sense_max_a;
     k.base.v_test_max_v = 0.9f * p_desc->vbus_min_v * 0.577350269f; /* / sqrt(3) */
@@ -29,6 +31,6 @@ void mc_board_comm_cfg_from(const mc_board_desc_t *p_desc, const mc_params_t *p,
     if (k.status_div == 0u) {
         k.status_div = 1u;
     }
-    k.enc_pll_bw_rad_s = p->speed_pll_bw_rad_s;
+    k.enc_pll_bw_rad_s = e.p.speed_pll_bw_rad_s;
     *p_out = k;
 }

@@ -40,6 +40,7 @@ bool parse_socketcand_interface(const std::string& interface, std::string* host,
 
 CanTransport::CanTransport(const CanTransportConfig& cfg) : cfg_(cfg) {
   if (!cfg_.now_s) throw std::invalid_argument("CanTransport: a clock is required");
+  if (!cfg_.rx_now_s) cfg_.rx_now_s = cfg_.now_s;
   std::string host, why;
   uint16_t port = 0;
   if (parse_socketcand_interface(cfg_.interface, &host, &port, &why)) {
@@ -52,7 +53,7 @@ CanTransport::CanTransport(const CanTransportConfig& cfg) : cfg_(cfg) {
     inner_ = sock_->hal();
   } else {
     log_ = std::make_unique<CandumpLogCan>(cfg_.log_path, cfg_.log_iface, cfg_.now_s,
-                                           cfg_.script_path, cfg_.now_ticks);
+                                           cfg_.script_path, cfg_.now_ticks, cfg_.rx_now_s);
     inner_ = log_->hal();
   }
   if (!log_ && !cfg_.script_path.empty()) {
@@ -128,7 +129,7 @@ int CanTransport::send(const mc_hal_can_frame_t* f) noexcept {
 int CanTransport::receive(mc_hal_can_frame_t* f) noexcept {
   if (script_) {
     try {
-      if (script_->next_due(cfg_.now_s(), f)) {
+      if (script_->next_due(cfg_.rx_now_s(), f)) {
         f->timestamp_ticks = cfg_.now_ticks ? cfg_.now_ticks() : 0u;
         ++script_frames_;
         return 0;

@@ -152,9 +152,13 @@ bool CandumpScript::next_due(double now_s, mc_hal_can_frame_t* f) {
 
 CandumpLogCan::CandumpLogCan(const std::string& out_path, const std::string& iface,
                              std::function<double()> now_s, const std::string& rx_path,
-                             std::function<uint32_t()> now_ticks)
-    : iface_(iface), now_s_(std::move(now_s)), now_ticks_(std::move(now_ticks)) {
+                             std::function<uint32_t()> now_ticks, std::function<double()> rx_now_s)
+    : iface_(iface),
+      now_s_(std::move(now_s)),
+      rx_now_s_(std::move(rx_now_s)),
+      now_ticks_(std::move(now_ticks)) {
   if (!now_s_) throw std::invalid_argument("CandumpLogCan: a clock is required");
+  if (!rx_now_s_) rx_now_s_ = now_s_;
   if (!rx_path.empty()) script_ = std::make_unique<CandumpScript>(rx_path);
   if (!out_path.empty()) {
     out_ = std::fopen(out_path.c_str(), "w");
@@ -197,7 +201,7 @@ int CandumpLogCan::receive(mc_hal_can_frame_t* f) noexcept {
   if (!script_) return -EAGAIN;
   double now = 0.0;
   try {
-    now = now_s_();
+    now = rx_now_s_();
   } catch (...) {
     return -EIO;
   }

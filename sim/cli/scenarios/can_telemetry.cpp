@@ -79,6 +79,7 @@
 #include "can_bus.hpp"
 #include "drive_setup.hpp"
 #include "foc_sil.hpp"
+#include "hal_host/app_rig.hpp"
 #include "hal_host/file_flash.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
@@ -252,6 +253,15 @@ mc_params_t scenario_params(const Params& P, const CanBoard& cb, const mc_drive_
   p.can_timeout_s = static_cast<float>(P.get("timeout_s"));
   p.stop_ramp_a_per_s = static_cast<float>(P.get("stop_ramp_a_per_s"));
   p.stop_decel_rad_s2 = static_cast<float>(P.get("stop_decel_rad_s2"));
+  // the speed law's crossover (its gains derive from it and J) and the
+  // speed reference's ramp
+  p.speed_bw_rad_s = static_cast<float>(P.get("speed_bw_rad_s"));
+  p.speed_ramp_rad_s2 = static_cast<float>(P.get("speed_ramp_rad_s2"));
+  // the position move as this scenario always ran it: cruise at the speed
+  // limit, accelerate and decelerate at the stop's rate
+  p.traj_v_max_rad_s = p.speed_max_rad_s;
+  p.traj_a_max_rad_s2 = p.stop_decel_rad_s2;
+  p.traj_d_max_rad_s2 = p.stop_decel_rad_s2;
   p.tm_heartbeat_hz = static_cast<uint32_t>(P.get("rate_heartbeat_hz"));
   p.tm_currents_hz = static_cast<uint32_t>(P.get("rate_currents_hz"));
   p.tm_voltages_hz = static_cast<uint32_t>(P.get("rate_voltages_hz"));
@@ -321,16 +331,6 @@ void run_can_telemetry(RunContext& ctx) {
       open_can_bus(board, P.get("realtime") != 0.0, ctx.out_dir);
   const mc_hal_can_t* can = can_bus->hal();
 
-  {
-    // The application's speed loop: a PI on J dw/dt = Kt iq, kp = J bw / Kt,
-    // ki = kp bw / 4 (critically damped), at the slow rate.
-    const double kt = cb.kt_nm_a;  // 1.5 p Phi [N m/A]
-    const double bw = P.get("speed_bw_rad_s");
-    const float kp = static_cast<float>(o.J_kgm2 * bw / kt);
-    app.cfg.speed.kp_a_s_rad = kp;
-    app.cfg.speed.ki_dt_a_s_rad = static_cast<float>(kp * bw / 4.0 / tick_hz_d);
-    app.cfg.speed.i_max_a = static_cast<float>(P.get("speed_i_max_a"));
-  }
   // The laws of SPEED (speed_law) and POSITION from the parameters.
   app.cfg.laws_from_params = true;
   const uint32_t aerr = mc_app_start(&app, &d, board.hal(), can, serve_params);
@@ -389,7 +389,6 @@ void run_can_telemetry(RunContext& ctx) {
     ab.tm_budget_frac = app.cfg.tm_budget_frac;
     std::copy(std::begin(app.cfg.tm_ext_rate_hz), std::end(app.cfg.tm_ext_rate_hz),
               std::begin(ab.tm_ext_rate_hz));
-    ab.speed = app.cfg.speed;
     ab.pwm_hz_fixed = app.cfg.pwm_hz_fixed;
     ab.slow_loop_div_fixed = app.cfg.slow_loop_div_fixed;
     ab.serve_params = serve_params;
@@ -423,13 +422,12 @@ void run_can_telemetry(RunContext& ctx) {
   uint32_t rx_read_max = 0;  // frames taken from the HAL by one receive call
   std::vector<double> row(cols.size());
   for (long k = 1; k <= n; ++k) {
-    cb.step();
-    if (k % static_cast<long>(o.slow_loop_div) != 0) continue;
-    // The slow loop's application work, as on the MCU: the frames received
-    // since the previous step (the MCU's CAN interrupt), then commands,
-    // supervision, the speed loop and telemetry.
-    rx_read_max = std::max(rx_read_max, mc_app_can_rx_isr(&app));
-    const uint32_t sent = mc_app_slow_work(&app);
+    // One period as the image's interrupts run it (hal_host::app_period):
+    // the CAN receive interrupt, the fast step, the slow step when due.
+    const hal_host::AppPeriod ap = hal_host::app_period(board, app);
+    rx_read_max = std::max(rx_read_max, ap.rx_frames);
+    if (!ap.slow_ran) continue;
+    const uint32_t sent = app.tm_sent;
     ++slow_steps;
     frames += static_cast<uint64_t>(__builtin_popcount(sent));
 
@@ -561,8 +559,14 @@ std::vector<ParamSpec> own_params() {
   const std::vector<ParamSpec> own = {
       {"stop_decel_rad_s2", 200.0, "rad/s^2", "speed ramp of a safe stop", 0.01, 1e6},
       {"speed_max_rad_s", 150.0, "rad/s", "largest speed reference accepted", 0.1, 1000.0},
-      {"speed_bw_rad_s", 20.0, "rad/s", "bandwidth of the scenario's speed PI", 0.1, 500.0},
-      {"speed_i_max_a", 3.0, "A", "current limit of the speed PI", 0.0, 10.0},
+      {"speed_bw_rad_s", 0.0, "rad/s",
+       "crossover of the speed loops (parameter speed_bw_rad_s; 0: derived, min(current_bw / 10, "
+       "speed_pll_bw / 4))",
+       0.0, 500.0},
+      {"speed_ramp_rad_s2", 0.0, "rad/s^2",
+       "speed reference ramp (parameter speed_ramp_rad_s2; 0: derived, half the current limit's "
+       "acceleration)",
+       0.0, 1.0e6},
       {"pwm_hz", 10000.0, "Hz", "PWM and current-loop rate", 1000.0, 100000.0},
       {"slow_loop_div", 10.0, "1", "slow loop (CAN) every this many PWM periods", 1.0, 1000.0},
       {"bw_hz", 200.0, "Hz", "designed current-loop bandwidth", 1.0, 2000.0},
@@ -586,10 +590,14 @@ std::vector<ParamSpec> file_params(const MotorFiles& f) {
   const std::vector<ParamSpec> own = {
       {"speed_max_rad_s", g.speed_limit_rad_s, "rad/s",
        "largest speed reference accepted (derived: speed_limit_rad_s)", 0.1, 10000.0},
-      {"speed_bw_rad_s", g.speed_wc_rad_s, "rad/s",
-       "bandwidth of the scenario's speed PI (derived: speed_wc_rad_s)", 0.1, 1.0e4},
-      {"speed_i_max_a", g.i_limit_a, "A", "current limit of the speed PI (<= i_limit_a)", 0.0,
-       g.i_limit_a},
+      {"speed_bw_rad_s", 0.0, "rad/s",
+       "crossover of the speed loops (parameter speed_bw_rad_s; 0: derived, min(current_bw / 10, "
+       "speed_pll_bw / 4))",
+       0.0, 1.0e4},
+      {"speed_ramp_rad_s2", 0.0, "rad/s^2",
+       "speed reference ramp (parameter speed_ramp_rad_s2; 0: derived, half the current limit's "
+       "acceleration)",
+       0.0, 1.0e6},
       {"slow_loop_div", std::max(1.0, std::round(f.board.pwm_hz / 1000.0)), "1",
        "slow loop (CAN) every this many PWM periods (about 1 kHz)", 1.0, 1000.0},
       {"load_nm", 0.0, "N m", "constant load torque (at most the current limit's torque)",

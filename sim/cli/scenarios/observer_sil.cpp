@@ -156,16 +156,23 @@ Sil::Sil(const Machine& m, const SilOptions& o, const mc_ctrl_sls_cfg_t& cfg, Lo
     throw std::invalid_argument("sensorless controller rejected its configuration: bits " +
                                 std::to_string(cerr) + " (decimal)");
   }
-  // The drive's own FOC (unused in CTRL mode) gets the same current loop.
+  // The drive's current loop runs the f32 law's references (the q31 twin
+  // runs its own): kp = L bw, ki = R bw at the law's bandwidth, and the
+  // law's duty-side dead-time correction.
   mc_drive_cfg_t dc{};
+  float kp = 0.0f, ki = 0.0f;
+  (void)mc_foc_f32_gains_from_bandwidth(cfg.r_ohm, cfg.l_h, cfg.cur_bw_rad_s, &kp, &ki);
   dc.foc.r_ohm = cfg.r_ohm;
   dc.foc.ld_h = cfg.l_h;
   dc.foc.lq_h = cfg.l_h;
   dc.foc.flux_wb = cfg.flux_wb;
-  dc.foc.kp_d_v_per_a = ctrl_.foc.pi_d.kp;
-  dc.foc.ki_d_v_per_as = ctrl_.foc.pi_d.ki_per_s;
-  dc.foc.kp_q_v_per_a = ctrl_.foc.pi_q.kp;
-  dc.foc.ki_q_v_per_as = ctrl_.foc.pi_q.ki_per_s;
+  dc.foc.kp_d_v_per_a = kp;
+  dc.foc.ki_d_v_per_as = ki;
+  dc.foc.kp_q_v_per_a = kp;
+  dc.foc.ki_q_v_per_as = ki;
+  dc.dead_time_comp = cfg.dead_comp_duty && cfg.dead_time_s > 0.0f;
+  dc.dead_time_s = cfg.dead_time_s;
+  dc.dead_band_a = cfg.dead_band_a;
   dc.foc.dt_s = cfg.dt_s;
   dc.foc.aw = MC_PI_AW_CLAMP;
   dc.foc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
@@ -283,8 +290,8 @@ void Sil::record(Summary& s) const {
   s.set("pll_bw_rad_s", c.pll_bw_rad_s);
   s.set("current_loop_rate_hz", 1.0 / c.dt_s);
   s.set("current_loop_bw_rad_s", c.cur_bw_rad_s);
-  s.set("current_kp_v_per_a", ctrl_.foc.pi_d.kp);
-  s.set("current_ki_v_per_as", ctrl_.foc.pi_d.ki_per_s);
+  s.set("current_kp_v_per_a", drive_.cfg.foc.kp_d_v_per_a);
+  s.set("current_ki_v_per_as", drive_.cfg.foc.ki_d_v_per_as);
   s.set("speed_loop_rate_hz", 1.0 / (c.dt_s * static_cast<float>(c.speed_div)));
   s.set("speed_wc_rad_s", o_.speed_wc_rad_s);
   s.set("speed_kp_a_s_rad", c.speed_kp_a_s_rad);

@@ -5,8 +5,8 @@
 # The SIL drive (mcsim can-telemetry, paced to the wall clock) on vcan0;
 # candump -L and `mdtool record rec.blf` record (not .mf4 in the VM: asammdf's compiled
 # dependencies use instructions the emulated CPU lacks; the host converts); then mdtool scan, status,
-# config get (the SIL has no parameter service attached: the drive's
-# refusal, CMD_ERROR UNSUPPORTED, must come back decoded, exit 4), monitor
+# config get (the SIL serves the parameter table its scenario set builds,
+# as the image does: the value comes back), monitor
 # (headless, to a PNG) and run speed (the keep-alive sent by mdtool; held
 # until the measured speed settles, counted in telemetry frames, so a slow
 # emulated clock cannot fail it; the drive stops when it disables), and, before
@@ -36,7 +36,7 @@ pids+=($!); CD=$!
 REC=$!; pids+=("$REC")  # python itself (a shell function here would fork a subshell)
 wait_for 120 test -e rec.ready || { say "recorder did not start"; cat record.out; exit 1; }
 MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN" --duration 900 --set end_after_stop_s=0.3 \
-  --set realtime=1 --set timeout_s=2.0 --set pwm_hz=2000 --set slow_loop_div=2 --set substeps=1 \
+  --set realtime=1 --set timeout_s=2.0 --set pwm_hz=5000 --set slow_loop_div=5 --set substeps=1 \
   --set bw_hz=20 --set speed_pll_bw_rad_s=500 --set J_kgm2=0.002 > mcsim.out 2>&1 &
 SIM=$!; pids+=("$SIM")
 wait_for 60 grep -q " 021#" candump.log || { say "no heartbeat from the SIL"; cat mcsim.out; exit 1; }
@@ -44,8 +44,8 @@ say "drive is streaming"
 # every mdtool command in one Python process (tests/can/vm/mdtool_batch.py:
 # the same entry point as the command line; one interpreter start instead of
 # five, which the emulated CPU makes slow on a busy machine); calibrate comes
-# before run (the SIL ends after the run's disable); this SIL runs outside the
-# parameter table (no service): results shown, not staged
+# before run (the SIL ends after the run's disable); the results are staged
+# on the drive's parameter service (not applied: no --save)
 B="--interface socketcan --channel $IF"
 cat > steps.txt <<EOS
 scan scan $B --timeout 10

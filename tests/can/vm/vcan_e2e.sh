@@ -48,11 +48,11 @@ CD=$!; pids+=("$CD")
 REC=$!; pids+=("$REC")
 wait_for 120 test -e rec.ready || { say "logger did not start"; cat record.out; exit 1; }
 
-# 2 kHz PWM, one RK4 step per period, slow loop (CAN) at 1 kHz: light
+# 5 kHz PWM (at 2 kHz the 200 V ripple exceeds the 10 A limit: no safe gains), one RK4 step per period, slow loop (CAN) at 1 kHz: light
 # enough to keep up with the wall clock under QEMU's instruction emulation.
 # The run ends 0.3 s after the drive stopped (at most 30 s simulated).
 MCSIM_CAN_IF=$IF "$MCSIM" run can-telemetry --out "$RUN" --duration 30 --set end_after_stop_s=0.3 \
-  --set realtime=1 --set timeout_s=2.0 --set pwm_hz=2000 --set slow_loop_div=2 --set substeps=1 \
+  --set realtime=1 --set timeout_s=2.0 --set pwm_hz=5000 --set slow_loop_div=5 --set substeps=1 \
   --set bw_hz=20 --set speed_pll_bw_rad_s=500 > mcsim.out 2>&1 &
 SIM=$!; pids+=("$SIM")
 # the drive is up once its first heartbeat (id 0x021) is on the bus

@@ -90,10 +90,6 @@ TEST(PilFrame, OutAndCfgRoundTrip) {
   o.duty_b = nan_with_payload();
   o.cmd_rc = -EBUSY;
   o.ipsr_fast = 34u;
-  o.app_duty_set_count = 1u;
-  o.app_duty_c = -0.0f;
-  o.app_pwm_enabled = 1u;
-  o.app_gate_kill_count = 2u;
   uint8_t buf[MC_PIL_MAX_FRAME];
   size_t n = mc_pil_encode_out(&o, buf, sizeof buf);
   mc_pil_out_t od{};
@@ -183,8 +179,8 @@ TEST(PilFrame, WholeImageFramesRoundTrip) {
   mc_pil_app_t a{};
   a.tm_budget_frac = 0.5f;
   a.tm_ext_rate_hz[4] = 50u;
-  a.speed_kp_a_s_rad = std::nextafter(0.378f, 1.0f);
-  a.speed_i_max_a = nan_with_payload();
+  a.tm_budget_frac = std::nextafter(0.378f, 1.0f);
+  a.tick_hz = 0xFFFFFFFFu;
   a.slow_loop_div_fixed = 10u;
   n = mc_pil_encode_app(&a, buf, sizeof buf);
   mc_pil_app_t ad{};

@@ -41,6 +41,8 @@ struct StopTrace {
     long first_ready_slow = -1;     // first slow step with ramp 0 and |omega_est| <= rest
     bool bridge_on_while_stopping = true;
     double omega_at_open = 0.0;
+    bool opened_on_crossing = false; // the estimate had crossed zero when it opened
+    double omega_back = 0.0;         // largest rotor speed against kOmega0's sign
 };
 
 class AppStop : public AppDrive
@@ -120,6 +122,7 @@ class AppStop : public AppDrive
                 tr.first_ready_slow = step_;
             }
             if (tr.start_step >= 0) {
+                tr.omega_back = std::max(tr.omega_back, -omega_);
                 tr.t_s.push_back(static_cast<double>(step_ - tr.start_step) * kDt);
                 tr.omega.push_back(omega_);
                 if (fake.pwm3.enabled != (d.mode == MC_DRIVE_MODE_STOPPING)) {
@@ -130,6 +133,7 @@ class AppStop : public AppDrive
         if (!fake.pwm3.enabled) {
             tr.open_step = step_;
             tr.omega_at_open = omega_;
+            tr.opened_on_crossing = d.enc_trk.omega_rad_s < 0.0f;
         }
         EXPECT_GE(tr.start_step, first + 1);
         EXPECT_LE(tr.start_step, first + start_within);
@@ -182,8 +186,16 @@ class AppStop : public AppDrive
         EXPECT_GE(t_stop, t_pred - 0.0005);
         EXPECT_LE(t_stop, t_pred + 0.002);
         // The step in which the bridge opens: the first slow step at which
-        // the ramp is at 0 and the estimate at rest, not later.
-        EXPECT_EQ(tr.first_ready_slow, tr.open_step);
+        // the ramp is at 0 and the estimate at rest, or earlier the fast step
+        // in which the estimate crossed zero (a stop never reverses).
+        if (tr.opened_on_crossing) {
+            EXPECT_TRUE(tr.first_ready_slow < 0 || tr.open_step <= tr.first_ready_slow);
+        } else {
+            EXPECT_EQ(tr.first_ready_slow, tr.open_step);
+        }
+        // Never backwards by more than the crossing's period and the one its
+        // current acts in: 2 decel T = 0.05 rad/s.
+        EXPECT_LE(tr.omega_back, 2.0 * kDecel * kDt);
         // At rest when it opens: the estimate's bound; the rotor may differ
         // from the estimate by its lag and quantisation, 0.1 rad/s (measured
         // |omega| <= 0.015 rad/s).
@@ -210,7 +222,13 @@ TEST_F(AppStop, StopCommandDeceleratesAtTheConfiguredRate)
     mc_record("t_stop_over_pred", t_stop_ / (kOmega0 / kDecel), 1.0 + 0.002 / (kOmega0 / kDecel));
 }
 
-TEST_F(AppStop, CanCommandTimeoutDeceleratesAtTheConfiguredRate)
+// CURRENT (torque) mode over CAN: the command timeout ramps the torque to
+// zero at stop_ramp_a_per_s, then opens the bridge; the drive's
+// speed-controlled stop (configured here) is not used: the host owned the
+// torque, not the speed, and a speed-controlled stop would brake against
+// (or drive with) whatever the load does. SPEED and POSITION stop under
+// control (the drive's STOPPING: tests/sil/position/test_stop_sil.cpp).
+TEST_F(AppStop, CanCommandTimeoutInTorqueModeRampsTheTorqueDown)
 {
     SpinUp();
     mc_can_cmd_cfg_t cc{};
@@ -224,7 +242,8 @@ TEST_F(AppStop, CanCommandTimeoutDeceleratesAtTheConfiguredRate)
     cc.position_drive_mode = MC_DRIVE_MODE_IDLE;
     mc_can_cmd_t c{};
     ASSERT_EQ(MC_CAN_CMD_CFG_OK, mc_can_cmd_init(&c, &cc, &d, nullptr));
-    // control mode CURRENT (0x11), then enable (0x10): node 1, classic frames
+    ASSERT_GT(d.cfg.stop_decel_rad_s2, 0.0f) << "the controlled stop is configured";
+    // control mode CURRENT (0x11), enable (0x10), then 2 A of q current
     mc_hal_can_frame_t f{};
     f.id = (1u << 5) | 0x11u;
     f.len = 1;
@@ -234,14 +253,39 @@ TEST_F(AppStop, CanCommandTimeoutDeceleratesAtTheConfiguredRate)
     ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_cmd_handle(&c, &f, &fake.can_dev));
     ASSERT_TRUE(c.enabled);
     ASSERT_EQ(MC_DRIVE_MODE_CURRENT, d.mode);
+    ASSERT_EQ(0, mc_drive_set_current_ref(&d, 0.0f, 2.0f));
     can_ = &c;
-    // No further command: the timeout (100 ticks of the slow loop = 1000
-    // fast steps) starts the stop in its 100th slow step.
-    const StopTrace tr = RunStop(1000);
-    EXPECT_GE(c.ticks_since_alive, 100u);
-    ExpectControlledStop(tr, MC_DRIVE_STOP_CMD);
+    // No keep-alive: the timeout (100 slow ticks = 1000 fast steps), then
+    // 2 A at 100 A/s = 20 ms = 40 slow ticks down to 0.
+    std::vector<float> iq; // the q reference at each slow step of the stop
+    bool entered_stopping = false;
+    long steps = 0;
+    while (c.enabled && steps < 4000) {
+        if (Step() && c.stopping) {
+            iq.push_back(d.iq_ref_a);
+        }
+        entered_stopping = entered_stopping || (d.mode == MC_DRIVE_MODE_STOPPING);
+        ++steps;
+    }
     EXPECT_FALSE(c.enabled);
     EXPECT_EQ(MC_CAN_STOP_CMD_TIMEOUT, c.stop_reason);
+    EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
+    EXPECT_FALSE(fake.pwm3.enabled) << "the bridge is open at the end of the ramp";
+    EXPECT_FALSE(entered_stopping) << "no speed-controlled stop in torque mode";
+    EXPECT_GE(c.ticks_since_alive, 100u);
+    // 40 ticks of ramp (+1: the tick that reaches 0 ends the run)
+    ASSERT_GE(iq.size(), 40u);
+    ASSERT_LE(iq.size(), 41u);
+    // the ramp: 0.05 A per 0.5 ms slow tick (float steps: to 1e-5 A each)
+    EXPECT_NEAR(2.0f - iq[0], 0.05f, 1e-5f);
+    for (size_t k = 1; k < 39; ++k) {
+        EXPECT_NEAR(iq[k - 1] - iq[k], 0.05f, 1e-5f) << k;
+    }
+    // never below zero: the ramp never reverses the torque
+    for (float x : iq) {
+        EXPECT_GE(x, 0.0f);
+    }
+    EXPECT_EQ(0.0f, d.iq_ref_a);
     can_ = nullptr;
 }
 

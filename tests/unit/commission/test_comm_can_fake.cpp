@@ -263,13 +263,17 @@ TEST_F(CommCan, DoneStagesEveryResultThenApplyPutsThemInEffect) {
   EXPECT_EQ(p.i_offset_b_a - 0.05f, s.i_offset_b_a);
   EXPECT_EQ(2e-4f, s.j_kgm2);
   EXPECT_EQ(1e-5f, s.b_nm_s_rad);
+  // the speed gains are staged as derived (0), and derive from the new J
+  EXPECT_EQ(0.0f, s.speed_kp_a_s_rad);
+  EXPECT_EQ(0.0f, s.speed_ki_a_rad);
+  mc_params_eff_t e;
+  mc_params_resolve(&s, &e);
   float kp = 0, ki = 0;
-  ASSERT_EQ(MC_GAINS_OK,
-            mc_gains_speed_pi(static_cast<double>(2e-4f),
-                              mc_gains_kt_nm_a(7.0, static_cast<double>(0.02f)),
-                              mc_gains_speed_wc_rad_s(p.current_bw_rad_s, 1000.0), &kp, &ki));
-  EXPECT_EQ(kp, s.speed_kp_a_s_rad);
-  EXPECT_EQ(ki, s.speed_ki_a_rad);
+  ASSERT_EQ(MC_GAINS_OK, mc_gains_speed_pi(static_cast<double>(2e-4f),
+                                           mc_gains_kt_nm_a(7.0, static_cast<double>(0.02f)),
+                                           e.g.speed_wc_rad_s, &kp, &ki));
+  EXPECT_EQ(kp, e.p.speed_kp_a_s_rad);
+  EXPECT_EQ(ki, e.p.speed_ki_a_rad);
   // the end status, then the results in order, bit-exact
   const auto rx = Drain();
   ASSERT_EQ(1u + MC_COMM_CAN_ITEM_COUNT, rx.size());
@@ -296,7 +300,8 @@ TEST_F(CommCan, DoneStagesEveryResultThenApplyPutsThemInEffect) {
   EXPECT_TRUE(d.cfg.encoder_reversed);
   EXPECT_EQ(s.i_offset_a_a, d.cfg.i_offset_a[0]);
   float kpd = 0, kid = 0;
-  ASSERT_EQ(0u, mc_foc_f32_gains_from_bandwidth(0.2f, 1e-4f, p.current_bw_rad_s, &kpd, &kid));
+  // (the bandwidth the set derives: the table's current_bw_rad_s is 0)
+  ASSERT_EQ(0u, mc_foc_f32_gains_from_bandwidth(0.2f, 1e-4f, e.p.current_bw_rad_s, &kpd, &kid));
   EXPECT_EQ(kpd, d.cfg.foc.kp_d_v_per_a);
   EXPECT_EQ(kid, d.cfg.foc.ki_d_v_per_as);
   // REPORT sends them again
@@ -434,6 +439,15 @@ TEST_F(CommCan, TestValuesBeyondTheDrivesLimitsAreRefusedNothingEnergised) {
     raw = 0;
     ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&srv, MC_PARAM_OP_APPLY, 0u, &raw));
   };
+  {
+    // the under-voltage trip at 12 V (derived it is half of vbus_v, 24 V:
+    // a 15 V bus would be a fault, not a sag)
+    uint32_t raw = 0;
+    const float v_min = 12.0f;
+    std::memcpy(&raw, &v_min, sizeof raw);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_VBUS_MIN_V, &raw));
+  }
   apply(3.0f, 50.0f);
   sample(15.0f);
   ASSERT_EQ(15.0f, d.tm.vbus_v);
@@ -450,7 +464,9 @@ TEST_F(CommCan, TestValuesBeyondTheDrivesLimitsAreRefusedNothingEnergised) {
   m.params = nullptr;
   EXPECT_EQ(MC_CAN_ERR_RANGE, Comm(MC_COMM_CAN_START, 0.0f, 0.0f, d.cfg.omega_max_rad_s));
   // at the limits themselves: accepted (the DBC's steps: 1 mA, 10 mV, 0.1 rad/s)
-  EXPECT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START, p.i_max_a, 13.85f, 590.0f));
+  // (10 rad/s below the trip: 440 of the derived 1.5 speed_max_rad_s)
+  EXPECT_EQ(MC_CAN_ERR_NONE,
+            Comm(MC_COMM_CAN_START, p.i_max_a, 13.85f, d.cfg.omega_max_rad_s - 10.0f));
   EXPECT_TRUE(m.running);
 }
 

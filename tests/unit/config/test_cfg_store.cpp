@@ -203,7 +203,8 @@ TEST(CfgStore, InvalidRecordRefusedWithDefaults)
 {
     Rig r(4096);
     mc_params_t bad = mc_params_default;
-    bad.i_sense_max_a = 5.0f; // each value in range, the whole refused (sensor scale)
+    bad.i_sense_max_a = 5.0f; // each value in range, the whole refused (sensor
+    bad.i_trip_a = 6.0f;      // scale below the trip)
     ASSERT_NE(mc_params_validate(&bad), MC_PARAMS_OK);
     const auto rec = Record(MC_PARAMS_LAYOUT_VERSION, 1, Entries(bad));
     std::memcpy(r.Sector(1), rec.data(), rec.size() * 4u);

@@ -62,10 +62,17 @@ TEST(LawCfg, DefaultsGiveEveryLaw)
     mc_gains_motor_t m{};
     mc_gains_t g{};
     ASSERT_EQ(mc_law_gains_from_params(&p, &m, &g), MC_GAINS_OK);
-    // the settings the table fixes are taken as given
-    EXPECT_EQ(g.cur_bw_rad_s, static_cast<double>(p.current_bw_rad_s));
-    EXPECT_EQ(g.i_limit_a, static_cast<double>(p.i_max_a));
-    EXPECT_EQ(g.pos_v_max_rad_s, static_cast<double>(p.speed_max_rad_s));
+    // the table's 0s are derived (mc_gains.c), its other values taken as given
+    EXPECT_EQ(g.cur_bw_rad_s, 0.08 * p.pwm_hz);
+    EXPECT_EQ(g.i_limit_a, static_cast<double>(p.i_max_a)); // below the sensor's and the bus's
+    EXPECT_EQ(g.pos_v_max_rad_s, 0.5 * g.speed_rated_eff_rad_s);
+    p.current_bw_rad_s = 900.0f;
+    p.traj_v_max_rad_s = 12.5f;
+    ASSERT_EQ(mc_law_gains_from_params(&p, &m, &g), MC_GAINS_OK);
+    EXPECT_EQ(g.cur_bw_rad_s, 900.0);
+    EXPECT_EQ(g.pos_v_max_rad_s, 12.5);
+    p = mc_params_default;
+    ASSERT_EQ(mc_law_gains_from_params(&p, &m, &g), MC_GAINS_OK);
     // obs_* 0: derived, 0.02 of the rated speed the bus allows, and
     // min(300, 0.04 pwm_hz)
     EXPECT_EQ(g.obs_crit_rad_s, 0.02 * g.speed_rated_eff_rad_s);
@@ -79,12 +86,21 @@ TEST(LawCfg, DefaultsGiveEveryLaw)
     EXPECT_EQ(mc_law_pi2d_cfg(&m, &g, &dc), 0u);
     static mc_ctrl_pi2d_t pi2d;
     EXPECT_EQ(mc_ctrl_pi2d_init(&pi2d, &dc), 0u);
-    mc_drive_cfg_t drive{};
-    ASSERT_EQ(mc_params_to_drive_cfg(&p, &drive), MC_PARAMS_OK);
     mc_ctrl_pos_cfg_t pc{};
-    mc_law_pos_cfg(&m, &g, &drive.foc, &pc);
+    mc_law_pos_cfg(&m, &g, &pc);
     static mc_ctrl_pos_t pos;
     EXPECT_EQ(mc_ctrl_pos_init(&pos, &pc), 0u);
+    mc_ctrl_speed_cfg_t spc{};
+    mc_law_speed_cfg(&m, &g, &spc);
+    static mc_ctrl_speed_t spd;
+    EXPECT_EQ(mc_ctrl_speed_init(&spd, &spc), 0u);
+    // the drive's reference for the speed laws the application builds
+    EXPECT_TRUE(sc.ref_from_drive);
+    EXPECT_TRUE(dc.ref_from_drive);
+    EXPECT_TRUE(mc_ctrl_speed_ops(&spd)->uses_speed_ref);
+    EXPECT_EQ(mc_ctrl_speed_ops(&spd)->outputs, MC_DRIVE_OUT_CURRENT);
+    EXPECT_EQ(mc_ctrl_pos_ops(&pos)->outputs, MC_DRIVE_OUT_CURRENT);
+    EXPECT_EQ(mc_ctrl_sls_ops(&sls)->outputs, MC_DRIVE_OUT_CURRENT);
     for (uint32_t law : {MC_LAW_SPEED_PI, MC_LAW_SPEED_SENSORLESS, MC_LAW_SPEED_PI2D}) {
         p.speed_law = law;
         EXPECT_EQ(mc_law_speed_check(&p), 0u) << law;
@@ -113,11 +129,12 @@ TEST(LawCfg, RefusalsAreNamed)
     p.j_kgm2 = 1e-6f;
     EXPECT_NE(mc_law_speed_check(&p) & MC_GAINS_ERR_PI2D_COUPLING, 0u);
 
-    // the current limit leaves no margin to the sensor (i_limit > i_sense / 1.1)
+    // the sensor's range too small for the motor: the usable current
+    // i_sense / 1.25 is below 10 % of i_max (every law, the drive too)
     p = mc_params_default;
     p.speed_law = MC_LAW_SPEED_SENSORLESS;
-    p.i_max_a = p.i_sense_max_a;
-    EXPECT_EQ(mc_law_speed_check(&p), MC_GAINS_ERR_SENSE);
+    p.i_sense_max_a = 1.0f;
+    EXPECT_EQ(mc_law_speed_check(&p), MC_GAINS_ERR_I_LIMIT);
 
     // no motor values: nothing derived
     mc_gains_motor_t m{};

@@ -67,7 +67,9 @@ class ParamCan : public ::testing::Test
         cc.tick_hz = 1000;
         cc.timeout_s = p.can_timeout_s;
         cc.stop_ramp_a_per_s = p.stop_ramp_a_per_s;
-        cc.stop_decel_rad_s2 = p.stop_decel_rad_s2;
+        mc_params_eff_t e;
+        ASSERT_EQ(MC_GAINS_OK, mc_params_resolve(&p, &e));
+        cc.stop_decel_rad_s2 = e.p.stop_decel_rad_s2;
         cc.speed_max_rad_s = p.speed_max_rad_s;
         ASSERT_EQ(MC_CAN_CMD_CFG_OK, mc_can_cmd_init(&c, &cc, &d, &tm));
         ASSERT_EQ(0,
@@ -194,6 +196,7 @@ TEST_F(ParamCan, InconsistentSetRefusedAsAWhole)
     // each value in range; together the trip (15 A) exceeds the sensor (12 A)
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_SENSE_MAX_A, Bits(12.0f)).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_MAX_A, Bits(8.0f)).status);
+    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_TRIP_A, Bits(15.0f)).status);
     Reply r = Req(MC_PARAM_OP_APPLY, 0);
     EXPECT_EQ(MC_PARAM_ERR_INVALID, r.status);
     EXPECT_EQ(MC_PARAMS_ERR_SENSE, r.value);
@@ -338,6 +341,8 @@ TEST_F(ParamCan, ProtectionsCannotBeSwitchedOffWhileRunning)
     };
     Run();
     const mc_params_t staged = srv.staged;
+    const float w_trip = d.cfg.omega_max_rad_s; // derived: 1.5 speed_max_rad_s
+    ASSERT_GT(w_trip, 0.0f);
     for (const W &w : writes) {
         const mc_param_info_t *info = mc_param_find(w.id, nullptr);
         ASSERT_NE(nullptr, info);
@@ -347,14 +352,16 @@ TEST_F(ParamCan, ProtectionsCannotBeSwitchedOffWhileRunning)
     }
     EXPECT_EQ(0, std::memcmp(&staged, &srv.staged, sizeof staged)) << "nothing staged";
     EXPECT_FALSE(srv.pending);
-    EXPECT_EQ(600.0f, d.cfg.omega_max_rad_s);
+    EXPECT_EQ(w_trip, d.cfg.omega_max_rad_s);
     EXPECT_EQ(500u, c.timeout_ticks);
-    // bridge off: allowed (the operator's decision, with the motor at rest)
+    // bridge off: allowed (the operator's decision, with the motor at rest;
+    // 0 is the derived trip, so another value)
     ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_IDLE));
-    EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_OMEGA_MAX_RAD_S, Bits(0.0f)).status);
+    EXPECT_EQ(MC_PARAM_OK,
+              Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_OMEGA_MAX_RAD_S, Bits(2.0f * w_trip)).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_CAN_TIMEOUT_S, Bits(2.0f)).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_APPLY, 0).status);
-    EXPECT_EQ(0.0f, d.cfg.omega_max_rad_s);
+    EXPECT_EQ(2.0f * w_trip, d.cfg.omega_max_rad_s);
     EXPECT_EQ(2000u, c.timeout_ticks);
 }
 

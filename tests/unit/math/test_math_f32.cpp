@@ -579,3 +579,17 @@ TEST(MathTurnFromRadF32, MatchesLongDoubleReference)
     EXPECT_TRUE(mc_turn_from_rad_f32(0.0f, &turn));
     EXPECT_EQ(turn, 0u);
 }
+
+// mc_sign_band_f32: linear inside the band, +-1 outside, the plain sign
+// without a band. Exact: each case is one division of representable values.
+TEST(MathF32, SignBandIsLinearInsideTheBandAndTheSignOutside)
+{
+    EXPECT_EQ(0.5f, mc_sign_band_f32(0.25f, 0.5f));
+    EXPECT_EQ(-0.5f, mc_sign_band_f32(-0.25f, 0.5f));
+    EXPECT_EQ(1.0f, mc_sign_band_f32(3.0f, 0.5f));
+    EXPECT_EQ(-1.0f, mc_sign_band_f32(-3.0f, 0.5f));
+    EXPECT_EQ(0.0f, mc_sign_band_f32(0.0f, 0.5f));
+    EXPECT_EQ(1.0f, mc_sign_band_f32(1e-20f, 0.0f));
+    EXPECT_EQ(-1.0f, mc_sign_band_f32(-1e-20f, 0.0f));
+    EXPECT_EQ(0.0f, mc_sign_band_f32(0.0f, 0.0f));
+}

@@ -261,6 +261,26 @@ TEST(Pi2dLimits, CurrentClampFreezesNuAndZeroesRho) {
   EXPECT_EQ(st.nu_nm, 0.0f);
 }
 
+// A clamp set at run time (a current limit lowered while the law runs)
+// applies from the next step; an invalid one is refused, nothing changes.
+TEST(Pi2dLimits, CurrentClampSetAtRunTime) {
+  mc_pi2d_f32_cfg_t c = paper_cfg();
+  c.iq_max_a = 5.0f;
+  mc_pi2d_f32_t st{};
+  ASSERT_EQ(mc_pi2d_f32_init(&st, &c), 0u);
+  EXPECT_EQ(mc_pi2d_f32_set_iq_max(&st, 0.0f), MC_PI2D_ERR_LIMITS);
+  EXPECT_EQ(mc_pi2d_f32_set_iq_max(&st, std::nanf("")), MC_PI2D_ERR_LIMITS);
+  EXPECT_EQ(mc_pi2d_f32_set_iq_max(nullptr, 1.0f), MC_PI2D_ERR_NULL);
+  EXPECT_EQ(st.cfg.iq_max_a, 5.0f);
+  ASSERT_EQ(mc_pi2d_f32_set_iq_max(&st, 0.5f), 0u);
+  mc_pi2d_f32_in_t in{};
+  in.theta_m_rad = -1.0f;  // large lag: x2* far above 0.5
+  mc_pi2d_f32_out_t o{};
+  ASSERT_EQ(mc_pi2d_f32_step(&st, &in, &o), 0u);
+  EXPECT_TRUE(o.iq_limited);
+  EXPECT_EQ(o.iq_ref_a, 0.5f);
+}
+
 TEST(Pi2dLimits, VoltageCircleAndNuClamp) {
   mc_pi2d_f32_cfg_t c = paper_cfg();
   c.v_max_v = 2.0f;

@@ -36,9 +36,14 @@ struct CanTransportConfig {
   std::string interface;  // see above
   std::string log_path;   // candump log (interface ""): the file written
   std::string log_iface = "can0";
-  std::string script_path;              // command script ("" = none)
-  size_t wait_clients = 0;              // socketcand: serve this many clients in raw mode first
-  std::function<double()> now_s;        // the simulated clock [s]
+  std::string script_path;        // command script ("" = none)
+  size_t wait_clients = 0;        // socketcand: serve this many clients in raw mode first
+  std::function<double()> now_s;  // the simulated clock [s] stamping the frames sent
+  // the clock a script frame's stamp must have reached to be received
+  // (default now_s): the SIL stamps a period's frames with the period's end
+  // and receives at its start, so a reply to a frame stamped t arrives in
+  // the next period
+  std::function<double()> rx_now_s;
   std::function<uint32_t()> now_ticks;  // the board's tick counter
 };
 

@@ -64,12 +64,17 @@ struct CandumpLogStats {
 class CandumpLogCan {
  public:
   // out_path: log to write ("" = none, frames are only counted).
-  // rx_path: command script to replay ("" = none). now_s: the clock.
+  // rx_path: command script to replay ("" = none). now_s: the clock that
+  // stamps the frames sent; rx_now_s (default now_s): the clock a script
+  // frame's time stamp must have reached to be received (the SIL stamps a
+  // period's frames with the period's end and receives at its start, so a
+  // reply to a frame stamped t, sent at t, arrives in the next period).
   // Throws std::runtime_error naming the file that cannot be opened or the
   // script line that cannot be parsed.
   CandumpLogCan(const std::string& out_path, const std::string& iface,
                 std::function<double()> now_s, const std::string& rx_path = "",
-                std::function<uint32_t()> now_ticks = nullptr);
+                std::function<uint32_t()> now_ticks = nullptr,
+                std::function<double()> rx_now_s = nullptr);
   ~CandumpLogCan();
   CandumpLogCan(const CandumpLogCan&) = delete;
   CandumpLogCan& operator=(const CandumpLogCan&) = delete;
@@ -88,6 +93,7 @@ class CandumpLogCan {
   bool write_error_ = false;
   std::string iface_;
   std::function<double()> now_s_;
+  std::function<double()> rx_now_s_;
   std::function<uint32_t()> now_ticks_;
   std::unique_ptr<CandumpScript> script_;
   CandumpLogStats stats_;
