@@ -51,10 +51,11 @@
 #define MC_BOOT_REQ_MAGIC1 0xABB0B00Bu
 
 /** Board identifiers of the image header (BOOT_REPLY INFO: board_id). */
-#define MC_BOOT_BOARD_EXAMPLE  1u
-#define MC_BOOT_BOARD_ODRIVE36 2u
-#define MC_BOOT_BOARD_VESC6    3u
-#define MC_BOOT_BOARD_PIL      100u /**< the emulated STM32F405 (QEMU) */
+#define MC_BOOT_BOARD_EXAMPLE      1u
+#define MC_BOOT_BOARD_ODRIVE36     2u
+#define MC_BOOT_BOARD_VESC6        3u
+#define MC_BOOT_BOARD_ODRIVE36_24V 4u
+#define MC_BOOT_BOARD_PIL          100u /**< the emulated STM32F405 (QEMU) */
 
 /** The update protocol's version (BOOT_REPLY INFO, ANNOUNCE). */
 #define MC_BOOT_PROTO_VERSION 1u

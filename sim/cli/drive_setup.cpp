@@ -303,9 +303,9 @@ hal_host::PmsmBoardConfig build_board_cfg(const MotorFiles& f) {
   bc.inverter.t_dead_s = b.dead_time_s;
   bc.inverter.i_dead_band_a = std::max(1e-3, 0.01 * m.i_rated_a);
   bc.vbus_v = b.vbus_v;
-  bc.current_sensor.full_scale_a = b.i_sense_max_a;
+  bc.current_sensor.full_scale_a = b.adc_full_scale_a();
   bc.current_sensor.bits = b.adc_bits;
-  bc.vbus_sensor.full_scale_v = 2.0 * b.vbus_v;
+  bc.vbus_sensor.full_scale_v = b.vbus_full_scale_v();
   bc.vbus_sensor.bits = b.adc_bits;
   // No encoder (encoder_cpr = 0): the board model still has one, which no
   // scenario reads (the sensored scenarios refuse such a board).

@@ -12,6 +12,7 @@
 #include <utility>
 #include <toml++/toml.h>
 
+#include "board_desc.hpp"
 #include "scenario.hpp"
 #include "config/mc_params.h"
 
@@ -176,18 +177,6 @@ class TableReader {
   KeySources at_;
 };
 
-toml::table parse(const std::string& path) {
-  try {
-    return toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    const std::string d(e.description());
-    if (e.source().begin.line == 0 || d.find("File could not be opened") != std::string::npos) {
-      fail(path, 1, "cannot read the file: " + d);
-    }
-    fail(path, static_cast<long>(e.source().begin.line), "malformed TOML: " + d);
-  }
-}
-
 // Top-level keys other than the known tables are refused too.
 void check_top(const std::string& path, const toml::table& root) {
   for (const auto& kv : root) {
@@ -278,6 +267,11 @@ BoardSpec read_board(const std::string& path, const toml::table& t, const SetSou
              " is out of range: 0 (no encoder) or [" + std::to_string(static_cast<long>(cpr.lo)) +
              ", " + std::to_string(static_cast<long>(cpr.hi)) + "]" + kFwTable);
   }
+  // 0 when absent: the ranges follow i_sense_max_a and vbus_v (BoardSpec),
+  // also when a scenario changes those after the files are read
+  b.i_adc_full_scale_a = r.num_or("i_adc_full_scale_a", 0.0, b.i_sense_max_a, 1.0e5, false,
+                                  "A (at least i_sense_max_a)");
+  b.vbus_sense_max_v = r.num_or("vbus_sense_max_v", 0.0, b.vbus_v, 1.0e4, true, "V (above vbus_v)");
   b.delay_periods = static_cast<int>(r.int_or("delay_periods", 1, 0, 4));
   b.dc_link_c_f = r.num_or("dc_link_c_f", 0.0, 0.0, 10.0, false, "F");
   b.source_r_ohm = r.num_or("source_r_ohm", 0.05, 1.0e-4, 1.0e3, false, "ohm");
@@ -312,7 +306,58 @@ SetSources apply_overrides(toml::table& t, const std::string& table, const Overr
   return srcs;
 }
 
+// A [board] table that names a board description (`description = "odrive36"`
+// or a path, relative to the file): nothing else in it, the values are the
+// description's.
+bool names_description(const std::string& file, const toml::table& bt, std::string* arg) {
+  const toml::node* n = bt.get("description");
+  if (n == nullptr) return false;
+  if (!n->is_string()) fail(file, line_of(*n), "'description' must be a board name or path");
+  for (const auto& kv : bt) {
+    if (kv.first.str() != "description") {
+      fail(file, line_of(kv.second),
+           "'" + std::string(kv.first.str()) +
+               "' beside 'description': the board's values are its description's "
+               "(change one run with --set board.KEY=VALUE)");
+    }
+  }
+  *arg = n->value<std::string>().value_or("");
+  if (arg->find('/') != std::string::npos) {
+    *arg = (std::filesystem::path(file).parent_path() / *arg).string();
+  }
+  return true;
+}
+
+BoardSpec read_board_table(const std::string& file, toml::table& bt, const Overrides& ov) {
+  std::string desc;
+  if (names_description(file, bt, &desc)) return load_board_desc(desc, ov);
+  const SetSources bsets = apply_overrides(bt, "board", ov);
+  return read_board(file, bt, bsets);
+}
+
 }  // namespace
+
+toml::table parse_toml_file(const std::string& path) {
+  try {
+    return toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    const std::string d(e.description());
+    if (e.source().begin.line == 0 || d.find("File could not be opened") != std::string::npos) {
+      fail(path, 1, "cannot read the file: " + d);
+    }
+    fail(path, static_cast<long>(e.source().begin.line), "malformed TOML: " + d);
+  }
+}
+
+BoardSpec load_board_desc(const std::string& arg, const Overrides& overrides) {
+  BoardDescTable d = board_desc_table(arg);
+  const SetSources sets = apply_overrides(d.board, "board", overrides);
+  BoardSpec b = read_board(d.path, d.board, sets);
+  for (const auto& kv : d.at) {
+    if (sets.count(kv.first) == 0u) b.at[kv.first] = kv.second;
+  }
+  return b;
+}
 
 MotorFiles load_motor_files(const std::string& motor_path, const std::string& board_path,
                             const Overrides& overrides) {
@@ -322,7 +367,7 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
     }
   }
   MotorFiles f;
-  toml::table mroot = parse(motor_path);
+  toml::table mroot = parse_toml_file(motor_path);
   check_top(motor_path, mroot);
   toml::table* mt = mroot["motor"].as_table();
   if (mt == nullptr) fail(motor_path, 1, "no [motor] table");
@@ -333,8 +378,14 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
     if (bt == nullptr) {
       fail(motor_path, 1, "no [board] table here and no --board FILE given");
     }
-    const SetSources bsets = apply_overrides(*bt, "board", overrides);
-    f.board = read_board(motor_path, *bt, bsets);
+    f.board = read_board_table(motor_path, *bt, overrides);
+  } else if (is_board_description(board_path)) {
+    if (const toml::node* other = mroot.get("board"); other != nullptr) {
+      fail(motor_path, line_of(*other),
+           "a [board] table here and --board " + board_path +
+               ": one of them would be ignored (remove this one, or the --board)");
+    }
+    f.board = load_board_desc(board_path, overrides);
   } else {
     std::error_code ec;  // the same file named twice holds both, as one
     const bool same = std::filesystem::equivalent(motor_path, board_path, ec);
@@ -343,7 +394,7 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
            "a [board] table here and --board " + board_path +
                ": one of them would be ignored (remove this one, or the --board)");
     }
-    toml::table broot = parse(board_path);
+    toml::table broot = parse_toml_file(board_path);
     check_top(board_path, broot);
     if (const toml::node* other = broot.get("motor"); other != nullptr && !same) {
       fail(board_path, line_of(*other),
@@ -352,8 +403,7 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
     }
     toml::table* bt = broot["board"].as_table();
     if (bt == nullptr) fail(board_path, 1, "no [board] table");
-    const SetSources bsets = apply_overrides(*bt, "board", overrides);
-    f.board = read_board(board_path, *bt, bsets);
+    f.board = read_board_table(board_path, *bt, overrides);
   }
   return f;
 }

@@ -26,7 +26,14 @@
 //          (current ADC full scale, +-A), adc_bits, encoder_cpr (counts per
 //          mechanical revolution; 0 = no encoder).
 //          optional: delay_periods (computation delay, default 1),
-//          source (text).
+//          source (text), i_adc_full_scale_a (the current converter's range,
+//          +-A: the model's step is 2 i_adc_full_scale_a / 2^adc_bits;
+//          default i_sense_max_a), vbus_sense_max_v (the bus sensor's range,
+//          step vbus_sense_max_v / 2^adc_bits; default 2 vbus_v).
+//          Or the board's description instead of values: a [board] table
+//          with the one key description = "odrive36" (a board name, or a
+//          path relative to the file) reads it as --board odrive36 does
+//          (board_desc.hpp).
 //          DC link (optional; without dc_link_c_f the bus is stiff at vbus_v):
 //          dc_link_c_f (bus capacitance, F), source_r_ohm (supply internal
 //          resistance, default 0.05), source_sink (bool: the supply can
@@ -77,13 +84,22 @@ struct BoardSpec {
   double vbus_v = 0, pwm_hz = 0, dead_time_s = 0;
   int current_sensors = 2;
   double i_sense_max_a = 0;
+  double i_adc_full_scale_a = 0;  // the converter's range (quantisation); 0: i_sense_max_a
   int adc_bits = 12;
+  double vbus_sense_max_v = 0;  // the bus sensor's range; 0: 2 vbus_v
   long encoder_cpr = 0;
   int delay_periods = 1;
   double dc_link_c_f = 0;  // 0: stiff bus
   double source_r_ohm = 0.05;
   bool source_sink = false;
   double brake_r_ohm = 0;
+  // The sensor models' ranges (a BoardSpec built in code leaves them 0).
+  double adc_full_scale_a() const {
+    return i_adc_full_scale_a > 0 ? i_adc_full_scale_a : i_sense_max_a;
+  }
+  double vbus_full_scale_v() const {
+    return vbus_sense_max_v > 0 ? vbus_sense_max_v : 2.0 * vbus_v;
+  }
 };
 
 /// The files given on the command line, parsed and validated.
@@ -93,7 +109,8 @@ struct MotorFiles {
 };
 
 /// Parse --motor FILE and --board FILE (board_path may be empty when the
-/// motor file also holds [board]). Throws UsageError("<file>:<line>: ...").
+/// motor file also holds [board]; a board name or a board.toml path reads
+/// the image's board description, board_desc.hpp). Throws UsageError("<file>:<line>: ...").
 /// --set motor.KEY=VALUE / board.KEY=VALUE pairs: they replace the files'
 /// values before the tables are read (the same checks; a refusal names the
 /// --set).

@@ -65,7 +65,7 @@ def main():
         check(d.get(k) == v, f"{k}: C {d.get(k)}, Python {v}")
     layout_h = Path(ROOT, "firmware", "boot", "mc_boot_layout.h").read_text()
     check(image.APP_MAX_BYTES == 752 * 1024 and "(752u * 1024u)" in layout_h, "slot size 752 KiB")
-    check(image.BOARDS == {1: "example", 2: "odrive36", 3: "vesc6", 100: "pil"}, "board names")
+    check(image.BOARDS == {1: "example", 2: "odrive36", 3: "vesc6", 4: "odrive36_24v", 100: "pil"}, "board names")
 
     tool = [sys.executable, os.path.join(ROOT, "tools", "boot", "mc_image.py")]
     data = Path(a.image).read_bytes()

@@ -10,8 +10,13 @@ is generated from them.
 Each board folder holds
     pins.csv    signal,port_pin,mode,af,pull,otype,speed,init (comment lines
                 start with '#'; they name the public source and its commit)
-    board.toml  name, source, PWM dead time and break input, pin polarities,
-                sense scaling, thermistors, encoder, DRV8301 set-up
+    board.toml  name, source, PWM rate, dead time and break input, pin
+                polarities, sense scaling, nominal supply, brake chopper,
+                thermistors, encoder, DRV8301 set-up
+A variant folder holds only a board.toml naming its base (base = "<folder>"):
+its tables are merged over the base's key by key and the base's pins.csv
+applies (odrive36_24v). mcsim reads the same board.toml
+(sim/cli/board_desc.hpp, the same formulas; tests/sil/boards keeps them equal).
 
 Generated (paths relative to the repository root):
     <board>/mc_board_<board>_gen.h   declares mc_board_<board>_desc
@@ -106,6 +111,7 @@ OC_ADJ_VDS_V = [0.060, 0.068, 0.076, 0.086, 0.097, 0.109, 0.123, 0.138, 0.155, 0
                 0.648, 0.730, 0.822, 0.926, 1.043, 1.175, 1.324, 1.491, 1.679, 1.892,
                 2.131, 2.400]
 ADC_COUNTS = 4096
+PWM_HZ_MIN, PWM_HZ_MAX = 5000, 60000   # the drive's pwm_hz range (params.toml)
 KELVIN = 273.15
 T25_K = 298.15
 
@@ -310,14 +316,45 @@ def load_thermistor(th, slot, where, vref, pins):
                 "table": table if model == "ntc" else None, "slot": slot}
 
 
+def merge(base, over):
+    """A variant's board.toml over its base's: tables merged key by key, the
+    variant's values win."""
+    out = dict(base)
+    for k, v in over.items():
+        out[k] = merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+def read_board_toml(folder):
+    """board.toml of a folder, merged over its base's when it names one
+    (`base = "<folder>"`: a variant, e.g. odrive36_24v of odrive36), and the
+    folder whose pins.csv applies (the variant's own, else the base's)."""
+    name = os.path.basename(os.path.normpath(folder))
+    with open(os.path.join(folder, "board.toml"), "rb") as f:
+        t = tomllib.load(f)
+    pins_dir = folder
+    if "base" in t:
+        base = t.pop("base")
+        base_dir = os.path.join(os.path.dirname(os.path.normpath(folder)), str(base))
+        if not os.path.isfile(os.path.join(base_dir, "board.toml")):
+            raise BoardError(f"{name}/board.toml: base '{base}' is not a board folder")
+        with open(os.path.join(base_dir, "board.toml"), "rb") as f:
+            bt = tomllib.load(f)
+        if "base" in bt:
+            raise BoardError(f"{name}/board.toml: base '{base}' is a variant itself")
+        t = merge(bt, t)
+        if not os.path.isfile(os.path.join(folder, "pins.csv")):
+            pins_dir = base_dir
+    return t, pins_dir
+
+
 def load_board(folder):
     name = os.path.basename(os.path.normpath(folder))
     if not re.fullmatch(r"[a-z][a-z0-9_]*", name):
         raise BoardError(f"board folder '{name}' must be a lower-case identifier")
-    comments, pin_list = load_pins(os.path.join(folder, "pins.csv"))
+    t, pins_dir = read_board_toml(folder)
+    comments, pin_list = load_pins(os.path.join(pins_dir, "pins.csv"))
     pins = {p["signal"]: p for p in pin_list}
-    with open(os.path.join(folder, "board.toml"), "rb") as f:
-        t = tomllib.load(f)
     where = f"{name}/board.toml"
 
     missing = [s for s in REQUIRED if s not in pins]
@@ -378,6 +415,12 @@ def load_board(folder):
     deadtime_ns = need(pwm, "deadtime_ns", where + " [pwm]", int)
     if not 0 < deadtime_ns <= 6000:
         raise BoardError(f"{where}: pwm.deadtime_ns must be 1..6000")
+    pwm_hz = need(pwm, "frequency_hz", where + " [pwm]", int)
+    if not PWM_HZ_MIN <= pwm_hz <= PWM_HZ_MAX:
+        raise BoardError(f"{where}: pwm.frequency_hz must be {PWM_HZ_MIN}..{PWM_HZ_MAX} "
+                         "(the drive's pwm_hz range, tools/config/params.toml)")
+    if deadtime_ns * 1e-9 > 0.1 / pwm_hz:
+        raise BoardError(f"{where}: pwm.deadtime_ns above 10 % of a PWM period")
     brk = need(pwm, "break_input", where + " [pwm]", str)
     if brk not in ("none", "overcurrent"):
         raise BoardError(f"{where}: pwm.break_input is 'none' or 'overcurrent'")
@@ -419,6 +462,12 @@ def load_board(folder):
     vbus_full = (ADC_COUNTS - 1 - margin) * vref / ADC_COUNTS * divider
     if vbus_full < vbus_max:
         raise BoardError(f"{ws}: the divider reads at most {vbus_full:.1f} V < vbus_max_v")
+
+    supply = need(t, "supply", where, dict)
+    nominal = positive(supply, "nominal_v", where + " [supply]")
+    if not vbus_min <= nominal <= vbus_max:
+        raise BoardError(f"{where}: supply.nominal_v must lie inside sense.vbus_min_v .. vbus_max_v")
+    brake = load_brake(need(t, "brake", where, dict), where + " [brake]", name, pins)
 
     therm = {}
     for slot in ("power_stage", "motor"):
@@ -482,15 +531,31 @@ def load_board(folder):
                 "gain": float(gain), "offset": offset, "divider": divider, "margin": margin,
                 "i_max": i_max, "vbus_min": vbus_min, "vbus_max": vbus_max, "amplifier": amplifier,
                 "therm": therm, "cpr": cpr, "filt": filt, "drv": drv, "notes": t.get("notes", []),
-                "enc_type": enc_type}
+                "enc_type": enc_type, "pins_from": os.path.basename(os.path.normpath(pins_dir)),
+                "pwm_hz": pwm_hz, "nominal": nominal, "brake": brake}
+
+
+def load_brake(br, wb, name, pins):
+    """[brake] present (bool) and, with a chopper, r_ohm (the resistor the
+    board is used with) on the brake_l/brake_h pins. None: no chopper."""
+    if not isinstance(br.get("present"), bool):
+        raise BoardError(f"{wb}: 'present' must be true or false")
+    present = br["present"]
+    if not present:
+        if "r_ohm" in br:
+            raise BoardError(f"{wb}: r_ohm without a chopper (present = false)")
+        return None
+    r = positive(br, "r_ohm", wb)
+    if not ("brake_l" in pins and "brake_h" in pins):
+        raise BoardError(f"{name}: a brake chopper needs the brake_l and brake_h pins")
+    return r
 
 
 def board_folders(boards_dir):
     out = []
     for d in sorted(os.listdir(boards_dir)):
         p = os.path.join(boards_dir, d)
-        if os.path.isfile(os.path.join(p, "pins.csv")) and \
-                os.path.isfile(os.path.join(p, "board.toml")):
+        if os.path.isfile(os.path.join(p, "board.toml")):
             out.append(p)
     return out
 
@@ -579,7 +644,7 @@ def gpio_table_lines(var, pins, comment):
 def gen_header(b):
     n = b["name"]
     g = f"MC_BOARD_{n.upper()}_GEN_H"
-    return f"""/* Generated by tools/boards/mc_boards.py from boards/{n}/pins.csv and
+    return f"""/* Generated by tools/boards/mc_boards.py from boards/{b['pins_from']}/pins.csv and
  * boards/{n}/board.toml: do not edit. */
 #ifndef {g}
 #define {g}
@@ -596,7 +661,7 @@ extern const mc_board_desc_t mc_board_{n}_desc;
 def gen_source(b):
     n = b["name"]
     src = b["source"]
-    lines = [f"/* Generated by tools/boards/mc_boards.py from boards/{n}/pins.csv and",
+    lines = [f"/* Generated by tools/boards/mc_boards.py from boards/{b['pins_from']}/pins.csv and",
              f" * boards/{n}/board.toml: do not edit.",
              f" * {b['title']}",
              f" * Source: {src['repository']} at commit {src['commit']}:"]
@@ -635,6 +700,7 @@ def gen_source(b):
               "    .p_gpio = k_gpio,",
               f"    .n_gpio = {len(table)}u,",
               f"    .gpio_port_mask = 0x{mask:03X}u,",
+              f"    .pwm_hz = {b['pwm_hz']}u,",
               f"    .deadtime_ns = {b['deadtime_ns']}u,",
               f"    .break_enable = {'true' if brk else 'false'},",
               f"    .break_active_high = "
@@ -657,6 +723,9 @@ def gen_source(b):
               f"    .temp_motor = {therm_init(b['therm']['motor'])},",
               f"    .vbus_min_v = {cfloat(b['vbus_min'])},",
               f"    .vbus_max_v = {cfloat(b['vbus_max'])},",
+              f"    .vbus_nominal_v = {cfloat(b['nominal'])},",
+              f"    .has_brake = {'false' if b['brake'] is None else 'true'},",
+              f"    .brake_r_ohm = {cfloat(b['brake'] or 0.0)},",
               f"    .enc_counts_per_rev = {b['cpr']}u,",
               f"    .enc_input_filter = {b['filt']}u,",
               f"    .enc_type = {ENCODER_TYPES[b['enc_type']]},",
@@ -709,11 +778,16 @@ def gen_readme_section(boards):
                 f"{fmt((ADC_COUNTS - 1 - b['margin']) * b['vref'] / ADC_COUNTS * b['divider'], 3)}"
                 " V) |",
                 f"| bus limits | {fmt(b['vbus_min'])} .. {fmt(b['vbus_max'])} V |",
+                f"| nominal bus (the simulator's supply) | {fmt(b['nominal'])} V |",
+                f"| PWM | {b['pwm_hz'] / 1e3:g} kHz, one current-loop step per period |",
                 f"| dead time | {b['deadtime_ns']} ns |",
                 f"| break input (TIM1_BKIN) | {b['break_input']} |",
                 f"| encoder | TIM3, {b['cpr']} counts/rev, filter {b['filt']}"
                 + (", index on EXTI" if "enc_z" in b["by_signal"] else "") + " |",
-                f"| position sensor fitted (board.toml) | {b['enc_type']} |"]
+                f"| position sensor fitted (board.toml) | {b['enc_type']} |",
+                "| brake chopper | " + ("none" if b["brake"] is None else
+                                       f"brake_l/brake_h, {fmt(b['brake'])} ohm resistor")
+                + " |"]
         for slot in ("power_stage", "motor"):
             th = b["therm"][slot]
             if th is None:

@@ -5,7 +5,7 @@
  *        MC_BOARD: example, odrive36, vesc6) bound to the hal/stm32f405
  *        drivers by boards/mc_board_f405.c.
  *
- *   TIM1 PWM      20 kHz centre-aligned, the board's dead time; ADC trigger
+ *   TIM1 PWM      the board's rate (board.toml), centre-aligned, the board's dead time; ADC trigger
  *                 TIM1 TRGO = OC4REF, 1 us before the counter peak.
  *   ADC1          injected: the board's measured phases and bus voltage;
  *                 JEOC interrupt runs the fast loop. Temperatures regular.
@@ -71,13 +71,15 @@
 #endif
 extern const mc_board_desc_t MC_BOARD_DESC;
 
-#define PWM_HZ           20000u
+/* The board's PWM rate (board.toml [pwm] frequency_hz, the rate mcsim runs
+ * the board at) and a slow loop of about 1 kHz. */
+#define PWM_HZ           (MC_BOARD_DESC.pwm_hz)
 #define CURRENT_BW_RAD_S 1256.6371f /* 2 pi 200 Hz */
 #define I_MAX_A          10.0f
 #define I_TRIP_A         15.0f
 #define DELAY_POLL_SLACK 1000u
-#define SLOW_LOOP_DIV    20u                                 /* 1 kHz slow loop */
-#define SLOW_PERIOD_US   (1000000u / PWM_HZ * SLOW_LOOP_DIV) /* 1000 us */
+#define SLOW_LOOP_DIV    (slow_loop_div())
+#define SLOW_PERIOD_US   (1000000u * SLOW_LOOP_DIV / PWM_HZ) /* 1000 us at 20/24/30 kHz */
 #define CFG_SECTOR_A     10u
 #define CFG_SECTOR_B     11u
 #define CFG_PROTECT_MASK 0x3FFu /* sectors 0..9: the code's side of the flash */
@@ -88,6 +90,13 @@ extern const mc_board_desc_t MC_BOARD_DESC;
 #define WDG_ERASE_MS     4000u /* >= 2.7 s at the fastest LSI: a 128 KiB erase */
 #define TM_BUDGET_FRAC   0.5f
 #define TX_DRAIN_POLLS   200000u /* >= 5 ms of TSR reads: the OK of ENTER leaves */
+
+/* The slow loop's divider: about 1 kHz at the board's PWM rate (20, 24
+ * and 30 at 20, 24 and 30 kHz). */
+static uint32_t slow_loop_div(void)
+{
+    return (PWM_HZ + 500u) / 1000u;
+}
 
 void CAN1_RX0_IRQHandler(void);
 void EXTI0_IRQHandler(void);

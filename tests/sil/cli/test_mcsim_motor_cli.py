@@ -14,6 +14,7 @@ import argparse
 import csv
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -146,6 +147,33 @@ class MotorCli(unittest.TestCase):
                     lib("odrive-v36-24v"), check=False), [f"mcsim: {bad}:3: 'r_ohm'"])
         finally:
             os.remove(bad)
+
+    def test_board_by_name_runs_the_image_s_board(self):
+        # --board NAME reads the image's board description (issue 29): the
+        # ODrive v3.6 24 V board runs at its 24 kHz, the summary names it.
+        run("run", "current-step", "--out", self.out, "--motor", lib("odrive-d5065"),
+            "--board", "odrive36_24v")
+        with open(os.path.join(self.out, "current-step.json")) as f:
+            s = json.load(f)
+        self.assertEqual(s["board"], "ODrive v3.6 (24 V), axis M0")
+
+    def test_unknown_board_name_and_bad_description_refused(self):
+        self.assert_usage_error(
+            run("run", "current-step", "--out", self.out, "--motor", lib("odrive-d5065"),
+                "--board", "odrive37", check=False),
+            ["mcsim: --board odrive37: no board of that name (boards: example, odrive36, "
+             "odrive36_24v, vesc6"])
+        bad_dir = tempfile.mkdtemp()
+        try:
+            bad = os.path.join(bad_dir, "board.toml")
+            with open(bad, "w") as f:
+                f.write('name = "x"\n[pwm]\nfrequency_hz = 2000\n')
+            self.assert_usage_error(
+                run("run", "current-step", "--out", self.out, "--motor", lib("odrive-d5065"),
+                    "--board", bad, check=False),
+                [f"mcsim: {bad}:3: [pwm] frequency_hz: 2000 is out of range [5000, 60000]"])
+        finally:
+            shutil.rmtree(bad_dir)
 
     def test_missing_file(self):
         self.assert_usage_error(

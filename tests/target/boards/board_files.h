@@ -40,9 +40,20 @@ inline std::string dir(const std::string &board)
     return std::string(MC_BOARDS_DIR) + "/" + board;
 }
 
+// The folder whose pins.csv applies: the board's, or its base's for a
+// variant without one (board.toml base = "<folder>", mc_boards.py).
+inline std::string pins_dir(const std::string &board)
+{
+    if (std::ifstream(dir(board) + "/pins.csv")) {
+        return dir(board);
+    }
+    const auto base = toml::parse_file(dir(board) + "/board.toml")["base"].value<std::string>();
+    return base ? dir(*base) : dir(board);
+}
+
 inline std::vector<Pin> read_pins(const std::string &board)
 {
-    std::ifstream f(dir(board) + "/pins.csv");
+    std::ifstream f(pins_dir(board) + "/pins.csv");
     if (!f) {
         throw std::runtime_error("no pins.csv for " + board);
     }
@@ -136,9 +147,31 @@ inline std::optional<unsigned> adc_channel(const std::string &name)
     return it->second;
 }
 
+// board.toml, a variant's merged over its base's table by table, key by
+// key (mc_boards.py merge()).
+inline void merge_over(toml::table &base, const toml::table &over)
+{
+    for (const auto &kv : over) {
+        toml::table *b = base[kv.first].as_table();
+        if (kv.second.is_table() && b != nullptr) {
+            merge_over(*b, *kv.second.as_table());
+        } else {
+            base.insert_or_assign(kv.first, kv.second);
+        }
+    }
+}
+
 inline toml::table read_toml(const std::string &board)
 {
-    return toml::parse_file(dir(board) + "/board.toml");
+    toml::table t = toml::parse_file(dir(board) + "/board.toml");
+    const auto base = t["base"].value<std::string>();
+    if (!base) {
+        return t;
+    }
+    toml::table merged = toml::parse_file(dir(*base) + "/board.toml");
+    t.erase("base");
+    merge_over(merged, t);
+    return merged;
 }
 
 inline double num(const toml::table &t, const std::string &path)

@@ -15,6 +15,7 @@
 
 extern "C" {
 #include "mc_board_example_gen.h"
+#include "mc_board_odrive36_24v_gen.h"
 #include "mc_board_odrive36_gen.h"
 #include "mc_board_vesc6_gen.h"
 }
@@ -36,6 +37,7 @@ struct Case {
 const Case kBoards[] = {
     {"example", &mc_board_example_desc},
     {"odrive36", &mc_board_odrive36_desc},
+    {"odrive36_24v", &mc_board_odrive36_24v_desc},
     {"vesc6", &mc_board_vesc6_desc},
 };
 

@@ -16,6 +16,7 @@
 extern "C" {
 #include "mc_board_example_gen.h"
 #include "mc_board_f405.h"
+#include "mc_board_odrive36_24v_gen.h"
 #include "mc_board_odrive36_gen.h"
 #include "mc_board_vesc6_gen.h"
 }
@@ -37,6 +38,7 @@ struct Case {
 const Case kBoards[] = {
     {"example", &mc_board_example_desc},
     {"odrive36", &mc_board_odrive36_desc},
+    {"odrive36_24v", &mc_board_odrive36_24v_desc},
     {"vesc6", &mc_board_vesc6_desc},
 };
 
@@ -103,6 +105,7 @@ struct Rig {
 
 const Case kDrvBoards[] = {
     {"odrive36", &mc_board_odrive36_desc},
+    {"odrive36_24v", &mc_board_odrive36_24v_desc},
     {"vesc6", &mc_board_vesc6_desc},
 };
 
@@ -278,6 +281,38 @@ TEST_P(BoardSetup, ClocksPinsTimersAndAdc)
     }
     const double vbus = 2500.0 * kVref / 4096.0 * divider(t);
     EXPECT_NEAR(s.vbus_v, vbus, 1e-5 * vbus);
+}
+
+// The ODrive v3.6 variants (issue 29): each image reads its own board's bus.
+// A 24 V bus on the 24 V board (divider 11) gives the pin 24 / 11 V; the
+// 24 V image reads it back within one count (3.3 V * 11 / 4096 = 8.9 mV, the
+// rounding of the code), while the 56 V image (divider 19) would read it
+// 19 / 11 = 1.73 times high, the error the board owner had to fix by hand.
+// Likewise 48 V on the 56 V board through its own image.
+TEST(BoardBus, OdriveVariantsReadTheirOwnBus)
+{
+    struct V {
+        const mc_board_desc_t *desc;
+        double vbus_v, divider;
+    };
+    for (const V &v :
+         {V{&mc_board_odrive36_24v_desc, 24.0, 11.0}, V{&mc_board_odrive36_desc, 48.0, 19.0}}) {
+        SCOPED_TRACE(v.desc->name);
+        Rig rig;
+        ASSERT_EQ(rig.setup(v.desc), MC_BOARD_F405_OK) << mc_board_f405_err_name(rig.board.err);
+        const double lsb_v = kVref * v.divider / 4096.0;
+        const auto code = uint32_t(std::lround(v.vbus_v / lsb_v));
+        rig.adc.JDR[0] = 2048u; /* phases b, c at 0 A, then the bus */
+        rig.adc.JDR[1] = 2048u;
+        rig.adc.JDR[2] = code;
+        rig.adc.SR = MC_F405_ADC_SR_JEOC;
+        mc_hal_adc_sample_t s{};
+        ASSERT_EQ(mc_hal_adc_read(rig.board.hal.adc, &s), 0);
+        EXPECT_NEAR(s.vbus_v, v.vbus_v, lsb_v);
+    }
+    EXPECT_NEAR(double(mc_board_odrive36_desc.vbus_divider) /
+                    double(mc_board_odrive36_24v_desc.vbus_divider),
+                19.0 / 11.0, 1e-6);
 }
 
 // Thermistors through the ADC driver against the board.toml models: the

@@ -45,7 +45,7 @@ def main():
     r = run("gen", "--root", a.work)
     check(r.returncode == 0, f"gen failed: {r.stderr}")
     boards = mc_boards.load_all()
-    check({b["name"] for b in boards} == {"example", "odrive36", "vesc6"},
+    check({b["name"] for b in boards} == {"example", "odrive36", "odrive36_24v", "vesc6"},
           f"boards found: {[b['name'] for b in boards]}")
     rels = [mc_boards.README_REL]
     for b in boards:
@@ -90,6 +90,15 @@ def main():
         "must be an output starting high (released)":
             ("pins", sub(pins, r"^(enc_spi_cs,PA0,output,,none,pp,low,)1", r"\g<1>0")),
         "encoder.type is one of": ("toml", sub(toml, r'^type = "abi"', 'type = "resolver"')),
+        # the PWM rate, the supply and the brake chopper (issue 29)
+        "pwm.frequency_hz must be 5000..60000":
+            ("toml", sub(toml, r"^frequency_hz = 24000", "frequency_hz = 70000")),
+        "supply.nominal_v must lie inside": ("toml", sub(toml, r"^nominal_v = 56.0",
+                                                         "nominal_v = 60.0")),
+        "a brake chopper needs the brake_l and brake_h pins": ("pins", sub(pins, r"^brake_h,.*\n",
+                                                                           "")),
+        "'present' must be true or false": ("toml", sub(toml, r"^present = true",
+                                                        'present = "yes"')),
     }
     for what, (which, text) in bad.items():
         d = os.path.join(a.work, "bad", "odrive36")
@@ -100,6 +109,14 @@ def main():
         r = run("validate", d)
         check(r.returncode == 2, f"{what}: generator exit {r.returncode}, want 2")
         check(what in r.stderr, f"{what}: message was {r.stderr.strip()!r}")
+    # a variant whose base is missing
+    d = os.path.join(a.work, "bad", "variant")
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, "board.toml"), "w") as f:
+        f.write('base = "nosuch"\n')
+    r = run("validate", d)
+    check(r.returncode == 2 and "base 'nosuch' is not a board folder" in r.stderr,
+          f"variant without base: exit {r.returncode}, {r.stderr.strip()!r}")
     for b in boards:
         r = run("validate", os.path.join(ROOT, mc_boards.BOARDS_REL, b["name"]))
         check(r.returncode == 0, f"{b['name']} does not validate: {r.stderr}")

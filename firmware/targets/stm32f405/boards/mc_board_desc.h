@@ -72,6 +72,7 @@ typedef struct mc_board_desc {
     uint32_t n_gpio;
     uint32_t gpio_port_mask; /**< bit n: port n used (RCC_AHB1ENR GPIOxEN) */
     /* TIM1 PWM */
+    uint32_t pwm_hz; /**< PWM rate = fast-loop rate of the image on this board */
     uint32_t deadtime_ns;
     bool break_enable; /**< BKIN wired (an over-current comparator) */
     bool break_active_high;
@@ -96,6 +97,10 @@ typedef struct mc_board_desc {
     /* supply limits of the board (the drive's configuration may be narrower) */
     float vbus_min_v;
     float vbus_max_v;
+    float vbus_nominal_v; /**< the board's rated bus (the simulator's supply) */
+    /* brake chopper (brake_l/brake_h): present, and the resistor it is used with */
+    bool has_brake;
+    float brake_r_ohm; /**< 0 without a chopper */
     /* position sensors */
     uint32_t enc_counts_per_rev; /**< TIM3 encoder */
     uint8_t enc_input_filter;

@@ -17,6 +17,7 @@
  *   Firmware/Drivers/STM32/stm32_gpio.cpp
  *   Firmware/MotorControl/low_level.cpp
  *   Firmware/Tupfile.lua
+ *   Firmware/MotorControl/odrive_main.h
  */
 #include "mc_board_odrive36_gen.h"
 
@@ -93,6 +94,7 @@ const mc_board_desc_t mc_board_odrive36_desc = {
     .p_gpio = k_gpio,
     .n_gpio = 4u,
     .gpio_port_mask = 0x00Fu,
+    .pwm_hz = 24000u,
     .deadtime_ns = 119u,
     .break_enable = false,
     .break_active_high = false,
@@ -122,6 +124,9 @@ const mc_board_desc_t mc_board_odrive36_desc = {
     .temp_motor = {MC_F405_ADC_CH_NONE, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, NULL, 0u},
     .vbus_min_v = 8.0f,
     .vbus_max_v = 56.0f,
+    .vbus_nominal_v = 56.0f,
+    .has_brake = true,
+    .brake_r_ohm = 2.0f,
     .enc_counts_per_rev = 8192u,
     .enc_input_filter = 4u,
     .enc_type = MC_BOARD_ENC_ABI,

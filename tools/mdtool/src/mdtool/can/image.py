@@ -27,7 +27,7 @@ APP_MAX_BYTES = 752 * 1024
 BOOT_ADDR = 0x08000000
 BOOT_MAX_BYTES = 16 * 1024
 RAM_START, RAM_END = 0x20000000, 0x20020000
-BOARDS = {1: "example", 2: "odrive36", 3: "vesc6", 100: "pil"}
+BOARDS = {1: "example", 2: "odrive36", 3: "vesc6", 4: "odrive36_24v", 100: "pil"}
 _FIELDS = ("magic", "hdr_version", "board_id", "layout_id", "app_version", "image_bytes",
            "crc32", "commit")
 
