@@ -50,6 +50,7 @@
 #include "hal_host/app_rig.hpp"
 #include "mc_record.hpp"
 #include "motor_file.hpp"
+#include "pil_test_link.hpp"
 #include "scenario.hpp"
 extern "C" {
 #include "mc_can_cmd.h"
@@ -271,16 +272,6 @@ RunLog run(mcsim::AppTarget& t, const Script& sc, long n) {
   return r;
 }
 
-hal_host::PilLinkOptions link_options(const std::string& board) {
-  hal_host::PilLinkOptions l;
-  l.qemu = MC_QEMU_ARM;
-  l.elf = MC_PIL_ELF;
-  l.boot_elf = MC_BOOT_PIL_ELF;  // the image starts through the bootloader
-  l.semihost_log = std::string(MC_PIL_LOG_DIR) + "/pil_app_target_" + board + ".log";
-  l.receive_timeout_s = 60.0;  // bounds the wait for a crashed target only
-  return l;
-}
-
 // The board's generated description, the one the flashed image is built
 // with (firmware/targets/stm32f405/boards/<name>/, board_stm32f405.c).
 const mc_board_desc_t& board_desc(const std::string& board) {
@@ -323,7 +314,7 @@ void same_experiment(const std::string& board) {
   expect_board_image_table(s.defaults, board);
   SilTarget sil(s);
   mcsim::AppTargetPilOptions po;
-  po.link = link_options(board);
+  po.link = pil_test_link("pil_app_target_" + board + ".log", 60.0);
   po.board = board;
   std::unique_ptr<mcsim::AppTarget> pil = mcsim::make_app_target_pil(s, po);
   EXPECT_EQ(pil->name(), "pil:mc_stm32f405_pil:" + board);
@@ -425,7 +416,7 @@ TEST(PilAppTarget, OneUlpInAParameterChangesThePilRun) {
   s_ulp.defaults.r_ohm = std::nextafter(s.defaults.r_ohm, 1.0f);
   SilTarget sil(s);
   mcsim::AppTargetPilOptions po;
-  po.link = link_options(board + "_ulp");
+  po.link = pil_test_link("pil_app_target_ulp.log", 60.0);
   std::unique_ptr<mcsim::AppTarget> pil = mcsim::make_app_target_pil(s_ulp, po);
   const double T = sil.board().period_s();
   const long n = std::lround(0.02 / T);  // the current step starts at 10 ms
@@ -447,7 +438,7 @@ TEST(PilAppTarget, InvalidTableIsRefusedWithAReason) {
   mcsim::AppSetup s = setup_for("vesc6");
   s.defaults.pwm_hz = 1u;  // below the table's 5 kHz
   mcsim::AppTargetPilOptions po;
-  po.link = link_options("refused");
+  po.link = pil_test_link("pil_app_target_refused.log");
   try {
     (void)mcsim::make_app_target_pil(s, po);
     FAIL() << "accepted an invalid table";
