@@ -618,7 +618,7 @@ static void send_probe(void)
     }
     mc_app_probe_t p;
     mc_app_probe(app, &p);
-    uint8_t buf[MC_PIL_MAX_FRAME];
+    uint8_t buf[MC_PIL_MAX_FRAME] = {0u};
     usart_send(buf, mc_pil_encode_probe(&p, buf, sizeof buf));
 }
 

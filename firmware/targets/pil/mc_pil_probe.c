@@ -9,7 +9,7 @@
 /* Every field one 32-bit word, no padding: the struct is its payload. A
  * copy into words keeps each field's bits (a float's IEEE pattern) on any
  * byte order; the link writes the words little-endian. */
-_Static_assert(sizeof(mc_app_probe_t) == 4u * MC_PIL_PROBE_WORDS,
+_Static_assert(sizeof(mc_app_probe_t) == sizeof(uint32_t[MC_PIL_PROBE_WORDS]),
                "mc_app_probe_t changed: update MC_PIL_PROBE_WORDS (one 32-bit word per field)");
 
 size_t mc_pil_encode_probe(const mc_app_probe_t *p, uint8_t *buf, size_t cap)
