@@ -98,8 +98,9 @@ struct AppTargetPilOptions {
   hal_host::PilLinkOptions link;  // QEMU, the PIL image and its bootloader, logs
   std::string board;              // the board s describes, for name() (may be "")
 };
-// Throws UsageError when the setup cannot run on the link (parameter table
-// invalid, a brake chopper on the plant: the link carries none),
+// Throws UsageError when the setup cannot run on the link (QEMU, the image
+// or its bootloader unreadable, the parameter table invalid, a brake
+// chopper on the plant: the link carries none),
 // std::runtime_error when QEMU or the image fails.
 std::unique_ptr<AppTarget> make_app_target_pil(const AppSetup& s, const AppTargetPilOptions& o);
 

@@ -10,6 +10,8 @@
 // instead of the board's hal/stm32f405 drivers): the ADC, encoder, fault,
 // tick and temperature answers are the host board's, CAN frames travel over
 // the link, the configuration store is two RAM sectors, no watchdog.
+#include <unistd.h>
+
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,7 +24,16 @@ namespace mcsim {
 
 namespace {
 
-const AppSetup& checked(const AppSetup& s) {
+const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
+  const std::pair<const char*, const std::string*> files[] = {
+      {"QEMU", &o.link.qemu}, {"PIL image", &o.link.elf}, {"PIL bootloader", &o.link.boot_elf}};
+  for (const auto& [what, path] : files) {
+    if (path == &o.link.boot_elf && path->empty()) continue;  // an image linked at the reset vector
+    if (path->empty() || ::access(path->c_str(), R_OK) != 0) {
+      throw UsageError(std::string("PIL: ") + what + " '" + *path +
+                       "' cannot be read (build the image: target mc_pil_m4f)");
+    }
+  }
   const uint32_t err = mc_params_validate(&s.defaults);
   if (err != MC_PARAMS_OK) {
     throw UsageError("PIL: the parameter table is invalid (MC_PARAMS_ERR bits 0x" +
@@ -47,7 +58,7 @@ std::string image_name(const AppTargetPilOptions& o) {
 class PilAppTarget final : public AppTarget {
  public:
   PilAppTarget(const AppSetup& s, const AppTargetPilOptions& o)
-      : params_(checked(s).defaults),
+      : params_(checked(s, o).defaults),
         board_(std::make_unique<hal_host::PmsmBoard>(s.board)),
         pil_(*board_, o.link),
         name_(image_name(o)) {

@@ -447,4 +447,31 @@ TEST(PilAppTarget, InvalidTableIsRefusedWithAReason) {
   }
 }
 
+// A missing image, and a plant with a brake chopper (the link carries no
+// brake output), are refused with the reason before QEMU starts.
+TEST(PilAppTarget, MissingImageOrBrakeIsRefusedWithAReason) {
+  const mcsim::AppSetup s = setup_for("vesc6");
+  mcsim::AppTargetPilOptions po;
+  po.link = pil_test_link("pil_app_target_refused.log");
+  po.link.elf = std::string(MC_PIL_LOG_DIR) + "/no_such_image.elf";
+  try {
+    (void)mcsim::make_app_target_pil(s, po);
+    FAIL() << "accepted a missing image";
+  } catch (const mcsim::UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("no_such_image.elf"), std::string::npos) << e.what();
+  }
+  mcsim::AppSetup sb = s;
+  sb.board.dc_link_enabled = true;
+  sb.board.dc_link.source_v = sb.board.vbus_v;
+  sb.board.dc_link.c_f = 1e-3;
+  sb.board.dc_link.brake_r_ohm = 5.0;
+  po.link = pil_test_link("pil_app_target_refused.log");
+  try {
+    (void)mcsim::make_app_target_pil(sb, po);
+    FAIL() << "accepted a plant with a brake chopper";
+  } catch (const mcsim::UsageError& e) {
+    EXPECT_NE(std::string(e.what()).find("brake"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
