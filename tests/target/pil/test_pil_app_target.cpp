@@ -15,7 +15,8 @@
 // image's (hal/pil/mc_hal_pil.c).
 //
 // Boards: the ODrive v3.6 (24 V variant) and the VESC 6, with the ODrive
-// D5065 motor file (sim/motors/odrive-d5065.toml).
+// D5065 motor file (sim/motors/odrive-d5065.toml); the sensored speed law on
+// both, the sensorless one on the VESC 6 too.
 // The experiment (0.1 s simulated per board): enable in CURRENT at 5 ms, a
 // q-current step of 20 % of the motor's rated current at 10 ms, disable and
 // switch to SPEED at 40 ms, enable, a speed reference of 10 % of the rated
@@ -56,6 +57,7 @@ extern "C" {
 #include "mc_can_cmd.h"
 #include "mc_can_dbc.h"
 #include "mc_can_proto.h"
+#include "mc_ctrl_sensorless.h"
 #include "mc_board_odrive36_24v_gen.h"
 #include "mc_board_vesc6_gen.h"
 #include "mc_fake_flash.h"
@@ -308,13 +310,17 @@ void expect_board_image_table(const mc_params_t& p, const std::string& board) {
   EXPECT_NEAR(p.dead_time_s, static_cast<float>(d.deadtime_ns) * 1e-9f, 1e-12f);
 }
 
-void same_experiment(const std::string& board) {
-  const mcsim::AppSetup s = setup_for(board);
-  ASSERT_EQ(mc_params_validate(&s.defaults), MC_PARAMS_OK);
+// speed_law: the law of SPEED (params.toml speed_law: 0 sensored PI, 1
+// sensorless). Returns the SIL run (equal to the PIL's when the test passes).
+RunLog same_experiment(const std::string& board, uint32_t speed_law = 0u) {
+  mcsim::AppSetup s = setup_for(board);
+  s.defaults.speed_law = speed_law;
+  const std::string tag = board + (speed_law == 0u ? "" : ".law" + std::to_string(speed_law));
+  EXPECT_EQ(mc_params_validate(&s.defaults), MC_PARAMS_OK);
   expect_board_image_table(s.defaults, board);
   SilTarget sil(s);
   mcsim::AppTargetPilOptions po;
-  po.link = pil_test_link("pil_app_target_" + board + ".log", 60.0);
+  po.link = pil_test_link("pil_app_target_" + tag + ".log", 60.0);
   po.board = board;
   std::unique_ptr<mcsim::AppTarget> pil = mcsim::make_app_target_pil(s, po);
   EXPECT_EQ(pil->name(), "pil:mc_stm32f405_pil:" + board);
@@ -333,28 +339,44 @@ void same_experiment(const std::string& board) {
     what = difference(a.periods[static_cast<size_t>(k)], b.periods[static_cast<size_t>(k)]);
     if (!what.empty()) first = k;
   }
-  EXPECT_EQ(first, -1) << board << ": first differing period " << first << " (" << what << ")";
+  EXPECT_EQ(first, -1) << tag << ": first differing period " << first << " (" << what << ")";
   long frames = 0;
   for (const Snapshot& p : a.periods) frames += static_cast<long>(p.tx.size());
-  std::printf("[pil-app] %s: %ld periods, %ld CAN frames compared\n", board.c_str(), n, frames);
-  mc_record(board + ".periods_compared", static_cast<double>(n));
-  mc_record(board + ".periods_differing", first < 0 ? 0.0 : 1.0, 0.0);
+  std::printf("[pil-app] %s: %ld periods, %ld CAN frames compared\n", tag.c_str(), n, frames);
+  mc_record(tag + ".periods_compared", static_cast<double>(n));
+  mc_record(tag + ".periods_differing", first < 0 ? 0.0 : 1.0, 0.0);
+  const double sim_s = static_cast<double>(n) * T;
+  std::printf(
+      "[pil-cost] {\"benchmark\": \"pil_app_target\", \"board\": \"%s\", \"motor\": \"%s\", "
+      "\"speed_law\": %u, \"pwm_hz\": %u, \"periods\": %ld, \"sim_s\": %.6g, "
+      "\"pil_wall_s\": %.6g, \"pil_wall_s_per_sim_s\": %.4g, \"sil_wall_s_per_sim_s\": %.4g}\n",
+      board.c_str(), kMotor, speed_law, s.defaults.pwm_hz, n, sim_s, b.wall_s, b.wall_s / sim_s,
+      a.wall_s / sim_s);
+  return a;
+}
 
-  // The experiment did what it says (on the SIL run, which the PIL equals):
-  const auto at = [&](double t_s) -> const mc_app_probe_t& {
-    return a.periods[static_cast<size_t>(std::lround(t_s / T) - 1)].probe;
-  };
+// The q-current step in CURRENT (both laws run the same CURRENT mode).
+void expect_current_step(const RunLog& a, const Script& sc, double T) {
+  const mc_app_probe_t& c = a.periods[static_cast<size_t>(std::lround(0.035 / T) - 1)].probe;
+
   // CURRENT, enabled, the q current at its reference 25 ms after the step
   // (the current loop's bandwidth is hundreds of rad/s or more: 25 ms is
   // many time constants; 5 % of the step bounds ripple and quantisation).
-  const mc_app_probe_t& c = at(0.035);
   EXPECT_EQ(c.mode, static_cast<uint32_t>(MC_DRIVE_MODE_CURRENT));
   EXPECT_NEAR(c.iq_ref_a, sc.iq_step_a, 1e-3f);  // the DBC's 1 mA step
   EXPECT_NEAR(c.iq_a, sc.iq_step_a, 0.05 * sc.iq_step_a);
   EXPECT_EQ(c.faults, 0u);
+}
+
+// The experiment did what it says (on the SIL run, which the PIL equals).
+void sensored_experiment(const std::string& board) {
+  const RunLog a = same_experiment(board);
+  const mcsim::AppSetup s = setup_for(board);
+  const double T = 1.0 / s.defaults.pwm_hz;
+  const Script sc = script(s.defaults, T);
+  expect_current_step(a, sc, T);
   // SPEED (the application's CTRL mode): the law's reference has reached
-  // the command (the ramp is done within the 58 ms left) and the rotor
-  // moves toward it; no fault.
+  // the command and the rotor follows it; no fault.
   const mc_app_probe_t& e = a.periods.back().probe;
   EXPECT_EQ(e.mode, static_cast<uint32_t>(MC_DRIVE_MODE_CTRL));
   EXPECT_EQ(e.faults, 0u);
@@ -363,18 +385,8 @@ void same_experiment(const std::string& board) {
   // the rotor at the reference 58 ms after it (a light rotor: the speed law
   // settles in a few ms; 10 % bounds its overshoot and the encoder's ripple)
   EXPECT_NEAR(e.omega_m_rad_s, sc.speed_ref_rad_s, 0.1f * sc.speed_ref_rad_s);
-  std::printf("[pil-app] %s: iq %.4g A (ref %.4g) at 35 ms; at %.3g s speed %.4g rad/s, ref %.4g\n",
-              board.c_str(), static_cast<double>(c.iq_a), static_cast<double>(c.iq_ref_a),
-              kDuration_s, static_cast<double>(e.omega_m_rad_s),
-              static_cast<double>(e.omega_ref_rad_s));
-
-  const double sim_s = static_cast<double>(n) * T;
-  std::printf(
-      "[pil-cost] {\"benchmark\": \"pil_app_target\", \"board\": \"%s\", \"motor\": \"%s\", "
-      "\"pwm_hz\": %u, \"periods\": %ld, \"sim_s\": %.6g, \"pil_wall_s\": %.6g, "
-      "\"pil_wall_s_per_sim_s\": %.4g, \"sil_wall_s_per_sim_s\": %.4g}\n",
-      board.c_str(), kMotor, s.defaults.pwm_hz, n, sim_s, b.wall_s, b.wall_s / sim_s,
-      a.wall_s / sim_s);
+  std::printf("[pil-app] %s: at %.3g s speed %.4g rad/s, ref %.4g\n", board.c_str(), kDuration_s,
+              static_cast<double>(e.omega_m_rad_s), static_cast<double>(e.omega_ref_rad_s));
 }
 
 // The ODrive v3.6 in its 24 V variant: the 56 V description's nominal bus
@@ -382,11 +394,29 @@ void same_experiment(const std::string& board) {
 // which the parameter table refuses (MC_PARAMS_ERR_DRIVE: no margin for
 // the brake and regen thresholds) whatever the motor.
 TEST(PilAppTarget, OdriveV36ImageEqualsSilBitForBit) {
-  same_experiment("odrive36_24v");
+  sensored_experiment("odrive36_24v");
 }
 
 TEST(PilAppTarget, Vesc6ImageEqualsSilBitForBit) {
-  same_experiment("vesc6");
+  sensored_experiment("vesc6");
+}
+
+// The sensorless law (speed_law 1: flux observer, PLL, I-f start) on the
+// VESC 6: the law's own probe fields (start-up phase, handovers, the
+// observer's angle) travel in PROBE too.
+TEST(PilAppTarget, Vesc6SensorlessImageEqualsSilBitForBit) {
+  const RunLog a = same_experiment("vesc6", 1u);
+  const mc_app_probe_t& e = a.periods.back().probe;
+  // 58 ms into SPEED the law has aligned and runs its I-f start (the
+  // observer's hand-over comes later on this rotor), turning the rotor
+  // forward; no fault.
+  EXPECT_EQ(e.mode, static_cast<uint32_t>(MC_DRIVE_MODE_CTRL));
+  EXPECT_EQ(e.faults, 0u);
+  EXPECT_EQ(e.law_error, 0u);
+  EXPECT_EQ(e.sls_phase, static_cast<uint32_t>(MC_CTRL_SLS_IF));
+  EXPECT_GT(e.omega_m_rad_s, 0.0f);
+  std::printf("[pil-app] vesc6.law1: phase %u handovers %u speed %.4g rad/s mode %u faults %u\n",
+              e.sls_phase, e.sls_handovers, static_cast<double>(e.omega_m_rad_s), e.mode, e.faults);
 }
 
 // The comparison finds one ulp: in any probe field, in the plant's state.
