@@ -12,8 +12,10 @@
 // the link, the configuration store is two RAM sectors, no watchdog.
 #include <unistd.h>
 
+#include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "app_target.hpp"
@@ -36,8 +38,10 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
   }
   const uint32_t err = mc_params_validate(&s.defaults);
   if (err != MC_PARAMS_OK) {
-    throw UsageError("PIL: the parameter table is invalid (MC_PARAMS_ERR bits 0x" +
-                     std::to_string(err) + "): the image would refuse it");
+    char bits[16];
+    std::snprintf(bits, sizeof bits, "0x%X", static_cast<unsigned>(err));
+    throw UsageError(std::string("PIL: the parameter table is invalid (MC_PARAMS_ERR bits ") +
+                     bits + "): the image would refuse it");
   }
   if (s.board.dc_link_enabled && s.board.dc_link.brake_r_ohm > 0.0) {
     throw UsageError(
