@@ -109,6 +109,10 @@ typedef struct mc_f405_fault_config {
                                           (optional) */
     uint32_t bkin_mask;              /**< MC_HAL_FAULT_* inputs wired to the
                                           timers' BKIN (hardware kill) */
+    void (*kill_hook)(void *ctx);    /**< called by the gate kill after the
+                                          timers' outputs are off (the brake
+                                          chopper's off: mc_f405_brake_off), or NULL */
+    void *kill_hook_ctx;
 } mc_f405_fault_config_t;
 
 typedef struct mc_f405_fault {

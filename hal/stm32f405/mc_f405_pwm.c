@@ -502,6 +502,9 @@ static void fault_gate_kill(void *ctx)
     kill_timer(f->cfg.p_tim1);
     kill_timer(f->cfg.p_tim8);
     pin_drive(&f->cfg.gate_enable, false);
+    if (f->cfg.kill_hook != NULL) {
+        f->cfg.kill_hook(f->cfg.kill_hook_ctx);
+    }
 }
 
 static bool break_flag(const mc_f405_tim_regs_t *p_tim)

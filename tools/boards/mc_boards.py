@@ -537,18 +537,39 @@ def load_board(folder):
 
 def load_brake(br, wb, name, pins):
     """[brake] present (bool) and, with a chopper, r_ohm (the resistor the
-    board is used with) on the brake_l/brake_h pins. None: no chopper."""
+    board is used with) on the brake_l/brake_h pins, driven by TIM2 (channels
+    ch_low/ch_high, centre-aligned, period_clocks, deadtime_clocks between
+    the two switches, duty_max). None: no chopper."""
     if not isinstance(br.get("present"), bool):
         raise BoardError(f"{wb}: 'present' must be true or false")
     present = br["present"]
     if not present:
-        if "r_ohm" in br:
-            raise BoardError(f"{wb}: r_ohm without a chopper (present = false)")
+        extra = sorted(k for k in br if k != "present")
+        if extra:
+            raise BoardError(f"{wb}: {extra[0]} without a chopper (present = false)")
         return None
     r = positive(br, "r_ohm", wb)
     if not ("brake_l" in pins and "brake_h" in pins):
         raise BoardError(f"{name}: a brake chopper needs the brake_l and brake_h pins")
-    return r
+    if need(br, "timer", wb, str) != "tim2":
+        raise BoardError(f"{wb}: 'timer' must be \"tim2\" (the image's brake timer)")
+    out = {"r_ohm": r}
+    for key in ("ch_low", "ch_high"):
+        ch = need(br, key, wb, int)
+        if not 1 <= ch <= 4:
+            raise BoardError(f"{wb}: '{key}' must be a channel 1..4")
+        out[key] = ch
+    if out["ch_low"] == out["ch_high"]:
+        raise BoardError(f"{wb}: ch_low and ch_high must differ")
+    period = need(br, "period_clocks", wb, int)
+    dead = need(br, "deadtime_clocks", wb, int)
+    if not (dead >= 1 and 2 * dead < period <= 0xFFFF):
+        raise BoardError(f"{wb}: period_clocks must be in (2 deadtime_clocks, 65535]")
+    duty_max = positive(br, "duty_max", wb)
+    if not duty_max <= 1.0 - dead / period:
+        raise BoardError(f"{wb}: duty_max leaves no dead time (at most 1 - deadtime/period)")
+    out.update(period_clocks=period, deadtime_clocks=dead, duty_max=duty_max)
+    return out
 
 
 def board_folders(boards_dir):
@@ -681,6 +702,7 @@ def gen_source(b):
     for e in gpio_table(b["pins"]):
         mask |= 1 << e["port"]
     drv = b["drv"]
+    br = b["brake"]
     if drv:
         drv_init = ("{\n        .gain = %s,\n        .oc_adj_set = %du, /* V_DS trip %.3f V */\n"
                     "        .ocp_mode = %s,\n        .pwm_mode = %s,\n        .gate_current = %s,\n"
@@ -724,8 +746,13 @@ def gen_source(b):
               f"    .vbus_min_v = {cfloat(b['vbus_min'])},",
               f"    .vbus_max_v = {cfloat(b['vbus_max'])},",
               f"    .vbus_nominal_v = {cfloat(b['nominal'])},",
-              f"    .has_brake = {'false' if b['brake'] is None else 'true'},",
-              f"    .brake_r_ohm = {cfloat(b['brake'] or 0.0)},",
+              f"    .has_brake = {'false' if br is None else 'true'},",
+              f"    .brake_r_ohm = {cfloat(br['r_ohm'] if br else 0.0)},",
+              f"    .brake_ch_low = {br['ch_low'] if br else 0}u,",
+              f"    .brake_ch_high = {br['ch_high'] if br else 0}u,",
+              f"    .brake_period_ticks = {br['period_clocks'] if br else 0}u,",
+              f"    .brake_deadtime_ticks = {br['deadtime_clocks'] if br else 0}u,",
+              f"    .brake_duty_max = {cfloat(br['duty_max'] if br else 0.0)},",
               f"    .enc_counts_per_rev = {b['cpr']}u,",
               f"    .enc_input_filter = {b['filt']}u,",
               f"    .enc_type = {ENCODER_TYPES[b['enc_type']]},",
@@ -786,7 +813,11 @@ def gen_readme_section(boards):
                 + (", index on EXTI" if "enc_z" in b["by_signal"] else "") + " |",
                 f"| position sensor fitted (board.toml) | {b['enc_type']} |",
                 "| brake chopper | " + ("none" if b["brake"] is None else
-                                       f"brake_l/brake_h, {fmt(b['brake'])} ohm resistor")
+                                       f"brake_l/brake_h, {fmt(b['brake']['r_ohm'])} ohm resistor, "
+                                       f"TIM2 CH{b['brake']['ch_low']}/CH{b['brake']['ch_high']}, "
+                                       f"{b['brake']['period_clocks']}-clock centre-aligned period, "
+                                       f"{b['brake']['deadtime_clocks']}-clock dead time, duty "
+                                       f"<= {fmt(b['brake']['duty_max'])}")
                 + " |"]
         for slot in ("power_stage", "motor"):
             th = b["therm"][slot]

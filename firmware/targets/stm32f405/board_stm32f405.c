@@ -232,6 +232,7 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
     p.p_rcc_apb1enr = periph_at((uintptr_t)MC_RCC_BASE + MC_RCC_APB1ENR_OFS);
     p.p_rcc_apb2enr = periph_at((uintptr_t)MC_RCC_BASE + MC_RCC_APB2ENR_OFS);
     p.p_tim1 = periph_at(MC_F405_TIM1_BASE);
+    p.p_tim2 = periph_at(MC_F405_TIM2_BASE);
     p.p_tim3 = periph_at(MC_F405_TIM3_BASE);
     p.p_tim5 = periph_at(MC_F405_TIM5_BASE);
     p.p_adc1 = periph_at(MC_F405_ADC1_BASE);

@@ -47,8 +47,8 @@ constexpr uint32_t kPwmHz = 20000u;
 constexpr double kVref = 3.3;
 
 // RM0090 bit positions.
-constexpr uint32_t kApb1Tim3 = 1u << 1, kApb1Tim5 = 1u << 3, kApb1Spi3 = 1u << 15,
-                   kApb1Can1 = 1u << 25;
+constexpr uint32_t kApb1Tim2 = 1u << 0, kApb1Tim3 = 1u << 1, kApb1Tim5 = 1u << 3,
+                   kApb1Spi3 = 1u << 15, kApb1Can1 = 1u << 25;
 constexpr uint32_t kApb2Tim1 = 1u << 0, kApb2Adc1 = 1u << 8, kApb2Syscfg = 1u << 14;
 constexpr uint32_t kBdtrBke = 1u << 12, kBdtrBkp = 1u << 13, kBdtrMoe = 1u << 15;
 constexpr uint32_t kEgrBg = 1u << 7;
@@ -57,7 +57,7 @@ constexpr uint32_t kCanMsrInak = 1u << 0;
 struct Rig {
     mc_f405_gpio_regs_t gpio[MC_F405_GPIO_PORTS]{};
     volatile uint32_t ahb1 = 0u, apb1 = 0u, apb2 = 0u;
-    mc_f405_tim_regs_t tim1{}, tim3{}, tim5{};
+    mc_f405_tim_regs_t tim1{}, tim2{}, tim3{}, tim5{};
     mc_f405_adc_regs_t adc{};
     mc_f405_adc_common_regs_t adc_common{};
     mc_f405_can_regs_t can{};
@@ -82,6 +82,7 @@ struct Rig {
         p.p_rcc_apb1enr = &apb1;
         p.p_rcc_apb2enr = &apb2;
         p.p_tim1 = &tim1;
+        p.p_tim2 = &tim2;
         p.p_tim3 = &tim3;
         p.p_tim5 = &tim5;
         p.p_adc1 = &adc;
@@ -177,7 +178,8 @@ TEST_P(BoardSetup, ClocksPinsTimersAndAdc)
         ports |= 1u << p.port;
     }
     EXPECT_EQ(rig.ahb1, ports);
-    EXPECT_EQ(rig.apb1, kApb1Tim3 | kApb1Tim5 | kApb1Can1 | (c.desc->has_drv8301 ? kApb1Spi3 : 0u));
+    EXPECT_EQ(rig.apb1, kApb1Tim3 | kApb1Tim5 | kApb1Can1 | (c.desc->has_drv8301 ? kApb1Spi3 : 0u) |
+                            (c.desc->has_brake ? kApb1Tim2 : 0u));
     const auto *z = boards::find(pins, "enc_z");
     EXPECT_EQ(rig.apb2, kApb2Tim1 | kApb2Adc1 | (z != nullptr ? kApb2Syscfg : 0u));
 
@@ -714,4 +716,104 @@ TEST(BoardCanBitRate, RateTheClockCannotTimeIsRefused)
     EXPECT_EQ(rig.can.BTR, btr0);
     EXPECT_EQ(mc_board_f405_can_set_bitrate(&rig.board, 125000u), MC_BOARD_F405_OK);
     EXPECT_EQ(rig.can.BTR, 0x001C0001u);
+}
+
+// The brake chopper (board.toml [brake], pins.csv brake_l/brake_h): on a
+// board with one, TIM2 on the description's channels, centre-aligned
+// (RM0090 §18.4.1 CMS = 11), both channels PWM mode 2 (OCxM = 111) with
+// preload (OCxPE), the low switch's polarity inverted (CCxP: on while
+// CNT < CCRl) and both outputs enabled, ARR the period, both switches off
+// at boot; without one no handle, TIM2 untouched and its clock off.
+TEST_P(BoardSetup, BrakeChopperFromBoardToml)
+{
+    const Case &c = GetParam();
+    const toml::table t = boards::read_toml(c.name);
+    const bool present = t.at_path("brake.present").value<bool>().value();
+    Rig rig;
+    ASSERT_EQ(rig.setup(c.desc), MC_BOARD_F405_OK) << mc_board_f405_err_name(rig.board.err);
+    ASSERT_EQ(c.desc->has_brake, present);
+    if (!present) {
+        EXPECT_EQ(rig.board.hal.brake, nullptr);
+        EXPECT_EQ(rig.apb1 & kApb1Tim2, 0u);
+        EXPECT_EQ(rig.tim2.CR1 | rig.tim2.CCER | rig.tim2.CCMR1 | rig.tim2.CCMR2 | rig.tim2.ARR |
+                      rig.tim2.CCR1 | rig.tim2.CCR2 | rig.tim2.CCR3 | rig.tim2.CCR4,
+                  0u);
+        return;
+    }
+    ASSERT_EQ(rig.board.hal.brake, &rig.board.brake.dev);
+    EXPECT_EQ(t.at_path("brake.timer").value<std::string>().value(), "tim2");
+    const auto lo = unsigned(boards::num(t, "brake.ch_low"));
+    const auto hi = unsigned(boards::num(t, "brake.ch_high"));
+    const auto arr = uint32_t(boards::num(t, "brake.period_clocks"));
+    const auto dead = uint32_t(boards::num(t, "brake.deadtime_clocks"));
+    const double duty_max = boards::num(t, "brake.duty_max");
+    // Both pins in their alternate function AF1 (TIM2), as pins.csv says.
+    const auto pins = boards::read_pins(c.name);
+    for (const char *sig : {"brake_l", "brake_h"}) {
+        const auto *pin = boards::find(pins, sig);
+        ASSERT_NE(pin, nullptr) << sig;
+        EXPECT_EQ(pin->mode, "af") << sig;
+        EXPECT_EQ((rig.gpio[pin->port].MODER >> (2 * pin->pin)) & 3u, 2u) << sig;
+        EXPECT_EQ((rig.gpio[pin->port].AFR[pin->pin / 8] >> (4 * (pin->pin % 8))) & 0xFu, 1u)
+            << sig;
+    }
+    EXPECT_EQ(rig.tim2.PSC, 0u);
+    EXPECT_EQ(rig.tim2.ARR, arr);
+    EXPECT_EQ(rig.tim2.CR1 & (3u << 5), 3u << 5);               // CMS centre-aligned 3
+    EXPECT_EQ(rig.tim2.CR1 & ((1u << 7) | 1u), (1u << 7) | 1u); // ARPE, CEN
+    volatile uint32_t *ccr[] = {&rig.tim2.CCR1, &rig.tim2.CCR2, &rig.tim2.CCR3, &rig.tim2.CCR4};
+    for (const unsigned ch : {lo, hi}) {
+        const uint32_t ccmr = (ch <= 2) ? rig.tim2.CCMR1 : rig.tim2.CCMR2;
+        EXPECT_EQ((ccmr >> (8 * ((ch - 1) % 2))) & 0x78u, (7u << 4) | (1u << 3)) << ch;
+        EXPECT_NE(rig.tim2.CCER & (1u << (4 * (ch - 1))), 0u) << ch; // CCxE
+    }
+    EXPECT_NE(rig.tim2.CCER & (1u << (4 * (lo - 1) + 1)), 0u); // low: active low
+    EXPECT_EQ(rig.tim2.CCER & (1u << (4 * (hi - 1) + 1)), 0u); // high: active high
+    // Boot: both off (low never: CNT < 0; high never: CNT >= ARR + 1).
+    EXPECT_EQ(*ccr[lo - 1], 0u);
+    EXPECT_EQ(*ccr[hi - 1], arr + 1u);
+
+    // A duty the drive asks for (mc_drive's brake step calls this handle)
+    // lands in the compares: the high switch on for round(d ARR) of the ARR
+    // ticks of each half period, the low switch off dead-time ticks before.
+    for (const float d : {0.0f, 0.25f, 0.5f, 0.9f, 1.0f}) {
+        ASSERT_EQ(mc_hal_brake_set_duty(rig.board.hal.brake, d), 0) << d;
+        const double dc = std::min(double(d), duty_max);
+        const auto on = uint32_t(std::lround(float(dc) * float(arr)));
+        EXPECT_EQ(*ccr[hi - 1], arr + 1u - on) << d;
+        EXPECT_EQ(*ccr[lo - 1], arr + 1u - on - dead) << d;
+        // Never on together: the low switch goes off dead-time ticks before
+        // the high one comes on.
+        EXPECT_EQ(*ccr[hi - 1] - *ccr[lo - 1], dead) << d;
+    }
+    // A duty outside [0, 1] or NaN is refused and changes nothing.
+    ASSERT_EQ(mc_hal_brake_set_duty(rig.board.hal.brake, 0.5f), 0);
+    const uint32_t h = *ccr[hi - 1], l = *ccr[lo - 1];
+    for (const float bad : {-0.1f, 1.5f, std::nanf("")}) {
+        EXPECT_EQ(mc_hal_brake_set_duty(rig.board.hal.brake, bad), -EINVAL) << bad;
+        EXPECT_EQ(*ccr[hi - 1], h);
+        EXPECT_EQ(*ccr[lo - 1], l);
+    }
+    // The gate kill (fault path) turns both switches off, and they stay
+    // off while the kill is latched whatever duty is asked.
+    (void)mc_hal_fault_gate_kill(rig.board.hal.fault);
+    EXPECT_EQ(*ccr[lo - 1], 0u);
+    EXPECT_EQ(*ccr[hi - 1], arr + 1u);
+    EXPECT_EQ(mc_hal_brake_set_duty(rig.board.hal.brake, 0.5f), 0);
+    EXPECT_EQ(*ccr[lo - 1], 0u);
+    EXPECT_EQ(*ccr[hi - 1], arr + 1u);
+}
+
+// A description whose brake timer is out of range stops the set-up by name.
+TEST(BoardBrake, BadTimerDescriptionIsRefused)
+{
+    mc_board_desc_t d = mc_board_odrive36_desc;
+    d.brake_ch_high = d.brake_ch_low;
+    Rig rig;
+    EXPECT_EQ(rig.setup(&d), MC_BOARD_F405_ERR_BRAKE);
+    EXPECT_STREQ(mc_board_f405_err_name(MC_BOARD_F405_ERR_BRAKE), "brake chopper timer");
+    d = mc_board_odrive36_desc;
+    d.brake_duty_max = 1.0f; // no room for the dead time
+    Rig rig2;
+    EXPECT_EQ(rig2.setup(&d), MC_BOARD_F405_ERR_BRAKE);
 }

@@ -100,7 +100,13 @@ typedef struct mc_board_desc {
     float vbus_nominal_v; /**< the board's rated bus (the simulator's supply) */
     /* brake chopper (brake_l/brake_h): present, and the resistor it is used with */
     bool has_brake;
-    float brake_r_ohm; /**< 0 without a chopper */
+    float brake_r_ohm;             /**< 0 without a chopper */
+    uint8_t brake_ch_low;          /**< TIM2 channel of brake_l (AUX_L), 1..4 */
+    uint8_t brake_ch_high;         /**< TIM2 channel of brake_h (AUX_H): the
+                                        resistor conducts while it is on */
+    uint32_t brake_period_ticks;   /**< TIM2 ARR, centre-aligned */
+    uint32_t brake_deadtime_ticks; /**< between one switch off and the other on */
+    float brake_duty_max;          /**< largest duty (bootstrap charge) */
     /* position sensors */
     uint32_t enc_counts_per_rev; /**< TIM3 encoder */
     uint8_t enc_input_filter;

@@ -52,6 +52,9 @@ static void clocks_on(const mc_board_desc_t *d, const mc_board_f405_periph_t *p)
     if (d->has_drv8301 || spi_encoder(d)) {
         apb1 |= MC_BOARD_F405_APB1ENR_SPI3EN;
     }
+    if (d->has_brake) {
+        apb1 |= MC_BOARD_F405_APB1ENR_TIM2EN;
+    }
     if (has_pin(d->enc_index)) {
         apb2 |= MC_BOARD_F405_APB2ENR_SYSCFGEN; /* EXTICR */
     }
@@ -69,6 +72,7 @@ static bool periph_complete(const mc_board_desc_t *d, const mc_board_f405_periph
         (p->p_tim1 == NULL) || (p->p_tim3 == NULL) || (p->p_tim5 == NULL) || (p->p_adc1 == NULL) ||
         (p->p_adc_common == NULL) || (p->p_can1 == NULL) ||
         ((d->has_drv8301 || spi_encoder(d)) && (p->p_spi3 == NULL)) ||
+        (d->has_brake && (p->p_tim2 == NULL)) ||
         (has_pin(d->enc_index) && ((p->p_syscfg == NULL) || (p->p_exti == NULL))) ||
         (spi_encoder(d) && !has_pin(d->enc_spi_cs)) ||
         ((d->enc_type == MC_BOARD_ENC_HALL) && (d->p_gpio_hall == NULL))) {
@@ -86,6 +90,22 @@ static mc_board_f405_err_t fail(mc_board_f405_t *b, mc_board_f405_err_t err)
 {
     b->err = err;
     return err;
+}
+
+/* The brake chopper on TIM2 (APB1 timer clock), both switches off. */
+static int setup_brake(mc_board_f405_t *b, const mc_board_desc_t *d,
+                       const mc_board_f405_periph_t *p)
+{
+    const mc_f405_brake_config_t c = {
+        .tim = p->p_tim2,
+        .ch_low = d->brake_ch_low,
+        .ch_high = d->brake_ch_high,
+        .period_ticks = d->brake_period_ticks,
+        .deadtime_ticks = d->brake_deadtime_ticks,
+        .duty_max = d->brake_duty_max,
+        .p_fault = &b->fault,
+    };
+    return mc_f405_brake_init(&b->brake, &c);
 }
 
 /* SPI3 shared by the fast loop and the slow loop (mc_spisched.h): the
@@ -234,6 +254,9 @@ mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board
      * pulse, then the fault driver raises it. A BKIN input stays in its
      * alternate function: the fault driver only sees it through BIF. */
     delay(p, MC_BOARD_F405_GATE_RESET_US);
+    if (d->has_brake && (setup_brake(b, d, p) != 0)) {
+        return fail(b, MC_BOARD_F405_ERR_BRAKE);
+    }
     const mc_f405_fault_config_t fc = {
         .p_tim1 = p->p_tim1,
         .p_tim8 = NULL,
@@ -241,6 +264,8 @@ mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board
         .overcurrent = {NULL, 0u, false},
         .gate_enable = pin_of(p, d->gate_enable),
         .bkin_mask = d->bkin_mask,
+        .kill_hook = d->has_brake ? mc_f405_brake_off : NULL,
+        .kill_hook_ctx = d->has_brake ? &b->brake : NULL,
     };
     if (mc_f405_fault_init(&b->fault, &fc) != 0) {
         return fail(b, MC_BOARD_F405_ERR_FAULT);
@@ -340,7 +365,7 @@ mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board
     b->hal.can = b->can_ok ? &b->can.dev : NULL;
     b->hal.tick = &b->tick.dev;
     b->hal.fault = &b->fault.dev;
-    b->hal.brake = NULL;
+    b->hal.brake = d->has_brake ? &b->brake.dev : NULL;
     b->drv_ready = !d->has_drv8301; /* a DRV8301 becomes ready when set up */
     b->err = MC_BOARD_F405_OK;
     return MC_BOARD_F405_OK;
@@ -493,6 +518,8 @@ const char *mc_board_f405_err_name(mc_board_f405_err_t err)
         return "absolute encoder";
     case MC_BOARD_F405_ERR_HALL:
         return "Hall inputs";
+    case MC_BOARD_F405_ERR_BRAKE:
+        return "brake chopper timer";
     default:
         return "unknown";
     }

@@ -35,6 +35,11 @@
  *   hall     the Hall GPIO table over the encoder's pins; the inputs as
  *            mc_f405_hall (hall.dev); hal.encoder NULL: the drive has no
  *            encoder until the Hall kernel is bound to it (firmware/kernels/hall).
+ *
+ * Brake chopper (desc has_brake): TIM2 on the description's channels,
+ * period and dead time (mc_f405_brake.h), set up with both switches off
+ * before the fault driver, whose gate kill turns it off again (kill hook);
+ * hal.brake = brake.dev. Without one hal.brake is NULL and TIM2 untouched.
  */
 #ifndef MC_BOARD_F405_H
 #define MC_BOARD_F405_H
@@ -46,6 +51,7 @@
 #include "hal/hall.h"
 #include "mc_as5047p.h"
 #include "mc_board_desc.h"
+#include "mc_f405_brake.h"
 #include "mc_ma732.h"
 #include "mc_spisched.h"
 
@@ -58,6 +64,7 @@ extern "C" {
 #define MC_BOARD_F405_GATE_STARTUP_US 20000u
 
 /** RCC enable bits the set-up writes (RM0090 §7.3.10, §7.3.13, §7.3.14). */
+#define MC_BOARD_F405_APB1ENR_TIM2EN   (1u << 0)
 #define MC_BOARD_F405_APB1ENR_TIM3EN   (1u << 1)
 #define MC_BOARD_F405_APB1ENR_TIM5EN   (1u << 3)
 #define MC_BOARD_F405_APB1ENR_SPI3EN   (1u << 15)
@@ -81,6 +88,7 @@ typedef struct mc_board_f405_periph {
     volatile uint32_t *p_rcc_apb1enr;
     volatile uint32_t *p_rcc_apb2enr;
     mc_f405_tim_regs_t *p_tim1;
+    mc_f405_tim_regs_t *p_tim2; /**< the brake chopper (boards with one) */
     mc_f405_tim_regs_t *p_tim3;
     mc_f405_tim_regs_t *p_tim5;
     mc_f405_adc_regs_t *p_adc1;
@@ -110,7 +118,9 @@ typedef enum mc_board_f405_err {
                                         bit/s, or not exact on the APB1 clock */
     MC_BOARD_F405_ERR_SPIENC,      /**< the absolute encoder the board names does
                                         not answer as it should (enc_probe_rc) */
-    MC_BOARD_F405_ERR_HALL         /**< the Hall inputs could not be set up */
+    MC_BOARD_F405_ERR_HALL,        /**< the Hall inputs could not be set up */
+    MC_BOARD_F405_ERR_BRAKE        /**< the brake chopper's timer description
+                                        is out of range */
 } mc_board_f405_err_t;
 
 typedef struct mc_board_f405 {
@@ -128,8 +138,9 @@ typedef struct mc_board_f405 {
     mc_f405_spi_t enc_spi; /**< the absolute encoder's device on SPI3 */
     mc_as5047p_t as5047p;
     mc_ma732_t ma732;
-    int enc_probe_rc;    /**< the absolute encoder's probe (0 ok) */
-    mc_f405_hall_t hall; /**< the Hall inputs (enc_type hall) */
+    int enc_probe_rc;      /**< the absolute encoder's probe (0 ok) */
+    mc_f405_hall_t hall;   /**< the Hall inputs (enc_type hall) */
+    mc_f405_brake_t brake; /**< TIM2 brake chopper (has_brake) */
     mc_hal_t hal;
     bool can_ok; /**< CAN left init mode (else hal.can NULL) */
     mc_board_f405_err_t err;
