@@ -53,7 +53,14 @@
  *                    (mc_boot_handoff.h), as on the drive boards.
  *       probe        the application's probe (mc_app_probe) goes to the
  *                    host as PROBE after READY and after each period,
- *                    before OUT (link protocol version 2).
+ *                    before OUT (link protocol version 2);
+ *       brake        when APP says the board has a brake chopper
+ *                    (has_brake), mc_hal_t.brake: the duty the drive sets
+ *                    (checked as hal_host::PmsmBoard does) goes to the host
+ *                    in OUT (brake_set_count, brake_duty), which applies it
+ *                    to its board's brake before the period's integration
+ *                    (link protocol version 3). Without one, NULL: the
+ *                    application refuses brake_enable as on the board.
  *     Both loops run within the period (the ADC interrupt, then PendSV),
  *     as in the SIL's one period (hal_host::app_period): OUT carries what
  *     the bridge does in the next period.
@@ -135,6 +142,8 @@ typedef struct {
     bool killed_here; /**< gate kill by the drive (host kill is in meas) */
     uint32_t duty_set_count;
     uint32_t gate_kill_count;
+    float brake_duty;
+    uint32_t brake_set_count;
     int32_t cmd_rc;
     uint32_t ipsr_fast;
     /* HAL handles */
@@ -144,6 +153,7 @@ typedef struct {
     mc_hal_tick_t tick;
     mc_hal_fault_t fault;
     mc_hal_can_t can;
+    mc_hal_brake_t brake;
     mc_hal_t hal;
     /* whole-image mode */
     bool app_mode;
@@ -319,6 +329,18 @@ static int pwm_set_duty(void *ctx, float da, float db, float dc)
     return 0;
 }
 
+/* As hal_host::PmsmBoard::brake_set_duty: NaN or outside [0, 1] refused. */
+static int brake_set_duty(void *ctx, float duty)
+{
+    pil_board_t *b = ctx;
+    if (!((duty >= 0.0f) && (duty <= 1.0f))) {
+        return -EINVAL;
+    }
+    b->brake_duty = duty;
+    b->brake_set_count++;
+    return 0;
+}
+
 static bool gate_killed(const pil_board_t *b)
 {
     return b->killed_here || b->meas.fault.gate_killed;
@@ -448,6 +470,7 @@ static const mc_hal_pwm3_ops_t k_pwm3_ops = {pwm_set_duty, pwm_enable, pwm_disab
 static const mc_hal_encoder_ops_t k_enc_ops = {enc_read};
 static const mc_hal_tick_ops_t k_tick_ops = {tick_read, tick_freq};
 static const mc_hal_fault_ops_t k_fault_ops = {fault_read, fault_gate_kill, fault_gate_release};
+static const mc_hal_brake_ops_t k_brake_ops = {brake_set_duty};
 
 /* ---- mc_board.h -------------------------------------------------------- */
 
@@ -471,6 +494,8 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
     g_pil.hal.can = NULL; /* set in the whole-image mode */
     g_pil.hal.tick = &g_pil.tick;
     g_pil.hal.fault = &g_pil.fault;
+    g_pil.brake = (mc_hal_brake_t){&k_brake_ops, &g_pil};
+    g_pil.hal.brake = NULL; /* set in the whole-image mode when the board has one */
 
     /* USART1 on APB2 (84 MHz on silicon; QEMU ignores the rate). */
     RCC_APB2ENR |= RCC_APB2ENR_USART1EN;
@@ -558,6 +583,7 @@ static void receive_app_setup(int type)
     c->enter_boot = mc_boot_mailbox_enter; /* frames are sent at once: nothing to drain */
     c->boot_ctx = NULL;
     g_pil.hal.can = &g_pil.can;
+    g_pil.hal.brake = (a.has_brake != 0u) ? &g_pil.brake : NULL;
     g_pil.app_mode = true;
     g_pil.have_app = true;
 }
@@ -706,6 +732,9 @@ void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
     o.ipsr_fast = g_pil.ipsr_fast;
     o.ipsr_slow = slow_ran ? mc_ipsr() : 0u;
     o.slow_ran = slow_ran ? 1u : 0u;
+    o.brake_set_count = g_pil.brake_set_count;
+    o.brake_duty = g_pil.brake_duty;
+    g_pil.brake_set_count = 0u;
     g_pil.duty_set_count = 0u;
     g_pil.gate_kill_count = 0u;
 

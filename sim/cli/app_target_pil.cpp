@@ -1,8 +1,9 @@
 // The PIL AppTarget (app_target.hpp): the board's whole image on the
 // emulated Cortex-M4F, the plant on the host, one period at a time over the
 // PIL link (foc_pil.hpp's PilSession; protocol firmware/targets/pil/
-// mc_pil_frame.h, version 2: the application's probe comes back as PROBE
-// after each period).
+// mc_pil_frame.h, version 3: the application's probe comes back as PROBE
+// after each period; a board with a brake chopper gets one in the image's
+// HAL, whose duty comes back in OUT and drives the plant's brake).
 //
 // What the image runs is the flashed image's code (main.c's interrupt and
 // PendSV sequence, firmware/app: the application, the drive, the laws, CAN,
@@ -42,11 +43,6 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
     std::snprintf(bits, sizeof bits, "0x%X", static_cast<unsigned>(err));
     throw UsageError(std::string("PIL: the parameter table is invalid (MC_PARAMS_ERR bits ") +
                      bits + "): the image would refuse it");
-  }
-  if (s.board.dc_link_enabled && s.board.dc_link.brake_r_ohm > 0.0) {
-    throw UsageError(
-        "PIL: the plant has a brake chopper (brake_r_ohm > 0) but the PIL link carries "
-        "no brake output yet: the image could not drive it");
   }
   return s;
 }

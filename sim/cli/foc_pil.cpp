@@ -47,6 +47,8 @@ void PilSession::boot_app(const PilAppSetup& setup) {
   }
   mc_pil_app_t app = setup.app;
   (void)board_.tick_freq(&app.tick_hz);  // this board's, whatever the caller gave
+  // The image's HAL exposes a brake chopper when this board has one.
+  app.has_brake = (board_.hal()->brake != nullptr) ? 1u : 0u;
   const std::size_t n = mc_pil_encode_app(&app, buf.data(), buf.size());
   link_.send(buf.data(), n);
   expect_ready();
@@ -142,6 +144,9 @@ const mc_pil_out_t& PilSession::step(const PilCommand& cmd,
   // What the drive did to the bridge this period, in the board's terms.
   if (out_.duty_set_count > 0u && b.pwm_set_duty(out_.duty_a, out_.duty_b, out_.duty_c) != 0) {
     throw std::runtime_error("PIL: the board refused duties the target accepted");
+  }
+  if (out_.brake_set_count > 0u && b.brake_set_duty(out_.brake_duty) != 0) {
+    throw std::runtime_error("PIL: the board refused a brake duty the target accepted");
   }
   if (out_.gate_kill_count > 0u) b.fault_gate_kill();
   if (out_.pwm_enabled != 0u) {

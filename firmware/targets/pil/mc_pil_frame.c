@@ -10,8 +10,8 @@
 #define CFG_WORDS   23u
 #define READY_WORDS 3u
 #define MEAS_WORDS  29u
-#define OUT_WORDS   21u
-#define APP_WORDS   9u
+#define OUT_WORDS   23u
+#define APP_WORDS   10u
 /* CAN frames: id, time stamp, length and flags, then the data rounded up
  * to whole words (CAN_TX: the period's seq first) */
 #define CAN_HEAD_WORDS 3u
@@ -414,6 +414,8 @@ size_t mc_pil_encode_out(const mc_pil_out_t *o, uint8_t *buf, size_t cap)
     put_u32(&w, o->ipsr_fast);
     put_u32(&w, o->ipsr_slow);
     put_u32(&w, o->slow_ran);
+    put_u32(&w, o->brake_set_count);
+    put_f32(&w, o->brake_duty);
     return finish(&w);
 }
 
@@ -449,6 +451,8 @@ int mc_pil_decode_out(const uint8_t *buf, size_t n, mc_pil_out_t *out)
     o.ipsr_fast = get_u32(&r);
     o.ipsr_slow = get_u32(&r);
     o.slow_ran = get_u32(&r);
+    o.brake_set_count = get_u32(&r);
+    o.brake_duty = get_f32(&r);
     *out = o;
     return MC_PIL_OK;
 }
@@ -558,6 +562,7 @@ size_t mc_pil_encode_app(const mc_pil_app_t *a, uint8_t *buf, size_t cap)
     put_u32(&w, a->pwm_hz_fixed);
     put_u32(&w, a->slow_loop_div_fixed);
     put_u32(&w, a->tick_hz);
+    put_u32(&w, a->has_brake);
     return finish(&w);
 }
 
@@ -579,6 +584,7 @@ int mc_pil_decode_app(const uint8_t *buf, size_t n, mc_pil_app_t *out)
     a.pwm_hz_fixed = get_u32(&r);
     a.slow_loop_div_fixed = get_u32(&r);
     a.tick_hz = get_u32(&r);
+    a.has_brake = get_u32(&r);
     *out = a;
     return MC_PIL_OK;
 }

@@ -18,7 +18,8 @@
  *   target          fast-loop interrupt: commands, mc_drive_fast_step(); the
  *                   slow step in PendSV when due.
  *   target -> host  OUT: what the drive did to the bridge this period (last
- *                   accepted duties, enable state, gate kill) and telemetry.
+ *                   accepted duties, enable state, gate kill, the brake
+ *                   chopper's duty) and telemetry.
  *   host            applies OUT to the simulated board, integrates one period.
  * Start-up: target -> HELLO once its USART receives (bytes sent earlier
  * would be dropped), then one of
@@ -48,7 +49,11 @@
  *
  * Versions (MC_PIL_VERSION, in READY):
  *   1  drive alone, whole image with CAN (READY without a version word);
- *   2  PROBE frames in the whole-image mode; READY carries the version.
+ *   2  PROBE frames in the whole-image mode; READY carries the version;
+ *   3  the brake chopper: APP says whether the board has one (the image's
+ *      HAL then exposes mc_hal_t.brake), OUT carries the brake duty the
+ *      drive set this period (count and last duty), which the host applies
+ *      to its board's brake before it integrates the period.
  *
  * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
  * and parse a complete frame. Built for the target (hal/pil/mc_hal_pil.c) and for the
@@ -89,7 +94,7 @@ typedef enum {
 } mc_pil_type_t;
 
 /** The link protocol's version (see the file comment), sent in READY. */
-#define MC_PIL_VERSION 2u
+#define MC_PIL_VERSION 3u
 
 /** (id, raw) pairs per PARAMS frame (the payload limit). */
 #define MC_PIL_PARAMS_MAX 31u
@@ -146,6 +151,9 @@ typedef struct {
     uint32_t ipsr_fast; /**< exception number of the fast step (34 = ADC IRQ) */
     uint32_t ipsr_slow; /**< of the slow step (14 = PendSV), 0 if none ran */
     uint32_t slow_ran;
+    uint32_t brake_set_count; /**< accepted brake set_duty calls this period
+                                   (version 3) */
+    float brake_duty;         /**< the last accepted brake chopper duty */
     /* What the application's slow work did to the bridge (whole-image mode;
      * zero counts and pwm_enabled unchanged otherwise): applied by the host
      * after the period's integration. */
@@ -158,7 +166,9 @@ typedef struct {
     uint32_t tm_ext_rate_hz[MC_PIL_TM_EXT_RATES];
     uint32_t pwm_hz_fixed;
     uint32_t slow_loop_div_fixed;
-    uint32_t tick_hz; /**< the board's tick frequency, answered before the first MEAS */
+    uint32_t tick_hz;   /**< the board's tick frequency, answered before the first MEAS */
+    uint32_t has_brake; /**< 1: the board has a brake chopper, the image's HAL
+                             exposes one (mc_hal_t.brake; version 3) */
 } mc_pil_app_t;
 
 /** Target -> host after CFG. */

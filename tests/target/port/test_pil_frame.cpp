@@ -91,6 +91,8 @@ TEST(PilFrame, OutAndCfgRoundTrip) {
   o.duty_b = nan_with_payload();
   o.cmd_rc = -EBUSY;
   o.ipsr_fast = 34u;
+  o.brake_set_count = 1u;
+  o.brake_duty = std::nextafter(0.375f, 1.0f);
   uint8_t buf[MC_PIL_MAX_FRAME];
   size_t n = mc_pil_encode_out(&o, buf, sizeof buf);
   mc_pil_out_t od{};
@@ -183,6 +185,7 @@ TEST(PilFrame, WholeImageFramesRoundTrip) {
   a.tm_budget_frac = std::nextafter(0.378f, 1.0f);
   a.tick_hz = 0xFFFFFFFFu;
   a.slow_loop_div_fixed = 10u;
+  a.has_brake = 1u;
   n = mc_pil_encode_app(&a, buf, sizeof buf);
   mc_pil_app_t ad{};
   ASSERT_EQ(mc_pil_decode_app(buf, n, &ad), MC_PIL_OK);
@@ -236,7 +239,7 @@ TEST(PilFrame, CanFrameWithALengthThatIsNoCanLengthIsRefused) {
   }
 }
 
-// Version 2: READY carries the protocol version; a version-1 READY (two
+// Version 3 (the brake chopper in APP and OUT): READY carries the protocol version; a version-1 READY (two
 // words) is refused by length, so a stale image stops the host at READY.
 TEST(PilFrame, ReadyCarriesTheProtocolVersion) {
   uint8_t buf[MC_PIL_MAX_FRAME];
@@ -245,7 +248,7 @@ TEST(PilFrame, ReadyCarriesTheProtocolVersion) {
   mc_pil_ready_t d{};
   ASSERT_EQ(mc_pil_decode_ready(buf, n, &d), MC_PIL_OK);
   EXPECT_TRUE(same_bits(d, r));
-  EXPECT_EQ(d.version, 2u);
+  EXPECT_EQ(d.version, 3u);
   const uint32_t v1[2] = {0u, 0u};
   n = mc_pil_encode_words(MC_PIL_TYPE_READY, v1, 2u, buf, sizeof buf);
   ASSERT_GT(n, 0u);
@@ -292,6 +295,31 @@ TEST(PilFrame, ProbeRoundTripKeepsEveryBit) {
   EXPECT_EQ(
       mc_pil_encode_words(MC_PIL_TYPE_PROBE, words, MC_PIL_MAX_PAYLOAD / 4u + 1u, buf, sizeof buf),
       0u);
+}
+
+}  // namespace
+
+namespace {
+
+// Version 3: OUT carries the brake chopper's duty (23 words), APP whether
+// the board has one (10 words); a version-2 OUT (21 words) or APP (9 words)
+// is refused by length and leaves the output as it was.
+TEST(PilFrame, Version2OutAndAppAreRefused) {
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  const uint32_t v2_out[21] = {};
+  size_t n = mc_pil_encode_words(MC_PIL_TYPE_OUT, v2_out, 21u, buf, sizeof buf);
+  ASSERT_GT(n, 0u);
+  mc_pil_out_t o{};
+  o.brake_duty = 0.5f;
+  EXPECT_EQ(mc_pil_decode_out(buf, n, &o), MC_PIL_ERR_LEN);
+  EXPECT_EQ(o.brake_duty, 0.5f);
+  const uint32_t v2_app[9] = {};
+  n = mc_pil_encode_words(MC_PIL_TYPE_APP, v2_app, 9u, buf, sizeof buf);
+  ASSERT_GT(n, 0u);
+  mc_pil_app_t a{};
+  a.has_brake = 7u;
+  EXPECT_EQ(mc_pil_decode_app(buf, n, &a), MC_PIL_ERR_LEN);
+  EXPECT_EQ(a.has_brake, 7u);
 }
 
 }  // namespace
