@@ -26,7 +26,7 @@ void CAN1_RX0_IRQHandler(void);
 typedef struct {
     mc_f405_gpio_regs_t gpio[MC_F405_GPIO_PORTS];
     volatile uint32_t ahb1, apb1, apb2;
-    mc_f405_tim_regs_t tim1, tim3, tim5;
+    mc_f405_tim_regs_t tim1, tim2, tim3, tim5;
     mc_f405_adc_regs_t adc;
     mc_f405_adc_common_regs_t adc_common;
     mc_f405_can_regs_t can;

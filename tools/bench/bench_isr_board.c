@@ -27,6 +27,7 @@ const mc_hal_t *bench_board_init(bench_regs_t *regs)
     p.p_rcc_apb1enr = &regs->apb1;
     p.p_rcc_apb2enr = &regs->apb2;
     p.p_tim1 = &regs->tim1;
+    p.p_tim2 = &regs->tim2;
     p.p_tim3 = &regs->tim3;
     p.p_tim5 = &regs->tim5;
     p.p_adc1 = &regs->adc;
