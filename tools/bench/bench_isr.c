@@ -322,6 +322,12 @@ static void part_pwm(void)
     g_sink =
         mc_hal_pwm3_set_duty(B->hal.pwm3, D->tm.foc.duty_a, D->tm.foc.duty_b, D->tm.foc.duty_c);
 }
+/* The brake chopper's duty write (boards with one): what the drive's fast
+ * step adds when brake_enable is 1 (the runs' tables leave it 0). */
+static void part_brake(void)
+{
+    g_sink = mc_hal_brake_set_duty(B->hal.brake, 0.5f);
+}
 static void part_mark(void)
 {
     mc_app_fast_mark(A);
@@ -582,6 +588,10 @@ static int run(bool sensorless)
     out_stat(name, "duties_write", &s);
     s = parts(part_mark, false);
     out_stat(name, "app_mark", &s);
+    if (B->hal.brake != NULL) {
+        s = parts(part_brake, false);
+        out_stat(name, "brake_write", &s);
+    }
 
     /* CAN receive interrupt, one frame per call (parameter reads). */
     stat_t rx = {0};

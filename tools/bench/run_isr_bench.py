@@ -111,6 +111,9 @@ def board_report(board, rows, meta):
         runs[run] = {
             "isr": isr, "isr_slow_due": rows[(run, "isr_slow_due")],
             "parts": parts, "drive_rest_mean": round(rest, 1),
+            # boards with a brake chopper: its duty write, not in the runs'
+            # interrupt (their tables leave brake_enable 0)
+            "brake_write": rows.get((run, "brake_write")),
             "slow": rows[(run, "slow")], "slow_full_ring": rows[(run, "slow_full_ring")],
             "can_rx": rows[(run, "can_rx")], "can_rx_heartbeat": rows[(run, "can_rx_heartbeat")],
             "target_instr": target, "met": isr["max"] <= target,

@@ -386,12 +386,15 @@ def _mcu_isr_parts(ctx, b):
                          f"{p['encoder_read']['mean']:g}", f"{p['law']['mean']:g}",
                          f"{p['foc']['mean']:g}",
                          f"{p['duties_write']['mean']:g}", f"{p['app_mark']['mean']:g}",
-                         f"{r['drive_rest_mean']:g}", f"{r['isr']['mean']:g}"])
+                         f"{r['drive_rest_mean']:g}", f"{r['isr']['mean']:g}",
+                         "—" if r.get("brake_write") is None else f"{r['brake_write']['mean']:g}"])
     return table(["board", "run", "ADC read", "encoder read", "speed law", "FOC step",
                   "duties write", "app mark",
                   "drive rest (checks, encoder tracking, reference shaping, dead-time "
-                  "compensation, supervision, hooks)", "whole interrupt"], rows,
-                 ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---:", "---:"])
+                  "compensation, supervision, hooks)", "whole interrupt",
+                  "brake write (brake_enable 1 adds it; not in this run)"], rows,
+                 ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---:", "---:",
+                  "---:"])
 
 
 @figure("mcu-cpu-budget", [bench_isr()], reason=EXACT_QEMU)
