@@ -448,9 +448,9 @@ static int angle_enable(void *ctx, mc_drive_mode_t mode)
     const mc_drive_ctrl_t *law = d->ctrl;
     const uint32_t st = mc_drive_angle_state(d);
     const mc_drive_ctrl_t *finder = NULL;
-    const bool needs = (mode == MC_DRIVE_MODE_CURRENT) ||
-                       ((mode == MC_DRIVE_MODE_CTRL) && (law != NULL) && law->needs_encoder &&
-                        !law->finds_angle);
+    const bool needs =
+        (mode == MC_DRIVE_MODE_CURRENT) ||
+        ((mode == MC_DRIVE_MODE_CTRL) && (law != NULL) && law->needs_encoder && !law->finds_angle);
     if (!needs || (st == MC_DRIVE_ANGLE_KNOWN)) {
         return 0;
     }

@@ -226,8 +226,8 @@ typedef struct {
     mc_ctrl_sls_cfg_t sls_cfg;
     mc_ctrl_pi2d_cfg_t pi2d_cfg;
     mc_ctrl_pos_cfg_t pos_cfg;
-    mc_ctrl_align_t align;      /**< the alignment at enable (angle_ref align) */
-    mc_ctrl_idx_t idx;          /**< the index search at enable (angle_ref index) */
+    mc_ctrl_align_t align; /**< the alignment at enable (angle_ref align) */
+    mc_ctrl_idx_t idx;     /**< the index search at enable (angle_ref index) */
     mc_ctrl_align_cfg_t align_cfg;
     mc_ctrl_idx_cfg_t idx_cfg;
     mc_telemetry_ext_t sls_ext; /**< OBSERVER from the sensorless law */

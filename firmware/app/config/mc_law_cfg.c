@@ -233,8 +233,8 @@ void mc_law_find_cfg(const mc_params_t *p, const mc_gains_motor_t *m, const mc_g
 {
     const double pi = 3.14159265358979323846;
     const double pp = dmax(1.0, m->pole_pairs);
-    const double i = (p->angle_find_current_a > 0.0f) ? (double)p->angle_find_current_a
-                                                      : 0.5 * g->i_rated_eff_a;
+    const double i =
+        (p->angle_find_current_a > 0.0f) ? (double)p->angle_find_current_a : 0.5 * g->i_rated_eff_a;
     const double kt = g->kt_nm_a;
     const double k = dabs(kt * i * pp); /* the vector's spring [N m / rad mech.] */
     const double damp = (kt > 0.0) ? 2.0 * 0.7 * sqrt(k * m->j_kgm2) / kt : 0.0;

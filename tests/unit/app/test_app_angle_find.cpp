@@ -173,8 +173,14 @@ class AngleFind : public ::testing::Test
         return v;
     }
 
-    double OmegaM() const { return board->state()(2); }
-    double ThetaM() const { return board->state()(3); }
+    double OmegaM() const
+    {
+        return board->state()(2);
+    }
+    double ThetaM() const
+    {
+        return board->state()(3);
+    }
 
     mc_params_t p{};
     std::unique_ptr<hal_host::PmsmBoard> board;
