@@ -238,7 +238,8 @@ void mc_law_find_cfg(const mc_params_t *p, const mc_gains_motor_t *m, const mc_g
         (p->angle_find_current_a > 0.0f) ? (double)p->angle_find_current_a : 0.5 * g->i_rated_eff_a;
     const double kt = g->kt_nm_a;
     const double k = dabs(kt * i * pp); /* the vector's spring [N m / rad mech.] */
-    const double damp = (kt > 0.0) ? 2.0 * 0.7 * (double)mc_sqrt_f32((float)(k * m->j_kgm2)) / kt : 0.0;
+    const double damp =
+        (kt > 0.0) ? 2.0 * 0.7 * (double)mc_sqrt_f32((float)(k * m->j_kgm2)) / kt : 0.0;
     const double sweep = pi / 2.0;
     const double cpr = (p->encoder_cpr > 0u) ? (double)p->encoder_cpr : 1.0;
     const double band = 4.0 * 2.0 * pi / cpr;
