@@ -169,10 +169,23 @@ static int drive_speed_hook(void *ctx, float ref)
     return mc_drive_set_speed_ref(a->drive, ref);
 }
 
+/* ref is relative to the angle at enable (mc_can_cmd.h); the position
+ * law's frame is turn 0 at enable plus the encoder's angle within its turn
+ * (mc_ctrl_position.h): the angle at enable is added. */
 static int pos_ref_hook(void *ctx, float ref)
 {
     mc_app_t *a = ctx;
-    return (mc_ctrl_pos_set_target_rad(&a->laws.pos, ref) == 0u) ? 0 : -1;
+    return (mc_ctrl_pos_set_target_rad(&a->laws.pos, ref + a->pos_theta0_rad) == 0u) ? 0 : -1;
+}
+
+/* The encoder's angle within its turn as the law's first step will see it
+ * (the rotor at rest or nearly: the last step's). */
+static void pos_frame_at_enable(mc_app_t *a)
+{
+    const float th = a->drive->tm.theta_m_rad;
+    /* the law counts the HAL's raw count: a reversed encoder's cpr - count */
+    const bool rev = a->drive->cfg.encoder_reversed && (th > 0.0f);
+    a->pos_theta0_rad = !mc_isfinite_f32(th) ? 0.0f : (rev ? (MC_TWO_PI_F32 - th) : th);
 }
 
 /* The configurations of every law for p (the builders zero them first, so
@@ -448,9 +461,10 @@ static int angle_enable(void *ctx, mc_drive_mode_t mode)
     const mc_drive_ctrl_t *law = d->ctrl;
     const uint32_t st = mc_drive_angle_state(d);
     const mc_drive_ctrl_t *finder = NULL;
-    const bool needs =
-        (mode == MC_DRIVE_MODE_CURRENT) ||
-        ((mode == MC_DRIVE_MODE_CTRL) && (law != NULL) && law->needs_encoder && !law->finds_angle);
+    bool needs;
+    pos_frame_at_enable(a);
+    needs = (mode == MC_DRIVE_MODE_CURRENT) || ((mode == MC_DRIVE_MODE_CTRL) && (law != NULL) &&
+                                                law->needs_encoder && !law->finds_angle);
     if (!needs || (st == MC_DRIVE_ANGLE_KNOWN)) {
         return 0;
     }
@@ -519,6 +533,7 @@ static void angle_service(mc_app_t *a)
             if (law != NULL) {
                 (void)mc_drive_attach_ctrl(a->drive, law);
             }
+            pos_frame_at_enable(a);
             (void)mc_can_cmd_angle_found(&a->cmd);
         }
     } else if (fail != 0u) {

@@ -296,6 +296,7 @@ typedef struct {
     /* the angle at enable (laws_from_params) */
     bool angle_running;   /**< a find runs (the finder attached, CTRL) */
     uint32_t angle_error; /**< MC_CTRL_ALIGN_ERR_* of the last find (0: none failed) */
+    float pos_theta0_rad; /**< the encoder's angle at enable: the position law's frame */
 } mc_app_t;
 
 /** What a scenario reads of the drive after a period (the simulator's

@@ -326,6 +326,62 @@ TEST_F(AngleFind, IndexSearchThenSpeed)
     }
 }
 
+// POSITION after an alignment: a SET_POSITION_REF during the find is
+// refused MODE (its frame is set at the hand-over); after it the position
+// law holds the rotor where the find left it and moves it by the 3 rad the
+// host asks, in the telemetry's multi-turn frame: within 0.05 rad (65
+// encoder counts; the cascade settles to a few counts on the frictionless
+// load, the margin is for the trajectory's last millisecond).
+TEST_F(AngleFind, AlignThenPosition)
+{
+    Boot b;
+    b.theta_m0_rad = 4.1;
+    b.angle_ref = MC_DRIVE_ANGLE_REF_ALIGN;
+    b.find_at_enable = 1u;
+    Start(b);
+    Send(MC_CAN_MSG_SET_CONTROL_MODE, {static_cast<float>(MC_CAN_CTRL_POSITION)});
+    Send(MC_CAN_MSG_SET_ENABLE, {1.0f});
+    Run(0.01);
+    ASSERT_TRUE(app->cmd.angle_finding);
+    Send(MC_CAN_MSG_SET_POSITION_REF, {1.0f});
+    Run(0.01);
+    EXPECT_EQ(LastCmdError(), static_cast<float>(MC_CAN_ERR_MODE));
+    Run(4.0);
+    ASSERT_EQ(mc_drive_angle_state(&drive), MC_DRIVE_ANGLE_KNOWN);
+    ASSERT_EQ(drive.ctrl, mc_ctrl_pos_ops(&app->laws.pos));
+    const double th_plant0 = ThetaM();
+    const float th_tm0 = mc_telemetry_theta_multi_rad(&app->tm, &drive);
+    Send(MC_CAN_MSG_SET_POSITION_REF, {th_tm0 + 3.0f});
+    Run(3.0);
+    EXPECT_EQ(drive.faults, 0u);
+    EXPECT_TRUE(app->cmd.enabled);
+    EXPECT_NEAR(ThetaM() - th_plant0, 3.0, 0.05);
+}
+
+// The host falls silent during a find: the run ends at once with
+// CMD_TIMEOUT (the find's bounded current needs no controlled stop), the
+// bridge off, the angle still unknown.
+TEST_F(AngleFind, KeepAliveLostDuringTheFind)
+{
+    Boot b;
+    b.theta_m0_rad = 0.7;
+    b.angle_ref = MC_DRIVE_ANGLE_REF_ALIGN;
+    b.find_at_enable = 1u;
+    Start(b);
+    Send(MC_CAN_MSG_SET_CONTROL_MODE, {static_cast<float>(MC_CAN_CTRL_SPEED)});
+    Send(MC_CAN_MSG_SET_ENABLE, {1.0f});
+    const long n = std::lround(0.7 * p.pwm_hz); // past the 0.5 s timeout, no keep-alive
+    for (long k = 0; k < n; ++k) {
+        (void)hal_host::app_period(*board, *app);
+    }
+    EXPECT_FALSE(app->cmd.enabled);
+    EXPECT_FALSE(app->cmd.angle_finding);
+    EXPECT_FALSE(board->pwm_enabled());
+    EXPECT_EQ(app->cmd.stop_reason, MC_CAN_STOP_CMD_TIMEOUT);
+    EXPECT_EQ(mc_drive_angle_state(&drive), MC_DRIVE_ANGLE_NEED_ALIGN);
+    EXPECT_EQ(drive.ctrl, mc_ctrl_speed_ops(&app->laws.spd)); // back in its slot
+}
+
 // The parameters: a reference to find without an encoder is refused by
 // name; out-of-range values by the table.
 TEST(AngleParams, RefusedWithoutAnEncoder)
