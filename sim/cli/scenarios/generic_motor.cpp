@@ -5,11 +5,18 @@
 // 20000 rows and is decimated beyond (csv_every).
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <memory>
 #include <stdexcept>
+#include <string>
 
+#include "app_scenario.hpp"
 #include "drive_setup.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
+extern "C" {
+#include "config/mc_law_cfg.h"
+}
 
 namespace mcsim {
 namespace {
@@ -223,36 +230,55 @@ std::vector<ParamSpec> speed_params(const MotorFiles& f, bool load_step) {
 
 void run_speed(RunContext& ctx, bool load_step) {
   const MotorFiles& f = *ctx.files;
-  const Gains g = derive_gains(f, &ctx.params);
+  if (f.board.encoder_cpr == 0) {
+    throw UsageError(f.board.file +
+                     ": this scenario needs an encoder (encoder_cpr = 0 here); "
+                     "use sensorless-speed-step");
+  }
   const bool pi2d = ctx.params.get("law") > 0.5;
+  // The application's table: SPEED runs the speed_law it names.
+  const mc_params_t p =
+      params_from_files(f, ctx.params, pi2d ? MC_LAW_SPEED_PI2D : MC_LAW_SPEED_PI);
+  const mc_params_eff_t e = resolve_params(p);  // the gains the application derives
+  const mc_gains_t& g = e.g;
   const double w_t = ctx.params.get("speed_rad_s");
   const double tau_l = ctx.params.get("load_frac") * g.torque_rated_nm;
   const double wc = pi2d ? 3.0 * g.pi2d_wn_rad_s : g.speed_wc_rad_s;
-  const double t_acc = std::abs(w_t) / g.speed_accel_rad_s2;
+  // The drive slews the reference at speed_ramp_rad_s2 (the table's).
+  const double t_acc = std::abs(w_t) / static_cast<double>(e.p.speed_ramp_rad_s2);
   const double t0 = 0.01;
   // Settling: the PI's zero at wc/4 leaves a tail of a few 4/wc.
   const double t_set = 40.0 / wc;
   // load-step: the speed step first, the load once it has settled.
   const double t_load = load_step ? t0 + t_acc + 0.5 * t_set : 0.0;
   const double dur = duration(ctx, load_step ? t_load + t_set : t0 + t_acc + t_set);
-  RigOptions o;
-  o.law = pi2d ? Law::kPi2d : Law::kSpeedPi;
-  o.load_nm = [tau_l, t_load](double t) { return t >= t_load ? tau_l : 0.0; };
-  MotorFiles fr = f;
-  MotorRig rig(fr, g, o);
-  const double T = rig.period_s();
+  const std::function<double(double)> load = [tau_l, t_load](double t) {
+    return t >= t_load ? tau_l : 0.0;
+  };
+  const std::unique_ptr<AppTarget> target = make_file_target(f, p, &load);
+  AppRunner run(*target);
+  run.start(MC_CAN_CTRL_SPEED);
+  hal_host::PmsmBoard& board = run.board();
+  const double T = board.period_s();
   const long n = step_count(dur, T);
-  Recorder rec{ctx, rig, false, csv_every(ctx, n)};
+  AppRecorder rec{ctx, run, f.motor.pole_pairs, false, csv_every(ctx, n)};
   rec.header();
   const double band = 0.02 * std::abs(w_t);
   double last_out = t0, id_max_ss = 0, iq_max = 0, w = 0, id = 0, iq = 0, werr_max_ss = 0;
-  double last_out_load = t_load, dip = 0;
+  double last_out_load = t_load, dip = 0, w_max = 0;
+  bool ref_sent = false;
   const double t_ss = dur - 0.2 * (dur - (load_step ? t_load : t0 + t_acc));
+  std::string stopped;
+  AppWatch watch;
   for (long k = 0; k <= n; ++k) {
-    const double t = rig.board().t_s();
-    rig.set_speed_ref(t >= t0 ? w_t : 0.0);
-    rig.board().true_dq_a(&id, &iq);
-    w = rig.board().state()(2);
+    const double t = board.t_s();
+    if (!ref_sent && t >= t0) {
+      run.send(run.cmd().speed_ref(w_t));
+      ref_sent = true;
+    }
+    board.true_dq_a(&id, &iq);
+    w = board.state()(2);
+    w_max = std::max(w_max, w_t >= 0 ? w : -w);
     if (t >= t0 && std::abs(w - w_t) > band) last_out = t;
     if (load_step && t >= t_load) {
       dip = std::max(dip, std::abs(w - w_t));
@@ -264,17 +290,20 @@ void run_speed(RunContext& ctx, bool load_step) {
     }
     iq_max = std::max(iq_max, std::abs(iq));
     rec.row(t, id, iq, w);
-    if (rig.drive().faults != 0u) break;
-    if (k < n) rig.step();
+    stopped = watch(run.probe());
+    if (!stopped.empty()) break;
+    if (k < n) run.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
-  record_setup(f, g, ctx.summary);
-  mc_drive_t& d = rig.drive();
+  record_app_setup(f, p, ctx.summary);
+  const mc_app_probe_t& d = run.probe();
+  ctx.summary.set_text("target", target->name());
   ctx.summary.set_text("law", pi2d ? "pi2d" : "pi");
   ctx.summary.set("faults", d.faults);
-  if (d.faults != 0u) {
-    ctx.summary.set_text("fault_names", fault_names(d.faults, d.tm.ctrl_err));
-    return write_verdict(ctx.summary, faulted(d.faults, fault_names(d.faults, d.tm.ctrl_err)));
+  if (!stopped.empty()) {
+    ctx.summary.set_text("fault_names", stopped);
+    return write_verdict(ctx.summary, d.faults != 0u ? faulted(d.faults, stopped)
+                                                     : Verdict{"stopped", stopped, true});
   }
   if (load_step) {
     ctx.summary.set("t_load_step_s", t_load);
@@ -282,6 +311,9 @@ void run_speed(RunContext& ctx, bool load_step) {
     ctx.summary.set("recover_2pct_s", last_out_load - t_load);
   } else {
     ctx.summary.set("settle_2pct_s", last_out - t0);
+    // the largest speed past the target, of the target (the step's overshoot)
+    ctx.summary.set("overshoot_frac", w_t != 0.0 ? std::max(0.0, w_max / std::abs(w_t) - 1.0)
+                                                 : 0.0);
   }
   ctx.summary.set("settled", std::abs(w - w_t) <= band ? 1.0 : 0.0);
   ctx.summary.set("omega_final_rad_s", w);
