@@ -367,9 +367,20 @@ std::vector<ParamSpec> sls_params(const MotorFiles& f) {
   return p;
 }
 
+// The observer's gain the application's sensorless law runs with (its
+// init computes it from the configuration mc_law_sls_cfg builds).
+double sls_gamma(const mc_params_eff_t& e) {
+  mc_ctrl_sls_cfg_t sc{};
+  mc_law_sls_cfg(&e.m, &e.g, &sc);
+  const auto law = std::make_unique<mc_ctrl_sls_t>();
+  return mc_ctrl_sls_init(law.get(), &sc) == 0u ? static_cast<double>(law->gamma) : std::nan("");
+}
+
 void run_sensorless(RunContext& ctx) {
   const MotorFiles& f = *ctx.files;
-  const Gains g = derive_gains(f, &ctx.params);
+  const mc_params_t p = params_from_files(f, ctx.params, MC_LAW_SPEED_SENSORLESS);
+  const mc_params_eff_t e = resolve_params(p);
+  const mc_gains_t& g = e.g;
   const double w_t = ctx.params.get("speed_rad_s");
   if (std::abs(w_t) < g.handover_rad_s / (1.0 - 0.3) * 1.2) {
     throw UsageError("speed_rad_s must be well above the hand-over speed " +
@@ -384,63 +395,71 @@ void run_sensorless(RunContext& ctx) {
   const double t_run = std::abs(w_t) / slew + 40.0 / wc;
   const double t_load = t_start + t_run;
   const double dur = duration(ctx, t_load + 40.0 / wc);
-  RigOptions o;
-  o.law = Law::kSensorless;
   // The load opposes the direction of the run (an active load: it turns a
   // rotor at standstill backwards).
   const double sgn = w_t >= 0 ? 1.0 : -1.0;
   const double tau0s = sgn * tau0, tau1s = sgn * tau1;
-  o.load_nm = [tau0s, tau1s, t_load](double t) { return t >= t_load ? tau1s : tau0s; };
-  MotorRig rig(f, g, o);
-  rig.set_speed_ref(w_t);
-  const double T = rig.period_s();
+  const std::function<double(double)> load = [tau0s, tau1s, t_load](double t) {
+    return t >= t_load ? tau1s : tau0s;
+  };
+  const std::unique_ptr<AppTarget> target = make_file_target(f, p, &load);
+  AppRunner run(*target);
+  run.start(MC_CAN_CTRL_SPEED);
+  run.send(run.cmd().speed_ref(w_t));
+  hal_host::PmsmBoard& board = run.board();
+  const double T = board.period_s();
   const long n = step_count(dur, T);
-  Recorder rec{ctx, rig, true, csv_every(ctx, n)};
+  AppRecorder rec{ctx, run, f.motor.pole_pairs, true, csv_every(ctx, n)};
   rec.header();
   const double band = 0.05 * std::abs(w_t);
   double t_lock = std::nan(""), ang_max = 0, ang_sq = 0, werr_end = 0, w = 0, id = 0, iq = 0;
   long ang_n = 0, k = 0;
   double min_w_align = 0;
+  std::string stopped;
+  AppWatch watch;
   for (k = 0; k <= n; ++k) {
-    const double t = rig.board().t_s();
-    rig.board().true_dq_a(&id, &iq);
-    w = rig.board().state()(2);
-    const auto& tm = rig.sls().tm;
-    if (tm.phase == MC_CTRL_SLS_ALIGN) min_w_align = std::min(min_w_align, sgn * w);
-    if (tm.phase == MC_CTRL_SLS_CLOSED && std::isnan(t_lock)) t_lock = t;
+    const double t = board.t_s();
+    board.true_dq_a(&id, &iq);
+    w = board.state()(2);
+    const mc_app_probe_t& pr = run.probe();
+    const bool running = pr.cmd_enabled != 0u;
+    if (running && pr.sls_phase == MC_CTRL_SLS_ALIGN) min_w_align = std::min(min_w_align, sgn * w);
+    if (running && pr.sls_phase == MC_CTRL_SLS_CLOSED && std::isnan(t_lock)) t_lock = t;
     if (!std::isnan(t_lock) && t > t_lock + 0.05) {
-      const double e = std::abs(std::remainder(rig.theta_e_hat() - rig.theta_e_true(), 2 * kPi));
-      ang_max = std::max(ang_max, e);
-      ang_sq += e * e;
+      const double hat = static_cast<double>(pr.sls_theta_hat_e_rad);
+      const double err = std::abs(std::remainder(hat - rec.theta_e_true(), 2 * kPi));
+      ang_max = std::max(ang_max, err);
+      ang_sq += err * err;
       ++ang_n;
     }
     if (t >= dur - 0.1 * (dur - t_load)) werr_end = std::max(werr_end, std::abs(w - w_t));
     rec.row(t, id, iq, w);
-    if (rig.drive().faults != 0u) break;
-    if (k < n) rig.step();
+    stopped = watch(pr);
+    if (!stopped.empty()) break;
+    if (k < n) run.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
-  record_setup(f, g, ctx.summary);
-  const mc_drive_t& d = rig.drive();
-  const auto& tm = rig.sls().tm;
+  record_app_setup(f, p, ctx.summary);
+  const mc_app_probe_t& d = run.probe();
+  ctx.summary.set_text("target", target->name());
   ctx.summary.set("faults", d.faults);
-  ctx.summary.set("handovers", tm.handovers);
-  ctx.summary.set("fallbacks", tm.fallbacks);
+  ctx.summary.set("handovers", d.sls_handovers);
+  ctx.summary.set("fallbacks", d.sls_fallbacks);
   ctx.summary.set("t_lock_s", t_lock);
   ctx.summary.set("t_load_step_s", t_load);
   ctx.summary.set("align_backwards_rad_s", -min_w_align);
-  ctx.summary.set("obs_gamma_per_wb2_s", rig.sls().gamma);
-  if (d.faults != 0u) {
-    const std::string why = (d.faults & MC_DRIVE_FAULT_CONTROL)
-                                ? sls_reason(d.tm.ctrl_err)
-                                : "drive fault " + fault_names(d.faults, d.tm.ctrl_err);
+  ctx.summary.set("obs_gamma_per_wb2_s", sls_gamma(e));
+  if (!stopped.empty()) {
+    const std::string why = (d.faults & MC_DRIVE_FAULT_CONTROL) ? sls_reason(d.ctrl_err) : stopped;
     ctx.summary.set_text("fault_names", why);
-    const bool no_lock = (d.faults & MC_DRIVE_FAULT_CONTROL) != 0u &&
-                         (d.tm.ctrl_err & MC_CTRL_SLS_ERR_NO_LOCK) != 0u;
-    return write_verdict(ctx.summary,
-                         no_lock ? Verdict{"not locked", why, true} : faulted(d.faults, why));
+    const bool no_lock =
+        (d.faults & MC_DRIVE_FAULT_CONTROL) != 0u && (d.ctrl_err & MC_CTRL_SLS_ERR_NO_LOCK) != 0u;
+    return write_verdict(ctx.summary, no_lock           ? Verdict{"not locked", why, true}
+                                      : d.faults != 0u ? faulted(d.faults, why)
+                                                        : Verdict{"stopped", why, true});
   }
-  ctx.summary.set("locked", (tm.phase == MC_CTRL_SLS_CLOSED) ? 1.0 : 0.0);
+  const bool locked = d.sls_phase == MC_CTRL_SLS_CLOSED;
+  ctx.summary.set("locked", locked ? 1.0 : 0.0);
   ctx.summary.set("angle_err_max_rad", ang_max);
   ctx.summary.set("angle_err_rms_rad",
                   ang_n ? std::sqrt(ang_sq / static_cast<double>(ang_n)) : std::nan(""));
@@ -451,7 +470,7 @@ void run_sensorless(RunContext& ctx) {
   ctx.summary.set("load1_nm", tau1);
   SensorlessFigures fig;
   fig.target_rad_s = w_t;
-  fig.locked = tm.phase == MC_CTRL_SLS_CLOSED;
+  fig.locked = locked;
   fig.werr_max_end_rad_s = werr_end;
   fig.angle_err_max_rad = ang_max;
   fig.t_load_step_s = t_load;
