@@ -54,14 +54,6 @@ class RiseTimer {
   double t10_ = std::nan(""), t90_ = std::nan("");
 };
 
-std::string fault_names(uint32_t f, uint32_t ctrl_err) {
-  std::string s = drive_fault_names(f);
-  if ((f & MC_DRIVE_FAULT_CONTROL) != 0u) {
-    s += " (law error bits " + std::to_string(ctrl_err) + ")";
-  }
-  return s;
-}
-
 // The sensorless law's error bits, named (the reasons a start can fail).
 std::string sls_reason(uint32_t e) {
   if (e & MC_CTRL_SLS_ERR_NO_LOCK) {
@@ -73,36 +65,6 @@ std::string sls_reason(uint32_t e) {
   if (e & MC_CTRL_SLS_ERR_MEAS) return "non-finite measurement";
   return "sensorless law error bits " + std::to_string(e) + " (observer divergence)";
 }
-
-// Common CSV row and bookkeeping.
-struct Recorder {
-  RunContext& ctx;
-  MotorRig& rig;
-  bool hat = false;
-  long every = 1;
-  long k = 0;
-  void header() {
-    std::vector<std::string> c = {"t",         "i_d_a",         "i_q_a",           "i_d_ref_a",
-                                  "i_q_ref_a", "omega_m_rad_s", "omega_ref_rad_s", "theta_e_rad"};
-    if (hat) c.emplace_back("theta_e_hat_rad");
-    c.insert(c.end(), {"v_d_v", "v_q_v", "fault_1"});
-    ctx.csv.columns(c);
-  }
-  void row(double t, double id, double iq, double w) {
-    if (k++ % every != 0) return;
-    double idr, iqr, vd, vq;
-    rig.dq_refs(&idr, &iqr);
-    rig.dq_volts(&vd, &vq);
-    double v[12];
-    size_t n = 0;
-    for (double x : {t, id, iq, idr, iqr, w, rig.omega_ref_rad_s(), rig.theta_e_true()}) v[n++] = x;
-    if (hat) v[n++] = rig.theta_e_hat();
-    v[n++] = vd;
-    v[n++] = vq;
-    v[n++] = static_cast<double>(rig.drive().faults);
-    ctx.csv.row(v, n);
-  }
-};
 
 long csv_every(const RunContext& ctx, long n) {
   const long e = std::lround(ctx.params.get("csv_every"));
@@ -141,56 +103,75 @@ std::vector<ParamSpec> current_step_params(const MotorFiles& f) {
 }
 
 void run_current_step(RunContext& ctx) {
-  MotorFiles f = *ctx.files;
-  const Gains g = derive_gains(f, &ctx.params);
-  f.motor.j_kgm2 *= 1.0 + ctx.params.get("j_load_factor");
-  RigOptions ro;
-  ro.law = Law::kCurrent;
-  MotorRig rig(f, g, ro);
-  const double T = rig.period_s();
-  const double design = std::log(9.0) / g.cur_bw_rad_s;
-  // Each step gets 12 design rise times (settled to 0.5 %) plus 2 ms.
+  const MotorFiles& f = *ctx.files;
+  // The drive's table from the files; the plant with the dyno's flywheel.
+  const mc_params_t p = params_from_files(f, ctx.params);
+  const mc_params_eff_t e = resolve_params(p);
+  mc_drive_cfg_t dcfg{};
+  (void)mc_params_eff_to_drive_cfg(&e, &dcfg);
+  MotorFiles plant = f;
+  plant.motor.j_kgm2 *= 1.0 + ctx.params.get("j_load_factor");
+  const std::unique_ptr<AppTarget> target = make_file_target(plant, p, nullptr);
+  AppRunner run(*target);
+  run.start(MC_CAN_CTRL_CURRENT);
+  hal_host::PmsmBoard& board = run.board();
+  const double T = board.period_s();
+  const double design = std::log(9.0) / e.g.cur_bw_rad_s;
+  // Each step gets 12 design rise times (settled to 0.5 %) plus 2 ms (the
+  // command waits up to one slow-loop period for the application's slow step).
   const double t_iq = 10 * T, t_id = t_iq + 12 * design + 2e-3;
   const double dur = duration(ctx, t_id + 12 * design + 2e-3);
   const double iq_s = ctx.params.get("iq_step_a"), id_s = ctx.params.get("id_step_a");
   const long n = step_count(dur, T);
-  Recorder rec{ctx, rig, false, csv_every(ctx, n)};
+  AppRecorder rec{ctx, run, f.motor.pole_pairs, false, csv_every(ctx, n)};
   rec.header();
   RiseTimer rq(t_iq, 0.0, iq_s), rd(t_id, 0.0, id_s);
-  mc_drive_t& d = rig.drive();
   double id = 0, iq = 0;
+  bool sent_q = false, sent_d = false;
+  std::string stopped;
+  AppWatch watch;
   for (long k = 0; k <= n; ++k) {
-    const double t = rig.board().t_s();
-    const double idr = t >= t_id ? id_s : 0.0, iqr = t >= t_iq ? iq_s : 0.0;
-    if (mc_drive_set_current_ref(&d, static_cast<float>(idr), static_cast<float>(iqr)) != 0) {
-      throw UsageError("current reference rejected by the drive");
+    const double t = board.t_s();
+    if (!sent_q && t >= t_iq) {
+      run.send(run.cmd().current_ref(0.0, iq_s));
+      sent_q = true;
     }
-    rig.board().true_dq_a(&id, &iq);
+    if (!sent_d && t >= t_id) {
+      run.send(run.cmd().current_ref(id_s, iq_s));
+      sent_d = true;
+    }
+    board.true_dq_a(&id, &iq);
     rq.add(t, iq);
     rd.add(t, id);
-    rec.row(t, id, iq, rig.board().state()(2));
-    if (d.faults != 0u) break;  // as the speed scenarios: a faulted run ends at its fault
-    if (k < n) rig.step();
+    rec.row(t, id, iq, board.state()(2));
+    stopped = watch(run.probe());
+    if (!stopped.empty()) break;  // as the speed scenarios: a faulted run ends at its fault
+    if (k < n) run.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
-  record_setup(*ctx.files, g, ctx.summary);
+  record_app_setup(f, p, ctx.summary);
+  const mc_app_probe_t& d = run.probe();
+  ctx.summary.set_text("target", target->name());
   ctx.summary.set("faults", d.faults);
-  if (d.faults != 0u) {
-    ctx.summary.set_text("fault_names", fault_names(d.faults, d.tm.ctrl_err));
-    return write_verdict(ctx.summary, faulted(d.faults, fault_names(d.faults, d.tm.ctrl_err)));
+  if (!stopped.empty()) {
+    ctx.summary.set_text("fault_names", stopped);
+    return write_verdict(ctx.summary, d.faults != 0u ? faulted(d.faults, stopped)
+                                                     : Verdict{"stopped", stopped, true});
   }
   ctx.summary.set("rise_time_designed_s", design);
   ctx.summary.set("iq_rise_time_s", rq.rise_s());
   ctx.summary.set("id_rise_time_s", rd.rise_s());
   ctx.summary.set("iq_rise_time_ratio", rq.rise_s() / design);
   ctx.summary.set("id_rise_time_ratio", rd.rise_s() / design);
-  ctx.summary.set("kp_q_v_per_a", rig.drive_cfg().foc.kp_q_v_per_a);
-  ctx.summary.set("ki_q_v_per_as", rig.drive_cfg().foc.ki_q_v_per_as);
+  ctx.summary.set("kp_q_v_per_a", dcfg.foc.kp_q_v_per_a);
+  ctx.summary.set("ki_q_v_per_as", dcfg.foc.ki_q_v_per_as);
   ctx.summary.set("iq_final_a", iq);
   ctx.summary.set("id_final_a", id);
   CurrentStepFigures fig;
-  fig.iq_step_a = iq_s;
-  fig.id_step_a = id_s;
+  // The references the drive runs: the commands as SET_CURRENT_REF carries
+  // them (1 mA resolution).
+  fig.iq_step_a = d.iq_ref_a;
+  fig.id_step_a = d.id_ref_a;
   fig.iq_rise_ratio = rq.rise_s() / design;
   fig.id_rise_ratio = rd.rise_s() / design;
   fig.iq_final_a = iq;
@@ -198,7 +179,7 @@ void run_current_step(RunContext& ctx) {
   fig.lsb_a = 2.0 * f.board.i_sense_max_a / std::ldexp(1.0, f.board.adc_bits);
   fig.t_id_step_s = t_id;
   fig.duration_s = dur;
-  fig.bw_t = g.cur_bw_rad_s * T;
+  fig.bw_t = e.g.cur_bw_rad_s * T;
   write_verdict(ctx.summary, judge_current_step(fig));
 }
 
