@@ -246,7 +246,7 @@ void run_speed(RunContext& ctx, bool load_step) {
   rec.header();
   const double band = 0.02 * std::abs(w_t);
   double last_out = t0, id_max_ss = 0, iq_max = 0, w = 0, id = 0, iq = 0, werr_max_ss = 0;
-  double last_out_load = t_load, dip = 0, w_max = 0;
+  double last_out_load = t_load, dip = 0, w_max = 0, t_half = std::nan("");
   bool ref_sent = false;
   const double t_ss = dur - 0.2 * (dur - (load_step ? t_load : t0 + t_acc));
   std::string stopped;
@@ -260,6 +260,7 @@ void run_speed(RunContext& ctx, bool load_step) {
     board.true_dq_a(&id, &iq);
     w = board.state()(2);
     w_max = std::max(w_max, w_t >= 0 ? w : -w);
+    if (t >= t0 && std::isnan(t_half) && std::abs(w) >= 0.5 * std::abs(w_t)) t_half = t - t0;
     if (t >= t0 && std::abs(w - w_t) > band) last_out = t;
     if (load_step && t >= t_load) {
       dip = std::max(dip, std::abs(w - w_t));
@@ -299,6 +300,11 @@ void run_speed(RunContext& ctx, bool load_step) {
   ctx.summary.set("settled", std::abs(w - w_t) <= band ? 1.0 : 0.0);
   ctx.summary.set("omega_final_rad_s", w);
   ctx.summary.set("accel_time_s", t_acc);
+  // when the rotor passed half the target, from the command (the
+  // application's ramp: about t_acc / 2)
+  ctx.summary.set("half_speed_time_s", t_half);
+  // the frames the application sent (its telemetry; none from a C++ loop)
+  ctx.summary.set("app_tx_frames", static_cast<double>(run.frames_sent()));
   ctx.summary.set("id_abs_max_steady_a", id_max_ss);
   ctx.summary.set("id_abs_max_steady_frac_rated", id_max_ss / g.i_rated_eff_a);
   ctx.summary.set("omega_err_max_steady_rad_s", werr_max_ss);
