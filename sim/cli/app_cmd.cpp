@@ -13,8 +13,8 @@ mc_hal_can_frame_t AppCommands::pack(uint32_t msg, const std::vector<float>& val
   const float* v = values.empty() ? &none : values.data();
   const uint32_t n = values.empty() ? 1u : static_cast<uint32_t>(values.size());
   if (mc_can_proto_pack(msg, node_, v, n, &f) != MC_CAN_ERR_NONE) {
-    throw std::logic_error("mc_can_proto_pack refused a command (message " +
-                           std::to_string(msg) + ")");
+    throw std::logic_error("mc_can_proto_pack refused a command (message " + std::to_string(msg) +
+                           ")");
   }
   return f;
 }
@@ -44,8 +44,7 @@ mc_hal_can_frame_t AppCommands::host_heartbeat() {
   return pack(MC_CAN_MSG_HOST_HEARTBEAT, {static_cast<float>(hb_counter_)});
 }
 
-AppRunner::AppRunner(AppTarget& target)
-    : t_(target), cmd_(target.params().can_node_id) {
+AppRunner::AppRunner(AppTarget& target) : t_(target), cmd_(target.params().can_node_id) {
   keepalive_s_ = 0.1 * static_cast<double>(target.params().can_timeout_s);
 }
 
@@ -78,8 +77,8 @@ AppTargetPeriod AppRunner::step() {
                        return std::string(b);
                      }(static_cast<uint32_t>(v[MC_CAN_CMD_ERROR_REJECTED_CMD])) +
                      " (CMD_ERROR error " +
-                     std::to_string(static_cast<int>(v[MC_CAN_CMD_ERROR_ERROR])) + ") at t = " +
-                     std::to_string(t) + " s");
+                     std::to_string(static_cast<int>(v[MC_CAN_CMD_ERROR_ERROR])) +
+                     ") at t = " + std::to_string(t) + " s");
   }
   return r;
 }

@@ -66,9 +66,9 @@ void refuse_law(const MotorFiles& f, const mc_params_t& p, uint32_t err) {
                      f.motor.file + " and " + f.board.file + ": MC_PARAMS_ERR " +
                      params_err_names(err);
   if ((err & MC_PARAMS_ERR_LAW) != 0u) {
-    const char* name = p.speed_law == MC_LAW_SPEED_PI2D          ? "PI2D"
+    const char* name = p.speed_law == MC_LAW_SPEED_PI2D         ? "PI2D"
                        : p.speed_law == MC_LAW_SPEED_SENSORLESS ? "the sensorless law"
-                                                                 : "the sensored speed law";
+                                                                : "the sensored speed law";
     what = std::string(name) + " refuses this motor (" + law_err_names(law) + "; " + what + ")";
   }
   throw UsageError(what);

@@ -7,7 +7,7 @@
 namespace mcsim {
 
 std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
-                                             const std::function<double(double)>* load_nm) {
+                                            const std::function<double(double)>* load_nm) {
   AppSetup s;
   s.board = build_board_cfg(plant);
   if (load_nm != nullptr && *load_nm) {

@@ -23,7 +23,7 @@ namespace mcsim {
 /// load_nm(t) opposing positive rotation (kept alive by the caller), the
 /// application booted from p.
 std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
-                                             const std::function<double(double)>* load_nm);
+                                            const std::function<double(double)>* load_nm);
 
 /// The scenarios' CSV: t, the true dq currents, the references (the
 /// application's probe), the true speed and electrical angle, the observer's

@@ -294,8 +294,8 @@ void run_speed(RunContext& ctx, bool load_step) {
   } else {
     ctx.summary.set("settle_2pct_s", last_out - t0);
     // the largest speed past the target, of the target (the step's overshoot)
-    ctx.summary.set("overshoot_frac", w_t != 0.0 ? std::max(0.0, w_max / std::abs(w_t) - 1.0)
-                                                 : 0.0);
+    ctx.summary.set("overshoot_frac",
+                    w_t != 0.0 ? std::max(0.0, w_max / std::abs(w_t) - 1.0) : 0.0);
   }
   ctx.summary.set("settled", std::abs(w - w_t) <= band ? 1.0 : 0.0);
   ctx.summary.set("omega_final_rad_s", w);
@@ -441,9 +441,9 @@ void run_sensorless(RunContext& ctx) {
     ctx.summary.set_text("fault_names", why);
     const bool no_lock =
         (d.faults & MC_DRIVE_FAULT_CONTROL) != 0u && (d.ctrl_err & MC_CTRL_SLS_ERR_NO_LOCK) != 0u;
-    return write_verdict(ctx.summary, no_lock           ? Verdict{"not locked", why, true}
+    return write_verdict(ctx.summary, no_lock          ? Verdict{"not locked", why, true}
                                       : d.faults != 0u ? faulted(d.faults, why)
-                                                        : Verdict{"stopped", why, true});
+                                                       : Verdict{"stopped", why, true});
   }
   const bool locked = d.sls_phase == MC_CTRL_SLS_CLOSED;
   ctx.summary.set("locked", locked ? 1.0 : 0.0);

@@ -98,9 +98,12 @@ void run_position(RunContext& ctx) {
   }
   mc_params_t p0 = params_from_files(f, ctx.params);
   // the move's limits: the trajectory parameters
-  if (ctx.params.get("v_max") > 0) p0.traj_v_max_rad_s = static_cast<float>(ctx.params.get("v_max"));
-  if (ctx.params.get("a_max") > 0) p0.traj_a_max_rad_s2 = static_cast<float>(ctx.params.get("a_max"));
-  if (ctx.params.get("d_max") > 0) p0.traj_d_max_rad_s2 = static_cast<float>(ctx.params.get("d_max"));
+  if (ctx.params.get("v_max") > 0)
+    p0.traj_v_max_rad_s = static_cast<float>(ctx.params.get("v_max"));
+  if (ctx.params.get("a_max") > 0)
+    p0.traj_a_max_rad_s2 = static_cast<float>(ctx.params.get("a_max"));
+  if (ctx.params.get("d_max") > 0)
+    p0.traj_d_max_rad_s2 = static_cast<float>(ctx.params.get("d_max"));
   const mc_params_t p = p0;
   const mc_params_eff_t e = resolve_params(p);
   const mc_gains_t& g = e.g;
@@ -108,8 +111,7 @@ void run_position(RunContext& ctx) {
   const double replan_frac = ctx.params.get("replan_frac");
   const double tau_l = ctx.params.get("load_frac") * g.torque_rated_nm;
   const std::function<double(double)> load = [tau_l](double) { return tau_l; };
-  const std::unique_ptr<AppTarget> target =
-      make_file_target(f, p, tau_l != 0.0 ? &load : nullptr);
+  const std::unique_ptr<AppTarget> target = make_file_target(f, p, tau_l != 0.0 ? &load : nullptr);
   AppRunner run(*target);
   run.start(MC_CAN_CTRL_POSITION);
   hal_host::PmsmBoard& board = run.board();
