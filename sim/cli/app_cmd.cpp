@@ -57,7 +57,7 @@ void AppRunner::start(uint32_t mode) {
 
 AppTargetPeriod AppRunner::step() {
   const double t = t_.board().t_s();
-  if (started_ && t >= next_hb_s_) {
+  if (started_ && keepalive_on_ && t >= next_hb_s_) {
     pending_.push_back(cmd_.host_heartbeat());
     next_hb_s_ = t + keepalive_s_;
   }

@@ -50,6 +50,9 @@ class AppRunner {
   /// Enable the drive in mode (MC_CAN_CTRL_*): mode, then enable.
   void start(uint32_t mode);
   AppTargetPeriod step();
+  /// Stop (false) or resume the HOST_HEARTBEAT keep-alive: a host that
+  /// went silent (the application's command timeout then stops the drive).
+  void keepalive(bool on) { keepalive_on_ = on; }
   AppCommands& cmd() { return cmd_; }
   const mc_app_probe_t& probe() const { return t_.probe(); }
   hal_host::PmsmBoard& board() { return t_.board(); }
@@ -63,6 +66,7 @@ class AppRunner {
   double keepalive_s_ = 0, next_hb_s_ = 0;
   uint64_t frames_tx_ = 0;
   bool started_ = false;
+  bool keepalive_on_ = true;
 };
 
 }  // namespace mcsim
