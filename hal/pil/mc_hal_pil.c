@@ -51,6 +51,9 @@
  *                    from the image header (mc_image_header.h), ENTER
  *                    resetting into the bootloader through the mailbox
  *                    (mc_boot_handoff.h), as on the drive boards.
+ *       probe        the application's probe (mc_app_probe) goes to the
+ *                    host as PROBE after READY and after each period,
+ *                    before OUT (link protocol version 2).
  *     Both loops run within the period (the ADC interrupt, then PendSV),
  *     as in the SIL's one period (hal_host::app_period): OUT carries what
  *     the bridge does in the next period.
@@ -71,6 +74,7 @@
 #include "mc_image_header.h"
 #include "mc_params.h"
 #include "mc_pil_frame.h"
+#include "mc_pil_probe.h"
 #include "mc_stm32f405.h"
 
 /* Exit codes reported to the host through semihosting. */
@@ -600,9 +604,22 @@ const mc_drive_cfg_t *mc_board_drive_cfg(void)
 static void send_ready(uint32_t err)
 {
     uint8_t buf[MC_PIL_MAX_FRAME];
-    const mc_pil_ready_t r = {err, g_pil.sysclk_hz};
+    const mc_pil_ready_t r = {err, g_pil.sysclk_hz, MC_PIL_VERSION};
     const size_t n = mc_pil_encode_ready(&r, buf, sizeof buf);
     usart_send(buf, n);
+}
+
+/* Whole-image mode: the application's probe to the host (PROBE). */
+static void send_probe(void)
+{
+    const mc_app_t *app = mc_main_app();
+    if (!g_pil.app_mode || (app == NULL)) {
+        return;
+    }
+    mc_app_probe_t p;
+    mc_app_probe(app, &p);
+    uint8_t buf[MC_PIL_MAX_FRAME] = {0u};
+    usart_send(buf, mc_pil_encode_probe(&p, buf, sizeof buf));
 }
 
 void mc_board_start(void)
@@ -622,6 +639,7 @@ void mc_board_start(void)
         mc_nvic_set_pending(MC_IRQ_USART1);
     }
     send_ready(MC_DRIVE_CFG_OK);
+    send_probe(); /* the application after boot */
 }
 
 void mc_board_fast_irq_ack(void)
@@ -691,6 +709,7 @@ void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
     g_pil.duty_set_count = 0u;
     g_pil.gate_kill_count = 0u;
 
+    send_probe();
     uint8_t buf[MC_PIL_MAX_FRAME];
     const size_t n = mc_pil_encode_out(&o, buf, sizeof buf);
     usart_send(buf, n);

@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "hal_host/pil_link.hpp"
 #include "hal_host/pmsm_board.hpp"
 extern "C" {
 #include "hal/can.h"
@@ -68,8 +69,39 @@ class AppTarget {
   virtual std::string name() const = 0;
 };
 
+// The application's binding besides the parameter table, as the boards'
+// images make it (firmware/targets/stm32f405/board_stm32f405.c,
+// mc_board_app_cfg): the PWM rate and the slow divider fixed to the
+// table's (APPLY cannot change them on a board), telemetry up to half of
+// the bus, the rates of the messages past POSITION 0 (the image's), the
+// laws of SPEED and POSITION from the parameters. Both targets bind it (the
+// PIL image receives it in its APP frame), so their applications are the
+// same; flash, watchdog and boot hooks are each target's own.
+inline void app_target_binding(const mc_params_t& p, mc_app_cfg_t* c) {
+  c->pwm_hz_fixed = p.pwm_hz;
+  c->slow_loop_div_fixed = p.slow_loop_div;
+  c->tm_budget_frac = 0.5f;
+  for (uint16_t& r : c->tm_ext_rate_hz) r = 0u;
+  c->laws_from_params = true;
+}
+
 // Throws UsageError naming the reason when the application refuses the
 // setup (its parameter table invalid, a law refused).
 std::unique_ptr<AppTarget> make_app_target_sil(const AppSetup& s);
+
+// The PIL target: the board's whole image (mc_stm32f405_pil: the image's
+// main, both interrupts, the application, CAN and a RAM configuration store
+// behind hal/pil's HAL; firmware/targets/pil) on QEMU's emulated M4F, booted
+// on s.defaults with app_target_binding, the plant built from s.board on
+// the host (app_target_pil.cpp).
+struct AppTargetPilOptions {
+  hal_host::PilLinkOptions link;  // QEMU, the PIL image and its bootloader, logs
+  std::string board;              // the board s describes, for name() (may be "")
+};
+// Throws UsageError when the setup cannot run on the link (QEMU, the image
+// or its bootloader unreadable, the parameter table invalid, a brake
+// chopper on the plant: the link carries none),
+// std::runtime_error when QEMU or the image fails.
+std::unique_ptr<AppTarget> make_app_target_pil(const AppSetup& s, const AppTargetPilOptions& o);
 
 }  // namespace mcsim

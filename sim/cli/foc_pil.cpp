@@ -15,28 +15,22 @@ std::vector<uint8_t> frame_buf() {
 
 }  // namespace
 
-FocPil::FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
-               const std::function<void(mc_drive_cfg_t&)>& tweak_cfg)
-    : sil_(o), link_(link) {
+PilSession::PilSession(hal_host::PmsmBoard& board, const hal_host::PilLinkOptions& link)
+    : board_(board), link_(link) {
   const std::vector<uint8_t> hello = link_.receive_frame();
   if (mc_pil_check_hello(hello.data(), hello.size()) != MC_PIL_OK) {
-    throw std::runtime_error("FocPil: expected HELLO from the target");
+    throw std::runtime_error("PIL: expected HELLO from the target");
   }
-  mc_drive_cfg_t cfg = sil_.drive().cfg;
-  if (tweak_cfg) tweak_cfg(cfg);
+}
+
+void PilSession::boot_drive(const mc_drive_cfg_t& cfg) {
   std::vector<uint8_t> buf = frame_buf();
   const std::size_t n = mc_pil_encode_cfg(&cfg, buf.data(), buf.size());
   link_.send(buf.data(), n);
   expect_ready();
 }
 
-FocPil::FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
-               const PilAppSetup& setup)
-    : sil_(o), link_(link) {
-  const std::vector<uint8_t> hello = link_.receive_frame();
-  if (mc_pil_check_hello(hello.data(), hello.size()) != MC_PIL_OK) {
-    throw std::runtime_error("FocPil: expected HELLO from the target");
-  }
+void PilSession::boot_app(const PilAppSetup& setup) {
   // Every parameter with a field, MC_PIL_PARAMS_MAX per frame.
   std::vector<uint32_t> ids, raws;
   for (const mc_param_info_t& info : mc_param_table) {
@@ -52,27 +46,44 @@ FocPil::FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
     link_.send(buf.data(), n);
   }
   mc_pil_app_t app = setup.app;
-  (void)sil_.board().tick_freq(&app.tick_hz);  // this board's, whatever the caller gave
+  (void)board_.tick_freq(&app.tick_hz);  // this board's, whatever the caller gave
   const std::size_t n = mc_pil_encode_app(&app, buf.data(), buf.size());
   link_.send(buf.data(), n);
   expect_ready();
+  app_mode_ = true;
+  expect_probe();  // the application after boot
 }
 
-void FocPil::expect_ready() {
+void PilSession::expect_ready() {
   const std::vector<uint8_t> r = link_.receive_frame();
   if (mc_pil_decode_ready(r.data(), r.size(), &ready_) != MC_PIL_OK) {
-    throw std::runtime_error("FocPil: expected READY from the target");
+    throw std::runtime_error("PIL: expected READY (link protocol version " +
+                             std::to_string(MC_PIL_VERSION) +
+                             ") from the target: is the image built from this tree?");
+  }
+  if (ready_.version != MC_PIL_VERSION) {
+    throw std::runtime_error("PIL: the image speaks link protocol version " +
+                             std::to_string(ready_.version) + ", this host " +
+                             std::to_string(MC_PIL_VERSION) + ": rebuild the image");
   }
   if (ready_.drive_cfg_err != MC_DRIVE_CFG_OK) {
-    throw std::runtime_error("FocPil: the target's drive refused the configuration, bits " +
+    throw std::runtime_error("PIL: the target's drive refused the configuration, bits " +
                              std::to_string(ready_.drive_cfg_err));
   }
 }
 
-const mc_pil_out_t& FocPil::step(const PilCommand& cmd,
-                                 const std::vector<mc_hal_can_frame_t>& can_rx,
-                                 std::vector<PilCanTx>* can_tx) {
-  hal_host::PmsmBoard& b = sil_.board();
+void PilSession::expect_probe() {
+  const std::vector<uint8_t> r = link_.receive_frame();
+  if (mc_pil_decode_probe(r.data(), r.size(), &probe_) != MC_PIL_OK) {
+    throw std::runtime_error("PIL: expected the application's PROBE at period " +
+                             std::to_string(seq_));
+  }
+}
+
+const mc_pil_out_t& PilSession::step(const PilCommand& cmd,
+                                     const std::vector<mc_hal_can_frame_t>& can_rx,
+                                     std::vector<PilCanTx>* can_tx) {
+  hal_host::PmsmBoard& b = board_;
   b.sample();
 
   mc_pil_meas_t m{};
@@ -92,33 +103,45 @@ const mc_pil_out_t& FocPil::step(const PilCommand& cmd,
   std::vector<uint8_t> buf = frame_buf();
   for (const mc_hal_can_frame_t& f : can_rx) {
     const std::size_t k = mc_pil_encode_can_rx(&f, buf.data(), buf.size());
-    if (k == 0) throw std::runtime_error("FocPil: CAN frame does not fit a link frame");
+    if (k == 0) throw std::runtime_error("PIL: CAN frame does not fit a link frame");
     link_.send(buf.data(), k);
   }
   const std::size_t n = mc_pil_encode_meas(&m, buf.data(), buf.size());
   link_.send(buf.data(), n);
+  bool probed = false;
   for (;;) {
     const std::vector<uint8_t> r = link_.receive_frame();
-    if (mc_pil_frame_type(r.data(), r.size()) == MC_PIL_TYPE_CAN_TX) {
+    const int type = mc_pil_frame_type(r.data(), r.size());
+    if (type == MC_PIL_TYPE_CAN_TX) {
       PilCanTx t;
       if (mc_pil_decode_can_tx(r.data(), r.size(), &t.seq, &t.frame) != MC_PIL_OK ||
           t.seq != seq_) {
-        throw std::runtime_error("FocPil: bad or out-of-sequence CAN_TX frame at period " +
+        throw std::runtime_error("PIL: bad or out-of-sequence CAN_TX frame at period " +
                                  std::to_string(seq_));
       }
       if (can_tx != nullptr) can_tx->push_back(t);
       continue;
     }
+    if (type == MC_PIL_TYPE_PROBE && app_mode_ && !probed) {
+      if (mc_pil_decode_probe(r.data(), r.size(), &probe_) != MC_PIL_OK) {
+        throw std::runtime_error("PIL: bad PROBE frame at period " + std::to_string(seq_));
+      }
+      probed = true;
+      continue;
+    }
     if (mc_pil_decode_out(r.data(), r.size(), &out_) != MC_PIL_OK || out_.seq != seq_) {
-      throw std::runtime_error("FocPil: bad or out-of-sequence OUT frame at period " +
+      throw std::runtime_error("PIL: bad or out-of-sequence OUT frame at period " +
                                std::to_string(seq_));
     }
     break;
   }
+  if (app_mode_ && !probed) {
+    throw std::runtime_error("PIL: no PROBE before OUT at period " + std::to_string(seq_));
+  }
 
   // What the drive did to the bridge this period, in the board's terms.
   if (out_.duty_set_count > 0u && b.pwm_set_duty(out_.duty_a, out_.duty_b, out_.duty_c) != 0) {
-    throw std::runtime_error("FocPil: the board refused duties the target accepted");
+    throw std::runtime_error("PIL: the board refused duties the target accepted");
   }
   if (out_.gate_kill_count > 0u) b.fault_gate_kill();
   if (out_.pwm_enabled != 0u) {
@@ -129,6 +152,20 @@ const mc_pil_out_t& FocPil::step(const PilCommand& cmd,
   b.advance();
   ++seq_;
   return out_;
+}
+
+FocPil::FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
+               const std::function<void(mc_drive_cfg_t&)>& tweak_cfg)
+    : sil_(o), pil_(sil_.board(), link) {
+  mc_drive_cfg_t cfg = sil_.drive().cfg;
+  if (tweak_cfg) tweak_cfg(cfg);
+  pil_.boot_drive(cfg);
+}
+
+FocPil::FocPil(const FocSilOptions& o, const hal_host::PilLinkOptions& link,
+               const PilAppSetup& setup)
+    : sil_(o), pil_(sil_.board(), link) {
+  pil_.boot_app(setup);
 }
 
 }  // namespace mcsim

@@ -30,6 +30,7 @@
 extern "C" {
 #include "mc_params.h"
 #include "mc_pil_frame.h"
+#include "mc_pil_probe.h"
 }
 
 namespace mcsim {
@@ -56,6 +57,43 @@ struct PilCanTx {
   mc_hal_can_frame_t frame{};
 };
 
+// The host end of one PIL session on any simulated board (FocPil's two
+// modes; the PIL AppTarget, app_target_pil.cpp): the link to the image and
+// one period at a time on the caller's board. The board outlives the
+// session.
+class PilSession {
+ public:
+  // Starts QEMU (PilLink) and waits for HELLO. Throws std::runtime_error.
+  PilSession(hal_host::PmsmBoard& board, const hal_host::PilLinkOptions& link);
+
+  // Drive alone: the drive configuration (CFG), READY checked.
+  void boot_drive(const mc_drive_cfg_t& cfg);
+  // Whole image: the application on setup.defaults (PARAMS, APP), READY and
+  // the application's probe after boot (PROBE) checked.
+  void boot_app(const PilAppSetup& setup);
+
+  // One PWM period (FocPil::step); in the whole-image mode the probe the
+  // image sent before OUT is probe().
+  const mc_pil_out_t& step(const PilCommand& cmd, const std::vector<mc_hal_can_frame_t>& can_rx,
+                           std::vector<PilCanTx>* can_tx);
+
+  const mc_pil_ready_t& ready() const { return ready_; }
+  const mc_app_probe_t& probe() const { return probe_; }
+  int finish() { return link_.finish(0); }
+
+ private:
+  void expect_ready();
+  void expect_probe();
+
+  hal_host::PmsmBoard& board_;
+  hal_host::PilLink link_;
+  mc_pil_ready_t ready_{};
+  mc_pil_out_t out_{};
+  mc_app_probe_t probe_{};
+  bool app_mode_ = false;
+  uint32_t seq_ = 0;
+};
+
 class FocPil {
  public:
   // tweak_cfg (optional) edits the drive configuration before it is sent
@@ -73,21 +111,20 @@ class FocPil {
   // Throws std::runtime_error on a link error or a frame out of sequence.
   const mc_pil_out_t& step(const PilCommand& cmd,
                            const std::vector<mc_hal_can_frame_t>& can_rx = {},
-                           std::vector<PilCanTx>* can_tx = nullptr);
+                           std::vector<PilCanTx>* can_tx = nullptr) {
+    return pil_.step(cmd, can_rx, can_tx);
+  }
 
   hal_host::PmsmBoard& board() { return sil_.board(); }
-  const mc_pil_ready_t& ready() const { return ready_; }
+  const mc_pil_ready_t& ready() const { return pil_.ready(); }
+  // Whole image: the application's probe after the last period.
+  const mc_app_probe_t& probe() const { return pil_.probe(); }
   // Stop the target; returns its exit status (0 = clean END).
-  int finish() { return link_.finish(0); }
+  int finish() { return pil_.finish(); }
 
  private:
   FocSil sil_;  // owns the board; its own drive instance stays idle
-  void expect_ready();
-
-  hal_host::PilLink link_;
-  mc_pil_ready_t ready_{};
-  mc_pil_out_t out_{};
-  uint32_t seq_ = 0;
+  PilSession pil_;
 };
 
 }  // namespace mcsim

@@ -8,7 +8,7 @@
 
 /* Payload sizes [32-bit words]. */
 #define CFG_WORDS   23u
-#define READY_WORDS 2u
+#define READY_WORDS 3u
 #define MEAS_WORDS  29u
 #define OUT_WORDS   21u
 #define APP_WORDS   9u
@@ -247,6 +247,7 @@ size_t mc_pil_encode_ready(const mc_pil_ready_t *rd, uint8_t *buf, size_t cap)
     }
     put_u32(&w, rd->drive_cfg_err);
     put_u32(&w, rd->sysclk_hz);
+    put_u32(&w, rd->version);
     return finish(&w);
 }
 
@@ -262,6 +263,40 @@ int mc_pil_decode_ready(const uint8_t *buf, size_t n, mc_pil_ready_t *out)
     }
     out->drive_cfg_err = get_u32(&r);
     out->sysclk_hz = get_u32(&r);
+    out->version = get_u32(&r);
+    return MC_PIL_OK;
+}
+
+/* ---- frames of words (PROBE) ------------------------------------------- */
+
+size_t mc_pil_encode_words(mc_pil_type_t type, const uint32_t *words, uint32_t n_words,
+                           uint8_t *buf, size_t cap)
+{
+    writer_t w;
+    if ((words == NULL) || (n_words > MC_PIL_MAX_PAYLOAD / 4u) ||
+        !begin(&w, buf, cap, type, n_words)) {
+        return 0u;
+    }
+    for (uint32_t i = 0u; i < n_words; ++i) {
+        put_u32(&w, words[i]);
+    }
+    return finish(&w);
+}
+
+int mc_pil_decode_words(const uint8_t *buf, size_t n, mc_pil_type_t type, uint32_t *words,
+                        uint32_t n_words)
+{
+    reader_t r;
+    if ((words == NULL) || (n_words > MC_PIL_MAX_PAYLOAD / 4u)) {
+        return MC_PIL_ERR_ARG;
+    }
+    const int rc = open_frame(&r, buf, n, type, n_words);
+    if (rc != MC_PIL_OK) {
+        return rc;
+    }
+    for (uint32_t i = 0u; i < n_words; ++i) {
+        words[i] = get_u32(&r);
+    }
     return MC_PIL_OK;
 }
 

@@ -27,8 +27,10 @@
  *                    parameter set, (id, raw value) pairs), APP (the rest of
  *                    the application's binding); the image boots the
  *                    application (firmware/app/app/mc_app) from them;
- * then target -> READY (the drive's init result). End: host -> END, the
- * target exits (semihosting).
+ * then target -> READY (the drive's init result and the protocol version,
+ * MC_PIL_VERSION: a host and an image built from different versions stop at
+ * READY instead of misreading each other). End: host -> END, the target
+ * exits (semihosting).
  *
  * CAN in the whole-image mode, carried over the same link:
  *   host -> target  CAN_RX before a period's MEAS: a frame the bus delivers
@@ -38,6 +40,15 @@
  * Both loops run within the period, as on the drive board (main.c: the
  * ADC interrupt, then PendSV): OUT is what the bridge does for the next
  * period, whatever part of the application set it.
+ *   target -> host  PROBE (version 2) once after READY (the application
+ *                   after boot) and once per period after its CAN_TX
+ *                   frames, before OUT: the application's probe
+ *                   (mc_app_probe_t, mc_pil_probe.h), what the SIL's
+ *                   mc_app_probe() gives after the same period.
+ *
+ * Versions (MC_PIL_VERSION, in READY):
+ *   1  drive alone, whole image with CAN (READY without a version word);
+ *   2  PROBE frames in the whole-image mode; READY carries the version.
  *
  * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
  * and parse a complete frame. Built for the target (hal/pil/mc_hal_pil.c) and for the
@@ -74,7 +85,11 @@ typedef enum {
     MC_PIL_TYPE_APP = 8,     /**< host -> target: mc_pil_app_t, ends the set-up */
     MC_PIL_TYPE_CAN_RX = 9,  /**< host -> target: one CAN frame received by the drive */
     MC_PIL_TYPE_CAN_TX = 10, /**< target -> host: one CAN frame the drive sent */
+    MC_PIL_TYPE_PROBE = 11,  /**< target -> host: the application's probe (version 2) */
 } mc_pil_type_t;
+
+/** The link protocol's version (see the file comment), sent in READY. */
+#define MC_PIL_VERSION 2u
 
 /** (id, raw) pairs per PARAMS frame (the payload limit). */
 #define MC_PIL_PARAMS_MAX 31u
@@ -150,6 +165,7 @@ typedef struct {
 typedef struct {
     uint32_t drive_cfg_err; /**< mc_drive_init() result */
     uint32_t sysclk_hz;     /**< clock set-up result (0: no RCC, emulator) */
+    uint32_t version;       /**< MC_PIL_VERSION of the image */
 } mc_pil_ready_t;
 
 /** CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF, no reflection). */
@@ -170,6 +186,11 @@ size_t mc_pil_encode_app(const mc_pil_app_t *a, uint8_t *buf, size_t cap);
 size_t mc_pil_encode_can_rx(const mc_hal_can_frame_t *f, uint8_t *buf, size_t cap);
 /** seq: the period (MEAS seq) in which the application sent f. */
 size_t mc_pil_encode_can_tx(uint32_t seq, const mc_hal_can_frame_t *f, uint8_t *buf, size_t cap);
+
+/** A frame of n_words 32-bit words (n_words <= MC_PIL_MAX_PAYLOAD / 4), for
+ *  payloads defined beside this file (mc_pil_probe.h). */
+size_t mc_pil_encode_words(mc_pil_type_t type, const uint32_t *words, uint32_t n_words,
+                           uint8_t *buf, size_t cap);
 
 /**
  * Length of the frame that starts at buf given its first n bytes: 0 while
@@ -196,6 +217,9 @@ int mc_pil_decode_app(const uint8_t *buf, size_t n, mc_pil_app_t *out);
  *  the payload size: MC_PIL_ERR_LEN. */
 int mc_pil_decode_can_rx(const uint8_t *buf, size_t n, mc_hal_can_frame_t *out);
 int mc_pil_decode_can_tx(const uint8_t *buf, size_t n, uint32_t *p_seq, mc_hal_can_frame_t *out);
+/** A complete frame of the given type and exactly n_words words into words. */
+int mc_pil_decode_words(const uint8_t *buf, size_t n, mc_pil_type_t type, uint32_t *words,
+                        uint32_t n_words);
 /** MC_PIL_OK if buf is a complete HELLO frame. */
 int mc_pil_check_hello(const uint8_t *buf, size_t n);
 

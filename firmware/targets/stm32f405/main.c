@@ -91,6 +91,11 @@ void mc_main_can_rx(void)
     }
 }
 
+const mc_app_t *mc_main_app(void)
+{
+    return g_app_on ? &g_app : NULL;
+}
+
 void ADC_IRQHandler(void)
 {
     mc_board_fast_irq_ack();

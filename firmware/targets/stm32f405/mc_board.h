@@ -58,6 +58,10 @@ const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p);
  *  application runs). */
 void mc_main_can_rx(void);
 
+/** Provided by main.c: the drive application once it runs, else NULL (the
+ *  PIL board reads its probe for the host after each period). */
+const mc_app_t *mc_main_app(void);
+
 /** Start the PWM-synchronous conversions (the fast-loop interrupt source). */
 void mc_board_start(void);
 

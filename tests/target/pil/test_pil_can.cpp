@@ -41,6 +41,7 @@
 #include "foc_pil.hpp"
 #include "hal_host/candump_log.hpp"
 #include "mc_record.hpp"
+#include "pil_test_link.hpp"
 extern "C" {
 #include "mc_can_dbc.h"
 #include "mc_can_proto.h"
@@ -87,18 +88,6 @@ int run_sil(const std::string& dir) {
   return std::system(cmd.c_str());
 }
 
-hal_host::PilLinkOptions link_options() {
-  hal_host::PilLinkOptions l;
-  l.qemu = MC_QEMU_ARM;
-  l.elf = MC_PIL_ELF;
-  l.boot_elf = MC_BOOT_PIL_ELF;  // the image starts through the bootloader
-  l.semihost_log = work_dir() + "/pil_semihost.log";
-  // Lock-step: the target answers every frame; this only bounds how long a
-  // crashed target is waited for on a loaded machine.
-  l.receive_timeout_s = 60.0;
-  return l;
-}
-
 struct PilRun {
   long periods = 0;
   long rx_delivered = 0;
@@ -118,7 +107,7 @@ PilRun run_pil(const mcsim::AppBinding& ab, const std::string& dir) {
   setup.app.pwm_hz_fixed = ab.pwm_hz_fixed;
   setup.app.slow_loop_div_fixed = ab.slow_loop_div_fixed;
 
-  mcsim::FocPil pil(ab.plant, link_options(), setup);
+  mcsim::FocPil pil(ab.plant, pil_test_link("pil_can/pil_semihost.log", 60.0), setup);
   hal_host::PmsmBoard& b = pil.board();
   double now_s = 0.0;
   hal_host::CandumpLogCan can(

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "foc_pil.hpp"
+#include "pil_test_link.hpp"
 #include "foc_sil.hpp"
 
 namespace {
@@ -77,15 +78,6 @@ std::vector<Sample> run_sil(long n) {
   return out;
 }
 
-hal_host::PilLinkOptions link_options(const std::string& log_name) {
-  hal_host::PilLinkOptions l;
-  l.qemu = MC_QEMU_ARM;
-  l.elf = MC_PIL_ELF;
-  l.boot_elf = MC_BOOT_PIL_ELF;  // the image starts through the bootloader
-  l.semihost_log = std::string(MC_PIL_LOG_DIR) + "/" + log_name;
-  return l;
-}
-
 struct PilRun {
   std::vector<Sample> samples;
   std::vector<mc_pil_out_t> outs;
@@ -95,7 +87,7 @@ struct PilRun {
 
 PilRun run_pil(long n, const std::function<void(mc_drive_cfg_t&)>& tweak, const std::string& log) {
   PilRun r;
-  mcsim::FocPil pil(scenario_options(), link_options(log), tweak);
+  mcsim::FocPil pil(scenario_options(), pil_test_link(log), tweak);
   r.ready = pil.ready();
   for (long k = 0; k < n; ++k) {
     mcsim::PilCommand c;

@@ -12,6 +12,7 @@
 
 extern "C" {
 #include "mc_pil_frame.h"
+#include "mc_pil_probe.h"
 }
 
 namespace {
@@ -233,6 +234,64 @@ TEST(PilFrame, CanFrameWithALengthThatIsNoCanLengthIsRefused) {
     EXPECT_EQ(mc_pil_decode_can_rx(buf, n, &fd), MC_PIL_ERR_LEN) << int(bad);
     EXPECT_EQ(fd.id, 0x555u) << "output untouched";
   }
+}
+
+// Version 2: READY carries the protocol version; a version-1 READY (two
+// words) is refused by length, so a stale image stops the host at READY.
+TEST(PilFrame, ReadyCarriesTheProtocolVersion) {
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  const mc_pil_ready_t r = {7u, 168000000u, MC_PIL_VERSION};
+  size_t n = mc_pil_encode_ready(&r, buf, sizeof buf);
+  mc_pil_ready_t d{};
+  ASSERT_EQ(mc_pil_decode_ready(buf, n, &d), MC_PIL_OK);
+  EXPECT_TRUE(same_bits(d, r));
+  EXPECT_EQ(d.version, 2u);
+  const uint32_t v1[2] = {0u, 0u};
+  n = mc_pil_encode_words(MC_PIL_TYPE_READY, v1, 2u, buf, sizeof buf);
+  ASSERT_GT(n, 0u);
+  mc_pil_ready_t untouched = r;
+  EXPECT_EQ(mc_pil_decode_ready(buf, n, &untouched), MC_PIL_ERR_LEN);
+  EXPECT_TRUE(same_bits(untouched, r));
+}
+
+// PROBE: every field of mc_app_probe_t keeps its bits (NaN payload, -0,
+// the last field); a short, foreign or corrupt frame is refused, output
+// untouched.
+TEST(PilFrame, ProbeRoundTripKeepsEveryBit) {
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  mc_app_probe_t p{};
+  p.mode = 3u;
+  p.first_fault = 0xFFFFFFFFu;
+  p.id_ref_a = -0.0f;
+  p.iq_a = nan_with_payload();
+  p.omega_m_rad_s = std::numeric_limits<float>::denorm_min();
+  p.pos_turns = -123456;
+  p.pos_traj_k = 0xDEADBEEFu;  // the last field
+  const size_t n = mc_pil_encode_probe(&p, buf, sizeof buf);
+  ASSERT_EQ(n, MC_PIL_HEADER_LEN + 4u * MC_PIL_PROBE_WORDS + MC_PIL_CRC_LEN);
+  mc_app_probe_t d{};
+  ASSERT_EQ(mc_pil_decode_probe(buf, n, &d), MC_PIL_OK);
+  EXPECT_TRUE(same_bits(d, p));
+  EXPECT_EQ(mc_pil_frame_type(buf, n), MC_PIL_TYPE_PROBE);
+  EXPECT_EQ(mc_pil_encode_probe(&p, buf, n - 1u), 0u);  // does not fit
+  EXPECT_EQ(mc_pil_encode_probe(nullptr, buf, sizeof buf), 0u);
+
+  mc_app_probe_t untouched{};
+  untouched.mode = 9u;
+  const mc_app_probe_t before = untouched;
+  buf[10] ^= 0x01u;  // one bit of the payload
+  EXPECT_EQ(mc_pil_decode_probe(buf, n, &untouched), MC_PIL_ERR_CRC);
+  EXPECT_TRUE(same_bits(untouched, before));
+  const size_t k = mc_pil_encode_hello(buf, sizeof buf);
+  EXPECT_EQ(mc_pil_decode_probe(buf, k, &untouched), MC_PIL_ERR_TYPE);
+  uint32_t words[MC_PIL_PROBE_WORDS] = {};
+  const size_t m =
+      mc_pil_encode_words(MC_PIL_TYPE_PROBE, words, MC_PIL_PROBE_WORDS - 1u, buf, sizeof buf);
+  EXPECT_EQ(mc_pil_decode_probe(buf, m, &untouched), MC_PIL_ERR_LEN);
+  EXPECT_TRUE(same_bits(untouched, before));
+  EXPECT_EQ(
+      mc_pil_encode_words(MC_PIL_TYPE_PROBE, words, MC_PIL_MAX_PAYLOAD / 4u + 1u, buf, sizeof buf),
+      0u);
 }
 
 }  // namespace
