@@ -76,11 +76,8 @@ class AppTargetSil final : public AppTarget {
     }
     mc_app_cfg_t c{};
     c.defaults = &params_;
-    c.flash = nullptr;
-    c.tm_budget_frac = 0.5f;
-    c.pwm_hz_fixed = params_.pwm_hz;
-    c.slow_loop_div_fixed = params_.slow_loop_div;
-    c.laws_from_params = true;
+    c.flash = nullptr;                // no store: the table boots as the board's defaults
+    app_target_binding(params_, &c);  // the images' binding, as the PIL target's
     const uint32_t berr = mc_app_boot(app_.get(), &c);
     if (berr != MC_APP_CFG_OK) {
       throw UsageError("the application refused to boot: MC_APP_CFG bits " + hex(berr));
