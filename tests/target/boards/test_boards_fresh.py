@@ -93,7 +93,7 @@ def main():
         # the PWM rate, the supply and the brake chopper (issue 29)
         "pwm.frequency_hz must be 5000..60000":
             ("toml", sub(toml, r"^frequency_hz = 24000", "frequency_hz = 70000")),
-        "supply.nominal_v must lie inside": ("toml", sub(toml, r"^nominal_v = 56.0",
+        "supply.nominal_v must lie inside": ("toml", sub(toml, r"^nominal_v = 48.0",
                                                          "nominal_v = 60.0")),
         "a brake chopper needs the brake_l and brake_h pins": ("pins", sub(pins, r"^brake_h,.*\n",
                                                                            "")),

@@ -58,7 +58,7 @@ extern "C" {
 #include "mc_can_dbc.h"
 #include "mc_can_proto.h"
 #include "mc_ctrl_sensorless.h"
-#include "mc_board_odrive36_24v_gen.h"
+#include "mc_board_odrive36_gen.h"
 #include "mc_board_vesc6_gen.h"
 #include "mc_fake_flash.h"
 }
@@ -277,7 +277,7 @@ RunLog run(mcsim::AppTarget& t, const Script& sc, long n) {
 // The board's generated description, the one the flashed image is built
 // with (firmware/targets/stm32f405/boards/<name>/, board_stm32f405.c).
 const mc_board_desc_t& board_desc(const std::string& board) {
-  if (board == "odrive36_24v") return mc_board_odrive36_24v_desc;
+  if (board == "odrive36") return mc_board_odrive36_desc;
   if (board == "vesc6") return mc_board_vesc6_desc;
   throw std::invalid_argument("no description linked for board " + board);
 }
@@ -389,12 +389,11 @@ void sensored_experiment(const std::string& board) {
               static_cast<double>(e.omega_m_rad_s), static_cast<double>(e.omega_ref_rad_s));
 }
 
-// The ODrive v3.6 in its 24 V variant: the 56 V description's nominal bus
-// equals its overvoltage limit (board.toml: nominal_v = vbus_max_v = 56),
-// which the parameter table refuses (MC_PARAMS_ERR_DRIVE: no margin for
-// the brake and regen thresholds) whatever the motor.
+// The ODrive v3.6 56 V board (the stm32f405-odrive36 image), on its 48 V
+// nominal supply (board.toml: a nominal bus equal to the 56 V limit left no
+// margin for the brake and regen thresholds, MC_PARAMS_ERR_DRIVE).
 TEST(PilAppTarget, OdriveV36ImageEqualsSilBitForBit) {
-  sensored_experiment("odrive36_24v");
+  sensored_experiment("odrive36");
 }
 
 TEST(PilAppTarget, Vesc6ImageEqualsSilBitForBit) {
