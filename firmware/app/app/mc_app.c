@@ -169,10 +169,23 @@ static int drive_speed_hook(void *ctx, float ref)
     return mc_drive_set_speed_ref(a->drive, ref);
 }
 
+/* ref is relative to the angle at enable (mc_can_cmd.h); the position
+ * law's frame is turn 0 at enable plus the encoder's angle within its turn
+ * (mc_ctrl_position.h): the angle at enable is added. */
 static int pos_ref_hook(void *ctx, float ref)
 {
     mc_app_t *a = ctx;
-    return (mc_ctrl_pos_set_target_rad(&a->laws.pos, ref) == 0u) ? 0 : -1;
+    return (mc_ctrl_pos_set_target_rad(&a->laws.pos, ref + a->pos_theta0_rad) == 0u) ? 0 : -1;
+}
+
+/* The encoder's angle within its turn as the law's first step will see it
+ * (the rotor at rest or nearly: the last step's). */
+static void pos_frame_at_enable(mc_app_t *a)
+{
+    const float th = a->drive->tm.theta_m_rad;
+    /* the law counts the HAL's raw count: a reversed encoder's cpr - count */
+    const bool rev = a->drive->cfg.encoder_reversed && (th > 0.0f);
+    a->pos_theta0_rad = !mc_isfinite_f32(th) ? 0.0f : (rev ? (MC_TWO_PI_F32 - th) : th);
 }
 
 /* The configurations of every law for p (the builders zero them first, so
@@ -183,13 +196,16 @@ typedef struct {
     mc_ctrl_sls_cfg_t sls;
     mc_ctrl_pi2d_cfg_t pi2d;
     mc_ctrl_pos_cfg_t pos;
+    mc_ctrl_align_cfg_t align;
+    mc_ctrl_idx_cfg_t idx;
     uint32_t gains_err, pi2d_err;
 } laws_cfgs_t;
 
-static void laws_cfgs(const mc_params_t *p, laws_cfgs_t *c)
+static void laws_cfgs(const mc_app_t *a, const mc_params_t *p, laws_cfgs_t *c)
 {
     mc_gains_motor_t m;
     mc_gains_t g;
+    mc_drive_cfg_t dc;
     (void)memset(c, 0, sizeof *c);
     c->gains_err = mc_law_gains_from_params(p, &m, &g);
     if (c->gains_err != MC_GAINS_OK) {
@@ -199,6 +215,33 @@ static void laws_cfgs(const mc_params_t *p, laws_cfgs_t *c)
     mc_law_sls_cfg(&m, &g, &c->sls);
     c->pi2d_err = mc_law_pi2d_cfg(&m, &g, &c->pi2d);
     mc_law_pos_cfg(&m, &g, &c->pos);
+    /* built whatever angle_ref (an APPLY compares them); initialised only
+     * for the reference that needs it */
+    if ((p->encoder_cpr != 0u) && (mc_params_to_drive_cfg(p, &dc) == MC_PARAMS_OK)) {
+        mc_law_find_cfg(p, &m, &g, &dc, a->hal->encoder, &c->align, &c->idx);
+    }
+}
+
+/* The law that finds the angle after a power-up, the one angle_ref selects
+ * (with an encoder). Returns law_error bits. */
+static uint32_t finder_init(mc_app_laws_t *l, const mc_params_t *p, const laws_cfgs_t *c)
+{
+    l->align_ok = false;
+    l->idx_ok = false;
+    l->angle_ref = p->angle_ref;
+    l->find_at_enable = (p->angle_find_at_enable != 0u);
+    if (p->encoder_cpr == 0u) {
+        return 0u; /* mc_params_validate refuses a reference without an encoder */
+    }
+    if (p->angle_ref == MC_DRIVE_ANGLE_REF_ALIGN) {
+        l->align_ok = mc_ctrl_align_init(&l->align, &c->align) == 0u;
+        return l->align_ok ? 0u : MC_LAW_ERR_ALIGN_INIT;
+    }
+    if (p->angle_ref == MC_DRIVE_ANGLE_REF_INDEX) {
+        l->idx_ok = mc_ctrl_idx_init(&l->idx, &c->idx) == 0u;
+        return l->idx_ok ? 0u : MC_LAW_ERR_IDX_INIT;
+    }
+    return 0u;
 }
 
 /* Initialise the laws the set selects from c; a law whose init refuses is
@@ -213,6 +256,8 @@ static uint32_t laws_init(mc_app_t *a, const mc_params_t *p, const laws_cfgs_t *
     l->pi2d_ok = false;
     l->pos_ok = false;
     l->sls_speed_max_rad_s = c->sls.speed_max_rad_s;
+    l->align_ok = false;
+    l->idx_ok = false;
     if (c->gains_err != MC_GAINS_OK) {
         return err;
     }
@@ -238,6 +283,9 @@ static uint32_t laws_init(mc_app_t *a, const mc_params_t *p, const laws_cfgs_t *
         l->pos_ok = mc_ctrl_pos_init(&l->pos, &c->pos) == 0u;
         err |= l->pos_ok ? 0u : MC_LAW_ERR_POS_INIT;
     }
+    err |= finder_init(l, p, c);
+    (void)memcpy(&l->align_cfg, &c->align, sizeof l->align_cfg);
+    (void)memcpy(&l->idx_cfg, &c->idx, sizeof l->idx_cfg);
     (void)memcpy(&l->spd_cfg, &c->spd, sizeof l->spd_cfg); /* padding too */
     (void)memcpy(&l->sls_cfg, &c->sls, sizeof l->sls_cfg);
     (void)memcpy(&l->pi2d_cfg, &c->pi2d, sizeof l->pi2d_cfg);
@@ -325,13 +373,16 @@ static uint32_t laws_check(mc_app_t *a, const mc_params_t *p)
         a->laws_rebuilt = false;
         return 0u;
     }
-    laws_cfgs(p, &c);
+    laws_cfgs(a, p, &c);
     a->laws_rebuilt = true;
     if ((p->speed_law == l->speed_law) && (c.gains_err == MC_GAINS_OK) &&
         same_bytes(&c.spd, &l->spd_cfg, sizeof c.spd) &&
         same_bytes(&c.sls, &l->sls_cfg, sizeof c.sls) &&
         same_bytes(&c.pi2d, &l->pi2d_cfg, sizeof c.pi2d) &&
         same_bytes(&c.pos, &l->pos_cfg, sizeof c.pos) &&
+        same_bytes(&c.align, &l->align_cfg, sizeof c.align) &&
+        same_bytes(&c.idx, &l->idx_cfg, sizeof c.idx) && (p->angle_ref == l->angle_ref) &&
+        ((p->angle_find_at_enable != 0u) == l->find_at_enable) &&
         (a->srv.active.encoder_cpr == p->encoder_cpr)) {
         return 0u;
     }
@@ -339,7 +390,7 @@ static uint32_t laws_check(mc_app_t *a, const mc_params_t *p)
     /* the selected speed law must run; the position law is offered when it
      * can (law_error says why not) */
     if ((err & ~MC_LAW_ERR_POS_INIT) != 0u) {
-        laws_cfgs(&a->srv.active, &c); /* the laws before (c reused: stack) */
+        laws_cfgs(a, &a->srv.active, &c); /* the laws before (c reused: stack) */
         l->error = laws_init(a, &a->srv.active, &c);
         a->srv.law_error = err;
         a->laws_rebuilt = false;
@@ -385,6 +436,121 @@ static void params_apply(void *ctx, const mc_params_t *p)
         a->cmd.cfg.position_drive_mode = cc.position_drive_mode;
         a->srv.law_error = a->laws.error;
     }
+}
+
+/* ------------------------------------------------- the angle at enable */
+
+/* The law of the selected control mode (NULL: CURRENT, or none). */
+static const mc_drive_ctrl_t *law_of(const mc_app_t *a)
+{
+    if (a->cmd.control_mode == MC_CAN_CTRL_SPEED) {
+        return a->cfg.speed_law.ctrl;
+    }
+    if (a->cmd.control_mode == MC_CAN_CTRL_POSITION) {
+        return a->cfg.position_law.ctrl;
+    }
+    return NULL;
+}
+
+/* SET_ENABLE's question (mc_can_cmd_angle_fn): enter mode now (0), find the
+ * angle first (1), or refuse ANGLE_UNKNOWN (-1). See mc_app.h. */
+static int angle_enable(void *ctx, mc_drive_mode_t mode)
+{
+    mc_app_t *a = ctx;
+    mc_drive_t *d = a->drive;
+    const mc_drive_ctrl_t *law = d->ctrl;
+    const uint32_t st = mc_drive_angle_state(d);
+    const mc_drive_ctrl_t *finder = NULL;
+    bool needs;
+    pos_frame_at_enable(a);
+    needs = (mode == MC_DRIVE_MODE_CURRENT) || ((mode == MC_DRIVE_MODE_CTRL) && (law != NULL) &&
+                                                law->needs_encoder && !law->finds_angle);
+    if (!needs || (st == MC_DRIVE_ANGLE_KNOWN)) {
+        return 0;
+    }
+    if (!a->laws.find_at_enable) {
+        return -1;
+    }
+    if ((st == MC_DRIVE_ANGLE_NEED_ALIGN) && a->laws.align_ok) {
+        finder = mc_ctrl_align_ops(&a->laws.align);
+    } else if ((st == MC_DRIVE_ANGLE_NEED_INDEX) && a->laws.idx_ok) {
+        finder = mc_ctrl_idx_ops(&a->laws.idx);
+    } else {
+        return -1; /* no finder for it (law_error says why) */
+    }
+    if ((mc_drive_attach_ctrl(d, finder) != 0) || (mc_drive_set_mode(d, MC_DRIVE_MODE_CTRL) != 0)) {
+        (void)mc_drive_set_mode(d, MC_DRIVE_MODE_IDLE);
+        return -1; /* the slow step attaches the law again */
+    }
+    a->angle_running = true;
+    return 1;
+}
+
+/* The finder's status and failure bits. */
+static mc_ctrl_align_status_t finder_status(const mc_app_t *a, uint32_t *p_fail, float *p_offset)
+{
+    if (a->drive->ctrl == &a->laws.align.ops) {
+        mc_ctrl_align_result_t r;
+        (void)mc_ctrl_align_get_result(&a->laws.align, &r);
+        *p_fail = r.fail;
+        *p_offset = r.offset_e_rad;
+        return r.status;
+    }
+    if (a->drive->ctrl == &a->laws.idx.ops) {
+        mc_ctrl_idx_result_t r;
+        (void)mc_ctrl_idx_get_result(&a->laws.idx, &r);
+        *p_fail = r.fail;
+        *p_offset = -1.0f; /* the drive took the index */
+        return r.status;
+    }
+    *p_fail = 0u;
+    *p_offset = -1.0f;
+    return MC_CTRL_ALIGN_FAILED; /* detached: the run ended */
+}
+
+/* Slow step, after the command handler's: a find that ended (see mc_app.h). */
+static void angle_service(mc_app_t *a)
+{
+    uint32_t fail = 0u;
+    float offset = -1.0f;
+    mc_ctrl_align_status_t st;
+    if (!a->angle_running) {
+        return;
+    }
+    st = finder_status(a, &fail, &offset);
+    if ((st == MC_CTRL_ALIGN_RUNNING) && a->cmd.enabled) {
+        return;
+    }
+    a->angle_running = false;
+    if (st == MC_CTRL_ALIGN_DONE) {
+        a->angle_error = 0u;
+        if (a->cmd.enabled && a->cmd.angle_finding) {
+            const mc_drive_ctrl_t *law = law_of(a);
+            if (offset >= 0.0f) {
+                (void)mc_drive_set_encoder_offset(a->drive, offset);
+            }
+            (void)mc_drive_set_mode(a->drive, MC_DRIVE_MODE_IDLE);
+            if (law != NULL) {
+                (void)mc_drive_attach_ctrl(a->drive, law);
+            }
+            pos_frame_at_enable(a);
+            (void)mc_can_cmd_angle_found(&a->cmd);
+        }
+    } else if (fail != 0u) {
+        /* the finder's error bits faulted the drive (bridge off in that
+         * step); the command handler ended the run with FAULT: name it */
+        a->angle_error = fail;
+        if (a->cmd.enabled) {
+            mc_can_cmd_end_run(&a->cmd, (uint8_t)MC_CAN_STOP_ANGLE_FIND);
+        } else if (a->cmd.stop_reason == (uint8_t)MC_CAN_STOP_FAULT) {
+            a->cmd.stop_reason = (uint8_t)MC_CAN_STOP_ANGLE_FIND;
+        } else {
+            /* ended otherwise (disable, timeout): its reason stands */
+        }
+    } else {
+        /* the run ended before the find did (disable, timeout) */
+    }
+    a->srv.angle_error = a->angle_error;
 }
 
 /* BOOT_REQ (can/mc_boot_enter.h), answered on can. */
@@ -500,7 +666,7 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     cc.hook_ctx = app;
     if (app->cfg.laws_from_params) {
         laws_cfgs_t lc;
-        laws_cfgs(p, &lc);
+        laws_cfgs(app, p, &lc);
         app->laws.error = laws_init(app, p, &lc);
         laws_plug(app);
     }
@@ -508,6 +674,9 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     app->cmd_err = mc_can_cmd_init(&app->cmd, &cc, drive, &app->tm);
     if (app->cmd_err != MC_CAN_CMD_CFG_OK) {
         return MC_APP_CFG_ERR_CMD;
+    }
+    if (app->cfg.laws_from_params) {
+        mc_can_cmd_attach_angle(&app->cmd, angle_enable, app);
     }
     if (app->params_valid) {
         if (mc_param_srv_init(&app->srv, p, drive, hal, app->have_store ? &app->store : NULL,
@@ -709,6 +878,8 @@ uint32_t mc_app_slow_work(mc_app_t *app)
     }
     attach_law(app);
     mc_can_cmd_step(&app->cmd);
+    angle_service(app);
+    attach_law(app);
     if (app->comm != NULL) {
         mc_comm_can_step(app->comm, can, &app->cmd.reply);
     }

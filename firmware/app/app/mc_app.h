@@ -87,6 +87,28 @@
  * sets its target, the drive slews it at speed_ramp_rad_s2 (its
  * acceleration is the laws' feed-forward) and ramps it to zero in a
  * controlled stop: one owner of the reference for every speed law.
+ *
+ * The rotor angle after a power-up (laws_from_params; angle_ref,
+ * mc_drive.h): with angle_ref index or align the application builds the
+ * index search or the alignment (ctrl/mc_ctrl_align.h, mc_law_find_cfg).
+ * An enable whose mode needs the encoder (CURRENT, the sensored laws)
+ * while mc_drive_angle_state() says the angle is unknown:
+ *   angle_find_at_enable 1  the finder is attached and runs in CTRL mode
+ *                      (the run has begun: the keep-alive counts); when it
+ *                      is done (the slow step sees it) the measured offset
+ *                      is set (align; index: the drive took the index), the
+ *                      bridge opens for that step, the selected law is
+ *                      attached and the selected mode entered from the
+ *                      present state (mc_can_cmd_angle_found). A failure
+ *                      (the finder's error bits fault the drive, bridge
+ *                      off in that fast step) ends the run with stop_reason
+ *                      ANGLE_FIND and the readonly parameter angle_error
+ *                      = the finder's MC_CTRL_ALIGN_ERR_* bits;
+ *   angle_find_at_enable 0  the enable is refused ANGLE_UNKNOWN (CMD_ERROR,
+ *                      HEARTBEAT.last_error), the bridge stays off.
+ * The finders run only during a find: the fast loop's cost afterwards is
+ * the selected law's. A re-init of the drive (an APPLY that changes its
+ * configuration) forgets the angle (align) as mc_drive_init does.
  */
 #ifndef MC_APP_H
 #define MC_APP_H
@@ -204,11 +226,18 @@ typedef struct {
     mc_ctrl_sls_cfg_t sls_cfg;
     mc_ctrl_pi2d_cfg_t pi2d_cfg;
     mc_ctrl_pos_cfg_t pos_cfg;
+    mc_ctrl_align_t align; /**< the alignment at enable (angle_ref align) */
+    mc_ctrl_idx_t idx;     /**< the index search at enable (angle_ref index) */
+    mc_ctrl_align_cfg_t align_cfg;
+    mc_ctrl_idx_cfg_t idx_cfg;
     mc_telemetry_ext_t sls_ext; /**< OBSERVER from the sensorless law */
     float sls_speed_max_rad_s;  /**< the sensorless law's speed limit [rad/s] */
     uint32_t speed_law;         /**< MC_LAW_SPEED_* plugged */
     uint32_t error;             /**< law_error: MC_GAINS_ERR_* | MC_LAW_ERR_* */
+    uint32_t angle_ref;         /**< MC_DRIVE_ANGLE_REF_* of the laws' set */
     bool spd_ok, sls_ok, pi2d_ok, pos_ok;
+    bool align_ok, idx_ok; /**< the finder angle_ref selects is built */
+    bool find_at_enable;   /**< angle_find_at_enable */
 } mc_app_laws_t;
 
 /* Fields ordered by size (pointers, structs, words, bytes): no padding. */
@@ -264,6 +293,10 @@ typedef struct {
     bool laws_rebuilt; /**< the last APPLY's check rebuilt the laws (bridge off) */
     bool wdg_running;
     bool boot_on; /**< BOOT_REQ served */
+    /* the angle at enable (laws_from_params) */
+    bool angle_running;   /**< a find runs (the finder attached, CTRL) */
+    uint32_t angle_error; /**< MC_CTRL_ALIGN_ERR_* of the last find (0: none failed) */
+    float pos_theta0_rad; /**< the encoder's angle at enable: the position law's frame */
 } mc_app_t;
 
 /** What a scenario reads of the drive after a period (the simulator's

@@ -4,6 +4,8 @@
  */
 #include "mc_can_cmd.h"
 
+#include <errno.h>
+
 #include <stddef.h>
 
 #include "math/mc_math.h"
@@ -275,7 +277,22 @@ static void end_run(mc_can_cmd_t *c, uint8_t reason)
     (void)mc_drive_set_mode(c->drive, MC_DRIVE_MODE_IDLE);
     c->enabled = false;
     c->stopping = false;
+    c->angle_finding = false;
     c->stop_reason = reason;
+}
+
+void mc_can_cmd_end_run(mc_can_cmd_t *c, uint8_t reason)
+{
+    end_run(c, reason);
+}
+
+void mc_can_cmd_attach_angle(mc_can_cmd_t *c, mc_can_cmd_angle_fn fn, void *ctx)
+{
+    if (c == NULL) {
+        return;
+    }
+    c->angle_fn = fn;
+    c->angle_ctx = (fn != NULL) ? ctx : NULL;
 }
 
 /* The references of the selected control mode from the present state, so
@@ -310,9 +327,35 @@ static int refs_from_present(mc_can_cmd_t *c)
     }
 }
 
+/* The drive mode of the selected control mode; -1: none selected. */
+static int drive_mode_of(const mc_can_cmd_t *c, mc_drive_mode_t *p_mode)
+{
+    switch (c->control_mode) {
+    case MC_CAN_CTRL_CURRENT:
+        *p_mode = MC_DRIVE_MODE_CURRENT;
+        return 0;
+    case MC_CAN_CTRL_SPEED:
+        *p_mode = c->cfg.speed_drive_mode;
+        return 0;
+    case MC_CAN_CTRL_POSITION:
+        *p_mode = c->cfg.position_drive_mode;
+        return 0;
+    default:
+        return -1;
+    }
+}
+
+static void run_on(mc_can_cmd_t *c)
+{
+    c->enabled = true;
+    c->stop_reason = (uint8_t)MC_CAN_STOP_NONE;
+    run_begin(c);
+}
+
 static mc_can_err_t do_enable(mc_can_cmd_t *c, bool on)
 {
     mc_drive_mode_t mode;
+    int rc;
     if (!on) {
         if (c->enabled) {
             end_run(c, (uint8_t)MC_CAN_STOP_DISABLE_CMD);
@@ -327,29 +370,56 @@ static mc_can_err_t do_enable(mc_can_cmd_t *c, bool on)
     if (c->enabled) {
         return MC_CAN_ERR_NONE; /* no new run: the keep-alive counts on */
     }
-    switch (c->control_mode) {
-    case MC_CAN_CTRL_CURRENT:
-        mode = MC_DRIVE_MODE_CURRENT;
-        break;
-    case MC_CAN_CTRL_SPEED:
-        mode = c->cfg.speed_drive_mode;
-        break;
-    case MC_CAN_CTRL_POSITION:
-        mode = c->cfg.position_drive_mode;
-        break;
-    default:
+    if (drive_mode_of(c, &mode) != 0) {
         return MC_CAN_ERR_MODE; /* no control mode selected */
     }
     if (refs_from_present(c) != 0) {
         return MC_CAN_ERR_REFUSED;
     }
-    if (mc_drive_set_mode(c->drive, mode) != 0) {
+    if (c->angle_fn != NULL) {
+        const int r = c->angle_fn(c->angle_ctx, mode);
+        if (r < 0) {
+            return MC_CAN_ERR_ANGLE_UNKNOWN;
+        }
+        if (r > 0) {
+            c->angle_finding = true; /* the application finds the angle first */
+            run_on(c);
+            return MC_CAN_ERR_NONE;
+        }
+    }
+    rc = mc_drive_set_mode(c->drive, mode);
+    if (rc == -EACCES) {
+        return MC_CAN_ERR_ANGLE_UNKNOWN; /* the angle unknown since power-up */
+    }
+    if (rc != 0) {
         return MC_CAN_ERR_REFUSED;
     }
-    c->enabled = true;
-    c->stop_reason = (uint8_t)MC_CAN_STOP_NONE;
-    run_begin(c);
+    run_on(c);
     return MC_CAN_ERR_NONE;
+}
+
+int mc_can_cmd_angle_found(mc_can_cmd_t *c)
+{
+    mc_drive_mode_t mode;
+    const float w_host = c->omega_ref_rad_s; /* SPEED: the host's, or the one at enable */
+    int rc = -1;
+    if (!c->enabled || !c->angle_finding) {
+        return -1;
+    }
+    c->angle_finding = false;
+    if ((drive_mode_of(c, &mode) == 0) && (refs_from_present(c) == 0)) {
+        rc = mc_drive_set_mode(c->drive, mode);
+    }
+    if ((rc == 0) && (c->control_mode == MC_CAN_CTRL_SPEED)) {
+        /* from the present speed to the host's reference, slewed */
+        rc = c->cfg.set_speed_ref(c->cfg.hook_ctx, w_host);
+        c->omega_ref_rad_s = w_host;
+    }
+    if (rc != 0) {
+        end_run(c, (uint8_t)MC_CAN_STOP_FAULT);
+        return -1;
+    }
+    return 0;
 }
 
 /* The keep-alive (mc_can_cmd.h): the counter advanced by 1..MC_CAN_HB_STEP_MAX
@@ -402,7 +472,8 @@ static mc_can_err_t do_speed_ref(mc_can_cmd_t *c, float w)
 
 static mc_can_err_t do_position_ref(mc_can_cmd_t *c, float th)
 {
-    if ((c->control_mode != MC_CAN_CTRL_POSITION) || c->stopping || !c->enabled) {
+    if ((c->control_mode != MC_CAN_CTRL_POSITION) || c->stopping || !c->enabled ||
+        c->angle_finding) {
         return MC_CAN_ERR_MODE;
     }
     if (c->cfg.set_position_ref(c->cfg.hook_ctx, th - c->theta_enable_rad) != 0) {
@@ -439,7 +510,8 @@ static mc_can_err_t dispatch(mc_can_cmd_t *c, uint32_t msg, const float *v)
     case MC_CAN_MSG_SET_CONTROL_MODE:
         return do_control_mode(c, (uint32_t)v[MC_CAN_SET_CONTROL_MODE_CONTROL_MODE]);
     case MC_CAN_MSG_SET_CURRENT_REF:
-        if ((c->control_mode != MC_CAN_CTRL_CURRENT) || c->stopping || !c->enabled) {
+        if ((c->control_mode != MC_CAN_CTRL_CURRENT) || c->stopping || !c->enabled ||
+            c->angle_finding) {
             return MC_CAN_ERR_MODE;
         }
         if (mc_drive_set_current_ref(c->drive, v[MC_CAN_SET_CURRENT_REF_I_D_REF_A],
@@ -658,6 +730,11 @@ void mc_can_cmd_step(mc_can_cmd_t *c)
     }
     if (c->drive->mode == MC_DRIVE_MODE_FAULT) {
         end_run(c, (uint8_t)MC_CAN_STOP_FAULT);
+        return;
+    }
+    if (c->angle_finding && (c->ticks_since_alive >= c->timeout_ticks)) {
+        /* the find's bounded current holds the rotor near rest: off at once */
+        end_run(c, (uint8_t)MC_CAN_STOP_CMD_TIMEOUT);
         return;
     }
     if (!c->stopping && (c->ticks_since_alive >= c->timeout_ticks)) {

@@ -111,6 +111,21 @@
  * During the stop, setpoint and enable commands are refused (MODE);
  * SET_ENABLE 0 ends it at once. A drive fault while enabled ends the run
  * with stop_reason FAULT.
+ *
+ * The rotor angle at enable (mc_drive.h, angle_ref): an enable whose drive
+ * mode needs the encoder while the angle is unknown since power-up is
+ * refused ANGLE_UNKNOWN (the drive's -EACCES), unless the application finds
+ * the angle first (mc_can_cmd_attach_angle: its hook starts an alignment or
+ * an index search in CTRL mode). The run then begins at once (the keep-alive
+ * counts, SET_ENABLE 0 ends it, a lost keep-alive ends it at once with
+ * CMD_TIMEOUT); SET_SPEED_REF is accepted and takes effect, slewed, when
+ * the angle is found; SET_CURRENT_REF and SET_POSITION_REF are refused MODE
+ * until then (their references start from the present state at the
+ * hand-over, as at an enable).
+ * mc_can_cmd_angle_found() enters the selected mode: the references from
+ * the present state, as at an enable (SPEED then slews to the reference the
+ * host set during the find); the application ends a failed find with
+ * mc_can_cmd_end_run(MC_CAN_STOP_ANGLE_FIND).
  */
 #ifndef MC_CAN_CMD_H
 #define MC_CAN_CMD_H
@@ -139,6 +154,7 @@ extern "C" {
 #define MC_CAN_STOP_CMD_TIMEOUT 1u
 #define MC_CAN_STOP_DISABLE_CMD 2u
 #define MC_CAN_STOP_FAULT       3u
+#define MC_CAN_STOP_ANGLE_FIND  4u /**< the find of the angle at enable failed */
 
 /** |omega_m| at which a CAN-side stop counts the rotor at rest when the
  *  drive's stop_rest_rad_s is 0 [rad/s]. */
@@ -197,6 +213,13 @@ typedef void (*mc_can_cmd_lost_fn)(void *ctx);
 typedef void (*mc_can_cmd_boot_fn)(void *ctx, const mc_hal_can_frame_t *p_frame, bool busy,
                                    const mc_hal_can_t *can);
 
+/** The angle at enable (mc_can_cmd_attach_angle): called by SET_ENABLE 1
+ *  with the drive mode it is about to enter, the references already set.
+ *  Returns 0: enter it (the angle is known or not needed); 1: a find of the
+ *  angle started (the drive runs it in CTRL mode); < 0: refuse the enable
+ *  ANGLE_UNKNOWN (nothing started). */
+typedef int (*mc_can_cmd_angle_fn)(void *ctx, mc_drive_mode_t mode);
+
 typedef struct mc_can_cmd {
     mc_can_cmd_cfg_t cfg;
     mc_drive_t *drive;
@@ -244,6 +267,9 @@ typedef struct mc_can_cmd {
     void *comm_ctx;
     mc_can_cmd_boot_fn boot_fn; /**< BOOT_REQ, or NULL */
     void *boot_ctx;
+    mc_can_cmd_angle_fn angle_fn; /**< the angle at enable, or NULL */
+    void *angle_ctx;
+    bool angle_finding; /**< enabled, the application finds the angle */
 } mc_can_cmd_t;
 
 /** Validate cfg and initialise c (disabled, control mode NONE). tm may be
@@ -268,6 +294,19 @@ void mc_can_cmd_attach_commission(mc_can_cmd_t *c, mc_can_cmd_comm_fn fn, mc_can
 
 /** Serve BOOT_REQ with fn (NULL: detach; the request is then UNSUPPORTED). */
 void mc_can_cmd_attach_boot(mc_can_cmd_t *c, mc_can_cmd_boot_fn fn, void *ctx);
+
+/** Ask fn at every enable whether the angle must be found first (NULL:
+ *  detach; an enable the drive refuses for the angle is ANGLE_UNKNOWN). */
+void mc_can_cmd_attach_angle(mc_can_cmd_t *c, mc_can_cmd_angle_fn fn, void *ctx);
+
+/** The application found the angle (the drive IDLE, the selected mode's law
+ *  attached): enter the selected mode, the references from the present
+ *  state (see the file comment). Returns 0, or -1 when the drive refused
+ *  (the run then ends with stop_reason FAULT). */
+int mc_can_cmd_angle_found(mc_can_cmd_t *c);
+
+/** End the run now (bridge off, IDLE) with reason (MC_CAN_STOP_*). */
+void mc_can_cmd_end_run(mc_can_cmd_t *c, uint8_t reason);
 
 /**
  * Handle one received frame; on rejection queue a CMD_ERROR reply on can

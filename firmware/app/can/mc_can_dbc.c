@@ -13,10 +13,10 @@ static const mc_can_signal_t sig_heartbeat[11] = {
     {12u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* enabled [-] */
     {13u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* stopping [-] */
     {14u, 2u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* can_state [-] */
-    {16u, 4u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* stop_reason [-] */
+    {16u, 4u, false, 1.0f, 0.0f, 0.0f, 4.0f}, /* stop_reason [-] */
     {20u, 4u, false, 1.0f, 0.0f, 0.0f, 6.0f}, /* cfg_status [-] */
     {24u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* faults [-] */
-    {40u, 8u, false, 1.0f, 0.0f, 0.0f, 11.0f}, /* last_error [-] */
+    {40u, 8u, false, 1.0f, 0.0f, 0.0f, 12.0f}, /* last_error [-] */
     {48u, 8u, false, 1.0f, 0.0f, 0.0f, 31.0f}, /* last_error_cmd [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
@@ -163,7 +163,7 @@ static const mc_can_signal_t sig_commission_result[3] = {
 };
 static const mc_can_signal_t sig_cmd_error[4] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 31.0f}, /* rejected_cmd [-] */
-    {8u, 8u, false, 1.0f, 0.0f, 1.0f, 11.0f}, /* error [-] */
+    {8u, 8u, false, 1.0f, 0.0f, 1.0f, 12.0f}, /* error [-] */
     {16u, 8u, false, 1.0f, 0.0f, 0.0f, 64.0f}, /* rx_len [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };

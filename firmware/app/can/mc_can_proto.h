@@ -56,6 +56,9 @@ typedef enum {
     MC_CAN_ERR_LIMITED = 11,       /**< not served: its reply could not be sent under
                                         the reply rate limit (PARAM_REQ while another
                                         waits; only in HEARTBEAT.last_error) */
+    MC_CAN_ERR_ANGLE_UNKNOWN = 12, /**< SET_ENABLE refused: the mode needs the rotor
+                                        angle and it is unknown since power-up
+                                        (angle_ref index / align, no find at enable) */
     MC_CAN_ERR_ARG = 0xFE,         /**< API misuse (NULL, bad index, short array) */
     MC_CAN_ERR_IGNORED = 0xFF      /**< not addressed to this node */
 } mc_can_err_t;

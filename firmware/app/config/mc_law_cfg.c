@@ -6,6 +6,8 @@
 
 #include <string.h>
 
+#include "math/mc_math.h"
+
 static double dmax(double a, double b)
 {
     return (a < b) ? b : a; /* std::max's choice */
@@ -224,4 +226,50 @@ uint32_t mc_law_gains_from_params(const mc_params_t *p, mc_gains_motor_t *m, mc_
     fix.pos_filter_bw_rad_s = fixed(p->traj_filter_bw_rad_s);
     fix.stop_decel_rad_s2 = fixed(p->stop_decel_rad_s2);
     return mc_gains_derive(m, &fix, g);
+}
+
+void mc_law_find_cfg(const mc_params_t *p, const mc_gains_motor_t *m, const mc_gains_t *g,
+                     const mc_drive_cfg_t *dc, const mc_hal_encoder_t *p_enc,
+                     mc_ctrl_align_cfg_t *al, mc_ctrl_idx_cfg_t *ix)
+{
+    const double pi = 3.14159265358979323846;
+    const double pp = dmax(1.0, m->pole_pairs);
+    const double i =
+        (p->angle_find_current_a > 0.0f) ? (double)p->angle_find_current_a : 0.5 * g->i_rated_eff_a;
+    const double kt = g->kt_nm_a;
+    const double k = dabs(kt * i * pp); /* the vector's spring [N m / rad mech.] */
+    const double damp =
+        (kt > 0.0) ? 2.0 * 0.7 * (double)mc_sqrt_f32((float)(k * m->j_kgm2)) / kt : 0.0;
+    const double sweep = pi / 2.0;
+    const double cpr = (p->encoder_cpr > 0u) ? (double)p->encoder_cpr : 1.0;
+    const double band = 4.0 * 2.0 * pi / cpr;
+    (void)memset(al, 0, sizeof *al); /* padding too: configurations compare bytewise */
+    (void)memset(ix, 0, sizeof *ix);
+    al->foc = dc->foc;
+    al->pole_pairs = dc->pole_pairs;
+    al->i_max_a = dc->i_max_a;
+    al->i_align_a = (float)i;
+    al->t_ramp_s = 0.05f;
+    al->t_settle_s = 0.1f;
+    al->t_timeout_s = 2.0f;
+    al->still_band_m_rad = (float)((band < 0.1) ? band : 0.1);
+    al->sweep_e_rad = (float)sweep;
+    al->omega_sweep_e_rad_s = 20.0f;
+    al->sweep_tol_e_rad = 0.3f;
+    al->load_tol_e_rad = 0.1f;
+    al->damping_a_s_rad = (float)damp;
+    al->travel_max_m_rad = (p->angle_find_travel_rad > 0.0f)
+                               ? p->angle_find_travel_rad
+                               : (float)(1.5 * (pi + 3.0 * sweep) / pp);
+    ix->foc = dc->foc;
+    ix->pole_pairs = dc->pole_pairs;
+    ix->i_max_a = dc->i_max_a;
+    ix->i_search_a = (float)i;
+    ix->t_ramp_s = 0.05f;
+    ix->omega_search_e_rad_s = (float)((10.0 * pp < 2000.0) ? 10.0 * pp : 2000.0);
+    ix->damping_a_s_rad = (float)damp;
+    ix->travel_max_m_rad =
+        (p->angle_find_travel_rad > 0.0f) ? p->angle_find_travel_rad : (float)(1.25 * 2.0 * pi);
+    ix->first_direction = 1;
+    ix->p_enc = p_enc;
 }

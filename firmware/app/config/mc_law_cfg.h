@@ -18,6 +18,7 @@
 #include <stdint.h>
 
 #include "foc/mc_foc.h"
+#include "mc_ctrl_align.h"
 #include "mc_ctrl_pi2d.h"
 #include "mc_ctrl_position.h"
 #include "mc_ctrl_sensorless.h"
@@ -68,6 +69,33 @@ void mc_law_pos_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_pos_
 /** The sensored speed law (mc_ctrl_speed.h): speed_kp, speed_ki at the PWM
  *  rate, the current limit, the torque feed-forward's kt, J, B. */
 void mc_law_speed_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_speed_cfg_t *c);
+
+/* Why a law that finds the rotor angle is not available (law_error). */
+#define MC_LAW_ERR_ALIGN_INIT (1u << 22) /**< mc_ctrl_align_init refused the alignment */
+#define MC_LAW_ERR_IDX_INIT   (1u << 23) /**< mc_ctrl_idx_init refused the index search */
+
+/** The laws that find the rotor angle after a power-up (ctrl/mc_ctrl_align.h:
+ *  the alignment, angle_ref 2; the index search, angle_ref 1), from a
+ *  parameter set, its gains and the drive's configuration dc (the current
+ *  loop, the current limit, pole pairs), with p_enc the board's encoder
+ *  (the index search reads its flags). With i the vector's magnitude and
+ *  kt the torque per ampere:
+ *    i          angle_find_current_a, or 0.5 i_rated (derived; the init
+ *               refuses i above the current limit: law_error);
+ *    damping    2 z sqrt(k J) / kt, z = 0.7, k = kt i p the vector's spring
+ *               per rad mech. (N m/rad), J the rotor's inertia;
+ *    alignment  sweep s = pi/2 el. at 20 rad/s el., ramps 50 ms, rest 100 ms
+ *               within 4 encoder counts (at most 0.1 rad), a settle at most
+ *               2 s, sweep tolerance 0.3 rad el., load tolerance 0.1 rad el.
+ *               (about the offset error a load may leave: cos 0.1 = 0.995 of the
+ *               torque), travel angle_find_travel_rad or 1.5 (pi + 3 s) / p;
+ *    search     10 rad/s mech. (10 p el., at most 2000), forward first,
+ *               travel each way angle_find_travel_rad or 1.25 turns (the
+ *               index passes once per turn).
+ *  The inits check the ranges (mc_ctrl_align.h). */
+void mc_law_find_cfg(const mc_params_t *p, const mc_gains_motor_t *m, const mc_gains_t *g,
+                     const mc_drive_cfg_t *dc, const mc_hal_encoder_t *p_enc,
+                     mc_ctrl_align_cfg_t *al, mc_ctrl_idx_cfg_t *ix);
 
 /** The motor and board values of a parameter set (one PWM period of
  *  computation delay, as the drive's fast loop writes the duties for the

@@ -75,6 +75,8 @@ static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
         return s->pending ? 1u : 0u;
     case MC_PARAM_ID_LAW_ERROR:
         return s->law_error;
+    case MC_PARAM_ID_ANGLE_ERROR:
+        return s->angle_error;
     default:
         return mc_param_get_raw(&s->staged, info);
     }

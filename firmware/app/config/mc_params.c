@@ -197,6 +197,7 @@ void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg)
     cfg->pole_pairs = p->pole_pairs;
     cfg->encoder_offset_rad = p->encoder_offset_rad;
     cfg->encoder_reversed = (p->encoder_reversed != 0u);
+    cfg->angle_ref = p->angle_ref; /* MC_DRIVE_ANGLE_REF_* is the parameter's value */
     cfg->i_offset_a[0] = p->i_offset_a_a;
     cfg->i_offset_a[1] = p->i_offset_b_a;
     cfg->i_offset_a[2] = p->i_offset_c_a;
@@ -283,6 +284,11 @@ uint32_t mc_params_validate(const mc_params_t *p)
     }
     if ((p->encoder_cpr != 0u) && (p->encoder_cpr < 4u)) {
         err |= MC_PARAMS_ERR_ENCODER;
+    }
+    /* the angle's reference is the encoder's: none to find without one */
+    if ((p->encoder_cpr == 0u) &&
+        ((p->angle_ref != MC_DRIVE_ANGLE_REF_STORED) || (p->angle_find_at_enable != 0u))) {
+        err |= MC_PARAMS_ERR_ANGLE_REF;
     }
     if (mc_params_resolve(p, &e) != MC_GAINS_OK) {
         return err | MC_PARAMS_ERR_GAINS; /* nothing derived to check */

@@ -70,6 +70,9 @@ typedef enum {
     (1u << 10) /**< the board cannot run it: brake_enable on a board
                     without a brake chopper (the application's check,
                     mc_app.h) */
+#define MC_PARAMS_ERR_ANGLE_REF \
+    (1u << 11) /**< angle_ref index or align (or angle_find_at_enable) on
+                    a drive without an encoder (encoder_cpr 0) */
 
 /** Largest current_bw_rad_s * dt (dt = 1 / pwm_hz): above it the one-period
  *  computation delay costs too much phase (gains vs PWM rate). */

@@ -67,6 +67,10 @@ const mc_params_t mc_params_default = {
     .open_phase_i_min_a = 0.0f,
     .open_phase_time_s = 0.0f,
     .asc_enable = 0u,
+    .angle_ref = 0u,
+    .angle_find_at_enable = 0u,
+    .angle_find_current_a = 0.0f,
+    .angle_find_travel_rad = 0.0f,
     .can_node_id = 1u,
     .can_bitrate_bps = 500000u,
     .can_timeout_s = 0.5f,
@@ -152,6 +156,10 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {94u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, open_phase_i_min_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* open_phase_i_min_a */
     {95u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, open_phase_time_s), {.f = 0.0f}, {.f = 10.0f}, {.f = 0.0f}}, /* open_phase_time_s */
     {96u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, asc_enable), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* asc_enable */
+    {100u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, angle_ref), {.u = 0u}, {.u = 2u}, {.u = 0u}}, /* angle_ref */
+    {101u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, angle_find_at_enable), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* angle_find_at_enable */
+    {102u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, angle_find_current_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* angle_find_current_a */
+    {103u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, angle_find_travel_rad), {.f = 0.0f}, {.f = 62.83f}, {.f = 0.0f}}, /* angle_find_travel_rad */
     {110u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, can_node_id), {.u = 0u}, {.u = 62u}, {.u = 1u}}, /* can_node_id */
     {111u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, can_bitrate_bps), {.u = 125000u}, {.u = 1000000u}, {.u = 500000u}}, /* can_bitrate_bps */
     {112u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, can_timeout_s), {.f = 0.01f}, {.f = 60.0f}, {.f = 0.5f}}, /* can_timeout_s */
@@ -174,6 +182,7 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {202u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_store_seq */
     {203u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* cfg_pending */
     {204u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* law_error */
+    {205u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* angle_error */
 };
 
 const char *const mc_param_names[MC_PARAM_COUNT] = {
@@ -240,6 +249,10 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "open_phase_i_min_a",
     "open_phase_time_s",
     "asc_enable",
+    "angle_ref",
+    "angle_find_at_enable",
+    "angle_find_current_a",
+    "angle_find_travel_rad",
     "can_node_id",
     "can_bitrate_bps",
     "can_timeout_s",
@@ -262,6 +275,7 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "cfg_store_seq",
     "cfg_pending",
     "law_error",
+    "angle_error",
 };
 
 const char *const mc_param_units[MC_PARAM_COUNT] = {
@@ -329,6 +343,10 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "s",
     "",
     "",
+    "",
+    "A",
+    "rad",
+    "",
     "bit/s",
     "s",
     "A/s",
@@ -345,6 +363,7 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "rad/s^2",
     "rad/s^2",
     "rad/s",
+    "",
     "",
     "",
     "",

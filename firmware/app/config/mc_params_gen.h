@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 85u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 80u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 90u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 84u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -80,6 +80,10 @@
 #define MC_PARAM_ID_OPEN_PHASE_I_MIN_A 94u
 #define MC_PARAM_ID_OPEN_PHASE_TIME_S 95u
 #define MC_PARAM_ID_ASC_ENABLE 96u
+#define MC_PARAM_ID_ANGLE_REF 100u
+#define MC_PARAM_ID_ANGLE_FIND_AT_ENABLE 101u
+#define MC_PARAM_ID_ANGLE_FIND_CURRENT_A 102u
+#define MC_PARAM_ID_ANGLE_FIND_TRAVEL_RAD 103u
 #define MC_PARAM_ID_CAN_NODE_ID 110u
 #define MC_PARAM_ID_CAN_BITRATE_BPS 111u
 #define MC_PARAM_ID_CAN_TIMEOUT_S 112u
@@ -102,6 +106,7 @@
 #define MC_PARAM_ID_CFG_STORE_SEQ 202u
 #define MC_PARAM_ID_CFG_PENDING 203u
 #define MC_PARAM_ID_LAW_ERROR 204u
+#define MC_PARAM_ID_ANGLE_ERROR 205u
 
 /* Indices into mc_param_table[] (sorted by id). */
 #define MC_PARAM_IDX_R_OHM 0u
@@ -167,28 +172,33 @@
 #define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 60u
 #define MC_PARAM_IDX_OPEN_PHASE_TIME_S 61u
 #define MC_PARAM_IDX_ASC_ENABLE 62u
-#define MC_PARAM_IDX_CAN_NODE_ID 63u
-#define MC_PARAM_IDX_CAN_BITRATE_BPS 64u
-#define MC_PARAM_IDX_CAN_TIMEOUT_S 65u
-#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 66u
-#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 67u
-#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 68u
-#define MC_PARAM_IDX_TM_CURRENTS_HZ 69u
-#define MC_PARAM_IDX_TM_VOLTAGES_HZ 70u
-#define MC_PARAM_IDX_TM_SPEED_HZ 71u
-#define MC_PARAM_IDX_TM_POSITION_HZ 72u
-#define MC_PARAM_IDX_PI2D_WN_RAD_S 73u
-#define MC_PARAM_IDX_PI2D_A_PER_S 74u
-#define MC_PARAM_IDX_POS_KP_PER_S 75u
-#define MC_PARAM_IDX_TRAJ_V_MAX_RAD_S 76u
-#define MC_PARAM_IDX_TRAJ_A_MAX_RAD_S2 77u
-#define MC_PARAM_IDX_TRAJ_D_MAX_RAD_S2 78u
-#define MC_PARAM_IDX_TRAJ_FILTER_BW_RAD_S 79u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 80u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 81u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 82u
-#define MC_PARAM_IDX_CFG_PENDING 83u
-#define MC_PARAM_IDX_LAW_ERROR 84u
+#define MC_PARAM_IDX_ANGLE_REF 63u
+#define MC_PARAM_IDX_ANGLE_FIND_AT_ENABLE 64u
+#define MC_PARAM_IDX_ANGLE_FIND_CURRENT_A 65u
+#define MC_PARAM_IDX_ANGLE_FIND_TRAVEL_RAD 66u
+#define MC_PARAM_IDX_CAN_NODE_ID 67u
+#define MC_PARAM_IDX_CAN_BITRATE_BPS 68u
+#define MC_PARAM_IDX_CAN_TIMEOUT_S 69u
+#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 70u
+#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 71u
+#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 72u
+#define MC_PARAM_IDX_TM_CURRENTS_HZ 73u
+#define MC_PARAM_IDX_TM_VOLTAGES_HZ 74u
+#define MC_PARAM_IDX_TM_SPEED_HZ 75u
+#define MC_PARAM_IDX_TM_POSITION_HZ 76u
+#define MC_PARAM_IDX_PI2D_WN_RAD_S 77u
+#define MC_PARAM_IDX_PI2D_A_PER_S 78u
+#define MC_PARAM_IDX_POS_KP_PER_S 79u
+#define MC_PARAM_IDX_TRAJ_V_MAX_RAD_S 80u
+#define MC_PARAM_IDX_TRAJ_A_MAX_RAD_S2 81u
+#define MC_PARAM_IDX_TRAJ_D_MAX_RAD_S2 82u
+#define MC_PARAM_IDX_TRAJ_FILTER_BW_RAD_S 83u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 84u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 85u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 86u
+#define MC_PARAM_IDX_CFG_PENDING 87u
+#define MC_PARAM_IDX_LAW_ERROR 88u
+#define MC_PARAM_IDX_ANGLE_ERROR 89u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -255,6 +265,10 @@ typedef struct {
     float open_phase_i_min_a; /**< Open-phase check: reference above which a phase must conduct; 0 (with the time) = off. [A] */
     float open_phase_time_s; /**< Open-phase check: time without conduction that trips; 0 (with i_min) = off. [s] */
     uint32_t asc_enable; /**< Active short circuit (low sides on) for a fault above the speed whose back-EMF exceeds the bus; needs flux/Ld < i_trip_a (app README). */
+    uint32_t angle_ref; /**< What makes encoder_offset_rad true after a power-up: 0 stored (absolute encoder, Hall, or a bench that always starts at the calibrated angle), 1 index (the offset is relative to the encoder's index: an index search or a turn by hand first), 2 align (incremental encoder without index: an alignment at the first enable measures it); until the angle is known the sensored modes are refused (firmware/app/drive/mc_drive.h). 1 and 2 need an encoder. */
+    uint32_t angle_find_at_enable; /**< 1: an enable that needs the encoder while the angle is unknown (angle_ref 1 or 2) first runs the index search or the alignment, then the commanded mode; 0: such an enable is refused (CMD_ERROR ANGLE_UNKNOWN). */
+    float angle_find_current_a; /**< Magnitude of the current vector of the alignment and the index search, at most the current limit; 0: derived, half the rated current (firmware/app/config/mc_law_cfg.h). [A] */
+    float angle_find_travel_rad; /**< Largest rotor travel of the alignment (at least 1.25 (pi + 3 pi/2) / pole_pairs) or of the index search each way (at least 2 pi / pole_pairs, at most 20 pi) [rad mech.]; 0: derived, 1.5 (pi + 3 pi/2) / pole_pairs and 1.25 turns. [rad] */
     uint32_t can_node_id; /**< CAN node id (id = node_id << 5 | cmd); takes effect after save + reset. */
     uint32_t can_bitrate_bps; /**< CAN bit rate (125k, 250k, 500k or 1M); takes effect after save + reset. [bit/s] */
     float can_timeout_s; /**< Command timeout while enabled or commissioning: no advancing HOST_HEARTBEAT for this long stops the drive. [s] */

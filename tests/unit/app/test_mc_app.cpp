@@ -786,7 +786,10 @@ struct Running {
                std::memcmp(&laws.sls_cfg, &o.laws.sls_cfg, sizeof laws.sls_cfg) != 0 ||
                std::memcmp(&laws.pi2d_cfg, &o.laws.pi2d_cfg, sizeof laws.pi2d_cfg) != 0 ||
                std::memcmp(&laws.pos_cfg, &o.laws.pos_cfg, sizeof laws.pos_cfg) != 0 ||
-               laws.speed_law != o.laws.speed_law;
+               std::memcmp(&laws.align_cfg, &o.laws.align_cfg, sizeof laws.align_cfg) != 0 ||
+               std::memcmp(&laws.idx_cfg, &o.laws.idx_cfg, sizeof laws.idx_cfg) != 0 ||
+               laws.speed_law != o.laws.speed_law || laws.angle_ref != o.laws.angle_ref ||
+               laws.find_at_enable != o.laws.find_at_enable;
     }
 };
 } // namespace
@@ -884,15 +887,14 @@ TEST_F(McAppEveryParam, EveryStoppedParameterChangesTheDriveOrItsLaws)
     //                         any other is refused), read at boot
     //  asc_enable             the default motor's short-circuit current flux/Ld
     //                         is above i_trip_a: no set with it on validates
-    //  current_sensors, adc_bits, i_sense_max_a, encoder_cpr
+    //  current_sensors, adc_bits, i_sense_max_a
     //                         the board's sensing: the drive takes the
-    //                         HAL's (counts per revolution, samples), these
-    //                         only bound derived limits or say whether there
-    //                         is an encoder (issue 29 item 2: one board
-    //                         description, not done)
-    const std::vector<std::string> known = {"pwm_hz",    "current_sensors", "i_sense_max_a",
-                                            "adc_bits",  "encoder_cpr",     "slow_loop_div",
-                                            "asc_enable"};
+    //                         HAL's (samples), these only bound derived
+    //                         limits (issue 29 item 2: one board
+    //                         description, not done). encoder_cpr is read:
+    //                         the alignment's rest band is 4 of its counts
+    const std::vector<std::string> known = {"pwm_hz",   "current_sensors", "i_sense_max_a",
+                                            "adc_bits", "slow_loop_div",   "asc_enable"};
     EXPECT_EQ(known, Unread(MC_PARAM_ACCESS_STOPPED, &tested));
     EXPECT_GE(tested, 40u);
 }
