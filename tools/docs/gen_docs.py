@@ -817,7 +817,7 @@ def _drive_stop(ctx, t):
                      g(prop(t, test, "reverse_speed_rad_s"), 3),
                      g(prop(t, test, "reverse_speed_rad_s.bound"), 3)])
     return table(["mode", "motor", "stop time / (ω₀ / decel)", "test bounds",
-                  "largest backward speed [rad/s]", "bound (2 decel T)"], rows)
+                  "largest backward speed [rad/s]", "bound (2 decel T; speed mode: + stop_rest)"], rows)
 
 
 ASC_RUNS = [("off", ()), ("on", ("fault_i_sense_max_a=250",)), ("on", ())]

@@ -5,11 +5,18 @@
 // 20000 rows and is decimated beyond (csv_every).
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <memory>
 #include <stdexcept>
+#include <string>
 
+#include "app_scenario.hpp"
 #include "drive_setup.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
+extern "C" {
+#include "config/mc_law_cfg.h"
+}
 
 namespace mcsim {
 namespace {
@@ -47,14 +54,6 @@ class RiseTimer {
   double t10_ = std::nan(""), t90_ = std::nan("");
 };
 
-std::string fault_names(uint32_t f, uint32_t ctrl_err) {
-  std::string s = drive_fault_names(f);
-  if ((f & MC_DRIVE_FAULT_CONTROL) != 0u) {
-    s += " (law error bits " + std::to_string(ctrl_err) + ")";
-  }
-  return s;
-}
-
 // The sensorless law's error bits, named (the reasons a start can fail).
 std::string sls_reason(uint32_t e) {
   if (e & MC_CTRL_SLS_ERR_NO_LOCK) {
@@ -66,36 +65,6 @@ std::string sls_reason(uint32_t e) {
   if (e & MC_CTRL_SLS_ERR_MEAS) return "non-finite measurement";
   return "sensorless law error bits " + std::to_string(e) + " (observer divergence)";
 }
-
-// Common CSV row and bookkeeping.
-struct Recorder {
-  RunContext& ctx;
-  MotorRig& rig;
-  bool hat = false;
-  long every = 1;
-  long k = 0;
-  void header() {
-    std::vector<std::string> c = {"t",         "i_d_a",         "i_q_a",           "i_d_ref_a",
-                                  "i_q_ref_a", "omega_m_rad_s", "omega_ref_rad_s", "theta_e_rad"};
-    if (hat) c.emplace_back("theta_e_hat_rad");
-    c.insert(c.end(), {"v_d_v", "v_q_v", "fault_1"});
-    ctx.csv.columns(c);
-  }
-  void row(double t, double id, double iq, double w) {
-    if (k++ % every != 0) return;
-    double idr, iqr, vd, vq;
-    rig.dq_refs(&idr, &iqr);
-    rig.dq_volts(&vd, &vq);
-    double v[12];
-    size_t n = 0;
-    for (double x : {t, id, iq, idr, iqr, w, rig.omega_ref_rad_s(), rig.theta_e_true()}) v[n++] = x;
-    if (hat) v[n++] = rig.theta_e_hat();
-    v[n++] = vd;
-    v[n++] = vq;
-    v[n++] = static_cast<double>(rig.drive().faults);
-    ctx.csv.row(v, n);
-  }
-};
 
 long csv_every(const RunContext& ctx, long n) {
   const long e = std::lround(ctx.params.get("csv_every"));
@@ -134,56 +103,75 @@ std::vector<ParamSpec> current_step_params(const MotorFiles& f) {
 }
 
 void run_current_step(RunContext& ctx) {
-  MotorFiles f = *ctx.files;
-  const Gains g = derive_gains(f, &ctx.params);
-  f.motor.j_kgm2 *= 1.0 + ctx.params.get("j_load_factor");
-  RigOptions ro;
-  ro.law = Law::kCurrent;
-  MotorRig rig(f, g, ro);
-  const double T = rig.period_s();
-  const double design = std::log(9.0) / g.cur_bw_rad_s;
-  // Each step gets 12 design rise times (settled to 0.5 %) plus 2 ms.
+  const MotorFiles& f = *ctx.files;
+  // The drive's table from the files; the plant with the dyno's flywheel.
+  const mc_params_t p = params_from_files(f, ctx.params);
+  const mc_params_eff_t e = resolve_params(p);
+  mc_drive_cfg_t dcfg{};
+  (void)mc_params_eff_to_drive_cfg(&e, &dcfg);
+  MotorFiles plant = f;
+  plant.motor.j_kgm2 *= 1.0 + ctx.params.get("j_load_factor");
+  const std::unique_ptr<AppTarget> target = make_file_target(plant, p, nullptr);
+  AppRunner run(*target);
+  run.start(MC_CAN_CTRL_CURRENT);
+  hal_host::PmsmBoard& board = run.board();
+  const double T = board.period_s();
+  const double design = std::log(9.0) / e.g.cur_bw_rad_s;
+  // Each step gets 12 design rise times (settled to 0.5 %) plus 2 ms (the
+  // command waits up to one slow-loop period for the application's slow step).
   const double t_iq = 10 * T, t_id = t_iq + 12 * design + 2e-3;
   const double dur = duration(ctx, t_id + 12 * design + 2e-3);
   const double iq_s = ctx.params.get("iq_step_a"), id_s = ctx.params.get("id_step_a");
   const long n = step_count(dur, T);
-  Recorder rec{ctx, rig, false, csv_every(ctx, n)};
+  AppRecorder rec{ctx, run, f.motor.pole_pairs, false, csv_every(ctx, n)};
   rec.header();
   RiseTimer rq(t_iq, 0.0, iq_s), rd(t_id, 0.0, id_s);
-  mc_drive_t& d = rig.drive();
   double id = 0, iq = 0;
+  bool sent_q = false, sent_d = false;
+  std::string stopped;
+  AppWatch watch;
   for (long k = 0; k <= n; ++k) {
-    const double t = rig.board().t_s();
-    const double idr = t >= t_id ? id_s : 0.0, iqr = t >= t_iq ? iq_s : 0.0;
-    if (mc_drive_set_current_ref(&d, static_cast<float>(idr), static_cast<float>(iqr)) != 0) {
-      throw UsageError("current reference rejected by the drive");
+    const double t = board.t_s();
+    if (!sent_q && t >= t_iq) {
+      run.send(run.cmd().current_ref(0.0, iq_s));
+      sent_q = true;
     }
-    rig.board().true_dq_a(&id, &iq);
+    if (!sent_d && t >= t_id) {
+      run.send(run.cmd().current_ref(id_s, iq_s));
+      sent_d = true;
+    }
+    board.true_dq_a(&id, &iq);
     rq.add(t, iq);
     rd.add(t, id);
-    rec.row(t, id, iq, rig.board().state()(2));
-    if (d.faults != 0u) break;  // as the speed scenarios: a faulted run ends at its fault
-    if (k < n) rig.step();
+    rec.row(t, id, iq, board.state()(2));
+    stopped = watch(run.probe());
+    if (!stopped.empty()) break;  // as the speed scenarios: a faulted run ends at its fault
+    if (k < n) run.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
-  record_setup(*ctx.files, g, ctx.summary);
+  record_app_setup(f, p, ctx.summary);
+  const mc_app_probe_t& d = run.probe();
+  ctx.summary.set_text("target", target->name());
   ctx.summary.set("faults", d.faults);
-  if (d.faults != 0u) {
-    ctx.summary.set_text("fault_names", fault_names(d.faults, d.tm.ctrl_err));
-    return write_verdict(ctx.summary, faulted(d.faults, fault_names(d.faults, d.tm.ctrl_err)));
+  if (!stopped.empty()) {
+    ctx.summary.set_text("fault_names", stopped);
+    return write_verdict(ctx.summary, d.faults != 0u ? faulted(d.faults, stopped)
+                                                     : Verdict{"stopped", stopped, true});
   }
   ctx.summary.set("rise_time_designed_s", design);
   ctx.summary.set("iq_rise_time_s", rq.rise_s());
   ctx.summary.set("id_rise_time_s", rd.rise_s());
   ctx.summary.set("iq_rise_time_ratio", rq.rise_s() / design);
   ctx.summary.set("id_rise_time_ratio", rd.rise_s() / design);
-  ctx.summary.set("kp_q_v_per_a", rig.drive_cfg().foc.kp_q_v_per_a);
-  ctx.summary.set("ki_q_v_per_as", rig.drive_cfg().foc.ki_q_v_per_as);
+  ctx.summary.set("kp_q_v_per_a", dcfg.foc.kp_q_v_per_a);
+  ctx.summary.set("ki_q_v_per_as", dcfg.foc.ki_q_v_per_as);
   ctx.summary.set("iq_final_a", iq);
   ctx.summary.set("id_final_a", id);
   CurrentStepFigures fig;
-  fig.iq_step_a = iq_s;
-  fig.id_step_a = id_s;
+  // The references the drive runs: the commands as SET_CURRENT_REF carries
+  // them (1 mA resolution).
+  fig.iq_step_a = d.iq_ref_a;
+  fig.id_step_a = d.id_ref_a;
   fig.iq_rise_ratio = rq.rise_s() / design;
   fig.id_rise_ratio = rd.rise_s() / design;
   fig.iq_final_a = iq;
@@ -191,7 +179,7 @@ void run_current_step(RunContext& ctx) {
   fig.lsb_a = 2.0 * f.board.i_sense_max_a / std::ldexp(1.0, f.board.adc_bits);
   fig.t_id_step_s = t_id;
   fig.duration_s = dur;
-  fig.bw_t = g.cur_bw_rad_s * T;
+  fig.bw_t = e.g.cur_bw_rad_s * T;
   write_verdict(ctx.summary, judge_current_step(fig));
 }
 
@@ -223,36 +211,56 @@ std::vector<ParamSpec> speed_params(const MotorFiles& f, bool load_step) {
 
 void run_speed(RunContext& ctx, bool load_step) {
   const MotorFiles& f = *ctx.files;
-  const Gains g = derive_gains(f, &ctx.params);
+  if (f.board.encoder_cpr == 0) {
+    throw UsageError(f.board.file +
+                     ": this scenario needs an encoder (encoder_cpr = 0 here); "
+                     "use sensorless-speed-step");
+  }
   const bool pi2d = ctx.params.get("law") > 0.5;
+  // The application's table: SPEED runs the speed_law it names.
+  const mc_params_t p =
+      params_from_files(f, ctx.params, pi2d ? MC_LAW_SPEED_PI2D : MC_LAW_SPEED_PI);
+  const mc_params_eff_t e = resolve_params(p);  // the gains the application derives
+  const mc_gains_t& g = e.g;
   const double w_t = ctx.params.get("speed_rad_s");
   const double tau_l = ctx.params.get("load_frac") * g.torque_rated_nm;
   const double wc = pi2d ? 3.0 * g.pi2d_wn_rad_s : g.speed_wc_rad_s;
-  const double t_acc = std::abs(w_t) / g.speed_accel_rad_s2;
+  // The drive slews the reference at speed_ramp_rad_s2 (the table's).
+  const double t_acc = std::abs(w_t) / static_cast<double>(e.p.speed_ramp_rad_s2);
   const double t0 = 0.01;
   // Settling: the PI's zero at wc/4 leaves a tail of a few 4/wc.
   const double t_set = 40.0 / wc;
   // load-step: the speed step first, the load once it has settled.
   const double t_load = load_step ? t0 + t_acc + 0.5 * t_set : 0.0;
   const double dur = duration(ctx, load_step ? t_load + t_set : t0 + t_acc + t_set);
-  RigOptions o;
-  o.law = pi2d ? Law::kPi2d : Law::kSpeedPi;
-  o.load_nm = [tau_l, t_load](double t) { return t >= t_load ? tau_l : 0.0; };
-  MotorFiles fr = f;
-  MotorRig rig(fr, g, o);
-  const double T = rig.period_s();
+  const std::function<double(double)> load = [tau_l, t_load](double t) {
+    return t >= t_load ? tau_l : 0.0;
+  };
+  const std::unique_ptr<AppTarget> target = make_file_target(f, p, &load);
+  AppRunner run(*target);
+  run.start(MC_CAN_CTRL_SPEED);
+  hal_host::PmsmBoard& board = run.board();
+  const double T = board.period_s();
   const long n = step_count(dur, T);
-  Recorder rec{ctx, rig, false, csv_every(ctx, n)};
+  AppRecorder rec{ctx, run, f.motor.pole_pairs, false, csv_every(ctx, n)};
   rec.header();
   const double band = 0.02 * std::abs(w_t);
   double last_out = t0, id_max_ss = 0, iq_max = 0, w = 0, id = 0, iq = 0, werr_max_ss = 0;
-  double last_out_load = t_load, dip = 0;
+  double last_out_load = t_load, dip = 0, w_max = 0, t_half = std::nan("");
+  bool ref_sent = false;
   const double t_ss = dur - 0.2 * (dur - (load_step ? t_load : t0 + t_acc));
+  std::string stopped;
+  AppWatch watch;
   for (long k = 0; k <= n; ++k) {
-    const double t = rig.board().t_s();
-    rig.set_speed_ref(t >= t0 ? w_t : 0.0);
-    rig.board().true_dq_a(&id, &iq);
-    w = rig.board().state()(2);
+    const double t = board.t_s();
+    if (!ref_sent && t >= t0) {
+      run.send(run.cmd().speed_ref(w_t));
+      ref_sent = true;
+    }
+    board.true_dq_a(&id, &iq);
+    w = board.state()(2);
+    w_max = std::max(w_max, w_t >= 0 ? w : -w);
+    if (t >= t0 && std::isnan(t_half) && std::abs(w) >= 0.5 * std::abs(w_t)) t_half = t - t0;
     if (t >= t0 && std::abs(w - w_t) > band) last_out = t;
     if (load_step && t >= t_load) {
       dip = std::max(dip, std::abs(w - w_t));
@@ -264,17 +272,20 @@ void run_speed(RunContext& ctx, bool load_step) {
     }
     iq_max = std::max(iq_max, std::abs(iq));
     rec.row(t, id, iq, w);
-    if (rig.drive().faults != 0u) break;
-    if (k < n) rig.step();
+    stopped = watch(run.probe());
+    if (!stopped.empty()) break;
+    if (k < n) run.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
-  record_setup(f, g, ctx.summary);
-  mc_drive_t& d = rig.drive();
+  record_app_setup(f, p, ctx.summary);
+  const mc_app_probe_t& d = run.probe();
+  ctx.summary.set_text("target", target->name());
   ctx.summary.set_text("law", pi2d ? "pi2d" : "pi");
   ctx.summary.set("faults", d.faults);
-  if (d.faults != 0u) {
-    ctx.summary.set_text("fault_names", fault_names(d.faults, d.tm.ctrl_err));
-    return write_verdict(ctx.summary, faulted(d.faults, fault_names(d.faults, d.tm.ctrl_err)));
+  if (!stopped.empty()) {
+    ctx.summary.set_text("fault_names", stopped);
+    return write_verdict(ctx.summary, d.faults != 0u ? faulted(d.faults, stopped)
+                                                     : Verdict{"stopped", stopped, true});
   }
   if (load_step) {
     ctx.summary.set("t_load_step_s", t_load);
@@ -282,10 +293,18 @@ void run_speed(RunContext& ctx, bool load_step) {
     ctx.summary.set("recover_2pct_s", last_out_load - t_load);
   } else {
     ctx.summary.set("settle_2pct_s", last_out - t0);
+    // the largest speed past the target, of the target (the step's overshoot)
+    ctx.summary.set("overshoot_frac",
+                    w_t != 0.0 ? std::max(0.0, w_max / std::abs(w_t) - 1.0) : 0.0);
   }
   ctx.summary.set("settled", std::abs(w - w_t) <= band ? 1.0 : 0.0);
   ctx.summary.set("omega_final_rad_s", w);
   ctx.summary.set("accel_time_s", t_acc);
+  // when the rotor passed half the target, from the command (the
+  // application's ramp: about t_acc / 2)
+  ctx.summary.set("half_speed_time_s", t_half);
+  // the frames the application sent (its telemetry; none from a C++ loop)
+  ctx.summary.set("app_tx_frames", static_cast<double>(run.frames_sent()));
   ctx.summary.set("id_abs_max_steady_a", id_max_ss);
   ctx.summary.set("id_abs_max_steady_frac_rated", id_max_ss / g.i_rated_eff_a);
   ctx.summary.set("omega_err_max_steady_rad_s", werr_max_ss);
@@ -335,9 +354,20 @@ std::vector<ParamSpec> sls_params(const MotorFiles& f) {
   return p;
 }
 
+// The observer's gain the application's sensorless law runs with (its
+// init computes it from the configuration mc_law_sls_cfg builds).
+double sls_gamma(const mc_params_eff_t& e) {
+  mc_ctrl_sls_cfg_t sc{};
+  mc_law_sls_cfg(&e.m, &e.g, &sc);
+  const auto law = std::make_unique<mc_ctrl_sls_t>();
+  return mc_ctrl_sls_init(law.get(), &sc) == 0u ? static_cast<double>(law->gamma) : std::nan("");
+}
+
 void run_sensorless(RunContext& ctx) {
   const MotorFiles& f = *ctx.files;
-  const Gains g = derive_gains(f, &ctx.params);
+  const mc_params_t p = params_from_files(f, ctx.params, MC_LAW_SPEED_SENSORLESS);
+  const mc_params_eff_t e = resolve_params(p);
+  const mc_gains_t& g = e.g;
   const double w_t = ctx.params.get("speed_rad_s");
   if (std::abs(w_t) < g.handover_rad_s / (1.0 - 0.3) * 1.2) {
     throw UsageError("speed_rad_s must be well above the hand-over speed " +
@@ -352,63 +382,71 @@ void run_sensorless(RunContext& ctx) {
   const double t_run = std::abs(w_t) / slew + 40.0 / wc;
   const double t_load = t_start + t_run;
   const double dur = duration(ctx, t_load + 40.0 / wc);
-  RigOptions o;
-  o.law = Law::kSensorless;
   // The load opposes the direction of the run (an active load: it turns a
   // rotor at standstill backwards).
   const double sgn = w_t >= 0 ? 1.0 : -1.0;
   const double tau0s = sgn * tau0, tau1s = sgn * tau1;
-  o.load_nm = [tau0s, tau1s, t_load](double t) { return t >= t_load ? tau1s : tau0s; };
-  MotorRig rig(f, g, o);
-  rig.set_speed_ref(w_t);
-  const double T = rig.period_s();
+  const std::function<double(double)> load = [tau0s, tau1s, t_load](double t) {
+    return t >= t_load ? tau1s : tau0s;
+  };
+  const std::unique_ptr<AppTarget> target = make_file_target(f, p, &load);
+  AppRunner run(*target);
+  run.start(MC_CAN_CTRL_SPEED);
+  run.send(run.cmd().speed_ref(w_t));
+  hal_host::PmsmBoard& board = run.board();
+  const double T = board.period_s();
   const long n = step_count(dur, T);
-  Recorder rec{ctx, rig, true, csv_every(ctx, n)};
+  AppRecorder rec{ctx, run, f.motor.pole_pairs, true, csv_every(ctx, n)};
   rec.header();
   const double band = 0.05 * std::abs(w_t);
   double t_lock = std::nan(""), ang_max = 0, ang_sq = 0, werr_end = 0, w = 0, id = 0, iq = 0;
   long ang_n = 0, k = 0;
   double min_w_align = 0;
+  std::string stopped;
+  AppWatch watch;
   for (k = 0; k <= n; ++k) {
-    const double t = rig.board().t_s();
-    rig.board().true_dq_a(&id, &iq);
-    w = rig.board().state()(2);
-    const auto& tm = rig.sls().tm;
-    if (tm.phase == MC_CTRL_SLS_ALIGN) min_w_align = std::min(min_w_align, sgn * w);
-    if (tm.phase == MC_CTRL_SLS_CLOSED && std::isnan(t_lock)) t_lock = t;
+    const double t = board.t_s();
+    board.true_dq_a(&id, &iq);
+    w = board.state()(2);
+    const mc_app_probe_t& pr = run.probe();
+    const bool running = pr.cmd_enabled != 0u;
+    if (running && pr.sls_phase == MC_CTRL_SLS_ALIGN) min_w_align = std::min(min_w_align, sgn * w);
+    if (running && pr.sls_phase == MC_CTRL_SLS_CLOSED && std::isnan(t_lock)) t_lock = t;
     if (!std::isnan(t_lock) && t > t_lock + 0.05) {
-      const double e = std::abs(std::remainder(rig.theta_e_hat() - rig.theta_e_true(), 2 * kPi));
-      ang_max = std::max(ang_max, e);
-      ang_sq += e * e;
+      const double hat = static_cast<double>(pr.sls_theta_hat_e_rad);
+      const double err = std::abs(std::remainder(hat - rec.theta_e_true(), 2 * kPi));
+      ang_max = std::max(ang_max, err);
+      ang_sq += err * err;
       ++ang_n;
     }
     if (t >= dur - 0.1 * (dur - t_load)) werr_end = std::max(werr_end, std::abs(w - w_t));
     rec.row(t, id, iq, w);
-    if (rig.drive().faults != 0u) break;
-    if (k < n) rig.step();
+    stopped = watch(pr);
+    if (!stopped.empty()) break;
+    if (k < n) run.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
-  record_setup(f, g, ctx.summary);
-  const mc_drive_t& d = rig.drive();
-  const auto& tm = rig.sls().tm;
+  record_app_setup(f, p, ctx.summary);
+  const mc_app_probe_t& d = run.probe();
+  ctx.summary.set_text("target", target->name());
   ctx.summary.set("faults", d.faults);
-  ctx.summary.set("handovers", tm.handovers);
-  ctx.summary.set("fallbacks", tm.fallbacks);
+  ctx.summary.set("handovers", d.sls_handovers);
+  ctx.summary.set("fallbacks", d.sls_fallbacks);
   ctx.summary.set("t_lock_s", t_lock);
   ctx.summary.set("t_load_step_s", t_load);
   ctx.summary.set("align_backwards_rad_s", -min_w_align);
-  ctx.summary.set("obs_gamma_per_wb2_s", rig.sls().gamma);
-  if (d.faults != 0u) {
-    const std::string why = (d.faults & MC_DRIVE_FAULT_CONTROL)
-                                ? sls_reason(d.tm.ctrl_err)
-                                : "drive fault " + fault_names(d.faults, d.tm.ctrl_err);
+  ctx.summary.set("obs_gamma_per_wb2_s", sls_gamma(e));
+  if (!stopped.empty()) {
+    const std::string why = (d.faults & MC_DRIVE_FAULT_CONTROL) ? sls_reason(d.ctrl_err) : stopped;
     ctx.summary.set_text("fault_names", why);
-    const bool no_lock = (d.faults & MC_DRIVE_FAULT_CONTROL) != 0u &&
-                         (d.tm.ctrl_err & MC_CTRL_SLS_ERR_NO_LOCK) != 0u;
-    return write_verdict(ctx.summary,
-                         no_lock ? Verdict{"not locked", why, true} : faulted(d.faults, why));
+    const bool no_lock =
+        (d.faults & MC_DRIVE_FAULT_CONTROL) != 0u && (d.ctrl_err & MC_CTRL_SLS_ERR_NO_LOCK) != 0u;
+    return write_verdict(ctx.summary, no_lock          ? Verdict{"not locked", why, true}
+                                      : d.faults != 0u ? faulted(d.faults, why)
+                                                       : Verdict{"stopped", why, true});
   }
-  ctx.summary.set("locked", (tm.phase == MC_CTRL_SLS_CLOSED) ? 1.0 : 0.0);
+  const bool locked = d.sls_phase == MC_CTRL_SLS_CLOSED;
+  ctx.summary.set("locked", locked ? 1.0 : 0.0);
   ctx.summary.set("angle_err_max_rad", ang_max);
   ctx.summary.set("angle_err_rms_rad",
                   ang_n ? std::sqrt(ang_sq / static_cast<double>(ang_n)) : std::nan(""));
@@ -419,7 +457,7 @@ void run_sensorless(RunContext& ctx) {
   ctx.summary.set("load1_nm", tau1);
   SensorlessFigures fig;
   fig.target_rad_s = w_t;
-  fig.locked = tm.phase == MC_CTRL_SLS_CLOSED;
+  fig.locked = locked;
   fig.werr_max_end_rad_s = werr_end;
   fig.angle_err_max_rad = ang_max;
   fig.t_load_step_s = t_load;

@@ -1,9 +1,10 @@
 // regen-stop: any motor, a full-speed stop on a DC link (mcsim::DcLink) so
 // braking shows on the bus voltage; with and without the brake resistor
-// (--set brake=on|off). The sensored speed PI accelerates the rotor to
-// speed_rad_s (default: the speed limit), holds it, then the reference
-// ramps to zero at decel_rad_s2 (the rig's reference slew, speed_accel_rad_s2).
-// The drive limits the regenerative current by the bus voltage, injects d
+// (--set brake=on|off: the brake_enable parameter). The drive application's
+// sensored speed law (speed_law 0, commanded by SET_SPEED_REF frames)
+// accelerates the rotor to speed_rad_s (default: the speed limit), holds
+// it, then the reference ramps to zero at decel_rad_s2 (the drive's slew,
+// the speed_ramp_rad_s2 parameter). The drive limits the regenerative current by the bus voltage, injects d
 // current to burn energy in the windings when the bus is full, and drives
 // the chopper (mc_drive.h, "Regenerative braking").
 //
@@ -17,8 +18,11 @@
 // to the kinetic energy is energy_balance_rel_err.
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
+#include <string>
 
+#include "app_scenario.hpp"
 #include "drive_setup.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
@@ -65,9 +69,14 @@ void run_regen(RunContext& ctx) {
   f.board.source_sink = P.get("source_sink") > 0.5;
   const bool brake = P.get("brake") > 0.5;
   f.board.brake_r_ohm = brake ? P.get("brake_r_ohm") : 0.0;
-  const Gains g = derive_gains(f, &P);
+  // The application's table (app_params.hpp); the chopper where the board
+  // has a brake resistor (brake_enable: a board without one refuses it).
+  mc_params_t p = params_from_files(f, P);
+  p.brake_enable = brake ? 1u : 0u;
+  const mc_params_eff_t e0 = resolve_params(p);
+  const mc_gains_t& g = e0.g;
   const double w_t = P.get("speed_rad_s");
-  const double acc = g.speed_accel_rad_s2;
+  const double acc = e0.p.speed_ramp_rad_s2;
   const double t0 = 0.01, t_acc = w_t / acc, t_set = 40.0 / g.speed_wc_rad_s;
   const double t_stop = t0 + t_acc + t_set;
   // The stop may take longer than the ramp when the bus cannot take the
@@ -77,19 +86,22 @@ void run_regen(RunContext& ctx) {
   const double ke_j = 0.5 * m.j_kgm2 * w_t * w_t;
   const double p_cu = std::max(1e-9, 1.5 * m.r_ohm * g.i_limit_a * g.i_limit_a);
   const double dur = run_duration(ctx, t_stop + std::max(20.0 * t_acc, 10.0 * ke_j / p_cu) + t_set);
-  RigOptions ro;
-  ro.law = Law::kSpeedPi;
-  MotorRig rig(f, g, ro);
-  auto& board = rig.board();
+  const std::unique_ptr<AppTarget> target = make_file_target(f, p, nullptr);
+  AppRunner run(*target);
+  run.start(MC_CAN_CTRL_SPEED);
+  auto& board = run.board();
   const mcsim::DcLink* link = board.dc_link();
   if (link == nullptr) throw std::logic_error("regen-stop: the board has no DC link");
-  const double T = rig.period_s();
+  const double T = board.period_s();
   const long n = step_count(dur, T);
   const long every =
       P.get("csv_every") > 0 ? std::lround(P.get("csv_every")) : std::max(1L, n / 20000);
   ctx.csv.columns({"t", "omega_m_rad_s", "omega_ref_rad_s", "i_d_a", "i_q_a", "i_d_ref_a",
                    "i_q_ref_a", "vbus_v", "brake_duty", "regen_scale", "fault_1"});
-  const double trip = rig.drive_cfg().vbus_max_v;
+  const double trip = e0.p.vbus_max_v;
+  double w_cmd = 0.0;  // the last SET_SPEED_REF sent
+  std::string stopped;
+  AppWatch watch;
   double vpk = 0, t_still = std::nan(""), w = 0, id = 0, iq = 0, w_min = 0;
   // Energy bookkeeping over the stop (from t_stop).
   double e_cu = 0, p_prev = 0;
@@ -103,7 +115,11 @@ void run_regen(RunContext& ctx) {
   };
   for (long k = 0; k <= n; ++k) {
     const double t = board.t_s();
-    rig.set_speed_ref(t >= t_stop ? 0.0 : (t >= t0 ? w_t : 0.0));
+    const double w_want = t >= t_stop ? 0.0 : (t >= t0 ? w_t : 0.0);
+    if (w_want != w_cmd) {
+      run.send(run.cmd().speed_ref(w_want));
+      w_cmd = w_want;
+    }
     board.true_dq_a(&id, &iq);
     w = board.state()(2);
     const double v = board.vbus_v();
@@ -128,31 +144,35 @@ void run_regen(RunContext& ctx) {
       }
       p_prev = pl;
     }
+    const mc_app_probe_t& pr = run.probe();
     if (k % every == 0) {
       const double row[] = {t,
                             w,
-                            rig.omega_ref_rad_s(),
+                            pr.omega_ref_rad_s,
                             id,
                             iq,
-                            rig.drive().tm.id_ref_a,
-                            rig.drive().tm.iq_ref_a,
+                            pr.id_ref_a,
+                            pr.iq_ref_a,
                             v,
                             board.brake_duty(),
-                            rig.drive().tm.regen_scale,
-                            static_cast<double>(rig.drive().faults)};
+                            pr.regen_scale,
+                            static_cast<double>(pr.faults)};
       ctx.csv.row(row, sizeof row / sizeof row[0]);
     }
-    if (rig.drive().faults != 0u) break;
-    if (k < n) rig.step();
+    stopped = watch(pr);
+    if (!stopped.empty()) break;
+    if (k < n) run.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
-  record_setup(f, g, ctx.summary);
-  const mc_drive_t& d = rig.drive();
+  record_app_setup(f, p, ctx.summary);
+  const mc_app_probe_t& d = run.probe();
+  ctx.summary.set_text("target", target->name());
   ctx.summary.set("faults", d.faults);
   ctx.summary.set_text("brake", brake ? "on" : "off");
-  if (d.faults != 0u) {
-    ctx.summary.set_text("fault_names", drive_fault_names(d.faults));
-    return write_verdict(ctx.summary, faulted(d.faults));
+  if (!stopped.empty()) {
+    ctx.summary.set_text("fault_names", stopped);
+    return write_verdict(ctx.summary,
+                         d.faults != 0u ? faulted(d.faults) : Verdict{"stopped", stopped, true});
   }
   const auto& e = link->energy();
   const double ke1 = 0.5 * m.j_kgm2 * w * w, em1 = emag(id, iq);
@@ -162,8 +182,8 @@ void run_regen(RunContext& ctx) {
   ctx.summary.set("vbus_peak_v", vpk);
   ctx.summary.set("vbus_trip_v", trip);
   ctx.summary.set("vbus_margin_v", trip - vpk);
-  ctx.summary.set("vbus_regen_start_v", d.cfg.vbus_regen_start_v);
-  ctx.summary.set("brake_on_v", d.cfg.brake_on_v);
+  ctx.summary.set("vbus_regen_start_v", e0.p.vbus_regen_start_v);
+  ctx.summary.set("brake_on_v", brake ? e0.p.brake_on_v : 0.0f);
   ctx.summary.set("decel_rad_s2", acc);
   ctx.summary.set("stop_time_s", t_still - t_stop);
   ctx.summary.set("stop_time_ramp_s", w_t / acc);

@@ -209,7 +209,15 @@ class Errors(unittest.TestCase):
         self.same_error("commission", M, B, duration=1.0)
 
     def test_drive_fault(self):
+        # a current-loop bandwidth the parameter table does not allow (at
+        # most 0.5 pwm_hz) is refused before the run, the reason named
         e = self.same_error("current-step", M, B, {"iq_step_a": 60, "cur_bw_rad_s": 1e5},
+                            duration=0.01)
+        self.assertIsInstance(e, sil.UsageError)
+        self.assertIn("MC_PARAMS_ERR RANGE", str(e))
+        # the drive told 20 times the motor's inductance: its current loop's
+        # gain 20 times too high, the q step trips the drive
+        e = self.same_error("current-step", M, B, {"iq_step_a": 60, "model_l_scale": 20},
                             duration=0.01)
         self.assertIsInstance(e, sil.RunFailed)
         self.assertIn("OVERCURRENT", str(e))

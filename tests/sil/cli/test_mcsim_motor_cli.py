@@ -359,8 +359,10 @@ class Verdicts(unittest.TestCase):
         self.assertEqual(s["stopped"], 1)
 
     def test_faults_are_named(self):
+        # the drive told 20 times the motor's inductance: its current loop's
+        # gain 20 times too high, the q step trips the drive
         s = self.failed("current-step", "--duration", "0.01", "--set", "iq_step_a=60",
-                        "--set", "cur_bw_rad_s=1e5")
+                        "--set", "model_l_scale=20")
         self.assertEqual(s["verdict"], "faulted: OVERCURRENT")
         self.assertEqual(s["stopped"], 1)
         # the IPM motor on a supply that cannot sink, no brake resistor: the

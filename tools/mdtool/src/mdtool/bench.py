@@ -157,10 +157,10 @@ def run(duration: float = 1.0, runs: int = 20, mcsim: str | None = None,
             res["mcsim_subprocess_cpu_s_per_run"] = (
                 (ru1.ru_utime + ru1.ru_stime - ru0.ru_utime - ru0.ru_stime) / (n + 1))
             res["inprocess_over_subprocess"] = rate / rate_s
-    # A run that faults early: the current step far beyond what the loop
-    # can follow trips OVERCURRENT about a millisecond in; the scenario
-    # stops at the fault.
-    bad = {"iq_step_a": 60, "cur_bw_rad_s": 1e5}
+    # A run that faults early: the drive told 20 times the motor's
+    # inductance (its current loop's gain 20 times too high) trips
+    # OVERCURRENT on the current step; the scenario stops at the fault.
+    bad = {"iq_step_a": 60, "model_l_scale": 20}
     r = sil.run_raw(SCEN, motor, board, bad, duration, trajectory=True)
     res["fault_run_error"] = r.error
     res["fault_run_sim_s"] = float(r.data[-1][0]) if len(r.data) else None

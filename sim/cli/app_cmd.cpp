@@ -1,0 +1,86 @@
+#include "app_cmd.hpp"
+
+#include <cstdio>
+#include <stdexcept>
+
+#include "scenario.hpp"
+
+namespace mcsim {
+
+mc_hal_can_frame_t AppCommands::pack(uint32_t msg, const std::vector<float>& values) const {
+  mc_hal_can_frame_t f{};
+  const float none = 0.0f;
+  const float* v = values.empty() ? &none : values.data();
+  const uint32_t n = values.empty() ? 1u : static_cast<uint32_t>(values.size());
+  if (mc_can_proto_pack(msg, node_, v, n, &f) != MC_CAN_ERR_NONE) {
+    throw std::logic_error("mc_can_proto_pack refused a command (message " + std::to_string(msg) +
+                           ")");
+  }
+  return f;
+}
+
+mc_hal_can_frame_t AppCommands::enable(bool on) const {
+  return pack(MC_CAN_MSG_SET_ENABLE, {on ? 1.0f : 0.0f});
+}
+
+mc_hal_can_frame_t AppCommands::mode(uint32_t mode) const {
+  return pack(MC_CAN_MSG_SET_CONTROL_MODE, {static_cast<float>(mode)});
+}
+
+mc_hal_can_frame_t AppCommands::current_ref(double id_a, double iq_a) const {
+  return pack(MC_CAN_MSG_SET_CURRENT_REF, {static_cast<float>(id_a), static_cast<float>(iq_a)});
+}
+
+mc_hal_can_frame_t AppCommands::speed_ref(double omega_m_rad_s) const {
+  return pack(MC_CAN_MSG_SET_SPEED_REF, {static_cast<float>(omega_m_rad_s)});
+}
+
+mc_hal_can_frame_t AppCommands::position_ref(double theta_m_rad) const {
+  return pack(MC_CAN_MSG_SET_POSITION_REF, {static_cast<float>(theta_m_rad)});
+}
+
+mc_hal_can_frame_t AppCommands::host_heartbeat() {
+  ++hb_counter_;
+  return pack(MC_CAN_MSG_HOST_HEARTBEAT, {static_cast<float>(hb_counter_)});
+}
+
+AppRunner::AppRunner(AppTarget& target) : t_(target), cmd_(target.params().can_node_id) {
+  keepalive_s_ = 0.1 * static_cast<double>(target.params().can_timeout_s);
+}
+
+void AppRunner::start(uint32_t mode) {
+  send(cmd_.mode(mode));
+  send(cmd_.enable(true));
+  started_ = true;  // the first keep-alive with the enable
+  next_hb_s_ = t_.board().t_s();
+}
+
+AppTargetPeriod AppRunner::step() {
+  const double t = t_.board().t_s();
+  if (started_ && keepalive_on_ && t >= next_hb_s_) {
+    pending_.push_back(cmd_.host_heartbeat());
+    next_hb_s_ = t + keepalive_s_;
+  }
+  tx_.clear();
+  const AppTargetPeriod r = t_.period(pending_, &tx_);
+  pending_.clear();
+  for (const mc_hal_can_frame_t& f : tx_) {
+    ++frames_tx_;
+    if (mc_can_id_cmd(f.id) != MC_CAN_CMD_CMD_ERROR) continue;
+    uint32_t msg = 0;
+    float v[MC_CAN_NSIG_MAX] = {0};
+    if (mc_can_proto_unpack(&f, &msg, v, MC_CAN_NSIG_MAX) != MC_CAN_ERR_NONE) continue;
+    throw UsageError("the drive application refused command 0x" +
+                     [](uint32_t c) {
+                       char b[8];
+                       std::snprintf(b, sizeof b, "%02x", c);
+                       return std::string(b);
+                     }(static_cast<uint32_t>(v[MC_CAN_CMD_ERROR_REJECTED_CMD])) +
+                     " (CMD_ERROR error " +
+                     std::to_string(static_cast<int>(v[MC_CAN_CMD_ERROR_ERROR])) +
+                     ") at t = " + std::to_string(t) + " s");
+  }
+  return r;
+}
+
+}  // namespace mcsim

@@ -1,0 +1,72 @@
+// A scenario's side of the CAN bus (issue 29 item 3): the DBC's command
+// messages (tools/can/motordrive.dbc), packed by the firmware's generated
+// codec (mc_can_proto_pack, the tables mc_can_cmd decodes), and a runner
+// that gives them to an AppTarget one period at a time with the host
+// keep-alive a user's tool sends. A scenario commands the application only
+// through these frames, so the `--pil` twin replays the same run.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "app_target.hpp"
+extern "C" {
+#include "mc_can_cmd.h"
+#include "mc_can_proto.h"
+}
+
+namespace mcsim {
+
+/// The command frames for one node.
+class AppCommands {
+ public:
+  explicit AppCommands(uint32_t node_id) : node_(node_id) {}
+  mc_hal_can_frame_t enable(bool on) const;
+  /// mode: MC_CAN_CTRL_CURRENT, _SPEED or _POSITION.
+  mc_hal_can_frame_t mode(uint32_t mode) const;
+  mc_hal_can_frame_t current_ref(double id_a, double iq_a) const;
+  mc_hal_can_frame_t speed_ref(double omega_m_rad_s) const;
+  mc_hal_can_frame_t position_ref(double theta_m_rad) const;
+  /// HOST_HEARTBEAT, its counter advanced by one at each call.
+  mc_hal_can_frame_t host_heartbeat();
+
+ private:
+  mc_hal_can_frame_t pack(uint32_t msg, const std::vector<float>& values) const;
+  uint32_t node_;
+  uint8_t hb_counter_ = 0;
+};
+
+/// Runs an AppTarget period by period: the frames queued since the last
+/// period go to the next one, a HOST_HEARTBEAT every keepalive_s of
+/// simulated time (a tenth of the command timeout), and every CMD_ERROR the
+/// application answers is a refused command: step() throws UsageError
+/// naming the command and the error (a scenario never commands what the
+/// drive refuses without saying so).
+class AppRunner {
+ public:
+  explicit AppRunner(AppTarget& target);
+  void send(const mc_hal_can_frame_t& f) { pending_.push_back(f); }
+  /// Enable the drive in mode (MC_CAN_CTRL_*): mode, then enable.
+  void start(uint32_t mode);
+  AppTargetPeriod step();
+  /// Stop (false) or resume the HOST_HEARTBEAT keep-alive: a host that
+  /// went silent (the application's command timeout then stops the drive).
+  void keepalive(bool on) { keepalive_on_ = on; }
+  AppCommands& cmd() { return cmd_; }
+  const mc_app_probe_t& probe() const { return t_.probe(); }
+  hal_host::PmsmBoard& board() { return t_.board(); }
+  AppTarget& target() { return t_; }
+  uint64_t frames_sent() const { return frames_tx_; }
+
+ private:
+  AppTarget& t_;
+  AppCommands cmd_;
+  std::vector<mc_hal_can_frame_t> pending_, tx_;
+  double keepalive_s_ = 0, next_hb_s_ = 0;
+  uint64_t frames_tx_ = 0;
+  bool started_ = false;
+  bool keepalive_on_ = true;
+};
+
+}  // namespace mcsim

@@ -1,0 +1,126 @@
+// make_app_target_sil (app_target.hpp): the drive application compiled for
+// the host on the simulated board, one PWM period = hal_host::app_period
+// (the image's interrupt/PendSV sequence), booted from the setup's
+// parameter table (no flash), the laws from the parameters, and a CAN bus
+// in memory: the frames a period is given are what the controller holds
+// when the receive interrupt runs at the period start; the frames the
+// application sends in the period are handed back.
+#include <cerrno>
+#include <cstdio>
+#include <deque>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "app_params.hpp"
+#include "app_target.hpp"
+#include "hal_host/app_rig.hpp"
+#include "hal_host/can_ops.hpp"
+#include "scenario.hpp"
+extern "C" {
+#include "config/mc_law_cfg.h"
+}
+
+namespace mcsim {
+namespace {
+
+// The in-memory CAN controller: never full, never in error.
+class MemCan {
+ public:
+  MemCan() {
+    dev_.ops = hal_host::can_ops<MemCan>();
+    dev_.ctx = this;
+  }
+  int send(const mc_hal_can_frame_t* f) {
+    tx_.push_back(*f);
+    return 0;
+  }
+  int receive(mc_hal_can_frame_t* f) {
+    if (rx_.empty()) return -EAGAIN;
+    *f = rx_.front();
+    rx_.pop_front();
+    return 0;
+  }
+  int get_status(mc_hal_can_status_t* s) const {
+    *s = mc_hal_can_status_t{};
+    s->state = MC_HAL_CAN_STATE_ERROR_ACTIVE;
+    return 0;
+  }
+  const mc_hal_can_t* hal() const { return &dev_; }
+  std::deque<mc_hal_can_frame_t> rx_;
+  std::vector<mc_hal_can_frame_t> tx_;
+
+ private:
+  mc_hal_can_t dev_{};
+};
+
+std::string hex(uint32_t v) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%x", v);
+  return b;
+}
+
+class AppTargetSil final : public AppTarget {
+ public:
+  explicit AppTargetSil(const AppSetup& s)
+      : params_(s.defaults),
+        board_(std::make_unique<hal_host::PmsmBoard>(s.board)),
+        app_(std::make_unique<mc_app_t>()),
+        drive_(std::make_unique<mc_drive_t>()) {
+    const uint32_t verr = mc_params_validate(&params_);
+    if (verr != MC_PARAMS_OK) {
+      throw UsageError("the application's parameter table is invalid: MC_PARAMS_ERR " +
+                       params_err_names(verr) + " (law_error " +
+                       law_err_names(mc_law_speed_check(&params_)) + ")");
+    }
+    mc_app_cfg_t c{};
+    c.defaults = &params_;
+    c.flash = nullptr;                // no store: the table boots as the board's defaults
+    app_target_binding(params_, &c);  // the images' binding, as the PIL target's
+    const uint32_t berr = mc_app_boot(app_.get(), &c);
+    if (berr != MC_APP_CFG_OK) {
+      throw UsageError("the application refused to boot: MC_APP_CFG bits " + hex(berr));
+    }
+    const uint32_t aerr = mc_app_start(app_.get(), drive_.get(), board_->hal(), can_.hal(), true);
+    if (aerr != MC_APP_CFG_OK) {
+      throw UsageError("the application refused to start: MC_APP_CFG bits " + hex(aerr) +
+                       " (drive MC_DRIVE_CFG " + hex(app_->drive_err) + ", telemetry " +
+                       hex(app_->tm_err) + ", commands " + hex(app_->cmd_err) + ", laws " +
+                       law_err_names(app_->laws.error) + ")");
+    }
+    mc_app_probe(app_.get(), &probe_);
+  }
+
+  AppTargetPeriod period(const std::vector<mc_hal_can_frame_t>& rx,
+                         std::vector<mc_hal_can_frame_t>* tx) override {
+    can_.rx_.insert(can_.rx_.end(), rx.begin(), rx.end());
+    const hal_host::AppPeriod ap = hal_host::app_period(*board_, *app_);
+    mc_app_probe(app_.get(), &probe_);
+    if (tx != nullptr) tx->insert(tx->end(), can_.tx_.begin(), can_.tx_.end());
+    can_.tx_.clear();
+    AppTargetPeriod r;
+    r.slow_ran = ap.slow_ran;
+    return r;
+  }
+  const mc_app_probe_t& probe() const override { return probe_; }
+  const mc_params_t& params() const override { return app_->params; }
+  hal_host::PmsmBoard& board() override { return *board_; }
+  std::string name() const override { return "sil"; }
+
+ private:
+  mc_params_t params_;
+  std::unique_ptr<hal_host::PmsmBoard> board_;
+  std::unique_ptr<mc_app_t> app_;
+  std::unique_ptr<mc_drive_t> drive_;
+  MemCan can_;
+  mc_app_probe_t probe_{};
+};
+
+}  // namespace
+
+std::unique_ptr<AppTarget> make_app_target_sil(const AppSetup& s) {
+  return std::make_unique<AppTargetSil>(s);
+}
+
+}  // namespace mcsim

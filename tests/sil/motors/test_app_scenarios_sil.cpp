@@ -1,0 +1,70 @@
+// The generic scenarios run the drive application (issue 29 item 3): what
+// the application's parameter table says changes what the scenario measures,
+// and the application's own output (its CAN telemetry) is there. A scenario
+// that ran another loop (the former C++ speed PI of MotorRig) would keep its
+// own ramp and send no frame.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <string>
+
+#include "motor_library.hpp"
+
+namespace mcsim {
+namespace {
+
+const testlib::Case kD5065{"odrive-d5065", "odrive-v36-24v"};
+
+std::map<std::string, double> speed_step(const testlib::Sets& sets, const std::string& tag) {
+  return testlib::run_scenario("speed-step", testlib::files(kD5065), sets, tag);
+}
+
+// speed_ramp_rad_s2 (--set speed_accel_rad_s2) a quarter of its derived
+// value: the application slews the reference at it, so the rotor passes
+// half the target after about half the ramp's time. Tolerance 10 % of that
+// plus 3 ms: the command waits for the application's slow step (1 ms) and
+// the speed loop follows the ramp with a lag of about 1 / speed_bw (0.5 ms
+// at 192 rad/s here, the feed-forward taking most of it).
+TEST(AppScenarios, SpeedRampParameterSetsTheRotorsAcceleration) {
+  const auto d = speed_step({{"speed_rad_s", "200"}}, "_derived");
+  const double ramp = d.at("param.speed_ramp_rad_s2");
+  ASSERT_GT(ramp, 0.0);
+  const double slow = 0.25 * ramp;
+  const auto r =
+      speed_step({{"speed_rad_s", "200"}, {"speed_accel_rad_s2", std::to_string(slow)}}, "_slow");
+  EXPECT_NEAR(r.at("param.speed_ramp_rad_s2"), slow, 1e-3 * slow);
+  for (const auto* x : {&d, &r}) {
+    const double a = x->at("param.speed_ramp_rad_s2");
+    const double expect = 0.5 * 200.0 / a;
+    EXPECT_NEAR(x->at("half_speed_time_s"), expect, 0.1 * expect + 3e-3) << "ramp " << a;
+  }
+  EXPECT_EQ(r.at("settled"), 1.0);
+}
+
+// i_max_a lowered (--set i_limit_a): the application's limit holds the
+// speed law's current (|i_q| at most the limit plus 5 % for the current
+// loop's overshoot and the PWM ripple), and the derived ramp follows it
+// (0.5 kt i_limit / J: a third of the current, a third of the ramp).
+TEST(AppScenarios, CurrentLimitParameterHoldsTheSpeedLawsCurrent) {
+  const auto d = speed_step({{"speed_rad_s", "200"}}, "_derived");
+  const double i_lim = d.at("gain.i_limit_a") / 3.0;
+  const auto r =
+      speed_step({{"speed_rad_s", "200"}, {"i_limit_a", std::to_string(i_lim)}}, "_limited");
+  EXPECT_NEAR(r.at("gain.i_limit_a"), i_lim, 1e-3 * i_lim);
+  EXPECT_NEAR(r.at("param.speed_ramp_rad_s2"), d.at("param.speed_ramp_rad_s2") / 3.0,
+              1e-3 * d.at("param.speed_ramp_rad_s2"));
+  EXPECT_LE(r.at("iq_abs_max_a"), 1.05 * i_lim);
+  EXPECT_EQ(r.at("faults"), 0.0);
+  EXPECT_EQ(r.at("settled"), 1.0);
+}
+
+// The application's telemetry: HEARTBEAT at its table rate (10 Hz) and the
+// other default messages, so at least one frame per 100 ms of the run.
+TEST(AppScenarios, TheApplicationSendsItsTelemetry) {
+  const auto r = speed_step({{"speed_rad_s", "200"}}, "_tm");
+  EXPECT_GE(r.at("app_tx_frames"), 1.0);
+  EXPECT_GE(r.at("app_tx_frames"), r.at("duration_s") * 10.0 - 1.0);
+}
+
+}  // namespace
+}  // namespace mcsim
