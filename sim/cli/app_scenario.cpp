@@ -1,24 +1,29 @@
 #include "app_scenario.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include "verdict.hpp"
 
 namespace mcsim {
 
-std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
+std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,
+                                            const mc_params_t& p,
                                             const std::function<double(double)>* load_nm) {
   AppSetup s;
   s.board = build_board_cfg(plant);
   if (load_nm != nullptr && *load_nm) {
     s.board.motor.load.kind = LoadKind::kFunction;
-    s.board.motor.load.fn = [](double t, double, double, const void* ctx) {
-      return (*static_cast<const std::function<double(double)>*>(ctx))(t);
+    s.board.motor.load.fn = [](double t, double, double, const void* fn_ctx) {
+      return (*static_cast<const std::function<double(double)>*>(fn_ctx))(t);
     };
     s.board.motor.load.fn_ctx = load_nm;
   }
   s.defaults = p;
-  return make_app_target_sil(s);
+  if (ctx.pil == nullptr) return make_app_target_sil(s);
+  std::unique_ptr<AppTarget> t = make_app_target_pil(s, *ctx.pil);
+  std::fprintf(stderr, "mcsim: target %s\n", t->name().c_str());
+  return t;
 }
 
 double AppRecorder::theta_e_true() {
