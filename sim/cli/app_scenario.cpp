@@ -7,21 +7,35 @@
 
 namespace mcsim {
 
-std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,
-                                            const mc_params_t& p,
-                                            const std::function<double(double)>* load_nm) {
+namespace {
+
+AppSetup file_setup(const MotorFiles& plant, const mc_params_t& p,
+                    const std::function<double(double)>* load_nm) {
   AppSetup s;
   s.board = build_board_cfg(plant);
   if (load_nm != nullptr && *load_nm) {
     s.board.motor.load.kind = LoadKind::kFunction;
-    s.board.motor.load.fn = [](double t, double, double, const void* fn_ctx) {
-      return (*static_cast<const std::function<double(double)>*>(fn_ctx))(t);
+    s.board.motor.load.fn = [](double t, double, double, const void* ctx) {
+      return (*static_cast<const std::function<double(double)>*>(ctx))(t);
     };
     s.board.motor.load.fn_ctx = load_nm;
   }
   s.defaults = p;
-  if (ctx.pil == nullptr) return make_app_target_sil(s);
-  std::unique_ptr<AppTarget> t = make_app_target_pil(s, *ctx.pil);
+  return s;
+}
+
+}  // namespace
+
+std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
+                                            const std::function<double(double)>* load_nm) {
+  return make_app_target_sil(file_setup(plant, p, load_nm));
+}
+
+std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,
+                                            const mc_params_t& p,
+                                            const std::function<double(double)>* load_nm) {
+  if (ctx.pil == nullptr) return make_file_target(plant, p, load_nm);
+  std::unique_ptr<AppTarget> t = make_app_target_pil(file_setup(plant, p, load_nm), *ctx.pil);
   std::fprintf(stderr, "mcsim: target %s\n", t->name().c_str());
   return t;
 }

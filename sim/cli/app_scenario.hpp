@@ -27,6 +27,9 @@ namespace mcsim {
 std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,
                                             const mc_params_t& p,
                                             const std::function<double(double)>* load_nm);
+/// The same on the SIL (tests that build their own run).
+std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
+                                            const std::function<double(double)>* load_nm);
 
 /// The scenarios' CSV: t, the true dq currents, the references (the
 /// application's probe), the true speed and electrical angle, the observer's
