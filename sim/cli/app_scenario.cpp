@@ -1,13 +1,16 @@
 #include "app_scenario.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include "verdict.hpp"
 
 namespace mcsim {
 
-std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
-                                            const std::function<double(double)>* load_nm) {
+namespace {
+
+AppSetup file_setup(const MotorFiles& plant, const mc_params_t& p,
+                    const std::function<double(double)>* load_nm) {
   AppSetup s;
   s.board = build_board_cfg(plant);
   if (load_nm != nullptr && *load_nm) {
@@ -18,7 +21,23 @@ std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_pa
     s.board.motor.load.fn_ctx = load_nm;
   }
   s.defaults = p;
-  return make_app_target_sil(s);
+  return s;
+}
+
+}  // namespace
+
+std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
+                                            const std::function<double(double)>* load_nm) {
+  return make_app_target_sil(file_setup(plant, p, load_nm));
+}
+
+std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,
+                                            const mc_params_t& p,
+                                            const std::function<double(double)>* load_nm) {
+  if (ctx.pil == nullptr) return make_file_target(plant, p, load_nm);
+  std::unique_ptr<AppTarget> t = make_app_target_pil(file_setup(plant, p, load_nm), *ctx.pil);
+  std::fprintf(stderr, "mcsim: target %s\n", t->name().c_str());
+  return t;
 }
 
 double AppRecorder::theta_e_true() {

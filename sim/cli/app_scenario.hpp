@@ -21,7 +21,13 @@ namespace mcsim {
 /// The target for the files: the plant from the board and motor files
 /// (plant_motor: the motor the plant simulates, e.g. with a flywheel),
 /// load_nm(t) opposing positive rotation (kept alive by the caller), the
-/// application booted from p.
+/// application booted from p: the SIL, or with ctx.pil (mcsim run --pil)
+/// the board's whole image on QEMU (the target's name then on stderr: the
+/// CSV and summary are the same on both targets, bit for bit).
+std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,
+                                            const mc_params_t& p,
+                                            const std::function<double(double)>* load_nm);
+/// The same on the SIL (tests that build their own run).
 std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
                                             const std::function<double(double)>* load_nm);
 

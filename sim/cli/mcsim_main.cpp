@@ -7,6 +7,9 @@
 //             [--motor FILE [--board FILE]]   (scenarios for any motor)
 //             [--flash FILE]   (the board's flash: the drive boots from the
 //                              configuration stored there and saves to it)
+//             [--pil]   (the scenarios on the drive application: the board's
+//                       whole image on QEMU's emulated Cortex-M4F instead of
+//                       the SIL; pil_options below)
 //   mcsim bench [--duration S]
 //
 // Exit codes (sim/README.md, "Verdicts"):
@@ -29,6 +32,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "app_target.hpp"
 #include "bench.hpp"
 #include "motor_file.hpp"
 #include "run.hpp"
@@ -37,12 +41,79 @@
 namespace {
 
 void usage(std::FILE* f) {
-  std::fprintf(f,
-               "usage: mcsim list\n"
-               "       mcsim describe <scenario> [--motor FILE [--board FILE]]\n"
-               "       mcsim run <scenario> --out DIR [--duration S] [--set key=value ...]\n"
-               "                 [--motor FILE [--board FILE]] [--flash FILE]\n"
-               "       mcsim bench [--duration S]\n");
+  std::fprintf(
+      f,
+      "usage: mcsim list\n"
+      "       mcsim describe <scenario> [--motor FILE [--board FILE]]\n"
+      "       mcsim run <scenario> --out DIR [--duration S] [--set key=value ...]\n"
+      "                 [--motor FILE [--board FILE]] [--flash FILE] [--pil]\n"
+      "       mcsim bench [--duration S]\n"
+      "\n"
+      "--pil (the scenarios `describe` marks \"--pil: yes\"): the drive application runs\n"
+      "as the board's whole image (mc_stm32f405_pil: the image's main, both interrupts,\n"
+      "the application, CAN, parameter service) on QEMU's emulated Cortex-M4F, the\n"
+      "plant on the host, one PWM period at a time; the CSV and summary are the same as\n"
+      "without --pil, bit for bit. What differs from the flashed image is the HAL only\n"
+      "(hal/pil: ADC, encoder, faults and CAN over the link, the configuration store in\n"
+      "RAM, no watchdog). Slow: hundreds of wall seconds per simulated second.\n"
+      "Files:\n"
+      "  MCSIM_QEMU          qemu-system-arm         (default: the one the build found)\n"
+      "  MCSIM_PIL_ELF       the PIL image            (default: the build's, target mc_pil_m4f)\n"
+      "  MCSIM_PIL_BOOT_ELF  its emulated bootloader  (default: the build's, mc_boot_pil_m4f)\n"
+      "  MCSIM_PIL_LOG       the image's semihosting text (default: none)\n");
+}
+
+#ifndef MCSIM_QEMU_ARM
+#define MCSIM_QEMU_ARM ""
+#endif
+#ifndef MCSIM_PIL_ELF
+#define MCSIM_PIL_ELF ""
+#endif
+#ifndef MCSIM_BOOT_PIL_ELF
+#define MCSIM_BOOT_PIL_ELF ""
+#endif
+
+// --pil: QEMU, the image and its bootloader from the environment, else the
+// build's (tests/target/CMakeLists.txt defines them where the ARM toolchain
+// and QEMU were found); UsageError naming what is missing.
+std::shared_ptr<const mcsim::AppTargetPilOptions> pil_options(const mcsim::Scenario& scen,
+                                                              const std::string& board) {
+  if (!scen.takes_pil) {
+    std::string on;
+    for (const auto& s : mcsim::registry()) {
+      if (s.takes_pil) on += (on.empty() ? "" : ", ") + s.name;
+    }
+    throw mcsim::UsageError("--pil: " + scen.name +
+                            " does not run the drive application (--pil runs " + on + ")");
+  }
+  auto o = std::make_shared<mcsim::AppTargetPilOptions>();
+  struct File {
+    const char* env;
+    const char* built;
+    const char* what;
+    std::string* to;
+  };
+  const File files[] = {
+      {"MCSIM_QEMU", MCSIM_QEMU_ARM, "QEMU (qemu-system-arm)", &o->link.qemu},
+      {"MCSIM_PIL_ELF", MCSIM_PIL_ELF, "the PIL image (build target mc_pil_m4f)", &o->link.elf},
+      {"MCSIM_PIL_BOOT_ELF", MCSIM_BOOT_PIL_ELF,
+       "the PIL bootloader (build target mc_boot_pil_m4f)", &o->link.boot_elf}};
+  for (const File& f : files) {
+    const char* env = std::getenv(f.env);
+    *f.to = env != nullptr && *env != '\0' ? env : f.built;
+    if (f.to->empty()) {
+      throw mcsim::UsageError(std::string("--pil: no ") + f.what + ": this build found none " +
+                              "(no ARM toolchain or QEMU at configure time); set " + f.env);
+    }
+    if (access(f.to->c_str(), R_OK) != 0) {
+      throw mcsim::UsageError(std::string("--pil: ") + f.what + " '" + *f.to +
+                              "' cannot be read (" + std::strerror(errno) + "; set " + f.env +
+                              " or build it)");
+    }
+  }
+  if (const char* log = std::getenv("MCSIM_PIL_LOG"); log != nullptr) o->link.semihost_log = log;
+  o->board = board;
+  return o;
 }
 
 double parse_positive(const std::string& what, const std::string& s) {
@@ -88,6 +159,8 @@ int cmd_describe(const std::vector<std::string>& args) {
   } else {
     std::printf("default duration: derived from the motor (at most %g s)\n", mcsim::kMaxDurationS);
   }
+  std::printf("--pil: %s\n", s.takes_pil ? "yes (the board's whole image on QEMU: mcsim --help)"
+                                         : "no (the scenario does not run the drive application)");
   std::printf("parameters (--set key=value):\n");
   if (s.motor_params && motor.empty() && !s.motor_optional) {
     std::printf(
@@ -167,11 +240,16 @@ void write_json(const std::string& path, const mcsim::Summary& summary) {
 
 int cmd_run(const std::vector<std::string>& args) {
   if (args.empty()) throw mcsim::UsageError("run: missing scenario name");
+  if (args[0] == "-h" || args[0] == "--help") {
+    usage(stdout);
+    return 0;
+  }
   const auto& scen = mcsim::need_scenario(args[0]);
   std::string out_dir;
   double duration = 0.0;  // the scenario's own
   std::vector<std::pair<std::string, std::string>> sets;
   std::string motor_path, board_path, flash_path;
+  bool pil = false;
   for (size_t i = 1; i < args.size(); ++i) {
     const std::string& a = args[i];
     auto value = [&](const char* opt) -> const std::string& {
@@ -189,6 +267,8 @@ int cmd_run(const std::vector<std::string>& args) {
     } else if (a == "--flash") {
       flash_path = value("--flash");
       if (flash_path.empty()) throw mcsim::UsageError("--flash needs a file name");
+    } else if (a == "--pil") {
+      pil = true;
     } else if (a == "--set") {
       const std::string& kv = value("--set");
       auto eq = kv.find('=');
@@ -203,8 +283,9 @@ int cmd_run(const std::vector<std::string>& args) {
   if (out_dir.empty()) throw mcsim::UsageError("run: --out DIR is required");
   // Scenario, motor and board files, the duration and every --set before
   // anything is written: a bad input changes nothing.
-  const mcsim::PreparedRun run =
+  mcsim::PreparedRun run =
       mcsim::prepare_run(scen.name, motor_path, board_path, sets, flash_path, duration);
+  if (pil) run.pil = pil_options(scen, board_path);
 
   const std::vector<std::filesystem::path> created = missing_dirs(out_dir);
   std::error_code ec;

@@ -85,8 +85,8 @@ PreparedRun prepare_run(const std::string& scenario, const std::string& motor_pa
 RunOutcome execute_run(const PreparedRun& run, RowSink& sink, Summary& summary, Progress& progress,
                        const std::string& out_dir) {
   const Scenario& scen = *run.scenario;
-  RunContext ctx{run.duration_s,  run.params,      sink,   summary, progress,
-                 run.files.get(), run.flash.get(), out_dir};
+  RunContext ctx{run.duration_s,  run.params,      sink,    summary,      progress,
+                 run.files.get(), run.flash.get(), out_dir, run.pil.get()};
   summary.set_text("scenario", scen.name);
   summary.set("duration_s", run.duration_s);
   for (const auto& kv : run.params.values()) summary.set("param." + kv.first, kv.second);

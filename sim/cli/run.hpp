@@ -31,6 +31,9 @@ struct PreparedRun {
   Params params;
   std::unique_ptr<hal_host::FileFlash> flash;  ///< --flash FILE, opened; else null
   double duration_s = 0.0;  ///< the run's: --duration, else the scenario's default
+  /// --pil: the PIL target's QEMU, image and bootloader (takes_pil
+  /// scenarios only); null: the SIL.
+  std::shared_ptr<const AppTargetPilOptions> pil;
 };
 
 /// Scenario name, motor and board files and every key=value checked (the

@@ -16,7 +16,8 @@ class FileFlash;  // hal_host/file_flash.hpp
 
 namespace mcsim {
 
-struct MotorFiles;  // motor_file.hpp
+struct MotorFiles;           // motor_file.hpp
+struct AppTargetPilOptions;  // app_target.hpp
 
 /// A user-visible error: printed as "mcsim: <what>", exit code 2.
 struct UsageError : std::runtime_error {
@@ -171,6 +172,9 @@ struct RunContext {
   /// The run's output directory (mcsim run --out), where a scenario puts
   /// any file of its own; empty when the rows stay in memory (mdtool.sil).
   std::string out_dir = {};
+  /// --pil: the board's whole image on QEMU (app_target.hpp) instead of the
+  /// SIL (scenarios with takes_pil only; else null).
+  const AppTargetPilOptions* pil = nullptr;
 };
 
 /// The run's duration: ctx.duration_s when given (prepare_run checked it),
@@ -198,7 +202,17 @@ struct Scenario {
   /// False: the run's length is set by what it does (a commissioning
   /// sequence, a list of speeds, no time at all), and --duration is refused.
   bool takes_duration = true;
+  /// The scenario runs the drive application through make_file_target
+  /// (app_scenario.hpp) and so also on the PIL target (mcsim run --pil).
+  bool takes_pil = false;
 };
+
+/// s with takes_pil set (for the registrations of the scenarios on the
+/// drive application).
+inline Scenario on_app_target(Scenario s) {
+  s.takes_pil = true;
+  return s;
+}
 
 /// Global registry; scenario files register themselves with a static
 /// Registrar at start-up.

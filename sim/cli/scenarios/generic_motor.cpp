@@ -111,7 +111,7 @@ void run_current_step(RunContext& ctx) {
   (void)mc_params_eff_to_drive_cfg(&e, &dcfg);
   MotorFiles plant = f;
   plant.motor.j_kgm2 *= 1.0 + ctx.params.get("j_load_factor");
-  const std::unique_ptr<AppTarget> target = make_file_target(plant, p, nullptr);
+  const std::unique_ptr<AppTarget> target = make_file_target(ctx, plant, p, nullptr);
   AppRunner run(*target);
   run.start(MC_CAN_CTRL_CURRENT);
   hal_host::PmsmBoard& board = run.board();
@@ -151,7 +151,6 @@ void run_current_step(RunContext& ctx) {
   }
   record_app_setup(f, p, ctx.summary);
   const mc_app_probe_t& d = run.probe();
-  ctx.summary.set_text("target", target->name());
   ctx.summary.set("faults", d.faults);
   if (!stopped.empty()) {
     ctx.summary.set_text("fault_names", stopped);
@@ -183,14 +182,14 @@ void run_current_step(RunContext& ctx) {
   write_verdict(ctx.summary, judge_current_step(fig));
 }
 
-const Registrar reg_current(
+const Registrar reg_current(on_app_target(
     {"current-step",
      "any motor (--motor FILE [--board FILE]): FOC current loop through the firmware, a q then "
      "a d current step; summary: 10-90% rise times against the design ln 9 / cur_bw",
      0.0,
      {},
      run_current_step,
-     current_step_params});
+     current_step_params}));
 
 // --------------------------------------------------- speed step / load step
 std::vector<ParamSpec> speed_params(const MotorFiles& f, bool load_step) {
@@ -236,7 +235,7 @@ void run_speed(RunContext& ctx, bool load_step) {
   const std::function<double(double)> load = [tau_l, t_load](double t) {
     return t >= t_load ? tau_l : 0.0;
   };
-  const std::unique_ptr<AppTarget> target = make_file_target(f, p, &load);
+  const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, &load);
   AppRunner run(*target);
   run.start(MC_CAN_CTRL_SPEED);
   hal_host::PmsmBoard& board = run.board();
@@ -279,7 +278,6 @@ void run_speed(RunContext& ctx, bool load_step) {
   }
   record_app_setup(f, p, ctx.summary);
   const mc_app_probe_t& d = run.probe();
-  ctx.summary.set_text("target", target->name());
   ctx.summary.set_text("law", pi2d ? "pi2d" : "pi");
   ctx.summary.set("faults", d.faults);
   if (!stopped.empty()) {
@@ -322,7 +320,7 @@ void run_speed(RunContext& ctx, bool load_step) {
   write_verdict(ctx.summary, judge_speed_step(fig));
 }
 
-const Registrar reg_speed(
+const Registrar reg_speed(on_app_target(
     {"speed-step",
      "any motor: sensored speed step from standstill through the firmware (law=pi: speed PI "
      "on the drive's encoder speed; law=pi2d: the PI^2D plug-in); summary: 2% settling time, "
@@ -330,16 +328,16 @@ const Registrar reg_speed(
      0.0,
      {},
      [](RunContext& ctx) { run_speed(ctx, false); },
-     [](const MotorFiles& f) { return speed_params(f, false); }});
+     [](const MotorFiles& f) { return speed_params(f, false); }}));
 
-const Registrar reg_load(
+const Registrar reg_load(on_app_target(
     {"load-step",
      "any motor: sensored speed step to speed_rad_s, then a load step of load_frac rated torque "
      "(law=pi or pi2d); summary: speed dip and 2% recovery time",
      0.0,
      {},
      [](RunContext& ctx) { run_speed(ctx, true); },
-     [](const MotorFiles& f) { return speed_params(f, true); }});
+     [](const MotorFiles& f) { return speed_params(f, true); }}));
 
 // -------------------------------------------------- sensorless speed step
 std::vector<ParamSpec> sls_params(const MotorFiles& f) {
@@ -389,7 +387,7 @@ void run_sensorless(RunContext& ctx) {
   const std::function<double(double)> load = [tau0s, tau1s, t_load](double t) {
     return t >= t_load ? tau1s : tau0s;
   };
-  const std::unique_ptr<AppTarget> target = make_file_target(f, p, &load);
+  const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, &load);
   AppRunner run(*target);
   run.start(MC_CAN_CTRL_SPEED);
   run.send(run.cmd().speed_ref(w_t));
@@ -428,7 +426,6 @@ void run_sensorless(RunContext& ctx) {
   }
   record_app_setup(f, p, ctx.summary);
   const mc_app_probe_t& d = run.probe();
-  ctx.summary.set_text("target", target->name());
   ctx.summary.set("faults", d.faults);
   ctx.summary.set("handovers", d.sls_handovers);
   ctx.summary.set("fallbacks", d.sls_fallbacks);
@@ -465,14 +462,14 @@ void run_sensorless(RunContext& ctx) {
   write_verdict(ctx.summary, judge_sensorless(fig));
 }
 
-const Registrar reg_sls(
+const Registrar reg_sls(on_app_target(
     {"sensorless-speed-step",
      "any motor: sensorless start from standstill under load (I-f, hand-over to the flux "
      "observer), speed step, then a load step; summary: lock, angle error, tracking",
      0.0,
      {},
      run_sensorless,
-     sls_params});
+     sls_params}));
 
 }  // namespace
 }  // namespace mcsim

@@ -111,7 +111,8 @@ void run_position(RunContext& ctx) {
   const double replan_frac = ctx.params.get("replan_frac");
   const double tau_l = ctx.params.get("load_frac") * g.torque_rated_nm;
   const std::function<double(double)> load = [tau_l](double) { return tau_l; };
-  const std::unique_ptr<AppTarget> target = make_file_target(f, p, tau_l != 0.0 ? &load : nullptr);
+  const std::unique_ptr<AppTarget> target =
+      make_file_target(ctx, f, p, tau_l != 0.0 ? &load : nullptr);
   AppRunner run(*target);
   run.start(MC_CAN_CTRL_POSITION);
   hal_host::PmsmBoard& board = run.board();
@@ -224,7 +225,6 @@ void run_position(RunContext& ctx) {
   }
   record_app_setup(f, p, ctx.summary);
   const mc_app_probe_t& dr = run.probe();
-  ctx.summary.set_text("target", target->name());
   ctx.summary.set("faults", dr.faults);
   if (!stopped.empty()) {
     ctx.summary.set_text("fault_names", stopped);
@@ -269,7 +269,7 @@ void run_position(RunContext& ctx) {
   write_verdict(ctx.summary, judge_position(fig));
 }
 
-const Registrar reg_position(
+const Registrar reg_position(on_app_target(
     {"position-move",
      "any motor with an encoder: a trapezoidal move of `turns` turns through the position "
      "cascade (trajectory -> P -> velocity PI -> FOC); re-plan mid-move (replan_frac) or "
@@ -278,7 +278,7 @@ const Registrar reg_position(
      0.0,
      {},
      run_position,
-     position_params});
+     position_params}));
 
 }  // namespace
 }  // namespace mcsim

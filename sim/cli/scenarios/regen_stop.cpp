@@ -86,7 +86,7 @@ void run_regen(RunContext& ctx) {
   const double ke_j = 0.5 * m.j_kgm2 * w_t * w_t;
   const double p_cu = std::max(1e-9, 1.5 * m.r_ohm * g.i_limit_a * g.i_limit_a);
   const double dur = run_duration(ctx, t_stop + std::max(20.0 * t_acc, 10.0 * ke_j / p_cu) + t_set);
-  const std::unique_ptr<AppTarget> target = make_file_target(f, p, nullptr);
+  const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, nullptr);
   AppRunner run(*target);
   run.start(MC_CAN_CTRL_SPEED);
   auto& board = run.board();
@@ -166,7 +166,6 @@ void run_regen(RunContext& ctx) {
   }
   record_app_setup(f, p, ctx.summary);
   const mc_app_probe_t& d = run.probe();
-  ctx.summary.set_text("target", target->name());
   ctx.summary.set("faults", d.faults);
   ctx.summary.set_text("brake", brake ? "on" : "off");
   if (!stopped.empty()) {
@@ -205,7 +204,7 @@ void run_regen(RunContext& ctx) {
   write_verdict(ctx.summary, judge_regen_stop(fig));
 }
 
-const Registrar reg_regen(
+const Registrar reg_regen(on_app_target(
     {"regen-stop",
      "any motor: full-speed stop on a DC link (supply with internal resistance that cannot sink "
      "by default, bus capacitor, brake resistor with brake=on): regen current limit by the bus "
@@ -213,7 +212,7 @@ const Registrar reg_regen(
      0.0,
      {},
      run_regen,
-     regen_params});
+     regen_params}));
 
 }  // namespace
 }  // namespace mcsim

@@ -7,12 +7,9 @@
 // run through hal_host::app_period, once as the board's whole image on the
 // emulated Cortex-M4F (mc_stm32f405_pil, QEMU netduinoplus2).
 //
-// The SIL side here is a minimal AppTarget written in this test (the
-// generic make_app_target_sil, app_target_sil.cpp, had not landed on main
-// when this test was written): app_period on the board, the application
-// bound by app_target_binding as the PIL image binds it, an erased RAM
-// store of the PIL image's geometry and a CAN HAL that answers as the PIL
-// image's (hal/pil/mc_hal_pil.c).
+// The SIL side is the scenarios' (mcsim::make_app_target_sil,
+// sim/cli/app_target_sil.cpp): app_period on the board, the application
+// bound by app_target_binding as the PIL image binds it.
 //
 // Boards: the ODrive v3.6 (24 V variant) and the VESC 6, with the ODrive
 // D5065 motor file (sim/motors/odrive-d5065.toml); the sensored speed law on
@@ -35,20 +32,17 @@
 
 #include <sys/stat.h>
 
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "app_target.hpp"
 #include "drive_setup.hpp"
-#include "hal_host/app_rig.hpp"
 #include "mc_record.hpp"
 #include "motor_file.hpp"
 #include "pil_test_link.hpp"
@@ -60,7 +54,6 @@ extern "C" {
 #include "mc_ctrl_sensorless.h"
 #include "mc_board_odrive36_gen.h"
 #include "mc_board_vesc6_gen.h"
-#include "mc_fake_flash.h"
 }
 
 namespace {
@@ -96,88 +89,6 @@ mc_params_t params_from_files(const mcsim::MotorFiles& f) {
   p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
   return p;
 }
-
-// ---- the minimal SIL target ---------------------------------------------
-
-// CAN as the PIL image answers it (hal/pil/mc_hal_pil.c): FD capable,
-// error-active, frames sent at once.
-struct QueueCan {
-  std::deque<mc_hal_can_frame_t> rx;
-  std::vector<mc_hal_can_frame_t>* tx = nullptr;
-  mc_hal_can_t dev{};
-  static int send(void* ctx, const mc_hal_can_frame_t* f) {
-    const int rc = mc_hal_can_frame_check(f, true);
-    if (rc != 0) return rc;
-    auto* q = static_cast<QueueCan*>(ctx);
-    if (q->tx != nullptr) q->tx->push_back(*f);
-    return 0;
-  }
-  static int receive(void* ctx, mc_hal_can_frame_t* f) {
-    auto* q = static_cast<QueueCan*>(ctx);
-    if (q->rx.empty()) return -EAGAIN;
-    *f = q->rx.front();
-    q->rx.pop_front();
-    return 0;
-  }
-  static int status(void*, mc_hal_can_status_t* s) {
-    *s = mc_hal_can_status_t{};
-    s->state = MC_HAL_CAN_STATE_ERROR_ACTIVE;
-    s->fd_capable = true;
-    return 0;
-  }
-};
-const mc_hal_can_ops_t kQueueCanOps = {QueueCan::send, QueueCan::receive, QueueCan::status};
-
-class SilTarget final : public mcsim::AppTarget {
- public:
-  explicit SilTarget(const mcsim::AppSetup& s) : defaults_(s.defaults), board_(s.board) {
-    can_.dev = mc_hal_can_t{&kQueueCanOps, &can_};
-    // The PIL image's store: two erased 16 KiB sectors.
-    flash_mem_.assign(2u * 16u * 1024u, 0xFFu);
-    const uint32_t sectors[2] = {16u * 1024u, 16u * 1024u};
-    if (mc_fake_flash_init(&flash_, flash_mem_.data(), sectors, 2u) != 0) {
-      throw std::runtime_error("SIL: fake flash refused");
-    }
-    mc_app_cfg_t c{};
-    c.defaults = &defaults_;
-    c.flash = &flash_.dev;
-    c.flash_sectors[0] = 0u;
-    c.flash_sectors[1] = 1u;
-    mcsim::app_target_binding(defaults_, &c);
-    (void)mc_app_boot(app_.get(), &c);
-    const uint32_t err = mc_app_start(app_.get(), &drive_, board_.hal(), &can_.dev, true);
-    if (err != MC_APP_CFG_OK) {
-      throw std::runtime_error("SIL: the application refused the setup, MC_APP_CFG 0x" +
-                               std::to_string(err));
-    }
-    mc_app_probe(app_.get(), &probe_);
-  }
-  mcsim::AppTargetPeriod period(const std::vector<mc_hal_can_frame_t>& rx,
-                                std::vector<mc_hal_can_frame_t>* tx) override {
-    for (const mc_hal_can_frame_t& f : rx) can_.rx.push_back(f);
-    can_.tx = tx;
-    const hal_host::AppPeriod ap = hal_host::app_period(board_, *app_);
-    can_.tx = nullptr;
-    mc_app_probe(app_.get(), &probe_);
-    mcsim::AppTargetPeriod r;
-    r.slow_ran = ap.slow_ran;
-    return r;
-  }
-  const mc_app_probe_t& probe() const override { return probe_; }
-  const mc_params_t& params() const override { return app_->params; }
-  hal_host::PmsmBoard& board() override { return board_; }
-  std::string name() const override { return "sil (test)"; }
-
- private:
-  mc_params_t defaults_;
-  hal_host::PmsmBoard board_;
-  QueueCan can_;
-  std::vector<uint8_t> flash_mem_;
-  mc_fake_flash_t flash_{};
-  std::unique_ptr<mc_app_t> app_ = std::make_unique<mc_app_t>();
-  mc_drive_t drive_{};
-  mc_app_probe_t probe_{};
-};
 
 // ---- the experiment -----------------------------------------------------
 
@@ -320,7 +231,8 @@ RunLog same_experiment(const std::string& board, uint32_t speed_law = 0u) {
   const std::string tag = board + (speed_law == 0u ? "" : ".law" + std::to_string(speed_law));
   EXPECT_EQ(mc_params_validate(&s.defaults), MC_PARAMS_OK);
   expect_board_image_table(s.defaults, board);
-  SilTarget sil(s);
+  const std::unique_ptr<mcsim::AppTarget> sil_t = mcsim::make_app_target_sil(s);
+  mcsim::AppTarget& sil = *sil_t;
   mcsim::AppTargetPilOptions po;
   po.link = pil_test_link("pil_app_target_" + tag + ".log", 60.0);
   po.board = board;
@@ -445,7 +357,8 @@ TEST(PilAppTarget, OneUlpInAParameterChangesThePilRun) {
   const mcsim::AppSetup s = setup_for(board);
   mcsim::AppSetup s_ulp = s;
   s_ulp.defaults.r_ohm = std::nextafter(s.defaults.r_ohm, 1.0f);
-  SilTarget sil(s);
+  const std::unique_ptr<mcsim::AppTarget> sil_t = mcsim::make_app_target_sil(s);
+  mcsim::AppTarget& sil = *sil_t;
   mcsim::AppTargetPilOptions po;
   po.link = pil_test_link("pil_app_target_ulp.log", 60.0);
   std::unique_ptr<mcsim::AppTarget> pil = mcsim::make_app_target_pil(s_ulp, po);

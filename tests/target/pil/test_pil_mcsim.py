@@ -1,0 +1,212 @@
+#!/usr/bin/env python3
+"""mcsim run --pil against mcsim run, file by file (issue 29 item 5).
+
+    test_pil_mcsim.py --mcsim M --motor FILE --board B --duration S --work DIR \\
+        SCENARIO [--set key=value ...]
+
+runs SCENARIO twice on the same motor and board, once on the SIL and once with
+--pil (the board's whole image on QEMU), each into its own directory, and
+requires the same exit code and the same files (the CSV, or the partial CSV of
+a run whose verdict fails at this short duration, and the JSON summary) equal
+byte for byte; a difference prints the file and its first differing line.
+Prints the PIL cost as one JSON line ("[pil-cost] {...}"): wall seconds of the
+PIL run per simulated second (QEMU's boot included, as a user pays it).
+
+    test_pil_mcsim.py --mcsim M --motor FILE --self-test --work DIR
+
+checks the comparison itself (a one-character change in a file is found and
+its line printed) and --pil's refusals (a scenario that does not run the
+drive application; a missing image, named; a board with a brake chopper:
+the link carries no brake output yet; nothing written), without QEMU.
+"""
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+
+def first_difference(a_path, b_path):
+    """None when the files are equal byte for byte, else a message naming the
+    first differing line (1-based) and both versions of it."""
+    with open(a_path, "rb") as f:
+        a = f.read()
+    with open(b_path, "rb") as f:
+        b = f.read()
+    if a == b:
+        return None
+    la, lb = a.split(b"\n"), b.split(b"\n")
+    for i in range(max(len(la), len(lb))):
+        x = la[i] if i < len(la) else b"<end of file>"
+        y = lb[i] if i < len(lb) else b"<end of file>"
+        if x != y:
+            return "%s and %s differ first at line %d:\n  sil: %s\n  pil: %s" % (
+                a_path,
+                b_path,
+                i + 1,
+                x.decode(errors="replace"),
+                y.decode(errors="replace"),
+            )
+    return "%s and %s differ (same lines, different bytes)" % (a_path, b_path)
+
+
+def compare_dirs(sil_dir, pil_dir):
+    """The list of differences between the two output directories."""
+    errors = []
+    names_s, names_p = sorted(os.listdir(sil_dir)), sorted(os.listdir(pil_dir))
+    if names_s != names_p:
+        errors.append("the runs wrote different files: sil %s, pil %s" % (names_s, names_p))
+    for n in names_s:
+        if n in names_p:
+            d = first_difference(os.path.join(sil_dir, n), os.path.join(pil_dir, n))
+            if d:
+                errors.append(d)
+    return errors
+
+
+def run(cmd, env=None):
+    t0 = time.monotonic()
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    return p, time.monotonic() - t0
+
+
+def fresh(path):
+    shutil.rmtree(path, ignore_errors=True)
+    return path
+
+
+def same_run(a):
+    base = [a.mcsim, "run", a.scenario, "--motor", a.motor, "--board", a.board, "--duration", repr(a.duration)]
+    for kv in a.set or []:
+        base += ["--set", kv]
+    sil_dir = fresh(os.path.join(a.work, "sil"))
+    pil_dir = fresh(os.path.join(a.work, "pil"))
+    ps, wall_s = run(base + ["--out", sil_dir])
+    pp, wall_p = run(base + ["--out", pil_dir, "--pil"])
+    for tag, p in (("sil", ps), ("pil", pp)):
+        print("[%s] exit %d\n%s%s" % (tag, p.returncode, p.stdout, p.stderr), end="")
+    errors = []
+    # 0 (pass) or 1 (the verdict fails at this short duration): a run that
+    # was refused (2) or crashed wrote nothing to compare.
+    if ps.returncode not in (0, 1):
+        errors.append("the SIL run exited %d" % ps.returncode)
+    if pp.returncode != ps.returncode:
+        errors.append("exit codes differ: sil %d, pil %d" % (ps.returncode, pp.returncode))
+    if "target pil:" not in pp.stderr:
+        errors.append("the --pil run did not name its target on stderr")
+    if not errors:
+        errors += compare_dirs(sil_dir, pil_dir)
+    print(
+        "[pil-cost] "
+        + json.dumps(
+            {
+                "benchmark": "pil_mcsim",
+                "scenario": a.scenario,
+                "set": a.set or [],
+                "board": a.board,
+                "motor": os.path.basename(a.motor),
+                "duration_s": a.duration,
+                "pil_wall_s": round(wall_p, 3),
+                "sil_wall_s": round(wall_s, 3),
+                "pil_wall_per_sim_s": round(wall_p / a.duration, 1),
+            }
+        )
+    )
+    return errors
+
+
+def self_test(a):
+    errors = []
+    d = fresh(os.path.join(a.work, "self"))
+    os.makedirs(os.path.join(d, "a"))
+    os.makedirs(os.path.join(d, "b"))
+    rows = "t,x\n0,1.0\n1,2.0000000000000004\n2,3.0\n"
+    for side, text in (("a", rows), ("b", rows.replace("2.0000000000000004", "2.0000000000000009"))):
+        with open(os.path.join(d, side, "s.csv"), "w") as f:
+            f.write(text)
+    msg = first_difference(os.path.join(d, "a", "s.csv"), os.path.join(d, "b", "s.csv"))
+    if not msg or "line 3" not in msg or "2.0000000000000009" not in msg:
+        errors.append("a one-digit change was not reported at its line: %r" % msg)
+    if compare_dirs(os.path.join(d, "a"), os.path.join(d, "a")):
+        errors.append("a directory differs from itself")
+    # A scenario that does not run the drive application refuses --pil.
+    out = os.path.join(d, "refused")
+    p, _ = run([a.mcsim, "run", "pmsm-open-loop-step", "--out", out, "--pil"])
+    if p.returncode != 2 or "does not run the drive application" not in p.stderr or os.path.exists(out):
+        errors.append("pmsm-open-loop-step --pil: exit %d, %r" % (p.returncode, p.stderr))
+    # A missing image is named, and nothing is written.
+    env = dict(os.environ, MCSIM_PIL_ELF=os.path.join(d, "no_such_image.elf"))
+    p, _ = run(
+        [
+            a.mcsim,
+            "run",
+            "speed-step",
+            "--motor",
+            a.motor,
+            "--board",
+            "vesc6",
+            "--duration",
+            "0.01",
+            "--out",
+            out,
+            "--pil",
+        ],
+        env,
+    )
+    if (
+        p.returncode != 2
+        or "no_such_image.elf" not in p.stderr
+        or "MCSIM_PIL_ELF" not in p.stderr
+        or os.path.exists(out)
+    ):
+        errors.append("a missing image: exit %d, %r" % (p.returncode, p.stderr))
+    # The ODrive v3.6's brake chopper (regen-stop's default brake=on): the
+    # link carries no brake output yet, so the PIL run is refused, named.
+    p, _ = run(
+        [
+            a.mcsim,
+            "run",
+            "regen-stop",
+            "--motor",
+            a.motor,
+            "--board",
+            "odrive36",
+            "--duration",
+            "0.01",
+            "--out",
+            out,
+            "--pil",
+        ]
+    )
+    if p.returncode != 2 or "brake chopper" not in p.stderr or os.path.exists(out):
+        errors.append("regen-stop brake=on --pil: exit %d, %r" % (p.returncode, p.stderr))
+    return errors
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--mcsim", required=True)
+    ap.add_argument("--motor", required=True)
+    ap.add_argument("--board")
+    ap.add_argument("--duration", type=float)
+    ap.add_argument("--work", required=True)
+    ap.add_argument("--set", action="append")
+    ap.add_argument("--self-test", action="store_true")
+    ap.add_argument("scenario", nargs="?")
+    a = ap.parse_args()
+    if a.self_test:
+        errors = self_test(a)
+    else:
+        if not (a.scenario and a.board and a.duration):
+            ap.error("SCENARIO, --board and --duration are required")
+        errors = same_run(a)
+    for e in errors:
+        print("FAIL: " + e)
+    return 1 if errors else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
