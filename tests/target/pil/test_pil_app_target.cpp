@@ -452,7 +452,8 @@ TEST(PilAppTarget, OdriveV36RegenerativeStopBrakesAsTheSil) {
   const mcsim::AppSetup s = regen_setup();
   ASSERT_EQ(mc_params_validate(&s.defaults), MC_PARAMS_OK);
   expect_board_image_table(s.defaults, "odrive36");
-  SilTarget sil(s);
+  const std::unique_ptr<mcsim::AppTarget> sil_t = mcsim::make_app_target_sil(s);
+  mcsim::AppTarget& sil = *sil_t;
   mcsim::AppTargetPilOptions po;
   po.link = pil_test_link("pil_app_target_odrive36.brake.log", 60.0);
   po.board = "odrive36";
