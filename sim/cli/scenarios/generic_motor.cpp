@@ -12,6 +12,7 @@
 
 #include "app_scenario.hpp"
 #include "drive_setup.hpp"
+#include "rise_timer.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
 extern "C" {
@@ -22,37 +23,6 @@ namespace mcsim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// 10-90 % rise time of y after a step at t0 to `target`, from consecutive
-// samples (linear interpolation), in constant memory.
-class RiseTimer {
- public:
-  RiseTimer(double t0, double y0, double target) : t0_(t0), y0_(y0), target_(target) {}
-  void add(double t, double y) {
-    if (t >= t0_ && have_) {
-      cross(0.1, &t10_, t, y);
-      cross(0.9, &t90_, t, y);
-    }
-    tp_ = t;
-    yp_ = y;
-    have_ = true;
-  }
-  double rise_s() const { return t90_ - t10_; }
-
- private:
-  void cross(double frac, double* tc, double t, double y) const {
-    if (!std::isnan(*tc)) return;
-    const double lvl = y0_ + frac * (target_ - y0_);
-    const double a = yp_ - lvl, b = y - lvl;
-    if ((target_ > y0_ && a < 0 && b >= 0) || (target_ < y0_ && a > 0 && b <= 0)) {
-      *tc = tp_ + (t - tp_) * a / (a - b);
-    }
-  }
-  double t0_, y0_, target_;
-  double tp_ = 0, yp_ = 0;
-  bool have_ = false;
-  double t10_ = std::nan(""), t90_ = std::nan("");
-};
 
 // The sensorless law's error bits, named (the reasons a start can fail).
 std::string sls_reason(uint32_t e) {

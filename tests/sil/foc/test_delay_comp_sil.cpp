@@ -14,39 +14,13 @@
 
 #include "drive_setup.hpp"
 #include "motor_file.hpp"
+#include "rise_timer.hpp"
 
 extern "C" {
 #include "foc/mc_foc.h"
 }
 
 namespace {
-
-// 10-90 % rise time of y after a step at t0 from 0 to `target` (linear
-// interpolation between periods); NaN if a level is never crossed.
-class Rise {
- public:
-  Rise(double t0, double target) : t0_(t0), target_(target) {}
-  void add(double t, double y) {
-    if (t >= t0_ && have_) {
-      cross(0.1, &t10_, t, y);
-      cross(0.9, &t90_, t, y);
-    }
-    tp_ = t;
-    yp_ = y;
-    have_ = true;
-  }
-  double rise_s() const { return t90_ - t10_; }
-
- private:
-  void cross(double frac, double* tc, double t, double y) const {
-    if (!std::isnan(*tc)) return;
-    const double a = (yp_ - frac * target_) / target_, b = (y - frac * target_) / target_;
-    if (a < 0 && b >= 0) *tc = tp_ + (t - tp_) * a / (a - b);
-  }
-  double t0_, target_, tp_ = 0, yp_ = 0;
-  bool have_ = false;
-  double t10_ = std::nan(""), t90_ = std::nan("");
-};
 
 struct Result {
   uint32_t faults = 0;
@@ -85,7 +59,7 @@ Result run(double we_t, double pwm_hz, bool compensate) {
   // 10 ms at speed before the first step (the encoder's tracking loop settles)
   const double t_iq = t_ramp + 0.01, t_id = t_iq + 12 * design + 2e-3,
                t_end = t_id + 12 * design + 2e-3;
-  Rise rq(t_iq, i_step), rd(t_id, 0.5 * i_step);
+  mcsim::RiseTimer rq(t_iq, 0.0, i_step), rd(t_id, 0.0, 0.5 * i_step);
   Result r;
   for (long k = 0; rig.board().t_s() < t_end; ++k) {
     const double t = rig.board().t_s();
