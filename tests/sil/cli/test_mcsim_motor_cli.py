@@ -75,7 +75,7 @@ class MotorCli(unittest.TestCase):
         self.assertEqual(h, COLUMNS[:8] + ["theta_e_hat_rad"] + COLUMNS[8:])
 
     def test_gain_override_and_motor_ranges(self):
-        run("run", "current-step", "--out", self.out, *d5065(), "--set", "cur_bw_rad_s=1000",
+        run("run", "current-step", "--out", self.out, *d5065(), "--set", "current_bw_rad_s=1000",
             "--set", "iq_step_a=20")
         with open(os.path.join(self.out, "current-step.json")) as f:
             s = json.load(f)
@@ -327,7 +327,7 @@ class Verdicts(unittest.TestCase):
         # A speed loop crossing over at 800 rad/s, above a quarter of the
         # encoder tracking loop's 1000 rad/s (the derivation's bound),
         # limit-cycles: it never settles within 2 %.
-        s = self.failed("speed-step", "--set", "speed_wc_rad_s=800")
+        s = self.failed("speed-step", "--set", "speed_bw_rad_s=800")
         self.assertEqual(s["verdict"], "not settled")
         self.assertIn("2 % of the target", s["verdict_detail"])
         # cut short before the slew ends: the target is not reached
