@@ -33,7 +33,7 @@ samples = 2
 csv_every = 10
 
 [sweep]
-iq_step_a = [3.0, 60.0]
+iq_step_a = [3.0, 50.0]
 current_bw_rad_s = {{ start = 1000.0, stop = 10000.0, num = 3, log = true }}
 id_step_a = {{ dist = "uniform", low = -2.0, high = 0.0 }}
 

@@ -212,13 +212,13 @@ class Errors(unittest.TestCase):
         # a current-loop bandwidth the parameter table does not allow (at
         # most 0.5 pwm_hz: 12 kHz on this 24 kHz board) is refused before
         # the run, the reason named
-        e = self.same_error("current-step", M, B, {"iq_step_a": 60, "current_bw_rad_s": 15000},
+        e = self.same_error("current-step", M, B, {"iq_step_a": 50, "current_bw_rad_s": 15000},
                             duration=0.01)
         self.assertIsInstance(e, sil.UsageError)
         self.assertIn("MC_PARAMS_ERR BANDWIDTH", str(e))
         # the drive told 20 times the motor's inductance: its current loop's
         # gain 20 times too high, the q step trips the drive
-        e = self.same_error("current-step", M, B, {"iq_step_a": 60, "model_l_scale": 20},
+        e = self.same_error("current-step", M, B, {"iq_step_a": 50, "model_l_scale": 20},
                             duration=0.01)
         self.assertIsInstance(e, sil.RunFailed)
         self.assertIn("OVERCURRENT", str(e))
