@@ -6,17 +6,23 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "app_cmd.hpp"
 #include "app_params.hpp"
+#include "app_target.hpp"
+#include "drive_setup.hpp"
 #include "motor_library.hpp"
 
 namespace mcsim {
 namespace {
 
 const testlib::Case kD5065{"odrive-d5065", "odrive-v36-24v"};
+constexpr double kTwoPi = 6.283185307179586476925;
 
 std::map<std::string, double> speed_step(const testlib::Sets& sets, const std::string& tag) {
   return testlib::run_scenario("speed-step", testlib::files(kD5065), sets, tag);
@@ -133,6 +139,40 @@ TEST(AppScenarios, SummaryGainRecordsAreTheCDerivations) {
   EXPECT_EQ(r.at("gain.speed_limit_rad_s"), e.g.speed_limit_rad_s);
   EXPECT_EQ(r.at("param.speed_bw_rad_s"), static_cast<double>(e.p.speed_bw_rad_s));
   EXPECT_EQ(r.at("param.traj_v_max_rad_s"), static_cast<double>(e.p.traj_v_max_rad_s));
+}
+
+// An encoder mounted the other way (the plant's encoder counts down as the
+// rotor turns positive) with encoder_reversed = 1: POSITION moves the rotor
+// one turn forward, as it does with the encoder the right way round. The
+// position law counts turns on the drive's count, which has the direction
+// applied (it counted the encoder's own count before: its feedback then had
+// the wrong sign). Tolerance: 3 counts of the 8192 (the loop's settling and
+// the load-free rotor's ripple at rest; SET_POSITION_REF's 1e-4 rad
+// resolution is under one count).
+TEST(AppScenarios, PositionWithAReversedEncoderMovesTheWayCommanded) {
+  const MotorFiles f = testlib::files(kD5065);
+  for (const int dir : {+1, -1}) {
+    AppSetup s;
+    s.board = build_board_cfg(f);
+    s.board.encoder.direction = dir;
+    s.defaults = params_from_files(f, Params(app_gain_params(f), {}));
+    s.defaults.encoder_reversed = dir < 0 ? 1u : 0u;
+    const std::unique_ptr<AppTarget> t = make_app_target_sil(s);
+    AppRunner run(*t);
+    run.start(MC_CAN_CTRL_POSITION);
+    const double T = run.board().period_s();
+    const double cpr = static_cast<double>(s.defaults.encoder_cpr);
+    const double theta0 = run.board().state()(3);
+    const auto steps = [&](double secs) {
+      for (long k = std::lround(secs / T); k > 0; --k) run.step();
+    };
+    steps(0.01);
+    run.send(run.cmd().position_ref(kTwoPi));
+    steps(0.6);
+    const double moved = run.board().state()(3) - theta0;
+    EXPECT_NEAR(moved, kTwoPi, 3.0 * kTwoPi / cpr) << "encoder direction " << dir;
+    EXPECT_EQ(run.probe().faults, 0u) << "encoder direction " << dir;
+  }
 }
 
 }  // namespace
