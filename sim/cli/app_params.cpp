@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -14,33 +17,182 @@ extern "C" {
 namespace mcsim {
 namespace {
 
-struct GainParam {
-  const char* key;  // the scenario's --set key (gain_params)
-  float mc_params_t::*field;
+// The gain parameters of the table (tools/config/params.toml), by name: the
+// values mc_law_gains_from_params hands mc_gains_derive as given when not 0.
+// Each is a --set key of the generic scenarios, its default the value the C
+// derivation resolves for the files (mc_params_resolve).
+const char* const kGainNames[] = {
+    "current_bw_rad_s",   "speed_pll_bw_rad_s", "speed_bw_rad_s",         "speed_kp_a_s_rad",
+    "speed_ki_a_rad",     "speed_ramp_rad_s2",  "obs_omega_crit_m_rad_s", "obs_pll_bw_rad_s",
+    "sls_speed_bw_rad_s", "sls_handover_rad_s", "sls_if_current_a",       "sls_if_accel_rad_s2",
+    "sls_align_time_s",   "pi2d_wn_rad_s",      "pi2d_a_per_s",           "pos_kp_per_s",
+    "traj_v_max_rad_s",   "traj_a_max_rad_s2",  "traj_d_max_rad_s2",      "traj_filter_bw_rad_s",
+    "stop_decel_rad_s2",
 };
 
-const GainParam kGainParams[] = {
-    {"cur_bw_rad_s", &mc_params_t::current_bw_rad_s},
-    {"i_limit_a", &mc_params_t::i_max_a},
-    {"enc_pll_bw_rad_s", &mc_params_t::speed_pll_bw_rad_s},
-    {"speed_wc_rad_s", &mc_params_t::speed_bw_rad_s},
-    {"speed_accel_rad_s2", &mc_params_t::speed_ramp_rad_s2},
-    {"obs_crit_rad_s", &mc_params_t::obs_omega_crit_m_rad_s},
-    {"pll_bw_rad_s", &mc_params_t::obs_pll_bw_rad_s},
-    {"sls_wc_rad_s", &mc_params_t::sls_speed_bw_rad_s},
-    {"handover_rad_s", &mc_params_t::sls_handover_rad_s},
-    {"if_current_a", &mc_params_t::sls_if_current_a},
-    {"if_accel_rad_s2", &mc_params_t::sls_if_accel_rad_s2},
-    {"align_time_s", &mc_params_t::sls_align_time_s},
-    {"pi2d_wn_rad_s", &mc_params_t::pi2d_wn_rad_s},
-    {"pi2d_a_per_s", &mc_params_t::pi2d_a_per_s},
-    {"pos_kp_per_s", &mc_params_t::pos_kp_per_s},
-    {"pos_v_max_rad_s", &mc_params_t::traj_v_max_rad_s},
-    {"pos_a_max_rad_s2", &mc_params_t::traj_a_max_rad_s2},
-    {"pos_d_max_rad_s2", &mc_params_t::traj_d_max_rad_s2},
-    {"pos_filter_bw_rad_s", &mc_params_t::traj_filter_bw_rad_s},
-    {"stop_decel_rad_s2", &mc_params_t::stop_decel_rad_s2},
+// Model errors: the motor values the drive is given, the files' scaled.
+struct ModelScale {
+  const char* key;
+  const char* help;
 };
+const ModelScale kScales[] = {
+    {"model_r_scale", "the drive's R / the motor's (model error)"},
+    {"model_l_scale", "the drive's Ld, Lq / the motor's (model error)"},
+    {"model_flux_scale", "the drive's flux / the motor's (model error)"},
+};
+
+// The derived limits of mc_gains_t the summary records (gain.NAME), besides
+// the gain parameters' own values.
+struct GainField {
+  const char* name;
+  double mc_gains_t::*field;
+};
+const GainField kGainFields[] = {
+    {"cur_bw_rad_s", &mc_gains_t::cur_bw_rad_s},
+    {"i_limit_a", &mc_gains_t::i_limit_a},
+    {"enc_pll_bw_rad_s", &mc_gains_t::enc_pll_bw_rad_s},
+    {"speed_wc_rad_s", &mc_gains_t::speed_wc_rad_s},
+    {"speed_accel_rad_s2", &mc_gains_t::speed_accel_rad_s2},
+    {"speed_kp_a_s_rad", &mc_gains_t::speed_kp_a_s_rad},
+    {"speed_ki_a_rad", &mc_gains_t::speed_ki_a_rad},
+    {"obs_crit_rad_s", &mc_gains_t::obs_crit_rad_s},
+    {"pll_bw_rad_s", &mc_gains_t::pll_bw_rad_s},
+    {"sls_wc_rad_s", &mc_gains_t::sls_wc_rad_s},
+    {"handover_rad_s", &mc_gains_t::handover_rad_s},
+    {"if_current_a", &mc_gains_t::if_current_a},
+    {"if_accel_rad_s2", &mc_gains_t::if_accel_rad_s2},
+    {"align_time_s", &mc_gains_t::align_time_s},
+    {"pi2d_wn_rad_s", &mc_gains_t::pi2d_wn_rad_s},
+    {"pi2d_a_per_s", &mc_gains_t::pi2d_a_per_s},
+    {"pos_kp_per_s", &mc_gains_t::pos_kp_per_s},
+    {"pos_v_max_rad_s", &mc_gains_t::pos_v_max_rad_s},
+    {"pos_a_max_rad_s2", &mc_gains_t::pos_a_max_rad_s2},
+    {"pos_d_max_rad_s2", &mc_gains_t::pos_d_max_rad_s2},
+    {"pos_filter_bw_rad_s", &mc_gains_t::pos_filter_bw_rad_s},
+    {"stop_decel_rad_s2", &mc_gains_t::stop_decel_rad_s2},
+    {"kt_nm_a", &mc_gains_t::kt_nm_a},
+    {"v_max_v", &mc_gains_t::v_max_v},
+    {"i_rated_eff_a", &mc_gains_t::i_rated_eff_a},
+    {"torque_rated_nm", &mc_gains_t::torque_rated_nm},
+    {"speed_limit_rad_s", &mc_gains_t::speed_limit_rad_s},
+    {"speed_rated_eff_rad_s", &mc_gains_t::speed_rated_eff_rad_s},
+    {"pi2d_coupling", &mc_gains_t::pi2d_coupling},
+};
+
+// The table row of a gain parameter (kGainNames holds only table names: a
+// unit test checks each is found).
+const mc_param_info_t& row_of(const char* name) {
+  const int32_t i = mc_param_find_name(name);
+  if (i < 0) throw std::logic_error(std::string("no parameter named ") + name);
+  return mc_param_table[i];
+}
+
+double get_f32(const mc_params_t& p, const mc_param_info_t& info) {
+  mc_param_value_t v;
+  v.u = mc_param_get_raw(&p, &info);
+  return static_cast<double>(v.f);
+}
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(4);
+  os << v;
+  return os.str();
+}
+
+// Where a file key's value came from ("FILE:LINE", or the --set that
+// replaced it); the file itself for a key left at its default.
+std::string where(const KeySources& at, const std::string& key, const std::string& file) {
+  const auto it = at.find(key);
+  return it != at.end() ? it->second : file;
+}
+
+// The refusals of mc_gains_derive's errors (mc_params_resolve): no gains
+// make these safe. Each names the value its remedy changes (file and line,
+// or its --set) and the values the C derivation weighed it against (e.m:
+// what the drive is given, the model scales applied).
+void refuse_unsafe(const MotorFiles& f, uint32_t err, const mc_params_eff_t& e) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  const mc_gains_motor_t& gm = e.m;
+  const double T = 1.0 / gm.pwm_hz;
+  const double l_min = std::min(gm.ld_h, gm.lq_h);
+  const std::string l_at = where(m.at, m.ld_h <= m.lq_h ? "ld_h" : "lq_h", m.file);
+  if ((err & MC_GAINS_ERR_VALUE) != 0u) {
+    throw UsageError(m.file + ", " + b.file + ": no gains: a motor or board value is not positive");
+  }
+  if ((err & MC_GAINS_ERR_LR_SHORT) != 0u) {
+    throw UsageError(where(b.at, "pwm_hz", b.file) +
+                     ": no safe gains: the electrical time constant L/R = " +
+                     num(l_min / gm.r_ohm) + " s (L at " + l_at + ", r_ohm at " +
+                     where(m.at, "r_ohm", m.file) + ") is shorter than two PWM periods (" +
+                     num(2 * T) + " s at " + num(gm.pwm_hz) + " Hz): raise pwm_hz");
+  }
+  if ((err & MC_GAINS_ERR_RIPPLE) != 0u) {
+    throw UsageError(where(b.at, "pwm_hz", b.file) +
+                     ": no safe gains: the PWM current ripple vbus T / (4 L) = " +
+                     num(gm.vbus_v * T / (4.0 * l_min)) + " A (peak to peak; L at " + l_at +
+                     ") exceeds i_max_a (" + num(gm.i_max_a) + " A at " +
+                     where(m.at, "i_max_a", m.file) + "): raise pwm_hz or lower vbus_v (at " +
+                     where(b.at, "vbus_v", b.file) + ")");
+  }
+  if ((err & MC_GAINS_ERR_I_LIMIT) != 0u) {
+    throw UsageError(where(b.at, "i_sense_max_a", b.file) + ": no safe gains: the usable current " +
+                     num(e.g.i_limit_a) +
+                     " A (sensor range / 1.25, bus through R) is below 10 % of i_max_a (" +
+                     num(gm.i_max_a) + " A at " + where(m.at, "i_max_a", m.file) + ")");
+  }
+  if ((err & MC_GAINS_ERR_SENSE) != 0u) {
+    throw UsageError(where(b.at, "i_sense_max_a", b.file) + ": i_limit_a " + num(e.g.i_limit_a) +
+                     " A leaves no margin to the current sensor's full scale " +
+                     num(gm.i_sense_max_a) + " A");
+  }
+  if ((err & MC_GAINS_ERR_SPEED_LIMIT) != 0u) {
+    throw UsageError(where(b.at, "vbus_v", b.file) + ": no safe gains: the bus (" + num(gm.vbus_v) +
+                     " V) cannot drive rated current (" + num(gm.i_rated_a) +
+                     " A, the motor's R and flux: " + m.file + ") at any speed");
+  }
+  if (err != 0u) {
+    throw UsageError(m.file + ", " + b.file + ": no safe gains: MC_GAINS_ERR " +
+                     law_err_names(err));
+  }
+}
+
+// The files' motor and board into the table (the drive's motor values
+// scaled by the model errors); every gain and derived limit left 0.
+mc_params_t table_of(const MotorFiles& f, double r_scale, double l_scale, double flux_scale) {
+  const MotorSpec& m = f.motor;
+  const BoardSpec& b = f.board;
+  mc_params_t p = mc_params_default;
+  p.r_ohm = static_cast<float>(m.r_ohm * r_scale);
+  p.ld_h = static_cast<float>(m.ld_h * l_scale);
+  p.lq_h = static_cast<float>(m.lq_h * l_scale);
+  p.flux_wb = static_cast<float>(m.flux_wb * flux_scale);
+  p.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
+  p.j_kgm2 = static_cast<float>(m.j_kgm2);
+  p.b_nm_s_rad = static_cast<float>(m.b_nm_s_rad);
+  p.i_max_a = static_cast<float>(m.i_max_a);
+  p.speed_max_rad_s = static_cast<float>(m.speed_max_rad_s);
+  p.i_rated_a = static_cast<float>(m.i_rated_a);
+  p.speed_rated_rad_s = static_cast<float>(m.speed_rated_rad_s);
+  p.vbus_v = static_cast<float>(b.vbus_v);
+  p.pwm_hz = static_cast<uint32_t>(std::lround(b.pwm_hz));
+  p.dead_time_s = static_cast<float>(b.dead_time_s);
+  p.current_sensors = static_cast<uint32_t>(b.current_sensors);
+  p.i_sense_max_a = static_cast<float>(b.i_sense_max_a);
+  p.adc_bits = static_cast<uint32_t>(b.adc_bits);
+  p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
+  p.slow_loop_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
+  return p;
+}
+
+// The table resolved by the C derivation, refused with the reason named.
+mc_params_eff_t resolve_or_refuse(const MotorFiles& f, const mc_params_t& p) {
+  mc_params_eff_t e{};
+  const uint32_t err = mc_params_resolve(&p, &e);
+  if (err != MC_GAINS_OK) refuse_unsafe(f, err, e);
+  return e;
+}
 
 std::string join_names(uint32_t bits, const std::vector<std::pair<uint32_t, const char*>>& names) {
   std::string s;
@@ -113,41 +265,49 @@ std::string law_err_names(uint32_t bits) {
                            {MC_LAW_ERR_SPD_INIT, "SPD_INIT"}});
 }
 
+std::vector<ParamSpec> app_gain_params(const MotorFiles& f) {
+  const mc_params_eff_t e = files_params_eff(f);
+  std::vector<ParamSpec> v;
+  for (const char* name : kGainNames) {
+    const mc_param_info_t& info = row_of(name);
+    const int32_t i = mc_param_find_name(name);
+    const double d = get_f32(e.p, info);
+    mc_param_value_t lo, hi;
+    lo = info.min;
+    hi = info.max;
+    v.push_back({name, d, mc_param_units[i],
+                 "the table's parameter; default derived from the motor and board "
+                 "(firmware/app/config/mc_gains.h)",
+                 std::min(static_cast<double>(lo.f), d), std::max(static_cast<double>(hi.f), d)});
+  }
+  for (const ModelScale& s : kScales) v.push_back({s.key, 1.0, "1", s.help, 1e-3, 1e3});
+  return v;
+}
+
+mc_params_eff_t files_params_eff(const MotorFiles& f) {
+  return resolve_or_refuse(f, table_of(f, 1.0, 1.0, 1.0));
+}
+
 mc_params_t params_from_files(const MotorFiles& f, const Params& overrides, uint32_t speed_law) {
-  // The refusals that name the files' values (mc_gains_derive's errors,
-  // with the file and line of the value to change).
-  const Gains g = derive_gains(f, &overrides);
-  const MotorSpec& m = f.motor;
-  const BoardSpec& b = f.board;
-  mc_params_t p = mc_params_default;
-  p.r_ohm = static_cast<float>(m.r_ohm * g.model_r_scale);
-  p.ld_h = static_cast<float>(m.ld_h * g.model_l_scale);
-  p.lq_h = static_cast<float>(m.lq_h * g.model_l_scale);
-  p.flux_wb = static_cast<float>(m.flux_wb * g.model_flux_scale);
-  p.pole_pairs = static_cast<uint32_t>(m.pole_pairs);
-  p.j_kgm2 = static_cast<float>(m.j_kgm2);
-  p.b_nm_s_rad = static_cast<float>(m.b_nm_s_rad);
-  p.i_max_a = static_cast<float>(m.i_max_a);
-  p.speed_max_rad_s = static_cast<float>(m.speed_max_rad_s);
-  p.i_rated_a = static_cast<float>(m.i_rated_a);
-  p.speed_rated_rad_s = static_cast<float>(m.speed_rated_rad_s);
-  p.vbus_v = static_cast<float>(b.vbus_v);
-  p.pwm_hz = static_cast<uint32_t>(std::lround(b.pwm_hz));
-  p.dead_time_s = static_cast<float>(b.dead_time_s);
-  p.current_sensors = static_cast<uint32_t>(b.current_sensors);
-  p.i_sense_max_a = static_cast<float>(b.i_sense_max_a);
-  p.adc_bits = static_cast<uint32_t>(b.adc_bits);
-  p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
-  p.slow_loop_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
-  // The gains the user set (a value other than the derived default).
-  const std::vector<ParamSpec> specs = gain_params(f);
-  for (const GainParam& gp : kGainParams) {
-    const auto it = std::find_if(specs.begin(), specs.end(),
-                                 [&](const ParamSpec& s) { return s.key == gp.key; });
-    const double v = overrides.get(gp.key);
-    if (it != specs.end() && v != it->default_value) p.*(gp.field) = static_cast<float>(v);
+  mc_params_t p = table_of(f, overrides.get("model_r_scale"), overrides.get("model_l_scale"),
+                           overrides.get("model_flux_scale"));
+  // The gains the user set (a value other than the derived default): given
+  // to the drive, the others derived from them by the C.
+  const mc_params_eff_t d = files_params_eff(f);
+  for (const char* name : kGainNames) {
+    const mc_param_info_t& info = row_of(name);
+    const double v = overrides.get(name);
+    if (v == get_f32(d.p, info)) continue;
+    mc_param_value_t raw;
+    raw.f = static_cast<float>(v);
+    if (mc_param_check_value(&info, raw.u) != MC_PARAM_OK) {
+      throw UsageError(std::string("--set ") + name + "=" + num(v) +
+                       ": outside the parameter table's range");
+    }
+    mc_param_set_raw(&p, &info, raw.u);
   }
   p.speed_law = speed_law;
+  (void)resolve_or_refuse(f, p);
   const uint32_t err = mc_params_validate(&p);
   if (err != MC_PARAMS_OK) refuse_law(f, p, err);
   return p;
@@ -160,43 +320,16 @@ mc_params_eff_t resolve_params(const mc_params_t& p) {
 }
 
 void record_app_setup(const MotorFiles& f, const mc_params_t& p, Summary& s) {
-  Gains g;
   const mc_params_eff_t e = resolve_params(p);
-  const mc_gains_t& c = e.g;
-  g.cur_bw_rad_s = c.cur_bw_rad_s;
-  g.i_limit_a = c.i_limit_a;
-  g.enc_pll_bw_rad_s = c.enc_pll_bw_rad_s;
-  g.speed_wc_rad_s = c.speed_wc_rad_s;
-  g.speed_accel_rad_s2 = c.speed_accel_rad_s2;
-  g.obs_crit_rad_s = c.obs_crit_rad_s;
-  g.pll_bw_rad_s = c.pll_bw_rad_s;
-  g.sls_wc_rad_s = c.sls_wc_rad_s;
-  g.handover_rad_s = c.handover_rad_s;
-  g.if_current_a = c.if_current_a;
-  g.if_accel_rad_s2 = c.if_accel_rad_s2;
-  g.align_time_s = c.align_time_s;
-  g.pi2d_wn_rad_s = c.pi2d_wn_rad_s;
-  g.pi2d_a_per_s = c.pi2d_a_per_s;
-  g.pos_kp_per_s = c.pos_kp_per_s;
-  g.pos_v_max_rad_s = c.pos_v_max_rad_s;
-  g.pos_a_max_rad_s2 = c.pos_a_max_rad_s2;
-  g.pos_d_max_rad_s2 = c.pos_d_max_rad_s2;
-  g.pos_filter_bw_rad_s = c.pos_filter_bw_rad_s;
-  g.stop_decel_rad_s2 = c.stop_decel_rad_s2;
-  g.kt_nm_a = c.kt_nm_a;
-  g.v_max_v = c.v_max_v;
-  g.i_rated_eff_a = c.i_rated_eff_a;
-  g.torque_rated_nm = c.torque_rated_nm;
-  g.speed_limit_rad_s = c.speed_limit_rad_s;
-  g.speed_rated_eff_rad_s = c.speed_rated_eff_rad_s;
-  g.model_r_scale = p.r_ohm / f.motor.r_ohm;
-  g.model_l_scale = p.ld_h / f.motor.ld_h;
-  g.model_flux_scale = f.motor.flux_wb > 0 ? p.flux_wb / f.motor.flux_wb : 1.0;
-  record_setup(f, g, s);
+  record_files(f, s);
+  for (const GainField& g : kGainFields) s.set(std::string("gain.") + g.name, e.g.*(g.field));
+  s.set("gain.model_r_scale", p.r_ohm / f.motor.r_ohm);
+  s.set("gain.model_l_scale", p.ld_h / f.motor.ld_h);
+  s.set("gain.model_flux_scale", f.motor.flux_wb > 0 ? p.flux_wb / f.motor.flux_wb : 1.0);
+  for (const char* name : kGainNames) {
+    s.set(std::string("param.") + name, get_f32(e.p, row_of(name)));
+  }
   s.set("param.speed_law", p.speed_law);
-  s.set("param.speed_kp_a_s_rad", e.p.speed_kp_a_s_rad);
-  s.set("param.speed_ki_a_rad", e.p.speed_ki_a_rad);
-  s.set("param.speed_ramp_rad_s2", e.p.speed_ramp_rad_s2);
   s.set("param.slow_loop_div", p.slow_loop_div);
 }
 

@@ -5,23 +5,20 @@
 // (mc_params_resolve: mc_gains_derive, mc_law_gains_from_params,
 // mc_params_to_drive_cfg) computes it, exactly as on the board.
 //
-// The scenarios' gain keys (--set KEY=VALUE, gain_params in drive_setup.hpp)
-// are written onto the parameter of the same meaning when the user changed
-// them (a value equal to the derived default stays derived):
-//
-//   cur_bw_rad_s -> current_bw_rad_s       enc_pll_bw_rad_s -> speed_pll_bw_rad_s
-//   i_limit_a    -> i_max_a (the drive limits to min(it, the sensor's and
-//                   the bus's bounds): mc_gains.c)
-//   speed_wc_rad_s -> speed_bw_rad_s       speed_accel_rad_s2 -> speed_ramp_rad_s2
-//   obs_crit_rad_s -> obs_omega_crit_m_rad_s  pll_bw_rad_s -> obs_pll_bw_rad_s
-//   sls_wc_rad_s -> sls_speed_bw_rad_s     handover_rad_s -> sls_handover_rad_s
-//   if_current_a -> sls_if_current_a       if_accel_rad_s2 -> sls_if_accel_rad_s2
-//   align_time_s -> sls_align_time_s       pi2d_wn_rad_s, pi2d_a_per_s, pos_kp_per_s
-//   pos_v_max_rad_s -> traj_v_max_rad_s    pos_a_max_rad_s2 -> traj_a_max_rad_s2
-//   pos_d_max_rad_s2 -> traj_d_max_rad_s2  pos_filter_bw_rad_s -> traj_filter_bw_rad_s
-//   stop_decel_rad_s2 -> stop_decel_rad_s2
+// The scenarios' gain keys (--set KEY=VALUE, app_gain_params) are the
+// table's gain parameters, by name: current_bw_rad_s, speed_pll_bw_rad_s,
+// speed_bw_rad_s, speed_kp_a_s_rad, speed_ki_a_rad, speed_ramp_rad_s2,
+// obs_omega_crit_m_rad_s, obs_pll_bw_rad_s, sls_*, pi2d_wn_rad_s,
+// pi2d_a_per_s, pos_kp_per_s, traj_*, stop_decel_rad_s2 (the ones
+// mc_law_gains_from_params takes as given when not 0). Their defaults are
+// what the C derivation resolves for the files; a value the user changed is
+// written onto the parameter (one equal to the default stays derived). The
+// current limit is the motor's: --set motor.i_max_a. Besides them:
 //   model_r_scale, model_l_scale, model_flux_scale: the motor values the
 //                   drive is given (r_ohm, ld_h/lq_h, flux_wb) scaled
+// The summary records every field of the resolved mc_gains_t as gain.NAME
+// (its C names: gain.cur_bw_rad_s, gain.i_limit_a, ...) and each gain
+// parameter's resolved value as param.NAME.
 //
 // The board's part: vbus_v, pwm_hz, dead_time_s, current_sensors,
 // i_sense_max_a, adc_bits, encoder_cpr from the board file, slow_loop_div
@@ -31,6 +28,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "motor_file.hpp"
 #include "scenario.hpp"
@@ -40,9 +38,18 @@ extern "C" {
 
 namespace mcsim {
 
+/// The --set keys of the gains (see the file comment).
+std::vector<ParamSpec> app_gain_params(const MotorFiles& f);
+
+/// The files' table resolved by the C derivation (no --set): the derived
+/// gains and limits the scenarios' defaults come from. Throws UsageError
+/// (the reason and the file values named) when no safe gains exist.
+mc_params_eff_t files_params_eff(const MotorFiles& f);
+
 /// The parameter table for the files and the scenario's --set values
-/// (see the file comment), SPEED running speed_law (MC_LAW_SPEED_*). Throws UsageError when no safe gains exist
-/// (naming the file values, as derive_gains does) or when
+/// (see the file comment), SPEED running speed_law (MC_LAW_SPEED_*). Throws
+/// UsageError when no safe gains exist (naming the file values), when a
+/// gain is outside the table's range, or when
 /// mc_params_validate refuses the set (its MC_PARAMS_ERR bits named; a
 /// refused speed law with its law_error reasons).
 mc_params_t params_from_files(const MotorFiles& f, const Params& overrides,

@@ -241,6 +241,17 @@ Gains derive_gains(const MotorFiles& f, const Params* p) {
 }
 
 void record_setup(const MotorFiles& f, const Gains& g, Summary& s) {
+  record_files(f, s);
+  for (const auto& k : kKeys) s.set(std::string("gain.") + k.key, g.*(k.field));
+  s.set("gain.i_rated_eff_a", g.i_rated_eff_a);
+  s.set("gain.torque_rated_nm", g.torque_rated_nm);
+  s.set("gain.speed_limit_rad_s", g.speed_limit_rad_s);
+  s.set("gain.speed_rated_eff_rad_s", g.speed_rated_eff_rad_s);
+  s.set("gain.kt_nm_a", g.kt_nm_a);
+  s.set("gain.v_max_v", g.v_max_v);
+}
+
+void record_files(const MotorFiles& f, Summary& s) {
   const MotorSpec& m = f.motor;
   const BoardSpec& b = f.board;
   s.set_text("motor", m.name);
@@ -272,13 +283,6 @@ void record_setup(const MotorFiles& f, const Gains& g, Summary& s) {
     s.set("board.source_sink", b.source_sink ? 1.0 : 0.0);
     s.set("board.brake_r_ohm", b.brake_r_ohm);
   }
-  for (const auto& k : kKeys) s.set(std::string("gain.") + k.key, g.*(k.field));
-  s.set("gain.i_rated_eff_a", g.i_rated_eff_a);
-  s.set("gain.torque_rated_nm", g.torque_rated_nm);
-  s.set("gain.speed_limit_rad_s", g.speed_limit_rad_s);
-  s.set("gain.speed_rated_eff_rad_s", g.speed_rated_eff_rad_s);
-  s.set("gain.kt_nm_a", g.kt_nm_a);
-  s.set("gain.v_max_v", g.v_max_v);
 }
 
 hal_host::PmsmBoardConfig build_board_cfg(const MotorFiles& f) {

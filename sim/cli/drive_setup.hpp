@@ -3,70 +3,11 @@
 // configurations (mc_drive_cfg_t, the sensorless and PI^2D plug-ins, the
 // sensored speed PI) and the simulated board are built from them.
 //
-// Gains (every one overridable with --set KEY=VALUE; the others are then
-// derived from the overridden values). T = 1/pwm_hz, kt = 3/2 p flux,
-// ke = p flux, v_max = 0.95 vbus / sqrt 3 (the SVPWM circle).
-//
-//   cur_bw_rad_s       = 0.08 / T. The current PI kp = L bw, ki = R bw
-//                        cancels the winding's pole: the loop is first order
-//                        with bandwidth bw; with the one-period computation
-//                        delay it stays first-order-like (10-90 % rise
-//                        ln 9 / bw within 25 %) while bw T <= 0.08.
-//   i_limit_a          = min(i_max_a, i_sense_max_a / 1.25, 0.8 v_max / R):
-//                        inside the sensor's range with margin, and a
-//                        current the bus can push through R at standstill.
-//   i_rated_eff_a      = min(i_rated_a, i_limit_a); torque_rated = kt i_rated_eff.
-//   speed_limit_rad_s  = min(speed_max_rad_s, 0.9 w_v), w_v the speed at
-//                        which rated current needs v_max (R, L, ke).
-//   speed_rated_eff    = min(speed_rated_rad_s, speed_limit_rad_s).
-//   enc_pll_bw_rad_s   = min(1000, 0.1 / T): the drive's encoder tracking loop.
-//   speed_wc_rad_s     = min(cur_bw / 10, enc_pll_bw / 4): crossover of the
-//                        sensored speed PI on the plant kt / (J s):
-//                        kp = J wc / kt, ki = kp wc / 4 (zero at wc / 4).
-//   speed_accel_rad_s2 = 0.5 kt i_limit / J: the reference slews so that
-//                        half the current limit accelerates the rotor.
-//   obs_crit_rad_s     = 0.02 speed_rated_eff: flux observer critical speed,
-//                        gamma = 4 p w_crit / flux^2 (in the firmware).
-//   pll_bw_rad_s       = min(300, 0.04 / T): observer PLL (paper 002).
-//   sls_wc_rad_s       = min(pll_bw / 3, cur_bw / 10): sensorless speed PI
-//                        crossover, same formula as the sensored one.
-//   handover_rad_s     = 0.1 speed_rated_eff (5x the critical speed).
-//   if_current_a       = min(i_limit, 0.8 i_rated_eff): holds 30 % rated load
-//                        at a load angle of about 22 deg plus the ramp.
-//   if_accel_rad_s2    = 0.15 torque_rated / J.
-//   align_time_s       = clamp(2 sqrt(0.2 J / (p 0.3 torque_rated)),
-//                        10 / cur_bw, 0.05): short enough that a 30 %
-//                        rated load cannot turn the rotor 0.2 rad (electrical)
-//                        while the current ramps up, long enough for the
-//                        current loop.
-//   pos_kp_per_s       = speed_wc / 6: position P gain (the position pole
-//                        below the velocity PI's zero at speed_wc / 4, so the
-//                        cascade does not overshoot); the velocity PI of the
-//                        position cascade is the sensored speed PI above.
-//   pos_v_max_rad_s    = 0.5 speed_rated_eff: trapezoid cruise speed.
-//   pos_a_max_rad_s2   = speed_accel_rad_s2 (half the current limit
-//                        accelerates the rotor; the other half is the loop's).
-//   pos_d_max_rad_s2   = speed_accel_rad_s2.
-//   pos_filter_bw_rad_s = pos_kp: input filter of streamed setpoints.
-//   stop_decel_rad_s2  = speed_accel_rad_s2: the drive's controlled stop.
-//   pi2d_wn_rad_s      = min(speed_wc / 3, 0.5 R / L): the PI^2D triple pole;
-//                        the R/L bound keeps the proof's ki (L/R)^2 < eps
-//                        with eps = 2 ki / kp (kp' = kp / 2).
-//   pi2d_a_per_s       = min(enc_pll_bw, 0.1 / T, 2 cur_bw sigma / (3 wn)),
-//                        sigma = kt / J: dirty-derivative pole (b = 1); the
-//                        last bound keeps the law's coupling of the speed
-//                        error into the q-current error (Delta ~ 3 wn a / sigma)
-//                        below 2 k2. PI^2D is refused when this leaves
-//                        a < 3 wn (the filter would be slower than the loop),
-//                        and when kt ke / (J L k2) > 300 rad/s: an empirical
-//                        bound (the library's gimbal motor, 453, limit-cycles
-//                        to over-current with any wn, a tried; the others are
-//                        at 7 to 186 and settle).
-//
-// Refused (UsageError naming the reason): L/R shorter than two PWM periods;
-// a PWM ripple vbus T / (4 L) (peak to peak, half-bridge at 50 % duty: an
-// upper bound) above i_max_a; an i_limit below 10 % of
-// i_max_a (sensor or bus too small for the motor).
+// The gains: Gains below holds the C derivation's results
+// (firmware/app/config/mc_gains.h documents every formula and refusal);
+// derive_gains keeps the scenarios that still build the drive here (not the
+// generic ones: they run the application on its parameter table,
+// app_params.hpp).
 #pragma once
 
 #include <functional>
@@ -114,6 +55,8 @@ Gains derive_gains(const MotorFiles& f, const Params* p);
 
 /// Every motor, board and gain value into the summary.
 void record_setup(const MotorFiles& f, const Gains& g, Summary& s);
+/// Every motor and board value into the summary (motor.*, board.*).
+void record_files(const MotorFiles& f, Summary& s);
 
 enum class Law { kCurrent, kSpeedPi, kPi2d, kSensorless, kPosition };
 

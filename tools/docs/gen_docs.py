@@ -978,6 +978,33 @@ def _motor_library(ctx):
     return table(["motor file", "R", "L_d / L_q", "flux", "pole pairs", "i_max", "board file in the tests"], rows)
 
 
+PIL_COST_JSON = os.path.join("tools", "bench", "results", "pil_cost.json")
+
+
+@figure("pil-cost", [], reason=f"exactly (quoted from {PIL_COST_JSON}, the stored report of "
+                               "tools/bench/run_pil_cost.py; wall time is the machine's and its "
+                               "load's, so the check does not re-measure it)")
+def _pil_cost(ctx):
+    with open(os.path.join(ROOT, PIL_COST_JSON), encoding="utf-8") as fh:
+        r = json.load(fh)
+    if r.get("benchmark") != "pil_cost":
+        raise DocError(f"{PIL_COST_JSON}: not a run_pil_cost.py report")
+    rows = [[f"`{x['board']}`", f"`{x['scenario']}`", g(x["pil_wall_per_sim_s"], 3),
+             g(x["pil_wall_s"][1] / x["durations_s"][1], 3), g(x["sil_wall_per_sim_s"], 2),
+             g(x["pil_over_sil"], 3)]
+            for x in r["runs"]]
+    m = r["machine"]
+    d = r["runs"][0]["durations_s"] if r["runs"] else ["-", "-"]
+    head = ["board", "scenario", "PIL wall s per simulated s (slope)",
+            f"PIL wall s per simulated s ({g(d[1], 2)} s run, start included)",
+            "SIL wall s per simulated s", "PIL / SIL wall"]
+    return (table(head, rows) + "\n\n"
+            f"Measured with `{r['command']}` (runs of {g(d[0], 2)} s and {g(d[1], 2)} s simulated; "
+            f"the motor `{r['runs'][0]['motor'] if r['runs'] else '-'}`) on {m['nproc']} "
+            f"{m['machine']} cores, 1-minute load average {g(m['loadavg_1min_start'], 2)} at the "
+            f"start and {g(m['loadavg_1min_end'], 2)} at the end: re-run it on your machine.\n")
+
+
 # ---------------------------------------------------------------------------
 # Documents
 

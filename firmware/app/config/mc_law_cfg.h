@@ -51,7 +51,7 @@ extern "C" {
  *  own) of a parameter set: the pure part of the check, no instance. */
 uint32_t mc_law_speed_check(const mc_params_t *p);
 
-/** The sensorless law's configuration (sim/cli/drive_setup.hpp documents
+/** The sensorless law's configuration (mc_gains.h documents
  *  each value): speed loop at about 1 kHz, dead-time compensation in the
  *  duties, I-f current, ramp, hand-over and alignment from the gains. */
 void mc_law_sls_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_sls_cfg_t *c);

@@ -1,6 +1,7 @@
 // Scenarios for any motor (`--motor FILE [--board FILE]`): the unmodified
-// drive on the simulated board, the gains derived from the files
-// (drive_setup.hpp). Every metric is computed on the fly: a run keeps
+// drive application on the simulated board, its parameter table built from
+// the files and the gains derived from it by the firmware's C
+// (app_params.hpp, firmware/app/config/mc_gains.h). Every metric is computed on the fly: a run keeps
 // constant memory whatever its length. The CSV keeps every PWM period up to
 // 20000 rows and is decimated beyond (csv_every).
 #include <algorithm>
@@ -11,7 +12,7 @@
 #include <string>
 
 #include "app_scenario.hpp"
-#include "drive_setup.hpp"
+#include "app_params.hpp"
 #include "rise_timer.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
@@ -53,7 +54,7 @@ ParamSpec csv_every_spec() {
 
 // ------------------------------------------------------------ current step
 std::vector<ParamSpec> current_step_params(const MotorFiles& f) {
-  const Gains g = derive_gains(f, nullptr);
+  const mc_gains_t g = files_params_eff(f).g;  // the C derivation's, for the files
   const double L = std::max(f.motor.ld_h, f.motor.lq_h);
   // Default step: half the rated current, at most what needs half the
   // voltage limit at the first instant (kp + R) di <= v_max / 2.
@@ -68,7 +69,7 @@ std::vector<ParamSpec> current_step_params(const MotorFiles& f) {
        "standstill, as on a test bench)",
        0.0, 1.0e6},
       csv_every_spec()};
-  for (auto& s : gain_params(f)) p.push_back(s);
+  for (auto& s : app_gain_params(f)) p.push_back(s);
   return p;
 }
 
@@ -163,7 +164,7 @@ const Registrar reg_current(on_app_target(
 
 // --------------------------------------------------- speed step / load step
 std::vector<ParamSpec> speed_params(const MotorFiles& f, bool load_step) {
-  const Gains g = derive_gains(f, nullptr);
+  const mc_gains_t g = files_params_eff(f).g;
   std::vector<ParamSpec> p = {
       {"law", 0.0, "1", "speed law", 0.0, 1.0, {{"pi", 0.0}, {"pi2d", 1.0}}},
       {"speed_rad_s", 0.5 * g.speed_rated_eff_rad_s, "rad/s",
@@ -174,7 +175,7 @@ std::vector<ParamSpec> speed_params(const MotorFiles& f, bool load_step) {
                  : "constant load, fraction of rated torque",
        -1.0, 1.0},
       csv_every_spec()};
-  for (auto& s : gain_params(f)) p.push_back(s);
+  for (auto& s : app_gain_params(f)) p.push_back(s);
   return p;
 }
 
@@ -311,14 +312,14 @@ const Registrar reg_load(on_app_target(
 
 // -------------------------------------------------- sensorless speed step
 std::vector<ParamSpec> sls_params(const MotorFiles& f) {
-  const Gains g = derive_gains(f, nullptr);
+  const mc_gains_t g = files_params_eff(f).g;
   std::vector<ParamSpec> p = {
       {"speed_rad_s", 0.5 * g.speed_rated_eff_rad_s, "rad/s", "speed target (mechanical)",
        -g.speed_limit_rad_s, g.speed_limit_rad_s},
       {"load_frac", 0.3, "1", "load from standstill on, fraction of rated torque", -1.0, 1.0},
       {"load_step_frac", 0.3, "1", "load step added later, fraction of rated torque", -1.0, 1.0},
       csv_every_spec()};
-  for (auto& s : gain_params(f)) p.push_back(s);
+  for (auto& s : app_gain_params(f)) p.push_back(s);
   return p;
 }
 

@@ -1,7 +1,7 @@
 // position-move for any motor (`--motor FILE [--board FILE]`): the drive
 // application's POSITION mode (its position law, firmware/app/ctrl/
-// mc_ctrl_position, built from the parameter table: app_params.hpp, pos_*
-// keys onto the traj_* parameters), commanded by SET_POSITION_REF frames. A
+// mc_ctrl_position, built from the parameter table: app_params.hpp, the
+// pos_kp_per_s and traj_* parameters), commanded by SET_POSITION_REF frames. A
 // trapezoidal move of `turns` turns from standstill; optionally a re-plan to
 // `replan_turns` at `replan_frac` of the predicted move time; or (stream=1)
 // the same move streamed as SET_POSITION_REF setpoints at stream_hz, a
@@ -33,7 +33,7 @@
 #include <string>
 
 #include "app_scenario.hpp"
-#include "drive_setup.hpp"
+#include "app_params.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
 
@@ -46,9 +46,9 @@ constexpr double kPi = 3.141592653589793238463;
 std::vector<ParamSpec> position_params(const MotorFiles& f) {
   std::vector<ParamSpec> p = {
       {"turns", 10.0, "1", "move length in turns (sign: direction)", -1000.0, 1000.0},
-      {"v_max", 0.0, "rad/s", "trajectory cruise speed (0: pos_v_max_rad_s)", 0.0, 1.0e5},
-      {"a_max", 0.0, "rad/s^2", "trajectory acceleration (0: pos_a_max_rad_s2)", 0.0, 1.0e9},
-      {"d_max", 0.0, "rad/s^2", "trajectory deceleration (0: pos_d_max_rad_s2)", 0.0, 1.0e9},
+      {"v_max", 0.0, "rad/s", "trajectory cruise speed (0: traj_v_max_rad_s)", 0.0, 1.0e5},
+      {"a_max", 0.0, "rad/s^2", "trajectory acceleration (0: traj_a_max_rad_s2)", 0.0, 1.0e9},
+      {"d_max", 0.0, "rad/s^2", "trajectory deceleration (0: traj_d_max_rad_s2)", 0.0, 1.0e9},
       {"replan_frac", 0.0, "1",
        "re-plan to replan_turns at this fraction of the predicted move time (0: off)", 0.0, 1.0},
       {"replan_turns", 5.0, "1", "target of the re-plan [turns from the start]", -1000.0, 1000.0},
@@ -56,7 +56,7 @@ std::vector<ParamSpec> position_params(const MotorFiles& f) {
       {"stream_hz", 200.0, "Hz", "setpoint rate of the streamed move", 1.0, 1.0e5},
       {"load_frac", 0.0, "1", "constant load, fraction of rated torque", -1.0, 1.0},
       {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9}};
-  for (auto& s : gain_params(f)) p.push_back(s);
+  for (auto& s : app_gain_params(f)) p.push_back(s);
   return p;
 }
 

@@ -23,7 +23,7 @@
 #include <string>
 
 #include "app_scenario.hpp"
-#include "drive_setup.hpp"
+#include "app_params.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
 
@@ -34,13 +34,13 @@ namespace {
 // per kW of peak shaft power, at least 1 mF (the 40 kW machine of paper 002
 // trips on over-voltage with 1 mF: its current loop, 640 rad/s, cannot cut
 // 40 kW before a 1 mF bus has risen through the 36 V regen band).
-double default_c_f(const Gains& g) {
+double default_c_f(const mc_gains_t& g) {
   const double p_w = g.kt_nm_a * g.i_limit_a * g.speed_limit_rad_s;
   return std::max(1.0e-3, 0.25e-3 * p_w / 1000.0);
 }
 
 std::vector<ParamSpec> regen_params(const MotorFiles& f) {
-  const Gains g = derive_gains(f, nullptr);
+  const mc_gains_t g = files_params_eff(f).g;  // the C derivation's, for the files
   const BoardSpec& b = f.board;
   std::vector<ParamSpec> p = {
       {"brake", 1.0, "1", "brake resistor on the chopper", 0.0, 1.0, {{"off", 0.0}, {"on", 1.0}}},
@@ -57,7 +57,7 @@ std::vector<ParamSpec> regen_params(const MotorFiles& f) {
        "brake resistor when brake=on (the board file's, else 2 ohm as ODrive's default)", 1.0e-3,
        1.0e4},
       {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9}};
-  for (auto& s : gain_params(f)) p.push_back(s);
+  for (auto& s : app_gain_params(f)) p.push_back(s);
   return p;
 }
 

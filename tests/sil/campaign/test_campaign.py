@@ -33,8 +33,8 @@ samples = 2
 csv_every = 10
 
 [sweep]
-iq_step_a = [3.0, 60.0]
-cur_bw_rad_s = {{ start = 1000.0, stop = 10000.0, num = 3, log = true }}
+iq_step_a = [3.0, 50.0]
+current_bw_rad_s = {{ start = 1000.0, stop = 10000.0, num = 3, log = true }}
 id_step_a = {{ dist = "uniform", low = -2.0, high = 0.0 }}
 
 [derived]
@@ -42,7 +42,7 @@ id_step_a = {{ dist = "uniform", low = -2.0, high = 0.0 }}
 # current loop's gain 20 times too high): the drive trips, a drive fault in
 # the campaign (a bandwidth above the parameter table's 0.5 pwm_hz would be
 # refused before the run)
-model_l_scale = "1.0 + 19.0 * (cur_bw_rad_s > 5000.0)"
+model_l_scale = "1.0 + 19.0 * (current_bw_rad_s > 5000.0)"
 
 [pass]
 fast = "iq_rise_time_ratio < 1.25 and abs(iq_final_a - param.iq_step_a) < 0.1 * abs(param.iq_step_a)"
@@ -87,7 +87,7 @@ class Campaigns(unittest.TestCase):
         self.assertEqual(df["run_id"].is_unique, True)
         # The runs of the file: pass, fail and fault all occur.
         self.assertTrue({"pass", "fault"} <= set(df["status"]), df["status"].tolist())
-        for col in ("seed", "in.iq_step_a", "in.cur_bw_rad_s", "in.id_step_a", "in.csv_every",
+        for col in ("seed", "in.iq_step_a", "in.current_bw_rad_s", "in.id_step_a", "in.csv_every",
                     "out.iq_rise_time_s", "firmware_git", "motor_sha256", "pass.fast"):
             self.assertIn(col, df.columns)
 
@@ -524,7 +524,7 @@ BAD = [
     ("{head}\n[sweep]\niq_step_a = {{ start = 1.0, stop = 2.0, num = 4611686018427387904 }}\n", 7,
      "range for iq_step_a: num = 4611686018427387904: at most 1000000 points in a range"),
     ("{head}\n[sweep]\niq_step_a = {{ start = 1.0, stop = 2.0, num = 1000 }}\n"
-     "cur_bw_rad_s = {{ start = 1000.0, stop = 2000.0, num = 1000 }}\n"
+     "current_bw_rad_s = {{ start = 1000.0, stop = 2000.0, num = 1000 }}\n"
      "id_step_a = {{ start = -1.0, stop = 0.0, num = 1000 }}\n", 6,
      "1000000000 runs: more than 100000000"),
 ]

@@ -102,7 +102,7 @@ class BitForBit(unittest.TestCase):
 
     def test_current_step_params(self):
         self.same("current-step", M, B, {"iq_step_a": 3.3, "id_step_a": -1.1, "csv_every": 2,
-                                          "cur_bw_rad_s": 1234.5678})
+                                          "current_bw_rad_s": 1234.5678})
 
     def test_sensorless_short(self):
         self.same("sensorless-speed-step", M, B, {"load_frac": 0.1}, duration=0.05)
@@ -189,7 +189,7 @@ class Errors(unittest.TestCase):
         self.assertIn("bad.toml:3:", str(e))
 
     def test_refused_at_run_time(self):
-        e = self.same_error("sensorless-speed-step", M, B, {"obs_crit_rad_s": 1000})
+        e = self.same_error("sensorless-speed-step", M, B, {"obs_omega_crit_m_rad_s": 1000})
         self.assertIsNotNone(e.summary)
 
     def test_verdict_not_a_pass(self):
@@ -210,14 +210,15 @@ class Errors(unittest.TestCase):
 
     def test_drive_fault(self):
         # a current-loop bandwidth the parameter table does not allow (at
-        # most 0.5 pwm_hz) is refused before the run, the reason named
-        e = self.same_error("current-step", M, B, {"iq_step_a": 60, "cur_bw_rad_s": 1e5},
+        # most 0.5 pwm_hz: 12 kHz on this 24 kHz board) is refused before
+        # the run, the reason named
+        e = self.same_error("current-step", M, B, {"iq_step_a": 50, "current_bw_rad_s": 15000},
                             duration=0.01)
         self.assertIsInstance(e, sil.UsageError)
-        self.assertIn("MC_PARAMS_ERR RANGE", str(e))
+        self.assertIn("MC_PARAMS_ERR BANDWIDTH", str(e))
         # the drive told 20 times the motor's inductance: its current loop's
         # gain 20 times too high, the q step trips the drive
-        e = self.same_error("current-step", M, B, {"iq_step_a": 60, "model_l_scale": 20},
+        e = self.same_error("current-step", M, B, {"iq_step_a": 50, "model_l_scale": 20},
                             duration=0.01)
         self.assertIsInstance(e, sil.RunFailed)
         self.assertIn("OVERCURRENT", str(e))

@@ -75,12 +75,12 @@ class MotorCli(unittest.TestCase):
         self.assertEqual(h, COLUMNS[:8] + ["theta_e_hat_rad"] + COLUMNS[8:])
 
     def test_gain_override_and_motor_ranges(self):
-        run("run", "current-step", "--out", self.out, *d5065(), "--set", "cur_bw_rad_s=1000",
+        run("run", "current-step", "--out", self.out, *d5065(), "--set", "current_bw_rad_s=1000",
             "--set", "iq_step_a=20")
         with open(os.path.join(self.out, "current-step.json")) as f:
             s = json.load(f)
         self.assertEqual(s["gain.cur_bw_rad_s"], 1000.0)
-        # The D5065's limit is 64 A (80 A sensor / 1.25), not the test motor's 10 A.
+        # The D5065's limit is 54 A (67.5 A sensor / 1.25), not the test motor's 10 A.
         p = run("run", "current-step", "--out", self.out + "/x", *d5065(), "--set",
                 "iq_step_a=70", check=False)
         self.assertEqual(p.returncode, 2)
@@ -109,21 +109,30 @@ class MotorCli(unittest.TestCase):
         # The refusal leads with the value its remedy changes, in the board
         # file (it named the motor file, without a line), and names the
         # motor's values it weighed with their lines.
-        board, motor = lib("odrive-v36-24v"), lib("odrive-d5065")
+        # The board file names its description (odrive36_24v over odrive36):
+        # the PWM rate's line is the base description's.
+        boards = os.path.join(os.path.dirname(os.path.abspath(ARGS.motors)), "..", "firmware",
+                              "targets", "stm32f405", "boards")
+        desc = os.path.realpath(os.path.join(boards, "odrive36", "board.toml"))
+        motor = lib("odrive-d5065")
         at = {}
-        for path in (board, motor):
-            with open(path) as f:
-                for i, ln in enumerate(f):
-                    if "=" in ln and not ln.startswith("#"):
-                        at[ln.split("=")[0].strip()] = f"{path}:{i + 1}"
+        with open(motor) as f:
+            for i, ln in enumerate(f):
+                if "=" in ln and not ln.startswith("#"):
+                    at[ln.split("=")[0].strip()] = f"{motor}:{i + 1}"
+        with open(desc) as f:
+            for i, ln in enumerate(f):
+                if ln.split("=")[0].strip() == "frequency_hz":
+                    at["pwm_hz"] = f"{desc}:{i + 1}"
         # R 0.2 ohm: L/R = 79 us, under two periods at 24 kHz (83 us)
         p = run("run", "current-step", "--out", self.out, *d5065(), "--set", "motor.r_ohm=0.2",
                 check=False)
         self.assert_usage_error(p, [f"mcsim: {at['pwm_hz']}: no safe gains: the electrical",
                                     f"L at {at['ld_h']}", "r_ohm at --set motor.r_ohm=0.2"])
-        # 200 V at 24 kHz on 15.7 uH: 133 A of ripple above the 65 A limit
+        # 200 V at 24 kHz on 15.7 uH: 133 A of ripple above the 65 A limit (the
+        # bus sensor's range raised with it: the board's reads 36.3 V at most)
         p = run("run", "current-step", "--out", self.out, *d5065(), "--set", "board.vbus_v=200",
-                check=False)
+                "--set", "board.vbus_sense_max_v=400", check=False)
         self.assert_usage_error(p, [f"mcsim: {at['pwm_hz']}: no safe gains: the PWM current ripple",
                                     f"65 A at {at['i_max_a']}", "at --set board.vbus_v=200"])
         # a 1 A sensor for a 65 A motor
@@ -327,7 +336,7 @@ class Verdicts(unittest.TestCase):
         # A speed loop crossing over at 800 rad/s, above a quarter of the
         # encoder tracking loop's 1000 rad/s (the derivation's bound),
         # limit-cycles: it never settles within 2 %.
-        s = self.failed("speed-step", "--set", "speed_wc_rad_s=800")
+        s = self.failed("speed-step", "--set", "speed_bw_rad_s=800")
         self.assertEqual(s["verdict"], "not settled")
         self.assertIn("2 % of the target", s["verdict_detail"])
         # cut short before the slew ends: the target is not reached
@@ -353,7 +362,7 @@ class Verdicts(unittest.TestCase):
         self.assertIn("|flux error|", s["verdict_detail"])
         self.assertEqual(s["stopped"], 0)  # it ran to its end
         # and a sequence that stops is named by its error (sensor noise of
-        # 2 A rms, 2.5 % of the 80 A range: the test current trips)
+        # 2 A rms, 3 % of the 67.5 A range: the test current trips)
         s = self.failed("commission", "--set", "noise_rms_a=2")
         self.assertEqual(s["verdict"], "commissioning failed: OVERCURRENT")
         self.assertEqual(s["stopped"], 1)
@@ -361,7 +370,7 @@ class Verdicts(unittest.TestCase):
     def test_faults_are_named(self):
         # the drive told 20 times the motor's inductance: its current loop's
         # gain 20 times too high, the q step trips the drive
-        s = self.failed("current-step", "--duration", "0.01", "--set", "iq_step_a=60",
+        s = self.failed("current-step", "--duration", "0.01", "--set", "iq_step_a=50",
                         "--set", "model_l_scale=20")
         self.assertEqual(s["verdict"], "faulted: OVERCURRENT")
         self.assertEqual(s["stopped"], 1)

@@ -36,6 +36,9 @@ Result run(double we_t, double pwm_hz, bool compensate) {
       mcsim::load_motor_files(std::string(MCSIM_MOTORS_DIR) + "/u8-class-kv100.toml",
                               std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-56v.toml");
   f.board.pwm_hz = pwm_hz;
+  // the bus at the 56 V version's rating (its description's nominal supply
+  // is 48 V; its divider reads up to 62.7 V)
+  f.board.vbus_v = 56.0;
   const double T = 1.0 / pwm_hz;
   const double w_m = we_t / (T * f.motor.pole_pairs);
   // A flywheel of 100 rotor inertias (a dyno), brought to speed by the dyno's

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "app_params.hpp"
 #include "motor_library.hpp"
 
 namespace mcsim {
@@ -48,7 +49,7 @@ TEST_P(MotorSil, SpeedStepPiSettles) {
 // refused with its reason (never a generic fault).
 TEST_P(MotorSil, SpeedStepPi2dSettlesWithSmallIdOrRefuses) {
   const MotorFiles f = files(GetParam());
-  if (derive_gains(f, nullptr).pi2d_coupling > 300.0) {
+  if (files_params_eff(f).g.pi2d_coupling > MC_GAINS_PI2D_COUPLING_MAX) {
     try {
       run("speed-step", f, {{"law", "pi2d"}});
       FAIL() << "expected a refusal";
@@ -156,7 +157,7 @@ TEST(MotorFile, PwmTooSlowForLOverRIsRefused) {
   t.replace(t.find(pwm_old), pwm_old.size(), "pwm_hz = 5000");         // 2 T = 0.4 ms
   const MotorFiles f = load_motor_files(write("slow.toml", t), "");
   try {
-    derive_gains(f, nullptr);
+    files_params_eff(f);  // the C derivation's refusal, named
     FAIL() << "expected a refusal";
   } catch (const UsageError& e) {
     EXPECT_NE(std::string(e.what()).find("shorter than two PWM periods"), std::string::npos);

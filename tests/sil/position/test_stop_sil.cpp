@@ -38,7 +38,7 @@ struct StopResult {
 
 StopResult RunStop(const char* motor, const char* board, bool position) {
   const MotorFiles f = load_motor_files(kDir + "/" + motor + ".toml", kDir + "/" + board + ".toml");
-  const mc_params_t p = params_from_files(f, Params(gain_params(f), {}));
+  const mc_params_t p = params_from_files(f, Params(app_gain_params(f), {}));
   const mc_params_eff_t e = resolve_params(p);
   mc_drive_cfg_t dc{};
   mc_params_eff_to_drive_cfg(&e, &dc);

@@ -7,6 +7,9 @@ a drive as it is. Keys that are not drive parameters, each for a reason:
   name, source      text describing the file, not stored in the drive
   delay_periods     the simulated board's computation delay (a property of
                     the simulation, fixed by the firmware's timing on a MCU)
+  description       a board file that names the image's board description
+                    instead of holding values (tests/sil/boards checks it
+                    reads what the image is built from)
 Also checks that the check can fail: a file with an unknown key and one with
 a value out of range are reported.
     test_motor_files_map.py --repo ROOT
@@ -18,7 +21,7 @@ import os
 import sys
 import tomllib
 
-NOT_PARAMS = {"name", "source", "delay_periods"}
+NOT_PARAMS = {"name", "source", "delay_periods", "description"}
 
 
 def problems_of(path, params):

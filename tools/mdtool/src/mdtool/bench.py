@@ -160,7 +160,7 @@ def run(duration: float = 1.0, runs: int = 20, mcsim: str | None = None,
     # A run that faults early: the drive told 20 times the motor's
     # inductance (its current loop's gain 20 times too high) trips
     # OVERCURRENT on the current step; the scenario stops at the fault.
-    bad = {"iq_step_a": 60, "model_l_scale": 20}
+    bad = {"iq_step_a": 50, "model_l_scale": 20}
     r = sil.run_raw(SCEN, motor, board, bad, duration, trajectory=True)
     res["fault_run_error"] = r.error
     res["fault_run_sim_s"] = float(r.data[-1][0]) if len(r.data) else None

@@ -16,7 +16,7 @@ A campaign file (TOML; format in tools/mdtool/README.md):
 
     [sweep]                  # grids (product) and distributions (sampled)
     iq_step_a = [2.0, 5.0]
-    cur_bw_rad_s = { start = 500.0, stop = 2000.0, num = 4 }
+    current_bw_rad_s = { start = 500.0, stop = 2000.0, num = 4 }
     r_scale = { dist = "uniform", low = 0.8, high = 1.2 }
 
     [pass]                   # every criterion must hold; expressions over the summary
