@@ -3,11 +3,16 @@
 // through the AppTarget (issue 29 item 3): on the SIL or with --pil the
 // board's whole image on QEMU, the same CSV and summary on both.
 //
-// The application boots the table of an image that knows only the board
-// (app_params.hpp with the motor's values the table's defaults: the
-// image's default motor; the limits i_max_a, speed_max_rad_s and the
-// ratings are the user's, from the motor file). The plant has the sensor
-// offsets, noise, encoder direction and start angle of the parameters.
+// The application boots the table of the files (app_params.hpp). The
+// sequence reads none of its motor values (it starts from the board: PWM
+// period, dead time, shunts; mc_comm_can_cfg_for_board), only the drive's
+// limits: i_max_a bounds the test current, speed_max_rad_s and the
+// over-speed trip the spin-up; what it identifies replaces the motor
+// values. (A table with placeholder motor values instead refused to boot
+// many of the campaign's random boards: its derived current limit and PWM
+// ripple checks then judge the board against a motor it does not drive.)
+// The plant has the sensor offsets, noise, encoder direction and start
+// angle of the parameters.
 // The scenario sends COMMISSION_CMD START (i_test_a; 0: the drive's
 // default, a quarter of the sense range within i_max_a), keeps the host
 // alive (HOST_HEARTBEAT: the application times a run out as an enabled
@@ -123,18 +128,9 @@ std::vector<ParamSpec> commission_params(const MotorFiles& f) {
   };
 }
 
-// The table of an image that knows only the board (see the file comment).
-mc_params_t board_only_params(const MotorFiles& f) {
-  MotorFiles fb = f;
-  const mc_params_t& d = mc_params_default;
-  fb.motor.r_ohm = d.r_ohm;
-  fb.motor.ld_h = d.ld_h;
-  fb.motor.lq_h = d.lq_h;
-  fb.motor.flux_wb = d.flux_wb;
-  fb.motor.pole_pairs = static_cast<int>(d.pole_pairs);
-  fb.motor.j_kgm2 = d.j_kgm2;
-  fb.motor.b_nm_s_rad = d.b_nm_s_rad;
-  return params_from_files(fb, Params(gain_params(fb), {}), MC_LAW_SPEED_PI);
+// The table the application boots (see the file comment).
+mc_params_t booted_params(const MotorFiles& f) {
+  return params_from_files(f, Params(gain_params(f), {}), MC_LAW_SPEED_PI);
 }
 
 // The booted table with what commissioning stages (mc_comm_can.c, stage()).
@@ -299,7 +295,7 @@ void run_commission_scenario(RunContext& ctx) {
     throw UsageError(f.board.file + ": commissioning needs an encoder (encoder_cpr = 0)");
   }
   const CommissionSetup s = plant_setup(ctx);
-  const mc_params_t p = board_only_params(f);
+  const mc_params_t p = booted_params(f);
   hal_host::PmsmBoardConfig bc = build_board_cfg(f);
   configure_plant(f, s, bc);
   const double true_off = true_offset(f, s, bc);
@@ -370,8 +366,8 @@ void run_commission_scenario(RunContext& ctx) {
 
 const Registrar reg_commission(on_app_target(
     {"commission",
-     "any motor: the drive application's commissioning over CAN (COMMISSION_CMD), knowing only "
-     "the board: current-sensor offsets, R, Ld, Lq, pole pairs, encoder direction and offset, "
+     "any motor: the drive application's commissioning over CAN (COMMISSION_CMD), from the "
+     "board alone: current-sensor offsets, R, Ld, Lq, pole pairs, encoder direction and offset, "
      "flux (and J, B) read back from its COMMISSION_RESULT frames; JSON with 'identified' and "
      "'true'; verify=1 then reboots the drive on the identified values and runs speed steps",
      0.0,
