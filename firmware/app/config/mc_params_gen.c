@@ -88,6 +88,7 @@ const mc_params_t mc_params_default = {
     .traj_a_max_rad_s2 = 0.0f,
     .traj_d_max_rad_s2 = 0.0f,
     .traj_filter_bw_rad_s = 0.0f,
+    .pos_input_mode = 0u,
 };
 
 #define NO_FIELD MC_PARAM_NO_FIELD
@@ -177,6 +178,7 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {134u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, traj_a_max_rad_s2), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* traj_a_max_rad_s2 */
     {135u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, traj_d_max_rad_s2), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* traj_d_max_rad_s2 */
     {136u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, traj_filter_bw_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* traj_filter_bw_rad_s */
+    {137u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, pos_input_mode), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* pos_input_mode */
     {200u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_layout_version */
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
     {202u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_store_seq */
@@ -270,6 +272,7 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "traj_a_max_rad_s2",
     "traj_d_max_rad_s2",
     "traj_filter_bw_rad_s",
+    "pos_input_mode",
     "cfg_layout_version",
     "cfg_store_status",
     "cfg_store_seq",
@@ -363,6 +366,7 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "rad/s^2",
     "rad/s^2",
     "rad/s",
+    "",
     "",
     "",
     "",

@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 90u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 84u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 91u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 85u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -101,6 +101,7 @@
 #define MC_PARAM_ID_TRAJ_A_MAX_RAD_S2 134u
 #define MC_PARAM_ID_TRAJ_D_MAX_RAD_S2 135u
 #define MC_PARAM_ID_TRAJ_FILTER_BW_RAD_S 136u
+#define MC_PARAM_ID_POS_INPUT_MODE 137u
 #define MC_PARAM_ID_CFG_LAYOUT_VERSION 200u
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
 #define MC_PARAM_ID_CFG_STORE_SEQ 202u
@@ -193,12 +194,13 @@
 #define MC_PARAM_IDX_TRAJ_A_MAX_RAD_S2 81u
 #define MC_PARAM_IDX_TRAJ_D_MAX_RAD_S2 82u
 #define MC_PARAM_IDX_TRAJ_FILTER_BW_RAD_S 83u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 84u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 85u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 86u
-#define MC_PARAM_IDX_CFG_PENDING 87u
-#define MC_PARAM_IDX_LAW_ERROR 88u
-#define MC_PARAM_IDX_ANGLE_ERROR 89u
+#define MC_PARAM_IDX_POS_INPUT_MODE 84u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 85u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 86u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 87u
+#define MC_PARAM_IDX_CFG_PENDING 88u
+#define MC_PARAM_IDX_LAW_ERROR 89u
+#define MC_PARAM_IDX_ANGLE_ERROR 90u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -286,6 +288,7 @@ typedef struct {
     float traj_a_max_rad_s2; /**< Trajectory acceleration; 0: derived, the speed ramp. [rad/s^2] */
     float traj_d_max_rad_s2; /**< Trajectory deceleration; 0: derived, the speed ramp. [rad/s^2] */
     float traj_filter_bw_rad_s; /**< Input filter of streamed position setpoints; 0: derived, pos_kp. [rad/s] */
+    uint32_t pos_input_mode; /**< POSITION setpoints: 0 a trapezoid to each (traj_* limits); 1 streamed, through the input filter (traj_filter_bw_rad_s). */
 } mc_params_t;
 
 /** Defaults ("load defaults", and a drive with an empty store). */

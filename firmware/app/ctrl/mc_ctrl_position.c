@@ -181,6 +181,13 @@ static uint32_t ctrl_stop(void *ctx, float decel_rad_s2)
                                                             : MC_CTRL_POS_ERR_REF;
 }
 
+/* A trapezoid, or the input filter when it has a bandwidth. */
+static bool input_mode_ok(const mc_ctrl_pos_cfg_t *cfg, mc_traj_mode_t mode)
+{
+    return (mode == MC_TRAJ_MODE_TRAP) ||
+           ((mode == MC_TRAJ_MODE_FILTER) && (cfg->traj.filter_bw_rad_s > 0.0f));
+}
+
 static bool nonneg_finite(float x)
 {
     return mc_isfinite_f32(x) && (x >= 0.0f);
@@ -207,6 +214,9 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
         !(mc_isfinite_f32(cfg->kt_nm_a) && (cfg->kt_nm_a > 0.0f)) || !nonneg_finite(cfg->j_kgm2) ||
         !nonneg_finite(cfg->b_nm_s_rad) || (cfg->pole_pairs == 0u)) {
         err |= MC_CTRL_POS_ERR_LIMIT;
+    }
+    if (!input_mode_ok(cfg, cfg->input_mode)) {
+        err |= MC_CTRL_POS_ERR_TRAJ;
     }
     mc_pi_f32_t pi;
     if ((err & (MC_CTRL_POS_ERR_GAIN | MC_CTRL_POS_ERR_LIMIT)) == 0u) {
@@ -237,13 +247,13 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
     c->ack_seq = 0u;
     c->req_turns = 0;
     c->req_rad = 0.0f;
-    c->req_mode = MC_TRAJ_MODE_TRAP;
+    c->req_mode = cfg->input_mode;
     c->req_v = cfg->traj.v_max_rad_s;
     c->req_a = cfg->traj.a_max_rad_s2;
     c->req_d = cfg->traj.d_max_rad_s2;
     c->lim_seq = 0u;
     c->lim_ack = 0u;
-    c->mode_seq = 0u;
+    c->mode_seq = (cfg->input_mode != MC_TRAJ_MODE_TRAP) ? 1u : 0u; /* taken at the first step */
     c->mode_ack = 0u;
     c->tm = tm0;
     c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_CURRENT,
@@ -293,8 +303,7 @@ uint32_t mc_ctrl_pos_set_input_mode(mc_ctrl_pos_t *c, mc_traj_mode_t mode)
     if (c == NULL) {
         return MC_CTRL_POS_ERR_NULL;
     }
-    if ((mode != MC_TRAJ_MODE_TRAP) &&
-        ((mode != MC_TRAJ_MODE_FILTER) || !(c->cfg.traj.filter_bw_rad_s > 0.0f))) {
+    if (!input_mode_ok(&c->cfg, mode)) {
         return MC_CTRL_POS_ERR_REF;
     }
     c->req_mode = mode;

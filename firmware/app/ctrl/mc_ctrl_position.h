@@ -63,20 +63,24 @@ extern "C" {
 #define MC_CTRL_POS_ERR_REF  (1u << 6) /**< non-finite setpoint or limit: refused */
 
 typedef struct {
-    float dt_s;             /**< the fast step (PWM period) [s] */
-    uint32_t pole_pairs;    /**< for the electrical speed of the decoupling, >= 1 */
-    mc_traj_f32_cfg_t traj; /**< trajectory limits and input filter; traj.dt_s = dt_s */
-    float pos_kp_per_s;     /**< position P gain [(rad/s)/rad], kp dt <= 1 */
-    float vel_kp_a_s_rad;   /**< velocity PI proportional gain [A/(rad/s)] */
-    float vel_ki_a_rad;     /**< velocity PI integral gain [A/rad] */
-    float vel_limit_rad_s;  /**< bound of the velocity command [rad/s] */
-    float iq_max_a;         /**< q current limit [A] */
-    float kt_nm_a;          /**< torque constant for the feed-forward [N m/A] */
-    float j_kgm2;           /**< inertia for the torque feed-forward [kg m^2], >= 0 */
-    float ff_lead_s;        /**< the torque feed-forward takes the trajectory's
+    float dt_s;                /**< the fast step (PWM period) [s] */
+    uint32_t pole_pairs;       /**< for the electrical speed of the decoupling, >= 1 */
+    mc_traj_f32_cfg_t traj;    /**< trajectory limits and input filter; traj.dt_s = dt_s */
+    float pos_kp_per_s;        /**< position P gain [(rad/s)/rad], kp dt <= 1 */
+    float vel_kp_a_s_rad;      /**< velocity PI proportional gain [A/(rad/s)] */
+    float vel_ki_a_rad;        /**< velocity PI integral gain [A/rad] */
+    float vel_limit_rad_s;     /**< bound of the velocity command [rad/s] */
+    float iq_max_a;            /**< q current limit [A] */
+    float kt_nm_a;             /**< torque constant for the feed-forward [N m/A] */
+    float j_kgm2;              /**< inertia for the torque feed-forward [kg m^2], >= 0 */
+    float ff_lead_s;           /**< the torque feed-forward takes the trajectory's
                                          acceleration this far ahead [s], [0, 0.1]: about the
                                          current loop's lag 1/bw plus the PWM delay */
-    float b_nm_s_rad;       /**< viscous friction for the feed-forward [N m s/rad], >= 0 */
+    float b_nm_s_rad;          /**< viscous friction for the feed-forward [N m s/rad], >= 0 */
+    mc_traj_mode_t input_mode; /**< setpoints from init on: MC_TRAJ_MODE_TRAP (a trapezoid
+                                    to each target) or MC_TRAJ_MODE_FILTER (streamed
+                                    setpoints through the input filter: traj.filter_bw_rad_s
+                                    > 0); mc_ctrl_pos_set_input_mode changes it later */
 } mc_ctrl_pos_cfg_t;
 
 /** Telemetry of the last fast step. */

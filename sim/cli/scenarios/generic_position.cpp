@@ -3,9 +3,10 @@
 // mc_ctrl_position, built from the parameter table: app_params.hpp, pos_*
 // keys onto the traj_* parameters), commanded by SET_POSITION_REF frames. A
 // trapezoidal move of `turns` turns from standstill; optionally a re-plan to
-// `replan_turns` at `replan_frac` of the predicted move time. stream=1 (the
-// move streamed through the input filter) is refused: the application has no
-// command or parameter that selects the filter. Every metric is computed on
+// `replan_turns` at `replan_frac` of the predicted move time; or (stream=1)
+// the same move streamed as SET_POSITION_REF setpoints at stream_hz, a
+// (1 - cos) ramp over the trapezoid's time, through the law's input filter
+// (parameter pos_input_mode = 1). Every metric is computed on
 // the fly (constant memory).
 //
 // Summary:
@@ -40,6 +41,7 @@ namespace mcsim {
 namespace {
 
 constexpr double kTwoPi = 6.283185307179586476925;
+constexpr double kPi = 3.141592653589793238463;
 
 std::vector<ParamSpec> position_params(const MotorFiles& f) {
   std::vector<ParamSpec> p = {
@@ -91,12 +93,9 @@ void run_position(RunContext& ctx) {
   if (f.board.encoder_cpr == 0) {
     throw UsageError(f.board.file + ": position-move needs an encoder (encoder_cpr = 0 here)");
   }
-  if (ctx.params.get("stream") > 0.5) {
-    throw UsageError(
-        "stream=1: the drive application has no command or parameter that selects the position "
-        "law's input filter (MC_TRAJ_MODE_FILTER), so a streamed move cannot run through it");
-  }
+  const bool stream = ctx.params.get("stream") > 0.5;
   mc_params_t p0 = params_from_files(f, ctx.params);
+  p0.pos_input_mode = stream ? 1u : 0u;
   // the move's limits: the trajectory parameters
   if (ctx.params.get("v_max") > 0)
     p0.traj_v_max_rad_s = static_cast<float>(ctx.params.get("v_max"));
@@ -131,6 +130,9 @@ void run_position(RunContext& ctx) {
   if (replan_frac > 0)
     t_move_total +=
         std::abs(ctx.params.get("replan_turns") - turns) * kTwoPi / v + 2 * v / std::min(a, d);
+  const double t_stream = t_pred0;  // the streamed ramp takes the trapezoid's time
+  const long stream_div =
+      std::max(1L, std::lround(1.0 / (ctx.params.get("stream_hz") * board.period_s())));
   const double settle = 20.0 / g.pos_kp_per_s;
   const double dur = run_duration(ctx, t0 + t_move_total + settle);
   const long n = step_count(dur, T);
@@ -155,10 +157,16 @@ void run_position(RunContext& ctx) {
       r.start_rad = pr.pos_turns * kTwoPi + pr.pos_count * rad_per_count;
       const mc_hal_can_frame_t fr = run.cmd().position_ref(r.start_rad + turns * kTwoPi);
       r.set_target(as_sent(fr), rad_per_count);
-      run.send(fr);
+      if (!stream) run.send(fr);
       r.started = true;
     }
-    if (r.started && !r.replanned && replan_frac > 0 && t >= t0 + replan_frac * t_pred0) {
+    if (r.started && stream && (k % stream_div) == 0) {
+      const double ts = std::min(t - t0, t_stream);
+      const double x = 0.5 * (1.0 - std::cos(kPi * ts / t_stream)) * turns * kTwoPi;
+      run.send(run.cmd().position_ref(r.start_rad + x));
+    }
+    if (r.started && !stream && !r.replanned && replan_frac > 0 &&
+        t >= t0 + replan_frac * t_pred0) {
       const double rt = ctx.params.get("replan_turns");
       const mc_hal_can_frame_t fr = run.cmd().position_ref(r.start_rad + rt * kTwoPi);
       r.set_target(as_sent(fr), rad_per_count);
@@ -178,7 +186,7 @@ void run_position(RunContext& ctx) {
     if (k == n) break;
     run.step();
     const mc_app_probe_t& q = run.probe();
-    if (r.started && r.t_pred == 0 && q.pos_traj_k > 0) {
+    if (r.started && !stream && r.t_pred == 0 && q.pos_traj_k > 0) {
       // the move took effect (the application's slow step): its end, from t0
       t_cmd = t;
       r.t_pred = (t - t0) + static_cast<double>(q.pos_traj_duration_s);
@@ -231,7 +239,9 @@ void run_position(RunContext& ctx) {
     return write_verdict(ctx.summary, dr.faults != 0u ? faulted(dr.faults, stopped)
                                                       : Verdict{"stopped", stopped, true});
   }
-  ctx.summary.set_text("mode", r.replanned ? "replan" : "trapezoid");
+  if (stream) r.t_pred = t_stream;
+  ctx.summary.set_text("mode", stream ? "stream" : (r.replanned ? "replan" : "trapezoid"));
+  ctx.summary.set("pos_input_mode", run.target().params().pos_input_mode);
   ctx.summary.set("turns", turns);
   ctx.summary.set("target_rad", r.target_rad);
   ctx.summary.set("encoder_cpr", cpr);
@@ -252,7 +262,7 @@ void run_position(RunContext& ctx) {
   ctx.summary.set("a_max_rad_s2", a);
   ctx.summary.set("d_max_rad_s2", d);
   PositionFigures fig;
-  fig.stream = false;
+  fig.stream = stream;
   // judged against 1 count: the target's offset from the grid taken off
   fig.final_err_counts = std::max(0.0, r.err_counts - (r.band_counts - 1.0));
   fig.overshoot_rad = std::max(0.0, r.overshoot);

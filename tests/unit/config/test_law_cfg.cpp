@@ -108,6 +108,45 @@ TEST(LawCfg, DefaultsGiveEveryLaw)
     }
 }
 
+// The position law's input mode from its configuration (the application
+// sets it from pos_input_mode): FILTER is taken at the first fast step and
+// stays through an enable (reset); FILTER without a filter bandwidth, and
+// a mode that does not exist, are refused at init.
+TEST(LawCfg, PositionInputModeFromTheConfiguration)
+{
+    const mc_params_t p = mc_params_default;
+    mc_gains_motor_t m{};
+    mc_gains_t g{};
+    ASSERT_EQ(mc_law_gains_from_params(&p, &m, &g), MC_GAINS_OK);
+    mc_ctrl_pos_cfg_t pc{};
+    mc_law_pos_cfg(&m, &g, &pc);
+    EXPECT_EQ(pc.input_mode, MC_TRAJ_MODE_TRAP); // the builder's default
+    static mc_ctrl_pos_t pos;
+    pc.input_mode = MC_TRAJ_MODE_FILTER;
+    ASSERT_GT(pc.traj.filter_bw_rad_s, 0.0f);
+    ASSERT_EQ(mc_ctrl_pos_init(&pos, &pc), 0u);
+    const mc_drive_ctrl_t *ops = mc_ctrl_pos_ops(&pos);
+    ASSERT_EQ(ops->reset(ops->ctx), 0u);
+    mc_drive_meas_t meas{};
+    meas.have_encoder = true;
+    meas.enc_cpr = 8192u;
+    meas.vbus_v = 24.0f;
+    meas.dt_s = pc.dt_s;
+    meas.i_max_a = pc.iq_max_a;
+    meas.regen_scale = 1.0f;
+    mc_drive_out_t out{};
+    ASSERT_EQ(ops->fast(ops->ctx, &meas, &out), 0u);
+    EXPECT_EQ(pos.traj.mode, MC_TRAJ_MODE_FILTER);
+    ASSERT_EQ(ops->reset(ops->ctx), 0u); // an enable
+    ASSERT_EQ(ops->fast(ops->ctx, &meas, &out), 0u);
+    EXPECT_EQ(pos.traj.mode, MC_TRAJ_MODE_FILTER);
+    pc.traj.filter_bw_rad_s = 0.0f;
+    EXPECT_EQ(mc_ctrl_pos_init(&pos, &pc), MC_CTRL_POS_ERR_TRAJ);
+    mc_law_pos_cfg(&m, &g, &pc);
+    pc.input_mode = static_cast<mc_traj_mode_t>(7);
+    EXPECT_EQ(mc_ctrl_pos_init(&pos, &pc), MC_CTRL_POS_ERR_TRAJ);
+}
+
 // Each refusal by its name, and only for the law that needs it: the
 // sensored PI takes any motor the drive takes.
 TEST(LawCfg, RefusalsAreNamed)
