@@ -46,7 +46,12 @@
  *       laws         from the parameters (laws_from_params), as on the
  *                    drive boards and in the SIL: speed_law picks SPEED's
  *                    law, the position law serves POSITION;
- *       commissioning not bound (main's weak mc_board_comm_cfg);
+ *       commissioning over CAN as on the drive boards (mc_board_comm_cfg:
+ *                    the rule of mc_comm_can_cfg_for_board from the
+ *                    parameters: the table's sense range, its nominal bus
+ *                    as the lowest, three shunts when current_sensors is
+ *                    3; the simulator's SIL application target binds the
+ *                    same);
  *       update       BOOT_REQ INFO, VERSION and the confirmed ENTER answered
  *                    from the image header (mc_image_header.h), ENTER
  *                    resetting into the bootloader through the mailbox
@@ -619,6 +624,13 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
 {
     handshake();
     return g_pil.have_app ? &g_pil.app : NULL;
+}
+
+const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p)
+{
+    static mc_comm_can_cfg_t comm;
+    mc_comm_can_cfg_for_board(p, p->i_sense_max_a, p->vbus_v, p->current_sensors == 3u, &comm);
+    return &comm;
 }
 
 const mc_drive_cfg_t *mc_board_drive_cfg(void)

@@ -39,6 +39,13 @@ mc_hal_can_frame_t AppCommands::position_ref(double theta_m_rad) const {
   return pack(MC_CAN_MSG_SET_POSITION_REF, {static_cast<float>(theta_m_rad)});
 }
 
+mc_hal_can_frame_t AppCommands::commission(uint32_t action, double i_test_a, double v_test_max_v,
+                                           double speed_max_m_rad_s) const {
+  return pack(MC_CAN_MSG_COMMISSION_CMD,
+              {static_cast<float>(action), static_cast<float>(i_test_a),
+               static_cast<float>(v_test_max_v), static_cast<float>(speed_max_m_rad_s)});
+}
+
 mc_hal_can_frame_t AppCommands::host_heartbeat() {
   ++hb_counter_;
   return pack(MC_CAN_MSG_HOST_HEARTBEAT, {static_cast<float>(hb_counter_)});
@@ -51,7 +58,11 @@ AppRunner::AppRunner(AppTarget& target) : t_(target), cmd_(target.params().can_n
 void AppRunner::start(uint32_t mode) {
   send(cmd_.mode(mode));
   send(cmd_.enable(true));
-  started_ = true;  // the first keep-alive with the enable
+  keep_host_alive();  // the first keep-alive with the enable
+}
+
+void AppRunner::keep_host_alive() {
+  started_ = true;
   next_hb_s_ = t_.board().t_s();
 }
 

@@ -28,6 +28,10 @@ class AppCommands {
   mc_hal_can_frame_t current_ref(double id_a, double iq_a) const;
   mc_hal_can_frame_t speed_ref(double omega_m_rad_s) const;
   mc_hal_can_frame_t position_ref(double theta_m_rad) const;
+  /// COMMISSION_CMD: action MC_COMM_CAN_START, _ABORT or _REPORT with its
+  /// options (0: the drive's default).
+  mc_hal_can_frame_t commission(uint32_t action, double i_test_a, double v_test_max_v,
+                                double speed_max_m_rad_s) const;
   /// HOST_HEARTBEAT, its counter advanced by one at each call.
   mc_hal_can_frame_t host_heartbeat();
 
@@ -49,6 +53,9 @@ class AppRunner {
   void send(const mc_hal_can_frame_t& f) { pending_.push_back(f); }
   /// Enable the drive in mode (MC_CAN_CTRL_*): mode, then enable.
   void start(uint32_t mode);
+  /// The keep-alive from now on without an enable (a commissioning run,
+  /// which the application times out as an enabled drive).
+  void keep_host_alive();
   AppTargetPeriod step();
   /// Stop (false) or resume the HOST_HEARTBEAT keep-alive: a host that
   /// went silent (the application's command timeout then stops the drive).
@@ -58,6 +65,8 @@ class AppRunner {
   hal_host::PmsmBoard& board() { return t_.board(); }
   AppTarget& target() { return t_; }
   uint64_t frames_sent() const { return frames_tx_; }
+  /// The frames the application sent in the last step.
+  const std::vector<mc_hal_can_frame_t>& sent() const { return tx_; }
 
  private:
   AppTarget& t_;

@@ -24,9 +24,12 @@ namespace mcsim {
 /// application booted from p: the SIL, or with ctx.pil (mcsim run --pil)
 /// the board's whole image on QEMU (the target's name then on stderr: the
 /// CSV and summary are the same on both targets, bit for bit).
-std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,
-                                            const mc_params_t& p,
-                                            const std::function<double(double)>* load_nm);
+/// plant_hook (optional): changes to the plant before it is built (sensor
+/// noise, encoder direction, the shaft's start angle).
+std::unique_ptr<AppTarget> make_file_target(
+    const RunContext& ctx, const MotorFiles& plant, const mc_params_t& p,
+    const std::function<double(double)>* load_nm,
+    const std::function<void(hal_host::PmsmBoardConfig&)>& plant_hook = {});
 /// The same on the SIL (tests that build their own run).
 std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
                                             const std::function<double(double)>* load_nm);

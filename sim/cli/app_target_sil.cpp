@@ -1,7 +1,8 @@
 // make_app_target_sil (app_target.hpp): the drive application compiled for
 // the host on the simulated board, one PWM period = hal_host::app_period
 // (the image's interrupt/PendSV sequence), booted from the setup's
-// parameter table (no flash), the laws from the parameters, and a CAN bus
+// parameter table (no flash), the laws from the parameters, commissioning
+// over CAN bound as the images bind it, and a CAN bus
 // in memory: the frames a period is given are what the controller holds
 // when the receive interrupt runs at the period start; the frames the
 // application sends in the period are handed back.
@@ -89,6 +90,15 @@ class AppTargetSil final : public AppTarget {
                        hex(app_->tm_err) + ", commands " + hex(app_->cmd_err) + ", laws " +
                        law_err_names(app_->laws.error) + ")");
     }
+    // Commissioning over CAN, as the images bind it (main.c,
+    // mc_board_comm_cfg; the PIL board's rule: hal/pil/mc_hal_pil.c).
+    mc_comm_can_cfg_t cc{};
+    mc_comm_can_cfg_for_board(&app_->params, app_->params.i_sense_max_a, app_->params.vbus_v,
+                              app_->params.current_sensors == 3u, &cc);
+    if (mc_comm_can_init(comm_can_.get(), &cc, comm_.get(), drive_.get(),
+                         app_->params_valid ? &app_->srv : nullptr) == MC_COMM_CAN_CFG_OK) {
+      mc_app_attach_commission(app_.get(), comm_can_.get());
+    }
     mc_app_probe(app_.get(), &probe_);
   }
 
@@ -113,6 +123,8 @@ class AppTargetSil final : public AppTarget {
   std::unique_ptr<hal_host::PmsmBoard> board_;
   std::unique_ptr<mc_app_t> app_;
   std::unique_ptr<mc_drive_t> drive_;
+  std::unique_ptr<mc_comm_t> comm_ = std::make_unique<mc_comm_t>();  // large
+  std::unique_ptr<mc_comm_can_t> comm_can_ = std::make_unique<mc_comm_can_t>();
   MemCan can_;
   mc_app_probe_t probe_{};
 };

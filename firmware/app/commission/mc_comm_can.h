@@ -123,6 +123,21 @@ typedef struct {
     uint32_t tx_dropped; /**< frames the HAL refused */
 } mc_comm_can_t;
 
+/** The commissioning limits of a board from its parameters p (pwm_hz,
+ *  slow_loop_div, dead_time_s, speed_max_rad_s, the encoder loop's bandwidth
+ *  derived unless set, can_node_id) and three board facts: the current-sense
+ *  range i_sense_max_a, the lowest bus it runs on vbus_low_v and whether it
+ *  measures three phases. A quarter of the sense range as the test current,
+ *  90 % of the phase voltage vbus_low_v allows, a tenth of the sense range as
+ *  the largest plausible sensor offset, the tests' current loop at 0.08 / T,
+ *  the spin-up capped at speed_max_rad_s, status frames at 10 Hz. The boards'
+ *  images (firmware/targets/stm32f405/mc_board_comm.c, from the board's
+ *  description), the PIL image and the simulator's application target (from
+ *  the parameter table: the nominal bus, current_sensors) use this one rule.
+ *  mc_comm_can_init validates the result. */
+void mc_comm_can_cfg_for_board(const mc_params_t *p, float i_sense_max_a, float vbus_low_v,
+                               bool three_shunts, mc_comm_can_cfg_t *p_out);
+
 /** Validate cfg and bind: comm is (re)initialised with cfg->base, params
  *  may be NULL. Returns MC_COMM_CAN_CFG_* bits; on error m is unchanged. */
 uint32_t mc_comm_can_init(mc_comm_can_t *m, const mc_comm_can_cfg_t *cfg, mc_comm_t *comm,

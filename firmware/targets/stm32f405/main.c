@@ -77,7 +77,7 @@ __attribute__((weak)) int mc_board_can_bitrate(uint32_t bitrate_bps)
     return 0;
 }
 
-/* Boards without commissioning (the PIL board) keep this one. */
+/* Boards without commissioning keep this one. */
 __attribute__((weak)) const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p)
 {
     (void)p;

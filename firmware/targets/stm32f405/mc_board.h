@@ -50,7 +50,8 @@ int mc_board_can_bitrate(uint32_t bitrate_bps);
 /** Commissioning over CAN for this board, from the booted parameters p
  *  (test current and voltage from the board's sense range and lowest bus,
  *  its dead time, the PWM period). NULL (the default of main.c, a weak
- *  symbol; the PIL board): not offered, COMMISSION_CMD answers UNSUPPORTED. */
+ *  symbol): not offered, COMMISSION_CMD answers UNSUPPORTED. The PIL board
+ *  offers it from its parameters (hal/pil/mc_hal_pil.c). */
 const mc_comm_can_cfg_t *mc_board_comm_cfg(const mc_params_t *p);
 
 /** Provided by main.c for the board's CAN receive interrupt: move the

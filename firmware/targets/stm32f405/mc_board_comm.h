@@ -1,11 +1,10 @@
 /**
  * @file mc_board_comm.h
  * Commissioning limits of an STM32F405 board (mc_comm_can_cfg_t) from its
- * description and the booted parameters, the same rules as the SIL's
- * can-telemetry scenario: a quarter of the current-sense range as the test
- * current, 90 % of the phase voltage the board's lowest bus allows, a tenth
- * of the sense range as the largest plausible sensor offset, the tests'
- * current loop at 0.08 / T, status frames at 10 Hz.
+ * description and the booted parameters: the rule of
+ * mc_comm_can_cfg_for_board (commission/mc_comm_can.h) with the board's
+ * current-sense range, its lowest bus voltage and whether it has a third
+ * shunt.
  */
 #ifndef MC_BOARD_COMM_H
 #define MC_BOARD_COMM_H

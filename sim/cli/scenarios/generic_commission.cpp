@@ -1,6 +1,7 @@
-// The `commission` scenario: the drive, knowing only the board, measures
-// the motor of a file (firmware/app/commission/README.md), then (verify=1)
-// runs a sensored and a sensorless speed step on the identified values.
+// Commissioning on the kernel-level rig (the drive alone with the
+// commissioning plug-in, the tests of tests/sil/commission) and the plant's
+// side shared with the `commission` scenario (commission.cpp, which runs the
+// drive application's commissioning over CAN).
 #include "generic_commission.hpp"
 
 #include <algorithm>
@@ -20,6 +21,8 @@ double wrap2pi(double x) {
   x = std::fmod(x, 2 * kPi);
   return x < 0 ? x + 2 * kPi : x;
 }
+
+}  // namespace
 
 void set_adc_offsets(const CommissionSetup& s, double out[3]) {
   out[0] = s.adc_offset_a;
@@ -45,6 +48,8 @@ double true_offset(const MotorFiles& f, const CommissionSetup& s,
   const double x0 = dir * th0 * cpr / (2 * kPi);
   return wrap2pi(p * (th0 - dir * (x0 - std::floor(x0) - 0.5) * step));
 }
+
+namespace {
 
 // The drive with placeholder motor values (what an image knows before
 // commissioning): only the board's limits are real.
@@ -221,152 +226,4 @@ double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, const Co
   return std::abs(rig.board().state()(2) - w_t) / std::abs(w_t);
 }
 
-namespace {
-
-std::vector<ParamSpec> commission_params(const MotorFiles& f) {
-  const CommissionSetup d = default_commission_setup(f);
-  return {
-      {"encoder_offset_rad", d.encoder_offset_rad, "rad",
-       "plant: electrical angle of the d axis at encoder count 0", -100.0, 100.0},
-      {"encoder_direction", 1.0, "1", "plant: encoder counting direction (+1 or -1)", -1.0, 1.0},
-      {"adc_offset_a", d.adc_offset_a, "A",
-       "plant: current-sensor offsets (x, -0.7 x, 0.4 x) on phases a, b, c", -1e4, 1e4},
-      {"noise_rms_a", d.noise_rms_a, "A", "plant: current-sensor noise per channel", 0.0, 1e4},
-      {"i_test_a", 0.25 * f.board.i_sense_max_a, "A", "commissioning test current", 1e-6, 1e6},
-      {"verify", 0.0, "1",
-       "1: then run sensored and sensorless speed steps on the identified "
-       "values",
-       0.0, 1.0},
-      {"verify_sensorless_theta_e_rad", 0.0, "rad",
-       "verify=1: the rotor's electrical angle when the sensorless run starts", -100.0, 100.0},
-      {"seed", 1.0, "1", "plant: current-noise generator seed", 0.0, 4294967295.0},
-  };
-}
-
-void run_commission_scenario(RunContext& ctx) {
-  const MotorFiles& f = *ctx.files;
-  CommissionSetup s = default_commission_setup(f);
-  s.encoder_offset_rad = ctx.params.get("encoder_offset_rad");
-  s.encoder_direction = ctx.params.get("encoder_direction") < 0 ? -1 : 1;
-  s.adc_offset_a = ctx.params.get("adc_offset_a");
-  s.noise_rms_a = ctx.params.get("noise_rms_a");
-  s.i_test_a = ctx.params.get("i_test_a");
-  s.seed = static_cast<std::uint64_t>(ctx.params.get("seed"));
-  s.sensorless_start_theta_e_rad = ctx.params.get("verify_sensorless_theta_e_rad");
-  const CommissionRun run = run_commission(f, s);
-  const mc_comm_result_t& r = run.res;
-  ctx.summary.set("duration_s", run.duration_s);
-  ctx.summary.set("error_bits", run.err);
-  ctx.summary.set_text("fault", run.err ? commission_error_names(run.err) : "");
-  ctx.summary.set_text("motor", f.motor.name);
-  ctx.summary.set_text("board", f.board.name);
-  ctx.csv.columns({"t", "done"});
-  const double row[2] = {run.duration_s, run.done ? 1.0 : 0.0};
-  ctx.csv.row(row, 2);
-  ctx.summary.set_object("true", {{"r_ohm", f.motor.r_ohm},
-                                  {"ld_h", f.motor.ld_h},
-                                  {"lq_h", f.motor.lq_h},
-                                  {"flux_wb", f.motor.flux_wb},
-                                  {"pole_pairs", f.motor.pole_pairs},
-                                  {"encoder_offset_rad", run.true_encoder_offset_rad},
-                                  {"encoder_direction", run.true_encoder_direction},
-                                  {"adc_offset_a_a", run.true_adc_offset_a[0]},
-                                  {"adc_offset_b_a", run.true_adc_offset_a[1]},
-                                  {"adc_offset_c_a", run.true_adc_offset_a[2]},
-                                  {"j_kgm2", f.motor.j_kgm2},
-                                  {"b_nm_s_rad", f.motor.b_nm_s_rad}});
-  CommissionFigures fig;
-  fig.duration_s = run.duration_s;
-  fig.error_names = commission_error_names(run.err);
-  if (!run.done) return write_verdict(ctx.summary, judge_commission(fig));
-  std::map<std::string, double> id = {{"r_ohm", r.r_ohm},
-                                      {"ld_h", r.ld_h},
-                                      {"lq_h", r.lq_h},
-                                      {"flux_wb", r.flux_wb},
-                                      {"pole_pairs", r.pole_pairs},
-                                      {"encoder_offset_rad", r.encoder_offset_rad},
-                                      {"encoder_direction", r.encoder_direction},
-                                      {"adc_offset_a_a", r.adc_offset_a[0]},
-                                      {"adc_offset_b_a", r.adc_offset_a[1]},
-                                      {"adc_offset_c_a", r.adc_offset_a[2]},
-                                      {"dead_time_v", r.dead_time_v},
-                                      {"saliency", r.lq_h / r.ld_h}};
-  if (r.valid & MC_COMM_HAVE_MECH) {
-    id["j_kgm2"] = r.j_kgm2;
-    id["b_nm_s_rad"] = r.b_nm_s_rad;
-  }
-  ctx.summary.set_object("identified", id);
-  const double e_off = std::remainder(r.encoder_offset_rad - run.true_encoder_offset_rad, 2 * kPi);
-  double e_adc = 0;  // the largest current-sensor offset error
-  for (int k = 0; k < 3; ++k) {
-    e_adc = std::max(e_adc, std::abs(r.adc_offset_a[k] - run.true_adc_offset_a[k]));
-  }
-  ctx.summary.set_object(
-      "error", {{"r_frac", r.r_ohm / f.motor.r_ohm - 1},
-                {"ld_frac", r.ld_h / f.motor.ld_h - 1},
-                {"lq_frac", r.lq_h / f.motor.lq_h - 1},
-                {"flux_frac", r.flux_wb / f.motor.flux_wb - 1},
-                {"encoder_offset_deg", e_off * 180 / kPi},
-                {"pole_pairs_diff", static_cast<double>(r.pole_pairs) - f.motor.pole_pairs},
-                {"direction_wrong", r.encoder_direction == run.true_encoder_direction ? 0.0 : 1.0},
-                {"adc_offset_max_a", e_adc},
-                {"adc_offset_max_frac", e_adc / f.board.i_sense_max_a}});
-  if (ctx.params.get("verify") > 0.5) {
-    // verify.LAW_faulted: 1 if the drive faulted on the way (the error is
-    // then NaN), 0 if not. A law that refuses this motor (the sensorless
-    // law takes no salient machine; either law a pair without safe gains)
-    // leaves its error NaN, no _faulted, and
-    // says why; commissioning itself succeeded, so the run does not fail.
-    double w = 0;
-    const auto verify = [&](Law law, const char* name) {
-      try {
-        const double e = verify_speed_step(f, s, run, law, &w);
-        ctx.summary.set(std::string("verify.") + name + "_speed_err_frac", e);
-        ctx.summary.set(std::string("verify.") + name + "_faulted", std::isnan(e) ? 1.0 : 0.0);
-      } catch (const UsageError& e) {
-        ctx.summary.set(std::string("verify.") + name + "_speed_err_frac", std::nan(""));
-        ctx.summary.set_text(std::string("verify.") + name + "_refused", e.what());
-        if (law == Law::kSensorless) {
-          fig.sensorless_refused = true;
-        } else {
-          fig.sensored_refused = true;  // no safe gains for this motor and board
-        }
-      }
-    };
-    verify(Law::kSpeedPi, "sensored");
-    verify(Law::kSensorless, "sensorless");
-    ctx.summary.set("verify.speed_target_rad_s", w);
-  }
-  const auto& n = ctx.summary.numbers();
-  fig.done = true;
-  fig.r_frac = r.r_ohm / f.motor.r_ohm - 1;
-  fig.ld_frac = r.ld_h / f.motor.ld_h - 1;
-  fig.lq_frac = r.lq_h / f.motor.lq_h - 1;
-  fig.flux_frac = r.flux_wb / f.motor.flux_wb - 1;
-  fig.pole_pairs_diff = static_cast<double>(r.pole_pairs) - f.motor.pole_pairs;
-  fig.encoder_offset_deg = e_off * 180 / kPi;
-  fig.adc_offset_max_frac = e_adc / f.board.i_sense_max_a;
-  fig.direction_right = r.encoder_direction == run.true_encoder_direction;
-  fig.verify = ctx.params.get("verify") > 0.5;
-  if (fig.verify) {
-    fig.verify_sensored_err_frac = n.at("verify.sensored_speed_err_frac");
-    fig.verify_sensorless_err_frac = n.at("verify.sensorless_speed_err_frac");
-  }
-  write_verdict(ctx.summary, judge_commission(fig));
-}
-
-const Registrar reg_commission(
-    {"commission",
-     "any motor: the drive, knowing only the board, measures current-sensor offsets, R, Ld, "
-     "Lq, pole pairs, encoder direction and offset, flux (and J, B); JSON with 'identified' and "
-     "'true'; verify=1 then runs speed steps on the identified values",
-     0.0,
-     {},
-     run_commission_scenario,
-     commission_params,
-     /*takes_flash=*/false,
-     /*motor_optional=*/false,
-     /*takes_duration=*/false});
-
-}  // namespace
 }  // namespace mcsim

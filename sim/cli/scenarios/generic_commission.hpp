@@ -1,6 +1,10 @@
 // Commissioning in the loop: the drive, knowing only the board, measures a
-// motor from a file (firmware/app/commission). Used by the `commission`
-// scenario (generic_commission.cpp) and the tests (tests/sil/commission).
+// motor from a file (firmware/app/commission). run_commission and
+// verify_speed_step are the kernel-level rig of the tests
+// (tests/sil/commission: the drive alone with the commissioning plug-in, a
+// C++ rig for the runs on the identified values); the `commission`
+// scenario (commission.cpp) runs the drive application's commissioning
+// over CAN instead and shares only the plant's side (the helpers below).
 #pragma once
 
 #include <cstdint>
@@ -52,6 +56,16 @@ CommissionSetup default_commission_setup(const MotorFiles& f);
 
 /// Run the sequence; throws UsageError for files the rig refuses.
 CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s);
+
+/// The plant's imperfections of s: current noise and its seed, the
+/// encoder's direction, the shaft angle at power-up (encoder_offset_rad).
+void configure_plant(const MotorFiles& f, const CommissionSetup& s, hal_host::PmsmBoardConfig& bc);
+/// The current-sensor offsets of s on phases a, b, c (x, -0.7 x, 0.4 x).
+void set_adc_offsets(const CommissionSetup& s, double out[3]);
+/// The electrical encoder offset the firmware's formula should find on
+/// the plant bc (the count's quantisation included).
+double true_offset(const MotorFiles& f, const CommissionSetup& s,
+                   const hal_host::PmsmBoardConfig& bc);
 
 /// Names of MC_COMM_ERR_* bits, "|"-separated.
 std::string commission_error_names(uint32_t err);

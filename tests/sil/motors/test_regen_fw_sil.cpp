@@ -90,9 +90,10 @@ TEST(FieldWeakening, NonSalientUnaffected) {
               0.02 * r.at("target_speed_rad_s"));
 }
 
-// Active short circuit (mc_drive_cfg_t.asc_enable) on the salient motor at
+// Active short circuit (the asc_enable parameter) on the salient motor at
 // 2.5x base speed, where its line-to-line back-EMF peak exceeds the 48 V
-// bus, on a supply that cannot sink current: a fault with the bridge opened
+// bus, on a supply that cannot sink current: the encoder lost (an ENCODER
+// fault, one of MC_DRIVE_ASC_FAULTS) with the bridge opened
 // pumps the bus through the diodes past its trip; with the short the bus
 // stays at the supply and the rotor is braked, as long as the short's
 // transient current stays below the over-current trip: it settles towards

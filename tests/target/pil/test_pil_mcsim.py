@@ -3,6 +3,11 @@
 
     test_pil_mcsim.py --mcsim M --motor FILE --board B --duration S --work DIR \\
         SCENARIO [--set key=value ...]
+    test_pil_mcsim.py ... --sim-s S ... SCENARIO --set BOUND=S
+
+(--sim-s: a scenario that takes no --duration, bounded by one of its own
+parameters, e.g. commission's t_max_s: S is only the cost line's simulated
+time)
 
 runs SCENARIO twice on the same motor and board, once on the SIL and once with
 --pil (the board's whole image on QEMU), each into its own directory, and
@@ -78,7 +83,10 @@ def fresh(path):
 
 
 def same_run(a):
-    base = [a.mcsim, "run", a.scenario, "--motor", a.motor, "--board", a.board, "--duration", repr(a.duration)]
+    base = [a.mcsim, "run", a.scenario, "--motor", a.motor, "--board", a.board]
+    if a.duration:
+        base += ["--duration", repr(a.duration)]
+    sim_s = a.duration or a.sim_s
     for kv in a.set or []:
         base += ["--set", kv]
     sil_dir = fresh(os.path.join(a.work, "sil"))
@@ -107,10 +115,10 @@ def same_run(a):
                 "set": a.set or [],
                 "board": a.board,
                 "motor": os.path.basename(a.motor),
-                "duration_s": a.duration,
+                "duration_s": sim_s,
                 "pil_wall_s": round(wall_p, 3),
                 "sil_wall_s": round(wall_s, 3),
-                "pil_wall_per_sim_s": round(wall_p / a.duration, 1),
+                "pil_wall_per_sim_s": round(wall_p / sim_s, 1),
             }
         )
     )
@@ -171,6 +179,12 @@ def main():
     ap.add_argument("--motor", required=True)
     ap.add_argument("--board")
     ap.add_argument("--duration", type=float)
+    ap.add_argument(
+        "--sim-s",
+        type=float,
+        help="instead of --duration, for a scenario that takes none (its --set bounds the run): "
+        "the simulated seconds of the run, for the cost line only",
+    )
     ap.add_argument("--work", required=True)
     ap.add_argument("--set", action="append")
     ap.add_argument("--self-test", action="store_true")
@@ -179,8 +193,8 @@ def main():
     if a.self_test:
         errors = self_test(a)
     else:
-        if not (a.scenario and a.board and a.duration):
-            ap.error("SCENARIO, --board and --duration are required")
+        if not (a.scenario and a.board and (a.duration or a.sim_s)):
+            ap.error("SCENARIO, --board and --duration (or --sim-s) are required")
         errors = same_run(a)
     for e in errors:
         print("FAIL: " + e)
