@@ -130,7 +130,7 @@ std::vector<ParamSpec> commission_params(const MotorFiles& f) {
 
 // The table the application boots (see the file comment).
 mc_params_t booted_params(const MotorFiles& f) {
-  return params_from_files(f, Params(gain_params(f), {}), MC_LAW_SPEED_PI);
+  return params_from_files(f, Params(app_gain_params(f), {}), MC_LAW_SPEED_PI);
 }
 
 // The booted table with what commissioning stages (mc_comm_can.c, stage()).

@@ -134,7 +134,7 @@ std::vector<ParamSpec> fw_params(const MotorFiles& f) {
        "part 3: current-sensing range of the board (0: the board file's); the drive's "
        "over-current trip i_trip_a at 98 % of it",
        0.0, 1.0e5}};
-  for (auto& s : gain_params(f)) p.push_back(s);
+  for (auto& s : app_gain_params(f)) p.push_back(s);
   return p;
 }
 
