@@ -33,9 +33,12 @@ std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_pa
 
 std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,
                                             const mc_params_t& p,
-                                            const std::function<double(double)>* load_nm) {
-  if (ctx.pil == nullptr) return make_file_target(plant, p, load_nm);
-  std::unique_ptr<AppTarget> t = make_app_target_pil(file_setup(plant, p, load_nm), *ctx.pil);
+                                            const std::function<double(double)>* load_nm,
+                                            const std::function<void(AppSetup&)>& adjust) {
+  AppSetup s = file_setup(plant, p, load_nm);
+  if (adjust) adjust(s);
+  if (ctx.pil == nullptr) return make_app_target_sil(s);
+  std::unique_ptr<AppTarget> t = make_app_target_pil(s, *ctx.pil);
   std::fprintf(stderr, "mcsim: target %s\n", t->name().c_str());
   return t;
 }

@@ -5,7 +5,9 @@
 // in memory: the frames a period is given are what the controller holds
 // when the receive interrupt runs at the period start; the frames the
 // application sends in the period are handed back.
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <deque>
 #include <memory>
@@ -19,6 +21,7 @@
 #include "hal_host/can_ops.hpp"
 #include "scenario.hpp"
 extern "C" {
+#include "commission/mc_comm_can.h"
 #include "config/mc_law_cfg.h"
 }
 
@@ -76,9 +79,15 @@ class AppTargetSil final : public AppTarget {
     }
     mc_app_cfg_t c{};
     c.defaults = &params_;
-    c.flash = nullptr;                // no store: the table boots as the board's defaults
-    app_target_binding(params_, &c);  // the images' binding, as the PIL target's
+    c.flash = s.flash;  // null: no store, the table boots as the board's defaults
+    c.flash_sectors[0] = 0u;
+    c.flash_sectors[1] = 1u;
+    app_target_binding(s, &c);  // the images' binding, as the PIL target's
     const uint32_t berr = mc_app_boot(app_.get(), &c);
+    if ((berr & MC_APP_CFG_ERR_STORE) != 0u) {
+      throw UsageError("the configuration store refused the flash's sectors (MC_APP_CFG bits " +
+                       hex(berr) + ")");
+    }
     if (berr != MC_APP_CFG_OK) {
       throw UsageError("the application refused to boot: MC_APP_CFG bits " + hex(berr));
     }
@@ -89,6 +98,7 @@ class AppTargetSil final : public AppTarget {
                        hex(app_->tm_err) + ", commands " + hex(app_->cmd_err) + ", laws " +
                        law_err_names(app_->laws.error) + ")");
     }
+    if (s.commissioning) attach_commissioning(s.board);
     mc_app_probe(app_.get(), &probe_);
   }
 
@@ -109,11 +119,47 @@ class AppTargetSil final : public AppTarget {
   std::string name() const override { return "sil"; }
 
  private:
+  // Commissioning over CAN (COMMISSION_CMD, firmware/app/commission/
+  // mc_comm_can.h) with the boards' test limits (firmware/targets/
+  // stm32f405/mc_board_comm.c: a quarter of the current-sense range as the
+  // test current, 90 % of the bus's phase voltage (the simulated bus; the
+  // boards take their lowest), a tenth of the sense range as the largest offset,
+  // the tests' current loop at 0.08 / T, status frames at 10 Hz; the
+  // results staged in the parameter service.
+  void attach_commissioning(const hal_host::PmsmBoardConfig& b) {
+    const mc_params_t& p = app_->params;
+    const double T = 1.0 / static_cast<double>(p.pwm_hz);
+    mc_comm_can_cfg_t k{};
+    k.base.dt_s = static_cast<float>(T);
+    k.base.i_test_a = 0.25f * p.i_sense_max_a;
+    k.base.v_test_max_v = static_cast<float>(0.9 * b.vbus_v / std::sqrt(3.0));
+    k.base.offset_max_a = 0.1f * p.i_sense_max_a;
+    k.base.dead_time_s = p.dead_time_s;
+    k.base.cur_bw_rad_s = static_cast<float>(0.08 / T);
+    k.base.speed_max_m_rad_s = p.speed_max_rad_s;
+    k.base.bemf_frac = 0.5f;
+    k.base.pole_pairs_max = 32;
+    k.base.three_shunts = b.three_shunts;
+    k.node_id = static_cast<uint8_t>(p.can_node_id);
+    k.status_div = std::max<uint32_t>(1u, app_->tick_hz / 10u);
+    mc_params_eff_t e;
+    (void)mc_params_resolve(&p, &e);  // the encoder loop's bandwidth, derived unless set
+    k.enc_pll_bw_rad_s = e.p.speed_pll_bw_rad_s;
+    comm_ = std::make_unique<mc_comm_t>();
+    if (mc_comm_can_init(&comm_can_, &k, comm_.get(), drive_.get(),
+                         app_->params_valid ? &app_->srv : nullptr) != MC_COMM_CAN_CFG_OK) {
+      throw UsageError("commissioning refused its configuration for this board");
+    }
+    mc_app_attach_commission(app_.get(), &comm_can_);
+  }
+
   mc_params_t params_;
   std::unique_ptr<hal_host::PmsmBoard> board_;
   std::unique_ptr<mc_app_t> app_;
   std::unique_ptr<mc_drive_t> drive_;
   MemCan can_;
+  std::unique_ptr<mc_comm_t> comm_;
+  mc_comm_can_t comm_can_{};
   mc_app_probe_t probe_{};
 };
 
