@@ -4,8 +4,8 @@
  *        ring), the node filter, command handling, telemetry, the command
  *        timeout, parameter access and the configuration loaded from flash,
  *        the control modes (plug-ins), the CAN controller's state and the
- *        watchdog. The MCU image's main and the SIL scenario (can-telemetry)
- *        only bind it; both run exactly this code.
+ *        watchdog. The MCU image's main and the SIL's AppTarget (the
+ *        simulator's scenarios) only bind it; both run exactly this code.
  *
  * Instances are the caller's (static on the MCU, no heap). One mc_app_t per
  * drive; the drive (mc_drive_t) is the caller's too, since on the MCU it
