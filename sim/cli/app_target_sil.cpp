@@ -23,6 +23,7 @@
 extern "C" {
 #include "commission/mc_comm_can.h"
 #include "config/mc_law_cfg.h"
+#include "mc_telemetry.h"
 }
 
 namespace mcsim {
@@ -92,6 +93,16 @@ class AppTargetSil final : public AppTarget {
       throw UsageError("the application refused to boot: MC_APP_CFG bits " + hex(berr));
     }
     const uint32_t aerr = mc_app_start(app_.get(), drive_.get(), board_->hal(), can_.hal(), true);
+    if ((aerr & MC_APP_CFG_ERR_TM) != 0u) {
+      char load[96];
+      std::snprintf(load, sizeof load, "bus load %.1f %% of %u bit/s, budget %.1f %%",
+                    100.0 * mc_telemetry_bus_load(&app_->tm_cfg),
+                    static_cast<unsigned>(app_->tm_cfg.bitrate_bps), 100.0 * s.tm_budget_frac);
+      throw UsageError(
+          "the application refused to start: telemetry configuration refused (MC_TM_CFG "
+          "bits " +
+          hex(app_->tm_err) + "), " + load);
+    }
     if (aerr != MC_APP_CFG_OK) {
       throw UsageError("the application refused to start: MC_APP_CFG bits " + hex(aerr) +
                        " (drive MC_DRIVE_CFG " + hex(app_->drive_err) + ", telemetry " +
