@@ -53,6 +53,11 @@ SLOTS = ["HEARTBEAT", "CURRENTS", "VOLTAGES", "SPEED", "POSITION", "OBSERVER", "
          "CURRENT_REFS", "POSITION_REF"]  # bit i of tm_sent_mask (sim/cli/scenarios/can_telemetry.cpp)
 
 
+# A busy loop that ends when this test process does: a test killed by
+# ctest's timeout (SIGKILL, no finally) must not leave cores busy.
+BUSY_WHILE_PARENT_LIVES = "import os\nparent = os.getppid()\nwhile os.getppid() == parent:\n    pass\n"
+
+
 def check(ok, what):
     print(("ok   " if ok else "FAIL ") + what, flush=True)
     if not ok:
@@ -264,7 +269,7 @@ def served_drive(mcsim, W, py):
     run = os.path.join(W, "live")
     os.makedirs(run)
     os.chdir(run)
-    busy = subprocess.Popen([py, "-c", "while True: pass"])  # a core kept busy throughout
+    busy = subprocess.Popen([py, "-c", BUSY_WHILE_PARENT_LIVES])  # a core kept busy throughout
     # light enough for the wall clock on a loaded machine; a valid parameter
     # set (with --flash); the default telemetry rates; the motor without the
     # scenario's flywheel (commissioning: commission/README.md, Limits)

@@ -366,6 +366,7 @@ static mc_drive_meas_t law_meas(void)
         .theta_e_rad = D->tm.theta_e_rad,
         .omega_m_rad_s = D->enc_trk.omega_rad_s,
         .enc_count = g_enc,
+        .enc_raw_count = g_enc,
         .enc_cpr = DESC->enc_counts_per_rev,
         .dt_s = D->cfg.foc.dt_s,
         .fast_count = D->fast_count,
@@ -380,15 +381,18 @@ static mc_drive_meas_t law_meas(void)
     };
     return m;
 }
+/* Built once before the law's part is counted: the part is the law's fast
+ * step alone (the drive's own building of the record is in its rest, and
+ * a record built inside the count would measure the compiler's way of
+ * zeroing a struct, which changes with the struct's size). */
+static mc_drive_meas_t g_law_meas;
 static void part_law(void)
 {
-    const mc_drive_meas_t m = law_meas();
-    g_sink = (int)mc_ctrl_sls_fast(&g_sls_copy, &m, &g_law_out);
+    g_sink = (int)mc_ctrl_sls_fast(&g_sls_copy, &g_law_meas, &g_law_out);
 }
 static void part_speed_law(void)
 {
-    const mc_drive_meas_t m = law_meas();
-    g_sink = (int)mc_ctrl_speed_fast(&g_spd_copy, &m, &g_law_out);
+    g_sink = (int)mc_ctrl_speed_fast(&g_spd_copy, &g_law_meas, &g_law_out);
 }
 
 static stat_t parts(fn_t fn, bool adc)
@@ -573,6 +577,7 @@ static int run(bool sensorless)
     s = parts(part_enc, false);
     out_stat(name, "encoder_read", &s);
     /* every speed law hands its currents to the drive's FOC step */
+    g_law_meas = law_meas();
     if (sensorless) {
         g_sls_copy = g_sls;
         s = parts(part_law, false);

@@ -189,7 +189,7 @@ static bool volts_out(const mc_comm_t *c, float va, float vb, float vbus, mc_dri
 static void track_count(mc_comm_t *c, const mc_drive_meas_t *m)
 {
     const uint32_t cpr = m->enc_cpr;
-    const uint32_t cnt = m->enc_count % cpr;
+    const uint32_t cnt = m->enc_raw_count % cpr;
     if (c->have_count) {
         int32_t d = (int32_t)cnt - (int32_t)c->last_count;
         if (d > (int32_t)(cpr / 2u)) {
@@ -218,7 +218,7 @@ static void track_count(mc_comm_t *c, const mc_drive_meas_t *m)
 static float enc_theta_e(const mc_comm_t *c, const mc_drive_meas_t *m, float offset_rad)
 {
     const uint32_t cpr = m->enc_cpr;
-    const uint32_t raw = m->enc_count % cpr;
+    const uint32_t raw = m->enc_raw_count % cpr;
     const uint32_t cnt = (c->res.encoder_direction < 0 && raw != 0u) ? cpr - raw : raw;
     const uint32_t e = (uint32_t)(((uint64_t)cnt * (uint64_t)c->res.pole_pairs) % (uint64_t)cpr);
     return mc_wrap_2pi_f32((float)e * (MC_TWO_PI_F32 / (float)cpr) + offset_rad);

@@ -314,6 +314,7 @@ static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
     const uint32_t raw = (enc->count < cpr) ? enc->count : enc->count % cpr;
     /* A reversed encoder counts down as the rotor turns positive. */
     const uint32_t count = (d->cfg.encoder_reversed && raw != 0u) ? cpr - raw : raw;
+    d->enc_count = count;
     const float rad_per_count = d->enc_rad_per_count;
     /* Electrical position in integer counts first: exact for any count.
      * 32-bit when the product fits (always for cpr * poles < 2^32), which
@@ -876,7 +877,8 @@ bool mc_drive_fast_step(mc_drive_t *d)
             .theta_m_rad = d->tm.theta_m_rad,
             .theta_e_rad = d->tm.theta_e_rad,
             .omega_m_rad_s = d->enc_trk.omega_rad_s,
-            .enc_count = enc.count,
+            .enc_count = d->enc_count,
+            .enc_raw_count = enc.count,
             .enc_cpr = enc.counts_per_rev,
             .dt_s = d->cfg.foc.dt_s,
             .fast_count = d->fast_count,

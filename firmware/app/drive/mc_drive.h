@@ -411,17 +411,21 @@ typedef struct {
 
 /** Measurements handed to a plugged control law, once per fast step. */
 typedef struct {
-    float ia_a, ib_a;    /**< phase (or winding) currents [A] */
-    float ic_a;          /**< third phase [A]: measured, or -(ia + ib) */
-    float vbus_v;        /**< DC bus [V] */
-    bool have_encoder;   /**< the fields below are valid */
-    float theta_m_rad;   /**< encoder mechanical angle, [0, 2 pi) */
-    float theta_e_rad;   /**< pole_pairs * theta_m + offset, [0, 2 pi) */
-    float omega_m_rad_s; /**< encoder tracking-loop speed [rad/s] */
-    uint32_t enc_count;  /**< raw count, 0 .. enc_cpr - 1 */
-    uint32_t enc_cpr;    /**< counts per mechanical revolution */
-    float dt_s;          /**< fast-loop period [s] */
-    uint32_t fast_count; /**< fast steps since init (wraps) */
+    float ia_a, ib_a;       /**< phase (or winding) currents [A] */
+    float ic_a;             /**< third phase [A]: measured, or -(ia + ib) */
+    float vbus_v;           /**< DC bus [V] */
+    bool have_encoder;      /**< the fields below are valid */
+    float theta_m_rad;      /**< encoder mechanical angle, [0, 2 pi) */
+    float theta_e_rad;      /**< pole_pairs * theta_m + offset, [0, 2 pi) */
+    float omega_m_rad_s;    /**< encoder tracking-loop speed [rad/s] */
+    uint32_t enc_count;     /**< count in the rotor's positive direction (encoder_reversed
+                              applied, as theta_m_rad), 0 .. enc_cpr - 1: what a law
+                              that counts turns counts */
+    uint32_t enc_raw_count; /**< the encoder's own count, 0 .. enc_cpr - 1 (commissioning
+                                 identifies the direction from it) */
+    uint32_t enc_cpr;       /**< counts per mechanical revolution */
+    float dt_s;             /**< fast-loop period [s] */
+    uint32_t fast_count;    /**< fast steps since init (wraps) */
     /* the drive's shaped speed reference (a law with uses_speed_ref) */
     bool have_speed_ref;    /**< the two below are valid */
     float omega_ref_rad_s;  /**< speed reference of this step [rad/s] */
@@ -509,6 +513,7 @@ typedef struct {
     uint32_t foc_err;             /**< last FOC error bits (init or step) */
     uint32_t deadline_ticks;      /**< one PWM period in HAL ticks (0: no tick source) */
     uint32_t last_count_raw;      /**< encoder count of the previous step */
+    uint32_t enc_count;           /**< the last count, encoder_reversed applied */
     uint32_t enc_cpr_cached;      /**< counts per rev the two below are for (0: none yet) */
     float enc_rad_per_count;      /**< 2 pi / cpr (computed once per cpr, not per step) */
     float enc_max_step_counts;    /**< encoder-jump threshold per step [counts] */

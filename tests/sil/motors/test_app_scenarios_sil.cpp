@@ -5,15 +5,22 @@
 // own ramp and send no frame.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
+#include <memory>
 #include <string>
 
+#include "app_cmd.hpp"
+#include "app_params.hpp"
+#include "app_target.hpp"
+#include "drive_setup.hpp"
 #include "motor_library.hpp"
 
 namespace mcsim {
 namespace {
 
 const testlib::Case kD5065{"odrive-d5065", "odrive-v36-24v"};
+constexpr double kTwoPi = 6.283185307179586476925;
 
 std::map<std::string, double> speed_step(const testlib::Sets& sets, const std::string& tag) {
   return testlib::run_scenario("speed-step", testlib::files(kD5065), sets, tag);
@@ -64,6 +71,40 @@ TEST(AppScenarios, TheApplicationSendsItsTelemetry) {
   const auto r = speed_step({{"speed_rad_s", "200"}}, "_tm");
   EXPECT_GE(r.at("app_tx_frames"), 1.0);
   EXPECT_GE(r.at("app_tx_frames"), r.at("duration_s") * 10.0 - 1.0);
+}
+
+// An encoder mounted the other way (the plant's encoder counts down as the
+// rotor turns positive) with encoder_reversed = 1: POSITION moves the rotor
+// one turn forward, as it does with the encoder the right way round. The
+// position law counts turns on the drive's count, which has the direction
+// applied (it counted the encoder's own count before: its feedback then had
+// the wrong sign). Tolerance: 3 counts of the 8192 (the loop's settling and
+// the load-free rotor's ripple at rest; SET_POSITION_REF's 1e-4 rad
+// resolution is under one count).
+TEST(AppScenarios, PositionWithAReversedEncoderMovesTheWayCommanded) {
+  const MotorFiles f = testlib::files(kD5065);
+  for (const int dir : {+1, -1}) {
+    AppSetup s;
+    s.board = build_board_cfg(f);
+    s.board.encoder.direction = dir;
+    s.defaults = params_from_files(f, Params(gain_params(f), {}));
+    s.defaults.encoder_reversed = dir < 0 ? 1u : 0u;
+    const std::unique_ptr<AppTarget> t = make_app_target_sil(s);
+    AppRunner run(*t);
+    run.start(MC_CAN_CTRL_POSITION);
+    const double T = run.board().period_s();
+    const double cpr = static_cast<double>(s.defaults.encoder_cpr);
+    const double theta0 = run.board().state()(3);
+    const auto steps = [&](double secs) {
+      for (long k = std::lround(secs / T); k > 0; --k) run.step();
+    };
+    steps(0.01);
+    run.send(run.cmd().position_ref(kTwoPi));
+    steps(0.6);
+    const double moved = run.board().state()(3) - theta0;
+    EXPECT_NEAR(moved, kTwoPi, 3.0 * kTwoPi / cpr) << "encoder direction " << dir;
+    EXPECT_EQ(run.probe().faults, 0u) << "encoder direction " << dir;
+  }
 }
 
 }  // namespace

@@ -122,6 +122,7 @@ TEST_F(AppDriveCtrl, RunsTheLawAndWritesItsThreePhaseDuties)
     EXPECT_EQ(kVbus, law.last.vbus_v);
     EXPECT_TRUE(law.last.have_encoder);
     EXPECT_EQ(1024u, law.last.enc_count);
+    EXPECT_EQ(1024u, law.last.enc_raw_count);
     EXPECT_EQ(d.tm.theta_e_rad, law.last.theta_e_rad);
     EXPECT_EQ(kDt, law.last.dt_s);
     // Its duties reached the 3-phase bridge.
@@ -136,6 +137,30 @@ TEST_F(AppDriveCtrl, RunsTheLawAndWritesItsThreePhaseDuties)
         }
     }
     EXPECT_EQ(1u, law.slows);
+}
+
+// A reversed encoder (encoder_reversed: it counts down as the rotor turns
+// positive): the law gets the count in the rotor's positive direction, the
+// one theta_m_rad is made of, so a law that counts turns (position, CSMC)
+// moves the way the drive's angle does; the encoder's own count stays there
+// for commissioning, which identifies the direction from it. Exact: integer
+// counts, and theta_m_rad is count * (2 pi / cpr) in the drive.
+TEST_F(AppDriveCtrl, ReversedEncoderHandsTheLawThePositiveDirectionCount)
+{
+    cfg.encoder_reversed = true;
+    InitDrive();
+    const mc_drive_ctrl_t c = Law(MC_DRIVE_OUT_PWM3);
+    ASSERT_EQ(0, mc_drive_attach_ctrl(&d, &c));
+    ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL));
+    ASSERT_EQ(0, mc_hal_fake_encoder_set(&fake, 1024u, MC_HAL_ENCODER_FLAG_VALID));
+    ASSERT_EQ(0, mc_hal_fake_adc_set_sample(&fake, 1.5f, -0.5f, 0.0f, kVbus, kMask3));
+    (void)mc_drive_fast_step(&d);
+    ASSERT_EQ(1u, law.fasts);
+    const uint32_t cpr = law.last.enc_cpr;
+    ASSERT_GT(cpr, 1024u);
+    EXPECT_EQ(1024u, law.last.enc_raw_count);
+    EXPECT_EQ(cpr - 1024u, law.last.enc_count);
+    EXPECT_EQ((float)law.last.enc_count * (MC_TWO_PI_F32 / (float)cpr), law.last.theta_m_rad);
 }
 
 TEST_F(AppDriveCtrl, StepperLawDrivesTheDualHBridgeWithoutAThirdPhase)
