@@ -10,11 +10,9 @@ namespace mcsim {
 namespace {
 
 AppSetup file_setup(const MotorFiles& plant, const mc_params_t& p,
-                    const std::function<double(double)>* load_nm,
-                    const std::function<void(hal_host::PmsmBoardConfig&)>& plant_hook = {}) {
+                    const std::function<double(double)>* load_nm) {
   AppSetup s;
   s.board = build_board_cfg(plant);
-  if (plant_hook) plant_hook(s.board);
   if (load_nm != nullptr && *load_nm) {
     s.board.motor.load.kind = LoadKind::kFunction;
     s.board.motor.load.fn = [](double t, double, double, const void* ctx) {
@@ -33,11 +31,12 @@ std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_pa
   return make_app_target_sil(file_setup(plant, p, load_nm));
 }
 
-std::unique_ptr<AppTarget> make_file_target(
-    const RunContext& ctx, const MotorFiles& plant, const mc_params_t& p,
-    const std::function<double(double)>* load_nm,
-    const std::function<void(hal_host::PmsmBoardConfig&)>& plant_hook) {
-  const AppSetup s = file_setup(plant, p, load_nm, plant_hook);
+std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,
+                                            const mc_params_t& p,
+                                            const std::function<double(double)>* load_nm,
+                                            const std::function<void(AppSetup&)>& adjust) {
+  AppSetup s = file_setup(plant, p, load_nm);
+  if (adjust) adjust(s);
   if (ctx.pil == nullptr) return make_app_target_sil(s);
   std::unique_ptr<AppTarget> t = make_app_target_pil(s, *ctx.pil);
   std::fprintf(stderr, "mcsim: target %s\n", t->name().c_str());

@@ -23,13 +23,13 @@ namespace mcsim {
 /// load_nm(t) opposing positive rotation (kept alive by the caller), the
 /// application booted from p: the SIL, or with ctx.pil (mcsim run --pil)
 /// the board's whole image on QEMU (the target's name then on stderr: the
-/// CSV and summary are the same on both targets, bit for bit).
-/// plant_hook (optional): changes to the plant before it is built (sensor
-/// noise, encoder direction, the shaft's start angle).
+/// CSV and summary are the same on both targets, bit for bit). adjust, if
+/// set, completes the setup before the target is built (the CAN scenario's
+/// telemetry binding, store, commissioning, the plant's sub-steps).
 std::unique_ptr<AppTarget> make_file_target(
     const RunContext& ctx, const MotorFiles& plant, const mc_params_t& p,
     const std::function<double(double)>* load_nm,
-    const std::function<void(hal_host::PmsmBoardConfig&)>& plant_hook = {});
+    const std::function<void(AppSetup&)>& adjust = std::function<void(AppSetup&)>());
 /// The same on the SIL (tests that build their own run).
 std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
                                             const std::function<double(double)>* load_nm);

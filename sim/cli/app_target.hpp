@@ -33,6 +33,7 @@
 #include "hal_host/pmsm_board.hpp"
 extern "C" {
 #include "hal/can.h"
+#include "hal/flash.h"
 #include "mc_app.h"
 #include "mc_params.h"
 }
@@ -42,6 +43,16 @@ namespace mcsim {
 struct AppSetup {
   hal_host::PmsmBoardConfig board;  // plant + board (its load function included)
   mc_params_t defaults{};           // the configuration the application boots
+  // Telemetry beyond the parameter table: the share of the bus it may use
+  // and the rates of the messages past POSITION (mc_app_cfg_t; the images'
+  // binding by default). Both targets bind them (the PIL's APP frame).
+  float tm_budget_frac = 0.5f;
+  uint16_t tm_ext_rate_hz[MC_TM_COUNT - MC_TM_OBSERVER] = {};
+  // The board's configuration store (the SIL only: the PIL image has its
+  // own, an erased RAM store, and make_app_target_pil refuses one here).
+  // Null: no store (a SAVE answers STORE; the PIL image's RAM store answers
+  // it OK: a run that saves is not compared with --pil).
+  const mc_hal_flash_t* flash = nullptr;
 };
 
 // What one period did (both targets report the same).
@@ -73,15 +84,18 @@ class AppTarget {
 // images make it (firmware/targets/stm32f405/board_stm32f405.c,
 // mc_board_app_cfg): the PWM rate and the slow divider fixed to the
 // table's (APPLY cannot change them on a board), telemetry up to half of
-// the bus, the rates of the messages past POSITION 0 (the image's), the
-// laws of SPEED and POSITION from the parameters. Both targets bind it (the
+// the bus, the rates of the messages past POSITION 0 (the image's; a
+// scenario may ask for others: AppSetup), the laws of SPEED and POSITION
+// from the parameters. Both targets bind it (the
 // PIL image receives it in its APP frame), so their applications are the
 // same; flash, watchdog and boot hooks are each target's own.
-inline void app_target_binding(const mc_params_t& p, mc_app_cfg_t* c) {
-  c->pwm_hz_fixed = p.pwm_hz;
-  c->slow_loop_div_fixed = p.slow_loop_div;
-  c->tm_budget_frac = 0.5f;
-  for (uint16_t& r : c->tm_ext_rate_hz) r = 0u;
+inline void app_target_binding(const AppSetup& s, mc_app_cfg_t* c) {
+  c->pwm_hz_fixed = s.defaults.pwm_hz;
+  c->slow_loop_div_fixed = s.defaults.slow_loop_div;
+  c->tm_budget_frac = s.tm_budget_frac;  // the images': 0.5
+  for (size_t i = 0; i < sizeof c->tm_ext_rate_hz / sizeof c->tm_ext_rate_hz[0]; ++i) {
+    c->tm_ext_rate_hz[i] = s.tm_ext_rate_hz[i];  // the images': 0
+  }
   c->laws_from_params = true;
 }
 

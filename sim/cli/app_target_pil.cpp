@@ -37,6 +37,11 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
                        "' cannot be read (build the image: target mc_pil_m4f)");
     }
   }
+  if (s.flash != nullptr) {
+    throw UsageError(
+        "PIL: the image's configuration store is its own (an erased RAM store): --flash is "
+        "for the SIL");
+  }
   const uint32_t err = mc_params_validate(&s.defaults);
   if (err != MC_PARAMS_OK) {
     char bits[16];
@@ -65,7 +70,7 @@ class PilAppTarget final : public AppTarget {
     PilAppSetup ps;
     ps.defaults = s.defaults;
     mc_app_cfg_t c{};
-    app_target_binding(s.defaults, &c);
+    app_target_binding(s, &c);
     ps.app.tm_budget_frac = c.tm_budget_frac;
     for (uint32_t i = 0; i < MC_PIL_TM_EXT_RATES; ++i)
       ps.app.tm_ext_rate_hz[i] = c.tm_ext_rate_hz[i];

@@ -6,7 +6,9 @@
 // in memory: the frames a period is given are what the controller holds
 // when the receive interrupt runs at the period start; the frames the
 // application sends in the period are handed back.
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <deque>
 #include <memory>
@@ -20,7 +22,9 @@
 #include "hal_host/can_ops.hpp"
 #include "scenario.hpp"
 extern "C" {
+#include "commission/mc_comm_can.h"
 #include "config/mc_law_cfg.h"
+#include "mc_telemetry.h"
 }
 
 namespace mcsim {
@@ -77,13 +81,29 @@ class AppTargetSil final : public AppTarget {
     }
     mc_app_cfg_t c{};
     c.defaults = &params_;
-    c.flash = nullptr;                // no store: the table boots as the board's defaults
-    app_target_binding(params_, &c);  // the images' binding, as the PIL target's
+    c.flash = s.flash;  // null: no store, the table boots as the board's defaults
+    c.flash_sectors[0] = 0u;
+    c.flash_sectors[1] = 1u;
+    app_target_binding(s, &c);  // the images' binding, as the PIL target's
     const uint32_t berr = mc_app_boot(app_.get(), &c);
+    if ((berr & MC_APP_CFG_ERR_STORE) != 0u) {
+      throw UsageError("the configuration store refused the flash's sectors (MC_APP_CFG bits " +
+                       hex(berr) + ")");
+    }
     if (berr != MC_APP_CFG_OK) {
       throw UsageError("the application refused to boot: MC_APP_CFG bits " + hex(berr));
     }
     const uint32_t aerr = mc_app_start(app_.get(), drive_.get(), board_->hal(), can_.hal(), true);
+    if ((aerr & MC_APP_CFG_ERR_TM) != 0u) {
+      char load[96];
+      std::snprintf(load, sizeof load, "bus load %.1f %% of %u bit/s, budget %.1f %%",
+                    100.0 * mc_telemetry_bus_load(&app_->tm_cfg),
+                    static_cast<unsigned>(app_->tm_cfg.bitrate_bps), 100.0 * s.tm_budget_frac);
+      throw UsageError(
+          "the application refused to start: telemetry configuration refused (MC_TM_CFG "
+          "bits " +
+          hex(app_->tm_err) + "), " + load);
+    }
     if (aerr != MC_APP_CFG_OK) {
       throw UsageError("the application refused to start: MC_APP_CFG bits " + hex(aerr) +
                        " (drive MC_DRIVE_CFG " + hex(app_->drive_err) + ", telemetry " +

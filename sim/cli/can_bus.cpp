@@ -47,10 +47,11 @@ std::unique_ptr<hal_host::CanTransport> open_can_bus(const hal_host::PmsmBoard& 
                      ": clients are waited for on a socketcand bus only "
                      "(MCSIM_CAN_IF=socketcand:HOST:PORT)");
   }
-  // a period's frames stamped with its end (the drive's loops run within it,
-  // hal_host::app_period), the script's frames received at the start of a
-  // period (app_period's receive interrupt) once their stamp is reached
-  c.now_s = [&board]() { return board.t_s() + board.period_s(); };
+  // a period's frames stamped with its end (they go to the bus after the
+  // target ran the period: the board is at its end), the script's frames
+  // received at the start of a period (before the target runs it: the
+  // receive interrupt's) once their stamp is reached
+  c.now_s = [&board]() { return board.t_s(); };
   c.rx_now_s = [&board]() { return board.t_s(); };
   c.now_ticks = [&board]() {
     uint32_t t = 0;

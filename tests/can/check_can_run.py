@@ -10,8 +10,9 @@ script) and by the SocketCAN test (vcan0, candump -L, cansend).
 
 Asserts, each with the reason of its tolerance:
  1. every telemetry frame the SIL generated is in the log, in order, with the
-    values of the SIL's own CSV within half a quantisation step of the DBC
-    (the packer rounds to nearest; +1e-6 relative for float32 arithmetic);
+    values of the SIL's own CSV (the frames as the firmware's generated codec
+    decodes them) within half a quantisation step of the DBC (the CSV's
+    values are already on the grid; +1e-6 relative for float32 arithmetic);
     sequence counters equal, so zero sequence gaps at the configured rates;
  2. frames per message = rate x duration within one frame (phase
     accumulator: the count is exact up to the partial period at each end);
@@ -131,7 +132,9 @@ def main():
               for _t, v in per.get("HEARTBEAT", [])), "HEARTBEAT never reported the rejection")
     check(summ["cmd_rejected"] >= 1, "the SIL counted no rejected command")
     # nothing changed: the reference before and after the bad frame is a commanded one
-    refs = sorted({round(r[col["CURRENT_REFS.i_q_ref_a"]], 6) for r in rows})
+    # (the CSV holds the last CURRENT_REFS frame's values: empty before the first)
+    refs = sorted({round(r[col["CURRENT_REFS.i_q_ref_a"]], 6) for r in rows
+                   if not math.isnan(r[col["CURRENT_REFS.i_q_ref_a"]])})
     check(all(any(abs(x - c) < 1e-6 for c in (0.0, 0.5, a.iq_cmd_a)) or
               0.0 < x < a.iq_cmd_a for x in refs),  # values between are the stop ramp
           f"unexpected i_q references {refs[:10]}")
@@ -156,9 +159,12 @@ def main():
         timeout = summ["param.timeout_s"]
         ramp = a.iq_cmd_a / summ["param.stop_ramp_a_per_s"]
         tick = 1.0 / summ["tick_hz"]
+        hb_period = 1.0 / summ["param.rate_heartbeat_hz"]
         # the stop begins timeout after the last accepted command (to one
-        # tick) and ends when the ramp reaches zero (to one tick)
-        check(timeout + ramp - 2 * tick <= t_stop - t_last <= timeout + ramp + 2 * tick,
+        # tick) and ends when the ramp reaches zero (to one tick); the CSV
+        # holds the last HEARTBEAT frame's values, so the first one that
+        # shows the stop comes up to one heartbeat period after its end
+        check(timeout + ramp - 2 * tick <= t_stop - t_last <= timeout + ramp + 2 * tick + hb_period,
               f"stop at {t_stop:.4f} s, last command at {t_last:.4f} s: expected "
               f"{timeout + ramp:.4f} s later")
         print(f"safe stop {t_stop - t_last:.4f} s after the last heartbeat "

@@ -25,6 +25,7 @@ true speed and the encoder's multi-turn angle from the CSV. J = 0.005 kg m^2
     test_sil_laws.py --mcsim MCSIM --work DIR --repo ROOT
 """
 import csv
+import math
 import os
 import struct
 import sys
@@ -125,7 +126,8 @@ def position(sil):
     err = max(abs(v - TURNS10) for v in th)
     check(err <= 2 * count, f"position: held within {err:.5f} rad of 10 turns (2 counts "
                             f"{2 * count:.5f})")
-    peak = max(r["POSITION.theta_m_rad"] for r in rows)
+    # (the CSV holds the last POSITION frame: empty before the first)
+    peak = max(r["POSITION.theta_m_rad"] for r in rows if not math.isnan(r["POSITION.theta_m_rad"]))
     # the trapezoid ends at rest on the target: 0.05 rad is the cascade's lag
     check(peak - TURNS10 <= 0.05, f"position: overshoot {peak - TURNS10:.4f} rad")
     print(f"POSITION: 10 turns held within {err:.5f} rad, overshoot {peak - TURNS10:.5f} rad")

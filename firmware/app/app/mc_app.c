@@ -962,6 +962,26 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
         p->pos_traj_duration_s = mc_traj_f32_get_duration_s(&l->pos.traj);
         p->pos_traj_k = l->pos.traj.k;
     }
+    p->tm_load_frac = app->tm.load_frac;
+    p->tm_tx_frames = app->tm.tx_frames;
+    p->tm_tx_dropped = app->tm.tx_dropped;
+    p->tm_tx_nobufs = app->tm.tx_nobufs;
+    p->tm_tx_busoff = app->tm.tx_busoff;
+    p->tm_saturated = app->tm.saturated;
+    p->cmd_rx_accepted = app->cmd.rx_accepted;
+    p->cmd_rx_rejected = app->cmd.rx_rejected;
+    p->cmd_reply_dropped = app->cmd.reply_dropped;
+    p->cmd_reply_limited = app->cmd.reply_limited;
+    p->cmd_rx_foreign = app->cmd.rx_foreign;
+    p->cmd_poll_max = app->cmd.poll_max;
+    p->app_rx_foreign = app->rx_foreign;
+    p->app_rx_overflows = app->rx_overflows;
+    p->speed_law = l->speed_law;
+    p->tick_hz = app->tick_hz;
+    p->boot_status = app->boot_status;
+    p->store_seq = app->have_store ? app->store.seq : 0u;
+    p->store_saves = app->have_store ? app->store.saves : 0u;
+    p->srv_applied = app->params_valid ? app->srv.applied : 0u;
 }
 
 void mc_app_attach_commission(mc_app_t *app, mc_comm_can_t *m)

@@ -4,8 +4,8 @@
  *        ring), the node filter, command handling, telemetry, the command
  *        timeout, parameter access and the configuration loaded from flash,
  *        the control modes (plug-ins), the CAN controller's state and the
- *        watchdog. The MCU image's main and the SIL scenario (can-telemetry)
- *        only bind it; both run exactly this code.
+ *        watchdog. The MCU image's main and the SIL's AppTarget (the
+ *        simulator's scenarios) only bind it; both run exactly this code.
  *
  * Instances are the caller's (static on the MCU, no heap). One mc_app_t per
  * drive; the drive (mc_drive_t) is the caller's too, since on the MCU it
@@ -325,6 +325,15 @@ typedef struct {
     float pos_theta_ref_rad;
     float pos_traj_duration_s;
     uint32_t pos_traj_k;
+    /* the CAN side's counters (a scenario's summary; tools see the same
+     * through the frames): telemetry (mc_telemetry_t), the command handler
+     * (mc_can_cmd_t), the receive interrupt (mc_app_t.rx_*) */
+    float tm_load_frac;
+    uint32_t tm_tx_frames, tm_tx_dropped, tm_tx_nobufs, tm_tx_busoff, tm_saturated;
+    uint32_t cmd_rx_accepted, cmd_rx_rejected, cmd_reply_dropped, cmd_reply_limited;
+    uint32_t cmd_rx_foreign, cmd_poll_max, app_rx_foreign, app_rx_overflows;
+    /* the configuration: which law SPEED runs, the store at boot and since */
+    uint32_t speed_law, tick_hz, boot_status, store_seq, store_saves, srv_applied;
 } mc_app_probe_t;
 
 /** Fill *p from the application and its drive (after a period). */

@@ -1,8 +1,11 @@
-// Scenario can-telemetry: the FOC drive on the simulated board with the
-// drive application of the MCU image (firmware/app/app/mc_app: CAN receive
-// ring, command handler, telemetry, command timeout, parameter service and
-// flash configuration, sensored speed loop) bound to it; this file only binds
-// the application to the simulated board, its CAN and its flash file.
+// Scenario can-telemetry: the drive application of the MCU image
+// (firmware/app/app/mc_app: CAN receive ring, command handler, telemetry,
+// command timeout, parameter service and flash configuration, the laws
+// chosen by the parameters) on the AppTarget the generic scenarios use
+// (app_scenario.hpp make_file_target: the SIL, hal_host::app_period, or with
+// --pil the board's whole image on QEMU), its CAN frames carried to and from
+// a bus. This file only connects the target's CAN boundary to the bus and
+// records what crosses it.
 //
 // Where the frames go (environment, since scenario parameters are numbers;
 // sim/cli/can_bus.hpp):
@@ -16,78 +19,75 @@
 //                          --out; in memory, mdtool.sil, MCSIM_CAN_LOG must
 //                          be set), time-stamped with the simulated time;
 // commands from the candump-format script MCSIM_CAN_CMDS if set (any of them).
-// The motor and board: the paper-002 test motor on FocSil's 200 V board
-// (no --motor), or any motor and board of sim/motors/ (--motor FILE
-// [--board FILE], MotorRig of drive_setup.hpp: the plant, sensors and the
-// drive's limits from the files, the gains of drive_setup.hpp and every one
-// of them settable with --set; the speed PI's defaults are the derived
-// speed_wc_rad_s and i_limit_a, speed_max_rad_s the derived speed limit).
+// The frames a period's receive interrupt gets are those the bus delivered
+// by the start of the period; the frames the application sent in a period
+// go to the bus at its end (stamped with the period's end).
+//
+// The motor and board: the paper-002 test motor on a 200 V, 10 kHz board
+// with a 12-bit, +-20 A current sense and an 8192-count encoder (no
+// --motor), or any motor and board (--motor FILE [--board FILE]). The
+// application boots the parameter table built from them (app_params.hpp
+// params_from_files: every gain and derived limit by the firmware's C
+// derivation, as on the board), with the CAN settings below; the plant is
+// built from the same files.
 //
 // With --set realtime=1 the loop is paced to the wall clock (needed when
 // people or scripts send commands on a live interface).
 //
-// The CSV has one row per slow-loop step: the values every telemetry
-// message carried (or would carry) at that step, as "<MESSAGE>.<signal>",
-// with the mask of the frames generated (tm_sent_mask, bit = slot) and of
-// those the HAL refused (tm_fail_mask), so a logger's decoded frames can be
-// matched one for one.
-//
-// The control laws are the application's, built from the parameters as on
-// the MCU (mc_app_cfg_t.laws_from_params, firmware/app/config/mc_law_cfg.h):
-// SPEED runs the law of the speed_law parameter (--set speed_law=N, or the
-// stored value with --flash): 0 the application's sensored speed PI (at the
-// slow rate, writing the current references in the drive's CURRENT mode,
-// gains below), 1 the sensorless law (flux observer + PLL, I-f start from
-// standstill), 2 PI2D; POSITION the position cascade
-// (firmware/app/ctrl/mc_ctrl_position: trapezoid to the multi-turn target
-// of SET_POSITION_REF, at speed_max_rad_s and stop_decel_rad_s2). Their
-// gains come from the motor values (mc_gains.c).
+// The CSV has one row per slow-loop step: the true speed, q current and
+// angle of the plant, and for every telemetry message the signals of the
+// last frame of it the application sent (decoded with the DBC's generated
+// codec; empty before the first), as "<MESSAGE>.<signal>", with the mask
+// of the messages sent in that step (tm_sent_mask, bit = slot) and of those
+// the bus refused (tm_fail_mask), so a logger's decoded frames can be
+// matched one for one. The summary's counters are the application's probe
+// (mc_app_probe_t: telemetry, commands, receive interrupt, store) and what
+// the bus saw: nothing of the application is read but its frames and its
+// probe, so the run with --pil writes the same CSV, summary and CAN log.
 //
 // Parameters (PARAM_REQ/PARAM_REPLY) are served as on the MCU: the
 // parameter service (firmware/app/config/mc_param_srv) on the drive, with
 // the configuration store on the board's flash when mcsim runs with
-// --flash FILE (hal_host::FileFlash). The scenario's settings, as a
-// parameter set (scenario_params below), are this board's defaults (what
-// mc_params_default is on the MCU: the table's defaults describe a 48 V
-// board, not this 200 V one). Boot, with --flash: mc_cfg_store_load; with a
-// STORED or MIGRATED record the stored set replaces the scenario's settings
-// for everything the firmware configures (gains from current_bw_rad_s,
-// pwm_hz, slow_loop_div, limits, trips, CAN node id, bit rate, timeout,
-// ramps, speed limit, telemetry rates: the stored value wins over --set,
-// as a flashed drive ignores how it was shipped); any other status boots
-// the scenario's settings and says so. The plant and the board's hardware
-// (motor, inertia, load, bus voltage, sensors) stay the scenario's: the
-// flash configures the drive, not the motor it is wired to. A SAVE writes
-// the file. On this board pwm_hz and slow_loop_div cannot change by APPLY
-// during a run (the simulated PWM period and CAN tick are fixed at start):
-// such an APPLY is refused INVALID (MC_PARAMS_ERR_DRIVE). Without --flash
-// the service runs without a store (SAVE answers STORE), and with settings
-// outside the parameter table (e.g. rate_heartbeat_hz=500, a 10 kbit/s bus)
-// without the service (PARAM_REQ: UNSUPPORTED).
+// --flash FILE (hal_host::FileFlash; the SIL only: the PIL image has its own
+// erased RAM store). The scenario's settings are this board's defaults
+// (what mc_params_default is on the MCU). Boot, with --flash:
+// mc_cfg_store_load; with a STORED or MIGRATED record the stored set
+// replaces the scenario's settings for everything the firmware configures
+// (the stored value wins over --set, as a flashed drive ignores how it was
+// shipped); a stored set whose pwm_hz or slow_loop_div differ from the
+// board's is refused (boot status INVALID: the simulated PWM period and CAN
+// tick are fixed at start, as a board's are) and the scenario's settings
+// run; any other status boots the scenario's settings and says so. The
+// plant (motor, inertia, load, bus voltage, sensors) stays the scenario's:
+// the flash configures the drive, not the motor it is wired to. A SAVE
+// writes the file. Without --flash the service runs without a store (SAVE
+// answers STORE). Settings outside the parameter table are refused.
+//
+// Commissioning over CAN (COMMISSION_CMD) is bound as the boards' main.c
+// binds it (the SIL; the PIL image binds none: app_target.hpp).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "app_binding.hpp"
+#include "app_params.hpp"
+#include "app_scenario.hpp"
 #include "can_bus.hpp"
-#include "drive_setup.hpp"
 #include "foc_sil.hpp"
-#include "hal_host/app_rig.hpp"
 #include "hal_host/file_flash.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
 extern "C" {
-#include "commission/mc_comm_can.h"
-#include "mc_app.h"
 #include "mc_can_proto.h"
 #include "mc_params.h"
+#include "mc_telemetry.h"
 }
 
 namespace mcsim {
@@ -115,412 +115,320 @@ const std::vector<std::vector<std::string>> kSlotSignals = {
     {"i_d_ref_a", "i_q_ref_a", "sat", "seq"},
     {"theta_ref_rad", "sat", "seq"}};
 
-std::string env_or(const char* name, const std::string& fallback) {
-  const char* v = std::getenv(name);
-  return (v != nullptr && *v != '\0') ? std::string(v) : fallback;
-}
-
 const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
                                  "LAYOUT", "INVALID",  "FLASH"};
 
-// The simulated motor, board and drive: FocSil (paper-002 test motor) or
-// MotorRig (the --motor/--board files). o holds the rates, inertia, bus and
-// bandwidths the rest of the scenario reads, for both.
-struct CanBoard {
-  FocSilOptions o;
-  double kt_nm_a = 0, b_nm_s_rad = 0, i_sense_max_a = 0, dead_time_s = 0;
-  double i_rated_a = 0, speed_rated_rad_s = 0;  // the laws' gains scale with them
-  uint32_t adc_bits = 12, encoder_cpr = 0;
-  std::unique_ptr<FocSil> sil;
-  std::unique_ptr<MotorRig> rig;
-  void step() const { sil ? sil->step() : rig->step(); }
-  hal_host::PmsmBoard& board() const { return sil ? sil->board() : rig->board(); }
-  mc_drive_t& drive() const { return sil ? sil->drive() : rig->drive(); }
+// Without --motor: the paper-002 test motor (Table I; J the scenario's
+// flywheel) on a 200 V board: 10 kHz (pwm_hz), no dead time, two shunts,
+// 12-bit +-20 A current sense, 400 V bus sense, an 8192-count encoder.
+MotorFiles paper002_files(const Params& P) {
+  const PmsmParams m = paper002_test_motor();
+  MotorFiles f;
+  f.motor.name = "paper002-test-motor";
+  f.motor.file = "(paper 002 test motor)";
+  f.motor.r_ohm = m.R_ohm;
+  f.motor.ld_h = m.Ld_h;
+  f.motor.lq_h = m.Lq_h;
+  f.motor.flux_wb = m.flux_wb;
+  f.motor.pole_pairs = m.pole_pairs;
+  f.motor.j_kgm2 = P.get("J_kgm2");
+  f.motor.b_nm_s_rad = m.B_nms_rad;
+  f.motor.i_max_a = 10.0;
+  f.motor.i_rated_a = 4.24;            // 3 A rms
+  f.motor.speed_rated_rad_s = 104.72;  // 1000 r/min
+  f.motor.speed_max_rad_s = 157.08;    // 1.5x rated
+  f.board.name = "paper002-200v";
+  f.board.file = "(200 V board)";
+  f.board.vbus_v = 200.0;
+  f.board.pwm_hz = P.get("pwm_hz");
+  f.board.dead_time_s = 0.0;
+  f.board.current_sensors = 2;
+  f.board.i_sense_max_a = 20.0;
+  f.board.adc_bits = 12;
+  f.board.vbus_sense_max_v = 400.0;
+  f.board.encoder_cpr = 8192;
+  return f;
+}
+
+// The parameter table without --motor: the files' motor and board values,
+// the limits of the paper-002 bench (10 A, trip 15 A, bus 100..300 V,
+// 1.5x rated speed, 100 degC, stall 90 % of i_max below 1 rad/s for 0.5 s),
+// the current loop at bw_hz, every gain derived by the firmware.
+mc_params_t paper002_params(const MotorFiles& f, const Params& P) {
+  mc_params_t p = mc_params_default;
+  p.r_ohm = static_cast<float>(f.motor.r_ohm);
+  p.ld_h = static_cast<float>(f.motor.ld_h);
+  p.lq_h = static_cast<float>(f.motor.lq_h);
+  p.flux_wb = static_cast<float>(f.motor.flux_wb);
+  p.pole_pairs = static_cast<uint32_t>(f.motor.pole_pairs);
+  p.j_kgm2 = static_cast<float>(f.motor.j_kgm2);
+  p.b_nm_s_rad = static_cast<float>(f.motor.b_nm_s_rad);
+  p.i_rated_a = static_cast<float>(f.motor.i_rated_a);
+  p.speed_rated_rad_s = static_cast<float>(f.motor.speed_rated_rad_s);
+  p.i_max_a = static_cast<float>(f.motor.i_max_a);
+  p.vbus_v = static_cast<float>(f.board.vbus_v);
+  p.pwm_hz = static_cast<uint32_t>(std::lround(f.board.pwm_hz));
+  p.dead_time_s = static_cast<float>(f.board.dead_time_s);
+  p.current_sensors = static_cast<uint32_t>(f.board.current_sensors);
+  p.i_sense_max_a = static_cast<float>(f.board.i_sense_max_a);
+  p.adc_bits = static_cast<uint32_t>(f.board.adc_bits);
+  p.encoder_cpr = static_cast<uint32_t>(f.board.encoder_cpr);
+  p.current_bw_rad_s = static_cast<float>(2.0 * 3.14159265358979 * P.get("bw_hz"));
+  p.speed_pll_bw_rad_s = static_cast<float>(P.get("speed_pll_bw_rad_s"));
+  p.i_trip_a = 15.0f;
+  p.vbus_min_v = static_cast<float>(0.5 * f.board.vbus_v);
+  p.vbus_max_v = static_cast<float>(1.5 * f.board.vbus_v);
+  p.omega_max_rad_s = static_cast<float>(f.motor.speed_max_rad_s);
+  p.temp_max_c = 100.0f;
+  p.stall_current_frac = 0.9f;
+  p.stall_speed_rad_s = 1.0f;
+  p.stall_time_s = 0.5f;
+  p.stop_decel_rad_s2 = static_cast<float>(P.get("stop_decel_rad_s2"));
+  return p;
+}
+
+// The CAN side's settings on top of the motor's table (the board's defaults).
+void can_settings(const Params& P, mc_params_t* p) {
+  p->speed_law = static_cast<uint32_t>(P.get("speed_law"));
+  p->speed_max_rad_s = static_cast<float>(P.get("speed_max_rad_s"));
+  p->slow_loop_div = static_cast<uint32_t>(P.get("slow_loop_div"));
+  p->can_node_id = static_cast<uint32_t>(P.get("node_id"));
+  p->can_bitrate_bps = static_cast<uint32_t>(P.get("bitrate_kbps") * 1000.0);
+  p->can_timeout_s = static_cast<float>(P.get("timeout_s"));
+  p->stop_ramp_a_per_s = static_cast<float>(P.get("stop_ramp_a_per_s"));
+  // the speed law's crossover (0: derived) and the speed reference's ramp
+  if (P.get("speed_bw_rad_s") > 0.0)
+    p->speed_bw_rad_s = static_cast<float>(P.get("speed_bw_rad_s"));
+  if (P.get("speed_ramp_rad_s2") > 0.0) {
+    p->speed_ramp_rad_s2 = static_cast<float>(P.get("speed_ramp_rad_s2"));
+  }
+  // the position move as this scenario always ran it: cruise at the speed
+  // limit, accelerate and decelerate at the stop's rate (0: derived)
+  p->traj_v_max_rad_s = p->speed_max_rad_s;
+  p->traj_a_max_rad_s2 = p->stop_decel_rad_s2;
+  p->traj_d_max_rad_s2 = p->stop_decel_rad_s2;
+  p->tm_heartbeat_hz = static_cast<uint32_t>(P.get("rate_heartbeat_hz"));
+  p->tm_currents_hz = static_cast<uint32_t>(P.get("rate_currents_hz"));
+  p->tm_voltages_hz = static_cast<uint32_t>(P.get("rate_voltages_hz"));
+  p->tm_speed_hz = static_cast<uint32_t>(P.get("rate_speed_hz"));
+  p->tm_position_hz = static_cast<uint32_t>(P.get("rate_position_hz"));
+}
+
+// What crosses the boundary, recorded: the last decoded frame of every
+// telemetry message, the masks of one slow step.
+struct TmRecord {
+  uint32_t node = 0;
+  std::vector<std::vector<double>> held;  // per slot, NaN before the first frame
+  uint32_t sent_mask = 0, fail_mask = 0;
+  uint64_t frames = 0, refused = 0;
+  explicit TmRecord(uint32_t node_id) : node(node_id) {
+    for (int i = 0; i < MC_TM_COUNT; ++i) {
+      const uint32_t msg = mc_telemetry_msg(static_cast<uint32_t>(i));
+      if (kSlotSignals[i].size() != mc_can_messages[msg].n_signals) {
+        throw std::logic_error(std::string("signal list of ") + kSlotName[i] + " out of date");
+      }
+      held.emplace_back(kSlotSignals[i].size(), std::nan(""));
+    }
+  }
+  // A frame the application sent; refused: the bus did not take it.
+  void frame(const mc_hal_can_frame_t& f, bool refused_by_bus) {
+    uint32_t msg = 0;
+    float v[MC_CAN_NSIG_MAX] = {0};
+    if (mc_can_id_node(f.id) != node || mc_can_proto_unpack(&f, &msg, v, MC_CAN_NSIG_MAX) != 0) {
+      return;
+    }
+    for (uint32_t i = 0; i < MC_TM_COUNT; ++i) {
+      if (mc_telemetry_msg(i) != msg) continue;
+      sent_mask |= 1u << i;
+      ++frames;
+      if (refused_by_bus) {
+        fail_mask |= 1u << i;
+        ++refused;
+      }
+      for (size_t j = 0; j < held[i].size(); ++j) held[i][j] = static_cast<double>(v[j]);
+    }
+  }
 };
 
-// (Re)build the board for o (pwm_hz, slow_loop_div, bandwidths may come
-// from the flash).
-void build_board(CanBoard& cb, const RunContext& ctx) {
-  if (ctx.files == nullptr) {
-    const PmsmParams m = paper002_test_motor();
-    cb.kt_nm_a = 1.5 * m.pole_pairs * m.flux_wb;
-    cb.b_nm_s_rad = m.B_nms_rad;
-    cb.i_rated_a = 4.24;            // paper 002 Table I: 3 A rms
-    cb.speed_rated_rad_s = 104.72;  // 1000 r/min
-    cb.i_sense_max_a = 20.0;        // FocSil's board: 12-bit, 20 A, 8192 counts
-    cb.adc_bits = 12u;
-    cb.encoder_cpr = 8192u;
-    cb.dead_time_s = 0.0;  // the average-value inverter has none here
-    cb.sil = std::make_unique<FocSil>(cb.o);
-    return;
+std::vector<std::string> csv_columns() {
+  std::vector<std::string> cols{
+      "t", "tm_sent_mask", "tm_fail_mask", "omega_m_true_rad_s", "i_q_true_a", "theta_m_true_rad"};
+  for (int i = 0; i < MC_TM_COUNT; ++i) {
+    for (const auto& s : kSlotSignals[i]) cols.push_back(std::string(kSlotName[i]) + "." + s);
   }
-  MotorFiles f = *ctx.files;
-  f.board.pwm_hz = cb.o.pwm_hz;
-  Gains g = derive_gains(f, &ctx.params);
-  g.cur_bw_rad_s = cb.o.bw_rad_s;
-  g.enc_pll_bw_rad_s = cb.o.speed_pll_bw_rad_s;
-  cb.kt_nm_a = g.kt_nm_a;
-  cb.b_nm_s_rad = f.motor.b_nm_s_rad;
-  cb.i_rated_a = f.motor.i_rated_a;
-  cb.speed_rated_rad_s = f.motor.speed_rated_rad_s;
-  cb.i_sense_max_a = f.board.i_sense_max_a;
-  cb.adc_bits = static_cast<uint32_t>(f.board.adc_bits);
-  cb.encoder_cpr = static_cast<uint32_t>(f.board.encoder_cpr);
-  cb.dead_time_s = f.board.dead_time_s;
-  RigOptions ro;
-  ro.law = Law::kCurrent;
-  const double load = ctx.params.get("load_nm");
-  ro.load_nm = [load](double) { return load; };
-  const int substeps = static_cast<int>(ctx.params.get("substeps"));
-  ro.board_hook = [substeps](hal_host::PmsmBoardConfig& bc) { bc.substeps = substeps; };
-  const unsigned div = cb.o.slow_loop_div;
-  ro.drive_hook = [div](mc_drive_cfg_t& dc) { dc.slow_loop_div = div; };
-  cb.rig = std::make_unique<MotorRig>(f, g, ro);
+  return cols;
 }
 
-CanBoard make_board(const RunContext& ctx) {
-  const auto& P = ctx.params;
-  CanBoard cb;
-  FocSilOptions& o = cb.o;
-  o.substeps = static_cast<int>(P.get("substeps"));
-  o.slow_loop_div = static_cast<unsigned>(P.get("slow_loop_div"));
-  o.load_nm = P.get("load_nm");
-  if (ctx.files == nullptr) {
-    o.pwm_hz = P.get("pwm_hz");
-    o.J_kgm2 = P.get("J_kgm2");
-    o.bw_rad_s = 2.0 * 3.14159265358979 * P.get("bw_hz");
-    o.speed_pll_bw_rad_s = P.get("speed_pll_bw_rad_s");
-  } else {
-    const MotorFiles& f = *ctx.files;
-    o.pwm_hz = f.board.pwm_hz;
-    o.J_kgm2 = f.motor.j_kgm2;
-    o.vbus_v = f.board.vbus_v;
-    o.three_shunts = f.board.current_sensors == 3;
-    o.delay_periods = f.board.delay_periods;
-    o.bw_rad_s = P.get("cur_bw_rad_s");
-    o.speed_pll_bw_rad_s = P.get("enc_pll_bw_rad_s");
+// The summary: the application's probe and what the bus saw.
+void write_summary(RunContext& ctx, AppTarget& t, const mc_params_t& p_scn, const TmRecord& rec,
+                   uint32_t rx_read_max) {
+  const mc_app_probe_t& q = t.probe();
+  Summary& s = ctx.summary;
+  s.set("tick_hz", q.tick_hz);
+  s.set("bus_load_frac", q.tm_load_frac);
+  s.set("tm_frames_generated", static_cast<double>(rec.frames));
+  s.set("tm_frames_queued", q.tm_tx_frames);
+  // refused by the application's controller or by the bus
+  s.set("tm_frames_dropped", static_cast<double>(q.tm_tx_dropped + rec.refused));
+  s.set("tm_tx_nobufs", q.tm_tx_nobufs);
+  s.set("tm_tx_busoff", q.tm_tx_busoff);
+  s.set("tm_bus_refused", static_cast<double>(rec.refused));
+  s.set("cmd_accepted", q.cmd_rx_accepted);
+  s.set("cmd_rejected", q.cmd_rx_rejected);
+  s.set("cmd_reply_dropped", q.cmd_reply_dropped);
+  s.set("cmd_reply_limited", q.cmd_reply_limited);
+  // foreign frames: dropped by the application's receive path (before the
+  // ring) or by the command handler's own filter
+  s.set("cmd_rx_foreign", q.app_rx_foreign + q.cmd_rx_foreign);
+  s.set("cmd_poll_frames_max", std::max(rx_read_max, q.cmd_poll_max));
+  // the receive interrupt's part: foreign frames dropped there, own frames
+  // lost to a full ring, and the most frames the bus delivered to one period
+  s.set("app_rx_foreign", q.app_rx_foreign);
+  s.set("app_rx_overflows", q.app_rx_overflows);
+  s.set("app_rx_read_max", rx_read_max);
+  s.set("tm_frames_saturated", q.tm_saturated);
+  s.set("final_mode", q.mode);
+  s.set("final_enabled", q.cmd_enabled != 0u ? 1.0 : 0.0);
+  s.set("final_stop_reason", q.cmd_stop_reason);
+  s.set("final_faults", q.faults);
+  s.set_text("final_fault_names", drive_fault_names(q.faults));
+  // The laws (firmware/app/config/mc_law_cfg.h): which one SPEED ran, and
+  // why one is not available (the law_error parameter).
+  s.set("speed_law", q.speed_law);
+  s.set("law_error", q.law_error);
+  s.set("sls_handovers", q.sls_handovers);
+  if (ctx.flash != nullptr) {
+    // What the drive booted from (cfg_from_store: ids of the parameters whose
+    // stored value replaced the scenario's), and what the run did to the store.
+    std::string from_store;
+    for (const mc_param_info_t& info : mc_param_table) {
+      if (info.offset == MC_PARAM_NO_FIELD) continue;
+      if (mc_param_get_raw(&t.params(), &info) != mc_param_get_raw(&p_scn, &info)) {
+        from_store += (from_store.empty() ? "" : ",") + std::to_string(info.id);
+      }
+    }
+    const uint32_t boot = std::min<uint32_t>(q.boot_status, 6u);
+    s.set_text("flash_file", ctx.flash->path());
+    s.set_text("cfg_boot_status", kBootName[boot]);
+    s.set("cfg_boot_code", static_cast<double>(boot));
+    s.set_text("cfg_from_store", from_store);
+    s.set("cfg_store_seq", q.store_seq);
+    s.set("cfg_saves", q.store_saves);
+    s.set("cfg_applied", q.srv_applied);
+    s.set("flash_persist_errors", ctx.flash->persist_errors());
   }
-  build_board(cb, ctx);
-  return cb;
-}
-
-// The scenario's settings and the drive configuration FocSil or MotorRig
-// built from them, as a parameter set (the board's defaults; see the header).
-mc_params_t scenario_params(const Params& P, const CanBoard& cb, const mc_drive_cfg_t& c) {
-  mc_params_t p = mc_params_default;
-  const FocSilOptions& o = cb.o;
-  p.r_ohm = c.foc.r_ohm;
-  p.ld_h = c.foc.ld_h;
-  p.lq_h = c.foc.lq_h;
-  p.flux_wb = c.foc.flux_wb;
-  p.pole_pairs = c.pole_pairs;
-  p.j_kgm2 = static_cast<float>(o.J_kgm2);
-  p.b_nm_s_rad = static_cast<float>(cb.b_nm_s_rad);
-  p.i_rated_a = static_cast<float>(cb.i_rated_a);
-  p.speed_rated_rad_s = static_cast<float>(cb.speed_rated_rad_s);
-  p.speed_law = static_cast<uint32_t>(P.get("speed_law"));
-  p.i_max_a = c.i_max_a;
-  p.speed_max_rad_s = static_cast<float>(P.get("speed_max_rad_s"));
-  p.vbus_v = static_cast<float>(o.vbus_v);
-  p.pwm_hz = static_cast<uint32_t>(std::lround(o.pwm_hz));
-  p.dead_time_s = static_cast<float>(cb.dead_time_s);
-  p.current_sensors = o.three_shunts ? 3u : 2u;
-  p.i_sense_max_a = static_cast<float>(cb.i_sense_max_a);
-  p.adc_bits = cb.adc_bits;
-  p.encoder_cpr = cb.encoder_cpr;
-  p.current_bw_rad_s = static_cast<float>(o.bw_rad_s);
-  p.v_limit_ratio = c.foc.v_limit_ratio;
-  p.slow_loop_div = c.slow_loop_div;
-  p.speed_pll_bw_rad_s = c.speed_pll_bw_rad_s;
-  p.encoder_offset_rad = c.encoder_offset_rad;
-  p.encoder_reversed = c.encoder_reversed ? 1u : 0u;
-  p.i_offset_a_a = c.i_offset_a[0];
-  p.i_offset_b_a = c.i_offset_a[1];
-  p.i_offset_c_a = c.i_offset_a[2];
-  p.i_trip_a = c.i_trip_a;
-  p.vbus_min_v = c.vbus_min_v;
-  p.vbus_max_v = c.vbus_max_v;
-  p.omega_max_rad_s = c.omega_max_rad_s;
-  p.temp_max_c = c.temp_max_c;
-  p.stall_current_frac = c.stall_current_frac;
-  p.stall_speed_rad_s = c.stall_speed_rad_s;
-  p.stall_time_s = c.stall_time_s;
-  p.i_unbalance_max_a = c.i_unbalance_max_a;
-  p.open_phase_i_min_a = c.open_phase_i_min_a;
-  p.open_phase_time_s = c.open_phase_time_s;
-  p.can_node_id = static_cast<uint32_t>(P.get("node_id"));
-  p.can_bitrate_bps = static_cast<uint32_t>(P.get("bitrate_kbps") * 1000.0);
-  p.can_timeout_s = static_cast<float>(P.get("timeout_s"));
-  p.stop_ramp_a_per_s = static_cast<float>(P.get("stop_ramp_a_per_s"));
-  p.stop_decel_rad_s2 = static_cast<float>(P.get("stop_decel_rad_s2"));
-  // the speed law's crossover (its gains derive from it and J) and the
-  // speed reference's ramp
-  p.speed_bw_rad_s = static_cast<float>(P.get("speed_bw_rad_s"));
-  p.speed_ramp_rad_s2 = static_cast<float>(P.get("speed_ramp_rad_s2"));
-  // the position move as this scenario always ran it: cruise at the speed
-  // limit, accelerate and decelerate at the stop's rate
-  p.traj_v_max_rad_s = p.speed_max_rad_s;
-  p.traj_a_max_rad_s2 = p.stop_decel_rad_s2;
-  p.traj_d_max_rad_s2 = p.stop_decel_rad_s2;
-  p.tm_heartbeat_hz = static_cast<uint32_t>(P.get("rate_heartbeat_hz"));
-  p.tm_currents_hz = static_cast<uint32_t>(P.get("rate_currents_hz"));
-  p.tm_voltages_hz = static_cast<uint32_t>(P.get("rate_voltages_hz"));
-  p.tm_speed_hz = static_cast<uint32_t>(P.get("rate_speed_hz"));
-  p.tm_position_hz = static_cast<uint32_t>(P.get("rate_position_hz"));
-  return p;
+  CanTelemetryFigures fig;
+  fig.tm_frames_dropped = static_cast<double>(q.tm_tx_dropped + rec.refused);
+  fig.rx_overflows = q.app_rx_overflows;
+  fig.flash_persist_errors = ctx.flash != nullptr ? ctx.flash->persist_errors() : 0.0;
+  fig.final_faults = q.faults;
+  write_verdict(s, judge_can_telemetry(fig));
 }
 
 void run_can_telemetry(RunContext& ctx) {
   const auto& P = ctx.params;
-  CanBoard cb = make_board(ctx);
-  FocSilOptions& o = cb.o;
-  // Boot: the configuration (see the header).
-  const mc_params_t p_scn = scenario_params(P, cb, cb.drive().cfg);
+  const MotorFiles f = ctx.files != nullptr ? *ctx.files : paper002_files(P);
+  const auto speed_law = static_cast<uint32_t>(P.get("speed_law"));
+  mc_params_t p_scn =
+      ctx.files != nullptr ? params_from_files(f, P, speed_law) : paper002_params(f, P);
+  can_settings(P, &p_scn);
   const uint32_t scn_err = mc_params_validate(&p_scn);
-  if (ctx.flash != nullptr && scn_err != MC_PARAMS_OK) {
+  if (scn_err != MC_PARAMS_OK) {
     throw UsageError(
-        "with --flash the scenario's settings are the board's defaults and must "
-        "form a valid parameter set (firmware/app/config/PARAMS.md); "
-        "mc_params_validate refuses them: MC_PARAMS_ERR bits 0x" +
-        std::to_string(scn_err));
+        "the scenario's settings are the board's defaults and must form a valid parameter set "
+        "(firmware/app/config/PARAMS.md); mc_params_validate refuses them: MC_PARAMS_ERR " +
+        params_err_names(scn_err) + " (law_error " + law_err_names(mc_law_speed_check(&p_scn)) +
+        ")");
   }
-  auto app_ptr = std::make_unique<mc_app_t>();
-  mc_app_t& app = *app_ptr;
-  mc_app_cfg_t acfg{};
-  acfg.flash = ctx.flash != nullptr ? ctx.flash->hal() : nullptr;
-  acfg.flash_sectors[0] = 0u;
-  acfg.flash_sectors[1] = 1u;
-  acfg.defaults = &p_scn;
-  acfg.tm_budget_frac = static_cast<float>(P.get("budget_pct") / 100.0);
-  for (int i = 0; i < MC_TM_COUNT - MC_TM_OBSERVER; ++i) {
-    acfg.tm_ext_rate_hz[i] = static_cast<uint16_t>(P.get(kSlotParam[MC_TM_OBSERVER + i]));
-  }
-  if ((mc_app_boot(&app, &acfg) & MC_APP_CFG_ERR_STORE) != 0u) {
-    throw std::logic_error("configuration store refused the flash file's sectors");
-  }
-  const mc_params_t& p = app.params;
-  const auto boot = static_cast<mc_cfg_boot_t>(app.boot_status);
-  if (ctx.flash != nullptr) {
-    if (boot != MC_CFG_BOOT_STORED && boot != MC_CFG_BOOT_MIGRATED && boot != MC_CFG_BOOT_EMPTY) {
-      std::fprintf(stderr,
-                   "mcsim: %s: no usable configuration (boot status %s): the "
-                   "scenario's settings\n",
-                   ctx.flash->path().c_str(), kBootName[boot]);
-    }
-    if (p.pwm_hz != p_scn.pwm_hz || p.slow_loop_div != p_scn.slow_loop_div) {
-      o.pwm_hz = static_cast<double>(p.pwm_hz);
-      o.slow_loop_div = p.slow_loop_div;
-      o.bw_rad_s = static_cast<double>(p.current_bw_rad_s);
-      o.speed_pll_bw_rad_s = static_cast<double>(p.speed_pll_bw_rad_s);
-      build_board(cb, ctx);
-    }
-  }
-  mc_drive_t& d = cb.drive();
-  // The parameter service needs the drive to run exactly its parameters
-  // (the application initialises it from them).
-  const bool serve_params = scn_err == MC_PARAMS_OK;
-  const double tick_hz_d = o.pwm_hz / o.slow_loop_div;
+  const double tick_hz_d = static_cast<double>(p_scn.pwm_hz) / p_scn.slow_loop_div;
   if (std::fabs(tick_hz_d - std::round(tick_hz_d)) > 1e-9) {
     throw UsageError("pwm_hz / slow_loop_div must be a whole number of hertz");
   }
-  const uint32_t tick_hz = static_cast<uint32_t>(std::lround(tick_hz_d));
+  const double load = P.get("load_nm");
+  const std::function<double(double)> load_fn = [load](double) { return load; };
+  const auto substeps = static_cast<int>(P.get("substeps"));
+  const std::unique_ptr<AppTarget> target =
+      make_file_target(ctx, f, p_scn, load != 0.0 ? &load_fn : nullptr, [&](AppSetup& s) {
+        s.board.substeps = substeps;
+        s.tm_budget_frac = static_cast<float>(P.get("budget_pct") / 100.0);
+        for (int i = 0; i < MC_TM_COUNT - MC_TM_OBSERVER; ++i) {
+          s.tm_ext_rate_hz[i] = static_cast<uint16_t>(P.get(kSlotParam[MC_TM_OBSERVER + i]));
+        }
+        s.flash = ctx.flash != nullptr ? ctx.flash->hal() : nullptr;
+      });
+  AppTarget& t = *target;
+  const uint32_t boot = t.probe().boot_status;
+  if (ctx.flash != nullptr && boot != MC_CFG_BOOT_STORED && boot != MC_CFG_BOOT_MIGRATED &&
+      boot != MC_CFG_BOOT_EMPTY) {
+    std::fprintf(stderr,
+                 "mcsim: %s: no usable configuration (boot status %s): the "
+                 "scenario's settings\n",
+                 ctx.flash->path().c_str(), kBootName[std::min<uint32_t>(boot, 6u)]);
+  }
 
   // CAN: a candump log, SocketCAN or a socketcand server (sim/cli/can_bus.hpp).
-  hal_host::PmsmBoard& board = cb.board();
-  const std::unique_ptr<hal_host::CanTransport> can_bus =
-      open_can_bus(board, P.get("realtime") != 0.0, ctx.out_dir);
-  const mc_hal_can_t* can = can_bus->hal();
-
-  // The laws of SPEED (speed_law) and POSITION from the parameters.
-  app.cfg.laws_from_params = true;
-  const uint32_t aerr = mc_app_start(&app, &d, board.hal(), can, serve_params);
-  if ((aerr & MC_APP_CFG_ERR_TM) != 0u) {
-    throw UsageError("telemetry configuration refused (MC_TM_CFG bits 0x" +
-                     std::to_string(app.tm_err) + "), bus load " +
-                     std::to_string(100.0 * mc_telemetry_bus_load(&app.tm_cfg)) + " % of " +
-                     std::to_string(app.tm_cfg.bitrate_bps) + " bit/s, budget " +
-                     std::to_string(P.get("budget_pct")) + " %");
-  }
-  if ((aerr & MC_APP_CFG_ERR_CMD) != 0u) {
-    throw UsageError("command handler configuration refused (MC_CAN_CMD_CFG bits 0x" +
-                     std::to_string(app.cmd_err) + ")");
-  }
-  if (aerr != MC_APP_CFG_OK) {
-    throw std::logic_error("the application refused a validated configuration (MC_APP_CFG 0x" +
-                           std::to_string(aerr) + ")");
-  }
-  mc_telemetry_t& tm = app.tm;
-  const mc_can_cmd_t& cmd = app.cmd;
-  const mc_telemetry_src_t& src = app.tm_src;
-  // Commissioning over CAN (COMMISSION_CMD, firmware/app/commission/
-  // mc_comm_can.h): the board's test limits as in the commission scenario,
-  // the results staged in the parameter service (when it is served).
-  static mc_comm_t comm;  // large; one run at a time
-  mc_comm_can_t comm_can{};
-  {
-    const double T = 1.0 / o.pwm_hz;
-    mc_comm_can_cfg_t k{};
-    k.base.dt_s = static_cast<float>(T);
-    k.base.i_test_a = static_cast<float>(0.25 * p.i_sense_max_a);
-    k.base.v_test_max_v = static_cast<float>(0.9 * o.vbus_v / std::sqrt(3.0));
-    k.base.offset_max_a = static_cast<float>(0.1 * p.i_sense_max_a);
-    k.base.dead_time_s = p.dead_time_s;
-    k.base.cur_bw_rad_s = static_cast<float>(0.08 / T);
-    k.base.speed_max_m_rad_s = p.speed_max_rad_s;
-    k.base.bemf_frac = 0.5f;
-    k.base.pole_pairs_max = 32;
-    k.base.three_shunts = o.three_shunts;
-    k.node_id = static_cast<uint8_t>(p.can_node_id);
-    k.status_div = std::max<uint32_t>(1u, tick_hz / 10u);
-    k.enc_pll_bw_rad_s = p.speed_pll_bw_rad_s;
-    if (mc_comm_can_init(&comm_can, &k, &comm, &d, serve_params ? &app.srv : nullptr) !=
-        MC_COMM_CAN_CFG_OK) {
-      throw UsageError("commissioning refused its configuration for this board");
-    }
-    mc_app_attach_commission(&app, &comm_can);
-  }
-
-  // MCSIM_APP_BINDING_OUT=FILE: this binding, for the processor-in-the-loop
-  // twin (sim/cli/app_binding.hpp, tests/target/pil/test_pil_can.cpp).
-  if (const std::string out = env_or("MCSIM_APP_BINDING_OUT", ""); !out.empty()) {
-    AppBinding ab;
-    ab.plant = o;
-    ab.defaults = p_scn;
-    ab.tm_budget_frac = app.cfg.tm_budget_frac;
-    std::copy(std::begin(app.cfg.tm_ext_rate_hz), std::end(app.cfg.tm_ext_rate_hz),
-              std::begin(ab.tm_ext_rate_hz));
-    ab.pwm_hz_fixed = app.cfg.pwm_hz_fixed;
-    ab.slow_loop_div_fixed = app.cfg.slow_loop_div_fixed;
-    ab.serve_params = serve_params;
-    ab.position_law = app.cfg.position_law.ctrl != nullptr;
-    ab.commissioning = app.comm != nullptr;
-    write_app_binding(out, ab);
-  }
-
-  std::vector<std::string> cols{
-      "t", "tm_sent_mask", "tm_fail_mask", "omega_m_true_rad_s", "i_q_true_a", "theta_m_true_rad"};
-  for (int i = 0; i < MC_TM_COUNT; ++i) {
-    const uint32_t msg = mc_telemetry_msg(static_cast<uint32_t>(i));
-    if (kSlotSignals[i].size() != mc_can_messages[msg].n_signals) {
-      throw std::logic_error(std::string("signal list of ") + kSlotName[i] + " out of date");
-    }
-    for (const auto& s : kSlotSignals[i]) cols.push_back(std::string(kSlotName[i]) + "." + s);
-  }
-  ctx.csv.columns(cols);
-
+  hal_host::PmsmBoard& board = t.board();
   const bool realtime = P.get("realtime") != 0.0;
+  const std::unique_ptr<hal_host::CanTransport> can_bus =
+      open_can_bus(board, realtime, ctx.out_dir);
+  const mc_hal_can_t* bus = can_bus->hal();
+
+  const std::vector<std::string> cols = csv_columns();
+  ctx.csv.columns(cols);
+  TmRecord rec(t.params().can_node_id);
   // end_after_stop_s > 0: end the run that long after a CAN-commanded run
   // stopped (timeout, disable or fault), for scripted tests whose command
   // timing depends on a slow machine.
   const double end_after_stop_s = P.get("end_after_stop_s");
   bool was_enabled = false;
   double t_end_early = -1.0;
-  const double T = board.period_s();
-  const long n = step_count(ctx.duration_s, T);
+  const long n = step_count(ctx.duration_s, board.period_s());
   const auto wall0 = std::chrono::steady_clock::now();
-  uint64_t frames = 0, slow_steps = 0;
-  uint32_t rx_read_max = 0;  // frames taken from the HAL by one receive call
+  uint64_t slow_steps = 0;
+  uint32_t rx_read_max = 0;  // the most frames the bus delivered to one period
+  std::vector<mc_hal_can_frame_t> rx, tx;
   std::vector<double> row(cols.size());
   for (long k = 1; k <= n; ++k) {
-    // One period as the image's interrupts run it (hal_host::app_period):
-    // the CAN receive interrupt, the fast step, the slow step when due.
-    const hal_host::AppPeriod ap = hal_host::app_period(board, app);
-    rx_read_max = std::max(rx_read_max, ap.rx_frames);
+    // The frames the bus delivered by the start of the period, one period
+    // of the target, its frames to the bus (stamped with the period's end).
+    rx.clear();
+    tx.clear();
+    mc_hal_can_frame_t fr;
+    while (mc_hal_can_receive(bus, &fr) == 0) rx.push_back(fr);
+    rx_read_max = std::max(rx_read_max, static_cast<uint32_t>(rx.size()));
+    const AppTargetPeriod ap = t.period(rx, &tx);
+    for (const mc_hal_can_frame_t& x : tx) rec.frame(x, mc_hal_can_send(bus, &x) != 0);
     if (!ap.slow_ran) continue;
-    const uint32_t sent = app.tm_sent;
     ++slow_steps;
-    frames += static_cast<uint64_t>(__builtin_popcount(sent));
-
     size_t c = 0;
     double id_true, iq_true;
     board.true_dq_a(&id_true, &iq_true);
     row[c++] = board.t_s();
-    row[c++] = sent;
-    row[c++] = tm.last_fail_mask;
+    row[c++] = rec.sent_mask;
+    row[c++] = rec.fail_mask;
     row[c++] = board.state()(2);
     row[c++] = iq_true;
     row[c++] = board.state()(3);  // multi-turn, from the start angle (0)
-    for (uint32_t i = 0; i < MC_TM_COUNT; ++i) {
-      float v[MC_CAN_NSIG_MAX] = {0};
-      const bool have = mc_telemetry_values(i, &src, v);
-      const uint32_t ns = mc_can_messages[mc_telemetry_msg(i)].n_signals;
-      const bool was_sent = (sent >> i) & 1u;
-      v[ns - 1] = static_cast<float>(was_sent ? static_cast<uint8_t>(tm.seq[i] - 1u) : tm.seq[i]);
-      for (uint32_t j = 0; j < ns; ++j) row[c++] = have ? static_cast<double>(v[j]) : std::nan("");
+    for (const auto& v : rec.held) {
+      for (double x : v) row[c++] = x;
     }
+    rec.sent_mask = rec.fail_mask = 0;
     ctx.csv.row(row);
     if (realtime) {
       std::this_thread::sleep_until(wall0 + std::chrono::duration<double>(board.t_s()));
     }
     if ((slow_steps & 255u) == 0) ctx.progress.update(board.t_s(), ctx.duration_s);
     if (end_after_stop_s > 0.0) {
-      if (was_enabled && !cmd.enabled && t_end_early < 0.0)
+      const bool enabled = t.probe().cmd_enabled != 0u;
+      if (was_enabled && !enabled && t_end_early < 0.0)
         t_end_early = board.t_s() + end_after_stop_s;
-      was_enabled = cmd.enabled;
+      was_enabled = enabled;
       if (t_end_early >= 0.0 && board.t_s() >= t_end_early) break;
     }
   }
   ctx.summary.set("t_end_s", board.t_s());
   close_can_bus(*can_bus, ctx.summary);
-
-  ctx.summary.set("tick_hz", tick_hz);
-  ctx.summary.set("bus_load_frac", tm.load_frac);
-  ctx.summary.set("tm_frames_generated", static_cast<double>(frames));
-  ctx.summary.set("tm_frames_queued", tm.tx_frames);
-  ctx.summary.set("tm_frames_dropped", tm.tx_dropped);
-  ctx.summary.set("tm_tx_nobufs", tm.tx_nobufs);
-  ctx.summary.set("tm_tx_busoff", tm.tx_busoff);
-  ctx.summary.set("cmd_accepted", cmd.rx_accepted);
-  ctx.summary.set("cmd_rejected", cmd.rx_rejected);
-  ctx.summary.set("cmd_reply_dropped", cmd.reply_dropped);
-  ctx.summary.set("cmd_reply_limited", cmd.reply_limited);
-  // foreign frames: dropped by the application's receive path (before the
-  // ring) or by the command handler's own filter
-  ctx.summary.set("cmd_rx_foreign", app.rx_foreign + cmd.rx_foreign);
-  ctx.summary.set("cmd_poll_frames_max", std::max(rx_read_max, cmd.poll_max));
-  // the receive interrupt's part: foreign frames dropped there (before the
-  // ring and the command handler), own frames lost to a full ring, and the
-  // most frames one call took from the HAL
-  ctx.summary.set("app_rx_foreign", app.rx_foreign);
-  ctx.summary.set("app_rx_overflows", app.rx_overflows);
-  ctx.summary.set("app_rx_read_max", rx_read_max);
-  ctx.summary.set("tm_frames_saturated", tm.saturated);
-  ctx.summary.set("final_mode", static_cast<double>(d.mode));
-  ctx.summary.set("final_enabled", cmd.enabled ? 1.0 : 0.0);
-  ctx.summary.set("final_stop_reason", cmd.stop_reason);
-  ctx.summary.set("final_faults", d.faults);
-  ctx.summary.set_text("final_fault_names", drive_fault_names(d.faults));
-  // The laws (firmware/app/config/mc_law_cfg.h): which one SPEED ran, and
-  // why one is not available (the law_error parameter).
-  ctx.summary.set("speed_law", app.laws.speed_law);
-  ctx.summary.set("law_error", app.laws.error);
-  ctx.summary.set("sls_handovers", app.laws.sls.tm.handovers);
-  if (ctx.flash != nullptr) {
-    // What the drive booted from (cfg_from_store: ids of the parameters whose
-    // stored value replaced the scenario's), and what the run did to the store.
-    std::string from_store;
-    for (const mc_param_info_t& entry : mc_param_table) {
-      const mc_param_info_t* info = &entry;
-      if (info->offset == MC_PARAM_NO_FIELD) continue;
-      if (mc_param_get_raw(&p, info) != mc_param_get_raw(&p_scn, info)) {
-        from_store += (from_store.empty() ? "" : ",") + std::to_string(info->id);
-      }
-    }
-    ctx.summary.set_text("flash_file", ctx.flash->path());
-    ctx.summary.set_text("cfg_boot_status", kBootName[boot]);
-    ctx.summary.set("cfg_boot_code", static_cast<double>(boot));
-    ctx.summary.set_text("cfg_from_store", from_store);
-    ctx.summary.set("cfg_store_seq", app.store.seq);
-    ctx.summary.set("cfg_saves", app.store.saves);
-    ctx.summary.set("cfg_applied", app.srv.applied);
-    ctx.summary.set("flash_persist_errors", ctx.flash->persist_errors());
-  }
-  CanTelemetryFigures fig;
-  fig.tm_frames_dropped = tm.tx_dropped;
-  fig.rx_overflows = app.rx_overflows;
-  fig.flash_persist_errors = ctx.flash != nullptr ? ctx.flash->persist_errors() : 0.0;
-  fig.final_faults = d.faults;
-  write_verdict(ctx.summary, judge_can_telemetry(fig));
+  write_summary(ctx, t, p_scn, rec, rx_read_max);
 }
 
 // The CAN side's parameters, the same for every motor.
@@ -553,7 +461,7 @@ std::vector<ParamSpec> can_params() {
           {"substeps", 2.0, "1", "RK4 sub-steps per PWM period", 1.0, 64.0}};
 }
 
-// Without --motor: the paper-002 test motor on FocSil's board.
+// Without --motor: the paper-002 test motor on its 200 V board.
 std::vector<ParamSpec> own_params() {
   std::vector<ParamSpec> v = can_params();
   const std::vector<ParamSpec> own = {
@@ -579,17 +487,16 @@ std::vector<ParamSpec> own_params() {
   return v;
 }
 
-// With --motor/--board: the gains of drive_setup.hpp (cur_bw_rad_s,
-// enc_pll_bw_rad_s, stop_decel_rad_s2, ...), the speed PI and the limits
-// from them; pwm_hz and J from the files (--set board.pwm_hz=,
-// motor.j_kgm2=).
+// With --motor/--board: the gain keys of the generic scenarios (gain_params:
+// cur_bw_rad_s, enc_pll_bw_rad_s, stop_decel_rad_s2, ...; app_params.hpp
+// maps them onto the parameter table), the speed limit from the motor
+// file; pwm_hz and J from the files (--set board.pwm_hz=, motor.j_kgm2=).
 std::vector<ParamSpec> file_params(const MotorFiles& f) {
-  const Gains g = derive_gains(f, nullptr);
   std::vector<ParamSpec> v = can_params();
-  const double torque_max_nm = g.kt_nm_a * g.i_limit_a;
+  const double torque_max_nm = 1.5 * f.motor.pole_pairs * f.motor.flux_wb * f.motor.i_max_a;
   const std::vector<ParamSpec> own = {
-      {"speed_max_rad_s", g.speed_limit_rad_s, "rad/s",
-       "largest speed reference accepted (derived: speed_limit_rad_s)", 0.1, 10000.0},
+      {"speed_max_rad_s", f.motor.speed_max_rad_s, "rad/s",
+       "largest speed reference accepted (the motor file's speed_max_rad_s)", 0.1, 10000.0},
       {"speed_bw_rad_s", 0.0, "rad/s",
        "crossover of the speed loops (parameter speed_bw_rad_s; 0: derived, min(current_bw / 10, "
        "speed_pll_bw / 4))",
@@ -620,7 +527,7 @@ Scenario make_scenario() {
              file_params,
              true};
   s.motor_optional = true;
-  return s;
+  return on_app_target(s);
 }
 
 const Registrar reg_can(make_scenario());

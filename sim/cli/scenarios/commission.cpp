@@ -179,8 +179,8 @@ void inject_offsets(const CommissionSetup& s, hal_host::PmsmBoard& b) {
 CommissionFrames run_app_commission(RunContext& ctx, const CommissionSetup& s,
                                     const mc_params_t& p) {
   const MotorFiles& f = *ctx.files;
-  const std::unique_ptr<AppTarget> target = make_file_target(
-      ctx, f, p, nullptr, [&](hal_host::PmsmBoardConfig& bc) { configure_plant(f, s, bc); });
+  const std::unique_ptr<AppTarget> target =
+      make_file_target(ctx, f, p, nullptr, [&](AppSetup& su) { configure_plant(f, s, su.board); });
   AppRunner run(*target);
   hal_host::PmsmBoard& board = run.board();
   inject_offsets(s, board);
@@ -220,11 +220,10 @@ double verify_step(RunContext& ctx, const CommissionSetup& s, mc_params_t p, uin
   const mc_params_eff_t e = resolve_params(p);
   const mc_gains_t& g = e.g;
   const bool sls = law == MC_LAW_SPEED_SENSORLESS;
-  const std::unique_ptr<AppTarget> target =
-      make_file_target(ctx, f, p, nullptr, [&](hal_host::PmsmBoardConfig& bc) {
-        configure_plant(f, s, bc);
-        if (sls) bc.theta_m0_rad = s.sensorless_start_theta_e_rad / f.motor.pole_pairs;
-      });
+  const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, nullptr, [&](AppSetup& su) {
+    configure_plant(f, s, su.board);
+    if (sls) su.board.theta_m0_rad = s.sensorless_start_theta_e_rad / f.motor.pole_pairs;
+  });
   AppRunner run(*target);
   inject_offsets(s, run.board());
   const double w_t = 0.5 * g.speed_rated_eff_rad_s;

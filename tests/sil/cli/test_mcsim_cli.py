@@ -207,9 +207,10 @@ class RunOutputs(unittest.TestCase):
             self.assertNotIn(bytes([c]), raw.replace(b"\n", b""))
 
     def test_refusal_inside_the_run_leaves_nothing(self):
-        # The telemetry schedule is checked inside the run (after the CAN log
-        # was opened): refused, exit 2, and --out as it was: a directory
-        # mcsim made is removed, an existing one keeps only its own files.
+        # The telemetry schedule is checked inside the run (when the
+        # application starts on its target): refused, exit 2, and --out as
+        # it was: a directory mcsim made is removed, an existing one keeps
+        # only its own files.
         bad = ["--set", "budget_pct=1", "--set", "rate_currents_hz=1000"]
         env = {k: v for k, v in os.environ.items() if k != "MCSIM_CAN_LOG"}
         made = os.path.join(self.out, "a", "b")

@@ -2,7 +2,7 @@
 """mcsim run --pil against mcsim run, file by file (issue 29 item 5).
 
     test_pil_mcsim.py --mcsim M --motor FILE --board B --duration S --work DIR \\
-        SCENARIO [--set key=value ...]
+        SCENARIO [--set key=value ...] [--expect key=value ...]
     test_pil_mcsim.py ... --sim-s S ... SCENARIO --set BOUND=S
 
 (--sim-s: a scenario that takes no --duration, bounded by one of its own
@@ -12,8 +12,13 @@ time)
 runs SCENARIO twice on the same motor and board, once on the SIL and once with
 --pil (the board's whole image on QEMU), each into its own directory, and
 requires the same exit code and the same files (the CSV, or the partial CSV of
-a run whose verdict fails at this short duration, and the JSON summary) equal
-byte for byte; a difference prints the file and its first differing line.
+a run whose verdict fails at this short duration, the JSON summary and, for
+can-telemetry, the candump log of the CAN bus) equal byte for byte; a
+difference prints the file and its first differing line. Both runs see the
+same environment (can-telemetry's command script: MCSIM_CAN_CMDS). Each
+--expect KEY=VALUE is a number the summary must hold exactly (what the run
+did: commands refused, the stop's reason), so two runs that did nothing
+alike do not pass.
 Prints the PIL cost as one JSON line ("[pil-cost] {...}"): wall seconds of the
 PIL run per simulated second (QEMU's boot included, as a user pays it).
 
@@ -71,9 +76,9 @@ def compare_dirs(sil_dir, pil_dir):
     return errors
 
 
-def run(cmd, env=None):
+def run(cmd, env=None, cwd=None):
     t0 = time.monotonic()
-    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=cwd)
     return p, time.monotonic() - t0
 
 
@@ -89,10 +94,15 @@ def same_run(a):
     sim_s = a.duration or a.sim_s
     for kv in a.set or []:
         base += ["--set", kv]
-    sil_dir = fresh(os.path.join(a.work, "sil"))
-    pil_dir = fresh(os.path.join(a.work, "pil"))
-    ps, wall_s = run(base + ["--out", sil_dir])
-    pp, wall_p = run(base + ["--out", pil_dir, "--pil"])
+    # Each run in its own working directory with the same relative --out, so
+    # that paths a summary names (can-telemetry's can_log) are the same text.
+    sil_cwd = fresh(os.path.join(a.work, "sil"))
+    pil_cwd = fresh(os.path.join(a.work, "pil"))
+    os.makedirs(sil_cwd)
+    os.makedirs(pil_cwd)
+    sil_dir, pil_dir = os.path.join(sil_cwd, "out"), os.path.join(pil_cwd, "out")
+    ps, wall_s = run(base + ["--out", "out"], cwd=sil_cwd)
+    pp, wall_p = run(base + ["--out", "out", "--pil"], cwd=pil_cwd)
     for tag, p in (("sil", ps), ("pil", pp)):
         print("[%s] exit %d\n%s%s" % (tag, p.returncode, p.stdout, p.stderr), end="")
     errors = []
@@ -106,6 +116,7 @@ def same_run(a):
         errors.append("the --pil run did not name its target on stderr")
     if not errors:
         errors += compare_dirs(sil_dir, pil_dir)
+    errors += expected(a, os.path.join(sil_dir, a.scenario + ".json"))
     print(
         "[pil-cost] "
         + json.dumps(
@@ -122,6 +133,29 @@ def same_run(a):
             }
         )
     )
+    return errors
+
+
+def expected(a, summary_path):
+    """The checks --expect KEY=VALUE asks of the summary (the runs being
+    equal, the SIL's): what the run did, so that two equal runs that did
+    nothing do not pass."""
+    errors = []
+    if not a.expect:
+        return errors
+    try:
+        with open(summary_path) as f:
+            s = json.load(f)
+    except (OSError, ValueError) as e:
+        return ["the summary %s cannot be read: %s" % (summary_path, e)]
+    for kv in a.expect:
+        key, _, want = kv.partition("=")
+        if key not in s:
+            errors.append("the summary has no %s" % key)
+        elif float(s[key]) != float(want):
+            errors.append("%s = %r, expected %s" % (key, s[key], want))
+        else:
+            print("[expect] %s = %s" % (key, want))
     return errors
 
 
@@ -187,6 +221,7 @@ def main():
     )
     ap.add_argument("--work", required=True)
     ap.add_argument("--set", action="append")
+    ap.add_argument("--expect", action="append", help="KEY=VALUE the summary must hold (numbers, exact)")
     ap.add_argument("--self-test", action="store_true")
     ap.add_argument("scenario", nargs="?")
     a = ap.parse_args()

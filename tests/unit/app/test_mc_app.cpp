@@ -333,6 +333,51 @@ TEST_F(McApp, AppStatusReportsTheStoreAfterASave)
         << "the heartbeat's value";
 }
 
+// The probe (what a scenario reads at the target's boundary, the same
+// through the PIL link) carries the CAN side's and the store's counters:
+// each equals the application's own after a run with a foreign frame, a
+// refused command, an accepted one, an APPLY and a SAVE.
+TEST_F(McApp, ProbeCarriesTheCanAndStoreCounters)
+{
+    Start();
+    mc_app_probe_t p{};
+    mc_app_probe(&app, &p);
+    EXPECT_EQ(static_cast<uint32_t>(MC_CFG_BOOT_EMPTY), p.boot_status);
+    EXPECT_EQ(app.tick_hz, p.tick_hz);
+    EXPECT_EQ(0u, p.store_saves);
+    const mc_hal_can_frame_t other = Frame(((defaults.can_node_id + 1u) << 5) | 0x17u, {1});
+    ASSERT_EQ(0, mc_hal_fake_can_rx_push(&fake, &other));
+    Send(0x17u, {1});                      // HOST_HEARTBEAT: accepted
+    Send(0x12u, {0, 0, 0});                // SET_CURRENT_REF, 3 bytes: refused LENGTH
+    Send(0x18u, {2, 0, 0, 0, 0, 0, 0, 0}); // PARAM_REQ APPLY
+    Send(0x18u, {3, 0, 0, 0, 0, 0, 0, 0}); // PARAM_REQ SAVE
+    SlowSteps(20);
+    mc_app_probe(&app, &p);
+    EXPECT_EQ(1u, p.app_rx_foreign);
+    EXPECT_EQ(1u, p.cmd_rx_rejected);
+    EXPECT_GE(p.cmd_rx_accepted, 1u);
+    EXPECT_EQ(1u, p.srv_applied);
+    EXPECT_EQ(1u, p.store_saves);
+    EXPECT_EQ(1u, p.store_seq);
+    EXPECT_GT(p.tm_tx_frames, 0u) << "the heartbeat and the default rates sent frames";
+    EXPECT_GT(p.tm_load_frac, 0.0f);
+    // every counter equal to the application's own
+    EXPECT_EQ(app.rx_foreign, p.app_rx_foreign);
+    EXPECT_EQ(app.rx_overflows, p.app_rx_overflows);
+    EXPECT_EQ(app.cmd.rx_accepted, p.cmd_rx_accepted);
+    EXPECT_EQ(app.cmd.rx_foreign, p.cmd_rx_foreign);
+    EXPECT_EQ(app.cmd.poll_max, p.cmd_poll_max);
+    EXPECT_EQ(app.cmd.reply_dropped, p.cmd_reply_dropped);
+    EXPECT_EQ(app.cmd.reply_limited, p.cmd_reply_limited);
+    EXPECT_EQ(app.tm.tx_frames, p.tm_tx_frames);
+    EXPECT_EQ(app.tm.tx_dropped, p.tm_tx_dropped);
+    EXPECT_EQ(app.tm.tx_nobufs, p.tm_tx_nobufs);
+    EXPECT_EQ(app.tm.tx_busoff, p.tm_tx_busoff);
+    EXPECT_EQ(app.tm.saturated, p.tm_saturated);
+    EXPECT_EQ(app.laws.speed_law, p.speed_law);
+    EXPECT_EQ(static_cast<uint32_t>(app.boot_status), p.boot_status);
+}
+
 TEST_F(McApp, SaveStretchesTheWatchdogAroundTheErase)
 {
     Start();

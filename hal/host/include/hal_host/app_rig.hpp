@@ -1,8 +1,9 @@
 // hal_host::app_period(): one PWM period of the drive image, as the image's
 // interrupts run it (firmware/targets/stm32f405/main.c), on the simulated
-// board. Every scenario that runs the drive application (the generic motor
-// scenarios and can-telemetry) goes through it, so what a scenario shows is
-// the sequence the board runs:
+// board. The SIL's AppTarget (sim/cli/app_target_sil.cpp), through which
+// every scenario that runs the drive application (the generic motor
+// scenarios and can-telemetry) runs it, calls it, so what a scenario shows
+// is the sequence the board runs:
 //
 //   1. board.sample()          TIM1 update -> injected conversions: the plant
 //                              at the period start t_k is measured.
