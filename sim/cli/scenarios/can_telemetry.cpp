@@ -487,9 +487,9 @@ std::vector<ParamSpec> own_params() {
   return v;
 }
 
-// With --motor/--board: the gain keys of the generic scenarios (gain_params:
-// cur_bw_rad_s, enc_pll_bw_rad_s, stop_decel_rad_s2, ...; app_params.hpp
-// maps them onto the parameter table), the speed limit from the motor
+// With --motor/--board: the gain keys of the generic scenarios (the table's
+// parameters: app_gain_params, current_bw_rad_s, speed_pll_bw_rad_s,
+// stop_decel_rad_s2, ...), the speed limit from the motor
 // file; pwm_hz and J from the files (--set board.pwm_hz=, motor.j_kgm2=).
 std::vector<ParamSpec> file_params(const MotorFiles& f) {
   std::vector<ParamSpec> v = can_params();
@@ -510,8 +510,12 @@ std::vector<ParamSpec> file_params(const MotorFiles& f) {
       {"load_nm", 0.0, "N m", "constant load torque (at most the current limit's torque)",
        -torque_max_nm, torque_max_nm}};
   v.insert(v.end(), own.begin(), own.end());
-  const std::vector<ParamSpec> gains = gain_params(f);
-  v.insert(v.end(), gains.begin(), gains.end());
+  // the table's gain keys, those above kept (their 0 is the table's "derived")
+  for (const ParamSpec& g : app_gain_params(f)) {
+    if (std::none_of(v.begin(), v.end(), [&](const ParamSpec& k) { return k.key == g.key; })) {
+      v.push_back(g);
+    }
+  }
   return v;
 }
 
