@@ -4,6 +4,9 @@
 #include <stdexcept>
 
 #include "scenario.hpp"
+extern "C" {
+#include "config/mc_law_cfg.h"
+}
 
 namespace mcsim {
 
@@ -46,6 +49,10 @@ mc_hal_can_frame_t AppCommands::commission(uint32_t action, double i_test_a, dou
                static_cast<float>(v_test_max_v), static_cast<float>(speed_max_m_rad_s)});
 }
 
+mc_hal_can_frame_t AppCommands::param_op(uint32_t opcode) const {
+  return pack(MC_CAN_MSG_PARAM_REQ, {static_cast<float>(opcode), 0.0f, 0.0f});
+}
+
 mc_hal_can_frame_t AppCommands::host_heartbeat() {
   ++hb_counter_;
   return pack(MC_CAN_MSG_HOST_HEARTBEAT, {static_cast<float>(hb_counter_)});
@@ -55,10 +62,46 @@ AppRunner::AppRunner(AppTarget& target) : t_(target), cmd_(target.params().can_n
   keepalive_s_ = 0.1 * static_cast<double>(target.params().can_timeout_s);
 }
 
-void AppRunner::start(uint32_t mode) {
+bool AppRunner::find_at_enable(uint32_t mode) const {
+  const mc_params_t& p = t_.params();
+  const bool needs_encoder = mode == MC_CAN_CTRL_CURRENT || mode == MC_CAN_CTRL_POSITION ||
+                             (mode == MC_CAN_CTRL_SPEED && p.speed_law != MC_LAW_SPEED_SENSORLESS);
+  return needs_encoder && p.angle_ref != MC_DRIVE_ANGLE_REF_STORED &&
+         p.angle_find_at_enable != 0u && t_.probe().angle_state != MC_DRIVE_ANGLE_KNOWN;
+}
+
+void AppRunner::start(uint32_t mode, bool waits_for_find) {
+  if (!waits_for_find && find_at_enable(mode)) {
+    throw UsageError(
+        "the drive finds the rotor's angle at this enable (angle_ref " +
+        std::string(t_.params().angle_ref == MC_DRIVE_ANGLE_REF_INDEX ? "index" : "align") +
+        ", angle_find_at_enable 1) and this scenario does not wait for it yet (speed-step, "
+        "load-step and current-step do)");
+  }
+  find_pending_ = find_at_enable(mode);
   send(cmd_.mode(mode));
   send(cmd_.enable(true));
   keep_host_alive();  // the first keep-alive with the enable
+}
+
+double AppRunner::finish_angle_find(double max_s) {
+  if (!find_pending_) return 0.0;
+  find_pending_ = false;
+  const double t0 = t_.board().t_s();
+  bool began = false;
+  while (t_.board().t_s() - t0 < max_s) {
+    step();
+    const mc_app_probe_t& p = t_.probe();
+    if (p.faults != 0u) break;  // the find failed: the scenario's watch names it
+    if (p.angle_finding != 0u) began = true;
+    if (began && p.angle_finding == 0u) break;
+    if (!began && p.cmd_enabled != 0u && p.angle_state == MC_DRIVE_ANGLE_KNOWN) break;
+  }
+  if (t_.probe().angle_finding != 0u) {
+    throw UsageError("the drive's power-up angle find did not end within " + std::to_string(max_s) +
+                     " s");
+  }
+  return t_.board().t_s() - t0;
 }
 
 void AppRunner::keep_host_alive() {
@@ -81,6 +124,17 @@ AppTargetPeriod AppRunner::step() {
     uint32_t msg = 0;
     float v[MC_CAN_NSIG_MAX] = {0};
     if (mc_can_proto_unpack(&f, &msg, v, MC_CAN_NSIG_MAX) != MC_CAN_ERR_NONE) continue;
+    const auto code = static_cast<uint32_t>(v[MC_CAN_CMD_ERROR_ERROR]);
+    if (code == MC_CAN_ERR_ANGLE_UNKNOWN) {
+      throw UsageError(
+          "the drive application refused the enable: CMD_ERROR ANGLE_UNKNOWN (the mode needs "
+          "the rotor's angle, unknown since power-up: angle_ref " +
+          std::string(t_.params().angle_ref == MC_DRIVE_ANGLE_REF_INDEX ? "index" : "align") +
+          " without angle_find_at_enable; the stored encoder offset is not used before the " +
+          std::string(t_.params().angle_ref == MC_DRIVE_ANGLE_REF_INDEX ? "index is seen"
+                                                                        : "alignment") +
+          ")");
+    }
     throw UsageError("the drive application refused command 0x" +
                      [](uint32_t c) {
                        char b[8];

@@ -32,6 +32,9 @@ class AppCommands {
   /// options (0: the drive's default).
   mc_hal_can_frame_t commission(uint32_t action, double i_test_a, double v_test_max_v,
                                 double speed_max_m_rad_s) const;
+  /// PARAM_REQ with an opcode that takes no id or value (MC_PARAM_OP_APPLY,
+  /// MC_PARAM_OP_SAVE).
+  mc_hal_can_frame_t param_op(uint32_t opcode) const;
   /// HOST_HEARTBEAT, its counter advanced by one at each call.
   mc_hal_can_frame_t host_heartbeat();
 
@@ -51,8 +54,22 @@ class AppRunner {
  public:
   explicit AppRunner(AppTarget& target);
   void send(const mc_hal_can_frame_t& f) { pending_.push_back(f); }
-  /// Enable the drive in mode (MC_CAN_CTRL_*): mode, then enable.
-  void start(uint32_t mode);
+  /// Enable the drive in mode (MC_CAN_CTRL_*): mode, then enable. When the
+  /// booted table makes the drive find the rotor's angle at this enable
+  /// (angle_ref index or align, angle_find_at_enable 1, the angle unknown
+  /// since power-up) the scenario must wait for it: with waits_for_find
+  /// it then calls finish_angle_find(); without, start refuses the run
+  /// (UsageError: the scenario's timing does not allow for it).
+  void start(uint32_t mode, bool waits_for_find = false);
+  /// After start(): the periods of the power-up find, until the drive runs
+  /// the commanded mode (at most max_s of simulated time). Returns the time
+  /// it took (0: no find ran, nothing stepped). A find that fails faults
+  /// the drive (the scenario's AppWatch names it, with the finder's reason);
+  /// one still running after max_s is a UsageError.
+  double finish_angle_find(double max_s = 30.0);
+  /// Whether the booted table makes the drive find the angle at an enable
+  /// in mode (see start()).
+  bool find_at_enable(uint32_t mode) const;
   /// The keep-alive from now on without an enable (a commissioning run,
   /// which the application times out as an enabled drive).
   void keep_host_alive();
@@ -76,6 +93,7 @@ class AppRunner {
   uint64_t frames_tx_ = 0;
   bool started_ = false;
   bool keepalive_on_ = true;
+  bool find_pending_ = false;  // start() enabled a mode that finds the angle first
 };
 
 }  // namespace mcsim

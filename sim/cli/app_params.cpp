@@ -12,6 +12,7 @@
 #include "drive_setup.hpp"
 extern "C" {
 #include "config/mc_law_cfg.h"
+#include "mc_drive.h"
 }
 
 namespace mcsim {
@@ -183,7 +184,23 @@ mc_params_t table_of(const MotorFiles& f, double r_scale, double l_scale, double
   p.adc_bits = static_cast<uint32_t>(b.adc_bits);
   p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
   p.slow_loop_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
+  if (b.encoder == kEncoderAbiIndex) {
+    // the offset is relative to the index: an index search at the first enable
+    p.angle_ref = MC_DRIVE_ANGLE_REF_INDEX;
+    p.angle_find_at_enable = 1u;
+  }
   return p;
+}
+
+// angle_ref, angle_find_at_enable from the run's keys (when it has them).
+void set_angle_params(const Params& P, mc_params_t* p) {
+  const auto& v = P.values();
+  if (const auto it = v.find("angle_ref"); it != v.end()) {
+    p->angle_ref = static_cast<uint32_t>(it->second);
+  }
+  if (const auto it = v.find("angle_find_at_enable"); it != v.end()) {
+    p->angle_find_at_enable = static_cast<uint32_t>(it->second);
+  }
 }
 
 // The table resolved by the C derivation, refused with the reason named.
@@ -284,6 +301,28 @@ std::vector<ParamSpec> app_gain_params(const MotorFiles& f) {
   return v;
 }
 
+std::vector<ParamSpec> app_powerup_params(const MotorFiles& f) {
+  const mc_params_t d = table_of(f, 1.0, 1.0, 1.0);
+  return {
+      {"theta_m0_rad", 0.0, "rad",
+       "plant: the rotor's mechanical angle at power-up (an incremental encoder counts from 0 "
+       "there)",
+       -100.0, 100.0},
+      {"angle_ref",
+       static_cast<double>(d.angle_ref),
+       "1",
+       "the table's parameter: what makes the stored encoder offset true after a power-up "
+       "(stored, index, align; default from board.encoder)",
+       0.0,
+       2.0,
+       {{"stored", 0.0}, {"index", 1.0}, {"align", 2.0}}},
+      {"angle_find_at_enable", static_cast<double>(d.angle_find_at_enable), "1",
+       "the table's parameter: 1 = the first enable runs the index search or the alignment, "
+       "0 = it is refused (ANGLE_UNKNOWN) until the angle is known",
+       0.0, 1.0},
+  };
+}
+
 mc_params_eff_t files_params_eff(const MotorFiles& f) {
   return resolve_or_refuse(f, table_of(f, 1.0, 1.0, 1.0));
 }
@@ -307,6 +346,7 @@ mc_params_t params_from_files(const MotorFiles& f, const Params& overrides, uint
     mc_param_set_raw(&p, &info, raw.u);
   }
   p.speed_law = speed_law;
+  set_angle_params(overrides, &p);
   (void)resolve_or_refuse(f, p);
   const uint32_t err = mc_params_validate(&p);
   if (err != MC_PARAMS_OK) refuse_law(f, p, err);

@@ -16,6 +16,8 @@
 // current limit is the motor's: --set motor.i_max_a. Besides them:
 //   model_r_scale, model_l_scale, model_flux_scale: the motor values the
 //                   drive is given (r_ohm, ld_h/lq_h, flux_wb) scaled
+//   angle_ref, angle_find_at_enable (app_powerup_params): the table's, their
+//                   defaults from the board's encoder type
 // The summary records every field of the resolved mc_gains_t as gain.NAME
 // (its C names: gain.cur_bw_rad_s, gain.i_limit_a, ...) and each gain
 // parameter's resolved value as param.NAME.
@@ -40,6 +42,14 @@ namespace mcsim {
 
 /// The --set keys of the gains (see the file comment).
 std::vector<ParamSpec> app_gain_params(const MotorFiles& f);
+
+/// The power-up keys of every scenario on the drive application (issue 32
+/// item 1; app_scenario.hpp on_app_target adds them): theta_m0_rad (the
+/// plant: the rotor's mechanical angle at power-up, where an incremental
+/// encoder counts from 0), and the table's angle_ref and
+/// angle_find_at_enable (defaults from the board's encoder: "abi_index"
+/// index and 1, "abi" the table's, stored and 0).
+std::vector<ParamSpec> app_powerup_params(const MotorFiles& f);
 
 /// The files' table resolved by the C derivation (no --set): the derived
 /// gains and limits the scenarios' defaults come from. Throws UsageError

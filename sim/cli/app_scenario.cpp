@@ -1,18 +1,96 @@
 #include "app_scenario.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
+#include "hal_host/file_flash.hpp"
 #include "verdict.hpp"
 
 namespace mcsim {
 
+Scenario on_app_target(Scenario s) {
+  s.takes_pil = true;
+  s.takes_flash = true;
+  if (s.motor_params) {
+    const auto own = s.motor_params;
+    s.motor_params = [own](const MotorFiles& f) {
+      std::vector<ParamSpec> v = own(f);
+      for (const ParamSpec& k : app_powerup_params(f)) {
+        if (std::none_of(v.begin(), v.end(), [&](const ParamSpec& x) { return x.key == k.key; })) {
+          v.push_back(k);
+        }
+      }
+      return v;
+    };
+  }
+  return s;
+}
+
+void set_board_sensor(const MotorFiles& f, hal_host::PmsmBoardConfig& bc) {
+  bc.encoder.has_index = f.board.encoder == kEncoderAbiIndex;
+  bc.encoder.index_angle_rad = bc.encoder.has_index ? f.board.encoder_index_rad : 0.0;
+}
+
 namespace {
+
+const char* const kBootNames[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
+                                  "LAYOUT", "INVALID",  "FLASH"};
+const char* const kBootWhy[] = {
+    "",
+    "",
+    "",
+    "no valid record, and the sectors are not erased: not a configuration this drive wrote",
+    "the newest record has another format or layout: a foreign image's",
+    "the newest record fails the drive's validation or another board's PWM rate",
+    "the flash could not be read"};
+
+// The board's own quantities: a stored set that differs in one was saved
+// on another board (the simulated board is the files').
+void refuse_foreign(const std::string& file, const mc_params_t& stored, const mc_params_t& board) {
+  const char* const keys[] = {"pwm_hz",        "dead_time_s", "vbus_v",     "current_sensors",
+                              "i_sense_max_a", "adc_bits",    "encoder_cpr"};
+  for (const char* k : keys) {
+    const mc_param_info_t& info = mc_param_table[mc_param_find_name(k)];
+    const uint32_t a = mc_param_get_raw(&stored, &info), b = mc_param_get_raw(&board, &info);
+    if (a == b) continue;
+    mc_param_value_t va, vb;
+    va.u = a;
+    vb.u = b;
+    const bool f32 = info.type == MC_PARAM_TYPE_F32;
+    const auto txt = [f32](mc_param_value_t v) {
+      char buf[32];
+      if (f32) {
+        std::snprintf(buf, sizeof buf, "%.6g", static_cast<double>(v.f));
+      } else {
+        std::snprintf(buf, sizeof buf, "%u", static_cast<unsigned>(v.u));
+      }
+      return std::string(buf);
+    };
+    throw UsageError(file + ": the stored configuration is another board's: " + k + " " + txt(va) +
+                     " stored, " + txt(vb) + " on this board (--board); nothing run, " +
+                     "the file unchanged");
+  }
+}
+
+// The parameters the scenario or the user chose over the files' plain
+// table (its law, fw_enable, a --set gain): written over a stored set.
+std::vector<uint32_t> chosen_over_files(const MotorFiles& f, const mc_params_t& p) {
+  const mc_params_t plain = params_from_files(f, Params(app_gain_params(f), {}), p.speed_law);
+  std::vector<uint32_t> ids;
+  for (const mc_param_info_t& info : mc_param_table) {
+    if (info.offset == MC_PARAM_NO_FIELD) continue;
+    if (mc_param_get_raw(&p, &info) != mc_param_get_raw(&plain, &info)) ids.push_back(info.id);
+  }
+  ids.push_back(MC_PARAM_ID_SPEED_LAW);  // SPEED's law is the scenario's
+  return ids;
+}
 
 AppSetup file_setup(const MotorFiles& plant, const mc_params_t& p,
                     const std::function<double(double)>* load_nm) {
   AppSetup s;
   s.board = build_board_cfg(plant);
+  set_board_sensor(plant, s.board);
   if (load_nm != nullptr && *load_nm) {
     s.board.motor.load.kind = LoadKind::kFunction;
     s.board.motor.load.fn = [](double t, double, double, const void* ctx) {
@@ -36,11 +114,52 @@ std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFi
                                             const std::function<double(double)>* load_nm,
                                             const std::function<void(AppSetup&)>& adjust) {
   AppSetup s = file_setup(plant, p, load_nm);
+  const auto& keys = ctx.params.values();
+  if (const auto it = keys.find("theta_m0_rad"); it != keys.end()) {
+    s.board.theta_m0_rad = it->second;
+  }
+  if (ctx.flash != nullptr) {
+    ctx.summary.set_text("flash_file", ctx.flash->path());
+    s.flash = ctx.flash->hal();
+    s.flash_must_boot = true;
+    s.over_stored = chosen_over_files(plant, p);
+  }
   if (adjust) adjust(s);
-  if (ctx.pil == nullptr) return make_app_target_sil(s);
+  if (ctx.pil == nullptr) {
+    std::unique_ptr<AppTarget> t = make_app_target_sil(s);
+    if (s.flash != nullptr && s.flash_must_boot) {
+      check_flash_boot(*t, ctx.flash->path(), p);
+      ctx.summary.set_text("cfg_boot_status", flash_boot_name(t->probe().boot_status));
+    }
+    return t;
+  }
   std::unique_ptr<AppTarget> t = make_app_target_pil(s, *ctx.pil);
   std::fprintf(stderr, "mcsim: target %s\n", t->name().c_str());
   return t;
+}
+
+void check_flash_boot(const AppTarget& t, const std::string& file, const mc_params_t& board) {
+  const uint32_t b = std::min<uint32_t>(t.probe().boot_status, 6u);
+  if (b != MC_CFG_BOOT_STORED && b != MC_CFG_BOOT_MIGRATED && b != MC_CFG_BOOT_EMPTY) {
+    throw UsageError(file + ": refused, boot status " + kBootNames[b] + " (" + kBootWhy[b] +
+                     "); nothing run, the file unchanged");
+  }
+  if (b != MC_CFG_BOOT_EMPTY) refuse_foreign(file, t.params(), board);
+}
+
+std::string align_err_names(uint32_t bits) {
+  static const char* const names[] = {"NULL",      "CFG",         "FOC",       "MEAS",
+                                      "TRAVEL",    "NOT_SETTLED", "DIRECTION", "LOAD",
+                                      "NO_MOTION", "NOT_FOUND",   "ENCODER",   "SLIP"};
+  std::string s;
+  for (uint32_t i = 0; i < 12u; ++i) {
+    if ((bits & (1u << i)) != 0u) s += (s.empty() ? "" : "|") + std::string(names[i]);
+  }
+  return s.empty() ? "none" : s;
+}
+
+std::string flash_boot_name(uint32_t boot_status) {
+  return kBootNames[std::min<uint32_t>(boot_status, 6u)];
 }
 
 double AppRecorder::theta_e_true() {
@@ -78,7 +197,10 @@ void AppRecorder::row(double t, double id, double iq, double w) {
 std::string AppWatch::operator()(const mc_app_probe_t& p) {
   if (p.faults != 0u) {
     std::string s = drive_fault_names(p.faults);
-    if ((p.faults & MC_DRIVE_FAULT_CONTROL) != 0u) {
+    if (p.angle_error != 0u) {
+      s += " (the power-up angle find failed: MC_CTRL_ALIGN_ERR " + align_err_names(p.angle_error) +
+           ")";
+    } else if ((p.faults & MC_DRIVE_FAULT_CONTROL) != 0u) {
       s += " (law error bits " + std::to_string(p.ctrl_err) + ")";
     }
     return s;

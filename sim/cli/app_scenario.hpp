@@ -30,9 +30,32 @@ std::unique_ptr<AppTarget> make_file_target(
     const RunContext& ctx, const MotorFiles& plant, const mc_params_t& p,
     const std::function<double(double)>* load_nm,
     const std::function<void(AppSetup&)>& adjust = std::function<void(AppSetup&)>());
+/// With ctx.flash (mcsim --flash FILE, the SIL): the application boots
+/// from the file's configuration store (mc_app_boot, as main.c): an absent
+/// or erased file boots p; a stored record replaces p, except for what the
+/// scenario or the user chose over the files' plain table (its speed law,
+/// fw_enable, a --set gain: written over the stored set, as a host's
+/// PARAM_REQ WRITE and APPLY before the enable). A file the drive cannot
+/// boot (CORRUPT, LAYOUT, INVALID, FLASH) or a stored set of another board
+/// (pwm_hz, dead_time_s, vbus_v, current_sensors, i_sense_max_a,
+/// adc_bits, encoder_cpr differ from p's) is refused (UsageError naming it; nothing has been written).
+/// theta_m0_rad (the run's key, when it has one): the plant's rotor angle
+/// at power-up. The board's encoder type (set_board_sensor) on the plant.
+///
 /// The same on the SIL (tests that build their own run).
 std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
                                             const std::function<double(double)>* load_nm);
+
+/// The board's position sensor on the plant: "abi_index" an index mark at
+/// encoder_index_rad (BoardSpec::encoder).
+void set_board_sensor(const MotorFiles& f, hal_host::PmsmBoardConfig& bc);
+
+/// The refusals of a --flash boot (make_file_target): throws UsageError.
+void check_flash_boot(const AppTarget& t, const std::string& file, const mc_params_t& board);
+/// MC_CTRL_ALIGN_ERR_* bits by name ("LOAD|SLIP"; "none").
+std::string align_err_names(uint32_t bits);
+/// "STORED", "EMPTY", ... (mc_cfg_boot_t).
+std::string flash_boot_name(uint32_t boot_status);
 
 /// The scenarios' CSV: t, the true dq currents, the references (the
 /// application's probe), the true speed and electrical angle, the observer's

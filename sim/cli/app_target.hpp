@@ -53,6 +53,11 @@ struct AppSetup {
   // Null: no store (a SAVE answers STORE; the PIL image's RAM store answers
   // it OK: a run that saves is not compared with --pil).
   const mc_hal_flash_t* flash = nullptr;
+  // make_file_target with --flash: refuse a flash the drive cannot boot
+  // (app_scenario.hpp; can-telemetry boots the defaults and says so), and
+  // the parameters written over a stored set before the start (ids).
+  bool flash_must_boot = false;
+  std::vector<uint32_t> over_stored;
 };
 
 // What one period did (both targets report the same).

@@ -1,7 +1,8 @@
 // make_app_target_sil (app_target.hpp): the drive application compiled for
 // the host on the simulated board, one PWM period = hal_host::app_period
 // (the image's interrupt/PendSV sequence), booted from the setup's
-// parameter table (no flash), the laws from the parameters, commissioning
+// parameter table (or the setup's flash: the stored set, with the
+// scenario's choices over it), the laws from the parameters, commissioning
 // over CAN bound as the images bind it, and a CAN bus
 // in memory: the frames a period is given are what the controller holds
 // when the receive interrupt runs at the period start; the frames the
@@ -93,6 +94,7 @@ class AppTargetSil final : public AppTarget {
     if (berr != MC_APP_CFG_OK) {
       throw UsageError("the application refused to boot: MC_APP_CFG bits " + hex(berr));
     }
+    over_stored(s);
     const uint32_t aerr = mc_app_start(app_.get(), drive_.get(), board_->hal(), can_.hal(), true);
     if ((aerr & MC_APP_CFG_ERR_TM) != 0u) {
       char load[96];
@@ -120,6 +122,27 @@ class AppTargetSil final : public AppTarget {
       mc_app_attach_commission(app_.get(), comm_can_.get());
     }
     mc_app_probe(app_.get(), &probe_);
+  }
+
+  // A stored set booted: what the scenario chose (AppSetup::over_stored)
+  // written over it, as a host's WRITE and APPLY would before the enable.
+  void over_stored(const AppSetup& s) {
+    const uint32_t b = app_->boot_status;
+    if (s.over_stored.empty() || (b != MC_CFG_BOOT_STORED && b != MC_CFG_BOOT_MIGRATED)) return;
+    mc_params_t q = app_->params;
+    for (uint32_t id : s.over_stored) {
+      const mc_param_info_t* info = mc_param_find(id, nullptr);
+      if (info == nullptr) continue;
+      mc_param_set_raw(&q, info, mc_param_get_raw(&s.defaults, info));
+    }
+    const uint32_t err = mc_params_validate(&q);
+    if (err != MC_PARAMS_OK) {
+      throw UsageError(
+          "the stored configuration with the scenario's settings over it is invalid: "
+          "MC_PARAMS_ERR " +
+          params_err_names(err) + " (law_error " + law_err_names(mc_law_speed_check(&q)) + ")");
+    }
+    app_->params = q;
   }
 
   AppTargetPeriod period(const std::vector<mc_hal_can_frame_t>& rx,

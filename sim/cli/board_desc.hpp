@@ -18,8 +18,9 @@
 //                     vref / 4096 / (|gain| shunt)
 //   adc_bits        = 12 (the STM32F405's ADC)
 //   vbus_sense_max_v = vref * divider (step vref * divider / 4096)
-//   encoder_cpr     = [encoder] counts_per_rev (type abi; other sensors are
-//                     not modelled and refused)
+//   encoder_cpr     = [encoder] counts_per_rev
+//   encoder         = [encoder] type ("abi"; motor_file.cpp refuses the SPI
+//                     and Hall sensors by name until the simulator runs them)
 //   brake_r_ohm     = [brake] r_ohm when present, else 0 (no chopper)
 // These formulas are mc_boards.py's (load_board); tests/sil/boards checks the
 // two agree on every board. The rest of the description (pins, thermistors,

@@ -243,6 +243,37 @@ MotorSpec read_motor(const std::string& path, const toml::table& t, const SetSou
   return m;
 }
 
+// The position sensor (motor_file.hpp, [board] encoder): the types the
+// plant and the firmware run today, the others refused by name.
+void read_encoder_type(TableReader& r, BoardSpec* b) {
+  const std::string type = r.text("encoder", false);
+  b->encoder = type.empty() ? kEncoderAbi : type;
+  const toml::node* n = r.maybe("encoder");
+  const int line = n != nullptr ? line_of(*n) : 1;
+  if (b->encoder == "as5047p" || b->encoder == "ma732" || b->encoder == "hall") {
+    fail(r.src("encoder"), line,
+         "encoder '" + b->encoder +
+             "' is not available in the simulator yet: the plant models it "
+             "(sim/include/mcsim), but the simulated board and the drive do not read it "
+             "(issue 32 items 5 and 6); the simulator runs 'abi' and 'abi_index'");
+  }
+  if (b->encoder != kEncoderAbi && b->encoder != kEncoderAbiIndex) {
+    fail(r.src("encoder"), line,
+         "encoder '" + b->encoder +
+             "' is not a sensor type: 'abi' (A/B, no index), 'abi_index' (A/B with an index "
+             "mark at encoder_index_rad); 'as5047p', 'ma732', 'hall' are not available yet");
+  }
+  if (b->encoder == kEncoderAbiIndex && b->encoder_cpr == 0) {
+    fail(r.src("encoder"), line, "encoder 'abi_index' needs an encoder: encoder_cpr is 0");
+  }
+  b->encoder_index_rad = r.num_or("encoder_index_rad", 0.0, -6.283185307179586, 6.283185307179586,
+                                  false, "rad (mechanical angle of the index mark)");
+  if (b->encoder != kEncoderAbiIndex && r.maybe("encoder_index_rad") != nullptr) {
+    fail(r.src("encoder_index_rad"), line_of(*r.maybe("encoder_index_rad")),
+         "encoder_index_rad: only an 'abi_index' encoder has an index mark");
+  }
+}
+
 BoardSpec read_board(const std::string& path, const toml::table& t, const SetSources& sets) {
   TableReader r(path, "board", t, sets);
   BoardSpec b;
@@ -267,6 +298,7 @@ BoardSpec read_board(const std::string& path, const toml::table& t, const SetSou
              " is out of range: 0 (no encoder) or [" + std::to_string(static_cast<long>(cpr.lo)) +
              ", " + std::to_string(static_cast<long>(cpr.hi)) + "]" + kFwTable);
   }
+  read_encoder_type(r, &b);
   // 0 when absent: the ranges follow i_sense_max_a and vbus_v (BoardSpec),
   // also when a scenario changes those after the files are read
   b.i_adc_full_scale_a = r.num_or("i_adc_full_scale_a", 0.0, b.i_sense_max_a, 1.0e5, false,
@@ -293,8 +325,13 @@ SetSources apply_overrides(toml::table& t, const std::string& table, const Overr
     const std::string key = kv.first.substr(prefix.size());
     const std::string where = "--set " + kv.first + "=" + kv.second;
     toml::table one;
+    // A name (board.encoder=abi_index) may be given as a bare word.
+    const bool bare_name =
+        key == "encoder" && !kv.second.empty() &&
+        kv.second.find_first_not_of(
+            "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") == std::string::npos;
     try {
-      one = toml::parse(key + " = " + kv.second, where);
+      one = toml::parse(key + " = " + (bare_name ? "\"" + kv.second + "\"" : kv.second), where);
     } catch (const toml::parse_error& e) {
       throw UsageError(where + ": not a TOML value: " + std::string(e.description()));
     }

@@ -25,7 +25,13 @@
 //          period), dead_time_s, current_sensors (2 or 3), i_sense_max_a
 //          (current ADC full scale, +-A), adc_bits, encoder_cpr (counts per
 //          mechanical revolution; 0 = no encoder).
-//          optional: delay_periods (computation delay, default 1),
+//          optional: encoder (the position sensor: "abi", an A/B
+//          incremental encoder without index, the default; "abi_index", one
+//          with an index mark at encoder_index_rad, the mechanical angle of
+//          the mark, default 0; "as5047p", "ma732" and "hall" are refused:
+//          not available in the simulator yet, issue 32 items 5 and 6;
+//          --set board.encoder=abi_index takes the bare word),
+//          delay_periods (computation delay, default 1),
 //          source (text), i_adc_full_scale_a (the current converter's range,
 //          +-A: the model's step is 2 i_adc_full_scale_a / 2^adc_bits;
 //          default i_sense_max_a), vbus_sense_max_v (the bus sensor's range,
@@ -88,6 +94,8 @@ struct BoardSpec {
   int adc_bits = 12;
   double vbus_sense_max_v = 0;  // the bus sensor's range; 0: 2 vbus_v
   long encoder_cpr = 0;
+  std::string encoder = "abi";   // kEncoderAbi or kEncoderAbiIndex (the file comment)
+  double encoder_index_rad = 0;  // abi_index: mechanical angle of the index mark
   int delay_periods = 1;
   double dc_link_c_f = 0;  // 0: stiff bus
   double source_r_ohm = 0.05;
@@ -101,6 +109,10 @@ struct BoardSpec {
     return vbus_sense_max_v > 0 ? vbus_sense_max_v : 2.0 * vbus_v;
   }
 };
+
+/// The board's encoder types the simulator runs (BoardSpec::encoder).
+inline constexpr const char* kEncoderAbi = "abi";
+inline constexpr const char* kEncoderAbiIndex = "abi_index";
 
 /// The files given on the command line, parsed and validated.
 struct MotorFiles {

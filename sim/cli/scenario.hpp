@@ -207,12 +207,11 @@ struct Scenario {
   bool takes_pil = false;
 };
 
-/// s with takes_pil set (for the registrations of the scenarios on the
-/// drive application).
-inline Scenario on_app_target(Scenario s) {
-  s.takes_pil = true;
-  return s;
-}
+/// s for the registrations of the scenarios on the drive application
+/// (app_scenario.cpp): takes_pil and takes_flash set, and with
+/// motor_params the power-up keys (app_params.hpp app_powerup_params)
+/// added to its parameters.
+Scenario on_app_target(Scenario s);
 
 /// Global registry; scenario files register themselves with a static
 /// Registrar at start-up.

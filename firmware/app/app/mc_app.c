@@ -936,6 +936,9 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
     p->fw_v_max_v = d->tm.fw.v_max_v;
     p->omega_ref_rad_s = d->speed_ref_rad_s;
     p->asc_active = d->asc_active ? 1u : 0u;
+    p->angle_state = mc_drive_angle_state(d);
+    p->angle_finding = app->angle_running ? 1u : 0u;
+    p->angle_error = app->angle_error;
     if ((ctrl != NULL) && app->cfg.laws_from_params) {
         if (l->pi2d_ok && (ctrl == &l->pi2d.ops)) {
             p->id_ref_a = l->pi2d.tm.id_ref_a;

@@ -334,6 +334,10 @@ typedef struct {
     uint32_t cmd_rx_foreign, cmd_poll_max, app_rx_foreign, app_rx_overflows;
     /* the configuration: which law SPEED runs, the store at boot and since */
     uint32_t speed_law, tick_hz, boot_status, store_seq, store_saves, srv_applied;
+    /* the rotor angle after a power-up: mc_drive_angle_state() (KNOWN,
+     * NEED_INDEX, NEED_ALIGN), 1 while a find at enable runs, and the
+     * MC_CTRL_ALIGN_ERR_* bits of the last find that failed */
+    uint32_t angle_state, angle_finding, angle_error;
 } mc_app_probe_t;
 
 /** Fill *p from the application and its drive (after a period). */

@@ -43,7 +43,9 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "app_scenario.hpp"
 #include "generic_commission.hpp"
@@ -51,6 +53,7 @@
 #include "verdict.hpp"
 extern "C" {
 #include "config/mc_law_cfg.h"
+#include "config/mc_param_srv.h"
 }
 
 namespace mcsim {
@@ -65,7 +68,8 @@ struct CommissionFrames {
   uint32_t err = 0, valid = 0, step = 0;
   double t_end_s = 0;
   std::array<float, MC_COMM_CAN_ITEM_COUNT> value{};
-  uint32_t have = 0;  // bit per item received
+  uint32_t have = 0;    // bit per item received
+  bool staged = false;  // COMMISSION_STATUS: the results are staged in the table
   // COMMISSION_STATUS and COMMISSION_RESULT among the frames of a period.
   void take(const std::vector<mc_hal_can_frame_t>& frames, double t);
 };
@@ -90,6 +94,7 @@ void CommissionFrames::take(const std::vector<mc_hal_can_frame_t>& frames, doubl
       step = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_STEP]);
       err = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_ERROR]);
       valid = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_VALID]);
+      staged = v[MC_CAN_COMMISSION_STATUS_STAGED] > 0.5f;
       done = step == MC_COMM_STEP_DONE;
       if (step == MC_COMM_STEP_FAILED) {
         ended = true;
@@ -109,6 +114,10 @@ std::vector<ParamSpec> commission_params(const MotorFiles& f) {
   return {
       {"encoder_offset_rad", d.encoder_offset_rad, "rad",
        "plant: electrical angle of the d axis at encoder count 0", -100.0, 100.0},
+      {"theta_m0_rad", d.encoder_offset_rad / f.motor.pole_pairs, "rad",
+       "plant: the rotor's mechanical angle at power-up (the same as encoder_offset_rad / "
+       "pole_pairs: set one)",
+       -100.0, 100.0},
       {"encoder_direction", 1.0, "1", "plant: encoder counting direction (+1 or -1)", -1.0, 1.0},
       {"adc_offset_a", d.adc_offset_a, "A",
        "plant: current-sensor offsets (x, -0.7 x, 0.4 x) on phases a, b, c", -1e4, 1e4},
@@ -128,9 +137,18 @@ std::vector<ParamSpec> commission_params(const MotorFiles& f) {
   };
 }
 
-// The table the application boots (see the file comment).
-mc_params_t booted_params(const MotorFiles& f) {
-  return params_from_files(f, Params(app_gain_params(f), {}), MC_LAW_SPEED_PI);
+// The table the application boots (see the file comment), with the run's
+// power-up keys (angle_ref, angle_find_at_enable).
+mc_params_t booted_params(const MotorFiles& f, const Params& P) {
+  mc_params_t p = params_from_files(f, Params(app_gain_params(f), {}), MC_LAW_SPEED_PI);
+  p.angle_ref = static_cast<uint32_t>(P.get("angle_ref"));
+  p.angle_find_at_enable = static_cast<uint32_t>(P.get("angle_find_at_enable"));
+  const uint32_t err = mc_params_validate(&p);
+  if (err != MC_PARAMS_OK) {
+    throw UsageError("angle_ref " + std::to_string(p.angle_ref) +
+                     " refused by the parameter table: MC_PARAMS_ERR " + params_err_names(err));
+  }
+  return p;
 }
 
 // The booted table with what commissioning stages (mc_comm_can.c, stage()).
@@ -155,10 +173,32 @@ mc_params_t identified_params(mc_params_t p, const CommissionFrames& c) {
   return p;
 }
 
+// The electrical offset relative to the index (the count 0 from the mark
+// on, and on average half a count behind the shaft): the angle of the
+// middle of count 0, dir (index + step / 2), times the pole pairs.
+double true_index_offset(const MotorFiles& f, const CommissionSetup& s,
+                         const hal_host::PmsmBoardConfig& bc) {
+  const double step = 2 * kPi / bc.encoder.counts_per_rev;
+  const double th = s.encoder_direction * (bc.encoder.index_angle_rad + 0.5 * step);
+  return std::remainder(f.motor.pole_pairs * th, 2 * kPi);
+}
+
 // The plant's side of the setup, and its sensor offsets once built.
 CommissionSetup plant_setup(const RunContext& ctx) {
   CommissionSetup s = default_commission_setup(*ctx.files);
   s.encoder_offset_rad = ctx.params.get("encoder_offset_rad");
+  // theta_m0_rad is the same power-up angle, mechanical (configure_plant)
+  const double pp = ctx.files->motor.pole_pairs;
+  const double off_dflt = default_commission_setup(*ctx.files).encoder_offset_rad;
+  const double th = ctx.params.get("theta_m0_rad");
+  if (th != off_dflt / pp) {
+    if (s.encoder_offset_rad != off_dflt) {
+      throw UsageError(
+          "theta_m0_rad and encoder_offset_rad both set the rotor's angle at "
+          "power-up: set one");
+    }
+    s.encoder_offset_rad = th * pp;
+  }
   s.encoder_direction = ctx.params.get("encoder_direction") < 0 ? -1 : 1;
   s.adc_offset_a = ctx.params.get("adc_offset_a");
   s.noise_rms_a = ctx.params.get("noise_rms_a");
@@ -175,6 +215,79 @@ void inject_offsets(const CommissionSetup& s, hal_host::PmsmBoard& b) {
   b.inject(inj);
 }
 
+// angle_ref index: the offset commissioning measures must be relative to
+// the index, so the drive finds it first, as a user enables the drive once
+// (its index search at the enable) before `mdtool calibrate`: an enable in
+// CURRENT mode at 0 A, the search, the disable. Returns the search's time.
+double find_index_first(RunContext& ctx, AppRunner& run) {
+  if (run.target().params().angle_ref != MC_DRIVE_ANGLE_REF_INDEX ||
+      run.probe().angle_state == MC_DRIVE_ANGLE_KNOWN) {
+    return 0.0;
+  }
+  if (!run.find_at_enable(MC_CAN_CTRL_CURRENT)) {
+    throw UsageError(
+        "angle_ref index: the encoder offset must be measured relative to the index, and the "
+        "drive searches it only at an enable with angle_find_at_enable 1 (0 here)");
+  }
+  const double t0 = run.board().t_s();
+  run.start(MC_CAN_CTRL_CURRENT, true);
+  (void)run.finish_angle_find();
+  if (run.probe().faults != 0u) {
+    AppWatch watch;
+    throw std::runtime_error("the index search before commissioning failed: " + watch(run.probe()));
+  }
+  run.send(run.cmd().enable(false));
+  const double t1 = run.board().t_s();
+  while (run.probe().mode != MC_DRIVE_MODE_IDLE && run.board().t_s() - t1 < 1.0) run.step();
+  ctx.summary.set("index_search_s", run.board().t_s() - t0);
+  return run.board().t_s() - t0;
+}
+
+// The PARAM_REPLY to opcode op among the frames of a period: its status
+// (and its value's raw bits), or -1 when none.
+int param_reply(const std::vector<mc_hal_can_frame_t>& frames, uint32_t op, uint32_t* p_value) {
+  for (const mc_hal_can_frame_t& f : frames) {
+    if (mc_can_id_cmd(f.id) != MC_CAN_CMD_PARAM_REPLY || f.len < 8u || f.data[0] != op) continue;
+    *p_value = static_cast<uint32_t>(f.data[4]) | (static_cast<uint32_t>(f.data[5]) << 8) |
+               (static_cast<uint32_t>(f.data[6]) << 16) | (static_cast<uint32_t>(f.data[7]) << 24);
+    return f.data[3];
+  }
+  return -1;
+}
+
+// --flash: what commissioning staged applied and saved, as `mdtool
+// calibrate --save` does (PARAM_REQ APPLY, then SAVE; each answered by
+// PARAM_REPLY). A refusal stops the run (exit 1) naming the status.
+void save_to_flash(RunContext& ctx, AppRunner& run, const CommissionFrames& c) {
+  if (!c.staged) {
+    throw std::runtime_error(
+        "--flash: the drive did not stage the results (no parameter "
+        "service): nothing to save");
+  }
+  static const char* const kStatus[] = {"OK",      "UNKNOWN_ID",    "READONLY",      "RANGE",
+                                        "RUNNING", "FAULT",         "INVALID",       "STORE",
+                                        "OPCODE",  "NEEDS_CONFIRM", "NOT_CONFIRMED", "RATE_LIMIT"};
+  for (const uint32_t op : {MC_PARAM_OP_APPLY, MC_PARAM_OP_SAVE}) {
+    const char* name = op == MC_PARAM_OP_APPLY ? "APPLY" : "SAVE";
+    run.send(run.cmd().param_op(op));
+    int st = -1;
+    uint32_t value = 0;
+    const double t0 = run.board().t_s();
+    while (st < 0 && run.board().t_s() - t0 < 1.0) {
+      run.step();
+      st = param_reply(run.sent(), op, &value);
+    }
+    if (st != 0) {
+      throw std::runtime_error(std::string("--flash: PARAM_REQ ") + name +
+                               (st < 0 ? " not answered within 1 s"
+                                       : std::string(" answered ") + kStatus[std::min(st, 11)] +
+                                             " (value " + std::to_string(value) + ")"));
+    }
+    if (op == MC_PARAM_OP_SAVE) ctx.summary.set("cfg_saved_seq", value);
+  }
+  ctx.summary.set("cfg_saves", run.probe().store_saves);
+}
+
 // The commissioning run on the application (see the file comment).
 CommissionFrames run_app_commission(RunContext& ctx, const CommissionSetup& s,
                                     const mc_params_t& p) {
@@ -184,6 +297,7 @@ CommissionFrames run_app_commission(RunContext& ctx, const CommissionSetup& s,
   AppRunner run(*target);
   hal_host::PmsmBoard& board = run.board();
   inject_offsets(s, board);
+  const double t_start = find_index_first(ctx, run);  // the commissioning's time 0
   run.keep_host_alive();
   run.send(run.cmd().commission(MC_COMM_CAN_START, s.i_test_a, 0.0, 0.0));
   const long n = step_count(s.t_max_s, board.period_s());
@@ -192,17 +306,18 @@ CommissionFrames run_app_commission(RunContext& ctx, const CommissionSetup& s,
   CommissionFrames c;
   double id = 0, iq = 0;
   for (long k = 0; k <= n && !c.ended; ++k) {
-    const double t = board.t_s();
+    const double t = board.t_s() - t_start;
     board.true_dq_a(&id, &iq);
     rec.row(t, id, iq, board.state()(2));
     if (k < n) {
       run.step();
-      c.take(run.sent(), board.t_s());
+      c.take(run.sent(), board.t_s() - t_start);
     }
     if ((k & 1023) == 0) ctx.progress.update(t, s.t_max_s);
   }
+  if (c.done && c.ended && ctx.flash != nullptr) save_to_flash(ctx, run, c);
   if (!c.ended) {
-    c.t_end_s = board.t_s();
+    c.t_end_s = board.t_s() - t_start;
     if (c.err == 0u) c.err = MC_COMM_ERR_ABORTED;  // timed out
     c.done = false;
   }
@@ -221,6 +336,8 @@ double verify_step(RunContext& ctx, const CommissionSetup& s, mc_params_t p, uin
   const mc_gains_t& g = e.g;
   const bool sls = law == MC_LAW_SPEED_SENSORLESS;
   const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, nullptr, [&](AppSetup& su) {
+    su.flash = nullptr;  // the identified values, not the flash (see the file comment)
+    su.flash_must_boot = false;
     configure_plant(f, s, su.board);
     if (sls) su.board.theta_m0_rad = s.sensorless_start_theta_e_rad / f.motor.pole_pairs;
   });
@@ -294,10 +411,13 @@ void run_commission_scenario(RunContext& ctx) {
     throw UsageError(f.board.file + ": commissioning needs an encoder (encoder_cpr = 0)");
   }
   const CommissionSetup s = plant_setup(ctx);
-  const mc_params_t p = booted_params(f);
+  const mc_params_t p = booted_params(f, ctx.params);
   hal_host::PmsmBoardConfig bc = build_board_cfg(f);
+  set_board_sensor(f, bc);
   configure_plant(f, s, bc);
-  const double true_off = true_offset(f, s, bc);
+  const double true_off = p.angle_ref == MC_DRIVE_ANGLE_REF_INDEX && bc.encoder.has_index
+                              ? true_index_offset(f, s, bc)
+                              : true_offset(f, s, bc);
   double adc[3];
   set_adc_offsets(s, adc);
   if (f.board.current_sensors != 3) adc[2] = 0.0;
@@ -373,7 +493,7 @@ const Registrar reg_commission(on_app_target(
      {},
      run_commission_scenario,
      commission_params,
-     /*takes_flash=*/false,
+     /*takes_flash=*/true,
      /*motor_optional=*/false,
      /*takes_duration=*/false}));
 

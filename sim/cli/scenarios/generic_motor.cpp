@@ -84,8 +84,13 @@ void run_current_step(RunContext& ctx) {
   plant.motor.j_kgm2 *= 1.0 + ctx.params.get("j_load_factor");
   const std::unique_ptr<AppTarget> target = make_file_target(ctx, plant, p, nullptr);
   AppRunner run(*target);
-  run.start(MC_CAN_CTRL_CURRENT);
+  run.start(MC_CAN_CTRL_CURRENT, true);
   hal_host::PmsmBoard& board = run.board();
+  // The power-up find at enable (the index search or the alignment, when the
+  // table asks for it): the step's time starts after it.
+  const double t_find = run.finish_angle_find();
+  const double t_origin = board.t_s();
+  ctx.summary.set("angle_find_s", t_find);
   const double T = board.period_s();
   const double design = std::log(9.0) / e.g.cur_bw_rad_s;
   // Each step gets 12 design rise times (settled to 0.5 %) plus 2 ms (the
@@ -102,7 +107,7 @@ void run_current_step(RunContext& ctx) {
   std::string stopped;
   AppWatch watch;
   for (long k = 0; k <= n; ++k) {
-    const double t = board.t_s();
+    const double t = board.t_s() - t_origin;
     if (!sent_q && t >= t_iq) {
       run.send(run.cmd().current_ref(0.0, iq_s));
       sent_q = true;
@@ -203,13 +208,18 @@ void run_speed(RunContext& ctx, bool load_step) {
   // load-step: the speed step first, the load once it has settled.
   const double t_load = load_step ? t0 + t_acc + 0.5 * t_set : 0.0;
   const double dur = duration(ctx, load_step ? t_load + t_set : t0 + t_acc + t_set);
-  const std::function<double(double)> load = [tau_l, t_load](double t) {
-    return t >= t_load ? tau_l : 0.0;
+  double t_origin = 0.0;  // the end of the power-up find: the step's time 0
+  const std::function<double(double)> load = [tau_l, t_load, &t_origin](double t) {
+    return t - t_origin >= t_load ? tau_l : 0.0;
   };
   const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, &load);
   AppRunner run(*target);
-  run.start(MC_CAN_CTRL_SPEED);
+  run.start(MC_CAN_CTRL_SPEED, true);
   hal_host::PmsmBoard& board = run.board();
+  // The power-up find at enable (the index search or the alignment, when the
+  // table asks for it): the step's time starts after it.
+  ctx.summary.set("angle_find_s", run.finish_angle_find());
+  t_origin = board.t_s();
   const double T = board.period_s();
   const long n = step_count(dur, T);
   AppRecorder rec{ctx, run, f.motor.pole_pairs, false, csv_every(ctx, n)};
@@ -222,7 +232,7 @@ void run_speed(RunContext& ctx, bool load_step) {
   std::string stopped;
   AppWatch watch;
   for (long k = 0; k <= n; ++k) {
-    const double t = board.t_s();
+    const double t = board.t_s() - t_origin;
     if (!ref_sent && t >= t0) {
       run.send(run.cmd().speed_ref(w_t));
       ref_sent = true;
