@@ -74,13 +74,18 @@ void refuse_foreign(const std::string& file, const mc_params_t& stored, const mc
 }
 
 // The parameters the scenario or the user chose over the files' plain
-// table (its law, fw_enable, a --set gain): written over a stored set.
-std::vector<uint32_t> chosen_over_files(const MotorFiles& f, const mc_params_t& p) {
+// table (its law, fw_enable, a table key given with --set, even at its
+// default): written over a stored set.
+std::vector<uint32_t> chosen_over_files(const MotorFiles& f, const mc_params_t& p,
+                                        const Params& P) {
   const mc_params_t plain = params_from_files(f, Params(app_gain_params(f), {}), p.speed_law);
   std::vector<uint32_t> ids;
   for (const mc_param_info_t& info : mc_param_table) {
     if (info.offset == MC_PARAM_NO_FIELD) continue;
-    if (mc_param_get_raw(&p, &info) != mc_param_get_raw(&plain, &info)) ids.push_back(info.id);
+    const bool set = P.was_set(mc_param_names[&info - mc_param_table]);
+    if (set || mc_param_get_raw(&p, &info) != mc_param_get_raw(&plain, &info)) {
+      ids.push_back(info.id);
+    }
   }
   ids.push_back(MC_PARAM_ID_SPEED_LAW);  // SPEED's law is the scenario's
   return ids;
@@ -122,7 +127,7 @@ std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFi
     ctx.summary.set_text("flash_file", ctx.flash->path());
     s.flash = ctx.flash->hal();
     s.flash_must_boot = true;
-    s.over_stored = chosen_over_files(plant, p);
+    s.over_stored = chosen_over_files(plant, p, ctx.params);
   }
   if (adjust) adjust(s);
   if (ctx.pil == nullptr) {

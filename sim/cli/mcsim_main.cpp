@@ -5,8 +5,11 @@
 //   mcsim describe <scenario>
 //   mcsim run <scenario> --out DIR [--duration S] [--set key=value ...]
 //             [--motor FILE [--board FILE]]   (scenarios for any motor)
-//             [--flash FILE]   (the board's flash: the drive boots from the
-//                              configuration stored there and saves to it)
+//             [--flash FILE]   (the scenarios on the drive application, the
+//                              SIL: the board's flash; the drive boots from
+//                              the configuration stored there, commission and
+//                              can-telemetry save to it; sim/README.md,
+//                              "Power-up")
 //             [--pil]   (the scenarios on the drive application: the board's
 //                       whole image on QEMU's emulated Cortex-M4F instead of
 //                       the SIL; pil_options below)
@@ -56,6 +59,10 @@ void usage(std::FILE* f) {
       "without --pil, bit for bit. What differs from the flashed image is the HAL only\n"
       "(hal/pil: ADC, encoder, faults and CAN over the link, the configuration store in\n"
       "RAM, no watchdog). Slow: hundreds of wall seconds per simulated second.\n"
+      "--flash FILE (the same scenarios, without --pil): the board's flash; the drive\n"
+      "boots from its stored configuration (absent: erased), commission saves what it\n"
+      "identified; a file it cannot boot or another board's is refused. A power-up\n"
+      "elsewhere: --set theta_m0_rad=X; the encoder: --set board.encoder=abi|abi_index.\n"
       "Files:\n"
       "  MCSIM_QEMU          qemu-system-arm         (default: the one the build found)\n"
       "  MCSIM_PIL_ELF       the PIL image            (default: the build's, target mc_pil_m4f)\n"

@@ -63,6 +63,7 @@ Params::Params(const std::vector<ParamSpec>& specs,
       throw UsageError(os.str());
     }
     values_[kv.first] = v;
+    set_.insert(kv.first);
   }
 }
 

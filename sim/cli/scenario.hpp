@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -60,9 +61,12 @@ class Params {
          const std::vector<std::pair<std::string, std::string>>& sets);
   double get(const std::string& key) const;
   const std::map<std::string, double>& values() const { return values_; }
+  /// Whether key was given with --set (even at its default).
+  bool was_set(const std::string& key) const { return set_.count(key) != 0u; }
 
  private:
   std::map<std::string, double> values_;
+  std::set<std::string> set_;
 };
 
 /// Where a scenario's trajectory goes: a header fixed by the first call to

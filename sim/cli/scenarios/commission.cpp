@@ -345,7 +345,8 @@ double verify_step(RunContext& ctx, const CommissionSetup& s, mc_params_t p, uin
   inject_offsets(s, run.board());
   const double w_t = 0.5 * g.speed_rated_eff_rad_s;
   *p_target = w_t;
-  run.start(MC_CAN_CTRL_SPEED);
+  run.start(MC_CAN_CTRL_SPEED, true);
+  (void)run.finish_angle_find();  // angle_ref index: the search first
   run.send(run.cmd().speed_ref(w_t));
   const double wc = sls ? g.sls_wc_rad_s : g.speed_wc_rad_s;
   double t_end = std::abs(w_t) / static_cast<double>(e.p.speed_ramp_rad_s2) + 40.0 / wc + 0.1;

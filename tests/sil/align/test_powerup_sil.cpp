@@ -1,0 +1,231 @@
+// Power-up in the SIL (issue 32 items 1 and 8): commission once with
+// `--flash`, then power the drive up again and again from the same flash
+// with the rotor somewhere else, as a user who calibrates once and then
+// switches the drive off and on. Every run goes through the path of
+// `mcsim run` (prepare_run, execute_run: the files, the --set keys, the
+// flash file), on the D5065 of the motor library on the ODrive v3.6
+// description (sim/motors/odrive-v36-24v.toml names
+// firmware/targets/stm32f405/boards/odrive36_24v).
+//
+// The discriminating runs are in the tests: the same power-ups without the
+// flash (the table's offset 0, not the commissioned one) fail their
+// verdict with an index encoder, and a stored offset used after a
+// power-up elsewhere (abi, angle_ref stored) fails it too: so a pass
+// needs the stored offset, and needs it relative to the index.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "run.hpp"
+#include "scenario.hpp"
+
+namespace mcsim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+const std::string kMotor = std::string(MCSIM_MOTORS_DIR) + "/odrive-d5065.toml";
+const std::string kBoard = std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-24v.toml";
+constexpr int kPolePairs = 7;  // the D5065's
+// The index mark away from where the table's default offset (0) would be
+// right: relative to it the d axis sits at 7 x 2.0 rad el. (1.43 rad).
+const char* const kIndexRad = "2.0";
+constexpr int kPowerUps = 8;
+
+using Sets = std::vector<std::pair<std::string, std::string>>;
+
+struct RunResult {
+  RunOutcome out;
+  std::map<std::string, double> num;
+  std::map<std::string, std::string> txt;
+};
+
+// A run as `mcsim run SCENARIO --motor .. --board .. --set .. [--flash F]`.
+RunResult run(const std::string& scen, const Sets& sets, const std::string& flash = "") {
+  RunResult r;
+  try {
+    const PreparedRun p = prepare_run(scen, kMotor, kBoard, sets, flash);
+    ColumnSink sink;
+    Summary sum;
+    Progress prog(false);
+    r.out = execute_run(p, sink, sum, prog);
+    r.num = sum.numbers();
+    r.txt = sum.texts();
+  } catch (const UsageError& e) {  // prepare_run's refusals: mcsim's exit 2
+    r.out.kind = RunOutcome::Kind::kRefused;
+    r.out.message = e.what();
+  }
+  return r;
+}
+
+std::string tmp(const std::string& name) {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::string dir = ::testing::TempDir() + "/powerup_" + info->name();
+  std::filesystem::create_directories(dir);
+  return dir + "/" + name;
+}
+
+std::string bytes(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// 8 mechanical angles at power-up, fixed seed, anywhere in the turn.
+std::vector<double> power_up_angles() {
+  std::mt19937 gen(32u);
+  std::uniform_real_distribution<double> u(-kPi, kPi);
+  std::vector<double> v;
+  for (int k = 0; k < kPowerUps; ++k) v.push_back(u(gen));
+  return v;
+}
+
+// Commission on the flash file; the verdict is the scenario's (R 2 %, L 5 %,
+// flux 3 %, encoder offset 1 degree el., ...: sim/cli/verdict.cpp).
+void commission(const std::string& flash, const Sets& sets) {
+  const RunResult c = run("commission", sets, flash);
+  ASSERT_EQ(c.out.kind, RunOutcome::Kind::kPass) << c.out.message;
+  EXPECT_EQ(c.txt.at("verdict"), "pass");
+  EXPECT_GE(c.num.at("cfg_saved_seq"), 1.0);  // SAVE answered with a record
+  EXPECT_EQ(c.num.at("cfg_saves"), 1.0);
+  ASSERT_TRUE(std::filesystem::exists(flash));
+}
+
+// abi_index: the commissioned offset is relative to the index (the drive
+// searched it before commissioning); every power-up searches it again at
+// the enable and the sensored speed step then passes its verdict (within
+// 2 % of the target over the steady window, |i_d| below 10 % of rated:
+// the scenario's judge). The search takes at most one turn at the search
+// speed (4 p rad/s el. = 4 rad/s mech.: 1.57 s) plus its current ramp and
+// the slow loop's latency (0.3 s), since the mark is always within a turn
+// forward. The flash is never written by a power-up.
+TEST(AlignPowerUpSil, IndexEncoderPassesTheSpeedStepAfterEveryPowerUp) {
+  const Sets enc = {{"board.encoder", "abi_index"}, {"board.encoder_index_rad", kIndexRad}};
+  const std::string flash = tmp("abi_index.flash");
+  std::filesystem::remove(flash);
+  ASSERT_NO_FATAL_FAILURE(commission(flash, enc));
+  const std::string saved = bytes(flash);
+  const double search_max_s = 2.0 * kPi / 4.0 + 0.3;
+  for (const double th : power_up_angles()) {
+    Sets s = enc;
+    s.emplace_back("theta_m0_rad", std::to_string(th));
+    const RunResult r = run("speed-step", s, flash);
+    EXPECT_EQ(r.out.kind, RunOutcome::Kind::kPass) << "theta_m0 " << th << ": " << r.out.message;
+    EXPECT_EQ(r.txt.at("cfg_boot_status"), "STORED");
+    EXPECT_GT(r.num.at("angle_find_s"), 0.0) << th;  // the search ran
+    EXPECT_LE(r.num.at("angle_find_s"), search_max_s) << th;
+    EXPECT_EQ(bytes(flash), saved) << th;
+    // The control: the same power-up booted without the flash (the
+    // table's offset 0, 1.43 rad el. from the d axis relative to the
+    // index): the step fails its verdict.
+    if (th == power_up_angles().front()) {
+      const RunResult d = run("speed-step", s);
+      EXPECT_EQ(d.out.kind, RunOutcome::Kind::kFailed) << d.out.message;
+    }
+  }
+}
+
+// abi (no index): after a power-up the stored offset is the power-up
+// count's, so with angle_ref align the enable is refused ANGLE_UNKNOWN
+// (nothing run, the flash unchanged), or with angle_find_at_enable 1 the
+// drive aligns first and the step passes its verdict. The control: the
+// same flash used as is (angle_ref stored: the bug of issue 32) at a
+// power-up half an electrical turn from the commissioning's (positive
+// feedback) fails.
+TEST(AlignPowerUpSil, IncrementalEncoderIsRefusedOrAlignsAfterEveryPowerUp) {
+  const std::string flash = tmp("abi.flash");
+  std::filesystem::remove(flash);
+  ASSERT_NO_FATAL_FAILURE(commission(flash, {{"board.encoder", "abi"}, {"angle_ref", "align"}}));
+  const std::string saved = bytes(flash);
+  for (const double th : power_up_angles()) {
+    const Sets s = {{"theta_m0_rad", std::to_string(th)}};
+    const RunResult refused = run("speed-step", s, flash);
+    EXPECT_EQ(refused.out.kind, RunOutcome::Kind::kRefused) << th;
+    EXPECT_NE(refused.out.message.find("ANGLE_UNKNOWN"), std::string::npos) << refused.out.message;
+    Sets a = s;
+    a.emplace_back("angle_find_at_enable", "1");
+    const RunResult aligned = run("speed-step", a, flash);
+    EXPECT_EQ(aligned.out.kind, RunOutcome::Kind::kPass) << th << ": " << aligned.out.message;
+    EXPECT_GT(aligned.num.at("angle_find_s"), 0.0) << th;
+    EXPECT_EQ(bytes(flash), saved) << th;
+  }
+  // commissioned at the default power-up angle, 1.0 rad el. (1.0 / 7 mech.)
+  const double th_half = (1.0 + kPi) / kPolePairs;
+  const RunResult stale = run(
+      "speed-step", {{"theta_m0_rad", std::to_string(th_half)}, {"angle_ref", "stored"}}, flash);
+  EXPECT_EQ(stale.out.kind, RunOutcome::Kind::kFailed) << stale.out.message;
+}
+
+// A flash the drive cannot boot is refused by name before anything runs,
+// and the file is left as it was: random bytes (CORRUPT), a set saved on
+// another board (the ODrive's 48 V description: vbus_v differs), a file of
+// the wrong size (not a flash image).
+TEST(AlignPowerUpSil, CorruptOrForeignFlashIsRefusedAndLeftUnchanged) {
+  const std::string corrupt = tmp("corrupt.flash");
+  {
+    std::mt19937 gen(7u);
+    std::ofstream out(corrupt, std::ios::binary);
+    for (int k = 0; k < 32768; ++k) out.put(static_cast<char>(gen() & 0xFFu));
+  }
+  const std::string before = bytes(corrupt);
+  const RunResult c = run("speed-step", {}, corrupt);
+  EXPECT_EQ(c.out.kind, RunOutcome::Kind::kRefused);
+  EXPECT_NE(c.out.message.find("CORRUPT"), std::string::npos) << c.out.message;
+  EXPECT_EQ(bytes(corrupt), before);
+
+  const std::string other = tmp("odrive36_48v.flash");
+  std::filesystem::remove(other);
+  {
+    const PreparedRun p = prepare_run("commission", kMotor, "odrive36", {}, other);
+    ColumnSink sink;
+    Summary sum;
+    Progress prog(false);
+    ASSERT_EQ(execute_run(p, sink, sum, prog).kind, RunOutcome::Kind::kPass);
+  }
+  const std::string other_bytes = bytes(other);
+  const RunResult f = run("current-step", {}, other);
+  EXPECT_EQ(f.out.kind, RunOutcome::Kind::kRefused);
+  EXPECT_NE(f.out.message.find("another board's: vbus_v"), std::string::npos) << f.out.message;
+  EXPECT_EQ(bytes(other), other_bytes);
+
+  const std::string short_file = tmp("short.flash");
+  { std::ofstream(short_file, std::ios::binary) << "not a flash image"; }
+  const RunResult s = run("speed-step", {}, short_file);
+  EXPECT_EQ(s.out.kind, RunOutcome::Kind::kRefused);
+  EXPECT_EQ(bytes(short_file), "not a flash image");
+}
+
+// An absent file is an erased flash: the table's defaults from the files
+// boot (the same run as without --flash), and nothing is written.
+TEST(AlignPowerUpSil, AbsentFlashBootsTheFilesDefaults) {
+  const std::string flash = tmp("absent.flash");
+  std::filesystem::remove(flash);
+  const RunResult r = run("speed-step", {}, flash);
+  EXPECT_EQ(r.out.kind, RunOutcome::Kind::kPass) << r.out.message;
+  EXPECT_EQ(r.txt.at("cfg_boot_status"), "EMPTY");
+  EXPECT_EQ(r.num.at("omega_final_rad_s"), run("speed-step", {}).num.at("omega_final_rad_s"));
+  EXPECT_FALSE(std::filesystem::exists(flash));
+}
+
+// The sensors the simulator does not run yet are refused by name (issue 32
+// items 5 and 6); an unknown type lists the types.
+TEST(AlignPowerUpSil, SensorsNotAvailableYetAreRefusedByName) {
+  for (const char* type : {"as5047p", "ma732", "hall"}) {
+    const RunResult r = run("speed-step", {{"board.encoder", type}});
+    EXPECT_EQ(r.out.kind, RunOutcome::Kind::kRefused) << type;
+    EXPECT_NE(r.out.message.find("not available in the simulator yet"), std::string::npos)
+        << r.out.message;
+  }
+  const RunResult u = run("speed-step", {{"board.encoder", "resolver"}});
+  EXPECT_EQ(u.out.kind, RunOutcome::Kind::kRefused);
+  EXPECT_NE(u.out.message.find("'abi_index'"), std::string::npos) << u.out.message;
+}
+
+}  // namespace
+}  // namespace mcsim
