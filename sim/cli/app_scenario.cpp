@@ -132,7 +132,7 @@ std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFi
   if (adjust) adjust(s);
   if (ctx.pil == nullptr) {
     std::unique_ptr<AppTarget> t = make_app_target_sil(s);
-    if (s.flash != nullptr && s.flash_must_boot) {
+    if (ctx.flash != nullptr && s.flash != nullptr && s.flash_must_boot) {
       check_flash_boot(*t, ctx.flash->path(), p);
       ctx.summary.set_text("cfg_boot_status", flash_boot_name(t->probe().boot_status));
     }

@@ -249,7 +249,7 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
   const std::string type = r.text("encoder", false);
   b->encoder = type.empty() ? kEncoderAbi : type;
   const toml::node* n = r.maybe("encoder");
-  const int line = n != nullptr ? line_of(*n) : 1;
+  const long line = n != nullptr ? line_of(*n) : 1;
   if (b->encoder == "as5047p" || b->encoder == "ma732" || b->encoder == "hall") {
     fail(r.src("encoder"), line,
          "encoder '" + b->encoder +

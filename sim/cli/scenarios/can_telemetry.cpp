@@ -355,6 +355,10 @@ void run_can_telemetry(RunContext& ctx) {
           s.tm_ext_rate_hz[i] = static_cast<uint16_t>(P.get(kSlotParam[MC_TM_OBSERVER + i]));
         }
         s.flash = ctx.flash != nullptr ? ctx.flash->hal() : nullptr;
+        // its own rule (the file comment): a store it cannot boot boots the
+        // scenario's settings, and the stored values win over --set
+        s.flash_must_boot = false;
+        s.over_stored.clear();
       });
   AppTarget& t = *target;
   const uint32_t boot = t.probe().boot_status;
