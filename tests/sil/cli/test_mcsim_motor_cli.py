@@ -167,6 +167,27 @@ class MotorCli(unittest.TestCase):
         self.assertEqual(p.returncode, 2, p.stderr)
         self.assertIn("speed_rad_s", p.stderr)
 
+    def test_current_step_reports_overshoot_and_settling(self):
+        # The D5065 on the 24 V ODrive at its derived bandwidth (bw T = 0.08):
+        # first order with the delay compensated, under 2 % overshoot (0.9 %
+        # measured), settled within 12 design rise times. At bw T = 0.5 (the
+        # firmware's bound) the loop overshoots 28 %: the verdict names it and
+        # the run exits 1 whatever its rise time.
+        p = run("run", "current-step", "--out", self.out, *d5065())
+        with open(os.path.join(self.out, "current-step.json")) as f:
+            s = json.load(f)
+        self.assertEqual(s["verdict"], "pass")
+        self.assertLess(s["iq_overshoot_pct"], 2.0)
+        self.assertGreater(s["iq_settle_time_s"], 0.0)
+        self.assertLess(s["iq_settle_time_s"], 12 * s["rise_time_designed_s"])
+        p = run("run", "current-step", "--out", self.out, *d5065(), "--set",
+                "current_bw_rad_s=12000", check=False)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        with open(os.path.join(self.out, "current-step.json")) as f:
+            s = json.load(f)
+        self.assertEqual(s["verdict"], "overshoot")
+        self.assertGreater(s["iq_overshoot_pct"], 20.0)
+
     def test_unknown_key_is_refused(self):
         self.assert_usage_error(
             run("run", "current-step", "--out", self.out, *d5065(), "--set", "R_ohm=1",
