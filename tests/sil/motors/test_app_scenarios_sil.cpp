@@ -115,7 +115,7 @@ TEST(AppScenarios, GainKeysAreTheTablesParametersWithTheCDerivedDefaults) {
   EXPECT_EQ(r.p.current_bw_rad_s, static_cast<float>(e.g.cur_bw_rad_s));
   EXPECT_THROW(Params(specs, {{"speed_bw_rad_s", "-1"}}), UsageError);
   EXPECT_THROW(Params(specs, {{"cur_bw_rad_s", "1000"}}), UsageError);
-  // the table's cross check: a bandwidth above 0.5 pwm_hz (12 kHz here)
+  // the table's cross check: a bandwidth above 0.3 pwm_hz (7.2 kHz here)
   try {
     params_from_files(f, Params(specs, {{"current_bw_rad_s", "15000"}}));
     FAIL() << "expected a refusal";
