@@ -15,7 +15,7 @@
 #include "app_cmd.hpp"
 #include "app_params.hpp"
 #include "app_target.hpp"
-#include "drive_setup.hpp"
+#include "plant_from_files.hpp"
 #include "motor_library.hpp"
 
 namespace mcsim {

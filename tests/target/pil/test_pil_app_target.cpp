@@ -42,7 +42,7 @@
 #include <vector>
 
 #include "app_target.hpp"
-#include "drive_setup.hpp"
+#include "plant_from_files.hpp"
 #include "mc_record.hpp"
 #include "motor_file.hpp"
 #include "pil_test_link.hpp"
