@@ -117,7 +117,8 @@ CommissionRun run_app_commission(RunContext& ctx, const CommissionSetup& s, cons
     hal_host::PmsmBoard& board = run.board();
     if (!rec) {
       const long n = step_count(s.t_max_s, board.period_s());
-      rec.reset(new AppRecorder{ctx, run, f.motor.pole_pairs, false, std::max(1L, n / 20000)});
+      rec = std::make_unique<AppRecorder>(
+          AppRecorder{ctx, run, f.motor.pole_pairs, false, std::max(1L, n / 20000)});
       rec->header();
     }
     const double t = board.t_s();

@@ -212,24 +212,24 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s) {
   return run_commission(f, s, commission_booted_params(f), sil_factory(f));
 }
 
-mc_params_t staged_params(mc_params_t p, const mc_comm_result_t& r) {
-  p.r_ohm = r.r_ohm;
-  p.ld_h = r.ld_h;
-  p.lq_h = r.lq_h;
-  p.flux_wb = r.flux_wb;
-  p.pole_pairs = r.pole_pairs;
-  p.encoder_offset_rad = r.encoder_offset_rad;
-  p.encoder_reversed = r.encoder_direction < 0 ? 1u : 0u;
-  p.i_offset_a_a = r.adc_offset_a[0];
-  p.i_offset_b_a = r.adc_offset_a[1];
-  p.i_offset_c_a = r.adc_offset_a[2];
+mc_params_t staged_params(mc_params_t booted, const mc_comm_result_t& r) {
+  booted.r_ohm = r.r_ohm;
+  booted.ld_h = r.ld_h;
+  booted.lq_h = r.lq_h;
+  booted.flux_wb = r.flux_wb;
+  booted.pole_pairs = r.pole_pairs;
+  booted.encoder_offset_rad = r.encoder_offset_rad;
+  booted.encoder_reversed = r.encoder_direction < 0 ? 1u : 0u;
+  booted.i_offset_a_a = r.adc_offset_a[0];
+  booted.i_offset_b_a = r.adc_offset_a[1];
+  booted.i_offset_c_a = r.adc_offset_a[2];
   if ((r.valid & MC_COMM_HAVE_MECH) != 0u) {
-    p.j_kgm2 = r.j_kgm2;
-    p.b_nm_s_rad = r.b_nm_s_rad;
-    p.speed_kp_a_s_rad = 0.0f;  // derived from the identified inertia
-    p.speed_ki_a_rad = 0.0f;
+    booted.j_kgm2 = r.j_kgm2;
+    booted.b_nm_s_rad = r.b_nm_s_rad;
+    booted.speed_kp_a_s_rad = 0.0f;  // derived from the identified inertia
+    booted.speed_ki_a_rad = 0.0f;
   }
-  return p;
+  return booted;
 }
 
 // The sensorless run starts the rotor at sensorless_start_theta_e_rad
@@ -237,20 +237,21 @@ mc_params_t staged_params(mc_params_t p, const mc_comm_result_t& r) {
 // its observer from the flux path's circle fit
 // (mc_ctrl_sls_cfg_t.align_any_angle), so any start angle works
 // (tests/sil/commission SensorlessStartAngle); the encoder is not used.
-double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, mc_params_t p, uint32_t law,
-                         double* p_target, const CommissionTargetFactory& make) {
-  p.speed_law = law;
-  const mc_params_eff_t e = resolve_params(p);
+double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, mc_params_t staged,
+                         uint32_t law, double* p_target_rad_s,
+                         const CommissionTargetFactory& make) {
+  staged.speed_law = law;
+  const mc_params_eff_t e = resolve_params(staged);
   const mc_gains_t& g = e.g;
   const bool sls = law == MC_LAW_SPEED_SENSORLESS;
-  const std::unique_ptr<AppTarget> target = make(p, [&](AppSetup& su) {
+  const std::unique_ptr<AppTarget> target = make(staged, [&](AppSetup& su) {
     configure_plant(f, s, su.board);
     if (sls) su.board.theta_m0_rad = s.sensorless_start_theta_e_rad / f.motor.pole_pairs;
   });
   AppRunner run(*target);
   inject_offsets(s, run.board());
   const double w_t = 0.5 * g.speed_rated_eff_rad_s;
-  *p_target = w_t;
+  *p_target_rad_s = w_t;
   run.start(MC_CAN_CTRL_SPEED);
   run.send(run.cmd().speed_ref(w_t));
   const double wc = sls ? g.sls_wc_rad_s : g.speed_wc_rad_s;
@@ -266,8 +267,8 @@ double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, mc_param
 }
 
 double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, const mc_params_t& staged,
-                         uint32_t law, double* p_target) {
-  return verify_speed_step(f, s, staged, law, p_target, sil_factory(f));
+                         uint32_t law, double* p_target_rad_s) {
+  return verify_speed_step(f, s, staged, law, p_target_rad_s, sil_factory(f));
 }
 
 }  // namespace mcsim

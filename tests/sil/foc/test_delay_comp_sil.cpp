@@ -153,6 +153,7 @@ TEST(DelayCompSilOff, UncompensatedLoopLosesControlAtPointThree) {
   const Result r = run(0.3, 16000.0, false);
   const bool lost = (r.faults != 0u) || !(std::abs(r.iq_ratio - 1.0) <= 0.25) ||
                     !(std::abs(r.id_ratio - 1.0) <= 0.25) || !(r.dev_max_a <= 1.0);
+  RecordProperty("faults", std::to_string(r.faults));
   EXPECT_TRUE(lost) << "faults " << r.faults << ", rise ratios " << r.iq_ratio << " / "
                     << r.id_ratio << ", deviation " << r.dev_max_a << " A";
 }
