@@ -128,7 +128,7 @@ Verdict faulted(uint32_t faults, const std::string& extra) {
 // ------------------------------------------------------------ current-step
 // The design: kp = L bw, ki = R bw make the current loop first order with
 // bandwidth bw, 10-90 % rise ln 9 / bw; with the one-period delay it stays
-// within 25 % of that while bw T <= 0.08 (drive_setup.hpp, issue 16
+// within 25 % of that while bw T <= 0.08 (firmware/app/config/mc_gains.h, issue 16
 // deliverable 5; tests/sil/motors CurrentStepRiseWithin25PercentOfDesign;
 // foc-current-step asks 20 %, tests/sil/foc). Above bw T = 0.08 the design
 // claims no rise time (firmware/kernels/foc/README.md shows how far it
