@@ -13,7 +13,7 @@
 #include "app_cmd.hpp"
 #include "app_params.hpp"
 #include "app_target.hpp"
-#include "drive_setup.hpp"
+#include "plant_from_files.hpp"
 #include "scenario.hpp"
 
 namespace mcsim {
@@ -43,8 +43,9 @@ std::unique_ptr<AppTarget> make_file_target(
 /// at power-up. The board's encoder type (set_board_sensor) on the plant.
 ///
 /// The same on the SIL (tests that build their own run).
-std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
-                                            const std::function<double(double)>* load_nm);
+std::unique_ptr<AppTarget> make_file_target(
+    const MotorFiles& plant, const mc_params_t& p, const std::function<double(double)>* load_nm,
+    const std::function<void(AppSetup&)>& adjust = std::function<void(AppSetup&)>());
 
 /// The board's position sensor on the plant: "abi_index" an index mark at
 /// encoder_index_rad (BoardSpec::encoder).

@@ -128,7 +128,7 @@ Verdict faulted(uint32_t faults, const std::string& extra) {
 // ------------------------------------------------------------ current-step
 // The design: kp = L bw, ki = R bw make the current loop first order with
 // bandwidth bw, 10-90 % rise ln 9 / bw; with the one-period delay it stays
-// within 25 % of that while bw T <= 0.08 (drive_setup.hpp, issue 16
+// within 25 % of that while bw T <= 0.08 (firmware/app/config/mc_gains.h, issue 16
 // deliverable 5; tests/sil/motors CurrentStepRiseWithin25PercentOfDesign;
 // foc-current-step asks 20 %, tests/sil/foc). Above bw T = 0.08 the design
 // claims no rise time (firmware/kernels/foc/README.md shows how far it
@@ -157,9 +157,10 @@ Verdict judge_current_step(const CurrentStepFigures& f) {
   }
   if (!designed) j.note("bw T = " + num(f.bw_t) + " > 0.08: no rise time is designed, not judged");
   // The design is first order (no overshoot); the computation delay adds
-  // about 1 % up to bw T = 0.3 and 14 / 28 % at 0.4 / 0.5 (the D5065 on the
-  // 24 V ODrive, sim/README.md): past 10 % the loop is no longer the
-  // first-order loop the gains were derived for, whatever its rise time.
+  // about 1 % up to bw T = 0.3, the table's bound (14 / 28 % at 0.4 / 0.5:
+  // the D5065 on the 24 V ODrive, sim/README.md). Past 10 % (a drive on a
+  // wrong model) the loop is no longer the first-order loop its gains were
+  // derived for, whatever its rise time.
   if (std::abs(f.iq_step_a) > band_q) {
     j.at_most("overshoot", "q overshoot / step", f.iq_overshoot, f.overshoot_max,
               "a first-order-like loop");
