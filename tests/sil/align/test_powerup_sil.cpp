@@ -7,11 +7,11 @@
 // description (sim/motors/odrive-v36-24v.toml names
 // firmware/targets/stm32f405/boards/odrive36_24v).
 //
-// The discriminating runs are in the tests: the same power-ups without the
-// flash (the table's offset 0, not the commissioned one) fail their
-// verdict with an index encoder, and a stored offset used after a
-// power-up elsewhere (abi, angle_ref stored) fails it too: so a pass
-// needs the stored offset, and needs it relative to the index.
+// The discriminating run is in the test: the stored offset used after a
+// power-up elsewhere (abi, angle_ref stored) fails the verdict, so the
+// refusal or the alignment is what makes the step pass. (The abi_index
+// power-ups passed on the branch before its merge with main; commissioning
+// with an index is refused by name on this head: see the test.)
 #include <gtest/gtest.h>
 
 #include <cmath>
