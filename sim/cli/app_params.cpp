@@ -182,6 +182,7 @@ mc_params_t table_of(const MotorFiles& f, double r_scale, double l_scale, double
   p.i_sense_max_a = static_cast<float>(b.i_sense_max_a);
   p.adc_bits = static_cast<uint32_t>(b.adc_bits);
   p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
+  p.vbus_board_max_v = static_cast<float>(b.bus_limit_v());
   p.slow_loop_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
   return p;
 }

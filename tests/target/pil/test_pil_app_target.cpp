@@ -202,10 +202,12 @@ mcsim::AppSetup setup_for(const std::string& board) {
   s.board = mcsim::build_board_cfg(f);
   s.defaults = params_from_files(f);
   // The bus limits as the board image's defaults take them (board_defaults
-  // in board_stm32f405.c: from the description).
+  // in board_stm32f405.c: from the description; the trip derived from the
+  // board's limit, vbus_board_max_v, which the simulator's table already
+  // holds from the same description).
   const mc_board_desc_t& d = board_desc(board);
   s.defaults.vbus_min_v = d.vbus_min_v;
-  s.defaults.vbus_max_v = d.vbus_max_v;
+  s.defaults.vbus_max_v = 0.0f;
   return s;
 }
 
@@ -221,6 +223,8 @@ void expect_board_image_table(const mc_params_t& p, const std::string& board) {
   EXPECT_EQ(p.encoder_cpr, d.enc_counts_per_rev);
   EXPECT_NEAR(p.i_sense_max_a, d.i_sense_max_a, 1e-6f * d.i_sense_max_a);
   EXPECT_NEAR(p.dead_time_s, static_cast<float>(d.deadtime_ns) * 1e-9f, 1e-12f);
+  EXPECT_EQ(p.vbus_board_max_v, d.vbus_max_v);
+  EXPECT_EQ(p.vbus_v, d.vbus_nominal_v);
 }
 
 // speed_law: the law of SPEED (params.toml speed_law: 0 sensored PI, 1
