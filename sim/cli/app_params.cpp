@@ -309,6 +309,13 @@ mc_params_t params_from_files(const MotorFiles& f, const Params& overrides, uint
   }
   p.speed_law = speed_law;
   (void)resolve_or_refuse(f, p);
+  if (!(p.vbus_v < p.vbus_board_max_v)) {  // else MC_PARAMS_ERR_BOARD, unnamed
+    const BoardSpec& b = f.board;
+    throw UsageError(where(b.at, "vbus_v", b.file) + ": vbus_v " + num(p.vbus_v) +
+                     " V is not below the board's bus limit vbus_board_max_v " +
+                     num(p.vbus_board_max_v) + " V (at " + where(b.at, "vbus_board_max_v", b.file) +
+                     "): the drive's trip and braking thresholds lie between the two");
+  }
   const uint32_t err = mc_params_validate(&p);
   if (err != MC_PARAMS_OK) refuse_law(f, p, err);
   return p;

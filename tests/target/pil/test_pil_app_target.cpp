@@ -87,6 +87,7 @@ mc_params_t params_from_files(const mcsim::MotorFiles& f) {
   p.i_sense_max_a = static_cast<float>(b.i_sense_max_a);
   p.adc_bits = static_cast<uint32_t>(b.adc_bits);
   p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
+  p.vbus_board_max_v = static_cast<float>(b.bus_limit_v());
   return p;
 }
 
