@@ -185,8 +185,8 @@ Sense read_sense(const Desc& d) {
               d.number("sense", "vbus_r_bottom_ohm", 0.0, 1e9, true, "ohm");
   }
   s.vbus_min_v = d.number("sense", "vbus_min_v", 0.0, 1e4, true, "V");
-  s.vbus_max_v = d.number("sense", "vbus_max_v", s.vbus_min_v, 1e4, true, "V (above vbus_min_v)",
-                          &s.at_vmax);
+  s.vbus_max_v =
+      d.number("sense", "vbus_max_v", s.vbus_min_v, 1e4, true, "V (above vbus_min_v)", &s.at_vmax);
   const double half_v = std::min(offset, vref - offset);
   s.i_sense_max_a = (half_v - static_cast<double>(margin) * vref / kAdcCounts) / (gain * shunt);
   if (!(s.i_sense_max_a > 0.0)) {

@@ -107,7 +107,9 @@ struct BoardSpec {
   }
   // The drive's vbus_board_max_v parameter: the board's rating, or what its
   // bus sensor reads (the trip and the braking thresholds stay below it).
-  double bus_limit_v() const { return vbus_board_max_v > 0 ? vbus_board_max_v : vbus_full_scale_v(); }
+  double bus_limit_v() const {
+    return vbus_board_max_v > 0 ? vbus_board_max_v : vbus_full_scale_v();
+  }
 };
 
 /// The files given on the command line, parsed and validated.

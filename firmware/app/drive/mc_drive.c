@@ -463,8 +463,7 @@ static void regen_track(mc_drive_t *d, float vbus_v)
 /* The regenerative-current limit (mc_drive.h): a braking q reference
  * scaled down as the bus (with its lead) rises from vbus_regen_start_v to
  * _end_v. */
-static void regen_limit(mc_drive_t *d, float vbus_meas_v, float omega, float *p_id_a,
-                        float *p_iq_a)
+static void regen_limit(mc_drive_t *d, float vbus_meas_v, float omega, float *p_id_a, float *p_iq_a)
 {
     float k = 1.0f;
     const float lo = d->cfg.vbus_regen_start_v;

@@ -53,9 +53,8 @@ TEST_P(RegenStop, FullSpeedStopBelowTripEnergyBalanced) {
   for (const char* brake : {"on", "off"}) {
     SCOPED_TRACE(std::string("brake=") + brake);
     const bool on = std::string(brake) == "on";
-    const auto r =
-        run("regen-stop", f, on ? testlib::Sets{{"brake", "on"}} : brake_off_sets(GetParam()),
-            brake);
+    const auto r = run("regen-stop", f,
+                       on ? testlib::Sets{{"brake", "on"}} : brake_off_sets(GetParam()), brake);
     EXPECT_EQ(r.at("faults"), 0.0);
     EXPECT_LT(r.at("vbus_peak_v"), r.at("vbus_trip_v"));
     EXPECT_LT(std::abs(r.at("energy_balance_rel_err")), 0.01);

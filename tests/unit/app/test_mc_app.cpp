@@ -810,15 +810,14 @@ TEST_F(McApp, BusLimitAboveTheBoardsRefused)
         uint32_t id;
         float value;
     };
-    for (const Write &w : {Write{MC_PARAM_ID_VBUS_MAX_V, 70.0f},
-                           Write{MC_PARAM_ID_VBUS_BOARD_MAX_V, 80.0f},
-                           Write{MC_PARAM_ID_VBUS_BOARD_MAX_V, 0.0f}}) {
+    for (const Write &w :
+         {Write{MC_PARAM_ID_VBUS_MAX_V, 70.0f}, Write{MC_PARAM_ID_VBUS_BOARD_MAX_V, 80.0f},
+          Write{MC_PARAM_ID_VBUS_BOARD_MAX_V, 0.0f}}) {
         SCOPED_TRACE(testing::Message() << "id " << w.id << " = " << w.value);
         uint32_t v = F32Bits(w.value);
         ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, w.id, &v));
         v = 0u;
-        EXPECT_EQ(MC_PARAM_ERR_INVALID,
-                  mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+        EXPECT_EQ(MC_PARAM_ERR_INVALID, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
         EXPECT_EQ(MC_PARAMS_ERR_BOARD, v);
         EXPECT_EQ(0.0f, app.srv.active.vbus_max_v);
         EXPECT_EQ(57.0f, app.srv.active.vbus_board_max_v);
