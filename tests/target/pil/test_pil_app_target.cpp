@@ -501,10 +501,15 @@ TEST(PilAppTarget, OdriveV36RegenerativeStopBrakesAsTheSil) {
   EXPECT_NEAR(speed_top, kRegenSpeed_rad_s, 0.1 * kRegenSpeed_rad_s);
   EXPECT_GT(duty_b, 0.0);
   EXPECT_GT(braking, 0);
-  // brake_on_v derived (params.toml): vbus_v + 0.2 (vbus_max_v - vbus_v)
-  const double on_v = s.defaults.vbus_v + 0.2 * (s.defaults.vbus_max_v - s.defaults.vbus_v);
+  // brake_on_v derived (params.toml): vbus_v + 0.2 (vbus_max_v - vbus_v),
+  // the trip derived from the board's limit (min(1.5 vbus_v, 56 V))
+  mc_params_eff_t eff{};
+  ASSERT_EQ(mc_params_resolve(&s.defaults, &eff), MC_GAINS_OK);
+  const double trip_v = eff.p.vbus_max_v;
+  EXPECT_EQ(trip_v, static_cast<double>(mc_board_odrive36_desc.vbus_max_v));
+  const double on_v = s.defaults.vbus_v + 0.2 * (trip_v - s.defaults.vbus_v);
   EXPECT_GT(peak_b, on_v);
-  EXPECT_LT(peak_b, static_cast<double>(s.defaults.vbus_max_v));
+  EXPECT_LT(peak_b, trip_v);
   EXPECT_EQ(e.faults, 0u);
   EXPECT_NEAR(e.omega_m_rad_s, 0.0f, 0.05f * kRegenSpeed_rad_s);
   std::printf(
