@@ -77,6 +77,8 @@ const GainField kGainFields[] = {
     {"speed_limit_rad_s", &mc_gains_t::speed_limit_rad_s},
     {"speed_rated_eff_rad_s", &mc_gains_t::speed_rated_eff_rad_s},
     {"pi2d_coupling", &mc_gains_t::pi2d_coupling},
+    {"speed_voltage_rad_s", &mc_gains_t::speed_voltage_rad_s},
+    {"speed_delay_rad_s", &mc_gains_t::speed_delay_rad_s},
 };
 
 // The table row of a gain parameter (kGainNames holds only table names: a

@@ -32,6 +32,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "app_params.hpp"
 #include "app_target.hpp"
 #include "bench.hpp"
 #include "motor_file.hpp"
@@ -138,6 +139,32 @@ int cmd_list() {
   return 0;
 }
 
+// The drive's derived speed limit and what sets it (mc_gains.h,
+// speed_limit_rad_s): the motor's own maximum, the bus voltage, or the
+// current loop's electrical angle per period.
+void print_speed_limit(const mcsim::MotorFiles& f) {
+  const mc_gains_t& g = mcsim::files_params_eff(f).g;
+  const double w = g.speed_limit_rad_s, w_v = 0.9 * g.speed_voltage_rad_s,
+               w_d = 0.9 * g.speed_delay_rad_s;
+  char why[200];
+  if (w == w_d && w_d <= w_v) {
+    std::snprintf(why, sizeof why,
+                  "the current loop: 0.9 x %g rad of electrical angle per PWM period (p = %d, "
+                  "%g Hz; a faster PWM raises it)",
+                  MC_GAINS_WE_T_MAX, f.motor.pole_pairs, f.board.pwm_hz);
+  } else if (w == w_v) {
+    std::snprintf(why, sizeof why,
+                  "the bus voltage: 0.9 x the speed at which rated current needs "
+                  "0.95 vbus / sqrt 3 (vbus %g V)",
+                  f.board.vbus_v);
+  } else {
+    std::snprintf(why, sizeof why, "the motor's speed_max_rad_s");
+  }
+  std::printf("speed limit: %g rad/s (mechanical), set by %s\n", w, why);
+  std::printf("  its bounds: motor %g, bus voltage %g, current loop %g rad/s\n",
+              f.motor.speed_max_rad_s, w_v, w_d);
+}
+
 int cmd_describe(const std::vector<std::string>& args) {
   if (args.empty()) throw mcsim::UsageError("describe takes one scenario name");
   const auto& s = mcsim::need_scenario(args[0]);
@@ -161,8 +188,8 @@ int cmd_describe(const std::vector<std::string>& args) {
   }
   std::printf("--pil: %s\n", s.takes_pil ? "yes (the board's whole image on QEMU: mcsim --help)"
                                          : "no (the scenario does not run the drive application)");
-  std::printf("parameters (--set key=value):\n");
   if (s.motor_params && motor.empty() && !s.motor_optional) {
+    std::printf("parameters (--set key=value):\n");
     std::printf(
         "  (ranges and defaults depend on the motor: describe %s --motor FILE "
         "[--board FILE])\n",
@@ -170,6 +197,8 @@ int cmd_describe(const std::vector<std::string>& args) {
     return 0;
   }
   const auto files = mcsim::motor_files(s, motor, board);
+  if (files) print_speed_limit(*files);
+  std::printf("parameters (--set key=value):\n");
   const std::vector<mcsim::ParamSpec> specs = files ? s.motor_params(*files) : s.params;
   for (const auto& p : specs) {
     std::printf("  %-22s default %-10g [%g, %g] %-8s %s", p.key.c_str(), p.default_value,

@@ -82,6 +82,9 @@
 #ifndef RUN_PERIODS
 #define RUN_PERIODS 2000u /* 100 ms: 100 slow loops, 10 heartbeats */
 #endif
+#ifndef PROFILE_PERIOD
+#define PROFILE_PERIOD 1000u /* the counted period run_isr_profile.py single-steps */
+#endif
 #define PART_CALLS 64u
 #define RX_FRAMES  64u
 #ifndef SLOW_RUNS
@@ -279,10 +282,19 @@ static void send_heartbeat(void)
 
 /* ---- one PWM period ------------------------------------------------------ */
 
-static stat_t g_isr, g_isr_slow, g_slow;
+static stat_t g_isr, g_isr_slow, g_slow, g_profiled;
 
-/* The ADC interrupt, then PendSV if it pended it. */
-static void period(bool counted)
+/* tools/bench/run_isr_profile.py stops here (a breakpoint) and
+ * single-steps the next ADC interrupt; a no-op otherwise, called outside
+ * the counts. */
+__attribute__((noinline)) void bench_profile_mark(void);
+__attribute__((noinline)) void bench_profile_mark(void)
+{
+    __asm volatile("" ::: "memory");
+}
+
+/* The ADC interrupt, then PendSV if it pended it; the interrupt's count. */
+static uint32_t period(bool counted)
 {
     hw_sample(true);
     const uint32_t n = count(ADC_IRQHandler);
@@ -300,6 +312,7 @@ static void period(bool counted)
             stat_add(&g_slow, m);
         }
     }
+    return n;
 }
 
 /* ---- parts on copies of the state ---------------------------------------- */
@@ -539,7 +552,7 @@ static int run(bool sensorless)
         if (sensorless && g_sls.phase != MC_CTRL_SLS_CLOSED) {
             g_sls.phase = MC_CTRL_SLS_CLOSED; /* the closed loop: see the file comment */
         }
-        period(false);
+        (void)period(false);
     }
     const mc_drive_mode_t want = MC_DRIVE_MODE_CTRL; /* every speed law */
     if (D->mode != want) {
@@ -559,7 +572,13 @@ static int run(bool sensorless)
         if (k % 200u == 7u) {
             send_heartbeat();
         }
-        period(true);
+        if (k == PROFILE_PERIOD) {
+            bench_profile_mark();
+            g_profiled = (stat_t){0};
+            stat_add(&g_profiled, period(true));
+        } else {
+            (void)period(true);
+        }
     }
     if (D->mode != want || D->faults != 0u || (sensorless && g_sls.phase != MC_CTRL_SLS_CLOSED)) {
         out_kv("bad_mode", (uint32_t)D->mode);
@@ -570,6 +589,7 @@ static int run(bool sensorless)
     out_stat(name, "isr_slow_due", &g_isr_slow);
     out_stat(name, "slow", &g_slow);
     out_stat(name, "can_rx_heartbeat", &g_rx);
+    out_stat(name, "isr_profiled_period", &g_profiled);
 
     /* Parts, each alone on the state the run left. */
     stat_t s = parts(part_adc, true);
@@ -607,7 +627,7 @@ static int run(bool sensorless)
         if ((k % MC_APP_RX_PER_STEP) == MC_APP_RX_PER_STEP - 1u) {
             /* drain the ring in the periods of one slow loop */
             for (uint32_t j = 0u; j < D->cfg.slow_loop_div; j++) {
-                period(false);
+                (void)period(false);
             }
         }
     }
@@ -627,7 +647,7 @@ static int run(bool sensorless)
             CAN1_RX0_IRQHandler();
         }
         for (uint32_t j = 0u; j < D->cfg.slow_loop_div; j++) {
-            period(true);
+            (void)period(true);
         }
     }
     out_stat(name, "slow_full_ring", &g_slow);

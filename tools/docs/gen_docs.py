@@ -219,6 +219,20 @@ def bench_isr():
     return Src(("bench_isr",), "ctest -R target.bench_isr", fn)
 
 
+def isr_profile():
+    def fn(ctx):
+        out = os.path.join(ctx.workdir(("isr_profile",)), "isr_profile.json")
+        cmd = [sys.executable, os.path.join(ROOT, "tools", "bench", "run_isr_profile.py"),
+               "--qemu", ctx.input("qemu"), "--nm", ctx.input("arm_nm"),
+               "--addr2line", ctx.input("arm_addr2line"), "--out", out]
+        for b in ISR_BOARDS:
+            cmd += ["--elf", f"{b}={ctx.input(f'bench_isr_{b}_elf')}"]
+        run(cmd)
+        with open(out) as fh:
+            return json.load(fh)
+    return Src(("isr_profile",), "ctest -R target.isr_profile", fn)
+
+
 def bench_q31(cpu):
     machine = {"m3": "netduino2", "m4f": "netduinoplus2"}[cpu]
 
@@ -395,6 +409,35 @@ def _mcu_isr_parts(ctx, b):
                   "brake write (brake_enable 1 adds it; not in this run)"], rows,
                  ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---:", "---:",
                   "---:"])
+
+
+ISR_PROFILE_BOARD = "odrive36"
+ISR_PROFILE_MIN = 8  # functions below this in both runs are summed in one row
+
+
+@figure("mcu-isr-profile", [isr_profile()], reason=EXACT_QEMU)
+def _mcu_isr_profile(ctx, p):
+    bd = next(b for b in p["boards"] if b["board"] == ISR_PROFILE_BOARD)
+    runs = list(bd["runs"])
+    per = {}
+    for run in runs:
+        for x in bd["runs"][run]["self"]:
+            per.setdefault((x["function"], x["file"]), {})[run] = x["instr"]
+    order = sorted(per, key=lambda k: (-sum(per[k].values()), k))
+    rows, rest, n_rest = [], dict.fromkeys(runs, 0), 0
+    for k in order:
+        if max(per[k].values()) >= ISR_PROFILE_MIN:
+            rows.append([f"`{k[0]}`", f"`{k[1]}`"] + [str(per[k].get(r, 0)) for r in runs])
+        else:
+            n_rest += 1
+            for r in runs:
+                rest[r] += per[k].get(r, 0)
+    rows.append([f"the other {n_rest} functions (under {ISR_PROFILE_MIN} each)", ""] +
+                [str(rest[r]) for r in runs])
+    rows.append(["**whole interrupt** (one period, stepped)", ""] +
+                [f"**{bd['runs'][r]['instructions']}**" for r in runs])
+    return table(["function (its own instructions, with the header helpers inlined into it)",
+                  "file"] + runs, rows, ["---", "---"] + ["---:"] * len(runs))
 
 
 @figure("mcu-cpu-budget", [bench_isr()], reason=EXACT_QEMU)

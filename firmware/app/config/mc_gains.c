@@ -141,6 +141,8 @@ void mc_gains_fix_none(mc_gains_t *fix)
     fix->speed_limit_rad_s = nan;
     fix->speed_rated_eff_rad_s = nan;
     fix->pi2d_coupling = nan;
+    fix->speed_voltage_rad_s = nan;
+    fix->speed_delay_rad_s = nan;
 }
 
 /* Speed at which current i needs v_max (steady state, id = 0, iq = i):
@@ -211,8 +213,12 @@ uint32_t mc_gains_derive(const mc_gains_motor_t *m, const mc_gains_t *fix, mc_ga
     }
     g->i_rated_eff_a = dmin(m->i_rated_a, g->i_limit_a);
     g->torque_rated_nm = g->kt_nm_a * g->i_rated_eff_a;
+    g->speed_voltage_rad_s = voltage_limited_speed(m, g->i_rated_eff_a, g->v_max_v);
+    g->speed_delay_rad_s = MC_GAINS_WE_T_MAX / (m->pole_pairs * T);
+    /* 0.9 min(a, b) is min(0.9 a, 0.9 b) bit for bit (a product by a
+     * positive constant keeps the order) */
     g->speed_limit_rad_s =
-        dmin(m->speed_max_rad_s, 0.9 * voltage_limited_speed(m, g->i_rated_eff_a, g->v_max_v));
+        dmin(m->speed_max_rad_s, 0.9 * dmin(g->speed_voltage_rad_s, g->speed_delay_rad_s));
     if (!(g->speed_limit_rad_s > 0.0)) {
         err |= MC_GAINS_ERR_SPEED_LIMIT;
     }

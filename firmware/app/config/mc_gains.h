@@ -23,8 +23,17 @@
  *                        inside the sensor's range with margin, and a
  *                        current the bus can push through R at standstill.
  *   i_rated_eff_a      = min(i_rated_a, i_limit_a); torque_rated = kt i_rated_eff.
- *   speed_limit_rad_s  = min(speed_max_rad_s, 0.9 w_v), w_v the speed at
- *                        which rated current (id = 0) needs v_max (R, Lq, ke).
+ *   speed_limit_rad_s  = min(speed_max_rad_s, 0.9 w_v, 0.9 w_d):
+ *                        w_v = speed_voltage_rad_s, the speed at which rated
+ *                        current (id = 0) needs v_max (R, Lq, ke);
+ *                        w_d = speed_delay_rad_s = MC_GAINS_WE_T_MAX / (p T),
+ *                        the speed at which the current loop's electrical
+ *                        angle advances 0.6 rad a period: with its
+ *                        computation-delay compensation (mc_foc.h) the loop
+ *                        keeps its rise time and stability up to there
+ *                        (tests/sil/foc/test_delay_comp_sil.cpp), not beyond.
+ *                        `mcsim describe SCENARIO --motor M --board B` says
+ *                        which of the three sets the limit.
  *   speed_rated_eff    = min(speed_rated_rad_s, speed_limit_rad_s).
  *   enc_pll_bw_rad_s   = min(1000, 0.1 / T): the drive's encoder tracking loop.
  *   speed_wc_rad_s     = min(cur_bw / 10, enc_pll_bw / 4): crossover of the
@@ -152,7 +161,13 @@ typedef struct {
     /* derived only */
     double kt_nm_a, v_max_v, i_rated_eff_a, torque_rated_nm;
     double speed_limit_rad_s, speed_rated_eff_rad_s, pi2d_coupling;
+    double speed_voltage_rad_s, speed_delay_rad_s; /**< the bounds of speed_limit_rad_s */
 } mc_gains_t;
+
+/** The largest electrical angle per period, omega_e T [rad], the current
+ *  loop is designed for (speed_limit_rad_s; 10 samples per electrical
+ *  period). */
+#define MC_GAINS_WE_T_MAX 0.6
 
 /** Square root of x >= 0, correctly rounded (IEEE 754 sqrt, bit for bit):
  *  the gains are computed once, in double, on targets without a libm. */

@@ -214,7 +214,7 @@ typedef struct {
     float j_kgm2; /**< Rotor (plus load) inertia, for observers and derived speed gains. [kg.m^2] */
     float b_nm_s_rad; /**< Viscous friction. [N.m.s/rad] */
     float i_max_a; /**< Largest phase current of the motor; the drive limits every current reference to i_limit = min(i_max_a, i_sense_max_a / 1.25, 0.8 v_max / r_ohm), v_max = 0.95 vbus_v / sqrt 3 (firmware/app/config/mc_gains.c). [A] */
-    float speed_max_rad_s; /**< Largest speed of the motor (mechanical); speed references are limited to min(this, 0.9 of the speed at which rated current needs v_max) (mc_gains.c). [rad/s] */
+    float speed_max_rad_s; /**< Largest speed of the motor (mechanical); speed references are limited to min(this, 0.9 of the speed at which rated current needs v_max, 0.9 of the speed at which the current loop turns 0.6 rad electrical per PWM period) (mc_gains.c; mcsim describe says which). [rad/s] */
     float i_rated_a; /**< Rated (continuous) current; gains and start-up currents are derived from it. [A] */
     float speed_rated_rad_s; /**< Rated speed (mechanical); the observer's critical speed and hand-over derive from it. [rad/s] */
     float vbus_v; /**< Nominal DC-bus voltage. [V] */

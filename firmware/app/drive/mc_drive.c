@@ -335,7 +335,8 @@ static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
     const uint32_t e_count =
         (prod <= 0xFFFFFFFFull) ? (uint32_t)prod % cpr : (uint32_t)(prod % (uint64_t)cpr);
     d->tm.theta_m_rad = (float)count * rad_per_count;
-    d->tm.theta_e_rad = mc_wrap_2pi_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);
+    d->tm.theta_e_rad =
+        mc_wrap_2pi_fast_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);
 
     /* Speed from the encoder tracking loop (observer/mc_enctrack.h): the
      * angle is finite by construction, so the step cannot fail. */
@@ -830,6 +831,38 @@ static void stop_supervise(mc_drive_t *d, float slow_dt, const mc_hal_adc_temp_t
     }
 }
 
+/* The record handed to a law, filled field by field in the drive's own
+ * instance: a record initialised on the stack each step costs a zeroing
+ * of the whole struct first (a memset call, about 50 instructions on the
+ * M4F, tools/bench/run_isr_profile.py). Every field is written here or in
+ * run_ctrl (the shaped speed reference). */
+static void fill_meas(mc_drive_t *d, const mc_hal_adc_sample_t *s, float ic, bool have_enc,
+                      const mc_hal_encoder_sample_t *enc, float iq_applied_prev)
+{
+    mc_drive_meas_t *m = &d->meas;
+    m->ia_a = s->ia_a;
+    m->ib_a = s->ib_a;
+    m->ic_a = ic;
+    m->vbus_v = s->vbus_v;
+    m->have_encoder = have_enc;
+    m->theta_m_rad = d->tm.theta_m_rad;
+    m->theta_e_rad = d->tm.theta_e_rad;
+    m->omega_m_rad_s = d->enc_trk.omega_rad_s;
+    m->enc_count = d->enc_count;
+    m->enc_raw_count = enc->count;
+    m->enc_cpr = enc->counts_per_rev;
+    m->dt_s = d->cfg.foc.dt_s;
+    m->fast_count = d->fast_count;
+    m->have_speed_ref = false;
+    m->omega_ref_rad_s = 0.0f;
+    m->alpha_ref_rad_s2 = 0.0f;
+    m->i_max_a = d->cfg.i_max_a;
+    m->iq_applied_a = iq_applied_prev;
+    m->regen_scale = d->tm.regen_scale;
+    m->v_alpha_prev_v = d->v_ab_prev_v[0];
+    m->v_beta_prev_v = d->v_ab_prev_v[1];
+}
+
 bool mc_drive_fast_step(mc_drive_t *d)
 {
     uint32_t f = 0u;
@@ -895,27 +928,8 @@ bool mc_drive_fast_step(mc_drive_t *d)
     } else if (f == 0u && d->mode == MC_DRIVE_MODE_STOPPING && !d->stop_from_ctrl) {
         f |= stop_current_step(d, &s, ic);
     } else if (f == 0u && (d->mode == MC_DRIVE_MODE_CTRL || d->mode == MC_DRIVE_MODE_STOPPING)) {
-        mc_drive_meas_t m = {
-            .ia_a = s.ia_a,
-            .ib_a = s.ib_a,
-            .ic_a = ic,
-            .vbus_v = s.vbus_v,
-            .have_encoder = have_enc,
-            .theta_m_rad = d->tm.theta_m_rad,
-            .theta_e_rad = d->tm.theta_e_rad,
-            .omega_m_rad_s = d->enc_trk.omega_rad_s,
-            .enc_count = d->enc_count,
-            .enc_raw_count = enc.count,
-            .enc_cpr = enc.counts_per_rev,
-            .dt_s = d->cfg.foc.dt_s,
-            .fast_count = d->fast_count,
-            .i_max_a = d->cfg.i_max_a,
-            .iq_applied_a = iq_applied_prev,
-            .regen_scale = d->tm.regen_scale,
-            .v_alpha_prev_v = d->v_ab_prev_v[0],
-            .v_beta_prev_v = d->v_ab_prev_v[1],
-        };
-        f |= run_ctrl(d, &m, &s, ic);
+        fill_meas(d, &s, ic, have_enc, &enc, iq_applied_prev);
+        f |= run_ctrl(d, &d->meas, &s, ic);
     }
     /* Control deadline: the new duties must be written within one period of
      * the ADC trigger, or the bridge runs on stale ones. */

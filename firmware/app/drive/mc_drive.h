@@ -550,6 +550,7 @@ typedef struct {
     float speed_alpha_rad_s2; /**< its acceleration of the last step [rad/s^2] */
     /* the current loop's last step, handed to the law (mc_drive_meas_t) */
     float v_ab_prev_v[2]; /**< alpha-beta voltage commanded [V] */
+    mc_drive_meas_t meas; /**< the record handed to a CTRL law this step */
     bool index_seen;      /**< the last encoder sample had MC_HAL_ENCODER_FLAG_INDEX */
     bool aligned;         /**< ALIGN: mc_drive_set_encoder_offset since init */
     /* the regenerative limit's lead (see "Regenerative braking") */

@@ -336,6 +336,18 @@ static inline float mc_wrap_pi_fast_f32(float x_rad)
 float mc_wrap_2pi_f32(float x_rad);
 
 /**
+ * mc_wrap_2pi_f32 with the in-range test inline: an input in [0, 2*pi)
+ * (-0 included) is returned as is, which is what mc_wrap_2pi_f32 returns
+ * for it; any other input (NaN too: both comparisons are false) goes to
+ * mc_wrap_2pi_f32. Same results, about 5 instructions when in range
+ * instead of a call and the reduction's set-up.
+ */
+static inline float mc_wrap_2pi_fast_f32(float x_rad)
+{
+    return ((x_rad >= 0.0f) && (x_rad < MC_TWO_PI_F32)) ? x_rad : mc_wrap_2pi_f32(x_rad);
+}
+
+/**
  * x_rad / (2*pi) modulo one turn, as an unsigned Q0.64 fraction of a turn
  * (2^64 = one turn), for every finite float. Integer Payne-Hanek: the 24-bit
  * significand times a 96-bit window of the bits of 2/pi (128-bit product

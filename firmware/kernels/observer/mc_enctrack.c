@@ -63,9 +63,9 @@ uint32_t mc_enctrack_f32_step(mc_enctrack_f32_t *st, float theta_meas_rad)
         return MC_ENCTRACK_ERR_NONE;
     }
     const float dt = st->cfg.dt_s;
-    const float predicted = mc_wrap_2pi_f32(st->theta_rad + st->omega_rad_s * dt);
-    const float e = mc_wrap_pi_f32(theta_meas_rad - predicted);
-    st->theta_rad = mc_wrap_2pi_f32(predicted + st->k1_dt * e);
+    const float predicted = mc_wrap_2pi_fast_f32(st->theta_rad + st->omega_rad_s * dt);
+    const float e = mc_wrap_pi_fast_f32(theta_meas_rad - predicted);
+    st->theta_rad = mc_wrap_2pi_fast_f32(predicted + st->k1_dt * e);
     st->omega_rad_s += st->alpha_rad_s2 * dt + st->k2_dt * e;
     st->alpha_rad_s2 += st->k3_dt * e;
     return MC_ENCTRACK_ERR_NONE;

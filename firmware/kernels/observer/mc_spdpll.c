@@ -77,7 +77,7 @@ uint32_t mc_spdpll_f32_reset(mc_spdpll_f32_t *st, float theta_rad, float omega_r
 static SPDPLL_NOINLINE uint32_t spdpll_store_wrapped(mc_spdpll_f32_t *st, float theta_next,
                                                      uint32_t err)
 {
-    st->theta_rad = mc_wrap_pi_f32(theta_next);
+    st->theta_rad = mc_wrap_pi_fast_f32(theta_next);
     return err;
 }
 
@@ -142,7 +142,7 @@ static SPDPLL_NOINLINE uint32_t spdpll_step_far(mc_spdpll_f32_t *st, float theta
         *p_omega_rad_s = st->omega_rad_s;
         return MC_SPDPLL_ERR_NAN_INPUT;
     }
-    e = mc_wrap_pi_f32(e_raw);
+    e = mc_wrap_pi_fast_f32(e_raw);
     wi = st->omega_i_rad_s + (st->ki_dt_per_s * e);
     if (mc_fabs_f32(wi) > lim) {
         err = MC_SPDPLL_ERR_SAT;

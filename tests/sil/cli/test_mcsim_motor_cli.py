@@ -141,6 +141,32 @@ class MotorCli(unittest.TestCase):
         self.assert_usage_error(p, ["mcsim: --set board.i_sense_max_a=1: no safe gains: the usable",
                                     f"65 A at {at['i_max_a']}"])
 
+    def test_describe_says_what_sets_the_speed_limit(self):
+        # The U8-class outrunner (21 pole pairs) on the ODrive v3.6 at 24 kHz:
+        # the bus voltage sets the limit. On a board at 8 kHz the current
+        # loop's 0.6 rad of electrical angle per period comes first:
+        # 0.9 x 0.6 x 8000 / 21 = 205.714 rad/s (printed to 6 digits), and the
+        # speed step's target range stops there.
+        u8 = lib("u8-class-kv100")
+        p = run("describe", "speed-step", "--motor", u8, "--board", "odrive36")
+        self.assertIn("speed limit: 363.82 rad/s (mechanical), set by the bus voltage", p.stdout)
+        board = os.path.join(self.out, "slow-pwm.toml")
+        with open(board, "w") as f:
+            f.write('[board]\nname = "slow-pwm-48V-8kHz"\nsource = "test board"\n'
+                    "vbus_v = 48.0\npwm_hz = 8000.0\ndead_time_s = 1.0e-7\n"
+                    "current_sensors = 3\ni_sense_max_a = 60.0\nadc_bits = 12\n"
+                    "encoder_cpr = 8192\n")
+        p = run("describe", "speed-step", "--motor", u8, "--board", board)
+        self.assertIn("speed limit: 205.714 rad/s (mechanical), set by the current loop: "
+                      "0.9 x 0.6 rad of electrical angle per PWM period (p = 21, 8000 Hz", p.stdout)
+        self.assertIn("speed_rad_s            default 102.857    [-205.714, 205.714]", p.stdout)
+        out = os.path.join(self.out, "run")
+        os.mkdir(out)
+        p = run("run", "speed-step", "--out", out, "--motor", u8, "--board", board,
+                "--set", "speed_rad_s=250", check=False)
+        self.assertEqual(p.returncode, 2, p.stderr)
+        self.assertIn("speed_rad_s", p.stderr)
+
     def test_unknown_key_is_refused(self):
         self.assert_usage_error(
             run("run", "current-step", "--out", self.out, *d5065(), "--set", "R_ohm=1",

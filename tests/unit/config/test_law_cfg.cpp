@@ -1,7 +1,7 @@
 // The laws' gains in C (firmware/app/config/mc_gains.c, mc_law_cfg.c): the
 // correctly rounded square root the derivation uses on targets without a
 // libm, the gains of the parameter table's defaults, and the named refusals.
-// The simulator's scenarios call the same functions (sim/cli/drive_setup.cpp),
+// The simulator's scenarios call the same functions (sim/cli/app_params.cpp),
 // so there is no second derivation to compare with.
 #include <gtest/gtest.h>
 
@@ -180,6 +180,48 @@ TEST(LawCfg, RefusalsAreNamed)
     mc_gains_t g{};
     EXPECT_EQ(mc_gains_derive(&m, nullptr, &g), MC_GAINS_ERR_VALUE);
     EXPECT_EQ(mc_gains_derive(nullptr, nullptr, &g), MC_GAINS_ERR_VALUE);
+}
+
+// The derived speed limit stops below omega_e T = 0.6 rad (the current loop's
+// design bound with its delay compensation) where that comes before the bus
+// voltage: a 21-pole-pair U8-class outrunner (sim/motors/u8-class-kv100.toml)
+// at 8 kHz and 48 V. Where the voltage binds (24 kHz) the limit is 0.9 of the
+// voltage-limited speed bit for bit, as before the delay bound existed.
+TEST(GainsDerive, SpeedLimitStopsBelowTheCurrentLoopsAnglePerPeriod)
+{
+    mc_gains_motor_t m{};
+    m.r_ohm = 0.13;
+    m.ld_h = 80.0e-6;
+    m.lq_h = 80.0e-6;
+    m.flux_wb = 2.63e-3;
+    m.pole_pairs = 21.0;
+    m.j_kgm2 = 2.0e-4;
+    m.b_nm_s_rad = 1.0e-5;
+    m.i_max_a = 30.0;
+    m.i_rated_a = 15.0;
+    m.speed_max_rad_s = 560.0;
+    m.speed_rated_rad_s = 450.0;
+    m.vbus_v = 48.0;
+    m.pwm_hz = 8000.0;
+    m.dead_time_s = 1.0e-7;
+    m.i_sense_max_a = 60.0;
+    m.delay_periods = 1.0;
+    mc_gains_t g{};
+    ASSERT_EQ(mc_gains_derive(&m, nullptr, &g), 0u);
+    // 0.9 x 0.6 rad / (21 x 125 us) = 205.714 rad/s; 1e-12 relative: the
+    // double rounding of four operations
+    const double w_d = 0.9 * 0.6 * 8000.0 / 21.0;
+    EXPECT_NEAR(g.speed_limit_rad_s, w_d, 1e-12 * w_d);
+    EXPECT_NEAR(g.speed_delay_rad_s, w_d / 0.9, 1e-12 * w_d);
+    EXPECT_GT(0.9 * g.speed_voltage_rad_s, g.speed_limit_rad_s) << "the voltage must not bind";
+    EXPECT_LE(g.speed_rated_eff_rad_s, g.speed_limit_rad_s);
+    // omega_e T at the limit
+    EXPECT_LE(g.speed_limit_rad_s * m.pole_pairs / m.pwm_hz, MC_GAINS_WE_T_MAX);
+
+    m.pwm_hz = 24000.0;
+    ASSERT_EQ(mc_gains_derive(&m, nullptr, &g), 0u);
+    EXPECT_LT(g.speed_voltage_rad_s, g.speed_delay_rad_s);
+    EXPECT_EQ(g.speed_limit_rad_s, 0.9 * g.speed_voltage_rad_s); // bit for bit
 }
 
 } // namespace
