@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "drive_setup.hpp"
+#include "plant_from_files.hpp"
 extern "C" {
 #include "config/mc_law_cfg.h"
 }

@@ -61,7 +61,7 @@ std::string params_err_names(uint32_t bits);
 std::string law_err_names(uint32_t bits);
 
 /// The motor, board and every gain of the booted table (mc_params_resolve:
-/// the C derivation) into the summary, under the keys record_setup writes.
+/// the C derivation) into the summary (motor.*, board.*, gain.*, param.*).
 void record_app_setup(const MotorFiles& f, const mc_params_t& p, Summary& s);
 
 /// The resolved table (its gains and limits), for a scenario's timing.

@@ -13,13 +13,7 @@ AppSetup file_setup(const MotorFiles& plant, const mc_params_t& p,
                     const std::function<double(double)>* load_nm) {
   AppSetup s;
   s.board = build_board_cfg(plant);
-  if (load_nm != nullptr && *load_nm) {
-    s.board.motor.load.kind = LoadKind::kFunction;
-    s.board.motor.load.fn = [](double t, double, double, const void* ctx) {
-      return (*static_cast<const std::function<double(double)>*>(ctx))(t);
-    };
-    s.board.motor.load.fn_ctx = load_nm;
-  }
+  attach_load(s.board, load_nm);
   s.defaults = p;
   return s;
 }
@@ -27,8 +21,11 @@ AppSetup file_setup(const MotorFiles& plant, const mc_params_t& p,
 }  // namespace
 
 std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
-                                            const std::function<double(double)>* load_nm) {
-  return make_app_target_sil(file_setup(plant, p, load_nm));
+                                            const std::function<double(double)>* load_nm,
+                                            const std::function<void(AppSetup&)>& adjust) {
+  AppSetup s = file_setup(plant, p, load_nm);
+  if (adjust) adjust(s);
+  return make_app_target_sil(s);
 }
 
 std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFiles& plant,

@@ -13,7 +13,7 @@
 #include "app_cmd.hpp"
 #include "app_params.hpp"
 #include "app_target.hpp"
-#include "drive_setup.hpp"
+#include "plant_from_files.hpp"
 #include "scenario.hpp"
 
 namespace mcsim {
@@ -31,8 +31,9 @@ std::unique_ptr<AppTarget> make_file_target(
     const std::function<double(double)>* load_nm,
     const std::function<void(AppSetup&)>& adjust = std::function<void(AppSetup&)>());
 /// The same on the SIL (tests that build their own run).
-std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
-                                            const std::function<double(double)>* load_nm);
+std::unique_ptr<AppTarget> make_file_target(
+    const MotorFiles& plant, const mc_params_t& p, const std::function<double(double)>* load_nm,
+    const std::function<void(AppSetup&)>& adjust = std::function<void(AppSetup&)>());
 
 /// The scenarios' CSV: t, the true dq currents, the references (the
 /// application's probe), the true speed and electrical angle, the observer's

@@ -82,6 +82,8 @@ struct CurrentStepFigures {
   double t_id_step_s = 0, duration_s = 0;       // the d step, the run's end
   double bw_t = 0;                              // the design bandwidth times the PWM period
   double rise_tol = 0.25;                       // the rise's allowed distance from the design
+  double iq_overshoot = 0, id_overshoot = 0;    // past the step, fraction of it
+  double overshoot_max = 0.10;                  // first-order-like (the verdict's reason)
 };
 Verdict judge_current_step(const CurrentStepFigures& f);
 

@@ -428,7 +428,8 @@ static int sls_set_ref(void *ctx, float ref)
 }
 
 /* The law from the board's defaults (the paper-002 motor), gains by the
- * simulator's rules (sim/cli/drive_setup.cpp); the divergence monitor wide
+ * table's derivation (mc_params_resolve, as the image and the simulator
+ * derive them: firmware/app/config/mc_gains.h); the divergence monitor wide
  * open, since the bench has no plant (the observer sees synthetic currents). */
 static uint32_t sls_setup(const mc_params_t *raw)
 {

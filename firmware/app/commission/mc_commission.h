@@ -209,7 +209,7 @@ static inline bool mc_comm_done(const mc_comm_t *c)
  * Check the result and write it into the drive configuration: motor
  * values into foc (r, ld, lq, flux), current PI gains re-derived with
  * mc_foc_f32_gains_from_bandwidth at cur_bw_rad_s (the formula of
- * sim/cli/drive_setup.cpp), pole pairs, encoder offset and direction,
+ * mc_params_to_drive_cfg), pole pairs, encoder offset and direction,
  * current offsets added. Returns MC_COMM_ERR_RANGE (and changes nothing)
  * for an incomplete or implausible result.
  */

@@ -5,8 +5,9 @@
  *        (paper 000) and the position cascade, built from the gains of
  *        mc_gains_derive. The one place their formulas live: the MCU images
  *        and the SIL's can-telemetry scenario build them from the parameter
- *        table (mc_law_cfg_from_params), the simulator's motor scenarios
- *        from the motor and board files (sim/cli/drive_setup.cpp).
+ *        table (mc_law_cfg_from_params), and so does the simulator's drive
+ *        application, booted from the motor and board files' table
+ *        (sim/cli/app_params.hpp).
  *
  * SPEED-mode law (parameter speed_law, MC_LAW_SPEED_*): the sensored PI of
  * the application, the sensorless law, or PI2D. POSITION mode runs the

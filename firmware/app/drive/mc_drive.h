@@ -341,10 +341,10 @@ typedef struct {
     float vbus_min_v;         /**< under-voltage trip [V] */
     float vbus_max_v;         /**< over-voltage trip [V] */
     /* Optional supervision: a value of 0 disables that check (documented as
-     * a choice of the integrator, never a default to forget: the SIL's
-     * configurations (sim/cli/drive_setup.cpp) set them; the STM32F405
-     * image's example configuration (board_stm32f405.c) sets none yet, so
-     * there they are off). */
+     * a choice of the integrator, never a default to forget: the parameter
+     * table sets each from its parameter, a default or a derivation each
+     * (mc_params_to_drive_cfg: the one builder of the images and the
+     * simulator). */
     float omega_max_rad_s;    /**< over-speed trip, mechanical [rad/s]; also bounds
                                      the plausible encoder step (2x margin) */
     float temp_max_c;         /**< over-temperature trip for power stage and motor [deg C]:

@@ -36,6 +36,11 @@
 // Summary: "true", "identified", "error" as before the move, duration_s
 // (when the last result arrived), verify.* (the final speed error of each
 // step as a fraction of its target).
+//
+// The run itself (START, the keep-alive, the frames, the staging, the speed
+// steps) is generic_commission.cpp's, which the SIL tests of
+// tests/sil/commission run too; this file adds the parameters, the CSV and
+// the summary.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -57,52 +62,6 @@ namespace mcsim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// What the host learns from the application's commissioning frames.
-struct CommissionFrames {
-  bool ended = false;  // DONE with every result, or FAILED
-  bool done = false;
-  uint32_t err = 0, valid = 0, step = 0;
-  double t_end_s = 0;
-  std::array<float, MC_COMM_CAN_ITEM_COUNT> value{};
-  uint32_t have = 0;  // bit per item received
-  // COMMISSION_STATUS and COMMISSION_RESULT among the frames of a period.
-  void take(const std::vector<mc_hal_can_frame_t>& frames, double t);
-};
-
-void CommissionFrames::take(const std::vector<mc_hal_can_frame_t>& frames, double t) {
-  for (const mc_hal_can_frame_t& f : frames) {
-    const uint32_t cmd = mc_can_id_cmd(f.id);
-    if (cmd == MC_CAN_CMD_COMMISSION_RESULT && f.len >= 8u) {
-      // the value is the float's bits, little-endian (DBC: 32|32@1+)
-      const uint32_t bits =
-          static_cast<uint32_t>(f.data[4]) | (static_cast<uint32_t>(f.data[5]) << 8) |
-          (static_cast<uint32_t>(f.data[6]) << 16) | (static_cast<uint32_t>(f.data[7]) << 24);
-      const uint32_t item = f.data[0];
-      if (item < MC_COMM_CAN_ITEM_COUNT) {
-        std::memcpy(&value[item], &bits, sizeof bits);
-        have |= 1u << item;
-      }
-    } else if (cmd == MC_CAN_CMD_COMMISSION_STATUS) {
-      uint32_t msg = 0;
-      float v[MC_CAN_NSIG_MAX] = {0};
-      if (mc_can_proto_unpack(&f, &msg, v, MC_CAN_NSIG_MAX) != MC_CAN_ERR_NONE) continue;
-      step = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_STEP]);
-      err = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_ERROR]);
-      valid = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_VALID]);
-      done = step == MC_COMM_STEP_DONE;
-      if (step == MC_COMM_STEP_FAILED) {
-        ended = true;
-        t_end_s = t;
-      }
-    }
-  }
-  constexpr uint32_t kAll = (1u << MC_COMM_CAN_ITEM_COUNT) - 1u;
-  if (done && have == kAll && !ended) {
-    ended = true;
-    t_end_s = t;
-  }
-}
 
 std::vector<ParamSpec> commission_params(const MotorFiles& f) {
   const CommissionSetup d = default_commission_setup(f);
@@ -128,33 +87,6 @@ std::vector<ParamSpec> commission_params(const MotorFiles& f) {
   };
 }
 
-// The table the application boots (see the file comment).
-mc_params_t booted_params(const MotorFiles& f) {
-  return params_from_files(f, Params(app_gain_params(f), {}), MC_LAW_SPEED_PI);
-}
-
-// The booted table with what commissioning stages (mc_comm_can.c, stage()).
-mc_params_t identified_params(mc_params_t p, const CommissionFrames& c) {
-  const auto& v = c.value;
-  p.r_ohm = v[MC_COMM_CAN_ITEM_R_OHM];
-  p.ld_h = v[MC_COMM_CAN_ITEM_LD_H];
-  p.lq_h = v[MC_COMM_CAN_ITEM_LQ_H];
-  p.flux_wb = v[MC_COMM_CAN_ITEM_FLUX_WB];
-  p.pole_pairs = static_cast<uint32_t>(std::lround(v[MC_COMM_CAN_ITEM_POLE_PAIRS]));
-  p.encoder_offset_rad = v[MC_COMM_CAN_ITEM_ENCODER_OFFSET_RAD];
-  p.encoder_reversed = v[MC_COMM_CAN_ITEM_ENCODER_DIRECTION] < 0.0f ? 1u : 0u;
-  p.i_offset_a_a = v[MC_COMM_CAN_ITEM_ADC_OFFSET_A_A];
-  p.i_offset_b_a = v[MC_COMM_CAN_ITEM_ADC_OFFSET_B_A];
-  p.i_offset_c_a = v[MC_COMM_CAN_ITEM_ADC_OFFSET_C_A];
-  if ((c.valid & MC_COMM_HAVE_MECH) != 0u) {
-    p.j_kgm2 = v[MC_COMM_CAN_ITEM_J_KGM2];
-    p.b_nm_s_rad = v[MC_COMM_CAN_ITEM_B_NM_S_RAD];
-    p.speed_kp_a_s_rad = 0.0f;  // derived from the identified inertia
-    p.speed_ki_a_rad = 0.0f;
-  }
-  return p;
-}
-
 // The plant's side of the setup, and its sensor offsets once built.
 CommissionSetup plant_setup(const RunContext& ctx) {
   CommissionSetup s = default_commission_setup(*ctx.files);
@@ -169,87 +101,46 @@ CommissionSetup plant_setup(const RunContext& ctx) {
   return s;
 }
 
-void inject_offsets(const CommissionSetup& s, hal_host::PmsmBoard& b) {
-  hal_host::PmsmBoard::Injection inj;
-  set_adc_offsets(s, inj.offset_a);
-  b.inject(inj);
+// The run's target: the files' plant, the SIL or with --pil the image.
+CommissionTargetFactory target_factory(RunContext& ctx) {
+  return [&ctx](const mc_params_t& p, const std::function<void(AppSetup&)>& adjust) {
+    return make_file_target(ctx, *ctx.files, p, nullptr, adjust);
+  };
 }
 
-// The commissioning run on the application (see the file comment).
-CommissionFrames run_app_commission(RunContext& ctx, const CommissionSetup& s,
-                                    const mc_params_t& p) {
+// The commissioning run on the application (generic_commission.hpp), its
+// CSV rows and progress.
+CommissionRun run_app_commission(RunContext& ctx, const CommissionSetup& s, const mc_params_t& p) {
   const MotorFiles& f = *ctx.files;
-  const std::unique_ptr<AppTarget> target =
-      make_file_target(ctx, f, p, nullptr, [&](AppSetup& su) { configure_plant(f, s, su.board); });
-  AppRunner run(*target);
-  hal_host::PmsmBoard& board = run.board();
-  inject_offsets(s, board);
-  run.keep_host_alive();
-  run.send(run.cmd().commission(MC_COMM_CAN_START, s.i_test_a, 0.0, 0.0));
-  const long n = step_count(s.t_max_s, board.period_s());
-  AppRecorder rec{ctx, run, f.motor.pole_pairs, false, std::max(1L, n / 20000)};
-  rec.header();
-  CommissionFrames c;
-  double id = 0, iq = 0;
-  for (long k = 0; k <= n && !c.ended; ++k) {
-    const double t = board.t_s();
-    board.true_dq_a(&id, &iq);
-    rec.row(t, id, iq, board.state()(2));
-    if (k < n) {
-      run.step();
-      c.take(run.sent(), board.t_s());
+  std::unique_ptr<AppRecorder> rec;
+  const CommissionObserver observe = [&](AppRunner& run, long k) {
+    hal_host::PmsmBoard& board = run.board();
+    if (!rec) {
+      const long n = step_count(s.t_max_s, board.period_s());
+      rec = std::make_unique<AppRecorder>(
+          AppRecorder{ctx, run, f.motor.pole_pairs, false, std::max(1L, n / 20000)});
+      rec->header();
     }
+    const double t = board.t_s();
+    double id = 0, iq = 0;
+    board.true_dq_a(&id, &iq);
+    rec->row(t, id, iq, board.state()(2));
     if ((k & 1023) == 0) ctx.progress.update(t, s.t_max_s);
-  }
-  if (!c.ended) {
-    c.t_end_s = board.t_s();
-    if (c.err == 0u) c.err = MC_COMM_ERR_ABORTED;  // timed out
-    c.done = false;
-  }
-  ctx.summary.set("commission_faults", run.probe().faults);
-  ctx.summary.set("app_tx_frames", static_cast<double>(run.frames_sent()));
-  return c;
+  };
+  const CommissionRun r = run_commission(f, s, p, target_factory(ctx), observe);
+  ctx.summary.set("commission_faults", r.drive_faults);
+  ctx.summary.set("app_tx_frames", static_cast<double>(r.tx_frames));
+  return r;
 }
 
-// A speed step on the rebooted drive (see the file comment): the final
-// speed error as a fraction of the target, NaN when the drive stopped.
-double verify_step(RunContext& ctx, const CommissionSetup& s, mc_params_t p, uint32_t law,
-                   double* p_target) {
-  const MotorFiles& f = *ctx.files;
-  p.speed_law = law;
-  const mc_params_eff_t e = resolve_params(p);
-  const mc_gains_t& g = e.g;
-  const bool sls = law == MC_LAW_SPEED_SENSORLESS;
-  const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, nullptr, [&](AppSetup& su) {
-    configure_plant(f, s, su.board);
-    if (sls) su.board.theta_m0_rad = s.sensorless_start_theta_e_rad / f.motor.pole_pairs;
-  });
-  AppRunner run(*target);
-  inject_offsets(s, run.board());
-  const double w_t = 0.5 * g.speed_rated_eff_rad_s;
-  *p_target = w_t;
-  run.start(MC_CAN_CTRL_SPEED);
-  run.send(run.cmd().speed_ref(w_t));
-  const double wc = sls ? g.sls_wc_rad_s : g.speed_wc_rad_s;
-  double t_end = std::abs(w_t) / static_cast<double>(e.p.speed_ramp_rad_s2) + 40.0 / wc + 0.1;
-  if (sls) t_end += g.align_time_s + g.handover_rad_s / g.if_accel_rad_s2 + 0.1;
-  const long n = step_count(t_end, run.board().period_s());
-  AppWatch watch;
-  for (long k = 0; k < n; ++k) {
-    run.step();
-    if (!watch(run.probe()).empty()) return std::nan("");
-  }
-  return std::abs(run.board().state()(2) - w_t) / std::abs(w_t);
-}
-
-// verify=1: both laws on the identified values (see the file comment).
+// verify=1: both laws on the staged table (see the file comment).
 void run_verify(RunContext& ctx, const CommissionSetup& s, const mc_params_t& p,
                 CommissionFigures& fig) {
   double w = 0;
   const auto verify = [&](uint32_t law, const char* name) {
     const std::string key = std::string("verify.") + name;
     try {
-      const double e = verify_step(ctx, s, p, law, &w);
+      const double e = verify_speed_step(*ctx.files, s, p, law, &w, target_factory(ctx));
       ctx.summary.set(key + "_speed_err_frac", e);
       ctx.summary.set(key + "_faulted", std::isnan(e) ? 1.0 : 0.0);
     } catch (const UsageError& e) {
@@ -294,33 +185,26 @@ void run_commission_scenario(RunContext& ctx) {
     throw UsageError(f.board.file + ": commissioning needs an encoder (encoder_cpr = 0)");
   }
   const CommissionSetup s = plant_setup(ctx);
-  const mc_params_t p = booted_params(f);
-  hal_host::PmsmBoardConfig bc = build_board_cfg(f);
-  configure_plant(f, s, bc);
-  const double true_off = true_offset(f, s, bc);
-  double adc[3];
-  set_adc_offsets(s, adc);
-  if (f.board.current_sensors != 3) adc[2] = 0.0;
-
-  const CommissionFrames c = run_app_commission(ctx, s, p);
-  const auto& v = c.value;
-  ctx.summary.set("duration_s", c.t_end_s);
+  const mc_params_t p = commission_booted_params(f);
+  const CommissionRun c = run_app_commission(ctx, s, p);
+  const double true_off = c.true_encoder_offset_rad;
+  const double* adc = c.true_adc_offset_a;
+  ctx.summary.set("duration_s", c.duration_s);
   ctx.summary.set("error_bits", c.err);
   ctx.summary.set_text("fault", c.err ? commission_error_names(c.err) : "");
   ctx.summary.set_text("motor", f.motor.name);
   ctx.summary.set_text("board", f.board.name);
   record_truth(ctx, s, true_off, adc);
   CommissionFigures fig;
-  fig.duration_s = c.t_end_s;
+  fig.duration_s = c.duration_s;
   fig.error_names = commission_error_names(c.err);
   if (!c.done) return write_verdict(ctx.summary, judge_commission(fig));
-  const double r = v[MC_COMM_CAN_ITEM_R_OHM], ld = v[MC_COMM_CAN_ITEM_LD_H];
-  const double lq = v[MC_COMM_CAN_ITEM_LQ_H], flux = v[MC_COMM_CAN_ITEM_FLUX_WB];
-  const double pp = v[MC_COMM_CAN_ITEM_POLE_PAIRS];
-  const double off = v[MC_COMM_CAN_ITEM_ENCODER_OFFSET_RAD];
-  const double dir = v[MC_COMM_CAN_ITEM_ENCODER_DIRECTION];
-  const double adc_id[3] = {v[MC_COMM_CAN_ITEM_ADC_OFFSET_A_A], v[MC_COMM_CAN_ITEM_ADC_OFFSET_B_A],
-                            v[MC_COMM_CAN_ITEM_ADC_OFFSET_C_A]};
+  const mc_comm_result_t& v = c.res;
+  const double r = v.r_ohm, ld = v.ld_h, lq = v.lq_h, flux = v.flux_wb;
+  const double pp = v.pole_pairs;
+  const double off = v.encoder_offset_rad;
+  const double dir = v.encoder_direction;
+  const double adc_id[3] = {v.adc_offset_a[0], v.adc_offset_a[1], v.adc_offset_a[2]};
   std::map<std::string, double> id = {{"r_ohm", r},
                                       {"ld_h", ld},
                                       {"lq_h", lq},
@@ -332,9 +216,9 @@ void run_commission_scenario(RunContext& ctx) {
                                       {"adc_offset_b_a", adc_id[1]},
                                       {"adc_offset_c_a", adc_id[2]},
                                       {"saliency", lq / ld}};
-  if ((c.valid & MC_COMM_HAVE_MECH) != 0u) {
-    id["j_kgm2"] = v[MC_COMM_CAN_ITEM_J_KGM2];
-    id["b_nm_s_rad"] = v[MC_COMM_CAN_ITEM_B_NM_S_RAD];
+  if ((v.valid & MC_COMM_HAVE_MECH) != 0u) {
+    id["j_kgm2"] = v.j_kgm2;
+    id["b_nm_s_rad"] = v.b_nm_s_rad;
   }
   ctx.summary.set_object("identified", id);
   const double e_off = std::remainder(off - true_off, 2 * kPi);
@@ -350,7 +234,7 @@ void run_commission_scenario(RunContext& ctx) {
                                    {"direction_wrong", dir_right ? 0.0 : 1.0},
                                    {"adc_offset_max_a", e_adc},
                                    {"adc_offset_max_frac", e_adc / f.board.i_sense_max_a}});
-  if (ctx.params.get("verify") > 0.5) run_verify(ctx, s, identified_params(p, c), fig);
+  if (ctx.params.get("verify") > 0.5) run_verify(ctx, s, c.staged, fig);
   fig.done = true;
   fig.r_frac = r / f.motor.r_ohm - 1;
   fig.ld_frac = ld / f.motor.ld_h - 1;

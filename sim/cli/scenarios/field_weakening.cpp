@@ -55,7 +55,6 @@
 #include <string>
 
 #include "app_scenario.hpp"
-#include "drive_setup.hpp"
 #include "scenario.hpp"
 #include "verdict.hpp"
 extern "C" {

@@ -1,16 +1,22 @@
-// Commissioning on the kernel-level rig (the drive alone with the
-// commissioning plug-in, the tests of tests/sil/commission) and the plant's
-// side shared with the `commission` scenario (commission.cpp, which runs the
-// drive application's commissioning over CAN).
+// Commissioning in the loop over CAN (see generic_commission.hpp): one run
+// for the `commission` scenario (commission.cpp) and the SIL tests
+// (tests/sil/commission).
 #include "generic_commission.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
-#include <stdexcept>
+#include <cstring>
+#include <vector>
 
-#include "hal_host/sil_rig.hpp"
+#include "app_params.hpp"
+#include "app_scenario.hpp"
+#include "plant_from_files.hpp"
 #include "scenario.hpp"
-#include "verdict.hpp"
+extern "C" {
+#include "commission/mc_comm_can.h"
+#include "config/mc_law_cfg.h"
+}
 
 namespace mcsim {
 namespace {
@@ -20,6 +26,84 @@ constexpr double kPi = 3.14159265358979323846;
 double wrap2pi(double x) {
   x = std::fmod(x, 2 * kPi);
   return x < 0 ? x + 2 * kPi : x;
+}
+
+// What the host learns from the application's commissioning frames.
+struct CommissionFrames {
+  bool ended = false;  // DONE with every result, or FAILED
+  bool done = false;
+  uint32_t err = 0, valid = 0, step = 0;
+  double t_end_s = 0;
+  std::array<float, MC_COMM_CAN_ITEM_COUNT> value{};
+  uint32_t have = 0;  // bit per item received
+  // COMMISSION_STATUS and COMMISSION_RESULT among the frames of a period.
+  void take(const std::vector<mc_hal_can_frame_t>& frames, double t);
+};
+
+void CommissionFrames::take(const std::vector<mc_hal_can_frame_t>& frames, double t) {
+  for (const mc_hal_can_frame_t& f : frames) {
+    const uint32_t cmd = mc_can_id_cmd(f.id);
+    if (cmd == MC_CAN_CMD_COMMISSION_RESULT && f.len >= 8u) {
+      // the value is the float's bits, little-endian (DBC: 32|32@1+)
+      const uint32_t bits =
+          static_cast<uint32_t>(f.data[4]) | (static_cast<uint32_t>(f.data[5]) << 8) |
+          (static_cast<uint32_t>(f.data[6]) << 16) | (static_cast<uint32_t>(f.data[7]) << 24);
+      const uint32_t item = f.data[0];
+      if (item < MC_COMM_CAN_ITEM_COUNT) {
+        std::memcpy(&value[item], &bits, sizeof bits);
+        have |= 1u << item;
+      }
+    } else if (cmd == MC_CAN_CMD_COMMISSION_STATUS) {
+      uint32_t msg = 0;
+      float v[MC_CAN_NSIG_MAX] = {0};
+      if (mc_can_proto_unpack(&f, &msg, v, MC_CAN_NSIG_MAX) != MC_CAN_ERR_NONE) continue;
+      step = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_STEP]);
+      err = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_ERROR]);
+      valid = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_VALID]);
+      done = step == MC_COMM_STEP_DONE;
+      if (step == MC_COMM_STEP_FAILED) {
+        ended = true;
+        t_end_s = t;
+      }
+    }
+  }
+  constexpr uint32_t kAll = (1u << MC_COMM_CAN_ITEM_COUNT) - 1u;
+  if (done && have == kAll && !ended) {
+    ended = true;
+    t_end_s = t;
+  }
+}
+
+// The result as the frames carry it (COMMISSION_RESULT items, the status's
+// valid bits).
+mc_comm_result_t result_of(const CommissionFrames& c) {
+  const auto& v = c.value;
+  mc_comm_result_t r{};
+  r.r_ohm = v[MC_COMM_CAN_ITEM_R_OHM];
+  r.ld_h = v[MC_COMM_CAN_ITEM_LD_H];
+  r.lq_h = v[MC_COMM_CAN_ITEM_LQ_H];
+  r.flux_wb = v[MC_COMM_CAN_ITEM_FLUX_WB];
+  r.pole_pairs = static_cast<uint32_t>(std::lround(v[MC_COMM_CAN_ITEM_POLE_PAIRS]));
+  r.encoder_offset_rad = v[MC_COMM_CAN_ITEM_ENCODER_OFFSET_RAD];
+  r.encoder_direction = v[MC_COMM_CAN_ITEM_ENCODER_DIRECTION] < 0.0f ? -1 : 1;
+  for (uint32_t k = 0; k < 3u; ++k) r.adc_offset_a[k] = v[MC_COMM_CAN_ITEM_ADC_OFFSET_A_A + k];
+  r.j_kgm2 = v[MC_COMM_CAN_ITEM_J_KGM2];
+  r.b_nm_s_rad = v[MC_COMM_CAN_ITEM_B_NM_S_RAD];
+  r.valid = c.valid;
+  return r;
+}
+
+void inject_offsets(const CommissionSetup& s, hal_host::PmsmBoard& b) {
+  hal_host::PmsmBoard::Injection inj;
+  set_adc_offsets(s, inj.offset_a);
+  b.inject(inj);
+}
+
+// The target for the SIL runs: the files' plant.
+CommissionTargetFactory sil_factory(const MotorFiles& f) {
+  return [&f](const mc_params_t& p, const std::function<void(AppSetup&)>& adjust) {
+    return make_file_target(f, p, nullptr, adjust);
+  };
 }
 
 }  // namespace
@@ -49,42 +133,6 @@ double true_offset(const MotorFiles& f, const CommissionSetup& s,
   return wrap2pi(p * (th0 - dir * (x0 - std::floor(x0) - 0.5) * step));
 }
 
-namespace {
-
-// The drive with placeholder motor values (what an image knows before
-// commissioning): only the board's limits are real.
-mc_drive_cfg_t board_only_drive_cfg(const MotorFiles& f) {
-  const BoardSpec& b = f.board;
-  mc_drive_cfg_t dc{};
-  const double T = 1.0 / b.pwm_hz, bw = 0.08 / T;
-  float kp = 0, ki = 0;
-  (void)mc_foc_f32_gains_from_bandwidth(0.1f, 1e-4f, static_cast<float>(bw), &kp, &ki);
-  dc.foc.kp_d_v_per_a = dc.foc.kp_q_v_per_a = kp;
-  dc.foc.ki_d_v_per_as = dc.foc.ki_q_v_per_as = ki;
-  dc.foc.r_ohm = 0.1f;
-  dc.foc.ld_h = dc.foc.lq_h = 1e-4f;
-  dc.foc.flux_wb = 0.01f;
-  dc.foc.dt_s = static_cast<float>(T);
-  dc.foc.aw = MC_PI_AW_CLAMP;
-  dc.foc.limit_mode = MC_SVPWM_LIMIT_CIRCLE;
-  dc.foc.v_limit_ratio = 0.95f;
-  dc.foc.v_abs_max_v = static_cast<float>(1.5 * b.vbus_v);
-  dc.foc.decouple = true;
-  dc.pole_pairs = 1;
-  dc.speed_pll_bw_rad_s = static_cast<float>(std::min(1000.0, 0.1 / T));
-  dc.slow_loop_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
-  dc.i_max_a = static_cast<float>(b.i_sense_max_a / 1.25);
-  dc.i_trip_a = static_cast<float>(0.98 * b.i_sense_max_a);
-  dc.vbus_min_v = static_cast<float>(0.5 * b.vbus_v);
-  dc.vbus_max_v = static_cast<float>(1.5 * b.vbus_v);
-  dc.omega_max_rad_s = 0.0f;  // unknown motor: commissioning caps its own speed
-  dc.temp_max_c = 100.0f;
-  dc.i_unbalance_max_a = b.current_sensors == 3 ? static_cast<float>(0.03 * b.i_sense_max_a) : 0.0f;
-  return dc;
-}
-
-}  // namespace
-
 CommissionSetup default_commission_setup(const MotorFiles& f) {
   CommissionSetup s;
   s.adc_offset_a = 0.01 * f.board.i_sense_max_a;
@@ -104,126 +152,123 @@ std::string commission_error_names(uint32_t e) {
   return s;
 }
 
-CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s) {
+mc_params_t commission_booted_params(const MotorFiles& f) {
+  return params_from_files(f, Params(app_gain_params(f), {}), MC_LAW_SPEED_PI);
+}
+
+CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, const mc_params_t& p,
+                             const CommissionTargetFactory& make,
+                             const CommissionObserver& observe) {
   if (f.board.encoder_cpr == 0) {
     throw UsageError(f.board.file + ": commissioning needs an encoder (encoder_cpr = 0)");
   }
-  const BoardSpec& b = f.board;
+  CommissionRun out;
   hal_host::PmsmBoardConfig bc = build_board_cfg(f);
   configure_plant(f, s, bc);
-  hal_host::PmsmBoard board(bc);
-  hal_host::PmsmBoard::Injection inj;
-  set_adc_offsets(s, inj.offset_a);
-  board.inject(inj);
+  out.true_encoder_offset_rad = true_offset(f, s, bc);
+  out.true_encoder_direction = s.encoder_direction;
+  set_adc_offsets(s, out.true_adc_offset_a);
+  if (f.board.current_sensors != 3) out.true_adc_offset_a[2] = 0.0;
+
+  const std::unique_ptr<AppTarget> target = make(p, [&](AppSetup& su) {
+    configure_plant(f, s, su.board);
+    if (s.plant) s.plant(su.board);
+  });
+  AppRunner run(*target);
+  hal_host::PmsmBoard& board = run.board();
+  inject_offsets(s, board);
   if (s.inject) s.inject(board);
-
-  CommissionRun run;
-  run.true_encoder_offset_rad = true_offset(f, s, bc);
-  run.true_encoder_direction = s.encoder_direction;
-  set_adc_offsets(s, run.true_adc_offset_a);
-  if (b.current_sensors != 3) run.true_adc_offset_a[2] = 0.0;
-
-  mc_drive_cfg_t dc = board_only_drive_cfg(f);
-  mc_drive_t drive{};
-  if (mc_drive_init(&drive, &dc, board.hal()) != MC_DRIVE_CFG_OK) {
-    throw std::runtime_error("the board-only drive configuration was refused");
-  }
-  const double T = 1.0 / b.pwm_hz;
-  mc_comm_cfg_t cc{};
-  cc.dt_s = static_cast<float>(T);
-  cc.i_test_a = static_cast<float>(s.i_test_a > 0 ? s.i_test_a : 0.25 * b.i_sense_max_a);
-  cc.v_test_max_v = static_cast<float>(0.9 * b.vbus_v / std::sqrt(3.0));
-  cc.offset_max_a = static_cast<float>(0.1 * b.i_sense_max_a);
-  cc.dead_time_s = static_cast<float>(b.dead_time_s);
-  cc.cur_bw_rad_s = static_cast<float>(0.08 / T);  // drive_setup's cur_bw_rad_s
-  cc.speed_max_m_rad_s = 1.0e4f;
-  cc.bemf_frac = 0.5f;
-  cc.pole_pairs_max = 32;
-  cc.three_shunts = (b.current_sensors == 3);
-  static mc_comm_t comm;  // large; one run at a time
-  if (mc_comm_init(&comm, &cc) != MC_COMM_CFG_OK) {
-    throw UsageError("commissioning refused its configuration for this board");
-  }
-  if (mc_drive_attach_ctrl(&drive, mc_comm_ops(&comm)) != 0 ||
-      mc_drive_set_mode(&drive, MC_DRIVE_MODE_CTRL) != 0) {
-    throw std::runtime_error("the drive refused the commissioning plug-in");
-  }
-  const long n_max = std::lround(s.t_max_s / T);
-  long k = 0;
-  for (; k < n_max; ++k) {
-    hal_host::sil_period(board, drive);
-    if (s.each_period) s.each_period(board, comm);
-    if (drive.mode == MC_DRIVE_MODE_FAULT || mc_comm_done(&comm)) break;
-  }
-  run.duration_s = static_cast<double>(k + 1) * T;
-  run.done = mc_comm_done(&comm);
-  run.err = comm.err;
-  if (!run.done && run.err == 0u) run.err = MC_COMM_ERR_ABORTED;  // timed out
-  run.drive_faults = drive.faults;
-  if (run.done) {
-    mc_drive_set_mode(&drive, MC_DRIVE_MODE_IDLE);
-    run.res = comm.res;
-  }
-  run.bridge_off = !board.pwm_enabled();
-  return run;
-}
-
-MotorSpec identified_motor(const MotorSpec& truth, const mc_comm_result_t& r) {
-  MotorSpec m = truth;
-  m.r_ohm = r.r_ohm;
-  m.ld_h = r.ld_h;
-  m.lq_h = r.lq_h;
-  m.flux_wb = r.flux_wb;
-  m.pole_pairs = static_cast<int>(r.pole_pairs);
-  if (r.valid & MC_COMM_HAVE_MECH) {
-    m.j_kgm2 = r.j_kgm2;
-    m.b_nm_s_rad = r.b_nm_s_rad;
-  }
-  return m;
-}
-
-double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, const CommissionRun& run,
-                         Law law, double* p_target) {
-  MotorFiles fi = f;
-  fi.motor = identified_motor(f.motor, run.res);
-  const Gains g = derive_gains(fi, nullptr);  // the same formulas, identified values
-  RigOptions o;
-  o.law = law;
-  o.drive_motor = &fi.motor;
-  o.board_hook = [&](hal_host::PmsmBoardConfig& bc) {
-    configure_plant(f, s, bc);
-    // The sensorless run starts the rotor at sensorless_start_theta_e_rad
-    // (default 0): the I-f start holds the current at two angles and
-    // restarts its observer from the flux path's circle fit
-    // (mc_ctrl_sls_cfg_t.align_any_angle), so any start angle works
-    // (tests/sil/commission SensorlessStartAngle); the encoder is not used.
-    if (law == Law::kSensorless) {
-      bc.theta_m0_rad = s.sensorless_start_theta_e_rad / f.motor.pole_pairs;
+  run.keep_host_alive();
+  run.send(run.cmd().commission(MC_COMM_CAN_START, s.i_test_a, 0.0, 0.0));
+  const long n = step_count(s.t_max_s, board.period_s());
+  CommissionFrames c;
+  for (long k = 0; k <= n && !c.ended; ++k) {
+    if (observe) observe(run, k);
+    if (k < n) {
+      run.step();
+      c.take(run.sent(), board.t_s());
+      if (s.each_period) s.each_period(board, c.step);
     }
-  };
-  o.board_built_hook = [&](hal_host::PmsmBoard& bd) {
-    hal_host::PmsmBoard::Injection inj;
-    set_adc_offsets(s, inj.offset_a);
-    bd.inject(inj);
-  };
-  const mc_comm_result_t res = run.res;
-  const float bw = static_cast<float>(g.cur_bw_rad_s);
-  o.drive_hook = [res, bw](mc_drive_cfg_t& dc) {
-    if (mc_comm_apply(&res, bw, &dc) != 0u) throw std::runtime_error("result refused by apply");
-  };
-  MotorRig rig(f, g, o);
-  const double w_t = 0.5 * g.speed_rated_eff_rad_s;
-  *p_target = w_t;
-  rig.set_speed_ref(w_t);
-  const double wc = law == Law::kSensorless ? g.sls_wc_rad_s : g.speed_wc_rad_s;
-  double t_end = std::abs(w_t) / (0.5 * g.torque_rated_nm / f.motor.j_kgm2) + 40.0 / wc + 0.1;
-  if (law == Law::kSensorless) t_end += g.align_time_s + g.handover_rad_s / g.if_accel_rad_s2 + 0.1;
-  const long n = std::lround(t_end / rig.period_s());
-  for (long k = 0; k < n; ++k) {
-    rig.step();
-    if (rig.drive().faults != 0u) return std::nan("");
   }
-  return std::abs(rig.board().state()(2) - w_t) / std::abs(w_t);
+  if (!c.ended) {
+    c.t_end_s = board.t_s();
+    if (c.err == 0u) c.err = MC_COMM_ERR_ABORTED;  // timed out
+    c.done = false;
+  }
+  out.err = c.err;
+  out.done = c.done;
+  out.duration_s = c.t_end_s;
+  out.drive_faults = run.probe().faults;
+  out.bridge_off = !board.pwm_enabled();
+  out.tx_frames = run.frames_sent();
+  if (out.done) {
+    out.res = result_of(c);
+    out.staged = staged_params(p, out.res);
+  }
+  return out;
+}
+
+CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s) {
+  return run_commission(f, s, commission_booted_params(f), sil_factory(f));
+}
+
+mc_params_t staged_params(mc_params_t booted, const mc_comm_result_t& r) {
+  booted.r_ohm = r.r_ohm;
+  booted.ld_h = r.ld_h;
+  booted.lq_h = r.lq_h;
+  booted.flux_wb = r.flux_wb;
+  booted.pole_pairs = r.pole_pairs;
+  booted.encoder_offset_rad = r.encoder_offset_rad;
+  booted.encoder_reversed = r.encoder_direction < 0 ? 1u : 0u;
+  booted.i_offset_a_a = r.adc_offset_a[0];
+  booted.i_offset_b_a = r.adc_offset_a[1];
+  booted.i_offset_c_a = r.adc_offset_a[2];
+  if ((r.valid & MC_COMM_HAVE_MECH) != 0u) {
+    booted.j_kgm2 = r.j_kgm2;
+    booted.b_nm_s_rad = r.b_nm_s_rad;
+    booted.speed_kp_a_s_rad = 0.0f;  // derived from the identified inertia
+    booted.speed_ki_a_rad = 0.0f;
+  }
+  return booted;
+}
+
+// The sensorless run starts the rotor at sensorless_start_theta_e_rad
+// (default 0): the I-f start holds the current at two angles and restarts
+// its observer from the flux path's circle fit
+// (mc_ctrl_sls_cfg_t.align_any_angle), so any start angle works
+// (tests/sil/commission SensorlessStartAngle); the encoder is not used.
+double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, mc_params_t staged,
+                         uint32_t law, double* p_target_rad_s,
+                         const CommissionTargetFactory& make) {
+  staged.speed_law = law;
+  const mc_params_eff_t e = resolve_params(staged);
+  const mc_gains_t& g = e.g;
+  const bool sls = law == MC_LAW_SPEED_SENSORLESS;
+  const std::unique_ptr<AppTarget> target = make(staged, [&](AppSetup& su) {
+    configure_plant(f, s, su.board);
+    if (sls) su.board.theta_m0_rad = s.sensorless_start_theta_e_rad / f.motor.pole_pairs;
+  });
+  AppRunner run(*target);
+  inject_offsets(s, run.board());
+  const double w_t = 0.5 * g.speed_rated_eff_rad_s;
+  *p_target_rad_s = w_t;
+  run.start(MC_CAN_CTRL_SPEED);
+  run.send(run.cmd().speed_ref(w_t));
+  const double wc = sls ? g.sls_wc_rad_s : g.speed_wc_rad_s;
+  double t_end = std::abs(w_t) / static_cast<double>(e.p.speed_ramp_rad_s2) + 40.0 / wc + 0.1;
+  if (sls) t_end += g.align_time_s + g.handover_rad_s / g.if_accel_rad_s2 + 0.1;
+  const long n = step_count(t_end, run.board().period_s());
+  AppWatch watch;
+  for (long k = 0; k < n; ++k) {
+    run.step();
+    if (!watch(run.probe()).empty()) return std::nan("");
+  }
+  return std::abs(run.board().state()(2) - w_t) / std::abs(w_t);
+}
+
+double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, const mc_params_t& staged,
+                         uint32_t law, double* p_target_rad_s) {
+  return verify_speed_step(f, s, staged, law, p_target_rad_s, sil_factory(f));
 }
 
 }  // namespace mcsim

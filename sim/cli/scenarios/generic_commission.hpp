@@ -1,21 +1,33 @@
-// Commissioning in the loop: the drive, knowing only the board, measures a
-// motor from a file (firmware/app/commission). run_commission and
-// verify_speed_step are the kernel-level rig of the tests
-// (tests/sil/commission: the drive alone with the commissioning plug-in, a
-// C++ rig for the runs on the identified values); the `commission`
-// scenario (commission.cpp) runs the drive application's commissioning
-// over CAN instead and shares only the plant's side (the helpers below).
+// Commissioning in the loop: the drive application's commissioning
+// (firmware/app/commission: mc_comm_can, bound as the images bind it, its
+// configuration from mc_comm_can_cfg_for_board) run over CAN on a target
+// built from the motor and board files, as a user's tool runs it: START,
+// the keep-alive, COMMISSION_STATUS followed, every COMMISSION_RESULT read.
+// The application boots the files' parameter table (app_params.hpp:
+// params_from_files -> mc_params_to_drive_cfg, the image's path); the
+// sequence reads none of its motor values, only the drive's limits.
+//
+// One implementation for the `commission` scenario (commission.cpp: its
+// CSV rows, --pil) and the SIL tests (tests/sil/commission: the same run on
+// the SIL, the plant's fault injections through the hooks below).
+// verify_speed_step reboots the application on the table commissioning
+// staged (staged_params: the image's staging, mc_comm_can.c stage()) and
+// runs a speed step on the application's speed law; the plant keeps the
+// files' true motor.
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 
-#include "drive_setup.hpp"
+#include "app_cmd.hpp"
+#include "app_target.hpp"
 #include "hal_host/pmsm_board.hpp"
 #include "motor_file.hpp"
 extern "C" {
 #include "commission/mc_commission.h"
+#include "mc_params.h"
 }
 
 namespace mcsim {
@@ -25,36 +37,63 @@ struct CommissionSetup {
   int encoder_direction = 1;        // plant: +1 counts up with positive rotation
   double adc_offset_a = 0.0;        // plant: offsets (x, -0.7 x, 0.4 x) on a, b, c [A]
   double noise_rms_a = 0.0;         // plant: current noise per channel [A]
-  double i_test_a = 0.0;            // 0: 0.25 i_sense_max_a (the board's range)
+  double i_test_a = 0.0;            // COMMISSION_CMD i_test_a; 0: the drive's default
+                                    // (a quarter of the sense range within i_max_a)
   double t_max_s = 12.0;            // give up after this much simulated time
   std::uint64_t seed = 1;           // plant: current-noise generator
   // verify_speed_step, sensorless: the rotor's electrical angle at the
   // start (the I-f start resets its observer at angle 0; see the .cpp).
   double sensorless_start_theta_e_rad = 0.0;
-  // Test hooks: injections once the board is built, and a call every period
-  // (e.g. a load that appears in the flux step).
+  // Test hooks: the plant's configuration before it is built (a plant the
+  // drive's table cannot describe, e.g. a locked rotor), injections once the
+  // board is built (before START), and a call after every period with the
+  // step COMMISSION_STATUS last reported (mc_comm_step_t; e.g. a load that
+  // appears in the flux step).
+  std::function<void(hal_host::PmsmBoardConfig&)> plant;
   std::function<void(hal_host::PmsmBoard&)> inject;
-  std::function<void(hal_host::PmsmBoard&, const mc_comm_t&)> each_period;
+  std::function<void(hal_host::PmsmBoard&, uint32_t step)> each_period;
 };
 
 struct CommissionRun {
+  // What COMMISSION_RESULT reported (the sensor offsets: the ones in use
+  // plus the measured, as staged; valid from COMMISSION_STATUS): all zero
+  // unless done.
   mc_comm_result_t res{};
+  mc_params_t staged{};       // the booted table with the results staged (done)
   uint32_t err = 0;           // MC_COMM_ERR_* (0: done)
   uint32_t drive_faults = 0;  // the drive's fault bits at the end
   bool done = false;
   bool bridge_off = false;  // PWM disabled at the end (after a failure)
-  double duration_s = 0;
+  double duration_s = 0;    // when the last result (or FAILED) arrived
+  uint64_t tx_frames = 0;   // frames the application sent
   // the plant's true values in the result's terms
   double true_encoder_offset_rad = 0;
   int true_encoder_direction = 1;
   double true_adc_offset_a[3] = {0, 0, 0};
 };
 
+/// The target a run is made on: the files' target (make_file_target)
+/// booted from p, `adjust` completing the setup (the plant's imperfections).
+using CommissionTargetFactory = std::function<std::unique_ptr<AppTarget>(
+    const mc_params_t& p, const std::function<void(AppSetup&)>& adjust)>;
+/// Called before each period of the run (k = 0 .. the last; the CSV rows).
+using CommissionObserver = std::function<void(AppRunner& run, long k)>;
+
 /// Default plant imperfections for the board: offset 1 % and noise 0.1 %
 /// of the sensor range (about 20 and 2 LSB at 12 bits).
 CommissionSetup default_commission_setup(const MotorFiles& f);
 
-/// Run the sequence; throws UsageError for files the rig refuses.
+/// The table the application boots before commissioning: the files' table
+/// (params_from_files, the sensored speed law). Throws UsageError when the
+/// table is refused.
+mc_params_t commission_booted_params(const MotorFiles& f);
+
+/// The sequence over CAN on make's target booted from p (see the file
+/// comment). Throws UsageError for files the run refuses (no encoder).
+CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, const mc_params_t& p,
+                             const CommissionTargetFactory& make,
+                             const CommissionObserver& observe = CommissionObserver());
+/// The same on the SIL, booted from commission_booted_params(f).
 CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s);
 
 /// The plant's imperfections of s: current noise and its seed, the
@@ -70,14 +109,22 @@ double true_offset(const MotorFiles& f, const CommissionSetup& s,
 /// Names of MC_COMM_ERR_* bits, "|"-separated.
 std::string commission_error_names(uint32_t err);
 
-/// The motor as commissioning identified it (the file's other values kept:
-/// limits, ratings; J and B replaced when identified).
-MotorSpec identified_motor(const MotorSpec& truth, const mc_comm_result_t& r);
+/// The booted table with what commissioning stages (mc_comm_can.c,
+/// stage(): r, ld, lq, flux, pole pairs, encoder offset and direction, the
+/// sensor offsets as r reports them; J and B with the speed PI gains reset
+/// to 0, derived from them, when the mechanics were measured), as the host
+/// APPLYs and SAVEs it.
+mc_params_t staged_params(mc_params_t booted, const mc_comm_result_t& r);
 
-/// Speed step on the identified values: law kSpeedPi or kSensorless; the
-/// plant as in s. Returns the final speed error as a fraction of the target
-/// (NaN if the drive faulted).
-double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, const CommissionRun& run,
-                         Law law, double* p_target_rad_s);
+/// A speed step to half the rated speed on make's target rebooted on the
+/// staged table with speed_law law (MC_LAW_SPEED_PI or _SENSORLESS), the
+/// plant as in s (the files' true motor). Returns the final speed error as
+/// a fraction of the target, NaN if the drive faulted or stopped. Throws
+/// UsageError when the table refuses the law for this motor.
+double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, mc_params_t staged,
+                         uint32_t law, double* p_target_rad_s, const CommissionTargetFactory& make);
+/// The same on the SIL.
+double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, const mc_params_t& staged,
+                         uint32_t law, double* p_target_rad_s);
 
 }  // namespace mcsim

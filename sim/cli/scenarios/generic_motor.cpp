@@ -96,7 +96,13 @@ void run_current_step(RunContext& ctx) {
   const long n = step_count(dur, T);
   AppRecorder rec{ctx, run, f.motor.pole_pairs, false, csv_every(ctx, n)};
   rec.header();
-  RiseTimer rq(t_iq, 0.0, iq_s), rd(t_id, 0.0, id_s);
+  // settled: within 2 % of the step, at least 5 ADC steps (the verdict's band)
+  const double lsb = 2.0 * f.board.i_sense_max_a / std::ldexp(1.0, f.board.adc_bits);
+  const double band_q = std::max(0.02 * std::abs(iq_s), 5.0 * lsb),
+               band_d = std::max(0.02 * std::abs(id_s), 5.0 * lsb);
+  // q over its own window (the d step moves i_q a little through the
+  // decoupling), d to the end
+  StepResponse rq(t_iq, t_id, 0.0, iq_s, band_q), rd(t_id, 1e300, 0.0, id_s, band_d);
   double id = 0, iq = 0;
   bool sent_q = false, sent_d = false;
   std::string stopped;
@@ -133,6 +139,10 @@ void run_current_step(RunContext& ctx) {
   ctx.summary.set("id_rise_time_s", rd.rise_s());
   ctx.summary.set("iq_rise_time_ratio", rq.rise_s() / design);
   ctx.summary.set("id_rise_time_ratio", rd.rise_s() / design);
+  ctx.summary.set("iq_overshoot_pct", 100.0 * rq.overshoot_frac());
+  ctx.summary.set("id_overshoot_pct", 100.0 * rd.overshoot_frac());
+  ctx.summary.set("iq_settle_time_s", rq.settle_s());
+  ctx.summary.set("id_settle_time_s", rd.settle_s());
   ctx.summary.set("kp_q_v_per_a", dcfg.foc.kp_q_v_per_a);
   ctx.summary.set("ki_q_v_per_as", dcfg.foc.ki_q_v_per_as);
   ctx.summary.set("iq_final_a", iq);
@@ -146,7 +156,9 @@ void run_current_step(RunContext& ctx) {
   fig.id_rise_ratio = rd.rise_s() / design;
   fig.iq_final_a = iq;
   fig.id_final_a = id;
-  fig.lsb_a = 2.0 * f.board.i_sense_max_a / std::ldexp(1.0, f.board.adc_bits);
+  fig.lsb_a = lsb;
+  fig.iq_overshoot = rq.overshoot_frac();
+  fig.id_overshoot = rd.overshoot_frac();
   fig.t_id_step_s = t_id;
   fig.duration_s = dur;
   fig.bw_t = e.g.cur_bw_rad_s * T;

@@ -34,14 +34,14 @@ csv_every = 10
 
 [sweep]
 iq_step_a = [3.0, 50.0]
-current_bw_rad_s = {{ start = 1000.0, stop = 10000.0, num = 3, log = true }}
+current_bw_rad_s = {{ start = 1000.0, stop = 7000.0, num = 3, log = true }}
 id_step_a = {{ dist = "uniform", low = -2.0, high = 0.0 }}
 
 [derived]
 # the fastest loop on a drive told 20 times the motor's inductance (its
 # current loop's gain 20 times too high): the drive trips, a drive fault in
-# the campaign (a bandwidth above the parameter table's 0.5 pwm_hz would be
-# refused before the run)
+# the campaign (a bandwidth above the parameter table's 0.3 pwm_hz, 7.2 kHz
+# here, would be refused before the run)
 model_l_scale = "1.0 + 19.0 * (current_bw_rad_s > 5000.0)"
 
 [pass]

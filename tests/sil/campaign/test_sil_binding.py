@@ -210,7 +210,7 @@ class Errors(unittest.TestCase):
 
     def test_drive_fault(self):
         # a current-loop bandwidth the parameter table does not allow (at
-        # most 0.5 pwm_hz: 12 kHz on this 24 kHz board) is refused before
+        # most 0.3 pwm_hz: 7.2 kHz on this 24 kHz board) is refused before
         # the run, the reason named
         e = self.same_error("current-step", M, B, {"iq_step_a": 50, "current_bw_rad_s": 15000},
                             duration=0.01)

@@ -167,6 +167,34 @@ class MotorCli(unittest.TestCase):
         self.assertEqual(p.returncode, 2, p.stderr)
         self.assertIn("speed_rad_s", p.stderr)
 
+    def test_current_step_reports_overshoot_and_settling(self):
+        # The D5065 on the 24 V ODrive at its derived bandwidth (bw T = 0.08):
+        # first order with the delay compensated, under 2 % overshoot (0.9 %
+        # measured), settled within 12 design rise times. A bandwidth past
+        # the table's bound (bw T = 0.4, which would overshoot 14 %) is
+        # refused before the run; a drive told 8 times the motor's inductance
+        # (its current gain 8 times too high) overshoots 30 %, which the
+        # verdict's detail names beside the rise.
+        p = run("run", "current-step", "--out", self.out, *d5065())
+        with open(os.path.join(self.out, "current-step.json")) as f:
+            s = json.load(f)
+        self.assertEqual(s["verdict"], "pass")
+        self.assertLess(s["iq_overshoot_pct"], 2.0)
+        self.assertGreater(s["iq_settle_time_s"], 0.0)
+        self.assertLess(s["iq_settle_time_s"], 12 * s["rise_time_designed_s"])
+        for name in os.listdir(self.out):
+            os.remove(os.path.join(self.out, name))
+        p = run("run", "current-step", "--out", self.out, *d5065(), "--set",
+                "current_bw_rad_s=9600", check=False)
+        self.assert_usage_error(p, ["MC_PARAMS_ERR BANDWIDTH"])
+        p = run("run", "current-step", "--out", self.out, *d5065(), "--set",
+                "model_l_scale=8", check=False)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        with open(os.path.join(self.out, "current-step.json")) as f:
+            s = json.load(f)
+        self.assertGreater(s["iq_overshoot_pct"], 20.0)
+        self.assertRegex(s["verdict_detail"], r"q overshoot / step = 0\.\d+ <= 0\.1 .*FAILED")
+
     def test_unknown_key_is_refused(self):
         self.assert_usage_error(
             run("run", "current-step", "--out", self.out, *d5065(), "--set", "R_ohm=1",

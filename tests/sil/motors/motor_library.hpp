@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "drive_setup.hpp"
+#include "plant_from_files.hpp"
 #include "motor_file.hpp"
 #include "scenario.hpp"
 

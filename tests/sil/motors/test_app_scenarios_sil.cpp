@@ -1,8 +1,8 @@
 // The generic scenarios run the drive application (issue 29 item 3): what
 // the application's parameter table says changes what the scenario measures,
 // and the application's own output (its CAN telemetry) is there. A scenario
-// that ran another loop (the former C++ speed PI of MotorRig) would keep its
-// own ramp and send no frame.
+// that ran another loop (as the deleted C++ speed PI did) would keep its own
+// ramp and send no frame.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,7 +15,7 @@
 #include "app_cmd.hpp"
 #include "app_params.hpp"
 #include "app_target.hpp"
-#include "drive_setup.hpp"
+#include "plant_from_files.hpp"
 #include "motor_library.hpp"
 
 namespace mcsim {
@@ -115,7 +115,7 @@ TEST(AppScenarios, GainKeysAreTheTablesParametersWithTheCDerivedDefaults) {
   EXPECT_EQ(r.p.current_bw_rad_s, static_cast<float>(e.g.cur_bw_rad_s));
   EXPECT_THROW(Params(specs, {{"speed_bw_rad_s", "-1"}}), UsageError);
   EXPECT_THROW(Params(specs, {{"cur_bw_rad_s", "1000"}}), UsageError);
-  // the table's cross check: a bandwidth above 0.5 pwm_hz (12 kHz here)
+  // the table's cross check: a bandwidth above 0.3 pwm_hz (7.2 kHz here)
   try {
     params_from_files(f, Params(specs, {{"current_bw_rad_s", "15000"}}));
     FAIL() << "expected a refusal";

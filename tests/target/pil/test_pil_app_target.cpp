@@ -1,7 +1,7 @@
 // The PIL AppTarget (sim/cli/app_target_pil.cpp) against the SIL, for any
 // motor and board: the same drive application, booted from the same
 // parameter table on the same plant (hal_host::PmsmBoardConfig from the
-// motor file and the board's description, sim/cli/drive_setup.cpp
+// motor file and the board's description, sim/cli/plant_from_files.hpp
 // build_board_cfg), commanded by the same CAN frames (packed with the
 // project's DBC encoders, mc_can_proto_pack), once compiled for the host and
 // run through hal_host::app_period, once as the board's whole image on the
@@ -42,7 +42,7 @@
 #include <vector>
 
 #include "app_target.hpp"
-#include "drive_setup.hpp"
+#include "plant_from_files.hpp"
 #include "mc_record.hpp"
 #include "motor_file.hpp"
 #include "pil_test_link.hpp"

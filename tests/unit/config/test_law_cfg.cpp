@@ -1,8 +1,9 @@
 // The laws' gains in C (firmware/app/config/mc_gains.c, mc_law_cfg.c): the
 // correctly rounded square root the derivation uses on targets without a
 // libm, the gains of the parameter table's defaults, and the named refusals.
-// The simulator's scenarios call the same functions (sim/cli/app_params.cpp),
-// so there is no second derivation to compare with.
+// The simulator's scenarios boot the drive application on a parameter table
+// (sim/cli/app_params.hpp), which calls the same functions: there is no
+// second derivation to compare with.
 #include <gtest/gtest.h>
 
 #include <cmath>

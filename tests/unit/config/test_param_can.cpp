@@ -202,7 +202,7 @@ TEST_F(ParamCan, InconsistentSetRefusedAsAWhole)
     EXPECT_EQ(MC_PARAMS_ERR_SENSE, r.value);
     EXPECT_EQ(0, std::memcmp(&dc, &d.cfg, sizeof dc)) << "never half applied";
     EXPECT_EQ(10.0f, srv.active.i_max_a);
-    // gains vs PWM rate: 1257 rad/s at 2 kHz is bw dt = 0.63 > 0.5
+    // gains vs PWM rate: 3000 rad/s at 5 kHz is bw dt = 0.6 > 0.3
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_I_SENSE_MAX_A, Bits(60.0f)).status);
     EXPECT_EQ(MC_PARAM_OK, Req(MC_PARAM_OP_WRITE, MC_PARAM_ID_PWM_HZ, 5000u).status);
     EXPECT_EQ(MC_PARAM_OK,

@@ -240,9 +240,9 @@ TEST(Params, TripAboveSensorFullScaleRefused)
 TEST(Params, CrossChecks)
 {
     mc_params_t p = mc_params_default;
-    p.current_bw_rad_s = 0.5f * 20000.0f; // bw dt = 0.5: the limit itself is allowed
+    p.current_bw_rad_s = 0.3f * 20000.0f; // bw dt = 0.3: the limit itself is allowed
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
-    p.pwm_hz = 19999u; // same bandwidth, slower loop: bw dt > 0.5
+    p.pwm_hz = 19999u; // same bandwidth, slower loop: bw dt > 0.3
     EXPECT_EQ(mc_params_validate(&p) & MC_PARAMS_ERR_BANDWIDTH, MC_PARAMS_ERR_BANDWIDTH);
     p = mc_params_default;
     p.dead_time_s = 5.0e-6f; // 10 % of 50 us is 5 us: allowed
