@@ -185,6 +185,7 @@ mc_params_t table_of(const MotorFiles& f, double r_scale, double l_scale, double
   p.i_sense_max_a = static_cast<float>(b.i_sense_max_a);
   p.adc_bits = static_cast<uint32_t>(b.adc_bits);
   p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
+  p.vbus_board_max_v = static_cast<float>(b.bus_limit_v());
   p.slow_loop_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
   if (b.encoder == kEncoderAbiIndex) {
     // the offset is relative to the index: an index search at the first enable
@@ -350,6 +351,13 @@ mc_params_t params_from_files(const MotorFiles& f, const Params& overrides, uint
   p.speed_law = speed_law;
   set_angle_params(overrides, &p);
   (void)resolve_or_refuse(f, p);
+  if (!(p.vbus_v < p.vbus_board_max_v)) {  // else MC_PARAMS_ERR_BOARD, unnamed
+    const BoardSpec& b = f.board;
+    throw UsageError(where(b.at, "vbus_v", b.file) + ": vbus_v " + num(p.vbus_v) +
+                     " V is not below the board's bus limit vbus_board_max_v " +
+                     num(p.vbus_board_max_v) + " V (at " + where(b.at, "vbus_board_max_v", b.file) +
+                     "): the drive's trip and braking thresholds lie between the two");
+  }
   const uint32_t err = mc_params_validate(&p);
   if (err != MC_PARAMS_OK) refuse_law(f, p, err);
   return p;

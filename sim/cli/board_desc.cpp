@@ -161,7 +161,7 @@ int current_sensors(const std::string& pins_dir) {
 // [sense]: the current range, the converter's range and the bus sensor's.
 struct Sense {
   double i_sense_max_a, i_adc_full_scale_a, vbus_sense_max_v, vbus_min_v, vbus_max_v;
-  std::string at_i, at_vbus;
+  std::string at_i, at_vbus, at_vmax;
 };
 
 Sense read_sense(const Desc& d) {
@@ -185,7 +185,8 @@ Sense read_sense(const Desc& d) {
               d.number("sense", "vbus_r_bottom_ohm", 0.0, 1e9, true, "ohm");
   }
   s.vbus_min_v = d.number("sense", "vbus_min_v", 0.0, 1e4, true, "V");
-  s.vbus_max_v = d.number("sense", "vbus_max_v", s.vbus_min_v, 1e4, true, "V (above vbus_min_v)");
+  s.vbus_max_v =
+      d.number("sense", "vbus_max_v", s.vbus_min_v, 1e4, true, "V (above vbus_min_v)", &s.at_vmax);
   const double half_v = std::min(offset, vref - offset);
   s.i_sense_max_a = (half_v - static_cast<double>(margin) * vref / kAdcCounts) / (gain * shunt);
   if (!(s.i_sense_max_a > 0.0)) {
@@ -193,6 +194,12 @@ Sense read_sense(const Desc& d) {
   }
   s.i_adc_full_scale_a = vref / (2.0 * gain * shunt);
   s.vbus_sense_max_v = vref * divider;
+  if (!(s.vbus_max_v < s.vbus_sense_max_v)) {  // the drive trips on what it reads
+    const Desc::Hit h = d.need("sense", "vbus_max_v");
+    fail(h.file, line_of(*h.n),
+         "[sense] vbus_max_v: not below what the bus divider reads (vref_v divider = " +
+             std::to_string(s.vbus_sense_max_v) + " V)");
+  }
   return s;
 }
 
@@ -283,6 +290,7 @@ BoardDescTable board_desc_table(const std::string& arg) {
   b.insert("i_adc_full_scale_a", s.i_adc_full_scale_a);
   b.insert("adc_bits", static_cast<int64_t>(kAdcBits));
   b.insert("vbus_sense_max_v", s.vbus_sense_max_v);
+  b.insert("vbus_board_max_v", s.vbus_max_v);
   b.insert("encoder_cpr", static_cast<int64_t>(cpr));
   b.insert("encoder", enc_type);
   b.insert("brake_r_ohm", brake_r);
@@ -296,6 +304,7 @@ BoardDescTable board_desc_table(const std::string& arg) {
             {"i_adc_full_scale_a", s.at_i},
             {"adc_bits", out.path},
             {"vbus_sense_max_v", s.at_vbus},
+            {"vbus_board_max_v", s.at_vmax},
             {"encoder_cpr", at_cpr},
             {"encoder", at_enc},
             {"brake_r_ohm", at_brake}};

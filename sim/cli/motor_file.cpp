@@ -304,6 +304,9 @@ BoardSpec read_board(const std::string& path, const toml::table& t, const SetSou
   b.i_adc_full_scale_a = r.num_or("i_adc_full_scale_a", 0.0, b.i_sense_max_a, 1.0e5, false,
                                   "A (at least i_sense_max_a)");
   b.vbus_sense_max_v = r.num_or("vbus_sense_max_v", 0.0, b.vbus_v, 1.0e4, true, "V (above vbus_v)");
+  // above vbus_v: the drive's check (app_params.cpp names both values)
+  b.vbus_board_max_v = r.num_or("vbus_board_max_v", 0.0, 0.0, b.vbus_full_scale_v(), true,
+                                "V (at most what the bus sensor reads)");
   b.delay_periods = static_cast<int>(r.int_or("delay_periods", 1, 0, 4));
   b.dc_link_c_f = r.num_or("dc_link_c_f", 0.0, 0.0, 10.0, false, "F");
   b.source_r_ohm = r.num_or("source_r_ohm", 0.05, 1.0e-4, 1.0e3, false, "ohm");

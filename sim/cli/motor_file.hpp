@@ -35,7 +35,11 @@
 //          source (text), i_adc_full_scale_a (the current converter's range,
 //          +-A: the model's step is 2 i_adc_full_scale_a / 2^adc_bits;
 //          default i_sense_max_a), vbus_sense_max_v (the bus sensor's range,
-//          step vbus_sense_max_v / 2^adc_bits; default 2 vbus_v).
+//          step vbus_sense_max_v / 2^adc_bits; default 2 vbus_v),
+//          vbus_board_max_v (the board's highest bus, its rating: the
+//          drive's parameter of that name, which bounds its over-voltage
+//          trip; above vbus_v, at most vbus_sense_max_v; default the bus
+//          sensor's range).
 //          Or the board's description instead of values: a [board] table
 //          with the one key description = "odrive36" (a board name, or a
 //          path relative to the file) reads it as --board odrive36 does
@@ -93,6 +97,7 @@ struct BoardSpec {
   double i_adc_full_scale_a = 0;  // the converter's range (quantisation); 0: i_sense_max_a
   int adc_bits = 12;
   double vbus_sense_max_v = 0;  // the bus sensor's range; 0: 2 vbus_v
+  double vbus_board_max_v = 0;  // the board's bus limit (rating); 0: the bus sensor's range
   long encoder_cpr = 0;
   std::string encoder = "abi";   // kEncoderAbi or kEncoderAbiIndex (the file comment)
   double encoder_index_rad = 0;  // abi_index: mechanical angle of the index mark
@@ -107,6 +112,11 @@ struct BoardSpec {
   }
   double vbus_full_scale_v() const {
     return vbus_sense_max_v > 0 ? vbus_sense_max_v : 2.0 * vbus_v;
+  }
+  // The drive's vbus_board_max_v parameter: the board's rating, or what its
+  // bus sensor reads (the trip and the braking thresholds stay below it).
+  double bus_limit_v() const {
+    return vbus_board_max_v > 0 ? vbus_board_max_v : vbus_full_scale_v();
   }
 };
 

@@ -900,21 +900,34 @@ def _fw_results(ctx, *runs):
                   "\\|v\\| − v_max at the top [V]", "faults"], rows)
 
 
-REGEN = [("on",), ("off",)]
+# (label, motor, board, sets, judged): the D5065 on the 24 V ODrive with and
+# without its resistor (without it, at the derived ramp the board's 25.68 V
+# trip is reached: shown, not judged), at a quarter of that ramp, and the
+# SK3 on the VESC 6 (no chopper; 57 V limit).
+REGEN = [("D5065, ODrive 24 V", "odrive-d5065", "odrive-v36-24v", ("brake=on",), True),
+         ("D5065, ODrive 24 V", "odrive-d5065", "odrive-v36-24v", ("brake=off",), False),
+         ("D5065, ODrive 24 V, ramp 1380 rad/s²", "odrive-d5065", "odrive-v36-24v",
+          ("brake=off", "speed_ramp_rad_s2=1380"), True),
+         ("SK3 6374, VESC 6", "turnigy-sk3-6374-149kv", "vesc6-48v", ("brake=off",), True)]
 
 
-@figure("regen-stop", [mcsim("regen-stop", f"brake={b}", motor="odrive-d5065", board="odrive-v36-24v")
-                       for b in ("on", "off")])
-def _regen(ctx, on, off):
+@figure("regen-stop", [mcsim("regen-stop", *x, motor=m, board=b, judged=j) for _l, m, b, x, j in REGEN])
+def _regen(ctx, *runs):
     rows = []
-    for lab, r in (("on", on), ("off", off)):
+    for (lab, _m, _b, x, _j), r in zip(REGEN, runs, strict=True):
         s = r["summary"]
-        rows.append([lab, f"{g(s['vbus_peak_v'], 3)} / {g(s['vbus_trip_v'], 3)}",
+        brake = x[0].split("=")[1]
+        if "vbus_peak_v" not in s:  # stopped by a fault: the verdict says which
+            rows.append([lab, brake, f"– / {g(s['vbus_trip_v'], 4)}", "–", "–", "–", "–",
+                         s.get("fault_names", g(s["faults"]))])
+            continue
+        rows.append([lab, brake, f"{g(s['vbus_peak_v'], 3)} / {g(s['vbus_trip_v'], 4)}",
                      g(s["brake_energy_j"], 3), g(s["kinetic_j"], 3),
                      f"{g(s['stop_time_s'] * 1e3, 3)} / {g(s['stop_time_ramp_s'] * 1e3, 3)}",
                      g(s["energy_balance_rel_err"], 2), g(s["faults"])])
-    return table(["brake resistor", "vbus peak / trip [V]", "brake energy [J]", "kinetic energy [J]",
-                  "stop time / ramp [ms]", "energy balance rel. error", "faults"], rows)
+    return table(["motor, board", "brake resistor", "vbus peak / trip [V]", "brake energy [J]",
+                  "kinetic energy [J]", "stop time / ramp [ms]", "energy balance rel. error",
+                  "faults"], rows)
 
 
 

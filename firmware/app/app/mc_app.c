@@ -401,6 +401,19 @@ static uint32_t laws_check(mc_app_t *a, const mc_params_t *p)
     return 0u;
 }
 
+/* What this board cannot run (MC_PARAMS_ERR_BOARD): the brake chopper
+ * where it has none, or its bus limit raised above its own (the defaults'
+ * vbus_board_max_v: the rating inside what its divider reads; a set may
+ * lower it, never raise it or take it away). */
+static bool board_refuses(const mc_app_cfg_t *cfg, const mc_hal_t *hal, const mc_params_t *p)
+{
+    const float board_v = (cfg->defaults != NULL) ? cfg->defaults->vbus_board_max_v : 0.0f;
+    if ((p->brake_enable != 0u) && (hal->brake == NULL)) {
+        return true; /* no brake chopper on this board */
+    }
+    return (board_v > 0.0f) && !((p->vbus_board_max_v > 0.0f) && (p->vbus_board_max_v <= board_v));
+}
+
 /* The parameter service's hook: the board's check (the PWM rate and the slow
  * divider stay the booted ones: the timer and the CAN tick run on them),
  * then the command handler's own check and apply (telemetry rates, timeout,
@@ -411,8 +424,8 @@ static uint32_t params_check(void *ctx, const mc_params_t *p)
     if ((p->pwm_hz != a->params.pwm_hz) || (p->slow_loop_div != a->params.slow_loop_div)) {
         return 1u;
     }
-    if ((p->brake_enable != 0u) && (a->hal->brake == NULL)) {
-        return MC_PARAMS_ERR_BOARD; /* no brake chopper on this board */
+    if (board_refuses(&a->cfg, a->hal, p)) {
+        return MC_PARAMS_ERR_BOARD;
     }
     if ((a->cmd_hook.check != NULL) && (a->cmd_hook.check(a->cmd_hook.ctx, p) != 0u)) {
         return 1u;
@@ -608,10 +621,10 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
     app->drive = drive;
     app->hal = hal;
     app->can = can;
-    if ((p->brake_enable != 0u) && (hal->brake == NULL)) {
-        /* a stored set this board cannot run (no brake chopper): the
-         * defaults boot and cfg_store_status says so */
-        if ((app->cfg.defaults == NULL) || (app->cfg.defaults->brake_enable != 0u)) {
+    if (board_refuses(&app->cfg, hal, p)) {
+        /* a stored set this board cannot run (no brake chopper, its bus
+         * limit raised): the defaults boot and cfg_store_status says so */
+        if ((app->cfg.defaults == NULL) || board_refuses(&app->cfg, hal, app->cfg.defaults)) {
             return MC_APP_CFG_ERR_PARAMS;
         }
         app->params = *app->cfg.defaults;

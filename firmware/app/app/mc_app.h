@@ -23,9 +23,13 @@
  *                    parameter service, the hardware receive filter for
  *                    this node's ids, the watchdog. A stored set with
  *                    brake_enable on a board without a brake chopper
- *                    (mc_hal_t.brake NULL) boots the defaults with status
- *                    INVALID; an APPLY of it is refused INVALID with
- *                    MC_PARAMS_ERR_BOARD (nothing changes).
+ *                    (mc_hal_t.brake NULL), or with vbus_board_max_v above
+ *                    the board's (its defaults': the bus limit its divider
+ *                    reads and its rating allow) or 0 where the board has
+ *                    one, boots the defaults with status INVALID; an APPLY
+ *                    of it is refused INVALID with MC_PARAMS_ERR_BOARD
+ *                    (nothing changes). vbus_max_v above vbus_board_max_v
+ *                    is refused the same way (mc_params_validate).
  *   mc_app_fast_step()  ADC interrupt: the drive's fast step, and the mark
  *                    that the fast loop ran.
  *   mc_app_can_rx_isr() CAN receive interrupt: moves every received frame

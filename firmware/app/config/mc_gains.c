@@ -275,3 +275,12 @@ double mc_gains_sls_slew_rad_s2(const mc_gains_motor_t *m, const mc_gains_t *g)
 {
     return 0.5 * g->torque_rated_nm / m->j_kgm2;
 }
+
+double mc_gains_vbus_max_v(const mc_gains_motor_t *m)
+{
+    const double v = 1.5 * m->vbus_v;
+    if (m->vbus_max_v > 0.0) {
+        return m->vbus_max_v;
+    }
+    return ((m->vbus_board_max_v > 0.0) && (m->vbus_board_max_v < v)) ? m->vbus_board_max_v : v;
+}

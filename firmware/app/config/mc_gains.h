@@ -139,7 +139,10 @@ typedef struct {
     double r_ohm, ld_h, lq_h, flux_wb, pole_pairs, j_kgm2, b_nm_s_rad;
     double i_max_a, i_rated_a, speed_max_rad_s, speed_rated_rad_s;
     double vbus_v, pwm_hz, dead_time_s, i_sense_max_a;
-    double delay_periods; /**< PWM periods between sampling and the duties' effect */
+    double delay_periods;    /**< PWM periods between sampling and the duties' effect */
+    double vbus_max_v;       /**< the over-voltage trip as set; 0: derived (mc_gains_vbus_max_v) */
+    double vbus_board_max_v; /**< the board's bus limit (rating inside its divider's
+                                  range); 0: none given */
 } mc_gains_motor_t;
 
 /** Every derived gain (the formulas: the file comment; the code in
@@ -180,6 +183,17 @@ void mc_gains_fix_none(mc_gains_t *fix);
  * written in full either way (for the caller's messages).
  */
 uint32_t mc_gains_derive(const mc_gains_motor_t *m, const mc_gains_t *fix, mc_gains_t *g);
+
+/**
+ * The over-voltage trip the drive runs with (the vbus_max_v parameter, and
+ * the sensorless law's static voltage limit): m->vbus_max_v when set, else
+ * half the nominal bus above it, 1.5 vbus_v, but never above the board's
+ * own limit m->vbus_board_max_v (when given):
+ *   vbus_max = min(1.5 vbus_v, vbus_board_max_v).
+ * The brake and regen thresholds are fractions of vbus_max - vbus_v
+ * (mc_params.c), so they stay inside what the board reads too.
+ */
+double mc_gains_vbus_max_v(const mc_gains_motor_t *m);
 
 /** Speed slew of the sensorless law, 0.5 torque_rated / J [rad/s^2]. */
 double mc_gains_sls_slew_rad_s2(const mc_gains_motor_t *m, const mc_gains_t *g);

@@ -44,7 +44,7 @@ void mc_law_sls_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_sls_
     c->pll_bw_rad_s = (float)g->pll_bw_rad_s;
     c->cur_bw_rad_s = (float)g->cur_bw_rad_s;
     c->v_limit_ratio = 0.95f;
-    c->vbus_max_v = (float)(1.5 * m->vbus_v);
+    c->vbus_max_v = (float)mc_gains_vbus_max_v(m); /* the drive's trip (mc_params.c) */
     /* the sensored PI's formula at the sensorless crossover; a refusal
      * (J or kt not positive) leaves 0, which mc_ctrl_sls_init refuses */
     (void)mc_gains_speed_pi(m->j_kgm2, g->kt_nm_a, g->sls_wc_rad_s, &c->speed_kp_a_s_rad,
@@ -171,6 +171,8 @@ void mc_law_motor_from_params(const mc_params_t *p, mc_gains_motor_t *m)
     m->dead_time_s = (double)p->dead_time_s;
     m->i_sense_max_a = (double)p->i_sense_max_a;
     m->delay_periods = 1.0;
+    m->vbus_max_v = (double)p->vbus_max_v;
+    m->vbus_board_max_v = (double)p->vbus_board_max_v;
 }
 
 uint32_t mc_law_speed_check(const mc_params_t *p)

@@ -91,15 +91,17 @@ static float or_derived(float v, double derived)
 
 /* The drive's own derivations (the gains' are mc_gains.c's): the trip
  * above the current limit inside the sensor's range, the bus window around
- * the nominal bus, the over-speed trip above the motor's top speed, and the
- * bus-power thresholds as fractions of the margin vbus_max - vbus. */
-static void resolve_drive(const mc_params_t *p, const mc_gains_t *g, mc_params_t *r)
+ * the nominal bus (its top bounded by the board's limit), the over-speed
+ * trip above the motor's top speed, and the bus-power thresholds as
+ * fractions of the margin vbus_max - vbus. */
+static void resolve_drive(const mc_params_t *p, const mc_gains_motor_t *m, const mc_gains_t *g,
+                          mc_params_t *r)
 {
     const float i_lim = (float)g->i_limit_a;
     float margin;
     r->i_trip_a = or_derived(p->i_trip_a, (double)fmin_f(1.6f * i_lim, 0.98f * p->i_sense_max_a));
     r->vbus_min_v = or_derived(p->vbus_min_v, 0.5 * (double)p->vbus_v);
-    r->vbus_max_v = or_derived(p->vbus_max_v, 1.5 * (double)p->vbus_v);
+    r->vbus_max_v = (float)mc_gains_vbus_max_v(m);
     r->omega_max_rad_s = or_derived(p->omega_max_rad_s, 1.5 * (double)p->speed_max_rad_s);
     margin = r->vbus_max_v - p->vbus_v;
     r->brake_on_v = or_derived(p->brake_on_v, (double)(p->vbus_v + (0.2f * margin)));
@@ -145,7 +147,7 @@ uint32_t mc_params_resolve(const mc_params_t *p, mc_params_eff_t *e)
     r->traj_d_max_rad_s2 = (float)g->pos_d_max_rad_s2;
     r->traj_filter_bw_rad_s = (float)g->pos_filter_bw_rad_s;
     r->stop_decel_rad_s2 = (float)g->stop_decel_rad_s2;
-    resolve_drive(p, g, r);
+    resolve_drive(p, &e->m, g, r);
     return err;
 }
 
@@ -292,6 +294,11 @@ uint32_t mc_params_validate(const mc_params_t *p)
     }
     if (mc_params_resolve(p, &e) != MC_GAINS_OK) {
         return err | MC_PARAMS_ERR_GAINS; /* nothing derived to check */
+    }
+    /* the board's bus limit: no trip above it, the nominal bus below it */
+    if ((p->vbus_board_max_v > 0.0f) &&
+        ((r->vbus_max_v > p->vbus_board_max_v) || !(p->vbus_v < p->vbus_board_max_v))) {
+        err |= MC_PARAMS_ERR_BOARD;
     }
     /* the current sensor must see every current the drive trips on */
     if (r->i_trip_a > r->i_sense_max_a) {

@@ -68,8 +68,10 @@ typedef enum {
 #define MC_PARAMS_ERR_ENCODER (1u << 9) /**< encoder_cpr 1 to 3 (0: none, else >= 4) */
 #define MC_PARAMS_ERR_BOARD \
     (1u << 10) /**< the board cannot run it: brake_enable on a board
-                    without a brake chopper (the application's check,
-                    mc_app.h) */
+                    without a brake chopper, vbus_board_max_v above the
+                    board's own (the application's checks, mc_app.h);
+                    vbus_max_v above vbus_board_max_v, or vbus_v not
+                    below it */
 #define MC_PARAMS_ERR_ANGLE_REF \
     (1u << 11) /**< angle_ref index or align (or angle_find_at_enable) on
                     a drive without an encoder (encoder_cpr 0) */

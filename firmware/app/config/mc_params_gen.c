@@ -25,6 +25,7 @@ const mc_params_t mc_params_default = {
     .i_offset_a_a = 0.0f,
     .i_offset_b_a = 0.0f,
     .i_offset_c_a = 0.0f,
+    .vbus_board_max_v = 72.0f,
     .current_bw_rad_s = 0.0f,
     .v_limit_ratio = 0.95f,
     .slow_loop_div = 20u,
@@ -115,6 +116,7 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {27u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_offset_a_a), {.f = -100.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* i_offset_a_a */
     {28u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_offset_b_a), {.f = -100.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* i_offset_b_a */
     {29u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_offset_c_a), {.f = -100.0f}, {.f = 100.0f}, {.f = 0.0f}}, /* i_offset_c_a */
+    {30u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, vbus_board_max_v), {.f = 0.0f}, {.f = 1000.0f}, {.f = 72.0f}}, /* vbus_board_max_v */
     {40u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, current_bw_rad_s), {.f = 0.0f}, {.f = 20000.0f}, {.f = 0.0f}}, /* current_bw_rad_s */
     {41u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, v_limit_ratio), {.f = 0.1f}, {.f = 1.0f}, {.f = 0.95f}}, /* v_limit_ratio */
     {42u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, slow_loop_div), {.u = 1u}, {.u = 1000u}, {.u = 20u}}, /* slow_loop_div */
@@ -209,6 +211,7 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "i_offset_a_a",
     "i_offset_b_a",
     "i_offset_c_a",
+    "vbus_board_max_v",
     "current_bw_rad_s",
     "v_limit_ratio",
     "slow_loop_div",
@@ -303,6 +306,7 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "A",
     "A",
     "A",
+    "V",
     "rad/s",
     "",
     "",

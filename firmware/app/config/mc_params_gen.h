@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 91u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 85u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 92u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 86u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -38,6 +38,7 @@
 #define MC_PARAM_ID_I_OFFSET_A_A 27u
 #define MC_PARAM_ID_I_OFFSET_B_A 28u
 #define MC_PARAM_ID_I_OFFSET_C_A 29u
+#define MC_PARAM_ID_VBUS_BOARD_MAX_V 30u
 #define MC_PARAM_ID_CURRENT_BW_RAD_S 40u
 #define MC_PARAM_ID_V_LIMIT_RATIO 41u
 #define MC_PARAM_ID_SLOW_LOOP_DIV 42u
@@ -131,76 +132,77 @@
 #define MC_PARAM_IDX_I_OFFSET_A_A 18u
 #define MC_PARAM_IDX_I_OFFSET_B_A 19u
 #define MC_PARAM_IDX_I_OFFSET_C_A 20u
-#define MC_PARAM_IDX_CURRENT_BW_RAD_S 21u
-#define MC_PARAM_IDX_V_LIMIT_RATIO 22u
-#define MC_PARAM_IDX_SLOW_LOOP_DIV 23u
-#define MC_PARAM_IDX_SPEED_PLL_BW_RAD_S 24u
-#define MC_PARAM_IDX_ENCODER_OFFSET_RAD 25u
-#define MC_PARAM_IDX_SPEED_KP_A_S_RAD 26u
-#define MC_PARAM_IDX_SPEED_KI_A_RAD 27u
-#define MC_PARAM_IDX_ENCODER_REVERSED 28u
-#define MC_PARAM_IDX_SPEED_LAW 29u
-#define MC_PARAM_IDX_SPEED_BW_RAD_S 30u
-#define MC_PARAM_IDX_SPEED_RAMP_RAD_S2 31u
-#define MC_PARAM_IDX_FW_ENABLE 32u
-#define MC_PARAM_IDX_FW_V_MARGIN 33u
-#define MC_PARAM_IDX_FW_KI_A_PER_VS 34u
-#define MC_PARAM_IDX_DEAD_TIME_COMP 35u
-#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 36u
-#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 37u
-#define MC_PARAM_IDX_SLS_SPEED_BW_RAD_S 38u
-#define MC_PARAM_IDX_SLS_HANDOVER_RAD_S 39u
-#define MC_PARAM_IDX_SLS_IF_CURRENT_A 40u
-#define MC_PARAM_IDX_SLS_IF_ACCEL_RAD_S2 41u
-#define MC_PARAM_IDX_SLS_ALIGN_TIME_S 42u
-#define MC_PARAM_IDX_I_TRIP_A 43u
-#define MC_PARAM_IDX_VBUS_MIN_V 44u
-#define MC_PARAM_IDX_VBUS_MAX_V 45u
-#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 46u
-#define MC_PARAM_IDX_TEMP_MAX_C 47u
-#define MC_PARAM_IDX_BRAKE_ENABLE 48u
-#define MC_PARAM_IDX_BRAKE_ON_V 49u
-#define MC_PARAM_IDX_BRAKE_FULL_V 50u
-#define MC_PARAM_IDX_VBUS_REGEN_START_V 51u
-#define MC_PARAM_IDX_VBUS_REGEN_END_V 52u
-#define MC_PARAM_IDX_REGEN_ID_A 53u
-#define MC_PARAM_IDX_TEMP_WARN_C 54u
-#define MC_PARAM_IDX_VBUS_SAG_V 55u
-#define MC_PARAM_IDX_STALL_CURRENT_FRAC 56u
-#define MC_PARAM_IDX_STALL_SPEED_RAD_S 57u
-#define MC_PARAM_IDX_STALL_TIME_S 58u
-#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 59u
-#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 60u
-#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 61u
-#define MC_PARAM_IDX_ASC_ENABLE 62u
-#define MC_PARAM_IDX_ANGLE_REF 63u
-#define MC_PARAM_IDX_ANGLE_FIND_AT_ENABLE 64u
-#define MC_PARAM_IDX_ANGLE_FIND_CURRENT_A 65u
-#define MC_PARAM_IDX_ANGLE_FIND_TRAVEL_RAD 66u
-#define MC_PARAM_IDX_CAN_NODE_ID 67u
-#define MC_PARAM_IDX_CAN_BITRATE_BPS 68u
-#define MC_PARAM_IDX_CAN_TIMEOUT_S 69u
-#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 70u
-#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 71u
-#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 72u
-#define MC_PARAM_IDX_TM_CURRENTS_HZ 73u
-#define MC_PARAM_IDX_TM_VOLTAGES_HZ 74u
-#define MC_PARAM_IDX_TM_SPEED_HZ 75u
-#define MC_PARAM_IDX_TM_POSITION_HZ 76u
-#define MC_PARAM_IDX_PI2D_WN_RAD_S 77u
-#define MC_PARAM_IDX_PI2D_A_PER_S 78u
-#define MC_PARAM_IDX_POS_KP_PER_S 79u
-#define MC_PARAM_IDX_TRAJ_V_MAX_RAD_S 80u
-#define MC_PARAM_IDX_TRAJ_A_MAX_RAD_S2 81u
-#define MC_PARAM_IDX_TRAJ_D_MAX_RAD_S2 82u
-#define MC_PARAM_IDX_TRAJ_FILTER_BW_RAD_S 83u
-#define MC_PARAM_IDX_POS_INPUT_MODE 84u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 85u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 86u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 87u
-#define MC_PARAM_IDX_CFG_PENDING 88u
-#define MC_PARAM_IDX_LAW_ERROR 89u
-#define MC_PARAM_IDX_ANGLE_ERROR 90u
+#define MC_PARAM_IDX_VBUS_BOARD_MAX_V 21u
+#define MC_PARAM_IDX_CURRENT_BW_RAD_S 22u
+#define MC_PARAM_IDX_V_LIMIT_RATIO 23u
+#define MC_PARAM_IDX_SLOW_LOOP_DIV 24u
+#define MC_PARAM_IDX_SPEED_PLL_BW_RAD_S 25u
+#define MC_PARAM_IDX_ENCODER_OFFSET_RAD 26u
+#define MC_PARAM_IDX_SPEED_KP_A_S_RAD 27u
+#define MC_PARAM_IDX_SPEED_KI_A_RAD 28u
+#define MC_PARAM_IDX_ENCODER_REVERSED 29u
+#define MC_PARAM_IDX_SPEED_LAW 30u
+#define MC_PARAM_IDX_SPEED_BW_RAD_S 31u
+#define MC_PARAM_IDX_SPEED_RAMP_RAD_S2 32u
+#define MC_PARAM_IDX_FW_ENABLE 33u
+#define MC_PARAM_IDX_FW_V_MARGIN 34u
+#define MC_PARAM_IDX_FW_KI_A_PER_VS 35u
+#define MC_PARAM_IDX_DEAD_TIME_COMP 36u
+#define MC_PARAM_IDX_OBS_OMEGA_CRIT_M_RAD_S 37u
+#define MC_PARAM_IDX_OBS_PLL_BW_RAD_S 38u
+#define MC_PARAM_IDX_SLS_SPEED_BW_RAD_S 39u
+#define MC_PARAM_IDX_SLS_HANDOVER_RAD_S 40u
+#define MC_PARAM_IDX_SLS_IF_CURRENT_A 41u
+#define MC_PARAM_IDX_SLS_IF_ACCEL_RAD_S2 42u
+#define MC_PARAM_IDX_SLS_ALIGN_TIME_S 43u
+#define MC_PARAM_IDX_I_TRIP_A 44u
+#define MC_PARAM_IDX_VBUS_MIN_V 45u
+#define MC_PARAM_IDX_VBUS_MAX_V 46u
+#define MC_PARAM_IDX_OMEGA_MAX_RAD_S 47u
+#define MC_PARAM_IDX_TEMP_MAX_C 48u
+#define MC_PARAM_IDX_BRAKE_ENABLE 49u
+#define MC_PARAM_IDX_BRAKE_ON_V 50u
+#define MC_PARAM_IDX_BRAKE_FULL_V 51u
+#define MC_PARAM_IDX_VBUS_REGEN_START_V 52u
+#define MC_PARAM_IDX_VBUS_REGEN_END_V 53u
+#define MC_PARAM_IDX_REGEN_ID_A 54u
+#define MC_PARAM_IDX_TEMP_WARN_C 55u
+#define MC_PARAM_IDX_VBUS_SAG_V 56u
+#define MC_PARAM_IDX_STALL_CURRENT_FRAC 57u
+#define MC_PARAM_IDX_STALL_SPEED_RAD_S 58u
+#define MC_PARAM_IDX_STALL_TIME_S 59u
+#define MC_PARAM_IDX_I_UNBALANCE_MAX_A 60u
+#define MC_PARAM_IDX_OPEN_PHASE_I_MIN_A 61u
+#define MC_PARAM_IDX_OPEN_PHASE_TIME_S 62u
+#define MC_PARAM_IDX_ASC_ENABLE 63u
+#define MC_PARAM_IDX_ANGLE_REF 64u
+#define MC_PARAM_IDX_ANGLE_FIND_AT_ENABLE 65u
+#define MC_PARAM_IDX_ANGLE_FIND_CURRENT_A 66u
+#define MC_PARAM_IDX_ANGLE_FIND_TRAVEL_RAD 67u
+#define MC_PARAM_IDX_CAN_NODE_ID 68u
+#define MC_PARAM_IDX_CAN_BITRATE_BPS 69u
+#define MC_PARAM_IDX_CAN_TIMEOUT_S 70u
+#define MC_PARAM_IDX_STOP_RAMP_A_PER_S 71u
+#define MC_PARAM_IDX_STOP_DECEL_RAD_S2 72u
+#define MC_PARAM_IDX_TM_HEARTBEAT_HZ 73u
+#define MC_PARAM_IDX_TM_CURRENTS_HZ 74u
+#define MC_PARAM_IDX_TM_VOLTAGES_HZ 75u
+#define MC_PARAM_IDX_TM_SPEED_HZ 76u
+#define MC_PARAM_IDX_TM_POSITION_HZ 77u
+#define MC_PARAM_IDX_PI2D_WN_RAD_S 78u
+#define MC_PARAM_IDX_PI2D_A_PER_S 79u
+#define MC_PARAM_IDX_POS_KP_PER_S 80u
+#define MC_PARAM_IDX_TRAJ_V_MAX_RAD_S 81u
+#define MC_PARAM_IDX_TRAJ_A_MAX_RAD_S2 82u
+#define MC_PARAM_IDX_TRAJ_D_MAX_RAD_S2 83u
+#define MC_PARAM_IDX_TRAJ_FILTER_BW_RAD_S 84u
+#define MC_PARAM_IDX_POS_INPUT_MODE 85u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 86u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 87u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 88u
+#define MC_PARAM_IDX_CFG_PENDING 89u
+#define MC_PARAM_IDX_LAW_ERROR 90u
+#define MC_PARAM_IDX_ANGLE_ERROR 91u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -225,6 +227,7 @@ typedef struct {
     float i_offset_a_a; /**< Current-sensor offset of phase a, subtracted from its reading (commissioning measures it). [A] */
     float i_offset_b_a; /**< Current-sensor offset of phase b, subtracted from its reading (commissioning measures it). [A] */
     float i_offset_c_a; /**< Current-sensor offset of phase c, subtracted from its reading (commissioning measures it). [A] */
+    float vbus_board_max_v; /**< The board's highest DC bus: its rating, inside what its bus divider reads (an image sets its description's vbus_max_v; a write above the board's own is refused: MC_PARAMS_ERR_BOARD). vbus_max_v is derived at most this and refused above it; 0: no board limit. Default: the default board's 1.5 vbus_v. [V] */
     float current_bw_rad_s; /**< Current-loop bandwidth: kp = L bw, ki = R bw; bw / pwm_hz at most 0.5; 0: derived, 0.08 pwm_hz. [rad/s] */
     float v_limit_ratio; /**< Fraction of the modulator's circle the current loop may use. */
     uint32_t slow_loop_div; /**< Slow loop every this many fast steps. */
@@ -249,7 +252,7 @@ typedef struct {
     float sls_align_time_s; /**< Alignment current ramp before the I-f start; 0: derived (mc_gains.c: a 30 % rated load cannot turn the rotor 0.2 rad meanwhile). [s] */
     float i_trip_a; /**< Instantaneous over-current trip on any phase; i_limit <= it <= i_sense_max_a; 0: derived, min(1.6 i_limit, 0.98 i_sense_max_a). [A] */
     float vbus_min_v; /**< DC-bus under-voltage trip; 0: derived, 0.5 vbus_v. [V] */
-    float vbus_max_v; /**< DC-bus over-voltage trip; 0: derived, 1.5 vbus_v. [V] */
+    float vbus_max_v; /**< DC-bus over-voltage trip; 0: derived, min(1.5 vbus_v, vbus_board_max_v). Above vbus_board_max_v: refused (MC_PARAMS_ERR_BOARD). [V] */
     float omega_max_rad_s; /**< Over-speed trip (mechanical); 0: derived, 1.5 speed_max_rad_s. [rad/s] */
     float temp_max_c; /**< Over-temperature trip, power stage and motor; 0 = off. [degC] */
     uint32_t brake_enable; /**< 1: drive the brake chopper from the bus voltage (a board without one refuses it: MC_PARAMS_ERR_BOARD). */

@@ -139,6 +139,17 @@ uint32_t mc_drive_check_cfg(const mc_drive_cfg_t *cfg)
     return validate_cfg(cfg, &foc, &foc_err);
 }
 
+/* The regenerative limit's lead time (mc_drive.h): the current loop's
+ * closed-loop time constant L / kp (kp = L bandwidth) and one and a half
+ * periods of computation and PWM delay; its filter's factor per step. */
+static float regen_lead_alpha(const mc_drive_cfg_t *cfg)
+{
+    const mc_foc_f32_cfg_t *c = &cfg->foc;
+    const float t_lead =
+        ((c->kp_q_v_per_a > 0.0f) ? (c->lq_h / c->kp_q_v_per_a) : 0.0f) + (1.5f * c->dt_s);
+    return c->dt_s / (t_lead + c->dt_s);
+}
+
 uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t *hal)
 {
     if (d == NULL || cfg == NULL || hal == NULL) {
@@ -168,6 +179,7 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
     d->foc = foc;
     d->mode = MC_DRIVE_MODE_IDLE;
     d->tm.regen_scale = 1.0f;
+    d->regen_lead_alpha = regen_lead_alpha(cfg);
     if (cfg->fw_enable) {
         (void)mc_fw_f32_init(&d->fw, &cfg->fw);
     }
@@ -438,13 +450,27 @@ static uint32_t open_phase_check(mc_drive_t *d, const float meas_a[3], float vbu
     return f;
 }
 
+/* Every valid bus sample: its first-order lag of time constant t_lead,
+ * from which the regen limit takes the bus's rate (v - lag = t_lead dv/dt
+ * for a steady slope). */
+static void regen_track(mc_drive_t *d, float vbus_v)
+{
+    if (!(d->vbus_lag_v > 0.0f)) {
+        d->vbus_lag_v = vbus_v;
+    }
+    d->vbus_lag_v += d->regen_lead_alpha * (vbus_v - d->vbus_lag_v);
+}
+
 /* The regenerative-current limit (mc_drive.h): a braking q reference
- * scaled down as the bus rises from vbus_regen_start_v to _end_v. */
-static void regen_limit(mc_drive_t *d, float vbus_v, float omega, float *p_id_a, float *p_iq_a)
+ * scaled down as the bus (with its lead) rises from vbus_regen_start_v to
+ * _end_v. */
+static void regen_limit(mc_drive_t *d, float vbus_meas_v, float omega, float *p_id_a, float *p_iq_a)
 {
     float k = 1.0f;
     const float lo = d->cfg.vbus_regen_start_v;
     const float hi = d->cfg.vbus_regen_end_v;
+    /* the bus the current loop will have brought: v + t_lead dv/dt */
+    const float vbus_v = vbus_meas_v + (vbus_meas_v - d->vbus_lag_v);
     if (hi > 0.0f && vbus_v > lo && *p_iq_a * omega < 0.0f) {
         k = (vbus_v >= hi) ? 0.0f : (hi - vbus_v) / (hi - lo);
     }
@@ -860,6 +886,7 @@ bool mc_drive_fast_step(mc_drive_t *d)
         d->tm.ic_a = ic;
         d->tm.vbus_v = s.vbus_v;
         if (mc_isfinite_f32(s.vbus_v)) {
+            regen_track(d, s.vbus_v);
             f |= brake_step(d, s.vbus_v);
         }
     }

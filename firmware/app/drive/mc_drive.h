@@ -258,8 +258,16 @@ typedef enum {
  * reference brakes the rotor (iq_ref and the measured speed of opposite
  * signs: the machine generates and the bridge pushes current into the bus),
  * the drive scales it by
- *   k = clamp((vbus_regen_end_v - vbus) / (vbus_regen_end_v - vbus_regen_start_v), 0, 1)
- * so the bus settles where the braking power equals what the bus can take
+ *   k = clamp((vbus_regen_end_v - v) / (vbus_regen_end_v - vbus_regen_start_v), 0, 1)
+ * where v is the bus the current loop will have brought when it follows
+ * a cut: the reading plus its rise over the lead time,
+ *   v = vbus + t_lead dvbus/dt,  t_lead = Lq / kp_q + 1.5 dt
+ * (the current loop's closed-loop time constant and the computation and
+ * PWM delay), the rate from a first-order lag of time constant t_lead of
+ * every valid bus sample (v = 2 vbus - lag; equal to vbus on a steady
+ * bus). A small bus capacitor rises through the band faster than the q
+ * current can follow a cut taken on the bus alone (firmware/app/README.md,
+ * "Regenerative limit"), so the bus settles where the braking power equals what the bus can take
  * (source sinking, brake resistor, losses) instead of rising to the
  * over-voltage trip. A supply that cannot sink current and no brake
  * resistor leave only the motor's and the bridge's losses: the rotor then
@@ -545,6 +553,9 @@ typedef struct {
     mc_drive_meas_t meas; /**< the record handed to a CTRL law this step */
     bool index_seen;      /**< the last encoder sample had MC_HAL_ENCODER_FLAG_INDEX */
     bool aligned;         /**< ALIGN: mc_drive_set_encoder_offset since init */
+    /* the regenerative limit's lead (see "Regenerative braking") */
+    float vbus_lag_v;       /**< the bus reading low-passed at the lead time [V] (0: none yet) */
+    float regen_lead_alpha; /**< that filter's factor per fast step, dt / (t_lead + dt) */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns

@@ -280,7 +280,11 @@ static void board_defaults(mc_params_t *p)
     p->dead_time_s = (float)MC_BOARD_DESC.deadtime_ns * 1e-9f;
     p->encoder_cpr = MC_BOARD_DESC.enc_counts_per_rev;
     p->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
-    p->vbus_max_v = MC_BOARD_DESC.vbus_max_v;
+    /* the board's bus limit (its description's vbus_max_v, inside what its
+     * divider reads): the trip and the braking thresholds derive from it */
+    p->vbus_board_max_v = MC_BOARD_DESC.vbus_max_v;
+    p->vbus_v = MC_BOARD_DESC.vbus_nominal_v;
+    p->vbus_max_v = 0.0f;         /* derived: min(1.5 vbus_v, vbus_board_max_v) */
     p->can_bitrate_bps = 500000u; /* the set-up's rate; a stored one applies at boot */
     /* A board without any thermistor (the example board) cannot enforce a
      * temperature limit: the drive would trip OVERTEMP at once with the

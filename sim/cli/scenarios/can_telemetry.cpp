@@ -167,6 +167,7 @@ mc_params_t paper002_params(const MotorFiles& f, const Params& P) {
   p.speed_rated_rad_s = static_cast<float>(f.motor.speed_rated_rad_s);
   p.i_max_a = static_cast<float>(f.motor.i_max_a);
   p.vbus_v = static_cast<float>(f.board.vbus_v);
+  p.vbus_board_max_v = static_cast<float>(f.board.bus_limit_v());
   p.pwm_hz = static_cast<uint32_t>(std::lround(f.board.pwm_hz));
   p.dead_time_s = static_cast<float>(f.board.dead_time_s);
   p.current_sensors = static_cast<uint32_t>(f.board.current_sensors);

@@ -168,6 +168,8 @@ void run_regen(RunContext& ctx) {
   const mc_app_probe_t& d = run.probe();
   ctx.summary.set("faults", d.faults);
   ctx.summary.set_text("brake", brake ? "on" : "off");
+  ctx.summary.set("vbus_trip_v", trip);  // the thresholds, also for a run a fault stopped
+  ctx.summary.set("vbus_regen_start_v", e0.p.vbus_regen_start_v);
   if (!stopped.empty()) {
     ctx.summary.set_text("fault_names", stopped);
     return write_verdict(ctx.summary,
@@ -179,9 +181,7 @@ void run_regen(RunContext& ctx) {
   const double rhs =
       (e.brake_j - brk0) + (e.source_r_j - srcr0) + e_cu + (link->cap_delta_j() - cap0);
   ctx.summary.set("vbus_peak_v", vpk);
-  ctx.summary.set("vbus_trip_v", trip);
   ctx.summary.set("vbus_margin_v", trip - vpk);
-  ctx.summary.set("vbus_regen_start_v", e0.p.vbus_regen_start_v);
   ctx.summary.set("brake_on_v", brake ? e0.p.brake_on_v : 0.0f);
   ctx.summary.set("decel_rad_s2", acc);
   ctx.summary.set("stop_time_s", t_still - t_stop);

@@ -71,6 +71,10 @@ TEST_P(SimBoard, EqualsTheImagesGeneratedDescription) {
   EXPECT_EQ(b.current_sensors, phases);
   EXPECT_EQ(b.brake_r_ohm > 0.0, d.has_brake);
   expect_rel(b.brake_r_ohm, d.has_brake ? double(d.brake_r_ohm) : 0.0, "brake resistor");
+  // The board's bus limit (the drive's vbus_board_max_v) is the image's,
+  // below what the divider reads.
+  expect_rel(b.vbus_board_max_v, d.vbus_max_v, "bus limit");
+  EXPECT_LT(b.vbus_board_max_v, b.vbus_sense_max_v);
   // Each value names the description's line it comes from.
   EXPECT_NE(b.at.at("pwm_hz").find("board.toml:"), std::string::npos) << b.at.at("pwm_hz");
 }
@@ -96,6 +100,7 @@ TEST(BoardDesc, BoardFileNamingADescriptionReadsIt) {
     EXPECT_EQ(a.i_sense_max_a, b.i_sense_max_a);
     EXPECT_EQ(a.i_adc_full_scale_a, b.i_adc_full_scale_a);
     EXPECT_EQ(a.vbus_sense_max_v, b.vbus_sense_max_v);
+    EXPECT_EQ(a.vbus_board_max_v, b.vbus_board_max_v);
     EXPECT_EQ(a.vbus_v, b.vbus_v);
     EXPECT_EQ(a.encoder_cpr, b.encoder_cpr);
     EXPECT_EQ(a.brake_r_ohm, b.brake_r_ohm);
@@ -111,14 +116,19 @@ TEST(BoardDesc, BoardFileNamingADescriptionReadsIt) {
   EXPECT_NEAR(load_board_desc("odrive36_24v").vbus_sense_max_v, 3.3 * 11.0, 1e-9);
 }
 
-// The simulator's own files of the ODrive boards (sim/motors, named by the
+// The simulator's own files of the image's boards (sim/motors, named by the
 // campaigns, tests and documents) are no second description: each reads
-// exactly its board's (issue 29 item 2; once they held +-80 A where the
-// board senses +-67.5 A, no brake resistor, 56 V on the 48 V description).
+// exactly its board's (issue 29 item 2; once they held their own values:
+// the ODrive files +-80 A where the board senses +-67.5 A, no brake
+// resistor, 56 V on the 48 V description; the VESC 6 file a 16384-count
+// encoder for the image's 8192, 100 ns dead time for 360, +-150 A for
+// +-164 A, and no bus limit, so the drive's trip was 72 V on a divider that
+// reads 61.8 V).
 TEST(BoardDesc, SimBoardFilesAreTheImagesDescriptions) {
   const std::string dir = MCSIM_MOTORS_DIR;
   const std::pair<const char*, const char*> files[] = {{"odrive-v36-24v.toml", "odrive36_24v"},
-                                                       {"odrive-v36-56v.toml", "odrive36"}};
+                                                       {"odrive-v36-56v.toml", "odrive36"},
+                                                       {"vesc6-48v.toml", "vesc6"}};
   for (const auto& [file, name] : files) {
     SCOPED_TRACE(file);
     const BoardSpec a = load_motor_files(dir + "/odrive-d5065.toml", dir + "/" + file).board;
@@ -130,6 +140,7 @@ TEST(BoardDesc, SimBoardFilesAreTheImagesDescriptions) {
     EXPECT_EQ(a.i_sense_max_a, b.i_sense_max_a);
     EXPECT_EQ(a.i_adc_full_scale_a, b.i_adc_full_scale_a);
     EXPECT_EQ(a.vbus_sense_max_v, b.vbus_sense_max_v);
+    EXPECT_EQ(a.vbus_board_max_v, b.vbus_board_max_v);
     EXPECT_EQ(a.vbus_v, b.vbus_v);
     EXPECT_EQ(a.encoder_cpr, b.encoder_cpr);
     EXPECT_EQ(a.brake_r_ohm, b.brake_r_ohm);

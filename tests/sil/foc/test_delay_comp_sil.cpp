@@ -38,16 +38,17 @@ struct Result {
   double dev_max_a = 0;  // largest |i - i_ref| once each step has risen (3 design rise times on)
 };
 
-// omega_e T of the run; pwm_hz overrides the board's PWM rate (the 56 V bus
+// omega_e T of the run; pwm_hz overrides the board's PWM rate (the 54 V bus
 // reaches omega_e T = 0.6 at 16 kHz: 457 rad/s, 25 V of back-EMF).
 Result run(double we_t, double pwm_hz, bool compensate) {
   mcsim::MotorFiles f =
       mcsim::load_motor_files(std::string(MCSIM_MOTORS_DIR) + "/u8-class-kv100.toml",
                               std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-56v.toml");
   f.board.pwm_hz = pwm_hz;
-  // the bus at the 56 V version's rating (its description's nominal supply
-  // is 48 V; its divider reads up to 62.7 V)
-  f.board.vbus_v = 56.0;
+  // the bus below the 56 V version's rating, its limit and the drive's trip
+  // there (vbus_board_max_v; its description's nominal supply is 48 V; its
+  // divider reads up to 62.7 V)
+  f.board.vbus_v = 54.0;
   const double T = 1.0 / pwm_hz;
   const double w_m = we_t / (T * f.motor.pole_pairs);
   // A flywheel of 100 rotor inertias (a dyno), brought to speed by the dyno's

@@ -87,6 +87,7 @@ mc_params_t params_from_files(const mcsim::MotorFiles& f) {
   p.i_sense_max_a = static_cast<float>(b.i_sense_max_a);
   p.adc_bits = static_cast<uint32_t>(b.adc_bits);
   p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
+  p.vbus_board_max_v = static_cast<float>(b.bus_limit_v());
   return p;
 }
 
@@ -202,10 +203,12 @@ mcsim::AppSetup setup_for(const std::string& board) {
   s.board = mcsim::build_board_cfg(f);
   s.defaults = params_from_files(f);
   // The bus limits as the board image's defaults take them (board_defaults
-  // in board_stm32f405.c: from the description).
+  // in board_stm32f405.c: from the description; the trip derived from the
+  // board's limit, vbus_board_max_v, which the simulator's table already
+  // holds from the same description).
   const mc_board_desc_t& d = board_desc(board);
   s.defaults.vbus_min_v = d.vbus_min_v;
-  s.defaults.vbus_max_v = d.vbus_max_v;
+  s.defaults.vbus_max_v = 0.0f;
   return s;
 }
 
@@ -221,6 +224,8 @@ void expect_board_image_table(const mc_params_t& p, const std::string& board) {
   EXPECT_EQ(p.encoder_cpr, d.enc_counts_per_rev);
   EXPECT_NEAR(p.i_sense_max_a, d.i_sense_max_a, 1e-6f * d.i_sense_max_a);
   EXPECT_NEAR(p.dead_time_s, static_cast<float>(d.deadtime_ns) * 1e-9f, 1e-12f);
+  EXPECT_EQ(p.vbus_board_max_v, d.vbus_max_v);
+  EXPECT_EQ(p.vbus_v, d.vbus_nominal_v);
 }
 
 // speed_law: the law of SPEED (params.toml speed_law: 0 sensored PI, 1
@@ -496,10 +501,15 @@ TEST(PilAppTarget, OdriveV36RegenerativeStopBrakesAsTheSil) {
   EXPECT_NEAR(speed_top, kRegenSpeed_rad_s, 0.1 * kRegenSpeed_rad_s);
   EXPECT_GT(duty_b, 0.0);
   EXPECT_GT(braking, 0);
-  // brake_on_v derived (params.toml): vbus_v + 0.2 (vbus_max_v - vbus_v)
-  const double on_v = s.defaults.vbus_v + 0.2 * (s.defaults.vbus_max_v - s.defaults.vbus_v);
+  // brake_on_v derived (params.toml): vbus_v + 0.2 (vbus_max_v - vbus_v),
+  // the trip derived from the board's limit (min(1.5 vbus_v, 56 V))
+  mc_params_eff_t eff{};
+  ASSERT_EQ(mc_params_resolve(&s.defaults, &eff), MC_GAINS_OK);
+  const double trip_v = eff.p.vbus_max_v;
+  EXPECT_EQ(trip_v, static_cast<double>(mc_board_odrive36_desc.vbus_max_v));
+  const double on_v = s.defaults.vbus_v + 0.2 * (trip_v - s.defaults.vbus_v);
   EXPECT_GT(peak_b, on_v);
-  EXPECT_LT(peak_b, static_cast<double>(s.defaults.vbus_max_v));
+  EXPECT_LT(peak_b, trip_v);
   EXPECT_EQ(e.faults, 0u);
   EXPECT_NEAR(e.omega_m_rad_s, 0.0f, 0.05f * kRegenSpeed_rad_s);
   std::printf(

@@ -793,6 +793,68 @@ TEST_F(McApp, BrakeParametersRefusedByABoardWithoutAChopper)
     EXPECT_EQ(MC_APP_CFG_ERR_PARAMS, mc_app_start(&app, &drive, &fake.board, fake.board.can, true));
 }
 
+// The board's bus limit is its own (the defaults' vbus_board_max_v): a set
+// trip above it, or the limit raised or taken away, is refused by name
+// (APPLY INVALID, MC_PARAMS_ERR_BOARD) and nothing changes; lowering it
+// is taken, and the derived trip follows. A stored set with the limit
+// raised boots the defaults (cfg_store_status INVALID).
+TEST_F(McApp, BusLimitAboveTheBoardsRefused)
+{
+    defaults.vbus_v = 48.0f;
+    defaults.vbus_board_max_v = 57.0f;
+    defaults.vbus_max_v = 0.0f;
+    Start();
+    ASSERT_EQ(57.0f, drive.cfg.vbus_max_v);
+    const float regen_end = drive.cfg.vbus_regen_end_v;
+    struct Write {
+        uint32_t id;
+        float value;
+    };
+    for (const Write &w :
+         {Write{MC_PARAM_ID_VBUS_MAX_V, 70.0f}, Write{MC_PARAM_ID_VBUS_BOARD_MAX_V, 80.0f},
+          Write{MC_PARAM_ID_VBUS_BOARD_MAX_V, 0.0f}}) {
+        SCOPED_TRACE(testing::Message() << "id " << w.id << " = " << w.value);
+        uint32_t v = F32Bits(w.value);
+        ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, w.id, &v));
+        v = 0u;
+        EXPECT_EQ(MC_PARAM_ERR_INVALID, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+        EXPECT_EQ(MC_PARAMS_ERR_BOARD, v);
+        EXPECT_EQ(0.0f, app.srv.active.vbus_max_v);
+        EXPECT_EQ(57.0f, app.srv.active.vbus_board_max_v);
+        EXPECT_EQ(57.0f, drive.cfg.vbus_max_v);
+        EXPECT_EQ(regen_end, drive.cfg.vbus_regen_end_v);
+        // the refused value stays staged: write the active one back
+        v = (w.id == MC_PARAM_ID_VBUS_MAX_V) ? F32Bits(0.0f) : F32Bits(57.0f);
+        ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, w.id, &v));
+    }
+    // lowered: taken, the trip and the band follow
+    uint32_t v = F32Bits(54.0f);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_VBUS_BOARD_MAX_V, &v));
+    v = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_EQ(54.0f, drive.cfg.vbus_max_v);
+    EXPECT_EQ(48.0f + 0.8f * 6.0f, drive.cfg.vbus_regen_end_v);
+    // a stored set with the limit raised (another board's) boots the defaults
+    app = mc_app_t{};
+    drive = mc_drive_t{};
+    defaults.vbus_board_max_v = 60.0f;
+    Start();
+    v = F32Bits(60.0f);
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_VBUS_BOARD_MAX_V, &v));
+    Send(0x18u, {3, 0, 0, 0, 0, 0, 0, 0}); // PARAM_REQ SAVE
+    SlowSteps(2);
+    ASSERT_EQ(1u, app.store.saves);
+    app = mc_app_t{};
+    drive = mc_drive_t{};
+    defaults.vbus_board_max_v = 57.0f;
+    Start();
+    EXPECT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_INVALID), app.boot_status);
+    EXPECT_EQ(57.0f, app.params.vbus_board_max_v);
+    EXPECT_EQ(57.0f, drive.cfg.vbus_max_v);
+}
+
 namespace
 {
 // Values of one parameter other than its effective one (derived values

@@ -12,6 +12,10 @@
 #include "mc_hal_fake.h"
 #include "mc_params.h"
 
+extern "C" {
+#include "mc_law_cfg.h"
+}
+
 namespace
 {
 
@@ -142,6 +146,52 @@ TEST(Params, DerivedUnlessSet)
     ASSERT_EQ(mc_params_to_drive_cfg(&q, &c), MC_PARAMS_OK);
     EXPECT_EQ(c.brake_on_v, e.p.brake_on_v);
     EXPECT_EQ(c.brake_full_v, e.p.brake_full_v);
+}
+
+// The bus limits come from the board (vbus_board_max_v): the derived trip
+// is min(1.5 vbus_v, the board's), the braking thresholds follow its
+// margin, the sensorless law's static voltage limit is the same value; a
+// set trip above the board's, or a nominal bus not below it, is refused
+// MC_PARAMS_ERR_BOARD. The VESC 6's values: 48 V nominal, 57 V limit (its
+// divider reads 61.8 V; 1.5 vbus_v would be 72 V).
+TEST(Params, BusLimitsFromTheBoard)
+{
+    mc_params_t p = mc_params_default;
+    p.vbus_v = 48.0f;
+    p.vbus_board_max_v = 57.0f;
+    ASSERT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
+    mc_params_eff_t e;
+    ASSERT_EQ(mc_params_resolve(&p, &e), MC_GAINS_OK);
+    EXPECT_EQ(e.p.vbus_max_v, 57.0f);
+    EXPECT_EQ(e.p.brake_on_v, 48.0f + 0.2f * 9.0f);
+    EXPECT_EQ(e.p.vbus_regen_start_v, 48.0f + 0.5f * 9.0f);
+    EXPECT_EQ(e.p.vbus_regen_end_v, 48.0f + 0.8f * 9.0f);
+    mc_drive_cfg_t c;
+    ASSERT_EQ(mc_params_to_drive_cfg(&p, &c), MC_PARAMS_OK);
+    EXPECT_EQ(c.vbus_max_v, 57.0f);
+    EXPECT_EQ(c.foc.v_abs_max_v, 57.0f);
+    // the sensorless law's limit is the drive's trip (no second 1.5 rule)
+    mc_ctrl_sls_cfg_t sc{};
+    mc_law_sls_cfg(&e.m, &e.g, &sc);
+    EXPECT_EQ(sc.vbus_max_v, 57.0f);
+    // a board limit above 1.5 vbus_v leaves the nominal derivation
+    p.vbus_board_max_v = 100.0f;
+    ASSERT_EQ(mc_params_resolve(&p, &e), MC_GAINS_OK);
+    EXPECT_EQ(e.p.vbus_max_v, 72.0f);
+    // set values: at the board's limit taken, above it refused
+    p.vbus_board_max_v = 57.0f;
+    p.vbus_max_v = 57.0f;
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
+    p.vbus_max_v = 57.5f;
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_BOARD);
+    p.vbus_max_v = 0.0f;
+    p.vbus_v = 57.0f;
+    EXPECT_NE(mc_params_validate(&p) & MC_PARAMS_ERR_BOARD, 0u) << "nominal bus at the limit";
+    // no board limit (0): the nominal rule alone
+    p = mc_params_default;
+    p.vbus_board_max_v = 0.0f;
+    ASSERT_EQ(mc_params_resolve(&p, &e), MC_GAINS_OK);
+    EXPECT_EQ(e.p.vbus_max_v, 1.5f * p.vbus_v);
 }
 
 // No safe gains: refused by name (MC_PARAMS_ERR_GAINS, the reason from
