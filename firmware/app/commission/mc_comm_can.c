@@ -135,6 +135,14 @@ static mc_can_err_t start(mc_comm_can_t *m, const float *v)
     if (d->mode != MC_DRIVE_MODE_IDLE) {
         return MC_CAN_ERR_MODE;
     }
+    if (mc_drive_angle_state(d) == MC_DRIVE_ANGLE_NEED_INDEX) {
+        /* angle_ref index: the offset is measured against the index, and the
+         * encoder's count starts from it only once it has been seen; measured
+         * before, it would be relative to the power-up count and wrong after
+         * the next power cycle. Run the index search (or turn the rotor past
+         * the index) first. */
+        return MC_CAN_ERR_REFUSED;
+    }
     {
         const limits_t lim = limits_of(m);
         mc_comm_t probe;

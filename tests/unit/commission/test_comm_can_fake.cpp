@@ -36,6 +36,7 @@ class CommCan : public AppDrive {
  protected:
   void Boot(bool attach = true) {
     p = mc_params_default;
+    p.angle_ref = angle_ref;
     ASSERT_EQ(MC_PARAMS_OK, mc_params_to_drive_cfg(&p, &cfg));
     InitDrive();
     GoodSample();  // the bus measured, as by the fast loop of a drive at rest
@@ -102,9 +103,10 @@ class CommCan : public AppDrive {
       }
     }
   }
-  bool host = true;          // the host sends its keep-alive ...
-  uint32_t hb_every = 100u;  // ... every this many slow steps
-  float timeout_s = 0.5f;    // the command timeout (1000 slow steps)
+  uint32_t angle_ref = MC_DRIVE_ANGLE_REF_STORED;  // the table's, at Boot
+  bool host = true;                                // the host sends its keep-alive ...
+  uint32_t hb_every = 100u;                        // ... every this many slow steps
+  float timeout_s = 0.5f;                          // the command timeout (1000 slow steps)
   uint8_t hb = 0;
   uint32_t slow_n = 0;
   void Collect() {
@@ -151,6 +153,26 @@ TEST_F(CommCan, RefusedWhileEnabled) {
   EXPECT_EQ(MC_CAN_ERR_MODE, Comm(MC_COMM_CAN_START));
   EXPECT_EQ(MC_DRIVE_MODE_CURRENT, d.mode) << "the run goes on";
   EXPECT_FALSE(m.running);
+}
+
+// With angle_ref index the offset is measured against the index: a START
+// before the index has been seen after power-up is refused and energises
+// nothing; once an encoder sample carries the index, it runs.
+TEST_F(CommCan, IndexReferenceRefusedUntilTheIndexIsSeen) {
+  angle_ref = MC_DRIVE_ANGLE_REF_INDEX;
+  Boot();
+  ASSERT_EQ(MC_DRIVE_ANGLE_NEED_INDEX, mc_drive_angle_state(&d));
+  EXPECT_EQ(MC_CAN_ERR_REFUSED, Comm(MC_COMM_CAN_START));
+  EXPECT_EQ(MC_DRIVE_MODE_IDLE, d.mode);
+  EXPECT_FALSE(m.running);
+  EXPECT_FALSE(fake.pwm3.enabled) << "nothing energised";
+  ASSERT_EQ(
+      0, mc_hal_fake_encoder_set(&fake, 0u, MC_HAL_ENCODER_FLAG_VALID | MC_HAL_ENCODER_FLAG_INDEX));
+  GoodSample();
+  (void)mc_drive_fast_step(&d);
+  ASSERT_EQ(MC_DRIVE_ANGLE_KNOWN, mc_drive_angle_state(&d));
+  EXPECT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START));
+  EXPECT_TRUE(m.running);
 }
 
 TEST_F(CommCan, AnOptionReplacesTheDefaultZeroKeepsIt) {
