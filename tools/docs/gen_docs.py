@@ -206,31 +206,30 @@ def bench_m4f():
 ISR_BOARDS = ("example", "odrive36", "vesc6")
 
 
-def bench_isr():
+def isr_images(name, runner, extra_inputs=()):
+    """A runner over the interrupt benchmark images of every ISR board
+    (run_isr_bench.py, run_isr_profile.py): its JSON report."""
     def fn(ctx):
-        out = os.path.join(ctx.workdir(("bench_isr",)), "bench_isr.json")
-        cmd = [sys.executable, os.path.join(ROOT, "tools", "bench", "run_isr_bench.py"),
+        out = os.path.join(ctx.workdir((name,)), name + ".json")
+        cmd = [sys.executable, os.path.join(ROOT, "tools", "bench", runner),
                "--qemu", ctx.input("qemu"), "--out", out]
+        for flag, key in extra_inputs:
+            cmd += [flag, ctx.input(key)]
         for b in ISR_BOARDS:
             cmd += ["--elf", f"{b}={ctx.input(f'bench_isr_{b}_elf')}"]
         run(cmd)
         with open(out) as fh:
             return json.load(fh)
-    return Src(("bench_isr",), "ctest -R target.bench_isr", fn)
+    return Src((name,), f"ctest -R target.{name}", fn)
+
+
+def bench_isr():
+    return isr_images("bench_isr", "run_isr_bench.py")
 
 
 def isr_profile():
-    def fn(ctx):
-        out = os.path.join(ctx.workdir(("isr_profile",)), "isr_profile.json")
-        cmd = [sys.executable, os.path.join(ROOT, "tools", "bench", "run_isr_profile.py"),
-               "--qemu", ctx.input("qemu"), "--nm", ctx.input("arm_nm"),
-               "--addr2line", ctx.input("arm_addr2line"), "--out", out]
-        for b in ISR_BOARDS:
-            cmd += ["--elf", f"{b}={ctx.input(f'bench_isr_{b}_elf')}"]
-        run(cmd)
-        with open(out) as fh:
-            return json.load(fh)
-    return Src(("isr_profile",), "ctest -R target.isr_profile", fn)
+    return isr_images("isr_profile", "run_isr_profile.py",
+                      (("--nm", "arm_nm"), ("--addr2line", "arm_addr2line")))
 
 
 def bench_q31(cpu):
