@@ -88,6 +88,18 @@ class Stub:
         self.sock.sendall(f"${data}#{csum:02x}".encode("ascii"))
         return self._read_packet()
 
+    def run_to_end(self):
+        """Continue and let the image end: QEMU answers with its exit (W..)
+        and closes the socket, possibly before our acknowledgement reaches
+        it, so a closed connection here is the normal end, not an error."""
+        data = "c"
+        try:
+            self.sock.sendall(f"${data}#{sum(data.encode('ascii')) % 256:02x}".encode("ascii"))
+            while self.sock.recv(65536):
+                pass
+        except OSError:
+            pass
+
     def reg(self, n):
         """Core register n (0..15) from a 'g' read (QEMU's ARM stub has no 'p')."""
         v = self.cmd("g")
@@ -208,7 +220,7 @@ def profile(qemu, elf, nm, a2l, timeout_s=300):
                 stub.cmd("c")
                 stub.cmd(f"z0,{by_name[HANDLER]:x},2")
                 stepped[run] = step_interrupt(stub, funcs, by_name[HANDLER])
-            stub.cmd("c")  # to the image's end (semihosting exit)
+            stub.run_to_end()  # the image's end (semihosting exit)
         finally:
             try:
                 proc.wait(timeout=timeout_s)
