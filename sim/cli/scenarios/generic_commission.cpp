@@ -186,9 +186,10 @@ std::string commission_error_names(uint32_t e) {
   static const char* const names[] = {
       "OFFSET",        "NO_MOTOR",        "OPEN_PHASE",  "ENCODER_NO_MOTION",
       "ROTOR_BLOCKED", "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT",
-      "VOLTAGE",       "RANGE",           "MEAS",        "ABORTED"};
+      "VOLTAGE",       "RANGE",           "MEAS",        "ABORTED",
+      "HOST_LOST",     "ENCODER_COARSE"};
   std::string s;
-  for (int i = 0; i < 12; ++i) {
+  for (int i = 0; i < 14; ++i) {
     if (e & (1u << i)) s += (s.empty() ? "" : "|") + std::string(names[i]);
   }
   return s;
