@@ -404,6 +404,7 @@ void run_sensorless(RunContext& ctx) {
   double t_lock = std::nan(""), ang_max = 0, ang_sq = 0, werr_end = 0, w = 0, id = 0, iq = 0;
   long ang_n = 0, k = 0;
   double min_w_align = 0;
+  double t_enable = std::nan("");  // the application enabled the drive (the load ran before)
   // The true angle at the previous period's start: the sample the probe's
   // estimate (the fast step run at the end of the previous iteration) was
   // computed from. Compared with the angle after the plant advanced, the
@@ -418,6 +419,7 @@ void run_sensorless(RunContext& ctx) {
     w = board.state()(2);
     const mc_app_probe_t& pr = run.probe();
     const bool running = pr.cmd_enabled != 0u;
+    if (running && std::isnan(t_enable)) t_enable = t;
     if (running && pr.sls_phase == MC_CTRL_SLS_ALIGN) min_w_align = std::min(min_w_align, sgn * w);
     if (running && pr.sls_phase == MC_CTRL_SLS_CLOSED && std::isnan(t_lock)) t_lock = t;
     if (!std::isnan(t_lock) && t > t_lock + 0.05) {
@@ -442,6 +444,7 @@ void run_sensorless(RunContext& ctx) {
   ctx.summary.set("fallbacks", d.sls_fallbacks);
   ctx.summary.set("t_lock_s", t_lock);
   ctx.summary.set("t_load_step_s", t_load);
+  ctx.summary.set("t_enable_s", t_enable);
   ctx.summary.set("align_backwards_rad_s", -min_w_align);
   ctx.summary.set("obs_gamma_per_wb2_s", sls_gamma(e));
   if (!stopped.empty()) {
