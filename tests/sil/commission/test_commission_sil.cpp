@@ -195,22 +195,17 @@ TEST(CommissionRefuses, EncoderNotMoving) {
 // coast's speed from so few counts read the flux 41 % low, error_bits 0,
 // before the check). At 180 counts (12 per electrical turn) the same motor
 // identifies within the library's bounds (flux measured 1.5 % off).
-MotorFiles hub(int cpr) {
-  MotorFiles f = load_motor_files(std::string(MCSIM_MOTORS_DIR) + "/hub-6p5in-15pp.toml",
-                                  std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-56v.toml");
-  f.board.encoder_cpr = cpr;
-  return f;
-}
+using testlib::hub_on_odrive;
 
 TEST(CommissionRefuses, EncoderTooCoarseForTheFlux) {
-  const MotorFiles f = hub(90);
+  const MotorFiles f = hub_on_odrive(90);
   const CommissionRun r = run_commission(f, default_commission_setup(f));
   expect_refused(r, MC_COMM_ERR_ENCODER_COARSE, "90 counts, 15 pole pairs");
   EXPECT_EQ(r.err, MC_COMM_ERR_ENCODER_COARSE) << commission_error_names(r.err);
 }
 
 TEST(CommissionCoarse, TwelveCountsPerElectricalTurnIdentify) {
-  const MotorFiles f = hub(180);
+  const MotorFiles f = hub_on_odrive(180);
   expect_accurate(f, run_commission(f, default_commission_setup(f)), "hub_180_counts");
 }
 

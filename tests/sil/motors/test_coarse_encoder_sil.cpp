@@ -26,10 +26,7 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 MotorFiles hub(int cpr) {
-  MotorFiles f = load_motor_files(std::string(MCSIM_MOTORS_DIR) + "/hub-6p5in-15pp.toml",
-                                  std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-56v.toml");
-  f.board.encoder_cpr = cpr;
-  return f;
+  return testlib::hub_on_odrive(cpr);
 }
 
 // The bound by its formula, computed here from the motor's values: a count's
