@@ -93,9 +93,11 @@ class MotorCli(unittest.TestCase):
         self.assertGreaterEqual(max(ramp), 0.999 * ho - s["gain.if_accel_rad_s2"] * (t[1] - t[0]))
         # NaN exactly from the lock on (t_lock_s is the first CLOSED sample; no fallback).
         self.assertEqual(s["fallbacks"], 0)
-        self.assertEqual([math.isnan(w) for w in w_if], [ti >= s["t_lock_s"] for ti in t])
+        # (1e-9 s: the CSV's t has 9 significant digits, the summary's more.)
+        t_lock = s["t_lock_s"] - 1e-9
+        self.assertEqual([math.isnan(w) for w in w_if], [ti >= t_lock for ti in t])
         # Meanwhile the speed command's ramp was far past the hand-over speed.
-        k = max(i for i, ti in enumerate(t) if ti < s["t_lock_s"])
+        k = max(i for i, ti in enumerate(t) if ti < t_lock)
         self.assertGreater(float(rows[k]["omega_ref_rad_s"]), 1.5 * ho)
 
     def test_gain_override_and_motor_ranges(self):
