@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -241,7 +242,7 @@ void run_speed(RunContext& ctx, bool load_step) {
   double last_out_load = t_load, dip = 0, w_max = 0, t_half = std::nan("");
   // the steady window's speed: its mean error (the steady error) and its
   // peak to peak (a residual oscillation the 2 % band alone would pass)
-  double w_ss_min = INFINITY, w_ss_max = -INFINITY, werr_ss_sum = 0;
+  double w_ss_min = std::numeric_limits<double>::infinity(), w_ss_max = -w_ss_min, werr_ss_sum = 0;
   long n_ss = 0;
   bool ref_sent = false;
   const double t_ss = dur - 0.2 * (dur - (load_step ? t_load : t0 + t_acc));
