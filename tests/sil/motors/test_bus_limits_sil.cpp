@@ -54,8 +54,7 @@ INSTANTIATE_TEST_SUITE_P(Boards, BusLimits,
 TEST(BusLimitsSupply, HigherSupplyResistanceStillWithinLimits) {
   const MotorFiles f = files({"odrive-d5065", "odrive-v36-24v"});
   const double r = 10.0 * f.board.source_r_ohm;
-  const auto s =
-      testlib::run_scenario("bus-limits", f, {{"source_r_ohm", std::to_string(r)}}, "");
+  const auto s = testlib::run_scenario("bus-limits", f, {{"source_r_ohm", std::to_string(r)}}, "");
   EXPECT_NEAR(s.at("source_r_ohm"), r, 1e-9 * r);
   EXPECT_EQ(s.at("faults"), 0.0);
   EXPECT_LE(s.at("i_bus_excess_frac"), 0.02);
