@@ -320,7 +320,8 @@ TEST_F(TelemetryOnDrive, CurrentsAreTheParkTransformOfThePhaseCurrents) {
 // BUS_CURRENT (BO_ 44) carries the drive's bus estimate and the limits in
 // force (mc_drive_bus.h) as they are, within half a step of 0.01 A.
 TEST_F(TelemetryOnDrive, BusCurrentCarriesTheEstimateAndTheLimits) {
-  d.bus.i_bus_est_a = -3.25f;
+  d.bus.p_bus_est_w = -3.25f * 24.0f;
+  d.bus.vbus_v = 24.0f;
   d.bus.i_mot_lim_a = 12.5f;
   d.bus.i_regen_lim_a = 4.0f;
   const mc_telemetry_src_t src{&d, nullptr, nullptr, nullptr};

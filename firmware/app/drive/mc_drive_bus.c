@@ -27,6 +27,11 @@ float mc_drive_bus_estimate_a(float vd_v, float vq_v, float id_a, float iq_a, fl
     return (vbus_v > 0.0f && mc_isfinite_f32(i)) ? i : 0.0f;
 }
 
+float mc_drive_bus_current_a(const mc_drive_bus_t *s)
+{
+    return (s->vbus_v > 0.0f) ? (s->p_bus_est_w / s->vbus_v) : 0.0f;
+}
+
 void mc_drive_bus_init(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc)
 {
     const float t_loop = (foc->kp_q_v_per_a > 0.0f) ? (foc->lq_h / foc->kp_q_v_per_a) : foc->dt_s;
@@ -131,13 +136,11 @@ static void limits_w(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg, float vbu
     *p_r = r;
 }
 
-/* The estimate of the last step and the correction c towards it. */
-static void correct(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc, const mc_drive_bus_in_t *in)
+/* The correction c towards the estimate of the last step (its power
+ * recorded by mc_drive_bus_limit). */
+static void correct(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc, const mc_drive_bus_in_t *in,
+                    bool fresh)
 {
-    const bool fresh = s->have_last && (in->fast_count == s->last_count + 1u);
-    s->i_bus_est_a = mc_drive_bus_estimate_a(in->vd_v, in->vq_v, in->id_a, in->iq_a, in->vbus_v);
-    s->last_count = in->fast_count;
-    s->have_last = true;
     if (!fresh) {
         s->corr_w = 0.0f; /* the loop did not run last step: nothing to compare */
         return;
@@ -149,7 +152,7 @@ static void correct(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc, const mc_dri
             const float psi = foc->flux_wb + ((foc->ld_h - foc->lq_h) * in->id_a);
             model += 1.5f * in->omega_e_rad_s * psi * in->iq_a;
         }
-        s->corr_w += s->corr_alpha * ((s->i_bus_est_a * in->vbus_v) - model - s->corr_w);
+        s->corr_w += s->corr_alpha * (s->p_bus_est_w - model - s->corr_w);
         if (!mc_isfinite_f32(s->corr_w)) {
             s->corr_w = 0.0f;
         }
@@ -177,8 +180,19 @@ void mc_drive_bus_limit(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg,
 {
     float p_m;
     float p_r;
-    correct(s, foc, in);
+    const bool fresh = s->have_last && (in->fast_count == s->last_count + 1u);
+    const float p = 1.5f * ((in->vd_v * in->id_a) + (in->vq_v * in->iq_a));
+    s->p_bus_est_w = mc_isfinite_f32(p) ? p : 0.0f;
+    s->vbus_v = in->vbus_v;
     s->limiting = false;
+    if (cfg->i_bus_max_a == 0.0f && cfg->i_bus_regen_max_a == 0.0f && cfg->p_bus_max_w == 0.0f &&
+        cfg->p_bus_regen_max_w == 0.0f) {
+        s->have_last = false; /* off: the correction restarts when a limit is set */
+        return;
+    }
+    s->last_count = in->fast_count;
+    s->have_last = true;
+    correct(s, foc, in, fresh);
     if (!(in->vbus_v > 0.0f)) {
         s->i_mot_lim_a = 0.0f;
         s->i_regen_lim_a = 0.0f;

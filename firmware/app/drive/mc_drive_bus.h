@@ -71,7 +71,8 @@ typedef struct {
 typedef struct {
     float corr_w;        /**< the estimate's correction c [W] */
     float corr_alpha;    /**< its filter's factor per step */
-    float i_bus_est_a;   /**< estimated bus current of the last step [A] */
+    float p_bus_est_w;   /**< estimated bus power of the last step [W] */
+    float vbus_v;        /**< the bus of that step [V] */
     float i_mot_lim_a;   /**< motoring limit in force, P_m / vbus [A] (0: off) */
     float i_regen_lim_a; /**< regenerative limit in force, P_r / vbus [A] (0: off) */
     bool limiting;       /**< the last step moved a reference */
@@ -97,11 +98,17 @@ uint32_t mc_drive_bus_check(const mc_drive_bus_cfg_t *cfg);
  *  or a value that is not finite. */
 float mc_drive_bus_estimate_a(float vd_v, float vq_v, float id_a, float iq_a, float vbus_v);
 
+/** The estimated bus current of the last step, p_bus_est_w / vbus_v [A]
+ *  (0 before the first; divided here, off the fast step). */
+float mc_drive_bus_current_a(const mc_drive_bus_t *s);
+
 /** Fresh state for the current loop's configuration foc. */
 void mc_drive_bus_init(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc);
 
 /** Limit (*p_id_a, *p_iq_a) so that the estimated bus power stays in
- *  [-P_r, P_m]; updates the estimate and the correction. */
+ *  [-P_r, P_m]; updates the estimate and the correction. With every limit
+ *  off it records the estimate's power and returns (a few multiplications:
+ *  the interrupt's cost of the default configuration). */
 void mc_drive_bus_limit(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg,
                         const mc_foc_f32_cfg_t *foc, const mc_drive_bus_in_t *in, float *p_id_a,
                         float *p_iq_a);
