@@ -131,7 +131,7 @@ TEST(CanProto, UnpackRejectsFormatLengthIdAndRange) {
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {0})));  // control_mode 1..3
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {4})));
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x030, {2})));              // enable 0..1
-  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {11, 10, 0})));      // tm_cmd 1..10
+  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {13, 10, 0})));      // tm_cmd 1..12
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {1, 0xE9, 0x03})));  // 1001 Hz
   // 10000.001 rad/s: one raw step above the DBC maximum
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x033, {0x81, 0x96, 0x98, 0x00})));
@@ -315,6 +315,32 @@ TEST_F(TelemetryOnDrive, CurrentsAreTheParkTransformOfThePhaseCurrents) {
   // own float sin/cos: a few 1e-7 relative
   EXPECT_NEAR(id, v[MC_CAN_CURRENTS_I_D_A], 1e-5);
   EXPECT_NEAR(iq, v[MC_CAN_CURRENTS_I_Q_A], 1e-5);
+}
+
+// BUS_CURRENT (BO_ 44) carries the drive's bus estimate and the limits in
+// force (mc_drive_bus.h) as they are, within half a step of 0.01 A.
+TEST_F(TelemetryOnDrive, BusCurrentCarriesTheEstimateAndTheLimits) {
+  d.bus.p_bus_est_w = -3.25f * 24.0f;
+  d.bus.vbus_v = 24.0f;
+  d.bus.i_mot_lim_a = 12.5f;
+  d.bus.i_regen_lim_a = 4.0f;
+  const mc_telemetry_src_t src{&d, nullptr, nullptr, nullptr};
+  float v[MC_CAN_NSIG_MAX];
+  ASSERT_TRUE(mc_telemetry_values(MC_TM_BUS_CURRENT, &src, v));
+  mc_hal_can_frame_t f;
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_pack(MC_CAN_MSG_BUS_CURRENT, 1u, v, MC_CAN_NSIG_MAX, &f));
+  EXPECT_EQ((1u << 5) | 12u, f.id);  // node 1, BO_ 44
+  uint32_t m = 0;
+  float u[MC_CAN_NSIG_MAX];
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&f, &m, u, MC_CAN_NSIG_MAX));
+  EXPECT_EQ(MC_CAN_MSG_BUS_CURRENT, m);
+  EXPECT_NEAR(-3.25f, u[MC_CAN_BUS_CURRENT_I_BUS_EST_A], 0.005f);
+  EXPECT_NEAR(12.5f, u[MC_CAN_BUS_CURRENT_I_BUS_MAX_A], 0.005f);
+  EXPECT_NEAR(4.0f, u[MC_CAN_BUS_CURRENT_I_BUS_REGEN_MAX_A], 0.005f);
+  EXPECT_EQ(0.0f, u[MC_CAN_BUS_CURRENT_SAT]);
+  EXPECT_EQ(static_cast<uint32_t>(MC_TM_BUS_CURRENT),
+            mc_telemetry_slot_of_cmd(MC_CAN_CMD_BUS_CURRENT));
+  EXPECT_EQ(static_cast<uint32_t>(MC_TM_COUNT), mc_telemetry_slot_of_cmd(0x0Bu));  // not telemetry
 }
 
 TEST_F(TelemetryOnDrive, SetRateRefusesAboveBudget) {
@@ -598,6 +624,13 @@ TEST_F(CanCmd, TelemetryRateCommand) {
   Init();
   ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x036, {4, 0x2C, 0x01})));  // SPEED 300 Hz
   EXPECT_EQ(300u, tm.cfg.rate_hz[MC_TM_SPEED]);
+  // BUS_CURRENT by its command id 12 (slots past POSITION_REF are not id - 1)
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x036, {12, 20, 0})));
+  EXPECT_EQ(20u, tm.cfg.rate_hz[MC_TM_BUS_CURRENT]);
+  // 11 names no telemetry message: refused, nothing changes
+  const mc_telemetry_cfg_t before = tm.cfg;
+  EXPECT_NE(MC_CAN_ERR_NONE, Send(Frame(0x036, {11, 20, 0})));
+  EXPECT_EQ(0, std::memcmp(&before, &tm.cfg, sizeof before));
   mc_can_cmd_t z{};
   ASSERT_EQ(MC_CAN_CMD_CFG_OK, mc_can_cmd_init(&z, &cc, &d, nullptr));
   const mc_hal_can_frame_t f = Frame(0x036, {4, 1, 0});

@@ -316,6 +316,9 @@ typedef struct {
     float omega_m_rad_s;      /**< the encoder tracking loop's speed [rad/s] */
     float vbus_v;
     float regen_scale, brake_duty;
+    float i_bus_est_a;            /**< the drive's estimated DC-bus current [A] (mc_drive_bus.h) */
+    float i_bus_mot_lim_a;        /**< its motoring limit in force [A] (0: off) */
+    float i_bus_regen_lim_a;      /**< its regenerative limit in force [A] (0: off) */
     float fw_v_mag_v, fw_v_max_v; /**< field weakening: |v| and its target [V] */
     float omega_ref_rad_s;        /**< the speed law's reference; the position law's
                                        trajectory speed [rad/s] */

@@ -230,6 +230,10 @@ void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg)
     cfg->vbus_regen_start_v = p->vbus_regen_start_v;
     cfg->vbus_regen_end_v = p->vbus_regen_end_v;
     cfg->regen_id_a = p->regen_id_a;
+    cfg->bus.i_bus_max_a = p->i_bus_max_a;
+    cfg->bus.i_bus_regen_max_a = p->i_bus_regen_max_a;
+    cfg->bus.p_bus_max_w = p->p_bus_max_w;
+    cfg->bus.p_bus_regen_max_w = p->p_bus_regen_max_w;
     if (p->brake_enable != 0u) {
         cfg->brake_on_v = p->brake_on_v;
         cfg->brake_full_v = p->brake_full_v;

@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 92u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 86u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 96u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 90u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -103,6 +103,10 @@
 #define MC_PARAM_ID_TRAJ_D_MAX_RAD_S2 135u
 #define MC_PARAM_ID_TRAJ_FILTER_BW_RAD_S 136u
 #define MC_PARAM_ID_POS_INPUT_MODE 137u
+#define MC_PARAM_ID_I_BUS_MAX_A 150u
+#define MC_PARAM_ID_I_BUS_REGEN_MAX_A 151u
+#define MC_PARAM_ID_P_BUS_MAX_W 152u
+#define MC_PARAM_ID_P_BUS_REGEN_MAX_W 153u
 #define MC_PARAM_ID_CFG_LAYOUT_VERSION 200u
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
 #define MC_PARAM_ID_CFG_STORE_SEQ 202u
@@ -197,12 +201,16 @@
 #define MC_PARAM_IDX_TRAJ_D_MAX_RAD_S2 83u
 #define MC_PARAM_IDX_TRAJ_FILTER_BW_RAD_S 84u
 #define MC_PARAM_IDX_POS_INPUT_MODE 85u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 86u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 87u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 88u
-#define MC_PARAM_IDX_CFG_PENDING 89u
-#define MC_PARAM_IDX_LAW_ERROR 90u
-#define MC_PARAM_IDX_ANGLE_ERROR 91u
+#define MC_PARAM_IDX_I_BUS_MAX_A 86u
+#define MC_PARAM_IDX_I_BUS_REGEN_MAX_A 87u
+#define MC_PARAM_IDX_P_BUS_MAX_W 88u
+#define MC_PARAM_IDX_P_BUS_REGEN_MAX_W 89u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 90u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 91u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 92u
+#define MC_PARAM_IDX_CFG_PENDING 93u
+#define MC_PARAM_IDX_LAW_ERROR 94u
+#define MC_PARAM_IDX_ANGLE_ERROR 95u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -292,6 +300,10 @@ typedef struct {
     float traj_d_max_rad_s2; /**< Trajectory deceleration; 0: derived, the speed ramp. [rad/s^2] */
     float traj_filter_bw_rad_s; /**< Input filter of streamed position setpoints; 0: derived, pos_kp. [rad/s] */
     uint32_t pos_input_mode; /**< POSITION setpoints: 0 a trapezoid to each (traj_* limits); 1 streamed, through the input filter (traj_filter_bw_rad_s). */
+    float i_bus_max_a; /**< Motoring DC-bus current limit: the current the drive draws from its supply, estimated from 3/2 (vd id + vq iq) / vbus (firmware/app/drive/mc_drive_bus.h); 0: off. [A] */
+    float i_bus_regen_max_a; /**< Regenerative DC-bus current limit: the largest current pushed back into the supply (a magnitude), as i_bus_max_a; the DC link's voltage limit (vbus_regen_start_v) applies as well, the tighter wins; 0: off. [A] */
+    float p_bus_max_w; /**< Motoring DC-bus power limit (vbus times the estimated bus current); 0: off. [W] */
+    float p_bus_regen_max_w; /**< Regenerative DC-bus power limit (a magnitude); 0: off. [W] */
 } mc_params_t;
 
 /** Defaults ("load defaults", and a drive with an empty store). */

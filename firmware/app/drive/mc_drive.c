@@ -126,6 +126,9 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
         (cfg->regen_id_a > 0.0f && !(cfg->regen_id_a <= cfg->i_max_a))) {
         err |= MC_DRIVE_CFG_ERR_BUS_POWER;
     }
+    if (mc_drive_bus_check(&cfg->bus) != 0u) {
+        err |= MC_DRIVE_CFG_ERR_BUS_POWER;
+    }
     return err;
 }
 
@@ -180,6 +183,7 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
     d->mode = MC_DRIVE_MODE_IDLE;
     d->tm.regen_scale = 1.0f;
     d->regen_lead_alpha = regen_lead_alpha(cfg);
+    mc_drive_bus_init(&d->bus, &cfg->foc);
     if (cfg->fw_enable) {
         (void)mc_fw_f32_init(&d->fw, &cfg->fw);
     }
@@ -613,6 +617,12 @@ static uint32_t current_loop(mc_drive_t *d, const mc_hal_adc_sample_t *s, float 
         regen_limit(d, s->vbus_v, r->omega_e_rad_s, &id, &iq);
     } else {
         d->tm.regen_scale = 1.0f;
+    }
+    {
+        const mc_drive_bus_in_t bi = {s->vbus_v,      r->omega_e_rad_s, r->rotor_frame,
+                                      d->fast_count,  d->tm.foc.id_a,   d->tm.foc.iq_a,
+                                      d->tm.foc.vd_v, d->tm.foc.vq_v};
+        mc_drive_bus_limit(&d->bus, &d->cfg.bus, &d->cfg.foc, &bi, &id, &iq);
     }
     id = mc_sat_f32(id, -lim, lim);
     iq = mc_sat_f32(iq, -lim, lim);
@@ -1277,6 +1287,7 @@ void mc_drive_set_runtime_limits(mc_drive_t *d, const mc_drive_cfg_t *cfg)
     d->cfg.vbus_regen_start_v = cfg->vbus_regen_start_v;
     d->cfg.vbus_regen_end_v = cfg->vbus_regen_end_v;
     d->cfg.regen_id_a = cfg->regen_id_a;
+    d->cfg.bus = cfg->bus;
     d->cfg.brake_on_v = cfg->brake_on_v;
     d->cfg.brake_full_v = cfg->brake_full_v;
     d->id_ref_a = mc_sat_f32(d->id_ref_a, -cfg->i_max_a, cfg->i_max_a);

@@ -71,6 +71,7 @@ RUNS = {
     "pi2d-motor-q31": ([], ["--duration", "0.22"], ["--duration", "2.2"]),
     "csmc-state-feedback-q31": ([], ["--duration", "0.05"], ["--duration", "0.5"]),
     "regen-stop": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
+    "bus-limits": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
 }
 
 
