@@ -342,6 +342,9 @@ typedef struct {
      * NEED_INDEX, NEED_ALIGN), 1 while a find at enable runs, and the
      * MC_CTRL_ALIGN_ERR_* bits of the last find that failed */
     uint32_t angle_state, angle_finding, angle_error;
+    /* thermal derating (mc_drive_thermal.h): the winding estimate [C] (the
+     * ambient while the model is off) and the current limit in force [A] */
+    float t_winding_est_c, i_limit_a;
 } mc_app_probe_t;
 
 /** Fill *p from the application and its drive (after a period). */

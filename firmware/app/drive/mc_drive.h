@@ -92,6 +92,7 @@
 #include "fw/mc_fw.h"
 #include "observer/mc_enctrack.h"
 #include "hal/hal.h"
+#include "mc_drive_thermal.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -193,6 +194,8 @@ typedef enum {
                                                     them 0, i_min above i_max_a, or the
                                                     time shorter than one period or
                                                     longer than 2^24 periods */
+#define MC_DRIVE_CFG_ERR_THERMAL \
+    (1u << 19) /**< cfg.thermal refused by mc_drive_thermal_init (see there) */
 #define MC_DRIVE_CFG_ERR_FW \
     (1u << 13) /**< fw_enable with a cfg.fw mc_fw_f32_init
                                                    refuses, or fw.dt_s != foc.dt_s */
@@ -406,6 +409,9 @@ typedef struct {
      *  exceeds the bus (see "Active short circuit" above); needs foc.flux_wb,
      *  foc.ld_h > 0 and foc.flux_wb / foc.ld_h < i_trip_a. */
     bool asc_enable;
+    /** Thermal derating and the winding estimate (mc_drive_thermal.h): the
+     *  current limit in force is i_max_a times its factor. */
+    mc_drive_thermal_cfg_t thermal;
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
@@ -556,6 +562,7 @@ typedef struct {
     /* the regenerative limit's lead (see "Regenerative braking") */
     float vbus_lag_v;       /**< the bus reading low-passed at the lead time [V] (0: none yet) */
     float regen_lead_alpha; /**< that filter's factor per fast step, dt / (t_lead + dt) */
+    mc_drive_thermal_t thermal; /**< derating factor, winding estimate (mc_drive_thermal.h) */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns
