@@ -201,7 +201,8 @@ typedef struct {
     uint32_t slow_loop_div_fixed;  /**< the board's slow divider (0: any) */
     float tm_budget_frac;          /**< share of the bus telemetry may use */
     /** Rates of the messages past POSITION: OBSERVER, CONTROLLER, STEPPER,
-     *  CURRENT_REFS, POSITION_REF [Hz] (the parameter table has the first five). */
+     *  CURRENT_REFS, POSITION_REF, THERMAL [Hz] (the parameter table has the first
+     *  five). */
     uint16_t tm_ext_rate_hz[MC_TM_COUNT - MC_TM_OBSERVER];
     mc_app_law_t speed_law;    /**< plugged speed law (ctrl NULL: SPEED unsupported) */
     mc_app_law_t position_law; /**< plugged position law (ctrl NULL: none) */

@@ -17,6 +17,7 @@ static const uint8_t k_slot_msg[MC_TM_COUNT] = {
     (uint8_t)MC_CAN_MSG_POSITION,     (uint8_t)MC_CAN_MSG_OBSERVER,
     (uint8_t)MC_CAN_MSG_CONTROLLER,   (uint8_t)MC_CAN_MSG_STEPPER,
     (uint8_t)MC_CAN_MSG_CURRENT_REFS, (uint8_t)MC_CAN_MSG_POSITION_REF,
+    (uint8_t)MC_CAN_MSG_THERMAL,
 };
 
 #define NO_SAT 0xFFu
@@ -32,6 +33,7 @@ static const uint8_t k_slot_sat[MC_TM_COUNT] = {
     NO_SAT,
     (uint8_t)MC_CAN_CURRENT_REFS_SAT,
     (uint8_t)MC_CAN_POSITION_REF_SAT,
+    (uint8_t)MC_CAN_THERMAL_SAT,
 };
 
 #define TWO_PI_F 6.28318530717958647692f
@@ -321,6 +323,12 @@ static bool values_of(uint32_t slot, const mc_telemetry_src_t *src, float *value
     case MC_TM_POSITION_REF:
         values[MC_CAN_POSITION_REF_THETA_REF_RAD] =
             (src->cmd != NULL) ? src->cmd->theta_ref_rad : 0.0f;
+        return true;
+    case MC_TM_THERMAL:
+        values[MC_CAN_THERMAL_T_WINDING_EST_C] = d->thermal.t_w_c;
+        values[MC_CAN_THERMAL_I_LIMIT_A] = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
+        values[MC_CAN_THERMAL_DERATE_FACTOR] = d->thermal.k;
+        values[MC_CAN_THERMAL_DERATING] = d->thermal.derating ? 1.0f : 0.0f;
         return true;
     case MC_TM_OBSERVER:
         if ((x == NULL) || !x->have_observer) {

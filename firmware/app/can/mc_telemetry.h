@@ -16,6 +16,7 @@
  *              not sent while the application gives none.
  *   CURRENT_REFS  the drive's dq current references
  *   POSITION_REF  the multi-turn CAN position reference
+ *   THERMAL       the winding estimate and the derated current limit
  * Every frame ends with its message's rolling 8-bit sequence counter, which
  * advances for every frame generated, so a frame the HAL could not queue
  * shows up as a gap at the logger.
@@ -82,7 +83,8 @@ typedef enum {
     MC_TM_STEPPER = 7,
     MC_TM_CURRENT_REFS = 8,
     MC_TM_POSITION_REF = 9,
-    MC_TM_COUNT = 10
+    MC_TM_THERMAL = 10,
+    MC_TM_COUNT = 11
 } mc_tm_slot_t;
 
 #define MC_TM_HEARTBEAT_MIN_HZ 1u /**< the drive's HEARTBEAT cannot go below this */
