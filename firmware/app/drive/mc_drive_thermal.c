@@ -140,8 +140,7 @@ static void model_step(mc_drive_thermal_t *th, float dt_s, float i_sq_a2)
  * is MC_DRIVE_THERMAL_HYST_K below its start. */
 static bool below_release(float t_c, float start_c, float end_c)
 {
-    return !(end_c > 0.0f) || !mc_isfinite_f32(t_c) ||
-           t_c < start_c - MC_DRIVE_THERMAL_HYST_K;
+    return !(end_c > 0.0f) || !mc_isfinite_f32(t_c) || t_c < start_c - MC_DRIVE_THERMAL_HYST_K;
 }
 
 float mc_drive_thermal_step(mc_drive_thermal_t *th, float dt_s, float i_sq_a2,

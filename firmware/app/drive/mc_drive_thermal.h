@@ -51,16 +51,18 @@
 extern "C" {
 #endif
 
-#define MC_DRIVE_THERMAL_ERR_NONE   0u
-#define MC_DRIVE_THERMAL_ERR_NULL   (1u << 0) /**< NULL state or config */
-#define MC_DRIVE_THERMAL_ERR_DERATE (1u << 1) /**< a start/end pair not finite, negative,
+#define MC_DRIVE_THERMAL_ERR_NONE 0u
+#define MC_DRIVE_THERMAL_ERR_NULL (1u << 0) /**< NULL state or config */
+#define MC_DRIVE_THERMAL_ERR_DERATE \
+    (1u << 1) /**< a start/end pair not finite, negative,
                                                   end <= start, or only one of them 0 */
-#define MC_DRIVE_THERMAL_ERR_MODEL  (1u << 2) /**< model_enable with r_ohm, i_rated_a,
+#define MC_DRIVE_THERMAL_ERR_MODEL \
+    (1u << 2) /**< model_enable with r_ohm, i_rated_a,
                                                   rise_k, a tau <= 0 or not finite, share
                                                   outside (0, 1), ambient_c outside
                                                   [-50, 150] C */
 
-#define MC_DRIVE_THERMAL_HYST_K     5.0f     /**< the warning clears this far below start */
+#define MC_DRIVE_THERMAL_HYST_K       5.0f     /**< the warning clears this far below start */
 #define MC_DRIVE_THERMAL_ALPHA_CU_1_K 0.00393f /**< copper, per K at 20 C (IEC 60028) */
 
 typedef struct {

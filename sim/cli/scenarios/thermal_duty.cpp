@@ -53,14 +53,19 @@ constexpr double kLimitTolK = 2.0;  // issue 33: at most 2 K above the limit wit
 
 std::vector<ParamSpec> thermal_params(const MotorFiles& f) {
   std::vector<ParamSpec> p = {
-      {"derate", 1.0, "1", "the drive's derating by the winding estimate (0: off, the estimate runs)",
-       0.0, 1.0, {{"off", 0.0}, {"on", 1.0}}},
+      {"derate",
+       1.0,
+       "1",
+       "the drive's derating by the winding estimate (0: off, the estimate runs)",
+       0.0,
+       1.0,
+       {{"off", 0.0}, {"on", 1.0}}},
       {"overload", 1.75, "1", "current of the on-phase in units of the motor's i_rated_a", 0.1,
        3.0},
       {"on_s", 60.0, "s", "on-phase of the cycle", 1e-3, 3600.0},
       {"off_s", 30.0, "s", "off-phase of the cycle (zero current, the bridge on)", 0.0, 3600.0},
-      {"duration_s", 600.0, "s", "the run (at least 10 min of the cycle at catalogue time constants)",
-       1e-2, 3600.0},
+      {"duration_s", 600.0, "s",
+       "the run (at least 10 min of the cycle at catalogue time constants)", 1e-2, 3600.0},
       {"tau_w_s", 30.0, "s", "winding time constant, plant and drive (C_w R_wh)", 1e-2, 1e4},
       {"tau_h_s", 900.0, "s", "housing time constant, plant and drive (C_h R_ha)", 1e-2, 1e5},
       {"rise_k", 80.0, "K", "steady winding rise at i_rated_a (the rating both models come from)",
@@ -90,8 +95,9 @@ mc_params_t thermal_table(const MotorFiles& f, const Params& P) {
     p.derate_motor_end_c = static_cast<float>(P.get("derate_end_c"));
   }
   if (mc_params_validate(&p) != MC_PARAMS_OK) {
-    throw UsageError("thermal-duty: the drive refuses the thermal parameters (derate_end_c must "
-                     "be above derate_start_c, each inside the table's range)");
+    throw UsageError(
+        "thermal-duty: the drive refuses the thermal parameters (derate_end_c must "
+        "be above derate_start_c, each inside the table's range)");
   }
   return p;
 }
@@ -140,8 +146,8 @@ void run_thermal(RunContext& ctx) {
   const long n = step_count(dur, T);
   const long every =
       P.get("csv_every") > 0 ? std::lround(P.get("csv_every")) : std::max(1L, n / 20000);
-  ctx.csv.columns({"t", "t_winding_c", "t_winding_est_c", "t_housing_c", "i_limit_a", "i_d_a",
-                   "i_d_ref_a"});
+  ctx.csv.columns(
+      {"t", "t_winding_c", "t_winding_est_c", "t_housing_c", "i_limit_a", "i_d_a", "i_d_ref_a"});
   const double limit_c = P.get("derate_end_c");
   double cmd = -1.0, tw_max = -1e9, err_max = 0.0, ilim_min = 1e9, id = 0, iq = 0;
   double t_err_max = 0.0;
@@ -169,7 +175,7 @@ void run_thermal(RunContext& ctx) {
       t_err_max = t;
     }
     if (k % every == 0) {
-      const double row[] = {t,  tw, pr.t_winding_est_c, th->housing_c(), pr.i_limit_a,
+      const double row[] = {t,  tw,         pr.t_winding_est_c, th->housing_c(), pr.i_limit_a,
                             id, pr.id_ref_a};
       ctx.csv.row(row, sizeof row / sizeof row[0]);
     }

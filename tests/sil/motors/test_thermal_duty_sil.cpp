@@ -28,9 +28,8 @@ constexpr double kEstTolK = 5.0;
 constexpr double kLimitTolK = 2.0;
 
 testlib::Sets scaled(const std::string& derate, const std::string& r_scale) {
-  return {{"derate", derate},     {"model_r_scale", r_scale}, {"tau_w_s", "0.3"},
-          {"tau_h_s", "9"},       {"on_s", "0.6"},            {"off_s", "0.3"},
-          {"duration_s", "6"}};
+  return {{"derate", derate}, {"model_r_scale", r_scale}, {"tau_w_s", "0.3"}, {"tau_h_s", "9"},
+          {"on_s", "0.6"},    {"off_s", "0.3"},           {"duration_s", "6"}};
 }
 
 struct Outcome {
@@ -70,7 +69,7 @@ TEST(ThermalDuty, WithoutDeratingTheDutyOverheats) {
   EXPECT_EQ(r.txt.at("verdict"), "pass") << r.txt.at("verdict_detail");
   EXPECT_GT(r.num.at("t_winding_max_c"), r.num.at("t_winding_limit_c") + kLimitTolK);
   EXPECT_LE(r.num.at("t_est_err_max_k"), kEstTolK);
-  EXPECT_GE(r.num.at("i_limit_min_a"), r.num.at("i_on_a")); // never derated
+  EXPECT_GE(r.num.at("i_limit_min_a"), r.num.at("i_on_a"));  // never derated
 }
 
 // The verdict fails (mcsim exits 1) when a bound does not hold: a duty too
@@ -86,7 +85,7 @@ TEST(ThermalDuty, AVerdictThatFailsNamesItsReason) {
 // Parameters the drive refuses are refused before anything runs.
 TEST(ThermalDuty, BadThermalParametersAreRefused) {
   testlib::Sets s = scaled("1", "1.0");
-  s.push_back({"derate_start_c", "140"}); // above derate_end_c (130)
+  s.push_back({"derate_start_c", "140"});  // above derate_end_c (130)
   EXPECT_THROW(run_duty(s, "bad"), UsageError);
 }
 
