@@ -92,7 +92,9 @@ double AppRunner::finish_angle_find(double max_s) {
   while (t_.board().t_s() - t0 < max_s) {
     step();
     const mc_app_probe_t& p = t_.probe();
-    if (p.faults != 0u) break;  // the find failed: the scenario's watch names it
+    // the find failed: the scenario's watch names it once the next slow
+    // step has ended the run (the fault comes from the fast step first)
+    if (p.faults != 0u && p.angle_finding == 0u) break;
     if (p.angle_finding != 0u) began = true;
     if (began && p.angle_finding == 0u) break;
     if (!began && p.cmd_enabled != 0u && p.angle_state == MC_DRIVE_ANGLE_KNOWN) break;

@@ -413,6 +413,7 @@ static uint32_t step_l_rough(mc_comm_t *c, const float i[3], mc_drive_out_t *out
         }
         enter(c, MC_COMM_STEP_ENCODER, ENC_ALIGN_RAMP);
         c->have_count = false;
+        c->enc_coarse = false;
         c->count_acc = 0;
         mc_ident_avg_f32_reset(&c->v_acc);
         zero_out(out);
@@ -512,6 +513,7 @@ static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas
                     return MC_COMM_ERR_ENCODER_BAD;
                 }
                 c->res.pole_pairs = p;
+                c->enc_coarse = (uint32_t)cpr < MC_COMM_COUNTS_PER_E_TURN_MIN * p;
                 c->res.encoder_direction = (c->count_fwd > 0) ? 1 : -1;
                 c->count_acc = 0;
                 mc_ident_circ_f32_reset(&c->off_acc);
@@ -682,6 +684,9 @@ static uint32_t step_inductance(mc_comm_t *c, const float i[3], mc_drive_out_t *
             } else {
                 c->res.lq_h = l;
                 c->res.valid |= MC_COMM_HAVE_L;
+                if (c->enc_coarse) {
+                    return MC_COMM_ERR_ENCODER_COARSE;
+                }
                 enter(c, MC_COMM_STEP_FLUX, 0u);
                 c->count_acc = 0;
                 mc_ident_line_f32_reset(&c->fit);

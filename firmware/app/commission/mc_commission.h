@@ -83,6 +83,16 @@ extern "C" {
 #define MC_COMM_ERR_MEAS        (1u << 10) /**< no encoder sample or a non-finite one */
 #define MC_COMM_ERR_ABORTED     (1u << 11) /**< mc_comm_abort() */
 #define MC_COMM_ERR_HOST_LOST   (1u << 12) /**< the host's keep-alive stopped (CAN) */
+#define MC_COMM_ERR_ENCODER_COARSE \
+    (1u << 13) /**< fewer than MC_COMM_COUNTS_PER_E_TURN_MIN counts per electrical turn:
+                    the flux step cannot measure the speed (refused before it) */
+
+/** The fewest encoder counts per electrical turn the flux step measures
+ *  with: its speed comes from the counts, and at 6 (a Hall-class 90-count
+ *  sensor on 15 pole pairs) the coast's fit read the hub motor's flux tens
+ *  of percent low; at 12 within the library's 3 % (tests/sil/commission,
+ *  the hub motor at 90 and 180 counts). */
+#define MC_COMM_COUNTS_PER_E_TURN_MIN 12u
 
 /* Configuration errors of mc_comm_init. */
 #define MC_COMM_CFG_OK        0u
@@ -171,6 +181,8 @@ typedef struct {
     int32_t count_fwd;
     int32_t count_back;
     bool have_count;
+    bool enc_coarse; /**< the encoder has < MC_COMM_COUNTS_PER_E_TURN_MIN counts per
+                          electrical turn (set once the pole pairs are known) */
     mc_ident_circ_f32_t off_acc;
     mc_ident_avg_f32_t vq_acc;
     /* resistance / inductance */

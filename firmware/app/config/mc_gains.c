@@ -17,6 +17,22 @@ double mc_gains_kt_nm_a(double pole_pairs, double flux_wb)
     return 1.5 * pole_pairs * flux_wb;
 }
 
+double mc_gains_enc_bw_quant_rad_s(const mc_gains_motor_t *m, const mc_gains_t *g)
+{
+    /* One count q = 2 pi / cpr stepping the tracking loop's input moves its
+     * speed by 3 bw q at once (k2 / bw: the loop's gain from an angle step
+     * to its speed), which the speed PI (kp = J wc / kt, wc = bw / 4) turns
+     * into 3 kp bw q of current: at most MC_GAINS_ENC_NOISE_FRAC of the
+     * rated current, 3 J bw^2 q / (4 kt) <= frac i_rated. No encoder: no
+     * bound. */
+    if (!(m->encoder_cpr > 0.0) || !(m->j_kgm2 > 0.0) || !(g->kt_nm_a > 0.0)) {
+        return __builtin_inf();
+    }
+    const double q = 2.0 * 3.14159265358979323846 / m->encoder_cpr;
+    return mc_gains_sqrt(4.0 * MC_GAINS_ENC_NOISE_FRAC * g->i_rated_eff_a * g->kt_nm_a /
+                         (3.0 * m->j_kgm2 * q));
+}
+
 double mc_gains_speed_wc_rad_s(double cur_bw_rad_s, double enc_pll_bw_rad_s)
 {
     const double a = cur_bw_rad_s / 10.0;
@@ -223,7 +239,8 @@ uint32_t mc_gains_derive(const mc_gains_motor_t *m, const mc_gains_t *fix, mc_ga
         err |= MC_GAINS_ERR_SPEED_LIMIT;
     }
     g->speed_rated_eff_rad_s = dmin(m->speed_rated_rad_s, g->speed_limit_rad_s);
-    g->enc_pll_bw_rad_s = pick(fix->enc_pll_bw_rad_s, dmin(1000.0, 0.1 / T));
+    g->enc_pll_bw_rad_s =
+        pick(fix->enc_pll_bw_rad_s, dmin(dmin(1000.0, 0.1 / T), mc_gains_enc_bw_quant_rad_s(m, g)));
     g->speed_wc_rad_s =
         pick(fix->speed_wc_rad_s, mc_gains_speed_wc_rad_s(g->cur_bw_rad_s, g->enc_pll_bw_rad_s));
     g->speed_accel_rad_s2 =

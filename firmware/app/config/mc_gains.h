@@ -35,7 +35,18 @@
  *                        `mcsim describe SCENARIO --motor M --board B` says
  *                        which of the three sets the limit.
  *   speed_rated_eff    = min(speed_rated_rad_s, speed_limit_rad_s).
- *   enc_pll_bw_rad_s   = min(1000, 0.1 / T): the drive's encoder tracking loop.
+ *   enc_pll_bw_rad_s   = min(1000, 0.1 / T, bw_q): the drive's encoder
+ *                        tracking loop; bw_q (mc_gains_enc_bw_quant_rad_s)
+ *                        bounds it by the encoder's resolution: a step of
+ *                        one count q = 2 pi / cpr moves the loop's speed by
+ *                        3 bw q at once, which the speed PI (kp = J wc / kt,
+ *                        wc = bw / 4) turns into 3 kp bw q of current; bw_q
+ *                        keeps that at half the rated current,
+ *                        sqrt(4 0.5 i_rated kt / (3 J q)). With 8192 counts
+ *                        the other bounds hold on the library's motors with
+ *                        their boards; a 90-count (Hall-class) sensor on the
+ *                        hub motor gets tens of rad/s (ODrive's hoverboard
+ *                        guide sets 100 by hand).
  *   speed_wc_rad_s     = min(cur_bw / 10, enc_pll_bw / 4): crossover of the
  *                        sensored speed PI on the plant kt / (J s):
  *                        kp = J wc / kt, ki = kp wc / 4 (zero at wc / 4).
@@ -143,6 +154,7 @@ typedef struct {
     double vbus_max_v;       /**< the over-voltage trip as set; 0: derived (mc_gains_vbus_max_v) */
     double vbus_board_max_v; /**< the board's bus limit (rating inside its divider's
                                   range); 0: none given */
+    double encoder_cpr;      /**< encoder counts per mechanical turn; 0: none */
 } mc_gains_motor_t;
 
 /** Every derived gain (the formulas: the file comment; the code in
@@ -168,6 +180,15 @@ typedef struct {
  *  loop is designed for (speed_limit_rad_s; 10 samples per electrical
  *  period). */
 #define MC_GAINS_WE_T_MAX 0.6
+
+/** The share of the rated current one encoder count may move through the
+ *  tracking loop and the speed PI (enc_pll_bw_rad_s's resolution bound). */
+#define MC_GAINS_ENC_NOISE_FRAC 0.5
+
+/** The encoder tracking loop's bandwidth bound from the encoder's
+ *  resolution (the file comment), from g's kt_nm_a and i_rated_eff_a;
+ *  +inf without an encoder. */
+double mc_gains_enc_bw_quant_rad_s(const mc_gains_motor_t *m, const mc_gains_t *g);
 
 /** Square root of x >= 0, correctly rounded (IEEE 754 sqrt, bit for bit):
  *  the gains are computed once, in double, on targets without a libm. */

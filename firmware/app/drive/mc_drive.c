@@ -322,8 +322,24 @@ static void enc_constants(mc_drive_t *d, uint32_t cpr)
         d->enc_rad_per_count = MC_TWO_PI_F32 / (float)cpr;
         d->enc_max_step_counts =
             2.0f * d->cfg.omega_max_rad_s * d->cfg.foc.dt_s * (float)cpr / MC_TWO_PI_F32 + 2.0f;
+        d->enc_interp = (float)d->cfg.pole_pairs * d->enc_rad_per_count > MC_DRIVE_ENC_INTERP_E_RAD;
         d->enc_cpr_cached = cpr;
     }
+}
+
+/* The electrical angle of a coarse encoder (enc_interp): the count's angle
+ * moved by the tracking loop's sub-count estimate, delta = wrap_pi(theta_trk
+ * - count q), held within one count of the measurement (a loop that strays
+ * further, e.g. just after a reset, never moves the angle beyond the count
+ * next to the one read). The commissioned offset already holds the half
+ * count a count's angle lags the rotor by on average (mc_commission.c
+ * averages the offset over a sweep), and the loop follows the count's
+ * staircase, so no other correction enters (firmware/app/README.md). */
+static float enc_interp_delta(const mc_drive_t *d, uint32_t count)
+{
+    const float q = d->enc_rad_per_count;
+    const float delta = mc_wrap_pi_f32(d->enc_trk.theta_rad - (float)count * q);
+    return (float)d->cfg.pole_pairs * mc_sat_f32(delta, -q, q);
 }
 
 static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
@@ -342,13 +358,18 @@ static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
     const uint32_t e_count =
         (prod <= 0xFFFFFFFFull) ? (uint32_t)prod % cpr : (uint32_t)(prod % (uint64_t)cpr);
     d->tm.theta_m_rad = (float)count * rad_per_count;
-    d->tm.theta_e_rad =
-        mc_wrap_2pi_fast_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);
 
     /* Speed from the encoder tracking loop (observer/mc_enctrack.h): the
      * angle is finite by construction, so the step cannot fail. */
     (void)mc_enctrack_f32_step(&d->enc_trk, d->tm.theta_m_rad);
     d->tm.omega_m_rad_s = d->enc_trk.omega_rad_s;
+    if (d->enc_interp) {
+        d->tm.theta_e_rad = mc_wrap_2pi_f32((float)e_count * rad_per_count +
+                                            d->cfg.encoder_offset_rad + enc_interp_delta(d, count));
+    } else {
+        d->tm.theta_e_rad =
+            mc_wrap_2pi_fast_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);
+    }
 }
 
 static uint32_t check_sample(const mc_drive_t *d, const mc_hal_adc_sample_t *s, float *p_ic)

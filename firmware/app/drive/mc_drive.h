@@ -111,6 +111,14 @@ typedef enum {
  * and CTRL are refused while one is set (cleared by mc_drive_clear_faults
  * once the condition is gone). */
 #define MC_DRIVE_WARN_NONE 0u
+
+/** A count wider than this electrical angle [rad] (2.9 deg: i_d up to 2.5 %
+ *  of i_q from the count's half width alone) is interpolated by the
+ *  tracking loop for commutation (mc_drive_t.enc_interp); finer encoders
+ *  commutate on the count, which has no estimator lag. Every encoder of
+ *  8192 counts on up to 64 pole pairs is fine (at most 0.049 rad); a
+ *  90-count Hall-class sensor on 15 pole pairs is 1.05 rad. */
+#define MC_DRIVE_ENC_INTERP_E_RAD 0.05f
 /** Consecutive slow steps a fitted temperature sensor may be without a
  *  reading before OVERTEMP trips: the STM32F405 board converts one
  *  thermistor per slow step, so both have one after 2 steps from boot; 8
@@ -531,6 +539,8 @@ typedef struct {
     uint32_t enc_cpr_cached;      /**< counts per rev the two below are for (0: none yet) */
     float enc_rad_per_count;      /**< 2 pi / cpr (computed once per cpr, not per step) */
     float enc_max_step_counts;    /**< encoder-jump threshold per step [counts] */
+    bool enc_interp;              /**< commutate on the tracking loop's angle: one count
+                                       is more than MC_DRIVE_ENC_INTERP_E_RAD electrical */
     float stall_time_acc_s;       /**< time spent in the stall condition [s] */
     uint32_t temp_invalid_steps;  /**< consecutive slow steps without a reading of
                                        every fitted temperature sensor */

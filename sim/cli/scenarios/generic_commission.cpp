@@ -7,6 +7,8 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "app_params.hpp"
@@ -99,6 +101,36 @@ void inject_offsets(const CommissionSetup& s, hal_host::PmsmBoard& b) {
   b.inject(inj);
 }
 
+// angle_ref index: the offset commissioning measures must be relative to
+// the index (the drive refuses START until it has been seen: mc_comm_can.c),
+// so the drive searches it first, as a user enables the drive once before
+// `mdtool calibrate`: an enable in CURRENT mode at 0 A runs the image's
+// search (mc_ctrl_idx, bounded current and travel, both directions), then
+// the disable. Returns the time it took (0: no search needed). A search
+// that fails stops the run naming the finder's reason.
+double find_index_first(AppRunner& run) {
+  if (run.target().params().angle_ref != MC_DRIVE_ANGLE_REF_INDEX ||
+      run.probe().angle_state == MC_DRIVE_ANGLE_KNOWN) {
+    return 0.0;
+  }
+  if (!run.find_at_enable(MC_CAN_CTRL_CURRENT)) {
+    throw UsageError(
+        "angle_ref index: the encoder offset is measured relative to the index, and the drive "
+        "searches it only at an enable with angle_find_at_enable 1 (0 here)");
+  }
+  const double t0 = run.board().t_s();
+  run.start(MC_CAN_CTRL_CURRENT, true);
+  (void)run.finish_angle_find();
+  if (run.probe().faults != 0u || run.probe().angle_state != MC_DRIVE_ANGLE_KNOWN) {
+    AppWatch watch;
+    throw std::runtime_error("the index search before commissioning failed: " + watch(run.probe()));
+  }
+  run.send(run.cmd().enable(false));
+  const double t1 = run.board().t_s();
+  while (run.probe().mode != MC_DRIVE_MODE_IDLE && run.board().t_s() - t1 < 1.0) run.step();
+  return run.board().t_s() - t0;
+}
+
 // The target for the SIL runs: the files' plant.
 CommissionTargetFactory sil_factory(const MotorFiles& f) {
   return [&f](const mc_params_t& p, const std::function<void(AppSetup&)>& adjust) {
@@ -120,6 +152,16 @@ void configure_plant(const MotorFiles& f, const CommissionSetup& s, hal_host::Pm
   bc.encoder.direction = s.encoder_direction;
   // An incremental encoder's offset is the shaft angle at power-up.
   bc.theta_m0_rad = s.encoder_offset_rad / f.motor.pole_pairs;
+}
+
+// Relative to the index (the count 0 from the mark on, on average half a
+// count behind the shaft): the angle of the middle of count 0, dir (index +
+// step / 2), times the pole pairs.
+double true_index_offset(const MotorFiles& f, const CommissionSetup& s,
+                         const hal_host::PmsmBoardConfig& bc) {
+  const double step = 2 * kPi / bc.encoder.counts_per_rev;
+  const double th = s.encoder_direction * (bc.encoder.index_angle_rad + 0.5 * step);
+  return wrap2pi(f.motor.pole_pairs * th);
 }
 
 // The electrical offset the firmware's formula needs for this plant: the
@@ -144,9 +186,10 @@ std::string commission_error_names(uint32_t e) {
   static const char* const names[] = {
       "OFFSET",        "NO_MOTOR",        "OPEN_PHASE",  "ENCODER_NO_MOTION",
       "ROTOR_BLOCKED", "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT",
-      "VOLTAGE",       "RANGE",           "MEAS",        "ABORTED"};
+      "VOLTAGE",       "RANGE",           "MEAS",        "ABORTED",
+      "HOST_LOST",     "ENCODER_COARSE"};
   std::string s;
-  for (int i = 0; i < 12; ++i) {
+  for (int i = 0; i < 14; ++i) {
     if (e & (1u << i)) s += (s.empty() ? "" : "|") + std::string(names[i]);
   }
   return s;
@@ -164,8 +207,10 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
   }
   CommissionRun out;
   hal_host::PmsmBoardConfig bc = build_board_cfg(f);
+  set_board_sensor(f, bc);
   configure_plant(f, s, bc);
-  out.true_encoder_offset_rad = true_offset(f, s, bc);
+  const bool by_index = p.angle_ref == MC_DRIVE_ANGLE_REF_INDEX;
+  out.true_encoder_offset_rad = by_index ? true_index_offset(f, s, bc) : true_offset(f, s, bc);
   out.true_encoder_direction = s.encoder_direction;
   set_adc_offsets(s, out.true_adc_offset_a);
   if (f.board.current_sensors != 3) out.true_adc_offset_a[2] = 0.0;
@@ -178,6 +223,8 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
   hal_host::PmsmBoard& board = run.board();
   inject_offsets(s, board);
   if (s.inject) s.inject(board);
+  out.index_search_s = find_index_first(run);
+  const double t_start = board.t_s();  // the commissioning's time 0
   run.keep_host_alive();
   run.send(run.cmd().commission(MC_COMM_CAN_START, s.i_test_a, 0.0, 0.0));
   const long n = step_count(s.t_max_s, board.period_s());
@@ -186,12 +233,12 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
     if (observe) observe(run, k);
     if (k < n) {
       run.step();
-      c.take(run.sent(), board.t_s());
+      c.take(run.sent(), board.t_s() - t_start);
       if (s.each_period) s.each_period(board, c.step);
     }
   }
   if (!c.ended) {
-    c.t_end_s = board.t_s();
+    c.t_end_s = board.t_s() - t_start;
     if (c.err == 0u) c.err = MC_COMM_ERR_ABORTED;  // timed out
     c.done = false;
   }
@@ -252,7 +299,8 @@ double verify_speed_step(const MotorFiles& f, const CommissionSetup& s, mc_param
   inject_offsets(s, run.board());
   const double w_t = 0.5 * g.speed_rated_eff_rad_s;
   *p_target_rad_s = w_t;
-  run.start(MC_CAN_CTRL_SPEED);
+  run.start(MC_CAN_CTRL_SPEED, true);
+  (void)run.finish_angle_find();  // angle_ref index: the search first
   run.send(run.cmd().speed_ref(w_t));
   const double wc = sls ? g.sls_wc_rad_s : g.speed_wc_rad_s;
   double t_end = std::abs(w_t) / static_cast<double>(e.p.speed_ramp_rad_s2) + 40.0 / wc + 0.1;

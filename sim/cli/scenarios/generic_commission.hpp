@@ -63,9 +63,10 @@ struct CommissionRun {
   uint32_t err = 0;           // MC_COMM_ERR_* (0: done)
   uint32_t drive_faults = 0;  // the drive's fault bits at the end
   bool done = false;
-  bool bridge_off = false;  // PWM disabled at the end (after a failure)
-  double duration_s = 0;    // when the last result (or FAILED) arrived
-  uint64_t tx_frames = 0;   // frames the application sent
+  bool bridge_off = false;    // PWM disabled at the end (after a failure)
+  double duration_s = 0;      // when the last result (or FAILED) arrived, from START
+  double index_search_s = 0;  // angle_ref index: the search before START (0: none)
+  uint64_t tx_frames = 0;     // frames the application sent
   // the plant's true values in the result's terms
   double true_encoder_offset_rad = 0;
   int true_encoder_direction = 1;
@@ -89,7 +90,11 @@ CommissionSetup default_commission_setup(const MotorFiles& f);
 mc_params_t commission_booted_params(const MotorFiles& f);
 
 /// The sequence over CAN on make's target booted from p (see the file
-/// comment). Throws UsageError for files the run refuses (no encoder).
+/// comment); with p.angle_ref index the drive's index search first (an
+/// enable at 0 A, the image's mc_ctrl_idx), so the offset is relative to
+/// the index. Throws UsageError for files the run refuses (no encoder;
+/// angle_ref index without angle_find_at_enable), runtime_error naming the
+/// reason when the index search fails.
 CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, const mc_params_t& p,
                              const CommissionTargetFactory& make,
                              const CommissionObserver& observe = CommissionObserver());
@@ -102,9 +107,14 @@ void configure_plant(const MotorFiles& f, const CommissionSetup& s, hal_host::Pm
 /// The current-sensor offsets of s on phases a, b, c (x, -0.7 x, 0.4 x).
 void set_adc_offsets(const CommissionSetup& s, double out[3]);
 /// The electrical encoder offset the firmware's formula should find on
-/// the plant bc (the count's quantisation included).
+/// the plant bc (the count's quantisation included), relative to the
+/// power-up count.
 double true_offset(const MotorFiles& f, const CommissionSetup& s,
                    const hal_host::PmsmBoardConfig& bc);
+/// The same relative to the index (angle_ref index: the count from the
+/// mark on).
+double true_index_offset(const MotorFiles& f, const CommissionSetup& s,
+                         const hal_host::PmsmBoardConfig& bc);
 
 /// Names of MC_COMM_ERR_* bits, "|"-separated.
 std::string commission_error_names(uint32_t err);

@@ -189,6 +189,26 @@ TEST(CommissionRefuses, EncoderNotMoving) {
   expect_refused(run_commission(f, s), MC_COMM_ERR_ENCODER_NO_MOTION, "encoder frozen");
 }
 
+// The hub motor (sim/motors/hub-6p5in-15pp.toml) on the ODrive v3.6 with
+// its Hall sensors read as 90 counts: 6 counts per electrical turn, below
+// MC_COMM_COUNTS_PER_E_TURN_MIN (12): refused by name before the spin (the
+// coast's speed from so few counts read the flux 41 % low, error_bits 0,
+// before the check). At 180 counts (12 per electrical turn) the same motor
+// identifies within the library's bounds (flux measured 1.5 % off).
+using testlib::hub_on_odrive;
+
+TEST(CommissionRefuses, EncoderTooCoarseForTheFlux) {
+  const MotorFiles f = hub_on_odrive(90);
+  const CommissionRun r = run_commission(f, default_commission_setup(f));
+  expect_refused(r, MC_COMM_ERR_ENCODER_COARSE, "90 counts, 15 pole pairs");
+  EXPECT_EQ(r.err, MC_COMM_ERR_ENCODER_COARSE) << commission_error_names(r.err);
+}
+
+TEST(CommissionCoarse, TwelveCountsPerElectricalTurnIdentify) {
+  const MotorFiles f = hub_on_odrive(180);
+  expect_accurate(f, run_commission(f, default_commission_setup(f)), "hub_180_counts");
+}
+
 TEST(CommissionRefuses, BlockedRotor) {
   const MotorFiles f = d5065();
   CommissionSetup s = default_commission_setup(f);

@@ -55,6 +55,10 @@ Result run(double we_t, double pwm_hz, bool compensate) {
   // torque over t_ramp while the drive holds zero current (the loop crosses
   // every omega_e T below the target on the way), then left to coast: the
   // current steps move its speed by < 0.1 %.
+  // The drive knows the motor's own inertia (its gains, among them the
+  // encoder tracking loop's resolution bound, mc_gains.h); the dyno is the
+  // plant's.
+  mcsim::MotorFiles drive_f = f;
   f.motor.j_kgm2 *= 100.0;
   const double t_ramp = 0.04;
   const double tau_dyno = -f.motor.j_kgm2 * w_m / t_ramp;  // negative load: driving
@@ -64,7 +68,8 @@ Result run(double we_t, double pwm_hz, bool compensate) {
   // dead-time voltage no longer slows the steps and the d step at 0.45 rad
   // rises in 0.72 of the design's time (0.79 with it off), the delay's lead
   // alone (the criterion below is the library's, for the loop as designed).
-  mc_params_t p = mcsim::params_from_files(f, mcsim::Params(mcsim::app_gain_params(f), {}));
+  mc_params_t p =
+      mcsim::params_from_files(drive_f, mcsim::Params(mcsim::app_gain_params(drive_f), {}));
   p.dead_time_comp = 0u;
   const mc_gains_t g = mcsim::resolve_params(p).g;
   mc_drive_cfg_t dc{};

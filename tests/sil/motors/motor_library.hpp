@@ -42,6 +42,15 @@ inline MotorFiles files(const Case& c) {
                           c.board[0] ? dir + "/" + c.board + ".toml" : "");
 }
 
+// The hub motor (its Hall sensors read as an encoder) on the 56 V ODrive
+// v3.6 with `cpr` counts a turn: the coarse-sensor cases (issue 31 item 3).
+inline MotorFiles hub_on_odrive(int cpr) {
+  const std::string dir = MCSIM_MOTORS_DIR;
+  MotorFiles f = load_motor_files(dir + "/hub-6p5in-15pp.toml", dir + "/odrive-v36-56v.toml");
+  f.board.encoder_cpr = cpr;
+  return f;
+}
+
 // A name usable as a gtest parameter name or a folder name.
 inline std::string identifier(std::string s) {
   for (auto& ch : s) {

@@ -9,6 +9,7 @@
 // theta_m0 the true offset is p theta_m0, so the stored one is stale.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <deque>
@@ -324,6 +325,59 @@ TEST_F(AngleFind, IndexSearchThenSpeed)
         EXPECT_EQ(drive.faults, 0u);
         EXPECT_NEAR(OmegaM(), 30.0, 0.05 * 30.0);
     }
+}
+
+// (e) angle_ref index on an encoder whose index never comes (no mark, or
+// its EXTI line broken): the search at the enable turns travel_max (the
+// table's 1.25 turn) one way, then the other, and fails by name: the
+// bridge off, stop_reason ANGLE_FIND in the HEARTBEAT, the readonly
+// angle_error NOT_FOUND, the angle still unknown (the stored offset never
+// used). The motion under the bridge stays within the bound plus the
+// rotor's coasting past it when the vector turns back (0.05 rad: at the
+// search's 10 rad/s with the vector's damped spring, as
+// CtrlIdx.NotFoundAfterBothDirections); sampled every 10 ms while the
+// bridge is on (the search ends with the bridge off at 10 rad/s, and
+// the frictionless rotor then coasts, which is not the search's travel),
+// so the far end of each leg within 0.1 rad (10 ms at 10 rad/s).
+// Timing: 2 x 7.85 rad at 10 rad/s and the ramps: under 2 s; Run(4.0).
+TEST_F(AngleFind, IndexSearchWithoutTheIndexFailsByName)
+{
+    Boot b;
+    b.theta_m0_rad = 0.9;
+    b.angle_ref = MC_DRIVE_ANGLE_REF_INDEX;
+    b.find_at_enable = 1u;
+    b.index = false;
+    Start(b);
+    ASSERT_EQ(mc_drive_angle_state(&drive), MC_DRIVE_ANGLE_NEED_INDEX);
+    Send(MC_CAN_MSG_SET_CONTROL_MODE, {static_cast<float>(MC_CAN_CTRL_SPEED)});
+    Send(MC_CAN_MSG_SET_ENABLE, {1.0f});
+    Run(0.01);
+    ASSERT_EQ(drive.ctrl, mc_ctrl_idx_ops(&app->laws.idx));
+    const double travel_max = 1.25 * 2.0 * kPi;
+    double th_lo = ThetaM(), th_hi = ThetaM();
+    const long n = std::lround(4.0 / 0.01);
+    for (long k = 0; k < n; ++k) {
+        Run(0.01);
+        if (board->pwm_enabled()) { // the search's motion, not the coasting after it
+            th_lo = std::min(th_lo, ThetaM());
+            th_hi = std::max(th_hi, ThetaM());
+        }
+    }
+    EXPECT_FALSE(app->cmd.enabled);
+    EXPECT_FALSE(board->pwm_enabled());
+    EXPECT_EQ(drive.mode, MC_DRIVE_MODE_FAULT);
+    EXPECT_NE(drive.faults & MC_DRIVE_FAULT_CONTROL, 0u);
+    EXPECT_EQ(mc_drive_angle_state(&drive), MC_DRIVE_ANGLE_NEED_INDEX);
+    EXPECT_EQ(app->cmd.stop_reason, MC_CAN_STOP_ANGLE_FIND);
+    EXPECT_EQ(LastHeartbeat()[MC_CAN_HEARTBEAT_STOP_REASON],
+              static_cast<float>(MC_CAN_STOP_ANGLE_FIND));
+    EXPECT_EQ(ReadParam(MC_PARAM_ID_ANGLE_ERROR), MC_CTRL_ALIGN_ERR_NOT_FOUND);
+    // both directions, each within its bound
+    EXPECT_LE(th_hi - b.theta_m0_rad, travel_max + 0.05);
+    EXPECT_GE(th_hi - b.theta_m0_rad, travel_max - 0.1);
+    EXPECT_LE(b.theta_m0_rad - th_lo, travel_max + 0.05);
+    EXPECT_GE(b.theta_m0_rad - th_lo, travel_max - 0.1);
+    EXPECT_EQ(drive.ctrl, mc_ctrl_speed_ops(&app->laws.spd)); // back in its slot
 }
 
 // POSITION after an alignment: a SET_POSITION_REF during the find is

@@ -55,7 +55,7 @@ def rows(results, present, table):
 #: MC_COMM_ERR_* bit names (firmware/app/commission/mc_commission.h)
 ERROR_BITS = ["OFFSET", "NO_MOTOR", "OPEN_PHASE", "ENCODER_NO_MOTION", "ROTOR_BLOCKED",
               "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT", "VOLTAGE", "RANGE", "MEAS", "ABORTED",
-              "HOST_LOST"]
+              "HOST_LOST", "ENCODER_COARSE"]
 ERROR_HELP = {
     "OFFSET": "a current-sensor offset is implausible (sensor broken?)",
     "NO_MOTOR": "no current flows on any axis: is a motor connected?",
@@ -70,6 +70,9 @@ ERROR_HELP = {
     "MEAS": "no encoder sample, or a non-finite one",
     "ABORTED": "stopped (ABORT, disable, or the drive stopped it)",
     "HOST_LOST": "the host's keep-alive (HOST_HEARTBEAT) stopped: the drive aborted it",
+    "ENCODER_COARSE": "fewer than 12 encoder counts per electrical turn (a Hall-class"
+                      " sensor): the flux step cannot measure the speed; give the motor's"
+                      " values (flux from its KV) instead",
 }
 
 
