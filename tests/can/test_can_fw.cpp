@@ -710,6 +710,37 @@ TEST_F(TelemetryOnDrive, SixtyAmpMotorValuesArriveUnclipped) {
   EXPECT_EQ(2u, t.saturated);
 }
 
+// THERMAL (issue 33): the winding estimate, the current limit in force and
+// its factor as the drive holds them (mc_drive_thermal.h), within half a
+// step of each signal plus float rounding.
+TEST_F(TelemetryOnDrive, ThermalCarriesTheEstimateAndTheDeratedLimit) {
+  d.cfg.i_max_a = 40.0f;
+  d.thermal.t_w_c = 121.37f;
+  d.thermal.k = 0.25f;
+  d.thermal.derating = true;
+  mc_telemetry_cfg_t c = TmCfg();
+  for (auto& r : c.rate_hz) r = 0;
+  c.rate_hz[MC_TM_HEARTBEAT] = 1;
+  c.rate_hz[MC_TM_THERMAL] = 1000;
+  mc_telemetry_t t;
+  ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &c));
+  const mc_telemetry_src_t src{&d, nullptr, nullptr, &t};
+  uint32_t counts[32] = {0};
+  std::vector<mc_hal_can_frame_t> fr;
+  Run(&t, 1, &src, counts, &fr);
+  ASSERT_EQ(1u, fr.size());
+  EXPECT_EQ((1u << 5) | MC_CAN_CMD_THERMAL, fr[0].id);  // node 1, BO_ 43
+  float v[MC_CAN_NSIG_MAX];
+  uint32_t m;
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&fr[0], &m, v, MC_CAN_NSIG_MAX));
+  ASSERT_EQ(MC_CAN_MSG_THERMAL, m);
+  EXPECT_NEAR(121.37f, v[MC_CAN_THERMAL_T_WINDING_EST_C], 0.005f + 1e-4f);
+  EXPECT_NEAR(10.0f, v[MC_CAN_THERMAL_I_LIMIT_A], 0.0005f + 1e-5f);
+  EXPECT_NEAR(0.25f, v[MC_CAN_THERMAL_DERATE_FACTOR], 0.0005f + 1e-6f);
+  EXPECT_EQ(1.0f, v[MC_CAN_THERMAL_DERATING]);
+  EXPECT_EQ(0.0f, v[MC_CAN_THERMAL_SAT]);
+}
+
 // Multi-turn position at 1290 rad/s (205 turns/s, 1.29 rad per 1 kHz tick)
 // and backwards: the unwrapped angle follows w t.
 TEST_F(TelemetryOnDrive, PositionIsMultiTurnAtAnySpeed) {

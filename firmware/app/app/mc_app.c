@@ -955,6 +955,8 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
     p->angle_state = mc_drive_angle_state(d);
     p->angle_finding = app->angle_running ? 1u : 0u;
     p->angle_error = app->angle_error;
+    p->t_winding_est_c = d->thermal.t_w_c;
+    p->i_limit_a = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
     if ((ctrl != NULL) && app->cfg.laws_from_params) {
         if (l->pi2d_ok && (ctrl == &l->pi2d.ops)) {
             p->id_ref_a = l->pi2d.tm.id_ref_a;

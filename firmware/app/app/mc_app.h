@@ -201,7 +201,8 @@ typedef struct {
     uint32_t slow_loop_div_fixed;  /**< the board's slow divider (0: any) */
     float tm_budget_frac;          /**< share of the bus telemetry may use */
     /** Rates of the messages past POSITION: OBSERVER, CONTROLLER, STEPPER,
-     *  CURRENT_REFS, POSITION_REF [Hz] (the parameter table has the first five). */
+     *  CURRENT_REFS, POSITION_REF, THERMAL [Hz] (the parameter table has the first
+     *  five). */
     uint16_t tm_ext_rate_hz[MC_TM_COUNT - MC_TM_OBSERVER];
     mc_app_law_t speed_law;    /**< plugged speed law (ctrl NULL: SPEED unsupported) */
     mc_app_law_t position_law; /**< plugged position law (ctrl NULL: none) */
@@ -345,6 +346,9 @@ typedef struct {
      * NEED_INDEX, NEED_ALIGN), 1 while a find at enable runs, and the
      * MC_CTRL_ALIGN_ERR_* bits of the last find that failed */
     uint32_t angle_state, angle_finding, angle_error;
+    /* thermal derating (mc_drive_thermal.h): the winding estimate [C] (the
+     * ambient while the model is off) and the current limit in force [A] */
+    float t_winding_est_c, i_limit_a;
 } mc_app_probe_t;
 
 /** Fill *p from the application and its drive (after a period). */

@@ -76,6 +76,14 @@ static const mc_can_signal_t sig_position_ref[3] = {
     {32u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
+static const mc_can_signal_t sig_thermal[6] = {
+    {0u, 16u, true, 0.01f, 0.0f, -327.68f, 327.67f}, /* t_winding_est_c [degC] */
+    {16u, 24u, false, 0.001f, 0.0f, 0.0f, 16777.215f}, /* i_limit_a [A] */
+    {40u, 10u, false, 0.001f, 0.0f, 0.0f, 1.023f}, /* derate_factor [-] */
+    {50u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* derating [-] */
+    {51u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
+    {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
+};
 static const mc_can_signal_t sig_bus_current[5] = {
     {0u, 18u, true, 0.01f, 0.0f, -1310.72f, 1310.71f}, /* i_bus_est_a [A] */
     {18u, 18u, false, 0.01f, 0.0f, 0.0f, 2621.43f}, /* i_bus_max_a [A] */
@@ -187,6 +195,7 @@ const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
     {MC_CAN_CMD_STEPPER, 8u, MC_CAN_DIR_TX, 5u, sig_stepper}, /* STEPPER */
     {MC_CAN_CMD_CURRENT_REFS, 8u, MC_CAN_DIR_TX, 4u, sig_current_refs}, /* CURRENT_REFS */
     {MC_CAN_CMD_POSITION_REF, 8u, MC_CAN_DIR_TX, 3u, sig_position_ref}, /* POSITION_REF */
+    {MC_CAN_CMD_THERMAL, 8u, MC_CAN_DIR_TX, 6u, sig_thermal}, /* THERMAL */
     {MC_CAN_CMD_BUS_CURRENT, 8u, MC_CAN_DIR_TX, 5u, sig_bus_current}, /* BUS_CURRENT */
     {MC_CAN_CMD_APP_STATUS, 8u, MC_CAN_DIR_TX, 8u, sig_app_status}, /* APP_STATUS */
     {MC_CAN_CMD_BOOT_REPLY, 8u, MC_CAN_DIR_TX, 5u, sig_boot_reply}, /* BOOT_REPLY */

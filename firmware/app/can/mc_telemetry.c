@@ -18,6 +18,7 @@ static const uint8_t k_slot_msg[MC_TM_COUNT] = {
     (uint8_t)MC_CAN_MSG_CONTROLLER,   (uint8_t)MC_CAN_MSG_STEPPER,
     (uint8_t)MC_CAN_MSG_CURRENT_REFS, (uint8_t)MC_CAN_MSG_POSITION_REF,
     (uint8_t)MC_CAN_MSG_BUS_CURRENT,
+    (uint8_t)MC_CAN_MSG_THERMAL,
 };
 
 #define NO_SAT 0xFFu
@@ -34,6 +35,7 @@ static const uint8_t k_slot_sat[MC_TM_COUNT] = {
     (uint8_t)MC_CAN_CURRENT_REFS_SAT,
     (uint8_t)MC_CAN_POSITION_REF_SAT,
     (uint8_t)MC_CAN_BUS_CURRENT_SAT,
+    (uint8_t)MC_CAN_THERMAL_SAT,
 };
 
 #define TWO_PI_F 6.28318530717958647692f
@@ -339,6 +341,12 @@ static bool values_of(uint32_t slot, const mc_telemetry_src_t *src, float *value
         values[MC_CAN_BUS_CURRENT_I_BUS_EST_A] = mc_drive_bus_current_a(&d->bus);
         values[MC_CAN_BUS_CURRENT_I_BUS_MAX_A] = d->bus.i_mot_lim_a;
         values[MC_CAN_BUS_CURRENT_I_BUS_REGEN_MAX_A] = d->bus.i_regen_lim_a;
+        return true;
+    case MC_TM_THERMAL:
+        values[MC_CAN_THERMAL_T_WINDING_EST_C] = d->thermal.t_w_c;
+        values[MC_CAN_THERMAL_I_LIMIT_A] = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
+        values[MC_CAN_THERMAL_DERATE_FACTOR] = d->thermal.k;
+        values[MC_CAN_THERMAL_DERATING] = d->thermal.derating ? 1.0f : 0.0f;
         return true;
     case MC_TM_OBSERVER:
         if ((x == NULL) || !x->have_observer) {

@@ -20,6 +20,7 @@
  *   POSITION_REF  the multi-turn CAN position reference
  *   BUS_CURRENT   the estimated DC-bus current and the bus limits in force
  *                 (mc_drive_bus.h)
+ *   THERMAL       the winding estimate and the derated current limit
  * Every frame ends with its message's rolling 8-bit sequence counter, which
  * advances for every frame generated, so a frame the HAL could not queue
  * shows up as a gap at the logger.
@@ -87,7 +88,8 @@ typedef enum {
     MC_TM_CURRENT_REFS = 8,
     MC_TM_POSITION_REF = 9,
     MC_TM_BUS_CURRENT = 10,
-    MC_TM_COUNT = 11
+    MC_TM_THERMAL = 11,
+    MC_TM_COUNT = 12
 } mc_tm_slot_t;
 
 #define MC_TM_HEARTBEAT_MIN_HZ 1u /**< the drive's HEARTBEAT cannot go below this */

@@ -129,6 +129,12 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
     if (mc_drive_bus_check(&cfg->bus) != 0u) {
         err |= MC_DRIVE_CFG_ERR_BUS_POWER;
     }
+    {
+        mc_drive_thermal_t probe;
+        if (mc_drive_thermal_init(&probe, &cfg->thermal) != MC_DRIVE_THERMAL_ERR_NONE) {
+            err |= MC_DRIVE_CFG_ERR_THERMAL;
+        }
+    }
     return err;
 }
 
@@ -184,6 +190,7 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
     d->tm.regen_scale = 1.0f;
     d->regen_lead_alpha = regen_lead_alpha(cfg);
     mc_drive_bus_init(&d->bus, &cfg->foc);
+    (void)mc_drive_thermal_init(&d->thermal, &cfg->thermal); /* validated above */
     if (cfg->fw_enable) {
         (void)mc_fw_f32_init(&d->fw, &cfg->fw);
     }
@@ -608,7 +615,7 @@ static uint32_t current_loop(mc_drive_t *d, const mc_hal_adc_sample_t *s, float 
 {
     float id = r->id_a;
     float iq = r->iq_a;
-    const float lim = d->cfg.i_max_a;
+    const float lim = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
     uint32_t f = 0u;
     if (r->rotor_frame && d->cfg.fw_enable) {
         f |= fw_refs(d, s->vbus_v, &id, &iq);
@@ -812,6 +819,31 @@ static bool read_temps(const mc_drive_t *d, mc_hal_adc_temp_t *t)
     return (fitted != 0u) && ((t->valid_mask & fitted) == fitted);
 }
 
+/* The thermal derating's slow step (mc_drive_thermal.h): each fitted
+ * sensor's reading, the square of the measured current while the bridge
+ * is driven. */
+static void thermal_slow(mc_drive_t *d, float slow_dt)
+{
+    const mc_drive_thermal_cfg_t *c = &d->cfg.thermal;
+    if (!(c->fet_end_c > 0.0f) && !(c->motor_end_c > 0.0f) && !c->model_enable) {
+        return; /* nothing to derate by: k stays 1 */
+    }
+    mc_hal_adc_temp_t t = {0};
+    mc_drive_thermal_in_t in = {0.0f, 0.0f, false, false};
+    if (mc_hal_adc_read_temp(d->hal->adc, &t) == 0) {
+        const uint32_t ok = t.valid_mask & ~t.absent_mask;
+        in.fet_c = t.power_stage_temp_c;
+        in.motor_c = t.motor_temp_c;
+        in.fet_ok = (ok & MC_HAL_ADC_TEMP_VALID_POWER_STAGE) != 0u;
+        in.motor_ok = (ok & MC_HAL_ADC_TEMP_VALID_MOTOR) != 0u;
+    }
+    const bool on = d->mode == MC_DRIVE_MODE_CURRENT || d->mode == MC_DRIVE_MODE_CTRL ||
+                    d->mode == MC_DRIVE_MODE_STOPPING;
+    const float isq =
+        on ? (d->tm.foc.id_a * d->tm.foc.id_a) + (d->tm.foc.iq_a * d->tm.foc.iq_a) : 0.0f;
+    (void)mc_drive_thermal_step(&d->thermal, slow_dt, isq, &in);
+}
+
 /* The end of a controlled stop: the bridge opens, IDLE. */
 static void stop_end(mc_drive_t *d)
 {
@@ -887,7 +919,7 @@ static void fill_meas(mc_drive_t *d, const mc_hal_adc_sample_t *s, float ic, boo
     m->have_speed_ref = false;
     m->omega_ref_rad_s = 0.0f;
     m->alpha_ref_rad_s2 = 0.0f;
-    m->i_max_a = d->cfg.i_max_a;
+    m->i_max_a = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
     m->iq_applied_a = iq_applied_prev;
     m->regen_scale = d->tm.regen_scale;
     m->v_alpha_prev_v = d->v_ab_prev_v[0];
@@ -990,6 +1022,7 @@ void mc_drive_slow_step(mc_drive_t *d)
     const float slow_dt = d->cfg.foc.dt_s * (float)d->cfg.slow_loop_div;
     mc_hal_adc_temp_t t = {0};
     bool t_ok = false;
+    thermal_slow(d, slow_dt);
     if (d->cfg.temp_warn_c > 0.0f || d->cfg.temp_max_c > 0.0f) {
         t_ok = read_temps(d, &t);
     }

@@ -50,6 +50,9 @@ RUNS = {
     # is with verify=1, which adds two speed steps on the identified values.
     "commission": (D5065, [], ["--set", "verify=1"]),
     "current-step": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
+    # thermal times divided by 100 (tests/sil/motors/test_thermal_duty_sil.cpp)
+    "thermal-duty": (D5065 + ["--set", "tau_w_s=0.3", "--set", "tau_h_s=9", "--set", "on_s=0.6",
+                              "--set", "off_s=0.3"], ["--duration", "0.2"], ["--duration", "2"]),
     "speed-step": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
     "load-step": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
     "sensorless-speed-step": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
