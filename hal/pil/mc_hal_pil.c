@@ -562,6 +562,8 @@ static void receive_app_setup(int type)
     memset(c, 0, sizeof *c);
     c->defaults = &g_pil.defaults;
     c->tm_budget_frac = a.tm_budget_frac;
+    _Static_assert(sizeof c->tm_ext_rate_hz / sizeof c->tm_ext_rate_hz[0] == MC_PIL_TM_EXT_RATES,
+                   "the APP frame carries every rate past POSITION");
     for (uint32_t i = 0u; i < MC_PIL_TM_EXT_RATES; ++i) {
         c->tm_ext_rate_hz[i] = (uint16_t)a.tm_ext_rate_hz[i];
     }

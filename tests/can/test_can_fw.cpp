@@ -131,7 +131,7 @@ TEST(CanProto, UnpackRejectsFormatLengthIdAndRange) {
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {0})));  // control_mode 1..3
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x031, {4})));
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x030, {2})));              // enable 0..1
-  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {11, 10, 0})));      // tm_cmd 1..10
+  EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {13, 10, 0})));      // tm_cmd 1..12
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x036, {1, 0xE9, 0x03})));  // 1001 Hz
   // 10000.001 rad/s: one raw step above the DBC maximum
   EXPECT_EQ(MC_CAN_ERR_RANGE, un(Frame(0x033, {0x81, 0x96, 0x98, 0x00})));
@@ -315,6 +315,32 @@ TEST_F(TelemetryOnDrive, CurrentsAreTheParkTransformOfThePhaseCurrents) {
   // own float sin/cos: a few 1e-7 relative
   EXPECT_NEAR(id, v[MC_CAN_CURRENTS_I_D_A], 1e-5);
   EXPECT_NEAR(iq, v[MC_CAN_CURRENTS_I_Q_A], 1e-5);
+}
+
+// BUS_CURRENT (BO_ 44) carries the drive's bus estimate and the limits in
+// force (mc_drive_bus.h) as they are, within half a step of 0.01 A.
+TEST_F(TelemetryOnDrive, BusCurrentCarriesTheEstimateAndTheLimits) {
+  d.bus.p_bus_est_w = -3.25f * 24.0f;
+  d.bus.vbus_v = 24.0f;
+  d.bus.i_mot_lim_a = 12.5f;
+  d.bus.i_regen_lim_a = 4.0f;
+  const mc_telemetry_src_t src{&d, nullptr, nullptr, nullptr};
+  float v[MC_CAN_NSIG_MAX];
+  ASSERT_TRUE(mc_telemetry_values(MC_TM_BUS_CURRENT, &src, v));
+  mc_hal_can_frame_t f;
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_pack(MC_CAN_MSG_BUS_CURRENT, 1u, v, MC_CAN_NSIG_MAX, &f));
+  EXPECT_EQ((1u << 5) | 12u, f.id);  // node 1, BO_ 44
+  uint32_t m = 0;
+  float u[MC_CAN_NSIG_MAX];
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&f, &m, u, MC_CAN_NSIG_MAX));
+  EXPECT_EQ(MC_CAN_MSG_BUS_CURRENT, m);
+  EXPECT_NEAR(-3.25f, u[MC_CAN_BUS_CURRENT_I_BUS_EST_A], 0.005f);
+  EXPECT_NEAR(12.5f, u[MC_CAN_BUS_CURRENT_I_BUS_MAX_A], 0.005f);
+  EXPECT_NEAR(4.0f, u[MC_CAN_BUS_CURRENT_I_BUS_REGEN_MAX_A], 0.005f);
+  EXPECT_EQ(0.0f, u[MC_CAN_BUS_CURRENT_SAT]);
+  EXPECT_EQ(static_cast<uint32_t>(MC_TM_BUS_CURRENT),
+            mc_telemetry_slot_of_cmd(MC_CAN_CMD_BUS_CURRENT));
+  EXPECT_EQ(static_cast<uint32_t>(MC_TM_COUNT), mc_telemetry_slot_of_cmd(0x0Bu));  // not telemetry
 }
 
 TEST_F(TelemetryOnDrive, SetRateRefusesAboveBudget) {
@@ -598,6 +624,13 @@ TEST_F(CanCmd, TelemetryRateCommand) {
   Init();
   ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x036, {4, 0x2C, 0x01})));  // SPEED 300 Hz
   EXPECT_EQ(300u, tm.cfg.rate_hz[MC_TM_SPEED]);
+  // BUS_CURRENT by its command id 12 (slots past POSITION_REF are not id - 1)
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x036, {12, 20, 0})));
+  EXPECT_EQ(20u, tm.cfg.rate_hz[MC_TM_BUS_CURRENT]);
+  // 11 names no telemetry message: refused, nothing changes
+  const mc_telemetry_cfg_t before = tm.cfg;
+  EXPECT_NE(MC_CAN_ERR_NONE, Send(Frame(0x036, {11, 20, 0})));
+  EXPECT_EQ(0, std::memcmp(&before, &tm.cfg, sizeof before));
   mc_can_cmd_t z{};
   ASSERT_EQ(MC_CAN_CMD_CFG_OK, mc_can_cmd_init(&z, &cc, &d, nullptr));
   const mc_hal_can_frame_t f = Frame(0x036, {4, 1, 0});
@@ -675,6 +708,37 @@ TEST_F(TelemetryOnDrive, SixtyAmpMotorValuesArriveUnclipped) {
   EXPECT_EQ(0.0f, v[MC_CAN_CURRENT_REFS_I_Q_REF_A]);  // NaN packs as 0 ...
   EXPECT_EQ(1.0f, v[MC_CAN_CURRENT_REFS_SAT]);        // ... and says so
   EXPECT_EQ(2u, t.saturated);
+}
+
+// THERMAL (issue 33): the winding estimate, the current limit in force and
+// its factor as the drive holds them (mc_drive_thermal.h), within half a
+// step of each signal plus float rounding.
+TEST_F(TelemetryOnDrive, ThermalCarriesTheEstimateAndTheDeratedLimit) {
+  d.cfg.i_max_a = 40.0f;
+  d.thermal.t_w_c = 121.37f;
+  d.thermal.k = 0.25f;
+  d.thermal.derating = true;
+  mc_telemetry_cfg_t c = TmCfg();
+  for (auto& r : c.rate_hz) r = 0;
+  c.rate_hz[MC_TM_HEARTBEAT] = 1;
+  c.rate_hz[MC_TM_THERMAL] = 1000;
+  mc_telemetry_t t;
+  ASSERT_EQ(MC_TM_CFG_OK, mc_telemetry_init(&t, &c));
+  const mc_telemetry_src_t src{&d, nullptr, nullptr, &t};
+  uint32_t counts[32] = {0};
+  std::vector<mc_hal_can_frame_t> fr;
+  Run(&t, 1, &src, counts, &fr);
+  ASSERT_EQ(1u, fr.size());
+  EXPECT_EQ((1u << 5) | MC_CAN_CMD_THERMAL, fr[0].id);  // node 1, BO_ 43
+  float v[MC_CAN_NSIG_MAX];
+  uint32_t m;
+  ASSERT_EQ(MC_CAN_ERR_NONE, mc_can_proto_unpack(&fr[0], &m, v, MC_CAN_NSIG_MAX));
+  ASSERT_EQ(MC_CAN_MSG_THERMAL, m);
+  EXPECT_NEAR(121.37f, v[MC_CAN_THERMAL_T_WINDING_EST_C], 0.005f + 1e-4f);
+  EXPECT_NEAR(10.0f, v[MC_CAN_THERMAL_I_LIMIT_A], 0.0005f + 1e-5f);
+  EXPECT_NEAR(0.25f, v[MC_CAN_THERMAL_DERATE_FACTOR], 0.0005f + 1e-6f);
+  EXPECT_EQ(1.0f, v[MC_CAN_THERMAL_DERATING]);
+  EXPECT_EQ(0.0f, v[MC_CAN_THERMAL_SAT]);
 }
 
 // Multi-turn position at 1290 rad/s (205 turns/s, 1.29 rad per 1 kHz tick)

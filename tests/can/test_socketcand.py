@@ -50,7 +50,7 @@ from mdtool.can import dbc, log  # noqa: E402
 logging.getLogger("can.interfaces.socketcand").setLevel(logging.ERROR)
 fails = []
 SLOTS = ["HEARTBEAT", "CURRENTS", "VOLTAGES", "SPEED", "POSITION", "OBSERVER", "CONTROLLER", "STEPPER",
-         "CURRENT_REFS", "POSITION_REF"]  # bit i of tm_sent_mask (sim/cli/scenarios/can_telemetry.cpp)
+         "CURRENT_REFS", "POSITION_REF", "BUS_CURRENT", "THERMAL"]  # bit i of tm_sent_mask (sim/cli/scenarios/can_telemetry.cpp)
 
 
 # A busy loop that ends when this test process does: a test killed by

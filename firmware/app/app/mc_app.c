@@ -944,6 +944,9 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
     p->omega_m_rad_s = d->tm.omega_m_rad_s;
     p->vbus_v = d->tm.vbus_v;
     p->regen_scale = d->tm.regen_scale;
+    p->i_bus_est_a = mc_drive_bus_current_a(&d->bus);
+    p->i_bus_mot_lim_a = d->bus.i_mot_lim_a;
+    p->i_bus_regen_lim_a = d->bus.i_regen_lim_a;
     p->brake_duty = d->tm.brake_duty;
     p->fw_v_mag_v = d->tm.fw.v_mag_v;
     p->fw_v_max_v = d->tm.fw.v_max_v;
@@ -952,6 +955,8 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
     p->angle_state = mc_drive_angle_state(d);
     p->angle_finding = app->angle_running ? 1u : 0u;
     p->angle_error = app->angle_error;
+    p->t_winding_est_c = d->thermal.t_w_c;
+    p->i_limit_a = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
     if ((ctrl != NULL) && app->cfg.laws_from_params) {
         if (l->pi2d_ok && (ctrl == &l->pi2d.ops)) {
             p->id_ref_a = l->pi2d.tm.id_ref_a;

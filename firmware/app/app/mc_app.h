@@ -201,7 +201,8 @@ typedef struct {
     uint32_t slow_loop_div_fixed;  /**< the board's slow divider (0: any) */
     float tm_budget_frac;          /**< share of the bus telemetry may use */
     /** Rates of the messages past POSITION: OBSERVER, CONTROLLER, STEPPER,
-     *  CURRENT_REFS, POSITION_REF [Hz] (the parameter table has the first five). */
+     *  CURRENT_REFS, POSITION_REF, THERMAL [Hz] (the parameter table has the first
+     *  five). */
     uint16_t tm_ext_rate_hz[MC_TM_COUNT - MC_TM_OBSERVER];
     mc_app_law_t speed_law;    /**< plugged speed law (ctrl NULL: SPEED unsupported) */
     mc_app_law_t position_law; /**< plugged position law (ctrl NULL: none) */
@@ -316,6 +317,9 @@ typedef struct {
     float omega_m_rad_s;      /**< the encoder tracking loop's speed [rad/s] */
     float vbus_v;
     float regen_scale, brake_duty;
+    float i_bus_est_a;            /**< the drive's estimated DC-bus current [A] (mc_drive_bus.h) */
+    float i_bus_mot_lim_a;        /**< its motoring limit in force [A] (0: off) */
+    float i_bus_regen_lim_a;      /**< its regenerative limit in force [A] (0: off) */
     float fw_v_mag_v, fw_v_max_v; /**< field weakening: |v| and its target [V] */
     float omega_ref_rad_s;        /**< the speed law's reference; the position law's
                                        trajectory speed [rad/s] */
@@ -345,6 +349,9 @@ typedef struct {
      * NEED_INDEX, NEED_ALIGN), 1 while a find at enable runs, and the
      * MC_CTRL_ALIGN_ERR_* bits of the last find that failed */
     uint32_t angle_state, angle_finding, angle_error;
+    /* thermal derating (mc_drive_thermal.h): the winding estimate [C] (the
+     * ambient while the model is off) and the current limit in force [A] */
+    float t_winding_est_c, i_limit_a;
 } mc_app_probe_t;
 
 /** Fill *p from the application and its drive (after a period). */

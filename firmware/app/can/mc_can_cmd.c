@@ -489,8 +489,10 @@ static mc_can_err_t do_tm_rate(mc_can_cmd_t *c, float slot_cmd, float rate)
     if (c->tm == NULL) {
         return MC_CAN_ERR_UNSUPPORTED;
     }
-    /* the DBC range limits tm_cmd to 1..8 and rate to 0..1000 */
-    err = mc_telemetry_set_rate(c->tm, (uint32_t)slot_cmd - 1u, (uint16_t)rate);
+    /* the DBC range limits tm_cmd to 1..12 and rate to 0..1000; a command
+     * id that names no telemetry message is a bad slot (RANGE) */
+    err =
+        mc_telemetry_set_rate(c->tm, mc_telemetry_slot_of_cmd((uint32_t)slot_cmd), (uint16_t)rate);
     if (err == MC_TM_CFG_OK) {
         return MC_CAN_ERR_NONE;
     }

@@ -76,6 +76,21 @@ static const mc_can_signal_t sig_position_ref[3] = {
     {32u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
+static const mc_can_signal_t sig_thermal[6] = {
+    {0u, 16u, true, 0.01f, 0.0f, -327.68f, 327.67f}, /* t_winding_est_c [degC] */
+    {16u, 24u, false, 0.001f, 0.0f, 0.0f, 16777.215f}, /* i_limit_a [A] */
+    {40u, 10u, false, 0.001f, 0.0f, 0.0f, 1.023f}, /* derate_factor [-] */
+    {50u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* derating [-] */
+    {51u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
+    {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
+};
+static const mc_can_signal_t sig_bus_current[5] = {
+    {0u, 18u, true, 0.01f, 0.0f, -1310.72f, 1310.71f}, /* i_bus_est_a [A] */
+    {18u, 18u, false, 0.01f, 0.0f, 0.0f, 2621.43f}, /* i_bus_max_a [A] */
+    {36u, 18u, false, 0.01f, 0.0f, 0.0f, 2621.43f}, /* i_bus_regen_max_a [A] */
+    {54u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* sat [-] */
+    {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
+};
 static const mc_can_signal_t sig_app_status[8] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 127.0f}, /* reset_cause [-] */
     {8u, 4u, false, 1.0f, 0.0f, 0.0f, 6.0f}, /* cfg_status [-] */
@@ -110,7 +125,7 @@ static const mc_can_signal_t sig_set_position_ref[1] = {
     {0u, 32u, true, 0.0001f, 0.0f, -200000.0f, 200000.0f}, /* theta_ref_rad [rad] */
 };
 static const mc_can_signal_t sig_set_tm_rate[2] = {
-    {0u, 8u, false, 1.0f, 0.0f, 1.0f, 10.0f}, /* tm_cmd [-] */
+    {0u, 8u, false, 1.0f, 0.0f, 1.0f, 12.0f}, /* tm_cmd [-] */
     {8u, 16u, false, 1.0f, 0.0f, 0.0f, 1000.0f}, /* rate_hz [Hz] */
 };
 static const mc_can_signal_t sig_host_heartbeat[1] = {
@@ -180,6 +195,8 @@ const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
     {MC_CAN_CMD_STEPPER, 8u, MC_CAN_DIR_TX, 5u, sig_stepper}, /* STEPPER */
     {MC_CAN_CMD_CURRENT_REFS, 8u, MC_CAN_DIR_TX, 4u, sig_current_refs}, /* CURRENT_REFS */
     {MC_CAN_CMD_POSITION_REF, 8u, MC_CAN_DIR_TX, 3u, sig_position_ref}, /* POSITION_REF */
+    {MC_CAN_CMD_THERMAL, 8u, MC_CAN_DIR_TX, 6u, sig_thermal}, /* THERMAL */
+    {MC_CAN_CMD_BUS_CURRENT, 8u, MC_CAN_DIR_TX, 5u, sig_bus_current}, /* BUS_CURRENT */
     {MC_CAN_CMD_APP_STATUS, 8u, MC_CAN_DIR_TX, 8u, sig_app_status}, /* APP_STATUS */
     {MC_CAN_CMD_BOOT_REPLY, 8u, MC_CAN_DIR_TX, 5u, sig_boot_reply}, /* BOOT_REPLY */
     {MC_CAN_CMD_SET_ENABLE, 1u, MC_CAN_DIR_RX, 1u, sig_set_enable}, /* SET_ENABLE */

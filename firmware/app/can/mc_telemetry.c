@@ -17,6 +17,8 @@ static const uint8_t k_slot_msg[MC_TM_COUNT] = {
     (uint8_t)MC_CAN_MSG_POSITION,     (uint8_t)MC_CAN_MSG_OBSERVER,
     (uint8_t)MC_CAN_MSG_CONTROLLER,   (uint8_t)MC_CAN_MSG_STEPPER,
     (uint8_t)MC_CAN_MSG_CURRENT_REFS, (uint8_t)MC_CAN_MSG_POSITION_REF,
+    (uint8_t)MC_CAN_MSG_BUS_CURRENT,
+    (uint8_t)MC_CAN_MSG_THERMAL,
 };
 
 #define NO_SAT 0xFFu
@@ -32,6 +34,8 @@ static const uint8_t k_slot_sat[MC_TM_COUNT] = {
     NO_SAT,
     (uint8_t)MC_CAN_CURRENT_REFS_SAT,
     (uint8_t)MC_CAN_POSITION_REF_SAT,
+    (uint8_t)MC_CAN_BUS_CURRENT_SAT,
+    (uint8_t)MC_CAN_THERMAL_SAT,
 };
 
 #define TWO_PI_F 6.28318530717958647692f
@@ -39,6 +43,17 @@ static const uint8_t k_slot_sat[MC_TM_COUNT] = {
 uint32_t mc_telemetry_msg(uint32_t slot)
 {
     return (slot < (uint32_t)MC_TM_COUNT) ? (uint32_t)k_slot_msg[slot] : MC_CAN_MSG_COUNT;
+}
+
+uint32_t mc_telemetry_slot_of_cmd(uint32_t cmd)
+{
+    uint32_t i;
+    for (i = 0u; i < (uint32_t)MC_TM_COUNT; i++) {
+        if ((uint32_t)mc_can_messages[k_slot_msg[i]].cmd == cmd) {
+            return i;
+        }
+    }
+    return (uint32_t)MC_TM_COUNT;
 }
 
 float mc_telemetry_bus_load(const mc_telemetry_cfg_t *cfg)
@@ -321,6 +336,17 @@ static bool values_of(uint32_t slot, const mc_telemetry_src_t *src, float *value
     case MC_TM_POSITION_REF:
         values[MC_CAN_POSITION_REF_THETA_REF_RAD] =
             (src->cmd != NULL) ? src->cmd->theta_ref_rad : 0.0f;
+        return true;
+    case MC_TM_BUS_CURRENT:
+        values[MC_CAN_BUS_CURRENT_I_BUS_EST_A] = mc_drive_bus_current_a(&d->bus);
+        values[MC_CAN_BUS_CURRENT_I_BUS_MAX_A] = d->bus.i_mot_lim_a;
+        values[MC_CAN_BUS_CURRENT_I_BUS_REGEN_MAX_A] = d->bus.i_regen_lim_a;
+        return true;
+    case MC_TM_THERMAL:
+        values[MC_CAN_THERMAL_T_WINDING_EST_C] = d->thermal.t_w_c;
+        values[MC_CAN_THERMAL_I_LIMIT_A] = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
+        values[MC_CAN_THERMAL_DERATE_FACTOR] = d->thermal.k;
+        values[MC_CAN_THERMAL_DERATING] = d->thermal.derating ? 1.0f : 0.0f;
         return true;
     case MC_TM_OBSERVER:
         if ((x == NULL) || !x->have_observer) {

@@ -2,7 +2,9 @@
  * @file mc_telemetry.h
  * @brief Cyclic CAN telemetry with a rate per message and a bus budget.
  *
- * Messages (tools/can/motordrive.dbc; slot = command id - 1):
+ * Messages (tools/can/motordrive.dbc; slot = command id - 1 up to
+ * POSITION_REF, then in the order below; SET_TM_RATE names a message by its
+ * command id: mc_telemetry_slot_of_cmd):
  *   HEARTBEAT  drive mode, CAN control mode, enabled/stopping, stop reason,
  *              fault bits, last rejected command; its rate is at least
  *              MC_TM_HEARTBEAT_MIN_HZ (it cannot be switched off)
@@ -16,6 +18,9 @@
  *              not sent while the application gives none.
  *   CURRENT_REFS  the drive's dq current references
  *   POSITION_REF  the multi-turn CAN position reference
+ *   BUS_CURRENT   the estimated DC-bus current and the bus limits in force
+ *                 (mc_drive_bus.h)
+ *   THERMAL       the winding estimate and the derated current limit
  * Every frame ends with its message's rolling 8-bit sequence counter, which
  * advances for every frame generated, so a frame the HAL could not queue
  * shows up as a gap at the logger.
@@ -70,7 +75,7 @@
 extern "C" {
 #endif
 
-/** Telemetry slots (slot = DBC command id - 1). */
+/** Telemetry slots (the DBC command id - 1 up to POSITION_REF). */
 typedef enum {
     MC_TM_HEARTBEAT = 0,
     MC_TM_CURRENTS = 1,
@@ -82,7 +87,9 @@ typedef enum {
     MC_TM_STEPPER = 7,
     MC_TM_CURRENT_REFS = 8,
     MC_TM_POSITION_REF = 9,
-    MC_TM_COUNT = 10
+    MC_TM_BUS_CURRENT = 10,
+    MC_TM_THERMAL = 11,
+    MC_TM_COUNT = 12
 } mc_tm_slot_t;
 
 #define MC_TM_HEARTBEAT_MIN_HZ 1u /**< the drive's HEARTBEAT cannot go below this */
@@ -219,6 +226,10 @@ float mc_telemetry_theta_multi_rad(const mc_telemetry_t *t, const mc_drive_t *dr
 
 /** DBC message index (MC_CAN_MSG_*) of a slot. */
 uint32_t mc_telemetry_msg(uint32_t slot);
+
+/** The slot of the telemetry message with command id cmd (MC_CAN_CMD_*),
+ *  MC_TM_COUNT if none. */
+uint32_t mc_telemetry_slot_of_cmd(uint32_t cmd);
 
 #ifdef __cplusplus
 }

@@ -170,6 +170,23 @@ int32_t mc_param_find_name(const char *name)
     return -1;
 }
 
+/* The thermal derating and the winding model (mc_drive_thermal.h). */
+static void mc_params_thermal_cfg(const mc_params_t *p, mc_drive_thermal_cfg_t *t)
+{
+    t->fet_start_c = p->derate_fet_start_c;
+    t->fet_end_c = p->derate_fet_end_c;
+    t->motor_start_c = p->derate_motor_start_c;
+    t->motor_end_c = p->derate_motor_end_c;
+    t->model_enable = p->winding_model != 0u;
+    t->r_ohm = p->r_ohm;
+    t->i_rated_a = p->i_rated_a;
+    t->rise_k = p->winding_rise_k;
+    t->share = p->winding_share;
+    t->tau_w_s = p->winding_tau_s;
+    t->tau_h_s = p->housing_tau_s;
+    t->ambient_c = p->ambient_c;
+}
+
 void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg)
 {
     const mc_params_t *p = &e->p;
@@ -230,6 +247,10 @@ void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg)
     cfg->vbus_regen_start_v = p->vbus_regen_start_v;
     cfg->vbus_regen_end_v = p->vbus_regen_end_v;
     cfg->regen_id_a = p->regen_id_a;
+    cfg->bus.i_bus_max_a = p->i_bus_max_a;
+    cfg->bus.i_bus_regen_max_a = p->i_bus_regen_max_a;
+    cfg->bus.p_bus_max_w = p->p_bus_max_w;
+    cfg->bus.p_bus_regen_max_w = p->p_bus_regen_max_w;
     if (p->brake_enable != 0u) {
         cfg->brake_on_v = p->brake_on_v;
         cfg->brake_full_v = p->brake_full_v;
@@ -247,6 +268,7 @@ void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg)
     cfg->fw.k_demag = 0.9f;
     cfg->fw.ki_fw_a_per_vs = p->fw_ki_a_per_vs;
     cfg->fw.dt_s = dt;
+    mc_params_thermal_cfg(p, &cfg->thermal);
 }
 
 uint32_t mc_params_to_drive_cfg(const mc_params_t *p, mc_drive_cfg_t *cfg)

@@ -90,6 +90,20 @@ const mc_params_t mc_params_default = {
     .traj_d_max_rad_s2 = 0.0f,
     .traj_filter_bw_rad_s = 0.0f,
     .pos_input_mode = 0u,
+    .derate_fet_start_c = 0.0f,
+    .derate_fet_end_c = 0.0f,
+    .derate_motor_start_c = 0.0f,
+    .derate_motor_end_c = 0.0f,
+    .winding_model = 0u,
+    .winding_rise_k = 80.0f,
+    .winding_tau_s = 30.0f,
+    .housing_tau_s = 900.0f,
+    .winding_share = 0.3f,
+    .ambient_c = 25.0f,
+    .i_bus_max_a = 0.0f,
+    .i_bus_regen_max_a = 0.0f,
+    .p_bus_max_w = 0.0f,
+    .p_bus_regen_max_w = 0.0f,
 };
 
 #define NO_FIELD MC_PARAM_NO_FIELD
@@ -181,6 +195,20 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {135u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, traj_d_max_rad_s2), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* traj_d_max_rad_s2 */
     {136u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, traj_filter_bw_rad_s), {.f = 0.0f}, {.f = 10000.0f}, {.f = 0.0f}}, /* traj_filter_bw_rad_s */
     {137u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, pos_input_mode), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* pos_input_mode */
+    {140u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, derate_fet_start_c), {.f = 0.0f}, {.f = 200.0f}, {.f = 0.0f}}, /* derate_fet_start_c */
+    {141u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, derate_fet_end_c), {.f = 0.0f}, {.f = 200.0f}, {.f = 0.0f}}, /* derate_fet_end_c */
+    {142u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, derate_motor_start_c), {.f = 0.0f}, {.f = 250.0f}, {.f = 0.0f}}, /* derate_motor_start_c */
+    {143u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, derate_motor_end_c), {.f = 0.0f}, {.f = 250.0f}, {.f = 0.0f}}, /* derate_motor_end_c */
+    {144u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, winding_model), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* winding_model */
+    {145u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, winding_rise_k), {.f = 1.0f}, {.f = 200.0f}, {.f = 80.0f}}, /* winding_rise_k */
+    {146u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, winding_tau_s), {.f = 0.01f}, {.f = 10000.0f}, {.f = 30.0f}}, /* winding_tau_s */
+    {147u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, housing_tau_s), {.f = 0.01f}, {.f = 100000.0f}, {.f = 900.0f}}, /* housing_tau_s */
+    {148u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, winding_share), {.f = 0.01f}, {.f = 0.99f}, {.f = 0.3f}}, /* winding_share */
+    {149u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, ambient_c), {.f = -50.0f}, {.f = 150.0f}, {.f = 25.0f}}, /* ambient_c */
+    {150u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_bus_max_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* i_bus_max_a */
+    {151u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_bus_regen_max_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* i_bus_regen_max_a */
+    {152u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, p_bus_max_w), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* p_bus_max_w */
+    {153u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, p_bus_regen_max_w), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* p_bus_regen_max_w */
     {200u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_layout_version */
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
     {202u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_store_seq */
@@ -276,6 +304,20 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "traj_d_max_rad_s2",
     "traj_filter_bw_rad_s",
     "pos_input_mode",
+    "derate_fet_start_c",
+    "derate_fet_end_c",
+    "derate_motor_start_c",
+    "derate_motor_end_c",
+    "winding_model",
+    "winding_rise_k",
+    "winding_tau_s",
+    "housing_tau_s",
+    "winding_share",
+    "ambient_c",
+    "i_bus_max_a",
+    "i_bus_regen_max_a",
+    "p_bus_max_w",
+    "p_bus_regen_max_w",
     "cfg_layout_version",
     "cfg_store_status",
     "cfg_store_seq",
@@ -371,6 +413,20 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "rad/s^2",
     "rad/s",
     "",
+    "degC",
+    "degC",
+    "degC",
+    "degC",
+    "",
+    "K",
+    "s",
+    "s",
+    "",
+    "degC",
+    "A",
+    "A",
+    "W",
+    "W",
     "",
     "",
     "",

@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 92u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 86u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 106u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 100u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -103,6 +103,20 @@
 #define MC_PARAM_ID_TRAJ_D_MAX_RAD_S2 135u
 #define MC_PARAM_ID_TRAJ_FILTER_BW_RAD_S 136u
 #define MC_PARAM_ID_POS_INPUT_MODE 137u
+#define MC_PARAM_ID_DERATE_FET_START_C 140u
+#define MC_PARAM_ID_DERATE_FET_END_C 141u
+#define MC_PARAM_ID_DERATE_MOTOR_START_C 142u
+#define MC_PARAM_ID_DERATE_MOTOR_END_C 143u
+#define MC_PARAM_ID_WINDING_MODEL 144u
+#define MC_PARAM_ID_WINDING_RISE_K 145u
+#define MC_PARAM_ID_WINDING_TAU_S 146u
+#define MC_PARAM_ID_HOUSING_TAU_S 147u
+#define MC_PARAM_ID_WINDING_SHARE 148u
+#define MC_PARAM_ID_AMBIENT_C 149u
+#define MC_PARAM_ID_I_BUS_MAX_A 150u
+#define MC_PARAM_ID_I_BUS_REGEN_MAX_A 151u
+#define MC_PARAM_ID_P_BUS_MAX_W 152u
+#define MC_PARAM_ID_P_BUS_REGEN_MAX_W 153u
 #define MC_PARAM_ID_CFG_LAYOUT_VERSION 200u
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
 #define MC_PARAM_ID_CFG_STORE_SEQ 202u
@@ -197,12 +211,26 @@
 #define MC_PARAM_IDX_TRAJ_D_MAX_RAD_S2 83u
 #define MC_PARAM_IDX_TRAJ_FILTER_BW_RAD_S 84u
 #define MC_PARAM_IDX_POS_INPUT_MODE 85u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 86u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 87u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 88u
-#define MC_PARAM_IDX_CFG_PENDING 89u
-#define MC_PARAM_IDX_LAW_ERROR 90u
-#define MC_PARAM_IDX_ANGLE_ERROR 91u
+#define MC_PARAM_IDX_DERATE_FET_START_C 86u
+#define MC_PARAM_IDX_DERATE_FET_END_C 87u
+#define MC_PARAM_IDX_DERATE_MOTOR_START_C 88u
+#define MC_PARAM_IDX_DERATE_MOTOR_END_C 89u
+#define MC_PARAM_IDX_WINDING_MODEL 90u
+#define MC_PARAM_IDX_WINDING_RISE_K 91u
+#define MC_PARAM_IDX_WINDING_TAU_S 92u
+#define MC_PARAM_IDX_HOUSING_TAU_S 93u
+#define MC_PARAM_IDX_WINDING_SHARE 94u
+#define MC_PARAM_IDX_AMBIENT_C 95u
+#define MC_PARAM_IDX_I_BUS_MAX_A 96u
+#define MC_PARAM_IDX_I_BUS_REGEN_MAX_A 97u
+#define MC_PARAM_IDX_P_BUS_MAX_W 98u
+#define MC_PARAM_IDX_P_BUS_REGEN_MAX_W 99u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 100u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 101u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 102u
+#define MC_PARAM_IDX_CFG_PENDING 103u
+#define MC_PARAM_IDX_LAW_ERROR 104u
+#define MC_PARAM_IDX_ANGLE_ERROR 105u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -292,6 +320,20 @@ typedef struct {
     float traj_d_max_rad_s2; /**< Trajectory deceleration; 0: derived, the speed ramp. [rad/s^2] */
     float traj_filter_bw_rad_s; /**< Input filter of streamed position setpoints; 0: derived, pos_kp. [rad/s] */
     uint32_t pos_input_mode; /**< POSITION setpoints: 0 a trapezoid to each (traj_* limits); 1 streamed, through the input filter (traj_filter_bw_rad_s). */
+    float derate_fet_start_c; /**< Power-stage thermistor: the current limit falls linearly from i_limit at this temperature to 0 at derate_fet_end_c; 0 and 0 = off (firmware/app/drive/mc_drive_thermal.h). [degC] */
+    float derate_fet_end_c; /**< Power-stage thermistor: the current limit is 0 at and above it; above derate_fet_start_c (or both 0). [degC] */
+    float derate_motor_start_c; /**< Motor thermistor and winding estimate: the current limit falls linearly from i_limit here to 0 at derate_motor_end_c; 0 and 0 = off. [degC] */
+    float derate_motor_end_c; /**< Motor thermistor and winding estimate: the current limit is 0 at and above it (the winding's limit); above derate_motor_start_c (or both 0). [degC] */
+    uint32_t winding_model; /**< 1: the drive estimates the winding's temperature from the copper losses (two thermal nodes from the rating below, R following copper's coefficient) and derates by it like a motor thermistor. */
+    float winding_rise_k; /**< Steady winding rise at i_rated_a (the rating the winding model's thermal resistances come from); default 80 K, IEC 60034-1 class B by resistance. [K] */
+    float winding_tau_s; /**< Winding thermal time constant C_w R_wh of the winding model (catalogue: thermal time constant winding). [s] */
+    float housing_tau_s; /**< Housing (motor) thermal time constant C_h R_ha of the winding model (catalogue: thermal time constant motor). [s] */
+    float winding_share; /**< Share of the winding-to-housing thermal resistance in the total winding-to-ambient one. */
+    float ambient_c; /**< Ambient of the winding model, the temperature r_ohm is taken at, and the estimate's start after a power-up without a motor thermistor (nothing is stored: set it to the hottest start expected). [degC] */
+    float i_bus_max_a; /**< Motoring DC-bus current limit: the current the drive draws from its supply, estimated from 3/2 (vd id + vq iq) / vbus (firmware/app/drive/mc_drive_bus.h); 0: off. [A] */
+    float i_bus_regen_max_a; /**< Regenerative DC-bus current limit: the largest current pushed back into the supply (a magnitude), as i_bus_max_a; the DC link's voltage limit (vbus_regen_start_v) applies as well, the tighter wins; 0: off. [A] */
+    float p_bus_max_w; /**< Motoring DC-bus power limit (vbus times the estimated bus current); 0: off. [W] */
+    float p_bus_regen_max_w; /**< Regenerative DC-bus power limit (a magnitude); 0: off. [W] */
 } mc_params_t;
 
 /** Defaults ("load defaults", and a drive with an empty store). */

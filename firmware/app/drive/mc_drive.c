@@ -126,6 +126,15 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
         (cfg->regen_id_a > 0.0f && !(cfg->regen_id_a <= cfg->i_max_a))) {
         err |= MC_DRIVE_CFG_ERR_BUS_POWER;
     }
+    if (mc_drive_bus_check(&cfg->bus) != 0u) {
+        err |= MC_DRIVE_CFG_ERR_BUS_POWER;
+    }
+    {
+        mc_drive_thermal_t probe;
+        if (mc_drive_thermal_init(&probe, &cfg->thermal) != MC_DRIVE_THERMAL_ERR_NONE) {
+            err |= MC_DRIVE_CFG_ERR_THERMAL;
+        }
+    }
     return err;
 }
 
@@ -180,6 +189,8 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
     d->mode = MC_DRIVE_MODE_IDLE;
     d->tm.regen_scale = 1.0f;
     d->regen_lead_alpha = regen_lead_alpha(cfg);
+    mc_drive_bus_init(&d->bus, &cfg->foc);
+    (void)mc_drive_thermal_init(&d->thermal, &cfg->thermal); /* validated above */
     if (cfg->fw_enable) {
         (void)mc_fw_f32_init(&d->fw, &cfg->fw);
     }
@@ -604,7 +615,7 @@ static uint32_t current_loop(mc_drive_t *d, const mc_hal_adc_sample_t *s, float 
 {
     float id = r->id_a;
     float iq = r->iq_a;
-    const float lim = d->cfg.i_max_a;
+    const float lim = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
     uint32_t f = 0u;
     if (r->rotor_frame && d->cfg.fw_enable) {
         f |= fw_refs(d, s->vbus_v, &id, &iq);
@@ -613,6 +624,12 @@ static uint32_t current_loop(mc_drive_t *d, const mc_hal_adc_sample_t *s, float 
         regen_limit(d, s->vbus_v, r->omega_e_rad_s, &id, &iq);
     } else {
         d->tm.regen_scale = 1.0f;
+    }
+    {
+        const mc_drive_bus_in_t bi = {s->vbus_v,      r->omega_e_rad_s, r->rotor_frame,
+                                      d->fast_count,  d->tm.foc.id_a,   d->tm.foc.iq_a,
+                                      d->tm.foc.vd_v, d->tm.foc.vq_v};
+        mc_drive_bus_limit(&d->bus, &d->cfg.bus, &d->cfg.foc, &bi, &id, &iq);
     }
     id = mc_sat_f32(id, -lim, lim);
     iq = mc_sat_f32(iq, -lim, lim);
@@ -802,6 +819,31 @@ static bool read_temps(const mc_drive_t *d, mc_hal_adc_temp_t *t)
     return (fitted != 0u) && ((t->valid_mask & fitted) == fitted);
 }
 
+/* The thermal derating's slow step (mc_drive_thermal.h): each fitted
+ * sensor's reading, the square of the measured current while the bridge
+ * is driven. */
+static void thermal_slow(mc_drive_t *d, float slow_dt)
+{
+    const mc_drive_thermal_cfg_t *c = &d->cfg.thermal;
+    if (!(c->fet_end_c > 0.0f) && !(c->motor_end_c > 0.0f) && !c->model_enable) {
+        return; /* nothing to derate by: k stays 1 */
+    }
+    mc_hal_adc_temp_t t = {0};
+    mc_drive_thermal_in_t in = {0.0f, 0.0f, false, false};
+    if (mc_hal_adc_read_temp(d->hal->adc, &t) == 0) {
+        const uint32_t ok = t.valid_mask & ~t.absent_mask;
+        in.fet_c = t.power_stage_temp_c;
+        in.motor_c = t.motor_temp_c;
+        in.fet_ok = (ok & MC_HAL_ADC_TEMP_VALID_POWER_STAGE) != 0u;
+        in.motor_ok = (ok & MC_HAL_ADC_TEMP_VALID_MOTOR) != 0u;
+    }
+    const bool on = d->mode == MC_DRIVE_MODE_CURRENT || d->mode == MC_DRIVE_MODE_CTRL ||
+                    d->mode == MC_DRIVE_MODE_STOPPING;
+    const float isq =
+        on ? (d->tm.foc.id_a * d->tm.foc.id_a) + (d->tm.foc.iq_a * d->tm.foc.iq_a) : 0.0f;
+    (void)mc_drive_thermal_step(&d->thermal, slow_dt, isq, &in);
+}
+
 /* The end of a controlled stop: the bridge opens, IDLE. */
 static void stop_end(mc_drive_t *d)
 {
@@ -877,7 +919,7 @@ static void fill_meas(mc_drive_t *d, const mc_hal_adc_sample_t *s, float ic, boo
     m->have_speed_ref = false;
     m->omega_ref_rad_s = 0.0f;
     m->alpha_ref_rad_s2 = 0.0f;
-    m->i_max_a = d->cfg.i_max_a;
+    m->i_max_a = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
     m->iq_applied_a = iq_applied_prev;
     m->regen_scale = d->tm.regen_scale;
     m->v_alpha_prev_v = d->v_ab_prev_v[0];
@@ -980,6 +1022,7 @@ void mc_drive_slow_step(mc_drive_t *d)
     const float slow_dt = d->cfg.foc.dt_s * (float)d->cfg.slow_loop_div;
     mc_hal_adc_temp_t t = {0};
     bool t_ok = false;
+    thermal_slow(d, slow_dt);
     if (d->cfg.temp_warn_c > 0.0f || d->cfg.temp_max_c > 0.0f) {
         t_ok = read_temps(d, &t);
     }
@@ -1277,6 +1320,7 @@ void mc_drive_set_runtime_limits(mc_drive_t *d, const mc_drive_cfg_t *cfg)
     d->cfg.vbus_regen_start_v = cfg->vbus_regen_start_v;
     d->cfg.vbus_regen_end_v = cfg->vbus_regen_end_v;
     d->cfg.regen_id_a = cfg->regen_id_a;
+    d->cfg.bus = cfg->bus;
     d->cfg.brake_on_v = cfg->brake_on_v;
     d->cfg.brake_full_v = cfg->brake_full_v;
     d->id_ref_a = mc_sat_f32(d->id_ref_a, -cfg->i_max_a, cfg->i_max_a);

@@ -90,8 +90,10 @@
 
 #include "foc/mc_foc.h"
 #include "fw/mc_fw.h"
+#include "mc_drive_bus.h"
 #include "observer/mc_enctrack.h"
 #include "hal/hal.h"
+#include "mc_drive_thermal.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -201,6 +203,8 @@ typedef enum {
                                                     them 0, i_min above i_max_a, or the
                                                     time shorter than one period or
                                                     longer than 2^24 periods */
+#define MC_DRIVE_CFG_ERR_THERMAL \
+    (1u << 19) /**< cfg.thermal refused by mc_drive_thermal_init (see there) */
 #define MC_DRIVE_CFG_ERR_FW \
     (1u << 13) /**< fw_enable with a cfg.fw mc_fw_f32_init
                                                    refuses, or fw.dt_s != foc.dt_s */
@@ -214,7 +218,9 @@ typedef enum {
 #define MC_DRIVE_CFG_ERR_BUS_POWER \
     (1u << 12) /**< regen limit or brake chopper thresholds:
                                                    not finite, only one of a pair 0, or not
-                                                   vbus_min_v < start < end <= vbus_max_v */
+                                                   vbus_min_v < start < end <= vbus_max_v;
+                                                   or a DC-bus limit (cfg.bus) negative
+                                                   or not finite */
 
 /* Faults that may engage the active short circuit (cfg.asc_enable): those
  * that leave the bridge and the current measurement trustworthy. */
@@ -414,6 +420,11 @@ typedef struct {
      *  exceeds the bus (see "Active short circuit" above); needs foc.flux_wb,
      *  foc.ld_h > 0 and foc.flux_wb / foc.ld_h < i_trip_a. */
     bool asc_enable;
+    /** DC-bus current and power limits (mc_drive_bus.h); 0 = off each. */
+    mc_drive_bus_cfg_t bus;
+    /** Thermal derating and the winding estimate (mc_drive_thermal.h): the
+     *  current limit in force is i_max_a times its factor. */
+    mc_drive_thermal_cfg_t thermal;
 } mc_drive_cfg_t;
 
 /** Bridges a control law can drive (mc_drive_ctrl_t.outputs). */
@@ -566,6 +577,8 @@ typedef struct {
     /* the regenerative limit's lead (see "Regenerative braking") */
     float vbus_lag_v;       /**< the bus reading low-passed at the lead time [V] (0: none yet) */
     float regen_lead_alpha; /**< that filter's factor per fast step, dt / (t_lead + dt) */
+    mc_drive_bus_t bus;     /**< the DC-bus limits' state and estimate (mc_drive_bus.h) */
+    mc_drive_thermal_t thermal; /**< derating factor, winding estimate (mc_drive_thermal.h) */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns

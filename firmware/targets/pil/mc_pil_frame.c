@@ -11,7 +11,7 @@
 #define READY_WORDS 3u
 #define MEAS_WORDS  29u
 #define OUT_WORDS   23u
-#define APP_WORDS   10u
+#define APP_WORDS   (5u + MC_PIL_TM_EXT_RATES) /* budget, the rates, 4 words */
 /* CAN frames: id, time stamp, length and flags, then the data rounded up
  * to whole words (CAN_TX: the period's seq first) */
 #define CAN_HEAD_WORDS 3u

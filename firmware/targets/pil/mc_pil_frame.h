@@ -101,7 +101,7 @@ typedef enum {
 /** (id, raw) pairs per PARAMS frame (the payload limit). */
 #define MC_PIL_PARAMS_MAX 31u
 /** Rates of the telemetry messages past POSITION (mc_app_cfg_t). */
-#define MC_PIL_TM_EXT_RATES 5u
+#define MC_PIL_TM_EXT_RATES 7u
 
 /* Decode errors. */
 #define MC_PIL_OK       0

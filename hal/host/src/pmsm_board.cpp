@@ -42,6 +42,8 @@ PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
   sp.substeps = cfg.substeps;
   sp.theta_m0_rad = cfg.theta_m0_rad;
   sp.omega_m0_rad_s = cfg.omega_m0_rad_s;
+  sp.thermal_enabled = cfg.thermal_enabled;
+  sp.thermal = cfg.thermal;
   check_config(stage_.configure(sp), "power stage");
   if (cfg.dc_link_enabled) {
     check_config(link_.configure(cfg.dc_link), "dc_link");
@@ -172,7 +174,11 @@ int PmsmBoard::adc_read_temp(mc_hal_adc_temp_t* t) noexcept {
   t->power_stage_temp_c = 25.0f;
   t->motor_temp_c = 25.0f;
   t->valid_mask = MC_HAL_ADC_TEMP_VALID_ALL;
-  t->absent_mask = 0u;
+  t->absent_mask = cfg_.thermal_enabled ? MC_HAL_ADC_TEMP_VALID_MOTOR : 0u;
+  if (cfg_.thermal_enabled) {
+    t->valid_mask = MC_HAL_ADC_TEMP_VALID_POWER_STAGE;
+    t->motor_temp_c = 0.0f;
+  }
   return 0;
 }
 

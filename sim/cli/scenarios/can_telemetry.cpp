@@ -94,12 +94,12 @@ namespace mcsim {
 namespace {
 
 const char* const kSlotParam[MC_TM_COUNT] = {
-    "rate_heartbeat_hz",    "rate_currents_hz",    "rate_voltages_hz",   "rate_speed_hz",
-    "rate_position_hz",     "rate_observer_hz",    "rate_controller_hz", "rate_stepper_hz",
-    "rate_current_refs_hz", "rate_position_ref_hz"};
-const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT",    "CURRENTS",    "VOLTAGES",   "SPEED",
-                                            "POSITION",     "OBSERVER",    "CONTROLLER", "STEPPER",
-                                            "CURRENT_REFS", "POSITION_REF"};
+    "rate_heartbeat_hz",    "rate_currents_hz",     "rate_voltages_hz",   "rate_speed_hz",
+    "rate_position_hz",     "rate_observer_hz",     "rate_controller_hz", "rate_stepper_hz",
+    "rate_current_refs_hz", "rate_position_ref_hz", "rate_bus_current_hz", "rate_thermal_hz"};
+const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT",    "CURRENTS",     "VOLTAGES",   "SPEED",
+                                            "POSITION",     "OBSERVER",     "CONTROLLER", "STEPPER",
+                                            "CURRENT_REFS", "POSITION_REF", "BUS_CURRENT", "THERMAL"};
 // Signal names per slot, in DBC order (checked against the generated
 // signal counts below; tests/can compares the CSV header with the DBC).
 const std::vector<std::vector<std::string>> kSlotSignals = {
@@ -113,7 +113,9 @@ const std::vector<std::vector<std::string>> kSlotSignals = {
     {"nu_pu", "vartheta_pu", "sat", "seq"},
     {"e1_rad", "e2_rad_s", "s1", "s2", "seq"},
     {"i_d_ref_a", "i_q_ref_a", "sat", "seq"},
-    {"theta_ref_rad", "sat", "seq"}};
+    {"theta_ref_rad", "sat", "seq"},
+    {"i_bus_est_a", "i_bus_max_a", "i_bus_regen_max_a", "sat", "seq"},
+    {"t_winding_est_c", "i_limit_a", "derate_factor", "derating", "sat", "seq"}};
 
 const char* const kBootName[] = {"STORED", "MIGRATED", "EMPTY", "CORRUPT",
                                  "LAYOUT", "INVALID",  "FLASH"};
@@ -452,6 +454,8 @@ std::vector<ParamSpec> can_params() {
           {"rate_stepper_hz", 0.0, "Hz", "STEPPER rate (nothing sent here)", 0.0, 1000.0},
           {"rate_current_refs_hz", 100.0, "Hz", "CURRENT_REFS rate", 0.0, 1000.0},
           {"rate_position_ref_hz", 50.0, "Hz", "POSITION_REF rate", 0.0, 1000.0},
+          {"rate_bus_current_hz", 0.0, "Hz", "BUS_CURRENT rate", 0.0, 1000.0},
+          {"rate_thermal_hz", 0.0, "Hz", "THERMAL rate", 0.0, 1000.0},
           {"timeout_s", 0.5, "s", "command timeout while enabled", 0.001, 60.0},
           {"stop_ramp_a_per_s", 20.0, "A/s", "current ramp of a safe stop", 0.01, 1e6},
           {"speed_law", 0.0, "1",

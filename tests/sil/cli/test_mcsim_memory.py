@@ -50,6 +50,9 @@ RUNS = {
     # is with verify=1, which adds two speed steps on the identified values.
     "commission": (D5065, [], ["--set", "verify=1"]),
     "current-step": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
+    # thermal times divided by 100 (tests/sil/motors/test_thermal_duty_sil.cpp)
+    "thermal-duty": (D5065 + ["--set", "tau_w_s=0.3", "--set", "tau_h_s=9", "--set", "on_s=0.6",
+                              "--set", "off_s=0.3"], ["--duration", "0.2"], ["--duration", "2"]),
     "speed-step": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
     "load-step": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
     "sensorless-speed-step": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
@@ -71,6 +74,7 @@ RUNS = {
     "pi2d-motor-q31": ([], ["--duration", "0.22"], ["--duration", "2.2"]),
     "csmc-state-feedback-q31": ([], ["--duration", "0.05"], ["--duration", "0.5"]),
     "regen-stop": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
+    "bus-limits": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
 }
 
 

@@ -68,8 +68,9 @@ using Sets = std::vector<std::pair<std::string, std::string>>;
 // Runs scenario `scen` for the files as `mcsim run` does, writing its CSV in
 // a folder of its own per test (ctest runs tests in parallel; `tag` tells
 // apart several runs of one test) and returns the summary's numbers.
-inline std::map<std::string, double> run_scenario(const std::string& scen, const MotorFiles& f,
-                                                  const Sets& sets, const std::string& tag = "") {
+inline std::map<std::string, double> run_scenario(
+    const std::string& scen, const MotorFiles& f, const Sets& sets, const std::string& tag = "",
+    std::map<std::string, std::string>* texts = nullptr) {
   const Scenario* s = find_scenario(scen);
   if (s == nullptr) throw std::logic_error("scenario " + scen + " not registered");
   const Params p(s->motor_params(f), sets);
@@ -84,6 +85,7 @@ inline std::map<std::string, double> run_scenario(const std::string& scen, const
   RunContext ctx{0.0, p, csv, sum, prog, &f};
   s->run(ctx);
   csv.commit();
+  if (texts != nullptr) *texts = sum.texts();
   return sum.numbers();
 }
 

@@ -270,7 +270,8 @@ TEST(PilFrame, ProbeRoundTripKeepsEveryBit) {
   p.omega_m_rad_s = std::numeric_limits<float>::denorm_min();
   p.pos_turns = -123456;
   p.pos_traj_k = 0xDEADBEEFu;
-  p.angle_error = 0xDEADBEEFu;  // the last field
+  p.sls_omega_if_rad_s = -0.0f;
+  p.i_limit_a = nan_with_payload();  // the last field
   const size_t n = mc_pil_encode_probe(&p, buf, sizeof buf);
   ASSERT_EQ(n, MC_PIL_HEADER_LEN + 4u * MC_PIL_PROBE_WORDS + MC_PIL_CRC_LEN);
   mc_app_probe_t d{};

@@ -456,5 +456,48 @@ TEST_F(AppDriveCtrl, RegenLimitAppliesToCurrentLaws)
     EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
 }
 
+// The DC-bus limits (mc_drive_bus.h) are the drive's for every law that
+// gives current references: with the fake board's currents at zero the
+// estimate's correction stays 0 and the limit is the model's root. At
+// omega_e = -100 rad/s, psi 0.01 Wb, R 0.1 ohm, the braking reference 5 A
+// would push 1.5 (R iq^2 + w psi iq) = -3.75 W into the bus: the
+// regenerative limit 0.0625 A at 24 V (1.5 W) moves it to the root of
+// 0.15 iq^2 - 1.5 iq + 1.5 = 0 nearer zero, (10 - sqrt 60) / 2; motoring at
+// +100 rad/s the limit 0.25 A (6 W) to (-10 + sqrt 260) / 2; outside the
+// rotor's frame the copper loss 3.75 W scales down to the limit 2.4 W:
+// both references times 0.8. Tolerance 1e-5 relative: float roots.
+TEST_F(AppDriveCtrl, BusLimitsApplyToCurrentLaws)
+{
+    cfg.bus.i_bus_regen_max_a = 0.0625f;
+    cfg.bus.i_bus_max_a = 0.25f;
+    InitDrive();
+    mc_drive_ctrl_t c = Law(MC_DRIVE_OUT_CURRENT);
+    ASSERT_EQ(0, mc_drive_attach_ctrl(&d, &c));
+    law.out = mc_drive_out_t{};
+    law.out.iq_ref_a = 5.0f;
+    law.out.omega_e_rad_s = -100.0f;
+    law.out.rotor_frame = true;
+    ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL));
+    auto step = [&]() {
+        GoodSample();
+        (void)mc_drive_fast_step(&d);
+    };
+    step();
+    const double regen = (10.0 - std::sqrt(60.0)) / 2.0;
+    EXPECT_NEAR(regen, d.tm.iq_ref_a, 1e-5 * regen);
+    EXPECT_NEAR(0.0625f, d.bus.i_regen_lim_a, 1e-7);
+    law.out.omega_e_rad_s = 100.0f;
+    step();
+    const double mot = (-10.0 + std::sqrt(260.0)) / 2.0;
+    EXPECT_NEAR(mot, d.tm.iq_ref_a, 1e-5 * mot);
+    cfg.bus.i_bus_max_a = 0.1f;
+    mc_drive_set_runtime_limits(&d, &cfg);
+    law.out.rotor_frame = false;
+    law.out.id_ref_a = 0.0f;
+    step();
+    EXPECT_NEAR(4.0, d.tm.iq_ref_a, 1e-5 * 4.0);
+    EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
+}
+
 } // namespace
 } // namespace apptest

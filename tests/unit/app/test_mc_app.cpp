@@ -971,6 +971,18 @@ class McAppEveryParam : public McApp
                                                             : MC_PARAM_ID_OPEN_PHASE_I_MIN_A,
                                                         &v));
         }
+        // a derating pair runs with both of its values or neither: the
+        // other end at the range's top (a start) or at half the value (an end)
+        if (id >= MC_PARAM_ID_DERATE_FET_START_C && id <= MC_PARAM_ID_DERATE_MOTOR_END_C) {
+            const bool start =
+                id == MC_PARAM_ID_DERATE_FET_START_C || id == MC_PARAM_ID_DERATE_MOTOR_START_C;
+            const bool fet = id <= MC_PARAM_ID_DERATE_FET_END_C;
+            float f;
+            std::memcpy(&f, &raw, sizeof f);
+            v = F32Bits(start ? (fet ? 200.0f : 250.0f) : 0.5f * f);
+            EXPECT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE,
+                                                        start ? id + 1u : id - 1u, &v));
+        }
         v = 0u;
         if (mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v) != MC_PARAM_OK) {
             return false; // a value the cross checks refuse: the next one

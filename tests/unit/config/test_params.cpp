@@ -258,6 +258,20 @@ TEST(Params, CrossChecks)
     p = mc_params_default;
     p.r_ohm = std::numeric_limits<float>::quiet_NaN();
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_RANGE);
+    // thermal derating (mc_drive_thermal.h): each value in range, the pair
+    // refused when its end is not above its start or only one is 0
+    p = mc_params_default;
+    p.derate_motor_start_c = 120.0f;
+    p.derate_motor_end_c = 100.0f;
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_DRIVE);
+    p.derate_motor_end_c = 0.0f;
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_DRIVE);
+    p.derate_motor_end_c = 140.0f;
+    p.winding_model = 1u;
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
+    p.derate_fet_start_c = 250.0f; // above the parameter's range (200)
+    p.derate_fet_end_c = 260.0f;
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_RANGE);
     EXPECT_EQ(mc_params_validate(nullptr), MC_PARAMS_ERR_NULL);
 }
 

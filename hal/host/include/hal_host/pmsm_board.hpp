@@ -58,6 +58,11 @@ struct PmsmBoardConfig {
   double tick_hz = 10.0e6;      // HAL tick counter frequency
   double theta_m0_rad = 0.0;    // initial rotor angle
   double omega_m0_rad_s = 0.0;  // initial speed
+  // The motor's temperatures (mcsim/thermal.hpp): off by default. On, the
+  // board has no motor thermistor (as the ODrive v3.6 by default: its
+  // temperature reads absent) and the power stage reads 25 C.
+  bool thermal_enabled = false;
+  mcsim::ThermalParams thermal{};
 };
 
 class PmsmBoard final : public SimBoard {

@@ -1,0 +1,227 @@
+/**
+ * @file mc_drive_bus.c
+ * @brief DC-bus current and power limits: see mc_drive_bus.h.
+ */
+#include "mc_drive_bus.h"
+
+#include "math/mc_math.h"
+
+#define BUS_NONE 3.0e38f /* no bound */
+
+uint32_t mc_drive_bus_check(const mc_drive_bus_cfg_t *cfg)
+{
+    const float v[4] = {cfg->i_bus_max_a, cfg->i_bus_regen_max_a, cfg->p_bus_max_w,
+                        cfg->p_bus_regen_max_w};
+    uint32_t bad = 0u;
+    for (unsigned k = 0u; k < 4u; ++k) {
+        if (!mc_isfinite_f32(v[k]) || v[k] < 0.0f) {
+            bad |= 1u << k;
+        }
+    }
+    return bad;
+}
+
+float mc_drive_bus_estimate_a(float vd_v, float vq_v, float id_a, float iq_a, float vbus_v)
+{
+    const float i = 1.5f * ((vd_v * id_a) + (vq_v * iq_a)) / vbus_v;
+    return (vbus_v > 0.0f && mc_isfinite_f32(i)) ? i : 0.0f;
+}
+
+float mc_drive_bus_current_a(const mc_drive_bus_t *s)
+{
+    return (s->vbus_v > 0.0f) ? (s->p_bus_est_w / s->vbus_v) : 0.0f;
+}
+
+void mc_drive_bus_init(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc)
+{
+    const float t_loop = (foc->kp_q_v_per_a > 0.0f) ? (foc->lq_h / foc->kp_q_v_per_a) : foc->dt_s;
+    const float tau = MC_DRIVE_BUS_CORR_TAU_LOOPS * t_loop;
+    const mc_drive_bus_t z = {0};
+    *s = z;
+    s->corr_alpha = foc->dt_s / (tau + foc->dt_s);
+}
+
+/* The two roots of a x^2 + b x + c = 0 (a > 0, disc = b^2 - 4ac >= 0),
+ * in order, without cancellation. */
+static void roots(float a, float b, float c, float disc, float *p_lo, float *p_hi)
+{
+    const float sq = mc_sqrt_f32(disc);
+    const float q = -0.5f * (b + ((b < 0.0f) ? -sq : sq));
+    float r1 = q / a;
+    float r2 = (q != 0.0f) ? (c / q) : 0.0f;
+    if (r1 > r2) {
+        const float t = r1;
+        r1 = r2;
+        r2 = t;
+    }
+    *p_lo = r1;
+    *p_hi = r2;
+}
+
+bool mc_drive_bus_motor_range(float a, float b, float c0, float p_max_w, float *p_lo, float *p_hi)
+{
+    const float c = c0 - p_max_w;
+    *p_lo = -BUS_NONE;
+    *p_hi = BUS_NONE;
+    if (a > 0.0f) {
+        const float disc = (b * b) - (4.0f * a * c);
+        if (disc < 0.0f) {
+            return false;
+        }
+        roots(a, b, c, disc, p_lo, p_hi);
+        return true;
+    }
+    if (b > 0.0f) {
+        *p_hi = -c / b;
+    } else if (b < 0.0f) {
+        *p_lo = -c / b;
+    } else {
+        return c <= 0.0f;
+    }
+    return true;
+}
+
+float mc_drive_bus_regen_clamp(float a, float b, float c0, float p_regen_w, float iq_a)
+{
+    const float c = c0 + p_regen_w;
+    float r1;
+    float r2;
+    if (!(a > 0.0f)) {
+        if (b > 0.0f) {
+            r1 = -c / b;
+            return (iq_a < r1) ? r1 : iq_a;
+        }
+        if (b < 0.0f) {
+            r2 = -c / b;
+            return (iq_a > r2) ? r2 : iq_a;
+        }
+        return iq_a;
+    }
+    {
+        const float disc = (b * b) - (4.0f * a * c);
+        if (!(disc > 0.0f)) {
+            return iq_a;
+        }
+        roots(a, b, c, disc, &r1, &r2);
+    }
+    /* the band (r1, r2) brakes harder than P_r; past its far edge lies
+     * plugging, which the current limit would bring back into the band */
+    if (r1 >= 0.0f) {
+        return (iq_a > r1) ? r1 : iq_a;
+    }
+    if (r2 <= 0.0f) {
+        return (iq_a < r2) ? r2 : iq_a;
+    }
+    if (iq_a > r1 && iq_a < r2) {
+        return ((iq_a - r1) < (r2 - iq_a)) ? r1 : r2;
+    }
+    return iq_a;
+}
+
+/* The limits in force at vbus as powers [W] (BUS_NONE: off) and in A. */
+static void limits_w(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg, float vbus_v, float *p_m,
+                     float *p_r)
+{
+    float m = (cfg->i_bus_max_a > 0.0f) ? (cfg->i_bus_max_a * vbus_v) : BUS_NONE;
+    float r = (cfg->i_bus_regen_max_a > 0.0f) ? (cfg->i_bus_regen_max_a * vbus_v) : BUS_NONE;
+    if (cfg->p_bus_max_w > 0.0f && cfg->p_bus_max_w < m) {
+        m = cfg->p_bus_max_w;
+    }
+    if (cfg->p_bus_regen_max_w > 0.0f && cfg->p_bus_regen_max_w < r) {
+        r = cfg->p_bus_regen_max_w;
+    }
+    s->i_mot_lim_a = (m < BUS_NONE) ? (m / vbus_v) : 0.0f;
+    s->i_regen_lim_a = (r < BUS_NONE) ? (r / vbus_v) : 0.0f;
+    *p_m = m;
+    *p_r = r;
+}
+
+/* The correction c towards the estimate of the last step (its power
+ * recorded by mc_drive_bus_limit). */
+static void correct(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc, const mc_drive_bus_in_t *in,
+                    bool fresh)
+{
+    if (!fresh) {
+        s->corr_w = 0.0f; /* the loop did not run last step: nothing to compare */
+        return;
+    }
+    {
+        const float i2 = (in->id_a * in->id_a) + (in->iq_a * in->iq_a);
+        float model = 1.5f * foc->r_ohm * i2;
+        if (in->rotor_frame) {
+            const float psi = foc->flux_wb + ((foc->ld_h - foc->lq_h) * in->id_a);
+            model += 1.5f * in->omega_e_rad_s * psi * in->iq_a;
+        }
+        s->corr_w += s->corr_alpha * (s->p_bus_est_w - model - s->corr_w);
+        if (!mc_isfinite_f32(s->corr_w)) {
+            s->corr_w = 0.0f;
+        }
+    }
+}
+
+/* Outside the rotor's frame: both references scaled to the copper-loss
+ * model's motoring limit. */
+static void limit_copper(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc, float p_m, float *p_id_a,
+                         float *p_iq_a)
+{
+    const float q = 1.5f * foc->r_ohm * ((*p_id_a * *p_id_a) + (*p_iq_a * *p_iq_a));
+    if (p_m < BUS_NONE && q > 0.0f && (q + s->corr_w) > p_m) {
+        const float room = p_m - s->corr_w;
+        const float k = (room > 0.0f) ? mc_sqrt_f32(room / q) : 0.0f;
+        *p_id_a *= k;
+        *p_iq_a *= k;
+        s->limiting = true;
+    }
+}
+
+void mc_drive_bus_limit(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg,
+                        const mc_foc_f32_cfg_t *foc, const mc_drive_bus_in_t *in, float *p_id_a,
+                        float *p_iq_a)
+{
+    float p_m;
+    float p_r;
+    const bool fresh = s->have_last && (in->fast_count == s->last_count + 1u);
+    const float p = 1.5f * ((in->vd_v * in->id_a) + (in->vq_v * in->iq_a));
+    s->p_bus_est_w = mc_isfinite_f32(p) ? p : 0.0f;
+    s->vbus_v = in->vbus_v;
+    s->limiting = false;
+    if (cfg->i_bus_max_a == 0.0f && cfg->i_bus_regen_max_a == 0.0f && cfg->p_bus_max_w == 0.0f &&
+        cfg->p_bus_regen_max_w == 0.0f) {
+        s->have_last = false; /* off: the correction restarts when a limit is set */
+        return;
+    }
+    s->last_count = in->fast_count;
+    s->have_last = true;
+    correct(s, foc, in, fresh);
+    if (!(in->vbus_v > 0.0f)) {
+        s->i_mot_lim_a = 0.0f;
+        s->i_regen_lim_a = 0.0f;
+        return; /* no bus: the under-voltage trip's business */
+    }
+    limits_w(s, cfg, in->vbus_v, &p_m, &p_r);
+    if (!in->rotor_frame) {
+        limit_copper(s, foc, p_m, p_id_a, p_iq_a);
+        return;
+    }
+    {
+        const float id = *p_id_a;
+        const float a = 1.5f * foc->r_ohm;
+        const float b = 1.5f * in->omega_e_rad_s * (foc->flux_wb + ((foc->ld_h - foc->lq_h) * id));
+        const float c0 = (a * id * id) + s->corr_w;
+        float iq = *p_iq_a;
+        if (p_m < BUS_NONE) {
+            float lo;
+            float hi;
+            if (!mc_drive_bus_motor_range(a, b, c0, p_m, &lo, &hi)) {
+                iq = 0.0f;
+            } else {
+                iq = mc_sat_f32(iq, lo, hi);
+            }
+        }
+        if (p_r < BUS_NONE) {
+            iq = mc_drive_bus_regen_clamp(a, b, c0, p_r, iq);
+        }
+        s->limiting = (iq != *p_iq_a);
+        *p_iq_a = iq;
+    }
+}

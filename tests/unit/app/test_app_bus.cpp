@@ -1,0 +1,180 @@
+// The DC-bus current and power limits (firmware/app/drive/mc_drive_bus.h):
+// the estimate, the quadratic limits against closed forms, the correction
+// closing on a motor whose R the drive has wrong, and the configuration's
+// refusals (the drive's init, the parameter table).
+#include <cmath>
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "app_test_fixture.h"
+#include "mc_params.h"
+#include "mc_drive_bus.h"
+
+namespace apptest
+{
+namespace
+{
+
+// 3/2 (vd id + vq iq) / vbus: 1.5 (2 (-1) + 10 5) / 24 = 3 A; no bus or a
+// value that is not a number gives 0. Tolerance: one float rounding.
+TEST(DriveBusEstimate, ClosedForm)
+{
+    EXPECT_NEAR(3.0f, mc_drive_bus_estimate_a(2.0f, 10.0f, -1.0f, 5.0f, 24.0f), 1e-6f);
+    EXPECT_NEAR(-3.0f, mc_drive_bus_estimate_a(2.0f, 10.0f, 1.0f, -5.0f, 24.0f), 1e-6f);
+    EXPECT_EQ(0.0f, mc_drive_bus_estimate_a(2.0f, 10.0f, -1.0f, 5.0f, 0.0f));
+    EXPECT_EQ(0.0f, mc_drive_bus_estimate_a(kNaN, 10.0f, -1.0f, 5.0f, 24.0f));
+}
+
+float Poly(float a, float b, float c, float x)
+{
+    return (a * x * x) + (b * x) + c;
+}
+
+// Motoring: the range of iq with a iq^2 + b iq + c0 <= P is bounded by the
+// two roots, where the power is P (1e-4 relative: float roots of a
+// well-conditioned quadratic); none when even the vertex draws more; the
+// linear model (R = 0) bounds one side only.
+TEST(DriveBusLimit, MotoringRangeIsBetweenTheRoots)
+{
+    const float a = 0.15f;
+    const float b = 1.5f;
+    const float c0 = 0.3f;
+    float lo = 0.0f;
+    float hi = 0.0f;
+    ASSERT_TRUE(mc_drive_bus_motor_range(a, b, c0, 6.0f, &lo, &hi));
+    EXPECT_NEAR(6.0f, Poly(a, b, c0, lo), 6e-4f);
+    EXPECT_NEAR(6.0f, Poly(a, b, c0, hi), 6e-4f);
+    EXPECT_LT(lo, 0.0f);
+    EXPECT_GT(hi, 0.0f);
+    // vertex at -5: 0.15 * 25 - 7.5 + 0.3 = -3.45 W; a limit below it
+    EXPECT_FALSE(mc_drive_bus_motor_range(a, b, c0, -4.0f, &lo, &hi));
+    ASSERT_TRUE(mc_drive_bus_motor_range(0.0f, b, c0, 6.0f, &lo, &hi));
+    EXPECT_NEAR((6.0f - 0.3f) / 1.5f, hi, 1e-6f);
+    EXPECT_LT(lo, -1e30f);
+}
+
+// Regenerating: a reference in the band where the power is below -P moves
+// to the band's edge nearer zero (power exactly -P, 1e-4 relative); one
+// outside stays; one past the far edge (plugging, which the current limit
+// would pull back into the band) also goes to the near edge.
+TEST(DriveBusLimit, RegenerativeBandToItsNearEdge)
+{
+    const float a = 0.15f;
+    const float b = -1.5f; // braking with iq > 0 at negative speed
+    const float c0 = 0.0f;
+    const float pr = 1.5f;
+    const float near = (10.0f - std::sqrt(60.0f)) / 2.0f;
+    const float x = mc_drive_bus_regen_clamp(a, b, c0, pr, 5.0f);
+    EXPECT_NEAR(near, x, 1e-4f * near);
+    EXPECT_NEAR(-pr, Poly(a, b, c0, x), 1e-4f * pr);
+    EXPECT_EQ(0.5f, mc_drive_bus_regen_clamp(a, b, c0, pr, 0.5f));
+    EXPECT_EQ(-2.0f, mc_drive_bus_regen_clamp(a, b, c0, pr, -2.0f)); // motoring side
+    EXPECT_NEAR(near, mc_drive_bus_regen_clamp(a, b, c0, pr, 9.5f), 1e-4f * near);
+    // no band: the vertex (-3.75 W) above -5 W
+    EXPECT_EQ(5.0f, mc_drive_bus_regen_clamp(a, b, c0, 5.0f, 5.0f));
+}
+
+// A motor model for the closed loop below: steady-state dq voltages.
+struct Motor {
+    float r, ld, lq, psi, w;
+    void Volts(float id, float iq, float *vd, float *vq) const
+    {
+        *vd = (r * id) - (w * lq * iq);
+        *vq = (r * iq) + (w * ((ld * id) + psi));
+    }
+};
+
+// The limiter in a loop with an ideal current loop (the next step measures
+// the reference it gave) on a motor whose R is 30 % above the drive's: the
+// estimate's correction takes up the difference, and after 20 filter time
+// constants the true bus current is at the motoring limit within 0.5 %
+// (the filter's residue e^-20 is nil; the rest is the one-step lag of the
+// measured current behind the reference while the correction moves).
+// Braking the same way to the regenerative limit. The power limit, lower
+// than the current limit times the bus, is the one in force.
+TEST(DriveBusLimit, CorrectionClosesOnAWrongResistance)
+{
+    mc_foc_f32_cfg_t foc = GoodCfg().foc;
+    const Motor m{1.3f * foc.r_ohm, foc.ld_h, foc.lq_h, foc.flux_wb, 2000.0f};
+    const float vbus = 24.0f;
+    mc_drive_bus_cfg_t cfg{};
+    cfg.i_bus_max_a = 1.0f;
+    cfg.i_bus_regen_max_a = 0.5f;
+    mc_drive_bus_t s;
+    for (const float sign : {1.0f, -1.0f}) {
+        const Motor mm{m.r, m.ld, m.lq, m.psi, sign * m.w};
+        mc_drive_bus_init(&s, &foc);
+        float id_meas = 0.0f;
+        float iq_meas = 0.0f;
+        const int n = static_cast<int>(20.0f * MC_DRIVE_BUS_CORR_TAU_LOOPS * foc.lq_h /
+                                       foc.kp_q_v_per_a / foc.dt_s);
+        for (int k = 0; k < n; ++k) {
+            mc_drive_bus_in_t in{vbus,    mm.w,    true, static_cast<uint32_t>(k),
+                                 id_meas, iq_meas, 0.0f, 0.0f};
+            mm.Volts(id_meas, iq_meas, &in.vd_v, &in.vq_v);
+            float id = 0.0f;
+            float iq = 15.0f; // motoring at +w, braking at -w
+            mc_drive_bus_limit(&s, &cfg, &foc, &in, &id, &iq);
+            id_meas = id;
+            iq_meas = iq;
+        }
+        float vd;
+        float vq;
+        mm.Volts(id_meas, iq_meas, &vd, &vq);
+        const float i_true = mc_drive_bus_estimate_a(vd, vq, id_meas, iq_meas, vbus);
+        const float want = (sign > 0.0f) ? cfg.i_bus_max_a : -cfg.i_bus_regen_max_a;
+        EXPECT_NEAR(want, i_true, 0.005f * std::fabs(want)) << "sign " << sign;
+        EXPECT_TRUE(s.limiting);
+    }
+    // the power limit below i_bus_max_a vbus is the one in force
+    cfg.p_bus_max_w = 12.0f;
+    float id = 0.0f;
+    float iq = 1.0f;
+    const mc_drive_bus_in_t in{vbus, 0.0f, true, 0u, 0.0f, 0.0f, 0.0f, 0.0f};
+    mc_drive_bus_limit(&s, &cfg, &foc, &in, &id, &iq);
+    EXPECT_NEAR(0.5f, s.i_mot_lim_a, 1e-6f);
+}
+
+// Bad limits are refused by name and change nothing: the drive's init
+// (negative, NaN, infinite: MC_DRIVE_CFG_ERR_BUS_POWER), and the parameter
+// table's range check for each of ids 150-153 (negative, NaN, above max).
+TEST_F(AppDrive, BusLimitsRefused)
+{
+    InitDrive();
+    const mc_drive_t before = d;
+    const float bad[3] = {-1.0f, kNaN, kInf};
+    for (const float v : bad) {
+        for (int k = 0; k < 4; ++k) {
+            mc_drive_cfg_t c = cfg;
+            float *f[4] = {&c.bus.i_bus_max_a, &c.bus.i_bus_regen_max_a, &c.bus.p_bus_max_w,
+                           &c.bus.p_bus_regen_max_w};
+            *f[k] = v;
+            EXPECT_EQ(MC_DRIVE_CFG_ERR_BUS_POWER, mc_drive_init(&d, &c, hal)) << k << " " << v;
+            EXPECT_EQ(MC_DRIVE_CFG_ERR_BUS_POWER, mc_drive_check_cfg(&c));
+        }
+    }
+    EXPECT_EQ(0, std::memcmp(&before, &d, sizeof d));
+    for (const char *name :
+         {"i_bus_max_a", "i_bus_regen_max_a", "p_bus_max_w", "p_bus_regen_max_w"}) {
+        const int32_t i = mc_param_find_name(name);
+        ASSERT_GE(i, 0) << name;
+        const mc_param_info_t &info = mc_param_table[i];
+        EXPECT_GE(info.id, 150u);
+        EXPECT_LE(info.id, 159u);
+        mc_param_value_t raw;
+        for (const float v : {-1.0f, kNaN, 2.0f * info.max.f}) {
+            raw.f = v;
+            EXPECT_EQ(MC_PARAM_ERR_RANGE, mc_param_check_value(&info, raw.u)) << name << " " << v;
+        }
+        raw.f = 0.0f; // off
+        EXPECT_EQ(MC_PARAM_OK, mc_param_check_value(&info, raw.u));
+        mc_params_t p = mc_params_default;
+        raw.f = -1.0f;
+        mc_param_set_raw(&p, &info, raw.u);
+        EXPECT_NE(0u, mc_params_validate(&p) & MC_PARAMS_ERR_RANGE) << name;
+    }
+}
+
+} // namespace
+} // namespace apptest
