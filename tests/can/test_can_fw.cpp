@@ -340,7 +340,7 @@ TEST_F(TelemetryOnDrive, BusCurrentCarriesTheEstimateAndTheLimits) {
   EXPECT_EQ(0.0f, u[MC_CAN_BUS_CURRENT_SAT]);
   EXPECT_EQ(static_cast<uint32_t>(MC_TM_BUS_CURRENT),
             mc_telemetry_slot_of_cmd(MC_CAN_CMD_BUS_CURRENT));
-  EXPECT_EQ(static_cast<uint32_t>(MC_TM_COUNT), mc_telemetry_slot_of_cmd(0x0Bu));  // not telemetry
+  EXPECT_EQ(static_cast<uint32_t>(MC_TM_COUNT), mc_telemetry_slot_of_cmd(0x0Du));  // not telemetry
 }
 
 TEST_F(TelemetryOnDrive, SetRateRefusesAboveBudget) {
@@ -484,7 +484,7 @@ TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
       {Frame(0x02D, {}), MC_CAN_ERR_UNKNOWN_CMD},
       {Frame(0x032, {0, 0, 0, 0xE8, 0x03, 0}, MC_HAL_CAN_FLAG_RTR), MC_CAN_ERR_FORMAT},
       {Frame(0x036, {2, 0xE8, 0x03}), MC_CAN_ERR_BUDGET},  // CURRENTS at 1000 Hz (see below)
-      {Frame(0x036, {11, 1, 0}), MC_CAN_ERR_RANGE},
+      {Frame(0x036, {13, 1, 0}), MC_CAN_ERR_RANGE},  // 13: no telemetry message
       {Frame(0x036, {1, 0, 0}), MC_CAN_ERR_HEARTBEAT_MIN},  // HEARTBEAT off
       {Frame(0x037, {7}), MC_CAN_ERR_STALE},                // the counter of the last one
   };
@@ -627,9 +627,12 @@ TEST_F(CanCmd, TelemetryRateCommand) {
   // BUS_CURRENT by its command id 12 (slots past POSITION_REF are not id - 1)
   ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x036, {12, 20, 0})));
   EXPECT_EQ(20u, tm.cfg.rate_hz[MC_TM_BUS_CURRENT]);
-  // 11 names no telemetry message: refused, nothing changes
+  // THERMAL by its command id 11 (slot 11, after BUS_CURRENT)
+  ASSERT_EQ(MC_CAN_ERR_NONE, Send(Frame(0x036, {11, 10, 0})));
+  EXPECT_EQ(10u, tm.cfg.rate_hz[MC_TM_THERMAL]);
+  // 13 names no telemetry message: refused, nothing changes
   const mc_telemetry_cfg_t before = tm.cfg;
-  EXPECT_NE(MC_CAN_ERR_NONE, Send(Frame(0x036, {11, 20, 0})));
+  EXPECT_NE(MC_CAN_ERR_NONE, Send(Frame(0x036, {13, 20, 0})));
   EXPECT_EQ(0, std::memcmp(&before, &tm.cfg, sizeof before));
   mc_can_cmd_t z{};
   ASSERT_EQ(MC_CAN_CMD_CFG_OK, mc_can_cmd_init(&z, &cc, &d, nullptr));

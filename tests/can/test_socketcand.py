@@ -49,8 +49,9 @@ from mdtool.can import dbc, log  # noqa: E402
 # python-can's client warns whenever a TCP read ends inside a frame (normal)
 logging.getLogger("can.interfaces.socketcand").setLevel(logging.ERROR)
 fails = []
+# bit i of tm_sent_mask (sim/cli/scenarios/can_telemetry.cpp)
 SLOTS = ["HEARTBEAT", "CURRENTS", "VOLTAGES", "SPEED", "POSITION", "OBSERVER", "CONTROLLER", "STEPPER",
-         "CURRENT_REFS", "POSITION_REF", "BUS_CURRENT", "THERMAL"]  # bit i of tm_sent_mask (sim/cli/scenarios/can_telemetry.cpp)
+         "CURRENT_REFS", "POSITION_REF", "BUS_CURRENT", "THERMAL"]
 
 
 # A busy loop that ends when this test process does: a test killed by

@@ -17,8 +17,7 @@ static const uint8_t k_slot_msg[MC_TM_COUNT] = {
     (uint8_t)MC_CAN_MSG_POSITION,     (uint8_t)MC_CAN_MSG_OBSERVER,
     (uint8_t)MC_CAN_MSG_CONTROLLER,   (uint8_t)MC_CAN_MSG_STEPPER,
     (uint8_t)MC_CAN_MSG_CURRENT_REFS, (uint8_t)MC_CAN_MSG_POSITION_REF,
-    (uint8_t)MC_CAN_MSG_BUS_CURRENT,
-    (uint8_t)MC_CAN_MSG_THERMAL,
+    (uint8_t)MC_CAN_MSG_BUS_CURRENT,  (uint8_t)MC_CAN_MSG_THERMAL,
 };
 
 #define NO_SAT 0xFFu

@@ -94,12 +94,12 @@ namespace mcsim {
 namespace {
 
 const char* const kSlotParam[MC_TM_COUNT] = {
-    "rate_heartbeat_hz",    "rate_currents_hz",     "rate_voltages_hz",   "rate_speed_hz",
-    "rate_position_hz",     "rate_observer_hz",     "rate_controller_hz", "rate_stepper_hz",
+    "rate_heartbeat_hz",    "rate_currents_hz",     "rate_voltages_hz",    "rate_speed_hz",
+    "rate_position_hz",     "rate_observer_hz",     "rate_controller_hz",  "rate_stepper_hz",
     "rate_current_refs_hz", "rate_position_ref_hz", "rate_bus_current_hz", "rate_thermal_hz"};
-const char* const kSlotName[MC_TM_COUNT] = {"HEARTBEAT",    "CURRENTS",     "VOLTAGES",   "SPEED",
-                                            "POSITION",     "OBSERVER",     "CONTROLLER", "STEPPER",
-                                            "CURRENT_REFS", "POSITION_REF", "BUS_CURRENT", "THERMAL"};
+const char* const kSlotName[MC_TM_COUNT] = {
+    "HEARTBEAT",  "CURRENTS", "VOLTAGES",     "SPEED",        "POSITION",    "OBSERVER",
+    "CONTROLLER", "STEPPER",  "CURRENT_REFS", "POSITION_REF", "BUS_CURRENT", "THERMAL"};
 // Signal names per slot, in DBC order (checked against the generated
 // signal counts below; tests/can compares the CSV header with the DBC).
 const std::vector<std::vector<std::string>> kSlotSignals = {
