@@ -73,9 +73,12 @@ log "3. speed steps on the identified values"
   --columns omega_m_rad_s,omega_ref_rad_s,i_q_a,i_q_ref_a,i_d_a >/dev/null
 "$PY" tools/plot/mcplot.py "$OUT/3-sensorless/sensorless-speed-step.csv" \
   --columns omega_m_rad_s,omega_ref_rad_s,i_q_a,i_d_a >/dev/null
+# The start-up plots the I-f frame's speed (omega_if_rad_s: the rotor follows
+# it until the hand-over, NaN after), not omega_ref_rad_s, the speed command's
+# ramp, which runs ahead of the I-f frame (issue 31: it read as a lost start).
 "$PY" tools/plot/mcplot.py "$OUT/3-sensorless/sensorless-speed-step.csv" --tmax 0.12 \
   -o "$OUT/3-sensorless/start-up.png" --title "sensorless start-up: I-f, then the flux observer" \
-  --columns omega_m_rad_s,omega_ref_rad_s,theta_e_rad,theta_e_hat_rad >/dev/null
+  --columns omega_m_rad_s,omega_if_rad_s,theta_e_rad,theta_e_hat_rad >/dev/null
 "$PY" - "$OUT" <<'PYEOF'
 import json, sys
 o = sys.argv[1]

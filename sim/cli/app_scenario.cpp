@@ -172,7 +172,7 @@ double AppRecorder::theta_e_true() {
 void AppRecorder::header() {
   std::vector<std::string> c = {"t",         "i_d_a",         "i_q_a",           "i_d_ref_a",
                                 "i_q_ref_a", "omega_m_rad_s", "omega_ref_rad_s", "theta_e_rad"};
-  if (hat) c.emplace_back("theta_e_hat_rad");
+  if (hat) c.insert(c.end(), {"theta_e_hat_rad", "omega_if_rad_s"});
   c.insert(c.end(), {"v_d_v", "v_q_v", "fault_1"});
   ctx.csv.columns(c);
 }
@@ -183,13 +183,20 @@ void AppRecorder::row(double t, double id, double iq, double w) {
   const double th = theta_e_true();
   const Eigen::Vector2d& v = run.board().v_alpha_beta_applied();
   const double c = std::cos(th), s = std::sin(th);
-  double r[12];
+  double r[13];
   size_t n = 0;
   for (double x : {t, id, iq, static_cast<double>(p.id_ref_a), static_cast<double>(p.iq_ref_a), w,
                    static_cast<double>(p.omega_ref_rad_s), th}) {
     r[n++] = x;
   }
-  if (hat) r[n++] = std::remainder(static_cast<double>(p.sls_theta_hat_e_rad), 6.283185307179586);
+  if (hat) {
+    r[n++] = std::remainder(static_cast<double>(p.sls_theta_hat_e_rad), 6.283185307179586);
+    // The I-f frame's speed while the law turns that frame (0 in ALIGN, the
+    // ramp in IF); NaN once CLOSED (the frame is then the observer's; its
+    // speed is not the I-f's, and the plot leaves a gap).
+    r[n++] = p.sls_phase == MC_CTRL_SLS_CLOSED ? std::nan("")
+                                               : static_cast<double>(p.sls_omega_if_rad_s);
+  }
   r[n++] = c * v(0) + s * v(1);
   r[n++] = -s * v(0) + c * v(1);
   r[n++] = static_cast<double>(p.faults);

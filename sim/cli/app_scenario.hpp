@@ -60,7 +60,10 @@ std::string flash_boot_name(uint32_t boot_status);
 
 /// The scenarios' CSV: t, the true dq currents, the references (the
 /// application's probe), the true speed and electrical angle, the observer's
-/// angle (sensorless), the applied dq voltage in the true frame, the faults.
+/// angle and the I-f frame's mechanical speed omega_if_rad_s (sensorless: 0
+/// in ALIGN, the I-f ramp in IF, NaN once CLOSED; omega_ref_rad_s is the
+/// speed command's ramp, which the I-f frame follows only up to the
+/// hand-over speed), the applied dq voltage in the true frame, the faults.
 struct AppRecorder {
   RunContext& ctx;
   AppRunner& run;

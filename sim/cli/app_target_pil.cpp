@@ -1,7 +1,7 @@
 // The PIL AppTarget (app_target.hpp): the board's whole image on the
 // emulated Cortex-M4F, the plant on the host, one period at a time over the
 // PIL link (foc_pil.hpp's PilSession; protocol firmware/targets/pil/
-// mc_pil_frame.h, version 3: the application's probe comes back as PROBE
+// mc_pil_frame.h, version 4: the application's probe comes back as PROBE
 // after each period; a board with a brake chopper gets one in the image's
 // HAL, whose duty comes back in OUT and drives the plant's brake).
 //

@@ -975,6 +975,7 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
         p->sls_handovers = l->sls.tm.handovers;
         p->sls_fallbacks = l->sls.tm.fallbacks;
         p->sls_theta_hat_e_rad = l->sls.tm.theta_hat_e_rad;
+        p->sls_omega_if_rad_s = l->sls.tm.omega_if_m_rad_s;
     }
     if (app->cfg.laws_from_params && l->pos_ok) {
         p->pos_turns = l->pos.tm.turns;

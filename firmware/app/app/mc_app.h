@@ -327,6 +327,9 @@ typedef struct {
     /* the sensorless law */
     uint32_t sls_phase, sls_handovers, sls_fallbacks;
     float sls_theta_hat_e_rad;
+    float sls_omega_if_rad_s; /**< the I-f frame's speed, mechanical (mc_ctrl_sls_tm_t.
+                                   omega_if_m_rad_s: 0 in ALIGN, the ramp in IF; in
+                                   CLOSED the value it handed over at) [rad/s] */
     /* the position law */
     int32_t pos_turns;
     uint32_t pos_count;

@@ -192,6 +192,7 @@ uint32_t mc_ctrl_sls_reset(void *ctx)
     c->id_ref_a = 0.0f;
     c->iq_ref_a = 0.0f;
     c->dir = 1.0f;
+    c->align_dir_set = false;
     c->al_x_a = 0.0f;
     c->al_x_b = 0.0f;
     c->al_i_prev_a = 0.0f;
@@ -237,6 +238,11 @@ static void dead_time_error(const mc_ctrl_sls_t *c, float ia_a, float ib_a, floa
     *p_va = k * (2.0f / 3.0f) * (sa - (0.5f * (sb + sc)));
     *p_vb = k * MC_INV_SQRT3_F32 * (sb - sc);
 }
+
+/* The holds' current angles ahead of the observer's reset guess (0) in the
+ * run's direction [rad, electrical]: a quarter turn apart (see ALIGN). */
+#define ALIGN_LEAD1 (0.25f * MC_PI_F32)
+#define ALIGN_LEAD2 (0.75f * MC_PI_F32)
 
 /* The hold waits for a trusted circle fit up to this many align times. */
 #define ALIGN_WAIT 4.0f
@@ -497,17 +503,36 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
             c->t_lockwait_s = 0.0f;
         }
     } else if (c->phase == MC_CTRL_SLS_ALIGN) {
-        /* Two holds, a quarter turn apart: the current ramps up along
-         * -pi/2 + pi/2 = 0 in the first half of align_time, then holds at
-         * pi/2 (the I-f frame at 0, its q axis). A rotor whose d axis sits
-         * opposite one hold's current feels no torque from it (an unstable
-         * rest), but the full torque from the other: from any start the
-         * rotor ends at the second hold's angle. */
+        /* Two holds, a quarter turn apart in the run's direction: the
+         * current ramps up along dir pi/2 in the first half of align_time,
+         * then holds at dir pi (the I-f frame at dir pi - pi/2, its q
+         * axis). A rotor whose d axis sits opposite one hold's current
+         * feels no torque from it (an unstable rest), but the full torque
+         * from the other: from any start the rotor ends at the second
+         * hold's angle, reached from the first in the run's direction. A
+         * rotor at the observer's reset guess (0) feels the first hold a
+         * quarter turn ahead: the full torque forwards, which holds an
+         * active load from the moment the current exceeds it (holds along
+         * 0, then pi/2 let such a load turn it backwards while the first
+         * current, along its d axis, gave no torque: issue 31, -8 rad/s
+         * on the D5065). dir is the command's direction (its ramp's with
+         * ref_from_drive: the ramp may start from a rotor turning the
+         * other way), latched at the first step that has one. */
         const float half_s = 0.5f * cfg->align_time_s;
+        if (!c->align_dir_set) {
+            const float hint = (cfg->ref_from_drive && (m->alpha_ref_rad_s2 != 0.0f))
+                                   ? sign_f32(m->alpha_ref_rad_s2)
+                                   : ((cmd != 0.0f) ? sign_f32(cmd) : 0.0f);
+            if (hint != 0.0f) {
+                c->dir = hint;
+                c->align_dir_set = true;
+            }
+        }
         c->i_if_a = (half_s > 0.0f)
                         ? (cfg->if_current_a * mc_sat_f32(c->t_phase_s / half_s, 0.0f, 1.0f))
                         : cfg->if_current_a;
-        c->theta_if_e_rad = (c->t_phase_s < half_s) ? -MC_HALF_PI_F32 : 0.0f;
+        c->theta_if_e_rad = mc_wrap_pi_f32(
+            (c->dir * ((c->t_phase_s < half_s) ? ALIGN_LEAD1 : ALIGN_LEAD2)) - MC_HALF_PI_F32);
         /* Observer and PLL restart at the rotor's angle, not from the
          * reset guess, which knew nothing of the start angle: from the
          * circle fit of the flux path once the rotor has moved enough for

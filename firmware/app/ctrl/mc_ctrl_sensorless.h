@@ -171,7 +171,11 @@ typedef struct {
                                       law's own (mc_ctrl_sls_set_speed_ref, slewed at
                                       speed_slew_rad_s2). f32 only */
     bool align_any_angle;       /**< start from any rotor angle (true: two holds a
-                                      quarter turn apart, the observer restarted at
+                                      quarter turn apart, pi/4 and 3 pi/4 ahead of
+                                      angle 0 in the command's direction (a rotor at
+                                      rest near 0 is pulled forwards by both; from
+                                      elsewhere the first hold may pull it either
+                                      way), the observer restarted at
                                       the angle the flux path's circle fit gives;
                                       false: one hold, the observer from angle 0,
                                       which needs the rotor near 0: diverges from
@@ -215,6 +219,7 @@ typedef struct {
     float t_lockwait_s; /**< time spent at the hand-over speed waiting for lock */
     float id_ref_a, iq_ref_a;
     float dir;                      /**< +1 / -1: direction of the I-f ramp */
+    bool align_dir_set;             /**< ALIGN (any angle): dir latched from the command */
     float v_hist_a[4], v_hist_b[4]; /**< applied alpha-beta voltage, newest first */
     float ia_prev_a, ib_prev_a;     /**< phase currents of the previous sample */
     uint32_t speed_count;

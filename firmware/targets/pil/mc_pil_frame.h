@@ -53,7 +53,9 @@
  *   3  the brake chopper: APP says whether the board has one (the image's
  *      HAL then exposes mc_hal_t.brake), OUT carries the brake duty the
  *      drive set this period (count and last duty), which the host applies
- *      to its board's brake before it integrates the period.
+ *      to its board's brake before it integrates the period;
+ *   4  PROBE carries the sensorless law's I-f frame speed
+ *      (mc_app_probe_t.sls_omega_if_rad_s): one word more.
  *
  * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
  * and parse a complete frame. Built for the target (hal/pil/mc_hal_pil.c) and for the
@@ -94,7 +96,7 @@ typedef enum {
 } mc_pil_type_t;
 
 /** The link protocol's version (see the file comment), sent in READY. */
-#define MC_PIL_VERSION 3u
+#define MC_PIL_VERSION 4u
 
 /** (id, raw) pairs per PARAMS frame (the payload limit). */
 #define MC_PIL_PARAMS_MAX 31u

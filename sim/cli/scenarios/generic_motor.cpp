@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -241,7 +242,7 @@ void run_speed(RunContext& ctx, bool load_step) {
   double last_out_load = t_load, dip = 0, w_max = 0, t_half = std::nan("");
   // the steady window's speed: its mean error (the steady error) and its
   // peak to peak (a residual oscillation the 2 % band alone would pass)
-  double w_ss_min = INFINITY, w_ss_max = -INFINITY, werr_ss_sum = 0;
+  double w_ss_min = std::numeric_limits<double>::infinity(), w_ss_max = -w_ss_min, werr_ss_sum = 0;
   long n_ss = 0;
   bool ref_sent = false;
   const double t_ss = dur - 0.2 * (dur - (load_step ? t_load : t0 + t_acc));
@@ -404,6 +405,7 @@ void run_sensorless(RunContext& ctx) {
   double t_lock = std::nan(""), ang_max = 0, ang_sq = 0, werr_end = 0, w = 0, id = 0, iq = 0;
   long ang_n = 0, k = 0;
   double min_w_align = 0;
+  double t_enable = std::nan("");  // the application enabled the drive (the load ran before)
   // The true angle at the previous period's start: the sample the probe's
   // estimate (the fast step run at the end of the previous iteration) was
   // computed from. Compared with the angle after the plant advanced, the
@@ -418,6 +420,7 @@ void run_sensorless(RunContext& ctx) {
     w = board.state()(2);
     const mc_app_probe_t& pr = run.probe();
     const bool running = pr.cmd_enabled != 0u;
+    if (running && std::isnan(t_enable)) t_enable = t;
     if (running && pr.sls_phase == MC_CTRL_SLS_ALIGN) min_w_align = std::min(min_w_align, sgn * w);
     if (running && pr.sls_phase == MC_CTRL_SLS_CLOSED && std::isnan(t_lock)) t_lock = t;
     if (!std::isnan(t_lock) && t > t_lock + 0.05) {
@@ -442,6 +445,7 @@ void run_sensorless(RunContext& ctx) {
   ctx.summary.set("fallbacks", d.sls_fallbacks);
   ctx.summary.set("t_lock_s", t_lock);
   ctx.summary.set("t_load_step_s", t_load);
+  ctx.summary.set("t_enable_s", t_enable);
   ctx.summary.set("align_backwards_rad_s", -min_w_align);
   ctx.summary.set("obs_gamma_per_wb2_s", sls_gamma(e));
   if (!stopped.empty()) {

@@ -13,6 +13,7 @@ test_mcsim_memory.py. Standard library only.
 import argparse
 import csv
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -72,7 +73,32 @@ class MotorCli(unittest.TestCase):
     def test_sensorless_has_observer_angle(self):
         run("run", "sensorless-speed-step", "--out", self.out, *d5065())
         h = self.header("sensorless-speed-step")
-        self.assertEqual(h, COLUMNS[:8] + ["theta_e_hat_rad"] + COLUMNS[8:])
+        self.assertEqual(h, COLUMNS[:8] + ["theta_e_hat_rad", "omega_if_rad_s"] + COLUMNS[8:])
+        # omega_if_rad_s is the I-f frame's speed (issue 31: omega_ref_rad_s, the speed
+        # command's ramp, was plotted as if it were): 0 while the rotor is aligned, then
+        # the I-f ramp up to the hand-over speed, NaN once the observer's frame runs.
+        with open(os.path.join(self.out, "sensorless-speed-step.csv")) as f:
+            rows = list(csv.DictReader(f))
+        with open(os.path.join(self.out, "sensorless-speed-step.json")) as f:
+            s = json.load(f)
+        w_if = [float(r["omega_if_rad_s"]) for r in rows]
+        t = [float(r["t"]) for r in rows]
+        ho = s["gain.handover_rad_s"]
+        ramp = [w for w in w_if if not math.isnan(w)]
+        self.assertEqual(ramp[0], 0.0)  # the frame holds still while aligning
+        # The ramp stops at the hand-over speed: the float32 law's value, 1e-4 relative.
+        self.assertLessEqual(max(ramp), ho * (1 + 1e-4))
+        # It reaches it (0.999 ho, the law's hand-over test) less the ramp's advance between
+        # two CSV rows (the CSV keeps every n-th period).
+        self.assertGreaterEqual(max(ramp), 0.999 * ho - s["gain.if_accel_rad_s2"] * (t[1] - t[0]))
+        # NaN exactly from the lock on (t_lock_s is the first CLOSED sample; no fallback).
+        self.assertEqual(s["fallbacks"], 0)
+        # (1e-9 s: the CSV's t has 9 significant digits, the summary's more.)
+        t_lock = s["t_lock_s"] - 1e-9
+        self.assertEqual([math.isnan(w) for w in w_if], [ti >= t_lock for ti in t])
+        # Meanwhile the speed command's ramp was far past the hand-over speed.
+        k = max(i for i, ti in enumerate(t) if ti < t_lock)
+        self.assertGreater(float(rows[k]["omega_ref_rad_s"]), 1.5 * ho)
 
     def test_gain_override_and_motor_ranges(self):
         run("run", "current-step", "--out", self.out, *d5065(), "--set", "current_bw_rad_s=1000",

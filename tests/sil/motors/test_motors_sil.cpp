@@ -90,6 +90,48 @@ TEST_P(MotorSil, SensorlessStartUnderLoadLocksAndTracks) {
   EXPECT_LT(r.at("angle_err_rms_rad"), 0.25 * we_t);
 }
 
+// The alignment does not turn the rotor backwards beyond what the load
+// alone does before the drive's torque can hold it (issue 31). The active
+// load (30 % rated, against the run) turns the rotor at standstill
+// backwards at tau_L / J from t = 0: until the application enables the
+// drive (t_enable_s), then while the first hold's current ramps (0 to
+// if_current over half the align time) and its torque, with the current
+// pi/4 ahead of the rotor at rest (mc_ctrl_sensorless.c ALIGN_LEAD1),
+// kt I(t) sin(pi/4), is below tau_L: t_c = (align_time / 2) tau_L /
+// (kt if_current sin(pi/4)). The backward speed is at most the load's over
+// t_enable + t_c (the drive's torque only slows it; friction ignored, which
+// only slows it too); measured 0.60 to 0.75 of it over the library. Before,
+// the first hold's current lay along the rotor's d axis (no torque until
+// the rotor had turned) and the second pulled the rotor a quarter turn
+// against a negative run: 1.26 to 1.63 times this bound (D5065 8.1 rad/s
+// against 5.7), 31.6 rad/s on the D5065 at -250 rad/s.
+constexpr double kPi = 3.14159265358979323846;
+
+double align_backwards_bound(const MotorFiles& f, const std::map<std::string, double>& r) {
+  const mc_gains_t g = files_params_eff(f).g;
+  const double tau_l = 0.3 * g.torque_rated_nm;  // the scenario's load_frac
+  const double t_c =
+      0.5 * g.align_time_s * tau_l / (g.kt_nm_a * g.if_current_a * std::sin(kPi / 4));
+  return tau_l / f.motor.j_kgm2 * (r.at("t_enable_s") + t_c);
+}
+
+TEST_P(MotorSil, SensorlessAlignDoesNotPullTheRotorBack) {
+  const MotorFiles f = files(GetParam());
+  const auto r = run("sensorless-speed-step", f, {});
+  EXPECT_EQ(r.at("faults"), 0.0);
+  EXPECT_LE(r.at("align_backwards_rad_s"), align_backwards_bound(f, r));
+}
+
+// The same in the other direction on the D5065 (the second hold turned the
+// rotor against a negative run: 31.6 rad/s backwards before issue 31).
+TEST(MotorSilAlign, NegativeRunD5065AlignsForwards) {
+  const MotorFiles f = files({"odrive-d5065", "odrive-v36-24v"});
+  const auto r = run("sensorless-speed-step", f, {{"speed_rad_s", "-250"}});
+  EXPECT_EQ(r.at("faults"), 0.0);
+  EXPECT_EQ(r.at("locked"), 1.0);
+  EXPECT_LE(r.at("align_backwards_rad_s"), align_backwards_bound(f, r));
+}
+
 INSTANTIATE_TEST_SUITE_P(Library, MotorSil, ::testing::ValuesIn(testlib::library()),
                          testlib::case_name);
 

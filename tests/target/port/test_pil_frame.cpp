@@ -248,7 +248,7 @@ TEST(PilFrame, ReadyCarriesTheProtocolVersion) {
   mc_pil_ready_t d{};
   ASSERT_EQ(mc_pil_decode_ready(buf, n, &d), MC_PIL_OK);
   EXPECT_TRUE(same_bits(d, r));
-  EXPECT_EQ(d.version, 3u);
+  EXPECT_EQ(d.version, 4u);  // 4: PROBE carries sls_omega_if_rad_s
   const uint32_t v1[2] = {0u, 0u};
   n = mc_pil_encode_words(MC_PIL_TYPE_READY, v1, 2u, buf, sizeof buf);
   ASSERT_GT(n, 0u);
@@ -269,7 +269,9 @@ TEST(PilFrame, ProbeRoundTripKeepsEveryBit) {
   p.iq_a = nan_with_payload();
   p.omega_m_rad_s = std::numeric_limits<float>::denorm_min();
   p.pos_turns = -123456;
-  p.pos_traj_k = 0xDEADBEEFu;  // the last field
+  p.pos_traj_k = 0xDEADBEEFu;
+  p.sls_omega_if_rad_s = -0.0f;
+  p.i_limit_a = nan_with_payload();  // the last field
   const size_t n = mc_pil_encode_probe(&p, buf, sizeof buf);
   ASSERT_EQ(n, MC_PIL_HEADER_LEN + 4u * MC_PIL_PROBE_WORDS + MC_PIL_CRC_LEN);
   mc_app_probe_t d{};
