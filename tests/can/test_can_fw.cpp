@@ -483,8 +483,8 @@ TEST_F(CanCmd, RejectedCommandsReplyAndChangeNothing) {
       {Frame(0x022, {0, 0, 0, 0, 0, 0, 0, 0}), MC_CAN_ERR_UNKNOWN_CMD},  // a telemetry id
       {Frame(0x02D, {}), MC_CAN_ERR_UNKNOWN_CMD},
       {Frame(0x032, {0, 0, 0, 0xE8, 0x03, 0}, MC_HAL_CAN_FLAG_RTR), MC_CAN_ERR_FORMAT},
-      {Frame(0x036, {2, 0xE8, 0x03}), MC_CAN_ERR_BUDGET},  // CURRENTS at 1000 Hz (see below)
-      {Frame(0x036, {13, 1, 0}), MC_CAN_ERR_RANGE},  // 13: no telemetry message
+      {Frame(0x036, {2, 0xE8, 0x03}), MC_CAN_ERR_BUDGET},   // CURRENTS at 1000 Hz (see below)
+      {Frame(0x036, {13, 1, 0}), MC_CAN_ERR_RANGE},         // 13: no telemetry message
       {Frame(0x036, {1, 0, 0}), MC_CAN_ERR_HEARTBEAT_MIN},  // HEARTBEAT off
       {Frame(0x037, {7}), MC_CAN_ERR_STALE},                // the counter of the last one
   };
