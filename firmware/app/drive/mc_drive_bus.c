@@ -29,8 +29,8 @@ float mc_drive_bus_estimate_a(float vd_v, float vq_v, float id_a, float iq_a, fl
 
 bool mc_drive_bus_any(const mc_drive_bus_cfg_t *cfg)
 {
-    return cfg->i_bus_max_a != 0.0f || cfg->i_bus_regen_max_a != 0.0f ||
-           cfg->p_bus_max_w != 0.0f || cfg->p_bus_regen_max_w != 0.0f;
+    return cfg->i_bus_max_a != 0.0f || cfg->i_bus_regen_max_a != 0.0f || cfg->p_bus_max_w != 0.0f ||
+           cfg->p_bus_regen_max_w != 0.0f;
 }
 
 void mc_drive_bus_off(mc_drive_bus_t *s)
