@@ -504,7 +504,8 @@ typedef struct {
     bool uses_speed_ref;
     /** Measures the angle reference itself (alignment, index search,
      *  commissioning): runs before the angle is known (MC_DRIVE_ANGLE_REF_*).
-     *  Last, so that a table written in order leaves it false. */
+     *  After the fields every law sets, so that a table written in order
+     *  leaves it false (and set_r_scale NULL). */
     bool finds_angle;
     /** The phase resistance in force is the configured one times r_scale
      *  (a warm winding, mc_drive_thermal_r_scale): the drive calls it from
