@@ -194,7 +194,7 @@ uint32_t mc_foc_f32_set_r_scale(mc_foc_f32_t *st, float scale)
     if (st == NULL) {
         return MC_FOC_ERR_NULL;
     }
-    if (!mc_r_scale_ok(scale)) {
+    if (!mc_r_scale_f32_ok(scale)) {
         return MC_FOC_ERR_MOTOR;
     }
     /* ki_cfg >= 0 finite (init) times a scale in [0.25, 3]: both accepted */

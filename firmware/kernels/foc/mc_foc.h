@@ -237,7 +237,7 @@ uint32_t mc_foc_f32_set_delay_comp(mc_foc_f32_t *st, float periods);
  * stays), bumplessly (mc_pi_f32_set_gains with kp unchanged moves nothing).
  * State, not a step input: R moves in seconds, a slow loop sets it.
  * MC_FOC_ERR_MOTOR for a scale outside
- * mc_r_scale_ok (math/mc_math.h), MC_FOC_ERR_NULL; st unchanged then. Kept
+ * mc_r_scale_f32_ok (math/mc_math.h), MC_FOC_ERR_NULL; st unchanged then. Kept
  * by mc_foc_f32_reset.
  */
 uint32_t mc_foc_f32_set_r_scale(mc_foc_f32_t *st, float scale);

@@ -50,7 +50,7 @@ static inline bool mc_isfinite_f32(float x)
 #define MC_R_SCALE_MAX 3.0f
 
 /** true for a scale of R in [MC_R_SCALE_MIN, MC_R_SCALE_MAX] (false for NaN). */
-static inline bool mc_r_scale_ok(float scale)
+static inline bool mc_r_scale_f32_ok(float scale)
 {
     return (scale >= MC_R_SCALE_MIN) && (scale <= MC_R_SCALE_MAX);
 }

@@ -111,7 +111,7 @@ uint32_t mc_fluxobs_f32_set_r_scale(mc_fluxobs_f32_t *st, float scale)
     if (st == NULL) {
         return MC_FLUXOBS_ERR_NULL;
     }
-    if (!mc_r_scale_ok(scale)) {
+    if (!mc_r_scale_f32_ok(scale)) {
         return MC_FLUXOBS_ERR_ARG;
     }
     st->r_scale = scale;

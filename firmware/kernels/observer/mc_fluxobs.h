@@ -64,7 +64,7 @@
  * arguments and its cost. The config stays the R measured cold; reset()
  * keeps the scale, init() restores 1. The q31 twin does the same with its
  * R gain (mc_fluxobs_q31_set_r_scale), both accept the same scales
- * (mc_r_scale_ok, math/mc_math.h).
+ * (mc_r_scale_f32_ok, math/mc_math.h).
  *
  * Non-finite input: the step is refused (state unchanged) and the sticky
  * MC_FLUXOBS_ERR_NAN_INPUT is set. No heap, no globals, no I/O.
@@ -140,7 +140,7 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
 /**
  * R in force = cfg.r_ohm * scale from the next step on (a winding whose
  * temperature moved since R was measured). Outside
- * mc_r_scale_ok (NaN included): MC_FLUXOBS_ERR_ARG, nothing
+ * mc_r_scale_f32_ok (NaN included): MC_FLUXOBS_ERR_ARG, nothing
  * changed. Float arithmetic, meant for a slow loop.
  */
 uint32_t mc_fluxobs_f32_set_r_scale(mc_fluxobs_f32_t *st, float scale);

@@ -95,7 +95,7 @@ uint32_t mc_fluxobs_q31_set_r_scale(mc_fluxobs_q31_t *st, float scale)
         return MC_FLUXOBS_ERR_NULL;
     }
     /* the configured gain formed at init; scale <= 3 keeps it below 2^30 */
-    if (!mc_r_scale_ok(scale) || !mc_q46_gain_from_f32(st->g_r_cfg * scale, &g)) {
+    if (!mc_r_scale_f32_ok(scale) || !mc_q46_gain_from_f32(st->g_r_cfg * scale, &g)) {
         return MC_FLUXOBS_ERR_ARG;
     }
     st->g_r = g;

@@ -84,7 +84,7 @@ uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_a
 
 /** R in force = the configured R times scale (mc_fluxobs_f32_set_r_scale):
  *  the R gain re-formed from the configured one. A scale outside
- *  mc_r_scale_ok: MC_FLUXOBS_ERR_ARG, nothing changed. Float
+ *  mc_r_scale_f32_ok: MC_FLUXOBS_ERR_ARG, nothing changed. Float
  *  arithmetic, meant for a slow loop. */
 uint32_t mc_fluxobs_q31_set_r_scale(mc_fluxobs_q31_t *st, float scale);
 

@@ -218,7 +218,7 @@ TEST(FluxobsQ31, RScaleTwinsFollowAWarmWinding)
     EXPECT_LE(twins, 2.0e-5);
 }
 
-// Both twins refuse the same scales (mc_r_scale_ok) and change nothing.
+// Both twins refuse the same scales (mc_r_scale_f32_ok) and change nothing.
 TEST(FluxobsQ31, RScaleRefusedAlikeByBothTwins)
 {
     const mc_fluxobs_q31_cfg_t c = cfg();
