@@ -271,6 +271,12 @@ BoardDescTable board_desc_table(const std::string& arg) {
     }
   }
   const long cpr = d.integer("encoder", "counts_per_rev", 1, 65536, &at_cpr);
+  const long chip_cpr = enc_type == "as5047p" ? 16384 : (enc_type == "ma732" ? 65536 : cpr);
+  if (cpr != chip_cpr) {  // the image's generator refuses it too (tools/boards)
+    const Desc::Hit h = d.need("encoder", "counts_per_rev");
+    fail(h.file, line_of(*h.n),
+         "[encoder] counts_per_rev must be the " + enc_type + "'s " + std::to_string(chip_cpr));
+  }
   double brake_r = 0.0;
   std::string at_brake = d.file() + ":" + std::to_string(d.table_line("brake"));
   if (d.boolean("brake", "present")) {
