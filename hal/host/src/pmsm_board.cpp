@@ -219,6 +219,9 @@ int PmsmBoard::pwm_get_state(mc_hal_pwm3_state_t* st) noexcept {
 }
 
 int PmsmBoard::encoder_read(mc_hal_encoder_sample_t* s) noexcept {
+  // the SPI encoder's driver makes its frame now (the PIL link asks here;
+  // the SIL's drive reads the driver's device itself)
+  if (spi_enc_) return mc_hal_encoder_read(spi_enc_->encoder(), s);
   *s = enc_;
   return 0;
 }
