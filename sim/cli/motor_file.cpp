@@ -250,16 +250,16 @@ void read_abs_encoder(TableReader& r, BoardSpec* b, long line) {
   const long cpr = b->encoder == kEncoderAs5047p ? 16384 : 65536;
   if (r.src("encoder_cpr").rfind("--set", 0) == 0 && b->encoder_cpr != cpr) {
     fail(r.src("encoder_cpr"), line,
-         "'encoder_cpr' does not apply to an absolute encoder: the '" + b->encoder +
-             "' reads " + std::to_string(cpr) + " counts per turn (remove the --set)");
+         "'encoder_cpr' does not apply to an absolute encoder: the '" + b->encoder + "' reads " +
+             std::to_string(cpr) + " counts per turn (remove the --set)");
   }
   if (b->encoder_cpr == 0) {
     fail(r.src("encoder"), line,
          "encoder '" + b->encoder + "' on a board without an encoder (encoder_cpr 0)");
   }
   b->encoder_cpr = cpr;
-  b->encoder_err_rate = r.num_or("encoder_err_rate", 0.0, 0.0, 1.0, false,
-                                 "per frame (a bit flipped on MISO)");
+  b->encoder_err_rate =
+      r.num_or("encoder_err_rate", 0.0, 0.0, 1.0, false, "per frame (a bit flipped on MISO)");
   b->encoder_mount_rad = r.num_or("encoder_mount_rad", 0.0, -6.283185307179586, 6.283185307179586,
                                   false, "rad (the mechanical angle the chip adds to the shaft's)");
 }

@@ -154,11 +154,11 @@ typedef struct {
     double r_ohm, ld_h, lq_h, flux_wb, pole_pairs, j_kgm2, b_nm_s_rad;
     double i_max_a, i_rated_a, speed_max_rad_s, speed_rated_rad_s;
     double vbus_v, pwm_hz, dead_time_s, i_sense_max_a;
-    double delay_periods;    /**< PWM periods between sampling and the duties' effect */
-    double vbus_max_v;       /**< the over-voltage trip as set; 0: derived (mc_gains_vbus_max_v) */
-    double vbus_board_max_v; /**< the board's bus limit (rating inside its divider's
+    double delay_periods;     /**< PWM periods between sampling and the duties' effect */
+    double vbus_max_v;        /**< the over-voltage trip as set; 0: derived (mc_gains_vbus_max_v) */
+    double vbus_board_max_v;  /**< the board's bus limit (rating inside its divider's
                                   range); 0: none given */
-    double encoder_cpr;      /**< encoder counts per mechanical turn; 0: none */
+    double encoder_cpr;       /**< encoder counts per mechanical turn; 0: none */
     double encoder_latency_s; /**< the encoder's latency (an SPI frame's) [s]; 0: none */
 } mc_gains_motor_t;
 

@@ -127,8 +127,8 @@ void powerups_pass_at_once(const char* type) {
     Sets s = enc;
     s.emplace_back("theta_m0_rad", std::to_string(th));
     const RunResult r = run("speed-step", s, flash);
-    EXPECT_EQ(r.out.kind, RunOutcome::Kind::kPass) << type << " theta_m0 " << th << ": "
-                                                   << r.out.message;
+    EXPECT_EQ(r.out.kind, RunOutcome::Kind::kPass)
+        << type << " theta_m0 " << th << ": " << r.out.message;
     EXPECT_EQ(r.txt.at("cfg_boot_status"), "STORED") << th;
     EXPECT_EQ(r.num.at("angle_find_s"), 0.0) << th;  // no search, no alignment
     EXPECT_EQ(r.num.at("encoder_bad_reads"), 0.0) << th;
@@ -174,9 +174,9 @@ TEST(SpiEncPowerUpSil, BadSensorKeysAreRefusedByName) {
     EXPECT_NE(r.out.message.find(c.needle), std::string::npos) << r.out.message;
   }
   // the chip's own count is accepted when given
-  EXPECT_EQ(run("speed-step", {{"board.encoder", "as5047p"}, {"board.encoder_cpr", "16384"}})
-                .out.kind,
-            RunOutcome::Kind::kPass);
+  EXPECT_EQ(
+      run("speed-step", {{"board.encoder", "as5047p"}, {"board.encoder_cpr", "16384"}}).out.kind,
+      RunOutcome::Kind::kPass);
 }
 
 // The AS5047P's angle is one period old when the drive reads it (latched

@@ -259,7 +259,7 @@ TEST(GainsDerive, EncoderLoopFollowsTheSensorsResolutionAndLatency)
     m.encoder_latency_s = 400e-6; // an AS5047P without DAEC at a slow rate, say
     ASSERT_EQ(mc_gains_derive(&m, nullptr, &g), 0u);
     EXPECT_EQ(g.enc_pll_bw_rad_s, 0.1 / 400e-6); // 250 rad/s
-    EXPECT_EQ(g.speed_wc_rad_s, 250.0 / 4.0);   // the speed PI follows it
+    EXPECT_EQ(g.speed_wc_rad_s, 250.0 / 4.0);    // the speed PI follows it
     // a coarse sensor's resolution binds below both (a 90-count Hall class)
     m.encoder_latency_s = 0.0;
     m.encoder_cpr = 90.0;
