@@ -187,6 +187,12 @@ mc_params_t table_of(const MotorFiles& f, double r_scale, double l_scale, double
   p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
   p.vbus_board_max_v = static_cast<float>(b.bus_limit_v());
   p.slow_loop_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
+  // an absolute SPI encoder's latency (the image's board sets the same:
+  // board_stm32f405.c): the AS5047P's angle is latched at the end of the
+  // previous period's frame (DAEC covers the chip's own delay), the MA732's
+  // at its frame's start less its 3 us
+  if (b.encoder == kEncoderAs5047p) p.encoder_latency_s = static_cast<float>(1.0 / b.pwm_hz);
+  if (b.encoder == kEncoderMa732) p.encoder_latency_s = 3e-6f;
   if (b.encoder == kEncoderAbiIndex) {
     // the offset is relative to the index: an index search at the first enable
     p.angle_ref = MC_DRIVE_ANGLE_REF_INDEX;
@@ -203,6 +209,9 @@ void set_angle_params(const Params& P, mc_params_t* p) {
   }
   if (const auto it = v.find("angle_find_at_enable"); it != v.end()) {
     p->angle_find_at_enable = static_cast<uint32_t>(it->second);
+  }
+  if (const auto it = v.find("encoder_latency_s"); it != v.end()) {
+    p->encoder_latency_s = static_cast<float>(it->second);
   }
 }
 
@@ -323,6 +332,10 @@ std::vector<ParamSpec> app_powerup_params(const MotorFiles& f) {
        "the table's parameter: 1 = the first enable runs the index search or the alignment, "
        "0 = it is refused (ANGLE_UNKNOWN) until the angle is known",
        0.0, 1.0},
+      {"encoder_latency_s", static_cast<double>(d.encoder_latency_s), "s",
+       "the table's parameter: the encoder's latency the drive advances the angle by "
+       "(default from board.encoder: as5047p one PWM period, ma732 3 us, A/B 0)",
+       0.0, 1e-3},
   };
 }
 

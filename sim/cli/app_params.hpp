@@ -48,7 +48,8 @@ std::vector<ParamSpec> app_gain_params(const MotorFiles& f);
 /// plant: the rotor's mechanical angle at power-up, where an incremental
 /// encoder counts from 0), and the table's angle_ref and
 /// angle_find_at_enable (defaults from the board's encoder: "abi_index"
-/// index and 1, "abi" the table's, stored and 0).
+/// index and 1, "abi" the table's, stored and 0), encoder_latency_s
+/// (as5047p one PWM period, ma732 3 us, A/B 0).
 std::vector<ParamSpec> app_powerup_params(const MotorFiles& f);
 
 /// The files' table resolved by the C derivation (no --set): the derived

@@ -30,6 +30,7 @@ Scenario on_app_target(Scenario s) {
 void set_board_sensor(const MotorFiles& f, hal_host::PmsmBoardConfig& bc) {
   bc.encoder.has_index = f.board.encoder == kEncoderAbiIndex;
   bc.encoder.index_angle_rad = bc.encoder.has_index ? f.board.encoder_index_rad : 0.0;
+  set_board_spi_encoder(f, bc);
 }
 
 namespace {

@@ -48,8 +48,14 @@ std::unique_ptr<AppTarget> make_file_target(
     const std::function<void(AppSetup&)>& adjust = std::function<void(AppSetup&)>());
 
 /// The board's position sensor on the plant: "abi_index" an index mark at
-/// encoder_index_rad (BoardSpec::encoder).
+/// encoder_index_rad (BoardSpec::encoder); "as5047p", "ma732" the image's
+/// driver on the chip model (set_board_spi_encoder, app_spi_encoder.cpp).
 void set_board_sensor(const MotorFiles& f, hal_host::PmsmBoardConfig& bc);
+void set_board_spi_encoder(const MotorFiles& f, hal_host::PmsmBoardConfig& bc);
+/// The absolute encoder's reads into the summary: encoder_reads,
+/// encoder_bad_reads, encoder_line_flips, encoder_errors_seen (nothing
+/// with the A/B encoder).
+void record_spi_encoder(hal_host::PmsmBoard& board, Summary& s);
 
 /// The refusals of a --flash boot (make_file_target): throws UsageError.
 void check_flash_boot(const AppTarget& t, const std::string& file, const mc_params_t& board);

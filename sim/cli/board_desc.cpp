@@ -262,15 +262,21 @@ BoardDescTable board_desc_table(const std::string& arg) {
   if (d.find("encoder", "type").n != nullptr) {
     const Desc::Hit h = d.need("encoder", "type");
     at_enc = h.file + ":" + std::to_string(line_of(*h.n));
-    if (enc_type != "abi") {
+    if (enc_type != "abi" && enc_type != "as5047p" && enc_type != "ma732") {
       fail(h.file, line_of(*h.n),
            "[encoder] type: '" + enc_type +
-               "' is not available in the simulator yet (issue 32 items 5 and 6: the drive "
-               "and the simulated board do not read it); the simulator runs 'abi' and "
-               "'abi_index' (--set board.encoder)");
+               "' is not available in the simulator yet (issue 32 item 6: the drive "
+               "and the simulated board do not read it); the simulator runs 'abi', "
+               "'as5047p', 'ma732' and 'abi_index' (--set board.encoder)");
     }
   }
   const long cpr = d.integer("encoder", "counts_per_rev", 1, 65536, &at_cpr);
+  const long chip_cpr = enc_type == "as5047p" ? 16384 : (enc_type == "ma732" ? 65536 : cpr);
+  if (cpr != chip_cpr) {  // the image's generator refuses it too (tools/boards)
+    const Desc::Hit h = d.need("encoder", "counts_per_rev");
+    fail(h.file, line_of(*h.n),
+         "[encoder] counts_per_rev must be the " + enc_type + "'s " + std::to_string(chip_cpr));
+  }
   double brake_r = 0.0;
   std::string at_brake = d.file() + ":" + std::to_string(d.table_line("brake"));
   if (d.boolean("brake", "present")) {

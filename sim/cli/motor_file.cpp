@@ -243,6 +243,27 @@ MotorSpec read_motor(const std::string& path, const toml::table& t, const SetSou
   return m;
 }
 
+// An absolute SPI encoder (as5047p, ma732): its counts are the chip's (an
+// encoder_cpr --set beside it is refused, a file's replaced), its line's
+// error rate and the magnet's angle on the shaft.
+void read_abs_encoder(TableReader& r, BoardSpec* b, long line) {
+  const long cpr = b->encoder == kEncoderAs5047p ? 16384 : 65536;
+  if (r.src("encoder_cpr").rfind("--set", 0) == 0 && b->encoder_cpr != cpr) {
+    fail(r.src("encoder_cpr"), line,
+         "'encoder_cpr' does not apply to an absolute encoder: the '" + b->encoder + "' reads " +
+             std::to_string(cpr) + " counts per turn (remove the --set)");
+  }
+  if (b->encoder_cpr == 0) {
+    fail(r.src("encoder"), line,
+         "encoder '" + b->encoder + "' on a board without an encoder (encoder_cpr 0)");
+  }
+  b->encoder_cpr = cpr;
+  b->encoder_err_rate =
+      r.num_or("encoder_err_rate", 0.0, 0.0, 1.0, false, "per frame (a bit flipped on MISO)");
+  b->encoder_mount_rad = r.num_or("encoder_mount_rad", 0.0, -6.283185307179586, 6.283185307179586,
+                                  false, "rad (the mechanical angle the chip adds to the shaft's)");
+}
+
 // The position sensor (motor_file.hpp, [board] encoder): the types the
 // plant and the firmware run today, the others refused by name.
 void read_encoder_type(TableReader& r, BoardSpec* b) {
@@ -250,18 +271,20 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
   b->encoder = type.empty() ? kEncoderAbi : type;
   const toml::node* n = r.maybe("encoder");
   const long line = n != nullptr ? line_of(*n) : 1;
-  if (b->encoder == "as5047p" || b->encoder == "ma732" || b->encoder == "hall") {
+  if (b->encoder == "hall") {
     fail(r.src("encoder"), line,
          "encoder '" + b->encoder +
              "' is not available in the simulator yet: the plant models it "
              "(sim/include/mcsim), but the simulated board and the drive do not read it "
-             "(issue 32 items 5 and 6); the simulator runs 'abi' and 'abi_index'");
+             "(issue 32 item 6); the simulator runs 'abi', 'abi_index', 'as5047p', 'ma732'");
   }
-  if (b->encoder != kEncoderAbi && b->encoder != kEncoderAbiIndex) {
+  const bool absolute = b->encoder == kEncoderAs5047p || b->encoder == kEncoderMa732;
+  if (b->encoder != kEncoderAbi && b->encoder != kEncoderAbiIndex && !absolute) {
     fail(r.src("encoder"), line,
          "encoder '" + b->encoder +
              "' is not a sensor type: 'abi' (A/B, no index), 'abi_index' (A/B with an index "
-             "mark at encoder_index_rad); 'as5047p', 'ma732', 'hall' are not available yet");
+             "mark at encoder_index_rad), 'as5047p', 'ma732' (absolute on SPI); 'hall' is not "
+             "available yet");
   }
   if (b->encoder == kEncoderAbiIndex && b->encoder_cpr == 0) {
     fail(r.src("encoder"), line, "encoder 'abi_index' needs an encoder: encoder_cpr is 0");
@@ -271,6 +294,16 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
   if (b->encoder != kEncoderAbiIndex && r.maybe("encoder_index_rad") != nullptr) {
     fail(r.src("encoder_index_rad"), line_of(*r.maybe("encoder_index_rad")),
          "encoder_index_rad: only an 'abi_index' encoder has an index mark");
+  }
+  if (absolute) {
+    read_abs_encoder(r, b, line);
+    return;
+  }
+  for (const char* k : {"encoder_err_rate", "encoder_mount_rad"}) {
+    if (const toml::node* x = r.maybe(k); x != nullptr) {
+      fail(r.src(k), line_of(*x),
+           std::string(k) + ": only an absolute encoder ('as5047p', 'ma732') has it");
+    }
   }
 }
 

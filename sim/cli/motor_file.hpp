@@ -28,8 +28,13 @@
 //          optional: encoder (the position sensor: "abi", an A/B
 //          incremental encoder without index, the default; "abi_index", one
 //          with an index mark at encoder_index_rad, the mechanical angle of
-//          the mark, default 0; "as5047p", "ma732" and "hall" are refused:
-//          not available in the simulator yet, issue 32 items 5 and 6;
+//          the mark, default 0; "as5047p" (ams, 14 bits) or "ma732" (MPS,
+//          16 bits), absolute on SPI: the image's driver (hal/spienc) reads
+//          the plant's chip model, encoder_cpr is the chip's (a --set of
+//          it refused), encoder_err_rate the line's MISO bit errors per
+//          frame in [0, 1] (default 0), encoder_mount_rad the mechanical
+//          angle the chip reads at the rotor's 0 (default 0); "hall" is
+//          refused: not available in the simulator yet, issue 32 item 6;
 //          --set board.encoder=abi_index takes the bare word),
 //          delay_periods (computation delay, default 1),
 //          source (text), i_adc_full_scale_a (the current converter's range,
@@ -99,8 +104,10 @@ struct BoardSpec {
   double vbus_sense_max_v = 0;  // the bus sensor's range; 0: 2 vbus_v
   double vbus_board_max_v = 0;  // the board's bus limit (rating); 0: the bus sensor's range
   long encoder_cpr = 0;
-  std::string encoder = "abi";   // kEncoderAbi or kEncoderAbiIndex (the file comment)
+  std::string encoder = "abi";   // kEncoderAbi, kEncoderAbiIndex, kEncoderAs5047p, kEncoderMa732
   double encoder_index_rad = 0;  // abi_index: mechanical angle of the index mark
+  double encoder_err_rate = 0;   // as5047p, ma732: MISO bit errors per frame
+  double encoder_mount_rad = 0;  // as5047p, ma732: the magnet's angle on the shaft
   int delay_periods = 1;
   double dc_link_c_f = 0;  // 0: stiff bus
   double source_r_ohm = 0.05;
@@ -123,6 +130,8 @@ struct BoardSpec {
 /// The board's encoder types the simulator runs (BoardSpec::encoder).
 inline constexpr const char* kEncoderAbi = "abi";
 inline constexpr const char* kEncoderAbiIndex = "abi_index";
+inline constexpr const char* kEncoderAs5047p = "as5047p";  // absolute, SPI, 14 bits
+inline constexpr const char* kEncoderMa732 = "ma732";      // absolute, SPI, 16 bits
 
 /// The files given on the command line, parsed and validated.
 struct MotorFiles {

@@ -487,6 +487,10 @@ def load_board(folder):
         raise BoardError(f"{name}: encoder.type hall without hall_a..hall_c pins")
     if enc_type in ("as5047p", "ma732") and "enc_spi_cs" not in pins:
         raise BoardError(f"{name}: encoder.type {enc_type} without an enc_spi_cs pin")
+    chip_cpr = {"as5047p": 16384, "ma732": 65536}.get(enc_type)
+    if chip_cpr is not None and cpr != chip_cpr:
+        # the drive's encoder_cpr (its gains) is the chip's resolution
+        raise BoardError(f"{where}: encoder counts_per_rev must be the {enc_type}'s {chip_cpr}")
 
     drv = t.get("drv8301")
     has_spi = [s for s in SPI_SIGNALS if s in pins]

@@ -197,6 +197,7 @@ uint32_t mc_gains_derive(const mc_gains_motor_t *m, const mc_gains_t *fix, mc_ga
     double w_r;
     double sigma;
     double t_hold;
+    double t_lag;
     if ((m == NULL) || (g == NULL)) {
         return MC_GAINS_ERR_VALUE;
     }
@@ -239,8 +240,11 @@ uint32_t mc_gains_derive(const mc_gains_motor_t *m, const mc_gains_t *fix, mc_ga
         err |= MC_GAINS_ERR_SPEED_LIMIT;
     }
     g->speed_rated_eff_rad_s = dmin(m->speed_rated_rad_s, g->speed_limit_rad_s);
-    g->enc_pll_bw_rad_s =
-        pick(fix->enc_pll_bw_rad_s, dmin(dmin(1000.0, 0.1 / T), mc_gains_enc_bw_quant_rad_s(m, g)));
+    /* the sample period or the encoder's latency, the longer: 0.1 rad of
+     * phase at the loop's bandwidth */
+    t_lag = (m->encoder_latency_s > T) ? m->encoder_latency_s : T;
+    g->enc_pll_bw_rad_s = pick(fix->enc_pll_bw_rad_s,
+                               dmin(dmin(1000.0, 0.1 / t_lag), mc_gains_enc_bw_quant_rad_s(m, g)));
     g->speed_wc_rad_s =
         pick(fix->speed_wc_rad_s, mc_gains_speed_wc_rad_s(g->cur_bw_rad_s, g->enc_pll_bw_rad_s));
     g->speed_accel_rad_s2 =

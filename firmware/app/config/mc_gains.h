@@ -35,8 +35,12 @@
  *                        `mcsim describe SCENARIO --motor M --board B` says
  *                        which of the three sets the limit.
  *   speed_rated_eff    = min(speed_rated_rad_s, speed_limit_rad_s).
- *   enc_pll_bw_rad_s   = min(1000, 0.1 / T, bw_q): the drive's encoder
- *                        tracking loop; bw_q (mc_gains_enc_bw_quant_rad_s)
+ *   enc_pll_bw_rad_s   = min(1000, 0.1 / max(T, latency), bw_q): the drive's
+ *                        encoder tracking loop; its sample period or the
+ *                        encoder's latency (encoder_latency_s: an SPI
+ *                        frame's, one period for the AS5047P) costs it at
+ *                        most 0.1 rad of phase at its bandwidth; bw_q
+ *                        (mc_gains_enc_bw_quant_rad_s)
  *                        bounds it by the encoder's resolution: a step of
  *                        one count q = 2 pi / cpr moves the loop's speed by
  *                        3 bw q at once, which the speed PI (kp = J wc / kt,
@@ -150,11 +154,12 @@ typedef struct {
     double r_ohm, ld_h, lq_h, flux_wb, pole_pairs, j_kgm2, b_nm_s_rad;
     double i_max_a, i_rated_a, speed_max_rad_s, speed_rated_rad_s;
     double vbus_v, pwm_hz, dead_time_s, i_sense_max_a;
-    double delay_periods;    /**< PWM periods between sampling and the duties' effect */
-    double vbus_max_v;       /**< the over-voltage trip as set; 0: derived (mc_gains_vbus_max_v) */
-    double vbus_board_max_v; /**< the board's bus limit (rating inside its divider's
+    double delay_periods;     /**< PWM periods between sampling and the duties' effect */
+    double vbus_max_v;        /**< the over-voltage trip as set; 0: derived (mc_gains_vbus_max_v) */
+    double vbus_board_max_v;  /**< the board's bus limit (rating inside its divider's
                                   range); 0: none given */
-    double encoder_cpr;      /**< encoder counts per mechanical turn; 0: none */
+    double encoder_cpr;       /**< encoder counts per mechanical turn; 0: none */
+    double encoder_latency_s; /**< the encoder's latency (an SPI frame's) [s]; 0: none */
 } mc_gains_motor_t;
 
 /** Every derived gain (the formulas: the file comment; the code in

@@ -175,6 +175,7 @@ void mc_law_motor_from_params(const mc_params_t *p, mc_gains_motor_t *m)
     m->vbus_max_v = (double)p->vbus_max_v;
     m->vbus_board_max_v = (double)p->vbus_board_max_v;
     m->encoder_cpr = (double)p->encoder_cpr;
+    m->encoder_latency_s = (double)p->encoder_latency_s;
 }
 
 uint32_t mc_law_speed_check(const mc_params_t *p)

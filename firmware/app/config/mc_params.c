@@ -218,6 +218,7 @@ void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg)
     cfg->encoder_offset_rad = p->encoder_offset_rad;
     cfg->encoder_reversed = (p->encoder_reversed != 0u);
     cfg->angle_ref = p->angle_ref; /* MC_DRIVE_ANGLE_REF_* is the parameter's value */
+    cfg->encoder_latency_s = p->encoder_latency_s;
     cfg->i_offset_a[0] = p->i_offset_a_a;
     cfg->i_offset_a[1] = p->i_offset_b_a;
     cfg->i_offset_a[2] = p->i_offset_c_a;

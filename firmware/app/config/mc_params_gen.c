@@ -105,6 +105,7 @@ const mc_params_t mc_params_default = {
     .p_bus_max_w = 0.0f,
     .p_bus_regen_max_w = 0.0f,
     .winding_r_follow = 1u,
+    .encoder_latency_s = 0.0f,
 };
 
 #define NO_FIELD MC_PARAM_NO_FIELD
@@ -211,6 +212,7 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {152u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, p_bus_max_w), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* p_bus_max_w */
     {153u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, p_bus_regen_max_w), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* p_bus_regen_max_w */
     {154u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, winding_r_follow), {.u = 0u}, {.u = 1u}, {.u = 1u}}, /* winding_r_follow */
+    {160u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_latency_s), {.f = 0.0f}, {.f = 0.001f}, {.f = 0.0f}}, /* encoder_latency_s */
     {200u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_layout_version */
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
     {202u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_store_seq */
@@ -321,6 +323,7 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "p_bus_max_w",
     "p_bus_regen_max_w",
     "winding_r_follow",
+    "encoder_latency_s",
     "cfg_layout_version",
     "cfg_store_status",
     "cfg_store_seq",
@@ -431,6 +434,7 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "W",
     "W",
     "",
+    "s",
     "",
     "",
     "",

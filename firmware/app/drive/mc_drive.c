@@ -79,7 +79,8 @@ static uint32_t validate_cfg(const mc_drive_cfg_t *cfg, mc_foc_f32_t *foc_probe,
         err |= MC_DRIVE_CFG_ERR_SPEED_PLL;
     }
     if (!mc_isfinite_f32(cfg->encoder_offset_rad) || !mc_isfinite_f32(cfg->i_offset_a[0]) ||
-        !mc_isfinite_f32(cfg->i_offset_a[1]) || !mc_isfinite_f32(cfg->i_offset_a[2])) {
+        !mc_isfinite_f32(cfg->i_offset_a[1]) || !mc_isfinite_f32(cfg->i_offset_a[2]) ||
+        !(cfg->encoder_latency_s >= 0.0f) || !(cfg->encoder_latency_s <= 1e-3f)) {
         err |= MC_DRIVE_CFG_ERR_OFFSET;
     }
     if (cfg->angle_ref > MC_DRIVE_ANGLE_REF_ALIGN) {
@@ -368,12 +369,17 @@ static void update_position(mc_drive_t *d, const mc_hal_encoder_sample_t *enc)
      * angle is finite by construction, so the step cannot fail. */
     (void)mc_enctrack_f32_step(&d->enc_trk, d->tm.theta_m_rad);
     d->tm.omega_m_rad_s = d->enc_trk.omega_rad_s;
+    /* A sensor with a latency (an SPI encoder's frame) reports the rotor
+     * as it was that long ago: the angle moves on by omega_e latency. */
+    float offset = d->cfg.encoder_offset_rad;
+    if (d->cfg.encoder_latency_s > 0.0f) {
+        offset += d->cfg.encoder_latency_s * (float)d->cfg.pole_pairs * d->enc_trk.omega_rad_s;
+    }
     if (d->enc_interp) {
-        d->tm.theta_e_rad = mc_wrap_2pi_f32((float)e_count * rad_per_count +
-                                            d->cfg.encoder_offset_rad + enc_interp_delta(d, count));
-    } else {
         d->tm.theta_e_rad =
-            mc_wrap_2pi_fast_f32((float)e_count * rad_per_count + d->cfg.encoder_offset_rad);
+            mc_wrap_2pi_f32((float)e_count * rad_per_count + offset + enc_interp_delta(d, count));
+    } else {
+        d->tm.theta_e_rad = mc_wrap_2pi_fast_f32((float)e_count * rad_per_count + offset);
     }
 }
 

@@ -191,7 +191,9 @@ typedef enum {
 #define MC_DRIVE_CFG_ERR_VBUS    (1u << 6) /**< vbus_min_v <= 0, window empty, or not finite */
 #define MC_DRIVE_CFG_ERR_SPEED_PLL \
     (1u << 7) /**< speed_pll_bw_rad_s <= 0, not finite, or 3 bw dt > 1 */
-#define MC_DRIVE_CFG_ERR_OFFSET (1u << 8) /**< encoder_offset_rad or an i_offset_a not finite */
+#define MC_DRIVE_CFG_ERR_OFFSET \
+    (1u << 8) /**< encoder_offset_rad or an i_offset_a not finite, or
+                   encoder_latency_s outside [0, 1 ms] */
 #define MC_DRIVE_CFG_ERR_SUPERVISION \
     (1u << 9) /**< omega_max, temp_max, a stall
                                                     parameter or i_unbalance_max
@@ -340,6 +342,10 @@ typedef struct {
     uint32_t pole_pairs;      /**< electrical turns per mechanical turn, >= 1 */
     float encoder_offset_rad; /**< electrical angle of the d axis at encoder count 0 [rad] */
     uint32_t angle_ref;       /**< MC_DRIVE_ANGLE_REF_* (0: STORED) */
+    float encoder_latency_s;  /**< the encoder's latency [s], [0, 1 ms]: a sample is the
+                                     rotor's angle this long before the period's sample
+                                     (an absolute SPI encoder's frame); the electrical
+                                     angle is advanced by omega_e times it (0: none) */
     bool encoder_reversed;    /**< the encoder counts down when the rotor turns positive
                                      (commissioning's encoder_direction = -1): the drive
                                      uses cpr - count */

@@ -279,6 +279,14 @@ static void board_defaults(mc_params_t *p)
     p->i_sense_max_a = MC_BOARD_DESC.i_sense_max_a;
     p->dead_time_s = (float)MC_BOARD_DESC.deadtime_ns * 1e-9f;
     p->encoder_cpr = MC_BOARD_DESC.enc_counts_per_rev;
+    /* an absolute SPI encoder's latency (firmware/app/drive mc_drive.h):
+     * the AS5047P's angle is latched at the end of the previous period's
+     * frame (DAEC on), the MA732's at its frame's start less its 3 us */
+    if (MC_BOARD_DESC.enc_type == MC_BOARD_ENC_AS5047P) {
+        p->encoder_latency_s = 1.0f / (float)PWM_HZ;
+    } else if (MC_BOARD_DESC.enc_type == MC_BOARD_ENC_MA732) {
+        p->encoder_latency_s = 3e-6f;
+    }
     p->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
     /* the board's bus limit (its description's vbus_max_v, inside what its
      * divider reads): the trip and the braking thresholds derive from it */

@@ -62,6 +62,10 @@ PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
   hal_.pwm3 = &pwm_dev_;
   hal_.pwm2 = nullptr;
   hal_.encoder = &enc_dev_;
+  if (cfg.spi_encoder.type != SpiEncoderType::kNone) {
+    spi_enc_ = std::make_unique<SpiEncoder>(cfg.spi_encoder, cfg.theta_m0_rad, cfg.omega_m0_rad_s);
+    hal_.encoder = spi_enc_->encoder();
+  }
   hal_.can = nullptr;
   hal_.tick = &tick_dev_;
   hal_.fault = &fault_dev_;
@@ -111,6 +115,10 @@ void PmsmBoard::sample() {
   adc_.seq = ++adc_seq_;
   adc_fresh_ = true;
 
+  if (spi_enc_) {
+    const mcsim::PmsmRotorFrame::State& x = stage_.rotor_frame_state();
+    spi_enc_->observe(stage_.t_s(), x(3), x(2));
+  }
   const mcsim::EncoderReading r = encoder_.sample(stage_.rotor_frame_state()(3));
   if (!inj_.encoder_frozen) enc_.count = static_cast<uint32_t>(r.count_in_rev);
   enc_.counts_per_rev = static_cast<uint32_t>(cfg_.encoder.counts_per_rev);
@@ -214,6 +222,9 @@ int PmsmBoard::pwm_get_state(mc_hal_pwm3_state_t* st) noexcept {
 }
 
 int PmsmBoard::encoder_read(mc_hal_encoder_sample_t* s) noexcept {
+  // the SPI encoder's driver makes its frame now (the PIL link asks here;
+  // the SIL's drive reads the driver's device itself)
+  if (spi_enc_) return mc_hal_encoder_read(spi_enc_->encoder(), s);
   *s = enc_;
   return 0;
 }

@@ -150,6 +150,7 @@ void configure_plant(const MotorFiles& f, const CommissionSetup& s, hal_host::Pm
   bc.current_sensor.noise_rms_a = s.noise_rms_a;
   bc.current_sensor.seed = s.seed;
   bc.encoder.direction = s.encoder_direction;
+  bc.spi_encoder.direction = s.encoder_direction;
   // An incremental encoder's offset is the shaft angle at power-up.
   bc.theta_m0_rad = s.encoder_offset_rad / f.motor.pole_pairs;
 }
@@ -211,6 +212,11 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
   configure_plant(f, s, bc);
   const bool by_index = p.angle_ref == MC_DRIVE_ANGLE_REF_INDEX;
   out.true_encoder_offset_rad = by_index ? true_index_offset(f, s, bc) : true_offset(f, s, bc);
+  if (bc.spi_encoder.type != hal_host::SpiEncoderType::kNone) {
+    // absolute: the chip reads dir theta_m + mount (rounded: no mean lag)
+    out.true_encoder_offset_rad =
+        wrap2pi(-s.encoder_direction * f.motor.pole_pairs * bc.spi_encoder.mount_offset_rad);
+  }
   out.true_encoder_direction = s.encoder_direction;
   set_adc_offsets(s, out.true_adc_offset_a);
   if (f.board.current_sensors != 3) out.true_adc_offset_a[2] = 0.0;

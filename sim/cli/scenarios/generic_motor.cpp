@@ -374,6 +374,7 @@ void run_speed(RunContext& ctx, bool load_step) {
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
   record_app_setup(f, p, ctx.summary);
+  record_spi_encoder(board, ctx.summary);
   const mc_app_probe_t& d = run.probe();
   ctx.summary.set_text("law", pi2d ? "pi2d" : "pi");
   ctx.summary.set("faults", d.faults);

@@ -262,10 +262,10 @@ TEST(AlignPowerUpSil, AbsentFlashBootsTheFilesDefaults) {
   EXPECT_FALSE(std::filesystem::exists(flash));
 }
 
-// The sensors the simulator does not run yet are refused by name (issue 32
-// items 5 and 6); an unknown type lists the types.
+// The sensor the simulator does not run yet is refused by name (issue 32
+// item 6); an unknown type lists the types.
 TEST(AlignPowerUpSil, SensorsNotAvailableYetAreRefusedByName) {
-  for (const char* type : {"as5047p", "ma732", "hall"}) {
+  for (const char* type : {"hall"}) {
     const RunResult r = run("speed-step", {{"board.encoder", type}});
     EXPECT_EQ(r.out.kind, RunOutcome::Kind::kRefused) << type;
     EXPECT_NE(r.out.message.find("not available in the simulator yet"), std::string::npos)

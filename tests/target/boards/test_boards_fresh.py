@@ -90,6 +90,9 @@ def main():
         "must be an output starting high (released)":
             ("pins", sub(pins, r"^(enc_spi_cs,PA0,output,,none,pp,low,)1", r"\g<1>0")),
         "encoder.type is one of": ("toml", sub(toml, r'^type = "abi"', 'type = "resolver"')),
+        # an absolute encoder's counts are the chip's (8192 left from the A/B one)
+        "counts_per_rev must be the as5047p's 16384":
+            ("toml", sub(toml, r'^type = "abi"', 'type = "as5047p"')),
         # the PWM rate, the supply and the brake chopper (issue 29)
         "pwm.frequency_hz must be 5000..60000":
             ("toml", sub(toml, r"^frequency_hz = 24000", "frequency_hz = 70000")),

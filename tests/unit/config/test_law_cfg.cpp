@@ -225,4 +225,47 @@ TEST(GainsDerive, SpeedLimitStopsBelowTheCurrentLoopsAnglePerPeriod)
     EXPECT_EQ(g.speed_limit_rad_s, 0.9 * g.speed_voltage_rad_s); // bit for bit
 }
 
+// The encoder tracking loop's bandwidth is bounded by the sensor: its
+// resolution (bw_q with the chip's counts: 16384 for an AS5047P) and its
+// latency (encoder_latency_s: 0.1 / latency once it is longer than a PWM
+// period; an AS5047P's one period leaves the 0.1 / T bound as it was).
+// The U8-class outrunner at 8 kHz: 0.1 / T = 800 rad/s binds without a latency.
+TEST(GainsDerive, EncoderLoopFollowsTheSensorsResolutionAndLatency)
+{
+    mc_gains_motor_t m{};
+    m.r_ohm = 0.13;
+    m.ld_h = 80.0e-6;
+    m.lq_h = 80.0e-6;
+    m.flux_wb = 2.63e-3;
+    m.pole_pairs = 21.0;
+    m.j_kgm2 = 2.0e-4;
+    m.b_nm_s_rad = 1.0e-5;
+    m.i_max_a = 30.0;
+    m.i_rated_a = 15.0;
+    m.speed_max_rad_s = 560.0;
+    m.speed_rated_rad_s = 450.0;
+    m.vbus_v = 48.0;
+    m.pwm_hz = 8000.0;
+    m.dead_time_s = 1.0e-7;
+    m.i_sense_max_a = 60.0;
+    m.delay_periods = 1.0;
+    m.encoder_cpr = 16384.0;
+    mc_gains_t g{};
+    ASSERT_EQ(mc_gains_derive(&m, nullptr, &g), 0u);
+    EXPECT_EQ(g.enc_pll_bw_rad_s, 0.1 * 8000.0);
+    m.encoder_latency_s = 1.0 / m.pwm_hz; // one period: the same bound
+    ASSERT_EQ(mc_gains_derive(&m, nullptr, &g), 0u);
+    EXPECT_EQ(g.enc_pll_bw_rad_s, 0.1 * 8000.0);
+    m.encoder_latency_s = 400e-6; // an AS5047P without DAEC at a slow rate, say
+    ASSERT_EQ(mc_gains_derive(&m, nullptr, &g), 0u);
+    EXPECT_EQ(g.enc_pll_bw_rad_s, 0.1 / 400e-6); // 250 rad/s
+    EXPECT_EQ(g.speed_wc_rad_s, 250.0 / 4.0);    // the speed PI follows it
+    // a coarse sensor's resolution binds below both (a 90-count Hall class)
+    m.encoder_latency_s = 0.0;
+    m.encoder_cpr = 90.0;
+    ASSERT_EQ(mc_gains_derive(&m, nullptr, &g), 0u);
+    EXPECT_EQ(g.enc_pll_bw_rad_s, mc_gains_enc_bw_quant_rad_s(&m, &g));
+    EXPECT_LT(g.enc_pll_bw_rad_s, 250.0);
+}
+
 } // namespace

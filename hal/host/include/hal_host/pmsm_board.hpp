@@ -22,10 +22,12 @@
 #define HAL_HOST_PMSM_BOARD_HPP
 
 #include <cstdint>
+#include <memory>
 
 #include "hal/hal.h"
 #include "hal_host/hal_binding.hpp"
 #include "hal_host/sim_board.hpp"
+#include "hal_host/spi_encoder.hpp"
 #include "mcsim/dc_link.hpp"
 #include "mcsim/integrator.hpp"
 #include "mcsim/inverter.hpp"
@@ -52,6 +54,10 @@ struct PmsmBoardConfig {
   mcsim::CurrentSensorParams current_sensor{};
   mcsim::VbusSensorParams vbus_sensor{};
   mcsim::EncoderParams encoder{};
+  // An absolute SPI encoder instead of the A/B one (type not kNone): the
+  // drive's encoder device is then the image's driver on the chip model
+  // (hal_host::SpiEncoder); encoder above is unused.
+  SpiEncoderConfig spi_encoder{};
   bool three_shunts = false;    // false: ic is not measured
   int substeps = 4;             // RK4 sub-steps per PWM period, >= 1
   int delay_periods = 1;        // computation delay, 0..4 periods
@@ -110,6 +116,8 @@ class PmsmBoard final : public SimBoard {
   // the DC link on) and the brake duty in force.
   double motor_in_j() const { return motor_in_j_; }
   double brake_duty() const { return brake_duty_; }
+  // The absolute SPI encoder, nullptr with the A/B encoder.
+  SpiEncoder* spi_encoder() { return spi_enc_.get(); }
 
   // Faults a test can inject into the board (all off by default).
   struct Injection {
@@ -163,6 +171,7 @@ class PmsmBoard final : public SimBoard {
   mcsim::CurrentSensor isense_[3];
   mcsim::VbusSensor vsense_;
   mcsim::Encoder encoder_;
+  std::unique_ptr<SpiEncoder> spi_enc_;
   mcsim::InputDelay<Eigen::Vector3d, 4> delay_;
 
   // HAL-visible state
