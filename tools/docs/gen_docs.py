@@ -747,6 +747,29 @@ def _q31_sensorless(ctx, t):
                            ["run", "quantity", "measured", "test bound"], sig=3)
 
 
+@figure("r-follow", [gtest("test_r_follow_sil")])
+def _r_follow(ctx, t):
+    """The drive's R following its winding estimate on a 120 C winding,
+    with (winding_r_follow 1) and without (0): tests/sil/motors/
+    test_r_follow_sil.cpp's records."""
+    sls = {k: v for k, v, _u, _b in _recorded(t, "RFollow.SensorlessAngleOnAHotWinding")}
+    cur = {k: v for k, v, _u, _b in _recorded(t, "RFollow.CurrentStepOnAHotWinding")}
+    rows = [
+        ["sensorless, 100 rad/s, 0.3 → 0.9 rated torque", "angle error max [rad]",
+         g(sls["sls.off.angle_err_max_rad"], 3), g(sls["sls.on.angle_err_max_rad"], 3)],
+        ["", "angle error rms [rad]", g(sls["sls.off.angle_err_rms_rad"], 3),
+         g(sls["sls.on.angle_err_rms_rad"], 3)],
+        ["", "speed error max, end [rad/s]", g(sls["sls.off.omega_err_max_end_rad_s"], 2),
+         g(sls["sls.on.omega_err_max_end_rad_s"], 2)],
+        ["current step (q)", "10-90 % rise / design", g(cur["cur.off.iq_rise_time_ratio"], 3),
+         g(cur["cur.on.iq_rise_time_ratio"], 3)],
+        ["", "settling time [ms]", g(1e3 * cur["cur.off.iq_settle_time_s"], 3),
+         g(1e3 * cur["cur.on.iq_settle_time_s"], 3)],
+    ]
+    return table(["run (D5065, ODrive v3.6 24 V, winding 120 °C)", "quantity",
+                  "R = r_ohm (cold)", "R follows the estimate"], rows)
+
+
 # --- drive: faults, position, stop --------------------------------------------------
 
 def _fault_defs():

@@ -185,6 +185,7 @@ static void mc_params_thermal_cfg(const mc_params_t *p, mc_drive_thermal_cfg_t *
     t->tau_w_s = p->winding_tau_s;
     t->tau_h_s = p->housing_tau_s;
     t->ambient_c = p->ambient_c;
+    t->r_follow = p->winding_r_follow != 0u;
 }
 
 void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg)

@@ -104,6 +104,7 @@ const mc_params_t mc_params_default = {
     .i_bus_regen_max_a = 0.0f,
     .p_bus_max_w = 0.0f,
     .p_bus_regen_max_w = 0.0f,
+    .winding_r_follow = 1u,
     .encoder_latency_s = 0.0f,
 };
 
@@ -210,6 +211,7 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {151u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, i_bus_regen_max_a), {.f = 0.0f}, {.f = 1000.0f}, {.f = 0.0f}}, /* i_bus_regen_max_a */
     {152u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, p_bus_max_w), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* p_bus_max_w */
     {153u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, p_bus_regen_max_w), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* p_bus_regen_max_w */
+    {154u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, winding_r_follow), {.u = 0u}, {.u = 1u}, {.u = 1u}}, /* winding_r_follow */
     {160u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_latency_s), {.f = 0.0f}, {.f = 0.001f}, {.f = 0.0f}}, /* encoder_latency_s */
     {200u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_layout_version */
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
@@ -320,6 +322,7 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "i_bus_regen_max_a",
     "p_bus_max_w",
     "p_bus_regen_max_w",
+    "winding_r_follow",
     "encoder_latency_s",
     "cfg_layout_version",
     "cfg_store_status",
@@ -430,6 +433,7 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "A",
     "W",
     "W",
+    "",
     "s",
     "",
     "",

@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 107u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 101u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 108u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 102u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -117,6 +117,7 @@
 #define MC_PARAM_ID_I_BUS_REGEN_MAX_A 151u
 #define MC_PARAM_ID_P_BUS_MAX_W 152u
 #define MC_PARAM_ID_P_BUS_REGEN_MAX_W 153u
+#define MC_PARAM_ID_WINDING_R_FOLLOW 154u
 #define MC_PARAM_ID_ENCODER_LATENCY_S 160u
 #define MC_PARAM_ID_CFG_LAYOUT_VERSION 200u
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
@@ -226,13 +227,14 @@
 #define MC_PARAM_IDX_I_BUS_REGEN_MAX_A 97u
 #define MC_PARAM_IDX_P_BUS_MAX_W 98u
 #define MC_PARAM_IDX_P_BUS_REGEN_MAX_W 99u
-#define MC_PARAM_IDX_ENCODER_LATENCY_S 100u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 101u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 102u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 103u
-#define MC_PARAM_IDX_CFG_PENDING 104u
-#define MC_PARAM_IDX_LAW_ERROR 105u
-#define MC_PARAM_IDX_ANGLE_ERROR 106u
+#define MC_PARAM_IDX_WINDING_R_FOLLOW 100u
+#define MC_PARAM_IDX_ENCODER_LATENCY_S 101u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 102u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 103u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 104u
+#define MC_PARAM_IDX_CFG_PENDING 105u
+#define MC_PARAM_IDX_LAW_ERROR 106u
+#define MC_PARAM_IDX_ANGLE_ERROR 107u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -336,6 +338,7 @@ typedef struct {
     float i_bus_regen_max_a; /**< Regenerative DC-bus current limit: the largest current pushed back into the supply (a magnitude), as i_bus_max_a; the DC link's voltage limit (vbus_regen_start_v) applies as well, the tighter wins; 0: off. [A] */
     float p_bus_max_w; /**< Motoring DC-bus power limit (vbus times the estimated bus current); 0: off. [W] */
     float p_bus_regen_max_w; /**< Regenerative DC-bus power limit (a magnitude); 0: off. [W] */
+    uint32_t winding_r_follow; /**< 1: with winding_model on, the current loop's ki (R bw) and the sensorless law's flux observer use r_ohm times copper's R(T) / R(ambient_c) at the winding estimate (set every slow step); 0: r_ohm as measured (firmware/app/README.md, thermal). */
     float encoder_latency_s; /**< Position sensor's latency: a read returns the rotor's angle this long before the period's sample (A/B encoder 0; AS5047P one PWM period; MA732 3 us). The drive advances the electrical angle by omega_e times it; the tracking loop's bandwidth stays below 0.1 / latency. [s] */
 } mc_params_t;
 

@@ -146,11 +146,23 @@ uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
     c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_CURRENT,
                                .reset = mc_ctrl_sls_reset,
                                .fast = mc_ctrl_sls_fast,
+                               .set_r_scale = mc_ctrl_sls_set_r_scale,
                                .ctx = c,
                                .uses_speed_ref = cfg->ref_from_drive};
     c->tm.handovers = 0u;
     c->tm.fallbacks = 0u;
     return mc_ctrl_sls_reset(c);
+}
+
+uint32_t mc_ctrl_sls_set_r_scale(void *ctx, float r_scale)
+{
+    mc_ctrl_sls_t *c = (mc_ctrl_sls_t *)ctx;
+    if (c == NULL) {
+        return MC_CTRL_SLS_ERR_NULL;
+    }
+    return (mc_fluxobs_f32_set_r_scale(&c->obs, r_scale) == MC_FLUXOBS_ERR_NONE)
+               ? MC_CTRL_SLS_ERR_NONE
+               : MC_CTRL_SLS_ERR_OBSERVER;
 }
 
 const mc_drive_ctrl_t *mc_ctrl_sls_ops(mc_ctrl_sls_t *c)

@@ -94,14 +94,15 @@
 extern "C" {
 #endif
 
-#define MC_CTRL_SLS_ERR_NONE     0u
-#define MC_CTRL_SLS_ERR_NULL     (1u << 0) /**< a required pointer is NULL */
-#define MC_CTRL_SLS_ERR_MOTOR    (1u << 1) /**< R, L, flux or pole pairs invalid */
-#define MC_CTRL_SLS_ERR_TIMING   (1u << 2) /**< dt, speed_div, pwm delay (0..3) invalid */
-#define MC_CTRL_SLS_ERR_OBSERVER (1u << 3) /**< observer config rejected (see obs_err) */
-#define MC_CTRL_SLS_ERR_PLL      (1u << 4) /**< PLL config rejected */
-#define MC_CTRL_SLS_ERR_CURRENT  (1u << 5) /**< current loop config rejected */
-#define MC_CTRL_SLS_ERR_SPEED    (1u << 6) /**< speed PI gains / limits / slew invalid */
+#define MC_CTRL_SLS_ERR_NONE   0u
+#define MC_CTRL_SLS_ERR_NULL   (1u << 0) /**< a required pointer is NULL */
+#define MC_CTRL_SLS_ERR_MOTOR  (1u << 1) /**< R, L, flux or pole pairs invalid */
+#define MC_CTRL_SLS_ERR_TIMING (1u << 2) /**< dt, speed_div, pwm delay (0..3) invalid */
+#define MC_CTRL_SLS_ERR_OBSERVER \
+    (1u << 3) /**< observer config rejected (see obs_err), or set_r_scale's scale */
+#define MC_CTRL_SLS_ERR_PLL     (1u << 4) /**< PLL config rejected */
+#define MC_CTRL_SLS_ERR_CURRENT (1u << 5) /**< current loop config rejected */
+#define MC_CTRL_SLS_ERR_SPEED   (1u << 6) /**< speed PI gains / limits / slew invalid */
 #define MC_CTRL_SLS_ERR_STARTUP \
     (1u << 7)                               /**< I-f parameters invalid, or handover too close
                                                     to the critical speed */
@@ -251,6 +252,11 @@ uint32_t mc_ctrl_sls_set_speed_ref(mc_ctrl_sls_t *c, float omega_m_rad_s);
 
 /** Plug-in functions (also callable directly, e.g. from a test loop). */
 uint32_t mc_ctrl_sls_reset(void *ctx);
+/** The observer's R = cfg.r_ohm * r_scale (mc_fluxobs_f32_set_r_scale; the
+ *  drive calls it from its slow step with the winding estimate's scale);
+ *  kept across reset. MC_CTRL_SLS_ERR_OBSERVER for a scale the observer
+ *  refuses (nothing changed). */
+uint32_t mc_ctrl_sls_set_r_scale(void *ctx, float r_scale);
 uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out);
 
 #ifdef __cplusplus

@@ -229,10 +229,22 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
     c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_PWM3,
                                .reset = mc_ctrl_sls_q31_reset,
                                .fast = mc_ctrl_sls_q31_fast,
+                               .set_r_scale = mc_ctrl_sls_q31_set_r_scale,
                                .ctx = c};
     c->tm.handovers = 0u;
     c->tm.fallbacks = 0u;
     return mc_ctrl_sls_q31_reset(c);
+}
+
+uint32_t mc_ctrl_sls_q31_set_r_scale(void *ctx, float r_scale)
+{
+    mc_ctrl_sls_q31_t *c = (mc_ctrl_sls_q31_t *)ctx;
+    if (c == NULL) {
+        return MC_CTRL_SLS_ERR_NULL;
+    }
+    return (mc_fluxobs_q31_set_r_scale(&c->obs, r_scale) == MC_FLUXOBS_ERR_NONE)
+               ? MC_CTRL_SLS_ERR_NONE
+               : MC_CTRL_SLS_ERR_OBSERVER;
 }
 
 const mc_drive_ctrl_t *mc_ctrl_sls_q31_ops(mc_ctrl_sls_q31_t *c)

@@ -152,6 +152,8 @@ uint32_t mc_ctrl_sls_q31_set_speed_ref(mc_ctrl_sls_q31_t *c, float omega_m_rad_s
 
 /** Plug-in functions (also callable directly). */
 uint32_t mc_ctrl_sls_q31_reset(void *ctx);
+/** As mc_ctrl_sls_set_r_scale (mc_fluxobs_q31_set_r_scale). */
+uint32_t mc_ctrl_sls_q31_set_r_scale(void *ctx, float r_scale);
 uint32_t mc_ctrl_sls_q31_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out);
 
 /** The telemetry in engineering units (the f32 plug-in's struct). */

@@ -849,6 +849,11 @@ static void thermal_slow(mc_drive_t *d, float slow_dt)
     const float isq =
         on ? (d->tm.foc.id_a * d->tm.foc.id_a) + (d->tm.foc.iq_a * d->tm.foc.iq_a) : 0.0f;
     (void)mc_drive_thermal_step(&d->thermal, slow_dt, isq, &in);
+    if (c->model_enable && c->r_follow) {
+        /* ki = R bw at the winding estimate (a scale in copper's range:
+         * mc_drive_thermal_r_scale of a finite estimate; refused, ki stays) */
+        (void)mc_foc_f32_set_r_scale(&d->foc, mc_drive_thermal_r_scale(&d->thermal));
+    }
 }
 
 /* The end of a controlled stop: the bridge opens, IDLE. */
@@ -1024,6 +1029,28 @@ bool mc_drive_fast_step(mc_drive_t *d)
     return false;
 }
 
+/* The law's slow step while it runs: the phase resistance of the winding
+ * estimate first (winding_r_follow; off the fast step, the estimate moves
+ * in seconds), then the law's own. */
+static void ctrl_slow(mc_drive_t *d)
+{
+    if (d->mode != MC_DRIVE_MODE_CTRL &&
+        !(d->mode == MC_DRIVE_MODE_STOPPING && d->stop_from_ctrl)) {
+        return;
+    }
+    uint32_t cerr = 0u;
+    if (d->cfg.thermal.model_enable && d->cfg.thermal.r_follow && d->ctrl->set_r_scale != NULL) {
+        cerr = d->ctrl->set_r_scale(d->ctrl->ctx, mc_drive_thermal_r_scale(&d->thermal));
+    }
+    if (cerr == 0u && d->ctrl->slow != NULL) {
+        cerr = d->ctrl->slow(d->ctrl->ctx);
+    }
+    if (cerr != 0u) {
+        d->tm.ctrl_err = cerr;
+        raise_fault(d, MC_DRIVE_FAULT_CONTROL);
+    }
+}
+
 void mc_drive_slow_step(mc_drive_t *d)
 {
     const float slow_dt = d->cfg.foc.dt_s * (float)d->cfg.slow_loop_div;
@@ -1063,15 +1090,7 @@ void mc_drive_slow_step(mc_drive_t *d)
         d->stall_time_acc_s = 0.0f;
     }
     stop_supervise(d, slow_dt, &t, t_ok);
-    if ((d->mode == MC_DRIVE_MODE_CTRL ||
-         (d->mode == MC_DRIVE_MODE_STOPPING && d->stop_from_ctrl)) &&
-        d->ctrl->slow != NULL) {
-        const uint32_t cerr = d->ctrl->slow(d->ctrl->ctx);
-        if (cerr != 0u) {
-            d->tm.ctrl_err = cerr;
-            raise_fault(d, MC_DRIVE_FAULT_CONTROL);
-        }
-    }
+    ctrl_slow(d);
     if (d->hal->fault != NULL) {
         mc_hal_fault_status_t fs;
         /* A fault status that cannot be read is treated as a fault: the

@@ -510,8 +510,15 @@ typedef struct {
     bool uses_speed_ref;
     /** Measures the angle reference itself (alignment, index search,
      *  commissioning): runs before the angle is known (MC_DRIVE_ANGLE_REF_*).
-     *  Last, so that a table written in order leaves it false. */
+     *  After the fields every law sets, so that a table written in order
+     *  leaves it false (and set_r_scale NULL). */
     bool finds_angle;
+    /** The phase resistance in force is the configured one times r_scale
+     *  (a warm winding, mc_drive_thermal_r_scale): the drive calls it from
+     *  the slow step while the law runs, with the winding model on and
+     *  winding_r_follow. May be NULL (the law's R stays). A non-zero return
+     *  is a control fault. */
+    uint32_t (*set_r_scale)(void *ctx, float r_scale);
 } mc_drive_ctrl_t;
 
 /** What the last fast step saw and did (telemetry snapshot). */

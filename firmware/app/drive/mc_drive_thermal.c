@@ -136,6 +136,15 @@ static void model_step(mc_drive_thermal_t *th, float dt_s, float i_sq_a2)
     add_compensated(&th->t_h_c, &th->t_h_lo, (a11 * b2 + g_wh * b1) / det);
 }
 
+float mc_drive_thermal_r_scale(const mc_drive_thermal_t *th)
+{
+    const mc_drive_thermal_cfg_t *c = &th->cfg;
+    if (!c->model_enable || !c->r_follow || !th->started) {
+        return 1.0f;
+    }
+    return r_factor(th->t_w_c, c->ambient_c);
+}
+
 /* The warning with hysteresis: on below k = 1, off when every temperature
  * is MC_DRIVE_THERMAL_HYST_K below its start. */
 static bool below_release(float t_c, float start_c, float end_c)

@@ -76,6 +76,8 @@ typedef struct {
     float tau_w_s;                    /**< C_w R_wh [s] */
     float tau_h_s;                    /**< C_h R_ha [s] */
     float ambient_c;                  /**< ambient; the estimate's start without sensors [C] */
+    bool r_follow;                    /**< with model_enable: the law's R follows the estimate
+                        (mc_drive_thermal_r_scale) */
 } mc_drive_thermal_cfg_t;
 
 /** One slow step's temperatures; a sensor absent or without a reading has
@@ -111,6 +113,14 @@ float mc_drive_thermal_factor(float t_c, float start_c, float end_c);
  *  warning; returns k. */
 float mc_drive_thermal_step(mc_drive_thermal_t *th, float dt_s, float i_sq_a2,
                             const mc_drive_thermal_in_t *in);
+
+/** The scale of the phase resistance in force: R(T_w) / R(ambient_c) of
+ *  copper at the winding estimate when the model runs with r_follow and has
+ *  started, else 1. The drive's slow step hands it to its current loop
+ *  (mc_foc_f32_set_r_scale: ki = R bw) and to a running law
+ *  (mc_drive_ctrl_t.set_r_scale: the sensorless observer's R); measured
+ *  effect in firmware/app/README.md (thermal). */
+float mc_drive_thermal_r_scale(const mc_drive_thermal_t *th);
 
 /** The current limit in force: i_max_a times the factor of the last step. */
 static inline float mc_drive_thermal_limit_a(const mc_drive_thermal_t *th, float i_max_a)

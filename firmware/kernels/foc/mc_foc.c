@@ -181,8 +181,26 @@ uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg)
     st->svpwm_linear =
         (cfg->limit_mode == MC_SVPWM_LIMIT_CIRCLE) && (cfg->v_limit_ratio <= MC_FOC_LINEAR_RATIO);
     st->dt_s = cfg->dt_s;
+    st->ki_d_cfg = cfg->ki_d_v_per_as;
+    st->ki_q_cfg = cfg->ki_q_v_per_as;
+    st->r_scale = 1.0f;
     foc_set_delay(st, MC_FOC_DELAY_COMP_PERIODS);
     st->flags = MC_FOC_ERR_NONE;
+    return MC_FOC_ERR_NONE;
+}
+
+uint32_t mc_foc_f32_set_r_scale(mc_foc_f32_t *st, float scale)
+{
+    if (st == NULL) {
+        return MC_FOC_ERR_NULL;
+    }
+    if (!mc_r_scale_f32_ok(scale)) {
+        return MC_FOC_ERR_MOTOR;
+    }
+    /* ki_cfg >= 0 finite (init) times a scale in [0.25, 3]: both accepted */
+    (void)mc_pi_f32_set_gains(&st->pi_d, st->pi_d.kp, st->ki_d_cfg * scale);
+    (void)mc_pi_f32_set_gains(&st->pi_q, st->pi_q.kp, st->ki_q_cfg * scale);
+    st->r_scale = scale;
     return MC_FOC_ERR_NONE;
 }
 

@@ -174,7 +174,10 @@ typedef struct {
     float dt_s;               /**< control period [s] */
     float pred_d;             /**< w of the d current in the decoupling (derived) */
     float pred_q;             /**< w of the q current in the decoupling (derived) */
-    uint32_t flags;           /**< sticky MC_FOC_ERR_* */
+    float ki_d_cfg;           /**< the configured integral gains [V/(A s)] */
+    float ki_q_cfg;
+    float r_scale;  /**< ki in force / ki_*_cfg (set_r_scale; 1 after init) */
+    uint32_t flags; /**< sticky MC_FOC_ERR_* */
 } mc_foc_f32_t;
 
 /** Inputs of the whole fast step. */
@@ -227,6 +230,17 @@ uint32_t mc_foc_f32_init(mc_foc_f32_t *st, const mc_foc_f32_cfg_t *cfg);
  * unchanged; kept by mc_foc_f32_reset.
  */
 uint32_t mc_foc_f32_set_delay_comp(mc_foc_f32_t *st, float periods);
+
+/**
+ * A warm winding: the PIs' integral gains become the configured ones times
+ * scale (ki = R bw follows R, mc_foc_f32_gains_from_bandwidth; kp = L bw
+ * stays), bumplessly (mc_pi_f32_set_gains with kp unchanged moves nothing).
+ * State, not a step input: R moves in seconds, a slow loop sets it.
+ * MC_FOC_ERR_MOTOR for a scale outside
+ * mc_r_scale_f32_ok (math/mc_math.h), MC_FOC_ERR_NULL; st unchanged then. Kept
+ * by mc_foc_f32_reset.
+ */
+uint32_t mc_foc_f32_set_r_scale(mc_foc_f32_t *st, float scale);
 
 /** The decoupling's prediction weight of one axis (shared by the twins):
  *  min(1, periods dt kp / L), kp / L the axis' designed bandwidth. */

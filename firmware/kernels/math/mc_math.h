@@ -42,6 +42,19 @@ static inline bool mc_isfinite_f32(float x)
     return d == d;
 }
 
+/** Scales of a phase resistance a kernel accepts at run time (a warm or
+ *  cold winding: mc_fluxobs_*_set_r_scale, mc_foc_f32_set_r_scale): copper
+ *  from -200 C to 570 C referred to 20 C ((1 + a (T - 20)), a = 0.00393 / K)
+ *  lies inside. */
+#define MC_R_SCALE_MIN 0.25f
+#define MC_R_SCALE_MAX 3.0f
+
+/** true for a scale of R in [MC_R_SCALE_MIN, MC_R_SCALE_MAX] (false for NaN). */
+static inline bool mc_r_scale_f32_ok(float scale)
+{
+    return (scale >= MC_R_SCALE_MIN) && (scale <= MC_R_SCALE_MAX);
+}
+
 /** Clamp x to [lo, hi] (requires lo <= hi). NaN in x gives NaN out. */
 static inline float mc_sat_f32(float x, float lo, float hi)
 {

@@ -67,6 +67,7 @@ uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *c
     st->cfg = *cfg;
     st->half_gamma_dt = 0.5f * cfg->gamma * cfg->dt_s;
     st->half_r_ohm = cfg->r_ohm * 0.5f;
+    st->r_scale = 1.0f;
     st->inv_flux_per_wb = 1.0f / cfg->flux_wb;
     st->flux2 = cfg->flux_wb * cfg->flux_wb;
     st->x_alpha_wb = cfg->flux_wb;
@@ -102,6 +103,19 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
     st->resid = 0.0f;
     st->resid_bad_s = 0.0f;
     st->flags = MC_FLUXOBS_ERR_NONE;
+    return MC_FLUXOBS_ERR_NONE;
+}
+
+uint32_t mc_fluxobs_f32_set_r_scale(mc_fluxobs_f32_t *st, float scale)
+{
+    if (st == NULL) {
+        return MC_FLUXOBS_ERR_NULL;
+    }
+    if (!mc_r_scale_f32_ok(scale)) {
+        return MC_FLUXOBS_ERR_ARG;
+    }
+    st->r_scale = scale;
+    st->half_r_ohm = 0.5f * st->cfg.r_ohm * scale;
     return MC_FLUXOBS_ERR_NONE;
 }
 

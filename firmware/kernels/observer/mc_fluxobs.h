@@ -56,6 +56,16 @@
  * (Prop. 4 i) has rho = 0. The caller must also keep the speed above the
  * critical one (the sensorless drive checks the PLL speed).
  *
+ * Resistance at run time (a warm winding: copper's R rises about 0.4 %
+ * per K): mc_fluxobs_f32_set_r_scale() sets the R the integration uses to
+ * cfg.r_ohm times a scale. The scale is state (the derived R/2 the step
+ * already reads), not a step input: R moves at the winding's thermal speed
+ * (seconds), so a caller's slow loop sets it and the fast step keeps its
+ * arguments and its cost. The config stays the R measured cold; reset()
+ * keeps the scale, init() restores 1. The q31 twin does the same with its
+ * R gain (mc_fluxobs_q31_set_r_scale), both accept the same scales
+ * (mc_r_scale_f32_ok, math/mc_math.h).
+ *
  * Non-finite input: the step is refused (state unchanged) and the sticky
  * MC_FLUXOBS_ERR_NAN_INPUT is set. No heap, no globals, no I/O.
  */
@@ -77,7 +87,8 @@ extern "C" {
 #define MC_FLUXOBS_ERR_MONITOR   (1u << 4) /**< resid_tol <= 0 or resid_time_s < 0 / not finite */
 #define MC_FLUXOBS_ERR_NAN_INPUT (1u << 5) /**< sticky: a step input was NaN/inf (step refused) */
 #define MC_FLUXOBS_ERR_DIVERGED  (1u << 6) /**< sticky: residual out of tolerance too long */
-#define MC_FLUXOBS_ERR_ARG       (1u << 7) /**< helper: speed/gain/pole pairs invalid */
+#define MC_FLUXOBS_ERR_ARG \
+    (1u << 7) /**< helper: speed/gain/pole pairs invalid; set_r_scale: scale refused */
 
 /** Largest gamma flux^2 dt accepted (Euler step of the gradient term). */
 #define MC_FLUXOBS_MAX_GAIN_DT 0.2f
@@ -97,7 +108,8 @@ typedef struct {
 typedef struct {
     mc_fluxobs_f32_cfg_t cfg;
     float half_gamma_dt;   /**< gamma dt / 2 (derived) */
-    float half_r_ohm;      /**< R / 2 (derived) */
+    float half_r_ohm;      /**< R / 2 in force: cfg.r_ohm r_scale / 2 */
+    float r_scale;         /**< R in force / cfg.r_ohm (set_r_scale; 1 after init) */
     float inv_flux_per_wb; /**< 1 / flux (derived) */
     float flux2;           /**< flux^2 [Wb^2] (derived) */
     float x_alpha_wb;      /**< flux estimate xh [Wb] */
@@ -124,6 +136,14 @@ uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *c
  */
 uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float i_alpha_a,
                               float i_beta_a);
+
+/**
+ * R in force = cfg.r_ohm * scale from the next step on (a winding whose
+ * temperature moved since R was measured). Outside
+ * mc_r_scale_f32_ok (NaN included): MC_FLUXOBS_ERR_ARG, nothing
+ * changed. Float arithmetic, meant for a slow loop.
+ */
+uint32_t mc_fluxobs_f32_set_r_scale(mc_fluxobs_f32_t *st, float scale);
 
 /**
  * One step over the period that ended with the current sample i_ab (see the

@@ -37,8 +37,10 @@ uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *c
     if (err != MC_FLUXOBS_ERR_NONE) {
         return err;
     }
+    t.g_r_cfg = (0.5f * f->dt_s * f->r_ohm * cfg->i_base_a) / fb;
+    t.r_scale = 1.0f;
     if (!mc_q46_gain_from_f32((f->dt_s * cfg->v_base_v) / fb, &t.g_v) ||
-        !mc_q46_gain_from_f32((0.5f * f->dt_s * f->r_ohm * cfg->i_base_a) / fb, &t.g_r) ||
+        !mc_q46_gain_from_f32(t.g_r_cfg, &t.g_r) ||
         !mc_q46_gain_from_f32((f->l_h * cfg->i_base_a) / fb, &t.g_l) ||
         !mc_q46_gain_from_f32(ref.half_gamma_dt * fb * fb, &t.g_k)) {
         return MC_FLUXOBS_ERR_SCALE;
@@ -82,6 +84,22 @@ uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_a
     st->resid = 0;
     st->resid_bad_steps = 0u;
     st->flags = MC_FLUXOBS_ERR_NONE;
+    return MC_FLUXOBS_ERR_NONE;
+}
+
+uint32_t mc_fluxobs_q31_set_r_scale(mc_fluxobs_q31_t *st, float scale)
+{
+    mc_q46_gain_t g;
+
+    if (st == NULL) {
+        return MC_FLUXOBS_ERR_NULL;
+    }
+    /* the configured gain formed at init; scale <= 3 keeps it below 2^30 */
+    if (!mc_r_scale_f32_ok(scale) || !mc_q46_gain_from_f32(st->g_r_cfg * scale, &g)) {
+        return MC_FLUXOBS_ERR_ARG;
+    }
+    st->g_r = g;
+    st->r_scale = scale;
     return MC_FLUXOBS_ERR_NONE;
 }
 

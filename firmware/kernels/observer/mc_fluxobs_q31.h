@@ -55,7 +55,9 @@ typedef struct {
 
 typedef struct {
     mc_q46_gain_t g_v;    /**< dt v_base/flux_base */
-    mc_q46_gain_t g_r;    /**< dt R i_base/(2 flux_base) */
+    mc_q46_gain_t g_r;    /**< dt R i_base/(2 flux_base), R in force (cfg R r_scale) */
+    float g_r_cfg;        /**< the same for the configured R (set_r_scale scales it) */
+    float r_scale;        /**< R in force / configured R (1 after init) */
     mc_q46_gain_t g_l;    /**< L i_base/flux_base */
     mc_q46_gain_t g_k;    /**< gamma dt flux_base^2 / 2 */
     uint64_t flux2_q62;   /**< (flux/flux_base)^2 in Q62 */
@@ -79,6 +81,12 @@ uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *c
  *  flags cleared. Returns MC_FLUXOBS_ERR_NONE, or MC_FLUXOBS_ERR_NULL for a
  *  NULL st. */
 uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha, q31_t i_beta);
+
+/** R in force = the configured R times scale (mc_fluxobs_f32_set_r_scale):
+ *  the R gain re-formed from the configured one. A scale outside
+ *  mc_r_scale_f32_ok: MC_FLUXOBS_ERR_ARG, nothing changed. Float
+ *  arithmetic, meant for a slow loop. */
+uint32_t mc_fluxobs_q31_set_r_scale(mc_fluxobs_q31_t *st, float scale);
 
 /** One step (see mc_fluxobs_f32_step); returns the bits raised (DIVERGED). */
 uint32_t mc_fluxobs_q31_step(mc_fluxobs_q31_t *st, q31_t v_alpha, q31_t v_beta, q31_t i_alpha,

@@ -183,7 +183,10 @@ int PmsmBoard::adc_read_temp(mc_hal_adc_temp_t* t) noexcept {
   t->motor_temp_c = 25.0f;
   t->valid_mask = MC_HAL_ADC_TEMP_VALID_ALL;
   t->absent_mask = cfg_.thermal_enabled ? MC_HAL_ADC_TEMP_VALID_MOTOR : 0u;
-  if (cfg_.thermal_enabled) {
+  if (cfg_.thermal_enabled && cfg_.motor_thermistor) {
+    t->motor_temp_c = static_cast<float>(stage_.thermal()->winding_c());
+    t->absent_mask = 0u;
+  } else if (cfg_.thermal_enabled) {
     t->valid_mask = MC_HAL_ADC_TEMP_VALID_POWER_STAGE;
     t->motor_temp_c = 0.0f;
   }

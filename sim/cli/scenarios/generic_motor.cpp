@@ -54,6 +54,97 @@ ParamSpec csv_every_spec() {
 }
 
 // ------------------------------------------------------------ current step
+// A hot winding (issue 33 item 2: the drive's R following the winding
+// estimate, measured): the plant's temperatures and the drive's winding
+// model, sim/README.md.
+std::vector<ParamSpec> hot_params() {
+  return {
+      {"plant_thermal",
+       0.0,
+       "1",
+       "plant: winding and housing temperatures with R(T) and flux(T) from the motor's rating "
+       "(the table's winding_* values), started at t_winding0_c and read by a motor thermistor; "
+       "the drive runs its winding model from there (winding_model 1)",
+       0.0,
+       1.0,
+       {{"off", 0.0}, {"on", 1.0}}},
+      {"t_winding0_c", 25.0, "degC",
+       "plant_thermal=on: the winding's temperature at power-up (after an overload: the "
+       "housing and the magnet still at the ambient), the drive's estimate starting from its "
+       "thermistor",
+       -20.0, 150.0},
+      {"r_follow",
+       1.0,
+       "1",
+       "the table's winding_r_follow (plant_thermal=on): the observer's R follows the winding "
+       "estimate (1) or stays r_ohm (0)",
+       0.0,
+       1.0,
+       {{"off", 0.0}, {"on", 1.0}}},
+  };
+}
+
+// plant_thermal=on (hot_params: current-step, sensorless-speed-step): the drive's winding model and the
+// plant's network from the same rating (the table's winding_* values and
+// r_ohm as the plant's own), both starting at t_winding0_c: the plant's
+// winding read by a motor thermistor, whose first reading starts the
+// drive's estimate. The trip moves to temp_max_c 180 C (a hot start must
+// not trip at the default 100 C: that trip is not what is measured).
+constexpr float kHotTripC = 180.0f;
+
+void hot_table(const Params& P, mc_params_t* p) {
+  if (P.get("plant_thermal") < 0.5) {
+    if (P.was_set("t_winding0_c") || P.was_set("r_follow")) {
+      throw UsageError("t_winding0_c and r_follow need --set plant_thermal=on");
+    }
+    return;
+  }
+  p->winding_model = 1u;
+  p->winding_r_follow = P.get("r_follow") > 0.5 ? 1u : 0u;
+  p->temp_max_c = kHotTripC;
+  if (mc_params_validate(p) != MC_PARAMS_OK) {
+    throw UsageError("plant_thermal: the drive refuses the winding model's parameters");
+  }
+}
+
+ThermalParams hot_plant_thermal(const MotorFiles& f, const mc_params_t& p, double t0_c) {
+  ThermalRating r;
+  r.r_ohm = f.motor.r_ohm;
+  r.i_rated_a = f.motor.i_rated_a;
+  r.rise_k = p.winding_rise_k;
+  r.ambient_c = r.t_ref_c = p.ambient_c;
+  r.winding_share = p.winding_share;
+  r.tau_winding_s = p.winding_tau_s;
+  r.tau_housing_s = p.housing_tau_s;
+  ThermalParams t;
+  if (thermal_from_rating(r, &t) != Status::kOk) {
+    throw UsageError("plant_thermal: the plant refuses the thermal rating");
+  }
+  t.t_w0_c = t0_c;  // the housing (and the magnet with it) at the ambient
+  return t;
+}
+
+// The board of a plant_thermal run (make_file_target's adjust).
+std::function<void(AppSetup&)> hot_board(const MotorFiles& f, const mc_params_t& p,
+                                         const Params& P) {
+  if (P.get("plant_thermal") < 0.5) return {};
+  const ThermalParams t = hot_plant_thermal(f, p, P.get("t_winding0_c"));
+  return [t](AppSetup& s) {
+    s.board.thermal_enabled = true;
+    s.board.thermal = t;
+    s.board.motor_thermistor = true;
+  };
+}
+
+// The summary of a plant_thermal run: the plant's winding and the drive's
+// estimate at the end.
+void hot_summary(const Params& P, AppRunner& run, Summary& sum) {
+  if (P.get("plant_thermal") < 0.5) return;
+  sum.set("t_winding_c", run.board().power_stage().thermal()->winding_c());
+  sum.set("t_winding_est_c", static_cast<double>(run.probe().t_winding_est_c));
+  sum.set("r_follow", P.get("r_follow"));
+}
+
 std::vector<ParamSpec> current_step_params(const MotorFiles& f) {
   const mc_gains_t g = files_params_eff(f).g;  // the C derivation's, for the files
   const double L = std::max(f.motor.ld_h, f.motor.lq_h);
@@ -70,6 +161,7 @@ std::vector<ParamSpec> current_step_params(const MotorFiles& f) {
        "standstill, as on a test bench)",
        0.0, 1.0e6},
       csv_every_spec()};
+  for (auto& s : hot_params()) p.push_back(s);
   for (auto& s : app_gain_params(f)) p.push_back(s);
   return p;
 }
@@ -77,13 +169,15 @@ std::vector<ParamSpec> current_step_params(const MotorFiles& f) {
 void run_current_step(RunContext& ctx) {
   const MotorFiles& f = *ctx.files;
   // The drive's table from the files; the plant with the dyno's flywheel.
-  const mc_params_t p = params_from_files(f, ctx.params);
+  mc_params_t p = params_from_files(f, ctx.params);
+  hot_table(ctx.params, &p);
   const mc_params_eff_t e = resolve_params(p);
   mc_drive_cfg_t dcfg{};
   (void)mc_params_eff_to_drive_cfg(&e, &dcfg);
   MotorFiles plant = f;
   plant.motor.j_kgm2 *= 1.0 + ctx.params.get("j_load_factor");
-  const std::unique_ptr<AppTarget> target = make_file_target(ctx, plant, p, nullptr);
+  const std::unique_ptr<AppTarget> target =
+      make_file_target(ctx, plant, p, nullptr, hot_board(f, p, ctx.params));
   AppRunner run(*target);
   run.start(MC_CAN_CTRL_CURRENT, true);
   hal_host::PmsmBoard& board = run.board();
@@ -153,6 +247,7 @@ void run_current_step(RunContext& ctx) {
   ctx.summary.set("ki_q_v_per_as", dcfg.foc.ki_q_v_per_as);
   ctx.summary.set("iq_final_a", iq);
   ctx.summary.set("id_final_a", id);
+  hot_summary(ctx.params, run, ctx.summary);
   CurrentStepFigures fig;
   // The references the drive runs: the commands as SET_CURRENT_REF carries
   // them (1 mA resolution).
@@ -354,6 +449,7 @@ std::vector<ParamSpec> sls_params(const MotorFiles& f) {
       {"load_frac", 0.3, "1", "load from standstill on, fraction of rated torque", -1.0, 1.0},
       {"load_step_frac", 0.3, "1", "load step added later, fraction of rated torque", -1.0, 1.0},
       csv_every_spec()};
+  for (auto& s : hot_params()) p.push_back(s);
   for (auto& s : app_gain_params(f)) p.push_back(s);
   return p;
 }
@@ -369,7 +465,8 @@ double sls_gamma(const mc_params_eff_t& e) {
 
 void run_sensorless(RunContext& ctx) {
   const MotorFiles& f = *ctx.files;
-  const mc_params_t p = params_from_files(f, ctx.params, MC_LAW_SPEED_SENSORLESS);
+  mc_params_t p = params_from_files(f, ctx.params, MC_LAW_SPEED_SENSORLESS);
+  hot_table(ctx.params, &p);
   const mc_params_eff_t e = resolve_params(p);
   const mc_gains_t& g = e.g;
   const double w_t = ctx.params.get("speed_rad_s");
@@ -393,7 +490,8 @@ void run_sensorless(RunContext& ctx) {
   const std::function<double(double)> load = [tau0s, tau1s, t_load](double t) {
     return t >= t_load ? tau1s : tau0s;
   };
-  const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, &load);
+  const std::unique_ptr<AppTarget> target =
+      make_file_target(ctx, f, p, &load, hot_board(f, p, ctx.params));
   AppRunner run(*target);
   run.start(MC_CAN_CTRL_SPEED);
   run.send(run.cmd().speed_ref(w_t));
@@ -468,6 +566,7 @@ void run_sensorless(RunContext& ctx) {
   ctx.summary.set("tracks", werr_end <= band ? 1.0 : 0.0);
   ctx.summary.set("load0_nm", tau0);
   ctx.summary.set("load1_nm", tau1);
+  hot_summary(ctx.params, run, ctx.summary);
   SensorlessFigures fig;
   fig.target_rad_s = w_t;
   fig.locked = locked;

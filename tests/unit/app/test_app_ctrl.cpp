@@ -18,8 +18,9 @@ namespace
 {
 
 struct StubLaw {
-    uint32_t resets = 0, fasts = 0, slows = 0;
-    uint32_t reset_ret = 0, fast_ret = 0, slow_ret = 0;
+    uint32_t resets = 0, fasts = 0, slows = 0, r_sets = 0;
+    uint32_t reset_ret = 0, fast_ret = 0, slow_ret = 0, r_ret = 0;
+    float r_scale = 0.0f;
     mc_drive_meas_t last{};
     mc_drive_out_t out = Out();
     static mc_drive_out_t Out()
@@ -55,13 +56,21 @@ uint32_t stub_slow(void *ctx)
     return s->slow_ret;
 }
 
+uint32_t stub_set_r_scale(void *ctx, float r_scale)
+{
+    auto *s = static_cast<StubLaw *>(ctx);
+    s->r_sets++;
+    s->r_scale = r_scale;
+    return s->r_ret;
+}
+
 class AppDriveCtrl : public AppDrive
 {
   protected:
     mc_drive_ctrl_t Law(uint32_t outputs, bool needs_encoder = true)
     {
         return mc_drive_ctrl_t{outputs, needs_encoder, stub_reset, stub_fast, stub_slow,
-                               &law,    nullptr,       false,      false};
+                               &law,    nullptr,       false,      false,     nullptr};
     }
     StubLaw law;
 };
@@ -212,6 +221,71 @@ TEST_F(AppDriveCtrl, SlowErrorIsAControlFault)
     mc_drive_slow_step(&d);
     EXPECT_EQ(MC_DRIVE_FAULT_CONTROL, d.faults);
     EXPECT_FALSE(fake.pwm3.enabled);
+}
+
+// winding_r_follow (issue 33 item 2): with the winding model on, the slow
+// step hands the running law the estimate's scale of R and sets the
+// current loop's ki to match; off (or the model off), neither is touched;
+// a law refusing the scale is a control fault. The estimate starts from
+// the motor thermistor at 120 C: R(120) / R(25) of copper, exact to float
+// rounding (1e-5 relative: the estimate moves by a few mK over one slow
+// step at zero current).
+TEST_F(AppDriveCtrl, TheLawAndTheCurrentLoopGetTheWindingsR)
+{
+    cfg.thermal.model_enable = true;
+    cfg.thermal.r_follow = true;
+    cfg.thermal.r_ohm = 0.1f;
+    cfg.thermal.i_rated_a = 10.0f;
+    cfg.thermal.rise_k = 80.0f;
+    cfg.thermal.share = 0.3f;
+    cfg.thermal.tau_w_s = 30.0f;
+    cfg.thermal.tau_h_s = 900.0f;
+    cfg.thermal.ambient_c = 25.0f;
+    InitDrive();
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 30.0f, 120.0f, MC_HAL_ADC_TEMP_VALID_ALL));
+    mc_drive_ctrl_t c = Law(MC_DRIVE_OUT_PWM3);
+    c.set_r_scale = stub_set_r_scale;
+    ASSERT_EQ(0, mc_drive_attach_ctrl(&d, &c));
+    mc_drive_slow_step(&d); // IDLE: the estimate starts, no law runs
+    EXPECT_EQ(0u, law.r_sets);
+    ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL));
+    mc_drive_slow_step(&d);
+    const float a = MC_DRIVE_THERMAL_ALPHA_CU_1_K;
+    const float want = (1.0f + a * (120.0f - 20.0f)) / (1.0f + a * (25.0f - 20.0f));
+    EXPECT_EQ(1u, law.r_sets);
+    EXPECT_NEAR(want, law.r_scale, 1e-5f * want);
+    EXPECT_NEAR(want * cfg.foc.ki_q_v_per_as, d.foc.pi_q.ki_per_s, 1e-5f * want * 100.0f);
+    EXPECT_EQ(cfg.foc.kp_q_v_per_a, d.foc.pi_q.kp);
+    EXPECT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
+    law.r_ret = 7u; // the law refuses: a control fault, the law's slow not run
+    const uint32_t slows = law.slows;
+    mc_drive_slow_step(&d);
+    EXPECT_EQ(MC_DRIVE_FAULT_CONTROL, d.faults);
+    EXPECT_EQ(slows, law.slows);
+}
+
+TEST_F(AppDriveCtrl, WithoutRFollowTheLawsRStays)
+{
+    cfg.thermal.model_enable = true;
+    cfg.thermal.r_follow = false;
+    cfg.thermal.r_ohm = 0.1f;
+    cfg.thermal.i_rated_a = 10.0f;
+    cfg.thermal.rise_k = 80.0f;
+    cfg.thermal.share = 0.3f;
+    cfg.thermal.tau_w_s = 30.0f;
+    cfg.thermal.tau_h_s = 900.0f;
+    cfg.thermal.ambient_c = 25.0f;
+    InitDrive();
+    ASSERT_EQ(0, mc_hal_fake_adc_set_temp(&fake, 30.0f, 120.0f, MC_HAL_ADC_TEMP_VALID_ALL));
+    mc_drive_ctrl_t c = Law(MC_DRIVE_OUT_PWM3);
+    c.set_r_scale = stub_set_r_scale;
+    ASSERT_EQ(0, mc_drive_attach_ctrl(&d, &c));
+    ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL));
+    mc_drive_slow_step(&d);
+    mc_drive_slow_step(&d);
+    EXPECT_EQ(0u, law.r_sets);
+    EXPECT_EQ(cfg.foc.ki_q_v_per_as, d.foc.pi_q.ki_per_s);
+    EXPECT_GT(d.thermal.t_w_c, 119.0f); // the model runs all the same
 }
 
 TEST_F(AppDriveCtrl, InvalidLawDutiesArePwmFaults)

@@ -188,6 +188,29 @@ TEST(DriveThermal, TheEstimateDeratesAndStartsFromTheMotorThermistor)
     EXPECT_NEAR(mc_drive_thermal_factor(th3.t_w_c, 90.0f, 110.0f), th3.k, 1e-6f);
 }
 
+// The scale of R the drive hands its current loop and its law: copper's
+// R(T_w) / R(ambient) at the estimate, with r_follow and the model started;
+// 1 otherwise. Exact to float rounding (tolerance 1e-6 relative: a
+// handful of float operations).
+TEST(DriveThermal, RScaleIsCoppersFactorAtTheEstimate)
+{
+    mc_drive_thermal_cfg_t c = ModelCfg();
+    c.r_follow = true;
+    mc_drive_thermal_t th{};
+    ASSERT_EQ(MC_DRIVE_THERMAL_ERR_NONE, mc_drive_thermal_init(&th, &c));
+    EXPECT_EQ(1.0f, mc_drive_thermal_r_scale(&th)); // not started yet
+    const mc_drive_thermal_in_t hot_m = {30.0f, 120.0f, false, true};
+    (void)mc_drive_thermal_step(&th, 1e-3f, 0.0f, &hot_m);
+    const double want = (1.0 + kAlpha * (th.t_w_c - 20.0)) / (1.0 + kAlpha * (25.0 - 20.0));
+    EXPECT_NEAR(want, mc_drive_thermal_r_scale(&th), 1e-6 * want);
+    EXPECT_GT(mc_drive_thermal_r_scale(&th), 1.36f); // 120 C against 25 C: +37 %
+    th.cfg.r_follow = false;
+    EXPECT_EQ(1.0f, mc_drive_thermal_r_scale(&th));
+    th.cfg.r_follow = true;
+    th.cfg.model_enable = false;
+    EXPECT_EQ(1.0f, mc_drive_thermal_r_scale(&th));
+}
+
 TEST(DriveThermal, BadParametersAreRefusedAndChangeNothing)
 {
     auto Refused = [](const mc_drive_thermal_cfg_t &c, uint32_t want) {

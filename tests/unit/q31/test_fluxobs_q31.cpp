@@ -8,6 +8,7 @@
 
 extern "C" {
 #include "observer/mc_fluxobs_q31.h"
+#include "math/mc_math.h"
 }
 
 using namespace q31t;
@@ -151,4 +152,97 @@ TEST(FluxobsQ31, FullScaleVoltageSaturatesNeverWraps)
         ASSERT_LE(q.x_beta_q46, 0);
     }
     EXPECT_EQ(mc_q46_to_q31(q.x_beta_q46), MC_Q31_MIN + 1); // clamp at -MAX
+}
+
+// A warm winding (issue 33 item 2): the machine's R is 1.37 times the
+// configured one (copper from 25 to 120 C). Both twins given the scale
+// (set_r_scale) track the true angle and agree with each other; given none
+// (R stale) the integration's error dR i drags the angle. Bounds: with the
+// scale, 1e-3 rad (no noise, the voltages exact for the scaled R: what is
+// left is rounding, measured 8e-6 rad); twins within the 2e-5 rad of the
+// matching test (the same rounding argument); without, more than 0.1 rad
+// at 40 rad/s electrical and 3 A (measured 0.143 rad: the flux error dR i
+// per second against the gradient's pull, of the order of dR i / (omega
+// flux) = 0.17 rad).
+TEST(FluxobsQ31, RScaleTwinsFollowAWarmWinding)
+{
+    const double scale = 1.37;
+    double err_true[2] = {0.0, 0.0};
+    double twins = 0.0;
+    for (int with = 0; with < 2; ++with) {
+        const mc_fluxobs_q31_cfg_t c = cfg();
+        mc_fluxobs_f32_t f{};
+        mc_fluxobs_q31_t q{};
+        ASSERT_EQ(mc_fluxobs_f32_init(&f, &c.f), 0u);
+        ASSERT_EQ(mc_fluxobs_q31_init(&q, &c), 0u);
+        if (with == 1) {
+            ASSERT_EQ(mc_fluxobs_f32_set_r_scale(&f, static_cast<float>(scale)), 0u);
+            ASSERT_EQ(mc_fluxobs_q31_set_r_scale(&q, static_cast<float>(scale)), 0u);
+        }
+        Drive d;
+        d.w = 40.0;
+        ASSERT_EQ(mc_fluxobs_f32_reset(&f, static_cast<float>(d.th), 0.0f, 3.0f), 0u);
+        ASSERT_EQ(mc_fluxobs_q31_reset(&q, ang_q(d.th), to_q(0.0, kIb), to_q(3.0, kIb)), 0u);
+        double ia0, ib0;
+        d.currents(d.th, 3.0, &ia0, &ib0);
+        for (int k = 0; k < 16000; ++k) { // 2 s
+            const double th1 = d.th + d.w * kDt;
+            double ia1, ib1;
+            d.currents(th1, 3.0, &ia1, &ib1);
+            const double rr = scale * kR;
+            const double va = rr * 0.5 * (ia0 + ia1) +
+                              (kL * (ia1 - ia0) + kPsi * (std::cos(th1) - std::cos(d.th))) / kDt;
+            const double vb = rr * 0.5 * (ib0 + ib1) +
+                              (kL * (ib1 - ib0) + kPsi * (std::sin(th1) - std::sin(d.th))) / kDt;
+            const q31_t vaq = to_q(va, kVb), vbq = to_q(vb, kVb);
+            const q31_t iaq = to_q(ia1, kIb), ibq = to_q(ib1, kIb);
+            mc_fluxobs_f32_step(
+                &f, static_cast<float>(from_q(vaq, kVb)), static_cast<float>(from_q(vbq, kVb)),
+                static_cast<float>(from_q(iaq, kIb)), static_cast<float>(from_q(ibq, kIb)));
+            mc_fluxobs_q31_step(&q, vaq, vbq, iaq, ibq);
+            if (k * kDt > 1.0) {
+                err_true[with] = std::max(err_true[with], ang_diff(ang_rad(q.theta), th1));
+                err_true[with] = std::max(err_true[with], ang_diff(f.theta_e_rad, th1));
+            }
+            if (with == 1)
+                twins = std::max(twins, ang_diff(f.theta_e_rad, ang_rad(q.theta)));
+            d.th = th1;
+            ia0 = ia1;
+            ib0 = ib1;
+        }
+    }
+    report("fluxobs warm winding, R scaled: angle error", err_true[1], 1e-3, "rad");
+    report("fluxobs warm winding, R stale: angle error", err_true[0], 0.1, "rad");
+    EXPECT_LE(err_true[1], 1e-3);
+    EXPECT_GT(err_true[0], 0.1);
+    EXPECT_LE(twins, 2.0e-5);
+}
+
+// Both twins refuse the same scales (mc_r_scale_f32_ok) and change nothing.
+TEST(FluxobsQ31, RScaleRefusedAlikeByBothTwins)
+{
+    const mc_fluxobs_q31_cfg_t c = cfg();
+    mc_fluxobs_f32_t f{};
+    mc_fluxobs_q31_t q{};
+    ASSERT_EQ(mc_fluxobs_f32_init(&f, &c.f), 0u);
+    ASSERT_EQ(mc_fluxobs_q31_init(&q, &c), 0u);
+    const float half_r = f.half_r_ohm;
+    const mc_q46_gain_t g = q.g_r;
+    for (float bad : {std::nanf(""), INFINITY, 0.0f, 0.2f, 3.5f, -1.0f}) {
+        EXPECT_EQ(mc_fluxobs_f32_set_r_scale(&f, bad), MC_FLUXOBS_ERR_ARG) << bad;
+        EXPECT_EQ(mc_fluxobs_q31_set_r_scale(&q, bad), MC_FLUXOBS_ERR_ARG) << bad;
+    }
+    EXPECT_EQ(f.half_r_ohm, half_r);
+    EXPECT_EQ(f.r_scale, 1.0f);
+    EXPECT_EQ(q.g_r.mant, g.mant);
+    EXPECT_EQ(q.r_scale, 1.0f);
+    EXPECT_EQ(mc_fluxobs_f32_set_r_scale(nullptr, 1.0f), MC_FLUXOBS_ERR_NULL);
+    EXPECT_EQ(mc_fluxobs_q31_set_r_scale(nullptr, 1.0f), MC_FLUXOBS_ERR_NULL);
+    // the edges are accepted, and reset keeps the scale
+    EXPECT_EQ(mc_fluxobs_f32_set_r_scale(&f, MC_R_SCALE_MAX), 0u);
+    EXPECT_EQ(mc_fluxobs_q31_set_r_scale(&q, MC_R_SCALE_MIN), 0u);
+    EXPECT_EQ(mc_fluxobs_f32_reset(&f, 0.0f, 0.0f, 0.0f), 0u);
+    EXPECT_FLOAT_EQ(f.half_r_ohm, 0.5f * c.f.r_ohm * MC_R_SCALE_MAX);
+    EXPECT_EQ(mc_fluxobs_q31_reset(&q, 0, 0, 0), 0u);
+    EXPECT_EQ(q.r_scale, MC_R_SCALE_MIN);
 }

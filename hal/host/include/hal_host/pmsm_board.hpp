@@ -65,10 +65,13 @@ struct PmsmBoardConfig {
   double theta_m0_rad = 0.0;    // initial rotor angle
   double omega_m0_rad_s = 0.0;  // initial speed
   // The motor's temperatures (mcsim/thermal.hpp): off by default. On, the
-  // board has no motor thermistor (as the ODrive v3.6 by default: its
-  // temperature reads absent) and the power stage reads 25 C.
+  // power stage reads 25 C and the board has no motor thermistor (as the
+  // ODrive v3.6 by default: its temperature reads absent) unless
+  // motor_thermistor: then it reads the plant's winding temperature (a
+  // thermistor in the winding, as the VESC 6's motor input takes).
   bool thermal_enabled = false;
   mcsim::ThermalParams thermal{};
+  bool motor_thermistor = false;
 };
 
 class PmsmBoard final : public SimBoard {
