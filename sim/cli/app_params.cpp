@@ -187,6 +187,11 @@ mc_params_t table_of(const MotorFiles& f, double r_scale, double l_scale, double
   p.encoder_cpr = static_cast<uint32_t>(b.encoder_cpr);
   p.vbus_board_max_v = static_cast<float>(b.bus_limit_v());
   p.slow_loop_div = static_cast<uint32_t>(std::max(1.0, std::round(b.pwm_hz / 1000.0)));
+  if (b.encoder == kEncoderHall) {
+    // the Hall kernel on the board's Hall inputs, referenced at power-up
+    p.encoder_type = MC_PARAMS_ENCODER_HALL;
+    p.angle_ref = MC_DRIVE_ANGLE_REF_STORED;
+  }
   if (b.encoder == kEncoderAbiIndex) {
     // the offset is relative to the index: an index search at the first enable
     p.angle_ref = MC_DRIVE_ANGLE_REF_INDEX;

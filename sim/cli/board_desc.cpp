@@ -262,12 +262,12 @@ BoardDescTable board_desc_table(const std::string& arg) {
   if (d.find("encoder", "type").n != nullptr) {
     const Desc::Hit h = d.need("encoder", "type");
     at_enc = h.file + ":" + std::to_string(line_of(*h.n));
-    if (enc_type != "abi") {
+    if (enc_type != "abi" && enc_type != "hall") {
       fail(h.file, line_of(*h.n),
            "[encoder] type: '" + enc_type +
-               "' is not available in the simulator yet (issue 32 items 5 and 6: the drive "
-               "and the simulated board do not read it); the simulator runs 'abi' and "
-               "'abi_index' (--set board.encoder)");
+               "' is not available in the simulator yet (issue 32 item 5: the drive "
+               "and the simulated board do not read it); the simulator runs 'abi', "
+               "'abi_index' and 'hall' (--set board.encoder)");
     }
   }
   const long cpr = d.integer("encoder", "counts_per_rev", 1, 65536, &at_cpr);

@@ -1,5 +1,7 @@
 #include "motor_file.hpp"
 
+#include "board_hall.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -250,18 +252,19 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
   b->encoder = type.empty() ? kEncoderAbi : type;
   const toml::node* n = r.maybe("encoder");
   const long line = n != nullptr ? line_of(*n) : 1;
-  if (b->encoder == "as5047p" || b->encoder == "ma732" || b->encoder == "hall") {
+  if (b->encoder == "as5047p" || b->encoder == "ma732") {
     fail(r.src("encoder"), line,
          "encoder '" + b->encoder +
              "' is not available in the simulator yet: the plant models it "
              "(sim/include/mcsim), but the simulated board and the drive do not read it "
-             "(issue 32 items 5 and 6); the simulator runs 'abi' and 'abi_index'");
+             "(issue 32 item 5); the simulator runs 'abi', 'abi_index' and 'hall'");
   }
-  if (b->encoder != kEncoderAbi && b->encoder != kEncoderAbiIndex) {
+  if (b->encoder != kEncoderAbi && b->encoder != kEncoderAbiIndex && b->encoder != kEncoderHall) {
     fail(r.src("encoder"), line,
          "encoder '" + b->encoder +
              "' is not a sensor type: 'abi' (A/B, no index), 'abi_index' (A/B with an index "
-             "mark at encoder_index_rad); 'as5047p', 'ma732', 'hall' are not available yet");
+             "mark at encoder_index_rad), 'hall' (three Hall sensors); 'as5047p', 'ma732' are not "
+             "available yet");
   }
   if (b->encoder == kEncoderAbiIndex && b->encoder_cpr == 0) {
     fail(r.src("encoder"), line, "encoder 'abi_index' needs an encoder: encoder_cpr is 0");
@@ -272,6 +275,20 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
     fail(r.src("encoder_index_rad"), line_of(*r.maybe("encoder_index_rad")),
          "encoder_index_rad: only an 'abi_index' encoder has an index mark");
   }
+  // The Hall model's keys (board_hall.hpp checks them together).
+  for (const char* k :
+       {"hall_offset_e_rad", "hall_hysteresis_e_rad", "hall_edge_error_e_rad", "hall_fault"}) {
+    if (b->encoder != kEncoderHall && r.maybe(k) != nullptr) {
+      fail(r.src(k), line_of(*r.maybe(k)), std::string(k) + ": only a 'hall' encoder has it");
+    }
+  }
+  b->hall_offset_e_rad = r.num_or("hall_offset_e_rad", 0.0, -6.283185307179586, 6.283185307179586,
+                                  false, "rad el. (sensor A's angle)");
+  b->hall_hysteresis_e_rad =
+      r.num_or("hall_hysteresis_e_rad", 0.0, 0.0, 0.5, false, "rad el. (the full band)");
+  b->hall_edge_error_e_rad = r.num_or("hall_edge_error_e_rad", 0.0, -0.4, 0.4, false,
+                                      "rad el. (rising edges +e, falling -e)");
+  if (r.maybe("hall_fault") != nullptr) b->hall_fault = r.text("hall_fault", false);
 }
 
 BoardSpec read_board(const std::string& path, const toml::table& t, const SetSources& sets) {
@@ -328,9 +345,10 @@ SetSources apply_overrides(toml::table& t, const std::string& table, const Overr
     const std::string key = kv.first.substr(prefix.size());
     const std::string where = "--set " + kv.first + "=" + kv.second;
     toml::table one;
-    // A name (board.encoder=abi_index) may be given as a bare word.
+    // A name (board.encoder=abi_index, board.hall_fault=all_high) may be
+    // given as a bare word.
     const bool bare_name =
-        key == "encoder" && !kv.second.empty() &&
+        (key == "encoder" || key == "hall_fault") && !kv.second.empty() &&
         kv.second.find_first_not_of(
             "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") == std::string::npos;
     try {
@@ -445,6 +463,7 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
     if (bt == nullptr) fail(board_path, 1, "no [board] table");
     f.board = read_board_table(board_path, *bt, overrides);
   }
+  check_hall(f);
   return f;
 }
 

@@ -101,6 +101,12 @@ struct BoardSpec {
   long encoder_cpr = 0;
   std::string encoder = "abi";   // kEncoderAbi or kEncoderAbiIndex (the file comment)
   double encoder_index_rad = 0;  // abi_index: mechanical angle of the index mark
+  // hall (board_hall.hpp): sensor A's electrical angle, the full hysteresis
+  // band, the edges' placement error (rising +e, falling -e) [rad el.]
+  double hall_offset_e_rad = 0;
+  double hall_hysteresis_e_rad = 0;
+  double hall_edge_error_e_rad = 0;
+  std::string hall_fault = "none";  // none, all_low, all_high: from power-up
   int delay_periods = 1;
   double dc_link_c_f = 0;  // 0: stiff bus
   double source_r_ohm = 0.05;
@@ -123,6 +129,7 @@ struct BoardSpec {
 /// The board's encoder types the simulator runs (BoardSpec::encoder).
 inline constexpr const char* kEncoderAbi = "abi";
 inline constexpr const char* kEncoderAbiIndex = "abi_index";
+inline constexpr const char* kEncoderHall = "hall";
 
 /// The files given on the command line, parsed and validated.
 struct MotorFiles {

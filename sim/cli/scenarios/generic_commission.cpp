@@ -13,6 +13,7 @@
 
 #include "app_params.hpp"
 #include "app_scenario.hpp"
+#include "board_hall.hpp"
 #include "plant_from_files.hpp"
 #include "scenario.hpp"
 extern "C" {
@@ -210,7 +211,9 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
   set_board_sensor(f, bc);
   configure_plant(f, s, bc);
   const bool by_index = p.angle_ref == MC_DRIVE_ANGLE_REF_INDEX;
-  out.true_encoder_offset_rad = by_index ? true_index_offset(f, s, bc) : true_offset(f, s, bc);
+  out.true_encoder_offset_rad = by_index                          ? true_index_offset(f, s, bc)
+                                : f.board.encoder == kEncoderHall ? hall_true_offset(f)
+                                                                  : true_offset(f, s, bc);
   out.true_encoder_direction = s.encoder_direction;
   set_adc_offsets(s, out.true_adc_offset_a);
   if (f.board.current_sensors != 3) out.true_adc_offset_a[2] = 0.0;
