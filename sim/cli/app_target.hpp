@@ -65,6 +65,7 @@ struct AppSetup {
   bool hall = false;
   mcsim::HallParams hall_params{};
   mcsim::HallFault hall_fault = mcsim::HallFault::kNone;
+  double hall_fault_at_s = 0.0;
 };
 
 // What one period did (both targets report the same).

@@ -61,6 +61,7 @@ void set_board_hall(const MotorFiles& f, AppSetup& s) {
   s.hall_fault = f.board.hall_fault == "all_low"    ? HallFault::kAllLow
                  : f.board.hall_fault == "all_high" ? HallFault::kAllHigh
                                                     : HallFault::kNone;
+  s.hall_fault_at_s = f.board.hall_fault_at_s;
 }
 
 }  // namespace mcsim

@@ -11,7 +11,9 @@
 //   hall_edge_error_e_rad  placement error of every edge, rising +e,
 //                          falling -e (default 0)
 //   hall_fault             none (default), all_low (000: the supply lost),
-//                          all_high (111: the connector off): from power-up
+//                          all_high (111: the connector off)
+//   hall_fault_at_s        from this time of the run on (default 0: from
+//                          power-up)
 // encoder_cpr is then 6 pole_pairs whatever the board says: the Hall's
 // edges per mechanical turn, which the gains' encoder bound (mc_gains.c,
 // mc_gains_enc_bw_quant_rad_s) and the drive's validation take.

@@ -277,7 +277,8 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
   }
   // The Hall model's keys (board_hall.hpp checks them together).
   for (const char* k :
-       {"hall_offset_e_rad", "hall_hysteresis_e_rad", "hall_edge_error_e_rad", "hall_fault"}) {
+       {"hall_offset_e_rad", "hall_hysteresis_e_rad", "hall_edge_error_e_rad", "hall_fault",
+        "hall_fault_at_s"}) {
     if (b->encoder != kEncoderHall && r.maybe(k) != nullptr) {
       fail(r.src(k), line_of(*r.maybe(k)), std::string(k) + ": only a 'hall' encoder has it");
     }
@@ -289,6 +290,7 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
   b->hall_edge_error_e_rad = r.num_or("hall_edge_error_e_rad", 0.0, -0.4, 0.4, false,
                                       "rad el. (rising edges +e, falling -e)");
   if (r.maybe("hall_fault") != nullptr) b->hall_fault = r.text("hall_fault", false);
+  b->hall_fault_at_s = r.num_or("hall_fault_at_s", 0.0, 0.0, 1.0e4, false, "s");
 }
 
 BoardSpec read_board(const std::string& path, const toml::table& t, const SetSources& sets) {

@@ -106,7 +106,8 @@ struct BoardSpec {
   double hall_offset_e_rad = 0;
   double hall_hysteresis_e_rad = 0;
   double hall_edge_error_e_rad = 0;
-  std::string hall_fault = "none";  // none, all_low, all_high: from power-up
+  std::string hall_fault = "none";  // none, all_low, all_high
+  double hall_fault_at_s = 0;       // from this time of the run on
   int delay_periods = 1;
   double dc_link_c_f = 0;  // 0: stiff bus
   double source_r_ohm = 0.05;

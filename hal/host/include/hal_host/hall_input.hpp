@@ -28,14 +28,19 @@ class HallInput {
   HallInput& operator=(const HallInput&) = delete;
 
   const mc_hal_hall_t* hal() const { return &dev_; }
-  // Throws std::invalid_argument for a sensor outside 0..2 with a stuck fault.
-  void set_fault(mcsim::HallFault f, int sensor = 0);
+  // Throws std::invalid_argument for a sensor outside 0..2 with a stuck
+  // fault. From the first read at or after the board's time at_s on (0:
+  // the next read).
+  void set_fault(mcsim::HallFault f, int sensor = 0, double at_s = 0.0);
   const mcsim::HallSensors& sensors() const { return hall_; }
   int read(uint32_t* p_code) noexcept;
 
  private:
   const PmsmBoard& board_;
   mcsim::HallSensors hall_;
+  mcsim::HallFault fault_ = mcsim::HallFault::kNone;
+  int fault_sensor_ = 0;
+  double fault_at_s_ = -1.0;  // < 0: nothing pending
   mc_hal_hall_ops_t ops_{};
   mc_hal_hall_t dev_{};
 };
