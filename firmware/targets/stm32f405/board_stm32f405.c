@@ -279,6 +279,13 @@ static void board_defaults(mc_params_t *p)
     p->i_sense_max_a = MC_BOARD_DESC.i_sense_max_a;
     p->dead_time_s = (float)MC_BOARD_DESC.deadtime_ns * 1e-9f;
     p->encoder_cpr = MC_BOARD_DESC.enc_counts_per_rev;
+    if (MC_BOARD_DESC.enc_type == MC_BOARD_ENC_HALL) {
+        /* the Hall kernel on the Hall inputs (mc_board_app_cfg binds them):
+         * 6 edges per electrical turn, referenced at power-up */
+        p->encoder_type = MC_PARAMS_ENCODER_HALL;
+        p->encoder_cpr = 6u * p->pole_pairs;
+        p->angle_ref = MC_DRIVE_ANGLE_REF_STORED;
+    }
     p->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
     /* the board's bus limit (its description's vbus_max_v, inside what its
      * divider reads): the trip and the braking thresholds derive from it */
@@ -334,6 +341,9 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
      * position cascade, every gain from the parameters (derived from the
      * motor values unless set: firmware/app/config/mc_params.h) */
     b->app.laws_from_params = true;
+    if (MC_BOARD_DESC.enc_type == MC_BOARD_ENC_HALL) {
+        b->app.hall = &b->f405.hall.dev; /* the drive's encoder: mc_drive_hall */
+    }
     b->app.set_rx_filter = set_node_filter;
     b->app.filter_ctx = b;
     b->app.boot = &mc_image_boot_cfg;
