@@ -87,7 +87,7 @@ class AppTargetSil final : public AppTarget {
     c.flash_sectors[0] = 0u;
     c.flash_sectors[1] = 1u;
     app_target_binding(s, &c);  // the images' binding, as the PIL target's
-    if (s.hall) {  // the board's Hall inputs on the plant's model
+    if (s.hall) {               // the board's Hall inputs on the plant's model
       hall_ = std::make_unique<hal_host::HallInput>(*board_, s.hall_params, s.board.theta_m0_rad);
       hall_->set_fault(s.hall_fault, 0, s.hall_fault_at_s);
       c.hall = hall_->hal();

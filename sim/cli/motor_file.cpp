@@ -276,9 +276,8 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
          "encoder_index_rad: only an 'abi_index' encoder has an index mark");
   }
   // The Hall model's keys (board_hall.hpp checks them together).
-  for (const char* k :
-       {"hall_offset_e_rad", "hall_hysteresis_e_rad", "hall_edge_error_e_rad", "hall_fault",
-        "hall_fault_at_s"}) {
+  for (const char* k : {"hall_offset_e_rad", "hall_hysteresis_e_rad", "hall_edge_error_e_rad",
+                        "hall_fault", "hall_fault_at_s"}) {
     if (b->encoder != kEncoderHall && r.maybe(k) != nullptr) {
       fail(r.src(k), line_of(*r.maybe(k)), std::string(k) + ": only a 'hall' encoder has it");
     }

@@ -193,9 +193,9 @@ typedef struct {
 } mc_app_law_t;
 
 typedef struct {
-    const mc_hal_flash_t *flash;   /**< configuration store's flash, or NULL */
-    uint32_t flash_sectors[2];     /**< its A and B sectors */
-    const mc_hal_wdg_t *wdg;       /**< independent watchdog, or NULL */
+    const mc_hal_flash_t *flash; /**< configuration store's flash, or NULL */
+    uint32_t flash_sectors[2];   /**< its A and B sectors */
+    const mc_hal_wdg_t *wdg;     /**< independent watchdog, or NULL */
     /** The board's Hall inputs, or NULL: with encoder_type 1 the drive's
      *  encoder is the Hall kernel on them (mc_drive_hall.h; the board's own
      *  hal.encoder is not used); encoder_type 1 without them is refused

@@ -40,7 +40,7 @@
  * that step took 0.8 of the voltage (and half of it along q) in the first
  * sample. */
 #define T_SPIN_SETTLE 0.005f
-#define W_E_BW_MAX       1.5f  /* ... or at this electrical speed per current-loop bandwidth */
+#define W_E_BW_MAX    1.5f /* ... or at this electrical speed per current-loop bandwidth */
 
 /* Sub-phases of the encoder step. */
 enum {
@@ -94,8 +94,7 @@ uint32_t mc_comm_init(mc_comm_t *c, const mc_comm_cfg_t *cfg)
         cfg->dead_time_s >= 0.25f * cfg->dt_s || !(cfg->bemf_frac > 0.0f) ||
         !(cfg->bemf_frac < 1.0f) || cfg->cur_bw_rad_s * cfg->dt_s > 0.2f ||
         cfg->pole_pairs_max < 1u || cfg->pole_pairs_max > 64u ||
-        !mc_isfinite_f32(cfg->speed_tau_s) || cfg->speed_tau_s < 0.0f ||
-        cfg->speed_tau_s > 0.1f) {
+        !mc_isfinite_f32(cfg->speed_tau_s) || cfg->speed_tau_s < 0.0f || cfg->speed_tau_s > 0.1f) {
         return MC_COMM_CFG_ERR_VALUE;
     }
     *c = (mc_comm_t){0};

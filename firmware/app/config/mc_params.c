@@ -306,7 +306,7 @@ uint32_t mc_params_hall_table(const mc_params_t *p, mc_hall_f32_cfg_t *t)
     t->dt_s = (p->pwm_hz > 0u) ? 1.0f / (float)p->pwm_hz : 0.0f;
     t->omega_min_e_rad_s = p->hall_omega_min_e_rad_s;
     return (mc_hall_f32_validate(t, map, NULL) == MC_HALL_ERR_NONE) ? MC_PARAMS_OK
-                                                                       : MC_PARAMS_ERR_ENCODER;
+                                                                    : MC_PARAMS_ERR_ENCODER;
 }
 
 uint32_t mc_params_validate(const mc_params_t *p)

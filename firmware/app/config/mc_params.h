@@ -64,7 +64,7 @@ typedef enum {
                    motor values, or its init refused them (the
                    law_error parameter says why: mc_law_cfg.h) */
 #define MC_PARAMS_ERR_GAINS \
-    (1u << 8)                           /**< no safe gains for these motor and board values
+    (1u << 8) /**< no safe gains for these motor and board values
                    (mc_params_resolve returns the MC_GAINS_ERR_* reason) */
 #define MC_PARAMS_ERR_ENCODER \
     (1u << 9) /**< encoder_cpr 1 to 3 (0: none, else >= 4); encoder_type 1

@@ -49,10 +49,10 @@ static int hall_read(void *ctx, mc_hal_encoder_sample_t *p_sample)
     h->error |= bad;
     /* below omega_min: the middle of the sector (within 30 degrees el.
      * either way, whichever way the rotor came) */
-    const float theta = out.interpolating
-                            ? out.theta_e_rad
-                            : mc_wrap_2pi_f32(h->k.start_rad[out.sector] +
-                                              (0.5f * h->k.width_rad[out.sector]));
+    const float theta =
+        out.interpolating
+            ? out.theta_e_rad
+            : mc_wrap_2pi_f32(h->k.start_rad[out.sector] + (0.5f * h->k.width_rad[out.sector]));
     const uint32_t frac = frac_of(theta);
     if (bad == 0u) {
         count_turns(h, frac);

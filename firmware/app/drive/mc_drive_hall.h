@@ -63,17 +63,17 @@ typedef struct {
 } mc_drive_hall_cfg_t;
 
 typedef struct {
-    mc_hall_f32_t k;             /**< the kernel */
-    const mc_hal_hall_t *hall;   /**< the inputs */
-    const mc_hal_tick_t *tick;   /**< timestamps (may be NULL: 0) */
-    mc_hal_encoder_ops_t ops;    /**< read = the adapter's */
-    mc_hal_encoder_t dev;        /**< what the drive reads (hal.encoder) */
-    uint32_t pole_pairs;         /**< from the configuration */
-    uint32_t e_turn;             /**< electrical turns since power-up, mod pole_pairs */
-    uint32_t frac_prev;          /**< the last count within the electrical turn */
-    uint32_t error;              /**< sticky MC_HALL_ERR_ILLEGAL | MC_HALL_ERR_SEQUENCE */
-    uint32_t code;               /**< the last code read */
-    bool have_frac;              /**< frac_prev is valid */
+    mc_hall_f32_t k;           /**< the kernel */
+    const mc_hal_hall_t *hall; /**< the inputs */
+    const mc_hal_tick_t *tick; /**< timestamps (may be NULL: 0) */
+    mc_hal_encoder_ops_t ops;  /**< read = the adapter's */
+    mc_hal_encoder_t dev;      /**< what the drive reads (hal.encoder) */
+    uint32_t pole_pairs;       /**< from the configuration */
+    uint32_t e_turn;           /**< electrical turns since power-up, mod pole_pairs */
+    uint32_t frac_prev;        /**< the last count within the electrical turn */
+    uint32_t error;            /**< sticky MC_HALL_ERR_ILLEGAL | MC_HALL_ERR_SEQUENCE */
+    uint32_t code;             /**< the last code read */
+    bool have_frac;            /**< frac_prev is valid */
 } mc_drive_hall_t;
 
 /** Validate cfg, bind hall and tick, power up (no sector yet). On error h

@@ -94,8 +94,8 @@ std::vector<double> power_up_angles() {
 
 // Commission on the flash file; the verdict is the scenario's (R 2 %, L 5 %,
 // flux 3 %, encoder offset 1 degree el., ...: sim/cli/verdict.cpp).
-RunResult commission(const std::string& flash, const Sets& sets,
-                     const std::string& motor = kMotor, const std::string& board = kBoard) {
+RunResult commission(const std::string& flash, const Sets& sets, const std::string& motor = kMotor,
+                     const std::string& board = kBoard) {
   const RunResult c = run("commission", sets, flash, motor, board);
   EXPECT_EQ(c.out.kind, RunOutcome::Kind::kPass) << c.out.message;
   if (c.out.kind == RunOutcome::Kind::kPass) {
@@ -227,9 +227,8 @@ TEST(AlignPowerUpSil, HallSensorsPassTheSpeedStepAtOnceAtEveryPowerUp) {
 // csv_every periods, at most 2 here) of the injection.
 TEST(AlignPowerUpSil, IllegalHallStateIsANamedEncoderFault) {
   for (const char* f : {"all_low", "all_high"}) {
-    const Sets s = {{"board.encoder", "hall"},
-                    {"board.hall_fault", f},
-                    {"board.hall_fault_at_s", "1.0"}};
+    const Sets s = {
+        {"board.encoder", "hall"}, {"board.hall_fault", f}, {"board.hall_fault_at_s", "1.0"}};
     RunResult r;
     ColumnSink sink;
     {

@@ -16,7 +16,8 @@ extern "C" {
 #include "mc_drive_hall.h"
 }
 
-namespace {
+namespace
+{
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr uint32_t kK = MC_DRIVE_HALL_COUNTS_E;
