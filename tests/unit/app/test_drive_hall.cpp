@@ -9,6 +9,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <vector>
 
 extern "C" {
 #include "config/mc_params.h"
@@ -54,6 +55,19 @@ mc_drive_hall_cfg_t ideal(uint32_t pole_pairs, float dt_s = 1.0f / 20000.0f)
     c.pole_pairs = pole_pairs;
     return c;
 }
+
+// The adapter on a fake's inputs with the ideal table.
+struct Rig {
+    FakeHall f;
+    mc_drive_hall_t h{};
+    explicit Rig(uint32_t pole_pairs, float dt_s = 1.0f / 20000.0f)
+    {
+        const mc_drive_hall_cfg_t c = ideal(pole_pairs, dt_s);
+        EXPECT_EQ(mc_drive_hall_init(&h, &c, &f.dev, nullptr), MC_DRIVE_HALL_ERR_NONE);
+    }
+    Rig(const Rig &) = delete;
+    Rig &operator=(const Rig &) = delete;
+};
 
 mc_hal_encoder_sample_t read(mc_drive_hall_t *h, int *p_rc = nullptr)
 {
@@ -122,29 +136,25 @@ TEST(DriveHall, PowerUpIsTheMiddleOfTheSectorRead)
 // the start gives the start's count; never not valid.
 TEST(DriveHall, CountsElectricalTurnsBothWays)
 {
-    FakeHall f;
-    mc_drive_hall_t h{};
-    mc_drive_hall_cfg_t c = ideal(3u);
-    ASSERT_EQ(mc_drive_hall_init(&h, &c, &f.dev, nullptr), MC_DRIVE_HALL_ERR_NONE);
-    f.code = kCodes[4];
-    const uint32_t c0 = read(&h).count;
+    Rig r(3u);
+    r.f.code = kCodes[4];
+    const uint32_t c0 = read(&r.h).count;
     const uint32_t cpr = 3u * kK;
-    for (int step = 1; step <= 12; ++step) { // two turns forward, a sector at a time
-        f.code = kCodes[(4 + step) % 6];
+    std::vector<int> steps; // two turns forward, a sector at a time, and back
+    for (int k = 1; k <= 12; ++k) {
+        steps.push_back(k);
+    }
+    for (int k = 11; k >= 0; --k) {
+        steps.push_back(k);
+    }
+    for (const int step : steps) {
+        r.f.code = kCodes[(4 + step) % 6];
         for (int n = 0; n < 2000; ++n) { // 0.1 s a sector: 10.5 rad/s el., below 50
-            const mc_hal_encoder_sample_t s = read(&h);
+            const mc_hal_encoder_sample_t s = read(&r.h);
             ASSERT_EQ(s.flags, MC_HAL_ENCODER_FLAG_ALL);
         }
         const uint32_t want = (c0 + static_cast<uint32_t>(step) * kK / 6u) % cpr;
-        EXPECT_NEAR(static_cast<double>(read(&h).count), static_cast<double>(want), 1.0) << step;
-    }
-    for (int step = 11; step >= 0; --step) { // and back
-        f.code = kCodes[(4 + step) % 6];
-        for (int n = 0; n < 2000; ++n) {
-            (void)read(&h);
-        }
-        const uint32_t want = (c0 + static_cast<uint32_t>(step) * kK / 6u) % cpr;
-        EXPECT_NEAR(static_cast<double>(read(&h).count), static_cast<double>(want), 1.0) << step;
+        EXPECT_NEAR(static_cast<double>(read(&r.h).count), static_cast<double>(want), 1.0) << step;
     }
 }
 
@@ -154,11 +164,10 @@ TEST(DriveHall, CountsElectricalTurnsBothWays)
 // and the half sample of edge timing, after the first two edges.
 TEST(DriveHall, InterpolatesAtSpeed)
 {
-    FakeHall f;
-    mc_drive_hall_t h{};
     const float dt = 1.0f / 20000.0f;
-    mc_drive_hall_cfg_t c = ideal(7u, dt);
-    ASSERT_EQ(mc_drive_hall_init(&h, &c, &f.dev, nullptr), MC_DRIVE_HALL_ERR_NONE);
+    Rig r(7u, dt);
+    FakeHall &f = r.f;
+    mc_drive_hall_t &h = r.h;
     const double w = 600.0; // rad/s el.: 35 samples a sector
     double worst = 0.0;
     for (int n = 0; n < 4000; ++n) {
@@ -183,10 +192,9 @@ TEST(DriveHall, InterpolatesAtSpeed)
 // drive's fault is its own to clear). A read the inputs refuse is -EIO.
 TEST(DriveHall, IllegalCodesAndJumpsAreNotValidWithTheirReason)
 {
-    FakeHall f;
-    mc_drive_hall_t h{};
-    mc_drive_hall_cfg_t c = ideal(7u);
-    ASSERT_EQ(mc_drive_hall_init(&h, &c, &f.dev, nullptr), MC_DRIVE_HALL_ERR_NONE);
+    Rig r(7u);
+    FakeHall &f = r.f;
+    mc_drive_hall_t &h = r.h;
     f.code = kCodes[2];
     const uint32_t c0 = read(&h).count;
     for (uint32_t bad : {0u, 7u}) {
