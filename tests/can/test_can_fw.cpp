@@ -320,8 +320,12 @@ TEST_F(TelemetryOnDrive, CurrentsAreTheParkTransformOfThePhaseCurrents) {
 // BUS_CURRENT (BO_ 44) carries the drive's bus estimate and the limits in
 // force (mc_drive_bus.h) as they are, within half a step of 0.01 A.
 TEST_F(TelemetryOnDrive, BusCurrentCarriesTheEstimateAndTheLimits) {
-  d.bus.p_bus_est_w = -3.25f * 24.0f;
-  d.bus.vbus_v = 24.0f;
+  // -3.25 A pushed back: 3/2 (vd id + vq iq) / vbus = 1.5 (-1.3 * 40) / 24
+  d.tm.foc.vd_v = 0.0f;
+  d.tm.foc.id_a = 0.0f;
+  d.tm.foc.vq_v = -1.3f;
+  d.tm.foc.iq_a = 40.0f;
+  d.tm.vbus_v = 24.0f;
   d.bus.i_mot_lim_a = 12.5f;
   d.bus.i_regen_lim_a = 4.0f;
   const mc_telemetry_src_t src{&d, nullptr, nullptr, nullptr};

@@ -930,6 +930,49 @@ def _regen(ctx, *runs):
 
 
 
+# Thermal derating and the DC-bus limits (issue 33): thermal-duty with the
+# drive's R 10 % off (model_r_scale 1.1), derating on and off; bus-limits
+# with the drive's limits on and off (off fails its verdict by design: it
+# is judged against the same limits), on two motors and boards.
+THERMAL = [("D5065, ODrive 24 V", "odrive-d5065", "odrive-v36-24v")]
+THERMAL_RUNS = [(lab, m, b, d) for lab, m, b in THERMAL for d in ("1", "0")]
+BUS = [("D5065, ODrive 24 V", "odrive-d5065", "odrive-v36-24v"),
+       ("SK3 6374, VESC 6", "turnigy-sk3-6374-149kv", "vesc6-48v")]
+BUS_RUNS = [(lab, m, b, lim) for lab, m, b in BUS for lim in ("on", "off")]
+
+
+def thermal_src(m, b, derate):
+    return mcsim("thermal-duty", "model_r_scale=1.1", f"derate={derate}", motor=m, board=b)
+
+
+def bus_src(m, b, limits):
+    return mcsim("bus-limits", f"limits={limits}", motor=m, board=b, judged=limits == "on")
+
+
+@figure("power-limits", [thermal_src(m, b, d) for _l, m, b, d in THERMAL_RUNS] +
+        [bus_src(m, b, x) for _l, m, b, x in BUS_RUNS])
+def _power_limits(ctx, *runs):
+    th, bu = runs[:len(THERMAL_RUNS)], runs[len(THERMAL_RUNS):]
+    t_rows = []
+    for (lab, _m, _b, d), r in zip(THERMAL_RUNS, th, strict=True):
+        s = r["summary"]
+        t_rows.append([lab, "on" if d == "1" else "off", g(s["t_winding_max_c"], 4),
+                       g(s["t_winding_limit_c"], 4), g(s["t_est_err_max_k"], 2),
+                       g(s["i_limit_min_a"], 3), s["verdict"]])
+    b_rows = []
+    for (lab, _m, _b, x), r in zip(BUS_RUNS, bu, strict=True):
+        s = r["summary"]
+        b_rows.append([lab, x, g(s["i_bus_peak_a"], 3), g(s["i_bus_max_a"], 3),
+                       g(s["i_bus_min_a"], 3), g(-s["i_bus_regen_max_a"], 3),
+                       g(s["omega_peak_rad_s"], 3), s["verdict"]])
+    return (table(["thermal-duty: motor, board", "derating", "winding max [°C]", "limit [°C]",
+                   "estimate error max [K]", "current limit min [A]", "verdict"], t_rows) +
+            "\n\n" +
+            table(["bus-limits: motor, board", "limits", "supply current peak [A]",
+                   "motoring limit [A]", "supply current min [A]", "regenerating limit [A]",
+                   "peak speed [rad/s]", "verdict"], b_rows))
+
+
 # --- static sources: DBC, motor files ---------------------------------------------
 
 @figure("can-protocol", [mc_can("table")], reason="exactly (derived from the DBC)")
@@ -1307,16 +1350,28 @@ def _main(a):
 
 PNGS = [("pi2d-paper.png", mcsim("pi2d-paper"), ["tools/plot/pi2d_figs.py", "paper"]),
         ("pi2d-motor.png", mcsim("pi2d-motor"), ["tools/plot/pi2d_figs.py", "motor"]),
-        ("csmc-sampled.png", mcsim("csmc-sampled"), None)]
+        ("csmc-sampled.png", mcsim("csmc-sampled"), None),
+        ("thermal-duty.png", [thermal_src("odrive-d5065", "odrive-v36-24v", "1"),
+                              thermal_src("odrive-d5065", "odrive-v36-24v", "0")],
+         ["tools/plot/power_figs.py", "thermal"]),
+        ("bus-limits.png", [bus_src("odrive-d5065", "odrive-v36-24v", "on"),
+                            bus_src("odrive-d5065", "odrive-v36-24v", "off")],
+         ["tools/plot/power_figs.py", "bus"])]
 
 
 def write_figures(ctx):
     dst = os.path.join(ROOT, "tools", "plot", "figures")
     for png, src, cmd in PNGS:
-        r = ctx.get(src)
-        if cmd:
+        if isinstance(src, list):  # several runs, one figure (power_figs.py)
+            rs = [ctx.get(x) for x in src]
+            extra = [g(rs[0]["summary"]["t_winding_limit_c"], 6)] if cmd[1] == "thermal" else []
+            run([sys.executable, os.path.join(ROOT, cmd[0]), cmd[1], *[r["csv"] for r in rs],
+                 *extra, os.path.join(dst, png)])
+        elif cmd:
+            r = ctx.get(src)
             run([sys.executable, os.path.join(ROOT, cmd[0]), cmd[1], r["csv"], os.path.join(dst, png)])
         else:
+            r = ctx.get(src)
             tmp = ctx.workdir(("png", png))
             run([sys.executable, os.path.join(ROOT, "tools", "plot", "csmc_figs.py"),
                  os.path.dirname(r["csv"]), tmp])

@@ -971,7 +971,7 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
     p->omega_m_rad_s = d->tm.omega_m_rad_s;
     p->vbus_v = d->tm.vbus_v;
     p->regen_scale = d->tm.regen_scale;
-    p->i_bus_est_a = mc_drive_bus_current_a(&d->bus);
+    p->i_bus_est_a = mc_drive_bus_current_a(d);
     p->i_bus_mot_lim_a = d->bus.i_mot_lim_a;
     p->i_bus_regen_lim_a = d->bus.i_regen_lim_a;
     p->brake_duty = d->tm.brake_duty;

@@ -337,7 +337,7 @@ static bool values_of(uint32_t slot, const mc_telemetry_src_t *src, float *value
             (src->cmd != NULL) ? src->cmd->theta_ref_rad : 0.0f;
         return true;
     case MC_TM_BUS_CURRENT:
-        values[MC_CAN_BUS_CURRENT_I_BUS_EST_A] = mc_drive_bus_current_a(&d->bus);
+        values[MC_CAN_BUS_CURRENT_I_BUS_EST_A] = mc_drive_bus_current_a(d);
         values[MC_CAN_BUS_CURRENT_I_BUS_MAX_A] = d->bus.i_mot_lim_a;
         values[MC_CAN_BUS_CURRENT_I_BUS_REGEN_MAX_A] = d->bus.i_regen_lim_a;
         return true;

@@ -190,6 +190,7 @@ uint32_t mc_drive_init(mc_drive_t *d, const mc_drive_cfg_t *cfg, const mc_hal_t 
     d->tm.regen_scale = 1.0f;
     d->regen_lead_alpha = regen_lead_alpha(cfg);
     mc_drive_bus_init(&d->bus, &cfg->foc);
+    d->bus_on = mc_drive_bus_any(&cfg->bus);
     (void)mc_drive_thermal_init(&d->thermal, &cfg->thermal); /* validated above */
     if (cfg->fw_enable) {
         (void)mc_fw_f32_init(&d->fw, &cfg->fw);
@@ -630,7 +631,7 @@ static uint32_t current_loop(mc_drive_t *d, const mc_hal_adc_sample_t *s, float 
     } else {
         d->tm.regen_scale = 1.0f;
     }
-    {
+    if (d->bus_on) {
         const mc_drive_bus_in_t bi = {s->vbus_v,      r->omega_e_rad_s, r->rotor_frame,
                                       d->fast_count,  d->tm.foc.id_a,   d->tm.foc.iq_a,
                                       d->tm.foc.vd_v, d->tm.foc.vq_v};
@@ -1326,10 +1327,20 @@ void mc_drive_set_runtime_limits(mc_drive_t *d, const mc_drive_cfg_t *cfg)
     d->cfg.vbus_regen_end_v = cfg->vbus_regen_end_v;
     d->cfg.regen_id_a = cfg->regen_id_a;
     d->cfg.bus = cfg->bus;
+    d->bus_on = mc_drive_bus_any(&cfg->bus);
+    if (!d->bus_on) {
+        mc_drive_bus_off(&d->bus);
+    }
     d->cfg.brake_on_v = cfg->brake_on_v;
     d->cfg.brake_full_v = cfg->brake_full_v;
     d->id_ref_a = mc_sat_f32(d->id_ref_a, -cfg->i_max_a, cfg->i_max_a);
     d->iq_ref_a = mc_sat_f32(d->iq_ref_a, -cfg->i_max_a, cfg->i_max_a);
+}
+
+float mc_drive_bus_current_a(const mc_drive_t *d)
+{
+    return mc_drive_bus_estimate_a(d->tm.foc.vd_v, d->tm.foc.vq_v, d->tm.foc.id_a, d->tm.foc.iq_a,
+                                   d->tm.vbus_v);
 }
 
 void mc_drive_raise_fault(mc_drive_t *d, uint32_t bits)

@@ -582,6 +582,7 @@ typedef struct {
     float vbus_lag_v;       /**< the bus reading low-passed at the lead time [V] (0: none yet) */
     float regen_lead_alpha; /**< that filter's factor per fast step, dt / (t_lead + dt) */
     mc_drive_bus_t bus;     /**< the DC-bus limits' state and estimate (mc_drive_bus.h) */
+    bool bus_on;            /**< a DC-bus limit is set (cfg.bus): the limiter runs */
     mc_drive_thermal_t thermal; /**< derating factor, winding estimate (mc_drive_thermal.h) */
 } mc_drive_t;
 
@@ -596,6 +597,13 @@ uint32_t mc_drive_check_cfg(const mc_drive_cfg_t *cfg);
 
 /** Fast loop body (ADC interrupt). Returns true when the slow loop is due. */
 bool mc_drive_fast_step(mc_drive_t *d);
+
+/** The DC-bus current of the last current-loop step, 3/2 (vd id + vq iq)
+ *  / vbus from its commanded voltages and measured currents [A], positive
+ *  drawn (mc_drive_bus.h); 0 before the first. Computed here, for the
+ *  telemetry, off the fast step: the limiter forms the same product only
+ *  when a bus limit is set. */
+float mc_drive_bus_current_a(const mc_drive_t *d);
 
 /** Slow loop body (supervision). */
 void mc_drive_slow_step(mc_drive_t *d);

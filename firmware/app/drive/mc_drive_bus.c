@@ -27,9 +27,18 @@ float mc_drive_bus_estimate_a(float vd_v, float vq_v, float id_a, float iq_a, fl
     return (vbus_v > 0.0f && mc_isfinite_f32(i)) ? i : 0.0f;
 }
 
-float mc_drive_bus_current_a(const mc_drive_bus_t *s)
+bool mc_drive_bus_any(const mc_drive_bus_cfg_t *cfg)
 {
-    return (s->vbus_v > 0.0f) ? (s->p_bus_est_w / s->vbus_v) : 0.0f;
+    return cfg->i_bus_max_a != 0.0f || cfg->i_bus_regen_max_a != 0.0f || cfg->p_bus_max_w != 0.0f ||
+           cfg->p_bus_regen_max_w != 0.0f;
+}
+
+void mc_drive_bus_off(mc_drive_bus_t *s)
+{
+    s->have_last = false;
+    s->limiting = false;
+    s->i_mot_lim_a = 0.0f;
+    s->i_regen_lim_a = 0.0f;
 }
 
 void mc_drive_bus_init(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc)
@@ -185,9 +194,8 @@ void mc_drive_bus_limit(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg,
     s->p_bus_est_w = mc_isfinite_f32(p) ? p : 0.0f;
     s->vbus_v = in->vbus_v;
     s->limiting = false;
-    if (cfg->i_bus_max_a == 0.0f && cfg->i_bus_regen_max_a == 0.0f && cfg->p_bus_max_w == 0.0f &&
-        cfg->p_bus_regen_max_w == 0.0f) {
-        s->have_last = false; /* off: the correction restarts when a limit is set */
+    if (!mc_drive_bus_any(cfg)) {
+        mc_drive_bus_off(s); /* the correction restarts when a limit is set */
         return;
     }
     s->last_count = in->fast_count;

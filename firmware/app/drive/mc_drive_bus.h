@@ -98,17 +98,21 @@ uint32_t mc_drive_bus_check(const mc_drive_bus_cfg_t *cfg);
  *  or a value that is not finite. */
 float mc_drive_bus_estimate_a(float vd_v, float vq_v, float id_a, float iq_a, float vbus_v);
 
-/** The estimated bus current of the last step, p_bus_est_w / vbus_v [A]
- *  (0 before the first; divided here, off the fast step). */
-float mc_drive_bus_current_a(const mc_drive_bus_t *s);
+/** True when any of the four limits is set (the drive calls
+ *  mc_drive_bus_limit only then: the default configuration pays nothing
+ *  in the fast interrupt). */
+bool mc_drive_bus_any(const mc_drive_bus_cfg_t *cfg);
+
+/** The state after the limits were switched off: nothing limiting, no
+ *  limit in force, the correction restarts when a limit is set again. */
+void mc_drive_bus_off(mc_drive_bus_t *s);
 
 /** Fresh state for the current loop's configuration foc. */
 void mc_drive_bus_init(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc);
 
 /** Limit (*p_id_a, *p_iq_a) so that the estimated bus power stays in
  *  [-P_r, P_m]; updates the estimate and the correction. With every limit
- *  off it records the estimate's power and returns (a few multiplications:
- *  the interrupt's cost of the default configuration). */
+ *  off it only forgets the correction (mc_drive_bus_off). */
 void mc_drive_bus_limit(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg,
                         const mc_foc_f32_cfg_t *foc, const mc_drive_bus_in_t *in, float *p_id_a,
                         float *p_iq_a);

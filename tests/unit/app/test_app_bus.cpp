@@ -176,5 +176,38 @@ TEST_F(AppDrive, BusLimitsRefused)
     }
 }
 
+// The drive runs the limiter only while a limit is set (mc_drive_t.bus_on,
+// so the default configuration pays nothing in the fast interrupt): a
+// limit set at run time (mc_drive_set_runtime_limits, the path of a
+// parameter APPLY) holds the q reference from the next step, and clearing
+// it releases the reference and shows no limit in force. With no current
+// measured the bus power is 1.5 R (id^2 + iq^2) (the fake's rotor stands),
+// so i_bus_max_a 0.01 A at 24 V (0.24 W) with id = 1 A allows |iq| <=
+// sqrt((0.24 - 0.15) / 0.15) = 0.775 A of the 5 A asked. Tolerances: float
+// rounding of the closed form.
+TEST_F(AppDrive, BusLimitSetAndClearedAtRunTime)
+{
+    InitRunning();
+    EXPECT_FALSE(d.bus_on);
+    EXPECT_NEAR(5.0f, d.tm.iq_ref_a, 1e-6f);
+    mc_drive_cfg_t c = cfg;
+    c.bus.i_bus_max_a = 0.01f;
+    mc_drive_set_runtime_limits(&d, &c);
+    EXPECT_TRUE(d.bus_on);
+    GoodSample();
+    (void)mc_drive_fast_step(&d);
+    ASSERT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
+    EXPECT_NEAR(std::sqrt(0.09f / 0.15f), d.tm.iq_ref_a, 1e-4f);
+    EXPECT_TRUE(d.bus.limiting);
+    EXPECT_NEAR(0.01f, d.bus.i_mot_lim_a, 1e-7f);
+    mc_drive_set_runtime_limits(&d, &cfg);
+    EXPECT_FALSE(d.bus_on);
+    EXPECT_FALSE(d.bus.limiting);
+    EXPECT_EQ(0.0f, d.bus.i_mot_lim_a);
+    GoodSample();
+    (void)mc_drive_fast_step(&d);
+    EXPECT_NEAR(5.0f, d.tm.iq_ref_a, 1e-6f);
+}
+
 } // namespace
 } // namespace apptest
