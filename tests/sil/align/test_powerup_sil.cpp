@@ -359,9 +359,9 @@ TEST(AlignPowerUpSil, AbsentFlashBootsTheFilesDefaults) {
 }
 
 // The sensors the simulator does not run yet are refused by name (issue 32
-// items 5 and 6); an unknown type lists the types.
+// item 5); an unknown type lists the types.
 TEST(AlignPowerUpSil, SensorsNotAvailableYetAreRefusedByName) {
-  for (const char* type : {"as5047p", "ma732", "hall"}) {
+  for (const char* type : {"as5047p", "ma732"}) {
     const RunResult r = run("speed-step", {{"board.encoder", type}});
     EXPECT_EQ(r.out.kind, RunOutcome::Kind::kRefused) << type;
     EXPECT_NE(r.out.message.find("not available in the simulator yet"), std::string::npos)
@@ -370,6 +370,28 @@ TEST(AlignPowerUpSil, SensorsNotAvailableYetAreRefusedByName) {
   const RunResult u = run("speed-step", {{"board.encoder", "resolver"}});
   EXPECT_EQ(u.out.kind, RunOutcome::Kind::kRefused);
   EXPECT_NE(u.out.message.find("'abi_index'"), std::string::npos) << u.out.message;
+}
+
+// The Hall model's keys: only with a Hall encoder, a band and an edge error
+// that would put the edges out of order (|e| + band / 2 at 30 degrees el.
+// or more), an unknown fault: each refused by name before anything runs.
+TEST(AlignPowerUpSil, HallKeysRefusedByName) {
+  const struct {
+    Sets sets;
+    const char* want;
+  } cases[] = {
+      {{{"board.hall_hysteresis_e_rad", "0.05"}}, "only a 'hall' encoder has it"},
+      {{{"board.encoder", "hall"},
+        {"board.hall_hysteresis_e_rad", "0.5"},
+        {"board.hall_edge_error_e_rad", "0.3"}},
+       "must stay below 30 degrees el."},
+      {{{"board.encoder", "hall"}, {"board.hall_fault", "stuck"}}, "board.hall_fault 'stuck'"},
+  };
+  for (const auto& c : cases) {
+    const RunResult r = run("speed-step", c.sets, "", kHubMotor, kHubBoard);
+    EXPECT_EQ(r.out.kind, RunOutcome::Kind::kRefused) << c.want;
+    EXPECT_NE(r.out.message.find(c.want), std::string::npos) << r.out.message;
+  }
 }
 
 }  // namespace
