@@ -830,6 +830,29 @@ def _drive_faults(ctx, sil, unit):
                      "SIL tests (`tests/sil`)", "latency, measured (bound)"], rows))
 
 
+# The sensored speed law's step on motors from the heaviest rotor to the
+# lightest (sim/motors): its own derived gains, ramp and reference lag.
+SPEED_MOTORS = [("odrive-d5065", "odrive-v36-24v"), ("turnigy-sk3-6374-149kv", "vesc6-48v"),
+                ("paper002-test-motor", "paper002-200v"), ("u8-class-kv100", "odrive-v36-56v"),
+                ("hub-6p5in-15pp", "odrive-v36-56v"), ("gimbal-gm4108", "gimbal-24v"),
+                ("maxon-ec45flat-class-24v", "odrive-v36-24v")]
+
+
+@figure("speed-step", [mcsim("speed-step", motor=m, board=b) for m, b in SPEED_MOTORS])
+def _speed_step(ctx, *runs):
+    rows = []
+    for (m, _b), r in zip(SPEED_MOTORS, runs, strict=True):
+        s = r["summary"]
+        w = s["omega_final_rad_s"]
+        rows.append([f"`{m}`", g(s["gain.speed_wc_rad_s"], 3), g(s["gain.speed_accel_rad_s2"], 3),
+                     g(w / s["gain.speed_accel_rad_s2"] * 1e3, 2), g(s["overshoot_frac"] * 100, 2),
+                     g(s["settle_2pct_s"] * 1e3, 3), g(s["omega_pp_steady_rad_s"] / w * 100, 2),
+                     g(s["omega_err_mean_steady_rad_s"] / w * 100, 2), s["verdict"]])
+    return table(["motor", "crossover [rad/s]", "ramp [rad/s²]", "ramp time [ms]", "overshoot [%]",
+                  "settling 2 % [ms]", "steady peak-to-peak [% of target]",
+                  "steady mean error [% of target]", "verdict"], rows)
+
+
 POS_MOTORS = [("odrive-d5065", "odrive-v36-24v", "D5065"),
               ("paper002-test-motor", "paper002-200v", "paper-002 test motor")]
 

@@ -14,20 +14,16 @@ Each CSV is the scenario's own (header row, seconds in `t`); the numbers
 the figures show are in the checked table `gen:power-limits`
 (firmware/app/README.md).
 """
-import csv
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
+# the plots' shared CSV reader, PNG writer and pyplot on the Agg backend
+from csmc_figs import plt, read, save
 
 
-def read(path):
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    head, data = rows[0], rows[1:]
-    return {h: [float(r[i]) for r in data] for i, h in enumerate(head)}
+def panel(a, ylabel, loc):
+    a.set_ylabel(ylabel)
+    a.legend(loc=loc, fontsize=8)
+    a.grid(alpha=0.3)
 
 
 def thermal(on, off, limit_c, png):
@@ -41,20 +37,15 @@ def thermal(on, off, limit_c, png):
            label="drive's estimate, derating on")
     a.plot(t_on, on["t_housing_c"], color="tab:gray", lw=0.8, label="housing (plant)")
     a.axhline(limit_c, color="tab:red", ls=":", lw=1.0, label=f"limit {limit_c:g} °C")
-    a.set_ylabel("temperature [°C]")
-    a.legend(loc="lower right", fontsize=8)
-    a.grid(alpha=0.3)
+    panel(a, "temperature [°C]", "lower right")
     a = ax[1]
     a.plot(t_on, on["i_limit_a"], color="tab:blue", lw=1.2, label="current limit in force (derated)")
     a.plot(t_on, [abs(x) for x in on["i_d_ref_a"]], color="tab:orange", lw=0.8,
            label="|i_d| asked (after the limit)")
-    a.set_ylabel("current [A]")
+    panel(a, "current [A]", "lower right")
     a.set_xlabel("time [min]")
-    a.legend(loc="lower right", fontsize=8)
-    a.grid(alpha=0.3)
     fig.suptitle("thermal-duty: overload cycle, winding model and derating")
-    fig.tight_layout()
-    fig.savefig(png, dpi=110)
+    save(fig, png)
 
 
 def bus(on, off, png):
@@ -66,20 +57,15 @@ def bus(on, off, png):
     a.plot(on["t"], on["i_bus_max_a"], color="tab:green", lw=1.0, ls=":", label="motoring limit")
     a.plot(on["t"], [-x for x in on["i_bus_regen_max_a"]], color="tab:purple", lw=1.0, ls=":",
            label="regenerating limit")
-    a.set_ylabel("DC-bus current [A] (+ drawn)")
-    a.legend(loc="upper right", fontsize=8)
-    a.grid(alpha=0.3)
+    panel(a, "DC-bus current [A] (+ drawn)", "upper right")
     a = ax[1]
     a.plot(off["t"], off["omega_m_rad_s"], color="tab:red", lw=0.8, label="speed, limits off")
     a.plot(on["t"], on["omega_m_rad_s"], color="tab:blue", lw=1.2, label="speed, limits on")
     a.plot(on["t"], on["omega_ref_rad_s"], color="k", lw=0.6, ls="--", label="speed command")
-    a.set_ylabel("speed [rad/s]")
+    panel(a, "speed [rad/s]", "upper right")
     a.set_xlabel("time [s]")
-    a.legend(loc="upper right", fontsize=8)
-    a.grid(alpha=0.3)
     fig.suptitle("bus-limits: acceleration and regenerative stop on a supply with internal resistance")
-    fig.tight_layout()
-    fig.savefig(png, dpi=110)
+    save(fig, png)
 
 
 def main(argv):

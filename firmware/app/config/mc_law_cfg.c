@@ -78,6 +78,7 @@ void mc_law_speed_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_sp
     c->j_kgm2 = (float)m->j_kgm2;
     c->b_nm_s_rad = (float)m->b_nm_s_rad;
     c->pole_pairs = (uint32_t)m->pole_pairs;
+    c->ref_lag_s = (float)((1.0 / g->cur_bw_rad_s) + (1.5 / m->pwm_hz));
 }
 
 uint32_t mc_law_pi2d_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_pi2d_cfg_t *cc)

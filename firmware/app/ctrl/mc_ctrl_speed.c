@@ -29,6 +29,9 @@ uint32_t mc_ctrl_speed_init(mc_ctrl_speed_t *c, const mc_ctrl_speed_cfg_t *cfg)
         !mc_isfinite_f32(cfg->iq_max_a) || !(cfg->iq_max_a > 0.0f)) {
         err |= MC_CTRL_SPEED_ERR_MODEL;
     }
+    if (!nonneg_finite(cfg->ref_lag_s)) {
+        err |= MC_CTRL_SPEED_ERR_GAIN;
+    }
     if (err != MC_CTRL_SPEED_ERR_NONE) {
         return err;
     }
@@ -43,6 +46,7 @@ uint32_t mc_ctrl_speed_init(mc_ctrl_speed_t *c, const mc_ctrl_speed_cfg_t *cfg)
         return MC_CTRL_SPEED_ERR_GAIN;
     }
     c->cfg = *cfg;
+    c->ref_lag_alpha = cfg->dt_s / (cfg->ref_lag_s + cfg->dt_s);
     c->ops = (mc_drive_ctrl_t){.outputs = MC_DRIVE_OUT_CURRENT,
                                .needs_encoder = true,
                                .reset = mc_ctrl_speed_reset,
@@ -66,6 +70,7 @@ uint32_t mc_ctrl_speed_reset(void *ctx)
     }
     (void)mc_pi_f32_reset(&c->pi, 0.0f); /* a new run starts without old torque */
     c->tm = z;
+    c->have_ref_lag = false;
     return MC_CTRL_SPEED_ERR_NONE;
 }
 
@@ -92,7 +97,15 @@ uint32_t mc_ctrl_speed_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t 
     lim = (m->i_max_a < cfg->iq_max_a) ? m->i_max_a : cfg->iq_max_a;
     ff = ((cfg->j_kgm2 * m->alpha_ref_rad_s2) + (cfg->b_nm_s_rad * m->omega_ref_rad_s)) /
          cfg->kt_nm_a;
-    if (mc_pi_f32_step_lim(&c->pi, m->omega_ref_rad_s - m->omega_m_rad_s, ff, -lim, lim, &iq) !=
+    if (!mc_isfinite_f32(m->omega_m_rad_s) || !mc_isfinite_f32(m->omega_ref_rad_s)) {
+        return MC_CTRL_SPEED_ERR_STEP; /* refused before it reaches the lag's state */
+    }
+    if (!c->have_ref_lag) {
+        c->omega_ref_lag_rad_s = m->omega_m_rad_s; /* from where the rotor is */
+        c->have_ref_lag = true;
+    }
+    c->omega_ref_lag_rad_s += c->ref_lag_alpha * (m->omega_ref_rad_s - c->omega_ref_lag_rad_s);
+    if (mc_pi_f32_step_lim(&c->pi, c->omega_ref_lag_rad_s - m->omega_m_rad_s, ff, -lim, lim, &iq) !=
         MC_PI_ERR_NONE) {
         return MC_CTRL_SPEED_ERR_STEP;
     }

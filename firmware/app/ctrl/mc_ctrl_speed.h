@@ -57,6 +57,12 @@ typedef struct {
     float j_kgm2;        /**< inertia of the feed-forward [kg m^2], >= 0 */
     float b_nm_s_rad;    /**< viscous friction of the feed-forward [N m s/rad], >= 0 */
     uint32_t pole_pairs; /**< for the frame's electrical speed, >= 1 */
+    float ref_lag_s;     /**< the lag between the feed-forward's current and the measured
+                              speed's answer to it (current loop, speed measurement,
+                              computation delay) [s], >= 0: the PI compares the measured
+                              speed with the reference passed through that lag, so a
+                              ramp the feed-forward follows leaves it no error to wind
+                              up on; 0: the reference as it is */
 } mc_ctrl_speed_cfg_t;
 
 /** Telemetry of the last fast step. */
@@ -74,6 +80,9 @@ typedef struct {
     mc_pi_f32_t pi;
     mc_ctrl_speed_tm_t tm;
     mc_drive_ctrl_t ops;
+    float ref_lag_alpha;       /**< dt / (ref_lag_s + dt) */
+    float omega_ref_lag_rad_s; /**< the reference through the lag [rad/s] */
+    bool have_ref_lag;         /**< omega_ref_lag_rad_s holds a value (not after a reset) */
 } mc_ctrl_speed_t;
 
 /** Validate cfg and initialise c and its ops table (current references,

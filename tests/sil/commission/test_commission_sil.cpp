@@ -74,7 +74,8 @@ TEST_P(LibraryMotor, IdentifiesWithinBounds) {
   expect_accurate(f, run_commission(f, s), kCases[i].motor);
 }
 
-INSTANTIATE_TEST_SUITE_P(Library, LibraryMotor, ::testing::Range(0, 6));
+INSTANTIATE_TEST_SUITE_P(Library, LibraryMotor,
+                         ::testing::Range(0, static_cast<int>(testlib::library().size())));
 
 // Motors drawn from ranges that cover the library (log-uniform), on a board
 // sized for each (its sensor range, bus and PWM from the motor).
@@ -298,7 +299,8 @@ TEST_P(SensorlessStartAngle, EightInitialAnglesLockAndTrack) {
                        << " theta_e0 = " << s.sensorless_start_theta_e_rad;
   }
 }
-INSTANTIATE_TEST_SUITE_P(Library, SensorlessStartAngle, ::testing::Range(0, 6));
+INSTANTIATE_TEST_SUITE_P(Library, SensorlessStartAngle,
+                         ::testing::Range(0, static_cast<int>(testlib::library().size())));
 
 }  // namespace
 }  // namespace mcsim

@@ -37,12 +37,23 @@ TEST_P(MotorSil, CurrentStepRiseWithin25PercentOfDesign) {
 }
 
 // Sensored speed step (speed PI) settles to 2 % without fault; |i_d| stays
-// below 10 % of rated in steady state.
+// below 10 % of rated in steady state. Overshoot: the law compares the
+// speed with its reference through the feed-forward's lag
+// (mc_ctrl_speed_cfg_t.ref_lag_s), so a ramp longer than the encoder
+// tracking loop's settling (3 / bw) ends without overshoot: below 0.3 %
+// (measured at most 0.06 % over the library; without the lag the
+// integrator winds up on the ramp's tracking error: 0.9 % on the D5065).
+// A shorter ramp (the
+// gimbal's 2.3 ms) meets the tracking loop's transient, which the lag does
+// not model: below 12 % (measured 9.5 %).
 TEST_P(MotorSil, SpeedStepPiSettles) {
   const auto r = run("speed-step", files(GetParam()), {});
   EXPECT_EQ(r.at("faults"), 0.0);
   EXPECT_EQ(r.at("settled"), 1.0);
   EXPECT_LT(r.at("id_abs_max_steady_frac_rated"), 0.10);
+  const double ramp_s = r.at("omega_final_rad_s") / r.at("gain.speed_accel_rad_s2");
+  const bool long_ramp = ramp_s > 3.0 / r.at("gain.enc_pll_bw_rad_s");
+  EXPECT_LT(r.at("overshoot_frac"), long_ramp ? 0.003 : 0.12) << "ramp " << ramp_s << " s";
 }
 
 // PI2D: settles and keeps |i_d| < 10 % of rated in steady state, or is

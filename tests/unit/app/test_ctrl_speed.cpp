@@ -153,6 +153,55 @@ TEST(CtrlSpeed, RefusalsAreNamed)
     EXPECT_EQ(MC_CTRL_SPEED_ERR_MEAS, mc_ctrl_speed_fast(&c, &m, &out));
     m = Meas(10.0f, 0.0f, NAN);
     EXPECT_EQ(MC_CTRL_SPEED_ERR_STEP, mc_ctrl_speed_fast(&c, &m, &out));
+    // a NaN leaves no trace: the next good step is the law's first
+    m = Meas(10.0f, 0.0f, 0.0f);
+    EXPECT_EQ(0u, mc_ctrl_speed_fast(&c, &m, &out));
+    EXPECT_TRUE(std::isfinite(out.iq_ref_a));
+    for (const float bad : {-1e-3f, NAN, INFINITY}) {
+        cfg = Cfg();
+        cfg.ref_lag_s = bad;
+        EXPECT_EQ(MC_CTRL_SPEED_ERR_GAIN, mc_ctrl_speed_init(&c, &cfg)) << bad;
+    }
+}
+
+// The reference lag (cfg.ref_lag_s): the PI compares the measured speed
+// with the reference through a first-order lag of ref_lag_s, started at
+// the rotor's speed. A rotor that is where the lagged reference is, step
+// by step along a ramp, leaves the PI nothing: the output is the
+// feed-forward alone (1e-5 A: float rounding of the same lag recomputed
+// here). Without the lag the same rotor leaves the PI the ramp's tracking
+// error, a_ref * ref_lag_s = 1 rad/s at the end, and its integral: the
+// output exceeds the feed-forward by more than kp times that error.
+TEST(CtrlSpeed, ReferenceLagLeavesTheFeedForwardAloneOnARamp)
+{
+    const float a_ref = 1000.0f; // feed-forward J a / kt = 10 A, half the limit
+    const float lag_s = 1e-3f;
+    const float alpha = kDt / (lag_s + kDt);
+    for (const float cfg_lag : {lag_s, 0.0f}) {
+        mc_ctrl_speed_t c{};
+        mc_ctrl_speed_cfg_t cfg = Cfg();
+        cfg.ref_lag_s = cfg_lag;
+        ASSERT_EQ(0u, mc_ctrl_speed_init(&c, &cfg));
+        float lag = 0.0f;
+        float ff = 0.0f;
+        float err = 0.0f;
+        mc_drive_out_t out{};
+        for (int k = 0; k <= 400; ++k) { // from rest: the lag starts at 0
+            const float w_ref = a_ref * kDt * static_cast<float>(k);
+            lag += alpha * (w_ref - lag);
+            const mc_drive_meas_t m = Meas(w_ref, a_ref, lag);
+            ASSERT_EQ(0u, mc_ctrl_speed_fast(&c, &m, &out));
+            ff = ((cfg.j_kgm2 * a_ref) + (cfg.b_nm_s_rad * w_ref)) / cfg.kt_nm_a;
+            err = w_ref - lag;
+            if (cfg_lag > 0.0f) {
+                ASSERT_NEAR(ff, out.iq_ref_a, 1e-5f) << k;
+            }
+        }
+        if (cfg_lag == 0.0f) {
+            EXPECT_NEAR(a_ref * lag_s, err, 0.02f * a_ref * lag_s); // the ramp's settled lag
+            EXPECT_GT(out.iq_ref_a - ff, cfg.kp_a_s_rad * err);
+        }
+    }
 }
 
 } // namespace
