@@ -193,6 +193,11 @@ mc_params_t table_of(const MotorFiles& f, double r_scale, double l_scale, double
   // at its frame's start less its 3 us
   if (b.encoder == kEncoderAs5047p) p.encoder_latency_s = static_cast<float>(1.0 / b.pwm_hz);
   if (b.encoder == kEncoderMa732) p.encoder_latency_s = 3e-6f;
+  if (b.encoder == kEncoderHall) {
+    // the Hall kernel on the board's Hall inputs, referenced at power-up
+    p.encoder_type = MC_PARAMS_ENCODER_HALL;
+    p.angle_ref = MC_DRIVE_ANGLE_REF_STORED;
+  }
   if (b.encoder == kEncoderAbiIndex) {
     // the offset is relative to the index: an index search at the first enable
     p.angle_ref = MC_DRIVE_ANGLE_REF_INDEX;

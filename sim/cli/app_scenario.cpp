@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "board_hall.hpp"
 #include "hal_host/file_flash.hpp"
 #include "verdict.hpp"
 
@@ -97,6 +98,7 @@ AppSetup file_setup(const MotorFiles& plant, const mc_params_t& p,
   AppSetup s;
   s.board = build_board_cfg(plant);
   set_board_sensor(plant, s.board);
+  set_board_hall(plant, s);
   attach_load(s.board, load_nm);
   s.defaults = p;
   return s;
@@ -207,7 +209,9 @@ void AppRecorder::row(double t, double id, double iq, double w) {
 std::string AppWatch::operator()(const mc_app_probe_t& p) {
   if (p.faults != 0u) {
     std::string s = drive_fault_names(p.faults);
-    if (p.angle_error != 0u) {
+    if (p.hall_error != 0u) {
+      s += " (the Hall sensors: MC_HALL_ERR " + hall_err_names(p.hall_error) + ")";
+    } else if (p.angle_error != 0u) {
       s += " (the power-up angle find failed: MC_CTRL_ALIGN_ERR " + align_err_names(p.angle_error) +
            ")";
     } else if ((p.faults & MC_DRIVE_FAULT_CONTROL) != 0u) {

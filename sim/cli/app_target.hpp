@@ -31,6 +31,7 @@
 
 #include "hal_host/pil_link.hpp"
 #include "hal_host/pmsm_board.hpp"
+#include "mcsim/hall.hpp"
 extern "C" {
 #include "hal/can.h"
 #include "hal/flash.h"
@@ -58,6 +59,13 @@ struct AppSetup {
   // the parameters written over a stored set before the start (ids).
   bool flash_must_boot = false;
   std::vector<uint32_t> over_stored;
+  // Hall sensors (board_hall.hpp; the SIL only): the board's Hall inputs
+  // read the plant's model (hal_host::HallInput), powered up at
+  // board.theta_m0_rad, with hall_fault from power-up.
+  bool hall = false;
+  mcsim::HallParams hall_params{};
+  mcsim::HallFault hall_fault = mcsim::HallFault::kNone;
+  double hall_fault_at_s = 0.0;
 };
 
 // What one period did (both targets report the same).

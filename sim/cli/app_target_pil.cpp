@@ -37,6 +37,11 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
                        "' cannot be read (build the image: target mc_pil_m4f)");
     }
   }
+  if (s.hall) {
+    throw UsageError(
+        "PIL: the PIL image's HAL (hal/pil) has no Hall inputs on its link yet: "
+        "board.encoder=hall is for the SIL");
+  }
   if (s.flash != nullptr) {
     throw UsageError(
         "PIL: the image's configuration store is its own (an erased RAM store): --flash is "

@@ -21,6 +21,7 @@
 #include "app_target.hpp"
 #include "hal_host/app_rig.hpp"
 #include "hal_host/can_ops.hpp"
+#include "hal_host/hall_input.hpp"
 #include "scenario.hpp"
 extern "C" {
 #include "commission/mc_comm_can.h"
@@ -86,6 +87,11 @@ class AppTargetSil final : public AppTarget {
     c.flash_sectors[0] = 0u;
     c.flash_sectors[1] = 1u;
     app_target_binding(s, &c);  // the images' binding, as the PIL target's
+    if (s.hall) {               // the board's Hall inputs on the plant's model
+      hall_ = std::make_unique<hal_host::HallInput>(*board_, s.hall_params, s.board.theta_m0_rad);
+      hall_->set_fault(s.hall_fault, 0, s.hall_fault_at_s);
+      c.hall = hall_->hal();
+    }
     const uint32_t berr = mc_app_boot(app_.get(), &c);
     if ((berr & MC_APP_CFG_ERR_STORE) != 0u) {
       throw UsageError("the configuration store refused the flash's sectors (MC_APP_CFG bits " +
@@ -164,6 +170,7 @@ class AppTargetSil final : public AppTarget {
  private:
   mc_params_t params_;
   std::unique_ptr<hal_host::PmsmBoard> board_;
+  std::unique_ptr<hal_host::HallInput> hall_;
   std::unique_ptr<mc_app_t> app_;
   std::unique_ptr<mc_drive_t> drive_;
   std::unique_ptr<mc_comm_t> comm_ = std::make_unique<mc_comm_t>();  // large

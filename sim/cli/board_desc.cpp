@@ -262,12 +262,12 @@ BoardDescTable board_desc_table(const std::string& arg) {
   if (d.find("encoder", "type").n != nullptr) {
     const Desc::Hit h = d.need("encoder", "type");
     at_enc = h.file + ":" + std::to_string(line_of(*h.n));
-    if (enc_type != "abi" && enc_type != "as5047p" && enc_type != "ma732") {
+    if (enc_type != "abi" && enc_type != "as5047p" && enc_type != "ma732" && enc_type != "hall") {
       fail(h.file, line_of(*h.n),
            "[encoder] type: '" + enc_type +
-               "' is not available in the simulator yet (issue 32 item 6: the drive "
-               "and the simulated board do not read it); the simulator runs 'abi', "
-               "'as5047p', 'ma732' and 'abi_index' (--set board.encoder)");
+               "' is not available in the simulator yet (the drive and the simulated board "
+               "do not read it); the simulator runs 'abi', 'abi_index', 'as5047p', 'ma732' "
+               "and 'hall' (--set board.encoder)");
     }
   }
   const long cpr = d.integer("encoder", "counts_per_rev", 1, 65536, &at_cpr);

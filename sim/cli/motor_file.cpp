@@ -1,5 +1,7 @@
 #include "motor_file.hpp"
 
+#include "board_hall.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -271,20 +273,14 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
   b->encoder = type.empty() ? kEncoderAbi : type;
   const toml::node* n = r.maybe("encoder");
   const long line = n != nullptr ? line_of(*n) : 1;
-  if (b->encoder == "hall") {
-    fail(r.src("encoder"), line,
-         "encoder '" + b->encoder +
-             "' is not available in the simulator yet: the plant models it "
-             "(sim/include/mcsim), but the simulated board and the drive do not read it "
-             "(issue 32 item 6); the simulator runs 'abi', 'abi_index', 'as5047p', 'ma732'");
-  }
   const bool absolute = b->encoder == kEncoderAs5047p || b->encoder == kEncoderMa732;
-  if (b->encoder != kEncoderAbi && b->encoder != kEncoderAbiIndex && !absolute) {
+  if (b->encoder != kEncoderAbi && b->encoder != kEncoderAbiIndex && b->encoder != kEncoderHall &&
+      !absolute) {
     fail(r.src("encoder"), line,
          "encoder '" + b->encoder +
              "' is not a sensor type: 'abi' (A/B, no index), 'abi_index' (A/B with an index "
-             "mark at encoder_index_rad), 'as5047p', 'ma732' (absolute on SPI); 'hall' is not "
-             "available yet");
+             "mark at encoder_index_rad), 'as5047p', 'ma732' (absolute on SPI), 'hall' (three "
+             "Hall sensors)");
   }
   if (b->encoder == kEncoderAbiIndex && b->encoder_cpr == 0) {
     fail(r.src("encoder"), line, "encoder 'abi_index' needs an encoder: encoder_cpr is 0");
@@ -295,16 +291,31 @@ void read_encoder_type(TableReader& r, BoardSpec* b) {
     fail(r.src("encoder_index_rad"), line_of(*r.maybe("encoder_index_rad")),
          "encoder_index_rad: only an 'abi_index' encoder has an index mark");
   }
-  if (absolute) {
-    read_abs_encoder(r, b, line);
-    return;
-  }
   for (const char* k : {"encoder_err_rate", "encoder_mount_rad"}) {
-    if (const toml::node* x = r.maybe(k); x != nullptr) {
+    if (const toml::node* x = r.maybe(k); x != nullptr && !absolute) {
       fail(r.src(k), line_of(*x),
            std::string(k) + ": only an absolute encoder ('as5047p', 'ma732') has it");
     }
   }
+  // The Hall model's keys (board_hall.hpp checks them together).
+  for (const char* k : {"hall_offset_e_rad", "hall_hysteresis_e_rad", "hall_edge_error_e_rad",
+                        "hall_fault", "hall_fault_at_s"}) {
+    if (b->encoder != kEncoderHall && r.maybe(k) != nullptr) {
+      fail(r.src(k), line_of(*r.maybe(k)), std::string(k) + ": only a 'hall' encoder has it");
+    }
+  }
+  if (absolute) {
+    read_abs_encoder(r, b, line);
+    return;
+  }
+  b->hall_offset_e_rad = r.num_or("hall_offset_e_rad", 0.0, -6.283185307179586, 6.283185307179586,
+                                  false, "rad el. (sensor A's angle)");
+  b->hall_hysteresis_e_rad =
+      r.num_or("hall_hysteresis_e_rad", 0.0, 0.0, 0.5, false, "rad el. (the full band)");
+  b->hall_edge_error_e_rad = r.num_or("hall_edge_error_e_rad", 0.0, -0.4, 0.4, false,
+                                      "rad el. (rising edges +e, falling -e)");
+  if (r.maybe("hall_fault") != nullptr) b->hall_fault = r.text("hall_fault", false);
+  b->hall_fault_at_s = r.num_or("hall_fault_at_s", 0.0, 0.0, 1.0e4, false, "s");
 }
 
 BoardSpec read_board(const std::string& path, const toml::table& t, const SetSources& sets) {
@@ -361,9 +372,10 @@ SetSources apply_overrides(toml::table& t, const std::string& table, const Overr
     const std::string key = kv.first.substr(prefix.size());
     const std::string where = "--set " + kv.first + "=" + kv.second;
     toml::table one;
-    // A name (board.encoder=abi_index) may be given as a bare word.
+    // A name (board.encoder=abi_index, board.hall_fault=all_high) may be
+    // given as a bare word.
     const bool bare_name =
-        key == "encoder" && !kv.second.empty() &&
+        (key == "encoder" || key == "hall_fault") && !kv.second.empty() &&
         kv.second.find_first_not_of(
             "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_") == std::string::npos;
     try {
@@ -478,6 +490,7 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
     if (bt == nullptr) fail(board_path, 1, "no [board] table");
     f.board = read_board_table(board_path, *bt, overrides);
   }
+  check_hall(f);
   return f;
 }
 

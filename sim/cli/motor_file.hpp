@@ -108,6 +108,13 @@ struct BoardSpec {
   double encoder_index_rad = 0;  // abi_index: mechanical angle of the index mark
   double encoder_err_rate = 0;   // as5047p, ma732: MISO bit errors per frame
   double encoder_mount_rad = 0;  // as5047p, ma732: the magnet's angle on the shaft
+  // hall (board_hall.hpp): sensor A's electrical angle, the full hysteresis
+  // band, the edges' placement error (rising +e, falling -e) [rad el.]
+  double hall_offset_e_rad = 0;
+  double hall_hysteresis_e_rad = 0;
+  double hall_edge_error_e_rad = 0;
+  std::string hall_fault = "none";  // none, all_low, all_high
+  double hall_fault_at_s = 0;       // from this time of the run on
   int delay_periods = 1;
   double dc_link_c_f = 0;  // 0: stiff bus
   double source_r_ohm = 0.05;
@@ -132,6 +139,7 @@ inline constexpr const char* kEncoderAbi = "abi";
 inline constexpr const char* kEncoderAbiIndex = "abi_index";
 inline constexpr const char* kEncoderAs5047p = "as5047p";  // absolute, SPI, 14 bits
 inline constexpr const char* kEncoderMa732 = "ma732";      // absolute, SPI, 16 bits
+inline constexpr const char* kEncoderHall = "hall";
 
 /// The files given on the command line, parsed and validated.
 struct MotorFiles {

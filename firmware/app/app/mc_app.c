@@ -411,6 +411,9 @@ static bool board_refuses(const mc_app_cfg_t *cfg, const mc_hal_t *hal, const mc
     if ((p->brake_enable != 0u) && (hal->brake == NULL)) {
         return true; /* no brake chopper on this board */
     }
+    if ((p->encoder_type == MC_PARAMS_ENCODER_HALL) && (cfg->hall == NULL)) {
+        return true; /* no Hall inputs on this board */
+    }
     return (board_v > 0.0f) && !((p->vbus_board_max_v > 0.0f) && (p->vbus_board_max_v <= board_v));
 }
 
@@ -607,6 +610,23 @@ static void boot_service(mc_app_t *a)
     mc_boot_enter_step(&a->boot);
 }
 
+/* encoder_type 1: the Hall kernel on the board's inputs becomes the
+ * drive's encoder (mc_drive_hall.h), in a copy of the board's HAL; NULL
+ * when the table or the pole pairs are refused. */
+static const mc_hal_t *bind_hall(mc_app_t *a, const mc_hal_t *hal, const mc_params_t *p)
+{
+    mc_drive_hall_cfg_t hc;
+    hc.pole_pairs = p->pole_pairs;
+    if ((mc_params_hall_table(p, &hc.table) != MC_PARAMS_OK) ||
+        (mc_drive_hall_init(&a->hall, &hc, a->cfg.hall, hal->tick) != MC_DRIVE_HALL_ERR_NONE)) {
+        return NULL;
+    }
+    a->hal_hall = *hal;
+    a->hal_hall.encoder = mc_drive_hall_encoder(&a->hall);
+    a->hal = &a->hal_hall;
+    return &a->hal_hall;
+}
+
 uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
                       const mc_hal_can_t *can, bool init_drive)
 {
@@ -630,6 +650,12 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
         app->params = *app->cfg.defaults;
         app->boot_status = (uint8_t)MC_CFG_BOOT_INVALID;
         app->status_sent_cfg = app->boot_status;
+    }
+    if (p->encoder_type == MC_PARAMS_ENCODER_HALL) {
+        hal = bind_hall(app, hal, p);
+        if (hal == NULL) {
+            return MC_APP_CFG_ERR_PARAMS;
+        }
     }
     app->params_valid = init_drive && (mc_params_validate(p) == MC_PARAMS_OK);
     if (init_drive) {
@@ -906,6 +932,7 @@ uint32_t mc_app_slow_work(mc_app_t *app)
         app->faults = MC_APP_FAULT_NONE; /* CLEAR_FAULTS went through */
     }
     app->cmd.can_state = (uint8_t)mc_app_can_state(app);
+    app->srv.hall_error = app->hall.error;
     app->tm_sent = mc_telemetry_step(&app->tm, can, &app->tm_src);
     status_send(app);
     wdg_service(app);
@@ -955,6 +982,7 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
     p->angle_state = mc_drive_angle_state(d);
     p->angle_finding = app->angle_running ? 1u : 0u;
     p->angle_error = app->angle_error;
+    p->hall_error = app->hall.error;
     p->t_winding_est_c = d->thermal.t_w_c;
     p->i_limit_a = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
     if ((ctrl != NULL) && app->cfg.laws_from_params) {

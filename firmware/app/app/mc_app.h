@@ -122,6 +122,7 @@
 
 #include "hal/flash.h"
 #include "hal/hal.h"
+#include "hal/hall.h"
 #include "hal/wdg.h"
 #include "commission/mc_comm_can.h"
 #include "mc_boot_enter.h"
@@ -132,6 +133,7 @@
 #include "mc_ctrl_sensorless.h"
 #include "mc_ctrl_speed.h"
 #include "mc_drive.h"
+#include "mc_drive_hall.h"
 #include "mc_law_cfg.h"
 #include "mc_param_srv.h"
 #include "mc_params.h"
@@ -191,9 +193,14 @@ typedef struct {
 } mc_app_law_t;
 
 typedef struct {
-    const mc_hal_flash_t *flash;   /**< configuration store's flash, or NULL */
-    uint32_t flash_sectors[2];     /**< its A and B sectors */
-    const mc_hal_wdg_t *wdg;       /**< independent watchdog, or NULL */
+    const mc_hal_flash_t *flash; /**< configuration store's flash, or NULL */
+    uint32_t flash_sectors[2];   /**< its A and B sectors */
+    const mc_hal_wdg_t *wdg;     /**< independent watchdog, or NULL */
+    /** The board's Hall inputs, or NULL: with encoder_type 1 the drive's
+     *  encoder is the Hall kernel on them (mc_drive_hall.h; the board's own
+     *  hal.encoder is not used); encoder_type 1 without them is refused
+     *  (MC_PARAMS_ERR_BOARD). */
+    const mc_hal_hall_t *hall;
     uint32_t wdg_timeout_ms;       /**< normal timeout (> 2 slow periods) */
     uint32_t wdg_erase_timeout_ms; /**< timeout around a flash erase */
     const mc_params_t *defaults;   /**< the board's defaults */
@@ -252,6 +259,9 @@ typedef struct {
     const mc_hal_can_t *can;   /**< the CAN bus, or NULL */
     mc_comm_can_t *comm;       /**< commissioning over CAN, or NULL */
     mc_hal_flash_t flash_wrap; /**< the store's flash: stretches the watchdog */
+    mc_hal_t hal_hall;         /**< the board's HAL with the Hall as its encoder
+                                    (encoder_type 1: hal points here) */
+    mc_drive_hall_t hall;      /**< the Hall sensors as the drive's encoder */
     mc_param_hook_t cmd_hook;  /**< the command handler's APPLY hook, chained */
     mc_telemetry_src_t tm_src;
     mc_can_cmd_t cmd;
@@ -352,6 +362,9 @@ typedef struct {
     /* thermal derating (mc_drive_thermal.h): the winding estimate [C] (the
      * ambient while the model is off) and the current limit in force [A] */
     float t_winding_est_c, i_limit_a;
+    /* the Hall sensors (encoder_type 1): MC_HALL_ERR_* behind an ENCODER
+     * fault (the parameter hall_error) */
+    uint32_t hall_error;
 } mc_app_probe_t;
 
 /** Fill *p from the application and its drive (after a period). */

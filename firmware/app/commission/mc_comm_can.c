@@ -54,6 +54,8 @@ void mc_comm_can_cfg_for_board(const mc_params_t *p, float i_sense_max_a, float 
     k.base.bemf_frac = 0.5f;
     k.base.pole_pairs_max = 32u;
     k.base.three_shunts = three_shunts;
+    k.base.speed_tau_s =
+        (p->encoder_type == MC_PARAMS_ENCODER_HALL) ? MC_COMM_HALL_SPEED_TAU_S : 0.0f;
     k.node_id = (uint8_t)p->can_node_id;
     k.status_div = (p->pwm_hz / p->slow_loop_div) / 10u; /* 10 Hz */
     if (k.status_div == 0u) {

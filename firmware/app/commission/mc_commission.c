@@ -34,7 +34,13 @@
 #define T_COAST_SKIP_MAX 0.20f
 #define I_COAST_GATE     0.03f /* of i_test (about 7 sigma of the library's sensor noise) */
 #define V_SPIN_FRAC      0.8f  /* spin-up ends at this fraction of the voltage limit */
-#define W_E_BW_MAX       1.5f  /* ... or at this electrical speed per current-loop bandwidth */
+/* The voltage checks of the spin-up wait this long: the current loop moves
+ * the inductance step's current (along d) to the spin's (along q) first; on
+ * an angle up to 30 degrees el. off (Hall sensors at rest, mc_drive_hall.h)
+ * that step took 0.8 of the voltage (and half of it along q) in the first
+ * sample. */
+#define T_SPIN_SETTLE 0.005f
+#define W_E_BW_MAX    1.5f /* ... or at this electrical speed per current-loop bandwidth */
 
 /* Sub-phases of the encoder step. */
 enum {
@@ -87,7 +93,8 @@ uint32_t mc_comm_init(mc_comm_t *c, const mc_comm_cfg_t *cfg)
     if (!mc_isfinite_f32(cfg->dead_time_s) || cfg->dead_time_s < 0.0f ||
         cfg->dead_time_s >= 0.25f * cfg->dt_s || !(cfg->bemf_frac > 0.0f) ||
         !(cfg->bemf_frac < 1.0f) || cfg->cur_bw_rad_s * cfg->dt_s > 0.2f ||
-        cfg->pole_pairs_max < 1u || cfg->pole_pairs_max > 64u) {
+        cfg->pole_pairs_max < 1u || cfg->pole_pairs_max > 64u ||
+        !mc_isfinite_f32(cfg->speed_tau_s) || cfg->speed_tau_s < 0.0f || cfg->speed_tau_s > 0.1f) {
         return MC_COMM_CFG_ERR_VALUE;
     }
     *c = (mc_comm_t){0};
@@ -198,7 +205,9 @@ static void track_count(mc_comm_t *c, const mc_drive_meas_t *m)
             d += (int32_t)cpr;
         }
         const float w = (float)d * (MC_TWO_PI_F32 / (float)cpr) / c->cfg.dt_s;
-        c->w_m_rad_s += (w - c->w_m_rad_s) * (c->cfg.dt_s / TAU_SPEED_S);
+        const float tau = (c->cfg.speed_tau_s > 0.0f) ? c->cfg.speed_tau_s : TAU_SPEED_S;
+        const float k = c->cfg.dt_s / tau;
+        c->w_m_rad_s += (w - c->w_m_rad_s) * ((k < 1.0f) ? k : 1.0f);
     }
     if (c->have_count) {
         int32_t d = (int32_t)cnt - (int32_t)c->last_count;
@@ -742,8 +751,9 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
         if (v_lim > c->cfg.v_test_max_v) {
             v_lim = c->cfg.v_test_max_v;
         }
-        if (mc_abs_f32(emf) >= c->cfg.bemf_frac * c->cfg.v_test_max_v ||
-            vmag >= V_SPIN_FRAC * v_lim || (fo.svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u ||
+        if ((c->t_s >= T_SPIN_SETTLE &&
+             (mc_abs_f32(emf) >= c->cfg.bemf_frac * c->cfg.v_test_max_v ||
+              vmag >= V_SPIN_FRAC * v_lim || (fo.svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u)) ||
             w_e >= W_E_BW_MAX * c->cfg.cur_bw_rad_s || w_m >= c->cfg.speed_max_m_rad_s ||
             c->t_s >= T_SPIN_MAX) {
             if (w_m <= 0.0f) {

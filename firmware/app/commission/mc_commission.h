@@ -123,7 +123,18 @@ typedef struct {
     float bemf_frac;         /**< spin-up ends at this fraction of v_test_max, (0, 1) */
     uint32_t pole_pairs_max; /**< largest pole-pair count accepted, 1..64 */
     bool three_shunts;       /**< ic is measured (else -(ia + ib)) */
+    float speed_tau_s;       /**< time constant of the speed from the counts [s],
+                                   0 (the encoders': 2 ms) or (0, 0.1]; Hall sensors
+                                   (encoder_type 1): MC_COMM_HALL_SPEED_TAU_S */
 } mc_comm_cfg_t;
+
+/** The count speed's time constant with Hall sensors: their angle moves by
+ *  up to a sector (60 degrees el.) in one sample below the interpolation's
+ *  speed, which over 2 ms reads as a speed far above the rotor's (15 pole
+ *  pairs: 35 rad/s mech.) and ended the flux step's spin-up at once; over
+ *  20 ms a tenth of it, and the coast's speed (a decay of seconds) lags by
+ *  under 1 %. */
+#define MC_COMM_HALL_SPEED_TAU_S 0.02f
 
 /* Result bits (mc_comm_result_t.valid). */
 #define MC_COMM_HAVE_OFFSETS (1u << 0)

@@ -77,6 +77,8 @@ static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
         return s->law_error;
     case MC_PARAM_ID_ANGLE_ERROR:
         return s->angle_error;
+    case MC_PARAM_ID_HALL_ERROR:
+        return s->hall_error;
     default:
         return mc_param_get_raw(&s->staged, info);
     }

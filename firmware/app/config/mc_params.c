@@ -217,6 +217,7 @@ void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg)
     cfg->pole_pairs = p->pole_pairs;
     cfg->encoder_offset_rad = p->encoder_offset_rad;
     cfg->encoder_reversed = (p->encoder_reversed != 0u);
+    cfg->enc_steps_checked = (p->encoder_type == MC_PARAMS_ENCODER_HALL);
     cfg->angle_ref = p->angle_ref; /* MC_DRIVE_ANGLE_REF_* is the parameter's value */
     cfg->encoder_latency_s = p->encoder_latency_s;
     cfg->i_offset_a[0] = p->i_offset_a_a;
@@ -289,6 +290,27 @@ uint32_t mc_params_to_drive_cfg(const mc_params_t *p, mc_drive_cfg_t *cfg)
     return MC_PARAMS_OK;
 }
 
+uint32_t mc_params_hall_table(const mc_params_t *p, mc_hall_f32_cfg_t *t)
+{
+    if ((p == NULL) || (t == NULL)) {
+        return MC_PARAMS_ERR_NULL;
+    }
+    const float edges[MC_HALL_SECTORS] = {p->hall_edge0_e_rad, p->hall_edge1_e_rad,
+                                          p->hall_edge2_e_rad, p->hall_edge3_e_rad,
+                                          p->hall_edge4_e_rad, p->hall_edge5_e_rad};
+    uint8_t map[8];
+    uint32_t k;
+    for (k = 0u; k < MC_HALL_SECTORS; k++) {
+        t->code_of_sector[k] = (uint8_t)((p->hall_codes >> (3u * k)) & 7u);
+        t->edge_e_rad[k] = edges[k];
+    }
+    t->hysteresis_e_rad = p->hall_hysteresis_e_rad;
+    t->dt_s = (p->pwm_hz > 0u) ? 1.0f / (float)p->pwm_hz : 0.0f;
+    t->omega_min_e_rad_s = p->hall_omega_min_e_rad_s;
+    return (mc_hall_f32_validate(t, map, NULL) == MC_HALL_ERR_NONE) ? MC_PARAMS_OK
+                                                                    : MC_PARAMS_ERR_ENCODER;
+}
+
 uint32_t mc_params_validate(const mc_params_t *p)
 {
     uint32_t err = MC_PARAMS_OK;
@@ -310,6 +332,14 @@ uint32_t mc_params_validate(const mc_params_t *p)
     }
     if ((p->encoder_cpr != 0u) && (p->encoder_cpr < 4u)) {
         err |= MC_PARAMS_ERR_ENCODER;
+    }
+    if ((p->encoder_type == MC_PARAMS_ENCODER_HALL) &&
+        ((p->encoder_cpr != 6u * p->pole_pairs) || (p->angle_ref != MC_DRIVE_ANGLE_REF_STORED))) {
+        err |= MC_PARAMS_ERR_ENCODER; /* the Hall's resolution; referenced at power-up */
+    }
+    if (p->encoder_type == MC_PARAMS_ENCODER_HALL) {
+        mc_hall_f32_cfg_t t;
+        err |= mc_params_hall_table(p, &t);
     }
     /* the angle's reference is the encoder's: none to find without one */
     if ((p->encoder_cpr == 0u) &&

@@ -20,6 +20,7 @@
 #include "mc_drive.h"
 #include "mc_gains.h"
 #include "mc_params_gen.h"
+#include "hall/mc_hall.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -63,9 +64,12 @@ typedef enum {
                    motor values, or its init refused them (the
                    law_error parameter says why: mc_law_cfg.h) */
 #define MC_PARAMS_ERR_GAINS \
-    (1u << 8)                           /**< no safe gains for these motor and board values
+    (1u << 8) /**< no safe gains for these motor and board values
                    (mc_params_resolve returns the MC_GAINS_ERR_* reason) */
-#define MC_PARAMS_ERR_ENCODER (1u << 9) /**< encoder_cpr 1 to 3 (0: none, else >= 4) */
+#define MC_PARAMS_ERR_ENCODER \
+    (1u << 9) /**< encoder_cpr 1 to 3 (0: none, else >= 4); encoder_type 1
+                   (Hall) with encoder_cpr not 6 pole_pairs, angle_ref not
+                   0 (stored), or a Hall table mc_hall_f32_validate refuses */
 #define MC_PARAMS_ERR_BOARD \
     (1u << 10) /**< the board cannot run it: brake_enable on a board
                     without a brake chopper, vbus_board_max_v above the
@@ -135,6 +139,14 @@ uint32_t mc_params_validate(const mc_params_t *p);
  *  field weakening (fw_enable). Returns MC_PARAMS_OK, MC_PARAMS_ERR_NULL,
  *  _RANGE (pwm_hz 0) or _GAINS (no safe gains); not validated. */
 uint32_t mc_params_to_drive_cfg(const mc_params_t *p, mc_drive_cfg_t *cfg);
+
+/** encoder_type 1 (Hall sensors, mc_drive_hall.h). */
+#define MC_PARAMS_ENCODER_HALL 1u
+
+/** The Hall kernel's table from the hall_* parameters (dt_s = 1 / pwm_hz).
+ *  @return MC_PARAMS_OK, MC_PARAMS_ERR_NULL, or MC_PARAMS_ERR_ENCODER when
+ *  mc_hall_f32_validate refuses the table (*t written either way). */
+uint32_t mc_params_hall_table(const mc_params_t *p, mc_hall_f32_cfg_t *t);
 
 #ifdef __cplusplus
 }

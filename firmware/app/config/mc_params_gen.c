@@ -106,6 +106,16 @@ const mc_params_t mc_params_default = {
     .p_bus_regen_max_w = 0.0f,
     .winding_r_follow = 1u,
     .encoder_latency_s = 0.0f,
+    .encoder_type = 0u,
+    .hall_codes = 156877u,
+    .hall_edge0_e_rad = 0.0f,
+    .hall_edge1_e_rad = 1.0471976f,
+    .hall_edge2_e_rad = 2.0943952f,
+    .hall_edge3_e_rad = 3.1415927f,
+    .hall_edge4_e_rad = 4.1887903f,
+    .hall_edge5_e_rad = 5.2359877f,
+    .hall_hysteresis_e_rad = 0.0f,
+    .hall_omega_min_e_rad_s = 50.0f,
 };
 
 #define NO_FIELD MC_PARAM_NO_FIELD
@@ -213,6 +223,17 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {153u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, p_bus_regen_max_w), {.f = 0.0f}, {.f = 1000000.0f}, {.f = 0.0f}}, /* p_bus_regen_max_w */
     {154u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, winding_r_follow), {.u = 0u}, {.u = 1u}, {.u = 1u}}, /* winding_r_follow */
     {160u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, encoder_latency_s), {.f = 0.0f}, {.f = 0.001f}, {.f = 0.0f}}, /* encoder_latency_s */
+    {165u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, encoder_type), {.u = 0u}, {.u = 1u}, {.u = 0u}}, /* encoder_type */
+    {166u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_codes), {.u = 0u}, {.u = 262143u}, {.u = 156877u}}, /* hall_codes */
+    {167u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_edge0_e_rad), {.f = -6.2831855f}, {.f = 6.2831855f}, {.f = 0.0f}}, /* hall_edge0_e_rad */
+    {168u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_edge1_e_rad), {.f = -6.2831855f}, {.f = 6.2831855f}, {.f = 1.0471976f}}, /* hall_edge1_e_rad */
+    {169u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_edge2_e_rad), {.f = -6.2831855f}, {.f = 6.2831855f}, {.f = 2.0943952f}}, /* hall_edge2_e_rad */
+    {170u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_edge3_e_rad), {.f = -6.2831855f}, {.f = 6.2831855f}, {.f = 3.1415927f}}, /* hall_edge3_e_rad */
+    {171u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_edge4_e_rad), {.f = -6.2831855f}, {.f = 6.2831855f}, {.f = 4.1887903f}}, /* hall_edge4_e_rad */
+    {172u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_edge5_e_rad), {.f = -6.2831855f}, {.f = 6.2831855f}, {.f = 5.2359877f}}, /* hall_edge5_e_rad */
+    {173u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_hysteresis_e_rad), {.f = 0.0f}, {.f = 0.5f}, {.f = 0.0f}}, /* hall_hysteresis_e_rad */
+    {174u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_omega_min_e_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 50.0f}}, /* hall_omega_min_e_rad_s */
+    {179u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* hall_error */
     {200u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_layout_version */
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
     {202u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_store_seq */
@@ -324,6 +345,17 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "p_bus_regen_max_w",
     "winding_r_follow",
     "encoder_latency_s",
+    "encoder_type",
+    "hall_codes",
+    "hall_edge0_e_rad",
+    "hall_edge1_e_rad",
+    "hall_edge2_e_rad",
+    "hall_edge3_e_rad",
+    "hall_edge4_e_rad",
+    "hall_edge5_e_rad",
+    "hall_hysteresis_e_rad",
+    "hall_omega_min_e_rad_s",
+    "hall_error",
     "cfg_layout_version",
     "cfg_store_status",
     "cfg_store_seq",
@@ -435,6 +467,17 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "W",
     "",
     "s",
+    "",
+    "",
+    "rad",
+    "rad",
+    "rad",
+    "rad",
+    "rad",
+    "rad",
+    "rad",
+    "rad/s",
+    "",
     "",
     "",
     "",

@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 108u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 102u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 119u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 112u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -119,6 +119,17 @@
 #define MC_PARAM_ID_P_BUS_REGEN_MAX_W 153u
 #define MC_PARAM_ID_WINDING_R_FOLLOW 154u
 #define MC_PARAM_ID_ENCODER_LATENCY_S 160u
+#define MC_PARAM_ID_ENCODER_TYPE 165u
+#define MC_PARAM_ID_HALL_CODES 166u
+#define MC_PARAM_ID_HALL_EDGE0_E_RAD 167u
+#define MC_PARAM_ID_HALL_EDGE1_E_RAD 168u
+#define MC_PARAM_ID_HALL_EDGE2_E_RAD 169u
+#define MC_PARAM_ID_HALL_EDGE3_E_RAD 170u
+#define MC_PARAM_ID_HALL_EDGE4_E_RAD 171u
+#define MC_PARAM_ID_HALL_EDGE5_E_RAD 172u
+#define MC_PARAM_ID_HALL_HYSTERESIS_E_RAD 173u
+#define MC_PARAM_ID_HALL_OMEGA_MIN_E_RAD_S 174u
+#define MC_PARAM_ID_HALL_ERROR 179u
 #define MC_PARAM_ID_CFG_LAYOUT_VERSION 200u
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
 #define MC_PARAM_ID_CFG_STORE_SEQ 202u
@@ -229,12 +240,23 @@
 #define MC_PARAM_IDX_P_BUS_REGEN_MAX_W 99u
 #define MC_PARAM_IDX_WINDING_R_FOLLOW 100u
 #define MC_PARAM_IDX_ENCODER_LATENCY_S 101u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 102u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 103u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 104u
-#define MC_PARAM_IDX_CFG_PENDING 105u
-#define MC_PARAM_IDX_LAW_ERROR 106u
-#define MC_PARAM_IDX_ANGLE_ERROR 107u
+#define MC_PARAM_IDX_ENCODER_TYPE 102u
+#define MC_PARAM_IDX_HALL_CODES 103u
+#define MC_PARAM_IDX_HALL_EDGE0_E_RAD 104u
+#define MC_PARAM_IDX_HALL_EDGE1_E_RAD 105u
+#define MC_PARAM_IDX_HALL_EDGE2_E_RAD 106u
+#define MC_PARAM_IDX_HALL_EDGE3_E_RAD 107u
+#define MC_PARAM_IDX_HALL_EDGE4_E_RAD 108u
+#define MC_PARAM_IDX_HALL_EDGE5_E_RAD 109u
+#define MC_PARAM_IDX_HALL_HYSTERESIS_E_RAD 110u
+#define MC_PARAM_IDX_HALL_OMEGA_MIN_E_RAD_S 111u
+#define MC_PARAM_IDX_HALL_ERROR 112u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 113u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 114u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 115u
+#define MC_PARAM_IDX_CFG_PENDING 116u
+#define MC_PARAM_IDX_LAW_ERROR 117u
+#define MC_PARAM_IDX_ANGLE_ERROR 118u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -340,6 +362,16 @@ typedef struct {
     float p_bus_regen_max_w; /**< Regenerative DC-bus power limit (a magnitude); 0: off. [W] */
     uint32_t winding_r_follow; /**< 1: with winding_model on, the current loop's ki (R bw) and the sensorless law's flux observer use r_ohm times copper's R(T) / R(ambient_c) at the winding estimate (set every slow step); 0: r_ohm as measured (firmware/app/README.md, thermal). */
     float encoder_latency_s; /**< Position sensor's latency: a read returns the rotor's angle this long before the period's sample (A/B encoder 0; AS5047P one PWM period; MA732 3 us). The drive advances the electrical angle by omega_e times it; the tracking loop's bandwidth stays below 0.1 / latency. [s] */
+    uint32_t encoder_type; /**< The position sensor the drive reads: 0 the board's encoder (A/B or absolute, encoder_cpr counts), 1 three Hall sensors through the Hall kernel (encoder_cpr must be 6 pole_pairs, the Hall's edges per mechanical turn; a board without Hall inputs refuses it; firmware/kernels/hall/README.md). */
+    uint32_t hall_codes; /**< The Hall code (A bit 0, B bit 1, C bit 2) read in each of the six sectors in the positive direction, sector k in bits 3k..3k+2; default 120-degree placement from sector 0: 5, 1, 3, 2, 6, 4 (encoder_type 1). */
+    float hall_edge0_e_rad; /**< Electrical angle where Hall sector 0 begins (the d axis at 0), as commissioning measures it; sectors 10 to 110 degrees wide, in order round the turn; default the ideal 120-degree placement, 0 x 60 degrees (encoder_type 1). [rad] */
+    float hall_edge1_e_rad; /**< Electrical angle where Hall sector 1 begins (the d axis at 0), as commissioning measures it; sectors 10 to 110 degrees wide, in order round the turn; default the ideal 120-degree placement, 1 x 60 degrees (encoder_type 1). [rad] */
+    float hall_edge2_e_rad; /**< Electrical angle where Hall sector 2 begins (the d axis at 0), as commissioning measures it; sectors 10 to 110 degrees wide, in order round the turn; default the ideal 120-degree placement, 2 x 60 degrees (encoder_type 1). [rad] */
+    float hall_edge3_e_rad; /**< Electrical angle where Hall sector 3 begins (the d axis at 0), as commissioning measures it; sectors 10 to 110 degrees wide, in order round the turn; default the ideal 120-degree placement, 3 x 60 degrees (encoder_type 1). [rad] */
+    float hall_edge4_e_rad; /**< Electrical angle where Hall sector 4 begins (the d axis at 0), as commissioning measures it; sectors 10 to 110 degrees wide, in order round the turn; default the ideal 120-degree placement, 4 x 60 degrees (encoder_type 1). [rad] */
+    float hall_edge5_e_rad; /**< Electrical angle where Hall sector 5 begins (the d axis at 0), as commissioning measures it; sectors 10 to 110 degrees wide, in order round the turn; default the ideal 120-degree placement, 5 x 60 degrees (encoder_type 1). [rad] */
+    float hall_hysteresis_e_rad; /**< The Hall sensors' full hysteresis band [rad el.]: an edge is seen at edge + h/2 turning positive, edge - h/2 turning negative; below half the narrowest sector (encoder_type 1). [rad] */
+    float hall_omega_min_e_rad_s; /**< Electrical speed from which the Hall angle is interpolated between edges with the edge-interval speed [rad/s el.]; below it the angle is the last edge's (encoder_type 1). Default 50: 8 times commissioning's sweep (one electrical turn a second), whose offset and pole pairs are read on the edges themselves; a sector lasts 21 ms there. [rad/s] */
 } mc_params_t;
 
 /** Defaults ("load defaults", and a drive with an empty store). */

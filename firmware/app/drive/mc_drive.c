@@ -326,8 +326,13 @@ static void enc_constants(mc_drive_t *d, uint32_t cpr)
 {
     if (cpr != d->enc_cpr_cached) {
         d->enc_rad_per_count = MC_TWO_PI_F32 / (float)cpr;
+        /* a source that checks its own steps: a threshold no step reaches
+         * (at most half a turn), set here so the step costs nothing */
         d->enc_max_step_counts =
-            2.0f * d->cfg.omega_max_rad_s * d->cfg.foc.dt_s * (float)cpr / MC_TWO_PI_F32 + 2.0f;
+            d->cfg.enc_steps_checked
+                ? (float)cpr
+                : 2.0f * d->cfg.omega_max_rad_s * d->cfg.foc.dt_s * (float)cpr / MC_TWO_PI_F32 +
+                      2.0f;
         d->enc_interp = (float)d->cfg.pole_pairs * d->enc_rad_per_count > MC_DRIVE_ENC_INTERP_E_RAD;
         d->enc_cpr_cached = cpr;
     }

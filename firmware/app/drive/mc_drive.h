@@ -349,6 +349,10 @@ typedef struct {
     bool encoder_reversed;    /**< the encoder counts down when the rotor turns positive
                                      (commissioning's encoder_direction = -1): the drive
                                      uses cpr - count */
+    bool enc_steps_checked;   /**< the position source checks its own steps (Hall
+                                     sensors, mc_drive_hall.h: the kernel's SEQUENCE;
+                                     its angle moves up to a sector at an edge): no
+                                     encoder-jump check */
     float i_offset_a[3];      /**< current-sensor offsets subtracted from each phase
                                      reading (a, b, c) before any use [A] (commissioning
                                      measures them; 0 on a board whose HAL removes them) */

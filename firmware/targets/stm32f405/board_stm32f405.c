@@ -286,6 +286,12 @@ static void board_defaults(mc_params_t *p)
         p->encoder_latency_s = 1.0f / (float)PWM_HZ;
     } else if (MC_BOARD_DESC.enc_type == MC_BOARD_ENC_MA732) {
         p->encoder_latency_s = 3e-6f;
+    } else if (MC_BOARD_DESC.enc_type == MC_BOARD_ENC_HALL) {
+        /* the Hall kernel on the Hall inputs (mc_board_app_cfg binds them):
+         * 6 edges per electrical turn, referenced at power-up */
+        p->encoder_type = MC_PARAMS_ENCODER_HALL;
+        p->encoder_cpr = 6u * p->pole_pairs;
+        p->angle_ref = MC_DRIVE_ANGLE_REF_STORED;
     }
     p->vbus_min_v = MC_BOARD_DESC.vbus_min_v;
     /* the board's bus limit (its description's vbus_max_v, inside what its
@@ -342,6 +348,9 @@ const mc_app_cfg_t *mc_board_app_cfg(void)
      * position cascade, every gain from the parameters (derived from the
      * motor values unless set: firmware/app/config/mc_params.h) */
     b->app.laws_from_params = true;
+    if (MC_BOARD_DESC.enc_type == MC_BOARD_ENC_HALL) {
+        b->app.hall = &b->f405.hall.dev; /* the drive's encoder: mc_drive_hall */
+    }
     b->app.set_rx_filter = set_node_filter;
     b->app.filter_ctx = b;
     b->app.boot = &mc_image_boot_cfg;

@@ -13,6 +13,7 @@
 
 #include "app_params.hpp"
 #include "app_scenario.hpp"
+#include "board_hall.hpp"
 #include "plant_from_files.hpp"
 #include "scenario.hpp"
 extern "C" {
@@ -211,7 +212,9 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
   set_board_sensor(f, bc);
   configure_plant(f, s, bc);
   const bool by_index = p.angle_ref == MC_DRIVE_ANGLE_REF_INDEX;
-  out.true_encoder_offset_rad = by_index ? true_index_offset(f, s, bc) : true_offset(f, s, bc);
+  out.true_encoder_offset_rad = by_index                          ? true_index_offset(f, s, bc)
+                                : f.board.encoder == kEncoderHall ? hall_true_offset(f)
+                                                                  : true_offset(f, s, bc);
   if (bc.spi_encoder.type != hal_host::SpiEncoderType::kNone) {
     // absolute: the chip reads dir theta_m + mount (rounded: no mean lag)
     out.true_encoder_offset_rad =

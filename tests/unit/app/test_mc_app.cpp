@@ -793,6 +793,58 @@ TEST_F(McApp, BrakeParametersRefusedByABoardWithoutAChopper)
     EXPECT_EQ(MC_APP_CFG_ERR_PARAMS, mc_app_start(&app, &drive, &fake.board, fake.board.can, true));
 }
 
+// Hall sensors (encoder_type 1): a board without Hall inputs cannot run
+// them (defaults with them: MC_APP_CFG_ERR_PARAMS); with them the drive's
+// encoder is the Hall kernel on the inputs (mc_drive_hall.h), not the
+// board's own: the fast step reads the sector's middle, and a code 000
+// (the sensors' supply lost) is the drive's ENCODER fault in that step
+// with hall_error (the parameter and the probe) ILLEGAL.
+TEST_F(McApp, HallSensorsAreTheDrivesEncoderOnlyWithHallInputs)
+{
+    defaults.encoder_type = MC_PARAMS_ENCODER_HALL;
+    defaults.encoder_cpr = 6u * defaults.pole_pairs;
+    ASSERT_EQ(MC_PARAMS_OK, mc_params_validate(&defaults));
+    ASSERT_EQ(MC_APP_CFG_OK, mc_app_boot(&app, &cfg));
+    EXPECT_EQ(MC_APP_CFG_ERR_PARAMS, mc_app_start(&app, &drive, &fake.board, fake.board.can, true));
+    struct In {
+        uint32_t code;
+        mc_hal_hall_ops_t ops;
+        mc_hal_hall_t dev;
+    } in{};
+    in.code = 3u; // sector 2 of the default table: 120 .. 180 degrees
+    in.ops.read = [](void *ctx, uint32_t *p) {
+        *p = static_cast<In *>(ctx)->code;
+        return 0;
+    };
+    in.dev.ops = &in.ops;
+    in.dev.ctx = &in;
+    cfg.hall = &in.dev;
+    app = mc_app_t{};
+    drive = mc_drive_t{};
+    ASSERT_EQ(MC_APP_CFG_OK, mc_app_boot(&app, &cfg));
+    ASSERT_EQ(MC_APP_CFG_OK, mc_app_start(&app, &drive, &fake.board, fake.board.can, true));
+    EXPECT_EQ(drive.hal->encoder, mc_drive_hall_encoder(&app.hall));
+    EXPECT_TRUE(drive.cfg.enc_steps_checked);
+    Period();
+    EXPECT_EQ(0u, drive.faults);
+    EXPECT_EQ(MC_DRIVE_MODE_IDLE, drive.mode);
+    // 150 degrees el. within a count (4096 a turn); the electrical angle
+    // from the count with encoder_offset_rad 0 is the Hall angle
+    EXPECT_NEAR(static_cast<double>(drive.tm.theta_e_rad), 150.0 * 3.14159265358979 / 180.0,
+                2.0 * 3.14159265358979 / 4096.0);
+    in.code = 0u;
+    Period();
+    EXPECT_EQ(MC_DRIVE_FAULT_ENCODER, drive.faults & MC_DRIVE_FAULT_ENCODER);
+    SlowSteps(1);
+    mc_app_probe_t pr{};
+    mc_app_probe(&app, &pr);
+    EXPECT_EQ(MC_HALL_ERR_ILLEGAL, pr.hall_error);
+    uint32_t v = 0u;
+    ASSERT_EQ(MC_PARAM_OK,
+              mc_param_srv_request(&app.srv, MC_PARAM_OP_READ, MC_PARAM_ID_HALL_ERROR, &v));
+    EXPECT_EQ(MC_HALL_ERR_ILLEGAL, v);
+}
+
 // The board's bus limit is its own (the defaults' vbus_board_max_v): a set
 // trip above it, or the limit raised or taken away, is refused by name
 // (APPLY INVALID, MC_PARAMS_ERR_BOARD) and nothing changes; lowering it

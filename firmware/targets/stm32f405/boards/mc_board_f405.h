@@ -33,8 +33,10 @@
  *            drive's step, and mc_spisched_defer(&sched) before the fast loop
  *            starts;
  *   hall     the Hall GPIO table over the encoder's pins; the inputs as
- *            mc_f405_hall (hall.dev); hal.encoder NULL: the drive has no
- *            encoder until the Hall kernel is bound to it (firmware/kernels/hall).
+ *            mc_f405_hall (hall.dev); hal.encoder NULL here: the image binds
+ *            hall.dev as mc_app_cfg_t.hall, and the application makes the
+ *            Hall kernel on it the drive's encoder (encoder_type 1, the
+ *            board's default: firmware/app/drive/mc_drive_hall.h).
  *
  * Brake chopper (desc has_brake): TIM2 on the description's channels,
  * period and dead time (mc_f405_brake.h), set up with both switches off
