@@ -25,6 +25,7 @@
 #include <utility>
 #include <vector>
 
+#include "powerup_run.hpp"
 #include "run.hpp"
 #include "scenario.hpp"
 extern "C" {
@@ -35,61 +36,32 @@ extern "C" {
 namespace mcsim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 const std::string kMotor = std::string(MCSIM_MOTORS_DIR) + "/odrive-d5065.toml";
 const std::string kBoard = std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-24v.toml";
 constexpr int kPolePairs = 7;  // the D5065's
 // The index mark away from where the table's default offset (0) would be
 // right: relative to it the d axis sits at 7 x 2.0 rad el. (1.43 rad).
 const char* const kIndexRad = "2.0";
-constexpr int kPowerUps = 8;
 
-using Sets = std::vector<std::pair<std::string, std::string>>;
-
-struct RunResult {
-  RunOutcome out;
-  std::map<std::string, double> num;
-  std::map<std::string, std::string> txt;
-};
+using powerup::kPi;
+using powerup::kPowerUps;
+using powerup::RunResult;
+using powerup::Sets;
 
 // A run as `mcsim run SCENARIO --motor .. --board .. --set .. [--flash F]`.
 RunResult run(const std::string& scen, const Sets& sets, const std::string& flash = "",
               const std::string& motor = kMotor, const std::string& board = kBoard) {
-  RunResult r;
-  try {
-    const PreparedRun p = prepare_run(scen, motor, board, sets, flash);
-    ColumnSink sink;
-    Summary sum;
-    Progress prog(false);
-    r.out = execute_run(p, sink, sum, prog);
-    r.num = sum.numbers();
-    r.txt = sum.texts();
-  } catch (const UsageError& e) {  // prepare_run's refusals: mcsim's exit 2
-    r.out.kind = RunOutcome::Kind::kRefused;
-    r.out.message = e.what();
-  }
-  return r;
+  return powerup::run(scen, motor, board, sets, flash);
 }
-
 std::string tmp(const std::string& name) {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string dir = ::testing::TempDir() + "/powerup_" + info->name();
-  std::filesystem::create_directories(dir);
-  return dir + "/" + name;
+  return powerup::tmp("powerup_", name);
 }
 
-std::string bytes(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using powerup::bytes;
 
-// 8 mechanical angles at power-up, fixed seed, anywhere in the turn.
+// 8 mechanical angles at power-up, seed 32, anywhere in the turn.
 std::vector<double> power_up_angles() {
-  std::mt19937 gen(32u);
-  std::uniform_real_distribution<double> u(-kPi, kPi);
-  std::vector<double> v;
-  for (int k = 0; k < kPowerUps; ++k) v.push_back(u(gen));
-  return v;
+  return powerup::power_up_angles(32u);
 }
 
 // Commission on the flash file; the verdict is the scenario's (R 2 %, L 5 %,

@@ -27,80 +27,35 @@
 
 #include "app_scenario.hpp"
 #include "motor_file.hpp"
+#include "powerup_run.hpp"
 #include "run.hpp"
 #include "scenario.hpp"
 
 namespace mcsim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 const std::string kMotor = std::string(MCSIM_MOTORS_DIR) + "/odrive-d5065.toml";
 const std::string kBoard = std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-24v.toml";
 const char* const kMountRad = "2.0";
-constexpr int kPowerUps = 8;
 
-using Sets = std::vector<std::pair<std::string, std::string>>;
-
-struct RunResult {
-  RunOutcome out;
-  std::map<std::string, double> num;
-  std::map<std::string, std::string> txt;
-  std::vector<std::string> cols;
-  std::vector<double> data;  // row-major, cols.size() per row
-  // the mean of column c over the rows with t at or after t0
-  double mean_after(const std::string& c, double t0) const {
-    size_t j = 0;
-    while (j < cols.size() && cols[j] != c) ++j;
-    double sum = 0;
-    long n = 0;
-    for (size_t k = 0; j < cols.size() && k + cols.size() <= data.size(); k += cols.size()) {
-      if (data[k] < t0) continue;
-      sum += data[k + j];
-      ++n;
-    }
-    return n > 0 ? sum / static_cast<double>(n) : std::nan("");
-  }
-};
+using powerup::kPi;
+using powerup::kPowerUps;
+using powerup::RunResult;
+using powerup::Sets;
 
 // A run as `mcsim run SCENARIO --motor .. --board .. --set .. [--flash F]`.
 RunResult run(const std::string& scen, const Sets& sets, const std::string& flash = "") {
-  RunResult r;
-  try {
-    const PreparedRun p = prepare_run(scen, kMotor, kBoard, sets, flash);
-    ColumnSink sink;
-    Summary sum;
-    Progress prog(false);
-    r.out = execute_run(p, sink, sum, prog);
-    r.num = sum.numbers();
-    r.txt = sum.texts();
-    r.cols = sink.names();
-    r.data = sink.data();
-  } catch (const UsageError& e) {
-    r.out.kind = RunOutcome::Kind::kRefused;
-    r.out.message = e.what();
-  }
-  return r;
+  return powerup::run(scen, kMotor, kBoard, sets, flash);
 }
-
 std::string tmp(const std::string& name) {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string dir = ::testing::TempDir() + "/powerup_spienc_" + info->name();
-  std::filesystem::create_directories(dir);
-  return dir + "/" + name;
+  return powerup::tmp("powerup_spienc_", name);
 }
 
-std::string bytes(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using powerup::bytes;
 
 // 8 mechanical angles at power-up, seed 3205, anywhere in the turn.
 std::vector<double> power_up_angles() {
-  std::mt19937 gen(3205u);
-  std::uniform_real_distribution<double> u(-kPi, kPi);
-  std::vector<double> v;
-  for (int k = 0; k < kPowerUps; ++k) v.push_back(u(gen));
-  return v;
+  return powerup::power_up_angles(3205u);
 }
 
 Sets sensor(const char* type) {
