@@ -183,12 +183,9 @@ TEST(LawCfg, RefusalsAreNamed)
     EXPECT_EQ(mc_gains_derive(nullptr, nullptr, &g), MC_GAINS_ERR_VALUE);
 }
 
-// The derived speed limit stops below omega_e T = 0.6 rad (the current loop's
-// design bound with its delay compensation) where that comes before the bus
-// voltage: a 21-pole-pair U8-class outrunner (sim/motors/u8-class-kv100.toml)
-// at 8 kHz and 48 V. Where the voltage binds (24 kHz) the limit is 0.9 of the
-// voltage-limited speed bit for bit, as before the delay bound existed.
-TEST(GainsDerive, SpeedLimitStopsBelowTheCurrentLoopsAnglePerPeriod)
+// The 21-pole-pair U8-class outrunner (sim/motors/u8-class-kv100.toml) on
+// a 48 V board at 8 kHz.
+mc_gains_motor_t U8At8kHz()
 {
     mc_gains_motor_t m{};
     m.r_ohm = 0.13;
@@ -207,6 +204,17 @@ TEST(GainsDerive, SpeedLimitStopsBelowTheCurrentLoopsAnglePerPeriod)
     m.dead_time_s = 1.0e-7;
     m.i_sense_max_a = 60.0;
     m.delay_periods = 1.0;
+    return m;
+}
+
+// The derived speed limit stops below omega_e T = 0.6 rad (the current loop's
+// design bound with its delay compensation) where that comes before the bus
+// voltage: a 21-pole-pair U8-class outrunner (sim/motors/u8-class-kv100.toml)
+// at 8 kHz and 48 V. Where the voltage binds (24 kHz) the limit is 0.9 of the
+// voltage-limited speed bit for bit, as before the delay bound existed.
+TEST(GainsDerive, SpeedLimitStopsBelowTheCurrentLoopsAnglePerPeriod)
+{
+    mc_gains_motor_t m = U8At8kHz();
     mc_gains_t g{};
     ASSERT_EQ(mc_gains_derive(&m, nullptr, &g), 0u);
     // 0.9 x 0.6 rad / (21 x 125 us) = 205.714 rad/s; 1e-12 relative: the
@@ -232,23 +240,7 @@ TEST(GainsDerive, SpeedLimitStopsBelowTheCurrentLoopsAnglePerPeriod)
 // The U8-class outrunner at 8 kHz: 0.1 / T = 800 rad/s binds without a latency.
 TEST(GainsDerive, EncoderLoopFollowsTheSensorsResolutionAndLatency)
 {
-    mc_gains_motor_t m{};
-    m.r_ohm = 0.13;
-    m.ld_h = 80.0e-6;
-    m.lq_h = 80.0e-6;
-    m.flux_wb = 2.63e-3;
-    m.pole_pairs = 21.0;
-    m.j_kgm2 = 2.0e-4;
-    m.b_nm_s_rad = 1.0e-5;
-    m.i_max_a = 30.0;
-    m.i_rated_a = 15.0;
-    m.speed_max_rad_s = 560.0;
-    m.speed_rated_rad_s = 450.0;
-    m.vbus_v = 48.0;
-    m.pwm_hz = 8000.0;
-    m.dead_time_s = 1.0e-7;
-    m.i_sense_max_a = 60.0;
-    m.delay_periods = 1.0;
+    mc_gains_motor_t m = U8At8kHz();
     m.encoder_cpr = 16384.0;
     mc_gains_t g{};
     ASSERT_EQ(mc_gains_derive(&m, nullptr, &g), 0u);
