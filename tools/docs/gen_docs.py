@@ -747,6 +747,23 @@ def _q31_sensorless(ctx, t):
                            ["run", "quantity", "measured", "test bound"], sig=3)
 
 
+@figure("dead-time", [gtest("test_dead_time_sil")])
+def _dead_time(ctx, t):
+    """The drive's dead-time compensation at 5 % of rated speed, with
+    (dead_time_comp 1) and without (0): tests/sil/foc/test_dead_time_sil.cpp's
+    records."""
+    r = {k: v for k, v, _u, _b in
+         _recorded(t, "DeadTimeCompSil.LowSpeedCurrentDistortionFallsWithTheCompensation")}
+    rows = [
+        ["phase current THD (harmonics 2-25) [%]", g(100 * r["off.thd"], 3),
+         g(100 * r["on.thd"], 3)],
+        ["i_q ripple, RMS / mean [%]", g(100 * r["off.iq_ripple"], 3),
+         g(100 * r["on.iq_ripple"], 3)],
+    ]
+    return table(["D5065, VESC 6 (360 ns, 30 kHz, 48 V), 25 rad/s, i_q 3 A",
+                  "dead_time_comp 0", "dead_time_comp 1"], rows)
+
+
 @figure("r-follow", [gtest("test_r_follow_sil")])
 def _r_follow(ctx, t):
     """The drive's R following its winding estimate on a 120 C winding,
