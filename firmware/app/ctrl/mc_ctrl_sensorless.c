@@ -259,6 +259,25 @@ static void dead_time_error(const mc_ctrl_sls_t *c, float ia_a, float ib_a, floa
 /* The hold waits for a trusted circle fit up to this many align times. */
 #define ALIGN_WAIT 4.0f
 
+/* At the end of ALIGN, with the rotor's angle from the circle fit: the I-f
+ * current (the frame's q axis) is meant to lead the rotor's d axis by 0 to
+ * a quarter turn in the run's direction (I-f's stable region: forward
+ * torque that grows as the rotor falls behind). A load the holds could not
+ * turn (or a rotor too heavy to reach the second hold within the align
+ * time) leaves it further back: the second hold's current up to 160 deg
+ * ahead on the U8-class motor under 30 % load, where the torque is a third
+ * of its most and falls as the frame accelerates away (issue 31: no lock).
+ * Then the frame restarts with the current a quarter turn ahead of the
+ * fitted rotor (the most torque); a rotor within the region keeps the
+ * frame the hold gave it. dir: the run's direction (+-1). */
+static void if_frame_to_rotor(mc_ctrl_sls_t *c, float theta_rotor, float dir)
+{
+    const float lead = dir * mc_wrap_pi_f32(c->theta_if_e_rad + MC_HALF_PI_F32 - theta_rotor);
+    if ((dir != 0.0f) && !(mc_abs_f32(lead) <= MC_HALF_PI_F32)) {
+        c->theta_if_e_rad = mc_wrap_pi_f32(theta_rotor + (dir * MC_HALF_PI_F32) - MC_HALF_PI_F32);
+    }
+}
+
 /* ALIGN: integrate the flux without correction (the observer's formula)
  * and add the point to the circle fit's sums. */
 static void align_track(mc_ctrl_sls_t *c, float i_al, float i_be)
@@ -558,6 +577,7 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         if ((cmd != 0.0f) && (fitted || (c->t_phase_s >= (ALIGN_WAIT * cfg->align_time_s)))) {
             if (fitted) {
                 theta_rotor = theta_fit;
+                if_frame_to_rotor(c, theta_rotor, sign_f32(cmd));
             }
             (void)mc_fluxobs_f32_reset(&c->obs, theta_rotor, i_al, i_be);
             (void)mc_spdpll_f32_reset(&c->pll, theta_rotor, 0.0f);

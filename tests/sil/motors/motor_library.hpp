@@ -32,11 +32,7 @@ inline const std::vector<Case>& library() {
       {"paper002-test-motor", "paper002-200v"}, {"paper002-40kw", ""},
       {"odrive-d5065", "odrive-v36-24v"},       {"gimbal-gm4108", "gimbal-24v"},
       {"low-l-8uh", "low-l-48khz-24v"},         {"turnigy-sk3-6374-149kv", "vesc6-48v"},
-      {"hub-6p5in-15pp", "odrive-v36-56v"},
-      // Not yet: u8-class-kv100 (on either ODrive v3.6) passes every case but
-      // the sensorless start under 30 % load, which does not lock (issue 31:
-      // the I-f frame leaves a rotor that the load turned backwards during
-      // the 5 ms alignment).
+      {"hub-6p5in-15pp", "odrive-v36-56v"},     {"u8-class-kv100", "odrive-v36-56v"},
   };
   return cases;
 }

@@ -149,7 +149,7 @@ TEST_P(MotorSil, SensorlessStartUnderLoadLocksAndTracks) {
 // kt I(t) sin(pi/4), is below tau_L: t_c = (align_time / 2) tau_L /
 // (kt if_current sin(pi/4)). The backward speed is at most the load's over
 // t_enable + t_c (the drive's torque only slows it; friction ignored, which
-// only slows it too); measured 0.60 to 0.75 of it over the library. Before,
+// only slows it too); measured 0.60 to 0.80 of it over the library. Before,
 // the first hold's current lay along the rotor's d axis (no torque until
 // the rotor had turned) and the second pulled the rotor a quarter turn
 // against a negative run: 1.26 to 1.63 times this bound (D5065 8.1 rad/s
