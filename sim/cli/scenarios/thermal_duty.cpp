@@ -66,8 +66,8 @@ struct Duty {
 
 Duty default_duty(const MotorFiles& f) {
   const double i_lim = files_params_eff(f).g.i_limit_a;
-  const double k = std::min(kOverload, 0.95 * i_lim / f.motor.i_rated_a);
-  if (k >= kOverload) return {kOverload, kOnS, kDurationS};
+  if (kOverload * f.motor.i_rated_a <= i_lim) return {kOverload, kOnS, kDurationS};
+  const double k = 0.95 * i_lim / f.motor.i_rated_a;
   // the smaller current's quicker winding rise is made up by the housing's:
   // the run lasts longer in the same ratio (up to an hour)
   const double r = (kOverload / k) * (kOverload / k);
@@ -86,7 +86,7 @@ std::vector<ParamSpec> thermal_params(const MotorFiles& f) {
        {{"off", 0.0}, {"on", 1.0}}},
       {"overload", d.overload, "1",
        "current of the on-phase in units of the motor's i_rated_a (default 1.75, or 95 % of "
-       "the drive's current limit where that is less)",
+       "the drive's current limit where 1.75 x rated is above it)",
        0.1, 3.0},
       {"on_s", d.on_s, "s",
        "on-phase of the cycle (default 60 s, longer with a smaller overload: the same mean "
