@@ -48,6 +48,7 @@ void mc_drive_bus_init(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc)
     const mc_drive_bus_t z = {0};
     *s = z;
     s->corr_alpha = foc->dt_s / (tau + foc->dt_s);
+    s->corr_fast_alpha = foc->dt_s / ((MC_DRIVE_BUS_CORR_FAST_LOOPS * t_loop) + foc->dt_s);
 }
 
 /* The two roots of a x^2 + b x + c = 0 (a > 0, disc = b^2 - 4ac >= 0),
@@ -152,6 +153,7 @@ static void correct(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc, const mc_dri
 {
     if (!fresh) {
         s->corr_w = 0.0f; /* the loop did not run last step: nothing to compare */
+        s->corr_r_w = 0.0f;
         return;
     }
     {
@@ -161,9 +163,13 @@ static void correct(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc, const mc_dri
             const float psi = foc->flux_wb + ((foc->ld_h - foc->lq_h) * in->id_a);
             model += 1.5f * in->omega_e_rad_s * psi * in->iq_a;
         }
-        s->corr_w += s->corr_alpha * (s->p_bus_est_w - model - s->corr_w);
-        if (!mc_isfinite_f32(s->corr_w)) {
+        const float em = s->p_bus_est_w - model - s->corr_w;
+        const float er = s->p_bus_est_w - model - s->corr_r_w;
+        s->corr_w += ((em > 0.0f) ? s->corr_fast_alpha : s->corr_alpha) * em;
+        s->corr_r_w += ((er < 0.0f) ? s->corr_fast_alpha : s->corr_alpha) * er;
+        if (!mc_isfinite_f32(s->corr_w) || !mc_isfinite_f32(s->corr_r_w)) {
             s->corr_w = 0.0f;
+            s->corr_r_w = 0.0f;
         }
     }
 }
@@ -227,7 +233,7 @@ void mc_drive_bus_limit(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg,
             }
         }
         if (p_r < BUS_NONE) {
-            iq = mc_drive_bus_regen_clamp(a, b, c0, p_r, iq);
+            iq = mc_drive_bus_regen_clamp(a, b, c0 - s->corr_w + s->corr_r_w, p_r, iq);
         }
         s->limiting = (iq != *p_iq_a);
         *p_iq_a = iq;

@@ -31,7 +31,13 @@
  * the model's at the measured currents, low-passed over
  * MC_DRIVE_BUS_CORR_TAU_LOOPS current-loop time constants (it takes up
  * what the model misses in steady state: a wrong R, a load the model does
- * not know). The q reference is moved to the nearest value with
+ * not know). Each limit has its own c, which follows the estimate within
+ * MC_DRIVE_BUS_CORR_FAST_LOOPS where the model says less than it about
+ * that limit (the motoring limit's c when the estimate draws more, the
+ * regenerative one's when it returns more) and slowly the other way: the
+ * model lags a fast deceleration (the hub motor's stop pushed 1.355 A back
+ * against a 1.227 A limit with one slow c, the gimbal drew 0.158 A against
+ * 0.114 A; 1.216 A and 0.130 A with the two). The q reference is moved to the nearest value with
  * p(iq) in [-P_r, P_m] (a quadratic in iq, solved exactly); a reference
  * already inside is unchanged. When even iq = 0 draws more than P_m (the d
  * current's copper loss alone), iq becomes 0. In a frame that is not the
@@ -58,6 +64,12 @@ extern "C" {
  *  constants Lq / kp_q (long against the loop's own transients, whose
  *  1/2 L di/dt power the steady-state model does not carry). */
 #define MC_DRIVE_BUS_CORR_TAU_LOOPS 20.0f
+/** The correction's time constant, in the same loops, on the side where
+ *  the model says less than the estimate about the limit it guards: more
+ *  drawn power for the motoring limit, more returned for the regenerative
+ *  one (the model lags a fast deceleration, misses the current's own
+ *  transients). */
+#define MC_DRIVE_BUS_CORR_FAST_LOOPS 2.0f
 
 /** The limits; each 0 = off, else > 0 and finite. */
 typedef struct {
@@ -69,14 +81,16 @@ typedef struct {
 
 /** State and what the last step saw. */
 typedef struct {
-    float corr_w;        /**< the estimate's correction c [W] */
-    float corr_alpha;    /**< its filter's factor per step */
-    float p_bus_est_w;   /**< estimated bus power of the last step [W] */
-    float vbus_v;        /**< the bus of that step [V] */
-    float i_mot_lim_a;   /**< motoring limit in force, P_m / vbus [A] (0: off) */
-    float i_regen_lim_a; /**< regenerative limit in force, P_r / vbus [A] (0: off) */
-    bool limiting;       /**< the last step moved a reference */
-    uint32_t last_count; /**< fast count of the last step (a gap restarts c) */
+    float corr_w;          /**< the estimate's correction c for the motoring limit [W] */
+    float corr_r_w;        /**< the same for the regenerative limit [W] */
+    float corr_alpha;      /**< their filter's factor per step, slow side */
+    float corr_fast_alpha; /**< the fast side's (MC_DRIVE_BUS_CORR_FAST_LOOPS) */
+    float p_bus_est_w;     /**< estimated bus power of the last step [W] */
+    float vbus_v;          /**< the bus of that step [V] */
+    float i_mot_lim_a;     /**< motoring limit in force, P_m / vbus [A] (0: off) */
+    float i_regen_lim_a;   /**< regenerative limit in force, P_r / vbus [A] (0: off) */
+    bool limiting;         /**< the last step moved a reference */
+    uint32_t last_count;   /**< fast count of the last step (a gap restarts c) */
     bool have_last;
 } mc_drive_bus_t;
 

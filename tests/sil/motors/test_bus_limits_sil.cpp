@@ -1,6 +1,6 @@
 // Issue 33 items 4 and 5 (bus-limits): the drive's DC-bus current limits
-// (firmware/app/drive/mc_drive_bus.h) on the ODrive v3.6 and VESC 6 boards
-// with their motors, through the scenario bus-limits (sim/cli/scenarios):
+// (firmware/app/drive/mc_drive_bus.h) on the ODrive v3.6 (24 V and 56 V)
+// and VESC 6 boards with their library motors, through the scenario bus-limits (sim/cli/scenarios):
 // an acceleration and a regenerative stop on a supply with internal
 // resistance.
 #include <gtest/gtest.h>
@@ -24,8 +24,10 @@ class BusLimits : public ::testing::TestWithParam<Case> {};
 // 2 % of them (the issue's bound: the steady-state model leaves the
 // current loop's lag behind a falling reference, about 1.3 % measured)
 // while the rotor still reaches 95 % of its speed and stops; the same run
-// without them draws and returns more than 1.5 times each (measured 2.2 to
-// 3.0 times): the limits are what holds the current.
+// without them draws and returns more than 1.25 times each (measured 1.36
+// on the hub motor's braking, whose 0.5 ohm winding burns much of the
+// energy, 2.2 to 3.0 times elsewhere): the limits are what holds the
+// current.
 TEST_P(BusLimits, SupplyCurrentWithinItsLimitsAndNotWithout) {
   const MotorFiles f = files(GetParam());
   const auto on = testlib::run_scenario("bus-limits", f, {{"limits", "on"}}, "on");
@@ -39,13 +41,15 @@ TEST_P(BusLimits, SupplyCurrentWithinItsLimitsAndNotWithout) {
   EXPECT_LE(std::abs(on.at("omega_end_rad_s")), 0.02 * on.at("omega_start_rad_s"));
   const auto off = testlib::run_scenario("bus-limits", f, {{"limits", "off"}}, "off");
   EXPECT_EQ(off.at("faults"), 0.0);
-  EXPECT_GT(off.at("i_bus_excess_frac"), 0.5);
-  EXPECT_GT(off.at("i_bus_regen_excess_frac"), 0.5);
+  EXPECT_GT(off.at("i_bus_excess_frac"), 0.25);
+  EXPECT_GT(off.at("i_bus_regen_excess_frac"), 0.25);
 }
 
 INSTANTIATE_TEST_SUITE_P(Boards, BusLimits,
                          ::testing::Values(Case{"odrive-d5065", "odrive-v36-24v"},
-                                           Case{"turnigy-sk3-6374-149kv", "vesc6-48v"}),
+                                           Case{"turnigy-sk3-6374-149kv", "vesc6-48v"},
+                                           Case{"hub-6p5in-15pp", "odrive-v36-56v"},
+                                           Case{"u8-class-kv100", "odrive-v36-56v"}),
                          testlib::case_name);
 
 // The supply's resistance is the scenario's (--set source_r_ohm): ten
