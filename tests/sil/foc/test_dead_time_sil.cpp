@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "app_params.hpp"
+#include "dyno_rig.hpp"
 #include "hal_host/sil_rig.hpp"
 #include "mc_record.hpp"
 #include "motor_file.hpp"
@@ -71,15 +72,10 @@ Distortion run(bool compensate) {
   mc_params_t p =
       mcsim::params_from_files(drive_f, mcsim::Params(mcsim::app_gain_params(drive_f), {}));
   p.dead_time_comp = compensate ? 1u : 0u;
-  mc_drive_cfg_t dc{};
-  EXPECT_EQ(mc_params_to_drive_cfg(&p, &dc), MC_PARAMS_OK);
-  EXPECT_EQ(dc.dead_time_comp, compensate);  // the board states a dead time
-  hal_host::PmsmBoardConfig bc = mcsim::build_board_cfg(f);
-  mcsim::attach_load(bc, &load);
-  hal_host::PmsmBoard board(bc);
-  mc_drive_t d{};
-  EXPECT_EQ(mc_drive_init(&d, &dc, board.hal()), MC_DRIVE_CFG_OK);
-  EXPECT_EQ(mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT), 0);
+  mcsim::DynoRig rig(f, p, &load);
+  EXPECT_EQ(rig.dead_time_comp, compensate);  // the board states a dead time
+  hal_host::PmsmBoard& board = rig.board;
+  mc_drive_t& d = rig.d;
   // the current set 30 ms after it is switched on (its transient gone), then
   // kTurns electrical turns measured
   const double t_meas = t_on + 0.03;

@@ -18,6 +18,7 @@
 #include <string>
 
 #include "app_params.hpp"
+#include "dyno_rig.hpp"
 #include "hal_host/sil_rig.hpp"
 #include "motor_file.hpp"
 #include "plant_from_files.hpp"
@@ -72,17 +73,12 @@ Result run(double we_t, double pwm_hz, bool compensate) {
       mcsim::params_from_files(drive_f, mcsim::Params(mcsim::app_gain_params(drive_f), {}));
   p.dead_time_comp = 0u;
   const mc_gains_t g = mcsim::resolve_params(p).g;
-  mc_drive_cfg_t dc{};
-  EXPECT_EQ(mc_params_to_drive_cfg(&p, &dc), MC_PARAMS_OK);
   const std::function<double(double)> load = [t_ramp, tau_dyno](double t) {
     return t < t_ramp ? tau_dyno : 0.0;
   };
-  hal_host::PmsmBoardConfig bc = mcsim::build_board_cfg(f);
-  mcsim::attach_load(bc, &load);
-  hal_host::PmsmBoard board(bc);
-  mc_drive_t d{};
-  EXPECT_EQ(mc_drive_init(&d, &dc, board.hal()), MC_DRIVE_CFG_OK);
-  EXPECT_EQ(mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT), 0);
+  mcsim::DynoRig rig(f, p, &load);
+  hal_host::PmsmBoard& board = rig.board;
+  mc_drive_t& d = rig.d;
   if (!compensate) {
     EXPECT_EQ(mc_foc_f32_set_delay_comp(&d.foc, 0.0f), MC_FOC_ERR_NONE);
   }
