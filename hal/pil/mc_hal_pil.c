@@ -60,12 +60,25 @@
  *                    host as PROBE after READY and after each period,
  *                    before OUT (link protocol version 2);
  *       brake        when APP says the board has a brake chopper
- *                    (has_brake), mc_hal_t.brake: the duty the drive sets
- *                    (checked as hal_host::PmsmBoard does) goes to the host
- *                    in OUT (brake_set_count, brake_duty), which applies it
- *                    to its board's brake before the period's integration
- *                    (link protocol version 3). Without one, NULL: the
- *                    application refuses brake_enable as on the board.
+ *                    (caps MC_PIL_CAP_BRAKE), mc_hal_t.brake: the duty the
+ *                    drive sets (checked as hal_host::PmsmBoard does) goes
+ *                    to the host in OUT (brake_set_count, brake_duty),
+ *                    which applies it to its board's brake before the
+ *                    period's integration (link protocol version 3).
+ *                    Without one, NULL: the application refuses
+ *                    brake_enable as on the board;
+ *       Hall         when APP says the board has Hall inputs (caps
+ *                    MC_PIL_CAP_HALL), the Hall capability (hal/hall.h)
+ *                    bound as mc_app_cfg_t.hall, as the F405 image binds
+ *                    mc_f405_hall on a Hall board: its read answers the
+ *                    code the host's board read at the period's sample
+ *                    (MEAS hall_rc, hall_code; link protocol version 5),
+ *                    and the application makes the Hall kernel on it the
+ *                    drive's encoder (encoder_type 1). Without them, NULL:
+ *                    the application refuses encoder_type 1 as on a board
+ *                    without Hall inputs. APP with a capability this image
+ *                    does not know is answered READY MC_PIL_READY_ERR_CAPS
+ *                    with the image's version, so the host names it.
  *     Both loops run within the period (the ADC interrupt, then PendSV),
  *     as in the SIL's one period (hal_host::app_period): OUT carries what
  *     the bridge does in the next period.
@@ -79,6 +92,7 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "hal/hall.h"
 #include "mc_board.h"
 #include "mc_boot_handoff.h"
 #include "mc_cortexm.h"
@@ -159,6 +173,7 @@ typedef struct {
     mc_hal_fault_t fault;
     mc_hal_can_t can;
     mc_hal_brake_t brake;
+    mc_hal_hall_t hall;
     mc_hal_t hal;
     /* whole-image mode */
     bool app_mode;
@@ -346,6 +361,21 @@ static int brake_set_duty(void *ctx, float duty)
     return 0;
 }
 
+/* The code the host's board read at the sample; a code outside the three
+ * bits is a host bug, answered -EIO (the drive faults ENCODER). */
+static int hall_read(void *ctx, uint32_t *p_code)
+{
+    const pil_board_t *b = ctx;
+    if (b->meas.hall_rc != 0) {
+        return (int)b->meas.hall_rc;
+    }
+    if (b->meas.hall_code > 7u) {
+        return -EIO;
+    }
+    *p_code = b->meas.hall_code;
+    return 0;
+}
+
 static bool gate_killed(const pil_board_t *b)
 {
     return b->killed_here || b->meas.fault.gate_killed;
@@ -476,6 +506,7 @@ static const mc_hal_encoder_ops_t k_enc_ops = {enc_read};
 static const mc_hal_tick_ops_t k_tick_ops = {tick_read, tick_freq};
 static const mc_hal_fault_ops_t k_fault_ops = {fault_read, fault_gate_kill, fault_gate_release};
 static const mc_hal_brake_ops_t k_brake_ops = {brake_set_duty};
+static const mc_hal_hall_ops_t k_hall_ops = {hall_read};
 
 /* ---- mc_board.h -------------------------------------------------------- */
 
@@ -501,6 +532,7 @@ const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
     g_pil.hal.fault = &g_pil.fault;
     g_pil.brake = (mc_hal_brake_t){&k_brake_ops, &g_pil};
     g_pil.hal.brake = NULL; /* set in the whole-image mode when the board has one */
+    g_pil.hall = (mc_hal_hall_t){&k_hall_ops, &g_pil}; /* bound by APP's caps */
 
     /* USART1 on APB2 (84 MHz on silicon; QEMU ignores the rate). */
     RCC_APB2ENR |= RCC_APB2ENR_USART1EN;
@@ -530,6 +562,8 @@ static void setup_fail(const char *what)
     sh_exit(PIL_EXIT_FRAME_ERROR);
 }
 
+static void send_ready(uint32_t err);
+
 /* Whole-image mode: PARAMS frames onto the table's defaults, then APP. */
 static void receive_app_setup(int type)
 {
@@ -557,6 +591,12 @@ static void receive_app_setup(int type)
         setup_fail("pil: expected an APP frame\n");
     }
     g_pil.rx_len = 0u;
+    if ((a.caps & ~MC_PIL_CAP_ALL) != 0u) {
+        /* a host of another version: READY with this image's version, so
+         * the host names the mismatch */
+        send_ready(MC_PIL_READY_ERR_CAPS);
+        setup_fail("pil: APP names a capability this image does not have\n");
+    }
 
     mc_app_cfg_t *c = &g_pil.app;
     memset(c, 0, sizeof *c);
@@ -590,7 +630,10 @@ static void receive_app_setup(int type)
     c->enter_boot = mc_boot_mailbox_enter; /* frames are sent at once: nothing to drain */
     c->boot_ctx = NULL;
     g_pil.hal.can = &g_pil.can;
-    g_pil.hal.brake = (a.has_brake != 0u) ? &g_pil.brake : NULL;
+    g_pil.hal.brake = ((a.caps & MC_PIL_CAP_BRAKE) != 0u) ? &g_pil.brake : NULL;
+    /* the drive's encoder is the Hall kernel on them (mc_app), as the F405
+     * image binds mc_f405_hall on a Hall board */
+    c->hall = ((a.caps & MC_PIL_CAP_HALL) != 0u) ? &g_pil.hall : NULL;
     g_pil.app_mode = true;
     g_pil.have_app = true;
 }

@@ -59,9 +59,10 @@ struct AppSetup {
   // the parameters written over a stored set before the start (ids).
   bool flash_must_boot = false;
   std::vector<uint32_t> over_stored;
-  // Hall sensors (board_hall.hpp; the SIL only): the board's Hall inputs
-  // read the plant's model (hal_host::HallInput), powered up at
-  // board.theta_m0_rad, with hall_fault from power-up.
+  // Hall sensors (board_hall.hpp): the board's Hall inputs read the
+  // plant's model (hal_host::HallInput), powered up at board.theta_m0_rad,
+  // with hall_fault from hall_fault_at_s. Both targets: the SIL's drive
+  // reads them, the PIL host reads them at each sample for the image's.
   bool hall = false;
   mcsim::HallParams hall_params{};
   mcsim::HallFault hall_fault = mcsim::HallFault::kNone;

@@ -1,15 +1,17 @@
 // The PIL AppTarget (app_target.hpp): the board's whole image on the
 // emulated Cortex-M4F, the plant on the host, one period at a time over the
 // PIL link (foc_pil.hpp's PilSession; protocol firmware/targets/pil/
-// mc_pil_frame.h, version 4: the application's probe comes back as PROBE
+// mc_pil_frame.h, version 5: the application's probe comes back as PROBE
 // after each period; a board with a brake chopper gets one in the image's
-// HAL, whose duty comes back in OUT and drives the plant's brake).
+// HAL, whose duty comes back in OUT and drives the plant's brake; a board
+// with Hall sensors gets Hall inputs there, the host's Hall model read at
+// each period's sample and its code sent in MEAS).
 //
 // What the image runs is the flashed image's code (main.c's interrupt and
 // PendSV sequence, firmware/app: the application, the drive, the laws, CAN,
 // parameter service and store); what differs is only the HAL (hal/pil
-// instead of the board's hal/stm32f405 drivers): the ADC, encoder, fault,
-// tick and temperature answers are the host board's, CAN frames travel over
+// instead of the board's hal/stm32f405 drivers): the ADC, encoder, Hall,
+// fault, tick and temperature answers are the host board's, CAN frames travel over
 // the link, the configuration store is two RAM sectors, no watchdog.
 #include <unistd.h>
 
@@ -21,6 +23,7 @@
 
 #include "app_target.hpp"
 #include "foc_pil.hpp"
+#include "hal_host/hall_input.hpp"
 #include "scenario.hpp"
 
 namespace mcsim {
@@ -37,11 +40,6 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
                        "' cannot be read (build the image: target mc_pil_m4f)");
     }
   }
-  if (s.hall) {
-    throw UsageError(
-        "PIL: the PIL image's HAL (hal/pil) has no Hall inputs on its link yet: "
-        "board.encoder=hall is for the SIL");
-  }
   if (s.flash != nullptr) {
     throw UsageError(
         "PIL: the image's configuration store is its own (an erased RAM store): --flash is "
@@ -57,6 +55,16 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
   return s;
 }
 
+// The board's Hall inputs on the plant's model, as the SIL target makes
+// them (app_target_sil.cpp): the host reads them at each period's sample
+// and sends the code in MEAS; null without Hall sensors.
+std::unique_ptr<hal_host::HallInput> hall_of(const AppSetup& s, const hal_host::PmsmBoard& b) {
+  if (!s.hall) return nullptr;
+  auto h = std::make_unique<hal_host::HallInput>(b, s.hall_params, s.board.theta_m0_rad);
+  h->set_fault(s.hall_fault, 0, s.hall_fault_at_s);
+  return h;
+}
+
 std::string image_name(const AppTargetPilOptions& o) {
   const std::string& elf = o.link.elf;
   const std::size_t slash = elf.find_last_of('/');
@@ -70,6 +78,7 @@ class PilAppTarget final : public AppTarget {
   PilAppTarget(const AppSetup& s, const AppTargetPilOptions& o)
       : params_(checked(s, o).defaults),
         board_(std::make_unique<hal_host::PmsmBoard>(s.board)),
+        hall_(hall_of(s, *board_)),
         pil_(*board_, o.link),
         name_(image_name(o)) {
     PilAppSetup ps;
@@ -81,6 +90,7 @@ class PilAppTarget final : public AppTarget {
       ps.app.tm_ext_rate_hz[i] = c.tm_ext_rate_hz[i];
     ps.app.pwm_hz_fixed = c.pwm_hz_fixed;
     ps.app.slow_loop_div_fixed = c.slow_loop_div_fixed;
+    ps.hall = hall_ ? hall_->hal() : nullptr;
     pil_.boot_app(ps);
   }
   ~PilAppTarget() override {
@@ -111,6 +121,7 @@ class PilAppTarget final : public AppTarget {
  private:
   mc_params_t params_;
   std::unique_ptr<hal_host::PmsmBoard> board_;
+  std::unique_ptr<hal_host::HallInput> hall_;
   PilSession pil_;
   std::string name_;
   std::vector<PilCanTx> tx_;

@@ -1,6 +1,7 @@
 #include "foc_pil.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -47,8 +48,11 @@ void PilSession::boot_app(const PilAppSetup& setup) {
   }
   mc_pil_app_t app = setup.app;
   (void)board_.tick_freq(&app.tick_hz);  // this board's, whatever the caller gave
-  // The image's HAL exposes a brake chopper when this board has one.
-  app.has_brake = (board_.hal()->brake != nullptr) ? 1u : 0u;
+  // The image's HAL exposes a brake chopper when this board has one, Hall
+  // inputs when it has them (the image binds them as the application's).
+  app.caps = ((board_.hal()->brake != nullptr) ? MC_PIL_CAP_BRAKE : 0u) |
+             ((setup.hall != nullptr) ? MC_PIL_CAP_HALL : 0u);
+  hall_ = setup.hall;
   const std::size_t n = mc_pil_encode_app(&app, buf.data(), buf.size());
   link_.send(buf.data(), n);
   expect_ready();
@@ -67,6 +71,11 @@ void PilSession::expect_ready() {
     throw std::runtime_error("PIL: the image speaks link protocol version " +
                              std::to_string(ready_.version) + ", this host " +
                              std::to_string(MC_PIL_VERSION) + ": rebuild the image");
+  }
+  if (ready_.drive_cfg_err == MC_PIL_READY_ERR_CAPS) {
+    throw std::runtime_error(
+        "PIL: the image refused the board's capabilities (APP caps): it has no HAL for one of "
+        "them");
   }
   if (ready_.drive_cfg_err != MC_DRIVE_CFG_OK) {
     throw std::runtime_error("PIL: the target's drive refused the configuration, bits " +
@@ -94,6 +103,9 @@ const mc_pil_out_t& PilSession::step(const PilCommand& cmd,
   m.enc_rc = b.encoder_read(&m.enc);
   m.fault_rc = b.fault_read(&m.fault);
   m.temp_rc = b.adc_read_temp(&m.temp);
+  // The Hall inputs at the same sample, once per period: what the SIL's
+  // drive reads in its fast step (hal_host::HallInput after sample()).
+  m.hall_rc = (hall_ != nullptr) ? mc_hal_hall_read(hall_, &m.hall_code) : -ENODEV;
   (void)b.tick_read(&m.tick_ticks);
   (void)b.tick_freq(&m.tick_hz);
   m.cmd_flags =

@@ -5,7 +5,7 @@
 // exchanging one frame each way per PWM period over USART1.
 //
 // Per period, as FocSil::step() does it in one process:
-//   board.sample()  -> MEAS (the board's adc/encoder/fault/tick HAL answers,
+//   board.sample()  -> MEAS (the board's adc/encoder/fault/tick/Hall HAL answers,
 //                      plus this period's commands) -> target: fast step in
 //                      the ADC interrupt, slow step in PendSV when due
 //   OUT             -> the duties, enable and gate kills the drive asked for,
@@ -28,6 +28,7 @@
 #include "foc_sil.hpp"
 #include "hal_host/pil_link.hpp"
 extern "C" {
+#include "hal/hall.h"
 #include "mc_params.h"
 #include "mc_pil_frame.h"
 #include "mc_pil_probe.h"
@@ -48,7 +49,12 @@ struct PilCommand {
 // of the application's binding (mc_pil_frame.h).
 struct PilAppSetup {
   mc_params_t defaults{};
-  mc_pil_app_t app{};
+  mc_pil_app_t app{};  // caps: the session's (the board's brake, hall below)
+  // The board's Hall inputs (hal_host::HallInput on the session's board;
+  // null: none): read once per period at the sample into MEAS, the image's
+  // HAL exposing them to the application (MC_PIL_CAP_HALL). Outlives the
+  // session.
+  const mc_hal_hall_t* hall = nullptr;
 };
 
 // A frame the image sent, and the period (MEAS seq) it left in.
@@ -91,6 +97,7 @@ class PilSession {
   mc_pil_out_t out_{};
   mc_app_probe_t probe_{};
   bool app_mode_ = false;
+  const mc_hal_hall_t* hall_ = nullptr;  // the board's Hall inputs (PilAppSetup::hall)
   uint32_t seq_ = 0;
 };
 

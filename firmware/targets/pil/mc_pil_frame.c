@@ -9,7 +9,7 @@
 /* Payload sizes [32-bit words]. */
 #define CFG_WORDS   23u
 #define READY_WORDS 3u
-#define MEAS_WORDS  29u
+#define MEAS_WORDS  31u
 #define OUT_WORDS   23u
 #define APP_WORDS   (5u + MC_PIL_TM_EXT_RATES) /* budget, the rates, 4 words */
 /* CAN frames: id, time stamp, length and flags, then the data rounded up
@@ -337,6 +337,8 @@ size_t mc_pil_encode_meas(const mc_pil_meas_t *m, uint8_t *buf, size_t cap)
     put_f32(&w, m->temp.motor_temp_c);
     put_u32(&w, m->temp.valid_mask);
     put_u32(&w, m->temp.absent_mask);
+    put_i32(&w, m->hall_rc);
+    put_u32(&w, m->hall_code);
     return finish(&w);
 }
 
@@ -381,6 +383,8 @@ int mc_pil_decode_meas(const uint8_t *buf, size_t n, mc_pil_meas_t *out)
     m.temp.motor_temp_c = get_f32(&r);
     m.temp.valid_mask = get_u32(&r);
     m.temp.absent_mask = get_u32(&r);
+    m.hall_rc = get_i32(&r);
+    m.hall_code = get_u32(&r);
     *out = m;
     return MC_PIL_OK;
 }
@@ -562,7 +566,7 @@ size_t mc_pil_encode_app(const mc_pil_app_t *a, uint8_t *buf, size_t cap)
     put_u32(&w, a->pwm_hz_fixed);
     put_u32(&w, a->slow_loop_div_fixed);
     put_u32(&w, a->tick_hz);
-    put_u32(&w, a->has_brake);
+    put_u32(&w, a->caps);
     return finish(&w);
 }
 
@@ -584,7 +588,7 @@ int mc_pil_decode_app(const uint8_t *buf, size_t n, mc_pil_app_t *out)
     a.pwm_hz_fixed = get_u32(&r);
     a.slow_loop_div_fixed = get_u32(&r);
     a.tick_hz = get_u32(&r);
-    a.has_brake = get_u32(&r);
+    a.caps = get_u32(&r);
     *out = a;
     return MC_PIL_OK;
 }

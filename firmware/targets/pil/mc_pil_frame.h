@@ -55,7 +55,16 @@
  *      drive set this period (count and last duty), which the host applies
  *      to its board's brake before it integrates the period;
  *   4  PROBE carries the sensorless law's I-f frame speed
- *      (mc_app_probe_t.sls_omega_if_rad_s): one word more.
+ *      (mc_app_probe_t.sls_omega_if_rad_s): one word more;
+ *   5  Hall sensors: APP's has_brake word becomes the board's capabilities
+ *      (caps: MC_PIL_CAP_BRAKE, the value 1 it had, and MC_PIL_CAP_HALL:
+ *      the image's HAL then exposes Hall inputs, bound as
+ *      mc_app_cfg_t.hall as the F405 image binds mc_f405_hall); MEAS
+ *      carries the host board's Hall read at the sample (hall_rc,
+ *      hall_code: two words more). APP keeps its size, so a host and an
+ *      image of different versions still reach READY and the host refuses
+ *      the image by its version; an image given a capability it does not
+ *      know answers READY with MC_PIL_READY_ERR_CAPS and its version.
  *
  * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
  * and parse a complete frame. Built for the target (hal/pil/mc_hal_pil.c) and for the
@@ -96,7 +105,7 @@ typedef enum {
 } mc_pil_type_t;
 
 /** The link protocol's version (see the file comment), sent in READY. */
-#define MC_PIL_VERSION 4u
+#define MC_PIL_VERSION 5u
 
 /** (id, raw) pairs per PARAMS frame (the payload limit). */
 #define MC_PIL_PARAMS_MAX 31u
@@ -110,6 +119,16 @@ typedef enum {
 #define MC_PIL_ERR_CRC  (-3)
 #define MC_PIL_ERR_TYPE (-4) /**< not the expected frame type */
 #define MC_PIL_ERR_ARG  (-5) /**< NULL pointer or buffer too small */
+
+/* The board's capabilities, bits of mc_pil_app_t.caps (version 5). */
+#define MC_PIL_CAP_BRAKE (1u << 0) /**< a brake chopper: mc_hal_t.brake (version 3) */
+#define MC_PIL_CAP_HALL  (1u << 1) /**< Hall inputs: mc_app_cfg_t.hall (version 5) */
+#define MC_PIL_CAP_ALL   (MC_PIL_CAP_BRAKE | MC_PIL_CAP_HALL)
+
+/** mc_pil_ready_t.drive_cfg_err of an image that refused APP's caps (a bit
+ *  outside MC_PIL_CAP_ALL: a host of a later version); no mc_drive_init()
+ *  result has every bit set. */
+#define MC_PIL_READY_ERR_CAPS 0xFFFFFFFFu
 
 /* Command bits of mc_pil_meas_t.cmd_flags. */
 #define MC_PIL_CMD_SET_MODE (1u << 0)
@@ -132,6 +151,9 @@ typedef struct {
     float iq_ref_a;
     int32_t temp_rc;        /**< board adc read_temp() result */
     mc_hal_adc_temp_t temp; /**< temperature channels, valid when temp_rc == 0 */
+    int32_t hall_rc;        /**< board Hall read() result (-ENODEV: no Hall inputs;
+                                 version 5) */
+    uint32_t hall_code;     /**< the sensors' code 0..7, valid when hall_rc == 0 */
 } mc_pil_meas_t;
 
 /** Target -> host, once per period. */
@@ -168,9 +190,9 @@ typedef struct {
     uint32_t tm_ext_rate_hz[MC_PIL_TM_EXT_RATES];
     uint32_t pwm_hz_fixed;
     uint32_t slow_loop_div_fixed;
-    uint32_t tick_hz;   /**< the board's tick frequency, answered before the first MEAS */
-    uint32_t has_brake; /**< 1: the board has a brake chopper, the image's HAL
-                             exposes one (mc_hal_t.brake; version 3) */
+    uint32_t tick_hz; /**< the board's tick frequency, answered before the first MEAS */
+    uint32_t caps;    /**< MC_PIL_CAP_* the board has, the image's HAL exposes
+                        (version 5; version 3 and 4: has_brake, 1 or 0) */
 } mc_pil_app_t;
 
 /** Target -> host after CFG. */

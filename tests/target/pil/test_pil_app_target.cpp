@@ -52,6 +52,7 @@ extern "C" {
 #include "mc_can_dbc.h"
 #include "mc_can_proto.h"
 #include "mc_ctrl_sensorless.h"
+#include "mc_pil_frame.h"
 #include "mc_board_odrive36_gen.h"
 #include "mc_board_vesc6_gen.h"
 }
@@ -408,6 +409,40 @@ TEST(PilAppTarget, MissingImageIsRefusedWithAReason) {
   } catch (const mcsim::UsageError& e) {
     EXPECT_NE(std::string(e.what()).find("no_such_image.elf"), std::string::npos) << e.what();
   }
+}
+
+// A host of a later link version names a capability this image has no HAL
+// for (APP caps, a bit outside MC_PIL_CAP_ALL): the image answers READY
+// with MC_PIL_READY_ERR_CAPS and its own version, so the host can name the
+// mismatch (foc_pil.cpp), says why in its semihosting text and stops
+// (exit status 3, PIL_EXIT_FRAME_ERROR: nothing booted).
+TEST(PilAppTarget, UnknownCapabilityIsRefusedByTheImageWithItsVersion) {
+  const std::string log = "pil_app_target_caps.log";
+  hal_host::PilLink link(pil_test_link(log));
+  const std::vector<uint8_t> hello = link.receive_frame();
+  ASSERT_EQ(mc_pil_check_hello(hello.data(), hello.size()), MC_PIL_OK);
+  mc_pil_app_t a{};
+  a.tick_hz = 168000000u;
+  a.caps = MC_PIL_CAP_HALL | (1u << 7);  // bit 7: no version has it
+  std::vector<uint8_t> buf(MC_PIL_MAX_FRAME);
+  link.send(buf.data(), mc_pil_encode_app(&a, buf.data(), buf.size()));
+  const std::vector<uint8_t> r = link.receive_frame();
+  mc_pil_ready_t rd{};
+  ASSERT_EQ(mc_pil_decode_ready(r.data(), r.size(), &rd), MC_PIL_OK);
+  EXPECT_EQ(rd.drive_cfg_err, MC_PIL_READY_ERR_CAPS);
+  EXPECT_EQ(rd.version, MC_PIL_VERSION);
+  try {
+    (void)link.receive_frame();
+    FAIL() << "the image went on after refusing APP";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("exit status 3"), std::string::npos) << e.what();
+  }
+  std::FILE* f = std::fopen((std::string(MC_PIL_LOG_DIR) + "/" + log).c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  char text[256] = {};
+  const std::size_t n = std::fread(text, 1, sizeof text - 1, f);
+  std::fclose(f);
+  EXPECT_NE(std::string(text, n).find("capability"), std::string::npos) << text;
 }
 
 // ---- braking: a regenerative stop on the ODrive v3.6 ----------------------

@@ -58,9 +58,11 @@ TEST(PilFrame, MeasRoundTripKeepsEveryBit) {
   m.iq_ref_a = std::numeric_limits<float>::infinity();
   m.temp_rc = -ENOSYS;
   m.temp = {25.0f, nan_with_payload(), 1u, 2u};
+  m.hall_rc = -ENODEV;
+  m.hall_code = 0xFFFFFFFAu;  // every bit travels: the image checks the range
   uint8_t buf[MC_PIL_MAX_FRAME];
   const size_t n = mc_pil_encode_meas(&m, buf, sizeof buf);
-  ASSERT_EQ(n, 3u + 4u * 29u + 2u);
+  ASSERT_EQ(n, 3u + 4u * 31u + 2u);  // version 5: the Hall read, two words
   EXPECT_EQ(mc_pil_frame_len(buf, 3), n);
   EXPECT_EQ(mc_pil_frame_type(buf, n), MC_PIL_TYPE_MEAS);
   mc_pil_meas_t d{};
@@ -82,6 +84,14 @@ TEST(PilFrame, MeasRoundTripKeepsEveryBit) {
   EXPECT_TRUE(same_bits(d.temp.motor_temp_c, m.temp.motor_temp_c));
   EXPECT_EQ(d.temp.valid_mask, 1u);
   EXPECT_EQ(d.temp.absent_mask, 2u);
+  EXPECT_EQ(d.hall_rc, -ENODEV);
+  EXPECT_EQ(d.hall_code, 0xFFFFFFFAu);
+  m.hall_rc = 0;
+  m.hall_code = 5u;
+  ASSERT_EQ(mc_pil_encode_meas(&m, buf, sizeof buf), n);
+  ASSERT_EQ(mc_pil_decode_meas(buf, n, &d), MC_PIL_OK);
+  EXPECT_EQ(d.hall_rc, 0);
+  EXPECT_EQ(d.hall_code, 5u);
 }
 
 TEST(PilFrame, OutAndCfgRoundTrip) {
@@ -185,8 +195,9 @@ TEST(PilFrame, WholeImageFramesRoundTrip) {
   a.tm_budget_frac = std::nextafter(0.378f, 1.0f);
   a.tick_hz = 0xFFFFFFFFu;
   a.slow_loop_div_fixed = 10u;
-  a.has_brake = 1u;
+  a.caps = MC_PIL_CAP_BRAKE | MC_PIL_CAP_HALL;
   n = mc_pil_encode_app(&a, buf, sizeof buf);
+  ASSERT_EQ(n, 3u + 4u * 12u + 2u);  // version 5 keeps version 3's size: caps
   mc_pil_app_t ad{};
   ASSERT_EQ(mc_pil_decode_app(buf, n, &ad), MC_PIL_OK);
   EXPECT_TRUE(same_bits(ad, a));
@@ -248,7 +259,7 @@ TEST(PilFrame, ReadyCarriesTheProtocolVersion) {
   mc_pil_ready_t d{};
   ASSERT_EQ(mc_pil_decode_ready(buf, n, &d), MC_PIL_OK);
   EXPECT_TRUE(same_bits(d, r));
-  EXPECT_EQ(d.version, 4u);  // 4: PROBE carries sls_omega_if_rad_s
+  EXPECT_EQ(d.version, 5u);  // 5: MEAS carries the Hall read, APP the capabilities
   const uint32_t v1[2] = {0u, 0u};
   n = mc_pil_encode_words(MC_PIL_TYPE_READY, v1, 2u, buf, sizeof buf);
   ASSERT_GT(n, 0u);
@@ -319,9 +330,28 @@ TEST(PilFrame, Version2OutAndAppAreRefused) {
   n = mc_pil_encode_words(MC_PIL_TYPE_APP, v2_app, 9u, buf, sizeof buf);
   ASSERT_GT(n, 0u);
   mc_pil_app_t a{};
-  a.has_brake = 7u;
+  a.caps = 7u;
   EXPECT_EQ(mc_pil_decode_app(buf, n, &a), MC_PIL_ERR_LEN);
-  EXPECT_EQ(a.has_brake, 7u);
+  EXPECT_EQ(a.caps, 7u);
+}
+
+// Version 5: MEAS carries the Hall read (31 words); a version-4 MEAS (29
+// words) is refused by length and leaves the output as it was. The brake
+// keeps its bit value of version 3 and 4 (has_brake 1), so APP's layout is
+// the same and a host and an image of different versions meet at READY,
+// where the host refuses the image by its version (foc_pil.cpp).
+TEST(PilFrame, Version4MeasIsRefusedAndTheBrakeKeepsItsBit) {
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  const uint32_t v4_meas[29] = {};
+  const size_t n = mc_pil_encode_words(MC_PIL_TYPE_MEAS, v4_meas, 29u, buf, sizeof buf);
+  ASSERT_GT(n, 0u);
+  mc_pil_meas_t m{};
+  m.hall_code = 3u;
+  EXPECT_EQ(mc_pil_decode_meas(buf, n, &m), MC_PIL_ERR_LEN);
+  EXPECT_EQ(m.hall_code, 3u);
+  EXPECT_EQ(MC_PIL_CAP_BRAKE, 1u);
+  EXPECT_EQ(MC_PIL_CAP_ALL & MC_PIL_CAP_HALL, MC_PIL_CAP_HALL);
+  EXPECT_EQ(MC_PIL_VERSION, 5u);
 }
 
 }  // namespace
