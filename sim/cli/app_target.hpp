@@ -127,9 +127,10 @@ struct AppTargetPilOptions {
   std::string board;              // the board s describes, for name() (may be "")
 };
 // Throws UsageError when the setup cannot run on the link (QEMU, the image
-// or its bootloader unreadable, the parameter table invalid, a brake
-// chopper on the plant: the link carries none),
-// std::runtime_error when QEMU or the image fails.
+// or its bootloader unreadable, the parameter table invalid, --flash: the
+// image's store is its own), std::runtime_error when QEMU or the image
+// fails. The brake chopper and the Hall inputs travel on the link (APP's
+// caps).
 std::unique_ptr<AppTarget> make_app_target_pil(const AppSetup& s, const AppTargetPilOptions& o);
 
 }  // namespace mcsim
