@@ -67,6 +67,7 @@ struct AppSetup {
   mcsim::HallParams hall_params{};
   mcsim::HallFault hall_fault = mcsim::HallFault::kNone;
   double hall_fault_at_s = 0.0;
+  int hall_fault_sensor = 0;  // the sensor of kStuckLow / kStuckHigh (0..2)
 };
 
 // What one period did (both targets report the same).
@@ -89,6 +90,10 @@ class AppTarget {
   virtual const mc_app_probe_t& probe() const = 0;
   // The parameter table the application booted (validated).
   virtual const mc_params_t& params() const = 0;
+  // The parameter service's staged set (what commissioning staged for the
+  // host's APPLY and SAVE); nullptr where the target cannot show it (PIL:
+  // the image's memory is the board's).
+  virtual const mc_params_t* staged() const { return nullptr; }
   virtual hal_host::PmsmBoard& board() = 0;
   // "sil" or "pil:<image>" for the summary.
   virtual std::string name() const = 0;

@@ -89,7 +89,7 @@ class AppTargetSil final : public AppTarget {
     app_target_binding(s, &c);  // the images' binding, as the PIL target's
     if (s.hall) {               // the board's Hall inputs on the plant's model
       hall_ = std::make_unique<hal_host::HallInput>(*board_, s.hall_params, s.board.theta_m0_rad);
-      hall_->set_fault(s.hall_fault, 0, s.hall_fault_at_s);
+      hall_->set_fault(s.hall_fault, s.hall_fault_sensor, s.hall_fault_at_s);
       c.hall = hall_->hal();
     }
     const uint32_t berr = mc_app_boot(app_.get(), &c);
@@ -164,6 +164,9 @@ class AppTargetSil final : public AppTarget {
   }
   const mc_app_probe_t& probe() const override { return probe_; }
   const mc_params_t& params() const override { return app_->params; }
+  const mc_params_t* staged() const override {
+    return app_->params_valid ? &app_->srv.staged : nullptr;
+  }
   hal_host::PmsmBoard& board() override { return *board_; }
   std::string name() const override { return "sil"; }
 

@@ -144,6 +144,7 @@ struct CommissionFigures {
   double pole_pairs_diff = 0, encoder_offset_deg = 0, adc_offset_max_frac = 0;
   bool direction_right = true;
   double duration_s = 0;
+  double duration_max_s = 10.0;  // + the Hall table's step with Hall sensors
   bool verify = false;
   double verify_sensored_err_frac = 0, verify_sensorless_err_frac = 0;
   bool sensorless_refused = false;  // the law takes no such motor (a salient one)

@@ -1037,6 +1037,8 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
 void mc_app_attach_commission(mc_app_t *app, mc_comm_can_t *m)
 {
     app->comm = m;
+    /* Hall sensors as the encoder: commissioning measures their table first */
+    m->cfg.base.hall = (app->hal == &app->hal_hall) ? app->cfg.hall : NULL;
     mc_can_cmd_attach_commission(&app->cmd, mc_comm_can_command, mc_comm_can_busy,
                                  mc_comm_can_host_lost, m);
 }

@@ -266,6 +266,43 @@ static bool write_u32(mc_param_srv_t *s, uint32_t id, uint32_t x)
     return mc_param_srv_request(s, MC_PARAM_OP_WRITE, id, &raw) == MC_PARAM_OK;
 }
 
+/* A reboot parameter (the Hall table): WRITE, and the CONFIRM the service
+ * asks of any change of one (the sequence the host would send). */
+static bool write_reboot(mc_param_srv_t *s, uint32_t id, uint32_t raw)
+{
+    uint32_t v = raw;
+    const mc_param_status_t st = mc_param_srv_request(s, MC_PARAM_OP_WRITE, id, &v);
+    if (st == MC_PARAM_OK) {
+        return true;
+    }
+    v = raw;
+    return (st == MC_PARAM_ERR_NEEDS_CONFIRM) &&
+           (mc_param_srv_request(s, MC_PARAM_OP_CONFIRM, id, &v) == MC_PARAM_OK);
+}
+
+/* The Hall table measured: codes, edges and band (parameters 166-173).
+ * Its edges are the d axis's angles (the vector's), so the drive's angle
+ * from the count is the d axis's with encoder_offset_rad 0, and the codes
+ * run in the positive order: encoder_reversed 0 (mc_drive_hall.h). The
+ * encoder step's offset and direction are against the table the drive ran
+ * the sequence on, and replaced here with the table. */
+static bool stage_hall(mc_param_srv_t *s, const mc_comm_hall_table_t *t)
+{
+    static const uint32_t edge_id[MC_HALL_SECTORS] = {
+        MC_PARAM_ID_HALL_EDGE0_E_RAD, MC_PARAM_ID_HALL_EDGE1_E_RAD, MC_PARAM_ID_HALL_EDGE2_E_RAD,
+        MC_PARAM_ID_HALL_EDGE3_E_RAD, MC_PARAM_ID_HALL_EDGE4_E_RAD, MC_PARAM_ID_HALL_EDGE5_E_RAD};
+    uint32_t codes = 0u;
+    bool ok = true;
+    for (uint32_t k = 0u; k < MC_HALL_SECTORS; k++) {
+        codes |= ((uint32_t)t->code_of_sector[k] & 7u) << (3u * k);
+        ok = ok && write_reboot(s, edge_id[k], f32_bits(t->edge_e_rad[k]));
+    }
+    return ok && write_reboot(s, MC_PARAM_ID_HALL_CODES, codes) &&
+           write_reboot(s, MC_PARAM_ID_HALL_HYSTERESIS_E_RAD, f32_bits(t->hysteresis_e_rad)) &&
+           write_f32(s, MC_PARAM_ID_ENCODER_OFFSET_RAD, 0.0f) &&
+           write_u32(s, MC_PARAM_ID_ENCODER_REVERSED, 0u);
+}
+
 /* Every result into the staged set, each through the service's WRITE
  * checks; all or nothing. */
 static bool stage(mc_comm_can_t *m)
@@ -289,6 +326,9 @@ static bool stage(mc_comm_can_t *m)
          write_f32(s, MC_PARAM_ID_I_OFFSET_A_A, o[MC_COMM_CAN_ITEM_ADC_OFFSET_A_A]) &&
          write_f32(s, MC_PARAM_ID_I_OFFSET_B_A, o[MC_COMM_CAN_ITEM_ADC_OFFSET_B_A]) &&
          write_f32(s, MC_PARAM_ID_I_OFFSET_C_A, o[MC_COMM_CAN_ITEM_ADC_OFFSET_C_A]);
+    if (ok && r->have_hall) {
+        ok = stage_hall(s, &r->hall);
+    }
     if (ok && ((r->valid & MC_COMM_HAVE_MECH) != 0u)) {
         /* the speed gains follow the identified inertia: 0 = derived from
          * it (mc_params_resolve: kp = J wc / kt, zero at wc / 4) */
@@ -324,7 +364,10 @@ static void follow(mc_comm_can_t *m)
     if (m->drive->mode != MC_DRIVE_MODE_CTRL) {
         /* the plug-in failed (the drive faulted with its bits) or the
          * drive was stopped under it */
-        finish(m, (c->err != MC_COMM_ERR_NONE) ? c->err : MC_COMM_ERR_ABORTED);
+        const uint32_t hall = mc_comm_hall_fault_reason(c, m->drive->faults);
+        finish(m, (c->err != MC_COMM_ERR_NONE) ? c->err
+                  : (hall != 0u)               ? hall
+                                               : MC_COMM_ERR_ABORTED);
         return;
     }
     if ((uint8_t)c->step != m->step) {

@@ -46,7 +46,10 @@
  * encoder_offset_rad, encoder_reversed, i_offset_{a,b,c}_a (the offsets in
  * use plus the measured ones), and, when the mechanics were measured,
  * j_kgm2, b_nm_s_rad and the speed PI re-derived from them (mc_gains.h,
- * the simulator's formulas). One refused write restores the staged set
+ * the simulator's formulas), and with Hall sensors the measured table
+ * (hall_codes, hall_edge0..5_e_rad, hall_hysteresis_e_rad: WRITE and
+ * CONFIRM, reboot parameters) with encoder_offset_rad 0 and
+ * encoder_reversed 0 (the edges are the d axis's angles). One refused write restores the staged set
  * as it was: the run reports MC_COMM_ERR_RANGE and stages nothing. The
  * host then APPLYs (the whole-set validation of PARAM_REQ APPLY, which also
  * re-derives the current-loop gains) and SAVEs. A failed run stages

@@ -53,8 +53,26 @@ enum {
     ENC_BACK,
     ENC_BACK_HOLD,
     ENC_FWD2,
-    ENC_FWD2_HOLD
+    ENC_FWD2_HOLD,
+    /* the Hall table, before the sweeps above (cfg.hall) */
+    ENC_HALL_RAMP,
+    ENC_HALL_HOLD,
+    ENC_HALL_UP,
+    ENC_HALL_UP_HOLD,
+    ENC_HALL_DOWN,
+    ENC_HALL_DOWN_HOLD
 };
+
+/* The Hall sweep: a turn and two sectors each way (every edge seen at the
+ * constant speed once the ramp, 0.6 rad, is over), at 0.9 turn per second
+ * (the encoder step's sweeps: one), 5.6 rad/s el.: the rotor follows the
+ * vector at a constant lag (the same both ways, so it cancels in each
+ * edge), and the drive's Hall angle stays below its interpolation speed
+ * (hall_omega_min_e_rad_s, default 50). */
+#define HALL_SWEEP_RAD (MC_TWO_PI_F32 * (4.0f / 3.0f))
+#define T_HALL_RAMP    MC_COMM_HALL_T_RAMP_S
+#define T_HALL_CONST   MC_COMM_HALL_T_CONST_S
+#define HALL_NONE      8u
 
 static uint32_t steps_of(const mc_comm_t *c, float t_s)
 {
@@ -420,7 +438,8 @@ static uint32_t step_l_rough(mc_comm_t *c, const float i[3], mc_drive_out_t *out
         if (!(c->l0_h > 0.0f)) {
             return MC_COMM_ERR_RANGE;
         }
-        enter(c, MC_COMM_STEP_ENCODER, ENC_ALIGN_RAMP);
+        enter(c, MC_COMM_STEP_ENCODER, (c->cfg.hall != NULL) ? ENC_HALL_RAMP : ENC_ALIGN_RAMP);
+        c->hall_code = HALL_NONE;
         c->have_count = false;
         c->enc_coarse = false;
         c->count_acc = 0;
@@ -464,10 +483,97 @@ static void damp_loop(mc_comm_t *c)
     (void)mc_pi_f32_set_gains(&c->foc.pi_q, r_up, ki);
 }
 
+/* The Hall table (mc_comm_hall.h): the vector (i_test, the damped loop of
+ * the encoder step) aligned at 0, swept a turn and two sectors up at a
+ * constant speed, then back; every code change at the constant speed is
+ * recorded with the vector's angle, every code read counts (000, 111). */
+static uint32_t hall_table_done(mc_comm_t *c)
+{
+    const uint32_t e = mc_comm_hall_table_f32(&c->hall_rec, &c->res.hall);
+    if ((e & MC_COMM_HALL_ERR_CODES) != 0u) {
+        return MC_COMM_ERR_HALL_CODES;
+    }
+    if ((e & MC_COMM_HALL_ERR_ORDER) != 0u) {
+        return MC_COMM_ERR_HALL_ORDER;
+    }
+    if ((e & MC_COMM_HALL_ERR_WIDTH) != 0u) {
+        return MC_COMM_ERR_RANGE;
+    }
+    if (e != 0u) {
+        return MC_COMM_ERR_ROTOR_BLOCKED;
+    }
+    c->res.have_hall = true;
+    enter(c, MC_COMM_STEP_ENCODER, ENC_ALIGN_RAMP);
+    return 0u;
+}
+
+static uint32_t step_hall(mc_comm_t *c, const float i[3], mc_drive_out_t *out)
+{
+    uint32_t code = 0u;
+    if (mc_hal_hall_read(c->cfg.hall, &code) != 0 || code > 7u) {
+        return MC_COMM_ERR_MEAS;
+    }
+    c->hall_rec.seen_mask |= 1u << code;
+    bool in_const = false;
+    bool end = false;
+    float w = 0.0f;
+    switch (c->sub) {
+    case ENC_HALL_RAMP:
+        c->theta_cmd_rad = 0.0f;
+        c->i_cmd_a = c->cfg.i_test_a * (float)c->n / (float)steps_of(c, T_ALIGN_RAMP);
+        if (c->n >= steps_of(c, T_ALIGN_RAMP)) {
+            c->i_cmd_a = c->cfg.i_test_a;
+            next_sub(c);
+        }
+        break;
+    case ENC_HALL_HOLD:
+    case ENC_HALL_UP_HOLD:
+    case ENC_HALL_DOWN_HOLD:
+        if (c->n >= steps_of(c, T_HOLD)) {
+            if (c->sub == ENC_HALL_HOLD) {
+                damp_loop(c);
+            } else if (c->sub == ENC_HALL_UP_HOLD && c->hall_rec.n_up == 0u) {
+                return MC_COMM_ERR_ROTOR_BLOCKED; /* no change over the turn */
+            } else if (c->sub == ENC_HALL_DOWN_HOLD) {
+                c->hall_code = code;
+                return hall_table_done(c);
+            }
+            next_sub(c);
+        }
+        break;
+    case ENC_HALL_UP:
+        w = move_velocity(c, HALL_SWEEP_RAD, T_HALL_RAMP, T_HALL_CONST, c->n, &in_const, &end);
+        break;
+    case ENC_HALL_DOWN:
+        w = move_velocity(c, -HALL_SWEEP_RAD, T_HALL_RAMP, T_HALL_CONST, c->n, &in_const, &end);
+        break;
+    default:
+        break;
+    }
+    if (in_const && c->hall_code != HALL_NONE && code != c->hall_code) {
+        mc_comm_hall_record(&c->hall_rec, (w > 0.0f) ? 1 : -1, c->hall_code, code,
+                            c->theta_cmd_rad);
+    }
+    c->hall_code = code;
+    c->theta_cmd_rad = mc_wrap_2pi_f32(c->theta_cmd_rad + w * c->cfg.dt_s);
+    mc_foc_f32_out_t fo;
+    const uint32_t e = foc_out(c, i, c->theta_cmd_rad, 0.0f, c->i_cmd_a, 0.0f, out, &fo);
+    if (c->sub == ENC_HALL_HOLD) {
+        (void)mc_ident_avg_f32_step(&c->v_acc, fo.vd_v);
+    }
+    if (end) {
+        next_sub(c);
+    }
+    return e;
+}
+
 static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas_t *m,
                              mc_drive_out_t *out)
 {
     track_count(c, m);
+    if (c->sub >= ENC_HALL_RAMP) {
+        return step_hall(c, i, out);
+    }
     const float dt = c->cfg.dt_s;
     bool in_const = false;
     bool end = false;
@@ -891,10 +997,22 @@ static uint32_t fast_cb(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out
         c->err |= e;
         c->step = MC_COMM_STEP_FAILED;
         c->res.valid = 0u;
+        c->res.have_hall = false;
         zero_out(out);
         return c->err;
     }
     return 0u;
+}
+
+uint32_t mc_comm_hall_fault_reason(const mc_comm_t *c, uint32_t drive_faults)
+{
+    uint32_t code = 0u;
+    if (c == NULL || c->cfg.hall == NULL || c->step != MC_COMM_STEP_ENCODER ||
+        c->sub < ENC_HALL_RAMP || (drive_faults & MC_DRIVE_FAULT_ENCODER) == 0u ||
+        mc_hal_hall_read(c->cfg.hall, &code) != 0) {
+        return 0u;
+    }
+    return (code == 0u || code == 7u) ? MC_COMM_ERR_HALL_CODES : MC_COMM_ERR_HALL_ORDER;
 }
 
 const mc_drive_ctrl_t *mc_comm_ops(mc_comm_t *c)

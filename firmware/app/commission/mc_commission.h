@@ -19,6 +19,12 @@
  *               i_test: a first inductance for the current loop, and the
  *               connection check (per-phase ripple): nothing conducts ->
  *               NO_MOTOR; one phase silent -> OPEN_PHASE.
+ *   HALL        (within ENCODER, with cfg.hall: Hall sensors) i_test along
+ *               a forced angle swept a turn and two sectors up, then back;
+ *               every code change recorded with the angle; the table
+ *               (codes, six edges, band) from mc_comm_hall_table_f32
+ *               (mc_comm_hall.h); refusals HALL_CODES, HALL_ORDER, RANGE
+ *               (sector widths), ROTOR_BLOCKED (no change).
  *   ALIGN/SWEEP i_test along a commanded electrical angle (current loop
  *               kp = L bw, ki = kp bw / 4: stable whatever R), a quarter
  *               turn, then one electrical turn forward (direction and pole
@@ -58,7 +64,9 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "commission/mc_comm_hall.h"
 #include "foc/mc_foc.h"
+#include "hal/hall.h"
 #include "ident/mc_ident.h"
 #include "mc_drive.h"
 
@@ -86,6 +94,18 @@ extern "C" {
 #define MC_COMM_ERR_ENCODER_COARSE \
     (1u << 13) /**< fewer than MC_COMM_COUNTS_PER_E_TURN_MIN counts per electrical turn:
                     the flux step cannot measure the speed (refused before it) */
+#define MC_COMM_ERR_HALL_CODES \
+    (1u << 14) /**< Hall table: a code 000 or 111 read, or fewer than six distinct
+                    codes (a sensor stuck, unpowered or disconnected) */
+#define MC_COMM_ERR_HALL_ORDER \
+    (1u << 15) /**< Hall table: the codes do not change one sensor at a time round
+                    one cycle of six (wiring), or not the order the table in force
+                    allows (the drive's ENCODER fault during the sweep) */
+/* The Hall table's other refusals use the bits that already name them (the
+ * status frame's error field has 16 bits): a sector width outside 30..90
+ * degrees el. or a band of half a sector: MC_COMM_ERR_RANGE; no change
+ * over the sweep or an edge seen one way only (the rotor did not follow
+ * the vector): MC_COMM_ERR_ROTOR_BLOCKED. */
 
 /** The fewest encoder counts per electrical turn the flux step measures
  *  with: its speed comes from the counts, and at 6 (a Hall-class 90-count
@@ -93,6 +113,14 @@ extern "C" {
  *  of percent low; at 12 within the library's 3 % (tests/sil/commission,
  *  the hub motor at 90 and 180 counts). */
 #define MC_COMM_COUNTS_PER_E_TURN_MIN 12u
+
+/** The Hall table's sweep (README.md "Hall table"): each way a turn and two
+ *  sectors, MC_COMM_HALL_T_RAMP_S up to speed, MC_COMM_HALL_T_CONST_S at it
+ *  (1.5 s: 0.9 turn a second), MC_COMM_HALL_T_RAMP_S down; with the align
+ *  ramp and the three holds (0.1 s each) the step takes MC_COMM_HALL_STEP_S. */
+#define MC_COMM_HALL_T_RAMP_S  0.25f
+#define MC_COMM_HALL_T_CONST_S 1.5f
+#define MC_COMM_HALL_STEP_S    (0.4f + 2.0f * (2.0f * MC_COMM_HALL_T_RAMP_S + MC_COMM_HALL_T_CONST_S))
 
 /* Configuration errors of mc_comm_init. */
 #define MC_COMM_CFG_OK        0u
@@ -112,20 +140,22 @@ typedef enum {
 } mc_comm_step_t;
 
 typedef struct {
-    float dt_s;              /**< PWM period [s], > 0 */
-    float i_test_a;          /**< test current (every step stays below 1.5x) [A], > 0 */
-    float v_test_max_v;      /**< largest voltage vector of any step [V], > 0 */
-    float offset_max_a;      /**< largest plausible current-sensor offset [A], > 0 */
-    float dead_time_s;       /**< bridge dead time [s], >= 0, < dt_s / 4 */
-    float cur_bw_rad_s;      /**< current-loop bandwidth during the tests [rad/s],
+    float dt_s;                /**< PWM period [s], > 0 */
+    float i_test_a;            /**< test current (every step stays below 1.5x) [A], > 0 */
+    float v_test_max_v;        /**< largest voltage vector of any step [V], > 0 */
+    float offset_max_a;        /**< largest plausible current-sensor offset [A], > 0 */
+    float dead_time_s;         /**< bridge dead time [s], >= 0, < dt_s / 4 */
+    float cur_bw_rad_s;        /**< current-loop bandwidth during the tests [rad/s],
                                    0 < bw dt <= 0.2 */
-    float speed_max_m_rad_s; /**< cap of the flux spin-up, mechanical [rad/s], > 0 */
-    float bemf_frac;         /**< spin-up ends at this fraction of v_test_max, (0, 1) */
-    uint32_t pole_pairs_max; /**< largest pole-pair count accepted, 1..64 */
-    bool three_shunts;       /**< ic is measured (else -(ia + ib)) */
-    float speed_tau_s;       /**< time constant of the speed from the counts [s],
+    float speed_max_m_rad_s;   /**< cap of the flux spin-up, mechanical [rad/s], > 0 */
+    float bemf_frac;           /**< spin-up ends at this fraction of v_test_max, (0, 1) */
+    uint32_t pole_pairs_max;   /**< largest pole-pair count accepted, 1..64 */
+    bool three_shunts;         /**< ic is measured (else -(ia + ib)) */
+    float speed_tau_s;         /**< time constant of the speed from the counts [s],
                                    0 (the encoders': 2 ms) or (0, 0.1]; Hall sensors
                                    (encoder_type 1): MC_COMM_HALL_SPEED_TAU_S */
+    const mc_hal_hall_t *hall; /**< the Hall sensors whose table the sequence measures
+                                    first (README.md "Hall table"); NULL: none */
 } mc_comm_cfg_t;
 
 /** The count speed's time constant with Hall sensors: their angle moves by
@@ -164,7 +194,9 @@ typedef struct {
     float dead_time_v;         /**< inverter voltage error per phase (dead time, drops) [V] */
     float j_kgm2;
     float b_nm_s_rad;
-    uint32_t valid; /**< MC_COMM_HAVE_* */
+    uint32_t valid;            /**< MC_COMM_HAVE_* */
+    mc_comm_hall_table_t hall; /**< the Hall table measured (have_hall) */
+    bool have_hall;            /**< cfg.hall was swept and its table derived */
 } mc_comm_result_t;
 
 typedef struct {
@@ -196,6 +228,9 @@ typedef struct {
                           electrical turn (set once the pole pairs are known) */
     mc_ident_circ_f32_t off_acc;
     mc_ident_avg_f32_t vq_acc;
+    /* Hall table */
+    mc_comm_hall_rec_t hall_rec;
+    uint32_t hall_code; /**< the last code read (8: none yet) */
     /* resistance / inductance */
     mc_ident_avg_f32_t v_acc, i_acc;
     float v1_v, i1_a, v2_v, i2_a;
@@ -222,6 +257,14 @@ void mc_comm_restart(mc_comm_t *c);
 void mc_comm_abort(mc_comm_t *c);
 /** The plug-in to attach (outputs PWM3, needs the encoder). */
 const mc_drive_ctrl_t *mc_comm_ops(mc_comm_t *c);
+
+/** The run ended on the drive's own fault (the plug-in was not asked): when
+ *  that was the ENCODER fault while the Hall table was swept, the Hall
+ *  adapter refused a code or a change of the table in force, and the
+ *  sensors, read now (the bridge is off, the rotor where it stopped), tell
+ *  which: 000 or 111, MC_COMM_ERR_HALL_CODES, else MC_COMM_ERR_HALL_ORDER.
+ *  0 otherwise. */
+uint32_t mc_comm_hall_fault_reason(const mc_comm_t *c, uint32_t drive_faults);
 
 static inline bool mc_comm_done(const mc_comm_t *c)
 {

@@ -259,6 +259,7 @@ void run_commission_scenario(RunContext& ctx) {
   record_truth(ctx, s, true_off, adc);
   CommissionFigures fig;
   fig.duration_s = c.duration_s;
+  if (f.board.encoder == kEncoderHall) fig.duration_max_s += MC_COMM_HALL_STEP_S;
   fig.error_names = commission_error_names(c.err);
   if (!c.done) return write_verdict(ctx.summary, judge_commission(fig));
   const mc_comm_result_t& v = c.res;

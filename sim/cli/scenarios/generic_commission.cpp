@@ -189,9 +189,9 @@ std::string commission_error_names(uint32_t e) {
       "OFFSET",        "NO_MOTOR",        "OPEN_PHASE",  "ENCODER_NO_MOTION",
       "ROTOR_BLOCKED", "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT",
       "VOLTAGE",       "RANGE",           "MEAS",        "ABORTED",
-      "HOST_LOST",     "ENCODER_COARSE"};
+      "HOST_LOST",     "ENCODER_COARSE",  "HALL_CODES",  "HALL_ORDER"};
   std::string s;
-  for (int i = 0; i < 14; ++i) {
+  for (int i = 0; i < 16; ++i) {
     if (e & (1u << i)) s += (s.empty() ? "" : "|") + std::string(names[i]);
   }
   return s;
@@ -227,6 +227,7 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
   const std::unique_ptr<AppTarget> target = make(p, [&](AppSetup& su) {
     configure_plant(f, s, su.board);
     if (s.plant) s.plant(su.board);
+    if (s.setup) s.setup(su);
   });
   AppRunner run(*target);
   hal_host::PmsmBoard& board = run.board();
@@ -236,7 +237,9 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
   const double t_start = board.t_s();  // the commissioning's time 0
   run.keep_host_alive();
   run.send(run.cmd().commission(MC_COMM_CAN_START, s.i_test_a, 0.0, 0.0));
-  const long n = step_count(s.t_max_s, board.period_s());
+  // the Hall table's step comes on top of the other steps' time
+  const double t_max_s = s.t_max_s + (f.board.encoder == kEncoderHall ? MC_COMM_HALL_STEP_S : 0.0);
+  const long n = step_count(t_max_s, board.period_s());
   CommissionFrames c;
   for (long k = 0; k <= n && !c.ended; ++k) {
     if (observe) observe(run, k);
@@ -259,6 +262,13 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
   out.tx_frames = run.frames_sent();
   if (out.done) {
     out.res = result_of(c);
+    // The Hall table has no COMMISSION_RESULT item: the SIL reads it from
+    // the parameter service's staged set, as a host reads parameters 166-173
+    const mc_params_t* st = target->staged();
+    if (st != nullptr && p.encoder_type == MC_PARAMS_ENCODER_HALL) {
+      out.res.have_hall = true;
+      out.res.hall = hall_table_of(*st);
+    }
     out.staged = staged_params(p, out.res);
   }
   return out;
@@ -266,6 +276,21 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
 
 CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s) {
   return run_commission(f, s, commission_booted_params(f), sil_factory(f));
+}
+
+mc_comm_hall_table_t hall_table_of(const mc_params_t& p) {
+  mc_comm_hall_table_t t{};
+  for (unsigned k = 0u; k < MC_HALL_SECTORS; ++k) {
+    t.code_of_sector[k] = static_cast<uint8_t>((p.hall_codes >> (3u * k)) & 7u);
+  }
+  t.edge_e_rad[0] = p.hall_edge0_e_rad;
+  t.edge_e_rad[1] = p.hall_edge1_e_rad;
+  t.edge_e_rad[2] = p.hall_edge2_e_rad;
+  t.edge_e_rad[3] = p.hall_edge3_e_rad;
+  t.edge_e_rad[4] = p.hall_edge4_e_rad;
+  t.edge_e_rad[5] = p.hall_edge5_e_rad;
+  t.hysteresis_e_rad = p.hall_hysteresis_e_rad;
+  return t;
 }
 
 mc_params_t staged_params(mc_params_t booted, const mc_comm_result_t& r) {
@@ -284,6 +309,21 @@ mc_params_t staged_params(mc_params_t booted, const mc_comm_result_t& r) {
     booted.b_nm_s_rad = r.b_nm_s_rad;
     booted.speed_kp_a_s_rad = 0.0f;  // derived from the identified inertia
     booted.speed_ki_a_rad = 0.0f;
+  }
+  if (r.have_hall) {  // the measured Hall table, against the d axis (mc_comm_can.c stage_hall)
+    booted.hall_codes = 0u;
+    for (unsigned k = 0u; k < MC_HALL_SECTORS; ++k) {
+      booted.hall_codes |= (static_cast<uint32_t>(r.hall.code_of_sector[k]) & 7u) << (3u * k);
+    }
+    booted.hall_edge0_e_rad = r.hall.edge_e_rad[0];
+    booted.hall_edge1_e_rad = r.hall.edge_e_rad[1];
+    booted.hall_edge2_e_rad = r.hall.edge_e_rad[2];
+    booted.hall_edge3_e_rad = r.hall.edge_e_rad[3];
+    booted.hall_edge4_e_rad = r.hall.edge_e_rad[4];
+    booted.hall_edge5_e_rad = r.hall.edge_e_rad[5];
+    booted.hall_hysteresis_e_rad = r.hall.hysteresis_e_rad;
+    booted.encoder_offset_rad = 0.0f;
+    booted.encoder_reversed = 0u;
   }
   return booted;
 }

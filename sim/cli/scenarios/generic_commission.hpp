@@ -51,6 +51,8 @@ struct CommissionSetup {
   // appears in the flux step).
   std::function<void(hal_host::PmsmBoardConfig&)> plant;
   std::function<void(hal_host::PmsmBoard&)> inject;
+  // the application's setup before it is built (the Hall inputs' faults)
+  std::function<void(AppSetup&)> setup;
   std::function<void(hal_host::PmsmBoard&, uint32_t step)> each_period;
 };
 
@@ -125,6 +127,8 @@ std::string commission_error_names(uint32_t err);
 /// to 0, derived from them, when the mechanics were measured), as the host
 /// APPLYs and SAVEs it.
 mc_params_t staged_params(mc_params_t booted, const mc_comm_result_t& r);
+/// The Hall table held in the parameters 166-173 of p.
+mc_comm_hall_table_t hall_table_of(const mc_params_t& p);
 
 /// A speed step to half the rated speed on make's target rebooted on the
 /// staged table with speed_law law (MC_LAW_SPEED_PI or _SENSORLESS), the

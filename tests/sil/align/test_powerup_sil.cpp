@@ -138,27 +138,31 @@ TEST(AlignPowerUpSil, IndexEncoderPassesTheSpeedStepAfterTheSearchAtEveryPowerUp
 // the board's Hall inputs, the drive's Hall kernel their angle) on the hub
 // motor of the library (15 pole pairs) on the ODrive v3.6 56 V description:
 // sensor A 3.0 rad el. from where the table's default puts sector 0, a 0.05
-// rad el. band (2.9 deg), the edges where the default table puts them
-// (commissioning does not measure the six edges yet: placement errors of
-// 0.03 rad el. move i_d by 1 A at each edge at speed, and the verdict's
-// 10 % of rated is then missed). Commissioning through the Hall angle (its scenario's verdict:
-// the offset within 1 degree el. of the sensors', flux 3 %, ...) stores the
-// offset; every power-up from the flash at the 8 angles then runs the
-// sensored speed step at once (no search, no alignment: the sector read at
-// the first sample references the angle, within 30 degrees el.) and passes
-// its verdict (within 2 % of the target in the steady window, |i_d| below 10
-// % of rated). The control: the same power-up without the flash (the
-// table's offset, 3.0 rad el. = 172 degrees from the sensors': positive
-// feedback) fails its verdict. The speed loop is derived from the Hall's
-// resolution: encoder_cpr 6 x 15 = 90, and the tracking loop's bandwidth
-// the gains' encoder bound for 90 counts (mc_gains_enc_bw_quant_rad_s).
+// rad el. band (2.9 deg), every edge placed 0.03 rad el. (1.7 deg) off
+// (rising +, falling -: the sectors alternately 3.4 deg wider and narrower).
+// Commissioning measures the table (its Hall step) and stores it with the
+// offset 0 (the edges are the d axis's angles); with the entered ideal
+// table the 0.03 rad placement errors moved i_d by 1 A at each edge at
+// speed and the verdict's 10 % of rated was missed. Its scenario's verdict
+// (the offset through the booted table within 1 degree el. of the
+// sensors', flux 3 %, ...) passes; every power-up from the flash at the 8
+// angles then runs the sensored speed step at once (no search, no
+// alignment: the sector read at the first sample references the angle,
+// within 30 degrees el.) and passes its verdict (within 2 % of the target
+// in the steady window, |i_d| below 10 % of rated). The control: the same
+// power-up without the flash (the table's default, sector 0 at 0, 3.0 rad
+// el. = 172 degrees from the sensors': positive feedback) fails its
+// verdict. The speed loop is derived from the Hall's resolution:
+// encoder_cpr 6 x 15 = 90, and the tracking loop's bandwidth the gains'
+// encoder bound for 90 counts (mc_gains_enc_bw_quant_rad_s).
 const std::string kHubMotor = std::string(MCSIM_MOTORS_DIR) + "/hub-6p5in-15pp.toml";
 const std::string kHubBoard = std::string(MCSIM_MOTORS_DIR) + "/odrive-v36-56v.toml";
 
 TEST(AlignPowerUpSil, HallSensorsPassTheSpeedStepAtOnceAtEveryPowerUp) {
   const Sets hall = {{"board.encoder", "hall"},
                      {"board.hall_offset_e_rad", "3.0"},
-                     {"board.hall_hysteresis_e_rad", "0.05"}};
+                     {"board.hall_hysteresis_e_rad", "0.05"},
+                     {"board.hall_edge_error_e_rad", "0.03"}};
   const std::string flash = tmp("hall.flash");
   std::filesystem::remove(flash);
   const RunResult c = commission(flash, hall, kHubMotor, kHubBoard);

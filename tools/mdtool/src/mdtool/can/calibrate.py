@@ -55,7 +55,7 @@ def rows(results, present, table):
 #: MC_COMM_ERR_* bit names (firmware/app/commission/mc_commission.h)
 ERROR_BITS = ["OFFSET", "NO_MOTOR", "OPEN_PHASE", "ENCODER_NO_MOTION", "ROTOR_BLOCKED",
               "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT", "VOLTAGE", "RANGE", "MEAS", "ABORTED",
-              "HOST_LOST", "ENCODER_COARSE"]
+              "HOST_LOST", "ENCODER_COARSE", "HALL_CODES", "HALL_ORDER"]
 ERROR_HELP = {
     "OFFSET": "a current-sensor offset is implausible (sensor broken?)",
     "NO_MOTOR": "no current flows on any axis: is a motor connected?",
@@ -73,6 +73,10 @@ ERROR_HELP = {
     "ENCODER_COARSE": "fewer than 12 encoder counts per electrical turn (a Hall-class"
                       " sensor): the flux step cannot measure the speed; give the motor's"
                       " values (flux from its KV) instead",
+    "HALL_CODES": "Hall table: a code 000 or 111, or fewer than six codes: a Hall sensor is"
+                  " stuck, unpowered or disconnected",
+    "HALL_ORDER": "Hall table: the codes do not change one sensor at a time round one cycle"
+                  " (wiring), or not in the order of the table in force",
 }
 
 
