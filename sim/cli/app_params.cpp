@@ -218,6 +218,16 @@ void set_angle_params(const Params& P, mc_params_t* p) {
   if (const auto it = v.find("encoder_latency_s"); it != v.end()) {
     p->encoder_latency_s = static_cast<float>(it->second);
   }
+  // the Hall + observer hand-over (firmware/app/drive/mc_drive_hallobs.h)
+  if (const auto it = v.find("hall_obs_start_e_rad_s"); it != v.end()) {
+    p->hall_obs_start_e_rad_s = static_cast<float>(it->second);
+  }
+  if (const auto it = v.find("hall_obs_end_e_rad_s"); it != v.end()) {
+    p->hall_obs_end_e_rad_s = static_cast<float>(it->second);
+  }
+  if (const auto it = v.find("hall_obs_disagree_e_rad"); it != v.end()) {
+    p->hall_obs_disagree_e_rad = static_cast<float>(it->second);
+  }
 }
 
 // The table resolved by the C derivation, refused with the reason named.
@@ -251,6 +261,11 @@ void refuse_law(const MotorFiles& f, const mc_params_t& p, uint32_t err) {
   std::string what = "the drive application refuses the parameter table built from " +
                      f.motor.file + " and " + f.board.file + ": MC_PARAMS_ERR " +
                      params_err_names(err);
+  if ((err & MC_PARAMS_ERR_HALL_OBS) != 0u) {
+    mc_drive_hallobs_cfg_t hc{};
+    what = "the Hall + observer hand-over refuses this table (MC_DRIVE_HALLOBS_ERR " +
+           hallobs_err_names(mc_law_hallobs_cfg(&p, &hc)) + "; " + what + ")";
+  }
   if ((err & MC_PARAMS_ERR_LAW) != 0u) {
     const char* name = p.speed_law == MC_LAW_SPEED_PI2D         ? "PI2D"
                        : p.speed_law == MC_LAW_SPEED_SENSORLESS ? "the sensorless law"
@@ -273,7 +288,23 @@ std::string params_err_names(uint32_t bits) {
                            {MC_PARAMS_ERR_LAW, "LAW"},
                            {MC_PARAMS_ERR_GAINS, "GAINS"},
                            {MC_PARAMS_ERR_ENCODER, "ENCODER"},
-                           {MC_PARAMS_ERR_BOARD, "BOARD"}});
+                           {MC_PARAMS_ERR_BOARD, "BOARD"},
+                           {MC_PARAMS_ERR_HALL_OBS, "HALL_OBS"}});
+}
+
+std::string hallobs_err_names(uint32_t bits) {
+  return join_names(
+      bits,
+      {{MC_DRIVE_HALLOBS_ERR_NULL, "NULL"},
+       {MC_DRIVE_HALLOBS_ERR_BLEND,
+        "BLEND: not 0 < hall_obs_start < hall_obs_end, or hall_obs_disagree not in (0, pi/2]"},
+       {MC_DRIVE_HALLOBS_ERR_OBSERVER, "OBSERVER: the flux observer refuses its gain"},
+       {MC_DRIVE_HALLOBS_ERR_PLL, "PLL"},
+       {MC_DRIVE_HALLOBS_ERR_TIMING, "TIMING"},
+       {MC_DRIVE_HALLOBS_ERR_NOT_HALL, "NOT_HALL: encoder_type is not the Hall sensors"},
+       {MC_DRIVE_HALLOBS_ERR_MOTOR,
+        "MOTOR: the observer needs R, L and flux (and a non-salient machine) as the sensorless "
+        "law"}});
 }
 
 std::string law_err_names(uint32_t bits) {
@@ -341,6 +372,15 @@ std::vector<ParamSpec> app_powerup_params(const MotorFiles& f) {
        "the table's parameter: the encoder's latency the drive advances the angle by "
        "(default from board.encoder: as5047p one PWM period, ma732 3 us, A/B 0)",
        0.0, 1e-3},
+      {"hall_obs_start_e_rad_s", static_cast<double>(d.hall_obs_start_e_rad_s), "rad/s",
+       "the table's parameter: the Hall + observer hand-over's start, |speed| el. (board.encoder "
+       "hall)",
+       0.0, 1e5},
+      {"hall_obs_end_e_rad_s", static_cast<double>(d.hall_obs_end_e_rad_s), "rad/s",
+       "the table's parameter: the hand-over's end, |speed| el.; 0 = off", 0.0, 1e5},
+      {"hall_obs_disagree_e_rad", static_cast<double>(d.hall_obs_disagree_e_rad), "rad",
+       "the table's parameter: the largest |observer - Hall| angle while the observer is used", 0.0,
+       1.5707964},
   };
 }
 

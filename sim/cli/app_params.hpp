@@ -70,6 +70,8 @@ mc_params_t params_from_files(const MotorFiles& f, const Params& overrides,
 /// (MC_GAINS_ERR_* | MC_LAW_ERR_*: "PI2D_COUPLING").
 std::string params_err_names(uint32_t bits);
 std::string law_err_names(uint32_t bits);
+/// The names of the Hall + observer hand-over's refusals (MC_DRIVE_HALLOBS_ERR_*).
+std::string hallobs_err_names(uint32_t bits);
 
 /// The motor, board and every gain of the booted table (mc_params_resolve:
 /// the C derivation) into the summary (motor.*, board.*, gain.*, param.*).

@@ -176,6 +176,7 @@ void AppRecorder::header() {
   std::vector<std::string> c = {"t",         "i_d_a",         "i_q_a",           "i_d_ref_a",
                                 "i_q_ref_a", "omega_m_rad_s", "omega_ref_rad_s", "theta_e_rad"};
   if (hat) c.insert(c.end(), {"theta_e_hat_rad", "omega_if_rad_s"});
+  if (used) c.emplace_back("theta_e_used_rad");
   c.insert(c.end(), {"v_d_v", "v_q_v", "fault_1"});
   ctx.csv.columns(c);
 }
@@ -186,7 +187,7 @@ void AppRecorder::row(double t, double id, double iq, double w) {
   const double th = theta_e_true();
   const Eigen::Vector2d& v = run.board().v_alpha_beta_applied();
   const double c = std::cos(th), s = std::sin(th);
-  double r[13];
+  double r[14];
   size_t n = 0;
   for (double x : {t, id, iq, static_cast<double>(p.id_ref_a), static_cast<double>(p.iq_ref_a), w,
                    static_cast<double>(p.omega_ref_rad_s), th}) {
@@ -200,6 +201,7 @@ void AppRecorder::row(double t, double id, double iq, double w) {
     r[n++] = p.sls_phase == MC_CTRL_SLS_CLOSED ? std::nan("")
                                                : static_cast<double>(p.sls_omega_if_rad_s);
   }
+  if (used) r[n++] = std::remainder(static_cast<double>(p.theta_e_rad), 6.283185307179586);
   r[n++] = c * v(0) + s * v(1);
   r[n++] = -s * v(0) + c * v(1);
   r[n++] = static_cast<double>(p.faults);

@@ -77,6 +77,9 @@ struct AppRecorder {
   bool hat = false;
   long every = 1;
   long k = 0;
+  /// a column theta_e_used_rad: the angle the drive's current loop used
+  /// (the Hall + observer hand-over's blend, or the encoder's)
+  bool used = false;
   void header();
   void row(double t, double id, double iq, double w);
   double theta_e_true();

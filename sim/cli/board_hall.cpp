@@ -46,9 +46,13 @@ double hall_true_offset(const MotorFiles& f) {
 }
 
 std::string hall_err_names(uint32_t bits) {
-  static const char* const names[] = {"NULL", "CFG", "ILLEGAL", "SEQUENCE"};
+  // MC_HALL_ERR_* (bits 0..3) and the hand-over's fallback
+  // (MC_DRIVE_HALL_ERR_OBS_DISAGREE, _OBS_NAN: bits 8, 9)
+  static const char* const names[] = {"NULL", "CFG", "ILLEGAL", "SEQUENCE",     "",
+                                      "",     "",    "",        "OBS_DISAGREE", "OBS_NAN"};
   std::string s;
-  for (uint32_t i = 0; i < 4u; ++i) {
+  for (uint32_t i = 0; i < 10u; ++i) {
+    if (names[i][0] == '\0') continue;
     if ((bits & (1u << i)) != 0u) s += (s.empty() ? "" : "|") + std::string(names[i]);
   }
   return s.empty() ? "none" : s;

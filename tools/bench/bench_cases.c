@@ -42,6 +42,7 @@
 #include "math/mc_math.h"
 #include "math/mc_q31.h"
 #include "mc_drive.h"
+#include "mc_drive_hallobs.h"
 #include "observer/mc_fluxobs.h"
 #include "observer/mc_spdpll.h"
 #include "pi/mc_pi.h"
@@ -108,6 +109,9 @@ static mc_foc_f32_t g_foc;
 static mc_foc_f32_cfg_t g_foc_cfg;
 static mc_foc_f32_t g_foc_sls;
 static mc_fluxobs_f32_t g_obs;
+/* Hall + observer with the hand-over on (mc_drive_hallobs.h): its step is
+ * what the drive's fast step adds then; off, one pointer test. */
+static mc_drive_hallobs_t g_hallobs;
 static mc_spdpll_f32_t g_pll;
 static mc_pi2d_f32_t g_pi2d;
 static mc_pi2d_f32_out_t g_pi2d_out; /* the step's only output (last call's) */
@@ -290,6 +294,20 @@ static NOINLINE void c_drive_fast_f32(uint32_t i)
     bench_sink_u32(mc_drive_fast_step(&g_drive) ? 1u : 0u);
 }
 
+/* The whole path of a step in which the observer carries weight: the
+ * Hall angle at the observer's (no disagreement on these random inputs),
+ * past the settle after its start, no fallback (three stores of the
+ * harness in the count). */
+static NOINLINE void c_drive_hallobs_f32(uint32_t i)
+{
+    g_hallobs.running = true;
+    g_hallobs.settle_left = 0u;
+    g_hallobs.fallback = false;
+    const mc_drive_hallobs_in_t in = {
+        g_in.y[i], g_in.z[i], g_in.va[i], g_in.vb[i], g_hallobs.obs.theta_e_rad, 2000.0f};
+    sink_f32(mc_drive_hallobs_step(&g_hallobs, &in));
+}
+
 static NOINLINE void c_fluxobs_f32(uint32_t i)
 {
     bench_sink_u32(mc_fluxobs_f32_step(&g_obs, g_in.va[i], g_in.vb[i], g_in.y[i], g_in.z[i]));
@@ -385,6 +403,7 @@ static const bench_case_t k_cases[] = {
     {"drive_fast_step_sensored", "f32", "fast_loop", c_drive_fast_f32, BENCH_N},
     {"fluxobs_step", "f32", "kernel", c_fluxobs_f32, BENCH_N},
     {"spdpll_step", "f32", "kernel", c_spdpll_f32, BENCH_N},
+    {"drive_hallobs_step", "f32", "fast_loop", c_drive_hallobs_f32, BENCH_N},
     {"foc_step_sensorless", "f32", "fast_loop", c_foc_sensorless_f32, BENCH_N},
     {"pi2d_step", "f32", "fast_loop", c_pi2d_f32, BENCH_N},
     {"hgo_step", "f32", "kernel", c_hgo_f32, BENCH_N},
@@ -595,6 +614,23 @@ int bench_setup(void)
         .bw_rad_s = 500.0f, .dt_s = 5.0e-5f, .omega_max_rad_s = 6000.0f};
     if (mc_fluxobs_f32_init(&g_obs, &oc) != 0u || mc_spdpll_f32_init(&g_pll, &plc) != 0u) {
         return 1;
+    }
+    {
+        /* the observer above, the hand-over from 500 to 1000 rad/s el. */
+        const mc_drive_hallobs_cfg_t hc = {.blend = {500.0f, 1000.0f, 0.785f},
+                                           .r_ohm = oc.r_ohm,
+                                           .l_h = oc.l_h,
+                                           .flux_wb = oc.flux_wb,
+                                           .gamma = oc.gamma,
+                                           .resid_tol = oc.resid_tol,
+                                           .resid_time_s = oc.resid_time_s,
+                                           .pll_bw_rad_s = plc.bw_rad_s,
+                                           .omega_max_e_rad_s = plc.omega_max_rad_s,
+                                           .dt_s = oc.dt_s,
+                                           .pwm_delay_periods = 1u};
+        if (mc_drive_hallobs_init(&g_hallobs, &hc) != 0u) {
+            return 1;
+        }
     }
     mc_drive_cfg_t dc;
     memset(&dc, 0, sizeof dc);

@@ -613,6 +613,38 @@ static void boot_service(mc_app_t *a)
 /* encoder_type 1: the Hall kernel on the board's inputs becomes the
  * drive's encoder (mc_drive_hall.h), in a copy of the board's HAL; NULL
  * when the table or the pole pairs are refused. */
+/* The Hall + observer hand-over (hall_obs_end_e_rad_s > 0, validated with
+ * the set: MC_PARAMS_ERR_HALL_OBS): attached to the drive just initialised.
+ * Off: nothing attached, the drive's step pays one pointer test. */
+static bool bind_hallobs(mc_app_t *a, const mc_params_t *p)
+{
+    mc_drive_hallobs_cfg_t hc;
+    a->hallobs_on = false;
+    if (!(p->hall_obs_end_e_rad_s > 0.0f)) {
+        return true;
+    }
+    if ((mc_law_hallobs_cfg(p, &hc) != MC_DRIVE_HALLOBS_ERR_NONE) ||
+        (mc_drive_hallobs_init(&a->hallobs, &hc) != MC_DRIVE_HALLOBS_ERR_NONE) ||
+        (mc_drive_attach_hallobs(a->drive, &a->hallobs) != 0)) {
+        return false;
+    }
+    a->hallobs_on = true;
+    return true;
+}
+
+/* The hall_error parameter: the Hall kernel's reasons and the hand-over's
+ * fallback (mc_drive_hallobs.h). */
+static uint32_t hall_error_of(const mc_app_t *a)
+{
+    uint32_t e = a->hall.error;
+    if (a->hallobs_on) {
+        e |= ((a->hallobs.flags & MC_HALLOBS_ERR_DISAGREE) != 0u) ? MC_DRIVE_HALL_ERR_OBS_DISAGREE
+                                                                  : 0u;
+        e |= ((a->hallobs.flags & MC_HALLOBS_ERR_NAN) != 0u) ? MC_DRIVE_HALL_ERR_OBS_NAN : 0u;
+    }
+    return e;
+}
+
 static const mc_hal_t *bind_hall(mc_app_t *a, const mc_hal_t *hal, const mc_params_t *p)
 {
     mc_drive_hall_cfg_t hc;
@@ -666,6 +698,9 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
         app->drive_err = mc_drive_init(drive, &dc, hal);
         if (app->drive_err != MC_DRIVE_CFG_OK) {
             return MC_APP_CFG_ERR_DRIVE;
+        }
+        if (!bind_hallobs(app, p)) {
+            return MC_APP_CFG_ERR_PARAMS;
         }
     }
     if ((p->slow_loop_div == 0u) || ((p->pwm_hz % p->slow_loop_div) != 0u)) {
@@ -932,7 +967,8 @@ uint32_t mc_app_slow_work(mc_app_t *app)
         app->faults = MC_APP_FAULT_NONE; /* CLEAR_FAULTS went through */
     }
     app->cmd.can_state = (uint8_t)mc_app_can_state(app);
-    app->srv.hall_error = app->hall.error;
+    app->srv.hall_error = hall_error_of(app);
+    app->srv.hall_obs_weight = app->hallobs_on ? app->hallobs.w_obs : 0.0f;
     app->tm_sent = mc_telemetry_step(&app->tm, can, &app->tm_src);
     status_send(app);
     wdg_service(app);
@@ -982,7 +1018,7 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
     p->angle_state = mc_drive_angle_state(d);
     p->angle_finding = app->angle_running ? 1u : 0u;
     p->angle_error = app->angle_error;
-    p->hall_error = app->hall.error;
+    p->hall_error = hall_error_of(app);
     p->t_winding_est_c = d->thermal.t_w_c;
     p->i_limit_a = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
     if ((ctrl != NULL) && app->cfg.laws_from_params) {

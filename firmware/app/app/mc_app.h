@@ -255,14 +255,16 @@ typedef struct {
 /* Fields ordered by size (pointers, structs, words, bytes): no padding. */
 typedef struct {
     mc_drive_t *drive;
-    const mc_hal_t *hal;       /**< the drive's board */
-    const mc_hal_can_t *can;   /**< the CAN bus, or NULL */
-    mc_comm_can_t *comm;       /**< commissioning over CAN, or NULL */
-    mc_hal_flash_t flash_wrap; /**< the store's flash: stretches the watchdog */
-    mc_hal_t hal_hall;         /**< the board's HAL with the Hall as its encoder
+    const mc_hal_t *hal;        /**< the drive's board */
+    const mc_hal_can_t *can;    /**< the CAN bus, or NULL */
+    mc_comm_can_t *comm;        /**< commissioning over CAN, or NULL */
+    mc_hal_flash_t flash_wrap;  /**< the store's flash: stretches the watchdog */
+    mc_hal_t hal_hall;          /**< the board's HAL with the Hall as its encoder
                                     (encoder_type 1: hal points here) */
-    mc_drive_hall_t hall;      /**< the Hall sensors as the drive's encoder */
-    mc_param_hook_t cmd_hook;  /**< the command handler's APPLY hook, chained */
+    mc_drive_hall_t hall;       /**< the Hall sensors as the drive's encoder */
+    mc_drive_hallobs_t hallobs; /**< Hall + observer (hall_obs_end_e_rad_s > 0) */
+    bool hallobs_on;            /**< hallobs attached to the drive */
+    mc_param_hook_t cmd_hook;   /**< the command handler's APPLY hook, chained */
     mc_telemetry_src_t tm_src;
     mc_can_cmd_t cmd;
     mc_app_cfg_t cfg;
@@ -323,7 +325,8 @@ typedef struct {
     float id_ref_a, iq_ref_a; /**< the current loop's references (PI2D: the law's) */
     float id_a, iq_a;         /**< measured, in the loop's frame [A] */
     float vd_v, vq_v;         /**< the loop's voltage [V] */
-    float theta_e_rad;        /**< the encoder's electrical angle [rad] */
+    float theta_e_rad;        /**< the electrical angle the drive used [rad] (the encoder's,
+                                   or the Hall + observer blend: mc_drive_hallobs.h) */
     float omega_m_rad_s;      /**< the encoder tracking loop's speed [rad/s] */
     float vbus_v;
     float regen_scale, brake_duty;

@@ -178,6 +178,43 @@ void mc_law_motor_from_params(const mc_params_t *p, mc_gains_motor_t *m)
     m->encoder_latency_s = (double)p->encoder_latency_s;
 }
 
+uint32_t mc_law_hallobs_cfg(const mc_params_t *p, mc_drive_hallobs_cfg_t *c)
+{
+    mc_gains_motor_t m;
+    mc_gains_t g;
+    mc_ctrl_sls_cfg_t s;
+    mc_drive_hallobs_t probe;
+    uint32_t err = MC_DRIVE_HALLOBS_ERR_NONE;
+
+    (void)memset(c, 0, sizeof *c);
+    c->blend.omega_start_e_rad_s = p->hall_obs_start_e_rad_s;
+    c->blend.omega_end_e_rad_s = p->hall_obs_end_e_rad_s;
+    c->blend.disagree_max_e_rad = p->hall_obs_disagree_e_rad;
+    if (p->encoder_type != MC_PARAMS_ENCODER_HALL) {
+        err |= MC_DRIVE_HALLOBS_ERR_NOT_HALL;
+    }
+    if ((mc_law_gains_from_params(p, &m, &g) != MC_GAINS_OK) || !(m.r_ohm >= 0.0) ||
+        !(m.lq_h > 0.0) || !(m.flux_wb > 0.0) ||
+        (dabs(m.ld_h - m.lq_h) > 0.05 * dmax(m.ld_h, m.lq_h))) {
+        return err | MC_DRIVE_HALLOBS_ERR_MOTOR;
+    }
+    mc_law_sls_cfg(&m, &g, &s);
+    c->r_ohm = s.r_ohm;
+    c->l_h = s.l_h;
+    c->flux_wb = s.flux_wb;
+    if (mc_fluxobs_f32_gamma_for_critical_speed(s.omega_crit_m_rad_s, s.pole_pairs, s.flux_wb,
+                                                &c->gamma) != MC_FLUXOBS_ERR_NONE) {
+        err |= MC_DRIVE_HALLOBS_ERR_OBSERVER;
+    }
+    c->resid_tol = s.resid_tol;
+    c->resid_time_s = s.resid_time_s;
+    c->pll_bw_rad_s = s.pll_bw_rad_s;
+    c->omega_max_e_rad_s = 2.0f * s.speed_max_rad_s * (float)s.pole_pairs;
+    c->dt_s = s.dt_s;
+    c->pwm_delay_periods = s.pwm_delay_periods;
+    return err | mc_drive_hallobs_init(&probe, c);
+}
+
 uint32_t mc_law_speed_check(const mc_params_t *p)
 {
     mc_gains_motor_t m;

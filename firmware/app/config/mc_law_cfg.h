@@ -24,6 +24,7 @@
 #include "mc_ctrl_position.h"
 #include "mc_ctrl_sensorless.h"
 #include "mc_ctrl_speed.h"
+#include "mc_drive_hallobs.h"
 #include "mc_gains.h"
 #include "mc_params.h"
 
@@ -97,6 +98,15 @@ void mc_law_speed_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_sp
 void mc_law_find_cfg(const mc_params_t *p, const mc_gains_motor_t *m, const mc_gains_t *g,
                      const mc_drive_cfg_t *dc, const mc_hal_encoder_t *p_enc,
                      mc_ctrl_align_cfg_t *al, mc_ctrl_idx_cfg_t *ix);
+
+/** The Hall + observer hand-over of a parameter set (mc_drive_hallobs.h):
+ *  start, end and disagree from hall_obs_*, the observer and its PLL as the
+ *  sensorless law's (mc_law_sls_cfg: R, L = lq, flux, gamma from the
+ *  critical speed, its monitor, the PLL bandwidth, the PWM delay; the PLL's
+ *  clamp twice the speed limit). Returns MC_DRIVE_HALLOBS_ERR_* bits:
+ *  NOT_HALL (encoder_type not 1), MOTOR (see there), and
+ *  mc_drive_hallobs_init's refusals; 0: *c runs. */
+uint32_t mc_law_hallobs_cfg(const mc_params_t *p, mc_drive_hallobs_cfg_t *c);
 
 /** The motor and board values of a parameter set (one PWM period of
  *  computation delay, as the drive's fast loop writes the duties for the

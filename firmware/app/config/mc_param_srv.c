@@ -7,6 +7,7 @@
 #include "mc_law_cfg.h"
 
 #include <stddef.h>
+#include <string.h>
 
 int mc_param_srv_init(mc_param_srv_t *s, const mc_params_t *p, mc_drive_t *drive,
                       const mc_hal_t *hal, mc_cfg_store_t *store, uint8_t boot_status)
@@ -79,6 +80,11 @@ static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
         return s->angle_error;
     case MC_PARAM_ID_HALL_ERROR:
         return s->hall_error;
+    case MC_PARAM_ID_HALL_OBS_WEIGHT: {
+        uint32_t u;
+        (void)memcpy(&u, &s->hall_obs_weight, sizeof u);
+        return u;
+    }
     default:
         return mc_param_get_raw(&s->staged, info);
     }

@@ -375,5 +375,11 @@ uint32_t mc_params_validate(const mc_params_t *p)
     if (mc_law_speed_check(p) != 0u) {
         err |= MC_PARAMS_ERR_LAW;
     }
+    if (p->hall_obs_end_e_rad_s > 0.0f) {
+        mc_drive_hallobs_cfg_t hc;
+        if (mc_law_hallobs_cfg(p, &hc) != MC_DRIVE_HALLOBS_ERR_NONE) {
+            err |= MC_PARAMS_ERR_HALL_OBS;
+        }
+    }
     return err;
 }

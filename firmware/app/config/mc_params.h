@@ -76,6 +76,11 @@ typedef enum {
                     board's own (the application's checks, mc_app.h);
                     vbus_max_v above vbus_board_max_v, or vbus_v not
                     below it */
+#define MC_PARAMS_ERR_HALL_OBS \
+    (1u << 12) /**< the Hall + observer hand-over is on (hall_obs_end_e_rad_s
+                    > 0) and cannot run: mc_law_hallobs_cfg names why
+                    (MC_DRIVE_HALLOBS_ERR_*: not a Hall encoder, the
+                    observer's motor values, start / end / disagree) */
 #define MC_PARAMS_ERR_ANGLE_REF \
     (1u << 11) /**< angle_ref index or align (or angle_find_at_enable) on
                     a drive without an encoder (encoder_cpr 0) */

@@ -116,6 +116,9 @@ const mc_params_t mc_params_default = {
     .hall_edge5_e_rad = 5.2359877f,
     .hall_hysteresis_e_rad = 0.0f,
     .hall_omega_min_e_rad_s = 50.0f,
+    .hall_obs_start_e_rad_s = 0.0f,
+    .hall_obs_end_e_rad_s = 0.0f,
+    .hall_obs_disagree_e_rad = 0.7853982f,
 };
 
 #define NO_FIELD MC_PARAM_NO_FIELD
@@ -233,6 +236,10 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {172u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_edge5_e_rad), {.f = -6.2831855f}, {.f = 6.2831855f}, {.f = 5.2359877f}}, /* hall_edge5_e_rad */
     {173u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_hysteresis_e_rad), {.f = 0.0f}, {.f = 0.5f}, {.f = 0.0f}}, /* hall_hysteresis_e_rad */
     {174u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_omega_min_e_rad_s), {.f = 0.1f}, {.f = 10000.0f}, {.f = 50.0f}}, /* hall_omega_min_e_rad_s */
+    {175u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_obs_start_e_rad_s), {.f = 0.0f}, {.f = 100000.0f}, {.f = 0.0f}}, /* hall_obs_start_e_rad_s */
+    {176u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_obs_end_e_rad_s), {.f = 0.0f}, {.f = 100000.0f}, {.f = 0.0f}}, /* hall_obs_end_e_rad_s */
+    {177u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_obs_disagree_e_rad), {.f = 0.0f}, {.f = 1.5707964f}, {.f = 0.7853982f}}, /* hall_obs_disagree_e_rad */
+    {178u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.f = 0.0f}, {.f = 1.0f}, {.f = 0.0f}}, /* hall_obs_weight */
     {179u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* hall_error */
     {200u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_layout_version */
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
@@ -355,6 +362,10 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "hall_edge5_e_rad",
     "hall_hysteresis_e_rad",
     "hall_omega_min_e_rad_s",
+    "hall_obs_start_e_rad_s",
+    "hall_obs_end_e_rad_s",
+    "hall_obs_disagree_e_rad",
+    "hall_obs_weight",
     "hall_error",
     "cfg_layout_version",
     "cfg_store_status",
@@ -477,6 +488,10 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "rad",
     "rad",
     "rad/s",
+    "rad/s",
+    "rad/s",
+    "rad",
+    "",
     "",
     "",
     "",

@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 119u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 112u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 123u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 115u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -129,6 +129,10 @@
 #define MC_PARAM_ID_HALL_EDGE5_E_RAD 172u
 #define MC_PARAM_ID_HALL_HYSTERESIS_E_RAD 173u
 #define MC_PARAM_ID_HALL_OMEGA_MIN_E_RAD_S 174u
+#define MC_PARAM_ID_HALL_OBS_START_E_RAD_S 175u
+#define MC_PARAM_ID_HALL_OBS_END_E_RAD_S 176u
+#define MC_PARAM_ID_HALL_OBS_DISAGREE_E_RAD 177u
+#define MC_PARAM_ID_HALL_OBS_WEIGHT 178u
 #define MC_PARAM_ID_HALL_ERROR 179u
 #define MC_PARAM_ID_CFG_LAYOUT_VERSION 200u
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
@@ -250,13 +254,17 @@
 #define MC_PARAM_IDX_HALL_EDGE5_E_RAD 109u
 #define MC_PARAM_IDX_HALL_HYSTERESIS_E_RAD 110u
 #define MC_PARAM_IDX_HALL_OMEGA_MIN_E_RAD_S 111u
-#define MC_PARAM_IDX_HALL_ERROR 112u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 113u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 114u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 115u
-#define MC_PARAM_IDX_CFG_PENDING 116u
-#define MC_PARAM_IDX_LAW_ERROR 117u
-#define MC_PARAM_IDX_ANGLE_ERROR 118u
+#define MC_PARAM_IDX_HALL_OBS_START_E_RAD_S 112u
+#define MC_PARAM_IDX_HALL_OBS_END_E_RAD_S 113u
+#define MC_PARAM_IDX_HALL_OBS_DISAGREE_E_RAD 114u
+#define MC_PARAM_IDX_HALL_OBS_WEIGHT 115u
+#define MC_PARAM_IDX_HALL_ERROR 116u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 117u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 118u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 119u
+#define MC_PARAM_IDX_CFG_PENDING 120u
+#define MC_PARAM_IDX_LAW_ERROR 121u
+#define MC_PARAM_IDX_ANGLE_ERROR 122u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -372,6 +380,9 @@ typedef struct {
     float hall_edge5_e_rad; /**< Electrical angle where Hall sector 5 begins (the d axis at 0), as commissioning measures it; sectors 10 to 110 degrees wide, in order round the turn; default the ideal 120-degree placement, 5 x 60 degrees (encoder_type 1). [rad] */
     float hall_hysteresis_e_rad; /**< The Hall sensors' full hysteresis band [rad el.]: an edge is seen at edge + h/2 turning positive, edge - h/2 turning negative; below half the narrowest sector (encoder_type 1). [rad] */
     float hall_omega_min_e_rad_s; /**< Electrical speed from which the Hall angle is interpolated between edges with the edge-interval speed [rad/s el.]; below it the angle is the last edge's (encoder_type 1). Default 50: 8 times commissioning's sweep (one electrical turn a second), whose offset and pole pairs are read on the edges themselves; a sector lasts 21 ms there. [rad/s] */
+    float hall_obs_start_e_rad_s; /**< Hall + observer hand-over (firmware/app/drive/mc_drive_hallobs.h): at and below this |speed| of the flux observer's PLL [rad/s el.] the Hall angle alone; the observer's weight ramps from 0 here to 1 at hall_obs_end_e_rad_s. With the hand-over on: above 0, below hall_obs_end_e_rad_s (encoder_type 1). [rad/s] */
+    float hall_obs_end_e_rad_s; /**< Hall + observer hand-over: at and above this |speed| [rad/s el.] the flux observer's angle alone (it runs with its PLL beside the Hall angle while the current loop drives the bridge). 0: hand-over off, the Hall angle as it is. On: needs encoder_type 1 and the observer's motor values (r_ohm, l_h, flux_wb, a non-salient machine) the sensorless law needs; refused MC_PARAMS_ERR_HALL_OBS otherwise. [rad/s] */
+    float hall_obs_disagree_e_rad; /**< Hall + observer hand-over: largest |observer - Hall| angle [rad el.] while the observer carries weight, in (0, pi/2]; beyond it the drive falls back to the Hall angle until the next enable and hall_error gets 256 (OBS_DISAGREE). Above the Hall angle's error (below 30 degrees with a measured table), default 45 degrees. [rad] */
 } mc_params_t;
 
 /** Defaults ("load defaults", and a drive with an empty store). */

@@ -858,6 +858,10 @@ static void thermal_slow(mc_drive_t *d, float slow_dt)
         /* ki = R bw at the winding estimate (a scale in copper's range:
          * mc_drive_thermal_r_scale of a finite estimate; refused, ki stays) */
         (void)mc_foc_f32_set_r_scale(&d->foc, mc_drive_thermal_r_scale(&d->thermal));
+        if (d->hallobs != NULL) {
+            /* the observer's R as the sensorless law's (refused: R stays) */
+            (void)mc_drive_hallobs_set_r_scale(d->hallobs, mc_drive_thermal_r_scale(&d->thermal));
+        }
     }
 }
 
@@ -943,6 +947,28 @@ static void fill_meas(mc_drive_t *d, const mc_hal_adc_sample_t *s, float ic, boo
     m->v_beta_prev_v = d->v_ab_prev_v[1];
 }
 
+/* Hall + observer (mc_drive_hallobs.h): in a step in which the current
+ * loop drives the bridge, the angle every sensored path uses is the blend;
+ * otherwise the observer waits for the next such step, which starts it
+ * from the Hall angle. ok: the sample and the encoder are valid, no fault. */
+static void hallobs_angle(mc_drive_t *d, bool ok, const mc_hal_adc_sample_t *s)
+{
+    const mc_drive_mode_t md = d->mode;
+    const bool law_loop =
+        (d->ctrl != NULL) && (d->ctrl->outputs == MC_DRIVE_OUT_CURRENT) && !d->ctrl->finds_angle;
+    const bool loop = (md == MC_DRIVE_MODE_CURRENT) ||
+                      ((md == MC_DRIVE_MODE_STOPPING) && (!d->stop_from_ctrl || law_loop)) ||
+                      ((md == MC_DRIVE_MODE_CTRL) && law_loop);
+    if (!ok || !loop) {
+        mc_drive_hallobs_stop(d->hallobs);
+        return;
+    }
+    const mc_drive_hallobs_in_t in = {
+        s->ia_a,           s->ib_a,           d->v_ab_prev_v[0],
+        d->v_ab_prev_v[1], d->tm.theta_e_rad, d->enc_trk.omega_rad_s * (float)d->cfg.pole_pairs};
+    d->tm.theta_e_rad = mc_drive_hallobs_step(d->hallobs, &in);
+}
+
 bool mc_drive_fast_step(mc_drive_t *d)
 {
     uint32_t f = 0u;
@@ -990,6 +1016,9 @@ bool mc_drive_fast_step(mc_drive_t *d)
         }
     }
 
+    if (d->hallobs != NULL) {
+        hallobs_angle(d, (arc == 0) && have_enc && (f == 0u), &s);
+    }
     if (stop_reversed(d, have_enc)) {
         stop_end(d);
     }
@@ -1185,6 +1214,21 @@ int mc_drive_set_encoder_offset(mc_drive_t *d, float offset_e_rad)
     }
     d->cfg.encoder_offset_rad = offset_e_rad;
     d->aligned = true;
+    return 0;
+}
+
+int mc_drive_attach_hallobs(mc_drive_t *d, mc_drive_hallobs_t *h)
+{
+    if (d->mode != MC_DRIVE_MODE_IDLE && d->mode != MC_DRIVE_MODE_FAULT) {
+        return -EBUSY;
+    }
+    if ((h != NULL) && (d->hal->encoder == NULL)) {
+        return -ENODEV;
+    }
+    if (h != NULL) {
+        mc_drive_hallobs_stop(h);
+    }
+    d->hallobs = h;
     return 0;
 }
 

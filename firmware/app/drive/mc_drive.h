@@ -91,6 +91,7 @@
 #include "foc/mc_foc.h"
 #include "fw/mc_fw.h"
 #include "mc_drive_bus.h"
+#include "mc_drive_hallobs.h"
 #include "observer/mc_enctrack.h"
 #include "hal/hal.h"
 #include "mc_drive_thermal.h"
@@ -453,7 +454,8 @@ typedef struct {
     float vbus_v;           /**< DC bus [V] */
     bool have_encoder;      /**< the fields below are valid */
     float theta_m_rad;      /**< encoder mechanical angle, [0, 2 pi) */
-    float theta_e_rad;      /**< pole_pairs * theta_m + offset, [0, 2 pi) */
+    float theta_e_rad;      /**< pole_pairs * theta_m + offset, [0, 2 pi); with the Hall +
+                                 observer hand-over attached, its blend */
     float omega_m_rad_s;    /**< encoder tracking-loop speed [rad/s] */
     uint32_t enc_count;     /**< count in the rotor's positive direction (encoder_reversed
                               applied, as theta_m_rad), 0 .. enc_cpr - 1: what a law
@@ -596,7 +598,9 @@ typedef struct {
     float regen_lead_alpha; /**< that filter's factor per fast step, dt / (t_lead + dt) */
     mc_drive_bus_t bus;     /**< the DC-bus limits' state and estimate (mc_drive_bus.h) */
     bool bus_on;            /**< a DC-bus limit is set (cfg.bus): the limiter runs */
-    mc_drive_thermal_t thermal; /**< derating factor, winding estimate (mc_drive_thermal.h) */
+    mc_drive_thermal_t thermal;  /**< derating factor, winding estimate (mc_drive_thermal.h) */
+    mc_drive_hallobs_t *hallobs; /**< Hall + observer (mc_drive_hallobs.h), or NULL: the
+                                      encoder's angle as it is */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns
@@ -648,6 +652,16 @@ int mc_drive_set_encoder_offset(mc_drive_t *d, float offset_e_rad);
  *  (no fast function, unknown outputs); -ENODEV (the board lacks the bridge
  *  the law drives, or the encoder it needs). On error nothing changes. */
 int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl);
+
+/** Attach (or, with NULL, detach) the Hall + observer hand-over
+ *  (mc_drive_hallobs.h, initialised by the caller, outliving the drive's use
+ *  of it): from then on, in every step in which the current loop drives the
+ *  bridge (CURRENT, the drive's stop, a law giving current references that
+ *  does not find the angle itself) the electrical angle is its blend of the
+ *  encoder's (the Hall) angle and the flux observer's. Only while not
+ *  running (IDLE or FAULT); an mc_drive_init detaches it. Returns 0, -EBUSY
+ *  while running, -ENODEV without an encoder. */
+int mc_drive_attach_hallobs(mc_drive_t *d, mc_drive_hallobs_t *h);
 
 /** Controlled stop (STOPPING, see Modes) from CURRENT or CTRL; IDLE at
  *  once when stop_decel_rad_s2 is 0 or the law has no stop op. Returns 0

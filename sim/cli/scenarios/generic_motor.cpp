@@ -13,6 +13,7 @@
 #include <string>
 
 #include "app_scenario.hpp"
+#include "board_hall.hpp"
 #include "app_params.hpp"
 #include "rise_timer.hpp"
 #include "scenario.hpp"
@@ -331,6 +332,7 @@ void run_speed(RunContext& ctx, bool load_step) {
   const double T = board.period_s();
   const long n = step_count(dur, T);
   AppRecorder rec{ctx, run, f.motor.pole_pairs, false, csv_every(ctx, n)};
+  rec.used = f.board.encoder == kEncoderHall;
   rec.header();
   const double band = 0.02 * std::abs(w_t);
   double last_out = t0, id_max_ss = 0, iq_max = 0, w = 0, id = 0, iq = 0, werr_max_ss = 0;
@@ -378,6 +380,11 @@ void run_speed(RunContext& ctx, bool load_step) {
   const mc_app_probe_t& d = run.probe();
   ctx.summary.set_text("law", pi2d ? "pi2d" : "pi");
   ctx.summary.set("faults", d.faults);
+  if (f.board.encoder == kEncoderHall) {
+    // the Hall's reasons and the hand-over's fallback (the parameter hall_error)
+    ctx.summary.set("hall_error", d.hall_error);
+    ctx.summary.set_text("hall_error_names", hall_err_names(d.hall_error));
+  }
   if (!stopped.empty()) {
     ctx.summary.set_text("fault_names", stopped);
     return write_verdict(ctx.summary, d.faults != 0u ? faulted(d.faults, stopped)
