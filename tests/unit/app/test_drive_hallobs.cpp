@@ -48,9 +48,21 @@ double wrap_pi(double x)
     return std::remainder(x, 2.0 * kPi);
 }
 
-// A rotor at omega [rad/s el.] from angle 0, no current: the voltage over
-// the period that ended at step n is the back-EMF at the period's middle
-// (exact for a constant speed: the flux's chord over the period).
+// The module's inputs for a rotor with no current that turned from th0 to
+// th1 [rad el.] over the period that just ended at omega [rad/s el.]: the
+// voltage is the back-EMF, the flux's chord over the period (exact for a
+// constant speed); the Hall angle hall_err off the rotor's.
+mc_drive_hallobs_in_t inputs(double th0, double th1, double omega, double hall_err)
+{
+    mc_drive_hallobs_in_t i{};
+    i.v_alpha_prev_v = static_cast<float>(kFlux * (std::cos(th1) - std::cos(th0)) / kDt);
+    i.v_beta_prev_v = static_cast<float>(kFlux * (std::sin(th1) - std::sin(th0)) / kDt);
+    i.theta_hall_e_rad = static_cast<float>(std::fmod(th1 + hall_err + 100.0 * kPi, 2.0 * kPi));
+    i.omega_hall_e_rad_s = static_cast<float>(omega);
+    return i;
+}
+
+// A rotor at omega [rad/s el.] from angle 0, no current.
 struct Rotor {
     double omega;
     double theta(long n) const
@@ -59,13 +71,7 @@ struct Rotor {
     }
     mc_drive_hallobs_in_t in(long n, double hall_err) const
     {
-        const double th0 = theta(n - 1), th1 = theta(n);
-        mc_drive_hallobs_in_t i{};
-        i.v_alpha_prev_v = static_cast<float>(kFlux * (std::cos(th1) - std::cos(th0)) / kDt);
-        i.v_beta_prev_v = static_cast<float>(kFlux * (std::sin(th1) - std::sin(th0)) / kDt);
-        i.theta_hall_e_rad = static_cast<float>(std::fmod(th1 + hall_err + 100.0 * kPi, 2.0 * kPi));
-        i.omega_hall_e_rad_s = static_cast<float>(omega);
-        return i;
+        return inputs(theta(n - 1), theta(n), omega, hall_err);
     }
 };
 
@@ -166,11 +172,7 @@ TEST(DriveHallObs, ContinuousThroughTheHandOverBothWays)
                                              : 100.0;
         const double th0 = th;
         th += w * kDt;
-        mc_drive_hallobs_in_t in{};
-        in.v_alpha_prev_v = static_cast<float>(kFlux * (std::cos(th) - std::cos(th0)) / kDt);
-        in.v_beta_prev_v = static_cast<float>(kFlux * (std::sin(th) - std::sin(th0)) / kDt);
-        in.theta_hall_e_rad = static_cast<float>(std::fmod(th + 0.3, 2.0 * kPi));
-        in.omega_hall_e_rad_s = static_cast<float>(w);
+        const mc_drive_hallobs_in_t in = inputs(th0, th, w, 0.3);
         const double e = wrap_pi(mc_drive_hallobs_step(&h, &in) - th);
         if (!std::isnan(prev)) {
             jump = std::fmax(jump, std::fabs(wrap_pi(e - prev)));
