@@ -23,7 +23,7 @@ case "$target" in
       "$CC" "${FLAGS[@]/-fsanitize=fuzzer,/-fsanitize=fuzzer-no-link,}" -std=c11 \
         -I firmware/kernels -I firmware/app -I firmware/app/drive -I firmware/app/ctrl -I firmware/app/can -I hal/include -I hal/fake -c "$f" -o "$o"
       objs+=("$o")
-    done < <(find firmware/kernels -name '*.c' | sort; echo firmware/app/drive/mc_drive.c; echo firmware/app/drive/mc_drive_bus.c; echo firmware/app/drive/mc_drive_thermal.c; echo firmware/app/drive/mc_drive_hall.c; echo firmware/app/drive/mc_drive_hallobs.c; find hal/fake -name '*.c' | sort)
+    done < <(find firmware/kernels -name '*.c' | sort; find firmware/app/drive -name '*.c' | sort; find hal/fake -name '*.c' | sort)
     "$CXX" "${FLAGS[@]}" -std=c++17 -I firmware/kernels -I firmware/app -I firmware/app/drive -I firmware/app/ctrl -I firmware/app/can -I hal/include -I hal/fake \
       tests/fuzz/fuzz_drive_api.cpp "${objs[@]}" -o "$work/fuzz_$target"
     ;;

@@ -20,7 +20,10 @@ while IFS= read -r f; do
   "$CC" "${FLAGS[@]/-fsanitize=fuzzer,/-fsanitize=fuzzer-no-link,}" -std=c11 "${INC[@]}" -c "$f" -o "$o"
   objs+=("$o")
 done < <(find "$src/firmware/kernels" -name '*.c' | sort
-         for f in drive/mc_drive drive/mc_drive_bus drive/mc_drive_thermal drive/mc_drive_hall can/mc_can_proto can/mc_can_dbc can/mc_telemetry can/mc_can_cmd; do echo "$src/firmware/app/$f.c"; done
+         # the whole drive folder (a module added there links without a list
+         # to keep), the CAN files the command decoder needs
+         find "$src/firmware/app/drive" -name '*.c' | sort
+         for f in can/mc_can_proto can/mc_can_dbc can/mc_telemetry can/mc_can_cmd; do echo "$src/firmware/app/$f.c"; done
          find "$src/firmware/app/config" -name '*.c' | sort
          find "$src/hal/fake" -name '*.c' | sort)
 "$CXX" "${FLAGS[@]}" -std=c++17 "${INC[@]}" "$src/tests/can/fuzz/fuzz_can_cmd.cpp" "${objs[@]}" \
