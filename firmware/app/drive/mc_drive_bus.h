@@ -35,9 +35,8 @@
  * MC_DRIVE_BUS_CORR_FAST_LOOPS where the model says less than it about
  * that limit (the motoring limit's c when the estimate draws more, the
  * regenerative one's when it returns more) and slowly the other way: the
- * model lags a fast deceleration (the hub motor's stop pushed 1.355 A back
- * against a 1.227 A limit with one slow c, the gimbal drew 0.158 A against
- * 0.114 A; 1.216 A and 0.130 A with the two). The q reference is moved to the nearest value with
+ * model lags a fast deceleration (with one slow c the hub motor's
+ * regenerative stop passed its limit; BusLimits/hub_6p5in_15pp). The q reference is moved to the nearest value with
  * p(iq) in [-P_r, P_m] (a quadratic in iq, solved exactly); a reference
  * already inside is unchanged. When even iq = 0 draws more than P_m (the d
  * current's copper loss alone), iq becomes 0. In a frame that is not the
