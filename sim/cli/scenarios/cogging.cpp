@@ -65,6 +65,18 @@ double table_value(const mc_param_info_t& info, mc_param_value_t v) {
   return info.type == MC_PARAM_TYPE_U32 ? static_cast<double>(v.u) : static_cast<double>(v.f);
 }
 
+// Whether the keys every drive scenario shares (the gains, the power-up
+// keys) already hold anticogging: then params_from_files sets it.
+bool shared_key(const MotorFiles& f) {
+  for (const auto& s : app_gain_params(f)) {
+    if (s.key == kAnticogging) return true;
+  }
+  for (const auto& s : app_powerup_params(f)) {
+    if (s.key == kAnticogging) return true;
+  }
+  return false;
+}
+
 std::vector<ParamSpec> cogging_params(const MotorFiles& f) {
   std::vector<ParamSpec> p = {
       {"speed_frac", 0.10, "1", "speed of the ripple measurement, fraction of rated speed", 1e-3,
@@ -72,21 +84,22 @@ std::vector<ParamSpec> cogging_params(const MotorFiles& f) {
       {"hold_load_frac", 0.05, "1", "step load in the position hold, fraction of rated torque",
        -1.0, 1.0},
       {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9}};
-  const int32_t i = anticogging_index();
-  if (i >= 0) {
+  for (auto& s : app_gain_params(f)) p.push_back(s);
+  if (anticogging_index() >= 0 && !shared_key(f)) {
+    const int32_t i = anticogging_index();
     const mc_param_info_t& info = mc_param_table[i];
     p.push_back({kAnticogging, table_value(info, info.def), mc_param_units[i],
                  "the table's parameter: the drive's cogging compensation",
                  table_value(info, info.min), table_value(info, info.max)});
   }
-  for (auto& s : app_gain_params(f)) p.push_back(s);
   return p;
 }
 
-// The --set anticogging value onto the table (when it has the parameter).
-void set_anticogging(const Params& P, mc_params_t* p) {
+// The --set anticogging value onto the table (when it has the parameter and
+// the shared keys do not already carry it).
+void set_anticogging(const MotorFiles& f, const Params& P, mc_params_t* p) {
   const int32_t i = anticogging_index();
-  if (i < 0 || !P.was_set(kAnticogging)) return;
+  if (i < 0 || shared_key(f) || !P.was_set(kAnticogging)) return;
   const mc_param_info_t& info = mc_param_table[i];
   const double v = P.get(kAnticogging);
   mc_param_value_t raw;
@@ -236,7 +249,7 @@ void run_cogging(RunContext& ctx) {
     throw UsageError(f.board.file + ": cogging needs an encoder (encoder_cpr = 0 here)");
   }
   mc_params_t p = params_from_files(f, ctx.params, MC_LAW_SPEED_PI);
-  set_anticogging(ctx.params, &p);
+  set_anticogging(f, ctx.params, &p);
   const mc_params_eff_t e = resolve_params(p);
   const double n_c = cogging_order(f.motor.slots, f.motor.pole_pairs);
   const double w_t = ctx.params.get("speed_frac") * e.g.speed_rated_eff_rad_s;
