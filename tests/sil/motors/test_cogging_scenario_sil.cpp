@@ -38,21 +38,24 @@ std::map<std::string, double> run_cog(const MotorFiles& f, double frac, const st
 }
 
 // Peak-to-peak speed ripple of the speed loop rejecting the cogging torque
-// A sin(N th): the rotor J s w = tau_cog - B w - kt C(s) H(s) w with the
-// speed PI C(s) = kp + ki / s [A s/rad, A/rad] acting on the drive's
-// encoder tracking loop's speed, H(s) = (3 bw^2 s + bw^3) / (s + bw)^3
-// (mc_enctrack.h: triple pole at bw), at s = j N w:
-//   pp = 2 A / |J s + B + kt C(s) H(s)|.
-// The current loop (1920 rad/s here) is left out: the PI's term is 35 % of
-// the denominator at 2 % of rated speed and 0.7 % at 10 %, so its lag moves
-// the estimate by a few percent at most (see the tolerance).
+// A sin(N th): the rotor J s w = tau_cog - B w - kt C(s) L(s) H(s) w at
+// s = j N w, with
+//   C(s) = kp + ki / s   the speed PI [A s/rad, A/rad],
+//   H(s) = (3 bw^2 s + bw^3) / (s + bw)^3   the drive's encoder tracking
+//          loop's speed (mc_enctrack.h: triple pole at bw),
+//   L(s) = e^{-1.5 s T} / (1 + s / cur_bw)   the current loop (first order
+//          by design, mc_gains.h) behind one sample and the PWM's half
+//          period of delay,
+//   pp = 2 A / |J s + B + kt C L H|.
 double ripple_estimate(const std::map<std::string, double>& s, const MotorFiles& f) {
   const double w = s.at("cogging_freq_rad_s");
   const cd jw(0.0, w);
   const double kt = s.at("gain.kt_nm_a"), bw = s.at("gain.enc_pll_bw_rad_s");
+  const double t = 1.0 / s.at("board.pwm_hz");
   const cd c = kt * (s.at("param.speed_kp_a_s_rad") + s.at("param.speed_ki_a_rad") / jw);
   const cd h = (3.0 * bw * bw * jw + bw * bw * bw) / ((jw + bw) * (jw + bw) * (jw + bw));
-  const cd d = f.motor.j_kgm2 * jw + f.motor.b_nm_s_rad + c * h;
+  const cd l = std::exp(-1.5 * t * jw) / (1.0 + jw / s.at("gain.cur_bw_rad_s"));
+  const cd d = f.motor.j_kgm2 * jw + f.motor.b_nm_s_rad + c * l * h;
   return 2.0 * f.motor.cogging_nm / std::abs(d);
 }
 
@@ -83,14 +86,15 @@ TEST(CoggingScenarioSil, SpeedRippleIsTheLoopsRejectionOfTheCoggingTorque) {
     const double meas = s.at("speed_ripple_pp_rad_s");
     ripple[i++] = meas;
     // Tolerance: the floor (the quantisation ripple adds at most its own
-    // peak-to-peak to the sum's) plus 5 % of the estimate: the neglected
-    // current loop and the speed law's sampled delay change kt C H by a
-    // factor |e^{-j w tau} - 1| < 1 on a term that is at most 35 % of the
-    // denominator, which moves it by a few percent (2 % computed for a
-    // 1.5 ms delay); the peak sampled at 24 kHz misses the crest by
-    // 1 - cos(w T / 2) < 0.4 %.
+    // peak-to-peak to the sum's) plus 5 % of the estimate: the delay taken
+    // anywhere from 0 to 2 periods moves the estimate by 0.5 % at these
+    // gains; the rotor's speed, and with it the disturbance's frequency,
+    // swings by half the ripple over the mean (2 % at 2 % of rated speed),
+    // moving |J s| by as much; the peak sampled at 24 kHz misses the crest
+    // by 1 - cos(N w T / 2) < 0.4 %.
     RecordProperty("speed_ripple_pp_rad_s_" + tag, std::to_string(meas));
     RecordProperty("speed_ripple_estimate_rad_s_" + tag, std::to_string(est));
+    RecordProperty("speed_ripple_floor_pp_rad_s_" + tag, std::to_string(floor));
     EXPECT_NEAR(meas, est, floor + 0.05 * est)
         << "speed_frac " << frac << ": floor " << floor << " rad/s";
     // The cogging is what the ripple measures: well above the floor.
