@@ -197,15 +197,15 @@ void read_cogging(TableReader& r, MotorSpec* m) {
   m->slots = static_cast<int>(r.int_or("slots", 0, 0, 1000));
   m->cogging_nm = r.num_or("cogging_nm", 0.0, 0.0, 1.0e3, false, "N m");
   m->cogging_phase_rad = r.num_or("cogging_phase_rad", 0.0, -10.0, 10.0, false, "rad");
-  bool any = m->cogging_nm > 0.0;
+  // the first amplitude given (named in the refusal below)
+  std::string key = m->cogging_nm > 0.0 ? "cogging_nm" : "";
   for (int k = 0; k < 3; ++k) {
     const std::string h = "cogging_h" + std::to_string(k + 2);
     m->cogging_h_nm[k] = r.num_or(h + "_nm", 0.0, 0.0, 1.0e3, false, "N m");
     m->cogging_h_phase_rad[k] = r.num_or(h + "_phase_rad", 0.0, -10.0, 10.0, false, "rad");
-    any = any || m->cogging_h_nm[k] > 0.0;
+    if (key.empty() && m->cogging_h_nm[k] > 0.0) key = h + "_nm";
   }
-  if (any && m->slots == 0) {
-    const std::string key = m->cogging_nm > 0.0 ? "cogging_nm" : "cogging_h2_nm";
+  if (!key.empty() && m->slots == 0) {
     fail(r.src(key), r.line(key),
          "a cogging torque needs 'slots' (its order is lcm(slots, poles))");
   }

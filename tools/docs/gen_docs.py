@@ -1133,10 +1133,15 @@ def _motor_library(ctx):
             bcell = "the same file" if board == "" else f"`{board}.toml`"
         big = max(m["ld_h"], m["lq_h"]) >= 1e-3
         k, u = (1e3, "mH") if big else (1e6, "µH")
+        q, a = m.get("slots", 0), m.get("cogging_nm", 0.0)
+        # cogging: slots / poles, the order lcm(slots, 2 p) and the fundamental's peak
+        cog = (f"{q} / {2 * m['pole_pairs']}: {math.lcm(q, 2 * m['pole_pairs'])} per turn, "
+               f"{g(a * 1e3, 3)} mN m") if q > 0 and a > 0 else "none"
         rows.append([f"`{n}`", f"{g(m['r_ohm'], 3)} Ω", f"{g(m['ld_h'] * k, 3)} / {g(m['lq_h'] * k, 3)} {u}",
                      f"{g(m['flux_wb'] * 1e3, 3)} mWb", f"{m['pole_pairs']}", f"{g(m['i_max_a'], 3)} A",
-                     bcell])
-    return table(["motor file", "R", "L_d / L_q", "flux", "pole pairs", "i_max", "board file in the tests"], rows)
+                     cog, bcell])
+    return table(["motor file", "R", "L_d / L_q", "flux", "pole pairs", "i_max",
+                  "cogging: slots / poles, order, peak", "board file in the tests"], rows)
 
 
 PIL_COST_JSON = os.path.join("tools", "bench", "results", "pil_cost.json")

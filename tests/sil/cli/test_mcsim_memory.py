@@ -75,6 +75,11 @@ RUNS = {
     "csmc-state-feedback-q31": ([], ["--duration", "0.05"], ["--duration", "0.5"]),
     "regen-stop": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
     "bus-limits": (D5065, ["--duration", "0.2"], ["--duration", "2"]),
+    # The D5065 with cogging (its file has none); at speed_frac 0.001 the
+    # speed phase's window (20 cogging periods) outlasts both runs, so
+    # --duration (the cap of its phases) sets the length.
+    "cogging": (D5065 + ["--set", "motor.slots=12", "--set", "motor.cogging_nm=0.018",
+                         "--set", "speed_frac=0.001"], ["--duration", "0.2"], ["--duration", "2"]),
 }
 
 

@@ -291,5 +291,35 @@ TEST(MotorFile, CoggingKeysReachThePlant) {
       << error_of(pv);
 }
 
+// Every bad cogging key refused with its line and a named reason (issue 35
+// item 1): slots not an integer or negative, a negative, NaN or infinite
+// amplitude, a NaN phase, a harmonic order the plant does not have (the
+// fundamental is cogging_nm; harmonics are the orders 2 to 4 times it).
+TEST(MotorFile, BadCoggingKeysAreRefusedByName) {
+  const struct {
+    const char* keys;  // inserted before [board]: the first at line 12
+    const char* error;
+  } cases[] = {
+      {"slots = 12.5\n", ":12: 'slots' must be an integer"},
+      {"slots = -1\n", ":12: 'slots' = -1 is out of range [0, 1000]"},
+      {"slots = 12\ncogging_nm = nan\n", ":13: 'cogging_nm' = nan N m is out of range"},
+      {"slots = 12\ncogging_nm = inf\n", ":13: 'cogging_nm' = inf N m is out of range"},
+      {"slots = 12\ncogging_nm = 0.01\ncogging_phase_rad = nan\n",
+       ":14: 'cogging_phase_rad' = nan rad is out of range"},
+      {"slots = 12\ncogging_h2_nm = -0.001\n", ":13: 'cogging_h2_nm' = -0.001 N m is out of range"},
+      {"slots = 12\ncogging_h1_nm = 0.01\n", ":13: unknown key 'cogging_h1_nm' in [motor]"},
+      {"slots = 12\ncogging_h5_nm = 0.01\n", ":13: unknown key 'cogging_h5_nm' in [motor]"},
+      {"cogging_h3_nm = 0.01\n", ":12: a cogging torque needs 'slots'"},
+  };
+  int i = 0;
+  for (const auto& c : cases) {
+    std::string t = kGood;
+    t.replace(t.find("[board]"), 0, c.keys);
+    const std::string p = write("cog_bad" + std::to_string(i++) + ".toml", t);
+    const std::string e = error_of(p);
+    EXPECT_EQ(e.rfind(p + c.error, 0), 0u) << c.keys << " -> " << e;
+  }
+}
+
 }  // namespace
 }  // namespace mcsim

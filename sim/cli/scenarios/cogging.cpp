@@ -1,0 +1,316 @@
+// cogging for any motor with cogging (`--motor FILE [--board FILE]`, issue
+// 35 item 4): what the plant's cogging torque (mcsim/cogging.hpp) does to
+// the drive application, measured in two phases on the same files.
+//
+//  1. Speed: the sensored speed PI (SPEED mode) at speed_frac times the
+//     rated speed; after the ramp and 40 / speed_wc of settling, a window of
+//     at least 20 cogging periods and 10 / speed_wc. The cogging torque is a
+//     disturbance at N_c w (N_c = lcm(slots, 2 p) per turn) that the loop
+//     rejects: speed ripple ~ A / |J s + B + kt C(s)| at s = j N_c w.
+//  2. Hold: POSITION mode holding where it started (no move); after
+//     20 / pos_kp_per_s, a step load of hold_load_frac rated torque; the
+//     rotor's excursion from the held angle over the following 20 /
+//     pos_kp_per_s.
+//
+// The speed is the plant's (the rotor's true speed): the physical ripple,
+// not the drive's encoder tracking loop's estimate (filtered at its
+// bandwidth and quantised to counts), which the summary gives besides.
+//
+// Summary:
+//   cogging_order            N_c = lcm(slots, 2 pole_pairs) per turn
+//   cogging_freq_rad_s       N_c w_t: the disturbance's frequency
+//   speed_target_rad_s       speed_frac speed_rated_eff
+//   speed_ripple_pp_rad_s    peak-to-peak of the true speed in the window
+//   speed_mean_rad_s         its mean
+//   speed_est_ripple_pp_rad_s  peak-to-peak of the drive's speed estimate
+//   iq_ref_pp_a              peak-to-peak of the current reference
+//   hold_err_pp_rad          peak-to-peak of the true angle after the load
+//                            step (the held angle included)
+//   hold_err_max_rad         largest |angle - held angle| after the step
+//   hold_load_nm             the step
+//   speed_phase_s, hold_phase_s  the phases' simulated times (--duration
+//                            caps their sum; a window it cuts is not measured)
+// With the table parameter `anticogging` (when the firmware has it) set by
+// --set like any other.
+//
+// Verdict: refused (exit 2, named) on a motor without cogging; a fault or
+// stop is the failure; otherwise pass once both figures are measured
+// (finite): the scenario measures, the tests hold it to the analytic
+// estimate (tests/sil/motors/test_cogging_scenario_sil.cpp).
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <string>
+
+#include "app_params.hpp"
+#include "app_scenario.hpp"
+#include "scenario.hpp"
+#include "verdict.hpp"
+#include "mcsim/cogging.hpp"
+
+namespace mcsim {
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586476925;
+constexpr const char* kAnticogging = "anticogging";
+
+// The table's anticogging parameter when the firmware has one (-1: none).
+int32_t anticogging_index() {
+  return mc_param_find_name(kAnticogging);
+}
+
+double table_value(const mc_param_info_t& info, mc_param_value_t v) {
+  return info.type == MC_PARAM_TYPE_U32 ? static_cast<double>(v.u) : static_cast<double>(v.f);
+}
+
+// Whether the keys every drive scenario shares (the gains, the power-up
+// keys) already hold anticogging: then params_from_files sets it.
+bool shared_key(const MotorFiles& f) {
+  for (const auto& s : app_gain_params(f)) {
+    if (s.key == kAnticogging) return true;
+  }
+  for (const auto& s : app_powerup_params(f)) {
+    if (s.key == kAnticogging) return true;
+  }
+  return false;
+}
+
+std::vector<ParamSpec> cogging_params(const MotorFiles& f) {
+  std::vector<ParamSpec> p = {
+      {"speed_frac", 0.10, "1", "speed of the ripple measurement, fraction of rated speed", 1e-3,
+       1.0},
+      {"hold_load_frac", 0.05, "1", "step load in the position hold, fraction of rated torque",
+       -1.0, 1.0},
+      {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9}};
+  for (auto& s : app_gain_params(f)) p.push_back(s);
+  if (anticogging_index() >= 0 && !shared_key(f)) {
+    const int32_t i = anticogging_index();
+    const mc_param_info_t& info = mc_param_table[i];
+    p.push_back({kAnticogging, table_value(info, info.def), mc_param_units[i],
+                 "the table's parameter: the drive's cogging compensation",
+                 table_value(info, info.min), table_value(info, info.max)});
+  }
+  return p;
+}
+
+// The --set anticogging value onto the table (when it has the parameter and
+// the shared keys do not already carry it).
+void set_anticogging(const MotorFiles& f, const Params& P, mc_params_t* p) {
+  const int32_t i = anticogging_index();
+  if (i < 0 || shared_key(f) || !P.was_set(kAnticogging)) return;
+  const mc_param_info_t& info = mc_param_table[i];
+  const double v = P.get(kAnticogging);
+  mc_param_value_t raw;
+  if (info.type == MC_PARAM_TYPE_U32) {
+    raw.u = static_cast<uint32_t>(std::lround(v));
+  } else {
+    raw.f = static_cast<float>(v);
+  }
+  if (mc_param_check_value(&info, raw.u) != MC_PARAM_OK) {
+    throw UsageError("--set anticogging: outside the parameter table's range");
+  }
+  mc_param_set_raw(p, &info, raw.u);
+}
+
+struct Span {  // running min / max / sum of a signal
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, sum = 0;
+  long n = 0;
+  void add(double v) {
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+    sum += v;
+    ++n;
+  }
+  double pp() const { return n ? hi - lo : std::nan(""); }
+  double mean() const { return n ? sum / static_cast<double>(n) : std::nan(""); }
+};
+
+struct Phase {  // what a phase hands back: "" or the fault / stop that ended it
+  std::string stopped;
+  uint32_t faults = 0;
+};
+
+Phase end_of(AppRunner& run, const std::string& stopped) {
+  return {stopped, run.probe().faults};
+}
+
+// Phase 1: the speed loop at w_t; the window's spans.
+Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c, double cap_s,
+                  Span* w_true, Span* w_est, Span* iq_ref) {
+  const MotorFiles& f = *ctx.files;
+  const mc_params_eff_t e = resolve_params(p);
+  const double wc = e.g.speed_wc_rad_s;
+  const double t0 = 0.01;
+  const double t_acc = std::abs(w_t) / static_cast<double>(e.p.speed_ramp_rad_s2);
+  const double t_win0 = t0 + t_acc + 40.0 / wc;
+  const double win = std::max(20.0 * kTwoPi / (n_c * std::abs(w_t)), 10.0 / wc);
+  const double dur = std::min(t_win0 + win, cap_s);
+  const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, nullptr);
+  AppRunner run(*target);
+  run.start(MC_CAN_CTRL_SPEED, true);
+  hal_host::PmsmBoard& board = run.board();
+  ctx.summary.set("angle_find_s", run.finish_angle_find());
+  const double t_origin = board.t_s();
+  const long n = step_count(dur, board.period_s());
+  const long every = std::lround(ctx.params.get("csv_every")) > 0
+                         ? std::lround(ctx.params.get("csv_every"))
+                         : std::max(1L, n / 10000);
+  bool sent = false;
+  std::string stopped;
+  AppWatch watch;
+  double id = 0, iq = 0;
+  for (long k = 0; k <= n; ++k) {
+    const double t = board.t_s() - t_origin;
+    if (!sent && t >= t0) {
+      run.send(run.cmd().speed_ref(w_t));
+      sent = true;
+    }
+    const double w = board.state()(2);
+    const mc_app_probe_t& q = run.probe();
+    if (t >= t_win0) {
+      w_true->add(w);
+      w_est->add(q.omega_m_rad_s);
+      iq_ref->add(q.iq_ref_a);
+    }
+    if (k % every == 0) {
+      board.true_dq_a(&id, &iq);
+      const double row[] = {0.0, t, w, q.omega_m_rad_s, q.iq_ref_a, iq, board.state()(3)};
+      ctx.csv.row(row, 7);
+    }
+    stopped = watch(q);
+    if (!stopped.empty() || k == n) break;
+    run.step();
+    if ((k & 1023) == 0) ctx.progress.update(t, dur);
+  }
+  ctx.summary.set("speed_phase_s", dur);
+  ctx.summary.set("speed_window_s", win);
+  ctx.summary.set("speed_window_start_s", t_win0);
+  return end_of(run, stopped);
+}
+
+// Phase 2: position hold, a step load; the angle's excursion after it.
+Phase hold_phase(RunContext& ctx, const mc_params_t& p, double tau_step, double cap_s,
+                 Span* th_after, double* th_hold, double* err_max) {
+  const MotorFiles& f = *ctx.files;
+  const mc_params_eff_t e = resolve_params(p);
+  const double settle = 20.0 / e.g.pos_kp_per_s;
+  const double t_step = 0.01 + settle;
+  const double dur = std::min(t_step + settle, cap_s);
+  double t_origin = 0.0;
+  const std::function<double(double)> load = [tau_step, t_step, &t_origin](double t) {
+    return t - t_origin >= t_step ? tau_step : 0.0;
+  };
+  const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, &load);
+  AppRunner run(*target);
+  run.start(MC_CAN_CTRL_POSITION);
+  hal_host::PmsmBoard& board = run.board();
+  t_origin = board.t_s();
+  const long n = step_count(dur, board.period_s());
+  const long every = std::max(1L, n / 10000);
+  std::string stopped;
+  AppWatch watch;
+  double id = 0, iq = 0;
+  bool held = false;
+  for (long k = 0; k <= n; ++k) {
+    const double t = board.t_s() - t_origin;
+    const double th = board.state()(3);
+    if (!held && t >= t_step) {
+      *th_hold = th;  // the angle held when the load steps on
+      held = true;
+    }
+    if (held) {
+      th_after->add(th);
+      *err_max = std::max(*err_max, std::abs(th - *th_hold));
+    }
+    const mc_app_probe_t& q = run.probe();
+    if (k % every == 0) {
+      board.true_dq_a(&id, &iq);
+      const double row[] = {1.0, t, board.state()(2), q.omega_m_rad_s, q.iq_ref_a, iq, th};
+      ctx.csv.row(row, 7);
+    }
+    stopped = watch(q);
+    if (!stopped.empty() || k == n) break;
+    run.step();
+    if ((k & 1023) == 0) ctx.progress.update(t, dur);
+  }
+  ctx.summary.set("hold_phase_s", dur);
+  ctx.summary.set("hold_step_time_s", t_step);
+  return end_of(run, stopped);
+}
+
+void run_cogging(RunContext& ctx) {
+  const MotorFiles& f = *ctx.files;
+  if (!(f.motor.slots > 0 && f.motor.cogging_nm > 0.0)) {
+    throw UsageError(f.motor.file + ": cogging needs a motor with cogging_nm > 0 (and slots)");
+  }
+  if (f.board.encoder_cpr == 0) {
+    throw UsageError(f.board.file + ": cogging needs an encoder (encoder_cpr = 0 here)");
+  }
+  mc_params_t p = params_from_files(f, ctx.params, MC_LAW_SPEED_PI);
+  set_anticogging(f, ctx.params, &p);
+  const mc_params_eff_t e = resolve_params(p);
+  const double n_c = cogging_order(f.motor.slots, f.motor.pole_pairs);
+  const double w_t = ctx.params.get("speed_frac") * e.g.speed_rated_eff_rad_s;
+  const double tau_step = ctx.params.get("hold_load_frac") * e.g.torque_rated_nm;
+  ctx.csv.columns(
+      {"phase", "t", "omega_m_rad_s", "omega_est_rad_s", "iq_ref_a", "iq_a", "theta_m_rad"});
+  Span w_true, w_est, iq_ref, th_after;
+  double th_hold = 0.0, err_max = 0.0;
+  // --duration caps the two phases' total (the speed phase first): a run
+  // cut before a window leaves its figure unmeasured (the verdict says so).
+  const double cap = ctx.duration_s > 0.0 ? run_duration(ctx, ctx.duration_s) : kMaxDurationS;
+  Phase ph = speed_phase(ctx, p, w_t, n_c, cap, &w_true, &w_est, &iq_ref);
+  const double used = ctx.summary.numbers().at("speed_phase_s");
+  if (ph.stopped.empty() && cap - used > 0.0) {
+    ph = hold_phase(ctx, p, tau_step, cap - used, &th_after, &th_hold, &err_max);
+  }
+  ctx.progress.done();
+  const auto& nums = ctx.summary.numbers();
+  ctx.summary.set("duration_s",
+                  used + (nums.count("hold_phase_s") ? nums.at("hold_phase_s") : 0.0));
+  record_app_setup(f, p, ctx.summary);
+  ctx.summary.set("faults", ph.faults);
+  ctx.summary.set("cogging_order", n_c);
+  ctx.summary.set("cogging_nm", f.motor.cogging_nm);
+  ctx.summary.set("cogging_freq_rad_s", n_c * std::abs(w_t));
+  ctx.summary.set("speed_target_rad_s", w_t);
+  ctx.summary.set("speed_frac", ctx.params.get("speed_frac"));
+  if (anticogging_index() >= 0) {
+    ctx.summary.set("anticogging", ctx.params.get(kAnticogging));
+  }
+  if (!ph.stopped.empty()) {
+    ctx.summary.set_text("fault_names", ph.stopped);
+    return write_verdict(ctx.summary, ph.faults != 0u ? faulted(ph.faults, ph.stopped)
+                                                      : Verdict{"stopped", ph.stopped, true});
+  }
+  ctx.summary.set("speed_ripple_pp_rad_s", w_true.pp());
+  ctx.summary.set("speed_mean_rad_s", w_true.mean());
+  ctx.summary.set("speed_est_ripple_pp_rad_s", w_est.pp());
+  ctx.summary.set("iq_ref_pp_a", iq_ref.pp());
+  ctx.summary.set("hold_load_nm", tau_step);
+  ctx.summary.set("hold_theta_rad", th_hold);
+  ctx.summary.set("hold_err_pp_rad", th_after.pp());
+  ctx.summary.set("hold_err_max_rad", err_max);
+  Judge j;
+  j.require("ripple not measured", std::isfinite(w_true.pp()) && w_true.n > 1,
+            "speed ripple measured over the window");
+  j.require("hold error not measured", std::isfinite(th_after.pp()) && th_after.n > 1,
+            "hold error measured after the load step");
+  j.note("measured, not bounded here: the tests hold the ripple to the loop's analytic estimate");
+  write_verdict(ctx.summary, j.verdict());
+}
+
+const Registrar reg_cogging(on_app_target(
+    {"cogging",
+     "any motor with cogging (slots, cogging_nm): speed ripple of the speed PI at speed_frac of "
+     "rated speed (speed_ripple_pp_rad_s) and the position error in hold under a step load "
+     "(hold_err_pp_rad); --set anticogging=0|1 when the firmware has that parameter",
+     0.0,
+     {},
+     run_cogging,
+     cogging_params}));
+
+}  // namespace
+}  // namespace mcsim
