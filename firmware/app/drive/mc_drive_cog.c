@@ -80,7 +80,7 @@ mc_cog_status_t mc_cog_check(const mc_cog_map_t *map, const mc_cog_ident_t *iden
         return MC_COG_ST_EMPTY;
     }
     if (!ident_valid(ident)) {
-        return MC_COG_ST_ARG;
+        return MC_COG_ST_ENCODER; /* the drive has no encoder a map fits */
     }
     if ((map->magic != MC_COG_MAGIC) || (map->format != (MC_COG_FORMAT | (MC_COG_N << 16)))) {
         return MC_COG_ST_LAYOUT;

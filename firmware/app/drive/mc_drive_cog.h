@@ -38,7 +38,8 @@
  * per turn, direction or pole pairs differ, or the encoder offset moved by
  * more than MC_COG_OFFSET_TOL_M_RAD mechanical (half a bin: a recommission
  * measures the same mounting within it; a remounted encoder moves its
- * zero, and the map would cancel the cogging at the wrong angle).
+ * zero, and the map would cancel the cogging at the wrong angle), or the
+ * drive's own identity is not one a map fits (no encoder: encoder_cpr 0).
  *
  * Lookup (mc_cog_ff_a): linear interpolation between the two bins around
  * theta_m_rad, bin N-1 to bin 0 across 2 pi; any finite angle (wrapped);
