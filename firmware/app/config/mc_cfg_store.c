@@ -95,7 +95,8 @@ typedef struct {
 } kind_loc_t;
 
 /* Walk sector i's records, the newest of each kind (0 configuration, 1
- * map) into loc; returns 0 or -EIO. *p_any: not erased at 0. */
+ * map) into loc; returns 0 or -EIO. *p_any: something other than erased
+ * words and valid map records. */
 static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any, kind_loc_t loc[2])
 {
     uint32_t off = 0u;
@@ -113,15 +114,17 @@ static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any, kind_loc_t lo
             s->append_off[i] = off;
             return 0;
         }
-        *p_any = true;
         rc = check_record(s, i, off, &words, hdr);
         if (rc == -EIO) {
             return rc;
         }
+        k = (hdr[0] == MC_CFG_MAP_MAGIC) ? 1u : 0u;
+        /* not erased and not a map: a configuration once written (valid or
+         * not: no configuration record then boots CORRUPT, not EMPTY) */
+        *p_any = *p_any || (rc != 0) || (k == 0u);
         if (rc != 0) {
             return 0; /* a cut record: the rest of the sector is unusable */
         }
-        k = (hdr[0] == MC_CFG_MAP_MAGIC) ? 1u : 0u;
         if (!loc[k].have || mc_cfg_store_seq_newer(hdr[2], loc[k].seq)) {
             loc[k].have = true;
             loc[k].seq = hdr[2];

@@ -16,6 +16,7 @@
 _Static_assert((MC_COG_N & (MC_COG_N - 1u)) == 0u, "MC_COG_N must be a power of two");
 _Static_assert(offsetof(mc_cog_map_t, crc) == (sizeof(mc_cog_map_t) - 4u),
                "the map has no padding: the CRC is its last word");
+_Static_assert((sizeof(mc_cog_map_t) % 8u) == 0u, "a whole number of the store's 8-byte pairs");
 
 uint32_t mc_cog_crc(const mc_cog_map_t *map)
 {
@@ -65,6 +66,7 @@ mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
     map->format = MC_COG_FORMAT | (MC_COG_N << 16);
     map->ident = *ident;
     map->scale_a = fs / 32767.0f;
+    map->reserved = 0u;
     inv = (fs > 0.0f) ? (32767.0f / fs) : 0.0f;
     for (uint32_t k = 0u; k < MC_COG_N; ++k) {
         map->q[k] = round_q15((i_q_a[k] - mean) * inv);

@@ -3,7 +3,7 @@
  * @brief The anticogging map: the q-axis current that cancels the motor's
  *        cogging torque, per mechanical angle, and its feed-forward lookup.
  *
- * Map (mc_cog_map_t, 2080 bytes, 32-bit words with the entries packed two
+ * Map (mc_cog_map_t, 2088 bytes, 32-bit words with the entries packed two
  * per word, little-endian, CRC last):
  *   magic    0x474F434D ("MCOG")
  *   format   MC_COG_FORMAT (bits 0..15) | MC_COG_N (bits 16..31)
@@ -14,6 +14,7 @@
  *            q[k] * scale_a, the current at mechanical angle k 2 pi / N
  *   q[N]     N = 1024 signed 16-bit entries (q15 of the full scale
  *            32767 scale_a, the largest |entry| of the map)
+ *   reserved 0 (the size a whole number of 8-byte pairs)
  *   crc      CRC-32 (zlib, mc_crc32) of every byte before it
  *
  * N = 1024 over one mechanical turn: a cogging harmonic of order k (the
@@ -88,6 +89,8 @@ typedef struct {
     uint32_t format; /**< MC_COG_FORMAT | MC_COG_N << 16 */
     mc_cog_ident_t ident;
     float scale_a;       /**< A per unit of q */
+    uint32_t reserved;   /**< 0: the map is a whole number of 8-byte pairs (the
+                              store's record unit) */
     int16_t q[MC_COG_N]; /**< the entries, bin k at k 2 pi / N mechanical */
     uint32_t crc;        /**< CRC-32 of the bytes above */
 } mc_cog_map_t;

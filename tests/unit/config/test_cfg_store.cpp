@@ -372,7 +372,7 @@ TEST(CfgStore, HoldsTellsAnUnchangedSet)
 namespace
 {
 
-constexpr uint32_t kMapBytes = 2080u; // sizeof(mc_cog_map_t): the store takes any multiple of 8
+constexpr uint32_t kMapBytes = 2088u; // sizeof(mc_cog_map_t): the store takes any multiple of 8
 constexpr uint32_t kMapRecBytes = kMapBytes + 5u * 4u;
 
 std::vector<uint8_t> MapBlob(uint32_t i)
