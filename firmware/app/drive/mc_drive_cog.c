@@ -7,7 +7,7 @@
 #include <stddef.h>
 
 #include "math/mc_math.h"
-#include "mc_crc32.h"
+#include "config/mc_crc32.h"
 
 #define COG_TWO_PI    6.28318531f
 #define COG_PI        3.14159265f
