@@ -118,13 +118,15 @@ static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any, kind_loc_t lo
         if (rc == -EIO) {
             return rc;
         }
-        k = (hdr[0] == MC_CFG_MAP_MAGIC) ? 1u : 0u;
-        /* not erased and not a map: a configuration once written (valid or
-         * not: no configuration record then boots CORRUPT, not EMPTY) */
-        *p_any = *p_any || (rc != 0) || (k == 0u);
+        /* not erased and not a valid map: a configuration once written
+         * (valid or not: no configuration record then boots CORRUPT, not
+         * EMPTY) */
         if (rc != 0) {
+            *p_any = true;
             return 0; /* a cut record: the rest of the sector is unusable */
         }
+        k = (hdr[0] == MC_CFG_MAP_MAGIC) ? 1u : 0u;
+        *p_any = *p_any || (k == 0u);
         if (!loc[k].have || mc_cfg_store_seq_newer(hdr[2], loc[k].seq)) {
             loc[k].have = true;
             loc[k].seq = hdr[2];
