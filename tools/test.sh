@@ -10,9 +10,11 @@
 #     ASan natively in the other can tests; ASan inside an emulated VM only
 #     slows a wall-clock-paced test), can.mdtool_bus (Python alone) and
 #     sil.mcsim_memory (ASan's quarantine and shadow memory make peak RSS a
-#     measure of the sanitizer, not of the scenario), and the --pil scenario
-#     runs but speed-step (tests/README.md says why), under ASan + UBSan, at
-#     -O0 (Debug) with the sanitizers' checks;
+#     measure of the sanitizer, not of the scenario), the --pil scenario
+#     runs but speed-step (tests/README.md says why) and the tests labelled
+#     nosan (no binary of the build runs: Python alone, or a benchmark image
+#     under QEMU; their images are not in this build's `all`), under ASan +
+#     UBSan, at -O0 (Debug) with the sanitizers' checks;
 #  4. the whole suite (every label) on the host-release build of step 2. The
 #     unsanitised -O0 build (`host`) is not built again: it would compile
 #     every target a third time for no check the two above lack (no code of
