@@ -85,6 +85,24 @@ static const mc_hal_flash_ops_t wrap_flash_ops = {
 
 /* -------------------------------------------------------------------- boot */
 
+/* The stored anticogging map at boot (mc_cfg_store_load_map): cog_loaded
+ * and why not (EMPTY none stored, LAYOUT another size, FLASH unreadable);
+ * validated against the encoder when the drive starts (cog_bind). */
+static void cog_boot(mc_app_t *a)
+{
+    const int rc = mc_cfg_store_load_map(&a->store, &a->cog_map, (uint32_t)sizeof a->cog_map);
+    a->cog_loaded = (rc == 0);
+    if (rc == 0) {
+        a->cog_load_status = (uint32_t)MC_COG_ST_OK;
+    } else if (rc == -ENOENT) {
+        a->cog_load_status = (uint32_t)MC_COG_ST_EMPTY;
+    } else if (rc == -EBADMSG) {
+        a->cog_load_status = (uint32_t)MC_COG_ST_LAYOUT;
+    } else {
+        a->cog_load_status = (uint32_t)MC_COG_ST_FLASH;
+    }
+}
+
 uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
 {
     uint32_t err = MC_APP_CFG_OK;
@@ -108,6 +126,7 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
     }
     app->params = *cfg->defaults;
     app->boot_status = (uint8_t)MC_CFG_BOOT_EMPTY;
+    app->cog_load_status = (uint32_t)MC_COG_ST_EMPTY;
     if (cfg->flash != NULL) {
         mc_params_t loaded;
         mc_cfg_store_cfg_t scfg;
@@ -134,6 +153,7 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
                 }
             }
             app->boot_status = (uint8_t)b;
+            cog_boot(app);
         }
     }
     app->status_sent_cfg = app->boot_status;
@@ -421,6 +441,79 @@ static bool board_refuses(const mc_app_cfg_t *cfg, const mc_hal_t *hal, const mc
  * divider stay the booted ones: the timer and the CAN tick run on them),
  * then the command handler's own check and apply (telemetry rates, timeout,
  * ramps, speed limit). */
+/* ------------------------------------------------------------ anticogging */
+
+static mc_cog_ident_t cog_ident(const mc_params_t *p)
+{
+    mc_cog_ident_t id;
+    id.enc_type = p->encoder_type;
+    id.enc_cpr = p->encoder_cpr;
+    id.enc_reversed = p->encoder_reversed;
+    id.pole_pairs = p->pole_pairs;
+    id.enc_offset_rad = p->encoder_offset_rad;
+    return id;
+}
+
+/* cog_status from the map and the parameters in effect p; the map attached
+ * to the drive when it is valid for this encoder, detached otherwise
+ * (anticogging, the drive's cfg.anticogging, then has no effect). */
+static void cog_bind(mc_app_t *a, const mc_params_t *p)
+{
+    const mc_cog_ident_t id = cog_ident(p);
+    const uint32_t st =
+        a->cog_loaded ? (uint32_t)mc_cog_check(&a->cog_map, &id) : a->cog_load_status;
+    bool on = st == (uint32_t)MC_COG_ST_OK;
+    if (a->drive != NULL) {
+        on = on && (mc_drive_attach_cog(a->drive, &a->cog_map) == 0);
+        if (!on) {
+            (void)mc_drive_attach_cog(a->drive, NULL);
+        }
+    }
+    a->srv.cog_status = st;
+}
+
+static const mc_params_t *active_params(const mc_app_t *a)
+{
+    return a->params_valid ? &a->srv.active : &a->params;
+}
+
+mc_cog_status_t mc_app_cog_load(mc_app_t *app, const float *i_q_a, uint32_t n)
+{
+    const mc_params_t *p;
+    mc_cog_ident_t id;
+    mc_cog_status_t st;
+    if ((app == NULL) || (app->drive == NULL)) {
+        return MC_COG_ST_ARG;
+    }
+    p = active_params(app);
+    id = cog_ident(p);
+    /* the fast step never reads a map half rebuilt */
+    (void)mc_drive_attach_cog(app->drive, NULL);
+    st = mc_cog_build(&app->cog_map, i_q_a, n, &id, MC_APP_COG_BOUND_FRAC * p->i_max_a);
+    if (st == MC_COG_ST_OK) {
+        app->cog_loaded = true;
+        app->cog_load_status = (uint32_t)MC_COG_ST_OK;
+    }
+    cog_bind(app, p);
+    return st;
+}
+
+int mc_app_cog_save(mc_app_t *app)
+{
+    const mc_cog_ident_t id = cog_ident(active_params(app));
+    if (!app->cog_loaded || (mc_cog_check(&app->cog_map, &id) != MC_COG_ST_OK)) {
+        return -ENOENT;
+    }
+    if ((app->drive->mode == MC_DRIVE_MODE_CURRENT) || (app->drive->mode == MC_DRIVE_MODE_CTRL) ||
+        (app->drive->mode == MC_DRIVE_MODE_STOPPING)) {
+        return -EBUSY;
+    }
+    if (!app->have_store) {
+        return -ENODEV;
+    }
+    return mc_cfg_store_save_map(&app->store, &app->cog_map, (uint32_t)sizeof app->cog_map);
+}
+
 static uint32_t params_check(void *ctx, const mc_params_t *p)
 {
     mc_app_t *a = ctx;
@@ -453,6 +546,7 @@ static void params_apply(void *ctx, const mc_params_t *p)
         a->cmd.cfg.position_drive_mode = cc.position_drive_mode;
         a->srv.law_error = a->laws.error;
     }
+    cog_bind(a, p); /* the encoder or anticogging may have changed */
 }
 
 /* ------------------------------------------------- the angle at enable */
@@ -765,6 +859,7 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
         app->srv.hook.apply = params_apply;
         app->srv.hook.ctx = app;
     }
+    cog_bind(app, p);
     boot_start(app);
     app->tm_src.drive = drive;
     app->tm_src.cmd = &app->cmd;

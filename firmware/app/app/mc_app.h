@@ -264,6 +264,9 @@ typedef struct {
     mc_drive_hall_t hall;       /**< the Hall sensors as the drive's encoder */
     mc_drive_hallobs_t hallobs; /**< Hall + observer (hall_obs_end_e_rad_s > 0) */
     bool hallobs_on;            /**< hallobs attached to the drive */
+    mc_cog_map_t cog_map;       /**< the anticogging map (valid when cog_loaded) */
+    bool cog_loaded;            /**< cog_map holds a map (loaded or stored) */
+    uint32_t cog_load_status;   /**< MC_COG_ST_* of the map's load (EMPTY: none) */
     mc_param_hook_t cmd_hook;   /**< the command handler's APPLY hook, chained */
     mc_telemetry_src_t tm_src;
     mc_can_cmd_t cmd;
@@ -372,6 +375,30 @@ typedef struct {
 
 /** Fill *p from the application and its drive (after a period). */
 void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p);
+
+/** Anticogging (mc_drive_cog.h; parameters anticogging, cog_status): the
+ *  largest |feed-forward| a loaded map may ask, as a share of i_max_a (the
+ *  law keeps the rest; the sum is clamped to the limit in force). */
+#define MC_APP_COG_BOUND_FRAC 0.5f
+
+/**
+ * Load an anticogging map from a calibration's MC_COG_N q-axis currents [A]
+ * per mechanical-angle bin (mc_cog_build, bound MC_APP_COG_BOUND_FRAC
+ * i_max_a, the identity of the encoder the active parameters describe),
+ * from the host (the SIL, mcsim) for now; the calibration will call it. The
+ * map is detached while it is rebuilt and attached again when anticogging
+ * is 1. A refused load changes nothing (the previous map, if any, stays).
+ * @return MC_COG_ST_OK or the builder's refusal.
+ */
+mc_cog_status_t mc_app_cog_load(mc_app_t *app, const float *i_q_a, uint32_t n);
+
+/**
+ * Store the loaded map in the configuration store (its own record kind,
+ * mc_cfg_store.h). BLOCKING (may erase a sector): only while the bridge is
+ * off. Returns 0, -ENOENT (no valid map loaded), -EBUSY (the bridge is on),
+ * -ENODEV (no store), -EIO (flash: the previous stored map stays).
+ */
+int mc_app_cog_save(mc_app_t *app);
 
 /** Boot: reset cause, configuration (see the file comment). app is
  *  zeroed first. Returns MC_APP_CFG_* bits (only NULL, STORE, WDG); with

@@ -109,6 +109,7 @@ typedef struct {
     uint32_t angle_error;  /**< the angle_error parameter (the application's) */
     uint32_t hall_error;   /**< the hall_error parameter (the application's) */
     float hall_obs_weight; /**< the hall_obs_weight parameter (the application's) */
+    uint32_t cog_status;   /**< the cog_status parameter (the application's) */
     /* time base (mc_param_srv_tick) */
     uint32_t tick_hz;       /**< rate of mc_param_srv_tick [Hz] (0: not yet known) */
     uint32_t save_tokens;   /**< SAVEs allowed now, <= MC_PARAM_SAVE_BURST */
