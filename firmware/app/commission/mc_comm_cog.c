@@ -110,10 +110,19 @@ static void record(mc_comm_cog_t *c, uint32_t s, float theta, float iq)
 {
     const float per_rad = (float)MC_COG_N / MC_TWO_PI_F32;
     const float dth = mc_wrap_pi_f32(theta - c->theta_prev);
+    /* u0 and u1 computed from the angles alone (the same float for the same
+     * angle): the end of one step is exactly the start of the next, so a
+     * bin centre on it is crossed once, never lost to rounding */
     const float u0 = c->theta_prev * per_rad;
-    const float u1 = u0 + dth * per_rad;
-    const int32_t j0 = (u1 >= u0) ? (floor_i(u0) + 1) : floor_i(u1);
-    const int32_t j1 = (u1 >= u0) ? floor_i(u1) : (floor_i(u0) - ((floor_i(u0) == u0) ? 1 : 0));
+    float u1 = theta * per_rad;
+    if ((dth > 0.0f) && (u1 < u0)) {
+        u1 += (float)MC_COG_N;
+    } else if ((dth < 0.0f) && (u1 > u0)) {
+        u1 -= (float)MC_COG_N;
+    }
+    /* forward: the centres j in (u0, u1]; back: in [u1, u0) */
+    const int32_t j0 = (u1 >= u0) ? (floor_i(u0) + 1) : -floor_i(-u1);
+    const int32_t j1 = (u1 >= u0) ? floor_i(u1) : (-floor_i(-u0) - 1);
     if ((j1 - j0) < MC_COMM_COG_MAX_CROSS && (u1 != u0)) {
         for (int32_t j = j0; j <= j1; j++) {
             const float x = ((float)j - u0) / (u1 - u0);
