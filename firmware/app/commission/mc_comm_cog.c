@@ -127,8 +127,8 @@ static void record(mc_comm_cog_t *c, uint32_t s, float theta, float iq)
         for (int32_t j = j0; j <= j1; j++) {
             const float x = ((float)j - u0) / (u1 - u0);
             const uint32_t k = (uint32_t)j & (MC_COG_N - 1u);
-            c->sum[s][k] += c->iq_prev + (iq - c->iq_prev) * x;
-            if (c->cnt[s][k] < UINT16_MAX) {
+            if (c->cnt[s][k] < UINT8_MAX) { /* the first 255 crossings */
+                c->sum[s][k] += c->iq_prev + (iq - c->iq_prev) * x;
                 c->cnt[s][k]++;
             }
         }

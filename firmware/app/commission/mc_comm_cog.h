@@ -112,10 +112,10 @@ typedef struct {
     float travel; /**< angle covered while recording [rad] */
     float theta_prev;
     float iq_prev;
-    float sum[2][MC_COG_N]; /**< [0] forward, [1] back; currents on DONE */
-    uint16_t cnt[2][MC_COG_N];
-    float rms_cog_a; /**< rms of the result [A] (DONE) */
-    float rms_dis_a; /**< rms of d / 2 [A] (DONE) */
+    float sum[2][MC_COG_N];   /**< [0] forward, [1] back; currents on DONE */
+    uint8_t cnt[2][MC_COG_N]; /**< crossings per bin (saturating: the image's RAM) */
+    float rms_cog_a;          /**< rms of the result [A] (DONE) */
+    float rms_dis_a;          /**< rms of d / 2 [A] (DONE) */
 } mc_comm_cog_t;
 
 /** Validate cfg and arm c (phase RAMP_FWD). MC_COMM_COG_ERR_CFG (c not
