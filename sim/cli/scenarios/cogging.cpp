@@ -170,7 +170,7 @@ std::string calibrate(RunContext& ctx, AppRunner& run, double* t_s) {
       run.send(run.cmd().param_req(MC_PARAM_OP_READ, MC_PARAM_ID_COG_CAL_STATUS, 0.0));
       next_read += 0.05;
     }
-    const std::string stopped = watch(run.probe());
+    std::string stopped = watch(run.probe());
     if (!stopped.empty()) return stopped;
     run.step();
     if ((std::lround(t / board.period_s()) & 1023) == 0) ctx.progress.update(t, t_max);
