@@ -514,9 +514,89 @@ int mc_app_cog_save(mc_app_t *app)
     return mc_cfg_store_save_map(&app->store, &app->cog_map, (uint32_t)sizeof app->cog_map);
 }
 
+/* anticogging 2 may be applied only where the calibration can run. */
+static bool cog_cal_ready(const mc_app_t *a)
+{
+    return a->cmd.enabled && !a->cmd.stopping && !a->cmd.angle_finding &&
+           (a->cmd.control_mode == MC_CAN_CTRL_SPEED) && (a->cmd.cfg.set_speed_ref != NULL) &&
+           (a->cmd.omega_ref_rad_s == 0.0f) && !a->cog_cal_run;
+}
+
+/* anticogging := v in the sets in force and staged, and the drive's. */
+static void cog_cal_set_mode(mc_app_t *a, uint32_t v)
+{
+    mc_drive_cfg_t dc = a->drive->cfg;
+    a->srv.active.anticogging = v;
+    a->srv.staged.anticogging = v;
+    dc.anticogging = v != 0u;
+    mc_drive_set_runtime_limits(a->drive, &dc);
+}
+
+static void cog_cal_start(mc_app_t *a, const mc_params_t *p)
+{
+    mc_comm_cog_cfg_t g;
+    g.dt_s = (float)p->slow_loop_div / (float)p->pwm_hz;
+    g.w_rad_s = MC_APP_COG_CAL_SPEED_RAD_S;
+    g.t_ramp_s = MC_APP_COG_CAL_RAMP_S;
+    g.t_settle_s = MC_APP_COG_CAL_SETTLE_S;
+    g.i_bound_a = MC_APP_COG_BOUND_FRAC * p->i_max_a;
+    g.agree_frac = MC_APP_COG_CAL_AGREE;
+    g.i_floor_a = MC_APP_COG_CAL_FLOOR_FRAC * p->i_max_a;
+    g.offset_known = mc_drive_angle_state(a->drive) == MC_DRIVE_ANGLE_KNOWN;
+    (void)mc_drive_attach_cog(a->drive, NULL); /* the q reference without a map */
+    const uint32_t e = mc_comm_cog_start(&a->cog_cal, &g);
+    a->cog_cal_run = e == 0u;
+    a->srv.cog_cal_status = ((uint32_t)a->cog_cal.phase & 0xFFu) | ((e & 0xFFu) << 8);
+    if (e != 0u) {
+        a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_FAILED | ((e & 0xFFu) << 8);
+        cog_cal_set_mode(a, 0u);
+        cog_bind(a, &a->srv.active);
+    }
+}
+
+/* The slow step's part: the calibration's speed reference, its end. */
+static void cog_cal_service(mc_app_t *a)
+{
+    float w = 0.0f;
+    if (!a->cog_cal_run) {
+        return;
+    }
+    if (!a->cmd.enabled || a->cmd.stopping || (a->cmd.control_mode != MC_CAN_CTRL_SPEED)) {
+        mc_comm_cog_abort(&a->cog_cal);
+    }
+    const mc_drive_telemetry_t *tm = &a->drive->tm;
+    const uint32_t e =
+        mc_comm_cog_step(&a->cog_cal, tm->theta_m_rad, tm->iq_ref_a - tm->cog_ff_a, &w);
+    if (a->cmd.enabled && !a->cmd.stopping && (a->cmd.cfg.set_speed_ref != NULL) &&
+        (a->cmd.cfg.set_speed_ref(a->cmd.cfg.hook_ctx, w) == 0)) {
+        a->cmd.omega_ref_rad_s = w;
+    }
+    uint32_t st = 0u;
+    const float *i = mc_comm_cog_currents(&a->cog_cal);
+    if (i != NULL) {
+        st = (uint32_t)mc_app_cog_load(a, i, MC_COG_N);
+    }
+    a->srv.cog_cal_status =
+        ((uint32_t)a->cog_cal.phase & 0xFFu) | ((e & 0xFFu) << 8) | ((st & 0xFFu) << 16);
+    if ((a->cog_cal.phase == MC_COMM_COG_DONE) || (a->cog_cal.phase == MC_COMM_COG_FAILED)) {
+        a->cog_cal_run = false;
+        const bool ok = (i != NULL) && (st == (uint32_t)MC_COG_ST_OK);
+        if (ok) {
+            a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_DONE;
+        } else if (i != NULL) {
+            a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_FAILED | ((st & 0xFFu) << 16);
+        }
+        cog_cal_set_mode(a, ok ? 1u : 0u);
+        cog_bind(a, &a->srv.active);
+    }
+}
+
 static uint32_t params_check(void *ctx, const mc_params_t *p)
 {
     mc_app_t *a = ctx;
+    if ((p->anticogging == 2u) && (a->srv.active.anticogging != 2u) && !cog_cal_ready(a)) {
+        return MC_PARAMS_ERR_COG_CAL;
+    }
     if ((p->pwm_hz != a->params.pwm_hz) || (p->slow_loop_div != a->params.slow_loop_div)) {
         return 1u;
     }
@@ -547,6 +627,9 @@ static void params_apply(void *ctx, const mc_params_t *p)
         a->srv.law_error = a->laws.error;
     }
     cog_bind(a, p); /* the encoder or anticogging may have changed */
+    if ((p->anticogging == 2u) && !a->cog_cal_run) {
+        cog_cal_start(a, p);
+    }
 }
 
 /* ------------------------------------------------- the angle at enable */
@@ -1050,6 +1133,7 @@ uint32_t mc_app_slow_work(mc_app_t *app)
     mc_can_cmd_step(&app->cmd);
     angle_service(app);
     attach_law(app);
+    cog_cal_service(app);
     if (app->comm != NULL) {
         mc_comm_can_step(app->comm, can, &app->cmd.reply);
     }
