@@ -23,6 +23,19 @@ namespace
 
 using hal_host::FileFlash;
 
+// One boot of the configuration store on the file flash: the flash opened
+// on the file and the store initialised on its two sectors (a simulated
+// power cycle is a second StoreBoot on the same file).
+struct StoreBoot {
+    FileFlash f;
+    mc_cfg_store_t s{};
+    explicit StoreBoot(const std::string &path) : f(path)
+    {
+        const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
+        EXPECT_EQ(mc_cfg_store_init(&s, &sc), 0);
+    }
+};
+
 class FileFlashTest : public ::testing::Test
 {
   protected:
@@ -166,10 +179,8 @@ TEST_F(FileFlashTest, ConfigStoreKeepsItsRecordAcrossBoots)
 {
     mc_params_t p = mc_params_default;
     {
-        FileFlash f(path_);
-        mc_cfg_store_t s;
-        const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
-        ASSERT_EQ(mc_cfg_store_init(&s, &sc), 0);
+        StoreBoot boot(path_);
+        mc_cfg_store_t &s = boot.s;
         mc_params_t got;
         EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_EMPTY);
         p.speed_max_rad_s = 123.5f;
@@ -180,10 +191,8 @@ TEST_F(FileFlashTest, ConfigStoreKeepsItsRecordAcrossBoots)
         EXPECT_EQ(s.seq, 2u);
     }
     {
-        FileFlash f(path_);
-        mc_cfg_store_t s;
-        const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
-        ASSERT_EQ(mc_cfg_store_init(&s, &sc), 0);
+        StoreBoot boot(path_);
+        mc_cfg_store_t &s = boot.s;
         mc_params_t got;
         EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_STORED);
         EXPECT_EQ(std::memcmp(&got, &p, sizeof p), 0);
@@ -195,10 +204,8 @@ TEST_F(FileFlashTest, ConfigStoreKeepsItsRecordAcrossBoots)
     b[4 * 6] ^= 0x01u;                      // an entry of record 1
     b[4 * (MC_CFG_REC_WORDS + 6)] ^= 0x01u; // the same in record 2
     write_file(b);
-    FileFlash f(path_);
-    mc_cfg_store_t s;
-    const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
-    ASSERT_EQ(mc_cfg_store_init(&s, &sc), 0);
+    StoreBoot boot(path_);
+    mc_cfg_store_t &s = boot.s;
     mc_params_t got;
     EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_CORRUPT);
     EXPECT_EQ(std::memcmp(&got, &mc_params_default, sizeof got), 0);
@@ -220,10 +227,8 @@ TEST_F(FileFlashTest, AnticoggingMapSurvivesSectorSwitchesAndAPowerCycle)
     mc_params_t p = mc_params_default;
     uint32_t erases = 0u;
     {
-        FileFlash f(path_);
-        mc_cfg_store_t s;
-        const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
-        ASSERT_EQ(mc_cfg_store_init(&s, &sc), 0);
+        StoreBoot boot(path_);
+        mc_cfg_store_t &s = boot.s;
         mc_params_t got;
         EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_EMPTY);
         ASSERT_EQ(mc_cfg_store_save_map(&s, &map, sizeof map), 0);
@@ -237,10 +242,8 @@ TEST_F(FileFlashTest, AnticoggingMapSurvivesSectorSwitchesAndAPowerCycle)
     }
     // 16 KiB sectors: 15 configuration records beside the map, 17 alone
     EXPECT_GE(erases, 2u);
-    FileFlash f(path_);
-    mc_cfg_store_t s;
-    const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
-    ASSERT_EQ(mc_cfg_store_init(&s, &sc), 0);
+    StoreBoot boot(path_);
+    mc_cfg_store_t &s = boot.s;
     mc_params_t got;
     EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_STORED);
     EXPECT_EQ(got.speed_max_rad_s, 139.0f);
