@@ -4,7 +4,9 @@
 //
 //  1. Speed: the sensored speed PI (SPEED mode) at speed_frac times the
 //     rated speed; after the ramp and 40 / speed_wc of settling, a window of
-//     at least 20 cogging periods and 10 / speed_wc. The cogging torque is a
+//     at least window_periods (default 20) cogging periods and 10 /
+//     speed_wc. A longer window (e.g. 400) separates a lasting ripple at
+//     orders of the turn from a transient of the speed loop. The cogging torque is a
 //     disturbance at N_c w (N_c = lcm(slots, 2 p) per turn) that the loop
 //     rejects: speed ripple ~ A / |J s + B + kt C(s)| at s = j N_c w.
 //  2. Hold: POSITION mode holding where it started (no move); after
@@ -88,6 +90,8 @@ std::vector<ParamSpec> cogging_params(const MotorFiles& f) {
        1.0},
       {"hold_load_frac", 0.05, "1", "step load in the position hold, fraction of rated torque",
        -1.0, 1.0},
+      {"window_periods", 20.0, "1",
+       "the speed window's length in cogging periods (at least 10 / speed_wc)", 1.0, 1.0e5},
       {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9},
       {"cog_cal", 1.0, "1",
        "with anticogging=1: 1 the drive calibrates its map first (anticogging 2), 0 it runs on "
@@ -217,7 +221,8 @@ Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c,
   const double t0 = 0.01;
   const double t_acc = std::abs(w_t) / static_cast<double>(e.p.speed_ramp_rad_s2);
   const double t_win0 = t0 + t_acc + 40.0 / wc;
-  const double win = std::max(20.0 * kTwoPi / (n_c * std::abs(w_t)), 10.0 / wc);
+  const double win =
+      std::max(ctx.params.get("window_periods") * kTwoPi / (n_c * std::abs(w_t)), 10.0 / wc);
   const double dur = std::min(t_win0 + win, cap_s);
   const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, nullptr);
   AppRunner run(*target);
