@@ -261,8 +261,7 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
                                .reset = ctrl_reset,
                                .fast = ctrl_fast,
                                .stop = ctrl_stop,
-                               .ctx = c,
-                               .cogging_ff = true};
+                               .ctx = c};
     return MC_CTRL_POS_ERR_NONE;
 }
 
