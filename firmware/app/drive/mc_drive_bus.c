@@ -189,6 +189,66 @@ static void limit_copper(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc, float p
     }
 }
 
+/* Whether the transient bound's reference r may replace the reference
+ * asked, q: where it slows the step from the predicted current i1, or
+ * asks less current of the same sign (less loss, less of the winding's
+ * energy); never more current than asked nor the other sign (the
+ * steady-state clamps own those). */
+static bool slew_accept(float q, float i1, float r)
+{
+    const bool between = ((r - q) * (r - i1)) <= 0.0f;
+    const bool less = (mc_fabs_f32(r) <= mc_fabs_f32(q)) && ((r * q) >= 0.0f);
+    return between || less;
+}
+
+/* The current loop's own transient, which the steady-state model p(iq)
+ * does not carry: the winding's 3/2 Lq iq diq/dt while the current moves
+ * at the loop's bandwidth. From the last step's measured current i0 and
+ * commanded voltage vq, the current moves by d = T (vq - vq_ss(i0)) / Lq
+ * a period (vq_ss = R iq + w psi_eff): this step samples about
+ * ik = i0 + d, and the voltage it commands acts one period later (the
+ * computation delay), from i1 = i0 + 2 d. That voltage is
+ * vq_ss + kp u, u = iq* - ik (the loop's proportional action on this
+ * step's error), which moves the current by g u (g = kp T / Lq) and
+ * carries, at its mean current i1 + g u / 2,
+ *   p(u) = p_ss(i1 + g u / 2) + 3/2 kp u (i1 + g u / 2) + c,
+ * a quadratic in u held within [-P_r, P_m] as the steady state is
+ * (c: each limit's correction). q: the reference so far; ab: the
+ * model's a and b. */
+static float limit_slew(const mc_foc_f32_cfg_t *foc, const mc_drive_bus_in_t *in, const float ab[2],
+                        const float c[2], float p_m, float p_r, float q)
+{
+    const float a = ab[0];
+    const float b = ab[1];
+    const float kp = foc->kp_q_v_per_a;
+    const float t_l = (foc->lq_h > 0.0f) ? (foc->dt_s / foc->lq_h) : 0.0f;
+    const float d = t_l * (in->vq_v - ((foc->r_ohm * in->iq_a) + (b / 1.5f)));
+    const float ik = in->iq_a + d;
+    const float i1 = ik + d;
+    const float h = 0.5f * kp * t_l;
+    /* p(u) = A u^2 + B u + C with p_ss(i) = a i^2 + b i + a id^2 */
+    const float qa = (a * h * h) + (1.5f * kp * h);
+    const float qb = (((2.0f * a * i1) + b) * h) + (1.5f * kp * i1);
+    const float c0 = (a * i1 * i1) + (b * i1) + (a * in->id_a * in->id_a);
+    float u = q - ik;
+    if (!mc_isfinite_f32(i1) || !(qa > 0.0f)) {
+        return q;
+    }
+    if (p_m < BUS_NONE) {
+        float lo;
+        float hi;
+        if (mc_drive_bus_motor_range(qa, qb, c0 + c[0], p_m, &lo, &hi)) {
+            u = mc_sat_f32(u, lo, hi);
+        } else {
+            u = -qb / (2.0f * qa); /* the least power the model has */
+        }
+    }
+    if (p_r < BUS_NONE) {
+        u = mc_drive_bus_regen_clamp(qa, qb, c0 + c[1], p_r, u);
+    }
+    return slew_accept(q, ik, ik + u) ? (ik + u) : q;
+}
+
 void mc_drive_bus_limit(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg,
                         const mc_foc_f32_cfg_t *foc, const mc_drive_bus_in_t *in, float *p_id_a,
                         float *p_iq_a)
@@ -234,6 +294,11 @@ void mc_drive_bus_limit(mc_drive_bus_t *s, const mc_drive_bus_cfg_t *cfg,
         }
         if (p_r < BUS_NONE) {
             iq = mc_drive_bus_regen_clamp(a, b, c0 - s->corr_w + s->corr_r_w, p_r, iq);
+        }
+        {
+            const float ab[2] = {a, b};
+            const float c[2] = {s->corr_w, s->corr_r_w};
+            iq = limit_slew(foc, in, ab, c, p_m, p_r, iq);
         }
         s->limiting = (iq != *p_iq_a);
         *p_iq_a = iq;

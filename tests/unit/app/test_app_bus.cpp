@@ -136,6 +136,83 @@ TEST(DriveBusLimit, CorrectionClosesOnAWrongResistance)
     EXPECT_NEAR(0.5f, s.i_mot_lim_a, 1e-6f);
 }
 
+// A discrete current loop as the drive runs it: this step samples i_k,
+// the PI's voltage acts one period later (the computation delay), the
+// winding integrates it over the period. The power of each period is
+// 3/2 v i at the period's mean current.
+struct DelayedLoop {
+    float r, l, t, kp, ki;
+    float i = 0.0f, v_act = 0.0f, v_last = 0.0f, i_last = 0.0f, integ = 0.0f;
+    float Step(float q) // returns the power of the period [W]
+    {
+        const float i_k = i;
+        const float e = q - i_k;
+        const float v_new = (kp * e) + integ;
+        integ += ki * t * e;
+        const float i_next = i_k + (t / l) * (v_act - (r * i_k));
+        const float p = 1.5f * v_act * 0.5f * (i_k + i_next);
+        i_last = i_k;
+        v_last = v_new;
+        v_act = v_new;
+        i = i_next;
+        return p;
+    }
+};
+
+// The current loop's transient (mc_drive_bus.c, limit_slew): a step of
+// the q reference from rest to 200 A on paper 002's 40 kW motor
+// (R 0.065 ohm, L 0.655 mH) at 8 kHz with a 640 rad/s current loop and a
+// 5 kW motoring limit. With the references the steady-state range alone
+// allows (the winding's 3/2 L i di/dt not in it) the supply power
+// overshoots the limit by more than 20 % while the current rises; through
+// mc_drive_bus_limit it stays within 2 % of it (the scenario's tolerance,
+// issue 33 item 5: what the model leaves out is the PI's integral and the
+// mean current's curvature within the period), and the current still
+// reaches the 200 A asked within 400 periods (50 ms) (the bound slows the
+// rise, it does not stall it: 5 kW / (3/2 R) allows 226 A at standstill,
+// so the 200 A asked is reached).
+TEST(DriveBusLimit, TransientOfAStepFromRestWithinTheLimit)
+{
+    mc_foc_f32_cfg_t foc = GoodCfg().foc;
+    foc.r_ohm = 0.065f;
+    foc.ld_h = 0.655e-3f;
+    foc.lq_h = 0.655e-3f;
+    foc.flux_wb = 0.146f;
+    foc.dt_s = 1.0f / 8000.0f;
+    foc.kp_q_v_per_a = foc.lq_h * 640.0f;
+    const float ki = foc.r_ohm * 640.0f;
+    const float vbus = 240.0f;
+    const float p_m = 5000.0f;
+    mc_drive_bus_cfg_t cfg{};
+    cfg.p_bus_max_w = p_m;
+    float peak[2] = {0.0f, 0.0f};
+    float i_end[2] = {0.0f, 0.0f};
+    for (int with = 0; with < 2; ++with) {
+        DelayedLoop loop{foc.r_ohm, foc.lq_h, foc.dt_s, foc.kp_q_v_per_a, ki};
+        mc_drive_bus_t s;
+        mc_drive_bus_init(&s, &foc);
+        for (uint32_t k = 0u; k < 400u; ++k) {
+            float id = 0.0f;
+            float iq = 200.0f;
+            if (with == 1) {
+                const mc_drive_bus_in_t in{vbus, 0.0f,        true, k,
+                                           0.0f, loop.i_last, 0.0f, loop.v_last};
+                mc_drive_bus_limit(&s, &cfg, &foc, &in, &id, &iq);
+            } else {
+                float lo = 0.0f;
+                float hi = 0.0f;
+                ASSERT_TRUE(mc_drive_bus_motor_range(1.5f * foc.r_ohm, 0.0f, 0.0f, p_m, &lo, &hi));
+                iq = std::fmin(iq, hi);
+            }
+            peak[with] = std::fmax(peak[with], loop.Step(iq));
+        }
+        i_end[with] = loop.i;
+    }
+    EXPECT_GT(peak[0], 1.2f * p_m) << "the steady-state range alone";
+    EXPECT_LE(peak[1], 1.02f * p_m);
+    EXPECT_NEAR(200.0f, i_end[1], 2.0f); // 1 %: the PI's residual after 400 periods
+}
+
 // Bad limits are refused by name and change nothing: the drive's init
 // (negative, NaN, infinite: MC_DRIVE_CFG_ERR_BUS_POWER), and the parameter
 // table's range check for each of ids 150-153 (negative, NaN, above max).
