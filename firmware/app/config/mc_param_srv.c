@@ -80,6 +80,10 @@ static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
         return s->angle_error;
     case MC_PARAM_ID_HALL_ERROR:
         return s->hall_error;
+    case MC_PARAM_ID_COG_STATUS:
+        return s->cog_status;
+    case MC_PARAM_ID_COG_CAL_STATUS:
+        return s->cog_cal_status;
     case MC_PARAM_ID_HALL_OBS_WEIGHT: {
         uint32_t u;
         (void)memcpy(&u, &s->hall_obs_weight, sizeof u);
