@@ -522,8 +522,15 @@ static bool cog_cal_ready(const mc_app_t *a)
            (a->cmd.omega_ref_rad_s == 0.0f) && !a->cog_cal_run;
 }
 
+/* The calibration's start, end and service are kept out of their callers
+ * (noinline): inlined, their frames (a whole mc_drive_cfg_t here) sit on
+ * the stack through params_apply's and mc_app_slow_work's deepest calls (the
+ * command handler's APPLY), which overflowed the boards' 4 KiB main stack
+ * (PIL: pil: stack overflow, hal/pil/mc_hal_pil.c). */
+#define MC_APP_NOINLINE __attribute__((noinline))
+
 /* anticogging := v in the sets in force and staged, and the drive's. */
-static void cog_cal_set_mode(mc_app_t *a, uint32_t v)
+static MC_APP_NOINLINE void cog_cal_set_mode(mc_app_t *a, uint32_t v)
 {
     mc_drive_cfg_t dc = a->drive->cfg;
     a->srv.active.anticogging = v;
@@ -532,7 +539,7 @@ static void cog_cal_set_mode(mc_app_t *a, uint32_t v)
     mc_drive_set_runtime_limits(a->drive, &dc);
 }
 
-static void cog_cal_start(mc_app_t *a, const mc_params_t *p)
+static MC_APP_NOINLINE void cog_cal_start(mc_app_t *a, const mc_params_t *p)
 {
     mc_comm_cog_cfg_t g;
     g.dt_s = (float)p->slow_loop_div / (float)p->pwm_hz;
@@ -555,7 +562,7 @@ static void cog_cal_start(mc_app_t *a, const mc_params_t *p)
 }
 
 /* The slow step's part: the calibration's speed reference, its end. */
-static void cog_cal_service(mc_app_t *a)
+static MC_APP_NOINLINE void cog_cal_service(mc_app_t *a)
 {
     float w = 0.0f;
     if (!a->cog_cal_run) {
