@@ -148,6 +148,12 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
                      (loaded.slow_loop_div == cfg->slow_loop_div_fixed));
                 if (fits) {
                     app->params = loaded;
+                    if (app->params.anticogging == 2u) {
+                        /* a request, never a setting (mc_param_srv do_save
+                         * stores the value before it): no calibration and no
+                         * feed-forward at boot */
+                        app->params.anticogging = 0u;
+                    }
                 } else {
                     b = MC_CFG_BOOT_INVALID; /* a set this board cannot run */
                 }
@@ -601,6 +607,9 @@ static MC_APP_NOINLINE void cog_cal_service(mc_app_t *a)
 static uint32_t params_check(void *ctx, const mc_params_t *p)
 {
     mc_app_t *a = ctx;
+    if (a->srv.active.anticogging != 2u) {
+        a->srv.cog_persist = a->srv.active.anticogging; /* what a SAVE stores for a 2 */
+    }
     if ((p->anticogging == 2u) && (a->srv.active.anticogging != 2u) && !cog_cal_ready(a)) {
         return MC_PARAMS_ERR_COG_CAL;
     }

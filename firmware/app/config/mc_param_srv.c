@@ -143,8 +143,8 @@ static mc_param_status_t do_confirm(mc_param_srv_t *s, bool armed, uint32_t id, 
     return MC_PARAM_OK;
 }
 
-/* SAVE (mc_param_srv.h): unchanged skipped, the rate limit, the store. */
-static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
+/* SAVE of the set in force as it is stored (do_save). */
+static mc_param_status_t save_active(mc_param_srv_t *s, uint32_t *p_value)
 {
     if (bridge_on(s)) {
         return MC_PARAM_ERR_RUNNING; /* an erase stalls the CPU for up to seconds */
@@ -173,6 +173,23 @@ static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
     s->store_status = (uint8_t)MC_CFG_BOOT_STORED;
     *p_value = s->store->seq;
     return MC_PARAM_OK;
+}
+
+/* SAVE (mc_param_srv.h): unchanged skipped, the rate limit, the store.
+ * anticogging 2 (a calibration runs) is stored as cog_persist, the value
+ * before it, for the record and the check for an unchanged set alike: a
+ * stored 2 would boot with the feed-forward on and no map measured. The
+ * set in force keeps its 2 (patched in place: no second mc_params_t on the
+ * stack, whose 4 KiB on the boards this path nearly fills). */
+static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
+{
+    const uint32_t cog = s->active.anticogging;
+    if (cog == 2u) {
+        s->active.anticogging = s->cog_persist;
+    }
+    const mc_param_status_t st = save_active(s, p_value);
+    s->active.anticogging = cog;
+    return st;
 }
 
 /* LOAD_DEFAULTS: the defaults staged, the reboot parameters kept. */

@@ -111,6 +111,10 @@ typedef struct {
     float hall_obs_weight;   /**< the hall_obs_weight parameter (the application's) */
     uint32_t cog_status;     /**< the cog_status parameter (the application's) */
     uint32_t cog_cal_status; /**< the cog_cal_status parameter (the application's) */
+    uint32_t cog_persist;    /**< what a SAVE stores for anticogging while the
+                                  set in force has 2 (a calibration runs: 2
+                                  is a request, not a setting to boot with):
+                                  the value before it (the application's) */
     /* time base (mc_param_srv_tick) */
     uint32_t tick_hz;       /**< rate of mc_param_srv_tick [Hz] (0: not yet known) */
     uint32_t save_tokens;   /**< SAVEs allowed now, <= MC_PARAM_SAVE_BURST */

@@ -1208,3 +1208,66 @@ TEST_F(McAppCog, StoredMapSurvivesAPowerCycleAndIsRefusedForAnotherEncoder)
     EXPECT_FALSE(app.cog_loaded);
     EXPECT_EQ(nullptr, drive.cog);
 }
+
+// A SAVE while a calibration runs (anticogging 2 in force): here the SAVE
+// that comes with the disable in the same slow step, handled before the
+// calibration sees its abort. The record holds the value before the
+// calibration (0), not the request 2, which would boot with the
+// feed-forward on and no map measured; the reply is OK and the set in force
+// keeps its 2 until the calibration ends (then 0: aborted).
+TEST_F(McAppCog, SaveDuringACalibrationStoresTheValueBeforeIt)
+{
+    cfg.laws_from_params = true;
+    defaults.speed_law = MC_LAW_SPEED_PI;
+    Start();
+    Send(0x11u, {MC_CAN_CTRL_SPEED}); // SET_CONTROL_MODE SPEED, reference 0
+    Send(0x10u, {1});                 // SET_ENABLE
+    SlowSteps(100);
+    ASSERT_EQ(MC_DRIVE_MODE_CTRL, drive.mode) << "faults 0x" << std::hex << drive.faults;
+    ASSERT_EQ(MC_PARAM_OK, WriteApply(MC_PARAM_ID_ANTICOGGING, 2u));
+    ASSERT_TRUE(app.cog_cal_run) << "cog_cal_status 0x" << std::hex << app.srv.cog_cal_status;
+    SlowSteps(5);
+    ASSERT_TRUE(app.cog_cal_run);
+    ASSERT_EQ(2u, app.srv.active.anticogging);
+    DrainTx();
+
+    Send(0x10u, {0});                      // SET_ENABLE 0
+    Send(0x18u, {3, 0, 0, 0, 0, 0, 0, 0}); // PARAM_REQ SAVE
+    SlowSteps(1);
+    bool replied = false;
+    mc_hal_can_frame_t f;
+    while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) {
+        if ((f.id == (defaults.can_node_id << 5 | 0x19u)) && (f.data[0] == 3u)) {
+            replied = true;
+            EXPECT_EQ(static_cast<uint8_t>(MC_PARAM_OK), f.data[3]) << "SAVE's status";
+        }
+    }
+    EXPECT_TRUE(replied) << "the SAVE is answered";
+    ASSERT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_STORED), app.srv.store_status);
+    EXPECT_FALSE(app.cog_cal_run) << "the disable aborted the calibration";
+    EXPECT_EQ(0u, app.srv.active.anticogging) << "an aborted calibration leaves 0";
+
+    mc_cfg_store_t st{};
+    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}};
+    ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
+    uint32_t raw = 0xFFFFFFFFu;
+    ASSERT_EQ(0, mc_cfg_store_find_raw(&st, MC_PARAM_ID_ANTICOGGING, &raw));
+    EXPECT_EQ(0u, raw) << "stored: the value before the calibration, not the request";
+}
+
+// A record holding anticogging 2 (written by an image without the SAVE's
+// substitution) boots as 0: no calibration, no feed-forward at boot.
+TEST_F(McAppCog, AStoredCalibrationRequestBootsAsOff)
+{
+    mc_params_t p = defaults;
+    p.anticogging = 2u;
+    mc_cfg_store_t st{};
+    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}};
+    ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
+    ASSERT_EQ(0, mc_cfg_store_save(&st, &p));
+    Start();
+    ASSERT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_STORED), app.boot_status);
+    EXPECT_EQ(0u, Read(MC_PARAM_ID_ANTICOGGING));
+    EXPECT_FALSE(drive.cfg.anticogging);
+    EXPECT_FALSE(app.cog_cal_run);
+}
