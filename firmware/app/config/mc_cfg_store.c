@@ -61,7 +61,9 @@ static int check_record(const mc_cfg_store_t *s, uint32_t i, uint32_t off, uint3
                    : -EIO;
     }
     n = hdr[3] & 0xFFFFu;
-    if (((hdr[0] != MC_CFG_MAGIC) && (hdr[0] != MC_CFG_MAP_MAGIC)) || ((hdr[3] >> 16) != 0xFFFFu) ||
+    /* any kind (magic) in the envelope: one this image does not know is
+     * skipped by its length, not taken for a cut record (scan_sector) */
+    if ((hdr[0] == MC_HAL_FLASH_ERASED_WORD) || ((hdr[3] >> 16) != 0xFFFFu) ||
         (n > MC_CFG_ENTRIES_MAX)) {
         return -EAGAIN;
     }
@@ -124,6 +126,10 @@ static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any, kind_loc_t lo
         if (rc != 0) {
             *p_any = true;
             return 0; /* a cut record: the rest of the sector is unusable */
+        }
+        if ((hdr[0] != MC_CFG_MAGIC) && (hdr[0] != MC_CFG_MAP_MAGIC)) {
+            off += words * W; /* a kind of a later image: skipped whole */
+            continue;
         }
         k = (hdr[0] == MC_CFG_MAP_MAGIC) ? 1u : 0u;
         *p_any = *p_any || (k == 0u);

@@ -510,3 +510,44 @@ TEST(CfgStoreMap, OtherSizeRefusedAndTheConfigurationUntouched)
     EXPECT_EQ(mc_cfg_store_save_map(&tiny.store, m.data(), kMapBytes), -ENOSPC);
     EXPECT_EQ(tiny.mem, before);
 }
+
+// A record of a kind this image does not know (a later image's: another
+// magic in the same envelope, valid length and CRC) is skipped by its
+// length: the configuration written after it boots, and the next save
+// appends behind it. The same bytes with a wrong CRC are a cut record (the
+// rest of the sector unusable): the configuration before it boots.
+TEST(CfgStore, UnknownRecordKindIsSkipped)
+{
+    Rig r(4096);
+    const mc_params_t v1 = Variant(1);
+    const mc_params_t v2 = Variant(2);
+    std::vector<uint32_t> unknown = {0x584D434Du /* "MCMX" */, 1u, 5u, 3u | 0xFFFF0000u,
+                                     11u, 12u, 21u, 22u, 31u, 32u};
+    unknown.push_back(mc_crc32(unknown.data(), unknown.size() * 4u));
+    const std::vector<uint32_t> rec1 = Record(MC_PARAMS_LAYOUT_VERSION, 4u, Entries(v1));
+    const std::vector<uint32_t> rec2 = Record(MC_PARAMS_LAYOUT_VERSION, 6u, Entries(v2));
+    std::vector<uint32_t> sector = rec1;
+    sector.insert(sector.end(), unknown.begin(), unknown.end());
+    sector.insert(sector.end(), rec2.begin(), rec2.end());
+    std::memcpy(r.Sector(1), sector.data(), sector.size() * 4u);
+
+    mc_params_t p{};
+    ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, v2)) << "the configuration behind the unknown record";
+    EXPECT_EQ(r.store.seq, 6u);
+    const mc_params_t v3 = Variant(3);
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &v3), 0);
+    EXPECT_EQ(r.flash.erases, 0u) << "appended behind the records, no sector switch";
+    ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, v3));
+    EXPECT_EQ(0, std::memcmp(r.Sector(1) + rec1.size() * 4u, unknown.data(), unknown.size() * 4u))
+        << "the unknown record is left as it was";
+
+    // its CRC broken: a cut record, the sector ends there (v1 boots)
+    Rig c(4096);
+    std::vector<uint32_t> cut = sector;
+    cut[rec1.size() + unknown.size() - 1u] ^= 1u;
+    std::memcpy(c.Sector(1), cut.data(), cut.size() * 4u);
+    ASSERT_EQ(c.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, v1));
+}
