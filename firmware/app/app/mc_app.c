@@ -499,6 +499,7 @@ mc_cog_status_t mc_app_cog_load(mc_app_t *app, const float *i_q_a, uint32_t n)
     if (st == MC_COG_ST_OK) {
         app->cog_loaded = true;
         app->cog_load_status = (uint32_t)MC_COG_ST_OK;
+        app->cog_unsaved = true;
     }
     cog_bind(app, p);
     return st;
@@ -517,7 +518,25 @@ int mc_app_cog_save(mc_app_t *app)
     if (!app->have_store) {
         return -ENODEV;
     }
-    return mc_cfg_store_save_map(&app->store, &app->cog_map, (uint32_t)sizeof app->cog_map);
+    const int rc =
+        mc_cfg_store_save_map(&app->store, &app->cog_map, (uint32_t)sizeof app->cog_map);
+    if (rc == 0) {
+        app->cog_unsaved = false;
+    }
+    return rc;
+}
+
+/* The param server's SAVE, after the configuration: a map built since the
+ * last map save (a calibration's) is stored with it; none, or one not valid
+ * for the encoder in force (cog_status says why), is no error. */
+static int params_save(void *ctx)
+{
+    mc_app_t *a = ctx;
+    if (!a->cog_unsaved) {
+        return 0;
+    }
+    const int rc = mc_app_cog_save(a);
+    return (rc == -ENOENT) ? 0 : rc;
 }
 
 /* anticogging 2 may be applied only where the calibration can run. */
@@ -957,6 +976,7 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
         app->srv.hook.check = params_check;
         app->srv.hook.apply = params_apply;
         app->srv.hook.ctx = app;
+        app->srv.hook.save = params_save;
     }
     cog_bind(app, p);
     boot_start(app);

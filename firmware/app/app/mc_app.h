@@ -267,6 +267,7 @@ typedef struct {
     bool hallobs_on;            /**< hallobs attached to the drive */
     mc_cog_map_t cog_map;       /**< the anticogging map (valid when cog_loaded) */
     bool cog_loaded;            /**< cog_map holds a map (loaded or stored) */
+    bool cog_unsaved;           /**< cog_map built since its last save: a SAVE stores it */
     uint32_t cog_load_status;   /**< MC_COG_ST_* of the map's load (EMPTY: none) */
     mc_comm_cog_t cog_cal;      /**< the anticogging calibration (anticogging 2) */
     bool cog_cal_run;           /**< cog_cal runs (mc_app.h, MC_APP_COG_CAL_*) */

@@ -189,6 +189,12 @@ static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
     }
     const mc_param_status_t st = save_active(s, p_value);
     s->active.anticogging = cog;
+    /* the configuration first, then the front end's records (behind it in
+     * the sector: an older image's scan, which stops at them, still sees it) */
+    if ((st == MC_PARAM_OK) && (s->hook.save != NULL) && (s->hook.save(s->hook.ctx) != 0)) {
+        s->store_status = (uint8_t)MC_CFG_BOOT_FLASH;
+        return MC_PARAM_ERR_STORE;
+    }
     return st;
 }
 

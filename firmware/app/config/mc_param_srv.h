@@ -84,11 +84,15 @@ extern "C" {
 #define MC_PARAM_CONFIRM_WINDOW_S 2u
 
 /** Extra check of a staged set by the front end (e.g. the CAN bus budget of
- *  the telemetry rates), and its apply: check returns 0 to accept. */
+ *  the telemetry rates), and its apply: check returns 0 to accept. save
+ *  (optional) runs after a SAVE stored the configuration (or found it
+ *  stored): the front end's own records (the application's anticogging map
+ *  from a calibration), 0 or a negative errno (the SAVE answers STORE). */
 typedef struct {
     uint32_t (*check)(void *ctx, const mc_params_t *staged);
     void (*apply)(void *ctx, const mc_params_t *active);
     void *ctx;
+    int (*save)(void *ctx);
 } mc_param_hook_t;
 
 typedef struct {

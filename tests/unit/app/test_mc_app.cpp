@@ -1271,3 +1271,32 @@ TEST_F(McAppCog, AStoredCalibrationRequestBootsAsOff)
     EXPECT_FALSE(drive.cfg.anticogging);
     EXPECT_FALSE(app.cog_cal_run);
 }
+
+// The parameter SAVE (PARAM_REQ over CAN, here through the param server)
+// stores a map built since the last save (a calibration's: loaded as the
+// calibration loads it) behind the configuration; after a power cycle both
+// boot (the map bit for bit, cog_status OK, attached). A SAVE with no new
+// map writes no map record (the sequence counter stays).
+TEST_F(McAppCog, ParameterSaveStoresANewMapWithTheConfiguration)
+{
+    Start();
+    const std::vector<float> v = CogCurrents();
+    ASSERT_EQ(MC_COG_ST_OK, mc_app_cog_load(&app, v.data(), MC_COG_N));
+    ASSERT_EQ(MC_PARAM_OK, WriteApply(MC_PARAM_ID_ANTICOGGING, 1u));
+    uint32_t seq = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_SAVE, 0u, &seq));
+    EXPECT_EQ(1u, seq) << "the configuration: record 1";
+    EXPECT_EQ(2u, app.store.seq_top) << "the map behind it: record 2";
+    uint32_t again = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_SAVE, 0u, &again));
+    EXPECT_EQ(2u, app.store.seq_top) << "no new map: nothing written";
+
+    const mc_cog_map_t saved = app.cog_map;
+    Reboot();
+    EXPECT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_STORED), app.boot_status);
+    EXPECT_EQ(1u, Read(MC_PARAM_ID_ANTICOGGING));
+    EXPECT_EQ(0u, Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_EQ(0, std::memcmp(&saved, &app.cog_map, sizeof saved));
+    EXPECT_EQ(&app.cog_map, drive.cog);
+    EXPECT_TRUE(drive.cfg.anticogging);
+}
