@@ -518,8 +518,7 @@ int mc_app_cog_save(mc_app_t *app)
     if (!app->have_store) {
         return -ENODEV;
     }
-    const int rc =
-        mc_cfg_store_save_map(&app->store, &app->cog_map, (uint32_t)sizeof app->cog_map);
+    const int rc = mc_cfg_store_save_map(&app->store, &app->cog_map, (uint32_t)sizeof app->cog_map);
     if (rc == 0) {
         app->cog_unsaved = false;
     }

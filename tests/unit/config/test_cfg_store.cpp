@@ -521,8 +521,8 @@ TEST(CfgStore, UnknownRecordKindIsSkipped)
     Rig r(4096);
     const mc_params_t v1 = Variant(1);
     const mc_params_t v2 = Variant(2);
-    std::vector<uint32_t> unknown = {0x584D434Du /* "MCMX" */, 1u, 5u, 3u | 0xFFFF0000u,
-                                     11u, 12u, 21u, 22u, 31u, 32u};
+    std::vector<uint32_t> unknown = {
+        0x584D434Du /* "MCMX" */, 1u, 5u, 3u | 0xFFFF0000u, 11u, 12u, 21u, 22u, 31u, 32u};
     unknown.push_back(mc_crc32(unknown.data(), unknown.size() * 4u));
     const std::vector<uint32_t> rec1 = Record(MC_PARAMS_LAYOUT_VERSION, 4u, Entries(v1));
     const std::vector<uint32_t> rec2 = Record(MC_PARAMS_LAYOUT_VERSION, 6u, Entries(v2));
