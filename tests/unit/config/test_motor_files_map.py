@@ -10,6 +10,10 @@ a drive as it is. Keys that are not drive parameters, each for a reason:
   description       a board file that names the image's board description
                     instead of holding values (tests/sil/boards checks it
                     reads what the image is built from)
+  slots, cogging_*  the plant's cogging torque (sim/include/mcsim/cogging.hpp):
+                    a property of the motor the drive does not store; the
+                    drive measures its effect (the anticogging map), it is
+                    not configured with it
 Also checks that the check can fail: a file with an unknown key and one with
 a value out of range are reported.
     test_motor_files_map.py --repo ROOT
@@ -21,7 +25,8 @@ import os
 import sys
 import tomllib
 
-NOT_PARAMS = {"name", "source", "delay_periods", "description"}
+NOT_PARAMS = {"name", "source", "delay_periods", "description", "slots"}
+NOT_PARAM_PREFIXES = ("cogging_",)
 
 
 def problems_of(path, params):
@@ -30,7 +35,7 @@ def problems_of(path, params):
     out = []
     for table in ("motor", "board"):
         for key, value in doc.get(table, {}).items():
-            if key in NOT_PARAMS:
+            if key in NOT_PARAMS or key.startswith(NOT_PARAM_PREFIXES):
                 continue
             p = params.get(key)
             if p is None:
