@@ -247,14 +247,14 @@ static void sh_exit(int code)
 /* ---- the main stack's guard (file comment, "stack") --------------------- */
 
 #if defined(__arm__)
-extern uint32_t _sstack;
+extern uint32_t _sstack[]; /* the linker script's: the stack's lowest word */
 
 /* Paint from the stack's bottom up to 64 bytes below this frame. */
 static void stack_paint(void)
 {
     volatile uint32_t here = 0u;
     const uintptr_t top = (uintptr_t)&here - 64u;
-    for (uint32_t *w = &_sstack; (uintptr_t)w < top; ++w) {
+    for (uint32_t *w = _sstack; (uintptr_t)w < top; ++w) {
         *w = PIL_STACK_PAINT;
     }
 }
@@ -262,7 +262,7 @@ static void stack_paint(void)
 /* The guard band still holds the paint. */
 static bool stack_guard_intact(void)
 {
-    const volatile uint32_t *w = &_sstack;
+    const volatile uint32_t *w = _sstack;
     for (uint32_t k = 0u; k < PIL_STACK_GUARD_BYTES / 4u; ++k) {
         if (w[k] != PIL_STACK_PAINT) {
             return false;
@@ -270,16 +270,6 @@ static bool stack_guard_intact(void)
     }
     return true;
 }
-#else
-static void stack_paint(void)
-{
-}
-
-static bool stack_guard_intact(void)
-{
-    return true;
-}
-#endif
 
 /* Exit PIL_EXIT_STACK when the guard band was written: at once, so the
  * host's link reports the image's exit instead of the damage it did. */
@@ -290,6 +280,16 @@ static void stack_check(void)
         sh_exit(PIL_EXIT_STACK);
     }
 }
+#else
+/* the host's build of this file (lint): no stack to guard */
+static void stack_paint(void)
+{
+}
+
+static void stack_check(void)
+{
+}
+#endif
 
 void HardFault_Handler(void)
 {
