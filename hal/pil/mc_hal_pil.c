@@ -56,6 +56,14 @@
  *                    from the image header (mc_image_header.h), ENTER
  *                    resetting into the bootloader through the mailbox
  *                    (mc_boot_handoff.h), as on the drive boards.
+ *       stack        the main stack (stm32f405_sections.ld: MC_STACK_SIZE
+ *                    bytes from _sstack, right above .bss) is painted at
+ *                    start-up; after every period and at END a band of
+ *                    PIL_STACK_GUARD_BYTES at its bottom must still hold the
+ *                    paint, else the image exits PIL_EXIT_STACK ("stack
+ *                    overflow", QEMU's exit status): an overflow writes
+ *                    into the last .bss objects (this HAL's CAN receive queue)
+ *                    and shows only as a SIL/PIL difference otherwise;
  *       probe        the application's probe (mc_app_probe) goes to the
  *                    host as PROBE after READY and after each period,
  *                    before OUT (link protocol version 2);
@@ -107,6 +115,16 @@
 #define PIL_EXIT_FRAME_ERROR  3
 #define PIL_EXIT_CFG_REJECTED 2
 #define PIL_EXIT_HARD_FAULT   99
+#define PIL_EXIT_STACK        5 /* 4: the bootloader's "no host" */
+
+/* The main stack's guard band (file comment, "stack"): a run whose deepest
+ * path reaches the bottom 128 bytes of the 4 KiB stack fails. The
+ * can-telemetry runs leave 204 bytes unused (measured by the paint at END,
+ * after the anticogging calibration's frames were taken off the APPLY path);
+ * the band is below that so those runs pass, and well above zero so an
+ * overflow is caught before it reaches .bss. */
+#define PIL_STACK_GUARD_BYTES 128u
+#define PIL_STACK_PAINT       0xA5C3E1F7u
 
 /* USART1 (RM0090 section 30.6). */
 #define USART_SR             MC_REG32(MC_USART1_BASE + 0x00u)
@@ -226,6 +244,53 @@ static void sh_exit(int code)
     }
 }
 
+/* ---- the main stack's guard (file comment, "stack") --------------------- */
+
+#if defined(__arm__)
+extern uint32_t _sstack[]; /* the linker script's: the stack's lowest word */
+
+/* Paint from the stack's bottom up to 64 bytes below this frame. */
+static void stack_paint(void)
+{
+    volatile uint32_t here = 0u;
+    const uintptr_t top = (uintptr_t)&here - 64u;
+    for (uint32_t *w = _sstack; (uintptr_t)w < top; ++w) {
+        *w = PIL_STACK_PAINT;
+    }
+}
+
+/* The guard band still holds the paint. */
+static bool stack_guard_intact(void)
+{
+    const volatile uint32_t *w = _sstack;
+    for (uint32_t k = 0u; k < PIL_STACK_GUARD_BYTES / 4u; ++k) {
+        if (w[k] != PIL_STACK_PAINT) {
+            return false;
+        }
+    }
+    return true;
+}
+
+/* Exit PIL_EXIT_STACK when the guard band was written: at once, so the
+ * host's link reports the image's exit instead of the damage it did. */
+static void stack_check(void)
+{
+    if (!stack_guard_intact()) {
+        sh_write0("pil: stack overflow (the main stack reached its guard band)\n");
+        sh_exit(PIL_EXIT_STACK);
+    }
+}
+#else
+/* the host's build of this file (lint): no stack to guard */
+static void stack_paint(void)
+{
+}
+
+static void stack_check(void)
+{
+}
+#endif
+
 void HardFault_Handler(void)
 {
     sh_write0("pil: hard fault\n");
@@ -293,6 +358,7 @@ static void handle_frame(int type)
     } else if (type == (int)MC_PIL_TYPE_END) {
         int32_t code = 0;
         (void)mc_pil_decode_end(g_pil.rx, n, &code);
+        stack_check();
         sh_exit((int)code);
     } else {
         sh_write0("pil: unexpected frame type\n");
@@ -512,6 +578,7 @@ static const mc_hal_hall_ops_t k_hall_ops = {hall_read};
 
 const mc_hal_t *mc_board_init(uint32_t sysclk_hz)
 {
+    stack_paint();
     memset(&g_pil, 0, sizeof g_pil);
     g_pil.sysclk_hz = sysclk_hz;
     g_pil.duty[0] = MC_HAL_PWM3_DUTY_INIT;
@@ -766,6 +833,7 @@ static pil_bridge_t bridge_now(void)
 void mc_board_period_done(const mc_drive_t *d, bool slow_ran)
 {
     mc_pil_out_t o;
+    stack_check();
     const pil_bridge_t now = bridge_now();
     const pil_bridge_t *drv = &now;
     o.seq = g_pil.meas.seq;

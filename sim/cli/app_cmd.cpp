@@ -53,6 +53,11 @@ mc_hal_can_frame_t AppCommands::param_op(uint32_t opcode) const {
   return pack(MC_CAN_MSG_PARAM_REQ, {static_cast<float>(opcode), 0.0f, 0.0f});
 }
 
+mc_hal_can_frame_t AppCommands::param_req(uint32_t opcode, uint32_t id, double raw) const {
+  return pack(MC_CAN_MSG_PARAM_REQ,
+              {static_cast<float>(opcode), static_cast<float>(id), static_cast<float>(raw)});
+}
+
 mc_hal_can_frame_t AppCommands::host_heartbeat() {
   ++hb_counter_;
   return pack(MC_CAN_MSG_HOST_HEARTBEAT, {static_cast<float>(hb_counter_)});

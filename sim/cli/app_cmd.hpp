@@ -35,6 +35,9 @@ class AppCommands {
   /// PARAM_REQ with an opcode that takes no id or value (MC_PARAM_OP_APPLY,
   /// MC_PARAM_OP_SAVE).
   mc_hal_can_frame_t param_op(uint32_t opcode) const;
+  /// PARAM_REQ opcode for parameter id with the value's raw 32 bits given
+  /// as a number (a u32 parameter's value; up to 2^24 exactly).
+  mc_hal_can_frame_t param_req(uint32_t opcode, uint32_t id, double raw) const;
   /// HOST_HEARTBEAT, its counter advanced by one at each call.
   mc_hal_can_frame_t host_heartbeat();
 

@@ -51,7 +51,9 @@
  * MC_APP_RX_PER_STEP command frames (parameter reads) over every phase of
  * the telemetry schedule, the reply limiter's bucket full before each (its
  * worst case: MC_TM_REPLY_BURST reads answered, one more served and its
- * reply held, the rest not served).
+ * reply held, the rest not served). The sensored run then counts the
+ * anticogging lookup alone and RUN_PERIODS interrupts with a map attached
+ * and anticogging on (cog_lookup, isr_anticogging; its "isr" has it off).
  *
  * Output: one JSON object per line over semihosting (run_isr_bench.py).
  */
@@ -408,6 +410,17 @@ static void part_speed_law(void)
     g_sink = (int)mc_ctrl_speed_fast(&g_spd_copy, &g_law_meas, &g_law_out);
 }
 
+/* The anticogging map (mc_drive_cog.h): its lookup alone, and the whole
+ * interrupt with the feed-forward on (the sensored run). Any shape: the
+ * lookup's cost does not depend on the values. */
+static mc_cog_map_t g_cog;
+static float g_cog_i[MC_COG_N];
+static volatile float g_sinkf;
+static void part_cog(void)
+{
+    g_sinkf = mc_cog_ff_a(&g_cog, D->tm.theta_m_rad);
+}
+
 static stat_t parts(fn_t fn, bool adc)
 {
     stat_t s = {0};
@@ -516,6 +529,37 @@ static void check_filter(void)
     out_kv("filter_banks_active", g_regs.can.FA1R);
     out_kv("filter_pass_ids", pass);
     out_kv("filter_pass_own_ids", own);
+}
+
+/* The sensored run's anticogging cost: the lookup, then RUN_PERIODS
+ * interrupts with a map attached and anticogging on (the run's own
+ * interrupt, before, has it off: the default). */
+static int cog_costs(const char *name)
+{
+    const mc_cog_ident_t id = {0u, DESC->enc_counts_per_rev, 0u, D->cfg.pole_pairs, 0.0f};
+    for (uint32_t k = 0u; k < MC_COG_N; k++) {
+        g_cog_i[k] = (0.05f * (float)((k * 37u) % 17u)) - 0.4f;
+    }
+    if (mc_cog_build(&g_cog, g_cog_i, MC_COG_N, &id, 10.0f) != MC_COG_ST_OK) {
+        return 23;
+    }
+    stat_t s = parts(part_cog, false);
+    out_stat(name, "cog_lookup", &s);
+    if (mc_drive_attach_cog(D, &g_cog) != 0) {
+        return 24;
+    }
+    D->cfg.anticogging = true;
+    memset(&g_isr, 0, sizeof g_isr);
+    for (uint32_t k = 0u; k < RUN_PERIODS; k++) {
+        if (k % 200u == 7u) {
+            send_heartbeat();
+        }
+        (void)period(true);
+    }
+    out_stat(name, "isr_anticogging", &g_isr);
+    D->cfg.anticogging = false;
+    (void)mc_drive_attach_cog(D, NULL);
+    return 0;
 }
 
 static int run(bool sensorless)
@@ -652,6 +696,12 @@ static int run(bool sensorless)
         }
     }
     out_stat(name, "slow_full_ring", &g_slow);
+    if (!sensorless) {
+        const int crc = cog_costs(name);
+        if (crc != 0) {
+            return crc;
+        }
+    }
     if (D->mode != want || D->faults != 0u) {
         out_kv("bad_mode", (uint32_t)D->mode);
         out_kv("faults", D->faults);

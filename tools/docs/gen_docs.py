@@ -400,14 +400,18 @@ def _mcu_isr_parts(ctx, b):
                          f"{p['foc']['mean']:g}",
                          f"{p['duties_write']['mean']:g}", f"{p['app_mark']['mean']:g}",
                          f"{r['drive_rest_mean']:g}", f"{r['isr']['mean']:g}",
-                         "—" if r.get("brake_write") is None else f"{r['brake_write']['mean']:g}"])
+                         "—" if r.get("brake_write") is None else f"{r['brake_write']['mean']:g}",
+                         "—" if r.get("cog_lookup") is None else
+                         f"{r['cog_lookup']['mean']:g} / {r['isr_anticogging']['mean']:g}"])
     return table(["board", "run", "ADC read", "encoder read", "speed law", "FOC step",
                   "duties write", "app mark",
                   "drive rest (checks, encoder tracking, reference shaping, dead-time "
                   "compensation, supervision, hooks)", "whole interrupt",
-                  "brake write (brake_enable 1 adds it; not in this run)"], rows,
+                  "brake write (brake_enable 1 adds it; not in this run)",
+                  "anticogging: map lookup / whole interrupt with it on (the interrupt "
+                  "before: off)"], rows,
                  ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---:", "---:",
-                  "---:"])
+                  "---:", "---:"])
 
 
 ISR_PROFILE_BOARD = "odrive36"

@@ -85,6 +85,24 @@ static const mc_hal_flash_ops_t wrap_flash_ops = {
 
 /* -------------------------------------------------------------------- boot */
 
+/* The stored anticogging map at boot (mc_cfg_store_load_map): cog_loaded
+ * and why not (EMPTY none stored, LAYOUT another size, FLASH unreadable);
+ * validated against the encoder when the drive starts (cog_bind). */
+static void cog_boot(mc_app_t *a)
+{
+    const int rc = mc_cfg_store_load_map(&a->store, &a->cog_map, (uint32_t)sizeof a->cog_map);
+    a->cog_loaded = (rc == 0);
+    if (rc == 0) {
+        a->cog_load_status = (uint32_t)MC_COG_ST_OK;
+    } else if (rc == -ENOENT) {
+        a->cog_load_status = (uint32_t)MC_COG_ST_EMPTY;
+    } else if (rc == -EBADMSG) {
+        a->cog_load_status = (uint32_t)MC_COG_ST_LAYOUT;
+    } else {
+        a->cog_load_status = (uint32_t)MC_COG_ST_FLASH;
+    }
+}
+
 uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
 {
     uint32_t err = MC_APP_CFG_OK;
@@ -108,6 +126,7 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
     }
     app->params = *cfg->defaults;
     app->boot_status = (uint8_t)MC_CFG_BOOT_EMPTY;
+    app->cog_load_status = (uint32_t)MC_COG_ST_EMPTY;
     if (cfg->flash != NULL) {
         mc_params_t loaded;
         mc_cfg_store_cfg_t scfg;
@@ -129,11 +148,18 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
                      (loaded.slow_loop_div == cfg->slow_loop_div_fixed));
                 if (fits) {
                     app->params = loaded;
+                    if (app->params.anticogging == 2u) {
+                        /* a request, never a setting (mc_param_srv do_save
+                         * stores the value before it): no calibration and no
+                         * feed-forward at boot */
+                        app->params.anticogging = 0u;
+                    }
                 } else {
                     b = MC_CFG_BOOT_INVALID; /* a set this board cannot run */
                 }
             }
             app->boot_status = (uint8_t)b;
+            cog_boot(app);
         }
     }
     app->status_sent_cfg = app->boot_status;
@@ -421,9 +447,190 @@ static bool board_refuses(const mc_app_cfg_t *cfg, const mc_hal_t *hal, const mc
  * divider stay the booted ones: the timer and the CAN tick run on them),
  * then the command handler's own check and apply (telemetry rates, timeout,
  * ramps, speed limit). */
+/* ------------------------------------------------------------ anticogging */
+
+static mc_cog_ident_t cog_ident(const mc_params_t *p)
+{
+    mc_cog_ident_t id;
+    id.enc_type = p->encoder_type;
+    id.enc_cpr = p->encoder_cpr;
+    id.enc_reversed = p->encoder_reversed;
+    id.pole_pairs = p->pole_pairs;
+    id.enc_offset_rad = p->encoder_offset_rad;
+    return id;
+}
+
+/* cog_status from the map and the parameters in effect p; the map attached
+ * to the drive when it is valid for this encoder, detached otherwise
+ * (anticogging, the drive's cfg.anticogging, then has no effect). */
+static void cog_bind(mc_app_t *a, const mc_params_t *p)
+{
+    const mc_cog_ident_t id = cog_ident(p);
+    const uint32_t st =
+        a->cog_loaded ? (uint32_t)mc_cog_check(&a->cog_map, &id) : a->cog_load_status;
+    bool on = st == (uint32_t)MC_COG_ST_OK;
+    if (a->drive != NULL) {
+        on = on && (mc_drive_attach_cog(a->drive, &a->cog_map) == 0);
+        if (!on) {
+            (void)mc_drive_attach_cog(a->drive, NULL);
+        }
+    }
+    a->srv.cog_status = st;
+}
+
+static const mc_params_t *active_params(const mc_app_t *a)
+{
+    return a->params_valid ? &a->srv.active : &a->params;
+}
+
+mc_cog_status_t mc_app_cog_load(mc_app_t *app, const float *i_q_a, uint32_t n)
+{
+    const mc_params_t *p;
+    mc_cog_ident_t id;
+    mc_cog_status_t st;
+    if ((app == NULL) || (app->drive == NULL)) {
+        return MC_COG_ST_ARG;
+    }
+    p = active_params(app);
+    id = cog_ident(p);
+    /* the fast step never reads a map half rebuilt */
+    (void)mc_drive_attach_cog(app->drive, NULL);
+    st = mc_cog_build(&app->cog_map, i_q_a, n, &id, MC_APP_COG_BOUND_FRAC * p->i_max_a);
+    if (st == MC_COG_ST_OK) {
+        app->cog_loaded = true;
+        app->cog_load_status = (uint32_t)MC_COG_ST_OK;
+        app->cog_unsaved = true;
+    }
+    cog_bind(app, p);
+    return st;
+}
+
+int mc_app_cog_save(mc_app_t *app)
+{
+    const mc_cog_ident_t id = cog_ident(active_params(app));
+    if (!app->cog_loaded || (mc_cog_check(&app->cog_map, &id) != MC_COG_ST_OK)) {
+        return -ENOENT;
+    }
+    if ((app->drive->mode == MC_DRIVE_MODE_CURRENT) || (app->drive->mode == MC_DRIVE_MODE_CTRL) ||
+        (app->drive->mode == MC_DRIVE_MODE_STOPPING)) {
+        return -EBUSY;
+    }
+    if (!app->have_store) {
+        return -ENODEV;
+    }
+    const int rc = mc_cfg_store_save_map(&app->store, &app->cog_map, (uint32_t)sizeof app->cog_map);
+    if (rc == 0) {
+        app->cog_unsaved = false;
+    }
+    return rc;
+}
+
+/* The param server's SAVE, after the configuration: a map built since the
+ * last map save (a calibration's) is stored with it; none, or one not valid
+ * for the encoder in force (cog_status says why), is no error. */
+static int params_save(void *ctx)
+{
+    mc_app_t *a = ctx;
+    if (!a->cog_unsaved) {
+        return 0;
+    }
+    const int rc = mc_app_cog_save(a);
+    return (rc == -ENOENT) ? 0 : rc;
+}
+
+/* anticogging 2 may be applied only where the calibration can run. */
+static bool cog_cal_ready(const mc_app_t *a)
+{
+    return a->cmd.enabled && !a->cmd.stopping && !a->cmd.angle_finding &&
+           (a->cmd.control_mode == MC_CAN_CTRL_SPEED) && (a->cmd.cfg.set_speed_ref != NULL) &&
+           (a->cmd.omega_ref_rad_s == 0.0f) && !a->cog_cal_run;
+}
+
+/* The calibration's start, end and service are kept out of their callers
+ * (noinline): inlined, their frames (a whole mc_drive_cfg_t here) sit on
+ * the stack through params_apply's and mc_app_slow_work's deepest calls (the
+ * command handler's APPLY), which overflowed the boards' 4 KiB main stack
+ * (PIL: pil: stack overflow, hal/pil/mc_hal_pil.c). */
+#define MC_APP_NOINLINE __attribute__((noinline))
+
+/* anticogging := v in the sets in force and staged, and the drive's. */
+static MC_APP_NOINLINE void cog_cal_set_mode(mc_app_t *a, uint32_t v)
+{
+    mc_drive_cfg_t dc = a->drive->cfg;
+    a->srv.active.anticogging = v;
+    a->srv.staged.anticogging = v;
+    dc.anticogging = v != 0u;
+    mc_drive_set_runtime_limits(a->drive, &dc);
+}
+
+static MC_APP_NOINLINE void cog_cal_start(mc_app_t *a, const mc_params_t *p)
+{
+    mc_comm_cog_cfg_t g;
+    g.dt_s = (float)p->slow_loop_div / (float)p->pwm_hz;
+    g.w_rad_s = MC_APP_COG_CAL_SPEED_RAD_S;
+    g.t_ramp_s = MC_APP_COG_CAL_RAMP_S;
+    g.t_settle_s = MC_APP_COG_CAL_SETTLE_S;
+    g.i_bound_a = MC_APP_COG_BOUND_FRAC * p->i_max_a;
+    g.agree_frac = MC_APP_COG_CAL_AGREE;
+    g.i_floor_a = MC_APP_COG_CAL_FLOOR_FRAC * p->i_max_a;
+    g.offset_known = mc_drive_angle_state(a->drive) == MC_DRIVE_ANGLE_KNOWN;
+    (void)mc_drive_attach_cog(a->drive, NULL); /* the q reference without a map */
+    const uint32_t e = mc_comm_cog_start(&a->cog_cal, &g);
+    a->cog_cal_run = e == 0u;
+    a->srv.cog_cal_status = ((uint32_t)a->cog_cal.phase & 0xFFu) | ((e & 0xFFu) << 8);
+    if (e != 0u) {
+        a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_FAILED | ((e & 0xFFu) << 8);
+        cog_cal_set_mode(a, 0u);
+        cog_bind(a, &a->srv.active);
+    }
+}
+
+/* The slow step's part: the calibration's speed reference, its end. */
+static MC_APP_NOINLINE void cog_cal_service(mc_app_t *a)
+{
+    float w = 0.0f;
+    if (!a->cog_cal_run) {
+        return;
+    }
+    if (!a->cmd.enabled || a->cmd.stopping || (a->cmd.control_mode != MC_CAN_CTRL_SPEED)) {
+        mc_comm_cog_abort(&a->cog_cal);
+    }
+    const mc_drive_telemetry_t *tm = &a->drive->tm;
+    const uint32_t e =
+        mc_comm_cog_step(&a->cog_cal, tm->theta_m_rad, tm->iq_ref_a - tm->cog_ff_a, &w);
+    if (a->cmd.enabled && !a->cmd.stopping && (a->cmd.cfg.set_speed_ref != NULL) &&
+        (a->cmd.cfg.set_speed_ref(a->cmd.cfg.hook_ctx, w) == 0)) {
+        a->cmd.omega_ref_rad_s = w;
+    }
+    uint32_t st = 0u;
+    const float *i = mc_comm_cog_currents(&a->cog_cal);
+    if (i != NULL) {
+        st = (uint32_t)mc_app_cog_load(a, i, MC_COG_N);
+    }
+    a->srv.cog_cal_status =
+        ((uint32_t)a->cog_cal.phase & 0xFFu) | ((e & 0xFFu) << 8) | ((st & 0xFFu) << 16);
+    if ((a->cog_cal.phase == MC_COMM_COG_DONE) || (a->cog_cal.phase == MC_COMM_COG_FAILED)) {
+        a->cog_cal_run = false;
+        const bool ok = (i != NULL) && (st == (uint32_t)MC_COG_ST_OK);
+        if (ok) {
+            a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_DONE;
+        } else if (i != NULL) {
+            a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_FAILED | ((st & 0xFFu) << 16);
+        }
+        cog_cal_set_mode(a, ok ? 1u : 0u);
+        cog_bind(a, &a->srv.active);
+    }
+}
+
 static uint32_t params_check(void *ctx, const mc_params_t *p)
 {
     mc_app_t *a = ctx;
+    if (a->srv.active.anticogging != 2u) {
+        a->srv.cog_persist = a->srv.active.anticogging; /* what a SAVE stores for a 2 */
+    }
+    if ((p->anticogging == 2u) && (a->srv.active.anticogging != 2u) && !cog_cal_ready(a)) {
+        return MC_PARAMS_ERR_COG_CAL;
+    }
     if ((p->pwm_hz != a->params.pwm_hz) || (p->slow_loop_div != a->params.slow_loop_div)) {
         return 1u;
     }
@@ -452,6 +659,10 @@ static void params_apply(void *ctx, const mc_params_t *p)
         a->cmd.cfg.speed_drive_mode = cc.speed_drive_mode;
         a->cmd.cfg.position_drive_mode = cc.position_drive_mode;
         a->srv.law_error = a->laws.error;
+    }
+    cog_bind(a, p); /* the encoder or anticogging may have changed */
+    if ((p->anticogging == 2u) && !a->cog_cal_run) {
+        cog_cal_start(a, p);
     }
 }
 
@@ -764,7 +975,9 @@ uint32_t mc_app_start(mc_app_t *app, mc_drive_t *drive, const mc_hal_t *hal,
         app->srv.hook.check = params_check;
         app->srv.hook.apply = params_apply;
         app->srv.hook.ctx = app;
+        app->srv.hook.save = params_save;
     }
+    cog_bind(app, p);
     boot_start(app);
     app->tm_src.drive = drive;
     app->tm_src.cmd = &app->cmd;
@@ -955,6 +1168,7 @@ uint32_t mc_app_slow_work(mc_app_t *app)
     mc_can_cmd_step(&app->cmd);
     angle_service(app);
     attach_law(app);
+    cog_cal_service(app);
     if (app->comm != NULL) {
         mc_comm_can_step(app->comm, can, &app->cmd.reply);
     }

@@ -125,6 +125,7 @@
 #include "hal/hall.h"
 #include "hal/wdg.h"
 #include "commission/mc_comm_can.h"
+#include "commission/mc_comm_cog.h"
 #include "mc_boot_enter.h"
 #include "mc_can_cmd.h"
 #include "mc_cfg_store.h"
@@ -264,6 +265,12 @@ typedef struct {
     mc_drive_hall_t hall;       /**< the Hall sensors as the drive's encoder */
     mc_drive_hallobs_t hallobs; /**< Hall + observer (hall_obs_end_e_rad_s > 0) */
     bool hallobs_on;            /**< hallobs attached to the drive */
+    mc_cog_map_t cog_map;       /**< the anticogging map (valid when cog_loaded) */
+    bool cog_loaded;            /**< cog_map holds a map (loaded or stored) */
+    bool cog_unsaved;           /**< cog_map built since its last save: a SAVE stores it */
+    uint32_t cog_load_status;   /**< MC_COG_ST_* of the map's load (EMPTY: none) */
+    mc_comm_cog_t cog_cal;      /**< the anticogging calibration (anticogging 2) */
+    bool cog_cal_run;           /**< cog_cal runs (mc_app.h, MC_APP_COG_CAL_*) */
     mc_param_hook_t cmd_hook;   /**< the command handler's APPLY hook, chained */
     mc_telemetry_src_t tm_src;
     mc_can_cmd_t cmd;
@@ -372,6 +379,53 @@ typedef struct {
 
 /** Fill *p from the application and its drive (after a period). */
 void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p);
+
+/** Anticogging (mc_drive_cog.h; parameters anticogging, cog_status): the
+ *  largest |feed-forward| a loaded map may ask, as a share of i_max_a (the
+ *  law keeps the rest; the sum is clamped to the limit in force). */
+#define MC_APP_COG_BOUND_FRAC 0.5f
+
+/** The anticogging calibration (anticogging 2; mc_comm_cog.h, driven by
+ *  the slow step with the speed law's reference): its ramps, the settle at
+ *  speed (the speed loop's integral takes the friction), and the bounds: the
+ *  two directions' disagreement at most MC_APP_COG_CAL_AGREE of the map's
+ *  RMS plus MC_APP_COG_CAL_FLOOR_FRAC of i_max_a (the encoder's counts and
+ *  the loop's noise on a motor with little cogging). The current is the
+ *  speed loop's own, bounded by i_max_a; the map's amplitude by
+ *  MC_APP_COG_BOUND_FRAC i_max_a (the builder's bound, checked first by the
+ *  calibration). When it ends the application sets anticogging to 1 with the
+ *  new map (0 when refused), the speed reference stays 0, cog_cal_status
+ *  says the phase, the MC_COMM_COG_ERR_* bits << 8 and the builder's
+ *  MC_COG_ST_* << 16. Leaving SPEED or disabling aborts it. */
+/** The turns' speed [rad/s mechanical]: the speed loop's q reference is the
+ *  cogging current only while the cogging frequency (the speed times the
+ *  cogging order, 84 per turn for 12 slots / 14 poles: 8.4 rad/s) is well
+ *  inside the speed loop's bandwidth (hundreds of rad/s); one map bin per
+ *  slow step (refused MC_COMM_COG_ERR_CFG above it) allows 6 rad/s at 1 kHz. */
+#define MC_APP_COG_CAL_SPEED_RAD_S 0.1f
+#define MC_APP_COG_CAL_RAMP_S      0.5f
+#define MC_APP_COG_CAL_SETTLE_S    1.0f
+#define MC_APP_COG_CAL_AGREE       0.5f
+#define MC_APP_COG_CAL_FLOOR_FRAC  0.005f
+
+/**
+ * Load an anticogging map from a calibration's MC_COG_N q-axis currents [A]
+ * per mechanical-angle bin (mc_cog_build, bound MC_APP_COG_BOUND_FRAC
+ * i_max_a, the identity of the encoder the active parameters describe),
+ * from the host (the SIL, mcsim) for now; the calibration will call it. The
+ * map is detached while it is rebuilt and attached again when anticogging
+ * is 1. A refused load changes nothing (the previous map, if any, stays).
+ * @return MC_COG_ST_OK or the builder's refusal.
+ */
+mc_cog_status_t mc_app_cog_load(mc_app_t *app, const float *i_q_a, uint32_t n);
+
+/**
+ * Store the loaded map in the configuration store (its own record kind,
+ * mc_cfg_store.h). BLOCKING (may erase a sector): only while the bridge is
+ * off. Returns 0, -ENOENT (no valid map loaded), -EBUSY (the bridge is on),
+ * -ENODEV (no store), -EIO (flash: the previous stored map stays).
+ */
+int mc_app_cog_save(mc_app_t *app);
 
 /** Boot: reset cause, configuration (see the file comment). app is
  *  zeroed first. Returns MC_APP_CFG_* bits (only NULL, STORE, WDG); with

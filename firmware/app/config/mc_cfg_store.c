@@ -5,6 +5,7 @@
 #include "mc_cfg_store.h"
 
 #include <stddef.h>
+#include <string.h>
 
 #include "mc_crc32.h"
 
@@ -31,6 +32,8 @@ int mc_cfg_store_init(mc_cfg_store_t *s, const mc_cfg_store_cfg_t *cfg)
     s->sector_bytes[0] = bytes[0];
     s->sector_bytes[1] = bytes[1];
     s->active = -1;
+    s->home = -1;
+    s->map_sec = -1;
     s->append_off[0] = MC_CFG_OFF_NONE;
     s->append_off[1] = MC_CFG_OFF_NONE;
     s->boot = MC_CFG_BOOT_EMPTY;
@@ -58,7 +61,10 @@ static int check_record(const mc_cfg_store_t *s, uint32_t i, uint32_t off, uint3
                    : -EIO;
     }
     n = hdr[3] & 0xFFFFu;
-    if ((hdr[0] != MC_CFG_MAGIC) || ((hdr[3] >> 16) != 0xFFFFu) || (n > MC_CFG_ENTRIES_MAX)) {
+    /* any kind (magic) in the envelope: one this image does not know is
+     * skipped by its length, not taken for a cut record (scan_sector) */
+    if ((hdr[0] == MC_HAL_FLASH_ERASED_WORD) || ((hdr[3] >> 16) != 0xFFFFu) ||
+        (n > MC_CFG_ENTRIES_MAX)) {
         return -EAGAIN;
     }
     words = MC_CFG_HDR_WORDS + 2u * n + 1u;
@@ -83,8 +89,17 @@ static int check_record(const mc_cfg_store_t *s, uint32_t i, uint32_t off, uint3
     return 0;
 }
 
-/* Walk sector i's records; returns 0 or -EIO. *p_any: not erased at 0. */
-static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any)
+/* The newest record of one kind in one sector. */
+typedef struct {
+    bool have;
+    uint32_t seq;
+    uint32_t off;
+} kind_loc_t;
+
+/* Walk sector i's records, the newest of each kind (0 configuration, 1
+ * map) into loc; returns 0 or -EIO. *p_any: something other than erased
+ * words and valid map records. */
+static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any, kind_loc_t loc[2])
 {
     uint32_t off = 0u;
     s->append_off[i] = MC_CFG_OFF_NONE;
@@ -92,6 +107,7 @@ static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any)
         uint32_t hdr[MC_CFG_HDR_WORDS];
         uint32_t words = 0u;
         uint32_t w;
+        uint32_t k;
         int rc;
         if (read_word(s, i, off, &w) != 0) {
             return -EIO;
@@ -100,33 +116,116 @@ static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any)
             s->append_off[i] = off;
             return 0;
         }
-        *p_any = true;
         rc = check_record(s, i, off, &words, hdr);
         if (rc == -EIO) {
             return rc;
         }
+        /* not erased and not a valid map: a configuration once written
+         * (valid or not: no configuration record then boots CORRUPT, not
+         * EMPTY) */
         if (rc != 0) {
+            *p_any = true;
             return 0; /* a cut record: the rest of the sector is unusable */
         }
-        if ((s->active < 0) || mc_cfg_store_seq_newer(hdr[2], s->seq)) {
-            s->seq = hdr[2];
-            s->active = (int32_t)i;
-            s->newest_off = off;
+        if ((hdr[0] != MC_CFG_MAGIC) && (hdr[0] != MC_CFG_MAP_MAGIC)) {
+            off += words * W; /* a kind of a later image: skipped whole */
+            continue;
+        }
+        k = (hdr[0] == MC_CFG_MAP_MAGIC) ? 1u : 0u;
+        *p_any = *p_any || (k == 0u);
+        if (!loc[k].have || mc_cfg_store_seq_newer(hdr[2], loc[k].seq)) {
+            loc[k].have = true;
+            loc[k].seq = hdr[2];
+            loc[k].off = off;
         }
         off += words * W;
     }
     return 0; /* full */
 }
 
+/* The newest sequence number of sector i's records (loc: its kinds). */
+static uint32_t top_seq(const kind_loc_t loc[2])
+{
+    if (!loc[0].have) {
+        return loc[1].have ? loc[1].seq : 0u;
+    }
+    return (loc[1].have && mc_cfg_store_seq_newer(loc[1].seq, loc[0].seq)) ? loc[1].seq
+                                                                           : loc[0].seq;
+}
+
+/* The home sector (mc_cfg_store.h, "Two record kinds"): the one holding the
+ * newest record of every kind; both: the newer; neither (only after a
+ * corruption): the configuration's. sec_of: the sector of each kind's
+ * newest, -1 none. */
+static int32_t home_of(const kind_loc_t loc[2][2], const int32_t sec_of[2])
+{
+    bool complete[2] = {true, true};
+    for (uint32_t k = 0u; k < 2u; ++k) {
+        if (sec_of[k] < 0) {
+            continue;
+        }
+        for (uint32_t i = 0u; i < 2u; ++i) {
+            if (!loc[i][k].have || (loc[i][k].seq != loc[sec_of[k]][k].seq)) {
+                complete[i] = false;
+            }
+        }
+    }
+    if ((sec_of[0] < 0) && (sec_of[1] < 0)) {
+        return -1;
+    }
+    if (complete[0] && complete[1]) {
+        return mc_cfg_store_seq_newer(top_seq(loc[1]), top_seq(loc[0])) ? 1 : 0;
+    }
+    if (complete[0] || complete[1]) {
+        return complete[0] ? 0 : 1;
+    }
+    return (sec_of[0] >= 0) ? sec_of[0] : sec_of[1];
+}
+
 static int scan(mc_cfg_store_t *s, bool *p_any)
 {
+    kind_loc_t loc[2][2] = {{{false, 0u, 0u}, {false, 0u, 0u}}, {{false, 0u, 0u}, {false, 0u, 0u}}};
+    int32_t sec_of[2] = {-1, -1};
     s->active = -1;
     s->seq = 0u;
     s->newest_off = 0u;
+    s->map_sec = -1;
+    s->map_off = 0u;
+    s->seq_top = 0u;
     *p_any = false;
     for (uint32_t i = 0u; i < 2u; ++i) {
-        if (scan_sector(s, i, p_any) != 0) {
+        if (scan_sector(s, i, p_any, loc[i]) != 0) {
             return -EIO;
+        }
+    }
+    for (uint32_t k = 0u; k < 2u; ++k) {
+        for (uint32_t i = 0u; i < 2u; ++i) {
+            if (loc[i][k].have &&
+                ((sec_of[k] < 0) || mc_cfg_store_seq_newer(loc[i][k].seq, loc[sec_of[k]][k].seq))) {
+                sec_of[k] = (int32_t)i;
+            }
+        }
+    }
+    s->home = home_of((const kind_loc_t(*)[2])loc, sec_of);
+    for (uint32_t k = 0u; k < 2u; ++k) {
+        int32_t i = sec_of[k];
+        if (i < 0) {
+            continue;
+        }
+        /* a copy with the same number in the home sector: read that one */
+        if (loc[s->home][k].have && (loc[s->home][k].seq == loc[i][k].seq)) {
+            i = s->home;
+        }
+        if (k == 0u) {
+            s->active = i;
+            s->newest_off = loc[i][0].off;
+            s->seq = loc[i][0].seq;
+        } else {
+            s->map_sec = i;
+            s->map_off = loc[i][1].off;
+        }
+        if ((s->seq_top == 0u) || mc_cfg_store_seq_newer(loc[i][k].seq, s->seq_top)) {
+            s->seq_top = loc[i][k].seq;
         }
     }
     s->scanned = true;
@@ -317,44 +416,204 @@ bool mc_cfg_store_holds(mc_cfg_store_t *s, const mc_params_t *p)
     return true;
 }
 
+/* Program bytes from RAM at off of sector i (a multiple of W). */
+static int program_mem(const mc_cfg_store_t *s, uint32_t i, uint32_t off, const void *src,
+                       uint32_t bytes)
+{
+    const uint8_t *p = src;
+    uint32_t buf[16];
+    for (uint32_t k = 0u; k < bytes;) {
+        const uint32_t n = ((bytes - k) > (uint32_t)sizeof buf) ? (uint32_t)sizeof buf : bytes - k;
+        (void)memcpy(buf, p + k, n);
+        if (mc_hal_flash_program(s->cfg.flash, s->cfg.sector[i], off + k, buf, n / W) != 0) {
+            return -EIO;
+        }
+        k += n;
+    }
+    return 0;
+}
+
+/* Copy a record of words words from (fi, fo) to (ti, to), word for word. */
+static int copy_record(const mc_cfg_store_t *s, uint32_t fi, uint32_t fo, uint32_t ti, uint32_t to,
+                       uint32_t words)
+{
+    uint32_t buf[16];
+    for (uint32_t k = 0u; k < words;) {
+        const uint32_t n = ((words - k) > 16u) ? 16u : words - k;
+        if ((mc_hal_flash_read(s->cfg.flash, s->cfg.sector[fi], fo + k * W, buf, n * W) != 0) ||
+            (mc_hal_flash_program(s->cfg.flash, s->cfg.sector[ti], to + k * W, buf, n) != 0)) {
+            return -EIO;
+        }
+        k += n;
+    }
+    return 0;
+}
+
+/* Where a save of kind writes (mc_cfg_store.h, "Two record kinds"): *p_off
+ * in *p_target (erased first when it is the other sector), and whether the
+ * other kind's newest record (*p_copy_words long) is copied there first.
+ * Returns 0, -ENOSPC or -EIO (nothing written). */
+static int save_place(mc_cfg_store_t *s, uint32_t kind, uint32_t bytes, uint32_t *p_target,
+                      uint32_t *p_off, uint32_t *p_copy_words, bool *p_lost)
+{
+    const int32_t o_sec = (kind == 0u) ? s->map_sec : s->active;
+    const uint32_t o_off = (kind == 0u) ? s->map_off : s->newest_off;
+    uint32_t target = (s->home >= 0) ? (uint32_t)s->home : 0u;
+    uint32_t cw = 0u;
+    uint32_t hdr[MC_CFG_HDR_WORDS];
+    *p_lost = false;
+    if ((o_sec >= 0) && (check_record(s, (uint32_t)o_sec, o_off, &cw, hdr) != 0)) {
+        return -EIO; /* valid during the scan, not now */
+    }
+    /* append: with a copy of the other kind when the home sector lacks it
+     * (only after a corruption) */
+    *p_copy_words = ((o_sec >= 0) && ((uint32_t)o_sec != target)) ? cw : 0u;
+    *p_off = s->append_off[target];
+    if (region_erased(s, target, *p_off, bytes + (*p_copy_words * W))) {
+        *p_target = target;
+        return 0;
+    }
+    /* switch: the other sector holds only older records; the other kind's
+     * newest is copied from the home sector (if its only copy was in the
+     * sector erased, a corruption of the home sector lost it before) */
+    target ^= 1u;
+    *p_copy_words = ((o_sec >= 0) && ((uint32_t)o_sec != target)) ? cw : 0u;
+    *p_lost = (o_sec >= 0) && ((uint32_t)o_sec == target);
+    if (bytes + (*p_copy_words * W) > s->sector_bytes[target]) {
+        return -ENOSPC;
+    }
+    *p_off = 0u;
+    *p_target = target;
+    s->append_off[target] = MC_CFG_OFF_NONE;
+    return (mc_hal_flash_erase(s->cfg.flash, s->cfg.sector[target]) != 0) ? -EIO : 0;
+}
+
+/* Write a record of kind (0 configuration, 1 map): header hdr (its
+ * sequence number in hdr[2]), payload, CRC; read back. */
+static int save_rec(mc_cfg_store_t *s, uint32_t kind, const uint32_t hdr[MC_CFG_HDR_WORDS],
+                    const void *payload, uint32_t payload_bytes)
+{
+    const uint32_t bytes = ((MC_CFG_HDR_WORDS + 1u) * W) + payload_bytes;
+    const int32_t o_sec = (kind == 0u) ? s->map_sec : s->active;
+    const uint32_t o_off = (kind == 0u) ? s->map_off : s->newest_off;
+    const uint32_t crc = mc_crc32_final(mc_crc32_update(
+        mc_crc32_update(MC_CRC32_INIT, hdr, (size_t)MC_CFG_HDR_WORDS * W), payload, payload_bytes));
+    uint32_t target = 0u;
+    uint32_t off = 0u;
+    uint32_t cw = 0u;
+    uint32_t words = 0u;
+    uint32_t rb[MC_CFG_HDR_WORDS];
+    uint32_t c_off;
+    bool lost = false;
+    const int rc = save_place(s, kind, bytes, &target, &off, &cw, &lost);
+    if (rc != 0) {
+        return rc;
+    }
+    c_off = off;
+    if (cw != 0u) {
+        if ((copy_record(s, (uint32_t)o_sec, o_off, target, off, cw) != 0) ||
+            (check_record(s, target, off, &words, rb) != 0) || (words != cw)) {
+            s->append_off[target] = MC_CFG_OFF_NONE;
+            return -EIO;
+        }
+        off += cw * W;
+    }
+    if ((program_mem(s, target, off, hdr, MC_CFG_HDR_WORDS * W) != 0) ||
+        (program_mem(s, target, off + (MC_CFG_HDR_WORDS * W), payload, payload_bytes) != 0) ||
+        (program_mem(s, target, off + bytes - W, &crc, W) != 0) ||
+        (check_record(s, target, off, &words, rb) != 0) || (words * W != bytes) ||
+        (rb[2] != hdr[2])) {
+        s->append_off[target] = MC_CFG_OFF_NONE; /* not again before an erase */
+        return -EIO;
+    }
+    if (lost) {
+        /* the other kind's only copy was in the sector erased */
+        if (kind == 0u) {
+            s->map_sec = -1;
+        } else {
+            s->active = -1;
+            s->seq = 0u;
+        }
+    } else if (cw != 0u) {
+        if (kind == 0u) {
+            s->map_sec = (int32_t)target;
+            s->map_off = c_off;
+        } else {
+            s->active = (int32_t)target;
+            s->newest_off = c_off;
+        }
+    }
+    if (kind == 0u) {
+        s->seq = hdr[2];
+        s->active = (int32_t)target;
+        s->newest_off = off;
+    } else {
+        s->map_sec = (int32_t)target;
+        s->map_off = off;
+    }
+    s->seq_top = hdr[2];
+    s->home = (int32_t)target;
+    s->append_off[target] = off + bytes;
+    s->saves++;
+    return 0;
+}
+
 int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p)
 {
-    const uint32_t bytes = MC_CFG_REC_WORDS * W;
-    uint32_t target;
-    uint32_t off;
-    uint32_t words = 0u;
-    uint32_t hdr[MC_CFG_HDR_WORDS];
     if ((s == NULL) || (p == NULL) || (mc_params_validate(p) != MC_PARAMS_OK)) {
         return -EINVAL;
     }
     if (scan_once(s) != 0) {
         return -EIO;
     }
-    build_record(s, p, mc_cfg_store_seq_next(s->seq));
+    build_record(s, p, mc_cfg_store_seq_next(s->seq_top));
+    return save_rec(s, 0u, s->rec, &s->rec[MC_CFG_HDR_WORDS],
+                    (MC_CFG_REC_WORDS - MC_CFG_HDR_WORDS - 1u) * W);
+}
 
-    target = (s->active >= 0) ? (uint32_t)s->active : 0u;
-    off = s->append_off[target];
-    if (!region_erased(s, target, off, bytes)) {
-        /* The sector of the newest record is full (or cut): start the
-         * other one. It holds only older records. */
-        target ^= 1u;
-        off = 0u;
-        s->append_off[target] = MC_CFG_OFF_NONE;
-        if (mc_hal_flash_erase(s->cfg.flash, s->cfg.sector[target]) != 0) {
-            return -EIO;
-        }
+int mc_cfg_store_save_map(mc_cfg_store_t *s, const void *map, uint32_t bytes)
+{
+    uint32_t hdr[MC_CFG_HDR_WORDS];
+    if ((s == NULL) || (map == NULL) || (bytes == 0u) || ((bytes % (2u * W)) != 0u) ||
+        (bytes / (2u * W) > MC_CFG_ENTRIES_MAX)) {
+        return -EINVAL;
     }
-    if ((mc_hal_flash_program(s->cfg.flash, s->cfg.sector[target], off, s->rec, MC_CFG_REC_WORDS) !=
-         0) ||
-        (check_record(s, target, off, &words, hdr) != 0) || (words != MC_CFG_REC_WORDS) ||
-        (hdr[2] != s->rec[2])) {
-        s->append_off[target] = MC_CFG_OFF_NONE; /* not again before an erase */
+    if (scan_once(s) != 0) {
         return -EIO;
     }
-    s->seq = s->rec[2];
-    s->active = (int32_t)target;
-    s->newest_off = off;
-    s->append_off[target] = off + bytes;
-    s->saves++;
+    hdr[0] = MC_CFG_MAP_MAGIC;
+    hdr[1] = MC_CFG_FORMAT;
+    hdr[2] = mc_cfg_store_seq_next(s->seq_top);
+    hdr[3] = (bytes / (2u * W)) | 0xFFFF0000u;
+    return save_rec(s, 1u, hdr, map, bytes);
+}
+
+int mc_cfg_store_load_map(mc_cfg_store_t *s, void *map, uint32_t bytes)
+{
+    uint32_t hdr[MC_CFG_HDR_WORDS];
+    uint32_t words = 0u;
+    uint8_t *p = map;
+    if ((s == NULL) || (map == NULL)) {
+        return -EINVAL;
+    }
+    if (scan_once(s) != 0) {
+        return -EIO;
+    }
+    if (s->map_sec < 0) {
+        return -ENOENT;
+    }
+    if (check_record(s, (uint32_t)s->map_sec, s->map_off, &words, hdr) != 0) {
+        return -EIO;
+    }
+    if ((hdr[1] != MC_CFG_FORMAT) || ((hdr[3] & 0xFFFFu) * 2u * W != bytes)) {
+        return -EBADMSG;
+    }
+    for (uint32_t k = 0u; k < bytes; k += W) {
+        uint32_t w;
+        if (read_word(s, (uint32_t)s->map_sec, s->map_off + (MC_CFG_HDR_WORDS * W) + k, &w) != 0) {
+            return -EIO;
+        }
+        (void)memcpy(p + k, &w, W);
+    }
     return 0;
 }

@@ -49,6 +49,19 @@
  *   take their default / are dropped, then validated as a whole
  *                           -> MC_CFG_BOOT_MIGRATED
  *   otherwise              -> MC_CFG_BOOT_STORED
+ * Two record kinds: the configuration (magic MCFG) and the anticogging map
+ * (magic MC_CFG_MAP_MAGIC "MCMP", the same envelope: words 0..3 as above
+ * with format | 0 << 16, the map's bytes as its n pairs of words, the
+ * CRC), written only by a calibration's save (mc_cfg_store_save_map). One
+ * sequence counter numbers both. The sector saves append to (home) always
+ * holds the newest record of each kind: a save that must switch sectors
+ * erases the other one, copies the newest record of the other kind into it
+ * word for word (its sequence number kept), then writes the new record. A
+ * cut leaves the home sector untouched, so each kind keeps its old newest
+ * record or gets the new one. At boot the home sector is the one holding
+ * the newest record of every kind (after a cut switch, the old one; both:
+ * the one with the newer record). A map record of another size or format
+ * is refused by mc_cfg_store_load_map (-EBADMSG), never decoded.
  * No valid record: MC_CFG_BOOT_EMPTY if both sectors start erased, else
  * MC_CFG_BOOT_CORRUPT; defaults either way. The status goes into the
  * heartbeat (HEARTBEAT.cfg_status) and the readonly parameter
@@ -68,6 +81,7 @@ extern "C" {
 #endif
 
 #define MC_CFG_MAGIC       0x4746434Du /**< "MCFG" in memory order */
+#define MC_CFG_MAP_MAGIC   0x504D434Du /**< "MCMP": an anticogging map record */
 #define MC_CFG_FORMAT      1u
 #define MC_CFG_HDR_WORDS   4u
 #define MC_CFG_ENTRIES_MAX 1024u /**< a header announcing more is not a record */
@@ -94,9 +108,16 @@ typedef struct {
 typedef struct {
     mc_cfg_store_cfg_t cfg;
     uint32_t sector_bytes[2];
-    uint32_t seq;           /**< sequence number of the newest valid record (0: none) */
-    int32_t active;         /**< 0/1: the sector of the newest valid record; -1: none */
+    uint32_t seq;           /**< sequence number of the newest valid configuration
+                                 record (0: none) */
+    int32_t active;         /**< 0/1: the sector of the newest valid configuration
+                                 record; -1: none */
     uint32_t newest_off;    /**< its offset */
+    uint32_t seq_top;       /**< the newest sequence number of any kind (0: none) */
+    int32_t home;           /**< 0/1: the sector saves append to, holding the newest
+                                 record of each kind; -1: no record */
+    int32_t map_sec;        /**< 0/1: the sector of the newest map record; -1: none */
+    uint32_t map_off;       /**< its offset */
     uint32_t append_off[2]; /**< next free offset per sector, MC_CFG_OFF_NONE if unusable */
     bool scanned;
     mc_cfg_boot_t boot;             /**< result of the last load */
@@ -134,6 +155,24 @@ int mc_cfg_store_find_raw(mc_cfg_store_t *s, uint32_t id, uint32_t *p_raw);
  *         or read-back mismatch: the previous record stays the newest).
  */
 int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p);
+
+/**
+ * Write an anticogging map (bytes, a multiple of 8, e.g. mc_cog_map_t) as a
+ * map record (see "Two record kinds" above). BLOCKING, as a save.
+ * @return 0; -EINVAL (NULL, bytes 0, not a multiple of 8 or more than a
+ *         record holds); -ENOSPC (a sector cannot hold the map and the
+ *         configuration record together); -EIO (flash error: the previous
+ *         map stays the newest).
+ */
+int mc_cfg_store_save_map(mc_cfg_store_t *s, const void *map, uint32_t bytes);
+
+/**
+ * Read the newest map record into map (bytes long; scans first if needed).
+ * @return 0; -ENOENT (no map record); -EBADMSG (a map record of another
+ *         size or format: another layout, map not changed); -EIO (flash);
+ *         -EINVAL.
+ */
+int mc_cfg_store_load_map(mc_cfg_store_t *s, void *map, uint32_t bytes);
 
 /** The sequence number after seq (1 after 0xFFFFFFFF: 0 means none). */
 uint32_t mc_cfg_store_seq_next(uint32_t seq);

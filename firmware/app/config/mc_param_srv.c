@@ -80,6 +80,10 @@ static uint32_t read_value(const mc_param_srv_t *s, const mc_param_info_t *info)
         return s->angle_error;
     case MC_PARAM_ID_HALL_ERROR:
         return s->hall_error;
+    case MC_PARAM_ID_COG_STATUS:
+        return s->cog_status;
+    case MC_PARAM_ID_COG_CAL_STATUS:
+        return s->cog_cal_status;
     case MC_PARAM_ID_HALL_OBS_WEIGHT: {
         uint32_t u;
         (void)memcpy(&u, &s->hall_obs_weight, sizeof u);
@@ -139,8 +143,8 @@ static mc_param_status_t do_confirm(mc_param_srv_t *s, bool armed, uint32_t id, 
     return MC_PARAM_OK;
 }
 
-/* SAVE (mc_param_srv.h): unchanged skipped, the rate limit, the store. */
-static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
+/* SAVE of the set in force as it is stored (do_save). */
+static mc_param_status_t save_active(mc_param_srv_t *s, uint32_t *p_value)
 {
     if (bridge_on(s)) {
         return MC_PARAM_ERR_RUNNING; /* an erase stalls the CPU for up to seconds */
@@ -169,6 +173,29 @@ static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
     s->store_status = (uint8_t)MC_CFG_BOOT_STORED;
     *p_value = s->store->seq;
     return MC_PARAM_OK;
+}
+
+/* SAVE (mc_param_srv.h): unchanged skipped, the rate limit, the store.
+ * anticogging 2 (a calibration runs) is stored as cog_persist, the value
+ * before it, for the record and the check for an unchanged set alike: a
+ * stored 2 would boot with the feed-forward on and no map measured. The
+ * set in force keeps its 2 (patched in place: no second mc_params_t on the
+ * stack, whose 4 KiB on the boards this path nearly fills). */
+static mc_param_status_t do_save(mc_param_srv_t *s, uint32_t *p_value)
+{
+    const uint32_t cog = s->active.anticogging;
+    if (cog == 2u) {
+        s->active.anticogging = s->cog_persist;
+    }
+    const mc_param_status_t st = save_active(s, p_value);
+    s->active.anticogging = cog;
+    /* the configuration first, then the front end's records (behind it in
+     * the sector: an older image's scan, which stops at them, still sees it) */
+    if ((st == MC_PARAM_OK) && (s->hook.save != NULL) && (s->hook.save(s->hook.ctx) != 0)) {
+        s->store_status = (uint8_t)MC_CFG_BOOT_FLASH;
+        return MC_PARAM_ERR_STORE;
+    }
+    return st;
 }
 
 /* LOAD_DEFAULTS: the defaults staged, the reboot parameters kept. */

@@ -84,11 +84,15 @@ extern "C" {
 #define MC_PARAM_CONFIRM_WINDOW_S 2u
 
 /** Extra check of a staged set by the front end (e.g. the CAN bus budget of
- *  the telemetry rates), and its apply: check returns 0 to accept. */
+ *  the telemetry rates), and its apply: check returns 0 to accept. save
+ *  (optional) runs after a SAVE stored the configuration (or found it
+ *  stored): the front end's own records (the application's anticogging map
+ *  from a calibration), 0 or a negative errno (the SAVE answers STORE). */
 typedef struct {
     uint32_t (*check)(void *ctx, const mc_params_t *staged);
     void (*apply)(void *ctx, const mc_params_t *active);
     void *ctx;
+    int (*save)(void *ctx);
 } mc_param_hook_t;
 
 typedef struct {
@@ -97,18 +101,24 @@ typedef struct {
     bool pending;       /**< staged differs from active (written since APPLY) */
     mc_drive_t *drive;
     const mc_hal_t *hal;
-    mc_cfg_store_t *store; /**< NULL: SAVE answers STORE */
-    uint8_t boot_status;   /**< mc_cfg_boot_t of the boot */
-    uint8_t store_status;  /**< the store's status now (HEARTBEAT.cfg_status,
+    mc_cfg_store_t *store;   /**< NULL: SAVE answers STORE */
+    uint8_t boot_status;     /**< mc_cfg_boot_t of the boot */
+    uint8_t store_status;    /**< the store's status now (HEARTBEAT.cfg_status,
                                 cfg_store_status): the boot status until a SAVE,
                                 then STORED (the applied set is the newest record)
                                 or, when the SAVE failed, FLASH */
-    mc_param_hook_t hook;  /**< optional (fields NULL) */
-    uint32_t applied;      /**< successful APPLYs */
-    uint32_t law_error;    /**< the law_error parameter (the application's) */
-    uint32_t angle_error;  /**< the angle_error parameter (the application's) */
-    uint32_t hall_error;   /**< the hall_error parameter (the application's) */
-    float hall_obs_weight; /**< the hall_obs_weight parameter (the application's) */
+    mc_param_hook_t hook;    /**< optional (fields NULL) */
+    uint32_t applied;        /**< successful APPLYs */
+    uint32_t law_error;      /**< the law_error parameter (the application's) */
+    uint32_t angle_error;    /**< the angle_error parameter (the application's) */
+    uint32_t hall_error;     /**< the hall_error parameter (the application's) */
+    float hall_obs_weight;   /**< the hall_obs_weight parameter (the application's) */
+    uint32_t cog_status;     /**< the cog_status parameter (the application's) */
+    uint32_t cog_cal_status; /**< the cog_cal_status parameter (the application's) */
+    uint32_t cog_persist;    /**< what a SAVE stores for anticogging while the
+                                  set in force has 2 (a calibration runs: 2
+                                  is a request, not a setting to boot with):
+                                  the value before it (the application's) */
     /* time base (mc_param_srv_tick) */
     uint32_t tick_hz;       /**< rate of mc_param_srv_tick [Hz] (0: not yet known) */
     uint32_t save_tokens;   /**< SAVEs allowed now, <= MC_PARAM_SAVE_BURST */

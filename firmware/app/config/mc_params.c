@@ -263,6 +263,7 @@ void mc_params_eff_to_drive_cfg(const mc_params_eff_t *e, mc_drive_cfg_t *cfg)
     cfg->dead_time_s = p->dead_time_s;
     cfg->dead_band_a = fmax_f(1e-3f, 0.01f * p->i_rated_a);
     cfg->fw_enable = p->fw_enable != 0u;
+    cfg->anticogging = p->anticogging != 0u;
     cfg->fw.ld_h = p->ld_h;
     cfg->fw.lq_h = p->lq_h;
     cfg->fw.flux_wb = p->flux_wb;

@@ -81,6 +81,11 @@ typedef enum {
                     > 0) and cannot run: mc_law_hallobs_cfg names why
                     (MC_DRIVE_HALLOBS_ERR_*: not a Hall encoder, the
                     observer's motor values, start / end / disagree) */
+#define MC_PARAMS_ERR_COG_CAL \
+    (1u << 13) /**< anticogging 2 (calibrate) applied while the drive is
+                    not enabled in SPEED mode with its angle known and a
+                    speed reference of 0, or a calibration already runs
+                    (mc_app.h) */
 #define MC_PARAMS_ERR_ANGLE_REF \
     (1u << 11) /**< angle_ref index or align (or angle_find_at_enable) on
                     a drive without an encoder (encoder_cpr 0) */

@@ -119,6 +119,7 @@ const mc_params_t mc_params_default = {
     .hall_obs_start_e_rad_s = 0.0f,
     .hall_obs_end_e_rad_s = 0.0f,
     .hall_obs_disagree_e_rad = 0.7853982f,
+    .anticogging = 0u,
 };
 
 #define NO_FIELD MC_PARAM_NO_FIELD
@@ -241,6 +242,9 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {177u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_REBOOT, (uint16_t)offsetof(mc_params_t, hall_obs_disagree_e_rad), {.f = 0.0f}, {.f = 1.5707964f}, {.f = 0.7853982f}}, /* hall_obs_disagree_e_rad */
     {178u, MC_PARAM_TYPE_F32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.f = 0.0f}, {.f = 1.0f}, {.f = 0.0f}}, /* hall_obs_weight */
     {179u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* hall_error */
+    {180u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, anticogging), {.u = 0u}, {.u = 2u}, {.u = 0u}}, /* anticogging */
+    {181u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 1u}}, /* cog_status */
+    {183u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 16777215u}, {.u = 0u}}, /* cog_cal_status */
     {200u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_layout_version */
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
     {202u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_store_seq */
@@ -367,6 +371,9 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "hall_obs_disagree_e_rad",
     "hall_obs_weight",
     "hall_error",
+    "anticogging",
+    "cog_status",
+    "cog_cal_status",
     "cfg_layout_version",
     "cfg_store_status",
     "cfg_store_seq",
@@ -491,6 +498,9 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "rad/s",
     "rad/s",
     "rad",
+    "",
+    "",
+    "",
     "",
     "",
     "",

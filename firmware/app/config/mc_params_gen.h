@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 123u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 115u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 126u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 116u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -134,6 +134,9 @@
 #define MC_PARAM_ID_HALL_OBS_DISAGREE_E_RAD 177u
 #define MC_PARAM_ID_HALL_OBS_WEIGHT 178u
 #define MC_PARAM_ID_HALL_ERROR 179u
+#define MC_PARAM_ID_ANTICOGGING 180u
+#define MC_PARAM_ID_COG_STATUS 181u
+#define MC_PARAM_ID_COG_CAL_STATUS 183u
 #define MC_PARAM_ID_CFG_LAYOUT_VERSION 200u
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
 #define MC_PARAM_ID_CFG_STORE_SEQ 202u
@@ -259,12 +262,15 @@
 #define MC_PARAM_IDX_HALL_OBS_DISAGREE_E_RAD 114u
 #define MC_PARAM_IDX_HALL_OBS_WEIGHT 115u
 #define MC_PARAM_IDX_HALL_ERROR 116u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 117u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 118u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 119u
-#define MC_PARAM_IDX_CFG_PENDING 120u
-#define MC_PARAM_IDX_LAW_ERROR 121u
-#define MC_PARAM_IDX_ANGLE_ERROR 122u
+#define MC_PARAM_IDX_ANTICOGGING 117u
+#define MC_PARAM_IDX_COG_STATUS 118u
+#define MC_PARAM_IDX_COG_CAL_STATUS 119u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 120u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 121u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 122u
+#define MC_PARAM_IDX_CFG_PENDING 123u
+#define MC_PARAM_IDX_LAW_ERROR 124u
+#define MC_PARAM_IDX_ANGLE_ERROR 125u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -383,6 +389,7 @@ typedef struct {
     float hall_obs_start_e_rad_s; /**< Hall + observer hand-over (firmware/app/drive/mc_drive_hallobs.h): at and below this |speed| of the flux observer's PLL [rad/s el.] the Hall angle alone; the observer's weight ramps from 0 here to 1 at hall_obs_end_e_rad_s. With the hand-over on: above 0, below hall_obs_end_e_rad_s (encoder_type 1). [rad/s] */
     float hall_obs_end_e_rad_s; /**< Hall + observer hand-over: at and above this |speed| [rad/s el.] the flux observer's angle alone (it runs with its PLL beside the Hall angle while the current loop drives the bridge). 0: hand-over off, the Hall angle as it is. On: needs encoder_type 1 and the observer's motor values (r_ohm, l_h, flux_wb, a non-salient machine) the sensorless law needs; refused MC_PARAMS_ERR_HALL_OBS otherwise. [rad/s] */
     float hall_obs_disagree_e_rad; /**< Hall + observer hand-over: largest |observer - Hall| angle [rad el.] while the observer carries weight, in (0, pi/2]; beyond it the drive falls back to the Hall angle until the next enable and hall_error gets 256 (OBS_DISAGREE). Above the Hall angle's error (below 30 degrees with a measured table), default 45 degrees. [rad] */
+    uint32_t anticogging; /**< 1: the anticogging map's current (firmware/app/drive/mc_drive_cog.h) is added to the q reference of the laws that give current references in SPEED and POSITION (the sensored speed law and the position cascade; not the sensorless law, PI2D or their q31 twins, which run no drive current loop or no encoder angle), at the encoder's mechanical angle, before the current limit; only with a valid map (cog_status 0). Not in CURRENT mode nor during commissioning. 2: calibrate (firmware/app/commission/mc_comm_cog.h): APPLY it while the drive is enabled in SPEED mode with its angle known and a speed reference of 0 (else refused), and the drive turns once forward and once back at MC_APP_COG_CAL_SPEED_RAD_S (0.1 rad/s mechanical, about 130 s in all) under its speed loop, builds the map from the q reference per bin and sets anticogging to 1 (or to 0 when refused; cog_cal_status says why); the host then SAVEs the map with the configuration. */
 } mc_params_t;
 
 /** Defaults ("load defaults", and a drive with an empty store). */

@@ -261,7 +261,8 @@ uint32_t mc_ctrl_pos_init(mc_ctrl_pos_t *c, const mc_ctrl_pos_cfg_t *cfg)
                                .reset = ctrl_reset,
                                .fast = ctrl_fast,
                                .stop = ctrl_stop,
-                               .ctx = c};
+                               .ctx = c,
+                               .cogging_ff = true};
     return MC_CTRL_POS_ERR_NONE;
 }
 

@@ -52,7 +52,8 @@ uint32_t mc_ctrl_speed_init(mc_ctrl_speed_t *c, const mc_ctrl_speed_cfg_t *cfg)
                                .reset = mc_ctrl_speed_reset,
                                .fast = mc_ctrl_speed_fast,
                                .ctx = c,
-                               .uses_speed_ref = true};
+                               .uses_speed_ref = true,
+                               .cogging_ff = true};
     return mc_ctrl_speed_reset(c);
 }
 

@@ -702,8 +702,23 @@ static void shape_speed_ref(mc_drive_t *d, float target, float rate)
     d->speed_alpha_rad_s2 = a;
 }
 
+/* The anticogging feed-forward of this step [A] (mc_drive_attach_cog): a
+ * speed or position law's, anticogging on, with a map and the encoder
+ * read; else 0. */
+static float cog_ff(mc_drive_t *d, const mc_drive_meas_t *m)
+{
+    float ff = 0.0f;
+    if (d->cfg.anticogging && (d->cog != NULL) && d->ctrl->cogging_ff && m->have_encoder) {
+        ff = mc_cog_ff_a(d->cog, m->theta_m_rad);
+    }
+    d->tm.cog_ff_a = ff;
+    return ff;
+}
+
 /* One step of the plugged law: its duties go to the bridge it drives, its
- * current references to the drive's current loop. */
+ * current references to the drive's current loop (a speed or position
+ * law's q reference with the anticogging feed-forward: the one place it
+ * enters, before the current loop's limits). */
 static uint32_t run_ctrl(mc_drive_t *d, mc_drive_meas_t *m, const mc_hal_adc_sample_t *s, float ic)
 {
     mc_drive_out_t out = {.duty_a = 0.5f, .duty_b = 0.5f, .duty_c = 0.5f};
@@ -734,8 +749,9 @@ static uint32_t run_ctrl(mc_drive_t *d, mc_drive_meas_t *m, const mc_hal_adc_sam
         return MC_DRIVE_FAULT_CONTROL;
     }
     if (d->ctrl->outputs == MC_DRIVE_OUT_CURRENT) {
-        const cur_req_t r = {out.id_ref_a,      out.iq_ref_a,    out.theta_e_rad,
-                             out.omega_e_rad_s, out.rotor_frame, out.reframe};
+        const cur_req_t r = {out.id_ref_a,    out.iq_ref_a + cog_ff(d, m),
+                             out.theta_e_rad, out.omega_e_rad_s,
+                             out.rotor_frame, out.reframe};
         return current_loop(d, s, ic, &r);
     }
     rc = (d->ctrl->outputs == MC_DRIVE_OUT_PWM2)
@@ -1232,6 +1248,15 @@ int mc_drive_attach_hallobs(mc_drive_t *d, mc_drive_hallobs_t *h)
     return 0;
 }
 
+int mc_drive_attach_cog(mc_drive_t *d, const mc_cog_map_t *map)
+{
+    if ((map != NULL) && (d->hal->encoder == NULL)) {
+        return -ENODEV;
+    }
+    d->cog = map;
+    return 0;
+}
+
 int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl)
 {
     if (d->mode != MC_DRIVE_MODE_IDLE && d->mode != MC_DRIVE_MODE_FAULT) {
@@ -1377,6 +1402,7 @@ int mc_drive_set_current_ref(mc_drive_t *d, float id_ref_a, float iq_ref_a)
 void mc_drive_set_runtime_limits(mc_drive_t *d, const mc_drive_cfg_t *cfg)
 {
     d->cfg.i_max_a = cfg->i_max_a;
+    d->cfg.anticogging = cfg->anticogging;
     d->cfg.i_trip_a = cfg->i_trip_a;
     d->cfg.vbus_min_v = cfg->vbus_min_v;
     d->cfg.vbus_max_v = cfg->vbus_max_v;

@@ -91,6 +91,7 @@
 #include "foc/mc_foc.h"
 #include "fw/mc_fw.h"
 #include "mc_drive_bus.h"
+#include "mc_drive_cog.h"
 #include "mc_drive_hallobs.h"
 #include "observer/mc_enctrack.h"
 #include "hal/hal.h"
@@ -427,6 +428,10 @@ typedef struct {
      * fw.dt_s must be foc.dt_s. Off: references as set. */
     bool fw_enable;
     mc_fw_f32_cfg_t fw;
+    /** Anticogging (runtime): a law with cogging_ff adds the attached map's
+     *  current (mc_drive_attach_cog) to its q reference; no effect without
+     *  a map. */
+    bool anticogging;
     /** Active short circuit on a fault above the speed where the back-EMF
      *  exceeds the bus (see "Active short circuit" above); needs foc.flux_wb,
      *  foc.ld_h > 0 and foc.flux_wb / foc.ld_h < i_trip_a. */
@@ -525,6 +530,12 @@ typedef struct {
      *  winding_r_follow. May be NULL (the law's R stays). A non-zero return
      *  is a control fault. */
     uint32_t (*set_r_scale)(void *ctx, float r_scale);
+    /** A speed or position law giving current references: with a map
+     *  attached (mc_drive_attach_cog) and the encoder read, the drive adds
+     *  the anticogging feed-forward at the mechanical angle to its q
+     *  reference, before the current limit. false for CURRENT's own loop,
+     *  commissioning and the angle finders (a table that does not name it). */
+    bool cogging_ff;
 } mc_drive_ctrl_t;
 
 /** What the last fast step saw and did (telemetry snapshot). */
@@ -540,6 +551,8 @@ typedef struct {
     float regen_scale;       /**< factor applied to a braking iq reference, [0, 1] */
     float brake_duty;        /**< brake chopper duty written, [0, 1] */
     mc_fw_f32_out_t fw;      /**< last MTPA/FW step (fw_enable) */
+    float cog_ff_a;          /**< anticogging feed-forward added to the q reference
+                                  before the limit [A] (0: none this step) */
 } mc_drive_telemetry_t;
 
 /** The drive instance (statically allocated by the caller). */
@@ -601,6 +614,7 @@ typedef struct {
     mc_drive_thermal_t thermal;  /**< derating factor, winding estimate (mc_drive_thermal.h) */
     mc_drive_hallobs_t *hallobs; /**< Hall + observer (mc_drive_hallobs.h), or NULL: the
                                       encoder's angle as it is */
+    const mc_cog_map_t *cog;     /**< anticogging map (mc_drive_cog.h), or NULL: none */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns
@@ -662,6 +676,16 @@ int mc_drive_attach_ctrl(mc_drive_t *d, const mc_drive_ctrl_t *ctrl);
  *  running (IDLE or FAULT); an mc_drive_init detaches it. Returns 0, -EBUSY
  *  while running, -ENODEV without an encoder. */
 int mc_drive_attach_hallobs(mc_drive_t *d, mc_drive_hallobs_t *h);
+
+/** Attach (or, with NULL, detach) the anticogging map (mc_drive_cog.h),
+ *  already validated by the caller against this drive's encoder
+ *  (mc_cog_check), outliving the drive's use of it: from the next fast step,
+ *  with cfg.anticogging, a law with cogging_ff adds mc_cog_ff_a(map,
+ *  theta_m) to its q reference.
+ *  Allowed while running (one pointer store: the fast step sees the old or
+ *  the new map); the caller does not change a map while it is attached. An
+ *  mc_drive_init detaches it. Returns 0, -ENODEV with a map and no encoder. */
+int mc_drive_attach_cog(mc_drive_t *d, const mc_cog_map_t *map);
 
 /** Controlled stop (STOPPING, see Modes) from CURRENT or CTRL; IDLE at
  *  once when stop_decel_rad_s2 is 0 or the law has no stop op. Returns 0

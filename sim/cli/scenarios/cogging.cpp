@@ -4,7 +4,9 @@
 //
 //  1. Speed: the sensored speed PI (SPEED mode) at speed_frac times the
 //     rated speed; after the ramp and 40 / speed_wc of settling, a window of
-//     at least 20 cogging periods and 10 / speed_wc. The cogging torque is a
+//     at least window_periods (default 20) cogging periods and 10 /
+//     speed_wc. A longer window (e.g. 400) separates a lasting ripple at
+//     orders of the turn from a transient of the speed loop. The cogging torque is a
 //     disturbance at N_c w (N_c = lcm(slots, 2 p) per turn) that the loop
 //     rejects: speed ripple ~ A / |J s + B + kt C(s)| at s = j N_c w.
 //  2. Hold: POSITION mode holding where it started (no move); after
@@ -49,6 +51,11 @@
 #include "scenario.hpp"
 #include "verdict.hpp"
 #include "mcsim/cogging.hpp"
+extern "C" {
+#include "commission/mc_comm_cog.h"
+#include "mc_can_proto.h"
+#include "mc_param_srv.h"
+}
 
 namespace mcsim {
 namespace {
@@ -83,7 +90,13 @@ std::vector<ParamSpec> cogging_params(const MotorFiles& f) {
        1.0},
       {"hold_load_frac", 0.05, "1", "step load in the position hold, fraction of rated torque",
        -1.0, 1.0},
-      {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9}};
+      {"window_periods", 20.0, "1",
+       "the speed window's length in cogging periods (at least 10 / speed_wc)", 1.0, 1.0e5},
+      {"csv_every", 0.0, "1", "write every n-th PWM period (0: all up to 20000 rows)", 0.0, 1.0e9},
+      {"cog_cal", 1.0, "1",
+       "with anticogging=1: 1 the drive calibrates its map first (anticogging 2), 0 it runs on "
+       "the map it booted (--flash)",
+       0.0, 1.0}};
   for (auto& s : app_gain_params(f)) p.push_back(s);
   if (anticogging_index() >= 0 && !shared_key(f)) {
     const int32_t i = anticogging_index();
@@ -136,6 +149,69 @@ Phase end_of(AppRunner& run, const std::string& stopped) {
   return {stopped, run.probe().faults};
 }
 
+// With --set anticogging=1: the drive calibrates its map first, as a host
+// runs it (mc_app.h, anticogging 2): enabled in SPEED at rest, PARAM_REQ
+// WRITE anticogging 2 and APPLY; the drive's turns until cog_cal_status
+// (read every 50 ms) reads DONE (the drive then runs with anticogging 1) or
+// FAILED. Returns "" or the reason; *t_s the time it took.
+std::string calibrate(RunContext& ctx, AppRunner& run, double* t_s) {
+  hal_host::PmsmBoard& board = run.board();
+  const double t0 = board.t_s();
+  const double w = static_cast<double>(MC_APP_COG_CAL_SPEED_RAD_S);
+  // two ramps each way, two settles, two turns at w, and their 2x limits
+  const double t_max = 3.0 * static_cast<double>(MC_APP_COG_CAL_RAMP_S) +
+                       2.0 * static_cast<double>(MC_APP_COG_CAL_SETTLE_S) +
+                       2.0 * static_cast<double>(MC_COMM_COG_TIME_FACTOR) * 1.01 * kTwoPi / w + 1.0;
+  run.send(run.cmd().param_req(MC_PARAM_OP_WRITE, MC_PARAM_ID_ANTICOGGING, 2.0));
+  run.send(run.cmd().param_op(MC_PARAM_OP_APPLY));
+  const uint32_t node = run.target().params().can_node_id;
+  double next_read = 0.05;
+  AppWatch watch;
+  for (;;) {
+    const double t = board.t_s() - t0;
+    if (t > t_max) return "the anticogging calibration did not end in time";
+    if (t >= next_read) {
+      run.send(run.cmd().param_req(MC_PARAM_OP_READ, MC_PARAM_ID_COG_CAL_STATUS, 0.0));
+      next_read += 0.05;
+    }
+    std::string stopped = watch(run.probe());
+    if (!stopped.empty()) return stopped;
+    run.step();
+    if ((std::lround(t / board.period_s()) & 1023) == 0) ctx.progress.update(t, t_max);
+    for (const mc_hal_can_frame_t& f : run.sent()) {
+      uint32_t msg = 0;
+      float v[MC_CAN_NSIG_MAX];
+      if (mc_can_id_node(f.id) != node || mc_can_proto_unpack(&f, &msg, v, MC_CAN_NSIG_MAX) != 0 ||
+          msg != MC_CAN_MSG_PARAM_REPLY) {
+        continue;
+      }
+      if (static_cast<uint32_t>(v[MC_CAN_PARAM_REPLY_OPCODE]) == MC_PARAM_OP_APPLY &&
+          static_cast<uint32_t>(v[MC_CAN_PARAM_REPLY_STATUS]) != MC_PARAM_OK) {
+        return "anticogging 2 refused: MC_PARAMS_ERR_* " +
+               std::to_string(static_cast<uint32_t>(v[MC_CAN_PARAM_REPLY_VALUE]));
+      }
+      if (static_cast<uint32_t>(v[MC_CAN_PARAM_REPLY_PARAM_ID]) != MC_PARAM_ID_COG_CAL_STATUS) {
+        continue;
+      }
+      const uint32_t st = static_cast<uint32_t>(v[MC_CAN_PARAM_REPLY_VALUE]);
+      ctx.summary.set("cog_cal_status", st);
+      if ((st & 0xFFu) == MC_COMM_COG_DONE) {
+        *t_s = board.t_s() - t0;
+        return "";
+      }
+      if ((st & 0xFFu) == MC_COMM_COG_FAILED) {
+        return "anticogging calibration failed: cog_cal_status " + std::to_string(st);
+      }
+    }
+  }
+}
+
+bool calibrates(const RunContext& ctx) {
+  return anticogging_index() >= 0 && ctx.params.was_set(kAnticogging) &&
+         std::lround(ctx.params.get(kAnticogging)) == 1 &&
+         std::lround(ctx.params.get("cog_cal")) == 1;
+}
+
 // Phase 1: the speed loop at w_t; the window's spans.
 Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c, double cap_s,
                   Span* w_true, Span* w_est, Span* iq_ref) {
@@ -145,13 +221,23 @@ Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c,
   const double t0 = 0.01;
   const double t_acc = std::abs(w_t) / static_cast<double>(e.p.speed_ramp_rad_s2);
   const double t_win0 = t0 + t_acc + 40.0 / wc;
-  const double win = std::max(20.0 * kTwoPi / (n_c * std::abs(w_t)), 10.0 / wc);
+  const double win =
+      std::max(ctx.params.get("window_periods") * kTwoPi / (n_c * std::abs(w_t)), 10.0 / wc);
   const double dur = std::min(t_win0 + win, cap_s);
   const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, nullptr);
   AppRunner run(*target);
   run.start(MC_CAN_CTRL_SPEED, true);
   hal_host::PmsmBoard& board = run.board();
   ctx.summary.set("angle_find_s", run.finish_angle_find());
+  if (calibrates(ctx)) {
+    double t_cal = 0.0;
+    const std::string why = calibrate(ctx, run, &t_cal);
+    if (!why.empty()) {
+      ctx.summary.set("speed_phase_s", 0.0);
+      return end_of(run, why);
+    }
+    ctx.summary.set("cog_cal_s", t_cal);
+  }
   const double t_origin = board.t_s();
   const long n = step_count(dur, board.period_s());
   const long every = std::lround(ctx.params.get("csv_every")) > 0
@@ -204,8 +290,19 @@ Phase hold_phase(RunContext& ctx, const mc_params_t& p, double tau_step, double 
   };
   const std::unique_ptr<AppTarget> target = make_file_target(ctx, f, p, &load);
   AppRunner run(*target);
-  run.start(MC_CAN_CTRL_POSITION);
   hal_host::PmsmBoard& board = run.board();
+  if (calibrates(ctx)) {  // in SPEED, then POSITION from where it stopped
+    run.start(MC_CAN_CTRL_SPEED, true);
+    (void)run.finish_angle_find();
+    double t_cal = 0.0;
+    const std::string why = calibrate(ctx, run, &t_cal);
+    if (!why.empty()) return end_of(run, why);
+    run.send(run.cmd().enable(false));
+    run.send(run.cmd().mode(MC_CAN_CTRL_POSITION));
+    run.send(run.cmd().enable(true));
+  } else {
+    run.start(MC_CAN_CTRL_POSITION);
+  }
   t_origin = board.t_s();
   const long n = step_count(dur, board.period_s());
   const long every = std::max(1L, n / 10000);

@@ -15,6 +15,8 @@
 #include "scenario.hpp"
 #include "mcsim/cogging.hpp"
 extern "C" {
+#include "commission/mc_comm_cog.h"
+#include "mc_app.h"
 #include "mc_params.h"
 }
 
@@ -130,6 +132,42 @@ TEST(CoggingScenarioSil, MotorWithoutCoggingIsRefused) {
               std::string::npos)
         << e.what();
   }
+}
+
+// anticogging=1: the drive calibrates its own map first (mc_app.h,
+// anticogging 2 written and applied over CAN in SPEED at rest; the turns of
+// firmware/app/commission/mc_comm_cog.h), then the same two measurements.
+// On the SK3 (library cogging, 2 % of rated torque, order 84) on the VESC 6.
+TEST(CoggingScenarioSil, TheDriveCalibratesItsMapThroughTheApplication) {
+  const MotorFiles f = testlib::files({"turnigy-sk3-6374-149kv", "vesc6-48v"});
+  ASSERT_GT(f.motor.cogging_nm, 0.0);
+  std::map<std::string, std::string> txt0, txt1;
+  const auto s0 = testlib::run_scenario("cogging", f, {{"anticogging", "0"}}, "off", &txt0);
+  const auto s1 = testlib::run_scenario("cogging", f, {{"anticogging", "1"}}, "on", &txt1);
+  ASSERT_EQ(txt0.at("verdict"), "pass") << txt0.at("verdict_detail");
+  ASSERT_EQ(txt1.at("verdict"), "pass") << txt1.at("verdict_detail");
+  EXPECT_EQ(s1.at("cog_cal_status"), static_cast<double>(MC_COMM_COG_DONE));
+  EXPECT_EQ(s1.at("faults"), 0.0);
+  // The calibration's time: three ramps, two settles and two turns (plus
+  // MC_COMM_COG_MARGIN_BINS bins) at MC_APP_COG_CAL_SPEED_RAD_S; up to 5 %
+  // more: the drive's shaped reference reaches the speed after the ramp,
+  // and the status is read every 50 ms.
+  const double t_nom =
+      3.0 * MC_APP_COG_CAL_RAMP_S + 2.0 * MC_APP_COG_CAL_SETTLE_S +
+      2.0 * 2.0 * M_PI * (1.0 + MC_COMM_COG_MARGIN_BINS / 1024.0) / MC_APP_COG_CAL_SPEED_RAD_S;
+  EXPECT_GE(s1.at("cog_cal_s"), t_nom - 0.05);
+  EXPECT_LE(s1.at("cog_cal_s"), 1.05 * t_nom);
+  // The hold under the step load: the map takes the detent torque off the
+  // position loop: the excursion at most 0.6 of the one without the map
+  // (measured 0.49: the map's order-84 amplitude within 6 % of the plant's
+  // cogging over kt; the rest is the map's noise and the phase below).
+  RecordProperty("hold_err_pp_rad_off", std::to_string(s0.at("hold_err_pp_rad")));
+  RecordProperty("hold_err_pp_rad_on", std::to_string(s1.at("hold_err_pp_rad")));
+  EXPECT_LT(s1.at("hold_err_pp_rad"), 0.6 * s0.at("hold_err_pp_rad"));
+  // The speed ripple at 10 % of rated speed, recorded, not bounded here:
+  // the issue's 5x reduction is not reached (issue 35, open).
+  RecordProperty("speed_ripple_pp_rad_s_off", std::to_string(s0.at("speed_ripple_pp_rad_s")));
+  RecordProperty("speed_ripple_pp_rad_s_on", std::to_string(s1.at("speed_ripple_pp_rad_s")));
 }
 
 // --set anticogging is the table's parameter when the firmware has one, and

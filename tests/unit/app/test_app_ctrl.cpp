@@ -69,8 +69,8 @@ class AppDriveCtrl : public AppDrive
   protected:
     mc_drive_ctrl_t Law(uint32_t outputs, bool needs_encoder = true)
     {
-        return mc_drive_ctrl_t{outputs, needs_encoder, stub_reset, stub_fast, stub_slow,
-                               &law,    nullptr,       false,      false,     nullptr};
+        return mc_drive_ctrl_t{outputs, needs_encoder, stub_reset, stub_fast, stub_slow, &law,
+                               nullptr, false,         false,      nullptr,   false};
     }
     StubLaw law;
 };

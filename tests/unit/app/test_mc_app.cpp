@@ -1069,3 +1069,234 @@ TEST_F(McAppEveryParam, EveryStoppedParameterChangesTheDriveOrItsLaws)
     EXPECT_EQ(known, Unread(MC_PARAM_ACCESS_STOPPED, &tested));
     EXPECT_GE(tested, 40u);
 }
+
+// ------------------------------------------------------------ anticogging
+
+namespace
+{
+constexpr double kCogPi = 3.14159265358979323846;
+
+// A calibration's currents: 0.4 A cos(12 theta) + 1 A (the mean, removed).
+std::vector<float> CogCurrents(double amp = 0.4)
+{
+    std::vector<float> v(MC_COG_N);
+    for (uint32_t k = 0; k < MC_COG_N; ++k) {
+        v[k] = static_cast<float>(1.0 + amp * std::cos(12.0 * 2.0 * kCogPi * k / MC_COG_N));
+    }
+    return v;
+}
+} // namespace
+
+class McAppCog : public McApp
+{
+  protected:
+    uint32_t Read(uint32_t id)
+    {
+        uint32_t v = 0u;
+        EXPECT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_READ, id, &v));
+        return v;
+    }
+    mc_param_status_t WriteApply(uint32_t id, uint32_t raw)
+    {
+        uint32_t v = raw;
+        const mc_param_status_t st = mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, id, &v);
+        if (st != MC_PARAM_OK) {
+            return st;
+        }
+        v = 0u;
+        return mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v);
+    }
+    void Reboot()
+    {
+        app = mc_app_t{};
+        drive = mc_drive_t{};
+        Start();
+    }
+};
+
+// No map: cog_status EMPTY, nothing attached. A map loaded from the host:
+// OK and attached to the drive; the parameter anticogging (default 0)
+// switches the drive's feed-forward, at run time too. A refused load
+// (NaN, an amplitude above half of i_max_a) changes nothing.
+TEST_F(McAppCog, LoadFromTheHostThenTheFlagSwitchesIt)
+{
+    Start();
+    EXPECT_EQ(static_cast<uint32_t>(MC_COG_ST_EMPTY), Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_EQ(nullptr, drive.cog);
+    EXPECT_EQ(0u, Read(MC_PARAM_ID_ANTICOGGING));
+    const std::vector<float> v = CogCurrents();
+    ASSERT_EQ(MC_COG_ST_OK, mc_app_cog_load(&app, v.data(), MC_COG_N));
+    EXPECT_EQ(0u, Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_EQ(&app.cog_map, drive.cog);
+    EXPECT_FALSE(drive.cfg.anticogging);
+    // the map: the currents less their mean (1 A), q15 (0.4 A / 65534) and
+    // float rounding of the mean (1e-6 A)
+    EXPECT_NEAR(mc_cog_ff_a(drive.cog, 0.0f), 0.4, 0.4 / 65534.0 + 1e-6);
+    ASSERT_EQ(MC_PARAM_OK, WriteApply(MC_PARAM_ID_ANTICOGGING, 1u));
+    EXPECT_TRUE(drive.cfg.anticogging);
+    EXPECT_EQ(&app.cog_map, drive.cog);
+
+    const mc_cog_map_t before = app.cog_map;
+    std::vector<float> bad = v;
+    bad[7] = NAN;
+    EXPECT_EQ(MC_COG_ST_NONFINITE, mc_app_cog_load(&app, bad.data(), MC_COG_N));
+    const std::vector<float> big = CogCurrents(0.51 * defaults.i_max_a);
+    EXPECT_EQ(MC_COG_ST_AMPLITUDE, mc_app_cog_load(&app, big.data(), MC_COG_N));
+    EXPECT_EQ(MC_COG_ST_ARG, mc_app_cog_load(&app, v.data(), MC_COG_N - 1u));
+    EXPECT_EQ(0, std::memcmp(&before, &app.cog_map, sizeof before));
+    EXPECT_EQ(0u, Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_EQ(&app.cog_map, drive.cog);
+
+    // on while the bridge runs, off again: runtime
+    Send(0x11u, {1}); // SET_CONTROL_MODE CURRENT
+    Send(0x10u, {1}); // SET_ENABLE
+    SlowSteps(2);
+    ASSERT_EQ(MC_DRIVE_MODE_CURRENT, drive.mode);
+    ASSERT_EQ(MC_PARAM_OK, WriteApply(MC_PARAM_ID_ANTICOGGING, 0u));
+    EXPECT_FALSE(drive.cfg.anticogging);
+    EXPECT_EQ(-EBUSY, mc_app_cog_save(&app)); // a save erases: bridge off only
+}
+
+// Another encoder offset (a remounted encoder, recommissioned): the map is
+// refused ENCODER and detached; back within half a bin it is valid again.
+TEST_F(McAppCog, AnotherEncoderRefusesTheMap)
+{
+    Start();
+    const std::vector<float> v = CogCurrents();
+    ASSERT_EQ(MC_COG_ST_OK, mc_app_cog_load(&app, v.data(), MC_COG_N));
+    ASSERT_EQ(MC_PARAM_OK, WriteApply(MC_PARAM_ID_ENCODER_OFFSET_RAD, F32Bits(1.0f)));
+    EXPECT_EQ(static_cast<uint32_t>(MC_COG_ST_ENCODER), Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_EQ(nullptr, drive.cog);
+    ASSERT_EQ(MC_PARAM_OK,
+              WriteApply(MC_PARAM_ID_ENCODER_OFFSET_RAD, F32Bits(defaults.encoder_offset_rad)));
+    EXPECT_EQ(0u, Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_EQ(&app.cog_map, drive.cog);
+}
+
+// The map saved with the configuration survives a power cycle bit for bit
+// (and the configuration stays); booted with another encoder it is
+// refused ENCODER; a map record of another size, LAYOUT; anticogging then
+// has no effect (nothing attached).
+TEST_F(McAppCog, StoredMapSurvivesAPowerCycleAndIsRefusedForAnotherEncoder)
+{
+    Start();
+    EXPECT_EQ(-ENOENT, mc_app_cog_save(&app));
+    const std::vector<float> v = CogCurrents();
+    ASSERT_EQ(MC_COG_ST_OK, mc_app_cog_load(&app, v.data(), MC_COG_N));
+    ASSERT_EQ(0, mc_app_cog_save(&app));
+    const mc_cog_map_t saved = app.cog_map;
+    Reboot();
+    EXPECT_EQ(0u, Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_EQ(0, std::memcmp(&saved, &app.cog_map, sizeof saved));
+    EXPECT_EQ(&app.cog_map, drive.cog);
+    EXPECT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_EMPTY), app.boot_status); // no config saved
+
+    defaults.encoder_cpr = 4096u; // the board's encoder replaced
+    Reboot();
+    EXPECT_EQ(static_cast<uint32_t>(MC_COG_ST_ENCODER), Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_EQ(nullptr, drive.cog);
+
+    // a map record of another size in the store: LAYOUT, nothing loaded
+    mc_cfg_store_t st{};
+    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}};
+    ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
+    std::vector<uint8_t> other(512u, 0x11u);
+    ASSERT_EQ(0, mc_cfg_store_save_map(&st, other.data(), 512u));
+    defaults.encoder_cpr = mc_params_default.encoder_cpr;
+    Reboot();
+    EXPECT_EQ(static_cast<uint32_t>(MC_COG_ST_LAYOUT), Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_FALSE(app.cog_loaded);
+    EXPECT_EQ(nullptr, drive.cog);
+}
+
+// A SAVE while a calibration runs (anticogging 2 in force): here the SAVE
+// that comes with the disable in the same slow step, handled before the
+// calibration sees its abort. The record holds the value before the
+// calibration (0), not the request 2, which would boot with the
+// feed-forward on and no map measured; the reply is OK and the set in force
+// keeps its 2 until the calibration ends (then 0: aborted).
+TEST_F(McAppCog, SaveDuringACalibrationStoresTheValueBeforeIt)
+{
+    cfg.laws_from_params = true;
+    defaults.speed_law = MC_LAW_SPEED_PI;
+    Start();
+    Send(0x11u, {MC_CAN_CTRL_SPEED}); // SET_CONTROL_MODE SPEED, reference 0
+    Send(0x10u, {1});                 // SET_ENABLE
+    SlowSteps(100);
+    ASSERT_EQ(MC_DRIVE_MODE_CTRL, drive.mode) << "faults 0x" << std::hex << drive.faults;
+    ASSERT_EQ(MC_PARAM_OK, WriteApply(MC_PARAM_ID_ANTICOGGING, 2u));
+    ASSERT_TRUE(app.cog_cal_run) << "cog_cal_status 0x" << std::hex << app.srv.cog_cal_status;
+    SlowSteps(5);
+    ASSERT_TRUE(app.cog_cal_run);
+    ASSERT_EQ(2u, app.srv.active.anticogging);
+    DrainTx();
+
+    Send(0x10u, {0});                      // SET_ENABLE 0
+    Send(0x18u, {3, 0, 0, 0, 0, 0, 0, 0}); // PARAM_REQ SAVE
+    SlowSteps(1);
+    bool replied = false;
+    mc_hal_can_frame_t f;
+    while (mc_hal_fake_can_tx_pop(&fake, &f) == 0) {
+        if ((f.id == (defaults.can_node_id << 5 | 0x19u)) && (f.data[0] == 3u)) {
+            replied = true;
+            EXPECT_EQ(static_cast<uint8_t>(MC_PARAM_OK), f.data[3]) << "SAVE's status";
+        }
+    }
+    EXPECT_TRUE(replied) << "the SAVE is answered";
+    ASSERT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_STORED), app.srv.store_status);
+    EXPECT_FALSE(app.cog_cal_run) << "the disable aborted the calibration";
+    EXPECT_EQ(0u, app.srv.active.anticogging) << "an aborted calibration leaves 0";
+
+    mc_cfg_store_t st{};
+    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}};
+    ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
+    uint32_t raw = 0xFFFFFFFFu;
+    ASSERT_EQ(0, mc_cfg_store_find_raw(&st, MC_PARAM_ID_ANTICOGGING, &raw));
+    EXPECT_EQ(0u, raw) << "stored: the value before the calibration, not the request";
+}
+
+// A record holding anticogging 2 (written by an image without the SAVE's
+// substitution) boots as 0: no calibration, no feed-forward at boot.
+TEST_F(McAppCog, AStoredCalibrationRequestBootsAsOff)
+{
+    mc_params_t p = defaults;
+    p.anticogging = 2u;
+    mc_cfg_store_t st{};
+    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}};
+    ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
+    ASSERT_EQ(0, mc_cfg_store_save(&st, &p));
+    Start();
+    ASSERT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_STORED), app.boot_status);
+    EXPECT_EQ(0u, Read(MC_PARAM_ID_ANTICOGGING));
+    EXPECT_FALSE(drive.cfg.anticogging);
+    EXPECT_FALSE(app.cog_cal_run);
+}
+
+// The parameter SAVE (PARAM_REQ over CAN, here through the param server)
+// stores a map built since the last save (a calibration's: loaded as the
+// calibration loads it) behind the configuration; after a power cycle both
+// boot (the map bit for bit, cog_status OK, attached). A SAVE with no new
+// map writes no map record (the sequence counter stays).
+TEST_F(McAppCog, ParameterSaveStoresANewMapWithTheConfiguration)
+{
+    Start();
+    const std::vector<float> v = CogCurrents();
+    ASSERT_EQ(MC_COG_ST_OK, mc_app_cog_load(&app, v.data(), MC_COG_N));
+    ASSERT_EQ(MC_PARAM_OK, WriteApply(MC_PARAM_ID_ANTICOGGING, 1u));
+    uint32_t seq = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_SAVE, 0u, &seq));
+    EXPECT_EQ(1u, seq) << "the configuration: record 1";
+    EXPECT_EQ(2u, app.store.seq_top) << "the map behind it: record 2";
+    uint32_t again = 0u;
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_SAVE, 0u, &again));
+    EXPECT_EQ(2u, app.store.seq_top) << "no new map: nothing written";
+
+    const mc_cog_map_t saved = app.cog_map;
+    Reboot();
+    EXPECT_EQ(static_cast<uint8_t>(MC_CFG_BOOT_STORED), app.boot_status);
+    EXPECT_EQ(1u, Read(MC_PARAM_ID_ANTICOGGING));
+    EXPECT_EQ(0u, Read(MC_PARAM_ID_COG_STATUS));
+    EXPECT_EQ(0, std::memcmp(&saved, &app.cog_map, sizeof saved));
+    EXPECT_EQ(&app.cog_map, drive.cog);
+    EXPECT_TRUE(drive.cfg.anticogging);
+}

@@ -366,3 +366,188 @@ TEST(CfgStore, HoldsTellsAnUnchangedSet)
 }
 
 } // namespace
+
+// ------------------------------------------------- the anticogging map kind
+
+namespace
+{
+
+constexpr uint32_t kMapBytes = 2088u; // sizeof(mc_cog_map_t): the store takes any multiple of 8
+constexpr uint32_t kMapRecBytes = kMapBytes + 5u * 4u;
+
+std::vector<uint8_t> MapBlob(uint32_t i)
+{
+    std::vector<uint8_t> m(kMapBytes);
+    for (uint32_t k = 0; k < kMapBytes; ++k) {
+        m[k] = static_cast<uint8_t>(k * 13u + i * 101u + 7u);
+    }
+    return m;
+}
+
+// The stored map is exactly want (empty: none stored).
+void ExpectMap(Rig &r, const std::vector<uint8_t> &want, const char *what)
+{
+    std::vector<uint8_t> got(kMapBytes, 0u);
+    const int rc = mc_cfg_store_load_map(&r.store, got.data(), kMapBytes);
+    if (want.empty()) {
+        EXPECT_EQ(rc, -ENOENT) << what;
+    } else {
+        ASSERT_EQ(rc, 0) << what;
+        EXPECT_EQ(got, want) << what;
+    }
+}
+
+// Configuration (C) and map (M) saves in the order ops, the power cut at
+// every step of each (not done, half done): after the reboot each kind is
+// exactly its previous newest (bit for bit; a map never saved: none),
+// and the save then completes. Returns the cases and the switches (saves
+// that erased).
+void MixedPowerCutSweep(uint32_t sector_bytes, const char *ops, uint32_t *p_cases,
+                        uint32_t *p_switches)
+{
+    Rig r(sector_bytes);
+    mc_params_t p{};
+    mc_params_t old_cfg = mc_params_default;
+    std::vector<uint8_t> old_map;
+    r.Boot(&p);
+    for (uint32_t i = 0; ops[i] != '\0'; ++i) {
+        const bool map = ops[i] == 'M';
+        const mc_params_t next_cfg = Variant(i);
+        const std::vector<uint8_t> next_map = MapBlob(i);
+        const auto save = [&]() {
+            return map ? mc_cfg_store_save_map(&r.store, next_map.data(), kMapBytes)
+                       : mc_cfg_store_save(&r.store, &next_cfg);
+        };
+        const std::vector<uint8_t> before = r.mem;
+        r.Boot(&p);
+        const uint32_t s0 = r.flash.steps, e0 = r.flash.erases;
+        ASSERT_EQ(save(), 0) << "op " << i;
+        const uint32_t n = r.flash.steps - s0;
+        *p_switches += (r.flash.erases > e0) ? 1u : 0u;
+        const std::vector<uint8_t> after = r.mem;
+        for (uint32_t k = 1; k <= n; ++k) {
+            for (const mc_fake_flash_tear_t tear :
+                 {MC_FAKE_FLASH_TEAR_NONE, MC_FAKE_FLASH_TEAR_HALF}) {
+                r.mem = before;
+                r.Boot(&p);
+                mc_fake_flash_cut_at(&r.flash, k, tear);
+                ASSERT_EQ(save(), -EIO) << "op " << i << " step " << k;
+                r.Boot(&p);
+                ASSERT_TRUE(Same(p, old_cfg)) << "op " << i << " cut at " << k << " of " << n;
+                ExpectMap(r, old_map, "after the cut");
+                ++*p_cases;
+                ASSERT_EQ(save(), 0) << "op " << i << " step " << k;
+                r.Boot(&p);
+                ASSERT_TRUE(Same(p, map ? old_cfg : next_cfg));
+                ExpectMap(r, map ? next_map : old_map, "after the recovery");
+            }
+        }
+        r.mem = after;
+        r.Boot(&p);
+        if (map) {
+            old_map = next_map;
+        } else {
+            old_cfg = next_cfg;
+        }
+        ASSERT_TRUE(Same(p, old_cfg)) << "op " << i;
+        ExpectMap(r, old_map, "after the save");
+    }
+}
+
+} // namespace
+
+// One configuration record and one map per sector: every save switches
+// and copies the other kind's newest record first. The cases: every step
+// of every save, both tear modes.
+TEST(CfgStoreMap, PowerCutAtEveryStepOfMixedSavesEachKindKeepsOldOrNew)
+{
+    uint32_t cases = 0, switches = 0;
+    MixedPowerCutSweep(kRecBytes + kMapRecBytes + 16u, "CMCCMMC", &cases, &switches);
+    // the first two fill sector A (a configuration, then the map behind
+    // it); each later save switches
+    EXPECT_EQ(switches, 5u);
+    // every save writes its record; each switch also copies the other kind
+    EXPECT_GT(cases, 2u * (4u * MC_CFG_REC_WORDS + 3u * (kMapRecBytes / 4u)));
+}
+
+// Two of each per sector: appends, switches with a copy.
+TEST(CfgStoreMap, PowerCutAtEveryStepAppendAndSwitch)
+{
+    uint32_t cases = 0, switches = 0;
+    MixedPowerCutSweep(2u * (kRecBytes + kMapRecBytes) + 32u, "MCMCCMMCCM", &cases, &switches);
+    EXPECT_GE(switches, 2u);
+    EXPECT_GT(cases, 2u * (5u * MC_CFG_REC_WORDS + 5u * (kMapRecBytes / 4u)));
+}
+
+// A map record of another size (another layout) is refused -EBADMSG and
+// the buffer not changed; a map saved does not disturb the configuration
+// (the configuration's sequence number stays, the counter moves on); a
+// sector that cannot hold both is refused -ENOSPC with nothing written.
+TEST(CfgStoreMap, OtherSizeRefusedAndTheConfigurationUntouched)
+{
+    Rig r(kRecBytes + kMapRecBytes + 16u);
+    mc_params_t p{};
+    r.Boot(&p);
+    const mc_params_t c = Variant(3);
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &c), 0);
+    const std::vector<uint8_t> m = MapBlob(1);
+    ASSERT_EQ(mc_cfg_store_save_map(&r.store, m.data(), kMapBytes), 0);
+    EXPECT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, c));
+    EXPECT_EQ(r.store.seq, 1u);
+    EXPECT_EQ(r.store.seq_top, 2u);
+    std::vector<uint8_t> small(kMapBytes - 8u, 0xA5u);
+    const std::vector<uint8_t> small0 = small;
+    EXPECT_EQ(mc_cfg_store_load_map(&r.store, small.data(), kMapBytes - 8u), -EBADMSG);
+    EXPECT_EQ(small, small0);
+    EXPECT_EQ(mc_cfg_store_save_map(&r.store, m.data(), kMapBytes - 4u), -EINVAL);
+    EXPECT_EQ(mc_cfg_store_save_map(&r.store, nullptr, kMapBytes), -EINVAL);
+
+    Rig tiny(kRecBytes + 16u);
+    tiny.Boot(&p);
+    ASSERT_EQ(mc_cfg_store_save(&tiny.store, &c), 0);
+    const std::vector<uint8_t> before = tiny.mem;
+    EXPECT_EQ(mc_cfg_store_save_map(&tiny.store, m.data(), kMapBytes), -ENOSPC);
+    EXPECT_EQ(tiny.mem, before);
+}
+
+// A record of a kind this image does not know (a later image's: another
+// magic in the same envelope, valid length and CRC) is skipped by its
+// length: the configuration written after it boots, and the next save
+// appends behind it. The same bytes with a wrong CRC are a cut record (the
+// rest of the sector unusable): the configuration before it boots.
+TEST(CfgStore, UnknownRecordKindIsSkipped)
+{
+    Rig r(4096);
+    const mc_params_t v1 = Variant(1);
+    const mc_params_t v2 = Variant(2);
+    std::vector<uint32_t> unknown = {
+        0x584D434Du /* "MCMX" */, 1u, 5u, 3u | 0xFFFF0000u, 11u, 12u, 21u, 22u, 31u, 32u};
+    unknown.push_back(mc_crc32(unknown.data(), unknown.size() * 4u));
+    const std::vector<uint32_t> rec1 = Record(MC_PARAMS_LAYOUT_VERSION, 4u, Entries(v1));
+    const std::vector<uint32_t> rec2 = Record(MC_PARAMS_LAYOUT_VERSION, 6u, Entries(v2));
+    std::vector<uint32_t> sector = rec1;
+    sector.insert(sector.end(), unknown.begin(), unknown.end());
+    sector.insert(sector.end(), rec2.begin(), rec2.end());
+    std::memcpy(r.Sector(1), sector.data(), sector.size() * 4u);
+
+    mc_params_t p{};
+    ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, v2)) << "the configuration behind the unknown record";
+    EXPECT_EQ(r.store.seq, 6u);
+    const mc_params_t v3 = Variant(3);
+    ASSERT_EQ(mc_cfg_store_save(&r.store, &v3), 0);
+    EXPECT_EQ(r.flash.erases, 0u) << "appended behind the records, no sector switch";
+    ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, v3));
+    EXPECT_EQ(0, std::memcmp(r.Sector(1) + rec1.size() * 4u, unknown.data(), unknown.size() * 4u))
+        << "the unknown record is left as it was";
+
+    // its CRC broken: a cut record, the sector ends there (v1 boots)
+    Rig c(4096);
+    std::vector<uint32_t> cut = sector;
+    cut[rec1.size() + unknown.size() - 1u] ^= 1u;
+    std::memcpy(c.Sector(1), cut.data(), cut.size() * 4u);
+    ASSERT_EQ(c.Boot(&p), MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p, v1));
+}

@@ -14,6 +14,7 @@
 #include "hal_host/file_flash.hpp"
 extern "C" {
 #include "mc_cfg_store.h"
+#include "mc_drive_cog.h"
 #include "mc_params.h"
 }
 
@@ -21,6 +22,19 @@ namespace
 {
 
 using hal_host::FileFlash;
+
+// One boot of the configuration store on the file flash: the flash opened
+// on the file and the store initialised on its two sectors (a simulated
+// power cycle is a second StoreBoot on the same file).
+struct StoreBoot {
+    FileFlash f;
+    mc_cfg_store_t s{};
+    explicit StoreBoot(const std::string &path) : f(path)
+    {
+        const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
+        EXPECT_EQ(mc_cfg_store_init(&s, &sc), 0);
+    }
+};
 
 class FileFlashTest : public ::testing::Test
 {
@@ -165,10 +179,8 @@ TEST_F(FileFlashTest, ConfigStoreKeepsItsRecordAcrossBoots)
 {
     mc_params_t p = mc_params_default;
     {
-        FileFlash f(path_);
-        mc_cfg_store_t s;
-        const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
-        ASSERT_EQ(mc_cfg_store_init(&s, &sc), 0);
+        StoreBoot boot(path_);
+        mc_cfg_store_t &s = boot.s;
         mc_params_t got;
         EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_EMPTY);
         p.speed_max_rad_s = 123.5f;
@@ -179,10 +191,8 @@ TEST_F(FileFlashTest, ConfigStoreKeepsItsRecordAcrossBoots)
         EXPECT_EQ(s.seq, 2u);
     }
     {
-        FileFlash f(path_);
-        mc_cfg_store_t s;
-        const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
-        ASSERT_EQ(mc_cfg_store_init(&s, &sc), 0);
+        StoreBoot boot(path_);
+        mc_cfg_store_t &s = boot.s;
         mc_params_t got;
         EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_STORED);
         EXPECT_EQ(std::memcmp(&got, &p, sizeof p), 0);
@@ -194,13 +204,53 @@ TEST_F(FileFlashTest, ConfigStoreKeepsItsRecordAcrossBoots)
     b[4 * 6] ^= 0x01u;                      // an entry of record 1
     b[4 * (MC_CFG_REC_WORDS + 6)] ^= 0x01u; // the same in record 2
     write_file(b);
-    FileFlash f(path_);
-    mc_cfg_store_t s;
-    const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
-    ASSERT_EQ(mc_cfg_store_init(&s, &sc), 0);
+    StoreBoot boot(path_);
+    mc_cfg_store_t &s = boot.s;
     mc_params_t got;
     EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_CORRUPT);
     EXPECT_EQ(std::memcmp(&got, &mc_params_default, sizeof got), 0);
+}
+
+// The anticogging map on the SIL board's flash: saved once, then enough
+// configuration SAVEs to switch sectors several times (each switch copies
+// the map), and a simulated power cycle (a new FileFlash on the file): the
+// map reads back bit for bit and validates against the same encoder.
+TEST_F(FileFlashTest, AnticoggingMapSurvivesSectorSwitchesAndAPowerCycle)
+{
+    std::vector<float> iq(MC_COG_N);
+    for (uint32_t k = 0; k < MC_COG_N; ++k) {
+        iq[k] = 0.3f * static_cast<float>((k * 29u) % 11u) - 1.5f;
+    }
+    const mc_cog_ident_t id{0u, 8192u, 0u, 7u, 0.5f};
+    mc_cog_map_t map{};
+    ASSERT_EQ(mc_cog_build(&map, iq.data(), MC_COG_N, &id, 5.0f), MC_COG_ST_OK);
+    mc_params_t p = mc_params_default;
+    uint32_t erases = 0u;
+    {
+        StoreBoot boot(path_);
+        mc_cfg_store_t &s = boot.s;
+        mc_params_t got;
+        EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_EMPTY);
+        ASSERT_EQ(mc_cfg_store_save_map(&s, &map, sizeof map), 0);
+        int32_t home = s.home;
+        for (uint32_t i = 0; i < 40u; ++i) {
+            p.speed_max_rad_s = 100.0f + static_cast<float>(i);
+            ASSERT_EQ(mc_cfg_store_save(&s, &p), 0);
+            erases += (s.home != home) ? 1u : 0u;
+            home = s.home;
+        }
+    }
+    // 16 KiB sectors: 15 configuration records beside the map, 17 alone
+    EXPECT_GE(erases, 2u);
+    StoreBoot boot(path_);
+    mc_cfg_store_t &s = boot.s;
+    mc_params_t got;
+    EXPECT_EQ(mc_cfg_store_load(&s, &got), MC_CFG_BOOT_STORED);
+    EXPECT_EQ(got.speed_max_rad_s, 139.0f);
+    mc_cog_map_t back{};
+    ASSERT_EQ(mc_cfg_store_load_map(&s, &back, sizeof back), 0);
+    EXPECT_EQ(std::memcmp(&back, &map, sizeof map), 0);
+    EXPECT_EQ(mc_cog_check(&back, &id), MC_COG_ST_OK);
 }
 
 } // namespace

@@ -1,0 +1,138 @@
+/**
+ * @file mc_drive_cog.c
+ * @brief The anticogging map: see mc_drive_cog.h.
+ */
+#include "mc_drive_cog.h"
+
+#include <stddef.h>
+
+#include "math/mc_math.h"
+#include "config/mc_crc32.h"
+
+#define COG_TWO_PI    6.28318531f
+#define COG_PI        3.14159265f
+#define COG_BIN_PER_R ((float)MC_COG_N / COG_TWO_PI)
+
+_Static_assert((MC_COG_N & (MC_COG_N - 1u)) == 0u, "MC_COG_N must be a power of two");
+_Static_assert(offsetof(mc_cog_map_t, crc) == (sizeof(mc_cog_map_t) - 4u),
+               "the map has no padding: the CRC is its last word");
+_Static_assert((sizeof(mc_cog_map_t) % 8u) == 0u, "a whole number of the store's 8-byte pairs");
+
+uint32_t mc_cog_crc(const mc_cog_map_t *map)
+{
+    return mc_crc32(map, offsetof(mc_cog_map_t, crc));
+}
+
+static bool ident_valid(const mc_cog_ident_t *id)
+{
+    return (id != NULL) && (id->enc_cpr > 0u) && (id->enc_reversed <= 1u) &&
+           (id->pole_pairs >= 1u) && mc_isfinite_f32(id->enc_offset_rad) &&
+           (mc_abs_f32(id->enc_offset_rad) <= 4.0f * COG_PI);
+}
+
+/* Round to the nearest integer, halves away from zero (|x| <= 32767.5). */
+static int16_t round_q15(float x)
+{
+    const int32_t r = (int32_t)((x >= 0.0f) ? (x + 0.5f) : (x - 0.5f));
+    return (int16_t)((r > 32767) ? 32767 : ((r < -32767) ? -32767 : r));
+}
+
+mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
+                             const mc_cog_ident_t *ident, float i_bound_a)
+{
+    float sum = 0.0f;
+    float mean;
+    float fs = 0.0f;
+    float inv;
+    if ((map == NULL) || (i_q_a == NULL) || (n != MC_COG_N) || !ident_valid(ident) ||
+        !mc_isfinite_f32(i_bound_a) || !(i_bound_a > 0.0f)) {
+        return MC_COG_ST_ARG;
+    }
+    for (uint32_t k = 0u; k < MC_COG_N; ++k) {
+        if (!mc_isfinite_f32(i_q_a[k]) || (mc_abs_f32(i_q_a[k]) > 1.0e6f)) {
+            return MC_COG_ST_NONFINITE; /* 1e6 A: the sum below stays finite */
+        }
+        sum += i_q_a[k];
+    }
+    mean = sum / (float)MC_COG_N;
+    for (uint32_t k = 0u; k < MC_COG_N; ++k) {
+        const float v = mc_abs_f32(i_q_a[k] - mean);
+        fs = (v > fs) ? v : fs;
+    }
+    if (fs > i_bound_a) {
+        return MC_COG_ST_AMPLITUDE;
+    }
+    map->magic = MC_COG_MAGIC;
+    map->format = MC_COG_FORMAT | (MC_COG_N << 16);
+    map->ident = *ident;
+    map->scale_a = fs / 32767.0f;
+    map->reserved = 0u;
+    inv = (fs > 0.0f) ? (32767.0f / fs) : 0.0f;
+    for (uint32_t k = 0u; k < MC_COG_N; ++k) {
+        map->q[k] = round_q15((i_q_a[k] - mean) * inv);
+    }
+    map->crc = mc_cog_crc(map);
+    return MC_COG_ST_OK;
+}
+
+mc_cog_status_t mc_cog_check(const mc_cog_map_t *map, const mc_cog_ident_t *ident)
+{
+    float d;
+    if (map == NULL) {
+        return MC_COG_ST_EMPTY;
+    }
+    if (!ident_valid(ident)) {
+        return MC_COG_ST_ENCODER; /* the drive has no encoder a map fits */
+    }
+    if ((map->magic != MC_COG_MAGIC) || (map->format != (MC_COG_FORMAT | (MC_COG_N << 16)))) {
+        return MC_COG_ST_LAYOUT;
+    }
+    if (mc_cog_crc(map) != map->crc) {
+        return MC_COG_ST_CRC;
+    }
+    if (!mc_isfinite_f32(map->scale_a) || !(map->scale_a >= 0.0f) || !ident_valid(&map->ident)) {
+        return MC_COG_ST_LAYOUT;
+    }
+    if ((map->ident.enc_type != ident->enc_type) || (map->ident.enc_cpr != ident->enc_cpr) ||
+        (map->ident.enc_reversed != ident->enc_reversed) ||
+        (map->ident.pole_pairs != ident->pole_pairs)) {
+        return MC_COG_ST_ENCODER;
+    }
+    /* both offsets within +-4 pi (ident_valid): the difference within
+     * +-8 pi, wrapped into (-pi, pi] in at most four turns */
+    d = map->ident.enc_offset_rad - ident->enc_offset_rad;
+    for (uint32_t i = 0u; (i < 4u) && (d > COG_PI); ++i) {
+        d -= COG_TWO_PI;
+    }
+    for (uint32_t i = 0u; (i < 4u) && (d <= -COG_PI); ++i) {
+        d += COG_TWO_PI;
+    }
+    if (mc_abs_f32(d) / (float)ident->pole_pairs > MC_COG_OFFSET_TOL_M_RAD) {
+        return MC_COG_ST_ENCODER;
+    }
+    return MC_COG_ST_OK;
+}
+
+float mc_cog_ff_a(const mc_cog_map_t *map, float theta_m_rad)
+{
+    float x = theta_m_rad * COG_BIN_PER_R;
+    int32_t i;
+    uint32_t k;
+    float f;
+    float a;
+    float b;
+    if (!(x >= 0.0f) || !(x < (float)MC_COG_N)) {
+        /* off [0, 2 pi): the drive's angle never is; wrap any finite one */
+        if (!mc_isfinite_f32(x) || (mc_abs_f32(x) > 1.0e9f)) {
+            return 0.0f;
+        }
+        x -= (float)MC_COG_N * (float)(int32_t)(x * (1.0f / (float)MC_COG_N));
+        x = (x < 0.0f) ? (x + (float)MC_COG_N) : x;
+    }
+    i = (int32_t)x;
+    f = x - (float)i;
+    k = (uint32_t)i & (MC_COG_N - 1u);
+    a = (float)map->q[k];
+    b = (float)map->q[(k + 1u) & (MC_COG_N - 1u)];
+    return map->scale_a * (a + (f * (b - a)));
+}

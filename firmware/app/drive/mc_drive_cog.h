@@ -1,0 +1,119 @@
+/**
+ * @file mc_drive_cog.h
+ * @brief The anticogging map: the q-axis current that cancels the motor's
+ *        cogging torque, per mechanical angle, and its feed-forward lookup.
+ *
+ * Map (mc_cog_map_t, 2088 bytes, 32-bit words with the entries packed two
+ * per word, little-endian, CRC last):
+ *   magic    0x474F434D ("MCOG")
+ *   format   MC_COG_FORMAT (bits 0..15) | MC_COG_N (bits 16..31)
+ *   the encoder identity it was measured with (mc_cog_ident_t):
+ *            encoder_type, encoder_cpr, encoder_reversed, pole_pairs,
+ *            encoder_offset_rad (IEEE 754 single)
+ *   scale_a  amperes per entry unit (IEEE 754 single, >= 0): entry k is
+ *            q[k] * scale_a, the current at mechanical angle k 2 pi / N
+ *   q[N]     N = 1024 signed 16-bit entries (q15 of the full scale
+ *            32767 scale_a, the largest |entry| of the map)
+ *   reserved 0 (the size a whole number of 8-byte pairs)
+ *   crc      CRC-32 (zlib, mc_crc32) of every byte before it
+ *
+ * N = 1024 over one mechanical turn: a cogging harmonic of order k (the
+ * least common multiple of slots and poles and its multiples, e.g. 12
+ * slots / 14 poles: 84) has N / k >= 12 bins per period up to k = 85, where
+ * linear interpolation's error is at most (2 pi k / N)^2 / 8 of its
+ * amplitude (the second derivative's bound times h^2 / 8): 3.4 % at k = 84,
+ * 0.07 % at k = 12. q15 adds half an LSB of the full scale (1.5e-5).
+ *
+ * Build (mc_cog_build): from N q-axis currents [A], one per mechanical-angle
+ * bin k (angle k 2 pi / N, in the rotor's positive direction: what the
+ * drive's theta_m_rad reads), as a calibration measures them. The mean is
+ * removed (a constant current is friction or load, not cogging); refused:
+ * a non-finite entry (MC_COG_ST_NONFINITE), an entry whose |value - mean|
+ * exceeds i_bound_a (MC_COG_ST_AMPLITUDE: the caller passes the share of the
+ * current limit a feed-forward may take), an identity or bound that is not
+ * valid (MC_COG_ST_ARG). On refusal *map is not changed.
+ *
+ * Validate (mc_cog_check): magic, format or N of another layout
+ * (MC_COG_ST_LAYOUT), CRC (MC_COG_ST_CRC), scale not finite or negative
+ * (MC_COG_ST_LAYOUT), another encoder (MC_COG_ST_ENCODER): the type, counts
+ * per turn, direction or pole pairs differ, or the encoder offset moved by
+ * more than MC_COG_OFFSET_TOL_M_RAD mechanical (half a bin: a recommission
+ * measures the same mounting within it; a remounted encoder moves its
+ * zero, and the map would cancel the cogging at the wrong angle), or the
+ * drive's own identity is not one a map fits (no encoder: encoder_cpr 0).
+ *
+ * Lookup (mc_cog_ff_a): linear interpolation between the two bins around
+ * theta_m_rad, bin N-1 to bin 0 across 2 pi; any finite angle (wrapped);
+ * a non-finite one gives 0. About 20 instructions, no division.
+ */
+#ifndef MC_DRIVE_COG_H
+#define MC_DRIVE_COG_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MC_COG_MAGIC  0x474F434Du /**< "MCOG" in memory order */
+#define MC_COG_FORMAT 1u
+#define MC_COG_N      1024u /**< entries per mechanical turn (a power of two) */
+/** Largest encoder-offset move [rad mechanical] a map survives: half a bin. */
+#define MC_COG_OFFSET_TOL_M_RAD (3.14159265f / (float)MC_COG_N)
+
+/** Map status (the readonly parameter cog_status). */
+typedef enum {
+    MC_COG_ST_OK = 0,        /**< a valid map for this encoder */
+    MC_COG_ST_EMPTY = 1,     /**< no map loaded (none stored) */
+    MC_COG_ST_LAYOUT = 2,    /**< magic, format, N or scale of another layout */
+    MC_COG_ST_CRC = 3,       /**< the CRC does not match */
+    MC_COG_ST_ENCODER = 4,   /**< measured with another encoder / offset / pole pairs */
+    MC_COG_ST_NONFINITE = 5, /**< build: an entry is NaN or infinite */
+    MC_COG_ST_AMPLITUDE = 6, /**< build: |entry - mean| beyond the bound */
+    MC_COG_ST_ARG = 7,       /**< NULL, a bad bound or identity, a wrong count */
+    MC_COG_ST_FLASH = 8,     /**< the stored map could not be read or written */
+} mc_cog_status_t;
+
+/** The encoder (and motor) a map was measured with. */
+typedef struct {
+    uint32_t enc_type;     /**< encoder_type parameter */
+    uint32_t enc_cpr;      /**< encoder_cpr, > 0 */
+    uint32_t enc_reversed; /**< encoder_reversed, 0/1 */
+    uint32_t pole_pairs;   /**< >= 1 */
+    float enc_offset_rad;  /**< encoder_offset_rad (electrical) */
+} mc_cog_ident_t;
+
+typedef struct {
+    uint32_t magic;
+    uint32_t format; /**< MC_COG_FORMAT | MC_COG_N << 16 */
+    mc_cog_ident_t ident;
+    float scale_a;       /**< A per unit of q */
+    uint32_t reserved;   /**< 0: the map is a whole number of 8-byte pairs (the
+                              store's record unit) */
+    int16_t q[MC_COG_N]; /**< the entries, bin k at k 2 pi / N mechanical */
+    uint32_t crc;        /**< CRC-32 of the bytes above */
+} mc_cog_map_t;
+
+/** Words of a map (the flash record's payload). */
+#define MC_COG_MAP_WORDS ((uint32_t)(sizeof(mc_cog_map_t) / 4u))
+
+/** Build *map from n = MC_COG_N currents [A] (above). */
+mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
+                             const mc_cog_ident_t *ident, float i_bound_a);
+
+/** Validate a map against the drive's encoder (above). NULL map: EMPTY. */
+mc_cog_status_t mc_cog_check(const mc_cog_map_t *map, const mc_cog_ident_t *ident);
+
+/** The CRC a map must carry (over every byte before crc). */
+uint32_t mc_cog_crc(const mc_cog_map_t *map);
+
+/** The feed-forward current at the mechanical angle [A] (above). The map
+ *  must have passed mc_cog_check. */
+float mc_cog_ff_a(const mc_cog_map_t *map, float theta_m_rad);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MC_DRIVE_COG_H */

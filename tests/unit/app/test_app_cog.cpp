@@ -1,0 +1,167 @@
+// The anticogging feed-forward in the drive (mc_drive_attach_cog,
+// mc_drive_cfg_t.anticogging, mc_drive_ctrl_t.cogging_ff): added once, to
+// the q reference of a speed or position law giving current references, at
+// the encoder's mechanical angle, before the current limit; nowhere else.
+// The law is a stub answering fixed references.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "app_test_fixture.h"
+
+namespace apptest
+{
+namespace
+{
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct FixedLaw {
+    mc_drive_out_t out{};
+};
+
+uint32_t fixed_fast(void *ctx, const mc_drive_meas_t *, mc_drive_out_t *out)
+{
+    *out = static_cast<FixedLaw *>(ctx)->out;
+    return 0u;
+}
+
+class DriveCogFf : public AppDrive
+{
+  protected:
+    void SetUp() override
+    {
+        AppDrive::SetUp();
+        // 0.5 cos(theta) + 0.25 sin(3 theta) [A] at the map's bins
+        std::vector<float> v(MC_COG_N);
+        for (uint32_t k = 0; k < MC_COG_N; ++k) {
+            const double th = 2.0 * kPi * k / MC_COG_N;
+            v[k] = static_cast<float>(0.5 * std::cos(th) + 0.25 * std::sin(3.0 * th));
+        }
+        mc_cog_ident_t id{};
+        id.enc_cpr = fcfg.encoder_counts_per_rev;
+        id.pole_pairs = kPolePairs;
+        id.enc_offset_rad = kOffset;
+        ASSERT_EQ(MC_COG_ST_OK, mc_cog_build(&map, v.data(), MC_COG_N, &id, 10.0f));
+        law.out.iq_ref_a = 5.0f;
+        law.out.theta_e_rad = kOffset;
+        law.out.rotor_frame = true;
+        ctrl = mc_drive_ctrl_t{};
+        ctrl.outputs = MC_DRIVE_OUT_CURRENT;
+        ctrl.needs_encoder = true;
+        ctrl.fast = fixed_fast;
+        ctrl.ctx = &law;
+        ctrl.cogging_ff = true;
+        cfg.anticogging = true;
+    }
+
+    // Init, the law (and the map) attached, CTRL, the rotor at count, one
+    // fast step.
+    void RunAt(uint32_t count, bool attach_map = true)
+    {
+        InitDrive();
+        ASSERT_EQ(0, mc_drive_attach_ctrl(&d, &ctrl));
+        ASSERT_EQ(0, mc_drive_attach_cog(&d, attach_map ? &map : nullptr));
+        ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL));
+        Step(count);
+    }
+
+    void Step(uint32_t count)
+    {
+        ASSERT_EQ(0, mc_hal_fake_encoder_set(&fake, count, MC_HAL_ENCODER_FLAG_VALID));
+        GoodSample();
+        (void)mc_drive_fast_step(&d);
+        ASSERT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
+    }
+
+    mc_cog_map_t map{};
+    FixedLaw law;
+    mc_drive_ctrl_t ctrl{};
+};
+
+} // namespace
+
+// At count 0 (theta_m 0) the map gives 0.5 A, so the q reference is 5.5 A;
+// one count on, the lookup at that angle (the same function: exact). The
+// analytic value within q15's half LSB (0.75 A full scale / 65534) and
+// the interpolation bound (2 pi 3 / 1024)^2 / 8 0.25 A + (2 pi / 1024)^2 /
+// 8 0.5 A (1.1e-5 A): 3e-5 A.
+TEST_F(DriveCogFf, AddedToTheLawsQReferenceAtTheMechanicalAngle)
+{
+    RunAt(0u);
+    EXPECT_EQ(MC_DRIVE_MODE_CTRL, d.mode);
+    EXPECT_NEAR(d.tm.cog_ff_a, 0.5f, 3e-5f);
+    EXPECT_EQ(d.tm.iq_ref_a, 5.0f + d.tm.cog_ff_a);
+    EXPECT_EQ(d.tm.id_ref_a, 0.0f); // d untouched
+    Step(1u);
+    const double th = 2.0 * kPi / fcfg.encoder_counts_per_rev;
+    EXPECT_EQ(d.tm.cog_ff_a, mc_cog_ff_a(&map, d.tm.theta_m_rad));
+    EXPECT_NEAR(d.tm.cog_ff_a, 0.5 * std::cos(th) + 0.25 * std::sin(3.0 * th), 3e-5);
+    EXPECT_EQ(d.tm.iq_ref_a, 5.0f + d.tm.cog_ff_a);
+}
+
+// Nothing added: anticogging off (and switched on at run time through the
+// runtime limits), no map, a law without cogging_ff (commissioning, the
+// angle finders), CURRENT mode: the q reference is the law's / the set one,
+// bit for bit.
+TEST_F(DriveCogFf, OnlyWithTheFlagAMapAndASpeedOrPositionLaw)
+{
+    cfg.anticogging = false;
+    RunAt(0u);
+    EXPECT_EQ(d.tm.cog_ff_a, 0.0f);
+    EXPECT_EQ(d.tm.iq_ref_a, 5.0f);
+    mc_drive_cfg_t on = d.cfg;
+    on.anticogging = true;
+    mc_drive_set_runtime_limits(&d, &on);
+    Step(0u);
+    EXPECT_NEAR(d.tm.iq_ref_a, 5.5f, 3e-5f);
+    on.anticogging = false;
+    mc_drive_set_runtime_limits(&d, &on);
+    Step(0u);
+    EXPECT_EQ(d.tm.iq_ref_a, 5.0f);
+
+    cfg.anticogging = true;
+    RunAt(0u, false);
+    EXPECT_EQ(d.tm.iq_ref_a, 5.0f);
+
+    ctrl.cogging_ff = false;
+    RunAt(0u);
+    EXPECT_EQ(d.tm.cog_ff_a, 0.0f);
+    EXPECT_EQ(d.tm.iq_ref_a, 5.0f);
+
+    InitDrive();
+    ASSERT_EQ(0, mc_drive_attach_cog(&d, &map));
+    ASSERT_EQ(0, mc_drive_set_current_ref(&d, 0.0f, 5.0f));
+    ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CURRENT));
+    Step(0u);
+    EXPECT_EQ(MC_DRIVE_MODE_CURRENT, d.mode);
+    EXPECT_EQ(d.tm.iq_ref_a, 5.0f);
+}
+
+// The sum is clamped to the current limit in force, as every reference:
+// the law at the limit less 0.1 A plus 0.5 A is the limit; at minus the
+// limit the feed-forward pulls it inside (-20 + 0.5 A).
+TEST_F(DriveCogFf, TheSumStaysWithinTheCurrentLimit)
+{
+    law.out.iq_ref_a = kIMax - 0.1f;
+    RunAt(0u);
+    EXPECT_EQ(d.tm.iq_ref_a, kIMax);
+    law.out.iq_ref_a = -kIMax;
+    Step(0u);
+    EXPECT_NEAR(d.tm.iq_ref_a, -kIMax + 0.5f, 3e-5f);
+}
+
+// A map needs the encoder its angle comes from.
+TEST_F(DriveCogFf, NoMapWithoutAnEncoder)
+{
+    InitDrive();
+    mc_hal_t no_enc = *hal;
+    no_enc.encoder = nullptr;
+    d.hal = &no_enc;
+    EXPECT_EQ(-ENODEV, mc_drive_attach_cog(&d, &map));
+    EXPECT_EQ(nullptr, d.cog);
+    EXPECT_EQ(0, mc_drive_attach_cog(&d, nullptr));
+}
+
+} // namespace apptest

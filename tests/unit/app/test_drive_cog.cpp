@@ -1,0 +1,196 @@
+// The anticogging map (firmware/app/drive/mc_drive_cog.h): the builder from
+// a calibration's N currents, the validation against the drive's encoder,
+// the interpolated lookup, against analytic values.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+extern "C" {
+#include "mc_drive_cog.h"
+}
+
+namespace
+{
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr uint32_t kN = MC_COG_N;
+
+mc_cog_ident_t ident()
+{
+    mc_cog_ident_t id{};
+    id.enc_type = 0u;
+    id.enc_cpr = 8192u;
+    id.enc_reversed = 0u;
+    id.pole_pairs = 7u;
+    id.enc_offset_rad = 1.25f;
+    return id;
+}
+
+// amp sin(k theta + phase) + mean at the N bins.
+std::vector<float> sinusoid(double amp, uint32_t k, double phase, double mean)
+{
+    std::vector<float> v(kN);
+    for (uint32_t i = 0; i < kN; ++i) {
+        v[i] = static_cast<float>(mean + amp * std::sin(k * (2.0 * kPi * i / kN) + phase));
+    }
+    return v;
+}
+
+mc_cog_map_t built(const std::vector<float> &v, float bound = 10.0f)
+{
+    mc_cog_map_t m{};
+    const mc_cog_ident_t id = ident();
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, bound), MC_COG_ST_OK);
+    return m;
+}
+
+// Largest |lookup - amp sin(k theta + phase)| over 16 points per bin.
+double max_interp_error(const mc_cog_map_t &m, double amp, uint32_t k, double phase)
+{
+    double e = 0.0;
+    for (uint32_t j = 0; j < 16u * kN; ++j) {
+        const double th = 2.0 * kPi * j / (16.0 * kN);
+        const double want = amp * std::sin(k * th + phase);
+        e = std::max(e, std::fabs(mc_cog_ff_a(&m, static_cast<float>(th)) - want));
+    }
+    return e;
+}
+
+} // namespace
+
+// Linear interpolation of a sinusoid of order k at spacing h = 2 pi / N
+// errs by at most amp (k h)^2 / 8 (|f''| <= amp k^2, the remainder h^2/8
+// |f''|); q15 adds half an LSB of the full scale (amp / 32767 / 2) and
+// float arithmetic a few 1e-7 of it: the bound asserted is
+// amp ((k h)^2 / 8 + 1 / 65534 + 1e-6). The error also reaches half the
+// interpolation term for k = 84 (the peak falls between two bins for some
+// phase): the test sees the interpolation, not a lucky grid.
+TEST(DriveCog, InterpolationErrorOfASinusoidWithinTheDerivedBound)
+{
+    const double amp = 0.8;
+    for (const uint32_t k : {1u, 12u, 42u, 84u}) {
+        const double phase = 0.3;
+        const mc_cog_map_t m = built(sinusoid(amp, k, phase, 0.0));
+        const double h = 2.0 * kPi / kN;
+        const double interp = amp * (k * h) * (k * h) / 8.0;
+        const double bound = interp + amp * (1.0 / 65534.0 + 1e-6);
+        const double e = max_interp_error(m, amp, k, phase);
+        EXPECT_LE(e, bound) << "k " << k;
+        if (k == 84u) {
+            EXPECT_GE(e, 0.5 * interp) << "k " << k;
+        }
+    }
+}
+
+// At the bins the map returns the entries (less the mean), to q15: half an
+// LSB of the full scale (0.8 A / 65534) plus float rounding (1e-6 A).
+TEST(DriveCog, TheMeanIsRemovedAndTheBinsAreExact)
+{
+    const std::vector<float> v = sinusoid(0.8, 12u, 0.0, 3.0);
+    const mc_cog_map_t m = built(v);
+    for (uint32_t i = 0; i < kN; i += 37u) {
+        const float th = static_cast<float>(2.0 * kPi * i / kN);
+        EXPECT_NEAR(mc_cog_ff_a(&m, th), v[i] - 3.0, 0.8 / 65534.0 + 1e-6) << i;
+    }
+    EXPECT_NEAR(m.scale_a * 32767.0f, 0.8f, 1e-6f); // the full scale is the largest |entry|
+}
+
+// Between bin N-1 and 2 pi the lookup interpolates to bin 0; any finite
+// angle is wrapped (negative, beyond 2 pi); a non-finite one gives 0.
+// Entries: bin 0 = +1 A, bin N-1 = -1 A, the rest 0: the midpoint is 0 and
+// a quarter of the way from N-1 is -0.5 A (exact in q15: +-32767; float
+// rounding of the angle 1e-3 A at most, an angle error of 1e-3 bins).
+TEST(DriveCog, WrapsAroundTwoPi)
+{
+    std::vector<float> v(kN, 0.0f);
+    v[0] = 1.0f;
+    v[kN - 1u] = -1.0f;
+    const mc_cog_map_t m = built(v);
+    const double h = 2.0 * kPi / kN;
+    EXPECT_NEAR(mc_cog_ff_a(&m, static_cast<float>(2.0 * kPi - 0.5 * h)), 0.0, 1e-3);
+    EXPECT_NEAR(mc_cog_ff_a(&m, static_cast<float>(2.0 * kPi - 0.75 * h)), -0.5, 1e-3);
+    EXPECT_NEAR(mc_cog_ff_a(&m, static_cast<float>(-0.5 * h)), 0.0, 1e-3);
+    EXPECT_NEAR(mc_cog_ff_a(&m, static_cast<float>(-0.25 * h)), 0.5, 1e-3);
+    EXPECT_NEAR(mc_cog_ff_a(&m, static_cast<float>(4.0 * kPi)), 1.0, 1e-3);
+    EXPECT_NEAR(mc_cog_ff_a(&m, static_cast<float>(2.0 * kPi + 0.5 * h)), 0.5, 1e-3);
+    EXPECT_EQ(mc_cog_ff_a(&m, NAN), 0.0f);
+    EXPECT_EQ(mc_cog_ff_a(&m, INFINITY), 0.0f);
+}
+
+// Refusals of the builder, each named, and the map left as it was.
+TEST(DriveCog, BuilderRefusesBadInputAndChangesNothing)
+{
+    const mc_cog_map_t good = built(sinusoid(0.5, 12u, 0.0, 0.0));
+    const mc_cog_ident_t id = ident();
+    mc_cog_map_t m = good;
+    std::vector<float> v = sinusoid(0.5, 12u, 0.0, 0.0);
+    v[100] = NAN;
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f), MC_COG_ST_NONFINITE);
+    v[100] = INFINITY;
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f), MC_COG_ST_NONFINITE);
+    // amplitude: 0.5 A about the mean; a bound of 0.49 A refuses, 0.51 A takes it
+    v = sinusoid(0.5, 12u, 0.0, 2.0);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 0.49f), MC_COG_ST_AMPLITUDE);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN - 1u, &id, 10.0f), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 0.0f), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, NAN), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, nullptr, kN, &id, 10.0f), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, nullptr, 10.0f), MC_COG_ST_ARG);
+    mc_cog_ident_t bad = id;
+    bad.enc_cpr = 0u;
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &bad, 10.0f), MC_COG_ST_ARG);
+    EXPECT_EQ(std::memcmp(&m, &good, sizeof m), 0);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 0.51f), MC_COG_ST_OK);
+}
+
+// Validation: another layout, a broken CRC, another encoder; an offset
+// within half a bin (pi / N mechanical, 7 pole pairs: 0.0215 rad el.) is
+// the same mounting, beyond it is not; the wrap of the offset at 2 pi.
+TEST(DriveCog, ValidationNamesWhatIsWrong)
+{
+    const mc_cog_map_t good = built(sinusoid(0.5, 12u, 0.0, 0.0));
+    const mc_cog_ident_t id = ident();
+    EXPECT_EQ(mc_cog_check(&good, &id), MC_COG_ST_OK);
+    EXPECT_EQ(mc_cog_check(nullptr, &id), MC_COG_ST_EMPTY);
+
+    mc_cog_map_t m = good;
+    m.magic ^= 1u;
+    EXPECT_EQ(mc_cog_check(&m, &id), MC_COG_ST_LAYOUT);
+    m = good;
+    m.format = MC_COG_FORMAT | (512u << 16);
+    EXPECT_EQ(mc_cog_check(&m, &id), MC_COG_ST_LAYOUT);
+    m = good;
+    m.format = (MC_COG_FORMAT + 1u) | (kN << 16);
+    EXPECT_EQ(mc_cog_check(&m, &id), MC_COG_ST_LAYOUT);
+    m = good;
+    m.q[500] ^= 4;
+    EXPECT_EQ(mc_cog_check(&m, &id), MC_COG_ST_CRC);
+    m = good;
+    m.scale_a = -1.0f;
+    m.crc = mc_cog_crc(&m);
+    EXPECT_EQ(mc_cog_check(&m, &id), MC_COG_ST_LAYOUT);
+
+    mc_cog_ident_t other = id;
+    other.enc_cpr = 4096u;
+    EXPECT_EQ(mc_cog_check(&good, &other), MC_COG_ST_ENCODER);
+    other = id;
+    other.enc_type = 1u;
+    EXPECT_EQ(mc_cog_check(&good, &other), MC_COG_ST_ENCODER);
+    other = id;
+    other.enc_reversed = 1u;
+    EXPECT_EQ(mc_cog_check(&good, &other), MC_COG_ST_ENCODER);
+    other = id;
+    other.pole_pairs = 4u;
+    EXPECT_EQ(mc_cog_check(&good, &other), MC_COG_ST_ENCODER);
+    const float tol_e = static_cast<float>(kPi / kN * 7.0); // half a bin, electrical
+    other = id;
+    other.enc_offset_rad = id.enc_offset_rad + 0.9f * tol_e;
+    EXPECT_EQ(mc_cog_check(&good, &other), MC_COG_ST_OK);
+    other.enc_offset_rad = id.enc_offset_rad - 1.1f * tol_e;
+    EXPECT_EQ(mc_cog_check(&good, &other), MC_COG_ST_ENCODER);
+    // 1.25 rad and 1.25 - 2 pi are the same electrical angle
+    other.enc_offset_rad = id.enc_offset_rad - static_cast<float>(2.0 * kPi);
+    EXPECT_EQ(mc_cog_check(&good, &other), MC_COG_ST_OK);
+}
