@@ -304,8 +304,8 @@ def calibrate_cogging(drive, timeout_s=DEFAULT_TIMEOUT_S, save=False, keepalive=
     if phase == "FAILED":
         names = [n for n, _h in fails] or ["UNKNOWN"]
         raise CalibrationFailed("anticogging calibration failed: " + "; ".join(
-            f"{n} ({h})" for n, h in fails) + f" [cog_cal_status 0x{st:06X}]; anticogging is 0, "
-            "the map in use unchanged", status="|".join(names))
+            f"{n} ({h})" for n, h in fails) + f" [cog_cal_status 0x{st:06X}]; anticogging reads 0 "
+            "(no map acts), the drive's map is unchanged", status="|".join(names))
     drive.wait_for(lambda n, v: n == "HEARTBEAT" and not v["enabled"], drive.timeout,
                    "HEARTBEAT showing the drive disabled")
     drive.param("WRITE", P_ANTICOGGING, 1)
