@@ -16,7 +16,8 @@ frames mdtool sent:
 - each named failure of cog_cal_status (NO_OFFSET, ROTOR_BLOCKED, MEAS,
   MAP_IMPLAUSIBLE_AMPLITUDE, MAP_IMPLAUSIBLE_DISAGREE, ABORTED, the
   builder's MAP_IMPLAUSIBLE_AMPLITUDE): exit 5, DISABLE the last frame, no
-  anticogging 1 written, no SAVE;
+  anticogging 1 written, no SAVE; with a map in use before, anticogging 1
+  written back after DISABLE (the drive set 0);
 - the refusals before it runs (FAULT, BUSY, PENDING: exit 4, nothing but
   READs sent; the drive refusing SPEED for an unknown angle: NO_OFFSET,
   exit 4, DISABLE last; APPLY refused: NOT_READY, anticogging written back);
@@ -98,13 +99,14 @@ class FakeDrive(threading.Thread):
     pending | angle_unknown. fail_at: the phase in which a failure is
     reported (NO_OFFSET at once, BLOCKED during the forward turn, ...)."""
 
-    def __init__(self, prefix, script="ok", start="idle", fail_at=2):
+    def __init__(self, prefix, script="ok", start="idle", fail_at=2, anticogging=0):
         super().__init__(daemon=True)
         self.prefix, self.script, self.start_state, self.fail_at = prefix, script, start, fail_at
         self.stop = threading.Event()
         self.seq = 0
-        self.params = {180: 0, 181: 1, 183: 0, 203: 1 if start == "pending" else 0}
-        self.staged_cog = 0
+        self.params = {180: anticogging, 181: 0 if anticogging else 1, 183: 0,
+                       203: 1 if start == "pending" else 0}
+        self.staged_cog = anticogging
         self.cal_t0 = None
         self.cal_end_t = None
 
@@ -299,6 +301,15 @@ def failure_checks(work, env):
               and not any(r[0] == 3 for r in reqs),
               f"{script} (phase {at}): exit {rc} (want 5), named {name}, DISABLE last "
               f"({sent[-1:]}), no anticogging 1, no SAVE: '{err.strip()[-160:]}'")
+    # with a map in use before (anticogging 1): the drive sets 0 on the
+    # failure; mdtool writes 1 back (after DISABLE), still exit 5, no SAVE
+    b = Bus(work, env)
+    rc, _out, err, _dt = b.run("--cogging", "--save", drive=FakeDrive(b.prefix, "fail:0x04", anticogging=1))
+    sent = names(b.prefix)
+    after = param_reqs_after(b.prefix, sent.index("DISABLE") if "DISABLE" in sent else len(sent))
+    check(rc == 5 and "ROTOR_BLOCKED (" in err and "anticogging back to 1 (cog_status 0)" in err
+          and after == [(1, 180, 1), (2, 0, 0), (0, 181, 0)],
+          f"failure with a map in use before: exit {rc}, after DISABLE {after}: '{err.strip()[-120:]}'")
 
 
 def refusal_checks(work, env):

@@ -15,7 +15,8 @@ drive idle and without a fault, no calibration running, no written value
 waiting for APPLY: the APPLY that starts the calibration would apply it
 too), enable SPEED at 0, start, follow cog_cal_status with the keep-alive,
 DISABLE on every way out, and on success set anticogging 1 (APPLY) and
-with `save` SAVE.
+with `save` SAVE; on a named failure the anticogging value of before is
+written back (the drive sets 0; its map is unchanged).
 
 The constants below mirror the firmware's (tests/can/test_mdtool_cogging.py
 checks them against the C headers): they give the calibration's own time
@@ -200,6 +201,7 @@ def _enable_speed_at_rest(drive, keepalive):
                 raise Refused(f"FAULT: the drive faulted at enable (faults 0x{int(vals['faults']):04X})",
                               status="FAULT")
             if vals["enabled"] and vals["mode"] == "CTRL" and not vals["stopping"]:
+                drive.send("SET_SPEED_REF", omega_ref_rad_s=0.0)  # at rest, as the start asks
                 return
 
 
@@ -286,7 +288,9 @@ def calibrate_cogging(drive, timeout_s=DEFAULT_TIMEOUT_S, save=False, keepalive=
     try:
         enabled = True  # from the first SET_* frame on, DISABLE on the way out
         _enable_speed_at_rest(drive, keepalive)
+        drive.host_heartbeat()  # each request waits for its reply: keep-alive first
         drive.param("WRITE", P_ANTICOGGING, 2)
+        drive.host_heartbeat()
         try:
             drive.param("APPLY")
         except Refused as e:
@@ -301,13 +305,19 @@ def calibrate_cogging(drive, timeout_s=DEFAULT_TIMEOUT_S, save=False, keepalive=
         if enabled:
             drive.disable()
     t_cal = time.monotonic() - t0
-    if phase == "FAILED":
-        names = [n for n, _h in fails] or ["UNKNOWN"]
-        raise CalibrationFailed("anticogging calibration failed: " + "; ".join(
-            f"{n} ({h})" for n, h in fails) + f" [cog_cal_status 0x{st:06X}]; anticogging reads 0 "
-            "(no map acts), the drive's map is unchanged", status="|".join(names))
     drive.wait_for(lambda n, v: n == "HEARTBEAT" and not v["enabled"], drive.timeout,
                    "HEARTBEAT showing the drive disabled")
+    if phase == "FAILED":
+        names = [n for n, _h in fails] or ["UNKNOWN"]
+        # the drive set anticogging 0 and kept its map: the value before, back
+        after = "anticogging reads 0 (no map acts)"
+        if old:
+            drive.param("WRITE", P_ANTICOGGING, old)
+            drive.param("APPLY")
+            after = f"anticogging back to {old} (cog_status {_read(drive, P_COG_STATUS)})"
+        raise CalibrationFailed("anticogging calibration failed: " + "; ".join(
+            f"{n} ({h})" for n, h in fails) + f" [cog_cal_status 0x{st:06X}]; {after}, the drive's "
+            "map is unchanged", status="|".join(names))
     drive.param("WRITE", P_ANTICOGGING, 1)
     drive.param("APPLY")
     cog = _read(drive, P_COG_STATUS)
