@@ -22,6 +22,8 @@ frames mdtool sent:
   READs sent; the drive refusing SPEED for an unknown angle: NO_OFFSET,
   exit 4, DISABLE last; APPLY refused: NOT_READY, anticogging written back);
 - a calibration that never ends: CAL_TIMEOUT, exit 3, DISABLE last;
+- READs of cog_cal_status left unanswered: two in a row are sent again
+  (the run ends 0), four in a row exit 3 with DISABLE last;
 - replies that are not the drive's answer: PARAM_REPLYs of another node,
   for another parameter and of a wrong length are ignored (the run still
   ends on the drive's own DONE, not before), a cog_cal_status no drive
@@ -109,6 +111,7 @@ class FakeDrive(threading.Thread):
         self.staged_cog = anticogging
         self.cal_t0 = None
         self.cal_end_t = None
+        self.reads_183 = 0  # READs of cog_cal_status since the APPLY
 
     def emit(self, name, node=NODE, **vals):
         m = db.get_message_by_name(name)
@@ -148,6 +151,13 @@ class FakeDrive(threading.Thread):
 
     def on_param(self, op, pid, value, now, enabled, control):
         if op == 0:  # READ
+            if pid == 183 and self.cal_t0 is not None:
+                self.reads_183 += 1
+                # drop: the 2nd and 3rd unanswered (a lost frame, a request
+                # not served); mute: none answered after the 2nd
+                if (self.script == "drop" and self.reads_183 in (2, 3)) or \
+                        (self.script == "mute" and self.reads_183 >= 2):
+                    return
             if pid not in self.params:
                 self.reply(op, pid, status=1)
                 return
@@ -368,6 +378,18 @@ def timeout_and_foreign_checks(work, env):
     check(rc == 0 and dt is not None and dt >= total and "map in use" in out,
           f"foreign replies ignored: exit {rc}, APPLY to DISABLE {dt} s (the schedule takes {total:.2f} s): "
           f"'{err.strip()[-160:]}'")
+    b = Bus(work, env)
+    d = FakeDrive(b.prefix, "drop")
+    rc, out, err, _dt = b.run("--cogging", drive=d)
+    check(rc == 0 and "map in use" in out and d.reads_183 >= 4,
+          f"two READs unanswered in a row: sent again, exit {rc} ({d.reads_183} READs): '{err.strip()[-120:]}'")
+    b = Bus(work, env)
+    d = FakeDrive(b.prefix, "mute")
+    rc, _out, err, _dt = b.run("--cogging", "--timeout", "0.3", drive=d)
+    check(rc == 3 and "no PARAM_REPLY to 4 READs of cog_cal_status" in err and d.reads_183 == 5
+          and names(b.prefix)[-1:] == ["DISABLE"],
+          f"the drive falls silent: exit {rc} (want 3) after {d.reads_183} READs (1 answered, 4 not), "
+          f"DISABLE last: '{err.strip()[-120:]}'")
     b = Bus(work, env)
     rc, _out, err, _dt = b.run("--cogging", drive=FakeDrive(b.prefix, "malformed"))
     check(rc == 1 and "is not a value the drive sends" in err and names(b.prefix)[-1:] == ["DISABLE"],

@@ -205,21 +205,36 @@ def _enable_speed_at_rest(drive, keepalive):
                 return
 
 
+#: READs of cog_cal_status left unanswered in a row before NoReply: a frame
+#: lost on the bus, or a request the drive did not serve (its one held reply
+#: slot busy: LIMITED) must not end a run of minutes; four in a row is a
+#: drive that is gone
+POLL_MISSES = 4
+
+
 class _Poller:
     """cog_cal_status read without blocking the keep-alive: one READ out at a
-    time, its reply taken from the frames the follow loop decodes."""
+    time, its reply taken from the frames the follow loop decodes; a READ
+    unanswered within the reply timeout is sent again, up to POLL_MISSES in
+    a row."""
 
     def __init__(self, drive, period):
         self.drive, self.period = drive, period
         self.t_sent = None
         self.t_next = 0.0
+        self.misses = 0
 
     def tick(self, now):
         if self.t_sent is not None:
-            if now - self.t_sent > self.drive.timeout:
-                raise NoReply(f"no PARAM_REPLY to READ cog_cal_status from node {self.drive.node} "
-                              f"within {self.drive.timeout:g} s")
-        elif now >= self.t_next:
+            if now - self.t_sent <= self.drive.timeout:
+                return
+            self.misses += 1
+            if self.misses >= POLL_MISSES:
+                raise NoReply(f"no PARAM_REPLY to {POLL_MISSES} READs of cog_cal_status in a row from node "
+                              f"{self.drive.node} (each waited {self.drive.timeout:g} s)")
+            self.t_sent = None
+            self.t_next = now
+        if now >= self.t_next:
             self.drive.send("PARAM_REQ", opcode=0, param_id=P_COG_CAL_STATUS, value=0)
             self.t_sent = now
 
@@ -229,7 +244,7 @@ class _Poller:
             return None
         if vals["status"] != "OK":
             raise Refused(f"the drive refused READ cog_cal_status: {vals['status']}", status=vals["status"])
-        self.t_sent, self.t_next = None, now + self.period
+        self.t_sent, self.t_next, self.misses = None, now + self.period, 0
         return int(vals["value"])
 
 
