@@ -20,7 +20,7 @@ source file the table is derived from), how it renders, and the tolerance a
 fresh run may differ by, with its reason.
 
 `write` runs the sources and rewrites the regions (with --figures also the
-committed PNGs). `check` runs them afresh and fails when a region disagrees
+committed PNGs; with --only only the PNGs of those names). `check` runs them afresh and fails when a region disagrees
 with the fresh rendering beyond the figure's tolerance, when a region is
 missing, unknown or duplicated, or when a relative link or a backquoted
 source path in any README.md names nothing (`links` runs only that part).
@@ -1040,6 +1040,95 @@ def _power_limits(ctx, *runs):
                    "peak speed [rad/s]", "verdict"], b_rows))
 
 
+# --- anticogging (issue 35) ------------------------------------------------------------
+# The cogging scenario's speed ripple without the map and with the map the
+# drive calibrates first, on the library's motors with cogging, at 2 % and
+# 10 % of rated speed; the calibration's constants from the firmware's headers.
+COG_MOTORS = [("SK3 6374, VESC 6", "turnigy-sk3-6374-149kv", "vesc6-48v"),
+              ("GM4108, gimbal 24 V", "gimbal-gm4108", "gimbal-24v")]
+COG_FRACS = ("0.02", "0.10")
+COG_RUNS = [(lab, m, b, fr, ac) for lab, m, b in COG_MOTORS for fr in COG_FRACS for ac in ("0", "1")]
+COG_PNG = "cogging-ripple.png"
+
+
+def cog_src(m, b, frac, ac):
+    return mcsim("cogging", f"anticogging={ac}", f"speed_frac={frac}", motor=m, board=b)
+
+
+def cog_srcs():
+    return [cog_src(m, b, fr, ac) for _l, m, b, fr, ac in COG_RUNS]
+
+
+@figure("cogging-ripple", cog_srcs)
+def _cogging_ripple(ctx, *runs):
+    rows = []
+    for i in range(0, len(runs), 2):
+        lab, _m, _b, fr, _ac = COG_RUNS[i]
+        s0, s1 = runs[i]["summary"], runs[i + 1]["summary"]
+        r0, r1 = s0["speed_ripple_pp_rad_s"], s1["speed_ripple_pp_rad_s"]
+        rows.append([lab, f"{100 * float(fr):g} % ({g(s0['speed_target_rad_s'])} rad/s)", g(r0), g(r1),
+                     g(r0 / r1, 2), g(s1["cog_cal_s"], 4)])
+    return (table(["motor, board", "speed (of rated)", "ripple without map [rad/s p-p]",
+                   "with the calibrated map [rad/s p-p]", "without / with", "calibration [s]"], rows) +
+            f"\n\n![cogging-ripple: the peak-to-peak speed ripple without and with the map, per motor "
+            f"and speed](../../../tools/plot/figures/{COG_PNG})")
+
+
+COG_HDRS = {"app": "firmware/app/app/mc_app.h", "comm": "firmware/app/commission/mc_comm_cog.h",
+            "drive": "firmware/app/drive/mc_drive_cog.h"}
+COG_DEFS = {"app": ["MC_APP_COG_CAL_SPEED_RAD_S", "MC_APP_COG_CAL_RAMP_S", "MC_APP_COG_CAL_SETTLE_S",
+                    "MC_APP_COG_BOUND_FRAC", "MC_APP_COG_CAL_AGREE", "MC_APP_COG_CAL_FLOOR_FRAC"],
+            "comm": ["MC_COMM_COG_TIME_FACTOR", "MC_COMM_COG_MARGIN_BINS"], "drive": ["MC_COG_N"]}
+
+
+def c_defines(key):
+    """The numeric #defines COG_DEFS[key] of the header COG_HDRS[key]."""
+    path = COG_HDRS[key]
+
+    def fn(_ctx):
+        text = read_text(os.path.join(ROOT, path))
+        out = {}
+        for n in COG_DEFS[key]:
+            m = re.search(r"#define " + n + r"\s+\(?([0-9.]+(?:[eE][-+]?[0-9]+)?)[uUfF]?", text)
+            if m is None:
+                raise DocError(f"#define {n} not found in {path}")
+            out[n] = float(m.group(1))
+        return out
+    return Src(("defines", path), path, fn)
+
+
+@figure("cogging-cal", [c_defines(k) for k in COG_HDRS], reason="exactly (derived from the headers)")
+def _cogging_cal(ctx, app, comm, drv):
+    w, n, margin = app["MC_APP_COG_CAL_SPEED_RAD_S"], drv["MC_COG_N"], comm["MC_COMM_COG_MARGIN_BINS"]
+    ramp, settle, factor = app["MC_APP_COG_CAL_RAMP_S"], app["MC_APP_COG_CAL_SETTLE_S"], \
+        comm["MC_COMM_COG_TIME_FACTOR"]
+    turn = 2.0 * math.pi * (1.0 + margin / n)
+    nominal = 3.0 * (ramp + settle) + 2.0 * turn / w
+    bound = 3.0 * (ramp + settle) + 2.0 * factor * turn / w
+    sys.path.insert(0, os.path.join(ROOT, "tools", "mdtool", "src"))
+    from mdtool.can import cogging as mdcog
+    if abs(mdcog.BOUND_S - bound) > 1e-9 * bound:
+        raise DocError(f"mdtool's calibration bound {mdcog.BOUND_S} s is not the headers' {bound} s: "
+                       "update tools/mdtool/src/mdtool/can/cogging.py")
+    rows = [["speed of the turns (mechanical)", f"{g(w)} rad/s", "`MC_APP_COG_CAL_SPEED_RAD_S`"],
+            ["angle points (map entries) per turn", f"{n:.0f}, each recording {margin:.0f} more",
+             "`MC_COG_N`, `MC_COMM_COG_MARGIN_BINS`"],
+            ["ramp, then settle, before each turn and after the last", f"{g(ramp)} s + {g(settle)} s",
+             "`MC_APP_COG_CAL_RAMP_S`, `MC_APP_COG_CAL_SETTLE_S`"],
+            ["time, nominal (a turn each way)", f"{g(nominal, 4)} s", ""],
+            ["time bound (each turn within its time times the factor, else ROTOR_BLOCKED)",
+             f"factor {g(factor)}: {g(bound, 4)} s", "`MC_COMM_COG_TIME_FACTOR`"],
+            ["mdtool's longest wait (`--cal-timeout`, default and most)", f"{g(mdcog.DEFAULT_TIMEOUT_S, 4)} s",
+             "the bound plus 10 %"],
+            ["current", "the speed loop's, limited to `i_max_a`", ""],
+            ["largest map entry (else MAP_IMPLAUSIBLE_AMPLITUDE)", f"{g(app['MC_APP_COG_BOUND_FRAC'])} i_max_a",
+             "`MC_APP_COG_BOUND_FRAC`"],
+            ["directions' disagreement (else MAP_IMPLAUSIBLE_DISAGREE)",
+             f"{g(app['MC_APP_COG_CAL_AGREE'])} rms(map) + {g(app['MC_APP_COG_CAL_FLOOR_FRAC'])} i_max_a",
+             "`MC_APP_COG_CAL_AGREE`, `MC_APP_COG_CAL_FLOOR_FRAC`"]]
+    return table(["the calibration", "value", "constant"], rows)
+
+
 # --- static sources: DBC, motor files ---------------------------------------------
 
 @figure("can-protocol", [mc_can("table")], reason="exactly (derived from the DBC)")
@@ -1389,7 +1478,7 @@ def _main(a):
                 changed += 1
                 print(f"wrote gen:{fig.name} in {os.path.relpath(found[fig.name][0], ROOT)}")
         if a.figures:
-            write_figures(ctx)
+            write_figures(ctx, a.only)
         for e in errors + [f"no region for figure {n}" for n in missing] + link_errors:
             print("warning: " + e, file=sys.stderr)
         print(f"{len(figs)} figures, {changed} regions changed")
@@ -1428,13 +1517,25 @@ PNGS = [("pi2d-paper.png", mcsim("pi2d-paper"), ["tools/plot/pi2d_figs.py", "pap
          ["tools/plot/power_figs.py", "thermal"]),
         ("bus-limits.png", [bus_src("odrive-d5065", "odrive-v36-24v", "on"),
                             bus_src("odrive-d5065", "odrive-v36-24v", "off")],
-         ["tools/plot/power_figs.py", "bus"])]
+         ["tools/plot/power_figs.py", "bus"]),
+        (COG_PNG, cog_srcs(), ["tools/plot/cogging_figs.py", "ripple"])]
 
 
-def write_figures(ctx):
+def write_figures(ctx, only=None):
+    """Every PNG, or with --only those whose name (without .png) is listed."""
     dst = os.path.join(ROOT, "tools", "plot", "figures")
     for png, src, cmd in PNGS:
-        if isinstance(src, list):  # several runs, one figure (power_figs.py)
+        if only and png[:-4] not in only:
+            continue
+        if cmd and cmd[1] == "ripple":  # cogging_figs.py: LABEL OFF.json ON.json ... PNG
+            rs = [ctx.get(x) for x in src]
+            args = []
+            for i in range(0, len(rs), 2):
+                lab, _m, _b, fr, _ac = COG_RUNS[i]
+                args += [f"{lab}\n{100 * float(fr):g} % rated",
+                         *[os.path.join(os.path.dirname(r["csv"]), "cogging.json") for r in rs[i:i + 2]]]
+            run([sys.executable, os.path.join(ROOT, cmd[0]), *args, os.path.join(dst, png)])
+        elif isinstance(src, list):  # several runs, one figure (power_figs.py)
             rs = [ctx.get(x) for x in src]
             extra = [g(rs[0]["summary"]["t_winding_limit_c"], 6)] if cmd[1] == "thermal" else []
             run([sys.executable, os.path.join(ROOT, cmd[0]), cmd[1], *[r["csv"] for r in rs],

@@ -5,7 +5,9 @@ Every command that talks to a drive takes --interface/--channel/--bitrate
 file is checked before the first frame is sent. Exit codes: 0 ok,
 2 usage (bad argument, file, or a value refused here before sending),
 3 no reply within the timeout, 4 refused by the drive (its reason printed),
-1 other failures (frames lost while recording, a bus or file error),
+5 `calibrate --cogging`: the calibration ran and failed (its named failure
+printed), 1 other failures (frames lost while recording, a bus or file
+error, a reply no drive sends),
 130 / 143 interrupted by SIGINT (Ctrl-C) / SIGTERM (`run` has sent DISABLE,
 `calibrate` ABORT).
 """
@@ -326,7 +328,37 @@ def cmd_convert(a):
     return 0
 
 
+def cmd_calibrate_cogging(a):
+    """calibrate --cogging (mdtool.can.cogging): exit 0 the map in use (and
+    saved with --save), 3 no reply or CAL_TIMEOUT, 4 refused before it ran
+    (FAULT, BUSY, PENDING, NO_OFFSET, NOT_READY), 5 it ran and failed
+    (NO_OFFSET, ROTOR_BLOCKED, MEAS, MAP_IMPLAUSIBLE_*, ABORTED, ...), 1 a
+    reply no drive sends; DISABLE is sent on every way out once it enabled."""
+    from .cogging import BOUND_S, COG_N, NOMINAL_S, PHASE_TEXT, calibrate_cogging
+    given = [o for o, v in (("--i-test", a.i_test), ("--v-test-max", a.v_test_max),
+                            ("--speed-max", a.speed_max), ("--json", a.json)) if v]
+    if given:
+        raise UsageError(f"calibrate --cogging takes no {', '.join(given)} (the commissioning's "
+                         "options); nothing sent")
+    shown = {}
+
+    def progress(phase, prog):  # one line per change of phase or percentage
+        line = (f"  {PHASE_TEXT[phase]:<13} {prog.percent:>3} %  angle points "
+                f"{prog.done[0]:>4}/{COG_N} forward, {prog.done[1]:>4}/{COG_N} back")
+        if not a.quiet and shown.get("line") != line:
+            shown["line"] = line
+            print(line, flush=True)
+    if not a.quiet:
+        print(f"anticogging calibration: a turn forward and one back, about {NOMINAL_S:.0f} s "
+              f"(gives up after {a.cal_timeout:.0f} s; its own bound {BOUND_S:.0f} s)", flush=True)
+    with _Session(a) as s:
+        calibrate_cogging(s.drive, a.cal_timeout, save=a.save, on_progress=progress)
+    return 0
+
+
 def cmd_calibrate(a):
+    if a.cogging:
+        return cmd_calibrate_cogging(a)
     from .calibrate import ITEMS, calibrate, check_failed, rows
     from .errors import Refused
     from .params import fmt_value, from_raw
@@ -518,8 +550,17 @@ def add_parsers(sub):
     p.add_argument("dst")
     p.set_defaults(fn=cmd_convert)
 
+    from .cogging import DEFAULT_TIMEOUT_S
     p = sub.add_parser("calibrate", help="commission a motor: measure R, Ld, Lq, flux, pole pairs, "
-                       "encoder offset and direction, current-sensor offsets; --save stores them")
+                       "encoder offset and direction, current-sensor offsets; --save stores them. "
+                       "--cogging: the anticogging map instead")
+    p.add_argument("--cogging", action="store_true",
+                   help="calibrate the anticogging map (anticogging 2; the drive turns once each way "
+                        "in SPEED), then use it (anticogging 1); --save stores it")
+    p.add_argument("--cal-timeout", type=bounded(0.0, DEFAULT_TIMEOUT_S, low_open=True),
+                   default=DEFAULT_TIMEOUT_S,
+                   help=f"--cogging: give up after this long [s], (0, {DEFAULT_TIMEOUT_S:.1f}] (default: "
+                        "the calibration's own time bound plus 10 %%)")
     p.add_argument("--i-test", type=float, default=0.0, help="test current [A] (0: the drive's default)")
     p.add_argument("--v-test-max", type=float, default=0.0,
                    help="largest test voltage [V] (0: the drive's default)")
