@@ -709,7 +709,8 @@ static float cog_ff(mc_drive_t *d, const mc_drive_meas_t *m)
 {
     float ff = 0.0f;
     if (d->cfg.anticogging && (d->cog != NULL) && d->ctrl->cogging_ff && m->have_encoder) {
-        ff = mc_cog_ff_a(d->cog, m->theta_m_rad);
+        ff = mc_cog_ff_adv_a(d->cog, m->theta_m_rad, m->omega_m_rad_s, 1.5f * d->cfg.foc.dt_s,
+                             d->cfg.foc.lq_h / d->foc.pi_q.kp);
     }
     d->tm.cog_ff_a = ff;
     return ff;

@@ -37,6 +37,41 @@ static int16_t round_q15(float x)
     return (int16_t)((r > 32767) ? 32767 : ((r < -32767) ? -32767 : r));
 }
 
+/* The map's orders 1 .. MC_COG_LOW_ORDERS(pole_pairs) (Fourier coefficients
+ * over the N bins, 2 / N sum x_k cos / sin(j k 2 pi / N): exact for these
+ * orders, j < N / 2, on the uniform grid; each angle reduced to an index
+ * mod N before its sine, so none exceeds 2 pi). */
+static void low_orders(const float *x, uint32_t n_low, float *a, float *b)
+{
+    for (uint32_t j = 1u; j <= n_low; ++j) {
+        float sa = 0.0f;
+        float sb = 0.0f;
+        for (uint32_t k = 0u; k < MC_COG_N; ++k) {
+            float sn;
+            float cs;
+            mc_sincos_f32((float)((j * k) & (MC_COG_N - 1u)) / COG_BIN_PER_R, &sn, &cs);
+            sa += x[k] * cs;
+            sb += x[k] * sn;
+        }
+        a[j - 1u] = sa * (2.0f / (float)MC_COG_N);
+        b[j - 1u] = sb * (2.0f / (float)MC_COG_N);
+    }
+}
+
+/* Bin k's current less the mean and the low orders a, b. */
+static float cleaned(const float *x, uint32_t k, float mean, uint32_t n_low, const float *a,
+                     const float *b)
+{
+    float v = x[k] - mean;
+    for (uint32_t j = 1u; j <= n_low; ++j) {
+        float sn;
+        float cs;
+        mc_sincos_f32((float)((j * k) & (MC_COG_N - 1u)) / COG_BIN_PER_R, &sn, &cs);
+        v -= (a[j - 1u] * cs) + (b[j - 1u] * sn);
+    }
+    return v;
+}
+
 mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
                              const mc_cog_ident_t *ident, float i_bound_a)
 {
@@ -44,6 +79,9 @@ mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
     float mean;
     float fs = 0.0f;
     float inv;
+    uint32_t n_low;
+    float a[MC_COG_LOW_MAX];
+    float b[MC_COG_LOW_MAX];
     if ((map == NULL) || (i_q_a == NULL) || (n != MC_COG_N) || !ident_valid(ident) ||
         !mc_isfinite_f32(i_bound_a) || !(i_bound_a > 0.0f)) {
         return MC_COG_ST_ARG;
@@ -55,8 +93,10 @@ mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
         sum += i_q_a[k];
     }
     mean = sum / (float)MC_COG_N;
+    n_low = MC_COG_LOW_ORDERS(ident->pole_pairs);
+    low_orders(i_q_a, n_low, a, b);
     for (uint32_t k = 0u; k < MC_COG_N; ++k) {
-        const float v = mc_abs_f32(i_q_a[k] - mean);
+        const float v = mc_abs_f32(cleaned(i_q_a, k, mean, n_low, a, b));
         fs = (v > fs) ? v : fs;
     }
     if (fs > i_bound_a) {
@@ -69,7 +109,7 @@ mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
     map->reserved = 0u;
     inv = (fs > 0.0f) ? (32767.0f / fs) : 0.0f;
     for (uint32_t k = 0u; k < MC_COG_N; ++k) {
-        map->q[k] = round_q15((i_q_a[k] - mean) * inv);
+        map->q[k] = round_q15(cleaned(i_q_a, k, mean, n_low, a, b) * inv);
     }
     map->crc = mc_cog_crc(map);
     return MC_COG_ST_OK;
@@ -135,4 +175,14 @@ float mc_cog_ff_a(const mc_cog_map_t *map, float theta_m_rad)
     a = (float)map->q[k];
     b = (float)map->q[(k + 1u) & (MC_COG_N - 1u)];
     return map->scale_a * (a + (f * (b - a)));
+}
+
+float mc_cog_ff_adv_a(const mc_cog_map_t *map, float theta_m_rad, float rate_rad_s, float lead_s,
+                      float tau_s)
+{
+    const float th = theta_m_rad + (rate_rad_s * lead_s);
+    const float h = 1.0f / COG_BIN_PER_R;
+    const float i0 = mc_cog_ff_a(map, th - (0.5f * h));
+    const float i1 = mc_cog_ff_a(map, th + (0.5f * h));
+    return (0.5f * (i0 + i1)) + (tau_s * rate_rad_s * (i1 - i0) * COG_BIN_PER_R);
 }

@@ -59,6 +59,11 @@ extern "C" {
 #define MC_COG_MAGIC  0x474F434Du /**< "MCOG" in memory order */
 #define MC_COG_FORMAT 1u
 #define MC_COG_N      1024u /**< entries per mechanical turn (a power of two) */
+/** Most low orders the builder removes (2 p - 1 for up to 32 pole pairs). */
+#define MC_COG_LOW_MAX 63u
+/** The orders the builder removes: 1 .. 2 p - 1, at most MC_COG_LOW_MAX. */
+#define MC_COG_LOW_ORDERS(pp) \
+    (((2u * (pp)) - 1u) < MC_COG_LOW_MAX ? ((2u * (pp)) - 1u) : MC_COG_LOW_MAX)
 /** Largest encoder-offset move [rad mechanical] a map survives: half a bin. */
 #define MC_COG_OFFSET_TOL_M_RAD (3.14159265f / (float)MC_COG_N)
 
@@ -111,6 +116,9 @@ uint32_t mc_cog_crc(const mc_cog_map_t *map);
 /** The feed-forward current at the mechanical angle [A] (above). The map
  *  must have passed mc_cog_check. */
 float mc_cog_ff_a(const mc_cog_map_t *map, float theta_m_rad);
+
+float mc_cog_ff_adv_a(const mc_cog_map_t *map, float theta_m_rad, float rate_rad_s, float lead_s,
+                      float tau_s);
 
 #ifdef __cplusplus
 }
