@@ -21,9 +21,12 @@ case "$target" in
     while IFS= read -r f; do
       o="$work/obj-$target/$(echo "$f" | tr '/' '_').o"
       "$CC" "${FLAGS[@]/-fsanitize=fuzzer,/-fsanitize=fuzzer-no-link,}" -std=c11 \
-        -I firmware/kernels -I firmware/app -I firmware/app/drive -I firmware/app/ctrl -I firmware/app/can -I hal/include -I hal/fake -c "$f" -o "$o"
+        -I firmware/kernels -I firmware/app -I firmware/app/config -I firmware/app/drive -I firmware/app/ctrl -I firmware/app/can -I hal/include -I hal/fake -c "$f" -o "$o"
       objs+=("$o")
-    done < <(find firmware/kernels -name '*.c' | sort; find firmware/app/drive -name '*.c' | sort; find hal/fake -name '*.c' | sort)
+    # the whole drive folder, and the one file of config/ it links (the
+    # anticogging map's CRC)
+    done < <(find firmware/kernels -name '*.c' | sort; find firmware/app/drive -name '*.c' | sort
+             echo firmware/app/config/mc_crc32.c; find hal/fake -name '*.c' | sort)
     "$CXX" "${FLAGS[@]}" -std=c++17 -I firmware/kernels -I firmware/app -I firmware/app/drive -I firmware/app/ctrl -I firmware/app/can -I hal/include -I hal/fake \
       tests/fuzz/fuzz_drive_api.cpp "${objs[@]}" -o "$work/fuzz_$target"
     ;;
