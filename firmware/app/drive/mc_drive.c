@@ -624,7 +624,7 @@ typedef struct {
 
 /* The phase currents the references ask for at the angle this step's
  * voltage acts at, for the dead-time compensation while the anticogging
- * feed-forward runs (cur_req_t.cog_on): there the current is a fraction of
+ * feed-forward runs (mc_drive_t.cog_on): there the current is a fraction of
  * an ampere swinging at the cogging frequency, inside the compensation's
  * linear band (cfg.dead_band_a), where sat(i / band) of the measured
  * current, 1.5 periods old and a few ADC counts, leaves a voltage error of
