@@ -410,7 +410,8 @@ static void part_speed_law(void)
     g_sink = (int)mc_ctrl_speed_fast(&g_spd_copy, &g_law_meas, &g_law_out);
 }
 
-/* The anticogging map (mc_drive_cog.h): its lookup alone, and the whole
+/* The anticogging map (mc_drive_cog.h): its lookup alone (as the drive
+ * makes it: the advanced pair, mc_cog_ff_adv_a), and the whole
  * interrupt with the feed-forward on (the sensored run). Any shape: the
  * lookup's cost does not depend on the values. */
 static mc_cog_map_t g_cog;
@@ -418,7 +419,10 @@ static float g_cog_i[MC_COG_N];
 static volatile float g_sinkf;
 static void part_cog(void)
 {
-    g_sinkf = mc_cog_ff_a(&g_cog, D->tm.theta_m_rad);
+    float i_a;
+    g_sinkf =
+        mc_cog_ff_adv_a(&g_cog, D->tm.theta_m_rad, D->tm.omega_m_rad_s, 5.0e-5f, 4.0e-4f, &i_a) +
+        i_a;
 }
 
 static stat_t parts(fn_t fn, bool adc)
@@ -540,7 +544,7 @@ static int cog_costs(const char *name)
     for (uint32_t k = 0u; k < MC_COG_N; k++) {
         g_cog_i[k] = (0.05f * (float)((k * 37u) % 17u)) - 0.4f;
     }
-    if (mc_cog_build(&g_cog, g_cog_i, MC_COG_N, &id, 10.0f) != MC_COG_ST_OK) {
+    if (mc_cog_build(&g_cog, g_cog_i, MC_COG_N, &id, 10.0f, 0u) != MC_COG_ST_OK) {
         return 23;
     }
     stat_t s = parts(part_cog, false);

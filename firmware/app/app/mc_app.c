@@ -495,7 +495,8 @@ mc_cog_status_t mc_app_cog_load(mc_app_t *app, const float *i_q_a, uint32_t n)
     id = cog_ident(p);
     /* the fast step never reads a map half rebuilt */
     (void)mc_drive_attach_cog(app->drive, NULL);
-    st = mc_cog_build(&app->cog_map, i_q_a, n, &id, MC_APP_COG_BOUND_FRAC * p->i_max_a);
+    st = mc_cog_build(&app->cog_map, i_q_a, n, &id, MC_APP_COG_BOUND_FRAC * p->i_max_a,
+                      mc_cog_order(p->cog_slots, p->pole_pairs));
     if (st == MC_COG_ST_OK) {
         app->cog_loaded = true;
         app->cog_load_status = (uint32_t)MC_COG_ST_OK;

@@ -120,6 +120,7 @@ const mc_params_t mc_params_default = {
     .hall_obs_end_e_rad_s = 0.0f,
     .hall_obs_disagree_e_rad = 0.7853982f,
     .anticogging = 0u,
+    .cog_slots = 0u,
 };
 
 #define NO_FIELD MC_PARAM_NO_FIELD
@@ -245,6 +246,7 @@ const mc_param_info_t mc_param_table[MC_PARAM_COUNT] = {
     {180u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_RUNTIME, (uint16_t)offsetof(mc_params_t, anticogging), {.u = 0u}, {.u = 2u}, {.u = 0u}}, /* anticogging */
     {181u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 1u}}, /* cog_status */
     {183u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 16777215u}, {.u = 0u}}, /* cog_cal_status */
+    {184u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_STOPPED, (uint16_t)offsetof(mc_params_t, cog_slots), {.u = 0u}, {.u = 1000u}, {.u = 0u}}, /* cog_slots */
     {200u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_layout_version */
     {201u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 255u}, {.u = 0u}}, /* cfg_store_status */
     {202u, MC_PARAM_TYPE_U32, MC_PARAM_ACCESS_READONLY, NO_FIELD, {.u = 0u}, {.u = 4294967295u}, {.u = 0u}}, /* cfg_store_seq */
@@ -374,6 +376,7 @@ const char *const mc_param_names[MC_PARAM_COUNT] = {
     "anticogging",
     "cog_status",
     "cog_cal_status",
+    "cog_slots",
     "cfg_layout_version",
     "cfg_store_status",
     "cfg_store_seq",
@@ -498,6 +501,7 @@ const char *const mc_param_units[MC_PARAM_COUNT] = {
     "rad/s",
     "rad/s",
     "rad",
+    "",
     "",
     "",
     "",

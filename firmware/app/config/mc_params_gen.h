@@ -13,8 +13,8 @@
 
 #define MC_PARAMS_LAYOUT_VERSION 1u
 
-#define MC_PARAM_COUNT 126u /**< entries of mc_param_table (all parameters) */
-#define MC_PARAM_STORED_COUNT 116u /**< fields of mc_params_t (not readonly) */
+#define MC_PARAM_COUNT 127u /**< entries of mc_param_table (all parameters) */
+#define MC_PARAM_STORED_COUNT 117u /**< fields of mc_params_t (not readonly) */
 
 /* Parameter ids (CAN PARAM_REQ.param_id). */
 #define MC_PARAM_ID_R_OHM 1u
@@ -137,6 +137,7 @@
 #define MC_PARAM_ID_ANTICOGGING 180u
 #define MC_PARAM_ID_COG_STATUS 181u
 #define MC_PARAM_ID_COG_CAL_STATUS 183u
+#define MC_PARAM_ID_COG_SLOTS 184u
 #define MC_PARAM_ID_CFG_LAYOUT_VERSION 200u
 #define MC_PARAM_ID_CFG_STORE_STATUS 201u
 #define MC_PARAM_ID_CFG_STORE_SEQ 202u
@@ -265,12 +266,13 @@
 #define MC_PARAM_IDX_ANTICOGGING 117u
 #define MC_PARAM_IDX_COG_STATUS 118u
 #define MC_PARAM_IDX_COG_CAL_STATUS 119u
-#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 120u
-#define MC_PARAM_IDX_CFG_STORE_STATUS 121u
-#define MC_PARAM_IDX_CFG_STORE_SEQ 122u
-#define MC_PARAM_IDX_CFG_PENDING 123u
-#define MC_PARAM_IDX_LAW_ERROR 124u
-#define MC_PARAM_IDX_ANGLE_ERROR 125u
+#define MC_PARAM_IDX_COG_SLOTS 120u
+#define MC_PARAM_IDX_CFG_LAYOUT_VERSION 121u
+#define MC_PARAM_IDX_CFG_STORE_STATUS 122u
+#define MC_PARAM_IDX_CFG_STORE_SEQ 123u
+#define MC_PARAM_IDX_CFG_PENDING 124u
+#define MC_PARAM_IDX_LAW_ERROR 125u
+#define MC_PARAM_IDX_ANGLE_ERROR 126u
 
 /** The stored configuration: one field per non-readonly parameter. */
 typedef struct {
@@ -390,6 +392,7 @@ typedef struct {
     float hall_obs_end_e_rad_s; /**< Hall + observer hand-over: at and above this |speed| [rad/s el.] the flux observer's angle alone (it runs with its PLL beside the Hall angle while the current loop drives the bridge). 0: hand-over off, the Hall angle as it is. On: needs encoder_type 1 and the observer's motor values (r_ohm, l_h, flux_wb, a non-salient machine) the sensorless law needs; refused MC_PARAMS_ERR_HALL_OBS otherwise. [rad/s] */
     float hall_obs_disagree_e_rad; /**< Hall + observer hand-over: largest |observer - Hall| angle [rad el.] while the observer carries weight, in (0, pi/2]; beyond it the drive falls back to the Hall angle until the next enable and hall_error gets 256 (OBS_DISAGREE). Above the Hall angle's error (below 30 degrees with a measured table), default 45 degrees. [rad] */
     uint32_t anticogging; /**< 1: the anticogging map's current (firmware/app/drive/mc_drive_cog.h) is added to the q reference of the laws that give current references in SPEED and POSITION (the sensored speed law and the position cascade; not the sensorless law, PI2D or their q31 twins, which run no drive current loop or no encoder angle), at the encoder's mechanical angle, before the current limit; only with a valid map (cog_status 0). Not in CURRENT mode nor during commissioning. 2: calibrate (firmware/app/commission/mc_comm_cog.h): APPLY it while the drive is enabled in SPEED mode with its angle known and a speed reference of 0 (else refused), and the drive turns once forward and once back at MC_APP_COG_CAL_SPEED_RAD_S (0.1 rad/s mechanical, about 130 s in all) under its speed loop, builds the map from the q reference per bin and sets anticogging to 1 (or to 0 when refused; cog_cal_status says why); the host then SAVEs the map with the configuration. */
+    uint32_t cog_slots; /**< Stator slots Q, for the anticogging map: the calibration keeps only the orders a slotted motor's cogging has, the multiples of lcm(Q, 2 pole_pairs) per turn below 512 (at most 8 of them), and drops what the calibration's speed loop left at other orders (firmware/app/drive/mc_drive_cog.h, mc_cog_order); 0: unknown, the map keeps every order. Read when the calibration ends (anticogging 2). */
 } mc_params_t;
 
 /** Defaults ("load defaults", and a drive with an empty store). */

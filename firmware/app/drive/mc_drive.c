@@ -617,6 +617,33 @@ typedef struct {
     bool reframe;
 } cur_req_t;
 
+/* The delay from a sample to the middle of the PWM period its voltage acts
+ * in [periods]: one period of computation, half of the zero-order hold
+ * (the same lag mc_law_cfg's ref_lag_s takes). */
+#define MC_DRIVE_COG_DELAY_PERIODS 1.5f
+
+/* The phase currents the references ask for at the angle this step's
+ * voltage acts at, for the dead-time compensation while the anticogging
+ * feed-forward runs (mc_drive_t.cog_on): there the current is a fraction of
+ * an ampere swinging at the cogging frequency, inside the compensation's
+ * linear band (cfg.dead_band_a), where sat(i / band) of the measured
+ * current, 1.5 periods old and a few ADC counts, leaves a voltage error of
+ * (dead time / T) vbus / band times the current's change: an impedance
+ * many times the winding's that the feed-forward cannot push through. The
+ * reference is the current the loop delivers then. */
+static void ref_phases(const mc_drive_t *d, float id, float iq, const cur_req_t *r, float i_x[3])
+{
+    float sn;
+    float cs;
+    float al;
+    float be;
+    const float th =
+        r->theta_e_rad + (r->omega_e_rad_s * MC_DRIVE_COG_DELAY_PERIODS * d->cfg.foc.dt_s);
+    mc_sincos_f32(th, &sn, &cs);
+    mc_inv_park_f32(id, iq, sn, cs, &al, &be);
+    mc_inv_clarke_f32(al, be, &i_x[0], &i_x[1], &i_x[2]);
+}
+
 /* One step of the current loop, the same for CURRENT mode, the stop's P
  * loop and the laws that give current references (mc_drive.h): MTPA /
  * field weakening and the regenerative limit in the rotor's frame, the
@@ -673,8 +700,13 @@ static uint32_t current_loop(mc_drive_t *d, const mc_hal_adc_sample_t *s, float 
     {
         const float meas[3] = {s->ia_a, s->ib_a, ic};
         if (d->cfg.dead_time_comp) {
-            dead_comp(d, meas, &d->tm.foc);
+            float ref[3];
+            if (d->cog_on) {
+                ref_phases(d, id, iq - d->cog_lead_a, r, ref);
+            }
+            dead_comp(d, d->cog_on ? ref : meas, &d->tm.foc);
         }
+        d->cog_on = false; /* one step's: cog_ff sets it again */
         if (mc_hal_pwm3_set_duty(d->hal->pwm3, d->tm.foc.duty_a, d->tm.foc.duty_b,
                                  d->tm.foc.duty_c) != 0) {
             return f | MC_DRIVE_FAULT_PWM;
@@ -708,8 +740,15 @@ static void shape_speed_ref(mc_drive_t *d, float target, float rate)
 static float cog_ff(mc_drive_t *d, const mc_drive_meas_t *m)
 {
     float ff = 0.0f;
+    d->cog_on = false;
+    d->cog_lead_a = 0.0f;
     if (d->cfg.anticogging && (d->cog != NULL) && d->ctrl->cogging_ff && m->have_encoder) {
-        ff = mc_cog_ff_a(d->cog, m->theta_m_rad);
+        float i_a;
+        ff = mc_cog_ff_adv_a(d->cog, m->theta_m_rad, m->omega_m_rad_s,
+                             MC_DRIVE_COG_DELAY_PERIODS * d->cfg.foc.dt_s,
+                             d->cfg.foc.lq_h / d->foc.pi_q.kp, &i_a);
+        d->cog_lead_a = ff - i_a;
+        d->cog_on = true;
     }
     d->tm.cog_ff_a = ff;
     return ff;

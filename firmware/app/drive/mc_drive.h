@@ -615,6 +615,10 @@ typedef struct {
     mc_drive_hallobs_t *hallobs; /**< Hall + observer (mc_drive_hallobs.h), or NULL: the
                                       encoder's angle as it is */
     const mc_cog_map_t *cog;     /**< anticogging map (mc_drive_cog.h), or NULL: none */
+    float cog_lead_a; /**< this step's feed-forward less the current it asks to flow [A]: the
+                           q reference's part that only lifts the loop's lag (0: none) */
+    bool cog_on;      /**< the feed-forward ran this step: the dead-time compensation takes
+                           its currents from the references */
 } mc_drive_t;
 
 /** Validate cfg and the HAL, initialise d (IDLE, PWM disabled). Returns

@@ -37,15 +37,87 @@ static int16_t round_q15(float x)
     return (int16_t)((r > 32767) ? 32767 : ((r < -32767) ? -32767 : r));
 }
 
+uint32_t mc_cog_order(uint32_t slots, uint32_t pole_pairs)
+{
+    uint32_t a = slots;
+    uint32_t b = 2u * pole_pairs;
+    uint32_t l;
+    if ((slots == 0u) || (pole_pairs == 0u) || (slots > 1000u) || (pole_pairs > 1000u)) {
+        return 0u;
+    }
+    while (b != 0u) { /* gcd */
+        const uint32_t r = a % b;
+        a = b;
+        b = r;
+    }
+    l = (slots / a) * 2u * pole_pairs; /* <= 2e6: no overflow */
+    return (l < (MC_COG_N / 2u)) ? l : 0u;
+}
+
+/* The orders the map keeps (mc_cog_keep_count): multiples m order, m =
+ * 1 .. count, below N / 2. */
+uint32_t mc_cog_keep_count(uint32_t order)
+{
+    uint32_t c = 0u;
+    if (order > 0u) {
+        c = (MC_COG_N / 2u - 1u) / order;
+        c = (c > MC_COG_KEEP_MAX) ? MC_COG_KEEP_MAX : c;
+    }
+    return c;
+}
+
+/* Fourier coefficients of the kept orders m order (2 / N sum x_k cos / sin
+ * of the bin's angle: exact on the uniform grid below N / 2; the mean drops
+ * out; each angle reduced to an index mod N before its sine). */
+static void kept_orders(const float *x, uint32_t order, uint32_t count, float *a, float *b)
+{
+    for (uint32_t m = 0u; m < count; ++m) {
+        const uint32_t j = (m + 1u) * order;
+        float sa = 0.0f;
+        float sb = 0.0f;
+        for (uint32_t k = 0u; k < MC_COG_N; ++k) {
+            float sn;
+            float cs;
+            mc_sincos_f32((float)((j * k) & (MC_COG_N - 1u)) / COG_BIN_PER_R, &sn, &cs);
+            sa += x[k] * cs;
+            sb += x[k] * sn;
+        }
+        a[m] = sa * (2.0f / (float)MC_COG_N);
+        b[m] = sb * (2.0f / (float)MC_COG_N);
+    }
+}
+
+/* Bin k of the map before scaling [A]: the kept orders' sum, or (order 0)
+ * the current less the mean. */
+static float kept_value(const float *x, uint32_t k, float mean, uint32_t order, uint32_t count,
+                        const float *a, const float *b)
+{
+    float v = 0.0f;
+    if (order == 0u) {
+        return x[k] - mean;
+    }
+    for (uint32_t m = 0u; m < count; ++m) {
+        const uint32_t j = (m + 1u) * order;
+        float sn;
+        float cs;
+        mc_sincos_f32((float)((j * k) & (MC_COG_N - 1u)) / COG_BIN_PER_R, &sn, &cs);
+        v += (a[m] * cs) + (b[m] * sn);
+    }
+    return v;
+}
+
 mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
-                             const mc_cog_ident_t *ident, float i_bound_a)
+                             const mc_cog_ident_t *ident, float i_bound_a, uint32_t order)
 {
     float sum = 0.0f;
     float mean;
     float fs = 0.0f;
     float inv;
+    const uint32_t count = mc_cog_keep_count(order);
+    float a[MC_COG_KEEP_MAX];
+    float b[MC_COG_KEEP_MAX];
     if ((map == NULL) || (i_q_a == NULL) || (n != MC_COG_N) || !ident_valid(ident) ||
-        !mc_isfinite_f32(i_bound_a) || !(i_bound_a > 0.0f)) {
+        !mc_isfinite_f32(i_bound_a) || !(i_bound_a > 0.0f) || (order >= MC_COG_N / 2u)) {
         return MC_COG_ST_ARG;
     }
     for (uint32_t k = 0u; k < MC_COG_N; ++k) {
@@ -55,8 +127,9 @@ mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
         sum += i_q_a[k];
     }
     mean = sum / (float)MC_COG_N;
+    kept_orders(i_q_a, order, count, a, b);
     for (uint32_t k = 0u; k < MC_COG_N; ++k) {
-        const float v = mc_abs_f32(i_q_a[k] - mean);
+        const float v = mc_abs_f32(kept_value(i_q_a, k, mean, order, count, a, b));
         fs = (v > fs) ? v : fs;
     }
     if (fs > i_bound_a) {
@@ -69,7 +142,7 @@ mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
     map->reserved = 0u;
     inv = (fs > 0.0f) ? (32767.0f / fs) : 0.0f;
     for (uint32_t k = 0u; k < MC_COG_N; ++k) {
-        map->q[k] = round_q15((i_q_a[k] - mean) * inv);
+        map->q[k] = round_q15(kept_value(i_q_a, k, mean, order, count, a, b) * inv);
     }
     map->crc = mc_cog_crc(map);
     return MC_COG_ST_OK;
@@ -135,4 +208,16 @@ float mc_cog_ff_a(const mc_cog_map_t *map, float theta_m_rad)
     a = (float)map->q[k];
     b = (float)map->q[(k + 1u) & (MC_COG_N - 1u)];
     return map->scale_a * (a + (f * (b - a)));
+}
+
+float mc_cog_ff_adv_a(const mc_cog_map_t *map, float theta_m_rad, float rate_rad_s, float lead_s,
+                      float tau_s, float *p_i_a)
+{
+    const float th = theta_m_rad + (rate_rad_s * lead_s);
+    const float h = 1.0f / COG_BIN_PER_R;
+    const float i0 = mc_cog_ff_a(map, th - (0.5f * h));
+    const float i1 = mc_cog_ff_a(map, th + (0.5f * h));
+    const float i = 0.5f * (i0 + i1);
+    *p_i_a = i;
+    return i + (tau_s * rate_rad_s * (i1 - i0) * COG_BIN_PER_R);
 }

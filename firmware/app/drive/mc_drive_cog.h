@@ -27,11 +27,17 @@
  * Build (mc_cog_build): from N q-axis currents [A], one per mechanical-angle
  * bin k (angle k 2 pi / N, in the rotor's positive direction: what the
  * drive's theta_m_rad reads), as a calibration measures them. The mean is
- * removed (a constant current is friction or load, not cogging); refused:
+ * removed (a constant current is friction or load, not cogging); with an
+ * order (mc_cog_order: lcm(slots, 2 p)), only its multiples below N / 2
+ * are kept (at most MC_COG_KEEP_MAX: a projection on their Fourier series,
+ * exact at the bins; order 0 keeps every order): a slotted motor's cogging
+ * has no other, and what the calibration leaves there is its speed loop's
+ * noise, which the feed-forward would inject. Refused:
  * a non-finite entry (MC_COG_ST_NONFINITE), an entry whose |value - mean|
  * exceeds i_bound_a (MC_COG_ST_AMPLITUDE: the caller passes the share of the
  * current limit a feed-forward may take), an identity or bound that is not
- * valid (MC_COG_ST_ARG). On refusal *map is not changed.
+ * valid or an order not below N / 2 (MC_COG_ST_ARG). On refusal *map is
+ * not changed.
  *
  * Validate (mc_cog_check): magic, format or N of another layout
  * (MC_COG_ST_LAYOUT), CRC (MC_COG_ST_CRC), scale not finite or negative
@@ -59,6 +65,9 @@ extern "C" {
 #define MC_COG_MAGIC  0x474F434Du /**< "MCOG" in memory order */
 #define MC_COG_FORMAT 1u
 #define MC_COG_N      1024u /**< entries per mechanical turn (a power of two) */
+/** Most orders a filtered map keeps (mc_cog_keep_count): the cost of a
+ *  build is 3 N sines per kept order. */
+#define MC_COG_KEEP_MAX 8u
 /** Largest encoder-offset move [rad mechanical] a map survives: half a bin. */
 #define MC_COG_OFFSET_TOL_M_RAD (3.14159265f / (float)MC_COG_N)
 
@@ -100,7 +109,17 @@ typedef struct {
 
 /** Build *map from n = MC_COG_N currents [A] (above). */
 mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
-                             const mc_cog_ident_t *ident, float i_bound_a);
+                             const mc_cog_ident_t *ident, float i_bound_a, uint32_t order);
+
+/** The order whose multiples a slotted motor's cogging has:
+ *  lcm(slots, 2 pole_pairs) per turn (Zhu and Howe 2000), or 0 (keep every
+ *  order) when slots or pole_pairs is 0 or above 1000 or the order is not
+ *  below N / 2 (the map could not hold one period of it). */
+uint32_t mc_cog_order(uint32_t slots, uint32_t pole_pairs);
+
+/** How many multiples of order (1 .. count) a map built with it keeps:
+ *  those below N / 2, at most MC_COG_KEEP_MAX; 0 for order 0. */
+uint32_t mc_cog_keep_count(uint32_t order);
 
 /** Validate a map against the drive's encoder (above). NULL map: EMPTY. */
 mc_cog_status_t mc_cog_check(const mc_cog_map_t *map, const mc_cog_ident_t *ident);
@@ -111,6 +130,16 @@ uint32_t mc_cog_crc(const mc_cog_map_t *map);
 /** The feed-forward current at the mechanical angle [A] (above). The map
  *  must have passed mc_cog_check. */
 float mc_cog_ff_a(const mc_cog_map_t *map, float theta_m_rad);
+
+/** The feed-forward through a current loop that lags: the map at the angle
+ *  lead_s ahead at rate_rad_s (the loop's sample and PWM delay), as the
+ *  mean of the lookups half a bin either side (*p_i_a: the current to
+ *  flow), plus tau_s times its rate of change, rate times the slope between
+ *  them: the reference a first-order loop of time constant tau_s (1 / its
+ *  bandwidth) turns into that current. A rate of 0 gives mc_cog_ff_a's
+ *  value to within the interpolation's half-bin average. */
+float mc_cog_ff_adv_a(const mc_cog_map_t *map, float theta_m_rad, float rate_rad_s, float lead_s,
+                      float tau_s, float *p_i_a);
 
 #ifdef __cplusplus
 }

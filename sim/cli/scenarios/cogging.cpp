@@ -33,7 +33,8 @@
 //   speed_phase_s, hold_phase_s  the phases' simulated times (--duration
 //                            caps their sum; a window it cuts is not measured)
 // With the table parameter `anticogging` (when the firmware has it) set by
-// --set like any other.
+// --set like any other; the drive's `cog_slots` is the motor file's slots
+// (--set cog_slots=N overrides it, 0: the map keeps every order).
 //
 // Verdict: refused (exit 2, named) on a motor without cogging; a fault or
 // stop is the failure; otherwise pass once both figures are measured
@@ -96,7 +97,11 @@ std::vector<ParamSpec> cogging_params(const MotorFiles& f) {
       {"cog_cal", 1.0, "1",
        "with anticogging=1: 1 the drive calibrates its map first (anticogging 2), 0 it runs on "
        "the map it booted (--flash)",
-       0.0, 1.0}};
+       0.0, 1.0},
+      {"cog_slots", -1.0, "1",
+       "the drive's cog_slots parameter: the map's kept orders (-1: the motor file's slots, 0: "
+       "every order)",
+       -1.0, 1000.0}};
   for (auto& s : app_gain_params(f)) p.push_back(s);
   if (anticogging_index() >= 0 && !shared_key(f)) {
     const int32_t i = anticogging_index();
@@ -347,6 +352,8 @@ void run_cogging(RunContext& ctx) {
   }
   mc_params_t p = params_from_files(f, ctx.params, MC_LAW_SPEED_PI);
   set_anticogging(f, ctx.params, &p);
+  const long slots = std::lround(ctx.params.get("cog_slots"));
+  p.cog_slots = static_cast<uint32_t>(slots < 0 ? f.motor.slots : slots);
   const mc_params_eff_t e = resolve_params(p);
   const double n_c = cogging_order(f.motor.slots, f.motor.pole_pairs);
   const double w_t = ctx.params.get("speed_frac") * e.g.speed_rated_eff_rad_s;

@@ -158,16 +158,59 @@ TEST(CoggingScenarioSil, TheDriveCalibratesItsMapThroughTheApplication) {
   EXPECT_GE(s1.at("cog_cal_s"), t_nom - 0.05);
   EXPECT_LE(s1.at("cog_cal_s"), 1.05 * t_nom);
   // The hold under the step load: the map takes the detent torque off the
-  // position loop: the excursion at most 0.6 of the one without the map
-  // (measured 0.49: the map's order-84 amplitude within 6 % of the plant's
-  // cogging over kt; the rest is the map's noise and the phase below).
+  // position loop: the excursion at most 0.75 of the one without the map
+  // (measured 0.67; 0.49 with the unfiltered map of the earlier builder,
+  // which the filter to multiples of lcm(slots, 2 p) gave up for the speed
+  // ripple below: the hold's excursion, a few bins wide, sees the map's
+  // bin-scale content, which the filter drops; not understood further).
   RecordProperty("hold_err_pp_rad_off", std::to_string(s0.at("hold_err_pp_rad")));
   RecordProperty("hold_err_pp_rad_on", std::to_string(s1.at("hold_err_pp_rad")));
-  EXPECT_LT(s1.at("hold_err_pp_rad"), 0.6 * s0.at("hold_err_pp_rad"));
-  // The speed ripple at 10 % of rated speed, recorded, not bounded here:
-  // the issue's 5x reduction is not reached (issue 35, open).
+  EXPECT_LT(s1.at("hold_err_pp_rad"), 0.75 * s0.at("hold_err_pp_rad"));
+  // The speed ripple at 10 % of rated speed: at least 4x lower with the
+  // map (measured 4.56x: 0.0801 -> 0.0176 rad/s). Tolerance: the
+  // peak-to-peak over the 20-period window includes ripple that is not
+  // locked to the angle (the encoder's counts through the speed loop),
+  // whose peaks fall differently from run to run (a 300-period window
+  // measured 4.3x). The issue's 5x is not reached here: see the next test.
+  const double r10 = s0.at("speed_ripple_pp_rad_s") / s1.at("speed_ripple_pp_rad_s");
   RecordProperty("speed_ripple_pp_rad_s_off", std::to_string(s0.at("speed_ripple_pp_rad_s")));
   RecordProperty("speed_ripple_pp_rad_s_on", std::to_string(s1.at("speed_ripple_pp_rad_s")));
+  EXPECT_GE(r10, 4.0);
+}
+
+// The ripple's reduction by the calibrated map (anticogging 0 against 1,
+// the map calibrated by the drive, filtered to the multiples of lcm(slots,
+// 2 p): the scenario sets cog_slots from the motor file).
+double ripple_ratio(const MotorFiles& f, double frac, const std::string& tag) {
+  std::map<std::string, std::string> txt0, txt1;
+  const std::string fr = std::to_string(frac);
+  const auto s0 = testlib::run_scenario("cogging", f, {{"anticogging", "0"}, {"speed_frac", fr}},
+                                        tag + "0", &txt0);
+  const auto s1 = testlib::run_scenario("cogging", f, {{"anticogging", "1"}, {"speed_frac", fr}},
+                                        tag + "1", &txt1);
+  EXPECT_EQ(txt0.at("verdict"), "pass") << txt0.at("verdict_detail");
+  EXPECT_EQ(txt1.at("verdict"), "pass") << txt1.at("verdict_detail");
+  EXPECT_EQ(s1.at("cog_cal_status"), static_cast<double>(MC_COMM_COG_DONE));
+  ::testing::Test::RecordProperty("speed_ripple_pp_rad_s_off_" + tag,
+                                  std::to_string(s0.at("speed_ripple_pp_rad_s")));
+  ::testing::Test::RecordProperty("speed_ripple_pp_rad_s_on_" + tag,
+                                  std::to_string(s1.at("speed_ripple_pp_rad_s")));
+  return s0.at("speed_ripple_pp_rad_s") / s1.at("speed_ripple_pp_rad_s");
+}
+
+// At 2 % of rated speed the SK3 reaches the issue's 5x (measured 6.2x:
+// 0.346 -> 0.056 rad/s; tolerance as above). The GM4108 (24 slots, 22
+// poles: order 264) does not (measured 1.93x at 10 %, 1.37x at 2 %): a
+// cogging period spans 3.9 of the map's 1024 bins, where the linear
+// interpolation and the half-bin pair of the lookup keep about 0.7 of the
+// amplitude and shift its phase, and its 4096-count encoder puts 15.5
+// counts in a period; bounds 1.6x and 1.2x, the same margin.
+TEST(CoggingScenarioSil, TheMapCutsTheSpeedRippleAtTwoAndTenPercent) {
+  const MotorFiles sk3 = testlib::files({"turnigy-sk3-6374-149kv", "vesc6-48v"});
+  const MotorFiles gm = testlib::files({"gimbal-gm4108", "gimbal-24v"});
+  EXPECT_GE(ripple_ratio(sk3, 0.02, "sk3_2"), 5.0);
+  EXPECT_GE(ripple_ratio(gm, 0.10, "gm_10"), 1.6);
+  EXPECT_GE(ripple_ratio(gm, 0.02, "gm_2"), 1.2);
 }
 
 // --set anticogging is the table's parameter when the firmware has one, and

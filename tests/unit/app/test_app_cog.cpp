@@ -43,7 +43,7 @@ class DriveCogFf : public AppDrive
         id.enc_cpr = fcfg.encoder_counts_per_rev;
         id.pole_pairs = kPolePairs;
         id.enc_offset_rad = kOffset;
-        ASSERT_EQ(MC_COG_ST_OK, mc_cog_build(&map, v.data(), MC_COG_N, &id, 10.0f));
+        ASSERT_EQ(MC_COG_ST_OK, mc_cog_build(&map, v.data(), MC_COG_N, &id, 10.0f, 0u));
         law.out.iq_ref_a = 5.0f;
         law.out.theta_e_rad = kOffset;
         law.out.rotor_frame = true;
@@ -83,7 +83,7 @@ class DriveCogFf : public AppDrive
 } // namespace
 
 // At count 0 (theta_m 0) the map gives 0.5 A, so the q reference is 5.5 A;
-// one count on, the lookup at that angle (the same function: exact). The
+// one count on, the advanced lookup at that angle (exact). The
 // analytic value within q15's half LSB (0.75 A full scale / 65534) and
 // the interpolation bound (2 pi 3 / 1024)^2 / 8 0.25 A + (2 pi / 1024)^2 /
 // 8 0.5 A (1.1e-5 A): 3e-5 A.
@@ -95,9 +95,18 @@ TEST_F(DriveCogFf, AddedToTheLawsQReferenceAtTheMechanicalAngle)
     EXPECT_EQ(d.tm.iq_ref_a, 5.0f + d.tm.cog_ff_a);
     EXPECT_EQ(d.tm.id_ref_a, 0.0f); // d untouched
     Step(1u);
-    const double th = 2.0 * kPi / fcfg.encoder_counts_per_rev;
-    EXPECT_EQ(d.tm.cog_ff_a, mc_cog_ff_a(&map, d.tm.theta_m_rad));
-    EXPECT_NEAR(d.tm.cog_ff_a, 0.5 * std::cos(th) + 0.25 * std::sin(3.0 * th), 3e-5);
+    // One count on, the tracking loop's speed is not 0: the drive asks for
+    // the map 1.5 periods ahead plus 1 / bandwidth times its rate of change
+    // (mc_cog_ff_adv_a: the same call, exact); the current it asks to flow
+    // is the map there, within the bound above plus the half-bin pair's
+    // average (the same h^2 / 8 bound again: 3e-5 A in all).
+    const float w = d.tm.omega_m_rad_s;
+    const float lead = 1.5f * d.cfg.foc.dt_s;
+    float i_a = 0.0f;
+    EXPECT_EQ(d.tm.cog_ff_a, mc_cog_ff_adv_a(&map, d.tm.theta_m_rad, w, lead,
+                                             d.cfg.foc.lq_h / d.foc.pi_q.kp, &i_a));
+    const double th = 2.0 * kPi / fcfg.encoder_counts_per_rev + static_cast<double>(w * lead);
+    EXPECT_NEAR(i_a, 0.5 * std::cos(th) + 0.25 * std::sin(3.0 * th), 3e-5);
     EXPECT_EQ(d.tm.iq_ref_a, 5.0f + d.tm.cog_ff_a);
 }
 

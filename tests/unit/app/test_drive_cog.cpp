@@ -42,7 +42,7 @@ mc_cog_map_t built(const std::vector<float> &v, float bound = 10.0f)
 {
     mc_cog_map_t m{};
     const mc_cog_ident_t id = ident();
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, bound), MC_COG_ST_OK);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, bound, 0u), MC_COG_ST_OK);
     return m;
 }
 
@@ -127,22 +127,22 @@ TEST(DriveCog, BuilderRefusesBadInputAndChangesNothing)
     mc_cog_map_t m = good;
     std::vector<float> v = sinusoid(0.5, 12u, 0.0, 0.0);
     v[100] = NAN;
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f), MC_COG_ST_NONFINITE);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 0u), MC_COG_ST_NONFINITE);
     v[100] = INFINITY;
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f), MC_COG_ST_NONFINITE);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 0u), MC_COG_ST_NONFINITE);
     // amplitude: 0.5 A about the mean; a bound of 0.49 A refuses, 0.51 A takes it
     v = sinusoid(0.5, 12u, 0.0, 2.0);
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 0.49f), MC_COG_ST_AMPLITUDE);
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN - 1u, &id, 10.0f), MC_COG_ST_ARG);
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 0.0f), MC_COG_ST_ARG);
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, NAN), MC_COG_ST_ARG);
-    EXPECT_EQ(mc_cog_build(&m, nullptr, kN, &id, 10.0f), MC_COG_ST_ARG);
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, nullptr, 10.0f), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 0.49f, 0u), MC_COG_ST_AMPLITUDE);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN - 1u, &id, 10.0f, 0u), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 0.0f, 0u), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, NAN, 0u), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, nullptr, kN, &id, 10.0f, 0u), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, nullptr, 10.0f, 0u), MC_COG_ST_ARG);
     mc_cog_ident_t bad = id;
     bad.enc_cpr = 0u;
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &bad, 10.0f), MC_COG_ST_ARG);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &bad, 10.0f, 0u), MC_COG_ST_ARG);
     EXPECT_EQ(std::memcmp(&m, &good, sizeof m), 0);
-    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 0.51f), MC_COG_ST_OK);
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 0.51f, 0u), MC_COG_ST_OK);
 }
 
 // Validation: another layout, a broken CRC, another encoder; an offset
@@ -193,4 +193,61 @@ TEST(DriveCog, ValidationNamesWhatIsWrong)
     // 1.25 rad and 1.25 - 2 pi are the same electrical angle
     other.enc_offset_rad = id.enc_offset_rad - static_cast<float>(2.0 * kPi);
     EXPECT_EQ(mc_cog_check(&good, &other), MC_COG_ST_OK);
+}
+
+// The cogging order lcm(slots, 2 p) (mc_cog_order) and the orders a map
+// built with it keeps.
+TEST(DriveCog, CoggingOrderIsLcmOfSlotsAndPoles)
+{
+    EXPECT_EQ(mc_cog_order(12u, 7u), 84u);   // 12N14P (the SK3)
+    EXPECT_EQ(mc_cog_order(24u, 11u), 264u); // 24N22P (the GM4108)
+    EXPECT_EQ(mc_cog_order(9u, 3u), 18u);
+    EXPECT_EQ(mc_cog_order(0u, 7u), 0u); // unknown: every order
+    EXPECT_EQ(mc_cog_order(12u, 0u), 0u);
+    EXPECT_EQ(mc_cog_order(1001u, 7u), 0u); // out of range
+    EXPECT_EQ(mc_cog_order(36u, 20u), 360u);
+    EXPECT_EQ(mc_cog_order(50u, 28u), 0u); // lcm 1400: not below N / 2
+    EXPECT_EQ(mc_cog_keep_count(0u), 0u);
+    EXPECT_EQ(mc_cog_keep_count(84u), 6u); // 84 .. 504 < 512
+    EXPECT_EQ(mc_cog_keep_count(264u), 1u);
+    EXPECT_EQ(mc_cog_keep_count(1u), MC_COG_KEEP_MAX);
+}
+
+// A map built with order 84 keeps orders 84 and 168 of the currents and
+// drops the calibration's noise at other orders (14, 37, 85) and the mean.
+TEST(DriveCog, FilteredMapKeepsOnlyTheMultiplesOfTheOrder)
+{
+    std::vector<float> v = sinusoid(0.8, 84u, 0.3, 0.25);
+    const std::vector<float> h2 = sinusoid(0.1, 168u, -1.0, 0.0);
+    const std::vector<float> n14 = sinusoid(0.2, 14u, 0.7, 0.0);
+    const std::vector<float> n37 = sinusoid(0.15, 37u, 2.0, 0.0);
+    const std::vector<float> n85 = sinusoid(0.05, 85u, 1.0, 0.0);
+    for (uint32_t i = 0; i < kN; ++i) {
+        v[i] += h2[i] + n14[i] + n37[i] + n85[i];
+    }
+    mc_cog_map_t m{};
+    const mc_cog_ident_t id = ident();
+    ASSERT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 84u), MC_COG_ST_OK);
+    double e = 0.0;
+    for (uint32_t i = 0; i < kN; ++i) {
+        const double th = 2.0 * kPi * i / kN;
+        const double want = 0.8 * std::sin(84.0 * th + 0.3) + 0.1 * std::sin(168.0 * th - 1.0);
+        e = std::max(e, std::fabs(m.q[i] * static_cast<double>(m.scale_a) - want));
+    }
+    // Tolerance: at the bins the projection is exact; what is left is
+    // float's sums over 1024 bins (~1e-5 of the 1.4 A full scale), the
+    // sine's error (mc_sincos_f32, ~1e-6) and q15's half LSB (1.4 A / 65534
+    // = 2.1e-5): 1e-4 A, far below the 0.05 A of the smallest dropped order.
+    EXPECT_LT(e, 1e-4);
+    // The same currents with order 0 keep everything but the mean.
+    ASSERT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 0u), MC_COG_ST_OK);
+    e = 0.0;
+    for (uint32_t i = 0; i < kN; ++i) {
+        e = std::max(e, std::fabs(m.q[i] * static_cast<double>(m.scale_a) - (v[i] - 0.25)));
+    }
+    EXPECT_LT(e, 1e-4);
+    // An order whose period the map cannot hold is refused, the map kept.
+    const mc_cog_map_t before = m;
+    EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, kN / 2u), MC_COG_ST_ARG);
+    EXPECT_EQ(std::memcmp(&m, &before, sizeof m), 0);
 }

@@ -1064,8 +1064,15 @@ TEST_F(McAppEveryParam, EveryStoppedParameterChangesTheDriveOrItsLaws)
     //                         limits (issue 29 item 2: one board
     //                         description, not done). encoder_cpr is read:
     //                         the alignment's rest band is 4 of its counts
+    //  cog_slots              read when an anticogging calibration ends (the
+    //                         map's kept orders, mc_app_cog_load), not by the
+    //                         running drive (tests/sil/motors/
+    //                         test_cogging_scenario_sil.cpp shows its effect);
+    //                         to leave this list: the drive's cfg holds the
+    //                         order (config/mc_params.c, not this branch's)
     const std::vector<std::string> known = {"pwm_hz",   "current_sensors", "i_sense_max_a",
-                                            "adc_bits", "slow_loop_div",   "asc_enable"};
+                                            "adc_bits", "slow_loop_div",   "asc_enable",
+                                            "cog_slots"};
     EXPECT_EQ(known, Unread(MC_PARAM_ACCESS_STOPPED, &tested));
     EXPECT_GE(tested, 40u);
 }

@@ -223,7 +223,7 @@ TEST_F(FileFlashTest, AnticoggingMapSurvivesSectorSwitchesAndAPowerCycle)
     }
     const mc_cog_ident_t id{0u, 8192u, 0u, 7u, 0.5f};
     mc_cog_map_t map{};
-    ASSERT_EQ(mc_cog_build(&map, iq.data(), MC_COG_N, &id, 5.0f), MC_COG_ST_OK);
+    ASSERT_EQ(mc_cog_build(&map, iq.data(), MC_COG_N, &id, 5.0f, 0u), MC_COG_ST_OK);
     mc_params_t p = mc_params_default;
     uint32_t erases = 0u;
     {
