@@ -375,6 +375,51 @@ static float sq_ripple(const mc_comm_t *c, float ua, float ub, float d_phase[3])
     return mc_abs_f32(a * ua + b * ub);
 }
 
+/* Connection check after both tries. A try that moves no current along its
+ * own axis: nothing conducts (both) or one phase is open (one; an open
+ * phase a leaves alpha without a path, b or c leave beta weak).
+ *
+ * Per phase, the ripple is judged over BOTH tries, not the alpha try alone.
+ * The per-volt ripple of phase k in try j is |e_k' G u_j|, with G = L^-1 of
+ * the stationary frame, L(theta) = (Ld+Lq)/2 I + (Ld-Lq)/2 R(2 theta)
+ * (R the reflection [cos, sin; sin, -cos]), e_k phase k's direction.
+ * With Ld = Lq, G is a multiple of I and the alpha try alone sends |d| to a
+ * and |d|/2 to b and c; with saliency the alpha try's current leans off
+ * alpha by up to asin((Lq-Ld)/(Lq+Ld)) toward the d axis, and at some rotor
+ * angles b or c carries under 0.2 of a's ripple although it is connected
+ * (Lq/Ld = 2, theta_e = 1 rad: 0.195): the old alpha-only test reported
+ * OPEN_PHASE on a healthy IPM (issue 31). The root-sum-square over the two
+ * tries is |G e_k|, between |e_k|/max(Ld, Lq) and |e_k|/min(Ld, Lq) at any
+ * angle, so a connected phase keeps at least min/max(Ld, Lq) of the largest
+ * (0.5 at Lq/Ld = 2): the 0.2 bound holds for saliency up to 5, an open
+ * phase carries none in either try (noise only). */
+static uint32_t connection_check(const mc_comm_t *c)
+{
+    const float thr = 0.02f * c->cfg.i_test_a;
+    const bool a_ok = c->d_axis[0] >= thr;
+    const bool b_ok = c->d_axis[1] >= thr;
+    if (!a_ok && !b_ok) {
+        return MC_COMM_ERR_NO_MOTOR;
+    }
+    if (!a_ok || !b_ok) {
+        return MC_COMM_ERR_OPEN_PHASE;
+    }
+    float g[3];
+    float big = 0.0f;
+    for (unsigned k = 0u; k < 3u; ++k) {
+        const float pa = c->d_phase[0][k];
+        const float pb = c->d_phase[1][k];
+        g[k] = mc_sqrt_f32(pa * pa + pb * pb);
+        big = (g[k] > big) ? g[k] : big;
+    }
+    for (unsigned k = 0u; k < 3u; ++k) {
+        if (!(g[k] >= 0.2f * big)) {
+            return MC_COMM_ERR_OPEN_PHASE;
+        }
+    }
+    return 0u;
+}
+
 static uint32_t step_l_rough(mc_comm_t *c, const float i[3], mc_drive_out_t *out)
 {
     const unsigned ax = c->sub; /* 0: alpha, 1: beta */
@@ -400,7 +445,7 @@ static uint32_t step_l_rough(mc_comm_t *c, const float i[3], mc_drive_out_t *out
         }
         c->d_axis[ax] = d;
         for (unsigned k = 0u; k < 3u; ++k) {
-            c->d_phase[ax][k] = dph[k];
+            c->d_phase[ax][k] = dph[k] / c->vh_v; /* per volt: the tries' amplitudes differ */
         }
         if (d >= 0.02f * c->cfg.i_test_a) {
             float l = 0.0f;
@@ -416,24 +461,9 @@ static uint32_t step_l_rough(mc_comm_t *c, const float i[3], mc_drive_out_t *out
             zero_out(out);
             return 0u;
         }
-        /* Connection check. */
-        const float thr = 0.02f * c->cfg.i_test_a;
-        const bool a_ok = c->d_axis[0] >= thr;
-        const bool b_ok = c->d_axis[1] >= thr;
-        if (!a_ok && !b_ok) {
-            return MC_COMM_ERR_NO_MOTOR;
-        }
-        if (!a_ok || !b_ok) {
-            return MC_COMM_ERR_OPEN_PHASE;
-        }
-        /* Alpha try: phase a carries d, b and c half of it each. */
-        const float *p = c->d_phase[0];
-        const float big =
-            (p[0] > p[1]) ? ((p[0] > p[2]) ? p[0] : p[2]) : ((p[1] > p[2]) ? p[1] : p[2]);
-        for (unsigned k = 0u; k < 3u; ++k) {
-            if (p[k] < 0.2f * big) {
-                return MC_COMM_ERR_OPEN_PHASE;
-            }
+        const uint32_t conn = connection_check(c);
+        if (conn != 0u) {
+            return conn;
         }
         if (!(c->l0_h > 0.0f)) {
             return MC_COMM_ERR_RANGE;

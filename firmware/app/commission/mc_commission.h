@@ -17,8 +17,9 @@
  *   L_ROUGH     square-wave voltage (+-v each period) along alpha, then
  *               beta, its amplitude doubled until the ripple reaches 10 % of
  *               i_test: a first inductance for the current loop, and the
- *               connection check (per-phase ripple): nothing conducts ->
- *               NO_MOTOR; one phase silent -> OPEN_PHASE.
+ *               connection check (per-phase ripple over both tries, valid
+ *               for Ld != Lq): nothing conducts -> NO_MOTOR; one phase
+ *               silent -> OPEN_PHASE.
  *   HALL        (within ENCODER, with cfg.hall: Hall sensors) i_test along
  *               a forced angle swept a turn and two sectors up, then back;
  *               every code change recorded with the angle; the table
@@ -213,8 +214,8 @@ typedef struct {
     float sq_sign;
     float prev_i[3];
     mc_ident_avg_f32_t corr[3];
-    float d_axis[2]; /**< ripple of the alpha and beta tries [A] */
-    float d_phase[2][3];
+    float d_axis[2];     /**< ripple of the alpha and beta tries [A] */
+    float d_phase[2][3]; /**< per-phase ripple per volt of the two tries [A/V] */
     /* encoder */
     float theta_cmd_rad;
     float theta0_rad;
