@@ -14,7 +14,9 @@ returns the environment in which an unmodified `python -m mdtool.cli ...
 --interface logbus --channel PREFIX` finds it, exactly as python-can finds
 an installed interface package.
 """
+import argparse
 import os
+import shutil
 import sys
 import time
 
@@ -84,6 +86,18 @@ class LogBus(can.BusABC):
         if self._rx is not None:
             self._rx.close()
         super().shutdown()
+
+
+def work_and_env():
+    """The common start of the scripts that run mdtool on this bus: the
+    --work folder emptied, and the environment whose python-can knows
+    `logbus` (plugin_env)."""
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--work", required=True)
+    a = ap.parse_args()
+    shutil.rmtree(a.work, ignore_errors=True)
+    os.makedirs(a.work)
+    return a.work, plugin_env(os.path.join(a.work, "plugin"))
 
 
 def plugin_env(folder, env=None):

@@ -19,9 +19,7 @@ cantools from the DBC, independently of mdtool's codec):
 
     test_mdtool_bus.py --work DIR
 """
-import argparse
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -262,15 +260,10 @@ def calibrate_abort_check(work, env):
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
-    shutil.rmtree(a.work, ignore_errors=True)
-    os.makedirs(a.work)
-    env = logbus.plugin_env(os.path.join(a.work, "plugin"))
-    nothing_sent_checks(a.work, env)
-    disable_checks(a.work, env)
-    calibrate_abort_check(a.work, env)
+    work, env = logbus.work_and_env()
+    nothing_sent_checks(work, env)
+    disable_checks(work, env)
+    calibrate_abort_check(work, env)
     print(f"mdtool bus checks: {'FAILED: ' + str(len(fails)) if fails else 'passed'}")
     return 1 if fails else 0
 

@@ -33,11 +33,9 @@ frames mdtool sent:
 
     test_mdtool_cogging.py --work DIR
 """
-import argparse
 import math
 import os
 import re
-import shutil
 import signal
 import subprocess
 import sys
@@ -455,18 +453,13 @@ def constants_check():
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--work", required=True)
-    a = ap.parse_args()
-    shutil.rmtree(a.work, ignore_errors=True)
-    os.makedirs(a.work)
-    env = logbus.plugin_env(os.path.join(a.work, "plugin"))
+    work, env = logbus.work_and_env()
     constants_check()
-    usage_checks(a.work, env)
-    success_checks(a.work, env)
-    failure_checks(a.work, env)
-    refusal_checks(a.work, env)
-    timeout_and_foreign_checks(a.work, env)
+    usage_checks(work, env)
+    success_checks(work, env)
+    failure_checks(work, env)
+    refusal_checks(work, env)
+    timeout_and_foreign_checks(work, env)
     print(f"mdtool calibrate --cogging checks: {'FAILED: ' + str(len(fails)) if fails else 'passed'}")
     return 1 if fails else 0
 
