@@ -230,6 +230,27 @@ TEST(CfgStore, FlashErrorKeepsPrevious)
     EXPECT_TRUE(Same(p, a));
 }
 
+// The save cut at every step k of its n (not done, half done), each time
+// from the flash image before: the cut save must fail with -EIO;
+// after_cut(k, tear) checks the reboot, the same save then completes, and
+// after_redo(k) checks that.
+template <typename Save, typename AfterCut, typename AfterRedo>
+void CutAtEveryStep(Rig &r, mc_params_t *p, const std::vector<uint8_t> &before, uint32_t n,
+                    Save save, AfterCut after_cut, AfterRedo after_redo)
+{
+    for (uint32_t k = 1; k <= n; ++k) {
+        for (const mc_fake_flash_tear_t tear : {MC_FAKE_FLASH_TEAR_NONE, MC_FAKE_FLASH_TEAR_HALF}) {
+            r.mem = before;
+            r.Boot(p);
+            mc_fake_flash_cut_at(&r.flash, k, tear);
+            ASSERT_EQ(save(), -EIO) << "step " << k << " tear " << tear;
+            after_cut(k, tear);
+            ASSERT_EQ(save(), 0) << "step " << k << " tear " << tear;
+            after_redo(k);
+        }
+    }
+}
+
 // The power-cut guarantee: for every save of a sequence, cut the power at
 // every erase and every word-program step (the step not done, and the step
 // half done), reboot, and require exactly the previous configuration; the
@@ -262,14 +283,9 @@ void PowerCutSweep(uint32_t sector_bytes, uint32_t saves, uint32_t *p_cases, uin
         const bool erased = r.flash.erases > e0;
         ASSERT_GE(n, MC_CFG_REC_WORDS);
         const std::vector<uint8_t> after = r.mem;
-        for (uint32_t k = 1; k <= n; ++k) {
-            for (const mc_fake_flash_tear_t tear :
-                 {MC_FAKE_FLASH_TEAR_NONE, MC_FAKE_FLASH_TEAR_HALF}) {
-                r.mem = before;
-                r.Boot(&p);
-                mc_fake_flash_cut_at(&r.flash, k, tear);
-                ASSERT_EQ(mc_cfg_store_save(&r.store, &next), -EIO)
-                    << "save " << i << " step " << k;
+        CutAtEveryStep(
+            r, &p, before, n, [&]() { return mc_cfg_store_save(&r.store, &next); },
+            [&](uint32_t k, mc_fake_flash_tear_t tear) {
                 const mc_cfg_boot_t st = r.Boot(&p);
                 ASSERT_TRUE(Same(p, old)) << "save " << i << " cut at step " << k << " of " << n
                                           << " tear " << tear << " boot " << st;
@@ -280,12 +296,13 @@ void PowerCutSweep(uint32_t sector_bytes, uint32_t saves, uint32_t *p_cases, uin
                 if (erased && k == 1) {
                     ++*p_erase_cuts;
                 }
-                // the store recovers: the same save now completes
-                ASSERT_EQ(mc_cfg_store_save(&r.store, &next), 0) << "save " << i << " step " << k;
-                ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
+            },
+            [&](uint32_t k) {
+                // the store recovers: the same save completed
+                ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED) << "save " << i << " step " << k;
                 ASSERT_TRUE(Same(p, next));
-            }
-        }
+            });
+        ASSERT_FALSE(::testing::Test::HasFatalFailure());
         r.mem = after;
         ASSERT_EQ(r.Boot(&p), MC_CFG_BOOT_STORED);
         ASSERT_TRUE(Same(p, next)) << "save " << i;
@@ -425,23 +442,20 @@ void MixedPowerCutSweep(uint32_t sector_bytes, const char *ops, uint32_t *p_case
         const uint32_t n = r.flash.steps - s0;
         *p_switches += (r.flash.erases > e0) ? 1u : 0u;
         const std::vector<uint8_t> after = r.mem;
-        for (uint32_t k = 1; k <= n; ++k) {
-            for (const mc_fake_flash_tear_t tear :
-                 {MC_FAKE_FLASH_TEAR_NONE, MC_FAKE_FLASH_TEAR_HALF}) {
-                r.mem = before;
-                r.Boot(&p);
-                mc_fake_flash_cut_at(&r.flash, k, tear);
-                ASSERT_EQ(save(), -EIO) << "op " << i << " step " << k;
+        CutAtEveryStep(
+            r, &p, before, n, save,
+            [&](uint32_t k, mc_fake_flash_tear_t /*tear*/) {
                 r.Boot(&p);
                 ASSERT_TRUE(Same(p, old_cfg)) << "op " << i << " cut at " << k << " of " << n;
                 ExpectMap(r, old_map, "after the cut");
                 ++*p_cases;
-                ASSERT_EQ(save(), 0) << "op " << i << " step " << k;
+            },
+            [&](uint32_t /*k*/) {
                 r.Boot(&p);
                 ASSERT_TRUE(Same(p, map ? old_cfg : next_cfg));
                 ExpectMap(r, map ? next_map : old_map, "after the recovery");
-            }
-        }
+            });
+        ASSERT_FALSE(::testing::Test::HasFatalFailure());
         r.mem = after;
         r.Boot(&p);
         if (map) {
