@@ -88,6 +88,30 @@ class LogBus(can.BusABC):
         super().shutdown()
 
 
+#: the checks that failed in this process (check)
+FAILS = []
+_buses = [0]
+
+
+def check(ok, what):
+    """One check of a test script: printed, and kept in FAILS when it fails."""
+    print(("ok   " if ok else "FAIL ") + what, flush=True)
+    if not ok:
+        FAILS.append(what)
+
+
+def summary(name):
+    """The script's last line and exit status from FAILS."""
+    print(f"{name}: {'FAILED: ' + str(len(FAILS)) if FAILS else 'passed'}")
+    return 1 if FAILS else 0
+
+
+def new_prefix(work):
+    """A fresh bus (its PREFIX) under the work folder."""
+    _buses[0] += 1
+    return os.path.join(work, f"bus{_buses[0]:02d}")
+
+
 def work_and_env():
     """The common start of the scripts that run mdtool on this bus: the
     --work folder emptied, and the environment whose python-can knows

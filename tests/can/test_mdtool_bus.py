@@ -35,13 +35,9 @@ import logbus  # noqa: E402
 DBC = os.path.join(HERE, "..", "..", "tools", "can", "motordrive.dbc")
 db = cantools.database.load_file(DBC)
 NODE = 1
-fails = []
 
 
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what, flush=True)
-    if not ok:
-        fails.append(what)
+check = logbus.check
 
 
 def cmd_name(can_id):
@@ -57,11 +53,8 @@ def names(prefix):
 
 class Bus:
     """One bus (a PREFIX) and the mdtool subprocesses on it."""
-    n = 0
-
     def __init__(self, work, env):
-        Bus.n += 1
-        self.prefix = os.path.join(work, f"bus{Bus.n:02d}")
+        self.prefix = logbus.new_prefix(work)
         self.env = env
 
     def args(self):
@@ -264,8 +257,7 @@ def main():
     nothing_sent_checks(work, env)
     disable_checks(work, env)
     calibrate_abort_check(work, env)
-    print(f"mdtool bus checks: {'FAILED: ' + str(len(fails)) if fails else 'passed'}")
-    return 1 if fails else 0
+    return logbus.summary("mdtool bus checks")
 
 
 if __name__ == "__main__":

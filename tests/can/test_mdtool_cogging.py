@@ -54,17 +54,13 @@ from mdtool.can import cogging  # noqa: E402  (logbus put tools/mdtool/src on th
 DBC = os.path.join(ROOT, "tools", "can", "motordrive.dbc")
 db = cantools.database.load_file(DBC)
 NODE = 1
-fails = []
 
 #: the fake's calibration: each phase's length [s] on its compressed clock
 SCHEDULE = [(1, 0.15), (2, 0.6), (3, 0.15), (4, 0.6), (5, 0.15)]
 DONE, FAILED = 6, 7
 
 
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what, flush=True)
-    if not ok:
-        fails.append(what)
+check = logbus.check
 
 
 def msg_of(can_id):
@@ -232,11 +228,8 @@ class FakeDrive(threading.Thread):
 
 
 class Bus:
-    n = 0
-
     def __init__(self, work, env):
-        Bus.n += 1
-        self.prefix = os.path.join(work, f"bus{Bus.n:02d}")
+        self.prefix = logbus.new_prefix(work)
         self.env = env
 
     def popen(self, *argv):
@@ -460,8 +453,7 @@ def main():
     failure_checks(work, env)
     refusal_checks(work, env)
     timeout_and_foreign_checks(work, env)
-    print(f"mdtool calibrate --cogging checks: {'FAILED: ' + str(len(fails)) if fails else 'passed'}")
-    return 1 if fails else 0
+    return logbus.summary("mdtool calibrate --cogging checks")
 
 
 if __name__ == "__main__":
