@@ -190,13 +190,13 @@ static void limit_copper(mc_drive_bus_t *s, const mc_foc_f32_cfg_t *foc, float p
 }
 
 /* Whether the transient bound's reference r may replace the reference
- * asked, q: where it slows the step from the predicted current i1, or
- * asks less current of the same sign (less loss, less of the winding's
- * energy); never more current than asked nor the other sign (the
- * steady-state clamps own those). */
-static bool slew_accept(float q, float i1, float r)
+ * asked, q: where it slows the step from the current this step samples
+ * (ik), or asks less current of the same sign (less loss, less of the
+ * winding's energy); never more current than asked nor the other sign
+ * (the steady-state clamps own those). */
+static bool slew_accept(float q, float ik, float r)
 {
-    const bool between = ((r - q) * (r - i1)) <= 0.0f;
+    const bool between = ((r - q) * (r - ik)) <= 0.0f;
     const bool less = (mc_fabs_f32(r) <= mc_fabs_f32(q)) && ((r * q) >= 0.0f);
     return between || less;
 }
