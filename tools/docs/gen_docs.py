@@ -402,14 +402,16 @@ def _mcu_isr_parts(ctx, b):
                          f"{r['drive_rest_mean']:g}", f"{r['isr']['mean']:g}",
                          "—" if r.get("brake_write") is None else f"{r['brake_write']['mean']:g}",
                          "—" if r.get("cog_lookup") is None else
-                         f"{r['cog_lookup']['mean']:g} / {r['isr_anticogging']['mean']:g}"])
+                         f"{r['cog_lookup']['mean']:g} / {r['cog_series']['mean']:g} / "
+                         f"{r['isr_anticogging']['mean']:g} / {r['cog_series_init']['mean']:g}"])
     return table(["board", "run", "ADC read", "encoder read", "speed law", "FOC step",
                   "duties write", "app mark",
                   "drive rest (checks, encoder tracking, reference shaping, dead-time "
                   "compensation, supervision, hooks)", "whole interrupt",
                   "brake write (brake_enable 1 adds it; not in this run)",
-                  "anticogging: map lookup / whole interrupt with it on (the interrupt "
-                  "before: off)"], rows,
+                  "anticogging: feed-forward from the bins / from the series (8 terms) / "
+                  "whole interrupt with the series on (the interrupt before: off) / the "
+                  "series' derivation when a map is attached (slow context, once)"], rows,
                  ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---:", "---:",
                   "---:", "---:"])
 
