@@ -426,8 +426,8 @@ static const mc_cog_loop_t g_cog_loop = {3.3e-5f, 5.0e-5f, 4.0e-4f};
 static void part_cog(void)
 {
     float i_a;
-    g_sinkf = mc_cog_ff_adv_a(&g_cog, D->tm.theta_m_rad, D->tm.omega_m_rad_s, &g_cog_loop, &i_a) +
-              i_a;
+    g_sinkf =
+        mc_cog_ff_adv_a(&g_cog, D->tm.theta_m_rad, D->tm.omega_m_rad_s, &g_cog_loop, &i_a) + i_a;
 }
 static void part_cog_series(void)
 {

@@ -611,11 +611,11 @@ typedef struct {
     float regen_lead_alpha; /**< that filter's factor per fast step, dt / (t_lead + dt) */
     mc_drive_bus_t bus;     /**< the DC-bus limits' state and estimate (mc_drive_bus.h) */
     bool bus_on;            /**< a DC-bus limit is set (cfg.bus): the limiter runs */
-    mc_drive_thermal_t thermal;  /**< derating factor, winding estimate (mc_drive_thermal.h) */
-    mc_drive_hallobs_t *hallobs; /**< Hall + observer (mc_drive_hallobs.h), or NULL: the
+    mc_drive_thermal_t thermal;      /**< derating factor, winding estimate (mc_drive_thermal.h) */
+    mc_drive_hallobs_t *hallobs;     /**< Hall + observer (mc_drive_hallobs.h), or NULL: the
                                       encoder's angle as it is */
-    const mc_cog_map_t *cog;     /**< anticogging map (mc_drive_cog.h), or NULL: none */
-    mc_cog_series_t cog_ser;     /**< its kept orders' series (count 0: interpolate the
+    const mc_cog_map_t *cog;         /**< anticogging map (mc_drive_cog.h), or NULL: none */
+    mc_cog_series_t cog_ser;         /**< its kept orders' series (count 0: interpolate the
                                       map), derived when it is attached */
     const mc_cog_map_t *cog_ser_map; /**< the map cog_ser was derived from (NULL: none) */
     uint32_t cog_ser_crc;            /**< and that map's CRC then */
