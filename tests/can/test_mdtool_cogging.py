@@ -268,7 +268,8 @@ def success_checks(work, env):
         # the last progress line: the whole map seen both ways (by construction
         # exact: DONE sets every bin)
         lines = [ln for ln in out.splitlines() if " % " in ln]
-        check(bool(lines) and lines[-1].split()[:4] == ["done", "100", "%", "angle"]
+        check(bool(lines) and lines[-1].split()[:6] == ["pass", f"{cogging.CAL_PASSES}/{cogging.CAL_PASSES}",
+                                                         "done", "100", "%", "angle"]
               and "1024/1024 forward" in lines[-1] and "1024/1024 back" in lines[-1],
               f"  progress ends at 100 %, 1024 points each way: {lines[-1] if lines else None!r}")
         # between: the forward turn seen part-done (a line with 0 < points < 1024)
@@ -429,6 +430,7 @@ def constants_check():
     pairs = [(app, "MC_APP_COG_CAL_SPEED_RAD_S", cogging.CAL_SPEED_RAD_S),
              (app, "MC_APP_COG_CAL_RAMP_S", cogging.CAL_RAMP_S),
              (app, "MC_APP_COG_CAL_SETTLE_S", cogging.CAL_SETTLE_S),
+             (app, "MC_APP_COG_CAL_PASSES", cogging.CAL_PASSES),
              (app, "MC_APP_COG_BOUND_FRAC", cogging.BOUND_FRAC),
              (comm, "MC_COMM_COG_TIME_FACTOR", cogging.TIME_FACTOR),
              (comm, "MC_COMM_COG_MARGIN_BINS", cogging.MARGIN_BINS),
@@ -436,6 +438,15 @@ def constants_check():
     for path, name, mine in pairs:
         c = define(path, name)
         check(c == mine, f"constant {name} = {c} in {path}, mdtool's {mine}")
+    # the pass in bits 24..31 (mc_app.c): the last pass decodes, one beyond is no drive's
+    last = (cogging.CAL_PASSES - 1) << 24
+    check(cogging.decode(last | 2) == ("REC_FWD", []) and cogging.pass_of(last | 2) == cogging.CAL_PASSES - 1,
+          "cog_cal_status of the last pass decodes")
+    try:
+        cogging.decode((cogging.CAL_PASSES << 24) | 2)
+        check(False, "a pass beyond the last is refused")
+    except cogging.ProtocolError:
+        check(True, "a pass beyond the last is refused")
     for path, name, bit in ((comm, "MC_COMM_COG_ERR_NO_OFFSET", 0x02), (comm, "MC_COMM_COG_ERR_BLOCKED", 0x04),
                             (comm, "MC_COMM_COG_ERR_MEAS", 0x08), (comm, "MC_COMM_COG_ERR_AMPLITUDE", 0x10),
                             (comm, "MC_COMM_COG_ERR_DISAGREE", 0x20), (comm, "MC_COMM_COG_ERR_ABORTED", 0x40)):

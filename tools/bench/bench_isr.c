@@ -410,19 +410,35 @@ static void part_speed_law(void)
     g_sink = (int)mc_ctrl_speed_fast(&g_spd_copy, &g_law_meas, &g_law_out);
 }
 
-/* The anticogging map (mc_drive_cog.h): its lookup alone (as the drive
- * makes it: the advanced pair, mc_cog_ff_adv_a), and the whole
- * interrupt with the feed-forward on (the sensored run). Any shape: the
- * lookup's cost does not depend on the values. */
+/* The anticogging map (mc_drive_cog.h): the feed-forward alone as the
+ * drive makes it (mc_drive.c cog_ff: the loop's leads, mc_cog_loop_t), from
+ * the bins (a map of every order, mc_cog_ff_adv_a) and from the series (a
+ * map of an order, mc_cog_series_ff_adv_a, with the most terms a map keeps,
+ * MC_COG_KEEP_MAX); the series' derivation from the map once (the slow
+ * context's, when a map is attached); and the whole interrupt with the
+ * series feed-forward on (the sensored run). Any shape: the costs do not
+ * depend on the values. */
 static mc_cog_map_t g_cog;
+static mc_cog_series_t g_cog_ser;
 static float g_cog_i[MC_COG_N];
 static volatile float g_sinkf;
+static const mc_cog_loop_t g_cog_loop = {3.3e-5f, 5.0e-5f, 4.0e-4f};
 static void part_cog(void)
 {
     float i_a;
     g_sinkf =
-        mc_cog_ff_adv_a(&g_cog, D->tm.theta_m_rad, D->tm.omega_m_rad_s, 5.0e-5f, 4.0e-4f, &i_a) +
-        i_a;
+        mc_cog_ff_adv_a(&g_cog, D->tm.theta_m_rad, D->tm.omega_m_rad_s, &g_cog_loop, &i_a) + i_a;
+}
+static void part_cog_series(void)
+{
+    float i_a;
+    g_sinkf = mc_cog_series_ff_adv_a(&g_cog_ser, D->tm.theta_m_rad, D->tm.omega_m_rad_s,
+                                     &g_cog_loop, &i_a) +
+              i_a;
+}
+static void part_cog_series_init(void)
+{
+    mc_cog_series_init(&g_cog_ser, &g_cog);
 }
 
 static stat_t parts(fn_t fn, bool adc)
@@ -549,6 +565,16 @@ static int cog_costs(const char *name)
     }
     stat_t s = parts(part_cog, false);
     out_stat(name, "cog_lookup", &s);
+    /* order 12 (12 slots, 2 or 3 pole pairs...): MC_COG_KEEP_MAX terms kept */
+    if ((mc_cog_build(&g_cog, g_cog_i, MC_COG_N, &id, 10.0f, 12u) != MC_COG_ST_OK) ||
+        (mc_cog_keep_count(12u) != MC_COG_KEEP_MAX)) {
+        return 25;
+    }
+    stat_t one = {0};
+    stat_add(&one, count(part_cog_series_init));
+    out_stat(name, "cog_series_init", &one);
+    s = parts(part_cog_series, false);
+    out_stat(name, "cog_series", &s);
     if (mc_drive_attach_cog(D, &g_cog) != 0) {
         return 24;
     }

@@ -114,9 +114,12 @@ def board_report(board, rows, meta):
             # boards with a brake chopper: its duty write, not in the runs'
             # interrupt (their tables leave brake_enable 0)
             "brake_write": rows.get((run, "brake_write")),
-            # the sensored run: the anticogging map's lookup alone and the
-            # whole interrupt with the feed-forward on ("isr": off)
+            # the sensored run: the anticogging feed-forward alone from the
+            # bins and from the series (and the series' derivation, once),
+            # the whole interrupt with the series on ("isr": off)
             "cog_lookup": rows.get((run, "cog_lookup")),
+            "cog_series": rows.get((run, "cog_series")),
+            "cog_series_init": rows.get((run, "cog_series_init")),
             "isr_anticogging": rows.get((run, "isr_anticogging")),
             "slow": rows[(run, "slow")], "slow_full_ring": rows[(run, "slow_full_ring")],
             "can_rx": rows[(run, "can_rx")], "can_rx_heartbeat": rows[(run, "can_rx_heartbeat")],

@@ -402,14 +402,16 @@ def _mcu_isr_parts(ctx, b):
                          f"{r['drive_rest_mean']:g}", f"{r['isr']['mean']:g}",
                          "—" if r.get("brake_write") is None else f"{r['brake_write']['mean']:g}",
                          "—" if r.get("cog_lookup") is None else
-                         f"{r['cog_lookup']['mean']:g} / {r['isr_anticogging']['mean']:g}"])
+                         f"{r['cog_lookup']['mean']:g} / {r['cog_series']['mean']:g} / "
+                         f"{r['isr_anticogging']['mean']:g} / {r['cog_series_init']['mean']:g}"])
     return table(["board", "run", "ADC read", "encoder read", "speed law", "FOC step",
                   "duties write", "app mark",
                   "drive rest (checks, encoder tracking, reference shaping, dead-time "
                   "compensation, supervision, hooks)", "whole interrupt",
                   "brake write (brake_enable 1 adds it; not in this run)",
-                  "anticogging: map lookup / whole interrupt with it on (the interrupt "
-                  "before: off)"], rows,
+                  "anticogging: feed-forward from the bins / from the series (8 terms) / "
+                  "whole interrupt with the series on (the interrupt before: off) / the "
+                  "series' derivation when a map is attached (slow context, once)"], rows,
                  ["---", "---", "---:", "---:", "---:", "---:", "---:", "---:", "---:", "---:",
                   "---:", "---:"])
 
@@ -1077,7 +1079,8 @@ def _cogging_ripple(ctx, *runs):
 COG_HDRS = {"app": "firmware/app/app/mc_app.h", "comm": "firmware/app/commission/mc_comm_cog.h",
             "drive": "firmware/app/drive/mc_drive_cog.h"}
 COG_DEFS = {"app": ["MC_APP_COG_CAL_SPEED_RAD_S", "MC_APP_COG_CAL_RAMP_S", "MC_APP_COG_CAL_SETTLE_S",
-                    "MC_APP_COG_BOUND_FRAC", "MC_APP_COG_CAL_AGREE", "MC_APP_COG_CAL_FLOOR_FRAC"],
+                    "MC_APP_COG_BOUND_FRAC", "MC_APP_COG_CAL_AGREE", "MC_APP_COG_CAL_FLOOR_FRAC",
+                    "MC_APP_COG_CAL_PASSES"],
             "comm": ["MC_COMM_COG_TIME_FACTOR", "MC_COMM_COG_MARGIN_BINS"], "drive": ["MC_COG_N"]}
 
 
@@ -1102,9 +1105,10 @@ def _cogging_cal(ctx, app, comm, drv):
     w, n, margin = app["MC_APP_COG_CAL_SPEED_RAD_S"], drv["MC_COG_N"], comm["MC_COMM_COG_MARGIN_BINS"]
     ramp, settle, factor = app["MC_APP_COG_CAL_RAMP_S"], app["MC_APP_COG_CAL_SETTLE_S"], \
         comm["MC_COMM_COG_TIME_FACTOR"]
+    passes = app["MC_APP_COG_CAL_PASSES"]
     turn = 2.0 * math.pi * (1.0 + margin / n)
-    nominal = 3.0 * (ramp + settle) + 2.0 * turn / w
-    bound = 3.0 * (ramp + settle) + 2.0 * factor * turn / w
+    nominal = passes * (3.0 * (ramp + settle) + 2.0 * turn / w)
+    bound = passes * (3.0 * (ramp + settle) + 2.0 * factor * turn / w)
     sys.path.insert(0, os.path.join(ROOT, "tools", "mdtool", "src"))
     from mdtool.can import cogging as mdcog
     if abs(mdcog.BOUND_S - bound) > 1e-9 * bound:
@@ -1115,7 +1119,9 @@ def _cogging_cal(ctx, app, comm, drv):
              "`MC_COG_N`, `MC_COMM_COG_MARGIN_BINS`"],
             ["ramp, then settle, before each turn and after the last", f"{g(ramp)} s + {g(settle)} s",
              "`MC_APP_COG_CAL_RAMP_S`, `MC_APP_COG_CAL_SETTLE_S`"],
-            ["time, nominal (a turn each way)", f"{g(nominal, 4)} s", ""],
+            ["passes (each after the first on the map of the one before)", f"{passes:.0f}",
+             "`MC_APP_COG_CAL_PASSES`"],
+            ["time, nominal (a turn each way per pass)", f"{g(nominal, 4)} s", ""],
             ["time bound (each turn within its time times the factor, else ROTOR_BLOCKED)",
              f"factor {g(factor)}: {g(bound, 4)} s", "`MC_COMM_COG_TIME_FACTOR`"],
             ["mdtool's longest wait (`--cal-timeout`, default and most)", f"{g(mdcog.DEFAULT_TIMEOUT_S, 4)} s",

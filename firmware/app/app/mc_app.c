@@ -578,6 +578,7 @@ static MC_APP_NOINLINE void cog_cal_start(mc_app_t *a, const mc_params_t *p)
     (void)mc_drive_attach_cog(a->drive, NULL); /* the q reference without a map */
     const uint32_t e = mc_comm_cog_start(&a->cog_cal, &g);
     a->cog_cal_run = e == 0u;
+    a->cog_cal_pass = 0u;
     a->srv.cog_cal_status = ((uint32_t)a->cog_cal.phase & 0xFFu) | ((e & 0xFFu) << 8);
     if (e != 0u) {
         a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_FAILED | ((e & 0xFFu) << 8);
@@ -597,8 +598,9 @@ static MC_APP_NOINLINE void cog_cal_service(mc_app_t *a)
         mc_comm_cog_abort(&a->cog_cal);
     }
     const mc_drive_telemetry_t *tm = &a->drive->tm;
-    const uint32_t e =
-        mc_comm_cog_step(&a->cog_cal, tm->theta_m_rad, tm->iq_ref_a - tm->cog_ff_a, &w);
+    /* the q reference the rotor took, the previous pass's feed-forward in
+     * it (none in the first: no map is attached) */
+    const uint32_t e = mc_comm_cog_step(&a->cog_cal, tm->theta_m_rad, tm->iq_ref_a, &w);
     if (a->cmd.enabled && !a->cmd.stopping && (a->cmd.cfg.set_speed_ref != NULL) &&
         (a->cmd.cfg.set_speed_ref(a->cmd.cfg.hook_ctx, w) == 0)) {
         a->cmd.omega_ref_rad_s = w;
@@ -610,6 +612,17 @@ static MC_APP_NOINLINE void cog_cal_service(mc_app_t *a)
     }
     a->srv.cog_cal_status =
         ((uint32_t)a->cog_cal.phase & 0xFFu) | ((e & 0xFFu) << 8) | ((st & 0xFFu) << 16);
+    if ((a->cog_cal.phase == MC_COMM_COG_DONE) && (st == (uint32_t)MC_COG_ST_OK) &&
+        ((a->cog_cal_pass + 1u) < MC_APP_COG_CAL_PASSES)) {
+        /* the next pass runs on this pass's map (mc_app.h): the same
+         * configuration, accepted once already */
+        const mc_comm_cog_cfg_t g = a->cog_cal.cfg;
+        a->cog_cal_pass++;
+        (void)mc_drive_attach_cog(a->drive, &a->cog_map);
+        (void)mc_comm_cog_start(&a->cog_cal, &g);
+        a->srv.cog_cal_status = (uint32_t)a->cog_cal.phase; /* not DONE: a host would stop */
+    }
+    a->srv.cog_cal_status |= (a->cog_cal_pass & 0xFFu) << 24;
     if ((a->cog_cal.phase == MC_COMM_COG_DONE) || (a->cog_cal.phase == MC_COMM_COG_FAILED)) {
         a->cog_cal_run = false;
         const bool ok = (i != NULL) && (st == (uint32_t)MC_COG_ST_OK);

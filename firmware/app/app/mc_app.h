@@ -271,6 +271,7 @@ typedef struct {
     uint32_t cog_load_status;   /**< MC_COG_ST_* of the map's load (EMPTY: none) */
     mc_comm_cog_t cog_cal;      /**< the anticogging calibration (anticogging 2) */
     bool cog_cal_run;           /**< cog_cal runs (mc_app.h, MC_APP_COG_CAL_*) */
+    uint32_t cog_cal_pass;      /**< cog_cal's pass, 0 .. MC_APP_COG_CAL_PASSES - 1 */
     mc_param_hook_t cmd_hook;   /**< the command handler's APPLY hook, chained */
     mc_telemetry_src_t tm_src;
     mc_can_cmd_t cmd;
@@ -407,6 +408,16 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p);
 #define MC_APP_COG_CAL_SETTLE_S    1.0f
 #define MC_APP_COG_CAL_AGREE       0.5f
 #define MC_APP_COG_CAL_FLOOR_FRAC  0.005f
+/** Passes of the calibration (iterative learning): the speed loop rejects
+ *  the cogging torque only within its bandwidth, so one pass's reference
+ *  carries a share of it (on the SK3 93 %, on the GM4108 55 %, where the
+ *  cogging frequency at the turns' speed is 26 rad/s) and the rotor's
+ *  speed ripple the rest; the next pass runs with the map of the one
+ *  before as feed-forward and records the whole q reference (the map's
+ *  current plus the loop's correction), which leaves the loop a residual
+ *  that share smaller. Each pass is the whole sequence of mc_comm_cog.h;
+ *  cog_cal_status carries the pass (0 first) in bits 24..31 while it runs. */
+#define MC_APP_COG_CAL_PASSES 2u
 
 /**
  * Load an anticogging map from a calibration's MC_COG_N q-axis currents [A]

@@ -5,6 +5,7 @@
 #include "mc_drive.h"
 
 #include <errno.h>
+#include <stdatomic.h>
 #include <stddef.h>
 
 #include "math/mc_math.h"
@@ -744,9 +745,12 @@ static float cog_ff(mc_drive_t *d, const mc_drive_meas_t *m)
     d->cog_lead_a = 0.0f;
     if (d->cfg.anticogging && (d->cog != NULL) && d->ctrl->cogging_ff && m->have_encoder) {
         float i_a;
-        ff = mc_cog_ff_adv_a(d->cog, m->theta_m_rad, m->omega_m_rad_s,
-                             MC_DRIVE_COG_DELAY_PERIODS * d->cfg.foc.dt_s,
-                             d->cfg.foc.lq_h / d->foc.pi_q.kp, &i_a);
+        const mc_cog_loop_t lp = {.lead_i_s = d->cfg.foc.dt_s,
+                                  .lead_d_s = MC_DRIVE_COG_DELAY_PERIODS * d->cfg.foc.dt_s,
+                                  .tau_s = d->cfg.foc.lq_h / d->foc.pi_q.kp};
+        ff = (d->cog_ser.count > 0u)
+                 ? mc_cog_series_ff_adv_a(&d->cog_ser, m->theta_m_rad, m->omega_m_rad_s, &lp, &i_a)
+                 : mc_cog_ff_adv_a(d->cog, m->theta_m_rad, m->omega_m_rad_s, &lp, &i_a);
         d->cog_lead_a = ff - i_a;
         d->cog_on = true;
     }
@@ -1291,6 +1295,16 @@ int mc_drive_attach_cog(mc_drive_t *d, const mc_cog_map_t *map)
 {
     if ((map != NULL) && (d->hal->encoder == NULL)) {
         return -ENODEV;
+    }
+    if ((map != NULL) && ((map != d->cog_ser_map) || (map->crc != d->cog_ser_crc))) {
+        /* the fast step interrupts this context: it sees no map while the
+         * series changes (the fences keep the stores in this order) */
+        d->cog = NULL;
+        atomic_signal_fence(memory_order_seq_cst);
+        mc_cog_series_init(&d->cog_ser, map);
+        d->cog_ser_map = map;
+        d->cog_ser_crc = map->crc;
+        atomic_signal_fence(memory_order_seq_cst);
     }
     d->cog = map;
     return 0;

@@ -611,10 +611,14 @@ typedef struct {
     float regen_lead_alpha; /**< that filter's factor per fast step, dt / (t_lead + dt) */
     mc_drive_bus_t bus;     /**< the DC-bus limits' state and estimate (mc_drive_bus.h) */
     bool bus_on;            /**< a DC-bus limit is set (cfg.bus): the limiter runs */
-    mc_drive_thermal_t thermal;  /**< derating factor, winding estimate (mc_drive_thermal.h) */
-    mc_drive_hallobs_t *hallobs; /**< Hall + observer (mc_drive_hallobs.h), or NULL: the
+    mc_drive_thermal_t thermal;      /**< derating factor, winding estimate (mc_drive_thermal.h) */
+    mc_drive_hallobs_t *hallobs;     /**< Hall + observer (mc_drive_hallobs.h), or NULL: the
                                       encoder's angle as it is */
-    const mc_cog_map_t *cog;     /**< anticogging map (mc_drive_cog.h), or NULL: none */
+    const mc_cog_map_t *cog;         /**< anticogging map (mc_drive_cog.h), or NULL: none */
+    mc_cog_series_t cog_ser;         /**< its kept orders' series (count 0: interpolate the
+                                      map), derived when it is attached */
+    const mc_cog_map_t *cog_ser_map; /**< the map cog_ser was derived from (NULL: none) */
+    uint32_t cog_ser_crc;            /**< and that map's CRC then */
     float cog_lead_a; /**< this step's feed-forward less the current it asks to flow [A]: the
                            q reference's part that only lifts the loop's lag (0: none) */
     bool cog_on;      /**< the feed-forward ran this step: the dead-time compensation takes
@@ -684,11 +688,16 @@ int mc_drive_attach_hallobs(mc_drive_t *d, mc_drive_hallobs_t *h);
 /** Attach (or, with NULL, detach) the anticogging map (mc_drive_cog.h),
  *  already validated by the caller against this drive's encoder
  *  (mc_cog_check), outliving the drive's use of it: from the next fast step,
- *  with cfg.anticogging, a law with cogging_ff adds mc_cog_ff_a(map,
- *  theta_m) to its q reference.
- *  Allowed while running (one pointer store: the fast step sees the old or
- *  the new map); the caller does not change a map while it is attached. An
- *  mc_drive_init detaches it. Returns 0, -ENODEV with a map and no encoder. */
+ *  with cfg.anticogging, a law with cogging_ff adds the map's current at the
+ *  mechanical angle to its q reference: its series (mc_cog_series_ff_adv_a)
+ *  when the map has an order, else its bins (mc_cog_ff_adv_a).
+ *  Allowed while running, from a context the fast step interrupts: a map
+ *  other than the one whose series the drive holds (or the same one with
+ *  another CRC) is detached first, its series derived (about 2 ms on the
+ *  M4F: the slow context's, never the fast step's), then attached with one
+ *  pointer store; re-attaching the same map costs nothing. The caller does
+ *  not change a map while it is attached. An mc_drive_init detaches it.
+ *  Returns 0, -ENODEV with a map and no encoder. */
 int mc_drive_attach_cog(mc_drive_t *d, const mc_cog_map_t *map);
 
 /** Controlled stop (STOPPING, see Modes) from CURRENT or CTRL; IDLE at

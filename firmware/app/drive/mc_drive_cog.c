@@ -66,10 +66,18 @@ uint32_t mc_cog_keep_count(uint32_t order)
     return c;
 }
 
+/* Bin k's current [A]: x[k], or (x NULL) the map's entry times its scale. */
+static float bin_at(const float *x, const mc_cog_map_t *map, uint32_t k)
+{
+    return (x != NULL) ? x[k] : (map->scale_a * (float)map->q[k]);
+}
+
 /* Fourier coefficients of the kept orders m order (2 / N sum x_k cos / sin
  * of the bin's angle: exact on the uniform grid below N / 2; the mean drops
- * out; each angle reduced to an index mod N before its sine). */
-static void kept_orders(const float *x, uint32_t order, uint32_t count, float *a, float *b)
+ * out; each angle reduced to an index mod N before its sine); the bins are
+ * x's or (x NULL) the map's. */
+static void kept_orders(const float *x, const mc_cog_map_t *map, uint32_t order, uint32_t count,
+                        float *a, float *b)
 {
     for (uint32_t m = 0u; m < count; ++m) {
         const uint32_t j = (m + 1u) * order;
@@ -79,8 +87,9 @@ static void kept_orders(const float *x, uint32_t order, uint32_t count, float *a
             float sn;
             float cs;
             mc_sincos_f32((float)((j * k) & (MC_COG_N - 1u)) / COG_BIN_PER_R, &sn, &cs);
-            sa += x[k] * cs;
-            sb += x[k] * sn;
+            const float v = bin_at(x, map, k);
+            sa += v * cs;
+            sb += v * sn;
         }
         a[m] = sa * (2.0f / (float)MC_COG_N);
         b[m] = sb * (2.0f / (float)MC_COG_N);
@@ -127,7 +136,7 @@ mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
         sum += i_q_a[k];
     }
     mean = sum / (float)MC_COG_N;
-    kept_orders(i_q_a, order, count, a, b);
+    kept_orders(i_q_a, NULL, order, count, a, b);
     for (uint32_t k = 0u; k < MC_COG_N; ++k) {
         const float v = mc_abs_f32(kept_value(i_q_a, k, mean, order, count, a, b));
         fs = (v > fs) ? v : fs;
@@ -139,7 +148,7 @@ mc_cog_status_t mc_cog_build(mc_cog_map_t *map, const float *i_q_a, uint32_t n,
     map->format = MC_COG_FORMAT | (MC_COG_N << 16);
     map->ident = *ident;
     map->scale_a = fs / 32767.0f;
-    map->reserved = 0u;
+    map->order = order;
     inv = (fs > 0.0f) ? (32767.0f / fs) : 0.0f;
     for (uint32_t k = 0u; k < MC_COG_N; ++k) {
         map->q[k] = round_q15(kept_value(i_q_a, k, mean, order, count, a, b) * inv);
@@ -163,7 +172,8 @@ mc_cog_status_t mc_cog_check(const mc_cog_map_t *map, const mc_cog_ident_t *iden
     if (mc_cog_crc(map) != map->crc) {
         return MC_COG_ST_CRC;
     }
-    if (!mc_isfinite_f32(map->scale_a) || !(map->scale_a >= 0.0f) || !ident_valid(&map->ident)) {
+    if (!mc_isfinite_f32(map->scale_a) || !(map->scale_a >= 0.0f) || !ident_valid(&map->ident) ||
+        (map->order >= MC_COG_N / 2u)) {
         return MC_COG_ST_LAYOUT;
     }
     if ((map->ident.enc_type != ident->enc_type) || (map->ident.enc_cpr != ident->enc_cpr) ||
@@ -210,14 +220,65 @@ float mc_cog_ff_a(const mc_cog_map_t *map, float theta_m_rad)
     return map->scale_a * (a + (f * (b - a)));
 }
 
-float mc_cog_ff_adv_a(const mc_cog_map_t *map, float theta_m_rad, float rate_rad_s, float lead_s,
-                      float tau_s, float *p_i_a)
+float mc_cog_ff_adv_a(const mc_cog_map_t *map, float theta_m_rad, float rate_rad_s,
+                      const mc_cog_loop_t *lp, float *p_i_a)
 {
-    const float th = theta_m_rad + (rate_rad_s * lead_s);
     const float h = 1.0f / COG_BIN_PER_R;
-    const float i0 = mc_cog_ff_a(map, th - (0.5f * h));
-    const float i1 = mc_cog_ff_a(map, th + (0.5f * h));
-    const float i = 0.5f * (i0 + i1);
+    const float th_d = theta_m_rad + (rate_rad_s * lp->lead_d_s);
+    const float i = mc_cog_ff_a(map, theta_m_rad + (rate_rad_s * lp->lead_i_s));
+    const float i0 = mc_cog_ff_a(map, th_d - (0.5f * h));
+    const float i1 = mc_cog_ff_a(map, th_d + (0.5f * h));
     *p_i_a = i;
-    return i + (tau_s * rate_rad_s * (i1 - i0) * COG_BIN_PER_R);
+    return i + (lp->tau_s * rate_rad_s * (i1 - i0) * COG_BIN_PER_R);
+}
+
+void mc_cog_series_init(mc_cog_series_t *s, const mc_cog_map_t *map)
+{
+    s->order = map->order;
+    s->count = mc_cog_keep_count(map->order);
+    for (uint32_t m = 0u; m < MC_COG_KEEP_MAX; ++m) {
+        s->a[m] = 0.0f;
+        s->b[m] = 0.0f;
+    }
+    kept_orders(NULL, map, s->order, s->count, s->a, s->b);
+}
+
+/* The series' terms at the angle theta [rad]: the sum (deriv false) or its
+ * derivative in angle (deriv true); 0 for an angle whose order-fold is not
+ * finite or beyond 1e6 turns. */
+static float series_at(const mc_cog_series_t *s, float theta, bool deriv)
+{
+    /* order theta in turns, its fraction: for the drive's angle in
+     * [0, 2 pi) plus a lead, below order + 1 turns, where float's rounding
+     * is under 6e-5 of a period (order < 512) */
+    const float u0 = theta * ((float)s->order / COG_TWO_PI);
+    float v = 0.0f;
+    if (!mc_isfinite_f32(u0) || (mc_abs_f32(u0) > 1.0e6f)) {
+        return 0.0f;
+    }
+    float u = u0 - (float)(int32_t)u0;
+    u = (u < 0.0f) ? (u + 1.0f) : u;
+    float s1;
+    float c1;
+    mc_sincos_f32(u * COG_TWO_PI, &s1, &c1);
+    float sn = s1;
+    float cs = c1;
+    for (uint32_t m = 0u; m < s->count; ++m) {
+        /* a cos + b sin of j theta, or its derivative j (b cos - a sin) */
+        v += deriv ? ((float)((m + 1u) * s->order) * ((s->b[m] * cs) - (s->a[m] * sn)))
+                   : ((s->a[m] * cs) + (s->b[m] * sn));
+        const float c_next = (cs * c1) - (sn * s1); /* cos, sin of (m + 2) x */
+        sn = (sn * c1) + (cs * s1);
+        cs = c_next;
+    }
+    return v;
+}
+
+float mc_cog_series_ff_adv_a(const mc_cog_series_t *s, float theta_m_rad, float rate_rad_s,
+                             const mc_cog_loop_t *lp, float *p_i_a)
+{
+    const float i = series_at(s, theta_m_rad + (rate_rad_s * lp->lead_i_s), false);
+    const float di = series_at(s, theta_m_rad + (rate_rad_s * lp->lead_d_s), true);
+    *p_i_a = i;
+    return mc_isfinite_f32(rate_rad_s) ? (i + (lp->tau_s * rate_rad_s * di)) : 0.0f;
 }

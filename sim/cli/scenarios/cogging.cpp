@@ -164,9 +164,12 @@ std::string calibrate(RunContext& ctx, AppRunner& run, double* t_s) {
   const double t0 = board.t_s();
   const double w = static_cast<double>(MC_APP_COG_CAL_SPEED_RAD_S);
   // two ramps each way, two settles, two turns at w, and their 2x limits
-  const double t_max = 3.0 * static_cast<double>(MC_APP_COG_CAL_RAMP_S) +
-                       2.0 * static_cast<double>(MC_APP_COG_CAL_SETTLE_S) +
-                       2.0 * static_cast<double>(MC_COMM_COG_TIME_FACTOR) * 1.01 * kTwoPi / w + 1.0;
+  const double t_max =
+      static_cast<double>(MC_APP_COG_CAL_PASSES) *
+          (3.0 * static_cast<double>(MC_APP_COG_CAL_RAMP_S) +
+           2.0 * static_cast<double>(MC_APP_COG_CAL_SETTLE_S) +
+           2.0 * static_cast<double>(MC_COMM_COG_TIME_FACTOR) * 1.01 * kTwoPi / w) +
+      1.0;
   run.send(run.cmd().param_req(MC_PARAM_OP_WRITE, MC_PARAM_ID_ANTICOGGING, 2.0));
   run.send(run.cmd().param_op(MC_PARAM_OP_APPLY));
   const uint32_t node = run.target().params().can_node_id;

@@ -148,34 +148,39 @@ TEST(CoggingScenarioSil, TheDriveCalibratesItsMapThroughTheApplication) {
   ASSERT_EQ(txt1.at("verdict"), "pass") << txt1.at("verdict_detail");
   EXPECT_EQ(s1.at("cog_cal_status"), static_cast<double>(MC_COMM_COG_DONE));
   EXPECT_EQ(s1.at("faults"), 0.0);
-  // The calibration's time: three ramps, two settles and two turns (plus
-  // MC_COMM_COG_MARGIN_BINS bins) at MC_APP_COG_CAL_SPEED_RAD_S; up to 5 %
-  // more: the drive's shaped reference reaches the speed after the ramp,
+  // The calibration's time: MC_APP_COG_CAL_PASSES passes of three ramps,
+  // two settles and two turns (plus MC_COMM_COG_MARGIN_BINS bins) at
+  // MC_APP_COG_CAL_SPEED_RAD_S; up to 5 % more: the drive's shaped
+  // reference reaches the speed after the ramp, each pass's stop settles,
   // and the status is read every 50 ms.
   const double t_nom =
-      3.0 * MC_APP_COG_CAL_RAMP_S + 2.0 * MC_APP_COG_CAL_SETTLE_S +
-      2.0 * 2.0 * M_PI * (1.0 + MC_COMM_COG_MARGIN_BINS / 1024.0) / MC_APP_COG_CAL_SPEED_RAD_S;
+      MC_APP_COG_CAL_PASSES *
+      (3.0 * MC_APP_COG_CAL_RAMP_S + 2.0 * MC_APP_COG_CAL_SETTLE_S +
+       2.0 * 2.0 * M_PI * (1.0 + MC_COMM_COG_MARGIN_BINS / 1024.0) / MC_APP_COG_CAL_SPEED_RAD_S);
   EXPECT_GE(s1.at("cog_cal_s"), t_nom - 0.05);
   EXPECT_LE(s1.at("cog_cal_s"), 1.05 * t_nom);
   // The hold under the step load: the map takes the detent torque off the
   // position loop: the excursion at most 0.75 of the one without the map
-  // (measured 0.67; 0.49 with the unfiltered map of the earlier builder,
+  // (measured 0.69; 0.49 with the unfiltered map of the earlier builder,
   // which the filter to multiples of lcm(slots, 2 p) gave up for the speed
   // ripple below: the hold's excursion, a few bins wide, sees the map's
   // bin-scale content, which the filter drops; not understood further).
   RecordProperty("hold_err_pp_rad_off", std::to_string(s0.at("hold_err_pp_rad")));
   RecordProperty("hold_err_pp_rad_on", std::to_string(s1.at("hold_err_pp_rad")));
   EXPECT_LT(s1.at("hold_err_pp_rad"), 0.75 * s0.at("hold_err_pp_rad"));
-  // The speed ripple at 10 % of rated speed: at least 4x lower with the
-  // map (measured 4.56x: 0.0801 -> 0.0176 rad/s). Tolerance: the
-  // peak-to-peak over the 20-period window includes ripple that is not
-  // locked to the angle (the encoder's counts through the speed loop),
-  // whose peaks fall differently from run to run (a 300-period window
-  // measured 4.3x). The 5x is not reached here: see the next test.
+  // The speed ripple at 10 % of rated speed: the 5x (measured 7.0x:
+  // 0.0801 -> 0.0114 rad/s; the cogging at 2.1 times the current loop's
+  // bandwidth, where the feed-forward's loop model of mc_cog_loop_t
+  // matters: what is left at the cogging order is 1 % of it). What the
+  // margin covers: the peak-to-peak over the 20-period window includes
+  // ripple that is not locked to the angle (the encoder's counts through
+  // the speed loop, 0.011 rad/s here), whose peaks fall differently from
+  // run to run (a 300-period window measured 5.8x, a power-up 0.1 rad on
+  // 8.0x).
   const double r10 = s0.at("speed_ripple_pp_rad_s") / s1.at("speed_ripple_pp_rad_s");
   RecordProperty("speed_ripple_pp_rad_s_off", std::to_string(s0.at("speed_ripple_pp_rad_s")));
   RecordProperty("speed_ripple_pp_rad_s_on", std::to_string(s1.at("speed_ripple_pp_rad_s")));
-  EXPECT_GE(r10, 4.0);
+  EXPECT_GE(r10, 5.0);
 }
 
 // The ripple's reduction by the calibrated map (anticogging 0 against 1,
@@ -198,19 +203,23 @@ double ripple_ratio(const MotorFiles& f, double frac, const std::string& tag) {
   return s0.at("speed_ripple_pp_rad_s") / s1.at("speed_ripple_pp_rad_s");
 }
 
-// At 2 % of rated speed the SK3 reaches the 5x (measured 6.2x:
-// 0.346 -> 0.056 rad/s; tolerance as above). The GM4108 (24 slots, 22
-// poles: order 264) does not (measured 1.93x at 10 %, 1.37x at 2 %): a
-// cogging period spans 3.9 of the map's 1024 bins, where the linear
-// interpolation and the half-bin pair of the lookup keep about 0.7 of the
-// amplitude and shift its phase, and its 4096-count encoder puts 15.5
-// counts in a period; bounds 1.6x and 1.2x, the same margin.
+// At 2 % of rated speed the SK3 reaches 21.6x (0.346 -> 0.016 rad/s;
+// bound the 5x). The GM4108 (24 slots, 22 poles: order 264, its
+// map's series, not its bins, which would keep 0.69 of the amplitude at
+// mid-bin) measured 5.3x at 10 % and 3.8x at 2 % from this power-up angle,
+// but 2.1x and 2.6x at 10 % from 0.1 and 0.5 rad: its cogging, 1.7 mN m,
+// is 5.2 mA of q current, two counts of the gimbal board's 12-bit ADC over
+// +-5 A, and its dead time's voltage (0.3 us at 20 kHz, 24 V over 5 ohm) is
+// worth 29 mA: the calibration's map is noise (its amplitude 0.80 to 1.01
+// of the plant's over those runs) and the 5x is not met on it.
+// Bounds 4.0x and 3.0x: what this run shows, a quarter under it for a
+// change that moves the noise.
 TEST(CoggingScenarioSil, TheMapCutsTheSpeedRippleAtTwoAndTenPercent) {
   const MotorFiles sk3 = testlib::files({"turnigy-sk3-6374-149kv", "vesc6-48v"});
   const MotorFiles gm = testlib::files({"gimbal-gm4108", "gimbal-24v"});
   EXPECT_GE(ripple_ratio(sk3, 0.02, "sk3_2"), 5.0);
-  EXPECT_GE(ripple_ratio(gm, 0.10, "gm_10"), 1.6);
-  EXPECT_GE(ripple_ratio(gm, 0.02, "gm_2"), 1.2);
+  EXPECT_GE(ripple_ratio(gm, 0.10, "gm_10"), 4.0);
+  EXPECT_GE(ripple_ratio(gm, 0.02, "gm_2"), 3.0);
 }
 
 // --set anticogging is the table's parameter when the firmware has one, and

@@ -44,6 +44,7 @@ class DriveCogFf : public AppDrive
         id.pole_pairs = kPolePairs;
         id.enc_offset_rad = kOffset;
         ASSERT_EQ(MC_COG_ST_OK, mc_cog_build(&map, v.data(), MC_COG_N, &id, 10.0f, 0u));
+        ASSERT_EQ(MC_COG_ST_OK, mc_cog_build(&map1, v.data(), MC_COG_N, &id, 10.0f, 1u));
         law.out.iq_ref_a = 5.0f;
         law.out.theta_e_rad = kOffset;
         law.out.rotor_frame = true;
@@ -75,7 +76,8 @@ class DriveCogFf : public AppDrive
         ASSERT_EQ(MC_DRIVE_FAULT_NONE, d.faults);
     }
 
-    mc_cog_map_t map{};
+    mc_cog_map_t map{};  /**< every order kept (0): the bins */
+    mc_cog_map_t map1{}; /**< order 1, its eight multiples kept: the series */
     FixedLaw law;
     mc_drive_ctrl_t ctrl{};
 };
@@ -96,18 +98,54 @@ TEST_F(DriveCogFf, AddedToTheLawsQReferenceAtTheMechanicalAngle)
     EXPECT_EQ(d.tm.id_ref_a, 0.0f); // d untouched
     Step(1u);
     // One count on, the tracking loop's speed is not 0: the drive asks for
-    // the map 1.5 periods ahead plus 1 / bandwidth times its rate of change
-    // (mc_cog_ff_adv_a: the same call, exact); the current it asks to flow
-    // is the map there, within the bound above plus the half-bin pair's
-    // average (the same h^2 / 8 bound again: 3e-5 A in all).
+    // the map one period ahead plus 1 / bandwidth times its rate of change
+    // 1.5 periods ahead (mc_cog_loop_t; mc_cog_ff_adv_a: the same call,
+    // exact: this map keeps every order, so the bins); the current it asks
+    // to flow is the map there, within the bound above.
     const float w = d.tm.omega_m_rad_s;
-    const float lead = 1.5f * d.cfg.foc.dt_s;
+    const mc_cog_loop_t lp = {d.cfg.foc.dt_s, 1.5f * d.cfg.foc.dt_s,
+                              d.cfg.foc.lq_h / d.foc.pi_q.kp};
     float i_a = 0.0f;
-    EXPECT_EQ(d.tm.cog_ff_a, mc_cog_ff_adv_a(&map, d.tm.theta_m_rad, w, lead,
-                                             d.cfg.foc.lq_h / d.foc.pi_q.kp, &i_a));
-    const double th = 2.0 * kPi / fcfg.encoder_counts_per_rev + static_cast<double>(w * lead);
+    EXPECT_EQ(d.tm.cog_ff_a, mc_cog_ff_adv_a(&map, d.tm.theta_m_rad, w, &lp, &i_a));
+    const double th =
+        2.0 * kPi / fcfg.encoder_counts_per_rev + static_cast<double>(w * lp.lead_i_s);
     EXPECT_NEAR(i_a, 0.5 * std::cos(th) + 0.25 * std::sin(3.0 * th), 3e-5);
     EXPECT_EQ(d.tm.iq_ref_a, 5.0f + d.tm.cog_ff_a);
+}
+
+// A map with an order goes through its series (mc_cog_series_ff_adv_a),
+// derived when it is attached: the same call on a series derived here,
+// bit for bit; orders 1 and 3 are kept, so the current at theta_m 0 is the
+// map's 0.5 A within the projection's 1e-4 A (test_drive_cog.cpp). The
+// series follows the map attached: a rebuilt map (another CRC) attached at
+// the same address gets its own series; re-attaching the same one leaves
+// it as it was.
+TEST_F(DriveCogFf, AMapWithAnOrderGoesThroughItsSeries)
+{
+    InitDrive();
+    ASSERT_EQ(0, mc_drive_attach_ctrl(&d, &ctrl));
+    ASSERT_EQ(0, mc_drive_attach_cog(&d, &map1));
+    EXPECT_EQ(d.cog_ser.order, 1u);
+    EXPECT_EQ(d.cog_ser.count, MC_COG_KEEP_MAX);
+    ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL));
+    Step(0u);
+    EXPECT_NEAR(d.tm.cog_ff_a, 0.5f, 1e-4f);
+    Step(1u);
+    mc_cog_series_t ser{};
+    mc_cog_series_init(&ser, &map1);
+    const mc_cog_loop_t lp = {d.cfg.foc.dt_s, 1.5f * d.cfg.foc.dt_s,
+                              d.cfg.foc.lq_h / d.foc.pi_q.kp};
+    float i_a = 0.0f;
+    EXPECT_EQ(d.tm.cog_ff_a,
+              mc_cog_series_ff_adv_a(&ser, d.tm.theta_m_rad, d.tm.omega_m_rad_s, &lp, &i_a));
+    // the same map again: nothing derived (the series' words untouched)
+    d.cog_ser.a[0] = 123.0f;
+    ASSERT_EQ(0, mc_drive_attach_cog(&d, &map1));
+    EXPECT_EQ(d.cog_ser.a[0], 123.0f);
+    // rebuilt in place with order 0: another CRC, no series (the bins)
+    map1 = map;
+    ASSERT_EQ(0, mc_drive_attach_cog(&d, &map1));
+    EXPECT_EQ(d.cog_ser.count, 0u);
 }
 
 // Nothing added: anticogging off (and switched on at run time through the

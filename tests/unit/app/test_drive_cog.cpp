@@ -171,6 +171,14 @@ TEST(DriveCog, ValidationNamesWhatIsWrong)
     m.scale_a = -1.0f;
     m.crc = mc_cog_crc(&m);
     EXPECT_EQ(mc_cog_check(&m, &id), MC_COG_ST_LAYOUT);
+    // an order the map cannot hold one period of (N / 2 and beyond)
+    m = good;
+    m.order = kN / 2u;
+    m.crc = mc_cog_crc(&m);
+    EXPECT_EQ(mc_cog_check(&m, &id), MC_COG_ST_LAYOUT);
+    m.order = kN / 2u - 1u;
+    m.crc = mc_cog_crc(&m);
+    EXPECT_EQ(mc_cog_check(&m, &id), MC_COG_ST_OK);
 
     mc_cog_ident_t other = id;
     other.enc_cpr = 4096u;
@@ -250,4 +258,88 @@ TEST(DriveCog, FilteredMapKeepsOnlyTheMultiplesOfTheOrder)
     const mc_cog_map_t before = m;
     EXPECT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, kN / 2u), MC_COG_ST_ARG);
     EXPECT_EQ(std::memcmp(&m, &before, sizeof m), 0);
+}
+
+// The series of a filtered map (mc_cog_series_init, mc_cog_series_ff_adv_a):
+// the builder stores its order; the series' value anywhere, not only at the
+// bins, is the kept orders' sinusoids, where the bins' interpolation loses
+// cos(pi k / N) at mid-bin (0.69 at k = 264). Tolerance 2e-4 A: the
+// projection's float sums and q15's half LSB (1e-4 A at the bins, the
+// test above) plus the series' phase, order theta in float turns (6e-5 of
+// a period at k = 264: 4e-4 rad of 0.3 A = 1.1e-4 A) and mc_sincos_f32.
+TEST(DriveCog, SeriesOfAFilteredMapIsExactBetweenTheBins)
+{
+    std::vector<float> v = sinusoid(0.3, 264u, 0.4, 0.1);
+    const std::vector<float> n = sinusoid(0.05, 100u, 1.0, 0.0); // dropped
+    for (uint32_t i = 0; i < kN; ++i) {
+        v[i] += n[i];
+    }
+    mc_cog_map_t m{};
+    const mc_cog_ident_t id = ident();
+    ASSERT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 264u), MC_COG_ST_OK);
+    EXPECT_EQ(m.order, 264u);
+    EXPECT_EQ(mc_cog_check(&m, &id), MC_COG_ST_OK);
+    mc_cog_series_t ser{};
+    mc_cog_series_init(&ser, &m);
+    EXPECT_EQ(ser.order, 264u);
+    EXPECT_EQ(ser.count, 1u); // 528 is not below N / 2
+    const mc_cog_loop_t still = {0.0f, 0.0f, 0.0f};
+    double e_ser = 0.0;
+    double e_bins = 0.0;
+    for (uint32_t j = 0; j < 8u * kN; ++j) {
+        const double th = 2.0 * kPi * (j + 0.5) / (8.0 * kN);
+        const double want = 0.3 * std::sin(264.0 * th + 0.4);
+        float i_a = 0.0f;
+        const float r = mc_cog_series_ff_adv_a(&ser, static_cast<float>(th), 0.0f, &still, &i_a);
+        EXPECT_EQ(r, i_a); // no rate: the reference is the current
+        e_ser = std::max(e_ser, std::fabs(i_a - want));
+        e_bins = std::max(e_bins, std::fabs(mc_cog_ff_a(&m, static_cast<float>(th)) - want));
+    }
+    EXPECT_LT(e_ser, 2e-4);
+    // the bins' interpolation of the same map: the mid-bin loss, 0.31 of
+    // 0.3 A (1 - cos(pi 264 / 1024)) at the crests, less between
+    EXPECT_GT(e_bins, 0.05);
+    // a map of order 0 has no series: the drive interpolates its bins
+    ASSERT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 0u), MC_COG_ST_OK);
+    mc_cog_series_init(&ser, &m);
+    EXPECT_EQ(ser.count, 0u);
+}
+
+// The feed-forward through the current loop (mc_cog_loop_t): the current at
+// lead_i, plus tau times its rate of change at lead_d, the derivative in
+// angle exact; the bins' pair the same to their interpolation. For
+// I = A sin(k th): r = A sin(k (th + w lead_i)) + tau w A k cos(k (th + w
+// lead_d)). Tolerances: the series as above scaled by the derivative's
+// gain tau w k (2.5 here): 1e-3 A; the bins: (k h)^2 / 8 of the amplitude
+// (3.4 % at k = 84) on the current and the slope's half-bin difference
+// (1 - sinc, 1.1 %) on the derivative term: 0.05 of the 0.8 A reference
+// scale.
+TEST(DriveCog, FeedForwardLeadsTheCurrentAndItsRateOfChange)
+{
+    const std::vector<float> v = sinusoid(0.2, 84u, 0.0, 0.0);
+    mc_cog_map_t m{};
+    const mc_cog_ident_t id = ident();
+    ASSERT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 84u), MC_COG_ST_OK);
+    mc_cog_series_t ser{};
+    mc_cog_series_init(&ser, &m);
+    const mc_cog_loop_t lp = {3.3e-5f, 5.0e-5f, 4.0e-4f};
+    const double w = 60.0; // rad/s: the SK3 at 10 % of its rated speed
+    for (uint32_t j = 0; j < 97u; ++j) {
+        const double th = 0.013 + 2.0 * kPi * j / 97.0;
+        const double xi = 84.0 * (th + w * lp.lead_i_s);
+        const double xd = 84.0 * (th + w * lp.lead_d_s);
+        const double want_i = 0.2 * std::sin(xi);
+        const double want = want_i + lp.tau_s * w * 0.2 * 84.0 * std::cos(xd);
+        float i_a = 0.0f;
+        const float r =
+            mc_cog_series_ff_adv_a(&ser, static_cast<float>(th), static_cast<float>(w), &lp, &i_a);
+        EXPECT_NEAR(i_a, want_i, 2e-4) << j;
+        EXPECT_NEAR(r, want, 1e-3) << j;
+        const float rb =
+            mc_cog_ff_adv_a(&m, static_cast<float>(th), static_cast<float>(w), &lp, &i_a);
+        EXPECT_NEAR(rb, want, 0.05 * 0.8) << j;
+    }
+    float i_a = 1.0f;
+    EXPECT_EQ(mc_cog_series_ff_adv_a(&ser, NAN, 1.0f, &lp, &i_a), 0.0f);
+    EXPECT_EQ(mc_cog_series_ff_adv_a(&ser, 1.0f, INFINITY, &lp, &i_a), 0.0f);
 }

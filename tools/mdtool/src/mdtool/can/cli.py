@@ -334,7 +334,7 @@ def cmd_calibrate_cogging(a):
     (FAULT, BUSY, PENDING, NO_OFFSET, NOT_READY), 5 it ran and failed
     (NO_OFFSET, ROTOR_BLOCKED, MEAS, MAP_IMPLAUSIBLE_*, ABORTED, ...), 1 a
     reply no drive sends; DISABLE is sent on every way out once it enabled."""
-    from .cogging import BOUND_S, COG_N, NOMINAL_S, PHASE_TEXT, calibrate_cogging
+    from .cogging import BOUND_S, CAL_PASSES, COG_N, NOMINAL_S, PHASE_TEXT, calibrate_cogging
     given = [o for o, v in (("--i-test", a.i_test), ("--v-test-max", a.v_test_max),
                             ("--speed-max", a.speed_max), ("--json", a.json)) if v]
     if given:
@@ -343,13 +343,14 @@ def cmd_calibrate_cogging(a):
     shown = {}
 
     def progress(phase, prog):  # one line per change of phase or percentage
-        line = (f"  {PHASE_TEXT[phase]:<13} {prog.percent:>3} %  angle points "
-                f"{prog.done[0]:>4}/{COG_N} forward, {prog.done[1]:>4}/{COG_N} back")
+        line = (f"  pass {prog.pass_no + 1}/{CAL_PASSES} {PHASE_TEXT[phase]:<13} {prog.percent:>3} %  "
+                f"angle points {prog.done[0]:>4}/{COG_N} forward, {prog.done[1]:>4}/{COG_N} back")
         if not a.quiet and shown.get("line") != line:
             shown["line"] = line
             print(line, flush=True)
     if not a.quiet:
-        print(f"anticogging calibration: a turn forward and one back, about {NOMINAL_S:.0f} s "
+        print(f"anticogging calibration: {CAL_PASSES} passes of a turn forward and one back, about "
+              f"{NOMINAL_S:.0f} s "
               f"(gives up after {a.cal_timeout:.0f} s; its own bound {BOUND_S:.0f} s)", flush=True)
     with _Session(a) as s:
         calibrate_cogging(s.drive, a.cal_timeout, save=a.save, on_progress=progress)

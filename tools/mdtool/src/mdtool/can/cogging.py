@@ -4,9 +4,11 @@ The drive runs it (firmware/app/commission/mc_comm_cog.h, driven by
 firmware/app/app/mc_app.c): with the drive enabled in SPEED at rest and its
 angle known, the parameter `anticogging` (180) = 2 applied starts a turn
 forward and a turn back at MC_APP_COG_CAL_SPEED_RAD_S under the drive's own
-speed loop; the parameter `cog_cal_status` (183) tells the phase (bits
-0..7), the MC_COMM_COG_ERR_* bits of a refusal (8..15) and the map
-builder's MC_COG_ST_* refusal (16..23). When it ends the drive runs with
+speed loop, MC_APP_COG_CAL_PASSES times (each pass after the first runs
+on the map of the one before and learns what it left); the parameter
+`cog_cal_status` (183) tells the phase (bits 0..7), the MC_COMM_COG_ERR_*
+bits of a refusal (8..15), the map builder's MC_COG_ST_* refusal (16..23)
+and the pass (24..31, 0 first). When it ends the drive runs with
 `anticogging` 1 and the new map (0 when refused); SAVE stores the map with
 the configuration.
 
@@ -35,6 +37,7 @@ P_ANTICOGGING, P_COG_STATUS, P_COG_CAL_STATUS, P_CFG_PENDING = 180, 181, 183, 20
 CAL_SPEED_RAD_S = 0.1
 CAL_RAMP_S = 0.5
 CAL_SETTLE_S = 1.0
+CAL_PASSES = 2
 BOUND_FRAC = 0.5
 TIME_FACTOR = 2.0
 MARGIN_BINS = 8
@@ -42,10 +45,12 @@ COG_N = 1024
 
 #: the angle one recording covers [rad]: a turn and the margin's bins
 TURN_RAD = 2.0 * math.pi * (1.0 + MARGIN_BINS / COG_N)
-#: the calibration's nominal time [s]: three ramps with their settles, two turns at the speed
-NOMINAL_S = 3.0 * (CAL_RAMP_S + CAL_SETTLE_S) + 2.0 * TURN_RAD / CAL_SPEED_RAD_S
+#: the calibration's nominal time [s]: per pass three ramps with their settles, two turns at
+#: the speed
+NOMINAL_S = CAL_PASSES * (3.0 * (CAL_RAMP_S + CAL_SETTLE_S) + 2.0 * TURN_RAD / CAL_SPEED_RAD_S)
 #: its own bound [s]: each recording fails BLOCKED beyond TIME_FACTOR times its turn's time
-BOUND_S = 3.0 * (CAL_RAMP_S + CAL_SETTLE_S) + 2.0 * TIME_FACTOR * TURN_RAD / CAL_SPEED_RAD_S
+BOUND_S = CAL_PASSES * (3.0 * (CAL_RAMP_S + CAL_SETTLE_S) +
+                        2.0 * TIME_FACTOR * TURN_RAD / CAL_SPEED_RAD_S)
 #: the host's longest wait over the bound: the drive's clock against the
 #: host's (a crystal's few 1e-4, a simulated drive on a loaded machine a few
 #: percent) and the status polls' latency; 10 % covers both
@@ -98,11 +103,12 @@ class ProtocolError(CanToolError):
 
 def decode(st):
     """cog_cal_status -> (phase name, [(failure name, help)]). ProtocolError
-    for a value no drive sends (a phase beyond FAILED, bits above 23, an
-    unknown error bit or builder status)."""
+    for a value no drive sends (a phase beyond FAILED, a pass beyond the
+    last, an unknown error bit or builder status)."""
     st = int(st)
     phase, err, bld = st & 0xFF, (st >> 8) & 0xFF, (st >> 16) & 0xFF
-    if st >> 24 or phase not in PHASES or err & ~sum(ERRORS) or (bld and bld not in BUILDER):
+    if (pass_of(st) >= CAL_PASSES or phase not in PHASES or err & ~sum(ERRORS) or
+            (bld and bld not in BUILDER)):
         raise ProtocolError(f"cog_cal_status 0x{st:08X} is not a value the drive sends "
                             "(a foreign or corrupted reply)")
     fails = [v for b, v in ERRORS.items() if err & b]
@@ -111,21 +117,31 @@ def decode(st):
     return PHASES[phase], fails
 
 
+def pass_of(st):
+    """The calibration's pass (0 first) a cog_cal_status tells."""
+    return (int(st) >> 24) & 0xFF
+
+
 class Progress:
-    """Bins done per direction: from the drive's POSITION frames when it
-    sends them (the angle covered since the recording began), else from the
-    time in the recording at the calibration speed."""
+    """Bins done per direction in the pass that runs: from the drive's
+    POSITION frames when it sends them (the angle covered since the recording
+    began), else from the time in the recording at the calibration speed."""
 
     def __init__(self):
         self.phase, self.t0, self.theta0, self.theta = None, None, None, None
         self.done = [0, 0]
+        self.pass_no = 0
 
     def position(self, theta):
         self.theta = theta
         if self.theta0 is None and self.phase in ("REC_FWD", "REC_REV"):
             self.theta0 = theta
 
-    def update(self, phase, now):
+    def update(self, phase, now, pass_no=0):
+        if phase == "DONE":  # the drive's DONE carries no pass: the last one ended
+            pass_no = self.pass_no = CAL_PASSES - 1
+        if pass_no != self.pass_no:  # a new pass: its turns begin again
+            self.pass_no, self.done, self.phase = pass_no, [0, 0], None
         if phase != self.phase:
             if self.phase == "REC_FWD":
                 self.done[0] = COG_N
@@ -144,7 +160,10 @@ class Progress:
 
     @property
     def percent(self):
-        return int(100 * (self.done[0] + self.done[1]) / (2 * COG_N))
+        if self.phase == "DONE":
+            return 100
+        return int(100 * (2 * COG_N * self.pass_no + self.done[0] + self.done[1]) /
+                   (2 * COG_N * CAL_PASSES))
 
 
 def _read(drive, pid):
@@ -281,7 +300,7 @@ def follow(drive, timeout_s, keepalive=0.05, poll=0.25, on_progress=None):
             if phase == "IDLE":
                 raise ProtocolError("cog_cal_status reads IDLE after the APPLY that starts the "
                                     "calibration: the drive did not start it")
-            prog.update(phase, time.monotonic())
+            prog.update(phase, time.monotonic(), pass_of(st))
             if on_progress:
                 on_progress(phase, prog)
             if phase in ("DONE", "FAILED"):
