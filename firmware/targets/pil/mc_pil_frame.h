@@ -65,6 +65,8 @@
  *      image of different versions still reach READY and the host refuses
  *      the image by its version; an image given a capability it does not
  *      know answers READY with MC_PIL_READY_ERR_CAPS and its version.
+ *   6  PROBE carries the anticogging map's status and feed-forward
+ *      (mc_app_probe_t.cog_status, cog_ff_a): two words more;
  *
  * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
  * and parse a complete frame. Built for the target (hal/pil/mc_hal_pil.c) and for the
@@ -105,7 +107,7 @@ typedef enum {
 } mc_pil_type_t;
 
 /** The link protocol's version (see the file comment), sent in READY. */
-#define MC_PIL_VERSION 5u
+#define MC_PIL_VERSION 6u
 
 /** (id, raw) pairs per PARAMS frame (the payload limit). */
 #define MC_PIL_PARAMS_MAX 31u

@@ -29,7 +29,7 @@ extern "C" {
 #endif
 
 /** Payload words of PROBE: sizeof(mc_app_probe_t) / 4. */
-#define MC_PIL_PROBE_WORDS 63u
+#define MC_PIL_PROBE_WORDS 65u
 
 /** Encode p; the frame's length, 0 if p or buf is NULL or buf too small. */
 size_t mc_pil_encode_probe(const mc_app_probe_t *p, uint8_t *buf, size_t cap);
