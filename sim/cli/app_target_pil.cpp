@@ -15,7 +15,10 @@
 // the link, the configuration store is two RAM sectors, no watchdog.
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <utility>
@@ -25,6 +28,9 @@
 #include "foc_pil.hpp"
 #include "hal_host/hall_input.hpp"
 #include "scenario.hpp"
+extern "C" {
+#include "config/mc_cfg_store.h"
+}
 
 namespace mcsim {
 
@@ -40,11 +46,6 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
                        "' cannot be read (build the image: target mc_pil_m4f)");
     }
   }
-  if (s.flash != nullptr) {
-    throw UsageError(
-        "PIL: the image's configuration store is its own (an erased RAM store): --flash is "
-        "for the SIL");
-  }
   const uint32_t err = mc_params_validate(&s.defaults);
   if (err != MC_PARAMS_OK) {
     char bits[16];
@@ -53,6 +54,93 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
                      bits + "): the image would refuse it");
   }
   return s;
+}
+
+// The image's RAM store as a flash for the host's store code (the FLASH
+// frames' content): two sectors of FileFlash's geometry, NOR semantics
+// (program clears bits only).
+class RamFlash {
+ public:
+  static constexpr uint32_t kSectorBytes = 16u * 1024u;
+  explicit RamFlash(std::vector<uint8_t> bytes) : mem_(std::move(bytes)) {}
+  const mc_hal_flash_t* hal() const { return &dev_; }
+  const std::vector<uint8_t>& bytes() const { return mem_; }
+
+ private:
+  static RamFlash& self(void* c) { return *static_cast<RamFlash*>(c); }
+  static bool in(uint32_t sector, uint32_t off, uint32_t len) {
+    return sector < 2u && off <= kSectorBytes && len <= kSectorBytes - off;
+  }
+  static int size(void*, uint32_t sector, uint32_t* b) {
+    if (sector >= 2u) return -EINVAL;
+    *b = kSectorBytes;
+    return 0;
+  }
+  static int erase(void* c, uint32_t sector) {
+    if (sector >= 2u) return -EINVAL;
+    std::fill_n(self(c).mem_.begin() + sector * kSectorBytes, kSectorBytes, uint8_t{0xFF});
+    return 0;
+  }
+  static int program(void* c, uint32_t sector, uint32_t off, const uint32_t* w, uint32_t n) {
+    if (!in(sector, off, 4u * n) || (off % 4u) != 0u) return -EINVAL;
+    std::vector<uint8_t> b(4u * n);
+    std::memcpy(b.data(), w, b.size());
+    for (uint32_t i = 0; i < b.size(); ++i) self(c).mem_[sector * kSectorBytes + off + i] &= b[i];
+    return 0;
+  }
+  static int read(void* c, uint32_t sector, uint32_t off, void* p, uint32_t len) {
+    if (!in(sector, off, len)) return -EINVAL;
+    std::memcpy(p, self(c).mem_.data() + sector * kSectorBytes + off, len);
+    return 0;
+  }
+  static constexpr mc_hal_flash_ops_t kOps = {size, erase, program, read};
+  std::vector<uint8_t> mem_;
+  mc_hal_flash_t dev_{&kOps, this};
+};
+
+// --flash: what the image's store receives (FLASH frames) and the set it
+// boots. The board's file read through its HAL (never written); a stored
+// set gets what the scenario chose written over it (AppSetup::over_stored,
+// as the SIL target writes it over the set it booted), here as a newer
+// record of the copy, which the image then boots. *booted: the set the
+// image boots (s.defaults when the store holds none it boots).
+std::vector<uint8_t> flash_for_image(const AppSetup& s, mc_params_t* booted) {
+  std::vector<uint8_t> bytes(2u * RamFlash::kSectorBytes);
+  for (uint32_t k = 0; k < 2u; ++k) {
+    uint32_t n = 0;
+    if (mc_hal_flash_sector_size(s.flash, k, &n) != 0 || n != RamFlash::kSectorBytes ||
+        mc_hal_flash_read(s.flash, k, 0u, bytes.data() + k * n, n) != 0) {
+      throw UsageError("PIL: the flash file cannot be read as the image's two 16 KiB sectors");
+    }
+  }
+  RamFlash ram(std::move(bytes));
+  mc_cfg_store_t st{};
+  mc_cfg_store_cfg_t sc{};
+  sc.flash = ram.hal();
+  sc.sector[0] = 0u;
+  sc.sector[1] = 1u;
+  mc_params_t q{};
+  *booted = s.defaults;
+  if (mc_cfg_store_init(&st, &sc) != 0) throw UsageError("PIL: no store on the flash file");
+  const mc_cfg_boot_t b = mc_cfg_store_load(&st, &q);
+  if (b != MC_CFG_BOOT_STORED && b != MC_CFG_BOOT_MIGRATED) return ram.bytes();
+  const mc_params_t stored = q;
+  for (uint32_t id : s.over_stored) {
+    const mc_param_info_t* info = mc_param_find(id, nullptr);
+    if (info != nullptr) mc_param_set_raw(&q, info, mc_param_get_raw(&s.defaults, info));
+  }
+  if (q.anticogging == 2u) q.anticogging = 0u;  // as the image boots a stored 2 (mc_app_boot)
+  if (std::memcmp(&q, &stored, sizeof q) != 0) {
+    if (mc_params_validate(&q) != MC_PARAMS_OK) {
+      throw UsageError(
+          "PIL: the stored configuration with the scenario's settings over it is invalid");
+    }
+    if (mc_cfg_store_save(&st, &q) != 0) {
+      throw UsageError("PIL: the scenario's settings do not fit the flash copy's store");
+    }
+  }
+  *booted = q;
+  return ram.bytes();
 }
 
 // The board's Hall inputs on the plant's model, as the SIL target makes
@@ -83,6 +171,7 @@ class PilAppTarget final : public AppTarget {
         name_(image_name(o)) {
     PilAppSetup ps;
     ps.defaults = s.defaults;
+    if (s.flash != nullptr) ps.flash = flash_for_image(s, &params_);
     mc_app_cfg_t c{};
     app_target_binding(s, &c);
     ps.app.tm_budget_frac = c.tm_budget_frac;

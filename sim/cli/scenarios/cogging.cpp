@@ -33,11 +33,13 @@
 //   speed_phase_s, hold_phase_s  the phases' simulated times (--duration
 //                            caps their sum; a window it cuts is not measured)
 //   cog_status, cog_status_name  the drive's cog_status (MC_COG_ST_*) as the
-//                            window starts: OK the map is attached; EMPTY
-//                            none, ENCODER made with another encoder or
+//                            speed phase starts: OK the map is attached;
+//                            EMPTY none, ENCODER made with another encoder or
 //                            offset (the drive then runs without it)
 //   cog_ff_pp_a              peak-to-peak of the drive's anticogging
 //                            feed-forward in the window (0: no map applied)
+//   cog_ff_max_abs_a         its largest magnitude over the speed phase
+//                            (a run cut before the window has it too)
 //   cog_saved, cog_save_seq  with --flash and a calibration: 1 once the map
 //                            and the set are SAVEd, and the store's sequence
 // The CSV's cog_ff_a column is that feed-forward, every row.
@@ -326,7 +328,7 @@ Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c,
   bool sent = false;
   std::string stopped;
   AppWatch watch;
-  double id = 0, iq = 0;
+  double id = 0, iq = 0, ff_max = 0;
   for (long k = 0; k <= n; ++k) {
     const double t = board.t_s() - t_origin;
     if (!sent && t >= t0) {
@@ -335,11 +337,12 @@ Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c,
     }
     const double w = board.state()(2);
     const mc_app_probe_t& q = run.probe();
+    if (k == 0) {  // the map's status as the phase starts (after a calibration)
+      ctx.summary.set("cog_status", q.cog_status);
+      ctx.summary.set_text("cog_status_name", cog_status_name(q.cog_status));
+    }
+    ff_max = std::max(ff_max, std::abs(static_cast<double>(q.cog_ff_a)));
     if (t >= t_win0) {
-      if (w_true->n == 0) {  // the map's status as the window starts
-        ctx.summary.set("cog_status", q.cog_status);
-        ctx.summary.set_text("cog_status_name", cog_status_name(q.cog_status));
-      }
       w_true->add(w);
       w_est->add(q.omega_m_rad_s);
       iq_ref->add(q.iq_ref_a);
@@ -356,6 +359,7 @@ Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c,
     run.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
+  ctx.summary.set("cog_ff_max_abs_a", ff_max);
   ctx.summary.set("speed_phase_s", dur);
   ctx.summary.set("speed_window_s", win);
   ctx.summary.set("speed_window_start_s", t_win0);
