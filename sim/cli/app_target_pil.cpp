@@ -1,8 +1,9 @@
 // The PIL AppTarget (app_target.hpp): the board's whole image on the
 // emulated Cortex-M4F, the plant on the host, one period at a time over the
 // PIL link (foc_pil.hpp's PilSession; protocol firmware/targets/pil/
-// mc_pil_frame.h, version 5: the application's probe comes back as PROBE
-// after each period; a board with a brake chopper gets one in the image's
+// mc_pil_frame.h, version 6: the application's probe comes back as PROBE
+// and PROBE2 after each period; with --flash the board's flash file's bytes
+// go to the image's RAM store (FLASH frames) before it boots; a board with a brake chopper gets one in the image's
 // HAL, whose duty comes back in OUT and drives the plant's brake; a board
 // with Hall sensors gets Hall inputs there, the host's Hall model read at
 // each period's sample and its code sent in MEAS).
@@ -12,7 +13,8 @@
 // parameter service and store); what differs is only the HAL (hal/pil
 // instead of the board's hal/stm32f405 drivers): the ADC, encoder, Hall,
 // fault, tick and temperature answers are the host board's, CAN frames travel over
-// the link, the configuration store is two RAM sectors, no watchdog.
+// the link, the configuration store is two RAM sectors (erased, or the
+// --flash file's content: never written back), no watchdog.
 #include <unistd.h>
 
 #include <algorithm>
