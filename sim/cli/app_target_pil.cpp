@@ -63,42 +63,56 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
 // (program clears bits only).
 class RamFlash {
  public:
-  static constexpr uint32_t kSectorBytes = 16u * 1024u;
+  static constexpr std::size_t kSectorBytes = 16u * 1024u;
   explicit RamFlash(std::vector<uint8_t> bytes) : mem_(std::move(bytes)) {}
   const mc_hal_flash_t* hal() const { return &dev_; }
   const std::vector<uint8_t>& bytes() const { return mem_; }
 
  private:
   static RamFlash& self(void* c) { return *static_cast<RamFlash*>(c); }
-  static bool in(uint32_t sector, uint32_t off, uint32_t len) {
+  static std::size_t at(uint32_t sector, uint32_t off) {
+    return static_cast<std::size_t>(sector) * kSectorBytes + off;
+  }
+  static bool in(uint32_t sector, uint32_t off, std::size_t len) {
     return sector < 2u && off <= kSectorBytes && len <= kSectorBytes - off;
   }
-  static int size(void*, uint32_t sector, uint32_t* b) {
+  static int size(void* /*ctx*/, uint32_t sector, uint32_t* b) {
     if (sector >= 2u) return -EINVAL;
-    *b = kSectorBytes;
+    *b = static_cast<uint32_t>(kSectorBytes);
     return 0;
   }
   static int erase(void* c, uint32_t sector) {
     if (sector >= 2u) return -EINVAL;
-    std::fill_n(self(c).mem_.begin() + sector * kSectorBytes, kSectorBytes, uint8_t{0xFF});
+    std::fill_n(self(c).mem_.begin() + static_cast<std::ptrdiff_t>(at(sector, 0u)), kSectorBytes,
+                uint8_t{0xFF});
     return 0;
   }
   static int program(void* c, uint32_t sector, uint32_t off, const uint32_t* w, uint32_t n) {
-    if (!in(sector, off, 4u * n) || (off % 4u) != 0u) return -EINVAL;
-    std::vector<uint8_t> b(4u * n);
-    std::memcpy(b.data(), w, b.size());
-    for (uint32_t i = 0; i < b.size(); ++i) self(c).mem_[sector * kSectorBytes + off + i] &= b[i];
+    const std::size_t len = static_cast<std::size_t>(n) * 4u;
+    if (!in(sector, off, len) || (off % 4u) != 0u) return -EINVAL;
+    std::vector<uint8_t> b(len);
+    std::memcpy(b.data(), w, len);
+    for (std::size_t i = 0; i < len; ++i) self(c).mem_[at(sector, off) + i] &= b[i];
     return 0;
   }
   static int read(void* c, uint32_t sector, uint32_t off, void* p, uint32_t len) {
     if (!in(sector, off, len)) return -EINVAL;
-    std::memcpy(p, self(c).mem_.data() + sector * kSectorBytes + off, len);
+    std::memcpy(p, self(c).mem_.data() + at(sector, off), len);
     return 0;
   }
   static constexpr mc_hal_flash_ops_t kOps = {size, erase, program, read};
   std::vector<uint8_t> mem_;
   mc_hal_flash_t dev_{&kOps, this};
 };
+
+// Whether two sets differ in a parameter of the table.
+bool sets_differ(const mc_params_t& a, const mc_params_t& b) {
+  for (const mc_param_info_t& info : mc_param_table) {
+    if (info.offset == MC_PARAM_NO_FIELD) continue;
+    if (mc_param_get_raw(&a, &info) != mc_param_get_raw(&b, &info)) return true;
+  }
+  return false;
+}
 
 // --flash: what the image's store receives (FLASH frames) and the set it
 // boots. The board's file read through its HAL (never written); a stored
@@ -111,7 +125,7 @@ std::vector<uint8_t> flash_for_image(const AppSetup& s, mc_params_t* booted) {
   for (uint32_t k = 0; k < 2u; ++k) {
     uint32_t n = 0;
     if (mc_hal_flash_sector_size(s.flash, k, &n) != 0 || n != RamFlash::kSectorBytes ||
-        mc_hal_flash_read(s.flash, k, 0u, bytes.data() + k * n, n) != 0) {
+        mc_hal_flash_read(s.flash, k, 0u, bytes.data() + static_cast<std::size_t>(k) * n, n) != 0) {
       throw UsageError("PIL: the flash file cannot be read as the image's two 16 KiB sectors");
     }
   }
@@ -132,7 +146,7 @@ std::vector<uint8_t> flash_for_image(const AppSetup& s, mc_params_t* booted) {
     if (info != nullptr) mc_param_set_raw(&q, info, mc_param_get_raw(&s.defaults, info));
   }
   if (q.anticogging == 2u) q.anticogging = 0u;  // as the image boots a stored 2 (mc_app_boot)
-  if (std::memcmp(&q, &stored, sizeof q) != 0) {
+  if (sets_differ(q, stored)) {
     if (mc_params_validate(&q) != MC_PARAMS_OK) {
       throw UsageError(
           "PIL: the stored configuration with the scenario's settings over it is invalid");

@@ -24,7 +24,7 @@ static size_t encode_part(const mc_app_probe_t *p, mc_pil_type_t t, uint32_t fir
     if (p == NULL) {
         return 0u;
     }
-    (void)memcpy(w, (const uint8_t *)p + 4u * first, 4u * n);
+    (void)memcpy(w, (const uint8_t *)p + ((size_t)first * 4u), (size_t)n * 4u);
     return mc_pil_encode_words(t, w, n, buf, cap);
 }
 
@@ -37,7 +37,7 @@ static int decode_part(const uint8_t *buf, size_t n, mc_pil_type_t t, uint32_t f
     }
     const int rc = mc_pil_decode_words(buf, n, t, w, words);
     if (rc == MC_PIL_OK) {
-        (void)memcpy((uint8_t *)out + 4u * first, w, 4u * words);
+        (void)memcpy((uint8_t *)out + ((size_t)first * 4u), w, (size_t)words * 4u);
     }
     return rc;
 }
