@@ -259,7 +259,7 @@ TEST(PilFrame, ReadyCarriesTheProtocolVersion) {
   mc_pil_ready_t d{};
   ASSERT_EQ(mc_pil_decode_ready(buf, n, &d), MC_PIL_OK);
   EXPECT_TRUE(same_bits(d, r));
-  EXPECT_EQ(d.version, 5u);  // 5: MEAS carries the Hall read, APP the capabilities
+  EXPECT_EQ(d.version, 6u);  // 6: PROBE2 (the probe past a frame), FLASH (the board's flash)
   const uint32_t v1[2] = {0u, 0u};
   n = mc_pil_encode_words(MC_PIL_TYPE_READY, v1, 2u, buf, sizeof buf);
   ASSERT_GT(n, 0u);
