@@ -63,7 +63,7 @@ const AppSetup& checked(const AppSetup& s, const AppTargetPilOptions& o) {
 // (program clears bits only).
 class RamFlash {
  public:
-  static constexpr std::size_t kSectorBytes = 16u * 1024u;
+  static constexpr std::size_t kSectorBytes = std::size_t{16} * 1024u;  // FileFlash's
   explicit RamFlash(std::vector<uint8_t> bytes) : mem_(std::move(bytes)) {}
   const mc_hal_flash_t* hal() const { return &dev_; }
   const std::vector<uint8_t>& bytes() const { return mem_; }
