@@ -38,9 +38,12 @@
  *       flash        RAM: QEMU does not model the F405's flash controller,
  *                    so the configuration store runs on two 16 KiB sectors
  *                    of SRAM with NOR semantics (hal/fake/mc_fake_flash.c),
- *                    erased at boot; the geometry of the SIL's
- *                    hal_host::FileFlash. A SAVE works within the run and is
- *                    gone at the next boot;
+ *                    erased at boot, or filled with the host's FLASH
+ *                    frames before APP (mcsim --pil --flash FILE: the
+ *                    board's flash file, link version 6); the geometry of
+ *                    the SIL's hal_host::FileFlash. A SAVE works within the
+ *                    run and is gone at the next boot (the file is the
+ *                    host's, never written back);
  *       watchdog     none (NULL), as in the SIL rig: QEMU's IWDG is not the
  *                    point here and a lock-step run may stall on the host;
  *       laws         from the parameters (laws_from_params), as on the
@@ -631,14 +634,39 @@ static void setup_fail(const char *what)
 
 static void send_ready(uint32_t err);
 
-/* Whole-image mode: PARAMS frames onto the table's defaults, then APP. */
+/* A FLASH frame's bytes into the RAM store (its offset and length checked
+ * against the store: the frame's own buffer, nothing on the stack). */
+static void receive_flash(void)
+{
+    uint32_t off = 0u;
+    uint32_t n = 0u;
+    const uint8_t *data = NULL;
+    if (mc_pil_decode_flash(g_pil.rx, g_pil.rx_len, &off, &data, &n) != MC_PIL_OK) {
+        setup_fail("pil: bad FLASH frame\n");
+    }
+    if ((off > sizeof g_flash_mem) || (n > sizeof g_flash_mem - off)) {
+        setup_fail("pil: FLASH beyond the store's two sectors\n");
+    }
+    memcpy(&g_flash_mem[off], data, n);
+}
+
+/* Whole-image mode: PARAMS frames onto the table's defaults and FLASH
+ * frames into the erased RAM store, then APP. */
 static void receive_app_setup(int type)
 {
     uint32_t ids[MC_PIL_PARAMS_MAX];
     uint32_t raws[MC_PIL_PARAMS_MAX];
     g_pil.defaults = mc_params_default;
-    while (type == (int)MC_PIL_TYPE_PARAMS) {
+    /* An erased flash, as a new FileFlash file, until FLASH frames fill it. */
+    memset(g_flash_mem, 0xFF, sizeof g_flash_mem);
+    while ((type == (int)MC_PIL_TYPE_PARAMS) || (type == (int)MC_PIL_TYPE_FLASH)) {
         uint32_t n = 0u;
+        if (type == (int)MC_PIL_TYPE_FLASH) {
+            receive_flash();
+            g_pil.rx_len = 0u;
+            type = poll_frame();
+            continue;
+        }
         if (mc_pil_decode_params(g_pil.rx, g_pil.rx_len, ids, raws, &n) != MC_PIL_OK) {
             setup_fail("pil: bad PARAMS frame\n");
         }
@@ -682,10 +710,9 @@ static void receive_app_setup(int type)
     /* The tick counter's rate before the first period (mc_drive_init reads
      * it for the control deadline); each MEAS brings it again. */
     g_pil.meas.tick_hz = a.tick_hz;
-    /* An erased flash, as a new FileFlash file. */
+    /* The RAM store: erased, or the host's FLASH content (the board's file) */
     static const uint32_t sector_bytes[PIL_FLASH_SECTORS] = {PIL_FLASH_SECTOR_BYTES,
                                                              PIL_FLASH_SECTOR_BYTES};
-    memset(g_flash_mem, 0xFF, sizeof g_flash_mem);
     if (mc_fake_flash_init(&g_pil.flash, g_flash_mem, sector_bytes, PIL_FLASH_SECTORS) == 0) {
         c->flash = &g_pil.flash.dev;
         c->flash_sectors[0] = 0u;
@@ -725,7 +752,8 @@ static void handshake(void)
         g_pil.have_cfg = true;
         return;
     }
-    if (type == (int)MC_PIL_TYPE_PARAMS || type == (int)MC_PIL_TYPE_APP) {
+    if (type == (int)MC_PIL_TYPE_PARAMS || type == (int)MC_PIL_TYPE_FLASH ||
+        type == (int)MC_PIL_TYPE_APP) {
         receive_app_setup(type);
         return;
     }
@@ -759,7 +787,7 @@ static void send_ready(uint32_t err)
     usart_send(buf, n);
 }
 
-/* Whole-image mode: the application's probe to the host (PROBE). */
+/* Whole-image mode: the application's probe to the host (PROBE, PROBE2). */
 static void send_probe(void)
 {
     const mc_app_t *app = mc_main_app();
@@ -770,6 +798,7 @@ static void send_probe(void)
     mc_app_probe(app, &p);
     uint8_t buf[MC_PIL_MAX_FRAME] = {0u};
     usart_send(buf, mc_pil_encode_probe(&p, buf, sizeof buf));
+    usart_send(buf, mc_pil_encode_probe2(&p, buf, sizeof buf));
 }
 
 void mc_board_start(void)

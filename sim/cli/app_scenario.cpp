@@ -140,6 +140,11 @@ std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFi
   }
   std::unique_ptr<AppTarget> t = make_app_target_pil(s, *ctx.pil);
   std::fprintf(stderr, "mcsim: target %s\n", t->name().c_str());
+  if (ctx.flash != nullptr && s.flash != nullptr && s.flash_must_boot) {
+    // the image's boot of the file's content (FLASH frames), checked as the SIL's
+    check_flash_boot(*t, ctx.flash->path(), p);
+    ctx.summary.set_text("cfg_boot_status", flash_boot_name(t->probe().boot_status));
+  }
   return t;
 }
 

@@ -46,6 +46,21 @@ void PilSession::boot_app(const PilAppSetup& setup) {
         mc_pil_encode_params(ids.data() + at, raws.data() + at, k, buf.data(), buf.size());
     link_.send(buf.data(), n);
   }
+  // The flash content, MC_PIL_FLASH_CHUNK bytes a frame; erased chunks are
+  // left out (the image's store starts erased).
+  const std::vector<uint8_t>& fl = setup.flash;
+  for (std::size_t at = 0; at < fl.size(); at += MC_PIL_FLASH_CHUNK) {
+    const auto k = static_cast<uint32_t>(std::min<std::size_t>(MC_PIL_FLASH_CHUNK, fl.size() - at));
+    if (std::all_of(fl.begin() + static_cast<std::ptrdiff_t>(at),
+                    fl.begin() + static_cast<std::ptrdiff_t>(at + k),
+                    [](uint8_t b) { return b == 0xFFu; })) {
+      continue;
+    }
+    const std::size_t n =
+        mc_pil_encode_flash(static_cast<uint32_t>(at), fl.data() + at, k, buf.data(), buf.size());
+    if (n == 0u) throw std::runtime_error("PIL: the flash content is not whole words");
+    link_.send(buf.data(), n);
+  }
   mc_pil_app_t app = setup.app;
   (void)board_.tick_freq(&app.tick_hz);  // this board's, whatever the caller gave
   // The image's HAL exposes a brake chopper when this board has one, Hall
@@ -88,6 +103,14 @@ void PilSession::expect_probe() {
   if (mc_pil_decode_probe(r.data(), r.size(), &probe_) != MC_PIL_OK) {
     throw std::runtime_error("PIL: expected the application's PROBE at period " +
                              std::to_string(seq_));
+  }
+  expect_probe2();
+}
+
+void PilSession::expect_probe2() {
+  const std::vector<uint8_t> r = link_.receive_frame();
+  if (mc_pil_decode_probe2(r.data(), r.size(), &probe_) != MC_PIL_OK) {
+    throw std::runtime_error("PIL: expected PROBE2 after PROBE at period " + std::to_string(seq_));
   }
 }
 
@@ -140,6 +163,7 @@ const mc_pil_out_t& PilSession::step(const PilCommand& cmd,
       if (mc_pil_decode_probe(r.data(), r.size(), &probe_) != MC_PIL_OK) {
         throw std::runtime_error("PIL: bad PROBE frame at period " + std::to_string(seq_));
       }
+      expect_probe2();
       probed = true;
       continue;
     }

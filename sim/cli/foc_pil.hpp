@@ -55,6 +55,10 @@ struct PilAppSetup {
   // HAL exposing them to the application (MC_PIL_CAP_HALL). Outlives the
   // session.
   const mc_hal_hall_t* hall = nullptr;
+  // The board's flash content for the image's RAM configuration store
+  // (FLASH frames before APP; link version 6): its two sectors' bytes, or
+  // empty for an erased store.
+  std::vector<uint8_t> flash;
 };
 
 // A frame the image sent, and the period (MEAS seq) it left in.
@@ -90,6 +94,7 @@ class PilSession {
  private:
   void expect_ready();
   void expect_probe();
+  void expect_probe2();  // PROBE2, right after PROBE
 
   hal_host::PmsmBoard& board_;
   hal_host::PilLink link_;

@@ -1249,6 +1249,8 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p)
     p->hall_error = hall_error_of(app);
     p->t_winding_est_c = d->thermal.t_w_c;
     p->i_limit_a = mc_drive_thermal_limit_a(&d->thermal, d->cfg.i_max_a);
+    p->cog_status = app->srv.cog_status;
+    p->cog_ff_a = d->tm.cog_ff_a;
     if ((ctrl != NULL) && app->cfg.laws_from_params) {
         if (l->pi2d_ok && (ctrl == &l->pi2d.ops)) {
             p->id_ref_a = l->pi2d.tm.id_ref_a;

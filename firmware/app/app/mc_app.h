@@ -376,6 +376,11 @@ typedef struct {
     /* the Hall sensors (encoder_type 1): MC_HALL_ERR_* behind an ENCODER
      * fault (the parameter hall_error) */
     uint32_t hall_error;
+    /* anticogging (mc_drive_cog.h): the cog_status parameter (MC_COG_ST_*:
+     * OK the map is valid for the encoder in force and attached) and the
+     * feed-forward the drive added to the q reference this period [A] */
+    uint32_t cog_status;
+    float cog_ff_a;
 } mc_app_probe_t;
 
 /** Fill *p from the application and its drive (after a period). */

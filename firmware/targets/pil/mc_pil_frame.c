@@ -551,6 +551,50 @@ int mc_pil_decode_params(const uint8_t *buf, size_t n, uint32_t *ids, uint32_t *
     return MC_PIL_OK;
 }
 
+/* ---- FLASH ------------------------------------------------------------- */
+
+size_t mc_pil_encode_flash(uint32_t offset, const uint8_t *data, uint32_t n, uint8_t *buf,
+                           size_t cap)
+{
+    writer_t w;
+    if (data == NULL || n == 0u || n > MC_PIL_FLASH_CHUNK || (n % 4u) != 0u ||
+        !begin(&w, buf, cap, MC_PIL_TYPE_FLASH, 1u + n / 4u)) {
+        return 0u;
+    }
+    put_u32(&w, offset);
+    memcpy(&w.buf[w.pos], data, n);
+    w.pos += n;
+    return finish(&w);
+}
+
+int mc_pil_decode_flash(const uint8_t *buf, size_t n, uint32_t *p_offset, const uint8_t **p_data,
+                        uint32_t *p_n)
+{
+    reader_t r;
+    if (p_offset == NULL || p_data == NULL || p_n == NULL) {
+        return MC_PIL_ERR_ARG;
+    }
+    const int t = mc_pil_frame_type(buf, n);
+    if (t < 0) {
+        return t;
+    }
+    if (t != (int)MC_PIL_TYPE_FLASH) {
+        return MC_PIL_ERR_TYPE;
+    }
+    const uint32_t len = (uint32_t)buf[2];
+    if (len < 8u || (len % 4u) != 0u || len - 4u > MC_PIL_FLASH_CHUNK) {
+        return MC_PIL_ERR_LEN;
+    }
+    const int rc = open_frame(&r, buf, n, MC_PIL_TYPE_FLASH, len / 4u);
+    if (rc != MC_PIL_OK) {
+        return rc;
+    }
+    *p_offset = get_u32(&r);
+    *p_data = &buf[r.pos];
+    *p_n = len - 4u;
+    return MC_PIL_OK;
+}
+
 /* ---- APP --------------------------------------------------------------- */
 
 size_t mc_pil_encode_app(const mc_pil_app_t *a, uint8_t *buf, size_t cap)

@@ -65,6 +65,15 @@
  *      image of different versions still reach READY and the host refuses
  *      the image by its version; an image given a capability it does not
  *      know answers READY with MC_PIL_READY_ERR_CAPS and its version.
+ *   6  the probe carries the anticogging map's status and feed-forward
+ *      (mc_app_probe_t.cog_status, cog_ff_a): two words more, past a
+ *      frame's payload: PROBE keeps the first 63 words and a PROBE2 frame
+ *      right after it carries the rest; FLASH
+ *      frames (host -> target, whole image, between the PARAMS and APP):
+ *      the board's flash content (a FileFlash file, mcsim --flash), at a
+ *      byte offset into the image's RAM store, which is erased (0xFF)
+ *      before the first PARAMS and booted by the application after APP;
+ *      bytes the host does not send stay erased.
  *
  * Plain C11, no I/O: encoders write into a caller buffer, decoders validate
  * and parse a complete frame. Built for the target (hal/pil/mc_hal_pil.c) and for the
@@ -102,13 +111,18 @@ typedef enum {
     MC_PIL_TYPE_CAN_RX = 9,  /**< host -> target: one CAN frame received by the drive */
     MC_PIL_TYPE_CAN_TX = 10, /**< target -> host: one CAN frame the drive sent */
     MC_PIL_TYPE_PROBE = 11,  /**< target -> host: the application's probe (version 2) */
+    MC_PIL_TYPE_FLASH = 12,  /**< host -> target: flash content at an offset (version 6) */
+    MC_PIL_TYPE_PROBE2 = 13, /**< target -> host: the probe's rest, after PROBE (version 6) */
 } mc_pil_type_t;
 
 /** The link protocol's version (see the file comment), sent in READY. */
-#define MC_PIL_VERSION 5u
+#define MC_PIL_VERSION 6u
 
 /** (id, raw) pairs per PARAMS frame (the payload limit). */
 #define MC_PIL_PARAMS_MAX 31u
+/** Flash bytes per FLASH frame: one offset word, then up to this many
+ *  bytes (a multiple of 4, within the payload limit). */
+#define MC_PIL_FLASH_CHUNK 248u
 /** Rates of the telemetry messages past POSITION (mc_app_cfg_t). */
 #define MC_PIL_TM_EXT_RATES 7u
 
@@ -217,6 +231,9 @@ size_t mc_pil_encode_hello(uint8_t *buf, size_t cap);
 size_t mc_pil_encode_params(const uint32_t *ids, const uint32_t *raws, uint32_t n, uint8_t *buf,
                             size_t cap);
 size_t mc_pil_encode_app(const mc_pil_app_t *a, uint8_t *buf, size_t cap);
+/** n (4..MC_PIL_FLASH_CHUNK, a multiple of 4) bytes of flash at offset. */
+size_t mc_pil_encode_flash(uint32_t offset, const uint8_t *data, uint32_t n, uint8_t *buf,
+                           size_t cap);
 size_t mc_pil_encode_can_rx(const mc_hal_can_frame_t *f, uint8_t *buf, size_t cap);
 /** seq: the period (MEAS seq) in which the application sent f. */
 size_t mc_pil_encode_can_tx(uint32_t seq, const mc_hal_can_frame_t *f, uint8_t *buf, size_t cap);
@@ -247,6 +264,10 @@ int mc_pil_decode_end(const uint8_t *buf, size_t n, int32_t *out);
 int mc_pil_decode_params(const uint8_t *buf, size_t n, uint32_t *ids, uint32_t *raws,
                          uint32_t *p_n);
 int mc_pil_decode_app(const uint8_t *buf, size_t n, mc_pil_app_t *out);
+/** A FLASH frame's offset, and its bytes in place (*p_data points into
+ *  buf: no copy), *p_n of them. */
+int mc_pil_decode_flash(const uint8_t *buf, size_t n, uint32_t *p_offset, const uint8_t **p_data,
+                        uint32_t *p_n);
 /** A data length that is not a CAN (FD) length, or one that disagrees with
  *  the payload size: MC_PIL_ERR_LEN. */
 int mc_pil_decode_can_rx(const uint8_t *buf, size_t n, mc_hal_can_frame_t *out);

@@ -32,6 +32,23 @@
 //   hold_load_nm             the step
 //   speed_phase_s, hold_phase_s  the phases' simulated times (--duration
 //                            caps their sum; a window it cuts is not measured)
+//   cog_status, cog_status_name  the drive's cog_status (MC_COG_ST_*) as the
+//                            speed phase starts: OK the map is attached;
+//                            EMPTY none, ENCODER made with another encoder or
+//                            offset (the drive then runs without it)
+//   cog_ff_pp_a              peak-to-peak of the drive's anticogging
+//                            feed-forward in the window (0: no map applied)
+//   cog_ff_max_abs_a         its largest magnitude over the speed phase
+//                            (a run cut before the window has it too)
+//   cog_saved, cog_save_seq  with --flash and a calibration: 1 once the map
+//                            and the set are SAVEd, and the store's sequence
+// The CSV's cog_ff_a column is that feed-forward, every row.
+//
+// --flash FILE with --set anticogging=1 (cog_cal 1): after the speed
+// window the drive is disabled and SAVEs (the map with the set in force,
+// anticogging 1, as `mdtool calibrate --cogging --save` does); a run with
+// --set cog_cal=0 then boots from FILE: a simulated power cycle onto the
+// stored map (--set theta_m0_rad=X: at another rotor angle).
 // With the table parameter `anticogging` (when the firmware has it) set by
 // --set like any other; the drive's `cog_slots` is the motor file's slots
 // (--set cog_slots=N overrides it, 0: the map keeps every order).
@@ -214,6 +231,66 @@ std::string calibrate(RunContext& ctx, AppRunner& run, double* t_s) {
   }
 }
 
+// The reply to a PARAM_REQ of opcode op among the frames the application
+// sent in the last step: true with its status and value, false when none.
+bool param_reply(AppRunner& run, uint32_t op, uint32_t* status, uint32_t* value) {
+  const uint32_t node = run.target().params().can_node_id;
+  for (const mc_hal_can_frame_t& f : run.sent()) {
+    uint32_t msg = 0;
+    float v[MC_CAN_NSIG_MAX];
+    if (mc_can_id_node(f.id) != node || mc_can_proto_unpack(&f, &msg, v, MC_CAN_NSIG_MAX) != 0 ||
+        msg != MC_CAN_MSG_PARAM_REPLY ||
+        static_cast<uint32_t>(v[MC_CAN_PARAM_REPLY_OPCODE]) != op) {
+      continue;
+    }
+    *status = static_cast<uint32_t>(v[MC_CAN_PARAM_REPLY_STATUS]);
+    *value = static_cast<uint32_t>(v[MC_CAN_PARAM_REPLY_VALUE]);
+    return true;
+  }
+  return false;
+}
+
+// With --flash, after a calibration and the speed window: the map and the
+// set in force (anticogging 1) stored as a host stores them (mdtool
+// calibrate --cogging --save): DISABLE, then once the drive is idle (the
+// application stores a map only then: mc_app_cog_save) PARAM SAVE, which
+// stores the configuration and the map behind it. The board's flash then
+// holds what its next power-up boots (--set cog_cal=0). Returns "" or why
+// not (cog_saved 1 in the summary when stored).
+std::string save_calibration(RunContext& ctx, AppRunner& run) {
+  hal_host::PmsmBoard& board = run.board();
+  const double t0 = board.t_s();
+  constexpr double kStopMaxS = 5.0, kReplyMaxS = 1.0;  // a ramp to rest; a reply within periods
+  run.send(run.cmd().enable(false));
+  while (run.probe().mode != MC_DRIVE_MODE_IDLE) {
+    if (run.probe().faults != 0u)
+      return "a fault before the SAVE: " + drive_fault_names(run.probe().faults);
+    if (board.t_s() - t0 > kStopMaxS) return "the drive did not stop for the SAVE";
+    run.step();
+  }
+  const double t1 = board.t_s();
+  run.send(run.cmd().param_op(MC_PARAM_OP_SAVE));
+  uint32_t status = 0, value = 0;
+  for (;;) {
+    if (board.t_s() - t1 > kReplyMaxS) return "no reply to the SAVE";
+    run.step();
+    if (!param_reply(run, MC_PARAM_OP_SAVE, &status, &value)) continue;
+    if (status != MC_PARAM_OK) {
+      return "the SAVE refused: MC_PARAM status " + std::to_string(status) + " (value " +
+             std::to_string(value) + ")";
+    }
+    ctx.summary.set("cog_saved", 1.0);
+    ctx.summary.set("cog_save_seq", value);
+    return "";
+  }
+}
+
+const char* cog_status_name(uint32_t st) {
+  static const char* const names[] = {"OK",        "EMPTY",     "LAYOUT", "CRC",  "ENCODER",
+                                      "NONFINITE", "AMPLITUDE", "ARG",    "FLASH"};
+  return st < 9u ? names[st] : "?";
+}
+
 bool calibrates(const RunContext& ctx) {
   return anticogging_index() >= 0 && ctx.params.was_set(kAnticogging) &&
          std::lround(ctx.params.get(kAnticogging)) == 1 &&
@@ -222,7 +299,7 @@ bool calibrates(const RunContext& ctx) {
 
 // Phase 1: the speed loop at w_t; the window's spans.
 Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c, double cap_s,
-                  Span* w_true, Span* w_est, Span* iq_ref) {
+                  Span* w_true, Span* w_est, Span* iq_ref, Span* cog_ff) {
   const MotorFiles& f = *ctx.files;
   const mc_params_eff_t e = resolve_params(p);
   const double wc = e.g.speed_wc_rad_s;
@@ -254,7 +331,7 @@ Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c,
   bool sent = false;
   std::string stopped;
   AppWatch watch;
-  double id = 0, iq = 0;
+  double id = 0, iq = 0, ff_max = 0;
   for (long k = 0; k <= n; ++k) {
     const double t = board.t_s() - t_origin;
     if (!sent && t >= t0) {
@@ -263,24 +340,35 @@ Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c,
     }
     const double w = board.state()(2);
     const mc_app_probe_t& q = run.probe();
+    if (k == 0) {  // the map's status as the phase starts (after a calibration)
+      ctx.summary.set("cog_status", q.cog_status);
+      ctx.summary.set_text("cog_status_name", cog_status_name(q.cog_status));
+    }
+    ff_max = std::max(ff_max, std::abs(static_cast<double>(q.cog_ff_a)));
     if (t >= t_win0) {
       w_true->add(w);
       w_est->add(q.omega_m_rad_s);
       iq_ref->add(q.iq_ref_a);
+      cog_ff->add(q.cog_ff_a);
     }
     if (k % every == 0) {
       board.true_dq_a(&id, &iq);
-      const double row[] = {0.0, t, w, q.omega_m_rad_s, q.iq_ref_a, iq, board.state()(3)};
-      ctx.csv.row(row, 7);
+      const double row[] = {0.0,       t, w, q.omega_m_rad_s, q.iq_ref_a, iq, board.state()(3),
+                            q.cog_ff_a};
+      ctx.csv.row(row, 8);
     }
     stopped = watch(q);
     if (!stopped.empty() || k == n) break;
     run.step();
     if ((k & 1023) == 0) ctx.progress.update(t, dur);
   }
+  ctx.summary.set("cog_ff_max_abs_a", ff_max);
   ctx.summary.set("speed_phase_s", dur);
   ctx.summary.set("speed_window_s", win);
   ctx.summary.set("speed_window_start_s", t_win0);
+  if (stopped.empty() && calibrates(ctx) && ctx.flash != nullptr && w_true->n > 0) {
+    stopped = save_calibration(ctx, run);
+  }
   return end_of(run, stopped);
 }
 
@@ -308,8 +396,9 @@ Phase hold_phase(RunContext& ctx, const mc_params_t& p, double tau_step, double 
     run.send(run.cmd().enable(false));
     run.send(run.cmd().mode(MC_CAN_CTRL_POSITION));
     run.send(run.cmd().enable(true));
-  } else {
-    run.start(MC_CAN_CTRL_POSITION);
+  } else {  // a power-up find (index, align) runs first, where the table asks for it
+    run.start(MC_CAN_CTRL_POSITION, true);
+    (void)run.finish_angle_find();
   }
   t_origin = board.t_s();
   const long n = step_count(dur, board.period_s());
@@ -332,8 +421,9 @@ Phase hold_phase(RunContext& ctx, const mc_params_t& p, double tau_step, double 
     const mc_app_probe_t& q = run.probe();
     if (k % every == 0) {
       board.true_dq_a(&id, &iq);
-      const double row[] = {1.0, t, board.state()(2), q.omega_m_rad_s, q.iq_ref_a, iq, th};
-      ctx.csv.row(row, 7);
+      const double row[] = {1.0, t,  board.state()(2), q.omega_m_rad_s, q.iq_ref_a,
+                            iq,  th, q.cog_ff_a};
+      ctx.csv.row(row, 8);
     }
     stopped = watch(q);
     if (!stopped.empty() || k == n) break;
@@ -361,14 +451,14 @@ void run_cogging(RunContext& ctx) {
   const double n_c = cogging_order(f.motor.slots, f.motor.pole_pairs);
   const double w_t = ctx.params.get("speed_frac") * e.g.speed_rated_eff_rad_s;
   const double tau_step = ctx.params.get("hold_load_frac") * e.g.torque_rated_nm;
-  ctx.csv.columns(
-      {"phase", "t", "omega_m_rad_s", "omega_est_rad_s", "iq_ref_a", "iq_a", "theta_m_rad"});
-  Span w_true, w_est, iq_ref, th_after;
+  ctx.csv.columns({"phase", "t", "omega_m_rad_s", "omega_est_rad_s", "iq_ref_a", "iq_a",
+                   "theta_m_rad", "cog_ff_a"});
+  Span w_true, w_est, iq_ref, th_after, cog_ff;
   double th_hold = 0.0, err_max = 0.0;
   // --duration caps the two phases' total (the speed phase first): a run
   // cut before a window leaves its figure unmeasured (the verdict says so).
   const double cap = ctx.duration_s > 0.0 ? run_duration(ctx, ctx.duration_s) : kMaxDurationS;
-  Phase ph = speed_phase(ctx, p, w_t, n_c, cap, &w_true, &w_est, &iq_ref);
+  Phase ph = speed_phase(ctx, p, w_t, n_c, cap, &w_true, &w_est, &iq_ref, &cog_ff);
   const double used = ctx.summary.numbers().at("speed_phase_s");
   if (ph.stopped.empty() && cap - used > 0.0) {
     ph = hold_phase(ctx, p, tau_step, cap - used, &th_after, &th_hold, &err_max);
@@ -396,6 +486,7 @@ void run_cogging(RunContext& ctx) {
   ctx.summary.set("speed_mean_rad_s", w_true.mean());
   ctx.summary.set("speed_est_ripple_pp_rad_s", w_est.pp());
   ctx.summary.set("iq_ref_pp_a", iq_ref.pp());
+  ctx.summary.set("cog_ff_pp_a", cog_ff.pp());
   ctx.summary.set("hold_load_nm", tau_step);
   ctx.summary.set("hold_theta_rad", th_hold);
   ctx.summary.set("hold_err_pp_rad", th_after.pp());

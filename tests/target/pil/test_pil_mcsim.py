@@ -19,6 +19,13 @@ same environment (can-telemetry's command script: MCSIM_CAN_CMDS). Each
 --expect KEY=VALUE is a number the summary must hold exactly (what the run
 did: commands refused, the stop's reason), so two runs that did nothing
 alike do not pass.
+With --flash-prep KEY=VALUE (repeatable): first one SIL run of SCENARIO
+at its full length with --flash F and those --set only (e.g. cogging's
+calibration, anticogging=1: the map SAVEd in F), which must pass and write F;
+then both runs boot a copy of F each (--flash flash.bin in their directories,
+the same text in both summaries), and each copy must still equal F after its
+run (a run that boots the board's flash does not write it).
+--expect KEY=nonzero asks for a finite non-zero number.
 Prints the PIL cost as one JSON line ("[pil-cost] {...}"): wall seconds of the
 PIL run per simulated second (QEMU's boot included, as a user pays it).
 
@@ -31,6 +38,7 @@ drive application; a missing image, named; nothing written), without QEMU.
 
 import argparse
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -101,11 +109,23 @@ def same_run(a):
     os.makedirs(sil_cwd)
     os.makedirs(pil_cwd)
     sil_dir, pil_dir = os.path.join(sil_cwd, "out"), os.path.join(pil_cwd, "out")
+    errors = []
+    flash = None
+    if a.flash_prep:
+        flash, prep_errors = prepare_flash(a)
+        if prep_errors:
+            return prep_errors
+        for cwd in (sil_cwd, pil_cwd):
+            shutil.copyfile(flash, os.path.join(cwd, "flash.bin"))
+        base += ["--flash", "flash.bin"]
     ps, wall_s = run(base + ["--out", "out"], cwd=sil_cwd)
     pp, wall_p = run(base + ["--out", "out", "--pil"], cwd=pil_cwd)
     for tag, p in (("sil", ps), ("pil", pp)):
         print("[%s] exit %d\n%s%s" % (tag, p.returncode, p.stdout, p.stderr), end="")
-    errors = []
+    if flash:
+        for tag, cwd in (("sil", sil_cwd), ("pil", pil_cwd)):
+            if first_difference(flash, os.path.join(cwd, "flash.bin")):
+                errors.append("the %s run wrote its copy of the flash file" % tag)
     # 0 (pass) or 1 (the verdict fails at this short duration): a run that
     # was refused (2) or crashed wrote nothing to compare.
     if ps.returncode not in (0, 1):
@@ -136,6 +156,24 @@ def same_run(a):
     return errors
 
 
+def prepare_flash(a):
+    """--flash-prep: the SIL run that writes the board's flash F (its full
+    length: no --duration); F's path and the errors."""
+    d = fresh(os.path.join(a.work, "prep"))
+    os.makedirs(d)
+    flash = os.path.join(d, "flash.bin")
+    cmd = [a.mcsim, "run", a.scenario, "--motor", a.motor, "--board", a.board, "--flash", flash]
+    for kv in a.flash_prep:
+        cmd += ["--set", kv]
+    p, _ = run(cmd + ["--out", os.path.join(d, "out")])
+    print("[prep] exit %d\n%s%s" % (p.returncode, p.stdout, p.stderr), end="")
+    if p.returncode != 0:
+        return flash, ["the SIL run that writes the flash exited %d" % p.returncode]
+    if not os.path.exists(flash):
+        return flash, ["the SIL run that writes the flash wrote no %s" % flash]
+    return flash, []
+
+
 def expected(a, summary_path):
     """The checks --expect KEY=VALUE asks of the summary (the runs being
     equal, the SIL's): what the run did, so that two equal runs that did
@@ -152,6 +190,11 @@ def expected(a, summary_path):
         key, _, want = kv.partition("=")
         if key not in s:
             errors.append("the summary has no %s" % key)
+        elif want == "nonzero":
+            if not (math.isfinite(float(s[key])) and float(s[key]) != 0.0):
+                errors.append("%s = %r, expected a finite non-zero number" % (key, s[key]))
+            else:
+                print("[expect] %s = %r (non-zero)" % (key, s[key]))
         elif float(s[key]) != float(want):
             errors.append("%s = %r, expected %s" % (key, s[key], want))
         else:
@@ -222,6 +265,13 @@ def main():
     ap.add_argument("--work", required=True)
     ap.add_argument("--set", action="append")
     ap.add_argument("--expect", action="append", help="KEY=VALUE the summary must hold (numbers, exact)")
+    ap.add_argument(
+        "--flash-prep",
+        action="append",
+        metavar="KEY=VALUE",
+        help="first a SIL run with --flash F and these --set writes the board's flash F; both runs "
+        "then boot a copy of F (see above)",
+    )
     ap.add_argument("--self-test", action="store_true")
     ap.add_argument("scenario", nargs="?")
     a = ap.parse_args()

@@ -259,7 +259,7 @@ TEST(PilFrame, ReadyCarriesTheProtocolVersion) {
   mc_pil_ready_t d{};
   ASSERT_EQ(mc_pil_decode_ready(buf, n, &d), MC_PIL_OK);
   EXPECT_TRUE(same_bits(d, r));
-  EXPECT_EQ(d.version, 5u);  // 5: MEAS carries the Hall read, APP the capabilities
+  EXPECT_EQ(d.version, 6u);  // 6: PROBE2 (the probe past a frame), FLASH (the board's flash)
   const uint32_t v1[2] = {0u, 0u};
   n = mc_pil_encode_words(MC_PIL_TYPE_READY, v1, 2u, buf, sizeof buf);
   ASSERT_GT(n, 0u);
@@ -282,12 +282,21 @@ TEST(PilFrame, ProbeRoundTripKeepsEveryBit) {
   p.pos_turns = -123456;
   p.pos_traj_k = 0xDEADBEEFu;
   p.sls_omega_if_rad_s = -0.0f;
-  p.i_limit_a = nan_with_payload();  // the last field
-  const size_t n = mc_pil_encode_probe(&p, buf, sizeof buf);
-  ASSERT_EQ(n, MC_PIL_HEADER_LEN + 4u * MC_PIL_PROBE_WORDS + MC_PIL_CRC_LEN);
+  p.i_limit_a = nan_with_payload();
+  p.hall_error = 0xA5A5A5A5u;       // the last field of PROBE
+  p.cog_status = 4u;                // the first of PROBE2
+  p.cog_ff_a = nan_with_payload();  // the last field
+  const size_t n2 = mc_pil_encode_probe2(&p, buf, sizeof buf);
+  ASSERT_EQ(n2, MC_PIL_HEADER_LEN + 4u * MC_PIL_PROBE2_WORDS + MC_PIL_CRC_LEN);
+  EXPECT_EQ(mc_pil_frame_type(buf, n2), MC_PIL_TYPE_PROBE2);
   mc_app_probe_t d{};
+  ASSERT_EQ(mc_pil_decode_probe2(buf, n2, &d), MC_PIL_OK);
+  EXPECT_EQ(mc_pil_decode_probe(buf, n2, &d), MC_PIL_ERR_TYPE);  // a PROBE2 is not a PROBE
+  const size_t n = mc_pil_encode_probe(&p, buf, sizeof buf);
+  ASSERT_EQ(n, MC_PIL_HEADER_LEN + 4u * MC_PIL_PROBE1_WORDS + MC_PIL_CRC_LEN);
+  EXPECT_EQ(MC_PIL_PROBE1_WORDS + MC_PIL_PROBE2_WORDS, sizeof(mc_app_probe_t) / 4u);
   ASSERT_EQ(mc_pil_decode_probe(buf, n, &d), MC_PIL_OK);
-  EXPECT_TRUE(same_bits(d, p));
+  EXPECT_TRUE(same_bits(d, p));  // the two parts make the whole probe
   EXPECT_EQ(mc_pil_frame_type(buf, n), MC_PIL_TYPE_PROBE);
   EXPECT_EQ(mc_pil_encode_probe(&p, buf, n - 1u), 0u);  // does not fit
   EXPECT_EQ(mc_pil_encode_probe(nullptr, buf, sizeof buf), 0u);
@@ -302,7 +311,7 @@ TEST(PilFrame, ProbeRoundTripKeepsEveryBit) {
   EXPECT_EQ(mc_pil_decode_probe(buf, k, &untouched), MC_PIL_ERR_TYPE);
   uint32_t words[MC_PIL_PROBE_WORDS] = {};
   const size_t m =
-      mc_pil_encode_words(MC_PIL_TYPE_PROBE, words, MC_PIL_PROBE_WORDS - 1u, buf, sizeof buf);
+      mc_pil_encode_words(MC_PIL_TYPE_PROBE, words, MC_PIL_PROBE1_WORDS - 1u, buf, sizeof buf);
   EXPECT_EQ(mc_pil_decode_probe(buf, m, &untouched), MC_PIL_ERR_LEN);
   EXPECT_TRUE(same_bits(untouched, before));
   EXPECT_EQ(
@@ -351,7 +360,31 @@ TEST(PilFrame, Version4MeasIsRefusedAndTheBrakeKeepsItsBit) {
   EXPECT_EQ(m.hall_code, 3u);
   EXPECT_EQ(MC_PIL_CAP_BRAKE, 1u);
   EXPECT_EQ(MC_PIL_CAP_ALL & MC_PIL_CAP_HALL, MC_PIL_CAP_HALL);
-  EXPECT_EQ(MC_PIL_VERSION, 5u);
+  EXPECT_EQ(MC_PIL_VERSION, 6u);
+}
+
+// FLASH (version 6): an offset and whole words of the board's flash, the
+// bytes decoded in place; a partial word, an empty or oversize chunk refused.
+TEST(PilFrame, FlashRoundTripAndRefusals) {
+  uint8_t buf[MC_PIL_MAX_FRAME];
+  std::vector<uint8_t> data(MC_PIL_FLASH_CHUNK);
+  for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<uint8_t>(i * 7u + 1u);
+  const size_t n = mc_pil_encode_flash(0x7F00u, data.data(), MC_PIL_FLASH_CHUNK, buf, sizeof buf);
+  ASSERT_EQ(n, MC_PIL_MAX_FRAME);  // the largest chunk fills a frame
+  uint32_t off = 0, len = 0;
+  const uint8_t* p = nullptr;
+  ASSERT_EQ(mc_pil_decode_flash(buf, n, &off, &p, &len), MC_PIL_OK);
+  EXPECT_EQ(off, 0x7F00u);
+  ASSERT_EQ(len, MC_PIL_FLASH_CHUNK);
+  EXPECT_EQ(std::memcmp(p, data.data(), len), 0);
+  EXPECT_EQ(mc_pil_encode_flash(0u, data.data(), 6u, buf, sizeof buf), 0u);  // not whole words
+  EXPECT_EQ(mc_pil_encode_flash(0u, data.data(), 0u, buf, sizeof buf), 0u);
+  EXPECT_EQ(mc_pil_encode_flash(0u, data.data(), MC_PIL_FLASH_CHUNK + 4u, buf, sizeof buf), 0u);
+  const uint32_t one[1] = {5u};  // an offset without bytes
+  const size_t m = mc_pil_encode_words(MC_PIL_TYPE_FLASH, one, 1u, buf, sizeof buf);
+  EXPECT_EQ(mc_pil_decode_flash(buf, m, &off, &p, &len), MC_PIL_ERR_LEN);
+  const size_t k = mc_pil_encode_hello(buf, sizeof buf);
+  EXPECT_EQ(mc_pil_decode_flash(buf, k, &off, &p, &len), MC_PIL_ERR_TYPE);
 }
 
 }  // namespace
