@@ -449,14 +449,20 @@ static bool board_refuses(const mc_app_cfg_t *cfg, const mc_hal_t *hal, const mc
  * ramps, speed limit). */
 /* ------------------------------------------------------------ anticogging */
 
-static mc_cog_ident_t cog_ident(const mc_params_t *p)
+/* The encoder a map is bound to: the parameters' type, counts, direction
+ * and pole pairs, and the offset in force in the drive (the parameter's, or
+ * what an alignment found since power-up: an encoder without an index
+ * counts from where the rotor stood, so a map measured before a power cycle
+ * no longer sits at the angle the counts say; the new offset tells it). */
+static mc_cog_ident_t cog_ident(const mc_app_t *a, const mc_params_t *p)
 {
     mc_cog_ident_t id;
     id.enc_type = p->encoder_type;
     id.enc_cpr = p->encoder_cpr;
     id.enc_reversed = p->encoder_reversed;
     id.pole_pairs = p->pole_pairs;
-    id.enc_offset_rad = p->encoder_offset_rad;
+    id.enc_offset_rad =
+        (a->drive != NULL) ? a->drive->cfg.encoder_offset_rad : p->encoder_offset_rad;
     return id;
 }
 
@@ -465,7 +471,7 @@ static mc_cog_ident_t cog_ident(const mc_params_t *p)
  * (anticogging, the drive's cfg.anticogging, then has no effect). */
 static void cog_bind(mc_app_t *a, const mc_params_t *p)
 {
-    const mc_cog_ident_t id = cog_ident(p);
+    const mc_cog_ident_t id = cog_ident(a, p);
     const uint32_t st =
         a->cog_loaded ? (uint32_t)mc_cog_check(&a->cog_map, &id) : a->cog_load_status;
     bool on = st == (uint32_t)MC_COG_ST_OK;
@@ -492,7 +498,7 @@ mc_cog_status_t mc_app_cog_load(mc_app_t *app, const float *i_q_a, uint32_t n)
         return MC_COG_ST_ARG;
     }
     p = active_params(app);
-    id = cog_ident(p);
+    id = cog_ident(app, p);
     /* the fast step never reads a map half rebuilt */
     (void)mc_drive_attach_cog(app->drive, NULL);
     st = mc_cog_build(&app->cog_map, i_q_a, n, &id, MC_APP_COG_BOUND_FRAC * p->i_max_a,
@@ -508,7 +514,7 @@ mc_cog_status_t mc_app_cog_load(mc_app_t *app, const float *i_q_a, uint32_t n)
 
 int mc_app_cog_save(mc_app_t *app)
 {
-    const mc_cog_ident_t id = cog_ident(active_params(app));
+    const mc_cog_ident_t id = cog_ident(app, active_params(app));
     if (!app->cog_loaded || (mc_cog_check(&app->cog_map, &id) != MC_COG_ST_OK)) {
         return -ENOENT;
     }
@@ -770,6 +776,7 @@ static void angle_service(mc_app_t *a)
             const mc_drive_ctrl_t *law = law_of(a);
             if (offset >= 0.0f) {
                 (void)mc_drive_set_encoder_offset(a->drive, offset);
+                cog_bind(a, active_params(a)); /* the map checked at the new offset */
             }
             (void)mc_drive_set_mode(a->drive, MC_DRIVE_MODE_IDLE);
             if (law != NULL) {
