@@ -87,8 +87,22 @@ constexpr double kMapCutFrac = 0.5;
 // at each end.
 constexpr double kFfFrac = 0.02;
 
+// The power-cycled run r2 on the calibrating run r1's map: its ripple that
+// of r1 within kSameMapFrac and below kMapCutFrac of the run without a map
+// r0; the three recorded (boot as tag).
+void expect_same_map(const Result& r1, const Result& r2, const Result& r0, const std::string& tag) {
+  const double rip1 = r1.n.at("speed_ripple_pp_rad_s"), rip2 = r2.n.at("speed_ripple_pp_rad_s");
+  const double rip0 = r0.n.at("speed_ripple_pp_rad_s");
+  ::testing::Test::RecordProperty("speed_ripple_pp_rad_s_cal", std::to_string(rip1));
+  ::testing::Test::RecordProperty("speed_ripple_pp_rad_s_" + tag, std::to_string(rip2));
+  ::testing::Test::RecordProperty("speed_ripple_pp_rad_s_off", std::to_string(rip0));
+  EXPECT_NEAR(rip2, rip1, kSameMapFrac * rip1);
+  EXPECT_LT(rip2, kMapCutFrac * rip0);
+}
+
 // Run 1 calibrates and stores; run 2 boots the file: the map loaded (OK),
 // its feed-forward applied, the ripple the calibrating run's, the file not
+
 // written by the run that only boots it.
 TEST(CoggingFlashSil, APowerCycleRunsOnTheStoredMap) {
   const std::string f = dir_of("flash") + "/vesc6.flash";
@@ -108,13 +122,7 @@ TEST(CoggingFlashSil, APowerCycleRunsOnTheStoredMap) {
   EXPECT_EQ(r2.n.count("cog_cal_s"), 0u);  // no calibration ran
   EXPECT_EQ(r2.n.count("cog_saved"), 0u);
   EXPECT_EQ(bytes_of(f), stored);  // booting the file does not write it
-  const double rip1 = r1.n.at("speed_ripple_pp_rad_s"), rip2 = r2.n.at("speed_ripple_pp_rad_s");
-  const double rip0 = r0.n.at("speed_ripple_pp_rad_s");
-  RecordProperty("speed_ripple_pp_rad_s_cal", std::to_string(rip1));
-  RecordProperty("speed_ripple_pp_rad_s_boot", std::to_string(rip2));
-  RecordProperty("speed_ripple_pp_rad_s_off", std::to_string(rip0));
-  EXPECT_NEAR(rip2, rip1, kSameMapFrac * rip1);
-  EXPECT_LT(rip2, kMapCutFrac * rip0);
+  expect_same_map(r1, r2, r0, "boot");
   EXPECT_GT(r2.n.at("cog_ff_pp_a"), 0.0);
   EXPECT_NEAR(r2.n.at("cog_ff_pp_a"), r1.n.at("cog_ff_pp_a"), kFfFrac * r1.n.at("cog_ff_pp_a"));
   EXPECT_EQ(r0.n.at("cog_ff_pp_a"), 0.0);
@@ -141,13 +149,7 @@ TEST(CoggingFlashSil, APowerUpAtAnotherAngleRunsOnTheMapWithAnIndex) {
   ASSERT_EQ(r2.t.at("verdict"), "pass") << r2.t.at("verdict_detail");
   EXPECT_EQ(r2.t.at("cog_status_name"), "OK");
   EXPECT_GT(r2.n.at("angle_find_s"), 0.0);  // the index search ran after the power-up
-  const double rip1 = r1.n.at("speed_ripple_pp_rad_s"), rip2 = r2.n.at("speed_ripple_pp_rad_s");
-  const double rip0 = r0.n.at("speed_ripple_pp_rad_s");
-  RecordProperty("speed_ripple_pp_rad_s_cal", std::to_string(rip1));
-  RecordProperty("speed_ripple_pp_rad_s_boot_1_234", std::to_string(rip2));
-  RecordProperty("speed_ripple_pp_rad_s_off", std::to_string(rip0));
-  EXPECT_NEAR(rip2, rip1, kSameMapFrac * rip1);
-  EXPECT_LT(rip2, kMapCutFrac * rip0);
+  expect_same_map(r1, r2, r0, "boot_1_234");
 }
 
 // The refusal: the file's map made with another encoder (its identity's
