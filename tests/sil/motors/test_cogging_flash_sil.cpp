@@ -102,7 +102,6 @@ void expect_same_map(const Result& r1, const Result& r2, const Result& r0, const
 
 // Run 1 calibrates and stores; run 2 boots the file: the map loaded (OK),
 // its feed-forward applied, the ripple the calibrating run's, the file not
-
 // written by the run that only boots it.
 TEST(CoggingFlashSil, APowerCycleRunsOnTheStoredMap) {
   const std::string f = dir_of("flash") + "/vesc6.flash";
