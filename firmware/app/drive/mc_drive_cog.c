@@ -243,10 +243,21 @@ void mc_cog_series_init(mc_cog_series_t *s, const mc_cog_map_t *map)
     kept_orders(NULL, map, s->order, s->count, s->a, s->b);
 }
 
-/* The series' terms at the angle theta [rad]: the sum (deriv false) or its
- * derivative in angle (deriv true); 0 for an angle whose order-fold is not
- * finite or beyond 1e6 turns. */
-static float series_at(const mc_cog_series_t *s, float theta, bool deriv)
+/* The fade of a term whose frequency is x times the current loop's
+ * bandwidth (mc_drive_cog.h): 1 up to MC_COG_FADE_START, 0 from
+ * MC_COG_FADE_END, linear between. */
+static float fade(float x)
+{
+    const float g = (MC_COG_FADE_END - x) * (1.0f / (MC_COG_FADE_END - MC_COG_FADE_START));
+    return (g >= 1.0f) ? 1.0f : ((g > 0.0f) ? g : 0.0f);
+}
+
+/* The series' terms at the angle theta [rad], each faded by its frequency
+ * (x1 >= 0: the first term's, over the loop's bandwidth): the sum (deriv
+ * false) or its derivative in angle (deriv true); 0 for an angle whose
+ * order-fold is not finite or beyond 1e6 turns (a non-finite rate makes the
+ * angle so). The terms past the fade's end are not evaluated. */
+static float series_at(const mc_cog_series_t *s, float theta, bool deriv, float x1)
 {
     /* order theta in turns, its fraction: for the drive's angle in
      * [0, 2 pi) plus a lead, below order + 1 turns, where float's rounding
@@ -263,10 +274,23 @@ static float series_at(const mc_cog_series_t *s, float theta, bool deriv)
     mc_sincos_f32(u * COG_TWO_PI, &s1, &c1);
     float sn = s1;
     float cs = c1;
+    float xm = 0.0f;                     /* this term's frequency over the bandwidth */
+    float jm = 0.0f;                     /* and its order */
+    const float order = (float)s->order; /* < 512: the sums below are exact */
     for (uint32_t m = 0u; m < s->count; ++m) {
+        xm += x1;
+        jm += order;
         /* a cos + b sin of j theta, or its derivative j (b cos - a sin) */
-        v += deriv ? ((float)((m + 1u) * s->order) * ((s->b[m] * cs) - (s->a[m] * sn)))
-                   : ((s->a[m] * cs) + (s->b[m] * sn));
+        float t =
+            deriv ? (jm * ((s->b[m] * cs) - (s->a[m] * sn))) : ((s->a[m] * cs) + (s->b[m] * sn));
+        if (xm > MC_COG_FADE_START) {
+            const float g = fade(xm);
+            if (!(g > 0.0f)) {
+                break; /* this term and every higher one faded out */
+            }
+            t *= g;
+        }
+        v += t;
         const float c_next = (cs * c1) - (sn * s1); /* cos, sin of (m + 2) x */
         sn = (sn * c1) + (cs * s1);
         cs = c_next;
@@ -277,8 +301,11 @@ static float series_at(const mc_cog_series_t *s, float theta, bool deriv)
 float mc_cog_series_ff_adv_a(const mc_cog_series_t *s, float theta_m_rad, float rate_rad_s,
                              const mc_cog_loop_t *lp, float *p_i_a)
 {
-    const float i = series_at(s, theta_m_rad + (rate_rad_s * lp->lead_i_s), false);
-    const float di = series_at(s, theta_m_rad + (rate_rad_s * lp->lead_d_s), true);
+    /* the first term's frequency over the loop's bandwidth (NaN for a
+     * non-finite rate: no term passes the fade, and the result is 0) */
+    const float x1 = mc_abs_f32(rate_rad_s) * lp->tau_s * (float)s->order;
+    const float i = series_at(s, theta_m_rad + (rate_rad_s * lp->lead_i_s), false, x1);
+    const float di = series_at(s, theta_m_rad + (rate_rad_s * lp->lead_d_s), true, x1);
     *p_i_a = i;
     return mc_isfinite_f32(rate_rad_s) ? (i + (lp->tau_s * rate_rad_s * di)) : 0.0f;
 }

@@ -191,9 +191,21 @@ float mc_cog_ff_adv_a(const mc_cog_map_t *map, float theta_m_rad, float rate_rad
  *  on the M4F at count 8, for the slow context that attaches a map. */
 void mc_cog_series_init(mc_cog_series_t *s, const mc_cog_map_t *map);
 
+/** The series feed-forward's fade with frequency: a term whose frequency
+ *  (its order times the speed) is more than MC_COG_FADE_START times the
+ *  current loop's bandwidth (1 / tau) is weighed down linearly, to 0 at
+ *  MC_COG_FADE_END. Past a few times the bandwidth the loop's inverse asks
+ *  for a reference that many times the map's current (on the SK3 at 80 %
+ *  of rated speed, order 84 at 17 times the bandwidth: 28 A peak-to-peak
+ *  for a 1.6 A map, and no less ripple), while the rotor's inertia has long
+ *  filtered the cogging out of the speed. Up to 4 times it reproduces the
+ *  map within a few percent (the SK3 at 10 % of rated speed: 2.1 times). */
+#define MC_COG_FADE_START 4.0f
+#define MC_COG_FADE_END   8.0f
+
 /** mc_cog_ff_adv_a's feed-forward from the series: the current and its
- *  derivative in angle exact at their leads (two sines). A non-finite
- *  angle or rate gives 0. */
+ *  derivative in angle exact at their leads (two sines), each term faded
+ *  by its frequency (above). A non-finite angle or rate gives 0. */
 float mc_cog_series_ff_adv_a(const mc_cog_series_t *s, float theta_m_rad, float rate_rad_s,
                              const mc_cog_loop_t *lp, float *p_i_a);
 

@@ -343,3 +343,32 @@ TEST(DriveCog, FeedForwardLeadsTheCurrentAndItsRateOfChange)
     EXPECT_EQ(mc_cog_series_ff_adv_a(&ser, NAN, 1.0f, &lp, &i_a), 0.0f);
     EXPECT_EQ(mc_cog_series_ff_adv_a(&ser, 1.0f, INFINITY, &lp, &i_a), 0.0f);
 }
+
+// The fade with frequency (MC_COG_FADE_START, MC_COG_FADE_END): the
+// fundamental at 6 times the loop's bandwidth (x1 = |w| tau order) weighs
+// half, at 9 times nothing, current and reference alike; below 4 times
+// all of it (the test above, 2 times). Tolerances as above.
+TEST(DriveCog, FeedForwardFadesAboveFourTimesTheLoopsBandwidth)
+{
+    const std::vector<float> v = sinusoid(0.2, 84u, 0.0, 0.0);
+    mc_cog_map_t m{};
+    const mc_cog_ident_t id = ident();
+    ASSERT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 84u), MC_COG_ST_OK);
+    mc_cog_series_t ser{};
+    mc_cog_series_init(&ser, &m);
+    const mc_cog_loop_t lp = {0.0f, 0.0f, 4.0e-4f};
+    for (const double x1 : {6.0, 9.0}) {
+        const double w = x1 / (lp.tau_s * 84.0);
+        const double g = (x1 < 8.0) ? (8.0 - x1) / 4.0 : 0.0;
+        for (uint32_t j = 0; j < 13u; ++j) {
+            const double th = 0.02 + 2.0 * kPi * j / 13.0;
+            const double want_i = g * 0.2 * std::sin(84.0 * th);
+            const double want = want_i + g * lp.tau_s * w * 0.2 * 84.0 * std::cos(84.0 * th);
+            float i_a = 1.0f;
+            const float r = mc_cog_series_ff_adv_a(&ser, static_cast<float>(th),
+                                                   static_cast<float>(w), &lp, &i_a);
+            EXPECT_NEAR(i_a, want_i, 2e-4) << x1 << " " << j;
+            EXPECT_NEAR(r, want, 2e-3) << x1 << " " << j;
+        }
+    }
+}
