@@ -58,6 +58,15 @@ double max_interp_error(const mc_cog_map_t &m, double amp, uint32_t k, double ph
     return e;
 }
 
+// A map of 0.2 sin(84 theta) [A] built with its order, and its series.
+void order84(mc_cog_map_t *m, mc_cog_series_t *ser)
+{
+    const std::vector<float> v = sinusoid(0.2, 84u, 0.0, 0.0);
+    const mc_cog_ident_t id = ident();
+    ASSERT_EQ(mc_cog_build(m, v.data(), kN, &id, 10.0f, 84u), MC_COG_ST_OK);
+    mc_cog_series_init(ser, m);
+}
+
 } // namespace
 
 // Linear interpolation of a sinusoid of order k at spacing h = 2 pi / N
@@ -316,12 +325,9 @@ TEST(DriveCog, SeriesOfAFilteredMapIsExactBetweenTheBins)
 // scale.
 TEST(DriveCog, FeedForwardLeadsTheCurrentAndItsRateOfChange)
 {
-    const std::vector<float> v = sinusoid(0.2, 84u, 0.0, 0.0);
     mc_cog_map_t m{};
-    const mc_cog_ident_t id = ident();
-    ASSERT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 84u), MC_COG_ST_OK);
     mc_cog_series_t ser{};
-    mc_cog_series_init(&ser, &m);
+    ASSERT_NO_FATAL_FAILURE(order84(&m, &ser));
     const mc_cog_loop_t lp = {3.3e-5f, 5.0e-5f, 4.0e-4f};
     const double w = 60.0; // rad/s: the SK3 at 10 % of its rated speed
     for (uint32_t j = 0; j < 97u; ++j) {
@@ -350,12 +356,9 @@ TEST(DriveCog, FeedForwardLeadsTheCurrentAndItsRateOfChange)
 // all of it (the test above, 2 times). Tolerances as above.
 TEST(DriveCog, FeedForwardFadesAboveFourTimesTheLoopsBandwidth)
 {
-    const std::vector<float> v = sinusoid(0.2, 84u, 0.0, 0.0);
     mc_cog_map_t m{};
-    const mc_cog_ident_t id = ident();
-    ASSERT_EQ(mc_cog_build(&m, v.data(), kN, &id, 10.0f, 84u), MC_COG_ST_OK);
     mc_cog_series_t ser{};
-    mc_cog_series_init(&ser, &m);
+    ASSERT_NO_FATAL_FAILURE(order84(&m, &ser));
     const mc_cog_loop_t lp = {0.0f, 0.0f, 4.0e-4f};
     for (const double x1 : {6.0, 9.0}) {
         const double w = x1 / (lp.tau_s * 84.0);
