@@ -635,7 +635,8 @@ static MC_APP_NOINLINE void cog_cal_service(mc_app_t *a)
         if (ok) {
             a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_DONE;
         } else if (i != NULL) {
-            a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_FAILED | ((st & 0xFFu) << 16);
+            a->srv.cog_cal_status = (uint32_t)MC_COMM_COG_FAILED | ((st & 0xFFu) << 16) |
+                                    ((a->cog_cal_pass & 0xFFu) << 24);
         }
         cog_cal_set_mode(a, ok ? 1u : 0u);
         cog_bind(a, &a->srv.active);

@@ -421,7 +421,10 @@ void mc_app_probe(const mc_app_t *app, mc_app_probe_t *p);
  *  before as feed-forward and records the whole q reference (the map's
  *  current plus the loop's correction), which leaves the loop a residual
  *  that share smaller. Each pass is the whole sequence of mc_comm_cog.h;
- *  cog_cal_status carries the pass (0 first) in bits 24..31 while it runs. */
+ *  cog_cal_status carries the pass (0 first) in bits 24..31 while it runs.
+ *  A later pass that fails leaves the map of the pass before it loaded
+ *  (anticogging 0: not applied; SAVE would store it), not the map the drive
+ *  had before the calibration. */
 #define MC_APP_COG_CAL_PASSES 2u
 
 /**

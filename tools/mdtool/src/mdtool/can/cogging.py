@@ -18,7 +18,8 @@ waiting for APPLY: the APPLY that starts the calibration would apply it
 too), enable SPEED at 0, start, follow cog_cal_status with the keep-alive,
 DISABLE on every way out, and on success set anticogging 1 (APPLY) and
 with `save` SAVE; on a named failure the anticogging value of before is
-written back (the drive sets 0; its map is unchanged).
+written back (the drive sets 0; its map is unchanged, or, when a later
+pass failed, the map of the pass before it, which that pass ran on).
 
 The constants below mirror the firmware's (tests/can/test_mdtool_cogging.py
 checks them against the C headers): they give the calibration's own time
@@ -349,9 +350,13 @@ def calibrate_cogging(drive, timeout_s=DEFAULT_TIMEOUT_S, save=False, keepalive=
             drive.param("WRITE", P_ANTICOGGING, old)
             drive.param("APPLY")
             after = f"anticogging back to {old} (cog_status {_read(drive, P_COG_STATUS)})"
+        # a later pass failed: the drive holds the map of the pass before it
+        # (the one that pass ran on), not the map it had before
+        kept = ("map is unchanged" if pass_of(st) == 0 else
+                f"map is pass {pass_of(st)}'s of {CAL_PASSES} (not saved)")
         raise CalibrationFailed("anticogging calibration failed: " + "; ".join(
-            f"{n} ({h})" for n, h in fails) + f" [cog_cal_status 0x{st:06X}]; {after}, the drive's "
-            "map is unchanged", status="|".join(names))
+            f"{n} ({h})" for n, h in fails) + f" [cog_cal_status 0x{st:08X}]; {after}, the drive's "
+            + kept, status="|".join(names))
     drive.param("WRITE", P_ANTICOGGING, 1)
     drive.param("APPLY")
     cog = _read(drive, P_COG_STATUS)
