@@ -501,8 +501,10 @@ mc_cog_status_t mc_app_cog_load(mc_app_t *app, const float *i_q_a, uint32_t n)
     id = cog_ident(app, p);
     /* the fast step never reads a map half rebuilt */
     (void)mc_drive_attach_cog(app->drive, NULL);
-    st = mc_cog_build(&app->cog_map, i_q_a, n, &id, MC_APP_COG_BOUND_FRAC * p->i_max_a,
-                      mc_cog_order(p->cog_slots, p->pole_pairs));
+    /* the slots unknown: the order the currents show, if one stands out */
+    const uint32_t order = (p->cog_slots == 0u) ? mc_cog_find_order(i_q_a, n, p->pole_pairs)
+                                                : mc_cog_order(p->cog_slots, p->pole_pairs);
+    st = mc_cog_build(&app->cog_map, i_q_a, n, &id, MC_APP_COG_BOUND_FRAC * p->i_max_a, order);
     if (st == MC_COG_ST_OK) {
         app->cog_loaded = true;
         app->cog_load_status = (uint32_t)MC_COG_ST_OK;

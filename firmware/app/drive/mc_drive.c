@@ -735,6 +735,23 @@ static void shape_speed_ref(mc_drive_t *d, float target, float rate)
     d->speed_alpha_rad_s2 = a;
 }
 
+/* The feed-forward from the map's bins (a map of every order), faded as a
+ * whole at its RMS order (mc_cog_map_order_rms): past MC_COG_FADE_END times
+ * the loop's bandwidth it is not evaluated. */
+static float cog_ff_bins(const mc_drive_t *d, const mc_drive_meas_t *m, const mc_cog_loop_t *lp,
+                         float *p_i_a)
+{
+    const float g = mc_cog_fade_gain(mc_abs_f32(m->omega_m_rad_s) * lp->tau_s * d->cog_ord_rms);
+    float i_a = 0.0f;
+    float ff = 0.0f;
+    if (g > 0.0f) {
+        ff = g * mc_cog_ff_adv_a(d->cog, m->theta_m_rad, m->omega_m_rad_s, lp, &i_a);
+        i_a *= g;
+    }
+    *p_i_a = i_a;
+    return ff;
+}
+
 /* The anticogging feed-forward of this step [A] (mc_drive_attach_cog): a
  * speed or position law's, anticogging on, with a map and the encoder
  * read; else 0. */
@@ -750,7 +767,7 @@ static float cog_ff(mc_drive_t *d, const mc_drive_meas_t *m)
                                   .tau_s = d->cfg.foc.lq_h / d->foc.pi_q.kp};
         ff = (d->cog_ser.count > 0u)
                  ? mc_cog_series_ff_adv_a(&d->cog_ser, m->theta_m_rad, m->omega_m_rad_s, &lp, &i_a)
-                 : mc_cog_ff_adv_a(d->cog, m->theta_m_rad, m->omega_m_rad_s, &lp, &i_a);
+                 : cog_ff_bins(d, m, &lp, &i_a);
         d->cog_lead_a = ff - i_a;
         d->cog_on = true;
     }
@@ -1302,6 +1319,7 @@ int mc_drive_attach_cog(mc_drive_t *d, const mc_cog_map_t *map)
         d->cog = NULL;
         atomic_signal_fence(memory_order_seq_cst);
         mc_cog_series_init(&d->cog_ser, map);
+        d->cog_ord_rms = mc_cog_map_order_rms(map);
         d->cog_ser_map = map;
         d->cog_ser_crc = map->crc;
         atomic_signal_fence(memory_order_seq_cst);

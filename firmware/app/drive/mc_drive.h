@@ -619,6 +619,8 @@ typedef struct {
                                       map), derived when it is attached */
     const mc_cog_map_t *cog_ser_map; /**< the map cog_ser was derived from (NULL: none) */
     uint32_t cog_ser_crc;            /**< and that map's CRC then */
+    float cog_ord_rms;               /**< that map's RMS order (mc_cog_map_order_rms): the
+                                      bins path fades at it */
     float cog_lead_a; /**< this step's feed-forward less the current it asks to flow [A]: the
                            q reference's part that only lifts the loop's lag (0: none) */
     bool cog_on;      /**< the feed-forward ran this step: the dead-time compensation takes

@@ -309,3 +309,78 @@ float mc_cog_series_ff_adv_a(const mc_cog_series_t *s, float theta_m_rad, float 
     *p_i_a = i;
     return mc_isfinite_f32(rate_rad_s) ? (i + (lp->tau_s * rate_rad_s * di)) : 0.0f;
 }
+
+float mc_cog_map_order_rms(const mc_cog_map_t *map)
+{
+    float sq = 0.0f;
+    float dq = 0.0f;
+    for (uint32_t k = 0u; k < MC_COG_N; ++k) {
+        const float a = (float)map->q[k];
+        const float d = (float)map->q[(k + 1u) & (MC_COG_N - 1u)] - a;
+        sq += a * a;
+        dq += d * d;
+    }
+    return (sq > 0.0f) ? (COG_BIN_PER_R * mc_sqrt_f32(dq / sq)) : 0.0f;
+}
+
+float mc_cog_fade_gain(float x)
+{
+    return fade(x);
+}
+
+/* The power of order k's line in x[0..N) less its mean (Goertzel):
+ * |X_k|^2 N^-2 4, the squared amplitude of a sinusoid of that order. */
+static float line_power(const float *x, float mean, uint32_t k)
+{
+    float sn;
+    float cs;
+    mc_sincos_f32((float)k / COG_BIN_PER_R, &sn, &cs);
+    const float c2 = 2.0f * cs;
+    float s1 = 0.0f;
+    float s2 = 0.0f;
+    for (uint32_t i = 0u; i < MC_COG_N; ++i) {
+        const float s0 = (x[i] - mean) + (c2 * s1) - s2;
+        s2 = s1;
+        s1 = s0;
+    }
+    const float p = (s1 * s1) + (s2 * s2) - (c2 * s1 * s2);
+    return p * (4.0f / ((float)MC_COG_N * (float)MC_COG_N));
+}
+
+uint32_t mc_cog_find_order(const float *i_q_a, uint32_t n, uint32_t pole_pairs)
+{
+    uint32_t seen[MC_COG_N / 64u] = {0u}; /* the orders tried, one bit each */
+    uint32_t best = 0u;
+    float best_p = 0.0f;
+    float mean = 0.0f;
+    float var = 0.0f;
+    if ((i_q_a == NULL) || (n != MC_COG_N)) {
+        return 0u;
+    }
+    for (uint32_t i = 0u; i < MC_COG_N; ++i) {
+        if (!mc_isfinite_f32(i_q_a[i])) {
+            return 0u;
+        }
+        mean += i_q_a[i];
+    }
+    mean *= 1.0f / (float)MC_COG_N;
+    for (uint32_t i = 0u; i < MC_COG_N; ++i) {
+        var += (i_q_a[i] - mean) * (i_q_a[i] - mean);
+    }
+    for (uint32_t q = 3u; q <= 1000u; q += 3u) {
+        const uint32_t o = mc_cog_order(q, pole_pairs);
+        if ((o == 0u) || ((seen[o / 32u] >> (o % 32u)) & 1u) != 0u) {
+            continue;
+        }
+        seen[o / 32u] |= 1u << (o % 32u);
+        const float p = line_power(i_q_a, mean, o);
+        if (p > best_p) {
+            best_p = p;
+            best = o;
+        }
+    }
+    /* the mean power per order: the variance's 2 / N of the squared
+     * amplitudes summed over the N / 2 - 1 orders (Parseval) */
+    const float per_order = 2.0f * (var / (float)MC_COG_N) / (float)(MC_COG_N / 2u - 1u);
+    return (best_p >= MC_COG_FIND_SNR * per_order) && (best_p > 0.0f) ? best : 0u;
+}

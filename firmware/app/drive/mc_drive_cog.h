@@ -209,6 +209,37 @@ void mc_cog_series_init(mc_cog_series_t *s, const mc_cog_map_t *map);
 float mc_cog_series_ff_adv_a(const mc_cog_series_t *s, float theta_m_rad, float rate_rad_s,
                              const mc_cog_loop_t *lp, float *p_i_a);
 
+/** The bins path's fade (mc_cog_ff_adv_a has no orders to fade one by
+ *  one): the map's RMS order, (N / 2 pi) times the RMS of its bin-to-bin
+ *  differences over the RMS of its entries (cyclic). It is the factor the
+ *  bins path's rate term carries: at speed w that term is tau w times it
+ *  times the map's RMS, as a term of that order would be, so the drive
+ *  fades the whole lookup (mc_cog_fade_gain) at tau w times this order, as
+ *  the series fades each term. A single order j reads 2 N sin(pi j / N) /
+ *  (2 pi), j within 10 % up to 264; noise at high orders reads higher and
+ *  fades the map at a lower speed. 0 for a map of zero entries. N
+ *  differences: for the context that attaches a map. */
+float mc_cog_map_order_rms(const mc_cog_map_t *map);
+
+/** The fade of a feed-forward term whose frequency is x times the current
+ *  loop's bandwidth: 1 up to MC_COG_FADE_START, 0 from MC_COG_FADE_END
+ *  (and for a non-finite x), linear between. */
+float mc_cog_fade_gain(float x);
+
+/** The order a calibration with the slots unknown (cog_slots 0) keeps:
+ *  of the orders lcm(Q, 2 pole_pairs) below N / 2 a three-phase stator can
+ *  have (Q a multiple of 3, up to 1000), the one whose line in the n =
+ *  MC_COG_N currents i_q_a is the strongest (Goertzel), when its power is
+ *  at least MC_COG_FIND_SNR times the currents' mean power per order; 0
+ *  (keep every order) when none is, or for bad arguments. Noise spreads
+ *  over the 511 orders: of pure noise the strongest of the (at most 85)
+ *  candidates reaches 25 times the mean with a probability of 85 e^-25,
+ *  1e-9.
+ *  About 1024 multiply-adds per candidate (85 at most), for the context that
+ *  builds a map. */
+uint32_t mc_cog_find_order(const float *i_q_a, uint32_t n, uint32_t pole_pairs);
+#define MC_COG_FIND_SNR 25.0f
+
 #ifdef __cplusplus
 }
 #endif

@@ -212,3 +212,58 @@ TEST_F(DriveCogFf, NoMapWithoutAnEncoder)
 }
 
 } // namespace apptest
+
+namespace apptest
+{
+
+// A map of every order (the bins: no series) fades as a whole at its RMS
+// order (mc_cog_map_order_rms, derived when attached): the drive turning
+// at the speed where that order is 6 times the current loop's bandwidth
+// adds half the bins' feed-forward, at 9 times none (the rotor's counts
+// fed at a constant speed until the tracking loop holds it; each compared
+// with the same lookup and gain on the step's own angle and speed: equal
+// to float rounding, 1e-6 A).
+TEST_F(DriveCogFf, AMapOfEveryOrderFadesAtItsRmsOrder)
+{
+    std::vector<float> v(MC_COG_N);
+    for (uint32_t k = 0; k < MC_COG_N; ++k) {
+        v[k] = static_cast<float>(0.3 * std::sin(300.0 * 2.0 * kPi * k / MC_COG_N));
+    }
+    mc_cog_ident_t id{};
+    id.enc_cpr = fcfg.encoder_counts_per_rev;
+    id.pole_pairs = kPolePairs;
+    id.enc_offset_rad = kOffset;
+    mc_cog_map_t high{};
+    ASSERT_EQ(MC_COG_ST_OK, mc_cog_build(&high, v.data(), MC_COG_N, &id, 10.0f, 0u));
+    for (const double x_want : {6.0, 9.0}) {
+        InitDrive();
+        ASSERT_EQ(0, mc_drive_attach_ctrl(&d, &ctrl));
+        ASSERT_EQ(0, mc_drive_attach_cog(&d, &high));
+        EXPECT_EQ(d.cog_ser.count, 0u);
+        EXPECT_EQ(d.cog_ord_rms, mc_cog_map_order_rms(&high));
+        ASSERT_EQ(0, mc_drive_set_mode(&d, MC_DRIVE_MODE_CTRL));
+        const mc_cog_loop_t lp = {d.cfg.foc.dt_s, 1.5f * d.cfg.foc.dt_s,
+                                  d.cfg.foc.lq_h / d.foc.pi_q.kp};
+        const double w = x_want / (static_cast<double>(lp.tau_s) * d.cog_ord_rms);
+        const double cpr = fcfg.encoder_counts_per_rev;
+        for (uint32_t k = 0; k < 4000u; ++k) {
+            const double turns = w * kDt * k / (2.0 * kPi);
+            Step(static_cast<uint32_t>(std::floor((turns - std::floor(turns)) * cpr)));
+        }
+        const float x = std::fabs(d.tm.omega_m_rad_s) * lp.tau_s * d.cog_ord_rms;
+        EXPECT_NEAR(x, x_want, 0.05 * x_want); // the tracking loop's count ripple
+        const float g = mc_cog_fade_gain(x);
+        float i_a = 0.0f;
+        const float want =
+            g * mc_cog_ff_adv_a(&high, d.tm.theta_m_rad, d.tm.omega_m_rad_s, &lp, &i_a);
+        EXPECT_NEAR(d.tm.cog_ff_a, want, 1e-6f) << x_want;
+        if (x_want > MC_COG_FADE_END) {
+            EXPECT_EQ(d.tm.cog_ff_a, 0.0f);
+        } else {
+            EXPECT_GT(g, 0.3f);
+            EXPECT_LT(g, 0.7f);
+        }
+    }
+}
+
+} // namespace apptest

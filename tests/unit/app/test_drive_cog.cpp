@@ -375,3 +375,93 @@ TEST(DriveCog, FeedForwardFadesAboveFourTimesTheLoopsBandwidth)
         }
     }
 }
+
+// The bins path's fade order (mc_cog_map_order_rms): a map of one order k
+// (every order kept: the bins path) reads N sin(pi k / N) / pi, what the
+// bins' half-bin slope makes of a sinusoid's derivative. Tolerance 1e-3
+// relative: the entries' q15 rounding (half an LSB against entries scaled
+// to 32767) and float sums over 1024 bins move it by under 1e-4.
+TEST(DriveCog, RmsOrderOfAOneOrderMapIsItsBinSlopesOrder)
+{
+    for (const uint32_t k : {1u, 84u, 264u, 500u}) {
+        const mc_cog_map_t m = built(sinusoid(0.2, k, 0.4, 0.0));
+        const double want = kN * std::sin(kPi * k / kN) / kPi;
+        EXPECT_NEAR(mc_cog_map_order_rms(&m), want, 1e-3 * want) << k;
+    }
+    // two orders: the RMS of their bin orders weighed by their squares
+    std::vector<float> v = sinusoid(0.3, 84u, 0.0, 0.0);
+    const std::vector<float> v2 = sinusoid(0.1, 168u, 1.0, 0.0);
+    for (uint32_t i = 0; i < kN; ++i) {
+        v[i] += v2[i];
+    }
+    const mc_cog_map_t m2 = built(v);
+    const double o1 = kN * std::sin(kPi * 84.0 / kN) / kPi;
+    const double o2 = kN * std::sin(kPi * 168.0 / kN) / kPi;
+    const double want2 = std::sqrt((0.09 * o1 * o1 + 0.01 * o2 * o2) / 0.1);
+    EXPECT_NEAR(mc_cog_map_order_rms(&m2), want2, 1e-3 * want2);
+    mc_cog_map_t zero{};
+    EXPECT_EQ(mc_cog_map_order_rms(&zero), 0.0f);
+}
+
+// The fade's gain at its corners and for a non-finite frequency (exact:
+// the arithmetic is on small binary fractions).
+TEST(DriveCog, FadeGainIsOneThenLinearThenZero)
+{
+    EXPECT_EQ(mc_cog_fade_gain(0.0f), 1.0f);
+    EXPECT_EQ(mc_cog_fade_gain(MC_COG_FADE_START), 1.0f);
+    EXPECT_EQ(mc_cog_fade_gain(6.0f), 0.5f);
+    EXPECT_EQ(mc_cog_fade_gain(MC_COG_FADE_END), 0.0f);
+    EXPECT_EQ(mc_cog_fade_gain(1e9f), 0.0f);
+    EXPECT_EQ(mc_cog_fade_gain(NAN), 0.0f);
+    EXPECT_EQ(mc_cog_fade_gain(INFINITY), 0.0f);
+}
+
+namespace
+{
+// Uniform noise in [-a, a], deterministic (a 64-bit LCG's top bits).
+std::vector<float> noise(double a, uint64_t seed)
+{
+    std::vector<float> v(kN);
+    for (uint32_t i = 0; i < kN; ++i) {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        v[i] = static_cast<float>(
+            a * (2.0 * static_cast<double>(seed >> 11) / 9007199254740992.0 - 1.0));
+    }
+    return v;
+}
+} // namespace
+
+// The slots unknown (cog_slots 0): the order found in the currents is the
+// slotted motor's lcm(Q, 2 p) when its line stands out of the noise: the
+// SK3's 84 (12N14P) and the GM4108's 264 (24N22P) under noise of half the
+// cogging's amplitude per bin (its power per order is 1/1000 of the line's:
+// far above MC_COG_FIND_SNR); pure noise, or a line at an order no
+// three-phase stator gives (85 for 7 pole pairs), keeps every order (0).
+TEST(DriveCog, FindOrderPicksTheSlottedMotorsLineOrNone)
+{
+    struct Case {
+        uint32_t k, p, want;
+    };
+    for (const Case c : {Case{84u, 7u, 84u}, Case{264u, 11u, 264u}, Case{85u, 7u, 0u}}) {
+        std::vector<float> v = sinusoid(0.2, c.k, 0.7, 0.05);
+        const std::vector<float> e = noise(0.1, c.k);
+        for (uint32_t i = 0; i < kN; ++i) {
+            v[i] += e[i];
+        }
+        EXPECT_EQ(mc_cog_find_order(v.data(), kN, c.p), c.want) << c.k;
+    }
+    for (uint64_t seed = 1u; seed <= 20u; ++seed) {
+        const std::vector<float> e = noise(0.3, seed);
+        EXPECT_EQ(mc_cog_find_order(e.data(), kN, 7u), 0u) << seed;
+    }
+    // bad input: refused as 0, nothing read past n
+    const std::vector<float> v = sinusoid(0.2, 84u, 0.0, 0.0);
+    EXPECT_EQ(mc_cog_find_order(nullptr, kN, 7u), 0u);
+    EXPECT_EQ(mc_cog_find_order(v.data(), kN - 1u, 7u), 0u);
+    EXPECT_EQ(mc_cog_find_order(v.data(), kN, 0u), 0u);
+    std::vector<float> bad = v;
+    bad[17] = NAN;
+    EXPECT_EQ(mc_cog_find_order(bad.data(), kN, 7u), 0u);
+    const std::vector<float> flat(kN, 0.3f);
+    EXPECT_EQ(mc_cog_find_order(flat.data(), kN, 7u), 0u);
+}
