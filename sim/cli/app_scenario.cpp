@@ -104,6 +104,33 @@ AppSetup file_setup(const MotorFiles& plant, const mc_params_t& p,
   return s;
 }
 
+// A power-up elsewhere (theta_m0) with an incremental encoder and the
+// offset taken as stored (angle_ref 0): the encoder counts from 0 where the
+// rotor stands, so the stored offset is off by pole_pairs theta_m0 and the
+// drive runs with that angle error, which nothing on the drive can see (on
+// the bench: an absolute encoder's stored offset, or an index or an
+// alignment at power-up). Said once, in the summary and on stderr.
+void warn_stored_offset(const RunContext& ctx, const MotorFiles& plant, const mc_params_t& p,
+                        double theta_m0) {
+  const bool incremental =
+      plant.board.encoder == kEncoderAbi || plant.board.encoder == kEncoderAbiIndex;
+  const double e = std::remainder(theta_m0 * plant.motor.pole_pairs, 2.0 * M_PI);
+  if (!incremental || p.angle_ref != 0u || std::abs(e) < 1e-9 ||
+      ctx.summary.texts().count("warning") != 0) {
+    return;
+  }
+  char msg[400];
+  std::snprintf(msg, sizeof msg,
+                "theta_m0_rad %g with an incremental encoder ('%s') and angle_ref 0 (the offset "
+                "stored): the encoder counts from 0 where the rotor powers up, so the stored "
+                "encoder_offset_rad is %.3f rad (electrical) off and the drive runs misaligned; "
+                "a drive that finds its angle: angle_ref=1 with board.encoder=abi_index, or "
+                "angle_ref=2",
+                theta_m0, plant.board.encoder.c_str(), e);
+  ctx.summary.set_text("warning", msg);
+  std::fprintf(stderr, "mcsim: warning: %s\n", msg);
+}
+
 }  // namespace
 
 std::unique_ptr<AppTarget> make_file_target(const MotorFiles& plant, const mc_params_t& p,
@@ -122,6 +149,7 @@ std::unique_ptr<AppTarget> make_file_target(const RunContext& ctx, const MotorFi
   const auto& keys = ctx.params.values();
   if (const auto it = keys.find("theta_m0_rad"); it != keys.end()) {
     s.board.theta_m0_rad = it->second;
+    warn_stored_offset(ctx, plant, p, it->second);
   }
   if (ctx.flash != nullptr) {
     ctx.summary.set_text("flash_file", ctx.flash->path());

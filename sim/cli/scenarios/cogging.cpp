@@ -24,6 +24,11 @@
 //   speed_target_rad_s       speed_frac speed_rated_eff
 //   speed_ripple_pp_rad_s    peak-to-peak of the true speed in the window
 //   speed_mean_rad_s         its mean
+//   speed_ripple_cog_amp_rad_s  the amplitude of its line at the cogging
+//                            order (locked to N_c theta): the ripple the
+//                            cogging makes, apart from what is not locked
+//                            to the angle (the current ADC's counts, the
+//                            encoder's through the loop)
 //   speed_est_ripple_pp_rad_s  peak-to-peak of the drive's speed estimate
 //   iq_ref_pp_a              peak-to-peak of the current reference
 //   hold_err_pp_rad          peak-to-peak of the true angle after the load
@@ -51,13 +56,15 @@
 // stored map (--set theta_m0_rad=X: at another rotor angle).
 // With the table parameter `anticogging` (when the firmware has it) set by
 // --set like any other; the drive's `cog_slots` is the motor file's slots
-// (--set cog_slots=N overrides it, 0: the map keeps every order).
+// (--set cog_slots=N overrides it; 0: unknown, the calibration finds the
+// order in its currents, mc_cog_find_order, or keeps every order).
 //
 // Verdict: refused (exit 2, named) on a motor without cogging; a fault or
 // stop is the failure; otherwise pass once both figures are measured
 // (finite): the scenario measures, the tests hold it to the analytic
 // estimate (tests/sil/motors/test_cogging_scenario_sil.cpp).
 #include <algorithm>
+#include <complex>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -117,7 +124,7 @@ std::vector<ParamSpec> cogging_params(const MotorFiles& f) {
        0.0, 1.0},
       {"cog_slots", -1.0, "1",
        "the drive's cog_slots parameter: the map's kept orders (-1: the motor file's slots, 0: "
-       "every order)",
+       "unknown: the calibration finds the order, or keeps every order)",
        -1.0, 1000.0}};
   for (auto& s : app_gain_params(f)) p.push_back(s);
   if (anticogging_index() >= 0 && !shared_key(f)) {
@@ -297,9 +304,37 @@ bool calibrates(const RunContext& ctx) {
          std::lround(ctx.params.get("cog_cal")) == 1;
 }
 
+// The true speed's line at the cogging order over the window: the
+// amplitude of its component locked to N_c theta (the ripple the cogging
+// torque makes, apart from what is not locked to the angle).
+struct CogLine {
+  double n_c = 0.0;
+  std::complex<double> we{}, e{};
+  double sw = 0.0;
+  long n = 0;
+  void add(double w, double theta) {
+    const std::complex<double> r = std::polar(1.0, -n_c * theta);
+    we += w * r;
+    e += r;
+    sw += w;
+    ++n;
+  }
+  // 2 |mean((w - mean w) e^{-j N_c theta})|
+  double amp() const {
+    return n > 0 ? 2.0 * std::abs(we - (sw / static_cast<double>(n)) * e) / static_cast<double>(n)
+                 : std::nan("");
+  }
+};
+
+// The speed phase's measurements over its window.
+struct SpeedSpans {
+  Span w_true, w_est, iq_ref, cog_ff;
+  CogLine line;
+};
+
 // Phase 1: the speed loop at w_t; the window's spans.
 Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c, double cap_s,
-                  Span* w_true, Span* w_est, Span* iq_ref, Span* cog_ff) {
+                  SpeedSpans* sp) {
   const MotorFiles& f = *ctx.files;
   const mc_params_eff_t e = resolve_params(p);
   const double wc = e.g.speed_wc_rad_s;
@@ -346,10 +381,11 @@ Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c,
     }
     ff_max = std::max(ff_max, std::abs(static_cast<double>(q.cog_ff_a)));
     if (t >= t_win0) {
-      w_true->add(w);
-      w_est->add(q.omega_m_rad_s);
-      iq_ref->add(q.iq_ref_a);
-      cog_ff->add(q.cog_ff_a);
+      sp->w_true.add(w);
+      sp->line.add(w, board.state()(3));
+      sp->w_est.add(q.omega_m_rad_s);
+      sp->iq_ref.add(q.iq_ref_a);
+      sp->cog_ff.add(q.cog_ff_a);
     }
     if (k % every == 0) {
       board.true_dq_a(&id, &iq);
@@ -366,7 +402,7 @@ Phase speed_phase(RunContext& ctx, const mc_params_t& p, double w_t, double n_c,
   ctx.summary.set("speed_phase_s", dur);
   ctx.summary.set("speed_window_s", win);
   ctx.summary.set("speed_window_start_s", t_win0);
-  if (stopped.empty() && calibrates(ctx) && ctx.flash != nullptr && w_true->n > 0) {
+  if (stopped.empty() && calibrates(ctx) && ctx.flash != nullptr && sp->w_true.n > 0) {
     stopped = save_calibration(ctx, run);
   }
   return end_of(run, stopped);
@@ -453,12 +489,15 @@ void run_cogging(RunContext& ctx) {
   const double tau_step = ctx.params.get("hold_load_frac") * e.g.torque_rated_nm;
   ctx.csv.columns({"phase", "t", "omega_m_rad_s", "omega_est_rad_s", "iq_ref_a", "iq_a",
                    "theta_m_rad", "cog_ff_a"});
-  Span w_true, w_est, iq_ref, th_after, cog_ff;
+  SpeedSpans sp;
+  sp.line.n_c = n_c;
+  Span th_after;
   double th_hold = 0.0, err_max = 0.0;
   // --duration caps the two phases' total (the speed phase first): a run
   // cut before a window leaves its figure unmeasured (the verdict says so).
   const double cap = ctx.duration_s > 0.0 ? run_duration(ctx, ctx.duration_s) : kMaxDurationS;
-  Phase ph = speed_phase(ctx, p, w_t, n_c, cap, &w_true, &w_est, &iq_ref, &cog_ff);
+  Phase ph = speed_phase(ctx, p, w_t, n_c, cap, &sp);
+  const Span& w_true = sp.w_true;
   const double used = ctx.summary.numbers().at("speed_phase_s");
   if (ph.stopped.empty() && cap - used > 0.0) {
     ph = hold_phase(ctx, p, tau_step, cap - used, &th_after, &th_hold, &err_max);
@@ -484,9 +523,10 @@ void run_cogging(RunContext& ctx) {
   }
   ctx.summary.set("speed_ripple_pp_rad_s", w_true.pp());
   ctx.summary.set("speed_mean_rad_s", w_true.mean());
-  ctx.summary.set("speed_est_ripple_pp_rad_s", w_est.pp());
-  ctx.summary.set("iq_ref_pp_a", iq_ref.pp());
-  ctx.summary.set("cog_ff_pp_a", cog_ff.pp());
+  ctx.summary.set("speed_ripple_cog_amp_rad_s", sp.line.amp());
+  ctx.summary.set("speed_est_ripple_pp_rad_s", sp.w_est.pp());
+  ctx.summary.set("iq_ref_pp_a", sp.iq_ref.pp());
+  ctx.summary.set("cog_ff_pp_a", sp.cog_ff.pp());
   ctx.summary.set("hold_load_nm", tau_step);
   ctx.summary.set("hold_theta_rad", th_hold);
   ctx.summary.set("hold_err_pp_rad", th_after.pp());

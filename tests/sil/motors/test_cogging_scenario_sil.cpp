@@ -183,6 +183,27 @@ TEST(CoggingScenarioSil, TheDriveCalibratesItsMapThroughTheApplication) {
   EXPECT_GE(r10, 5.0);
 }
 
+// The slots unknown (cog_slots 0): the calibration finds the order in its
+// currents (mc_cog_find_order: 84 on the SK3, the strongest of the
+// lcm(Q, 14) a three-phase stator gives), builds the same map as with the
+// slots given, and the run is that one, bit for bit (deterministic runs).
+// Two calibrations: in the release suite only (the ASan preset leaves out
+// TheMapCuts*).
+TEST(CoggingScenarioSil, TheMapCutsTheSameWithTheSlotsFoundAsGiven) {
+  const MotorFiles f = testlib::files({"turnigy-sk3-6374-149kv", "vesc6-48v"});
+  std::map<std::string, std::string> txt1, txt2;
+  const auto s1 = testlib::run_scenario("cogging", f, {{"anticogging", "1"}, {"cog_slots", "12"}},
+                                        "given", &txt1);
+  const auto s2 = testlib::run_scenario("cogging", f, {{"anticogging", "1"}, {"cog_slots", "0"}},
+                                        "found", &txt2);
+  ASSERT_EQ(txt1.at("verdict"), "pass") << txt1.at("verdict_detail");
+  ASSERT_EQ(txt2.at("verdict"), "pass") << txt2.at("verdict_detail");
+  EXPECT_EQ(s2.at("speed_ripple_pp_rad_s"), s1.at("speed_ripple_pp_rad_s"));
+  EXPECT_EQ(s2.at("speed_ripple_cog_amp_rad_s"), s1.at("speed_ripple_cog_amp_rad_s"));
+  EXPECT_EQ(s2.at("cog_ff_pp_a"), s1.at("cog_ff_pp_a"));
+  EXPECT_EQ(s2.at("hold_err_pp_rad"), s1.at("hold_err_pp_rad"));
+}
+
 // The ripple's reduction by the calibrated map (anticogging 0 against 1,
 // the map calibrated by the drive, filtered to the multiples of lcm(slots,
 // 2 p): the scenario sets cog_slots from the motor file).
@@ -206,20 +227,83 @@ double ripple_ratio(const MotorFiles& f, double frac, const std::string& tag) {
 // At 2 % of rated speed the SK3 reaches 21.6x (0.346 -> 0.016 rad/s;
 // bound the 5x). The GM4108 (24 slots, 22 poles: order 264, its
 // map's series, not its bins, which would keep 0.69 of the amplitude at
-// mid-bin) measured 5.3x at 10 % and 3.8x at 2 % from this power-up angle,
-// but 2.1x and 2.6x at 10 % from 0.1 and 0.5 rad: its cogging, 1.7 mN m,
-// is 5.2 mA of q current, two counts of the gimbal board's 12-bit ADC over
-// +-5 A, and its dead time's voltage (0.3 us at 20 kHz, 24 V over 5 ohm) is
-// worth 29 mA: the calibration's map is noise (its amplitude 0.80 to 1.01
-// of the plant's over those runs) and the 5x is not met on it.
-// Bounds 4.0x and 3.0x: what this run shows, a quarter under it for a
-// change that moves the noise.
+// mid-bin) measured 5.3x at 10 % and 3.8x at 2 % from this power-up angle;
+// from others (with an index: the test below) 4.6x to 8.5x at 10 %. What
+// limits it is not the map: the same motor without cogging ripples at a
+// fifth to a third of the cogging's ripple (0.025 to 0.037 rad/s against
+// 0.12 to 0.14), the 12-bit current ADC's counts (2.4 mA, half the
+// cogging's 5.2 mA of q current) through the current loop (with a 16-bit
+// ADC it falls to 0.005 to 0.013), and the map brings the ripple down to
+// that. Bounds 4.0x and 3.0x: what this run shows, a quarter under it for
+// a change that moves the ripple not locked to the angle.
 TEST(CoggingScenarioSil, TheMapCutsTheSpeedRippleAtTwoAndTenPercent) {
   const MotorFiles sk3 = testlib::files({"turnigy-sk3-6374-149kv", "vesc6-48v"});
   const MotorFiles gm = testlib::files({"gimbal-gm4108", "gimbal-24v"});
   EXPECT_GE(ripple_ratio(sk3, 0.02, "sk3_2"), 5.0);
   EXPECT_GE(ripple_ratio(gm, 0.10, "gm_10"), 4.0);
   EXPECT_GE(ripple_ratio(gm, 0.02, "gm_2"), 3.0);
+}
+
+// The GM4108 from three power-up angles, its angle known after each (an
+// index, angle_ref 1: found at the first enable): the map takes the line at
+// the cogging order (speed_ripple_cog_amp_rad_s) down at least the issue's
+// 5x (measured 6.9x, 7.1x and 13x at 0.1, 0.5 and 2.9 rad), and the
+// ripple's peak-to-peak to that of the same motor without cogging (the
+// plant's cogging a million times smaller, no map): measured 0.70, 1.11
+// and 0.94 of it; bound 1.3: the ripple that is not locked to the angle
+// (the ADC's counts through the loop) peaks differently from run to run
+// (the SK3's ratio moved by 30 % between windows). The runs at 0.1 and
+// 0.5 rad that once measured 2.1x and 2.6x had the stored offset of an
+// incremental encoder, 1.1 and 5.5 rad (electrical) wrong after that
+// power-up (the scenario warns of it now).
+TEST(CoggingScenarioSil, TheMapCutsTheGm4108sLineFromAnyPowerUpAngle) {
+  MotorFiles gm = testlib::files({"gimbal-gm4108", "gimbal-24v"});
+  gm.board.encoder = kEncoderAbiIndex;
+  MotorFiles quiet = gm;
+  quiet.motor.cogging_nm *= 1e-6;
+  for (const char* th : {"0.1", "0.5", "2.9"}) {
+    const testlib::Sets keys = {{"speed_frac", "0.1"},
+                                {"theta_m0_rad", th},
+                                {"angle_ref", "1"},
+                                {"angle_find_at_enable", "1"}};
+    auto k0 = keys, k1 = keys;
+    k0.emplace_back("anticogging", "0");
+    k1.emplace_back("anticogging", "1");
+    std::map<std::string, std::string> t0, t1, tq;
+    const std::string tag = std::string("gm_th") + th;
+    const auto s0 = testlib::run_scenario("cogging", gm, k0, tag + "_off", &t0);
+    const auto s1 = testlib::run_scenario("cogging", gm, k1, tag + "_on", &t1);
+    const auto sq = testlib::run_scenario("cogging", quiet, k0, tag + "_quiet", &tq);
+    ASSERT_EQ(t0.at("verdict"), "pass") << t0.at("verdict_detail");
+    ASSERT_EQ(t1.at("verdict"), "pass") << t1.at("verdict_detail");
+    ASSERT_EQ(tq.at("verdict"), "pass") << tq.at("verdict_detail");
+    EXPECT_EQ(t1.count("warning"), 0u) << th;  // the angle is found, not assumed
+    EXPECT_EQ(s1.at("cog_cal_status"), static_cast<double>(MC_COMM_COG_DONE)) << th;
+    const double line = s0.at("speed_ripple_cog_amp_rad_s") / s1.at("speed_ripple_cog_amp_rad_s");
+    const double to_floor = s1.at("speed_ripple_pp_rad_s") / sq.at("speed_ripple_pp_rad_s");
+    RecordProperty("cog_line_ratio_" + tag, std::to_string(line));
+    RecordProperty("pp_over_floor_" + tag, std::to_string(to_floor));
+    RecordProperty("pp_ratio_" + tag,
+                   std::to_string(s0.at("speed_ripple_pp_rad_s") / s1.at("speed_ripple_pp_rad_s")));
+    EXPECT_GE(line, 5.0) << th;
+    EXPECT_LE(to_floor, 1.3) << th;
+  }
+}
+
+// A power-up away from the calibrated angle with an incremental encoder
+// and the offset taken as stored (angle_ref 0) is named: the summary's
+// warning gives the electrical error, p theta_m0 wrapped (11 x 0.1 rad).
+TEST(CoggingScenarioSil, AStoredOffsetAfterAPowerUpElsewhereIsWarnedOf) {
+  const MotorFiles gm = testlib::files({"gimbal-gm4108", "gimbal-24v"});
+  std::map<std::string, std::string> txt;
+  (void)testlib::run_scenario("cogging", gm, {{"theta_m0_rad", "0.1"}, {"angle_ref", "0"}}, "warn",
+                              &txt);
+  ASSERT_EQ(txt.count("warning"), 1u);
+  EXPECT_NE(txt.at("warning").find("1.100 rad (electrical) off"), std::string::npos)
+      << txt.at("warning");
+  std::map<std::string, std::string> txt0;
+  (void)testlib::run_scenario("cogging", gm, {{"angle_ref", "0"}}, "nowarn", &txt0);
+  EXPECT_EQ(txt0.count("warning"), 0u);
 }
 
 // At 80 % of rated speed the SK3's cogging order is at 17 times the current
