@@ -381,6 +381,7 @@ uint32_t mc_cog_find_order(const float *i_q_a, uint32_t n, uint32_t pole_pairs)
     }
     /* the mean power per order: the variance's 2 / N of the squared
      * amplitudes summed over the N / 2 - 1 orders (Parseval) */
-    const float per_order = 2.0f * (var / (float)MC_COG_N) / (float)(MC_COG_N / 2u - 1u);
+    const uint32_t n_orders = (MC_COG_N / 2u) - 1u; /* 511: exact */
+    const float per_order = 2.0f * (var / (float)MC_COG_N) / (float)n_orders;
     return (best_p >= MC_COG_FIND_SNR * per_order) && (best_p > 0.0f) ? best : 0u;
 }
