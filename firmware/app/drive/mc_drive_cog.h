@@ -215,9 +215,9 @@ float mc_cog_series_ff_adv_a(const mc_cog_series_t *s, float theta_m_rad, float 
  *  bins path's rate term carries: at speed w that term is tau w times it
  *  times the map's RMS, as a term of that order would be, so the drive
  *  fades the whole lookup (mc_cog_fade_gain) at tau w times this order, as
- *  the series fades each term. A single order j reads 2 N sin(pi j / N) /
- *  (2 pi), j within 10 % up to 264; noise at high orders reads higher and
- *  fades the map at a lower speed. 0 for a map of zero entries. N
+ *  the series fades each term. A single order j reads N sin(pi j / N) / pi,
+ *  under j by 1.1 % at 84 and 10.6 % at 264 (the half-bin slope's); noise
+ *  at high orders reads higher and fades the map at a lower speed. 0 for a map of zero entries. N
  *  differences: for the context that attaches a map. */
 float mc_cog_map_order_rms(const mc_cog_map_t *map);
 
