@@ -253,17 +253,29 @@ static float fade(float x)
 }
 
 /* The series' terms at the angle theta [rad], each faded by its frequency
- * (x1 >= 0: the first term's, over the loop's bandwidth): the sum (deriv
- * false) or its derivative in angle (deriv true); 0 for an angle whose
- * order-fold is not finite or beyond 1e6 turns (a non-finite rate makes the
- * angle so). The terms past the fade's end are not evaluated. */
-static float series_at(const mc_cog_series_t *s, float theta, bool deriv, float x1)
+ * (x1 >= 0: the first term's, over the loop's bandwidth), in one pass with
+ * one sine and cosine: returns their sum, and *p_d their derivative in angle
+ * at theta + delta. That derivative is a Taylor step from theta with the
+ * first three derivatives there, V'(theta + delta) ~ V' + delta V'' +
+ * delta^2 / 2 V''': for a term of order j and amplitude A it errs by at most
+ * j A p^3 / 6, p = j |delta| its phase step (the Lagrange remainder, |V''''|
+ * <= j^4 A): with the drive's leads (delta = rate T / 2) a factor p below
+ * the loop model's own, its derivative at mid-period for the difference
+ * over the period, sin(p) / p ~ 1 - p^2 / 6 of it (mc_cog_loop_t). Both 0
+ * for an angle whose order-fold is not finite or beyond 1e6 turns (a
+ * non-finite rate makes the angle so). The terms past the fade's end are
+ * not evaluated. */
+static float series_at(const mc_cog_series_t *s, float theta, float delta, float x1, float *p_d)
 {
     /* order theta in turns, its fraction: for the drive's angle in
      * [0, 2 pi) plus a lead, below order + 1 turns, where float's rounding
      * is under 6e-5 of a period (order < 512) */
     const float u0 = theta * ((float)s->order / COG_TWO_PI);
-    float v = 0.0f;
+    float v = 0.0f;  /* the sum */
+    float d1 = 0.0f; /* its derivatives in angle at theta: V' */
+    float d2 = 0.0f; /* -V'' */
+    float d3 = 0.0f; /* -V''' */
+    *p_d = 0.0f;
     if (!mc_isfinite_f32(u0) || (mc_abs_f32(u0) > 1.0e6f)) {
         return 0.0f;
     }
@@ -280,21 +292,28 @@ static float series_at(const mc_cog_series_t *s, float theta, bool deriv, float 
     for (uint32_t m = 0u; m < s->count; ++m) {
         xm += x1;
         jm += order;
-        /* a cos + b sin of j theta, or its derivative j (b cos - a sin) */
-        float t =
-            deriv ? (jm * ((s->b[m] * cs) - (s->a[m] * sn))) : ((s->a[m] * cs) + (s->b[m] * sn));
+        /* a cos + b sin of j theta, and its derivative over j, b cos - a sin */
+        float t = (s->a[m] * cs) + (s->b[m] * sn);
+        float w = (s->b[m] * cs) - (s->a[m] * sn);
         if (xm > MC_COG_FADE_START) {
             const float g = fade(xm);
             if (!(g > 0.0f)) {
                 break; /* this term and every higher one faded out */
             }
             t *= g;
+            w *= g;
         }
+        const float jw = jm * w; /* the term's V'; -V'' = j^2 t, -V''' = j^2 jw */
+        const float j2 = jm * jm;
         v += t;
+        d1 += jw;
+        d2 += j2 * t;
+        d3 += j2 * jw;
         const float c_next = (cs * c1) - (sn * s1); /* cos, sin of (m + 2) x */
         sn = (sn * c1) + (cs * s1);
         cs = c_next;
     }
+    *p_d = d1 - (delta * (d2 + (0.5f * delta * d3)));
     return v;
 }
 
@@ -302,10 +321,11 @@ float mc_cog_series_ff_adv_a(const mc_cog_series_t *s, float theta_m_rad, float 
                              const mc_cog_loop_t *lp, float *p_i_a)
 {
     /* the first term's frequency over the loop's bandwidth (NaN for a
-     * non-finite rate: no term passes the fade, and the result is 0) */
+     * non-finite rate: so is the angle, and the result is 0) */
     const float x1 = mc_abs_f32(rate_rad_s) * lp->tau_s * (float)s->order;
-    const float i = series_at(s, theta_m_rad + (rate_rad_s * lp->lead_i_s), false, x1);
-    const float di = series_at(s, theta_m_rad + (rate_rad_s * lp->lead_d_s), true, x1);
+    float di;
+    const float i = series_at(s, theta_m_rad + (rate_rad_s * lp->lead_i_s),
+                              rate_rad_s * (lp->lead_d_s - lp->lead_i_s), x1, &di);
     *p_i_a = i;
     return mc_isfinite_f32(rate_rad_s) ? (i + (lp->tau_s * rate_rad_s * di)) : 0.0f;
 }

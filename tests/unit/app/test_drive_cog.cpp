@@ -3,7 +3,9 @@
 // the interpolated lookup, against analytic values.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <vector>
 
@@ -348,6 +350,220 @@ TEST(DriveCog, FeedForwardLeadsTheCurrentAndItsRateOfChange)
     float i_a = 1.0f;
     EXPECT_EQ(mc_cog_series_ff_adv_a(&ser, NAN, 1.0f, &lp, &i_a), 0.0f);
     EXPECT_EQ(mc_cog_series_ff_adv_a(&ser, 1.0f, INFINITY, &lp, &i_a), 0.0f);
+}
+
+namespace
+{
+
+// A map of the given order built from sinusoids amp[n] sin((n + 1) order
+// theta + n), and its series.
+void built_series(uint32_t order, const std::vector<double> &amp, mc_cog_map_t *m,
+                  mc_cog_series_t *ser)
+{
+    std::vector<float> v(kN, 0.0f);
+    for (uint32_t n = 0; n < amp.size(); ++n) {
+        const std::vector<float> h = sinusoid(amp[n], (n + 1u) * order, n, 0.0);
+        for (uint32_t i = 0; i < kN; ++i) {
+            v[i] += h[i];
+        }
+    }
+    const mc_cog_ident_t id = ident();
+    ASSERT_EQ(mc_cog_build(m, v.data(), kN, &id, 10.0f, order), MC_COG_ST_OK);
+    mc_cog_series_init(ser, m);
+    ASSERT_EQ(ser->count, amp.size());
+}
+
+// The series feed-forward in double, each term faded as the firmware fades
+// it: the current at lead_i, the reference with the derivative at lead_d
+// (r), the same with the derivative taken at lead_i (r_at_i: what the test
+// must tell from r), and the tolerance on r (below).
+struct SeriesRef {
+    double i;
+    double r;
+    double r_at_i;
+    double tol_i;
+    double tol_r;
+};
+
+// Float's phase error of a term of order j [rad] (mc_cog_series_ff_adv_a
+// in float): the angle theta + w lead_i (< 2 pi + lead) to half an ulp,
+// 2.4e-7 rad, times j; order theta / 2 pi in float turns (below order + 1
+// < 512 turns: half an ulp, 1.5e-5 turns at order 264, 9.6e-5 rad, 3.6e-7
+// per unit of order) and the rounding of order / 2 pi (6e-8 of order + 1
+// turns: 3.8e-7 rad per unit of order); the fundamental's phase is
+// multiplied by the harmonic's index. Sum 1e-6 j, taken as 1.5e-6 j, plus
+// the angle-addition recursion's and mc_sincos_f32's rounding, a few 1e-7
+// per step over at most 8 steps: 3e-6.
+double phase_error(double j)
+{
+    return (1.5e-6 * j) + 3e-6;
+}
+
+SeriesRef series_ref(const mc_cog_series_t &s, float th_f, float w_f, const mc_cog_loop_t &lp)
+{
+    const double th = th_f;
+    const double w = w_f;
+    const double tau = lp.tau_s;
+    const double delta = w * (static_cast<double>(lp.lead_d_s) - lp.lead_i_s);
+    const double x1 = std::fabs(w) * tau * s.order;
+    SeriesRef ref{0.0, 0.0, 0.0, 1e-6, 1e-6}; // 1e-6 A: float's sums
+    double di = 0.0;
+    double di_at_i = 0.0;
+    for (uint32_t m = 0; m < s.count; ++m) {
+        const double j = (m + 1.0) * s.order;
+        const double x = (m + 1.0) * x1;
+        const double g =
+            std::min(1.0, (MC_COG_FADE_END - x) /
+                              (static_cast<double>(MC_COG_FADE_END) - MC_COG_FADE_START));
+        if (!(g > 0.0)) {
+            break;
+        }
+        const double a = s.a[m];
+        const double b = s.b[m];
+        const double amp = std::hypot(a, b);
+        const double xi = j * (th + w * lp.lead_i_s);
+        const double xd = j * (th + w * lp.lead_d_s);
+        ref.i += g * (a * std::cos(xi) + b * std::sin(xi));
+        di += g * j * (b * std::cos(xd) - a * std::sin(xd));
+        di_at_i += g * j * (b * std::cos(xi) - a * std::sin(xi));
+        // the Taylor step's remainder: j A p^3 / 6 of the derivative, p =
+        // j |delta| (|V''''| <= j^4 A), times tau |w| in the reference;
+        // float's phase error on the current and on the derivative term
+        // (x = tau |w| j of the amplitude)
+        const double p = j * std::fabs(delta);
+        const double e = g * amp * phase_error(j);
+        ref.tol_i += e;
+        ref.tol_r += (tau * std::fabs(w) * g * j * amp * p * p * p / 6.0) + (e * (1.0 + x));
+    }
+    ref.r = ref.i + tau * w * di;
+    ref.r_at_i = ref.i + tau * w * di_at_i;
+    return ref;
+}
+
+// Over a sweep of speeds (both signs) from 0 to past the fade's end and
+// angles around the turn: the largest error over its tolerance, and the
+// largest miss of the derivative taken at lead_i over the same tolerance.
+struct SweepResult {
+    double worst_i;      // max |i - ref.i| / ref.tol_i
+    double worst_r;      // max |r - ref.r| / ref.tol_r
+    double at_i_miss;    // max |ref.r_at_i - ref.r| / ref.tol_r
+    double err_r_rel;    // max |r - ref.r| over max |ref.r|
+    double x_of_worst_r; // the fundamental's x where worst_r is
+};
+
+SweepResult sweep(const mc_cog_series_t &s, const mc_cog_loop_t &lp)
+{
+    SweepResult res{0.0, 0.0, 0.0, 0.0, 0.0};
+    double err_r = 0.0;
+    double ref_max = 0.0;
+    for (int32_t k = -34; k <= 34; ++k) { // x1 = 0.25 k: to 8.5, past the end
+        const double x1 = 0.25 * k;
+        const float w = static_cast<float>(x1 / (lp.tau_s * s.order));
+        for (uint32_t n = 0; n < 41u; ++n) {
+            const float th = static_cast<float>(0.011 + 2.0 * kPi * n / 41.0);
+            const SeriesRef ref = series_ref(s, th, w, lp);
+            float i_a = 1.0f;
+            const float r = mc_cog_series_ff_adv_a(&s, th, w, &lp, &i_a);
+            res.worst_i = std::max(res.worst_i, std::fabs(i_a - ref.i) / ref.tol_i);
+            const double q = std::fabs(r - ref.r) / ref.tol_r;
+            if (q > res.worst_r) {
+                res.worst_r = q;
+                res.x_of_worst_r = x1;
+            }
+            res.at_i_miss = std::max(res.at_i_miss, std::fabs(ref.r_at_i - ref.r) / ref.tol_r);
+            err_r = std::max(err_r, std::fabs(r - ref.r));
+            ref_max = std::max(ref_max, std::fabs(ref.r));
+        }
+    }
+    res.err_r_rel = err_r / ref_max;
+    return res;
+}
+
+} // namespace
+
+// The series feed-forward's one pass (mc_cog_series_ff_adv_a): the current
+// at lead_i, and the derivative at lead_d by a Taylor step from lead_i with
+// the first three derivatives, against the series evaluated in double at
+// each lead, each term faded alike. Speeds from 0 to past the fade's end
+// (the fundamental at 0 .. 8.5 times the loop's bandwidth), both
+// directions; the drive's leads (T, 1.5 T, 20 kHz) with the default
+// bandwidth (bw T = 0.08) and the largest (0.3, MC_PARAMS_BW_DT_MAX); the
+// order-84 map, one of the same order with all six multiples it keeps, and
+// the GM4108's order, 264. Tolerance per point (series_ref): the Taylor
+// remainder, tau |w| sum g j A p^3 / 6 with p = j |w| (lead_d - lead_i),
+// plus float's phase error (phase_error) on the current and on the
+// derivative term, plus 1e-6 A for float's sums. The derivative taken at
+// lead_i instead misses by more than ten times that tolerance: the test
+// sees the Taylor step.
+TEST(DriveCog, SeriesFeedForwardOnePassMatchesBothLeadsInDouble)
+{
+    struct Map {
+        const char *name;
+        uint32_t order;
+        std::vector<double> amp;
+    };
+    const std::vector<Map> maps = {
+        {"order 84, six multiples", 84u, {0.2, 0.08, 0.05, 0.03, 0.02, 0.01}},
+        {"order 264 (GM4108)", 264u, {0.3}}};
+    std::vector<mc_cog_series_t> sers;
+    for (const Map &mp : maps) {
+        mc_cog_map_t m{};
+        mc_cog_series_t ser{};
+        ASSERT_NO_FATAL_FAILURE(built_series(mp.order, mp.amp, &m, &ser)) << mp.name;
+        sers.push_back(ser);
+    }
+    {
+        mc_cog_map_t m{};
+        mc_cog_series_t ser{};
+        ASSERT_NO_FATAL_FAILURE(order84(&m, &ser));
+        sers.push_back(ser);
+    }
+    const double t = 5.0e-5;
+    for (const double bw_t : {0.08, 0.3}) {
+        const mc_cog_loop_t lp = {static_cast<float>(t), static_cast<float>(1.5 * t),
+                                  static_cast<float>(t / bw_t)};
+        for (size_t k = 0; k < sers.size(); ++k) {
+            const SweepResult res = sweep(sers[k], lp);
+            const char *name = (k < maps.size()) ? maps[k].name : "order 84 (order84())";
+            EXPECT_LE(res.worst_i, 1.0) << name << " bw T " << bw_t;
+            EXPECT_LE(res.worst_r, 1.0)
+                << name << " bw T " << bw_t << " at x1 " << res.x_of_worst_r;
+            EXPECT_GT(res.at_i_miss, 10.0) << name << " bw T " << bw_t;
+            std::printf("[ series one pass ] %s, bw T %g: error/tolerance %.3f (at x1 %g), "
+                        "current %.3f; error %.2e of the largest reference; derivative at "
+                        "lead_i: %.0f tolerances\n",
+                        name, bw_t, res.worst_r, res.x_of_worst_r, res.worst_i, res.err_r_rel,
+                        res.at_i_miss);
+        }
+    }
+}
+
+// A non-finite rate (or angle) gives 0, the reference and the current both,
+// whatever the loop's leads (a lead of 0 makes the angle NaN, not infinite).
+TEST(DriveCog, SeriesFeedForwardOfANonFiniteRateIsZero)
+{
+    mc_cog_map_t m{};
+    mc_cog_series_t ser{};
+    ASSERT_NO_FATAL_FAILURE(order84(&m, &ser));
+    const mc_cog_loop_t leads[] = {{5.0e-5f, 7.5e-5f, 6.25e-4f}, {0.0f, 0.0f, 6.25e-4f}};
+    for (const mc_cog_loop_t &lp : leads) {
+        for (const float w : {NAN, INFINITY, -INFINITY}) {
+            for (const float th : {0.0f, 1.3f, 6.2f}) {
+                float i_a = 1.0f;
+                EXPECT_EQ(mc_cog_series_ff_adv_a(&ser, th, w, &lp, &i_a), 0.0f) << w << " " << th;
+                EXPECT_EQ(i_a, 0.0f) << w << " " << th;
+            }
+        }
+        float i_a = 1.0f;
+        EXPECT_EQ(mc_cog_series_ff_adv_a(&ser, INFINITY, 10.0f, &lp, &i_a), 0.0f);
+        EXPECT_EQ(i_a, 0.0f);
+    }
+    // the same map at a finite rate is not 0 there (the check above is not
+    // a map that gives 0 everywhere): 0.2 sin(84 1.3 + ...) at 10 rad/s
+    float i_a = 0.0f;
+    const float r = mc_cog_series_ff_adv_a(&ser, 1.3f, 10.0f, &leads[0], &i_a);
+    EXPECT_GT(std::fabs(i_a), 0.01f);
+    EXPECT_GT(std::fabs(r), 0.01f);
 }
 
 // The fade with frequency (MC_COG_FADE_START, MC_COG_FADE_END): the
