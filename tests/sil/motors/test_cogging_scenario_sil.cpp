@@ -249,7 +249,7 @@ double ripple_ratio(const MotorFiles& f, double frac, const std::string& tag) {
 // a third of the cogging's ripple (0.025 to 0.037 rad/s against 0.12 to
 // 0.14), the 12-bit current ADC's counts (2.4 mA, half the cogging's
 // 5.2 mA of q current) through the current loop (with a 16-bit ADC it
-// falls to 0.005 to 0.013), and the map brings the ripple down to that.
+// falls to 0.012 to 0.013), and the map brings the ripple down to that.
 // Bounds 4.0x and 3.0x: under the lowest this test has measured (5.3x,
 // 3.8x), for a change that moves the ripple not locked to the angle.
 TEST(CoggingScenarioSil, TheMapCutsTheSpeedRippleAtTwoAndTenPercent) {
