@@ -81,6 +81,22 @@ AF_FUNCTIONS = {
     "drv_spi_miso": (6, {"PB4", "PC11"}),         # SPI3_MISO
     "drv_spi_mosi": (6, {"PB5", "PC12"}),         # SPI3_MOSI
 }
+# The second axis (signals m1_<signal>, the ODrive v3.6's M1): TIM8's outputs
+# (AF3) and TIM4's encoder inputs (AF2), DS8626 table 9. Until the image drives
+# M1, its gate inputs may instead be outputs held low (a bridge that cannot
+# switch); they may not be anything else.
+AF_FUNCTIONS_M1 = {
+    "m1_pwm_ah": (3, {"PC6", "PI5"}),             # TIM8_CH1
+    "m1_pwm_al": (3, {"PA5", "PA7", "PH13"}),     # TIM8_CH1N
+    "m1_pwm_bh": (3, {"PC7", "PI6"}),             # TIM8_CH2
+    "m1_pwm_bl": (3, {"PB0", "PB14", "PH14"}),    # TIM8_CH2N
+    "m1_pwm_ch": (3, {"PC8", "PI7"}),             # TIM8_CH3
+    "m1_pwm_cl": (3, {"PB1", "PB15", "PH15"}),    # TIM8_CH3N
+    "m1_enc_a": (2, {"PB6", "PD12"}),             # TIM4_CH1
+    "m1_enc_b": (2, {"PB7", "PD13"}),             # TIM4_CH2
+}
+M1_REQUIRED = ["m1_pwm_ah", "m1_pwm_al", "m1_pwm_bh", "m1_pwm_bl", "m1_pwm_ch", "m1_pwm_cl",
+               "m1_adc_ib", "m1_enc_a", "m1_enc_b"]
 # ADC1 channels (ADC123_IN0..IN15 on the STM32F405's pins).
 ADC_CHANNELS = {**{f"PA{i}": i for i in range(8)}, "PB0": 8, "PB1": 9,
                 **{f"PC{i}": 10 + i for i in range(6)}}
@@ -348,6 +364,42 @@ def read_board_toml(folder):
     return t, pins_dir
 
 
+def check_m1(name, pins):
+    """The second axis's pins, when the board lists any: the whole set, each
+    on a pin that carries its function (or, for a gate input, held low)."""
+    m1 = [s for s in pins if s.startswith("m1_")]
+    if not m1:
+        return
+    missing = [s for s in M1_REQUIRED if s not in pins]
+    if missing:
+        raise BoardError(f"{name}: a second axis needs all of its signals; missing: "
+                         f"{', '.join(missing)}")
+    if "m1_adc_ia" not in pins and "m1_adc_ic" not in pins:
+        raise BoardError(f"{name}: need m1_adc_ia or m1_adc_ic besides m1_adc_ib")
+    for sig, (af, allowed) in AF_FUNCTIONS_M1.items():
+        p = pins[sig]
+        held_low = sig.startswith("m1_pwm_") and p["mode"] == "output" and p["init"] == 0
+        if held_low:
+            continue
+        if p["mode"] != "af" or p["af"] != af or p["name"] not in allowed:
+            raise BoardError(f"{name}: {sig} must be af {af} on one of {sorted(allowed)}"
+                             + (" (or an output held low)" if sig.startswith("m1_pwm_") else "")
+                             + f", is {p['mode']} {p['af']} on {p['name']}")
+    for sig in m1:
+        p = pins[sig]
+        if sig.startswith("m1_adc_"):
+            if p["mode"] != "analog":
+                raise BoardError(f"{name}: {sig} must be analog")
+            if p["name"] not in ADC_CHANNELS:
+                raise BoardError(f"{name}: {sig} on {p['name']}, which has no ADC channel")
+    z = pins.get("m1_enc_z")
+    if z is not None and z["mode"] != "input":
+        raise BoardError(f"{name}: m1_enc_z (the index, an EXTI line) must be an input")
+    cs = pins.get("m1_drv_spi_cs")
+    if cs is not None and (cs["mode"] != "output" or cs["init"] != 1):
+        raise BoardError(f"{name}: m1_drv_spi_cs must be an output starting high (released)")
+
+
 def load_board(folder):
     name = os.path.basename(os.path.normpath(folder))
     if not re.fullmatch(r"[a-z][a-z0-9_]*", name):
@@ -390,6 +442,7 @@ def load_board(folder):
         if sg in HALL_SIGNALS and p["name"] not in {pins[e]["name"] for e in ENC_PIN_SIGNALS
                                                     if e in pins}:
             raise BoardError(f"{name}: {sg} on {p['name']}, not on an encoder pin")
+    check_m1(name, pins)
     cs = pins.get("enc_spi_cs")
     if cs is not None and (cs["mode"] != "output" or cs["init"] != 1):
         raise BoardError(f"{name}: enc_spi_cs must be an output starting high (released)")

@@ -334,3 +334,47 @@ TEST(BoardFacts, IndexHallAndSpiEncoderPins)
     EXPECT_EQ(mc_board_example_desc.enc_index.port, MC_BOARD_PORT_NONE);
     EXPECT_EQ(mc_board_example_desc.p_gpio_hall, nullptr);
 }
+
+// The ODrive v3.6's second axis (M1) from its sources (main.h, tim.c,
+// adc.c, board.cpp at the commit pins.csv names): phase B on PC3 (IN13),
+// phase C on PC2 (IN12), FET thermistor PA4 (IN4), encoder TIM4 on PB6/PB7
+// (AF2) with the index on PC15 pulled down, the DRV8301 chip select PC14
+// released. Its gate inputs are TIM8's pins (PC6..PC8, PA7, PB0, PB1),
+// held low as outputs until the image drives M1: a bridge that cannot
+// switch. Its DRV8301 shares the gate enable with M0's.
+TEST(BoardFacts, OdriveM1PinsAreTheSecondAxisAndItsGatesAreHeldLow)
+{
+    const auto pins = boards::read_pins("odrive36");
+    struct Want {
+        const char *sig, *name, *mode;
+        int af;
+    };
+    const Want want[] = {
+        {"m1_adc_ib", "PC3", "analog", 0},
+        {"m1_adc_ic", "PC2", "analog", 0},
+        {"m1_adc_temp_fet", "PA4", "analog", 0},
+        {"m1_enc_a", "PB6", "af", 2},
+        {"m1_enc_b", "PB7", "af", 2},
+        {"m1_enc_z", "PC15", "input", 0},
+        {"m1_drv_spi_cs", "PC14", "output", 0},
+        {"m1_pwm_ah", "PC6", "output", 0},
+        {"m1_pwm_bh", "PC7", "output", 0},
+        {"m1_pwm_ch", "PC8", "output", 0},
+        {"m1_pwm_al", "PA7", "output", 0},
+        {"m1_pwm_bl", "PB0", "output", 0},
+        {"m1_pwm_cl", "PB1", "output", 0},
+    };
+    for (const Want &w : want) {
+        const auto *p = boards::find(pins, w.sig);
+        ASSERT_NE(p, nullptr) << w.sig;
+        EXPECT_EQ(p->name, w.name) << w.sig;
+        EXPECT_EQ(p->mode, w.mode) << w.sig;
+        EXPECT_EQ(p->af, w.af) << w.sig;
+        if (std::string(w.sig).rfind("m1_pwm_", 0) == 0) {
+            EXPECT_EQ(p->init, 0) << w.sig << ": held low, the gate off";
+        }
+    }
+    EXPECT_EQ(boards::find(pins, "m1_drv_spi_cs")->init, 1);
+    EXPECT_EQ(boards::find(pins, "m1_enc_z")->pull, "down");
+    EXPECT_EQ(boards::find(pins, "m1_adc_ia"), nullptr);
+}

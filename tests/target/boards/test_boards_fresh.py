@@ -8,7 +8,8 @@
     function or pin for a signal, a debug pin, an ADC signal on a pin without
     an ADC channel, a gate enable that starts enabled, a DRV8301 gain that is
     not the sense scaling's, a malformed commit, an OC_ADJ_SET code out of
-    range.
+    range, and for the second axis's m1_* signals the same faults plus an
+    incomplete set and a gate input that is neither TIM8's nor held low.
 """
 import argparse
 import filecmp
@@ -72,9 +73,19 @@ def main():
         "used twice": ("pins", sub(pins, r"^drv_spi_cs,PC13,", "drv_spi_cs,PC0,")),
         "missing": ("pins", sub(pins, r"^can_tx,.*\n", "")),
         "must be af 1": ("pins", sub(pins, r"^pwm_ah,PA8,af,1,", "pwm_ah,PA8,af,2,")),
-        "must be af 2 on one of": ("pins", sub(pins, r"^enc_a,PB4,", "enc_a,PB6,")),
+        "must be af 2 on one of": ("pins", sub(pins, r"^enc_a,PB4,", "enc_a,PA15,")),
         "SWDIO": ("pins", sub(pins, r"^m1_drv_spi_cs,PC14,", "m1_drv_spi_cs,PA13,")),
         "no ADC channel": ("pins", sub(pins, r"^adc_vbus,PA6,", "adc_vbus,PB2,")),
+        # the second axis (M1): TIM4's encoder inputs, TIM8's outputs or held low, all or none
+        "m1_enc_a must be af 2 on one of": ("pins", sub(pins, r"^m1_enc_a,PB6,", "m1_enc_a,PA15,")),
+        "m1_pwm_ah must be af 3 on one of ['PC6', 'PI5'] (or an output held low)":
+            ("pins", sub(pins, r"^(m1_pwm_ah,PC6,output,,none,pp,low,)0", r"\g<1>1")),
+        "a second axis needs all of its signals; missing: m1_adc_ib":
+            ("pins", sub(pins, r"^m1_adc_ib,.*\n", "")),
+        "m1_adc_temp_fet on PB2, which has no ADC channel":
+            ("pins", sub(pins, r"^m1_adc_temp_fet,PA4,", "m1_adc_temp_fet,PB2,")),
+        "m1_enc_z (the index, an EXTI line) must be an input":
+            ("pins", sub(pins, r"^m1_enc_z,PC15,input,,down,,,", "m1_enc_z,PC15,output,,none,pp,low,0")),
         "start disabled": ("pins", sub(pins, r"^(gate_enable,PB12,output,,none,pp,low,)0",
                                        r"\g<1>1")),
         "must be sense.amp_gain_v_per_v": ("toml", sub(toml, r"^gain_v_per_v = 40",
@@ -82,7 +93,7 @@ def main():
         "40 hex digits": ("toml", sub(toml, r'^commit = "f9b5', 'commit = "zz')),
         "oc_adj_set is 0..31": ("toml", sub(toml, r"^oc_adj_set = 21", "oc_adj_set = 32")),
         # a Hall input may share an encoder pin, nothing else
-        "not on an encoder pin": ("pins", sub(pins, r"^hall_c,PC9,", "hall_c,PC3,")),
+        "not on an encoder pin": ("pins", sub(pins, r"^hall_c,PC9,", "hall_c,PC4,")),
         "used twice (pwm_ah": ("pins", sub(pins, r"^hall_a,PB4,", "hall_a,PA8,")),
         "need all of": ("pins", sub(pins, r"^hall_b,.*\n", "")),
         "enc_z (the index, an EXTI line) must be an input":

@@ -23,34 +23,34 @@
 
 /* GPIO set-up per port (pins.csv): masks of the pins the board owns. */
 static const mc_board_gpio_port_init_t k_gpio[] = {
-    { /* port A: PA8 pwm_ah, PA9 pwm_bh, PA10 pwm_ch, PA6 adc_vbus, PA0 enc_spi_cs, PA7 m1_pwm_al */
+    { /* port A: PA8 pwm_ah, PA9 pwm_bh, PA10 pwm_ch, PA6 adc_vbus, PA0 enc_spi_cs, PA4 m1_adc_temp_fet, PA7 m1_pwm_al */
         .port = 0u,
-        .moder_mask = 0x003FF003u, .moder = 0x002A7001u,
-        .otyper_mask = 0x000007C1u, .otyper = 0x00000000u,
-        .ospeedr_mask = 0x003FF003u, .ospeedr = 0x00000000u,
-        .pupdr_mask = 0x003FF003u, .pupdr = 0x00000000u,
-        .afrl_mask = 0xFF00000Fu, .afrl = 0x00000000u,
+        .moder_mask = 0x003FF303u, .moder = 0x002A7301u,
+        .otyper_mask = 0x000007D1u, .otyper = 0x00000000u,
+        .ospeedr_mask = 0x003FF303u, .ospeedr = 0x00000000u,
+        .pupdr_mask = 0x003FF303u, .pupdr = 0x00000000u,
+        .afrl_mask = 0xFF0F000Fu, .afrl = 0x00000000u,
         .afrh_mask = 0x00000FFFu, .afrh = 0x00000111u,
         .bsrr = 0x00800001u,
     },
-    { /* port B: PB13 pwm_al, PB14 pwm_bl, PB15 pwm_cl, PB4 enc_a, PB5 enc_b, PB8 can_rx, PB9 can_tx, PB12 gate_enable, PB0 m1_pwm_bl, PB1 m1_pwm_cl, PB10 brake_l, PB11 brake_h */
+    { /* port B: PB13 pwm_al, PB14 pwm_bl, PB15 pwm_cl, PB4 enc_a, PB5 enc_b, PB8 can_rx, PB9 can_tx, PB12 gate_enable, PB6 m1_enc_a, PB7 m1_enc_b, PB0 m1_pwm_bl, PB1 m1_pwm_cl, PB10 brake_l, PB11 brake_h */
         .port = 1u,
-        .moder_mask = 0xFFFF0F0Fu, .moder = 0xA9AA0A05u,
-        .otyper_mask = 0x0000FF33u, .otyper = 0x00000000u,
-        .ospeedr_mask = 0xFFFF0F0Fu, .ospeedr = 0x000F0000u,
-        .pupdr_mask = 0xFFFF0F0Fu, .pupdr = 0x00000000u,
-        .afrl_mask = 0x00FF00FFu, .afrl = 0x00220000u,
+        .moder_mask = 0xFFFFFF0Fu, .moder = 0xA9AAAA05u,
+        .otyper_mask = 0x0000FFF3u, .otyper = 0x00000000u,
+        .ospeedr_mask = 0xFFFFFF0Fu, .ospeedr = 0x000F0000u,
+        .pupdr_mask = 0xFFFFFF0Fu, .pupdr = 0x00000000u,
+        .afrl_mask = 0xFFFF00FFu, .afrl = 0x22220000u,
         .afrh_mask = 0xFFFFFFFFu, .afrh = 0x11101199u,
         .bsrr = 0x10030000u,
     },
-    { /* port C: PC0 adc_ib, PC1 adc_ic, PC5 adc_temp_fet, PC9 enc_z, PC10 drv_spi_sck, PC11 drv_spi_miso, PC12 drv_spi_mosi, PC13 drv_spi_cs, PC14 m1_drv_spi_cs, PC6 m1_pwm_ah, PC7 m1_pwm_bh, PC8 m1_pwm_ch */
+    { /* port C: PC0 adc_ib, PC1 adc_ic, PC5 adc_temp_fet, PC9 enc_z, PC10 drv_spi_sck, PC11 drv_spi_miso, PC12 drv_spi_mosi, PC13 drv_spi_cs, PC14 m1_drv_spi_cs, PC3 m1_adc_ib, PC2 m1_adc_ic, PC15 m1_enc_z, PC6 m1_pwm_ah, PC7 m1_pwm_bh, PC8 m1_pwm_ch */
         .port = 2u,
-        .moder_mask = 0x3FFFFC0Fu, .moder = 0x16A15C0Fu,
-        .otyper_mask = 0x00007FE3u, .otyper = 0x00000000u,
-        .ospeedr_mask = 0x3FFFFC0Fu, .ospeedr = 0x01500000u,
-        .pupdr_mask = 0x3FFFFC0Fu, .pupdr = 0x02680000u,
-        .afrl_mask = 0xFFF000FFu, .afrl = 0x00000000u,
-        .afrh_mask = 0x0FFFFFFFu, .afrh = 0x00066600u,
+        .moder_mask = 0xFFFFFCFFu, .moder = 0x16A15CFFu,
+        .otyper_mask = 0x0000FFEFu, .otyper = 0x00000000u,
+        .ospeedr_mask = 0xFFFFFCFFu, .ospeedr = 0x01500000u,
+        .pupdr_mask = 0xFFFFFCFFu, .pupdr = 0x82680000u,
+        .afrl_mask = 0xFFF0FFFFu, .afrl = 0x00000000u,
+        .afrh_mask = 0xFFFFFFFFu, .afrh = 0x00066600u,
         .bsrr = 0x01C06000u,
     },
     { /* port D: PD2 gate_fault */
