@@ -45,6 +45,9 @@ PmsmBoard::PmsmBoard(const PmsmBoardConfig& cfg) : cfg_(cfg) {
   sp.thermal_enabled = cfg.thermal_enabled;
   sp.thermal = cfg.thermal;
   check_config(stage_.configure(sp), "power stage");
+  if (cfg.dc_link_shared && !cfg.dc_link_enabled) {
+    throw std::invalid_argument("dc_link_shared needs dc_link_enabled (the shared link's values)");
+  }
   if (cfg.dc_link_enabled) {
     check_config(link_.configure(cfg.dc_link), "dc_link");
     if (cfg.vbus_v != cfg.dc_link.source_v) {
@@ -160,7 +163,9 @@ void PmsmBoard::advance() {
   const double T = cfg_.inverter.t_pwm_s;
   const double p_w = 0.75 * stage_.v_alpha_beta_applied().dot(i0 + i1);
   motor_in_j_ += p_w * T;
-  link_.advance(T, cfg_.substeps, p_w / stage_.vbus_v(), brake_duty_);
+  inverter_a_ = p_w / stage_.vbus_v();
+  if (cfg_.dc_link_shared) return;  // the owner advances the link and sets the bus
+  link_.advance(T, cfg_.substeps, inverter_a_, brake_duty_);
   cfg_.vbus_v = link_.v();
   stage_.set_vbus_v(link_.v());
 }

@@ -51,6 +51,12 @@ struct PmsmBoardConfig {
   // voltage (vbus_v is then only the initial value and must equal it).
   bool dc_link_enabled = false;
   mcsim::DcLinkParams dc_link{};
+  // The link is outside the board (set by hal_host::DualPmsmBoard, which
+  // owns the one link both axes of a two-axis board share; needs
+  // dc_link_enabled): advance() integrates the motor only and records the
+  // period's inverter current (inverter_a()); the owner advances the link
+  // and sets the bus voltage for the next period (set_vbus_v).
+  bool dc_link_shared = false;
   mcsim::CurrentSensorParams current_sensor{};
   mcsim::VbusSensorParams vbus_sensor{};
   mcsim::EncoderParams encoder{};
@@ -107,8 +113,18 @@ class PmsmBoard final : public SimBoard {
   bool pwm_enabled() const { return pwm_enabled_ && !fault_line_.killed; }
   const Eigen::Vector3d& duties_applied() const { return stage_.duties_applied(); }
   const Eigen::Vector2d& v_alpha_beta_applied() const { return stage_.v_alpha_beta_applied(); }
-  // The DC link, nullptr when the bus is stiff (dc_link_enabled false).
-  const mcsim::DcLink* dc_link() const { return cfg_.dc_link_enabled ? &link_ : nullptr; }
+  // The DC link, nullptr when the bus is stiff (dc_link_enabled false); a
+  // shared link is its owner's (bind_shared_link).
+  const mcsim::DcLink* dc_link() const {
+    if (!cfg_.dc_link_enabled) return nullptr;
+    return cfg_.dc_link_shared ? shared_link_ : &link_;
+  }
+  // With dc_link_shared: the link the owner advances (for dc_link()).
+  void bind_shared_link(const mcsim::DcLink* link) { shared_link_ = link; }
+  // The current the bridge drew from the bus over the last period [A]
+  // (power into the motor / bus voltage; < 0 while braking); 0 with a stiff
+  // bus.
+  double inverter_a() const { return inverter_a_; }
   // Bus voltage in force [V] (the link's, or the stiff vbus_v).
   double vbus_v() const { return stage_.vbus_v(); }
   // Energy delivered to the motor terminals since construction [J]
@@ -185,6 +201,8 @@ class PmsmBoard final : public SimBoard {
   Injection inj_{};
   double tick_offset_s_ = 0.0;
   mcsim::DcLink link_;
+  const mcsim::DcLink* shared_link_ = nullptr;
+  double inverter_a_ = 0.0;
   double motor_in_j_ = 0.0;
   double brake_duty_ = 0.0;
 
