@@ -50,13 +50,13 @@ struct PmsmBoardConfig {
   // dc_link.brake_r_ohm > 0. dc_link.source_v is the source's open-circuit
   // voltage (vbus_v is then only the initial value and must equal it).
   bool dc_link_enabled = false;
-  mcsim::DcLinkParams dc_link{};
   // The link is outside the board (set by hal_host::DualPmsmBoard, which
   // owns the one link both axes of a two-axis board share; needs
   // dc_link_enabled): advance() integrates the motor only and records the
   // period's inverter current (inverter_a()); the owner advances the link
   // and sets the bus voltage for the next period (set_vbus_v).
   bool dc_link_shared = false;
+  mcsim::DcLinkParams dc_link{};
   mcsim::CurrentSensorParams current_sensor{};
   mcsim::VbusSensorParams vbus_sensor{};
   mcsim::EncoderParams encoder{};
