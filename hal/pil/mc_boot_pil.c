@@ -278,6 +278,7 @@ int main(void)
     sc.store.flash = &g_pb.flash;
     sc.store.sector[0] = MC_BOOT_CFG_SECTOR_A;
     sc.store.sector[1] = MC_BOOT_CFG_SECTOR_B;
+    sc.store.axis = 0u; /* the node id and bit rate it listens with: axis 0's */
     sc.requested = mc_boot_mailbox_take();
     mc_boot_start_decide(&sc, &g_pb.store, &g_pb.start);
     if (g_pb.start.reason == MC_BOOT_IMG_OK) {

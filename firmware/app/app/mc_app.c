@@ -135,6 +135,7 @@ uint32_t mc_app_boot(mc_app_t *app, const mc_app_cfg_t *cfg)
         scfg.flash = &app->flash_wrap;
         scfg.sector[0] = cfg->flash_sectors[0];
         scfg.sector[1] = cfg->flash_sectors[1];
+        scfg.axis = cfg->flash_axis;
         if (mc_cfg_store_init(&app->store, &scfg) != 0) {
             err |= MC_APP_CFG_ERR_STORE;
         } else {

@@ -196,6 +196,10 @@ typedef struct {
 typedef struct {
     const mc_hal_flash_t *flash; /**< configuration store's flash, or NULL */
     uint32_t flash_sectors[2];   /**< its A and B sectors */
+    uint32_t flash_axis;         /**< whose records this application keeps there: 0
+                                      (a one-axis board, a two-axis board's M0) or 1
+                                      (its M1); the two share the sectors
+                                      (mc_cfg_store.h, "Axes") */
     const mc_hal_wdg_t *wdg;     /**< independent watchdog, or NULL */
     /** The board's Hall inputs, or NULL: with encoder_type 1 the drive's
      *  encoder is the Hall kernel on them (mc_drive_hall.h; the board's own

@@ -11,11 +11,13 @@
 
 #define W MC_HAL_FLASH_WORD_BYTES
 
+static void sync_own(mc_cfg_store_t *s);
+
 int mc_cfg_store_init(mc_cfg_store_t *s, const mc_cfg_store_cfg_t *cfg)
 {
     uint32_t bytes[2] = {0u, 0u};
     if ((s == NULL) || (cfg == NULL) || (cfg->flash == NULL) ||
-        (cfg->sector[0] == cfg->sector[1])) {
+        (cfg->sector[0] == cfg->sector[1]) || (cfg->axis >= MC_CFG_AXES)) {
         return -EINVAL;
     }
     for (uint32_t i = 0u; i < 2u; ++i) {
@@ -31,9 +33,11 @@ int mc_cfg_store_init(mc_cfg_store_t *s, const mc_cfg_store_cfg_t *cfg)
     s->cfg = *cfg;
     s->sector_bytes[0] = bytes[0];
     s->sector_bytes[1] = bytes[1];
-    s->active = -1;
     s->home = -1;
-    s->map_sec = -1;
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
+        s->kind_sec[k] = -1;
+    }
+    sync_own(s);
     s->append_off[0] = MC_CFG_OFF_NONE;
     s->append_off[1] = MC_CFG_OFF_NONE;
     s->boot = MC_CFG_BOOT_EMPTY;
@@ -89,6 +93,44 @@ static int check_record(const mc_cfg_store_t *s, uint32_t i, uint32_t off, uint3
     return 0;
 }
 
+/* Record kinds: kind k belongs to axis k / 2 and is its configuration (k
+ * even) or its anticogging map (k odd); mc_cfg_store.h, "Axes". */
+static const uint32_t k_magic[MC_CFG_KINDS] = {MC_CFG_MAGIC, MC_CFG_MAP_MAGIC, MC_CFG_MAGIC_AX1,
+                                               MC_CFG_MAP_MAGIC_AX1};
+
+/* The kind of a magic, MC_CFG_KINDS for one this image does not know. */
+static uint32_t kind_of(uint32_t magic)
+{
+    uint32_t k = 0u;
+    while ((k < MC_CFG_KINDS) && (k_magic[k] != magic)) {
+        ++k;
+    }
+    return k;
+}
+
+static uint32_t own_cfg(const mc_cfg_store_t *s)
+{
+    return 2u * s->cfg.axis;
+}
+
+static uint32_t own_map(const mc_cfg_store_t *s)
+{
+    return (2u * s->cfg.axis) + 1u;
+}
+
+/* The own axis's view (active, seq, newest_off, map_sec, map_off) of the
+ * per-kind locations. */
+static void sync_own(mc_cfg_store_t *s)
+{
+    const uint32_t c = own_cfg(s);
+    const uint32_t m = own_map(s);
+    s->active = s->kind_sec[c];
+    s->newest_off = s->kind_off[c];
+    s->seq = (s->kind_sec[c] >= 0) ? s->kind_seq[c] : 0u;
+    s->map_sec = s->kind_sec[m];
+    s->map_off = s->kind_off[m];
+}
+
 /* The newest record of one kind in one sector. */
 typedef struct {
     bool have;
@@ -96,10 +138,10 @@ typedef struct {
     uint32_t off;
 } kind_loc_t;
 
-/* Walk sector i's records, the newest of each kind (0 configuration, 1
- * map) into loc; returns 0 or -EIO. *p_any: something other than erased
- * words and valid map records. */
-static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any, kind_loc_t loc[2])
+/* Walk sector i's records, the newest of each kind into loc; returns 0 or
+ * -EIO. *p_any: something other than erased words and valid records of
+ * other kinds than this axis's configuration. */
+static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any, kind_loc_t loc[MC_CFG_KINDS])
 {
     uint32_t off = 0u;
     s->append_off[i] = MC_CFG_OFF_NONE;
@@ -120,19 +162,19 @@ static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any, kind_loc_t lo
         if (rc == -EIO) {
             return rc;
         }
-        /* not erased and not a valid map: a configuration once written
+        /* not erased and not a valid record: a configuration once written
          * (valid or not: no configuration record then boots CORRUPT, not
          * EMPTY) */
         if (rc != 0) {
             *p_any = true;
             return 0; /* a cut record: the rest of the sector is unusable */
         }
-        if ((hdr[0] != MC_CFG_MAGIC) && (hdr[0] != MC_CFG_MAP_MAGIC)) {
+        k = kind_of(hdr[0]);
+        if (k == MC_CFG_KINDS) {
             off += words * W; /* a kind of a later image: skipped whole */
             continue;
         }
-        k = (hdr[0] == MC_CFG_MAP_MAGIC) ? 1u : 0u;
-        *p_any = *p_any || (k == 0u);
+        *p_any = *p_any || (k == own_cfg(s));
         if (!loc[k].have || mc_cfg_store_seq_newer(hdr[2], loc[k].seq)) {
             loc[k].have = true;
             loc[k].seq = hdr[2];
@@ -144,33 +186,37 @@ static int scan_sector(mc_cfg_store_t *s, uint32_t i, bool *p_any, kind_loc_t lo
 }
 
 /* The newest sequence number of sector i's records (loc: its kinds). */
-static uint32_t top_seq(const kind_loc_t loc[2])
+static uint32_t top_seq(const kind_loc_t loc[MC_CFG_KINDS])
 {
-    if (!loc[0].have) {
-        return loc[1].have ? loc[1].seq : 0u;
+    uint32_t top = 0u;
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
+        if (loc[k].have && ((top == 0u) || mc_cfg_store_seq_newer(loc[k].seq, top))) {
+            top = loc[k].seq;
+        }
     }
-    return (loc[1].have && mc_cfg_store_seq_newer(loc[1].seq, loc[0].seq)) ? loc[1].seq
-                                                                           : loc[0].seq;
+    return top;
 }
 
-/* The home sector (mc_cfg_store.h, "Two record kinds"): the one holding the
+/* The home sector (mc_cfg_store.h, "Record kinds"): the one holding the
  * newest record of every kind; both: the newer; neither (only after a
- * corruption): the configuration's. sec_of: the sector of each kind's
- * newest, -1 none. */
-static int32_t home_of(const kind_loc_t loc[2][2], const int32_t sec_of[2])
+ * corruption): the sector of the first kind that has a record. sec_of: the
+ * sector of each kind's newest, -1 none. */
+static int32_t home_of(const kind_loc_t loc[2][MC_CFG_KINDS], const int32_t sec_of[MC_CFG_KINDS])
 {
     bool complete[2] = {true, true};
-    for (uint32_t k = 0u; k < 2u; ++k) {
+    int32_t first = -1;
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
         if (sec_of[k] < 0) {
             continue;
         }
+        first = (first < 0) ? sec_of[k] : first;
         for (uint32_t i = 0u; i < 2u; ++i) {
             if (!loc[i][k].have || (loc[i][k].seq != loc[sec_of[k]][k].seq)) {
                 complete[i] = false;
             }
         }
     }
-    if ((sec_of[0] < 0) && (sec_of[1] < 0)) {
+    if (first < 0) {
         return -1;
     }
     if (complete[0] && complete[1]) {
@@ -179,26 +225,30 @@ static int32_t home_of(const kind_loc_t loc[2][2], const int32_t sec_of[2])
     if (complete[0] || complete[1]) {
         return complete[0] ? 0 : 1;
     }
-    return (sec_of[0] >= 0) ? sec_of[0] : sec_of[1];
+    return first;
 }
 
 static int scan(mc_cfg_store_t *s, bool *p_any)
 {
-    kind_loc_t loc[2][2] = {{{false, 0u, 0u}, {false, 0u, 0u}}, {{false, 0u, 0u}, {false, 0u, 0u}}};
-    int32_t sec_of[2] = {-1, -1};
-    s->active = -1;
-    s->seq = 0u;
-    s->newest_off = 0u;
-    s->map_sec = -1;
-    s->map_off = 0u;
+    kind_loc_t loc[2][MC_CFG_KINDS];
+    int32_t sec_of[MC_CFG_KINDS];
+    (void)memset(loc, 0, sizeof loc);
     s->seq_top = 0u;
+    s->scanned = false;
     *p_any = false;
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
+        s->kind_sec[k] = -1;
+        s->kind_off[k] = 0u;
+        s->kind_seq[k] = 0u;
+        sec_of[k] = -1;
+    }
+    sync_own(s);
     for (uint32_t i = 0u; i < 2u; ++i) {
         if (scan_sector(s, i, p_any, loc[i]) != 0) {
             return -EIO;
         }
     }
-    for (uint32_t k = 0u; k < 2u; ++k) {
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
         for (uint32_t i = 0u; i < 2u; ++i) {
             if (loc[i][k].have &&
                 ((sec_of[k] < 0) || mc_cfg_store_seq_newer(loc[i][k].seq, loc[sec_of[k]][k].seq))) {
@@ -206,8 +256,8 @@ static int scan(mc_cfg_store_t *s, bool *p_any)
             }
         }
     }
-    s->home = home_of((const kind_loc_t(*)[2])loc, sec_of);
-    for (uint32_t k = 0u; k < 2u; ++k) {
+    s->home = home_of((const kind_loc_t(*)[MC_CFG_KINDS])loc, sec_of);
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
         int32_t i = sec_of[k];
         if (i < 0) {
             continue;
@@ -216,18 +266,14 @@ static int scan(mc_cfg_store_t *s, bool *p_any)
         if (loc[s->home][k].have && (loc[s->home][k].seq == loc[i][k].seq)) {
             i = s->home;
         }
-        if (k == 0u) {
-            s->active = i;
-            s->newest_off = loc[i][0].off;
-            s->seq = loc[i][0].seq;
-        } else {
-            s->map_sec = i;
-            s->map_off = loc[i][1].off;
-        }
+        s->kind_sec[k] = i;
+        s->kind_off[k] = loc[i][k].off;
+        s->kind_seq[k] = loc[i][k].seq;
         if ((s->seq_top == 0u) || mc_cfg_store_seq_newer(loc[i][k].seq, s->seq_top)) {
             s->seq_top = loc[i][k].seq;
         }
     }
+    sync_own(s);
     s->scanned = true;
     return 0;
 }
@@ -369,7 +415,7 @@ bool mc_cfg_store_seq_newer(uint32_t a, uint32_t b)
 static void build_record(mc_cfg_store_t *s, const mc_params_t *p, uint32_t seq)
 {
     uint32_t k = 0u;
-    s->rec[k++] = MC_CFG_MAGIC;
+    s->rec[k++] = k_magic[own_cfg(s)];
     s->rec[k++] = MC_CFG_FORMAT | ((uint32_t)MC_PARAMS_LAYOUT_VERSION << 16);
     s->rec[k++] = seq;
     s->rec[k++] = MC_PARAM_STORED_COUNT | 0xFFFF0000u;
@@ -381,6 +427,14 @@ static void build_record(mc_cfg_store_t *s, const mc_params_t *p, uint32_t seq)
         }
     }
     s->rec[k] = mc_crc32(s->rec, (size_t)k * W);
+}
+
+/* Before a write: the flash as it is now (another axis's store on the same
+ * sectors may have written since this one last looked). */
+static int rescan(mc_cfg_store_t *s)
+{
+    bool any = false;
+    return scan(s, &any);
 }
 
 static int scan_once(mc_cfg_store_t *s)
@@ -396,7 +450,7 @@ bool mc_cfg_store_holds(mc_cfg_store_t *s, const mc_params_t *p)
 {
     uint32_t words = 0u;
     uint32_t hdr[MC_CFG_HDR_WORDS];
-    if ((s == NULL) || (p == NULL) || (scan_once(s) != 0) || (s->active < 0)) {
+    if ((s == NULL) || (p == NULL) || (rescan(s) != 0) || (s->active < 0)) {
         return false;
     }
     /* the newest record is valid (checked again: the flash may have failed
@@ -449,37 +503,63 @@ static int copy_record(const mc_cfg_store_t *s, uint32_t fi, uint32_t fo, uint32
     return 0;
 }
 
-/* Where a save of kind writes (mc_cfg_store.h, "Two record kinds"): *p_off
- * in *p_target (erased first when it is the other sector), and whether the
- * other kind's newest record (*p_copy_words long) is copied there first.
- * Returns 0, -ENOSPC or -EIO (nothing written). */
-static int save_place(mc_cfg_store_t *s, uint32_t kind, uint32_t bytes, uint32_t *p_target,
-                      uint32_t *p_off, uint32_t *p_copy_words, bool *p_lost)
+/* The other kinds' newest records a save of kind keeps: cw[k] their
+ * lengths in words (0: none, and 0 for kind itself). 0 or -EIO (one was
+ * valid during the scan, not now). */
+static int others(const mc_cfg_store_t *s, uint32_t kind, uint32_t cw[MC_CFG_KINDS])
 {
-    const int32_t o_sec = (kind == 0u) ? s->map_sec : s->active;
-    const uint32_t o_off = (kind == 0u) ? s->map_off : s->newest_off;
-    uint32_t target = (s->home >= 0) ? (uint32_t)s->home : 0u;
-    uint32_t cw = 0u;
-    uint32_t hdr[MC_CFG_HDR_WORDS];
-    *p_lost = false;
-    if ((o_sec >= 0) && (check_record(s, (uint32_t)o_sec, o_off, &cw, hdr) != 0)) {
-        return -EIO; /* valid during the scan, not now */
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
+        uint32_t hdr[MC_CFG_HDR_WORDS];
+        cw[k] = 0u;
+        if ((k != kind) && (s->kind_sec[k] >= 0) &&
+            (check_record(s, (uint32_t)s->kind_sec[k], s->kind_off[k], &cw[k], hdr) != 0)) {
+            return -EIO;
+        }
     }
-    /* append: with a copy of the other kind when the home sector lacks it
-     * (only after a corruption) */
-    *p_copy_words = ((o_sec >= 0) && ((uint32_t)o_sec != target)) ? cw : 0u;
+    return 0;
+}
+
+/* Bytes of the other kinds' records a save into target must copy there
+ * (those whose newest is in the other sector). */
+static uint32_t copy_bytes(const mc_cfg_store_t *s, const uint32_t cw[MC_CFG_KINDS],
+                           uint32_t target)
+{
+    uint32_t b = 0u;
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
+        if ((cw[k] != 0u) && ((uint32_t)s->kind_sec[k] != target)) {
+            b += cw[k] * W;
+        }
+    }
+    return b;
+}
+
+/* Where a save of bytes writes (mc_cfg_store.h, "Record kinds"): *p_off in
+ * *p_target, erased first when it is the other sector (then lost[k]: kind
+ * k's newest was only there). Returns 0, -ENOSPC or -EIO (nothing
+ * written). */
+static int save_place(mc_cfg_store_t *s, const uint32_t cw[MC_CFG_KINDS], uint32_t bytes,
+                      uint32_t *p_target, uint32_t *p_off, bool lost[MC_CFG_KINDS])
+{
+    uint32_t target = (s->home >= 0) ? (uint32_t)s->home : 0u;
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
+        lost[k] = false;
+    }
+    /* append: with copies of the kinds the home sector lacks (only after a
+     * corruption) */
     *p_off = s->append_off[target];
-    if (region_erased(s, target, *p_off, bytes + (*p_copy_words * W))) {
+    if (region_erased(s, target, *p_off, bytes + copy_bytes(s, cw, target))) {
         *p_target = target;
         return 0;
     }
-    /* switch: the other sector holds only older records; the other kind's
-     * newest is copied from the home sector (if its only copy was in the
-     * sector erased, a corruption of the home sector lost it before) */
+    /* switch: the other sector holds only older records; every other
+     * kind's newest is copied from the home sector (a kind whose only copy
+     * was in the sector erased was lost before, by a corruption of the
+     * home sector) */
     target ^= 1u;
-    *p_copy_words = ((o_sec >= 0) && ((uint32_t)o_sec != target)) ? cw : 0u;
-    *p_lost = (o_sec >= 0) && ((uint32_t)o_sec == target);
-    if (bytes + (*p_copy_words * W) > s->sector_bytes[target]) {
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
+        lost[k] = (cw[k] != 0u) && ((uint32_t)s->kind_sec[k] == target);
+    }
+    if (bytes + copy_bytes(s, cw, target) > s->sector_bytes[target]) {
         return -ENOSPC;
     }
     *p_off = 0u;
@@ -488,73 +568,76 @@ static int save_place(mc_cfg_store_t *s, uint32_t kind, uint32_t bytes, uint32_t
     return (mc_hal_flash_erase(s->cfg.flash, s->cfg.sector[target]) != 0) ? -EIO : 0;
 }
 
-/* Write a record of kind (0 configuration, 1 map): header hdr (its
- * sequence number in hdr[2]), payload, CRC; read back. */
+/* Copy the other kinds' records that target lacks to *p_off there (each
+ * checked), their new places into sec/off. 0 or -EIO. */
+static int copy_others(const mc_cfg_store_t *s, const uint32_t cw[MC_CFG_KINDS], uint32_t target,
+                       uint32_t *p_off, int32_t sec[MC_CFG_KINDS], uint32_t off[MC_CFG_KINDS])
+{
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
+        uint32_t words = 0u;
+        uint32_t rb[MC_CFG_HDR_WORDS];
+        sec[k] = s->kind_sec[k];
+        off[k] = s->kind_off[k];
+        if ((cw[k] == 0u) || ((uint32_t)s->kind_sec[k] == target)) {
+            continue;
+        }
+        if ((copy_record(s, (uint32_t)s->kind_sec[k], s->kind_off[k], target, *p_off, cw[k]) !=
+             0) ||
+            (check_record(s, target, *p_off, &words, rb) != 0) || (words != cw[k])) {
+            return -EIO;
+        }
+        sec[k] = (int32_t)target;
+        off[k] = *p_off;
+        *p_off += cw[k] * W;
+    }
+    return 0;
+}
+
+/* Write a record of kind: header hdr (its sequence number in hdr[2]),
+ * payload, CRC; read back. On success every kind's place is updated. */
 static int save_rec(mc_cfg_store_t *s, uint32_t kind, const uint32_t hdr[MC_CFG_HDR_WORDS],
                     const void *payload, uint32_t payload_bytes)
 {
     const uint32_t bytes = ((MC_CFG_HDR_WORDS + 1u) * W) + payload_bytes;
-    const int32_t o_sec = (kind == 0u) ? s->map_sec : s->active;
-    const uint32_t o_off = (kind == 0u) ? s->map_off : s->newest_off;
     const uint32_t crc = mc_crc32_final(mc_crc32_update(
         mc_crc32_update(MC_CRC32_INIT, hdr, (size_t)MC_CFG_HDR_WORDS * W), payload, payload_bytes));
+    uint32_t cw[MC_CFG_KINDS];
+    bool lost[MC_CFG_KINDS];
+    int32_t sec[MC_CFG_KINDS];
+    uint32_t off_k[MC_CFG_KINDS];
     uint32_t target = 0u;
     uint32_t off = 0u;
-    uint32_t cw = 0u;
     uint32_t words = 0u;
     uint32_t rb[MC_CFG_HDR_WORDS];
-    uint32_t c_off;
-    bool lost = false;
-    const int rc = save_place(s, kind, bytes, &target, &off, &cw, &lost);
+    int rc = others(s, kind, cw);
+    if (rc == 0) {
+        rc = save_place(s, cw, bytes, &target, &off, lost);
+    }
     if (rc != 0) {
         return rc;
     }
-    c_off = off;
-    if (cw != 0u) {
-        if ((copy_record(s, (uint32_t)o_sec, o_off, target, off, cw) != 0) ||
-            (check_record(s, target, off, &words, rb) != 0) || (words != cw)) {
-            s->append_off[target] = MC_CFG_OFF_NONE;
-            return -EIO;
-        }
-        off += cw * W;
-    }
-    if ((program_mem(s, target, off, hdr, MC_CFG_HDR_WORDS * W) != 0) ||
+    if ((copy_others(s, cw, target, &off, sec, off_k) != 0) ||
+        (program_mem(s, target, off, hdr, MC_CFG_HDR_WORDS * W) != 0) ||
         (program_mem(s, target, off + (MC_CFG_HDR_WORDS * W), payload, payload_bytes) != 0) ||
         (program_mem(s, target, off + bytes - W, &crc, W) != 0) ||
         (check_record(s, target, off, &words, rb) != 0) || (words * W != bytes) ||
         (rb[2] != hdr[2])) {
         s->append_off[target] = MC_CFG_OFF_NONE; /* not again before an erase */
+        s->scanned = false;                      /* the places: from the flash again */
         return -EIO;
     }
-    if (lost) {
-        /* the other kind's only copy was in the sector erased */
-        if (kind == 0u) {
-            s->map_sec = -1;
-        } else {
-            s->active = -1;
-            s->seq = 0u;
-        }
-    } else if (cw != 0u) {
-        if (kind == 0u) {
-            s->map_sec = (int32_t)target;
-            s->map_off = c_off;
-        } else {
-            s->active = (int32_t)target;
-            s->newest_off = c_off;
-        }
+    for (uint32_t k = 0u; k < MC_CFG_KINDS; ++k) {
+        s->kind_sec[k] = lost[k] ? -1 : sec[k];
+        s->kind_off[k] = off_k[k];
     }
-    if (kind == 0u) {
-        s->seq = hdr[2];
-        s->active = (int32_t)target;
-        s->newest_off = off;
-    } else {
-        s->map_sec = (int32_t)target;
-        s->map_off = off;
-    }
+    s->kind_sec[kind] = (int32_t)target;
+    s->kind_off[kind] = off;
+    s->kind_seq[kind] = hdr[2];
     s->seq_top = hdr[2];
     s->home = (int32_t)target;
     s->append_off[target] = off + bytes;
     s->saves++;
+    sync_own(s);
     return 0;
 }
 
@@ -563,11 +646,11 @@ int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p)
     if ((s == NULL) || (p == NULL) || (mc_params_validate(p) != MC_PARAMS_OK)) {
         return -EINVAL;
     }
-    if (scan_once(s) != 0) {
+    if (rescan(s) != 0) {
         return -EIO;
     }
     build_record(s, p, mc_cfg_store_seq_next(s->seq_top));
-    return save_rec(s, 0u, s->rec, &s->rec[MC_CFG_HDR_WORDS],
+    return save_rec(s, own_cfg(s), s->rec, &s->rec[MC_CFG_HDR_WORDS],
                     (MC_CFG_REC_WORDS - MC_CFG_HDR_WORDS - 1u) * W);
 }
 
@@ -578,14 +661,14 @@ int mc_cfg_store_save_map(mc_cfg_store_t *s, const void *map, uint32_t bytes)
         (bytes / (2u * W) > MC_CFG_ENTRIES_MAX)) {
         return -EINVAL;
     }
-    if (scan_once(s) != 0) {
+    if (rescan(s) != 0) {
         return -EIO;
     }
-    hdr[0] = MC_CFG_MAP_MAGIC;
+    hdr[0] = k_magic[own_map(s)];
     hdr[1] = MC_CFG_FORMAT;
     hdr[2] = mc_cfg_store_seq_next(s->seq_top);
     hdr[3] = (bytes / (2u * W)) | 0xFFFF0000u;
-    return save_rec(s, 1u, hdr, map, bytes);
+    return save_rec(s, own_map(s), hdr, map, bytes);
 }
 
 int mc_cfg_store_load_map(mc_cfg_store_t *s, void *map, uint32_t bytes)

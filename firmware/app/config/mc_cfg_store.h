@@ -49,7 +49,7 @@
  *   take their default / are dropped, then validated as a whole
  *                           -> MC_CFG_BOOT_MIGRATED
  *   otherwise              -> MC_CFG_BOOT_STORED
- * Two record kinds: the configuration (magic MCFG) and the anticogging map
+ * Record kinds: the configuration (magic MCFG) and the anticogging map
  * (magic MC_CFG_MAP_MAGIC "MCMP", the same envelope: words 0..3 as above
  * with format | 0 << 16, the map's bytes as its n pairs of words, the
  * CRC), written only by a calibration's save (mc_cfg_store_save_map). One
@@ -62,6 +62,19 @@
  * the newest record of every kind (after a cut switch, the old one; both:
  * the one with the newer record). A map record of another size or format
  * is refused by mc_cfg_store_load_map (-EBADMSG), never decoded.
+ * Axes (a two-axis board, issue 34): the configuration and the map of
+ * axis 1 are two more kinds (magics MC_CFG_MAGIC_AX1 "MCF1" and
+ * MC_CFG_MAP_MAGIC_AX1 "MCM1"; axis 0's keep MCFG and MCMP, so a one-axis
+ * board's store is its axis 0's). mc_cfg_store_cfg_t.axis says which
+ * axis's kinds a store loads and saves; the two axes' stores share the two
+ * sectors and one sequence counter, and the home sector holds the newest
+ * record of all four kinds (a save that switches sectors copies the newest
+ * of each other kind, the other axis's included). A store rescans both
+ * sectors before every save and before mc_cfg_store_holds, so the other
+ * axis's saves since are seen (the two saves must not run at the same
+ * time: on the board both run from the one slow loop). An image of an
+ * older layout does not know the axis-1 kinds: it skips them by their
+ * length, and a sector switch it makes does not copy them.
  * No valid record: MC_CFG_BOOT_EMPTY if both sectors start erased, else
  * MC_CFG_BOOT_CORRUPT; defaults either way. The status goes into the
  * heartbeat (HEARTBEAT.cfg_status) and the readonly parameter
@@ -80,11 +93,15 @@
 extern "C" {
 #endif
 
-#define MC_CFG_MAGIC       0x4746434Du /**< "MCFG" in memory order */
-#define MC_CFG_MAP_MAGIC   0x504D434Du /**< "MCMP": an anticogging map record */
-#define MC_CFG_FORMAT      1u
-#define MC_CFG_HDR_WORDS   4u
-#define MC_CFG_ENTRIES_MAX 1024u /**< a header announcing more is not a record */
+#define MC_CFG_MAGIC         0x4746434Du        /**< "MCFG" in memory order */
+#define MC_CFG_MAP_MAGIC     0x504D434Du        /**< "MCMP": an anticogging map record */
+#define MC_CFG_MAGIC_AX1     0x3146434Du        /**< "MCF1": axis 1's configuration */
+#define MC_CFG_MAP_MAGIC_AX1 0x314D434Du        /**< "MCM1": axis 1's anticogging map */
+#define MC_CFG_AXES          2u                 /**< axes whose records a store tells apart */
+#define MC_CFG_KINDS         (2u * MC_CFG_AXES) /**< configuration and map per axis */
+#define MC_CFG_FORMAT        1u
+#define MC_CFG_HDR_WORDS     4u
+#define MC_CFG_ENTRIES_MAX   1024u /**< a header announcing more is not a record */
 /** Words of a record this firmware writes. */
 #define MC_CFG_REC_WORDS (MC_CFG_HDR_WORDS + 2u * MC_PARAM_STORED_COUNT + 1u)
 #define MC_CFG_OFF_NONE  0xFFFFFFFFu
@@ -103,11 +120,17 @@ typedef enum {
 typedef struct {
     const mc_hal_flash_t *flash;
     uint32_t sector[2]; /**< A and B: two distinct sectors of the flash */
+    uint32_t axis;      /**< whose records this store loads and saves: 0 (M0, and a
+                             one-axis board) or 1 (M1); see "Axes" above */
 } mc_cfg_store_cfg_t;
 
 typedef struct {
     mc_cfg_store_cfg_t cfg;
     uint32_t sector_bytes[2];
+    int32_t kind_sec[MC_CFG_KINDS];  /**< each kind's newest record: its sector, -1 none */
+    uint32_t kind_off[MC_CFG_KINDS]; /**< its offset */
+    uint32_t kind_seq[MC_CFG_KINDS]; /**< its sequence number */
+    /* This axis's view of the above (kept in step with it): */
     uint32_t seq;           /**< sequence number of the newest valid configuration
                                  record (0: none) */
     int32_t active;         /**< 0/1: the sector of the newest valid configuration
@@ -158,7 +181,7 @@ int mc_cfg_store_save(mc_cfg_store_t *s, const mc_params_t *p);
 
 /**
  * Write an anticogging map (bytes, a multiple of 8, e.g. mc_cog_map_t) as a
- * map record (see "Two record kinds" above). BLOCKING, as a save.
+ * map record (see "Record kinds" above). BLOCKING, as a save.
  * @return 0; -EINVAL (NULL, bytes 0, not a multiple of 8 or more than a
  *         record holds); -ENOSPC (a sector cannot hold the map and the
  *         configuration record together); -EIO (flash error: the previous

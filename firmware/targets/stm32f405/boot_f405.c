@@ -127,6 +127,7 @@ static void decide(bool asked)
     sc.store.flash = &g_boot.flash.dev;
     sc.store.sector[0] = MC_BOOT_CFG_SECTOR_A;
     sc.store.sector[1] = MC_BOOT_CFG_SECTOR_B;
+    sc.store.axis = 0u; /* the node id and bit rate it listens with: axis 0's */
     sc.requested = asked;
     mc_boot_start_decide(&sc, &g_boot.store, &g_boot.start);
 }

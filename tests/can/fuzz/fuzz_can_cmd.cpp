@@ -118,7 +118,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const uint32_t sectors[2] = {1024u, 1024u};
   require(mc_fake_flash_init(&flash, flash_mem, sectors, 2u) == 0);
   static mc_cfg_store_t store;
-  const mc_cfg_store_cfg_t scfg{&flash.dev, {0u, 1u}};
+  const mc_cfg_store_cfg_t scfg{&flash.dev, {0u, 1u}, 0u};
   require(mc_cfg_store_init(&store, &scfg) == 0);
   mc_params_t p;
   const mc_cfg_boot_t boot = mc_cfg_store_load(&store, &p);

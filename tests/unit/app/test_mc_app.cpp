@@ -163,7 +163,7 @@ TEST_F(McApp, BootWithoutRecordRunsTheDefaultsAndSaysSo)
 TEST_F(McApp, BootLoadsTheNewestStoredRecordAndRefusesOneTheBoardCannotRun)
 {
     mc_cfg_store_t st{};
-    const mc_cfg_store_cfg_t sc{&flash.dev, {0u, 1u}};
+    const mc_cfg_store_cfg_t sc{&flash.dev, {0u, 1u}, 0u};
     ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
     mc_params_t p = defaults;
     p.can_timeout_s = 0.75f;
@@ -1205,7 +1205,7 @@ TEST_F(McAppCog, StoredMapSurvivesAPowerCycleAndIsRefusedForAnotherEncoder)
 
     // a map record of another size in the store: LAYOUT, nothing loaded
     mc_cfg_store_t st{};
-    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}};
+    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}, 0u};
     ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
     std::vector<uint8_t> other(512u, 0x11u);
     ASSERT_EQ(0, mc_cfg_store_save_map(&st, other.data(), 512u));
@@ -1255,7 +1255,7 @@ TEST_F(McAppCog, SaveDuringACalibrationStoresTheValueBeforeIt)
     EXPECT_EQ(0u, app.srv.active.anticogging) << "an aborted calibration leaves 0";
 
     mc_cfg_store_t st{};
-    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}};
+    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}, 0u};
     ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
     uint32_t raw = 0xFFFFFFFFu;
     ASSERT_EQ(0, mc_cfg_store_find_raw(&st, MC_PARAM_ID_ANTICOGGING, &raw));
@@ -1269,7 +1269,7 @@ TEST_F(McAppCog, AStoredCalibrationRequestBootsAsOff)
     mc_params_t p = defaults;
     p.anticogging = 2u;
     mc_cfg_store_t st{};
-    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}};
+    const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}, 0u};
     ASSERT_EQ(0, mc_cfg_store_init(&st, &sc));
     ASSERT_EQ(0, mc_cfg_store_save(&st, &p));
     Start();

@@ -37,7 +37,7 @@ struct Rig {
     mc_cfg_boot_t Boot(mc_params_t *p)
     {
         EXPECT_EQ(mc_fake_flash_init(&flash, mem.data(), sizes, 3), 0);
-        const mc_cfg_store_cfg_t c = {&flash.dev, {1u, 2u}};
+        const mc_cfg_store_cfg_t c = {&flash.dev, {1u, 2u}, 0u};
         EXPECT_EQ(mc_cfg_store_init(&store, &c), 0);
         return mc_cfg_store_load(&store, p);
     }
@@ -564,4 +564,199 @@ TEST(CfgStore, UnknownRecordKindIsSkipped)
     std::memcpy(c.Sector(1), cut.data(), cut.size() * 4u);
     ASSERT_EQ(c.Boot(&p), MC_CFG_BOOT_STORED);
     EXPECT_TRUE(Same(p, v1));
+}
+
+// ---- Two axes on the one store (mc_cfg_store.h, "Axes") ----------------------
+
+namespace
+{
+
+// A small map: the store takes any multiple of 8 bytes, and the sweeps cut
+// at every word of every record (a 2 KB map makes them minutes long).
+constexpr uint32_t kAxMapBytes = 64u;
+constexpr uint32_t kAxMapRecBytes = kAxMapBytes + 5u * 4u;
+
+std::vector<uint8_t> AxMap(uint32_t i)
+{
+    std::vector<uint8_t> m(kAxMapBytes);
+    for (uint32_t k = 0; k < kAxMapBytes; ++k) {
+        m[k] = static_cast<uint8_t>(k * 13u + i * 101u + 7u);
+    }
+    return m;
+}
+
+// Both axes' stores over the same flash, as a two-axis image has them.
+struct Rig2 {
+    Rig r;
+    mc_cfg_store_t s1{};
+
+    explicit Rig2(uint32_t sector_bytes) : r(sector_bytes)
+    {
+    }
+    // Power on: a fresh fake and both stores over the same memory.
+    void Boot(mc_params_t p[2], mc_cfg_boot_t st[2])
+    {
+        st[0] = r.Boot(&p[0]);
+        const mc_cfg_store_cfg_t c = {&r.flash.dev, {1u, 2u}, 1u};
+        EXPECT_EQ(mc_cfg_store_init(&s1, &c), 0);
+        st[1] = mc_cfg_store_load(&s1, &p[1]);
+    }
+    mc_cfg_store_t *Store(uint32_t axis)
+    {
+        return (axis == 0u) ? &r.store : &s1;
+    }
+};
+
+std::vector<uint8_t> LoadMap(mc_cfg_store_t *s)
+{
+    std::vector<uint8_t> got(kAxMapBytes, 0u);
+    return (mc_cfg_store_load_map(s, got.data(), kAxMapBytes) == 0) ? got : std::vector<uint8_t>{};
+}
+
+// What the flash must hold for both axes: each kind's newest.
+struct Held {
+    mc_params_t cfg[2] = {mc_params_default, mc_params_default};
+    std::vector<uint8_t> map[2];
+};
+
+void ExpectHeld(Rig2 &r, const Held &h, const std::string &what)
+{
+    mc_params_t p[2];
+    mc_cfg_boot_t st[2];
+    r.Boot(p, st);
+    for (uint32_t a = 0; a < 2u; ++a) {
+        ASSERT_TRUE(Same(p[a], h.cfg[a])) << what << ": axis " << a << " boot " << st[a];
+        ASSERT_EQ(LoadMap(r.Store(a)), h.map[a]) << what << ": axis " << a << "'s map";
+    }
+}
+
+// ops: pairs "<axis><C|M>", e.g. "0C1M". Every save cut at every step (not
+// done, half done): after the reboot every kind of both axes is exactly its
+// previous newest; the save then completes and only its kind changed.
+void TwoAxisPowerCutSweep(uint32_t sector_bytes, const char *ops, uint32_t *p_cases,
+                          uint32_t *p_switches)
+{
+    Rig2 r(sector_bytes);
+    Held held;
+    mc_params_t p[2];
+    mc_cfg_boot_t st[2];
+    r.Boot(p, st);
+    for (uint32_t i = 0; ops[2u * i] != '\0'; ++i) {
+        const uint32_t axis = (ops[2u * i] == '1') ? 1u : 0u;
+        const bool map = ops[2u * i + 1u] == 'M';
+        Held next = held;
+        if (map) {
+            next.map[axis] = AxMap(10u * i + axis);
+        } else {
+            next.cfg[axis] = Variant(10u * i + axis);
+        }
+        const auto save = [&]() {
+            return map ? mc_cfg_store_save_map(r.Store(axis), next.map[axis].data(), kAxMapBytes)
+                       : mc_cfg_store_save(r.Store(axis), &next.cfg[axis]);
+        };
+        const std::vector<uint8_t> before = r.r.mem;
+        r.Boot(p, st);
+        const uint32_t s0 = r.r.flash.steps, e0 = r.r.flash.erases;
+        ASSERT_EQ(save(), 0) << "op " << i;
+        const uint32_t n = r.r.flash.steps - s0;
+        *p_switches += (r.r.flash.erases > e0) ? 1u : 0u;
+        const std::vector<uint8_t> after = r.r.mem;
+        for (uint32_t k = 1; k <= n; ++k) {
+            for (const mc_fake_flash_tear_t tear :
+                 {MC_FAKE_FLASH_TEAR_NONE, MC_FAKE_FLASH_TEAR_HALF}) {
+                const std::string what = "op " + std::to_string(i) + " cut at " +
+                                         std::to_string(k) + " of " + std::to_string(n) + " tear " +
+                                         std::to_string(tear);
+                r.r.mem = before;
+                r.Boot(p, st);
+                mc_fake_flash_cut_at(&r.r.flash, k, tear);
+                ASSERT_EQ(save(), -EIO) << what;
+                ExpectHeld(r, held, what);
+                ASSERT_EQ(save(), 0) << what;
+                ExpectHeld(r, next, what + ", redone");
+                ++*p_cases;
+            }
+        }
+        r.r.mem = after;
+        ExpectHeld(r, next, "op " + std::to_string(i));
+        held = next;
+    }
+}
+
+} // namespace
+
+// One record of each of the four kinds per sector: from the fifth save on
+// every save switches and copies the three other kinds' newest first.
+TEST(CfgStoreAxes, PowerCutAtEveryStepEachKindOfBothAxesKeepsOldOrNew)
+{
+    uint32_t cases = 0, switches = 0;
+    TwoAxisPowerCutSweep(2u * (kRecBytes + kAxMapRecBytes) + 16u, "0C1C0M1M1C0C1M0M1C", &cases,
+                         &switches);
+    EXPECT_EQ(switches, 5u); // the first four fill sector A
+    // every save writes its record; each switch also copies three records
+    EXPECT_GT(cases, 2u * (5u * MC_CFG_REC_WORDS + 4u * (kAxMapRecBytes / 4u)));
+}
+
+// Two of each per sector: appends, and switches with copies.
+TEST(CfgStoreAxes, PowerCutAtEveryStepAppendAndSwitch)
+{
+    uint32_t cases = 0, switches = 0;
+    TwoAxisPowerCutSweep(4u * (kRecBytes + kAxMapRecBytes) + 32u, "1C0C1M0M1C1C0C1M0M0C1C0C",
+                         &cases, &switches);
+    EXPECT_GE(switches, 2u);
+    EXPECT_GT(cases, 2u * (10u * MC_CFG_REC_WORDS));
+}
+
+// The two stores run side by side without a reboot between them, as on the
+// board: one's sector switch erases the sector the other last saw its
+// records in, and the other's next save and SAVE check (holds) still see
+// the flash as it is. A one-axis image's store is axis 0's; axis 1 then
+// boots EMPTY (nothing of its own stored), not CORRUPT; axis 2 is refused.
+TEST(CfgStoreAxes, EachAxisSeesTheOthersSavesWithoutARebootAndBootsItsOwn)
+{
+    Rig2 r(kRecBytes * 2u + kAxMapRecBytes + 32u);
+    mc_params_t p[2];
+    mc_cfg_boot_t st[2];
+    r.Boot(p, st);
+    EXPECT_EQ(st[0], MC_CFG_BOOT_EMPTY);
+    EXPECT_EQ(st[1], MC_CFG_BOOT_EMPTY);
+    // A one-axis image saved (axis 0's record only).
+    const mc_params_t a0 = Variant(1);
+    ASSERT_EQ(mc_cfg_store_save(r.Store(0), &a0), 0);
+    r.Boot(p, st);
+    EXPECT_EQ(st[0], MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p[0], a0));
+    EXPECT_EQ(st[1], MC_CFG_BOOT_EMPTY);
+    EXPECT_TRUE(Same(p[1], mc_params_default));
+    // Both live: axis 1 saves until it has switched sectors twice, then axis
+    // 0 (its view from before) saves and checks.
+    const uint32_t e0 = r.r.flash.erases;
+    mc_params_t a1 = Variant(2);
+    for (uint32_t i = 0; i < 9u; ++i) {
+        a1 = Variant(20u + i);
+        ASSERT_EQ(mc_cfg_store_save(r.Store(1), &a1), 0) << i;
+    }
+    ASSERT_GE(r.r.flash.erases - e0, 2u);
+    // axis 0 saves with the view it had before axis 1's switches
+    const mc_params_t a0b = Variant(3);
+    ASSERT_EQ(mc_cfg_store_save(r.Store(0), &a0b), 0);
+    EXPECT_TRUE(mc_cfg_store_holds(r.Store(0), &a0b));
+    EXPECT_FALSE(mc_cfg_store_holds(r.Store(0), &a0));
+    const std::vector<uint8_t> m1 = AxMap(7);
+    ASSERT_EQ(mc_cfg_store_save_map(r.Store(1), m1.data(), kAxMapBytes), 0);
+    r.Boot(p, st);
+    EXPECT_EQ(st[0], MC_CFG_BOOT_STORED);
+    EXPECT_EQ(st[1], MC_CFG_BOOT_STORED);
+    EXPECT_TRUE(Same(p[0], a0b));
+    EXPECT_TRUE(Same(p[1], a1));
+    EXPECT_EQ(LoadMap(r.Store(0)), std::vector<uint8_t>{}) << "no map of axis 0";
+    EXPECT_EQ(LoadMap(r.Store(1)), m1);
+    // The sequence counter is shared: axis 0's last save took the number
+    // after axis 1's saves.
+    EXPECT_EQ(r.Store(0)->seq, 11u); // 1, then axis 1's 2..10, then 11
+    EXPECT_EQ(r.Store(1)->seq, 10u);
+    EXPECT_EQ(r.Store(1)->seq_top, 12u); // its map
+    mc_cfg_store_t bad{};
+    const mc_cfg_store_cfg_t c2 = {&r.r.flash.dev, {1u, 2u}, 2u};
+    EXPECT_EQ(mc_cfg_store_init(&bad, &c2), -EINVAL);
 }

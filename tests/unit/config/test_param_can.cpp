@@ -48,7 +48,7 @@ class ParamCan : public ::testing::Test
         ASSERT_EQ(0, mc_hal_fake_config_default(&fc));
         ASSERT_EQ(0, mc_hal_fake_init(&fake, &fc));
         ASSERT_EQ(0, mc_fake_flash_init(&flash, mem.data(), sizes, 2));
-        const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}};
+        const mc_cfg_store_cfg_t sc = {&flash.dev, {0u, 1u}, 0u};
         ASSERT_EQ(0, mc_cfg_store_init(&store, &sc));
         boot = mc_cfg_store_load(&store, &p);
         mc_drive_cfg_t dc;

@@ -31,7 +31,7 @@ struct StoreBoot {
     mc_cfg_store_t s{};
     explicit StoreBoot(const std::string &path) : f(path)
     {
-        const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}};
+        const mc_cfg_store_cfg_t sc{f.hal(), {0u, 1u}, 0u};
         EXPECT_EQ(mc_cfg_store_init(&s, &sc), 0);
     }
 };

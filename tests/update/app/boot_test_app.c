@@ -46,7 +46,7 @@ static uint8_t node_id(void)
 {
     static mc_f405_flash_t flash;
     mc_boot_flash_ro_init(&flash);
-    const mc_cfg_store_cfg_t c = {&flash.dev, {MC_BOOT_CFG_SECTOR_A, MC_BOOT_CFG_SECTOR_B}};
+    const mc_cfg_store_cfg_t c = {&flash.dev, {MC_BOOT_CFG_SECTOR_A, MC_BOOT_CFG_SECTOR_B}, 0u};
     uint32_t raw = 1u;
     if ((mc_cfg_store_init(&g_store, &c) != 0) ||
         (mc_cfg_store_find_raw(&g_store, MC_PARAM_ID_CAN_NODE_ID, &raw) != 0) || (raw > 62u)) {
