@@ -63,7 +63,10 @@ TEST(CommissionHall, TableWithinTheModelsEdges) {
   for (const double err : {0.03, 0.08}) {
     const MotorFiles f = hub_hall(3.0, 0.05, err);
     const CommissionRun r = run_commission(f, default_commission_setup(f));
-    ASSERT_TRUE(r.done) << commission_error_names(r.err);
+    ASSERT_TRUE(r.done) << commission_error_names(r.err) << " " << commission_detail_name(r.detail)
+                        << " flux " << r.flux_chk.dev << "/" << r.flux_chk.tol << " J "
+                        << r.mech_chk.j_dev << "/" << r.mech_chk.j_tol << " fit "
+                        << r.mech_chk.fit_rms << "/" << r.mech_chk.fit_tol;
     ASSERT_TRUE(r.res.have_hall);
     HallSensors model;
     ASSERT_EQ(model.configure(hall_params_of(f)), Status::kOk);
