@@ -53,7 +53,19 @@
  *               zero), psi = |v| / omega_e (least squares). The
  *               spin-up and the coast-down give J and B. A rotor that does
  *               not move: ROTOR_BLOCKED; one that turns backwards:
- *               WRONG_DIRECTION.
+ *               WRONG_DIRECTION. The step checks itself (mc_comm_check.h,
+ *               README.md "Checks of the flux step"): the coast's first
+ *               and second half (two speed bands) fitted apart give two
+ *               fluxes, which must agree within the sum of their
+ *               resolutions (the counts per turn over the band's time and
+ *               the speed filter's, the dead time's voltage over the
+ *               band's): else FLUX_SPEEDS; the coast's speed must be a
+ *               line within 5 % of its fall plus the viscous decay's bend
+ *               and the counts' part (else MECH_FIT), and J from the
+ *               spin-up's first half and from its second (each with the
+ *               coast's B/J) within 2 % plus the counts' part (else
+ *               MECH_SPIN_COAST: friction not viscous, a load). A refusal
+ *               stores nothing, as every other.
  *   DONE        zero current until the application leaves CTRL mode.
  * A failure returns the error bits from the fast step: the drive faults
  * (MC_DRIVE_FAULT_CONTROL, tm.ctrl_err = the bits), the bridge is off and

@@ -6,6 +6,8 @@
 // refusals by name with nothing staged.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <cmath>
 #include <string>
 
@@ -67,6 +69,12 @@ TEST(CommissionHall, TableWithinTheModelsEdges) {
                         << " flux " << r.flux_chk.dev << "/" << r.flux_chk.tol << " J "
                         << r.mech_chk.j_dev << "/" << r.mech_chk.j_tol << " fit "
                         << r.mech_chk.fit_rms << "/" << r.mech_chk.fit_tol;
+    std::printf(
+        "COMMISSION_CHECKS {\"case\": \"hub hall %.2f\", \"flux_dev\": %.5f, "
+        "\"flux_tol\": %.5f, \"j_dev\": %.5f, \"j_tol\": %.5f, \"fit_rms\": %.5f, "
+        "\"fit_tol\": %.5f}\n",
+        err, r.flux_chk.dev, r.flux_chk.tol, r.mech_chk.j_dev, r.mech_chk.j_tol, r.mech_chk.fit_rms,
+        r.mech_chk.fit_tol);
     ASSERT_TRUE(r.res.have_hall);
     HallSensors model;
     ASSERT_EQ(model.configure(hall_params_of(f)), Status::kOk);
