@@ -10,7 +10,8 @@
  * Block recorder: a signal sampled every dt, kept as the means of up to
  * MC_COMM_BLK_N equal blocks; when the blocks are full, neighbours merge
  * pairwise and the block length doubles, so a record of unknown length
- * (the spin-up ends on a condition) always ends with MC_COMM_BLK_N / 2 to
+ * (the spin-up ends on a condition) of MC_COMM_BLK_N samples or more ends
+ * with MC_COMM_BLK_N / 2 to
  * MC_COMM_BLK_N full blocks spread over all of it (the samples of the
  * block being filled at the end are left out).
  */
@@ -39,13 +40,8 @@ typedef struct {
 void mc_comm_blk_reset(mc_comm_blk_t *b);
 void mc_comm_blk_step(mc_comm_blk_t *b, float y);
 
-/** Least-squares line through the means of blocks [j0, j1) against their
- *  centre times (dt per sample): slope, mean value, the RMS of the means
- *  about the line, and the worst-case slope error per unit of error of a
- *  block mean (sum |x - xm| / sum (x - xm)^2, [1/s]). false with fewer
- *  than 3 blocks or j1 beyond the full ones. */
-bool mc_comm_blk_line(const mc_comm_blk_t *b, uint32_t j0, uint32_t j1, float dt_s, float *p_slope,
-                      float *p_mean, float *p_rms, float *p_slope_per_err);
+/** The mean of the means of blocks [j0, j1), j0 < j1 <= nb. */
+float mc_comm_blk_mean(const mc_comm_blk_t *b, uint32_t j0, uint32_t j1);
 
 /* ------------------------------------------------------------ flux */
 /** The two flux estimates of the coast (through-origin fits of |v| on
@@ -74,12 +70,12 @@ uint32_t mc_comm_flux_check_f32(const mc_ident_line_f32_t *hi, const mc_ident_li
                                 float tol, mc_comm_flux_chk_t *out);
 
 /* ------------------------------------------------------- mechanics */
-/** The tolerances of the J/B checks (README.md): a coast's speed that is
- *  not a line within MC_COMM_MECH_FIT_TOL of its fall over the window
- *  (a viscous decay of the library's B/J bends away by under 1 %), and
- *  the spin-up's two halves' inertias within MC_COMM_MECH_J_TOL of each
- *  other (a viscous rotor gives the same), each plus the part the count
- *  resolution allows. */
+/** The tolerances of the J/B checks (README.md "Checks of the flux step"):
+ *  the coast's middle third on the chord of its outer two within
+ *  MC_COMM_MECH_FIT_TOL of its fall, and the spin-up's two halves'
+ *  inertias within MC_COMM_MECH_J_TOL of each other (a viscous rotor gives
+ *  the same; the library's within 1 %), each plus the viscous decay's own
+ *  bend and the part the count resolution allows. */
 #define MC_COMM_MECH_FIT_TOL 0.05f
 #define MC_COMM_MECH_J_TOL   0.02f
 
@@ -88,24 +84,24 @@ typedef struct {
     float j_hi_kgm2; /**< ... second half */
     float j_dev;     /**< |j_lo - j_hi| / their mean */
     float j_tol;     /**< MC_COMM_MECH_J_TOL plus the count resolution's part */
-    float fit_rms;   /**< the coast's RMS about its line / its fall over the window */
-    float fit_tol;   /**< MC_COMM_MECH_FIT_TOL plus the count resolution's part */
+    float fit_rms;   /**< the coast's middle third off the chord / its fall */
+    float fit_tol;   /**< MC_COMM_MECH_FIT_TOL plus the bend's and the counts' part */
 } mc_comm_mech_chk_t;
 
-/** The J/B checks on the spin-up's (motor torque tq_spin_nm, kt times
- *  the measured iq) and the coast's (tq_coast_nm, the loop's residue)
- *  speed records (mechanical rad/s, dt each), the speed of one count per
- *  block's time being the resolution (cpr counts a turn):
+/** The J/B checks on the spin-up's (motor torque tq_nm) and the coast's
+ *  speed records (mechanical rad/s, dt each; cpr counts a turn, the
+ *  resolution). The spin-up's four quarters give two halves (their mean
+ *  speeds and accelerations), the coast's three thirds its B/J (chord) and
+ *  its straightness (the middle third against the chord).
  *  MC_COMM_ERR_MECH_FIT when the coast is not a line within fit_tol (a
- *  load that changes, a speed reading that jumps), MC_COMM_ERR_MECH_SPIN_COAST
+ *  load that changes, a speed reading that jumps) or a record is too short
+ *  (fewer than 8 spin-up or 6 coast blocks); MC_COMM_ERR_MECH_SPIN_COAST
  *  when J from the spin-up's first half and from its second (each with the
  *  coast's B/J) differ by more than j_tol: the friction is not viscous
  *  (Coulomb, a load) and the J and B of the viscous model would be off;
- *  0 when consistent. Records too short (fewer than 6 spin-up or 3 coast
- *  blocks) or a deceleration that does not fit the model: MC_COMM_ERR_MECH_FIT. */
+ *  0 when consistent. Fills *out either way. */
 uint32_t mc_comm_mech_check_f32(const mc_comm_blk_t *spin, const mc_comm_blk_t *coast, float dt_s,
-                                uint32_t cpr, float tq_spin_nm, float tq_coast_nm,
-                                mc_comm_mech_chk_t *out);
+                                uint32_t cpr, float tq_nm, mc_comm_mech_chk_t *out);
 
 #ifdef __cplusplus
 }

@@ -226,14 +226,6 @@ static void track_count(mc_comm_t *c, const mc_drive_meas_t *m)
         const float tau = (c->cfg.speed_tau_s > 0.0f) ? c->cfg.speed_tau_s : TAU_SPEED_S;
         const float k = c->cfg.dt_s / tau;
         c->w_m_rad_s += (w - c->w_m_rad_s) * ((k < 1.0f) ? k : 1.0f);
-    }
-    if (c->have_count) {
-        int32_t d = (int32_t)cnt - (int32_t)c->last_count;
-        if (d > (int32_t)(cpr / 2u)) {
-            d -= (int32_t)cpr;
-        } else if (d < -(int32_t)(cpr / 2u)) {
-            d += (int32_t)cpr;
-        }
         c->count_acc += d;
     }
     c->last_count = cnt;
@@ -771,13 +763,8 @@ static uint32_t step_resistance(mc_comm_t *c, const float i[3], mc_drive_out_t *
         c->res.dead_time_v = 0.75f * (c->v2_v - c->res.r_ohm * c->i2_a);
         c->res.valid |= MC_COMM_HAVE_R;
         /* Hold this DC vector for the inductance step. */
-        float s;
-        float co;
-        mc_sincos_f32(c->theta0_rad, &s, &co);
         c->vdc_alpha_v = fo.v_alpha_v;
         c->vdc_beta_v = fo.v_beta_v;
-        (void)s;
-        (void)co;
         enter(c, MC_COMM_STEP_INDUCTANCE, 0u);
     }
     return 0u;
@@ -834,7 +821,6 @@ static uint32_t step_inductance(mc_comm_t *c, const float i[3], mc_drive_out_t *
                 }
                 enter(c, MC_COMM_STEP_FLUX, 0u);
                 c->count_acc = 0;
-                mc_ident_line_f32_reset(&c->fit);
                 mc_ident_line_f32_reset(&c->acc_fit);
                 mc_ident_line_f32_reset(&c->fit_band[0]);
                 mc_ident_line_f32_reset(&c->fit_band[1]);
@@ -868,8 +854,11 @@ static float band_res(const mc_comm_t *c, uint32_t cpr, unsigned k)
  * step"); a refusal returns its bit and stores nothing. */
 static uint32_t coast_end(mc_comm_t *c, uint32_t cpr)
 {
-    float psi = 0.0f;
-    if (mc_ident_line_f32_get(&c->fit, false, &psi, NULL) != 0u || !(psi > 0.0f)) {
+    /* the whole window's through-origin fit: the two bands' sums */
+    const mc_ident_line_f32_t *fb = c->fit_band;
+    const float sxx = fb[0].sxx.sum + fb[1].sxx.sum;
+    const float psi = (fb[0].sxy.sum + fb[1].sxy.sum) / ((sxx > 0.0f) ? sxx : 1.0f);
+    if (!(psi > 0.0f) || fb[0].sx.n < 2u || fb[1].sx.n < 2u) {
         return MC_COMM_ERR_RANGE;
     }
     const float tol = band_res(c, cpr, 0u) + band_res(c, cpr, 1u);
@@ -888,9 +877,8 @@ static uint32_t coast_end(mc_comm_t *c, uint32_t cpr)
             const float j = kt * c->iq_spin_a / den;
             const float b = -ac * j / wc;
             if (j > 0.0f && b >= 0.0f) {
-                const uint32_t em =
-                    mc_comm_mech_check_f32(&c->spin_rec, &c->coast_rec, c->cfg.dt_s, cpr,
-                                           kt * c->iq_spin_a, 0.0f, &c->mech_chk);
+                const uint32_t em = mc_comm_mech_check_f32(&c->spin_rec, &c->coast_rec, c->cfg.dt_s,
+                                                           cpr, kt * c->iq_spin_a, &c->mech_chk);
                 if (em != 0u) {
                     return em;
                 }
@@ -988,7 +976,6 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
              * along q; its magnitude does not depend on the angle error of
              * the one-period delay. */
             const float y = (fo.vq_v >= 0.0f) ? vmag : -vmag;
-            (void)mc_ident_line_f32_step(&c->fit, w_e, y);
             (void)mc_ident_line_f32_step(
                 &c->fit_band[(c->t_s < c->t_fit0_s + 0.5f * T_COAST) ? 0 : 1], w_e, y);
             (void)mc_ident_line_f32_step(&c->acc_fit, c->t_s, w_m);

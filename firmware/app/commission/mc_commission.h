@@ -60,7 +60,8 @@
  *               resolutions (the counts per turn over the band's time and
  *               the speed filter's, the dead time's voltage over the
  *               band's): else FLUX_SPEEDS; the coast's speed must be a
- *               line within 5 % of its fall plus the viscous decay's bend
+ *               line (its middle third on the chord of the outer two)
+ *               within 5 % of its fall plus the viscous decay's bend
  *               and the counts' part (else MECH_FIT), and J from the
  *               spin-up's first half and from its second (each with the
  *               coast's B/J) within 2 % plus the counts' part (else
@@ -141,14 +142,11 @@ extern "C" {
  *  when a wider bit is set) and its detail code from the error word. */
 static inline uint32_t mc_comm_err_frame(uint32_t err, uint32_t *p_detail)
 {
-    uint32_t d = MC_COMM_DETAIL_NONE;
-    for (uint32_t b = 16u; b < 32u && d == 0u; ++b) {
-        if ((err & (1u << b)) != 0u) {
-            d = b - 15u;
-        }
-    }
-    *p_detail = d;
-    return (err & 0xFFFFu) | ((d != 0u) ? MC_COMM_ERR_RANGE : 0u);
+    *p_detail = ((err & MC_COMM_ERR_FLUX_SPEEDS) != 0u)       ? MC_COMM_DETAIL_FLUX_SPEEDS
+                : ((err & MC_COMM_ERR_MECH_FIT) != 0u)        ? MC_COMM_DETAIL_MECH_FIT
+                : ((err & MC_COMM_ERR_MECH_SPIN_COAST) != 0u) ? MC_COMM_DETAIL_MECH_SPIN_COAST
+                                                              : MC_COMM_DETAIL_NONE;
+    return (err & 0xFFFFu) | (((err & MC_COMM_ERR_WIDE_MASK) != 0u) ? MC_COMM_ERR_RANGE : 0u);
 }
 
 /* The Hall table's other refusals use the bits that already name them (the
@@ -286,7 +284,6 @@ typedef struct {
     float v1_v, i1_a, v2_v, i2_a;
     float vdc_alpha_v, vdc_beta_v;
     /* flux and mechanics */
-    mc_ident_line_f32_t fit;
     mc_ident_line_f32_t acc_fit;
     mc_ident_line_f32_t fit_band[2]; /**< the flux fit's first and second half */
     mc_comm_blk_t spin_rec;          /**< the spin-up's speed (the J/B checks) */
