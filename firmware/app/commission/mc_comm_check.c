@@ -28,7 +28,8 @@ void mc_comm_blk_step(mc_comm_blk_t *b, float y)
     b->k = 0u;
     if (b->nb == MC_COMM_BLK_N) {
         for (uint32_t j = 0u; j < MC_COMM_BLK_N / 2u; ++j) {
-            b->mean[j] = 0.5f * (b->mean[2u * j] + b->mean[2u * j + 1u]);
+            const uint32_t i0 = 2u * j;
+            b->mean[j] = 0.5f * (b->mean[i0] + b->mean[i0 + 1u]);
         }
         b->nb = MC_COMM_BLK_N / 2u;
         b->len *= 2u;
@@ -127,8 +128,9 @@ uint32_t mc_comm_mech_check_f32(const mc_comm_blk_t *spin, const mc_comm_blk_t *
     float j[2];
     float rel = 0.0f;
     for (uint32_t h = 0u; h < 2u; ++h) {
-        const float w = 0.5f * (s[2u * h] + s[2u * h + 1u]);
-        const float den = (s[2u * h + 1u] - s[2u * h]) / hs + beta * w;
+        const uint32_t i0 = 2u * h;
+        const float w = 0.5f * (s[i0] + s[i0 + 1u]);
+        const float den = (s[i0 + 1u] - s[i0]) / hs + beta * w;
         j[h] = (den > 0.0f) ? tq_nm / den : -1.0f;
         rel += (2.0f * es / hs + mc_abs_f32(beta) * es + d_beta * w) / mc_abs_f32(den);
     }
