@@ -34,6 +34,7 @@
 #include "mcsim/hall.hpp"
 extern "C" {
 #include "hal/can.h"
+#include "commission/mc_commission.h"
 #include "hal/flash.h"
 #include "mc_app.h"
 #include "mc_params.h"
@@ -94,6 +95,9 @@ class AppTarget {
   // host's APPLY and SAVE); nullptr where the target cannot show it (PIL:
   // the image's memory is the board's).
   virtual const mc_params_t* staged() const { return nullptr; }
+  // The commissioning sequence's state (its checks' figures: flux_chk,
+  // mech_chk); nullptr where the target cannot show it (PIL).
+  virtual const mc_comm_t* commissioning() const { return nullptr; }
   virtual hal_host::PmsmBoard& board() = 0;
   // "sil" or "pil:<image>" for the summary.
   virtual std::string name() const = 0;

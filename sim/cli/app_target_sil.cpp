@@ -169,6 +169,7 @@ class AppTargetSil final : public AppTarget {
   }
   hal_host::PmsmBoard& board() override { return *board_; }
   std::string name() const override { return "sil"; }
+  const mc_comm_t* commissioning() const override { return comm_.get(); }
 
  private:
   mc_params_t params_;

@@ -90,6 +90,30 @@ def main():
         print(f"note: the venv's mdtool has no CAN data folder ({(r.stderr.strip().splitlines() or [data])[-1]}); "
               "run tools/bootstrap.sh setup to install this tree's package")
 
+    # ---- a commissioning refusal the error field has no bit for: RANGE plus
+    # COMMISSION_STATUS.detail, through the DBC's codec and named by mdtool
+    from mdtool.can import calibrate as cal
+    from mdtool.can import client
+    from mdtool.can.errors import Refused
+    dbm = dbc.find_message(dbc.load_db(), "COMMISSION_STATUS")
+    raw = dbc.encode_signals(dbm, {"step": 8, "error": 1 << 9, "detail": 3, "seq": 7})
+    col = cal.Collector()
+    col.feed("COMMISSION_STATUS", client.named(dbm, dbc.decode_signals(dbm, raw)))
+    summ = col.summary()
+    check(summ["detail"] == "MECH_SPIN_COAST" and summ["error"] == ["RANGE"],
+          f"COMMISSION_STATUS error RANGE, detail 3 decodes as {summ['error']} {summ['detail']}")
+    try:
+        cal.check_failed(summ)
+        check(False, "a FAILED status raises Refused")
+    except Refused as e:
+        check("MECH_SPIN_COAST" in str(e) and "not viscous" in str(e) and e.status == "MECH_SPIN_COAST",
+              f"the refusal names its reason: {e}")
+    summ0 = dict(summ, detail="NONE")
+    try:
+        cal.check_failed(summ0)
+    except Refused as e:
+        check(e.status == "RANGE", f"without a detail RANGE stays RANGE: {e.status}")
+
     # ---- the SIL's frames
     sil_log = os.path.join(W, "sil.log")
     env = dict(os.environ, MCSIM_CAN_LOG=sil_log,

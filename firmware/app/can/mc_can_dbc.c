@@ -163,12 +163,13 @@ static const mc_can_signal_t sig_commission_cmd[4] = {
     {24u, 16u, false, 0.01f, 0.0f, 0.0f, 655.35f}, /* v_test_max_v [V] */
     {40u, 16u, false, 0.1f, 0.0f, 0.0f, 6553.5f}, /* speed_max_m_rad_s [rad/s] */
 };
-static const mc_can_signal_t sig_commission_status[6] = {
+static const mc_can_signal_t sig_commission_status[7] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 8.0f}, /* step [-] */
     {8u, 8u, false, 1.0f, 0.0f, 0.0f, 100.0f}, /* progress_pct [%] */
     {16u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* error [-] */
     {32u, 8u, false, 1.0f, 0.0f, 0.0f, 63.0f}, /* valid [-] */
     {40u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* staged [-] */
+    {48u, 8u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* detail [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
 static const mc_can_signal_t sig_commission_result[3] = {
@@ -212,7 +213,7 @@ const mc_can_message_t mc_can_messages[MC_CAN_MSG_COUNT] = {
     {MC_CAN_CMD_BOOT_REQ, 8u, MC_CAN_DIR_RX, 3u, sig_boot_req}, /* BOOT_REQ */
     {MC_CAN_CMD_BOOT_DATA, 8u, MC_CAN_DIR_RX, 8u, sig_boot_data}, /* BOOT_DATA */
     {MC_CAN_CMD_COMMISSION_CMD, 8u, MC_CAN_DIR_RX, 4u, sig_commission_cmd}, /* COMMISSION_CMD */
-    {MC_CAN_CMD_COMMISSION_STATUS, 8u, MC_CAN_DIR_TX, 6u, sig_commission_status}, /* COMMISSION_STATUS */
+    {MC_CAN_CMD_COMMISSION_STATUS, 8u, MC_CAN_DIR_TX, 7u, sig_commission_status}, /* COMMISSION_STATUS */
     {MC_CAN_CMD_COMMISSION_RESULT, 8u, MC_CAN_DIR_TX, 3u, sig_commission_result}, /* COMMISSION_RESULT */
     {MC_CAN_CMD_CMD_ERROR, 8u, MC_CAN_DIR_TX, 4u, sig_cmd_error}, /* CMD_ERROR */
 };

@@ -425,7 +425,9 @@ void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can, mc_tm_reply_lim
         v[MC_CAN_COMMISSION_STATUS_PROGRESS_PCT] =
             (float)(m->running ? m->comm->progress_pct
                                : ((m->step == (uint8_t)MC_COMM_STEP_DONE) ? 100u : 0u));
-        v[MC_CAN_COMMISSION_STATUS_ERROR] = (float)(m->err & 0xFFFFu);
+        uint32_t detail = 0u;
+        v[MC_CAN_COMMISSION_STATUS_ERROR] = (float)mc_comm_err_frame(m->err, &detail);
+        v[MC_CAN_COMMISSION_STATUS_DETAIL] = (float)detail;
         v[MC_CAN_COMMISSION_STATUS_VALID] = (float)(m->comm->res.valid & MC_COMM_HAVE_ALL);
         v[MC_CAN_COMMISSION_STATUS_STAGED] = m->staged ? 1.0f : 0.0f;
         v[MC_CAN_COMMISSION_STATUS_SEQ] = (float)m->status_seq;

@@ -226,14 +226,6 @@ static void track_count(mc_comm_t *c, const mc_drive_meas_t *m)
         const float tau = (c->cfg.speed_tau_s > 0.0f) ? c->cfg.speed_tau_s : TAU_SPEED_S;
         const float k = c->cfg.dt_s / tau;
         c->w_m_rad_s += (w - c->w_m_rad_s) * ((k < 1.0f) ? k : 1.0f);
-    }
-    if (c->have_count) {
-        int32_t d = (int32_t)cnt - (int32_t)c->last_count;
-        if (d > (int32_t)(cpr / 2u)) {
-            d -= (int32_t)cpr;
-        } else if (d < -(int32_t)(cpr / 2u)) {
-            d += (int32_t)cpr;
-        }
         c->count_acc += d;
     }
     c->last_count = cnt;
@@ -771,13 +763,8 @@ static uint32_t step_resistance(mc_comm_t *c, const float i[3], mc_drive_out_t *
         c->res.dead_time_v = 0.75f * (c->v2_v - c->res.r_ohm * c->i2_a);
         c->res.valid |= MC_COMM_HAVE_R;
         /* Hold this DC vector for the inductance step. */
-        float s;
-        float co;
-        mc_sincos_f32(c->theta0_rad, &s, &co);
         c->vdc_alpha_v = fo.v_alpha_v;
         c->vdc_beta_v = fo.v_beta_v;
-        (void)s;
-        (void)co;
         enter(c, MC_COMM_STEP_INDUCTANCE, 0u);
     }
     return 0u;
@@ -834,8 +821,11 @@ static uint32_t step_inductance(mc_comm_t *c, const float i[3], mc_drive_out_t *
                 }
                 enter(c, MC_COMM_STEP_FLUX, 0u);
                 c->count_acc = 0;
-                mc_ident_line_f32_reset(&c->fit);
                 mc_ident_line_f32_reset(&c->acc_fit);
+                mc_ident_line_f32_reset(&c->fit_band[0]);
+                mc_ident_line_f32_reset(&c->fit_band[1]);
+                mc_comm_blk_reset(&c->spin_rec);
+                mc_comm_blk_reset(&c->coast_rec);
                 c->iq_spin_a = 0.5f * c->cfg.i_test_a;
                 c->t_s = 0.0f;
                 return foc_setup(c, c->res.r_ohm, c->res.ld_h, c->res.lq_h, true, ZDIV_STIFF);
@@ -847,6 +837,60 @@ static uint32_t step_inductance(mc_comm_t *c, const float i[3], mc_drive_out_t *
 }
 
 /* ------------------------------------------------ flux and mechanics */
+/* The flux fit's band resolution (mc_comm_flux_band_res_f32) of band k. */
+static float band_res(const mc_comm_t *c, uint32_t cpr, unsigned k)
+{
+    const mc_ident_line_f32_t *f = &c->fit_band[k];
+    const float n = (float)((f->sx.n > 0u) ? f->sx.n : 1u);
+    const float w_m = f->sx.sum / n / (float)c->res.pole_pairs;
+    const float v = mc_abs_f32(f->sy.sum / n);
+    const float tau = (c->cfg.speed_tau_s > 0.0f) ? c->cfg.speed_tau_s : TAU_SPEED_S;
+    const float v_dead = (4.0f / 3.0f) * c->vbus_v * c->cfg.dead_time_s / c->cfg.dt_s;
+    return mc_comm_flux_band_res_f32(cpr, 0.5f * T_COAST, tau, w_m, v_dead, v);
+}
+
+/* The end of the coast: the flux, its two-band check, J and B from the
+ * spin-up and the coast, their checks (README.md "Checks of the flux
+ * step"); a refusal returns its bit and stores nothing. */
+static uint32_t coast_end(mc_comm_t *c, uint32_t cpr)
+{
+    /* the whole window's through-origin fit: the two bands' sums */
+    const mc_ident_line_f32_t *fb = c->fit_band;
+    const float sxx = fb[0].sxx.sum + fb[1].sxx.sum;
+    const float psi = (fb[0].sxy.sum + fb[1].sxy.sum) / ((sxx > 0.0f) ? sxx : 1.0f);
+    if (!(psi > 0.0f) || fb[0].sx.n < 2u || fb[1].sx.n < 2u) {
+        return MC_COMM_ERR_RANGE;
+    }
+    const float tol = band_res(c, cpr, 0u) + band_res(c, cpr, 1u);
+    const uint32_t ef = mc_comm_flux_check_f32(&c->fit_band[0], &c->fit_band[1], tol, &c->flux_chk);
+    if (ef != 0u) {
+        return ef;
+    }
+    c->res.flux_wb = psi;
+    c->res.valid |= MC_COMM_HAVE_FLUX;
+    float ac = 0.0f;
+    const float wc = c->acc_fit.sy.sum / (float)(c->acc_fit.sy.n ? c->acc_fit.sy.n : 1u);
+    if (c->a_acc > 0.0f && mc_ident_line_f32_get(&c->acc_fit, true, &ac, NULL) == 0u && wc > 0.0f) {
+        const float kt = 1.5f * (float)c->res.pole_pairs * psi;
+        const float den = c->a_acc - ac * c->w_acc_mean / wc;
+        if (den > 0.0f) {
+            const float j = kt * c->iq_spin_a / den;
+            const float b = -ac * j / wc;
+            if (j > 0.0f && b >= 0.0f) {
+                const uint32_t em = mc_comm_mech_check_f32(&c->spin_rec, &c->coast_rec, c->cfg.dt_s,
+                                                           cpr, kt * c->iq_spin_a, &c->mech_chk);
+                if (em != 0u) {
+                    return em;
+                }
+                c->res.j_kgm2 = j;
+                c->res.b_nm_s_rad = b;
+                c->res.valid |= MC_COMM_HAVE_MECH;
+            }
+        }
+    }
+    return 0u;
+}
+
 static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t *m,
                           mc_drive_out_t *out)
 {
@@ -876,6 +920,7 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
         }
         if (c->t_s >= 0.02f) {
             (void)mc_ident_line_f32_step(&c->acc_fit, c->t_s, w_m);
+            mc_comm_blk_step(&c->spin_rec, w_m);
         }
         /* The back-EMF part of the voltage (the resistive drop removed). */
         const float emf = fo.vq_v - c->res.r_ohm * fo.iq_a;
@@ -931,36 +976,22 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
              * along q; its magnitude does not depend on the angle error of
              * the one-period delay. */
             const float y = (fo.vq_v >= 0.0f) ? vmag : -vmag;
-            (void)mc_ident_line_f32_step(&c->fit, w_e, y);
+            (void)mc_ident_line_f32_step(
+                &c->fit_band[(c->t_s < c->t_fit0_s + 0.5f * T_COAST) ? 0 : 1], w_e, y);
             (void)mc_ident_line_f32_step(&c->acc_fit, c->t_s, w_m);
+            mc_comm_blk_step(&c->coast_rec, w_m);
         }
         if (c->t_fit0_s >= 0.0f && c->t_s >= c->t_fit0_s + T_COAST) {
-            float psi = 0.0f;
-            if (mc_ident_line_f32_get(&c->fit, false, &psi, NULL) != 0u || !(psi > 0.0f)) {
-                return MC_COMM_ERR_RANGE;
+            /* the checks' count resolution: with Hall sensors a sector (the
+             * drive's Hall counts, MC_DRIVE_HALL_COUNTS_E an electrical turn,
+             * are interpolated between the edges) */
+            e = coast_end(c, (c->cfg.hall != NULL) ? 6u * c->res.pole_pairs : cpr);
+            if (e == 0u) {
+                enter(c, MC_COMM_STEP_DONE, 0u);
             }
-            c->res.flux_wb = psi;
-            c->res.valid |= MC_COMM_HAVE_FLUX;
-            float ac = 0.0f;
-            const float wc = c->acc_fit.sy.sum / (float)(c->acc_fit.sy.n ? c->acc_fit.sy.n : 1u);
-            if (c->a_acc > 0.0f && mc_ident_line_f32_get(&c->acc_fit, true, &ac, NULL) == 0u &&
-                wc > 0.0f) {
-                const float kt = 1.5f * p * psi;
-                const float den = c->a_acc - ac * c->w_acc_mean / wc;
-                if (den > 0.0f) {
-                    const float j = kt * c->iq_spin_a / den;
-                    const float b = -ac * j / wc;
-                    if (j > 0.0f && b >= 0.0f) {
-                        c->res.j_kgm2 = j;
-                        c->res.b_nm_s_rad = b;
-                        c->res.valid |= MC_COMM_HAVE_MECH;
-                    }
-                }
-            }
-            enter(c, MC_COMM_STEP_DONE, 0u);
+            return e;
         }
     }
-    (void)e;
     return 0u;
 }
 

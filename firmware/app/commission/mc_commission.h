@@ -53,7 +53,20 @@
  *               zero), psi = |v| / omega_e (least squares). The
  *               spin-up and the coast-down give J and B. A rotor that does
  *               not move: ROTOR_BLOCKED; one that turns backwards:
- *               WRONG_DIRECTION.
+ *               WRONG_DIRECTION. The step checks itself (mc_comm_check.h,
+ *               README.md "Checks of the flux step"): the coast's first
+ *               and second half (two speed bands) fitted apart give two
+ *               fluxes, which must agree within the sum of their
+ *               resolutions (the counts per turn over the band's time and
+ *               the speed filter's, the dead time's voltage over the
+ *               band's): else FLUX_SPEEDS; the coast's speed must be a
+ *               line (its middle third on the chord of the outer two)
+ *               within 5 % of its fall plus the viscous decay's bend
+ *               and the counts' part (else MECH_FIT), and J from the
+ *               spin-up's first half and from its second (each with the
+ *               coast's B/J) within 2 % plus the counts' part (else
+ *               MECH_SPIN_COAST: friction not viscous, a load). A refusal
+ *               stores nothing, as every other.
  *   DONE        zero current until the application leaves CTRL mode.
  * A failure returns the error bits from the fast step: the drive faults
  * (MC_DRIVE_FAULT_CONTROL, tm.ctrl_err = the bits), the bridge is off and
@@ -65,6 +78,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "commission/mc_comm_check.h"
 #include "commission/mc_comm_hall.h"
 #include "foc/mc_foc.h"
 #include "hal/hall.h"
@@ -102,6 +116,39 @@ extern "C" {
     (1u << 15) /**< Hall table: the codes do not change one sensor at a time round
                     one cycle of six (wiring), or not the order the table in force
                     allows (the drive's ENCODER fault during the sweep) */
+/* The flux step's own checks (mc_comm_check.h, README.md "Checks of the
+ * flux step"): bits above the status frame's 16; over CAN the frame's
+ * error field carries MC_COMM_ERR_RANGE for them and its detail field the
+ * reason (mc_comm_err_frame). */
+#define MC_COMM_ERR_FLUX_SPEEDS \
+    (1u << 16) /**< the coast's two speed bands (its first and second half) give
+                    fluxes further apart than their resolution allows */
+#define MC_COMM_ERR_MECH_FIT \
+    (1u << 17) /**< the coast's speed is not the viscous model's line (a load that
+                    changes, a speed that jumps), or its records are too short */
+#define MC_COMM_ERR_MECH_SPIN_COAST \
+    (1u << 18) /**< J from the spin-up's two halves (each with the coast's B/J)
+                    disagree: friction not viscous (Coulomb, a load) */
+#define MC_COMM_ERR_WIDE_MASK 0xFFFF0000u /**< the bits the status frame has no room for */
+
+/* COMMISSION_STATUS.detail: the reason a bit of MC_COMM_ERR_WIDE_MASK names
+ * (the lowest set), 0 none. */
+#define MC_COMM_DETAIL_NONE            0u
+#define MC_COMM_DETAIL_FLUX_SPEEDS     1u
+#define MC_COMM_DETAIL_MECH_FIT        2u
+#define MC_COMM_DETAIL_MECH_SPIN_COAST 3u
+
+/** The status frame's error field (the 16 low bits, MC_COMM_ERR_RANGE added
+ *  when a wider bit is set) and its detail code from the error word. */
+static inline uint32_t mc_comm_err_frame(uint32_t err, uint32_t *p_detail)
+{
+    *p_detail = ((err & MC_COMM_ERR_FLUX_SPEEDS) != 0u)       ? MC_COMM_DETAIL_FLUX_SPEEDS
+                : ((err & MC_COMM_ERR_MECH_FIT) != 0u)        ? MC_COMM_DETAIL_MECH_FIT
+                : ((err & MC_COMM_ERR_MECH_SPIN_COAST) != 0u) ? MC_COMM_DETAIL_MECH_SPIN_COAST
+                                                              : MC_COMM_DETAIL_NONE;
+    return (err & 0xFFFFu) | (((err & MC_COMM_ERR_WIDE_MASK) != 0u) ? MC_COMM_ERR_RANGE : 0u);
+}
+
 /* The Hall table's other refusals use the bits that already name them (the
  * status frame's error field has 16 bits): a sector width outside 30..90
  * degrees el. or a band of half a sector: MC_COMM_ERR_RANGE; no change
@@ -237,8 +284,12 @@ typedef struct {
     float v1_v, i1_a, v2_v, i2_a;
     float vdc_alpha_v, vdc_beta_v;
     /* flux and mechanics */
-    mc_ident_line_f32_t fit;
     mc_ident_line_f32_t acc_fit;
+    mc_ident_line_f32_t fit_band[2]; /**< the flux fit's first and second half */
+    mc_comm_blk_t spin_rec;          /**< the spin-up's speed (the J/B checks) */
+    mc_comm_blk_t coast_rec;         /**< the coast's speed */
+    mc_comm_flux_chk_t flux_chk;     /**< the flux check's figures (after the coast) */
+    mc_comm_mech_chk_t mech_chk;     /**< the J/B checks' figures */
     float w_acc_mean, a_acc;
     float iq_spin_a;
     float t_s;

@@ -253,7 +253,9 @@ void run_commission_scenario(RunContext& ctx) {
   ctx.summary.set("duration_s", c.duration_s);
   ctx.summary.set("index_search_s", c.index_search_s);
   ctx.summary.set("error_bits", c.err);
-  ctx.summary.set_text("fault", c.err ? commission_error_names(c.err) : "");
+  ctx.summary.set_text("fault", c.err ? commission_error_names(c.err) +
+                                            (c.detail ? " " + commission_detail_name(c.detail) : "")
+                                      : "");
   ctx.summary.set_text("motor", f.motor.name);
   ctx.summary.set_text("board", f.board.name);
   record_truth(ctx, s, true_off, adc);

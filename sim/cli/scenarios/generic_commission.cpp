@@ -35,7 +35,7 @@ double wrap2pi(double x) {
 struct CommissionFrames {
   bool ended = false;  // DONE with every result, or FAILED
   bool done = false;
-  uint32_t err = 0, valid = 0, step = 0;
+  uint32_t err = 0, valid = 0, step = 0, detail = 0;
   double t_end_s = 0;
   std::array<float, MC_COMM_CAN_ITEM_COUNT> value{};
   uint32_t have = 0;  // bit per item received
@@ -62,6 +62,7 @@ void CommissionFrames::take(const std::vector<mc_hal_can_frame_t>& frames, doubl
       if (mc_can_proto_unpack(&f, &msg, v, MC_CAN_NSIG_MAX) != MC_CAN_ERR_NONE) continue;
       step = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_STEP]);
       err = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_ERROR]);
+      detail = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_DETAIL]);
       valid = static_cast<uint32_t>(v[MC_CAN_COMMISSION_STATUS_VALID]);
       done = step == MC_COMM_STEP_DONE;
       if (step == MC_COMM_STEP_FAILED) {
@@ -197,6 +198,11 @@ std::string commission_error_names(uint32_t e) {
   return s;
 }
 
+std::string commission_detail_name(uint32_t d) {
+  static const char* const names[] = {"NONE", "FLUX_SPEEDS", "MECH_FIT", "MECH_SPIN_COAST"};
+  return d < 4u ? names[d] : "UNKNOWN";
+}
+
 mc_params_t commission_booted_params(const MotorFiles& f) {
   return params_from_files(f, Params(app_gain_params(f), {}), MC_LAW_SPEED_PI);
 }
@@ -255,6 +261,12 @@ CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, cons
     c.done = false;
   }
   out.err = c.err;
+  out.detail = c.detail;
+  if (const mc_comm_t* cm = target->commissioning()) {
+    out.have_checks = true;
+    out.flux_chk = cm->flux_chk;
+    out.mech_chk = cm->mech_chk;
+  }
   out.done = c.done;
   out.duration_s = c.t_end_s;
   out.drive_faults = run.probe().faults;

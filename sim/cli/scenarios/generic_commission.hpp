@@ -61,8 +61,14 @@ struct CommissionRun {
   // plus the measured, as staged; valid from COMMISSION_STATUS): all zero
   // unless done.
   mc_comm_result_t res{};
-  mc_params_t staged{};       // the booted table with the results staged (done)
-  uint32_t err = 0;           // MC_COMM_ERR_* (0: done)
+  mc_params_t staged{};  // the booted table with the results staged (done)
+  uint32_t err = 0;      // MC_COMM_ERR_* of the status frame (0: done)
+  uint32_t detail = 0;   // COMMISSION_STATUS.detail (MC_COMM_DETAIL_*)
+  // The flux step's checks (mc_comm_check.h) as the sequence left them
+  // (have_checks: the target shows them, the SIL; all zero before the coast)
+  bool have_checks = false;
+  mc_comm_flux_chk_t flux_chk{};
+  mc_comm_mech_chk_t mech_chk{};
   uint32_t drive_faults = 0;  // the drive's fault bits at the end
   bool done = false;
   bool bridge_off = false;    // PWM disabled at the end (after a failure)
@@ -120,6 +126,8 @@ double true_index_offset(const MotorFiles& f, const CommissionSetup& s,
 
 /// Names of MC_COMM_ERR_* bits, "|"-separated.
 std::string commission_error_names(uint32_t err);
+/// COMMISSION_STATUS.detail by name (MC_COMM_DETAIL_*).
+std::string commission_detail_name(uint32_t detail);
 
 /// The booted table with what commissioning stages (mc_comm_can.c,
 /// stage(): r, ld, lq, flux, pole pairs, encoder offset and direction, the

@@ -48,6 +48,15 @@ void expect_accurate(const MotorFiles& f, const CommissionRun& r, const std::str
       "\"encoder_offset_deg\": %.4f, \"direction_ok\": %d, \"duration_s\": %.3f}\n",
       tag.c_str(), er, ed, eq, ef, r.res.pole_pairs, m.pole_pairs, off_err_deg(r),
       r.res.encoder_direction == r.true_encoder_direction ? 1 : 0, r.duration_s);
+  // The flux step's own checks (mc_comm_check.h) passed: their figures
+  const mc_comm_flux_chk_t& fc = r.flux_chk;
+  const mc_comm_mech_chk_t& mc = r.mech_chk;
+  std::printf(
+      "COMMISSION_CHECKS {\"case\": \"%s\", \"flux_dev\": %.5f, \"flux_tol\": %.5f, "
+      "\"j_dev\": %.5f, \"j_tol\": %.5f, \"fit_rms\": %.5f, \"fit_tol\": %.5f, "
+      "\"j_frac\": %.5f, \"b_frac\": %.5f}\n",
+      tag.c_str(), fc.dev, fc.tol, mc.j_dev, mc.j_tol, mc.fit_rms, mc.fit_tol,
+      r.res.j_kgm2 / m.j_kgm2 - 1, r.res.b_nm_s_rad / m.b_nm_s_rad - 1);
   EXPECT_LT(std::abs(er), 0.02) << tag;
   EXPECT_LT(std::abs(ed), 0.05) << tag;
   EXPECT_LT(std::abs(eq), 0.05) << tag;
@@ -287,6 +296,79 @@ TEST(CommissionRefuses, RotorTurnsTheWrongWay) {
     }
   };
   expect_refused(run_commission(f, s), MC_COMM_ERR_WRONG_DIRECTION, "wrong way");
+}
+
+// The motor files the library list does not carry: the light-rotor maxon
+// class (on the 24 V ODrive, as its speed-law test runs it), with its
+// light rotor and the catalogue's, identify within the library's bounds:
+// the flux step's checks (mc_comm_check.h) do not refuse them.
+TEST(CommissionChecks, TheLightRotorFilesPassTheChecks) {
+  const std::string dir = MCSIM_MOTORS_DIR;
+  for (const char* j : {"1.35e-6", "1.35e-5"}) {
+    const MotorFiles f = load_motor_files(dir + "/maxon-ec45flat-class-24v.toml",
+                                          dir + "/odrive-v36-24v.toml", {{"motor.j_kgm2", j}});
+    expect_accurate(f, run_commission(f, default_commission_setup(f)),
+                    std::string("maxon-ec45flat J ") + j);
+  }
+}
+
+// The flux step's own J/B check (mc_comm_check.h): the d5065 with Coulomb
+// friction, a constant torque the viscous model J a = T - B w cannot hold:
+// the coast reads it as viscous and the spin-up's two halves then give two
+// inertias. Refused by name (the status frame: RANGE, detail
+// MECH_SPIN_COAST), nothing staged.
+TEST(CommissionRefuses, CoulombFrictionIsNotViscous) {
+  const MotorFiles f = d5065();
+  for (const double frac : {0.1, 0.3}) {
+    CommissionSetup s = default_commission_setup(f);
+    // of the spin-up's torque, 1.5 p psi i_test / 2 (i_test as the board's
+    // rule gives it: a quarter of the sense range)
+    const double tq = 1.5 * f.motor.pole_pairs * f.motor.flux_wb * 0.125 * f.board.i_sense_max_a;
+    s.plant = [tq, frac](hal_host::PmsmBoardConfig& bc) { bc.motor.load.coulomb_nm = frac * tq; };
+    const CommissionRun r = run_commission(f, s);
+    const mc_comm_mech_chk_t& mc = r.mech_chk;
+    std::printf(
+        "COMMISSION_REFUSED {\"case\": \"coulomb %.2f\", \"detail\": \"%s\", "
+        "\"j_dev\": %.4f, \"j_tol\": %.4f, \"j_lo_frac\": %.4f, \"j_hi_frac\": %.4f}\n",
+        frac, commission_detail_name(r.detail).c_str(), mc.j_dev, mc.j_tol,
+        mc.j_lo_kgm2 / f.motor.j_kgm2 - 1, mc.j_hi_kgm2 / f.motor.j_kgm2 - 1);
+    expect_refused(r, MC_COMM_ERR_RANGE, "coulomb friction");
+    EXPECT_EQ(r.detail, MC_COMM_DETAIL_MECH_SPIN_COAST) << commission_detail_name(r.detail);
+    EXPECT_GT(mc.j_dev, mc.j_tol) << frac;
+  }
+}
+
+// A load that appears during the coast (a brake, a coupling that engages):
+// a fifth of the spin-up torque 0.15 s after the rotor's speed peaked,
+// within the coast's 0.25 s fit. The coast is no longer one line: refused
+// by name (RANGE, detail MECH_FIT), nothing staged.
+TEST(CommissionRefuses, ALoadDuringTheCoast) {
+  const MotorFiles f = d5065();
+  CommissionSetup s = default_commission_setup(f);
+  const double tq = 1.5 * f.motor.pole_pairs * f.motor.flux_wb * 0.125 * f.board.i_sense_max_a;
+  double peak = 0, t_peak = 0;
+  bool loaded = false;
+  s.each_period = [&](hal_host::PmsmBoard& b, uint32_t step) {
+    if (step != MC_COMM_STEP_FLUX || loaded) return;
+    const double w = b.state()(2);
+    if (w > peak) {
+      peak = w;
+      t_peak = b.t_s();
+    } else if (b.t_s() - t_peak >= 0.15) {
+      b.set_load(load_constant(0.2 * tq));
+      loaded = true;
+    }
+  };
+  const CommissionRun r = run_commission(f, s);
+  const mc_comm_mech_chk_t& mc = r.mech_chk;
+  std::printf(
+      "COMMISSION_REFUSED {\"case\": \"coast load\", \"detail\": \"%s\", "
+      "\"fit_rms\": %.4f, \"fit_tol\": %.4f}\n",
+      commission_detail_name(r.detail).c_str(), mc.fit_rms, mc.fit_tol);
+  ASSERT_TRUE(loaded);
+  expect_refused(r, MC_COMM_ERR_RANGE, "a load during the coast");
+  EXPECT_EQ(r.detail, MC_COMM_DETAIL_MECH_FIT) << commission_detail_name(r.detail);
+  EXPECT_GT(mc.fit_rms, mc.fit_tol);
 }
 
 // ------------------------------------------- running on identified values

@@ -6,6 +6,8 @@
 // refusals by name with nothing staged.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include <cmath>
 #include <string>
 
@@ -63,7 +65,16 @@ TEST(CommissionHall, TableWithinTheModelsEdges) {
   for (const double err : {0.03, 0.08}) {
     const MotorFiles f = hub_hall(3.0, 0.05, err);
     const CommissionRun r = run_commission(f, default_commission_setup(f));
-    ASSERT_TRUE(r.done) << commission_error_names(r.err);
+    ASSERT_TRUE(r.done) << commission_error_names(r.err) << " " << commission_detail_name(r.detail)
+                        << " flux " << r.flux_chk.dev << "/" << r.flux_chk.tol << " J "
+                        << r.mech_chk.j_dev << "/" << r.mech_chk.j_tol << " fit "
+                        << r.mech_chk.fit_rms << "/" << r.mech_chk.fit_tol;
+    std::printf(
+        "COMMISSION_CHECKS {\"case\": \"hub hall %.2f\", \"flux_dev\": %.5f, "
+        "\"flux_tol\": %.5f, \"j_dev\": %.5f, \"j_tol\": %.5f, \"fit_rms\": %.5f, "
+        "\"fit_tol\": %.5f}\n",
+        err, r.flux_chk.dev, r.flux_chk.tol, r.mech_chk.j_dev, r.mech_chk.j_tol, r.mech_chk.fit_rms,
+        r.mech_chk.fit_tol);
     ASSERT_TRUE(r.res.have_hall);
     HallSensors model;
     ASSERT_EQ(model.configure(hall_params_of(f)), Status::kOk);

@@ -228,6 +228,7 @@ TEST_F(CommCan, FailedRunStagesNothingAndLeavesTheFault) {
         r.v[MC_CAN_COMMISSION_STATUS_STEP] == static_cast<float>(MC_COMM_STEP_FAILED)) {
       saw_failed = true;
       EXPECT_EQ(static_cast<float>(MC_COMM_ERR_NO_MOTOR), r.v[MC_CAN_COMMISSION_STATUS_ERROR]);
+      EXPECT_EQ(0.0f, r.v[MC_CAN_COMMISSION_STATUS_DETAIL]) << "a bit of its own: no detail";
       EXPECT_EQ(0.0f, r.v[MC_CAN_COMMISSION_STATUS_STAGED]);
     }
     EXPECT_NE(MC_CAN_MSG_COMMISSION_RESULT, r.msg) << "no results of a failed run";
@@ -235,6 +236,34 @@ TEST_F(CommCan, FailedRunStagesNothingAndLeavesTheFault) {
   EXPECT_TRUE(saw_failed);
   EXPECT_EQ(MC_CAN_ERR_REFUSED, Comm(MC_COMM_CAN_REPORT)) << "nothing to report";
   EXPECT_EQ(MC_CAN_ERR_REFUSED, Comm(MC_COMM_CAN_START)) << "the fault is latched";
+}
+
+// A refusal the status frame's 16-bit error field has no bit for (the flux
+// step's checks, MC_COMM_ERR_WIDE_MASK): set in the running sequence as its
+// coast end would, the drive faults on the next fast step, and the status
+// frame says RANGE with the reason in its detail field; nothing staged.
+TEST_F(CommCan, AWideRefusalTravelsAsRangeWithItsDetail) {
+  Boot();
+  ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START));
+  Run(kSlowDiv * 10u);
+  ASSERT_TRUE(m.running);
+  comm.err |= MC_COMM_ERR_MECH_SPIN_COAST;
+  Run(kSlowDiv * 10u);
+  EXPECT_EQ(MC_DRIVE_MODE_FAULT, d.mode);
+  EXPECT_FALSE(m.running);
+  EXPECT_EQ(MC_COMM_ERR_MECH_SPIN_COAST, m.err);
+  EXPECT_FALSE(m.staged);
+  bool saw_failed = false;
+  for (const auto& r : Drain()) {
+    if (r.msg == MC_CAN_MSG_COMMISSION_STATUS &&
+        r.v[MC_CAN_COMMISSION_STATUS_STEP] == static_cast<float>(MC_COMM_STEP_FAILED)) {
+      saw_failed = true;
+      EXPECT_EQ(static_cast<float>(MC_COMM_ERR_RANGE), r.v[MC_CAN_COMMISSION_STATUS_ERROR]);
+      EXPECT_EQ(static_cast<float>(MC_COMM_DETAIL_MECH_SPIN_COAST),
+                r.v[MC_CAN_COMMISSION_STATUS_DETAIL]);
+    }
+  }
+  EXPECT_TRUE(saw_failed);
 }
 
 TEST_F(CommCan, AbortOpensTheBridgeWithoutAFault) {

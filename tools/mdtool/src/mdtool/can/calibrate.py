@@ -84,6 +84,27 @@ def error_names(bits):
     return [n for i, n in enumerate(ERROR_BITS) if bits >> i & 1] or (["UNKNOWN"] if bits else [])
 
 
+#: COMMISSION_STATUS.detail (MC_COMM_DETAIL_*): the reasons the error field has
+#: no bit for; the field then carries RANGE
+DETAILS = ["NONE", "FLUX_SPEEDS", "MECH_FIT", "MECH_SPIN_COAST"]
+DETAIL_HELP = {
+    "FLUX_SPEEDS": "the coast's two speed bands gave fluxes further apart than the encoder's"
+                   " and the voltage's resolution allows: the speed or voltage reading is off",
+    "MECH_FIT": "the coast's speed is not the viscous model's line (a load that changes,"
+                " a speed that jumps): J and B would be off",
+    "MECH_SPIN_COAST": "J from the spin-up's two halves disagree: the friction is not viscous"
+                       " (Coulomb friction, a load); uncouple the load or enter J and B by hand",
+}
+
+
+def detail_name(v):
+    """The detail signal decoded (its DBC name, or the number) by name."""
+    if isinstance(v, str):
+        return v
+    i = int(v or 0)
+    return DETAILS[i] if 0 <= i < len(DETAILS) else "UNKNOWN"
+
+
 def f32_of(raw):
     return struct.unpack("<f", struct.pack("<I", int(raw) & 0xFFFFFFFF))[0]
 
@@ -116,6 +137,7 @@ class Collector:
     def summary(self):
         st = self.status or {}
         return {"step": st.get("step"), "error": error_names(int(st.get("error", 0))),
+                "detail": detail_name(st.get("detail", 0)),
                 "error_bits": int(st.get("error", 0)), "valid": int(st.get("valid", 0)),
                 "staged": bool(st.get("staged", 0)), "results": dict(self.results)}
 
@@ -173,7 +195,12 @@ def abort(drive):
 
 def check_failed(summary):
     if summary["step"] == "FAILED":
-        errs = summary["error"]
+        errs = list(summary["error"])
+        detail = summary.get("detail", "NONE")
+        help_ = dict(ERROR_HELP)
+        if detail != "NONE":  # the reason RANGE stands for
+            errs = [detail if e == "RANGE" else e for e in errs]
+            help_[detail] = DETAIL_HELP.get(detail, "")
         raise Refused("commissioning failed: " + ", ".join(
-            f"{e} ({ERROR_HELP.get(e, '')})" for e in errs) + "; nothing staged, bridge off",
+            f"{e} ({help_.get(e, '')})" for e in errs) + "; nothing staged, bridge off",
             status="|".join(errs))
