@@ -85,6 +85,7 @@
 #include <stdint.h>
 
 #include "foc/mc_foc.h"
+#include "fw/mc_fw.h"
 #include "mc_drive.h"
 #include "observer/mc_fluxobs.h"
 #include "observer/mc_spdpll.h"
@@ -119,11 +120,15 @@ typedef enum {
 } mc_ctrl_sls_phase_t;
 
 typedef struct {
-    /* motor (non-salient) */
+    /* motor */
     float r_ohm;         /**< stator resistance [ohm] */
-    float l_h;           /**< stator inductance [H] */
+    float l_h;           /**< stator inductance [H]: Lq of a salient machine */
     float flux_wb;       /**< PM flux linkage (peak) [Wb] */
     uint32_t pole_pairs; /**< >= 1 */
+    float ld_minus_lq_h; /**< Ld - Lq [H], finite, l_h + it > 0; 0: non-salient */
+    bool law_mtpa;       /**< salient machine: the law sets id by MTPA (false: iq_ref
+                                      is the current command, id 0, for a drive whose
+                                      own MTPA shapes it: fw_enable) */
     /* timing */
     float dt_s;                 /**< fast step = PWM period [s] */
     uint32_t pwm_delay_periods; /**< periods between writing duties and their taking
@@ -205,7 +210,11 @@ typedef struct {
 
 typedef struct {
     mc_ctrl_sls_cfg_t cfg;
-    float gamma; /**< observer gain from omega_crit [1/(Wb^2 s)] */
+    float gamma;        /**< observer gain from omega_crit [1/(Wb^2 s)] at psi_a_max_wb */
+    float psi_a_max_wb; /**< the largest active flux of the closed loop (the flux if
+                             non-salient) [Wb] */
+    mc_fw_f32_t mtpa;   /**< MTPA (fw/mc_fw.h, no weakening) */
+    float id_mtpa_a;    /**< MTPA's d current for the speed PI's command [A] */
     mc_fluxobs_f32_t obs;
     mc_spdpll_f32_t pll;
     mc_pi_f32_t speed_pi;
