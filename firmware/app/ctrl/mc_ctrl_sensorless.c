@@ -8,8 +8,10 @@
  *   paper's iv) with the measured currents in the feed-forward and the
  *   PLL speed as omega_hat; identical in the continuous limit;
  * - the paper's speed loop i_dq* = PI(omega* - omega_hat) is read as
- *   iq* = PI(...), id* = 0 (a non-salient machine below base speed; the
- *   paper's "field weakening provisions" are not reproduced);
+ *   iq* = PI(...), id* = 0 on a non-salient machine below base speed, and
+ *   as MTPA's (id*, iq*) for the magnitude PI(...) on a salient one (the
+ *   paper's "field weakening provisions" are not reproduced: the drive's
+ *   fw kernel with fw_enable);
  * - start-up (ALIGN, I-f) and the low-speed fallback are additions: the
  *   paper reports that below about 50 r/min the loop degrades or goes
  *   unstable, which Prop. 4 explains (no information at zero speed).
@@ -424,7 +426,10 @@ static bool align_fit(const mc_ctrl_sls_t *c, float *p_theta_rad)
  * (mc_fw_f32_mtpa_id) becomes id's target and iq = sign(i) sqrt(i^2 -
  * id^2). Else the output stays iq_ref_a and id's target 0 (a non-salient
  * machine bit for bit as before; with the drive's MTPA (fw_enable) the
- * drive shapes the command). */
+ * drive shapes the command). The PI's preset at the hand-over and its
+ * tracking of the regenerative limit take a q current as the command:
+ * MTPA then gives a q current lower by about id^2 / (2 iq) (under 1 % of
+ * it while |id| < iq / 8), which the integrator takes up. */
 static void sls_mtpa_refs(mc_ctrl_sls_t *c)
 {
     const float i_cmd = c->iq_ref_a;
@@ -440,21 +445,6 @@ static void sls_mtpa_refs(mc_ctrl_sls_t *c)
     c->iq_ref_a = sign_f32(i_cmd) * ((iq2 > 0.0f) ? mc_sqrt_f32(iq2) : 0.0f);
 }
 
-/* The speed PI's command whose MTPA q current is iq (the inverse of
- * sls_mtpa_refs, for the PI's preset and tracking): |i| = sqrt(iq^2 +
- * id_mtpa(|i|)^2) by one fixed-point step from |i| = |iq| (MTPA's id
- * grows slower than the current: the step's error is second order in
- * id / iq). iq itself without MTPA. */
-static float sls_cmd_from_iq(const mc_ctrl_sls_t *c, float iq)
-{
-    float id;
-    if (!c->cfg.law_mtpa || !c->mtpa.salient) {
-        return iq;
-    }
-    id = mc_fw_f32_mtpa_id(&c->mtpa, mc_abs_f32(iq));
-    return sign_f32(iq) * mc_sqrt_f32((iq * iq) + (id * id));
-}
-
 /* IF -> CLOSED, keeping the current vector and the torque. */
 static void handover_to_closed(mc_ctrl_sls_t *c, float omega_hat_e)
 {
@@ -468,7 +458,7 @@ static void handover_to_closed(mc_ctrl_sls_t *c, float omega_hat_e)
     mc_sincos_f32(d, &s, &co);
     c->id_ref_a = (co * id_if) - (s * iq_if);
     c->iq_ref_a = (s * id_if) + (co * iq_if);
-    (void)mc_pi_f32_reset(&c->speed_pi, sls_cmd_from_iq(c, c->iq_ref_a));
+    (void)mc_pi_f32_reset(&c->speed_pi, c->iq_ref_a);
     c->id_mtpa_a = 0.0f; /* until the speed loop's first step */
     c->reframe = true;   /* the drive keeps the voltage vector in the new frame */
     c->omega_ref_m_rad_s = omega_hat_e / (float)c->cfg.pole_pairs;
@@ -701,7 +691,7 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
         /* speed loop at dt * speed_div; the integrator tracks what the
          * drive's regenerative limit applied, saturates at the limit */
         if (m->regen_scale < 1.0f) {
-            (void)mc_pi_f32_track(&c->speed_pi, sls_cmd_from_iq(c, m->iq_applied_a));
+            (void)mc_pi_f32_track(&c->speed_pi, m->iq_applied_a);
         }
         c->speed_count++;
         if (c->speed_count >= cfg->speed_div) {

@@ -54,6 +54,16 @@ static uint32_t fluxobs_validate(const mc_fluxobs_f32_cfg_t *cfg)
     return err;
 }
 
+/* psi_a = flux + (Ld - Lq) i_d, floored (mc_fluxobs_f32_active_flux). */
+static float fluxobs_psi_a(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a)
+{
+    const float floor_wb = MC_FLUXOBS_PSI_A_MIN_FRAC * cfg->flux_wb;
+    const float psi_a = cfg->flux_wb + (cfg->ld_minus_lq_h * i_d_a);
+    /* a NaN current gives the floor (the step's finiteness test refuses
+     * that step anyway) */
+    return (psi_a >= floor_wb) ? psi_a : floor_wb;
+}
+
 uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *cfg)
 {
     uint32_t err;
@@ -72,8 +82,6 @@ uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *c
     st->inv_flux_per_wb = 1.0f / cfg->flux_wb;
     st->flux2 = cfg->flux_wb * cfg->flux_wb;
     st->psi_a_wb = cfg->flux_wb;
-    st->psi_a2 = st->flux2;
-    st->inv_psi_a_per_wb = st->inv_flux_per_wb;
     st->x_alpha_wb = cfg->flux_wb;
     st->x_beta_wb = 0.0f;
     st->i_alpha_prev_a = 0.0f;
@@ -100,12 +108,8 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
         return MC_FLUXOBS_ERR_NAN_INPUT;
     }
     mc_sincos_f32(theta_guess_rad, &s, &c);
-    psi_a = mc_fluxobs_f32_active_flux(&st->cfg, (c * i_alpha_a) + (s * i_beta_a));
-    if (st->cfg.ld_minus_lq_h != 0.0f) {
-        st->psi_a_wb = psi_a;
-        st->psi_a2 = psi_a * psi_a;
-        st->inv_psi_a_per_wb = 1.0f / psi_a;
-    }
+    psi_a = fluxobs_psi_a(&st->cfg, (c * i_alpha_a) + (s * i_beta_a));
+    st->psi_a_wb = psi_a;
     st->x_alpha_wb = (st->cfg.l_h * i_alpha_a) + (psi_a * c);
     st->x_beta_wb = (st->cfg.l_h * i_beta_a) + (psi_a * s);
     st->i_alpha_prev_a = i_alpha_a;
@@ -119,11 +123,7 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
 
 float mc_fluxobs_f32_active_flux(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a)
 {
-    const float floor_wb = MC_FLUXOBS_PSI_A_MIN_FRAC * cfg->flux_wb;
-    const float psi_a = cfg->flux_wb + (cfg->ld_minus_lq_h * i_d_a);
-    /* not (psi_a >= floor): a NaN current gives the floor, the step's
-     * finiteness test refuses the step anyway */
-    return (psi_a >= floor_wb) ? psi_a : floor_wb;
+    return fluxobs_psi_a(cfg, i_d_a);
 }
 
 uint32_t mc_fluxobs_f32_set_r_scale(mc_fluxobs_f32_t *st, float scale)
@@ -166,7 +166,7 @@ static FLUXOBS_NOINLINE float fluxobs_psi_a_prev_angle(const mc_fluxobs_f32_t *s
     float s;
     float c;
     mc_sincos_f32(st->theta_e_rad, &s, &c);
-    return mc_fluxobs_f32_active_flux(&st->cfg, (c * i_alpha_a) + (s * i_beta_a));
+    return fluxobs_psi_a(&st->cfg, (c * i_alpha_a) + (s * i_beta_a));
 }
 
 uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta_v, float i_alpha_a,
@@ -189,11 +189,11 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
         return MC_FLUXOBS_ERR_NULL;
     }
     cfg = &st->cfg;
-    /* non-salient: psi_a stays the flux, psi_a^2 and 1/psi_a the values
-     * init formed (the step bit for bit as before the active-flux form) */
-    psi_a = st->psi_a_wb;
-    psi2 = st->psi_a2;
-    inv_psi = st->inv_psi_a_per_wb;
+    /* non-salient: psi_a is the flux, psi_a^2 and 1/psi_a the values init
+     * formed (the step bit for bit as before the active-flux form) */
+    psi_a = cfg->flux_wb;
+    psi2 = st->flux2;
+    inv_psi = st->inv_flux_per_wb;
     if (cfg->ld_minus_lq_h != 0.0f) {
         psi_a = fluxobs_psi_a_prev_angle(st, i_alpha_a, i_beta_a);
         psi2 = psi_a * psi_a;
@@ -235,8 +235,6 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     st->i_alpha_prev_a = i_alpha_a;
     st->i_beta_prev_a = i_beta_a;
     st->psi_a_wb = psi_a;
-    st->psi_a2 = psi2;
-    st->inv_psi_a_per_wb = inv_psi;
 
     /* Divergence monitor on the constraint residual of the new estimate:
      * |e| = (1 + k) |e_before| (1 + k >= 1/2 > 0), to float rounding, far

@@ -148,15 +148,13 @@ typedef struct {
 /** State. Read-only for callers. */
 typedef struct {
     mc_fluxobs_f32_cfg_t cfg;
-    float half_gamma_dt;    /**< gamma dt / 2 (derived) */
-    float half_r_ohm;       /**< R / 2 in force: cfg.r_ohm r_scale / 2 */
-    float r_scale;          /**< R in force / cfg.r_ohm (set_r_scale; 1 after init) */
-    float inv_flux_per_wb;  /**< 1 / flux (derived) */
-    float flux2;            /**< flux^2 [Wb^2] (derived) */
-    float psi_a_wb;         /**< active flux of the last step [Wb] (the flux if non-salient) */
-    float psi_a2;           /**< its square [Wb^2] */
-    float inv_psi_a_per_wb; /**< its inverse [1/Wb] */
-    float x_alpha_wb;       /**< flux estimate xh [Wb] */
+    float half_gamma_dt;   /**< gamma dt / 2 (derived) */
+    float half_r_ohm;      /**< R / 2 in force: cfg.r_ohm r_scale / 2 */
+    float r_scale;         /**< R in force / cfg.r_ohm (set_r_scale; 1 after init) */
+    float inv_flux_per_wb; /**< 1 / flux (derived) */
+    float flux2;           /**< flux^2 [Wb^2] (derived) */
+    float psi_a_wb;        /**< active flux of the last step [Wb] (the flux if non-salient) */
+    float x_alpha_wb;      /**< flux estimate xh [Wb] */
     float x_beta_wb;
     float i_alpha_prev_a; /**< current at the start of the step [A] */
     float i_beta_prev_a;
