@@ -54,7 +54,7 @@ static uint32_t fluxobs_validate(const mc_fluxobs_f32_cfg_t *cfg)
     return err;
 }
 
-/* psi_a = flux + (Ld - Lq) i_d, floored (mc_fluxobs_f32_active_flux). */
+/* psi_a = flux + (Ld - Lq) i_d, floored (mc_fluxobs_f32_eval_active_flux). */
 static float fluxobs_psi_a(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a)
 {
     const float floor_wb = MC_FLUXOBS_PSI_A_MIN_FRAC * cfg->flux_wb;
@@ -121,7 +121,7 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
     return MC_FLUXOBS_ERR_NONE;
 }
 
-float mc_fluxobs_f32_active_flux(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a)
+float mc_fluxobs_f32_eval_active_flux(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a)
 {
     return fluxobs_psi_a(cfg, i_d_a);
 }

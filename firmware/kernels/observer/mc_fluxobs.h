@@ -176,7 +176,7 @@ uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *c
  * i_d_a, floored at MC_FLUXOBS_PSI_A_MIN_FRAC flux (the floor for a NaN
  * current too). The flux itself for a non-salient cfg and a finite i_d.
  */
-float mc_fluxobs_f32_active_flux(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a);
+float mc_fluxobs_f32_eval_active_flux(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a);
 
 /**
  * Restart from an angle guess: xh = L i + psi_a c(theta_guess) (psi_a at

@@ -71,7 +71,7 @@ uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *c
 
 /* The active flux psi_a = flux + (Ld - Lq) i_d (pu), i_d of i_ab at the
  * angle whose sine and cosine are given, floored as the f32 kernel's
- * (mc_fluxobs_f32_active_flux); the flux itself if non-salient. */
+ * (mc_fluxobs_f32_eval_active_flux); the flux itself if non-salient. */
 static q31_t fq_psi_a(const mc_fluxobs_q31_t *st, q31_t s, q31_t c, q31_t i_alpha, q31_t i_beta)
 {
     q31_t i_d;

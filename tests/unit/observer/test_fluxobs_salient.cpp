@@ -114,13 +114,13 @@ TEST(FluxObsSalient, ConfigRulesAndActiveFlux) {
   c = cfg_salient();
   ASSERT_EQ(mc_fluxobs_f32_init(&st, &c), 0u);
   // psi_a = flux + (Ld - Lq) i_d in float arithmetic, exactly
-  EXPECT_EQ(mc_fluxobs_f32_active_flux(&c, -5.0f), c.flux_wb + (c.ld_minus_lq_h * -5.0f));
+  EXPECT_EQ(mc_fluxobs_f32_eval_active_flux(&c, -5.0f), c.flux_wb + (c.ld_minus_lq_h * -5.0f));
   // floored at 0.1 flux: +95 A would give 0.02 - 0.019 = 0.001 Wb
-  EXPECT_EQ(mc_fluxobs_f32_active_flux(&c, 95.0f), MC_FLUXOBS_PSI_A_MIN_FRAC * c.flux_wb);
-  EXPECT_EQ(mc_fluxobs_f32_active_flux(&c, NAN), MC_FLUXOBS_PSI_A_MIN_FRAC * c.flux_wb);
+  EXPECT_EQ(mc_fluxobs_f32_eval_active_flux(&c, 95.0f), MC_FLUXOBS_PSI_A_MIN_FRAC * c.flux_wb);
+  EXPECT_EQ(mc_fluxobs_f32_eval_active_flux(&c, NAN), MC_FLUXOBS_PSI_A_MIN_FRAC * c.flux_wb);
   // non-salient: the flux itself
   c.ld_minus_lq_h = 0.0f;
-  EXPECT_EQ(mc_fluxobs_f32_active_flux(&c, 37.0f), c.flux_wb);
+  EXPECT_EQ(mc_fluxobs_f32_eval_active_flux(&c, 37.0f), c.flux_wb);
 }
 
 // Ld == Lq (ld_minus_lq_h = 0): the same state, bit for bit, as a kernel
