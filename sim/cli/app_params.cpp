@@ -320,8 +320,8 @@ std::string law_err_names(uint32_t bits) {
                             "PI2D_COUPLING: kt ke / (J L k2) > 300 rad/s, the back-EMF couples "
                             "the speed error into the q current"},
                            {MC_GAINS_ERR_SALIENT,
-                            "SALIENT: ld_h and lq_h differ by more than 5 %, the law assumes "
-                            "surface magnets"},
+                            "SALIENT: ld_h and lq_h differ by more than 5 %, the PI2D law "
+                            "assumes surface magnets"},
                            {MC_LAW_ERR_SLS_INIT, "SLS_INIT"},
                            {MC_LAW_ERR_PI2D_INIT, "PI2D_INIT"},
                            {MC_LAW_ERR_POS_INIT, "POS_INIT"},

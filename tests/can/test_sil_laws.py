@@ -17,10 +17,12 @@ true speed and the encoder's multi-turn angle from the CSV. J = 0.005 kg m^2
  3. the law chosen over CAN: PARAM_REQ WRITE speed_law 1, APPLY while
     disabled, then the SPEED run is sensorless (one hand-over); a WRITE of
     speed_law while enabled is refused RUNNING;
- 4. a law the motor values cannot run is refused at APPLY: speed_law 1 with
-    Ld 20 % above Lq (the observer assumes a round rotor) answers INVALID
-    with MC_PARAMS_ERR_LAW, and law_error reads MC_GAINS_ERR_SALIENT; the
-    drive keeps the law it had (SPEED still runs the sensored PI).
+ 4. a law the motor values cannot run is refused at APPLY: speed_law 2
+    (PI2D, whose model has one inductance) with Ld 20 % above Lq answers
+    INVALID with MC_PARAMS_ERR_LAW, and law_error reads
+    MC_GAINS_ERR_SALIENT; the drive keeps the law it had (SPEED still runs
+    the sensored PI). (The sensorless law runs a salient machine since
+    issue 31: tests/sil/motors, MotorSilIpm.)
 
     test_sil_laws.py --mcsim MCSIM --work DIR --repo ROOT
 """
@@ -158,7 +160,7 @@ def law_refused(sil):
     pid = sil.pid
     cmds = [sil.frame(0.02, "PARAM_REQ", opcode=1, param_id=pid["ld_h"],
                       value=f32_bits(1.2 * 1.14e-3)),
-            sil.frame(0.021, "PARAM_REQ", opcode=1, param_id=pid["speed_law"], value=1),
+            sil.frame(0.021, "PARAM_REQ", opcode=1, param_id=pid["speed_law"], value=2),
             sil.frame(0.03, "PARAM_REQ", opcode=2, param_id=0, value=0),
             sil.frame(0.04, "PARAM_REQ", opcode=0, param_id=pid["law_error"], value=0)]
     s, frames, rows = speed_run(sil, "lawbad", None, cmds)

@@ -240,6 +240,7 @@ static void laws_cfgs(const mc_app_t *a, const mc_params_t *p, laws_cfgs_t *c)
     }
     mc_law_speed_cfg(&m, &g, &c->spd);
     mc_law_sls_cfg(&m, &g, &c->sls);
+    c->sls.law_mtpa = p->fw_enable == 0u; /* else the drive's MTPA shapes the command */
     c->pi2d_err = mc_law_pi2d_cfg(&m, &g, &c->pi2d);
     mc_law_pos_cfg(&m, &g, &c->pos);
     c->pos.input_mode = (p->pos_input_mode != 0u) ? MC_TRAJ_MODE_FILTER : MC_TRAJ_MODE_TRAP;

@@ -142,7 +142,7 @@ uint32_t mc_gains_speed_pi(double j_kgm2, double kt_nm_a, double wc_rad_s, float
 /* Refusals of the law builders (bits). */
 #define MC_GAINS_ERR_PI2D_FILTER   (1u << 6) /**< PI2D: a < 3 wn (filter slower than the loop) */
 #define MC_GAINS_ERR_PI2D_COUPLING (1u << 7) /**< PI2D: kt ke / (J L k2) > 300 rad/s */
-#define MC_GAINS_ERR_SALIENT       (1u << 8) /**< sensorless, PI2D: Ld, Lq differ by > 5 % */
+#define MC_GAINS_ERR_SALIENT       (1u << 8) /**< PI2D: Ld, Lq differ by > 5 % (its model has one L) */
 
 /** Largest back-EMF coupling kt ke / (J L k2) PI2D accepts [rad/s] (empirical:
  *  see the file comment). */

@@ -32,6 +32,11 @@ void mc_law_sls_cfg(const mc_gains_motor_t *m, const mc_gains_t *g, mc_ctrl_sls_
     c->l_h = (float)m->lq_h;
     c->flux_wb = (float)m->flux_wb;
     c->pole_pairs = (uint32_t)m->pole_pairs;
+    /* a salient machine: the active-flux observer and MTPA's d current
+     * (mc_ctrl_sensorless.h); mc_app leaves MTPA to the drive when its own
+     * runs (fw_enable) */
+    c->ld_minus_lq_h = (float)(m->ld_h - m->lq_h);
+    c->law_mtpa = true;
     c->dt_s = (float)(1.0 / m->pwm_hz);
     c->pwm_delay_periods = (uint32_t)m->delay_periods;
     c->speed_div = (uint32_t)dmax(1.0, round_pos(m->pwm_hz / 1000.0)); /* about 1 kHz */
@@ -231,8 +236,9 @@ uint32_t mc_law_speed_check(const mc_params_t *p)
         mc_ctrl_pi2d_cfg_t c;
         return mc_law_pi2d_cfg(&m, &g, &c);
     }
-    /* sensorless: a non-salient machine (the observer's model) */
-    return (dabs(m.ld_h - m.lq_h) > 0.05 * dmax(m.ld_h, m.lq_h)) ? MC_GAINS_ERR_SALIENT : 0u;
+    /* sensorless: any machine (a salient one with the active-flux observer
+     * and MTPA, mc_ctrl_sensorless.h); its own checks are its init's */
+    return MC_GAINS_OK;
 }
 
 /* A fixed gain from a parameter: 0 means derived (NaN for mc_gains_derive). */

@@ -49,8 +49,8 @@ extern "C" {
 #define MC_LAW_ERR_SPD_INIT (1u << 21) /**< mc_ctrl_speed_init refused the sensored speed law */
 
 /** MC_GAINS_ERR_* bits that refuse the speed law `law` (the sensored PI:
- *  none; sensorless: the gains' refusals and saliency; PI2D: those and its
- *  own) of a parameter set: the pure part of the check, no instance. */
+ *  none; sensorless: the gains' refusals (a salient machine is run, see
+ *  mc_ctrl_sensorless.h); PI2D: those, saliency and its own) of a parameter set: the pure part of the check, no instance. */
 uint32_t mc_law_speed_check(const mc_params_t *p);
 
 /** The sensorless law's configuration (mc_gains.h documents

@@ -8,8 +8,10 @@
  *   paper's iv) with the measured currents in the feed-forward and the
  *   PLL speed as omega_hat; identical in the continuous limit;
  * - the paper's speed loop i_dq* = PI(omega* - omega_hat) is read as
- *   iq* = PI(...), id* = 0 (a non-salient machine below base speed; the
- *   paper's "field weakening provisions" are not reproduced);
+ *   iq* = PI(...), id* = 0 on a non-salient machine below base speed, and
+ *   as MTPA's (id*, iq*) for the magnitude PI(...) on a salient one (the
+ *   paper's "field weakening provisions" are not reproduced: the drive's
+ *   fw kernel with fw_enable);
  * - start-up (ALIGN, I-f) and the low-speed fallback are additions: the
  *   paper reports that below about 50 r/min the loop degrades or goes
  *   unstable, which Prop. 4 explains (no information at zero speed).
@@ -18,6 +20,7 @@
 
 #include <stddef.h>
 
+#include "fw/mc_fw.h"
 #include "math/mc_math.h"
 #include "transforms/mc_transforms.h"
 
@@ -48,7 +51,8 @@ static uint32_t sls_validate(const mc_ctrl_sls_cfg_t *cfg)
     uint32_t err = MC_CTRL_SLS_ERR_NONE;
 
     if (!(cfg->r_ohm >= 0.0f) || !mc_isfinite_f32(cfg->r_ohm) || !pos_finite(cfg->l_h) ||
-        !pos_finite(cfg->flux_wb) || (cfg->pole_pairs == 0u)) {
+        !pos_finite(cfg->flux_wb) || (cfg->pole_pairs == 0u) ||
+        !mc_isfinite_f32(cfg->ld_minus_lq_h) || !((cfg->l_h + cfg->ld_minus_lq_h) > 0.0f)) {
         err |= MC_CTRL_SLS_ERR_MOTOR;
     }
     if (!pos_finite(cfg->dt_s) || (cfg->speed_div == 0u) || (cfg->pwm_delay_periods > 3u) ||
@@ -81,6 +85,35 @@ static uint32_t sls_validate(const mc_ctrl_sls_cfg_t *cfg)
     return err;
 }
 
+/* The MTPA kernel (fw/mc_fw.h: its MTPA only, no weakening: ki_fw = 0)
+ * for the machine of c->cfg, the current circle the law's largest
+ * current: the I-f vector's 1.25 iq_max. */
+static uint32_t sls_mtpa_init(mc_ctrl_sls_t *c)
+{
+    const mc_ctrl_sls_cfg_t *cfg = &c->cfg;
+    const mc_fw_f32_cfg_t fc = {.ld_h = cfg->l_h + cfg->ld_minus_lq_h,
+                                .lq_h = cfg->l_h,
+                                .flux_wb = cfg->flux_wb,
+                                .i_max_a = 1.25f * cfg->iq_max_a,
+                                .v_margin = 1.0f,
+                                .ki_fw_a_per_vs = 0.0f,
+                                .k_demag = 1.0f,
+                                .dt_s = cfg->dt_s};
+    return mc_fw_f32_init(&c->mtpa, &fc);
+}
+
+/* The largest active flux of the closed loop (mc_fluxobs.h), where the
+ * observer's critical speed is highest: MTPA's d current at the largest
+ * current always raises psi_a (id_mtpa has the sign of Ld - Lq), so
+ * flux + (Ld - Lq) id_mtpa(1.25 iq_max); I-f's d current (>= 0 on its
+ * stable side) lowers it for Ld < Lq. The flux if non-salient (exactly:
+ * MTPA's d current is 0 there). */
+static float sls_psi_a_max(const mc_ctrl_sls_t *c)
+{
+    const float id = mc_fw_f32_mtpa_id(&c->mtpa, 1.25f * c->cfg.iq_max_a);
+    return c->cfg.flux_wb + (c->cfg.ld_minus_lq_h * id);
+}
+
 uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
 {
     uint32_t err;
@@ -98,8 +131,15 @@ uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
         return err; /* the kernels' configs below need these */
     }
     c->cfg = *cfg;
+    c->psi_a_max_wb = cfg->flux_wb;
+    if (sls_mtpa_init(c) != MC_FW_ERR_NONE) {
+        err |= MC_CTRL_SLS_ERR_SPEED; /* the current limit (iq_max_a) */
+        c->mtpa.salient = false;
+    } else {
+        c->psi_a_max_wb = sls_psi_a_max(c);
+    }
     c->obs_err = mc_fluxobs_f32_gamma_for_critical_speed(cfg->omega_crit_m_rad_s, cfg->pole_pairs,
-                                                         cfg->flux_wb, &c->gamma);
+                                                         c->psi_a_max_wb, &c->gamma);
     if (c->obs_err == MC_FLUXOBS_ERR_NONE) {
         oc.r_ohm = cfg->r_ohm;
         oc.l_h = cfg->l_h;
@@ -108,6 +148,7 @@ uint32_t mc_ctrl_sls_init(mc_ctrl_sls_t *c, const mc_ctrl_sls_cfg_t *cfg)
         oc.dt_s = cfg->dt_s;
         oc.resid_tol = cfg->resid_tol;
         oc.resid_time_s = cfg->resid_time_s;
+        oc.ld_minus_lq_h = cfg->ld_minus_lq_h;
         c->obs_err = mc_fluxobs_f32_init(&c->obs, &oc);
     }
     if (c->obs_err != MC_FLUXOBS_ERR_NONE) {
@@ -203,6 +244,7 @@ uint32_t mc_ctrl_sls_reset(void *ctx)
     c->t_lockwait_s = 0.0f;
     c->id_ref_a = 0.0f;
     c->iq_ref_a = 0.0f;
+    c->id_mtpa_a = 0.0f;
     c->dir = 1.0f;
     c->align_dir_set = false;
     c->al_x_a = 0.0f;
@@ -379,6 +421,30 @@ static bool align_fit(const mc_ctrl_sls_t *c, float *p_theta_rad)
     return true;
 }
 
+/* MTPA (law_mtpa on a salient machine): the speed PI's output, left in
+ * iq_ref_a, is the signed current command i; MTPA's d current for |i|
+ * (mc_fw_f32_mtpa_id) becomes id's target and iq = sign(i) sqrt(i^2 -
+ * id^2). Else the output stays iq_ref_a and id's target 0 (a non-salient
+ * machine bit for bit as before; with the drive's MTPA (fw_enable) the
+ * drive shapes the command). The PI's preset at the hand-over and its
+ * tracking of the regenerative limit take a q current as the command:
+ * MTPA then gives a q current lower by about id^2 / (2 iq) (under 1 % of
+ * it while |id| < iq / 8), which the integrator takes up. */
+static void sls_mtpa_refs(mc_ctrl_sls_t *c)
+{
+    const float i_cmd = c->iq_ref_a;
+    float id;
+    float iq2;
+    if (!c->cfg.law_mtpa || !c->mtpa.salient) {
+        c->id_mtpa_a = 0.0f;
+        return;
+    }
+    id = mc_fw_f32_mtpa_id(&c->mtpa, mc_abs_f32(i_cmd));
+    iq2 = (i_cmd * i_cmd) - (id * id);
+    c->id_mtpa_a = id;
+    c->iq_ref_a = sign_f32(i_cmd) * ((iq2 > 0.0f) ? mc_sqrt_f32(iq2) : 0.0f);
+}
+
 /* IF -> CLOSED, keeping the current vector and the torque. */
 static void handover_to_closed(mc_ctrl_sls_t *c, float omega_hat_e)
 {
@@ -393,7 +459,8 @@ static void handover_to_closed(mc_ctrl_sls_t *c, float omega_hat_e)
     c->id_ref_a = (co * id_if) - (s * iq_if);
     c->iq_ref_a = (s * id_if) + (co * iq_if);
     (void)mc_pi_f32_reset(&c->speed_pi, c->iq_ref_a);
-    c->reframe = true; /* the drive keeps the voltage vector in the new frame */
+    c->id_mtpa_a = 0.0f; /* until the speed loop's first step */
+    c->reframe = true;   /* the drive keeps the voltage vector in the new frame */
     c->omega_ref_m_rad_s = omega_hat_e / (float)c->cfg.pole_pairs;
     c->phase = MC_CTRL_SLS_CLOSED;
     c->t_phase_s = 0.0f;
@@ -631,10 +698,11 @@ uint32_t mc_ctrl_sls_fast(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *o
             c->speed_count = 0u;
             (void)mc_pi_f32_step_lim(&c->speed_pi, c->omega_ref_m_rad_s - omega_hat_m, 0.0f, -lim,
                                      lim, &c->iq_ref_a);
+            sls_mtpa_refs(c);
         }
-        /* id from the hand-over decays to 0 over blend_time */
+        /* id from the hand-over goes to MTPA's (0 if non-salient) over blend_time */
         c->id_ref_a =
-            slew_f32(c->id_ref_a, 0.0f, cfg->if_current_a * cfg->dt_s / cfg->blend_time_s);
+            slew_f32(c->id_ref_a, c->id_mtpa_a, cfg->if_current_a * cfg->dt_s / cfg->blend_time_s);
         theta_ctrl = theta_hat;
         omega_ctrl = omega_hat_e;
     } else {

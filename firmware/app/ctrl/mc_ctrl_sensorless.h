@@ -1,7 +1,8 @@
 /**
  * @file mc_ctrl_sensorless.h
- * @brief Sensorless field-oriented speed control of a surface-mounted PMSM
- *        (paper 002, Section V), as a control law plugged into the drive
+ * @brief Sensorless field-oriented speed control of a PMSM (paper 002,
+ *        Section V; a salient machine with the observer's active-flux form
+ *        and MTPA), as a control law plugged into the drive
  *        (mc_drive_attach_ctrl, MC_DRIVE_MODE_CTRL).
  *
  * Each fast step (PWM rate), from the phase currents only:
@@ -18,7 +19,9 @@
  *      At low speed the back-EMF is a few volts and an uncompensated
  *      2 us dead time at 8 kHz and 200 V is 3.2 V per leg: the observer
  *      integrates it as flux.
- *   2. Every speed_div steps: speed PI on the PLL speed -> iq_ref, limited
+ *   2. Every speed_div steps: speed PI on the PLL speed -> the current
+ *      command (iq_ref; on a salient machine with law_mtpa, MTPA's
+ *      (id, iq) for its magnitude: see "Salient machine" below), limited
  *      to +-iq_max_a (torque limit; the drive's current limit in force /
  *      1.25 when lower), clamping anti-windup; the integrator tracks what
  *      the drive's regenerative limit applied. The reference is the drive's
@@ -51,8 +54,8 @@
  *          unchanged: id_ref = -I sin(d), iq_ref = I cos(d) with
  *          d = theta_if - theta_hat, the speed PI's integrator preset to that
  *          iq_ref (the torque, 3/2 p flux iq, does not jump), id_ref then
- *          ramped to 0 over blend_time_s (no torque effect on a non-salient
- *          machine), the current PIs' integrators preset so the voltage
+ *          ramped to 0 (MTPA's, salient) over blend_time_s (no torque effect
+ *          on a non-salient machine), the current PIs' integrators preset so the voltage
  *          vector is continuous.
  *   Back to IF when the reference and the speed estimate fall below
  *          handover_speed (1 - handover_hyst) (if lowspeed_fallback): the
@@ -65,8 +68,34 @@
  *          current vector instead would put the rotor on the I-f stability
  *          limit (and, while braking, past it: pole slip).
  *
+ * Salient machine (ld_minus_lq_h != 0; mc_law_sls_cfg sets it from the
+ * parameters' Ld and Lq, l_h = Lq):
+ *   - the observer runs its active-flux form (mc_fluxobs.h: psi_a = flux +
+ *     (Ld - Lq) i_d, i_d at the previous estimate);
+ *   - CLOSED: the speed PI's output is the current command i; with
+ *     law_mtpa the d reference goes (at the blend's slew) to MTPA's for
+ *     |i| (mc_fw_f32_mtpa_id, the drive's MTPA kernel, here without its
+ *     field weakening) and iq = sign(i) sqrt(i^2 - id^2). law_mtpa false
+ *     (mc_app: the drive's own MTPA, fw_enable, shapes the command): id 0
+ *     from the law, the drive's kernel sets it;
+ *   - gamma is chosen at the LARGEST active flux of the closed loop,
+ *     psi_a_max = flux + (Ld - Lq) id_mtpa(1.25 iq_max) (MTPA's d current
+ *     has the sign of Ld - Lq, so it raises psi_a): the observer's
+ *     critical speed gamma psi_a^2 / (4 n_P) is then at most the configured
+ *     omega_crit at every operating point, and the hand-over margin below
+ *     holds. Where psi_a is smaller (the I-f start: its d current is >= 0
+ *     on the stable side, which lowers psi_a for Ld < Lq) the observer is
+ *     slower by (psi_a_max / psi_a)^2;
+ *   - the I-f start, the hand-over and the fallback are unchanged; their
+ *     d current steps (hand-over: id -> MTPA's over blend_time; fallback:
+ *     0 -> I cos(delta)) now move the torque by 3/2 n_P (Ld - Lq) id iq,
+ *     which the speed loop (closed) or the I-f spring (fallback) takes up;
+ *   - the q31 twin refuses a salient machine (MOTOR): it has no MTPA
+ *     (mc_fw is f32).
+ *
  * Tuning the observer: gamma from the critical speed (mc_fluxobs.h):
- *   gamma = 4 n_P omega_crit / flux^2, time scale 1 / (2 n_P omega_crit).
+ *   gamma = 4 n_P omega_crit / psi_a_max^2 (the flux if non-salient),
+ *   time scale 1 / (2 n_P omega_crit) at psi_a_max.
  * init requires handover_speed (1 - handover_hyst) > 2 omega_crit (the
  * closed loop never runs within a factor two of the critical speed unless
  * lowspeed_fallback is off, which the low-speed sweep uses on purpose).
@@ -85,6 +114,7 @@
 #include <stdint.h>
 
 #include "foc/mc_foc.h"
+#include "fw/mc_fw.h"
 #include "mc_drive.h"
 #include "observer/mc_fluxobs.h"
 #include "observer/mc_spdpll.h"
@@ -119,11 +149,15 @@ typedef enum {
 } mc_ctrl_sls_phase_t;
 
 typedef struct {
-    /* motor (non-salient) */
+    /* motor */
     float r_ohm;         /**< stator resistance [ohm] */
-    float l_h;           /**< stator inductance [H] */
+    float l_h;           /**< stator inductance [H]: Lq of a salient machine */
     float flux_wb;       /**< PM flux linkage (peak) [Wb] */
     uint32_t pole_pairs; /**< >= 1 */
+    float ld_minus_lq_h; /**< Ld - Lq [H], finite, l_h + it > 0; 0: non-salient */
+    bool law_mtpa;       /**< salient machine: the law sets id by MTPA (false: iq_ref
+                                      is the current command, id 0, for a drive whose
+                                      own MTPA shapes it: fw_enable) */
     /* timing */
     float dt_s;                 /**< fast step = PWM period [s] */
     uint32_t pwm_delay_periods; /**< periods between writing duties and their taking
@@ -205,7 +239,11 @@ typedef struct {
 
 typedef struct {
     mc_ctrl_sls_cfg_t cfg;
-    float gamma; /**< observer gain from omega_crit [1/(Wb^2 s)] */
+    float gamma;        /**< observer gain from omega_crit [1/(Wb^2 s)] at psi_a_max_wb */
+    float psi_a_max_wb; /**< the largest active flux of the closed loop (the flux if
+                             non-salient) [Wb] */
+    mc_fw_f32_t mtpa;   /**< MTPA (fw/mc_fw.h, no weakening) */
+    float id_mtpa_a;    /**< MTPA's d current for the speed PI's command [A] */
     mc_fluxobs_f32_t obs;
     mc_spdpll_f32_t pll;
     mc_pi_f32_t speed_pi;

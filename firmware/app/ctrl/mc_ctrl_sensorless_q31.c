@@ -108,6 +108,11 @@ uint32_t mc_ctrl_sls_q31_init(mc_ctrl_sls_q31_t *c, const mc_ctrl_sls_q31_cfg_t 
         /* the any-angle start (circle fit of the flux path) is f32 only */
         err |= MC_CTRL_SLS_ERR_STARTUP;
     }
+    if (f->ld_minus_lq_h != 0.0f) {
+        /* a salient machine needs MTPA's d current, which has no q31
+         * version (fw/mc_fw.h is f32): the f32 plug-in runs it */
+        err |= MC_CTRL_SLS_ERR_MOTOR;
+    }
     if (!slsq_pos(cfg->i_base_a) || !slsq_pos(cfg->v_base_v) ||
         !slsq_pos(cfg->omega_base_e_rad_s) || !slsq_pos(cfg->flux_base_wb)) {
         return err | MC_CTRL_SLS_ERR_SCALE;

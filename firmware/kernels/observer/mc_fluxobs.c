@@ -30,7 +30,8 @@ static uint32_t fluxobs_validate(const mc_fluxobs_f32_cfg_t *cfg)
     const bool flux_ok = pos_finite(cfg->flux_wb);
 
     if (!(cfg->r_ohm >= 0.0f) || !mc_isfinite_f32(cfg->r_ohm) || !pos_finite(cfg->l_h) ||
-        !flux_ok) {
+        !flux_ok || !mc_isfinite_f32(cfg->ld_minus_lq_h) ||
+        !((cfg->l_h + cfg->ld_minus_lq_h) > 0.0f)) {
         err |= MC_FLUXOBS_ERR_MOTOR;
     }
     if (!dt_ok) {
@@ -53,6 +54,16 @@ static uint32_t fluxobs_validate(const mc_fluxobs_f32_cfg_t *cfg)
     return err;
 }
 
+/* psi_a = flux + (Ld - Lq) i_d, floored (mc_fluxobs_f32_eval_active_flux). */
+static float fluxobs_psi_a(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a)
+{
+    const float floor_wb = MC_FLUXOBS_PSI_A_MIN_FRAC * cfg->flux_wb;
+    const float psi_a = cfg->flux_wb + (cfg->ld_minus_lq_h * i_d_a);
+    /* a NaN current gives the floor (the step's finiteness test refuses
+     * that step anyway) */
+    return (psi_a >= floor_wb) ? psi_a : floor_wb;
+}
+
 uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *cfg)
 {
     uint32_t err;
@@ -70,6 +81,7 @@ uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *c
     st->r_scale = 1.0f;
     st->inv_flux_per_wb = 1.0f / cfg->flux_wb;
     st->flux2 = cfg->flux_wb * cfg->flux_wb;
+    st->psi_a_wb = cfg->flux_wb;
     st->x_alpha_wb = cfg->flux_wb;
     st->x_beta_wb = 0.0f;
     st->i_alpha_prev_a = 0.0f;
@@ -86,6 +98,7 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
 {
     float s;
     float c;
+    float psi_a;
 
     if (st == NULL) {
         return MC_FLUXOBS_ERR_NULL;
@@ -95,8 +108,10 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
         return MC_FLUXOBS_ERR_NAN_INPUT;
     }
     mc_sincos_f32(theta_guess_rad, &s, &c);
-    st->x_alpha_wb = (st->cfg.l_h * i_alpha_a) + (st->cfg.flux_wb * c);
-    st->x_beta_wb = (st->cfg.l_h * i_beta_a) + (st->cfg.flux_wb * s);
+    psi_a = fluxobs_psi_a(&st->cfg, (c * i_alpha_a) + (s * i_beta_a));
+    st->psi_a_wb = psi_a;
+    st->x_alpha_wb = (st->cfg.l_h * i_alpha_a) + (psi_a * c);
+    st->x_beta_wb = (st->cfg.l_h * i_beta_a) + (psi_a * s);
     st->i_alpha_prev_a = i_alpha_a;
     st->i_beta_prev_a = i_beta_a;
     st->theta_e_rad = mc_wrap_pi_f32(theta_guess_rad);
@@ -104,6 +119,11 @@ uint32_t mc_fluxobs_f32_reset(mc_fluxobs_f32_t *st, float theta_guess_rad, float
     st->resid_bad_s = 0.0f;
     st->flags = MC_FLUXOBS_ERR_NONE;
     return MC_FLUXOBS_ERR_NONE;
+}
+
+float mc_fluxobs_f32_eval_active_flux(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a)
+{
+    return fluxobs_psi_a(cfg, i_d_a);
 }
 
 uint32_t mc_fluxobs_f32_set_r_scale(mc_fluxobs_f32_t *st, float scale)
@@ -136,6 +156,19 @@ static FLUXOBS_NOINLINE uint32_t fluxobs_finish_special(mc_fluxobs_f32_t *st, fl
     return raised;
 }
 
+/* Salient machine: the active flux psi_a = flux + (Ld - Lq) i_d with i_d
+ * the new current at the PREVIOUS estimate (the angle the step starts
+ * from: the new one is what the step computes). Out of line: the
+ * non-salient step keeps its cost. */
+static FLUXOBS_NOINLINE float fluxobs_psi_a_prev_angle(const mc_fluxobs_f32_t *st, float i_alpha_a,
+                                                       float i_beta_a)
+{
+    float s;
+    float c;
+    mc_sincos_f32(st->theta_e_rad, &s, &c);
+    return fluxobs_psi_a(&st->cfg, (c * i_alpha_a) + (s * i_beta_a));
+}
+
 uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta_v, float i_alpha_a,
                              float i_beta_a)
 {
@@ -147,12 +180,25 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     float e2;
     float k;
     float resid;
+    float psi_a;
+    float psi2;
+    float inv_psi;
     uint32_t raised = MC_FLUXOBS_ERR_NONE;
 
     if (st == NULL) {
         return MC_FLUXOBS_ERR_NULL;
     }
     cfg = &st->cfg;
+    /* non-salient: psi_a is the flux, psi_a^2 and 1/psi_a the values init
+     * formed (the step bit for bit as before the active-flux form) */
+    psi_a = cfg->flux_wb;
+    psi2 = st->flux2;
+    inv_psi = st->inv_flux_per_wb;
+    if (cfg->ld_minus_lq_h != 0.0f) {
+        psi_a = fluxobs_psi_a_prev_angle(st, i_alpha_a, i_beta_a);
+        psi2 = psi_a * psi_a;
+        inv_psi = 1.0f / psi_a;
+    }
 
     /* Open-loop flux integration, exact for a constant voltage over the
      * period and a current linear in time (trapezoid on R i). */
@@ -165,7 +211,7 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     ea = xa - (cfg->l_h * i_alpha_a);
     eb = xb - (cfg->l_h * i_beta_a);
     e2 = (ea * ea) + (eb * eb);
-    k = st->half_gamma_dt * (st->flux2 - e2);
+    k = st->half_gamma_dt * (psi2 - e2);
     if (k < -0.5f) {
         k = -0.5f; /* see the clamp in the header */
     }
@@ -188,11 +234,12 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
     st->x_beta_wb = xb;
     st->i_alpha_prev_a = i_alpha_a;
     st->i_beta_prev_a = i_beta_a;
+    st->psi_a_wb = psi_a;
 
     /* Divergence monitor on the constraint residual of the new estimate:
      * |e| = (1 + k) |e_before| (1 + k >= 1/2 > 0), to float rounding, far
-     * inside any useful resid_tol. */
-    resid = (((1.0f + k) * mc_sqrt_nonneg_f32(e2)) * st->inv_flux_per_wb) - 1.0f;
+     * inside any useful resid_tol; against psi_a (the flux, non-salient). */
+    resid = (((1.0f + k) * mc_sqrt_nonneg_f32(e2)) * inv_psi) - 1.0f;
     st->resid = resid;
     if (mc_fabs_f32(resid) > cfg->resid_tol) {
         st->resid_bad_s += cfg->dt_s;

@@ -1,8 +1,8 @@
 /**
  * @file mc_fluxobs.h
- * @brief Flux gradient observer of the rotor position of a surface-mounted
- *        PMSM (Ortega, Praly, Astolfi, Lee, Nam, IEEE TCST 2010, eqs. (4)-(9)),
- *        float32.
+ * @brief Flux gradient observer of the rotor position of a PMSM (Ortega,
+ *        Praly, Astolfi, Lee, Nam, IEEE TCST 2010, eqs. (4)-(9)), float32;
+ *        salient (interior-magnet) machines in the active-flux form.
  *
  * Model (amplitude-invariant alpha-beta frame, theta_e electrical angle):
  *     x      = L i_ab + flux c(theta_e),  c = [cos, sin]^T          (4)
@@ -11,6 +11,41 @@
  * Observer (a gradient search on the constraint):
  *     dxh/dt = y12 + (gamma/2) e (flux^2 - |e|^2),  e := xh - L i_ab   (9)
  *     theta_e_hat = atan2(e_beta, e_alpha)
+ *
+ * Salient machine (Ld != Lq), the active-flux form. The stator flux in
+ * alpha-beta is Ld i_d d + Lq i_q q + flux d (d = c(theta), q its quarter
+ * turn ahead) = Lq i_ab + psi_a c(theta) with the ACTIVE FLUX
+ *     psi_a = flux + (Ld - Lq) i_d:
+ * the model (4) with L := Lq (cfg.l_h) and the constant flux replaced by
+ * psi_a (cfg.ld_minus_lq_h = Ld - Lq). dx/dt = v - R i is unchanged, so
+ *     e := xh - Lq i_ab,   constraint |e|^2 = psi_a^2,
+ *     dxh/dt = y12 + (gamma/2) e (psi_a^2 - |e|^2),  theta_hat = atan2(e).
+ * i_d is not measurable without the angle: the step takes the new current
+ * at the PREVIOUS estimate, i_d = c(theta_hat_prev) . i_ab (one step
+ * behind: an error of about omega_e dt |i_q| in i_d; an angle error
+ * dtheta moves i_d by about dtheta |i_q| and psi_a by (Ld - Lq) dtheta
+ * |i_q|: an error of the circle's radius, which, like a flux error in the
+ * surface-magnet observer, leaves an angle error that grows with the
+ * speed; tests/unit/observer/test_fluxobs.cpp measures it). psi_a is floored at MC_FLUXOBS_PSI_A_MIN_FRAC flux (a wrong
+ * estimate with a large i_d must not shrink the circle to a point).
+ * cfg.ld_minus_lq_h = 0 is the surface-magnet observer, bit for bit (the
+ * step uses the constants formed at init).
+ * What of paper 002's proof carries over: the constraint is still a circle
+ * of radius psi_a about the origin of the e plane, and for a CONSTANT
+ * psi_a the error system (10)-(17) is the paper's with flux -> psi_a
+ * (the derivation uses only |e| = radius and dx/dt = y12): Prop. 3 and 4
+ * hold with psi_a. psi_a moves with i_d; the argument is kept for i_d
+ * varying slowly against the observer's time scale 2 / (gamma psi_a^2)
+ * (a quasi-static radius: at a steady operating point i_d is constant);
+ * a fast i_d step moves the circle's radius by (Ld - Lq) di_d, which the
+ * gradient pulls the estimate back to at that time scale. Not proved
+ * here: convergence under a fast-varying psi_a.
+ * The critical speed and the time scale below use psi_a for flux: the
+ * critical speed gamma psi_a^2 / (4 n_P) is largest at the LARGEST psi_a
+ * of the operating range and the time scale longest at the smallest. The
+ * sensorless law chooses gamma at the largest psi_a its current range
+ * gives (mc_ctrl_sensorless.h), so no operating point has a critical
+ * speed above the configured one.
  *
  * Units of gamma: x is a flux [Wb = V s], so (gamma/2) e (flux^2 - |e|^2)
  * must be [V] = [Wb/s]: gamma is in 1 / (Wb^2 s).
@@ -93,15 +128,21 @@ extern "C" {
 /** Largest gamma flux^2 dt accepted (Euler step of the gradient term). */
 #define MC_FLUXOBS_MAX_GAIN_DT 0.2f
 
+/** Floor of the active flux psi_a, as a fraction of the PM flux (salient
+ *  machine): a wrong angle estimate with a large current must not shrink
+ *  the constraint circle to a point (the gradient vanishes there). */
+#define MC_FLUXOBS_PSI_A_MIN_FRAC 0.1f
+
 /** Configuration. */
 typedef struct {
-    float r_ohm;        /**< stator resistance [ohm], >= 0 */
-    float l_h;          /**< stator inductance [H], > 0 (non-salient machine) */
-    float flux_wb;      /**< PM flux linkage (peak, per phase) [Wb], > 0 */
-    float gamma;        /**< observer gain [1/(Wb^2 s)], > 0 */
-    float dt_s;         /**< step period [s], > 0 */
-    float resid_tol;    /**< divergence monitor: tolerated | |e|/flux - 1 |, > 0 (e.g. 0.3) */
-    float resid_time_s; /**< ... for this long before the flag, >= 0 (e.g. 0.05) */
+    float r_ohm;         /**< stator resistance [ohm], >= 0 */
+    float l_h;           /**< stator inductance [H], > 0: Lq of a salient machine */
+    float flux_wb;       /**< PM flux linkage (peak, per phase) [Wb], > 0 */
+    float gamma;         /**< observer gain [1/(Wb^2 s)], > 0 */
+    float dt_s;          /**< step period [s], > 0 */
+    float resid_tol;     /**< divergence monitor: tolerated | |e|/flux - 1 |, > 0 (e.g. 0.3) */
+    float resid_time_s;  /**< ... for this long before the flag, >= 0 (e.g. 0.05) */
+    float ld_minus_lq_h; /**< Ld - Lq [H], finite, l_h + it > 0; 0: a non-salient machine */
 } mc_fluxobs_f32_cfg_t;
 
 /** State. Read-only for callers. */
@@ -112,6 +153,7 @@ typedef struct {
     float r_scale;         /**< R in force / cfg.r_ohm (set_r_scale; 1 after init) */
     float inv_flux_per_wb; /**< 1 / flux (derived) */
     float flux2;           /**< flux^2 [Wb^2] (derived) */
+    float psi_a_wb;        /**< active flux of the last step [Wb] (the flux if non-salient) */
     float x_alpha_wb;      /**< flux estimate xh [Wb] */
     float x_beta_wb;
     float i_alpha_prev_a; /**< current at the start of the step [A] */
@@ -130,7 +172,15 @@ typedef struct {
 uint32_t mc_fluxobs_f32_init(mc_fluxobs_f32_t *st, const mc_fluxobs_f32_cfg_t *cfg);
 
 /**
- * Restart from an angle guess: xh = L i + flux c(theta_guess), previous
+ * Active flux psi_a = flux + (Ld - Lq) i_d [Wb] of cfg at the d current
+ * i_d_a, floored at MC_FLUXOBS_PSI_A_MIN_FRAC flux (the floor for a NaN
+ * current too). The flux itself for a non-salient cfg and a finite i_d.
+ */
+float mc_fluxobs_f32_eval_active_flux(const mc_fluxobs_f32_cfg_t *cfg, float i_d_a);
+
+/**
+ * Restart from an angle guess: xh = L i + psi_a c(theta_guess) (psi_a at
+ * the i_d of i at theta_guess; the flux if non-salient), previous
  * current = i, sticky flags and monitor cleared. Non-finite argument:
  * MC_FLUXOBS_ERR_NAN_INPUT returned, nothing changed.
  */
@@ -162,7 +212,8 @@ uint32_t mc_fluxobs_f32_step(mc_fluxobs_f32_t *st, float v_alpha_v, float v_beta
 uint32_t mc_fluxobs_f32_gamma_for_critical_speed(float omega_crit_m_rad_s, uint32_t pole_pairs,
                                                  float flux_wb, float *p_gamma);
 
-/** Critical mechanical speed gamma flux^2 / (4 n_P) [rad/s]; MC_FLUXOBS_ERR_ARG as above. */
+/** Critical mechanical speed gamma flux^2 / (4 n_P) [rad/s]; MC_FLUXOBS_ERR_ARG as above.
+ *  Salient machine: pass psi_a for flux (see the header). */
 uint32_t mc_fluxobs_f32_critical_speed(float gamma, uint32_t pole_pairs, float flux_wb,
                                        float *p_omega_crit_m_rad_s);
 

@@ -42,6 +42,7 @@ uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *c
     if (!mc_q46_gain_from_f32((f->dt_s * cfg->v_base_v) / fb, &t.g_v) ||
         !mc_q46_gain_from_f32(t.g_r_cfg, &t.g_r) ||
         !mc_q46_gain_from_f32((f->l_h * cfg->i_base_a) / fb, &t.g_l) ||
+        !mc_q46_gain_from_f32((f->ld_minus_lq_h * cfg->i_base_a) / fb, &t.g_dl) ||
         !mc_q46_gain_from_f32(ref.half_gamma_dt * fb * fb, &t.g_k)) {
         return MC_FLUXOBS_ERR_SCALE;
     }
@@ -50,6 +51,9 @@ uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *c
         return MC_FLUXOBS_ERR_SCALE; /* flux below one LSB of the base */
     }
     t.flux2_q62 = (uint64_t)((int64_t)t.flux_pu * (int64_t)t.flux_pu);
+    t.psi_a_floor = mc_q31_from_f32(MC_FLUXOBS_PSI_A_MIN_FRAC * (f->flux_wb / fb));
+    t.salient = f->ld_minus_lq_h != 0.0f; /* as the f32 step's test */
+    t.psi_a_pu = t.flux_pu;
     t.resid_tol = mc_q31_from_f32(f->resid_tol);
     steps = (f->resid_time_s / f->dt_s) + 0.5f;
     t.resid_steps = (steps >= 4.0e9f) ? 4000000000u : (uint32_t)steps;
@@ -65,19 +69,40 @@ uint32_t mc_fluxobs_q31_init(mc_fluxobs_q31_t *st, const mc_fluxobs_q31_cfg_t *c
     return MC_FLUXOBS_ERR_NONE;
 }
 
+/* The active flux psi_a = flux + (Ld - Lq) i_d (pu), i_d of i_ab at the
+ * angle whose sine and cosine are given, floored as the f32 kernel's
+ * (mc_fluxobs_f32_eval_active_flux); the flux itself if non-salient. */
+static q31_t fq_psi_a(const mc_fluxobs_q31_t *st, q31_t s, q31_t c, q31_t i_alpha, q31_t i_beta)
+{
+    q31_t i_d;
+    int64_t psi;
+    if (!st->salient) {
+        return st->flux_pu;
+    }
+    i_d = mc_q31_add_sat(mc_q31_mul(c, i_alpha), mc_q31_mul(s, i_beta));
+    psi = mc_q46_add(mc_q46_from_q31(st->flux_pu), mc_q46_mul_q31(st->g_dl, i_d));
+    {
+        const q31_t p = mc_q46_to_q31(psi);
+        return (p >= st->psi_a_floor) ? p : st->psi_a_floor;
+    }
+}
+
 uint32_t mc_fluxobs_q31_reset(mc_fluxobs_q31_t *st, q31_t theta_guess, q31_t i_alpha, q31_t i_beta)
 {
     q31_t s;
     q31_t c;
+    q31_t psi;
 
     if (st == NULL) {
         return MC_FLUXOBS_ERR_NULL;
     }
     mc_sincos_q31(theta_guess, &s, &c);
+    psi = fq_psi_a(st, s, c, i_alpha, i_beta);
+    st->psi_a_pu = psi;
     st->x_alpha_q46 =
-        mc_q46_add(mc_q46_mul_q31(st->g_l, i_alpha), mc_q46_from_q31(mc_q31_mul(st->flux_pu, c)));
+        mc_q46_add(mc_q46_mul_q31(st->g_l, i_alpha), mc_q46_from_q31(mc_q31_mul(psi, c)));
     st->x_beta_q46 =
-        mc_q46_add(mc_q46_mul_q31(st->g_l, i_beta), mc_q46_from_q31(mc_q31_mul(st->flux_pu, s)));
+        mc_q46_add(mc_q46_mul_q31(st->g_l, i_beta), mc_q46_from_q31(mc_q31_mul(psi, s)));
     st->i_alpha_prev = i_alpha;
     st->i_beta_prev = i_beta;
     st->theta = theta_guess;
@@ -129,10 +154,25 @@ uint32_t mc_fluxobs_q31_step(mc_fluxobs_q31_t *st, q31_t v_alpha, q31_t v_beta, 
     q31_t k31;
     uint64_t e2;
     uint64_t mag;
+    uint64_t psi2_q62 = 0u;
+    q31_t psi = 0;
 
     if (st == NULL) {
         return MC_FLUXOBS_ERR_NULL;
     }
+    /* the active flux at the previous estimate (mc_fluxobs.h); the
+     * non-salient step uses the constants, as before the active-flux form */
+    if (st->salient) {
+        q31_t sn;
+        q31_t cs;
+        mc_sincos_q31(st->theta, &sn, &cs);
+        psi = fq_psi_a(st, sn, cs, i_alpha, i_beta);
+        psi2_q62 = (uint64_t)((int64_t)psi * (int64_t)psi);
+    } else {
+        psi = st->flux_pu;
+        psi2_q62 = st->flux2_q62;
+    }
+    st->psi_a_pu = psi;
     xa = fq_integrate(st, st->x_alpha_q46, v_alpha, st->i_alpha_prev, i_alpha);
     xb = fq_integrate(st, st->x_beta_q46, v_beta, st->i_beta_prev, i_beta);
 
@@ -144,11 +184,11 @@ uint32_t mc_fluxobs_q31_step(mc_fluxobs_q31_t *st, q31_t v_alpha, q31_t v_beta, 
     eb31 = mc_q46_to_q31(eb);
     /* |e|^2 in Q62, exact: each square <= 2^62, the sum <= 2^63 */
     e2 = (uint64_t)((int64_t)ea31 * (int64_t)ea31) + (uint64_t)((int64_t)eb31 * (int64_t)eb31);
-    /* flux^2 - |e|^2 in Q46: both < 2^63.1, the difference after >> 16 fits */
-    if (st->flux2_q62 >= e2) {
-        d46 = (int64_t)((st->flux2_q62 - e2) >> 16);
+    /* psi_a^2 - |e|^2 in Q46: both < 2^63.1, the difference after >> 16 fits */
+    if (psi2_q62 >= e2) {
+        d46 = (int64_t)((psi2_q62 - e2) >> 16);
     } else {
-        d46 = -(int64_t)((e2 - st->flux2_q62) >> 16);
+        d46 = -(int64_t)((e2 - psi2_q62) >> 16);
     }
     k46 = mc_q46_mul(st->g_k, d46);
     if (k46 < -(MC_Q46_ONE / 2)) {
@@ -172,7 +212,7 @@ uint32_t mc_fluxobs_q31_step(mc_fluxobs_q31_t *st, q31_t v_alpha, q31_t v_beta, 
     e2 = (uint64_t)((int64_t)ea31 * (int64_t)ea31) + (uint64_t)((int64_t)eb31 * (int64_t)eb31);
     mag = mc_isqrt_u64(e2, NULL); /* Q31, < 2^31.5 */
     {
-        const uint64_t ratio = (mag << 31) / (uint64_t)st->flux_pu; /* Q31 of |e|/flux */
+        const uint64_t ratio = (mag << 31) / (uint64_t)psi; /* Q31 of |e|/psi_a */
         const int64_t r = (int64_t)ratio - ((int64_t)1 << 31);
         st->resid = mc_q31_sat64(r);
     }

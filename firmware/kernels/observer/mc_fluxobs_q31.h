@@ -29,11 +29,17 @@
  * tolerance is counted in steps (resid_time_s/dt rounded): the f32 kernel
  * accumulates dt in float, so both raise MC_FLUXOBS_ERR_DIVERGED on the
  * same step up to that rounding.
+ * Salient machine (cfg.f.ld_minus_lq_h != 0): the f32 kernel's active-flux
+ * form, psi_a = flux + (Ld - Lq) i_d with i_d = c(theta_prev) . i_ab
+ * (mc_sincos_q31 of the previous estimate), floored at
+ * MC_FLUXOBS_PSI_A_MIN_FRAC flux, in place of the flux in the constraint
+ * and the residual; non-salient: the constants, as before.
  * Error vs f32: tests/unit/q31/test_fluxobs_q31.cpp.
  */
 #ifndef MC_FLUXOBS_Q31_H
 #define MC_FLUXOBS_Q31_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "math/mc_q46.h"
@@ -60,6 +66,10 @@ typedef struct {
     float r_scale;        /**< R in force / configured R (1 after init) */
     mc_q46_gain_t g_l;    /**< L i_base/flux_base */
     mc_q46_gain_t g_k;    /**< gamma dt flux_base^2 / 2 */
+    mc_q46_gain_t g_dl;   /**< (Ld - Lq) i_base/flux_base (salient machine) */
+    bool salient;         /**< cfg ld_minus_lq_h != 0 */
+    q31_t psi_a_floor;    /**< MC_FLUXOBS_PSI_A_MIN_FRAC flux/flux_base */
+    q31_t psi_a_pu;       /**< active flux of the last step (flux_pu if non-salient) */
     uint64_t flux2_q62;   /**< (flux/flux_base)^2 in Q62 */
     q31_t flux_pu;        /**< flux/flux_base */
     q31_t resid_tol;      /**< tolerated | |e|/flux - 1 | in q31 */

@@ -510,6 +510,11 @@ void run_sensorless(RunContext& ctx) {
   const double band = 0.05 * std::abs(w_t);
   double t_lock = std::nan(""), ang_max = 0, ang_sq = 0, werr_end = 0, w = 0, id = 0, iq = 0;
   long ang_n = 0, k = 0;
+  // the end window (the last tenth after the load step, as werr_end): the
+  // observer's own angle error and the true dq currents' means (MTPA on a
+  // salient machine: i_d and the current per torque)
+  double ang_end_max = 0, id_end_sum = 0, iq_end_sum = 0;
+  long n_end = 0;
   double min_w_align = 0;
   double t_enable = std::nan("");  // the application enabled the drive (the load ran before)
   // The true angle at the previous period's start: the sample the probe's
@@ -535,8 +540,14 @@ void run_sensorless(RunContext& ctx) {
       ang_max = std::max(ang_max, err);
       ang_sq += err * err;
       ++ang_n;
+      if (t >= dur - 0.1 * (dur - t_load)) ang_end_max = std::max(ang_end_max, err);
     }
-    if (t >= dur - 0.1 * (dur - t_load)) werr_end = std::max(werr_end, std::abs(w - w_t));
+    if (t >= dur - 0.1 * (dur - t_load)) {
+      werr_end = std::max(werr_end, std::abs(w - w_t));
+      id_end_sum += id;
+      iq_end_sum += iq;
+      ++n_end;
+    }
     rec.row(t, id, iq, w);
     stopped = watch(pr);
     if (!stopped.empty()) break;
@@ -570,6 +581,9 @@ void run_sensorless(RunContext& ctx) {
                   ang_n ? std::sqrt(ang_sq / static_cast<double>(ang_n)) : std::nan(""));
   ctx.summary.set("omega_final_rad_s", w);
   ctx.summary.set("omega_err_max_end_rad_s", werr_end);
+  ctx.summary.set("angle_err_max_end_rad", ang_end_max);
+  ctx.summary.set("id_mean_end_a", n_end ? id_end_sum / static_cast<double>(n_end) : std::nan(""));
+  ctx.summary.set("iq_mean_end_a", n_end ? iq_end_sum / static_cast<double>(n_end) : std::nan(""));
   ctx.summary.set("tracks", werr_end <= band ? 1.0 : 0.0);
   ctx.summary.set("load0_nm", tau0);
   ctx.summary.set("load1_nm", tau1);

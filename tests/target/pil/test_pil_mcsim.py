@@ -9,6 +9,8 @@
 parameters, e.g. commission's t_max_s: S is only the cost line's simulated
 time)
 
+(--board motor: the motor file's own [board] table, e.g. the IPM's)
+
 runs SCENARIO twice on the same motor and board, once on the SIL and once with
 --pil (the board's whole image on QEMU), each into its own directory, and
 requires the same exit code and the same files (the CSV, or the partial CSV of
@@ -95,8 +97,14 @@ def fresh(path):
     return path
 
 
+def board_args(a):
+    """--board B for mcsim; none for --board motor (the motor file's own
+    [board] table)."""
+    return [] if a.board == "motor" else ["--board", a.board]
+
+
 def same_run(a):
-    base = [a.mcsim, "run", a.scenario, "--motor", a.motor, "--board", a.board]
+    base = [a.mcsim, "run", a.scenario, "--motor", a.motor] + board_args(a)
     if a.duration:
         base += ["--duration", repr(a.duration)]
     sim_s = a.duration or a.sim_s
@@ -162,7 +170,7 @@ def prepare_flash(a):
     d = fresh(os.path.join(a.work, "prep"))
     os.makedirs(d)
     flash = os.path.join(d, "flash.bin")
-    cmd = [a.mcsim, "run", a.scenario, "--motor", a.motor, "--board", a.board, "--flash", flash]
+    cmd = [a.mcsim, "run", a.scenario, "--motor", a.motor] + board_args(a) + ["--flash", flash]
     for kv in a.flash_prep:
         cmd += ["--set", kv]
     p, _ = run(cmd + ["--out", os.path.join(d, "out")])

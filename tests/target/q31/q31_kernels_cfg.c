@@ -32,6 +32,7 @@ void mc_q31cfg_fluxobs(mc_fluxobs_q31_cfg_t *c)
     c->f.dt_s = 1.25e-4f;
     c->f.resid_tol = 0.3f;
     c->f.resid_time_s = 0.05f;
+    c->f.ld_minus_lq_h = 0.0f; /* non-salient */
     c->i_base_a = 20.0f;
     c->v_base_v = 400.0f;
     c->flux_base_wb = 0.25f;

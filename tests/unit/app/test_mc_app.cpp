@@ -631,17 +631,18 @@ TEST_F(McApp, ApplyChangesLawsOnlyWhileDisabledAndRefusesWithTheReason)
     EXPECT_LT(app.laws.sls.cfg.iq_max_a, before.iq_max_a);
     EXPECT_EQ(app.srv.law_error, 0u);
 
-    // Ld 20 % above Lq: the observer's round-rotor model does not hold
+    // Ld 20 % above Lq: a salient machine, which the sensorless law runs
+    // (active-flux observer, MTPA in the law while the drive's own is off)
     v = F32Bits(1.2f * defaults.lq_h);
     ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_WRITE, MC_PARAM_ID_LD_H, &v));
     v = 0u;
-    EXPECT_EQ(MC_PARAM_ERR_INVALID, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
-    EXPECT_EQ(v, MC_PARAMS_ERR_LAW);
-    v = 0u;
-    ASSERT_EQ(MC_PARAM_OK,
-              mc_param_srv_request(&app.srv, MC_PARAM_OP_READ, MC_PARAM_ID_LAW_ERROR, &v));
-    EXPECT_EQ(v, MC_GAINS_ERR_SALIENT);
-    EXPECT_EQ(app.cfg.speed_law.ctrl, mc_ctrl_sls_ops(&app.laws.sls)); // kept
+    ASSERT_EQ(MC_PARAM_OK, mc_param_srv_request(&app.srv, MC_PARAM_OP_APPLY, 0u, &v));
+    EXPECT_EQ(app.srv.law_error, 0u);
+    EXPECT_EQ(app.laws.sls.cfg.ld_minus_lq_h,
+              static_cast<float>(static_cast<double>(1.2f * defaults.lq_h) -
+                                 static_cast<double>(defaults.lq_h)));
+    EXPECT_TRUE(app.laws.sls.cfg.law_mtpa);
+    EXPECT_EQ(app.cfg.speed_law.ctrl, mc_ctrl_sls_ops(&app.laws.sls));
 }
 
 // With the sensored PI selected, values the other laws cannot run (here a

@@ -153,13 +153,13 @@ TEST(LawCfg, PositionInputModeFromTheConfiguration)
 TEST(LawCfg, RefusalsAreNamed)
 {
     mc_params_t p = mc_params_default;
-    p.ld_h = 1.2f * p.lq_h; // salient: neither the observer nor PI2D
+    p.ld_h = 1.2f * p.lq_h; // salient: the observer takes it (active flux), PI2D not
     p.speed_law = MC_LAW_SPEED_PI;
     EXPECT_EQ(mc_law_speed_check(&p), 0u);
     EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
     p.speed_law = MC_LAW_SPEED_SENSORLESS;
-    EXPECT_EQ(mc_law_speed_check(&p), MC_GAINS_ERR_SALIENT);
-    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_ERR_LAW);
+    EXPECT_EQ(mc_law_speed_check(&p), 0u);
+    EXPECT_EQ(mc_params_validate(&p), MC_PARAMS_OK);
     p.speed_law = MC_LAW_SPEED_PI2D;
     EXPECT_NE(mc_law_speed_check(&p) & MC_GAINS_ERR_SALIENT, 0u);
 

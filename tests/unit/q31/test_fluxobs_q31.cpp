@@ -24,7 +24,7 @@ mc_fluxobs_q31_cfg_t cfg()
     float gamma = 0.0f;
     // paper-002 test motor, critical speed 2.1 rad/s (20 r/min), 4 pole pairs
     EXPECT_EQ(mc_fluxobs_f32_gamma_for_critical_speed(2.1f, 4u, 0.11f, &gamma), 0u);
-    c.f = {0.675f, 1.14e-3f, 0.11f, gamma, 1.25e-4f, 0.3f, 0.05f};
+    c.f = {0.675f, 1.14e-3f, 0.11f, gamma, 1.25e-4f, 0.3f, 0.05f, 0.0f}; // non-salient
     c.i_base_a = static_cast<float>(kIb);
     c.v_base_v = static_cast<float>(kVb);
     c.flux_base_wb = static_cast<float>(kFb);
