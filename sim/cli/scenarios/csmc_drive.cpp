@@ -410,7 +410,9 @@ const Registrar reg_drive(
     {"csmc-drive",
      "The CSMC stepper position loop through the firmware path: drive application in CTRL mode "
      "with the mc_ctrl_csmc plug-in on the simulated dual-H-bridge board (12-bit currents, "
-     "encoder, one-period delay); phi_d step of 0.03142 rad, 0.2 N m load",
+     "encoder, one-period delay); phi_d step of 0.03142 rad, 0.2 N m load. --motor STEPPER "
+     "--board B: a [stepper] file on the board's three legs with a common one, the settings "
+     "derived for it (sim/README.md)",
      0.4,
      {{"pwm_hz", 10.0e3, "Hz", "fast-loop rate", 5.0e3, 100.0e3},
       {"hgo", 0.0, "-", "1: output feedback (high-gain observer), 0: state feedback", 0.0, 1.0},
