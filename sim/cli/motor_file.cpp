@@ -280,7 +280,7 @@ void read_stepper_km(TableReader& r, StepperSpec* m) {
   } else {
     fail(r.src("holding_excitation"), line_of(*ex),
          "'holding_excitation' = \"" + m->holding_excitation +
-             "\" is not \"two_phase_on\" or \"one_phase_on\"");
+             R"(" is not "two_phase_on" or "one_phase_on")");
   }
   m->km_nm_a = m->holding_torque_nm / (k * m->i_rated_a);
 }

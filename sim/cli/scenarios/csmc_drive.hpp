@@ -19,15 +19,11 @@ struct DriveOptions {
   PlantOptions plant{};    // default: Fig. 3 plant (set in the .cpp)
   double pwm_hz = 10.0e3;  // fast-loop rate (paper's sampled case: 10 kHz)
   double vbus_v = 60.0;
-  int encoder_cpr = 1 << 18;  // counts per mechanical revolution
   double current_fs_a = 5.0;  // ADC full scale (12 bits)
-  int delay_periods = 1;
   double speed_pll_bw_rad_s = 1000.0;
   double duration_s = 0.4;
   double step_rad = kPaperStepRad;  // phi_d = phi0 + step from t = 0
-  bool hgo = false;                 // output feedback (else state feedback)
   double eps_s = 1.0e-3;
-  bool model_law = false;  // law (5) instead of -M sat
   // Boundary layers. The paper's mu = (0.1 A, 50 rad/s^2) give a discrete
   // loop gain (T/L)(M/mu) of 1.7 (d) and 1.1 (q) per period at 10 kHz:
   // stable without computation delay (the paper's sampled case), a limit
@@ -38,14 +34,18 @@ struct DriveOptions {
   double mu2_rad_s2 = 200.0;
   // A motor and board from files (stepper_drive_options); the defaults are
   // the paper's plant on the dual H-bridge, as above.
-  bool common_leg = false;   // the three-leg board (hal_host StepperBoard)
   double dead_time_s = 0.0;  // common_leg: the legs' dead time
-  int adc_bits = 12;         // current converter
   double detent_nm = 0.0;    // plant: detent torque, 4 N_r periods a turn
   double i_max_a = 3.0;      // the drive's current limit and trip
   double i_trip_a = 4.5;
   double v_limit_v = 0.0;         // the law's clamp of each of u_d, u_q; 0: vbus
   double m1_v = 0.0, m2_v = 0.0;  // the law's M_i; 0: the paper's 50 V
+  int encoder_cpr = 1 << 18;      // counts per mechanical revolution
+  int delay_periods = 1;
+  int adc_bits = 12;              // current converter
+  bool hgo = false;               // output feedback (else state feedback)
+  bool model_law = false;         // law (5) instead of -M sat
+  bool common_leg = false;        // the three-leg board (hal_host StepperBoard)
   bool model_from_plant = false;  // the law's model (state feedback's e2'') from plant
 };
 

@@ -223,6 +223,20 @@ TEST(CsmcStepperRefusal, DetentBeyondTheStateFeedbacksReachIsRefusedByName) {
   }
 }
 
+// Why the detent is refused: run anyway (run_drive, no refusal there), the
+// NEMA 17 with its detent on odrive36 rests off the target by more than
+// the band (2 counts) and within the bound detent / (J k1) = 0.054 rad
+// (measured 0.029 rad: the rotor stopped where J k1 e2 = -tau_detent).
+TEST(CsmcStepperRefusal, WithTheDetentTheStateFeedbackRestsOffTheTargetWithinItsBound) {
+  csmc::DriveOptions o = csmc::stepper_drive_options(load_motor_files(kNema17, "odrive36"));
+  o.duration_s = 0.3;
+  const csmc::DriveResult r = csmc::run_drive(o);
+  ASSERT_EQ(r.faults, 0u);
+  const double e_end = std::abs(r.trace.back().e2);
+  EXPECT_GT(e_end, 2.0 * 2.0 * 3.14159265358979323846 / 8192.0);
+  EXPECT_LE(e_end, o.detent_nm / (o.plant.J_kgm2 * 7.5e4));
+}
+
 // The limit is the law's clamp: with the H-bridges' (u_d, u_q each up to
 // vbus, M = vbus) the loop asks beyond vbus / sqrt(2), the amplitude the
 // common leg gives at every angle (the verdict's check fails). Whether the
