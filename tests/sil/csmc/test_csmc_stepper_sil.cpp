@@ -223,6 +223,36 @@ TEST(CsmcStepperRefusal, DetentBeyondTheStateFeedbacksReachIsRefusedByName) {
   }
 }
 
+// The settings' other refusals, each by name: the paper's step beyond the
+// rated torque (a rotor 185 times the NEMA 17's: J k1 step = 2.36 N m
+// against 0.283 N m), vbus / 2 below 2 R i_rated (20 ohm: 68 V against
+// 24 V), the trip 2 i_rated beyond the board's range (40 A rated: 80 A
+// against the ODrive's 67.5 A), a board without an encoder.
+TEST(CsmcStepperRefusal, SettingsThatDoNotFitAreRefusedByName) {
+  EXPECT_NE(refusal(kNema17, "odrive36", {}).find("detent"), std::string::npos);
+  const auto with = [](const testlib::Sets& file_sets) {
+    try {
+      (void)testlib::run_scenario("csmc-drive", load_motor_files(kNema17, "odrive36", file_sets),
+                                  {{"detent", "0"}});
+    } catch (const UsageError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  std::string e = with({{"motor.j_kgm2", "1e-3"}});
+  EXPECT_NE(e.find("above the rated torque"), std::string::npos) << e;
+  e = with({{"motor.r_ohm", "20"}});
+  EXPECT_NE(e.find("no margin over the rated current's drop"), std::string::npos) << e;
+  e = with({{"board.encoder_cpr", "0"}});
+  EXPECT_NE(e.find("the board has no encoder"), std::string::npos) << e;
+  const std::string big = write(
+      "big.toml",
+      "[stepper]\nname = \"big\"\nr_ohm = 0.05\nl_h = 1e-3\ni_rated_a = 40\nrotor_teeth = 50\n"
+      "j_kgm2 = 5.4e-5\ndetent_nm = 0\nkm_nm_a = 0.2\n");
+  e = refusal(big, "odrive36", {{"detent", "0"}});
+  EXPECT_NE(e.find("beyond the board's current range"), std::string::npos) << e;
+}
+
 // Why the detent is refused: run anyway (run_drive, no refusal there), the
 // NEMA 17 with its detent on odrive36 rests off the target by more than
 // the band (2 counts) and within the bound detent / (J k1) = 0.054 rad
