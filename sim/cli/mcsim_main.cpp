@@ -207,7 +207,7 @@ int cmd_describe(const std::vector<std::string>& args) {
     return 0;
   }
   const auto files = mcsim::motor_files(s, motor, board);
-  if (files) print_speed_limit(*files);
+  if (files && !files->is_stepper) print_speed_limit(*files);  // a PMSM's
   std::printf("parameters (--set key=value):\n");
   const std::vector<mcsim::ParamSpec> specs = files ? s.motor_params(*files) : s.params;
   for (const auto& p : specs) {

@@ -183,9 +183,10 @@ class TableReader {
 void check_top(const std::string& path, const toml::table& root) {
   for (const auto& kv : root) {
     const std::string k(kv.first.str());
-    if (k != "motor" && k != "board") {
+    if (k != "motor" && k != "board" && k != "stepper") {
       fail(path, line_of(kv.second),
-           "unknown top-level key or table '" + k + "' (expected [motor] and/or [board])");
+           "unknown top-level key or table '" + k +
+               "' (expected [motor] or [stepper], and/or [board])");
     }
     if (!kv.second.is_table()) fail(path, line_of(kv.second), "'" + k + "' must be a table");
   }
@@ -239,6 +240,74 @@ MotorSpec read_motor(const std::string& path, const toml::table& t, const SetSou
     fail(r.src("ld_h"), r.line("ld_h"),
          "ld_h exceeds lq_h by more than 5 %: only surface (Ld = Lq) and interior "
          "(Ld < Lq) magnet machines are modelled");
+  }
+  r.reject_unknown();
+  m.at = r.sources();
+  return m;
+}
+
+// The torque constant of a [stepper] (motor_file.hpp): km_nm_a, or the
+// datasheet's holding torque at the rated current with its excitation.
+void read_stepper_km(TableReader& r, StepperSpec* m) {
+  const toml::node* km = r.maybe("km_nm_a");
+  const toml::node* th = r.maybe("holding_torque_nm");
+  const toml::node* ex = r.maybe("holding_excitation");
+  if ((km == nullptr) == (th == nullptr)) {
+    fail(r.src(km != nullptr ? "km_nm_a" : "holding_torque_nm"), r.line("km_nm_a"),
+         "[stepper] needs exactly one of 'km_nm_a' and 'holding_torque_nm' (with "
+         "'holding_excitation')");
+  }
+  if (km != nullptr) {
+    if (ex != nullptr) {
+      fail(r.src("holding_excitation"), line_of(*ex),
+           "'holding_excitation' belongs to 'holding_torque_nm', not to 'km_nm_a'");
+    }
+    m->km_nm_a = r.number(km, "km_nm_a", 0.0, 100.0, true, "N m/A");
+    return;
+  }
+  m->holding_torque_nm = r.number(th, "holding_torque_nm", 0.0, 1.0e3, true, "N m");
+  m->holding_excitation = r.text("holding_excitation", false);
+  if (ex == nullptr) {
+    fail(r.src("holding_torque_nm"), line_of(*th),
+         "'holding_torque_nm' needs 'holding_excitation': \"two_phase_on\" (T = sqrt(2) Km "
+         "i_rated_a) or \"one_phase_on\" (T = Km i_rated_a)");
+  }
+  double k = 0.0;
+  if (m->holding_excitation == "two_phase_on") {
+    k = std::sqrt(2.0);
+  } else if (m->holding_excitation == "one_phase_on") {
+    k = 1.0;
+  } else {
+    fail(r.src("holding_excitation"), line_of(*ex),
+         "'holding_excitation' = \"" + m->holding_excitation +
+             R"(" is not "two_phase_on" or "one_phase_on")");
+  }
+  m->km_nm_a = m->holding_torque_nm / (k * m->i_rated_a);
+}
+
+StepperSpec read_stepper(const std::string& path, const toml::table& t, const SetSources& sets) {
+  TableReader r(path, "stepper", t, sets);
+  StepperSpec m;
+  m.file = path;
+  m.name = r.text("name", true);
+  m.source = r.text("source", false);
+  m.r_ohm = r.num("r_ohm", 0.0, 1.0e3, true, "ohm");
+  m.l_h = r.num("l_h", 0.0, 10.0, true, "H");
+  m.i_rated_a = r.num("i_rated_a", 0.0, 1.0e3, true, "A");
+  m.rotor_teeth = static_cast<int>(r.int_req("rotor_teeth", 1, 1000));
+  m.j_kgm2 = r.num("j_kgm2", 0.0, 1.0e3, true, "kg m^2");
+  m.detent_nm = r.num("detent_nm", 0.0, 1.0e3, false, "N m");
+  m.b_nm_s_rad = r.num_or("b_nm_s_rad", 0.0, 0.0, 1.0e3, false, "N m s/rad");
+  read_stepper_km(r, &m);
+  if (const toml::node* sa = r.maybe("step_angle_deg"); sa != nullptr) {
+    const double deg = r.number(sa, "step_angle_deg", 0.0, 90.0, true, "deg");
+    const double want = 90.0 / m.rotor_teeth;
+    if (std::abs(deg - want) > 1.0e-3 * want) {
+      std::ostringstream os;
+      os << "'step_angle_deg' = " << deg << " does not match rotor_teeth = " << m.rotor_teeth
+         << " (a full step of a two-phase hybrid stepper is 90 / rotor_teeth = " << want << " deg)";
+      fail(r.src("step_angle_deg"), line_of(*sa), os.str());
+    }
   }
   r.reject_unknown();
   m.at = r.sources();
@@ -455,9 +524,21 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
   toml::table mroot = parse_toml_file(motor_path);
   check_top(motor_path, mroot);
   toml::table* mt = mroot["motor"].as_table();
-  if (mt == nullptr) fail(motor_path, 1, "no [motor] table");
-  const SetSources msets = apply_overrides(*mt, "motor", overrides);
-  f.motor = read_motor(motor_path, *mt, msets);
+  toml::table* st = mroot["stepper"].as_table();
+  if (mt != nullptr && st != nullptr) {
+    fail(motor_path, line_of(*mroot.get("stepper")),
+         "both [motor] and [stepper]: a file describes one motor (a PMSM in [motor] or a "
+         "two-phase stepper in [stepper])");
+  }
+  if (mt == nullptr && st == nullptr) fail(motor_path, 1, "no [motor] or [stepper] table");
+  if (st != nullptr) {
+    f.is_stepper = true;
+    const SetSources ssets = apply_overrides(*st, "motor", overrides);
+    f.stepper = read_stepper(motor_path, *st, ssets);
+  } else {
+    const SetSources msets = apply_overrides(*mt, "motor", overrides);
+    f.motor = read_motor(motor_path, *mt, msets);
+  }
   if (board_path.empty()) {
     toml::table* bt = mroot["board"].as_table();
     if (bt == nullptr) {
@@ -481,6 +562,11 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
     }
     toml::table broot = parse_toml_file(board_path);
     check_top(board_path, broot);
+    if (const toml::node* other = broot.get("stepper"); other != nullptr && !same) {
+      fail(board_path, line_of(*other),
+           "a [stepper] table in the --board file would be ignored (the motor is --motor " +
+               motor_path + "'s): remove it");
+    }
     if (const toml::node* other = broot.get("motor"); other != nullptr && !same) {
       fail(board_path, line_of(*other),
            "a [motor] table in the --board file would be ignored (the motor is --motor " +
@@ -489,6 +575,12 @@ MotorFiles load_motor_files(const std::string& motor_path, const std::string& bo
     toml::table* bt = broot["board"].as_table();
     if (bt == nullptr) fail(board_path, 1, "no [board] table");
     f.board = read_board_table(board_path, *bt, overrides);
+  }
+  if (f.is_stepper && f.board.encoder != kEncoderAbi && f.board.encoder != kEncoderAbiIndex) {
+    throw UsageError(motor_path +
+                     ": a stepper runs with an A/B encoder in the simulator; the "
+                     "board's encoder '" +
+                     f.board.encoder + "' is not modelled for it");
   }
   check_hall(f);
   return f;

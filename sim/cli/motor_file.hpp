@@ -56,6 +56,22 @@
 //          diode), brake_r_ohm (brake resistor on a chopper; 0 = none,
 //          the default). See mcsim::DcLink.
 //
+// [stepper] a two-phase hybrid stepper (csmc-drive only; a file holds [motor]
+//          or [stepper], never both). required: name, r_ohm (phase), l_h
+//          (phase), i_rated_a (rated phase current, the datasheet's),
+//          rotor_teeth (an integer: 50 for 1.8 deg per full step),
+//          j_kgm2 (rotor), detent_nm (peak of the unpowered detent torque,
+//          4 rotor_teeth periods per turn; 0 allowed), and the torque
+//          constant: either km_nm_a (the model's Km: torque
+//          Km (-i_a sin N phi + i_b cos N phi), sim/include/mcsim/
+//          stepper_2ph.hpp) or holding_torque_nm with holding_excitation:
+//          "two_phase_on" (both windings at i_rated_a, the usual datasheet
+//          test: T_hold = sqrt(2) Km i_rated_a, the two windings' torques
+//          summed at 45 deg) or "one_phase_on" (T_hold = Km i_rated_a).
+//          optional: b_nm_s_rad (viscous, default 0), step_angle_deg
+//          (checked against 90 / rotor_teeth), source (text).
+//          --set motor.KEY=VALUE edits this table too.
+//
 // Any problem (unreadable or malformed file, a missing, unknown, mistyped
 // or out-of-range key, a missing table) is a UsageError whose text is
 // "<file>:<line>: <reason>" (line of the offending key, or of the table /
@@ -134,6 +150,20 @@ struct BoardSpec {
   }
 };
 
+/// A two-phase hybrid stepper ([stepper] table).
+struct StepperSpec {
+  std::string name, source, file;
+  KeySources at;
+  double r_ohm = 0, l_h = 0, km_nm_a = 0, i_rated_a = 0;
+  double holding_torque_nm = 0;    // as given (0: km_nm_a was given)
+  std::string holding_excitation;  // "two_phase_on", "one_phase_on" or empty
+  int rotor_teeth = 0;
+  double j_kgm2 = 0, detent_nm = 0, b_nm_s_rad = 0;
+  // The torque at the rated current in the model (quadrature currents of
+  // amplitude i_rated_a): Km i_rated_a.
+  double rated_torque_nm() const { return km_nm_a * i_rated_a; }
+};
+
 /// The board's encoder types the simulator runs (BoardSpec::encoder).
 inline constexpr const char* kEncoderAbi = "abi";
 inline constexpr const char* kEncoderAbiIndex = "abi_index";
@@ -143,8 +173,10 @@ inline constexpr const char* kEncoderHall = "hall";
 
 /// The files given on the command line, parsed and validated.
 struct MotorFiles {
-  MotorSpec motor;
+  MotorSpec motor;  ///< a [motor] file (is_stepper false)
   BoardSpec board;
+  bool is_stepper = false;  ///< a [stepper] file: stepper holds it, motor is empty
+  StepperSpec stepper;
 };
 
 /// Parse --motor FILE and --board FILE (board_path may be empty when the

@@ -12,6 +12,19 @@ const Scenario& need_scenario(const std::string& name) {
   return *s;
 }
 
+namespace {
+
+// The scenarios that take a [stepper] file, comma separated.
+std::string stepper_scenarios() {
+  std::string with;
+  for (const auto& sc : registry()) {
+    if (sc.takes_stepper) with += (with.empty() ? "" : ", ") + sc.name;
+  }
+  return with.empty() ? "no scenario" : with;
+}
+
+}  // namespace
+
 std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& motor,
                                         const std::string& board, const Overrides& overrides) {
   if (!s.motor_params) {
@@ -29,7 +42,16 @@ std::unique_ptr<MotorFiles> motor_files(const Scenario& s, const std::string& mo
                      "' needs --motor FILE (and --board FILE "
                      "unless the motor file has a [board] table); see sim/motors/");
   }
-  return std::make_unique<MotorFiles>(load_motor_files(motor, board, overrides));
+  auto f = std::make_unique<MotorFiles>(load_motor_files(motor, board, overrides));
+  if (f->is_stepper && !s.takes_stepper) {
+    throw UsageError(motor + ": a [stepper] file (a two-phase stepper): scenario '" + s.name +
+                     "' runs a PMSM ([motor] table); the stepper runs in " + stepper_scenarios());
+  }
+  if (!f->is_stepper && s.takes_stepper) {
+    throw UsageError(motor + ": a [motor] file (a PMSM): scenario '" + s.name +
+                     "' runs a two-phase stepper, a file with a [stepper] table (see sim/motors/)");
+  }
+  return f;
 }
 
 PreparedRun prepare_run(const std::string& scenario, const std::string& motor_path,

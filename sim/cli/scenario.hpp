@@ -209,6 +209,10 @@ struct Scenario {
   /// The scenario runs the drive application through make_file_target
   /// (app_scenario.hpp) and so also on the PIL target (mcsim run --pil).
   bool takes_pil = false;
+  /// With motor_params: the scenario runs a two-phase stepper (a --motor
+  /// file with a [stepper] table; csmc-drive); the others take a [motor]
+  /// (PMSM) file. The other kind is refused by name (run.cpp).
+  bool takes_stepper = false;
 };
 
 /// s for the registrations of the scenarios on the drive application

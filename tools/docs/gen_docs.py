@@ -1243,6 +1243,34 @@ def _motor_library(ctx):
                   "cogging: slots / poles, order, peak", "board file in the tests"], rows)
 
 
+@figure("stepper-library", [], reason="exactly (derived from the [stepper] tables of "
+                                     "sim/motors/*.toml)")
+def _stepper_library(ctx):
+    rows = []
+    d = os.path.join(ROOT, "sim", "motors")
+    for n in sorted(os.listdir(d)):
+        if not n.endswith(".toml"):
+            continue
+        with open(os.path.join(d, n), "rb") as fh:
+            t = tomllib.load(fh)
+        if "stepper" not in t:
+            continue
+        m = t["stepper"]
+        # Km as sim/cli/motor_file.cpp derives it from the holding torque
+        if "km_nm_a" in m:
+            km, how = m["km_nm_a"], "given"
+        else:
+            k = math.sqrt(2.0) if m["holding_excitation"] == "two_phase_on" else 1.0
+            km = m["holding_torque_nm"] / (k * m["i_rated_a"])
+            how = f"{g(m['holding_torque_nm'], 3)} N m, {m['holding_excitation']}"
+        rows.append([f"`{n}`", f"{g(m['r_ohm'], 3)} Ω", f"{g(m['l_h'] * 1e3, 3)} mH",
+                     f"{g(m['i_rated_a'], 3)} A", f"{g(km, 3)} N m/A ({how})",
+                     f"{m['rotor_teeth']}", f"{g(m['j_kgm2'] * 1e7, 3)} g cm²",
+                     f"{g(m['detent_nm'] * 1e2, 3)} N cm"])
+    return table(["stepper file", "R", "L", "i_rated", "K_m (from)", "rotor teeth", "J",
+                  "detent"], rows)
+
+
 PIL_COST_JSON = os.path.join("tools", "bench", "results", "pil_cost.json")
 
 

@@ -2,6 +2,7 @@
 #include "hal_host/stepper_board.hpp"
 #include "hal_host/hal_binding.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <stdexcept>
@@ -45,6 +46,16 @@ StepperBoard::StepperBoard(const StepperBoardConfig& cfg) : cfg_(cfg) {
   sp.substeps = cfg.substeps;
   sp.theta_m0_rad = cfg.theta_m0_rad;
   check_config(stage_.configure(sp), "power stage");
+  if (cfg.common_leg) {
+    mcsim::StepperCommonLegStageParams cp;
+    cp.motor = cfg.motor;
+    cp.inverter.t_pwm_s = cfg.t_pwm_s;
+    cp.inverter.t_dead_s = cfg.dead_time_s;
+    cp.vbus_v = cfg.vbus_v;
+    cp.substeps = cfg.substeps;
+    cp.theta_m0_rad = cfg.theta_m0_rad;
+    check_config(stage3_.configure(cp), "common-leg power stage");
+  }
   encoder_.reset(cfg.theta_m0_rad);
   adc_dev_ = {&Binding::kAdc, this};
   pwm_dev_ = {&Binding::kPwm2, this};
@@ -61,12 +72,12 @@ StepperBoard::StepperBoard(const StepperBoardConfig& cfg) : cfg_(cfg) {
 }
 
 uint32_t StepperBoard::ticks_now() const {
-  const double ticks = std::floor(stage_.t_s() * cfg_.tick_hz + 0.5);
+  const double ticks = std::floor(t_s() * cfg_.tick_hz + 0.5);
   return static_cast<uint32_t>(static_cast<uint64_t>(std::fmod(ticks, 4294967296.0)));
 }
 
 void StepperBoard::sample() {
-  const State& x = stage_.state();
+  const State& x = state();
   adc_.ia_a = static_cast<float>(isense_[0].sample_a(x(mcsim::Stepper2Ph::kIa)));
   adc_.ib_a = static_cast<float>(isense_[1].sample_a(x(mcsim::Stepper2Ph::kIb)));
   adc_.ic_a = 0.0f;
@@ -85,7 +96,27 @@ void StepperBoard::sample() {
 void StepperBoard::advance() {
   // Duties after the computation delay; a disable acts at once.
   const Eigen::Vector2d duty = delay_.push(duty_cmd_);
-  check_config(stage_.advance(duty, pwm_enabled_ && !fault_line_.killed), "integrator");
+  const bool on = pwm_enabled_ && !fault_line_.killed;
+  if (cfg_.common_leg) {
+    advance_common_leg(duty, on);
+  } else {
+    check_config(stage_.advance(duty, on), "integrator");
+  }
+}
+
+// The pwm2 duties on three legs (stepper_board.hpp): leg 3 centred, the
+// request outside the hexagon clamped by the stage and counted here.
+void StepperBoard::advance_common_leg(const Eigen::Vector2d& duty, bool switching) {
+  const double hi = std::max({duty(0), duty(1), 0.0});
+  const double lo = std::min({duty(0), duty(1), 0.0});
+  const double c = 0.5 * (1.0 - hi - lo);
+  const Eigen::Vector3d legs(c + duty(0), c + duty(1), c);
+  if (switching) {
+    constexpr double kTol = 1.0e-9;  // float duties: rounding is not a clip
+    if (hi - lo > 1.0 + kTol) ++clipped_;
+    max_req_v_ = std::max(max_req_v_, duty.norm() * cfg_.vbus_v);
+  }
+  check_config(stage3_.advance(legs, switching), "integrator");
 }
 
 int StepperBoard::adc_read(mc_hal_adc_sample_t* s) noexcept {

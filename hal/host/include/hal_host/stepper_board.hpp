@@ -4,8 +4,18 @@
 // unmodified against the simulator.
 //
 // Plant: mcsim::StepperPowerStage (the two H-bridges and their diodes
-// feeding mcsim::Stepper2Ph, paper 001 eq. (1)); outputs disabled (or gate
-// kill) open every switch. The board adds the sensors, the duty register with
+// feeding mcsim::Stepper2Ph, paper 001 eq. (1)), or with common_leg
+// mcsim::StepperCommonLegStage (a three-phase board's three legs: winding a
+// between legs 1 and 3, b between legs 2 and 3); outputs disabled (or gate
+// kill) open every switch.
+// pwm2 on the common-leg board: the duties (d_a, d_b) in [-1, 1] ask for
+// winding voltages d vbus, as on the H-bridges; the board's pwm2 driver
+// puts them on the legs centred in [0, 1]: leg 3 at
+// c = (1 - max(d_a, d_b, 0) - min(d_a, d_b, 0)) / 2, legs 1 and 2 at
+// c + d_a and c + d_b. All three fit iff (d_a, d_b) is in the hexagon
+// |d_a|, |d_b|, |d_a - d_b| <= 1 (quadrature amplitude vbus / sqrt(2) at
+// every angle, mcsim/inverter.hpp); a request outside it is clamped leg by
+// leg (what the bridge can) and counted (clipped_periods()). The board adds the sensors, the duty register with
 // its computation delay, the enable and gate-kill path and the tick counter.
 // ADC: ia = winding A, ib = winding B (ic not measured), DC bus.
 // Timing as PmsmBoard: sample() at t_k, the firmware's fast step, advance()
@@ -22,6 +32,7 @@
 #include "mcsim/integrator.hpp"
 #include "mcsim/sensors.hpp"
 #include "mcsim/stepper_2ph.hpp"
+#include "mcsim/stepper_common_leg_stage.hpp"
 #include "mcsim/stepper_power_stage.hpp"
 
 namespace hal_host {
@@ -37,6 +48,8 @@ struct StepperBoardConfig {
   int delay_periods = 1;      // computation delay, 0..4 periods
   double tick_hz = 10.0e6;    // HAL tick counter frequency
   double theta_m0_rad = 0.0;  // initial shaft angle
+  bool common_leg = false;    // three legs with a common one (else two H-bridges)
+  double dead_time_s = 0.0;   // common_leg: the legs' dead time (InverterParams)
 };
 
 class StepperBoard final : public SimBoard {
@@ -53,12 +66,19 @@ class StepperBoard final : public SimBoard {
   void sample() override;   // ADC/encoder trigger at the start of the period
   void advance() override;  // integrate the plant over one period
 
-  double t_s() const override { return stage_.t_s(); }
-  const State& state() const { return stage_.state(); }
-  const mcsim::StepperPowerStage& power_stage() const { return stage_; }
+  double t_s() const override { return cfg_.common_leg ? stage3_.t_s() : stage_.t_s(); }
+  const State& state() const { return cfg_.common_leg ? stage3_.state() : stage_.state(); }
+  const mcsim::StepperPowerStage& power_stage() const { return stage_; }  // H-bridges only
   double period_s() const override { return cfg_.t_pwm_s; }
   bool pwm_enabled() const { return pwm_enabled_ && !fault_line_.killed; }
-  const Eigen::Vector2d& v_applied() const { return stage_.v_applied(); }
+  const Eigen::Vector2d& v_applied() const {
+    return cfg_.common_leg ? stage3_.v_applied() : stage_.v_applied();
+  }
+  // Common leg: switching periods whose requested (d_a, d_b) lay outside
+  // the hexagon (a leg clamped), and the largest requested amplitude
+  // |(d_a, d_b)| vbus [V] over the switching periods.
+  long clipped_periods() const { return clipped_; }
+  double max_request_amplitude_v() const { return max_req_v_; }
 
   // HAL op implementations (public so the C ops tables can reach them).
   int adc_read(mc_hal_adc_sample_t* s) noexcept;
@@ -76,9 +96,13 @@ class StepperBoard final : public SimBoard {
 
  private:
   uint32_t ticks_now() const;
+  void advance_common_leg(const Eigen::Vector2d& duty, bool switching);
 
   StepperBoardConfig cfg_;
   mcsim::StepperPowerStage stage_;
+  mcsim::StepperCommonLegStage stage3_;
+  long clipped_ = 0;
+  double max_req_v_ = 0.0;
   mcsim::CurrentSensor isense_[2];
   mcsim::VbusSensor vsense_;
   mcsim::Encoder encoder_;
