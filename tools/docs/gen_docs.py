@@ -1210,20 +1210,24 @@ def _motor_library_pairs():
     return dict(re.findall(r'\{"([\w.-]+)",\s*"([\w.-]*)"\}', text))
 
 
-@figure("motor-library", [], reason="exactly (derived from sim/motors/*.toml and "
-                                   "tests/sil/motors/motor_library.hpp)")
-def _motor_library(ctx):
-    pairs = _motor_library_pairs()
-    rows = []
+def _motor_files(table):
+    """(file name, its [table]) for each sim/motors/*.toml that has one, by name."""
     d = os.path.join(ROOT, "sim", "motors")
     for n in sorted(os.listdir(d)):
         if not n.endswith(".toml"):
             continue
         with open(os.path.join(d, n), "rb") as fh:
             t = tomllib.load(fh)
-        if "motor" not in t:
-            continue
-        m = t["motor"]
+        if table in t:
+            yield n, t[table]
+
+
+@figure("motor-library", [], reason="exactly (derived from sim/motors/*.toml and "
+                                   "tests/sil/motors/motor_library.hpp)")
+def _motor_library(ctx):
+    pairs = _motor_library_pairs()
+    rows = []
+    for n, m in _motor_files("motor"):
         stem = n[:-5]
         board = pairs.get(stem)
         if board is None:
@@ -1247,15 +1251,7 @@ def _motor_library(ctx):
                                      "sim/motors/*.toml)")
 def _stepper_library(ctx):
     rows = []
-    d = os.path.join(ROOT, "sim", "motors")
-    for n in sorted(os.listdir(d)):
-        if not n.endswith(".toml"):
-            continue
-        with open(os.path.join(d, n), "rb") as fh:
-            t = tomllib.load(fh)
-        if "stepper" not in t:
-            continue
-        m = t["stepper"]
+    for n, m in _motor_files("stepper"):
         # Km as sim/cli/motor_file.cpp derives it from the holding torque
         if "km_nm_a" in m:
             km, how = m["km_nm_a"], "given"
