@@ -1,7 +1,8 @@
 /**
  * @file mc_f405_adc.c
- * @brief adc capability on ADC1 of the STM32F405: injected group triggered
- *        by TIM1 for currents and bus voltage, software-started regular
+ * @brief adc capability on ADC1 (or ADC2, a second axis) of the STM32F405:
+ *        injected group triggered by TIM1 (or TIM8 CC4) for currents and bus
+ *        voltage, software-started regular
  *        conversions for temperatures. Register facts: RM0090 §13. See
  *        mc_f405_hal.h.
  */
@@ -91,7 +92,7 @@ static bool config_valid(const mc_f405_adc_config_t *c)
     if (!smp_valid(c->smp_current) || !smp_valid(c->smp_vbus) || !smp_valid(c->smp_temp)) {
         return false;
     }
-    if ((c->trigger != MC_F405_ADC_TRIG_TIM1_TRGO) && (c->trigger != MC_F405_ADC_TRIG_TIM1_CC4)) {
+    if ((uint32_t)c->trigger > (uint32_t)MC_F405_ADC_TRIG_TIM8_CC4) {
         return false;
     }
     if ((c->clk_div != 2u) && (c->clk_div != 4u) && (c->clk_div != 6u) && (c->clk_div != 8u)) {
@@ -306,7 +307,23 @@ static const mc_hal_adc_ops_t adc_ops_no_temp = {
     .read = adc_read, .read_temp = NULL, /* no temperature channel on this board */
 };
 
+bool mc_f405_adc_jeoc_pending(const mc_f405_adc_t *p_drv)
+{
+    const uint32_t irq = MC_F405_ADC_SR_JEOC;
+
+    if (p_drv == NULL) {
+        return false;
+    }
+    return ((p_drv->cfg.p_adc->SR & irq) != 0u) &&
+           ((p_drv->cfg.p_adc->CR1 & MC_F405_ADC_CR1_JEOCIE) != 0u);
+}
+
 /* ---- init -------------------------------------------------------------- */
+
+/* JEXTSEL of each trigger (RM0090 §13.6, external trigger for injected
+ * channels), in mc_f405_adc_trigger_t order. */
+static const uint8_t jextsel_of[3] = {MC_F405_ADC_JEXTSEL_TIM1_TRGO, MC_F405_ADC_JEXTSEL_TIM1_CC4,
+                                      MC_F405_ADC_JEXTSEL_TIM8_CC4};
 
 int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
 {
@@ -398,8 +415,7 @@ int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg)
     }
     c->p_common->CCR = ccr;
 
-    jextsel = (c->trigger == MC_F405_ADC_TRIG_TIM1_CC4) ? MC_F405_ADC_JEXTSEL_TIM1_CC4
-                                                        : MC_F405_ADC_JEXTSEL_TIM1_TRGO;
+    jextsel = jextsel_of[c->trigger];
     r = c->p_adc;
     r->CR2 = 0u; /* off while configuring */
     r->CR1 = MC_F405_ADC_CR1_SCAN | (c->jeoc_irq ? MC_F405_ADC_CR1_JEOCIE : 0u);

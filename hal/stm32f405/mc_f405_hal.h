@@ -17,7 +17,10 @@
  *   adc      ADC1 injected group (ia, ib, [ic], vbus), hardware-triggered by
  *            TIM1 TRGO (= OC4REF) or TIM1 CC4, end-of-injected-conversion
  *            interrupt runs the fast loop; temperatures as software-started
- *            regular conversions.
+ *            regular conversions. A second axis (ODrive v3.6 M1): pwm3 on
+ *            TIM8, its adc on ADC2 triggered by TIM8 CC4 (the three ADCs
+ *            share one interrupt: mc_f405_adc_jeoc_pending), the two timers
+ *            started half a period apart (mc_f405_pwm3_start_phased).
  *   encoder  TIM2..TIM5 in encoder mode 3 (x4), ARR = counts_per_rev - 1,
  *            index pulse on an EXTI line latching the count
  *            (mc_f405_encoder_index_isr() from its EXTI ISR).
@@ -144,11 +147,27 @@ int mc_f405_fault_init(mc_f405_fault_t *p_drv, const mc_f405_fault_config_t *p_c
  */
 typedef enum mc_f405_adc_trigger {
     MC_F405_ADC_TRIG_TIM1_TRGO = 0, /**< TRGO = OC4REF (MMS = 111), JEXTSEL 0001 */
-    MC_F405_ADC_TRIG_TIM1_CC4 = 1   /**< CC4 event, JEXTSEL 0000 (sets CC4E) */
+    MC_F405_ADC_TRIG_TIM1_CC4 = 1,  /**< CC4 event, JEXTSEL 0000 (sets CC4E) */
+    MC_F405_ADC_TRIG_TIM8_CC4 = 2   /**< TIM8 CC4 event, JEXTSEL 1110 (sets
+                                         CC4E): the second axis' pwm3 on TIM8.
+                                         TIM8's TRGO is not among the injected
+                                         triggers (RM0090 §13.6, external
+                                         trigger for injected channels: TIM8
+                                         offers CC2, CC3 and CC4 only). */
 } mc_f405_adc_trigger_t;
 
+/** Which advanced-control timer a pwm3 drives (both on APB2, 168 MHz
+ *  timer clock, same register layout): its ADC trigger must be its own.
+ *  The register file is reached through p_tim, so on the host the driver
+ *  cannot tell the timers apart by address: the config names it. */
+typedef enum mc_f405_adv_tim {
+    MC_F405_ADV_TIM1 = 0, /**< axis M0 (the default of a zeroed config) */
+    MC_F405_ADV_TIM8 = 1  /**< axis M1 of the ODrive v3.6 */
+} mc_f405_adv_tim_t;
+
 typedef struct mc_f405_pwm3_config {
-    mc_f405_tim_regs_t *p_tim;         /**< TIM1 */
+    mc_f405_tim_regs_t *p_tim;         /**< TIM1 or TIM8 (tim says which) */
+    mc_f405_adv_tim_t tim;             /**< the timer p_tim points to */
     uint32_t tim_clk_hz;               /**< 168e6 (APB2 timer clock) */
     uint32_t pwm_freq_hz;              /**< PWM (carrier) frequency, e.g. 20000 */
     uint32_t deadtime_ns;              /**< see mc_f405_deadtime_encode() */
@@ -177,13 +196,42 @@ typedef struct mc_f405_pwm3 {
 } mc_f405_pwm3_t;
 
 /**
- * Configure TIM1 and start its counter with the outputs off (MOE = 0),
- * duties MC_HAL_PWM3_DUTY_INIT. Period = 2 (PSC + 1) ARR / tim_clk_hz
+ * Configure TIM1 (or TIM8) and start its counter with the outputs off (MOE =
+ * 0), duties MC_HAL_PWM3_DUTY_INIT. Period = 2 (PSC + 1) ARR / tim_clk_hz
  * (centre-aligned mode 1), the smallest PSC that fits ARR in 16 bits.
  * @return 0; -EINVAL NULL, zero clock/frequency, ARR < 100 (too coarse) or
- *         dead time not encodable, lead outside 1..ARR-1, enum out of range.
+ *         dead time not encodable, lead outside 1..ARR-1, enum out of range,
+ *         an ADC trigger of the other timer (a TIM1 trigger on TIM8 or the
+ *         TIM8 one on TIM1).
  */
 int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg);
+
+/**
+ * Restart two pwm3 timers (axis M0 on TIM1 and M1 on TIM8) together, the
+ * lagging one lag_ticks counter ticks behind the leading one: both counters
+ * stopped, an update event on each (prescaler and repetition counters
+ * reset, the counter counting up), CNT = lag_ticks on the leader and 0 on
+ * the lagger, then both CEN set by two consecutive stores (the lagger
+ * starts one or two bus cycles later, a skew of a few ticks). Each axis'
+ * ADC trigger (CCR4 = ARR - lead, counting up) then fires lag_ticks apart.
+ * Outputs (MOE), duties and the triggers' set-up are not touched; call it
+ * with the outputs off, before the ADC interrupts are enabled (the update
+ * events load the preloaded duties).
+ *
+ * Phase chosen for the ODrive v3.6 (board): lag_ticks = ARR - 1, half a
+ * PWM period less one tick (both counters start counting up, so ARR - 1 is
+ * the largest lag that can be loaded). Each axis samples once per period,
+ * near its counter peak; half a period apart, each sample falls near the
+ * other bridge's counter valley, where that bridge switches only at duties
+ * below the trigger lead, and each fast loop has half a period before the
+ * other's conversion ends. (ODrive samples at both counter extremes, TRGO
+ * = update with RCR = 2, so it starts TIM1 a quarter period minus 128
+ * ticks ahead of TIM8: Firmware/Board/v3/board.cpp start_timers() and
+ * Inc/board.h TIM1_INIT_COUNT at commit f9b5419c.)
+ * @return 0; -EINVAL NULL, the same timer twice, different PSC or ARR (the
+ *         phase would drift), lag_ticks >= ARR (nothing written).
+ */
+int mc_f405_pwm3_start_phased(mc_f405_pwm3_t *p_lead, mc_f405_pwm3_t *p_lag, uint32_t lag_ticks);
 
 /* ======================================================================== */
 /* pwm2: TIM8 dual H-bridge                                                 */
@@ -218,7 +266,7 @@ typedef struct mc_f405_pwm2 {
 int mc_f405_pwm2_init(mc_f405_pwm2_t *p_drv, const mc_f405_pwm2_config_t *p_cfg);
 
 /* ======================================================================== */
-/* adc: ADC1 injected conversions triggered by TIM1                          */
+/* adc: ADC1 (or ADC2) injected conversions triggered by TIM1 (or TIM8)     */
 /* ======================================================================== */
 
 /** Channel number meaning "not measured on this board". */
@@ -269,7 +317,7 @@ typedef struct mc_f405_adc_temp_sensor {
 } mc_f405_adc_temp_sensor_t;
 
 typedef struct mc_f405_adc_config {
-    mc_f405_adc_regs_t *p_adc;           /**< ADC1 */
+    mc_f405_adc_regs_t *p_adc;           /**< ADC1 (ADC2 for a second axis) */
     mc_f405_adc_common_regs_t *p_common; /**< ADC common registers */
     const mc_hal_tick_t *p_tick;         /**< timestamps; NULL: 0 */
     uint8_t ch_ia;                       /**< channel of phase a amplifier,
@@ -332,6 +380,14 @@ typedef struct mc_f405_adc {
  *         clk_div not 2/4/6/8, non-finite or out-of-range analog parameter.
  */
 int mc_f405_adc_init(mc_f405_adc_t *p_drv, const mc_f405_adc_config_t *p_cfg);
+
+/**
+ * ADC1, ADC2 and ADC3 share one interrupt (ADC_IRQn, 18): the dual-axis
+ * ISR asks each axis' driver whether its injected sequence ended. True when
+ * JEOC is set with JEOCIE enabled (this driver raised the interrupt); the
+ * flag is left set (adc_read clears it). NULL: false.
+ */
+bool mc_f405_adc_jeoc_pending(const mc_f405_adc_t *p_drv);
 
 /* ======================================================================== */
 /* encoder: TIMx encoder mode                                                */

@@ -1,6 +1,6 @@
 /**
  * @file mc_f405_pwm.c
- * @brief pwm3 (TIM1), pwm2 (TIM8) and fault (break input, gate kill) on the
+ * @brief pwm3 (TIM1, or TIM8 for a second axis), pwm2 (TIM8) and fault (break input, gate kill) on the
  *        STM32F405. Register facts: RM0090 §17 (advanced-control timers),
  *        §8.4 (GPIO). See mc_f405_hal.h.
  */
@@ -149,6 +149,20 @@ static int tim_outputs_disable(mc_f405_tim_regs_t *p_tim, uint32_t bdtr_off)
 
 /* ---- pwm3 -------------------------------------------------------------- */
 
+/* The ADC trigger is one of the timer's own events: TIM1 TRGO / CC4 on
+ * TIM1, CC4 on TIM8. The trigger's bit 1 names its timer (one shift and one
+ * compare: the image's flash budget is tight). */
+_Static_assert(((MC_F405_ADC_TRIG_TIM1_TRGO >> 1) == MC_F405_ADV_TIM1) &&
+                   ((MC_F405_ADC_TRIG_TIM1_CC4 >> 1) == MC_F405_ADV_TIM1) &&
+                   ((MC_F405_ADC_TRIG_TIM8_CC4 >> 1) == MC_F405_ADV_TIM8),
+               "an ADC trigger's bit 1 is its timer");
+
+static bool trigger_of_timer(mc_f405_adc_trigger_t trig, mc_f405_adv_tim_t tim)
+{
+    return ((uint32_t)trig <= (uint32_t)MC_F405_ADC_TRIG_TIM8_CC4) &&
+           (((uint32_t)trig >> 1) == (uint32_t)tim);
+}
+
 static int pwm3_set_duty(void *ctx, float duty_a, float duty_b, float duty_c)
 {
     mc_f405_pwm3_t *p = ctx;
@@ -230,8 +244,7 @@ int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg)
     if ((p_drv == NULL) || (p_cfg == NULL) || (p_cfg->p_tim == NULL)) {
         return -EINVAL;
     }
-    if ((p_cfg->adc_trigger != MC_F405_ADC_TRIG_TIM1_TRGO) &&
-        (p_cfg->adc_trigger != MC_F405_ADC_TRIG_TIM1_CC4)) {
+    if (!trigger_of_timer(p_cfg->adc_trigger, p_cfg->tim)) {
         return -EINVAL;
     }
     if (pwm_timebase(p_cfg->tim_clk_hz, p_cfg->pwm_freq_hz, &psc, &arr, &period_s) != 0) {
@@ -270,7 +283,7 @@ int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg)
     }
     /* The CC4 event reaches the ADC only with the channel enabled (there is
      * no CH4 pin function in use, the output stays internal to the AF mux). */
-    if (p_cfg->adc_trigger == MC_F405_ADC_TRIG_TIM1_CC4) {
+    if (p_cfg->adc_trigger != MC_F405_ADC_TRIG_TIM1_TRGO) {
         ccer |= MC_F405_TIM_CCER_E(3u);
     }
     cr2 = MC_F405_TIM_MMS_OC4REF << MC_F405_TIM_CR2_MMS_SHIFT;
@@ -297,6 +310,36 @@ int mc_f405_pwm3_init(mc_f405_pwm3_t *p_drv, const mc_f405_pwm3_config_t *p_cfg)
     t->CR2 = cr2;
     t->EGR = MC_F405_TIM_EGR_UG; /* load PSC, ARR, RCR, CCRx preloads */
     t->CR1 = (1u << MC_F405_TIM_CR1_CMS_SHIFT) | MC_F405_TIM_CR1_ARPE | MC_F405_TIM_CR1_CEN;
+    return 0;
+}
+
+int mc_f405_pwm3_start_phased(mc_f405_pwm3_t *p_lead, mc_f405_pwm3_t *p_lag, uint32_t lag_ticks)
+{
+    mc_f405_tim_regs_t *a;
+    mc_f405_tim_regs_t *b;
+    uint32_t cr1_a;
+    uint32_t cr1_b;
+
+    if ((p_lead == NULL) || (p_lag == NULL) || (p_lead->cfg.p_tim == p_lag->cfg.p_tim) ||
+        (p_lead->cfg.tim == p_lag->cfg.tim) || (p_lead->arr != p_lag->arr) ||
+        (p_lead->psc != p_lag->psc) || (lag_ticks >= p_lead->arr)) {
+        return -EINVAL;
+    }
+    a = p_lead->cfg.p_tim;
+    b = p_lag->cfg.p_tim;
+    cr1_a = a->CR1 | MC_F405_TIM_CR1_CEN;
+    cr1_b = b->CR1 | MC_F405_TIM_CR1_CEN;
+    a->CR1 = cr1_a & ~MC_F405_TIM_CR1_CEN;
+    b->CR1 = cr1_b & ~MC_F405_TIM_CR1_CEN;
+    /* UG: prescaler and repetition counters reloaded, the counter restarts
+     * counting up (ODrive's Stm32Timer::start_synchronously relies on the
+     * same); then the counts that set the phase. */
+    a->EGR = MC_F405_TIM_EGR_UG;
+    b->EGR = MC_F405_TIM_EGR_UG;
+    a->CNT = lag_ticks;
+    b->CNT = 0u;
+    a->CR1 = cr1_a;
+    b->CR1 = cr1_b;
     return 0;
 }
 

@@ -156,8 +156,9 @@ typedef struct mc_f405_adc_common_regs {
 #define MC_F405_ADC_CR2_JEXTSEL_SHIFT 16u /* JEXTSEL[19:16] */
 #define MC_F405_ADC_CR2_JEXTEN_SHIFT  20u /* JEXTEN[21:20] */
 #define MC_F405_ADC_CR2_SWSTART       (1u << 30)
-#define MC_F405_ADC_JEXTSEL_TIM1_CC4  0u /* §13.6, external trigger for */
-#define MC_F405_ADC_JEXTSEL_TIM1_TRGO 1u /* injected channels table     */
+#define MC_F405_ADC_JEXTSEL_TIM1_CC4  0u  /* §13.6, external trigger for */
+#define MC_F405_ADC_JEXTSEL_TIM1_TRGO 1u  /* injected channels table     */
+#define MC_F405_ADC_JEXTSEL_TIM8_CC4  14u /* 1110 (TIM8 has no injected TRGO) */
 #define MC_F405_ADC_JEXTEN_RISING     1u
 /* JSQR: JSQ1..JSQ4 5 bits each from bit 0, JL[21:20] = length - 1. With
  * fewer than 4 conversions the sequence occupies the LAST JSQx fields

@@ -131,6 +131,70 @@ TEST_F(AdcBoard, InitTwoShuntsCc4Trigger)
     EXPECT_EQ(s.ic_a, 0.0f);
 }
 
+// A second axis' ADC (ADC2 on the ODrive v3.6) on TIM8's CC4 event:
+// JEXTSEL = 1110 (RM0090 §13.6, external trigger for injected channels;
+// the ST HAL's ADC_EXTERNALTRIGINJECCONV_T8_CC4 is JEXTSEL_3|2|1), JEXTEN =
+// 01 (rising edge), ADON. Everything else as on ADC1.
+TEST_F(AdcBoard, Tim8Cc4TriggerJextsel)
+{
+    mc_f405_adc_config_t c = cfg();
+    c.trigger = MC_F405_ADC_TRIG_TIM8_CC4;
+    ASSERT_EQ(mc_f405_adc_init(&drv, &c), 0);
+    EXPECT_EQ((adc.CR2 >> 16) & 0xFu, 0xEu); // JEXTSEL[19:16] = 1110
+    EXPECT_EQ((adc.CR2 >> 20) & 0x3u, 1u);   // JEXTEN[21:20] = 01, rising
+    EXPECT_EQ(adc.CR2, 1u | (14u << 16) | (1u << 20));
+
+    // A trigger value past the last one is refused, nothing written.
+    mc_f405_adc_regs_t adc_b{};
+    mc_f405_adc_t drv_b{};
+    const auto r0 = snapshot(adc_b);
+    c.p_adc = &adc_b;
+    c.trigger = static_cast<mc_f405_adc_trigger_t>(3);
+    EXPECT_EQ(mc_f405_adc_init(&drv_b, &c), -EINVAL);
+    EXPECT_EQ(snapshot(adc_b), r0);
+}
+
+// ADC1 (M0) and ADC2 (M1) share the ADC interrupt: each driver reports its
+// own end of injected sequence (JEOC with JEOCIE), not the other's; the
+// flag stays set until that driver's read clears it.
+TEST_F(AdcBoard, JeocPendingTellsTheAdcsApart)
+{
+    mc_f405_adc_regs_t adc2{};
+    mc_f405_adc_t drv2{};
+    const mc_f405_adc_config_t c1 = cfg();
+    mc_f405_adc_config_t c2 = cfg();
+    c2.p_adc = &adc2;
+    c2.trigger = MC_F405_ADC_TRIG_TIM8_CC4;
+    ASSERT_EQ(mc_f405_adc_init(&drv, &c1), 0);
+    ASSERT_EQ(mc_f405_adc_init(&drv2, &c2), 0);
+    EXPECT_FALSE(mc_f405_adc_jeoc_pending(&drv)); // init cleared SR
+    EXPECT_FALSE(mc_f405_adc_jeoc_pending(&drv2));
+
+    adc2.SR = MC_F405_ADC_SR_JEOC | MC_F405_ADC_SR_EOC; // M1's sequence ended
+    EXPECT_FALSE(mc_f405_adc_jeoc_pending(&drv));
+    EXPECT_TRUE(mc_f405_adc_jeoc_pending(&drv2));
+    adc.SR = MC_F405_ADC_SR_EOC; // a temperature conversion is not the fast loop
+    EXPECT_FALSE(mc_f405_adc_jeoc_pending(&drv));
+    convert(2048u, 2048u, 2048u, 1000u); // M0's too
+    EXPECT_TRUE(mc_f405_adc_jeoc_pending(&drv));
+    EXPECT_TRUE(mc_f405_adc_jeoc_pending(&drv2));
+
+    // The read of M1 writes ~JEOC to ADC2's SR (rc_w0: the hardware clears
+    // JEOC alone, EOC stays) and nothing to ADC1's.
+    mc_hal_adc_sample_t s{};
+    ASSERT_EQ(mc_hal_adc_read(&drv2.dev, &s), 0);
+    EXPECT_EQ(adc2.SR, ~MC_F405_ADC_SR_JEOC);
+    adc2.SR = MC_F405_ADC_SR_EOC; // what the hardware leaves after that write
+    EXPECT_FALSE(mc_f405_adc_jeoc_pending(&drv2));
+    EXPECT_TRUE(mc_f405_adc_jeoc_pending(&drv));
+
+    // JEOC set with JEOCIE off (a polled ADC) raises no interrupt: not
+    // pending for the shared ISR.
+    adc.CR1 &= ~MC_F405_ADC_CR1_JEOCIE;
+    EXPECT_FALSE(mc_f405_adc_jeoc_pending(&drv));
+    EXPECT_FALSE(mc_f405_adc_jeoc_pending(nullptr));
+}
+
 TEST_F(AdcBoard, InvalidConfigWritesNothing)
 {
     poison(drv);

@@ -215,6 +215,172 @@ TEST(F405Pwm3, InvalidConfigWritesNothing)
     EXPECT_EQ(snapshot(pwm), drv0);
 }
 
+// ---- pwm3 on TIM8 (a second axis) -------------------------------------------
+
+// The ODrive v3.6's M1: TIM8, 24 kHz (ARR = 168e6 / (2 x 24000) = 3500),
+// 119 ns dead time = 19.99 -> 20 tDTS (DTG 0x14, rounded up), no break
+// input, ADC trigger = TIM8 CC4 168 ticks (1 us) before the peak. TIM8 has
+// TIM1's register layout (RM0090 §17), so the values are TIM1's but for
+// CC4E: the CC4 event reaches the ADC only with the channel enabled.
+TEST(F405Pwm3, Tim8Cc4TriggerRegisterWrites)
+{
+    mc_f405_tim_regs_t tim8{};
+    mc_f405_pwm3_t pwm;
+    mc_f405_pwm3_config_t cfg = pwm3_cfg(&tim8);
+    cfg.tim = MC_F405_ADV_TIM8;
+    cfg.pwm_freq_hz = 24000u;
+    cfg.deadtime_ns = 119u;
+    cfg.adc_trigger_lead_ticks = 168u;
+    cfg.adc_trigger = MC_F405_ADC_TRIG_TIM8_CC4;
+    cfg.break_enable = false;
+
+    ASSERT_EQ(mc_f405_pwm3_init(&pwm, &cfg), 0);
+    EXPECT_EQ(tim8.PSC, 0u);    // 3500 fits 16 bits: no prescaler
+    EXPECT_EQ(tim8.ARR, 3500u); // 168e6 / (2 x 24e3), exact
+    EXPECT_EQ(tim8.RCR, 1u);    // one update (duty load) per period
+    // CR1: CMS = 01 (centre-aligned 1), ARPE, CEN: 0xA1, as on TIM1.
+    EXPECT_EQ(tim8.CR1, (1u << 5) | (1u << 7) | 1u);
+    EXPECT_EQ(tim8.CCMR1, 0x6868u); // OC1/OC2 PWM mode 1 + preload
+    EXPECT_EQ(tim8.CCMR2, 0x7868u); // OC3 PWM mode 1, OC4 PWM mode 2 (rises at CCR4 up-counting)
+    // CCER: the three complementary pairs (0x555) and CC4E (bit 12): the
+    // CC4 event is the ADC2 trigger.
+    EXPECT_EQ(tim8.CCER, 0x0555u | (1u << 12));
+    // BDTR: DTG 0x14, OSSI, OSSR; BKE clear (TIM8_BKIN would be PA6, the
+    // bus-voltage pin); MOE clear: outputs off.
+    EXPECT_EQ(tim8.BDTR, 0x14u | (1u << 10) | (1u << 11));
+    EXPECT_EQ(tim8.CCR4, 3500u - 168u); // trigger 168 ticks = 1 us before the peak
+    EXPECT_EQ(tim8.CCR1, 1750u);        // zero vector: 50 %
+    EXPECT_EQ(pwm.dev.ctx, &pwm);
+}
+
+// An ADC trigger is one of the pwm's own timer's events: a TIM1 trigger on
+// TIM8 or TIM8's on TIM1 would start the conversions at the other axis'
+// instant. Refused, nothing written. An enum value past the last is refused
+// on either timer.
+TEST(F405Pwm3, TriggerOfTheOtherTimerRefused)
+{
+    mc_f405_tim_regs_t tim{};
+    mc_f405_pwm3_t pwm;
+    poison(pwm);
+    const auto regs0 = snapshot(tim);
+    const auto drv0 = snapshot(pwm);
+
+    mc_f405_pwm3_config_t cfg = pwm3_cfg(&tim);
+    cfg.tim = MC_F405_ADV_TIM8;
+    cfg.adc_trigger = MC_F405_ADC_TRIG_TIM1_TRGO;
+    EXPECT_EQ(mc_f405_pwm3_init(&pwm, &cfg), -EINVAL);
+    cfg.adc_trigger = MC_F405_ADC_TRIG_TIM1_CC4;
+    EXPECT_EQ(mc_f405_pwm3_init(&pwm, &cfg), -EINVAL);
+    cfg = pwm3_cfg(&tim);
+    cfg.adc_trigger = MC_F405_ADC_TRIG_TIM8_CC4; // on TIM1
+    EXPECT_EQ(mc_f405_pwm3_init(&pwm, &cfg), -EINVAL);
+    cfg.adc_trigger = static_cast<mc_f405_adc_trigger_t>(3);
+    EXPECT_EQ(mc_f405_pwm3_init(&pwm, &cfg), -EINVAL);
+    cfg.tim = MC_F405_ADV_TIM8;
+    EXPECT_EQ(mc_f405_pwm3_init(&pwm, &cfg), -EINVAL);
+    cfg.tim = static_cast<mc_f405_adv_tim_t>(2);
+    cfg.adc_trigger = MC_F405_ADC_TRIG_TIM1_TRGO;
+    EXPECT_EQ(mc_f405_pwm3_init(&pwm, &cfg), -EINVAL);
+
+    EXPECT_EQ(snapshot(tim), regs0);
+    EXPECT_EQ(snapshot(pwm), drv0);
+}
+
+namespace
+{
+
+// M0 on TIM1 and M1 on TIM8 at 24 kHz (ARR 3500), the triggers 168 ticks
+// before each peak.
+struct TwoAxes : public ::testing::Test {
+    mc_f405_tim_regs_t tim1{};
+    mc_f405_tim_regs_t tim8{};
+    mc_f405_pwm3_t m0{};
+    mc_f405_pwm3_t m1{};
+
+    void SetUp() override
+    {
+        mc_f405_pwm3_config_t c0 = pwm3_cfg(&tim1);
+        c0.pwm_freq_hz = 24000u;
+        c0.adc_trigger_lead_ticks = 168u;
+        ASSERT_EQ(mc_f405_pwm3_init(&m0, &c0), 0);
+        mc_f405_pwm3_config_t c1 = c0;
+        c1.p_tim = &tim8;
+        c1.tim = MC_F405_ADV_TIM8;
+        c1.adc_trigger = MC_F405_ADC_TRIG_TIM8_CC4;
+        ASSERT_EQ(mc_f405_pwm3_init(&m1, &c1), 0);
+        tim1.CNT = 1234u; // running since init
+        tim8.CNT = 77u;
+        tim1.EGR = 0u;
+        tim8.EGR = 0u;
+    }
+};
+
+// Ticks until a centre-aligned counter that starts at `cnt` counting up
+// next reaches `v` while counting up (RM0090 §17.3.2: up to ARR, down to
+// 0, up again).
+uint32_t ticks_to_up_crossing(uint32_t cnt, uint32_t v, uint32_t arr)
+{
+    return (v >= cnt) ? (v - cnt) : ((arr - cnt) + arr + v);
+}
+
+} // namespace
+
+// The board's phase: lag = ARR - 1 = 3499. Both counters restarted by an
+// update event (EGR = UG on each), the leader loaded with 3499, the lagger
+// with 0, both running again with their CR1 modes kept.
+TEST_F(TwoAxes, StartPhasedLoadsTheCounters)
+{
+    const uint32_t cr1 = tim1.CR1;
+    ASSERT_EQ(mc_f405_pwm3_start_phased(&m0, &m1, m0.arr - 1u), 0);
+    EXPECT_EQ(tim1.CNT, 3499u);
+    EXPECT_EQ(tim8.CNT, 0u);
+    EXPECT_EQ(tim1.EGR, MC_F405_TIM_EGR_UG); // prescaler, repetition counter reset
+    EXPECT_EQ(tim8.EGR, MC_F405_TIM_EGR_UG);
+    EXPECT_EQ(tim1.CR1, cr1); // centre-aligned 1, ARPE, CEN: running again
+    EXPECT_EQ(tim8.CR1, cr1);
+    EXPECT_EQ(tim1.BDTR & MC_F405_TIM_BDTR_MOE, 0u); // outputs untouched (off)
+    EXPECT_EQ(tim8.BDTR & MC_F405_TIM_BDTR_MOE, 0u);
+
+    // Where the triggers fall (counter model, exact integers): M0's CC4
+    // (CCR4 = 3332, counting up) 3332 - 3499 -> after the peak, so the next
+    // one is (3500 - 3499) + 3500 + 3332 = 6833 ticks on; M1's 3332 ticks
+    // on. M1 samples 3499 ticks after M0's previous trigger (M0's period is
+    // 7000): half a period less one tick, the lag loaded.
+    const uint32_t t0 = ticks_to_up_crossing(tim1.CNT, tim1.CCR4, m0.arr);
+    const uint32_t t1 = ticks_to_up_crossing(tim8.CNT, tim8.CCR4, m1.arr);
+    EXPECT_EQ(t0, 6833u);
+    EXPECT_EQ(t1, 3332u);
+    EXPECT_EQ(t1 + 2u * m0.arr - t0, 3499u);
+    // At M1's trigger M0's counter is counting down at lead + 1 = 169 ticks
+    // above its valley: M0 switches there only at duties below 169 / 3500
+    // = 4.8 %, the other axis' sample sees no edge of M0 above that.
+    const uint32_t m0_at_t1 = m0.arr - (t1 - (m0.arr - tim1.CNT));
+    EXPECT_EQ(m0_at_t1, 169u);
+}
+
+// Refusals write nothing: the same timer twice, lag >= ARR (the counters
+// start counting up, so ARR - 1 is the largest loadable lag), NULL, and two
+// timers at different rates (the phase would drift).
+TEST_F(TwoAxes, StartPhasedRefusals)
+{
+    const auto r1 = snapshot(tim1);
+    const auto r8 = snapshot(tim8);
+    EXPECT_EQ(mc_f405_pwm3_start_phased(&m0, &m0, 10u), -EINVAL);
+    EXPECT_EQ(mc_f405_pwm3_start_phased(&m0, &m1, m0.arr), -EINVAL);
+    EXPECT_EQ(mc_f405_pwm3_start_phased(nullptr, &m1, 10u), -EINVAL);
+    EXPECT_EQ(mc_f405_pwm3_start_phased(&m0, nullptr, 10u), -EINVAL);
+    mc_f405_tim_regs_t tim8b{};
+    mc_f405_pwm3_t m1b{};
+    mc_f405_pwm3_config_t c = m1.cfg;
+    c.p_tim = &tim8b;
+    c.pwm_freq_hz = 20000u; // ARR 4200
+    ASSERT_EQ(mc_f405_pwm3_init(&m1b, &c), 0);
+    EXPECT_EQ(mc_f405_pwm3_start_phased(&m0, &m1b, 10u), -EINVAL);
+    EXPECT_EQ(snapshot(tim1), r1);
+    EXPECT_EQ(snapshot(tim8), r8);
+    EXPECT_EQ(tim8b.CNT, 0u);
+}
+
 // ---- pwm3 behaviour ----------------------------------------------------------
 
 TEST(F405Pwm3, DutyToCompareRegisters)
