@@ -1,0 +1,40 @@
+# The drive images' optimisation policy, stated once: read by the images
+# (firmware/targets/stm32f405/CMakeLists.txt) and by their mirrors in
+# tests/target (the interrupt benchmark bench_isr, the PIL image), so the
+# instruction counts and the PIL run measure the code the board runs.
+#
+# The images' code builds at -O2 with link-time optimisation (the reasons
+# next to mc_f405_interrupt_code_o2); MC_F405_OS_SOURCES, the code no
+# measured interrupt path runs (tools/bench/bench_isr.c counts the fast,
+# CAN-receive and slow interrupts, the slow one under a flood of parameter
+# reads), builds at -Os against the images' 128 KiB flash budget (issue 19):
+# - the configuration: deriving and checking a configuration's gains, the
+#   store, the parameter tables' data;
+# - commissioning: its plug-in runs in the fast interrupt only while a
+#   motor is being measured (the FOC kernels it calls stay at -O2), the
+#   identification kernels only for it, its CAN front end in the slow loop,
+#   its checks once at the end of the flux step's coast, the Hall table's
+#   derivation once after its sweep, the anticogging calibration's step in
+#   the slow loop while it calibrates; the board's commissioning limits
+#   once from the configuration;
+# - start-up: the reset handler, the clock tree, the pins' set-up, the
+#   jump to the bootloader (all before or instead of the interrupts).
+# The parameter server, the parameter lookup (mc_params.c) and the CAN
+# command handler stay at -O2: the flood runs them. Float results do not
+# depend on the level (FMA contraction is off; the PIL tests compare the
+# image with the SIL bit for bit).
+get_filename_component(_mc_root ${CMAKE_CURRENT_LIST_DIR}/../.. ABSOLUTE)
+set(_mc_app ${_mc_root}/firmware/app)
+set(_mc_f405 ${_mc_root}/firmware/targets/stm32f405)
+set(MC_F405_OS_SOURCES
+  # configuration
+  ${_mc_app}/config/mc_gains.c ${_mc_app}/config/mc_law_cfg.c ${_mc_app}/config/mc_cfg_store.c
+  ${_mc_app}/config/mc_params_gen.c
+  # commissioning
+  ${_mc_app}/commission/mc_commission.c ${_mc_app}/commission/mc_comm_can.c
+  ${_mc_app}/commission/mc_comm_check.c ${_mc_app}/commission/mc_comm_hall.c
+  ${_mc_app}/commission/mc_comm_cog.c ${_mc_root}/firmware/kernels/ident/mc_ident.c
+  ${_mc_f405}/mc_board_comm.c
+  # start-up
+  ${_mc_f405}/startup_stm32f405.c ${_mc_f405}/mc_clock.c ${_mc_f405}/boards/mc_board_gpio.c
+  ${_mc_f405}/mc_boot_handoff.c)
