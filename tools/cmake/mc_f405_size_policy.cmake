@@ -16,16 +16,20 @@
 #   its checks once at the end of the flux step's coast, the Hall table's
 #   derivation once after its sweep, the anticogging calibration's step in
 #   the slow loop while it calibrates; the board's commissioning limits
-#   once from the configuration;
+#   once from the configuration; likewise the encoder's angle finders
+#   (mc_ctrl_align.c: the alignment and the index search run in the fast
+#   interrupt only while an enable finds the offset, in place of the speed
+#   law, before the measured paths run);
 # - start-up: the reset handler, the clock tree, the pins' set-up, the
 #   jump to the bootloader (all before or instead of the interrupts);
 # - the slow loop's own work (PendSV, 1 kHz): the CAN command handler, the
 #   parameter server and lookup, telemetry and its frames' packing, the
-#   bootloader request, the thermal model. Not on the fast or CAN-receive
-#   interrupt's path (the bench's counts of those do not move); the slow
-#   loop's counts rise (the bench's slow and flood rows): even the flood
-#   (16 commands answered in one step) stays a small part of the 1 ms
-#   period (the CPU budget table of firmware/targets/stm32f405/README.md).
+#   bootloader request, the thermal model, and the application
+#   (mc_app.c: its start-up, its slow work; its fast-loop mark and CAN
+#   receive are a few lines, measured by the bench). The slow loop's counts
+#   rise (the bench's slow and flood rows): even the flood (16 commands
+#   answered in one step) stays a small part of the 1 ms period (the CPU
+#   budget table of firmware/targets/stm32f405/README.md).
 # Float results do not depend on the level (FMA contraction is off; the
 # PIL tests compare the image with the SIL bit for bit).
 # The interrupts' level: -O2, its basic blocks laid out in source order
@@ -46,11 +50,11 @@ set(MC_F405_OS_SOURCES
   ${_mc_app}/commission/mc_commission.c ${_mc_app}/commission/mc_comm_can.c
   ${_mc_app}/commission/mc_comm_check.c ${_mc_app}/commission/mc_comm_hall.c
   ${_mc_app}/commission/mc_comm_cog.c ${_mc_root}/firmware/kernels/ident/mc_ident.c
-  ${_mc_f405}/mc_board_comm.c
+  ${_mc_f405}/mc_board_comm.c ${_mc_app}/ctrl/mc_ctrl_align.c
   # start-up
   ${_mc_f405}/startup_stm32f405.c ${_mc_f405}/mc_clock.c ${_mc_f405}/boards/mc_board_gpio.c
   ${_mc_f405}/mc_boot_handoff.c
   # the slow loop's own work
   ${_mc_app}/can/mc_can_cmd.c ${_mc_app}/can/mc_telemetry.c ${_mc_app}/can/mc_can_proto.c
   ${_mc_app}/can/mc_boot_enter.c ${_mc_app}/can/mc_boot_proto.c ${_mc_app}/config/mc_param_srv.c
-  ${_mc_app}/config/mc_params.c ${_mc_app}/drive/mc_drive_thermal.c)
+  ${_mc_app}/config/mc_params.c ${_mc_app}/drive/mc_drive_thermal.c ${_mc_app}/app/mc_app.c)
