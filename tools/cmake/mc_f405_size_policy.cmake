@@ -4,10 +4,11 @@
 # instruction counts and the PIL run measure the code the board runs.
 #
 # The images' code builds at -O2 with link-time optimisation (the reasons
-# next to mc_f405_interrupt_code_o2); MC_F405_OS_SOURCES, the code no
-# measured interrupt path runs (tools/bench/bench_isr.c counts the fast,
-# CAN-receive and slow interrupts, the slow one under a flood of parameter
-# reads), builds at -Os against the images' 128 KiB flash budget (issue 19):
+# next to mc_f405_interrupt_code_o2); MC_F405_OS_SOURCES, code neither the
+# fast nor the CAN-receive interrupt's measured path runs
+# (tools/bench/bench_isr.c counts the fast, CAN-receive and slow
+# interrupts, the slow one under a flood of parameter reads), builds at -Os
+# against the images' 128 KiB flash budget (issue 19):
 # - the configuration: deriving and checking a configuration's gains, the
 #   store, the parameter tables' data;
 # - commissioning: its plug-in runs in the fast interrupt only while a
@@ -46,7 +47,7 @@ set(MC_F405_OS_SOURCES
   # configuration
   ${_mc_app}/config/mc_gains.c ${_mc_app}/config/mc_law_cfg.c ${_mc_app}/config/mc_cfg_store.c
   ${_mc_app}/config/mc_params_gen.c
-  # commissioning
+  # commissioning, the angle finders
   ${_mc_app}/commission/mc_commission.c ${_mc_app}/commission/mc_comm_can.c
   ${_mc_app}/commission/mc_comm_check.c ${_mc_app}/commission/mc_comm_hall.c
   ${_mc_app}/commission/mc_comm_cog.c ${_mc_root}/firmware/kernels/ident/mc_ident.c
