@@ -152,7 +152,11 @@ static uint32_t g_overhead;
 
 typedef void (*fn_t)(void);
 
-static __attribute__((noinline)) uint32_t count(fn_t fn)
+/* noipa (noinline, noclone, no identical-code folding): the image links
+ * with LTO like the drive image, which would otherwise specialise count()
+ * per handler or fold the empty functions below into one body (the profile
+ * mark then stops at every overhead measurement). */
+static __attribute__((noipa)) uint32_t count(fn_t fn)
 {
     const uint32_t t0 = TIM2_CNT;
     fn();
@@ -161,7 +165,7 @@ static __attribute__((noinline)) uint32_t count(fn_t fn)
     return (d > g_overhead) ? d - g_overhead : 0u;
 }
 
-static __attribute__((noinline)) void empty_fn(void)
+static __attribute__((noipa)) void empty_fn(void)
 {
     __asm__ volatile("" ::: "memory");
 }
@@ -289,8 +293,8 @@ static stat_t g_isr, g_isr_slow, g_slow, g_profiled;
 /* tools/bench/run_isr_profile.py stops here (a breakpoint) and
  * single-steps the next ADC interrupt; a no-op otherwise, called outside
  * the counts. */
-__attribute__((noinline)) void bench_profile_mark(void);
-__attribute__((noinline)) void bench_profile_mark(void)
+__attribute__((noipa)) void bench_profile_mark(void);
+__attribute__((noipa)) void bench_profile_mark(void)
 {
     __asm volatile("" ::: "memory");
 }

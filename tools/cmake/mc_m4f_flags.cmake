@@ -10,8 +10,13 @@
 #   MC_M4F_LINK_FLAGS     garbage-collect unused sections at link
 #   MC_FP_FLAGS           no FMA contraction: the same float results on
 #                         x86-64 and on the M4F (every build, host too)
+#   MC_M4F_LTO_FLAGS      link-time optimisation of the drive images (and
+#                         of their mirrors in tests/target: the interrupt
+#                         benchmark, the PIL image): one partition, so one
+#                         optimisation of the whole image, deterministic
 include_guard(GLOBAL)
 set(MC_M4F_CPU_FLAGS -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard)
 set(MC_M4F_SECTION_FLAGS -ffunction-sections -fdata-sections)
 set(MC_M4F_LINK_FLAGS -Wl,--gc-sections)
 set(MC_FP_FLAGS -ffp-contract=off)
+set(MC_M4F_LTO_FLAGS -flto -flto-partition=one)

@@ -469,6 +469,48 @@ def _mcu_cpu_budget(ctx, b):
                  rows, ["---", "---", "---:", "---:", "---:", "---:", "---", "---:"])
 
 
+IMAGE_BOARDS = ("example", "odrive36", "odrive36_24v", "vesc6")
+
+
+def f405_flash_max():
+    """The drive image's flash budget, from the CMakeLists that enforces it."""
+    text = read_text(os.path.join(ROOT, "firmware", "targets", "stm32f405", "CMakeLists.txt"))
+    m = re.search(r"set\(MC_F405_FLASH_MAX (\d+)\)", text)
+    if not m:
+        raise DocError("firmware/targets/stm32f405/CMakeLists.txt: no MC_F405_FLASH_MAX")
+    return int(m.group(1))
+
+
+def image_flash():
+    """Each board's drive image (its preset's build, tests/target): flash
+    bytes as size_report.cmake counts them (sections in flash, plus the
+    .data initialisers)."""
+    def fn(ctx):
+        res = {}
+        for b in IMAGE_BOARDS:
+            out = run([ctx.input("arm_size"), "-A", "-d", ctx.input(f"image_{b}_elf")])
+            flash = 0
+            for line in out.splitlines():
+                m = re.match(r"^([.A-Za-z_]\S*)\s+(\d+)\s+(\d+)", line)
+                if not m:
+                    continue
+                sec, size, addr = m.group(1), int(m.group(2)), int(m.group(3))
+                if 0x08000000 <= addr < 0x08100000 or (sec == ".data" and
+                                                         0x20000000 <= addr < 0x20020000):
+                    flash += size
+            res[b] = flash
+        return res
+    return Src(("image_flash",), "cmake --build --preset stm32f405[-<board>]", fn)
+
+
+@figure("mcu-flash", [image_flash()])
+def _mcu_flash(ctx, sizes):
+    cap = f405_flash_max()
+    rows = [[b, str(n), str(cap - n), f"{(cap - n) / 1024:.1f} KiB"] for b, n in sizes.items()]
+    return table(["board", "flash, bytes", f"headroom to {cap} B", "headroom"],
+                 rows, ["---", "---:", "---:", "---:"])
+
+
 # --- PI2D ----------------------------------------------------------------------
 
 @figure("pi2d-sampled", [gtest("test_pi2d_sil", "Pi2dPaper.SampledFirmwareLawMatchesContinuousClosedLoop")])

@@ -1532,7 +1532,10 @@ void mc_drive_warning_cause(mc_drive_t *d, uint32_t bits, bool present)
 int mc_drive_clear_faults(mc_drive_t *d)
 {
     if (d->hal->fault != NULL) {
-        mc_hal_fault_status_t fs;
+        /* zeroed: the images' link-time optimisation may fold the read's
+         * wrapper with a const-argument one and then warns (-Wmaybe-
+         * uninitialized) that fs goes in unset */
+        mc_hal_fault_status_t fs = {0};
         if (mc_hal_fault_read(d->hal->fault, &fs) != 0 || fs.active_mask != 0u) {
             return -EBUSY;
         }
