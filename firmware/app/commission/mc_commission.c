@@ -793,6 +793,14 @@ static uint32_t step_resistance(mc_comm_t *c, const float i[3], mc_drive_out_t *
     return 0u;
 }
 
+/* The spin-ups' voltage limit: the modulator's (0.95 of vbus / sqrt 3)
+ * within v_test_max. */
+static float v_limit(const mc_comm_t *c)
+{
+    const float v = 0.95f * c->vbus_v * MC_INV_SQRT3_F32;
+    return (v > c->cfg.v_test_max_v) ? c->cfg.v_test_max_v : v;
+}
+
 /* ------------------------------------------- flux without an encoder */
 /* The I-f spin (README.md "Without an encoder"): i_test along a commanded
  * angle turning at omega; a rotor that follows turns at omega exactly, and
@@ -806,13 +814,14 @@ enum {
     IF_LO,
     IF_KEEP
 };
-#define T_IF_RAMP   1.0f /* from rest to W_E_BW_MAX bandwidths (the largest speed) */
-#define T_IF_JERK   0.2f /* the acceleration rises and falls in this (1 - cos) */
-#define T_IF_SETTLE 0.3f /* each hold's settling before its average */
-#define T_IF_AVG    0.2f /* each hold's average */
-#define T_IF_DOWN   1.0f /* from the higher speed to half of it, (1 - cos) */
-#define IF_SYNC_MIN 0.9f /* |mean back-EMF| / mean |back-EMF| at least */
-#define IF_COS_MIN  0.5f /* the rotor's d axis within 60 deg el. of the current */
+#define T_IF_RAMP   1.0f               /* from rest to W_E_BW_MAX bandwidths (the largest speed) */
+#define T_IF_JERK   0.2f               /* the acceleration rises and falls in this (1 - cos) */
+#define T_IF_SETTLE 0.3f               /* each hold's settling before its average */
+#define T_IF_AVG    0.2f               /* each hold's average */
+#define T_IF_DOWN   1.0f               /* from the higher speed to half of it, (1 - cos) */
+#define IF_SYNC_MIN 0.9f               /* |mean back-EMF| / mean |back-EMF| at least */
+#define IF_COS_MIN  0.5f               /* the rotor's d axis within 60 deg el. of the current */
+#define IF_PHI_MAX  (MC_PI_F32 / 3.0f) /* ... the same as an angle */
 #define IF_PSI_MIN  0.2f /* psi at least this much of Ld i_test (an L error's share) */
 /* The holds' fluxes agree within this besides the dead time's share: half
  * the 3 % flux bound (the library's largest disagreement: see README). */
@@ -871,15 +880,12 @@ static uint32_t if_point(mc_comm_t *c, float w, float *p_psi, float *p_e)
         phi += mc_atan2_f32(-ed, eq);
         if_emf(c, vi, w, phi, &ed, &eq);
     }
-    float s;
-    float co;
-    mc_sincos_f32(phi, &s, &co);
     /* A rotor swinging about the spin's angle by a (sync = J0(a), the mean
      * of the unit back-EMF) still turns at omega on average: the mean of
      * |e| is omega psi, the mean vector's magnitude J0(a) of it. */
     *p_e = mc_sqrt_f32(ed * ed + eq * eq) / ((sync > 0.0f) ? sync : 1.0f);
     *p_psi = *p_e / w;
-    if (!(w > 0.0f) || !(sync >= IF_SYNC_MIN) || !(co >= IF_COS_MIN) || !(eq > 0.0f) ||
+    if (!(w > 0.0f) || !(sync >= IF_SYNC_MIN) || !(mc_abs_f32(phi) <= IF_PHI_MAX) || !(eq > 0.0f) ||
         !(*p_psi >= IF_PSI_MIN * c->res.ld_h * c->cfg.i_test_a)) {
         return MC_COMM_ERR_IF_SYNC;
     }
@@ -951,8 +957,7 @@ static uint32_t step_if(mc_comm_t *c, const float i[3], mc_drive_out_t *out)
         if (k < 1.0f) {
             return 0u;
         }
-        float v_lim = 0.95f * c->vbus_v * MC_INV_SQRT3_F32;
-        v_lim = (v_lim > c->cfg.v_test_max_v) ? c->cfg.v_test_max_v : v_lim;
+        const float v_lim = v_limit(c);
         /* judged at the speed the easing ends on (its gain a T_IF_JERK / 2) */
         const float w_end = w + 0.5f * c->a_acc * T_IF_JERK;
         const float g = w_end / w;
@@ -1154,10 +1159,7 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
          * winding's own omega_e Lq iq (along d) can take the voltage before
          * the back-EMF reaches its fraction; a loop at its limit no longer
          * controls the current, and the coast would start from nonsense. */
-        float v_lim = 0.95f * c->vbus_v * MC_INV_SQRT3_F32;
-        if (v_lim > c->cfg.v_test_max_v) {
-            v_lim = c->cfg.v_test_max_v;
-        }
+        const float v_lim = v_limit(c);
         if ((c->t_s >= T_SPIN_SETTLE &&
              (mc_abs_f32(emf) >= c->cfg.bemf_frac * c->cfg.v_test_max_v ||
               vmag >= V_SPIN_FRAC * v_lim || (fo.svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u)) ||
