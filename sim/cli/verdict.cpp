@@ -318,13 +318,18 @@ Verdict judge_commission(const CommissionFigures& f) {
   j.at_most(acc, "|Lq error|", std::abs(f.lq_frac), 0.05);
   j.at_most(acc, "|flux error|", std::abs(f.flux_frac), 0.03);
   j.at_most(acc, "|pole pairs error|", std::abs(f.pole_pairs_diff), 0.0);
-  j.at_most(acc, "|encoder offset error| [deg]", std::abs(f.encoder_offset_deg), 1.0);
-  j.require(acc, f.direction_right, "encoder direction identified");
+  if (f.sensorless) {
+    j.note("no encoder: no offset or direction measured, no J or B; the pole pairs given");
+  } else {
+    j.at_most(acc, "|encoder offset error| [deg]", std::abs(f.encoder_offset_deg), 1.0);
+    j.require(acc, f.direction_right, "encoder direction identified");
+  }
   j.at_most(acc, "|sensor offset error| / range", f.adc_offset_max_frac, 0.002);
   j.at_most("identification too slow", "duration [s]", f.duration_s, f.duration_max_s);
   if (f.verify) {
     if (f.sensored_refused) {
-      j.note("the motor and board have no safe gains for the sensored law: not run");
+      j.note(f.sensorless ? "no encoder: the sensored law not run"
+                          : "the motor and board have no safe gains for the sensored law: not run");
     } else {
       j.at_most("verification failed", "sensored speed error / target", f.verify_sensored_err_frac,
                 0.02);

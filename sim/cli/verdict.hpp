@@ -143,6 +143,7 @@ struct CommissionFigures {
   double r_frac = 0, ld_frac = 0, lq_frac = 0, flux_frac = 0;
   double pole_pairs_diff = 0, encoder_offset_deg = 0, adc_offset_max_frac = 0;
   bool direction_right = true;
+  bool sensorless = false;  // no encoder: no offset or direction to judge
   double duration_s = 0;
   double duration_max_s = 10.0;  // + the Hall table's step with Hall sensors
   bool verify = false;

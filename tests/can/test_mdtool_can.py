@@ -271,6 +271,23 @@ def main():
         res["encoder_direction"] = direction
         row = next(r for r in calibrate.rows(res, {"encoder_reversed": in_use}, table) if r[0] == "encoder_reversed")
         check((row[1], row[4]) == want, f"calibrate row: direction {direction:+g}, in use {in_use}: {row}")
+    # without an encoder (valid: offsets, R, L, flux and SENSORLESS): no rows
+    # for the encoder's offset and direction, J and B (not measured)
+    names = [r[0] for r in calibrate.rows(res, {}, table, valid=0x17 | calibrate.VALID_SENSORLESS)]
+    check("encoder_offset_rad" not in names and "encoder_reversed" not in names and
+          "j_kgm2" not in names and "b_nm_s_rad" not in names and "flux_wb" in names and
+          "pole_pairs" in names, f"calibrate rows without an encoder: {names}")
+    check(len(calibrate.rows(res, {}, table, valid=0x3F)) == len(calibrate.ITEMS),
+          "calibrate rows with every result valid: all")
+    # IF_SYNC (detail 4): named in RANGE's place with its help
+    summ = cal.Collector()
+    summ.feed("COMMISSION_STATUS", {"step": "FAILED", "error": 1 << 9, "detail": 4, "valid": 0,
+                                    "staged": 0, "progress_pct": 0, "seq": 0})
+    try:
+        cal.check_failed(summ.summary())
+        check(False, "IF_SYNC: a FAILED status raises Refused")
+    except Refused as e:
+        check(e.status == "IF_SYNC" and "I-f spin" in str(e), f"IF_SYNC named: {e}")
 
     print(f"mdtool CAN checks: {'FAILED: ' + str(len(fails)) if fails else 'passed'}")
     return 1 if fails else 0

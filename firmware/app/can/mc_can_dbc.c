@@ -167,9 +167,9 @@ static const mc_can_signal_t sig_commission_status[7] = {
     {0u, 8u, false, 1.0f, 0.0f, 0.0f, 8.0f}, /* step [-] */
     {8u, 8u, false, 1.0f, 0.0f, 0.0f, 100.0f}, /* progress_pct [%] */
     {16u, 16u, false, 1.0f, 0.0f, 0.0f, 65535.0f}, /* error [-] */
-    {32u, 8u, false, 1.0f, 0.0f, 0.0f, 63.0f}, /* valid [-] */
+    {32u, 8u, false, 1.0f, 0.0f, 0.0f, 127.0f}, /* valid [-] */
     {40u, 1u, false, 1.0f, 0.0f, 0.0f, 1.0f}, /* staged [-] */
-    {48u, 8u, false, 1.0f, 0.0f, 0.0f, 3.0f}, /* detail [-] */
+    {48u, 8u, false, 1.0f, 0.0f, 0.0f, 4.0f}, /* detail [-] */
     {56u, 8u, false, 1.0f, 0.0f, 0.0f, 255.0f}, /* seq [-] */
 };
 static const mc_can_signal_t sig_commission_result[3] = {

@@ -149,6 +149,12 @@ static mc_can_err_t start(mc_comm_can_t *m, const float *v)
         const limits_t lim = limits_of(m);
         mc_comm_t probe;
         bound_defaults(&lim, &cc);
+        /* no encoder (none on the board, or encoder_cpr 0 in force): the
+         * pole pairs in force (the user's), the flux from an I-f spin
+         * (mc_commission.h, README.md "Without an encoder") */
+        const bool no_enc = (d->hal->encoder == NULL) ||
+                            ((m->params != NULL) && (m->params->active.encoder_cpr == 0u));
+        cc.pole_pairs_given = no_enc ? d->cfg.pole_pairs : 0u;
         cc.i_test_a = option(v[MC_CAN_COMMISSION_CMD_I_TEST_A], cc.i_test_a);
         cc.v_test_max_v = option(v[MC_CAN_COMMISSION_CMD_V_TEST_MAX_V], cc.v_test_max_v);
         cc.speed_max_m_rad_s =
@@ -321,8 +327,9 @@ static bool stage(mc_comm_can_t *m)
     ok = write_f32(s, MC_PARAM_ID_R_OHM, r->r_ohm) && write_f32(s, MC_PARAM_ID_LD_H, r->ld_h) &&
          write_f32(s, MC_PARAM_ID_LQ_H, r->lq_h) && write_f32(s, MC_PARAM_ID_FLUX_WB, r->flux_wb) &&
          write_u32(s, MC_PARAM_ID_POLE_PAIRS, r->pole_pairs) &&
-         write_f32(s, MC_PARAM_ID_ENCODER_OFFSET_RAD, r->encoder_offset_rad) &&
-         write_u32(s, MC_PARAM_ID_ENCODER_REVERSED, (r->encoder_direction < 0) ? 1u : 0u) &&
+         (((r->valid & MC_COMM_HAVE_ENCODER) == 0u) ||
+          (write_f32(s, MC_PARAM_ID_ENCODER_OFFSET_RAD, r->encoder_offset_rad) &&
+           write_u32(s, MC_PARAM_ID_ENCODER_REVERSED, (r->encoder_direction < 0) ? 1u : 0u))) &&
          write_f32(s, MC_PARAM_ID_I_OFFSET_A_A, o[MC_COMM_CAN_ITEM_ADC_OFFSET_A_A]) &&
          write_f32(s, MC_PARAM_ID_I_OFFSET_B_A, o[MC_COMM_CAN_ITEM_ADC_OFFSET_B_A]) &&
          write_f32(s, MC_PARAM_ID_I_OFFSET_C_A, o[MC_COMM_CAN_ITEM_ADC_OFFSET_C_A]);
@@ -428,7 +435,8 @@ void mc_comm_can_step(mc_comm_can_t *m, const mc_hal_can_t *can, mc_tm_reply_lim
         uint32_t detail = 0u;
         v[MC_CAN_COMMISSION_STATUS_ERROR] = (float)mc_comm_err_frame(m->err, &detail);
         v[MC_CAN_COMMISSION_STATUS_DETAIL] = (float)detail;
-        v[MC_CAN_COMMISSION_STATUS_VALID] = (float)(m->comm->res.valid & MC_COMM_HAVE_ALL);
+        v[MC_CAN_COMMISSION_STATUS_VALID] =
+            (float)(m->comm->res.valid & (MC_COMM_HAVE_ALL | MC_COMM_SENSORLESS));
         v[MC_CAN_COMMISSION_STATUS_STAGED] = m->staged ? 1.0f : 0.0f;
         v[MC_CAN_COMMISSION_STATUS_SEQ] = (float)m->status_seq;
         m->status_seq = (uint8_t)(m->status_seq + 1u);

@@ -112,7 +112,9 @@ uint32_t mc_comm_init(mc_comm_t *c, const mc_comm_cfg_t *cfg)
         cfg->dead_time_s >= 0.25f * cfg->dt_s || !(cfg->bemf_frac > 0.0f) ||
         !(cfg->bemf_frac < 1.0f) || cfg->cur_bw_rad_s * cfg->dt_s > 0.2f ||
         cfg->pole_pairs_max < 1u || cfg->pole_pairs_max > 64u ||
-        !mc_isfinite_f32(cfg->speed_tau_s) || cfg->speed_tau_s < 0.0f || cfg->speed_tau_s > 0.1f) {
+        !mc_isfinite_f32(cfg->speed_tau_s) || cfg->speed_tau_s < 0.0f || cfg->speed_tau_s > 0.1f ||
+        cfg->pole_pairs_given > cfg->pole_pairs_max ||
+        (cfg->pole_pairs_given != 0u && cfg->hall != NULL)) {
         return MC_COMM_CFG_ERR_VALUE;
     }
     *c = (mc_comm_t){0};
@@ -589,10 +591,28 @@ static uint32_t step_hall(mc_comm_t *c, const float i[3], mc_drive_out_t *out)
     return e;
 }
 
+/* The rotor aligned (the d axis where the vector stands): the resistance
+ * and inductance steps run along it. */
+static uint32_t to_resistance(mc_comm_t *c)
+{
+    c->theta0_rad = c->theta_cmd_rad;
+    enter(c, MC_COMM_STEP_RESISTANCE, 0u);
+    mc_ident_avg_f32_reset(&c->v_acc);
+    mc_ident_avg_f32_reset(&c->i_acc);
+    return foc_setup(c, 0.0f, c->l0_h, c->l0_h, false, ZDIV_STIFF);
+}
+
 static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas_t *m,
                              mc_drive_out_t *out)
 {
-    track_count(c, m);
+    /* Without an encoder (cfg.pole_pairs_given) the alignment alone: the
+     * hold at -pi/2, the quarter turn to 0 and its hold; the rotor's d axis
+     * is then the commanded angle (the resistance and inductance steps run
+     * on the commanded angle either way). */
+    const bool sls = c->cfg.pole_pairs_given != 0u;
+    if (!sls) {
+        track_count(c, m);
+    }
     if (c->sub >= ENC_HALL_RAMP) {
         return step_hall(c, i, out);
     }
@@ -625,6 +645,13 @@ static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas
     case ENC_FWD2_HOLD:
         if (c->n >= steps_of(c, T_HOLD)) {
             const uint32_t s = c->sub;
+            if (s == ENC_PRE_HOLD && sls) {
+                c->res.pole_pairs = c->cfg.pole_pairs_given;
+                if (to_resistance(c) != 0u) {
+                    return MC_COMM_ERR_RANGE;
+                }
+                break;
+            }
             if (s == ENC_PRE_HOLD) {
                 c->count_acc = 0;
                 mc_ident_avg_f32_reset(&c->vq_acc);
@@ -672,13 +699,9 @@ static uint32_t step_encoder(mc_comm_t *c, const float i[3], const mc_drive_meas
                 }
                 c->res.encoder_offset_rad = mc_wrap_2pi_f32(off);
                 c->res.valid |= MC_COMM_HAVE_ENCODER;
-                c->theta0_rad = c->theta_cmd_rad;
-                enter(c, MC_COMM_STEP_RESISTANCE, 0u);
-                if (foc_setup(c, 0.0f, c->l0_h, c->l0_h, false, ZDIV_STIFF) != 0u) {
+                if (to_resistance(c) != 0u) {
                     return MC_COMM_ERR_RANGE;
                 }
-                mc_ident_avg_f32_reset(&c->v_acc);
-                mc_ident_avg_f32_reset(&c->i_acc);
                 break;
             }
             next_sub(c);
@@ -770,6 +793,211 @@ static uint32_t step_resistance(mc_comm_t *c, const float i[3], mc_drive_out_t *
     return 0u;
 }
 
+/* The spin-ups' voltage limit: the modulator's (0.95 of vbus / sqrt 3)
+ * within v_test_max. */
+static float v_limit(const mc_comm_t *c)
+{
+    const float v = 0.95f * c->vbus_v * MC_INV_SQRT3_F32;
+    return (v > c->cfg.v_test_max_v) ? c->cfg.v_test_max_v : v;
+}
+
+/* ------------------------------------------- flux without an encoder */
+/* The I-f spin (README.md "Without an encoder"): i_test along a commanded
+ * angle turning at omega; a rotor that follows turns at omega exactly, and
+ * in the spin's frame the voltage is v = R i + j omega L i + the back-EMF,
+ * omega psi along the rotor's q axis. Sub-phases: */
+enum {
+    IF_UP = 0,
+    IF_EASE,
+    IF_HI,
+    IF_DOWN,
+    IF_LO,
+    IF_KEEP
+};
+#define T_IF_RAMP   1.0f               /* from rest to W_E_BW_MAX bandwidths (the largest speed) */
+#define T_IF_JERK   0.2f               /* the acceleration rises and falls in this (1 - cos) */
+#define T_IF_SETTLE 0.3f               /* each hold's settling before its average */
+#define T_IF_AVG    0.2f               /* each hold's average */
+#define T_IF_DOWN   1.0f               /* from the higher speed to half of it, (1 - cos) */
+#define IF_SYNC_MIN 0.9f               /* |mean back-EMF| / mean |back-EMF| at least */
+#define IF_COS_MIN  0.5f               /* the rotor's d axis within 60 deg el. of the current */
+#define IF_PHI_MAX  (MC_PI_F32 / 3.0f) /* ... the same as an angle */
+#define IF_PSI_MIN  0.2f /* psi at least this much of Ld i_test (an L error's share) */
+/* The holds' fluxes agree within this besides the dead time's share: half
+ * the 3 % flux bound (the library's largest disagreement: see README). */
+#define IF_FLUX_TOL 0.015f
+
+/* The spin's loop: the stiff loop of the flux step (kp = L bw, ki = R bw),
+ * the current held at i_test while the back-EMF ramps. */
+static uint32_t if_setup(mc_comm_t *c)
+{
+    c->w_if_rad_s = 0.0f;
+    c->theta_cmd_rad = c->theta0_rad;
+    return foc_setup(c, c->res.r_ohm, c->res.ld_h, c->res.lq_h, true, ZDIV_STIFF);
+}
+
+/* The back-EMF in a frame at angle phi of the spin's (v, i the means in
+ * the spin's frame; Ld along that frame's d, Lq along its q). */
+static void if_emf(const mc_comm_t *c, const float vi[4], float w, float phi, float *p_ed,
+                   float *p_eq)
+{
+    float s;
+    float co;
+    mc_sincos_f32(phi, &s, &co);
+    /* the inverter's error (dead time, drops): each phase's +-dead_time_v
+     * with its current's sign, the fundamental (4 / pi) of it along i */
+    const float im = mc_sqrt_f32(vi[2] * vi[2] + vi[3] * vi[3]);
+    const float k = (im > 0.0f) ? (4.0f / MC_PI_F32) * c->res.dead_time_v / im : 0.0f;
+    const float v0 = vi[0] - k * vi[2];
+    const float v1 = vi[1] - k * vi[3];
+    const float vd = v0 * co + v1 * s;
+    const float vq = v1 * co - v0 * s;
+    const float id = vi[2] * co + vi[3] * s;
+    const float iq = vi[3] * co - vi[2] * s;
+    *p_ed = vd - c->res.r_ohm * id + w * c->res.lq_h * iq;
+    *p_eq = vq - c->res.r_ohm * iq - w * c->res.ld_h * id;
+}
+
+/* One hold's flux: the rotor's d axis phi in the spin's frame found where
+ * the back-EMF has no d part (a few steps: with Ld = Lq the first is exact,
+ * with saliency each shrinks the error by about (Lq - Ld) i / psi), then
+ * psi = |e| / omega; refused IF_SYNC when the rotor does not follow. */
+static uint32_t if_point(mc_comm_t *c, float w, float *p_psi, float *p_e)
+{
+    float vi[4];
+    float emean = 0.0f;
+    for (unsigned k = 0u; k < 3u; ++k) {
+        (void)mc_ident_avg_f32_get(&c->corr[k], &vi[k]);
+    }
+    (void)mc_ident_avg_f32_get(&c->v_acc, &vi[3]);
+    (void)mc_ident_avg_f32_get(&c->i_acc, &emean);
+    float ed;
+    float eq;
+    float phi = 0.0f;
+    if_emf(c, vi, w, 0.0f, &ed, &eq);
+    const float sync = mc_sqrt_f32(ed * ed + eq * eq) / ((emean > 0.0f) ? emean : 1.0f);
+    for (unsigned k = 0u; k < 4u; ++k) {
+        phi += mc_atan2_f32(-ed, eq);
+        if_emf(c, vi, w, phi, &ed, &eq);
+    }
+    /* A rotor swinging about the spin's angle by a (sync = J0(a), the mean
+     * of the unit back-EMF) still turns at omega on average: the mean of
+     * |e| is omega psi, the mean vector's magnitude J0(a) of it. */
+    *p_e = mc_sqrt_f32(ed * ed + eq * eq) / ((sync > 0.0f) ? sync : 1.0f);
+    *p_psi = *p_e / w;
+    if (!(w > 0.0f) || !(sync >= IF_SYNC_MIN) || !(mc_abs_f32(phi) <= IF_PHI_MAX) || !(eq > 0.0f) ||
+        !(*p_psi >= IF_PSI_MIN * c->res.ld_h * c->cfg.i_test_a)) {
+        return MC_COMM_ERR_IF_SYNC;
+    }
+    return 0u;
+}
+
+/* The two holds' fluxes agree within the dead time's voltage over each
+ * hold's back-EMF, as the encoder's two bands (the counts do not enter). */
+static uint32_t if_end(mc_comm_t *c, float psi_lo, float e_lo)
+{
+    const float v_dead = (4.0f / 3.0f) * c->vbus_v * c->cfg.dead_time_s / c->cfg.dt_s;
+    mc_comm_flux_chk_t *f = &c->flux_chk;
+    f->psi_lo_wb = psi_lo;
+    f->dev = mc_abs_f32(f->psi_hi_wb - psi_lo) / (0.5f * (f->psi_hi_wb + psi_lo));
+    f->tol = IF_FLUX_TOL + v_dead / e_lo + v_dead / (f->psi_hi_wb * c->w_hi_rad_s);
+    if (!(f->dev <= f->tol)) {
+        return MC_COMM_ERR_FLUX_SPEEDS;
+    }
+    c->res.flux_wb = f->psi_hi_wb;
+    c->res.valid |= MC_COMM_HAVE_FLUX | MC_COMM_SENSORLESS;
+    enter(c, MC_COMM_STEP_DONE, IF_KEEP);
+    return 0u;
+}
+
+static uint32_t step_if(mc_comm_t *c, const float i[3], mc_drive_out_t *out)
+{
+    const float dt = c->cfg.dt_s;
+    const float w_cap = W_E_BW_MAX * c->cfg.cur_bw_rad_s;
+    float w = c->w_if_rad_s;
+    /* Smooth speed: the rotor follows the angle on the stiffness of i_test
+     * alone (undamped), and a step of the acceleration leaves it swinging
+     * by a / omega_n^2; over T_IF_JERK (longer than a swing) almost not. */
+    const float k = (float)c->n * dt / ((c->sub == IF_DOWN) ? T_IF_DOWN : T_IF_JERK);
+    float sk;
+    float ck;
+    mc_sincos_f32(MC_PI_F32 * ((k < 1.0f) ? k : 1.0f), &sk, &ck);
+    if (c->sub == IF_UP) {
+        c->a_acc = (w_cap / T_IF_RAMP) * 0.5f * (1.0f - ck);
+        w += c->a_acc * dt;
+    } else if (c->sub == IF_EASE) {
+        w += c->a_acc * 0.5f * (1.0f + ck) * dt;
+    } else if (c->sub == IF_DOWN) {
+        w = c->w_hi_rad_s * (1.0f - 0.25f * (1.0f - ck));
+    }
+    c->w_if_rad_s = w;
+    c->theta_cmd_rad = mc_wrap_2pi_f32(c->theta_cmd_rad + w * dt);
+    mc_foc_f32_out_t fo;
+    const uint32_t e = foc_out(c, i, c->theta_cmd_rad, w, c->cfg.i_test_a, 0.0f, out, &fo);
+    if (e != 0u || c->sub == IF_KEEP) {
+        return e;
+    }
+    const float vi[4] = {fo.vd_v, fo.vq_v, fo.id_a, fo.iq_a};
+    float ed;
+    float eq;
+    if_emf(c, vi, w, 0.0f, &ed, &eq);
+    const float em = mc_sqrt_f32(ed * ed + eq * eq);
+    /* Out of step: a back-EMF clear of the inductance's error share turned
+     * more than 60 deg el. off the current's q axis (the rotor slipping
+     * behind: the loop, whose angle it no longer is, loses the current
+     * soon after; refused first). Not in the ramp's first T_IF_JERK: at
+     * the lowest speeds R's and the dead time's residues are as large. */
+    if ((c->sub != IF_UP || k >= 1.0f) && em >= IF_PSI_MIN * c->res.ld_h * c->cfg.i_test_a * w &&
+        eq < IF_COS_MIN * em) {
+        return MC_COMM_ERR_IF_SYNC;
+    }
+    if (c->sub == IF_UP) {
+        /* judged once the acceleration is whole (the easing's gain then at
+         * most the speed reached: the loop has long settled) */
+        if (k < 1.0f) {
+            return 0u;
+        }
+        const float v_lim = v_limit(c);
+        /* judged at the speed the easing ends on (its gain a T_IF_JERK / 2) */
+        const float w_end = w + 0.5f * c->a_acc * T_IF_JERK;
+        const float g = w_end / w;
+        if (em * g >= c->cfg.bemf_frac * c->cfg.v_test_max_v ||
+            (fo.vd_v * fo.vd_v + fo.vq_v * fo.vq_v) * g * g >=
+                V_SPIN_FRAC * V_SPIN_FRAC * v_lim * v_lim ||
+            (fo.svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u || w_end >= w_cap ||
+            w_end >= c->cfg.speed_max_m_rad_s * (float)c->res.pole_pairs) {
+            next_sub(c);
+        }
+    } else if (c->sub == IF_EASE || c->sub == IF_DOWN) {
+        if (k >= 1.0f) {
+            c->w_hi_rad_s = (c->sub == IF_EASE) ? w : c->w_hi_rad_s;
+            next_sub(c);
+        }
+    } else {
+        if (c->n == steps_of(c, T_IF_SETTLE)) {
+            sq_reset(c);
+            mc_ident_avg_f32_reset(&c->v_acc);
+            mc_ident_avg_f32_reset(&c->i_acc);
+        }
+        (void)mc_ident_avg_f32_step(&c->corr[0], fo.vd_v);
+        (void)mc_ident_avg_f32_step(&c->corr[1], fo.vq_v);
+        (void)mc_ident_avg_f32_step(&c->corr[2], fo.id_a);
+        (void)mc_ident_avg_f32_step(&c->v_acc, fo.iq_a);
+        (void)mc_ident_avg_f32_step(&c->i_acc, em);
+        if (c->n >= steps_of(c, T_IF_SETTLE + T_IF_AVG)) {
+            float psi;
+            float eh;
+            const uint32_t ep = if_point(c, w, &psi, &eh);
+            if (ep != 0u || c->sub == IF_LO) {
+                return (ep != 0u) ? ep : if_end(c, psi, eh);
+            }
+            c->flux_chk.psi_hi_wb = psi;
+            next_sub(c);
+        }
+    }
+    return 0u;
+}
+
 /* ------------------------------------------------------- inductance */
 static uint32_t step_inductance(mc_comm_t *c, const float i[3], mc_drive_out_t *out)
 {
@@ -820,6 +1048,9 @@ static uint32_t step_inductance(mc_comm_t *c, const float i[3], mc_drive_out_t *
                     return MC_COMM_ERR_ENCODER_COARSE;
                 }
                 enter(c, MC_COMM_STEP_FLUX, 0u);
+                if (c->cfg.pole_pairs_given != 0u) {
+                    return if_setup(c);
+                }
                 c->count_acc = 0;
                 mc_ident_line_f32_reset(&c->acc_fit);
                 mc_ident_line_f32_reset(&c->fit_band[0]);
@@ -928,10 +1159,7 @@ static uint32_t step_flux(mc_comm_t *c, const float i[3], const mc_drive_meas_t 
          * winding's own omega_e Lq iq (along d) can take the voltage before
          * the back-EMF reaches its fraction; a loop at its limit no longer
          * controls the current, and the coast would start from nonsense. */
-        float v_lim = 0.95f * c->vbus_v * MC_INV_SQRT3_F32;
-        if (v_lim > c->cfg.v_test_max_v) {
-            v_lim = c->cfg.v_test_max_v;
-        }
+        const float v_lim = v_limit(c);
         if ((c->t_s >= T_SPIN_SETTLE &&
              (mc_abs_f32(emf) >= c->cfg.bemf_frac * c->cfg.v_test_max_v ||
               vmag >= V_SPIN_FRAC * v_lim || (fo.svpwm_flags & MC_SVPWM_FLAG_LIMITED) != 0u)) ||
@@ -1003,7 +1231,8 @@ static uint32_t fast_cb(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out
         c->step = MC_COMM_STEP_FAILED;
         return c->err;
     }
-    if (!m->have_encoder || m->enc_cpr == 0u || !mc_isfinite_f32(m->vbus_v) ||
+    const bool sls = c->cfg.pole_pairs_given != 0u;
+    if ((!sls && (!m->have_encoder || m->enc_cpr == 0u)) || !mc_isfinite_f32(m->vbus_v) ||
         !(m->vbus_v > 0.0f)) {
         c->err |= MC_COMM_ERR_MEAS;
         c->step = MC_COMM_STEP_FAILED;
@@ -1041,6 +1270,12 @@ static uint32_t fast_cb(void *ctx, const mc_drive_meas_t *m, mc_drive_out_t *out
             break;
         case MC_COMM_STEP_FLUX:
         case MC_COMM_STEP_DONE: {
+            if (sls) {
+                /* the spin held at its lower speed until the application
+                 * opens the bridge: zero current needs the angle */
+                e = step_if(c, i, out);
+                break;
+            }
             if (c->step == MC_COMM_STEP_DONE) {
                 /* zero current on the identified values */
                 c->sub = 2u;
@@ -1080,7 +1315,7 @@ const mc_drive_ctrl_t *mc_comm_ops(mc_comm_t *c)
 {
     c->ops = (mc_drive_ctrl_t){
         .outputs = MC_DRIVE_OUT_PWM3,
-        .needs_encoder = true,
+        .needs_encoder = (c->cfg.pole_pairs_given == 0u),
         .finds_angle = true, /* it measures the encoder offset */
         .reset = reset_cb,
         .fast = fast_cb,
@@ -1092,11 +1327,14 @@ const mc_drive_ctrl_t *mc_comm_ops(mc_comm_t *c)
 
 uint32_t mc_comm_apply(const mc_comm_result_t *r, float cur_bw_rad_s, mc_drive_cfg_t *dc)
 {
+    /* without an encoder (MC_COMM_SENSORLESS) no offset or direction */
+    const bool enc = (r->valid & MC_COMM_SENSORLESS) == 0u;
     const uint32_t need = MC_COMM_HAVE_OFFSETS | MC_COMM_HAVE_R | MC_COMM_HAVE_L |
-                          MC_COMM_HAVE_ENCODER | MC_COMM_HAVE_FLUX;
+                          MC_COMM_HAVE_FLUX | (enc ? MC_COMM_HAVE_ENCODER : 0u);
     if ((r->valid & need) != need || !(r->r_ohm > 0.0f) || !(r->ld_h > 0.0f) || !(r->lq_h > 0.0f) ||
-        !(r->flux_wb > 0.0f) || r->pole_pairs < 1u || !mc_isfinite_f32(r->encoder_offset_rad) ||
-        (r->encoder_direction != 1 && r->encoder_direction != -1)) {
+        !(r->flux_wb > 0.0f) || r->pole_pairs < 1u ||
+        (enc && (!mc_isfinite_f32(r->encoder_offset_rad) ||
+                 (r->encoder_direction != 1 && r->encoder_direction != -1)))) {
         return MC_COMM_ERR_RANGE;
     }
     float kpd;
@@ -1116,8 +1354,10 @@ uint32_t mc_comm_apply(const mc_comm_result_t *r, float cur_bw_rad_s, mc_drive_c
     dc->foc.kp_q_v_per_a = kpq;
     dc->foc.ki_q_v_per_as = kiq;
     dc->pole_pairs = r->pole_pairs;
-    dc->encoder_offset_rad = r->encoder_offset_rad;
-    dc->encoder_reversed = (r->encoder_direction < 0);
+    if (enc) {
+        dc->encoder_offset_rad = r->encoder_offset_rad;
+        dc->encoder_reversed = (r->encoder_direction < 0);
+    }
     for (unsigned k = 0u; k < 3u; ++k) {
         dc->i_offset_a[k] += r->adc_offset_a[k];
     }

@@ -68,6 +68,14 @@
  *               MECH_SPIN_COAST: friction not viscous, a load). A refusal
  *               stores nothing, as every other.
  *   DONE        zero current until the application leaves CTRL mode.
+ * Without an encoder (cfg.pole_pairs_given, README.md "Without an
+ * encoder"): ENCODER is the alignment alone (no sweeps, the pole pairs
+ * given), RESISTANCE and INDUCTANCE as above, FLUX an I-f spin (i_test
+ * along an angle turning at omega, two holds at omega_hi and omega_hi / 2:
+ * psi from the back-EMF in the spin's frame; IF_SYNC when the rotor does
+ * not follow, FLUX_SPEEDS when the holds disagree), no J or B; DONE keeps
+ * the spin at the lower speed until the application opens the bridge; the
+ * result carries MC_COMM_SENSORLESS.
  * A failure returns the error bits from the fast step: the drive faults
  * (MC_DRIVE_FAULT_CONTROL, tm.ctrl_err = the bits), the bridge is off and
  * the result stays invalid (nothing to store).
@@ -129,6 +137,10 @@ extern "C" {
 #define MC_COMM_ERR_MECH_SPIN_COAST \
     (1u << 18) /**< J from the spin-up's two halves (each with the coast's B/J)
                     disagree: friction not viscous (Coulomb, a load) */
+#define MC_COMM_ERR_IF_SYNC \
+    (1u << 19) /**< without an encoder: the rotor did not follow the I-f spin (its
+                    back-EMF too small, turning in the spin's frame, or more than
+                    60 degrees el. off the current): stalled or out of step */
 #define MC_COMM_ERR_WIDE_MASK 0xFFFF0000u /**< the bits the status frame has no room for */
 
 /* COMMISSION_STATUS.detail: the reason a bit of MC_COMM_ERR_WIDE_MASK names
@@ -137,6 +149,7 @@ extern "C" {
 #define MC_COMM_DETAIL_FLUX_SPEEDS     1u
 #define MC_COMM_DETAIL_MECH_FIT        2u
 #define MC_COMM_DETAIL_MECH_SPIN_COAST 3u
+#define MC_COMM_DETAIL_IF_SYNC         4u
 
 /** The status frame's error field (the 16 low bits, MC_COMM_ERR_RANGE added
  *  when a wider bit is set) and its detail code from the error word. */
@@ -145,6 +158,7 @@ static inline uint32_t mc_comm_err_frame(uint32_t err, uint32_t *p_detail)
     *p_detail = ((err & MC_COMM_ERR_FLUX_SPEEDS) != 0u)       ? MC_COMM_DETAIL_FLUX_SPEEDS
                 : ((err & MC_COMM_ERR_MECH_FIT) != 0u)        ? MC_COMM_DETAIL_MECH_FIT
                 : ((err & MC_COMM_ERR_MECH_SPIN_COAST) != 0u) ? MC_COMM_DETAIL_MECH_SPIN_COAST
+                : ((err & MC_COMM_ERR_IF_SYNC) != 0u)         ? MC_COMM_DETAIL_IF_SYNC
                                                               : MC_COMM_DETAIL_NONE;
     return (err & 0xFFFFu) | (((err & MC_COMM_ERR_WIDE_MASK) != 0u) ? MC_COMM_ERR_RANGE : 0u);
 }
@@ -204,6 +218,10 @@ typedef struct {
                                    (encoder_type 1): MC_COMM_HALL_SPEED_TAU_S */
     const mc_hal_hall_t *hall; /**< the Hall sensors whose table the sequence measures
                                     first (README.md "Hall table"); NULL: none */
+    uint32_t pole_pairs_given; /**< 0: the encoder measures the pole pairs; else no
+                                    encoder (README.md "Without an encoder"): these
+                                    pole pairs (the user's), the flux from an I-f
+                                    spin, no offset, no J or B; 1..pole_pairs_max */
 } mc_comm_cfg_t;
 
 /** The count speed's time constant with Hall sensors: their angle moves by
@@ -222,6 +240,10 @@ typedef struct {
 #define MC_COMM_HAVE_FLUX    (1u << 4)
 #define MC_COMM_HAVE_MECH    (1u << 5)
 #define MC_COMM_HAVE_ALL     0x3Fu
+/** Measured without an encoder (cfg.pole_pairs_given): R, L and flux; the
+ *  pole pairs given, no encoder offset or direction, no J or B (their speed
+ *  comes from the counts). Not part of HAVE_ALL: a flag, not a value. */
+#define MC_COMM_SENSORLESS (1u << 6)
 
 /**
  * What commissioning found: one field per parameter of the table (issue 17
@@ -297,6 +319,8 @@ typedef struct {
     uint32_t quiet_n; /**< coast: periods the current has stayed near zero */
     float vbus_v;
     float w_m_rad_s;      /**< own speed estimate from the counts (forward > 0) */
+    float w_if_rad_s;     /**< without an encoder: the I-f spin's electrical speed */
+    float w_hi_rad_s;     /**< ... its higher speed (the ramp's end) */
     uint8_t progress_pct; /**< rough progress of the sequence, 0..100 */
     mc_drive_ctrl_t ops;  /**< the plug-in table (mc_comm_ops) */
 } mc_comm_t;

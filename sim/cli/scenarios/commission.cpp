@@ -34,7 +34,13 @@
 // (speed_law 0) and on the sensorless law (speed_law 2, its I-f start from
 // verify_sensorless_theta_e_rad), each on a fresh plant with the same
 // imperfections. A law the table refuses for this motor (the sensorless law
-// a salient machine) is reported, not run.
+// a salient machine) is reported, not run; without an encoder
+// (board.encoder_cpr 0) the sensored law is not run.
+//
+// encoder_cpr 0: commissioning without an encoder (README "Without an
+// encoder"): R, Ld, Lq and the flux from an I-f spin on the table's pole
+// pairs; no encoder offset or direction, no J or B ("identified" leaves
+// them out, the verdict does not judge them).
 //
 // CSV: the commissioning run, the generic scenarios' columns
 // (app_scenario.hpp), one row every max(1, t_max_s / T / 20000) periods.
@@ -212,7 +218,13 @@ void run_verify(RunContext& ctx, const CommissionSetup& s, const mc_params_t& p,
       }
     }
   };
-  verify(MC_LAW_SPEED_PI, "sensored");
+  if (ctx.files->board.encoder_cpr != 0) {
+    verify(MC_LAW_SPEED_PI, "sensored");
+  } else {  // no encoder: the sensored law has no angle (judge_commission notes it)
+    ctx.summary.set("verify.sensored_speed_err_frac", std::nan(""));
+    ctx.summary.set_text("verify.sensored_refused", "no encoder");
+    fig.sensored_refused = true;
+  }
   verify(MC_LAW_SPEED_SENSORLESS, "sensorless");
   ctx.summary.set("verify.speed_target_rad_s", w);
   const auto& n = ctx.summary.numbers();
@@ -239,9 +251,8 @@ void record_truth(RunContext& ctx, const CommissionSetup& s, double true_off, co
 
 void run_commission_scenario(RunContext& ctx) {
   const MotorFiles& f = *ctx.files;
-  if (f.board.encoder_cpr == 0) {
-    throw UsageError(f.board.file + ": commissioning needs an encoder (encoder_cpr = 0)");
-  }
+  // encoder_cpr 0: without an encoder (R, L, flux; the pole pairs the table's)
+  const bool sls = f.board.encoder_cpr == 0;
   const CommissionSetup s = plant_setup(ctx);
   mc_params_t p = commission_booted_params(f);
   p.angle_ref = static_cast<uint32_t>(ctx.params.get("angle_ref"));
@@ -281,15 +292,19 @@ void run_commission_scenario(RunContext& ctx) {
                                       {"adc_offset_b_a", adc_id[1]},
                                       {"adc_offset_c_a", adc_id[2]},
                                       {"saliency", lq / ld}};
+  if (sls) {  // no encoder: no offset or direction measured
+    id.erase("encoder_offset_rad");
+    id.erase("encoder_direction");
+  }
   if ((v.valid & MC_COMM_HAVE_MECH) != 0u) {
     id["j_kgm2"] = v.j_kgm2;
     id["b_nm_s_rad"] = v.b_nm_s_rad;
   }
   ctx.summary.set_object("identified", id);
-  const double e_off = std::remainder(off - true_off, 2 * kPi);
+  const double e_off = sls ? 0.0 : std::remainder(off - true_off, 2 * kPi);
   double e_adc = 0;  // the largest current-sensor offset error
   for (int k = 0; k < 3; ++k) e_adc = std::max(e_adc, std::abs(adc_id[k] - adc[k]));
-  const bool dir_right = (dir < 0) == (s.encoder_direction < 0);
+  const bool dir_right = sls || (dir < 0) == (s.encoder_direction < 0);
   ctx.summary.set_object("error", {{"r_frac", r / f.motor.r_ohm - 1},
                                    {"ld_frac", ld / f.motor.ld_h - 1},
                                    {"lq_frac", lq / f.motor.lq_h - 1},
@@ -306,7 +321,8 @@ void run_commission_scenario(RunContext& ctx) {
   fig.lq_frac = lq / f.motor.lq_h - 1;
   fig.flux_frac = flux / f.motor.flux_wb - 1;
   fig.pole_pairs_diff = pp - f.motor.pole_pairs;
-  fig.encoder_offset_deg = e_off * 180 / kPi;
+  fig.sensorless = sls;
+  fig.encoder_offset_deg = sls ? 0.0 : e_off * 180 / kPi;
   fig.adc_offset_max_frac = e_adc / f.board.i_sense_max_a;
   fig.direction_right = dir_right;
   write_verdict(ctx.summary, judge_commission(fig));

@@ -186,21 +186,37 @@ CommissionSetup default_commission_setup(const MotorFiles& f) {
 }
 
 std::string commission_error_names(uint32_t e) {
-  static const char* const names[] = {
-      "OFFSET",        "NO_MOTOR",        "OPEN_PHASE",  "ENCODER_NO_MOTION",
-      "ROTOR_BLOCKED", "WRONG_DIRECTION", "ENCODER_BAD", "OVERCURRENT",
-      "VOLTAGE",       "RANGE",           "MEAS",        "ABORTED",
-      "HOST_LOST",     "ENCODER_COARSE",  "HALL_CODES",  "HALL_ORDER"};
+  static const char* const names[] = {"OFFSET",
+                                      "NO_MOTOR",
+                                      "OPEN_PHASE",
+                                      "ENCODER_NO_MOTION",
+                                      "ROTOR_BLOCKED",
+                                      "WRONG_DIRECTION",
+                                      "ENCODER_BAD",
+                                      "OVERCURRENT",
+                                      "VOLTAGE",
+                                      "RANGE",
+                                      "MEAS",
+                                      "ABORTED",
+                                      "HOST_LOST",
+                                      "ENCODER_COARSE",
+                                      "HALL_CODES",
+                                      "HALL_ORDER",
+                                      "FLUX_SPEEDS",
+                                      "MECH_FIT",
+                                      "MECH_SPIN_COAST",
+                                      "IF_SYNC"};
   std::string s;
-  for (int i = 0; i < 16; ++i) {
+  for (int i = 0; i < 20; ++i) {
     if (e & (1u << i)) s += (s.empty() ? "" : "|") + std::string(names[i]);
   }
   return s;
 }
 
 std::string commission_detail_name(uint32_t d) {
-  static const char* const names[] = {"NONE", "FLUX_SPEEDS", "MECH_FIT", "MECH_SPIN_COAST"};
-  return d < 4u ? names[d] : "UNKNOWN";
+  static const char* const names[] = {"NONE", "FLUX_SPEEDS", "MECH_FIT", "MECH_SPIN_COAST",
+                                      "IF_SYNC"};
+  return d < 5u ? names[d] : "UNKNOWN";
 }
 
 mc_params_t commission_booted_params(const MotorFiles& f) {
@@ -210,9 +226,8 @@ mc_params_t commission_booted_params(const MotorFiles& f) {
 CommissionRun run_commission(const MotorFiles& f, const CommissionSetup& s, const mc_params_t& p,
                              const CommissionTargetFactory& make,
                              const CommissionObserver& observe) {
-  if (f.board.encoder_cpr == 0) {
-    throw UsageError(f.board.file + ": commissioning needs an encoder (encoder_cpr = 0)");
-  }
+  // encoder_cpr 0: the drive commissions without an encoder (R, L, flux
+  // from an I-f spin on the table's pole pairs; README "Without an encoder")
   CommissionRun out;
   hal_host::PmsmBoardConfig bc = build_board_cfg(f);
   set_board_sensor(f, bc);
@@ -311,8 +326,10 @@ mc_params_t staged_params(mc_params_t booted, const mc_comm_result_t& r) {
   booted.lq_h = r.lq_h;
   booted.flux_wb = r.flux_wb;
   booted.pole_pairs = r.pole_pairs;
-  booted.encoder_offset_rad = r.encoder_offset_rad;
-  booted.encoder_reversed = r.encoder_direction < 0 ? 1u : 0u;
+  if ((r.valid & MC_COMM_HAVE_ENCODER) != 0u) {  // none without an encoder
+    booted.encoder_offset_rad = r.encoder_offset_rad;
+    booted.encoder_reversed = r.encoder_direction < 0 ? 1u : 0u;
+  }
   booted.i_offset_a_a = r.adc_offset_a[0];
   booted.i_offset_b_a = r.adc_offset_a[1];
   booted.i_offset_c_a = r.adc_offset_a[2];

@@ -37,6 +37,7 @@ class CommCan : public AppDrive {
   void Boot(bool attach = true) {
     p = mc_params_default;
     p.angle_ref = angle_ref;
+    p.encoder_cpr = encoder_cpr;
     ASSERT_EQ(MC_PARAMS_OK, mc_params_to_drive_cfg(&p, &cfg));
     InitDrive();
     GoodSample();  // the bus measured, as by the fast loop of a drive at rest
@@ -103,10 +104,11 @@ class CommCan : public AppDrive {
       }
     }
   }
-  uint32_t angle_ref = MC_DRIVE_ANGLE_REF_STORED;  // the table's, at Boot
-  bool host = true;                                // the host sends its keep-alive ...
-  uint32_t hb_every = 100u;                        // ... every this many slow steps
-  float timeout_s = 0.5f;                          // the command timeout (1000 slow steps)
+  uint32_t angle_ref = MC_DRIVE_ANGLE_REF_STORED;        // the table's, at Boot
+  uint32_t encoder_cpr = mc_params_default.encoder_cpr;  // 0: the table has no encoder
+  bool host = true;                                      // the host sends its keep-alive ...
+  uint32_t hb_every = 100u;                              // ... every this many slow steps
+  float timeout_s = 0.5f;                                // the command timeout (1000 slow steps)
   uint8_t hb = 0;
   uint32_t slow_n = 0;
   void Collect() {
@@ -359,6 +361,50 @@ TEST_F(CommCan, DoneStagesEveryResultThenApplyPutsThemInEffect) {
   ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_REPORT));
   Run(1000u * kSlowDiv);
   EXPECT_EQ(1u + MC_COMM_CAN_ITEM_COUNT, Drain().size());
+}
+
+// encoder_cpr 0 in force: START runs the sequence without an encoder (the
+// plug-in does not ask for one; the pole pairs are the table's); when done
+// the motor's values are staged, the encoder's offset and direction (not
+// measured) stay as they are, and the status's valid carries SENSORLESS.
+TEST_F(CommCan, WithoutAnEncoderRunsOnThePolePairsInForceAndStagesNoEncoderValues) {
+  encoder_cpr = 0u;
+  Boot();
+  ASSERT_EQ(0u, p.encoder_cpr);
+  ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START));
+  EXPECT_EQ(MC_DRIVE_MODE_CTRL, d.mode);
+  EXPECT_EQ(p.pole_pairs, comm.cfg.pole_pairs_given);
+  EXPECT_FALSE(mc_comm_ops(&comm)->needs_encoder);
+  Run(10u * kSlowDiv);
+  (void)Drain();
+  mc_comm_result_t r = FullResult();
+  r.valid = (r.valid & ~MC_COMM_HAVE_ENCODER) | MC_COMM_SENSORLESS;
+  r.encoder_offset_rad = 0.0f;
+  r.encoder_direction = 0;
+  r.pole_pairs = p.pole_pairs;
+  comm.res = r;
+  comm.step = MC_COMM_STEP_DONE;
+  Run(1000u * kSlowDiv);
+  ASSERT_TRUE(m.staged);
+  const mc_params_t& s = srv.staged;
+  EXPECT_EQ(0.02f, s.flux_wb);
+  EXPECT_EQ(0.2f, s.r_ohm);
+  EXPECT_EQ(p.encoder_offset_rad, s.encoder_offset_rad);
+  EXPECT_EQ(p.encoder_reversed, s.encoder_reversed);
+  EXPECT_EQ(p.j_kgm2, s.j_kgm2);  // no mechanics measured
+  const auto rx = Drain();
+  ASSERT_FALSE(rx.empty());
+  EXPECT_EQ(MC_CAN_MSG_COMMISSION_STATUS, rx[0].msg);
+  EXPECT_EQ(static_cast<float>(r.valid), rx[0].v[MC_CAN_COMMISSION_STATUS_VALID]);
+}
+
+// With an encoder the plug-in asks for it (and measures the pole pairs).
+TEST_F(CommCan, WithAnEncoderThePolePairsAreMeasured) {
+  Boot();
+  ASSERT_NE(0u, p.encoder_cpr);
+  ASSERT_EQ(MC_CAN_ERR_NONE, Comm(MC_COMM_CAN_START));
+  EXPECT_EQ(0u, comm.cfg.pole_pairs_given);
+  EXPECT_TRUE(mc_comm_ops(&comm)->needs_encoder);
 }
 
 TEST_F(CommCan, AResultTheTableRefusesStagesNothing) {

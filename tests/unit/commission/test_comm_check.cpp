@@ -216,6 +216,8 @@ TEST(CommCheckFrame, WideBitsTravelAsRangeWithTheirDetail) {
   EXPECT_EQ(MC_COMM_ERR_RANGE | MC_COMM_ERR_HALL_ORDER,
             mc_comm_err_frame(MC_COMM_ERR_MECH_SPIN_COAST | MC_COMM_ERR_HALL_ORDER, &d));
   EXPECT_EQ(MC_COMM_DETAIL_MECH_SPIN_COAST, d);
+  EXPECT_EQ(MC_COMM_ERR_RANGE, mc_comm_err_frame(MC_COMM_ERR_IF_SYNC, &d));
+  EXPECT_EQ(MC_COMM_DETAIL_IF_SYNC, d);
 }
 
 }  // namespace

@@ -83,6 +83,15 @@ TEST(CommissionCfg, InitRefusesBadConfigurations) {
   EXPECT_EQ(MC_COMM_CFG_ERR_VALUE, bad([](mc_comm_cfg_t& x) { x.pole_pairs_max = 0u; }));
   EXPECT_EQ(MC_COMM_CFG_ERR_VALUE, bad([](mc_comm_cfg_t& x) { x.pole_pairs_max = 65u; }));
   EXPECT_EQ(MC_COMM_CFG_ERR_VALUE, bad([](mc_comm_cfg_t& x) { x.speed_max_m_rad_s = 0.0f; }));
+  // without an encoder: the pole pairs given within pole_pairs_max, no Hall table
+  EXPECT_EQ(MC_COMM_CFG_ERR_VALUE,
+            bad([](mc_comm_cfg_t& x) { x.pole_pairs_given = x.pole_pairs_max + 1u; }));
+  EXPECT_EQ(MC_COMM_CFG_OK, bad([](mc_comm_cfg_t& x) { x.pole_pairs_given = x.pole_pairs_max; }));
+  static const mc_hal_hall_t kHall{};
+  EXPECT_EQ(MC_COMM_CFG_ERR_VALUE, bad([](mc_comm_cfg_t& x) {
+              x.pole_pairs_given = 7u;
+              x.hall = &kHall;
+            }));
 }
 
 // A sensor reading 2 A with the bridge at zero voltage (no current can flow):
@@ -171,6 +180,26 @@ TEST(CommissionApply, RefusesAnIncompleteOrImplausibleResult) {
   EXPECT_EQ(MC_COMM_ERR_RANGE, refused([](mc_comm_result_t& r) { r.pole_pairs = 0u; }));
   EXPECT_EQ(MC_COMM_ERR_RANGE, refused([](mc_comm_result_t& r) { r.encoder_direction = 0; }));
   EXPECT_EQ(MC_COMM_ERR_RANGE, refused([](mc_comm_result_t& r) { r.encoder_offset_rad = kInf; }));
+  // an encoder result without the encoder's values is incomplete
+  EXPECT_EQ(MC_COMM_ERR_RANGE,
+            refused([](mc_comm_result_t& r) { r.valid &= ~MC_COMM_HAVE_ENCODER; }));
+}
+
+// Without an encoder (MC_COMM_SENSORLESS): the motor's values and the pole
+// pairs are written, the encoder's offset and direction stay as they were.
+TEST(CommissionApply, WithoutAnEncoderKeepsTheEncoderValues) {
+  mc_drive_cfg_t dc = GoodCfg();
+  dc.encoder_offset_rad = 0.5f;
+  dc.encoder_reversed = false;
+  mc_comm_result_t r = FullResult();
+  r.valid = (r.valid & ~MC_COMM_HAVE_ENCODER) | MC_COMM_SENSORLESS;
+  r.encoder_offset_rad = 0.0f;
+  r.encoder_direction = 0;  // not measured: not looked at
+  ASSERT_EQ(0u, mc_comm_apply(&r, 2000.0f, &dc));
+  EXPECT_EQ(0.02f, dc.foc.flux_wb);
+  EXPECT_EQ(7u, dc.pole_pairs);
+  EXPECT_EQ(0.5f, dc.encoder_offset_rad);
+  EXPECT_FALSE(dc.encoder_reversed);
 }
 
 }  // namespace

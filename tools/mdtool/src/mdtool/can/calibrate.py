@@ -34,12 +34,24 @@ ITEMS = {
 PARAM_VALUE = {"encoder_direction": lambda d: 1 if d < 0 else 0}
 
 
-def rows(results, present, table):
+#: COMMISSION_STATUS.valid (MC_COMM_HAVE_*, mc_commission.h): the encoder's
+#: offset and direction, J and B; SENSORLESS: measured without an encoder
+VALID_ENCODER, VALID_MECH, VALID_SENSORLESS = 1 << 3, 1 << 5, 1 << 6
+#: the results a valid bit stands for (not measured: no row)
+VALID_OF = {"encoder_offset_rad": VALID_ENCODER, "encoder_direction": VALID_ENCODER,
+            "j_kgm2": VALID_MECH, "b_nm_s_rad": VALID_MECH}
+
+
+def rows(results, present, table, valid=None):
     """The calibrate table: one row per parameter a result goes to, the
     measured value and the one in use in the same (the parameter's)
-    convention. (parameter, measured, unit, in use or None, change text)."""
+    convention. (parameter, measured, unit, in use or None, change text).
+    With `valid` (COMMISSION_STATUS.valid) a result the run did not
+    measure (without an encoder the offset, direction, J and B) has no row."""
     out = []
     for res, pname, unit in ITEMS.values():
+        if valid is not None and res in VALID_OF and not valid & VALID_OF[res]:
+            continue
         v = PARAM_VALUE.get(res, lambda x: x)(results[res])
         p = table.get(pname)
         old = present.get(pname)
@@ -86,7 +98,7 @@ def error_names(bits):
 
 #: COMMISSION_STATUS.detail (MC_COMM_DETAIL_*): the reasons the error field has
 #: no bit for; the field then carries RANGE
-DETAILS = ["NONE", "FLUX_SPEEDS", "MECH_FIT", "MECH_SPIN_COAST"]
+DETAILS = ["NONE", "FLUX_SPEEDS", "MECH_FIT", "MECH_SPIN_COAST", "IF_SYNC"]
 DETAIL_HELP = {
     "FLUX_SPEEDS": "the coast's two speed bands gave fluxes further apart than the encoder's"
                    " and the voltage's resolution allows: the speed or voltage reading is off",
@@ -94,6 +106,8 @@ DETAIL_HELP = {
                 " a speed that jumps): J and B would be off",
     "MECH_SPIN_COAST": "J from the spin-up's two halves disagree: the friction is not viscous"
                        " (Coulomb friction, a load); uncouple the load or enter J and B by hand",
+    "IF_SYNC": "without an encoder: the rotor did not follow the I-f spin (stalled, blocked or"
+               " out of step under a load): free the rotor, uncouple the load, check pole_pairs",
 }
 
 
@@ -139,6 +153,7 @@ class Collector:
         return {"step": st.get("step"), "error": error_names(int(st.get("error", 0))),
                 "detail": detail_name(st.get("detail", 0)),
                 "error_bits": int(st.get("error", 0)), "valid": int(st.get("valid", 0)),
+                "sensorless": bool(int(st.get("valid", 0)) & VALID_SENSORLESS),
                 "staged": bool(st.get("staged", 0)), "results": dict(self.results)}
 
 

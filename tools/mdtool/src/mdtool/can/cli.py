@@ -400,9 +400,12 @@ def cmd_calibrate(a):
                 json.dump(dict(summ, present=present), f, indent=1)
         check_failed(summ)
         print(f"{'parameter':<20}{'measured':>14}  {'unit':<10}{'in use':>14}{'change':>10}")
-        for pname, v, unit, old, ch in rows(summ["results"], present, table):
+        for pname, v, unit, old, ch in rows(summ["results"], present, table, summ["valid"]):
             print(f"{pname:<20}{v:>14.6g}  {unit:<10}"
                   f"{fmt_value(table.get(pname), old) if old is not None else '-':>14}{ch:>10}")
+        if summ["sensorless"]:
+            print("measured without an encoder: R, L and the flux (I-f spin); pole_pairs is the "
+                  "one in use, no encoder offset or direction, no J or B (not staged)")
         if not summ["staged"]:
             print("not staged: this drive has no parameter service (results shown only)")
             if a.save:
