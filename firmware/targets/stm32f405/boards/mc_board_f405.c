@@ -196,6 +196,38 @@ static mc_board_f405_err_t setup_sensor(mc_board_f405_t *b, const mc_board_desc_
     }
 }
 
+void mc_board_f405_adc_config(const mc_board_desc_t *p_desc, mc_f405_adc_regs_t *p_adc,
+                              mc_f405_adc_common_regs_t *p_common, const mc_hal_tick_t *p_tick,
+                              mc_f405_adc_trigger_t trigger, mc_f405_adc_config_t *p_cfg)
+{
+    const mc_board_desc_t *d = p_desc;
+    *p_cfg = (mc_f405_adc_config_t){
+        .p_adc = p_adc,
+        .p_common = p_common,
+        .p_tick = p_tick,
+        .ch_ia = d->adc_ch_ia,
+        .ch_ib = d->adc_ch_ib,
+        .ch_ic = d->adc_ch_ic,
+        .ch_vbus = d->adc_ch_vbus,
+        .smp_current = MC_F405_ADC_SMP_15,
+        .smp_vbus = MC_F405_ADC_SMP_15,
+        .smp_temp = MC_F405_ADC_SMP_144,
+        .trigger = trigger,
+        .clk_div = ADC_CLK_DIV,
+        .jeoc_irq = true,
+        .vref_v = d->adc_vref_v,
+        .shunt_ohm = d->shunt_ohm,
+        .amp_gain_v_per_v = d->amp_gain_v_per_v,
+        .ia_offset_v = d->amp_offset_v,
+        .ib_offset_v = d->amp_offset_v,
+        .ic_offset_v = d->amp_offset_v,
+        .vbus_divider = d->vbus_divider,
+        .rail_margin_counts = d->adc_rail_margin_counts,
+        .temp_power_stage = d->temp_power_stage,
+        .temp_motor = d->temp_motor,
+    };
+}
+
 mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board_desc_t *p_desc,
                                         const mc_board_f405_periph_t *p_periph, uint32_t sysclk_hz,
                                         uint32_t pwm_hz)
@@ -274,31 +306,9 @@ mc_board_f405_err_t mc_board_f405_setup(mc_board_f405_t *p_board, const mc_board
         delay(p, MC_BOARD_F405_GATE_STARTUP_US);
     }
 
-    const mc_f405_adc_config_t ac = {
-        .p_adc = p->p_adc1,
-        .p_common = p->p_adc_common,
-        .p_tick = &b->tick.dev,
-        .ch_ia = d->adc_ch_ia,
-        .ch_ib = d->adc_ch_ib,
-        .ch_ic = d->adc_ch_ic,
-        .ch_vbus = d->adc_ch_vbus,
-        .smp_current = MC_F405_ADC_SMP_15,
-        .smp_vbus = MC_F405_ADC_SMP_15,
-        .smp_temp = MC_F405_ADC_SMP_144,
-        .trigger = MC_F405_ADC_TRIG_TIM1_TRGO,
-        .clk_div = ADC_CLK_DIV,
-        .jeoc_irq = true,
-        .vref_v = d->adc_vref_v,
-        .shunt_ohm = d->shunt_ohm,
-        .amp_gain_v_per_v = d->amp_gain_v_per_v,
-        .ia_offset_v = d->amp_offset_v,
-        .ib_offset_v = d->amp_offset_v,
-        .ic_offset_v = d->amp_offset_v,
-        .vbus_divider = d->vbus_divider,
-        .rail_margin_counts = d->adc_rail_margin_counts,
-        .temp_power_stage = d->temp_power_stage,
-        .temp_motor = d->temp_motor,
-    };
+    mc_f405_adc_config_t ac;
+    mc_board_f405_adc_config(d, p->p_adc1, p->p_adc_common, &b->tick.dev,
+                             MC_F405_ADC_TRIG_TIM1_TRGO, &ac);
     if (mc_f405_adc_init(&b->adc, &ac) != 0) {
         return fail(b, MC_BOARD_F405_ERR_ADC);
     }

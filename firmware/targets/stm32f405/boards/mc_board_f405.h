@@ -218,6 +218,18 @@ bool mc_board_f405_fast_slot(mc_board_f405_t *p_board);
  *  or 0xFFFFFFFF when it has none. */
 uint32_t mc_board_f405_exti_irq(const mc_board_desc_t *p_desc);
 
+/**
+ * The ADC driver's configuration of one axis from the board's description:
+ * the description's channels, amplifier, bus divider and temperature
+ * sensors, and what every axis shares (the sample times, the ADC clock:
+ * ADCPRE is one field of the common registers). The set-up uses it for M0
+ * (ADC1 on TIM1 TRGO); the ODrive's M1 (mc_board_f405_m1.c) for ADC2 on
+ * TIM8 CC4, then sets its own channels.
+ */
+void mc_board_f405_adc_config(const mc_board_desc_t *p_desc, mc_f405_adc_regs_t *p_adc,
+                              mc_f405_adc_common_regs_t *p_common, const mc_hal_tick_t *p_tick,
+                              mc_f405_adc_trigger_t trigger, mc_f405_adc_config_t *p_cfg);
+
 /** Name of a set-up result ("ok", "gate driver", ...). */
 const char *mc_board_f405_err_name(mc_board_f405_err_t err);
 

@@ -8,6 +8,8 @@
 #include <errno.h>
 #include <stddef.h>
 
+#include "mc_board_f405.h"
+
 #define M1_ADC_TRIGGER_LEAD_US 1u /* as M0 (mc_board_f405.c): 1 us before the peak */
 #define M1_DRV_SPI_MODE        1u /* DRV8301: SCLK idle low, data captured on the falling edge */
 
@@ -41,32 +43,15 @@ static void pwm3_config(const mc_board_desc_t *d, const mc_board_f405_m1_periph_
 static void adc_config(const mc_board_desc_t *d, const mc_board_f405_m1_periph_t *p,
                        mc_f405_adc_config_t *c)
 {
-    *c = (mc_f405_adc_config_t){
-        .p_adc = p->p_adc2,
-        .p_common = p->p_adc_common,
-        .p_tick = p->p_tick,
-        .ch_ia = MC_F405_ADC_CH_NONE,
-        .ch_ib = MC_BOARD_F405_M1_ADC_CH_IB,
-        .ch_ic = MC_BOARD_F405_M1_ADC_CH_IC,
-        .ch_vbus = MC_BOARD_F405_M1_ADC_CH_VBUS,
-        .smp_current = MC_F405_ADC_SMP_15, /* sample times as M0's set-up */
-        .smp_vbus = MC_F405_ADC_SMP_15,
-        .smp_temp = MC_F405_ADC_SMP_144,
-        .trigger = MC_F405_ADC_TRIG_TIM8_CC4,
-        .clk_div = MC_BOARD_F405_M1_ADC_CLK_DIV,
-        .jeoc_irq = true,
-        .vref_v = d->adc_vref_v,
-        .shunt_ohm = d->shunt_ohm,
-        .amp_gain_v_per_v = d->amp_gain_v_per_v,
-        .ia_offset_v = d->amp_offset_v,
-        .ib_offset_v = d->amp_offset_v,
-        .ic_offset_v = d->amp_offset_v,
-        .vbus_divider = d->vbus_divider,
-        .rail_margin_counts = d->adc_rail_margin_counts,
-        .temp_power_stage = d->temp_power_stage,
-        .temp_motor = d->temp_motor,
-    };
-    /* M1's FET thermistor: M0's network and curve on PA4. */
+    /* M0's set-up (sample times, the common ADC clock, amplifier, divider),
+     * then M1's channels: ib, ic and the bus divider on ADC2, and M0's
+     * thermistor network and curve on PA4 */
+    mc_board_f405_adc_config(d, p->p_adc2, p->p_adc_common, p->p_tick, MC_F405_ADC_TRIG_TIM8_CC4,
+                             c);
+    c->ch_ia = MC_F405_ADC_CH_NONE;
+    c->ch_ib = MC_BOARD_F405_M1_ADC_CH_IB;
+    c->ch_ic = MC_BOARD_F405_M1_ADC_CH_IC;
+    c->ch_vbus = MC_BOARD_F405_M1_ADC_CH_VBUS;
     c->temp_power_stage.channel = MC_BOARD_F405_M1_ADC_CH_TEMP;
     c->temp_motor.channel = MC_F405_ADC_CH_NONE;
 }

@@ -57,8 +57,6 @@ extern "C" {
 #define MC_BOARD_F405_M1_ADC_CH_IC   12u
 #define MC_BOARD_F405_M1_ADC_CH_VBUS 6u
 #define MC_BOARD_F405_M1_ADC_CH_TEMP 4u
-/** ADC clock divider: the one M0's set-up writes (ADCPRE is common). */
-#define MC_BOARD_F405_M1_ADC_CLK_DIV 4u
 /** RCC enable bits of M1's peripherals (RM0090 §7.3.13 APB1ENR TIM4EN,
  *  §7.3.14 APB2ENR TIM8EN, ADC2EN), for the dual image's clock set-up. */
 #define MC_BOARD_F405_M1_APB1ENR_TIM4EN (1u << 2)
