@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The whole test suite (called by tools/bootstrap.sh test, after set-up):
 #  1. (none of its own: the STM32F405 images of every shipped board, the
-#     example board, ODrive v3.6 56 V and 24 V, VESC 6, are built whole with
-#     their presets' settings, warnings as errors and their size budgets, as
-#     part of step 2: tests/target/CMakeLists.txt, mc_image_<board>);
+#     example board, ODrive v3.6 56 V and 24 V, VESC 6: image and
+#     bootloader, with their presets' settings, warnings as errors and their
+#     size budgets, are built as part of step 2:
+#     tests/target/CMakeLists.txt, mc_image_<board>);
 #  2. the host-release preset built whole (every target): users build it
 #     (demo, benchmarks), and its -O3 finds warnings (errors here) that -O0
 #     does not;
